@@ -1,0 +1,3 @@
+from hearsee.cli import main
+
+main()

@@ -1,0 +1,229 @@
+"""Microphone arrays: positions, pairs, physical TDOA bounds and presets.
+
+Positions are metres in the array frame (x forward, y left, z up; README "Conventions"). Rows are
+microphones: ``positions[k]`` is microphone k, which is channel k of a multichannel recording.
+TDOA sign: ``tdoa(i, j) = t_i - t_j`` (arrival at i minus arrival at j, thesis eq. 2.7).
+
+Array files are YAML::
+
+    name: my-array            # optional
+    speed_of_sound: 343.0     # optional, m/s
+    microphones:              # metres, array frame
+      - [0.0, -0.075, 0.0]
+      - [0.0,  0.075, 0.0]
+    mask: {...}               # optional, masked two-microphone arrays (hearsee.audio.mask)
+
+Presets are such files shipped in ``hearsee/data/arrays/``: see :func:`list_presets`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from hearsee.config import as_float_array, check_keys, load_yaml, require
+from hearsee.errors import ConfigError, GeometryError
+
+__all__ = ["MicArray", "list_presets", "load_array"]
+
+#: Two microphones closer than this (metres) are treated as coincident.
+MIN_SPACING_M = 1e-3
+_KEYS = ("name", "speed_of_sound", "microphones", "mask")
+
+
+def _preset_dir() -> Path:
+    return Path(str(resources.files("hearsee") / "data" / "arrays"))
+
+
+def list_presets() -> list[str]:
+    """Names of the array presets shipped with hearsee (e.g. ``two-mic``, ``three-mic``)."""
+    return sorted(p.stem for p in _preset_dir().glob("*.yaml"))
+
+
+@dataclass(frozen=True, eq=False)
+class MicArray:
+    """A rigid set of microphones.
+
+    Parameters
+    ----------
+    positions : array (n_mics, 3)
+        Microphone positions in metres, array frame.
+    speed_of_sound : float
+        c0 in m/s.
+    name : str
+        Label used in reports and JSON.
+    mask : mapping or None
+        Raw ``mask:`` block of a masked two-microphone array; interpreted by
+        :mod:`hearsee.audio.mask`.
+    """
+
+    positions: NDArray
+    speed_of_sound: float = 343.0
+    name: str = "custom"
+    mask: Mapping[str, Any] | None = field(default=None)
+
+    def __post_init__(self) -> None:
+        pos = np.array(self.positions, dtype=float)
+        if pos.ndim != 2 or pos.shape[1] != 3:
+            raise GeometryError(
+                f"array {self.name!r}: microphone positions must be N x 3, got shape {pos.shape}"
+            )
+        if pos.shape[0] < 2:
+            raise GeometryError(
+                f"array {self.name!r}: needs at least 2 microphones, got {pos.shape[0]}"
+            )
+        if not np.all(np.isfinite(pos)):
+            raise GeometryError(f"array {self.name!r}: microphone positions must be finite")
+        d = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=-1)
+        iu = np.triu_indices(len(pos), 1)
+        k = int(np.argmin(d[iu]))
+        if d[iu][k] < MIN_SPACING_M:
+            i, j = iu[0][k], iu[1][k]
+            raise GeometryError(
+                f"array {self.name!r}: microphones {i} and {j} coincide "
+                f"({d[iu][k] * 1000:.2f} mm apart, minimum {MIN_SPACING_M * 1000:.0f} mm)"
+            )
+        c = float(self.speed_of_sound)
+        if not np.isfinite(c) or c <= 0:
+            raise GeometryError(f"array {self.name!r}: speed_of_sound must be > 0, got {c}")
+        pos.setflags(write=False)
+        object.__setattr__(self, "positions", pos)
+        object.__setattr__(self, "speed_of_sound", c)
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], where: str = "array") -> MicArray:
+        """Build from a mapping with the YAML schema above; ConfigError names bad fields."""
+        check_keys(data, _KEYS, where)
+        mics = as_float_array(require(data, "microphones", where), f"{where}: microphones",
+                              shape=(None, 3))
+        c = data.get("speed_of_sound", 343.0)
+        if isinstance(c, bool) or not isinstance(c, int | float):
+            raise ConfigError(f"{where}: speed_of_sound must be a number, got {c!r}")
+        mask = data.get("mask")
+        if mask is not None and not isinstance(mask, Mapping):
+            raise ConfigError(f"{where}: mask must be a mapping")
+        name = str(data.get("name", Path(where).stem if where != "array" else "custom"))
+        try:
+            return cls(mics, float(c), name, mask)
+        except GeometryError as exc:
+            raise GeometryError(f"{where}: {exc}") from None
+
+    @classmethod
+    def from_yaml(cls, path: str | Path) -> MicArray:
+        """Load an array file (see module docstring)."""
+        return cls.from_dict(load_yaml(path), where=str(path))
+
+    @classmethod
+    def from_preset(cls, name: str) -> MicArray:
+        """Load a preset shipped with hearsee by name (see :func:`list_presets`)."""
+        path = _preset_dir() / f"{name}.yaml"
+        if not path.is_file():
+            raise ConfigError(
+                f"unknown array preset {name!r} (presets: {', '.join(list_presets())})"
+            )
+        return cls.from_dict(load_yaml(path), where=name)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The YAML/JSON form of this array."""
+        out: dict[str, Any] = {
+            "name": self.name,
+            "speed_of_sound": self.speed_of_sound,
+            "microphones": self.positions.tolist(),
+        }
+        if self.mask is not None:
+            out["mask"] = dict(self.mask)
+        return out
+
+    # ------------------------------------------------------------------ geometry
+    @property
+    def n_mics(self) -> int:
+        return int(self.positions.shape[0])
+
+    @property
+    def R(self) -> NDArray:
+        """Positions as a ``(3, n_mics)`` array (pyroomacoustics' layout)."""
+        return self.positions.T.copy()
+
+    @property
+    def centre(self) -> NDArray:
+        """Centroid of the microphones, metres."""
+        return self.positions.mean(axis=0)
+
+    @cached_property
+    def pairs(self) -> list[tuple[int, int]]:
+        """All microphone pairs ``(i, j)`` with ``i < j``, in a fixed order."""
+        return [(i, j) for i in range(self.n_mics) for j in range(i + 1, self.n_mics)]
+
+    @property
+    def pair_labels(self) -> list[str]:
+        """JSON keys of :attr:`pairs`, e.g. ``["0-1", "0-2", "1-2"]``."""
+        return [f"{i}-{j}" for i, j in self.pairs]
+
+    def pair_distance(self, pairs: list[tuple[int, int]] | None = None) -> NDArray:
+        """Distance in metres between the microphones of each pair."""
+        pairs = self.pairs if pairs is None else pairs
+        p = self.positions
+        return np.array([np.linalg.norm(p[i] - p[j]) for i, j in pairs])
+
+    def max_tdoa(self, pairs: list[tuple[int, int]] | None = None) -> NDArray:
+        """Largest physically possible |TDOA| per pair in seconds: spacing / c0."""
+        return self.pair_distance(pairs) / self.speed_of_sound
+
+    @property
+    def aperture(self) -> float:
+        """Largest microphone spacing in metres."""
+        return float(self.pair_distance().max())
+
+    @property
+    def is_planar(self) -> bool:
+        """True when all microphones lie in one plane (always true for 2 or 3 microphones)."""
+        if self.n_mics <= 3:
+            return True
+        s = np.linalg.svd(self.positions - self.centre, compute_uv=False)
+        return bool(s[-1] < 1e-6 * max(s[0], 1e-12))
+
+    def tdoa(self, source: ArrayLike, pairs: list[tuple[int, int]] | None = None) -> NDArray:
+        """Exact (near-field) TDOAs ``t_i - t_j`` in seconds for source point(s) ``(..., 3)``.
+
+        Returns shape ``(..., n_pairs)``.
+        """
+        pairs = self.pairs if pairs is None else pairs
+        s = np.asarray(source, dtype=float)[..., None, :]
+        dist = np.linalg.norm(s - self.positions, axis=-1)  # (..., n_mics)
+        i = np.array([p[0] for p in pairs])
+        j = np.array([p[1] for p in pairs])
+        return (dist[..., i] - dist[..., j]) / self.speed_of_sound
+
+    def tdoa_far(self, direction: ArrayLike, pairs: list[tuple[int, int]] | None = None) -> NDArray:
+        """Far-field TDOAs ``t_i - t_j`` in seconds for unit direction(s) ``(..., 3)``.
+
+        A plane wave from direction u reaches microphone m at time ``-m . u / c0``.
+        """
+        pairs = self.pairs if pairs is None else pairs
+        u = np.asarray(direction, dtype=float)
+        u = u / np.linalg.norm(u, axis=-1, keepdims=True)
+        proj = u @ self.positions.T  # (..., n_mics)
+        i = np.array([p[0] for p in pairs])
+        j = np.array([p[1] for p in pairs])
+        return -(proj[..., i] - proj[..., j]) / self.speed_of_sound
+
+    def __repr__(self) -> str:
+        return f"MicArray(name={self.name!r}, n_mics={self.n_mics}, aperture={self.aperture:.3f} m)"
+
+
+def load_array(spec: str | Path | MicArray) -> MicArray:
+    """A MicArray from a preset name, a YAML path, or an existing MicArray."""
+    if isinstance(spec, MicArray):
+        return spec
+    s = str(spec)
+    if s.endswith((".yaml", ".yml")) or Path(s).is_file():
+        return MicArray.from_yaml(s)
+    return MicArray.from_preset(s)

@@ -1,0 +1,112 @@
+"""The typer app and the small helpers every command shares.
+
+Commands live in sibling modules (``hearsee/cli/<command>.py``) that import :data:`app` and
+decorate their functions with ``@app.command()``; :mod:`hearsee.cli` imports them. Commands are
+thin: they parse options, call library functions and print. Heavy imports (OpenCV, scikit-learn,
+pyroomacoustics) happen inside the command functions so that ``hearsee --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from enum import Enum
+from typing import Any
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+app = typer.Typer(
+    name="hearsee",
+    help="Ears and eyes for a mobile robot with very few sensors.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+)
+
+#: Human-facing messages and progress go to stderr; results go to stdout.
+err_console = Console(stderr=True)
+
+
+class OutputFormat(str, Enum):
+    json = "json"
+    csv = "csv"
+    table = "table"
+
+
+def to_jsonable(obj: Any) -> Any:
+    """Convert numpy types, tuples and non-finite floats (-> null) for JSON output."""
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, float | np.floating):
+        f = float(obj)
+        return f if math.isfinite(f) else None
+    return obj
+
+
+def emit_json(obj: Any, *, indent: int | None = 2) -> None:
+    """Print ``obj`` as one JSON document on stdout."""
+    sys.stdout.write(json.dumps(to_jsonable(obj), indent=indent) + "\n")
+
+
+def parse_floats(text: str, n: int | None, what: str) -> list[float]:
+    """Parse ``"1,2,3"`` into floats; raise typer.BadParameter with a clear message."""
+    try:
+        vals = [float(v) for v in text.replace(" ", "").split(",") if v != ""]
+    except ValueError:
+        raise typer.BadParameter(f"{what}: expected comma-separated numbers, got {text!r}") from None
+    if n is not None and len(vals) != n:
+        raise typer.BadParameter(f"{what}: expected {n} numbers, got {len(vals)} in {text!r}")
+    if not all(math.isfinite(v) for v in vals):
+        raise typer.BadParameter(f"{what}: numbers must be finite, got {text!r}")
+    return vals
+
+
+@contextmanager
+def progress(description: str, total: float | None, *, enabled: bool = True) -> Iterator[Any]:
+    """A rich progress bar on stderr; yields a callable ``advance(n=1)``."""
+    if not enabled or not sys.stderr.isatty():
+        yield lambda n=1: None
+        return
+    with Progress(
+        TextColumn("[progress.description]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed:.0f}/{task.total:.0f}"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+        console=err_console,
+        transient=True,
+    ) as bar:
+        task = bar.add_task(description, total=total)
+        yield lambda n=1: bar.advance(task, n)
+
+
+def _version_callback(value: bool) -> None:
+    if value:
+        from hearsee import __version__
+
+        typer.echo(f"hearsee {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: bool = typer.Option(
+        False, "--version", callback=_version_callback, is_eager=True, help="Print the version."
+    ),
+) -> None:
+    """Ears and eyes for a mobile robot with very few sensors."""

@@ -1,0 +1,22 @@
+"""``hearsee arrays``: list the microphone-array presets."""
+
+from __future__ import annotations
+
+import typer
+
+from hearsee.cli._app import app, emit_json
+
+
+@app.command("arrays")
+def arrays_cmd(
+    json_out: bool = typer.Option(False, "--json", help="Print the presets as JSON."),
+) -> None:
+    """List the microphone-array presets shipped with hearsee."""
+    from hearsee.audio.arrays import MicArray, list_presets
+
+    arrays = [MicArray.from_preset(n) for n in list_presets()]
+    if json_out:
+        emit_json({a.name: a.to_dict() for a in arrays})
+        return
+    for a in arrays:
+        typer.echo(f"{a.name:14s} {a.n_mics} mics, aperture {a.aperture * 100:.1f} cm")

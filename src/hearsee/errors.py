@@ -1,0 +1,44 @@
+"""The exception types hearsee raises.
+
+Every error the library raises on purpose derives from :class:`HearseeError`; the CLI turns any
+of them into one line on stderr and exit code 2. Subclasses also derive from the closest builtin
+(``ValueError``, ``FileNotFoundError``) so generic handlers keep working.
+"""
+
+from __future__ import annotations
+
+
+class HearseeError(Exception):
+    """Base class of every error hearsee raises on purpose."""
+
+
+class ConfigError(HearseeError, ValueError):
+    """A configuration file or value is malformed (bad YAML, unknown or missing field)."""
+
+
+class GeometryError(HearseeError, ValueError):
+    """Degenerate or impossible geometry (coincident microphones, source at a sensor, ...)."""
+
+
+class AudioInputError(HearseeError, ValueError):
+    """Audio that cannot be used: wrong channel count or sample rate, NaN/inf, silence, too short."""
+
+
+class ImageInputError(HearseeError, ValueError):
+    """Images that cannot be used: unreadable, wrong size or type, mismatched pair."""
+
+
+class CalibrationError(HearseeError, ValueError):
+    """Missing or unusable camera calibration (too few views, board not found, bad file)."""
+
+
+class EstimationError(HearseeError, RuntimeError):
+    """An estimate cannot be formed from the data given (no valid frames, no solution)."""
+
+
+class InputFileError(HearseeError, FileNotFoundError):
+    """A file the user named does not exist or cannot be read."""
+
+
+class ClippingWarning(UserWarning):
+    """The recording contains clipped samples; estimates may be biased."""

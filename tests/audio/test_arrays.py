@@ -1,0 +1,68 @@
+import numpy as np
+import pytest
+
+from hearsee.audio.arrays import MicArray, list_presets, load_array
+from hearsee.errors import ConfigError, GeometryError, InputFileError
+
+
+def test_presets_exist_and_match_the_thesis():
+    names = list_presets()
+    for n in ("two-mic", "three-mic", "respeaker-4", "respeaker-6"):
+        assert n in names
+    two = MicArray.from_preset("two-mic")
+    np.testing.assert_allclose(two.positions, [[0, -0.075, 0], [0, 0.075, 0]])
+    three = MicArray.from_preset("three-mic")
+    np.testing.assert_allclose(three.pair_distance(), [0.15, 0.15, 0.15], atol=1e-5)
+    np.testing.assert_allclose(three.centre, 0, atol=1e-6)
+    assert three.pairs == [(0, 1), (0, 2), (1, 2)]
+    assert three.pair_labels == ["0-1", "0-2", "1-2"]
+
+
+def test_tdoa_sign_and_far_field_limit():
+    two = MicArray.from_preset("two-mic")
+    # source on the left (+y): it reaches mic 1 (left) first, so t_0 - t_1 > 0
+    left = two.tdoa([0.0, 2.0, 0.0])
+    assert left[0] > 0
+    assert left[0] == pytest.approx((2.075 - 1.925) / 343.0)
+    # far away the near-field TDOA tends to the plane-wave one
+    u = np.array([np.cos(0.3), np.sin(0.3), 0.0])
+    np.testing.assert_allclose(two.tdoa(1e4 * u), two.tdoa_far(u), rtol=1e-5)
+    assert two.max_tdoa()[0] == pytest.approx(0.15 / 343.0)
+
+
+def test_yaml_round_trip(tmp_path):
+    a = MicArray.from_preset("three-mic")
+    p = tmp_path / "a.yaml"
+    import yaml
+
+    p.write_text(yaml.safe_dump(a.to_dict()))
+    b = load_array(p)
+    np.testing.assert_allclose(a.positions, b.positions)
+    assert b.speed_of_sound == 343.0 and b.name == "three-mic"
+
+
+@pytest.mark.parametrize(
+    "text, exc, words",
+    [
+        ("microphones: [[0,0,0]]", GeometryError, "at least 2"),
+        ("microphones: [[0,0,0],[0,0,0.0001]]", GeometryError, "coincide"),
+        ("microphones: [[0,0],[1,0]]", ConfigError, "shape"),
+        ("micro: [[0,0,0],[1,0,0]]", ConfigError, "unknown key 'micro'"),
+        ("name: x", ConfigError, "missing required key 'microphones'"),
+        ("microphones: [[0,0,0],[1,0,0]]\nspeed_of_sound: -3", GeometryError, "speed_of_sound"),
+        ("microphones: [[0,0,0], [1, 0, .nan]]", ConfigError, "finite"),
+        ("microphones: [[0,0,0", ConfigError, "invalid YAML"),
+    ],
+)
+def test_bad_array_files(tmp_path, text, exc, words):
+    p = tmp_path / "bad.yaml"
+    p.write_text(text)
+    with pytest.raises(exc, match=words):
+        MicArray.from_yaml(p)
+
+
+def test_missing_file_and_unknown_preset(tmp_path):
+    with pytest.raises(InputFileError):
+        load_array(tmp_path / "nope.yaml")
+    with pytest.raises(ConfigError, match="unknown array preset"):
+        load_array("five-mic")

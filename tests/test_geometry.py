@@ -1,0 +1,49 @@
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from hearsee.errors import GeometryError
+from hearsee.geometry import (
+    angle_between,
+    cart_to_sph,
+    direction_deg,
+    sph_to_cart,
+    unit_vector_deg,
+    wrap_deg,
+    wrap_rad,
+)
+
+
+def test_axes_follow_rep103():
+    np.testing.assert_allclose(unit_vector_deg(0, 0), [1, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(unit_vector_deg(90, 0), [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(unit_vector_deg(180, 0), [-1, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(unit_vector_deg(0, 90), [0, 0, 1], atol=1e-12)
+    az, el = direction_deg([0.0, -2.0, 0.0])
+    assert az == pytest.approx(-90.0) and el == pytest.approx(0.0)
+
+
+@given(
+    st.floats(-np.pi + 1e-6, np.pi),
+    st.floats(-np.pi / 2 + 1e-3, np.pi / 2 - 1e-3),
+    st.floats(0.01, 100.0),
+)
+def test_spherical_round_trip(az, el, r):
+    a, e, d = cart_to_sph(sph_to_cart(az, el, r))
+    assert float(wrap_rad(a - az)) == pytest.approx(0.0, abs=1e-9)
+    assert float(e) == pytest.approx(el, abs=1e-9)
+    assert float(d) == pytest.approx(r, rel=1e-12)
+
+
+def test_wrap():
+    np.testing.assert_allclose(wrap_deg([-180, 180, 190, -190, 540, 0]), [180, 180, -170, 170, 180, 0])
+    assert float(wrap_rad(3 * np.pi)) == pytest.approx(np.pi)
+
+
+def test_angle_between_and_errors():
+    assert float(angle_between([1, 0, 0], [0, 2, 0])) == pytest.approx(np.pi / 2)
+    with pytest.raises(GeometryError):
+        angle_between([0, 0, 0], [1, 0, 0])
+    with pytest.raises(GeometryError):
+        cart_to_sph([1.0, 2.0])
