@@ -7,15 +7,26 @@ from +x toward +y (0 = front, 90 deg = left, 180 deg = back), elevation from the
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
 
 from hearsee.errors import GeometryError
 
 __all__ = [
+    "HeadPose",
     "angle_between",
+    "array_to_robot",
+    "as_pose",
     "cart_to_sph",
     "direction_deg",
+    "head_rotation",
+    "mic_positions_at",
+    "robot_to_array",
     "sph_to_cart",
     "unit_vector_deg",
     "wrap_deg",
@@ -84,3 +95,141 @@ def angle_between(u: ArrayLike, v: ArrayLike) -> NDArray:
         raise GeometryError("angle between a zero-length vector and another is undefined")
     c = np.sum(a * b, axis=-1) / (na * nb)
     return np.arccos(np.clip(c, -1.0, 1.0))
+
+
+# ---------------------------------------------------------------------------------------------
+# Pan-tilt head kinematics (thesis ch. 4, fig. 4.1)
+# ---------------------------------------------------------------------------------------------
+#
+# Frames. The *robot* frame is REP 103 (x forward, y left, z up), fixed to the robot body. The
+# *array* (head) frame is the frame the microphone positions of a MicArray are written in; at
+# pose (0, 0) its axes are parallel to the robot's.
+#
+# Pan (alpha, ``pan_deg``) turns the head about the robot's +z axis: positive pan turns the gaze
+# to the LEFT, exactly like azimuth (pan 90 deg looks along +y).
+#
+# Tilt (beta, ``tilt_deg``) then turns the head about the *panned* y axis. In REP 103 a positive
+# rotation about +y takes +x toward -z (nose DOWN). hearsee defines tilt the other way round so
+# that it reads like elevation: **positive tilt raises the gaze** (tilt 90 deg looks straight up).
+# The head rotation is therefore ``R = Rz(pan) @ Ry(-tilt)`` and the gaze (array +x axis) points
+# at azimuth = pan, elevation = tilt in the robot frame.
+#
+# Both axes pass through one point, the head *pivot* (``pivot_m``, robot frame). The array
+# frame's origin sits at ``offset_m`` from the pivot, written in the head frame (it turns with the
+# head); a real head carries its microphones some centimetres in front of / above the pan-tilt
+# axes, which moves the array centre when the head turns (useful parallax for distance).
+#
+#     p_robot = pivot_m + R(pan, tilt) @ (offset_m + p_array)
+#     p_array = R(pan, tilt)^T @ (p_robot - pivot_m) - offset_m
+
+
+@dataclass(frozen=True)
+class HeadPose:
+    """Pose of a pan-tilt head in degrees: ``pan_deg`` (alpha, + = left, about robot +z) and
+    ``tilt_deg`` (beta, + = gaze up, about the panned y axis). See the module notes above."""
+
+    pan_deg: float = 0.0
+    tilt_deg: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("pan_deg", "tilt_deg"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int | float | np.floating | np.integer):
+                raise GeometryError(f"HeadPose.{name} must be a number, got {v!r}")
+            if not np.isfinite(v):
+                raise GeometryError(f"HeadPose.{name} must be finite, got {v!r}")
+            object.__setattr__(self, name, float(v))
+        if abs(self.tilt_deg) > 90.0:
+            raise GeometryError(
+                f"HeadPose.tilt_deg must be within [-90, 90] degrees, got {self.tilt_deg}"
+            )
+
+    @property
+    def gaze(self) -> NDArray:
+        """Unit vector of the head's +x axis (gaze) in the robot frame."""
+        return unit_vector_deg(self.pan_deg, self.tilt_deg)
+
+    def as_tuple(self) -> tuple[float, float]:
+        return (self.pan_deg, self.tilt_deg)
+
+
+def as_pose(pose: HeadPose | Sequence[float]) -> HeadPose:
+    """A :class:`HeadPose` from a HeadPose or a ``(pan_deg, tilt_deg)`` pair."""
+    if isinstance(pose, HeadPose):
+        return pose
+    try:
+        pan, tilt = pose  # type: ignore[misc]
+    except (TypeError, ValueError):
+        raise GeometryError(f"a head pose is (pan_deg, tilt_deg), got {pose!r}") from None
+    return HeadPose(pan, tilt)
+
+
+def head_rotation(pan_deg: float, tilt_deg: float) -> Rotation:
+    """Rotation taking array(head)-frame vectors to the robot frame for a pan-tilt pose.
+
+    ``R = Rz(pan) @ Ry(-tilt)``: pan about robot +z (+ = left), then tilt about the panned y
+    axis with **+tilt = gaze up** (the opposite of REP 103's right-hand sense about +y, so that
+    tilt reads like elevation). The array's +x axis maps to ``unit_vector_deg(pan, tilt)``.
+
+    >>> np.round(head_rotation(90.0, 0.0).apply([1.0, 0.0, 0.0]), 6)
+    array([0., 1., 0.])
+    >>> np.round(head_rotation(0.0, 90.0).apply([1.0, 0.0, 0.0]), 6)
+    array([0., 0., 1.])
+    """
+    p = HeadPose(pan_deg, tilt_deg)
+    return Rotation.from_euler("ZY", [p.pan_deg, -p.tilt_deg], degrees=True)
+
+
+def _vec3(v: ArrayLike, what: str) -> NDArray:
+    a = np.asarray(v, dtype=float)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise GeometryError(f"{what} must be a finite [x, y, z] in metres, got {v!r}")
+    return a
+
+
+def array_to_robot(points: ArrayLike, pose: HeadPose | Sequence[float],
+                   pivot_m: ArrayLike = (0.0, 0.0, 0.0),
+                   offset_m: ArrayLike = (0.0, 0.0, 0.0)) -> NDArray:
+    """Points ``(..., 3)`` in the array frame at ``pose`` -> robot frame (metres).
+
+    ``pivot_m`` is the pan-tilt pivot in the robot frame; ``offset_m`` the array origin relative
+    to the pivot in the head frame (see the notes above :class:`HeadPose`).
+    """
+    p = as_pose(pose)
+    pts = np.asarray(points, dtype=float)
+    if pts.shape[-1] != 3:
+        raise GeometryError(f"expected points with 3 coordinates, got shape {pts.shape}")
+    R = head_rotation(p.pan_deg, p.tilt_deg).as_matrix()
+    return _vec3(pivot_m, "pivot_m") + (pts + _vec3(offset_m, "offset_m")) @ R.T
+
+
+def robot_to_array(points: ArrayLike, pose: HeadPose | Sequence[float],
+                   pivot_m: ArrayLike = (0.0, 0.0, 0.0),
+                   offset_m: ArrayLike = (0.0, 0.0, 0.0)) -> NDArray:
+    """Points ``(..., 3)`` in the robot frame -> array frame at ``pose`` (inverse of
+    :func:`array_to_robot`)."""
+    p = as_pose(pose)
+    pts = np.asarray(points, dtype=float)
+    if pts.shape[-1] != 3:
+        raise GeometryError(f"expected points with 3 coordinates, got shape {pts.shape}")
+    R = head_rotation(p.pan_deg, p.tilt_deg).as_matrix()
+    return (pts - _vec3(pivot_m, "pivot_m")) @ R - _vec3(offset_m, "offset_m")
+
+
+def mic_positions_at(array: Any, pose: HeadPose | Sequence[float],
+                     pivot_m: ArrayLike = (0.0, 0.0, 0.0),
+                     offset_m: ArrayLike = (0.0, 0.0, 0.0)) -> NDArray:
+    """Microphone positions ``(n_mics, 3)`` in the robot frame with the head at ``pose``.
+
+    ``array`` is a :class:`hearsee.audio.arrays.MicArray` (or an ``(n_mics, 3)`` array of
+    positions in the array frame); ``pivot_m`` is the pan-tilt pivot in the robot frame and
+    ``offset_m`` the array origin relative to the pivot in the head frame, metres.
+
+    >>> np.round(mic_positions_at([[0.1, 0, 0]], (90.0, 0.0)), 6)
+    array([[0. , 0.1, 0. ]])
+    """
+    pos = getattr(array, "positions", array)
+    pos = np.asarray(pos, dtype=float)
+    if pos.ndim != 2 or pos.shape[1] != 3:
+        raise GeometryError(f"microphone positions must be N x 3, got shape {pos.shape}")
+    return array_to_robot(pos, pose, pivot_m, offset_m)
