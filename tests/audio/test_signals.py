@@ -1,0 +1,185 @@
+import warnings
+
+import numpy as np
+import pytest
+import soundfile as sf
+
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.signals import (
+    VOICE_F0_HZ,
+    load_wav,
+    make_signal,
+    read_recording,
+    synthetic_voice,
+    white_noise,
+    write_recording,
+)
+from hearsee.errors import (
+    AudioInputError,
+    ClippingWarning,
+    ConfigError,
+    HearseeError,
+    InputFileError,
+)
+
+FS = 16000
+
+
+def _f0_autocorr(y, fs, frame=1024):
+    """Median F0 (Hz) of the loud frames from the autocorrelation peak in 70-400 Hz."""
+    ests = []
+    lo, hi = int(fs / 400), int(fs / 70)
+    for s in range(0, len(y) - frame, frame // 2):
+        f = y[s:s + frame] - y[s:s + frame].mean()
+        if np.mean(f**2) < 0.3:
+            continue
+        r = np.correlate(f, f, "full")[frame - 1:]
+        ests.append(fs / (lo + np.argmax(r[lo:hi])))
+    return float(np.median(ests))
+
+
+@pytest.mark.parametrize("kind", ["male", "female"])
+def test_voice_f0_power_and_pauses(kind):
+    y = synthetic_voice(kind, 2.0, FS, rng=3)
+    assert y.shape == (2 * FS,)
+    assert np.mean(y**2) == pytest.approx(1.0)
+    assert _f0_autocorr(y, FS) == pytest.approx(VOICE_F0_HZ[kind], rel=0.10)
+    silent = np.mean(y == 0.0)
+    assert 0.05 < silent < 0.6  # pauses between syllables, but mostly voiced
+
+
+def test_voice_is_deterministic_and_has_formant_energy():
+    a = synthetic_voice("female", 1.0, FS, rng=7)
+    b = synthetic_voice("female", 1.0, FS, rng=7)
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, synthetic_voice("female", 1.0, FS, rng=8))
+    spec = np.abs(np.fft.rfft(a)) ** 2
+    f = np.fft.rfftfreq(len(a), 1 / FS)
+    # speech-like: most energy below 4 kHz, yet some above 1 kHz (F2/F3)
+    assert spec[f < 4000].sum() / spec.sum() > 0.9
+    assert spec[(f > 1000) & (f < 4000)].sum() / spec.sum() > 0.02
+
+
+def test_voice_bad_args():
+    with pytest.raises(ConfigError):
+        synthetic_voice("child", 1.0, FS)
+    with pytest.raises(ConfigError):
+        synthetic_voice("male", -1.0, FS)
+
+
+def test_make_signal_kinds_and_file(tmp_path):
+    assert make_signal("noise", 0.5, FS, rng=1).shape == (FS // 2,)
+    np.testing.assert_array_equal(make_signal("noise", 0.5, FS, rng=1), white_noise(0.5, FS, 1))
+    assert make_signal("male", 0.5, FS, rng=1).shape == (FS // 2,)
+    # a 0.3 s 44.1 kHz stereo file -> looped to 1 s at 16 kHz, unit power
+    t = np.arange(int(0.3 * 44100)) / 44100
+    tone = 0.5 * np.sin(2 * np.pi * 440 * t)
+    path = tmp_path / "tone.wav"
+    sf.write(path, np.column_stack([tone, tone]), 44100)
+    y = make_signal(path, 1.0, FS)
+    assert y.shape == (FS,)
+    assert np.mean(y**2) == pytest.approx(1.0)
+    spec = np.abs(np.fft.rfft(y[:4800]))
+    assert np.fft.rfftfreq(4800, 1 / FS)[np.argmax(spec)] == pytest.approx(440, abs=5)
+    with pytest.raises(ConfigError, match="unknown signal"):
+        make_signal("pink", 1.0, FS)
+    with pytest.raises(InputFileError):
+        make_signal(tmp_path / "missing.wav", 1.0, FS)
+
+
+def test_load_wav_resamples(tmp_path):
+    path = tmp_path / "a.wav"
+    x = 0.3 * np.sin(2 * np.pi * 1000 * np.arange(48000) / 48000)
+    sf.write(path, x, 48000)
+    y, fs = load_wav(path, fs=16000)
+    assert fs == 16000 and len(y) == 16000
+    ref = 0.3 * np.sin(2 * np.pi * 1000 * np.arange(16000) / 16000)
+    np.testing.assert_allclose(y[200:-200], ref[200:-200], atol=2e-3)
+    y2, fs2 = load_wav(path)
+    assert fs2 == 48000 and len(y2) == 48000
+
+
+def _write(path, x, fs=FS, subtype="FLOAT"):
+    sf.write(path, np.asarray(x).T, fs, subtype=subtype)
+    return path
+
+
+def test_read_write_round_trip(tmp_path):
+    rng = np.random.default_rng(0)
+    x = 0.1 * rng.standard_normal((3, 4000))
+    p = write_recording(tmp_path / "r.wav", x, FS)
+    y, fs = read_recording(p, n_channels=3, fs=FS)
+    assert fs == FS and y.dtype == np.float64 and y.shape == (3, 4000)
+    np.testing.assert_allclose(y, x, atol=1e-7)
+    write_recording(tmp_path / "p.wav", x, FS, subtype="PCM_16")
+    assert sf.info(str(tmp_path / "p.wav")).subtype == "PCM_16"
+    y16, _ = read_recording(tmp_path / "p.wav", MicArray.from_preset("three-mic"))
+    np.testing.assert_allclose(y16, x, atol=1 / 32768 + 1e-9)
+
+
+def test_read_recording_bad_inputs(tmp_path):
+    good = 0.1 * np.random.default_rng(1).standard_normal((2, 2000))
+    with pytest.raises(InputFileError, match="not found"):
+        read_recording(tmp_path / "nope.wav")
+    with pytest.raises(InputFileError, match="directory"):
+        read_recording(tmp_path)
+    text = tmp_path / "notes.wav"
+    text.write_text("this is not audio\n" * 50)
+    with pytest.raises(AudioInputError, match="not an audio file"):
+        read_recording(text)
+    p = _write(tmp_path / "two.wav", good)
+    with pytest.raises(AudioInputError,
+                       match="recording has 2 channels but array 'three-mic' has 3 microphones"):
+        read_recording(p, MicArray.from_preset("three-mic"))
+    with pytest.raises(AudioInputError, match="2 channels but 4 were expected"):
+        read_recording(p, n_channels=4)
+    with pytest.raises(AudioInputError, match="sampled at 16000 Hz but 48000 Hz"):
+        read_recording(p, fs=48000)
+    y, fs = read_recording(p, fs=48000, resample=True)
+    assert fs == 48000 and y.shape == (2, 6000)
+    with pytest.raises(AudioInputError, match="too short"):
+        read_recording(_write(tmp_path / "short.wav", good[:, :10]))
+    with pytest.raises(AudioInputError, match="too short"):
+        read_recording(p, min_samples=5000)
+    bad = good.copy()
+    bad[1, 7] = np.nan
+    with pytest.raises(AudioInputError, match="NaN"):
+        read_recording(_write(tmp_path / "nan.wav", bad))
+    bad[1, 7] = np.inf
+    with pytest.raises(AudioInputError, match="NaN or infinite"):
+        read_recording(_write(tmp_path / "inf.wav", bad))
+    with pytest.raises(AudioInputError, match="silent"):
+        read_recording(_write(tmp_path / "zero.wav", np.zeros((2, 2000)), subtype="PCM_16"))
+    dead = good.copy()
+    dead[1] = 0
+    with pytest.raises(AudioInputError, match="channel 1 silent"):
+        read_recording(_write(tmp_path / "dead.wav", dead))
+    # every one of them is a HearseeError (the CLI's one-line error path)
+    assert issubclass(AudioInputError, HearseeError) and issubclass(InputFileError, HearseeError)
+
+
+def test_read_recording_warns_on_clipping(tmp_path):
+    x = np.clip(2.0 * np.random.default_rng(2).standard_normal((2, 4000)), -1, 1)
+    p = _write(tmp_path / "clip.wav", x, subtype="PCM_16")
+    with pytest.warns(ClippingWarning, match="clipped"):
+        read_recording(p)
+    ok = _write(tmp_path / "ok.wav", 0.1 * x)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_recording(ok)
+
+
+def test_write_recording_refusals(tmp_path):
+    x = 0.1 * np.ones((2, 100))
+    src = _write(tmp_path / "in.wav", x)
+    with pytest.raises(ConfigError, match="refusing to overwrite"):
+        write_recording(src, x, FS, protect=[src])
+    with pytest.raises(ConfigError, match="refusing to overwrite"):
+        write_recording(tmp_path / "." / "in.wav", x, FS, protect=str(src))
+    with pytest.raises(InputFileError, match="does not exist"):
+        write_recording(tmp_path / "no" / "out.wav", x, FS)
+    with pytest.raises(AudioInputError, match="full scale"):
+        write_recording(tmp_path / "loud.wav", 20 * x, FS, subtype="PCM_16")
+    with pytest.raises(AudioInputError, match="NaN"):
+        write_recording(tmp_path / "nan.wav", x * np.nan, FS)
+    assert sf.info(str(src)).channels == 2  # untouched
