@@ -1,0 +1,150 @@
+import numpy as np
+import pytest
+import scipy.signal as ss
+
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.propagation import simulate_free_field
+from hearsee.errors import ConfigError, GeometryError, InputFileError
+from hearsee.sim.moving import (
+    Trajectory,
+    fractional_delay,
+    linear_trajectory,
+    load_trajectory,
+    save_trajectory,
+    simulate_moving_free_field,
+    simulate_moving_room,
+    waypoint_trajectory,
+)
+
+FS = 16000
+
+
+def _bandlimited_noise(n, seed):
+    x = np.random.default_rng(seed).standard_normal(n)
+    return np.convolve(x, ss.firwin(255, 0.8), "same")
+
+
+def test_constant_fractional_delay_matches_frequency_domain_shift():
+    x = _bandlimited_noise(4000, 1)
+    d = 7.37
+    y = fractional_delay(x, np.full(4000, d))
+    X = np.fft.rfft(np.concatenate([x, np.zeros(100)]))
+    f = np.fft.rfftfreq(4100)
+    ref = np.fft.irfft(X * np.exp(-2j * np.pi * f * d), 4100)[:4000]
+    err = y[200:-200] - ref[200:-200]
+    assert np.sqrt(np.mean(err**2) / np.mean(ref**2)) < 1e-3
+
+
+def test_static_trajectory_equals_static_free_field():
+    arr = MicArray.from_preset("three-mic")
+    x = _bandlimited_noise(FS // 2, 2)
+    src = np.array([1.5, 0.7, 0.3])
+    y = simulate_moving_free_field(x, FS, arr, Trajectory([0.0], [src]))
+    y0 = simulate_free_field(x, FS, arr, src)
+    e = y[:, 300:-300] - y0[:, 300:-300]
+    assert np.sqrt(np.mean(e**2) / np.mean(y0**2)) < 1e-3
+
+
+def test_receding_source_shows_doppler_and_spreading():
+    f0, v, c = 1000.0, 20.0, 343.0
+    t = np.arange(FS) / FS
+    x = np.sin(2 * np.pi * f0 * t)
+    traj = linear_trajectory([1.0, 0.0, 0.0], [v, 0.0, 0.0], 1.0)
+    y = simulate_moving_free_field(x, FS, np.zeros((1, 3)), traj, speed_of_sound=c)[0]
+    seg = slice(2000, 14000)
+    phase = np.unwrap(np.angle(ss.hilbert(y)))[seg]
+    f_meas = np.polyfit(t[seg], phase, 1)[0] / (2 * np.pi)
+    assert f_meas == pytest.approx(f0 * c / (c + v), rel=2e-4)
+    # amplitude follows 1/r at the emission time: at reception t, r = (1 + v t) c / (c + v)
+    env = np.abs(ss.hilbert(y))[8000]
+    r_expected = (1.0 + v * 0.5) * c / (c + v)
+    assert env == pytest.approx(1.0 / r_expected, rel=0.01)
+
+
+def test_moving_source_delay_follows_trajectory():
+    # a pulse emitted at t_e arrives at t_e + r(t_e)/c
+    c = 343.0
+    x = np.zeros(FS)
+    x[8000] = 1.0
+    traj = linear_trajectory([2.0, 0.0, 0.0], [0.0, 3.0, 0.0], 1.0)
+    y = simulate_moving_free_field(x, FS, np.zeros((1, 3)), traj, speed_of_sound=c)[0]
+    r = np.linalg.norm(traj.at(0.5))
+    arrival = (0.5 + r / c) * FS  # samples, fractional
+    n = np.arange(int(arrival) - 10, int(arrival) + 11)
+    expected = np.sinc(n - arrival) / r
+    np.testing.assert_allclose(y[n], expected, atol=0.02 / r)
+    # a 0.2-sample error in the arrival time would be visible
+    assert np.max(np.abs(np.sinc(n - arrival - 0.2) / r - y[n])) > 0.1 / r
+
+
+def _delay_rir(mics_room, c=343.0, length=400):
+    def rir(src_room):
+        h = np.zeros((len(mics_room), length))
+        for k, m in enumerate(mics_room):
+            d = np.linalg.norm(src_room - m) / c * FS
+            h[k] = np.sinc(np.arange(length) - d) * np.hanning(length + 2)[1:-1]
+            h[k, :] = h[k] / np.linalg.norm(src_room - m)
+        return h
+    return rir
+
+
+def test_room_static_trajectory_is_a_single_convolution():
+    arr = MicArray.from_preset("two-mic")
+    at = np.array([2.0, 2.0, 1.2])
+    rir = _delay_rir(arr.positions + at)
+    x = _bandlimited_noise(FS // 2, 3)
+    src = np.array([1.0, 0.5, 0.0])
+    y = simulate_moving_room(x, FS, arr, Trajectory([0.0], [src]), [5, 4, 3], 0.3, at,
+                             rir_fn=rir, block_s=0.03)
+    h = rir(src + at)
+    ref = ss.fftconvolve(x[None, :], h, axes=-1)[:, : x.size]
+    np.testing.assert_allclose(y, ref, atol=1e-9 * np.abs(ref).max())
+
+
+def test_room_moving_source_delay_tracks_trajectory():
+    arr = MicArray(np.array([[0.0, 0.0, 0.0], [0.0, 0.3, 0.0]]))
+    at = np.array([2.0, 2.0, 1.2])
+    rir = _delay_rir(arr.positions + at)
+    x = _bandlimited_noise(FS, 4)
+    traj = linear_trajectory([1.5, -1.0, 0.0], [0.0, 2.0, 0.0], 1.0)
+    y = simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.3, at, rir_fn=rir, block_s=0.02)
+    for tc in (0.25, 0.75):
+        s = slice(int(tc * FS) - 512, int(tc * FS) + 512)
+        cc = ss.correlate(y[0, s], y[1, s], "full")
+        lag = (np.argmax(cc) - 1023) / FS
+        true = arr.tdoa(traj.at(tc))[0]
+        assert lag == pytest.approx(true, abs=1.5 / FS)
+
+
+def test_trajectory_interpolation_velocity_and_csv_roundtrip(tmp_path):
+    traj = waypoint_trajectory([[1, 0, 0], [1, 1, 0], [0, 1, 0]], speed_mps=0.5)
+    assert traj.duration == pytest.approx(4.0)
+    np.testing.assert_allclose(traj.at(1.0), [1, 0.5, 0])
+    np.testing.assert_allclose(traj.velocity(3.0), [-0.5, 0, 0])
+    np.testing.assert_allclose(traj.at(-1.0), [1, 0, 0])
+    p = tmp_path / "traj.csv"
+    save_trajectory(traj, p)
+    back = load_trajectory(p)
+    np.testing.assert_allclose(back.positions, traj.positions, atol=1e-6)
+
+
+def test_bad_trajectories(tmp_path):
+    with pytest.raises(GeometryError):
+        Trajectory([0.0, 0.0], [[0, 0, 0], [1, 0, 0]])
+    with pytest.raises(GeometryError):
+        Trajectory([0.0, 1.0], [[0, 0, 0]])
+    with pytest.raises(InputFileError):
+        load_trajectory(tmp_path / "missing.csv")
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time,x,y\n0,1,2\n")
+    with pytest.raises(ConfigError, match="header"):
+        load_trajectory(bad)
+    bad.write_text("t,x,y,z\n0,1,2,abc\n")
+    with pytest.raises(ConfigError, match="non-numeric"):
+        load_trajectory(bad)
+    bad.write_text("t,x,y,z\n1,1,2,3\n0,1,2,3\n")
+    with pytest.raises(ConfigError, match="increasing"):
+        load_trajectory(bad)
+    with pytest.raises(GeometryError):
+        simulate_moving_free_field(np.ones(100), FS, np.zeros((1, 3)),
+                                   Trajectory([0.0], [[0.0, 0.0, 0.0]]))
