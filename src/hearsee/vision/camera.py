@@ -1,0 +1,750 @@
+"""Pinhole cameras with lens distortion, stereo(+thermal) rigs and their calibration files.
+
+Conventions
+-----------
+* **Optical frame** (OpenCV): x right, y down, z forward (along the optical axis), metres.
+  Pixels ``(u, v)``: u right (column), v down (row); the centre of the top-left pixel is
+  ``(0, 0)``.
+* **Intrinsics** ``K = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]`` in pixels; distortion ``dist``
+  in OpenCV order ``(k1, k2, p1, p2[, k3[, k4, k5, k6[, s1, s2, s3, s4[, tx, ty]]]])`` with
+  4, 5, 8, 12 or 14 coefficients (empty = no distortion).
+* **Extrinsics** ``(R, T)`` map points of one camera's optical frame into another's:
+  ``X_right = R @ X_left + T`` (the convention of ``cv2.stereoCalibrate``). ``T`` is in metres.
+  For a usual horizontal rig the right camera sits at ``+B`` along the left camera's x axis, so
+  ``T = [-B, 0, 0]`` and disparities ``d = u_left - u_right`` are positive.
+* **Body frame** (ROS REP 103): x forward, y left, z up. :data:`OPTICAL_FROM_BODY` rotates body
+  vectors into the optical frame of a camera looking along body +x; :func:`camera_pose` places
+  a camera on the robot (e.g. on the pan-tilt head).
+
+Calibration file format (YAML, one format for cameras and rigs; metres, pixels)
+------------------------------------------------------------------------------
+A single camera::
+
+    kind: camera            # optional
+    name: left              # optional
+    width: 640              # pixels
+    height: 480
+    K: [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]
+    dist: [k1, k2, p1, p2, k3]    # OpenCV order; [] = none
+    rms_px: 0.21            # optional: RMS reprojection error of the calibration
+
+A stereo rig, optionally with a thermal camera::
+
+    kind: stereo_rig
+    left:  {width: .., height: .., K: .., dist: ..}
+    right: {width: .., height: .., K: .., dist: ..}
+    R: [[...], [...], [...]]   # right-from-left rotation: X_right = R X_left + T
+    T: [tx, ty, tz]            # metres
+    thermal:                   # optional
+      camera: {width: .., height: .., K: .., dist: ..}
+      R: [[...], [...], [...]] # thermal-from-left: X_thermal = R X_left + T
+      T: [tx, ty, tz]          # metres
+    rms_px: 0.3                # optional, stereo RMS reprojection error
+    info: {...}                # optional free-form metadata (board, square size, image count)
+
+:func:`load_camera` also reads one camera out of a rig file (``which="left"|"right"|"thermal"``).
+OpenCV ``FileStorage`` files (``%YAML:1.0`` with ``!!opencv-matrix``) are read with
+:func:`read_opencv_yaml`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+import yaml
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from hearsee.config import as_float_array, check_keys, load_yaml, require
+from hearsee.errors import CalibrationError, ConfigError, GeometryError, InputFileError
+
+__all__ = [
+    "OPTICAL_FROM_BODY",
+    "Camera",
+    "Rectification",
+    "StereoRig",
+    "camera_pose",
+    "load_camera",
+    "load_rig",
+    "read_opencv_yaml",
+    "save_camera",
+    "save_rig",
+    "transform_points",
+]
+
+#: Rotation taking REP-103 body vectors (x forward, y left, z up) to the optical frame of a
+#: camera looking forward (x right, y down, z forward): ``p_optical = OPTICAL_FROM_BODY @ p_body``.
+OPTICAL_FROM_BODY: NDArray = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
+OPTICAL_FROM_BODY.setflags(write=False)
+
+_DIST_LENGTHS = (0, 4, 5, 8, 12, 14)
+
+
+def _check_rotation(R: ArrayLike, what: str) -> NDArray:
+    R = np.asarray(R, dtype=float)
+    if R.shape == (3,) or R.shape == (3, 1) or R.shape == (1, 3):  # Rodrigues vector
+        R = cv2.Rodrigues(R.reshape(3, 1))[0]
+    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+        raise CalibrationError(
+            f"{what}: expected a finite 3x3 rotation matrix, got shape {R.shape}"
+        )
+    if not np.allclose(R @ R.T, np.eye(3), atol=1e-5) or np.linalg.det(R) < 0:
+        raise CalibrationError(f"{what}: not a rotation matrix (R R^T != I or det(R) < 0)")
+    return R
+
+
+def _check_translation(T: ArrayLike, what: str) -> NDArray:
+    T = np.asarray(T, dtype=float).reshape(-1)
+    if T.shape != (3,) or not np.all(np.isfinite(T)):
+        raise CalibrationError(f"{what}: expected 3 finite numbers (metres), got {T.shape}")
+    return T
+
+
+@dataclass(frozen=True, eq=False)
+class Camera:
+    """A pinhole camera with OpenCV lens distortion.
+
+    Parameters
+    ----------
+    K : (3, 3) array
+        Intrinsic matrix in pixels.
+    dist : (k,) array
+        Distortion coefficients in OpenCV order, k in {0, 4, 5, 8, 12, 14}.
+    width, height : int
+        Image size in pixels.
+    name : str
+        Optional label ("left", "thermal", ...).
+
+    Examples
+    --------
+    >>> cam = Camera.from_fov(60.0, 640, 480)
+    >>> np.round(cam.project([[0.0, 0.0, 2.0]]), 3)
+    array([[319.5, 239.5]])
+    """
+
+    K: NDArray
+    dist: NDArray = field(default_factory=lambda: np.zeros(0))
+    width: int = 640
+    height: int = 480
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        K = np.asarray(self.K, dtype=float)
+        if K.shape != (3, 3) or not np.all(np.isfinite(K)):
+            raise CalibrationError(f"camera K: expected a finite 3x3 matrix, got shape {K.shape}")
+        if not np.allclose(K[2], [0.0, 0.0, 1.0]) or K[1, 0] != 0 or K[0, 0] <= 0 or K[1, 1] <= 0:
+            raise CalibrationError(
+                "camera K: expected [[fx, s, cx], [0, fy, cy], [0, 0, 1]] with fx, fy > 0"
+            )
+        d = np.asarray(self.dist if self.dist is not None else [], dtype=float).reshape(-1)
+        if d.size not in _DIST_LENGTHS or not np.all(np.isfinite(d)):
+            raise CalibrationError(
+                f"camera dist: expected 0, 4, 5, 8, 12 or 14 finite coefficients, got {d.size}"
+            )
+        if np.all(d == 0):
+            d = np.zeros(0)
+        w, h = int(self.width), int(self.height)
+        if w <= 0 or h <= 0 or w != self.width or h != self.height:
+            raise CalibrationError(
+                f"camera size: width and height must be positive integers, got "
+                f"{self.width}x{self.height}"
+            )
+        K.setflags(write=False)
+        d.setflags(write=False)
+        object.__setattr__(self, "K", K)
+        object.__setattr__(self, "dist", d)
+        object.__setattr__(self, "width", w)
+        object.__setattr__(self, "height", h)
+
+    # -- construction ---------------------------------------------------------------------
+    @classmethod
+    def from_fov(cls, hfov_deg: float, width: int, height: int, *, vfov_deg: float | None = None,
+                 name: str = "") -> Camera:
+        """An ideal (distortion-free) camera with horizontal field of view ``hfov_deg`` degrees.
+
+        Square pixels unless ``vfov_deg`` is given; principal point at the image centre
+        ``((width - 1) / 2, (height - 1) / 2)``.
+        """
+        if not 0.0 < hfov_deg < 180.0:
+            raise CalibrationError(f"hfov_deg must be in (0, 180), got {hfov_deg}")
+        fx = (width / 2.0) / np.tan(np.radians(hfov_deg) / 2.0)
+        if vfov_deg is None:
+            fy = fx
+        else:
+            if not 0.0 < vfov_deg < 180.0:
+                raise CalibrationError(f"vfov_deg must be in (0, 180), got {vfov_deg}")
+            fy = (height / 2.0) / np.tan(np.radians(vfov_deg) / 2.0)
+        K = np.array([[fx, 0.0, (width - 1) / 2.0], [0.0, fy, (height - 1) / 2.0], [0, 0, 1.0]])
+        return cls(K=K, dist=np.zeros(0), width=width, height=height, name=name)
+
+    # -- properties -----------------------------------------------------------------------
+    @property
+    def fx(self) -> float:
+        """Focal length along u, pixels."""
+        return float(self.K[0, 0])
+
+    @property
+    def fy(self) -> float:
+        """Focal length along v, pixels."""
+        return float(self.K[1, 1])
+
+    @property
+    def cx(self) -> float:
+        return float(self.K[0, 2])
+
+    @property
+    def cy(self) -> float:
+        return float(self.K[1, 2])
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """``(width, height)`` in pixels (the order OpenCV functions take)."""
+        return (self.width, self.height)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(height, width)``: the numpy shape of a single-channel image from this camera."""
+        return (self.height, self.width)
+
+    @property
+    def hfov_deg(self) -> float:
+        """Horizontal field of view of the pinhole (ignoring distortion), degrees."""
+        return float(np.degrees(2 * np.arctan2(self.width / 2.0, self.fx)))
+
+    @property
+    def vfov_deg(self) -> float:
+        """Vertical field of view of the pinhole (ignoring distortion), degrees."""
+        return float(np.degrees(2 * np.arctan2(self.height / 2.0, self.fy)))
+
+    @property
+    def has_distortion(self) -> bool:
+        return self.dist.size > 0
+
+    def with_size(self, width: int, height: int) -> Camera:
+        """The same camera resampled to ``width x height`` pixels (K scaled; dist unchanged)."""
+        sx, sy = width / self.width, height / self.height
+        S = np.diag([sx, sy, 1.0])
+        K = S @ self.K
+        # keep pixel-centre convention: u' + 0.5 = sx (u + 0.5)
+        K[0, 2] = sx * (self.cx + 0.5) - 0.5
+        K[1, 2] = sy * (self.cy + 0.5) - 0.5
+        return Camera(K=K, dist=self.dist.copy(), width=width, height=height, name=self.name)
+
+    # -- geometry -------------------------------------------------------------------------
+    def project(self, points: ArrayLike) -> NDArray:
+        """Project 3D points ``(N, 3)`` in this camera's optical frame (metres) to pixels.
+
+        Returns ``(N, 2)`` float ``(u, v)`` including lens distortion; points with ``z <= 0``
+        (behind the camera) give NaN. Pixels may lie outside the image: see :meth:`in_image`.
+        """
+        P = np.asarray(points, dtype=float)
+        if P.ndim == 1:
+            P = P[None, :]
+        if P.ndim != 2 or P.shape[1] != 3:
+            raise GeometryError(f"project: expected points of shape (N, 3), got {P.shape}")
+        z = P[:, 2]
+        front = z > 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = np.where(front, P[:, 0] / np.where(front, z, 1.0), np.nan)
+            y = np.where(front, P[:, 1] / np.where(front, z, 1.0), np.nan)
+        if self.dist.size == 14 and np.any(self.dist[12:] != 0):  # tilted sensor: defer to OpenCV
+            out = np.full((len(P), 2), np.nan)
+            if np.any(front):
+                uv, _ = cv2.projectPoints(P[front].reshape(-1, 1, 3), np.zeros(3), np.zeros(3),
+                                          self.K, self.dist)
+                out[front] = uv.reshape(-1, 2)
+            return out
+        xd, yd = _distort(x, y, self.dist)
+        K = self.K
+        u = K[0, 0] * xd + K[0, 1] * yd + K[0, 2]
+        v = K[1, 1] * yd + K[1, 2]
+        return np.stack([u, v], axis=1)
+
+    def normalized(self, uv: ArrayLike) -> NDArray:
+        """Undistorted normalised image coordinates ``(N, 2)`` (x/z, y/z) of pixels ``(N, 2)``."""
+        p = np.asarray(uv, dtype=float)
+        if p.ndim == 1:
+            p = p[None, :]
+        if p.ndim != 2 or p.shape[1] != 2:
+            raise GeometryError(f"pixel coordinates: expected shape (N, 2), got {p.shape}")
+        if len(p) == 0:
+            return np.zeros((0, 2))
+        if not self.has_distortion:
+            y = (p[:, 1] - self.cy) / self.fy
+            x = (p[:, 0] - self.cx - self.K[0, 1] * y) / self.fx
+            return np.stack([x, y], axis=1)
+        crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-10)
+        xy = cv2.undistortPointsIter(p.reshape(-1, 1, 2), self.K, self.dist, None, None, crit)
+        return xy.reshape(-1, 2).astype(float)
+
+    def pixel_rays(self, uv: ArrayLike) -> NDArray:
+        """Unit viewing rays ``(N, 3)`` in the optical frame through pixels ``uv`` ``(N, 2)``
+        (lens distortion removed)."""
+        xy = self.normalized(uv)
+        rays = np.concatenate([xy, np.ones((len(xy), 1))], axis=1)
+        return rays / np.linalg.norm(rays, axis=1, keepdims=True)
+
+    def in_image(self, uv: ArrayLike, margin: float = 0.0) -> NDArray:
+        """Boolean mask ``(N,)``: pixel lies inside the image (shrunk by ``margin`` pixels)."""
+        p = np.asarray(uv, dtype=float).reshape(-1, 2)
+        with np.errstate(invalid="ignore"):
+            return ((p[:, 0] >= -0.5 + margin) & (p[:, 0] <= self.width - 0.5 - margin)
+                    & (p[:, 1] >= -0.5 + margin) & (p[:, 1] <= self.height - 0.5 - margin))
+
+    # -- io ---------------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """The YAML mapping of this camera (see module docstring)."""
+        d: dict[str, Any] = {}
+        if self.name:
+            d["name"] = self.name
+        d.update(width=self.width, height=self.height, K=self.K.tolist(),
+                 dist=self.dist.tolist())
+        return d
+
+    @classmethod
+    def from_dict(cls, data: Any, where: str = "camera") -> Camera:
+        """Build a camera from a YAML mapping; ConfigError names the bad field."""
+        if not isinstance(data, dict):
+            raise ConfigError(f"{where}: expected a mapping with width, height, K, dist")
+        check_keys(data, ["kind", "name", "width", "height", "K", "dist", "rms_px", "info"], where)
+        width = require(data, "width", where)
+        height = require(data, "height", where)
+        for key, val in (("width", width), ("height", height)):
+            if isinstance(val, bool) or not isinstance(val, int) or val <= 0:
+                raise ConfigError(f"{where}: {key} must be a positive integer, got {val!r}")
+        K = as_float_array(require(data, "K", where), f"{where}: K", (3, 3))
+        dist = as_float_array(data.get("dist", []) or [], f"{where}: dist").reshape(-1)
+        if dist.size not in _DIST_LENGTHS:
+            raise ConfigError(
+                f"{where}: dist must have 0, 4, 5, 8, 12 or 14 coefficients, got {dist.size}"
+            )
+        try:
+            return cls(K=K, dist=dist, width=width, height=height, name=str(data.get("name", "")))
+        except CalibrationError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+
+
+def _distort(x: NDArray, y: NDArray, d: NDArray) -> tuple[NDArray, NDArray]:
+    """OpenCV distortion model on normalised coordinates (without the tilt terms)."""
+    if d.size == 0:
+        return x, y
+    c = np.zeros(12)
+    c[: min(d.size, 12)] = d[:12]
+    k1, k2, p1, p2, k3, k4, k5, k6, s1, s2, s3, s4 = c
+    r2 = x * x + y * y
+    r4 = r2 * r2
+    r6 = r4 * r2
+    radial = (1 + k1 * r2 + k2 * r4 + k3 * r6) / (1 + k4 * r2 + k5 * r4 + k6 * r6)
+    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x) + s1 * r2 + s2 * r4
+    yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y + s3 * r2 + s4 * r4
+    return xd, yd
+
+
+@dataclass(frozen=True, eq=False)
+class Rectification:
+    """Rectification of a stereo rig (``cv2.stereoRectify``) for images of ``size`` (w, h).
+
+    ``R1``/``R2`` rotate the left/right optical frames into the common rectified frame (that of
+    the rectified left camera), ``P1``/``P2`` are the 3x4 rectified projections and ``Q`` the
+    4x4 disparity-to-depth matrix: ``[X Y Z W]^T = Q [u v d 1]^T`` in the rectified left frame
+    (metres, since T is in metres).
+    """
+
+    R1: NDArray
+    R2: NDArray
+    P1: NDArray
+    P2: NDArray
+    Q: NDArray
+    size: tuple[int, int]
+    roi_left: tuple[int, int, int, int]
+    roi_right: tuple[int, int, int, int]
+
+    @property
+    def focal_px(self) -> float:
+        """Focal length of the rectified cameras, pixels."""
+        return float(self.P1[0, 0])
+
+    @property
+    def baseline_m(self) -> float:
+        """Signed rectified baseline, metres: positive when the right camera is to the right
+        (then disparities ``u_left - u_right`` are positive)."""
+        return float(-self.P2[0, 3] / self.P2[0, 0])
+
+    @property
+    def cx(self) -> float:
+        return float(self.P1[0, 2])
+
+    @property
+    def cy(self) -> float:
+        return float(self.P1[1, 2])
+
+    @property
+    def camera(self) -> Camera:
+        """The ideal (distortion-free) rectified left camera."""
+        return Camera(K=self.P1[:, :3].copy(), dist=np.zeros(0), width=self.size[0],
+                      height=self.size[1], name="rectified")
+
+
+@dataclass(frozen=True, eq=False)
+class StereoRig:
+    """Two cameras (and optionally a thermal camera) with their extrinsics.
+
+    Parameters
+    ----------
+    left, right : Camera
+    R, T : (3, 3), (3,)
+        Right-from-left: ``X_right = R @ X_left + T`` (metres).
+    thermal : Camera, optional
+    R_thermal, T_thermal : (3, 3), (3,), optional
+        Thermal-from-left: ``X_thermal = R_thermal @ X_left + T_thermal`` (metres).
+    rms_px : float, optional
+        RMS reprojection error of the stereo calibration (pixels), when known.
+    info : dict
+        Free-form metadata saved with the rig.
+    """
+
+    left: Camera
+    right: Camera
+    R: NDArray
+    T: NDArray
+    thermal: Camera | None = None
+    R_thermal: NDArray | None = None
+    T_thermal: NDArray | None = None
+    rms_px: float | None = None
+    info: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.left, Camera) or not isinstance(self.right, Camera):
+            raise CalibrationError("StereoRig: left and right must be Camera instances")
+        R = _check_rotation(self.R, "rig R (right-from-left)")
+        T = _check_translation(self.T, "rig T (right-from-left)")
+        if np.linalg.norm(T) <= 0:
+            raise CalibrationError("rig T: the baseline is zero (both cameras at one point)")
+        object.__setattr__(self, "R", R)
+        object.__setattr__(self, "T", T)
+        if self.thermal is not None:
+            if not isinstance(self.thermal, Camera):
+                raise CalibrationError("StereoRig: thermal must be a Camera")
+            if self.R_thermal is None or self.T_thermal is None:
+                raise CalibrationError(
+                    "StereoRig: a thermal camera needs R_thermal and T_thermal (thermal-from-left)"
+                )
+            object.__setattr__(self, "R_thermal",
+                               _check_rotation(self.R_thermal, "rig R_thermal (thermal-from-left)"))
+            object.__setattr__(self, "T_thermal",
+                               _check_translation(self.T_thermal, "rig T_thermal"))
+
+    # -- construction ---------------------------------------------------------------------
+    @classmethod
+    def ideal(cls, camera: Camera, baseline_m: float, *, thermal: Camera | None = None,
+              thermal_offset_m: ArrayLike = (0.0, 0.0, 0.0),
+              thermal_rotation: ArrayLike | None = None) -> StereoRig:
+        """A rectified rig of two identical cameras ``baseline_m`` metres apart (right camera at
+        ``+baseline_m`` along the left camera's x axis); optional thermal camera whose optical
+        centre is at ``thermal_offset_m`` in the left optical frame (rotation thermal-from-left
+        ``thermal_rotation``, default identity)."""
+        if not baseline_m > 0:
+            raise CalibrationError(f"baseline_m must be > 0, got {baseline_m}")
+        right = Camera(K=camera.K.copy(), dist=camera.dist.copy(), width=camera.width,
+                       height=camera.height, name="right")
+        left = Camera(K=camera.K.copy(), dist=camera.dist.copy(), width=camera.width,
+                      height=camera.height, name="left")
+        kw: dict[str, Any] = {}
+        if thermal is not None:
+            Rt = np.eye(3) if thermal_rotation is None else np.asarray(thermal_rotation, float)
+            c = np.asarray(thermal_offset_m, float).reshape(3)
+            kw = dict(thermal=thermal, R_thermal=Rt, T_thermal=-Rt @ c)
+        return cls(left=left, right=right, R=np.eye(3), T=np.array([-baseline_m, 0.0, 0.0]),
+                   **kw)
+
+    # -- geometry -------------------------------------------------------------------------
+    @property
+    def baseline_m(self) -> float:
+        """Distance between the two optical centres, metres (``|T|``)."""
+        return float(np.linalg.norm(self.T))
+
+    @property
+    def right_center_m(self) -> NDArray:
+        """Optical centre of the right camera in the left optical frame, metres."""
+        return -self.R.T @ self.T
+
+    @property
+    def thermal_center_m(self) -> NDArray | None:
+        """Optical centre of the thermal camera in the left optical frame, metres."""
+        if self.thermal is None:
+            return None
+        return -self.R_thermal.T @ self.T_thermal
+
+    @property
+    def is_rectified(self) -> bool:
+        """True when images need no rectification: no distortion, identical K and size,
+        R = I and T along x (so disparity is purely horizontal)."""
+        return bool(
+            not self.left.has_distortion and not self.right.has_distortion
+            and np.allclose(self.left.K, self.right.K) and self.left.size == self.right.size
+            and np.allclose(self.R, np.eye(3), atol=1e-9)
+            and abs(self.T[1]) < 1e-9 * self.baseline_m and abs(self.T[2]) < 1e-9 * self.baseline_m
+        )
+
+    @cached_property
+    def rectification(self) -> Rectification:
+        """Rectification at full image size with ``alpha = 0`` (only valid pixels kept)."""
+        return self.rectify(alpha=0.0)
+
+    def rectify(self, alpha: float = 0.0, size: tuple[int, int] | None = None) -> Rectification:
+        """``cv2.stereoRectify`` (CALIB_ZERO_DISPARITY) of this rig.
+
+        ``alpha`` in [0, 1]: 0 keeps only valid pixels, 1 keeps all source pixels. ``size`` is
+        the output (w, h), default the left image size. For an already rectified rig the result
+        is the identity with the left K.
+        """
+        if self.left.size != self.right.size:
+            raise CalibrationError(
+                f"left and right images differ in size ({self.left.size} vs {self.right.size}); "
+                "rectification needs equal sizes"
+            )
+        out_size = tuple(size) if size is not None else self.left.size
+        if self.is_rectified and out_size == self.left.size:
+            K = self.left.K
+            P1 = np.hstack([K, np.zeros((3, 1))])
+            P2 = P1.copy()
+            P2[0, 3] = self.T[0] * K[0, 0]
+            f, B = K[0, 0], -self.T[0]
+            Q = np.array([[1, 0, 0, -K[0, 2]], [0, 1, 0, -K[1, 2]], [0, 0, 0, f],
+                          [0, 0, 1.0 / B, 0]], dtype=float)
+            roi = (0, 0, self.left.width, self.left.height)
+            return Rectification(np.eye(3), np.eye(3), P1, P2, Q, self.left.size, roi, roi)
+        R1, R2, P1, P2, Q, roi1, roi2 = cv2.stereoRectify(
+            self.left.K, self.left.dist, self.right.K, self.right.dist, self.left.size,
+            self.R, self.T.reshape(3, 1), flags=cv2.CALIB_ZERO_DISPARITY, alpha=alpha,
+            newImageSize=out_size,
+        )
+        return Rectification(R1, R2, P1, P2, Q, (int(out_size[0]), int(out_size[1])),
+                             tuple(int(v) for v in roi1), tuple(int(v) for v in roi2))
+
+    @property
+    def focal_px(self) -> float:
+        """Focal length of the rectified pair, pixels (used in Z = f B / d)."""
+        return self.rectification.focal_px
+
+    @property
+    def Q(self) -> NDArray:
+        """4x4 disparity-to-depth matrix of the default rectification (:class:`Rectification`)."""
+        return self.rectification.Q
+
+    def left_to_right(self, points: ArrayLike) -> NDArray:
+        """Points ``(N, 3)`` from the left optical frame to the right one (metres)."""
+        return transform_points(self.R, self.T, points)
+
+    def left_to_thermal(self, points: ArrayLike) -> NDArray:
+        """Points ``(N, 3)`` from the left optical frame to the thermal camera's (metres)."""
+        if self.thermal is None:
+            raise CalibrationError("this rig has no thermal camera (add a 'thermal:' block)")
+        return transform_points(self.R_thermal, self.T_thermal, points)
+
+    def project_thermal(self, points: ArrayLike) -> NDArray:
+        """Pixels ``(N, 2)`` in the thermal image of points ``(N, 3)`` in the left frame."""
+        return self.thermal_camera.project(self.left_to_thermal(points))
+
+    @property
+    def thermal_camera(self) -> Camera:
+        if self.thermal is None:
+            raise CalibrationError("this rig has no thermal camera (add a 'thermal:' block)")
+        return self.thermal
+
+    def with_thermal(self, thermal: Camera, R_thermal: ArrayLike,
+                     T_thermal: ArrayLike) -> StereoRig:
+        """A copy of this rig with a thermal camera (thermal-from-left extrinsics)."""
+        return StereoRig(self.left, self.right, self.R, self.T, thermal, np.asarray(R_thermal),
+                         np.asarray(T_thermal), self.rms_px, dict(self.info))
+
+    # -- io ---------------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {
+            "kind": "stereo_rig",
+            "left": self.left.to_dict(),
+            "right": self.right.to_dict(),
+            "R": self.R.tolist(),
+            "T": self.T.tolist(),
+        }
+        if self.thermal is not None:
+            d["thermal"] = {"camera": self.thermal.to_dict(), "R": self.R_thermal.tolist(),
+                            "T": self.T_thermal.tolist()}
+        if self.rms_px is not None:
+            d["rms_px"] = float(self.rms_px)
+        if self.info:
+            d["info"] = dict(self.info)
+        return d
+
+    @classmethod
+    def from_dict(cls, data: Any, where: str = "rig") -> StereoRig:
+        if not isinstance(data, dict):
+            raise ConfigError(f"{where}: expected a mapping")
+        check_keys(data, ["kind", "left", "right", "R", "T", "thermal", "rms_px", "info"], where)
+        left = Camera.from_dict(require(data, "left", where), f"{where}: left")
+        right = Camera.from_dict(require(data, "right", where), f"{where}: right")
+        R = as_float_array(require(data, "R", where), f"{where}: R", (3, 3))
+        T = as_float_array(require(data, "T", where), f"{where}: T").reshape(-1)
+        kw: dict[str, Any] = {}
+        if data.get("thermal") is not None:
+            th = data["thermal"]
+            w = f"{where}: thermal"
+            if not isinstance(th, dict):
+                raise ConfigError(f"{w}: expected a mapping with camera, R, T")
+            check_keys(th, ["camera", "R", "T"], w)
+            kw["thermal"] = Camera.from_dict(require(th, "camera", w), f"{w}: camera")
+            kw["R_thermal"] = as_float_array(require(th, "R", w), f"{w}: R", (3, 3))
+            kw["T_thermal"] = as_float_array(require(th, "T", w), f"{w}: T").reshape(-1)
+        rms = data.get("rms_px")
+        info = data.get("info") or {}
+        if not isinstance(info, dict):
+            raise ConfigError(f"{where}: info must be a mapping")
+        try:
+            return cls(left=left, right=right, R=R, T=T,
+                       rms_px=None if rms is None else float(rms), info=info, **kw)
+        except CalibrationError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+
+
+def transform_points(R: ArrayLike, t: ArrayLike, points: ArrayLike) -> NDArray:
+    """Apply ``X' = R X + t`` to points ``(N, 3)`` (or one point ``(3,)``)."""
+    P = np.asarray(points, dtype=float)
+    one = P.ndim == 1
+    P = P.reshape(-1, 3)
+    out = P @ np.asarray(R, float).T + np.asarray(t, float).reshape(1, 3)
+    return out[0] if one else out
+
+
+def camera_pose(position_m: ArrayLike = (0.0, 0.0, 0.0), pan_deg: float = 0.0,
+                tilt_deg: float = 0.0, roll_deg: float = 0.0) -> tuple[NDArray, NDArray]:
+    """Pose of a camera on the robot: returns ``(R, t)`` with ``p_optical = R @ p_body + t``.
+
+    The camera's optical centre is at ``position_m`` (body frame, metres, REP 103). With all
+    angles zero it looks along body +x with image "up" = body +z. ``pan_deg`` turns it toward
+    +y (left, like azimuth), ``tilt_deg`` raises it (like elevation), ``roll_deg`` rotates it
+    about its viewing axis by the right-hand rule about body +x (the top of the camera turns
+    toward the robot's right, so the scene appears rotated counter-clockwise in the image).
+
+    >>> R, t = camera_pose((0.0, 0.0, 1.2))
+    >>> np.round(R @ np.array([3.0, 0.5, 1.2]) + t, 6) + 0.0  # 3 m ahead, 0.5 m left, eye height
+    array([-0.5,  0. ,  3. ])
+    """
+    # body-from-mount: mount axes are body axes turned by pan (about z), tilt, roll (about x)
+    mount = Rotation.from_euler("ZYX", [pan_deg, -tilt_deg, roll_deg], degrees=True).as_matrix()
+    R = OPTICAL_FROM_BODY @ mount.T
+    c = np.asarray(position_m, dtype=float).reshape(3)
+    return R, -R @ c
+
+
+# ---------------------------------------------------------------------------------------------
+# Files
+# ---------------------------------------------------------------------------------------------
+def _load_calib_yaml(path: str | Path) -> dict[str, Any]:
+    p = Path(path)
+    if not p.is_file():
+        raise InputFileError(
+            f"{p}: calibration file not found (create one with `hearsee calibrate`)"
+        )
+    head = p.read_bytes()[:16]
+    if head.startswith(b"%YAML:1.0") or head.startswith(b"%YAML 1.0"):
+        raise ConfigError(
+            f"{p}: this is an OpenCV FileStorage file, not a hearsee calibration file; read it "
+            "with hearsee.vision.camera.read_opencv_yaml"
+        )
+    return load_yaml(p)
+
+
+def load_camera(path: str | Path, which: str = "left") -> Camera:
+    """Read a camera from a camera file, or camera ``which`` ("left", "right", "thermal") from a
+    rig file. Raises InputFileError / ConfigError naming the field."""
+    data = _load_calib_yaml(path)
+    where = str(path)
+    if "left" in data or data.get("kind") == "stereo_rig":
+        if which not in ("left", "right", "thermal"):
+            raise ConfigError(f"{where}: which must be left, right or thermal, got {which!r}")
+        if which == "thermal":
+            th = require(data, "thermal", where)
+            if not isinstance(th, dict):
+                raise ConfigError(f"{where}: thermal must be a mapping")
+            return Camera.from_dict(require(th, "camera", f"{where}: thermal"),
+                                    f"{where}: thermal: camera")
+        return Camera.from_dict(require(data, which, where), f"{where}: {which}")
+    return Camera.from_dict(data, where)
+
+
+def save_camera(camera: Camera, path: str | Path, *, rms_px: float | None = None) -> None:
+    """Write ``camera`` as a camera YAML file (see the module docstring)."""
+    d = {"kind": "camera", **camera.to_dict()}
+    if rms_px is not None:
+        d["rms_px"] = float(rms_px)
+    _dump_calib_yaml(d, path, "hearsee camera (see hearsee.vision.camera)")
+
+
+def load_rig(path: str | Path) -> StereoRig:
+    """Read a stereo rig YAML file (see the module docstring)."""
+    data = _load_calib_yaml(path)
+    if "left" not in data:
+        raise ConfigError(f"{path}: missing required key 'left' (is this a single-camera file?)")
+    return StereoRig.from_dict(data, str(path))
+
+
+def save_rig(rig: StereoRig, path: str | Path) -> None:
+    """Write ``rig`` as a stereo rig YAML file (see the module docstring)."""
+    _dump_calib_yaml(rig.to_dict(), path, "hearsee stereo rig (see hearsee.vision.camera)")
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, dict):
+        return {str(k): _plain(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [_plain(x) for x in v]
+    return v
+
+
+def _dump_calib_yaml(data: dict[str, Any], path: str | Path, title: str) -> None:
+    """YAML with matrices written one row per line (flow style for the innermost lists)."""
+    text = yaml.safe_dump(_plain(data), sort_keys=False, default_flow_style=None, width=100)
+    header = (f"# {title}\n# optical frame x right, y down, z forward; K in pixels; "
+              "T in metres; X_to = R X_from + T\n")
+    Path(path).write_text(header + text, encoding="utf-8")
+
+
+def read_opencv_yaml(path: str | Path) -> dict[str, Any]:
+    """Read every top-level node of an OpenCV ``FileStorage`` file (matrices -> numpy arrays,
+    numbers -> float, strings -> str)."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputFileError(f"{p}: file not found")
+    try:
+        fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_READ)
+    except cv2.error as exc:
+        raise ConfigError(
+            f"{p}: not a readable OpenCV FileStorage file ({exc.msg.strip()})"
+        ) from None
+    if not fs.isOpened():
+        raise ConfigError(f"{p}: not a readable OpenCV FileStorage file")
+    out: dict[str, Any] = {}
+    try:
+        root = fs.root()
+        for key in root.keys():
+            node = fs.getNode(key)
+            if node.isReal() or node.isInt():
+                out[key] = float(node.real())
+            elif node.isString():
+                out[key] = node.string()
+            else:
+                m = node.mat()
+                if m is not None:
+                    out[key] = np.asarray(m, dtype=float)
+    finally:
+        fs.release()
+    return out

@@ -1,0 +1,187 @@
+"""Tests of hearsee.vision.camera: projection, rays, rigs, poses and calibration files."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from hearsee.errors import CalibrationError, ConfigError, InputFileError
+from hearsee.vision.camera import (
+    OPTICAL_FROM_BODY,
+    Camera,
+    StereoRig,
+    camera_pose,
+    load_camera,
+    load_rig,
+    read_opencv_yaml,
+    save_camera,
+    save_rig,
+)
+
+K = np.array([[500.0, 0.0, 320.0], [0.0, 505.0, 240.0], [0.0, 0.0, 1.0]])
+
+
+def _points(n: int = 200, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return np.c_[rng.uniform(-1.0, 1.0, (n, 2)), rng.uniform(1.0, 6.0, n)]
+
+
+@pytest.mark.parametrize("dist", [
+    [],
+    [-0.25, 0.08, 0.001, -0.002],
+    [-0.25, 0.08, 0.001, -0.002, -0.01],
+    [-0.25, 0.08, 0.001, -0.002, -0.01, 0.1, 0.02, 0.003],
+    [-0.2, 0.05, 0.001, -0.002, 0.01, 0.1, 0.02, 0.003, 0.001, 0.002, -0.001, 0.0005],
+    [-0.2, 0.05, 0.001, -0.002, 0.01, 0.1, 0.02, 0.003, 0.0, 0.0, 0.0, 0.0, 0.01, -0.02],
+])
+def test_project_matches_opencv_and_rays_invert_it(dist):
+    cam = Camera(K=K, dist=np.array(dist), width=640, height=480)
+    P = _points()
+    uv = cam.project(P)
+    ref, _ = cv2.projectPoints(P.reshape(-1, 1, 3), np.zeros(3), np.zeros(3), K,
+                               np.array(dist, float))
+    np.testing.assert_allclose(uv, ref.reshape(-1, 2), atol=1e-6)
+    rays = cam.pixel_rays(uv)
+    np.testing.assert_allclose(np.linalg.norm(rays, axis=1), 1.0)
+    np.testing.assert_allclose(rays, P / np.linalg.norm(P, axis=1, keepdims=True), atol=1e-7)
+
+
+def test_points_behind_camera_are_nan_and_in_image_mask():
+    cam = Camera.from_fov(90.0, 640, 480)
+    uv = cam.project([[0.0, 0.0, -1.0], [0.0, 0.0, 1.0], [10.0, 0.0, 1.0]])
+    assert np.all(np.isnan(uv[0]))
+    np.testing.assert_allclose(uv[1], [319.5, 239.5])
+    assert cam.in_image(uv).tolist() == [False, True, False]
+
+
+def test_from_fov_geometry():
+    cam = Camera.from_fov(60.0, 640, 480)
+    assert cam.hfov_deg == pytest.approx(60.0)
+    # a point on the edge of the horizontal field of view lands on the image border
+    u = cam.project([[np.tan(np.radians(30.0)), 0.0, 1.0]])[0, 0]
+    assert u == pytest.approx(cam.cx + 320.0)
+    half = cam.with_size(320, 240)
+    assert half.fx == pytest.approx(cam.fx / 2)
+    assert half.hfov_deg == pytest.approx(60.0)
+    np.testing.assert_allclose(half.project([[0.0, 0.0, 1.0]]), [[159.5, 119.5]])
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(K=np.eye(2)), "3x3"),
+    (dict(K=-K), "fx, fy > 0"),
+    (dict(K=K, dist=[0.1, 0.2, 0.3]), "dist"),
+    (dict(K=K, width=0), "positive integers"),
+])
+def test_bad_camera_raises(kwargs, match):
+    kw = dict(width=640, height=480)
+    kw.update(kwargs)
+    with pytest.raises(CalibrationError, match=match):
+        Camera(**kw)
+
+
+def test_optical_from_body_and_camera_pose():
+    # body forward -> optical z, body left -> optical -x, body up -> optical -y
+    np.testing.assert_allclose(OPTICAL_FROM_BODY @ [1, 0, 0], [0, 0, 1])
+    np.testing.assert_allclose(OPTICAL_FROM_BODY @ [0, 1, 0], [-1, 0, 0])
+    np.testing.assert_allclose(OPTICAL_FROM_BODY @ [0, 0, 1], [0, -1, 0])
+    R, t = camera_pose((0.1, 0.0, 1.2), pan_deg=90.0)
+    np.testing.assert_allclose(R @ np.array([0.1, 2.0, 1.2]) + t, [0, 0, 2], atol=1e-12)
+    R, t = camera_pose((0.0, 0.0, 0.0), tilt_deg=30.0)
+    d = np.array([np.cos(np.radians(30)), 0.0, np.sin(np.radians(30))])
+    np.testing.assert_allclose(R @ d + t, [0, 0, 1], atol=1e-12)
+    R, t = camera_pose((0.0, 0.0, 0.0), roll_deg=90.0)
+    # rolled +90 deg about forward: camera top points right, world up appears at image left
+    np.testing.assert_allclose(R @ np.array([0.0, 0.0, 1.0]), [-1, 0, 0], atol=1e-12)
+    assert np.linalg.det(R) == pytest.approx(1.0)
+
+
+def test_ideal_rig_rectification_and_depth_formula():
+    cam = Camera.from_fov(60.0, 640, 480)
+    rig = StereoRig.ideal(cam, 0.12)
+    assert rig.is_rectified
+    assert rig.baseline_m == pytest.approx(0.12)
+    assert rig.focal_px == pytest.approx(cam.fx)
+    X = np.array([[0.3, -0.2, 2.5]])
+    ul = cam.project(X)
+    ur = rig.right.project(rig.left_to_right(X))
+    d = ul[0, 0] - ur[0, 0]
+    assert d == pytest.approx(cam.fx * 0.12 / 2.5)
+    h = rig.Q @ np.array([ul[0, 0], ul[0, 1], d, 1.0])
+    np.testing.assert_allclose(h[:3] / h[3], X[0], atol=1e-9)
+
+
+def test_general_rig_rectification_matches_opencv():
+    cam = Camera(K=K, dist=[-0.1, 0.01, 0.0, 0.0], width=640, height=480)
+    R = cv2.Rodrigues(np.array([0.01, -0.02, 0.005]))[0]
+    rig = StereoRig(cam, cam, R, [-0.1, 0.002, 0.001])
+    assert not rig.is_rectified
+    rect = rig.rectification
+    assert rect.baseline_m == pytest.approx(0.1, rel=1e-3)
+    # a point projected into both rectified images lies on the same row
+    X = np.array([[0.2, 0.1, 3.0]])
+    pl = rect.P1 @ np.r_[rect.R1 @ X[0], 1.0]
+    pr = rect.P2 @ np.r_[rect.R2 @ rig.left_to_right(X)[0], 1.0]
+    assert pl[1] / pl[2] == pytest.approx(pr[1] / pr[2], abs=1e-6)
+    d = pl[0] / pl[2] - pr[0] / pr[2]
+    assert d > 0
+
+
+def test_rig_roundtrip_with_thermal(tmp_path):
+    cam = Camera(K=K, dist=[-0.1, 0.01, 0.001, 0.0, 0.002], width=640, height=480)
+    th = Camera.from_fov(45.0, 160, 120, name="thermal")
+    Rt = cv2.Rodrigues(np.array([0.0, 0.05, 0.0]))[0]
+    rig = StereoRig.ideal(cam, 0.09).with_thermal(th, Rt, [-0.045, 0.05, 0.0])
+    path = tmp_path / "rig.yaml"
+    save_rig(rig, path)
+    back = load_rig(path)
+    np.testing.assert_allclose(back.left.K, cam.K)
+    np.testing.assert_allclose(back.left.dist, cam.dist)
+    np.testing.assert_allclose(back.R_thermal, Rt)
+    np.testing.assert_allclose(back.T, [-0.09, 0, 0])
+    X = _points(5)
+    np.testing.assert_allclose(back.project_thermal(X), rig.project_thermal(X))
+    assert load_camera(path, "thermal").width == 160
+    assert load_camera(path, "right").fx == pytest.approx(500.0)
+    cpath = tmp_path / "cam.yaml"
+    save_camera(th, cpath, rms_px=0.2)
+    assert load_camera(cpath).fx == pytest.approx(th.fx)
+
+
+def test_missing_and_bad_calibration_files(tmp_path):
+    with pytest.raises(InputFileError, match="hearsee calibrate"):
+        load_rig(tmp_path / "nope.yaml")
+    cam = Camera.from_fov(60.0, 640, 480)
+    path = tmp_path / "rig.yaml"
+    save_rig(StereoRig.ideal(cam, 0.1), path)
+    text = path.read_text()
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text.replace("T: [-0.1, 0.0, 0.0]", "T: [-0.1, 0.0]"))
+    with pytest.raises(ConfigError, match="T"):
+        load_rig(bad)
+    bad.write_text(text.replace("width: 640", "width: -3", 1))
+    with pytest.raises(ConfigError, match="left: width"):
+        load_rig(bad)
+    bad.write_text(text.replace("kind: stereo_rig", "kind: stereo_rig\nfoo: 1"))
+    with pytest.raises(ConfigError, match="unknown key 'foo'"):
+        load_rig(bad)
+    bad.write_text("\n".join(line for line in text.splitlines() if not line.startswith("R:")
+                             and not line.startswith("- [")))
+    with pytest.raises(ConfigError, match="missing required key 'R'"):
+        load_rig(bad)
+    bad.write_text("%YAML:1.0\n---\nM1: 1\n")
+    with pytest.raises(ConfigError, match="FileStorage"):
+        load_rig(bad)
+    with pytest.raises(CalibrationError, match="no thermal camera"):
+        load_rig(path).left_to_thermal([[0, 0, 1]])
+
+
+def test_read_opencv_yaml(tmp_path):
+    p = tmp_path / "intr.yml"
+    fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_WRITE)
+    fs.write("M1", K)
+    fs.write("rms", 0.25)
+    fs.release()
+    data = read_opencv_yaml(p)
+    np.testing.assert_allclose(data["M1"], K)
+    assert data["rms"] == pytest.approx(0.25)
