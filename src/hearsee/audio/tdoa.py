@@ -1,0 +1,534 @@
+"""Time differences of arrival (ITD/TDOA) by generalized cross-correlation (thesis 2.2.1).
+
+The GCC of microphones i and j (thesis eqs. 2.8-2.10, Knapp & Carter 1976)::
+
+    R_ij(tau) = IFFT{ psi(w) G_ij(w) },   G_ij = X_i conj(X_j),   tau* = argmax_tau R_ij(tau)
+
+peaks at ``tau* = t_i - t_j`` (arrival at i minus arrival at j, the house TDOA sign). The
+weightings ``psi`` (Knapp & Carter 1976, table I):
+
+``phat``  1 / |G_ij|                              phase transform (thesis eq. 2.9)
+``scot``  1 / sqrt(G_ii G_jj)                     smoothed coherence transform
+``roth``  1 / G_jj                                Roth processor (j = reference microphone)
+``ml``    |g|^2 / (|G_ij| (1 - |g|^2))            Hannan-Thomson / maximum likelihood, with the
+                                                  magnitude-squared coherence |g|^2 estimated by
+                                                  averaging spectra over ``smooth_frames`` frames
+``cc``    1                                       plain cross-correlation
+
+SCOT, ROTH and ML need spectral-density *estimates*; a single frame's periodogram makes every
+coherence 1, so their auto/cross spectra are averaged over ``smooth_frames`` neighbouring frames
+(a moving average along time). PHAT uses each frame's own cross spectrum.
+
+Lag search is bounded by each pair's physical maximum ``|M_i - M_j| / c0`` plus a margin of
+``margin_samples`` samples. The integer peak is refined below one sample either by a parabola
+through the three samples around it (``refine="parabolic"``) or -- the default -- by Newton
+iterations on the band-limited correlation function evaluated exactly from its spectrum
+(``refine="interp"``: frequency-domain interpolation; ``bench/doa.py`` measures both).
+
+Confidence is the peak-to-second-peak ratio: the height of the chosen peak divided by the highest
+*other* local maximum of the whole correlation function (all lags, outside the main lobe). A
+coherent source gives a ratio well above 1; uncorrelated noise gives a peak in the narrow
+physical window that is usually lower than some spurious peak elsewhere (ratio < 1).
+
+Frames without a source give no estimate (``valid=False``, TDOA NaN) when either
+- their energy is within ``vad_db`` dB of the recording's noise floor (10th percentile of frame
+  energies) while the recording has louder frames (a dynamic range above ``vad_db`` + 3 dB), or
+  the frame is digital silence; or
+- any pair's confidence is below ``min_confidence``.
+
+Units: seconds for TDOAs and frame times, Hz for sample rates; frames are the analysis frames of
+``frame_ms`` milliseconds every ``hop_ms`` milliseconds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.fft as sfft
+from numpy.typing import ArrayLike, NDArray
+from scipy.ndimage import uniform_filter1d
+
+from hearsee.audio.arrays import MicArray, load_array
+from hearsee.errors import AudioInputError, ConfigError, GeometryError
+
+__all__ = [
+    "METHODS",
+    "GccResult",
+    "TdoaFrames",
+    "estimate_tdoas",
+    "frame_signals",
+    "gcc",
+    "gcc_weighting",
+    "normalize_method",
+]
+
+#: Weighting names accepted everywhere (CLI spellings ``gcc-phat`` etc. are aliases).
+METHODS = ("phat", "scot", "roth", "ml", "cc")
+_ALIASES = {
+    "gcc-phat": "phat", "gcc-scot": "scot", "gcc-roth": "roth", "gcc-ml": "ml", "gcc-ht": "ml",
+    "ht": "ml", "gcc": "phat", "xcorr": "cc",
+}
+_REFINE = ("interp", "parabolic", "none")
+_TINY = 1e-30
+#: Fewer confident frames than this: the summary averages all frames with energy instead.
+_MIN_SUMMARY_FRAMES = 3
+
+
+def normalize_method(method: str) -> str:
+    """Canonical weighting name (``"gcc-phat"`` -> ``"phat"``); ConfigError when unknown."""
+    m = str(method).lower().strip()
+    m = _ALIASES.get(m, m)
+    if m not in METHODS:
+        raise ConfigError(
+            f"unknown GCC method {method!r} (choose one of: {', '.join(METHODS)} or gcc-<name>)"
+        )
+    return m
+
+
+# ---------------------------------------------------------------------------------- framing
+def frame_signals(x: ArrayLike, frame_len: int, hop: int) -> NDArray:
+    """Cut signals into overlapping frames.
+
+    Parameters
+    ----------
+    x : array (n_ch, n) or (n,)
+        Signals, one row per channel.
+    frame_len, hop : int
+        Frame length and hop in samples.
+
+    Returns
+    -------
+    array (n_ch, n_frames, frame_len)
+        A read-only strided view: frame f of channel c is ``x[c, f*hop : f*hop + frame_len]``.
+        Trailing samples that do not fill a frame are dropped.
+    """
+    a = np.asarray(x, dtype=float)
+    if a.ndim == 1:
+        a = a[None, :]
+    if a.ndim != 2:
+        raise AudioInputError(f"signals must be (n_channels, n_samples), got shape {a.shape}")
+    frame_len, hop = int(frame_len), int(hop)
+    if frame_len < 2 or hop < 1:
+        raise ConfigError(f"frame length must be >= 2 and hop >= 1 samples, got {frame_len}, {hop}")
+    if a.shape[1] < frame_len:
+        raise AudioInputError(
+            f"recording too short: {a.shape[1]} samples, one frame needs {frame_len}; "
+            "use a longer recording or a shorter --frame-ms"
+        )
+    return np.lib.stride_tricks.sliding_window_view(a, frame_len, axis=-1)[:, ::hop, :]
+
+
+# ---------------------------------------------------------------------------------- weighting
+def gcc_weighting(method: str, G: NDArray, Gii: NDArray | None = None,
+                  Gjj: NDArray | None = None, Gij_avg: NDArray | None = None) -> NDArray:
+    """The GCC weighting ``psi(w)`` (real, same shape as ``G``) for cross spectrum ``G``.
+
+    ``Gii``, ``Gjj`` (auto spectra) and ``Gij_avg`` (averaged cross spectrum) are the
+    spectral-density estimates SCOT, ROTH and ML need (ignored by PHAT and CC).
+    """
+    method = normalize_method(method)
+    if method == "cc":
+        return np.ones(G.shape)
+    if method == "phat":
+        mag = np.abs(G)
+        return 1.0 / np.maximum(mag, _TINY + 1e-12 * mag.max(initial=0.0))
+    if Gii is None or Gjj is None:
+        raise ConfigError(f"GCC-{method.upper()} needs the auto spectra G_ii and G_jj")
+    floor = _TINY + 1e-12 * max(float(Gii.max(initial=0.0)), float(Gjj.max(initial=0.0)))
+    if method == "scot":
+        return 1.0 / np.sqrt(np.maximum(Gii * Gjj, floor * floor))
+    if method == "roth":
+        return 1.0 / np.maximum(Gjj, floor)
+    # ml / Hannan-Thomson
+    Gc = G if Gij_avg is None else Gij_avg
+    cmag2 = np.abs(Gc) ** 2
+    coh = np.clip(cmag2 / np.maximum(Gii * Gjj, floor * floor), 0.0, 0.99)
+    return coh / ((1.0 - coh) * np.maximum(np.abs(Gc), floor))
+
+
+# ---------------------------------------------------------------------------------- peaks
+def _irfft_weights(n_bins: int, nfft: int) -> NDArray:
+    c = np.ones(n_bins)
+    c[0] = 0.5
+    if nfft % 2 == 0:
+        c[-1] = 0.5
+    return c
+
+
+def _refine_interp(P: NDArray, tau0: NDArray, nfft: int, n_iter: int = 4) -> NDArray:
+    """Newton iterations for the maximum of ``R(tau) = sum_k c_k Re(P_k exp(j w_k tau))``.
+
+    ``P`` (..., n_bins) weighted spectra, ``tau0`` (...) start lags in samples. The correlation is
+    evaluated exactly between samples (frequency-domain interpolation of the band-limited GCC).
+    """
+    n_bins = P.shape[-1]
+    w = 2.0 * np.pi * np.arange(n_bins) / nfft
+    Pc = P * _irfft_weights(n_bins, nfft)
+    tau = tau0.astype(float).copy()
+    for _ in range(n_iter):
+        Q = Pc * np.exp(1j * w * tau[..., None])
+        d1 = -np.sum(w * Q.imag, axis=-1)
+        d2 = -np.sum(w * w * Q.real, axis=-1)
+        ok = d2 < 0
+        step = np.where(ok, -d1 / np.where(ok, d2, -1.0), 0.0)
+        tau = tau + np.clip(step, -0.5, 0.5)
+    # never move more than one sample away from the integer peak
+    return np.clip(tau, np.round(tau0) - 1.0, np.round(tau0) + 1.0)
+
+
+def _peaks(r: NDArray, P: NDArray, nfft: int, max_lag: NDArray, refine: str,
+           main_lobe: int) -> tuple[NDArray, NDArray]:
+    """Bounded peak search + refinement + confidence.
+
+    ``r`` (..., n_pairs, nfft) circular correlations, ``P`` their spectra, ``max_lag``
+    (n_pairs,) largest admissible |lag| in samples. Returns (lag in samples, confidence).
+    """
+    L = int(np.ceil(max_lag.max()))
+    lags = np.arange(-L, L + 1)
+    win = r[..., lags % nfft]  # (..., n_pairs, 2L+1)
+    outside = np.abs(lags)[None, :] > max_lag[:, None]  # (n_pairs, 2L+1)
+    win = np.where(outside, -np.inf, win)
+    k = np.argmax(win, axis=-1)
+    peak = np.take_along_axis(win, k[..., None], axis=-1)[..., 0]
+    lag0 = lags[k].astype(float)
+    # parabolic fit on the integer samples around the peak (values from the full circle)
+    ym = np.take_along_axis(r, ((lags[k] - 1) % nfft)[..., None], axis=-1)[..., 0]
+    yp = np.take_along_axis(r, ((lags[k] + 1) % nfft)[..., None], axis=-1)[..., 0]
+    den = ym - 2.0 * peak + yp
+    with np.errstate(divide="ignore", invalid="ignore"):
+        delta = np.where(den < 0, 0.5 * (ym - yp) / den, 0.0)
+    lag_par = lag0 + np.clip(delta, -0.5, 0.5)
+    if refine == "none":
+        lag = lag0
+    elif refine == "parabolic":
+        lag = lag_par
+    else:
+        lag = _refine_interp(P, lag_par, nfft)
+    lag = np.clip(lag, -max_lag, max_lag)
+    # confidence: peak over the highest other local maximum outside the main lobe
+    is_max = (r > np.roll(r, 1, axis=-1)) & (r >= np.roll(r, -1, axis=-1))
+    idx = np.arange(nfft)
+    dist = np.abs(((idx - lags[k][..., None]) + nfft // 2) % nfft - nfft // 2)
+    cand = np.where(is_max & (dist > main_lobe), r, -np.inf)
+    second = cand.max(axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        conf = np.where(second > 0, peak / second, np.where(peak > 0, 1e3, 0.0))
+    return lag, np.minimum(conf, 1e3)
+
+
+# ---------------------------------------------------------------------------------- one pair
+@dataclass(frozen=True)
+class GccResult:
+    """Whole-signal GCC of one pair.
+
+    tdoa_s : float          ``t_i - t_j`` in seconds (refined peak within the lag bound)
+    confidence : float      peak-to-second-peak ratio
+    lags_s : array (m,)     lags of ``r`` in seconds (centred, -nfft/2 .. nfft/2-1 samples)
+    r : array (m,)          the weighted cross-correlation function
+    """
+
+    tdoa_s: float
+    confidence: float
+    lags_s: NDArray
+    r: NDArray
+
+
+def _band_mask(n_bins: int, nfft: int, fs: float, band_hz: tuple[float, float] | None) -> NDArray:
+    if band_hz is None:
+        return np.ones(n_bins)
+    lo, hi = float(band_hz[0]), float(band_hz[1])
+    if not (0 <= lo < hi):
+        raise ConfigError(f"band_hz must be (low, high) with 0 <= low < high, got {band_hz}")
+    f = np.arange(n_bins) * fs / nfft
+    m = ((f >= lo) & (f <= hi)).astype(float)
+    if not m.any():
+        raise ConfigError(f"band_hz {band_hz} contains no frequency bin at fs={fs} Hz")
+    return m
+
+
+def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
+        max_tau_s: float | None = None, refine: str = "interp",
+        band_hz: tuple[float, float] | None = None) -> GccResult:
+    """GCC of two whole signals (one pair, one "frame"): the peak ``t_i - t_j`` in seconds.
+
+    ``max_tau_s`` bounds the lag search (default: the whole correlation). SCOT/ROTH/ML here use
+    the single-periodogram spectra, so prefer :func:`estimate_tdoas` (frame-averaged spectra)
+    for those weightings.
+
+    >>> rng = np.random.default_rng(0); s = rng.standard_normal(4000)
+    >>> round(gcc(np.roll(s, 3), s, 1000.0).tdoa_s, 6)   # x_i lags x_j by 3 samples
+    0.003
+    """
+    a = np.asarray(x_i, dtype=float)
+    b = np.asarray(x_j, dtype=float)
+    if a.ndim != 1 or a.shape != b.shape:
+        raise AudioInputError(
+            f"gcc needs two 1-D signals of equal length, got {a.shape}, {b.shape}"
+        )
+    _check_refine(refine)
+    method = normalize_method(method)
+    n = len(a)
+    nfft = sfft.next_fast_len(2 * n, real=True)
+    Xa = sfft.rfft(a, nfft)
+    Xb = sfft.rfft(b, nfft)
+    G = Xa * np.conj(Xb)
+    Gii, Gjj = np.abs(Xa) ** 2, np.abs(Xb) ** 2
+    P = G * gcc_weighting(method, G, Gii, Gjj) * _band_mask(len(G), nfft, fs, band_hz)
+    r = sfft.irfft(P, nfft)
+    max_lag = (n - 1) if max_tau_s is None else min(max_tau_s * fs, n - 1)
+    lag, conf = _peaks(r[None, :], P[None, :], nfft, np.array([float(max_lag)]), refine,
+                       main_lobe=2)
+    shift = np.fft.fftshift(r)
+    lags = (np.arange(nfft) - nfft // 2) / fs
+    return GccResult(float(lag[0] / fs), float(conf[0]), lags, shift)
+
+
+def _check_refine(refine: str) -> None:
+    if refine not in _REFINE:
+        raise ConfigError(f"unknown refine {refine!r} (choose one of: {', '.join(_REFINE)})")
+
+
+# ---------------------------------------------------------------------------------- frames
+@dataclass(frozen=True)
+class TdoaFrames:
+    """Framed TDOA estimates of all pairs.
+
+    Attributes
+    ----------
+    t : array (n_frames,)
+        Frame centre times in seconds from the start of the recording.
+    tdoa_s : array (n_frames, n_pairs)
+        ``t_i - t_j`` in seconds per frame and pair; NaN in invalid frames.
+    confidence : array (n_frames, n_pairs)
+        Peak-to-second-peak ratio of each GCC (0 in silent frames).
+    valid : array (n_frames,) bool
+        True where the frame holds a source (energy above the noise floor and every pair's
+        confidence >= ``min_confidence``).
+    pairs : list of (i, j)
+        The microphone pairs, columns of ``tdoa_s``.
+    summary_tdoa_s : array (n_pairs,)
+        Whole-recording estimate: the peak of the weighted cross spectra (each frame normalised
+        to unit energy) averaged over the valid frames -- or, when fewer than 3 frames are
+        valid, over all frames with energy; NaN when that average's confidence is below
+        ``min_confidence`` in any pair.
+    summary_confidence : array (n_pairs,)
+        Peak-to-second-peak ratio of the averaged correlation.
+    max_tdoa_s : array (n_pairs,)
+        The lag bound used per pair (physical maximum plus margin), seconds.
+    fs : float
+        Sample rate in Hz.
+    """
+
+    t: NDArray
+    tdoa_s: NDArray
+    confidence: NDArray
+    valid: NDArray
+    pairs: list[tuple[int, int]]
+    summary_tdoa_s: NDArray
+    summary_confidence: NDArray
+    max_tdoa_s: NDArray
+    fs: float
+
+    @property
+    def pair_labels(self) -> list[str]:
+        return [f"{i}-{j}" for i, j in self.pairs]
+
+    @property
+    def n_valid(self) -> int:
+        return int(np.count_nonzero(self.valid))
+
+
+def _check_pairs(pairs: Sequence[tuple[int, int]] | None, array: MicArray) -> list[tuple[int, int]]:
+    if pairs is None:
+        return list(array.pairs)
+    out = []
+    for p in pairs:
+        if len(p) != 2:
+            raise GeometryError(f"a pair is two microphone indices, got {p!r}")
+        i, j = int(p[0]), int(p[1])
+        if i == j or not (0 <= i < array.n_mics and 0 <= j < array.n_mics):
+            raise GeometryError(
+                f"invalid microphone pair {p!r} for an array of {array.n_mics} microphones"
+            )
+        out.append((i, j))
+    if not out:
+        raise GeometryError("no microphone pairs given")
+    return out
+
+
+def frame_activity(frames: NDArray, vad_db: float) -> tuple[NDArray, NDArray]:
+    """Energy voice-activity decision per frame.
+
+    ``frames`` (n_ch, n_frames, frame_len). Returns (energy per frame, active bool). The noise
+    floor is the 10th percentile of frame energies; frames within ``vad_db`` dB of it are
+    inactive when the recording's dynamic range (95th / 10th percentile) exceeds ``vad_db`` + 3
+    dB (otherwise the recording is stationary and the energy cannot tell source from noise; the
+    confidence test decides). Digitally silent frames are always inactive.
+    """
+    energy = np.mean(frames**2, axis=(0, 2))
+    e_max = float(energy.max(initial=0.0))
+    active = energy > max(1e-20, 1e-12 * e_max)
+    if active.any():
+        floor = float(np.percentile(energy[active], 10))
+        top = float(np.percentile(energy[active], 95))
+        if floor > 0 and top > floor * 10 ** ((vad_db + 3.0) / 10.0):
+            active &= energy > floor * 10 ** (vad_db / 10.0)
+    return energy, active
+
+
+def estimate_tdoas(
+    x: ArrayLike,
+    fs: float,
+    array: MicArray | str,
+    frame_ms: float = 64.0,
+    hop_ms: float = 32.0,
+    method: str = "phat",
+    pairs: Sequence[tuple[int, int]] | None = None,
+    *,
+    refine: str = "interp",
+    band_hz: tuple[float, float] | None = None,
+    smooth_frames: int = 5,
+    margin_samples: float = 1.0,
+    vad_db: float = 6.0,
+    min_confidence: float = 1.0,
+    window: str = "hann",
+    chunk_frames: int = 128,
+    progress: Callable[[int], None] | None = None,
+) -> TdoaFrames:
+    """Framed GCC TDOAs of all microphone pairs at once.
+
+    Parameters
+    ----------
+    x : array (n_mics, n)
+        The recording; row k is microphone k.
+    fs : float
+        Sample rate in Hz.
+    array : MicArray or preset/YAML name
+        Microphone geometry (for the lag bounds and the pairs).
+    frame_ms, hop_ms : float
+        Frame length and hop in milliseconds.
+    method : str
+        GCC weighting: ``phat``, ``scot``, ``roth``, ``ml`` (Hannan-Thomson) or ``cc``
+        (``gcc-phat`` etc. accepted).
+    pairs : list of (i, j), optional
+        Microphone pairs (default: all ``i < j``).
+    refine : ``"interp"`` | ``"parabolic"`` | ``"none"``
+        Sub-sample peak refinement (see module docstring).
+    band_hz : (low, high), optional
+        Only use this frequency band (e.g. ``(300, 3500)`` for speech).
+    smooth_frames : int
+        Frames averaged for the spectral densities of SCOT, ROTH and ML.
+    margin_samples : float
+        Added to each pair's physical lag bound.
+    vad_db, min_confidence : float
+        Thresholds deciding which frames hold a source (module docstring).
+    window : str
+        Analysis window (scipy.signal.get_window name).
+    chunk_frames : int
+        Frames processed per vectorised block (bounds memory); ``progress(n)`` is called after
+        each block with the number of frames done.
+
+    Returns
+    -------
+    TdoaFrames
+    """
+    from scipy.signal import get_window
+
+    arr = load_array(array)
+    a = np.asarray(x, dtype=float)
+    if a.ndim != 2 or a.shape[0] != arr.n_mics:
+        raise AudioInputError(
+            f"recording has shape {a.shape}; array {arr.name!r} needs ({arr.n_mics}, n_samples) "
+            "(one row per microphone)"
+        )
+    if not np.all(np.isfinite(a)):
+        raise AudioInputError("recording contains NaN or infinite samples")
+    fs = float(fs)
+    if not np.isfinite(fs) or fs <= 0:
+        raise AudioInputError(f"sample rate must be a positive number of Hz, got {fs}")
+    if frame_ms <= 0 or hop_ms <= 0:
+        raise ConfigError(f"frame and hop must be > 0 ms, got {frame_ms} and {hop_ms}")
+    method = normalize_method(method)
+    _check_refine(refine)
+    prs = _check_pairs(pairs, arr)
+    frame_len = max(int(round(frame_ms * 1e-3 * fs)), 8)
+    hop = max(int(round(hop_ms * 1e-3 * fs)), 1)
+    frames = frame_signals(a, frame_len, hop)  # (n_ch, F, L)
+    n_frames = frames.shape[1]
+    max_lag = arr.max_tdoa(prs) * fs + float(margin_samples)
+    if max_lag.max() >= frame_len // 2:
+        raise ConfigError(
+            f"frame of {frame_ms} ms is too short for the array's largest delay "
+            f"({max_lag.max() / fs * 1e3:.2f} ms); use a longer --frame-ms"
+        )
+    nfft = sfft.next_fast_len(2 * frame_len, real=True)
+    n_bins = nfft // 2 + 1
+    band = _band_mask(n_bins, nfft, fs, band_hz)
+    bw = (band.nonzero()[0][-1] - band.nonzero()[0][0] + 1) * fs / nfft
+    main_lobe = max(2, int(np.ceil(fs / bw)))
+    win = get_window(window, frame_len)
+    energy, active = frame_activity(frames, vad_db)
+    I = np.array([p[0] for p in prs])
+    J = np.array([p[1] for p in prs])
+    n_pairs = len(prs)
+    need_stats = method in ("scot", "roth", "ml")
+    halo = (int(smooth_frames) // 2) if need_stats else 0
+
+    tdoa = np.full((n_frames, n_pairs), np.nan)
+    conf = np.zeros((n_frames, n_pairs))
+    acc = np.zeros((n_pairs, n_bins), dtype=complex)
+    n_acc = 0
+    acc_active = np.zeros((n_pairs, n_bins), dtype=complex)
+    n_active = 0
+    chunk = max(int(chunk_frames), 1)
+    for s0 in range(0, n_frames, chunk):
+        s1 = min(s0 + chunk, n_frames)
+        h0, h1 = max(s0 - halo, 0), min(s1 + halo, n_frames)
+        X = sfft.rfft(frames[:, h0:h1, :] * win, nfft, axis=-1)  # (n_ch, F', B)
+        X = np.moveaxis(X, 0, 1)  # (F', n_ch, B)
+        G = X[:, I, :] * np.conj(X[:, J, :])  # (F', P, B)
+        if need_stats:
+            auto = X.real**2 + X.imag**2
+            k = max(int(smooth_frames), 1)
+            Gii = uniform_filter1d(auto[:, I, :], k, axis=0, mode="nearest")
+            Gjj = uniform_filter1d(auto[:, J, :], k, axis=0, mode="nearest")
+            Gav = (uniform_filter1d(G.real, k, axis=0, mode="nearest")
+                   + 1j * uniform_filter1d(G.imag, k, axis=0, mode="nearest"))
+            W = gcc_weighting(method, G, Gii, Gjj, Gav)
+        else:
+            W = gcc_weighting(method, G)
+        sl = slice(s0 - h0, s0 - h0 + (s1 - s0))
+        P = (G * W * band)[sl]
+        r = sfft.irfft(P, nfft, axis=-1)
+        lag, c = _peaks(r, P, nfft, max_lag, refine, main_lobe)
+        act = active[s0:s1]
+        c = np.where(act[:, None], c, 0.0)
+        ok = act & np.all(c >= min_confidence, axis=1)
+        tdoa[s0:s1] = np.where(ok[:, None], lag / fs, np.nan)
+        conf[s0:s1] = c
+        # normalise each frame's weighted spectrum so that every frame counts equally
+        norm = np.sqrt(np.sum(np.abs(P) ** 2, axis=-1, keepdims=True))
+        Pn = P / np.maximum(norm, _TINY)
+        if ok.any():
+            acc += np.sum(Pn[ok], axis=0)
+            n_acc += int(ok.sum())
+        if act.any():
+            acc_active += np.sum(Pn[act], axis=0)
+            n_active += int(act.sum())
+        if progress is not None:
+            progress(s1 - s0)
+    valid = ~np.isnan(tdoa).any(axis=1)
+    summary, summary_conf = np.full(n_pairs, np.nan), np.zeros(n_pairs)
+    if n_acc < _MIN_SUMMARY_FRAMES and n_active > n_acc:
+        # too few confident frames: a weak but steady source may still build up a clear peak
+        # in the average over all frames with energy; accept it only if that peak is confident
+        acc, n_acc = acc_active, n_active
+    if n_acc:
+        r = sfft.irfft(acc, nfft, axis=-1)
+        lag, c = _peaks(r[None], acc[None], nfft, max_lag, refine, main_lobe)
+        if np.all(c[0] >= min_confidence):
+            summary, summary_conf = lag[0] / fs, c[0]
+    t = (np.arange(n_frames) * hop + frame_len / 2.0) / fs
+    return TdoaFrames(t, tdoa, conf, valid, prs, summary, summary_conf, max_lag / fs, fs)
