@@ -1,0 +1,186 @@
+"""Reading and checking images (visible, stereo pairs, thermal) with clear errors.
+
+Every reader raises :class:`hearsee.errors.InputFileError` for a missing file and
+:class:`hearsee.errors.ImageInputError` for a file OpenCV cannot decode, an image of the wrong
+size or type, or a left/right pair that does not match. Images follow OpenCV conventions:
+``(height, width)`` or ``(height, width, 3)`` numpy arrays, BGR channel order.
+"""
+
+from __future__ import annotations
+
+import glob
+from pathlib import Path
+from typing import Literal
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from hearsee.errors import ImageInputError, InputFileError
+
+__all__ = [
+    "check_image",
+    "check_pair",
+    "glob_images",
+    "read_image",
+    "read_pair",
+    "read_thermal",
+    "to_gray",
+    "write_image",
+]
+
+ColorMode = Literal["gray", "bgr", "unchanged"]
+
+_IMREAD = {
+    "gray": cv2.IMREAD_GRAYSCALE,
+    "bgr": cv2.IMREAD_COLOR,
+    "unchanged": cv2.IMREAD_UNCHANGED,
+}
+
+
+def _size_text(size: tuple[int, int]) -> str:
+    return f"{size[0]}x{size[1]}"
+
+
+def check_image(image: NDArray, name: str = "image",
+                expected_size: tuple[int, int] | None = None) -> NDArray:
+    """Validate an image array: 2-D or 3-D with 1, 3 or 4 channels, non-empty, numeric, finite.
+
+    ``expected_size`` is ``(width, height)`` in pixels (OpenCV order). Returns the array.
+    """
+    if not isinstance(image, np.ndarray):
+        raise ImageInputError(f"{name}: expected a numpy image array, got {type(image).__name__}")
+    if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] not in (1, 3, 4)):
+        raise ImageInputError(
+            f"{name}: expected an (H, W) or (H, W, 1|3|4) image, got shape {image.shape}"
+        )
+    if image.shape[0] == 0 or image.shape[1] == 0:
+        raise ImageInputError(f"{name}: image is empty (shape {image.shape})")
+    if image.dtype.kind not in "uif" or image.dtype == np.bool_:
+        raise ImageInputError(f"{name}: unsupported pixel type {image.dtype}")
+    if image.dtype.kind == "f" and not np.all(np.isfinite(image)):
+        raise ImageInputError(f"{name}: image contains NaN or infinite values")
+    if expected_size is not None:
+        w, h = image.shape[1], image.shape[0]
+        if (w, h) != tuple(expected_size):
+            raise ImageInputError(
+                f"{name}: image is {w}x{h} pixels but the calibration expects "
+                f"{_size_text(expected_size)} (resize the image or recalibrate)"
+            )
+    return image
+
+
+def check_pair(left: NDArray, right: NDArray, names: tuple[str, str] = ("left", "right"),
+               expected_size: tuple[int, int] | None = None) -> tuple[NDArray, NDArray]:
+    """Validate a stereo pair: both valid images of the same size and channel count."""
+    check_image(left, names[0], expected_size)
+    check_image(right, names[1], expected_size)
+    if left.shape[:2] != right.shape[:2]:
+        raise ImageInputError(
+            f"{names[0]} and {names[1]} images differ in size "
+            f"({left.shape[1]}x{left.shape[0]} vs {right.shape[1]}x{right.shape[0]}); "
+            "a stereo pair must come from the same rig at the same resolution"
+        )
+    if left.ndim != right.ndim or (left.ndim == 3 and left.shape[2] != right.shape[2]):
+        raise ImageInputError(
+            f"{names[0]} and {names[1]} images differ in channels ({left.shape} vs {right.shape})"
+        )
+    return left, right
+
+
+def read_image(path: str | Path, mode: ColorMode = "gray",
+               expected_size: tuple[int, int] | None = None) -> NDArray:
+    """Read an image file.
+
+    Parameters
+    ----------
+    path : file name (any format OpenCV decodes: PNG, JPEG, TIFF, PGM, ...).
+    mode : "gray" (uint8 (H, W)), "bgr" (uint8 (H, W, 3)) or "unchanged" (bit depth and
+        channels as stored, e.g. 16-bit PGM/PNG).
+    expected_size : (width, height) in pixels, checked when given.
+    """
+    if mode not in _IMREAD:
+        raise ImageInputError(f"mode must be one of {', '.join(_IMREAD)}, got {mode!r}")
+    p = Path(path)
+    if not p.is_file():
+        raise InputFileError(f"{p}: image file not found")
+    try:
+        data = np.fromfile(str(p), dtype=np.uint8)
+    except OSError as exc:
+        raise InputFileError(f"{p}: cannot read file ({exc.strerror})") from None
+    img = cv2.imdecode(data, _IMREAD[mode]) if data.size else None
+    if img is None:
+        raise ImageInputError(
+            f"{p}: not a readable image (corrupt or unsupported format; expected PNG, JPEG, "
+            "TIFF or PGM)"
+        )
+    return check_image(img, str(p), expected_size)
+
+
+def read_pair(left: str | Path, right: str | Path, mode: ColorMode = "gray",
+              expected_size: tuple[int, int] | None = None) -> tuple[NDArray, NDArray]:
+    """Read a stereo pair and check that both images have the same size (and
+    ``expected_size`` = (width, height) when given)."""
+    L = read_image(left, mode)
+    R = read_image(right, mode)
+    return check_pair(L, R, (str(left), str(right)), expected_size)
+
+
+def to_gray(image: NDArray) -> NDArray:
+    """Single-channel view of an image (BGR/BGRA -> gray by OpenCV's weights; 1 channel kept)."""
+    check_image(image)
+    if image.ndim == 2:
+        return image
+    if image.shape[2] == 1:
+        return image[:, :, 0]
+    if image.shape[2] == 4:
+        return cv2.cvtColor(image, cv2.COLOR_BGRA2GRAY)
+    return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+
+
+def read_thermal(path: str | Path, expected_size: tuple[int, int] | None = None) -> NDArray:
+    """Read a thermal image as a single channel, keeping its bit depth.
+
+    8-bit files (non-radiometric, AGC-normalised; colour files that replicate one grey channel
+    are reduced to it) come back as uint8; 16-bit files (raw radiometric counts) as uint16;
+    float TIFFs (e.g. degrees Celsius) as float32. Converting counts to temperature is the
+    thermal filter's business (:mod:`hearsee.vision.thermal`).
+    """
+    img = read_image(path, "unchanged", expected_size)
+    if img.ndim == 3:
+        if img.dtype == np.uint8 or img.dtype == np.uint16:
+            chans = img[:, :, :3] if img.shape[2] >= 3 else img
+            if chans.ndim == 3 and np.array_equal(chans[:, :, 0], chans[:, :, 1]) and \
+                    np.array_equal(chans[:, :, 0], chans[:, :, 2]):
+                return np.ascontiguousarray(chans[:, :, 0])
+        img = to_gray(img)
+    return img
+
+
+def write_image(path: str | Path, image: NDArray) -> Path:
+    """Write an image (format from the suffix); raise ImageInputError when OpenCV cannot."""
+    check_image(image, str(path))
+    p = Path(path)
+    if not p.parent.is_dir():
+        raise InputFileError(f"{p}: folder {p.parent} does not exist")
+    ok, buf = cv2.imencode(p.suffix or ".png", image)
+    if not ok:
+        raise ImageInputError(f"{p}: cannot encode the image as {p.suffix or '.png'}")
+    buf.tofile(str(p))
+    return p
+
+
+def glob_images(pattern: str | Path, what: str = "images") -> list[Path]:
+    """Sorted files matching a shell pattern (``'DIR/left*.jpg'``) or in a folder.
+
+    Raises InputFileError when nothing matches.
+    """
+    text = str(pattern)
+    p = Path(text).expanduser()
+    if p.is_dir():
+        files = sorted(f for f in p.iterdir() if f.is_file())
+    else:
+        files = sorted(Path(f) for f in glob.glob(str(p)) if Path(f).is_file())
+    if not files:
+        raise InputFileError(f"no {what} matched {text!r} (check the path and quote the pattern)")
+    return files

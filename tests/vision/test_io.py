@@ -1,0 +1,103 @@
+"""Tests of hearsee.vision.io: image reading with validation."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from hearsee.errors import ImageInputError, InputFileError
+from hearsee.vision.io import (
+    check_image,
+    check_pair,
+    glob_images,
+    read_image,
+    read_pair,
+    read_thermal,
+    to_gray,
+    write_image,
+)
+
+
+def _img(h: int = 48, w: int = 64, c: int | None = None, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    shape = (h, w) if c is None else (h, w, c)
+    return rng.integers(0, 256, shape, dtype=np.uint8)
+
+
+def test_roundtrip_gray_and_color(tmp_path):
+    g = _img()
+    write_image(tmp_path / "g.png", g)
+    np.testing.assert_array_equal(read_image(tmp_path / "g.png"), g)
+    c = _img(c=3)
+    write_image(tmp_path / "c.png", c)
+    np.testing.assert_array_equal(read_image(tmp_path / "c.png", "bgr"), c)
+    assert read_image(tmp_path / "c.png").shape == (48, 64)
+    np.testing.assert_array_equal(to_gray(c), cv2.cvtColor(c, cv2.COLOR_BGR2GRAY))
+
+
+def test_missing_corrupt_and_empty_files(tmp_path):
+    with pytest.raises(InputFileError, match="not found"):
+        read_image(tmp_path / "none.png")
+    bad = tmp_path / "bad.png"
+    bad.write_bytes(b"this is not a png")
+    with pytest.raises(ImageInputError, match="not a readable image"):
+        read_image(bad)
+    empty = tmp_path / "empty.jpg"
+    empty.write_bytes(b"")
+    with pytest.raises(ImageInputError, match="not a readable image"):
+        read_image(empty)
+    # a PNG cut in half cannot be decoded
+    ok, buf = cv2.imencode(".png", _img(c=3))
+    trunc = tmp_path / "trunc.png"
+    trunc.write_bytes(buf.tobytes()[: len(buf) // 2])
+    with pytest.raises(ImageInputError):
+        read_image(trunc)
+
+
+def test_wrong_size_and_mismatched_pair(tmp_path):
+    write_image(tmp_path / "l.png", _img(48, 64))
+    write_image(tmp_path / "r.png", _img(48, 60))
+    with pytest.raises(ImageInputError, match="64x48 pixels but the calibration expects 32x24"):
+        read_image(tmp_path / "l.png", expected_size=(32, 24))
+    with pytest.raises(ImageInputError, match="differ in size"):
+        read_pair(tmp_path / "l.png", tmp_path / "r.png")
+    write_image(tmp_path / "r2.png", _img(48, 64, seed=1))
+    L, R = read_pair(tmp_path / "l.png", tmp_path / "r2.png", expected_size=(64, 48))
+    assert L.shape == R.shape == (48, 64)
+    with pytest.raises(ImageInputError, match="channels"):
+        check_pair(_img(), _img(c=3))
+
+
+@pytest.mark.parametrize("bad, match", [
+    (np.zeros((0, 5), np.uint8), "empty"),
+    (np.zeros((4, 4, 2), np.uint8), "shape"),
+    (np.full((4, 4), np.nan), "NaN"),
+    (np.zeros((4, 4), bool), "pixel type"),
+    ([[1, 2]], "numpy image"),
+])
+def test_check_image_rejects(bad, match):
+    with pytest.raises(ImageInputError, match=match):
+        check_image(bad)
+
+
+def test_read_thermal_keeps_depth_and_collapses_replicated_gray(tmp_path):
+    t16 = (np.arange(48 * 64, dtype=np.uint16).reshape(48, 64) * 7)
+    write_image(tmp_path / "t16.png", t16)
+    out = read_thermal(tmp_path / "t16.png")
+    assert out.dtype == np.uint16
+    np.testing.assert_array_equal(out, t16)
+    g = _img()
+    write_image(tmp_path / "t3.png", np.dstack([g, g, g]))
+    out = read_thermal(tmp_path / "t3.png")
+    assert out.ndim == 2
+    np.testing.assert_array_equal(out, g)
+
+
+def test_glob_images(tmp_path):
+    for name in ("left2.png", "left1.png", "right1.png"):
+        write_image(tmp_path / name, _img())
+    files = glob_images(str(tmp_path / "left*.png"))
+    assert [f.name for f in files] == ["left1.png", "left2.png"]
+    with pytest.raises(InputFileError, match="no images matched"):
+        glob_images(str(tmp_path / "nothing*.jpg"))
