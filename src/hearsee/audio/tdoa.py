@@ -74,6 +74,8 @@ _REFINE = ("interp", "parabolic", "none")
 _TINY = 1e-30
 #: Fewer confident frames than this: the summary averages all frames with energy instead.
 _MIN_SUMMARY_FRAMES = 3
+#: ... and its confidence must then exceed this multiple of ``min_confidence``.
+_FALLBACK_CONFIDENCE = 1.5
 
 
 def normalize_method(method: str) -> str:
@@ -312,7 +314,7 @@ class TdoaFrames:
         Whole-recording estimate: the peak of the weighted cross spectra (each frame normalised
         to unit energy) averaged over the valid frames -- or, when fewer than 3 frames are
         valid, over all frames with energy; NaN when that average's confidence is below
-        ``min_confidence`` in any pair.
+        ``min_confidence`` (1.5 x ``min_confidence`` in the fallback) in any pair.
     summary_confidence : array (n_pairs,)
         Peak-to-second-peak ratio of the averaged correlation.
     max_tdoa_s : array (n_pairs,)
@@ -521,14 +523,17 @@ def estimate_tdoas(
             progress(s1 - s0)
     valid = ~np.isnan(tdoa).any(axis=1)
     summary, summary_conf = np.full(n_pairs, np.nan), np.zeros(n_pairs)
+    need = min_confidence
     if n_acc < _MIN_SUMMARY_FRAMES and n_active > n_acc:
         # too few confident frames: a weak but steady source may still build up a clear peak
-        # in the average over all frames with energy; accept it only if that peak is confident
+        # in the average over all frames with energy; accept it only if that peak is clearly
+        # confident (noise-only recordings reach ~1.25 in 40 trials, a -15 dB source 0.8-2.4)
         acc, n_acc = acc_active, n_active
+        need = _FALLBACK_CONFIDENCE * min_confidence
     if n_acc:
         r = sfft.irfft(acc, nfft, axis=-1)
         lag, c = _peaks(r[None], acc[None], nfft, max_lag, refine, main_lobe)
-        if np.all(c[0] >= min_confidence):
+        if np.all(c[0] >= need):
             summary, summary_conf = lag[0] / fs, c[0]
     t = (np.arange(n_frames) * hop + frame_len / 2.0) / fs
     return TdoaFrames(t, tdoa, conf, valid, prs, summary, summary_conf, max_lag / fs, fs)
