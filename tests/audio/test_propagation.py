@@ -2,9 +2,16 @@ import numpy as np
 import pytest
 
 from hearsee.audio.arrays import MicArray
-from hearsee.audio.propagation import add_noise, delay_signals, simulate_free_field
+from hearsee.audio.propagation import (
+    MIN_WALL_DISTANCE_M,
+    add_noise,
+    delay_signals,
+    room_impulse_responses,
+    simulate_free_field,
+    simulate_room,
+)
 from hearsee.audio.signals import white_noise
-from hearsee.errors import GeometryError
+from hearsee.errors import ConfigError, GeometryError
 
 
 def test_integer_delay_is_exact_shift():
@@ -41,3 +48,100 @@ def test_free_field_spreading_and_noise():
     assert snr == pytest.approx(10.0, abs=0.3)
     with pytest.raises(GeometryError):
         simulate_free_field(x, 16000, arr, arr.positions[0])
+
+
+# ---------------------------------------------------------------------------- rooms
+ROOM = [6.0, 5.0, 3.0]
+AT = [3.0, 2.5, 1.4]
+
+
+def _gcc_phat_tdoa(a, b, fs, max_lag_s, interp=256):
+    """Reference GCC-PHAT (t_a - t_b, seconds), interpolated by zero padding the spectrum."""
+    n = len(a) + len(b)
+    G = np.fft.rfft(a, n) * np.conj(np.fft.rfft(b, n))
+    G /= np.abs(G) + 1e-12
+    cc = np.fft.irfft(G, n * interp)
+    m = int(np.ceil(max_lag_s * fs * interp))
+    cc = np.concatenate([cc[-m:], cc[: m + 1]])
+    return (np.argmax(cc) - m) / (interp * fs)
+
+
+@pytest.mark.parametrize("rt60", [0.0, 0.3])
+def test_room_gcc_tdoa_matches_geometry(rt60):
+    fs = 16000
+    arr = MicArray.from_preset("three-mic")
+    src = np.array([1.2, 0.9, 0.3])
+    y = simulate_room(white_noise(0.5, fs, rng=0), fs, arr, src, ROOM, rt60, AT)
+    truth = arr.tdoa(src)
+    est = np.array([_gcc_phat_tdoa(y[i], y[j], fs, 0.0006) for i, j in arr.pairs])
+    tol = 0.1 if rt60 == 0 else 0.25  # samples
+    np.testing.assert_allclose(est * fs, truth * fs, atol=tol)
+
+
+def test_room_rirs_aligned_and_scaled():
+    fs = 16000
+    arr = MicArray.from_preset("two-mic")
+    src = np.array([2.0, -0.5, 0.0])
+    h = room_impulse_responses(fs, arr.positions + AT, src + AT, ROOM, 0.0)
+    r = np.linalg.norm(arr.positions - src, axis=1)
+    # direct path peak at r/c (the fractional-delay latency is removed) with 1/r amplitude
+    np.testing.assert_array_equal(np.argmax(h, axis=1), np.round(r / 343.0 * fs).astype(int))
+    lp = np.array([np.sum(hk[int(rk / 343 * fs) - 3: int(rk / 343 * fs) + 5])
+                   for hk, rk in zip(h, r, strict=True)])
+    np.testing.assert_allclose(lp, 1 / r, rtol=0.1)
+    # anechoic room == free field below 5 kHz
+    from scipy.signal import butter, sosfiltfilt
+
+    x = white_noise(0.4, fs, rng=1)
+    yr = simulate_room(x, fs, arr, src, ROOM, 0.0, AT)
+    yf = simulate_free_field(x, fs, arr, src)
+    sos = butter(8, 5000, fs=fs, output="sos")
+    a, b = sosfiltfilt(sos, yf), sosfiltfilt(sos, yr)
+    assert np.std(a - b) / np.std(a) < 0.03
+
+
+def test_room_reverberation_time():
+    import pyroomacoustics as pra
+
+    fs = 16000
+    h = room_impulse_responses(fs, [[3.0, 2.5, 1.5]], [1.0, 1.0, 1.2], ROOM, 0.4)
+    assert pra.experimental.measure_rt60(h[0], fs) == pytest.approx(0.4, rel=0.3)
+
+
+def test_room_rotated_mic_positions_and_snr():
+    fs = 16000
+    arr = MicArray.from_preset("two-mic")
+    rot = arr.positions[:, [1, 0, 2]]  # mics now on the x axis (head turned 90 deg)
+    src = np.array([1.5, 0.4, 0.0])
+    x = white_noise(0.5, fs, rng=2)
+    clean = simulate_room(x, fs, arr, src, ROOM, 0.0, AT, mic_positions=rot)
+    r = np.linalg.norm(rot - src, axis=1)
+    est = _gcc_phat_tdoa(clean[0], clean[1], fs, 0.0005)
+    assert est * fs == pytest.approx((r[0] - r[1]) / 343.0 * fs, abs=0.1)
+    noisy = simulate_room(x, fs, arr, src, ROOM, 0.0, AT, snr_db=5.0, rng=3, mic_positions=rot)
+    snr = 10 * np.log10(np.mean(clean**2) / np.mean((noisy - clean) ** 2))
+    assert snr == pytest.approx(5.0, abs=0.2)
+    with pytest.raises(GeometryError, match="3 rows"):
+        simulate_room(x, fs, arr, src, ROOM, 0.0, AT, mic_positions=np.eye(3))
+
+
+def test_room_bad_geometry_and_rt60():
+    fs = 8000
+    arr = MicArray.from_preset("two-mic")
+    x = white_noise(0.05, fs, rng=0)
+    with pytest.raises(GeometryError, match="source .* outside the room"):
+        simulate_room(x, fs, arr, [5.0, 0.0, 0.0], ROOM, 0.0, AT)
+    with pytest.raises(GeometryError, match="source .* too close to a wall"):
+        simulate_room(x, fs, arr, [0.0, 0.0, 1.6 - MIN_WALL_DISTANCE_M / 2], ROOM, 0.0, AT)
+    with pytest.raises(GeometryError, match="microphone 0 .* too close to a wall"):
+        simulate_room(x, fs, arr, [1.0, 0.0, 0.0], ROOM, 0.0, [3.0, 0.1, 1.0])
+    with pytest.raises(GeometryError, match="microphone 1 .* outside the room"):
+        simulate_room(x, fs, arr, [1.0, 0.0, 0.0], ROOM, 0.0, [3.0, 4.95, 1.0])
+    with pytest.raises(GeometryError, match="room dimensions"):
+        simulate_room(x, fs, arr, [1.0, 0.0, 0.0], [6.0, -5.0, 3.0], 0.3, AT)
+    with pytest.raises(GeometryError, match="coincides"):
+        simulate_room(x, fs, arr, arr.positions[1], ROOM, 0.0, AT)
+    with pytest.raises(ConfigError, match="too short for a 20x20x5 m room"):
+        simulate_room(x, fs, arr, [1.0, 0.0, 0.0], [20.0, 20.0, 5.0], 0.1, [10, 10, 1])
+    with pytest.raises(ConfigError, match="non-negative"):
+        simulate_room(x, fs, arr, [1.0, 0.0, 0.0], ROOM, -0.2, AT)

@@ -4,7 +4,13 @@ Free field: exact fractional delays applied in the frequency domain (a linear ph
 FFT zero-padded past the longest delay, so nothing wraps around), 1/r spherical spreading, near
 and far field alike. Rooms: pyroomacoustics' image-source model (see :func:`simulate_room`).
 
-Frames: ``source`` and ``mics`` must be given in the same frame, metres.
+Frames: ``source`` and ``mics`` must be given in the same frame, metres. Room functions take
+room coordinates (origin at a corner, axes along the walls) or, for :func:`simulate_room`, the
+array frame plus the array origin ``array_at`` in room coordinates (axes parallel to the room's).
+
+Timing: every simulator here returns signals whose sample 0 is the emission time, so the arrival
+time at microphone k is ``r_k / c`` and ``t_i - t_j`` equals ``MicArray.tdoa(source)``
+exactly -- pyroomacoustics' fractional-delay filter latency is removed.
 """
 
 from __future__ import annotations
@@ -14,9 +20,19 @@ import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
-from hearsee.errors import AudioInputError, GeometryError
+from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
-__all__ = ["add_noise", "delay_signals", "simulate_free_field"]
+__all__ = [
+    "MIN_WALL_DISTANCE_M",
+    "add_noise",
+    "delay_signals",
+    "room_impulse_responses",
+    "simulate_free_field",
+    "simulate_room",
+]
+
+#: Sources and microphones must be at least this far (metres) from every wall of a room.
+MIN_WALL_DISTANCE_M = 0.05
 
 
 def _mic_positions(mics: MicArray | ArrayLike) -> NDArray:
@@ -139,4 +155,201 @@ def simulate_free_field(
         t = r / c
         gains = 1.0 / r
     y = delay_signals(signal, t, fs, gains)
+    return add_noise(y, snr_db, rng)
+
+
+# ---------------------------------------------------------------------------- rooms
+def _room_dim(room_dim: ArrayLike) -> NDArray:
+    d = np.asarray(room_dim, dtype=float)
+    if d.shape != (3,) or not np.all(np.isfinite(d)) or np.any(d <= 0):
+        raise GeometryError(
+            f"room dimensions must be three positive lengths [L, W, H] in metres, got {room_dim!r}"
+        )
+    return d
+
+
+def _check_inside(points: NDArray, dim: NDArray, what: str) -> None:
+    """GeometryError unless every point (n, 3) is >= MIN_WALL_DISTANCE_M inside the room."""
+    margin = np.minimum(points, dim - points).min(axis=-1)
+    bad = np.flatnonzero(margin < MIN_WALL_DISTANCE_M)
+    if bad.size:
+        k = int(bad[0])
+        where = "outside the room" if margin[k] < 0 else "too close to a wall"
+        label = f"{what} {k}" if len(points) > 1 else what
+        raise GeometryError(
+            f"{label} at {np.round(points[k], 3).tolist()} m (room coordinates) is {where} "
+            f"{np.round(dim, 3).tolist()} m; keep it at least {MIN_WALL_DISTANCE_M} m "
+            "from every wall"
+        )
+
+
+def _fractional_delay_latency() -> int:
+    """Samples by which pyroomacoustics' fractional-delay filters delay every RIR."""
+    import pyroomacoustics as pra
+
+    return int(pra.constants.get("frac_delay_length")) // 2
+
+
+def room_impulse_responses(
+    fs: float,
+    mic_positions_room: ArrayLike,
+    source_room: ArrayLike,
+    room_dim: ArrayLike,
+    rt60: float,
+    max_order: int | None = None,
+    speed_of_sound: float = 343.0,
+    align: bool = True,
+) -> NDArray:
+    """Room impulse responses of a shoebox room from pyroomacoustics' image-source model.
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate in Hz.
+    mic_positions_room : array (n_mics, 3)
+        Microphone positions in room coordinates (metres, origin at a corner).
+    source_room : array (3,)
+        Source position in room coordinates, metres.
+    room_dim : array (3,)
+        Room length, width, height in metres.
+    rt60 : float
+        Reverberation time in seconds; ``0`` gives the anechoic direct path only. The wall
+        absorption and image order come from Sabine's formula (``pra.inverse_sabine``).
+    max_order : int, optional
+        Override the image-source order (e.g. to trade accuracy for speed).
+    speed_of_sound : float
+        c0 in m/s (the array's, so room TDOAs match ``MicArray.tdoa``).
+    align : bool
+        Remove the fractional-delay filter latency so that sample 0 is the emission time (the
+        direct path to microphone k peaks at ``r_k / c * fs``). The filters' pre-ringing
+        before time 0 is then cut off (affects only sources closer than ~40 samples * c).
+
+    Returns
+    -------
+    array (n_mics, L)
+        Impulse responses; the direct path has amplitude ``1 / r`` (as :func:`simulate_free_field`).
+
+    Raises
+    ------
+    GeometryError
+        A point outside the room or closer than :data:`MIN_WALL_DISTANCE_M` to a wall.
+    ConfigError
+        A negative RT60, or one the room cannot have (too short for its size).
+    """
+    import pyroomacoustics as pra
+
+    dim = _room_dim(room_dim)
+    mics = np.atleast_2d(np.asarray(mic_positions_room, dtype=float))
+    src = np.asarray(source_room, dtype=float)
+    if mics.ndim != 2 or mics.shape[1] != 3 or not np.all(np.isfinite(mics)):
+        raise GeometryError(f"microphone positions must be finite N x 3, got shape {mics.shape}")
+    if src.shape != (3,) or not np.all(np.isfinite(src)):
+        raise GeometryError(f"source must be a finite [x, y, z] point, got {source_room!r}")
+    _check_inside(mics, dim, "microphone")
+    _check_inside(src[None, :], dim, "source")
+    if np.any(np.linalg.norm(mics - src, axis=1) < 1e-3):
+        raise GeometryError("the source coincides with a microphone")
+    rt60 = float(rt60)
+    if not np.isfinite(rt60) or rt60 < 0:
+        raise ConfigError(f"RT60 must be a non-negative number of seconds, got {rt60}")
+    if max_order is not None and (int(max_order) != max_order or max_order < 0):
+        raise ConfigError(f"max_order must be a non-negative integer, got {max_order!r}")
+
+    if rt60 == 0:
+        materials, order = None, 0
+    else:
+        try:
+            e_absorption, order = pra.inverse_sabine(rt60, dim, c=speed_of_sound)
+        except ValueError:
+            raise ConfigError(
+                f"RT60 {rt60} s is too short for a {'x'.join(f'{v:g}' for v in dim)} m room "
+                "(it would need walls absorbing more than all incident sound); "
+                "use a longer RT60 or a smaller room"
+            ) from None
+        materials = pra.Material(float(e_absorption))
+    if max_order is not None:
+        order = int(max_order)
+    room = pra.ShoeBox(dim, fs=int(round(fs)), materials=materials, max_order=int(order))
+    room.set_sound_speed(float(speed_of_sound))
+    room.add_source(src)
+    room.add_microphone_array(mics.T.copy())
+    room.compute_rir()
+    rirs = [np.asarray(room.rir[m][0], dtype=float) for m in range(len(mics))]
+    out = np.zeros((len(rirs), max(len(h) for h in rirs)))
+    for m, h in enumerate(rirs):
+        out[m, : len(h)] = h
+    if align:
+        out = out[:, _fractional_delay_latency():]
+    return out
+
+
+def simulate_room(
+    signal: ArrayLike,
+    fs: float,
+    array: MicArray,
+    source: ArrayLike,
+    room_dim: ArrayLike,
+    rt60: float,
+    array_at: ArrayLike,
+    snr_db: float | None = None,
+    rng: np.random.Generator | int | None = None,
+    mic_positions: ArrayLike | None = None,
+    max_order: int | None = None,
+) -> NDArray:
+    """Record ``signal`` emitted at ``source`` by ``array`` placed in a shoebox room.
+
+    Parameters
+    ----------
+    signal : array (n,)
+        Source waveform (at 1 m from the source).
+    fs : float
+        Sample rate in Hz.
+    array : MicArray
+        The microphones (array frame) and speed of sound.
+    source : array (3,)
+        Source position in the ARRAY frame, metres.
+    room_dim : array (3,)
+        Room length, width, height in metres.
+    rt60 : float
+        Reverberation time in seconds (0 = anechoic room, direct path only).
+    array_at : array (3,)
+        Position of the array-frame origin in room coordinates; the array axes are parallel
+        to the room's.
+    snr_db : float, optional
+        Per-channel SNR of added white sensor noise (relative to the mean received power).
+    mic_positions : array (n_mics, 3), optional
+        Microphone positions in the array frame overriding ``array.positions`` (e.g. a rotated
+        head from ``hearsee.geometry.mic_positions_at``).
+    max_order : int, optional
+        Image-source order override (see :func:`room_impulse_responses`).
+
+    Returns
+    -------
+    array (n_mics, n)
+        Sample 0 is the emission time: the direct path reaches microphone k at ``r_k / c``,
+        so the direct-path TDOAs equal ``MicArray.tdoa(source)``.
+    """
+    from scipy.signal import fftconvolve
+
+    x = np.asarray(signal, dtype=float)
+    if x.ndim != 1 or x.size == 0:
+        raise AudioInputError(f"signal must be a non-empty 1-D array, got shape {x.shape}")
+    pos = array.positions if mic_positions is None else _mic_positions(mic_positions)
+    if len(pos) != array.n_mics:
+        raise GeometryError(
+            f"mic_positions has {len(pos)} rows but array {array.name!r} has {array.n_mics} "
+            "microphones"
+        )
+    at = np.asarray(array_at, dtype=float)
+    if at.shape != (3,) or not np.all(np.isfinite(at)):
+        raise GeometryError(f"array_at must be a finite [x, y, z] point, got {array_at!r}")
+    src = np.asarray(source, dtype=float)
+    if src.shape != (3,) or not np.all(np.isfinite(src)):
+        raise GeometryError(f"source must be a finite [x, y, z] point, got {source!r}")
+    h = room_impulse_responses(fs, pos + at, src + at, room_dim, rt60, max_order=max_order,
+                               speed_of_sound=array.speed_of_sound, align=False)
+    lat = _fractional_delay_latency()
+    y = fftconvolve(x[None, :], h, axes=-1)[:, lat: lat + len(x)]
+    if y.shape[1] < len(x):  # signal shorter than the latency: pad the end
+        y = np.pad(y, ((0, 0), (0, len(x) - y.shape[1])))
     return add_noise(y, snr_db, rng)
