@@ -1,0 +1,444 @@
+"""Direction and 3D-motion trackers (thesis ch. 5): Kalman filters with gating and missing frames.
+
+Reconstruction (the thesis's ch. 5 text is lost; see ``design/reconstruction.md``):
+
+* :class:`DirectionKalman` (thesis 5.2, fig. 5.6) tracks the azimuth and elevation of a distant
+  moving source with a constant-velocity model (Bar-Shalom, Li & Kirubarajan, *Estimation with
+  Applications to Tracking and Navigation*, 2001, sec. 6.3: discrete white-noise acceleration).
+  The azimuth lives on a circle, so the innovation is wrapped to (-180, 180] deg and the state is
+  re-wrapped after every step -- a source walking through the back of the robot (+-180 deg) is
+  tracked without a 360 deg jump. Measurements outside the chi-square gate (Mahalanobis distance
+  of the innovation) are rejected as anomalous GCC peaks; after ``max_rejects`` rejections in a
+  row the track restarts at the new measurement. Missing frames only predict. With several
+  candidate directions (front/back twin of two microphones, elevation sign of a planar array)
+  the candidate nearest to the prediction (nearest-neighbour data association) is used.
+* :class:`MotionKalman` (thesis 5.4.3, figs. 5.18-5.20) estimates position, velocity and
+  acceleration in 3D with a constant-acceleration model (discrete white-noise jerk, same
+  reference, sec. 6.3.3), measurement = position with a per-measurement covariance (e.g. the
+  elongated covariance of the camera-ray + ITD fix of :mod:`hearsee.fusion.audiovisual`).
+
+Both are written with filterpy's textbook names (``x``, ``P``, ``F``, ``H``, ``Q``, ``R``) and
+use :func:`filterpy.common.Q_discrete_white_noise` for Q; the predict/update step itself is
+written out here (Joseph form) because filterpy's ``KalmanFilter.update`` cannot wrap the
+innovation of an angle.
+
+Units: degrees and deg/s for directions, metres, m/s and m/s^2 for motion, seconds for time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from filterpy.common import Q_discrete_white_noise
+from numpy.typing import ArrayLike, NDArray
+from scipy.stats import chi2
+
+from hearsee.errors import EstimationError
+from hearsee.geometry import wrap_deg
+
+__all__ = [
+    "DirectionKalman",
+    "DirectionTrack",
+    "MotionKalman",
+    "MotionTrack",
+    "track_directions",
+    "track_positions",
+]
+
+
+class _Kalman:
+    """Linear Kalman core with filterpy names and an optional wrapped innovation."""
+
+    x: NDArray
+    P: NDArray
+    F: NDArray
+    Q: NDArray
+    H: NDArray
+    R: NDArray
+
+    def _predict(self) -> None:
+        self.x = self.F @ self.x
+        self.P = self.F @ self.P @ self.F.T + self.Q
+
+    def _innovation(self, z: NDArray, H: NDArray, R: NDArray, wrap: NDArray | None
+                    ) -> tuple[NDArray, NDArray, float]:
+        y = z - H @ self.x
+        if wrap is not None:
+            y = np.where(wrap, wrap_deg(y), y)
+        S = H @ self.P @ H.T + R
+        d2 = float(y @ np.linalg.solve(S, y))
+        return y, S, d2
+
+    def _correct(self, y: NDArray, S: NDArray, H: NDArray, R: NDArray) -> None:
+        K = np.linalg.solve(S, H @ self.P).T  # P H^T S^-1 (S symmetric)
+        self.x = self.x + K @ y
+        I_KH = np.eye(len(self.x)) - K @ H
+        self.P = I_KH @ self.P @ I_KH.T + K @ R @ K.T  # Joseph form: stays symmetric PSD
+
+
+# ---------------------------------------------------------------------------- directions
+@dataclass
+class DirectionTrack:
+    """Output of :func:`track_directions`, one row per input frame.
+
+    ``azimuth_deg`` / ``elevation_deg`` are the filtered directions (NaN before the first
+    measurement), ``rate_dps`` the angular rates ``(n, 2)`` in deg/s, ``P`` the state covariances
+    ``(n, 4, 4)``, ``accepted`` whether the frame's measurement passed the gate.
+    """
+
+    t: NDArray
+    azimuth_deg: NDArray
+    elevation_deg: NDArray
+    rate_dps: NDArray
+    P: NDArray
+    accepted: NDArray
+
+
+class DirectionKalman(_Kalman):
+    """Constant-velocity Kalman filter on (azimuth, elevation) with wrap-around and gating.
+
+    State ``x = [az, el, d az/dt, d el/dt]`` (deg, deg/s); measurement ``z = [az, el]`` (deg) or
+    azimuth only (elevation unknown, e.g. a two-microphone array).
+
+    Parameters
+    ----------
+    sigma_meas_deg : float
+        Standard deviation of one frame's direction measurement (R = sigma^2 I), degrees.
+    sigma_accel_dps2 : float
+        Standard deviation of the angular acceleration (process noise), deg/s^2. Walking at
+        1.5 m/s past a robot 1 m away turns the direction at up to 86 deg/s.
+    gate_prob : float
+        Probability mass of the chi-square gate; innovations beyond it are rejected.
+    max_rejects : int
+        Consecutive rejected measurements after which the track restarts at the measurement.
+    init_rate_sigma_dps : float
+        Initial standard deviation of the angular rates.
+    """
+
+    def __init__(self, sigma_meas_deg: float = 5.0, sigma_accel_dps2: float = 150.0,
+                 gate_prob: float = 0.997, max_rejects: int = 4,
+                 init_rate_sigma_dps: float = 60.0) -> None:
+        if not sigma_meas_deg > 0 or not sigma_accel_dps2 > 0:
+            raise EstimationError("sigma_meas_deg and sigma_accel_dps2 must be > 0")
+        if not 0 < gate_prob < 1:
+            raise EstimationError(f"gate_prob must be in (0, 1), got {gate_prob}")
+        self.sigma_meas_deg = float(sigma_meas_deg)
+        self.sigma_accel_dps2 = float(sigma_accel_dps2)
+        self.gate_prob = float(gate_prob)
+        self.max_rejects = int(max_rejects)
+        self.init_rate_sigma_dps = float(init_rate_sigma_dps)
+        self.H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
+        self.R = np.eye(2) * self.sigma_meas_deg**2
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the track (the next measurement starts a new one)."""
+        self.x = np.zeros(4)
+        self.P = np.diag([180.0**2, 90.0**2, self.init_rate_sigma_dps**2,
+                          self.init_rate_sigma_dps**2])
+        self.F = np.eye(4)
+        self.Q = np.zeros((4, 4))
+        self.t: float | None = None
+        self.initialized = False
+        self.n_rejects = 0
+        self.has_elevation = False
+
+    # -- model ---------------------------------------------------------------------------
+    def _set_dt(self, dt: float) -> None:
+        self.F = np.eye(4)
+        self.F[0, 2] = self.F[1, 3] = dt
+        q = Q_discrete_white_noise(dim=2, dt=dt, var=self.sigma_accel_dps2**2)
+        self.Q = np.zeros((4, 4))
+        for a, b in ((0, 2), (1, 3)):
+            idx = np.ix_([a, b], [a, b])
+            self.Q[idx] = q
+
+    def predict(self, t: float) -> None:
+        """Propagate the state to time ``t`` (seconds)."""
+        if self.t is None or not self.initialized:
+            self.t = float(t)
+            return
+        dt = float(t) - self.t
+        if dt < 0:
+            raise EstimationError(f"tracker time went backwards ({self.t} s -> {t} s)")
+        if dt > 0:
+            self._set_dt(dt)
+            self._predict()
+            self.x[0] = float(wrap_deg(self.x[0]))
+        self.t = float(t)
+
+    def _start(self, az: float, el: float | None) -> None:
+        self.x = np.array([float(wrap_deg(az)), 0.0 if el is None else float(el), 0.0, 0.0])
+        el_var = 90.0**2 if el is None else self.sigma_meas_deg**2
+        self.P = np.diag([self.sigma_meas_deg**2, el_var, self.init_rate_sigma_dps**2,
+                          self.init_rate_sigma_dps**2])
+        self.initialized = True
+        self.has_elevation = el is not None
+        self.n_rejects = 0
+
+    def _parts(self, az: float, el: float | None, R: NDArray | None = None
+               ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        R = self.R if R is None else R
+        if el is None or not np.isfinite(el):
+            return np.array([az]), self.H[:1], R[:1, :1], np.array([True])
+        return np.array([az, el]), self.H, R, np.array([True, False])
+
+    def gate_distance(self, az: float, el: float | None = None, R: NDArray | None = None
+                      ) -> float:
+        """Squared Mahalanobis distance of a candidate measurement from the prediction."""
+        z, H, Rm, wrap = self._parts(az, el, R)
+        return self._innovation(z, H, Rm, wrap)[2]
+
+    def update(self, t: float, measurement: tuple[float, float | None] | None = None,
+               candidates: Sequence[tuple[float, float | None]] | None = None,
+               sigma_meas_deg: float | None = None) -> bool:
+        """One frame: predict to ``t`` and correct with a measurement if there is one.
+
+        Parameters
+        ----------
+        t : float
+            Frame time, seconds (non-decreasing).
+        measurement : (az_deg, el_deg or None), optional
+            The frame's direction; None for a missing frame (predict only).
+        candidates : list of (az_deg, el_deg or None), optional
+            Ambiguous alternatives (the measurement is one of them); the one nearest the
+            prediction is used.
+        sigma_meas_deg : float, optional
+            This frame's measurement noise (default: the filter's).
+
+        Returns
+        -------
+        bool
+            True when a measurement was fused (or started the track), False when the frame was
+            missing or its measurement fell outside the gate.
+        """
+        self.predict(t)
+        cands = list(candidates or [])
+        if measurement is not None:
+            cands = [measurement, *cands]
+        cands = [(float(a), None if e is None or not np.isfinite(e) else float(e))
+                 for a, e in cands if a is not None and np.isfinite(a)]
+        if not cands:
+            return False
+        Rf = None if sigma_meas_deg is None else np.eye(2) * float(sigma_meas_deg) ** 2
+        if not self.initialized:
+            self._start(*cands[0])
+            return True
+        d2 = [self.gate_distance(a, e, Rf) for a, e in cands]
+        k = int(np.argmin(d2))
+        az, el = cands[k]
+        z, H, R, wrap = self._parts(az, el, Rf)
+        y, S, dist2 = self._innovation(z, H, R, wrap)
+        if dist2 > chi2.ppf(self.gate_prob, len(z)):
+            self.n_rejects += 1
+            if self.n_rejects >= self.max_rejects:
+                self._start(az, el)
+                return True
+            return False
+        self._correct(y, S, H, R)
+        self.x[0] = float(wrap_deg(self.x[0]))
+        self.x[1] = float(np.clip(self.x[1], -90.0, 90.0))
+        self.has_elevation = self.has_elevation or el is not None
+        self.n_rejects = 0
+        return True
+
+    # -- read-out ------------------------------------------------------------------------
+    @property
+    def azimuth_deg(self) -> float:
+        return float(self.x[0]) if self.initialized else float("nan")
+
+    @property
+    def elevation_deg(self) -> float:
+        return float(self.x[1]) if self.initialized and self.has_elevation else float("nan")
+
+    @property
+    def rate_dps(self) -> NDArray:
+        """Angular rates (d az/dt, d el/dt) in deg/s."""
+        return self.x[2:].copy() if self.initialized else np.full(2, np.nan)
+
+
+def track_directions(t: ArrayLike, azimuth_deg: ArrayLike, elevation_deg: ArrayLike | None = None,
+                     valid: ArrayLike | None = None, **params: float) -> DirectionTrack:
+    """Run a :class:`DirectionKalman` over per-frame directions.
+
+    Parameters
+    ----------
+    t : array (n,)
+        Frame times, seconds.
+    azimuth_deg, elevation_deg : array (n,)
+        Per-frame estimates in degrees; NaN (or ``valid=False``) marks a missing frame.
+        ``elevation_deg=None`` tracks azimuth only.
+    **params
+        Passed to :class:`DirectionKalman` (``sigma_meas_deg``, ``sigma_accel_dps2``, ...).
+    """
+    tt = np.asarray(t, dtype=float)
+    az = np.asarray(azimuth_deg, dtype=float)
+    el = np.full_like(az, np.nan) if elevation_deg is None else np.asarray(elevation_deg, float)
+    ok = np.isfinite(az) if valid is None else np.asarray(valid, bool) & np.isfinite(az)
+    if not (tt.shape == az.shape == el.shape == ok.shape) or tt.ndim != 1:
+        raise EstimationError("t, azimuth_deg, elevation_deg and valid must be equal 1-D arrays")
+    kf = DirectionKalman(**params)
+    n = tt.size
+    out_az, out_el = np.full(n, np.nan), np.full(n, np.nan)
+    rates, Ps, acc = np.full((n, 2), np.nan), np.full((n, 4, 4), np.nan), np.zeros(n, bool)
+    for k in range(n):
+        meas = (az[k], el[k] if np.isfinite(el[k]) else None) if ok[k] else None
+        acc[k] = kf.update(tt[k], meas)
+        out_az[k], out_el[k] = kf.azimuth_deg, kf.elevation_deg
+        rates[k], Ps[k] = kf.rate_dps, kf.P
+    return DirectionTrack(tt, out_az, out_el, rates, Ps, acc)
+
+
+# ---------------------------------------------------------------------------- 3D motion
+@dataclass
+class MotionTrack:
+    """Output of :func:`track_positions`: per-frame position (m), velocity (m/s), acceleration
+    (m/s^2), each ``(n, 3)`` (NaN before the first fix), state covariances ``(n, 9, 9)`` in the
+    order ``[x, vx, ax, y, vy, ay, z, vz, az]`` and ``accepted`` flags."""
+
+    t: NDArray
+    position: NDArray
+    velocity: NDArray
+    acceleration: NDArray
+    P: NDArray
+    accepted: NDArray
+
+
+class MotionKalman(_Kalman):
+    """Constant-acceleration Kalman filter on a 3D position (thesis 5.4.3).
+
+    State ``x = [x, vx, ax, y, vy, ay, z, vz, az]`` (m, m/s, m/s^2; filterpy's
+    ``order_by_dim`` layout), measurement = position (m) with covariance R (3x3).
+
+    Parameters
+    ----------
+    sigma_meas_m : float
+        Default measurement standard deviation per axis, metres.
+    sigma_jerk : float
+        Standard deviation of the jerk (process noise), m/s^3.
+    gate_prob : float
+        Chi-square gate probability (3 degrees of freedom).
+    max_rejects : int
+        Consecutive gated measurements after which the track restarts.
+    """
+
+    _POS = np.array([0, 3, 6])
+    _VEL = np.array([1, 4, 7])
+    _ACC = np.array([2, 5, 8])
+
+    def __init__(self, sigma_meas_m: float = 0.05, sigma_jerk: float = 5.0,
+                 gate_prob: float = 0.999, max_rejects: int = 4,
+                 init_vel_sigma: float = 1.5, init_acc_sigma: float = 3.0) -> None:
+        if not sigma_meas_m > 0 or not sigma_jerk > 0:
+            raise EstimationError("sigma_meas_m and sigma_jerk must be > 0")
+        self.sigma_meas_m = float(sigma_meas_m)
+        self.sigma_jerk = float(sigma_jerk)
+        self.gate_prob = float(gate_prob)
+        self.max_rejects = int(max_rejects)
+        self.init_vel_sigma = float(init_vel_sigma)
+        self.init_acc_sigma = float(init_acc_sigma)
+        self.H = np.zeros((3, 9))
+        self.H[[0, 1, 2], self._POS] = 1.0
+        self.R = np.eye(3) * self.sigma_meas_m**2
+        self.reset()
+
+    def reset(self) -> None:
+        self.x = np.zeros(9)
+        self.P = np.eye(9) * 1e6
+        self.F = np.eye(9)
+        self.Q = np.zeros((9, 9))
+        self.t: float | None = None
+        self.initialized = False
+        self.n_rejects = 0
+
+    def _set_dt(self, dt: float) -> None:
+        f = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
+        self.F = np.kron(np.eye(3), f)
+        self.Q = Q_discrete_white_noise(dim=3, dt=dt, var=self.sigma_jerk**2, block_size=3,
+                                        order_by_dim=True)
+
+    def predict(self, t: float) -> None:
+        """Propagate the state to time ``t`` (seconds)."""
+        if self.t is None or not self.initialized:
+            self.t = float(t)
+            return
+        dt = float(t) - self.t
+        if dt < 0:
+            raise EstimationError(f"tracker time went backwards ({self.t} s -> {t} s)")
+        if dt > 0:
+            self._set_dt(dt)
+            self._predict()
+        self.t = float(t)
+
+    def _start(self, z: NDArray, R: NDArray) -> None:
+        self.x = np.zeros(9)
+        self.x[self._POS] = z
+        self.P = np.diag(np.tile([1.0, self.init_vel_sigma**2, self.init_acc_sigma**2], 3))
+        self.P[np.ix_(self._POS, self._POS)] = R
+        self.initialized = True
+        self.n_rejects = 0
+
+    def update(self, t: float, position: ArrayLike | None = None,
+               R: ArrayLike | None = None) -> bool:
+        """One frame: predict to ``t`` and fuse ``position`` (m) with covariance ``R`` (3x3 m^2)
+        when given. Returns True when the measurement was fused."""
+        self.predict(t)
+        if position is None:
+            return False
+        z = np.asarray(position, dtype=float).reshape(3)
+        if not np.all(np.isfinite(z)):
+            return False
+        Rm = self.R if R is None else np.asarray(R, dtype=float).reshape(3, 3)
+        if not self.initialized:
+            self._start(z, Rm)
+            return True
+        y, S, d2 = self._innovation(z, self.H, Rm, None)
+        if d2 > chi2.ppf(self.gate_prob, 3):
+            self.n_rejects += 1
+            if self.n_rejects >= self.max_rejects:
+                self._start(z, Rm)
+                return True
+            return False
+        self._correct(y, S, self.H, Rm)
+        self.n_rejects = 0
+        return True
+
+    @property
+    def position(self) -> NDArray:
+        return self.x[self._POS].copy() if self.initialized else np.full(3, np.nan)
+
+    @property
+    def velocity(self) -> NDArray:
+        return self.x[self._VEL].copy() if self.initialized else np.full(3, np.nan)
+
+    @property
+    def acceleration(self) -> NDArray:
+        return self.x[self._ACC].copy() if self.initialized else np.full(3, np.nan)
+
+    @property
+    def position_cov(self) -> NDArray:
+        return self.P[np.ix_(self._POS, self._POS)].copy()
+
+
+def track_positions(t: ArrayLike, positions: ArrayLike, R: ArrayLike | None = None,
+                    **params: float) -> MotionTrack:
+    """Run a :class:`MotionKalman` over per-frame 3D fixes ``(n, 3)`` (NaN rows = missing).
+
+    ``R`` is one 3x3 covariance for all frames or ``(n, 3, 3)`` per frame (m^2).
+    """
+    tt = np.asarray(t, dtype=float)
+    z = np.asarray(positions, dtype=float)
+    if tt.ndim != 1 or z.shape != (tt.size, 3):
+        raise EstimationError(f"t (n,) and positions (n, 3) expected, got {tt.shape}, {z.shape}")
+    Rs = None if R is None else np.broadcast_to(np.asarray(R, float), (tt.size, 3, 3))
+    kf = MotionKalman(**params)
+    n = tt.size
+    pos, vel, acc = (np.full((n, 3), np.nan) for _ in range(3))
+    Ps, ok = np.full((n, 9, 9), np.nan), np.zeros(n, bool)
+    for k in range(n):
+        meas = z[k] if np.all(np.isfinite(z[k])) else None
+        ok[k] = kf.update(tt[k], meas, None if Rs is None else Rs[k])
+        pos[k], vel[k], acc[k], Ps[k] = kf.position, kf.velocity, kf.acceleration, kf.P
+    return MotionTrack(tt, pos, vel, acc, Ps, ok)

@@ -1,0 +1,129 @@
+import numpy as np
+import pytest
+
+from hearsee.audio.tracking import (
+    DirectionKalman,
+    MotionKalman,
+    track_directions,
+    track_positions,
+)
+from hearsee.errors import EstimationError
+from hearsee.geometry import wrap_deg
+
+DT = 0.032
+
+
+def _err(a, b):
+    return np.abs(wrap_deg(np.asarray(a) - np.asarray(b)))
+
+
+def test_tracking_halves_error_of_noisy_constant_rate_motion():
+    rng = np.random.default_rng(0)
+    t = np.arange(200) * DT
+    az_true = -60 + 30 * t  # 30 deg/s
+    el_true = 10 + 5 * t
+    az = az_true + 5 * rng.standard_normal(t.size)
+    el = el_true + 5 * rng.standard_normal(t.size)
+    tr = track_directions(t, az, el, sigma_meas_deg=5.0, sigma_accel_dps2=30.0)
+    s = slice(30, None)
+    raw = np.sqrt(np.mean(_err(az, az_true)[s] ** 2))
+    trk = np.sqrt(np.mean(_err(tr.azimuth_deg, az_true)[s] ** 2))
+    assert trk < 0.5 * raw
+    assert np.sqrt(np.mean((tr.elevation_deg - el_true)[s] ** 2)) < 0.5 * 5
+    assert np.median(tr.rate_dps[s, 0]) == pytest.approx(30.0, abs=3.0)
+    # no lag: mean signed error is near zero
+    assert abs(np.mean(wrap_deg(tr.azimuth_deg - az_true)[s])) < 1.0
+
+
+def test_wraps_through_180_without_a_jump():
+    rng = np.random.default_rng(1)
+    t = np.arange(150) * DT
+    az_true = wrap_deg(150 + 40 * t)  # crosses +180 -> -180 at t = 0.75 s
+    az = wrap_deg(az_true + 3 * rng.standard_normal(t.size))
+    tr = track_directions(t, az, sigma_meas_deg=3.0, sigma_accel_dps2=30.0)
+    e = _err(tr.azimuth_deg, az_true)
+    assert e[10:].max() < 6.0
+    assert np.all(tr.accepted[1:])
+    assert np.all(np.abs(tr.azimuth_deg) <= 180.0)
+    assert tr.rate_dps[-1, 0] == pytest.approx(40.0, abs=5.0)
+
+
+def test_gate_rejects_outliers_and_missing_frames_predict():
+    rng = np.random.default_rng(2)
+    t = np.arange(200) * DT
+    az_true = 20 + 15 * np.sin(0.5 * t)
+    az = az_true + 2 * rng.standard_normal(t.size)
+    outl = rng.random(t.size) < 0.15
+    outl[:5] = False
+    az[outl] = rng.uniform(-180, 180, outl.sum())
+    az[100:110] = np.nan  # missing frames
+    tr = track_directions(t, az, sigma_meas_deg=2.0, sigma_accel_dps2=20.0)
+    far = outl & (_err(az, az_true) > 30)
+    assert not np.any(tr.accepted[far])
+    assert not np.any(tr.accepted[100:110])
+    assert _err(tr.azimuth_deg, az_true)[5:].max() < 8.0
+    raw = np.sqrt(np.nanmean(_err(az, az_true) ** 2))
+    assert np.sqrt(np.mean(_err(tr.azimuth_deg, az_true)[5:] ** 2)) < 0.1 * raw
+
+
+def test_restart_after_consecutive_rejections():
+    kf = DirectionKalman(sigma_meas_deg=2.0, max_rejects=3)
+    for k in range(20):
+        kf.update(k * DT, (10.0, 0.0))
+    results = [kf.update((20 + k) * DT, (-120.0, 0.0)) for k in range(3)]
+    assert results == [False, False, True]
+    assert kf.azimuth_deg == pytest.approx(-120.0)
+
+
+def test_candidates_resolve_front_back_twin():
+    kf = DirectionKalman(sigma_meas_deg=3.0)
+    for k in range(60):
+        a = 30.0 + 0.5 * k
+        # measurement order alternates: the twin (180 - a) comes first half of the time
+        pair = [(a, None), (180.0 - a, None)]
+        if k % 2 and k > 0:
+            pair = pair[::-1]
+        kf.update(k * DT, pair[0], candidates=pair[1:])
+    assert kf.azimuth_deg == pytest.approx(30.0 + 0.5 * 59, abs=2.0)
+    assert np.isnan(kf.elevation_deg)
+
+
+def test_constant_acceleration_motion_is_recovered():
+    rng = np.random.default_rng(3)
+    t = np.arange(150) * 0.05
+    a = np.array([0.2, -0.1, 0.0])
+    v0 = np.array([0.5, 0.8, 0.0])
+    p0 = np.array([1.0, -1.0, 0.3])
+    p = p0 + t[:, None] * v0 + 0.5 * t[:, None] ** 2 * a
+    z = p + 0.02 * rng.standard_normal(p.shape)
+    z[60:65] = np.nan
+    tr = track_positions(t, z, sigma_meas_m=0.02, sigma_jerk=0.1)
+    s = slice(40, None)
+    v_true = v0 + t[:, None] * a
+    assert np.sqrt(np.mean((tr.velocity[s] - v_true[s]) ** 2)) < 0.08
+    assert np.abs(tr.acceleration[-20:].mean(axis=0) - a).max() < 0.1
+    pos_err = np.linalg.norm(tr.position[s] - p[s], axis=1)
+    raw_err = np.linalg.norm(z[s] - p[s], axis=1)
+    assert np.nanmean(pos_err) < np.nanmean(raw_err)
+    assert not np.any(tr.accepted[60:65])
+
+
+def test_motion_gate_rejects_a_wild_fix():
+    kf = MotionKalman(sigma_meas_m=0.02, sigma_jerk=1.0)
+    for k in range(30):
+        kf.update(k * 0.05, [1.0 + 0.05 * k, 0.0, 0.0])
+    assert not kf.update(30 * 0.05, [5.0, 3.0, 0.0])
+    assert kf.velocity[0] == pytest.approx(1.0, abs=0.05)
+
+
+def test_bad_input():
+    kf = DirectionKalman()
+    kf.update(1.0, (0.0, 0.0))
+    with pytest.raises(EstimationError, match="backwards"):
+        kf.update(0.5, (0.0, 0.0))
+    with pytest.raises(EstimationError):
+        track_directions([0, 1], [0.0], [0.0])
+    with pytest.raises(EstimationError):
+        DirectionKalman(sigma_meas_deg=0)
+    with pytest.raises(EstimationError):
+        track_positions([0, 1], np.zeros((3, 3)))
