@@ -1,0 +1,247 @@
+"""Simulated microphone-array recordings with their ground truth (behind ``hearsee simulate``).
+
+:func:`simulate_recording` = source signal (:func:`hearsee.audio.signals.make_signal`) ->
+propagation (:func:`render`: free field or a pyroomacoustics shoebox room) -> sensor noise ->
+ground truth (:func:`ground_truth`). :func:`save_recording` writes the WAV (channel k =
+microphone k) and the truth JSON next to it.
+
+Frames: the source is given in the ARRAY frame (metres, x forward, y left, z up). In a room the
+array origin sits at ``room["array_at"]`` (room coordinates, axes parallel to the walls; default:
+the room centre).
+
+Extending: masked arrays, moving heads (poses) and moving sources (trajectories) plug in at
+:func:`render` (one propagation step for one static geometry) and at :func:`ground_truth`; keep
+:func:`simulate_recording` the single entry point.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.propagation import add_noise, simulate_free_field, simulate_room
+from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
+from hearsee.errors import ConfigError, GeometryError, InputFileError
+from hearsee.geometry import cart_to_sph
+
+__all__ = [
+    "EXAMPLE_RECORDING",
+    "example_recording_path",
+    "ground_truth",
+    "normalize_room",
+    "render",
+    "save_recording",
+    "simulate_recording",
+]
+
+#: File name of the bundled example recording (in ``hearsee/data/examples/``).
+EXAMPLE_RECORDING = "three-mic-speech.wav"
+
+_ROOM_KEYS = ("room_dim", "rt60", "array_at", "max_order")
+
+
+def example_recording_path() -> Path:
+    """Path of the bundled example: three-mic preset, female voice at azimuth 60 deg,
+    elevation 10 deg, 2 m, shoebox room 6 x 5 x 3 m, RT60 0.3 s, SNR 20 dB, 16 kHz.
+
+    Its ground truth is the ``.json`` file next to it.
+    """
+    p = Path(str(resources.files("hearsee") / "data" / "examples" / EXAMPLE_RECORDING))
+    if not p.is_file():
+        raise InputFileError(
+            f"{p}: bundled example recording missing; regenerate it with "
+            "examples/make_example_recording.py"
+        )
+    return p
+
+
+def _point(value: ArrayLike, what: str) -> NDArray:
+    try:
+        p = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise GeometryError(f"{what} must be an [x, y, z] point in metres, got {value!r}") from None
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise GeometryError(f"{what} must be a finite [x, y, z] point in metres, got {value!r}")
+    return p
+
+
+def normalize_room(room: Mapping[str, Any] | None) -> dict[str, Any] | None:
+    """Validate a room mapping and fill its defaults.
+
+    Keys: ``room_dim`` [L, W, H] m (required), ``rt60`` s (required; 0 = anechoic),
+    ``array_at`` [x, y, z] m in room coordinates (default: the room centre), ``max_order``
+    (optional image-source order override). Returns a plain JSON-able dict or None.
+    """
+    if room is None:
+        return None
+    if not isinstance(room, Mapping):
+        raise ConfigError(f"room must be a mapping with keys {', '.join(_ROOM_KEYS)}")
+    for key in room:
+        if key not in _ROOM_KEYS:
+            raise ConfigError(
+                f"room: unknown key {key!r} (expected one of: {', '.join(_ROOM_KEYS)})"
+            )
+    if "room_dim" not in room:
+        raise ConfigError("room: missing 'room_dim' ([length, width, height] in metres)")
+    if "rt60" not in room or room["rt60"] is None:
+        raise ConfigError("room: missing 'rt60' (reverberation time in seconds; 0 = anechoic)")
+    dim = _point(room["room_dim"], "room_dim")
+    if np.any(dim <= 0):
+        raise GeometryError(
+            f"room_dim must be three positive lengths in metres, got {dim.tolist()}"
+        )
+    try:
+        rt60 = float(room["rt60"])
+    except (TypeError, ValueError):
+        raise ConfigError(f"room: rt60 must be a number of seconds, got {room['rt60']!r}") from None
+    at = room.get("array_at")
+    out: dict[str, Any] = {
+        "room_dim": dim.tolist(),
+        "rt60": rt60,
+        "array_at": (dim / 2).tolist() if at is None else _point(at, "array_at").tolist(),
+    }
+    if room.get("max_order") is not None:
+        out["max_order"] = int(room["max_order"])
+    return out
+
+
+def render(signal: ArrayLike, fs: float, array: MicArray, source: ArrayLike,
+           room: Mapping[str, Any] | None = None,
+           mic_positions: ArrayLike | None = None) -> NDArray:
+    """Noise-free microphone signals ``(n_mics, n)`` for one static geometry.
+
+    ``source`` and ``mic_positions`` (default ``array.positions``) are in the array frame;
+    ``room`` as in :func:`normalize_room` (None = free field, near-field spherical waves).
+    Sample 0 is the emission time, so direct-path TDOAs equal ``MicArray.tdoa(source)``.
+    """
+    room = normalize_room(room)
+    src = _point(source, "source")
+    if room is None:
+        mics = array.positions if mic_positions is None else mic_positions
+        return simulate_free_field(signal, fs, mics, src, speed_of_sound=array.speed_of_sound)
+    return simulate_room(signal, fs, array, src, room["room_dim"], room["rt60"],
+                         room["array_at"], mic_positions=mic_positions,
+                         max_order=room.get("max_order"))
+
+
+def ground_truth(array: MicArray, source: ArrayLike,
+                 mic_positions: ArrayLike | None = None) -> dict[str, Any]:
+    """Geometric truth of a static source in the array frame.
+
+    Returns ``source_m`` [x, y, z] m, ``azimuth_deg``, ``elevation_deg``, ``distance_m`` (from
+    the array-frame origin) and ``tdoa_s`` {"i-j": t_i - t_j seconds} for every pair (exact
+    near-field values, ``MicArray.tdoa``; with ``mic_positions`` for those positions).
+    """
+    src = _point(source, "source")
+    geo = array if mic_positions is None else MicArray(
+        np.asarray(mic_positions, dtype=float), array.speed_of_sound, array.name)
+    az, el, r = cart_to_sph(src)
+    tdoa = geo.tdoa(src)
+    return {
+        "source_m": src.tolist(),
+        "azimuth_deg": float(np.degrees(az)),
+        "elevation_deg": float(np.degrees(el)),
+        "distance_m": float(r),
+        "tdoa_s": {lab: float(t) for lab, t in zip(array.pair_labels, tdoa, strict=True)},
+    }
+
+
+def simulate_recording(
+    array: MicArray | str | Path,
+    source: ArrayLike,
+    signal: str | Path = "noise",
+    duration_s: float = 2.0,
+    fs: float = 16000,
+    snr_db: float | None = None,
+    room: Mapping[str, Any] | None = None,
+    seed: int | None = 0,
+) -> tuple[NDArray, dict[str, Any]]:
+    """Simulate what ``array`` records from a static source, with its ground truth.
+
+    Parameters
+    ----------
+    array : MicArray, preset name or YAML path
+    source : array (3,)
+        Source position in the array frame, metres.
+    signal : ``"noise"``, ``"male"``, ``"female"`` or an audio file path
+        See :func:`hearsee.audio.signals.make_signal`.
+    duration_s, fs : float
+        Length in seconds and sample rate in Hz.
+    snr_db : float, optional
+        Per-channel SNR of white sensor noise, relative to the mean received signal power
+        (None = no noise).
+    room : mapping, optional
+        ``{"room_dim": [L, W, H], "rt60": s, "array_at": [x, y, z]}`` (see
+        :func:`normalize_room`); None = free field.
+    seed : int
+        Seeds the signal and the noise.
+
+    Returns
+    -------
+    x : array (n_mics, n)
+        The recording, channel k = microphone k (not normalised; see :func:`save_recording`).
+    truth : dict
+        JSON-able: ``source_m``, ``azimuth_deg``, ``elevation_deg``, ``distance_m``,
+        ``tdoa_s`` {"i-j": s}, ``fs``, ``duration_s``, ``array`` (``MicArray.to_dict``),
+        ``signal``, ``snr_db``, ``room`` (filled in, or None), ``seed``.
+
+    Examples
+    --------
+    >>> x, truth = simulate_recording("two-mic", [1.0, 1.0, 0.0], duration_s=0.1)
+    >>> x.shape, round(truth["azimuth_deg"])
+    ((2, 1600), 45)
+    """
+    array = load_array(array)
+    src = _point(source, "source")
+    if fs is None or not np.isfinite(fs) or fs <= 0 or int(round(fs)) != fs:
+        raise ConfigError(f"sample rate must be a positive whole number of Hz, got {fs!r}")
+    fs = int(fs)
+    if snr_db is not None and not np.isfinite(snr_db):
+        raise ConfigError(f"SNR must be a finite number of dB, got {snr_db!r}")
+    room = normalize_room(room)
+    rng = np.random.default_rng(seed)
+    s = make_signal(signal, duration_s, fs, rng)
+    x = add_noise(render(s, fs, array, src, room), snr_db, rng)
+    truth = ground_truth(array, src)
+    truth.update({
+        "fs": fs,
+        "duration_s": float(duration_s),
+        "array": array.to_dict(),
+        "signal": str(signal) if str(signal) in SIGNAL_KINDS else str(Path(signal)),
+        "snr_db": None if snr_db is None else float(snr_db),
+        "room": room,
+        "seed": seed,
+    })
+    return x, truth
+
+
+def save_recording(out: str | Path, x: ArrayLike, truth: Mapping[str, Any],
+                   subtype: str = "FLOAT", peak: float = 0.5,
+                   protect: list[str | Path] | None = None) -> tuple[Path, Path]:
+    """Write ``x`` as ``OUT.wav`` (scaled to ``peak`` full scale) and the truth as ``OUT.json``.
+
+    The common gain applied to all channels is stored as ``truth["gain"]`` (it does not change
+    any TDOA). ``protect`` lists input files that must not be overwritten. Returns both paths.
+    """
+    wav = Path(out)
+    if wav.suffix.lower() not in (".wav", ".flac"):
+        raise ConfigError(f"{wav}: output must end in .wav (or .flac)")
+    js = wav.with_suffix(".json")
+    y = np.asarray(x, dtype=float)
+    m = float(np.max(np.abs(y))) if y.size else 0.0
+    gain = peak / m if m > 0 else 1.0
+    for q in protect or []:
+        if Path(q).resolve() == js.resolve():
+            raise ConfigError(f"{js}: refusing to overwrite the input file {q}; "
+                              "choose another output path")
+    write_recording(wav, y * gain, truth["fs"], subtype=subtype, protect=protect)
+    doc = {**truth, "gain": gain, "wav": wav.name}
+    js.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    return wav, js
