@@ -1,0 +1,528 @@
+"""Source direction and position from TDOAs: 2-, 3- and N-microphone solvers (thesis 2.3, 2.4).
+
+Model (house conventions): ``tdoa[i,j] = t_i - t_j`` seconds. In the far field a plane wave from
+unit direction ``u`` reaches microphone ``M_k`` at ``-M_k . u / c0``, so every pair gives one
+linear equation ``-(M_i - M_j) . u = c0 tdoa[i,j]``; in the near field
+``|P - M_i| - |P - M_j| = c0 tdoa[i,j]`` (a hyperboloid with foci M_i, M_j).
+
+What one set of TDOAs can tell depends only on the span of the microphone positions, so
+:func:`localize_tdoa` dispatches on geometry, not on presets:
+
+- **linear** (two microphones, or all collinear): the locus is a hyperboloid (near field) /
+  cone (far field) about the array axis ``a``: ``a . u = cos(theta)``. In the horizontal plane of
+  the array frame this is an azimuth and its mirror about the axis -- for the thesis's pair on the
+  y axis, ``alpha`` and ``180 - alpha`` (front/back twins). Elevation is unresolvable (None).
+- **planar** (three microphones, or all coplanar): the TDOAs fix the in-plane part ``u_p`` of
+  ``u`` by least squares; the out-of-plane part is ``+-sqrt(1 - |u_p|^2)``: two mirror solutions
+  about the array plane, one when the source is in the plane (``|u_p| = 1``), none when the TDOAs
+  are inconsistent (``|u_p| > 1`` or a pair residual above ``tol_s``) -- then the nearest feasible
+  direction is returned with ``feasible=False``. Near field: two hyperboloids intersect in a 3D
+  curve (:func:`three_mic_curve`, thesis fig. 2.6).
+- **volume** (>= 4 non-coplanar microphones): a unique far-field direction (least squares on
+  the unit sphere with a robust loss) and a near-field position (spherical interpolation,
+  Smith & Abel 1987, as initialiser when >= 5 microphones, then robust nonlinear least squares).
+
+Angles: azimuth from +x toward +y, elevation from the xy-plane toward +z, degrees in the
+:class:`Localization` fields; positions in metres in the array frame.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from hearsee.audio.arrays import MicArray, load_array
+from hearsee.errors import GeometryError
+from hearsee.geometry import wrap_deg
+
+__all__ = [
+    "Localization",
+    "array_geometry",
+    "cone_points",
+    "far_field_linear",
+    "far_field_planar",
+    "far_field_volume",
+    "hyperboloid_points",
+    "localize_tdoa",
+    "near_field_position",
+    "three_mic_curve",
+]
+
+#: Default TDOA consistency tolerance (seconds): ~1 cm of path difference.
+DEFAULT_TOL_S = 3e-5
+
+
+@dataclass
+class Localization:
+    """The answer of one localization.
+
+    azimuth_deg : float or None     primary azimuth (None when the geometry cannot resolve it)
+    elevation_deg : float or None   primary elevation (None for linear arrays)
+    candidates : list of (az, el)   every solution consistent with the TDOAs (degrees; el None
+                                    where unresolvable); the primary is ``candidates[0]``
+    n_solutions : int               exact solutions: 1 or 2 (mirror twins), 0 when the TDOAs are
+                                    inconsistent (``candidates`` then holds the nearest feasible)
+    feasible : bool                 False when the TDOAs admit no direction exactly
+    position_m : array (3,) or None near-field position (volume arrays with >= 4 microphones)
+    direction : array (3,) or None  unit vector of the primary candidate (None for linear arrays)
+    residual_s : float              RMS TDOA residual of the primary solution, seconds
+    geometry : str                  "linear", "planar" or "volume"
+    """
+
+    azimuth_deg: float | None
+    elevation_deg: float | None
+    candidates: list[tuple[float | None, float | None]]
+    n_solutions: int
+    feasible: bool
+    position_m: NDArray | None = None
+    direction: NDArray | None = None
+    residual_s: float = 0.0
+    geometry: str = "planar"
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (degrees; None where unresolvable)."""
+        return {
+            "azimuth_deg": self.azimuth_deg,
+            "elevation_deg": self.elevation_deg,
+            "candidates": [{"azimuth_deg": a, "elevation_deg": e} for a, e in self.candidates],
+            "n_solutions": self.n_solutions,
+            "feasible": self.feasible,
+            "position_m": None if self.position_m is None else list(map(float, self.position_m)),
+        }
+
+
+# ---------------------------------------------------------------------------------- geometry
+@dataclass(frozen=True)
+class ArrayGeometry:
+    """Span of the microphone positions: ``kind`` and an orthonormal basis.
+
+    axis : (3,) for linear arrays (unit, from the first toward the last microphone)
+    basis : (2, 3) in-plane basis and normal (3,) for planar arrays (normal with z >= 0 when
+    possible, so that "above the plane" is +z for a horizontal array)
+    """
+
+    kind: str
+    centre: NDArray
+    axis: NDArray | None = None
+    basis: NDArray | None = None
+    normal: NDArray | None = None
+
+
+def array_geometry(array: MicArray | NDArray, rel_tol: float = 1e-6) -> ArrayGeometry:
+    """Classify microphone positions ``(n, 3)`` as linear, planar or volume."""
+    pos = array.positions if isinstance(array, MicArray) else np.asarray(array, dtype=float)
+    c = pos.mean(axis=0)
+    _, s, vt = np.linalg.svd(pos - c)
+    s = np.concatenate([s, np.zeros(3 - len(s))])
+    scale = max(s[0], 1e-12)
+    if s[1] < rel_tol * scale:
+        axis = vt[0]
+        if np.dot(axis, pos[-1] - pos[0]) < 0:
+            axis = -axis
+        return ArrayGeometry("linear", c, axis=axis)
+    if s[2] < rel_tol * scale:
+        n = np.cross(vt[0], vt[1])
+        n = n / np.linalg.norm(n)
+        # orientation: prefer +z, then +x, then +y for "above"
+        for k in (2, 0, 1):
+            if abs(n[k]) > 1e-9:
+                if n[k] < 0:
+                    n = -n
+                break
+        e1 = vt[0]
+        e2 = np.cross(n, e1)
+        return ArrayGeometry("planar", c, basis=np.stack([e1, e2]), normal=n)
+    return ArrayGeometry("volume", c)
+
+
+def _pairs(array: MicArray, pairs: Sequence[tuple[int, int]] | None) -> list[tuple[int, int]]:
+    prs = list(array.pairs) if pairs is None else [(int(i), int(j)) for i, j in pairs]
+    for i, j in prs:
+        if i == j or not (0 <= i < array.n_mics and 0 <= j < array.n_mics):
+            raise GeometryError(f"invalid pair ({i}, {j}) for {array.n_mics} microphones")
+    return prs
+
+
+def _design(array: MicArray, prs: list[tuple[int, int]]) -> NDArray:
+    """Rows ``-(M_i - M_j) / c`` so that ``A @ u = tdoa`` in the far field."""
+    p = array.positions
+    return -np.array([p[i] - p[j] for i, j in prs]) / array.speed_of_sound
+
+
+def _azel(u: NDArray) -> tuple[float, float]:
+    az = float(np.degrees(np.arctan2(u[1], u[0])))
+    el = float(np.degrees(np.arcsin(np.clip(u[2] / np.linalg.norm(u), -1.0, 1.0))))
+    return az, el
+
+
+def _rms(r: NDArray) -> float:
+    return float(np.sqrt(np.mean(np.square(r)))) if r.size else 0.0
+
+
+# ---------------------------------------------------------------------------------- linear
+def far_field_linear(tdoa_s: ArrayLike, array: MicArray,
+                     pairs: Sequence[tuple[int, int]] | None = None,
+                     tol_s: float = DEFAULT_TOL_S) -> Localization:
+    """Two microphones (or a collinear array): cone about the axis; azimuth and mirror twin.
+
+    ``cos(theta) = a . u`` is solved by least squares over the pairs (``a`` the array axis). The
+    azimuths are where the cone meets the horizontal plane of the array frame (sources assumed
+    at elevation 0, the thesis's "half horizontal plane"): ``phi_a +- acos(cos(theta) / |a_xy|)``
+    with ``phi_a`` the axis azimuth -- for the y-axis pair, ``alpha`` and ``180 - alpha``. The
+    front candidate (|az| <= 90) comes first. A vertical axis resolves only the elevation.
+    """
+    prs = _pairs(array, pairs)
+    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    geo = array_geometry(array)
+    if geo.kind != "linear":
+        raise GeometryError("far_field_linear needs collinear microphones")
+    a = geo.axis
+    A = _design(array, prs) @ a  # tdoa = A * cos(theta)
+    cos_t = float(np.dot(A, tau) / np.dot(A, A))
+    feasible = abs(cos_t) <= 1.0
+    cos_c = float(np.clip(cos_t, -1.0, 1.0))
+    resid = _rms(A * cos_c - tau)
+    if resid > tol_s:
+        feasible = False
+    axy = float(np.hypot(a[0], a[1]))
+    extra = {"cos_theta": cos_t, "cone_half_angle_deg": float(np.degrees(np.arccos(cos_c)))}
+    if axy < 1e-6:  # vertical axis: elevation only
+        el = float(np.degrees(np.arcsin(cos_c * np.sign(a[2]))))
+        return Localization(None, el, [(None, el)], 1 if feasible else 0, feasible,
+                            residual_s=resid, geometry="linear", extra=extra)
+    phi_a = np.arctan2(a[1], a[0])
+    ratio = cos_c / axy
+    if abs(ratio) > 1.0:  # the cone misses the horizontal plane: nearest azimuth on the axis
+        feasible = False
+        ratio = float(np.sign(ratio))
+    d = np.arccos(np.clip(ratio, -1.0, 1.0))
+    azs = [float(np.degrees(phi_a + d)), float(np.degrees(phi_a - d))]
+    azs = [float(wrap_deg(v)) for v in azs]
+    if abs(azs[0] - azs[1]) < 1e-9 or abs(abs(azs[0] - azs[1]) - 360) < 1e-9:
+        azs = azs[:1]
+    azs.sort(key=lambda v: (abs(v) > 90.0 + 1e-9, -np.cos(np.radians(v))))
+    cands = [(v, None) for v in azs]
+    n_sol = len(cands) if feasible else 0
+    return Localization(cands[0][0], None, cands, n_sol, feasible, residual_s=resid,
+                        geometry="linear", extra=extra)
+
+
+# ---------------------------------------------------------------------------------- planar
+def far_field_planar(tdoa_s: ArrayLike, array: MicArray,
+                     pairs: Sequence[tuple[int, int]] | None = None,
+                     tol_s: float = DEFAULT_TOL_S, in_plane_tol: float = 1e-3) -> Localization:
+    """Three (or coplanar) microphones, far field: closed form with all solutions (thesis 2.4).
+
+    ``u = u_p + w n`` with ``u_p`` in the array plane from least squares on
+    ``-(M_i - M_j) . u_p = c0 tdoa[i,j]`` and ``w = +-sqrt(1 - |u_p|^2)``:
+
+    - ``|u_p| < 1``: two mirror solutions about the array plane (the one above, ``w > 0``,
+      first); ``n_solutions=2``;
+    - ``|u_p| = 1`` (within ``in_plane_tol``): one solution in the plane;
+    - ``|u_p| > 1`` or a TDOA residual above ``tol_s`` (inconsistent ITDs): no exact solution;
+      the nearest feasible direction (``u_p / |u_p|``) is returned, ``feasible=False``,
+      ``n_solutions=0``.
+    """
+    prs = _pairs(array, pairs)
+    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    geo = array_geometry(array)
+    if geo.kind != "planar":
+        raise GeometryError("far_field_planar needs coplanar (and not collinear) microphones")
+    A = _design(array, prs)
+    B = A @ geo.basis.T  # (n_pairs, 2)
+    if np.linalg.matrix_rank(B, tol=1e-9 * np.abs(B).max()) < 2:
+        raise GeometryError("the pairs given do not span the array plane (need two independent)")
+    q, *_ = np.linalg.lstsq(B, tau, rcond=None)
+    norm_p = float(np.linalg.norm(q))
+    extra = {"in_plane_norm": norm_p}
+    if norm_p > 1.0 + in_plane_tol:
+        up = q / norm_p
+        u = up @ geo.basis
+        resid = _rms(A @ u - tau)
+        az, el = _azel(u)
+        return Localization(az, el, [(az, el)], 0, False, direction=u, residual_s=resid,
+                            geometry="planar", extra=extra)
+    w = float(np.sqrt(max(0.0, 1.0 - min(norm_p, 1.0) ** 2)))
+    up = q if norm_p <= 1.0 else q / norm_p
+    base = up @ geo.basis
+    if w < np.sqrt(2 * in_plane_tol):  # in the plane: one solution
+        us = [base / np.linalg.norm(base)]
+    else:
+        us = [base + w * geo.normal, base - w * geo.normal]
+    resid = _rms(A @ us[0] - tau)
+    feasible = resid <= tol_s
+    cands = [_azel(u) for u in us]
+    n_sol = len(us) if feasible else 0
+    return Localization(cands[0][0], cands[0][1], cands, n_sol, feasible, direction=us[0],
+                        residual_s=resid, geometry="planar", extra=extra)
+
+
+# ---------------------------------------------------------------------------------- volume
+def far_field_volume(tdoa_s: ArrayLike, array: MicArray,
+                     pairs: Sequence[tuple[int, int]] | None = None,
+                     tol_s: float = DEFAULT_TOL_S, loss: str = "soft_l1") -> Localization:
+    """>= 4 non-coplanar microphones: unique far-field direction.
+
+    Linear least squares ``A u = tdoa`` gives the start; the direction is then refined on the
+    unit sphere (azimuth, elevation) with scipy's robust ``least_squares`` (``loss``, scale
+    ``tol_s``). ``feasible`` is False when the RMS residual exceeds ``tol_s``.
+    """
+    from scipy.optimize import least_squares
+
+    prs = _pairs(array, pairs)
+    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    A = _design(array, prs)
+    if np.linalg.matrix_rank(A, tol=1e-9 * np.abs(A).max()) < 3:
+        raise GeometryError("the pairs given do not span 3D (need three independent pairs)")
+    u0, *_ = np.linalg.lstsq(A, tau, rcond=None)
+    if np.linalg.norm(u0) < 1e-12:
+        u0 = np.array([1.0, 0.0, 0.0])
+    az0, el0 = np.radians(_azel(u0))
+
+    def res(p: NDArray) -> NDArray:
+        u = np.array([np.cos(p[1]) * np.cos(p[0]), np.cos(p[1]) * np.sin(p[0]), np.sin(p[1])])
+        return (A @ u - tau) / tol_s
+
+    sol = least_squares(res, [az0, el0], loss=loss, f_scale=1.0)
+    az, el = sol.x
+    u = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+    resid = _rms(A @ u - tau)
+    feasible = resid <= tol_s
+    a, e = _azel(u)
+    return Localization(a, e, [(a, e)], 1 if feasible else 0, feasible, direction=u,
+                        residual_s=resid, geometry="volume",
+                        extra={"lls_norm": float(np.linalg.norm(u0))})
+
+
+def near_field_position(tdoa_s: ArrayLike, array: MicArray,
+                        pairs: Sequence[tuple[int, int]] | None = None,
+                        x0: ArrayLike | None = None, loss: str = "soft_l1",
+                        tol_s: float = DEFAULT_TOL_S) -> tuple[NDArray, float]:
+    """Source position (metres, array frame) from TDOAs by robust nonlinear least squares.
+
+    Residuals ``(|P - M_i| - |P - M_j|) / c0 - tdoa[i,j]``. Start: ``x0``, else spherical
+    interpolation (Smith & Abel 1987, needs >= 5 microphones with all pairs to the reference),
+    else the far-field direction at 2 m. Returns (position, RMS residual in seconds). Meaningful
+    only for arrays whose aperture is not tiny compared with the range.
+    """
+    from scipy.optimize import least_squares
+
+    prs = _pairs(array, pairs)
+    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    pos = array.positions
+    c = array.speed_of_sound
+    I = np.array([p[0] for p in prs])
+    J = np.array([p[1] for p in prs])
+    if x0 is None:
+        x0 = _spherical_interpolation(tau, array, prs)
+    if x0 is None:
+        geo = array_geometry(array)
+        if geo.kind == "volume":
+            u = far_field_volume(tau, array, prs).direction
+        elif geo.kind == "planar":
+            u = far_field_planar(tau, array, prs).direction
+        else:
+            raise GeometryError("a linear array cannot fix a source position (only a cone)")
+        x0 = geo.centre + 2.0 * u
+
+    def res(p: NDArray) -> NDArray:
+        d = np.linalg.norm(pos - p, axis=1)
+        return ((d[I] - d[J]) / c - tau) / tol_s
+
+    sol = least_squares(res, np.asarray(x0, dtype=float), loss=loss, f_scale=1.0)
+    d = np.linalg.norm(pos - sol.x, axis=1)
+    return sol.x, _rms((d[I] - d[J]) / c - tau)
+
+
+def _spherical_interpolation(tau: NDArray, array: MicArray,
+                             prs: list[tuple[int, int]]) -> NDArray | None:
+    """Smith & Abel (1987) spherical interpolation with microphone 0 as reference, or None."""
+    n = array.n_mics
+    if n < 5:
+        return None
+    lookup = {}
+    for k, (i, j) in enumerate(prs):
+        lookup[(i, j)] = tau[k]
+        lookup[(j, i)] = -tau[k]
+    if not all((m, 0) in lookup for m in range(1, n)):
+        return None
+    c = array.speed_of_sound
+    m = array.positions[1:] - array.positions[0]
+    d = np.array([lookup[(k, 0)] for k in range(1, n)]) * c  # |P-M_k| - |P-M_0|
+    M = np.column_stack([m, d])
+    rhs = 0.5 * (np.sum(m * m, axis=1) - d * d)
+    sol, *_ = np.linalg.lstsq(M, rhs, rcond=None)
+    p = sol[:3] + array.positions[0]
+    return p if np.all(np.isfinite(p)) else None
+
+
+# ---------------------------------------------------------------------------------- dispatch
+def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
+                  pairs: Sequence[tuple[int, int]] | None = None,
+                  tol_s: float = DEFAULT_TOL_S, near_field: bool = True) -> Localization:
+    """Localize from one TDOA vector, dispatching on the array's geometry.
+
+    Parameters
+    ----------
+    tdoa_s : array (n_pairs,)
+        ``t_i - t_j`` seconds for each pair of ``pairs`` (default: all ``i < j`` pairs).
+    array : MicArray or preset/YAML name
+    tol_s : float
+        TDOA consistency tolerance in seconds (residual above it -> ``feasible=False``).
+    near_field : bool
+        For volume arrays (>= 4 non-coplanar microphones) also estimate ``position_m``.
+
+    Returns
+    -------
+    Localization
+        NaN TDOAs give ``Localization(None, None, [], 0, False)``.
+
+    >>> arr = MicArray.from_preset("two-mic")
+    >>> u = np.array([np.cos(np.radians(30)), np.sin(np.radians(30)), 0.0])
+    >>> loc = localize_tdoa(arr.tdoa_far(u), arr)
+    >>> [round(a) for a, _ in loc.candidates]
+    [30, 150]
+    """
+    arr = load_array(array)
+    prs = _pairs(arr, pairs)
+    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    if tau.shape[0] != len(prs):
+        raise GeometryError(f"got {tau.shape[0]} TDOAs for {len(prs)} microphone pairs")
+    if not np.all(np.isfinite(tau)):
+        return Localization(None, None, [], 0, False, residual_s=float("nan"),
+                            geometry=array_geometry(arr).kind)
+    geo = array_geometry(arr)
+    if geo.kind == "linear":
+        return far_field_linear(tau, arr, prs, tol_s)
+    if geo.kind == "planar":
+        return far_field_planar(tau, arr, prs, tol_s)
+    loc = far_field_volume(tau, arr, prs, tol_s)
+    if near_field and arr.n_mics >= 4:
+        p, r = near_field_position(tau, arr, prs, tol_s=tol_s)
+        loc.position_m = p
+        loc.extra["position_residual_s"] = r
+    return loc
+
+
+# ---------------------------------------------------------------------------------- loci
+def _frame_from_axis(axis: NDArray) -> NDArray:
+    """Rows e1, e2, axis: a right-handed orthonormal frame with the given third axis."""
+    a = axis / np.linalg.norm(axis)
+    t = np.array([0.0, 0.0, 1.0]) if abs(a[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    e1 = np.cross(t, a)
+    e1 /= np.linalg.norm(e1)
+    return np.stack([e1, np.cross(a, e1), a])
+
+
+def hyperboloid_points(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float = 343.0,
+                       extent_m: float = 3.0, n_radial: int = 40,
+                       n_around: int = 48) -> NDArray:
+    """Sample the near-field locus of one TDOA: the sheet of the two-sheet hyperboloid
+    ``|P - M_i| - |P - M_j| = c tdoa`` (thesis fig. 2.3).
+
+    Returns a grid ``(n_radial, n_around, 3)`` of points (metres) out to ``extent_m`` from the
+    pair's centre, ready for ``plot_surface``. A zero TDOA gives the bisecting plane's disc;
+    ``|c tdoa| >= |M_i - M_j|`` raises GeometryError (no locus).
+    """
+    mi = np.asarray(m_i, dtype=float)
+    mj = np.asarray(m_j, dtype=float)
+    f = np.linalg.norm(mi - mj) / 2.0
+    delta = c * float(tdoa_s)
+    a = abs(delta) / 2.0
+    if a >= f:
+        raise GeometryError(f"|c*tdoa| = {2 * a:.4f} m is not below the spacing {2 * f:.4f} m")
+    centre = (mi + mj) / 2.0
+    # delta > 0: farther from M_i, i.e. the sheet on M_j's side
+    axis = (mj - mi) / (2 * f) if delta >= 0 else (mi - mj) / (2 * f)
+    R = _frame_from_axis(axis)
+    b = np.sqrt(f * f - a * a)
+    phi = np.linspace(0.0, 2.0 * np.pi, n_around)
+    if a < 1e-12:
+        rho = np.linspace(0.0, extent_m, n_radial)
+        z = np.zeros_like(rho)
+    else:
+        vmax = np.arcsinh(extent_m / b)
+        v = np.linspace(0.0, vmax, n_radial)
+        z, rho = a * np.cosh(v), b * np.sinh(v)
+    local = np.stack(np.broadcast_arrays(rho[:, None] * np.cos(phi)[None, :],
+                                         rho[:, None] * np.sin(phi)[None, :],
+                                         z[:, None] + 0 * phi[None, :]), axis=-1)
+    return centre + local @ R
+
+
+def cone_points(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float = 343.0,
+                extent_m: float = 3.0, n_radial: int = 20, n_around: int = 48) -> NDArray:
+    """Far-field locus of one TDOA: the cone about the pair axis with ``cos(theta) =
+    c tdoa / |M_i - M_j|`` (the hyperboloid's asymptote), apex at the pair's centre.
+
+    Returns ``(n_radial, n_around, 3)`` points in metres.
+    """
+    mi = np.asarray(m_i, dtype=float)
+    mj = np.asarray(m_j, dtype=float)
+    d = np.linalg.norm(mi - mj)
+    cos_t = c * float(tdoa_s) / d
+    if abs(cos_t) > 1:
+        raise GeometryError("|c*tdoa| exceeds the microphone spacing: no cone")
+    axis = (mj - mi) / d  # u . (mj - mi)/d = cos_t for delta = t_i - t_j > 0
+    R = _frame_from_axis(axis)
+    sin_t = np.sqrt(1 - cos_t**2)
+    s = np.linspace(0.0, extent_m, n_radial)
+    phi = np.linspace(0.0, 2 * np.pi, n_around)
+    local = np.stack(np.broadcast_arrays(s[:, None] * sin_t * np.cos(phi)[None, :],
+                                         s[:, None] * sin_t * np.sin(phi)[None, :],
+                                         s[:, None] * cos_t + 0 * phi[None, :]), axis=-1)
+    return (mi + mj) / 2.0 + local @ R
+
+
+def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
+                    pairs: Sequence[tuple[int, int]] | None = None,
+                    ranges_m: ArrayLike | None = None) -> list[NDArray]:
+    """The near-field 3D curve locus of a three-microphone system (thesis fig. 2.6).
+
+    Two independent TDOAs fix two hyperboloids; their intersection is a curve. It is traced by
+    continuation over the range from the array centre: at each range the direction satisfying
+    the pair equations is found by least squares, starting from the far-field solution, for each
+    mirror branch (above and below the array plane).
+
+    Returns a list of branches, each ``(n_points, 3)`` metres (points whose residual exceeds
+    10 us are dropped: where the sphere of that range misses the curve).
+    """
+    from scipy.optimize import least_squares
+
+    arr = load_array(array)
+    prs = _pairs(arr, pairs)
+    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    ranges = np.linspace(0.3, 3.0, 40) if ranges_m is None else np.asarray(ranges_m, float)
+    pos = arr.positions
+    c = arr.speed_of_sound
+    I = np.array([p[0] for p in prs])
+    J = np.array([p[1] for p in prs])
+    centre = pos.mean(axis=0)
+    ff = localize_tdoa(tau, arr, prs, near_field=False)
+    branches = []
+    for az0, el0 in ff.candidates:
+        p = np.radians([az0 or 0.0, el0 or 0.0])
+        pts = []
+        for r in ranges[::-1]:  # from far (where the far-field start is good) to near
+
+            def res(q: NDArray, r: float = r) -> NDArray:
+                u = np.array([np.cos(q[1]) * np.cos(q[0]), np.cos(q[1]) * np.sin(q[0]),
+                              np.sin(q[1])])
+                P = centre + r * u
+                d = np.linalg.norm(pos - P, axis=1)
+                return ((d[I] - d[J]) / c - tau) * 1e5
+
+            sol = least_squares(res, p)
+            if np.sqrt(np.mean(sol.fun**2)) * 1e-5 < 1e-5:
+                p = sol.x
+                q = sol.x
+                pts.append(centre + r * np.array([np.cos(q[1]) * np.cos(q[0]),
+                                                  np.cos(q[1]) * np.sin(q[0]), np.sin(q[1])]))
+        if pts:
+            branches.append(np.array(pts[::-1]))
+    return branches
