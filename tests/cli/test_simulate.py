@@ -1,0 +1,106 @@
+import json
+
+import numpy as np
+import pytest
+
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.signals import read_recording, write_recording
+from hearsee.cli import main
+from hearsee.sim.audio import simulate_recording
+
+
+def _gcc_phat_tdoa(a, b, fs, max_lag_s, interp=128):
+    n = len(a) + len(b)
+    G = np.fft.rfft(a, n) * np.conj(np.fft.rfft(b, n))
+    G /= np.abs(G) + 1e-12
+    cc = np.fft.irfft(G, n * interp)
+    m = int(np.ceil(max_lag_s * fs * interp))
+    cc = np.concatenate([cc[-m:], cc[: m + 1]])
+    return (np.argmax(cc) - m) / (interp * fs)
+
+
+def test_simulate_round_trip(tmp_path, capsys):
+    out = tmp_path / "rec.wav"
+    args = ["simulate", str(out), "--array", "three-mic", "--source", "1.0,-2.0,0.5",
+            "--signal", "female", "--duration", "0.5", "--fs", "16000", "--snr", "25",
+            "--seed", "3"]
+    assert main(args) == 0
+    assert "wrote" in capsys.readouterr().err
+    arr = MicArray.from_preset("three-mic")
+    x, fs = read_recording(out, arr, fs=16000)
+    assert x.shape == (3, 8000)
+    truth = json.loads((tmp_path / "rec.json").read_text())
+    src = np.array([1.0, -2.0, 0.5])
+    assert truth["source_m"] == [1.0, -2.0, 0.5]
+    assert truth["azimuth_deg"] == pytest.approx(np.degrees(np.arctan2(-2.0, 1.0)))
+    assert truth["elevation_deg"] == pytest.approx(np.degrees(np.arctan2(0.5, np.sqrt(5))))
+    assert truth["distance_m"] == pytest.approx(np.linalg.norm(src))
+    np.testing.assert_allclose(list(truth["tdoa_s"].values()), arr.tdoa(src))
+    assert truth["array"]["name"] == "three-mic" and truth["fs"] == 16000
+    assert truth["signal"] == "female" and truth["snr_db"] == 25.0 and truth["seed"] == 3
+    # the WAV is exactly the library's simulation times the recorded gain
+    ref, _ = simulate_recording(arr, src, "female", 0.5, 16000, snr_db=25.0, seed=3)
+    np.testing.assert_allclose(x, ref * truth["gain"], atol=1e-6)
+    est = [_gcc_phat_tdoa(x[i], x[j], fs, 0.0005) for i, j in arr.pairs]
+    np.testing.assert_allclose(np.array(est) * fs, arr.tdoa(src) * fs, atol=0.2)
+
+
+def test_simulate_room_yaml_array_and_wav_signal(tmp_path):
+    yaml_path = tmp_path / "pair.yaml"
+    yaml_path.write_text("name: pair\nmicrophones: [[0, 0.1, 0], [0, -0.1, 0]]\n")
+    sig = tmp_path / "speech.wav"
+    write_recording(sig, 0.3 * np.sin(np.arange(4000) * 0.3), 8000)
+    out = tmp_path / "room.wav"
+    assert main(["simulate", str(out), "--array", str(yaml_path), "--source", "2,1,0",
+                 "--signal", str(sig), "--duration", "0.3", "--room", "6x5x3", "--rt60", "0.2",
+                 "--pcm16"]) == 0
+    truth = json.loads(out.with_suffix(".json").read_text())
+    assert truth["room"] == {"room_dim": [6.0, 5.0, 3.0], "rt60": 0.2,
+                             "array_at": [3.0, 2.5, 1.5]}
+    assert truth["array"]["name"] == "pair" and truth["signal"] == str(sig)
+    x, fs = read_recording(out, n_channels=2, fs=16000)
+    assert x.shape == (2, 4800)
+    assert main(["simulate", str(tmp_path / "at.wav"), "--array", "two-mic", "--source",
+                 "1,0,0", "--duration", "0.1", "--room", "6x5x3", "--rt60", "0",
+                 "--array-at", "1,1,1"]) == 0
+    truth = json.loads((tmp_path / "at.json").read_text())
+    assert truth["room"]["array_at"] == [1.0, 1.0, 1.0]
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--source", "1,a,3"], "--source: expected comma-separated numbers"),
+    (["--source", "1,2"], "--source: expected 3 numbers"),
+    (["--source", "1,0,0", "--room", "6x5x3"], "--room needs --rt60"),
+    (["--source", "1,0,0", "--rt60", "0.3"], "need --room"),
+    (["--source", "1,0,0", "--room", "6x5", "--rt60", "0.3"], "--room: expected 3 numbers"),
+    (["--source", "9,0,0", "--room", "6x5x3", "--rt60", "0.3"], "outside the room"),
+    (["--source", "1,0,0", "--room", "40x40x10", "--rt60", "0.05"], "too short"),
+    (["--source", "1,0,0", "--signal", "pink"], "unknown signal"),
+    (["--source", "1,0,0", "--signal", "missing.wav"], "file not found"),
+    (["--source", "1,0,0", "--duration", "-1"], "duration"),
+])
+def test_simulate_bad_options(tmp_path, capsys, extra, message):
+    code = main(["simulate", str(tmp_path / "o.wav"), "--array", "two-mic", "--duration", "0.1",
+                 *extra])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert message in err
+    assert "Traceback" not in err
+    assert not (tmp_path / "o.wav").exists() and not (tmp_path / "o.json").exists()
+
+
+def test_simulate_refuses_bad_outputs(tmp_path, capsys):
+    sig = tmp_path / "in.wav"
+    write_recording(sig, 0.3 * np.sin(np.arange(1600) * 0.2), 16000)
+    before = sig.read_bytes()
+    base = ["--array", "two-mic", "--source", "1,0,0", "--duration", "0.1"]
+    assert main(["simulate", str(sig), *base, "--signal", str(sig)]) == 2
+    assert "refusing to overwrite" in capsys.readouterr().err
+    assert sig.read_bytes() == before
+    assert main(["simulate", str(tmp_path / "nodir" / "o.wav"), *base]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    assert main(["simulate", str(tmp_path / "o.mp4"), *base]) == 2
+    assert "must end in .wav" in capsys.readouterr().err
+    assert main(["simulate", str(tmp_path / "o.wav"), "--array", "nine-mic", "--source",
+                 "1,0,0"]) == 2
+    assert "unknown array preset" in capsys.readouterr().err

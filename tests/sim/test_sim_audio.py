@@ -1,0 +1,144 @@
+import json
+
+import numpy as np
+import pytest
+import soundfile as sf
+
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.signals import read_recording
+from hearsee.errors import ConfigError, GeometryError
+from hearsee.geometry import sph_to_cart
+from hearsee.sim.audio import (
+    example_recording_path,
+    ground_truth,
+    normalize_room,
+    save_recording,
+    simulate_recording,
+)
+
+FS = 16000
+
+
+def gcc_phat_tdoa(a, b, fs, max_lag_s, interp=256):
+    """Reference whole-signal GCC-PHAT (t_a - t_b in seconds)."""
+    n = len(a) + len(b)
+    G = np.fft.rfft(a, n) * np.conj(np.fft.rfft(b, n))
+    G /= np.abs(G) + 1e-12
+    cc = np.fft.irfft(G, n * interp)
+    m = int(np.ceil(max_lag_s * fs * interp))
+    cc = np.concatenate([cc[-m:], cc[: m + 1]])
+    return (np.argmax(cc) - m) / (interp * fs)
+
+
+def test_free_field_truth_and_tdoa():
+    arr = MicArray.from_preset("three-mic")
+    src = sph_to_cart(np.radians(-130.0), np.radians(20.0), 1.5)
+    x, truth = simulate_recording(arr, src, duration_s=0.5, fs=FS, seed=1)
+    assert x.shape == (3, FS // 2)
+    assert truth["azimuth_deg"] == pytest.approx(-130.0)
+    assert truth["elevation_deg"] == pytest.approx(20.0)
+    assert truth["distance_m"] == pytest.approx(1.5)
+    assert truth["source_m"] == pytest.approx(list(src))
+    assert list(truth["tdoa_s"]) == ["0-1", "0-2", "1-2"]
+    np.testing.assert_allclose(list(truth["tdoa_s"].values()), arr.tdoa(src))
+    assert truth["array"] == arr.to_dict()
+    assert truth["fs"] == FS and truth["signal"] == "noise" and truth["room"] is None
+    json.dumps(truth)  # JSON-able as is
+    est = [gcc_phat_tdoa(x[i], x[j], FS, 0.0005) for i, j in arr.pairs]
+    np.testing.assert_allclose(np.array(est) * FS, arr.tdoa(src) * FS, atol=0.05)
+
+
+@pytest.mark.parametrize("snr_db", [0.0, 20.0])
+def test_snr_accuracy_and_determinism(snr_db):
+    clean, _ = simulate_recording("two-mic", [1.0, 0.5, 0.0], "male", 1.0, FS, seed=4)
+    noisy, truth = simulate_recording("two-mic", [1.0, 0.5, 0.0], "male", 1.0, FS,
+                                      snr_db=snr_db, seed=4)
+    snr = 10 * np.log10(np.mean(clean**2) / np.mean((noisy - clean) ** 2))
+    assert snr == pytest.approx(snr_db, abs=0.1)
+    assert truth["snr_db"] == snr_db and truth["signal"] == "male"
+    again, _ = simulate_recording("two-mic", [1.0, 0.5, 0.0], "male", 1.0, FS,
+                                  snr_db=snr_db, seed=4)
+    np.testing.assert_array_equal(noisy, again)
+
+
+def test_room_recording_default_array_at_and_tdoa():
+    arr = MicArray.from_preset("three-mic")
+    src = np.array([1.5, -1.0, 0.2])
+    x, truth = simulate_recording(arr, src, "noise", 0.5, FS,
+                                  room={"room_dim": [5, 4, 3], "rt60": 0.2}, seed=2)
+    assert truth["room"] == {"room_dim": [5.0, 4.0, 3.0], "rt60": 0.2,
+                             "array_at": [2.5, 2.0, 1.5]}
+    est = [gcc_phat_tdoa(x[i], x[j], FS, 0.0005) for i, j in arr.pairs]
+    np.testing.assert_allclose(np.array(est) * FS, arr.tdoa(src) * FS, atol=0.25)
+
+
+def test_bad_inputs():
+    with pytest.raises(GeometryError, match="source"):
+        simulate_recording("two-mic", [1.0, 2.0], duration_s=0.1)
+    with pytest.raises(GeometryError, match="source"):
+        simulate_recording("two-mic", [1.0, np.nan, 0.0], duration_s=0.1)
+    with pytest.raises(ConfigError, match="sample rate"):
+        simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1, fs=-8000)
+    with pytest.raises(ConfigError, match="SNR"):
+        simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1, snr_db=float("inf"))
+    with pytest.raises(ConfigError, match="unknown array preset"):
+        simulate_recording("nine-mic", [1.0, 0.0, 0.0], duration_s=0.1)
+    with pytest.raises(GeometryError, match="outside the room"):
+        simulate_recording("two-mic", [4.0, 0.0, 0.0], duration_s=0.1,
+                           room={"room_dim": [5, 4, 3], "rt60": 0.2})
+    with pytest.raises(ConfigError, match="unknown key 'rt'"):
+        normalize_room({"room_dim": [5, 4, 3], "rt": 0.2})
+    with pytest.raises(ConfigError, match="missing 'rt60'"):
+        normalize_room({"room_dim": [5, 4, 3]})
+    with pytest.raises(ConfigError, match="missing 'room_dim'"):
+        normalize_room({"rt60": 0.3})
+    with pytest.raises(GeometryError, match="positive"):
+        normalize_room({"room_dim": [5, 0, 3], "rt60": 0.3})
+    with pytest.raises(ConfigError, match="too short"):
+        simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1,
+                           room={"room_dim": [30, 30, 10], "rt60": 0.05})
+
+
+def test_ground_truth_with_moved_microphones():
+    arr = MicArray.from_preset("two-mic")
+    moved = arr.positions[:, [1, 0, 2]]
+    src = [1.0, 0.3, 0.0]
+    t = ground_truth(arr, src, mic_positions=moved)
+    r = np.linalg.norm(moved - np.array(src), axis=1)
+    assert t["tdoa_s"]["0-1"] == pytest.approx((r[0] - r[1]) / 343.0)
+
+
+def test_save_recording(tmp_path):
+    x, truth = simulate_recording("two-mic", [1.0, 1.0, 0.0], duration_s=0.2, seed=0)
+    wav, js = save_recording(tmp_path / "r.wav", x, truth, subtype="PCM_16")
+    assert js == tmp_path / "r.json"
+    doc = json.loads(js.read_text())
+    y, fs = read_recording(wav, n_channels=2, fs=FS)
+    assert np.max(np.abs(y)) == pytest.approx(0.5, abs=1e-4)
+    np.testing.assert_allclose(y, x * doc["gain"], atol=1e-4)
+    assert doc["tdoa_s"] == truth["tdoa_s"] and doc["wav"] == "r.wav"
+    with pytest.raises(ConfigError, match=".wav"):
+        save_recording(tmp_path / "r.txt", x, truth)
+    with pytest.raises(ConfigError, match="refusing to overwrite"):
+        save_recording(wav, x, truth, protect=[wav])
+    with pytest.raises(ConfigError, match="refusing to overwrite"):
+        save_recording(tmp_path / "in.wav", x, truth, protect=[tmp_path / "in.json"])
+
+
+def test_bundled_example():
+    p = example_recording_path()
+    assert p.stat().st_size < 300_000
+    info = sf.info(str(p))
+    assert (info.channels, info.samplerate, info.subtype) == (3, 16000, "PCM_16")
+    truth = json.loads(p.with_suffix(".json").read_text())
+    arr = MicArray.from_preset("three-mic")
+    assert truth["azimuth_deg"] == pytest.approx(60.0)
+    assert truth["elevation_deg"] == pytest.approx(10.0)
+    assert truth["distance_m"] == pytest.approx(2.0)
+    assert truth["room"]["rt60"] == 0.3 and truth["snr_db"] == 20.0
+    assert truth["signal"] == "female"
+    src = sph_to_cart(np.radians(60.0), np.radians(10.0), 2.0)
+    np.testing.assert_allclose(list(truth["tdoa_s"].values()), arr.tdoa(src), atol=1e-12)
+    x, fs = read_recording(p, arr, fs=16000)
+    est = [gcc_phat_tdoa(x[i], x[j], fs, 0.0005, interp=16) for i, j in arr.pairs]
+    np.testing.assert_allclose(np.array(est) * fs, arr.tdoa(src) * fs, atol=0.5)
