@@ -145,3 +145,15 @@ def test_room_bad_geometry_and_rt60():
         simulate_room(x, fs, arr, [1.0, 0.0, 0.0], [20.0, 20.0, 5.0], 0.1, [10, 10, 1])
     with pytest.raises(ConfigError, match="non-negative"):
         simulate_room(x, fs, arr, [1.0, 0.0, 0.0], ROOM, -0.2, AT)
+
+
+@pytest.mark.parametrize("frac", [0.1, 0.25, 0.5, 0.77, 3.33, -1.6])
+def test_free_field_fractional_tdoa_accuracy(frac):
+    """Two mics whose path difference is ``frac`` samples: GCC-PHAT recovers it to 0.02."""
+    fs = 16000
+    d = frac * 343.0 / fs  # metres of path difference
+    src = np.array([2.0, 0.0, 0.0])
+    mics = np.array([[0.0, 0.0, 0.0], [-d, 0.0, 0.0]])  # mic 1 is d metres farther
+    y = simulate_free_field(white_noise(0.5, fs, rng=9), fs, mics, src)
+    est = _gcc_phat_tdoa(y[1], y[0], fs, 4.0 / fs)
+    assert est * fs == pytest.approx(frac, abs=0.02)

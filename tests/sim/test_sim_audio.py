@@ -142,3 +142,36 @@ def test_bundled_example():
     x, fs = read_recording(p, arr, fs=16000)
     est = [gcc_phat_tdoa(x[i], x[j], fs, 0.0005, interp=16) for i, j in arr.pairs]
     np.testing.assert_allclose(np.array(est) * fs, arr.tdoa(src) * fs, atol=0.5)
+
+
+def test_far_field_and_turned_head():
+    arr = MicArray.from_preset("three-mic")
+    src = sph_to_cart(np.radians(75.0), np.radians(-15.0), 3.0)
+    x, truth = simulate_recording(arr, src, duration_s=0.5, seed=5, far_field=True)
+    assert truth["far_field"] is True
+    np.testing.assert_allclose(list(truth["tdoa_s"].values()), arr.tdoa_far(src))
+    np.testing.assert_allclose(np.std(x, axis=1), np.std(x[0]), rtol=0.01)  # plane wave
+    est = [gcc_phat_tdoa(x[i], x[j], FS, 0.0005) for i, j in arr.pairs]
+    np.testing.assert_allclose(np.array(est) * FS, arr.tdoa_far(src) * FS, atol=0.05)
+    with pytest.raises(ConfigError, match="far_field"):
+        simulate_recording(arr, src, duration_s=0.1, far_field=True,
+                           room={"room_dim": [8, 8, 3], "rt60": 0.0})
+    # a head turned by 90 deg: mics rotated, the source fixed in the (original) array frame
+    c, s = np.cos(np.pi / 2), np.sin(np.pi / 2)
+    turned = arr.positions @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T
+    src = np.array([1.5, 0.5, 0.0])
+    x, truth = simulate_recording(arr, src, duration_s=0.5, seed=6, mic_positions=turned)
+    r = np.linalg.norm(turned - src, axis=1)
+    want = np.array([r[i] - r[j] for i, j in arr.pairs]) / arr.speed_of_sound
+    np.testing.assert_allclose(list(truth["tdoa_s"].values()), want)
+    np.testing.assert_allclose(truth["mic_positions"], turned)
+    est = [gcc_phat_tdoa(x[i], x[j], FS, 0.0005) for i, j in arr.pairs]
+    np.testing.assert_allclose(np.array(est) * FS, want * FS, atol=0.05)
+
+
+def test_save_flac(tmp_path):
+    x, truth = simulate_recording("two-mic", [1.0, 1.0, 0.0], duration_s=0.2, seed=0)
+    wav, _ = save_recording(tmp_path / "r.flac", x, truth)
+    assert sf.info(str(wav)).subtype == "PCM_24"
+    y, _ = read_recording(wav, 2)
+    np.testing.assert_allclose(y, x * 0.5 / np.abs(x).max(), atol=1e-6)

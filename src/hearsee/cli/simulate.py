@@ -48,6 +48,9 @@ def simulate_cmd(
                                         help="Array origin X,Y,Z in room coordinates "
                                         "(default: the room centre)."),
     seed: int = typer.Option(0, "--seed", help="Random seed (signal and noise)."),
+    far_field: bool = typer.Option(False, "--far-field",
+                                   help="Free field only: a plane wave from the source's "
+                                   "direction instead of a spherical wave."),
     pcm16: bool = typer.Option(False, "--pcm16", help="Write 16-bit PCM instead of float32."),
 ) -> None:
     """Simulate a recording of a static source and write OUT.wav + OUT.json (ground truth)."""
@@ -57,7 +60,7 @@ def simulate_cmd(
     room_spec = _room_from_options(room, rt60, array_at)
     protect = [p for p in (signal, array) if Path(p).is_file()]
     x, truth = simulate_recording(array, src, signal=signal, duration_s=duration, fs=fs,
-                                  snr_db=snr, room=room_spec, seed=seed)
+                                  snr_db=snr, room=room_spec, seed=seed, far_field=far_field)
     wav, js = save_recording(out, x, truth, subtype="PCM_16" if pcm16 else "FLOAT",
                              protect=protect)
     err_console.print(

@@ -114,36 +114,42 @@ def normalize_room(room: Mapping[str, Any] | None) -> dict[str, Any] | None:
 
 def render(signal: ArrayLike, fs: float, array: MicArray, source: ArrayLike,
            room: Mapping[str, Any] | None = None,
-           mic_positions: ArrayLike | None = None) -> NDArray:
+           mic_positions: ArrayLike | None = None, far_field: bool = False) -> NDArray:
     """Noise-free microphone signals ``(n_mics, n)`` for one static geometry.
 
     ``source`` and ``mic_positions`` (default ``array.positions``) are in the array frame;
-    ``room`` as in :func:`normalize_room` (None = free field, near-field spherical waves).
-    Sample 0 is the emission time, so direct-path TDOAs equal ``MicArray.tdoa(source)``.
+    ``room`` as in :func:`normalize_room` (None = free field: near-field spherical waves, or a
+    plane wave from the source's direction with ``far_field=True``). Sample 0 is the emission
+    time, so direct-path TDOAs equal ``MicArray.tdoa(source)`` (``tdoa_far`` in far field).
     """
     room = normalize_room(room)
     src = _point(source, "source")
     if room is None:
         mics = array.positions if mic_positions is None else mic_positions
-        return simulate_free_field(signal, fs, mics, src, speed_of_sound=array.speed_of_sound)
+        return simulate_free_field(signal, fs, mics, src, speed_of_sound=array.speed_of_sound,
+                                   far_field=far_field)
+    if far_field:
+        raise ConfigError("far_field applies to free field only; omit the room or far_field")
     return simulate_room(signal, fs, array, src, room["room_dim"], room["rt60"],
                          room["array_at"], mic_positions=mic_positions,
                          max_order=room.get("max_order"))
 
 
 def ground_truth(array: MicArray, source: ArrayLike,
-                 mic_positions: ArrayLike | None = None) -> dict[str, Any]:
+                 mic_positions: ArrayLike | None = None,
+                 far_field: bool = False) -> dict[str, Any]:
     """Geometric truth of a static source in the array frame.
 
     Returns ``source_m`` [x, y, z] m, ``azimuth_deg``, ``elevation_deg``, ``distance_m`` (from
     the array-frame origin) and ``tdoa_s`` {"i-j": t_i - t_j seconds} for every pair (exact
-    near-field values, ``MicArray.tdoa``; with ``mic_positions`` for those positions).
+    near-field values, ``MicArray.tdoa``, or plane-wave values, ``MicArray.tdoa_far``, with
+    ``far_field=True``; with ``mic_positions`` for those positions).
     """
     src = _point(source, "source")
     geo = array if mic_positions is None else MicArray(
         np.asarray(mic_positions, dtype=float), array.speed_of_sound, array.name)
     az, el, r = cart_to_sph(src)
-    tdoa = geo.tdoa(src)
+    tdoa = geo.tdoa_far(src) if far_field else geo.tdoa(src)
     return {
         "source_m": src.tolist(),
         "azimuth_deg": float(np.degrees(az)),
@@ -162,6 +168,8 @@ def simulate_recording(
     snr_db: float | None = None,
     room: Mapping[str, Any] | None = None,
     seed: int | None = 0,
+    mic_positions: ArrayLike | None = None,
+    far_field: bool = False,
 ) -> tuple[NDArray, dict[str, Any]]:
     """Simulate what ``array`` records from a static source, with its ground truth.
 
@@ -182,6 +190,12 @@ def simulate_recording(
         :func:`normalize_room`); None = free field.
     seed : int
         Seeds the signal and the noise.
+    mic_positions : array (n_mics, 3), optional
+        Microphone positions in the array frame overriding ``array.positions`` (a turned
+        head, e.g. from ``hearsee.geometry.mic_positions_at``); the truth uses them too.
+    far_field : bool
+        Free field only: a plane wave from the source's direction (equal amplitudes, truth
+        TDOAs from ``MicArray.tdoa_far``).
 
     Returns
     -------
@@ -208,8 +222,13 @@ def simulate_recording(
     room = normalize_room(room)
     rng = np.random.default_rng(seed)
     s = make_signal(signal, duration_s, fs, rng)
-    x = add_noise(render(s, fs, array, src, room), snr_db, rng)
-    truth = ground_truth(array, src)
+    clean = render(s, fs, array, src, room, mic_positions=mic_positions, far_field=far_field)
+    x = add_noise(clean, snr_db, rng)
+    truth = ground_truth(array, src, mic_positions=mic_positions, far_field=far_field)
+    if mic_positions is not None:
+        truth["mic_positions"] = np.asarray(mic_positions, dtype=float).tolist()
+    if far_field:
+        truth["far_field"] = True
     truth.update({
         "fs": fs,
         "duration_s": float(duration_s),
@@ -241,6 +260,8 @@ def save_recording(out: str | Path, x: ArrayLike, truth: Mapping[str, Any],
         if Path(q).resolve() == js.resolve():
             raise ConfigError(f"{js}: refusing to overwrite the input file {q}; "
                               "choose another output path")
+    if wav.suffix.lower() == ".flac" and subtype.upper() in ("FLOAT", "DOUBLE"):
+        subtype = "PCM_24"  # FLAC stores integers only
     write_recording(wav, y * gain, truth["fs"], subtype=subtype, protect=protect)
     doc = {**truth, "gain": gain, "wav": wav.name}
     js.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
