@@ -183,3 +183,19 @@ def test_write_recording_refusals(tmp_path):
     with pytest.raises(AudioInputError, match="NaN"):
         write_recording(tmp_path / "nan.wav", x * np.nan, FS)
     assert sf.info(str(src)).channels == 2  # untouched
+
+
+def test_load_wav_and_make_signal_bad_files(tmp_path):
+    junk = tmp_path / "junk.wav"
+    junk.write_bytes(b"RIFF\x00\x00garbage" * 10)
+    with pytest.raises(AudioInputError, match="not an audio file"):
+        load_wav(junk)
+    with pytest.raises(AudioInputError, match="not an audio file"):
+        make_signal(junk, 0.5, FS)
+    silent = _write(tmp_path / "silent.wav", np.zeros((1, 800)))
+    with pytest.raises(AudioInputError, match="silent"):
+        make_signal(silent, 0.5, FS)
+    empty = tmp_path / "empty.wav"
+    sf.write(empty, np.zeros((0, 1)), FS)
+    with pytest.raises(AudioInputError, match="no samples"):
+        load_wav(empty)

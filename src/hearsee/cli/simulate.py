@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from hearsee.cli._app import app, err_console, parse_floats
+from hearsee.cli._app import app, err_console, parse_floats, progress
 from hearsee.errors import ConfigError
 
 
@@ -59,8 +59,11 @@ def simulate_cmd(
     src = parse_floats(source, 3, "--source")
     room_spec = _room_from_options(room, rt60, array_at)
     protect = [p for p in (signal, array) if Path(p).is_file()]
-    x, truth = simulate_recording(array, src, signal=signal, duration_s=duration, fs=fs,
-                                  snr_db=snr, room=room_spec, seed=seed, far_field=far_field)
+    with progress("simulating", total=1) as advance:
+        x, truth = simulate_recording(array, src, signal=signal, duration_s=duration, fs=fs,
+                                      snr_db=snr, room=room_spec, seed=seed,
+                                      far_field=far_field)
+        advance()
     wav, js = save_recording(out, x, truth, subtype="PCM_16" if pcm16 else "FLOAT",
                              protect=protect)
     err_console.print(
