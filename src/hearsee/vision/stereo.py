@@ -1,0 +1,390 @@
+"""Stereo vision (thesis 7.1.2): rectification, disparity, depth and 3D points.
+
+Reconstruction. The thesis's stereo geometry (figs. 7.2-7.4) is the standard rectified pinhole
+pair: a point at depth ``Z`` appears in the left and right rectified images on the same row with
+horizontal disparity ``d = u_left - u_right = f B / Z`` (``f`` focal length in pixels, ``B``
+baseline in metres). Disparity is computed with OpenCV's semi-global block matching
+(Hirschmueller, "Stereo processing by semiglobal matching and mutual information", PAMI 2008;
+``cv2.StereoSGBM``) tuned as follows:
+
+* 3-way SGBM (``MODE_SGBM_3WAY``; fast, single core), 3x3 blocks, ``P1 = 8 b^2``,
+  ``P2 = 32 b^2`` on grey images, uniqueness 10 %, speckle filtering (100 px, 2 px);
+* the images are padded on the left by ``num_disparities`` columns so that the leftmost
+  columns (which plain SGBM leaves invalid) get disparities too;
+* a left-right consistency check (``disp12MaxDiff``, or a full right-to-left match checked in
+  numpy with ``lr_check="full"``);
+* optional hole filling: each invalid pixel takes the smaller (farther) of the nearest valid
+  disparities to its left and right on the same row -- occlusions belong to the background
+  (Scharstein & Szeliski 2002, sec. 5.3; Hirschmueller 2008, sec. 3.5) -- then a 5x5 median on
+  the filled pixels only.
+
+Conventions: disparities are float32 pixels of the rectified left image, NaN where invalid;
+depths are metres along the rectified left camera's optical axis; 3D points are ``(H, W, 3)``
+metres in the rectified left optical frame (x right, y down, z forward). For a rig that needs
+rectification that frame is rotated by ``rectification.R1`` from the left camera's frame:
+:func:`points_to_left_frame` undoes it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import cv2
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from hearsee.errors import CalibrationError, ImageInputError
+from hearsee.vision.camera import Rectification, StereoRig
+from hearsee.vision.io import check_pair, to_gray
+
+__all__ = [
+    "StereoFrame",
+    "compute_disparity",
+    "depth_from_disparity",
+    "disparity_from_depth",
+    "fill_disparity_holes",
+    "lr_consistency",
+    "points_from_disparity",
+    "points_to_left_frame",
+    "rectification_maps",
+    "rectify_pair",
+    "stereo_frame",
+]
+
+_MODES = {
+    "sgbm": cv2.STEREO_SGBM_MODE_SGBM,
+    "sgbm3way": cv2.STEREO_SGBM_MODE_SGBM_3WAY,
+    "hh": cv2.STEREO_SGBM_MODE_HH,
+    "hh4": cv2.STEREO_SGBM_MODE_HH4,
+}
+
+_MAPS_CACHE: dict[tuple[int, float, tuple[int, int]], tuple] = {}
+
+
+# ---------------------------------------------------------------------------------------------
+# Rectification
+# ---------------------------------------------------------------------------------------------
+def rectification_maps(rig: StereoRig, alpha: float = 0.0) -> tuple[Rectification, tuple]:
+    """The rectification of ``rig`` and its remap tables ``(map1x, map1y, map2x, map2y)``
+    (``cv2.initUndistortRectifyMap``, fixed-point maps), cached per rig."""
+    key = (id(rig), float(alpha), rig.left.size)
+    hit = _MAPS_CACHE.get(key)
+    if hit is not None and hit[0] is rig:
+        return hit[1], hit[2]
+    rect = rig.rectification if alpha == 0.0 else rig.rectify(alpha=alpha)
+    m1 = cv2.initUndistortRectifyMap(rig.left.K, rig.left.dist, rect.R1, rect.P1, rect.size,
+                                     cv2.CV_16SC2)
+    m2 = cv2.initUndistortRectifyMap(rig.right.K, rig.right.dist, rect.R2, rect.P2, rect.size,
+                                     cv2.CV_16SC2)
+    maps = (m1[0], m1[1], m2[0], m2[1])
+    if len(_MAPS_CACHE) > 8:
+        _MAPS_CACHE.clear()
+    _MAPS_CACHE[key] = (rig, rect, maps)
+    return rect, maps
+
+
+def rectify_pair(left: NDArray, right: NDArray, rig: StereoRig, alpha: float = 0.0,
+                 interpolation: int = cv2.INTER_LINEAR) -> tuple[NDArray, NDArray, Rectification]:
+    """Rectify a stereo pair with ``rig``: returns (left_rect, right_rect, rectification).
+
+    Images must have the rig's size (``ImageInputError`` otherwise). For an already rectified
+    rig (:attr:`StereoRig.is_rectified`) the images are returned unchanged.
+    """
+    check_pair(left, right, expected_size=rig.left.size)
+    rect, maps = rectification_maps(rig, alpha)
+    if rect.baseline_m <= 0:
+        raise CalibrationError(
+            "the 'right' camera of this rig is to the LEFT of the 'left' camera (T_x > 0): "
+            "swap the left and right images (and recalibrate with --left/--right swapped)"
+        )
+    if rig.is_rectified and alpha == 0.0:
+        return left, right, rect
+    lr = cv2.remap(left, maps[0], maps[1], interpolation)
+    rr = cv2.remap(right, maps[2], maps[3], interpolation)
+    return lr, rr, rect
+
+
+# ---------------------------------------------------------------------------------------------
+# Disparity
+# ---------------------------------------------------------------------------------------------
+def _sgbm(left: NDArray, right: NDArray, *, min_disparity: int, num_disparities: int,
+          block_size: int, p1: int, p2: int, lr_max_diff: int, pre_filter_cap: int,
+          uniqueness_ratio: int, speckle_window: int, speckle_range: int, mode: int,
+          pad_left: bool) -> NDArray:
+    pad = num_disparities + max(min_disparity, 0) if pad_left else 0
+    if pad:
+        left = cv2.copyMakeBorder(left, 0, 0, pad, 0, cv2.BORDER_REPLICATE)
+        right = cv2.copyMakeBorder(right, 0, 0, pad, 0, cv2.BORDER_REPLICATE)
+    m = cv2.StereoSGBM_create(
+        minDisparity=min_disparity, numDisparities=num_disparities, blockSize=block_size,
+        P1=p1, P2=p2, disp12MaxDiff=lr_max_diff, preFilterCap=pre_filter_cap,
+        uniquenessRatio=uniqueness_ratio, speckleWindowSize=speckle_window,
+        speckleRange=speckle_range, mode=mode,
+    )
+    raw = m.compute(left, right)
+    if pad:
+        raw = raw[:, pad:]
+    d = raw.astype(np.float32) * (1.0 / 16.0)
+    d[raw < (min_disparity * 16)] = np.nan  # OpenCV marks invalid as (minDisparity - 1) * 16
+    return d
+
+
+def compute_disparity(
+    left: NDArray,
+    right: NDArray,
+    *,
+    num_disparities: int = 64,
+    min_disparity: int = 0,
+    block_size: int = 3,
+    mode: Literal["sgbm", "sgbm3way", "hh", "hh4"] = "sgbm3way",
+    p1: int | None = None,
+    p2: int | None = None,
+    uniqueness_ratio: int = 10,
+    speckle_window: int = 100,
+    speckle_range: int = 2,
+    pre_filter_cap: int = 63,
+    lr_check: Literal["internal", "full", "none"] = "internal",
+    lr_max_diff: float = 1.0,
+    pad_left: bool = True,
+    fill_holes: bool = False,
+    scale: float = 1.0,
+) -> NDArray:
+    """Disparity of a rectified pair with tuned semi-global matching.
+
+    Parameters
+    ----------
+    left, right : (H, W) or (H, W, 3) uint8 rectified images (colour is converted to grey).
+    num_disparities : disparity search range in pixels (rounded up to a multiple of 16).
+    min_disparity : smallest disparity searched, pixels.
+    block_size : odd matching block size in pixels.
+    mode : SGBM variant; "sgbm3way" is fastest.
+    p1, p2 : smoothness penalties (default ``8 b^2`` and ``32 b^2``).
+    uniqueness_ratio, speckle_window, speckle_range, pre_filter_cap : as in cv2.StereoSGBM.
+    lr_check : "internal" (SGBM's own disp12MaxDiff check, free), "full" (match right-to-left
+        too and keep pixels whose two disparities agree within ``lr_max_diff``; ~2x time) or
+        "none".
+    pad_left : pad the images so the leftmost ``num_disparities`` columns get disparities.
+    fill_holes : fill invalid pixels from the background (see the module docstring); the
+        result is then dense.
+    scale : match at ``scale`` times the resolution (e.g. 0.5 for 4x speed) and upsample the
+        disparity back (values rescaled to full-resolution pixels).
+
+    Returns
+    -------
+    (H, W) float32 disparity in pixels (``u_left - u_right``), NaN where invalid.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> right = rng.integers(0, 255, (60, 120), dtype=np.uint8)
+    >>> left = np.roll(right, 7, axis=1)  # every pixel shifted 7 px to the right
+    >>> d = compute_disparity(left, right, num_disparities=16)
+    >>> float(np.nanmedian(d[:, 20:]))
+    7.0
+    """
+    check_pair(left, right)
+    L, R = to_gray(left), to_gray(right)
+    if L.dtype != np.uint8 or R.dtype != np.uint8:
+        raise ImageInputError(
+            f"stereo images must be 8-bit (got {L.dtype}); convert with cv2.normalize or "
+            "cv2.convertScaleAbs"
+        )
+    if mode not in _MODES:
+        raise ValueError(f"mode must be one of {', '.join(_MODES)}, got {mode!r}")
+    if lr_check not in ("internal", "full", "none"):
+        raise ValueError(f"lr_check must be internal, full or none, got {lr_check!r}")
+    if not 0.0 < scale <= 1.0:
+        raise ValueError(f"scale must be in (0, 1], got {scale}")
+    if block_size < 1 or block_size % 2 == 0:
+        raise ValueError(f"block_size must be a positive odd number, got {block_size}")
+    H, W = L.shape
+    if scale < 1.0:
+        size = (max(8, round(W * scale)), max(8, round(H * scale)))
+        L = cv2.resize(L, size, interpolation=cv2.INTER_AREA)
+        R = cv2.resize(R, size, interpolation=cv2.INTER_AREA)
+        sx = size[0] / W
+    else:
+        sx = 1.0
+    nd = int(np.ceil(num_disparities * sx / 16.0) * 16)
+    md = int(np.floor(min_disparity * sx))
+    b2 = block_size * block_size
+    kw = dict(
+        min_disparity=md, num_disparities=nd, block_size=block_size,
+        p1=int(p1 if p1 is not None else 8 * b2), p2=int(p2 if p2 is not None else 32 * b2),
+        lr_max_diff=int(np.ceil(lr_max_diff)) if lr_check == "internal" else -1,
+        pre_filter_cap=pre_filter_cap, uniqueness_ratio=uniqueness_ratio,
+        speckle_window=speckle_window, speckle_range=speckle_range, mode=_MODES[mode],
+        pad_left=pad_left,
+    )
+    d = _sgbm(L, R, **kw)
+    if lr_check == "full":
+        # right-to-left: mirror both images and swap them; the disparity comes out mirrored
+        dr = _sgbm(np.ascontiguousarray(R[:, ::-1]), np.ascontiguousarray(L[:, ::-1]), **kw)
+        d = lr_consistency(d, dr[:, ::-1], lr_max_diff)
+    if fill_holes:
+        d = fill_disparity_holes(d)
+    if scale < 1.0:
+        d = cv2.resize(d, (W, H), interpolation=cv2.INTER_NEAREST) / np.float32(sx)
+    return d
+
+
+def lr_consistency(disp_left: NDArray, disp_right: NDArray, max_diff: float = 1.0) -> NDArray:
+    """Left-right consistency check: keep ``disp_left[v, u]`` only where the right image's
+    disparity at the matched pixel ``u - d`` agrees within ``max_diff`` pixels.
+
+    ``disp_right`` is the disparity map of the right image (``u_left - u_right`` at right
+    pixels). Returns a copy of ``disp_left`` with inconsistent pixels set to NaN.
+    """
+    dl = np.asarray(disp_left, dtype=np.float32)
+    dr = np.asarray(disp_right, dtype=np.float32)
+    if dl.shape != dr.shape or dl.ndim != 2:
+        raise ImageInputError(f"disparity maps differ in shape: {dl.shape} vs {dr.shape}")
+    H, W = dl.shape
+    u = np.arange(W, dtype=np.float32)[None, :]
+    ur = np.rint(u - np.nan_to_num(dl, nan=0.0)).astype(np.int64)
+    inside = (ur >= 0) & (ur < W) & np.isfinite(dl)
+    rows = np.broadcast_to(np.arange(H)[:, None], (H, W))
+    back = np.full_like(dl, np.nan)
+    back[inside] = dr[rows[inside], ur[inside]]
+    with np.errstate(invalid="ignore"):
+        ok = inside & (np.abs(back - dl) <= max_diff)
+    return np.where(ok, dl, np.float32(np.nan)).astype(np.float32)
+
+
+def fill_disparity_holes(disparity: NDArray, median: int = 5) -> NDArray:
+    """Fill NaN pixels with the smaller of the nearest valid disparities to their left and
+    right on the same row (background fill), then smooth only the filled pixels with a
+    ``median`` x ``median`` median filter (3 or 5; 0 to skip). Rows without any valid pixel
+    stay NaN. Returns float32 pixels."""
+    d = np.asarray(disparity, dtype=np.float32)
+    H, W = d.shape
+    valid = np.isfinite(d)
+    if valid.all() or not valid.any():
+        return d.copy()
+    cols = np.arange(W)[None, :]
+    left_idx = np.maximum.accumulate(np.where(valid, cols, -1), axis=1)
+    right_idx = np.minimum.accumulate(np.where(valid, cols, W)[:, ::-1], axis=1)[:, ::-1]
+    rows = np.arange(H)[:, None]
+    inf = np.float32(np.inf)
+    lv = np.where(left_idx >= 0, d[rows, np.clip(left_idx, 0, W - 1)], inf)
+    rv = np.where(right_idx < W, d[rows, np.clip(right_idx, 0, W - 1)], inf)
+    filled = np.minimum(lv, rv)
+    filled[~np.isfinite(filled)] = np.nan
+    out = np.where(valid, d, filled).astype(np.float32)
+    if median:
+        if median not in (3, 5):
+            raise ValueError(f"median must be 0, 3 or 5, got {median}")
+        good = np.isfinite(out)
+        sm = cv2.medianBlur(np.where(good, out, 0).astype(np.float32), median)
+        out = np.where(valid | ~good, out, sm).astype(np.float32)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Depth and 3D points
+# ---------------------------------------------------------------------------------------------
+def depth_from_disparity(disparity: ArrayLike, focal_px: float, baseline_m: float,
+                         min_disparity: float = 0.0) -> NDArray:
+    """Depth ``Z = f B / d`` in metres (NaN where ``d <= min_disparity`` or NaN)."""
+    d = np.asarray(disparity, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = focal_px * baseline_m / d
+    z[~(d > max(min_disparity, 0.0))] = np.nan
+    return z
+
+
+def disparity_from_depth(depth_m: ArrayLike, focal_px: float, baseline_m: float) -> NDArray:
+    """Disparity ``d = f B / Z`` in pixels of depths in metres (NaN where Z <= 0 or NaN)."""
+    z = np.asarray(depth_m, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d = focal_px * baseline_m / z
+    d[~(z > 0)] = np.nan
+    return d
+
+
+def points_from_disparity(disparity: ArrayLike, Q: ArrayLike) -> NDArray:
+    """3D points ``(H, W, 3)`` in metres in the rectified left optical frame,
+    ``[X Y Z W]^T = Q [u v d 1]^T`` (``Q`` from :class:`hearsee.vision.camera.Rectification`);
+    NaN where the disparity is invalid or non-positive."""
+    d = np.asarray(disparity, dtype=np.float64)
+    Q = np.asarray(Q, dtype=np.float64)
+    if d.ndim != 2 or Q.shape != (4, 4):
+        raise ValueError(f"expected (H, W) disparity and 4x4 Q, got {d.shape} and {Q.shape}")
+    H, W = d.shape
+    u = np.arange(W, dtype=np.float64)[None, :]
+    v = np.arange(H, dtype=np.float64)[:, None]
+    X = Q[0, 0] * u + Q[0, 1] * v + Q[0, 2] * d + Q[0, 3]
+    Y = Q[1, 0] * u + Q[1, 1] * v + Q[1, 2] * d + Q[1, 3]
+    Z = Q[2, 0] * u + Q[2, 1] * v + Q[2, 2] * d + Q[2, 3]
+    Wh = Q[3, 0] * u + Q[3, 1] * v + Q[3, 2] * d + Q[3, 3]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pts = np.stack(np.broadcast_arrays(X / Wh, Y / Wh, Z / Wh), axis=-1)
+    bad = ~(d > 0)
+    pts[bad] = np.nan
+    return pts
+
+
+def points_to_left_frame(points: ArrayLike, rectification: Rectification) -> NDArray:
+    """Rotate points ``(..., 3)`` from the rectified left frame back to the (unrectified) left
+    camera's optical frame -- the frame the rig's thermal extrinsics refer to."""
+    p = np.asarray(points, dtype=np.float64)
+    return p @ rectification.R1  # R1 maps left -> rectified, so R1^T maps back (row vectors)
+
+
+# ---------------------------------------------------------------------------------------------
+# One call per frame
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class StereoFrame:
+    """Result of :func:`stereo_frame`: rectified images, disparity and the rectification.
+
+    ``disparity`` is float32 pixels (NaN invalid) of the rectified left image; :meth:`depth`
+    (metres) and :meth:`points` (``(H, W, 3)`` metres, rectified left frame) derive from it.
+    """
+
+    left: NDArray
+    right: NDArray
+    disparity: NDArray
+    rectification: Rectification
+    _points: NDArray | None = field(default=None, repr=False)
+
+    @property
+    def focal_px(self) -> float:
+        return self.rectification.focal_px
+
+    @property
+    def baseline_m(self) -> float:
+        return self.rectification.baseline_m
+
+    def depth(self) -> NDArray:
+        """Depth map in metres (NaN invalid)."""
+        return depth_from_disparity(self.disparity, self.focal_px, self.baseline_m)
+
+    def points(self, frame: Literal["rectified", "left"] = "rectified") -> NDArray:
+        """3D points ``(H, W, 3)`` in metres in the rectified left frame or, with
+        ``frame="left"``, the left camera's own optical frame."""
+        if self._points is None:
+            self._points = points_from_disparity(self.disparity, self.rectification.Q)
+        if frame == "left":
+            return points_to_left_frame(self._points, self.rectification)
+        return self._points
+
+
+def stereo_frame(left: NDArray, right: NDArray, rig: StereoRig, **disparity_options) -> StereoFrame:
+    """Rectify a pair with ``rig`` and compute its disparity (options of
+    :func:`compute_disparity`). The usual per-frame entry point.
+
+    Examples
+    --------
+    >>> from hearsee.vision.camera import Camera, StereoRig
+    >>> rig = StereoRig.ideal(Camera.from_fov(60.0, 160, 120), baseline_m=0.1)
+    >>> rng = np.random.default_rng(1)
+    >>> right = rng.integers(0, 255, (120, 160), dtype=np.uint8)
+    >>> f = stereo_frame(np.roll(right, 8, axis=1), right, rig, num_disparities=16)
+    >>> round(float(np.nanmedian(f.depth()[:, 30:])), 3)  # f B / d = 138.56 * 0.1 / 8
+    1.732
+    """
+    lr, rr, rect = rectify_pair(left, right, rig)
+    d = compute_disparity(lr, rr, **disparity_options)
+    return StereoFrame(lr, rr, d, rect)
