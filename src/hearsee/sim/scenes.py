@@ -15,7 +15,8 @@ into:
 * a rectified stereo pair (default 640x480, f = 500 px, baseline 0.12 m) and the ground-truth
   disparity of the left view,
 * a radiometric thermal image in degC from a separate, lower-resolution thermal camera
-  (default 160x120, 57 deg HFOV, mild barrel distortion) mounted above the stereo rig, with its
+  (default 160x120, 72 deg HFOV, wider than the stereo pair's 65 deg so it sees all of
+  its view; mild barrel distortion) mounted above the stereo rig, with its
   own extrinsics, optics blur, vignetting, fixed-pattern and temporal noise, and an 8-bit
   automatic-gain-controlled (non-radiometric) version of it,
 * person and object boxes (left-image pixels, from the visible pixels) and 3D positions.
@@ -70,7 +71,7 @@ _ENTITY_KINDS = ("person", *HUMAN_LIKE_KINDS, "box", "radiator", "appliance")
 # ---------------------------------------------------------------------------------------------
 def default_rig(width: int = 640, height: int = 480, *, focal_px: float | None = None,
                 baseline_m: float = 0.12, thermal_size: tuple[int, int] = (160, 120),
-                thermal_hfov_deg: float = 57.0, camera_height_m: float = 1.4) -> StereoRig:
+                thermal_hfov_deg: float = 72.0, camera_height_m: float = 1.4) -> StereoRig:
     """The simulated rig: a rectified stereo pair plus a thermal camera.
 
     ``focal_px`` defaults to ``500 * width / 640`` (f = 500 px at 640x480). The thermal camera
@@ -838,14 +839,17 @@ def generate_scene(seed: int, rig: StereoRig | None = None, **kwargs: Any) -> Sc
 
 
 def write_scene(scene: Scene, folder: str | Path) -> Path:
-    """Write ``left.png``, ``right.png``, ``thermal.png`` (8-bit), ``thermal_c.npy`` (float32
-    degC), ``disparity.npy`` (float32 px), ``calib.yaml`` (the rig) and ``truth.json`` into
+    """Write ``left.png``, ``right.png``, ``thermal.png`` (8-bit AGC),
+    ``thermal_radiometric.png`` (16-bit centi-kelvin), ``thermal_c.npy`` (float32 degC),
+    ``disparity.npy`` (float32 px), ``calib.yaml`` (the rig) and ``truth.json`` into
     ``folder`` (created if needed). Returns the folder."""
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     cv2.imwrite(str(out / "left.png"), scene.left)
     cv2.imwrite(str(out / "right.png"), scene.right)
     cv2.imwrite(str(out / "thermal.png"), scene.thermal_8bit)
+    ck = np.clip(np.rint((scene.thermal_c + 273.15) * 100.0), 0, 65535).astype(np.uint16)
+    cv2.imwrite(str(out / "thermal_radiometric.png"), ck)
     np.save(out / "thermal_c.npy", scene.thermal_c.astype(np.float32))
     np.save(out / "disparity.npy", scene.disparity.astype(np.float32))
     save_rig(scene.rig, out / "calib.yaml")

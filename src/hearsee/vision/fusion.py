@@ -1,0 +1,246 @@
+"""Stereo + thermal human detection (thesis 7.4): a stereo candidate is a human only when the
+thermal camera sees it warm.
+
+Reconstruction. The stereo detector (:mod:`hearsee.vision.humans`) finds person-shaped
+candidates; each candidate's 3D silhouette points are moved from the (rectified) left frame into
+the thermal camera's frame with the rig's extrinsics (``X_thermal = R_thermal X_left +
+T_thermal``, calibrated as in 7.4.1 / :mod:`hearsee.vision.calibration`), projected with the
+thermal camera's intrinsics and distortion (fig. 7.13), and looked up in the thermal filter's
+warm mask (:mod:`hearsee.vision.thermal`). The *thermal support* is the weighted fraction of
+the projected points that land on warm pixels, with the head and shoulders (the top 0.4 m of
+the silhouette) weighted ``head_weight`` times more -- faces are the most reliably warm part of
+a clothed person. A candidate is accepted when stereo verification passed and
+``support >= min_support``. This rejects human-shaped objects at room temperature (mannequins,
+posters, coats on stands; figs. 7.20-7.21). It fails (fig. 7.22) when a person's visible
+surface is cold (a heavy coat and a covered head just in from outside) or when a human-shaped
+object is warm (a mannequin heated by a radiator or the sun): see ``examples/ch7_humans.py``.
+
+Because the thermal camera sits elsewhere on the rig, projecting 3D points -- not pixels --
+handles the parallax: the same image offset would be wrong at 1 m and at 8 m.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from hearsee.errors import CalibrationError, ImageInputError
+from hearsee.vision.camera import StereoRig
+from hearsee.vision.humans import (
+    HumanCandidate,
+    HumanDetectorParams,
+    StereoDetection,
+    detect_candidates,
+)
+from hearsee.vision.stereo import StereoFrame, points_to_left_frame, stereo_frame
+from hearsee.vision.thermal import HUMAN_BAND_C, thermal_mask
+
+__all__ = [
+    "DetectionResult",
+    "Human",
+    "detect_humans",
+    "draw_detections",
+    "thermal_support",
+]
+
+#: Disparity options used by the detector (64 disparities: people from ~0.95 m at f B = 60 px m).
+DEFAULT_STEREO_OPTIONS: dict[str, Any] = {"num_disparities": 64, "block_size": 3}
+
+
+@dataclass
+class Human:
+    """One detection (accepted or rejected).
+
+    ``box`` [x, y, w, h] in left-image pixels; ``position_m`` torso centre in the left camera's
+    optical frame (metres); ``score`` the head-shoulder score; ``thermal_support`` in [0, 1]
+    (None without a thermal image, NaN when the thermal camera does not see the candidate);
+    ``reason`` why it was rejected (empty when accepted).
+    """
+
+    box: list[int]
+    position_m: NDArray
+    score: float
+    thermal_support: float | None
+    height_m: float
+    accepted: bool
+    reason: str = ""
+
+    @property
+    def distance_m(self) -> float:
+        return float(np.linalg.norm(self.position_m))
+
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {
+            "box": [int(v) for v in self.box],
+            "position_m": [round(float(v), 3) for v in self.position_m],
+            "distance_m": round(self.distance_m, 3),
+            "height_m": round(float(self.height_m), 3),
+            "score": round(float(self.score), 3),
+            "thermal_support": (None if self.thermal_support is None else
+                                round(float(self.thermal_support), 3)),
+        }
+        if not self.accepted:
+            d["reason"] = self.reason
+        return d
+
+
+@dataclass
+class DetectionResult:
+    """Output of :func:`detect_humans`: accepted ``humans``, ``rejected`` candidates, and the
+    intermediate results (stereo frame, stereo detection, thermal warm mask)."""
+
+    humans: list[Human]
+    rejected: list[Human]
+    frame: StereoFrame
+    stereo: StereoDetection
+    warm_mask: NDArray | None = None
+    info: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"humans": [h.to_dict() for h in self.humans],
+                "rejected": [h.to_dict() for h in self.rejected], **self.info}
+
+
+def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm: NDArray, *,
+                    head_weight: float = 2.0, head_band_m: float = 0.4, max_points: int = 2000,
+                    min_points: int = 15) -> float:
+    """Weighted fraction of a candidate's 3D points that project onto warm thermal pixels.
+
+    ``points_left`` ``(N, 3)``: silhouette points in the left optical frame (metres);
+    ``heights`` ``(N,)`` their heights above the floor (the top ``head_band_m`` metres get weight
+    ``head_weight``); ``warm`` the thermal filter's mask (thermal image size). Points projecting
+    outside the thermal image are ignored; NaN when fewer than ``min_points`` remain.
+    """
+    cam = rig.thermal_camera
+    if warm.shape != cam.shape:
+        raise ImageInputError(
+            f"thermal image is {warm.shape[1]}x{warm.shape[0]} pixels but the calibration's "
+            f"thermal camera is {cam.width}x{cam.height}"
+        )
+    P = np.asarray(points_left, dtype=float)
+    h = np.asarray(heights, dtype=float)
+    if len(P) > max_points:  # deterministic subsample
+        idx = np.linspace(0, len(P) - 1, max_points).astype(int)
+        P, h = P[idx], h[idx]
+    if len(P) == 0:
+        return float("nan")
+    uv = rig.project_thermal(P)
+    ok = cam.in_image(uv)
+    if ok.sum() < min_points:
+        return float("nan")
+    uv, h = uv[ok], h[ok]
+    u = np.clip(np.rint(uv[:, 0]).astype(int), 0, cam.width - 1)
+    v = np.clip(np.rint(uv[:, 1]).astype(int), 0, cam.height - 1)
+    w = np.where(h >= h.max() - head_band_m, head_weight, 1.0)
+    return float((w * warm[v, u]).sum() / w.sum())
+
+
+def _to_human(c: HumanCandidate, support: float | None, accepted: bool, reason: str) -> Human:
+    seg = c.segment
+    assert seg is not None
+    return Human(list(seg.box), seg.position_m, c.score, support, seg.top_m, accepted, reason)
+
+
+def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArray | None = None,
+                  *, params: HumanDetectorParams | None = None, min_support: float = 0.3,
+                  band_c: tuple[float, float] = HUMAN_BAND_C,
+                  camera_height_m: float | None = None,
+                  stereo_options: dict[str, Any] | None = None) -> DetectionResult:
+    """Detect humans in a stereo pair, confirmed by a thermal image when one is given.
+
+    Parameters
+    ----------
+    left, right : stereo images (uint8, grey or BGR) of the rig's size (rectified here if the
+        rig needs it).
+    rig : the calibrated rig; must have a thermal camera when ``thermal`` is given.
+    thermal : thermal image of the rig's thermal camera: float degC, uint16 centi-kelvin or
+        uint8 non-radiometric (see :func:`hearsee.vision.thermal.thermal_mask`).
+    params : stereo detector parameters (Tm = ``params.tm``).
+    min_support : thermal support needed to accept a candidate.
+    band_c : radiometric human temperature band (degC).
+    camera_height_m : prior for the floor (default ``rig.info["camera_height_m"]``).
+    stereo_options : options of :func:`hearsee.vision.stereo.compute_disparity`.
+
+    Returns
+    -------
+    :class:`DetectionResult`; boxes in left-image pixels (rectified), positions in the left
+    camera's optical frame (metres).
+    """
+    if thermal is not None and rig.thermal is None:
+        raise CalibrationError(
+            "a thermal image was given but the calibration has no thermal camera: add a "
+            "'thermal:' block (camera, R, T) to the calibration file or leave out the thermal image"
+        )
+    opts = dict(DEFAULT_STEREO_OPTIONS)
+    opts.update(stereo_options or {})
+    frame = stereo_frame(left, right, rig, **opts)
+    rect = frame.rectification
+    if camera_height_m is None:
+        ch = rig.info.get("camera_height_m") if isinstance(rig.info, dict) else None
+        camera_height_m = float(ch) if ch is not None else None
+    det = detect_candidates(frame.disparity, frame.points(), frame.focal_px, frame.baseline_m,
+                            rect.cy, camera_height_m=camera_height_m, params=params)
+    warm = None
+    if thermal is not None:
+        cam = rig.thermal_camera
+        th = np.asarray(thermal)
+        if th.shape[:2] != cam.shape:
+            raise ImageInputError(
+                f"thermal image is {th.shape[1]}x{th.shape[0]} pixels but the calibration's "
+                f"thermal camera is {cam.width}x{cam.height}"
+            )
+        warm = thermal_mask(th, band_c=band_c)
+    humans, rejected = [], []
+    needs_rect = not rig.is_rectified
+    for c in det.candidates:
+        if c.segment is None or c.reason.startswith("duplicate"):
+            continue
+        support = None
+        if warm is not None:
+            pts = c.segment.points
+            if needs_rect:
+                pts = points_to_left_frame(pts, rect)
+            support = thermal_support(pts, c.segment.heights, rig, warm)
+        if not c.accepted:
+            rejected.append(_to_human(c, support, False, c.reason))
+        elif support is not None and not support >= min_support:
+            why = ("not seen by the thermal camera" if np.isnan(support) else
+                   f"thermal support {support:.2f} < {min_support}")
+            rejected.append(_to_human(c, support, False, why))
+        else:
+            humans.append(_to_human(c, support, True, ""))
+    if needs_rect:  # positions back to the left camera's own frame
+        for h in humans + rejected:
+            h.position_m = points_to_left_frame(h.position_m, rect)
+    humans.sort(key=lambda h: h.distance_m)
+    info = {"floor": {"source": det.floor.source,
+                      "camera_height_m": round(det.floor.camera_height_m, 3)},
+            "thermal": None if thermal is None else
+            ("radiometric" if np.asarray(thermal).dtype != np.uint8 else "relative")}
+    return DetectionResult(humans, rejected, frame, det, warm, info)
+
+
+def draw_detections(image: NDArray, result: DetectionResult, *, show_rejected: bool = True
+                    ) -> NDArray:
+    """The left image with accepted humans in green (distance, score, support) and rejected
+    candidates in red (reason); returns a new BGR uint8 image."""
+    import cv2
+
+    img = np.asarray(image)
+    out = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR) if img.ndim == 2 else img.copy()
+    items = [(h, (0, 200, 0)) for h in result.humans]
+    if show_rejected:
+        items += [(h, (0, 0, 230)) for h in result.rejected]
+    for h, col in items:
+        x, y, w, hh = h.box
+        cv2.rectangle(out, (x, y), (x + w - 1, y + hh - 1), col, 2)
+        sup = "" if h.thermal_support is None else f" T{h.thermal_support:.2f}"
+        label = f"{h.distance_m:.1f}m s{h.score:.2f}{sup}"
+        if not h.accepted:
+            label = h.reason[:28]
+        cv2.putText(out, label, (x, max(10, y - 4)), cv2.FONT_HERSHEY_SIMPLEX, 0.38, col, 1,
+                    cv2.LINE_AA)
+    return out

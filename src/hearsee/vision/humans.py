@@ -1,0 +1,611 @@
+"""Human candidates from stereo: P(y,d), scale-adaptive filtering, body segmentation and
+head-shoulder verification (thesis 7.2).
+
+Reconstruction. Only the section titles of thesis ch. 7 survive; this module rebuilds them from
+the standard literature:
+
+* **P(y,d)** (7.2.1, fig. 7.5) is the *u-disparity* map: for every image column ``y`` and
+  disparity ``d`` the number of pixels of that column with that disparity (Hu, Lamosa & Uchimura,
+  "A complete u-v-disparity study for stereovision based 3D driving environment analysis",
+  3DIM 2005; Labayrade et al., IV 2002). Pixels of the floor (height above the floor below
+  ``min_height_m``), above ``max_height_m`` and beyond ``max_range_m`` are not counted, so the
+  map holds only things standing on the floor. The floor plane is estimated from the 3D points
+  by RANSAC (Fischler & Bolles 1981), with the camera height in the calibration file
+  (``info: {camera_height_m: ..}``) as prior/fallback.
+* **Scale-adaptive filtering** (fig. 7.6): a person of width ``W`` metres at disparity ``d``
+  spans ``W d / B`` columns and about ``h f / Z = h d / B`` rows, so both the kernel width and
+  the normalisation scale with ``d``. Each column count is divided by the number of rows a
+  standing person would occupy at that disparity (scale-normalised occupancy), summed over a
+  disparity band that corresponds to a fixed body depth (``d^2 / (f B)`` per metre), and filtered
+  along ``y`` with a centre-surround kernel whose centre is ``person_width_m * d / B`` columns
+  wide: ``Psi-hat(y,d) = mean_centre - min(mean_left_surround, mean_right_surround)``. Walls
+  (that extend on both sides) cancel, compact upright blobs of person width stand out. Local
+  maxima above ``peak_threshold`` after non-maximum suppression in (column, depth) are the
+  candidates; people apart in depth separate here even when they overlap in the image.
+* **Body segmentation** (7.2.2): the candidate's column range and disparity band are
+  back-projected to the pixels that have them; morphological closing/opening and the connected
+  component under the peak give the silhouette, its box and its 3D extent (height above the
+  floor, width, position).
+* **Head-shoulder verification** (7.2.3, figs. 7.7-7.9): a head-shoulder contour template
+  (Zhao & Nevatia, "Stochastic human segmentation from a static camera", 2002/2003; Li, Huang,
+  Nevatia et al., "Rapid and robust human detection and tracking based on omega-shape
+  features", ICIP 2009) in metric units, deformable in scale (via the measured depth), head
+  width, shoulder width, shoulder drop and head offset, is matched to the silhouette's upper
+  contour by a truncated vertical chamfer distance; ``score = 1 - mean_distance / tau``. A
+  candidate is accepted when ``score >= Tm``.
+
+Frames: pixels are those of the (rectified) left image; 3D points are metres in the rectified
+left optical frame (x right, y down, z forward) -- for an already rectified rig (the simulated
+one) that is the left camera frame. A person's ``position_m`` is the estimated torso centre.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from hearsee.errors import EstimationError, ImageInputError
+
+__all__ = [
+    "BodySegment",
+    "FloorPlane",
+    "HumanCandidate",
+    "HumanDetectorParams",
+    "detect_candidates",
+    "estimate_floor",
+    "find_peaks",
+    "head_shoulder_score",
+    "scale_adaptive_filter",
+    "segment_body",
+    "u_disparity",
+    "upper_contour",
+]
+
+
+# ---------------------------------------------------------------------------------------------
+# Parameters
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class HumanDetectorParams:
+    """Parameters of the stereo human detector (metres unless noted).
+
+    ``person_width_m``: centre width of the scale-adaptive kernel; ``surround_m``: width of
+    each surround; ``depth_band_m``: half depth of the disparity band summed in P(y,d) and used
+    for segmentation; ``min_height_m``/``max_height_m``: height band (above the floor) counted in
+    P(y,d); ``max_range_m``/``min_range_m``: depth limits; ``peak_threshold``: minimum
+    Psi-hat (scale-normalised occupancy, 0..1) of a candidate; ``tm``: head-shoulder score
+    threshold Tm; ``tau_m``: chamfer truncation/normalisation of the score; the extent limits
+    reject silhouettes too short/tall/narrow/wide for a standing adult.
+    """
+
+    person_width_m: float = 0.4
+    surround_m: float = 0.3
+    depth_band_m: float = 0.25
+    min_height_m: float = 0.12
+    max_height_m: float = 2.0
+    above_m: float = 2.45
+    above_weight: float = 3.0
+    max_range_m: float = 9.5
+    min_range_m: float = 0.7
+    peak_threshold: float = 0.3
+    tm: float = 0.5
+    tau_m: float = 0.08
+    min_top_m: float = 1.2
+    max_top_m: float = 2.2
+    min_width_m: float = 0.18
+    max_width_m: float = 1.1
+    max_candidates: int = 20
+
+
+# ---------------------------------------------------------------------------------------------
+# Floor
+# ---------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class FloorPlane:
+    """The floor as a plane in the camera frame: ``height(P) = P @ normal + offset`` metres
+    above the floor (``normal`` is the unit "up" vector in the optical frame, i.e. about
+    ``(0, -1, 0)`` for a level camera; ``offset`` the camera height). ``source`` says where it
+    came from ("ransac", "prior")."""
+
+    normal: NDArray
+    offset: float
+    source: str = "prior"
+
+    @classmethod
+    def level(cls, camera_height_m: float) -> FloorPlane:
+        """The floor of a level camera ``camera_height_m`` metres above it."""
+        return cls(np.array([0.0, -1.0, 0.0]), float(camera_height_m), "prior")
+
+    def height(self, points: NDArray) -> NDArray:
+        """Height above the floor (metres) of points ``(..., 3)``."""
+        return points @ self.normal + self.offset
+
+    @property
+    def camera_height_m(self) -> float:
+        return float(self.offset)
+
+
+def estimate_floor(points: NDArray, *, prior_height_m: float | None = None, step: int = 8,
+                   iterations: int = 120, inlier_m: float = 0.04, max_tilt_deg: float = 20.0,
+                   seed: int = 0) -> FloorPlane:
+    """RANSAC floor plane from 3D points ``(H, W, 3)`` (camera frame, metres, NaN invalid).
+
+    Only points at least 0.3 m below the camera and nearer than 10 m are used (subsampled every
+    ``step`` pixels); planes tilted more than ``max_tilt_deg`` from level are refused; among the
+    rest the one with most inliers (within ``inlier_m``) is refined by least squares. Falls back
+    to a level floor at ``prior_height_m`` when no floor is found (EstimationError when there
+    is no prior either). When a prior is given, floors more than 0.5 m from it are refused.
+    """
+    P = points[::step, ::step].reshape(-1, 3)
+    P = P[np.all(np.isfinite(P), axis=1)]
+    P = P[(P[:, 1] > 0.3) & (P[:, 2] < 10.0)]
+    best: FloorPlane | None = None
+    if len(P) >= 60:
+        rng = np.random.default_rng(seed)
+        idx = rng.integers(0, len(P), (iterations, 3))
+        a, b, c = P[idx[:, 0]], P[idx[:, 1]], P[idx[:, 2]]
+        n = np.cross(b - a, c - a)
+        norm = np.linalg.norm(n, axis=1)
+        ok = norm > 1e-9
+        n = n[ok] / norm[ok, None]
+        a = a[ok]
+        n *= np.where(n[:, 1] > 0, -1.0, 1.0)[:, None]  # "up" = -y
+        off = -np.einsum("ij,ij->i", n, a)
+        level = -n[:, 1] >= np.cos(np.radians(max_tilt_deg))
+        if prior_height_m is not None:
+            level &= np.abs(off - prior_height_m) < 0.5
+        if np.any(level):
+            n, off = n[level], off[level]
+            dist = np.abs(P @ n.T + off)  # (N, k)
+            counts = (dist < inlier_m).sum(axis=0)
+            k = int(np.argmax(counts))
+            if counts[k] >= max(40, 0.05 * len(P)):
+                inl = P[dist[:, k] < inlier_m]
+                cen = inl.mean(axis=0)
+                _, _, vt = np.linalg.svd(inl - cen, full_matrices=False)
+                nn = vt[-1]
+                nn = -nn if nn[1] > 0 else nn
+                if -nn[1] >= np.cos(np.radians(max_tilt_deg)):
+                    best = FloorPlane(nn, float(-nn @ cen), "ransac")
+    if best is not None:
+        return best
+    if prior_height_m is None:
+        raise EstimationError(
+            "no floor found in the disparity and no camera height known: add "
+            "'info: {camera_height_m: <metres>}' to the calibration file or pass the camera height"
+        )
+    return FloorPlane.level(prior_height_m)
+
+
+# ---------------------------------------------------------------------------------------------
+# P(y,d) and the scale-adaptive filter
+# ---------------------------------------------------------------------------------------------
+def u_disparity(disparity: NDArray, mask: NDArray | None = None, max_disparity: int | None = None
+                ) -> NDArray:
+    """P(y,d): counts ``(n_d, W)`` of pixels with (rounded) disparity ``d`` in image column ``y``.
+
+    ``disparity`` is ``(H, W)`` float pixels (NaN/<=0 invalid); ``mask`` selects the pixels
+    counted (e.g. not floor); ``n_d = max_disparity + 1`` (default: the largest disparity + 1).
+
+    >>> d = np.full((4, 3), np.nan); d[:, 1] = 5.0
+    >>> u_disparity(d)[5].tolist()
+    [0.0, 4.0, 0.0]
+    """
+    d = np.asarray(disparity, dtype=np.float32)
+    if d.ndim != 2:
+        raise ImageInputError(f"disparity must be (H, W), got shape {d.shape}")
+    H, W = d.shape
+    ok = np.isfinite(d) & (d > 0)
+    if mask is not None:
+        ok &= mask
+    di = np.rint(d[ok]).astype(np.int64)
+    nd = int(max_disparity + 1 if max_disparity is not None else (di.max() + 1 if di.size else 1))
+    keep = di < nd
+    cols = np.broadcast_to(np.arange(W), (H, W))[ok][keep]
+    counts = np.bincount(di[keep] * W + cols, minlength=nd * W)
+    return counts.reshape(nd, W).astype(np.float32)
+
+
+def _expected_rows(n_d: int, height: int, focal_px: float, baseline_m: float, cy: float,
+                   floor: FloorPlane, lo_m: float, hi_m: float) -> NDArray:
+    """Rows ``(n_d,)`` that an upright body from ``lo_m`` to ``hi_m`` above the floor covers at
+    each disparity (in the image centre column)."""
+    d = np.arange(n_d, dtype=float)
+    with np.errstate(divide="ignore"):
+        Z = np.where(d > 0, focal_px * baseline_m / np.maximum(d, 1e-9), np.inf)
+    v = np.arange(height, dtype=float)
+    Zf = np.where(np.isfinite(Z), Z, 0.0)
+    Y = (v[None, :] - cy) / focal_px * Zf[:, None]  # (n_d, H)
+    Zb = np.broadcast_to(Zf[:, None], Y.shape)
+    h = floor.normal[1] * Y + floor.normal[2] * Zb + floor.offset
+    rows = ((h >= lo_m) & (h <= hi_m)).sum(axis=1).astype(float)
+    rows[0] = 0.0
+    return rows
+
+
+def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
+                          expected_rows: NDArray | None = None, above: NDArray | None = None,
+                          above_weight: float = 3.0, person_width_m: float = 0.4,
+                          surround_m: float = 0.3, depth_band_m: float = 0.25) -> NDArray:
+    """Psi-hat(y,d): P(y,d) filtered with kernels whose size scales with ``d``.
+
+    1. Sum P over the disparity band ``|d' - d| <= max(1, d^2 depth_band_m / (f B))`` (a body's
+       depth) -- minus ``above_weight`` times the same sum of ``above`` (counts of pixels
+       just above a standing person's height: walls and tall shelves continue there), clipped
+       at 0 -- 2. divide by ``expected_rows[d]`` (rows a standing person covers at ``d``; 1 if
+       not given), 3. centre mean over ``person_width_m * d / B`` columns minus the smaller of
+       the two surround means (each ``surround_m * d / B`` columns). Returns ``(n_d, W)``.
+    """
+    P = np.asarray(P, dtype=np.float64)
+    nd, W = P.shape
+    d = np.arange(nd, dtype=float)
+    band = np.maximum(1, np.rint(d * d * depth_band_m / (focal_px * baseline_m))).astype(int)
+    cs = np.vstack([np.zeros((1, W)), np.cumsum(P, axis=0)])
+    lo = np.clip(np.arange(nd) - band, 0, nd)
+    hi = np.clip(np.arange(nd) + band + 1, 0, nd)
+    Pb = cs[hi] - cs[lo]
+    if above is not None:
+        A = np.asarray(above, dtype=np.float64)
+        ca = np.vstack([np.zeros((1, W)), np.cumsum(A, axis=0)])
+        Pb = np.clip(Pb - above_weight * (ca[hi] - ca[lo]), 0.0, None)
+    if expected_rows is not None:
+        e = np.asarray(expected_rows, float)
+        Pb = np.where(e[:, None] > 3, Pb / np.maximum(e[:, None], 1.0), 0.0)
+    half = np.maximum(1, np.rint(0.5 * person_width_m * d / baseline_m)).astype(int)[:, None]
+    sur = np.maximum(1, np.rint(surround_m * d / baseline_m)).astype(int)[:, None]
+    cc = np.hstack([np.zeros((nd, 1)), np.cumsum(Pb, axis=1)])
+    y = np.arange(W)[None, :]
+
+    def box_mean(a: NDArray, b: NDArray) -> NDArray:
+        a = np.clip(a, 0, W)
+        b = np.clip(b, 0, W)
+        s = np.take_along_axis(cc, b, 1) - np.take_along_axis(cc, a, 1)
+        width = np.broadcast_to(b - a, s.shape)
+        return np.where(width > 0, s / np.maximum(width, 1), 0.0)
+
+    centre = box_mean(y - half, y + half + 1)
+    left = box_mean(y - half - sur, y - half)
+    right = box_mean(y + half + 1, y + half + 1 + sur)
+    psi = centre - np.minimum(left, right)
+    psi[0] = 0.0
+    return psi
+
+
+def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: float = 0.3,
+               min_disparity: float = 1.0, person_width_m: float = 0.4, depth_sep_m: float = 0.5,
+               max_peaks: int = 12) -> list[tuple[int, int, float]]:
+    """Greedy non-maximum suppression on Psi-hat: returns ``[(column, disparity, value)]``,
+    strongest first. Around each peak, columns within ``person_width_m`` (scaled by ``d/B``)
+    and depths within ``depth_sep_m`` are suppressed."""
+    ps = np.array(psi, dtype=float, copy=True)
+    nd, W = ps.shape
+    ps[: int(np.ceil(min_disparity))] = -np.inf
+    d = np.arange(nd, dtype=float)
+    with np.errstate(divide="ignore"):
+        Z = np.where(d > 0, focal_px * baseline_m / np.maximum(d, 1e-9), np.inf)
+    out = []
+    for _ in range(max_peaks):
+        k = int(np.argmax(ps))
+        di, yi = divmod(k, W)
+        v = ps[di, yi]
+        if not v >= threshold:
+            break
+        out.append((yi, di, float(v)))
+        half = max(2, int(round(person_width_m * di / baseline_m)))
+        rows = np.abs(Z - Z[di]) < depth_sep_m
+        ps[rows, max(0, yi - half): yi + half + 1] = -np.inf
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Segmentation and verification
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class BodySegment:
+    """A candidate's silhouette: ``mask`` (bool, shape of ``box`` = [x, y, w, h] in left-image
+    pixels), 3D points ``(N, 3)`` of the silhouette (metres) with their heights above the floor,
+    ``top_m`` (height of the highest point), ``width_m`` and ``position_m`` (torso centre
+    estimate)."""
+
+    box: list[int]
+    mask: NDArray
+    points: NDArray
+    heights: NDArray
+    depth_m: float
+    top_m: float
+    width_m: float
+    position_m: NDArray
+
+
+def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
+                 heights: NDArray, floor: FloorPlane, focal_px: float, baseline_m: float, *,
+                 params: HumanDetectorParams | None = None) -> BodySegment | None:
+    """Back-project candidate (column, disparity) to a silhouette (7.2.2); None if empty.
+
+    Pixels within ``0.6 m`` (scaled by ``d/B``) of the column whose depth is within
+    ``depth_band_m + 0.15 m`` of the candidate's, above ``min_height_m`` and below
+    ``above_m`` (so walls keep their full height and fail the extent test), closed and opened
+    (kernels scaled with ``d``); the connected component under the candidate column is kept
+    and the depth band re-centred on its median once.
+    """
+    p = params or HumanDetectorParams()
+    H, W = disparity.shape
+    fb = focal_px * baseline_m
+    half = int(round(0.6 * disp / baseline_m))
+    u0, u1 = max(0, column - half), min(W, column + half + 1)
+    if u1 - u0 < 3:
+        return None
+    Zc = fb / max(disp, 1e-6)
+    sub_d = disparity[:, u0:u1]
+    sub_h = heights[:, u0:u1]
+    k = max(3, int(round(0.04 * disp / baseline_m)) | 1)
+    ker = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+    kopen = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(3, k // 2 | 1),) * 2)
+    mask = None
+    for _ in range(2):
+        band = p.depth_band_m + 0.15
+        dlo, dhi = fb / (Zc + band), fb / max(Zc - band, 0.2)
+        with np.errstate(invalid="ignore"):
+            m = (sub_d >= dlo) & (sub_d <= dhi) & (sub_h >= p.min_height_m) & \
+                (sub_h <= p.above_m)
+        m8 = cv2.morphologyEx(m.astype(np.uint8), cv2.MORPH_CLOSE, ker)
+        m8 = cv2.morphologyEx(m8, cv2.MORPH_OPEN, kopen)
+        n, lab, stats, _ = cv2.connectedComponentsWithStats(m8, connectivity=8)
+        if n <= 1:
+            return None
+        c = column - u0
+        cw = max(1, int(round(0.12 * disp / baseline_m)))
+        centre = lab[:, max(0, c - cw): c + cw + 1]
+        votes = np.bincount(centre.ravel(), minlength=n)
+        votes[0] = 0
+        best = int(np.argmax(votes))
+        if votes[best] == 0:
+            return None
+        mask = (lab == best) & m  # keep only pixels that really have the disparity
+        zs = fb / sub_d[mask]
+        Zm = float(np.median(zs))
+        if abs(Zm - Zc) < 0.05:
+            break
+        Zc = Zm
+    assert mask is not None
+    ys, xs = np.nonzero(mask)
+    if len(ys) < 20:
+        return None
+    x0, x1, y0, y1 = xs.min(), xs.max(), ys.min(), ys.max()
+    box = [int(u0 + x0), int(y0), int(x1 - x0 + 1), int(y1 - y0 + 1)]
+    crop = mask[y0: y1 + 1, x0: x1 + 1]
+    pts = points[:, u0:u1][mask]
+    hts = sub_h[mask]
+    good = np.all(np.isfinite(pts), axis=1)
+    pts, hts = pts[good], hts[good]
+    if len(pts) < 20:
+        return None
+    top = float(np.percentile(hts, 99.5))
+    xlo, xhi = np.percentile(pts[:, 0], [3, 97])
+    Zm = float(np.median(pts[:, 2]))
+    Xm = float(np.median(pts[:, 0]))
+    # torso centre: about 0.11 m behind the visible surface, at 0.675 of the body height
+    ray = np.array([Xm, 0.0, Zm])
+    ray /= np.linalg.norm(ray)
+    c = np.array([Xm, 0.0, Zm]) + 0.11 * ray
+    h_t = 0.675 * top
+    n = floor.normal
+    y = (h_t - floor.offset - n[0] * c[0] - n[2] * c[2]) / n[1]
+    pos = np.array([c[0], y, c[2]])
+    return BodySegment(box, crop, pts, hts, Zm, top, float(xhi - xlo), pos)
+
+
+def upper_contour(mask: NDArray) -> NDArray:
+    """Row of the topmost silhouette pixel of each column of a bool mask (NaN where empty)."""
+    m = np.asarray(mask, bool)
+    has = m.any(axis=0)
+    top = np.argmax(m, axis=0).astype(float)
+    top[~has] = np.nan
+    return top
+
+
+def head_shoulder_score(mask: NDArray, depth_m: float, focal_px: float, *, tau_m: float = 0.08
+                        ) -> tuple[float, dict[str, float]]:
+    """Match a deformable head-shoulder template to the silhouette's upper contour (7.2.3).
+
+    ``mask`` is the silhouette (bool, its own box); ``depth_m`` its depth, which fixes the
+    template's scale (``focal_px / depth_m`` pixels per metre). The template contour, in metres
+    below the top of the head at lateral offset ``x`` from the head centre, is a half ellipse
+    for the head (half width ``a``, height 0.2 m) and a shoulder line at drop ``s`` below the
+    head top, sloping down 0.12 m/m out to half the shoulder width ``S/2``; beyond the
+    shoulders the contour must fall at least 0.12 m below the shoulder line. The head may be
+    offset from the silhouette's highest column. Over all (offset, a, S, s) the mean truncated
+    vertical distance between contour and template (a vertical chamfer distance, truncated at
+    ``tau_m``) is minimised; ``score = 1 - best / tau_m`` in [0, 1].
+
+    Returns ``(score, params)`` with the best ``head_offset_m``, ``head_half_width_m``,
+    ``shoulder_width_m``, ``shoulder_drop_m`` and ``chamfer_m``.
+    """
+    top = upper_contour(mask)
+    if np.all(np.isnan(top)):
+        return 0.0, {}
+    s_px = focal_px / depth_m  # pixels per metre
+    ncol = len(top)
+    prof = (top - np.nanmin(top)) / s_px  # metres below the highest point
+    # head column: centre of the columns within 3 cm of the top
+    near = np.nonzero(prof <= 0.03)[0]
+    hc = 0.5 * (near.min() + near.max())
+    xs = np.arange(-0.42, 0.4201, 0.015)  # lateral samples (m)
+    offsets = np.arange(-0.06, 0.0601, 0.02)
+    a_s = np.array([0.065, 0.08, 0.095])
+    S_s = np.array([0.28, 0.36, 0.44, 0.52])
+    s_s = np.array([0.22, 0.26, 0.30, 0.34])
+    O, A, S, D = np.meshgrid(offsets, a_s, S_s, s_s, indexing="ij")
+    O, A, S, D = O.ravel(), A.ravel(), S.ravel(), D.ravel()
+    # observed profile at x + offset
+    cols = hc + (xs[None, :] + O[:, None]) * s_px
+    ci = np.rint(cols).astype(int)
+    inside = (ci >= 0) & (ci < ncol)
+    obs = np.where(inside, prof[np.clip(ci, 0, ncol - 1)], np.nan)
+    obs = np.where(np.isnan(obs), 10.0, obs)  # empty column: contour far below
+    ax = np.abs(xs)[None, :]
+    Ac, Sc, Dc = A[:, None], S[:, None], D[:, None]
+    head = 0.1 * (1.0 - np.sqrt(np.clip(1.0 - (ax / Ac) ** 2, 0.0, 1.0)))
+    shoulder = Dc + 0.12 * np.clip(ax - Ac - 0.05, 0.0, None)
+    tpl = np.where(ax <= Ac, head, shoulder)
+    # neck transition: between the head and the shoulders the contour may be anywhere between
+    neck = (ax > Ac) & (ax <= Ac + 0.05)
+    err = np.abs(obs - tpl)
+    err = np.where(neck, np.clip(np.minimum(err, np.abs(obs - 0.5 * Dc)), 0, None), err)
+    err = np.where(neck & (obs >= 0.1) & (obs <= Dc + 0.03), 0.0, err)
+    out = ax > Sc / 2 + 0.03
+    # beyond the shoulders: fine if the contour is at/below the shoulder line + 0.12 m
+    err = np.where(out, np.clip(Dc + 0.12 - obs, 0.0, None), err)
+    err = np.minimum(err, tau_m)
+    within = ax <= Sc / 2 + 0.15
+    cost = (err * within).sum(axis=1) / within.sum(axis=1)
+    k = int(np.argmin(cost))
+    best = float(cost[k])
+    score = float(np.clip(1.0 - best / tau_m, 0.0, 1.0))
+    return score, {"head_offset_m": float(O[k]), "head_half_width_m": float(A[k]),
+                   "shoulder_width_m": float(S[k]), "shoulder_drop_m": float(D[k]),
+                   "chamfer_m": best}
+
+
+# ---------------------------------------------------------------------------------------------
+# The stereo detector
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class HumanCandidate:
+    """One P(y,d) peak and what stereo says about it.
+
+    ``column``/``disparity``: the peak (pixels); ``response``: Psi-hat at the peak;
+    ``segment``: the body segmentation (None when empty); ``score``: head-shoulder score;
+    ``template``: the best template parameters; ``accepted``: passed stereo verification;
+    ``reason``: why not (empty when accepted).
+    """
+
+    column: int
+    disparity: int
+    response: float
+    segment: BodySegment | None
+    score: float = 0.0
+    template: dict[str, float] = field(default_factory=dict)
+    accepted: bool = False
+    reason: str = ""
+
+    @property
+    def box(self) -> list[int] | None:
+        return None if self.segment is None else self.segment.box
+
+    @property
+    def position_m(self) -> NDArray | None:
+        return None if self.segment is None else self.segment.position_m
+
+
+@dataclass
+class StereoDetection:
+    """Everything :func:`detect_candidates` computed (for plots and fusion)."""
+
+    candidates: list[HumanCandidate]
+    floor: FloorPlane
+    P: NDArray
+    psi: NDArray
+    heights: NDArray
+
+
+def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, baseline_m: float,
+                      cy: float, *, floor: FloorPlane | None = None,
+                      camera_height_m: float | None = None,
+                      params: HumanDetectorParams | None = None) -> StereoDetection:
+    """Stereo-only human detection (7.2): P(y,d) -> Psi-hat -> peaks -> segmentation ->
+    head-shoulder verification.
+
+    Parameters
+    ----------
+    disparity : (H, W) float32 pixels (NaN invalid) of the rectified left image.
+    points : (H, W, 3) metres in the rectified left frame (from the same disparity).
+    focal_px, baseline_m, cy : rectified focal length (px), baseline (m), principal row (px).
+    floor : the floor plane; estimated (RANSAC, prior ``camera_height_m``) when None.
+    params : :class:`HumanDetectorParams`.
+
+    Returns
+    -------
+    :class:`StereoDetection` whose candidates have ``accepted`` set by the stereo checks
+    (3D extent and ``score >= params.tm``).
+    """
+    p = params or HumanDetectorParams()
+    d = np.asarray(disparity, dtype=np.float32)
+    if d.ndim != 2 or points.shape != (*d.shape, 3):
+        raise ImageInputError(f"disparity (H, W) and points (H, W, 3) expected, got {d.shape} "
+                              f"and {points.shape}")
+    if floor is None:
+        floor = estimate_floor(points, prior_height_m=camera_height_m)
+    with np.errstate(invalid="ignore"):
+        heights = floor.height(points).astype(np.float32)
+        d_min = focal_px * baseline_m / p.max_range_m
+        d_max = focal_px * baseline_m / p.min_range_m
+        near = d >= d_min
+        counted = (heights >= p.min_height_m) & (heights <= p.max_height_m) & near
+        above = (heights > p.max_height_m) & (heights <= p.above_m) & near
+    nd = int(np.ceil(min(np.nanmax(d) if np.any(np.isfinite(d)) else 1.0, d_max))) + 1
+    # things that continue above a standing person (walls, tall shelves) count against P
+    P = u_disparity(d, counted, max_disparity=nd)
+    P_above = u_disparity(d, above, max_disparity=nd)
+    e = _expected_rows(P.shape[0], d.shape[0], focal_px, baseline_m, cy, floor,
+                       max(p.min_height_m, 0.1), 1.6)
+    psi = scale_adaptive_filter(P, focal_px, baseline_m, expected_rows=e, above=P_above,
+                                above_weight=p.above_weight,
+                                person_width_m=p.person_width_m, surround_m=p.surround_m,
+                                depth_band_m=p.depth_band_m)
+    peaks = find_peaks(psi, focal_px, baseline_m, threshold=p.peak_threshold,
+                       min_disparity=d_min, person_width_m=p.person_width_m,
+                       max_peaks=p.max_candidates)
+    cands = []
+    for col, disp, val in peaks:
+        seg = segment_body(col, float(disp), d, points, heights, floor, focal_px, baseline_m,
+                           params=p)
+        c = HumanCandidate(col, disp, val, seg)
+        if seg is None:
+            c.reason = "empty segmentation"
+        else:
+            c.score, c.template = head_shoulder_score(seg.mask, seg.depth_m, focal_px,
+                                                      tau_m=p.tau_m)
+            if not p.min_top_m <= seg.top_m <= p.max_top_m:
+                c.reason = f"height {seg.top_m:.2f} m outside [{p.min_top_m}, {p.max_top_m}]"
+            elif not p.min_width_m <= seg.width_m <= p.max_width_m:
+                c.reason = f"width {seg.width_m:.2f} m outside [{p.min_width_m}, {p.max_width_m}]"
+            elif c.score < p.tm:
+                c.reason = f"head-shoulder score {c.score:.2f} < Tm = {p.tm}"
+            else:
+                c.accepted = True
+        cands.append(c)
+    # one silhouette may yield two peaks (e.g. arms): drop accepted duplicates
+    _dedupe(cands)
+    return StereoDetection(cands, floor, P, psi, heights)
+
+
+def _iou(a: list[int], b: list[int]) -> float:
+    ax0, ay0, aw, ah = a
+    bx0, by0, bw, bh = b
+    iw = max(0, min(ax0 + aw, bx0 + bw) - max(ax0, bx0))
+    ih = max(0, min(ay0 + ah, by0 + bh) - max(ay0, by0))
+    inter = iw * ih
+    union = aw * ah + bw * bh - inter
+    return inter / union if union > 0 else 0.0
+
+
+def _dedupe(cands: list[HumanCandidate]) -> None:
+    """Two peaks on one silhouette (same box, same depth): keep the better one (accepted
+    first, then higher score); the other is marked as a duplicate."""
+    segs = [c for c in cands if c.segment is not None]
+    segs.sort(key=lambda c: (not c.accepted, -c.score))
+    kept: list[HumanCandidate] = []
+    for c in segs:
+        assert c.segment is not None
+        dup = any(_iou(c.segment.box, k.segment.box) > 0.6  # type: ignore[union-attr]
+                  and abs(c.segment.depth_m - k.segment.depth_m) < 0.4  # type: ignore[union-attr]
+                  for k in kept)
+        if dup:
+            c.accepted = False
+            c.reason = "duplicate of a stronger candidate"
+        else:
+            kept.append(c)

@@ -1,0 +1,158 @@
+"""Thermal filter (thesis 7.3): keep the pixels whose temperature fits a human, then morphology.
+
+Reconstruction (only the section titles survive; figs. 7.11-7.12 show the filter's output).
+Two kinds of thermal image are handled:
+
+* **Radiometric** images (float degC, or 16-bit counts converted with
+  :func:`counts_to_celsius`): a pixel is "warm" when its temperature lies in the band of human
+  skin and clothing, by default 26-40 degC (skin ~ 33-35 degC, clothing surface 27-31 degC in a
+  20-23 degC room; radiators and hot appliances above 40 degC are excluded). The band follows the
+  skin/clothing temperatures used in thermal people detection (e.g. Fernandez-Caballero et al.,
+  "Real-time human segmentation in infrared videos", Expert Syst. Appl. 2011; Davis & Sharma,
+  OTCBVS 2004).
+* **Non-radiometric 8-bit** images (automatic gain control, as in LLVIP): temperatures are
+  unknown, so the band is relative to the image's own statistics -- a pixel is warm when it is
+  at least ``k_sigma`` robust standard deviations (1.4826 * MAD) and at least ``min_gap``
+  of the (median -> 99.5th percentile) range above the median background level.
+
+Both masks are cleaned by a morphological opening (removes isolated noisy pixels) and closing
+(fills small gaps), with elliptical kernels of ``open_px``/``close_px`` pixels.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from hearsee.errors import ImageInputError, InputFileError
+
+__all__ = [
+    "counts_to_celsius",
+    "load_thermal",
+    "relative_warm_mask",
+    "thermal_mask",
+    "warm_mask_celsius",
+]
+
+#: Default human skin/clothing band in degC.
+HUMAN_BAND_C = (26.0, 40.0)
+
+
+def counts_to_celsius(counts: NDArray, scale: float = 0.01, offset: float = -273.15) -> NDArray:
+    """Convert raw radiometric counts to degC: ``T = counts * scale + offset``.
+
+    The defaults read 16-bit images stored in centi-kelvin (FLIR "TLinear" high resolution,
+    also what :func:`hearsee.sim.scenes.write_scene` writes to ``thermal_radiometric.png``).
+    """
+    return np.asarray(counts, dtype=np.float32) * np.float32(scale) + np.float32(offset)
+
+
+def _clean(mask: NDArray, open_px: int, close_px: int) -> NDArray:
+    m = mask.astype(np.uint8)
+    if open_px > 1:
+        m = cv2.morphologyEx(m, cv2.MORPH_OPEN,
+                             cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (open_px, open_px)))
+    if close_px > 1:
+        m = cv2.morphologyEx(m, cv2.MORPH_CLOSE,
+                             cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_px, close_px)))
+    return m.astype(bool)
+
+
+def warm_mask_celsius(thermal_c: NDArray, band_c: tuple[float, float] = HUMAN_BAND_C, *,
+                      open_px: int = 2, close_px: int = 3) -> NDArray:
+    """Pixels of a radiometric image (degC, (h, w)) inside ``band_c``, after morphology.
+
+    >>> t = np.full((20, 20), 21.0, np.float32); t[5:15, 8:12] = 33.0; t[0:3, 0:3] = 55.0
+    >>> m = warm_mask_celsius(t)
+    >>> bool(m[10, 10]), bool(m[1, 1]), int(m.sum())
+    (True, False, 40)
+    """
+    t = np.asarray(thermal_c, dtype=np.float32)
+    if t.ndim != 2:
+        raise ImageInputError(f"thermal image must be single-channel (h, w), got {t.shape}")
+    lo, hi = band_c
+    if not lo < hi:
+        raise ValueError(f"band_c must be (low, high) with low < high, got {band_c}")
+    with np.errstate(invalid="ignore"):
+        m = (t >= lo) & (t <= hi)
+    return _clean(m, open_px, close_px)
+
+
+def relative_warm_mask(image: NDArray, *, k_sigma: float = 6.0, min_gap: float = 0.15,
+                       open_px: int = 2, close_px: int = 3) -> NDArray:
+    """Warm pixels of a non-radiometric (8-bit AGC) thermal image, relative to its statistics.
+
+    ``threshold = median + max(k_sigma * 1.4826 * MAD, min_gap * (p99.5 - median))``; pixels at
+    or above it are warm. Returns a bool mask after morphology. Works for any single-channel
+    integer or float image in which warmer = brighter.
+    """
+    im = np.asarray(image)
+    if im.ndim == 3:
+        im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
+    if im.ndim != 2:
+        raise ImageInputError(f"thermal image must be single-channel (h, w), got {im.shape}")
+    x = im.astype(np.float32)
+    med = float(np.median(x))
+    mad = float(np.median(np.abs(x - med))) * 1.4826
+    hi = float(np.percentile(x, 99.5))
+    thr = med + max(k_sigma * mad, min_gap * (hi - med), 1e-6)
+    return _clean(x >= thr, open_px, close_px)
+
+
+def thermal_mask(image: NDArray, *, band_c: tuple[float, float] = HUMAN_BAND_C,
+                 radiometric: bool | None = None, **kwargs) -> NDArray:
+    """The thermal filter: warm-pixel mask of a thermal image of any supported kind.
+
+    float images are degC (radiometric), uint16 images centi-kelvin counts
+    (:func:`counts_to_celsius`), uint8 images non-radiometric (relative band). ``radiometric``
+    overrides the guess for float/uint16 images. Extra keyword arguments go to
+    :func:`warm_mask_celsius` or :func:`relative_warm_mask`.
+    """
+    im = np.asarray(image)
+    if im.ndim == 3:
+        if im.dtype != np.uint8:
+            raise ImageInputError("a multi-channel thermal image must be 8-bit")
+        im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
+    if im.ndim != 2 or im.size == 0:
+        raise ImageInputError(f"thermal image must be a non-empty (h, w) array, got {im.shape}")
+    if im.dtype == np.uint8 or radiometric is False:
+        return relative_warm_mask(im, **kwargs)
+    if im.dtype == np.uint16:
+        return warm_mask_celsius(counts_to_celsius(im), band_c, **kwargs)
+    if im.dtype.kind == "f":
+        if not np.all(np.isfinite(im)):
+            raise ImageInputError("thermal image contains NaN or infinite values")
+        return warm_mask_celsius(im, band_c, **kwargs)
+    raise ImageInputError(f"unsupported thermal pixel type {im.dtype} (use uint8, uint16 or float)")
+
+
+def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None) -> NDArray:
+    """Read a thermal image: ``.npy`` (float degC, (h, w)), or any image file through
+    :func:`hearsee.vision.io.read_thermal` (8-bit non-radiometric, 16-bit centi-kelvin counts,
+    float TIFF degC). ``expected_size`` is (width, height)."""
+    p = Path(path)
+    if p.suffix.lower() == ".npy":
+        if not p.is_file():
+            raise InputFileError(f"{p}: thermal file not found")
+        try:
+            arr = np.load(p, allow_pickle=False)
+        except (ValueError, OSError) as exc:
+            raise ImageInputError(f"{p}: not a readable .npy array ({exc})") from None
+        if arr.ndim != 2 or arr.dtype.kind not in "fiu" or arr.size == 0:
+            raise ImageInputError(f"{p}: expected a 2-D numeric array of degC, got {arr.shape} "
+                                  f"{arr.dtype}")
+        if expected_size is not None and (arr.shape[1], arr.shape[0]) != tuple(expected_size):
+            raise ImageInputError(
+                f"{p}: thermal image is {arr.shape[1]}x{arr.shape[0]} pixels but the calibration "
+                f"expects {expected_size[0]}x{expected_size[1]}"
+            )
+        arr = arr.astype(np.float32)
+        if not np.all(np.isfinite(arr)):
+            raise ImageInputError(f"{p}: thermal image contains NaN or infinite values")
+        return arr
+    from hearsee.vision.io import read_thermal
+
+    return read_thermal(p, expected_size)
