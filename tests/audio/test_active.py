@@ -1,0 +1,205 @@
+"""Multiple sampling with a moving head (hearsee.audio.active, thesis ch. 4)."""
+
+import numpy as np
+import pytest
+
+from hearsee.audio.active import (
+    PoseItdMLP,
+    align_head,
+    capture_tdoas,
+    facing_pair,
+    localize_continuous,
+    localize_multipose,
+    localize_one_mic,
+    make_pose_training_set,
+    simulate_pose_captures,
+    simulate_turning_capture,
+    solve_range_differences,
+    train_pose_mlp,
+)
+from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.signals import white_noise
+from hearsee.errors import AudioInputError, EstimationError, GeometryError
+from hearsee.geometry import HeadPose, angle_between, direction_deg, mic_positions_at
+
+ARR = load_array("three-mic")
+OFF = (0.1, 0.0, 0.05)
+POSES3 = [(0, 0), (45, 25), (-45, -20)]
+
+
+def true_tdoas(array, src, poses, offset=OFF, pivot=(0, 0, 0)):
+    return [MicArray(mic_positions_at(array, p, pivot, offset)).tdoa(src) for p in poses]
+
+
+def test_three_poses_give_a_unique_3d_point():
+    src = np.array([-0.9, 1.4, 0.6])
+    est = localize_multipose(true_tdoas(ARR, src, POSES3), POSES3, ARR, offset_m=OFF)
+    assert est.unique and len(est.candidates) == 1
+    np.testing.assert_allclose(est.position_m, src, atol=2e-3)
+    assert est.distance_m == pytest.approx(np.linalg.norm(src), rel=1e-3)
+    az, el = direction_deg(src)
+    assert est.azimuth_deg == pytest.approx(float(az), abs=0.1)
+    assert est.elevation_deg == pytest.approx(float(el), abs=0.1)
+    w = np.linalg.eigvalsh(est.covariance)
+    assert est.covariance.shape == (3, 3) and np.all(w > 0)
+    d = est.to_dict()
+    assert d["unique"] is True and len(d["position_m"]) == 3
+
+
+def test_single_pose_reports_mirror_and_no_distance():
+    src = np.array([1.0, 0.5, 0.7])
+    est = localize_multipose(true_tdoas(ARR, src, [(0, 0)]), [(0, 0)], ARR, offset_m=OFF)
+    assert not est.unique
+    assert est.distance_m is None and est.position_m is None and est.covariance is None
+    els = sorted(c["elevation_deg"] for c in est.candidates)
+    # without a distance the answer is a far-field direction: seen from the array centre
+    centre = mic_positions_at(ARR, (0, 0), offset_m=OFF).mean(axis=0)
+    az_true, el_true = (float(v) for v in direction_deg(src - centre))
+    assert len(els) == 2
+    np.testing.assert_allclose(els, [-el_true, el_true], atol=1.0)
+    for c in est.candidates:
+        assert c["azimuth_deg"] == pytest.approx(az_true, abs=1.0)
+        assert c["distance_m"] is None
+
+
+def test_pan_only_poses_keep_the_mirror():
+    """A horizontal planar array turned only in pan can never tell up from down."""
+    src = np.array([1.5, -0.5, 0.8])
+    poses = [(0, 0), (40, 0), (-40, 0)]
+    est = localize_multipose(true_tdoas(ARR, src, poses, offset=(0.1, 0, 0)), poses, ARR,
+                             offset_m=(0.1, 0, 0))
+    assert not est.unique
+    els = [c["elevation_deg"] for c in est.candidates]
+    assert min(els) < -20 and max(els) > 20
+
+
+def test_noisy_estimate_within_covariance():
+    rng = np.random.default_rng(4)
+    src = np.array([1.2, 0.4, 0.5])
+    poses = POSES3 + [(30, -25), (-30, 25)]
+    sig = 5e-6
+    errs = []
+    for _ in range(6):
+        tau = [t + rng.normal(0, sig, 3) for t in true_tdoas(ARR, src, poses, offset=(0.2, 0, 0.1))]
+        est = localize_multipose(tau, poses, ARR, offset_m=(0.2, 0, 0.1), tdoa_std_s=sig)
+        assert est.unique
+        e = est.position_m - src
+        errs.append(float(e @ np.linalg.solve(est.covariance, e)))  # Mahalanobis^2, chi2(3)
+        assert float(np.degrees(angle_between(est.direction, src))) < 3.0
+    assert np.median(errs) < 12.0
+
+
+def test_two_microphones_need_more_poses():
+    two = load_array("two-mic")
+    src = np.array([0.8, 1.0, 0.4])
+    poses = [(0, 0), (40, 30), (-40, -25), (70, -20), (-70, 30), (10, 45)]
+    tau = true_tdoas(two, src, poses, offset=(0.15, 0, 0.1))
+    est = localize_multipose(tau, poses, two, offset_m=(0.15, 0, 0.1), tdoa_std_s=1e-6)
+    assert est.unique
+    np.testing.assert_allclose(est.position_m, src, atol=0.02)
+    one = localize_multipose(true_tdoas(two, src, poses[:1]), poses[:1], two)
+    assert not one.unique and one.distance_m is None
+
+
+def test_one_microphone_repeating_source():
+    """One microphone on the head (mic 0 of three-mic) visited at 7 poses; the source repeats
+    with a known period so the per-period arrival times differ by range differences."""
+    src = np.array([1.3, -0.6, 0.4])
+    poses = [(0, 0), (60, 0), (-60, 0), (120, 20), (-120, -20), (0, 45), (30, -40)]
+    P = np.array([mic_positions_at(ARR, p, offset_m=(0.1, 0, 0))[0] for p in poses])
+    t0 = 0.0123  # unknown emission offset: cancels
+    t = t0 + np.linalg.norm(P - src, axis=1) / 343.0
+    est = localize_one_mic(t, P)
+    assert est.unique
+    np.testing.assert_allclose(est.position_m, src, atol=0.02)
+    with pytest.raises(GeometryError):
+        localize_one_mic(t[:2], P[:2])
+
+
+def test_bad_inputs():
+    with pytest.raises(GeometryError):
+        localize_multipose([np.zeros(3)], [(0, 0), (10, 0)], ARR)
+    with pytest.raises(EstimationError):
+        localize_multipose([np.full(3, np.nan)], [(0, 0)], ARR)
+    with pytest.raises(GeometryError):
+        localize_multipose([np.zeros(2)], [(0, 0)], ARR)
+    with pytest.raises(GeometryError):
+        solve_range_differences([np.zeros((3, 3))], [[(0, 5)]], [np.zeros(1)])
+    with pytest.raises(GeometryError):
+        localize_multipose([np.zeros(3)], [(0, 0)], ARR, tdoa_std_s=0.0)
+    with pytest.raises(EstimationError):
+        PoseItdMLP().predict(np.zeros((1, 9)))
+    with pytest.raises(AudioInputError):
+        align_head(lambda pose: np.zeros(2), ARR)
+
+
+def test_mlp_maps_tdoas_over_poses_to_positions():
+    mlp = train_pose_mlp(ARR, POSES3, offset_m=(0.2, 0, 0.1), n=2000, seed=1,
+                         hidden_layer_sizes=(32, 32))
+    assert train_pose_mlp(ARR, POSES3, offset_m=(0.2, 0, 0.1), n=2000, seed=1,
+                          hidden_layer_sizes=(32, 32)) is mlp  # in-memory cache
+    X, Y = make_pose_training_set(ARR, POSES3, 200, offset_m=(0.2, 0, 0.1), rng=99)
+    P = mlp.predict(X)
+    ang = np.degrees(angle_between(P, Y))
+    assert np.median(ang) < 10.0
+    assert np.median(np.abs(np.linalg.norm(P, axis=1) / np.linalg.norm(Y, axis=1) - 1)) < 0.3
+
+
+def test_facing_pair_and_alignment_free_field_geometry():
+    assert facing_pair(ARR) == (1, 2)
+    rng = np.random.default_rng(7)
+    for src in ([1.0, 1.5, 1.2], [-2.0, -0.5, -0.6], [0.5, -2.5, 0.1]):
+        src = np.array(src)
+
+        def measure(pose, src=src):
+            m = MicArray(mic_positions_at(ARR, pose, offset_m=OFF))
+            return m.tdoa(src) + rng.normal(0, 2e-6, 3)
+
+        res = align_head(measure, ARR, offset_m=OFF)
+        assert res.moves <= 8
+        assert res.error_deg(src, offset_m=OFF) < 2.0
+        assert abs(res.facing_tdoa_s[-1]) < 10e-6  # the symmetric pair's ITD vanishes
+
+
+@pytest.mark.slow
+def test_room_captures_and_alignment_with_audio():
+    fs = 16000
+    rng = np.random.default_rng(2)
+    sig = white_noise(0.5, fs, rng)
+    src = np.array([1.0, -1.2, 0.6])
+    room = dict(room_dim=(6.0, 6.0, 3.5), rt60=0.3, robot_at=(3.0, 3.0, 1.4))
+    caps = simulate_pose_captures(sig, fs, ARR, src, POSES3, offset_m=OFF, snr_db=20, rng=rng,
+                                  **room)
+    tau = [capture_tdoas(x, fs, ARR) for x in caps]
+    for t, g in zip(tau, true_tdoas(ARR, src, POSES3), strict=True):
+        np.testing.assert_allclose(t, g, atol=8e-6)
+    est = localize_multipose(tau, POSES3, ARR, offset_m=OFF)
+    assert float(np.degrees(angle_between(est.direction, src))) < 3.0
+
+    def measure(pose):
+        x = simulate_pose_captures(sig, fs, ARR, src, [pose], offset_m=OFF, snr_db=20, rng=rng,
+                                   **room)[0]
+        return capture_tdoas(x, fs, ARR)
+
+    res = align_head(measure, ARR, offset_m=OFF)
+    assert res.moves <= 8 and res.error_deg(src, offset_m=OFF) < 2.0
+
+
+def test_continuous_sampling_while_turning():
+    fs = 16000
+    rng = np.random.default_rng(5)
+    sig = white_noise(1.2, fs, rng)
+    src = np.array([1.2, 0.9, 0.5])
+
+    def pose_at(t):  # sweep pan -40 -> 40 deg and tilt -20 -> 20 deg over the capture
+        f = min(max(t / 1.2, 0.0), 1.0)
+        return HeadPose(-40 + 80 * f, -20 + 40 * f)
+
+    x = simulate_turning_capture(sig, fs, ARR, src, pose_at, offset_m=(0.2, 0, 0.1), snr_db=25,
+                                 rng=rng)
+    assert x.shape == (3, len(sig))
+    est, times, running = localize_continuous(x, fs, ARR, pose_at, offset_m=(0.2, 0, 0.1))
+    assert float(np.degrees(angle_between(est.direction, src))) < 3.0
+    assert est.distance_m is not None
+    assert est.distance_m == pytest.approx(np.linalg.norm(src), rel=0.15)
+    assert len(times) == len(running) and np.isfinite(running[-1]).all()
