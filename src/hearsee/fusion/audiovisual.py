@@ -1,0 +1,330 @@
+"""Microphones + one camera: the 3D position of a nearby sound source (thesis 5.3, 5.4).
+
+Reconstruction (the thesis's ch. 5 text is lost; see ``design/reconstruction.md``).
+
+**With camera calibration (5.4, figs. 5.12-5.17).** The image point ``(u, v)`` of the source fixes
+a ray from the camera centre ``o`` along ``d`` (lens distortion removed with the calibrated
+intrinsics of :class:`hearsee.vision.camera.Camera`). Every microphone pair (i, j) adds an ITD
+equation; along the ray ``p(s) = o + s d`` its residual is::
+
+    F_k(s) = (|p(s) - m_i| - |p(s) - m_j|) / c - tdoa_k
+
+and the source sits where ``J(s) = sum_k F_k(s)^2`` (the thesis's F1^2 + F2^2 for three
+microphones) is smallest. :func:`locate_on_ray` evaluates J on a log-spaced grid of ranges, then
+refines the best grid point with a bounded Brent search (scipy ``minimize_scalar``) -- the ITD
+equations are non-convex along the ray far from the source, so a 1-D global search followed by
+local refinement is both robust and cheap. The fix comes with a covariance: along the ray from
+the curvature of J (Gauss-Newton, ``var(s) = sigma_tdoa^2 / sum_k F_k'(s)^2``), across it from the
+pixel noise (``s * sigma_px / f``). That covariance is the measurement noise R of the
+constant-acceleration filter (:class:`hearsee.audio.tracking.MotionKalman`, thesis 5.4.3).
+
+**Without camera calibration (5.3, figs. 5.7-5.11).** The camera's intrinsics and its pose
+relative to the microphones are unknown; the image point still carries relative direction
+information. :class:`AudioVisualRegressor` learns the mapping (ITDs, image point) -> 3D position
+with a multi-layer perceptron (scikit-learn ``MLPRegressor`` behind a ``StandardScaler``), trained
+on simulated examples (:func:`simulate_av_samples`) -- the thesis's neural network, 5.3.3.
+
+Frames: positions are in the ARRAY frame (REP 103: x forward, y left, z up, metres). The camera's
+mounting is ``p_optical = R @ p_array + t`` (:func:`hearsee.vision.camera.camera_pose` builds it
+from a position and pan/tilt on the head).
+
+References: Knapp & Carter (1976) for the ITD model; Hartley & Zisserman, *Multiple View
+Geometry* (2003), ch. 6 for the back-projected ray; Brent (1973) for the bounded 1-D search.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import minimize_scalar
+from sklearn.base import BaseEstimator, RegressorMixin
+
+from hearsee.audio.arrays import MicArray
+from hearsee.errors import EstimationError, GeometryError
+from hearsee.vision.camera import Camera, camera_pose
+
+__all__ = [
+    "AudioVisualRegressor",
+    "AudioVisualRig",
+    "RayFix",
+    "locate_on_ray",
+    "ray_residuals",
+    "simulate_av_samples",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class AudioVisualRig:
+    """A microphone array and a camera rigidly mounted together.
+
+    Parameters
+    ----------
+    array : MicArray
+        Microphones (array frame).
+    camera : Camera
+        Calibrated pinhole camera (intrinsics, distortion).
+    R, t : arrays (3, 3), (3,)
+        Mounting: ``p_optical = R @ p_array + t`` (metres).
+    """
+
+    array: MicArray
+    camera: Camera
+    R: NDArray
+    t: NDArray
+
+    def __post_init__(self) -> None:
+        R = np.asarray(self.R, dtype=float)
+        t = np.asarray(self.t, dtype=float).reshape(-1)
+        if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-6):
+            raise GeometryError("rig mounting R must be a 3x3 rotation matrix")
+        if t.shape != (3,) or not np.all(np.isfinite(t)):
+            raise GeometryError("rig mounting t must be 3 finite numbers (metres)")
+        object.__setattr__(self, "R", R)
+        object.__setattr__(self, "t", t)
+
+    @classmethod
+    def mounted(cls, array: MicArray, camera: Camera, position_m: ArrayLike = (0.0, 0.0, 0.0),
+                pan_deg: float = 0.0, tilt_deg: float = 0.0) -> AudioVisualRig:
+        """Camera centre at ``position_m`` in the array frame, looking along +x turned by
+        ``pan_deg`` (toward +y) and ``tilt_deg`` (up)."""
+        R, t = camera_pose(position_m, pan_deg, tilt_deg)
+        return cls(array, camera, R, t)
+
+    @property
+    def camera_centre(self) -> NDArray:
+        """Optical centre in the array frame, metres."""
+        return -self.R.T @ self.t
+
+    def to_optical(self, points: ArrayLike) -> NDArray:
+        """Array-frame points ``(N, 3)`` -> camera optical frame."""
+        return np.atleast_2d(np.asarray(points, dtype=float)) @ self.R.T + self.t
+
+    def project(self, points: ArrayLike) -> NDArray:
+        """Pixels ``(N, 2)`` of array-frame points ``(N, 3)`` (NaN behind the camera)."""
+        return self.camera.project(self.to_optical(points))
+
+    def rays(self, uv: ArrayLike) -> tuple[NDArray, NDArray]:
+        """Back-projected rays of pixels ``(N, 2)``: (origin (3,), unit directions (N, 3)),
+        array frame."""
+        d_opt = self.camera.pixel_rays(np.atleast_2d(np.asarray(uv, dtype=float)))
+        return self.camera_centre, d_opt @ self.R  # R^T d for each row
+
+
+@dataclass
+class RayFix:
+    """A 3D fix from one image point and the ITDs.
+
+    Attributes
+    ----------
+    position_m : array (3,)
+        Estimated source position, array frame, metres.
+    range_m : float
+        Distance from the camera centre along the ray, metres.
+    residual_s : float
+        RMS of the ITD residuals ``F_k`` at the fix, seconds.
+    covariance : array (3, 3)
+        Position covariance, m^2 (along-ray from the ITD noise, across from the pixel noise).
+    direction : array (3,)
+        Unit ray direction (array frame).
+    """
+
+    position_m: NDArray
+    range_m: float
+    residual_s: float
+    covariance: NDArray
+    direction: NDArray
+
+
+def ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: ArrayLike,
+                  tdoa_s: ArrayLike, pairs: Sequence[tuple[int, int]] | None = None) -> NDArray:
+    """ITD residuals ``F_k(s)`` (seconds) of the points ``origin + s * direction``.
+
+    ``s`` (n,) ranges in metres; returns ``(n, n_pairs)``. ``sum(F**2, axis=1)`` is the cost
+    J(s) plotted in the thesis's figs. 5.14-5.16.
+    """
+    o = np.asarray(origin, dtype=float)
+    d = np.asarray(direction, dtype=float)
+    ss_ = np.atleast_1d(np.asarray(s, dtype=float))
+    pts = o[None, :] + ss_[:, None] * d[None, :]
+    return array.tdoa(pts, list(pairs) if pairs is not None else None) - np.asarray(tdoa_s, float)
+
+
+def locate_on_ray(
+    rig: AudioVisualRig,
+    uv: ArrayLike,
+    tdoa_s: ArrayLike,
+    pairs: Sequence[tuple[int, int]] | None = None,
+    range_m: tuple[float, float] = (0.1, 10.0),
+    n_grid: int = 256,
+    sigma_tdoa_s: float = 2e-5,
+    sigma_px: float = 1.0,
+) -> RayFix:
+    """Fuse an image point with the ITDs: the point on the camera ray that best explains them.
+
+    Parameters
+    ----------
+    rig : AudioVisualRig
+        Calibrated camera + microphones.
+    uv : array (2,)
+        Image point of the source, pixels.
+    tdoa_s : array (n_pairs,)
+        Measured ``t_i - t_j`` in seconds for ``pairs`` (default: all pairs of the array).
+    range_m : (near, far)
+        Search interval along the ray, metres from the camera centre.
+    n_grid : int
+        Log-spaced grid points of the global search.
+    sigma_tdoa_s, sigma_px : float
+        Measurement noise used for the returned covariance (seconds, pixels).
+
+    Returns
+    -------
+    RayFix
+    """
+    z = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    prs = list(rig.array.pairs if pairs is None else pairs)
+    if z.size != len(prs):
+        raise EstimationError(f"got {z.size} TDOAs for {len(prs)} microphone pairs")
+    if not np.all(np.isfinite(z)):
+        raise EstimationError("TDOAs must be finite to fuse with the camera ray")
+    p = np.asarray(uv, dtype=float).reshape(-1)
+    if p.shape != (2,) or not np.all(np.isfinite(p)):
+        raise EstimationError(f"image point must be two finite pixel coordinates, got {uv!r}")
+    near, far = float(range_m[0]), float(range_m[1])
+    if not 0 < near < far:
+        raise EstimationError(f"range_m must satisfy 0 < near < far, got {range_m}")
+    o, d = rig.rays(p[None, :])
+    d = d[0]
+    grid = np.geomspace(near, far, int(n_grid))
+    J = np.sum(ray_residuals(rig.array, o, d, grid, z, prs) ** 2, axis=1)
+    k = int(np.argmin(J))
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+
+    def cost(s: float) -> float:
+        return float(np.sum(ray_residuals(rig.array, o, d, [s], z, prs) ** 2))
+
+    if hi > lo:
+        res = minimize_scalar(cost, bounds=(lo, hi), method="bounded",
+                              options={"xatol": 1e-6})
+        s_hat = float(res.x) if res.fun <= J[k] else float(grid[k])
+    else:
+        s_hat = float(grid[k])
+    F = ray_residuals(rig.array, o, d, [s_hat], z, prs)[0]
+    h = 1e-4 * max(s_hat, 1e-2)
+    dF = (ray_residuals(rig.array, o, d, [s_hat + h], z, prs)[0]
+          - ray_residuals(rig.array, o, d, [s_hat - h], z, prs)[0]) / (2 * h)
+    var_s = sigma_tdoa_s**2 / max(float(dF @ dF), 1e-30)
+    var_lat = (s_hat * sigma_px / rig.camera.fx) ** 2
+    cov = var_s * np.outer(d, d) + var_lat * (np.eye(3) - np.outer(d, d))
+    return RayFix(o + s_hat * d, s_hat, float(np.sqrt(np.mean(F**2))), cov, d)
+
+
+# ---------------------------------------------------------------------------- learned (5.3)
+def simulate_av_samples(rig: AudioVisualRig, n: int, range_m: tuple[float, float] = (0.5, 3.0),
+                        sigma_tdoa_s: float = 0.0, sigma_px: float = 0.0,
+                        margin_px: float = 10.0,
+                        rng: np.random.Generator | int | None = None
+                        ) -> tuple[NDArray, NDArray]:
+    """Training/test examples for the uncalibrated mapping (thesis 5.3).
+
+    Draws ``n`` source positions uniformly in the camera's view (pixel uniform in the image,
+    range uniform in ``range_m`` metres from the camera centre), computes their exact TDOAs
+    (all pairs) and pixels, and adds Gaussian noise (``sigma_tdoa_s`` seconds,
+    ``sigma_px`` pixels).
+
+    Returns
+    -------
+    X : array (n, n_pairs + 2)
+        Features ``[tdoa_s ..., u, v]``.
+    Y : array (n, 3)
+        True positions, array frame, metres.
+    """
+    rng = np.random.default_rng(rng)
+    cam = rig.camera
+    uv = np.column_stack([rng.uniform(margin_px, cam.width - 1 - margin_px, n),
+                          rng.uniform(margin_px, cam.height - 1 - margin_px, n)])
+    o, d = rig.rays(uv)
+    s = rng.uniform(range_m[0], range_m[1], n)
+    Y = o[None, :] + s[:, None] * d
+    tdoa = rig.array.tdoa(Y) + sigma_tdoa_s * rng.standard_normal((n, len(rig.array.pairs)))
+    uv_n = rig.project(Y) + sigma_px * rng.standard_normal((n, 2))
+    return np.column_stack([tdoa, uv_n]), Y
+
+
+class AudioVisualRegressor(RegressorMixin, BaseEstimator):
+    """(ITDs, image point) -> 3D position by a multi-layer perceptron (thesis 5.3.3).
+
+    A scikit-learn regressor (``fit``/``predict``/``score``/``get_params``): features are
+    ``[tdoa_s for each pair..., u_px, v_px]`` as made by :func:`simulate_av_samples`; targets are
+    positions in metres. Internally ``StandardScaler -> MLPRegressor``; TDOAs are rescaled to
+    milliseconds first so that the scaler sees well-conditioned numbers.
+
+    Parameters
+    ----------
+    hidden_layer_sizes : tuple of int
+        Hidden layers of the MLP.
+    alpha : float
+        L2 penalty.
+    solver : str
+        MLP solver; ``"lbfgs"`` (default) converges fastest on these small smooth problems.
+    max_iter : int
+        Maximum iterations (lbfgs) or epochs (adam).
+    random_state : int or None
+        Seed of the weight initialisation.
+    """
+
+    def __init__(self, hidden_layer_sizes: tuple[int, ...] = (32, 32), alpha: float = 1e-4,
+                 solver: str = "lbfgs", max_iter: int = 500,
+                 random_state: int | None = 0) -> None:
+        self.hidden_layer_sizes = hidden_layer_sizes
+        self.alpha = alpha
+        self.solver = solver
+        self.max_iter = max_iter
+        self.random_state = random_state
+
+    @staticmethod
+    def _features(X: ArrayLike) -> NDArray:
+        A = np.asarray(X, dtype=float)
+        if A.ndim != 2 or A.shape[1] < 3:
+            raise EstimationError(
+                f"features must be (n_samples, n_pairs + 2) [tdoas..., u, v], got {A.shape}")
+        if not np.all(np.isfinite(A)):
+            raise EstimationError("features contain NaN or inf")
+        A = A.copy()
+        A[:, :-2] *= 1e3  # seconds -> milliseconds
+        return A
+
+    def fit(self, X: ArrayLike, y: ArrayLike) -> AudioVisualRegressor:
+        from sklearn.exceptions import ConvergenceWarning
+        from sklearn.neural_network import MLPRegressor
+        from sklearn.pipeline import make_pipeline
+        from sklearn.preprocessing import StandardScaler
+
+        A = self._features(X)
+        Y = np.asarray(y, dtype=float)
+        if Y.shape != (A.shape[0], 3):
+            raise EstimationError(f"targets must be (n_samples, 3) positions, got {Y.shape}")
+        self.model_ = make_pipeline(
+            StandardScaler(),
+            MLPRegressor(hidden_layer_sizes=tuple(self.hidden_layer_sizes), alpha=self.alpha,
+                         solver=self.solver, max_iter=int(self.max_iter),
+                         random_state=self.random_state, tol=1e-7),
+        )
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            self.model_.fit(A, Y)
+        self.n_features_in_ = A.shape[1]
+        return self
+
+    def predict(self, X: ArrayLike) -> NDArray:
+        if not hasattr(self, "model_"):
+            raise EstimationError("AudioVisualRegressor is not fitted; call fit() first")
+        A = self._features(X)
+        if A.shape[1] != self.n_features_in_:
+            raise EstimationError(
+                f"expected {self.n_features_in_} features, got {A.shape[1]}")
+        return self.model_.predict(A)
+
