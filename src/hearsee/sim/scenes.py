@@ -125,7 +125,7 @@ class Entity:
 class SceneSpec:
     """A room (metres; the camera is at x = 0, z = 0) and the entities in it.
 
-    The room spans ``x in [-width_left_m, width_right_m]``, ``z in [-0.5, depth_m]`` and the
+    The room spans ``x in [-width_left_m, width_right_m]``, ``z in [-back_m, depth_m]`` and the
     ceiling is ``ceiling_m`` above the floor. ``room_c`` is the air/wall temperature (degC).
     """
 
@@ -133,6 +133,7 @@ class SceneSpec:
     width_left_m: float = 4.0
     width_right_m: float = 4.0
     depth_m: float = 10.0
+    back_m: float = 0.5
     ceiling_m: float = 2.8
     room_c: float = 21.5
     camera_height_m: float = 1.4
@@ -521,7 +522,7 @@ def _cast(cam: Camera, R: NDArray, C: NDArray, b: _Builder, spec: SceneSpec,
     H, W = cam.height, cam.width
     D = (_camera_rays(cam) @ R.astype(np.float32)).reshape(H, W, 3)  # left frame (R^T d)
     # room interior: exit of the axis-aligned room box
-    lo = np.array([-spec.width_left_m, spec.camera_height_m - spec.ceiling_m, -0.5])
+    lo = np.array([-spec.width_left_m, spec.camera_height_m - spec.ceiling_m, -spec.back_m])
     hi = np.array([spec.width_right_m, spec.camera_height_m, spec.depth_m])
     tbest = np.full((H, W), np.inf, np.float32)
     axis = np.zeros((H, W), np.int8)
@@ -695,15 +696,27 @@ def _thermal_image(hits: _Hits, D: NDArray, C: NDArray, b: _Builder, cam: Camera
 # ---------------------------------------------------------------------------------------------
 # Rendering
 # ---------------------------------------------------------------------------------------------
-def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: float = 2.0
-                 ) -> Scene:
+def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: float = 2.0,
+                 view: tuple[NDArray, NDArray] | None = None) -> Scene:
     """Render ``spec`` with ``rig`` (default :func:`default_rig`): stereo pair, ground-truth
     disparity, thermal images and per-entity ground truth. Deterministic from ``spec.seed``.
 
     The rig must be rectified (identical distortion-free cameras, right camera at +B on x) and
     carry a thermal camera.
+
+    ``view`` = ``(R, C)`` places the left camera in the scene's frame (the frame the entities
+    and the room are written in): ``R`` rotates scene-frame vectors into the left optical frame
+    and ``C`` is the camera centre in the scene frame (metres). The default is the identity at
+    the origin. The rig moves rigidly with the left camera; ground-truth disparity and the
+    returned ``position_m`` are in the left camera's optical frame. Used to render what a
+    panning robot head sees (:mod:`hearsee.robot.pipeline`).
     """
     rig = rig or default_rig(camera_height_m=spec.camera_height_m)
+    if view is None:
+        Rv, Cv = np.eye(3), np.zeros(3)
+    else:
+        Rv = np.asarray(view[0], dtype=float).reshape(3, 3)
+        Cv = np.asarray(view[1], dtype=float).reshape(3)
     if not rig.is_rectified or rig.thermal is None:
         raise GeometryError("render_scene needs a rectified rig with a thermal camera "
                             "(see hearsee.sim.scenes.default_rig)")
@@ -717,8 +730,8 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
 
     cam = rig.left
     views = {}
-    for name, (Rc, Cc) in {"left": (np.eye(3), np.zeros(3)),
-                           "right": (rig.R, rig.right_center_m)}.items():
+    for name, (Rc, Cc) in {"left": (Rv, Cv),
+                           "right": (rig.R @ Rv, Cv + Rv.T @ rig.right_center_m)}.items():
         hits, D = _cast(cam, Rc, Cc, b, spec, (floor_m, wall_m, ceil_m), name == "left")
         img = _shade(hits, D, Cc, b, rng, tex_offsets)
         img = cv2.GaussianBlur(img.astype(np.float32), (0, 0), 0.5)
@@ -726,12 +739,13 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
         views[name] = (np.clip(img + 0.5, 0, 255).astype(np.uint8), hits, D)
     left, hits_l, D_l = views["left"]
     right = views["right"][0]
-    depth = hits_l.t * D_l[..., 2]
+    depth = hits_l.t * (D_l @ Rv.T.astype(np.float32))[..., 2]  # along the optical axis
     disparity = (cam.fx * rig.baseline_m / depth).astype(np.float32)
 
-    hits_t, D_t = _cast(rig.thermal, rig.R_thermal, rig.thermal_center_m, b, spec,
+    C_t = Cv + Rv.T @ rig.thermal_center_m
+    hits_t, D_t = _cast(rig.thermal, rig.R_thermal @ Rv, C_t, b, spec,
                         (floor_m, wall_m, ceil_m), False)
-    thermal_c = _thermal_image(hits_t, D_t, rig.thermal_center_m, b, rig.thermal, rng,
+    thermal_c = _thermal_image(hits_t, D_t, C_t, b, rig.thermal, rng,
                                tex_offsets)
 
     labels = hits_l.owner.astype(np.int16)
@@ -752,7 +766,8 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
             rys, rxs = np.nonzero(rr)
             trunc = bool(rxs.min() == 0 or rys.min() == 0 or rxs.max() == W - 1
                          or rys.max() == H - 1)
-        objects.append(SceneObject(i, e.kind, refs[i], box, n / total if total else 0.0,
+        objects.append(SceneObject(i, e.kind, Rv @ (refs[i] - Cv), box,
+                                   n / total if total else 0.0,
                                    trunc, float(e.yaw_deg), float(e.height_m), n))
     return Scene(left, right, disparity, labels, thermal_c, thermal_to_8bit(thermal_c), rig,
                  objects, spec)
