@@ -1,0 +1,490 @@
+"""Boundary elements for sound scattering by a rigid body, and the rigid-sphere series.
+
+Reconstruction (thesis ch. 3, "Helmholtz-Kirchhoff integral over the mask surface"): the sound
+pressure on and around a closed rigid (sound-hard) body is the solution of the Kirchhoff-Helmholtz
+boundary integral equation. For a point ``x`` with incident field ``p_inc`` and the body's
+outward normal ``n`` (pointing into the air)::
+
+    c(x) p(x) = p_inc(x) + integral_S p(y) dG(x, y)/dn_y dS(y),   G = exp(i k r) / (4 pi r)
+
+with ``c = 1`` in the air, ``1/2`` on a smooth part of the surface and ``0`` inside the body
+(time convention ``exp(-i w t)``; rigid: ``dp/dn = 0`` on S). We solve it by collocation with
+constant pressure on flat triangles (centroid collocation, centroid quadrature far away,
+subdivided quadrature for neighbouring panels; the self term of a flat panel is zero), and remove
+the fictitious interior (Dirichlet) frequencies with CHIEF points: interior points where the same
+integral must give zero, appended as extra rows of an overdetermined system solved by least
+squares (Schenck 1968). The system matrix does not depend on the source, so each frequency is
+factorised once (least squares through the normal equations) and the pressure at a few
+evaluation points (the microphones) is returned as an *adjoint* row vector ``v``:
+``p(x_e) = (p_inc(x_e) + v_e . b) / c_e`` for ANY incident field ``b`` sampled at the
+collocation + CHIEF points. Sources at any direction or distance then cost one dot product.
+
+Accuracy (tested in tests/audio/test_bem.py): on a coarse 320-panel sphere of radius 8.75 cm the
+BEM matches the exact series to |IID error| < 0.5 dB and |ITD error| < 10 us up to 2 kHz, far
+field and d0 = 0.5 m, including the first fictitious frequency (ka = pi).
+
+References: Schenck, H. A. (1968) "Improved integral formulation for acoustic radiation problems",
+JASA 44; Burton, A. J. & Miller, G. F. (1971) Proc. R. Soc. A 323 (the alternative cure for
+fictitious frequencies); Kirkup, S. (2019) "The Boundary Element Method in Acoustics" (2nd ed.);
+Duda, R. O. & Martens, W. L. (1998) "Range dependence of the response of a spherical head model",
+JASA 104(5), 3048-3058 (the series :func:`sphere_transfer`, with their recursions).
+
+Units: metres, Hz, m/s. Transfer functions are normalised by the free-field pressure the same
+source would produce at the origin of the frame (so far from the body ``H`` -> 1).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.linalg as sla
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
+
+from hearsee.errors import GeometryError
+
+__all__ = [
+    "TriMesh",
+    "check_closed_mesh",
+    "geodesic_sphere",
+    "incident_field",
+    "solve_adjoint",
+    "sphere_mesh",
+    "sphere_transfer",
+]
+
+_FOUR_PI = 4.0 * np.pi
+
+
+# ---------------------------------------------------------------------------------------- meshes
+def geodesic_sphere(n: int) -> tuple[NDArray, NDArray]:
+    """Unit geodesic sphere: an icosahedron whose faces are split ``n x n`` (``20 n^2`` triangles).
+
+    Returns ``(vertices (V, 3), faces (F, 3) int)``, faces counter-clockwise seen from outside.
+    """
+    n = int(n)
+    if n < 1:
+        raise GeometryError(f"geodesic sphere subdivision must be >= 1, got {n}")
+    t = (1.0 + 5**0.5) / 2.0
+    ico_v = np.array([(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
+                      (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)],
+                     dtype=float)
+    ico_f = np.array([(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9),
+                      (5, 11, 4), (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2),
+                      (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10),
+                      (8, 6, 7), (9, 8, 1)])
+    # barycentric lattice of one face
+    ij = [(i, j) for i in range(n + 1) for j in range(n + 1 - i)]
+    index = {p: k for k, p in enumerate(ij)}
+    tri = []
+    for i in range(n):
+        for j in range(n - i):
+            tri.append((index[(i, j)], index[(i + 1, j)], index[(i, j + 1)]))
+            if i + j + 2 <= n:
+                tri.append((index[(i + 1, j)], index[(i + 1, j + 1)], index[(i, j + 1)]))
+    tri = np.array(tri)
+    lat = np.array(ij, dtype=float) / n  # (L, 2)
+    pts, faces = [], []
+    for f in ico_f:
+        a, b, c = ico_v[f]
+        p = a + lat[:, :1] * (b - a) + lat[:, 1:] * (c - a)
+        faces.append(tri + len(pts) * len(ij))
+        pts.append(p)
+    pts = np.concatenate(pts)
+    pts /= np.linalg.norm(pts, axis=1, keepdims=True)
+    key = np.round(pts, 9)
+    uniq, inv = np.unique(key, axis=0, return_inverse=True)
+    verts = np.zeros((len(uniq), 3))
+    verts[inv.ravel()] = pts
+    faces = inv.ravel()[np.concatenate(faces)]
+    # orient outward
+    v = verts[faces]
+    nrm = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    flip = np.einsum("ij,ij->i", nrm, v.mean(axis=1)) < 0
+    faces[flip] = faces[flip][:, ::-1]
+    return verts, faces
+
+
+def sphere_mesh(radius: float, n: int, centre: ArrayLike = (0.0, 0.0, 0.0)) -> TriMesh:
+    """Geodesic triangulation of a sphere of ``radius`` metres (``20 n^2`` panels)."""
+    v, f = geodesic_sphere(n)
+    return TriMesh(v * float(radius) + np.asarray(centre, dtype=float), f)
+
+
+def check_closed_mesh(vertices: ArrayLike, faces: ArrayLike, where: str = "mesh") -> None:
+    """Raise GeometryError unless the triangulation is a closed (watertight), consistently oriented
+    2-manifold enclosing a positive volume with outward-facing triangles."""
+    v = np.asarray(vertices, dtype=float)
+    f = np.asarray(faces)
+    if v.ndim != 2 or v.shape[1] != 3 or len(v) < 4 or not np.all(np.isfinite(v)):
+        raise GeometryError(f"{where}: vertices must be a finite N x 3 array with N >= 4")
+    if f.ndim != 2 or f.shape[1] != 3 or len(f) < 1 or not np.issubdtype(f.dtype, np.integer):
+        raise GeometryError(f"{where}: faces must be a non-empty integer M x 3 array")
+    if f.min() < 0 or f.max() >= len(v):
+        raise GeometryError(f"{where}: face indices must lie in 0..{len(v) - 1}")
+    area2 = np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
+    if np.any(area2 <= 1e-14):
+        raise GeometryError(f"{where}: {int(np.sum(area2 <= 1e-14))} degenerate (zero-area) faces")
+    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    und = np.sort(e, axis=1)
+    _, cnt = np.unique(und, axis=0, return_counts=True)
+    if np.any(cnt == 1):
+        raise GeometryError(
+            f"{where}: the surface is open ({int(np.sum(cnt == 1))} boundary edges); the mask must "
+            "be a closed (watertight) body"
+        )
+    if np.any(cnt > 2):
+        raise GeometryError(f"{where}: non-manifold surface ({int(np.sum(cnt > 2))} edges shared "
+                            "by more than two faces)")
+    _, dcnt = np.unique(e, axis=0, return_counts=True)
+    if np.any(dcnt > 1):
+        raise GeometryError(f"{where}: faces are not consistently oriented")
+    vol = np.einsum("ij,ij->i", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]])).sum() / 6.0
+    if vol <= 0:
+        raise GeometryError(f"{where}: faces point inward (enclosed volume {vol:.3g} m^3 <= 0); "
+                            "list the vertices of each face counter-clockwise seen from outside")
+
+
+@dataclass(frozen=True, eq=False)
+class TriMesh:
+    """A closed triangulated surface, metres; faces counter-clockwise seen from outside."""
+
+    vertices: NDArray
+    faces: NDArray
+
+    @cached_property
+    def corners(self) -> NDArray:
+        """(F, 3, 3) triangle corner coordinates."""
+        return self.vertices[self.faces]
+
+    @cached_property
+    def centroids(self) -> NDArray:
+        return self.corners.mean(axis=1)
+
+    @cached_property
+    def _cross(self) -> NDArray:
+        c = self.corners
+        return np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+
+    @cached_property
+    def areas(self) -> NDArray:
+        return 0.5 * np.linalg.norm(self._cross, axis=1)
+
+    @cached_property
+    def normals(self) -> NDArray:
+        """Unit outward normals (F, 3)."""
+        return self._cross / (2.0 * self.areas[:, None])
+
+    @cached_property
+    def edge_lengths(self) -> NDArray:
+        c = self.corners
+        return np.linalg.norm(c - np.roll(c, 1, axis=1), axis=2)
+
+    @property
+    def n_panels(self) -> int:
+        return int(len(self.faces))
+
+    @property
+    def size(self) -> float:
+        """Mean edge length, metres."""
+        return float(self.edge_lengths.mean())
+
+    def winding_number(self, points: ArrayLike) -> NDArray:
+        """Generalised winding number of each point (1 inside, 0 outside, 1/2 on the surface).
+
+        Solid angles by Van Oosterom & Strackee (1983).
+        """
+        p = np.atleast_2d(np.asarray(points, dtype=float))
+        a = self.corners[None, :, 0] - p[:, None]
+        b = self.corners[None, :, 1] - p[:, None]
+        c = self.corners[None, :, 2] - p[:, None]
+        la, lb, lc = (np.linalg.norm(x, axis=-1) for x in (a, b, c))
+        num = np.einsum("pfi,pfi->pf", a, np.cross(b, c))
+        den = (la * lb * lc + np.einsum("pfi,pfi->pf", a, b) * lc
+               + np.einsum("pfi,pfi->pf", b, c) * la + np.einsum("pfi,pfi->pf", c, a) * lb)
+        return 2.0 * np.arctan2(num, den).sum(axis=1) / _FOUR_PI
+
+    def closest_points(self, points: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
+        """Closest surface point to each point: ``(closest (P, 3), distance (P,), face (P,))``."""
+        p = np.atleast_2d(np.asarray(points, dtype=float))
+        out_q, out_d, out_f = [], [], []
+        c = self.corners
+        a, b, cc = c[:, 0], c[:, 1], c[:, 2]
+        for x in p:
+            cand = [_project_to_triangles(x, a, b, cc, self.normals)]
+            for s, t in ((a, b), (b, cc), (cc, a)):
+                cand.append(_closest_on_segments(x, s, t))
+            q = np.stack(cand)  # (4, F, 3)
+            d = np.linalg.norm(q - x, axis=-1)
+            d = np.where(np.isnan(d), np.inf, d)
+            k, fi = np.unravel_index(np.argmin(d), d.shape)
+            out_q.append(q[k, fi])
+            out_d.append(d[k, fi])
+            out_f.append(fi)
+        return np.array(out_q), np.array(out_d), np.array(out_f)
+
+
+def _project_to_triangles(x: NDArray, a: NDArray, b: NDArray, c: NDArray, n: NDArray) -> NDArray:
+    q = x - np.einsum("fi,fi->f", x - a, n)[:, None] * n
+    v0, v1, v2 = b - a, c - a, q - a
+    d00 = np.einsum("fi,fi->f", v0, v0)
+    d01 = np.einsum("fi,fi->f", v0, v1)
+    d11 = np.einsum("fi,fi->f", v1, v1)
+    d20 = np.einsum("fi,fi->f", v2, v0)
+    d21 = np.einsum("fi,fi->f", v2, v1)
+    den = d00 * d11 - d01 * d01
+    s = (d11 * d20 - d01 * d21) / den
+    t = (d00 * d21 - d01 * d20) / den
+    inside = (s >= 0) & (t >= 0) & (s + t <= 1)
+    return np.where(inside[:, None], q, np.nan)
+
+
+def _closest_on_segments(x: NDArray, s: NDArray, t: NDArray) -> NDArray:
+    d = t - s
+    u = np.clip(np.einsum("fi,fi->f", x - s, d) / np.einsum("fi,fi->f", d, d), 0.0, 1.0)
+    return s + u[:, None] * d
+
+
+# ------------------------------------------------------------------------------ quadrature
+def _subtriangle_rule(m: int) -> NDArray:
+    """Barycentric (Q, 3) centroids of the m*m equal sub-triangles (weights 1/m^2 each)."""
+    pts = []
+    for i in range(m):
+        for j in range(m - i):
+            pts.append(((i + 1 / 3) / m, (j + 1 / 3) / m))
+            if i + j + 2 <= m:
+                pts.append(((i + 2 / 3) / m, (j + 2 / 3) / m))
+    st = np.array(pts)
+    return np.column_stack([1.0 - st.sum(axis=1), st])
+
+
+def _dlp_geometry(x: NDArray, y: NDArray, n: NDArray) -> tuple[NDArray, NDArray]:
+    """Distance r and Laplace double-layer kernel dG0/dn_y = -(y - x).n / (4 pi r^3)."""
+    d = y - x
+    r = np.sqrt(np.einsum("...i,...i->...", d, d))
+    rn = np.einsum("...i,...i->...", d, n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lap = np.where(r > 0, -rn / (_FOUR_PI * r**3), 0.0)
+    return r, lap
+
+
+def _helmholtz(r: NDArray, lap: NDArray, k: float) -> NDArray:
+    """Helmholtz double-layer kernel from the Laplace one: dG/dn = dG0/dn e^{ikr} (1 - ikr)."""
+    return lap * np.exp(1j * k * r) * (1.0 - 1j * k * r)
+
+
+class _DlpOperator:
+    """Double-layer matrices D[t, j] = int_panel_j dG(x_t, y)/dn_y dS for a fixed set of targets.
+
+    Frequency-independent geometry is computed once; :meth:`matrix` costs one complex exponential
+    per entry. Centroid rule for far panels, ``m*m`` sub-triangle rule for panels within
+    ``radius`` of the target, zero for a target on a flat panel's own plane.
+    """
+
+    def __init__(self, targets: NDArray, mesh: TriMesh, radius: float, m: int,
+                 self_rows: bool) -> None:
+        r, lap = _dlp_geometry(targets[:, None, :], mesh.centroids[None], mesh.normals[None])
+        lap = lap * mesh.areas[None]
+        if self_rows:  # flat panel: (y - x) . n = 0 on the panel itself
+            np.fill_diagonal(lap, 0.0)
+        tree = cKDTree(mesh.centroids)
+        lists = tree.query_ball_point(targets, r=radius)
+        rows = np.concatenate([np.full(len(lst), i) for i, lst in enumerate(lists)]).astype(int)
+        cols = np.concatenate([np.asarray(lst, dtype=int) for lst in lists]).astype(int)
+        if self_rows:
+            keep = rows != cols
+            rows, cols = rows[keep], cols[keep]
+        bary = _subtriangle_rule(m)
+        y = np.einsum("qk,pki->pqi", bary, mesh.corners[cols])
+        nr, nlap = _dlp_geometry(targets[rows][:, None], y, mesh.normals[cols][:, None])
+        nlap = nlap * (mesh.areas[cols][:, None] / len(bary))
+        lap[rows, cols] = 0.0
+        r[rows, cols] = 0.0
+        self.r, self.lap = r, lap
+        self.rows, self.cols, self.nr, self.nlap = rows, cols, nr, nlap
+        self.laplace = lap.copy()
+        self.laplace[rows, cols] = nlap.sum(axis=1)
+
+    def matrix(self, k: float) -> NDArray:
+        out = _helmholtz(self.r, self.lap, k)
+        if len(self.rows):
+            out[self.rows, self.cols] = _helmholtz(self.nr, self.nlap, k).sum(axis=1)
+        return out
+
+
+# ---------------------------------------------------------------------------------- solver
+@dataclass(frozen=True)
+class AdjointSolution:
+    """Per-frequency adjoint vectors of a rigid-body BEM problem.
+
+    ``p(eval_points[e], f_i) = (p_inc(eval_points[e]) + v[i, e] . p_inc(row_points)) / c[e]``.
+    """
+
+    freqs: NDArray  # (F,) Hz
+    v: NDArray  # (F, E, R) complex
+    c: NDArray  # (E,) free-term coefficient at the evaluation points
+    eval_points: NDArray  # (E, 3) metres
+    row_points: NDArray  # (R, 3) collocation centroids then CHIEF points, metres
+
+
+def chief_points(mesh: TriMesh, n: int = 16, rng: int = 0) -> NDArray:
+    """``n`` interior points well inside the body (at least two panel sizes from the surface)."""
+    gen = np.random.default_rng(rng)
+    lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
+    margin = 2.0 * mesh.size
+    out: list[NDArray] = []
+    for _ in range(50):
+        cand = gen.uniform(lo, hi, size=(8 * n, 3))
+        inside = mesh.winding_number(cand) > 0.5
+        cand = cand[inside]
+        if len(cand):
+            d = np.min(np.linalg.norm(cand[:, None] - mesh.centroids[None], axis=-1), axis=1)
+            out.extend(cand[d > margin])
+        if len(out) >= n:
+            break
+    if len(out) < max(4, n // 2):
+        raise GeometryError("mask body too thin for CHIEF interior points; use a finer mesh")
+    return np.array(out[:n])
+
+
+def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
+                  speed_of_sound: float = 343.0, n_chief: int = 16,
+                  on_surface_tol: float = 0.0,
+                  progress: Callable[[int], None] | None = None) -> AdjointSolution:
+    """Solve the rigid-body BEM once per frequency for pressure at ``eval_points``.
+
+    Parameters
+    ----------
+    mesh : TriMesh
+        Closed body, metres.
+    freqs : array (F,)
+        Frequencies in Hz (> 0).
+    eval_points : array (E, 3)
+        Where the pressure is wanted (the microphones), metres, on or outside the body. Points
+        closer than ``on_surface_tol`` to the surface are projected onto it.
+    progress : callable, optional
+        Called with 1 after each frequency.
+    """
+    f = np.asarray(freqs, dtype=float).ravel()
+    if np.any(f <= 0):
+        raise GeometryError("BEM frequencies must be > 0 Hz")
+    xe = np.atleast_2d(np.asarray(eval_points, dtype=float))
+    q, dist, _ = mesh.closest_points(xe)
+    xe = np.where((dist <= on_surface_tol)[:, None], q, xe)
+    xc = mesh.centroids
+    chief = chief_points(mesh, n_chief)
+    radius = 3.0 * mesh.edge_lengths.max()
+    op_c = _DlpOperator(xc, mesh, radius, 4, self_rows=True)
+    op_h = _DlpOperator(chief, mesh, radius, 4, self_rows=False)
+    op_e = _DlpOperator(xe, mesh, radius, 8, self_rows=False)
+    c_e = 1.0 + op_e.laplace.sum(axis=1)
+    n = mesh.n_panels
+    eye = 0.5 * np.eye(n)
+    v_all = np.empty((len(f), len(xe), n + len(chief)), dtype=complex)
+    for i, fi in enumerate(f):
+        k = 2.0 * np.pi * fi / speed_of_sound
+        d_cc, d_hc, d_ec = op_c.matrix(k), op_h.matrix(k), op_e.matrix(k)
+        sysm = np.vstack([eye - d_cc, -d_hc])  # (n + H, n)
+        # least squares by the normal equations (LAPACK QR is ~10x slower here; the CHIEF
+        # system is well conditioned): p = G^-1 M^H b, G = M^H M, so the adjoint row of an
+        # evaluation point with double-layer row d is v = conj(M G^-1 conj(d)).
+        gram = sysm.conj().T @ sysm
+        lu = sla.lu_factor(gram, overwrite_a=True, check_finite=False)
+        u = sla.lu_solve(lu, d_ec.conj().T, check_finite=False)  # (n, E)
+        v_all[i] = (sysm @ u).conj().T
+        if progress is not None:
+            progress(1)
+    return AdjointSolution(f, v_all, c_e, xe, np.vstack([xc, chief]))
+
+
+def incident_field(points: ArrayLike, k: ArrayLike, source: ArrayLike,
+                   far_field: bool = False) -> NDArray:
+    """Incident pressure of a unit source, normalised to 1 at the origin (``exp(-i w t)``).
+
+    ``points`` (P, 3) metres; ``k`` (F,) wavenumbers rad/m; ``source`` (S, 3) source positions
+    (metres) or, with ``far_field``, directions towards the source. Returns (F, S, P) complex.
+    """
+    x = np.atleast_2d(np.asarray(points, dtype=float))
+    s = np.atleast_2d(np.asarray(source, dtype=float))
+    k = np.atleast_1d(np.asarray(k, dtype=float))
+    if far_field:
+        u = s / np.linalg.norm(s, axis=1, keepdims=True)
+        return np.exp(-1j * k[:, None, None] * (u @ x.T)[None])
+    d0 = np.linalg.norm(s, axis=1)  # (S,)
+    r = np.linalg.norm(s[:, None, :] - x[None], axis=-1)  # (S, P)
+    return (d0[:, None] / r)[None] * np.exp(1j * k[:, None, None] * (r - d0[:, None])[None])
+
+
+def transfer_functions(sol: AdjointSolution, source: ArrayLike, far_field: bool = False,
+                       speed_of_sound: float = 343.0, chunk: int = 256) -> NDArray:
+    """Pressure at the evaluation points for sources ``(S, 3)``: ``(S, E, F)`` complex
+    (``exp(-i w t)`` convention, normalised by the free field at the origin)."""
+    s = np.atleast_2d(np.asarray(source, dtype=float))
+    k = 2.0 * np.pi * sol.freqs / speed_of_sound
+    out = np.empty((len(s), len(sol.eval_points), len(k)), dtype=complex)
+    for a in range(0, len(s), chunk):
+        ss = s[a:a + chunk]
+        b = incident_field(sol.row_points, k, ss, far_field)  # (F, S, R)
+        pe = incident_field(sol.eval_points, k, ss, far_field)  # (F, S, E)
+        tot = (pe + np.einsum("fer,fsr->fse", sol.v, b)) / sol.c[None, None, :]
+        out[a:a + chunk] = tot.transpose(1, 2, 0)
+    return out
+
+
+# ------------------------------------------------------------------------------ exact sphere
+def sphere_transfer(freqs: ArrayLike, radius: float, cos_theta: ArrayLike,
+                    distance: float | None = None, speed_of_sound: float = 343.0,
+                    tol: float = 1e-10, max_terms: int = 400) -> NDArray:
+    """Pressure on a rigid sphere by Rayleigh's series, normalised by the free field at its centre.
+
+    Duda & Martens (1998), eq. (10) with their recursions for the Legendre polynomials and the
+    spherical Hankel functions: with ``mu = k a`` and ``rho = r / a`` (``r`` the source distance
+    from the centre; ``distance=None`` = plane wave)::
+
+        H = -(rho / mu) exp(-i mu rho) sum_m (2m + 1) P_m(cos theta) h_m(mu rho) / h_m'(mu)
+        H_far = -(1 / mu^2) sum_m (2m + 1) (-i)^(m+1) P_m(cos theta) / h_m'(mu)
+
+    ``theta`` is the angle between the source direction and the surface point, seen from the
+    centre. Written for ``exp(-i w t)`` (``h_m`` = spherical Hankel of the first kind). Returns
+    (F, T) complex; the sum stops when the terms fall below ``tol`` relative to the sum.
+    """
+    f = np.atleast_1d(np.asarray(freqs, dtype=float))
+    ct = np.atleast_1d(np.asarray(cos_theta, dtype=float))
+    mu = 2.0 * np.pi * f * radius / speed_of_sound  # (F,)
+    x = mu[:, None]
+    # h_m(mu) and h_m(mu rho) by upward recursion h_{m+1} = (2m+1)/x h_m - h_{m-1}
+    h_prev = np.exp(1j * x) / (1j * x)  # h_0(x) = e^{ix} / (i x)
+    h_cur = np.exp(1j * x) * (-1.0 / x - 1j / x**2)  # h_1(x)
+    if distance is not None:
+        rho = float(distance) / radius
+        y = x * rho
+        g_prev = np.exp(1j * y) / (1j * y)
+        g_cur = np.exp(1j * y) * (-1.0 / y - 1j / y**2)
+    p_prev, p_cur = np.ones_like(ct), ct.copy()  # P_0, P_1
+    total = np.zeros((len(f), len(ct)), dtype=complex)
+    # m = 0 term: h_0'(x) = -h_1(x)
+    dh = -h_cur
+    if distance is None:
+        term = 1.0 * ((-1j) ** 1) * p_prev[None] / dh
+    else:
+        term = 1.0 * g_prev * p_prev[None] / dh
+    total += term
+    for m in range(1, max_terms):
+        h_next = (2 * m + 1) / x * h_cur - h_prev
+        dh = h_prev - (m + 1) / x * h_cur  # h_m' = h_{m-1} - (m+1)/x h_m
+        if distance is None:
+            term = (2 * m + 1) * ((-1j) ** (m + 1)) * p_cur[None] / dh
+        else:
+            term = (2 * m + 1) * g_cur * p_cur[None] / dh
+            g_prev, g_cur = g_cur, (2 * m + 1) / y * g_cur - g_prev
+        total += term
+        h_prev, h_cur = h_cur, h_next
+        p_prev, p_cur = p_cur, ((2 * m + 1) * ct * p_cur - m * p_prev) / (m + 1)
+        if m > 2 * np.max(x) + 10 and np.max(np.abs(term)) < tol * np.max(np.abs(total)):
+            break
+    if distance is None:
+        return -total / (mu[:, None] ** 2)
+    return -(rho / mu[:, None]) * np.exp(-1j * mu[:, None] * rho) * total

@@ -1,0 +1,754 @@
+"""Masked two-microphone arrays: 360-degree azimuth from mask diffraction (thesis ch. 3).
+
+Reconstruction. Two bare microphones know azimuth only up to the front/back mirror
+(``alpha`` or ``180 - alpha``). The thesis puts a closed, front/back-asymmetric rigid *mask*
+between them: diffraction around the body makes the intensity difference (IID) between the two
+microphones differ for a source in front and its mirror image behind, which breaks the mirror and
+gives a full 360-degree azimuth with two microphones.
+
+Model (what this module computes)
+---------------------------------
+* The mask is a rigid, sound-hard closed body given in the array YAML under ``mask:``. The
+  parametric ``shape: egg`` is two half-ellipsoids joined at ``x = centre_x``: a long convex front
+  (``front`` semi-axis towards +x), a short blunt back (``back``), lateral ``half_width`` and
+  vertical ``half_height``. Put the microphones on its rear flanks (the ``mask2`` preset) and each
+  microphone "looks" sideways-backwards, so a source behind is heard louder on its side than its
+  mirror image in front. ``shape: mesh`` takes any closed triangulation (``vertices``,
+  ``faces``). Microphones must lie on the surface (within ``tolerance``) or outside it.
+* Pressure at the microphones: the Kirchhoff-Helmholtz boundary integral equation for a rigid
+  body, solved by collocation BEM with CHIEF points (:mod:`hearsee.audio.bem`; Schenck 1968,
+  Burton & Miller 1971, Kirkup 2019), per frequency up to ``f_max`` (mesh sized to about
+  ``elements_per_wavelength`` panels per wavelength there). The BEM system does not depend on the
+  source: it is factorised once per frequency and reduced to two adjoint vectors, so the transfer
+  function to ANY source position or direction is a dot product (:meth:`MaskModel.transfer`).
+  Transfer functions ``H_m(f)`` are normalised by the free-field pressure at the array origin
+  (``H -> 1`` without the mask), time convention ``exp(-i w t)``.
+* Waveforms (thesis figs. 3.6-3.7) by inverse FFT of ``H`` (:meth:`MaskModel.impulse_responses`).
+  The model is band-limited to ``f_max``: above it the responses are tapered to zero (a raised
+  cosine over the top 10 %), so masked recordings carry no source energy above ``f_max``.
+* Validation: :func:`hearsee.audio.bem.sphere_transfer` (Rayleigh series, Duda & Martens 1998)
+  against the same BEM code on a meshed sphere; ``tests/audio/test_bem.py`` states and tests the
+  tolerance.
+* Responses over 360 degrees (figs. 3.10-3.11, 3.14-3.17): :meth:`MaskModel.responses` gives the
+  ITD (GCC-PHAT peak of the model cross-spectrum) and band IIDs on an azimuth grid, far field or
+  at a distance ``d0``.
+* Azimuth (figs. 3.12-3.13): :func:`localize_mask`. The recording's phase difference (ITD) fixes
+  ``alpha`` or its mirror; the band IIDs (from noise-corrected coherent band energies) pick the
+  half by the best match to the response tables, with a front/back probability; the azimuth is the
+  joint ITD-phase + IID best match on a 1-degree grid, refined parabolically.
+
+Sign conventions follow the package: azimuth from +x toward +y (degrees), ``tdoa = t_0 - t_1``,
+``iid_db = 10 log10(E_0 / E_1)`` (microphone 0 over microphone 1, pair "0-1").
+
+Cache
+-----
+BEM solutions and response tables are stored in ``$HEARSEE_CACHE_DIR/mask/`` (default
+``$XDG_CACHE_HOME/hearsee/mask/``, i.e. ``~/.cache/hearsee/mask/``) as ``<key>.npz`` files. The
+key is a SHA-256 of the mask geometry, the microphone positions, the mesh, the frequency grid, the
+speed of sound and :data:`CODE_VERSION`; any change gives a new key (stale files are simply not
+used; delete the folder to reclaim space). The first computation for a geometry shows a progress
+bar (mask2: about one to two minutes on two cores).
+
+References: Duda, R. O. & Martens, W. L. (1998) JASA 104(5); Burton, A. J. & Miller, G. F.
+(1971) Proc. R. Soc. A 323; Schenck, H. A. (1968) JASA 44; Kirkup, S. "The Boundary Element
+Method in Acoustics"; Knapp, C. & Carter, G. (1976) (GCC-PHAT); F. Guan (2006) thesis ch. 3.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import sys
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import scipy.fft as sfft
+from numpy.typing import ArrayLike, NDArray
+
+from hearsee.audio import bem
+from hearsee.audio.arrays import MicArray, load_array
+from hearsee.errors import AudioInputError, ConfigError, GeometryError
+
+__all__ = [
+    "CODE_VERSION",
+    "MaskGeometry",
+    "MaskLocalization",
+    "MaskModel",
+    "Responses",
+    "cache_dir",
+    "localize_mask",
+    "mask_geometry",
+    "simulate_masked",
+]
+
+#: Bump when the numerical method changes: invalidates every cached solution.
+CODE_VERSION = "mask-bem-1"
+#: Source distances of the cached response tables (None = far field), metres.
+TABLE_DISTANCES: tuple[float | None, ...] = (None, 1.0, 0.5)
+
+_EGG_KEYS = ("shape", "centre", "front", "back", "half_width", "half_height")
+_COMMON_KEYS = ("f_max", "df", "elements_per_wavelength", "mesh_subdivision", "tolerance")
+
+
+def cache_dir() -> Path:
+    """Folder of the mask cache: ``$HEARSEE_CACHE_DIR/mask`` or ``$XDG_CACHE_HOME/hearsee/mask``
+    (default ``~/.cache/hearsee/mask``)."""
+    root = os.environ.get("HEARSEE_CACHE_DIR")
+    if root:
+        return Path(root) / "mask"
+    xdg = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(xdg) / "hearsee" / "mask"
+
+
+# ------------------------------------------------------------------------------- geometry
+def _pos_number(d: Mapping[str, Any], key: str, where: str, default: float | None = None) -> float:
+    if key not in d:
+        if default is None:
+            raise ConfigError(f"{where}: missing required key {key!r}")
+        return float(default)
+    v = d[key]
+    if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v) or v <= 0:
+        raise ConfigError(f"{where}: {key} must be a positive number, got {v!r}")
+    return float(v)
+
+
+@dataclass(frozen=True, eq=False)
+class MaskGeometry:
+    """A closed rigid mask body (metres) and its numerical settings.
+
+    ``shape="egg"``: half-ellipsoids joined at ``centre`` (semi-axes ``front`` towards +x,
+    ``back`` towards -x, ``half_width`` along y, ``half_height`` along z). ``shape="mesh"``:
+    explicit ``vertices`` (V, 3) and ``faces`` (F, 3). ``f_max`` (Hz) and ``df`` (Hz) set the
+    frequency grid ``df, 2 df, ..., f_max``; the mesh has about ``elements_per_wavelength`` panels
+    per wavelength at ``f_max`` (or ``mesh_subdivision`` fixes the geodesic subdivision of the
+    egg). Microphones may be at most ``tolerance`` metres inside the surface.
+    """
+
+    shape: str = "egg"
+    centre: tuple[float, float, float] = (0.03, 0.0, 0.0)
+    front: float = 0.12
+    back: float = 0.06
+    half_width: float = 0.0866025
+    half_height: float = 0.08
+    vertices: NDArray | None = None
+    faces: NDArray | None = None
+    f_max: float = 4000.0
+    df: float = 62.5
+    elements_per_wavelength: float = 6.0
+    mesh_subdivision: int | None = None
+    tolerance: float = 0.002
+    raw: Mapping[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], where: str = "mask") -> MaskGeometry:
+        """Parse a ``mask:`` block; ConfigError names the bad field."""
+        if not isinstance(d, Mapping):
+            raise ConfigError(f"{where}: must be a mapping")
+        shape = d.get("shape", "egg")
+        common = dict(
+            f_max=_pos_number(d, "f_max", where, 4000.0),
+            df=_pos_number(d, "df", where, 62.5),
+            elements_per_wavelength=_pos_number(d, "elements_per_wavelength", where, 6.0),
+            tolerance=_pos_number(d, "tolerance", where, 0.002),
+            raw=dict(d),
+        )
+        if common["df"] >= common["f_max"]:
+            raise ConfigError(f"{where}: df ({common['df']} Hz) must be below f_max")
+        ms = d.get("mesh_subdivision")
+        if ms is not None:
+            if isinstance(ms, bool) or not isinstance(ms, int) or not 1 <= ms <= 40:
+                raise ConfigError(f"{where}: mesh_subdivision must be an integer 1..40, got {ms!r}")
+            common["mesh_subdivision"] = ms
+        if shape == "egg":
+            allowed = _EGG_KEYS + _COMMON_KEYS
+            for k in d:
+                if k not in allowed:
+                    raise ConfigError(f"{where}: unknown key {k!r} (expected one of: "
+                                      f"{', '.join(allowed)})")
+            c = d.get("centre", [0.0, 0.0, 0.0])
+            try:
+                c = np.asarray(c, dtype=float)
+            except (TypeError, ValueError):
+                raise ConfigError(f"{where}: centre must be [x, y, z] metres") from None
+            if c.shape != (3,) or not np.all(np.isfinite(c)):
+                raise ConfigError(
+                    f"{where}: centre must be [x, y, z] metres, got {d.get('centre')!r}")
+            return cls("egg", tuple(float(v) for v in c),
+                       *(_pos_number(d, k, where) for k in _EGG_KEYS[2:]), **common)
+        if shape == "mesh":
+            allowed = ("shape", "vertices", "faces") + _COMMON_KEYS
+            for k in d:
+                if k not in allowed:
+                    raise ConfigError(f"{where}: unknown key {k!r} (expected one of: "
+                                      f"{', '.join(allowed)})")
+            try:
+                v = np.asarray(d.get("vertices"), dtype=float)
+                f = np.asarray(d.get("faces"), dtype=np.int64)
+            except (TypeError, ValueError):
+                raise ConfigError(f"{where}: vertices must be [[x, y, z], ...] metres and faces "
+                                  "[[i, j, k], ...] vertex indices") from None
+            bem.check_closed_mesh(v, f, where)
+            return cls("mesh", vertices=v, faces=f, **common)
+        raise ConfigError(f"{where}: shape must be 'egg' or 'mesh', got {shape!r}")
+
+    # -- egg surface
+    def _egg_mesh(self, n: int) -> bem.TriMesh:
+        u, faces = bem.geodesic_sphere(n)
+        a = np.where(u[:, 0] >= 0, self.front, self.back)
+        r = 1.0 / np.sqrt((u[:, 0] / a) ** 2 + (u[:, 1] / self.half_width) ** 2
+                          + (u[:, 2] / self.half_height) ** 2)
+        return bem.TriMesh(u * r[:, None] + np.asarray(self.centre), faces)
+
+    def mesh(self, speed_of_sound: float = 343.0) -> bem.TriMesh:
+        """The BEM surface mesh (closed, checked)."""
+        if self.shape == "mesh":
+            return bem.TriMesh(np.asarray(self.vertices, float), np.asarray(self.faces))
+        if self.mesh_subdivision is not None:
+            return self._egg_mesh(self.mesh_subdivision)
+        target = speed_of_sound / self.f_max / self.elements_per_wavelength
+        for n in range(2, 41):
+            m = self._egg_mesh(n)
+            if m.size <= target:
+                return m
+        return m
+
+    def inside_egg(self, points: ArrayLike) -> NDArray:
+        """Implicit function of the egg: < 1 inside, 1 on the surface, > 1 outside."""
+        p = np.atleast_2d(np.asarray(points, dtype=float)) - np.asarray(self.centre)
+        a = np.where(p[:, 0] >= 0, self.front, self.back)
+        return ((p[:, 0] / a) ** 2 + (p[:, 1] / self.half_width) ** 2
+                + (p[:, 2] / self.half_height) ** 2)
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(self.raw)
+
+
+def mask_geometry(array: MicArray | Mapping[str, Any], positions: ArrayLike | None = None,
+                  where: str = "array", speed_of_sound: float = 343.0) -> MaskGeometry:
+    """Parse and validate the ``mask:`` block of an array.
+
+    Checks that the surface is closed, that there are exactly two microphones and that neither
+    lies inside the body (more than ``tolerance`` below the surface). Raises ConfigError or
+    GeometryError with a message naming the problem.
+    """
+    if isinstance(array, MicArray):
+        block, positions, where = array.mask, array.positions, array.name
+        speed_of_sound = array.speed_of_sound
+    else:
+        block = array
+    if block is None:
+        raise ConfigError(f"{where}: this array has no mask: block")
+    geom = MaskGeometry.from_dict(block, f"{where}: mask")
+    pos = np.asarray(positions, dtype=float)
+    if pos.shape != (2, 3):
+        raise GeometryError(f"{where}: a masked array needs exactly 2 microphones, got {len(pos)}")
+    mesh = geom.mesh(speed_of_sound)
+    bem.check_closed_mesh(mesh.vertices, mesh.faces, f"{where}: mask")
+    _, dist, _ = mesh.closest_points(pos)
+    wind = mesh.winding_number(pos)
+    for k in range(2):
+        depth = dist[k] if wind[k] > 0.5 else -dist[k]
+        if geom.shape == "egg":  # exact test on the smooth surface (the mesh is inscribed)
+            g = float(geom.inside_egg(pos[k])[0])
+            if g >= 1.0:
+                continue
+        if depth > geom.tolerance:
+            raise GeometryError(
+                f"{where}: microphone {k} at {pos[k].round(4).tolist()} is inside the mask body "
+                f"({depth * 1000:.1f} mm below its surface, tolerance {geom.tolerance * 1000:.1f} "
+                "mm); put the microphones on the surface or outside it"
+            )
+    return geom
+
+
+# ------------------------------------------------------------------------------- the model
+@dataclass(frozen=True)
+class Responses:
+    """ITD and band IID responses over azimuth (thesis figs. 3.10-3.11, 3.14-3.17).
+
+    ``azimuth_deg`` (A,), ``itd_s`` (A,) = t_0 - t_1 seconds, ``iid_db`` (A, B) = 10 log10(E_0/E_1)
+    per band for a white source, ``band_edges_hz`` (B + 1,), ``distance_m`` (None = far field),
+    ``elevation_deg``.
+    """
+
+    azimuth_deg: NDArray
+    itd_s: NDArray
+    iid_db: NDArray
+    band_edges_hz: NDArray
+    distance_m: float | None
+    elevation_deg: float
+
+
+def default_bands(f_max: float, n_bands: int = 8, f_lo: float = 250.0) -> NDArray:
+    """Log-spaced band edges (Hz) from ``f_lo`` to ``f_max``."""
+    return np.geomspace(f_lo, f_max, n_bands + 1)
+
+
+def _direction(az_deg: ArrayLike, el_deg: ArrayLike) -> NDArray:
+    az, el = np.deg2rad(az_deg), np.deg2rad(el_deg)
+    return np.stack(np.broadcast_arrays(np.cos(el) * np.cos(az), np.cos(el) * np.sin(az),
+                                        np.sin(el)), axis=-1)
+
+
+def _phat_itd(cross: NDArray, freqs: NDArray, weights: NDArray, max_s: float,
+              step_s: float = 2e-6) -> NDArray:
+    """Peak of the weighted GCC-PHAT of cross-spectra ``(..., F)`` (numpy sign convention:
+    ``cross = X_0 conj(X_1)``) over |tau| <= max_s; parabolic refinement. Returns t_0 - t_1 (s)."""
+    taus = np.arange(-max_s, max_s + step_s / 2, step_s)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ph = np.where(np.abs(cross) > 0, cross / np.abs(cross), 0.0) * weights
+    steer = np.exp(2j * np.pi * freqs[:, None] * taus[None])  # (F, T)
+    r = np.real(ph @ steer)
+    k = np.clip(np.argmax(r, axis=-1), 1, len(taus) - 2)
+    y0 = np.take_along_axis(r, (k - 1)[..., None], -1)[..., 0]
+    y1 = np.take_along_axis(r, k[..., None], -1)[..., 0]
+    y2 = np.take_along_axis(r, (k + 1)[..., None], -1)[..., 0]
+    den = y0 - 2 * y1 + y2
+    off = np.where(np.abs(den) > 1e-12, 0.5 * (y0 - y2) / den, 0.0)
+    return taus[k] + np.clip(off, -1, 1) * step_s
+
+
+class MaskModel:
+    """The diffraction model of a masked two-microphone array, with its on-disk cache.
+
+    Parameters
+    ----------
+    array : MicArray, preset name or YAML path
+        Must have a ``mask:`` block (e.g. the ``mask2`` preset).
+    cache : bool
+        Read/write the cache (see the module docstring); False computes in memory only.
+    progress : bool
+        Show a rich progress bar on stderr while solving (when stderr is a terminal).
+    """
+
+    def __init__(self, array: MicArray | str | Path, cache: bool = True,
+                 progress: bool = True) -> None:
+        self.array = load_array(array)
+        self.geometry = mask_geometry(self.array)
+        self.c = self.array.speed_of_sound
+        self.mesh = self.geometry.mesh(self.c)
+        n = int(np.floor(self.geometry.f_max / self.geometry.df + 1e-9))
+        self.freqs = self.geometry.df * np.arange(1, n + 1)
+        self.f_max = float(self.freqs[-1])
+        self.cache = cache
+        self.progress = progress
+        self._tables: dict[tuple, NDArray] = {}
+
+    # -- cache
+    @cached_property
+    def key(self) -> str:
+        h = hashlib.sha256()
+        h.update(CODE_VERSION.encode())
+        h.update(json.dumps(self.geometry.to_dict(), sort_keys=True, default=str).encode())
+        for a in (self.array.positions, self.mesh.vertices, self.mesh.faces.astype(np.int64),
+                  self.freqs, np.array([self.c])):
+            h.update(np.ascontiguousarray(a).tobytes())
+        return h.hexdigest()[:24]
+
+    def _path(self, suffix: str = "") -> Path:
+        return cache_dir() / f"{self.key}{suffix}.npz"
+
+    @staticmethod
+    def _save(path: Path, **arrays: Any) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)
+        os.replace(tmp, path)
+
+    @cached_property
+    def solution(self) -> bem.AdjointSolution:
+        """The per-frequency adjoint BEM solution (loaded from the cache or computed)."""
+        path = self._path()
+        if self.cache and path.is_file():
+            try:
+                z = np.load(path)
+                return bem.AdjointSolution(z["freqs"], z["v"], z["c"], z["eval_points"],
+                                           z["row_points"])
+            except (OSError, KeyError, ValueError):
+                pass  # unreadable cache file: recompute and overwrite
+        sol = self._compute()
+        if self.cache:
+            self._save(path, freqs=sol.freqs, v=sol.v, c=sol.c, eval_points=sol.eval_points,
+                       row_points=sol.row_points)
+        return sol
+
+    def _compute(self) -> bem.AdjointSolution:
+        kw = dict(mesh=self.mesh, freqs=self.freqs, eval_points=self.array.positions,
+                  speed_of_sound=self.c, on_surface_tol=self.geometry.tolerance)
+        if not (self.progress and sys.stderr.isatty()):
+            return bem.solve_adjoint(**kw)
+        from rich.console import Console
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        with Progress(TextColumn("[bold]mask BEM[/] {task.description}"), BarColumn(),
+                      MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
+                      console=Console(stderr=True), transient=True) as bar:
+            task = bar.add_task(f"{self.array.name}: {self.mesh.n_panels} panels, "
+                                f"{len(self.freqs)} frequencies", total=len(self.freqs))
+            return bem.solve_adjoint(**kw, progress=lambda n: bar.advance(task, n))
+
+    # -- transfer functions
+    def transfer(self, source: ArrayLike, far_field: bool = False) -> NDArray:
+        """Transfer functions at the model frequencies :attr:`freqs`.
+
+        ``source`` (3,) or (S, 3): positions (metres, array frame) or, with ``far_field``,
+        directions. Returns (S, 2, F) complex, ``exp(-i w t)`` convention, normalised by the
+        free-field pressure at the array origin.
+        """
+        s = np.atleast_2d(np.asarray(source, dtype=float))
+        if s.shape[-1] != 3 or not np.all(np.isfinite(s)):
+            raise GeometryError(f"source must be finite [x, y, z] point(s), got shape {s.shape}")
+        if not far_field and np.any(self.geometry_inside(s)):
+            raise GeometryError("the source lies inside the mask body; put it outside the mask")
+        return bem.transfer_functions(self.solution, s, far_field, self.c)
+
+    def geometry_inside(self, points: ArrayLike) -> NDArray:
+        """True for points inside the mask body."""
+        return self.mesh.winding_number(points) > 0.5
+
+    def transfer_at(self, freqs_hz: ArrayLike, source: ArrayLike, far_field: bool = False,
+                    taper: bool = True) -> NDArray:
+        """Transfer functions (S, 2, len(freqs_hz)) interpolated to arbitrary frequencies (Hz).
+
+        Linear interpolation of ``H * exp(-i k (r_m - d0))`` (the free-field phase removed) from
+        the model grid, ``H(0)`` = the free-field value; above ``f_max`` a raised-cosine taper over
+        the top 10 % of the band brings ``H`` to zero (``taper=False``: hold the last value).
+        """
+        s = np.atleast_2d(np.asarray(source, dtype=float))
+        fq = np.asarray(freqs_hz, dtype=float)
+        h = self.transfer(s, far_field)  # (S, 2, F)
+        mics = self.array.positions
+        if far_field:
+            u = s / np.linalg.norm(s, axis=1, keepdims=True)
+            tau = -(u @ mics.T) / self.c  # (S, 2) arrival relative to origin
+            g0 = np.ones_like(tau)
+        else:
+            d0 = np.linalg.norm(s, axis=1)
+            r = np.linalg.norm(s[:, None] - mics[None], axis=-1)
+            tau = (r - d0[:, None]) / self.c
+            g0 = d0[:, None] / r
+        grid = np.concatenate([[0.0], self.freqs])
+        base = h * np.exp(-2j * np.pi * self.freqs * tau[..., None])
+        base = np.concatenate([g0[..., None].astype(complex), base], axis=-1)
+        fc = np.clip(fq, 0, grid[-1])
+        out = np.empty(s.shape[:1] + (2, len(fq)), dtype=complex)
+        for a in range(len(s)):
+            for m in range(2):
+                out[a, m] = (np.interp(fc, grid, base[a, m].real)
+                             + 1j * np.interp(fc, grid, base[a, m].imag))
+        out *= np.exp(2j * np.pi * fq * tau[..., None])
+        if taper:
+            lo = 0.9 * self.f_max
+            w = np.where(fq <= lo, 1.0, 0.5 * (1 + np.cos(np.pi * np.clip(
+                (fq - lo) / (self.f_max - lo), 0, 1))))
+            out *= w
+        return out
+
+    def impulse_responses(self, source: ArrayLike, fs: float, n: int = 256,
+                          far_field: bool = False) -> NDArray:
+        """Impulse responses (2, n) of the two microphones (thesis figs. 3.6-3.7).
+
+        Relative to the free-field arrival at the origin, shifted by ``n // 4`` samples so that
+        the earlier microphone's onset is visible; amplitude 1 = free-field at the origin.
+        """
+        nf = 4 * int(n)
+        f = np.fft.rfftfreq(nf, 1.0 / fs)
+        h = self.transfer_at(f, source, far_field)[0]  # (2, F) physics convention
+        shift = np.exp(-2j * np.pi * f * (n // 4) / fs)
+        return np.fft.irfft(np.conj(h) * shift, nf, axis=-1)[:, :n]
+
+    # -- response tables
+    def table(self, distance: float | None = None, elevation_deg: float = 0.0,
+              az_step_deg: float = 1.0) -> tuple[NDArray, NDArray]:
+        """Transfer functions on an azimuth grid: ``(azimuth_deg (A,), H (A, 2, F))``.
+
+        Cached in memory and on disk (``<key>-table-*.npz``).
+        """
+        key = (None if distance is None else round(float(distance), 4), round(elevation_deg, 3),
+               round(az_step_deg, 4))
+        az = np.arange(0.0, 360.0, az_step_deg)
+        if key in self._tables:
+            return az, self._tables[key]
+        tag = f"-table-{'far' if distance is None else f'{distance:.4f}'}-{elevation_deg:.3f}-" \
+              f"{az_step_deg:.4f}"
+        path = self._path(tag)
+        h = None
+        if self.cache and path.is_file():
+            try:
+                h = np.load(path)["h"]
+            except (OSError, KeyError, ValueError):
+                h = None
+        if h is None:
+            u = _direction(az, elevation_deg)
+            src = u if distance is None else u * float(distance)
+            h = bem.transfer_functions(self.solution, src, distance is None, self.c)
+            h = h.astype(np.complex64)
+            if self.cache:
+                self._save(path, h=h)
+        self._tables[key] = h
+        return az, h
+
+    def responses(self, distance: float | None = None, elevation_deg: float = 0.0,
+                  bands_hz: ArrayLike | None = None, az_step_deg: float = 1.0) -> Responses:
+        """ITD and band IIDs over 360 degrees for a white source (figs. 3.10-3.11, 3.14-3.17)."""
+        az, h = self.table(distance, elevation_deg, az_step_deg)
+        edges = default_bands(self.f_max) if bands_hz is None else np.asarray(bands_hz, float)
+        cross = np.conj(h[:, 0]) * h[:, 1]  # numpy convention: X0 conj(X1) = conj(H0) H1
+        itd = _phat_itd(cross, self.freqs, np.ones(len(self.freqs)), self.max_itd())
+        p = np.abs(h) ** 2
+        inband = [(self.freqs >= lo) & (self.freqs < hi)
+                  for lo, hi in zip(edges[:-1], edges[1:], strict=True)]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            iid = np.stack([10 * np.log10(p[:, 0, b].sum(-1) / p[:, 1, b].sum(-1))
+                            for b in inband], axis=-1)
+        return Responses(az, itd, iid, edges, distance, elevation_deg)
+
+    def max_itd(self) -> float:
+        """A bound on |ITD| (s): half the path around the body plus the spacing, over c."""
+        ext = np.ptp(self.mesh.vertices, axis=0)
+        return float((self.array.aperture + 0.5 * np.pi * 0.5 * ext.max()) / self.c)
+
+
+# ------------------------------------------------------------------------------- simulation
+def simulate_masked(signal: ArrayLike, fs: float, array: MicArray | str | Path | MaskModel,
+                    source: ArrayLike, snr_db: float | None = None,
+                    rng: np.random.Generator | int | None = None,
+                    far_field: bool = False) -> NDArray:
+    """Record ``signal`` through a masked array: the mask's transfer functions + sensor noise.
+
+    Parameters
+    ----------
+    signal : array (n,)
+        Source waveform (at 1 m from the source in the near-field case, as in
+        :func:`hearsee.audio.propagation.simulate_free_field`).
+    fs : float
+        Sample rate, Hz.
+    array : MicArray, preset name, path or MaskModel
+        A masked two-microphone array (e.g. ``"mask2"``).
+    source : array (3,)
+        Source position in the array frame, metres (``far_field``: only its direction).
+    snr_db : float, optional
+        Per-channel SNR of white sensor noise relative to the mean received power.
+
+    Returns
+    -------
+    array (2, n)
+        Near field: absolute delay ``d0 / c`` and gain ``1 / d0`` of the free-field path to the
+        origin, times the mask's transfer functions (computed for this exact position,
+        interpolated in frequency). Far field: a fixed bulk delay of 1 ms. Content above the
+        model's ``f_max`` is tapered away (see the module docstring).
+    """
+    from hearsee.audio.propagation import add_noise
+
+    model = array if isinstance(array, MaskModel) else MaskModel(array)
+    x = np.asarray(signal, dtype=float)
+    if x.ndim != 1 or len(x) < 2:
+        raise AudioInputError(f"signal must be a 1-D waveform, got shape {x.shape}")
+    s = np.asarray(source, dtype=float)
+    if s.shape != (3,) or not np.all(np.isfinite(s)) or np.linalg.norm(s) < 1e-9:
+        raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")
+    if far_field:
+        bulk, gain = 1e-3, 1.0
+    else:
+        d0 = float(np.linalg.norm(s))
+        if model.geometry_inside(s[None])[0]:
+            raise GeometryError("the source lies inside the mask body")
+        bulk, gain = d0 / model.c, 1.0 / d0
+    tail = int(np.ceil((bulk + 2 * model.max_itd() + 0.01) * fs))
+    nf = sfft.next_fast_len(len(x) + tail, real=True)
+    f = np.fft.rfftfreq(nf, 1.0 / fs)
+    h = model.transfer_at(f, s, far_field)[0]
+    spec = sfft.rfft(x, nf) * gain * np.exp(-2j * np.pi * f * bulk)
+    y = sfft.irfft(spec[None] * np.conj(h), nf, axis=-1)[:, :len(x)]
+    return add_noise(y, snr_db, rng)
+
+
+# ------------------------------------------------------------------------------- localization
+@dataclass(frozen=True)
+class MaskLocalization:
+    """A 360-degree azimuth from a masked two-microphone recording.
+
+    ``azimuth_deg`` in [0, 360) (0 front, 90 left); ``runner_up_deg``: the best candidate in the
+    other half (front/back mirror); ``front_probability``: P(source in front, |az| < 90);
+    ``confidence``: probability of the chosen half; ``itd_s``: GCC-PHAT t_0 - t_1 (s);
+    ``iid_db``: measured band IIDs (dB, E_0/E_1); ``band_edges_hz``; ``distance_m``: the best
+    fitting response table (None = far field).
+    """
+
+    azimuth_deg: float
+    runner_up_deg: float
+    front_probability: float
+    confidence: float
+    itd_s: float
+    iid_db: NDArray
+    band_edges_hz: NDArray
+    distance_m: float | None
+    score: NDArray = field(repr=False, default_factory=lambda: np.zeros(0))
+
+
+def _spectra(x: NDArray, fs: float, frame_ms: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    n = int(2 ** np.round(np.log2(frame_ms * 1e-3 * fs)))
+    hop = n // 2
+    if x.shape[1] < n:
+        raise AudioInputError(f"recording too short: {x.shape[1]} samples, need at least {n}")
+    nfr = 1 + (x.shape[1] - n) // hop
+    idx = np.arange(n)[None] + hop * np.arange(nfr)[:, None]
+    w = np.hanning(n)
+    spec = np.fft.rfft(x[:, idx] * w, axis=-1)  # (2, frames, F)
+    p0 = np.mean(np.abs(spec[0]) ** 2, axis=0)
+    p1 = np.mean(np.abs(spec[1]) ** 2, axis=0)
+    cr = np.mean(spec[0] * np.conj(spec[1]), axis=0)
+    return np.fft.rfftfreq(n, 1.0 / fs), p0, p1, cr
+
+
+def _coherent_power(p0: NDArray, p1: NDArray, cr: NDArray) -> tuple[NDArray, NDArray]:
+    """Powers of the coherent (source) part at each microphone, removing equal uncorrelated noise:
+    S0 S1 = |C|^2 and S0 - S1 = P0 - P1."""
+    d = p0 - p1
+    s1 = 0.5 * (-d + np.sqrt(d**2 + 4 * np.abs(cr) ** 2))
+    return s1 + d, s1
+
+
+def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskModel = "mask2",
+                  frame_ms: float = 32.0, bands_hz: ArrayLike | None = None,
+                  distances: tuple[float | None, ...] = TABLE_DISTANCES,
+                  sigma_iid_db: float = 1.0, phase_weight: float = 400.0) -> MaskLocalization:
+    """360-degree azimuth of one source from a masked two-microphone recording (thesis 3.3).
+
+    Parameters
+    ----------
+    x : array (2, n)
+        The recording; channel k is microphone k.
+    fs : float
+        Sample rate, Hz.
+    array : masked array or MaskModel
+    frame_ms : float
+        STFT frame length (ms) for the averaged spectra.
+    bands_hz : array, optional
+        IID band edges (Hz); default 8 log-spaced bands 250 Hz .. f_max.
+    distances : tuple
+        Response tables tried (None = far field, metres otherwise); the best fit is reported.
+    sigma_iid_db : float
+        Assumed standard deviation of a band IID (dB) in the front/back likelihood.
+    phase_weight : float
+        Weight of the phase (ITD) misfit ``1 - rho`` against the IID chi-square.
+
+    Returns
+    -------
+    MaskLocalization
+        Method: from the frame-averaged auto- and cross-spectra, the GCC-PHAT ITD; the
+        phase-match ``rho(az) = sum w cos(phi - phi_table(az)) / sum w`` (coherence weights w)
+        that peaks at alpha and its mirror; band IIDs of the coherent (noise-removed) powers,
+        compared with the table's IIDs predicted for the recording's own spectrum. Cost
+        ``J = phase_weight (1 - rho) + sum_b (IID_b - IID_b(az))^2 / (2 sigma^2)``; the
+        front/back probability compares the best cost in each half, and the azimuth is the
+        parabola-refined minimum of J.
+    """
+    model = array if isinstance(array, MaskModel) else MaskModel(array)
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 2 or x.shape[0] != 2:
+        raise AudioInputError(f"a masked array recording needs 2 channels (2, n), got {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise AudioInputError("recording contains NaN or inf samples")
+    if not np.any(x):
+        raise AudioInputError("recording is all zeros")
+    f, p0, p1, cr = _spectra(x, fs, frame_ms)
+    edges = default_bands(model.f_max) if bands_hz is None else np.asarray(bands_hz, float)
+    use = (f >= max(edges[0], 100.0)) & (f <= min(edges[-1], 0.9 * model.f_max))
+    if use.sum() < 4:
+        raise AudioInputError(f"sample rate {fs} Hz too low for the mask model's bands")
+    f, p0, p1, cr = f[use], p0[use], p1[use], cr[use]
+    s0, s1 = _coherent_power(p0, p1, cr)
+    coh = np.abs(cr) ** 2 / np.maximum(p0 * p1, 1e-300)
+    w = coh / max(coh.sum(), 1e-300)
+    if not np.isfinite(w).all() or w.sum() <= 0:
+        raise AudioInputError("no coherent source found in the recording")
+    itd = float(_phat_itd(cr, f, w, model.max_itd()))
+    band_idx = np.digitize(f, edges) - 1  # (F,)
+    nb = len(edges) - 1
+    onehot = (band_idx[None] == np.arange(nb)[:, None]).astype(float)  # (B, F)
+    valid_b = onehot.sum(axis=1) > 0
+    e0, e1 = onehot @ s0, onehot @ s1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        iid_meas = 10 * np.log10(e0 / e1)
+    valid_b &= np.isfinite(iid_meas)
+    phi = np.angle(cr)
+    best = None
+    for dist in distances:
+        az, _ = model.table(dist)
+        h = _table_at(model, dist, f)  # (A, 2, F) physics convention
+        hc = np.conj(h)  # numpy convention
+        phi_t = np.angle(hc[:, 0] * np.conj(hc[:, 1]))
+        rho = np.cos(phi[None] - phi_t) @ w  # (A,)
+        g0, g1 = np.abs(h[:, 0]) ** 2, np.abs(h[:, 1]) ** 2
+        src = (s0 + s1)[None] / np.maximum(g0 + g1, 1e-12)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            iid_t = 10 * np.log10((src * g0) @ onehot.T / ((src * g1) @ onehot.T))
+        chi = np.nansum(((iid_meas[None] - iid_t) ** 2)[:, valid_b], axis=1) / (2 * sigma_iid_db**2)
+        cost = phase_weight * (1.0 - rho) + chi
+        if best is None or cost.min() < best[0].min():
+            best = (cost, dist, az)
+    cost, dist, az = best
+    front = (az < 90) | (az > 270)
+    jf, jb = cost[front].min(), cost[~front].min()
+    p_front = float(1.0 / (1.0 + np.exp(np.clip(jf - jb, -700, 700))))
+    k = int(np.argmin(cost))
+    # runner-up: the ITD mirror, the azimuth in the other half whose table ITD is the measured one
+    az_best = _refine(az, cost, k)
+    itd_tab = _itd_table(model, dist)
+    other = np.where(front != front[k], np.abs(itd_tab - itd), np.inf)
+    az_other = float(az[int(np.argmin(other))])
+    return MaskLocalization(az_best, az_other, p_front, max(p_front, 1 - p_front), itd,
+                            iid_meas, edges, dist, cost)
+
+
+def _itd_table(model: MaskModel, dist: float | None) -> NDArray:
+    key = ("itd", dist)
+    if key not in model._tables:
+        model._tables[key] = model.responses(dist).itd_s
+    return model._tables[key]
+
+
+def _table_at(model: MaskModel, dist: float | None, f: NDArray) -> NDArray:
+    """Table transfer functions interpolated (linearly, free-field phase removed) to ``f``."""
+    key = ("interp", dist, len(f), float(f[0]), float(f[-1]))
+    if key in model._tables:
+        return model._tables[key]
+    az, h = model.table(dist)
+    u = _direction(az, 0.0)
+    mics = model.array.positions
+    if dist is None:
+        tau = -(u @ mics.T) / model.c
+    else:
+        s = u * dist
+        tau = (np.linalg.norm(s[:, None] - mics[None], axis=-1) - dist) / model.c
+    base = h * np.exp(-2j * np.pi * model.freqs * tau[..., None])
+    fi = np.clip(f, model.freqs[0], model.freqs[-1])
+    j = np.clip(np.searchsorted(model.freqs, fi) - 1, 0, len(model.freqs) - 2)
+    t = (fi - model.freqs[j]) / (model.freqs[j + 1] - model.freqs[j])
+    out = base[..., j] * (1 - t) + base[..., j + 1] * t
+    out = out * np.exp(2j * np.pi * f * tau[..., None])
+    model._tables[key] = out
+    return out
+
+
+def _refine(az: NDArray, cost: NDArray, k: int) -> float:
+    n = len(az)
+    y0, y1, y2 = cost[(k - 1) % n], cost[k], cost[(k + 1) % n]
+    den = y0 - 2 * y1 + y2
+    step = az[1] - az[0]
+    off = 0.5 * (y0 - y2) / den if den > 1e-12 else 0.0
+    return float((az[k] + np.clip(off, -1, 1) * step) % 360.0)

@@ -1,0 +1,185 @@
+"""Masked two-microphone arrays (hearsee.audio.mask): geometry checks, cache, responses,
+simulation and 360-degree localization on a coarse, fast model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hearsee.audio import mask
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.signals import white_noise
+from hearsee.config import load_yaml
+from hearsee.errors import AudioInputError, ConfigError, GeometryError
+
+FS = 16000
+
+
+def _mask2_dict(**mask_over):
+    d = load_yaml(MicArray.from_preset.__func__.__globals__["_preset_dir"]() / "mask2.yaml")
+    d["mask"].update(mask_over)
+    return d
+
+
+def _coarse(**over):
+    # 320 panels, 8 frequencies to 2 kHz: seconds to solve
+    kw = dict(mesh_subdivision=4, df=250.0, f_max=2000.0)
+    kw.update(over)
+    return MicArray.from_dict(_mask2_dict(**kw), where="coarse-mask")
+
+
+@pytest.fixture(scope="module")
+def cache_root(tmp_path_factory):
+    root = tmp_path_factory.mktemp("hearsee-cache")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("HEARSEE_CACHE_DIR", str(root))
+        yield root
+
+
+@pytest.fixture(scope="module")
+def model(cache_root):
+    return mask.MaskModel(_coarse(), progress=False)
+
+
+def _src(az_deg, d=None):
+    u = np.array([np.cos(np.deg2rad(az_deg)), np.sin(np.deg2rad(az_deg)), 0.0])
+    return u if d is None else u * d
+
+
+# ------------------------------------------------------------------ geometry and bad input
+def test_mask2_preset_is_valid():
+    arr = MicArray.from_preset("mask2")
+    geom = mask.mask_geometry(arr)
+    assert geom.shape == "egg"
+    np.testing.assert_allclose(arr.aperture, 0.15)
+    # the microphones lie on the egg surface
+    np.testing.assert_allclose(geom.inside_egg(arr.positions), 1.0, atol=1e-4)
+    mesh = geom.mesh()
+    assert 500 < mesh.n_panels < 1500
+    assert mesh.size <= 343.0 / geom.f_max / geom.elements_per_wavelength
+
+
+def test_microphones_inside_the_body_is_an_error():
+    d = _mask2_dict(mesh_subdivision=3)
+    d["microphones"] = [[0.0, -0.05, 0.0], [0.0, 0.05, 0.0]]
+    arr = MicArray.from_dict(d, where="bad")
+    with pytest.raises(GeometryError, match="microphone 0 .* inside the mask body"):
+        mask.mask_geometry(arr)
+
+
+def test_microphones_outside_are_accepted():
+    d = _mask2_dict(mesh_subdivision=3)
+    d["microphones"] = [[0.0, -0.12, 0.0], [0.0, 0.12, 0.0]]
+    mask.mask_geometry(MicArray.from_dict(d))
+
+
+def test_open_mesh_surface_is_an_error():
+    v = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    closed = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    base = {"name": "tetra", "microphones": [[0.3, -0.5, 0.3], [0.3, 1.5, 0.3]]}
+    ok = MicArray.from_dict({**base, "mask": {"shape": "mesh", "vertices": v, "faces": closed}})
+    assert mask.mask_geometry(ok).shape == "mesh"
+    bad = MicArray.from_dict({**base, "mask": {"shape": "mesh", "vertices": v,
+                                               "faces": closed[:3]}})
+    with pytest.raises(GeometryError, match="open"):
+        mask.mask_geometry(bad)
+
+
+@pytest.mark.parametrize("over, exc, msg", [
+    ({"shape": "cube"}, ConfigError, "shape"),
+    ({"front": -0.1}, ConfigError, "front must be a positive number"),
+    ({"colour": "red"}, ConfigError, "unknown key 'colour'"),
+    ({"centre": [0, 0]}, ConfigError, "centre"),
+    ({"df": 5000.0}, ConfigError, "df"),
+])
+def test_bad_mask_blocks(over, exc, msg):
+    with pytest.raises(exc, match=msg):
+        mask.mask_geometry(MicArray.from_dict(_mask2_dict(**over)))
+
+
+def test_masked_array_needs_two_microphones():
+    d = _mask2_dict(mesh_subdivision=3)
+    d["microphones"].append([0.2, 0.0, 0.0])
+    with pytest.raises(GeometryError, match="exactly 2 microphones"):
+        mask.mask_geometry(MicArray.from_dict(d))
+
+
+# ------------------------------------------------------------------ model, cache, responses
+def test_cache_roundtrip_and_key(model, cache_root):
+    sol = model.solution
+    assert (cache_root / "mask" / f"{model.key}.npz").is_file()
+    again = mask.MaskModel(_coarse(), progress=False)
+    assert again.key == model.key
+    np.testing.assert_allclose(again.solution.v, sol.v)
+    other = mask.MaskModel(_coarse(front=0.13), progress=False)
+    assert other.key != model.key
+
+
+def test_left_right_mirror_symmetry(model):
+    # the egg is symmetric in y: a source at -az is heard with the microphones swapped
+    h = model.transfer(np.stack([_src(40), _src(-40)]), far_field=True)
+    np.testing.assert_allclose(h[0, 0], h[1, 1], rtol=2e-2, atol=2e-3)
+    hn = model.transfer(np.stack([_src(120, 0.5), _src(-120, 0.5)]))
+    np.testing.assert_allclose(hn[0, 0], hn[1, 1], rtol=2e-2, atol=2e-3)
+
+
+def test_source_inside_body_is_an_error(model):
+    with pytest.raises(GeometryError, match="inside the mask"):
+        model.transfer([0.05, 0.0, 0.0])
+
+
+def test_responses_sign_and_front_back_asymmetry(model):
+    r = model.responses(bands_hz=[250, 700, 1200, 2000])
+    k90, k270 = 90, 270
+    assert r.itd_s[k90] > 200e-6 and r.itd_s[k270] < -200e-6  # t_0 - t_1 > 0 for a left source
+    assert r.iid_db[k90, -1] < -2.0  # mic 1 (left) is louder for a left source
+    # the mirror pair 30 / 150 deg: ITDs of the same sign, different IIDs (the point of the mask)
+    assert r.itd_s[30] > 100e-6 and r.itd_s[150] > 100e-6
+    assert np.max(np.abs(r.iid_db[30] - r.iid_db[150])) > 1.0
+
+
+def test_impulse_responses_onsets(model):
+    ir = model.impulse_responses(_src(90), FS, 128, far_field=True)
+    # the left microphone (1) faces the source: earlier and stronger onset
+    assert np.argmax(np.abs(ir[1])) < np.argmax(np.abs(ir[0]))
+    assert np.max(np.abs(ir[1])) > np.max(np.abs(ir[0]))
+
+
+# ------------------------------------------------------------------ simulation + localization
+@pytest.mark.parametrize("az, dist", [(30, None), (150, None), (250, 1.0), (300, 0.5)])
+def test_localize_360(model, az, dist):
+    sig = white_noise(0.5, FS, rng=az)
+    x = mask.simulate_masked(sig, FS, model, _src(az, dist), snr_db=20, rng=1,
+                             far_field=dist is None)
+    est = mask.localize_mask(x, FS, model)
+    err = (est.azimuth_deg - az + 180) % 360 - 180
+    assert abs(err) < 5.0
+    front = az < 90 or az > 270
+    assert (est.front_probability > 0.5) == front
+    assert est.confidence > 0.9
+    # the runner-up is in the other half, near the mirror image 180 - az
+    mirror = (180 - az) % 360
+    assert abs((est.runner_up_deg - mirror + 180) % 360 - 180) < 35
+
+
+def test_simulated_delay_and_noise(model):
+    sig = white_noise(0.25, FS, rng=3)
+    clean = mask.simulate_masked(sig, FS, model, _src(90, 1.0))
+    # the left microphone faces the source: its delay is the direct path 0.925 m / 343 m/s
+    lag = np.argmax(np.correlate(clean[1], sig, mode="full")) - (len(sig) - 1)
+    assert abs(lag - FS * 0.925 / 343.0) <= 1.5
+    noisy = mask.simulate_masked(sig, FS, model, _src(90, 1.0), snr_db=0, rng=4)
+    np.testing.assert_allclose(np.var(noisy - clean), np.mean(clean**2), rtol=0.1)
+
+
+def test_localize_bad_input(model):
+    with pytest.raises(AudioInputError, match="2 channels"):
+        mask.localize_mask(np.zeros((3, 4000)), FS, model)
+    with pytest.raises(AudioInputError, match="all zeros"):
+        mask.localize_mask(np.zeros((2, 4000)), FS, model)
+    x = np.ones((2, 4000))
+    x[0, 5] = np.nan
+    with pytest.raises(AudioInputError, match="NaN"):
+        mask.localize_mask(x, FS, model)
+    with pytest.raises(AudioInputError, match="too short"):
+        mask.localize_mask(np.ones((2, 100)), FS, model)
