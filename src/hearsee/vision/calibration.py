@@ -1,0 +1,513 @@
+"""Camera calibration (thesis appendix A and 7.4.1): chessboards, intrinsics, stereo extrinsics
+and the extrinsics between a stereo rig and a thermal camera.
+
+Reconstruction. Appendix A follows Zhang ("A flexible new technique for camera calibration",
+PAMI 2000): several views of a planar chessboard give the intrinsics K, the lens distortion and
+one board pose per view, refined by minimising the reprojection error (``cv2.calibrateCamera``).
+The stereo extrinsics (R, T) come from boards seen by both cameras (``cv2.stereoCalibrate``:
+first with the intrinsics fixed, then a joint refinement, keeping the refinement only when it
+lowers the RMS error). The thermal-to-stereo extrinsics (7.4.1) use a board visible to both
+(in practice a heated or back-lit board): for each view the board's 3D corners in the left
+camera frame come from the left camera's board pose, ``cv2.solvePnP`` gives the board pose in
+the thermal camera, each view yields one thermal-from-left transform, those are averaged
+robustly (rotation mean after rejecting views far from the median, median translation), and a
+final PnP over the corners of all views jointly refines the transform.
+
+All lengths (square size, translations) are metres; pixel errors are RMS pixels.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from hearsee.errors import CalibrationError
+from hearsee.vision.camera import Camera, StereoRig
+from hearsee.vision.io import to_gray
+
+__all__ = [
+    "CameraCalibration",
+    "StereoCalibration",
+    "ThermalExtrinsics",
+    "board_points",
+    "calibrate_camera",
+    "calibrate_stereo",
+    "calibrate_thermal_extrinsics",
+    "find_corners",
+    "match_labeling",
+    "parse_board",
+    "render_chessboard",
+]
+
+#: Distortion models: number of coefficients and calibrateCamera flags.
+_MODELS = {
+    "radial": cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST,  # k1 only
+    "simple": cv2.CALIB_FIX_K3,                       # k1, k2, p1, p2
+    "standard": 0,                                    # k1, k2, p1, p2, k3
+    "rational": cv2.CALIB_RATIONAL_MODEL,             # + k4, k5, k6
+}
+
+
+def parse_board(text: str) -> tuple[int, int]:
+    """``"9x6"`` -> ``(9, 6)``: inner corners per row x per column (OpenCV ``patternSize``)."""
+    try:
+        a, b = (int(v) for v in str(text).lower().replace("*", "x").split("x"))
+    except ValueError:
+        raise CalibrationError(
+            f"board must look like 9x6 (inner corners per row x per column), got {text!r}"
+        ) from None
+    if a < 2 or b < 2:
+        raise CalibrationError(f"board needs at least 2x2 inner corners, got {text!r}")
+    return a, b
+
+
+def board_points(pattern: tuple[int, int], square_m: float) -> NDArray:
+    """3D corners ``(cols*rows, 3)`` float32 of a chessboard in its own frame (z = 0), metres,
+    in OpenCV's order (along rows of ``pattern[0]`` corners)."""
+    if not square_m > 0:
+        raise CalibrationError(f"square size must be > 0 metres, got {square_m}")
+    nx, ny = pattern
+    g = np.zeros((ny * nx, 3), np.float32)
+    g[:, :2] = np.mgrid[0:nx, 0:ny].T.reshape(-1, 2) * square_m
+    return g
+
+
+# ---------------------------------------------------------------------------------------------
+# Corners
+# ---------------------------------------------------------------------------------------------
+def _labelings(corners: NDArray, pattern: tuple[int, int]) -> list[NDArray]:
+    """The four relabelings of a detected grid that keep rows of ``pattern[0]`` corners."""
+    nx, ny = pattern
+    g = corners.reshape(ny, nx, 2)
+    out = [g, g[:, ::-1], g[::-1, :], g[::-1, ::-1]]
+    if nx == ny:  # square grids can also be transposed
+        t = g.transpose(1, 0, 2)
+        out += [t, t[:, ::-1], t[::-1, :], t[::-1, ::-1]]
+    return [np.ascontiguousarray(x.reshape(-1, 2)) for x in out]
+
+
+def _canonical(corners: NDArray, pattern: tuple[int, int]) -> NDArray:
+    """Relabel so that corner 0 is the outer corner nearest the image's top-left."""
+    return min(_labelings(corners, pattern), key=lambda c: float(c[0, 0] + c[0, 1]))
+
+
+def match_labeling(reference: NDArray, corners: NDArray, pattern: tuple[int, int]) -> NDArray:
+    """Relabel ``corners`` (another camera's view of the same board) to match ``reference``:
+    among the grid's relabelings, the one best explained by a scale + translation of the
+    reference corners (cameras of a rig are roughly aligned, never rolled 180 deg apart)."""
+    ref = np.asarray(reference, float).reshape(-1, 2)
+    best, best_res = None, np.inf
+    for cand in _labelings(np.asarray(corners, np.float32), pattern):
+        A = np.zeros((2 * len(ref), 3))
+        A[0::2, 0], A[0::2, 1] = ref[:, 0], 1.0
+        A[1::2, 0], A[1::2, 2] = ref[:, 1], 1.0
+        b = cand.astype(float).reshape(-1)
+        sol, *_ = np.linalg.lstsq(A, b, rcond=None)
+        res = float(np.sum((A @ sol - b) ** 2)) if sol[0] > 0 else np.inf
+        if res < best_res:
+            best, best_res = cand, res
+    return best
+
+
+def find_corners(image: NDArray, pattern: tuple[int, int], *, try_inverted: bool = False,
+                 upscale: int | None = None) -> NDArray | None:
+    """Inner chessboard corners ``(N, 2)`` float32 in pixels, or None when the board is not
+    found.
+
+    Uses ``cv2.findChessboardCornersSB`` (sub-pixel by design) and falls back to the classic
+    detector + ``cv2.cornerSubPix``. Small images (thermal cameras) are first enlarged by the
+    integer factor ``upscale`` (default: the smallest making them at least 640 px wide), which
+    makes the sub-pixel estimate several times more accurate on blurry low-resolution boards.
+    ``try_inverted`` also tries the inverted image (thermal images of a heated board). Corners
+    are relabelled so that corner 0 is the outer corner nearest the top-left of the image.
+    """
+    g = to_gray(image)
+    if g.dtype != np.uint8:
+        g = cv2.normalize(g, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
+    up = int(upscale) if upscale is not None else max(1, int(np.ceil(640 / g.shape[1])))
+    if up > 1:
+        g = cv2.resize(g, None, fx=up, fy=up, interpolation=cv2.INTER_CUBIC)
+    candidates = [g, 255 - g] if try_inverted else [g]
+    for img in candidates:
+        ok, c = cv2.findChessboardCornersSB(img, pattern, cv2.CALIB_CB_ACCURACY)
+        if not ok:
+            flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
+            ok, c = cv2.findChessboardCorners(img, pattern, flags)
+            if ok:
+                crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 50, 1e-3)
+                w = 2 * up + 3
+                c = cv2.cornerSubPix(img, c, (w, w), (-1, -1), crit)
+        if ok and c is not None and len(c) == pattern[0] * pattern[1]:
+            c = c.reshape(-1, 2).astype(np.float64)
+            c = (c + 0.5) / up - 0.5  # back to original pixel centres
+            return _canonical(c.astype(np.float32), pattern)
+    return None
+
+
+# ---------------------------------------------------------------------------------------------
+# Intrinsics
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class CameraCalibration:
+    """Result of :func:`calibrate_camera`.
+
+    ``rms_px`` is the overall RMS reprojection error, ``per_view_px`` the RMS error of each view
+    (pixels); ``rvecs``/``tvecs`` are the board poses (board -> camera, Rodrigues, metres);
+    ``used`` the indices (into the input lists) of the views kept after outlier rejection.
+    """
+
+    camera: Camera
+    rms_px: float
+    per_view_px: NDArray
+    rvecs: list[NDArray]
+    tvecs: list[NDArray]
+    used: list[int]
+    rejected: list[int] = field(default_factory=list)
+
+
+def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | Sequence[NDArray],
+                     image_size: tuple[int, int], *, model: str = "standard",
+                     fix_aspect: bool = False, reject_factor: float = 3.0,
+                     name: str = "") -> CameraCalibration:
+    """Zhang calibration of one camera (``cv2.calibrateCamera``).
+
+    Parameters
+    ----------
+    image_points : per view, the corners ``(N, 2)`` in pixels.
+    object_points : the board's 3D corners ``(N, 3)`` (same for every view) or one per view.
+    image_size : (width, height) pixels.
+    model : "radial" (k1 only: low-resolution cameras such as thermal ones), "simple"
+        (k1, k2, p1, p2), "standard" (+ k3) or "rational" (+ k4..k6).
+    fix_aspect : force fx = fy.
+    reject_factor : views whose RMS error exceeds ``reject_factor`` times the median (and
+        0.5 px) are dropped and the calibration rerun once; 0 disables.
+    """
+    if model not in _MODELS:
+        raise CalibrationError(f"model must be one of {', '.join(_MODELS)}, got {model!r}")
+    n = len(image_points)
+    if n < 3:
+        raise CalibrationError(
+            f"need the board in at least 3 images to calibrate, found it in {n}; add views of "
+            "the board at different angles"
+        )
+    objs = _per_view(object_points, n)
+    imgs = [np.asarray(p, np.float32).reshape(-1, 1, 2) for p in image_points]
+    flags = _MODELS[model] | (cv2.CALIB_FIX_ASPECT_RATIO if fix_aspect else 0)
+    idx = list(range(n))
+
+    def run(ix: list[int]) -> tuple:
+        K0 = None
+        if fix_aspect:
+            K0 = np.eye(3)
+        crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-9)
+        try:
+            return cv2.calibrateCameraExtended(
+                [objs[i] for i in ix], [imgs[i] for i in ix], tuple(image_size), K0, None,
+                flags=flags, criteria=crit)
+        except cv2.error as exc:
+            raise CalibrationError(f"OpenCV calibration failed: {exc.msg.strip()}") from None
+
+    out = run(idx)
+    rejected: list[int] = []
+    if reject_factor and n >= 6:
+        errs = np.asarray(out[7]).reshape(-1)
+        thr = max(reject_factor * float(np.median(errs)), 0.5)
+        keep = [i for i, e in zip(idx, errs, strict=True) if e <= thr]
+        if len(keep) < n and len(keep) >= 3:
+            rejected = [i for i in idx if i not in keep]
+            idx = keep
+            out = run(idx)
+    rms, K, dist, rvecs, tvecs, _, _, per_view = out
+    cam = Camera(K=K, dist=np.asarray(dist).reshape(-1), width=int(image_size[0]),
+                 height=int(image_size[1]), name=name)
+    return CameraCalibration(cam, float(rms), np.asarray(per_view).reshape(-1),
+                             [np.asarray(r).reshape(3) for r in rvecs],
+                             [np.asarray(t).reshape(3) for t in tvecs], idx, rejected)
+
+
+def _per_view(object_points: NDArray | Sequence[NDArray], n: int) -> list[NDArray]:
+    if isinstance(object_points, np.ndarray) and object_points.ndim == 2:
+        o = np.asarray(object_points, np.float32).reshape(-1, 1, 3)
+        return [o] * n
+    objs = [np.asarray(o, np.float32).reshape(-1, 1, 3) for o in object_points]
+    if len(objs) != n:
+        raise CalibrationError(f"{len(objs)} object point sets for {n} views")
+    return objs
+
+
+# ---------------------------------------------------------------------------------------------
+# Stereo
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class StereoCalibration:
+    """Result of :func:`calibrate_stereo`: the rig, the stereo RMS error (pixels, both
+    cameras), the per-view RMS errors ``(n_views, 2)`` (left, right) and whether the joint
+    refinement of the intrinsics was kept."""
+
+    rig: StereoRig
+    rms_px: float
+    per_view_px: NDArray
+    refined: bool
+
+
+def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDArray],
+                     object_points: NDArray | Sequence[NDArray], left: Camera, right: Camera,
+                     *, refine: bool = True) -> StereoCalibration:
+    """Stereo extrinsics (``cv2.stereoCalibrate``) from corners seen in both cameras.
+
+    First R, T with the given intrinsics fixed; then, if ``refine``, a joint refinement of the
+    intrinsics and extrinsics started from there, kept only if it lowers the RMS error and
+    keeps the focal lengths within 5 % (a guard against over-fitting few views).
+    Returns the rig with ``X_right = R X_left + T`` (metres, as the object points).
+    """
+    n = len(left_points)
+    if n != len(right_points):
+        raise CalibrationError(f"{n} left views but {len(right_points)} right views")
+    if n < 1:
+        raise CalibrationError("need at least one view with the board in both cameras")
+    if left.size != right.size:
+        raise CalibrationError(f"left and right image sizes differ: {left.size} vs {right.size}")
+    objs = _per_view(object_points, n)
+    lp = [np.asarray(p, np.float32).reshape(-1, 1, 2) for p in left_points]
+    rp = [np.asarray(p, np.float32).reshape(-1, 1, 2) for p in right_points]
+    crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-10)
+
+    def run(K1, d1, K2, d2, flags):
+        try:
+            return cv2.stereoCalibrateExtended(
+                objs, lp, rp, K1.copy(), d1.copy(), K2.copy(), d2.copy(), left.size,
+                np.eye(3), np.zeros((3, 1)), flags=flags, criteria=crit)
+        except cv2.error as exc:
+            raise CalibrationError(f"OpenCV stereo calibration failed: {exc.msg.strip()}") from None
+
+    d1 = _dist5(left.dist)
+    d2 = _dist5(right.dist)
+    rational = max(left.dist.size, right.dist.size) >= 8
+    base = cv2.CALIB_RATIONAL_MODEL if rational else 0
+    out = run(left.K, d1, right.K, d2, cv2.CALIB_FIX_INTRINSIC | base)
+    refined = False
+    if refine and n >= 3:
+        out2 = run(out[1], out[2], out[3], out[4], cv2.CALIB_USE_INTRINSIC_GUESS | base)
+        f_ok = all(abs(out2[k][i, i] / out[k][i, i] - 1.0) < 0.05 for k in (1, 3) for i in (0, 1))
+        if out2[0] < out[0] and f_ok:
+            out, refined = out2, True
+    rms, K1, D1, K2, D2, R, T = out[:7]
+    per_view = np.asarray(out[-1]).reshape(n, 2)
+    lc = Camera(K=K1, dist=np.asarray(D1).reshape(-1), width=left.width, height=left.height,
+                name=left.name or "left")
+    rc = Camera(K=K2, dist=np.asarray(D2).reshape(-1), width=right.width, height=right.height,
+                name=right.name or "right")
+    rig = StereoRig(lc, rc, R, np.asarray(T).reshape(3), rms_px=float(rms))
+    return StereoCalibration(rig, float(rms), per_view, refined)
+
+
+def _dist5(d: NDArray) -> NDArray:
+    """Distortion as OpenCV wants it back (at least 5 coefficients)."""
+    d = np.asarray(d, float).reshape(-1)
+    if d.size >= 5:
+        return d.reshape(-1, 1).copy()
+    out = np.zeros(5)
+    out[: d.size] = d
+    return out.reshape(-1, 1)
+
+
+# ---------------------------------------------------------------------------------------------
+# Thermal to stereo
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class ThermalExtrinsics:
+    """Result of :func:`calibrate_thermal_extrinsics`: thermal-from-left ``R``, ``T`` (metres),
+    the RMS reprojection error in the thermal image over all used views (pixels), the per-view
+    RMS errors, and the indices of the views used."""
+
+    R: NDArray
+    T: NDArray
+    rms_px: float
+    per_view_px: NDArray
+    used: list[int]
+
+
+def _board_pose(camera: Camera, obj: NDArray, img: NDArray) -> tuple[NDArray, NDArray]:
+    ok, rvec, tvec = cv2.solvePnP(obj.reshape(-1, 1, 3), np.asarray(img, np.float32)
+                                  .reshape(-1, 1, 2), camera.K, camera.dist,
+                                  flags=cv2.SOLVEPNP_IPPE)
+    if not ok:
+        raise CalibrationError("solvePnP failed for a board view")
+    rvec, tvec = cv2.solvePnPRefineLM(obj.reshape(-1, 1, 3),
+                                      np.asarray(img, np.float32).reshape(-1, 1, 2),
+                                      camera.K, camera.dist, rvec, tvec)
+    return cv2.Rodrigues(rvec)[0], tvec.reshape(3)
+
+
+def calibrate_thermal_extrinsics(rig: StereoRig, thermal: Camera,
+                                 left_points: Sequence[NDArray | None],
+                                 thermal_points: Sequence[NDArray | None],
+                                 object_points: NDArray,
+                                 right_points: Sequence[NDArray | None] | None = None,
+                                 *, max_rotation_deg: float = 2.0,
+                                 max_translation_m: float | None = None) -> ThermalExtrinsics:
+    """Extrinsics of a thermal camera relative to the stereo rig's left camera (7.4.1).
+
+    Parameters
+    ----------
+    rig : calibrated stereo rig (its left camera defines the frame).
+    thermal : calibrated thermal camera (intrinsics).
+    left_points, thermal_points : per view, the board corners in the left and the thermal
+        image (None where the board was not found); labelled consistently (see
+        :func:`match_labeling`).
+    object_points : the board's corners ``(N, 3)`` in metres.
+    right_points : optional right-image corners; when given, the board's 3D corners in the
+        left frame are triangulated from both stereo views (the rig's own estimate) instead of
+        taken from the left camera's PnP pose alone.
+    max_rotation_deg, max_translation_m : views whose transform is farther than this from the
+        median are rejected before averaging (translation default: 3x the median deviation,
+        at least 5 mm).
+
+    Returns
+    -------
+    ThermalExtrinsics with ``X_thermal = R X_left + T``.
+    """
+    n = len(left_points)
+    if len(thermal_points) != n:
+        raise CalibrationError(f"{n} left views but {len(thermal_points)} thermal views")
+    obj = np.asarray(object_points, np.float64).reshape(-1, 3)
+    views, Rs, Ts, X_all = [], [], [], []
+    for i in range(n):
+        lp, tp = left_points[i], thermal_points[i]
+        if lp is None or tp is None:
+            continue
+        rp = right_points[i] if right_points is not None else None
+        if rp is not None:
+            X = _triangulate(rig, lp, rp)
+        else:
+            Rb, tb = _board_pose(rig.left, obj, lp)
+            X = obj @ Rb.T + tb
+        # pose of the (3D, left-frame) corners in the thermal camera = thermal-from-left
+        Rt, tt = _board_pose(thermal, obj, tp)
+        Rb, tb = _rigid_fit(obj, X)  # board -> left
+        R = Rt @ Rb.T
+        T = tt - R @ tb
+        views.append(i)
+        Rs.append(R)
+        Ts.append(T)
+        X_all.append(X)
+    if len(views) < 1:
+        raise CalibrationError(
+            "the board was not found in any left/thermal image pair; the thermal camera needs "
+            "views of a board it can see (heated or back-lit chessboard)"
+        )
+    rots = Rotation.from_matrix(np.array(Rs))
+    Ts_arr = np.array(Ts)
+    # robust average: drop views far from the median, then mean rotation / median translation
+    r_med = rots[int(np.argmin([np.sum((rots[k].inv() * rots).magnitude())
+                                for k in range(len(rots))]))]
+    ang = np.degrees((r_med.inv() * rots).magnitude())
+    t_med = np.median(Ts_arr, axis=0)
+    dev = np.linalg.norm(Ts_arr - t_med, axis=1)
+    t_thr = max_translation_m if max_translation_m is not None else max(3 * np.median(dev), 0.005)
+    keep = (ang <= max_rotation_deg) & (dev <= t_thr)
+    if keep.sum() == 0:
+        keep[:] = True
+    R0 = rots[keep].mean().as_matrix()
+    T0 = np.median(Ts_arr[keep], axis=0)
+    # joint refinement: one PnP over all kept views' corners (3D in the left frame)
+    used = [v for v, k in zip(views, keep, strict=True) if k]
+    X = np.concatenate([X_all[j] for j in range(len(views)) if keep[j]])
+    uv = np.concatenate([np.asarray(thermal_points[v], np.float64).reshape(-1, 2) for v in used])
+    rvec, tvec = cv2.solvePnPRefineLM(X.reshape(-1, 1, 3), uv.reshape(-1, 1, 2), thermal.K,
+                                      thermal.dist, cv2.Rodrigues(R0)[0], T0.reshape(3, 1).copy())
+    R = cv2.Rodrigues(rvec)[0]
+    T = tvec.reshape(3)
+    per_view = []
+    for j, v in enumerate(views):
+        pred = thermal.project(X_all[j] @ R.T + T)
+        e = pred - np.asarray(thermal_points[v], float).reshape(-1, 2)
+        per_view.append(float(np.sqrt(np.mean(np.sum(e * e, axis=1)))))
+    per_view_arr = np.asarray(per_view)
+    rms = float(np.sqrt(np.mean(per_view_arr[keep] ** 2)))
+    return ThermalExtrinsics(R, T, rms, per_view_arr, used)
+
+
+def _triangulate(rig: StereoRig, lp: NDArray, rp: NDArray) -> NDArray:
+    """3D points (N, 3) in the left optical frame from undistorted stereo correspondences."""
+    xl = rig.left.normalized(np.asarray(lp, float).reshape(-1, 2))
+    xr = rig.right.normalized(np.asarray(rp, float).reshape(-1, 2))
+    P1 = np.hstack([np.eye(3), np.zeros((3, 1))])
+    P2 = np.hstack([rig.R, rig.T.reshape(3, 1)])
+    Xh = cv2.triangulatePoints(P1, P2, xl.T, xr.T)
+    return (Xh[:3] / Xh[3]).T
+
+
+def _rigid_fit(A: NDArray, B: NDArray) -> tuple[NDArray, NDArray]:
+    """Least-squares rotation R and translation t with B ~ A R^T + t (Kabsch / Umeyama)."""
+    ca, cb = A.mean(axis=0), B.mean(axis=0)
+    H = (A - ca).T @ (B - cb)
+    U, _, Vt = np.linalg.svd(H)
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
+    R = Vt.T @ D @ U.T
+    return R, cb - R @ ca
+
+
+# ---------------------------------------------------------------------------------------------
+# Synthetic boards (tests, examples, simulation)
+# ---------------------------------------------------------------------------------------------
+def render_chessboard(camera: Camera, R_board: NDArray, t_board: NDArray,
+                      pattern: tuple[int, int], square_m: float, *, margin_squares: float = 1.0,
+                      invert: bool = False, blur_px: float = 0.0, noise: float = 0.0,
+                      background: float = 0.45, rng: np.random.Generator | None = None,
+                      rays: NDArray | None = None) -> NDArray:
+    """Render an anti-aliased chessboard seen by ``camera`` (uint8 grey image).
+
+    The board (``pattern`` inner corners, squares of ``square_m`` metres, a white margin of
+    ``margin_squares``) has its corner grid at :func:`board_points`; ``R_board``, ``t_board``
+    map board coordinates to the camera's optical frame (metres). Lens distortion is rendered
+    exactly (each pixel's ray is intersected with the board plane); each pixel is the average
+    over a 4x4 grid of sub-pixel rays. ``invert`` swaps black and white (a heated board in a
+    thermal camera); ``blur_px`` is a Gaussian blur sigma; ``noise`` an additive Gaussian
+    noise sigma in grey levels. ``rays`` can pass precomputed sub-pixel rays for speed.
+    """
+    nx, ny = pattern
+    if rays is None:
+        rays = _subpixel_rays(camera)
+    R_board = np.asarray(R_board, float)
+    t_board = np.asarray(t_board, float).reshape(3)
+    # ray p = s * r meets the board plane n . (p - t) = 0 with n = R e_z
+    n = R_board[:, 2]
+    denom = rays @ n
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = (n @ t_board) / denom
+        P = s[..., None] * rays - t_board
+    local = P @ R_board  # board coordinates (x, y, ~0)
+    bx = local[..., 0] / square_m + 1.0  # squares; inner corner (0,0) is at square index 1
+    by = local[..., 1] / square_m + 1.0
+    inside = ((bx >= -margin_squares) & (bx <= nx + 1 + margin_squares)
+              & (by >= -margin_squares) & (by <= ny + 1 + margin_squares) & (s > 0))
+    on_squares = (bx >= 0) & (bx < nx + 1) & (by >= 0) & (by < ny + 1)
+    black = ((np.floor(bx) + np.floor(by)) % 2 == 0) & on_squares
+    val = np.where(black, 0.08, 0.92)
+    if invert:
+        val = 1.0 - val
+    val = np.where(inside, val, background)
+    img = val.reshape(camera.height, camera.width, -1).mean(axis=2)
+    if blur_px > 0:
+        img = cv2.GaussianBlur(img, (0, 0), blur_px)
+    if noise > 0:
+        rng = rng if rng is not None else np.random.default_rng(0)
+        img = img + rng.normal(0.0, noise / 255.0, img.shape)
+    return np.clip(np.rint(img * 255.0), 0, 255).astype(np.uint8)
+
+
+def _subpixel_rays(camera: Camera, k: int = 4) -> NDArray:
+    """Unit rays (H, W, k*k, 3) through a k x k grid inside every pixel."""
+    off = (np.arange(k) + 0.5) / k - 0.5
+    ou, ov = np.meshgrid(off, off)
+    u, v = np.meshgrid(np.arange(camera.width, dtype=float), np.arange(camera.height, dtype=float))
+    U = (u[..., None] + ou.ravel()).ravel()
+    V = (v[..., None] + ov.ravel()).ravel()
+    rays = camera.pixel_rays(np.c_[U, V])
+    return rays.reshape(camera.height, camera.width, k * k, 3)

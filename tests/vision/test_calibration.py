@@ -1,0 +1,189 @@
+"""Tests of hearsee.vision.calibration on synthetic chessboard renders with known ground truth
+(intrinsics, distortion, stereo and thermal extrinsics) and on the real chessboard set."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from hearsee.errors import CalibrationError
+from hearsee.vision import calibration as C
+from hearsee.vision.camera import Camera, StereoRig, read_opencv_yaml
+from hearsee.vision.io import read_image
+
+PATTERN = (9, 6)
+SQUARE = 0.025
+
+
+def _rot_deg(R1: np.ndarray, R2: np.ndarray) -> float:
+    return float(np.degrees(np.linalg.norm(cv2.Rodrigues(R1 @ R2.T)[0])))
+
+
+@pytest.fixture(scope="module")
+def synthetic():
+    """Ten views of a 9x6 board seen by a distorted stereo pair and a low-res thermal camera."""
+    left = Camera(K=np.array([[300.0, 0, 158.0], [0, 301.5, 122.0], [0, 0, 1]]),
+                  dist=[-0.22, 0.07, 0.0006, -0.0004, 0.0], width=320, height=240)
+    right = Camera(K=np.array([[296.0, 0, 163.0], [0, 297.0, 118.0], [0, 0, 1]]),
+                   dist=[-0.2, 0.05, -0.0005, 0.0003, 0.0], width=320, height=240)
+    R = cv2.Rodrigues(np.array([0.012, -0.035, 0.006]))[0]
+    T = -R @ np.array([0.10, 0.002, -0.003])  # right centre 10 cm to the right
+    thermal = Camera(K=np.array([[160.0, 0, 81.0], [0, 160.0, 59.0], [0, 0, 1]]),
+                     dist=[-0.1, 0.0, 0.0, 0.0, 0.0], width=160, height=120)
+    Rt = cv2.Rodrigues(np.array([-0.02, 0.03, 0.01]))[0]
+    c_t = np.array([0.05, 0.045, 0.01])  # thermal centre in the left frame
+    Tt = -Rt @ c_t
+    truth = StereoRig(left, right, R, T, thermal, Rt, Tt)
+    rng = np.random.default_rng(7)
+    rays = {k: C._subpixel_rays(c, 2) for k, c in
+            (("l", left), ("r", right), ("t", thermal))}
+    obj = C.board_points(PATTERN, SQUARE)
+    center = np.array([4 * SQUARE, 2.5 * SQUARE, 0.0])
+    views = []
+    for _ in range(10):
+        rv = rng.uniform(-0.5, 0.5, 3) * np.array([1.0, 1.0, 0.3])
+        Rb = cv2.Rodrigues(rv)[0]
+        pos = np.array([0.05 + rng.uniform(-0.06, 0.06), 0.02 + rng.uniform(-0.05, 0.05),
+                        rng.uniform(0.38, 0.5)])
+        tb = pos - Rb @ center
+        imgs = {}
+        for key, cam, Rc, Tc, kw in (
+            ("l", left, np.eye(3), np.zeros(3), dict(blur_px=0.5, noise=2.0)),
+            ("r", right, R, T, dict(blur_px=0.5, noise=2.0)),
+            ("t", thermal, Rt, Tt, dict(blur_px=0.9, noise=3.0, invert=True)),
+        ):
+            imgs[key] = C.render_chessboard(cam, Rc @ Rb, Rc @ tb + Tc, PATTERN, SQUARE,
+                                            rng=rng, rays=rays[key], **kw)
+        views.append(imgs)
+    return truth, obj, views
+
+
+@pytest.fixture(scope="module")
+def corners(synthetic):
+    """Detected corners per view (left, right and thermal relabelled to match the left)."""
+    _, _, views = synthetic
+    lp, rp, tp = [], [], []
+    for v in views:
+        a = C.find_corners(v["l"], PATTERN)
+        b = C.find_corners(v["r"], PATTERN)
+        t = C.find_corners(v["t"], PATTERN, try_inverted=True)
+        assert a is not None and b is not None and t is not None
+        lp.append(a)
+        rp.append(C.match_labeling(a, b, PATTERN))
+        tp.append(C.match_labeling(a, t, PATTERN))
+    return lp, rp, tp
+
+
+def test_board_helpers():
+    assert C.parse_board("9x6") == (9, 6)
+    with pytest.raises(CalibrationError, match="9x6"):
+        C.parse_board("nine by six")
+    with pytest.raises(CalibrationError, match="at least 2x2"):
+        C.parse_board("1x6")
+    p = C.board_points((3, 2), 0.1)
+    np.testing.assert_allclose(p[:4], [[0, 0, 0], [0.1, 0, 0], [0.2, 0, 0], [0, 0.1, 0]])
+    with pytest.raises(CalibrationError, match="square"):
+        C.board_points((3, 2), 0.0)
+
+
+def test_corners_are_subpixel_accurate(synthetic):
+    truth, obj, views = synthetic
+    img = views[0]["l"]
+    c = C.find_corners(img, PATTERN)
+    assert c is not None and c.shape == (54, 2)
+    # the true corners: find the pose that rendered them by matching the labelling
+    found = []
+    for cand in C._labelings(c, PATTERN):
+        ok, rv, tv = cv2.solvePnP(obj, cand, truth.left.K, truth.left.dist)
+        uv = truth.left.project(obj @ cv2.Rodrigues(rv)[0].T + tv.ravel())
+        found.append(np.sqrt(np.mean(np.sum((cand - uv) ** 2, axis=1))))
+    # with the true camera, the detected corners fit a board pose to a small fraction of a pixel
+    assert min(found) < 0.2
+    # no board -> None
+    assert C.find_corners(np.full((120, 160), 128, np.uint8), PATTERN) is None
+
+
+def test_full_chain_recovers_ground_truth(synthetic, corners):
+    truth, obj, views = synthetic
+    lp, rp, tp = corners
+    cl = C.calibrate_camera(lp, obj, truth.left.size, name="left")
+    cr = C.calibrate_camera(rp, obj, truth.right.size, name="right")
+    ct = C.calibrate_camera(tp, obj, truth.thermal.size, model="simple", name="thermal")
+    assert cl.rms_px < 0.3 and cr.rms_px < 0.3 and ct.rms_px < 0.3
+    assert cl.per_view_px.shape == (10,)
+    for est, ref in ((cl, truth.left), (cr, truth.right), (ct, truth.thermal)):
+        assert est.camera.fx == pytest.approx(ref.fx, rel=0.006)
+        assert est.camera.fy == pytest.approx(ref.fy, rel=0.006)
+        assert est.camera.cx == pytest.approx(ref.cx, abs=2.0)
+        assert est.camera.cy == pytest.approx(ref.cy, abs=2.0)
+        assert est.camera.dist[0] == pytest.approx(ref.dist[0], abs=0.03)
+    st = C.calibrate_stereo(lp, rp, obj, cl.camera, cr.camera)
+    assert st.rms_px < 0.3
+    assert st.per_view_px.shape == (10, 2)
+    assert st.rig.baseline_m == pytest.approx(truth.baseline_m, rel=0.01)
+    np.testing.assert_allclose(st.rig.T, truth.T, atol=0.002)
+    assert _rot_deg(st.rig.R, truth.R) < 0.3  # ~1 px of principal-point uncertainty
+    # rectified rig: focal and baseline sane, disparity positive
+    rect = st.rig.rectification
+    assert rect.baseline_m == pytest.approx(truth.baseline_m, rel=0.01)
+    # thermal extrinsics, with the board triangulated by the stereo rig and without
+    for right_points in (rp, None):
+        te = C.calibrate_thermal_extrinsics(st.rig, ct.camera, lp, tp, obj,
+                                            right_points=right_points)
+        assert len(te.used) >= 8
+        assert te.rms_px < 0.5
+        assert _rot_deg(te.R, truth.R_thermal) < 0.6  # 1 thermal pixel = 0.36 deg
+        np.testing.assert_allclose(-te.R.T @ te.T, truth.thermal_center_m, atol=0.005)
+
+
+def test_thermal_extrinsics_survive_missing_and_outlier_views(synthetic, corners):
+    truth, obj, views = synthetic
+    lp, _, tp = corners
+    tp = list(tp)
+    tp[1] = None  # board not seen by the thermal camera
+    tp[2] = tp[2] + np.float32([6.0, -4.0])  # a badly detected view
+    rig = truth  # ground-truth stereo calibration
+    te = C.calibrate_thermal_extrinsics(rig, truth.thermal, lp, tp, obj)
+    assert 1 not in te.used and 2 not in te.used
+    np.testing.assert_allclose(-te.R.T @ te.T, truth.thermal_center_m, atol=0.003)
+    with pytest.raises(CalibrationError, match="not found in any"):
+        C.calibrate_thermal_extrinsics(rig, truth.thermal, lp, [None] * len(lp), obj)
+
+
+def test_too_few_views_and_mismatch_raise(synthetic, corners):
+    truth, obj, views = synthetic
+    lp = corners[0][:2]
+    with pytest.raises(CalibrationError, match="at least 3 images"):
+        C.calibrate_camera(lp, obj, truth.left.size)
+    with pytest.raises(CalibrationError, match="right views"):
+        C.calibrate_stereo(lp, lp[:1], obj, truth.left, truth.right)
+
+
+@pytest.mark.shared
+def test_real_chessboard_pairs_close_to_reference(shared_data):
+    d = shared_data / "vision" / "chessboard_stereo"
+    if not d.is_dir():
+        pytest.skip("chessboard_stereo not present")
+    ids = ["01", "04", "07", "10", "13", "16"]
+    lp, rp = [], []
+    for i in ids:
+        a = C.find_corners(read_image(d / f"left{i}.jpg"), PATTERN)
+        b = C.find_corners(read_image(d / f"right{i}.jpg"), PATTERN)
+        if a is not None and b is not None:
+            lp.append(a)
+            rp.append(C.match_labeling(a, b, PATTERN))
+    assert len(lp) >= 5
+    obj = C.board_points(PATTERN, 1.0)
+    size = (640, 512)
+    cl = C.calibrate_camera(lp, obj, size, fix_aspect=True)
+    cr = C.calibrate_camera(rp, obj, size, fix_aspect=True)
+    ref = read_opencv_yaml(d / "reference_intrinsics.yml")
+    assert cl.camera.fx == pytest.approx(ref["M1"][0, 0], rel=0.10)
+    assert cr.camera.fx == pytest.approx(ref["M2"][0, 0], rel=0.10)
+    assert cl.rms_px < 1.0
+    st = C.calibrate_stereo(lp, rp, obj, cl.camera, cr.camera)
+    ref_T = read_opencv_yaml(d / "reference_extrinsics.yml")["T"].ravel()
+    # the reference was computed in its own (unknown) square units: compare directions
+    cos = st.rig.T @ ref_T / (np.linalg.norm(st.rig.T) * np.linalg.norm(ref_T))
+    assert cos > 0.98
