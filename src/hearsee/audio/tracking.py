@@ -131,6 +131,8 @@ class DirectionKalman(_Kalman):
         self.init_rate_sigma_dps = float(init_rate_sigma_dps)
         self.H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
         self.R = np.eye(2) * self.sigma_meas_deg**2
+        self._gate = {1: float(chi2.ppf(self.gate_prob, 1)), 2: float(chi2.ppf(self.gate_prob, 2))}
+        self._model_cache: dict[float, tuple[NDArray, NDArray]] = {}
         self.reset()
 
     def reset(self) -> None:
@@ -147,13 +149,16 @@ class DirectionKalman(_Kalman):
 
     # -- model ---------------------------------------------------------------------------
     def _set_dt(self, dt: float) -> None:
-        self.F = np.eye(4)
-        self.F[0, 2] = self.F[1, 3] = dt
-        q = Q_discrete_white_noise(dim=2, dt=dt, var=self.sigma_accel_dps2**2)
-        self.Q = np.zeros((4, 4))
-        for a, b in ((0, 2), (1, 3)):
-            idx = np.ix_([a, b], [a, b])
-            self.Q[idx] = q
+        key = round(dt, 9)
+        if key not in self._model_cache:
+            F = np.eye(4)
+            F[0, 2] = F[1, 3] = dt
+            q = Q_discrete_white_noise(dim=2, dt=dt, var=self.sigma_accel_dps2**2)
+            Q = np.zeros((4, 4))
+            for a, b in ((0, 2), (1, 3)):
+                Q[np.ix_([a, b], [a, b])] = q
+            self._model_cache[key] = (F, Q)
+        self.F, self.Q = self._model_cache[key]
 
     def predict(self, t: float) -> None:
         """Propagate the state to time ``t`` (seconds)."""
@@ -231,7 +236,7 @@ class DirectionKalman(_Kalman):
         az, el = cands[k]
         z, H, R, wrap = self._parts(az, el, Rf)
         y, S, dist2 = self._innovation(z, H, R, wrap)
-        if dist2 > chi2.ppf(self.gate_prob, len(z)):
+        if dist2 > self._gate[len(z)]:
             self.n_rejects += 1
             if self.n_rejects >= self.max_rejects:
                 self._start(az, el)
@@ -342,6 +347,8 @@ class MotionKalman(_Kalman):
         self.H = np.zeros((3, 9))
         self.H[[0, 1, 2], self._POS] = 1.0
         self.R = np.eye(3) * self.sigma_meas_m**2
+        self._gate = float(chi2.ppf(self.gate_prob, 3))
+        self._model_cache: dict[float, tuple[NDArray, NDArray]] = {}
         self.reset()
 
     def reset(self) -> None:
@@ -354,10 +361,15 @@ class MotionKalman(_Kalman):
         self.n_rejects = 0
 
     def _set_dt(self, dt: float) -> None:
-        f = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
-        self.F = np.kron(np.eye(3), f)
-        self.Q = Q_discrete_white_noise(dim=3, dt=dt, var=self.sigma_jerk**2, block_size=3,
-                                        order_by_dim=True)
+        key = round(dt, 9)
+        if key not in self._model_cache:
+            f = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
+            self._model_cache[key] = (
+                np.kron(np.eye(3), f),
+                Q_discrete_white_noise(dim=3, dt=dt, var=self.sigma_jerk**2, block_size=3,
+                                       order_by_dim=True),
+            )
+        self.F, self.Q = self._model_cache[key]
 
     def predict(self, t: float) -> None:
         """Propagate the state to time ``t`` (seconds)."""
@@ -395,7 +407,7 @@ class MotionKalman(_Kalman):
             self._start(z, Rm)
             return True
         y, S, d2 = self._innovation(z, self.H, Rm, None)
-        if d2 > chi2.ppf(self.gate_prob, 3):
+        if d2 > self._gate:
             self.n_rejects += 1
             if self.n_rejects >= self.max_rejects:
                 self._start(z, Rm)

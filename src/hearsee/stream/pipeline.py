@@ -1,0 +1,679 @@
+"""Real-time tracking: source -> framer -> TDOA -> ITD filter -> localizer -> tracker -> sink.
+
+Modelled on ODAS (Grondin & Michaud, "Lightweight and optimized sound source localization and
+tracking methods for open and closed microphone array configurations", Robotics and Autonomous
+Systems 113, 2019): small stages with explicit configuration, connected by a bounded queue.
+
+* **Sources** yield :class:`Block` s of samples with their absolute start sample, their sequence
+  number and the wall-clock time they became available. :class:`ArraySource` / :class:`WavSource`
+  read memory or a file (optionally paced in real time), :class:`DeviceSource` reads a live
+  microphone through sounddevice/PortAudio (imported lazily; a missing PortAudio library is a
+  clear :class:`~hearsee.errors.AudioInputError`). A device callback never blocks: when the bounded
+  queue is full the block is dropped and counted, which shows downstream as a gap in the
+  sequence numbers. :class:`DropoutSource` simulates dropped, late and stalled blocks.
+* :class:`Framer` cuts the block stream into analysis frames (``frame_ms`` every ``hop_ms``).
+  Frames that would need samples of a dropped block are emitted as *missing* (the trackers then
+  predict through them); a block that arrives after its samples were declared lost is *late* and
+  is discarded. Frames are emitted in batches (all complete frames of a block) so that the GCC of
+  :func:`hearsee.audio.tdoa.estimate_tdoas` runs vectorised.
+* :class:`TrackingProcessor` holds the TDOA, ITD-filter
+  (:class:`~hearsee.audio.itd_filter.ItdKalman`), localizer
+  (:func:`~hearsee.audio.localize.localize_tdoa`) and tracker stages
+  (:class:`~hearsee.audio.tracking.DirectionKalman`; with a calibrated camera and image points,
+  the camera-ray + ITD fix of :func:`~hearsee.fusion.audiovisual.locate_on_ray` and the
+  constant-acceleration :class:`~hearsee.audio.tracking.MotionKalman`).
+* :class:`StreamPipeline` runs them: in-line (fastest, for files) or with the source in its own
+  thread behind a bounded queue (live input). The consumer waits at most ``stall_timeout_s`` for
+  a block; a source that stays silent longer than ``max_stall_s`` ends the run with
+  ``stats.status == "stalled"`` instead of hanging. Each :class:`Update` carries its latency:
+  wall-clock time from the arrival of the block that completed the frame to its emission.
+
+Units: seconds, degrees, metres; frame times are frame centres from the start of the stream.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.itd_filter import ItdKalman
+from hearsee.audio.localize import localize_tdoa
+from hearsee.audio.tdoa import estimate_tdoas
+from hearsee.audio.tracking import DirectionKalman, MotionKalman
+from hearsee.errors import AudioInputError, ConfigError
+
+__all__ = [
+    "ArraySource",
+    "Block",
+    "DeviceSource",
+    "DropoutSource",
+    "FrameBatch",
+    "Framer",
+    "StreamConfig",
+    "StreamPipeline",
+    "StreamStats",
+    "TrackingProcessor",
+    "Update",
+    "WavSource",
+    "frame_geometry",
+]
+
+
+# ---------------------------------------------------------------------------- data
+@dataclass
+class Block:
+    """A block of samples from a source.
+
+    seq : int            sequence number (0, 1, 2, ...); a gap means blocks were dropped
+    start : int          absolute index of the first sample (sample 0 = start of the stream)
+    data : (n_ch, n)     samples, row k = microphone k
+    arrival : float      ``time.perf_counter()`` when the block became available
+    """
+
+    seq: int
+    start: int
+    data: NDArray
+    arrival: float
+
+
+@dataclass
+class FrameBatch:
+    """Consecutive analysis frames produced by one block.
+
+    ``t`` (k,) frame-centre times in seconds; ``missing`` (k,) True where the frame lost samples
+    to a dropped block; ``segment`` (n_ch, frame_len + (m - 1) * hop) holds the m complete
+    frames (the non-missing ones, which come last) or None.
+    """
+
+    t: NDArray
+    missing: NDArray
+    segment: NDArray | None
+    arrival: float
+
+
+@dataclass
+class Update:
+    """One tracker output per analysis frame (the JSON line of ``hearsee track``)."""
+
+    t: float
+    azimuth_deg: float | None
+    elevation_deg: float | None
+    position_m: list[float] | None
+    velocity_mps: list[float] | None
+    acceleration_mps2: list[float] | None
+    covariance: list[list[float]] | None
+    confidence: float
+    rate_dps: list[float] | None = None
+    measured: bool = False
+    missing: bool = False
+    latency_s: float = float("nan")
+    raw_azimuth_deg: float | None = None
+    raw_elevation_deg: float | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON object of the CLI contract (plus ``rate_dps``, ``measured``, ``missing``,
+        ``latency_ms``)."""
+        return {
+            "t": round(self.t, 6),
+            "azimuth_deg": self.azimuth_deg,
+            "elevation_deg": self.elevation_deg,
+            "position_m": self.position_m,
+            "velocity_mps": self.velocity_mps,
+            "acceleration_mps2": self.acceleration_mps2,
+            "covariance": self.covariance,
+            "confidence": self.confidence,
+            "rate_dps": self.rate_dps,
+            "measured": self.measured,
+            "missing": self.missing,
+            "latency_ms": None if not np.isfinite(self.latency_s) else self.latency_s * 1e3,
+        }
+
+
+@dataclass
+class StreamStats:
+    """What happened during a run."""
+
+    n_blocks: int = 0
+    n_frames: int = 0
+    n_missing_frames: int = 0
+    n_dropped_blocks: int = 0
+    n_late_blocks: int = 0
+    n_stalls: int = 0
+    audio_s: float = 0.0
+    wall_s: float = 0.0
+    cpu_s: float = 0.0
+    latencies_s: list[float] = field(default_factory=list)
+    status: str = "ok"
+
+    @property
+    def real_time_factor(self) -> float:
+        """Seconds of audio processed per second of wall-clock time."""
+        return self.audio_s / self.wall_s if self.wall_s > 0 else float("inf")
+
+    @property
+    def cpu_real_time_factor(self) -> float:
+        """Seconds of audio per second of process CPU time (fair on a loaded machine)."""
+        return self.audio_s / self.cpu_s if self.cpu_s > 0 else float("inf")
+
+    def latency_summary(self) -> dict[str, float]:
+        """Mean, median, 95th percentile and max per-frame latency in milliseconds."""
+        if not self.latencies_s:
+            return {"mean_ms": float("nan"), "median_ms": float("nan"),
+                    "p95_ms": float("nan"), "max_ms": float("nan")}
+        a = np.asarray(self.latencies_s) * 1e3
+        return {"mean_ms": float(a.mean()), "median_ms": float(np.median(a)),
+                "p95_ms": float(np.percentile(a, 95)), "max_ms": float(a.max())}
+
+
+# ---------------------------------------------------------------------------- sources
+class Source(Protocol):
+    fs: float
+    n_channels: int
+
+    def blocks(self) -> Iterator[Block]: ...
+
+
+class ArraySource:
+    """Blocks of an in-memory recording ``x`` (n_ch, n) at ``fs`` Hz.
+
+    ``realtime=True`` paces the blocks at the sample rate (a file played like a device).
+    """
+
+    def __init__(self, x: ArrayLike, fs: float, block_len: int = 2048,
+                 realtime: bool = False) -> None:
+        a = np.asarray(x, dtype=float)
+        if a.ndim != 2 or a.shape[1] == 0:
+            raise AudioInputError(f"recording must be (n_channels, n_samples), got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise AudioInputError("recording contains NaN or infinite samples")
+        if block_len < 1:
+            raise ConfigError(f"block_len must be >= 1 sample, got {block_len}")
+        self.x, self.fs, self.block_len = a, float(fs), int(block_len)
+        self.n_channels = a.shape[0]
+        self.realtime = bool(realtime)
+
+    def blocks(self) -> Iterator[Block]:
+        t0 = time.perf_counter()
+        for seq, start in enumerate(range(0, self.x.shape[1], self.block_len)):
+            data = self.x[:, start:start + self.block_len]
+            if self.realtime:
+                due = t0 + (start + data.shape[1]) / self.fs
+                delay = due - time.perf_counter()
+                if delay > 0:
+                    time.sleep(delay)
+            yield Block(seq, start, data, time.perf_counter())
+
+
+class WavSource(ArraySource):
+    """Blocks of a multichannel WAV file (validated by
+    :func:`hearsee.audio.signals.read_recording`)."""
+
+    def __init__(self, path: str | Path, n_channels: int | None = None, block_len: int = 2048,
+                 realtime: bool = False, fs: float | None = None) -> None:
+        from hearsee.audio.signals import read_recording
+
+        x, rate = read_recording(path, n_channels=n_channels, fs=fs)
+        super().__init__(x, rate, block_len, realtime)
+        self.path = Path(path)
+
+
+def _import_sounddevice() -> Any:
+    try:
+        import sounddevice
+    except OSError as exc:  # PortAudio shared library missing
+        raise AudioInputError(
+            f"live microphone input needs the PortAudio library ({exc}); install it (Debian/"
+            "Ubuntu: apt install libportaudio2) or process a recorded WAV file instead"
+        ) from None
+    except ImportError:
+        raise AudioInputError(
+            "live microphone input needs the 'sounddevice' package: pip install 'hearsee[live]'"
+        ) from None
+    return sounddevice
+
+
+def _device_listing(sd: Any) -> str:
+    try:
+        devs = sd.query_devices()
+        names = [f"{i}: {d['name']} ({d['max_input_channels']} in)"
+                 for i, d in enumerate(devs) if d.get("max_input_channels", 0) > 0]
+    except Exception:  # noqa: BLE001 - listing is best effort inside an error message
+        return "(could not list devices)"
+    return "; ".join(names) if names else "(no input devices found)"
+
+
+class DeviceSource:
+    """Live multichannel input through sounddevice (PortAudio).
+
+    Parameters
+    ----------
+    device : int or str or None
+        PortAudio device index or name (None = default input device).
+    n_channels : int
+        Channels to record (= microphones of the array).
+    fs : float
+        Sample rate, Hz.
+    block_len : int
+        Samples per callback block.
+    duration_s : float or None
+        Stop after this much audio (None: until interrupted or the device stalls).
+    queue_size : int
+        Bounded queue between the audio callback and the pipeline; a full queue drops the block
+        (counted in :attr:`n_dropped`) -- the callback never blocks.
+    timeout_s : float
+        A device that delivers nothing for this long ends the stream.
+    """
+
+    def __init__(self, device: int | str | None, n_channels: int, fs: float = 16000.0,
+                 block_len: int = 1024, duration_s: float | None = None, queue_size: int = 32,
+                 timeout_s: float = 2.0) -> None:
+        sd = _import_sounddevice()
+        try:
+            info = sd.query_devices(device, "input")
+        except (ValueError, sd.PortAudioError) as exc:
+            raise AudioInputError(
+                f"audio input device {device!r} not found or not an input ({exc}); "
+                f"available: {_device_listing(sd)}"
+            ) from None
+        if int(info["max_input_channels"]) < n_channels:
+            raise AudioInputError(
+                f"device {info['name']!r} has {info['max_input_channels']} input channels; the "
+                f"array needs {n_channels}"
+            )
+        self._sd = sd
+        self.device, self.n_channels, self.fs = device, int(n_channels), float(fs)
+        self.block_len, self.duration_s = int(block_len), duration_s
+        self.timeout_s = float(timeout_s)
+        self._q: queue.Queue = queue.Queue(maxsize=int(queue_size))
+        self.n_dropped = 0
+        self.n_overflows = 0
+
+    def _callback(self, indata: NDArray, frames: int, time_info: Any, status: Any) -> None:
+        if status and getattr(status, "input_overflow", False):
+            self.n_overflows += 1
+        start = self._next
+        self._next += frames
+        seq = self._seq
+        self._seq += 1
+        blk = Block(seq, start, np.array(indata, dtype=float).T, time.perf_counter())
+        try:
+            self._q.put_nowait(blk)
+        except queue.Full:
+            self.n_dropped += 1
+
+    def blocks(self) -> Iterator[Block]:
+        self._next, self._seq = 0, 0
+        stream = self._sd.InputStream(device=self.device, channels=self.n_channels,
+                                      samplerate=self.fs, blocksize=self.block_len,
+                                      dtype="float32", callback=self._callback)
+        limit = None if self.duration_s is None else int(self.duration_s * self.fs)
+        with stream:
+            while True:
+                try:
+                    blk = self._q.get(timeout=self.timeout_s)
+                except queue.Empty:
+                    return
+                yield blk
+                if limit is not None and blk.start + blk.data.shape[1] >= limit:
+                    return
+
+
+class DropoutSource:
+    """Wrap a source and simulate a flaky device (for tests and benchmarks).
+
+    Blocks whose sequence numbers are in ``drop`` are lost; those in ``late`` are held back and
+    delivered out of order after the following block (too late to be used); ``stall_before``
+    maps a sequence number to seconds of silence before that block is delivered.
+    """
+
+    def __init__(self, source: Any, drop: Sequence[int] = (), late: Sequence[int] = (),
+                 stall_before: dict[int, float] | None = None) -> None:
+        self.source = source
+        self.fs, self.n_channels = source.fs, source.n_channels
+        self.drop, self.late = set(drop), set(late)
+        self.stall_before = dict(stall_before or {})
+
+    def blocks(self) -> Iterator[Block]:
+        held: list[Block] = []
+        for blk in self.source.blocks():
+            if blk.seq in self.stall_before:
+                time.sleep(self.stall_before[blk.seq])
+            if blk.seq in self.drop:
+                continue
+            if blk.seq in self.late:
+                held.append(blk)
+                continue
+            yield Block(blk.seq, blk.start, blk.data, time.perf_counter())
+            for h in held:
+                yield Block(h.seq, h.start, h.data, time.perf_counter())
+            held = []
+
+
+# ---------------------------------------------------------------------------- framer
+def frame_geometry(fs: float, frame_ms: float, hop_ms: float) -> tuple[int, int]:
+    """Frame length and hop in samples, rounded exactly as :func:`estimate_tdoas` does."""
+    if frame_ms <= 0 or hop_ms <= 0:
+        raise ConfigError(f"frame and hop must be > 0 ms, got {frame_ms} and {hop_ms}")
+    return max(int(round(frame_ms * 1e-3 * fs)), 8), max(int(round(hop_ms * 1e-3 * fs)), 1)
+
+
+class Framer:
+    """Blocks -> batches of analysis frames, with missing frames where blocks were dropped."""
+
+    def __init__(self, n_channels: int, fs: float, frame_ms: float, hop_ms: float) -> None:
+        self.fs = float(fs)
+        self.frame_len, self.hop = frame_geometry(fs, frame_ms, hop_ms)
+        self.n_channels = int(n_channels)
+        self.buf = np.zeros((self.n_channels, 0))
+        self.buf_start = 0
+        self.next_frame = 0  # absolute start sample of the next frame to emit
+        self.n_late = 0
+        self.n_dropped = 0
+        self._expected_seq = 0
+
+    def push(self, blk: Block) -> FrameBatch | None:
+        """Add a block; return the frames it completes (or None)."""
+        data = np.asarray(blk.data, dtype=float)
+        if data.ndim != 2 or data.shape[0] != self.n_channels:
+            raise AudioInputError(
+                f"block has shape {data.shape}; expected {self.n_channels} channels")
+        buf_end = self.buf_start + self.buf.shape[1]
+        if blk.start < buf_end or blk.seq < self._expected_seq:
+            self.n_late += 1  # its samples were already consumed or declared lost
+            return None
+        if blk.seq > self._expected_seq:
+            self.n_dropped += blk.seq - self._expected_seq
+        self._expected_seq = blk.seq + 1
+        missing_t: list[float] = []
+        if blk.start > buf_end:  # gap: frames touching it are lost
+            while self.next_frame < blk.start:
+                missing_t.append((self.next_frame + self.frame_len / 2.0) / self.fs)
+                self.next_frame += self.hop
+            self.buf = np.zeros((self.n_channels, 0))
+            self.buf_start = blk.start
+        self.buf = np.concatenate([self.buf, data], axis=1)
+        buf_end = self.buf_start + self.buf.shape[1]
+        k = 0
+        if self.next_frame + self.frame_len <= buf_end:
+            k = (buf_end - self.frame_len - self.next_frame) // self.hop + 1
+        segment = None
+        ok_t = np.zeros(0)
+        if k > 0:
+            off = self.next_frame - self.buf_start
+            segment = self.buf[:, off: off + self.frame_len + (k - 1) * self.hop]
+            ok_t = (self.next_frame + np.arange(k) * self.hop + self.frame_len / 2.0) / self.fs
+            self.next_frame += k * self.hop
+        keep = max(self.next_frame - self.buf_start, 0)
+        if keep:
+            self.buf = self.buf[:, keep:]
+            self.buf_start += keep
+        if not missing_t and k == 0:
+            return None
+        t = np.concatenate([np.asarray(missing_t), ok_t])
+        missing = np.concatenate([np.ones(len(missing_t), bool), np.zeros(k, bool)])
+        return FrameBatch(t, missing, segment, blk.arrival)
+
+
+# ---------------------------------------------------------------------------- processing
+@dataclass
+class StreamConfig:
+    """Explicit configuration of the processing stages (ODAS style).
+
+    frame_ms, hop_ms : analysis frame and hop, milliseconds
+    method : GCC weighting (``phat``, ``scot``, ...)
+    refine : sub-sample peak refinement of the GCC (``parabolic`` is the cheapest; ``interp``
+        is exact band-limited interpolation, about 1.5x the cost)
+    band_hz : optional frequency band for the GCC, Hz
+    itd_filter : smooth the TDOAs with the ITD Kalman filter (thesis 2.2.2) before localizing
+    sigma_meas_deg, sigma_accel_dps2 : direction tracker noise (degrees, deg/s^2)
+    sigma_jerk : 3D motion tracker process noise, m/s^3
+    sigma_tdoa_s, sigma_px : measurement noise of the camera-ray fix (seconds, pixels)
+    range_m : search interval along the camera ray, metres
+    """
+
+    frame_ms: float = 64.0
+    hop_ms: float = 32.0
+    method: str = "phat"
+    refine: str = "parabolic"
+    band_hz: tuple[float, float] | None = None
+    itd_filter: bool = False
+    sigma_meas_deg: float = 6.0
+    sigma_accel_dps2: float = 150.0
+    sigma_jerk: float = 3.0
+    sigma_tdoa_s: float = 2e-5
+    sigma_px: float = 2.0
+    range_m: tuple[float, float] = (0.2, 6.0)
+
+
+class TrackingProcessor:
+    """TDOA -> ITD filter -> localizer -> tracker(s) for batches of frames.
+
+    Parameters
+    ----------
+    array : MicArray
+    fs : float
+        Sample rate, Hz.
+    config : StreamConfig
+    rig : hearsee.fusion.audiovisual.AudioVisualRig, optional
+        Calibrated camera + array; with ``image_points`` the tracker also estimates the 3D
+        position, velocity and acceleration.
+    image_points : callable ``t -> (u, v) or None``, optional
+        Image point of the source at time t (seconds), e.g. from a detector or a CSV file.
+    """
+
+    def __init__(self, array: MicArray, fs: float, config: StreamConfig | None = None,
+                 rig: Any = None, image_points: Callable[[float], Any] | None = None) -> None:
+        self.array, self.fs = array, float(fs)
+        self.cfg = config or StreamConfig()
+        self.rig, self.image_points = rig, image_points
+        self.frame_len, self.hop = frame_geometry(fs, self.cfg.frame_ms, self.cfg.hop_ms)
+        self.pairs = list(array.pairs)
+        self.itd = (ItdKalman(array.n_mics, self.pairs, q_std_s=0.5 / fs, r_std_s=1.0 / fs)
+                    if self.cfg.itd_filter else None)
+        self.direction = DirectionKalman(self.cfg.sigma_meas_deg, self.cfg.sigma_accel_dps2)
+        self.motion = MotionKalman(sigma_meas_m=0.05, sigma_jerk=self.cfg.sigma_jerk)
+
+    def tdoas(self, batch: FrameBatch) -> tuple[NDArray, NDArray]:
+        """Per-frame TDOAs (k, n_pairs) seconds (NaN = no estimate) and confidences (k,)."""
+        k = len(batch.t)
+        tdoa = np.full((k, len(self.pairs)), np.nan)
+        conf = np.zeros(k)
+        if batch.segment is not None:
+            m = int(np.count_nonzero(~batch.missing))
+            tf = estimate_tdoas(batch.segment, self.fs, self.array, self.cfg.frame_ms,
+                                self.cfg.hop_ms, self.cfg.method, self.pairs,
+                                band_hz=self.cfg.band_hz, refine=self.cfg.refine)
+            tdoa[k - m:] = tf.tdoa_s[:m]
+            conf[k - m:] = np.min(tf.confidence[:m], axis=1)
+        return tdoa, conf
+
+    def process(self, batch: FrameBatch) -> list[Update]:
+        """Run all stages on one batch of frames; one :class:`Update` per frame."""
+        tdoa, conf = self.tdoas(batch)
+        out = []
+        for n, t in enumerate(batch.t):
+            z = tdoa[n]
+            have = bool(np.all(np.isfinite(z)))
+            if self.itd is not None:
+                self.itd.step(z if have else None)
+                if have and self.itd.initialized:
+                    z = self.itd.pair_tdoas()
+            raw_az = raw_el = None
+            cands: list[tuple[float, float | None]] = []
+            if have:
+                loc = localize_tdoa(z, self.array, self.pairs, near_field=False)
+                cands = [(a, e) for a, e in loc.candidates if a is not None]
+                raw_az, raw_el = loc.azimuth_deg, loc.elevation_deg
+            measured = self.direction.update(float(t), cands[0] if cands else None, cands[1:])
+            upd = Update(float(t), None, None, None, None, None, None,
+                         float(conf[n]) if have else 0.0, measured=measured,
+                         missing=bool(batch.missing[n]), raw_azimuth_deg=raw_az,
+                         raw_elevation_deg=raw_el)
+            if self.direction.initialized:
+                upd.azimuth_deg = self.direction.azimuth_deg
+                el = self.direction.elevation_deg
+                upd.elevation_deg = el if np.isfinite(el) else None
+                upd.rate_dps = self.direction.rate_dps.tolist()
+                upd.covariance = self.direction.P[:2, :2].tolist()
+            if self.rig is not None and self.image_points is not None:
+                self._fuse(upd, z if have else None)
+            out.append(upd)
+        return out
+
+    def _fuse(self, upd: Update, z: NDArray | None) -> None:
+        from hearsee.fusion.audiovisual import locate_on_ray
+
+        uv = self.image_points(upd.t)
+        fix = None
+        if z is not None and uv is not None:
+            fix = locate_on_ray(self.rig, uv, z, self.pairs, range_m=self.cfg.range_m,
+                                sigma_tdoa_s=self.cfg.sigma_tdoa_s, sigma_px=self.cfg.sigma_px)
+        self.motion.update(upd.t, None if fix is None else fix.position_m,
+                           None if fix is None else fix.covariance)
+        if self.motion.initialized:
+            upd.position_m = self.motion.position.tolist()
+            upd.velocity_mps = self.motion.velocity.tolist()
+            upd.acceleration_mps2 = self.motion.acceleration.tolist()
+            upd.covariance = self.motion.position_cov.tolist()
+
+
+# ---------------------------------------------------------------------------- pipeline
+_END = object()
+
+
+class StreamPipeline:
+    """source -> framer -> processor -> sink, in-line or threaded behind a bounded queue.
+
+    Parameters
+    ----------
+    array : MicArray or preset/YAML name
+    config : StreamConfig
+    rig, image_points :
+        Optional camera fusion (see :class:`TrackingProcessor`).
+    queue_size : int
+        Bound of the block queue between the source thread and the processing (threaded mode).
+    stall_timeout_s : float
+        How long the consumer waits for one block before counting a stall.
+    max_stall_s : float
+        Total silence after which the run ends with ``status="stalled"``.
+    """
+
+    def __init__(self, array: MicArray | str, config: StreamConfig | None = None, rig: Any = None,
+                 image_points: Callable[[float], Any] | None = None, queue_size: int = 8,
+                 stall_timeout_s: float = 0.5, max_stall_s: float = 5.0) -> None:
+        self.array = load_array(array)
+        self.config = config or StreamConfig()
+        self.rig, self.image_points = rig, image_points
+        self.queue_size = int(queue_size)
+        self.stall_timeout_s, self.max_stall_s = float(stall_timeout_s), float(max_stall_s)
+        self.stats = StreamStats()
+
+    def _check_source(self, source: Any) -> None:
+        if source.n_channels != self.array.n_mics:
+            raise AudioInputError(
+                f"the input has {source.n_channels} channels; array {self.array.name!r} has "
+                f"{self.array.n_mics} microphones (channel k must be microphone k)"
+            )
+        frame_len, _ = frame_geometry(source.fs, self.config.frame_ms, self.config.hop_ms)
+        if self.array.max_tdoa().max() * source.fs + 1 >= frame_len // 2:
+            raise ConfigError(
+                f"frame of {self.config.frame_ms} ms is too short for the array's largest "
+                "delay; use a longer frame"
+            )
+
+    def run(self, source: Any, sink: Callable[[Update], None] | None = None,
+            threaded: bool = False) -> list[Update]:
+        """Process the whole source; call ``sink(update)`` per frame and return all updates."""
+        self._check_source(source)
+        framer = Framer(source.n_channels, source.fs, self.config.frame_ms, self.config.hop_ms)
+        proc = TrackingProcessor(self.array, source.fs, self.config, self.rig, self.image_points)
+        self.stats = st = StreamStats()
+        updates: list[Update] = []
+        last_sample = 0
+        t_start = time.perf_counter()
+        c_start = time.process_time()
+
+        def handle(blk: Block) -> None:
+            nonlocal last_sample
+            st.n_blocks += 1
+            last_sample = max(last_sample, blk.start + blk.data.shape[1])
+            batch = framer.push(blk)
+            if batch is None:
+                return
+            for u in proc.process(batch):
+                u.latency_s = time.perf_counter() - batch.arrival
+                st.latencies_s.append(u.latency_s)
+                st.n_frames += 1
+                st.n_missing_frames += int(u.missing)
+                updates.append(u)
+                if sink is not None:
+                    sink(u)
+
+        if not threaded:
+            for blk in source.blocks():
+                handle(blk)
+        else:
+            q: queue.Queue = queue.Queue(maxsize=self.queue_size)
+            stop = threading.Event()
+            errors: list[BaseException] = []
+
+            def produce() -> None:
+                try:
+                    for blk in source.blocks():
+                        while not stop.is_set():
+                            try:
+                                q.put(blk, timeout=0.1)
+                                break
+                            except queue.Full:
+                                continue
+                        if stop.is_set():
+                            return
+                except BaseException as exc:  # noqa: BLE001 - re-raised in the consumer
+                    errors.append(exc)
+                finally:
+                    while True:
+                        try:
+                            q.put(_END, timeout=0.1)
+                            break
+                        except queue.Full:
+                            if stop.is_set():
+                                break
+
+            th = threading.Thread(target=produce, name="hearsee-source", daemon=True)
+            th.start()
+            silent = 0.0
+            try:
+                while True:
+                    try:
+                        item = q.get(timeout=self.stall_timeout_s)
+                    except queue.Empty:
+                        st.n_stalls += 1
+                        silent += self.stall_timeout_s
+                        if silent >= self.max_stall_s:
+                            st.status = "stalled"
+                            break
+                        continue
+                    silent = 0.0
+                    if item is _END:
+                        break
+                    handle(item)
+            finally:
+                stop.set()
+                th.join(timeout=1.0)
+            if errors:
+                raise errors[0]
+        st.wall_s = time.perf_counter() - t_start
+        st.cpu_s = time.process_time() - c_start
+        st.audio_s = last_sample / source.fs
+        st.n_late_blocks = framer.n_late
+        st.n_dropped_blocks = framer.n_dropped + int(getattr(source, "n_dropped", 0))
+        return updates

@@ -1,0 +1,199 @@
+import sys
+import threading
+import time
+import types
+
+import numpy as np
+import pytest
+
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.tdoa import frame_signals
+from hearsee.errors import AudioInputError
+from hearsee.geometry import direction_deg, wrap_deg
+from hearsee.sim.moving import linear_trajectory, simulate_moving_free_field
+from hearsee.stream import pipeline as pl
+from hearsee.stream.pipeline import (
+    ArraySource,
+    Block,
+    DropoutSource,
+    Framer,
+    StreamConfig,
+    StreamPipeline,
+)
+
+FS = 16000
+
+
+@pytest.fixture(scope="module")
+def moving():
+    arr = MicArray.from_preset("three-mic")
+    x = np.random.default_rng(0).standard_normal(int(2.0 * FS))
+    traj = linear_trajectory([2.0, -1.0, 0.0], [0.0, 1.0, 0.0], 2.0)
+    y = simulate_moving_free_field(x, FS, arr, traj, snr_db=15, rng=1)
+    return arr, traj, y
+
+
+def _az_err(updates, traj):
+    t = np.array([u.t for u in updates])
+    az = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in updates])
+    return np.abs(wrap_deg(az - direction_deg(traj.at(t))[0]))
+
+
+def test_framer_matches_offline_framing_and_marks_gaps():
+    x = np.arange(3 * 5000, dtype=float).reshape(3, 5000)
+    fr = Framer(3, FS, frame_ms=16, hop_ms=8)  # 256 / 128 samples
+    frames, ts = [], []
+    for seq, s in enumerate(range(0, 5000, 700)):
+        b = fr.push(Block(seq, s, x[:, s:s + 700], 0.0))
+        if b is not None:
+            assert not b.missing.any()
+            frames.append(frame_signals(b.segment, fr.frame_len, fr.hop))
+            ts.append(b.t)
+    got = np.concatenate(frames, axis=1)
+    ref = frame_signals(x, 256, 128)
+    np.testing.assert_array_equal(got, ref)
+    np.testing.assert_allclose(np.concatenate(ts), (np.arange(ref.shape[1]) * 128 + 128) / FS)
+    # a dropped block: frames touching it come out missing, later frames are complete
+    fr = Framer(3, FS, frame_ms=16, hop_ms=8)
+    fr.push(Block(0, 0, x[:, :1000], 0.0))
+    b = fr.push(Block(2, 2000, x[:, 2000:3000], 0.0))
+    assert fr.n_dropped == 1
+    assert b.missing.sum() == len([s for s in range(768, 2000, 128)])
+    assert fr.push(Block(1, 1000, x[:, 1000:2000], 0.0)) is None
+    assert fr.n_late == 1
+
+
+def test_file_stream_tracks_a_moving_source(moving):
+    arr, traj, y = moving
+    pipe = StreamPipeline(arr, StreamConfig(frame_ms=64, hop_ms=32))
+    ups = pipe.run(ArraySource(y, FS, 2048))
+    assert len(ups) == frame_signals(y, 1024, 512).shape[1]
+    err = _az_err(ups, traj)
+    assert np.nanmedian(err[5:]) < 3.0
+    assert pipe.stats.n_frames == len(ups) and pipe.stats.status == "ok"
+    assert pipe.stats.real_time_factor > 1.0
+    assert all(np.isfinite(u.latency_s) and u.latency_s >= 0 for u in ups)
+    j = ups[-1].to_json()
+    assert set(j) >= {"t", "azimuth_deg", "elevation_deg", "position_m", "velocity_mps",
+                      "acceleration_mps2", "covariance", "confidence"}
+    # threaded mode gives the same estimates
+    ups2 = StreamPipeline(arr, StreamConfig(frame_ms=64, hop_ms=32)).run(
+        ArraySource(y, FS, 2048), threaded=True)
+    np.testing.assert_allclose([u.azimuth_deg for u in ups2], [u.azimuth_deg for u in ups])
+
+
+def test_device_dropout_late_block_and_stall_do_not_crash_or_hang(moving):
+    arr, traj, y = moving
+    src = DropoutSource(ArraySource(y, FS, 1024), drop=[6, 7, 8], late=[15],
+                        stall_before={20: 0.3})
+    pipe = StreamPipeline(arr, queue_size=2, stall_timeout_s=0.1, max_stall_s=2.0)
+    t0 = time.perf_counter()
+    ups = pipe.run(src, threaded=True)
+    assert time.perf_counter() - t0 < 10
+    st = pipe.stats
+    assert st.status == "ok"
+    assert st.n_late_blocks == 1
+    assert st.n_dropped_blocks == 4  # 3 dropped + the late one (missing when its successor came)
+    assert st.n_stalls >= 1
+    assert st.n_missing_frames >= 4
+    miss = np.array([u.missing for u in ups])
+    # the tracker predicts through missing frames and keeps tracking afterwards
+    assert all(u.azimuth_deg is not None for u in ups[np.argmax(miss):])
+    assert np.nanmedian(_az_err(ups, traj)[-20:]) < 3.0
+    t = np.array([u.t for u in ups])
+    assert np.all(np.diff(t) > 0)
+
+
+def test_a_dead_device_ends_the_run_as_stalled(moving):
+    arr, _, y = moving
+
+    class Dead:
+        fs, n_channels = FS, 3
+
+        def blocks(self):
+            yield Block(0, 0, y[:, :2048], time.perf_counter())
+            threading.Event().wait(5.0)  # never delivers again (within the test)
+
+    pipe = StreamPipeline(arr, stall_timeout_s=0.05, max_stall_s=0.3)
+    t0 = time.perf_counter()
+    ups = pipe.run(Dead(), threaded=True)
+    assert time.perf_counter() - t0 < 2.0
+    assert pipe.stats.status == "stalled"
+    assert len(ups) == 3
+
+
+def test_channel_mismatch_is_a_clear_error(moving):
+    arr, _, y = moving
+    with pytest.raises(AudioInputError, match="3 microphones"):
+        StreamPipeline(arr).run(ArraySource(y[:2], FS))
+    with pytest.raises(AudioInputError, match="NaN"):
+        ArraySource(np.full((3, 100), np.nan), FS)
+
+
+def test_missing_portaudio_is_a_clear_error(monkeypatch):
+    real_import = __import__
+
+    def fake_import(name, *a, **k):
+        if name == "sounddevice":
+            raise OSError("PortAudio library not found")
+        return real_import(name, *a, **k)
+
+    monkeypatch.delitem(sys.modules, "sounddevice", raising=False)
+    monkeypatch.setattr("builtins.__import__", fake_import)
+    with pytest.raises(AudioInputError, match="PortAudio"):
+        pl.DeviceSource(None, 3, FS)
+
+
+def _fake_sounddevice(blocks_to_send, gap_after=None):
+    sd = types.ModuleType("sounddevice")
+
+    class PortAudioError(Exception):
+        pass
+
+    devices = [{"name": "fake-3ch", "max_input_channels": 3},
+               {"name": "speaker", "max_input_channels": 0}]
+
+    def query_devices(device=None, kind=None):
+        if device is None and kind is None:
+            return devices
+        if device in (0, "fake-3ch", None):
+            return devices[0]
+        raise ValueError(f"No input device matching {device!r}")
+
+    class InputStream:
+        def __init__(self, device, channels, samplerate, blocksize, dtype, callback):
+            self.cb, self.bs, self.ch = callback, blocksize, channels
+
+        def __enter__(self):
+            def run():
+                rng = np.random.default_rng(0)
+                for k in range(blocks_to_send):
+                    if gap_after is not None and k == gap_after:
+                        time.sleep(0.3)  # a stall of the device
+                    self.cb(rng.standard_normal((self.bs, self.ch)).astype(np.float32),
+                            self.bs, None, None)
+                    time.sleep(0.001)
+            self.th = threading.Thread(target=run, daemon=True)
+            self.th.start()
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+    sd.PortAudioError = PortAudioError
+    sd.query_devices = query_devices
+    sd.InputStream = InputStream
+    return sd
+
+
+def test_live_device_source_with_fake_portaudio(monkeypatch):
+    monkeypatch.setitem(sys.modules, "sounddevice", _fake_sounddevice(20, gap_after=10))
+    with pytest.raises(AudioInputError, match="not found"):
+        pl.DeviceSource("usb-array", 3, FS)
+    with pytest.raises(AudioInputError, match="input channels"):
+        pl.DeviceSource(0, 4, FS)
+    src = pl.DeviceSource(0, 3, FS, block_len=1024, queue_size=4, timeout_s=1.0)
+    pipe = StreamPipeline(MicArray.from_preset("three-mic"))
+    ups = pipe.run(src, threaded=True)
+    assert pipe.stats.n_blocks + src.n_dropped == 20
+    assert len(ups) >= 1
