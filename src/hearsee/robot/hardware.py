@@ -78,6 +78,9 @@ __all__ = [
     "open_capture",
     "resolve_input_device",
     "robot_config_from_dict",
+    "run_robot",
+    "verify_audio_device",
+    "write_run_report",
 ]
 
 DRIVERS = ("none",)
@@ -515,21 +518,44 @@ def read_frame(cap: Any, spec: DeviceSpec, where: str, size: tuple[int, int] | N
     return frame
 
 
+def verify_audio_device(cfg: RobotConfig, sd: Any = None) -> dict[str, Any]:
+    """The input device of ``cfg.audio``, checked: it exists, has enough input channels and
+    accepts the sample rate (``sounddevice.check_input_settings``). ConfigError names the field;
+    a missing PortAudio library is an AudioInputError."""
+    a = cfg.audio
+    sd = import_sounddevice() if sd is None else sd
+    dev = resolve_input_device(sd, a.device, f"{cfg.path}: audio.device")
+    field_name = "audio.channels" if a.channels != tuple(range(a.array.n_mics)) \
+        else "audio.device"
+    if dev["max_input_channels"] < a.n_open:
+        raise ConfigError(f"{cfg.path}: {field_name}: device {dev['index']} {dev['name']!r} has "
+                          f"{dev['max_input_channels']} input channels; the array needs "
+                          f"{a.n_open} (channels {list(a.channels)})")
+    try:
+        sd.check_input_settings(device=dev["index"], channels=a.n_open, samplerate=a.fs,
+                                dtype="float32")
+    except Exception as exc:  # sounddevice raises PortAudioError or ValueError
+        raise ConfigError(f"{cfg.path}: audio.fs: device {dev['index']} {dev['name']!r} "
+                          f"does not accept {a.n_open} channels at {a.fs} Hz ({exc})") from None
+    return dev
+
+
 @dataclass
 class Check:
     """One dry-run check: ``name`` (the config field), ``ok``, ``detail`` (what was found or the
-    error message)."""
+    error message) and the ``error`` itself when it failed."""
 
     name: str
     ok: bool
     detail: str
+    error: HearseeError | None = None
 
 
 def _check(name: str, fn: Callable[[], str]) -> Check:
     try:
         return Check(name, True, fn())
     except HearseeError as exc:
-        return Check(name, False, str(exc))
+        return Check(name, False, str(exc), exc)
 
 
 def check_devices(cfg: RobotConfig) -> list[Check]:
@@ -544,21 +570,7 @@ def check_devices(cfg: RobotConfig) -> list[Check]:
                     f"head driver {cfg.head.driver}")]
 
     def audio() -> str:
-        sd = import_sounddevice()
-        dev = resolve_input_device(sd, a.device, f"{cfg.path}: audio.device")
-        where = "audio.channels" if cfg.audio.channels != tuple(range(a.array.n_mics)) \
-            else "audio.device"
-        where = f"{cfg.path}: {where}"
-        if dev["max_input_channels"] < a.n_open:
-            raise ConfigError(f"{where}: device {dev['index']} {dev['name']!r} has "
-                              f"{dev['max_input_channels']} input channels; the array needs "
-                              f"{a.n_open} (channels {list(a.channels)})")
-        try:
-            sd.check_input_settings(device=dev["index"], channels=a.n_open, samplerate=a.fs,
-                                    dtype="float32")
-        except Exception as exc:  # sounddevice raises PortAudioError or ValueError
-            raise ConfigError(f"{cfg.path}: audio.fs: device {dev['index']} {dev['name']!r} "
-                              f"does not accept {a.n_open} channels at {a.fs} Hz ({exc})") from None
+        dev = verify_audio_device(cfg)
         return (f"device {dev['index']} {dev['name']!r}: {a.n_open} of "
                 f"{dev['max_input_channels']} channels at {a.fs} Hz")
 
@@ -592,5 +604,537 @@ def first_failure(checks: Sequence[Check]) -> Check | None:
     return next((c for c in checks if not c.ok), None)
 
 
-def _log(msg: str) -> None:  # pragma: no cover - trivial
-    print(msg, file=sys.stderr)
+# ---------------------------------------------------------------------------------------------
+# Live sources
+# ---------------------------------------------------------------------------------------------
+class MappedSource:
+    """A stream source (:mod:`hearsee.stream.pipeline`) seen through the robot file: picks the
+    input channel of each microphone (``channels``), ends after ``duration_s`` seconds of audio
+    (None = when the source ends) or as soon as ``stop`` (a ``threading.Event``) is set."""
+
+    def __init__(self, source: Any, channels: Sequence[int], duration_s: float | None = None,
+                 stop: Any = None) -> None:
+        self.source = source
+        self.fs = float(source.fs)
+        self.channels = list(channels)
+        if max(self.channels) >= source.n_channels:
+            raise AudioInputError(f"audio.channels: channel {max(self.channels)} requested but "
+                                  f"the input has {source.n_channels} channels")
+        self.n_channels = len(self.channels)
+        self.limit = None if duration_s is None else int(round(duration_s * self.fs))
+        self.stop = stop
+
+    @property
+    def n_dropped(self) -> int:
+        return int(getattr(self.source, "n_dropped", 0))
+
+    def blocks(self) -> Any:
+        from hearsee.stream.pipeline import Block
+
+        for blk in self.source.blocks():
+            if self.stop is not None and self.stop.is_set():
+                return
+            data = np.asarray(blk.data)[self.channels]
+            if self.limit is not None:
+                if blk.start >= self.limit:
+                    return
+                data = data[:, : self.limit - blk.start]
+            yield Block(blk.seq, blk.start, data, blk.arrival)
+            if self.limit is not None and blk.start + data.shape[1] >= self.limit:
+                return
+
+
+def open_audio_source(cfg: RobotConfig, duration_s: float | None = None) -> MappedSource:
+    """The live microphones of ``cfg`` (checked with :func:`verify_audio_device`) as a stream
+    source: :class:`hearsee.stream.pipeline.DeviceSource` behind :class:`MappedSource`."""
+    from hearsee.stream.pipeline import DeviceSource
+
+    dev = verify_audio_device(cfg)
+    a = cfg.audio
+    src = DeviceSource(dev["index"], a.n_open, a.fs, a.block_len, duration_s=duration_s,
+                       queue_size=max(32, int(np.ceil(4000.0 / a.block_ms))))
+    return MappedSource(src, a.channels, duration_s)
+
+
+@dataclass
+class CameraFrames:
+    """One set of camera frames: ``left``/``right`` BGR uint8 (calibrated size) and the
+    ``thermal`` frame as grey uint8 (or None)."""
+
+    left: NDArray
+    right: NDArray
+    thermal: NDArray | None = None
+
+
+class Cameras:
+    """The cameras of a robot file, read through OpenCV ``VideoCapture``.
+
+    :meth:`read` returns the next :class:`CameraFrames` (a side-by-side device is split into its
+    halves), or None when a video file has ended or a device stopped delivering frames. Every
+    frame is checked against the calibrated size.
+    """
+
+    def __init__(self, cfg: CameraConfig) -> None:
+        import cv2
+
+        self.cfg = cfg
+        self.caps: dict[str, Any] = {}
+        try:
+            for field_name, spec in cfg.devices().items():
+                cap = open_capture(spec, field_name)
+                if isinstance(spec, int):  # live device: keep only the newest frame
+                    cap.set(cv2.CAP_PROP_BUFFERSIZE, 1)
+                self.caps[field_name.split(".")[1]] = cap
+        except BaseException:
+            self.close()
+            raise
+        self.n_failures = 0
+
+    def _grab(self, name: str) -> NDArray | None:
+        cap = self.caps[name]
+        ok, frame = cap.read()
+        if not ok or frame is None:
+            return None
+        w, h = self.cfg.expected_size(name)
+        if (frame.shape[1], frame.shape[0]) != (w, h):
+            raise ConfigError(f"cameras.{name}: camera delivers {frame.shape[1]}x{frame.shape[0]}"
+                              f" frames but the calibration expects {w}x{h}")
+        return frame
+
+    def read(self) -> CameraFrames | None:
+        import cv2
+
+        if "stereo" in self.caps:
+            f = self._grab("stereo")
+            if f is None:
+                self.n_failures += 1
+                return None
+            w = f.shape[1] // 2
+            left, right = f[:, :w], f[:, w:]
+        else:
+            left, right = self._grab("left"), self._grab("right")
+            if left is None or right is None:
+                self.n_failures += 1
+                return None
+        thermal = None
+        if "thermal" in self.caps:
+            thermal = self._grab("thermal")
+            if thermal is None:
+                self.n_failures += 1
+                return None
+            if thermal.ndim == 3:
+                thermal = cv2.cvtColor(thermal, cv2.COLOR_BGR2GRAY)
+        return CameraFrames(np.ascontiguousarray(left), np.ascontiguousarray(right), thermal)
+
+    def close(self) -> None:
+        for cap in self.caps.values():
+            cap.release()
+        self.caps = {}
+
+    def __enter__(self) -> Cameras:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+class PrintHeadDriver:
+    """Head driver ``none``: the head stays at ``pose_deg``; each desired pan/tilt command
+    (clipped to the pan limits) is logged and printed to ``stream`` when it changes by at least
+    ``min_change_deg``."""
+
+    def __init__(self, head: HeadConfig, stream: Any = None, min_change_deg: float = 2.0) -> None:
+        self.head = head
+        self.stream = stream
+        self.min_change_deg = float(min_change_deg)
+        self.last: tuple[float, float] | None = None
+        self.n_printed = 0
+
+    @property
+    def pose_deg(self) -> tuple[float, float]:
+        """The head's actual (pan, tilt): it does not move."""
+        return self.head.pose_deg
+
+    def command(self, t: float, pan_deg: float, tilt_deg: float) -> dict[str, float]:
+        lo, hi = self.head.pan_limits_deg
+        pan = float(np.clip(pan_deg, lo, hi))
+        tilt = float(np.clip(tilt_deg, -90.0, 90.0))
+        if self.last is None or max(abs(pan - self.last[0]), abs(tilt - self.last[1])) \
+                >= self.min_change_deg:
+            self.last = (pan, tilt)
+            if self.stream is not None:
+                print(f"head: t={t:.2f} s pan {pan:+.1f} deg tilt {tilt:+.1f} deg "
+                      "(driver none: not moved)", file=self.stream, flush=True)
+            self.n_printed += 1
+        return {"pan_deg": pan, "tilt_deg": tilt}
+
+
+# ---------------------------------------------------------------------------------------------
+# The live loop
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class LiveResult:
+    """What :func:`run_robot` returns: the ``log`` (one record per update, as written to the
+    JSON lines file), the ``summary``, report ``images``/``captions`` and overlay ``frames``
+    ``(t, BGR)`` for the Rerun/MCAP exports."""
+
+    log: list[dict[str, Any]]
+    summary: dict[str, Any]
+    images: dict[str, NDArray] = field(default_factory=dict)
+    captions: dict[str, str] = field(default_factory=dict)
+    frames: list[tuple[float, NDArray]] = field(default_factory=list)
+
+
+class _Head:
+    """Sensor geometry on the head at a fixed pose (robot frame, metres)."""
+
+    def __init__(self, cfg: RobotConfig, pose: tuple[float, float]) -> None:
+        from hearsee.geometry import array_to_robot, head_rotation
+        from hearsee.vision.camera import OPTICAL_FROM_BODY
+
+        self.pose = pose
+        self.R = head_rotation(*pose).as_matrix()  # head -> robot
+        self.pivot = np.asarray(cfg.head.pivot_m, float)
+        mount = cfg.cameras.mount_m if cfg.cameras is not None else np.zeros(3)
+        self.cam_centre = array_to_robot(np.zeros(3), pose, self.pivot, mount)
+        self.R_cam = OPTICAL_FROM_BODY @ self.R.T  # robot -> left optical
+        # what hearsee.robot.pipeline's bearing update needs (robot frame = its "room")
+        self.heading = 0.0
+        self.pivot_w = self.pivot
+
+    def direction_to_robot(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
+        from hearsee.geometry import direction_deg, unit_vector_deg
+
+        u = self.R @ unit_vector_deg(az_deg, 0.0 if el_deg is None else el_deg)
+        az, el = direction_deg(u)
+        return float(az), (None if el_deg is None else float(el))
+
+    def camera_to_robot(self, p_cam: NDArray) -> NDArray:
+        return self.R_cam.T @ np.asarray(p_cam, float) + self.cam_centre
+
+    def bearing_deg(self, p: NDArray) -> tuple[float, float]:
+        d = np.asarray(p, float) - self.pivot
+        return (float(np.degrees(np.arctan2(d[1], d[0]))),
+                float(np.degrees(np.arctan2(d[2], np.hypot(d[0], d[1])))))
+
+
+def _r(v: Any, nd: int = 4) -> Any:
+    if v is None:
+        return None
+    a = np.asarray(v, dtype=float)
+    return np.round(a, nd).tolist() if a.ndim else round(float(a), nd)
+
+
+def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source: Any = None,
+              cameras: Cameras | None = None, head: PrintHeadDriver | None = None,
+              jsonl: str | Path | None = None, threaded: bool | None = None,
+              progress: Callable[[float], None] | None = None, keep_frames: int = 100,
+              stop: Any = None, async_vision: bool | None = None) -> LiveResult:
+    """Run the robot's perception live until the audio ends, ``duration_s`` or Ctrl-C.
+
+    The same perception as the simulated pipeline (:mod:`hearsee.robot.pipeline`) where it
+    applies to a real head:
+
+    1. **Hear**: the microphones through the stream pipeline (:mod:`hearsee.stream.pipeline`:
+       framer -> GCC TDOAs -> ITD Kalman filter -> localizer -> direction Kalman filter); the
+       array-frame direction is rotated by the head pose into the robot frame.
+    2. **Turn**: after a few audio updates the desired head pan/tilt (toward the 3D track once
+       there is one, else the audio bearing; clipped to ``head.pan_limits_deg``) goes to the head
+       driver -- with ``driver: none`` it is printed and logged and the head stays put.
+    3. **See and verify**: every ``1 / cameras.rate_hz`` seconds of audio, one set of camera
+       frames goes through stereo + thermal human detection
+       (:func:`hearsee.vision.fusion.detect_humans`).
+    4. **Fuse and track**: the verified person nearest the audio bearing (within the pipeline's
+       association gate) updates a constant-acceleration 3D Kalman filter in the robot frame,
+       and audio bearings update it too (the pipeline's bearing update).
+
+    Parameters
+    ----------
+    cfg : the validated robot file.
+    duration_s : stop after this much audio (None: until the source ends or Ctrl-C).
+    audio_source : a stream source (``fs``, ``n_channels``, ``blocks()``) with ``cfg.audio``'s
+        input channels; default: the live device (:func:`open_audio_source`). Tests pass an
+        :class:`hearsee.stream.pipeline.ArraySource` of a simulated recording.
+    cameras : default: :class:`Cameras` of ``cfg.cameras`` (None in the file: audio only).
+    head : default: :class:`PrintHeadDriver` printing to stderr.
+    jsonl : the JSON lines file (default ``cfg.output.jsonl``); one line per update, flushed.
+    threaded : run the source in its own thread (default: only for the live device).
+    async_vision : detect humans in a worker thread, applying each result at the first update
+        after it is ready (default: only for the live device; otherwise in line, so that runs
+        over files are deterministic).
+    progress : called with the seconds of audio of each update.
+    keep_frames : overlays kept in memory for the exports (the first ones and the latest).
+    stop : a ``threading.Event`` that ends the run cleanly when set.
+
+    Returns
+    -------
+    LiveResult; ``summary["status"]`` is ``"ok"`` (source ended or duration reached),
+    ``"interrupted"`` (Ctrl-C) or ``"stalled"`` (the device stopped delivering audio).
+    """
+    import json
+    import time
+    from concurrent.futures import ThreadPoolExecutor
+
+    from hearsee.audio.tracking import MotionKalman
+    from hearsee.cli._app import to_jsonable
+    from hearsee.geometry import wrap_deg
+    from hearsee.robot.pipeline import (
+        ASSOCIATION_GATE_DEG,
+        BEARING_SIGMA_DEG,
+        MIN_AUDIO_UPDATES,
+        _bearing_update,
+        _measurement_cov,
+    )
+    from hearsee.stream.pipeline import StreamConfig, StreamPipeline
+
+    a = cfg.audio
+    live = audio_source is None
+    if live:
+        source = open_audio_source(cfg, duration_s)
+    else:
+        source = MappedSource(audio_source, a.channels, duration_s, stop)
+    if live and stop is not None:
+        source.stop = stop
+    if abs(source.fs - a.fs) > 1e-6:
+        raise AudioInputError(f"audio.fs: the source delivers {source.fs:g} Hz but the robot "
+                              f"file says {a.fs} Hz")
+    own_cameras = cameras is None and cfg.cameras is not None
+    if own_cameras:
+        cameras = Cameras(cfg.cameras)
+    head = head or PrintHeadDriver(cfg.head, sys.stderr)
+    geo = _Head(cfg, head.pose_deg)
+    rig = cfg.cameras.rig if cfg.cameras is not None else None
+    period = 1.0 / cfg.cameras.rate_hz if cfg.cameras is not None else float("inf")
+
+    scfg = StreamConfig(frame_ms=a.frame_ms, hop_ms=a.frame_ms / 2.0, method=a.method,
+                        itd_filter=True)
+    pipeline = StreamPipeline(a.array, scfg, queue_size=16, max_stall_s=5.0)
+    track = MotionKalman(sigma_meas_m=0.05, sigma_jerk=2.0)
+    out_path = Path(jsonl) if jsonl is not None else cfg.output.jsonl
+    try:
+        out_path.parent.mkdir(parents=True, exist_ok=True)
+        fh = open(out_path, "w", encoding="utf-8")  # noqa: SIM115 - closed in finally
+    except OSError as exc:
+        if own_cameras:
+            cameras.close()
+        raise ConfigError(f"output.jsonl: cannot write {out_path}: {exc.strerror}") from None
+
+    log: list[dict[str, Any]] = []
+    images: dict[str, NDArray] = {}
+    captions: dict[str, str] = {}
+    frames: list[tuple[float, NDArray]] = []
+    state = {"n_audio": 0, "next_cam": 0.0, "phase": "listening", "cam_frames": 0,
+             "cam_ended": False, "first_verified": None, "hop": scfg.hop_ms / 1000.0}
+    # live: detection runs in a worker thread so that the audio keeps flowing; its result is
+    # applied at the first update after it is ready (file sources: in line, deterministic)
+    use_pool = (live if async_vision is None else async_vision) and cameras is not None
+    pool = ThreadPoolExecutor(1, thread_name_prefix="hearsee-vision") if use_pool else None
+    pending: list[Any] = [None]
+    t_start = time.perf_counter()
+
+    def grab() -> CameraFrames | None:
+        fr = cameras.read()
+        if fr is None:
+            if cameras.n_failures >= 3 and not state["cam_ended"]:
+                state["cam_ended"] = True
+                print("cameras: no more frames; continuing with audio only", file=sys.stderr)
+            return None
+        state["cam_frames"] += 1
+        return fr
+
+    def detect(fr: CameraFrames) -> Any:
+        from hearsee.vision.fusion import detect_humans
+
+        thermal = fr.thermal if rig.thermal is not None else None
+        return detect_humans(fr.left, fr.right, rig, thermal,
+                             camera_height_m=float(geo.cam_centre[2]))
+
+    def apply(t: float, t_cap: float, fr: CameraFrames, det: Any, bearing: float | None
+              ) -> list[dict[str, Any]]:
+        from hearsee.vision.fusion import draw_detections
+
+        dets: list[dict[str, Any]] = []
+        best, best_d = None, np.inf
+        for h in det.humans + det.rejected:
+            p = geo.camera_to_robot(h.position_m)
+            az, el = geo.bearing_deg(p)
+            dets.append({**h.to_dict(), "position_m": _r(p), "azimuth_deg": _r(az, 2),
+                         "elevation_deg": _r(el, 2), "accepted": bool(h.accepted)})
+            if not h.accepted:
+                continue
+            if track.initialized:
+                d = float(np.linalg.norm(p - track.position))
+                ok = d < 0.8
+            elif bearing is not None:
+                d = abs(float(wrap_deg(az - bearing)))
+                ok = d < ASSOCIATION_GATE_DEG
+            else:
+                d, ok = np.inf, False
+            if ok and d < best_d:
+                best, best_d = (h, p, len(dets) - 1), d
+        for d in dets:
+            d["speaker"] = False
+        if best is not None:
+            h, p, k = best
+            Rc = geo.R_cam.T @ _measurement_cov(np.asarray(h.position_m), rig.focal_px,
+                                                rig.baseline_m) @ geo.R_cam
+            track.update(t, p, Rc)
+            dets[k]["speaker"] = True
+            if state["first_verified"] is None:
+                state["first_verified"] = t_cap
+        overlay = draw_detections(fr.left, det)
+        if len(frames) < keep_frames:
+            frames.append((t, overlay))
+        else:
+            frames[-1] = (t, overlay)
+        slot = "first" if state["cam_frames"] == 1 else "latest"
+        images[f"{slot}_overlay"] = overlay
+        captions[f"{slot}_overlay"] = (f"t = {t:.1f} s: {len(det.humans)} verified person(s), "
+                                       f"{len(det.rejected)} rejected candidate(s)")
+        if fr.thermal is not None:
+            import cv2
+
+            th = cv2.applyColorMap(fr.thermal, cv2.COLORMAP_INFERNO)
+            images[f"{slot}_thermal"] = cv2.resize(th, (overlay.shape[1], overlay.shape[0]),
+                                                   interpolation=cv2.INTER_NEAREST)
+            captions[f"{slot}_thermal"] = f"t = {t:.1f} s: thermal camera (8-bit, inferno)"
+        return dets
+
+    def sink(u: Any) -> None:
+        t = float(u.t)
+        track.predict(t)
+        audio = None
+        bearing = None
+        if u.azimuth_deg is not None:
+            az, el = geo.direction_to_robot(u.azimuth_deg, u.elevation_deg)
+            raw = None
+            if u.raw_azimuth_deg is not None:
+                raw = geo.direction_to_robot(u.raw_azimuth_deg, u.raw_elevation_deg)[0]
+            bearing = az
+            audio = {"azimuth_deg": _r(az, 2), "elevation_deg": _r(el, 2),
+                     "raw_azimuth_deg": _r(raw, 2), "confidence": _r(u.confidence, 3),
+                     "measured": bool(u.measured)}
+            if u.measured:
+                state["n_audio"] += 1
+                if raw is not None and track.initialized:
+                    _bearing_update(track, geo, raw, BEARING_SIGMA_DEG)
+        dets: list[dict[str, Any]] = []
+        camera_t = None
+        if (cameras is not None and not state["cam_ended"] and pending[0] is None
+                and t + 1e-9 >= state["next_cam"]):
+            state["next_cam"] = t + period - 1e-9
+            fr = grab()
+            if fr is not None and pool is not None:
+                pending[0] = (t, fr, pool.submit(detect, fr))
+            elif fr is not None:
+                dets, camera_t = apply(t, t, fr, detect(fr), bearing), t
+        if pending[0] is not None and pending[0][2].done():
+            t_cap, fr, fut = pending[0]
+            pending[0] = None
+            dets, camera_t = apply(t, t_cap, fr, fut.result(), bearing), t_cap
+        if state["phase"] == "listening" and state["n_audio"] >= MIN_AUDIO_UPDATES:
+            state["phase"] = "turning"
+        if track.initialized:
+            state["phase"] = "tracking"
+        command = None
+        if state["phase"] != "listening":
+            if track.initialized:
+                pan, tilt = geo.bearing_deg(track.position)
+            else:
+                pan, tilt = bearing if bearing is not None else head.pose_deg[0], head.pose_deg[1]
+            command = head.command(t, pan, tilt)
+        rec_track = None
+        if track.initialized:
+            rec_track = {"position_m": _r(track.position), "velocity_mps": _r(track.velocity),
+                         "acceleration_mps2": _r(track.acceleration),
+                         "covariance": _r(track.position_cov, 6)}
+        rec = {"t": round(t, 4), "phase": state["phase"], "head_pan_deg": head.pose_deg[0],
+               "head_tilt_deg": head.pose_deg[1], "head_command": command, "audio": audio,
+               "camera_t": camera_t, "detections": dets, "track": rec_track, "truth": None,
+               "error_m": None}
+        log.append(rec)
+        fh.write(json.dumps(to_jsonable(rec)) + "\n")
+        fh.flush()
+        if progress is not None:
+            progress(state["hop"])
+
+    status = "ok"
+    try:
+        pipeline.run(source, sink, threaded=live if threaded is None else threaded)
+        status = pipeline.stats.status
+    except KeyboardInterrupt:
+        status = "interrupted"
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
+        fh.close()
+        if own_cameras:
+            cameras.close()
+    summary = _live_summary(log, pipeline.stats, status, state, cameras, head,
+                            time.perf_counter() - t_start)
+    return LiveResult(log, summary, images, captions, frames)
+
+
+def _live_summary(log: list[dict[str, Any]], stats: Any, status: str, state: dict,
+                  cameras: Cameras | None, head: PrintHeadDriver, runtime_s: float
+                  ) -> dict[str, Any]:
+    """Summary metrics from the live log (nothing canned)."""
+    from hearsee.geometry import wrap_deg
+
+    az = np.array([r["audio"]["azimuth_deg"] for r in log
+                   if r["audio"] is not None and r["audio"]["measured"]], dtype=float)
+    az_final = float(az[-1]) if len(az) else float("nan")
+    az_med = (float(wrap_deg(np.median(wrap_deg(az - az_final)) + az_final)) if len(az)
+              else float("nan"))
+    dets = [d for r in log for d in r["detections"]]
+    last_track = next((r["track"] for r in reversed(log) if r["track"] is not None), None)
+    last_cmd = next((r["head_command"] for r in reversed(log) if r["head_command"]), None)
+    tracked = sum(1 for r in log if r["track"] is not None)
+    out: dict[str, Any] = {
+        "status": status,
+        "audio_s": float(stats.audio_s),
+        "updates": len(log),
+        "audio_updates": int(len(az)),
+        "azimuth_deg_median": az_med,
+        "azimuth_deg_final": az_final,
+        "camera_frames": int(state["cam_frames"]),
+        "person_detections_verified": int(sum(1 for d in dets if d["accepted"])),
+        "candidates_rejected": int(sum(1 for d in dets if not d["accepted"])),
+        "person_reported": bool(any(d["accepted"] for d in dets)),
+        "time_to_verify_s": (float(state["first_verified"]) if state["first_verified"]
+                             is not None else float("nan")),
+        "tracked_updates": int(tracked),
+        "head_pan_command_deg_final": (float(last_cmd["pan_deg"]) if last_cmd
+                                       else float("nan")),
+        "head_commands_printed": int(head.n_printed),
+        "dropped_blocks": int(stats.n_dropped_blocks),
+        "missing_frames": int(stats.n_missing_frames),
+        "real_time_factor": float(stats.real_time_factor),
+        "runtime_s": float(runtime_s),
+    }
+    if last_track is not None:
+        p = np.asarray(last_track["position_m"], float)
+        out["track_position_m_final"] = p.tolist()
+        out["track_distance_m_final"] = float(np.linalg.norm(p[:2]))
+    if cameras is not None:
+        out["camera_read_failures"] = int(cameras.n_failures)
+    return out
+
+
+def write_run_report(cfg: RobotConfig, result: LiveResult, folder: str | Path | None = None
+                     ) -> Path:
+    """Write the report folder of a live run with :func:`hearsee.robot.report.write_report`;
+    returns ``index.html``. The top view is drawn in the robot frame (robot at the origin,
+    facing +x); no room outline and no ground truth are known on real hardware."""
+    from hearsee.robot.report import write_report
+
+    scenario = {
+        "name": f"live run ({cfg.path.name})",
+        "seed": None,
+        "room": {"size_m": [0.0, 0.0, 0.0]},
+        "robot": {"position_m": [0.0, 0.0], "heading_deg": 0.0,
+                  "head_height_m": float(cfg.head.pivot_m[2]), "array": cfg.audio.array.name},
+        "objects": [],
+    }
+    return write_report(folder if folder is not None else cfg.output.report, scenario,
+                        result.log, result.summary, result.images, result.captions)

@@ -1,0 +1,105 @@
+"""``hearsee run --config robot.yaml``: the robot on real hardware (issue 8).
+
+Live microphones through sounddevice, cameras through OpenCV ``VideoCapture``, the same
+perception and outputs as ``hearsee demo``: one JSON line per update, a report folder and a
+summary. ``--dry-run`` only checks the robot file and opens every device once. The robot file's
+schema is in :mod:`hearsee.robot.hardware`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from hearsee.cli._app import app, err_console, progress
+
+
+@app.command("run")
+def run_cmd(
+    config: Annotated[Path, typer.Option("--config", "-c",
+                                         help="Robot file (YAML): devices, head, outputs.")],
+    dry_run: Annotated[bool, typer.Option("--dry-run",
+                                          help="Check the robot file and open every device "
+                                          "once; exit 0 only if all checks pass.")] = False,
+    duration: Annotated[float | None, typer.Option(
+        "--duration", "-d", help="Stop after this many seconds (default: until Ctrl-C).")] = None,
+    out: Annotated[Path | None, typer.Option(
+        "--out", "-o", help="Report folder (overrides output.report; the JSON lines go to "
+        "OUT/updates.jsonl).")] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q",
+                                        help="No progress bar or summary table.")] = False,
+) -> None:
+    """Hear, turn to, see, verify and track a person with the robot's real sensors.
+
+    Writes one JSON line per update (output.jsonl), then the report folder (index.html,
+    log.json, summary.json). Stops cleanly on Ctrl-C or after --duration seconds.
+    """
+    from hearsee.errors import ConfigError
+    from hearsee.robot.hardware import (
+        check_devices,
+        first_failure,
+        load_robot_config,
+        run_robot,
+        write_run_report,
+    )
+
+    if duration is not None and not duration > 0:
+        raise ConfigError(f"--duration must be > 0 seconds, got {duration}")
+    cfg = load_robot_config(config)
+    if out is not None:
+        cfg = cfg.with_output(out)
+        ins = {p.resolve() for p in cfg.input_files() if p.exists()}
+        if cfg.output.jsonl.resolve() in ins or any(
+                p.is_relative_to(out.resolve()) and p.name in ("index.html", "log.json",
+                                                               "summary.json") for p in ins):
+            raise ConfigError(f"--out {out} would overwrite an input file; choose another folder")
+    if dry_run:
+        checks = check_devices(cfg)
+        _print_checks(checks)
+        bad = first_failure(checks)
+        if bad is not None:
+            raise bad.error if bad.error is not None else ConfigError(bad.detail)
+        typer.echo(f"all {len(checks)} checks passed")
+        return
+    with progress("listening", total=duration, enabled=not quiet and duration is not None) \
+            as advance:
+        result = run_robot(cfg, duration_s=duration, progress=advance)
+    index = write_run_report(cfg, result)
+    if not quiet:
+        _print_summary(result.summary)
+    typer.echo(f"updates: {cfg.output.jsonl}")
+    typer.echo(f"report: {index}")
+    status = result.summary["status"]
+    if status == "stalled":
+        err_console.print("audio: the input device stopped delivering samples", highlight=False)
+        raise typer.Exit(1)
+
+
+def _print_checks(checks: list) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    t = Table(title="hearsee run --dry-run")
+    t.add_column("check")
+    t.add_column("result")
+    t.add_column("detail", overflow="fold")
+    for c in checks:
+        t.add_row(c.name, "[green]ok[/green]" if c.ok else "[red]FAIL[/red]", c.detail)
+    Console(width=140).print(t)
+
+
+def _print_summary(summary: dict) -> None:
+    from rich.table import Table
+
+    t = Table(title="hearsee run summary")
+    t.add_column("metric")
+    t.add_column("value", justify="right")
+    for k, v in summary.items():
+        if isinstance(v, float):
+            v = f"{v:.3g}"
+        elif isinstance(v, list):
+            v = "[" + ", ".join(f"{x:.2f}" for x in v) + "]"
+        t.add_row(str(k), str(v))
+    err_console.print(t)
