@@ -393,24 +393,30 @@ class MotionKalman(_Kalman):
         self.n_rejects = 0
 
     def update(self, t: float, position: ArrayLike | None = None,
-               R: ArrayLike | None = None) -> bool:
+               R: ArrayLike | None = None,
+               candidates: Sequence[tuple[ArrayLike, ArrayLike | None]] | None = None) -> bool:
         """One frame: predict to ``t`` and fuse ``position`` (m) with covariance ``R`` (3x3 m^2)
-        when given. Returns True when the measurement was fused."""
+        when given. ``candidates`` are ambiguous alternative fixes ``(position, R)``; the one
+        nearest the prediction (Mahalanobis) is used. Returns True when a fix was fused."""
         self.predict(t)
-        if position is None:
+        cands = [] if position is None else [(position, R)]
+        cands += list(candidates or [])
+        opts = []
+        for pos, Rc in cands:
+            z = np.asarray(pos, dtype=float).reshape(3)
+            if np.all(np.isfinite(z)):
+                opts.append((z, self.R if Rc is None else np.asarray(Rc, float).reshape(3, 3)))
+        if not opts:
             return False
-        z = np.asarray(position, dtype=float).reshape(3)
-        if not np.all(np.isfinite(z)):
-            return False
-        Rm = self.R if R is None else np.asarray(R, dtype=float).reshape(3, 3)
         if not self.initialized:
-            self._start(z, Rm)
+            self._start(*opts[0])
             return True
-        y, S, d2 = self._innovation(z, self.H, Rm, None)
+        scored = [(self._innovation(z, self.H, Rm, None), z, Rm) for z, Rm in opts]
+        (y, S, d2), z, Rm = min(scored, key=lambda a: a[0][2])
         if d2 > self._gate:
             self.n_rejects += 1
             if self.n_rejects >= self.max_rejects:
-                self._start(z, Rm)
+                self._start(*opts[0])
                 return True
             return False
         self._correct(y, S, self.H, Rm)

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -130,6 +130,8 @@ class RayFix:
         Position covariance, m^2 (along-ray from the ITD noise, across from the pixel noise).
     direction : array (3,)
         Unit ray direction (array frame).
+    alternatives : list of RayFix
+        Other local minima along the ray that explain the ITDs almost as well.
     """
 
     position_m: NDArray
@@ -137,6 +139,7 @@ class RayFix:
     residual_s: float
     covariance: NDArray
     direction: NDArray
+    alternatives: list[RayFix] = field(default_factory=list)
 
 
 def ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: ArrayLike,
@@ -162,6 +165,7 @@ def locate_on_ray(
     n_grid: int = 256,
     sigma_tdoa_s: float = 2e-5,
     sigma_px: float = 1.0,
+    max_candidates: int = 3,
 ) -> RayFix:
     """Fuse an image point with the ITDs: the point on the camera ray that best explains them.
 
@@ -179,10 +183,16 @@ def locate_on_ray(
         Log-spaced grid points of the global search.
     sigma_tdoa_s, sigma_px : float
         Measurement noise used for the returned covariance (seconds, pixels).
+    max_candidates : int
+        Local minima of J examined.
 
     Returns
     -------
     RayFix
+        The best fix; ``alternatives`` holds other local minima whose ITD residual is within
+        4x the best (a planar array cannot tell a point from its mirror image in the array
+        plane, so a ray that crosses that plane has two exact solutions) -- a tracker picks
+        among them with its prediction.
     """
     z = np.asarray(tdoa_s, dtype=float).reshape(-1)
     prs = list(rig.array.pairs if pairs is None else pairs)
@@ -200,23 +210,40 @@ def locate_on_ray(
     d = d[0]
     grid = np.geomspace(near, far, int(n_grid))
     J = np.sum(ray_residuals(rig.array, o, d, grid, z, prs) ** 2, axis=1)
-    k = int(np.argmin(J))
+    # every local minimum of the grid is a candidate (e.g. the mirror image of the source in
+    # the plane of a planar array when the ray crosses that plane); best first
+    interior = np.r_[J[0] <= J[1], (J[1:-1] <= J[:-2]) & (J[1:-1] <= J[2:]), J[-1] <= J[-2]]
+    idx = np.flatnonzero(interior)
+    idx = idx[np.argsort(J[idx])][:max_candidates]
+    fixes = [_refine_on_ray(rig, o, d, z, prs, grid, J, int(k), sigma_tdoa_s, sigma_px)
+             for k in idx]
+    fixes.sort(key=lambda f: f.residual_s)
+    best = fixes[0]
+    # keep alternatives that explain the ITDs nearly as well as the best one
+    tol = max(4.0 * best.residual_s, sigma_tdoa_s)
+    best.alternatives = [f for f in fixes[1:] if f.residual_s <= tol]
+    return best
+
+
+def _refine_on_ray(rig: AudioVisualRig, o: NDArray, d: NDArray, z: NDArray,
+                   prs: list[tuple[int, int]], grid: NDArray, J: NDArray, k: int,
+                   sigma_tdoa_s: float, sigma_px: float) -> RayFix:
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
 
     def cost(s: float) -> float:
         return float(np.sum(ray_residuals(rig.array, o, d, [s], z, prs) ** 2))
 
+    s_hat = float(grid[k])
     if hi > lo:
-        res = minimize_scalar(cost, bounds=(lo, hi), method="bounded",
-                              options={"xatol": 1e-6})
-        s_hat = float(res.x) if res.fun <= J[k] else float(grid[k])
-    else:
-        s_hat = float(grid[k])
+        res = minimize_scalar(cost, bounds=(lo, hi), method="bounded", options={"xatol": 1e-6})
+        if res.fun <= J[k]:
+            s_hat = float(res.x)
     F = ray_residuals(rig.array, o, d, [s_hat], z, prs)[0]
     h = 1e-4 * max(s_hat, 1e-2)
     dF = (ray_residuals(rig.array, o, d, [s_hat + h], z, prs)[0]
           - ray_residuals(rig.array, o, d, [s_hat - h], z, prs)[0]) / (2 * h)
     var_s = sigma_tdoa_s**2 / max(float(dF @ dF), 1e-30)
+    var_s = min(var_s, (grid[-1] - grid[0]) ** 2)
     var_lat = (s_hat * sigma_px / rig.camera.fx) ** 2
     cov = var_s * np.outer(d, d) + var_lat * (np.eye(3) - np.outer(d, d))
     return RayFix(o + s_hat * d, s_hat, float(np.sqrt(np.mean(F**2))), cov, d)

@@ -538,7 +538,9 @@ class TrackingProcessor:
             fix = locate_on_ray(self.rig, uv, z, self.pairs, range_m=self.cfg.range_m,
                                 sigma_tdoa_s=self.cfg.sigma_tdoa_s, sigma_px=self.cfg.sigma_px)
         self.motion.update(upd.t, None if fix is None else fix.position_m,
-                           None if fix is None else fix.covariance)
+                           None if fix is None else fix.covariance,
+                           None if fix is None else [(a.position_m, a.covariance)
+                                                     for a in fix.alternatives])
         if self.motion.initialized:
             upd.position_m = self.motion.position.tolist()
             upd.velocity_mps = self.motion.velocity.tolist()

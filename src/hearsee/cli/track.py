@@ -1,0 +1,140 @@
+"""``hearsee track``: track a moving speaker from a recording or live microphones (+ camera)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from hearsee.cli._app import app, emit_json, err_console, parse_floats, to_jsonable
+
+
+class TrackFormat(StrEnum):
+    jsonl = "jsonl"
+    json = "json"
+
+
+class Detector(StrEnum):
+    hog = "hog"
+    face = "face"
+
+
+class GccMethod(StrEnum):
+    phat = "gcc-phat"
+    scot = "gcc-scot"
+    roth = "gcc-roth"
+    ml = "gcc-ml"
+    cc = "cc"
+
+
+def _device_spec(text: str) -> int | str:
+    return int(text) if text.strip().lstrip("-").isdigit() else text
+
+
+@app.command("track")
+def track_cmd(
+    recording: Annotated[Path | None, typer.Argument(
+        help="Multichannel audio file (channel k = microphone k). Omit with --device.")] = None,
+    array: Annotated[str, typer.Option("--array", help="Array preset name or YAML file.")] = ...,
+    device: Annotated[str | None, typer.Option(
+        "--device", help="Live input: PortAudio device index or name.")] = None,
+    duration: Annotated[float | None, typer.Option(
+        "--duration", help="Live input: stop after this many seconds.")] = None,
+    fs: Annotated[int, typer.Option("--fs", help="Live input: sample rate in Hz.")] = 16000,
+    video: Annotated[Path | None, typer.Option(
+        "--video", help="Video of the scene (needs --camera).")] = None,
+    camera_device: Annotated[int | None, typer.Option(
+        "--camera-device", help="Live camera index (needs --camera).")] = None,
+    image_points: Annotated[Path | None, typer.Option(
+        "--image-points", help="CSV t,u,v of the source's image point (needs --camera).")] = None,
+    detector: Annotated[Detector, typer.Option(
+        "--detector", help="Person detector for --video / --camera-device.")] = Detector.hog,
+    camera: Annotated[Path | None, typer.Option(
+        "--camera", help="Camera calibration YAML.")] = None,
+    camera_at: Annotated[str, typer.Option(
+        "--camera-at", help="Camera optical centre X,Y,Z in the array frame, metres.")] = "0,0,0",
+    camera_pan: Annotated[float, typer.Option(
+        "--camera-pan", help="Camera pan (deg, toward +y).")] = 0.0,
+    camera_tilt: Annotated[float, typer.Option(
+        "--camera-tilt", help="Camera tilt (deg, up).")] = 0.0,
+    frame_ms: Annotated[float, typer.Option(
+        "--frame-ms", help="Frame length in milliseconds.")] = 64.0,
+    hop_ms: Annotated[float, typer.Option("--hop-ms", help="Frame hop in milliseconds.")] = 32.0,
+    method: Annotated[GccMethod, typer.Option("--method", help="GCC weighting.")] = GccMethod.phat,
+    itd_filter: Annotated[bool, typer.Option(
+        "--itd-filter", help="Smooth TDOAs with the ITD Kalman filter first.")] = False,
+    fmt: Annotated[TrackFormat, typer.Option(
+        "--format", help="jsonl: one JSON line per frame; json: one document.")
+    ] = TrackFormat.jsonl,
+    stats: Annotated[bool, typer.Option(
+        "--stats", help="Print real-time factor and latency on stderr.")] = False,
+) -> None:
+    """Track the direction (and, with a calibrated camera, the 3D position, velocity and
+    acceleration) of a moving speaker; one update per audio frame."""
+    from hearsee.audio.arrays import load_array
+    from hearsee.errors import ConfigError
+    from hearsee.stream.pipeline import DeviceSource, StreamConfig, StreamPipeline, WavSource
+
+    if (recording is None) == (device is None):
+        raise ConfigError("give either a recording file or --device (live input), not both")
+    visual = [o for o in (video, camera_device, image_points) if o is not None]
+    if len(visual) > 1:
+        raise ConfigError("use only one of --video, --camera-device and --image-points")
+    if visual and camera is None:
+        raise ConfigError("--video / --camera-device / --image-points need --camera CAM.yaml "
+                          "(a calibrated camera; see `hearsee calibrate`)")
+    if camera is not None and not visual:
+        raise ConfigError("--camera needs an image-point source: --video, --camera-device or "
+                          "--image-points")
+    if frame_ms <= 0 or hop_ms <= 0:
+        raise ConfigError(f"--frame-ms and --hop-ms must be > 0, got {frame_ms} and {hop_ms}")
+    arr = load_array(array)
+    rig = points = None
+    if camera is not None:
+        from hearsee.fusion.audiovisual import AudioVisualRig
+        from hearsee.stream.video import CsvImagePoints, VideoImagePoints
+        from hearsee.vision.camera import load_camera
+
+        cam = load_camera(camera)
+        rig = AudioVisualRig.mounted(arr, cam, parse_floats(camera_at, 3, "--camera-at"),
+                                     camera_pan, camera_tilt)
+        if image_points is not None:
+            points = CsvImagePoints(image_points)
+        else:
+            points = VideoImagePoints(camera_device if video is None else video,
+                                      detector=detector.value)
+    if device is not None:
+        source = DeviceSource(_device_spec(device), arr.n_mics, fs, duration_s=duration)
+    else:
+        source = WavSource(recording, n_channels=arr.n_mics, block_len=2048)
+    cfg = StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms, method=method.value.replace("gcc-", ""),
+                       itd_filter=itd_filter)
+    pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
+
+    def sink(u: object) -> None:
+        sys.stdout.write(json.dumps(to_jsonable(u.to_json())) + "\n")  # type: ignore[attr-defined]
+        sys.stdout.flush()
+
+    updates = pipe.run(source, sink if fmt is TrackFormat.jsonl else None,
+                       threaded=device is not None)
+    st = pipe.stats
+    summary = {"frames": st.n_frames, "missing_frames": st.n_missing_frames,
+               "dropped_blocks": st.n_dropped_blocks, "late_blocks": st.n_late_blocks,
+               "status": st.status, "audio_s": st.audio_s,
+               "real_time_factor": st.real_time_factor, **st.latency_summary()}
+    if fmt is TrackFormat.json:
+        emit_json({"array": arr.to_dict(), "source": str(recording or device),
+                   "updates": [u.to_json() for u in updates], "stats": summary})
+    if stats or st.status != "ok":
+        err_console.print(
+            f"track: {st.n_frames} frames, {st.audio_s:.2f} s of audio, "
+            f"{st.real_time_factor:.1f}x real time, latency median "
+            f"{summary['median_ms']:.1f} ms (p95 {summary['p95_ms']:.1f} ms), "
+            f"{st.n_dropped_blocks} dropped / {st.n_late_blocks} late blocks, status {st.status}",
+            highlight=False)
+    if not any(u.measured for u in updates):
+        err_console.print("track: no frame held a localizable source", highlight=False)

@@ -1,0 +1,208 @@
+"""Image points of the sound source for the tracking stream: from a CSV sidecar or a video.
+
+The camera-ray + ITD fusion (:func:`hearsee.fusion.audiovisual.locate_on_ray`) needs, per audio
+frame, the pixel ``(u, v)`` where the source appears. Two providers, both callables
+``points(t_seconds) -> (u, v) or None``:
+
+* :class:`CsvImagePoints` reads ``t,u,v`` rows (seconds, pixels; empty u/v = not seen), e.g.
+  written by a simulation or an external detector, and interpolates linearly between rows that
+  are at most ``max_gap_s`` apart.
+* :class:`VideoImagePoints` reads a video file or a camera (OpenCV ``VideoCapture``) and runs a
+  simple detector on the frame at time t: OpenCV's HOG people detector (Dalal & Triggs 2005;
+  ``detector="hog"``, image point = 12 % down the person box, about the mouth of a standing
+  person) or the Haar frontal-face cascade that ships in ``cv2.data`` (Viola & Jones 2001;
+  ``detector="face"``, image point = 65 % down the face box). These are honest baselines, not
+  state-of-the-art detectors: they miss people seen from the side or partly out of view
+  (then the tracker falls back to direction-only updates), and with several people they
+  pick the strongest detection, which need not be the speaker.
+
+Video time t = frame index / fps for files; for a live camera the first frame read is t = 0 of
+the stream (the audio stream starts at the same moment within the camera's frame period).
+"""
+
+from __future__ import annotations
+
+import csv
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from hearsee.errors import ConfigError, ImageInputError, InputFileError
+
+__all__ = ["CsvImagePoints", "VideoImagePoints", "detect_source_point", "save_image_points"]
+
+
+class CsvImagePoints:
+    """Image points from a CSV file with header ``t,u,v`` (seconds, pixels).
+
+    Rows with empty ``u``/``v`` mean "source not visible". ``points(t)`` interpolates between
+    the two rows around t when they are at most ``max_gap_s`` apart, returns the nearest row
+    within ``max_gap_s / 2`` otherwise, else None.
+    """
+
+    def __init__(self, path: str | Path, max_gap_s: float = 0.2) -> None:
+        p = Path(path)
+        if not p.is_file():
+            raise InputFileError(f"{p}: image-point file not found")
+        try:
+            with p.open(newline="", encoding="utf-8") as fh:
+                rows = [r for r in csv.reader(fh) if r and any(c.strip() for c in r)]
+        except UnicodeDecodeError:
+            raise ConfigError(f"{p}: not a text CSV file") from None
+        if not rows or [c.strip().lower() for c in rows[0]] != ["t", "u", "v"]:
+            raise ConfigError(f"{p}: header must be 't,u,v' (seconds, pixels)")
+        data = []
+        for k, r in enumerate(rows[1:], start=2):
+            if len(r) != 3:
+                raise ConfigError(f"{p}: line {k}: expected 3 values t,u,v")
+            try:
+                t = float(r[0])
+                u = float(r[1]) if r[1].strip() else np.nan
+                v = float(r[2]) if r[2].strip() else np.nan
+            except ValueError:
+                raise ConfigError(f"{p}: line {k}: non-numeric value in {','.join(r)!r}") from None
+            data.append((t, u, v))
+        if not data:
+            raise ConfigError(f"{p}: no image points after the header")
+        a = np.array(data)
+        if np.any(np.diff(a[:, 0]) <= 0) or not np.all(np.isfinite(a[:, 0])):
+            raise ConfigError(f"{p}: times must be finite and strictly increasing")
+        self.t, self.uv = a[:, 0], a[:, 1:]
+        self.max_gap_s = float(max_gap_s)
+
+    def __call__(self, t: float) -> tuple[float, float] | None:
+        k = int(np.searchsorted(self.t, t))
+        lo, hi = max(k - 1, 0), min(k, len(self.t) - 1)
+        t0, t1 = self.t[lo], self.t[hi]
+        p0, p1 = self.uv[lo], self.uv[hi]
+        if lo != hi and t1 - t0 <= self.max_gap_s and np.all(np.isfinite(p0)) and np.all(
+                np.isfinite(p1)) and t0 <= t <= t1:
+            w = (t - t0) / (t1 - t0)
+            p = (1 - w) * p0 + w * p1
+            return float(p[0]), float(p[1])
+        best = lo if abs(t - t0) <= abs(t1 - t) else hi
+        if abs(self.t[best] - t) <= self.max_gap_s / 2 and np.all(np.isfinite(self.uv[best])):
+            return float(self.uv[best, 0]), float(self.uv[best, 1])
+        return None
+
+
+def save_image_points(path: str | Path, t: NDArray, uv: NDArray) -> None:
+    """Write ``t,u,v`` rows (NaN pixels become empty cells)."""
+    with Path(path).open("w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(["t", "u", "v"])
+        for ti, (u, v) in zip(np.asarray(t), np.asarray(uv), strict=True):
+            w.writerow([f"{ti:.6f}", "" if not np.isfinite(u) else f"{u:.3f}",
+                        "" if not np.isfinite(v) else f"{v:.3f}"])
+
+
+_DETECTORS: dict[str, Any] = {}
+
+
+def detect_source_point(image: NDArray, detector: str = "hog") -> tuple[float, float] | None:
+    """Pixel of a speaking person in a BGR or grey image, or None when nobody is found.
+
+    ``detector="hog"``: OpenCV HOG people detector, point 12 % down the strongest box (head);
+    ``detector="face"``: Haar frontal-face cascade from ``cv2.data``, point 65 % down the
+    largest face (mouth).
+    """
+    import cv2
+
+    img = np.asarray(image)
+    if img.ndim not in (2, 3) or img.size == 0:
+        raise ImageInputError(f"expected a 2-D grey or 3-channel image, got shape {img.shape}")
+    if detector == "hog":
+        hog = _DETECTORS.get("hog")
+        if hog is None:
+            hog = cv2.HOGDescriptor()
+            hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+            _DETECTORS["hog"] = hog
+        boxes, weights = hog.detectMultiScale(img, winStride=(8, 8), padding=(8, 8), scale=1.05)
+        if len(boxes) == 0:
+            return None
+        x, y, w, h = boxes[int(np.argmax(np.ravel(weights)))]
+        return float(x + w / 2.0), float(y + 0.12 * h)
+    if detector == "face":
+        casc = _DETECTORS.get("face")
+        if casc is None:
+            casc = cv2.CascadeClassifier(cv2.data.haarcascades
+                                         + "haarcascade_frontalface_default.xml")
+            _DETECTORS["face"] = casc
+        grey = img if img.ndim == 2 else cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+        faces = casc.detectMultiScale(grey, scaleFactor=1.1, minNeighbors=5)
+        if len(faces) == 0:
+            return None
+        x, y, w, h = faces[int(np.argmax([f[2] * f[3] for f in faces]))]
+        return float(x + w / 2.0), float(y + 0.65 * h)
+    raise ConfigError(f"unknown detector {detector!r} (choose hog or face)")
+
+
+class VideoImagePoints:
+    """Image points from a video file or camera via ``cv2.VideoCapture`` + a detector.
+
+    Parameters
+    ----------
+    source : path or int
+        Video file, or camera index for a live camera.
+    detector : ``"hog"`` | ``"face"``
+        See :func:`detect_source_point`.
+    fps : float, optional
+        Frame rate override (files whose container lacks it).
+    """
+
+    def __init__(self, source: str | Path | int, detector: str = "hog",
+                 fps: float | None = None) -> None:
+        import cv2
+
+        if detector not in ("hog", "face"):
+            raise ConfigError(f"unknown detector {detector!r} (choose hog or face)")
+        self.live = isinstance(source, int)
+        if not self.live and not Path(source).is_file():
+            raise InputFileError(f"{source}: video file not found")
+        cap = cv2.VideoCapture(int(source) if self.live else str(source))
+        if not cap.isOpened():
+            what = f"camera {source}" if self.live else f"{source}"
+            raise ImageInputError(f"{what}: cannot be opened as a video (OpenCV VideoCapture)")
+        rate = fps or cap.get(cv2.CAP_PROP_FPS) or 0.0
+        if not self.live and not rate > 0:
+            raise ImageInputError(f"{source}: video has no frame rate; pass fps=")
+        self.cap, self.fps, self.detector = cap, float(rate or 30.0), detector
+        self.frame_index = -1
+        self.frame_time = -np.inf
+        self.last_point: tuple[float, float] | None = None
+        self._t0: float | None = None
+        self.ended = False
+
+    def _read(self) -> bool:
+        ok, frame = self.cap.read()
+        if not ok:
+            self.ended = True
+            return False
+        self.frame_index += 1
+        if self.live:
+            now = time.perf_counter()
+            self._t0 = now if self._t0 is None else self._t0
+            self.frame_time = now - self._t0
+        else:
+            self.frame_time = self.frame_index / self.fps
+        self._frame = frame
+        return True
+
+    def __call__(self, t: float) -> tuple[float, float] | None:
+        fresh = False
+        if self.live:
+            fresh = self._read()
+        else:
+            while not self.ended and (self.frame_index + 1) / self.fps <= t:
+                fresh = self._read() or fresh
+        if fresh:
+            self.last_point = detect_source_point(self._frame, self.detector)
+        if self.frame_index < 0 or abs(self.frame_time - t) > 2.0 / self.fps and not self.live:
+            return None
+        return self.last_point
+
+    def close(self) -> None:
+        self.cap.release()

@@ -1,0 +1,130 @@
+import json
+
+import numpy as np
+import pytest
+
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.signals import write_recording
+from hearsee.cli import main
+from hearsee.fusion.audiovisual import AudioVisualRig
+from hearsee.geometry import direction_deg, wrap_deg
+from hearsee.sim.moving import linear_trajectory, simulate_moving_free_field
+from hearsee.stream.video import CsvImagePoints, VideoImagePoints, save_image_points
+from hearsee.vision.camera import Camera, save_camera
+
+FS = 16000
+CAM_AT = (0.0, 0.0, 0.25)
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    d = tmp_path_factory.mktemp("track")
+    arr = MicArray(np.array([[0.2, 0.0, 0.0], [-0.1, 0.25, 0.0], [-0.1, -0.25, 0.0]]),
+                   name="wide")
+    traj = linear_trajectory([1.2, -0.5, 0.1], [0.0, 0.8, 0.0], 1.5)
+    x = 0.05 * np.random.default_rng(0).standard_normal(int(1.5 * FS))
+    y = simulate_moving_free_field(x, FS, arr, traj, snr_db=25, rng=1)
+    wav = d / "rec.wav"
+    write_recording(wav, y, FS)
+    cam = Camera.from_fov(70.0, 640, 480)
+    cam_file = d / "cam.yaml"
+    save_camera(cam, cam_file)
+    rig = AudioVisualRig.mounted(arr, cam, CAM_AT)
+    t = np.arange(0, 1.5, 1 / 30)
+    pts = d / "points.csv"
+    save_image_points(pts, t, rig.project(traj.at(t)))
+    arr_file = d / "wide.yaml"
+    arr_file.write_text("name: wide\nmicrophones:\n" + "".join(
+        f"  - [{p[0]}, {p[1]}, {p[2]}]\n" for p in arr.positions))
+    return {"wav": wav, "cam": cam_file, "pts": pts, "traj": traj, "array": arr_file, "dir": d}
+
+
+def _lines(capsys):
+    out = capsys.readouterr().out.strip().splitlines()
+    return [json.loads(s) for s in out]
+
+
+def test_track_direction_jsonl(scene, capsys):
+    assert main(["track", str(scene["wav"]), "--array", str(scene["array"])]) == 0
+    rows = _lines(capsys)
+    assert len(rows) == (int(1.5 * FS) - 1024) // 512 + 1
+    for key in ("t", "azimuth_deg", "elevation_deg", "position_m", "velocity_mps",
+                "acceleration_mps2", "covariance", "confidence"):
+        assert key in rows[0]
+    t = np.array([r["t"] for r in rows])
+    az = np.array([r["azimuth_deg"] for r in rows], dtype=float)
+    err = np.abs(wrap_deg(az - direction_deg(scene["traj"].at(t))[0]))
+    assert np.median(err[5:]) < 3.0
+    assert rows[-1]["position_m"] is None
+
+
+def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, capsys):
+    code = main(["track", str(scene["wav"]), "--array", str(scene["array"]), "--camera",
+                 str(scene["cam"]), "--image-points", str(scene["pts"]), "--camera-at",
+                 ",".join(map(str, CAM_AT)), "--format", "json"])
+    assert code == 0
+    doc = json.loads(capsys.readouterr().out)
+    ups = doc["updates"]
+    t = np.array([u["t"] for u in ups])
+    pos = np.array([u["position_m"] for u in ups], dtype=float)
+    vel = np.array([u["velocity_mps"] for u in ups], dtype=float)
+    truth = scene["traj"].at(t)
+    err = np.linalg.norm(pos - truth, axis=1)
+    assert np.median(err[10:]) < 0.1
+    assert np.median(np.abs(vel[20:, 1] - 0.8)) < 0.3
+    assert np.array(ups[-1]["covariance"]).shape == (3, 3)
+    assert doc["stats"]["frames"] == len(ups)
+
+
+@pytest.mark.parametrize("args, msg", [
+    (["--camera", "CAM"], "image-point source"),
+    (["--image-points", "PTS"], "need --camera"),
+    (["--device", "0"], "either a recording"),
+    (["--frame-ms", "0"], "must be > 0"),
+])
+def test_track_bad_options(scene, capsys, args, msg):
+    args = [a.replace("CAM", str(scene["cam"])).replace("PTS", str(scene["pts"])) for a in args]
+    assert main(["track", str(scene["wav"]), "--array", "three-mic", *args]) == 2
+    assert msg in capsys.readouterr().err
+
+
+def test_track_bad_files(scene, capsys, tmp_path):
+    assert main(["track", str(tmp_path / "none.wav"), "--array", "three-mic"]) == 2
+    assert "error" in capsys.readouterr().err
+    assert main(["track", str(scene["wav"]), "--array", "two-mic"]) == 2
+    assert "channel" in capsys.readouterr().err
+    bad = tmp_path / "pts.csv"
+    bad.write_text("time,u,v\n0,1,2\n")
+    assert main(["track", str(scene["wav"]), "--array", str(scene["array"]), "--camera",
+                 str(scene["cam"]), "--image-points", str(bad)]) == 2
+    assert "header" in capsys.readouterr().err
+    assert main(["track", "--device", "0", "--array", "three-mic"]) == 2
+    assert "hearsee: error:" in capsys.readouterr().err
+
+
+def test_image_points_csv_interpolation_and_gaps(tmp_path):
+    p = tmp_path / "p.csv"
+    p.write_text("t,u,v\n0.0,100,200\n0.1,110,220\n0.2,,\n0.5,300,300\n")
+    pts = CsvImagePoints(p, max_gap_s=0.2)
+    assert pts(0.05) == pytest.approx((105.0, 210.0))
+    assert pts(0.19) is None or pts(0.19) == pytest.approx((110.0, 220.0))
+    assert pts(0.35) is None
+    assert pts(0.5) == pytest.approx((300.0, 300.0))
+
+
+def test_video_image_points_read_frames_and_detect_nothing_in_blank_video(tmp_path):
+    import cv2
+
+    path = tmp_path / "blank.avi"
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (160, 120))
+    for _ in range(5):
+        w.write(np.full((120, 160, 3), 128, np.uint8))
+    w.release()
+    vp = VideoImagePoints(path, detector="face")
+    assert vp(0.25) is None
+    assert vp.frame_index == 2
+    assert vp(10.0) is None and vp.ended
+    from hearsee.errors import InputFileError
+
+    with pytest.raises(InputFileError):
+        VideoImagePoints(tmp_path / "missing.mp4")
