@@ -18,6 +18,7 @@ _COMMAND_MODULES = [
     "info",
     "run",
     "simulate",
+    "track",
 ]
 
 for _name in _COMMAND_MODULES:
