@@ -623,6 +623,12 @@ class MappedSource:
         self.n_channels = len(self.channels)
         self.limit = None if duration_s is None else int(round(duration_s * self.fs))
         self.stop = stop
+        self.n_samples = 0  #: samples delivered so far
+
+    @property
+    def audio_s(self) -> float:
+        """Seconds of audio delivered so far."""
+        return self.n_samples / self.fs
 
     @property
     def n_dropped(self) -> int:
@@ -639,6 +645,7 @@ class MappedSource:
                 if blk.start >= self.limit:
                     return
                 data = data[:, : self.limit - blk.start]
+            self.n_samples = max(self.n_samples, blk.start + data.shape[1])
             yield Block(blk.seq, blk.start, data, blk.arrival)
             if self.limit is not None and blk.start + data.shape[1] >= self.limit:
                 return
@@ -1070,12 +1077,13 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         fh.close()
         if own_cameras:
             cameras.close()
-    summary = _live_summary(log, pipeline.stats, status, state, cameras, head,
+    summary = _live_summary(log, pipeline.stats, source.audio_s, status, state, cameras, head,
                             time.perf_counter() - t_start)
     return LiveResult(log, summary, images, captions, frames)
 
 
-def _live_summary(log: list[dict[str, Any]], stats: Any, status: str, state: dict,
+def _live_summary(log: list[dict[str, Any]], stats: Any, audio_s: float, status: str,
+                  state: dict,
                   cameras: Cameras | None, head: PrintHeadDriver, runtime_s: float
                   ) -> dict[str, Any]:
     """Summary metrics from the live log (nothing canned)."""
@@ -1092,7 +1100,7 @@ def _live_summary(log: list[dict[str, Any]], stats: Any, status: str, state: dic
     tracked = sum(1 for r in log if r["track"] is not None)
     out: dict[str, Any] = {
         "status": status,
-        "audio_s": float(stats.audio_s),
+        "audio_s": float(audio_s),
         "updates": len(log),
         "audio_updates": int(len(az)),
         "azimuth_deg_median": az_med,
@@ -1109,7 +1117,7 @@ def _live_summary(log: list[dict[str, Any]], stats: Any, status: str, state: dic
         "head_commands_printed": int(head.n_printed),
         "dropped_blocks": int(stats.n_dropped_blocks),
         "missing_frames": int(stats.n_missing_frames),
-        "real_time_factor": float(stats.real_time_factor),
+        "real_time_factor": float(audio_s / runtime_s) if runtime_s > 0 else float("nan"),
         "runtime_s": float(runtime_s),
     }
     if last_track is not None:

@@ -1,0 +1,427 @@
+"""hearsee.robot.hardware: robot.yaml validation, device checks and the live loop, all without
+hardware (a fake sounddevice module, video files as cameras, simulated recordings as microphones).
+"""
+
+from __future__ import annotations
+
+import io
+import sys
+import threading
+import types
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+import yaml
+
+from hearsee.errors import AudioInputError, ConfigError
+from hearsee.robot.hardware import (
+    MappedSource,
+    check_devices,
+    first_failure,
+    load_robot_config,
+    resolve_input_device,
+    robot_config_from_dict,
+    run_robot,
+    write_run_report,
+)
+from hearsee.vision.camera import save_rig
+
+FS = 16000
+
+
+# ------------------------------------------------------------------------------- fakes
+class FakeSoundDevice(types.ModuleType):
+    """Just enough of sounddevice's query API: a device list, defaults, settings checks."""
+
+    class PortAudioError(Exception):
+        pass
+
+    def __init__(self, devices: list[dict], default_input: int = 0,
+                 rates: tuple[int, ...] = (16000, 44100, 48000)) -> None:
+        super().__init__("sounddevice")
+        self.devices = devices
+        self.default = types.SimpleNamespace(device=[default_input, -1])
+        self.rates = rates
+        self.checked: list[dict] = []
+
+    def query_devices(self, device=None, kind=None):
+        if device is None and kind is None:
+            return [dict(d) for d in self.devices]
+        raise NotImplementedError
+
+    def check_input_settings(self, device=None, channels=None, dtype=None, extra_settings=None,
+                             samplerate=None):
+        self.checked.append({"device": device, "channels": channels, "samplerate": samplerate})
+        d = self.devices[device]
+        if channels > d["max_input_channels"]:
+            raise self.PortAudioError("Invalid number of channels")
+        if samplerate not in self.rates:
+            raise self.PortAudioError("Invalid sample rate [PaErrorCode -9997]")
+
+
+def _dev(name: str, n_in: int, n_out: int = 0) -> dict:
+    return {"name": name, "max_input_channels": n_in, "max_output_channels": n_out,
+            "default_samplerate": 48000.0, "hostapi": 0}
+
+
+DEVICES = [_dev("HDA Intel PCH: ALC3246 Analog (hw:0,0)", 2, 2),
+           _dev("HDMI output", 0, 8),
+           _dev("ReSpeaker 4 Mic Array (UAC1.0): USB Audio (hw:2,0)", 6)]
+
+
+@pytest.fixture
+def fake_sd(monkeypatch):
+    sd = FakeSoundDevice(DEVICES)
+    monkeypatch.setitem(sys.modules, "sounddevice", sd)
+    return sd
+
+
+class _NoPortAudio:
+    """A meta-path finder that makes ``import sounddevice`` fail like a missing PortAudio."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name == "sounddevice":
+            raise OSError("PortAudio library not found")
+        return None
+
+
+def write_video(path: Path, frames: list[np.ndarray], fps: float = 5.0) -> Path:
+    """A lossless (FFV1) video file that cv2.VideoCapture reads back exactly."""
+    h, w = frames[0].shape[:2]
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FFV1"), fps, (w, h), True)
+    assert vw.isOpened()
+    for f in frames:
+        vw.write(f if f.ndim == 3 else cv2.cvtColor(f, cv2.COLOR_GRAY2BGR))
+    vw.release()
+    return path
+
+
+@pytest.fixture
+def small_rig(tmp_path):
+    """A 160x120 rectified stereo rig with a 80x60 thermal camera saved as rig.yaml, and
+    matching 3-frame videos (left, right, side-by-side stereo, thermal)."""
+    from hearsee.sim.scenes import default_rig
+
+    rig = default_rig(160, 120, thermal_size=(80, 60))
+    save_rig(rig, tmp_path / "rig.yaml")
+    rng = np.random.default_rng(0)
+    img = rng.integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    write_video(tmp_path / "left.avi", [img] * 3)
+    write_video(tmp_path / "right.avi", [img] * 3)
+    write_video(tmp_path / "sbs.avi", [np.hstack([img, img])] * 3)
+    write_video(tmp_path / "thermal.avi", [img[:60, :80]] * 3)
+    write_video(tmp_path / "wrong.avi", [img[:100, :140]] * 3)
+    return tmp_path
+
+
+def make_config(folder: Path, data: dict, name: str = "robot.yaml") -> Path:
+    p = folder / name
+    p.write_text(yaml.safe_dump(data), encoding="utf-8")
+    return p
+
+
+BASE = {"audio": {"device": "ReSpeaker", "fs": 16000, "array": "respeaker-4",
+                  "channels": [1, 2, 3, 4]},
+        "cameras": {"left": "left.avi", "right": "right.avi", "thermal": "thermal.avi",
+                    "calib": "rig.yaml"},
+        "head": {"pivot_m": [0.0, 0.0, 1.2], "driver": "none"},
+        "output": {"report": "out"}}
+
+
+def _with(**sections) -> dict:
+    data = {k: dict(v) for k, v in BASE.items()}
+    for k, v in sections.items():
+        if v is None:
+            data.pop(k, None)
+        else:
+            data[k] = {**data.get(k, {}), **v}
+    return data
+
+
+# ------------------------------------------------------------------------------- schema
+def test_config_loads_with_defaults_and_relative_paths(small_rig):
+    cfg = load_robot_config(make_config(small_rig, _with()))
+    assert cfg.audio.array.n_mics == 4 and cfg.audio.channels == (1, 2, 3, 4)
+    assert cfg.audio.n_open == 5 and cfg.audio.block_len == 1600
+    assert cfg.cameras.left == str(small_rig / "left.avi")
+    assert cfg.cameras.rig.thermal.size == (80, 60)
+    assert cfg.cameras.expected_size("thermal") == (80, 60)
+    assert cfg.head.pan_limits_deg == (-170.0, 170.0) and cfg.head.driver == "none"
+    assert cfg.output.report == small_rig / "out"
+    assert cfg.output.jsonl == small_rig / "out" / "updates.jsonl"
+    assert cfg.with_output(small_rig / "o2").output.jsonl == small_rig / "o2" / "updates.jsonl"
+    # audio only: no cameras section; defaults for everything else
+    cfg2 = robot_config_from_dict({"audio": {}}, "r.yaml", small_rig)
+    assert cfg2.cameras is None and cfg2.audio.array.name == "three-mic"
+    assert cfg2.audio.device is None and cfg2.audio.fs == 16000
+
+
+def test_side_by_side_stereo_device(small_rig):
+    data = _with()
+    data["cameras"] = {**{k: v for k, v in data["cameras"].items() if k not in ("left", "right")},
+                       "stereo": "sbs.avi"}
+    cfg = load_robot_config(make_config(small_rig, data))
+    assert cfg.cameras.expected_size("stereo") == (320, 120)
+    assert cfg.cameras.stereo == str(small_rig / "sbs.avi")
+
+
+@pytest.mark.parametrize("data, field, words", [
+    ({**_with(), "microphone": {}}, "unknown key 'microphone'", "expected one of"),
+    (_with(audio={"gain": 3}), "audio: unknown key 'gain'", "block_ms"),
+    (_with(audio={"fs": "fast"}), "audio.fs", "expected a number"),
+    (_with(audio={"channels": [0, 1]}), "audio.channels", "2 channels for an array of 4"),
+    (_with(audio={"channels": [0, 1, 1, 2]}), "audio.channels", "distinct"),
+    (_with(audio={"array": "no-such-preset"}), "audio.array", "unknown array preset"),
+    (_with(audio={"method": "music"}), "audio.method", "music"),
+    (_with(cameras={"calib": None}), "cameras.calib", "hearsee calibrate"),
+    (_with(cameras={"calib": "missing.yaml"}), "cameras.calib", "not found"),
+    (_with(cameras={"left": "nope.avi"}), "cameras.left", "no such camera"),
+    (_with(cameras={"right": None}), "cameras.right", "missing"),
+    (_with(cameras={"stereo": 0}), "cameras", "either left + right or one side-by-side"),
+    (_with(cameras={"rate_hz": 0}), "cameras.rate_hz", ">= 0.1"),
+    (_with(cameras={"left": -1}), "cameras.left", ">= 0"),
+    (_with(head={"driver": "serial"}), "head.driver", "not supported"),
+    (_with(head={"pivot_m": [0, 0]}), "head.pivot_m", "expected shape 3"),
+    (_with(head={"pan_limits_deg": [90, -90]}), "head.pan_limits_deg", "min < max"),
+    (_with(head={"pose_deg": [120, 0], "pan_limits_deg": [-90, 90]}), "head.pose_deg",
+     "outside pan_limits_deg"),
+    (_with(output={"jsonl": "robot.yaml"}), "output.jsonl", "jsonl"),
+    (_with(output={"jsonl": "rig.jsonl", "extra": 1}), "output: unknown key 'extra'", "report"),
+])
+def test_bad_config_names_the_field(small_rig, data, field, words):
+    path = make_config(small_rig, data)
+    with pytest.raises(ConfigError) as e:
+        load_robot_config(path)
+    msg = str(e.value)
+    assert msg.startswith(str(path)) and field in msg and words in msg
+    assert "\n" not in msg
+
+
+def test_impossible_geometry_and_bad_calibration(small_rig):
+    (small_rig / "coincident.yaml").write_text(
+        "microphones:\n- [0.0, 0.0, 0.0]\n- [0.0, 0.0, 0.0]\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"audio\.array: .*coincide"):
+        load_robot_config(make_config(small_rig, _with(audio={"array": "coincident.yaml",
+                                                              "channels": [0, 1]})))
+    (small_rig / "wide.yaml").write_text(
+        "microphones:\n- [0.0, -0.6, 0.0]\n- [0.0, 0.6, 0.0]\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"audio\.frame_ms: 8.0 ms is too short"):
+        load_robot_config(make_config(small_rig, _with(audio={"array": "wide.yaml",
+                                                              "channels": [0, 1],
+                                                              "frame_ms": 8})))
+    (small_rig / "bad_rig.yaml").write_text("left: {width: 10}\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"cameras\.calib: "):
+        load_robot_config(make_config(small_rig, _with(cameras={"calib": "bad_rig.yaml"})))
+    from hearsee.sim.scenes import default_rig
+    from hearsee.vision.camera import StereoRig
+
+    r = default_rig(160, 120)
+    save_rig(StereoRig(r.left, r.right, r.R, r.T), small_rig / "no_thermal.yaml")
+    with pytest.raises(ConfigError, match=r"cameras\.thermal: .* has no thermal camera"):
+        load_robot_config(make_config(small_rig, _with(cameras={"calib": "no_thermal.yaml"})))
+
+
+def test_outputs_never_overwrite_inputs(small_rig):
+    path = make_config(small_rig, _with(output={"jsonl": "robot.json"}), name="robot.json")
+    with pytest.raises(ConfigError, match=r"output\.jsonl: .*robot\.json is an input file"):
+        load_robot_config(path)
+    (small_rig / "out").mkdir()
+    save_rig(load_robot_config(make_config(small_rig, _with())).cameras.rig,
+             small_rig / "out" / "summary.json")
+    with pytest.raises(ConfigError, match=r"output\.report: writing .* would overwrite"):
+        load_robot_config(make_config(small_rig, _with(cameras={"calib": "out/summary.json"})))
+
+
+# ------------------------------------------------------------------------------- devices
+def test_resolve_input_device(fake_sd):
+    assert resolve_input_device(fake_sd, "respeaker")["index"] == 2
+    assert resolve_input_device(fake_sd, 0)["name"].startswith("HDA")
+    assert resolve_input_device(fake_sd, None)["index"] == 0  # the default input
+    with pytest.raises(ConfigError) as e:
+        resolve_input_device(fake_sd, "Focusrite", "robot.yaml: audio.device")
+    msg = str(e.value)
+    assert msg.startswith("robot.yaml: audio.device: no input device named 'Focusrite'")
+    assert "2 'ReSpeaker 4 Mic Array" in msg and "HDMI" not in msg  # lists inputs only
+    with pytest.raises(ConfigError, match="has no input channels"):
+        resolve_input_device(fake_sd, 1)
+    with pytest.raises(ConfigError, match="no device with index 7"):
+        resolve_input_device(fake_sd, 7)
+    with pytest.raises(ConfigError, match="matches several input devices"):
+        resolve_input_device(fake_sd, "hw:")
+    fake_sd.default.device = [-1, -1]
+    with pytest.raises(ConfigError, match="no default input device"):
+        resolve_input_device(fake_sd, None)
+
+
+def test_check_devices_all_pass(small_rig, fake_sd):
+    cfg = load_robot_config(make_config(small_rig, _with()))
+    checks = check_devices(cfg)
+    assert first_failure(checks) is None, [c.detail for c in checks if not c.ok]
+    names = [c.name for c in checks]
+    assert names == ["config", "audio.device", "cameras.calib", "cameras.left", "cameras.right",
+                     "cameras.thermal"]
+    assert fake_sd.checked == [{"device": 2, "channels": 5, "samplerate": 16000}]
+    assert "160x120" in checks[3].detail and "80x60" in checks[5].detail
+
+
+def test_check_devices_failures_name_the_field(small_rig, fake_sd):
+    # too few channels on the named device
+    cfg = load_robot_config(make_config(small_rig, _with(audio={"device": "ALC3246"})))
+    bad = first_failure(check_devices(cfg))
+    assert bad.name == "audio.device" and "audio.channels" in bad.detail
+    assert "has 2 input channels; the array needs 5" in bad.detail
+    # unsupported sample rate
+    cfg = load_robot_config(make_config(small_rig, _with(audio={"fs": 22050})))
+    bad = first_failure(check_devices(cfg))
+    assert "audio.fs" in bad.detail and "22050 Hz" in bad.detail
+    # a camera of the wrong size, and a "camera" that is not a video at all
+    (small_rig / "junk.avi").write_text("not a video", encoding="utf-8")
+    cfg = load_robot_config(make_config(small_rig, _with(cameras={"left": "wrong.avi",
+                                                                  "right": "junk.avi"})))
+    checks = {c.name: c for c in check_devices(cfg)}
+    assert not checks["cameras.left"].ok
+    assert "140x100 frames but the calibration expects 160x120" in checks["cameras.left"].detail
+    assert not checks["cameras.right"].ok and "cannot open camera" in checks["cameras.right"].detail
+    assert checks["cameras.thermal"].ok and checks["audio.device"].ok
+
+
+def test_portaudio_missing_is_a_clear_error(small_rig, monkeypatch):
+    monkeypatch.delitem(sys.modules, "sounddevice", raising=False)
+    monkeypatch.setattr(sys, "meta_path", [_NoPortAudio(), *sys.meta_path])
+    cfg = load_robot_config(make_config(small_rig, _with()))
+    bad = first_failure(check_devices(cfg))
+    assert bad.name == "audio.device" and isinstance(bad.error, AudioInputError)
+    assert bad.detail == "audio: PortAudio library not found (apt-get install libportaudio2)"
+
+
+# ------------------------------------------------------------------------------- live loop
+def test_mapped_source_picks_channels_and_stops_at_duration():
+    from hearsee.stream.pipeline import ArraySource
+
+    x = np.arange(5)[:, None] * 1000.0 + np.arange(3000)[None, :]
+    src = MappedSource(ArraySource(x, 1000.0, block_len=400), [4, 1, 2], duration_s=1.5)
+    blocks = list(src.blocks())
+    data = np.concatenate([b.data for b in blocks], axis=1)
+    assert src.n_channels == 3 and data.shape == (3, 1500)
+    np.testing.assert_array_equal(data, x[[4, 1, 2], :1500])
+    stop = threading.Event()
+    stop.set()
+    assert list(MappedSource(ArraySource(x, 1000.0), [0, 1], stop=stop).blocks()) == []
+    with pytest.raises(AudioInputError, match="channel 7"):
+        MappedSource(ArraySource(x, 1000.0), [0, 7])
+
+
+def _person_case(folder: Path, n_frames: int = 8):
+    """A room with a person (left of centre, 2.5 m) and a mannequin (right, 3 m) seen by the
+    head's cameras, and the person's voice recorded by a three-mic array at the pivot."""
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.sim.scenes import Entity, SceneSpec, render_scene
+
+    cam_h = 1.4
+    spec = SceneSpec(entities=[Entity("person", -0.8, 2.5, 0.0, 1.75),
+                               Entity("mannequin", 0.9, 3.0, 0.0, 1.75)],
+                     depth_m=6.0, camera_height_m=cam_h, seed=1)
+    scene = render_scene(spec)
+    write_video(folder / "left.avi", [scene.left] * n_frames)
+    write_video(folder / "right.avi", [scene.right] * n_frames)
+    write_video(folder / "thermal.avi", [scene.thermal_8bit] * n_frames)
+    save_rig(scene.rig, folder / "rig.yaml")
+    p = scene.people[0].position_m  # left optical frame: x right, y down, z forward
+    torso = np.array([p[2], -p[0], cam_h - p[1]])  # robot frame, pivot = camera centre
+    mouth = np.array([p[2] - 0.08, -p[0], 1.75 - 0.14])
+    x, truth = simulate_recording("three-mic", mouth - [0.0, 0.0, cam_h], signal="female",
+                                  duration_s=3.0, fs=FS, snr_db=20.0, seed=2)
+    cfg = make_config(folder, {
+        "audio": {"array": "three-mic", "fs": FS, "block_ms": 100},
+        "cameras": {"left": "left.avi", "right": "right.avi", "thermal": "thermal.avi",
+                    "calib": "rig.yaml", "rate_hz": 2},
+        "head": {"pivot_m": [0.0, 0.0, cam_h]},
+        "output": {"report": "report"}})
+    return load_robot_config(cfg), x, truth, torso, scene
+
+
+@pytest.mark.slow
+def test_live_loop_hears_sees_and_tracks_the_person(tmp_path):
+    import json
+
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg, x, truth, torso, scene = _person_case(tmp_path)
+    from hearsee.robot.hardware import PrintHeadDriver
+
+    printed = io.StringIO()
+    head = PrintHeadDriver(cfg.head, printed)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, block_len=1600), head=head)
+    s = res.summary
+    assert s["status"] == "ok" and s["audio_s"] == pytest.approx(3.0, abs=0.01)
+    # hearing: the robot-frame azimuth matches the simulated voice direction
+    true_az = truth["azimuth_deg"]
+    assert abs(s["azimuth_deg_median"] - true_az) < 3.0
+    assert abs(s["azimuth_deg_final"] - true_az) < 3.0
+    # seeing: the person is reported, at the right place; the mannequin never is
+    assert s["person_reported"] and s["camera_frames"] == 6
+    accepted = [d for r in res.log for d in r["detections"] if d["accepted"]]
+    assert accepted and all(np.linalg.norm(np.array(d["position_m"]) - torso) < 0.3
+                            for d in accepted)
+    mannequin = scene.objects[1].position_m
+    mannequin_robot = np.array([mannequin[2], -mannequin[0], 1.4 - mannequin[1]])
+    assert not any(np.linalg.norm(np.array(d["position_m"]) - mannequin_robot) < 0.5
+                   for d in accepted)
+    # tracking: the 3D track sits on the person; the desired pan points at them
+    assert np.linalg.norm(np.array(s["track_position_m_final"]) - torso) < 0.2
+    assert abs(s["head_pan_command_deg_final"] - np.degrees(np.arctan2(torso[1], torso[0]))) < 3
+    lines = printed.getvalue().splitlines()
+    assert len(lines) == head.n_printed >= 1 and "(driver none: not moved)" in lines[0]
+    # one JSON line per update, same as the log
+    jl = cfg.output.jsonl.read_text(encoding="utf-8").splitlines()
+    assert len(jl) == s["updates"] == len(res.log)
+    assert json.loads(jl[-1])["t"] == res.log[-1]["t"]
+    index = write_run_report(cfg, res)
+    assert index.is_file() and (index.parent / "frames" / "first_overlay.png").is_file()
+    assert json.loads((index.parent / "summary.json").read_text())["person_reported"] is True
+
+
+def test_duration_and_ctrl_c_stop_cleanly(tmp_path):
+    import json
+
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource, Block
+
+    x, truth = simulate_recording("three-mic", [2.0, -1.0, 0.0], duration_s=2.0, fs=FS,
+                                  snr_db=25.0, seed=4)
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), duration_s=1.0,
+                    head=_quiet_head(cfg))
+    assert res.summary["status"] == "ok" and res.summary["audio_s"] == pytest.approx(1.0)
+    assert abs(res.summary["azimuth_deg_final"] - truth["azimuth_deg"]) < 3.0
+
+    class CtrlC:
+        fs, n_channels = float(FS), 3
+
+        def blocks(self):
+            for b in ArraySource(x, FS, 1600).blocks():
+                if b.seq == 8:
+                    raise KeyboardInterrupt
+                yield Block(b.seq, b.start, b.data, b.arrival)
+
+    res = run_robot(cfg, audio_source=CtrlC(), head=_quiet_head(cfg))
+    assert res.summary["status"] == "interrupted"
+    assert res.summary["audio_s"] == pytest.approx(0.8)
+    lines = cfg.output.jsonl.read_text(encoding="utf-8").splitlines()
+    assert len(lines) == len(res.log) > 0 and json.loads(lines[-1])["t"] < 0.8
+
+
+def _quiet_head(cfg):
+    from hearsee.robot.hardware import PrintHeadDriver
+
+    return PrintHeadDriver(cfg.head, None)
+
+
+def test_source_rate_must_match_the_robot_file(tmp_path):
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg = robot_config_from_dict({"audio": {"fs": 16000}}, "r.yaml", tmp_path)
+    with pytest.raises(AudioInputError, match=r"audio\.fs: the source delivers 8000 Hz"):
+        run_robot(cfg, audio_source=ArraySource(np.zeros((3, 800)), 8000, 400))
