@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hearsee.errors import CalibrationError, ImageInputError
-from hearsee.vision.camera import StereoRig
+from hearsee.vision.camera import Rectification, StereoRig
 from hearsee.vision.humans import (
     HumanCandidate,
     HumanDetectorParams,
@@ -41,6 +41,7 @@ from hearsee.vision.thermal import HUMAN_BAND_C, thermal_mask
 __all__ = [
     "DetectionResult",
     "Human",
+    "classify_candidates",
     "detect_humans",
     "draw_detections",
     "thermal_support",
@@ -144,6 +145,42 @@ def _to_human(c: HumanCandidate, support: float | None, accepted: bool, reason: 
     return Human(list(seg.box), seg.position_m, c.score, support, seg.top_m, accepted, reason)
 
 
+def classify_candidates(det: StereoDetection, rig: StereoRig, rect: Rectification,
+                        warm: NDArray | None, *, min_support: float = 0.3
+                        ) -> tuple[list[Human], list[Human]]:
+    """Turn stereo candidates into accepted humans and rejected candidates.
+
+    Without ``warm`` (the thermal filter's mask) the stereo decision stands (stereo-only
+    detection); with it, stereo-accepted candidates also need ``thermal_support >= min_support``.
+    Duplicates and empty segmentations are dropped. Positions are returned in the left camera's
+    own optical frame.
+    """
+    needs_rect = not rig.is_rectified
+    humans, rejected = [], []
+    for c in det.candidates:
+        if c.segment is None or c.reason.startswith("duplicate"):
+            continue
+        support = None
+        if warm is not None:
+            pts = c.segment.points
+            if needs_rect:
+                pts = points_to_left_frame(pts, rect)
+            support = thermal_support(pts, c.segment.heights, rig, warm)
+        if not c.accepted:
+            rejected.append(_to_human(c, support, False, c.reason))
+        elif support is not None and not support >= min_support:
+            why = ("not seen by the thermal camera" if np.isnan(support) else
+                   f"thermal support {support:.2f} < {min_support}")
+            rejected.append(_to_human(c, support, False, why))
+        else:
+            humans.append(_to_human(c, support, True, ""))
+    if needs_rect:  # positions back to the left camera's own frame
+        for h in humans + rejected:
+            h.position_m = points_to_left_frame(h.position_m, rect)
+    humans.sort(key=lambda h: h.distance_m)
+    return humans, rejected
+
+
 def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArray | None = None,
                   *, params: HumanDetectorParams | None = None, min_support: float = 0.3,
                   band_c: tuple[float, float] = HUMAN_BAND_C,
@@ -193,29 +230,7 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
                 f"thermal camera is {cam.width}x{cam.height}"
             )
         warm = thermal_mask(th, band_c=band_c)
-    humans, rejected = [], []
-    needs_rect = not rig.is_rectified
-    for c in det.candidates:
-        if c.segment is None or c.reason.startswith("duplicate"):
-            continue
-        support = None
-        if warm is not None:
-            pts = c.segment.points
-            if needs_rect:
-                pts = points_to_left_frame(pts, rect)
-            support = thermal_support(pts, c.segment.heights, rig, warm)
-        if not c.accepted:
-            rejected.append(_to_human(c, support, False, c.reason))
-        elif support is not None and not support >= min_support:
-            why = ("not seen by the thermal camera" if np.isnan(support) else
-                   f"thermal support {support:.2f} < {min_support}")
-            rejected.append(_to_human(c, support, False, why))
-        else:
-            humans.append(_to_human(c, support, True, ""))
-    if needs_rect:  # positions back to the left camera's own frame
-        for h in humans + rejected:
-            h.position_m = points_to_left_frame(h.position_m, rect)
-    humans.sort(key=lambda h: h.distance_m)
+    humans, rejected = classify_candidates(det, rig, rect, warm, min_support=min_support)
     info = {"floor": {"source": det.floor.source,
                       "camera_height_m": round(det.floor.camera_height_m, 3)},
             "thermal": None if thermal is None else

@@ -55,6 +55,7 @@ __all__ = [
     "HumanCandidate",
     "HumanDetectorParams",
     "detect_candidates",
+    "detect_people_hog",
     "estimate_floor",
     "find_peaks",
     "head_shoulder_score",
@@ -95,9 +96,9 @@ class HumanDetectorParams:
     tau_m: float = 0.08
     min_top_m: float = 1.2
     max_top_m: float = 2.2
-    min_width_m: float = 0.18
+    min_width_m: float = 0.12
     max_width_m: float = 1.1
-    max_candidates: int = 20
+    max_candidates: int = 16
 
 
 # ---------------------------------------------------------------------------------------------
@@ -339,8 +340,19 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     if u1 - u0 < 3:
         return None
     Zc = fb / max(disp, 1e-6)
-    sub_d = disparity[:, u0:u1]
-    sub_h = heights[:, u0:u1]
+    # rows where a body between the floor and above_m can appear at this depth (level-ish rig)
+    zn = max(Zc - p.depth_band_m - 0.15, 0.3)
+    cyc = (H - 1) / 2.0
+    y_top = (floor.offset - p.above_m) / max(-floor.normal[1], 0.5)
+    y_bot = floor.offset / max(-floor.normal[1], 0.5)
+    tilt = abs(floor.normal[2]) * zn * focal_px / zn + 0.15 * H
+    v0 = int(max(0, np.floor(cyc + focal_px * y_top / zn - tilt)))
+    v1 = int(min(H, np.ceil(cyc + focal_px * y_bot / zn + tilt)))
+    if v1 - v0 < 3:
+        return None
+    sub_d = disparity[v0:v1, u0:u1]
+    sub_h = heights[v0:v1, u0:u1]
+    H = v1 - v0
     k = max(3, int(round(0.04 * disp / baseline_m)) | 1)
     ker = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
     kopen = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(3, k // 2 | 1),) * 2)
@@ -351,9 +363,14 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
         with np.errstate(invalid="ignore"):
             m = (sub_d >= dlo) & (sub_d <= dhi) & (sub_h >= p.min_height_m) & \
                 (sub_h <= p.above_m)
-        m8 = cv2.morphologyEx(m.astype(np.uint8), cv2.MORPH_CLOSE, ker)
-        m8 = cv2.morphologyEx(m8, cv2.MORPH_OPEN, kopen)
-        n, lab, stats, _ = cv2.connectedComponentsWithStats(m8, connectivity=8)
+        rows = np.nonzero(m.any(axis=1))[0]
+        if len(rows) == 0:
+            return None
+        r0, r1 = max(0, rows[0] - k), min(H, rows[-1] + k + 1)
+        m8 = np.zeros(m.shape, np.uint8)
+        m8[r0:r1] = cv2.morphologyEx(m[r0:r1].astype(np.uint8), cv2.MORPH_CLOSE, ker)
+        m8[r0:r1] = cv2.morphologyEx(m8[r0:r1], cv2.MORPH_OPEN, kopen)
+        n, lab = cv2.connectedComponents(m8, connectivity=8)
         if n <= 1:
             return None
         c = column - u0
@@ -365,9 +382,9 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
         if votes[best] == 0:
             return None
         mask = (lab == best) & m  # keep only pixels that really have the disparity
-        zs = fb / sub_d[mask]
-        Zm = float(np.median(zs))
-        if abs(Zm - Zc) < 0.05:
+        dm = sub_d[mask]
+        Zm = float(fb / np.median(dm[:: max(1, len(dm) // 3000)]))
+        if abs(Zm - Zc) < 0.12:
             break
         Zc = Zm
     assert mask is not None
@@ -375,14 +392,17 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     if len(ys) < 20:
         return None
     x0, x1, y0, y1 = xs.min(), xs.max(), ys.min(), ys.max()
-    box = [int(u0 + x0), int(y0), int(x1 - x0 + 1), int(y1 - y0 + 1)]
+    box = [int(u0 + x0), int(v0 + y0), int(x1 - x0 + 1), int(y1 - y0 + 1)]
     crop = mask[y0: y1 + 1, x0: x1 + 1]
-    pts = points[:, u0:u1][mask]
+    pts = points[v0:v1, u0:u1][mask]
     hts = sub_h[mask]
     good = np.all(np.isfinite(pts), axis=1)
     pts, hts = pts[good], hts[good]
     if len(pts) < 20:
         return None
+    if len(pts) > 4000:  # statistics on a deterministic subsample (speed)
+        sel = np.linspace(0, len(pts) - 1, 4000).astype(int)
+        pts, hts = pts[sel], hts[sel]
     top = float(np.percentile(hts, 99.5))
     xlo, xhi = np.percentile(pts[:, 0], [3, 97])
     Zm = float(np.median(pts[:, 2]))
@@ -435,8 +455,8 @@ def head_shoulder_score(mask: NDArray, depth_m: float, focal_px: float, *, tau_m
     hc = 0.5 * (near.min() + near.max())
     xs = np.arange(-0.42, 0.4201, 0.015)  # lateral samples (m)
     offsets = np.arange(-0.06, 0.0601, 0.02)
-    a_s = np.array([0.065, 0.08, 0.095])
-    S_s = np.array([0.28, 0.36, 0.44, 0.52])
+    a_s = np.array([0.065, 0.08, 0.095, 0.11])
+    S_s = np.array([0.22, 0.3, 0.38, 0.46, 0.54])
     s_s = np.array([0.22, 0.26, 0.30, 0.34])
     O, A, S, D = np.meshgrid(offsets, a_s, S_s, s_s, indexing="ij")
     O, A, S, D = O.ravel(), A.ravel(), S.ravel(), D.ravel()
@@ -559,20 +579,33 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     peaks = find_peaks(psi, focal_px, baseline_m, threshold=p.peak_threshold,
                        min_disparity=d_min, person_width_m=p.person_width_m,
                        max_peaks=p.max_candidates)
-    cands = []
+    cands: list[HumanCandidate] = []
+    fb = focal_px * baseline_m
     for col, disp, val in peaks:
+        # a peak on a silhouette already segmented (same column range and depth) is a duplicate
+        Zp = fb / max(disp, 1e-6)
+        prev = next((c for c in cands if c.segment is not None
+                     and c.segment.box[0] <= col < c.segment.box[0] + c.segment.box[2]
+                     and abs(c.segment.depth_m - Zp) < 0.3), None)
+        if prev is not None:
+            cands.append(HumanCandidate(col, disp, val, None, reason="duplicate of a stronger "
+                                        "candidate (same silhouette)"))
+            continue
         seg = segment_body(col, float(disp), d, points, heights, floor, focal_px, baseline_m,
                            params=p)
         c = HumanCandidate(col, disp, val, seg)
         if seg is None:
             c.reason = "empty segmentation"
         else:
-            c.score, c.template = head_shoulder_score(seg.mask, seg.depth_m, focal_px,
-                                                      tau_m=p.tau_m)
             if not p.min_top_m <= seg.top_m <= p.max_top_m:
                 c.reason = f"height {seg.top_m:.2f} m outside [{p.min_top_m}, {p.max_top_m}]"
             elif not p.min_width_m <= seg.width_m <= p.max_width_m:
                 c.reason = f"width {seg.width_m:.2f} m outside [{p.min_width_m}, {p.max_width_m}]"
+            else:
+                c.score, c.template = head_shoulder_score(seg.mask, seg.depth_m, focal_px,
+                                                          tau_m=p.tau_m)
+            if c.reason:
+                pass
             elif c.score < p.tm:
                 c.reason = f"head-shoulder score {c.score:.2f} < Tm = {p.tm}"
             else:
@@ -609,3 +642,45 @@ def _dedupe(cands: list[HumanCandidate]) -> None:
             c.reason = "duplicate of a stronger candidate"
         else:
             kept.append(c)
+
+
+# ---------------------------------------------------------------------------------------------
+# Baseline: OpenCV's HOG people detector
+# ---------------------------------------------------------------------------------------------
+def detect_people_hog(image: NDArray, *, win_stride: int = 8, scale: float = 1.05,
+                      hit_threshold: float = 0.0, shrink: bool = True
+                      ) -> list[tuple[list[int], float]]:
+    """OpenCV's HOG + linear SVM people detector (Dalal & Triggs, CVPR 2005;
+    ``cv2.HOGDescriptor_getDefaultPeopleDetector``) on one image: the monocular baseline.
+
+    Returns ``[(box [x, y, w, h] in pixels, SVM weight)]``. The 64x128 detection window has
+    margins around the person; with ``shrink`` the boxes are shrunk by 15 % of the width on
+    each side and 5 % of the height at top and bottom (as OpenCV's ``peopledetect.py`` sample
+    draws them) so that they can be compared with tight person boxes.
+    """
+    img = np.asarray(image)
+    if img.ndim not in (2, 3) or img.dtype != np.uint8:
+        raise ImageInputError(f"HOG needs an 8-bit grey or BGR image, got {img.shape} {img.dtype}")
+    hog = _hog()
+    rects, weights = hog.detectMultiScale(img, hitThreshold=hit_threshold,
+                                          winStride=(win_stride, win_stride), padding=(8, 8),
+                                          scale=scale)
+    out = []
+    for (x, y, w, h), wt in zip(np.asarray(rects).reshape(-1, 4),
+                                np.asarray(weights).reshape(-1), strict=True):
+        if shrink:
+            px, py = int(0.15 * w), int(0.05 * h)
+            x, y, w, h = x + px, y + py, w - 2 * px, h - 2 * py
+        out.append(([int(x), int(y), int(w), int(h)], float(wt)))
+    return out
+
+
+_HOG: list = []
+
+
+def _hog() -> cv2.HOGDescriptor:
+    if not _HOG:
+        hog = cv2.HOGDescriptor()
+        hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+        _HOG.append(hog)
+    return _HOG[0]

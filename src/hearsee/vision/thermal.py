@@ -32,6 +32,7 @@ from hearsee.errors import ImageInputError, InputFileError
 __all__ = [
     "counts_to_celsius",
     "load_thermal",
+    "overlay_thermal",
     "relative_warm_mask",
     "thermal_mask",
     "warm_mask_celsius",
@@ -156,3 +157,27 @@ def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
     from hearsee.vision.io import read_thermal
 
     return read_thermal(p, expected_size)
+
+
+def overlay_thermal(visible: NDArray, thermal: NDArray, warm: NDArray | None = None, *,
+                    alpha: float = 0.6) -> NDArray:
+    """Visible/thermal overlay of a *registered* pair (same geometry, as LLVIP's): the thermal
+    image in a colour map blended over the visible image where ``warm`` (default: everywhere),
+    the rest of the visible image darkened; the thermal image is resized to the visible one.
+    Returns BGR uint8."""
+    vis = np.asarray(visible)
+    if vis.ndim == 2:
+        vis = cv2.cvtColor(vis, cv2.COLOR_GRAY2BGR)
+    th = np.asarray(thermal)
+    if th.ndim == 3:
+        th = cv2.cvtColor(th, cv2.COLOR_BGR2GRAY)
+    if th.dtype != np.uint8:
+        th = cv2.normalize(th.astype(np.float32), None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
+    size = (vis.shape[1], vis.shape[0])
+    col = cv2.applyColorMap(cv2.resize(th, size), cv2.COLORMAP_INFERNO)
+    m = np.ones(vis.shape[:2], bool) if warm is None else \
+        cv2.resize(warm.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST).astype(bool)
+    out = (0.55 * vis).astype(np.uint8)
+    blend = cv2.addWeighted(vis, 1.0 - alpha, col, alpha, 0.0)
+    out[m] = blend[m]
+    return out
