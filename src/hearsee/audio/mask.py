@@ -599,7 +599,14 @@ class MaskLocalization:
     score: NDArray = field(repr=False, default_factory=lambda: np.zeros(0))
 
 
-def _spectra(x: NDArray, fs: float, frame_ms: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+def _spectra(x: NDArray, fs: float, frame_ms: float
+             ) -> tuple[NDArray, NDArray, NDArray, NDArray, int]:
+    """Frame-averaged auto- and cross-spectra over the active frames (Hann, 50 % overlap).
+
+    Frames clearly above the noise floor (energy > 2x the 10th percentile) are kept when they are
+    at least 20 % of the recording (speech with pauses); otherwise all frames are used.
+    Returns ``(freqs, P0, P1, C = X0 conj(X1), n_frames_used)``.
+    """
     n = int(2 ** np.round(np.log2(frame_ms * 1e-3 * fs)))
     hop = n // 2
     if x.shape[1] < n:
@@ -608,17 +615,24 @@ def _spectra(x: NDArray, fs: float, frame_ms: float) -> tuple[NDArray, NDArray, 
     idx = np.arange(n)[None] + hop * np.arange(nfr)[:, None]
     w = np.hanning(n)
     spec = np.fft.rfft(x[:, idx] * w, axis=-1)  # (2, frames, F)
+    e = np.sum(np.abs(spec) ** 2, axis=(0, 2))
+    active = e > 2.0 * np.percentile(e, 10)
+    if active.sum() >= max(1, int(0.2 * nfr)):
+        spec = spec[:, active]
     p0 = np.mean(np.abs(spec[0]) ** 2, axis=0)
     p1 = np.mean(np.abs(spec[1]) ** 2, axis=0)
     cr = np.mean(spec[0] * np.conj(spec[1]), axis=0)
-    return np.fft.rfftfreq(n, 1.0 / fs), p0, p1, cr
+    return np.fft.rfftfreq(n, 1.0 / fs), p0, p1, cr, int(spec.shape[1])
 
 
-def _coherent_power(p0: NDArray, p1: NDArray, cr: NDArray) -> tuple[NDArray, NDArray]:
+def _coherent_power(p0: NDArray, p1: NDArray, cr: NDArray, n_frames: int
+                    ) -> tuple[NDArray, NDArray]:
     """Powers of the coherent (source) part at each microphone, removing equal uncorrelated noise:
-    S0 S1 = |C|^2 and S0 - S1 = P0 - P1."""
+    S0 S1 = |C|^2 and S0 - S1 = P0 - P1, with |C|^2 debiased by the estimation floor
+    P0 P1 / K of an average over K frames."""
     d = p0 - p1
-    s1 = 0.5 * (-d + np.sqrt(d**2 + 4 * np.abs(cr) ** 2))
+    c2 = np.maximum(np.abs(cr) ** 2 - p0 * p1 / max(n_frames, 1), 0.0)
+    s1 = 0.5 * (-d + np.sqrt(d**2 + 4 * c2))
     return s1 + d, s1
 
 
@@ -665,13 +679,13 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         raise AudioInputError("recording contains NaN or inf samples")
     if not np.any(x):
         raise AudioInputError("recording is all zeros")
-    f, p0, p1, cr = _spectra(x, fs, frame_ms)
+    f, p0, p1, cr, n_used = _spectra(x, fs, frame_ms)
     edges = default_bands(model.f_max) if bands_hz is None else np.asarray(bands_hz, float)
     use = (f >= max(edges[0], 100.0)) & (f <= min(edges[-1], 0.9 * model.f_max))
     if use.sum() < 4:
         raise AudioInputError(f"sample rate {fs} Hz too low for the mask model's bands")
     f, p0, p1, cr = f[use], p0[use], p1[use], cr[use]
-    s0, s1 = _coherent_power(p0, p1, cr)
+    s0, s1 = _coherent_power(p0, p1, cr, n_used)
     coh = np.abs(cr) ** 2 / np.maximum(p0 * p1, 1e-300)
     w = coh / max(coh.sum(), 1e-300)
     if not np.isfinite(w).all() or w.sum() <= 0:
@@ -682,9 +696,15 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
     onehot = (band_idx[None] == np.arange(nb)[:, None]).astype(float)  # (B, F)
     valid_b = onehot.sum(axis=1) > 0
     e0, e1 = onehot @ s0, onehot @ s1
+    noise = onehot @ np.maximum(0.5 * ((p0 - s0) + (p1 - s1)), 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         iid_meas = 10 * np.log10(e0 / e1)
-    valid_b &= np.isfinite(iid_meas)
+        # variance of a band IID: model floor + estimation noise of the two band powers over
+        # K ~ frames x bins / 2 independent samples
+        k_eff = np.maximum(0.5 * n_used * onehot.sum(axis=1), 1.0)
+        var_b = sigma_iid_db**2 + (10 / np.log(10)) ** 2 * (
+            ((e0 + noise) / e0) ** 2 + ((e1 + noise) / e1) ** 2) / k_eff
+    valid_b &= np.isfinite(iid_meas) & np.isfinite(var_b)
     phi = np.angle(cr)
     best = None
     for dist in distances:
@@ -697,7 +717,7 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         src = (s0 + s1)[None] / np.maximum(g0 + g1, 1e-12)
         with np.errstate(divide="ignore", invalid="ignore"):
             iid_t = 10 * np.log10((src * g0) @ onehot.T / ((src * g1) @ onehot.T))
-        chi = np.nansum(((iid_meas[None] - iid_t) ** 2)[:, valid_b], axis=1) / (2 * sigma_iid_db**2)
+        chi = np.nansum(((iid_meas[None] - iid_t) ** 2 / (2 * var_b))[:, valid_b], axis=1)
         cost = phase_weight * (1.0 - rho) + chi
         if best is None or cost.min() < best[0].min():
             best = (cost, dist, az)
