@@ -32,10 +32,12 @@ from hearsee.vision.io import to_gray
 
 __all__ = [
     "CameraCalibration",
+    "RigCalibration",
     "StereoCalibration",
     "ThermalExtrinsics",
     "board_points",
     "calibrate_camera",
+    "calibrate_rig",
     "calibrate_stereo",
     "calibrate_thermal_extrinsics",
     "find_corners",
@@ -511,3 +513,186 @@ def _subpixel_rays(camera: Camera, k: int = 4) -> NDArray:
     V = (v[..., None] + ov.ravel()).ravel()
     rays = camera.pixel_rays(np.c_[U, V])
     return rays.reshape(camera.height, camera.width, k * k, 3)
+
+
+# ---------------------------------------------------------------------------------------------
+# From image files to a calibrated rig (behind `hearsee calibrate`)
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class ViewReport:
+    """One image pair (or triplet) of a rig calibration: whether the board was found in each
+    image and the RMS reprojection errors (pixels; NaN where not used)."""
+
+    left: str
+    right: str
+    thermal: str | None = None
+    found_left: bool = False
+    found_right: bool = False
+    found_thermal: bool = False
+    err_left: float = float("nan")
+    err_right: float = float("nan")
+    err_stereo_left: float = float("nan")
+    err_stereo_right: float = float("nan")
+    err_thermal: float = float("nan")
+    rejected: bool = False
+
+
+@dataclass
+class RigCalibration:
+    """Result of :func:`calibrate_rig`: the rig (with thermal camera when given), the RMS
+    errors in pixels (intrinsics of each camera, stereo, thermal intrinsics and extrinsics),
+    one :class:`ViewReport` per image pair, and warnings for the user."""
+
+    rig: StereoRig
+    rms_left_px: float
+    rms_right_px: float
+    rms_stereo_px: float
+    views: list[ViewReport]
+    rms_thermal_px: float | None = None
+    rms_thermal_extrinsics_px: float | None = None
+    warnings: list[str] = field(default_factory=list)
+
+
+def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[int, int],
+                  square_m: float, *, thermal_files: Sequence | None = None,
+                  model: str = "standard", thermal_model: str = "radial",
+                  fix_aspect: bool = False, progress=None) -> RigCalibration:
+    """Calibrate a stereo rig (and optionally a thermal camera) from chessboard image files.
+
+    ``left_files[i]``, ``right_files[i]`` (and ``thermal_files[i]``) are simultaneous views,
+    paired by position. Intrinsics of each camera use every image where the board was found,
+    the stereo extrinsics the pairs found in both, the thermal extrinsics the views found in
+    the left and thermal images (board triangulated by the rig when also found on the right).
+    ``progress`` is an optional callable called once per image read.
+
+    Raises CalibrationError (mismatched counts, board never found, too few views) and
+    ImageInputError / InputFileError (unreadable or differently sized images).
+    """
+    from hearsee.errors import ImageInputError
+    from hearsee.vision.io import read_image
+
+    n = len(left_files)
+    if n != len(right_files):
+        raise CalibrationError(
+            f"{n} left images but {len(right_files)} right images; they are paired in sorted "
+            "order, so both patterns must match the same number of files"
+        )
+    if thermal_files is not None and len(thermal_files) != n:
+        raise CalibrationError(
+            f"{len(thermal_files)} thermal images for {n} stereo pairs; give one thermal image "
+            "per pair (same sorted order)"
+        )
+    if n == 0:
+        raise CalibrationError("no images given")
+    obj = board_points(pattern, square_m)
+    views: list[ViewReport] = []
+    lp: list[NDArray | None] = []
+    rp: list[NDArray | None] = []
+    tp: list[NDArray | None] = []
+    sizes: dict[str, tuple[int, int]] = {}
+
+    def load(path, key: str) -> NDArray:
+        img = read_image(path, "gray")
+        size = (img.shape[1], img.shape[0])
+        ref = sizes.setdefault(key, size)
+        if size != ref:
+            raise ImageInputError(
+                f"{path}: image is {size[0]}x{size[1]} but the other {key} images are "
+                f"{ref[0]}x{ref[1]}; all images of one camera must have the same size"
+            )
+        if progress is not None:
+            progress()
+        return img
+
+    for i in range(n):
+        v = ViewReport(str(left_files[i]), str(right_files[i]),
+                       None if thermal_files is None else str(thermal_files[i]))
+        a = find_corners(load(left_files[i], "left"), pattern)
+        b = find_corners(load(right_files[i], "right"), pattern)
+        if a is not None and b is not None:
+            b = match_labeling(a, b, pattern)
+        t = None
+        if thermal_files is not None:
+            t = find_corners(load(thermal_files[i], "thermal"), pattern, try_inverted=True)
+            if t is not None and a is not None:
+                t = match_labeling(a, t, pattern)
+            elif t is not None and b is not None:
+                t = match_labeling(b, t, pattern)
+        v.found_left, v.found_right, v.found_thermal = a is not None, b is not None, t is not None
+        views.append(v)
+        lp.append(a)
+        rp.append(b)
+        tp.append(t)
+    if sizes["left"] != sizes["right"]:
+        raise ImageInputError(
+            f"left images are {sizes['left'][0]}x{sizes['left'][1]} but right images are "
+            f"{sizes['right'][0]}x{sizes['right'][1]}; a stereo rig needs equal sizes"
+        )
+    warnings: list[str] = []
+    n_l = sum(x is not None for x in lp)
+    n_r = sum(x is not None for x in rp)
+    if n_l == 0 and n_r == 0:
+        raise CalibrationError(
+            f"the {pattern[0]}x{pattern[1]} chessboard was not found in any image; check --board "
+            "(inner corners per row x per column, e.g. 9x6 for a board of 10x7 squares)"
+        )
+    for side, k in (("left", n_l), ("right", n_r)):
+        if k < 3:
+            raise CalibrationError(
+                f"the board was found in only {k} {side} image(s); at least 3 are needed"
+            )
+    idx_l = [i for i in range(n) if lp[i] is not None]
+    idx_r = [i for i in range(n) if rp[i] is not None]
+    cl = calibrate_camera([lp[i] for i in idx_l], obj, sizes["left"], model=model,
+                          fix_aspect=fix_aspect, name="left")
+    cr = calibrate_camera([rp[i] for i in idx_r], obj, sizes["right"], model=model,
+                          fix_aspect=fix_aspect, name="right")
+    for idx, res, attr in ((idx_l, cl, "err_left"), (idx_r, cr, "err_right")):
+        for j, e in zip(res.used, res.per_view_px, strict=True):
+            setattr(views[idx[j]], attr, float(e))
+        for j in res.rejected:
+            views[idx[j]].rejected = True
+    rejected = {i for i, v in enumerate(views) if v.rejected}
+    both = [i for i in range(n) if lp[i] is not None and rp[i] is not None and i not in rejected]
+    if len(both) < 1:
+        raise CalibrationError("the board was never found in both images of a pair")
+    st = calibrate_stereo([lp[i] for i in both], [rp[i] for i in both], obj, cl.camera,
+                          cr.camera, refine=len(both) >= 3)
+    for j, i in enumerate(both):
+        views[i].err_stereo_left, views[i].err_stereo_right = map(float, st.per_view_px[j])
+    rig = st.rig
+    if rig.rectify().baseline_m < 0:
+        warnings.append(
+            "the 'right' camera is to the LEFT of the 'left' camera (T_x > 0): swap --left and "
+            "--right, otherwise stereo matching will refuse this rig"
+        )
+    if n_l < 8 or n_r < 8:
+        warnings.append(f"only {min(n_l, n_r)} usable views; 10-20 at varied angles are better")
+    rms_t = rms_te = None
+    if thermal_files is not None:
+        idx_t = [i for i in range(n) if tp[i] is not None]
+        if len(idx_t) < 3:
+            raise CalibrationError(
+                f"the board was found in only {len(idx_t)} thermal image(s); at least 3 are "
+                "needed (use a heated or back-lit board the thermal camera can see)"
+            )
+        th = [tp[i] for i in idx_t]
+        ct = calibrate_camera(th, obj, sizes["thermal"], model=thermal_model,
+                              fix_aspect=fix_aspect, name="thermal")
+        te = calibrate_thermal_extrinsics(
+            rig, ct.camera, [lp[i] if i not in rejected else None for i in range(n)], tp, obj,
+            right_points=[rp[i] if i not in rejected else None for i in range(n)])
+        used_views = [i for i in range(n) if lp[i] is not None and tp[i] is not None
+                      and i not in rejected]
+        for j, i in enumerate(used_views):
+            views[i].err_thermal = float(te.per_view_px[j])
+        rig = rig.with_thermal(ct.camera, te.R, te.T)
+        rms_t, rms_te = ct.rms_px, te.rms_px
+    info = {"board": f"{pattern[0]}x{pattern[1]}", "square_m": float(square_m),
+            "n_views_left": n_l, "n_views_right": n_r, "n_views_stereo": len(both),
+            "model": model, "rms_left_px": cl.rms_px, "rms_right_px": cr.rms_px}
+    if rms_t is not None:
+        info.update(rms_thermal_px=rms_t, rms_thermal_extrinsics_px=rms_te)
+    rig = StereoRig(rig.left, rig.right, rig.R, rig.T, rig.thermal, rig.R_thermal,
+                    rig.T_thermal, st.rms_px, info)
+    return RigCalibration(rig, cl.rms_px, cr.rms_px, st.rms_px, views, rms_t, rms_te, warnings)

@@ -1,0 +1,121 @@
+"""Tests of ``hearsee calibrate`` on rendered chessboards (known rig) and on bad input."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from hearsee.cli import main
+from hearsee.vision import calibration as C
+from hearsee.vision.camera import Camera, StereoRig, load_rig
+
+PATTERN = (9, 6)
+SQUARE = 0.025
+
+
+@pytest.fixture(scope="module")
+def board_dir(tmp_path_factory):
+    """Six stereo + thermal views of a 9x6 board, rendered with a known rig."""
+    d = tmp_path_factory.mktemp("boards")
+    cam = Camera(K=np.array([[300.0, 0, 159.5], [0, 300.0, 119.5], [0, 0, 1]]),
+                 dist=[-0.1, 0.02, 0.0, 0.0, 0.0], width=320, height=240)
+    th = Camera.from_fov(50.0, 160, 120)
+    truth = StereoRig.ideal(cam, 0.08, thermal=th, thermal_offset_m=(0.04, -0.04, 0.0))
+    rays = {"l": C._subpixel_rays(cam, 2), "t": C._subpixel_rays(th, 2)}
+    rng = np.random.default_rng(11)
+    center = np.array([4 * SQUARE, 2.5 * SQUARE, 0.0])
+    for i in range(6):
+        Rb = cv2.Rodrigues(rng.uniform(-0.45, 0.45, 3) * np.array([1.0, 1.0, 0.3]))[0]
+        pos = np.array([0.04 + rng.uniform(-0.05, 0.05), rng.uniform(-0.04, 0.04),
+                        rng.uniform(0.42, 0.52)])
+        tb = pos - Rb @ center
+        for key, R, T, kw in (("left", np.eye(3), np.zeros(3), {}),
+                              ("right", truth.R, truth.T, {}),
+                              ("thermal", truth.R_thermal, truth.T_thermal,
+                               dict(invert=True, blur_px=0.7))):
+            c = th if key == "thermal" else cam
+            img = C.render_chessboard(c, R @ Rb, R @ tb + T, PATTERN, SQUARE, noise=2.0,
+                                      rng=rng, rays=rays["t" if key == "thermal" else "l"],
+                                      **kw)
+            cv2.imwrite(str(d / f"{key}{i:02d}.png"), img)
+    return d, truth
+
+
+def _args(d, out, *extra):
+    return ["calibrate", "--left", str(d / "left*.png"), "--right", str(d / "right*.png"),
+            "--board", "9x6", "--square", str(SQUARE), "-o", str(out), *extra]
+
+
+@pytest.mark.slow
+def test_calibrate_writes_rig_and_prints_errors(board_dir, tmp_path, capsys):
+    d, truth = board_dir
+    out = tmp_path / "calib.yaml"
+    assert main(_args(d, out, "--thermal", str(d / "thermal*.png"))) == 0
+    text = capsys.readouterr().out
+    assert "RMS reprojection error" in text and "left00.png" in text and "thermal" in text
+    rig = load_rig(out)
+    assert rig.left.fx == pytest.approx(300.0, rel=0.01)
+    assert rig.baseline_m == pytest.approx(0.08, rel=0.02)
+    assert rig.thermal is not None
+    np.testing.assert_allclose(rig.thermal_center_m, truth.thermal_center_m, atol=0.006)
+    assert rig.rms_px is not None and rig.rms_px < 0.5
+    # existing output: refused without --force, overwritten with it (JSON output)
+    assert main(_args(d, out)) == 2
+    assert "--force" in capsys.readouterr().err
+    assert main(_args(d, out, "--force", "--json")) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert len(data["views"]) == 6 and data["rms_px"]["stereo"] < 0.5
+    assert load_rig(out).thermal is None
+
+
+@pytest.mark.parametrize("case", ["no_match", "no_board", "count_mismatch", "unreadable",
+                                  "overwrite_input", "bad_board", "bad_square", "sizes_differ"])
+def test_calibrate_bad_input_exits_2_with_one_line(case, board_dir, tmp_path, capsys):
+    d, _ = board_dir
+    out = tmp_path / "c.yaml"
+    if case == "no_match":
+        args = _args(tmp_path, out)
+        expect = "no left images matched"
+    elif case == "no_board":
+        for i in range(3):
+            for side in ("left", "right"):
+                cv2.imwrite(str(tmp_path / f"{side}{i}.png"), np.full((60, 80), 128, np.uint8))
+        args = _args(tmp_path, out)
+        expect = "not found in any image"
+    elif case == "count_mismatch":
+        args = _args(d, out)
+        args[4] = str(d / "right0[0-3].png")
+        expect = "6 left images but 4 right images"
+    elif case == "unreadable":
+        for i in range(3):
+            for side in ("left", "right"):
+                (tmp_path / f"{side}{i}.png").write_bytes(b"not an image")
+        args = _args(tmp_path, out)
+        expect = "not a readable image"
+    elif case == "overwrite_input":
+        args = _args(d, d / "left00.png", "--force")
+        expect = "refusing to overwrite an input"
+    elif case == "bad_board":
+        args = _args(d, out)
+        args[6] = "nine"
+        expect = "9x6"
+    elif case == "bad_square":
+        args = _args(d, out)
+        args[8] = "-1"
+        expect = "--square"
+    else:  # sizes_differ
+        for i in range(3):
+            cv2.imwrite(str(tmp_path / f"left{i}.png"), np.full((60, 80), 128, np.uint8))
+            cv2.imwrite(str(tmp_path / f"right{i}.png"), np.full((60, 90), 128, np.uint8))
+        args = _args(tmp_path, out)
+        expect = "right images are 90x60"
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert expect in err
+    assert len(err.strip().splitlines()) == 1
+    assert "Traceback" not in err
+    if case != "overwrite_input":
+        assert not out.exists()
