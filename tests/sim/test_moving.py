@@ -150,6 +150,7 @@ def test_bad_trajectories(tmp_path):
                                    Trajectory([0.0], [[0.0, 0.0, 0.0]]))
 
 
+@pytest.mark.slow
 def test_room_with_image_source_rirs_static_and_moving():
     from hearsee.audio.propagation import room_impulse_responses
 
