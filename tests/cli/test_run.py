@@ -1,0 +1,210 @@
+"""``hearsee run``: dry-run checks and a live run through a fake sounddevice (no hardware).
+
+The fake module lists devices, checks settings and streams a simulated recording through an
+``InputStream`` callback thread, like PortAudio does; cameras are video files.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import threading
+import time
+import types
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+import yaml
+
+from hearsee.cli import main
+
+FS = 16000
+
+
+class FakeInputStream:
+    """Calls ``callback(indata (frames, channels) float32, frames, time, status)`` from a thread,
+    block by block, ``speed`` times faster than real time."""
+
+    def __init__(self, recording, device=None, channels=None, samplerate=None, blocksize=None,
+                 dtype=None, callback=None, speed=4.0):
+        assert recording.shape[0] >= channels and samplerate == FS and dtype == "float32"
+        self.x = recording[:channels].astype(np.float32)
+        self.blocksize, self.callback, self.speed = int(blocksize), callback, speed
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._play, daemon=True)
+
+    def _play(self):
+        for start in range(0, self.x.shape[1] - self.blocksize + 1, self.blocksize):
+            if self._stop.is_set():
+                return
+            block = np.ascontiguousarray(self.x[:, start:start + self.blocksize].T)
+            self.callback(block, self.blocksize, None, None)
+            time.sleep(self.blocksize / FS / self.speed)
+
+    def __enter__(self):
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+
+
+class FakeSoundDevice(types.ModuleType):
+    class PortAudioError(Exception):
+        pass
+
+    def __init__(self, devices, recording=None):
+        super().__init__("sounddevice")
+        self.devices = devices
+        self.default = types.SimpleNamespace(device=[0, -1])
+        self.recording = recording
+
+    def query_devices(self, device=None, kind=None):
+        if device is None and kind is None:
+            return [dict(d) for d in self.devices]
+        d = dict(self.devices[device])
+        if kind == "input" and d["max_input_channels"] == 0:
+            raise ValueError("not an input device")
+        return d
+
+    def check_input_settings(self, device=None, channels=None, dtype=None, extra_settings=None,
+                             samplerate=None):
+        if samplerate not in (16000, 48000):
+            raise self.PortAudioError("Invalid sample rate")
+
+    def InputStream(self, **kw):
+        return FakeInputStream(self.recording, **kw)
+
+
+DEVICES = [{"name": "Built-in Microphone", "max_input_channels": 2, "max_output_channels": 0},
+           {"name": "USB 6ch Array", "max_input_channels": 6, "max_output_channels": 0}]
+
+
+def _video(path: Path, img: np.ndarray, n: int = 3) -> None:
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FFV1"), 5.0,
+                         (img.shape[1], img.shape[0]), True)
+    for _ in range(n):
+        vw.write(img)
+    vw.release()
+
+
+@pytest.fixture
+def robot_dir(tmp_path):
+    from hearsee.sim.scenes import default_rig
+    from hearsee.vision.camera import save_rig
+
+    save_rig(default_rig(160, 120, thermal_size=(80, 60)), tmp_path / "rig.yaml")
+    img = np.random.default_rng(1).integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    _video(tmp_path / "left.avi", img)
+    _video(tmp_path / "right.avi", img)
+    _video(tmp_path / "thermal.avi", img[:60, :80])
+    return tmp_path
+
+
+def _config(folder: Path, device="USB 6ch", cameras=True, **extra) -> Path:
+    data = {"audio": {"device": device, "fs": FS, "array": "three-mic", "channels": [1, 2, 3]},
+            "head": {"pivot_m": [0.0, 0.0, 1.2], "driver": "none"},
+            "output": {"report": "report"}, **extra}
+    if cameras:
+        data["cameras"] = {"left": "left.avi", "right": "right.avi", "thermal": "thermal.avi",
+                           "calib": "rig.yaml"}
+    p = folder / "robot.yaml"
+    p.write_text(yaml.safe_dump(data), encoding="utf-8")
+    return p
+
+
+def test_dry_run_all_checks_pass(robot_dir, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES))
+    code = main(["run", "--config", str(_config(robot_dir)), "--dry-run"])
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    for name in ("audio.device", "cameras.calib", "cameras.left", "cameras.right",
+                 "cameras.thermal"):
+        assert name in out.out
+    assert "FAIL" not in out.out and "all 6 checks passed" in out.out
+    assert not (robot_dir / "report").exists()  # a dry run writes nothing
+
+
+def test_dry_run_missing_device_is_one_line_naming_the_field(robot_dir, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES))
+    cfg = _config(robot_dir, device="ReSpeaker")
+    code = main(["run", "--config", str(cfg), "--dry-run"])
+    out = capsys.readouterr()
+    assert code == 2
+    err = out.err.strip().splitlines()
+    assert len(err) == 1
+    assert err[0].startswith(f"hearsee: error: {cfg}: audio.device: no input device named "
+                             "'ReSpeaker' (available: 0 'Built-in Microphone' (2 in), "
+                             "1 'USB 6ch Array' (6 in))")
+    assert "FAIL" in out.out and "Traceback" not in out.err
+
+
+def test_dry_run_without_portaudio(robot_dir, monkeypatch, capsys):
+    class NoPortAudio:
+        def find_spec(self, name, path=None, target=None):
+            if name == "sounddevice":
+                raise OSError("PortAudio library not found")
+
+    monkeypatch.delitem(sys.modules, "sounddevice", raising=False)
+    monkeypatch.setattr(sys, "meta_path", [NoPortAudio(), *sys.meta_path])
+    code = main(["run", "--config", str(_config(robot_dir)), "--dry-run"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert err == ("hearsee: error: audio: PortAudio library not found "
+                   "(apt-get install libportaudio2)")
+
+
+def test_bad_robot_files_and_options(robot_dir, capsys):
+    bad = robot_dir / "bad.yaml"
+    bad.write_text("audio: {}\ncamera: {left: 0}\n", encoding="utf-8")
+    assert main(["run", "--config", str(bad), "--dry-run"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown key 'camera'" in err[0] and str(bad) in err[0]
+    assert main(["run", "--config", str(robot_dir / "none.yaml")]) == 2
+    assert "file not found" in capsys.readouterr().err
+    assert main(["run", "--config", str(_config(robot_dir)), "--duration", "0"]) == 2
+    assert "--duration must be > 0" in capsys.readouterr().err
+    # --out must not write the report over an input (here a calibration named summary.json)
+    (robot_dir / "prev").mkdir()
+    (robot_dir / "prev" / "summary.json").write_bytes((robot_dir / "rig.yaml").read_bytes())
+    data = yaml.safe_load(_config(robot_dir).read_text(encoding="utf-8"))
+    data["cameras"]["calib"] = "prev/summary.json"
+    (robot_dir / "robot2.yaml").write_text(yaml.safe_dump(data), encoding="utf-8")
+    assert main(["run", "--config", str(robot_dir / "robot2.yaml"), "--dry-run",
+                 "--out", str(robot_dir / "prev")]) == 2
+    assert "would overwrite an input file" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_live_run_through_sounddevice(robot_dir, monkeypatch, capsys):
+    """Audio only: a simulated three-mic recording on channels 1-3 of a 6-channel device."""
+    from hearsee.sim.audio import simulate_recording
+
+    x, truth = simulate_recording("three-mic", [-1.5, 1.8, 0.3], signal="male", duration_s=2.0,
+                                  fs=FS, snr_db=25.0, seed=5)
+    rec = np.zeros((6, x.shape[1]))
+    rec[1:4] = x / np.abs(x).max() * 0.5
+    rec[[0, 4, 5]] = np.random.default_rng(0).normal(0, 0.05, (3, x.shape[1]))
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES, rec))
+    out_dir = robot_dir / "run1"
+    code = main(["run", "--config", str(_config(robot_dir, cameras=False)), "--duration", "1.5",
+                 "--out", str(out_dir), "--quiet"])
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    assert f"report: {out_dir / 'index.html'}" in out.out
+    lines = (out_dir / "updates.jsonl").read_text(encoding="utf-8").splitlines()
+    recs = [json.loads(s) for s in lines]
+    summary = json.loads((out_dir / "summary.json").read_text(encoding="utf-8"))
+    assert summary["status"] == "ok" and summary["audio_s"] == pytest.approx(1.5)
+    assert summary["dropped_blocks"] == 0 and len(recs) == summary["updates"] > 20
+    # the azimuth the robot reports is that of the simulated talker (robot frame, head at 0)
+    assert abs(summary["azimuth_deg_median"] - truth["azimuth_deg"]) < 3.0
+    measured = [r["audio"]["azimuth_deg"] for r in recs if r["audio"] and r["audio"]["measured"]]
+    assert len(measured) > 10 and abs(np.median(measured) - truth["azimuth_deg"]) < 3.0
+    # head driver none: the desired command is printed, the head is not moved
+    assert "(driver none: not moved)" in out.err
+    assert all(r["head_pan_deg"] == 0.0 for r in recs)
+    assert recs[-1]["head_command"]["pan_deg"] == pytest.approx(truth["azimuth_deg"], abs=3.0)
