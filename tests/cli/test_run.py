@@ -191,7 +191,7 @@ def test_live_run_through_sounddevice(robot_dir, monkeypatch, capsys):
     monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES, rec))
     out_dir = robot_dir / "run1"
     code = main(["run", "--config", str(_config(robot_dir, cameras=False)), "--duration", "1.5",
-                 "--out", str(out_dir), "--quiet"])
+                 "--out", str(out_dir), "--quiet", "--mcap", str(robot_dir / "run.mcap")])
     out = capsys.readouterr()
     assert code == 0, out.err
     assert f"report: {out_dir / 'index.html'}" in out.out
@@ -208,3 +208,9 @@ def test_live_run_through_sounddevice(robot_dir, monkeypatch, capsys):
     assert "(driver none: not moved)" in out.err
     assert all(r["head_pan_deg"] == 0.0 for r in recs)
     assert recs[-1]["head_command"]["pan_deg"] == pytest.approx(truth["azimuth_deg"], abs=3.0)
+    # the same outputs as the demo: ROS 2 messages in MCAP, one head angle per update
+    from mcap_ros2.reader import read_ros2_messages
+
+    pans = [m.ros_msg.data for m in read_ros2_messages(str(robot_dir / "run.mcap"),
+                                                       topics=["/hearsee/head_pan"])]
+    assert pans == [r["head_pan_deg"] for r in recs]

@@ -32,6 +32,16 @@ FS = 16000
 
 
 # ------------------------------------------------------------------------------- fakes
+class _Pair:
+    """Like sounddevice's default.device: indexable (0 = input), but not a sequence."""
+
+    def __init__(self, i, o):
+        self._pair = [i, o]
+
+    def __getitem__(self, k):
+        return self._pair[{"input": 0, "output": 1}.get(k, k)]
+
+
 class FakeSoundDevice(types.ModuleType):
     """Just enough of sounddevice's query API: a device list, defaults, settings checks."""
 
@@ -42,7 +52,7 @@ class FakeSoundDevice(types.ModuleType):
                  rates: tuple[int, ...] = (16000, 44100, 48000)) -> None:
         super().__init__("sounddevice")
         self.devices = devices
-        self.default = types.SimpleNamespace(device=[default_input, -1])
+        self.default = types.SimpleNamespace(device=_Pair(default_input, -1))
         self.rates = rates
         self.checked: list[dict] = []
 
@@ -234,6 +244,21 @@ def test_outputs_never_overwrite_inputs(small_rig):
         load_robot_config(make_config(small_rig, _with(cameras={"calib": "out/summary.json"})))
 
 
+def test_documented_example_file_is_valid(small_rig):
+    example = Path(__file__).resolve().parents[2] / "examples" / "robot.yaml"
+    # as shipped it points at a calibration the user still has to make
+    with pytest.raises(ConfigError, match=r"cameras\.calib: calibration file 'rig.yaml' not found"):
+        load_robot_config(example)
+    data = yaml.safe_load(example.read_text(encoding="utf-8"))
+    data["cameras"].update(calib="rig.yaml", left="left.avi", right="right.avi",
+                           thermal="thermal.avi")
+    cfg = robot_config_from_dict(data, "robot.yaml", small_rig)
+    assert cfg.audio.array.name == "respeaker-4" and cfg.audio.channels == (1, 2, 3, 4)
+    assert cfg.cameras.rate_hz == 2 and cfg.head.driver == "none"
+    np.testing.assert_allclose(cfg.cameras.mount_m, [0.05, 0.06, 0.10])
+    assert cfg.output.report == small_rig / "hearsee-run"
+
+
 # ------------------------------------------------------------------------------- devices
 def test_resolve_input_device(fake_sd):
     assert resolve_input_device(fake_sd, "respeaker")["index"] == 2
@@ -250,7 +275,9 @@ def test_resolve_input_device(fake_sd):
         resolve_input_device(fake_sd, 7)
     with pytest.raises(ConfigError, match="matches several input devices"):
         resolve_input_device(fake_sd, "hw:")
-    fake_sd.default.device = [-1, -1]
+    fake_sd.default.device = "respeaker"  # a name set as the default for input and output
+    assert resolve_input_device(fake_sd, None)["index"] == 2
+    fake_sd.default.device = _Pair(-1, -1)
     with pytest.raises(ConfigError, match="no default input device"):
         resolve_input_device(fake_sd, None)
 

@@ -28,6 +28,12 @@ def run_cmd(
     out: Annotated[Path | None, typer.Option(
         "--out", "-o", help="Report folder (overrides output.report; the JSON lines go to "
         "OUT/updates.jsonl).")] = None,
+    rerun: Annotated[Path | None, typer.Option(
+        "--rerun", help="Also write a Rerun recording (.rrd; pip install 'hearsee[rerun]').")
+    ] = None,
+    mcap: Annotated[Path | None, typer.Option(
+        "--mcap", help="Also write ROS 2 messages to an MCAP file (pip install 'hearsee[ros]').")
+    ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q",
                                         help="No progress bar or summary table.")] = False,
 ) -> None:
@@ -67,6 +73,15 @@ def run_cmd(
             as advance:
         result = run_robot(cfg, duration_s=duration, progress=advance)
     index = write_run_report(cfg, result)
+    if rerun is not None:
+        from hearsee.robot.export import write_rerun
+        from hearsee.robot.hardware import report_scenario
+
+        write_rerun(rerun, report_scenario(cfg), result.log, result.frames)
+    if mcap is not None:
+        from hearsee.robot.export import write_mcap
+
+        write_mcap(mcap, result.log, result.frames)
     if not quiet:
         _print_summary(result.summary)
     typer.echo(f"updates: {cfg.output.jsonl}")

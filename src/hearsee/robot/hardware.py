@@ -76,6 +76,7 @@ __all__ = [
     "import_sounddevice",
     "load_robot_config",
     "open_capture",
+    "report_scenario",
     "resolve_input_device",
     "robot_config_from_dict",
     "run_robot",
@@ -463,13 +464,19 @@ def resolve_input_device(sd: Any, spec: DeviceSpec | None, where: str = "audio.d
     devs = _device_list(sd)
     inputs = [d for d in devs if d.get("max_input_channels", 0) > 0]
     if spec is None:
-        default = sd.default.device
-        idx = default[0] if isinstance(default, Sequence) and not isinstance(default, str) \
-            else default
-        if idx is None or int(idx) < 0 or int(idx) >= len(devs):
+        default = sd.default.device  # an [input, output] pair, or one value for both
+        idx = default
+        if not isinstance(default, str | int):
+            try:
+                idx = default[0]
+            except (TypeError, IndexError, KeyError):
+                idx = default
+        if isinstance(idx, str):
+            return resolve_input_device(sd, idx, where)
+        if not isinstance(idx, int) or idx < 0 or idx >= len(devs):
             raise ConfigError(f"{where}: no default input device (available: "
                               f"{_describe(devs)}); name one in audio.device")
-        dev = devs[int(idx)]
+        dev = devs[idx]
     elif isinstance(spec, int):
         if spec >= len(devs):
             raise ConfigError(f"{where}: no device with index {spec} (available: "
@@ -1136,7 +1143,15 @@ def write_run_report(cfg: RobotConfig, result: LiveResult, folder: str | Path | 
     facing +x); no room outline and no ground truth are known on real hardware."""
     from hearsee.robot.report import write_report
 
-    scenario = {
+    return write_report(folder if folder is not None else cfg.output.report,
+                        report_scenario(cfg), result.log, result.summary, result.images,
+                        result.captions)
+
+
+def report_scenario(cfg: RobotConfig) -> dict[str, Any]:
+    """The scenario mapping the report and the Rerun export expect, for a live run: the robot
+    at the origin of its own frame, no room outline (unknown), no objects."""
+    return {
         "name": f"live run ({cfg.path.name})",
         "seed": None,
         "room": {"size_m": [0.0, 0.0, 0.0]},
@@ -1144,5 +1159,3 @@ def write_run_report(cfg: RobotConfig, result: LiveResult, folder: str | Path | 
                   "head_height_m": float(cfg.head.pivot_m[2]), "array": cfg.audio.array.name},
         "objects": [],
     }
-    return write_report(folder if folder is not None else cfg.output.report, scenario,
-                        result.log, result.summary, result.images, result.captions)
