@@ -106,7 +106,9 @@ def test_slanted_plane_through_distorted_rotated_rig_recovers_depth():
     ok = np.isfinite(pts[..., 2])
     assert ok.mean() > 0.6
     resid = pts[ok] @ n - z0  # distance to the true plane, metres
-    assert np.median(np.abs(resid)) < 0.01
+    # dZ = Z^2 / (f B) * dd: at 1.8 m a 0.1 px disparity error (SGBM's sub-pixel "pixel
+    # locking") is ~1 cm
+    assert np.median(np.abs(resid)) < 0.015
     assert np.percentile(np.abs(resid), 90) < 0.05
     # depth in the rectified frame agrees with Z from the 3D points there
     zr = f.points()[..., 2]
