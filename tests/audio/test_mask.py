@@ -183,3 +183,20 @@ def test_localize_bad_input(model):
         mask.localize_mask(x, FS, model)
     with pytest.raises(AudioInputError, match="too short"):
         mask.localize_mask(np.ones((2, 100)), FS, model)
+
+
+def test_localize_recording_document(model):
+    az = 200.0
+    x = mask.simulate_masked(white_noise(1.0, FS, rng=9), FS, model, _src(az), snr_db=20, rng=2,
+                             far_field=True)
+    doc = mask.localize_recording_mask(x, FS, model)
+    s = doc["summary"]
+    assert abs((s["azimuth_deg"] - az + 180) % 360 - 180) < 5
+    assert len(s["candidates"]) == 2 and s["elevation_deg"] is None
+    assert s["front_probability"] < 0.5 and s["n_valid_frames"] > 0
+    valid = [f for f in doc["frames"] if f["valid"]]
+    assert valid and all(f["candidates"][0]["azimuth_deg"] > 90 for f in valid)
+    med = np.median([f["azimuth_deg"] for f in valid])
+    assert abs(med - az) < 10
+    json_doc = __import__("json").dumps(doc)  # JSON-able
+    assert '"summary"' in json_doc

@@ -82,6 +82,7 @@ __all__ = [
     "Responses",
     "cache_dir",
     "localize_mask",
+    "localize_recording_mask",
     "mask_geometry",
     "simulate_masked",
 ]
@@ -384,6 +385,7 @@ class MaskModel:
         if not (self.progress and sys.stderr.isatty()):
             return bem.solve_adjoint(**kw)
         from rich.console import Console
+        from rich.errors import LiveError
         from rich.progress import (
             BarColumn,
             MofNCompleteColumn,
@@ -393,12 +395,20 @@ class MaskModel:
             TimeRemainingColumn,
         )
 
-        with Progress(TextColumn("[bold]mask BEM[/] {task.description}"), BarColumn(),
-                      MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
-                      console=Console(stderr=True), transient=True) as bar:
+        bar = Progress(TextColumn("[bold]mask BEM[/] {task.description}"), BarColumn(),
+                       MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
+                       console=Console(stderr=True), transient=True)
+        try:
+            bar.start()
+        except LiveError:  # another progress display is active (e.g. a CLI bar): no nested bar
+            return bem.solve_adjoint(**kw)
+        try:
             task = bar.add_task(f"{self.array.name}: {self.mesh.n_panels} panels, "
-                                f"{len(self.freqs)} frequencies", total=len(self.freqs))
+                                f"{len(self.freqs)} frequencies (first use; cached after)",
+                                total=len(self.freqs))
             return bem.solve_adjoint(**kw, progress=lambda n: bar.advance(task, n))
+        finally:
+            bar.stop()
 
     # -- transfer functions
     def transfer(self, source: ArrayLike, far_field: bool = False) -> NDArray:
@@ -772,3 +782,86 @@ def _refine(az: NDArray, cost: NDArray, k: int) -> float:
     step = az[1] - az[0]
     off = 0.5 * (y0 - y2) / den if den > 1e-12 else 0.0
     return float((az[k] + np.clip(off, -1, 1) * step) % 360.0)
+
+
+# ------------------------------------------------------------------------------- CLI document
+def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskModel,
+                            frame_ms: float = 64.0, hop_ms: float = 32.0,
+                            method: str = "phat", kalman: bool = True,
+                            progress: Any = None) -> dict[str, Any]:
+    """The ``hearsee localize`` JSON document for a masked array (same contract as
+    :func:`hearsee.audio.localize.localize_recording`).
+
+    Per frame: the GCC TDOA of :func:`hearsee.audio.tdoa.estimate_tdoas` (lag bound widened to
+    the mask's largest ITD; optionally smoothed by :class:`hearsee.audio.itd_filter.ItdKalman`)
+    is inverted through the mask's far-field ITD table into its two candidates, alpha and its
+    mirror; the primary is the one in the half chosen for the whole recording. Summary:
+    :func:`localize_mask` -- one 360-degree azimuth, the runner-up (ITD mirror) as the second
+    candidate, ``front_probability`` and ``confidence`` of the front/back decision,
+    ``distance_m`` of the best-fitting response table. Elevation is null (not resolvable with
+    two microphones; the tables are for the horizontal plane).
+    """
+    from hearsee.audio.itd_filter import ItdKalman
+    from hearsee.audio.tdoa import estimate_tdoas, normalize_method
+
+    model = array if isinstance(array, MaskModel) else MaskModel(array)
+    arr = model.array
+    x = np.asarray(x, dtype=float)
+    method = normalize_method(method)
+    est = localize_mask(x, fs, model)
+    margin = max(1.0, (model.max_itd() - float(arr.max_tdoa()[0])) * fs)
+    tf = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method,
+                        margin_samples=margin, progress=progress)
+    tdoa = tf.tdoa_s[:, 0]
+    if kalman and tf.n_valid:
+        kf = ItdKalman(2, tf.pairs, ref=0, q_std_s=0.25 / fs, r_std_s=1.0 / fs)
+        filt, _ = kf.filter(tf.tdoa_s)
+        tdoa = np.where(tf.valid, filt[:, 0], np.nan)
+    az_tab = np.arange(0.0, 360.0, 1.0)
+    itd_tab = _itd_table(model, None)
+    front_tab = (az_tab < 90) | (az_tab > 270)
+    want_front = est.front_probability >= 0.5
+    frames = []
+    for n in range(len(tf.t)):
+        ok = bool(tf.valid[n]) and bool(np.isfinite(tdoa[n]))
+        cands = []
+        if ok:
+            err = np.abs(itd_tab - tdoa[n])
+            a_f = float(az_tab[np.argmin(np.where(front_tab, err, np.inf))])
+            a_b = float(az_tab[np.argmin(np.where(~front_tab, err, np.inf))])
+            cands = [a_f, a_b] if want_front else [a_b, a_f]
+        frames.append({
+            "t": float(tf.t[n]),
+            "tdoa_s": {"0-1": float(tdoa[n]) if ok else None},
+            "azimuth_deg": cands[0] if ok else None,
+            "elevation_deg": None,
+            "candidates": [{"azimuth_deg": a, "elevation_deg": None} for a in cands],
+            "confidence": float(tf.confidence[n, 0]),
+            "valid": ok,
+            "feasible": True if ok else None,
+        })
+    summary = {
+        "tdoa_s": {"0-1": est.itd_s},
+        "azimuth_deg": est.azimuth_deg,
+        "elevation_deg": None,
+        "candidates": [{"azimuth_deg": est.azimuth_deg, "elevation_deg": None},
+                       {"azimuth_deg": est.runner_up_deg, "elevation_deg": None}],
+        "n_solutions": 1,
+        "feasible": True,
+        "confidence": est.confidence,
+        "front_probability": est.front_probability,
+        "distance_m": est.distance_m,
+        "iid_db": {f"{lo:.0f}-{hi:.0f}": float(v) for lo, hi, v in
+                   zip(est.band_edges_hz[:-1], est.band_edges_hz[1:], est.iid_db, strict=True)},
+        "n_valid_frames": tf.n_valid,
+        "position_m": None,
+    }
+    return {
+        "array": arr.to_dict(),
+        "sample_rate": float(fs),
+        "method": method,
+        "kalman": bool(kalman),
+        "mask": True,
+        "frames": frames,
+        "summary": summary,
+    }
