@@ -185,3 +185,17 @@ def test_read_opencv_yaml(tmp_path):
     data = read_opencv_yaml(p)
     np.testing.assert_allclose(data["M1"], K)
     assert data["rms"] == pytest.approx(0.25)
+
+
+def test_swapped_rig_is_the_same_geometry():
+    cam = Camera(K=K, dist=[-0.1, 0.01, 0.0, 0.0], width=640, height=480)
+    R = cv2.Rodrigues(np.array([0.01, -0.02, 0.005]))[0]
+    rig = StereoRig(cam, Camera.from_fov(55.0, 640, 480), R, [0.1, 0.002, 0.001]).with_thermal(
+        Camera.from_fov(40.0, 160, 120), np.eye(3), [0.02, 0.05, 0.0])
+    sw = rig.swapped()
+    X = _points(10)
+    # a point in the old left frame, seen from the new left (old right) camera
+    Xr = rig.left_to_right(X)
+    np.testing.assert_allclose(sw.left_to_right(Xr), X, atol=1e-12)
+    np.testing.assert_allclose(sw.project_thermal(Xr), rig.project_thermal(X), atol=1e-9)
+    assert sw.rectification.baseline_m == pytest.approx(-rig.rectify().baseline_m, rel=1e-6)

@@ -557,6 +557,22 @@ class StereoRig:
             raise CalibrationError("this rig has no thermal camera (add a 'thermal:' block)")
         return self.thermal
 
+    def swapped(self) -> StereoRig:
+        """The same rig with the roles of the two cameras exchanged (exact: ``R' = R^T``,
+        ``T' = -R^T T``); for a rig calibrated with its image sets swapped (``T_x > 0``). A
+        thermal camera is re-referenced to the new left camera."""
+        Rs = self.R.T
+        Ts = -Rs @ self.T
+        kw: dict[str, Any] = {}
+        if self.thermal is not None:
+            # X_t = Rt X_l + Tt and X_l = R^T X_r - R^T T  ->  X_t = Rt R^T X_r + (Tt + Rt Ts)
+            kw = dict(thermal=self.thermal, R_thermal=self.R_thermal @ Rs,
+                      T_thermal=self.T_thermal + self.R_thermal @ Ts)
+        left = Camera(self.right.K, self.right.dist, self.right.width, self.right.height,
+                      "left")
+        right = Camera(self.left.K, self.left.dist, self.left.width, self.left.height, "right")
+        return StereoRig(left, right, Rs, Ts, rms_px=self.rms_px, info=dict(self.info), **kw)
+
     def with_thermal(self, thermal: Camera, R_thermal: ArrayLike,
                      T_thermal: ArrayLike) -> StereoRig:
         """A copy of this rig with a thermal camera (thermal-from-left extrinsics)."""
