@@ -47,6 +47,7 @@ __all__ = [
     "far_field_planar",
     "far_field_volume",
     "hyperboloid_points",
+    "localize_recording",
     "localize_tdoa",
     "near_field_position",
     "three_mic_curve",
@@ -526,3 +527,103 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
         if pts:
             branches.append(np.array(pts[::-1]))
     return branches
+
+
+# ---------------------------------------------------------------------------------- recordings
+def localize_recording(
+    x: ArrayLike,
+    fs: float,
+    array: MicArray | str,
+    frame_ms: float = 64.0,
+    hop_ms: float = 32.0,
+    method: str = "phat",
+    kalman: bool = True,
+    pairs: Sequence[tuple[int, int]] | None = None,
+    q_std_s: float | None = None,
+    r_std_s: float | None = None,
+    progress: Any = None,
+    **tdoa_kwargs: Any,
+) -> dict[str, Any]:
+    """The per-frame pipeline behind ``hearsee localize``: GCC TDOAs -> ITD Kalman -> solver.
+
+    Parameters
+    ----------
+    x : array (n_mics, n)
+        The recording (row k = microphone k), sample rate ``fs`` Hz.
+    array : MicArray or preset/YAML name
+    frame_ms, hop_ms, method :
+        Passed to :func:`hearsee.audio.tdoa.estimate_tdoas` (with ``tdoa_kwargs``).
+    kalman : bool
+        Smooth the valid frames' TDOAs with :class:`hearsee.audio.itd_filter.ItdKalman`
+        (reference microphone 0; ``r_std_s`` default one sample, ``q_std_s`` a quarter sample
+        per frame). Frames without a source stay without an estimate either way.
+    progress : callable(n_frames_done), optional
+
+    Returns
+    -------
+    dict
+        The JSON document of the CLI contract::
+
+            {"array": {...}, "sample_rate": fs, "method": ..., "kalman": bool,
+             "frames": [{"t", "tdoa_s": {"0-1": s}, "azimuth_deg", "elevation_deg",
+                         "candidates": [{"azimuth_deg", "elevation_deg"}], "confidence",
+                         "valid", "feasible"}],
+             "summary": {"tdoa_s", "azimuth_deg", "elevation_deg", "candidates", "n_solutions",
+                         "feasible", "confidence", "n_valid_frames", "position_m"}}
+
+        with None where a quantity is not resolvable (no source in the frame, elevation of a
+        linear array, ...). The summary localizes the whole-recording TDOA estimate (weighted
+        cross spectra averaged over valid frames), not an average of frame angles.
+    """
+    from hearsee.audio.itd_filter import ItdKalman
+    from hearsee.audio.tdoa import estimate_tdoas, normalize_method
+
+    arr = load_array(array)
+    method = normalize_method(method)
+    tf = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method,
+                        pairs=pairs, progress=progress, **tdoa_kwargs)
+    labels = tf.pair_labels
+    tdoa = tf.tdoa_s
+    if kalman and tf.n_valid:
+        kf = ItdKalman(arr.n_mics, tf.pairs, ref=0,
+                       q_std_s=q_std_s if q_std_s is not None else 0.25 / fs,
+                       r_std_s=r_std_s if r_std_s is not None else 1.0 / fs)
+        filt, _ = kf.filter(tdoa)
+        tdoa = np.where(tf.valid[:, None], filt, np.nan)
+    frames = []
+    for n in range(len(tf.t)):
+        row = tdoa[n]
+        ok = bool(tf.valid[n]) and bool(np.all(np.isfinite(row)))
+        loc = localize_tdoa(row, arr, tf.pairs, near_field=False) if ok else None
+        frames.append({
+            "t": float(tf.t[n]),
+            "tdoa_s": {k: (float(v) if ok else None) for k, v in zip(labels, row, strict=True)},
+            "azimuth_deg": loc.azimuth_deg if loc else None,
+            "elevation_deg": loc.elevation_deg if loc else None,
+            "candidates": loc.to_dict()["candidates"] if loc else [],
+            "confidence": float(np.min(tf.confidence[n])),
+            "valid": ok,
+            "feasible": loc.feasible if loc else None,
+        })
+    summ = tf.summary_tdoa_s
+    have = bool(np.all(np.isfinite(summ)))
+    sloc = localize_tdoa(summ, arr, tf.pairs) if have else None
+    summary = {
+        "tdoa_s": {k: (float(v) if have else None) for k, v in zip(labels, summ, strict=True)},
+        "azimuth_deg": sloc.azimuth_deg if sloc else None,
+        "elevation_deg": sloc.elevation_deg if sloc else None,
+        "candidates": sloc.to_dict()["candidates"] if sloc else [],
+        "n_solutions": sloc.n_solutions if sloc else 0,
+        "feasible": sloc.feasible if sloc else None,
+        "confidence": float(np.min(tf.summary_confidence)) if have else None,
+        "n_valid_frames": tf.n_valid,
+        "position_m": sloc.to_dict()["position_m"] if sloc else None,
+    }
+    return {
+        "array": arr.to_dict(),
+        "sample_rate": float(fs),
+        "method": method,
+        "kalman": bool(kalman),
+        "frames": frames,
+        "summary": summary,
+    }

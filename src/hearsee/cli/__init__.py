@@ -17,6 +17,9 @@ from hearsee.errors import HearseeError
 _COMMAND_MODULES = [
     "calibrate",
     "info",
+    "localize",
+    "localize3d",
+    "robot",
     "run",
     "simulate",
     "track",

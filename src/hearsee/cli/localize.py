@@ -1,0 +1,119 @@
+"""``hearsee localize``: per-frame and whole-recording source direction from a recording."""
+
+from __future__ import annotations
+
+import csv
+import io
+import sys
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from hearsee.cli._app import OutputFormat, app, emit_json, err_console, progress
+
+
+class GccMethod(StrEnum):
+    phat = "gcc-phat"
+    scot = "gcc-scot"
+    roth = "gcc-roth"
+    ml = "gcc-ml"
+    cc = "cc"
+
+
+#: Above this much audio x pairs (seconds) processing takes about a second: show a bar.
+_PROGRESS_WORK_S = 60.0
+
+
+def _fmt(v: Any, digits: int = 1) -> str:
+    return "-" if v is None else f"{v:.{digits}f}"
+
+
+def _write_csv(doc: dict[str, Any]) -> None:
+    labels = list(doc["summary"]["tdoa_s"])
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["t_s", *[f"tdoa_{k}_s" for k in labels], "azimuth_deg", "elevation_deg",
+                "candidates", "confidence", "valid"])
+    for f in doc["frames"]:
+        cands = ";".join(f"{_fmt(c['azimuth_deg'], 2)}/{_fmt(c['elevation_deg'], 2)}"
+                         for c in f["candidates"])
+        w.writerow([f"{f['t']:.4f}",
+                    *["" if f["tdoa_s"][k] is None else f"{f['tdoa_s'][k]:.9f}" for k in labels],
+                    "" if f["azimuth_deg"] is None else f"{f['azimuth_deg']:.2f}",
+                    "" if f["elevation_deg"] is None else f"{f['elevation_deg']:.2f}",
+                    cands, f"{f['confidence']:.3f}", int(f["valid"])])
+    sys.stdout.write(buf.getvalue())
+
+
+def _print_table(doc: dict[str, Any]) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    labels = list(doc["summary"]["tdoa_s"])
+    t = Table(title=f"hearsee localize ({doc['array']['name']}, {doc['method']})")
+    t.add_column("t [s]")
+    for k in labels:
+        t.add_column(f"tdoa {k} [us]")
+    for h in ("azimuth [deg]", "elevation [deg]", "candidates", "confidence"):
+        t.add_column(h)
+    for f in doc["frames"]:
+        t.add_row(f"{f['t']:.3f}",
+                  *[_fmt(None if f["tdoa_s"][k] is None else f["tdoa_s"][k] * 1e6) for k in labels],
+                  _fmt(f["azimuth_deg"]), _fmt(f["elevation_deg"]),
+                  ", ".join(f"({_fmt(c['azimuth_deg'])}, {_fmt(c['elevation_deg'])})"
+                            for c in f["candidates"]),
+                  f"{f['confidence']:.2f}")
+    con = Console(file=sys.stdout, width=160)
+    con.print(t)
+    s = doc["summary"]
+    cands = ", ".join(f"({_fmt(c['azimuth_deg'])}, {_fmt(c['elevation_deg'])})"
+                      for c in s["candidates"]) or "none"
+    con.print(f"summary: azimuth {_fmt(s['azimuth_deg'])} deg, elevation "
+              f"{_fmt(s['elevation_deg'])} deg, candidates {cands}, "
+              f"{s['n_valid_frames']} valid frames", highlight=False)
+
+
+@app.command("localize")
+def localize_cmd(
+    recording: Annotated[Path, typer.Argument(help="Multichannel audio file; channel k is "
+                                              "microphone k of the array.")],
+    array: Annotated[str, typer.Option("--array", help="Array preset name or YAML file.")],
+    frame_ms: Annotated[float, typer.Option("--frame-ms",
+                                            help="Frame length in milliseconds.")] = 64.0,
+    hop_ms: Annotated[float, typer.Option("--hop-ms", help="Frame hop in milliseconds.")] = 32.0,
+    method: Annotated[GccMethod, typer.Option(
+        "--method", help="GCC weighting (gcc-ml = Hannan-Thomson).")] = GccMethod.phat,
+    no_kalman: Annotated[bool, typer.Option(
+        "--no-kalman", help="Report the raw per-frame TDOAs (no ITD Kalman filter).")] = False,
+    fmt: Annotated[OutputFormat, typer.Option("--format", help="Output format.")] = (
+        OutputFormat.json),
+) -> None:
+    """Estimate TDOAs and the source direction per frame and for the whole recording."""
+    from hearsee.audio.arrays import load_array
+    from hearsee.audio.localize import localize_recording
+    from hearsee.audio.signals import read_recording
+    from hearsee.errors import ConfigError
+
+    if frame_ms <= 0 or hop_ms <= 0:
+        raise ConfigError(f"--frame-ms and --hop-ms must be > 0, got {frame_ms} and {hop_ms}")
+    arr = load_array(array)
+    x, fs = read_recording(recording, arr)
+    frame_len = max(int(round(frame_ms * 1e-3 * fs)), 8)
+    hop = max(int(round(hop_ms * 1e-3 * fs)), 1)
+    n_frames = max((x.shape[1] - frame_len) // hop + 1, 0)
+    work = x.shape[1] / fs * len(arr.pairs)
+    with progress("localizing", n_frames, enabled=work > _PROGRESS_WORK_S) as advance:
+        doc = localize_recording(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
+                                 method=method.value, kalman=not no_kalman, progress=advance)
+    doc["recording"] = str(recording)
+    if fmt is OutputFormat.json:
+        emit_json(doc)
+    elif fmt is OutputFormat.csv:
+        _write_csv(doc)
+    else:
+        _print_table(doc)
+    if doc["summary"]["n_valid_frames"] == 0:
+        err_console.print(f"{recording}: no frame holds a detectable source "
+                          "(silence or uncorrelated noise)", highlight=False)

@@ -1,0 +1,81 @@
+import numpy as np
+import pytest
+
+from hearsee.audio.itd_filter import ItdKalman, pair_matrix
+from hearsee.errors import ConfigError, GeometryError
+
+TRUE = np.array([1e-4, 2.5e-4, 1.5e-4])  # pairs 0-1, 0-2, 1-2 (consistent: t01 + t12 = t02)
+
+
+def _noisy(n, seed=0, std=2e-5):
+    return TRUE + np.random.default_rng(seed).normal(0.0, std, (n, 3))
+
+
+def test_pair_matrix_maps_reference_state():
+    H = pair_matrix(3, [(0, 1), (0, 2), (1, 2)], ref=0)
+    s = np.array([-1e-4, -2.5e-4])  # t1 - t0, t2 - t0
+    np.testing.assert_allclose(H @ s, TRUE)
+    H1 = pair_matrix(3, [(0, 1), (2, 1)], ref=1)
+    np.testing.assert_allclose(H1 @ np.array([1e-4, 1.5e-4 * -1]), [1e-4, -1.5e-4])
+
+
+def test_filter_converges_and_state_is_inspectable():
+    kf = ItdKalman(3, q_std_s=1e-6, r_std_s=2e-5)
+    out, acc = kf.filter(_noisy(60))
+    assert acc.all()
+    np.testing.assert_allclose(kf.x, [-1e-4, -2.5e-4], atol=8e-6)  # state: t_k - t_0
+    np.testing.assert_allclose(out[-1], TRUE, atol=8e-6)
+    assert kf.P.shape == (2, 2) and np.all(np.linalg.eigvalsh(kf.P) > 0)
+    assert np.trace(kf.P) < (2e-5) ** 2  # tighter than one measurement
+    # filtered error is smaller than the raw measurement error
+    raw = np.sqrt(np.mean((_noisy(60)[30:] - TRUE) ** 2))
+    filt = np.sqrt(np.mean((out[30:] - TRUE) ** 2))
+    assert filt < 0.5 * raw
+    # textbook names are there
+    for name in ("x", "P", "F", "H", "Q", "R"):
+        assert hasattr(kf.kf, name)
+
+
+def test_gating_rejects_injected_outlier():
+    Z = _noisy(40, seed=1)
+    Z[25] = [-3e-4, 4e-4, 1e-4]  # an anomalous GCC peak
+    kf = ItdKalman(3, q_std_s=1e-6, r_std_s=2e-5)
+    out, acc = kf.filter(Z)
+    assert not acc[25] and acc[26:].all()
+    assert kf.n_rejected == 1
+    np.testing.assert_allclose(out[25], TRUE, atol=2e-5)  # state not pulled to the outlier
+
+
+def test_missing_frames_predict_only_and_covariance_grows():
+    kf = ItdKalman(2, q_std_s=5e-6, r_std_s=2e-5)
+    for z in _noisy(10)[:, :1]:
+        kf.step(z)
+    p_before = kf.P.copy()
+    x_before = kf.x.copy()
+    assert kf.step(None) is False
+    assert kf.step([np.nan]) is False
+    np.testing.assert_allclose(kf.x, x_before)
+    assert kf.P[0, 0] > p_before[0, 0]
+
+
+def test_reinitialises_after_repeated_rejections():
+    kf = ItdKalman(2, q_std_s=1e-6, r_std_s=1e-5, max_rejects=3)
+    for _ in range(10):
+        kf.step([1e-4])
+    for _ in range(3):
+        kf.step([-2e-4])  # the source jumped
+    assert kf.pair_tdoas()[0] == pytest.approx(-2e-4, abs=1e-6)
+
+
+def test_bad_parameters():
+    with pytest.raises(GeometryError):
+        ItdKalman(1)
+    with pytest.raises(ConfigError):
+        ItdKalman(3, q_std_s=0.0)
+    with pytest.raises(ConfigError):
+        ItdKalman(3, gate_prob=1.5)
+    with pytest.raises(GeometryError, match="do not determine"):
+        ItdKalman(3, pairs=[(0, 1)])
+    kf = ItdKalman(3)
+    with pytest.raises(GeometryError, match="expected 3"):
+        kf.step([0.0, 0.0])

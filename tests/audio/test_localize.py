@@ -1,0 +1,151 @@
+import numpy as np
+import pytest
+
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.localize import (
+    array_geometry,
+    cone_points,
+    far_field_planar,
+    hyperboloid_points,
+    localize_recording,
+    localize_tdoa,
+    near_field_position,
+    three_mic_curve,
+)
+from hearsee.audio.propagation import simulate_free_field
+from hearsee.audio.signals import white_noise
+from hearsee.errors import GeometryError
+from hearsee.geometry import unit_vector_deg
+
+TWO = MicArray.from_preset("two-mic")
+THREE = MicArray.from_preset("three-mic")
+
+
+def _az(c):
+    return [round(a, 6) for a, _ in c]
+
+
+@pytest.mark.parametrize("az", [30.0, -60.0, 150.0, 0.0, 89.0])
+def test_two_mic_azimuth_and_front_back_twin(az):
+    loc = localize_tdoa(TWO.tdoa_far(unit_vector_deg(az, 0.0)), TWO)
+    front = np.degrees(np.arcsin(np.sin(np.radians(az))))
+    twin = 180.0 - front if front >= 0 else -180.0 - front
+    assert loc.elevation_deg is None and loc.feasible
+    assert loc.n_solutions == 2 and len(loc.candidates) == 2
+    assert loc.azimuth_deg == pytest.approx(front, abs=1e-6)  # the front twin first
+    got = sorted(_az(loc.candidates))
+    assert got == pytest.approx(sorted([front, twin]), abs=1e-6)
+
+
+def test_two_mic_endfire_single_solution():
+    loc = localize_tdoa(TWO.tdoa_far(unit_vector_deg(90.0, 0.0)), TWO)
+    assert loc.n_solutions == 1 and loc.azimuth_deg == pytest.approx(90.0)
+
+
+def test_two_mic_impossible_tdoa_is_infeasible():
+    loc = localize_tdoa([1.2 * TWO.max_tdoa()[0]], TWO)
+    assert not loc.feasible and loc.n_solutions == 0
+    assert loc.azimuth_deg == pytest.approx(90.0)  # t0 > t1: nearest is end-fire at mic 1 (+y)
+
+
+@pytest.mark.parametrize("az,el", [(30.0, 20.0), (150.0, -40.0), (-100.0, 60.0)])
+def test_three_mic_two_mirror_solutions(az, el):
+    loc = localize_tdoa(THREE.tdoa_far(unit_vector_deg(az, el)), THREE)
+    assert loc.feasible and loc.n_solutions == 2
+    assert loc.azimuth_deg == pytest.approx(az, abs=1e-6)
+    assert loc.elevation_deg == pytest.approx(abs(el), abs=1e-6)  # above the plane first
+    assert sorted(e for _, e in loc.candidates) == pytest.approx([-abs(el), abs(el)], abs=1e-6)
+
+
+def test_three_mic_in_plane_single_solution():
+    loc = localize_tdoa(THREE.tdoa_far(unit_vector_deg(-135.0, 0.0)), THREE)
+    assert loc.feasible and loc.n_solutions == 1
+    assert loc.candidates[0] == pytest.approx((-135.0, 0.0), abs=1e-3)
+
+
+def test_three_mic_inconsistent_tdoas_flagged():
+    # |u_p| > 1: too large for any direction -> nearest feasible, in the plane
+    tau = 1.5 * THREE.tdoa_far(unit_vector_deg(40.0, 0.0))
+    loc = localize_tdoa(tau, THREE)
+    assert not loc.feasible and loc.n_solutions == 0
+    assert loc.azimuth_deg == pytest.approx(40.0, abs=1e-6) and loc.elevation_deg == 0.0
+    # violated closure t01 + t12 != t02
+    loc = localize_tdoa([2e-4, -2e-4, 2e-4], THREE)
+    assert not loc.feasible and loc.n_solutions == 0 and loc.candidates
+
+
+def test_planar_array_in_vertical_plane_mirrors_about_that_plane():
+    arr = MicArray(np.array([[0.0, 0.1, 0.0], [0.0, -0.1, 0.0], [0.0, 0.0, 0.12]]))
+    geo = array_geometry(arr)
+    assert geo.kind == "planar" and abs(geo.normal[0]) == pytest.approx(1.0)
+    loc = localize_tdoa(arr.tdoa_far(unit_vector_deg(30.0, 10.0)), arr)
+    assert loc.n_solutions == 2
+    cands = sorted(loc.candidates)
+    assert cands[0] == pytest.approx((30.0, 10.0), abs=1e-6)
+    assert cands[1] == pytest.approx((150.0, 10.0), abs=1e-6)
+
+
+def test_collinear_generic_axis():
+    arr = MicArray(np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.25, 0.0, 0.0]]))
+    assert array_geometry(arr).kind == "linear"
+    loc = localize_tdoa(arr.tdoa_far(unit_vector_deg(40.0, 0.0)), arr)
+    assert sorted(_az(loc.candidates)) == pytest.approx([-40.0, 40.0], abs=1e-6)
+    vert = MicArray(np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.2]]))
+    loc = localize_tdoa(vert.tdoa_far(unit_vector_deg(70.0, 25.0)), vert)
+    assert loc.azimuth_deg is None and loc.elevation_deg == pytest.approx(25.0)
+
+
+def test_volume_array_direction_and_position():
+    pos = np.vstack([THREE.positions, [[0.0, 0.0, 0.12]], [[0.02, 0.03, -0.1]]])
+    arr = MicArray(pos)
+    src = np.array([1.0, 0.6, 0.4])
+    loc = localize_tdoa(arr.tdoa(src), arr)
+    assert loc.geometry == "volume" and loc.n_solutions == 1
+    np.testing.assert_allclose(loc.position_m, src, atol=1e-4)
+    far = localize_tdoa(arr.tdoa_far(unit_vector_deg(-70.0, 35.0)), arr)
+    assert (far.azimuth_deg, far.elevation_deg) == pytest.approx((-70.0, 35.0), abs=1e-4)
+    p, r = near_field_position(arr.tdoa(src), arr, x0=[1.0, 0.0, 0.0])
+    np.testing.assert_allclose(p, src, atol=1e-4)
+    assert r < 1e-8
+
+
+def test_nan_tdoa_gives_empty_localization():
+    loc = localize_tdoa([np.nan, 0.0, 0.0], THREE)
+    assert loc.azimuth_deg is None and loc.candidates == [] and not loc.feasible
+
+
+def test_wrong_tdoa_count():
+    with pytest.raises(GeometryError, match="TDOAs"):
+        localize_tdoa([0.0, 0.0], THREE)
+    with pytest.raises(GeometryError):
+        far_field_planar([0.0], TWO)
+
+
+def test_loci_lie_on_their_equations():
+    src = np.array([1.0, 0.7, 0.4])
+    tau = TWO.tdoa(src)[0]
+    h = hyperboloid_points(tau, *TWO.positions, c=TWO.speed_of_sound).reshape(-1, 3)
+    d = np.linalg.norm(h - TWO.positions[0], axis=1) - np.linalg.norm(h - TWO.positions[1], axis=1)
+    np.testing.assert_allclose(d / TWO.speed_of_sound, tau, atol=1e-9)
+    cone = cone_points(tau, *TWO.positions, c=TWO.speed_of_sound)[1:].reshape(-1, 3)
+    u = cone / np.linalg.norm(cone, axis=1, keepdims=True)
+    np.testing.assert_allclose(TWO.tdoa_far(u)[:, 0], tau, atol=1e-9)
+    branches = three_mic_curve(THREE.tdoa(src), THREE)
+    assert len(branches) == 2
+    for b in branches:
+        np.testing.assert_allclose(THREE.tdoa(b), np.broadcast_to(THREE.tdoa(src), (len(b), 3)),
+                                   atol=1e-7)
+    # the true source lies on (one branch of) the curve
+    dmin = min(np.min(np.linalg.norm(b - src, axis=1)) for b in branches)
+    assert dmin < 0.1
+
+
+def test_localize_recording_document():
+    src = 2.0 * unit_vector_deg(60.0, 0.0)
+    x = simulate_free_field(white_noise(0.6, 16000, 7), 16000, THREE, src, snr_db=20, rng=8)
+    doc = localize_recording(x, 16000, THREE)
+    assert doc["summary"]["azimuth_deg"] == pytest.approx(60.0, abs=2.0)
+    assert len(doc["frames"]) > 10
+    f = doc["frames"][3]
+    assert set(f["tdoa_s"]) == {"0-1", "0-2", "1-2"} and f["valid"]
+    assert f["azimuth_deg"] == pytest.approx(60.0, abs=3.0)

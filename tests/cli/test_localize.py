@@ -1,0 +1,133 @@
+import json
+
+import numpy as np
+import pytest
+import soundfile as sf
+
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.propagation import simulate_free_field
+from hearsee.audio.signals import white_noise
+from hearsee.cli import main
+from hearsee.geometry import unit_vector_deg
+
+FS = 16000
+
+
+@pytest.fixture(scope="module")
+def rec3(tmp_path_factory):
+    arr = MicArray.from_preset("three-mic")
+    src = 2.0 * unit_vector_deg(-120.0, 0.0)
+    s = white_noise(0.8, FS, rng=1)
+    s[int(0.5 * FS):] = 0.0  # the last 0.3 s: sensor noise only
+    x = simulate_free_field(s, FS, arr, src, snr_db=25, rng=2)
+    path = tmp_path_factory.mktemp("rec") / "three.wav"
+    sf.write(path, (x / np.abs(x).max() * 0.5).T, FS, subtype="FLOAT")
+    return path
+
+
+def _run(capsys, *args):
+    code = main(["localize", *map(str, args)])
+    cap = capsys.readouterr()
+    return code, cap.out, cap.err
+
+
+def test_json_contract(rec3, capsys):
+    code, out, _ = _run(capsys, rec3, "--array", "three-mic", "--format", "json")
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["array"]["name"] == "three-mic" and doc["sample_rate"] == FS
+    assert set(doc) >= {"array", "sample_rate", "frames", "summary"}
+    f = doc["frames"][4]
+    assert set(f) >= {"t", "tdoa_s", "azimuth_deg", "elevation_deg", "candidates", "confidence"}
+    assert set(f["tdoa_s"]) == {"0-1", "0-2", "1-2"}
+    assert f["azimuth_deg"] == pytest.approx(-120.0, abs=3.0)
+    assert len(f["candidates"]) in (1, 2)
+    assert {"azimuth_deg", "elevation_deg"} == set(f["candidates"][0])
+    # frames after the source stopped: no estimate, nulls
+    late = [g for g in doc["frames"] if g["t"] > 0.6]
+    assert late and all(g["azimuth_deg"] is None and g["tdoa_s"]["0-1"] is None for g in late)
+    s = doc["summary"]
+    assert s["azimuth_deg"] == pytest.approx(-120.0, abs=2.0)
+    assert set(s["tdoa_s"]) == {"0-1", "0-2", "1-2"} and s["candidates"]
+
+
+def test_two_mic_elevation_null_and_twins(tmp_path, capsys):
+    arr = MicArray.from_preset("two-mic")
+    x = simulate_free_field(white_noise(0.5, FS, rng=3), FS, arr, 2.0 * unit_vector_deg(40, 0),
+                            snr_db=25, rng=4)
+    p = tmp_path / "two.wav"
+    sf.write(p, (0.3 * x / np.abs(x).max()).T, FS, subtype="FLOAT")
+    code, out, _ = _run(capsys, p, "--array", "two-mic", "--method", "gcc-scot", "--no-kalman")
+    assert code == 0
+    s = json.loads(out)["summary"]
+    assert s["elevation_deg"] is None
+    azs = sorted(c["azimuth_deg"] for c in s["candidates"])
+    assert azs == pytest.approx([40.0, 140.0], abs=2.0)
+
+
+@pytest.mark.parametrize("fmt", ["csv", "table"])
+def test_other_formats(rec3, capsys, fmt):
+    code, out, _ = _run(capsys, rec3, "--array", "three-mic", "--format", fmt)
+    assert code == 0
+    if fmt == "csv":
+        lines = out.strip().splitlines()
+        assert lines[0].startswith("t_s,tdoa_0-1_s,tdoa_0-2_s,tdoa_1-2_s,azimuth_deg")
+        assert len(lines) > 10
+    else:
+        assert "summary: azimuth" in out
+
+
+def _bad(tmp_path, name, data, fs=FS, subtype="FLOAT"):
+    p = tmp_path / name
+    sf.write(p, data, fs, subtype=subtype)
+    return p
+
+
+def test_bad_inputs_one_line_exit_2(rec3, tmp_path, capsys):
+    rng = np.random.default_rng(0)
+    nan = rng.standard_normal((FS, 3)) * 0.1
+    nan[100, 1] = np.nan
+    yaml_bad = tmp_path / "bad.yaml"
+    yaml_bad.write_text("microphones: [[0, 0, 0], [0, 0\n")
+    yaml_coinc = tmp_path / "coinc.yaml"
+    yaml_coinc.write_text("microphones: [[0, 0, 0], [0, 0, 0]]\n")
+    text = tmp_path / "notes.wav"
+    text.write_text("this is not audio")
+    cases = [
+        ([rec3, "--array", "two-mic"], "channel"),  # wrong channel count
+        ([_bad(tmp_path, "nan.wav", nan), "--array", "three-mic"], "NaN"),
+        ([_bad(tmp_path, "zero.wav", np.zeros((FS, 3))), "--array", "three-mic"], "silent"),
+        ([_bad(tmp_path, "short.wav", rng.standard_normal((300, 3)) * 0.1), "--array",
+          "three-mic"], "short"),
+        ([_bad(tmp_path, "lowfs.wav", rng.standard_normal((800, 3)) * 0.1, fs=400), "--array",
+          "three-mic"], ""),  # sample rate too low for one frame vs the array's delays
+        ([text, "--array", "three-mic"], ""),
+        ([tmp_path / "missing.wav", "--array", "three-mic"], "missing.wav"),
+        ([rec3, "--array", str(yaml_bad)], "YAML"),
+        ([rec3, "--array", str(yaml_coinc)], "coincide"),
+        ([rec3, "--array", "no-such-preset"], "preset"),
+        ([rec3, "--array", "three-mic", "--frame-ms", "0.2"], "frame"),
+    ]
+    for args, needle in cases:
+        code, out, err = _run(capsys, *args)
+        assert code == 2, (args, err)
+        assert err.startswith("hearsee: error:") and err.count("\n") == 1, err
+        assert needle in err, (needle, err)
+        assert "Traceback" not in err and out == ""
+
+
+def test_bad_method_is_usage_error(rec3, capsys):
+    code, _, err = _run(capsys, rec3, "--array", "three-mic", "--method", "music")
+    assert code == 2 and "Traceback" not in err
+
+
+def test_clipped_recording_warns_but_works(tmp_path, capsys):
+    arr = MicArray.from_preset("three-mic")
+    x = simulate_free_field(white_noise(0.5, FS, rng=5), FS, arr, [1.0, 1.0, 0.0], snr_db=25,
+                            rng=6)
+    x = np.clip(3.0 * x / np.abs(x).max(), -1.0, 1.0)
+    p = _bad(tmp_path, "clip.wav", x.T, subtype="PCM_16")
+    with pytest.warns(UserWarning, match="clipped"):
+        code = main(["localize", str(p), "--array", "three-mic"])
+    assert code == 0
+    assert json.loads(capsys.readouterr().out)["summary"]["azimuth_deg"] is not None
