@@ -44,6 +44,14 @@ def rectified_row_error(rig: StereoRig, lp: list[np.ndarray], rp: list[np.ndarra
         np.concatenate(du)))
 
 
+def _pnp_rms(corners: np.ndarray, obj: np.ndarray, cam: Camera) -> float:
+    """RMS reprojection error (px) of the best board pose for ``cam``'s intrinsics."""
+    ok, rv, tv = cv2.solvePnP(obj, corners, cam.K, cam.dist)
+    rv, tv = cv2.solvePnPRefineLM(obj, corners, cam.K, cam.dist, rv, tv)
+    uv = cam.project(obj @ cv2.Rodrigues(rv)[0].T + tv.ravel())
+    return float(np.sqrt(np.mean(np.sum((uv - corners) ** 2, axis=1))))
+
+
 def real(data: Path, square: float, figure: Path | None) -> None:
     d = data / "vision" / "chessboard_stereo"
     lf = sorted(d.glob("left*.jpg"))
@@ -75,6 +83,16 @@ def real(data: Path, square: float, figure: Path | None) -> None:
     for name, cam, key in (("left", rig.left, "D1"), ("right", rig.right, "D2")):
         print(f"  {name} distortion (k1 k2 p1 p2 k3): {np.round(cam.dist, 4).tolist()}   "
               f"reference (k1 k2 p1 p2 k3 k4 k5 k6): {np.round(ref[key].ravel()[:8], 4).tolist()}")
+    # how well does each calibration explain the detected corners? (one PnP pose per view)
+    obj = C.board_points(PATTERN, square)
+    for name, files, cam, key in (("left", lf, rig.left, "1"), ("right", rf, rig.right, "2")):
+        ref_cam = Camera(ref["M" + key], ref["D" + key].ravel(), cam.width, cam.height)
+        corners = [C.find_corners(read_image(f), PATTERN) for f in files]
+        fits = [_pnp_rms(c, obj, k) for k in (cam, ref_cam) for c in corners if c is not None]
+        n = len(fits) // 2
+        print(f"  {name}: corners fit with a free pose per view: this calibration "
+              f"{np.sqrt(np.mean(np.square(fits[:n]))):.3f} px RMS, reference "
+              f"{np.sqrt(np.mean(np.square(fits[n:]))):.3f} px RMS")
     T_ref = ref_ext["T"].ravel()
     cos = float(rig.T @ T_ref / (np.linalg.norm(rig.T) * np.linalg.norm(T_ref)))
     ang = np.degrees(np.linalg.norm(cv2.Rodrigues(rig.R @ ref_ext["R"].T)[0]))

@@ -36,7 +36,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.errors import CalibrationError, ImageInputError
+from hearsee.errors import CalibrationError, ConfigError, ImageInputError
 from hearsee.vision.camera import Rectification, StereoRig
 from hearsee.vision.io import check_pair, to_gray
 
@@ -158,7 +158,7 @@ def compute_disparity(
     ----------
     left, right : (H, W) or (H, W, 3) uint8 rectified images (colour is converted to grey).
     num_disparities : disparity search range in pixels (rounded up to a multiple of 16).
-    min_disparity : smallest disparity searched, pixels.
+    min_disparity : smallest disparity searched, pixels (>= 0).
     block_size : odd matching block size in pixels.
     mode : SGBM variant; "sgbm3way" is fastest.
     p1, p2 : smoothness penalties (default ``8 b^2`` and ``32 b^2``).
@@ -193,13 +193,18 @@ def compute_disparity(
             "cv2.convertScaleAbs"
         )
     if mode not in _MODES:
-        raise ValueError(f"mode must be one of {', '.join(_MODES)}, got {mode!r}")
+        raise ConfigError(f"mode must be one of {', '.join(_MODES)}, got {mode!r}")
     if lr_check not in ("internal", "full", "none"):
-        raise ValueError(f"lr_check must be internal, full or none, got {lr_check!r}")
+        raise ConfigError(f"lr_check must be internal, full or none, got {lr_check!r}")
     if not 0.0 < scale <= 1.0:
-        raise ValueError(f"scale must be in (0, 1], got {scale}")
+        raise ConfigError(f"scale must be in (0, 1], got {scale}")
+    if num_disparities < 1 or min_disparity < 0:
+        raise ConfigError(
+            f"num_disparities must be >= 1 and min_disparity >= 0, got {num_disparities}, "
+            f"{min_disparity}"
+        )
     if block_size < 1 or block_size % 2 == 0:
-        raise ValueError(f"block_size must be a positive odd number, got {block_size}")
+        raise ConfigError(f"block_size must be a positive odd number, got {block_size}")
     H, W = L.shape
     if scale < 1.0:
         size = (max(8, round(W * scale)), max(8, round(H * scale)))
@@ -276,7 +281,7 @@ def fill_disparity_holes(disparity: NDArray, median: int = 5) -> NDArray:
     out = np.where(valid, d, filled).astype(np.float32)
     if median:
         if median not in (3, 5):
-            raise ValueError(f"median must be 0, 3 or 5, got {median}")
+            raise ConfigError(f"median must be 0, 3 or 5, got {median}")
         good = np.isfinite(out)
         sm = cv2.medianBlur(np.where(good, out, 0).astype(np.float32), median)
         out = np.where(valid | ~good, out, sm).astype(np.float32)
@@ -312,7 +317,7 @@ def points_from_disparity(disparity: ArrayLike, Q: ArrayLike) -> NDArray:
     d = np.asarray(disparity, dtype=np.float64)
     Q = np.asarray(Q, dtype=np.float64)
     if d.ndim != 2 or Q.shape != (4, 4):
-        raise ValueError(f"expected (H, W) disparity and 4x4 Q, got {d.shape} and {Q.shape}")
+        raise ConfigError(f"expected (H, W) disparity and 4x4 Q, got {d.shape} and {Q.shape}")
     H, W = d.shape
     u = np.arange(W, dtype=np.float64)[None, :]
     v = np.arange(H, dtype=np.float64)[:, None]
