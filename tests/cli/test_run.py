@@ -199,6 +199,7 @@ def test_live_run_through_sounddevice(robot_dir, monkeypatch, capsys):
     recs = [json.loads(s) for s in lines]
     summary = json.loads((out_dir / "summary.json").read_text(encoding="utf-8"))
     assert summary["status"] == "ok" and summary["audio_s"] == pytest.approx(1.5)
+    assert summary["success"] is False  # no cameras: heard, but never seen nor tracked
     assert summary["dropped_blocks"] == 0 and len(recs) == summary["updates"] > 20
     # the azimuth the robot reports is that of the simulated talker (robot frame, head at 0)
     assert abs(summary["azimuth_deg_median"] - truth["azimuth_deg"]) < 3.0

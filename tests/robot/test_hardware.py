@@ -369,13 +369,18 @@ def _person_case(folder: Path, n_frames: int = 8):
     return load_robot_config(cfg), x, truth, torso, scene
 
 
+@pytest.fixture(scope="module")
+def person_case(tmp_path_factory):
+    return _person_case(tmp_path_factory.mktemp("person"))
+
+
 @pytest.mark.slow
-def test_live_loop_hears_sees_and_tracks_the_person(tmp_path):
+def test_live_loop_hears_sees_and_tracks_the_person(person_case):
     import json
 
     from hearsee.stream.pipeline import ArraySource
 
-    cfg, x, truth, torso, scene = _person_case(tmp_path)
+    cfg, x, truth, torso, scene = person_case
     from hearsee.robot.hardware import PrintHeadDriver
 
     printed = io.StringIO()
@@ -388,7 +393,7 @@ def test_live_loop_hears_sees_and_tracks_the_person(tmp_path):
     assert abs(s["azimuth_deg_median"] - true_az) < 3.0
     assert abs(s["azimuth_deg_final"] - true_az) < 3.0
     # seeing: the person is reported, at the right place; the mannequin never is
-    assert s["person_reported"] and s["camera_frames"] == 6
+    assert s["person_reported"] and s["success"] and s["camera_frames"] == 6
     accepted = [d for r in res.log for d in r["detections"] if d["accepted"]]
     assert accepted and all(np.linalg.norm(np.array(d["position_m"]) - torso) < 0.3
                             for d in accepted)
@@ -408,6 +413,34 @@ def test_live_loop_hears_sees_and_tracks_the_person(tmp_path):
     index = write_run_report(cfg, res)
     assert index.is_file() and (index.parent / "frames" / "first_overlay.png").is_file()
     assert json.loads((index.parent / "summary.json").read_text())["person_reported"] is True
+
+
+@pytest.mark.slow
+def test_live_mode_threads_and_stop_event(person_case, tmp_path):
+    """The live configuration: source thread, paced audio, detection in a worker thread, and a
+    clean stop from another thread."""
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg, x, truth, torso, _ = person_case
+    stop = threading.Event()
+    timer = threading.Timer(1.2, stop.set)
+    timer.start()
+    try:
+        res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600, realtime=True),
+                        threaded=True, async_vision=True, stop=stop, head=_quiet_head(cfg),
+                        jsonl=tmp_path / "live.jsonl")
+    finally:
+        timer.cancel()
+    s = res.summary
+    assert s["status"] == "ok" and 0.3 <= s["audio_s"] <= 1.8  # stopped well before 3 s
+    assert abs(s["azimuth_deg_median"] - truth["azimuth_deg"]) < 3.0
+    # detections ran beside the audio and were applied after their capture time
+    applied = [r for r in res.log if r["camera_t"] is not None]
+    assert applied and s["person_reported"]
+    assert all(r["camera_t"] <= r["t"] for r in applied)
+    assert np.linalg.norm(np.array(s["track_position_m_final"]) - torso) < 0.3
+    lines = (tmp_path / "live.jsonl").read_text(encoding="utf-8").splitlines()
+    assert len(lines) == len(res.log)
 
 
 def test_duration_and_ctrl_c_stop_cleanly(tmp_path):

@@ -1046,16 +1046,25 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             t_cap, fr, fut = pending[0]
             pending[0] = None
             dets, camera_t = apply(t, t_cap, fr, fut.result(), bearing), t_cap
+        state["last_t"], state["last_bearing"] = t, bearing
+        emit(t, audio, bearing, dets, camera_t)
+        if progress is not None:
+            progress(state["hop"])
+
+    def emit(t: float, audio: dict | None, bearing: float | None, dets: list[dict[str, Any]],
+             camera_t: float | None) -> None:
+        """Phase, head command and track of this update; one log record / JSON line."""
         if state["phase"] == "listening" and state["n_audio"] >= MIN_AUDIO_UPDATES:
             state["phase"] = "turning"
         if track.initialized:
             state["phase"] = "tracking"
         command = None
         if state["phase"] != "listening":
+            pan, tilt = head.pose_deg
             if track.initialized:
                 pan, tilt = geo.bearing_deg(track.position)
-            else:
-                pan, tilt = bearing if bearing is not None else head.pose_deg[0], head.pose_deg[1]
+            elif bearing is not None:
+                pan = bearing
             command = head.command(t, pan, tilt)
         rec_track = None
         if track.initialized:
@@ -1069,13 +1078,18 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         log.append(rec)
         fh.write(json.dumps(to_jsonable(rec)) + "\n")
         fh.flush()
-        if progress is not None:
-            progress(state["hop"])
 
     status = "ok"
     try:
         pipeline.run(source, sink, threaded=live if threaded is None else threaded)
         status = pipeline.stats.status
+        if pending[0] is not None and "last_t" in state:
+            # the audio ended while a detection was running: log its result as a last update
+            t_cap, fr, fut = pending[0]
+            pending[0] = None
+            t = state["last_t"]
+            emit(t, None, state["last_bearing"],
+                 apply(t, t_cap, fr, fut.result(), state["last_bearing"]), t_cap)
     except KeyboardInterrupt:
         status = "interrupted"
     finally:
@@ -1105,7 +1119,10 @@ def _live_summary(log: list[dict[str, Any]], stats: Any, audio_s: float, status:
     last_track = next((r["track"] for r in reversed(log) if r["track"] is not None), None)
     last_cmd = next((r["head_command"] for r in reversed(log) if r["head_command"]), None)
     tracked = sum(1 for r in log if r["track"] is not None)
+    verified = sum(1 for d in dets if d["accepted"])
     out: dict[str, Any] = {
+        # the report's verdict: a person was heard, seen, verified and tracked
+        "success": bool(verified > 0 and tracked > 0),
         "status": status,
         "audio_s": float(audio_s),
         "updates": len(log),
@@ -1113,9 +1130,9 @@ def _live_summary(log: list[dict[str, Any]], stats: Any, audio_s: float, status:
         "azimuth_deg_median": az_med,
         "azimuth_deg_final": az_final,
         "camera_frames": int(state["cam_frames"]),
-        "person_detections_verified": int(sum(1 for d in dets if d["accepted"])),
-        "candidates_rejected": int(sum(1 for d in dets if not d["accepted"])),
-        "person_reported": bool(any(d["accepted"] for d in dets)),
+        "person_detections_verified": int(verified),
+        "candidates_rejected": int(len(dets) - verified),
+        "person_reported": bool(verified > 0),
         "time_to_verify_s": (float(state["first_verified"]) if state["first_verified"]
                              is not None else float("nan")),
         "tracked_updates": int(tracked),
