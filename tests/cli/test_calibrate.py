@@ -65,10 +65,17 @@ def test_calibrate_writes_rig_and_prints_errors(board_dir, tmp_path, capsys):
     # existing output: refused without --force, overwritten with it (JSON output)
     assert main(_args(d, out)) == 2
     assert "--force" in capsys.readouterr().err
-    assert main(_args(d, out, "--force", "--json")) == 0
+    ref = tmp_path / "reference.yml"
+    fs = cv2.FileStorage(str(ref), cv2.FILE_STORAGE_WRITE)
+    fs.write("M1", truth.left.K)
+    fs.release()
+    assert main(_args(d, out, "--force", "--json", "--reference", str(ref))) == 0
     data = json.loads(capsys.readouterr().out)
     assert len(data["views"]) == 6 and data["rms_px"]["stereo"] < 0.5
+    assert abs(data["reference"]["left"]["fx_diff_pct"]) < 1.0
     assert load_rig(out).thermal is None
+    # the reference file is an input too
+    assert main(_args(d, ref, "--force", "--reference", str(ref))) == 2
 
 
 @pytest.mark.parametrize("case", ["no_match", "no_board", "count_mismatch", "unreadable",

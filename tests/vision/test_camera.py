@@ -15,6 +15,7 @@ from hearsee.vision.camera import (
     load_camera,
     load_rig,
     read_opencv_yaml,
+    rig_from_opencv,
     save_camera,
     save_rig,
 )
@@ -199,3 +200,33 @@ def test_swapped_rig_is_the_same_geometry():
     np.testing.assert_allclose(sw.left_to_right(Xr), X, atol=1e-12)
     np.testing.assert_allclose(sw.project_thermal(Xr), rig.project_thermal(X), atol=1e-9)
     assert sw.rectification.baseline_m == pytest.approx(-rig.rectify().baseline_m, rel=1e-6)
+
+
+def test_rig_from_opencv_files(tmp_path):
+    intr, extr = tmp_path / "intrinsics.yml", tmp_path / "extrinsics.yml"
+    R = cv2.Rodrigues(np.array([0.01, 0.02, 0.0]))[0]
+    fs = cv2.FileStorage(str(intr), cv2.FILE_STORAGE_WRITE)
+    for k, v in (("M1", K), ("D1", np.zeros((1, 5))), ("M2", K), ("D2", np.zeros((1, 14)))):
+        fs.write(k, v)
+    fs.release()
+    fs = cv2.FileStorage(str(extr), cv2.FILE_STORAGE_WRITE)
+    fs.write("R", R)
+    fs.write("T", np.array([[-120.0], [1.0], [0.5]]))
+    fs.release()
+    rig = rig_from_opencv(intr, extr, (640, 480), scale_to_m=0.001)
+    assert rig.baseline_m == pytest.approx(np.linalg.norm([0.12, 0.001, 0.0005]))
+    np.testing.assert_allclose(rig.R, R)
+    with pytest.raises(ConfigError, match="missing matrix 'R'"):
+        rig_from_opencv(intr, intr, (640, 480))
+
+
+@pytest.mark.shared
+def test_rig_from_opencv_reference_files(shared_data):
+    d = shared_data / "vision" / "chessboard_stereo"
+    if not d.is_dir():
+        pytest.skip("chessboard_stereo not present")
+    rig = rig_from_opencv(d / "reference_intrinsics.yml", d / "reference_extrinsics.yml",
+                          (640, 512), scale_to_m=0.001)
+    assert rig.left.fx == pytest.approx(518.05, abs=0.01)
+    assert rig.left.dist.size == 14
+    assert rig.baseline_m == pytest.approx(0.0921, abs=0.001)

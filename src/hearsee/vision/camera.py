@@ -72,6 +72,7 @@ __all__ = [
     "load_camera",
     "load_rig",
     "read_opencv_yaml",
+    "rig_from_opencv",
     "save_camera",
     "save_rig",
     "transform_points",
@@ -732,6 +733,33 @@ def _dump_calib_yaml(data: dict[str, Any], path: str | Path, title: str) -> None
     header = (f"# {title}\n# optical frame x right, y down, z forward; K in pixels; "
               "T in metres; X_to = R X_from + T\n")
     Path(path).write_text(header + text, encoding="utf-8")
+
+
+def rig_from_opencv(intrinsics: str | Path, extrinsics: str | Path,
+                    image_size: tuple[int, int], *, scale_to_m: float = 1.0) -> StereoRig:
+    """A rig from OpenCV ``stereo_calib``-style FileStorage files: ``M1``, ``D1``, ``M2``,
+    ``D2`` in ``intrinsics`` and ``R``, ``T`` in ``extrinsics``. Those files do not store the
+    image size (``(width, height)``, pixels) nor the length unit of ``T``: ``scale_to_m``
+    converts it to metres (0.001 for millimetres)."""
+    a = read_opencv_yaml(intrinsics)
+    b = read_opencv_yaml(extrinsics)
+    cams = []
+    for src, keys in ((a, ("M1", "D1")), (a, ("M2", "D2"))):
+        for k in keys:
+            if k not in src:
+                raise ConfigError(f"{intrinsics}: missing matrix {k!r}")
+        try:
+            cams.append(Camera(src[keys[0]], src[keys[1]].ravel(), int(image_size[0]),
+                               int(image_size[1]), "left" if keys[0] == "M1" else "right"))
+        except CalibrationError as exc:
+            raise ConfigError(f"{intrinsics}: {keys[0]}/{keys[1]}: {exc}") from None
+    for k in ("R", "T"):
+        if k not in b:
+            raise ConfigError(f"{extrinsics}: missing matrix {k!r}")
+    try:
+        return StereoRig(cams[0], cams[1], b["R"], b["T"].ravel() * scale_to_m)
+    except CalibrationError as exc:
+        raise ConfigError(f"{extrinsics}: {exc}") from None
 
 
 def read_opencv_yaml(path: str | Path) -> dict[str, Any]:
