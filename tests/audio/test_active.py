@@ -203,3 +203,81 @@ def test_continuous_sampling_while_turning():
     assert est.distance_m is not None
     assert est.distance_m == pytest.approx(np.linalg.norm(src), rel=0.15)
     assert len(times) == len(running) and np.isfinite(running[-1]).all()
+
+
+# ----------------------------------------------------------------------------- manifests + CLI
+@pytest.fixture(scope="module")
+def pose_manifest(tmp_path_factory):
+    from hearsee.audio.active import simulate_pose_manifest
+
+    d = tmp_path_factory.mktemp("poses")
+    src = [1.1, -0.7, 0.5]
+    man, files = simulate_pose_manifest(d / "cap.yaml", "three-mic", src, POSES3, signal="noise",
+                                        duration_s=0.5, fs=16000, snr_db=30, seed=3,
+                                        offset_m=(0.2, 0.0, 0.1))
+    return man, files, np.array(src)
+
+
+def test_localize3d_cli_round_trip(pose_manifest, capsys):
+    import json
+
+    from hearsee.audio.active import load_pose_manifest
+    from hearsee.cli import main
+
+    man, files, src = pose_manifest
+    assert len(files) == 3 and all(f.is_file() for f in files)
+    m = load_pose_manifest(man)
+    assert [p.as_tuple() for p in m.poses] == [tuple(map(float, p)) for p in POSES3]
+    np.testing.assert_allclose(m.truth["source_m"], src)
+    assert main(["localize3d", str(man)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["unique"] is True
+    np.testing.assert_allclose(doc["position_m"], src, atol=0.1)
+    assert doc["distance_m"] == pytest.approx(np.linalg.norm(src), rel=0.08)
+    assert np.array(doc["covariance"]).shape == (3, 3)
+    for k in ("azimuth_deg", "elevation_deg", "candidates"):
+        assert k in doc
+
+
+@pytest.mark.parametrize("edit, needle", [
+    (lambda d: d.update(extra=1), "unknown key 'extra'"),
+    (lambda d: d["captures"][0].pop("tilt_deg"), "missing required key 'tilt_deg'"),
+    (lambda d: d["captures"][1].update(file="nope.wav"), "not found"),
+    (lambda d: d["captures"][0].update(pan_deg="left"), "pan_deg must be a number"),
+    (lambda d: d["captures"][0].update(tilt_deg=120), "tilt_deg must be within"),
+    (lambda d: d.pop("captures"), "missing required key 'captures'"),
+    (lambda d: d["head"].update(offset_m=[0, 1]), "offset_m"),
+])
+def test_localize3d_bad_manifest(pose_manifest, tmp_path, capsys, edit, needle):
+    import yaml
+
+    from hearsee.cli import main
+
+    man, _files, _src = pose_manifest
+    doc = yaml.safe_load(man.read_text())
+    for c in doc["captures"]:
+        c["file"] = str(man.parent / c["file"])
+    edit(doc)
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(doc))
+    assert main(["localize3d", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and needle in err[0]
+
+
+def test_localize3d_missing_manifest(tmp_path, capsys):
+    from hearsee.cli import main
+
+    assert main(["localize3d", str(tmp_path / "none.yaml")]) == 2
+    assert "not found" in capsys.readouterr().err
+
+
+def test_parse_poses():
+    from hearsee.audio.active import parse_poses
+    from hearsee.errors import ConfigError
+
+    assert [p.as_tuple() for p in parse_poses("0,0;45,25; -45,-20")] == [
+        (0.0, 0.0), (45.0, 25.0), (-45.0, -20.0)]
+    for bad in ("", "0,0,0", "a,b", "0,95"):
+        with pytest.raises(ConfigError):
+            parse_poses(bad)

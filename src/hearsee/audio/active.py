@@ -81,11 +81,16 @@ __all__ = [
     "facing_pair",
     "fibonacci_sphere",
     "localize_continuous",
+    "load_pose_manifest",
+    "parse_poses",
+    "localize_manifest",
     "localize_multipose",
     "localize_one_mic",
     "make_pose_training_set",
     "pose_mic_positions",
+    "PoseManifest",
     "simulate_pose_captures",
+    "simulate_pose_manifest",
     "simulate_turning_capture",
     "solve_range_differences",
     "train_pose_mlp",
@@ -988,3 +993,224 @@ def align_head(
         pose = target
         moves += 1
     return AlignmentResult(poses, taus, moves, pose, facing, ests, converged)
+
+
+# ------------------------------------------------------------------------ pose manifests
+#: Keys of a pose manifest (``hearsee localize3d``, written by ``hearsee simulate --poses``).
+MANIFEST_KEYS = ("array", "head", "captures", "tdoa_std_s", "truth")
+_HEAD_KEYS = ("pivot_m", "offset_m")
+_CAPTURE_KEYS = ("file", "pan_deg", "tilt_deg")
+
+
+@dataclass
+class PoseManifest:
+    """A set of captures of one static source, each with the head pose it was taken at.
+
+    YAML schema (paths relative to the manifest's folder)::
+
+        array: three-mic            # preset name, array YAML path, or an inline array mapping
+        head:                       # optional
+          pivot_m: [0, 0, 0]        # pan-tilt pivot, robot frame, metres
+          offset_m: [0.1, 0, 0.05]  # array origin relative to the pivot, head frame, metres
+        tdoa_std_s: 5.0e-6          # optional expected TDOA error, seconds
+        captures:
+          - {file: pose0.wav, pan_deg: 0, tilt_deg: 0}
+          - {file: pose1.wav, pan_deg: 45, tilt_deg: 25}
+        truth: {...}                # optional ground truth (ignored by localize3d)
+    """
+
+    array: MicArray
+    files: list[Any]
+    poses: list[HeadPose]
+    pivot_m: NDArray
+    offset_m: NDArray
+    tdoa_std_s: float = DEFAULT_TDOA_STD_S
+    truth: dict[str, Any] | None = None
+
+
+def load_pose_manifest(path: Any) -> PoseManifest:
+    """Read and validate a pose manifest; ConfigError / InputFileError name the problem."""
+    from pathlib import Path
+
+    from hearsee.config import as_float_array, check_keys, load_yaml, require
+    from hearsee.errors import ConfigError, InputFileError
+
+    p = Path(path)
+    data = load_yaml(p)
+    where = str(p)
+    check_keys(data, MANIFEST_KEYS, where)
+    spec = require(data, "array", where)
+    if isinstance(spec, dict):
+        arr = MicArray.from_dict(spec, where=f"{where}: array")
+    elif isinstance(spec, str):
+        cand = p.parent / spec
+        arr = load_array(str(cand) if cand.is_file() else spec)
+    else:
+        raise ConfigError(f"{where}: array must be a preset name, a YAML path or a mapping")
+    head = data.get("head") or {}
+    if not isinstance(head, dict):
+        raise ConfigError(f"{where}: head must be a mapping with pivot_m and/or offset_m")
+    check_keys(head, _HEAD_KEYS, f"{where}: head")
+    pivot = as_float_array(head.get("pivot_m", [0, 0, 0]), f"{where}: head.pivot_m", (3,))
+    offset = as_float_array(head.get("offset_m", [0, 0, 0]), f"{where}: head.offset_m", (3,))
+    caps = require(data, "captures", where)
+    if not isinstance(caps, list) or not caps:
+        raise ConfigError(f"{where}: captures must be a non-empty list of "
+                          "{file, pan_deg, tilt_deg} entries")
+    files, poses = [], []
+    for k, c in enumerate(caps):
+        w = f"{where}: captures[{k}]"
+        if not isinstance(c, dict):
+            raise ConfigError(f"{w}: expected a mapping with file, pan_deg, tilt_deg")
+        check_keys(c, _CAPTURE_KEYS, w)
+        f = Path(str(require(c, "file", w)))
+        f = f if f.is_absolute() else p.parent / f
+        if not f.is_file():
+            raise InputFileError(f"{w}: capture file {f} not found")
+        pose_vals = []
+        for key in ("pan_deg", "tilt_deg"):
+            v = require(c, key, w)
+            if isinstance(v, bool) or not isinstance(v, int | float):
+                raise ConfigError(f"{w}: {key} must be a number of degrees, got {v!r}")
+            pose_vals.append(float(v))
+        try:
+            poses.append(HeadPose(*pose_vals))
+        except GeometryError as exc:
+            raise ConfigError(f"{w}: {exc}") from None
+        files.append(f)
+    std = data.get("tdoa_std_s", DEFAULT_TDOA_STD_S)
+    if isinstance(std, bool) or not isinstance(std, int | float) or not std > 0:
+        raise ConfigError(f"{where}: tdoa_std_s must be a positive number of seconds, got {std!r}")
+    truth = data.get("truth")
+    return PoseManifest(arr, files, poses, pivot, offset, float(std),
+                        truth if isinstance(truth, dict) else None)
+
+
+def localize_manifest(path: Any, *, frame_ms: float = 64.0, hop_ms: float = 32.0,
+                      method: str = "phat") -> Position3D:
+    """3D source position from the captures of a pose manifest (``hearsee localize3d``).
+
+    Each capture is read and validated (:func:`hearsee.audio.signals.read_recording`), its
+    whole-recording TDOAs measured (:func:`capture_tdoas`) and all poses solved together
+    (:func:`localize_multipose`).
+    """
+    from hearsee.audio.signals import read_recording
+
+    man = load_pose_manifest(path)
+    taus = []
+    for f in man.files:
+        x, fs = read_recording(f, n_channels=man.array.n_mics)
+        try:
+            taus.append(capture_tdoas(x, fs, man.array, frame_ms=frame_ms, hop_ms=hop_ms,
+                                      method=method))
+        except EstimationError as exc:
+            raise EstimationError(f"{f}: {exc}") from None
+    return localize_multipose(taus, man.poses, man.array, pivot_m=man.pivot_m,
+                              offset_m=man.offset_m, tdoa_std_s=man.tdoa_std_s)
+
+
+def parse_poses(text: str) -> list[HeadPose]:
+    """Parse ``"PAN,TILT;PAN,TILT;..."`` (degrees) into head poses; ConfigError when malformed.
+
+    >>> [p.as_tuple() for p in parse_poses("0,0; 45,25")]
+    [(0.0, 0.0), (45.0, 25.0)]
+    """
+    from hearsee.errors import ConfigError
+
+    poses = []
+    for item in str(text).split(";"):
+        if not item.strip():
+            continue
+        try:
+            pan, tilt = (float(v) for v in item.split(","))
+            poses.append(HeadPose(pan, tilt))
+        except (ValueError, GeometryError):
+            raise ConfigError(
+                f"--poses: {item.strip()!r} is not PAN,TILT in degrees (tilt within +-90); "
+                "write e.g. --poses '0,0;45,25;-45,-20'"
+            ) from None
+    if not poses:
+        raise ConfigError("--poses: no pose given; write e.g. --poses '0,0;45,25;-45,-20'")
+    return poses
+
+
+def simulate_pose_manifest(
+    out: Any,
+    array: MicArray | str,
+    source_m: ArrayLike,
+    poses: Sequence[HeadPose | Sequence[float]],
+    *,
+    signal: str = "noise",
+    duration_s: float = 2.0,
+    fs: int = 16000,
+    snr_db: float | None = None,
+    room: dict[str, Any] | None = None,
+    seed: int = 0,
+    pivot_m: ArrayLike = (0.0, 0.0, 0.0),
+    offset_m: ArrayLike = (0.0, 0.0, 0.0),
+    subtype: str = "FLOAT",
+    protect: Sequence[Any] = (),
+) -> tuple[Any, list[Any]]:
+    """Simulate one capture per head pose of a static source and write a pose manifest.
+
+    ``out`` is the manifest path (``.yaml``); captures go next to it as ``<stem>_pose<k>.wav``
+    (+ ``.json`` truth each). ``source_m`` is in the ROBOT frame; ``room`` as in
+    :func:`hearsee.sim.audio.normalize_room`, with ``array_at`` = the robot-frame origin in room
+    coordinates. The same source signal is used for every pose; sensor noise is independent.
+    The manifest's ``truth`` holds the source position, its azimuth/elevation/distance from the
+    pivot, and the true TDOAs per pose. Returns (manifest path, capture paths).
+    """
+    from pathlib import Path
+
+    from hearsee.audio.propagation import add_noise
+    from hearsee.audio.signals import make_signal
+    from hearsee.config import save_yaml
+    from hearsee.errors import ConfigError
+    from hearsee.sim.audio import ground_truth, normalize_room, render, save_recording
+
+    man = Path(out)
+    if man.suffix.lower() not in (".yaml", ".yml"):
+        raise ConfigError(f"{man}: with --poses the output is a manifest; use a .yaml name")
+    for q in protect:
+        if Path(q).resolve() == man.resolve():
+            raise ConfigError(f"{man}: refusing to overwrite the input file {q}")
+    arr = load_array(array)
+    src = np.asarray(source_m, dtype=float)
+    poses = [as_pose(p) for p in poses]
+    if not poses:
+        raise ConfigError("--poses needs at least one PAN,TILT pose")
+    room = normalize_room(room)
+    rng = np.random.default_rng(seed)
+    sig = make_signal(signal, duration_s, fs, rng)
+    pivot = np.asarray(pivot_m, dtype=float)
+    offset = np.asarray(offset_m, dtype=float)
+    files, true_tdoas = [], []
+    for k, pose in enumerate(poses):
+        mics = mic_positions_at(arr, pose, pivot, offset)
+        clean = render(sig, fs, arr, src, room, mic_positions=mics)
+        x = add_noise(clean, snr_db, rng)
+        truth = ground_truth(arr, src, mic_positions=mics)
+        truth.update({"fs": int(fs), "pan_deg": pose.pan_deg, "tilt_deg": pose.tilt_deg,
+                      "signal": str(signal), "snr_db": snr_db, "room": room, "seed": seed})
+        wav, _ = save_recording(man.with_name(f"{man.stem}_pose{k}.wav"), x, truth,
+                                subtype=subtype, protect=list(protect))
+        files.append(wav)
+        true_tdoas.append(dict(truth["tdoa_s"]))
+    az, el = direction_deg(src - pivot)
+    doc = {
+        "array": arr.to_dict(),
+        "head": {"pivot_m": pivot.tolist(), "offset_m": offset.tolist()},
+        "captures": [{"file": f.name, "pan_deg": p.pan_deg, "tilt_deg": p.tilt_deg}
+                     for f, p in zip(files, poses, strict=True)],
+        "truth": {
+            "source_m": src.tolist(),
+            "azimuth_deg": float(az),
+            "elevation_deg": float(el),
+            "distance_m": float(np.linalg.norm(src - pivot)),
+            "tdoa_s": true_tdoas,
+            "signal": str(signal), "snr_db": snr_db, "room": room, "fs": int(fs),
+            "duration_s": float(duration_s), "seed": seed,
+        },
+    }
+    save_yaml(doc, man)
+    return man, files
