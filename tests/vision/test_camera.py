@@ -12,6 +12,7 @@ from hearsee.vision.camera import (
     Camera,
     StereoRig,
     camera_pose,
+    head_camera_pose,
     load_camera,
     load_rig,
     read_opencv_yaml,
@@ -230,3 +231,19 @@ def test_rig_from_opencv_reference_files(shared_data):
     assert rig.left.fx == pytest.approx(518.05, abs=0.01)
     assert rig.left.dist.size == 14
     assert rig.baseline_m == pytest.approx(0.0921, abs=0.001)
+
+
+def test_head_camera_pose_follows_head_kinematics():
+    from hearsee.geometry import HeadPose, array_to_robot
+
+    pivot, offset = np.array([0.0, 0.0, 1.0]), np.array([0.05, 0.03, 0.1])
+    pose = HeadPose(30.0, 15.0)
+    R, t = head_camera_pose(pose, pivot, offset)
+    centre = array_to_robot(offset, pose, pivot)  # where the head carries the camera
+    np.testing.assert_allclose(R @ centre + t, 0.0, atol=1e-12)
+    # a point straight along the gaze lands on the optical axis
+    target = centre + 3.0 * pose.gaze
+    np.testing.assert_allclose(R @ target + t, [0.0, 0.0, 3.0], atol=1e-12)
+    # a point above the gaze (head +z) appears above the image centre (optical -y)
+    up = array_to_robot(offset + np.array([3.0, 0.0, 0.5]), pose, pivot)
+    assert (R @ up + t)[1] < 0

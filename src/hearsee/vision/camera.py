@@ -69,6 +69,7 @@ __all__ = [
     "Rectification",
     "StereoRig",
     "camera_pose",
+    "head_camera_pose",
     "load_camera",
     "load_rig",
     "read_opencv_yaml",
@@ -656,6 +657,21 @@ def camera_pose(position_m: ArrayLike = (0.0, 0.0, 0.0), pan_deg: float = 0.0,
     R = OPTICAL_FROM_BODY @ mount.T
     c = np.asarray(position_m, dtype=float).reshape(3)
     return R, -R @ c
+
+
+def head_camera_pose(pose: Any, pivot_m: ArrayLike = (0.0, 0.0, 0.0),
+                     offset_m: ArrayLike = (0.0, 0.0, 0.0),
+                     roll_deg: float = 0.0) -> tuple[NDArray, NDArray]:
+    """Pose ``(R, t)`` (``p_optical = R @ p_robot + t``) of a camera carried by the pan-tilt
+    head: optical centre at ``offset_m`` from the head pivot in the head frame, looking along
+    the head's gaze (+x). ``pose`` is a :class:`hearsee.geometry.HeadPose` or
+    ``(pan_deg, tilt_deg)``; ``pivot_m`` is in the robot frame (metres). Same kinematics as
+    :func:`hearsee.geometry.array_to_robot`."""
+    from hearsee.geometry import array_to_robot, as_pose
+
+    p = as_pose(pose)
+    centre = array_to_robot(np.zeros(3), p, pivot_m, offset_m)
+    return camera_pose(centre, p.pan_deg, p.tilt_deg, roll_deg)
 
 
 # ---------------------------------------------------------------------------------------------
