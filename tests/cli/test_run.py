@@ -210,8 +210,11 @@ def test_live_run_through_sounddevice(robot_dir, monkeypatch, capsys):
     assert all(r["head_pan_deg"] == 0.0 for r in recs)
     assert recs[-1]["head_command"]["pan_deg"] == pytest.approx(truth["azimuth_deg"], abs=3.0)
     # the same outputs as the demo: ROS 2 messages in MCAP, one head angle per update
-    from mcap_ros2.reader import read_ros2_messages
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
 
-    pans = [m.ros_msg.data for m in read_ros2_messages(str(robot_dir / "run.mcap"),
-                                                       topics=["/hearsee/head_pan"])]
+    with open(robot_dir / "run.mcap", "rb") as fh:
+        reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+        pans = [msg.data for _, _, _, msg in
+                reader.iter_decoded_messages(topics=["/hearsee/head_pan"])]
     assert pans == [r["head_pan_deg"] for r in recs]
