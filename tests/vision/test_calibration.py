@@ -187,3 +187,13 @@ def test_real_chessboard_pairs_close_to_reference(shared_data):
     # the reference was computed in its own (unknown) square units: compare directions
     cos = st.rig.T @ ref_T / (np.linalg.norm(st.rig.T) * np.linalg.norm(ref_T))
     assert cos > 0.98
+
+
+def test_corners_in_16bit_thermal_image(synthetic, corners):
+    """Raw 16-bit thermal counts (heated board = warm squares) are normalised before detection."""
+    _, _, views = synthetic
+    raw = views[0]["t"].astype(np.uint16) * 40 + 29000
+    c = C.find_corners(raw, PATTERN, try_inverted=True)
+    assert c is not None
+    c = C.match_labeling(corners[0][0], c, PATTERN)
+    np.testing.assert_allclose(c, corners[2][0], atol=0.05)
