@@ -473,6 +473,30 @@ def test_duration_and_ctrl_c_stop_cleanly(tmp_path):
     assert len(lines) == len(res.log) > 0 and json.loads(lines[-1])["t"] < 0.8
 
 
+def test_cameras_that_end_or_change_size(small_rig, capsys):
+    from hearsee.robot.hardware import Cameras
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource
+
+    data = _with(audio={"device": None, "array": "three-mic", "channels": None},
+                 cameras={"rate_hz": 5})
+    cfg = load_robot_config(make_config(small_rig, data))
+    x, truth = simulate_recording("three-mic", [1.0, 1.5, 0.0], duration_s=2.0, fs=FS,
+                                  snr_db=25.0, seed=6)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg))
+    s = res.summary
+    # 3 frames in the videos, then 3 failed reads and the run goes on with audio only
+    assert s["camera_frames"] == 3 and s["camera_read_failures"] == 3
+    assert s["status"] == "ok" and s["audio_s"] == pytest.approx(2.0)
+    assert "no more frames; continuing with audio only" in capsys.readouterr().err
+    assert not s["person_reported"]  # random texture, no person
+    assert abs(s["azimuth_deg_final"] - truth["azimuth_deg"]) < 3.0
+    cfg = load_robot_config(make_config(small_rig, _with(cameras={"left": "wrong.avi"})))
+    with Cameras(cfg.cameras, "robot.yaml: ") as cams, pytest.raises(
+            ConfigError, match=r"^robot\.yaml: cameras\.left: camera delivers 140x100 frames"):
+        cams.read()
+
+
 def _quiet_head(cfg):
     from hearsee.robot.hardware import PrintHeadDriver
 

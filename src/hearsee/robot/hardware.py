@@ -22,7 +22,9 @@ Schema (defaults in brackets)::
       right: 1                                        (left + right) ...
       stereo: 0                                       ... or ONE side-by-side device
                                                       (left image | right image)
-      thermal: 2                        [none]  optional thermal camera (8-bit video)
+      thermal: 2                        [none]  optional thermal camera: 8-bit grey video,
+                                        white = warm (colour palettes are converted to grey,
+                                        which is only right for grey-scale output)
       calib: rig.yaml                   required: rig YAML from `hearsee calibrate` (with a
                                         thermal block when `thermal` is given)
       rate_hz: 2                        [2]    human detection rate, frames per second
@@ -688,21 +690,23 @@ class Cameras:
     frame is checked against the calibrated size.
     """
 
-    def __init__(self, cfg: CameraConfig) -> None:
+    def __init__(self, cfg: CameraConfig, where: str = "") -> None:
         import cv2
 
         self.cfg = cfg
+        self.where = where
         self.caps: dict[str, Any] = {}
+        self.n_failures = 0  #: reads that delivered no frame
+        self.n_consecutive_failures = 0
         try:
             for field_name, spec in cfg.devices().items():
-                cap = open_capture(spec, field_name)
+                cap = open_capture(spec, f"{where}{field_name}")
                 if isinstance(spec, int):  # live device: keep only the newest frame
                     cap.set(cv2.CAP_PROP_BUFFERSIZE, 1)
                 self.caps[field_name.split(".")[1]] = cap
         except BaseException:
             self.close()
             raise
-        self.n_failures = 0
 
     def _grab(self, name: str) -> NDArray | None:
         cap = self.caps[name]
@@ -711,30 +715,37 @@ class Cameras:
             return None
         w, h = self.cfg.expected_size(name)
         if (frame.shape[1], frame.shape[0]) != (w, h):
-            raise ConfigError(f"cameras.{name}: camera delivers {frame.shape[1]}x{frame.shape[0]}"
-                              f" frames but the calibration expects {w}x{h}")
+            raise ConfigError(f"{self.where}cameras.{name}: camera delivers "
+                              f"{frame.shape[1]}x{frame.shape[0]} frames but the calibration "
+                              f"expects {w}x{h}")
         return frame
 
     def read(self) -> CameraFrames | None:
+        fr = self._read()
+        if fr is None:
+            self.n_failures += 1
+            self.n_consecutive_failures += 1
+        else:
+            self.n_consecutive_failures = 0
+        return fr
+
+    def _read(self) -> CameraFrames | None:
         import cv2
 
         if "stereo" in self.caps:
             f = self._grab("stereo")
             if f is None:
-                self.n_failures += 1
                 return None
             w = f.shape[1] // 2
             left, right = f[:, :w], f[:, w:]
         else:
             left, right = self._grab("left"), self._grab("right")
             if left is None or right is None:
-                self.n_failures += 1
                 return None
         thermal = None
         if "thermal" in self.caps:
             thermal = self._grab("thermal")
             if thermal is None:
-                self.n_failures += 1
                 return None
             if thermal.ndim == 3:
                 thermal = cv2.cvtColor(thermal, cv2.COLOR_BGR2GRAY)
@@ -914,7 +925,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                               f"file says {a.fs} Hz")
     own_cameras = cameras is None and cfg.cameras is not None
     if own_cameras:
-        cameras = Cameras(cfg.cameras)
+        cameras = Cameras(cfg.cameras, f"{cfg.path}: ")
     head = head or PrintHeadDriver(cfg.head, sys.stderr)
     geo = _Head(cfg, head.pose_deg)
     rig = cfg.cameras.rig if cfg.cameras is not None else None
@@ -949,7 +960,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     def grab() -> CameraFrames | None:
         fr = cameras.read()
         if fr is None:
-            if cameras.n_failures >= 3 and not state["cam_ended"]:
+            if cameras.n_consecutive_failures >= 3 and not state["cam_ended"]:
                 state["cam_ended"] = True
                 print("cameras: no more frames; continuing with audio only", file=sys.stderr)
             return None
