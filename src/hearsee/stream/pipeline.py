@@ -102,7 +102,14 @@ class FrameBatch:
 
 @dataclass
 class Update:
-    """One tracker output per analysis frame (the JSON line of ``hearsee track``)."""
+    """One tracker output per analysis frame (the JSON line of ``hearsee track``).
+
+    ``azimuth_deg``/``elevation_deg`` (deg), ``position_m`` (m), ``velocity_mps``,
+    ``acceleration_mps2`` and ``covariance`` (2x2 deg^2 for a direction, 3x3 m^2 for a position)
+    are the trackers' filtered estimates; ``raw_*`` are this frame's own measurements (None when
+    the frame gave none); ``latency_s`` is the wall-clock time from the arrival of the block that
+    completed the frame to the update.
+    """
 
     t: float
     azimuth_deg: float | None
@@ -118,6 +125,7 @@ class Update:
     latency_s: float = float("nan")
     raw_azimuth_deg: float | None = None
     raw_elevation_deg: float | None = None
+    raw_position_m: list[float] | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The JSON object of the CLI contract (plus ``rate_dps``, ``measured``, ``missing``,
@@ -432,18 +440,24 @@ class StreamConfig:
     method : GCC weighting (``phat``, ``scot``, ...)
     refine : sub-sample peak refinement of the GCC (``parabolic`` is the cheapest; ``interp``
         is exact band-limited interpolation, about 1.5x the cost)
+    min_confidence : frames whose GCC peak-to-second-peak ratio is below this in any pair give
+        no measurement (:func:`~hearsee.audio.tdoa.estimate_tdoas`)
     band_hz : optional frequency band for the GCC, Hz
     itd_filter : smooth the TDOAs with the ITD Kalman filter (thesis 2.2.2) before localizing
     sigma_meas_deg, sigma_accel_dps2 : direction tracker noise (degrees, deg/s^2)
     sigma_jerk : 3D motion tracker process noise, m/s^3
     sigma_tdoa_s, sigma_px : measurement noise of the camera-ray fix (seconds, pixels)
     range_m : search interval along the camera ray, metres
+    max_fix_residual_samples : a camera-ray fix whose RMS ITD residual exceeds this many samples
+        is discarded (with three microphones the three TDOAs must close, t01 + t12 = t02; a
+        reflection that captures one pair's GCC peak breaks that and leaves a large residual)
     """
 
     frame_ms: float = 64.0
     hop_ms: float = 32.0
     method: str = "phat"
     refine: str = "parabolic"
+    min_confidence: float = 1.0
     band_hz: tuple[float, float] | None = None
     itd_filter: bool = False
     sigma_meas_deg: float = 6.0
@@ -452,6 +466,7 @@ class StreamConfig:
     sigma_tdoa_s: float = 2e-5
     sigma_px: float = 2.0
     range_m: tuple[float, float] = (0.2, 6.0)
+    max_fix_residual_samples: float = 0.5
 
 
 class TrackingProcessor:
@@ -491,7 +506,8 @@ class TrackingProcessor:
             m = int(np.count_nonzero(~batch.missing))
             tf = estimate_tdoas(batch.segment, self.fs, self.array, self.cfg.frame_ms,
                                 self.cfg.hop_ms, self.cfg.method, self.pairs,
-                                band_hz=self.cfg.band_hz, refine=self.cfg.refine)
+                                band_hz=self.cfg.band_hz, refine=self.cfg.refine,
+                                min_confidence=self.cfg.min_confidence)
             tdoa[k - m:] = tf.tdoa_s[:m]
             conf[k - m:] = np.min(tf.confidence[:m], axis=1)
         return tdoa, conf
@@ -537,6 +553,10 @@ class TrackingProcessor:
         if z is not None and uv is not None:
             fix = locate_on_ray(self.rig, uv, z, self.pairs, range_m=self.cfg.range_m,
                                 sigma_tdoa_s=self.cfg.sigma_tdoa_s, sigma_px=self.cfg.sigma_px)
+        if fix is not None and fix.residual_s > self.cfg.max_fix_residual_samples / self.fs:
+            fix = None
+        if fix is not None:
+            upd.raw_position_m = fix.position_m.tolist()
         self.motion.update(upd.t, None if fix is None else fix.position_m,
                            None if fix is None else fix.covariance,
                            None if fix is None else [(a.position_m, a.covariance)
