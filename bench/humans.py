@@ -91,6 +91,7 @@ def _evaluate(dets: list[dict], scene, stats: dict, has_range: bool) -> None:
             stats["fp_all"] += 1
             far = has_range and d["distance_m"] > 6.5
             stats["fp_16"] += not far
+            stats["false"].append((scene.spec.seed, d["box"], round(d["distance_m"], 2)))
     for j, g in enumerate(people):
         if g.visible_fraction < 0.5:
             continue
@@ -115,7 +116,7 @@ def _evaluate(dets: list[dict], scene, stats: dict, has_range: bool) -> None:
 def _new_stats() -> dict:
     return {"tp_all": 0, "fp_all": 0, "fn_all": 0, "n_all": 0, "tp_16": 0, "fp_16": 0,
             "fn_16": 0, "n_16": 0, "like_n": 0, "like_acc": 0, "err_rel": [], "err_abs": [],
-            "err_range": [], "missed": []}
+            "err_range": [], "missed": [], "false": []}
 
 
 def _ratio(a: float, b: float) -> float:

@@ -84,7 +84,7 @@ class HumanDetectorParams:
 
     person_width_m: float = 0.4
     surround_m: float = 0.3
-    depth_band_m: float = 0.25
+    depth_band_m: float = 0.2
     min_height_m: float = 0.12
     max_height_m: float = 2.0
     above_m: float = 2.45
@@ -356,6 +356,15 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     k = max(3, int(round(0.04 * disp / baseline_m)) | 1)
     ker = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
     kopen = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(3, k // 2 | 1),) * 2)
+    # start from the median depth of the central strip's pixels near the peak disparity
+    cw0 = max(1, int(round(0.1 * disp / baseline_m)))
+    c0 = column - u0
+    strip = sub_d[:, max(0, c0 - cw0): c0 + cw0 + 1]
+    band0 = p.depth_band_m + 0.15
+    with np.errstate(invalid="ignore"):
+        near_pk = strip[(strip >= fb / (Zc + band0)) & (strip <= fb / max(Zc - band0, 0.2))]
+    if near_pk.size >= 10:
+        Zc = float(fb / np.median(near_pk))
     mask = None
     for _ in range(2):
         band = p.depth_band_m + 0.15
@@ -626,17 +635,31 @@ def _iou(a: list[int], b: list[int]) -> float:
     return inter / union if union > 0 else 0.0
 
 
+def _overlap(a: list[int], b: list[int]) -> float:
+    """Intersection over the smaller box's area."""
+    iw = max(0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
+    ih = max(0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
+    small = min(a[2] * a[3], b[2] * b[3])
+    return iw * ih / small if small > 0 else 0.0
+
+
 def _dedupe(cands: list[HumanCandidate]) -> None:
-    """Two peaks on one silhouette (same box, same depth): keep the better one (accepted
-    first, then higher score); the other is marked as a duplicate."""
+    """Two peaks on one silhouette (one box mostly inside the other, similar depth): keep the
+    better one (accepted first, then higher score); the other is marked as a duplicate."""
     segs = [c for c in cands if c.segment is not None]
     segs.sort(key=lambda c: (not c.accepted, -c.score))
     kept: list[HumanCandidate] = []
     for c in segs:
-        assert c.segment is not None
-        dup = any(_iou(c.segment.box, k.segment.box) > 0.6  # type: ignore[union-attr]
-                  and abs(c.segment.depth_m - k.segment.depth_m) < 0.4  # type: ignore[union-attr]
-                  for k in kept)
+        sc = c.segment
+        assert sc is not None
+        dup = False
+        for k in kept:
+            sk = k.segment
+            assert sk is not None
+            tol = max(0.4, 0.12 * sk.depth_m)
+            if _overlap(sc.box, sk.box) > 0.7 and abs(sc.depth_m - sk.depth_m) < tol:
+                dup = True
+                break
         if dup:
             c.accepted = False
             c.reason = "duplicate of a stronger candidate"
