@@ -175,3 +175,16 @@ def test_room_with_image_source_rirs_static_and_moving():
         cc = np.concatenate([cc[-20:], cc[:21]])
         lag = (np.argmax(cc) - 20) / FS
         assert lag == pytest.approx(arr.tdoa(traj.at(tc))[0], abs=1.5 / FS)
+
+
+def test_simulate_moving_recording_free_field_truth():
+    from hearsee.sim.moving import simulate_moving_recording
+
+    traj = linear_trajectory([1.0, -0.5, 0.0], [0.0, 1.0, 0.0], 0.5)
+    x, truth = simulate_moving_recording("two-mic", traj, "noise", fs=8000, snr_db=30, seed=1)
+    assert x.shape == (2, 4000)
+    assert truth["moving"] is True and truth["duration_s"] == pytest.approx(0.5)
+    np.testing.assert_allclose(truth["source_m"], [1.0, -0.5, 0.0])
+    assert len(truth["trajectory"]["t"]) == 2
+    with pytest.raises(ConfigError, match="duration"):
+        simulate_moving_recording("two-mic", Trajectory([0.0], [[1.0, 0.0, 0.0]]))
