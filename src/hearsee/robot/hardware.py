@@ -907,8 +907,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         ASSOCIATION_GATE_DEG,
         BEARING_SIGMA_DEG,
         MIN_AUDIO_UPDATES,
-        _bearing_update,
-        _measurement_cov,
+        bearing_update,
+        stereo_position_cov,
     )
     from hearsee.stream.pipeline import StreamConfig, StreamPipeline
 
@@ -1001,7 +1001,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             d["speaker"] = False
         if best is not None:
             h, p, k = best
-            Rc = geo.R_cam.T @ _measurement_cov(np.asarray(h.position_m), rig.focal_px,
+            Rc = geo.R_cam.T @ stereo_position_cov(np.asarray(h.position_m), rig.focal_px,
                                                 rig.baseline_m) @ geo.R_cam
             track.update(t, p, Rc)
             dets[k]["speaker"] = True
@@ -1042,7 +1042,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             if u.measured:
                 state["n_audio"] += 1
                 if raw is not None and track.initialized:
-                    _bearing_update(track, geo, raw, BEARING_SIGMA_DEG)
+                    bearing_update(track, geo, raw, BEARING_SIGMA_DEG)
         dets: list[dict[str, Any]] = []
         camera_t = None
         if (cameras is not None and not state["cam_ended"] and pending[0] is None

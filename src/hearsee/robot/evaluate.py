@@ -1,0 +1,143 @@
+"""``hearsee eval``: many random scenarios, in parallel on this machine or on a Dask cluster.
+
+Each scenario ``random_scenario(seed0 + k)`` runs the full pipeline without writing a report and
+returns its summary metrics. Runs are deterministic per seed: BLAS/OpenCV threads are pinned to
+one per worker, so the same seeds give identical numbers on a local process pool, in a single
+process, or through ``dask.distributed`` (``scheduler="tcp://host:port"`` or a ``Client``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from functools import partial
+from typing import Any
+
+import numpy as np
+
+from hearsee.errors import ConfigError
+
+__all__ = ["EvalResult", "evaluate", "run_one", "summarize"]
+
+
+def run_one(seed: int, duration_s: float = 6.0) -> dict[str, Any]:
+    """Run random scenario ``seed`` and return its metrics (single-threaded, deterministic).
+
+    ``runtime_s`` (wall-clock) is dropped so that results compare exactly across runs."""
+    from threadpoolctl import threadpool_limits
+
+    from hearsee.robot.pipeline import run_scenario
+    from hearsee.robot.scenario import random_scenario
+
+    try:
+        import cv2
+
+        cv2.setNumThreads(1)
+    except ImportError:  # pragma: no cover - cv2 is a hard dependency
+        pass
+    with threadpool_limits(1):
+        result = run_scenario(random_scenario(seed, duration_s), keep_images=False)
+    out = {k: v for k, v in result.summary.items() if k != "runtime_s"}
+    out["seed"] = int(seed)
+    return out
+
+
+@dataclass
+class EvalResult:
+    """Per-scenario metrics and their aggregate."""
+
+    runs: list[dict[str, Any]]
+    summary: dict[str, Any]
+
+
+def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Success rate and error percentiles over runs (NaN errors are excluded from percentiles)."""
+    n = len(runs)
+    success = [bool(r.get("success", False)) for r in runs]
+    out: dict[str, Any] = {"scenarios": n, "success_rate": float(np.mean(success)) if n else 0.0}
+    for key in ("position_error_median_m", "azimuth_error_initial_deg", "velocity_rmse_mps",
+                "time_to_verify_s"):
+        vals = np.array([r.get(key, np.nan) for r in runs], dtype=float)
+        vals = vals[np.isfinite(vals)]
+        out[key] = (
+            {f"p{q}": float(np.percentile(vals, q)) for q in (50, 75, 90, 95)}
+            | {"n": int(len(vals))}
+            if len(vals) else {"n": 0}
+        )
+    out["objects_reported_as_person"] = int(
+        sum(int(r.get("false_person_objects", 0)) for r in runs))
+    return out
+
+
+def evaluate(
+    n_scenarios: int,
+    seed0: int = 0,
+    workers: int | None = None,
+    scheduler: Any = None,
+    progress: Callable[[int], None] | None = None,
+    duration_s: float = 6.0,
+) -> EvalResult:
+    """Run ``n_scenarios`` random scenarios with seeds ``seed0 .. seed0 + n - 1``.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Local processes (default: all cores). ``1`` runs in this process.
+    scheduler : str or distributed.Client, optional
+        A Dask scheduler address (``tcp://...``) or a ``Client``; runs there instead.
+    progress : callable, optional
+        Called with 1 after each finished scenario.
+    duration_s : float
+        Simulated seconds per scenario.
+    """
+    if n_scenarios < 1:
+        raise ConfigError(f"--scenarios must be >= 1, got {n_scenarios}")
+    if not 2.0 <= duration_s <= 120.0:
+        raise ConfigError(f"--duration must be between 2 and 120 s, got {duration_s}")
+    seeds = list(range(seed0, seed0 + n_scenarios))
+    job = partial(run_one, duration_s=float(duration_s))
+    tick = progress or (lambda n=1: None)
+    runs: dict[int, dict[str, Any]] = {}
+    if scheduler is not None:
+        runs = _evaluate_dask(seeds, scheduler, tick, job)
+    else:
+        workers = workers or os.cpu_count() or 1
+        if workers == 1:
+            for s in seeds:
+                runs[s] = job(s)
+                tick(1)
+        else:
+            with ProcessPoolExecutor(max_workers=workers) as pool:
+                for s, r in zip(seeds, pool.map(job, seeds), strict=True):
+                    runs[s] = r
+                    tick(1)
+    ordered = [runs[s] for s in seeds]
+    return EvalResult(runs=ordered, summary=summarize(ordered))
+
+
+def _evaluate_dask(seeds: list[int], scheduler: Any, tick: Callable[[int], None],
+                   job: Callable[[int], dict[str, Any]]) -> dict:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise ConfigError(
+            "--scheduler needs dask.distributed: pip install 'hearsee[dask]'"
+        ) from None
+    own = not isinstance(scheduler, Client)
+    try:
+        client = Client(scheduler, timeout="10s") if own else scheduler
+    except (OSError, TimeoutError) as exc:
+        raise ConfigError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
+    try:
+        futures = client.map(job, seeds, pure=False)
+        index = {f.key: s for f, s in zip(futures, seeds, strict=True)}
+        runs = {}
+        for fut in as_completed(futures):
+            runs[index[fut.key]] = fut.result()
+            tick(1)
+        return runs
+    finally:
+        if own:
+            client.close()

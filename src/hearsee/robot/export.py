@@ -1,0 +1,152 @@
+"""Optional exports of a robot run: a Rerun recording and an MCAP file of ROS 2 messages.
+
+Both are behind extras (``pip install 'hearsee[rerun]'``, ``'hearsee[ros]'``); a missing extra is a
+clear :class:`hearsee.errors.ConfigError`. Positions are in the ROOM frame (ROS frame id
+``room``); times are seconds from the start of the run.
+
+ROS 2 messages written to MCAP (open in Foxglove or ``ros2 bag``):
+
+- ``/hearsee/speaker`` geometry_msgs/msg/PointStamped: the tracked speaker position;
+- ``/hearsee/truth`` geometry_msgs/msg/PointStamped: the ground truth (simulation only);
+- ``/hearsee/head_pan`` std_msgs/msg/Float64: the head pan angle in degrees;
+- ``/hearsee/overlay`` sensor_msgs/msg/Image (bgr8): the left camera with detections.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hearsee.errors import ConfigError, InputFileError
+
+__all__ = ["write_mcap", "write_rerun"]
+
+_POINT_STAMPED = """std_msgs/Header header
+geometry_msgs/Point point
+================================================================================
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+================================================================================
+MSG: geometry_msgs/Point
+float64 x
+float64 y
+float64 z"""
+
+_IMAGE = """std_msgs/Header header
+uint32 height
+uint32 width
+string encoding
+uint8 is_bigendian
+uint32 step
+uint8[] data
+================================================================================
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec"""
+
+_FLOAT64 = "float64 data"
+
+
+def _stamp(t: float) -> dict[str, int]:
+    sec = int(np.floor(t))
+    return {"sec": sec, "nanosec": int(round((t - sec) * 1e9)) % 1_000_000_000}
+
+
+def _check_out(path: str | Path) -> Path:
+    p = Path(path)
+    if not p.parent.is_dir():
+        raise InputFileError(f"{p}: folder {p.parent} does not exist")
+    return p
+
+
+def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
+               frames: Sequence[tuple[float, np.ndarray]] = ()) -> Path:
+    """Write the run's estimates (and overlay images ``(t, bgr uint8)``) as ROS 2 messages."""
+    try:
+        from mcap_ros2.writer import Writer
+    except ImportError:
+        raise ConfigError("--mcap needs the ROS extra: pip install 'hearsee[ros]'") from None
+    p = _check_out(path)
+    with open(p, "wb") as fh:
+        w = Writer(fh)
+        s_point = w.register_msgdef("geometry_msgs/msg/PointStamped", _POINT_STAMPED)
+        s_image = w.register_msgdef("sensor_msgs/msg/Image", _IMAGE)
+        s_float = w.register_msgdef("std_msgs/msg/Float64", _FLOAT64)
+        for seq, rec in enumerate(log):
+            t = float(rec["t"])
+            ns = int(round(t * 1e9))
+            for topic, key in (("/hearsee/speaker", "track"), ("/hearsee/truth", "truth")):
+                pos = (rec.get(key) or {}).get("position_m")
+                if pos is not None:
+                    w.write_message(topic, s_point, {
+                        "header": {"stamp": _stamp(t), "frame_id": "room"},
+                        "point": {"x": float(pos[0]), "y": float(pos[1]), "z": float(pos[2])},
+                    }, log_time=ns, publish_time=ns, sequence=seq)
+            if rec.get("head_pan_deg") is not None:
+                w.write_message("/hearsee/head_pan", s_float, {"data": float(rec["head_pan_deg"])},
+                                log_time=ns, publish_time=ns, sequence=seq)
+        for seq, (t, img) in enumerate(frames):
+            img = np.ascontiguousarray(img, dtype=np.uint8)
+            if img.ndim == 2:
+                img = np.repeat(img[:, :, None], 3, axis=2)
+            ns = int(round(t * 1e9))
+            w.write_message("/hearsee/overlay", s_image, {
+                "header": {"stamp": _stamp(t), "frame_id": "left_camera"},
+                "height": img.shape[0], "width": img.shape[1], "encoding": "bgr8",
+                "is_bigendian": 0, "step": img.shape[1] * 3, "data": img.tobytes(),
+            }, log_time=ns, publish_time=ns, sequence=seq)
+        w.finish()
+    return p
+
+
+def write_rerun(path: str | Path, scenario: Mapping[str, Any], log: Sequence[Mapping[str, Any]],
+                frames: Sequence[tuple[float, np.ndarray]] = ()) -> Path:
+    """Write a Rerun recording (``.rrd``): room, robot, truth and track in 3D, and the images."""
+    try:
+        import rerun as rr
+    except ImportError:
+        raise ConfigError("--rerun needs the Rerun extra: pip install 'hearsee[rerun]'") from None
+    p = _check_out(path)
+    rec = rr.RecordingStream("hearsee")
+    room = np.asarray(scenario["room"]["size_m"], dtype=float)
+    rec.log("room", rr.Boxes3D(centers=[room / 2], half_sizes=[room / 2]), static=True)
+    robot = list(scenario["robot"]["position_m"]) + [scenario["robot"]["head_height_m"]]
+    rec.log("robot", rr.Points3D([robot], radii=0.1, labels=["robot"]), static=True)
+    for k, o in enumerate(scenario.get("objects", [])):
+        pts = rr.Points3D([list(o["position_m"]) + [1.0]], radii=0.15, labels=[o["kind"]],
+                          colors=[[220, 40, 40]])
+        rec.log(f"objects/{k}", pts, static=True)
+    truth_path: list[list[float]] = []
+    track_path: list[list[float]] = []
+    for r in log:
+        rec.set_time("t", duration=float(r["t"]))
+        tr = (r.get("truth") or {}).get("position_m")
+        es = (r.get("track") or {}).get("position_m")
+        if tr is not None:
+            truth_path.append(list(map(float, tr)))
+            rec.log("truth", rr.Points3D([truth_path[-1]], radii=0.06, colors=[[40, 180, 40]]))
+            rec.log("truth_path", rr.LineStrips3D([truth_path], colors=[[40, 180, 40]]))
+        if es is not None:
+            track_path.append(list(map(float, es)))
+            rec.log("track", rr.Points3D([track_path[-1]], radii=0.06, colors=[[40, 80, 220]]))
+            rec.log("track_path", rr.LineStrips3D([track_path], colors=[[40, 80, 220]]))
+        if r.get("head_pan_deg") is not None:
+            rec.log("head_pan_deg", rr.Scalars(float(r["head_pan_deg"])))
+    for t, img in frames:
+        rec.set_time("t", duration=float(t))
+        rgb = img[:, :, ::-1] if img.ndim == 3 else img
+        rec.log("camera/overlay", rr.Image(np.ascontiguousarray(rgb)))
+    rec.save(str(p))
+    return p

@@ -1,0 +1,215 @@
+"""The report folder of a robot run: ``index.html`` with plots, ``log.json`` and ``summary.json``.
+
+Everything in the report comes from the run's own log (no canned values): the plots are drawn
+from ``log`` records, the overlays are the camera frames the pipeline saw.
+
+Folder layout::
+
+    index.html        the page (relative links only, opens from disk)
+    log.json          every estimate, one record per control step (see hearsee.robot.pipeline)
+    summary.json      the summary metrics
+    plots/*.png       top view, error over time, head angle over time
+    frames/*.png      detection overlays (left camera) and thermal views
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hearsee.errors import InputFileError
+
+__all__ = ["write_report"]
+
+_CSS = """
+body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
+h1{margin-bottom:0} .sub{color:#666;margin-top:.2em}
+table{border-collapse:collapse;margin:1em 0}
+td,th{border:1px solid #ccc;padding:.3em .7em;text-align:right}
+th{background:#f3f3f3} td:first-child,th:first-child{text-align:left}
+.grid{display:flex;flex-wrap:wrap;gap:12px} .grid figure{margin:0;width:350px}
+.grid img{width:100%;border:1px solid #ddd} figcaption{font-size:.85em;color:#555}
+img.plot{max-width:100%;border:1px solid #eee;margin:.5em 0}
+.ok{color:#17803d;font-weight:bold} .bad{color:#b3261e;font-weight:bold}
+"""
+
+
+def _fmt(v: Any) -> str:
+    if v is None:
+        return "n/a"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return "n/a" if not np.isfinite(v) else f"{v:.3g}"
+    return html.escape(str(v))
+
+
+def _arr(log: Sequence[Mapping[str, Any]], path: Sequence[str],
+         dim: int | None = None) -> np.ndarray:
+    """Pull a field (nested keys) out of every record; missing -> NaN."""
+    out = []
+    for rec in log:
+        v: Any = rec
+        for k in path:
+            v = v.get(k) if isinstance(v, Mapping) else None
+        if v is None:
+            out.append(np.full(dim, np.nan) if dim else np.nan)
+        else:
+            out.append(np.asarray(v, dtype=float))
+    return np.array(out, dtype=float)
+
+
+def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
+           scenario: Mapping[str, Any]) -> list[tuple[str, str]]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    (folder / "plots").mkdir(parents=True, exist_ok=True)
+    t = _arr(log, ["t"])
+    truth = _arr(log, ["truth", "position_m"], 3)
+    track = _arr(log, ["track", "position_m"], 3)
+    err = _arr(log, ["error_m"])
+    pan = _arr(log, ["head_pan_deg"])
+    target = _arr(log, ["truth", "azimuth_robot_deg"])
+    audio_az = _arr(log, ["audio", "azimuth_deg"])
+    figs = []
+
+    fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    room = scenario["room"]["size_m"]
+    ax.add_patch(plt.Rectangle((0, 0), room[0], room[1], fill=False, lw=2, color="k"))
+    robot = scenario["robot"]["position_m"]
+    ax.plot(*robot, "ks", ms=10, label="robot")
+    ax.plot(truth[:, 0], truth[:, 1], "g-", lw=3, alpha=0.6, label="person (truth)")
+    ax.plot(track[:, 0], track[:, 1], "b.-", ms=4, label="track (estimate)")
+    for o in scenario.get("objects", []):
+        ax.plot(*o["position_m"], "rx", ms=10, mew=2)
+        ax.annotate(o["kind"], o["position_m"], textcoords="offset points", xytext=(5, 5),
+                    color="r")
+    heading = np.radians(scenario["robot"].get("heading_deg", 0.0))
+    for p in pan[::max(1, len(t) // 12)]:
+        if np.isfinite(p):
+            a = heading + np.radians(p)
+            ax.plot([robot[0], robot[0] + 0.5 * np.cos(a)], [robot[1], robot[1] + 0.5 * np.sin(a)],
+                    color="0.6", lw=1)
+    ax.set_aspect("equal")
+    ax.set_xlabel("room x (m)")
+    ax.set_ylabel("room y (m)")
+    ax.set_title("Top view: trajectory vs ground truth (grey: head direction)")
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(folder / "plots" / "top_view.png", dpi=110)
+    plt.close(fig)
+    figs.append(("plots/top_view.png", "Top view of the room: estimated track vs ground truth."))
+
+    fig, ax = plt.subplots(figsize=(7, 3.2))
+    ax.plot(t, err * 100, "b.-")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("3D position error (cm)")
+    ax.set_title("Position error over time")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(folder / "plots" / "error.png", dpi=110)
+    plt.close(fig)
+    figs.append(("plots/error.png", "3D position error of the track over time."))
+
+    fig, ax = plt.subplots(figsize=(7, 3.2))
+    ax.plot(t, pan, "k-", label="head pan")
+    ax.plot(t, target, "g--", label="person direction (truth)")
+    ax.plot(t, audio_az, "m.", ms=4, label="audio azimuth estimate")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("azimuth in robot frame (deg)")
+    ax.set_title("Head angle over time")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(folder / "plots" / "head.png", dpi=110)
+    plt.close(fig)
+    figs.append(("plots/head.png",
+                 "Head pan angle, the person's true direction and the audio estimates."))
+    return figs
+
+
+def _write_images(folder: Path, images: Mapping[str, np.ndarray]) -> list[str]:
+    import cv2
+
+    (folder / "frames").mkdir(parents=True, exist_ok=True)
+    names = []
+    for name, img in images.items():
+        rel = f"frames/{name}.png"
+        if not cv2.imwrite(str(folder / rel), img):
+            raise InputFileError(f"cannot write {folder / rel}")
+        names.append(rel)
+    return names
+
+
+def write_report(
+    folder: str | Path,
+    scenario: Mapping[str, Any],
+    log: Sequence[Mapping[str, Any]],
+    summary: Mapping[str, Any],
+    images: Mapping[str, np.ndarray] | None = None,
+    captions: Mapping[str, str] | None = None,
+) -> Path:
+    """Write the report folder; returns the path of ``index.html``.
+
+    ``images`` maps a file stem to a BGR/grey uint8 image (overlays, thermal views);
+    ``captions`` maps the same stems to captions.
+    """
+    from hearsee.cli._app import to_jsonable
+
+    out = Path(folder)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputFileError(f"cannot create report folder {out}: {exc.strerror}") from None
+    (out / "log.json").write_text(json.dumps(to_jsonable(list(log)), indent=1), encoding="utf-8")
+    (out / "summary.json").write_text(json.dumps(to_jsonable(dict(summary)), indent=2),
+                                      encoding="utf-8")
+    figs = _plots(out, log, scenario)
+    image_files = _write_images(out, images or {})
+    captions = captions or {}
+
+    rows = "".join(
+        f"<tr><td>{html.escape(str(k))}</td><td>{_fmt(v)}</td></tr>"
+        for k, v in summary.items() if not isinstance(v, Mapping | list)
+    )
+    ok = bool(summary.get("success"))
+    verdict = ('<span class="ok">person found, verified and tracked</span>' if ok
+               else '<span class="bad">person not tracked</span>')
+    imgs = "".join(
+        f'<figure><img src="{html.escape(p)}" alt="{html.escape(Path(p).stem)}">'
+        f"<figcaption>{html.escape(captions.get(Path(p).stem, Path(p).stem))}</figcaption></figure>"
+        for p in image_files
+    )
+    plots = "".join(
+        f'<figure><img class="plot" src="{p}" alt="{Path(p).stem}"><figcaption>{html.escape(c)}'
+        f"</figcaption></figure>" for p, c in figs
+    )
+    name = html.escape(str(scenario.get("name", "")))
+    page = f"""<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>hearsee report: {name}</title>
+<style>{_CSS}</style></head><body>
+<h1>hearsee robot report</h1>
+<p class="sub">scenario <b>{name}</b> (seed {_fmt(scenario.get('seed'))}) &mdash;
+{verdict}</p>
+<h2>Summary</h2>
+<table id="summary"><tr><th>metric</th><th>value</th></tr>{rows}</table>
+<p>Full log of every estimate: <a href="log.json">log.json</a>;
+summary: <a href="summary.json">summary.json</a>.</p>
+<h2>Plots</h2>{plots}
+<h2>Camera views</h2>
+<p>Left camera with detections (green: verified person, red: rejected candidate)
+and the thermal view.</p>
+<div class="grid">{imgs}</div>
+</body></html>
+"""
+    index = out / "index.html"
+    index.write_text(page, encoding="utf-8")
+    return index

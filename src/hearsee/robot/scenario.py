@@ -1,0 +1,410 @@
+"""Scenarios for the robot pipeline: a room, the robot head, people, human-like objects, noise.
+
+A scenario is a YAML file (or the built-in default, :func:`default_scenario`). Positions are
+metres in the ROOM frame (x, y on the floor, z up, origin in a room corner); the robot's own frame
+follows REP 103 (x forward, y left, z up) and is placed by ``robot.position_m`` and
+``robot.heading_deg``. Every field is checked; an unknown or bad field raises
+:class:`hearsee.errors.ConfigError` naming it (e.g. ``scenario.people[0].path_m``).
+
+Schema (defaults in brackets)::
+
+    name: str                      [default]
+    seed: int                      [0]
+    duration_s: float              [6.0]    simulated time
+    audio: {fs: int [16000], snr_db: float [20], frame_ms: float [64], signal_level_db: [0]}
+    room: {size_m: [L, W, H] [7, 6, 3], rt60_s: float [0.3]}
+    robot:
+      position_m: [x, y]           [room centre]    base position on the floor
+      heading_deg: float           [0]              robot x axis, from room +x toward +y
+      head_height_m: float         [1.25]           pan/tilt pivot height above the floor
+      array: str                   [three-mic]      preset name or YAML path
+      pan_speed_dps: float         [120]            maximum pan rate
+      camera_rate_hz: float        [5]              stereo + thermal frames per second
+      stereo: {baseline_m [0.12], focal_px [500], width [640], height [480]}
+      thermal: {width [160], height [120], hfov_deg [72]}   (mounted 7 cm above the left camera)
+    people:                        [one walking speaker]
+      - {name, path_m: [[x, y], ...] (waypoints, walked at constant speed over the run),
+         height_m [1.72], voice: male|female [female], speaking: [[t0, t1], ...] [whole run],
+         facing: toward-robot|path [toward-robot]}
+    objects:                       [a mannequin]
+      - {kind: mannequin|poster|coat, position_m: [x, y], yaw_deg [0], height_m [1.75]}
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hearsee.config import check_keys, load_yaml
+from hearsee.errors import ConfigError
+
+__all__ = [
+    "ObjectSpec",
+    "PersonSpec",
+    "RobotSpec",
+    "Scenario",
+    "default_scenario",
+    "load_scenario",
+    "random_scenario",
+    "scenario_from_dict",
+]
+
+OBJECT_KINDS = ("mannequin", "poster", "coat")
+VOICES = ("male", "female")
+#: Minimum clearance (m) between the robot base and a person or object.
+ROBOT_CLEARANCE_M = 0.6
+#: Minimum distance (m) of people and objects from the walls.
+WALL_CLEARANCE_M = 0.3
+
+
+@dataclass(frozen=True)
+class PersonSpec:
+    name: str
+    path_m: np.ndarray  # (k, 2) waypoints on the floor, room frame
+    height_m: float = 1.72
+    voice: str = "female"
+    speaking: tuple[tuple[float, float], ...] = ()
+    facing: str = "toward-robot"
+
+
+@dataclass(frozen=True)
+class ObjectSpec:
+    kind: str
+    position_m: np.ndarray  # (2,) room frame
+    yaw_deg: float = 0.0
+    height_m: float = 1.75
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    position_m: np.ndarray  # (2,) base on the floor, room frame
+    heading_deg: float = 0.0
+    head_height_m: float = 1.25
+    array: str = "three-mic"
+    pan_speed_dps: float = 120.0
+    camera_rate_hz: float = 5.0
+    baseline_m: float = 0.12
+    focal_px: float = 500.0
+    width: int = 640
+    height: int = 480
+    thermal_width: int = 160
+    thermal_height: int = 120
+    thermal_hfov_deg: float = 72.0
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    seed: int
+    duration_s: float
+    fs: int
+    snr_db: float
+    frame_ms: float
+    room_size_m: np.ndarray  # (3,)
+    rt60_s: float
+    robot: RobotSpec
+    people: tuple[PersonSpec, ...]
+    objects: tuple[ObjectSpec, ...]
+
+    # ------------------------------------------------------------------ kinematics
+    def person_position(self, k: int, t: float | np.ndarray) -> np.ndarray:
+        """Floor position (room frame, metres) of person k at time(s) t: (..., 2)."""
+        path = self.people[k].path_m
+        if len(path) == 1:
+            return np.broadcast_to(path[0], np.shape(t) + (2,)).copy()
+        seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
+        s_cum = np.concatenate([[0.0], np.cumsum(seg)])
+        s = np.clip(np.asarray(t, dtype=float) / self.duration_s, 0.0, 1.0) * s_cum[-1]
+        return np.stack([np.interp(s, s_cum, path[:, 0]), np.interp(s, s_cum, path[:, 1])], -1)
+
+    def person_speed_mps(self, k: int) -> float:
+        path = self.people[k].path_m
+        return float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum() / self.duration_s)
+
+    def to_dict(self) -> dict[str, Any]:
+        r = self.robot
+        return {
+            "name": self.name,
+            "seed": self.seed,
+            "duration_s": self.duration_s,
+            "audio": {"fs": self.fs, "snr_db": self.snr_db, "frame_ms": self.frame_ms},
+            "room": {"size_m": self.room_size_m.tolist(), "rt60_s": self.rt60_s},
+            "robot": {
+                "position_m": r.position_m.tolist(),
+                "heading_deg": r.heading_deg,
+                "head_height_m": r.head_height_m,
+                "array": r.array,
+                "pan_speed_dps": r.pan_speed_dps,
+                "camera_rate_hz": r.camera_rate_hz,
+                "stereo": {"baseline_m": r.baseline_m, "focal_px": r.focal_px,
+                           "width": r.width, "height": r.height},
+                "thermal": {"width": r.thermal_width, "height": r.thermal_height,
+                            "hfov_deg": r.thermal_hfov_deg},
+            },
+            "people": [
+                {"name": p.name, "path_m": p.path_m.tolist(), "height_m": p.height_m,
+                 "voice": p.voice, "speaking": [list(s) for s in p.speaking], "facing": p.facing}
+                for p in self.people
+            ],
+            "objects": [
+                {"kind": o.kind, "position_m": o.position_m.tolist(), "yaw_deg": o.yaw_deg,
+                 "height_m": o.height_m}
+                for o in self.objects
+            ],
+        }
+
+
+# ---------------------------------------------------------------------- parsing helpers
+def _num(d: Mapping[str, Any], key: str, default: float, where: str, lo: float | None = None,
+         hi: float | None = None, integer: bool = False) -> float:
+    v = d.get(key, default)
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+        raise ConfigError(f"{where}.{key}: expected a number, got {v!r}")
+    if integer and int(v) != v:
+        raise ConfigError(f"{where}.{key}: expected a whole number, got {v!r}")
+    if lo is not None and v < lo:
+        raise ConfigError(f"{where}.{key}: must be >= {lo}, got {v}")
+    if hi is not None and v > hi:
+        raise ConfigError(f"{where}.{key}: must be <= {hi}, got {v}")
+    return int(v) if integer else float(v)
+
+
+def _vec(v: Any, n: int | None, where: str) -> np.ndarray:
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{where}: expected numbers, got {v!r}") from None
+    if n is not None and a.shape != (n,):
+        raise ConfigError(f"{where}: expected {n} numbers, got {v!r}")
+    if not np.all(np.isfinite(a)):
+        raise ConfigError(f"{where}: values must be finite")
+    return a
+
+
+def _section(d: Mapping[str, Any], key: str, where: str) -> Mapping[str, Any]:
+    v = d.get(key, {})
+    if v is None:
+        v = {}
+    if not isinstance(v, Mapping):
+        raise ConfigError(f"{where}.{key}: expected a mapping, got {type(v).__name__}")
+    return v
+
+
+def _inside(xy: np.ndarray, room: np.ndarray, where: str) -> None:
+    lo, hi = WALL_CLEARANCE_M, room[:2] - WALL_CLEARANCE_M
+    if np.any(xy < lo) or np.any(xy > hi):
+        raise ConfigError(
+            f"{where}: {np.round(xy, 3).tolist()} is outside the room or closer than "
+            f"{WALL_CLEARANCE_M} m to a wall (room {room[:2].tolist()} m)"
+        )
+
+
+def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scenario:
+    """Validate a scenario mapping (see module docstring) and build a :class:`Scenario`."""
+    check_keys(data, ("name", "seed", "duration_s", "audio", "room", "robot", "people", "objects"),
+               where)
+    base = default_scenario()
+    audio = _section(data, "audio", where)
+    check_keys(audio, ("fs", "snr_db", "frame_ms"), f"{where}.audio")
+    room = _section(data, "room", where)
+    check_keys(room, ("size_m", "rt60_s"), f"{where}.room")
+    size = _vec(room.get("size_m", base.room_size_m.tolist()), 3, f"{where}.room.size_m")
+    if np.any(size < 2.0) or np.any(size > 50.0):
+        raise ConfigError(f"{where}.room.size_m: each side must be 2-50 m, got {size.tolist()}")
+    rt60 = _num(room, "rt60_s", base.rt60_s, f"{where}.room", 0.0, 2.0)
+    duration = _num(data, "duration_s", base.duration_s, where, 1.0, 120.0)
+
+    rob = _section(data, "robot", where)
+    rw = f"{where}.robot"
+    check_keys(rob, ("position_m", "heading_deg", "head_height_m", "array", "pan_speed_dps",
+                     "camera_rate_hz", "stereo", "thermal"), rw)
+    stereo = _section(rob, "stereo", rw)
+    check_keys(stereo, ("baseline_m", "focal_px", "width", "height"), f"{rw}.stereo")
+    thermal = _section(rob, "thermal", rw)
+    check_keys(thermal, ("width", "height", "hfov_deg"), f"{rw}.thermal")
+    robot_xy = _vec(rob.get("position_m", (size[:2] / 2).tolist()), 2, f"{rw}.position_m")
+    _inside(robot_xy, size, f"{rw}.position_m")
+    head_h = _num(rob, "head_height_m", base.robot.head_height_m, rw, 0.2)
+    if head_h > size[2] - 0.2:
+        raise ConfigError(f"{rw}.head_height_m: {head_h} m does not fit under the "
+                          f"{size[2]} m ceiling")
+    array = rob.get("array", base.robot.array)
+    if not isinstance(array, str):
+        raise ConfigError(f"{rw}.array: expected a preset name or file path, got {array!r}")
+    from hearsee.audio.arrays import load_array
+
+    try:
+        load_array(array)
+    except ConfigError as exc:
+        raise ConfigError(f"{rw}.array: {exc}") from None
+    robot = RobotSpec(
+        position_m=robot_xy,
+        heading_deg=_num(rob, "heading_deg", 0.0, rw, -360, 360),
+        head_height_m=head_h,
+        array=array,
+        pan_speed_dps=_num(rob, "pan_speed_dps", base.robot.pan_speed_dps, rw, 1.0, 2000.0),
+        camera_rate_hz=_num(rob, "camera_rate_hz", base.robot.camera_rate_hz, rw, 0.5, 60.0),
+        baseline_m=_num(stereo, "baseline_m", 0.12, f"{rw}.stereo", 0.02, 1.0),
+        focal_px=_num(stereo, "focal_px", 500.0, f"{rw}.stereo", 50.0, 5000.0),
+        width=_num(stereo, "width", 640, f"{rw}.stereo", 64, 4096, integer=True),
+        height=_num(stereo, "height", 480, f"{rw}.stereo", 48, 4096, integer=True),
+        thermal_width=_num(thermal, "width", 160, f"{rw}.thermal", 16, 2048, integer=True),
+        thermal_height=_num(thermal, "height", 120, f"{rw}.thermal", 12, 2048, integer=True),
+        thermal_hfov_deg=_num(thermal, "hfov_deg", 72.0, f"{rw}.thermal", 10.0, 150.0),
+    )
+
+    people_raw = data.get("people", None)
+    if people_raw is None:
+        people = base.people
+    else:
+        if not isinstance(people_raw, list) or not people_raw:
+            raise ConfigError(f"{where}.people: expected a non-empty list")
+        plist = []
+        for k, p in enumerate(people_raw):
+            pw = f"{where}.people[{k}]"
+            if not isinstance(p, Mapping):
+                raise ConfigError(f"{pw}: expected a mapping")
+            check_keys(p, ("name", "path_m", "height_m", "voice", "speaking", "facing"), pw)
+            if "path_m" not in p:
+                raise ConfigError(f"{pw}: missing required key 'path_m'")
+            path = _vec(p["path_m"], None, f"{pw}.path_m")
+            if path.ndim == 1 and path.shape == (2,):
+                path = path[None, :]
+            if path.ndim != 2 or path.shape[1] != 2:
+                raise ConfigError(f"{pw}.path_m: expected a list of [x, y] waypoints")
+            for w in path:
+                _inside(w, size, f"{pw}.path_m")
+            if np.min(np.linalg.norm(path - robot_xy, axis=1)) < ROBOT_CLEARANCE_M:
+                raise ConfigError(f"{pw}.path_m: passes within {ROBOT_CLEARANCE_M} m of the robot")
+            voice = p.get("voice", "female")
+            if voice not in VOICES:
+                raise ConfigError(f"{pw}.voice: expected one of {VOICES}, got {voice!r}")
+            speaking = p.get("speaking", [[0.0, duration]])
+            try:
+                spk = tuple((float(a), float(b)) for a, b in speaking)
+            except (TypeError, ValueError):
+                raise ConfigError(f"{pw}.speaking: expected [[t0, t1], ...] in seconds") from None
+            if any(not (0 <= a < b) for a, b in spk):
+                raise ConfigError(f"{pw}.speaking: each interval needs 0 <= t0 < t1")
+            facing = p.get("facing", "toward-robot")
+            if facing not in ("toward-robot", "path"):
+                raise ConfigError(f"{pw}.facing: expected 'toward-robot' or 'path'")
+            plist.append(PersonSpec(
+                name=str(p.get("name", f"person{k}")), path_m=path,
+                height_m=_num(p, "height_m", 1.72, pw, 1.0, 2.2), voice=voice,
+                speaking=spk, facing=facing))
+        people = tuple(plist)
+
+    objects_raw = data.get("objects", None)
+    if objects_raw is None:
+        objects = base.objects
+    else:
+        if not isinstance(objects_raw, list):
+            raise ConfigError(f"{where}.objects: expected a list")
+        olist = []
+        for k, o in enumerate(objects_raw):
+            ow = f"{where}.objects[{k}]"
+            if not isinstance(o, Mapping):
+                raise ConfigError(f"{ow}: expected a mapping")
+            check_keys(o, ("kind", "position_m", "yaw_deg", "height_m"), ow)
+            kind = o.get("kind")
+            if kind not in OBJECT_KINDS:
+                raise ConfigError(f"{ow}.kind: expected one of {OBJECT_KINDS}, got {kind!r}")
+            if "position_m" not in o:
+                raise ConfigError(f"{ow}: missing required key 'position_m'")
+            pos = _vec(o["position_m"], 2, f"{ow}.position_m")
+            _inside(pos, size, f"{ow}.position_m")
+            if np.linalg.norm(pos - robot_xy) < ROBOT_CLEARANCE_M:
+                raise ConfigError(
+                    f"{ow}.position_m: closer than {ROBOT_CLEARANCE_M} m to the robot")
+            olist.append(ObjectSpec(kind=kind, position_m=pos,
+                                    yaw_deg=_num(o, "yaw_deg", 0.0, ow, -360, 360),
+                                    height_m=_num(o, "height_m", 1.75, ow, 0.5, 2.2)))
+        objects = tuple(olist)
+
+    name = data.get("name", "custom")
+    seed = _num(data, "seed", 0, where, 0, 2**32 - 1, integer=True)
+    return Scenario(
+        name=str(name), seed=int(seed), duration_s=duration,
+        fs=int(_num(audio, "fs", 16000, f"{where}.audio", 8000, 96000, integer=True)),
+        snr_db=_num(audio, "snr_db", 20.0, f"{where}.audio", -20.0, 80.0),
+        frame_ms=_num(audio, "frame_ms", 64.0, f"{where}.audio", 8.0, 512.0),
+        room_size_m=size, rt60_s=rt60, robot=robot, people=people, objects=objects,
+    )
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Load and validate a scenario YAML file."""
+    return scenario_from_dict(load_yaml(path), where=str(path))
+
+
+def default_scenario() -> Scenario:
+    """The built-in demo: a 7 x 6 x 3 m room (RT60 0.3 s, SNR 20 dB); the robot faces +x from
+    near the room centre; a woman speaks from behind-left of the robot (azimuth 120 -> 145 deg,
+    2.6 m) while walking at 0.15 m/s; a mannequin stands 1.8 m away at azimuth 100 deg, in the
+    camera's view once the head has turned to her."""
+    room = np.array([7.0, 6.0, 3.0])
+    robot_xy = np.array([3.5, 2.6])
+    return Scenario(
+        name="default", seed=7, duration_s=6.0, fs=16000, snr_db=20.0, frame_ms=64.0,
+        room_size_m=room, rt60_s=0.3,
+        robot=RobotSpec(position_m=robot_xy),
+        people=(PersonSpec(name="speaker", path_m=np.array([[2.1, 4.9], [1.4, 4.3]]),
+                           height_m=1.70, voice="female", speaking=((0.0, 6.0),)),),
+        objects=(ObjectSpec(kind="mannequin", position_m=np.array([3.1, 4.4]), yaw_deg=-20.0),),
+    )
+
+
+def random_scenario(seed: int, duration_s: float = 6.0) -> Scenario:
+    """A random scenario for ``hearsee eval``: one speaker walking 0.2-0.8 m/s at 1.2-4 m from the
+    robot in any direction, 0-2 human-like objects, RT60 0.2-0.5 s, SNR 10-25 dB."""
+    rng = np.random.default_rng(seed)
+    base = default_scenario()
+    room = np.array([rng.uniform(6, 9), rng.uniform(5, 8), rng.uniform(2.6, 3.2)])
+    robot_xy = room[:2] / 2 + rng.uniform(-0.4, 0.4, 2)
+    duration = float(duration_s)
+
+    def inside(p: np.ndarray) -> bool:
+        margin = WALL_CLEARANCE_M + 0.2
+        return bool(np.all(p > margin) and np.all(p < room[:2] - margin))
+
+    def free_point(rmin: float, rmax: float, taken: list[np.ndarray]) -> np.ndarray:
+        for _ in range(1000):
+            az = rng.uniform(-np.pi, np.pi)
+            r = rng.uniform(rmin, rmax)
+            p = robot_xy + r * np.array([np.cos(az), np.sin(az)])
+            if inside(p) and all(np.linalg.norm(p - q) > 0.9 for q in taken):
+                return p
+        raise ConfigError(f"random scenario {seed}: could not place an object")
+
+    start = free_point(1.5, 3.5, [])
+    speed = rng.uniform(0.2, 0.8)
+    for _ in range(1000):
+        heading = rng.uniform(-np.pi, np.pi)
+        end = start + speed * duration * np.array([np.cos(heading), np.sin(heading)])
+        if inside(end) and 1.2 < np.linalg.norm(end - robot_xy) < 4.0:
+            break
+    else:
+        end = start
+    taken = [start, end, (start + end) / 2]
+    objects = []
+    for _ in range(int(rng.integers(0, 3))):
+        kind = str(rng.choice(OBJECT_KINDS))
+        pos = free_point(1.2, 4.0, taken)
+        taken.append(pos)
+        objects.append(ObjectSpec(kind=kind, position_m=pos, yaw_deg=float(rng.uniform(-90, 90))))
+    person = PersonSpec(name="speaker", path_m=np.stack([start, end]),
+                        height_m=float(rng.uniform(1.55, 1.90)),
+                        voice=str(rng.choice(VOICES)), speaking=((0.0, duration),))
+    return replace(
+        base, name=f"random-{seed}", seed=int(seed), duration_s=duration,
+        snr_db=float(rng.uniform(10, 25)), room_size_m=room, rt60_s=float(rng.uniform(0.2, 0.5)),
+        robot=replace(base.robot, position_m=robot_xy,
+                      heading_deg=float(rng.uniform(-180, 180))),
+        people=(person,), objects=tuple(objects),
+    )

@@ -1,0 +1,38 @@
+import logging
+
+import numpy as np
+import pytest
+
+from hearsee.errors import ConfigError
+from hearsee.robot.evaluate import evaluate, summarize
+
+
+def test_summarize_percentiles_and_rates():
+    runs = [{"success": True, "position_error_median_m": e, "false_person_objects": 0}
+            for e in (0.05, 0.07, 0.09)] + [{"success": False, "position_error_median_m":
+                                             float("nan"), "false_person_objects": 1}]
+    s = summarize(runs)
+    assert s["scenarios"] == 4 and s["success_rate"] == pytest.approx(0.75)
+    assert s["position_error_median_m"]["p50"] == pytest.approx(0.07)
+    assert s["position_error_median_m"]["n"] == 3
+    assert s["objects_reported_as_person"] == 1
+
+
+def test_bad_counts_and_durations():
+    with pytest.raises(ConfigError):
+        evaluate(0)
+    with pytest.raises(ConfigError, match="duration"):
+        evaluate(1, duration_s=0.5)
+
+
+@pytest.mark.slow
+def test_dask_local_cluster_gives_identical_results():
+    distributed = pytest.importorskip("distributed")
+    local = evaluate(2, seed0=11, workers=1, duration_s=2.5)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  silence_logs=logging.ERROR,
+                                  dashboard_address=None) as cluster:
+        remote = evaluate(2, seed0=11, scheduler=cluster.scheduler_address, duration_s=2.5)
+    assert local.runs == remote.runs
+    assert [r["seed"] for r in remote.runs] == [11, 12]
+    assert np.isfinite(local.summary["success_rate"])
