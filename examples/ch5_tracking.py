@@ -106,9 +106,9 @@ def cases_5_1(out: Path, dur: float) -> None:
     for col, (name, prim, intf) in enumerate(cases):
         x = _sig(prim, dur, fs, rng)
         y = simulate_moving_free_field(x, fs, arr, traj, rng=rng)
-        yi = simulate_moving_free_field(0.5 * _sig(intf, dur, fs, rng), fs, arr,
+        yi = simulate_moving_free_field(0.15 * _sig(intf, dur, fs, rng), fs, arr,
                                         Trajectory([0.0], [interferer]), rng=rng)
-        rec = y + yi  # signal-to-interference ratio about +6 dB (before spreading)
+        rec = y + yi  # signal-to-interference ratio about +14 dB at the microphones
         rec = rec + 1e-3 * rng.standard_normal(rec.shape)
         ups = StreamPipeline(arr, StreamConfig()).run(ArraySource(rec, fs, 2048))
         t = np.array([u.t for u in ups])
@@ -227,7 +227,7 @@ def figs_5_18_20(out: Path) -> None:
                           rig.array.tdoa(pk) + 5e-6 * rng.standard_normal(3), sigma_tdoa_s=5e-6)
         fixes.append(f.position_m)
         covs.append(f.covariance)
-    tr = track_positions(t, np.array(fixes), np.array(covs), sigma_jerk=1.0)
+    tr = track_positions(t, np.array(fixes), np.array(covs), sigma_jerk=0.2)
     fig, ax = plt.subplots(1, 3, figsize=(15, 4))
     for k, lab in enumerate("xy"):
         ax[0].plot(t, p[:, k], "k-", lw=2)

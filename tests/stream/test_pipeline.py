@@ -197,3 +197,24 @@ def test_live_device_source_with_fake_portaudio(monkeypatch):
     ups = pipe.run(src, threaded=True)
     assert pipe.stats.n_blocks + src.n_dropped == 20
     assert len(ups) >= 1
+
+
+def test_camera_fix_with_inconsistent_itds_is_discarded():
+    from hearsee.fusion.audiovisual import AudioVisualRig
+    from hearsee.stream.pipeline import TrackingProcessor, Update
+    from hearsee.vision.camera import Camera
+
+    arr = MicArray.from_preset("three-mic")
+    rig = AudioVisualRig.mounted(arr, Camera.from_fov(70.0, 640, 480), (0.0, 0.2, 0.0))
+    src = np.array([1.2, 0.1, 0.0])
+    uv = tuple(rig.project(src)[0])
+    proc = TrackingProcessor(arr, FS, StreamConfig(), rig=rig, image_points=lambda t: uv)
+    good = Update(0.0, None, None, None, None, None, None, 1.0)
+    proc._fuse(good, arr.tdoa(src))
+    assert np.linalg.norm(np.array(good.raw_position_m) - src) < 0.01
+    assert good.position_m is not None
+    bad = Update(0.032, None, None, None, None, None, None, 1.0)
+    z = arr.tdoa(src) + np.array([0.0, 3.0 / FS, 0.0])  # t01 + t12 != t02: a reflection
+    proc._fuse(bad, z)
+    assert bad.raw_position_m is None
+    assert bad.position_m is not None  # the track predicts on
