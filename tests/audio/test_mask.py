@@ -62,9 +62,8 @@ def test_mask2_preset_is_valid():
 def test_microphones_inside_the_body_is_an_error():
     d = _mask2_dict(mesh_subdivision=3)
     d["microphones"] = [[0.0, -0.05, 0.0], [0.0, 0.05, 0.0]]
-    arr = MicArray.from_dict(d, where="bad")
     with pytest.raises(GeometryError, match="microphone 0 .* inside the mask body"):
-        mask.mask_geometry(arr)
+        mask.mask_geometry(MicArray.from_dict(d, where="bad"))
 
 
 def test_microphones_outside_are_accepted():
@@ -79,10 +78,9 @@ def test_open_mesh_surface_is_an_error():
     base = {"name": "tetra", "microphones": [[0.3, -0.5, 0.3], [0.3, 1.5, 0.3]]}
     ok = MicArray.from_dict({**base, "mask": {"shape": "mesh", "vertices": v, "faces": closed}})
     assert mask.mask_geometry(ok).shape == "mesh"
-    bad = MicArray.from_dict({**base, "mask": {"shape": "mesh", "vertices": v,
-                                               "faces": closed[:3]}})
     with pytest.raises(GeometryError, match="open"):
-        mask.mask_geometry(bad)
+        mask.mask_geometry(MicArray.from_dict({**base, "mask": {"shape": "mesh", "vertices": v,
+                                                                "faces": closed[:3]}}))
 
 
 @pytest.mark.parametrize("over, exc, msg", [
@@ -105,6 +103,7 @@ def test_masked_array_needs_two_microphones():
 
 
 # ------------------------------------------------------------------ model, cache, responses
+@pytest.mark.slow  # solves the coarse BEM for the module (about 10 s on a busy machine)
 def test_cache_roundtrip_and_key(model, cache_root):
     sol = model.solution
     assert (cache_root / "mask" / f"{model.key}.npz").is_file()
