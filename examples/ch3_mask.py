@@ -36,12 +36,11 @@ def fig_waveforms(m: MaskModel, out: Path) -> None:
     t = 1000 * np.arange(n) / FS
     burst_t = np.arange(int(0.012 * FS)) / FS
     burst = np.sin(2 * np.pi * 500 * burst_t) * np.hanning(len(burst_t))
-    for row, (az, name) in enumerate(((30.0, "front, alpha = 30 deg"),
-                                      (150.0, "back, alpha = 150 deg"))):
+    for row, (az, name) in enumerate(((30.0, "front, 30 deg"), (150.0, "back, 150 deg"))):
         ir = m.impulse_responses(_u(az), FS, n, far_field=True)
         ax[row, 0].plot(t, ir[0], label="mic 0 (right)")
         ax[row, 0].plot(t, ir[1], label="mic 1 (left)")
-        ax[row, 0].set_title(f"impulse responses, {name} (figs. 3.6/3.7)")
+        ax[row, 0].set_title(f"impulse responses, {name} (figs. 3.6-3.7)", fontsize=10)
         y = simulate_masked(np.concatenate([burst, np.zeros(200)]), FS, m, _u(az), far_field=True)
         tt = 1000 * np.arange(y.shape[1]) / FS
         for k in range(2):
@@ -49,7 +48,8 @@ def fig_waveforms(m: MaskModel, out: Path) -> None:
             on = np.argmax(np.abs(y[k]) > 0.05 * np.abs(y[k]).max())
             ax[row, 1].axvline(tt[on], color=f"C{k}", ls=":")
             ax[row, 1].axhline(np.abs(y[k]).max(), color=f"C{k}", lw=0.6)
-        ax[row, 1].set_title(f"500 Hz burst: onsets and amplitudes (fig. 3.8), {name}")
+        ax[row, 1].set_title(f"500 Hz burst, onsets and amplitudes, {name} (fig. 3.8)",
+                             fontsize=10)
     for a in ax.ravel():
         a.legend(fontsize=7)
     ax[1, 0].set_xlabel("time (ms)")
