@@ -265,12 +265,13 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
         b = np.clip(b, 0, W)
         s = np.take_along_axis(cc, b, 1) - np.take_along_axis(cc, a, 1)
         width = np.broadcast_to(b - a, s.shape)
-        return np.where(width > 0, s / np.maximum(width, 1), 0.0)
+        return np.where(width > 0, s / np.maximum(width, 1), np.nan)  # NaN: outside the image
 
-    centre = box_mean(y - half, y + half + 1)
+    centre = np.nan_to_num(box_mean(y - half, y + half + 1))
     left = box_mean(y - half - sur, y - half)
     right = box_mean(y + half + 1, y + half + 1 + sur)
-    psi = centre - np.minimum(left, right)
+    both = np.fmin(left, right)  # a surround outside the image is unknown, not empty
+    psi = centre - np.nan_to_num(both)
     psi[0] = 0.0
     return psi
 
@@ -445,7 +446,9 @@ def head_shoulder_score(mask: NDArray, depth_m: float, focal_px: float, *, tau_m
     below the top of the head at lateral offset ``x`` from the head centre, is a half ellipse
     for the head (half width ``a``, height 0.2 m) and a shoulder line at drop ``s`` below the
     head top, sloping down 0.12 m/m out to half the shoulder width ``S/2``; beyond the
-    shoulders the contour must fall at least 0.12 m below the shoulder line. The head may be
+    shoulders the contour must fall at least 0.12 m below the shoulder line; in the 5 cm
+    "neck" beside the head it must lie between 0.1 m below the head top and the shoulder line
+    (weighted 3x: this omega notch is what boxes and poles lack). The head may be
     offset from the silhouette's highest column. Over all (offset, a, S, s) the mean truncated
     vertical distance between contour and template (a vertical chamfer distance, truncated at
     ``tau_m``) is minimised; ``score = 1 - best / tau_m`` in [0, 1].
@@ -483,14 +486,17 @@ def head_shoulder_score(mask: NDArray, depth_m: float, focal_px: float, *, tau_m
     # neck transition: between the head and the shoulders the contour may be anywhere between
     neck = (ax > Ac) & (ax <= Ac + 0.05)
     err = np.abs(obs - tpl)
-    err = np.where(neck, np.clip(np.minimum(err, np.abs(obs - 0.5 * Dc)), 0, None), err)
-    err = np.where(neck & (obs >= 0.1) & (obs <= Dc + 0.03), 0.0, err)
+    # neck: the contour must have dropped below the head (>= 0.1 m) but not below the
+    # shoulders; this "omega" notch on both sides of the head is what boxes and poles lack
+    neck_err = np.where(obs < 0.1, 0.1 - obs + 0.04, np.clip(obs - Dc - 0.03, 0.0, None))
+    err = np.where(neck, neck_err, err)
     out = ax > Sc / 2 + 0.03
     # beyond the shoulders: fine if the contour is at/below the shoulder line + 0.12 m
     err = np.where(out, np.clip(Dc + 0.12 - obs, 0.0, None), err)
     err = np.minimum(err, tau_m)
     within = ax <= Sc / 2 + 0.15
-    cost = (err * within).sum(axis=1) / within.sum(axis=1)
+    weight = within * np.where(neck, 3.0, 1.0)
+    cost = (err * weight).sum(axis=1) / weight.sum(axis=1)
     k = int(np.argmin(cost))
     best = float(cost[k])
     score = float(np.clip(1.0 - best / tau_m, 0.0, 1.0))

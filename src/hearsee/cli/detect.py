@@ -1,0 +1,93 @@
+"""``hearsee detect``: find people in a stereo pair, confirmed by a thermal image (thesis ch. 7)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from hearsee.cli._app import app, emit_json
+from hearsee.errors import ImageInputError, InputFileError
+
+
+@app.command("detect")
+def detect_cmd(
+    left: str = typer.Option(..., "--left", help="Left image of the stereo pair (PNG, JPEG...)."),
+    right: str = typer.Option(..., "--right", help="Right image of the stereo pair."),
+    calib: str = typer.Option(..., "--calib",
+                               help="Stereo rig calibration YAML (from `hearsee calibrate`)."),
+    thermal: str | None = typer.Option(
+        None, "--thermal",
+        help="Thermal image of the rig's thermal camera: 8-bit (non-radiometric, relative band), "
+             "16-bit PNG (centi-kelvin) or .npy (degC)."),
+    fmt: str = typer.Option("json", "--format", help="json or table."),
+    overlay: str | None = typer.Option(
+        None, "--overlay", help="Write the left image with the detections drawn to this file."),
+    tm: float = typer.Option(0.5, "--tm", help="Head-shoulder score threshold Tm (0..1)."),
+    min_support: float = typer.Option(
+        0.3, "--min-support", help="Thermal support needed to accept a candidate (0..1)."),
+    camera_height: float | None = typer.Option(
+        None, "--camera-height",
+        help="Height of the left camera above the floor, metres (prior for the floor plane; "
+             "default: info.camera_height_m of the calibration file)."),
+) -> None:
+    """Detect humans: stereo candidates (P(y,d), head-shoulder template) confirmed by thermal.
+
+    Prints {"humans": [{"box": [x, y, w, h], "position_m": [x, y, z], "score", "thermal_support"}],
+    "rejected": [...]}: boxes in left-image pixels, positions in metres in the left camera's
+    optical frame (x right, y down, z forward).
+    """
+    from hearsee.vision.camera import load_rig
+    from hearsee.vision.fusion import detect_humans, draw_detections
+    from hearsee.vision.humans import HumanDetectorParams
+    from hearsee.vision.io import read_pair, write_image
+    from hearsee.vision.thermal import load_thermal
+
+    if fmt not in ("json", "table"):
+        raise typer.BadParameter(f"--format must be json or table, got {fmt!r}")
+    left_p, right_p, calib_p = Path(left), Path(right), Path(calib)
+    thermal_p = Path(thermal) if thermal else None
+    overlay_p = Path(overlay) if overlay else None
+    if not 0.0 <= tm <= 1.0:
+        raise typer.BadParameter(f"--tm must be in [0, 1], got {tm}")
+    if not 0.0 <= min_support <= 1.0:
+        raise typer.BadParameter(f"--min-support must be in [0, 1], got {min_support}")
+    if camera_height is not None and not 0.1 <= camera_height <= 5.0:
+        raise typer.BadParameter(f"--camera-height must be in [0.1, 5] metres, got {camera_height}")
+    if overlay_p is not None:
+        inputs = [left_p, right_p, calib_p] + ([thermal_p] if thermal_p else [])
+        if overlay_p.resolve() in {p.resolve() for p in inputs}:
+            raise InputFileError(f"{overlay_p}: --overlay would overwrite an input file; choose "
+                                 "another name")
+    rig = load_rig(calib_p)
+    L, R = read_pair(left_p, right_p, "bgr")
+    if (L.shape[1], L.shape[0]) != rig.left.size:
+        raise ImageInputError(
+            f"{left}: images are {L.shape[1]}x{L.shape[0]} pixels but the calibration expects "
+            f"{rig.left.width}x{rig.left.height} (use images from the calibrated rig)"
+        )
+    th = None
+    if thermal_p is not None:
+        if rig.thermal is None:
+            raise ImageInputError(
+                f"{thermal}: a thermal image was given but {calib} has no thermal camera; add a "
+                "'thermal:' block (camera, R, T) to the calibration or leave out --thermal"
+            )
+        th = load_thermal(thermal_p, expected_size=rig.thermal.size)
+    res = detect_humans(L, R, rig, th, params=HumanDetectorParams(tm=tm), min_support=min_support,
+                        camera_height_m=camera_height)
+    if overlay_p is not None:
+        write_image(overlay_p, draw_detections(L, res))
+    if fmt == "table":
+        typer.echo(f"{'':9s}{'x':>5s}{'y':>5s}{'w':>5s}{'h':>5s}  {'X m':>7s}{'Y m':>7s}"
+                   f"{'Z m':>7s}  {'score':>5s} {'thermal':>7s}  reason")
+        for kind, items in (("human", res.humans), ("rejected", res.rejected)):
+            for h in items:
+                x, y, w, hh = h.box
+                sup = "-" if h.thermal_support is None else f"{h.thermal_support:.2f}"
+                p = h.position_m
+                typer.echo(f"{kind:9s}{x:5d}{y:5d}{w:5d}{hh:5d}  {p[0]:7.2f}{p[1]:7.2f}{p[2]:7.2f}"
+                           f"  {h.score:5.2f} {sup:>7s}  {h.reason}")
+        typer.echo(f"{len(res.humans)} human(s), {len(res.rejected)} rejected candidate(s)")
+        return
+    emit_json(res.to_dict())

@@ -1,0 +1,139 @@
+"""Synthetic stereo + thermal scenes: determinism, geometry of the ground truth, files."""
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from hearsee.errors import ConfigError, GeometryError
+from hearsee.sim.scenes import (
+    HUMAN_LIKE_KINDS,
+    Entity,
+    SceneSpec,
+    default_rig,
+    generate_scene,
+    random_spec,
+    render_scene,
+    thermal_to_8bit,
+    write_scene,
+)
+from hearsee.vision.camera import Camera, StereoRig, load_rig
+from hearsee.vision.stereo import compute_disparity
+from hearsee.vision.thermal import counts_to_celsius
+
+RIG = default_rig(320, 240, thermal_size=(80, 60))
+
+
+@pytest.fixture(scope="module")
+def scene():
+    spec = SceneSpec(
+        entities=[Entity("person", -0.9, 3.0, 0.0, 1.75), Entity("mannequin", 0.2, 3.4, 20.0, 1.7),
+                  Entity("poster", 1.3, 3.0, 0.0, 1.75),
+                  Entity("radiator", -2.9, 4.5, 0.0, 0.6, {"width_m": 0.1, "depth_m": 1.0,
+                                                           "lift_m": 0.12})],
+        width_left_m=3.0, width_right_m=3.0, depth_m=7.0, seed=3)
+    return render_scene(spec, RIG)
+
+
+def test_shapes_types_and_rig(scene):
+    assert scene.left.shape == (240, 320, 3) and scene.left.dtype == np.uint8
+    assert scene.right.shape == scene.left.shape
+    assert scene.disparity.shape == (240, 320) and np.all(scene.disparity > 0)
+    assert scene.thermal_c.shape == (60, 80) and scene.thermal_c.dtype == np.float32
+    assert scene.thermal_8bit.dtype == np.uint8
+    assert scene.rig.is_rectified and scene.rig.thermal is not None
+    assert scene.rig.info["camera_height_m"] == pytest.approx(1.4)
+
+
+def test_deterministic_from_seed():
+    a = generate_scene(7, RIG, n_people=(1, 2), n_human_like=(0, 1))
+    b = generate_scene(7, RIG, n_people=(1, 2), n_human_like=(0, 1))
+    c = generate_scene(8, RIG, n_people=(1, 2), n_human_like=(0, 1))
+    assert np.array_equal(a.left, b.left) and np.array_equal(a.thermal_c, b.thermal_c)
+    assert a.truth() == b.truth()
+    assert not np.array_equal(a.left, c.left)
+
+
+def test_boxes_positions_and_gt_disparity_agree(scene):
+    f, B = RIG.focal_px, RIG.baseline_m
+    for obj in scene.objects[:3]:
+        x, y, w, h = obj.box
+        u, v = RIG.left.project(obj.position_m[None])[0]
+        assert x <= u <= x + w and y <= v <= y + h  # torso centre inside the visible box
+        assert obj.visible_fraction == pytest.approx(1.0, abs=0.02)
+        # labels: the box is exactly the extent of the entity's visible pixels
+        ys, xs = np.nonzero(scene.labels == obj.index)
+        assert [xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1] == obj.box
+        # disparity on the body ~ f B / Z (front surface is up to ~0.15 m nearer)
+        d = np.median(scene.disparity[scene.labels == obj.index])
+        z = obj.position_m[2]
+        assert f * B / z <= d <= f * B / (z - 0.2)
+
+
+def test_person_height_in_the_image(scene):
+    person = scene.objects[0]
+    # 1.75 m tall at 3 m: about f * 1.75 / 3 pixels (feet on the floor, top of the head)
+    assert person.box[3] == pytest.approx(RIG.focal_px * 1.75 / 3.0, rel=0.08)
+
+
+def test_textures_let_sgbm_match(scene):
+    d = compute_disparity(scene.left, scene.right, num_disparities=32)
+    ok = np.isfinite(d)
+    assert ok.mean() > 0.85
+    err = np.abs(d - scene.disparity)[ok]
+    assert np.median(err) < 0.5 and np.mean(err > 2) < 0.05
+
+
+def test_thermal_temperatures(scene):
+    th = scene.thermal_c
+    cam = RIG.thermal
+    def temp_at(p):
+        u, v = RIG.project_thermal(np.asarray(p)[None])[0]
+        return float(th[int(round(v)), int(round(u))])
+    person, mannequin, poster, radiator = scene.objects
+    assert 27.0 <= temp_at(person.position_m) <= 36.0  # clothing / skin
+    assert abs(temp_at(mannequin.position_m) - scene.spec.room_c) < 2.0
+    assert abs(temp_at(poster.position_m) - scene.spec.room_c) < 2.0
+    assert temp_at(radiator.position_m) > 40.0
+    assert cam.width == 80
+    # 8-bit AGC is a monotonic map of the radiometric image
+    t8 = scene.thermal_8bit.astype(float).ravel()
+    order = np.argsort(th.ravel())
+    assert np.all(np.diff(t8[order]) >= 0)
+    assert thermal_to_8bit(np.full((4, 4), 20.0)).dtype == np.uint8
+
+
+def test_random_spec_counts_and_ranges():
+    for seed in range(5):
+        spec = random_spec(seed, n_people=(1, 4), n_human_like=(0, 2), range_m=(1.0, 8.0))
+        people = [e for e in spec.entities if e.kind == "person"]
+        like = [e for e in spec.entities if e.kind in HUMAN_LIKE_KINDS]
+        assert 1 <= len(people) <= 4 and 0 <= len(like) <= 2
+        for e in people + like:
+            assert 1.0 <= e.z <= 8.0
+
+
+def test_write_scene_files(tmp_path, scene):
+    out = write_scene(scene, tmp_path / "s")
+    for name in ("left.png", "right.png", "thermal.png", "thermal_radiometric.png",
+                 "thermal_c.npy", "disparity.npy", "calib.yaml", "truth.json"):
+        assert (out / name).is_file()
+    rig = load_rig(out / "calib.yaml")
+    assert np.allclose(rig.left.K, RIG.left.K) and np.allclose(rig.T_thermal, RIG.T_thermal)
+    ck = cv2.imread(str(out / "thermal_radiometric.png"), cv2.IMREAD_UNCHANGED)
+    assert ck.dtype == np.uint16
+    assert np.allclose(counts_to_celsius(ck), scene.thermal_c, atol=0.006)
+    truth = json.loads((out / "truth.json").read_text())
+    assert [p["box"] for p in truth["people"]] == [scene.objects[0].box]
+    assert {o["kind"] for o in truth["objects"]} == {"mannequin", "poster", "radiator"}
+    assert np.array_equal(cv2.imread(str(out / "left.png")), scene.left)
+
+
+def test_bad_inputs():
+    with pytest.raises(ConfigError):
+        Entity("robot", 0.0, 2.0)
+    cam = Camera.from_fov(60.0, 160, 120)
+    rig_no_thermal = StereoRig.ideal(cam, 0.1)
+    with pytest.raises(GeometryError, match="thermal"):
+        render_scene(SceneSpec(), rig_no_thermal)

@@ -1,0 +1,106 @@
+"""Stereo + thermal fusion: human-like objects are rejected, people kept; the failure cases."""
+
+import numpy as np
+import pytest
+
+from hearsee.errors import CalibrationError, ImageInputError
+from hearsee.sim.scenes import Entity, SceneSpec, default_rig, render_scene
+from hearsee.vision.camera import StereoRig
+from hearsee.vision.fusion import detect_humans, draw_detections, thermal_support
+from hearsee.vision.thermal import warm_mask_celsius
+
+RIG = default_rig(320, 240, thermal_size=(80, 60))
+
+
+def _spec(seed=3, **person):
+    return SceneSpec(entities=[Entity("person", -0.9, 3.0, 0.0, 1.75, dict(person)),
+                               Entity("mannequin", 0.2, 3.4, 20.0, 1.75),
+                               Entity("poster", 1.3, 3.0, 0.0, 1.75)],
+                     width_left_m=3.0, width_right_m=3.0, depth_m=7.0, seed=seed)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return render_scene(_spec(), RIG)
+
+
+def _nearest(items, p):
+    return min(items, key=lambda h: np.linalg.norm(h.position_m - p))
+
+
+def test_fusion_keeps_the_person_and_rejects_human_like_objects(scene):
+    res = detect_humans(scene.left, scene.right, RIG, scene.thermal_c)
+    person, mannequin, poster = scene.objects
+    assert len(res.humans) == 1
+    h = res.humans[0]
+    assert np.linalg.norm(h.position_m - person.position_m) < 0.05 * person.distance_m
+    assert h.thermal_support > 0.6 and h.score >= 0.5
+    for obj in (mannequin, poster):
+        r = _nearest(res.rejected, obj.position_m)
+        assert np.linalg.norm(r.position_m - obj.position_m) < 0.3
+        assert r.thermal_support < 0.1 and r.reason.startswith("thermal support")
+    d = res.to_dict()
+    assert d["humans"][0]["box"] == h.box and d["thermal"] == "radiometric"
+
+
+def test_stereo_only_accepts_the_human_shaped_objects(scene):
+    res = detect_humans(scene.left, scene.right, RIG)  # no thermal image
+    assert len(res.humans) == 3  # person, mannequin, poster all look human to stereo
+    assert all(h.thermal_support is None for h in res.humans)
+
+
+def test_8bit_thermal_gives_the_same_decision(scene):
+    res = detect_humans(scene.left, scene.right, RIG, scene.thermal_8bit)
+    assert len(res.humans) == 1 and res.info["thermal"] == "relative"
+    assert res.humans[0].thermal_support > 0.6
+
+
+def test_failure_cases():
+    """Fig. 7.22: a person in a cold coat with a covered head is rejected; a mannequin warmed
+    to skin temperature is accepted."""
+    cold = render_scene(_spec(clothing_c=22.5, legs_c=22.0, covered_head=True), RIG)
+    res = detect_humans(cold.left, cold.right, RIG, cold.thermal_c)
+    p = cold.objects[0].position_m
+    assert all(np.linalg.norm(h.position_m - p) > 0.5 for h in res.humans)
+    spec = _spec()
+    spec.entities[1].params["temp_c"] = 33.0
+    warm = render_scene(spec, RIG)
+    res = detect_humans(warm.left, warm.right, RIG, warm.thermal_c)
+    m = warm.objects[1].position_m
+    assert any(np.linalg.norm(h.position_m - m) < 0.3 for h in res.humans)
+
+
+def test_thermal_support_projection_and_weights():
+    warm = np.zeros(RIG.thermal.shape, bool)
+    warm[:, : RIG.thermal.width // 2] = True  # left half of the thermal image is warm
+    # points 3 m ahead, left of centre (x < 0) and right of centre
+    left_pts = np.array([[-0.8, y, 3.0] for y in np.linspace(-0.3, 0.9, 40)])
+    right_pts = left_pts * [-1, 1, 1]
+    h = np.linspace(1.7, 0.5, 40)
+    assert thermal_support(left_pts, h, RIG, warm) == pytest.approx(1.0)
+    assert thermal_support(right_pts, h, RIG, warm) == pytest.approx(0.0)
+    # upper (head) points weigh more
+    mixed = np.vstack([left_pts[:10], right_pts[10:]])
+    s = thermal_support(mixed, h, RIG, warm)
+    assert s > 10 / 40
+    # behind the camera / outside the thermal view -> NaN
+    assert np.isnan(thermal_support(left_pts * [1, 1, -1], h, RIG, warm))
+    with pytest.raises(ImageInputError):
+        thermal_support(left_pts, h, RIG, warm[:10])
+
+
+def test_bad_inputs(scene):
+    no_thermal = StereoRig(RIG.left, RIG.right, RIG.R, RIG.T)
+    with pytest.raises(CalibrationError, match="no thermal camera"):
+        detect_humans(scene.left, scene.right, no_thermal, scene.thermal_c)
+    with pytest.raises(ImageInputError, match="thermal"):
+        detect_humans(scene.left, scene.right, RIG, scene.thermal_c[:30])
+    with pytest.raises(ImageInputError):
+        detect_humans(scene.left, scene.right[:100], RIG, scene.thermal_c)
+
+
+def test_draw(scene):
+    res = detect_humans(scene.left, scene.right, RIG, scene.thermal_c)
+    img = draw_detections(scene.left, res)
+    assert img.shape == scene.left.shape and not np.array_equal(img, scene.left)
+    assert warm_mask_celsius(scene.thermal_c).shape == RIG.thermal.shape

@@ -1,0 +1,179 @@
+"""Stereo human candidates: P(y,d), scale-adaptive filter, floor, segmentation, head-shoulder."""
+
+import cv2
+import numpy as np
+import pytest
+
+from hearsee.errors import EstimationError, ImageInputError
+from hearsee.sim.scenes import Entity, SceneSpec, default_rig, render_scene
+from hearsee.vision.humans import (
+    FloorPlane,
+    HumanDetectorParams,
+    detect_candidates,
+    detect_people_hog,
+    estimate_floor,
+    find_peaks,
+    head_shoulder_score,
+    scale_adaptive_filter,
+    u_disparity,
+    upper_contour,
+)
+from hearsee.vision.stereo import points_from_disparity
+
+F, B = 250.0, 0.12
+
+
+def test_u_disparity_counts():
+    d = np.full((10, 6), np.nan, np.float32)
+    d[2:9, 1] = 5.0  # 7 pixels at disparity 5 in column 1
+    d[0:3, 4] = 2.2  # 3 pixels at disparity 2 in column 4
+    P = u_disparity(d, max_disparity=8)
+    assert P.shape == (9, 6)
+    assert P[5, 1] == 7 and P[2, 4] == 3 and P.sum() == 10
+    mask = np.zeros_like(d, bool)
+    mask[:5] = True
+    assert u_disparity(d, mask, max_disparity=8)[5, 1] == 3
+    with pytest.raises(ImageInputError):
+        u_disparity(np.zeros(5))
+
+
+def _blob_P(width_cols: int, d: int, col: int, n_d: int = 40, W: int = 200, rows: float = 50):
+    P = np.zeros((n_d, W))
+    P[d, col - width_cols // 2: col + width_cols // 2 + 1] = rows
+    return P
+
+
+def test_scale_adaptive_filter_finds_person_width_blob_not_walls():
+    d = 20  # Z = f B / d = 1.5 m; a 0.4 m wide person spans 0.4 d / B ~ 67 columns
+    w = int(0.4 * d / B)
+    P = _blob_P(w, d, 100, W=260)
+    rows = np.full(40, 50.0)
+    psi = scale_adaptive_filter(P, F, B, expected_rows=rows)
+    dd, yy = np.unravel_index(np.argmax(psi), psi.shape)
+    assert abs(yy - 100) <= 4 and abs(dd - d) <= 2
+    assert psi[dd, yy] > 0.8
+    # a wall: the same occupancy along every column cancels out
+    wall = np.zeros((40, 260))
+    wall[d] = 50.0
+    psi_w = scale_adaptive_filter(wall, F, B, expected_rows=rows)
+    assert psi_w[d, 30:230].max() < 0.05
+    # peaks: the blob, once
+    peaks = find_peaks(psi, F, B, threshold=0.3)
+    assert len(peaks) >= 1 and abs(peaks[0][0] - 100) <= 4
+
+
+def test_kernel_width_scales_with_disparity():
+    """Two blobs of one metric width at two depths give the same normalised response."""
+    rows = np.full(60, 40.0)
+    out = []
+    for d in (12, 36):
+        P = _blob_P(int(0.4 * d / B), d, 200, n_d=60, W=400)
+        psi = scale_adaptive_filter(P, F, B, expected_rows=rows)
+        out.append(psi[d - 1: d + 2, 195:206].max())
+    assert out[0] == pytest.approx(out[1], rel=0.1)
+
+
+def _plane_points(height: float, tilt_deg: float, H=120, W=160):
+    """Points of a floor ``height`` below a camera pitched down by ``tilt_deg``."""
+    K = np.array([[F, 0, (W - 1) / 2], [0, F, (H - 1) / 2], [0, 0, 1.0]])
+    uu, vv = np.meshgrid(np.arange(W), np.arange(H))
+    rays = np.stack([(uu - K[0, 2]) / F, (vv - K[1, 2]) / F, np.ones_like(uu, float)], -1)
+    a = np.radians(tilt_deg)
+    up = np.array([0.0, -np.cos(a), -np.sin(a)])  # floor normal seen from a pitched-down camera
+    denom = rays @ up
+    with np.errstate(divide="ignore"):
+        t = -height / denom
+    pts = rays * t[..., None]
+    pts[~(t > 0) | (t > 30)] = np.nan
+    return pts, up
+
+
+def test_estimate_floor_recovers_height_and_tilt():
+    pts, up = _plane_points(1.3, 5.0)
+    fl = estimate_floor(pts)
+    assert fl.source == "ransac"
+    assert fl.camera_height_m == pytest.approx(1.3, abs=0.01)
+    assert np.degrees(np.arccos(np.clip(fl.normal @ up, -1, 1))) < 0.5
+    assert fl.height(np.array([0.0, 0.0, 0.0])) == pytest.approx(1.3, abs=0.01)
+
+
+def test_estimate_floor_fallback_and_error():
+    empty = np.full((40, 40, 3), np.nan)
+    assert estimate_floor(empty, prior_height_m=1.2).camera_height_m == 1.2
+    with pytest.raises(EstimationError, match="camera_height_m"):
+        estimate_floor(empty)
+    assert FloorPlane.level(1.4).height(np.array([0.0, 1.4, 3.0])) == pytest.approx(0.0)
+
+
+def _silhouette(head: bool, depth=3.0, f=F):
+    """A body silhouette (bool mask) drawn in metres: head ellipse + shoulders/torso."""
+    s = f / depth
+    W, H = int(0.9 * s), int(1.0 * s)
+    m = np.zeros((H, W), np.uint8)
+    cx = W // 2
+    top = 2
+    if head:
+        cv2.ellipse(m, (cx, top + int(0.11 * s)), (int(0.08 * s), int(0.11 * s)), 0, 0, 360, 1, -1)
+        cv2.rectangle(m, (cx - int(0.05 * s), top + int(0.18 * s)),
+                      (cx + int(0.05 * s), top + int(0.3 * s)), 1, -1)
+        sh = top + int(0.27 * s)
+    else:
+        sh = top
+    cv2.rectangle(m, (cx - int(0.2 * s), sh), (cx + int(0.2 * s), H - 1), 1, -1)
+    return m.astype(bool)
+
+
+def test_head_shoulder_template_separates_people_from_boxes():
+    person = _silhouette(True)
+    box = _silhouette(False)
+    sp, params = head_shoulder_score(person, 3.0, F)
+    sb, _ = head_shoulder_score(box, 3.0, F)
+    assert sp > 0.7 and sb < 0.5
+    assert 0.3 <= params["shoulder_width_m"] <= 0.54
+    assert params["head_offset_m"] == pytest.approx(0.0, abs=0.03)
+    top = upper_contour(person)
+    assert np.nanmin(top) == 2
+
+
+@pytest.fixture(scope="module")
+def small_scene():
+    rig = default_rig(320, 240, thermal_size=(80, 60))
+    spec = SceneSpec(entities=[Entity("person", -0.6, 3.0, 0.0, 1.8),
+                               Entity("box", 1.0, 3.5, 0, 0.9, {"width_m": 0.8})],
+                     width_left_m=3.0, width_right_m=3.0, depth_m=7.0, seed=5)
+    return render_scene(spec, rig)
+
+
+def test_detect_candidates_on_ground_truth_disparity(small_scene):
+    sc = small_scene
+    rect = sc.rig.rectification
+    pts = points_from_disparity(sc.disparity, rect.Q)
+    det = detect_candidates(sc.disparity, pts, rect.focal_px, rect.baseline_m, rect.cy,
+                            camera_height_m=1.4)
+    assert det.floor.camera_height_m == pytest.approx(1.4, abs=0.02)
+    acc = [c for c in det.candidates if c.accepted]
+    assert len(acc) == 1
+    person = sc.objects[0]
+    c = acc[0]
+    assert np.linalg.norm(c.position_m - person.position_m) < 0.05 * 3.0
+    assert c.segment.top_m == pytest.approx(1.8, abs=0.06)
+    x, y, w, h = c.box
+    px, py, pw, ph = person.box
+    assert abs(x - px) <= 3 and abs(y - py) <= 3 and abs(w - pw) <= 6
+    # the box is a candidate too, but fails verification (too low / no head)
+    assert not any(c.accepted and c.box[0] > 200 for c in det.candidates)
+    # Tm = 1 accepts nothing
+    det1 = detect_candidates(sc.disparity, pts, rect.focal_px, rect.baseline_m, rect.cy,
+                             camera_height_m=1.4, params=HumanDetectorParams(tm=1.0))
+    assert not any(c.accepted for c in det1.candidates)
+
+
+def test_detect_candidates_bad_shapes():
+    with pytest.raises(ImageInputError):
+        detect_candidates(np.zeros((10, 10)), np.zeros((10, 11, 3)), F, B, 5.0)
+
+
+def test_hog_baseline():
+    assert detect_people_hog(np.zeros((160, 120), np.uint8)) == []
+    with pytest.raises(ImageInputError):
+        detect_people_hog(np.zeros((160, 120), np.float32))

@@ -1,0 +1,95 @@
+"""Thermal filter: radiometric band, 8-bit relative band, loading, overlay."""
+
+import cv2
+import numpy as np
+import pytest
+
+from hearsee.errors import ImageInputError, InputFileError
+from hearsee.vision.thermal import (
+    counts_to_celsius,
+    load_thermal,
+    overlay_thermal,
+    relative_warm_mask,
+    thermal_mask,
+    warm_mask_celsius,
+)
+
+
+def _room(rng, h=60, w=80):
+    t = 21.0 + rng.normal(0, 0.1, (h, w)).astype(np.float32)
+    t[20:50, 30:40] = 31.0  # a clothed person
+    t[12:20, 32:38] = 34.0  # the face
+    t[40:55, 60:75] = 55.0  # a radiator
+    t[5:8, 5:8] = 33.0  # a 3x3 warm speck: removed by the opening
+    return t
+
+
+def test_radiometric_band_and_morphology():
+    t = _room(np.random.default_rng(0))
+    m = warm_mask_celsius(t, (26.0, 40.0), open_px=5, close_px=3)
+    assert m[30, 35] and m[15, 35]
+    assert not m[45, 65]  # radiator above the band
+    assert not m[6, 6]  # speck removed
+    assert not m[2, 70]  # room
+    with pytest.raises(ValueError):
+        warm_mask_celsius(t, (40.0, 26.0))
+    with pytest.raises(ImageInputError):
+        warm_mask_celsius(np.zeros((3, 3, 3)))
+
+
+def test_counts_and_dispatch():
+    t = _room(np.random.default_rng(1))
+    ck = np.rint((t + 273.15) * 100).astype(np.uint16)
+    assert np.allclose(counts_to_celsius(ck), t, atol=0.006)
+    assert np.array_equal(thermal_mask(ck), thermal_mask(t))
+    t8 = cv2.normalize(t, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
+    m8 = thermal_mask(t8)
+    assert m8[30, 35] and not m8[2, 70]
+    with pytest.raises(ImageInputError):
+        thermal_mask(np.zeros((4, 4), np.int64))
+    with pytest.raises(ImageInputError):
+        thermal_mask(np.full((4, 4), np.nan, np.float32))
+
+
+def test_relative_band_8bit_without_temperatures():
+    """AGC 8-bit: the person stands out from the background even though temperatures are
+    unknown; a room-temperature object does not."""
+    rng = np.random.default_rng(2)
+    t = _room(rng)
+    t[20:50, 10:18] = 21.6  # a mannequin, 0.6 degC above the room
+    lo, hi = np.percentile(t, [1, 99.5])
+    t8 = np.clip((t - lo) / (hi - lo) * 255, 0, 255).astype(np.uint8)
+    m = relative_warm_mask(t8)
+    assert m[30, 35] and not m[30, 14] and not m[2, 70]
+    # colour (3-channel grey) images are accepted
+    assert np.array_equal(relative_warm_mask(cv2.cvtColor(t8, cv2.COLOR_GRAY2BGR)), m)
+
+
+def test_load_thermal(tmp_path):
+    t = _room(np.random.default_rng(3))
+    np.save(tmp_path / "t.npy", t)
+    assert np.array_equal(load_thermal(tmp_path / "t.npy", expected_size=(80, 60)), t)
+    with pytest.raises(ImageInputError, match="80x60"):
+        load_thermal(tmp_path / "t.npy", expected_size=(160, 120))
+    with pytest.raises(InputFileError):
+        load_thermal(tmp_path / "missing.npy")
+    (tmp_path / "bad.npy").write_bytes(b"not numpy")
+    with pytest.raises(ImageInputError):
+        load_thermal(tmp_path / "bad.npy")
+    np.save(tmp_path / "nan.npy", np.full((4, 4), np.nan))
+    with pytest.raises(ImageInputError):
+        load_thermal(tmp_path / "nan.npy")
+    ck = np.rint((t + 273.15) * 100).astype(np.uint16)
+    cv2.imwrite(str(tmp_path / "t16.png"), ck)
+    got = load_thermal(tmp_path / "t16.png")
+    assert got.dtype == np.uint16 and np.array_equal(got, ck)
+
+
+def test_overlay_shape():
+    vis = np.full((120, 160, 3), 100, np.uint8)
+    th = np.zeros((60, 80), np.uint8)
+    th[20:40, 30:50] = 255
+    warm = th > 0
+    out = overlay_thermal(vis, th, warm)
+    assert out.shape == vis.shape and out.dtype == np.uint8
+    assert not np.array_equal(out[60, 80], out[5, 5])
