@@ -16,6 +16,7 @@ from hearsee.errors import HearseeError
 #: Modules under hearsee.cli that register commands (one line each; keep sorted).
 _COMMAND_MODULES = [
     "calibrate",
+    "detect",
     "info",
     "localize",
     "localize3d",
