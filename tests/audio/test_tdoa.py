@@ -125,3 +125,26 @@ def test_bad_inputs(three):
         estimate_tdoas(np.ones((3, FS)), FS, three, frame_ms=0.5)
     with pytest.raises(AudioInputError, match="sample rate"):
         estimate_tdoas(np.ones((3, FS)), -1, three)
+
+
+def test_snr_weighting_helps_a_voice_in_noise(three):
+    from hearsee.audio.signals import synthetic_voice
+
+    src = np.array([1.0, -1.5, 0.0])
+    s = synthetic_voice("female", 2.0, FS, rng=11)
+    x = simulate_free_field(s, FS, three, src, snr_db=0, rng=12)
+    true = three.tdoa(src)
+    err = {}
+    for w in (False, True):
+        tf = estimate_tdoas(x, FS, three, snr_weight=w, band_hz=(300, 3500))
+        err[w] = np.max(np.abs(tf.summary_tdoa_s - true)) * FS
+    assert err[True] < 0.3
+    assert err[True] <= err[False] + 0.05
+
+
+def test_summary_frames_option(recording, three):
+    x, true = recording
+    tf = estimate_tdoas(x, FS, three, summary_frames="active")
+    np.testing.assert_allclose(tf.summary_tdoa_s, true, atol=0.05 / FS)
+    with pytest.raises(ConfigError, match="summary_frames"):
+        estimate_tdoas(x, FS, three, summary_frames="all")
