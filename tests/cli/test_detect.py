@@ -1,0 +1,139 @@
+"""``hearsee detect``: JSON/table output on a generated scene and clear errors for bad input."""
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from hearsee.cli import main
+from hearsee.sim.scenes import Entity, SceneSpec, default_rig, render_scene, write_scene
+from hearsee.vision.camera import StereoRig, save_rig
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    rig = default_rig(320, 240, thermal_size=(80, 60))
+    spec = SceneSpec(entities=[Entity("person", -0.6, 3.0, 0.0, 1.8),
+                               Entity("mannequin", 0.8, 3.5, 0.0, 1.75)],
+                     width_left_m=3.0, width_right_m=3.0, depth_m=7.0, seed=11)
+    scene = render_scene(spec, rig)
+    out = write_scene(scene, tmp_path_factory.mktemp("scene"))
+    return out, scene
+
+
+def _args(d, *extra, thermal="thermal_radiometric.png"):
+    a = ["detect", "--left", str(d / "left.png"), "--right", str(d / "right.png"),
+         "--calib", str(d / "calib.yaml")]
+    if thermal:
+        a += ["--thermal", str(d / thermal)]
+    return a + list(extra)
+
+
+def test_json_output_matches_ground_truth(folder, capsys):
+    d, scene = folder
+    assert main(_args(d)) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert len(out["humans"]) == 1
+    h = out["humans"][0]
+    person = scene.objects[0]
+    assert np.linalg.norm(np.array(h["position_m"]) - person.position_m) < 0.15
+    x, y, w, hh = h["box"]
+    px, py, pw, ph = person.box
+    assert abs(x - px) <= 4 and abs(y - py) <= 4 and abs(w - pw) <= 8
+    assert 0.5 <= h["score"] <= 1.0 and h["thermal_support"] > 0.5
+    rej = [r for r in out["rejected"] if r["reason"].startswith("thermal")]
+    assert len(rej) == 1  # the mannequin
+    assert np.linalg.norm(np.array(rej[0]["position_m"]) - scene.objects[1].position_m) < 0.3
+
+
+@pytest.mark.parametrize("thermal", ["thermal.png", "thermal_c.npy"])
+def test_other_thermal_formats(folder, capsys, thermal):
+    d, _ = folder
+    assert main(_args(d, thermal=thermal)) == 0
+    assert len(json.loads(capsys.readouterr().out)["humans"]) == 1
+
+
+def test_stereo_only_table_and_overlay(folder, capsys, tmp_path):
+    d, _ = folder
+    ov = tmp_path / "ov.png"
+    assert main(_args(d, "--format", "table", "--overlay", str(ov), thermal=None)) == 0
+    text = capsys.readouterr().out
+    assert "2 human(s)" in text  # without thermal the mannequin passes
+    img = cv2.imread(str(ov))
+    assert img is not None and img.shape == (240, 320, 3)
+
+
+def _err(capsys):
+    err = capsys.readouterr().err
+    assert err.startswith("hearsee: error:") and "Traceback" not in err
+    return err
+
+
+def test_sizes_differ(folder, capsys, tmp_path):
+    d, scene = folder
+    small = tmp_path / "right_small.png"
+    cv2.imwrite(str(small), scene.right[:200])
+    args = _args(d, thermal=None)
+    args[args.index("--right") + 1] = str(small)
+    assert main(args) == 2
+    assert "differ in size" in _err(capsys)
+
+
+def test_images_do_not_match_calibration(folder, capsys, tmp_path):
+    d, scene = folder
+    for name in ("l.png", "r.png"):
+        cv2.imwrite(str(tmp_path / name), cv2.resize(scene.left, (160, 120)))
+    args = ["detect", "--left", str(tmp_path / "l.png"), "--right", str(tmp_path / "r.png"),
+            "--calib", str(d / "calib.yaml")]
+    assert main(args) == 2
+    assert "calibration expects 320x240" in _err(capsys)
+
+
+def test_unreadable_and_missing_files(folder, capsys, tmp_path):
+    d, _ = folder
+    bad = tmp_path / "bad.png"
+    bad.write_bytes(b"\x89PNG garbage")
+    args = _args(d, thermal=None)
+    args[args.index("--left") + 1] = str(bad)
+    assert main(args) == 2
+    assert "not a readable image" in _err(capsys)
+    args[args.index("--left") + 1] = str(tmp_path / "nope.png")
+    assert main(args) == 2
+    assert "not found" in _err(capsys)
+
+
+def test_missing_and_broken_calibration(folder, capsys, tmp_path):
+    d, _ = folder
+    args = _args(d, thermal=None)
+    args[args.index("--calib") + 1] = str(tmp_path / "none.yaml")
+    assert main(args) == 2
+    assert "calibration file not found" in _err(capsys)
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("left: {width: 320, height: 240, K: [[1, 2]]}\n")
+    args[args.index("--calib") + 1] = str(broken)
+    assert main(args) == 2
+    assert "K" in _err(capsys)
+
+
+def test_thermal_without_thermal_camera(folder, capsys, tmp_path):
+    d, scene = folder
+    rig = scene.rig
+    plain = tmp_path / "plain.yaml"
+    save_rig(StereoRig(rig.left, rig.right, rig.R, rig.T), plain)
+    args = _args(d)
+    args[args.index("--calib") + 1] = str(plain)
+    assert main(args) == 2
+    assert "no thermal camera" in _err(capsys)
+
+
+def test_thermal_wrong_size_and_overlay_over_input(folder, capsys, tmp_path):
+    d, scene = folder
+    th = tmp_path / "th.png"
+    cv2.imwrite(str(th), cv2.resize(scene.thermal_8bit, (40, 30)))
+    args = _args(d, thermal=None) + ["--thermal", str(th)]
+    assert main(args) == 2
+    assert "80x60" in _err(capsys)
+    args = _args(d, "--overlay", str(d / "left.png"))
+    assert main(args) == 2
+    assert "overwrite" in _err(capsys)
