@@ -240,15 +240,17 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
 
 def draw_detections(image: NDArray, result: DetectionResult, *, show_rejected: bool = True
                     ) -> NDArray:
-    """The left image with accepted humans in green (distance, score, support) and rejected
-    candidates in red (reason); returns a new BGR uint8 image."""
+    """The left image with accepted humans in green (distance, score, support) and, with
+    ``show_rejected``, in red the rejected candidates that reached head-shoulder verification
+    (thermal or template rejections; walls and furniture that failed the size test are not
+    drawn); returns a new BGR uint8 image."""
     import cv2
 
     img = np.asarray(image)
     out = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR) if img.ndim == 2 else img.copy()
     items = [(h, (0, 200, 0)) for h in result.humans]
     if show_rejected:
-        items += [(h, (0, 0, 230)) for h in result.rejected]
+        items += [(h, (0, 0, 230)) for h in result.rejected if h.score > 0]
     for h, col in items:
         x, y, w, hh = h.box
         cv2.rectangle(out, (x, y), (x + w - 1, y + hh - 1), col, 2)
