@@ -30,6 +30,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -116,7 +117,18 @@ class ArrayGeometry:
 
 def array_geometry(array: MicArray | NDArray, rel_tol: float = 1e-6) -> ArrayGeometry:
     """Classify microphone positions ``(n, 3)`` as linear, planar or volume."""
+    if isinstance(array, MicArray) and rel_tol == 1e-6:
+        return _geometry_cached(array)
     pos = array.positions if isinstance(array, MicArray) else np.asarray(array, dtype=float)
+    return _classify(pos, rel_tol)
+
+
+@lru_cache(maxsize=64)
+def _geometry_cached(array: MicArray) -> ArrayGeometry:
+    return _classify(array.positions, 1e-6)  # MicArray is immutable (frozen, read-only)
+
+
+def _classify(pos: NDArray, rel_tol: float) -> ArrayGeometry:
     c = pos.mean(axis=0)
     _, s, vt = np.linalg.svd(pos - c)
     s = np.concatenate([s, np.zeros(3 - len(s))])
