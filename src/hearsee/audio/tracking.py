@@ -327,6 +327,10 @@ class MotionKalman(_Kalman):
         Chi-square gate probability (3 degrees of freedom).
     max_rejects : int
         Consecutive gated measurements after which the track restarts.
+    accel_tau_s : float or None
+        Optional correlation time of the acceleration (Singer 1970): the acceleration state
+        decays by ``exp(-dt / tau)`` per step, so that long runs without measurements
+        extrapolate at nearly constant velocity. None (default) = pure constant acceleration.
     """
 
     _POS = np.array([0, 3, 6])
@@ -335,9 +339,13 @@ class MotionKalman(_Kalman):
 
     def __init__(self, sigma_meas_m: float = 0.05, sigma_jerk: float = 5.0,
                  gate_prob: float = 0.999, max_rejects: int = 4,
-                 init_vel_sigma: float = 1.5, init_acc_sigma: float = 3.0) -> None:
+                 init_vel_sigma: float = 1.5, init_acc_sigma: float = 3.0,
+                 accel_tau_s: float | None = None) -> None:
         if not sigma_meas_m > 0 or not sigma_jerk > 0:
             raise EstimationError("sigma_meas_m and sigma_jerk must be > 0")
+        if accel_tau_s is not None and not accel_tau_s > 0:
+            raise EstimationError(f"accel_tau_s must be > 0 s or None, got {accel_tau_s}")
+        self.accel_tau_s = accel_tau_s
         self.sigma_meas_m = float(sigma_meas_m)
         self.sigma_jerk = float(sigma_jerk)
         self.gate_prob = float(gate_prob)
@@ -363,7 +371,8 @@ class MotionKalman(_Kalman):
     def _set_dt(self, dt: float) -> None:
         key = round(dt, 9)
         if key not in self._model_cache:
-            f = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
+            decay = 1.0 if self.accel_tau_s is None else float(np.exp(-dt / self.accel_tau_s))
+            f = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, decay]])
             self._model_cache[key] = (
                 np.kron(np.eye(3), f),
                 Q_discrete_white_noise(dim=3, dt=dt, var=self.sigma_jerk**2, block_size=3,

@@ -446,6 +446,7 @@ class StreamConfig:
     itd_filter : smooth the TDOAs with the ITD Kalman filter (thesis 2.2.2) before localizing
     sigma_meas_deg, sigma_accel_dps2 : direction tracker noise (degrees, deg/s^2)
     sigma_jerk : 3D motion tracker process noise, m/s^3
+    accel_tau_s : correlation time of the 3D tracker's acceleration (Singer), s; None = pure CA
     sigma_tdoa_s, sigma_px : measurement noise of the camera-ray fix (seconds, pixels)
     range_m : search interval along the camera ray, metres
     max_fix_residual_samples : a camera-ray fix whose RMS ITD residual exceeds this many samples
@@ -462,11 +463,12 @@ class StreamConfig:
     itd_filter: bool = False
     sigma_meas_deg: float = 6.0
     sigma_accel_dps2: float = 150.0
-    sigma_jerk: float = 3.0
+    sigma_jerk: float = 0.5
     sigma_tdoa_s: float = 2e-5
     sigma_px: float = 2.0
     range_m: tuple[float, float] = (0.2, 6.0)
     max_fix_residual_samples: float = 0.5
+    accel_tau_s: float | None = 0.5
 
 
 class TrackingProcessor:
@@ -495,7 +497,8 @@ class TrackingProcessor:
         self.itd = (ItdKalman(array.n_mics, self.pairs, q_std_s=0.5 / fs, r_std_s=1.0 / fs)
                     if self.cfg.itd_filter else None)
         self.direction = DirectionKalman(self.cfg.sigma_meas_deg, self.cfg.sigma_accel_dps2)
-        self.motion = MotionKalman(sigma_meas_m=0.05, sigma_jerk=self.cfg.sigma_jerk)
+        self.motion = MotionKalman(sigma_meas_m=0.05, sigma_jerk=self.cfg.sigma_jerk,
+                                   accel_tau_s=self.cfg.accel_tau_s)
 
     def tdoas(self, batch: FrameBatch) -> tuple[NDArray, NDArray]:
         """Per-frame TDOAs (k, n_pairs) seconds (NaN = no estimate) and confidences (k,)."""
@@ -557,10 +560,10 @@ class TrackingProcessor:
             fix = None
         if fix is not None:
             upd.raw_position_m = fix.position_m.tolist()
-        self.motion.update(upd.t, None if fix is None else fix.position_m,
-                           None if fix is None else fix.covariance,
-                           None if fix is None else [(a.position_m, a.covariance)
-                                                     for a in fix.alternatives])
+            self.motion.update(upd.t, fix.position_m, fix.covariance,
+                               [(a.position_m, a.covariance) for a in fix.alternatives])
+        else:
+            self.motion.update(upd.t, None)
         if self.motion.initialized:
             upd.position_m = self.motion.position.tolist()
             upd.velocity_mps = self.motion.velocity.tolist()
