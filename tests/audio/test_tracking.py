@@ -127,3 +127,22 @@ def test_bad_input():
         DirectionKalman(sigma_meas_deg=0)
     with pytest.raises(EstimationError):
         track_positions([0, 1], np.zeros((3, 3)))
+
+
+def test_singer_decay_damps_acceleration_through_a_gap():
+    from hearsee.errors import EstimationError as EE
+
+    t = np.arange(40) * 0.05
+    p = np.c_[0.5 * t**2, np.zeros_like(t), np.zeros_like(t)]  # a = 1 m/s^2 along x
+    for tau, expect_decay in ((None, False), (0.2, True)):
+        kf = MotionKalman(sigma_meas_m=0.01, sigma_jerk=0.5, accel_tau_s=tau)
+        for tk, pk in zip(t, p, strict=True):
+            kf.update(tk, pk)
+        a_before = kf.acceleration[0]
+        kf.update(t[-1] + 1.0)  # one second without measurements
+        if expect_decay:
+            assert kf.acceleration[0] < 0.01 * a_before
+        else:
+            assert kf.acceleration[0] == pytest.approx(a_before)
+    with pytest.raises(EE):
+        MotionKalman(accel_tau_s=0.0)
