@@ -6,6 +6,8 @@ Figures and tables (thesis numbering; reconstruction, see ``design/reconstructio
 * table 5.1  + figs. 5.3-5.6  cases I-III: white noise / male / female voice as the moving
              primary source with a static interfering source; azimuth and elevation per frame
              and tracked with the Kalman filter (fig. 5.6: without vs with the filter)
+* figs. 5.10-5.11  5.3 without calibration: an MLP from (ITDs, image point) to the 3D position,
+             against the calibrated fix
 * figs. 5.14-5.16  F1^2 + F2^2 (+ F3^2) along the camera ray, without and with ITD noise
 * fig. 5.17  position estimates with sound (ITD) and video (pixel) noise
 * figs. 5.18-5.20  position, velocity and acceleration by the constant-acceleration Kalman filter
@@ -209,6 +211,34 @@ def figs_5_14_17(out: Path) -> None:
               f"median {med * 100:5.1f} cm, p90 {p90 * 100:5.1f} cm")
 
 
+# ------------------------------------------------------------------------------ 5.3
+def section_5_3(out: Path, quick: bool) -> None:
+    """Without calibration: an MLP maps (ITDs, image point) -> 3D position (figs. 5.10-5.11)."""
+    from hearsee.fusion.audiovisual import AudioVisualRegressor, simulate_av_samples
+
+    rig = _rig(_tri(0.5))
+    n = 800 if quick else 3000
+    sig_t = 5e-6
+    X, Y = simulate_av_samples(rig, n, (0.5, 2.0), sigma_tdoa_s=sig_t, sigma_px=1.0, rng=10)
+    Xt, Yt = simulate_av_samples(rig, 300, (0.5, 2.0), sigma_tdoa_s=sig_t, sigma_px=1.0, rng=11)
+    model = AudioVisualRegressor(hidden_layer_sizes=(32, 32), max_iter=300).fit(X, Y)
+    e_mlp = np.linalg.norm(model.predict(Xt) - Yt, axis=1)
+    e_cal = np.array([np.linalg.norm(locate_on_ray(rig, x[3:], x[:3], sigma_tdoa_s=sig_t)
+                                     .position_m - y) for x, y in zip(Xt, Yt, strict=True)])
+    fig, ax = plt.subplots(figsize=(5, 4))
+    ax.hist([e_mlp * 100, e_cal * 100], bins=30, range=(0, 40),
+            label=["MLP, no calibration (5.3)", "camera ray + ITDs, calibrated (5.4)"])
+    ax.set(xlabel="3D error [cm]", ylabel="test points",
+           title="figs. 5.10-5.11: learned vs calibrated fusion")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / "fig5_11_mlp_vs_calibrated.png", dpi=110)
+    plt.close(fig)
+    print(f"  {n} training points, ITD noise {sig_t * 1e6:.0f} us, 1 px: median 3D error MLP "
+          f"{np.median(e_mlp) * 100:.1f} cm (R^2 {model.score(Xt, Yt):.3f}), calibrated "
+          f"{np.median(e_cal) * 100:.1f} cm")
+
+
 # ------------------------------------------------------------------------------ 5.18-5.20
 def figs_5_18_20(out: Path) -> None:
     """Constant-acceleration KF on camera+ITD fixes of a source walking a circle."""
@@ -303,6 +333,7 @@ def main() -> None:
     t0 = time.time()
     print("fig. 5.1"); fig_5_1(args.out)  # noqa: E702
     print("table 5.1, figs. 5.3-5.6"); cases_5_1(args.out, 3.0 if args.quick else 5.0)  # noqa: E702
+    print("5.3 (figs. 5.10-5.11)"); section_5_3(args.out, args.quick)  # noqa: E702
     print("figs. 5.14-5.17"); figs_5_14_17(args.out)  # noqa: E702
     print("figs. 5.18-5.20"); figs_5_18_20(args.out)  # noqa: E702
     print("tables 5.2 / 5.3"); tables_5_2_3(args.quick)  # noqa: E702
