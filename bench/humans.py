@@ -321,7 +321,7 @@ def run_real(data: Path | None) -> list[tuple[str, str]]:
                 continue
             th = read_thermal(ir)
             vis = read_image(vis_p, "bgr")
-            warm = relative_warm_mask(th, open_px=5, close_px=9)
+            warm = relative_warm_mask(th, background_px=151, open_px=5, close_px=9)
             hog = detect_people_hog(cv2.resize(vis, (640, 512)))
             sup = []
             for (x, y, w, h), _ in hog:  # registered pair: same pixels (scale 2)

@@ -93,3 +93,13 @@ def test_overlay_shape():
     out = overlay_thermal(vis, th, warm)
     assert out.shape == vis.shape and out.dtype == np.uint8
     assert not np.array_equal(out[60, 80], out[5, 5])
+
+
+def test_local_background_for_outdoor_agc_images():
+    """A warm pavement as bright as a person: the global band fails, the top-hat one works."""
+    x = np.tile(np.linspace(60, 230, 200, dtype=np.float32), (150, 1))  # bright gradient
+    x[40:110, 50:70] += 60.0  # a person, warmer than the pavement around it
+    img = np.clip(x, 0, 255).astype(np.uint8)
+    m = relative_warm_mask(img, background_px=41)
+    assert m[75, 60] and not m[75, 150] and not m[10, 120]
+    assert not relative_warm_mask(img)[75, 60]  # global band: the pavement is brighter

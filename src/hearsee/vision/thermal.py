@@ -12,8 +12,10 @@ Two kinds of thermal image are handled:
   OTCBVS 2004).
 * **Non-radiometric 8-bit** images (automatic gain control, as in LLVIP): temperatures are
   unknown, so the band is relative to the image's own statistics -- a pixel is warm when it is
-  at least ``k_sigma`` robust standard deviations (1.4826 * MAD) and at least ``min_gap``
-  of the (median -> 99.5th percentile) range above the median background level.
+  ``k_sigma`` robust standard deviations (1.4826 * MAD) above the median background level,
+  but at least ``min_gap`` and at most ``max_gap`` of the (median -> 99.5th percentile) range;
+  outdoors, where pavement and walls are as bright as people, the local background (a white
+  top-hat) is subtracted first.
 
 Both masks are cleaned by a morphological opening (removes isolated noisy pixels) and closing
 (fills small gaps), with elliptical kernels of ``open_px``/``close_px`` pixels.
@@ -83,12 +85,16 @@ def warm_mask_celsius(thermal_c: NDArray, band_c: tuple[float, float] = HUMAN_BA
 
 
 def relative_warm_mask(image: NDArray, *, k_sigma: float = 6.0, min_gap: float = 0.15,
+                       max_gap: float = 0.6, background_px: int | None = None,
                        open_px: int = 2, close_px: int = 3) -> NDArray:
     """Warm pixels of a non-radiometric (8-bit AGC) thermal image, relative to its statistics.
 
-    ``threshold = median + max(k_sigma * 1.4826 * MAD, min_gap * (p99.5 - median))``; pixels at
-    or above it are warm. Returns a bool mask after morphology. Works for any single-channel
-    integer or float image in which warmer = brighter.
+    ``threshold = median + clip(k_sigma * 1.4826 * MAD, min_gap * r, max_gap * r)`` with
+    ``r = p99.5 - median``; pixels at or above it are warm. With ``background_px`` the image's
+    local background (grey opening with a disk of that diameter, i.e. a white top-hat) is
+    subtracted first, so that warm people stand out of a warm pavement or wall (outdoor AGC
+    imagery). Returns a bool mask after morphology. Works for any single-channel image in which
+    warmer = brighter.
     """
     im = np.asarray(image)
     if im.ndim == 3:
@@ -96,10 +102,13 @@ def relative_warm_mask(image: NDArray, *, k_sigma: float = 6.0, min_gap: float =
     if im.ndim != 2:
         raise ImageInputError(f"thermal image must be single-channel (h, w), got {im.shape}")
     x = im.astype(np.float32)
+    if background_px:
+        ker = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (background_px, background_px))
+        x = x - cv2.morphologyEx(x, cv2.MORPH_OPEN, ker)
     med = float(np.median(x))
     mad = float(np.median(np.abs(x - med))) * 1.4826
-    hi = float(np.percentile(x, 99.5))
-    thr = med + max(k_sigma * mad, min_gap * (hi - med), 1e-6)
+    r = float(np.percentile(x, 99.5)) - med
+    thr = med + max(min(k_sigma * mad, max_gap * r), min_gap * r, 1e-6)
     return _clean(x >= thr, open_px, close_px)
 
 
