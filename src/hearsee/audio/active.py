@@ -710,6 +710,7 @@ class PoseItdMLP:
 
         from sklearn.exceptions import ConvergenceWarning
         from sklearn.neural_network import MLPRegressor
+        from threadpoolctl import threadpool_limits
 
         X = np.asarray(X, dtype=float)
         Y = np.asarray(Y, dtype=float)
@@ -723,7 +724,8 @@ class PoseItdMLP:
         self.mlp_ = MLPRegressor(hidden_layer_sizes=self.hidden_layer_sizes, alpha=self.alpha,
                                  max_iter=self.max_iter, random_state=self.random_state,
                                  early_stopping=True, n_iter_no_change=15, tol=1e-5)
-        with warnings.catch_warnings():
+        # small dense layers: one BLAS thread is much faster than an oversubscribed pool
+        with warnings.catch_warnings(), threadpool_limits(1):
             warnings.simplefilter("ignore", ConvergenceWarning)
             self.mlp_.fit(X / self.tdoa_scale_s, (T - self.target_mean_) / self.target_std_)
         self.n_features_in_ = X.shape[1]
@@ -739,7 +741,10 @@ class PoseItdMLP:
                 f"expected {self.n_features_in_} TDOAs per sample (K poses x pairs), "
                 f"got {X.shape[1]}"
             )
-        T = self.mlp_.predict(X / self.tdoa_scale_s) * self.target_std_ + self.target_mean_
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(1):
+            T = self.mlp_.predict(X / self.tdoa_scale_s) * self.target_std_ + self.target_mean_
         T = np.atleast_2d(T)
         u = T[:, :3] / np.maximum(np.linalg.norm(T[:, :3], axis=1, keepdims=True), 1e-12)
         return np.asarray(self.reference_m, dtype=float) + u * np.exp(T[:, 3:4])
@@ -761,7 +766,7 @@ def _train_cached(array_key: tuple, c: float, poses: tuple, pivot: tuple, offset
 
 def train_pose_mlp(array: MicArray | str, poses: Sequence[HeadPose | Sequence[float]], *,
                    pivot_m: ArrayLike = (0.0, 0.0, 0.0), offset_m: ArrayLike = (0.0, 0.0, 0.0),
-                   n: int = 20000, tdoa_std_s: float = DEFAULT_TDOA_STD_S, seed: int = 0,
+                   n: int = 10000, tdoa_std_s: float = DEFAULT_TDOA_STD_S, seed: int = 0,
                    hidden_layer_sizes: tuple[int, ...] = (64, 64)) -> PoseItdMLP:
     """Train (or fetch from the in-memory cache) a :class:`PoseItdMLP` for this array, pose set
     and head geometry on ``n`` simulated samples (a few seconds; no model file is written)."""
