@@ -104,3 +104,18 @@ def test_draw(scene):
     img = draw_detections(scene.left, res)
     assert img.shape == scene.left.shape and not np.array_equal(img, scene.left)
     assert warm_mask_celsius(scene.thermal_c).shape == RIG.thermal.shape
+
+
+def test_rig_that_needs_rectification(scene):
+    """A calibrated (not yet rectified) rig goes through rectification; positions come back in
+    the left camera's own frame."""
+    import cv2
+
+    R = cv2.Rodrigues(np.array([0.0, 0.002, 0.0]))[0]
+    rig = StereoRig(RIG.left, RIG.right, R, RIG.T, RIG.thermal, RIG.R_thermal, RIG.T_thermal,
+                    info=dict(RIG.info))
+    assert not rig.is_rectified
+    res = detect_humans(scene.left, scene.right, rig, scene.thermal_c)
+    person = scene.objects[0]
+    near = [h for h in res.humans if np.linalg.norm(h.position_m - person.position_m) < 0.5]
+    assert len(near) == 1
