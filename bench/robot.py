@@ -1,0 +1,103 @@
+"""Benchmark of the whole robot (issue 8): the default demo scenario and N random scenarios.
+
+Prints and writes ``bench/results/robot.md`` and ``robot.png``: the demo's summary (3D position
+error after the head has turned, mannequin rejection, runtime) and, over ``--scenarios`` random
+scenarios (seeds 0..N-1, all cores), the success rate and error percentiles -- the numbers of
+``hearsee eval``. With ``--dask`` the same seeds also run through a Dask LocalCluster and the
+script checks that both give identical per-scenario results.
+
+    python bench/robot.py --scenarios 200            # about 25 min on 2 idle cores
+    python bench/robot.py --scenarios 20 --dask
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import RESULTS, markdown_table, print_table, write_markdown  # noqa: E402
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenarios", type=int, default=200)
+    ap.add_argument("--workers", type=int, default=0, help="0 = all cores")
+    ap.add_argument("--dask", action="store_true", help="also run through a Dask LocalCluster")
+    args = ap.parse_args()
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from hearsee.robot.evaluate import evaluate
+    from hearsee.robot.pipeline import run_scenario
+    from hearsee.robot.scenario import default_scenario
+
+    t0 = time.perf_counter()
+    demo = run_scenario(default_scenario(), keep_images=False).summary
+    demo_wall = time.perf_counter() - t0
+    keys = ["position_error_median_m", "position_error_p90_m", "velocity_rmse_mps",
+            "azimuth_error_initial_deg", "time_to_verify_s", "person_detections_verified",
+            "human_like_objects_rejected", "false_person_objects"]
+    demo_rows = [[k, demo[k]] for k in keys] + [["wall time (s)", demo_wall]]
+    print_table("default demo scenario", ["metric", "value"], demo_rows)
+
+    t0 = time.perf_counter()
+    res = evaluate(args.scenarios, workers=args.workers or None)
+    eval_wall = time.perf_counter() - t0
+    s = res.summary
+    rows = [["success rate", s["success_rate"], "", "", "", ""]]
+    for k in ("position_error_median_m", "azimuth_error_initial_deg", "velocity_rmse_mps",
+              "time_to_verify_s"):
+        d = s[k]
+        rows.append([k, d.get("n", 0), d.get("p50", np.nan), d.get("p75", np.nan),
+                     d.get("p90", np.nan), d.get("p95", np.nan)])
+    rows.append(["objects reported as person", s["objects_reported_as_person"], "", "", "", ""])
+    headers = ["metric", "n / value", "p50", "p75", "p90", "p95"]
+    print_table(f"{args.scenarios} random scenarios ({eval_wall:.0f} s wall)", headers, rows)
+
+    sections = [
+        ("Default demo scenario", markdown_table(["metric", "value"], demo_rows)),
+        (f"{args.scenarios} random scenarios (seeds 0..{args.scenarios - 1})",
+         markdown_table(headers, rows) + f"\n\nWall time {eval_wall:.0f} s."),
+    ]
+    if args.dask:
+        from distributed import LocalCluster
+
+        with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cl:
+            remote = evaluate(args.scenarios, scheduler=cl.scheduler_address)
+        same = remote.runs == res.runs
+        print(f"Dask LocalCluster gives identical per-scenario results: {same}")
+        sections.append(("Dask LocalCluster", f"identical per-scenario results: **{same}**"))
+
+    fails = [r for r in res.runs if not r["success"]]
+    if fails:
+        sections.append(("Failed scenarios", markdown_table(
+            ["seed", "median error (m)", "initial azimuth error (deg)", "tracked steps"],
+            [[r["seed"], r["position_error_median_m"], r["azimuth_error_initial_deg"],
+              r["tracked_steps"]] for r in fails])))
+    write_markdown("robot", sections, intro="Produced by `python bench/robot.py` "
+                   f"(--scenarios {args.scenarios}).")
+
+    errs = np.array([r["position_error_median_m"] for r in res.runs], dtype=float)
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    ax.hist(errs[np.isfinite(errs)] * 100, bins=30, color="tab:blue")
+    ax.axvline(10, color="k", ls="--", label="10 cm")
+    ax.set_xlabel("median 3D position error per scenario (cm)")
+    ax.set_ylabel("scenarios")
+    ax.set_title(f"hearsee eval: {args.scenarios} random scenarios, "
+                 f"success {100 * s['success_rate']:.0f}%")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(RESULTS / "robot.png", dpi=110)
+    print(f"wrote {RESULTS / 'robot.md'}")
+
+
+if __name__ == "__main__":
+    main()
