@@ -29,6 +29,62 @@ def _u(az_deg: float) -> np.ndarray:
     return np.array([np.cos(np.radians(az_deg)), np.sin(np.radians(az_deg)), 0.0])
 
 
+def fig_mask(m: MaskModel, out: Path) -> None:
+    """Fig. 3.2: the mask (BEM mesh) and the two microphones."""
+    fig = plt.figure(figsize=(6, 5))
+    ax = fig.add_subplot(projection="3d")
+    v, f = m.mesh.vertices, m.mesh.faces
+    ax.plot_trisurf(v[:, 0], v[:, 1], v[:, 2], triangles=f, color="lightgrey", edgecolor="grey",
+                    linewidth=0.2, alpha=0.6)
+    p = m.array.positions
+    ax.scatter(p[:, 0], p[:, 1], p[:, 2], color="red", s=40, depthshade=False)
+    ax.quiver(0.16, 0, 0, 0.05, 0, 0, color="k")
+    ax.set_xlabel("x (m, front)")
+    ax.set_ylabel("y (m, left)")
+    ax.set_zlabel("z (m)")
+    ax.set_box_aspect(np.ptp(v, axis=0))
+    ax.set_title(f"fig. 3.2: mask2, {m.mesh.n_panels} panels, microphones in red")
+    fig.tight_layout()
+    fig.savefig(out / "fig3_02_mask.png", dpi=110)
+    plt.close(fig)
+
+
+def fig_sphere_validation(out: Path) -> None:
+    """Validation: the same BEM on a rigid sphere vs the Rayleigh series (Duda & Martens 1998)."""
+    from hearsee.audio import bem
+
+    a = 0.0875
+    mesh = bem.sphere_mesh(a, 6)
+    mics = np.array([[0.0, -a, 0.0], [0.0, a, 0.0]])
+    freqs = np.array([500.0, 1500.0, 3000.0])
+    sol = bem.solve_adjoint(mesh, freqs, mics, on_surface_tol=1e-3)
+    az = np.arange(0, 361, 5.0)
+    u = np.stack([_u(x) for x in az])
+    h = bem.transfer_functions(sol, u, far_field=True)
+    e0 = bem.sphere_transfer(freqs, a, u @ (mics[0] / a)).T
+    e1 = bem.sphere_transfer(freqs, a, u @ (mics[1] / a)).T
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    for k, f in enumerate(freqs):
+        ax[0].plot(az, 20 * np.log10(np.abs(e0[:, k] / e1[:, k])), color=f"C{k}",
+                   label=f"series {f:.0f} Hz")
+        ax[0].plot(az, 20 * np.log10(np.abs(h[:, 0, k] / h[:, 1, k])), "o", ms=3,
+                   color=f"C{k}", label=f"BEM {f:.0f} Hz")
+        w = 2 * np.pi * f
+        ax[1].plot(az, 1e6 * np.angle(e0[:, k] * np.conj(e1[:, k])) / w, color=f"C{k}")
+        ax[1].plot(az, 1e6 * np.angle(h[:, 0, k] * np.conj(h[:, 1, k])) / w, "o", ms=3,
+                   color=f"C{k}")
+    ax[0].set_ylabel("IID (dB)")
+    ax[1].set_ylabel("interaural phase delay (us)")
+    for x in ax:
+        x.set_xlabel("azimuth (deg)")
+        x.grid(alpha=0.3)
+    ax[0].legend(fontsize=7, ncol=2)
+    fig.suptitle(f"rigid sphere r = {a} m: BEM ({mesh.n_panels} panels) vs Rayleigh series")
+    fig.tight_layout()
+    fig.savefig(out / "validation_sphere.png", dpi=110)
+    plt.close(fig)
+
+
 def fig_waveforms(m: MaskModel, out: Path) -> None:
     """Figs. 3.6-3.8: computed impulse responses and a 500 Hz tone burst at both microphones."""
     fig, ax = plt.subplots(2, 2, figsize=(11, 6), sharex="col")
@@ -193,6 +249,8 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     m = MaskModel("mask2")
     print(f"mask2: {m.mesh.n_panels} panels, {len(m.freqs)} frequencies up to {m.f_max:.0f} Hz")
+    fig_mask(m, out)
+    fig_sphere_validation(out)
     fig_waveforms(m, out)
     fig_itd_iid_derivation(m, out)
     fig_responses(m, out)
