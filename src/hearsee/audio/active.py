@@ -358,28 +358,47 @@ def solve_range_differences(
 
     lo = np.array([-np.inf, -np.pi / 2, np.log(rmin)])
     hi = np.array([np.inf, np.pi / 2, np.log(rmax)])
+    def refine(x0: NDArray) -> tuple[float, float, NDArray, NDArray]:
+        if far:
+            res = least_squares(lambda t: resid(np.append(t, np.log(FAR_DISTANCE_M))),
+                                x0[:2], bounds=(lo[:2], hi[:2]), loss=loss,
+                                f_scale=f_scale, x_scale=np.array([0.1, 0.1]), max_nfev=200)
+            res.x = np.append(res.x, np.log(FAR_DISTANCE_M))
+        else:
+            res = least_squares(resid, x0, bounds=(lo, hi), loss=loss, f_scale=f_scale,
+                                x_scale=np.array([0.1, 0.1, 0.5]), max_nfev=200)
+        th = res.x
+        p = ref + sph_to_cart(th[0], th[1], np.exp(th[2]))
+        return float(res.cost), float(np.sum(res.fun**2)), p, th
+
     sols = []
     for k in starts:
         az, el = np.arctan2(dirs[k, 1], dirs[k, 0]), np.arcsin(np.clip(dirs[k, 2], -1, 1))
         x0 = np.array([az, el, np.log(dists[best_r[k]])])
-        x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
-        try:
-            if far:
-                res = least_squares(lambda t: resid(np.append(t, np.log(FAR_DISTANCE_M))),
-                                    x0[:2], bounds=(lo[:2], hi[:2]), loss=loss,
-                                    f_scale=f_scale, x_scale=np.array([0.1, 0.1]), max_nfev=200)
-                res.x = np.append(res.x, np.log(FAR_DISTANCE_M))
-            else:
-                res = least_squares(resid, x0, bounds=(lo, hi), loss=loss, f_scale=f_scale,
-                                    x_scale=np.array([0.1, 0.1, 0.5]), max_nfev=200)
-        except ValueError:  # pragma: no cover - numerical trouble in one start
-            continue
-        th = res.x
-        p = ref + sph_to_cart(th[0], th[1], np.exp(th[2]))
-        chi2 = float(np.sum(res.fun**2))
-        sols.append((float(res.cost), chi2, p, th))
+        sols.append(refine(np.clip(x0, lo + 1e-9, hi - 1e-9)))
     if not sols:
         raise EstimationError("the multi-pose solver found no solution")
+    sols.sort(key=lambda s: s[0])
+
+    # the mirror images of the best point through each planar pose's array plane are
+    # explicit starts too (the grid cannot separate a mirror pair close to the plane)
+    p_best = sols[0][2]
+    for mset in mic_sets:
+        mset = np.asarray(mset, dtype=float)
+        if len(mset) < 3:
+            continue
+        cen = mset.mean(axis=0)
+        _, sv, vt = np.linalg.svd(mset - cen)
+        if sv[-1] > 1e-6 * sv[0] and len(mset) > 3:
+            continue  # not planar: no mirror
+        nrm = vt[-1]
+        q = p_best - 2.0 * ((p_best - cen) @ nrm) * nrm
+        v = q - ref
+        rq = float(np.clip(np.linalg.norm(v), rmin * 1.0001, rmax / 1.0001))
+        x0 = np.array([np.arctan2(v[1], v[0]), np.arcsin(np.clip(v[2] / np.linalg.norm(v), -1, 1)),
+                       np.log(rq)])
+        x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
+        sols.append(refine(x0))
     sols.sort(key=lambda s: s[0])
 
     # --- uncertainty of a solution
