@@ -110,7 +110,7 @@ def track_cmd(
     if device is not None:
         source = DeviceSource(_device_spec(device), arr.n_mics, fs, duration_s=duration)
     else:
-        source = WavSource(recording, n_channels=arr.n_mics, block_len=2048)
+        source = WavSource(recording, n_channels=arr.n_mics, block_len=4096)
     cfg = StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms, method=method.value.replace("gcc-", ""),
                        itd_filter=itd_filter)
     pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)

@@ -461,8 +461,8 @@ class StreamConfig:
     min_confidence: float = 1.0
     band_hz: tuple[float, float] | None = None
     itd_filter: bool = False
-    sigma_meas_deg: float = 6.0
-    sigma_accel_dps2: float = 150.0
+    sigma_meas_deg: float = 10.0
+    sigma_accel_dps2: float = 100.0
     sigma_jerk: float = 0.5
     sigma_tdoa_s: float = 2e-5
     sigma_px: float = 2.0
