@@ -13,7 +13,10 @@ All on the same simulated captures, in one process:
    (deg), distance error (% of the distance) and 3D error (m), medians; the share of estimates
    that report a distance and that are unique -- geometric solver (``localize_multipose``) vs
    the MLP (``PoseItdMLP`` trained on simulated free-field TDOAs + noise, in the a0-rotated
-   frame). For K = 1 the direction error is that of the closer mirror candidate.
+   frame). For K = 1 the direction error is that of the closer mirror candidate; a single
+   pose never reports a distance and returns the mirror pair, or one in-plane candidate when
+   the source is so close to the array plane that the pair merges (a planar array's TDOAs
+   change with cos(elevation), flat near the plane).
 2. **Head offset study** (RT60 0.3, SNR 20, voices, K = 3 and 5): the same sources with the
    array origin 0, 5, 10, 20 cm from the pivot -- distance information comes from the parallax
    of the array centre, which rotating about the array centre does not give.
@@ -213,7 +216,7 @@ def main() -> None:
                     uni = np.mean([r[k]["unique"] for r in rows]) * 100
                     if k == 1:
                         mir = np.mean([r[k]["mirror"] for r in rows]) * 100
-                        uni_s = f"{uni:.0f}% (mirror {mir:.0f}%)"
+                        uni_s = f"{uni:.0f}% (mirror pair {mir:.0f}%, else in-plane)"
                     else:
                         uni_s = f"{uni:.0f}%"
                     table.append([env, snr, sname, k, geo[0], geo[1], geo[2], f"{rep:.0f}%",
