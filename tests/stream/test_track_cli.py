@@ -128,3 +128,19 @@ def test_video_image_points_read_frames_and_detect_nothing_in_blank_video(tmp_pa
 
     with pytest.raises(InputFileError):
         VideoImagePoints(tmp_path / "missing.mp4")
+
+
+def test_track_with_video_and_no_detection_falls_back_to_direction(scene, capsys, tmp_path):
+    import cv2
+
+    path = tmp_path / "blank.avi"
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (160, 120))
+    for _ in range(16):
+        w.write(np.full((120, 160, 3), 90, np.uint8))
+    w.release()
+    code = main(["track", str(scene["wav"]), "--array", str(scene["array"]), "--camera",
+                 str(scene["cam"]), "--video", str(path), "--detector", "face"])
+    assert code == 0
+    rows = _lines(capsys)
+    assert all(r["position_m"] is None for r in rows)
+    assert rows[-1]["azimuth_deg"] is not None
