@@ -281,3 +281,24 @@ def test_parse_poses():
     for bad in ("", "0,0,0", "a,b", "0,95"):
         with pytest.raises(ConfigError):
             parse_poses(bad)
+
+
+def test_one_microphone_from_captures():
+    """Simulated captures of a repeating noise burst by one microphone at 7 head poses."""
+    from hearsee.audio.active import one_mic_arrival_differences
+    from hearsee.audio.propagation import simulate_free_field
+
+    fs = 16000
+    rng = np.random.default_rng(11)
+    burst = white_noise(0.3, fs, rng)  # one repetition; every capture is synchronised to it
+    src = np.array([1.0, 0.6, 0.3])
+    poses = [(0, 0), (60, 0), (-60, 0), (120, 20), (-120, -20), (0, 45), (30, -40)]
+    P = np.array([mic_positions_at(ARR, p, offset_m=(0.1, 0, 0))[0] for p in poses])
+    caps = [simulate_free_field(burst, fs, P[k:k + 1], src, snr_db=30, rng=rng)[0]
+            for k in range(len(P))]
+    dt = one_mic_arrival_differences(caps, fs, P)
+    np.testing.assert_allclose(dt, (np.linalg.norm(P[1:] - src, axis=1)
+                                    - np.linalg.norm(P[0] - src)) / 343.0, atol=3e-6)
+    est = localize_one_mic(np.r_[0.0, dt], P)
+    assert est.unique
+    np.testing.assert_allclose(est.position_m, src, atol=0.05)

@@ -87,6 +87,7 @@ __all__ = [
     "localize_multipose",
     "localize_one_mic",
     "make_pose_training_set",
+    "one_mic_arrival_differences",
     "pose_mic_positions",
     "PoseManifest",
     "simulate_pose_captures",
@@ -586,6 +587,33 @@ def localize_one_mic(
     res = solve_range_differences([P], [prs], [t[1:] - t[0]], speed_of_sound, **kwargs)
     res.n_poses = len(t)
     return res
+
+
+def one_mic_arrival_differences(captures: Sequence[ArrayLike], fs: float,
+                                mic_positions_m: ArrayLike, speed_of_sound: float = 343.0,
+                                **kwargs: Any) -> NDArray:
+    """Arrival-time differences ``t_k - t_0`` (s, shape ``(K-1,)``) of a repeating source heard
+    by ONE microphone at K known positions (input of :func:`localize_one_mic`).
+
+    Each capture must be synchronised to one repetition of the source (same start offset within
+    the period -- the assumption of :func:`localize_one_mic`). The K captures are treated as the
+    channels of a virtual array at ``mic_positions_m`` and their GCC-PHAT summary TDOAs against
+    capture 0 are returned (``**kwargs`` go to :func:`hearsee.audio.tdoa.estimate_tdoas`).
+    """
+    from hearsee.audio.tdoa import estimate_tdoas
+
+    P = np.asarray(mic_positions_m, dtype=float)
+    caps = [np.asarray(c, dtype=float).ravel() for c in captures]
+    if len(caps) != len(P) or len(caps) < 2:
+        raise GeometryError(f"need one position per capture (>= 2), got {len(P)} for {len(caps)}")
+    n = min(len(c) for c in caps)
+    virt = MicArray(P, speed_of_sound, name="one-mic-virtual")
+    fr = estimate_tdoas(np.stack([c[:n] for c in caps]), fs, virt,
+                        pairs=[(k, 0) for k in range(1, len(caps))], **kwargs)
+    tau = np.asarray(fr.summary_tdoa_s, dtype=float)
+    if not np.all(np.isfinite(tau)):
+        raise EstimationError("no common source found in the one-microphone captures")
+    return tau
 
 
 # ------------------------------------------------------------------------------- measurement
