@@ -39,8 +39,9 @@ Model (what this module computes)
 
 Known limits: the mask is left/right symmetric, so for a source in the median plane
 (azimuth near 0 or 180 degrees) both ITD and IID vanish for the source and its mirror alike; there
-the front/back decision is a guess and ``front_probability`` is near 0.5 (for white noise the
-band IIDs still decide a few degrees away from it; for speech at low SNR the zone is wider).
+the front/back decision is a guess and ``front_probability`` is near 0.5. Measured with mask2
+(far field, 1 s recordings, SNR 10-20 dB): about 30 % of sources within 2.5 deg of the median
+plane are put in the wrong half, 0 % (white noise) to 5 % (synthetic voices) at 2.5-5 deg.
 Sources are assumed in the horizontal plane (elevation 0 tables). The model is band-limited to
 ``f_max``.
 
