@@ -1,0 +1,769 @@
+"""Neighborhood Linear Embedding (NLE) and its clustering (CNLE), thesis ch. 6.
+
+Reconstruction
+--------------
+The thesis text of chapter 6 is not available; only its title, section titles and figure list
+are (see ``shared/design/reconstruction.md``). What follows is a reconstruction from the
+literature, not a transcription:
+
+* The embedding follows Locally Linear Embedding (LLE): Roweis & Saul, "Nonlinear dimensionality
+  reduction by locally linear embedding", Science 290 (2000); Saul & Roweis, "Think globally, fit
+  locally", JMLR 4 (2003). Each point is written as an affine combination of its neighbours
+  (weights summing to one, Tikhonov-regularised local Gram matrix); the embedding is given by the
+  bottom eigenvectors of ``M = (I - W)^T (I - W)`` after the constant one.
+* NLE's change is the neighbourhood. Instead of LLE's fixed ``K`` nearest neighbours, each point
+  selects its neighbours from its ``n_neighbors`` nearest candidates by a similarity test on the
+  local geometry, in the spirit of the adaptive-neighbourhood literature: Wang, Zhang & Zha,
+  "Adaptive manifold learning", NIPS 17 (2005); Zhang & Wang, "MLLE: modified locally linear
+  embedding using multiple weights", NIPS 19 (2007). The rule reconstructed here is the
+  *shadow rule* known from the relative neighbourhood graph (Toussaint 1980) and the sparse
+  neighbourhood graph of Arya & Mount (1993):
+
+      candidates ``x_j`` are visited in order of distance to ``x_i``; ``x_j`` is accepted unless it
+      is *shadowed* by an already accepted, closer neighbour ``x_k``:
+      ``||x_j - x_k|| < shadow * ||x_j - x_i||``.
+
+  A shadowed candidate lies "behind" an accepted neighbour as seen from ``x_i``: it adds little
+  new direction to the reconstruction and, on a curved or multi-sheet data set, is the kind of
+  point that short-circuits the manifold. ``shadow = 0`` turns the rule off (plain LLE);
+  ``shadow = 1`` is the relative-neighbourhood test, which keeps about ``d + 1`` neighbours on a
+  ``d``-dimensional manifold and leaves ``M`` nearly singular; the default ``0.5`` keeps 5-8
+  well-spread neighbours per point on 2-D manifolds (measured on the swiss roll). Every point keeps
+  at least ``min(n_components + 1, n_neighbors)`` neighbours: when the rule leaves fewer, the
+  nearest rejected candidates are added back.
+* CNLE (thesis 6.1.2): the adaptive neighbourhood graph, reduced to *mutual* edges (``j`` chose
+  ``i`` and ``i`` chose ``j``) and with edges cut whose length is an outlier for both endpoints'
+  local scale (``> bridge_ratio`` times the median accepted-neighbour distance of each end), falls
+  apart into connected components, one per manifold; components smaller than
+  ``min_cluster_size`` join the cluster of their nearest large component. Each cluster is then
+  embedded by NLE on its own. The two guards are against noise bridges: a sparse point that
+  reaches into a dense neighbouring sheet is rarely chosen back by the dense sheet's points.
+
+The thesis author's own paper on the method (Ge, Guan, Pan & Loh, "Neighborhood linear embedding
+for intrinsic structure discovery", Machine Vision and Applications, 2010) was not available to
+this reconstruction; any difference from it is ours.
+
+Solver: ``M`` is assembled in ``scipy.sparse`` (memory ``O(n k^2)`` for ``M``, ``O(n k)`` for the
+neighbourhoods and weights; the neighbour computations run in chunks) and its bottom eigenvectors
+are found by ARPACK in shift-invert mode around 0, with a sparse LU factorisation (SuperLU,
+COLAMD ordering) as the inverse operator. Small problems (``n <= 200``) use a dense eigensolver.
+"""
+
+from __future__ import annotations
+
+import warnings
+from numbers import Integral, Real
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
+from sklearn.base import BaseEstimator, TransformerMixin
+from sklearn.neighbors import NearestNeighbors
+from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+from hearsee.errors import EstimationError, HearseeError
+
+__all__ = [
+    "ClusteredNLE",
+    "DisconnectedGraphWarning",
+    "ManifoldInputError",
+    "NeighborhoodLinearEmbedding",
+    "adaptive_neighbors",
+    "make_two_rolls",
+    "reconstruction_weights",
+]
+
+# Bytes of scratch memory one chunk of the neighbourhood computations may use.
+_CHUNK_BYTES = 64 * 2**20
+
+
+class ManifoldInputError(HearseeError, ValueError):
+    """Data a manifold learner cannot use (duplicate points, too few samples for the neighbours).
+
+    Derives from ``ValueError`` like scikit-learn's own input errors."""
+
+
+class DisconnectedGraphWarning(UserWarning):
+    """The neighbourhood graph has several connected components: a single embedding of all points
+    is then not meaningful (use :class:`ClusteredNLE`)."""
+
+
+# --------------------------------------------------------------------------- building blocks
+
+
+def _chunks(n: int, k: int, n_features: int):
+    per_point = 8 * k * (max(n_features, k) + 2 * k)
+    step = max(1, min(n, _CHUNK_BYTES // max(per_point, 1)))
+    for s in range(0, n, step):
+        yield s, min(n, s + step)
+
+
+def adaptive_neighbors(
+    X: np.ndarray,
+    ind: np.ndarray,
+    dist: np.ndarray,
+    shadow: float = 0.5,
+    min_neighbors: int = 3,
+    centers: np.ndarray | None = None,
+) -> np.ndarray:
+    """Apply the NLE shadow rule to candidate neighbourhoods.
+
+    Parameters
+    ----------
+    X : (n_train, n_features) array
+        The points the candidates index into.
+    ind, dist : (n, K) arrays
+        Candidate neighbour indices into ``X`` and their distances to each center, sorted by
+        distance (as ``NearestNeighbors.kneighbors`` returns them).
+    shadow : float in [0, 1]
+        Candidate ``j`` is rejected when an already accepted neighbour ``k`` satisfies
+        ``||x_j - x_k|| < shadow * ||x_j - x_i||``. 0 accepts all candidates (plain LLE).
+    min_neighbors : int
+        Every row keeps at least this many (the nearest rejected candidates are added back).
+    centers : (n, n_features) array, optional
+        The points whose neighbourhoods these are; default ``X`` (row ``i`` is point ``i``).
+
+    Returns
+    -------
+    mask : (n, K) bool array
+        True where the candidate is accepted.
+    """
+    centers = X if centers is None else centers
+    n, K = ind.shape
+    mask = np.zeros((n, K), dtype=bool)
+    if K == 0:
+        return mask
+    min_neighbors = int(min(max(min_neighbors, 1), K))
+    s2 = float(shadow) ** 2
+    for s, e in _chunks(n, K, X.shape[1]):
+        P = X[ind[s:e]] - centers[s:e, None, :]  # (c, K, D) candidate offsets
+        G = np.einsum("ckd,cld->ckl", P, P)
+        sq = dist[s:e] ** 2
+        # squared candidate-candidate distances ||x_j - x_k||^2
+        Djk = np.diagonal(G, axis1=1, axis2=2)[:, :, None] + np.diagonal(G, axis1=1, axis2=2)[
+            :, None, :
+        ] - 2.0 * G
+        m = np.zeros((e - s, K), dtype=bool)
+        m[:, 0] = True
+        if s2 > 0:
+            for j in range(1, K):
+                shadowed = ((Djk[:, j, :j] < s2 * sq[:, j, None]) & m[:, :j]).any(axis=1)
+                m[:, j] = ~shadowed
+        else:
+            m[:] = True
+        # add back the nearest rejected candidates where too few were kept
+        short = m.sum(axis=1) < min_neighbors
+        if short.any():
+            mm = m[short]
+            rank = np.cumsum(~mm, axis=1)  # 1 for the nearest rejected candidate, ...
+            need = min_neighbors - mm.sum(axis=1)
+            mm |= (~mm) & (rank <= need[:, None])
+            m[short] = mm
+        mask[s:e] = m
+    return mask
+
+
+def reconstruction_weights(
+    X: np.ndarray,
+    ind: np.ndarray,
+    mask: np.ndarray,
+    reg: float = 1e-3,
+    centers: np.ndarray | None = None,
+) -> np.ndarray:
+    """LLE reconstruction weights of each center from its accepted neighbours.
+
+    Solves, for each point ``i`` with accepted neighbours ``N(i)``,
+    ``min ||x_i - sum_j w_j x_j||^2`` subject to ``sum_j w_j = 1`` via the local Gram matrix
+    ``C_jk = (x_j - x_i).(x_k - x_i)`` regularised as ``C + reg * trace(C) * I`` (Roweis & Saul
+    2000; the same regularisation as scikit-learn's LLE).
+
+    Returns
+    -------
+    W : (n, K) array
+        Weights aligned with ``ind``; 0 where ``mask`` is False. Rows sum to 1.
+    """
+    centers = X if centers is None else centers
+    n, K = ind.shape
+    W = np.zeros((n, K))
+    idx = np.arange(K)
+    for s, e in _chunks(n, K, X.shape[1]):
+        m = mask[s:e]
+        P = X[ind[s:e]] - centers[s:e, None, :]
+        P *= m[:, :, None]
+        C = np.einsum("ckd,cld->ckl", P, P)
+        tr = np.trace(C, axis1=1, axis2=2)
+        R = np.where(tr > 0, reg * tr, reg)
+        C[:, idx, idx] += np.where(m, R[:, None], 1.0)
+        w = np.linalg.solve(C, m.astype(float)[:, :, None])[:, :, 0]
+        w /= w.sum(axis=1, keepdims=True)
+        W[s:e] = w
+    return W
+
+
+def _bottom_eigenvectors(
+    M: sparse.spmatrix,
+    k: int,
+    solver: str,
+    tol: float,
+    random_state: np.random.RandomState,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The ``k`` smallest eigenpairs of the symmetric PSD sparse matrix ``M``."""
+    n = M.shape[0]
+    if solver == "dense":
+        from scipy.linalg import eigh
+
+        vals, vecs = eigh(M.toarray(), subset_by_index=(0, k - 1))
+        return vals, vecs
+    from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, LinearOperator, eigsh, splu
+
+    Mc = sparse.csc_matrix(M)
+    try:
+        lu = splu(Mc)
+    except RuntimeError:  # exactly singular: shift by a tiny multiple of the scale
+        eps = 1e-12 * max(float(np.abs(Mc.diagonal()).max()), 1e-300)
+        lu = splu(sparse.csc_matrix(Mc + eps * sparse.eye(n)))
+    op_inv = LinearOperator((n, n), matvec=lu.solve, dtype=float)
+    v0 = random_state.uniform(-1, 1, n)
+    try:
+        vals, vecs = eigsh(Mc, k=k, sigma=0.0, which="LM", OPinv=op_inv, tol=tol,
+                           v0=v0)
+    except (ArpackNoConvergence, ArpackError) as exc:
+        raise EstimationError(
+            f"the sparse eigensolver did not converge ({exc}); try eigen_solver='dense' for small "
+            "data, a larger tol, or a larger reg"
+        ) from exc
+    order = np.argsort(vals)
+    return vals[order], vecs[:, order]
+
+
+def _off_plane_fraction(X: np.ndarray, ind: np.ndarray, mask: np.ndarray, d: int) -> np.ndarray:
+    """Fraction of the energy of each point's accepted-neighbour offsets ``x_j - x_i`` that lies
+    outside their best ``d``-dimensional subspace (0 on a flat d-manifold; large for a point
+    floating between two sheets, whose neighbours lie on both sides)."""
+    n, K = ind.shape
+    out = np.zeros(n)
+    for s, e in _chunks(n, K, X.shape[1]):
+        P = (X[ind[s:e]] - X[s:e, None, :]) * mask[s:e, :, None]
+        G = np.einsum("ckd,cld->ckl", P, P)  # K x K Gram: same non-zero spectrum as P^T P
+        ev = np.linalg.eigvalsh(G)[:, ::-1]
+        tot = ev.sum(axis=1)
+        out[s:e] = np.where(tot > 0, ev[:, d:].clip(min=0).sum(axis=1) / np.where(tot > 0, tot, 1),
+                            0.0)
+    return out
+
+
+def _fix_signs(Y: np.ndarray) -> np.ndarray:
+    """Make the largest-magnitude entry of each column positive (deterministic output)."""
+    if Y.size == 0:
+        return Y
+    i = np.argmax(np.abs(Y), axis=0)
+    signs = np.sign(Y[i, np.arange(Y.shape[1])])
+    signs[signs == 0] = 1.0
+    return Y * signs
+
+
+def _weight_matrix(ind: np.ndarray, W: np.ndarray, mask: np.ndarray, n: int) -> sparse.csr_matrix:
+    rows = np.repeat(np.arange(ind.shape[0]), ind.shape[1])
+    f = mask.ravel()
+    return sparse.csr_matrix((W.ravel()[f], (rows[f], ind.ravel()[f])), shape=(ind.shape[0], n))
+
+
+# --------------------------------------------------------------------------- estimator
+
+
+class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
+    """Neighborhood Linear Embedding: LLE with adaptively chosen neighbourhoods (thesis ch. 6).
+
+    Reconstruction; see the module docstring for the rule and the literature followed. Each point
+    takes its neighbours from its ``n_neighbors`` nearest candidates by the *shadow rule*
+    (candidate ``x_j`` is dropped when an accepted closer neighbour ``x_k`` has
+    ``||x_j - x_k|| < shadow * ||x_j - x_i||``), is reconstructed from them with constrained,
+    regularised least-squares weights ``W``, and the embedding ``Y`` minimises
+    ``sum_i ||y_i - sum_j W_ij y_j||^2`` with ``Y^T Y = n I`` and ``sum_i y_i = 0``: it is given by
+    eigenvectors 2..d+1 (in increasing order of eigenvalue) of ``M = (I - W)^T (I - W)``, scaled
+    to unit variance per coordinate.
+
+    Parameters
+    ----------
+    n_components : int, default 2
+        Dimension ``d`` of the embedding.
+    n_neighbors : int, default 12
+        Number of candidate neighbours per point (the largest neighbourhood allowed).
+    shadow : float in [0, 1], default 0.5
+        Strength of the shadow rule; 0 gives plain LLE with ``n_neighbors`` neighbours.
+    reg : float, default 1e-3
+        Regularisation of the local Gram matrices, relative to their trace.
+    eigen_solver : {"auto", "arpack", "dense"}, default "auto"
+        "arpack": ARPACK shift-invert around 0 with a sparse LU inverse (scales to 10^5 points);
+        "dense": LAPACK on the dense ``M`` (n <= a few thousand); "auto": dense for n <= 200.
+    tol : float, default 1e-6
+        ARPACK tolerance.
+    random_state : int, RandomState or None
+        Seeds ARPACK's start vector.
+    n_jobs : int or None
+        Parallel jobs of the neighbour search (``sklearn.neighbors.NearestNeighbors``).
+
+    Attributes
+    ----------
+    embedding_ : (n_samples, n_components) array
+        The embedding of the training points (zero mean, unit variance per coordinate).
+    adjacency_ : sparse (n_samples, n_samples) CSR matrix
+        Reconstruction weights; row ``i`` holds the weights of point ``i``'s accepted neighbours.
+    n_neighbors_ : (n_samples,) int array
+        Number of accepted neighbours per point.
+    reconstruction_error_ : float
+        Sum of the ``n_components`` eigenvalues used (the LLE cost of the unscaled embedding).
+    n_features_in_ : int
+    nbrs_ : NearestNeighbors
+        Fitted on the training data; used by :meth:`transform`.
+
+    Examples
+    --------
+    >>> from sklearn.datasets import make_swiss_roll
+    >>> from hearsee.learn import NeighborhoodLinearEmbedding
+    >>> X, t = make_swiss_roll(1000, random_state=0)
+    >>> Y = NeighborhoodLinearEmbedding(n_components=2, random_state=0).fit_transform(X)
+    >>> Y.shape
+    (1000, 2)
+    """
+
+    _parameter_constraints: dict = {
+        "n_components": [Interval(Integral, 1, None, closed="left")],
+        "n_neighbors": [Interval(Integral, 1, None, closed="left")],
+        "shadow": [Interval(Real, 0, 1, closed="both")],
+        "reg": [Interval(Real, 0, None, closed="left")],
+        "eigen_solver": [StrOptions({"auto", "arpack", "dense"})],
+        "tol": [Interval(Real, 0, None, closed="left")],
+        "random_state": ["random_state"],
+        "n_jobs": [Integral, None],
+    }
+
+    def __init__(
+        self,
+        n_components: int = 2,
+        *,
+        n_neighbors: int = 12,
+        shadow: float = 0.5,
+        reg: float = 1e-3,
+        eigen_solver: str = "auto",
+        tol: float = 1e-6,
+        random_state=None,
+        n_jobs: int | None = None,
+    ) -> None:
+        self.n_components = n_components
+        self.n_neighbors = n_neighbors
+        self.shadow = shadow
+        self.reg = reg
+        self.eigen_solver = eigen_solver
+        self.tol = tol
+        self.random_state = random_state
+        self.n_jobs = n_jobs
+
+    # -- validation ---------------------------------------------------------------------------
+
+    def _validate_fit_input(self, X) -> np.ndarray:
+        self._validate_params()
+        X = validate_data(self, X, dtype=np.float64, ensure_min_samples=2)
+        n = X.shape[0]
+        if self.n_neighbors >= n:
+            raise ManifoldInputError(
+                f"n_neighbors={self.n_neighbors} must be smaller than the number of samples "
+                f"(n_samples = {n}); lower n_neighbors or give more points"
+            )
+        if self.n_components >= n:
+            raise ManifoldInputError(
+                f"n_components={self.n_components} must be smaller than the number of samples "
+                f"(n_samples = {n})"
+            )
+        return X
+
+    @staticmethod
+    def _check_duplicates(dist: np.ndarray, ind: np.ndarray) -> None:
+        zero = dist[:, 0] <= 0.0
+        if zero.any():
+            i = int(np.flatnonzero(zero)[0])
+            raise ManifoldInputError(
+                f"X contains {int(zero.sum())} points that duplicate another point (e.g. rows {i} "
+                f"and {int(ind[i, 0])}); reconstruction weights are undefined for them. Remove "
+                "duplicates first, e.g. X = np.unique(X, axis=0)"
+            )
+
+    # -- core ---------------------------------------------------------------------------------
+
+    def _neighbourhoods(self, X: np.ndarray, n_neighbors: int):
+        """Fit the candidate search on X; return (nbrs, dist, ind, mask) without self."""
+        nbrs = NearestNeighbors(n_neighbors=n_neighbors + 1, n_jobs=self.n_jobs).fit(X)
+        dist, ind = nbrs.kneighbors(X)
+        # drop self: it is normally column 0, but ties may reorder it
+        is_self = ind == np.arange(X.shape[0])[:, None]
+        keep = ~is_self
+        keep[keep.sum(axis=1) > n_neighbors, -1] = False
+        dist = dist[keep].reshape(X.shape[0], n_neighbors)
+        ind = ind[keep].reshape(X.shape[0], n_neighbors)
+        self._check_duplicates(dist, ind)
+        mask = adaptive_neighbors(X, ind, dist, self.shadow,
+                                  min_neighbors=self.n_components + 1)
+        return nbrs, dist, ind, mask
+
+    def _embed(self, ind, W, mask, n, random_state, warn=True):
+        """Embedding from the weights; returns (Y, W sparse, error)."""
+        Wm = _weight_matrix(ind, W, mask, n)
+        if warn and n > 1:
+            n_comp, _ = csgraph.connected_components(Wm, directed=True, connection="weak")
+            if n_comp > 1:
+                warnings.warn(
+                    f"the neighbourhood graph has {n_comp} connected components; the embedding "
+                    "separates them instead of unfolding them. Use ClusteredNLE to embed each "
+                    "component, or raise n_neighbors / lower shadow",
+                    DisconnectedGraphWarning,
+                    stacklevel=3,
+                )
+        A = sparse.eye(n, format="csr") - Wm
+        M = (A.T @ A).tocsr()
+        solver = self.eigen_solver
+        if solver == "auto":
+            solver = "dense" if n <= 200 else "arpack"
+        k = self.n_components + 1
+        if solver == "arpack" and k >= n - 1:
+            solver = "dense"
+        vals, vecs = _bottom_eigenvectors(M, k, solver, self.tol, random_state)
+        Y = _fix_signs(vecs[:, 1:k] * np.sqrt(n))
+        return Y, Wm, float(np.sum(vals[1:k]))
+
+    def _fit_embedding(self, X: np.ndarray, random_state) -> None:
+        n = X.shape[0]
+        self.nbrs_, dist, ind, mask = self._neighbourhoods(X, self.n_neighbors)
+        W = reconstruction_weights(X, ind, mask, self.reg)
+        self.embedding_, self.adjacency_, self.reconstruction_error_ = self._embed(
+            ind, W, mask, n, random_state
+        )
+        self.n_neighbors_ = mask.sum(axis=1)
+
+    def fit(self, X, y=None):
+        """Compute the embedding of X (n_samples, n_features). ``y`` is ignored."""
+        X = self._validate_fit_input(X)
+        self._fit_embedding(X, check_random_state(self.random_state))
+        return self
+
+    def fit_transform(self, X, y=None) -> np.ndarray:
+        """Fit and return ``embedding_``."""
+        return self.fit(X).embedding_
+
+    def _reconstruct(self, X: np.ndarray, allowed=None):
+        """Out-of-sample neighbourhoods and weights of X in the training set.
+
+        ``allowed`` (n_query, n_neighbors) bool masks candidates that may be used."""
+        train = self.nbrs_._fit_X
+        k = min(self.n_neighbors, train.shape[0])
+        dist, ind = self.nbrs_.kneighbors(X, n_neighbors=k)
+        mask = adaptive_neighbors(train, ind, dist, self.shadow,
+                                  min_neighbors=self.n_components + 1, centers=X)
+        if allowed is not None:
+            mask &= allowed(ind)
+            mask[~mask.any(axis=1), 0] = True  # the nearest is always allowed by construction
+        W = reconstruction_weights(train, ind, mask, self.reg, centers=X)
+        exact = dist[:, 0] <= 0.0  # query coincides with a training point: use its embedding
+        W[exact] = 0.0
+        W[exact, 0] = 1.0
+        mask[exact] = False
+        mask[exact, 0] = True
+        return ind, W, mask
+
+    def transform(self, X) -> np.ndarray:
+        """Embed new points: reconstruct each from its adaptive neighbourhood among the training
+        points (the same shadow rule and weights as in fit) and apply the weights to the training
+        embedding, ``y = sum_j w_j y_j`` (LLE's out-of-sample map, Saul & Roweis 2003, sec. 6.1).
+        """
+        check_is_fitted(self, "embedding_")
+        X = validate_data(self, X, dtype=np.float64, reset=False)
+        ind, W, mask = self._reconstruct(X)
+        return np.einsum("nk,nkd->nd", W * mask, self.embedding_[ind])
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.transformer_tags.preserves_dtype = ["float64"]
+        return tags
+
+
+class ClusteredNLE(NeighborhoodLinearEmbedding):
+    """Clustered NLE (CNLE, thesis 6.1.2): split the data into the connected components of the
+    adaptive neighbourhood graph and embed each component with NLE.
+
+    Reconstruction; see the module docstring. The clustering graph keeps an edge ``i - j`` only
+    when both points chose each other under the shadow rule (mutual neighbours) and the edge is
+    not longer than ``bridge_ratio`` times the median accepted-neighbour distance of *both* its
+    ends. Components smaller than ``min_cluster_size`` join the cluster of their nearest point in
+    a large component. Each cluster is then embedded separately, so the coordinates of different
+    clusters share axes but not a frame: read them together with ``labels_``.
+
+    Parameters
+    ----------
+    n_components, n_neighbors, shadow, reg, eigen_solver, tol, random_state, n_jobs
+        As in :class:`NeighborhoodLinearEmbedding`.
+    min_cluster_size : int, default 20
+        Components with fewer points are merged into the nearest large one.
+    bridge_ratio : float, default 3.0
+        An edge longer than this many times the median neighbour distance of both its ends is cut.
+        ``inf`` disables the length guard (mutual edges only).
+
+    Attributes
+    ----------
+    labels_ : (n_samples,) int array
+        Cluster of each training point, 0..n_clusters_-1, in decreasing order of cluster size.
+    n_clusters_ : int
+    embedding_ : (n_samples, n_components) array
+        Per-cluster NLE coordinates (each cluster zero-mean, unit variance per coordinate).
+    adjacency_, n_neighbors_, reconstruction_error_, nbrs_, n_features_in_
+        As in :class:`NeighborhoodLinearEmbedding` (``adjacency_`` holds the per-cluster weights;
+        the error is summed over clusters).
+    """
+
+    _parameter_constraints: dict = {
+        **NeighborhoodLinearEmbedding._parameter_constraints,
+        "min_cluster_size": [Interval(Integral, 1, None, closed="left")],
+        "bridge_ratio": [Interval(Real, 0, None, closed="neither")],
+        "max_off_plane": [Interval(Real, 0, 1, closed="both")],
+    }
+
+    def __init__(
+        self,
+        n_components: int = 2,
+        *,
+        n_neighbors: int = 8,
+        shadow: float = 0.5,
+        reg: float = 1e-3,
+        eigen_solver: str = "auto",
+        tol: float = 1e-6,
+        random_state=None,
+        n_jobs: int | None = None,
+        min_cluster_size: int = 20,
+        bridge_ratio: float = 3.0,
+        max_off_plane: float = 0.3,
+    ) -> None:
+        super().__init__(
+            n_components,
+            n_neighbors=n_neighbors,
+            shadow=shadow,
+            reg=reg,
+            eigen_solver=eigen_solver,
+            tol=tol,
+            random_state=random_state,
+            n_jobs=n_jobs,
+        )
+        self.min_cluster_size = min_cluster_size
+        self.bridge_ratio = bridge_ratio
+        self.max_off_plane = max_off_plane
+
+    def _cluster(self, X, dist, ind, mask) -> np.ndarray:
+        n = X.shape[0]
+        rows = np.repeat(np.arange(n), ind.shape[1])
+        f = mask.ravel()
+        r, c, d = rows[f], ind.ravel()[f], dist.ravel()[f]
+        # local scale: median accepted-neighbour distance
+        dm = np.where(mask, dist, np.nan)
+        scale = np.nanmedian(dm, axis=1)
+        A = sparse.csr_matrix((np.ones(r.size), (r, c)), shape=(n, n))
+        mutual = A.multiply(A.T).tocoo()
+        keep = mutual.row < mutual.col
+        i, j = mutual.row[keep], mutual.col[keep]
+        dij = np.linalg.norm(X[i] - X[j], axis=1)
+        ok = dij <= self.bridge_ratio * np.minimum(scale[i], scale[j])
+        i, j = i[ok], j[ok]
+        # core points: at least d + 1 mutual neighbours and a locally d-dimensional neighbourhood;
+        # the rest (noise, points between sheets) only join a cluster afterwards
+        degree = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
+        core = (degree >= self.n_components + 1) & (
+            _off_plane_fraction(X, ind, mask, self.n_components) <= self.max_off_plane
+        )
+        both = core[i] & core[j]
+        G = sparse.csr_matrix((np.ones(int(both.sum())), (i[both], j[both])), shape=(n, n))
+        del d
+        _, comp = csgraph.connected_components(G, directed=False)
+        sizes = np.bincount(comp)
+        min_size = max(self.min_cluster_size, self.n_components + 2)
+        big = (sizes[comp] >= min_size) & core
+        if not big.any():
+            return np.zeros(n, dtype=int)
+        comp = np.where(big, comp, -1)
+        # the others (noise, small pieces) take the majority label of their accepted neighbours,
+        # spreading outwards from the large components; what is still unreached takes the label
+        # of its nearest labelled point
+        rows = np.repeat(np.arange(n), ind.shape[1])
+        f = mask.ravel()
+        S = sparse.csr_matrix((np.ones(int(f.sum())), (rows[f], ind.ravel()[f])), shape=(n, n))
+        S = (S + S.T).tocsr()
+        n_lab = int(comp.max()) + 1
+        for _ in range(50):
+            todo = comp < 0
+            if not todo.any():
+                break
+            onehot = sparse.csr_matrix(
+                (np.ones(int((~todo).sum())), (np.flatnonzero(~todo), comp[~todo])),
+                shape=(n, n_lab),
+            )
+            votes = (S[todo] @ onehot).toarray()
+            has = votes.sum(axis=1) > 0
+            if not has.any():
+                break
+            idx = np.flatnonzero(todo)[has]
+            comp[idx] = np.argmax(votes[has], axis=1)
+        todo = comp < 0
+        if todo.any():
+            nn = NearestNeighbors(n_neighbors=1, n_jobs=self.n_jobs).fit(X[~todo])
+            _, near = nn.kneighbors(X[todo])
+            comp[todo] = comp[np.flatnonzero(~todo)[near[:, 0]]]
+        # relabel 0..k-1 by decreasing size
+        uniq, inv, counts = np.unique(comp, return_inverse=True, return_counts=True)
+        order = np.argsort(-counts, kind="stable")
+        rank = np.empty_like(order)
+        rank[order] = np.arange(order.size)
+        return rank[inv]
+
+    def fit(self, X, y=None):
+        """Cluster X by the adaptive neighbourhood graph and embed each cluster."""
+        X = self._validate_fit_input(X)
+        rs = check_random_state(self.random_state)
+        n = X.shape[0]
+        self.nbrs_, dist, ind, mask = self._neighbourhoods(X, self.n_neighbors)
+        labels = self._cluster(X, dist, ind, mask)
+        self.labels_ = labels
+        self.n_clusters_ = int(labels.max()) + 1
+        Y = np.zeros((n, self.n_components))
+        blocks = []
+        counts = np.zeros(n, dtype=int)
+        err = 0.0
+        for c in range(self.n_clusters_):
+            idx = np.flatnonzero(labels == c)
+            m = idx.size
+            if m <= self.n_components + 1:
+                blocks.append(sparse.csr_matrix((m, n)))
+                continue
+            Xc = X[idx]
+            k = min(self.n_neighbors, m - 1)
+            nn = NearestNeighbors(n_neighbors=k + 1, n_jobs=self.n_jobs).fit(Xc)
+            dc, ic = nn.kneighbors(Xc)
+            dc, ic = dc[:, 1:], ic[:, 1:]
+            mc = adaptive_neighbors(Xc, ic, dc, self.shadow, min_neighbors=self.n_components + 1)
+            Wc = reconstruction_weights(Xc, ic, mc, self.reg)
+            Yc, Wmc, e = self._embed(ic, Wc, mc, m, rs, warn=False)
+            Y[idx] = Yc
+            err += e
+            counts[idx] = mc.sum(axis=1)
+            Wmc = Wmc.tocoo()
+            blocks.append((idx[Wmc.row], idx[Wmc.col], Wmc.data))
+        r = np.concatenate([b[0] for b in blocks if isinstance(b, tuple)] or [np.zeros(0, int)])
+        c = np.concatenate([b[1] for b in blocks if isinstance(b, tuple)] or [np.zeros(0, int)])
+        v = np.concatenate([b[2] for b in blocks if isinstance(b, tuple)] or [np.zeros(0)])
+        self.adjacency_ = sparse.csr_matrix((v, (r, c)), shape=(n, n))
+        self.embedding_ = Y
+        self.n_neighbors_ = counts
+        self.reconstruction_error_ = err
+        return self
+
+    def fit_predict(self, X, y=None) -> np.ndarray:
+        """Fit and return ``labels_``."""
+        return self.fit(X).labels_
+
+    def predict(self, X) -> np.ndarray:
+        """Cluster of new points: that of their nearest training point."""
+        check_is_fitted(self, "labels_")
+        X = validate_data(self, X, dtype=np.float64, reset=False)
+        _, ind = self.nbrs_.kneighbors(X, n_neighbors=1)
+        return self.labels_[ind[:, 0]]
+
+    def transform(self, X) -> np.ndarray:
+        """Embed new points in the frame of their cluster (see :meth:`predict`): reconstruct each
+        from its adaptive neighbourhood among that cluster's training points."""
+        check_is_fitted(self, "embedding_")
+        X = validate_data(self, X, dtype=np.float64, reset=False)
+        _, near = self.nbrs_.kneighbors(X, n_neighbors=1)
+        lab = self.labels_[near[:, 0]]
+        ind, W, mask = self._reconstruct(X, allowed=lambda ind: self.labels_[ind] == lab[:, None])
+        return np.einsum("nk,nkd->nd", W * mask, self.embedding_[ind])
+
+
+# --------------------------------------------------------------------------- data
+
+
+def make_two_rolls(
+    n_samples: int = 2000,
+    *,
+    density_ratio: float = 6.0,
+    gap: float = np.pi,
+    noise: float = 0.0,
+    outliers: float = 0.0,
+    height: float = 10.0,
+    random_state=None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two swiss-roll sheets wound together (thesis fig. 6.7, reconstruction of the data set).
+
+    Sheet 0 follows the spiral ``r = t`` (``t`` from 1.5 pi to 4.5 pi), sheet 1 the same spiral
+    pushed ``gap`` outwards along the normal. Points are uniform by area on each sheet; sheet 0 is
+    ``density_ratio`` times denser than sheet 1, so sparse-sheet points find dense-sheet points
+    nearer than their own neighbours: a fixed-K neighbourhood bridges the sheets, an adaptive one
+    need not.
+
+    Parameters
+    ----------
+    n_samples : int
+        Total number of points.
+    density_ratio : float
+        Ratio of the number of points on sheet 0 to sheet 1.
+    gap : float
+        Normal distance between the sheets (same units as the spiral radius).
+    noise : float
+        Standard deviation of isotropic Gaussian noise added to the points.
+    height : float
+        Extent along the roll axis (y).
+    random_state : int, RandomState or None
+
+    Returns
+    -------
+    X : (n_samples, 3) array
+    labels : (n_samples,) int array
+        Sheet of each point (0 dense, 1 sparse).
+    t : (n_samples, 2) array
+        Intrinsic coordinates: arc length along the spiral and height.
+    """
+    rs = check_random_state(random_state)
+    n0 = int(round(n_samples * density_ratio / (1.0 + density_ratio)))
+    n1 = n_samples - n0
+    t_lo, t_hi = 1.5 * np.pi, 3.5 * np.pi
+
+    def arclen(t):
+        return 0.5 * (t * np.sqrt(1 + t * t) + np.arcsinh(t))
+
+    grid = np.linspace(t_lo, t_hi, 4096)
+    s_grid = arclen(grid) - arclen(t_lo)
+
+    def sheet(m, offset):
+        s = rs.uniform(0, s_grid[-1], m)
+        t = np.interp(s, s_grid, grid)
+        # outward normal of the spiral (t cos t, t sin t)
+        tx, tz = np.cos(t) - t * np.sin(t), np.sin(t) + t * np.cos(t)
+        nrm = np.hypot(tx, tz)
+        nx, nz = tz / nrm, -tx / nrm
+        if np.mean(nx * np.cos(t) + nz * np.sin(t)) < 0:
+            nx, nz = -nx, -nz
+        x = t * np.cos(t) + offset * nx
+        z = t * np.sin(t) + offset * nz
+        y = rs.uniform(0, height, m)
+        return np.column_stack([x, y, z]), np.column_stack([s, y])
+
+    X0, t0 = sheet(n0, 0.0)
+    X1, t1 = sheet(n1, gap)
+    X = np.vstack([X0, X1])
+    labels = np.r_[np.zeros(n0, int), np.ones(n1, int)]
+    t = np.vstack([t0, t1])
+    if noise > 0:
+        X = X + rs.normal(scale=noise, size=X.shape)
+    n_out = int(round(outliers * n_samples))
+    if n_out:
+        lo, hi = X.min(axis=0), X.max(axis=0)
+        X = np.vstack([X, rs.uniform(lo, hi, size=(n_out, 3))])
+        labels = np.r_[labels, -np.ones(n_out, int)]
+        t = np.vstack([t, np.full((n_out, 2), np.nan)])
+    perm = rs.permutation(X.shape[0])
+    return X[perm], labels[perm], t[perm]

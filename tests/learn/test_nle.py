@@ -1,0 +1,215 @@
+"""Tests of hearsee.learn.nle: NLE / CNLE estimators, the shadow rule, bad input."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy.stats import spearmanr
+from sklearn.datasets import make_s_curve, make_swiss_roll
+from sklearn.manifold import trustworthiness
+from sklearn.metrics import adjusted_rand_score
+from sklearn.utils.estimator_checks import parametrize_with_checks
+
+from hearsee.errors import HearseeError
+from hearsee.learn import (
+    ClusteredNLE,
+    DisconnectedGraphWarning,
+    ManifoldInputError,
+    NeighborhoodLinearEmbedding,
+    adaptive_neighbors,
+    make_two_rolls,
+    reconstruction_weights,
+)
+
+
+def _expected_failed_checks(estimator):
+    return {
+        "check_positive_only_tag_during_fit": (
+            "fits the iris data, which holds duplicate rows (101 and 142); NLE rejects duplicate "
+            "points on purpose (their reconstruction weights are undefined)"
+        ),
+    }
+
+
+# n_neighbors=5: scikit-learn's checks fit data sets of 10 samples
+@parametrize_with_checks(
+    [
+        NeighborhoodLinearEmbedding(n_neighbors=5, random_state=0),
+        ClusteredNLE(n_neighbors=5, random_state=0),
+    ],
+    expected_failed_checks=_expected_failed_checks,
+)
+def test_sklearn_compatible(estimator, check):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DisconnectedGraphWarning)
+        check(estimator)
+
+
+# --------------------------------------------------------------------------- the shadow rule
+
+
+def test_shadow_rule_drops_collinear_candidate():
+    # center at 0; candidates at 1 and 2 on the same ray, and at -1.5 on the other side
+    X = np.array([[0.0, 0.0], [1.0, 0.0], [1.5, 0.0], [-1.8, 0.0], [0.0, 3.0]])
+    ind = np.array([[1, 2, 3, 4]])
+    dist = np.linalg.norm(X[ind[0]] - X[0], axis=1)[None, :]
+    mask = adaptive_neighbors(X, ind, dist, shadow=0.5, min_neighbors=1, centers=X[:1])
+    # x=1.5 is shadowed by x=1 (|1.5-1| = 0.5 < 0.5 * 1.5); x=-1.8 and (0,3) open new directions
+    np.testing.assert_array_equal(mask[0], [True, False, True, True])
+    # shadow=0 keeps every candidate (plain LLE)
+    assert adaptive_neighbors(X, ind, dist, 0.0, 1, centers=X[:1]).all()
+    # min_neighbors adds back the nearest rejected candidate
+    mask4 = adaptive_neighbors(X, ind, dist, shadow=0.5, min_neighbors=4, centers=X[:1])
+    assert mask4.all()
+
+
+def test_reconstruction_weights_sum_to_one_and_reconstruct_a_plane_point():
+    rng = np.random.default_rng(0)
+    nb = rng.normal(size=(6, 2))
+    x = nb[:3].mean(axis=0)  # inside the convex hull of three neighbours
+    X = np.vstack([x, nb])
+    ind = np.arange(1, 7)[None, :]
+    mask = np.zeros((1, 6), bool)
+    mask[0, :3] = True
+    W = reconstruction_weights(X, ind, mask, reg=1e-9, centers=X[:1])
+    assert W[0, 3:].tolist() == [0.0, 0.0, 0.0]
+    assert W.sum() == pytest.approx(1.0)
+    np.testing.assert_allclose(W[0] @ X[1:], x, atol=1e-6)
+
+
+def test_nle_picks_fewer_neighbours_than_candidates():
+    X, _ = make_swiss_roll(400, random_state=1)
+    m = NeighborhoodLinearEmbedding(n_neighbors=12, random_state=0).fit(X)
+    assert m.n_neighbors_.min() >= 3
+    assert m.n_neighbors_.mean() < 12
+    assert m.adjacency_.shape == (400, 400)
+    np.testing.assert_allclose(np.asarray(m.adjacency_.sum(axis=1)).ravel(), 1.0)
+
+
+# --------------------------------------------------------------------------- embedding quality
+
+
+@pytest.mark.parametrize("maker, k", [(make_swiss_roll, 8), (make_s_curve, 12)])
+def test_nle_unrolls_the_manifold(maker, k):
+    # 500 points undersample the swiss roll: K = 8 candidates (scikit-learn's LLE reaches
+    # trustworthiness 0.87 here with K = 12)
+    X, t = maker(500, random_state=0)
+    Y = NeighborhoodLinearEmbedding(n_neighbors=k, random_state=0).fit_transform(X)
+    assert Y.shape == (500, 2)
+    np.testing.assert_allclose(Y.mean(axis=0), 0.0, atol=1e-6)
+    np.testing.assert_allclose(Y.std(axis=0), 1.0, rtol=1e-6)
+    rho = max(abs(spearmanr(Y[:, 0], t)[0]), abs(spearmanr(Y[:, 1], t)[0]))
+    assert rho > 0.98
+    assert trustworthiness(X, Y, n_neighbors=12) > 0.96
+
+
+def test_dense_and_arpack_solvers_agree():
+    X, _ = make_swiss_roll(300, random_state=0)
+    Yd = NeighborhoodLinearEmbedding(eigen_solver="dense", random_state=0).fit_transform(X)
+    Ya = NeighborhoodLinearEmbedding(eigen_solver="arpack", random_state=0).fit_transform(X)
+    np.testing.assert_allclose(np.abs(Yd), np.abs(Ya), atol=1e-4)
+
+
+def test_transform_new_points_lands_near_the_training_embedding():
+    X, t = make_s_curve(500, random_state=0)
+    X_new, t_new = make_s_curve(50, random_state=1)
+    m = NeighborhoodLinearEmbedding(n_neighbors=12, random_state=0).fit(X)
+    np.testing.assert_allclose(m.transform(X), m.embedding_, atol=1e-12)  # exact training points
+    Y_new = m.transform(X_new)
+    # the roll coordinate t is a monotone function of the unrolled axis: compare by interpolation
+    axis = int(np.argmax([abs(spearmanr(m.embedding_[:, k], t)[0]) for k in range(2)]))
+    assert abs(spearmanr(Y_new[:, axis], t_new)[0]) > 0.98
+
+
+# --------------------------------------------------------------------------- CNLE
+
+
+def test_two_rolls_data_set():
+    X, lab, t = make_two_rolls(300, outliers=0.1, random_state=0)
+    assert X.shape == (330, 3) and lab.shape == (330,) and t.shape == (330, 2)
+    assert set(np.unique(lab)) == {-1, 0, 1}
+    assert np.isnan(t[lab == -1]).all()
+
+
+def _two_sheets_with_noise_bridges(seed: int = 0, gap: float = 6.0, n_out: int = 40):
+    """Two jittered 15 x 15 grids (spacing 1) ``gap`` apart, plus ``n_out`` noise points
+    scattered between them (label -1)."""
+    rng = np.random.default_rng(seed)
+    g = np.stack(np.meshgrid(np.arange(15.0), np.arange(15.0)), -1).reshape(-1, 2)
+    a = np.c_[g + rng.uniform(-0.3, 0.3, g.shape), np.zeros(len(g))]
+    b = np.c_[g + rng.uniform(-0.3, 0.3, g.shape), np.full(len(g), gap)]
+    o = rng.uniform([0, 0, 0.5], [14, 14, gap - 0.5], (n_out, 3))
+    lab = np.r_[np.zeros(len(g), int), np.ones(len(g), int), -np.ones(n_out, int)]
+    return np.vstack([a, b, o]), lab
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_cnle_separates_sheets_that_a_fixed_k_graph_joins_through_noise(seed):
+    from scipy.sparse.csgraph import connected_components
+    from sklearn.neighbors import kneighbors_graph
+
+    X, lab = _two_sheets_with_noise_bridges(seed)
+    G = kneighbors_graph(X, 5)
+    n_comp, comp = connected_components(G + G.T)
+    assert np.bincount(comp).max() > 450  # LLE's K=5 graph joins the sheets through the noise
+    m = ClusteredNLE(random_state=0).fit(X)
+    good = lab >= 0
+    assert m.n_clusters_ == 2
+    assert adjusted_rand_score(lab[good], m.labels_[good]) == 1.0
+    assert m.embedding_.shape == (X.shape[0], 2)
+    for c in range(2):  # each sheet is embedded on its own
+        np.testing.assert_allclose(m.embedding_[m.labels_ == c].std(axis=0), 1.0, rtol=1e-6)
+    np.testing.assert_array_equal(m.predict(X), m.labels_)
+    np.testing.assert_allclose(m.transform(X), m.embedding_, atol=1e-12)
+    np.testing.assert_array_equal(m.fit_predict(X), m.labels_)
+
+
+def test_nle_warns_on_a_disconnected_graph():
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(100, 3))
+    X = np.vstack([a, a + 100.0])
+    with pytest.warns(DisconnectedGraphWarning, match="ClusteredNLE"):
+        NeighborhoodLinearEmbedding(n_neighbors=6, random_state=0).fit(X)
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+def test_nan_input_is_rejected():
+    X, _ = make_swiss_roll(100, random_state=0)
+    X[3, 1] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        NeighborhoodLinearEmbedding().fit(X)
+
+
+def test_too_many_neighbours_is_rejected():
+    X, _ = make_swiss_roll(30, random_state=0)
+    with pytest.raises(ManifoldInputError, match="n_neighbors=30 must be smaller") as exc:
+        NeighborhoodLinearEmbedding(n_neighbors=30).fit(X)
+    assert isinstance(exc.value, ValueError) and isinstance(exc.value, HearseeError)
+
+
+def test_duplicate_points_are_rejected():
+    X, _ = make_swiss_roll(100, random_state=0)
+    X[7] = X[42]
+    with pytest.raises(ManifoldInputError, match="duplicate.*rows (7 and 42|42 and 7)"):
+        NeighborhoodLinearEmbedding().fit(X)
+    with pytest.raises(ManifoldInputError, match="duplicate"):
+        ClusteredNLE().fit(X)
+
+
+def test_bad_parameters_are_rejected():
+    X, _ = make_swiss_roll(100, random_state=0)
+    with pytest.raises(ValueError, match="shadow"):
+        NeighborhoodLinearEmbedding(shadow=1.5).fit(X)
+    with pytest.raises(ValueError, match="eigen_solver"):
+        NeighborhoodLinearEmbedding(eigen_solver="magic").fit(X)
+
+
+def test_transform_checks_the_feature_count():
+    X, _ = make_swiss_roll(100, random_state=0)
+    m = NeighborhoodLinearEmbedding().fit(X)
+    with pytest.raises(ValueError, match="features"):
+        m.transform(X[:, :2])
