@@ -979,6 +979,7 @@ def align_head(
     max_moves: int = 8,
     tol_deg: float = 1.0,
     probe_deg: float = 20.0,
+    max_std_deg: float = 1.0,
     tilt_limits_deg: tuple[float, float] = (-60.0, 75.0),
     **kwargs: Any,
 ) -> AlignmentResult:
@@ -992,8 +993,10 @@ def align_head(
     puts the source into the array plane. A planar array cannot tell up from down at one pose
     (and the elevation is least sensitive when the source is in the array plane), so when the
     estimate is still ambiguous the first tilt goes to the upper candidate plus a ``probe_deg``
-    excursion that makes the next capture informative. Stops when the suggested move is below
-    ``tol_deg`` and the estimate is unique in direction, or after ``max_moves`` moves.
+    excursion that makes the next capture informative (also whenever the poses so far differ
+    only in pan and the direction is uncertain, 1-sigma above ``max_std_deg``). Stops when the
+    suggested move is below ``tol_deg`` and the direction is unique and certain, or after
+    ``max_moves`` moves.
 
     Parameters
     ----------
@@ -1010,7 +1013,7 @@ def align_head(
     ests: list[tuple[float, float]] = []
     moves = 0
     converged = False
-    probed = False
+    n_probes = 0
     lo_t, hi_t = tilt_limits_deg
     while True:
         tau = np.asarray(measure(pose), dtype=float)
@@ -1032,12 +1035,19 @@ def align_head(
             az, el = est.azimuth_deg, est.elevation_deg
         ests.append((float(az), float(el)))
         target = HeadPose(float(az), float(np.clip(el, lo_t, hi_t)))
-        if ambiguous and not probed:
-            # probe: overshoot the tilt so the next capture sees the source off the array plane
-            target = HeadPose(target.pan_deg, float(np.clip(el + probe_deg, lo_t, hi_t)))
-            probed = True
+        tilts = [p.tilt_deg for p in poses]
+        uncertain = ambiguous or not est.direction_std_deg <= max_std_deg
+        pan_only = max(tilts) - min(tilts) < probe_deg / 2
+        if uncertain and pan_only:
+            # probe: poses differing only in pan cannot tell up from down, and the elevation
+            # is least sensitive near the array plane -- overshoot the tilt so that the next
+            # capture sees the source well off the array plane
+            sign = 1.0 if n_probes % 2 == 0 else -1.0
+            target = HeadPose(target.pan_deg,
+                              float(np.clip(el + sign * probe_deg, lo_t, hi_t)))
+            n_probes += 1
         step = float(np.degrees(angle_between(target.gaze, pose.gaze)))
-        if step < tol_deg and not ambiguous:
+        if step < tol_deg and not ambiguous and not (uncertain and pan_only):
             converged = True
             break
         if moves >= max_moves:
