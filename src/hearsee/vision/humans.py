@@ -54,6 +54,7 @@ __all__ = [
     "FloorPlane",
     "HumanCandidate",
     "HumanDetectorParams",
+    "StereoDetection",
     "detect_candidates",
     "detect_people_hog",
     "estimate_floor",
