@@ -6,7 +6,8 @@ per-frame azimuth (hearsee GCC-PHAT + closed-form localizer, no filter), the tra
 (:class:`hearsee.audio.tracking.DirectionKalman` in the stream) and, side by side on the same
 frames, pyroomacoustics' SRP-PHAT applied per frame (it has no tracker). RMSE over each method's
 own output frames, coverage (share of frames with an estimate), and the tracker's lag (the time
-shift that best aligns the tracked azimuth with the truth), in frames.
+shift that best aligns the tracked azimuth with the truth over the frames that had a
+measurement; searched within +-4 frames, so 4 means "no alignment found"), in frames.
 
 Part B -- calibrated camera + three microphones, sources 0.5-2 m away in the camera's view
 (SNR 20 dB, RT60 0.3 s), image points from the true projection plus 1 px noise (a detector
@@ -103,9 +104,11 @@ def srp_per_frame(y: np.ndarray, arr: MicArray, t: np.ndarray) -> tuple[np.ndarr
     return out, time.process_time() - c0
 
 
-def lag_frames(t: np.ndarray, est: np.ndarray, traj: Trajectory, hop_s: float) -> float:
-    """Shift (frames) minimising the RMSE between est(t) and the true azimuth at t - shift."""
-    ok = np.isfinite(est)
+def lag_frames(t: np.ndarray, est: np.ndarray, traj: Trajectory, hop_s: float,
+               measured: np.ndarray) -> float:
+    """Shift (frames) minimising the RMSE between est(t) and the true azimuth at t - shift,
+    over the frames that had a measurement (coasting through pauses is not lag)."""
+    ok = np.isfinite(est) & measured
     shifts = np.arange(-4.0, 4.01, 0.25)
     rmse = [np.sqrt(np.mean(wrap_deg(est[ok] - direction_deg(traj.at(t[ok] - d * hop_s))[0])
                             ** 2)) for d in shifts]
@@ -144,7 +147,7 @@ def part_a(trials: int, seed: int, dur: float) -> tuple[list, dict]:
                 acc["trk_common"].append(np.where(np.isfinite(raw), e_trk, np.nan))
                 acc["srp"].append(wrap_deg(srp - true))
                 acc["cov_raw"].append(np.mean(np.isfinite(raw)))
-                acc["lag"].append(lag_frames(t, trk, traj, CFG.hop_ms * 1e-3))
+                acc["lag"].append(lag_frames(t, trk, traj, CFG.hop_ms * 1e-3, np.isfinite(raw)))
                 acc["speed"].append(np.linalg.norm(traj.velocity(0.5 * dur)))
                 if not example and kind == "male" and snr == 20.0:
                     example = {"t": t, "true": true, "raw": raw, "trk": trk, "srp": srp}
