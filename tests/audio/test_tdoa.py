@@ -148,3 +148,12 @@ def test_summary_frames_option(recording, three):
     np.testing.assert_allclose(tf.summary_tdoa_s, true, atol=0.05 / FS)
     with pytest.raises(ConfigError, match="summary_frames"):
         estimate_tdoas(x, FS, three, summary_frames="all")
+
+
+def test_closure_rejects_noise_only_summary_and_ml_snr_form(three):
+    rng = np.random.default_rng(21)
+    x = rng.standard_normal((3, FS))
+    x[:, FS // 2:] *= 0.3  # louder and quieter noise: the SNR weighting is active
+    for mc in (1.0, 0.8):
+        tf = estimate_tdoas(x, FS, three, method="ml", min_confidence=mc, snr_weight="ml")
+        assert np.isnan(tf.summary_tdoa_s).all()

@@ -78,8 +78,11 @@ _TINY = 1e-30
 MIN_FS_HZ = 4000.0
 #: Fewer confident frames than this: the summary averages all frames with energy instead.
 _MIN_SUMMARY_FRAMES = 3
-#: ... and its confidence must then exceed this multiple of ``min_confidence``.
+#: ... and, without redundant pairs, its confidence must exceed this multiple of
+#: ``min_confidence``.
 _FALLBACK_CONFIDENCE = 1.5
+#: Largest RMS violation (samples) of t_ij + t_jk = t_ik accepted for a summary estimate.
+_CLOSURE_TOL_SAMPLES = 2.0
 
 
 def normalize_method(method: str) -> str:
@@ -329,10 +332,12 @@ class TdoaFrames:
     pairs : list of (i, j)
         The microphone pairs, columns of ``tdoa_s``.
     summary_tdoa_s : array (n_pairs,)
-        Whole-recording estimate: the peak of the weighted cross spectra (each frame normalised
-        to unit energy) averaged over the valid frames -- or, when fewer than 3 frames are
-        valid, over all frames with energy; NaN when that average's confidence is below
-        ``min_confidence`` (1.5 x ``min_confidence`` in the fallback) in any pair.
+        Whole-recording estimate: the peak of the weighted cross spectra averaged over the valid
+        frames -- or, when fewer than 3 frames are valid, over all frames with energy. NaN when
+        that average's confidence is below ``min_confidence`` in any pair, or when redundant
+        pairs (3+ microphones) violate ``t_ij + t_jk = t_ik`` by more than 2 samples RMS, or --
+        for a single independent pair averaged over all frames -- when its confidence is below
+        1.5 x ``min_confidence``.
     summary_confidence : array (n_pairs,)
         Peak-to-second-peak ratio of the averaged correlation.
     max_tdoa_s : array (n_pairs,)
@@ -403,6 +408,19 @@ def frame_activity(x: NDArray, frame_len: int, hop: int, n_frames: int,
     return energy, active
 
 
+def _closure_residual(lag: NDArray, pairs: list[tuple[int, int]], n_mics: int) -> float | None:
+    """RMS residual (same unit as ``lag``) of the pair TDOAs against the best consistent set
+    ``t_i - t_j``; None when the pairs hold no redundancy (no closed cycle)."""
+    from hearsee.audio.itd_filter import pair_matrix
+
+    H = pair_matrix(n_mics, pairs, ref=0)
+    rank = np.linalg.matrix_rank(H)
+    if len(pairs) <= rank:
+        return None
+    s_ls, *_ = np.linalg.lstsq(H, lag, rcond=None)
+    return float(np.sqrt(np.sum((H @ s_ls - lag) ** 2) / (len(pairs) - rank)))
+
+
 def estimate_tdoas(
     x: ArrayLike,
     fs: float,
@@ -419,7 +437,7 @@ def estimate_tdoas(
     vad_db: float = 3.0,
     min_confidence: float = 1.0,
     window: str | tuple = ("tukey", 0.25),
-    snr_weight: bool = True,
+    snr_weight: bool | str = True,
     summary_frames: str = "valid",
     chunk_frames: int = 128,
     progress: Callable[[int], None] | None = None,
@@ -460,8 +478,11 @@ def estimate_tdoas(
         (1 + xi_j))`` from each channel's a-priori SNR ``xi = max(|X|^2 / N - 1, 0)``, with the
         noise spectrum ``N`` averaged over the recording's inactive (noise-only) frames
         (reconstruction of the SNR-weighted PHAT of ManyEars/ODAS, Valin et al. 2007). Bins that
-        hold only noise then no longer count as much as bins with the source. Ignored when the
-        recording has fewer than 3 inactive frames (nothing to learn the noise from).
+        hold only noise then no longer count as much as bins with the source. ``"ml"`` uses the
+        Hannan-Thomson form ``g / (1 - g)`` of that coherence estimate ``g`` instead (with
+        PHAT this is Knapp & Carter's ML processor with the coherence taken from the noise
+        floor). Ignored when the recording has fewer than 3 inactive frames (nothing to learn
+        the noise from; e.g. a steady source), which then gets the plain weighting.
     summary_frames : ``"valid"`` | ``"active"``
         Which frames the whole-recording estimate averages: the valid ones (default) or every
         frame with energy (then weighted by the GCC weighting alone -- useful with
@@ -569,7 +590,11 @@ def estimate_tdoas(
             W = gcc_weighting(method, G)
         if noise_psd is not None:
             xi = np.maximum((X.real**2 + X.imag**2) / noise_psd - 1.0, 0.0)  # (F', n_ch, B)
-            W = W * (xi[:, I] * xi[:, J] / ((1.0 + xi[:, I]) * (1.0 + xi[:, J])))
+            coh = xi[:, I] * xi[:, J] / ((1.0 + xi[:, I]) * (1.0 + xi[:, J]))
+            if snr_weight == "ml":  # Hannan-Thomson form gamma^2 / (1 - gamma^2)
+                coh = np.minimum(coh, 0.99)
+                coh = coh / (1.0 - coh)
+            W = W * coh
         sl = slice(s0 - h0, s0 - h0 + (s1 - s0))
         P = (G * W.astype(np.float32))[sl]
         r = corr(P)
@@ -598,18 +623,27 @@ def estimate_tdoas(
     valid = ~np.isnan(tdoa).any(axis=1)
     summary, summary_conf = np.full(n_pairs, np.nan), np.zeros(n_pairs)
     need = min_confidence
+    fallback = False
     if summary_frames == "active" and n_active:
         acc, n_acc = acc_active, n_active
     elif n_acc < _MIN_SUMMARY_FRAMES and n_active > n_acc:
-        # too few confident frames: a weak but steady source may still build up a clear peak
-        # in the average over all frames with energy; accept it only if that peak is clearly
-        # confident (noise-only recordings reach ~1.25 in 40 trials, a -15 dB source 0.8-2.4)
+        # too few confident frames (low SNR, strong reverberation): a weak but steady source
+        # still builds up a peak in the average over all frames with energy
         acc, n_acc = acc_active, n_active
-        need = _FALLBACK_CONFIDENCE * min_confidence
+        fallback = True
     if n_acc:
         lag, c = _peaks(corr(acc)[None], acc[None], nfft, max_lag, "interp", main_lobe,
                         band_bins)
-        if np.all(c[0] >= need):
+        resid = _closure_residual(lag[0], prs, arr.n_mics)
+        if resid is not None:
+            # redundant pairs (>= 3 microphones): the peaks of uncorrelated noise are random
+            # and violate t_ij + t_jk = t_ik; a real source's do not
+            ok = np.all(c[0] >= min_confidence) and resid <= _CLOSURE_TOL_SAMPLES
+        else:
+            # one independent pair: only the confidence can tell (noise-only recordings reach
+            # ~1.25 in 40 trials, a -15 dB white source 0.8-2.4)
+            ok = np.all(c[0] >= (_FALLBACK_CONFIDENCE * need if fallback else need))
+        if ok:
             summary, summary_conf = lag[0] / fs, c[0]
     t = (np.arange(n_frames) * hop + frame_len / 2.0) / fs
     return TdoaFrames(t, tdoa, conf, valid, prs, summary, summary_conf, max_lag / fs, fs)
