@@ -329,7 +329,7 @@ def _plots(arr, fs, offset, al_trace, rng):
     fig, ax = plt.subplots(2, 2, figsize=(11, 8.5))
     # fig. 4.14: continuous sampling while turning, running averaged coordinates
     src = np.array([1.4, 0.8, 0.6])
-    dur = 2.0
+    dur = 4.0
     sig = synthetic_voice("female", dur, fs, rng)
 
     def pose_at(t):
@@ -342,23 +342,28 @@ def _plots(arr, fs, offset, al_trace, rng):
     for j, lab in enumerate("xyz"):
         ax[0, 0].plot(times, running[:, j], label=f"{lab} estimate")
         ax[0, 0].axhline(src[j], ls=":", color=f"C{j}")
-    ax[0, 0].set(title="Fig. 4.14: averaged coordinates while the head turns (RT60 0.3)",
-                 xlabel="time (s)", ylabel="m")
+    final = "none" if est.position_m is None else np.round(est.position_m, 2).tolist()
+    ax[0, 0].set(title=f"Fig. 4.14: averaged coordinates while the head turns (RT60 0.3)\n"
+                 f"final {final}, true {src.tolist()}", xlabel="time (s)", ylabel="m")
     ax[0, 0].legend(fontsize=8)
     # figs. 4.15, 4.16: [dd_12]^2 vs alpha and dd_13 vs beta (free field, exact geometry)
     src2 = np.array([1.5, 0.9, 0.5])
     alphas = np.linspace(-30, 90, 241)
     dd12 = [MicArray(mic_positions_at(arr, (a, 0), offset_m=offset)).tdoa(src2)[2] * 343.0
             for a in alphas]
-    ax[0, 1].plot(alphas, np.square(dd12) * 1e4, label="[dd_12]^2 (cm^2), beta = 0")
+    ax[0, 1].plot(alphas, np.square(dd12) * 1e4)
     betas = np.linspace(-40, 80, 241)
     az_src = float(np.degrees(np.arctan2(src2[1], src2[0])))
     dd13 = [MicArray(mic_positions_at(arr, (az_src, b), offset_m=offset)).tdoa(src2)[1] * 343.0
             for b in betas]
-    ax[0, 1].plot(betas, np.array(dd13) * 100, label="dd_13 (cm) vs beta, alpha facing")
-    ax[0, 1].set(title="Figs. 4.15-4.16: range differences vs pan alpha / tilt beta",
-                 xlabel="angle (deg)")
-    ax[0, 1].legend(fontsize=8)
+    el_src = float(np.degrees(np.arctan2(src2[2], np.hypot(*src2[:2]))))
+    ax[0, 1].axvline(az_src, ls=":", color="k")
+    ax[0, 1].set(title="Fig. 4.15: [dd_12]^2 vs pan alpha (zero when facing)",
+                 xlabel="pan alpha (deg)", ylabel="cm^2")
+    ax[1, 1].plot(betas, np.array(dd13) * 100)
+    ax[1, 1].axvline(el_src, ls=":", color="k")
+    ax[1, 1].set(title="Fig. 4.16: dd_13 vs tilt beta, alpha facing (extreme when facing)",
+                 xlabel="tilt beta (deg)", ylabel="cm")
     # fig. 4.17: the simultaneous search path of one alignment run
     if al_trace is not None:
         res, s = al_trace
@@ -373,10 +378,6 @@ def _plots(arr, fs, offset, al_trace, rng):
         ax[1, 0].set(title="Fig. 4.17: simultaneous search in alpha and beta",
                      xlabel="pan alpha (deg)", ylabel="tilt beta (deg)")
         ax[1, 0].legend(fontsize=8)
-    ax[1, 1].axis("off")
-    ax[1, 1].text(0.0, 0.5, f"continuous sampling estimate:\n"
-                  f"{None if est.position_m is None else np.round(est.position_m, 3)}\n"
-                  f"true {src}", fontsize=10)
     fig.tight_layout()
     RESULTS.mkdir(parents=True, exist_ok=True)
     png = RESULTS / "active.png"

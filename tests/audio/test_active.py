@@ -302,3 +302,22 @@ def test_one_microphone_from_captures():
     est = localize_one_mic(np.r_[0.0, dt], P)
     assert est.unique
     np.testing.assert_allclose(est.position_m, src, atol=0.05)
+
+
+def test_localize3d_single_pose_reports_ambiguity(tmp_path, capsys):
+    import json
+
+    from hearsee.audio.active import simulate_pose_manifest
+    from hearsee.cli import main
+
+    src = [1.0, 0.8, 0.6]
+    man, _ = simulate_pose_manifest(tmp_path / "one.yaml", "three-mic", src, [(0, 0)],
+                                    duration_s=0.4, snr_db=30, seed=1)
+    assert main(["localize3d", str(man)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["unique"] is False
+    assert doc["distance_m"] is None and doc["position_m"] is None
+    els = sorted(c["elevation_deg"] for c in doc["candidates"])
+    el_true = float(np.degrees(np.arctan2(src[2], np.hypot(src[0], src[1]))))
+    assert len(els) == 2 and els[0] < 0 < els[1]
+    assert els[1] == pytest.approx(el_true, abs=4.0)
