@@ -6,6 +6,7 @@ from hearsee.learn.nle import (
     ManifoldInputError,
     NeighborhoodLinearEmbedding,
     adaptive_neighbors,
+    make_head_pose_images,
     make_two_rolls,
     reconstruction_weights,
 )
@@ -16,6 +17,7 @@ __all__ = [
     "ManifoldInputError",
     "NeighborhoodLinearEmbedding",
     "adaptive_neighbors",
+    "make_head_pose_images",
     "make_two_rolls",
     "reconstruction_weights",
 ]

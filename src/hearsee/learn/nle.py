@@ -71,6 +71,7 @@ __all__ = [
     "ManifoldInputError",
     "NeighborhoodLinearEmbedding",
     "adaptive_neighbors",
+    "make_head_pose_images",
     "make_two_rolls",
     "reconstruction_weights",
 ]
@@ -291,7 +292,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         Dimension ``d`` of the embedding.
     n_neighbors : int, default 12
         Number of candidate neighbours per point (the largest neighbourhood allowed).
-    shadow : float in [0, 1], default 0.5
+    shadow : float in [0, 1], default 0.3
         Strength of the shadow rule; 0 gives plain LLE with ``n_neighbors`` neighbours.
     reg : float, default 1e-3
         Regularisation of the local Gram matrices, relative to their trace.
@@ -345,7 +346,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         n_components: int = 2,
         *,
         n_neighbors: int = 12,
-        shadow: float = 0.5,
+        shadow: float = 0.3,
         reg: float = 1e-3,
         eigen_solver: str = "auto",
         tol: float = 1e-6,
@@ -767,3 +768,73 @@ def make_two_rolls(
         t = np.vstack([t, np.full((n_out, 2), np.nan)])
     perm = rs.permutation(X.shape[0])
     return X[perm], labels[perm], t[perm]
+
+
+def make_head_pose_images(
+    n_samples: int = 400,
+    *,
+    size: int = 32,
+    yaw_range_deg: tuple[float, float] = (-75.0, 75.0),
+    pitch_range_deg: tuple[float, float] = (-30.0, 30.0),
+    noise: float = 0.01,
+    random_state=None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Rendered grey-level images of a rotating head (a stand-in for the thesis's face-pose
+    sequence, fig. 6.10): a textured sphere (skin, hair on top and at the back, eyes, eyebrows,
+    nose, mouth) seen by an orthographic camera, shaded by a light at the camera.
+
+    Parameters
+    ----------
+    n_samples : int
+        Number of images; yaw and pitch are drawn uniformly from the ranges.
+    size : int
+        Image side in pixels.
+    yaw_range_deg, pitch_range_deg : (float, float)
+        Head rotation about the vertical axis (positive: the face turns towards the image right) and
+        about the horizontal axis (positive: the face looks up), degrees.
+    noise : float
+        Standard deviation of additive Gaussian pixel noise (intensities are in [0, 1]).
+    random_state : int, RandomState or None
+
+    Returns
+    -------
+    images : (n_samples, size * size) array
+        Flattened images, row-major.
+    pose : (n_samples, 2) array
+        (yaw, pitch) of each image in degrees.
+    """
+    rs = check_random_state(random_state)
+    yaw = rs.uniform(*yaw_range_deg, n_samples)
+    pitch = rs.uniform(*pitch_range_deg, n_samples)
+    c = (np.arange(size) + 0.5) / size * 2.2 - 1.1
+    u, v = np.meshgrid(c, -c)  # u right, v up
+    inside = u**2 + v**2 < 1.0
+    z = np.sqrt(np.clip(1.0 - u**2 - v**2, 0.0, None))
+    P = np.stack([u[inside], v[inside], z[inside]])  # camera frame, z towards the camera
+    shade = 0.35 + 0.65 * z[inside]
+
+    def blob(lon, lat, lon0, lat0, s_lon, s_lat):
+        return np.exp(-(((lon - lon0) / s_lon) ** 2) - ((lat - lat0) / s_lat) ** 2)
+
+    out = np.zeros((n_samples, size * size))
+    for k in range(n_samples):
+        a, b = np.radians(yaw[k]), np.radians(pitch[k])
+        # camera -> head frame: undo pitch (about x), then yaw (about y)
+        cb, sb, ca, sa = np.cos(b), np.sin(b), np.cos(a), np.sin(a)
+        x1, y1, z1 = P[0], cb * P[1] + sb * P[2], -sb * P[1] + cb * P[2]
+        xh, yh, zh = ca * x1 - sa * z1, y1, sa * x1 + ca * z1
+        lon = np.degrees(np.arctan2(xh, zh))  # 0 at the nose, + to the head's left side
+        lat = np.degrees(np.arcsin(np.clip(yh, -1, 1)))
+        tex = np.full(lon.shape, 0.75)
+        hair = (lat > 35) | (np.abs(lon) > 95) | ((np.abs(lon) > 75) & (lat > 0))
+        tex[hair] = 0.2
+        tex -= 0.55 * (blob(lon, lat, 28, 12, 9, 6) + blob(lon, lat, -28, 12, 9, 6))  # eyes
+        tex -= 0.3 * (blob(lon, lat, 28, 24, 14, 3) + blob(lon, lat, -28, 24, 14, 3))  # brows
+        tex += 0.2 * blob(lon, lat, 0, -2, 7, 12)  # nose
+        tex -= 0.45 * blob(lon, lat, 0, -30, 22, 5)  # mouth
+        img = np.zeros((size, size))
+        img[inside] = np.clip(tex, 0, 1) * shade
+        out[k] = img.ravel()
+    if noise > 0:
+        out += rs.normal(scale=noise, size=out.shape)
+    return out, np.column_stack([yaw, pitch])
