@@ -66,6 +66,12 @@ __all__ = [
     "upper_contour",
 ]
 
+#: Depth (metres) of a standing person's body axis behind the median of the visible surface of
+#: the whole silhouette. Measured on hearsee.sim.scenes bodies (adult proportions): about 0.07 m
+#: for a person facing the camera (torso ~0.22 m deep, legs and arms ~0.12 m) and about 0.15 m
+#: for one turned sideways (the near arm and shoulder); 0.09 m balances the two.
+BODY_SURFACE_DEPTH_M = 0.09
+
 
 # ---------------------------------------------------------------------------------------------
 # Parameters
@@ -418,10 +424,11 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     xlo, xhi = np.percentile(pts[:, 0], [3, 97])
     Zm = float(np.median(pts[:, 2]))
     Xm = float(np.median(pts[:, 0]))
-    # torso centre: about 0.11 m behind the visible surface, at 0.675 of the body height
+    # torso centre: at 0.675 of the body height, BODY_SURFACE_DEPTH_M behind the median of the
+    # silhouette's visible surface
     ray = np.array([Xm, 0.0, Zm])
     ray /= np.linalg.norm(ray)
-    c = np.array([Xm, 0.0, Zm]) + 0.11 * ray
+    c = np.array([Xm, 0.0, Zm]) + BODY_SURFACE_DEPTH_M * ray
     h_t = 0.675 * top
     n = floor.normal
     y = (h_t - floor.offset - n[0] * c[0] - n[2] * c[2]) / n[1]
