@@ -321,3 +321,21 @@ def test_localize3d_single_pose_reports_ambiguity(tmp_path, capsys):
     el_true = float(np.degrees(np.arctan2(src[2], np.hypot(src[0], src[1]))))
     assert len(els) == 2 and els[0] < 0 < els[1]
     assert els[1] == pytest.approx(el_true, abs=4.0)
+
+
+def test_thesis_search_alignment_far_source():
+    from hearsee.audio.active import align_head_search
+
+    rng = np.random.default_rng(8)
+    for src in ([2.0, 2.0, 1.2], [-3.0, 0.5, -0.8]):
+        src = np.array(src)
+
+        def measure(pose, src=src):
+            return MicArray(mic_positions_at(ARR, pose)).tdoa(src) + rng.normal(0, 1e-6, 3)
+
+        res = align_head_search(measure, ARR)
+        assert res.moves <= 8
+        assert res.error_deg(src) < 2.5
+    with pytest.raises(GeometryError):
+        align_head_search(lambda p: np.zeros(6),
+                          MicArray([[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0], [0, 0, 0.1]]))

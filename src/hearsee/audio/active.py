@@ -77,6 +77,7 @@ __all__ = [
     "PoseItdMLP",
     "AlignmentResult",
     "align_head",
+    "align_head_search",
     "capture_tdoas",
     "facing_pair",
     "fibonacci_sphere",
@@ -1048,6 +1049,103 @@ def align_head(
             n_probes += 1
         step = float(np.degrees(angle_between(target.gaze, pose.gaze)))
         if step < tol_deg and not ambiguous and not (uncertain and pan_only):
+            converged = True
+            break
+        if moves >= max_moves:
+            break
+        pose = target
+        moves += 1
+    return AlignmentResult(poses, taus, moves, pose, facing, ests, converged)
+
+
+def align_head_search(
+    measure: Callable[[HeadPose], ArrayLike],
+    array: MicArray | str,
+    *,
+    start: HeadPose | Sequence[float] = (0.0, 0.0),
+    max_moves: int = 8,
+    tol_deg: float = 1.0,
+    probe_deg: float = 12.0,
+    tilt_limits_deg: tuple[float, float] = (-60.0, 75.0),
+) -> AlignmentResult:
+    """Active alignment by the thesis's search (4.7, figs. 4.15-4.17), from the TDOAs alone.
+
+    Reconstruction for an array whose microphones lie in the head's horizontal plane (e.g.
+    ``three-mic``). Far field, the TDOAs give the in-plane part ``(u_x, u_y)`` of the source
+    direction in the head frame by least squares (``tau_ij = -(m_i - m_j) . u / c``):
+
+    - alpha: ``atan2(u_y, u_x)`` is the pan error -- the Newton step that drives the symmetric
+      pair's range difference dd_12 to zero (fig. 4.15, [dd_12]^2 has its minimum there), with
+      the front/back sign resolved by the other pairs;
+    - beta: ``g = |(u_x, u_y)| = cos(elevation in the head frame)`` is largest when the head
+      faces the source (fig. 4.16: dd_13 reaches its extreme). Its size gives |beta error| but
+      not its sign: the first tilt move tries ``+acos(g)`` and turns back if ``g`` fell; near
+      the top, where ``g`` is flat, the last three tilt samples are fitted by a parabola whose
+      vertex is the next tilt (a probe of ``probe_deg`` is taken when no bracketing sample
+      exists).
+
+    Pan and tilt are corrected together at every move (fig. 4.17, simultaneous search). Stops
+    when both corrections are below ``tol_deg`` or after ``max_moves`` moves.
+    """
+    arr = load_array(array)
+    z = arr.positions[:, 2]
+    if np.ptp(z) > 1e-6:
+        raise GeometryError("align_head_search needs microphones in the head's horizontal plane")
+    pair = facing_pair(arr)
+    D = np.array([(arr.positions[i] - arr.positions[j])[:2] for i, j in arr.pairs])
+    c = arr.speed_of_sound
+    lo_t, hi_t = tilt_limits_deg
+    pose = as_pose(start)
+    poses: list[HeadPose] = []
+    taus: list[NDArray] = []
+    facing: list[float] = []
+    ests: list[tuple[float, float]] = []
+    gs: list[float] = []
+    moves = 0
+    converged = False
+    while True:
+        tau = np.asarray(measure(pose), dtype=float)
+        if tau.shape != (len(arr.pairs),):
+            raise AudioInputError(f"measure() returned {tau.shape} TDOAs, expected "
+                                  f"{len(arr.pairs)} (one per pair)")
+        poses.append(pose)
+        taus.append(tau)
+        facing.append(float(tau[arr.pairs.index(pair)]) if pair else float("nan"))
+        uxy = np.linalg.lstsq(D, -c * tau, rcond=None)[0]
+        g = float(min(np.linalg.norm(uxy), 1.0))
+        gs.append(g)
+        d_pan = float(np.degrees(np.arctan2(uxy[1], uxy[0])))
+        # tilt: samples at (nearly) the current pan, i.e. taken since the pan settled
+        same = [k for k in range(len(poses)) if abs(poses[k].pan_deg - pose.pan_deg) < 3.0]
+        b = np.array([poses[k].tilt_deg for k in same])
+        gv = np.array([gs[k] for k in same])
+        e_mag = float(np.degrees(np.arccos(g)))
+        if len(same) == 1:
+            new_tilt = pose.tilt_deg + max(e_mag, probe_deg)  # first try: upward
+        else:
+            kb = int(np.argmax(gv))
+            lower, upper = b[b < b[kb]], b[b > b[kb]]
+            if len(lower) and len(upper):
+                # bracketed maximum: parabola through the best sample and its neighbours
+                bl, bu = lower.max(), upper.min()
+                gl, gu = gv[b == bl][0], gv[b == bu][0]
+                x = np.array([bl, b[kb], bu])
+                A = np.polyfit(x, [gl, gv[kb], gu], 2)
+                new_tilt = float(-A[1] / (2 * A[0])) if A[0] < 0 else float(b[kb])
+                new_tilt = float(np.clip(new_tilt, bl, bu))
+            elif len(lower):  # best is the highest tilt so far: go further up
+                new_tilt = b[kb] + max(float(np.degrees(np.arccos(gv[kb]))), probe_deg)
+            else:  # best is the lowest tilt so far: go further down
+                new_tilt = b[kb] - max(float(np.degrees(np.arccos(gv[kb]))), probe_deg)
+            if kb != len(same) - 1 and len(same) == 2:
+                # the upward try made g fall: the source is below
+                new_tilt = b[kb] - max(float(np.degrees(np.arccos(gv[kb]))), probe_deg)
+        new_tilt = float(np.clip(new_tilt, lo_t, hi_t))
+        if abs(d_pan) >= 3.0:
+            new_tilt = pose.tilt_deg  # settle the pan first (tilt samples need a fixed pan)
+        target = HeadPose(pose.pan_deg + d_pan, new_tilt)
+        ests.append((target.pan_deg, target.tilt_deg))
+        if abs(d_pan) < tol_deg and abs(new_tilt - pose.tilt_deg) < tol_deg:
             converged = True
             break
         if moves >= max_moves:
