@@ -192,7 +192,8 @@ def test_live_device_source_with_fake_portaudio(monkeypatch):
         pl.DeviceSource("usb-array", 3, FS)
     with pytest.raises(AudioInputError, match="input channels"):
         pl.DeviceSource(0, 4, FS)
-    src = pl.DeviceSource(0, 3, FS, block_len=1024, queue_size=4, timeout_s=3.0)
+    src = pl.DeviceSource(0, 3, FS, block_len=1024, queue_size=4, timeout_s=3.0,
+                          duration_s=20 * 1024 / FS)
     pipe = StreamPipeline(MicArray.from_preset("three-mic"))
     ups = pipe.run(src, threaded=True)
     assert pipe.stats.n_blocks + src.n_dropped == 20
