@@ -144,3 +144,40 @@ def test_track_with_video_and_no_detection_falls_back_to_direction(scene, capsys
     rows = _lines(capsys)
     assert all(r["position_m"] is None for r in rows)
     assert rows[-1]["azimuth_deg"] is not None
+
+
+def test_live_camera_is_read_in_a_thread(monkeypatch):
+    import time as _time
+
+    import cv2
+
+    class FakeCap:
+        def __init__(self, index):
+            self.n = 0
+
+        def isOpened(self):
+            return True
+
+        def get(self, prop):
+            return 30.0
+
+        def read(self):
+            self.n += 1
+            _time.sleep(0.005)
+            if self.n > 5:
+                return False, None
+            return True, np.full((60, 80, 3), 100, np.uint8)
+
+        def release(self):
+            pass
+
+    monkeypatch.setattr(cv2, "VideoCapture", FakeCap)
+    vp = VideoImagePoints(0, detector="face")
+    assert vp(0.0) is None  # starts the camera thread
+    for _ in range(100):
+        if vp.ended:
+            break
+        _time.sleep(0.01)
+    assert vp.ended and vp.frame_index == 4
+    assert vp(1.0) is None
+    vp.close()

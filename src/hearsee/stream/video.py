@@ -16,8 +16,9 @@ frame, the pixel ``(u, v)`` where the source appears. Two providers, both callab
   (then the tracker falls back to direction-only updates), and with several people they
   pick the strongest detection, which need not be the speaker.
 
-Video time t = frame index / fps for files; for a live camera the first frame read is t = 0 of
-the stream (the audio stream starts at the same moment within the camera's frame period).
+Video time t = frame index / fps for files. A live camera is read in its own thread which keeps
+the latest detection; ``points(t)`` then returns that (the audio and camera clocks are not
+synchronised beyond "latest frame", about one camera frame period).
 """
 
 from __future__ import annotations
@@ -173,7 +174,7 @@ class VideoImagePoints:
         self.frame_index = -1
         self.frame_time = -np.inf
         self.last_point: tuple[float, float] | None = None
-        self._t0: float | None = None
+        self._thread = None
         self.ended = False
 
     def _read(self) -> bool:
@@ -182,27 +183,47 @@ class VideoImagePoints:
             self.ended = True
             return False
         self.frame_index += 1
-        if self.live:
-            now = time.perf_counter()
-            self._t0 = now if self._t0 is None else self._t0
-            self.frame_time = now - self._t0
-        else:
-            self.frame_time = self.frame_index / self.fps
+        self.frame_time = self.frame_index / self.fps
         self._frame = frame
         return True
 
+    def _live_loop(self) -> None:
+        """Live camera: grab frames continuously in a thread, keep the latest detection."""
+        t0 = time.perf_counter()
+        while not self._stop.is_set():
+            ok, frame = self.cap.read()
+            if not ok:
+                self.ended = True
+                return
+            pt = detect_source_point(frame, self.detector)
+            with self._lock:
+                self.frame_index += 1
+                self.frame_time = time.perf_counter() - t0
+                self.last_point = pt
+
     def __call__(self, t: float) -> tuple[float, float] | None:
-        fresh = False
         if self.live:
-            fresh = self._read()
-        else:
-            while not self.ended and (self.frame_index + 1) / self.fps <= t:
-                fresh = self._read() or fresh
+            if self._thread is None:
+                import threading
+
+                self._stop = threading.Event()
+                self._lock = threading.Lock()
+                self._thread = threading.Thread(target=self._live_loop, daemon=True,
+                                                name="hearsee-camera")
+                self._thread.start()
+            with self._lock:
+                return self.last_point
+        fresh = False
+        while not self.ended and (self.frame_index + 1) / self.fps <= t:
+            fresh = self._read() or fresh
         if fresh:
             self.last_point = detect_source_point(self._frame, self.detector)
-        if self.frame_index < 0 or abs(self.frame_time - t) > 2.0 / self.fps and not self.live:
+        if self.frame_index < 0 or abs(self.frame_time - t) > 2.0 / self.fps:
             return None
         return self.last_point
 
     def close(self) -> None:
+        if self._thread is not None:
+            self._stop.set()
+            self._thread.join(timeout=1.0)
         self.cap.release()
