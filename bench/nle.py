@@ -17,12 +17,13 @@ scikit-learn ``LocallyLinearEmbedding`` (standard, modified, hessian, ltsa; ``ei
    for every method, CNLE's own ``labels_`` as well (ARI over the non-outlier points).
 2. **Two-rolls K sweep**: LLE with every fixed K in 5, 10, ..., 30: how many large components its
    K-NN graph has and the k-means ARI of its embedding, vs CNLE.
-3. **Scaling** on the swiss roll at n = 2000, 5000, 20000, 100000: wall time of ``fit_transform``
-   and peak resident memory (``ru_maxrss`` of a fresh subprocess per method and size, minus that
-   of the same subprocess doing everything but the fit), with trustworthiness / rank correlation
-   on a random subsample of 2000 points (sklearn's trustworthiness is O(n^2)). Each run has a
-   time limit; peers that are known to need O(n^2) memory or time (Isomap, hessian, modified,
-   ltsa beyond 5000; spectral beyond 20000) are skipped at the larger sizes and marked so.
+3. **Scaling** on the swiss roll at n = 2000, 5000, 20000, 100000: wall time of
+   ``fit_transform`` and memory (a fresh subprocess per method and size: its peak resident set
+   ``ru_maxrss``, and how much the fit raised it above the peak reached by the imports and the
+   data), with trustworthiness / rank correlation on a random subsample of 2000 points
+   (sklearn's trustworthiness is O(n^2)). Each run has a time limit; peers known to need
+   O(n^2) memory or time (Isomap, hessian, modified, ltsa beyond 5000; spectral beyond 20000)
+   are skipped at the larger sizes and marked so.
 
 Run ``python bench/nle.py`` (about 15 min on a shared 2-core machine) or ``--quick``.
 """
@@ -209,23 +210,21 @@ def part_sweep(n: int) -> list:
     return rows
 
 
-def _worker(meth: str, n: int, baseline: bool) -> None:
+def _worker(meth: str, n: int) -> None:
     """Subprocess body: fit one method on the swiss roll, print a JSON line."""
     rng = np.random.default_rng(1)
     X, t, lab = dataset("swiss", n)
     est = make_method(meth)
-    if baseline:
-        out = {"rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
-        print(json.dumps(out))
-        return
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         Y = est.fit_transform(X)
     dt = time.perf_counter() - t0
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     T, C, rho = quality(X, Y, t, None, rng)
-    print(json.dumps({"time_s": dt, "rss_mb": rss, "T": T, "C": C, "rho": rho}))
+    print(json.dumps({"time_s": dt, "rss_mb": after, "extra_mb": max(after - before, 0.0),
+                      "T": T, "C": C, "rho": rho}))
 
 
 SKIP = {  # (method, n) that need O(n^2) memory/time on this machine: not run
@@ -235,9 +234,8 @@ SKIP = {  # (method, n) that need O(n^2) memory/time on this machine: not run
 }
 
 
-def _run_child(meth: str, n: int, baseline: bool, timeout: float) -> dict | None:
+def _run_child(meth: str, n: int, timeout: float) -> dict:
     cmd = [sys.executable, __file__, "--worker", meth, str(n)]
-    cmd += ["--baseline"] if baseline else []
     try:
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
                            env={**os.environ, "PYTHONWARNINGS": "ignore"})
@@ -251,29 +249,27 @@ def _run_child(meth: str, n: int, baseline: bool, timeout: float) -> dict | None
 def part_scaling(sizes, timeout: float) -> list:
     rows = []
     for n in sizes:
-        base = _run_child("nle", n, True, timeout)
-        base_mb = base.get("rss_mb", float("nan")) if base else float("nan")
         ref = None
         for meth in METHODS:
             if (meth, n) in SKIP:
-                rows.append([n, LABEL[meth], "skipped: " + SKIP[(meth, n)], "", "", "", "", ""])
+                rows.append([n, LABEL[meth], "skipped: " + SKIP[(meth, n)], "", "", "", "", "", ""])
                 continue
-            r = _run_child(meth, n, False, timeout)
+            r = _run_child(meth, n, timeout)
             if r.get("timeout"):
-                rows.append([n, LABEL[meth], f"timeout > {timeout:.0f} s", "", "", "", "", ""])
+                rows.append([n, LABEL[meth], f"timeout > {timeout:.0f} s", "", "", "", "", "", ""])
                 print(f"  scaling n={n} {meth}: timeout", flush=True)
                 continue
             if "error" in r:
-                rows.append([n, LABEL[meth], "failed: " + r["error"], "", "", "", "", ""])
+                rows.append([n, LABEL[meth], "failed: " + r["error"], "", "", "", "", "", ""])
                 print(f"  scaling n={n} {meth}: {r['error']}", flush=True)
                 continue
             if meth == "nle":
                 ref = r["time_s"]
             ratio = r["time_s"] / ref if ref else float("nan")
-            rows.append([n, LABEL[meth], r["time_s"], ratio, r["rss_mb"] - base_mb, r["T"],
+            rows.append([n, LABEL[meth], r["time_s"], ratio, r["extra_mb"], r["rss_mb"], r["T"],
                          r["C"], r["rho"]])
-            print(f"  scaling n={n} {meth}: {r['time_s']:.1f}s {r['rss_mb'] - base_mb:.0f} MB "
-                  f"T={r['T']:.4f}", flush=True)
+            print(f"  scaling n={n} {meth}: {r['time_s']:.1f}s +{r['extra_mb']:.0f} MB "
+                  f"(peak {r['rss_mb']:.0f} MB) T={r['T']:.4f}", flush=True)
     return rows
 
 
@@ -316,10 +312,9 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="n=1000 quality, sizes 2000 and 5000")
     ap.add_argument("--timeout", type=float, default=None, help="per-run time limit [s]")
     ap.add_argument("--worker", nargs=2, metavar=("METHOD", "N"), help=argparse.SUPPRESS)
-    ap.add_argument("--baseline", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.worker:
-        _worker(a.worker[0], int(a.worker[1]), a.baseline)
+        _worker(a.worker[0], int(a.worker[1]))
         return 0
     t_start = time.perf_counter()
     rng = np.random.default_rng(0)
@@ -340,7 +335,7 @@ def main(argv=None) -> int:
 
     print("3. scaling", flush=True)
     srows = part_scaling(sizes, timeout)
-    sh = ["n", "method", "time [s]", "time / NLE", "peak RSS above baseline [MB]",
+    sh = ["n", "method", "time [s]", "time / NLE", "RSS growth in fit [MB]", "peak RSS [MB]",
           "trustworthiness (2000-pt subsample)", "continuity", "rank corr."]
     print_table("Swiss roll: time and memory", sh, srows, 4)
 

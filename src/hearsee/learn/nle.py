@@ -31,13 +31,24 @@ literature, not a transcription:
   well-spread neighbours per point on 2-D manifolds (measured on the swiss roll). Every point keeps
   at least ``min(n_components + 1, n_neighbors)`` neighbours: when the rule leaves fewer, the
   nearest rejected candidates are added back.
-* CNLE (thesis 6.1.2): the adaptive neighbourhood graph, reduced to *mutual* edges (``j`` chose
-  ``i`` and ``i`` chose ``j``) and with edges cut whose length is an outlier for both endpoints'
-  local scale (``> bridge_ratio`` times the median accepted-neighbour distance of each end), falls
-  apart into connected components, one per manifold; components smaller than
-  ``min_cluster_size`` join the cluster of their nearest large component. Each cluster is then
-  embedded by NLE on its own. The two guards are against noise bridges: a sparse point that
-  reaches into a dense neighbouring sheet is rarely chosen back by the dense sheet's points.
+* CNLE (thesis 6.1.2): the adaptive neighbourhood graph falls apart into one connected
+  component per manifold once bridges are removed. The guards reconstructed here:
+
+  1. *mutual* edges only (``j`` chose ``i`` and ``i`` chose ``j``): a point of a sparse or noisy
+     region that reaches into a dense neighbouring sheet is rarely chosen back;
+  2. an edge is cut when it is longer than ``bridge_ratio`` times the local scale (median
+     accepted-neighbour distance) of either end;
+  3. only *core* points link clusters: at least ``d + 1`` mutual neighbours and a locally
+     ``d``-dimensional neighbourhood (at most ``max_off_plane`` of the energy of the offsets
+     ``x_j - x_i`` outside their best ``d``-dimensional subspace). A noise point floating between
+     two sheets has neighbours on both sides, fails this test and cannot chain them together.
+
+  Components of core points with at least ``min_cluster_size`` points are the clusters; every
+  other point (noise, boundary points, small pieces) takes the majority label of its adaptive
+  neighbours, spreading outwards from the clusters, or failing that the label of its nearest
+  labelled point. Each cluster is then embedded by NLE on its own. The guards are in the spirit
+  of mutual-kNN graphs and density-based clustering (DBSCAN's core points, Ester et al. 1996);
+  their combination and thresholds are this reconstruction's choice.
 
 The thesis author's own paper on the method (Ge, Guan, Pan & Loh, "Neighborhood linear embedding
 for intrinsic structure discovery", Machine Vision and Applications, 2010) was not available to
@@ -492,22 +503,28 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
     """Clustered NLE (CNLE, thesis 6.1.2): split the data into the connected components of the
     adaptive neighbourhood graph and embed each component with NLE.
 
-    Reconstruction; see the module docstring. The clustering graph keeps an edge ``i - j`` only
-    when both points chose each other under the shadow rule (mutual neighbours) and the edge is
-    not longer than ``bridge_ratio`` times the median accepted-neighbour distance of *both* its
-    ends. Components smaller than ``min_cluster_size`` join the cluster of their nearest point in
-    a large component. Each cluster is then embedded separately, so the coordinates of different
-    clusters share axes but not a frame: read them together with ``labels_``.
+    Reconstruction; see the module docstring for the three bridge guards (mutual edges, an edge
+    length limit relative to the local scale of both ends, and core points with a locally
+    ``d``-dimensional neighbourhood) and how non-core points are assigned. Each cluster is embedded
+    separately, so the coordinates of different clusters share axes but not a frame: read them
+    together with ``labels_``. An estimator of its own (not an option of
+    :class:`NeighborhoodLinearEmbedding`) because it adds ``labels_``, :meth:`predict` and
+    :meth:`fit_predict`. Its defaults differ: ``n_neighbors=8`` and ``shadow=0.5`` (smaller,
+    sparser neighbourhoods bridge less; measured on the two rolls of :func:`make_two_rolls`).
 
     Parameters
     ----------
     n_components, n_neighbors, shadow, reg, eigen_solver, tol, random_state, n_jobs
-        As in :class:`NeighborhoodLinearEmbedding`.
+        As in :class:`NeighborhoodLinearEmbedding` (defaults ``n_neighbors=8``, ``shadow=0.5``).
+        ``n_components`` is also the dimension ``d`` of the core-point test.
     min_cluster_size : int, default 20
-        Components with fewer points are merged into the nearest large one.
+        Components of core points with fewer points do not form clusters of their own.
     bridge_ratio : float, default 3.0
-        An edge longer than this many times the median neighbour distance of both its ends is cut.
-        ``inf`` disables the length guard (mutual edges only).
+        A mutual edge longer than this many times the median accepted-neighbour distance of
+        either end is cut.
+    max_off_plane : float in [0, 1], default 0.3
+        Core-point test: the largest fraction of a point's neighbour-offset energy allowed outside
+        its best ``n_components``-dimensional subspace.
 
     Attributes
     ----------
@@ -519,6 +536,14 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
     adjacency_, n_neighbors_, reconstruction_error_, nbrs_, n_features_in_
         As in :class:`NeighborhoodLinearEmbedding` (``adjacency_`` holds the per-cluster weights;
         the error is summed over clusters).
+
+    Examples
+    --------
+    >>> from hearsee.learn import ClusteredNLE, make_two_rolls
+    >>> X, sheet, _ = make_two_rolls(2000, noise=0.1, outliers=0.02, random_state=0)
+    >>> cnle = ClusteredNLE(random_state=0).fit(X)
+    >>> cnle.n_clusters_
+    2
     """
 
     _parameter_constraints: dict = {
@@ -700,33 +725,35 @@ def make_two_rolls(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Two swiss-roll sheets wound together (thesis fig. 6.7, reconstruction of the data set).
 
-    Sheet 0 follows the spiral ``r = t`` (``t`` from 1.5 pi to 4.5 pi), sheet 1 the same spiral
-    pushed ``gap`` outwards along the normal. Points are uniform by area on each sheet; sheet 0 is
-    ``density_ratio`` times denser than sheet 1, so sparse-sheet points find dense-sheet points
-    nearer than their own neighbours: a fixed-K neighbourhood bridges the sheets, an adaptive one
-    need not.
+    Sheet 0 follows the spiral ``r = t`` (``t`` from 1.5 pi to 3.5 pi, one full turn), sheet 1
+    the same spiral pushed ``gap`` outwards along its normal (the default, pi, puts it halfway
+    between the turns of sheet 0). Points are uniform by area on each sheet; sheet 0 is
+    ``density_ratio`` times denser than sheet 1, and ``outliers`` adds noise points uniform in the
+    bounding box (label -1) that chain the sheets together in any fixed-K neighbour graph.
 
     Parameters
     ----------
     n_samples : int
-        Total number of points.
+        Number of points on the two sheets (outliers come on top).
     density_ratio : float
         Ratio of the number of points on sheet 0 to sheet 1.
     gap : float
         Normal distance between the sheets (same units as the spiral radius).
     noise : float
-        Standard deviation of isotropic Gaussian noise added to the points.
+        Standard deviation of isotropic Gaussian noise added to the sheet points.
+    outliers : float
+        Number of extra noise points, as a fraction of ``n_samples``.
     height : float
         Extent along the roll axis (y).
     random_state : int, RandomState or None
 
     Returns
     -------
-    X : (n_samples, 3) array
-    labels : (n_samples,) int array
-        Sheet of each point (0 dense, 1 sparse).
-    t : (n_samples, 2) array
-        Intrinsic coordinates: arc length along the spiral and height.
+    X : (n_samples + n_outliers, 3) array
+    labels : (n_samples + n_outliers,) int array
+        Sheet of each point (0 dense, 1 sparse, -1 outlier).
+    t : (n_samples + n_outliers, 2) array
+        Intrinsic coordinates: arc length along the spiral and height (NaN for outliers).
     """
     rs = check_random_state(random_state)
     n0 = int(round(n_samples * density_ratio / (1.0 + density_ratio)))
