@@ -212,7 +212,8 @@ def part_b(trials: int, seed: int, dur: float) -> tuple[list, dict]:
                 return float(uv[0]), float(uv[1])
 
             cfg = StreamConfig(frame_ms=64.0, hop_ms=32.0, sigma_tdoa_s=2e-5, sigma_px=1.0,
-                               sigma_jerk=0.3, accel_tau_s=0.5, range_m=(0.2, 4.0))
+                               sigma_jerk=0.3, accel_tau_s=0.5, range_m=(0.2, 4.0),
+                               refine="interp")  # exact sub-sample peaks matter for range
             ups = StreamPipeline(rig.array, cfg, rig=rig, image_points=points).run(
                 ArraySource(y, FS, 2048))
             t = np.array([u.t for u in ups])
