@@ -21,7 +21,7 @@ scikit-learn ``LocallyLinearEmbedding`` (standard, modified, hessian, ltsa; ``ei
    K-NN graph has and the k-means ARI of its embedding, vs CNLE.
 3. **Scaling** on the swiss roll at n = 2000, 5000, 20000, 100000: wall time of
    ``fit_transform`` and memory (a fresh subprocess per method and size: its peak resident set
-   ``ru_maxrss``, and how much the fit raised it above the peak reached by the imports and the
+   (``VmHWM``), and how much the fit raised it above the peak reached by the imports and the
    data), with trustworthiness / rank correlation on a random subsample of 2000 points
    (sklearn's trustworthiness is O(n^2)). Each run has a time limit; peers known to need
    O(n^2) memory or time (Isomap, hessian, modified, ltsa beyond 5000; spectral beyond 20000)
@@ -226,18 +226,30 @@ def part_sweep(n: int) -> list:
     return rows
 
 
+def _peak_rss_mb() -> float:
+    """Peak resident set of this process [MB]: VmHWM (reset by exec, unlike ru_maxrss, which a
+    child started by fork + exec inherits from its parent), or ru_maxrss where /proc is absent."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return float(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
 def _worker(meth: str, n: int) -> None:
     """Subprocess body: fit one method on the swiss roll, print a JSON line."""
     rng = np.random.default_rng(1)
     X, t, lab = dataset("swiss", n)
     est = make_method(meth)
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    before = _peak_rss_mb()
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         Y = est.fit_transform(X)
     dt = time.perf_counter() - t0
-    after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    after = _peak_rss_mb()
     T, C, rho = quality(X, Y, t, None, rng)
     print(json.dumps({"time_s": dt, "rss_mb": after, "extra_mb": max(after - before, 0.0),
                       "T": T, "C": C, "rho": rho}))

@@ -333,6 +333,8 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
     n_features_in_ : int
     nbrs_ : NearestNeighbors
         Fitted on the training data; used by :meth:`transform`.
+    training_data_ : (n_samples, n_features) array
+        The training points (a reference, not a copy, where X was already float64).
 
     Examples
     --------
@@ -450,6 +452,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
     def _fit_embedding(self, X: np.ndarray, random_state) -> None:
         n = X.shape[0]
         self.nbrs_, dist, ind, mask = self._neighbourhoods(X, self.n_neighbors)
+        self.training_data_ = X
         W = reconstruction_weights(X, ind, mask, self.reg)
         self.embedding_, self.adjacency_, self.reconstruction_error_ = self._embed(
             ind, W, mask, n, random_state
@@ -470,7 +473,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         """Out-of-sample neighbourhoods and weights of X in the training set.
 
         ``allowed`` (n_query, n_neighbors) bool masks candidates that may be used."""
-        train = self.nbrs_._fit_X
+        train = self.training_data_
         k = min(self.n_neighbors, train.shape[0])
         dist, ind = self.nbrs_.kneighbors(X, n_neighbors=k)
         mask = adaptive_neighbors(train, ind, dist, self.shadow,
@@ -536,7 +539,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
     n_clusters_ : int
     embedding_ : (n_samples, n_components) array
         Per-cluster NLE coordinates (each cluster zero-mean, unit variance per coordinate).
-    adjacency_, n_neighbors_, reconstruction_error_, nbrs_, n_features_in_
+    adjacency_, n_neighbors_, reconstruction_error_, nbrs_, training_data_, n_features_in_
         As in :class:`NeighborhoodLinearEmbedding` (``adjacency_`` holds the per-cluster weights;
         the error is summed over clusters).
 
@@ -656,6 +659,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         rs = check_random_state(self.random_state)
         n = X.shape[0]
         self.nbrs_, dist, ind, mask = self._neighbourhoods(X, self.n_neighbors)
+        self.training_data_ = X
         labels = self._cluster(X, dist, ind, mask)
         self.labels_ = labels
         self.n_clusters_ = int(labels.max()) + 1
