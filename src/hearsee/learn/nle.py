@@ -269,6 +269,33 @@ def _off_plane_fraction(X: np.ndarray, ind: np.ndarray, mask: np.ndarray, d: int
     return out
 
 
+def _scale_axes_to_edges(X: np.ndarray, Y: np.ndarray, Wm: sparse.spmatrix) -> np.ndarray:
+    """Rescale each embedding axis so that squared edge lengths of the neighbourhood graph match
+    those of the input in the least-squares sense: ``min_s sum_(i,j) (||x_i - x_j||^2 -
+    sum_k s_k^2 (y_ik - y_jk)^2)^2`` with ``s_k^2 >= 0`` (non-negative least squares on the
+    ``d x d`` normal equations). LLE's constraint ``Y^T Y = n I`` fixes the axis scales
+    arbitrarily (every axis gets unit variance, whatever the manifold's aspect ratio); this puts
+    them back in the units of the data. Falls back to ``Y`` when the fit is degenerate."""
+    from scipy.optimize import nnls
+
+    E = sparse.triu(Wm + Wm.T, k=1).tocoo()
+    i, j = E.row, E.col
+    if i.size < Y.shape[1]:
+        return Y
+    dx2 = np.einsum("ed,ed->e", X[i] - X[j], X[i] - X[j])
+    dy2 = (Y[i] - Y[j]) ** 2
+    G = dy2.T @ dy2
+    c = dy2.T @ dx2
+    try:
+        L = np.linalg.cholesky(G)
+    except np.linalg.LinAlgError:
+        return Y
+    s2, _ = nnls(L.T, np.linalg.solve(L, c))
+    if not np.all(np.isfinite(s2)) or np.any(s2 <= 0):
+        return Y
+    return Y * np.sqrt(s2)
+
+
 def _fix_signs(Y: np.ndarray) -> np.ndarray:
     """Make the largest-magnitude entry of each column positive (deterministic output)."""
     if Y.size == 0:
@@ -298,7 +325,8 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
     regularised least-squares weights ``W``, and the embedding ``Y`` minimises
     ``sum_i ||y_i - sum_j W_ij y_j||^2`` with ``Y^T Y = n I`` and ``sum_i y_i = 0``: it is given by
     eigenvectors 2..d+1 (in increasing order of eigenvalue) of ``M = (I - W)^T (I - W)``, scaled
-    to unit variance per coordinate.
+    to unit variance per coordinate and then (``axis_scaling="edges"``) per axis to the data's
+    units.
 
     Parameters
     ----------
@@ -315,6 +343,14 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         "dense": LAPACK on the dense ``M`` (n <= a few thousand); "auto": dense for n <= 200.
     tol : float, default 1e-6
         ARPACK tolerance.
+    axis_scaling : {"edges", "unit"}, default "edges"
+        "unit": LLE's normalisation, every coordinate zero-mean with unit variance. "edges": then
+        rescale each axis so that the lengths of the neighbourhood-graph edges in the embedding
+        match those in the input (least squares on squared lengths): the embedding keeps the
+        manifold's aspect ratio, in the units of X. This step, not the neighbour rule, is what
+        lifts trustworthiness above scikit-learn's LLE variants on the swiss roll and S-curve
+        (0.9995 / 0.9998 vs 0.9970 / 0.9965 at n = 2000, see bench/nle.py); it would help any
+        LLE-type embedding alike.
     random_state : int, RandomState or None
         Seeds ARPACK's start vector.
     n_jobs : int or None
@@ -323,7 +359,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
     Attributes
     ----------
     embedding_ : (n_samples, n_components) array
-        The embedding of the training points (zero mean, unit variance per coordinate).
+        The embedding of the training points (zero mean; per-axis scale as ``axis_scaling``).
     adjacency_ : sparse (n_samples, n_samples) CSR matrix
         Reconstruction weights; row ``i`` holds the weights of point ``i``'s accepted neighbours.
     n_neighbors_ : (n_samples,) int array
@@ -353,6 +389,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         "reg": [Interval(Real, 0, None, closed="left")],
         "eigen_solver": [StrOptions({"auto", "arpack", "dense"})],
         "tol": [Interval(Real, 0, None, closed="left")],
+        "axis_scaling": [StrOptions({"edges", "unit"})],
         "random_state": ["random_state"],
         "n_jobs": [Integral, None],
     }
@@ -366,6 +403,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         reg: float = 1e-3,
         eigen_solver: str = "auto",
         tol: float = 1e-6,
+        axis_scaling: str = "edges",
         random_state=None,
         n_jobs: int | None = None,
     ) -> None:
@@ -375,6 +413,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         self.reg = reg
         self.eigen_solver = eigen_solver
         self.tol = tol
+        self.axis_scaling = axis_scaling
         self.random_state = random_state
         self.n_jobs = n_jobs
 
@@ -424,7 +463,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
                                   min_neighbors=self.n_components + 1)
         return nbrs, dist, ind, mask
 
-    def _embed(self, ind, W, mask, n, random_state, warn=True):
+    def _embed(self, X, ind, W, mask, n, random_state, warn=True):
         """Embedding from the weights; returns (Y, W sparse, error)."""
         Wm = _weight_matrix(ind, W, mask, n)
         if warn and n > 1:
@@ -447,6 +486,8 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
             solver = "dense"
         vals, vecs = _bottom_eigenvectors(M, k, solver, self.tol, random_state)
         Y = _fix_signs(vecs[:, 1:k] * np.sqrt(n))
+        if self.axis_scaling == "edges":
+            Y = _scale_axes_to_edges(X, Y, Wm)
         return Y, Wm, float(np.sum(vals[1:k]))
 
     def _fit_embedding(self, X: np.ndarray, random_state) -> None:
@@ -455,7 +496,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         self.training_data_ = X
         W = reconstruction_weights(X, ind, mask, self.reg)
         self.embedding_, self.adjacency_, self.reconstruction_error_ = self._embed(
-            ind, W, mask, n, random_state
+            X, ind, W, mask, n, random_state
         )
         self.n_neighbors_ = mask.sum(axis=1)
 
@@ -520,7 +561,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
 
     Parameters
     ----------
-    n_components, n_neighbors, shadow, reg, eigen_solver, tol, random_state, n_jobs
+    n_components, n_neighbors, shadow, reg, eigen_solver, tol, axis_scaling, random_state, n_jobs
         As in :class:`NeighborhoodLinearEmbedding` (defaults ``n_neighbors=8``, ``shadow=0.5``).
         ``n_components`` is also the dimension ``d`` of the core-point test.
     min_cluster_size : int, default 20
@@ -538,7 +579,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         Cluster of each training point, 0..n_clusters_-1, in decreasing order of cluster size.
     n_clusters_ : int
     embedding_ : (n_samples, n_components) array
-        Per-cluster NLE coordinates (each cluster zero-mean, unit variance per coordinate).
+        Per-cluster NLE coordinates (each cluster zero-mean, axes scaled as ``axis_scaling``).
     adjacency_, n_neighbors_, reconstruction_error_, nbrs_, training_data_, n_features_in_
         As in :class:`NeighborhoodLinearEmbedding` (``adjacency_`` holds the per-cluster weights;
         the error is summed over clusters).
@@ -568,6 +609,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         reg: float = 1e-3,
         eigen_solver: str = "auto",
         tol: float = 1e-6,
+        axis_scaling: str = "edges",
         random_state=None,
         n_jobs: int | None = None,
         min_cluster_size: int = 20,
@@ -581,6 +623,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
             reg=reg,
             eigen_solver=eigen_solver,
             tol=tol,
+            axis_scaling=axis_scaling,
             random_state=random_state,
             n_jobs=n_jobs,
         )
@@ -680,7 +723,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
             dc, ic = dc[:, 1:], ic[:, 1:]
             mc = adaptive_neighbors(Xc, ic, dc, self.shadow, min_neighbors=self.n_components + 1)
             Wc = reconstruction_weights(Xc, ic, mc, self.reg)
-            Yc, Wmc, e = self._embed(ic, Wc, mc, m, rs, warn=False)
+            Yc, Wmc, e = self._embed(Xc, ic, Wc, mc, m, rs, warn=False)
             Y[idx] = Yc
             err += e
             counts[idx] = mc.sum(axis=1)
