@@ -29,7 +29,7 @@ Ambiguity is reported, never hidden:
 
 Covariance: ``C = sigma^2 (J^T J)^-1`` with J the Jacobian of the TDOA model (s/m) with respect to
 the cartesian position at the solution and ``sigma^2`` the larger of ``tdoa_std_s^2`` and the
-residual variance ``RSS / (m - 3)``.
+robust residual variance ``(1.4826 MAD)^2 m / (m - 3)`` (m measurements).
 
 Two microphones use the same solver (one TDOA per pose; more poses needed, thesis fig. 4.4). One
 microphone (thesis fig. 4.5, :func:`localize_one_mic`): **assumption** -- the source repeats with a
@@ -408,7 +408,11 @@ def solve_range_differences(
         J = _jac_cart(p, M, a, b, c)
         s2 = sig**2
         if m > 3:
-            s2 = max(s2, chi2 * sig**2 / (m - 3))
+            # robust residual scale (MAD): outliers down-weighted by the loss must not
+            # inflate the covariance of the estimate
+            r = (_model(p, M, a, b, c) - y) / sig
+            scale = 1.4826 * float(np.median(np.abs(r)))
+            s2 = sig**2 * max(1.0, scale**2 * m / (m - 3))
         JtJ = J.T @ J
         w = np.linalg.eigvalsh(JtJ)
         cond = float(np.sqrt(w[-1] / max(w[0], 1e-300)))
