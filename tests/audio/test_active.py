@@ -339,3 +339,26 @@ def test_thesis_search_alignment_far_source():
     with pytest.raises(GeometryError):
         align_head_search(lambda p: np.zeros(6),
                           MicArray([[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0], [0, 0, 0.1]]))
+
+
+def test_simulate_poses_cli_writes_manifest(tmp_path, capsys):
+    import json
+
+    from hearsee.cli import main
+
+    man = tmp_path / "cap.yaml"
+    args = ["simulate", str(man), "--array", "three-mic", "--source", "1.0,-0.8,0.5",
+            "--poses", "0,0;40,25;-40,-20", "--head-offset", "0.2,0,0.1", "--duration", "0.5",
+            "--snr", "30", "--seed", "4"]
+    assert main(args) == 0
+    assert man.is_file() and (tmp_path / "cap_pose2.wav").is_file()
+    capsys.readouterr()
+    assert main(["localize3d", str(man)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["unique"] is True
+    np.testing.assert_allclose(doc["position_m"], [1.0, -0.8, 0.5], atol=0.1)
+    # bad pose list and a non-manifest output name: one clear line, exit 2
+    assert main(args[:7] + ["0,0;45", "--duration", "0.2"]) == 2
+    assert "--poses" in capsys.readouterr().err
+    assert main(["simulate", str(tmp_path / "x.wav")] + args[2:]) == 2
+    assert "manifest" in capsys.readouterr().err

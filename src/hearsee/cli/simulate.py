@@ -52,9 +52,32 @@ def simulate_cmd(
                                    help="Free field only: a plane wave from the source's "
                                    "direction instead of a spherical wave."),
     pcm16: bool = typer.Option(False, "--pcm16", help="Write 16-bit PCM instead of float32."),
+    poses: str | None = typer.Option(
+        None, "--poses", help="Head poses 'PAN,TILT;PAN,TILT;...' in degrees: one capture per "
+        "pose (OUT_pose<k>.wav) and OUT.yaml, a pose manifest with the ground truth for "
+        "`hearsee localize3d`. --source is then in the robot frame (head pivot at the origin; "
+        "--array-at puts the pivot in the room)."),
+    head_offset: str = typer.Option(
+        "0,0,0", "--head-offset",
+        help="With --poses: array origin relative to the head pivot (head frame), X,Y,Z m."),
 ) -> None:
     """Simulate a recording of a static source and write OUT.wav + OUT.json (ground truth)."""
     from hearsee.sim.audio import save_recording, simulate_recording
+
+    if poses is not None:
+        from hearsee.audio.active import parse_poses, simulate_pose_manifest
+
+        if far_field:
+            raise ConfigError("--far-field does not apply with --poses")
+        man, files = simulate_pose_manifest(
+            out, array, parse_floats(source, 3, "--source"), parse_poses(poses), signal=signal,
+            duration_s=duration, fs=fs, snr_db=snr, room=_room_from_options(room, rt60, array_at),
+            seed=seed, offset_m=parse_floats(head_offset, 3, "--head-offset"),
+            subtype="PCM_16" if pcm16 else "FLOAT",
+            protect=[p for p in (signal, array) if Path(p).is_file()])
+        err_console.print(f"wrote {man} (pose manifest) and {len(files)} captures",
+                          highlight=False)
+        return
 
     src = parse_floats(source, 3, "--source")
     room_spec = _room_from_options(room, rt60, array_at)
