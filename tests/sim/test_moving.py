@@ -188,3 +188,39 @@ def test_simulate_moving_recording_free_field_truth():
     assert len(truth["trajectory"]["t"]) == 2
     with pytest.raises(ConfigError, match="duration"):
         simulate_moving_recording("two-mic", Trajectory([0.0], [[1.0, 0.0, 0.0]]))
+
+
+def test_cli_simulate_trajectory_writes_truth_beside_the_wav(tmp_path, capsys):
+    import json
+
+    from hearsee.audio.signals import read_recording
+    from hearsee.cli import main
+
+    csv_in = tmp_path / "walk.csv"
+    save_trajectory(linear_trajectory([1.5, -0.5, 0.2], [0.0, 1.0, 0.0], 1.0), csv_in)
+    out = tmp_path / "walk.wav"
+    assert main(["simulate", str(out), "--array", "three-mic", "--trajectory", str(csv_in),
+                 "--duration", "0.5", "--fs", "8000", "--snr", "30"]) == 0
+    x, fs = read_recording(out)
+    assert x.shape == (3, 4000) and fs == 8000
+    truth = json.loads(out.with_suffix(".json").read_text())
+    assert truth["moving"] and truth["trajectory_csv"] == "walk.trajectory.csv"
+    gt = load_trajectory(tmp_path / "walk.trajectory.csv")
+    np.testing.assert_allclose(gt.at(0.25), [1.5, -0.25, 0.2], atol=1e-6)
+    assert csv_in.read_text().startswith("t,x,y,z")  # the input is untouched
+    capsys.readouterr()
+    # bad combinations are one clear line, exit 2
+    assert main(["simulate", str(out), "--array", "three-mic"]) == 2
+    assert "--trajectory" in capsys.readouterr().err
+    assert main(["simulate", str(out), "--array", "three-mic", "--trajectory", str(csv_in),
+                 "--source", "1,0,0"]) == 2
+    capsys.readouterr()
+    assert main(["simulate", str(out), "--array", "three-mic", "--trajectory", str(csv_in),
+                 "--far-field"]) == 2
+    assert "far-field" in capsys.readouterr().err
+    # the truth CSV would overwrite the input trajectory: refused, input untouched
+    before = (tmp_path / "walk.trajectory.csv").read_text()
+    assert main(["simulate", str(out), "--array", "three-mic",
+                 "--trajectory", str(tmp_path / "walk.trajectory.csv")]) == 2
+    assert "overwrite" in capsys.readouterr().err
+    assert (tmp_path / "walk.trajectory.csv").read_text() == before
