@@ -199,3 +199,47 @@ def test_localize_recording_document(model):
     assert abs(med - az) < 10
     json_doc = __import__("json").dumps(doc)  # JSON-able
     assert '"summary"' in json_doc
+
+
+# ------------------------------------------------------------------ CLI: simulate + localize
+def test_cli_simulate_and_localize_masked(model, tmp_path, capsys):
+    import json
+
+    import yaml
+
+    from hearsee.cli import main
+
+    spec = tmp_path / "coarse-mask.yaml"
+    spec.write_text(yaml.safe_dump(model.array.to_dict()), encoding="utf-8")
+    wav = tmp_path / "rec.wav"
+    az = 120.0
+    src = f"{np.cos(np.radians(az)):.6f},{np.sin(np.radians(az)):.6f},0"
+    assert main(["simulate", str(wav), "--array", str(spec), "--source", src, "--snr", "20",
+                 "--duration", "1.0", "--seed", "4"]) == 0
+    capsys.readouterr()
+    assert main(["localize", str(wav), "--array", str(spec), "--format", "json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    s = doc["summary"]
+    assert abs((s["azimuth_deg"] - az + 180) % 360 - 180) < 5
+    assert len(s["candidates"]) == 2 and s["elevation_deg"] is None
+    assert s["front_probability"] < 0.5
+
+
+def test_cli_masked_array_in_a_room_is_an_error(model, tmp_path, capsys):
+    import yaml
+
+    from hearsee.cli import main
+
+    spec = tmp_path / "coarse-mask.yaml"
+    spec.write_text(yaml.safe_dump(model.array.to_dict()), encoding="utf-8")
+    code = main(["simulate", str(tmp_path / "r.wav"), "--array", str(spec), "--source", "1,0,0",
+                 "--room", "5x4x3", "--rt60", "0.3"])
+    assert code == 2
+    assert "free field" in capsys.readouterr().err
+
+
+def test_bad_mask_geometry_is_an_error_at_load():
+    d = _mask2_dict(mesh_subdivision=3)
+    d["microphones"] = [[0.0, -0.05, 0.0], [0.0, 0.05, 0.0]]
+    with pytest.raises(GeometryError, match="inside the mask body"):
+        MicArray.from_dict(d, where="bad")

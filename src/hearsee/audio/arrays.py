@@ -112,9 +112,14 @@ class MicArray:
             raise ConfigError(f"{where}: mask must be a mapping")
         name = str(data.get("name", Path(where).stem if where != "array" else "custom"))
         try:
-            return cls(mics, float(c), name, mask)
+            arr = cls(mics, float(c), name, mask)
         except GeometryError as exc:
             raise GeometryError(f"{where}: {exc}") from None
+        if mask is not None:  # bad mask geometry is a clear error at load (hearsee.audio.mask)
+            from hearsee.audio.mask import mask_geometry
+
+            mask_geometry(arr)
+        return arr
 
     @classmethod
     def from_yaml(cls, path: str | Path) -> MicArray:

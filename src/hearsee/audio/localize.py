@@ -591,6 +591,11 @@ def localize_recording(
     from hearsee.audio.tdoa import estimate_tdoas, normalize_method
 
     arr = load_array(array)
+    if arr.mask is not None:  # masked two-microphone array: one 360-degree azimuth (ch. 3)
+        from hearsee.audio.mask import localize_recording_mask
+
+        return localize_recording_mask(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
+                                       method=method, kalman=kalman, progress=progress)
     method = normalize_method(method)
     tf = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method,
                         pairs=pairs, progress=progress, **tdoa_kwargs)

@@ -124,6 +124,13 @@ def render(signal: ArrayLike, fs: float, array: MicArray, source: ArrayLike,
     """
     room = normalize_room(room)
     src = _point(source, "source")
+    if array.mask is not None:  # masked two-microphone array: the mask's diffraction (BEM)
+        from hearsee.audio.mask import simulate_masked
+
+        if room is not None or mic_positions is not None:
+            raise ConfigError(f"array {array.name!r} has a mask: masked arrays are simulated in "
+                              "free field with the head fixed (no room, no turned microphones)")
+        return simulate_masked(signal, fs, array, src, far_field=far_field)
     if room is None:
         mics = array.positions if mic_positions is None else mic_positions
         return simulate_free_field(signal, fs, mics, src, speed_of_sound=array.speed_of_sound,
