@@ -383,7 +383,7 @@ def _plots(arr, fs, offset, al_trace, rng):
                  xlabel="pan alpha (deg)", ylabel="cm^2")
     ax[1, 1].plot(betas, np.array(dd13) * 100)
     ax[1, 1].axvline(el_src, ls=":", color="k")
-    ax[1, 1].set(title="Fig. 4.16: dd_13 vs tilt beta, alpha facing (extreme when facing)",
+    ax[1, 1].set(title="Fig. 4.16: dd_13 vs tilt beta at facing alpha (extreme = facing)",
                  xlabel="tilt beta (deg)", ylabel="cm")
     # fig. 4.17: the simultaneous search path of one alignment run
     if al_trace is not None:
