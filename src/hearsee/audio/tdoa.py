@@ -23,19 +23,35 @@ Lag search is bounded by each pair's physical maximum ``|M_i - M_j| / c0`` plus 
 ``margin_samples`` samples. The integer peak is refined below one sample either by a parabola
 through the three samples around it (``refine="parabolic"``) or -- the default -- by Newton
 iterations on the band-limited correlation function evaluated exactly from its spectrum
-(``refine="interp"``: frequency-domain interpolation; ``bench/doa.py`` measures both).
+(``refine="interp"``: frequency-domain interpolation; ``bench/doa.py`` measures both: the
+parabola is biased by ~0.1 sample, the interpolation reaches the Cramer-Rao bound with ML).
+
+SNR weighting (``snr_weight=True``, default; reconstruction after ManyEars/ODAS, Valin et al.
+2007): the weighting is multiplied per bin by a coherence estimate from each channel's
+a-priori SNR against the noise spectrum of the recording's quiet frames, so bins between the
+harmonics of a voice and above its band stop counting as much as bins with the source.
 
 Confidence is the peak-to-second-peak ratio: the height of the chosen peak divided by the highest
 value of the whole correlation function outside the peak's main lobe (all lags; the lobe is
-``max(2, ceil(fs / bandwidth))`` samples either side). A
-coherent source gives a ratio well above 1; uncorrelated noise gives a peak in the narrow
-physical window that is usually lower than some spurious peak elsewhere (ratio < 1).
+``max(2, ceil(fs / bandwidth))`` samples either side). A coherent source gives a ratio well
+above 1; uncorrelated noise gives a peak in the narrow physical window that is usually lower
+than some spurious peak elsewhere (ratio < 1).
 
 Frames without a source give no estimate (``valid=False``, TDOA NaN) when either
 - their energy is within ``vad_db`` dB of the recording's noise floor (10th percentile of frame
   energies) while the recording has louder frames (a dynamic range above ``vad_db`` + 3 dB), or
   the frame is digital silence; or
 - any pair's confidence is below ``min_confidence``.
+
+The whole-recording estimate (``summary_tdoa_s``) takes the peak of the weighted cross spectra
+averaged over the valid frames (more robust than averaging per-frame TDOAs). With three or more
+microphones the pairs' peaks are chosen jointly -- nearest the TDOAs of the direction whose
+summed correlations are largest -- so that a reflection topping one pair's correlation loses to
+the direct path the other pairs agree on; the closure ``t_ij + t_jk = t_ik`` of the pairs' own
+peaks is the test that tells a source from uncorrelated noise.
+
+Performance: frames in single precision, all frames and pairs per FFT call, only the band's bins
+weighted; refinement only for active frames.
 
 Units: seconds for TDOAs and frame times, Hz for sample rates; frames are the analysis frames of
 ``frame_ms`` milliseconds every ``hop_ms`` milliseconds.
