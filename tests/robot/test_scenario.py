@@ -30,6 +30,8 @@ def test_person_walks_the_path_at_constant_speed():
     ({"robt": {}}, "unknown key 'robt'"),
     ({"robot": {"arrays": "three-mic"}}, "scenario.robot: unknown key 'arrays'"),
     ({"robot": {"array": "five-mic"}}, "scenario.robot.array"),
+    ({"robot": {"array": "two-mic"}}, "scenario.robot.array: 'two-mic' cannot be simulated"),
+    ({"robot": {"array": "mask2"}}, "scenario.robot.array: 'mask2' cannot be simulated"),
     ({"robot": {"head_height_m": 3.5}}, "scenario.robot.head_height_m"),
     ({"room": {"size_m": [1, 5, 3]}}, "scenario.room.size_m"),
     ({"room": {"rt60_s": "long"}}, "scenario.room.rt60_s"),

@@ -237,11 +237,19 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scen
     if not isinstance(array, str):
         raise ConfigError(f"{rw}.array: expected a preset name or file path, got {array!r}")
     from hearsee.audio.arrays import load_array
+    from hearsee.audio.localize import array_geometry
 
     try:
-        load_array(array)
+        arr = load_array(array)
     except ConfigError as exc:
         raise ConfigError(f"{rw}.array: {exc}") from None
+    if arr.mask is not None or array_geometry(arr).kind == "linear":
+        raise ConfigError(
+            f"{rw}.array: {arr.name!r} cannot be simulated in a room for 360-degree hearing "
+            "(masked pairs have free-field transfer functions only, linear arrays have a "
+            "front/back mirror); use a planar array of 3 or more microphones, e.g. three-mic, "
+            "respeaker-4 or respeaker-6"
+        )
     robot = RobotSpec(
         position_m=robot_xy,
         heading_deg=_num(rob, "heading_deg", 0.0, rw, -360, 360),
