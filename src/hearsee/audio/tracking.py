@@ -183,22 +183,27 @@ class DirectionKalman(_Kalman):
         self.has_elevation = el is not None
         self.n_rejects = 0
 
-    def _parts(self, az: float, el: float | None, R: NDArray | None = None
-               ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    def _parts(self, az: float, el: float | None, R: NDArray | None = None,
+               delay_s: float = 0.0) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         R = self.R if R is None else R
+        H = self.H
+        if delay_s:
+            # the measurement shows the direction delay_s ago: z = d(t - delay) ~ d - delay * rate
+            H = H.copy()
+            H[0, 2] = H[1, 3] = -float(delay_s)
         if el is None or not np.isfinite(el):
-            return np.array([az]), self.H[:1], R[:1, :1], np.array([True])
-        return np.array([az, el]), self.H, R, np.array([True, False])
+            return np.array([az]), H[:1], R[:1, :1], np.array([True])
+        return np.array([az, el]), H, R, np.array([True, False])
 
-    def gate_distance(self, az: float, el: float | None = None, R: NDArray | None = None
-                      ) -> float:
+    def gate_distance(self, az: float, el: float | None = None, R: NDArray | None = None,
+                      delay_s: float = 0.0) -> float:
         """Squared Mahalanobis distance of a candidate measurement from the prediction."""
-        z, H, Rm, wrap = self._parts(az, el, R)
+        z, H, Rm, wrap = self._parts(az, el, R, delay_s)
         return self._innovation(z, H, Rm, wrap)[2]
 
     def update(self, t: float, measurement: tuple[float, float | None] | None = None,
                candidates: Sequence[tuple[float, float | None]] | None = None,
-               sigma_meas_deg: float | None = None) -> bool:
+               sigma_meas_deg: float | None = None, delay_s: float = 0.0) -> bool:
         """One frame: predict to ``t`` and correct with a measurement if there is one.
 
         Parameters
@@ -212,6 +217,10 @@ class DirectionKalman(_Kalman):
             prediction is used.
         sigma_meas_deg : float, optional
             This frame's measurement noise (default: the filter's).
+        delay_s : float, optional
+            How old the measurement's evidence is, seconds (e.g. ``alpha / (1 - alpha)`` hops
+            for recursively averaged spectra): the measurement model becomes
+            ``z = direction - delay_s * rate``, so averaging adds no lag to the track.
 
         Returns
         -------
@@ -231,10 +240,10 @@ class DirectionKalman(_Kalman):
         if not self.initialized:
             self._start(*cands[0])
             return True
-        d2 = [self.gate_distance(a, e, Rf) for a, e in cands]
+        d2 = [self.gate_distance(a, e, Rf, delay_s) for a, e in cands]
         k = int(np.argmin(d2))
         az, el = cands[k]
-        z, H, R, wrap = self._parts(az, el, Rf)
+        z, H, R, wrap = self._parts(az, el, Rf, delay_s)
         y, S, dist2 = self._innovation(z, H, R, wrap)
         if dist2 > self._gate[len(z)]:
             self.n_rejects += 1

@@ -50,6 +50,7 @@ from hearsee.audio.localize import localize_tdoa
 from hearsee.audio.tdoa import estimate_tdoas
 from hearsee.audio.tracking import DirectionKalman, MotionKalman
 from hearsee.errors import AudioInputError, ConfigError
+from hearsee.geometry import wrap_deg
 
 __all__ = [
     "ArraySource",
@@ -431,6 +432,181 @@ class Framer:
         return FrameBatch(t, missing, segment, blk.arrival)
 
 
+# ---------------------------------------------------------------------------- smoothed SRP stage
+class SmoothedSrp:
+    """Recursively smoothed cross-power spectra -> PHAT -> steered response over directions.
+
+    The tracker's measurement stage (ODAS's SSL module, Grondin & Michaud 2019, sec. 3; HARK's
+    MUSIC/GEVD front ends smooth their correlation matrices the same way): per pair the cross
+    spectrum ``G_ij(k) = X_i(k) X_j*(k)`` of each frame is averaged recursively,
+    ``S <- alpha S + (1 - alpha) G``, before the PHAT weighting, so one estimate holds the evidence
+    of about ``(1 + alpha) / (1 - alpha)`` frames (loud frames count more: the raw spectra are
+    averaged). The PHAT-weighted, band-limited correlations (upsampled ``up`` times) are summed
+    at the TDOAs of a grid of directions (SRP-PHAT on the smoothed spectra), which picks all pair
+    peaks jointly -- a reflection that tops one pair's correlation loses to the direction the
+    other pairs agree on. The best direction's pair lags are refined on the upsampled
+    correlations and returned in seconds together with the normalised steered power
+    (``coherence``: 1 = perfectly coherent, ~0 = noise) and a few other local maxima of the
+    steered response (alternative directions for the tracker's data association).
+
+    The averaged spectrum lags the source by about ``alpha / (1 - alpha)`` frames; the tracker
+    accounts for it in its measurement model (:meth:`DirectionKalman.update` ``delay_s``).
+
+    Units: seconds, Hz, degrees. Frames are Hann-windowed ``frame_len`` samples; state persists
+    across batches (missing frames leave it unchanged).
+    """
+
+    def __init__(self, array: MicArray, fs: float, frame_len: int, alpha: float,
+                 band_hz: tuple[float, float] | None = (300.0, 3500.0), up: int = 4,
+                 grid_deg: float = 2.0, coherence_weight: bool = True) -> None:
+        import scipy.fft as sfft
+
+        if not 0.0 <= alpha < 1.0:
+            raise ConfigError(f"spectrum smoothing alpha must be in [0, 1), got {alpha}")
+        self.array, self.fs, self.alpha, self.up = array, float(fs), float(alpha), int(up)
+        self.frame_len = int(frame_len)
+        self.pairs = list(array.pairs)
+        max_lag = array.max_tdoa(self.pairs) * fs + 1.0
+        self.nfft = sfft.next_fast_len(self.frame_len + 2 * int(np.ceil(max_lag.max())) + 2,
+                                       real=True)
+        n_bins = self.nfft // 2 + 1
+        f = np.arange(n_bins) * fs / self.nfft
+        lo, hi = band_hz if band_hz is not None else (0.0, fs / 2.0)
+        self.k0 = int(np.searchsorted(f, lo))
+        self.k1 = int(np.searchsorted(f, min(hi, fs / 2.0), side="right"))
+        if self.k1 - self.k0 < 4:
+            raise ConfigError(f"band {band_hz} Hz holds too few frequency bins at fs={fs:g} Hz")
+        self.win = np.hanning(self.frame_len).astype(np.float32)
+        self.I = np.array([p[0] for p in self.pairs])
+        self.J = np.array([p[1] for p in self.pairs])
+        # direction grid (unit vectors in the array frame); planar arrays see only |elevation|
+        az = np.radians(np.arange(-180.0, 180.0, grid_deg))
+        planar = np.ptp(array.positions[:, 2]) < 1e-9
+        els = np.radians(np.arange(0.0 if planar else -80.0, 81.0, 10.0))
+        self.grid_deg, self.n_az = float(grid_deg), az.size
+        self.az_axis = np.degrees(az)
+        A, E = np.meshgrid(az, els, indexing="ij")
+        self.grid_az = np.degrees(A.ravel())
+        self.grid_el = np.degrees(E.ravel())
+        U = np.stack([np.cos(E) * np.cos(A), np.cos(E) * np.sin(A), np.sin(E)], -1).reshape(-1, 3)
+        pos = array.positions
+        tau = -((pos[self.I] - pos[self.J]) @ U.T) / array.speed_of_sound * fs  # (P, D) samples
+        self.n_up = self.nfft * self.up
+        self.idx = np.round(tau * self.up).astype(int) % self.n_up
+        self.coherence_weight = bool(coherence_weight)
+        self.S: NDArray | None = None
+        self.A: NDArray | None = None
+        self._w, self._age = 0.0, 0.0
+
+    def reset(self) -> None:
+        self.S = None
+        self.A = None
+        self._w, self._age = 0.0, 0.0
+
+    def process(self, segment: NDArray, n_frames: int, hop: int) -> dict[str, NDArray]:
+        """Smooth and steer ``n_frames`` consecutive frames of ``segment`` (n_ch, n).
+
+        Returns ``tdoa_s`` (k, n_pairs), ``coherence`` (k,), ``age_frames`` (k,) the
+        energy-weighted mean age of the averaged evidence in frames, ``az_deg``/``el_deg`` (k,)
+        of the grid maximum and ``alt_az_deg`` (k, 2) of the two strongest other local maxima (NaN
+        when none) with their ``alt_coherence`` (k, 2).
+        """
+        import scipy.fft as sfft
+        from scipy.signal import lfilter
+
+        from hearsee.audio.tdoa import frame_signals
+
+        fr = frame_signals(segment.astype(np.float32), self.frame_len, hop)[:, :n_frames]
+        X = sfft.rfft(fr * self.win, self.nfft, axis=-1)[..., self.k0:self.k1]
+        X = np.moveaxis(X, 0, 1)  # (k, n_ch, B)
+        G = X[:, self.I] * np.conj(X[:, self.J])  # (k, P, B)
+        a = self.alpha
+        if self.S is None:
+            zi = G[:1] * a  # start from the first frame itself
+        else:
+            zi = (a * self.S)[None]
+        S = lfilter([1.0 - a], [1.0, -a], G, axis=0, zi=zi)[0]
+        self.S = S[-1].copy()
+        # age of the evidence: energy-weighted mean age (frames) of the averaged cross spectra
+        # (a loud syllable keeps dominating the average through the quiet frames after it)
+        e = np.abs(G).sum(axis=(1, 2)).astype(float)
+        age = np.zeros(len(e))
+        w_prev, d_prev = self._w, self._age
+        for n, en in enumerate(e):
+            w = a * w_prev + (1.0 - a) * en
+            d = a * w_prev * (d_prev + 1.0) / w if w > 0 else 0.0
+            age[n] = d
+            w_prev, d_prev = w, d
+        self._w, self._age = w_prev, d_prev
+        mag = np.abs(S)
+        floor = 1e-20 + 1e-12 * mag.max(initial=0.0)
+        P = S / np.maximum(mag, floor)
+        if self.coherence_weight:
+            # weight each bin by its smoothed magnitude-squared coherence |S_ij|^2/(S_ii S_jj):
+            # PHAT's whitening otherwise gives the noise-only bins between a voice's harmonics
+            # the same say as the harmonics (cf. the Hannan-Thomson / ML weighting)
+            auto = X.real**2 + X.imag**2
+            zi_a = auto[:1] * a if self.A is None else (a * self.A)[None]
+            A = lfilter([1.0 - a], [1.0, -a], auto, axis=0, zi=zi_a)[0]
+            self.A = A[-1].copy()
+            msc = mag**2 / np.maximum(A[:, self.I] * A[:, self.J], floor * floor)
+            P = P * np.clip(msc, 0.0, 1.0)
+            # keep the normalisation (1 = coherent everywhere) per frame and pair
+            P = P * (P.shape[-1] / np.maximum(np.clip(msc, 0.0, 1.0).sum(-1, keepdims=True),
+                                             1e-9))
+        full = np.zeros(P.shape[:-1] + (self.n_up // 2 + 1,), dtype=complex)
+        full[..., self.k0:self.k1] = P
+        nb = self.k1 - self.k0
+        r = sfft.irfft(full, self.n_up, axis=-1) * (self.n_up / (2.0 * nb))  # peak 1 = coherent
+        k = r.shape[0]
+        n_p = len(self.pairs)
+        score = np.zeros((k, self.idx.shape[1]))
+        for p in range(n_p):
+            score += r[:, p, self.idx[p]]
+        score /= n_p
+        best = np.argmax(score, axis=1)
+        coh = score[np.arange(k), best]
+        # refine each pair's lag: parabola through the upsampled correlation around the grid lag
+        lag0 = self.idx[:, best].T  # (k, P) upsampled indices
+        rows = np.arange(k)[:, None]
+        cols = np.arange(n_p)[None, :]
+        # local maximum within +-up/2 upsampled samples of the grid lag
+        offs = np.arange(-self.up, self.up + 1)
+        cand = (lag0[..., None] + offs) % self.n_up
+        vals = r[rows[..., None], cols[..., None], cand]
+        j = np.argmax(vals, axis=-1)
+        jc = np.clip(j, 1, len(offs) - 2)
+        ym = np.take_along_axis(vals, (jc - 1)[..., None], -1)[..., 0]
+        y0 = np.take_along_axis(vals, jc[..., None], -1)[..., 0]
+        yp = np.take_along_axis(vals, (jc + 1)[..., None], -1)[..., 0]
+        den = ym - 2.0 * y0 + yp
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d = np.where(den < 0, 0.5 * (ym - yp) / den, 0.0)
+        lag_up = lag0 + offs[jc] + np.clip(d, -0.5, 0.5)
+        lag_up = np.where(lag_up > self.n_up / 2, lag_up - self.n_up, lag_up)
+        tdoa = lag_up / self.up / self.fs
+        # azimuth profile (max over elevations); the best azimuth refined by a parabola through
+        # the profile's neighbours, other local maxima >= 30 deg away as alternatives
+        n_az = self.n_az
+        prof = score.reshape(k, n_az, -1).max(axis=2)  # (k, n_az)
+        ia = best // (score.shape[1] // n_az)
+        rk = np.arange(k)
+        ym, y0, yp = prof[rk, (ia - 1) % n_az], prof[rk, ia], prof[rk, (ia + 1) % n_az]
+        den = ym - 2.0 * y0 + yp
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d = np.where(den < 0, np.clip(0.5 * (ym - yp) / den, -0.5, 0.5), 0.0)
+        best_az = wrap_deg(self.az_axis[ia] + d * self.grid_deg)
+        peak = (prof >= np.roll(prof, 1, 1)) & (prof > np.roll(prof, -1, 1))
+        sep = np.abs(wrap_deg(self.az_axis[None, :] - self.az_axis[ia][:, None])) > 30.0
+        masked = np.where(peak & sep, prof, -np.inf)
+        top = np.argsort(masked, axis=1)[:, ::-1][:, :2]
+        alt_c = np.take_along_axis(masked, top, 1)
+        alt_az = np.where(np.isfinite(alt_c), self.az_axis[top], np.nan)
+        alt_c = np.where(np.isfinite(alt_c), alt_c, np.nan)
+        return {"tdoa_s": tdoa, "coherence": coh, "az_deg": best_az, "age_frames": age,
+                "el_deg": self.grid_el[best], "alt_az_deg": alt_az, "alt_coherence": alt_c}
+
+
 # ---------------------------------------------------------------------------- processing
 @dataclass
 class StreamConfig:
@@ -452,6 +628,22 @@ class StreamConfig:
     max_fix_residual_samples : a camera-ray fix whose RMS ITD residual exceeds this many samples
         is discarded (with three microphones the three TDOAs must close, t01 + t12 = t02; a
         reflection that captures one pair's GCC peak breaks that and leaves a large residual)
+    spectrum_alpha : recursive smoothing factor of the cross-power spectra behind the direction
+        tracker's measurements (:class:`SmoothedSrp`); 0 = each frame's own GCC (the per-frame
+        TDOAs of ``method``/``refine``). The per-frame (``raw_*``) outputs of an :class:`Update`
+        always stay the plain per-frame estimates.
+    min_coherence : smoothed measurements whose normalised steered power is below this are not
+        used (no source, or diffuse noise and reverberation only)
+    srp_band_hz : frequency band of the smoothed steered response, Hz
+    srp_coherence_weight : weight the smoothed PHAT spectra by their magnitude-squared
+        coherence (:class:`SmoothedSrp`)
+    alt_ratio : other local maxima of the steered response with at least this share of the best
+        one's power are offered to the tracker as alternative directions (data association)
+    max_alt_ratio : a smoothed measurement whose second local maximum reaches this share of the
+        best one's power is ambiguous and not used (1 = no such test)
+    max_evidence_age_frames : a smoothed measurement whose evidence is older than this (energy-
+        weighted mean age, frames: in a pause the average still holds the last loud frames) is
+        not used; younger ones enter the tracker with their age as measurement delay
     """
 
     frame_ms: float = 64.0
@@ -469,6 +661,13 @@ class StreamConfig:
     range_m: tuple[float, float] = (0.2, 6.0)
     max_fix_residual_samples: float = 0.5
     accel_tau_s: float | None = 0.5
+    spectrum_alpha: float = 0.8
+    min_coherence: float = 0.4
+    srp_band_hz: tuple[float, float] | None = (300.0, 3500.0)
+    alt_ratio: float = 0.8
+    srp_coherence_weight: bool = True
+    max_alt_ratio: float = 1.0
+    max_evidence_age_frames: float = 8.0
 
 
 class TrackingProcessor:
@@ -499,6 +698,28 @@ class TrackingProcessor:
         self.direction = DirectionKalman(self.cfg.sigma_meas_deg, self.cfg.sigma_accel_dps2)
         self.motion = MotionKalman(sigma_meas_m=0.05, sigma_jerk=self.cfg.sigma_jerk,
                                    accel_tau_s=self.cfg.accel_tau_s)
+        self.srp = None
+        if self.cfg.spectrum_alpha > 0:
+            self.srp = SmoothedSrp(array, fs, self.frame_len, self.cfg.spectrum_alpha,
+                                   self.cfg.srp_band_hz,
+                                   coherence_weight=self.cfg.srp_coherence_weight)
+
+    def smoothed(self, batch: FrameBatch) -> dict[str, NDArray] | None:
+        """The :class:`SmoothedSrp` measurements of the batch's frames (NaN rows for missing
+        frames), or None when smoothing is off."""
+        if self.srp is None:
+            return None
+        k = len(batch.t)
+        out = {"tdoa_s": np.full((k, len(self.pairs)), np.nan), "coherence": np.zeros(k),
+               "az_deg": np.full(k, np.nan), "el_deg": np.full(k, np.nan),
+               "age_frames": np.full(k, np.nan),
+               "alt_az_deg": np.full((k, 2), np.nan), "alt_coherence": np.full((k, 2), np.nan)}
+        if batch.segment is not None:
+            m = int(np.count_nonzero(~batch.missing))
+            res = self.srp.process(batch.segment, m, self.hop)
+            for key in out:
+                out[key][k - m:] = res[key]
+        return out
 
     def tdoas(self, batch: FrameBatch) -> tuple[NDArray, NDArray]:
         """Per-frame TDOAs (k, n_pairs) seconds (NaN = no estimate) and confidences (k,)."""
@@ -518,6 +739,7 @@ class TrackingProcessor:
     def process(self, batch: FrameBatch) -> list[Update]:
         """Run all stages on one batch of frames; one :class:`Update` per frame."""
         tdoa, conf = self.tdoas(batch)
+        sm = self.smoothed(batch)
         out = []
         for n, t in enumerate(batch.t):
             z = tdoa[n]
@@ -532,7 +754,12 @@ class TrackingProcessor:
                 loc = localize_tdoa(z, self.array, self.pairs, near_field=False)
                 cands = [(a, e) for a, e in loc.candidates if a is not None]
                 raw_az, raw_el = loc.azimuth_deg, loc.elevation_deg
-            measured = self.direction.update(float(t), cands[0] if cands else None, cands[1:])
+            delay = 0.0
+            if sm is not None:
+                cands = self._smoothed_candidates(sm, n)
+                delay = float(sm["age_frames"][n]) * self.hop / self.fs if cands else 0.0
+            measured = self.direction.update(float(t), cands[0] if cands else None, cands[1:],
+                                             delay_s=delay)
             upd = Update(float(t), None, None, None, None, None, None,
                          float(conf[n]) if have else 0.0, measured=measured,
                          missing=bool(batch.missing[n]), raw_azimuth_deg=raw_az,
@@ -547,6 +774,26 @@ class TrackingProcessor:
                 self._fuse(upd, z if have else None)
             out.append(upd)
         return out
+
+    def _smoothed_candidates(self, sm: dict[str, NDArray], n: int
+                             ) -> list[tuple[float, float | None]]:
+        coh = float(sm["coherence"][n])
+        zs = sm["tdoa_s"][n]
+        if not (coh >= self.cfg.min_coherence and np.all(np.isfinite(zs))
+                and sm["age_frames"][n] <= self.cfg.max_evidence_age_frames):
+            return []
+        alt = sm["alt_coherence"][n]
+        if self.cfg.max_alt_ratio < 1.0 and np.any(np.isfinite(alt)) \
+                and np.nanmax(alt) >= self.cfg.max_alt_ratio * coh:
+            return []
+        # the steered response's own (interpolated) maximum; elevation on the 10 deg grid
+        el = float(sm["el_deg"][n])
+        cands: list[tuple[float, float | None]] = [
+            (float(sm["az_deg"][n]), el if np.isfinite(el) else None)]
+        for az, c in zip(sm["alt_az_deg"][n], sm["alt_coherence"][n], strict=True):
+            if np.isfinite(az) and c >= self.cfg.alt_ratio * coh:
+                cands.append((float(az), None))
+        return cands
 
     def _fuse(self, upd: Update, z: NDArray | None) -> None:
         from hearsee.fusion.audiovisual import locate_on_ray
