@@ -146,3 +146,20 @@ def test_singer_decay_damps_acceleration_through_a_gap():
             assert kf.acceleration[0] == pytest.approx(a_before)
     with pytest.raises(EE):
         MotionKalman(accel_tau_s=0.0)
+
+
+def test_measurement_delay_removes_the_lag_of_old_evidence():
+    # measurements show the direction 0.128 s ago (averaged spectra); 20 deg/s walk
+    rng = np.random.default_rng(3)
+    delay = 0.128
+    err = {}
+    for d in (0.0, delay):
+        kf = DirectionKalman(10.0, 100.0)
+        e = []
+        for k in range(150):
+            t = k * DT
+            kf.update(t, (20.0 * (t - delay) + rng.normal(0.0, 3.0), None), delay_s=d)
+            e.append(kf.azimuth_deg - 20.0 * t)
+        err[d] = np.mean(e[50:])
+    assert err[0.0] < -1.5  # lags by ~ 20 deg/s * 0.128 s = 2.6 deg without the model
+    assert abs(err[delay]) < 1.0

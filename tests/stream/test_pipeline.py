@@ -8,7 +8,7 @@ import pytest
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.tdoa import frame_signals
-from hearsee.errors import AudioInputError
+from hearsee.errors import AudioInputError, ConfigError
 from hearsee.geometry import direction_deg, wrap_deg
 from hearsee.sim.moving import linear_trajectory, simulate_moving_free_field
 from hearsee.stream import pipeline as pl
@@ -219,3 +219,32 @@ def test_camera_fix_with_inconsistent_itds_is_discarded():
     proc._fuse(bad, z)
     assert bad.raw_position_m is None
     assert bad.position_m is not None  # the track predicts on
+
+
+def test_smoothed_srp_finds_a_static_source_and_not_noise():
+    arr = MicArray.from_preset("three-mic")
+    rng = np.random.default_rng(5)
+    x = rng.standard_normal(int(1.0 * FS))
+    traj = linear_trajectory([1.0, 1.732, 0.0], [0.0, 0.0, 0.0], 1.0)  # azimuth 60 deg
+    y = simulate_moving_free_field(x, FS, arr, traj, snr_db=5, rng=6)
+    frame_len, hop = pl.frame_geometry(FS, 64.0, 32.0)
+    srp = pl.SmoothedSrp(arr, FS, frame_len, alpha=0.8)
+    n = (y.shape[1] - frame_len) // hop + 1
+    res = srp.process(y, n, hop)
+    assert np.all(np.abs(wrap_deg(res["az_deg"][5:] - 60.0)) < 3.0)
+    assert np.all(res["coherence"][5:] > 0.5)
+    # the evidence age settles at alpha / (1 - alpha) = 4 frames for a steady source
+    assert res["age_frames"][-1] == pytest.approx(4.0, abs=0.5)
+    noise = pl.SmoothedSrp(arr, FS, frame_len, alpha=0.8).process(
+        rng.standard_normal(y.shape), n, hop)
+    assert np.all(noise["coherence"][5:] < StreamConfig().min_coherence)
+    with pytest.raises(ConfigError):
+        pl.SmoothedSrp(arr, FS, frame_len, alpha=1.0)
+
+
+def test_per_frame_outputs_stay_plain_with_smoothing(moving):
+    arr, traj, y = moving
+    a = StreamPipeline(arr, StreamConfig(spectrum_alpha=0.8)).run(ArraySource(y, FS, 2048))
+    b = StreamPipeline(arr, StreamConfig(spectrum_alpha=0.0)).run(ArraySource(y, FS, 2048))
+    assert [u.raw_azimuth_deg for u in a] == [u.raw_azimuth_deg for u in b]
+    assert np.nanmedian(_az_err(a, traj)[10:]) < 3.0
