@@ -55,8 +55,14 @@ BANDS = {"noise": (300.0, 7500.0), "speech": (300.0, 3500.0)}
 #: frame confidence threshold 0.8 instead of the library's 1.0 so that reverberant 0 dB
 #: recordings still get an estimate -- with 3 microphones the closure test keeps noise-only
 #: recordings at 0 false estimates in 60 trials, see tests)
+#: onset_weight 3 (summary frames weighted by their energy rise, precedence effect) was chosen
+#: on held-out recordings (seed 777, 48 reverberant recordings per array and RT60), never on
+#: this table's seed; there it lowered the paired mean error in 3 of 4 array/RT60 cells
+#: (two-mic RT60 0.6: -1.6 deg) and raised it by 0.04 deg in the fourth.
 HEARSEE = {"method": "ml", "frame_ms": 64.0, "hop_ms": 64.0, "refine": "none",
-           "snr_weight": True, "window": ("tukey", 0.25), "min_confidence": 0.8}
+           "snr_weight": True, "window": ("tukey", 0.25), "min_confidence": 0.8,
+           "onset_weight": 3.0}
+N_BOOT = 2000
 
 
 # ---------------------------------------------------------------------------------- helpers
@@ -162,8 +168,10 @@ def summarize_doa(results: list, timing: dict) -> tuple[list, list, list]:
     headers = ["array", "RT60", "SNR", "signal", "n"]
     for m in methods:
         headers += [f"{m} RMSE", f"{m} med", f"{m} >10%"]
-    headers += ["hearsee best?"]
+    headers += ["hearsee best?", "best peer", "dRMSE vs best peer [95% CI]",
+                "hearsee better on % of recordings", "hearsee no estimate"]
     rows = []
+    boot_rng = np.random.default_rng(12345)
     for (arr, rt, snr, kind), errs in results:
         row = [arr, rt, snr, kind, len(errs["hearsee"])]
         rmse = {}
@@ -171,15 +179,58 @@ def summarize_doa(results: list, timing: dict) -> tuple[list, list, list]:
             e = np.asarray(errs[m])
             rmse[m] = float(np.sqrt(np.mean(e**2)))
             row += [rmse[m], float(np.median(e)), float(np.mean(e > 10) * 100)]
-        best_pra = min(rmse[m] for m in PRA_METHODS)
+        best_m = min(PRA_METHODS, key=lambda m: rmse[m])
+        best_pra = rmse[best_m]
         row.append("yes" if rmse["hearsee"] <= best_pra + 1e-9 else
                    f"no (+{rmse['hearsee'] - best_pra:.2g})")
+        eh, ep = np.asarray(errs["hearsee"]), np.asarray(errs[best_m])
+        lo, hi = paired_rmse_ci(eh, ep, boot_rng)
+        row += [best_m, f"{rmse['hearsee'] - best_pra:+.2g} [{lo:+.2g}, {hi:+.2g}]",
+                float(np.mean(eh < ep) * 100 + 50 * np.mean(eh == ep)),
+                int(np.sum(eh >= (90.0 if arr == "two-mic" else 180.0)))]
         rows.append(row)
     cpu_rows = []
     for m in methods:
         per_s = timing["cpu"][m] / timing["audio_s"]
         cpu_rows.append([m, per_s * 1e3, timing["cpu"]["SRP"] / max(timing["cpu"][m], 1e-12)])
     return headers, rows, cpu_rows
+
+
+def paired_rmse_ci(e_a: np.ndarray, e_b: np.ndarray, rng: np.random.Generator,
+                   n_boot: int = N_BOOT, level: float = 0.95) -> tuple[float, float]:
+    """Percentile bootstrap CI of RMSE(e_a) - RMSE(e_b), resampling recordings (paired)."""
+    n = len(e_a)
+    idx = rng.integers(0, n, size=(n_boot, n))
+    d = np.sqrt(np.mean(e_a[idx] ** 2, axis=1)) - np.sqrt(np.mean(e_b[idx] ** 2, axis=1))
+    q = (1 - level) / 2
+    return float(np.quantile(d, q)), float(np.quantile(d, 1 - q))
+
+
+def pooled_paired(results: list, rng: np.random.Generator) -> tuple[list, list]:
+    """Per array and RT60, all SNRs and signals pooled: hearsee vs each peer on the same
+    recordings (RMSE difference with bootstrap CI, share of recordings where hearsee's error
+    is smaller, Wilcoxon signed-rank p-value of the paired errors)."""
+    from scipy.stats import wilcoxon
+
+    groups: dict = {}
+    for (arr, rt, _snr, _kind), errs in results:
+        g = groups.setdefault((arr, rt), {m: [] for m in errs})
+        for m, e in errs.items():
+            g[m].extend(e)
+    headers = ["array", "RT60", "n", "peer", "hearsee RMSE", "peer RMSE",
+               "dRMSE [95% CI]", "hearsee better %", "Wilcoxon p"]
+    rows = []
+    for (arr, rt), g in sorted(groups.items()):
+        eh = np.asarray(g["hearsee"])
+        for m in PRA_METHODS:
+            ep = np.asarray(g[m])
+            lo, hi = paired_rmse_ci(eh, ep, rng)
+            d = eh - ep
+            p = float(wilcoxon(d).pvalue) if np.any(d != 0) else 1.0
+            rh, rp = float(np.sqrt(np.mean(eh**2))), float(np.sqrt(np.mean(ep**2)))
+            rows.append([arr, rt, len(eh), m, rh, rp, f"{rh - rp:+.2g} [{lo:+.2g}, {hi:+.2g}]",
+                         float(np.mean(eh < ep) * 100 + 50 * np.mean(eh == ep)), p])
+    return headers, rows
 
 
 # ---------------------------------------------------------------------------------- part 2
@@ -368,7 +419,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--data", default=None, help="shared data folder (default ../shared/data)")
     ap.add_argument("--duration", type=float, default=2.0, help="signal length in seconds")
     args = ap.parse_args(argv)
-    trials = args.trials or (3 if args.quick else 8)
+    trials = args.trials or (3 if args.quick else 20)
     data = shared_data_dir(args.data)
     if data is None:
         print("shared data not found: ARCTIC speech and the real-RIR part are skipped")
@@ -377,6 +428,8 @@ def main(argv: list[str] | None = None) -> int:
     results, timing = run_doa(trials, args.seed, data, args.duration)
     headers, rows, cpu_rows = summarize_doa(results, timing)
     print_table("Azimuth error [deg] (two-mic folded front/back)", headers, rows)
+    pool_headers, pool_rows = pooled_paired(results, np.random.default_rng(args.seed + 2))
+    print_table("Paired comparison, pooled over SNR and signal", pool_headers, pool_rows)
     cpu_headers = ["method", "CPU ms per s of audio", "speed-up vs SRP-PHAT"]
     print_table("CPU time", cpu_headers, cpu_rows)
     print("[2/3] TDOA vs CRB")
@@ -388,7 +441,13 @@ def main(argv: list[str] | None = None) -> int:
     if real is not None:
         print_table("Real RIRs (ULA32, ARCTIC): |TDOA error| [samples at 48 kHz]", real[0],
                     real[1])
-    n_best = sum(1 for r in rows if r[-1] == "yes")
+    ib = headers.index("hearsee best?")
+    n_best = sum(1 for r in rows if r[ib] == "yes")
+    ci = [r[ib + 2].split("[")[1].rstrip("]").split(", ") for r in rows]
+    n_sig_worse = sum(1 for lo, _ in ci if float(lo) > 0)
+    n_sig_better = sum(1 for _, hi in ci if float(hi) < 0)
+    per_arr = {a: sum(1 for r in rows if r[0] == a and r[ib] == "yes")
+               for a in ("three-mic", "two-mic")}
     intro = (
         f"`python bench/doa.py{' --quick' if args.quick else ''}` -- {trials} trials per "
         f"condition, {args.duration:g} s signals (ARCTIC: whole utterance up to 3 s), fs "
@@ -396,11 +455,18 @@ def main(argv: list[str] | None = None) -> int:
         f"in the array plane. hearsee: {HEARSEE}, whole-recording (summary) TDOAs -> "
         f"closed-form direction. pyroomacoustics: nfft {PRA_NFFT}, 1-deg grid, same frequency "
         f"band (noise {BANDS['noise']} Hz, speech {BANDS['speech']} Hz). hearsee RMSE <= best "
-        f"pyroomacoustics method in {n_best}/{len(rows)} conditions. Wall time "
+        f"pyroomacoustics method in {n_best}/{len(rows)} conditions (the issue's literal "
+        f"criterion; {per_arr}); the paired bootstrap CI of the RMSE difference excludes 0 "
+        f"in hearsee's disfavour in {n_sig_worse} and in its favour in {n_sig_better} conditions. "
+        f"'hearsee no estimate' counts recordings where hearsee abstained (summary confidence "
+        f"too low), scored as the worst error (180 deg, two-mic 90 deg). Wall time "
         f"{time.time() - t0:.0f} s."
     )
     sections = [
         ("Azimuth error [deg] (two-mic scored modulo front/back)", markdown_table(headers, rows)),
+        ("Paired comparison per array and RT60 (all SNRs and signals pooled; same recordings; "
+         f"dRMSE = hearsee - peer, {N_BOOT}-resample paired bootstrap)",
+         markdown_table(pool_headers, pool_rows)),
         ("CPU time per second of audio", markdown_table(cpu_headers, cpu_rows)),
         ("TDOA std vs Cramer-Rao bound", markdown_table(crb_headers, crb_rows)),
     ]

@@ -157,3 +157,37 @@ def test_closure_rejects_noise_only_summary_and_ml_snr_form(three):
     for mc in (1.0, 0.8):
         tf = estimate_tdoas(x, FS, three, method="ml", min_confidence=mc, snr_weight="ml")
         assert np.isnan(tf.summary_tdoa_s).all()
+
+
+def test_coherent_refine_recovers_known_direction(three):
+    from hearsee.audio.tdoa import _coherent_refine
+
+    nfft = 512
+    bins = np.arange(10, 200)
+    w = 2 * np.pi * bins / nfft
+    I = np.array([i for i, _ in three.pairs])
+    J = np.array([j for _, j in three.pairs])
+    D = -(three.positions[I] - three.positions[J]) / three.speed_of_sound * FS
+    u_true = np.array([np.cos(0.7), np.sin(0.7), 0.0])
+    tau_true = D @ u_true
+    P = np.exp(-1j * np.outer(tau_true, w))  # correlations peaking exactly at tau_true
+    u0 = np.array([np.cos(0.75), np.sin(0.75), 0.0])  # ~3 deg off, like the direction grid
+    tau = _coherent_refine(P, bins, nfft, D, u0)
+    np.testing.assert_allclose(tau, tau_true, atol=1e-3)
+
+
+def test_joint_coherent_and_weighting_options_keep_known_delays(three):
+    src = 3.0 * np.array([np.cos(-2.0), np.sin(-2.0), 0.0])
+    s = white_noise(1.0, FS, rng=5)
+    x = simulate_free_field(s, FS, three, src, snr_db=20, rng=6, far_field=True)
+    true = three.tdoa_far(src)
+    for kw in ({"joint": "coherent"}, {"phat_beta": 0.7}, {"onset_weight": 3.0},
+               {"method": "ml", "joint": "coherent", "onset_weight": 3.0}):
+        tf = estimate_tdoas(x, FS, three, **kw)
+        np.testing.assert_allclose(tf.summary_tdoa_s, true, atol=0.05 / FS)
+    tf = estimate_tdoas(x, FS, three, joint="coherent")
+    t01, t02, t12 = tf.summary_tdoa_s  # pairs (0,1), (0,2), (1,2): consistent by construction
+    assert t01 - t02 + t12 == pytest.approx(0.0, abs=1e-9)
+    for bad in ({"joint": "srp"}, {"phat_beta": 1.5}, {"onset_weight": -1.0}):
+        with pytest.raises(ConfigError):
+            estimate_tdoas(x, FS, three, **bad)
