@@ -37,7 +37,8 @@ def test_spherical_round_trip(az, el, r):
 
 
 def test_wrap():
-    np.testing.assert_allclose(wrap_deg([-180, 180, 190, -190, 540, 0]), [180, 180, -170, 170, 180, 0])
+    np.testing.assert_allclose(wrap_deg([-180, 180, 190, -190, 540, 0]),
+                               [180, 180, -170, 170, 180, 0])
     assert float(wrap_rad(3 * np.pi)) == pytest.approx(np.pi)
 
 

@@ -6,6 +6,7 @@ the field, e.g. ``robot.yaml: unknown key 'microphone' (expected one of: array, 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -15,7 +16,10 @@ import yaml
 
 from hearsee.errors import ConfigError, InputFileError
 
-__all__ = ["check_keys", "load_yaml", "require", "as_float_array", "save_yaml"]
+__all__ = [
+    "as_float_array", "check_keys", "load_yaml", "number", "require", "save_yaml", "to_jsonable",
+    "to_plain",
+]
 
 
 def load_yaml(path: str | Path) -> dict[str, Any]:
@@ -39,21 +43,34 @@ def load_yaml(path: str | Path) -> dict[str, Any]:
     return data
 
 
+def to_plain(obj: Any, *, json: bool = False) -> Any:
+    """Convert numpy arrays and scalars, tuples and nested mappings to plain Python for YAML or
+    JSON output. With ``json=True`` non-finite floats become None (JSON has no NaN)."""
+    if isinstance(obj, Mapping):
+        return {str(k): to_plain(v, json=json) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [to_plain(v, json=json) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_plain(obj.tolist(), json=json)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, float | np.floating):
+        f = float(obj)
+        return None if json and not math.isfinite(f) else f
+    return obj
+
+
+def to_jsonable(obj: Any) -> Any:
+    """:func:`to_plain` for JSON: numpy -> Python, NaN/inf -> None."""
+    return to_plain(obj, json=True)
+
+
 def save_yaml(data: Mapping[str, Any], path: str | Path) -> None:
     """Write ``data`` as YAML (numpy arrays and scalars converted to lists and floats)."""
-
-    def plain(v: Any) -> Any:
-        if isinstance(v, np.ndarray):
-            return v.tolist()
-        if isinstance(v, np.generic):
-            return v.item()
-        if isinstance(v, Mapping):
-            return {str(k): plain(x) for k, x in v.items()}
-        if isinstance(v, list | tuple):
-            return [plain(x) for x in v]
-        return v
-
-    Path(path).write_text(yaml.safe_dump(plain(dict(data)), sort_keys=False), encoding="utf-8")
+    Path(path).write_text(yaml.safe_dump(to_plain(dict(data)), sort_keys=False),
+                          encoding="utf-8")
 
 
 def check_keys(data: Mapping[str, Any], allowed: Iterable[str], where: str) -> None:
@@ -73,7 +90,8 @@ def require(data: Mapping[str, Any], key: str, where: str) -> Any:
     return data[key]
 
 
-def as_float_array(value: Any, where: str, shape: tuple[int | None, ...] | None = None) -> np.ndarray:
+def as_float_array(value: Any, where: str,
+                   shape: tuple[int | None, ...] | None = None) -> np.ndarray:
     """Convert ``value`` to a finite float array, checking ``shape`` (None = any length)."""
     try:
         arr = np.asarray(value, dtype=float)
@@ -88,3 +106,20 @@ def as_float_array(value: Any, where: str, shape: tuple[int | None, ...] | None 
     if not np.all(np.isfinite(arr)):
         raise ConfigError(f"{where}: values must be finite numbers")
     return arr
+
+
+def number(d: Mapping[str, Any], key: str, default: float, where: str, lo: float | None = None,
+           hi: float | None = None, integer: bool = False) -> float:
+    """``d[key]`` (or ``default``) as a finite number within ``[lo, hi]``; ConfigError naming
+    ``where.key`` otherwise. With ``integer=True`` the value must be whole and an int is
+    returned."""
+    v = d.get(key, default)
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+        raise ConfigError(f"{where}.{key}: expected a number, got {v!r}")
+    if integer and int(v) != v:
+        raise ConfigError(f"{where}.{key}: expected a whole number, got {v!r}")
+    if lo is not None and v < lo:
+        raise ConfigError(f"{where}.{key}: must be >= {lo}, got {v}")
+    if hi is not None and v > hi:
+        raise ConfigError(f"{where}.{key}: must be <= {hi}, got {v}")
+    return int(v) if integer else float(v)

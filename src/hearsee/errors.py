@@ -21,7 +21,7 @@ class GeometryError(HearseeError, ValueError):
 
 
 class AudioInputError(HearseeError, ValueError):
-    """Audio that cannot be used: wrong channel count or sample rate, NaN/inf, silence, too short."""
+    """Unusable audio: wrong channel count or sample rate, NaN/inf, silence, too short."""
 
 
 class ImageInputError(HearseeError, ValueError):

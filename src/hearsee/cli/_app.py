@@ -16,10 +16,11 @@ from contextlib import contextmanager
 from enum import Enum
 from typing import Any
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+from hearsee.config import to_jsonable
 
 app = typer.Typer(
     name="hearsee",
@@ -34,28 +35,10 @@ app = typer.Typer(
 err_console = Console(stderr=True)
 
 
-class OutputFormat(str, Enum):
+class OutputFormat(str, Enum):  # noqa: UP042 (typer choices)
     json = "json"
     csv = "csv"
     table = "table"
-
-
-def to_jsonable(obj: Any) -> Any:
-    """Convert numpy types, tuples and non-finite floats (-> null) for JSON output."""
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, float | np.floating):
-        f = float(obj)
-        return f if math.isfinite(f) else None
-    return obj
 
 
 def emit_json(obj: Any, *, indent: int | None = 2) -> None:
@@ -68,12 +51,29 @@ def parse_floats(text: str, n: int | None, what: str) -> list[float]:
     try:
         vals = [float(v) for v in text.replace(" ", "").split(",") if v != ""]
     except ValueError:
-        raise typer.BadParameter(f"{what}: expected comma-separated numbers, got {text!r}") from None
+        raise typer.BadParameter(
+            f"{what}: expected comma-separated numbers, got {text!r}") from None
     if n is not None and len(vals) != n:
         raise typer.BadParameter(f"{what}: expected {n} numbers, got {len(vals)} in {text!r}")
     if not all(math.isfinite(v) for v in vals):
         raise typer.BadParameter(f"{what}: numbers must be finite, got {text!r}")
     return vals
+
+
+def print_summary(title: str, summary: dict[str, Any]) -> None:
+    """A two-column rich table (metric, value) of a summary dict on stderr."""
+    from rich.table import Table
+
+    t = Table(title=title)
+    t.add_column("metric")
+    t.add_column("value", justify="right")
+    for k, v in summary.items():
+        if isinstance(v, float):
+            v = f"{v:.3g}"
+        elif isinstance(v, list):
+            v = "[" + ", ".join(f"{x:.2f}" if isinstance(x, float) else str(x) for x in v) + "]"
+        t.add_row(str(k), str(v))
+    err_console.print(t)
 
 
 @contextmanager

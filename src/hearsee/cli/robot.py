@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from hearsee.cli._app import app, emit_json, err_console, progress
+from hearsee.cli._app import app, emit_json, print_summary, progress
 
 
 @app.command("demo")
@@ -42,7 +42,7 @@ def demo_cmd(
 
         write_mcap(mcap, result.log, result.frames)
     if not quiet:
-        _print_summary(result.summary)
+        print_summary("hearsee demo summary", result.summary)
     typer.echo(f"report: {index}")
 
 
@@ -52,19 +52,6 @@ def _refuse_input_overwrite(out: Path, *inputs: Path | None) -> None:
     for p in inputs:
         if p is not None and Path(p).resolve().is_relative_to(Path(out).resolve()):
             raise ConfigError(f"--out {out} would overwrite the input {p}; choose another folder")
-
-
-def _print_summary(summary: dict) -> None:
-    from rich.table import Table
-
-    t = Table(title="hearsee demo summary")
-    t.add_column("metric")
-    t.add_column("value", justify="right")
-    for k, v in summary.items():
-        if isinstance(v, float):
-            v = f"{v:.3g}"
-        t.add_row(str(k), str(v))
-    err_console.print(t)
 
 
 @app.command("eval")
@@ -89,7 +76,7 @@ def eval_cmd(
     if out is not None:
         import json
 
-        from hearsee.cli._app import to_jsonable
+        from hearsee.config import to_jsonable
 
         out.write_text(json.dumps(to_jsonable({"summary": res.summary, "runs": res.runs}),
                                   indent=1), encoding="utf-8")

@@ -13,7 +13,7 @@ from typing import Annotated
 
 import typer
 
-from hearsee.cli._app import app, err_console, progress
+from hearsee.cli._app import app, err_console, print_summary, progress
 
 
 @app.command("run")
@@ -83,7 +83,7 @@ def run_cmd(
 
         write_mcap(mcap, result.log, result.frames)
     if not quiet:
-        _print_summary(result.summary)
+        print_summary("hearsee run summary", result.summary)
     typer.echo(f"updates: {cfg.output.jsonl}")
     typer.echo(f"report: {index}")
     status = result.summary["status"]
@@ -103,18 +103,3 @@ def _print_checks(checks: list) -> None:
     for c in checks:
         t.add_row(c.name, "[green]ok[/green]" if c.ok else "[red]FAIL[/red]", c.detail)
     Console(width=140).print(t)
-
-
-def _print_summary(summary: dict) -> None:
-    from rich.table import Table
-
-    t = Table(title="hearsee run summary")
-    t.add_column("metric")
-    t.add_column("value", justify="right")
-    for k, v in summary.items():
-        if isinstance(v, float):
-            v = f"{v:.3g}"
-        elif isinstance(v, list):
-            v = "[" + ", ".join(f"{x:.2f}" for x in v) + "]"
-        t.add_row(str(k), str(v))
-    err_console.print(t)

@@ -53,7 +53,6 @@ each camera opens and delivers a frame of the calibrated size, the calibration l
 
 from __future__ import annotations
 
-import math
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -64,7 +63,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
-from hearsee.config import as_float_array, check_keys, load_yaml
+from hearsee.config import as_float_array, check_keys, load_yaml, number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, HearseeError
 
 __all__ = [
@@ -204,20 +203,6 @@ class RobotConfig:
                            OutputConfig(f / "updates.jsonl", f))
 
 
-def _number(d: Mapping[str, Any], key: str, default: float, where: str, lo: float | None = None,
-            hi: float | None = None, integer: bool = False) -> float:
-    v = d.get(key, default)
-    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-        raise ConfigError(f"{where}.{key}: expected a number, got {v!r}")
-    if integer and int(v) != v:
-        raise ConfigError(f"{where}.{key}: expected a whole number, got {v!r}")
-    if lo is not None and v < lo:
-        raise ConfigError(f"{where}.{key}: must be >= {lo}, got {v}")
-    if hi is not None and v > hi:
-        raise ConfigError(f"{where}.{key}: must be <= {hi}, got {v}")
-    return int(v) if integer else float(v)
-
-
 def _mapping(d: Mapping[str, Any], key: str, where: str, required: bool = False
              ) -> Mapping[str, Any] | None:
     if key not in d or d[key] is None:
@@ -267,7 +252,7 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
     check_keys(d, _AUDIO, where)
     dev = d.get("device")
     device = None if dev is None else _device(dev, f"{where}.device", base, camera=False)
-    fs = _number(d, "fs", 16000, where, 4000, 384000, integer=True)
+    fs = number(d, "fs", 16000, where, 4000, 384000, integer=True)
     spec = d.get("array", "three-mic")
     if not isinstance(spec, str) or not spec.strip():
         raise ConfigError(f"{where}.array: expected a preset name or YAML path, got {spec!r}")
@@ -293,8 +278,8 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
         if any(c < 0 for c in ch) or len(set(ch)) != len(ch):
             raise ConfigError(f"{where}.channels: channels must be distinct and >= 0, got {ch}")
         channels = tuple(ch)
-    block_ms = _number(d, "block_ms", 100.0, where, 10.0, 2000.0)
-    frame_ms = _number(d, "frame_ms", 64.0, where, 8.0, 1000.0)
+    block_ms = number(d, "block_ms", 100.0, where, 10.0, 2000.0)
+    frame_ms = number(d, "frame_ms", 64.0, where, 8.0, 1000.0)
     max_delay_ms = float(array.max_tdoa().max()) * 1e3
     if frame_ms < 4 * max_delay_ms:
         raise ConfigError(f"{where}.frame_ms: {frame_ms} ms is too short for the array's "
@@ -338,7 +323,7 @@ def _cameras(d: Mapping[str, Any], where: str, base: Path) -> CameraConfig:
     if dev["thermal"] is not None and rig.thermal is None:
         raise ConfigError(f"{where}.thermal: the calibration {d['calib']!r} has no thermal "
                           "camera (add a 'thermal:' block or leave out cameras.thermal)")
-    rate = _number(d, "rate_hz", 2.0, where, 0.1, 60.0)
+    rate = number(d, "rate_hz", 2.0, where, 0.1, 60.0)
     mount = _vec3(d, "mount_m", (0.0, 0.0, 0.0), where)
     if np.linalg.norm(mount) > 2.0:
         raise ConfigError(f"{where}.mount_m: {mount.tolist()} is more than 2 m from the pivot")
@@ -901,7 +886,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     from concurrent.futures import ThreadPoolExecutor
 
     from hearsee.audio.tracking import MotionKalman
-    from hearsee.cli._app import to_jsonable
+    from hearsee.config import to_jsonable
     from hearsee.geometry import wrap_deg
     from hearsee.robot.pipeline import (
         ASSOCIATION_GATE_DEG,

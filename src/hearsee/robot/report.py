@@ -162,7 +162,7 @@ def write_report(
     ``images`` maps a file stem to a BGR/grey uint8 image (overlays, thermal views);
     ``captions`` maps the same stems to captions.
     """
-    from hearsee.cli._app import to_jsonable
+    from hearsee.config import to_jsonable
 
     out = Path(folder)
     try:

@@ -32,7 +32,6 @@ Schema (defaults in brackets)::
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -40,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from hearsee.config import check_keys, load_yaml
+from hearsee.config import check_keys, load_yaml, number
 from hearsee.errors import ConfigError
 
 __all__ = [
@@ -160,20 +159,6 @@ class Scenario:
 
 
 # ---------------------------------------------------------------------- parsing helpers
-def _num(d: Mapping[str, Any], key: str, default: float, where: str, lo: float | None = None,
-         hi: float | None = None, integer: bool = False) -> float:
-    v = d.get(key, default)
-    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-        raise ConfigError(f"{where}.{key}: expected a number, got {v!r}")
-    if integer and int(v) != v:
-        raise ConfigError(f"{where}.{key}: expected a whole number, got {v!r}")
-    if lo is not None and v < lo:
-        raise ConfigError(f"{where}.{key}: must be >= {lo}, got {v}")
-    if hi is not None and v > hi:
-        raise ConfigError(f"{where}.{key}: must be <= {hi}, got {v}")
-    return int(v) if integer else float(v)
-
-
 def _vec(v: Any, n: int | None, where: str) -> np.ndarray:
     try:
         a = np.asarray(v, dtype=float)
@@ -216,8 +201,8 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scen
     size = _vec(room.get("size_m", base.room_size_m.tolist()), 3, f"{where}.room.size_m")
     if np.any(size < 2.0) or np.any(size > 50.0):
         raise ConfigError(f"{where}.room.size_m: each side must be 2-50 m, got {size.tolist()}")
-    rt60 = _num(room, "rt60_s", base.rt60_s, f"{where}.room", 0.0, 2.0)
-    duration = _num(data, "duration_s", base.duration_s, where, 1.0, 120.0)
+    rt60 = number(room, "rt60_s", base.rt60_s, f"{where}.room", 0.0, 2.0)
+    duration = number(data, "duration_s", base.duration_s, where, 1.0, 120.0)
 
     rob = _section(data, "robot", where)
     rw = f"{where}.robot"
@@ -229,7 +214,7 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scen
     check_keys(thermal, ("width", "height", "hfov_deg"), f"{rw}.thermal")
     robot_xy = _vec(rob.get("position_m", (size[:2] / 2).tolist()), 2, f"{rw}.position_m")
     _inside(robot_xy, size, f"{rw}.position_m")
-    head_h = _num(rob, "head_height_m", base.robot.head_height_m, rw, 0.2)
+    head_h = number(rob, "head_height_m", base.robot.head_height_m, rw, 0.2)
     if head_h > size[2] - 0.2:
         raise ConfigError(f"{rw}.head_height_m: {head_h} m does not fit under the "
                           f"{size[2]} m ceiling")
@@ -252,18 +237,18 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scen
         )
     robot = RobotSpec(
         position_m=robot_xy,
-        heading_deg=_num(rob, "heading_deg", 0.0, rw, -360, 360),
+        heading_deg=number(rob, "heading_deg", 0.0, rw, -360, 360),
         head_height_m=head_h,
         array=array,
-        pan_speed_dps=_num(rob, "pan_speed_dps", base.robot.pan_speed_dps, rw, 1.0, 2000.0),
-        camera_rate_hz=_num(rob, "camera_rate_hz", base.robot.camera_rate_hz, rw, 0.5, 60.0),
-        baseline_m=_num(stereo, "baseline_m", 0.12, f"{rw}.stereo", 0.02, 1.0),
-        focal_px=_num(stereo, "focal_px", 500.0, f"{rw}.stereo", 50.0, 5000.0),
-        width=_num(stereo, "width", 640, f"{rw}.stereo", 64, 4096, integer=True),
-        height=_num(stereo, "height", 480, f"{rw}.stereo", 48, 4096, integer=True),
-        thermal_width=_num(thermal, "width", 160, f"{rw}.thermal", 16, 2048, integer=True),
-        thermal_height=_num(thermal, "height", 120, f"{rw}.thermal", 12, 2048, integer=True),
-        thermal_hfov_deg=_num(thermal, "hfov_deg", 72.0, f"{rw}.thermal", 10.0, 150.0),
+        pan_speed_dps=number(rob, "pan_speed_dps", base.robot.pan_speed_dps, rw, 1.0, 2000.0),
+        camera_rate_hz=number(rob, "camera_rate_hz", base.robot.camera_rate_hz, rw, 0.5, 60.0),
+        baseline_m=number(stereo, "baseline_m", 0.12, f"{rw}.stereo", 0.02, 1.0),
+        focal_px=number(stereo, "focal_px", 500.0, f"{rw}.stereo", 50.0, 5000.0),
+        width=number(stereo, "width", 640, f"{rw}.stereo", 64, 4096, integer=True),
+        height=number(stereo, "height", 480, f"{rw}.stereo", 48, 4096, integer=True),
+        thermal_width=number(thermal, "width", 160, f"{rw}.thermal", 16, 2048, integer=True),
+        thermal_height=number(thermal, "height", 120, f"{rw}.thermal", 12, 2048, integer=True),
+        thermal_hfov_deg=number(thermal, "hfov_deg", 72.0, f"{rw}.thermal", 10.0, 150.0),
     )
 
     people_raw = data.get("people", None)
@@ -304,7 +289,7 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scen
                 raise ConfigError(f"{pw}.facing: expected 'toward-robot' or 'path'")
             plist.append(PersonSpec(
                 name=str(p.get("name", f"person{k}")), path_m=path,
-                height_m=_num(p, "height_m", 1.72, pw, 1.0, 2.2), voice=voice,
+                height_m=number(p, "height_m", 1.72, pw, 1.0, 2.2), voice=voice,
                 speaking=spk, facing=facing))
         people = tuple(plist)
 
@@ -331,17 +316,17 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scen
                 raise ConfigError(
                     f"{ow}.position_m: closer than {ROBOT_CLEARANCE_M} m to the robot")
             olist.append(ObjectSpec(kind=kind, position_m=pos,
-                                    yaw_deg=_num(o, "yaw_deg", 0.0, ow, -360, 360),
-                                    height_m=_num(o, "height_m", 1.75, ow, 0.5, 2.2)))
+                                    yaw_deg=number(o, "yaw_deg", 0.0, ow, -360, 360),
+                                    height_m=number(o, "height_m", 1.75, ow, 0.5, 2.2)))
         objects = tuple(olist)
 
     name = data.get("name", "custom")
-    seed = _num(data, "seed", 0, where, 0, 2**32 - 1, integer=True)
+    seed = number(data, "seed", 0, where, 0, 2**32 - 1, integer=True)
     return Scenario(
         name=str(name), seed=int(seed), duration_s=duration,
-        fs=int(_num(audio, "fs", 16000, f"{where}.audio", 8000, 96000, integer=True)),
-        snr_db=_num(audio, "snr_db", 20.0, f"{where}.audio", -20.0, 80.0),
-        frame_ms=_num(audio, "frame_ms", 64.0, f"{where}.audio", 8.0, 512.0),
+        fs=int(number(audio, "fs", 16000, f"{where}.audio", 8000, 96000, integer=True)),
+        snr_db=number(audio, "snr_db", 20.0, f"{where}.audio", -20.0, 80.0),
+        frame_ms=number(audio, "frame_ms", 64.0, f"{where}.audio", 8.0, 512.0),
         room_size_m=size, rt60_s=rt60, robot=robot, people=people, objects=objects,
     )
 

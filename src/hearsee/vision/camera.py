@@ -60,7 +60,7 @@ import yaml
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.config import as_float_array, check_keys, load_yaml, require
+from hearsee.config import as_float_array, check_keys, load_yaml, require, to_plain
 from hearsee.errors import CalibrationError, ConfigError, GeometryError, InputFileError
 
 __all__ = [
@@ -731,21 +731,9 @@ def save_rig(rig: StereoRig, path: str | Path) -> None:
     _dump_calib_yaml(rig.to_dict(), path, "hearsee stereo rig (see hearsee.vision.camera)")
 
 
-def _plain(v: Any) -> Any:
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    if isinstance(v, np.generic):
-        return v.item()
-    if isinstance(v, dict):
-        return {str(k): _plain(x) for k, x in v.items()}
-    if isinstance(v, list | tuple):
-        return [_plain(x) for x in v]
-    return v
-
-
 def _dump_calib_yaml(data: dict[str, Any], path: str | Path, title: str) -> None:
     """YAML with matrices written one row per line (flow style for the innermost lists)."""
-    text = yaml.safe_dump(_plain(data), sort_keys=False, default_flow_style=None, width=100)
+    text = yaml.safe_dump(to_plain(data), sort_keys=False, default_flow_style=None, width=100)
     header = (f"# {title}\n# optical frame x right, y down, z forward; K in pixels; "
               "T in metres; X_to = R X_from + T\n")
     Path(path).write_text(header + text, encoding="utf-8")
