@@ -257,7 +257,7 @@ def part_c(seed: int) -> list:
     rows = []
     pipe = StreamPipeline(arr, CFG)
     pipe.run(ArraySource(y[:, :FS], FS, 2048))  # warm-up (imports, caches)
-    for block in (1024, 4096, 16384):
+    for block in (1024, 4096, 16384, 65536):
         pipe.run(ArraySource(y, FS, block))
         st = pipe.stats
         lat = st.latency_summary()

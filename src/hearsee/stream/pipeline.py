@@ -482,7 +482,7 @@ class SmoothedSrp:
         # direction grid (unit vectors in the array frame); planar arrays see only |elevation|
         az = np.radians(np.arange(-180.0, 180.0, grid_deg))
         planar = np.ptp(array.positions[:, 2]) < 1e-9
-        els = np.radians(np.arange(0.0 if planar else -80.0, 81.0, 10.0))
+        els = np.radians(np.arange(0.0 if planar else -80.0, 81.0, 20.0 if planar else 10.0))
         self.grid_deg, self.n_az = float(grid_deg), az.size
         self.az_axis = np.degrees(az)
         A, E = np.meshgrid(az, els, indexing="ij")
@@ -493,6 +493,12 @@ class SmoothedSrp:
         tau = -((pos[self.I] - pos[self.J]) @ U.T) / array.speed_of_sound * fs  # (P, D) samples
         self.n_up = self.nfft * self.up
         self.idx = np.round(tau * self.up).astype(int) % self.n_up
+        # linear interpolation between the upsampled lags (rounding them would leave a ripple
+        # of up to 1/(2 up) sample in the steered response, ~1 deg for a 15 cm array)
+        fl = np.floor(tau * self.up)
+        self.idx0 = fl.astype(int) % self.n_up
+        self.idx1 = (self.idx0 + 1) % self.n_up
+        self.frac = (tau * self.up - fl).astype(np.float32)
         self.coherence_weight = bool(coherence_weight)
         self.S: NDArray | None = None
         self.A: NDArray | None = None
@@ -554,15 +560,16 @@ class SmoothedSrp:
             # keep the normalisation (1 = coherent everywhere) per frame and pair
             P = P * (P.shape[-1] / np.maximum(np.clip(msc, 0.0, 1.0).sum(-1, keepdims=True),
                                              1e-9))
-        full = np.zeros(P.shape[:-1] + (self.n_up // 2 + 1,), dtype=complex)
+        full = np.zeros(P.shape[:-1] + (self.n_up // 2 + 1,), dtype=np.complex64)
         full[..., self.k0:self.k1] = P
         nb = self.k1 - self.k0
         r = sfft.irfft(full, self.n_up, axis=-1) * (self.n_up / (2.0 * nb))  # peak 1 = coherent
         k = r.shape[0]
         n_p = len(self.pairs)
-        score = np.zeros((k, self.idx.shape[1]))
+        score = np.zeros((k, self.idx.shape[1]), dtype=np.float32)
         for p in range(n_p):
-            score += r[:, p, self.idx[p]]
+            f = self.frac[p]
+            score += (1.0 - f) * r[:, p, self.idx0[p]] + f * r[:, p, self.idx1[p]]
         score /= n_p
         best = np.argmax(score, axis=1)
         coh = score[np.arange(k), best]
@@ -644,6 +651,8 @@ class StreamConfig:
     max_evidence_age_frames : a smoothed measurement whose evidence is older than this (energy-
         weighted mean age, frames: in a pause the average still holds the last loud frames) is
         not used; younger ones enter the tracker with their age as measurement delay
+    prefer_frame : frames whose own GCC gives a confident measurement use it (no delay); only
+        the others use the smoothed steered response
     """
 
     frame_ms: float = 64.0
@@ -668,6 +677,7 @@ class StreamConfig:
     srp_coherence_weight: bool = True
     max_alt_ratio: float = 1.0
     max_evidence_age_frames: float = 8.0
+    prefer_frame: bool = False
 
 
 class TrackingProcessor:
@@ -755,7 +765,7 @@ class TrackingProcessor:
                 cands = [(a, e) for a, e in loc.candidates if a is not None]
                 raw_az, raw_el = loc.azimuth_deg, loc.elevation_deg
             delay = 0.0
-            if sm is not None:
+            if sm is not None and not (cands and self.cfg.prefer_frame):
                 cands = self._smoothed_candidates(sm, n)
                 delay = float(sm["age_frames"][n]) * self.hop / self.fs if cands else 0.0
             measured = self.direction.update(float(t), cands[0] if cands else None, cands[1:],
@@ -786,7 +796,7 @@ class TrackingProcessor:
         if self.cfg.max_alt_ratio < 1.0 and np.any(np.isfinite(alt)) \
                 and np.nanmax(alt) >= self.cfg.max_alt_ratio * coh:
             return []
-        # the steered response's own (interpolated) maximum; elevation on the 10 deg grid
+        # the steered response's own (interpolated) azimuth; elevation on the coarse grid
         el = float(sm["el_deg"][n])
         cands: list[tuple[float, float | None]] = [
             (float(sm["az_deg"][n]), el if np.isfinite(el) else None)]
