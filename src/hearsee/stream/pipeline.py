@@ -483,6 +483,11 @@ class SmoothedSrp:
         az = np.radians(np.arange(-180.0, 180.0, grid_deg))
         planar = np.ptp(array.positions[:, 2]) < 1e-9
         els = np.radians(np.arange(0.0 if planar else -80.0, 81.0, 20.0 if planar else 10.0))
+        cen = array.positions - array.positions.mean(axis=0)
+        if np.linalg.svd(cen, compute_uv=False)[1] < 1e-9:
+            # linear array: every elevation on the cone gives the same TDOA; azimuth in the
+            # horizontal plane, as the closed-form localizer reports it
+            els = np.zeros(1)
         self.grid_deg, self.n_az = float(grid_deg), az.size
         self.az_axis = np.degrees(az)
         A, E = np.meshgrid(az, els, indexing="ij")
@@ -802,7 +807,12 @@ class TrackingProcessor:
             (float(sm["az_deg"][n]), el if np.isfinite(el) else None)]
         for az, c in zip(sm["alt_az_deg"][n], sm["alt_coherence"][n], strict=True):
             if np.isfinite(az) and c >= self.cfg.alt_ratio * coh:
-                cands.append((float(az), None))
+                # an exact twin (front/back of a linear array: the same steered power) goes
+                # first when it is the frontal one, as localize_tdoa orders its candidates
+                if c >= coh * (1.0 - 1e-4) and abs(az) < abs(cands[0][0]):
+                    cands.insert(0, (float(az), None))
+                else:
+                    cands.append((float(az), None))
         return cands
 
     def _fuse(self, upd: Update, z: NDArray | None) -> None:
