@@ -658,6 +658,9 @@ class StreamConfig:
         not used; younger ones enter the tracker with their age as measurement delay
     prefer_frame : frames whose own GCC gives a confident measurement use it (no delay); only
         the others use the smoothed steered response
+    prefer_frame_confidence : the same for frames whose own GCC confidence (smallest pair
+        peak ratio) reaches this value (inf = never; 1.5 chosen on the seed-100 walks of
+        bench/tracking.py)
     """
 
     frame_ms: float = 64.0
@@ -683,6 +686,7 @@ class StreamConfig:
     max_alt_ratio: float = 1.0
     max_evidence_age_frames: float = 8.0
     prefer_frame: bool = False
+    prefer_frame_confidence: float = 1.5
 
 
 class TrackingProcessor:
@@ -770,7 +774,9 @@ class TrackingProcessor:
                 cands = [(a, e) for a, e in loc.candidates if a is not None]
                 raw_az, raw_el = loc.azimuth_deg, loc.elevation_deg
             delay = 0.0
-            if sm is not None and not (cands and self.cfg.prefer_frame):
+            own = bool(cands) and (self.cfg.prefer_frame
+                                   or conf[n] >= self.cfg.prefer_frame_confidence)
+            if sm is not None and not own:
                 cands = self._smoothed_candidates(sm, n)
                 delay = float(sm["age_frames"][n]) * self.hop / self.fs if cands else 0.0
             measured = self.direction.update(float(t), cands[0] if cands else None, cands[1:],
