@@ -62,6 +62,19 @@ class _Kalman:
         self.x = self.F @ self.x
         self.P = self.F @ self.P @ self.F.T + self.Q
 
+    def predict(self, t: float) -> None:
+        """Propagate the state to time ``t`` (seconds); subclasses provide ``_set_dt``."""
+        if self.t is None or not self.initialized:
+            self.t = float(t)
+            return
+        dt = float(t) - self.t
+        if dt < 0:
+            raise EstimationError(f"tracker time went backwards ({self.t} s -> {t} s)")
+        if dt > 0:
+            self._set_dt(dt)
+            self._predict()
+        self.t = float(t)
+
     def _innovation(self, z: NDArray, H: NDArray, R: NDArray, wrap: NDArray | None
                     ) -> tuple[NDArray, NDArray, float]:
         y = z - H @ self.x
@@ -160,19 +173,9 @@ class DirectionKalman(_Kalman):
             self._model_cache[key] = (F, Q)
         self.F, self.Q = self._model_cache[key]
 
-    def predict(self, t: float) -> None:
-        """Propagate the state to time ``t`` (seconds)."""
-        if self.t is None or not self.initialized:
-            self.t = float(t)
-            return
-        dt = float(t) - self.t
-        if dt < 0:
-            raise EstimationError(f"tracker time went backwards ({self.t} s -> {t} s)")
-        if dt > 0:
-            self._set_dt(dt)
-            self._predict()
-            self.x[0] = float(wrap_deg(self.x[0]))
-        self.t = float(t)
+    def _predict(self) -> None:
+        super()._predict()
+        self.x[0] = float(wrap_deg(self.x[0]))
 
     def _start(self, az: float, el: float | None) -> None:
         self.x = np.array([float(wrap_deg(az)), 0.0 if el is None else float(el), 0.0, 0.0])
@@ -389,18 +392,6 @@ class MotionKalman(_Kalman):
             )
         self.F, self.Q = self._model_cache[key]
 
-    def predict(self, t: float) -> None:
-        """Propagate the state to time ``t`` (seconds)."""
-        if self.t is None or not self.initialized:
-            self.t = float(t)
-            return
-        dt = float(t) - self.t
-        if dt < 0:
-            raise EstimationError(f"tracker time went backwards ({self.t} s -> {t} s)")
-        if dt > 0:
-            self._set_dt(dt)
-            self._predict()
-        self.t = float(t)
 
     def _start(self, z: NDArray, R: NDArray) -> None:
         self.x = np.zeros(9)

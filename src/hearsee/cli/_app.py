@@ -13,7 +13,7 @@ import math
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
-from enum import Enum
+from enum import Enum, StrEnum
 from typing import Any
 
 import typer
@@ -39,6 +39,16 @@ class OutputFormat(str, Enum):  # noqa: UP042 (typer choices)
     json = "json"
     csv = "csv"
     table = "table"
+
+
+class GccMethod(StrEnum):
+    """GCC weightings offered by the audio commands (see hearsee.audio.tdoa)."""
+
+    phat = "gcc-phat"
+    scot = "gcc-scot"
+    roth = "gcc-roth"
+    ml = "gcc-ml"
+    cc = "cc"
 
 
 def emit_json(obj: Any, *, indent: int | None = 2) -> None:

@@ -5,22 +5,12 @@ from __future__ import annotations
 import csv
 import io
 import sys
-from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
-from hearsee.cli._app import OutputFormat, app, emit_json, err_console, progress
-
-
-class GccMethod(StrEnum):
-    phat = "gcc-phat"
-    scot = "gcc-scot"
-    roth = "gcc-roth"
-    ml = "gcc-ml"
-    cc = "cc"
-
+from hearsee.cli._app import GccMethod, OutputFormat, app, emit_json, err_console, progress
 
 #: Above this much audio x pairs (seconds) processing takes about a second: show a bar.
 _PROGRESS_WORK_S = 60.0

@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from hearsee.cli._app import app, emit_json, err_console, parse_floats, to_jsonable
+from hearsee.cli._app import GccMethod, app, emit_json, err_console, parse_floats, to_jsonable
 
 
 class TrackFormat(StrEnum):
@@ -21,14 +21,6 @@ class TrackFormat(StrEnum):
 class Detector(StrEnum):
     hog = "hog"
     face = "face"
-
-
-class GccMethod(StrEnum):
-    phat = "gcc-phat"
-    scot = "gcc-scot"
-    roth = "gcc-roth"
-    ml = "gcc-ml"
-    cc = "cc"
 
 
 def _device_spec(text: str) -> int | str:
