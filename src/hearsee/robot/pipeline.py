@@ -75,6 +75,10 @@ BEARING_SIGMA_DEG = 4.0
 DISPARITY_SIGMA_PX = 0.35
 #: Direction-filter updates needed before the head starts turning.
 MIN_AUDIO_UPDATES = 3
+#: Seconds without a verified visual fix after which the 3D track is dropped: audio bearings
+#: alone do not observe the range, so a coasting track drifts; the head then follows the audio
+#: bearing until vision re-acquires the person.
+TRACK_TIMEOUT_S = 1.0
 
 _OBJECT_KIND = {"mannequin": "mannequin", "poster": "poster", "coat": "coat_stand"}
 
@@ -308,6 +312,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     captions: dict[str, str] = {}
     frames: list[tuple[float, NDArray]] = []
     first_turned_t: float | None = None
+    last_visual_t = -np.inf
     n_steps = int(np.ceil(sc.duration_s / CONTROL_DT - 1e-9))
 
     for k in range(n_steps):
@@ -335,6 +340,8 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             audio_rec = {"azimuth_deg": direction.azimuth_deg, "n_frames": len(az_meas),
                          "confidence": float(np.mean(tf.confidence[tf.valid]))
                          if tf.valid.any() else 0.0}
+            if track.initialized and t1 - last_visual_t > TRACK_TIMEOUT_S:
+                track.reset()
             if track.initialized:
                 for az in az_meas:
                     bearing_update(track, body, az, BEARING_SIGMA_DEG)
@@ -377,7 +384,8 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
                 hmn, p_w = best
                 Rc = R_cr.T @ stereo_position_cov(np.asarray(hmn.position_m), rig.focal_px,
                                                rig.baseline_m) @ R_cr
-                track.update(t1, p_w, Rc)
+                if track.update(t1, p_w, Rc):
+                    last_visual_t = t1
                 if first_turned_t is None:
                     first_turned_t = t1
             else:
