@@ -974,6 +974,15 @@ def _aim_at(point: NDArray, pivot_m: ArrayLike, offset_m: ArrayLike) -> tuple[fl
     return az, el
 
 
+def _measure_pose(measure: Any, pose: Any, arr: MicArray) -> NDArray:
+    """Call the alignment loops' ``measure(pose)`` and check it returned one TDOA per pair."""
+    tau = np.asarray(measure(pose), dtype=float)
+    if tau.shape != (len(arr.pairs),):
+        raise AudioInputError(f"measure() returned {tau.shape} TDOAs, expected "
+                              f"{len(arr.pairs)} (one per pair)")
+    return tau
+
+
 def align_head(
     measure: Callable[[HeadPose], ArrayLike],
     array: MicArray | str,
@@ -1021,10 +1030,7 @@ def align_head(
     n_probes = 0
     lo_t, hi_t = tilt_limits_deg
     while True:
-        tau = np.asarray(measure(pose), dtype=float)
-        if tau.shape != (len(arr.pairs),):
-            raise AudioInputError(f"measure() returned {tau.shape} TDOAs, expected "
-                                  f"{len(arr.pairs)} (one per pair)")
+        tau = _measure_pose(measure, pose, arr)
         poses.append(pose)
         taus.append(tau)
         facing.append(float(tau[arr.pairs.index(pair)]) if pair else float("nan"))
@@ -1108,10 +1114,7 @@ def align_head_search(
     moves = 0
     converged = False
     while True:
-        tau = np.asarray(measure(pose), dtype=float)
-        if tau.shape != (len(arr.pairs),):
-            raise AudioInputError(f"measure() returned {tau.shape} TDOAs, expected "
-                                  f"{len(arr.pairs)} (one per pair)")
+        tau = _measure_pose(measure, pose, arr)
         poses.append(pose)
         taus.append(tau)
         facing.append(float(tau[arr.pairs.index(pair)]) if pair else float("nan"))
