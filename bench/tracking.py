@@ -351,31 +351,59 @@ def plot(ex_a: dict, ex_b: dict, path: Path) -> None:
     plt.close(fig)
 
 
+HEAD_A = ["signal", "SNR dB", "per-frame RMSE deg", "per-frame coverage %",
+          "tracked RMSE deg", "tracked RMSE on per-frame frames", "SRP-PHAT RMSE deg",
+          "SRP-PHAT RMSE on per-frame frames",
+          "per-frame / tracked (same frames)", "median |lag| frames", "max |lag| frames",
+          "mean speed m/s"]
+HEAD_B = ["rig", "per-frame fix median m", "fix signed range error median m",
+          "fix signed range error IQR m", "fix coverage %", "tracked median m (all frames)",
+          "tracked p90 m", "tracked median m (frames with a fix)", "velocity RMSE m/s"]
+HEAD_C = ["run", "RTF wall", "RTF CPU", "latency median ms", "latency p95 ms", "frames",
+          "missing frames", "status"]
+HEAD_D = ["method", "CPU s per s of audio", "ratio"]
+
+
+def _run_parts(parts: set[str], args: argparse.Namespace) -> None:
+    """Development runs of some parts only: print their tables, write nothing."""
+    if "A" in parts:
+        print_table("A. moving speakers", HEAD_A, part_a(args.trials, args.seed, args.duration)[0])
+    if "B" in parts:
+        print_table("B. camera + 3 mics: 3D", HEAD_B, part_b(args.trials, args.seed, 2.0)[0])
+    if "C" in parts:
+        print_table("C. stream", HEAD_C, part_c(args.seed))
+    if "D" in parts:
+        hs, srp = srp_cost(args.seed)
+        print_table("D. cost", HEAD_D, [["hearsee stream", hs, 1.0], ["SRP-PHAT", srp, srp / hs]])
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials", type=int, default=3, help="walks per condition")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--duration", type=float, default=4.0, help="seconds per walk")
+    ap.add_argument("--parts", default="ABCD",
+                    help="which parts to run (e.g. 'B'); the results file and plot are written "
+                         "only when all four run")
     args = ap.parse_args(argv)
+    parts = set(args.parts.upper())
+    if not parts <= set("ABCD") or not parts:
+        ap.error("--parts takes letters from ABCD")
     t0 = time.time()
+    if parts != set("ABCD"):
+        _run_parts(parts, args)
+        return
     rows_a, ex_a = part_a(args.trials, args.seed, args.duration)
-    head_a = ["signal", "SNR dB", "per-frame RMSE deg", "per-frame coverage %",
-              "tracked RMSE deg", "tracked RMSE on per-frame frames", "SRP-PHAT RMSE deg",
-              "SRP-PHAT RMSE on per-frame frames",
-              "per-frame / tracked (same frames)", "median |lag| frames", "max |lag| frames",
-              "mean speed m/s"]
+    head_a = HEAD_A
     print_table("A. moving speakers, three-mic, RT60 0.3 s: azimuth", head_a, rows_a)
     rows_b, ex_b = part_b(args.trials, args.seed, 2.0)
-    head_b = ["rig", "per-frame fix median m", "fix signed range error median m",
-              "fix signed range error IQR m", "fix coverage %", "tracked median m (all frames)",
-              "tracked p90 m", "tracked median m (frames with a fix)", "velocity RMSE m/s"]
+    head_b = HEAD_B
     print_table("B. calibrated camera + 3 mics, 0.5-2 m, SNR 20, RT60 0.3: 3D", head_b, rows_b)
     rows_c = part_c(args.seed)
-    head_c = ["run", "RTF wall", "RTF CPU", "latency median ms", "latency p95 ms", "frames",
-              "missing frames", "status"]
+    head_c = HEAD_C
     print_table("C. stream, three-mic, 16 kHz, 64/32 ms frames", head_c, rows_c)
     hs, srp = srp_cost(args.seed)
-    head_d = ["method", "CPU s per s of audio", "ratio"]
+    head_d = HEAD_D
     rows_d = [["hearsee stream (GCC-PHAT+localize+track)", hs, 1.0],
               ["pyroomacoustics SRP-PHAT per frame", srp, srp / hs]]
     print_table("D. cost per second of audio (same frames)", head_d, rows_d)
