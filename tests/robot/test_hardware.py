@@ -473,6 +473,26 @@ def test_duration_and_ctrl_c_stop_cleanly(tmp_path):
     assert len(lines) == len(res.log) > 0 and json.loads(lines[-1])["t"] < 0.8
 
 
+@pytest.mark.slow
+def test_track_dropped_after_cameras_end(tmp_path):
+    """Videos of 2 frames (camera at 2 Hz) and 3 s of audio: the person is verified and tracked,
+    then the cameras end; after TRACK_TIMEOUT_S without a visual fix the 3D track is dropped
+    (bearing-only updates would let its range drift) and the head follows the audio."""
+    from hearsee.robot.pipeline import TRACK_TIMEOUT_S
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg, x, truth, torso, _ = _person_case(tmp_path, n_frames=2)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, block_len=1600), head=_quiet_head(cfg))
+    s = res.summary
+    assert s["person_reported"] and s["camera_frames"] == 2 and s["track_drops"] == 1
+    fix_t = max(r["camera_t"] for r in res.log if r["camera_t"] is not None)
+    tracked_t = [r["t"] for r in res.log if r["track"] is not None]
+    assert tracked_t and max(tracked_t) <= fix_t + TRACK_TIMEOUT_S + 1e-9
+    assert res.log[-1]["track"] is None and res.log[-1]["t"] > fix_t + TRACK_TIMEOUT_S
+    # without a track the desired pan is the audio bearing, which points at the talker
+    assert abs(s["head_pan_command_deg_final"] - truth["azimuth_deg"]) < 3.0
+
+
 def test_cameras_that_end_or_change_size(small_rig, capsys):
     from hearsee.robot.hardware import Cameras
     from hearsee.sim.audio import simulate_recording

@@ -856,7 +856,9 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        (:func:`hearsee.vision.fusion.detect_humans`).
     4. **Fuse and track**: the verified person nearest the audio bearing (within the pipeline's
        association gate) updates a constant-acceleration 3D Kalman filter in the robot frame,
-       and audio bearings update it too (the pipeline's bearing update).
+       and audio bearings update it too (the pipeline's bearing update). A track without a
+       visual fix for ``TRACK_TIMEOUT_S`` seconds is dropped (counted in
+       ``summary["track_drops"]``) and the head follows the audio bearing again.
 
     Parameters
     ----------
@@ -892,6 +894,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         ASSOCIATION_GATE_DEG,
         BEARING_SIGMA_DEG,
         MIN_AUDIO_UPDATES,
+        TRACK_TIMEOUT_S,
         bearing_update,
         stereo_position_cov,
     )
@@ -934,7 +937,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     captions: dict[str, str] = {}
     frames: list[tuple[float, NDArray]] = []
     state = {"n_audio": 0, "next_cam": 0.0, "phase": "listening", "cam_frames": 0,
-             "cam_ended": False, "first_verified": None, "hop": scfg.hop_ms / 1000.0}
+             "cam_ended": False, "first_verified": None, "hop": scfg.hop_ms / 1000.0,
+             "last_visual": -np.inf, "track_drops": 0}
     # live: detection runs in a worker thread so that the audio keeps flowing; its result is
     # applied at the first update after it is ready (file sources: in line, deterministic)
     use_pool = (live if async_vision is None else async_vision) and cameras is not None
@@ -988,7 +992,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             h, p, k = best
             Rc = geo.R_cam.T @ stereo_position_cov(np.asarray(h.position_m), rig.focal_px,
                                                 rig.baseline_m) @ geo.R_cam
-            track.update(t, p, Rc)
+            if track.update(t, p, Rc):
+                state["last_visual"] = t
             dets[k]["speaker"] = True
             if state["first_verified"] is None:
                 state["first_verified"] = t_cap
@@ -1012,6 +1017,11 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
 
     def sink(u: Any) -> None:
         t = float(u.t)
+        if track.initialized and t - state["last_visual"] > TRACK_TIMEOUT_S:
+            # no visual fix for TRACK_TIMEOUT_S: bearing-only updates would let the range
+            # drift (as in the simulated pipeline); drop the track, the head follows the audio
+            track.reset()
+            state["track_drops"] += 1
         track.predict(t)
         audio = None
         bearing = None
@@ -1132,6 +1142,7 @@ def _live_summary(log: list[dict[str, Any]], stats: Any, audio_s: float, status:
         "time_to_verify_s": (float(state["first_verified"]) if state["first_verified"]
                              is not None else float("nan")),
         "tracked_updates": int(tracked),
+        "track_drops": int(state["track_drops"]),
         "head_pan_command_deg_final": (float(last_cmd["pan_deg"]) if last_cmd
                                        else float("nan")),
         "head_commands_printed": int(head.n_printed),
