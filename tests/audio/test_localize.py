@@ -9,6 +9,7 @@ from hearsee.audio.localize import (
     hyperboloid_points,
     localize_recording,
     localize_tdoa,
+    near_field_in_plane,
     near_field_position,
     three_mic_curve,
 )
@@ -149,3 +150,69 @@ def test_localize_recording_document():
     f = doc["frames"][3]
     assert set(f["tdoa_s"]) == {"0-1", "0-2", "1-2"} and f["valid"]
     assert f["azimuth_deg"] == pytest.approx(60.0, abs=3.0)
+
+
+def _in_plane_sources(n, seed):
+    """Exact near-field TDOAs of in-plane sources 1-3 m from the three-mic centre."""
+    rng = np.random.default_rng(seed)
+    az = rng.uniform(-180, 180, n)
+    r = rng.uniform(1.0, 3.0, n)
+    src = r[:, None] * np.stack([np.cos(np.radians(az)), np.sin(np.radians(az)), 0 * az], 1)
+    d = np.linalg.norm(src[:, None, :] - THREE.positions[None], axis=-1)
+    tau = np.stack([(d[:, i] - d[:, j]) for i, j in THREE.pairs], 1) / THREE.speed_of_sound
+    return az, r, tau
+
+
+def _wrap_err(a, b):
+    return np.abs((np.asarray(a) - np.asarray(b) + 180.0) % 360.0 - 180.0)
+
+
+def test_near_field_in_plane_removes_far_field_bias():
+    az, r, tau = _in_plane_sources(200, 3)
+    far = [localize_tdoa(t, THREE, near_field=False).azimuth_deg for t in tau]
+    default = [localize_tdoa(t, THREE).azimuth_deg for t in tau]  # default: unchanged
+    assumed = [localize_tdoa(t, THREE, in_plane=True).azimuth_deg for t in tau]  # 2 m assumed
+    exact_r = [near_field_in_plane(t, THREE, range_m=ri).azimuth_deg
+               for t, ri in zip(tau, r, strict=True)]
+    rms = lambda e: float(np.sqrt(np.mean(e**2)))  # noqa: E731
+    e_far = rms(_wrap_err(far, az))
+    assert 0.3 < e_far < 0.8  # the plane-wave model's bias for a 15 cm triangle at 1-3 m
+    assert np.allclose(default, far)
+    assert rms(_wrap_err(assumed, az)) < 0.45 * e_far
+    assert _wrap_err(exact_r, az).max() < 1e-4  # the true range: exact azimuth
+
+
+def test_near_field_in_plane_fitted_range():
+    az, r, tau = _in_plane_sources(100, 4)
+    locs = [near_field_in_plane(t, THREE, range_m=None) for t in tau]
+    err = _wrap_err([lo.azimuth_deg for lo in locs], az)
+    assert max(lo.residual_s for lo in locs) < 1e-8  # two TDOAs, two unknowns: exact fit
+    assert np.median(err) < 1e-3
+    inv = np.array([lo.extra["inverse_range_per_m"] for lo in locs])
+    good = err < 1e-3
+    assert np.allclose(inv[good], 1.0 / r[good], atol=1e-3)
+    pos = locs[int(np.argmax(good))].position_m
+    k = int(np.argmax(good))
+    assert np.linalg.norm(pos[:2]) == pytest.approx(r[k], rel=1e-3) and abs(pos[2]) < 1e-9
+
+
+def test_near_field_in_plane_noisy_tdoas():
+    az, _, tau = _in_plane_sources(200, 5)
+    rng = np.random.default_rng(6)
+    noisy = tau + 2e-6 * rng.standard_normal(tau.shape)  # ~0.03 samples at 16 kHz
+    far = [localize_tdoa(t, THREE, near_field=False).azimuth_deg for t in noisy]
+    near = [localize_tdoa(t, THREE, in_plane=True).azimuth_deg for t in noisy]
+    assert np.sqrt(np.mean(_wrap_err(near, az) ** 2)) < 0.8 * np.sqrt(
+        np.mean(_wrap_err(far, az) ** 2))
+
+
+def test_near_field_in_plane_bad_input():
+    with pytest.raises(GeometryError):
+        near_field_in_plane([1e-4], TWO)
+    with pytest.raises(GeometryError):
+        near_field_in_plane(np.zeros(3), THREE, range_m=0.0)
+    with pytest.raises(GeometryError):
+        near_field_in_plane(np.zeros(3), THREE, range_m=None, max_inverse_range=-1.0)
+    # linear arrays ignore in_plane (their locus is a cone either way)
+    tau = TWO.tdoa_far(unit_vector_deg(40.0, 0.0))
+    assert localize_tdoa(tau, TWO, in_plane=True).candidates == localize_tdoa(tau, TWO).candidates
