@@ -191,3 +191,48 @@ def test_joint_coherent_and_weighting_options_keep_known_delays(three):
     for bad in ({"joint": "srp"}, {"phat_beta": 1.5}, {"onset_weight": -1.0}):
         with pytest.raises(ConfigError):
             estimate_tdoas(x, FS, three, **bad)
+
+
+def _voice_in(array, rt60, seed):
+    """A female voice (with pauses) 2 m away in the array plane, free field or in a room."""
+    from hearsee.audio.propagation import simulate_room
+    from hearsee.audio.signals import synthetic_voice
+
+    src = 2.0 * np.array([np.cos(np.radians(50.0)), np.sin(np.radians(50.0)), 0.0])
+    s = synthetic_voice("female", 1.5, FS, rng=seed)
+    if rt60 == 0:
+        return simulate_free_field(s, FS, array, src, snr_db=20, rng=seed + 1), array.tdoa(src)
+    x = simulate_room(s, FS, array, src, room_dim=(5.0, 4.0, 3.0), rt60=rt60,
+                      array_at=(2.5, 1.8, 1.3), snr_db=20, rng=seed + 1)
+    return x, array.tdoa(src)
+
+
+def test_reverb_method_switches_on_measured_coherence(three):
+    free, truth = _voice_in(three, 0.0, 10)
+    room, _ = _voice_in(three, 0.4, 10)
+    kw = {"method": "ml", "band_hz": (300.0, 3500.0), "hop_ms": 64.0}
+    tf_free = estimate_tdoas(free, FS, three, reverb_method="phat", **kw)
+    tf_room = estimate_tdoas(room, FS, three, reverb_method="phat", **kw)
+    assert tf_free.coherence_ratio > 0.95 and tf_free.summary_method == "ml"
+    assert tf_room.coherence_ratio < 0.9 and tf_room.summary_method == "phat"
+    # free field: identical to the plain call, and right
+    plain = estimate_tdoas(free, FS, three, **kw)
+    assert np.array_equal(plain.summary_tdoa_s, tf_free.summary_tdoa_s)
+    assert np.isnan(plain.coherence_ratio) and plain.summary_method == "ml"
+    assert np.abs(tf_free.summary_tdoa_s - truth).max() * FS < 0.2
+    # per-frame estimates never change
+    plain_room = estimate_tdoas(room, FS, three, **kw)
+    assert np.array_equal(plain_room.tdoa_s, tf_room.tdoa_s, equal_nan=True)
+    # the threshold decides
+    never = estimate_tdoas(room, FS, three, reverb_method="phat", reverb_coherence=0.0, **kw)
+    assert never.summary_method == "ml"
+    assert np.array_equal(never.summary_tdoa_s, plain_room.summary_tdoa_s, equal_nan=True)
+
+
+def test_reverb_method_needs_noise_frames_and_valid_name(three):
+    x = simulate_free_field(white_noise(1.0, FS, rng=3), FS, three, np.array([1.0, 1.0, 0.0]),
+                            snr_db=20, rng=4)  # steady source: no noise-only frames
+    tf = estimate_tdoas(x, FS, three, reverb_method="roth")
+    assert np.isnan(tf.coherence_ratio) and tf.summary_method == "phat"
+    with pytest.raises(ConfigError):
+        estimate_tdoas(x, FS, three, reverb_method="bogus")
