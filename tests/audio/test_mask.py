@@ -15,17 +15,17 @@ from hearsee.errors import AudioInputError, ConfigError, GeometryError
 FS = 16000
 
 
-def _mask2_dict(**mask_over):
-    d = load_yaml(MicArray.from_preset.__func__.__globals__["_preset_dir"]() / "mask2.yaml")
+def _mask2_dict(preset="mask2", **mask_over):
+    d = load_yaml(MicArray.from_preset.__func__.__globals__["_preset_dir"]() / f"{preset}.yaml")
     d["mask"].update(mask_over)
     return d
 
 
-def _coarse(**over):
+def _coarse(preset="mask2", **over):
     # 320 panels, 8 frequencies to 2 kHz: seconds to solve
     kw = dict(mesh_subdivision=4, df=250.0, f_max=2000.0)
     kw.update(over)
-    return MicArray.from_dict(_mask2_dict(**kw), where="coarse-mask")
+    return MicArray.from_dict(_mask2_dict(preset, **kw), where=f"coarse-{preset}")
 
 
 @pytest.fixture(scope="module")
@@ -39,6 +39,12 @@ def cache_root(tmp_path_factory):
 @pytest.fixture(scope="module")
 def model(cache_root):
     return mask.MaskModel(_coarse(), progress=False)
+
+
+@pytest.fixture(scope="module")
+def asym(cache_root):
+    """Coarse mask2-asym (the left/right asymmetric design): a few seconds to solve."""
+    return mask.MaskModel(_coarse("mask2-asym"), progress=False)
 
 
 def _src(az_deg, d=None):
@@ -57,6 +63,34 @@ def test_mask2_preset_is_valid():
     mesh = geom.mesh()
     assert 500 < mesh.n_panels < 1500
     assert mesh.size <= 343.0 / geom.f_max / geom.elements_per_wavelength
+
+
+def test_mask2_asym_preset_is_valid_and_turned():
+    arr = MicArray.from_preset("mask2-asym")
+    geom = mask.mask_geometry(arr)
+    assert geom.yaw_deg == 25.0
+    np.testing.assert_allclose(arr.positions, MicArray.from_preset("two-mic").positions)
+    # both microphones on the (turned) egg surface
+    np.testing.assert_allclose(geom.inside_egg(arr.positions), 1.0, atol=1e-4)
+    # the nose (farthest surface point from the centre) points to azimuth ~25 deg
+    v = geom.mesh().vertices - np.asarray(geom.centre)
+    tip = v[np.argmax(np.linalg.norm(v, axis=1))]
+    assert abs(np.degrees(np.arctan2(tip[1], tip[0])) - 25.0) < 3.0
+    # left/right asymmetric: the mesh is not its own y-mirror image
+    mirrored = geom.mesh().vertices * [1, -1, 1]
+    assert geom.inside_egg(mirrored).max() > 1.2
+
+
+def test_yaw_zero_keeps_the_untouched_egg():
+    # an explicit yaw_deg: 0 gives bit-identical vertices (cached mask2 solutions stay valid)
+    a = mask.mask_geometry(MicArray.from_dict(_mask2_dict(mesh_subdivision=3)))
+    b = mask.mask_geometry(MicArray.from_dict(_mask2_dict(mesh_subdivision=3, yaw_deg=0)))
+    np.testing.assert_array_equal(a.mesh().vertices, b.mesh().vertices)
+    # turning by yaw rotates the implicit function with the mesh
+    c = mask.MaskGeometry(front=0.12, back=0.06, half_width=0.08, half_height=0.08,
+                          centre=(0.0, 0.0, 0.0), yaw_deg=90.0)
+    np.testing.assert_allclose(c.inside_egg([[0.0, 0.12, 0.0], [0.0, -0.06, 0.0]]), 1.0)
+    np.testing.assert_allclose(c.inside_egg(c.mesh().vertices), 1.0, atol=1e-9)
 
 
 def test_microphones_inside_the_body_is_an_error():
@@ -89,6 +123,8 @@ def test_open_mesh_surface_is_an_error():
     ({"colour": "red"}, ConfigError, "unknown key 'colour'"),
     ({"centre": [0, 0]}, ConfigError, "centre"),
     ({"df": 5000.0}, ConfigError, "df"),
+    ({"yaw_deg": "left"}, ConfigError, "yaw_deg"),
+    ({"yaw_deg": 270.0}, ConfigError, "yaw_deg"),
 ])
 def test_bad_mask_blocks(over, exc, msg):
     with pytest.raises(exc, match=msg):
@@ -120,6 +156,20 @@ def test_left_right_mirror_symmetry(model):
     np.testing.assert_allclose(h[0, 0], h[1, 1], rtol=2e-2, atol=2e-3)
     hn = model.transfer(np.stack([_src(120, 0.5), _src(-120, 0.5)]))
     np.testing.assert_allclose(hn[0, 0], hn[1, 1], rtol=2e-2, atol=2e-3)
+
+
+def test_front_back_margin_symmetric_vs_asymmetric(model, asym):
+    # mask2 is left/right symmetric: azimuth 0 and 180 have identical cues (margin 0)
+    az, mg, partner = mask.front_back_margin(model)
+    assert mg[0] < 1e-2 and partner[0] == 180.0
+    assert np.median(mg) > 10.0  # elsewhere the cues separate
+    # the turned, blunter egg separates every azimuth from every other one >= 20 deg away
+    az, mg_a, partner_a = mask.front_back_margin(asym)
+    assert mg_a.min() > 5.0
+    assert mg_a[0] > 10.0 and mg_a[180] > 10.0
+    assert np.all(np.abs((partner_a - az + 180) % 360 - 180) > 20.0)
+    with pytest.raises(GeometryError, match="inside the mask"):
+        asym.transfer([0.02, -0.01, 0.0])
 
 
 def test_source_inside_body_is_an_error(model):
@@ -159,6 +209,20 @@ def test_localize_360(model, az, dist):
     # the runner-up is in the other half, near the mirror image 180 - az
     mirror = (180 - az) % 360
     assert abs((est.runner_up_deg - mirror + 180) % 360 - 180) < 35
+
+
+@pytest.mark.parametrize("az, dist", [(1.0, None), (179.0, None), (358.0, 0.5), (182.0, 1.0)])
+def test_asymmetric_mask_resolves_the_median_plane(asym, az, dist):
+    # a voice (unknown, non-flat spectrum) within 2 deg of 0 / 180 deg: the symmetric mask2
+    # can only guess front/back there; the asymmetric design must not
+    from hearsee.audio.signals import synthetic_voice
+
+    sig = synthetic_voice("female", 1.0, FS, rng=int(az))
+    x = mask.simulate_masked(sig, FS, asym, _src(az, dist), snr_db=20, rng=5,
+                             far_field=dist is None)
+    est = mask.localize_mask(x, FS, asym)
+    assert abs((est.azimuth_deg - az + 180) % 360 - 180) < 5.0
+    assert (est.front_probability > 0.5) == (az < 90 or az > 270)
 
 
 def test_simulated_delay_and_noise(model):

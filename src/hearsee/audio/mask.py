@@ -89,6 +89,7 @@ __all__ = [
     "MaskModel",
     "Responses",
     "cache_dir",
+    "front_back_margin",
     "localize_mask",
     "localize_recording_mask",
     "mask_geometry",
@@ -101,6 +102,7 @@ CODE_VERSION = "mask-bem-1"
 TABLE_DISTANCES: tuple[float | None, ...] = (None, 1.0, 0.5)
 
 _EGG_KEYS = ("shape", "centre", "front", "back", "half_width", "half_height")
+_EGG_OPTIONAL = ("yaw_deg",)
 _COMMON_KEYS = ("f_max", "df", "elements_per_wavelength", "mesh_subdivision", "tolerance")
 
 
@@ -131,7 +133,9 @@ class MaskGeometry:
     """A closed rigid mask body (metres) and its numerical settings.
 
     ``shape="egg"``: half-ellipsoids joined at ``centre`` (semi-axes ``front`` towards +x,
-    ``back`` towards -x, ``half_width`` along y, ``half_height`` along z). ``shape="mesh"``:
+    ``back`` towards -x, ``half_width`` along y, ``half_height`` along z), optionally turned by
+    ``yaw_deg`` degrees about the vertical axis through ``centre`` (the front then points to
+    azimuth ``yaw_deg``; a non-zero yaw makes the mask left/right asymmetric). ``shape="mesh"``:
     explicit ``vertices`` (V, 3) and ``faces`` (F, 3). ``f_max`` (Hz) and ``df`` (Hz) set the
     frequency grid ``df, 2 df, ..., f_max``; the mesh has about ``elements_per_wavelength`` panels
     per wavelength at ``f_max`` (or ``mesh_subdivision`` fixes the geodesic subdivision of the
@@ -144,6 +148,7 @@ class MaskGeometry:
     back: float = 0.06
     half_width: float = 0.0866025
     half_height: float = 0.08
+    yaw_deg: float = 0.0
     vertices: NDArray | None = None
     faces: NDArray | None = None
     f_max: float = 4000.0
@@ -174,7 +179,7 @@ class MaskGeometry:
                 raise ConfigError(f"{where}: mesh_subdivision must be an integer 1..40, got {ms!r}")
             common["mesh_subdivision"] = ms
         if shape == "egg":
-            allowed = _EGG_KEYS + _COMMON_KEYS
+            allowed = _EGG_KEYS + _EGG_OPTIONAL + _COMMON_KEYS
             for k in d:
                 if k not in allowed:
                     raise ConfigError(f"{where}: unknown key {k!r} (expected one of: "
@@ -187,8 +192,14 @@ class MaskGeometry:
             if c.shape != (3,) or not np.all(np.isfinite(c)):
                 raise ConfigError(
                     f"{where}: centre must be [x, y, z] metres, got {d.get('centre')!r}")
+            yaw = d.get("yaw_deg", 0.0)
+            if isinstance(yaw, bool) or not isinstance(yaw, int | float) or not np.isfinite(yaw) \
+                    or abs(yaw) > 180:
+                raise ConfigError(f"{where}: yaw_deg must be a number of degrees in [-180, 180], "
+                                  f"got {yaw!r}")
             return cls("egg", tuple(float(v) for v in c),
-                       *(_pos_number(d, k, where) for k in _EGG_KEYS[2:]), **common)
+                       *(_pos_number(d, k, where) for k in _EGG_KEYS[2:]), yaw_deg=float(yaw),
+                       **common)
         if shape == "mesh":
             allowed = ("shape", "vertices", "faces") + _COMMON_KEYS
             for k in d:
@@ -206,12 +217,23 @@ class MaskGeometry:
         raise ConfigError(f"{where}: shape must be 'egg' or 'mesh', got {shape!r}")
 
     # -- egg surface
+    def _yaw_matrix(self) -> NDArray | None:
+        """Rotation body -> array frame about z (None when the egg is not turned)."""
+        if self.yaw_deg == 0.0:
+            return None
+        c, s = np.cos(np.deg2rad(self.yaw_deg)), np.sin(np.deg2rad(self.yaw_deg))
+        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
     def _egg_mesh(self, n: int) -> bem.TriMesh:
         u, faces = bem.geodesic_sphere(n)
         a = np.where(u[:, 0] >= 0, self.front, self.back)
         r = 1.0 / np.sqrt((u[:, 0] / a) ** 2 + (u[:, 1] / self.half_width) ** 2
                           + (u[:, 2] / self.half_height) ** 2)
-        return bem.TriMesh(u * r[:, None] + np.asarray(self.centre), faces)
+        v = u * r[:, None]
+        rot = self._yaw_matrix()
+        if rot is not None:
+            v = v @ rot.T
+        return bem.TriMesh(v + np.asarray(self.centre), faces)
 
     def mesh(self, speed_of_sound: float = 343.0) -> bem.TriMesh:
         """The BEM surface mesh (closed, checked)."""
@@ -229,6 +251,9 @@ class MaskGeometry:
     def inside_egg(self, points: ArrayLike) -> NDArray:
         """Implicit function of the egg: < 1 inside, 1 on the surface, > 1 outside."""
         p = np.atleast_2d(np.asarray(points, dtype=float)) - np.asarray(self.centre)
+        rot = self._yaw_matrix()
+        if rot is not None:
+            p = p @ rot  # array -> body frame
         a = np.where(p[:, 0] >= 0, self.front, self.back)
         return ((p[:, 0] / a) ** 2 + (p[:, 1] / self.half_width) ** 2
                 + (p[:, 2] / self.half_height) ** 2)
@@ -538,6 +563,47 @@ class MaskModel:
         """A bound on |ITD| (s): half the path around the body plus the spacing, over c."""
         ext = np.ptp(self.mesh.vertices, axis=0)
         return float((self.array.aperture + 0.5 * np.pi * 0.5 * ext.max()) / self.c)
+
+
+def front_back_margin(model: MaskModel, distance: float | None = None,
+                      min_separation_deg: float = 20.0, sigma_iid_db: float = 1.0,
+                      phase_weight: float = 400.0, bands_hz: ArrayLike | None = None,
+                      weights: ArrayLike | None = None) -> tuple[NDArray, NDArray, NDArray]:
+    """Worst-case separability of each azimuth from every other one, in the classifier's units.
+
+    For each azimuth ``a`` of the 1-degree response table (horizontal plane, far field or
+    ``distance`` metres) the noiseless cost that :func:`localize_mask` would give the wrong
+    answer ``b`` for a source at ``a``::
+
+        J(a, b) = phase_weight (1 - sum_f w_f cos(phi_a(f) - phi_b(f)))
+                  + sum_bands (IID_a - IID_b)^2 / (2 sigma_iid_db^2)
+
+    (``phi`` the interaural phase spectrum, ``IID`` the white-source band IIDs, ``w`` the
+    frequency weights, uniform by default, over the classifier's band 250 Hz .. 0.9 f_max),
+    minimised over ``b`` at least ``min_separation_deg`` away from ``a``. Both cues are ratios
+    of the two microphones' spectra, so they do not depend on the (unknown) source spectrum.
+    A left/right symmetric mask has ``J(0, 180) = 0`` (both cues vanish in the median plane);
+    a design that separates every azimuth from its front/back mirror has a positive minimum.
+
+    Returns ``(azimuth_deg (A,), margin (A,), partner_deg (A,))``: the cost of the nearest
+    confusable azimuth and that azimuth.
+    """
+    az, h = model.table(distance)
+    edges = default_bands(model.f_max) if bands_hz is None else np.asarray(bands_hz, float)
+    use = (model.freqs >= max(edges[0], 100.0)) & (model.freqs <= 0.9 * model.f_max)
+    w = np.ones(int(use.sum())) if weights is None else np.asarray(weights, float)[use]
+    w = w / w.sum()
+    cross = np.conj(h[:, 0, use]) * h[:, 1, use]
+    z = cross / np.maximum(np.abs(cross), 1e-300)  # unit phasors exp(i phi)
+    rho = np.real((z * w) @ np.conj(z).T)  # (A, A): sum_f w cos(phi_a - phi_b)
+    iid = model.responses(distance, bands_hz=edges).iid_db
+    iid = np.where(np.isfinite(iid), iid, 0.0)
+    chi = np.sum((iid[:, None] - iid[None]) ** 2, axis=-1) / (2 * sigma_iid_db**2)
+    cost = phase_weight * (1.0 - rho) + chi
+    sep = np.abs((az[:, None] - az[None] + 180.0) % 360.0 - 180.0)
+    cost = np.where(sep > min_separation_deg, cost, np.inf)
+    k = np.argmin(cost, axis=1)
+    return az, cost[np.arange(len(az)), k], az[k]
 
 
 # ------------------------------------------------------------------------------- simulation
