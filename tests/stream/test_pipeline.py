@@ -93,7 +93,7 @@ def test_device_dropout_late_block_and_stall_do_not_crash_or_hang(moving):
     st = pipe.stats
     assert st.status == "ok"
     assert st.n_late_blocks == 1
-    assert st.n_dropped_blocks == 4  # 3 dropped + the late one (missing when its successor came)
+    assert st.n_dropped_blocks == 3  # the late block is counted as late, not also as dropped
     assert st.n_stalls >= 1
     assert st.n_missing_frames >= 4
     miss = np.array([u.missing for u in ups])
@@ -197,6 +197,8 @@ def test_live_device_source_with_fake_portaudio(monkeypatch):
     pipe = StreamPipeline(MicArray.from_preset("three-mic"))
     ups = pipe.run(src, threaded=True)
     assert pipe.stats.n_blocks + src.n_dropped == 20
+    # each block the device dropped is counted once (not also as the sequence gap it leaves)
+    assert pipe.stats.n_dropped_blocks == src.n_dropped
     assert len(ups) >= 1
 
 
@@ -257,3 +259,83 @@ def test_smoothed_tracker_with_a_two_mic_array_takes_the_frontal_twin():
     y = simulate_moving_free_field(x, FS, arr, traj, snr_db=15, rng=3)
     ups = StreamPipeline(arr, StreamConfig(spectrum_alpha=0.8)).run(ArraySource(y, FS, 4096))
     assert np.nanmedian(_az_err(ups, traj)[5:]) < 3.0
+
+
+def test_device_drops_are_counted_once(moving):
+    """A device that drops blocks (its own count) leaves gaps in the sequence numbers the framer
+    also sees: every lost block is counted exactly once, also those after the last delivered
+    block (no gap follows them)."""
+    arr, _, y = moving
+    lost = {5, 6, 12, 29}
+
+    class DroppingDevice:
+        fs, n_channels, n_dropped = FS, 3, 0
+
+        def blocks(self):
+            for seq in range(30):  # the last block is lost too
+                if seq in lost:
+                    self.n_dropped += 1
+                    continue
+                yield Block(seq, seq * 1024, y[:, seq * 1024:(seq + 1) * 1024],
+                            time.perf_counter())
+
+    for threaded in (False, True):
+        pipe = StreamPipeline(arr)
+        pipe.run(DroppingDevice(), threaded=threaded)
+        st = pipe.stats
+        assert st.n_dropped_blocks == len(lost)
+        assert st.n_blocks == 30 - len(lost) and st.n_late_blocks == 0
+    # the same gaps from a source without its own count (DropoutSource): the framer's count
+    src = DropoutSource(ArraySource(y, FS, 1024), drop=sorted(lost - {29}), late=[20])
+    pipe = StreamPipeline(arr)
+    pipe.run(src)
+    assert pipe.stats.n_dropped_blocks == len(lost) - 1 and pipe.stats.n_late_blocks == 1
+
+
+@pytest.mark.parametrize("cfg", [StreamConfig(), StreamConfig(refine="interp", band_hz=(300, 3000)),
+                                 StreamConfig(method="scot")])
+def test_frame_gcc_equals_estimate_tdoas_per_frame(cfg):
+    """The stream's per-frame GCC stage gives estimate_tdoas's per-frame TDOAs and confidences
+    (it only leaves out the whole-recording summary)."""
+    from hearsee.audio.tdoa import estimate_tdoas
+
+    arr = MicArray.from_preset("three-mic")
+    rng = np.random.default_rng(3)
+    gcc = pl.FrameGcc(arr, FS, cfg)
+    for _ in range(3):
+        seg = 0.01 * rng.standard_normal((3, 1024 + 9 * 512))
+        s = rng.standard_normal(4000)  # a burst in the middle frames, known integer delays
+        for ch, d in enumerate((3, 0, 1)):
+            seg[ch, 2000:5000] += s[d:d + 3000]
+        ref = estimate_tdoas(seg, FS, arr, cfg.frame_ms, cfg.hop_ms, cfg.method, arr.pairs,
+                             band_hz=cfg.band_hz, refine=cfg.refine,
+                             min_confidence=cfg.min_confidence)
+        tdoa, conf = gcc(seg, 10)
+        np.testing.assert_array_equal(np.isnan(tdoa), np.isnan(ref.tdoa_s))
+        assert np.isfinite(tdoa).any() and np.isnan(tdoa).any()
+        np.testing.assert_allclose(tdoa, ref.tdoa_s, atol=1e-9, equal_nan=True)
+        np.testing.assert_allclose(conf, ref.confidence, rtol=1e-5, atol=1e-6)
+        # the burst: channel k leads by d_k samples, so it arrives at t_k = -d_k
+        ok = np.all(np.isfinite(tdoa), axis=1)
+        arrive = -np.array([3.0, 0.0, 1.0])
+        want = [arrive[i] - arrive[j] for i, j in arr.pairs]
+        np.testing.assert_allclose(np.median(tdoa[ok], axis=0) * FS, want, atol=0.3)
+
+
+def test_smoothed_srp_lag_window_equals_full_upsampled_correlation():
+    """SmoothedSrp evaluates the upsampled correlations only on the lag window; that must be
+    exactly the zero-padded inverse FFT at those lags."""
+    import scipy.fft as sfft
+
+    arr = MicArray.from_preset("three-mic")
+    srp = pl.SmoothedSrp(arr, FS, 1024, 0.8, (300.0, 3500.0))
+    rng = np.random.default_rng(4)
+    P = rng.standard_normal((2, 3, srp.k1 - srp.k0)) + 1j * rng.standard_normal(
+        (2, 3, srp.k1 - srp.k0))
+    full = np.zeros((2, 3, srp.n_up // 2 + 1), complex)
+    full[..., srp.k0:srp.k1] = P
+    nb = srp.k1 - srp.k0
+    ref = sfft.irfft(full, srp.n_up, axis=-1) * (srp.n_up / (2.0 * nb))
+    lags = np.arange(-srp.lag_max, srp.lag_max + 1)
+    got = (P.astype(np.complex64) @ srp.E).real / nb
+    np.testing.assert_allclose(got, ref[..., lags % srp.n_up], atol=2e-5)

@@ -48,6 +48,24 @@ __all__ = [
 ]
 
 
+def _wrap1(a: float) -> float:
+    """One angle wrapped to (-180, 180] degrees, as :func:`hearsee.geometry.wrap_deg` does
+    (a Python float: the trackers wrap their state every frame)."""
+    w = (a + 180.0) % 360.0 - 180.0
+    return 180.0 if w == -180.0 else w
+
+
+def _inv_small(S: NDArray) -> NDArray:
+    """Inverse of a symmetric positive definite innovation covariance; 1x1 and 2x2 in closed
+    form (the trackers' direction measurements: no LAPACK call per frame)."""
+    if S.shape == (1, 1):
+        return 1.0 / S
+    if S.shape == (2, 2):
+        a, b, c, d = S[0, 0], S[0, 1], S[1, 0], S[1, 1]
+        return np.array([[d, -b], [-c, a]]) / (a * d - b * c)
+    return np.linalg.inv(S)
+
+
 class _Kalman:
     """Linear Kalman core with filterpy names and an optional wrapped innovation."""
 
@@ -81,11 +99,11 @@ class _Kalman:
         if wrap is not None:
             y = np.where(wrap, wrap_deg(y), y)
         S = H @ self.P @ H.T + R
-        d2 = float(y @ np.linalg.solve(S, y))
+        d2 = float(y @ _inv_small(S) @ y)
         return y, S, d2
 
     def _correct(self, y: NDArray, S: NDArray, H: NDArray, R: NDArray) -> None:
-        K = np.linalg.solve(S, H @ self.P).T  # P H^T S^-1 (S symmetric)
+        K = self.P @ H.T @ _inv_small(S)  # P H^T S^-1
         self.x = self.x + K @ y
         I_KH = np.eye(len(self.x)) - K @ H
         self.P = I_KH @ self.P @ I_KH.T + K @ R @ K.T  # Joseph form: stays symmetric PSD
@@ -175,10 +193,10 @@ class DirectionKalman(_Kalman):
 
     def _predict(self) -> None:
         super()._predict()
-        self.x[0] = float(wrap_deg(self.x[0]))
+        self.x[0] = _wrap1(float(self.x[0]))
 
     def _start(self, az: float, el: float | None) -> None:
-        self.x = np.array([float(wrap_deg(az)), 0.0 if el is None else float(el), 0.0, 0.0])
+        self.x = np.array([_wrap1(float(az)), 0.0 if el is None else float(el), 0.0, 0.0])
         el_var = 90.0**2 if el is None else self.sigma_meas_deg**2
         self.P = np.diag([self.sigma_meas_deg**2, el_var, self.init_rate_sigma_dps**2,
                           self.init_rate_sigma_dps**2])
@@ -243,11 +261,13 @@ class DirectionKalman(_Kalman):
         if not self.initialized:
             self._start(*cands[0])
             return True
-        d2 = [self.gate_distance(a, e, Rf, delay_s) for a, e in cands]
-        k = int(np.argmin(d2))
-        az, el = cands[k]
-        z, H, R, wrap = self._parts(az, el, Rf, delay_s)
-        y, S, dist2 = self._innovation(z, H, R, wrap)
+        best = None
+        for a, e in cands:  # nearest neighbour: the candidate with the smallest gate distance
+            z, H, R, wrap = self._parts(a, e, Rf, delay_s)
+            y, S, d2 = self._innovation(z, H, R, wrap)
+            if best is None or d2 < best[0]:
+                best = (d2, a, e, z, H, R, y, S)
+        dist2, az, el, z, H, R, y, S = best
         if dist2 > self._gate[len(z)]:
             self.n_rejects += 1
             if self.n_rejects >= self.max_rejects:
@@ -255,7 +275,7 @@ class DirectionKalman(_Kalman):
                 return True
             return False
         self._correct(y, S, H, R)
-        self.x[0] = float(wrap_deg(self.x[0]))
+        self.x[0] = _wrap1(float(self.x[0]))
         self.x[1] = float(np.clip(self.x[1], -90.0, 90.0))
         self.has_elevation = self.has_elevation or el is not None
         self.n_rejects = 0
