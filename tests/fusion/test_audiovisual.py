@@ -6,9 +6,11 @@ from hearsee.errors import EstimationError, GeometryError
 from hearsee.fusion.audiovisual import (
     AudioVisualRegressor,
     AudioVisualRig,
+    RayTracker,
     locate_on_ray,
     ray_residuals,
     simulate_av_samples,
+    track_on_rays,
 )
 from hearsee.vision.camera import Camera
 
@@ -95,3 +97,79 @@ def test_learned_mapping_without_calibration(rig):
         AudioVisualRegressor().predict(Xt)
     with pytest.raises(EstimationError, match="features"):
         model.predict(Xt[:, :3])
+
+
+def _walk_fixes(rig, rng, n=60, dt=0.032, sigma_tdoa_s=5e-7):
+    """Fixes of a source walking at constant velocity: exact pixels, noisy ITDs."""
+    p0, v = np.array([1.2, -0.3, 0.05]), np.array([-0.2, 0.6, 0.0])
+    out = []
+    for k in range(n):
+        p = p0 + v * k * dt
+        z = rig.array.tdoa(p) + sigma_tdoa_s * rng.standard_normal(3)
+        out.append((k * dt, p, locate_on_ray(rig, rig.project(p)[0], z,
+                                             sigma_tdoa_s=sigma_tdoa_s)))
+    return v, out
+
+
+def test_ray_tracker_averages_the_range_scatter_and_estimates_velocity(rig):
+    v, fixes = _walk_fixes(rig, np.random.default_rng(3))
+    trk = RayTracker(sigma_accel=0.2)
+    raw, err = [], []
+    for t, p, fix in fixes:
+        trk.update(t, fix.position_m, fix.covariance)
+        raw.append(np.linalg.norm(fix.position_m - p))
+        err.append(np.linalg.norm(trk.position - p))
+    assert np.median(err[20:]) < 0.6 * np.median(raw[20:])
+    assert np.linalg.norm(trk.velocity - v) < 0.15
+    np.testing.assert_array_equal(trk.acceleration, np.zeros(3))
+    assert trk.position_cov.shape == (3, 3)
+
+
+def test_ray_tracker_gates_an_outlier_and_restarts_after_repeated_ones(rig):
+    _, fixes = _walk_fixes(rig, np.random.default_rng(4), n=30)
+    trk = RayTracker(max_rejects=3)
+    for t, _, fix in fixes[:25]:
+        trk.update(t, fix.position_m, fix.covariance)
+    t, p, fix = fixes[25]
+    far = fix.position_m + 0.8 * fix.direction  # a reflection's fix, 0.8 m along the ray
+    assert not trk.update(t, far, fix.covariance)
+    assert np.linalg.norm(trk.position - p) < 0.1
+    # the nearer of two candidate fixes is used
+    t, p, fix = fixes[26]
+    assert trk.update(t, far, fix.covariance, [(fix.position_m, fix.covariance)])
+    assert np.linalg.norm(trk.position - p) < 0.1
+    for t, _, fix in fixes[27:30]:
+        trk.update(t, fix.position_m + 1.5 * fix.direction, fix.covariance)
+    last = fixes[29][2]
+    assert np.linalg.norm(trk.position - (last.position_m + 1.5 * last.direction)) < 1e-6
+    assert trk.update(0.99, None) is False and trk.initialized
+    with pytest.raises(EstimationError, match="backwards"):
+        trk.update(0.5, None)
+
+
+def test_ray_tracker_bad_parameters():
+    with pytest.raises(EstimationError, match="sigma_accel"):
+        RayTracker(sigma_accel=0.0)
+    with pytest.raises(EstimationError, match="gate_prob"):
+        RayTracker(gate_prob=1.5)
+    assert np.all(np.isnan(RayTracker().position))
+
+
+def test_track_on_rays_from_a_recording(rig):
+    from hearsee.sim.moving import Trajectory, simulate_moving_free_field
+
+    rng = np.random.default_rng(5)
+    fs = 16000
+    traj = Trajectory([0.0, 1.0], [[1.0, -0.2, 0.0], [1.0, 0.3, 0.0]])
+    x = rng.standard_normal(fs)
+    y = simulate_moving_free_field(x, fs, rig.array, traj, snr_db=30.0, rng=rng)
+    res = track_on_rays(rig, y, fs, lambda t: rig.project(traj.at(t))[0])
+    truth = traj.at(res.t)
+    assert np.mean(np.isfinite(res.raw[:, 0])) > 0.8
+    err = np.linalg.norm(res.position - truth, axis=1)[10:]
+    assert np.median(err) < 0.05
+    assert np.linalg.norm(np.nanmean(res.velocity[10:], axis=0) - [0.0, 0.5, 0.0]) < 0.2
+    # frames without an image point give no fix; the track coasts
+    res2 = track_on_rays(rig, y, fs, lambda t: None if t > 0.5 else rig.project(traj.at(t))[0])
+    late = res2.t > 0.5
+    assert np.all(np.isnan(res2.raw[late, 0])) and np.all(np.isfinite(res2.position[late, 0]))

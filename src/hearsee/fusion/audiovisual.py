@@ -35,8 +35,9 @@ Geometry* (2003), ch. 6 for the back-projected ray; Brent (1973) for the bounded
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -51,9 +52,12 @@ __all__ = [
     "AudioVisualRegressor",
     "AudioVisualRig",
     "RayFix",
+    "RayTrack",
+    "RayTracker",
     "locate_on_ray",
     "ray_residuals",
     "simulate_av_samples",
+    "track_on_rays",
 ]
 
 
@@ -247,6 +251,220 @@ def _refine_on_ray(rig: AudioVisualRig, o: NDArray, d: NDArray, z: NDArray,
     var_lat = (s_hat * sigma_px / rig.camera.fx) ** 2
     cov = var_s * np.outer(d, d) + var_lat * (np.eye(3) - np.outer(d, d))
     return RayFix(o + s_hat * d, s_hat, float(np.sqrt(np.mean(F**2))), cov, d)
+
+
+# ----------------------------------------------------------------- tracking along the rays
+class RayTracker:
+    """Constant-velocity Kalman filter on the 3D position of a source on the camera's rays.
+
+    The camera fixes the direction to the source in every frame almost exactly (a pixel of
+    noise is a few millimetres across the ray at 1-2 m); the range along the ray comes from the
+    ITDs and scatters by several centimetres per frame (early reflections, TDOA noise). At
+    walking speed the range changes slowly, so the filter accumulates that evidence over many
+    frames: state ``[x, vx, y, vy, z, vz]`` (m, m/s; filterpy's ``order_by_dim`` layout), white-
+    acceleration process noise (``Q_discrete_white_noise``), each fix fused with its own
+    covariance from :func:`locate_on_ray` (elongated along the ray), and fixes whose innovation
+    fails a chi-square gate are rejected (a reflection that captured a GCC peak).
+
+    The interface matches :class:`hearsee.audio.tracking.MotionKalman` (``update(t, position,
+    R, candidates)``, ``position``, ``velocity``, ``acceleration``, ``position_cov``), so either
+    can track the fixes; the constant-velocity model averages over more frames than the
+    constant-acceleration one (``bench/tracking.py`` part B measures both on the same fixes).
+
+    Parameters
+    ----------
+    sigma_accel : float
+        Standard deviation of the white acceleration, m/s^2 (0.2 chosen on the seed-100 walks
+        of ``bench/tracking.py`` part B, with fixes made with ``sigma_tdoa_s=8e-6``).
+    gate_prob : float
+        Chi-square gate probability (3 degrees of freedom).
+    max_rejects : int
+        Consecutive gated fixes after which the track restarts at the newest fix.
+    init_vel_sigma : float
+        Initial velocity standard deviation, m/s.
+
+    References: Bar-Shalom, Li & Kirubarajan, *Estimation with Applications to Tracking and
+    Navigation* (2001), ch. 6 (white-acceleration model) and 5.4 (gating).
+    """
+
+    _POS = np.array([0, 2, 4])
+    _VEL = np.array([1, 3, 5])
+
+    def __init__(self, sigma_accel: float = 0.2, gate_prob: float = 0.99, max_rejects: int = 4,
+                 init_vel_sigma: float = 1.0) -> None:
+        from scipy.stats import chi2
+
+        if not sigma_accel > 0 or not init_vel_sigma > 0:
+            raise EstimationError("sigma_accel and init_vel_sigma must be > 0")
+        if not 0 < gate_prob < 1 or int(max_rejects) < 1:
+            raise EstimationError("gate_prob must be in (0, 1) and max_rejects >= 1")
+        self.sigma_accel = float(sigma_accel)
+        self.gate_prob = float(gate_prob)
+        self.max_rejects = int(max_rejects)
+        self.init_vel_sigma = float(init_vel_sigma)
+        self._gate = float(chi2.ppf(self.gate_prob, 3))
+        self.H = np.zeros((3, 6))
+        self.H[[0, 1, 2], self._POS] = 1.0
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the track."""
+        self.x = np.zeros(6)
+        self.P = np.eye(6) * 1e6
+        self.t: float | None = None
+        self.initialized = False
+        self.n_rejects = 0
+
+    def predict(self, t: float) -> None:
+        """Propagate the state to time ``t`` (seconds)."""
+        from filterpy.common import Q_discrete_white_noise
+
+        if self.t is not None and self.initialized:
+            dt = float(t) - self.t
+            if dt < 0:
+                raise EstimationError(f"tracker time went backwards ({self.t} s -> {t} s)")
+            if dt > 0:
+                F = np.kron(np.eye(3), np.array([[1.0, dt], [0.0, 1.0]]))
+                Q = Q_discrete_white_noise(dim=2, dt=dt, var=self.sigma_accel**2, block_size=3,
+                                           order_by_dim=True)
+                self.x = F @ self.x
+                self.P = F @ self.P @ F.T + Q
+        self.t = float(t)
+
+    def _start(self, z: NDArray, R: NDArray) -> None:
+        self.x = np.zeros(6)
+        self.x[self._POS] = z
+        self.P = np.diag(np.tile([1.0, self.init_vel_sigma**2], 3))
+        self.P[np.ix_(self._POS, self._POS)] = R
+        self.initialized = True
+        self.n_rejects = 0
+
+    def update(self, t: float, position: ArrayLike | None = None, R: ArrayLike | None = None,
+               candidates: Sequence[tuple[ArrayLike, ArrayLike | None]] | None = None) -> bool:
+        """One frame: predict to ``t`` (seconds) and fuse the fix ``position`` (m, array frame)
+        with covariance ``R`` (3x3, m^2; default 5 cm per axis). ``candidates`` are ambiguous
+        alternative fixes ``(position, R)``; the one nearest the prediction (Mahalanobis) is
+        used. Returns True when a fix was fused."""
+        self.predict(t)
+        opts = []
+        for pos, Rc in ([] if position is None else [(position, R)]) + list(candidates or []):
+            z = np.asarray(pos, dtype=float).reshape(3)
+            Rm = np.eye(3) * 0.05**2 if Rc is None else np.asarray(Rc, dtype=float).reshape(3, 3)
+            if np.all(np.isfinite(z)) and np.all(np.isfinite(Rm)):
+                opts.append((z, Rm))
+        if not opts:
+            return False
+        if not self.initialized:
+            self._start(*opts[0])
+            return True
+        best = None
+        for z, Rm in opts:
+            y = z - self.H @ self.x
+            S = self.H @ self.P @ self.H.T + Rm
+            d2 = float(y @ np.linalg.solve(S, y))
+            if best is None or d2 < best[0]:
+                best = (d2, y, S, Rm)
+        d2, y, S, Rm = best
+        if d2 > self._gate:
+            self.n_rejects += 1
+            if self.n_rejects >= self.max_rejects:
+                self._start(*opts[0])
+                return True
+            return False
+        K = np.linalg.solve(S, self.H @ self.P).T
+        self.x = self.x + K @ y
+        I_KH = np.eye(6) - K @ self.H
+        self.P = I_KH @ self.P @ I_KH.T + K @ Rm @ K.T  # Joseph form
+        self.n_rejects = 0
+        return True
+
+    @property
+    def position(self) -> NDArray:
+        """Position, m (NaN before the first fix)."""
+        return self.x[self._POS].copy() if self.initialized else np.full(3, np.nan)
+
+    @property
+    def velocity(self) -> NDArray:
+        """Velocity, m/s (NaN before the first fix)."""
+        return self.x[self._VEL].copy() if self.initialized else np.full(3, np.nan)
+
+    @property
+    def acceleration(self) -> NDArray:
+        """Zero (constant-velocity model), m/s^2; NaN before the first fix."""
+        return np.zeros(3) if self.initialized else np.full(3, np.nan)
+
+    @property
+    def position_cov(self) -> NDArray:
+        """Position covariance, m^2."""
+        return self.P[np.ix_(self._POS, self._POS)].copy()
+
+
+@dataclass
+class RayTrack:
+    """Output of :func:`track_on_rays`: per frame ``t`` (s), the per-frame fixes ``raw`` (m,
+    NaN where none), their ``fixes`` (:class:`RayFix` or None), and the tracker's ``position``
+    (m) and ``velocity`` (m/s), all ``(n_frames, 3)``, array frame."""
+
+    t: NDArray
+    raw: NDArray
+    fixes: list[RayFix | None]
+    position: NDArray
+    velocity: NDArray
+
+
+def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Callable,
+                  frame_ms: float = 64.0, hop_ms: float = 32.0,
+                  range_m: tuple[float, float] = (0.2, 4.0), sigma_tdoa_s: float = 8e-6,
+                  sigma_px: float = 1.0, min_confidence: float = 1.0,
+                  max_residual_samples: float = 0.5, tracker: Any = None) -> RayTrack:
+    """Track a source in 3D from a recording and its image points (thesis 5.4.3).
+
+    Per frame: GCC-PHAT TDOAs with exact band-limited peak interpolation
+    (:func:`hearsee.audio.tdoa.estimate_tdoas`, ``min_confidence``), the camera-ray fix
+    (:func:`locate_on_ray`, covariance from ``sigma_tdoa_s`` and ``sigma_px``), fixes whose RMS
+    ITD residual exceeds ``max_residual_samples`` discarded (three TDOAs that do not close),
+    then the ``tracker`` (default :class:`RayTracker`; anything with the same ``update`` and
+    ``position``/``velocity`` works, e.g. :class:`hearsee.audio.tracking.MotionKalman`).
+
+    Parameters
+    ----------
+    rig : AudioVisualRig
+    x : array (n_mics, n)
+        Microphone signals.
+    fs : float
+        Sample rate, Hz.
+    image_points : callable ``t -> (u, v) or None``
+        Image point of the source at frame time t (seconds, frame centre).
+    frame_ms, hop_ms : float
+        Analysis frames, milliseconds.
+    """
+    from hearsee.audio.tdoa import estimate_tdoas
+
+    prs = list(rig.array.pairs)
+    tf = estimate_tdoas(x, fs, rig.array, frame_ms, hop_ms, "phat", prs, refine="interp",
+                        min_confidence=min_confidence)
+    trk = RayTracker() if tracker is None else tracker
+    n = len(tf.t)
+    raw, pos, vel = (np.full((n, 3), np.nan) for _ in range(3))
+    fixes: list[RayFix | None] = []
+    for k, t in enumerate(tf.t):
+        z = tf.tdoa_s[k]
+        uv = image_points(float(t))
+        fix = None
+        if uv is not None and np.all(np.isfinite(z)):
+            fix = locate_on_ray(rig, uv, z, prs, range_m=range_m, sigma_tdoa_s=sigma_tdoa_s,
+                                sigma_px=sigma_px)
+            if fix.residual_s > max_residual_samples / fs:
+                fix = None
+        fixes.append(fix)
+        if fix is None:
+            trk.update(float(t), None)
+        else:
+            raw[k] = fix.position_m
+            trk.update(float(t), fix.position_m, fix.covariance,
+                       [(a.position_m, a.covariance) for a in fix.alternatives])
+        pos[k], vel[k] = trk.position, trk.velocity
+    return RayTrack(np.asarray(tf.t, dtype=float), raw, fixes, pos, vel)
 
 
 # ---------------------------------------------------------------------------- learned (5.3)
