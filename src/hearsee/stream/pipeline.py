@@ -610,6 +610,18 @@ class SmoothedSrp:
         self.idx0 = fl.astype(int) + self.lag_max
         self.idx1 = self.idx0 + 1
         self.frac = (tau * self.up - fl).astype(np.float32)
+        # steering as one matrix: score = r (k, pairs x lags) @ steer, the mean over pairs of
+        # each pair's correlation linearly interpolated at the direction's lag
+        n_p, n_l, n_d = len(self.pairs), lags.size, tau.shape[1]
+        self.steer = np.zeros((n_p * n_l, n_d), dtype=np.float32)
+        d = np.arange(n_d)
+        for p in range(n_p):
+            np.add.at(self.steer, (p * n_l + self.idx0[p], d), (1.0 - self.frac[p]) / n_p)
+            np.add.at(self.steer, (p * n_l + self.idx1[p], d), self.frac[p] / n_p)
+        # azimuth neighbours and the >30 deg separation of alternative maxima, per grid azimuth
+        ia = np.arange(self.n_az)
+        self._az_prev, self._az_next = (ia - 1) % self.n_az, (ia + 1) % self.n_az
+        self._az_far = np.abs(wrap_deg(self.az_axis[None, :] - self.az_axis[:, None])) > 30.0
         self._decay: dict[int, tuple[NDArray, NDArray]] = {}
         self.coherence_weight = bool(coherence_weight)
         self.S: NDArray | None = None
@@ -683,11 +695,7 @@ class SmoothedSrp:
         r = (P.astype(np.complex64) @ self.E).real * np.float32(1.0 / nb)
         k = r.shape[0]
         n_p = len(self.pairs)
-        score = np.zeros((k, self.idx.shape[1]), dtype=np.float32)
-        for p in range(n_p):
-            f = self.frac[p]
-            score += (1.0 - f) * r[:, p, self.idx0[p]] + f * r[:, p, self.idx1[p]]
-        score /= n_p
+        score = r.reshape(k, -1) @ self.steer  # (k, directions)
         best = np.argmax(score, axis=1)
         coh = score[np.arange(k), best]
         # refine each pair's lag: parabola through the upsampled correlation around the grid lag
@@ -719,9 +727,8 @@ class SmoothedSrp:
         with np.errstate(divide="ignore", invalid="ignore"):
             d = np.where(den < 0, np.clip(0.5 * (ym - yp) / den, -0.5, 0.5), 0.0)
         best_az = wrap_deg(self.az_axis[ia] + d * self.grid_deg)
-        peak = (prof >= np.roll(prof, 1, 1)) & (prof > np.roll(prof, -1, 1))
-        sep = np.abs(wrap_deg(self.az_axis[None, :] - self.az_axis[ia][:, None])) > 30.0
-        masked = np.where(peak & sep, prof, -np.inf)
+        peak = (prof >= prof[:, self._az_prev]) & (prof > prof[:, self._az_next])
+        masked = np.where(peak & self._az_far[ia], prof, -np.inf)
         top = np.argsort(masked, axis=1)[:, ::-1][:, :2]
         alt_c = np.take_along_axis(masked, top, 1)
         alt_az = np.where(np.isfinite(alt_c), self.az_axis[top], np.nan)
@@ -999,7 +1006,19 @@ class StreamPipeline:
 
     def run(self, source: Any, sink: Callable[[Update], None] | None = None,
             threaded: bool = False) -> list[Update]:
-        """Process the whole source; call ``sink(update)`` per frame and return all updates."""
+        """Process the whole source; call ``sink(update)`` per frame and return all updates.
+
+        BLAS runs single-threaded meanwhile: the stages' matrices are small (a few frames), and
+        a multithreaded BLAS on a busy machine made each product 10-100x slower (thread
+        hand-off), never faster.
+        """
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(1, user_api="blas"):
+            return self._run(source, sink, threaded)
+
+    def _run(self, source: Any, sink: Callable[[Update], None] | None,
+             threaded: bool) -> list[Update]:
         self._check_source(source)
         framer = Framer(source.n_channels, source.fs, self.config.frame_ms, self.config.hop_ms)
         proc = TrackingProcessor(self.array, source.fs, self.config, self.rig, self.image_points)
