@@ -1,15 +1,17 @@
-"""Benchmark: 360-degree azimuth with a masked two-microphone array vs a bare pair (thesis ch. 3).
+"""Benchmark: 360-degree azimuth with masked two-microphone arrays vs a bare pair (thesis ch. 3).
 
 All in one process on the same inputs. For every trial a source is drawn at a random azimuth in
 the horizontal plane (far field, or near field at d0 = 1 m / 0.5 m); the same source signal and
 the same sensor-noise seed are recorded
 
-* through the ``mask2`` array (the BEM transfer functions,
-  :func:`hearsee.audio.mask.simulate_masked`) and localized with
-  :func:`hearsee.audio.mask.localize_mask` (one 360-degree azimuth);
-* through the same mask with a *model mismatch* (front 5 mm longer, 2 mm taller, a 1280-panel
-  mesh instead of 980 panels) and still localized with the nominal ``mask2`` tables -- so the
-  numbers are not only the "inverse crime" of simulating and inverting with the same model;
+* through the ``mask2-asym`` array (headline: a left/right-ASYMMETRIC egg, turned 25 deg about
+  the vertical, blunter back) and through the earlier ``mask2`` array (a left/right symmetric
+  egg), with the BEM transfer functions (:func:`hearsee.audio.mask.simulate_masked`), each
+  localized with :func:`hearsee.audio.mask.localize_mask` (one 360-degree azimuth) using its own
+  nominal model;
+* through each mask with a *model mismatch* (front 5 mm longer, 2 mm taller, a 1280-panel mesh
+  instead of 980 panels) and still localized with the nominal tables -- so the numbers are not
+  only the "inverse crime" of simulating and inverting with the same model;
 * through a bare two-microphone array (``two-mic``, same microphone positions, free field) and
   localized with hearsee's ITD core (:func:`hearsee.audio.localize.localize_recording`); a bare
   pair can only guess front/back (it returns the front candidate first).
@@ -17,13 +19,15 @@ the same sensor-noise seed are recorded
 Front/back is "correct" unless the estimate is closer to the mirror image ``180 - az`` than to
 the true azimuth and more than 10 deg from the truth (a front/back confusion). Reported per
 signal (white noise, synthetic male and female voices), field and SNR: front/back correct rate,
-360-degree azimuth RMSE, median absolute error, the RMSE of the sources more than 3 deg off the
-median plane (diagnostic: at 0 / 180 deg a left/right symmetric mask has ITD = IID = 0 for the
-source and its mirror alike), mean front/back confidence. Targets (issue 3):
-front/back >= 95 % at SNR >= 10 dB for broadband sources, RMSE <= 5 deg at SNR >= 20 dB.
+360-degree azimuth RMSE, median absolute error, mean front/back confidence, and for mask2 the
+RMSE of the sources more than 3 deg off the median plane (diagnostic: at 0 / 180 deg a
+left/right symmetric mask has ITD = IID = 0 for the source and its mirror alike). The design
+measure :func:`hearsee.audio.mask.front_back_margin` (the classifier's noiseless cost of the
+nearest confusable azimuth, worst case over azimuth) is reported for both masks.
+Targets (issue 3): front/back >= 95 % at SNR >= 10 dB, RMSE <= 5 deg at SNR >= 20 dB.
 
 Run ``python bench/mask.py`` (about 5 min on 2 cores once the mask models are cached; the first
-run solves the BEM for both masks, a few minutes more) or ``--quick``.
+run solves the BEM for the four masks, about 3-6 min each) or ``--quick``.
 """
 
 from __future__ import annotations
@@ -41,7 +45,12 @@ from _common import RESULTS, markdown_table, print_table, write_markdown  # noqa
 
 from hearsee.audio.arrays import MicArray  # noqa: E402
 from hearsee.audio.localize import localize_recording  # noqa: E402
-from hearsee.audio.mask import MaskModel, localize_mask, simulate_masked  # noqa: E402
+from hearsee.audio.mask import (  # noqa: E402
+    MaskModel,
+    front_back_margin,
+    localize_mask,
+    simulate_masked,
+)
 from hearsee.audio.propagation import simulate_free_field  # noqa: E402
 from hearsee.audio.signals import synthetic_voice, white_noise  # noqa: E402
 from hearsee.config import load_yaml  # noqa: E402
@@ -49,14 +58,18 @@ from hearsee.config import load_yaml  # noqa: E402
 FS = 16000
 SIGNALS = ("noise", "male", "female")
 FIELDS = ("far", "near")
+#: (short name, preset); the first one is the headline design.
+DESIGNS = (("asym", "mask2-asym"), ("mask2", "mask2"))
 
 
-def perturbed_mask2() -> MicArray:
-    """mask2 with a 5 mm longer front, 2 mm taller body and a finer (1280-panel) mesh."""
-    d = load_yaml(Path(MicArray.from_preset.__func__.__globals__["_preset_dir"]()) / "mask2.yaml")
-    d["name"] = "mask2-perturbed"
-    d["mask"].update(front=0.125, half_height=0.082, mesh_subdivision=8)
-    return MicArray.from_dict(d, where="mask2-perturbed")
+def perturbed(preset: str) -> MicArray:
+    """``preset`` with a 5 mm longer front, 2 mm taller body and a finer (1280-panel) mesh."""
+    d = load_yaml(Path(MicArray.from_preset.__func__.__globals__["_preset_dir"]())
+                  / f"{preset}.yaml")
+    d["name"] = f"{preset}-perturbed"
+    d["mask"].update(front=round(d["mask"]["front"] + 0.005, 6),
+                     half_height=round(d["mask"]["half_height"] + 0.002, 6), mesh_subdivision=8)
+    return MicArray.from_dict(d, where=f"{preset}-perturbed")
 
 
 def angdiff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -77,19 +90,46 @@ def make_signal(kind: str, duration: float, rng: np.random.Generator) -> np.ndar
     return synthetic_voice(kind, duration, FS, rng)
 
 
-def run(trials: int, snrs: list[float], duration: float, seed: int, mismatch: bool) -> list[dict]:
-    model = MaskModel("mask2")
-    pert = MaskModel(perturbed_mask2()) if mismatch else None
+def margins(models: dict[str, MaskModel]) -> list[list]:
+    """Worst-case front/back separability of each design (far field, 1 m, 0.5 m)."""
+    out = []
+    for m in models.values():
+        line = [m.array.name]
+        for dist in (None, 1.0, 0.5):
+            az, mg, partner = front_back_margin(m, dist)
+            k = int(np.argmin(mg))
+            line.append(f"{mg[k]:.1f} ({az[k]:.0f} vs {partner[k]:.0f} deg)")
+        near = np.minimum(np.abs(angdiff(az, 0.0)), np.abs(angdiff(az, 180.0))) <= 5.0
+        line.append(f"{front_back_margin(m, None)[1][near].min():.1f}")
+        out.append(line)
+    return out
+
+
+def _stats(est: list, true: np.ndarray) -> tuple[float, float, float]:
+    e = np.array(est, float)
+    ok = np.isfinite(e)
+    if not ok.any():
+        return np.nan, np.nan, np.nan
+    err = np.abs(angdiff(e[ok], true[ok]))
+    return (100.0 * float(np.mean(fb_correct(e[ok], true[ok]))),
+            float(np.sqrt(np.mean(err**2))), float(np.median(err)))
+
+
+def run(trials: int, snrs: list[float], duration: float, seed: int, mismatch: bool
+        ) -> tuple[list[dict], dict[str, MaskModel]]:
+    models = {k: MaskModel(p) for k, p in DESIGNS}
+    perts = {k: MaskModel(perturbed(p)) for k, p in DESIGNS} if mismatch else {}
     bare = MicArray.from_preset("two-mic")
-    assert np.allclose(bare.positions, model.array.positions)
+    for m in models.values():
+        assert np.allclose(bare.positions, m.array.positions)
     rows = []
     for kind in SIGNALS:
         for fld in FIELDS:
             for snr in snrs:
                 rng = np.random.default_rng([seed, SIGNALS.index(kind), FIELDS.index(fld),
                                              int(snr)])
-                res: dict[str, list] = {k: [] for k in ("true", "mask", "conf", "mis", "bare")}
-                cpu = 0.0
+                res: dict[str, list] = {"true": [], "bare": []}
+                cpu = {k: 0.0 for k in models}
                 for _ in range(trials):
                     az = rng.uniform(0.0, 360.0)
                     u = np.array([np.cos(np.radians(az)), np.sin(np.radians(az)), 0.0])
@@ -97,43 +137,41 @@ def run(trials: int, snrs: list[float], duration: float, seed: int, mismatch: bo
                     src = u if far else u * rng.choice([1.0, 0.5])
                     sig = make_signal(kind, duration, rng)
                     nseed = int(rng.integers(2**31))
-                    x = simulate_masked(sig, FS, model, src, snr, nseed, far_field=far)
-                    t0 = time.process_time()
-                    est = localize_mask(x, FS, model)
-                    cpu += time.process_time() - t0
                     res["true"].append(az)
-                    res["mask"].append(est.azimuth_deg)
-                    res["conf"].append(est.confidence)
-                    if pert is not None:
-                        xm = simulate_masked(sig, FS, pert, src, snr, nseed, far_field=far)
-                        res["mis"].append(localize_mask(xm, FS, model).azimuth_deg)
+                    for k, model in models.items():
+                        x = simulate_masked(sig, FS, model, src, snr, nseed, far_field=far)
+                        t0 = time.process_time()
+                        est = localize_mask(x, FS, model)
+                        cpu[k] += time.process_time() - t0
+                        res.setdefault(k, []).append(est.azimuth_deg)
+                        res.setdefault(f"{k}_conf", []).append(est.confidence)
+                        if k in perts:
+                            xm = simulate_masked(sig, FS, perts[k], src, snr, nseed,
+                                                 far_field=far)
+                            res.setdefault(f"{k}_mis", []).append(
+                                localize_mask(xm, FS, model).azimuth_deg)
                     xb = simulate_free_field(sig, FS, bare, src, snr, nseed, far_field=far)
                     doc = localize_recording(xb, FS, bare, kalman=False)
                     a = doc["summary"]["azimuth_deg"]
                     res["bare"].append(np.nan if a is None else a % 360.0)
                 true = np.array(res["true"])
-                row = {"signal": kind, "field": fld, "snr": snr, "n": trials,
-                       "cpu_ms": 1000 * cpu / trials / duration}
-                for name in ("mask", "mis", "bare"):
-                    if not res[name]:
-                        continue
-                    e = np.array(res[name], float)
-                    ok = np.isfinite(e)
-                    err = np.abs(angdiff(e[ok], true[ok]))
-                    row[f"{name}_fb"] = 100.0 * np.mean(fb_correct(e[ok], true[ok])) if ok.any() \
-                        else float("nan")
-                    row[f"{name}_rmse"] = float(np.sqrt(np.mean(err**2))) if ok.any() else np.nan
-                    row[f"{name}_med"] = float(np.median(err)) if ok.any() else np.nan
-                # diagnostic: the median plane (within 3 deg of 0 / 180 deg) is where a left/right
-                # symmetric mask cannot tell front from back (ITD = IID = 0 for both)
+                row = {"signal": kind, "field": fld, "snr": snr, "n": trials}
+                for k in models:
+                    row[f"{k}_cpu_ms"] = 1000 * cpu[k] / trials / duration
+                    row[f"{k}_conf"] = float(np.mean(res[f"{k}_conf"]))
+                for name in [*models, *(f"{k}_mis" for k in perts), "bare"]:
+                    row[f"{name}_fb"], row[f"{name}_rmse"], row[f"{name}_med"] = _stats(
+                        res[name], true)
+                # diagnostic: the median plane (within 3 deg of 0 / 180 deg) is where the left/right
+                # symmetric mask2 cannot tell front from back (ITD = IID = 0 for both)
                 off = np.abs(np.sin(np.radians(true))) > np.sin(np.radians(3.0))
-                e = np.abs(angdiff(np.array(res["mask"]), true))[off]
-                row["mask_rmse_off"] = float(np.sqrt(np.mean(e**2))) if len(e) else np.nan
-                row["conf"] = float(np.mean(res["conf"]))
+                e = np.abs(angdiff(np.array(res.get("mask2", true)), true))[off]
+                row["mask2_rmse_off"] = float(np.sqrt(np.mean(e**2))) if len(e) else np.nan
                 rows.append(row)
-                print(f"{kind:6s} {fld:4s} {snr:4.0f} dB  mask fb {row['mask_fb']:5.1f}% rmse "
-                      f"{row['mask_rmse']:6.2f}  bare fb {row['bare_fb']:5.1f}%", flush=True)
-    return rows
+                print(f"{kind:6s} {fld:4s} {snr:4.0f} dB  " + "  ".join(
+                    f"{k} fb {row[f'{k}_fb']:5.1f}% rmse {row[f'{k}_rmse']:6.2f}"
+                    for k in models) + f"  bare fb {row['bare_fb']:5.1f}%", flush=True)
+    return rows, models
 
 
 def plot(rows: list[dict], path: Path) -> None:
@@ -142,39 +180,63 @@ def plot(rows: list[dict], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(1, 2, figsize=(12, 4.5))
-    for kind in SIGNALS:
-        for fld, ls in zip(FIELDS, ("-", "--"), strict=True):
-            rr = [r for r in rows if r["signal"] == kind and r["field"] == fld]
-            s = [r["snr"] for r in rr]
-            ax[0].plot(s, [r["mask_fb"] for r in rr], ls, marker="o", label=f"mask2 {kind} {fld}")
-            ax[1].semilogy(s, [max(r["mask_rmse"], 1e-2) for r in rr], ls, marker="o",
-                           label=f"mask2 {kind} {fld}")
-    for kind in SIGNALS:
-        rr = [r for r in rows if r["signal"] == kind and r["field"] == "far"]
-        ax[0].plot([r["snr"] for r in rr], [r["bare_fb"] for r in rr], ":", color="grey",
-                   marker="x", label=f"bare pair {kind}" if kind == "noise" else None)
-    ax[0].axhline(95, color="k", lw=0.8)
-    ax[0].set_ylim(0, 105)
-    ax[0].set_xlabel("SNR (dB)")
-    ax[0].set_ylabel("front/back correct (%)")
-    ax[1].axhline(5, color="k", lw=0.8)
-    ax[1].set_xlabel("SNR (dB)")
-    ax[1].set_ylabel("360-degree azimuth RMSE (deg)")
-    ax[0].legend(fontsize=7)
-    fig.suptitle("mask2 (BEM mask, 2 microphones) vs bare two-microphone pair")
+    fig, ax = plt.subplots(2, 2, figsize=(12, 8), sharex=True)
+    for i, (k, preset) in enumerate(DESIGNS):
+        for kind in SIGNALS:
+            for fld, ls in zip(FIELDS, ("-", "--"), strict=True):
+                rr = [r for r in rows if r["signal"] == kind and r["field"] == fld]
+                s = [r["snr"] for r in rr]
+                ax[i, 0].plot(s, [r[f"{k}_fb"] for r in rr], ls, marker="o",
+                              label=f"{kind} {fld}")
+                ax[i, 1].semilogy(s, [max(r[f"{k}_rmse"], 1e-2) for r in rr], ls, marker="o",
+                                  label=f"{kind} {fld}")
+        for kind in SIGNALS:
+            rr = [r for r in rows if r["signal"] == kind and r["field"] == "far"]
+            ax[i, 0].plot([r["snr"] for r in rr], [r["bare_fb"] for r in rr], ":", color="grey",
+                          marker="x", label="bare pair" if kind == "noise" else None)
+        ax[i, 0].axhline(95, color="k", lw=0.8)
+        ax[i, 0].set_ylim(0, 105)
+        ax[i, 0].set_ylabel(f"{preset}: front/back correct (%)")
+        ax[i, 1].axhline(5, color="k", lw=0.8)
+        ax[i, 1].set_ylabel(f"{preset}: 360-deg azimuth RMSE (deg)")
+        ax[i, 0].legend(fontsize=7)
+    for a in ax[1]:
+        a.set_xlabel("SNR (dB)")
+    fig.suptitle("masked two-microphone arrays (BEM) vs bare pair: mask2-asym (top), mask2 "
+                 "(bottom)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
+def _targets(rows: list[dict], k: str, label: str, mis: bool) -> list[list]:
+    ten = [r for r in rows if r["snr"] >= 10]
+    hi = [r for r in rows if r["snr"] >= 20]
+    out = []
+    for sig_label, keep in (("white noise", lambda r: r["signal"] == "noise"),
+                            ("voices", lambda r: r["signal"] != "noise")):
+        a = [r for r in ten if keep(r)]
+        b = [r for r in hi if keep(r)]
+        if not a or not b:
+            continue
+        out.append([f"front/back >= 95 % at SNR >= 10 dB, {sig_label} ({label})",
+                    f"min {min(r[f'{k}_fb'] for r in a):.1f} %"])
+        out.append([f"360-deg RMSE <= 5 deg at SNR >= 20 dB, {sig_label} ({label})",
+                    f"max {max(r[f'{k}_rmse'] for r in b):.2f} deg"])
+        if mis:
+            out.append([f"same two, with model mismatch, {sig_label} ({label})",
+                        f"F/B min {min(r[f'{k}_mis_fb'] for r in a):.1f} %, RMSE max "
+                        f"{max(r[f'{k}_mis_rmse'] for r in b):.2f} deg"])
+    return out
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--trials", type=int, default=20, help="sources per condition")
+    ap.add_argument("--trials", type=int, default=30, help="sources per condition")
     ap.add_argument("--snrs", default="0,10,20,30")
     ap.add_argument("--duration", type=float, default=1.0, help="seconds per recording")
     ap.add_argument("--seed", type=int, default=3)
-    ap.add_argument("--no-mismatch", action="store_true", help="skip the perturbed-mask column")
+    ap.add_argument("--no-mismatch", action="store_true", help="skip the perturbed-mask columns")
     ap.add_argument("--quick", action="store_true", help="6 trials, SNR 10 and 20 dB")
     a = ap.parse_args(argv)
     snrs = [float(s) for s in a.snrs.split(",")]
@@ -182,55 +244,55 @@ def main(argv: list[str] | None = None) -> None:
     if a.quick:
         trials, snrs = 6, [10.0, 20.0]
     t0 = time.time()
-    rows = run(trials, snrs, a.duration, a.seed, not a.no_mismatch)
     mis = not a.no_mismatch
-    headers = ["signal", "field", "SNR dB", "n", "mask2 F/B %", "mask2 RMSE", "mask2 median",
-               "RMSE off median plane", "F/B conf"]
-    if mis:
-        headers += ["mismatch F/B %", "mismatch RMSE", "mismatch median"]
-    headers += ["bare F/B %", "bare RMSE", "bare median", "mask CPU ms/s"]
+    rows, models = run(trials, snrs, a.duration, a.seed, mis)
+    headers = ["signal", "field", "SNR dB", "n"]
+    for k, preset in DESIGNS:
+        headers += [f"{preset} F/B %", f"{preset} RMSE", f"{preset} median", f"{preset} conf"]
+        if k == "mask2":
+            headers += ["mask2 RMSE off median plane"]
+        if mis:
+            headers += [f"{preset} mismatch F/B %", f"{preset} mismatch RMSE"]
+    headers += ["bare F/B %", "bare RMSE", "bare median"]
+    headers += [f"{preset} CPU ms/s" for _, preset in DESIGNS]
     table = []
     for r in rows:
-        line = [r["signal"], r["field"], r["snr"], r["n"], r["mask_fb"], r["mask_rmse"],
-                r["mask_med"], r["mask_rmse_off"], r["conf"]]
-        if mis:
-            line += [r["mis_fb"], r["mis_rmse"], r["mis_med"]]
-        line += [r["bare_fb"], r["bare_rmse"], r["bare_med"], r["cpu_ms"]]
+        line = [r["signal"], r["field"], r["snr"], r["n"]]
+        for k, _ in DESIGNS:
+            line += [r[f"{k}_fb"], r[f"{k}_rmse"], r[f"{k}_med"], r[f"{k}_conf"]]
+            if k == "mask2":
+                line += [r["mask2_rmse_off"]]
+            if mis:
+                line += [r[f"{k}_mis_fb"], r[f"{k}_mis_rmse"]]
+        line += [r["bare_fb"], r["bare_rmse"], r["bare_med"]]
+        line += [r[f"{k}_cpu_ms"] for k, _ in DESIGNS]
         table.append(line)
-    print_table("mask2 vs bare two-mic: 360-degree azimuth", headers, table)
-    # targets
-    bb = [r for r in rows if r["signal"] == "noise" and r["snr"] >= 10]
-    hi = [r for r in rows if r["snr"] >= 20]
-    voices10 = [r for r in rows if r["signal"] != "noise" and r["snr"] >= 10]
-    summary = [
-        ["front/back >= 95 % at SNR >= 10 dB, white noise (mask2)",
-         f"min {min(r['mask_fb'] for r in bb):.1f} %"],
-        ["360-deg RMSE <= 5 deg at SNR >= 20 dB, white noise (mask2)",
-         f"max {max(r['mask_rmse'] for r in hi if r['signal'] == 'noise'):.2f} deg"],
-        ["360-deg RMSE at SNR >= 20 dB, voices (mask2)",
-         f"max {max(r['mask_rmse'] for r in hi if r['signal'] != 'noise'):.2f} deg"],
-        ["same, sources more than 3 deg off the median plane (voices)",
-         f"max {max(r['mask_rmse_off'] for r in hi if r['signal'] != 'noise'):.2f} deg"],
-        ["front/back at SNR >= 10 dB, voices (mask2)",
-         f"min {min(r['mask_fb'] for r in voices10):.1f} %"],
-        ["bare pair front/back (all conditions)",
-         f"mean {np.nanmean([r['bare_fb'] for r in rows]):.1f} %"],
-    ]
-    if mis:
-        summary.insert(2, ["same, with model mismatch (white noise)",
-                           f"F/B min {min(r['mis_fb'] for r in bb):.1f} %, RMSE max "
-                           f"{max(r['mis_rmse'] for r in hi if r['signal'] == 'noise'):.2f} deg"])
+    print_table("masked arrays vs bare two-mic: 360-degree azimuth", headers, table)
+    summary = []
+    for k, preset in DESIGNS:
+        summary += _targets(rows, k, preset, mis)
+    summary.append(["bare pair front/back (all conditions)",
+                    f"mean {np.nanmean([r['bare_fb'] for r in rows]):.1f} %"])
     print_table("targets (issue 3)", ["target", "measured"], summary)
+    mhead = ["design", "margin far field (at, vs)", "margin 1 m", "margin 0.5 m",
+             "far field, within 5 deg of 0/180"]
+    mrows = margins(models)
+    print_table("front/back separability (front_back_margin, classifier cost units)", mhead,
+                mrows)
     RESULTS.mkdir(parents=True, exist_ok=True)
     png = RESULTS / "mask.png"
     plot(rows, png)
     md = write_markdown("mask", [
         ("Targets", markdown_table(["target", "measured"], summary)),
+        ("Design: front/back separability", (
+            "`front_back_margin`: the noiseless cost `localize_mask` gives the nearest wrong "
+            "azimuth (at least 20 deg away), minimised over the source azimuth; 0 means two "
+            "directions the cues cannot tell apart.\n\n" + markdown_table(mhead, mrows))),
         ("Results", markdown_table(headers, table)),
         ("Plot", f"![mask]({png.name})"),
     ], intro=(__doc__.split("\n\n")[0] + f"\n\nRun: `python bench/mask.py` (trials={trials}, "
-              f"duration={a.duration} s, fs={FS} Hz, seed={a.seed}); wall time "
-              f"{time.time() - t0:.0f} s."))
+              f"SNRs {','.join(f'{s:g}' for s in snrs)} dB, duration={a.duration} s, "
+              f"fs={FS} Hz, seed={a.seed}); wall time {time.time() - t0:.0f} s."))
     print(f"wrote {md} and {png}")
 
 
