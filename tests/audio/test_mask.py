@@ -158,6 +158,7 @@ def test_left_right_mirror_symmetry(model):
     np.testing.assert_allclose(hn[0, 0], hn[1, 1], rtol=2e-2, atol=2e-3)
 
 
+@pytest.mark.slow  # solves the coarse asymmetric BEM for the module (about 5 s)
 def test_front_back_margin_symmetric_vs_asymmetric(model, asym):
     # mask2 is left/right symmetric: azimuth 0 and 180 have identical cues (margin 0)
     az, mg, partner = mask.front_back_margin(model)
