@@ -28,8 +28,10 @@ settings (20 us, jerk 0.3, Singer 0.5 s). Median 3D error (after 0.35 s to conve
 frames and over the frames with a fix), velocity RMSE, and the fixes' signed range error along
 the camera ray (median and interquartile range: is the room's effect a bias or a spread?). Two
 rigs: the 15 cm three-mic preset with the camera 0.2 m to its side (the issue's "three
-microphones"), and a robot-sized 0.5 m triangle with the camera 0.3 m in front of its centre;
-each also in free field (same walks' statistics, no room) as a control.
+microphones"), a robot-sized 0.5 m triangle with the camera 0.3 m in front of its centre, and
+the three-mic preset with the camera 0.5 m to its side (a wider camera-microphone baseline:
+the range along the ray comes from the parallax between them); each also in free field (same
+walks' statistics, no room) as a control.
 
 Part C -- the stream: real-time factor (wall clock and process CPU time) from a file, per-frame
 latency when the file is paced in real time, and a simulated device dropout (dropped, late and
@@ -212,7 +214,9 @@ def part_b(trials: int, seed: int, dur: float) -> tuple[list, dict]:
     rigs = [("three-mic + camera 0.2 m aside",
              AudioVisualRig.mounted(MicArray.from_preset("three-mic"), cam, (0.0, 0.2, 0.0))),
             ("0.5 m triangle + camera 0.3 m ahead",
-             AudioVisualRig.mounted(_tri(0.5), cam, (0.3, 0.0, 0.0)))]
+             AudioVisualRig.mounted(_tri(0.5), cam, (0.3, 0.0, 0.0))),
+            ("three-mic + camera 0.5 m aside",
+             AudioVisualRig.mounted(MicArray.from_preset("three-mic"), cam, (0.0, 0.5, 0.0)))]
     rng = np.random.default_rng(seed + 1)
     rows, example = [], {}
     cases = [(name, rig, True) for name, rig in rigs] + [
