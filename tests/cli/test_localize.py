@@ -131,3 +131,16 @@ def test_clipped_recording_warns_but_works(tmp_path, capsys):
         code = main(["localize", str(p), "--array", "three-mic"])
     assert code == 0
     assert json.loads(capsys.readouterr().out)["summary"]["azimuth_deg"] is not None
+
+
+def test_in_plane_and_reverb_method_options(rec3, capsys):
+    code, out, _ = _run(capsys, rec3, "--array", "three-mic", "--method", "gcc-ml",
+                        "--reverb-method", "gcc-phat", "--in-plane", "--format", "json")
+    assert code == 0
+    s = json.loads(out)["summary"]
+    # free field: the coherence is what the noise explains, the ML summary is kept
+    assert s["coherence_ratio"] > 0.9 and s["method"] == "ml"
+    assert s["azimuth_deg"] == pytest.approx(-120.0, abs=1.0)
+    assert len(s["candidates"]) == 1 and s["elevation_deg"] == pytest.approx(0.0, abs=1e-6)
+    code, _, err = _run(capsys, rec3, "--array", "three-mic", "--reverb-method", "bogus")
+    assert code == 2 and "Traceback" not in err

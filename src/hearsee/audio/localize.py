@@ -662,6 +662,7 @@ def localize_recording(
     q_std_s: float | None = None,
     r_std_s: float | None = None,
     progress: Any = None,
+    in_plane: bool = False,
     **tdoa_kwargs: Any,
 ) -> dict[str, Any]:
     """The per-frame pipeline behind ``hearsee localize``: GCC TDOAs -> ITD Kalman -> solver.
@@ -678,6 +679,9 @@ def localize_recording(
         (reference microphone 0; ``r_std_s`` default one sample, ``q_std_s`` a quarter sample
         per frame). Frames without a source stay without an estimate either way.
     progress : callable(n_frames_done), optional
+    in_plane : bool
+        The source lies in the plane of a planar array: directions model its spherical
+        wavefront (:func:`near_field_in_plane`, assumed range 2 m). Default False.
 
     Returns
     -------
@@ -719,7 +723,8 @@ def localize_recording(
     for n in range(len(tf.t)):
         row = tdoa[n]
         ok = bool(tf.valid[n]) and bool(np.all(np.isfinite(row)))
-        loc = localize_tdoa(row, arr, tf.pairs, near_field=False) if ok else None
+        loc = (localize_tdoa(row, arr, tf.pairs, near_field=in_plane, in_plane=in_plane)
+               if ok else None)
         frames.append({
             "t": float(tf.t[n]),
             "tdoa_s": {k: (float(v) if ok else None) for k, v in zip(labels, row, strict=True)},
@@ -732,7 +737,7 @@ def localize_recording(
         })
     summ = tf.summary_tdoa_s
     have = bool(np.all(np.isfinite(summ)))
-    sloc = localize_tdoa(summ, arr, tf.pairs) if have else None
+    sloc = localize_tdoa(summ, arr, tf.pairs, in_plane=in_plane) if have else None
     summary = {
         "tdoa_s": {k: (float(v) if have else None) for k, v in zip(labels, summ, strict=True)},
         "azimuth_deg": sloc.azimuth_deg if sloc else None,
@@ -743,6 +748,9 @@ def localize_recording(
         "confidence": float(np.min(tf.summary_confidence)) if have else None,
         "n_valid_frames": tf.n_valid,
         "position_m": sloc.to_dict()["position_m"] if sloc else None,
+        "method": tf.summary_method,
+        "coherence_ratio": (float(tf.coherence_ratio) if np.isfinite(tf.coherence_ratio)
+                            else None),
     }
     return {
         "array": arr.to_dict(),

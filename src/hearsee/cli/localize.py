@@ -79,6 +79,13 @@ def localize_cmd(
         "--no-kalman", help="Report the raw per-frame TDOAs (no ITD Kalman filter).")] = False,
     fmt: Annotated[OutputFormat, typer.Option("--format", help="Output format.")] = (
         OutputFormat.json),
+    reverb_method: Annotated[GccMethod | None, typer.Option(
+        "--reverb-method", help="Weighting of the whole-recording estimate when the recording "
+        "measures as reverberant (coherence below what the noise explains), e.g. gcc-phat "
+        "with --method gcc-ml.")] = None,
+    in_plane: Annotated[bool, typer.Option(
+        "--in-plane", help="The source is in the plane of a planar (three-mic) array: model "
+        "its spherical wavefront (assumed 2 m away) instead of a plane wave.")] = False,
 ) -> None:
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
     from hearsee.audio.arrays import load_array
@@ -96,7 +103,10 @@ def localize_cmd(
     work = x.shape[1] / fs * len(arr.pairs)
     with progress("localizing", n_frames, enabled=work > _PROGRESS_WORK_S) as advance:
         doc = localize_recording(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
-                                 method=method.value, kalman=not no_kalman, progress=advance)
+                                 method=method.value, kalman=not no_kalman, progress=advance,
+                                 in_plane=in_plane,
+                                 reverb_method=None if reverb_method is None else
+                                 reverb_method.value)
     doc["recording"] = str(recording)
     if fmt is OutputFormat.json:
         emit_json(doc)
