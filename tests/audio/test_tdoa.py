@@ -252,3 +252,24 @@ def test_summary_upsample_finds_the_correlation_maximum():
     dense = np.real(np.exp(2j * np.pi * np.outer(taus, k / tf.nfft)) @ tf.summary_spectrum[0])
     assert tf.summary_tdoa_s[0] * FS == pytest.approx(taus[np.argmax(dense)], abs=2e-3)
     assert estimate_tdoas(x, FS, two, method="phat").summary_method == "phat"
+
+
+def test_source_in_plane_joint_search_ignores_elevated_reflection(three):
+    """An in-plane source plus a stronger, later copy from 50 deg elevation (a ceiling
+    reflection): the whole-sphere joint search locks onto the reflection, the in-plane search
+    onto the source."""
+    from hearsee.audio.localize import localize_tdoa
+    from hearsee.geometry import unit_vector_deg
+
+    s = white_noise(1.0, FS, rng=11)
+    u_src, u_refl = unit_vector_deg(40.0, 0.0), unit_vector_deg(-160.0, 50.0)
+    x = (delay_signals(s, 1e-3 - three.positions @ u_src / three.speed_of_sound, FS)
+         + 1.1 * delay_signals(s, 4e-3 - three.positions @ u_refl / three.speed_of_sound, FS))
+    x = x + 0.01 * np.random.default_rng(12).standard_normal(x.shape)
+    sphere = estimate_tdoas(x, FS, three)
+    plane = estimate_tdoas(x, FS, three, source_in_plane=True)
+    az_sphere = localize_tdoa(sphere.summary_tdoa_s, three).azimuth_deg
+    az_plane = localize_tdoa(plane.summary_tdoa_s, three, in_plane=True).azimuth_deg
+    assert abs(az_sphere - (-160.0)) < 3.0  # the reflection wins on the sphere
+    assert abs(az_plane - 40.0) < 2.0
+    assert np.abs(plane.summary_tdoa_s - three.tdoa_far(u_src)).max() * FS < 0.15

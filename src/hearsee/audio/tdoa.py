@@ -466,7 +466,8 @@ def _fibonacci_sphere(n: int) -> NDArray:
 
 def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
                  pairs: list[tuple[int, int]], c: float, fs: float, max_lag: NDArray,
-                 up: int = 4, n_dirs: int = 4000, coherent: bool = False) -> NDArray:
+                 up: int = 4, n_dirs: int = 4000, coherent: bool = False,
+                 in_plane: bool = False) -> NDArray:
     """Pick each pair's GCC peak consistently with one far-field direction.
 
     The weighted spectra ``P`` (n_pairs, band bins) are turned into correlations upsampled
@@ -482,6 +483,11 @@ def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
     I = np.array([p[0] for p in pairs])
     J = np.array([p[1] for p in pairs])
     U = _fibonacci_sphere(n_dirs)
+    if in_plane:  # directions in the plane of a planar array only (0.1 deg apart)
+        _, sv, vt = np.linalg.svd(positions - positions.mean(axis=0))
+        if len(sv) >= 3 and sv[2] < 1e-6 * sv[0]:
+            phi = np.radians(np.arange(3600) / 10.0)
+            U = np.outer(np.cos(phi), vt[0]) + np.outer(np.sin(phi), vt[1])
     tau = -((positions[I] - positions[J]) @ U.T) / c * fs  # (n_pairs, n_dirs) samples
     idx = np.round(tau * up).astype(int) % n_up
     score = np.take_along_axis(r, idx, axis=1).sum(axis=0)
@@ -599,6 +605,7 @@ def estimate_tdoas(
     reverb_method: str | None = None,
     reverb_coherence: float = 0.9,
     summary_upsample: int = 1,
+    source_in_plane: bool = False,
     chunk_frames: int = 128,
     progress: Callable[[int], None] | None = None,
 ) -> TdoaFrames:
@@ -690,6 +697,12 @@ def estimate_tdoas(
         early reflection) the integer samples can peak *between* them and the refinement then
         stops in the valley -- upsampling finds the true maximum (three or more microphones
         already choose their peaks on a 4x upsampled grid).
+    source_in_plane : bool
+        With a planar array of 3+ microphones, the joint whole-recording peak search
+        (``joint``) steers only directions in the array plane instead of the whole sphere --
+        for a source known to be at the array's height (the ``dim=2`` assumption of
+        pyroomacoustics' DOA; use with ``localize_tdoa(in_plane=True)``). Floor and ceiling
+        reflections then cannot win the search. Default False.
     chunk_frames : int
         Frames processed per vectorised block (bounds memory); ``progress(n)`` is called after
         each block with the number of frames done.
@@ -892,7 +905,8 @@ def estimate_tdoas(
                 _FALLBACK_CONFIDENCE * min_confidence)
             ok = np.all(c[0] >= need_c)
             lag = _joint_peaks(acc, band_bins, nfft, arr.positions, prs, arr.speed_of_sound,
-                               fs, max_lag, coherent=joint == "coherent")[None]
+                               fs, max_lag, coherent=joint == "coherent",
+                               in_plane=bool(source_in_plane))[None]
         else:
             # one independent pair: only the confidence can tell (noise-only recordings reach
             # ~1.25 in 40 trials, a -15 dB white source 0.8-2.4)
