@@ -10,11 +10,18 @@ side by side on the same frames, pyroomacoustics' SRP-PHAT applied per frame (it
 The stream's settings (alpha 0.8, min_coherence 0.4; frames whose own GCC confidence reaches 1.5
 use their own measurement) were chosen on walks of seed 100; the
 reported run uses seed 0. RMSE over each method's
-own output frames, coverage (share of frames with an estimate), and the tracker's lag (the time
-shift that best aligns the tracked azimuth with the truth over the frames that had a
-measurement; searched within +-4 frames, so 4 means "no alignment found"), in frames. On a
-straight walk the angular rate barely changes sign, so a constant azimuth bias of a few degrees
-(reverberation) shows up in this lag estimate as well.
+own output frames, coverage (share of frames with an estimate), and the tracker's lag with a
+constant azimuth offset, fitted jointly per walk (:func:`lag_frames`: the shift tau and offset
+b minimising the RMSE of tracked(t) - truth(t - tau) - b over the frames with a measurement;
+0.05-frame grid within +-6 frames, refined by a parabola). A straight walk's nearly constant
+angular rate cannot tell a shift from an offset, so the lag is measured on a second walk per
+trial, same signal kind and SNR, that turns back halfway (heading change 90-180 deg; its own
+random stream, seed + 10, so the straight walks stay those of earlier runs): median lag in
+frames (positive = the track is behind), the largest |lag|, the fits' median standard error
+(from the curvature of the RMSE profile; optimistic, the residuals are correlated) and the
+median |offset| in degrees; and the same turning walks and signals in free field (the
+tracker's own lag, without the room's slowly wandering bias, which a shift can partly mimic).
+A lag of +-6 with an infinite standard error means no minimum within the search range.
 
 Part B -- calibrated camera + three microphones, sources 0.5-2 m away in the camera's view
 (SNR 20 dB, RT60 0.3 s), image points from the true projection plus 1 px noise (a detector
@@ -122,15 +129,76 @@ def srp_per_frame(y: np.ndarray, arr: MicArray, t: np.ndarray) -> tuple[np.ndarr
     return out, time.process_time() - c0
 
 
+def turn_walk(rng: np.random.Generator, dur: float, r_range=(1.0, 4.0), speed=(0.5, 1.5),
+              z=0.3) -> Trajectory:
+    """A walk at walking speed that turns back halfway (heading change 90-180 deg), staying
+    r_range metres from the array, in the room: its angular rate changes, so the tracker's
+    lag and a constant azimuth offset can be told apart (:func:`lag_frames`)."""
+    lo = -ARRAY_AT[:2] + 0.4
+    hi = ROOM[:2] - ARRAY_AT[:2] - 0.4
+    s = np.linspace(0, 1, 15)[:, None]
+    for _ in range(5000):
+        r0 = rng.uniform(*r_range)
+        a0 = rng.uniform(-np.pi, np.pi)
+        p0 = np.array([r0 * np.cos(a0), r0 * np.sin(a0)])
+        v = rng.uniform(*speed)
+        h = rng.uniform(-np.pi, np.pi)
+        p1 = p0 + v * dur / 2 * np.array([np.cos(h), np.sin(h)])
+        h2 = h + rng.choice([-1.0, 1.0]) * np.radians(rng.uniform(90.0, 180.0))
+        p2 = p1 + v * dur / 2 * np.array([np.cos(h2), np.sin(h2)])
+        path = np.vstack([p0 + s * (p1 - p0), p1 + s * (p2 - p1)])
+        r = np.linalg.norm(path, axis=1)
+        if np.all(path > lo) and np.all(path < hi) and r.min() >= r_range[0] \
+                and r.max() <= r_range[1]:
+            return Trajectory([0.0, dur / 2, dur], [[*p0, z], [*p1, z], [*p2, z]])
+    raise RuntimeError("no turning walk found")
+
+
 def lag_frames(t: np.ndarray, est: np.ndarray, traj: Trajectory, hop_s: float,
-               measured: np.ndarray) -> float:
-    """Shift (frames) minimising the RMSE between est(t) and the true azimuth at t - shift,
-    over the frames that had a measurement (coasting through pauses is not lag)."""
+               measured: np.ndarray, max_shift: float = 6.0) -> tuple[float, float, float]:
+    """The tracker's lag and constant offset on one walk, fitted jointly.
+
+    Minimises ``RMSE(tau, b) = rms(wrap(est(t) - truth(t - tau) - b))`` over the frames that had
+    a measurement (coasting through pauses is not lag): for each shift ``tau`` (grid of 0.05
+    frames within +-``max_shift`` frames) the best offset ``b`` is the mean residual, and the
+    best shift is refined by a parabola through the profile ``SSE(tau)``. Returns ``(tau in
+    frames, b in degrees, se of tau in frames)``; positive ``tau`` = the track is behind the
+    truth. The standard error comes from the profile's curvature, ``se^2 = 2 s^2 / SSE''``
+    (``s^2`` the residual variance; frame-to-frame correlated residuals make it optimistic):
+    a shift and an offset are told apart only by how the angular rate changes along the walk
+    (at a constant rate they are the same thing), so walks whose rate hardly changes give a
+    large ``se``. NaN when fewer than 10 frames had a measurement.
+    """
     ok = np.isfinite(est) & measured
-    shifts = np.arange(-4.0, 4.01, 0.25)
-    rmse = [np.sqrt(np.mean(wrap_deg(est[ok] - direction_deg(traj.at(t[ok] - d * hop_s))[0])
-                            ** 2)) for d in shifts]
-    return float(shifts[int(np.argmin(rmse))])
+    n = int(ok.sum())
+    if n < 10:
+        return float("nan"), float("nan"), float("nan")
+    shifts = np.arange(-max_shift, max_shift + 1e-9, 0.05)
+    tt = t[ok][None, :] - shifts[:, None] * hop_s  # (shifts, frames)
+    truth = direction_deg(traj.at(tt.ravel()))[0].reshape(tt.shape)
+    e = wrap_deg(est[ok][None, :] - truth)
+    b = np.degrees(np.angle(np.mean(np.exp(1j * np.radians(e)), axis=1)))  # circular mean
+    sse = np.sum(wrap_deg(e - b[:, None]) ** 2, axis=1)
+    i = int(np.argmin(sse))
+    h = shifts[1] - shifts[0]
+    if 0 < i < len(shifts) - 1:
+        den = sse[i - 1] - 2 * sse[i] + sse[i + 1]
+        d = 0.5 * (sse[i - 1] - sse[i + 1]) / den if den > 0 else 0.0
+        curv = den / h**2
+    else:  # at the edge of the search: no minimum inside
+        d, curv = 0.0, 0.0
+    tau = float(shifts[i] + np.clip(d, -0.5, 0.5) * h)
+    s2 = sse[i] / max(n - 2, 1)
+    se = float(np.sqrt(2.0 * s2 / curv)) if curv > 0 else float("inf")
+    return tau, float(b[i]), se
+
+
+def _lag_summary(fits: np.ndarray) -> list[float]:
+    """Per condition from the walks' (lag, offset, se) fits: median lag, largest |lag|, median
+    se of the lag (frames) and median |offset| (degrees)."""
+    lag, off, se = fits[:, 0], fits[:, 1], fits[:, 2]
+    return [float(np.nanmedian(lag)), float(np.nanmax(np.abs(lag))), float(np.nanmedian(se)),
+            float(np.nanmedian(np.abs(off)))]
 
 
 def rmse(err: np.ndarray) -> float:
@@ -142,11 +210,12 @@ def rmse(err: np.ndarray) -> float:
 def part_a(trials: int, seed: int, dur: float) -> tuple[list, dict]:
     arr = MicArray.from_preset("three-mic")
     rng = np.random.default_rng(seed)
+    rng_t = np.random.default_rng(seed + 10)  # the turning walks: the straight ones unchanged
     rows, example = [], {}
     for snr in (10.0, 20.0):
         for kind in ("male", "female", "noise"):
             acc = {k: [] for k in ("raw", "trk", "trk_common", "srp", "srp_common", "cov_raw",
-                                   "lag", "speed")}
+                                   "lag", "lag_ff", "speed")}
             for _ in range(trials):
                 traj = walk(rng, dur)
                 x = _signal(kind, dur, rng)
@@ -166,7 +235,23 @@ def part_a(trials: int, seed: int, dur: float) -> tuple[list, dict]:
                 acc["srp"].append(wrap_deg(srp - true))
                 acc["srp_common"].append(np.where(np.isfinite(raw), wrap_deg(srp - true), np.nan))
                 acc["cov_raw"].append(np.mean(np.isfinite(raw)))
-                acc["lag"].append(lag_frames(t, trk, traj, CFG.hop_ms * 1e-3, np.isfinite(raw)))
+                # the lag: on a walk of the same kind that turns back halfway (a straight
+                # walk's nearly constant angular rate cannot tell a lag from an offset)
+                # (in the room, and the same walk and signal in free field: the tracker's own
+                # lag without the room's slowly wandering bias)
+                tw = turn_walk(rng_t, dur)
+                xt = _signal(kind, dur, rng_t)
+                for key, yt in (
+                        ("lag", simulate_moving_room(xt, FS, arr, tw, ROOM, RT60, ARRAY_AT,
+                                                     snr_db=snr, rng=rng_t, block_s=0.1)),
+                        ("lag_ff", simulate_moving_free_field(xt, FS, arr, tw, snr_db=snr,
+                                                              rng=rng_t))):
+                    ut = StreamPipeline(arr, CFG).run(ArraySource(yt, FS, 2048))
+                    acc[key].append(lag_frames(
+                        np.array([u.t for u in ut]),
+                        np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg
+                                  for u in ut]),
+                        tw, CFG.hop_ms * 1e-3, np.array([u.measured for u in ut])))
                 acc["speed"].append(np.linalg.norm(traj.velocity(0.5 * dur)))
                 if not example and kind == "male" and snr == 20.0:
                     example = {"t": t, "true": true, "raw": raw, "trk": trk, "srp": srp}
@@ -176,7 +261,8 @@ def part_a(trials: int, seed: int, dur: float) -> tuple[list, dict]:
             rows.append([kind, snr, r_raw, float(np.mean(acc["cov_raw"])) * 100, r_trk,
                          rmse(cat["trk_common"]), rmse(cat["srp"]), rmse(cat["srp_common"]),
                          rmse(cat["raw"]) / rmse(cat["trk_common"]),
-                         float(np.median(np.abs(acc["lag"]))), float(np.max(np.abs(acc["lag"]))),
+                         *_lag_summary(np.array(acc["lag"])),
+                         *_lag_summary(np.array(acc["lag_ff"]))[:2],
                          float(np.mean(acc["speed"]))])
     return rows, example
 
@@ -380,7 +466,9 @@ def plot(ex_a: dict, ex_b: dict, path: Path) -> None:
 HEAD_A = ["signal", "SNR dB", "per-frame RMSE deg", "per-frame coverage %",
           "tracked RMSE deg", "tracked RMSE on per-frame frames", "SRP-PHAT RMSE deg",
           "SRP-PHAT RMSE on per-frame frames",
-          "per-frame / tracked (same frames)", "median |lag| frames", "max |lag| frames",
+          "per-frame / tracked (same frames)", "lag frames, turning walks (median)",
+          "max |lag| frames", "lag se frames (median)", "offset deg (median |b|)",
+          "lag frames, same turning walks in free field (median)", "max |lag| free field",
           "mean speed m/s"]
 HEAD_B = ["rig", "per-frame fix median m", "fix signed range error median m",
           "fix signed range error IQR m", "fix coverage %", "tracked median m (all frames)",

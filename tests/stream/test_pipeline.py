@@ -339,3 +339,22 @@ def test_smoothed_srp_lag_window_equals_full_upsampled_correlation():
     lags = np.arange(-srp.lag_max, srp.lag_max + 1)
     got = (P.astype(np.complex64) @ srp.E).real / nb
     np.testing.assert_allclose(got, ref[..., lags % srp.n_up], atol=2e-5)
+
+
+def test_measurement_noise_model_follows_confidence_and_coherence():
+    """Own-frame directions get sigma_frame_deg / confidence, smoothed ones sigma_srp_deg
+    (1 - c) / c, both floored; None falls back to the fixed sigma_meas_deg."""
+    from hearsee.stream.pipeline import TrackingProcessor
+
+    arr = MicArray.from_preset("three-mic")
+    cfg = StreamConfig(sigma_meas_deg=10.0, sigma_frame_deg=6.0, sigma_srp_deg=28.0,
+                       sigma_min_deg=1.5)
+    proc = TrackingProcessor(arr, FS, cfg)
+    assert proc._frame_sigma(2.0) == pytest.approx(3.0)
+    assert proc._frame_sigma(100.0) == pytest.approx(1.5)  # floor
+    assert proc._srp_sigma(0.5) == pytest.approx(28.0)
+    assert proc._srp_sigma(0.8) == pytest.approx(7.0)
+    assert proc._srp_sigma(0.99) == pytest.approx(1.5)
+    fixed = TrackingProcessor(arr, FS, StreamConfig(sigma_meas_deg=10.0, sigma_frame_deg=None,
+                                                    sigma_srp_deg=None))
+    assert fixed._frame_sigma(5.0) == 10.0 and fixed._srp_sigma(0.9) == 10.0

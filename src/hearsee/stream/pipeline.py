@@ -14,8 +14,12 @@ Systems 113, 2019): small stages with explicit configuration, connected by a bou
 * :class:`Framer` cuts the block stream into analysis frames (``frame_ms`` every ``hop_ms``).
   Frames that would need samples of a dropped block are emitted as *missing* (the trackers then
   predict through them); a block that arrives after its samples were declared lost is *late* and
-  is discarded. Frames are emitted in batches (all complete frames of a block) so that the GCC of
-  :func:`hearsee.audio.tdoa.estimate_tdoas` runs vectorised.
+  is discarded. Frames are emitted in batches (all complete frames of a block) so that the
+  stages run vectorised over the batch.
+* :class:`FrameGcc` (each frame's own GCC TDOAs, as :func:`hearsee.audio.tdoa.estimate_tdoas`
+  gives them) and :class:`SmoothedSrp` (recursively smoothed cross spectra steered over a
+  direction grid) are the measurement stages; both precompute their tables (windows, lag
+  bounds, the steering matrix) once and work in single precision.
 * :class:`TrackingProcessor` holds the TDOA, ITD-filter
   (:class:`~hearsee.audio.itd_filter.ItdKalman`), localizer
   (:func:`~hearsee.audio.localize.localize_tdoa`) and tracker stages
@@ -27,6 +31,11 @@ Systems 113, 2019): small stages with explicit configuration, connected by a bou
   a block; a source that stays silent longer than ``max_stall_s`` ends the run with
   ``stats.status == "stalled"`` instead of hanging. Each :class:`Update` carries its latency:
   wall-clock time from the arrival of the block that completed the frame to its emission.
+
+Performance (three-mic preset, 16 kHz, 64 ms frames every 32 ms, ``bench/tracking.py`` part C):
+per batch the work is a few numpy calls on (frames x pairs x bins) arrays; what remains per
+frame in Python is the closed-form localizer and the Kalman step. BLAS is held to one thread
+during a run (small products; thread hand-off on a busy machine cost more than it gave).
 
 Units: seconds, degrees, metres; frame times are frame centres from the start of the stream.
 """
@@ -750,7 +759,17 @@ class StreamConfig:
         no measurement (:func:`~hearsee.audio.tdoa.estimate_tdoas`)
     band_hz : optional frequency band for the GCC, Hz
     itd_filter : smooth the TDOAs with the ITD Kalman filter (thesis 2.2.2) before localizing
-    sigma_meas_deg, sigma_accel_dps2 : direction tracker noise (degrees, deg/s^2)
+    sigma_meas_deg, sigma_accel_dps2 : direction tracker noise (degrees, deg/s^2);
+        ``sigma_meas_deg`` is the measurement noise where no model below applies
+    sigma_frame_deg : measurement noise model of a frame's own GCC direction: standard deviation
+        ``sigma_frame_deg / confidence`` degrees (confidence = the smallest pair's peak ratio);
+        None = ``sigma_meas_deg``
+    sigma_srp_deg : ... of a smoothed steered-response direction: ``sigma_srp_deg (1 - c) / c``
+        degrees for normalised steered power ``c``; None = ``sigma_meas_deg``
+    sigma_min_deg : floor of both models, degrees. The forms follow the measured spread of the
+        directions per confidence / coherence bin, and 6 / 40 deg were chosen on the seed-100
+        walks of ``bench/tracking.py`` (a fixed 10 deg over-smoothed white noise: every frame
+        is good, and turns lagged by several frames)
     sigma_jerk : 3D motion tracker process noise, m/s^3
     accel_tau_s : correlation time of the 3D tracker's acceleration (Singer), s; None = pure CA
     sigma_tdoa_s, sigma_px : measurement noise of the camera-ray fix (seconds, pixels)
@@ -805,6 +824,9 @@ class StreamConfig:
     max_evidence_age_frames: float = 8.0
     prefer_frame: bool = False
     prefer_frame_confidence: float = 1.5
+    sigma_frame_deg: float | None = 6.0
+    sigma_srp_deg: float | None = 40.0
+    sigma_min_deg: float = 1.5
 
 
 class TrackingProcessor:
@@ -892,11 +914,13 @@ class TrackingProcessor:
             delay = 0.0
             own = bool(cands) and (self.cfg.prefer_frame
                                    or conf[n] >= self.cfg.prefer_frame_confidence)
+            sigma = self._frame_sigma(float(conf[n])) if cands else None
             if sm is not None and not own:
                 cands = self._smoothed_candidates(sm, n)
                 delay = float(sm["age_frames"][n]) * self.hop / self.fs if cands else 0.0
+                sigma = self._srp_sigma(float(sm["coherence"][n])) if cands else None
             measured = self.direction.update(float(t), cands[0] if cands else None, cands[1:],
-                                             delay_s=delay)
+                                             sigma_meas_deg=sigma, delay_s=delay)
             upd = Update(float(t), None, None, None, None, None, None,
                          float(conf[n]) if have else 0.0, measured=measured,
                          missing=bool(batch.missing[n]), raw_azimuth_deg=raw_az,
@@ -911,6 +935,22 @@ class TrackingProcessor:
                 self._fuse(upd, z if have else None)
             out.append(upd)
         return out
+
+    def _frame_sigma(self, confidence: float) -> float:
+        """Measurement noise (deg) of a frame's own GCC direction: ``sigma_frame_deg /
+        confidence`` (floored at ``sigma_min_deg``), or the fixed ``sigma_meas_deg``."""
+        c = self.cfg
+        if c.sigma_frame_deg is None or not confidence > 0:
+            return c.sigma_meas_deg
+        return max(c.sigma_min_deg, c.sigma_frame_deg / confidence)
+
+    def _srp_sigma(self, coherence: float) -> float:
+        """Measurement noise (deg) of a smoothed steered-response direction: ``sigma_srp_deg
+        (1 - coherence) / coherence`` (floored at ``sigma_min_deg``), or ``sigma_meas_deg``."""
+        c = self.cfg
+        if c.sigma_srp_deg is None or not coherence > 0:
+            return c.sigma_meas_deg
+        return max(c.sigma_min_deg, c.sigma_srp_deg * (1.0 - coherence) / coherence)
 
     def _smoothed_candidates(self, sm: dict[str, NDArray], n: int
                              ) -> list[tuple[float, float | None]]:
