@@ -16,7 +16,11 @@ equations are non-convex along the ray far from the source, so a 1-D global sear
 local refinement is both robust and cheap. The fix comes with a covariance: along the ray from
 the curvature of J (Gauss-Newton, ``var(s) = sigma_tdoa^2 / sum_k F_k'(s)^2``), across it from the
 pixel noise (``s * sigma_px / f``). That covariance is the measurement noise R of the
-constant-acceleration filter (:class:`hearsee.audio.tracking.MotionKalman`, thesis 5.4.3).
+constant-acceleration filter (:class:`hearsee.audio.tracking.MotionKalman`, thesis 5.4.3) or of
+the constant-velocity :class:`RayTracker`, which :func:`track_on_rays` runs on a recording: a
+single fix's range scatters by several centimetres in a room (early reflections, TDOA noise;
+~0 median, not an offset), and at walking speed the range changes slowly, so averaging the fixes
+of many frames is what brings the 3D error down (``bench/tracking.py`` part B).
 
 **Without camera calibration (5.3, figs. 5.7-5.11).** The camera's intrinsics and its pose
 relative to the microphones are unknown; the image point still carries relative direction
