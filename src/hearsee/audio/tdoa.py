@@ -823,7 +823,6 @@ def estimate_tdoas(
             Gav = (uniform_filter1d(G.real, k, axis=0, mode="nearest")
                    + 1j * uniform_filter1d(G.imag, k, axis=0, mode="nearest"))
         W = gcc_weighting(method, G, Gii, Gjj, Gav)
-        W2 = gcc_weighting(reverb_method, G, Gii, Gjj, Gav) if use_rev else None
         if phat_beta != 1.0 and method in ("phat", "ml"):
             W = W * np.abs(G) ** (1.0 - float(phat_beta))
         if noise_psd is not None:
@@ -833,8 +832,6 @@ def estimate_tdoas(
                 coh = np.minimum(coh, 0.99)
                 coh = coh / (1.0 - coh)
             W = W * coh
-            if W2 is not None:
-                W2 = W2 * coh
         sl = slice(s0 - h0, s0 - h0 + (s1 - s0))
         P = (G * W.astype(np.float32))[sl]
         r = corr(P)
@@ -860,11 +857,15 @@ def estimate_tdoas(
             if okk.any():
                 acc += np.sum(Pn[okk], axis=0)
                 n_acc += int(okk.sum())
-            if use_rev:
-                Xa = X[sl][act]
-                s_cross += np.sum(G[sl][act], axis=0)
+            if use_rev:  # (noise_psd is known, so coh is)
+                ia = np.flatnonzero(act) + (s0 - h0)  # active frames, chunk indices
+                Ga = G[ia]
+                W2 = gcc_weighting(reverb_method, Ga, *(None if A is None else A[ia]
+                                                        for A in (Gii, Gjj, Gav)))
+                s_cross += np.sum(Ga, axis=0)
+                Xa = X[ia]
                 s_auto += np.sum(Xa.real**2 + Xa.imag**2, axis=0)
-                P2 = (G[sl][act] * W2[sl][act].astype(np.float32))
+                P2 = Ga * (W2 * coh[ia]).astype(np.float32)
                 if onset_weight:
                     P2 = P2 * frame_w[s0:s1][act][:, None, None]
                 acc2_active += np.sum(P2, axis=0)
