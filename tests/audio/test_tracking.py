@@ -163,3 +163,15 @@ def test_measurement_delay_removes_the_lag_of_old_evidence():
         err[d] = np.mean(e[50:])
     assert err[0.0] < -1.5  # lags by ~ 20 deg/s * 0.128 s = 2.6 deg without the model
     assert abs(err[delay]) < 1.0
+
+
+def test_closed_form_small_inverse_and_scalar_wrap_match_numpy():
+    from hearsee.audio.tracking import _inv_small, _wrap1
+
+    rng = np.random.default_rng(7)
+    for n in (1, 2, 3):
+        A = rng.standard_normal((n, n))
+        S = A @ A.T + n * np.eye(n)
+        np.testing.assert_allclose(_inv_small(S), np.linalg.inv(S), rtol=1e-12, atol=1e-12)
+    for a in [-900.0, -540.0, -180.0, -179.5, 0.0, 179.9, 180.0, 359.0, 540.0, 725.25]:
+        assert _wrap1(a) == float(wrap_deg(a))

@@ -117,14 +117,16 @@ def track_cmd(
     summary = {"frames": st.n_frames, "missing_frames": st.n_missing_frames,
                "dropped_blocks": st.n_dropped_blocks, "late_blocks": st.n_late_blocks,
                "status": st.status, "audio_s": st.audio_s,
-               "real_time_factor": st.real_time_factor, **st.latency_summary()}
+               "real_time_factor": st.real_time_factor,
+               "cpu_real_time_factor": st.cpu_real_time_factor, **st.latency_summary()}
     if fmt is TrackFormat.json:
         emit_json({"array": arr.to_dict(), "source": str(recording or device),
                    "updates": [u.to_json() for u in updates], "stats": summary})
     if stats or st.status != "ok":
         err_console.print(
             f"track: {st.n_frames} frames, {st.audio_s:.2f} s of audio, "
-            f"{st.real_time_factor:.1f}x real time, latency median "
+            f"{st.real_time_factor:.1f}x real time ({st.cpu_real_time_factor:.1f}x in CPU "
+            f"time), latency median "
             f"{summary['median_ms']:.1f} ms (p95 {summary['p95_ms']:.1f} ms), "
             f"{st.n_dropped_blocks} dropped / {st.n_late_blocks} late blocks, status {st.status}",
             highlight=False)

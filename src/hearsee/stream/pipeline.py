@@ -666,7 +666,7 @@ class SmoothedSrp:
         """
         import scipy.fft as sfft
 
-        fr = frame_signals(segment.astype(np.float32), self.frame_len, hop)[:, :n_frames]
+        fr = frame_signals(np.asarray(segment, dtype=np.float32), self.frame_len, hop)[:, :n_frames]
         X = sfft.rfft(fr * self.win, self.nfft, axis=-1)[..., self.k0:self.k1]
         X = np.moveaxis(X, 0, 1)  # (k, n_ch, B) complex64
         G = X[:, self.I] * np.conj(X[:, self.J])  # (k, P, B)
@@ -895,6 +895,9 @@ class TrackingProcessor:
 
     def process(self, batch: FrameBatch) -> list[Update]:
         """Run all stages on one batch of frames; one :class:`Update` per frame."""
+        if batch.segment is not None:  # single precision once for both measurement stages
+            batch = FrameBatch(batch.t, batch.missing, np.asarray(batch.segment, np.float32),
+                               batch.arrival)
         tdoa, conf = self.tdoas(batch)
         sm = self.smoothed(batch)
         out = []
