@@ -27,6 +27,7 @@ Units: degrees and deg/s for directions, metres, m/s and m/s^2 for motion, secon
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -46,6 +47,10 @@ __all__ = [
     "track_directions",
     "track_positions",
 ]
+
+
+_WRAP_AZ = np.array([True])  # which measurement components are angles on a circle
+_WRAP_AZ_EL = np.array([True, False])
 
 
 def _wrap1(a: float) -> float:
@@ -212,9 +217,9 @@ class DirectionKalman(_Kalman):
             # the measurement shows the direction delay_s ago: z = d(t - delay) ~ d - delay * rate
             H = H.copy()
             H[0, 2] = H[1, 3] = -float(delay_s)
-        if el is None or not np.isfinite(el):
-            return np.array([az]), H[:1], R[:1, :1], np.array([True])
-        return np.array([az, el]), H, R, np.array([True, False])
+        if el is None or not math.isfinite(el):
+            return np.array([az]), H[:1], R[:1, :1], _WRAP_AZ
+        return np.array([az, el]), H, R, _WRAP_AZ_EL
 
     def gate_distance(self, az: float, el: float | None = None, R: NDArray | None = None,
                       delay_s: float = 0.0) -> float:
@@ -253,11 +258,12 @@ class DirectionKalman(_Kalman):
         cands = list(candidates or [])
         if measurement is not None:
             cands = [measurement, *cands]
-        cands = [(float(a), None if e is None or not np.isfinite(e) else float(e))
-                 for a, e in cands if a is not None and np.isfinite(a)]
+        cands = [(float(a), None if e is None or not math.isfinite(e) else float(e))
+                 for a, e in cands if a is not None and math.isfinite(a)]
         if not cands:
             return False
-        Rf = None if sigma_meas_deg is None else np.eye(2) * float(sigma_meas_deg) ** 2
+        v = None if sigma_meas_deg is None else float(sigma_meas_deg) ** 2
+        Rf = None if v is None else np.array([[v, 0.0], [0.0, v]])
         if not self.initialized:
             self._start(*cands[0])
             return True
