@@ -37,7 +37,6 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
 from hearsee.errors import EstimationError
-from hearsee.geometry import wrap_deg
 
 __all__ = [
     "DirectionKalman",
@@ -58,6 +57,14 @@ def _wrap1(a: float) -> float:
     (a Python float: the trackers wrap their state every frame)."""
     w = (a + 180.0) % 360.0 - 180.0
     return 180.0 if w == -180.0 else w
+
+
+_EYE = {n: np.eye(n) for n in range(1, 10)}
+
+
+def _eye(n: int) -> NDArray:
+    """Identity matrix (n, n), not to be modified."""
+    return _EYE[n] if n in _EYE else np.eye(n)
 
 
 def _inv_small(S: NDArray) -> NDArray:
@@ -102,7 +109,9 @@ class _Kalman:
                     ) -> tuple[NDArray, NDArray, float]:
         y = z - H @ self.x
         if wrap is not None:
-            y = np.where(wrap, wrap_deg(y), y)
+            for i in range(y.size):  # tiny vectors: per element is faster than wrap_deg
+                if wrap[i]:
+                    y[i] = _wrap1(float(y[i]))
         S = H @ self.P @ H.T + R
         d2 = float(y @ _inv_small(S) @ y)
         return y, S, d2
@@ -110,7 +119,7 @@ class _Kalman:
     def _correct(self, y: NDArray, S: NDArray, H: NDArray, R: NDArray) -> None:
         K = self.P @ H.T @ _inv_small(S)  # P H^T S^-1
         self.x = self.x + K @ y
-        I_KH = np.eye(len(self.x)) - K @ H
+        I_KH = _eye(len(self.x)) - K @ H
         self.P = I_KH @ self.P @ I_KH.T + K @ R @ K.T  # Joseph form: stays symmetric PSD
 
 
