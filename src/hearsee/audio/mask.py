@@ -735,6 +735,11 @@ def _coherent_power(p0: NDArray, p1: NDArray, cr: NDArray, n_frames: int
     return s1 + d, s1
 
 
+#: Relative uncertainty of the noise floor subtracted from the band powers (pause frames are
+#: picked for their low energy, and sensor noise is not perfectly stationary).
+_NOISE_FLOOR_REL = 0.1
+
+
 def _band_powers(p0: NDArray, p1: NDArray, s0: NDArray, s1: NDArray, onehot: NDArray,
                  noise_psd: NDArray | None) -> tuple[NDArray, NDArray, NDArray]:
     """Band source powers at the two microphones and the band noise power (sums over bins).
@@ -823,10 +828,12 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
     with np.errstate(divide="ignore", invalid="ignore"):
         iid_meas = 10 * np.log10(e0 / e1)
         # variance of a band IID: model floor + estimation noise of the two band powers over
-        # K ~ frames x bins / 2 independent samples
+        # K ~ frames x bins / 2 independent samples + the uncertainty of the subtracted noise
+        # floor (_NOISE_FLOOR_REL of it), which dominates bands far below the noise
         k_eff = np.maximum(0.5 * n_used * onehot.sum(axis=1), 1.0)
         var_b = sigma_iid_db**2 + (10 / np.log(10)) ** 2 * (
-            ((e0 + noise) / e0) ** 2 + ((e1 + noise) / e1) ** 2) / k_eff
+            (((e0 + noise) / e0) ** 2 + ((e1 + noise) / e1) ** 2) / k_eff
+            + (_NOISE_FLOOR_REL * noise) ** 2 * (1 / e0**2 + 1 / e1**2))
     valid_b &= np.isfinite(iid_meas) & np.isfinite(var_b)
     phi = np.angle(cr)
     best = None
