@@ -34,5 +34,7 @@ def test_dask_local_cluster_gives_identical_results():
                                   dashboard_address=None) as cluster:
         remote = evaluate(2, seed0=11, scheduler=cluster.scheduler_address, duration_s=2.5)
     assert local.runs == remote.runs
+    # the local process pool (spawned workers) gives the same runs as in-process
+    assert evaluate(2, seed0=11, workers=2, duration_s=2.5).runs == local.runs
     assert [r["seed"] for r in remote.runs] == [11, 12]
     assert np.isfinite(local.summary["success_rate"])

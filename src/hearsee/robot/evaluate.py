@@ -8,6 +8,7 @@ process, or through ``dask.distributed`` (``scheduler="tcp://host:port"`` or a `
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -109,7 +110,10 @@ def evaluate(
                 runs[s] = job(s)
                 tick(1)
         else:
-            with ProcessPoolExecutor(max_workers=workers) as pool:
+            # spawn, not fork: a fork taken while BLAS / progress-bar threads hold a lock left
+            # the workers waiting forever on it (seen in a 200-scenario run)
+            ctx = multiprocessing.get_context("spawn")
+            with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
                 for s, r in zip(seeds, pool.map(job, seeds), strict=True):
                     runs[s] = r
                     tick(1)
