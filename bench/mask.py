@@ -26,8 +26,8 @@ measure :func:`hearsee.audio.mask.front_back_margin` (the classifier's noiseless
 nearest confusable azimuth, worst case over azimuth) is reported for both masks.
 Targets (issue 3): front/back >= 95 % at SNR >= 10 dB, RMSE <= 5 deg at SNR >= 20 dB.
 
-Run ``python bench/mask.py`` (about 5 min on 2 cores once the mask models are cached; the first
-run solves the BEM for the four masks, about 3-6 min each) or ``--quick``.
+Run ``python bench/mask.py`` (1-3 min on 2 cores once the mask models are cached; the first
+run solves the BEM for the four masks, 1-6 min each) or ``--quick``.
 """
 
 from __future__ import annotations
