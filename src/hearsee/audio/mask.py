@@ -36,7 +36,8 @@ Model (what this module computes)
   ITD (GCC-PHAT peak of the model cross-spectrum) and band IIDs on an azimuth grid, far field or
   at a distance ``d0``.
 * Azimuth (figs. 3.12-3.13): :func:`localize_mask`. The recording's phase difference (ITD) fixes
-  ``alpha`` or its mirror; the band IIDs (from noise-corrected coherent band energies) pick the
+  ``alpha`` or its mirror; the band IIDs (noise-corrected band energies: the noise spectrum of
+  the pauses of speech is subtracted, or the coherent part is kept for continuous sources) pick the
   half by the best match to the response tables, with a front/back probability; the azimuth is the
   joint ITD-phase + IID best match on a 1-degree grid, refined parabolically.
 
