@@ -59,6 +59,7 @@ Units: seconds for TDOAs and frame times, Hz for sample rates; frames are the an
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -417,6 +418,16 @@ def _check_pairs(pairs: Sequence[tuple[int, int]] | None, array: MicArray) -> li
     return out
 
 
+@functools.lru_cache(maxsize=16)
+def _window(window: str | tuple, frame_len: int) -> NDArray:
+    """The analysis window (float32, read-only: shared between calls)."""
+    from scipy.signal import get_window
+
+    w = get_window(window, frame_len).astype(np.float32)
+    w.flags.writeable = False
+    return w
+
+
 def frame_activity(x: NDArray, frame_len: int, hop: int, n_frames: int,
                    vad_db: float) -> tuple[NDArray, NDArray]:
     """Energy voice-activity decision per frame.
@@ -435,8 +446,7 @@ def frame_activity(x: NDArray, frame_len: int, hop: int, n_frames: int,
     e_max = float(energy.max(initial=0.0))
     active = energy > max(1e-20, 1e-10 * e_max)
     if active.any():
-        floor = float(np.percentile(energy[active], 10))
-        top = float(np.percentile(energy[active], 95))
+        floor, top = (float(v) for v in np.percentile(energy[active], [10, 95]))
         if floor > 0 and top > floor * 10 ** ((vad_db + 3.0) / 10.0):
             active &= energy > floor * 10 ** (vad_db / 10.0)
     return energy, active
@@ -606,6 +616,7 @@ def estimate_tdoas(
     reverb_coherence: float = 0.9,
     summary_upsample: int = 1,
     source_in_plane: bool = False,
+    whole_recording: bool = True,
     chunk_frames: int = 128,
     progress: Callable[[int], None] | None = None,
 ) -> TdoaFrames:
@@ -703,6 +714,10 @@ def estimate_tdoas(
         for a source known to be at the array's height (the ``dim=2`` assumption of
         pyroomacoustics' DOA; use with ``localize_tdoa(in_plane=True)``). Floor and ceiling
         reflections then cannot win the search. Default False.
+    whole_recording : bool
+        Compute the whole-recording estimate (default). ``False`` gives the per-frame results
+        only (``summary_tdoa_s`` all NaN): what a stream needs for each batch of frames, at
+        a fraction of the cost of the summary's direction search.
     chunk_frames : int
         Frames processed per vectorised block (bounds memory); ``progress(n)`` is called after
         each block with the number of frames done.
@@ -711,8 +726,6 @@ def estimate_tdoas(
     -------
     TdoaFrames
     """
-    from scipy.signal import get_window
-
     arr = load_array(array)
     a = np.asarray(x, dtype=float)
     if a.ndim != 2 or a.shape[0] != arr.n_mics:
@@ -759,7 +772,7 @@ def estimate_tdoas(
     bins = np.flatnonzero(band)
     bw = (band.nonzero()[0][-1] - band.nonzero()[0][0] + 1) * fs / nfft
     main_lobe = max(2, int(np.ceil(fs / bw)))
-    win = get_window(window, frame_len).astype(np.float32)
+    win = _window(tuple(window) if isinstance(window, list) else window, frame_len)
     energy, active = frame_activity(a32, frame_len, hop, n_frames, vad_db)
     if joint not in ("pairs", "coherent"):
         raise ConfigError(f"joint must be 'pairs' or 'coherent', got {joint!r}")
@@ -802,7 +815,7 @@ def estimate_tdoas(
     acc_active = np.zeros((n_pairs, nb), dtype=complex)
     n_active = 0
     # second weighting for reverberant recordings, and the coherence statistics deciding it
-    use_rev = reverb_method is not None and noise_psd is not None
+    use_rev = reverb_method is not None and noise_psd is not None and whole_recording
     acc2 = np.zeros((n_pairs, nb), dtype=complex)
     acc2_active = np.zeros((n_pairs, nb), dtype=complex)
     s_cross = np.zeros((n_pairs, nb), dtype=complex)
@@ -842,7 +855,7 @@ def estimate_tdoas(
         tdoa[s0:s1] = np.where(ok[:, None], lag / fs, np.nan)
         conf[s0:s1] = c
         # normalise each frame's weighted spectrum so that every frame counts equally
-        if act.any():
+        if whole_recording and act.any():
             Pa = P[act]
             if noise_psd is None:
                 norm = np.sqrt(np.sum(Pa.real**2 + Pa.imag**2, axis=-1, keepdims=True))
@@ -890,7 +903,7 @@ def estimate_tdoas(
         # still builds up a peak in the average over all frames with energy
         acc, n_acc = acc_active, n_active
         fallback = True
-    if n_acc:
+    if n_acc and whole_recording:
         lag, c = _peaks(corr(acc)[None], acc[None], nfft, max_lag, "interp", main_lobe,
                         band_bins)
         resid = _closure_residual(lag[0], prs, arr.n_mics)

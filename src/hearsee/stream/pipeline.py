@@ -16,10 +16,10 @@ Systems 113, 2019): small stages with explicit configuration, connected by a bou
   predict through them); a block that arrives after its samples were declared lost is *late* and
   is discarded. Frames are emitted in batches (all complete frames of a block) so that the
   stages run vectorised over the batch.
-* :class:`FrameGcc` (each frame's own GCC TDOAs, as :func:`hearsee.audio.tdoa.estimate_tdoas`
-  gives them) and :class:`SmoothedSrp` (recursively smoothed cross spectra steered over a
-  direction grid) are the measurement stages; both precompute their tables (windows, lag
-  bounds, the steering matrix) once and work in single precision.
+* :class:`FrameGcc` (each frame's own GCC TDOAs: :func:`hearsee.audio.tdoa.estimate_tdoas`
+  without its whole-recording summary) and :class:`SmoothedSrp` (recursively smoothed cross
+  spectra steered over a direction grid, its steering matrix precomputed once, single
+  precision) are the measurement stages.
 * :class:`TrackingProcessor` holds the TDOA, ITD-filter
   (:class:`~hearsee.audio.itd_filter.ItdKalman`), localizer
   (:func:`~hearsee.audio.localize.localize_tdoa`) and tracker stages
@@ -56,7 +56,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import localize_tdoa
-from hearsee.audio.tdoa import estimate_tdoas, frame_signals, gcc_weighting
+from hearsee.audio.tdoa import estimate_tdoas, frame_signals
 from hearsee.audio.tracking import DirectionKalman, MotionKalman
 from hearsee.errors import AudioInputError, ConfigError
 from hearsee.geometry import wrap_deg
@@ -456,86 +456,26 @@ class Framer:
 
 # ---------------------------------------------------------------------------- per-frame GCC stage
 class FrameGcc:
-    """Per-frame GCC TDOAs of consecutive frames, with every table computed once.
-
-    The per-frame half of :func:`hearsee.audio.tdoa.estimate_tdoas` -- the same window, lag
-    bounds, energy activity test (:func:`~hearsee.audio.tdoa.frame_activity` over the batch),
-    SNR weighting from the batch's quiet frames, peak search and confidence -- without the
-    whole-recording summary estimate that a stream does not use (its direction-grid search
-    cost about two thirds of each call on a batch of eight frames). Results equal
-    ``estimate_tdoas(segment, ...)``'s ``tdoa_s``/``confidence`` (tests/stream). Only the
-    weightings that need no spectral averaging (``phat``, ``cc``) take this path; the others
-    call :func:`estimate_tdoas`.
+    """Per-frame GCC TDOAs of consecutive frames: :func:`hearsee.audio.tdoa.estimate_tdoas`
+    with ``whole_recording=False`` (the same window, lag bounds, energy activity test over the
+    batch, SNR weighting from the batch's quiet frames, peak search and confidence, without the
+    whole-recording summary that a stream does not use -- its direction search cost about two
+    thirds of each call on a batch of eight frames).
 
     Units: seconds; ``segment`` (n_ch, frame_len + (m - 1) * hop) samples.
     """
 
-    VAD_DB = 3.0  # estimate_tdoas's default
-    WINDOW = ("tukey", 0.25)  # estimate_tdoas's default
-
     def __init__(self, array: MicArray, fs: float, cfg: StreamConfig) -> None:
-        import scipy.fft as sfft
-        from scipy.signal import get_window
-
-        from hearsee.audio.tdoa import _band_mask, normalize_method
-
         self.array, self.fs, self.cfg = array, float(fs), cfg
-        self.method = normalize_method(cfg.method)
-        self.fast = self.method in ("phat", "cc")
         self.pairs = list(array.pairs)
-        self.frame_len, self.hop = frame_geometry(fs, cfg.frame_ms, cfg.hop_ms)
-        self.max_lag = array.max_tdoa(self.pairs) * fs + 1.0
-        self.nfft = sfft.next_fast_len(self.frame_len + 2 * int(np.ceil(self.max_lag.max())) + 2,
-                                       real=True)
-        self.n_bins = self.nfft // 2 + 1
-        band = _band_mask(self.n_bins, self.nfft, fs, cfg.band_hz)
-        bins = np.flatnonzero(band)
-        self.k0, self.k1 = int(bins[0]), int(bins[-1]) + 1
-        self.band_bins = np.arange(self.k0, self.k1)
-        bw = (self.k1 - self.k0) * fs / self.nfft
-        self.main_lobe = max(2, int(np.ceil(fs / bw)))
-        self.win = get_window(self.WINDOW, self.frame_len).astype(np.float32)
-        self.I = np.array([p[0] for p in self.pairs])
-        self.J = np.array([p[1] for p in self.pairs])
 
     def __call__(self, segment: NDArray, n_frames: int) -> tuple[NDArray, NDArray]:
         """TDOAs (m, n_pairs) seconds (NaN: no estimate) and confidences (m, n_pairs)."""
-        if not self.fast:
-            cfg = self.cfg
-            tf = estimate_tdoas(segment, self.fs, self.array, cfg.frame_ms, cfg.hop_ms,
-                                cfg.method, self.pairs, band_hz=cfg.band_hz, refine=cfg.refine,
-                                min_confidence=cfg.min_confidence)
-            return tf.tdoa_s[:n_frames], tf.confidence[:n_frames]
-        import scipy.fft as sfft
-
-        from hearsee.audio.tdoa import _MIN_SUMMARY_FRAMES, _TINY, _peaks, frame_activity
-
-        a32 = np.asarray(segment, dtype=np.float32)
-        frames = frame_signals(a32, self.frame_len, self.hop)
-        m = frames.shape[1]
-        _, active = frame_activity(a32, self.frame_len, self.hop, m, self.VAD_DB)
-        X = sfft.rfft(frames * self.win, self.nfft, axis=-1)[..., self.k0:self.k1]
-        X = np.moveaxis(X, 0, 1)  # (m, n_ch, B)
-        G = X[:, self.I] * np.conj(X[:, self.J])
-        W = gcc_weighting(self.method, G)
-        quiet = np.flatnonzero(~active)
-        if quiet.size >= _MIN_SUMMARY_FRAMES:
-            pw = X.real**2 + X.imag**2
-            noise = np.mean(pw[quiet], axis=0)  # (n_ch, B)
-            noise = np.maximum(noise, 1e-12 * noise.max(initial=0.0) + _TINY)
-            xi = np.maximum(pw / noise - 1.0, 0.0)
-            W = W * (xi[:, self.I] * xi[:, self.J] / ((1.0 + xi[:, self.I])
-                                                       * (1.0 + xi[:, self.J])))
-        P = G * W.astype(np.float32)
-        full = np.zeros(P.shape[:-1] + (self.n_bins,), dtype=P.dtype)
-        full[..., self.k0:self.k1] = P
-        r = sfft.irfft(full, self.nfft, axis=-1)
-        lag, c = _peaks(r, P, self.nfft, self.max_lag, self.cfg.refine, self.main_lobe,
-                        self.band_bins, need=active)
-        c = np.where(active[:, None], c, 0.0)
-        ok = active & np.all(c >= self.cfg.min_confidence, axis=1)
-        tdoa = np.where(ok[:, None], lag / self.fs, np.nan)
-        return tdoa[:n_frames], c[:n_frames]
+        cfg = self.cfg
+        tf = estimate_tdoas(segment, self.fs, self.array, cfg.frame_ms, cfg.hop_ms, cfg.method,
+                            self.pairs, band_hz=cfg.band_hz, refine=cfg.refine,
+                            min_confidence=cfg.min_confidence, whole_recording=False)
+        return tf.tdoa_s[:n_frames], tf.confidence[:n_frames]
 
 
 # ---------------------------------------------------------------------------- smoothed SRP stage
