@@ -460,7 +460,7 @@ def plot(ex_a: dict, ex_b: dict, path: Path) -> None:
         ax[1].legend(fontsize=7)
         for k, lab in ((0, "vx"), (1, "vy")):
             ax[2].plot(ex_b["t"], ex_b["vtrue"][:, k], "k-", lw=2)
-            ax[2].plot(ex_b["t"], ex_b["vel"][:, k], "-", label=f"{lab} (CA Kalman)")
+            ax[2].plot(ex_b["t"], ex_b["vel"][:, k], "-", label=f"{lab} (RayTracker)")
         ax[2].set(xlabel="t [s]", ylabel="velocity [m/s]", title="velocity, truth black",
                   ylim=(-2.5, 2.5))
         ax[2].legend(fontsize=7)
