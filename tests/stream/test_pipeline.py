@@ -223,6 +223,32 @@ def test_camera_fix_with_inconsistent_itds_is_discarded():
     assert bad.position_m is not None  # the track predicts on
 
 
+@pytest.mark.parametrize("model", ["cv", "ca"])
+def test_motion_models_track_a_source_moving_along_a_line(model):
+    """Exact ITDs and image points of a source moving at a known 0.6 m/s along y: both 3D
+    trackers end on it with its velocity; an unknown model name is a ConfigError."""
+    from hearsee.fusion.audiovisual import AudioVisualRig
+    from hearsee.stream.pipeline import TrackingProcessor, Update
+    from hearsee.vision.camera import Camera
+
+    arr = MicArray.from_preset("three-mic")
+    rig = AudioVisualRig.mounted(arr, Camera.from_fov(70.0, 640, 480), (0.0, 0.2, 0.0))
+    v = np.array([0.0, 0.6, 0.0])
+
+    def at(t):
+        return np.array([1.5, -0.3, 0.0]) + v * t
+
+    proc = TrackingProcessor(arr, FS, StreamConfig(motion_model=model), rig=rig,
+                             image_points=lambda t: tuple(rig.project(at(t))[0]))
+    for k in range(60):
+        u = Update(k * 0.032, None, None, None, None, None, None, 1.0)
+        proc._fuse(u, arr.tdoa(at(u.t)))
+    assert np.linalg.norm(np.array(u.position_m) - at(u.t)) < 0.02
+    assert np.linalg.norm(np.array(u.velocity_mps) - v) < 0.1
+    with pytest.raises(ConfigError, match="motion_model"):
+        TrackingProcessor(arr, FS, StreamConfig(motion_model="kalman"), rig=rig)
+
+
 def test_smoothed_srp_finds_a_static_source_and_not_noise():
     arr = MicArray.from_preset("three-mic")
     rng = np.random.default_rng(5)

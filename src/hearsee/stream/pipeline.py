@@ -24,8 +24,9 @@ Systems 113, 2019): small stages with explicit configuration, connected by a bou
   (:class:`~hearsee.audio.itd_filter.ItdKalman`), localizer
   (:func:`~hearsee.audio.localize.localize_tdoa`) and tracker stages
   (:class:`~hearsee.audio.tracking.DirectionKalman`; with a calibrated camera and image points,
-  the camera-ray + ITD fix of :func:`~hearsee.fusion.audiovisual.locate_on_ray` and the
-  constant-acceleration :class:`~hearsee.audio.tracking.MotionKalman`).
+  the camera-ray + ITD fix of :func:`~hearsee.fusion.audiovisual.locate_on_ray` and the gated
+  constant-velocity :class:`~hearsee.fusion.audiovisual.RayTracker`, or with
+  ``motion_model="ca"`` the constant-acceleration :class:`~hearsee.audio.tracking.MotionKalman`).
 * :class:`StreamPipeline` runs them: in-line (fastest, for files) or with the source in its own
   thread behind a bounded queue (live input). The consumer waits at most ``stall_timeout_s`` for
   a block; a source that stays silent longer than ``max_stall_s`` ends the run with
@@ -710,9 +711,16 @@ class StreamConfig:
         directions per confidence / coherence bin, and 6 / 40 deg were chosen on the seed-100
         walks of ``bench/tracking.py`` (a fixed 10 deg over-smoothed white noise: every frame
         is good, and turns lagged by several frames)
-    sigma_jerk : 3D motion tracker process noise, m/s^3
-    accel_tau_s : correlation time of the 3D tracker's acceleration (Singer), s; None = pure CA
-    sigma_tdoa_s, sigma_px : measurement noise of the camera-ray fix (seconds, pixels)
+    motion_model : the 3D tracker of the camera-ray fixes: ``"cv"`` (default), the gated
+        constant-velocity :class:`~hearsee.fusion.audiovisual.RayTracker`, or ``"ca"``, the
+        constant-acceleration :class:`~hearsee.audio.tracking.MotionKalman`
+    sigma_accel : the ``"cv"`` tracker's acceleration noise, m/s^2
+    sigma_jerk : the ``"ca"`` tracker's process noise, m/s^3
+    accel_tau_s : correlation time of the ``"ca"`` tracker's acceleration (Singer), s; None =
+        pure CA
+    sigma_tdoa_s, sigma_px : measurement noise of the camera-ray fix (seconds, pixels);
+        ``sigma_tdoa_s`` None = the value each tracker was tuned with (``"cv"`` 8 us, ``"ca"``
+        20 us; bench/tracking.py part B, seed-100 walks)
     range_m : search interval along the camera ray, metres
     max_fix_residual_samples : a camera-ray fix whose RMS ITD residual exceeds this many samples
         is discarded (with three microphones the three TDOAs must close, t01 + t12 = t02; a
@@ -749,8 +757,10 @@ class StreamConfig:
     itd_filter: bool = False
     sigma_meas_deg: float = 10.0
     sigma_accel_dps2: float = 100.0
+    motion_model: str = "cv"
+    sigma_accel: float = 0.2
     sigma_jerk: float = 0.5
-    sigma_tdoa_s: float = 2e-5
+    sigma_tdoa_s: float | None = None
     sigma_px: float = 2.0
     range_m: tuple[float, float] = (0.2, 6.0)
     max_fix_residual_samples: float = 0.5
@@ -795,8 +805,7 @@ class TrackingProcessor:
         self.itd = (ItdKalman(array.n_mics, self.pairs, q_std_s=0.5 / fs, r_std_s=1.0 / fs)
                     if self.cfg.itd_filter else None)
         self.direction = DirectionKalman(self.cfg.sigma_meas_deg, self.cfg.sigma_accel_dps2)
-        self.motion = MotionKalman(sigma_meas_m=0.05, sigma_jerk=self.cfg.sigma_jerk,
-                                   accel_tau_s=self.cfg.accel_tau_s)
+        self.motion, self.sigma_tdoa_s = self._motion_tracker(self.cfg)
         self.gcc = FrameGcc(array, fs, self.cfg)
         self.srp = None
         if self.cfg.spectrum_alpha > 0:
@@ -920,6 +929,20 @@ class TrackingProcessor:
                     cands.append((float(az), None))
         return cands
 
+    @staticmethod
+    def _motion_tracker(cfg: StreamConfig) -> tuple[Any, float]:
+        """The 3D tracker of ``cfg.motion_model`` and the fixes' TDOA noise (seconds)."""
+        if cfg.motion_model == "cv":
+            from hearsee.fusion.audiovisual import RayTracker
+
+            tdoa = 8e-6 if cfg.sigma_tdoa_s is None else float(cfg.sigma_tdoa_s)
+            return RayTracker(sigma_accel=cfg.sigma_accel), tdoa
+        if cfg.motion_model == "ca":
+            tdoa = 2e-5 if cfg.sigma_tdoa_s is None else float(cfg.sigma_tdoa_s)
+            return MotionKalman(sigma_meas_m=0.05, sigma_jerk=cfg.sigma_jerk,
+                                accel_tau_s=cfg.accel_tau_s), tdoa
+        raise ConfigError(f"motion_model must be 'cv' or 'ca', got {cfg.motion_model!r}")
+
     def _fuse(self, upd: Update, z: NDArray | None) -> None:
         from hearsee.fusion.audiovisual import locate_on_ray
 
@@ -927,7 +950,7 @@ class TrackingProcessor:
         fix = None
         if z is not None and uv is not None:
             fix = locate_on_ray(self.rig, uv, z, self.pairs, range_m=self.cfg.range_m,
-                                sigma_tdoa_s=self.cfg.sigma_tdoa_s, sigma_px=self.cfg.sigma_px)
+                                sigma_tdoa_s=self.sigma_tdoa_s, sigma_px=self.cfg.sigma_px)
         if fix is not None and fix.residual_s > self.cfg.max_fix_residual_samples / self.fs:
             fix = None
         if fix is not None:
