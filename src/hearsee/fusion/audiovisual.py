@@ -49,6 +49,7 @@ from scipy.optimize import minimize_scalar
 from sklearn.base import BaseEstimator, RegressorMixin
 
 from hearsee.audio.arrays import MicArray
+from hearsee.audio.tracking import MotionKalman
 from hearsee.errors import EstimationError, GeometryError
 from hearsee.vision.camera import Camera, camera_pose
 
@@ -258,7 +259,7 @@ def _refine_on_ray(rig: AudioVisualRig, o: NDArray, d: NDArray, z: NDArray,
 
 
 # ----------------------------------------------------------------- tracking along the rays
-class RayTracker:
+class RayTracker(MotionKalman):
     """Constant-velocity Kalman filter on the 3D position of a source on the camera's rays.
 
     The camera fixes the direction to the source in every frame almost exactly (a pixel of
@@ -270,10 +271,11 @@ class RayTracker:
     covariance from :func:`locate_on_ray` (elongated along the ray), and fixes whose innovation
     fails a chi-square gate are rejected (a reflection that captured a GCC peak).
 
-    The interface matches :class:`hearsee.audio.tracking.MotionKalman` (``update(t, position,
-    R, candidates)``, ``position``, ``velocity``, ``acceleration``, ``position_cov``), so either
-    can track the fixes; the constant-velocity model averages over more frames than the
-    constant-acceleration one (``bench/tracking.py`` part B measures both on the same fixes).
+    A :class:`hearsee.audio.tracking.MotionKalman` (same ``update(t, position, R, candidates)``,
+    gating, restart, ``position``, ``velocity``, ``position_cov``) with the constant-velocity
+    model instead of constant acceleration: it averages over more frames
+    (``bench/tracking.py`` part B measures both on the same fixes). Fixes with a non-finite
+    covariance are ignored.
 
     Parameters
     ----------
@@ -296,44 +298,37 @@ class RayTracker:
 
     def __init__(self, sigma_accel: float = 0.2, gate_prob: float = 0.99, max_rejects: int = 4,
                  init_vel_sigma: float = 1.0) -> None:
-        from scipy.stats import chi2
-
         if not sigma_accel > 0 or not init_vel_sigma > 0:
             raise EstimationError("sigma_accel and init_vel_sigma must be > 0")
         if not 0 < gate_prob < 1 or int(max_rejects) < 1:
             raise EstimationError("gate_prob must be in (0, 1) and max_rejects >= 1")
         self.sigma_accel = float(sigma_accel)
-        self.gate_prob = float(gate_prob)
-        self.max_rejects = int(max_rejects)
-        self.init_vel_sigma = float(init_vel_sigma)
-        self._gate = float(chi2.ppf(self.gate_prob, 3))
+        super().__init__(sigma_meas_m=0.05, gate_prob=gate_prob, max_rejects=max_rejects,
+                         init_vel_sigma=init_vel_sigma)
         self.H = np.zeros((3, 6))
         self.H[[0, 1, 2], self._POS] = 1.0
-        self.reset()
 
     def reset(self) -> None:
         """Forget the track."""
         self.x = np.zeros(6)
         self.P = np.eye(6) * 1e6
+        self.F = np.eye(6)
+        self.Q = np.zeros((6, 6))
         self.t: float | None = None
         self.initialized = False
         self.n_rejects = 0
 
-    def predict(self, t: float) -> None:
-        """Propagate the state to time ``t`` (seconds)."""
+    def _set_dt(self, dt: float) -> None:
         from filterpy.common import Q_discrete_white_noise
 
-        if self.t is not None and self.initialized:
-            dt = float(t) - self.t
-            if dt < 0:
-                raise EstimationError(f"tracker time went backwards ({self.t} s -> {t} s)")
-            if dt > 0:
-                F = np.kron(np.eye(3), np.array([[1.0, dt], [0.0, 1.0]]))
-                Q = Q_discrete_white_noise(dim=2, dt=dt, var=self.sigma_accel**2, block_size=3,
-                                           order_by_dim=True)
-                self.x = F @ self.x
-                self.P = F @ self.P @ F.T + Q
-        self.t = float(t)
+        key = round(dt, 9)
+        if key not in self._model_cache:
+            self._model_cache[key] = (
+                np.kron(np.eye(3), np.array([[1.0, dt], [0.0, 1.0]])),
+                Q_discrete_white_noise(dim=2, dt=dt, var=self.sigma_accel**2, block_size=3,
+                                       order_by_dim=True),
+            )
+        self.F, self.Q = self._model_cache[key]
 
     def _start(self, z: NDArray, R: NDArray) -> None:
         self.x = np.zeros(6)
@@ -346,61 +341,16 @@ class RayTracker:
     def update(self, t: float, position: ArrayLike | None = None, R: ArrayLike | None = None,
                candidates: Sequence[tuple[ArrayLike, ArrayLike | None]] | None = None) -> bool:
         """One frame: predict to ``t`` (seconds) and fuse the fix ``position`` (m, array frame)
-        with covariance ``R`` (3x3, m^2; default 5 cm per axis). ``candidates`` are ambiguous
-        alternative fixes ``(position, R)``; the one nearest the prediction (Mahalanobis) is
-        used. Returns True when a fix was fused."""
-        self.predict(t)
-        opts = []
-        for pos, Rc in ([] if position is None else [(position, R)]) + list(candidates or []):
-            z = np.asarray(pos, dtype=float).reshape(3)
-            Rm = np.eye(3) * 0.05**2 if Rc is None else np.asarray(Rc, dtype=float).reshape(3, 3)
-            if np.all(np.isfinite(z)) and np.all(np.isfinite(Rm)):
-                opts.append((z, Rm))
-        if not opts:
-            return False
-        if not self.initialized:
-            self._start(*opts[0])
-            return True
-        best = None
-        for z, Rm in opts:
-            y = z - self.H @ self.x
-            S = self.H @ self.P @ self.H.T + Rm
-            d2 = float(y @ np.linalg.solve(S, y))
-            if best is None or d2 < best[0]:
-                best = (d2, y, S, Rm)
-        d2, y, S, Rm = best
-        if d2 > self._gate:
-            self.n_rejects += 1
-            if self.n_rejects >= self.max_rejects:
-                self._start(*opts[0])
-                return True
-            return False
-        K = np.linalg.solve(S, self.H @ self.P).T
-        self.x = self.x + K @ y
-        I_KH = np.eye(6) - K @ self.H
-        self.P = I_KH @ self.P @ I_KH.T + K @ Rm @ K.T  # Joseph form
-        self.n_rejects = 0
-        return True
-
-    @property
-    def position(self) -> NDArray:
-        """Position, m (NaN before the first fix)."""
-        return self.x[self._POS].copy() if self.initialized else np.full(3, np.nan)
-
-    @property
-    def velocity(self) -> NDArray:
-        """Velocity, m/s (NaN before the first fix)."""
-        return self.x[self._VEL].copy() if self.initialized else np.full(3, np.nan)
+        with covariance ``R`` (3x3, m^2; default 5 cm per axis); ``candidates`` are ambiguous
+        alternatives (see :meth:`MotionKalman.update`). Returns True when a fix was fused."""
+        cands = ([] if position is None else [(position, R)]) + list(candidates or [])
+        finite = [(p, Rc) for p, Rc in cands if Rc is None or np.all(np.isfinite(Rc))]
+        return super().update(t, None, None, finite)
 
     @property
     def acceleration(self) -> NDArray:
         """Zero (constant-velocity model), m/s^2; NaN before the first fix."""
         return np.zeros(3) if self.initialized else np.full(3, np.nan)
-
-    @property
-    def position_cov(self) -> NDArray:
-        """Position covariance, m^2."""
-        return self.P[np.ix_(self._POS, self._POS)].copy()
 
 
 @dataclass
