@@ -3,13 +3,14 @@
 Part A -- moving speakers in a room (RT60 0.3 s, SNR 10/20 dB, 0.5-1.5 m/s, 1-4 m away, male /
 female synthetic voice and white noise), three-mic preset at 16 kHz, 64 ms frames every 32 ms:
 per-frame azimuth (hearsee GCC-PHAT + closed-form localizer on each frame alone, no filter), the
-tracked azimuth (the stream's default: recursively smoothed cross spectra, alpha 0.8, coherence-
+tracked azimuth (the stream's default: recursively smoothed cross spectra, alpha 0.5, coherence-
 weighted SRP-PHAT over a direction grid, gated by the normalised steered power, into
 :class:`hearsee.audio.tracking.DirectionKalman` with the evidence's age as measurement delay) and,
 side by side on the same frames, pyroomacoustics' SRP-PHAT applied per frame (it has no tracker).
-The stream's settings (alpha 0.8, min_coherence 0.4; frames whose own GCC confidence reaches 1.5
-use their own measurement; measurement noise 6 deg / confidence for those, 40 (1 - c) / c deg
-for a smoothed direction of normalised steered power c, floor 1.5 deg) were chosen on walks of
+The stream's settings (alpha 0.5, min_coherence 0.4; frames whose own GCC confidence reaches 1.5
+use their own measurement; measurement noise 6 deg / confidence for those, 20 (1 - c) / c deg
+for a smoothed direction of normalised steered power c, floor 1.5 deg; angular acceleration
+noise 200 deg/s^2) were chosen on walks of
 seeds 100 (straight) and 110 (turning); the reported run uses seed 0. RMSE over each method's
 own output frames, coverage (share of frames with an estimate), and the tracker's lag with a
 constant azimuth offset, fitted jointly per walk (:func:`lag_frames`: the shift tau and offset
