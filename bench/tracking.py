@@ -8,7 +8,7 @@ weighted SRP-PHAT over a direction grid, gated by the normalised steered power, 
 :class:`hearsee.audio.tracking.DirectionKalman` with the evidence's age as measurement delay) and,
 side by side on the same frames, pyroomacoustics' SRP-PHAT applied per frame (it has no tracker).
 The stream's settings (alpha 0.5, min_coherence 0.4; frames whose own GCC confidence reaches 1.5
-use their own measurement; measurement noise 4 deg / confidence for those, 20 (1 - c) / c deg
+use their own measurement; measurement noise 6 deg / confidence for those, 20 (1 - c) / c deg
 for a smoothed direction of normalised steered power c, floor 1.5 deg; angular acceleration
 noise 200 deg/s^2) were chosen on walks of
 seeds 100 (straight) and 110 (turning); the reported run uses seed 0. RMSE over each method's
