@@ -82,6 +82,13 @@ def main() -> None:
             ["seed", "median error (m)", "initial azimuth error (deg)", "tracked steps"],
             [[r["seed"], r["position_error_median_m"], r["azimuth_error_initial_deg"],
               r["tracked_steps"]] for r in fails])))
+    fooled = [r for r in res.runs if r.get("false_person_objects", 0)]
+    if fooled:
+        sections.append(("Scenarios where an object was reported as a person", markdown_table(
+            ["seed", "camera frames with an object accepted", "person detections verified",
+             "objects rejected", "success"],
+            [[r["seed"], r["false_person_objects"], r["person_detections_verified"],
+              r["human_like_objects_rejected"], r["success"]] for r in fooled])))
     write_markdown("robot", sections, intro="Produced by `python bench/robot.py` "
                    f"(--scenarios {args.scenarios}).")
 
