@@ -92,23 +92,29 @@ def _signal(kind: str, dur: float, rng: np.random.Generator) -> np.ndarray:
     return 0.05 * x / np.std(x)
 
 
+def _leg_start(rng: np.random.Generator, r_range, speed) -> tuple[np.ndarray, float, float]:
+    """A random start point r_range metres from the array (x, y), speed (m/s), heading (rad)."""
+    r0 = rng.uniform(*r_range)
+    a0 = rng.uniform(-np.pi, np.pi)
+    p0 = np.array([r0 * np.cos(a0), r0 * np.sin(a0)])
+    return p0, rng.uniform(*speed), rng.uniform(-np.pi, np.pi)
+
+
+def _walkable(path: np.ndarray, r_range) -> bool:
+    """The path (n, 2) stays 0.4 m inside the room's walls and r_range metres from the array."""
+    r = np.linalg.norm(path, axis=1)
+    return bool(np.all(path > -ARRAY_AT[:2] + 0.4) and np.all(path < ROOM[:2] - ARRAY_AT[:2] - 0.4)
+                and r.min() >= r_range[0] and r.max() <= r_range[1])
+
+
 def walk(rng: np.random.Generator, dur: float, r_range=(1.0, 4.0), speed=(0.5, 1.5),
          z=0.3) -> Trajectory:
     """A straight walk at walking speed that stays r_range metres from the array, in the room."""
-    lo = -ARRAY_AT[:2] + 0.4
-    hi = ROOM[:2] - ARRAY_AT[:2] - 0.4
+    s = np.linspace(0, 1, 30)[:, None]
     for _ in range(1000):
-        r0 = rng.uniform(*r_range)
-        a0 = rng.uniform(-np.pi, np.pi)
-        p0 = np.array([r0 * np.cos(a0), r0 * np.sin(a0)])
-        v = rng.uniform(*speed)
-        h = rng.uniform(-np.pi, np.pi)
+        p0, v, h = _leg_start(rng, r_range, speed)
         p1 = p0 + v * dur * np.array([np.cos(h), np.sin(h)])
-        s = np.linspace(0, 1, 30)[:, None]
-        path = p0 + s * (p1 - p0)
-        r = np.linalg.norm(path, axis=1)
-        if np.all(path > lo) and np.all(path < hi) and r.min() >= r_range[0] \
-                and r.max() <= r_range[1]:
+        if _walkable(p0 + s * (p1 - p0), r_range):
             return Trajectory([0.0, dur], [[*p0, z], [*p1, z]])
     raise RuntimeError("no walk found")
 
@@ -137,22 +143,13 @@ def turn_walk(rng: np.random.Generator, dur: float, r_range=(1.0, 4.0), speed=(0
     """A walk at walking speed that turns back halfway (heading change 90-180 deg), staying
     r_range metres from the array, in the room: its angular rate changes, so the tracker's
     lag and a constant azimuth offset can be told apart (:func:`lag_frames`)."""
-    lo = -ARRAY_AT[:2] + 0.4
-    hi = ROOM[:2] - ARRAY_AT[:2] - 0.4
     s = np.linspace(0, 1, 15)[:, None]
     for _ in range(5000):
-        r0 = rng.uniform(*r_range)
-        a0 = rng.uniform(-np.pi, np.pi)
-        p0 = np.array([r0 * np.cos(a0), r0 * np.sin(a0)])
-        v = rng.uniform(*speed)
-        h = rng.uniform(-np.pi, np.pi)
+        p0, v, h = _leg_start(rng, r_range, speed)
         p1 = p0 + v * dur / 2 * np.array([np.cos(h), np.sin(h)])
         h2 = h + rng.choice([-1.0, 1.0]) * np.radians(rng.uniform(90.0, 180.0))
         p2 = p1 + v * dur / 2 * np.array([np.cos(h2), np.sin(h2)])
-        path = np.vstack([p0 + s * (p1 - p0), p1 + s * (p2 - p1)])
-        r = np.linalg.norm(path, axis=1)
-        if np.all(path > lo) and np.all(path < hi) and r.min() >= r_range[0] \
-                and r.max() <= r_range[1]:
+        if _walkable(np.vstack([p0 + s * (p1 - p0), p1 + s * (p2 - p1)]), r_range):
             return Trajectory([0.0, dur / 2, dur], [[*p0, z], [*p1, z], [*p2, z]])
     raise RuntimeError("no turning walk found")
 
