@@ -789,7 +789,8 @@ def estimate_tdoas(
     I = np.array([p[0] for p in prs])
     J = np.array([p[1] for p in prs])
     n_pairs = len(prs)
-    need_stats = method in ("scot", "roth", "ml") or reverb_method in ("scot", "roth", "ml")
+    need_stats = method in ("scot", "roth", "ml") or (
+        whole_recording and reverb_method in ("scot", "roth", "ml"))
     halo = (int(smooth_frames) // 2) if need_stats else 0
 
     k0, k1 = int(bins[0]), int(bins[-1]) + 1  # the band is one contiguous run of bins
