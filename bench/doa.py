@@ -244,17 +244,23 @@ def paired_rmse_ci(e_a: np.ndarray, e_b: np.ndarray, rng: np.random.Generator,
     return float(np.quantile(d, q)), float(np.quantile(d, 1 - q))
 
 
+def _pool_by_array_rt(results: list) -> dict:
+    """Per-recording errors of each method pooled over SNRs and signals, per (array, RT60)."""
+    groups: dict = {}
+    for (arr, rt, _snr, _kind), errs in results:
+        g = groups.setdefault((arr, rt), {m: [] for m in errs})
+        for m, e in errs.items():
+            g[m].extend(e)
+    return groups
+
+
 def pooled_paired(results: list, rng: np.random.Generator) -> tuple[list, list]:
     """Per array and RT60, all SNRs and signals pooled: hearsee vs each peer on the same
     recordings (RMSE difference with bootstrap CI, share of recordings where hearsee's error
     is smaller, Wilcoxon signed-rank p-value of the paired errors)."""
     from scipy.stats import wilcoxon
 
-    groups: dict = {}
-    for (arr, rt, _snr, _kind), errs in results:
-        g = groups.setdefault((arr, rt), {m: [] for m in errs})
-        for m, e in errs.items():
-            g[m].extend(e)
+    groups = _pool_by_array_rt(results)
     headers = ["array", "RT60", "n", "peer", "hearsee RMSE", "peer RMSE",
                "dRMSE [95% CI]", "hearsee better %", "Wilcoxon p"]
     rows = []
@@ -273,11 +279,7 @@ def pooled_paired(results: list, rng: np.random.Generator) -> tuple[list, list]:
 
 def ablation(results: list, rng: np.random.Generator) -> tuple[list, list]:
     """hearsee's variants vs the benchmarked setting on the same recordings, per array/RT60."""
-    groups: dict = {}
-    for (arr, rt, _snr, _kind), errs in results:
-        g = groups.setdefault((arr, rt), {m: [] for m in errs})
-        for m, e in errs.items():
-            g[m].extend(e)
+    groups = _pool_by_array_rt(results)
     headers = ["array", "RT60", "n", "variant", "variant RMSE", "hearsee RMSE",
                "dRMSE hearsee - variant [95% CI]", "mean paired diff [deg]"]
     rows = []
