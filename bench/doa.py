@@ -108,14 +108,15 @@ def hearsee_azimuth(x: np.ndarray, fs: float, arr: MicArray, band: tuple[float, 
     """hearsee's whole-recording azimuth. hearsee abstains (NaN summary) when its averaged
     correlation is not confident enough; the peers are told that one source is present
     (``num_src=1``) and always answer, so with ``fallback`` an abstention is replaced by
-    hearsee's best guess: the same estimate with ``min_confidence=0`` (every frame with energy
-    counts). The abstention policy was decided on held-out seed 777 (one three-mic RT60 0.6
-    recording without estimate there)."""
+    hearsee's best guess: the same estimate with ``min_confidence=0`` and ``min_peak_snr=0``
+    (every frame with energy counts, no detection test). The abstention policy was decided
+    on held-out seed 777 (one three-mic RT60 0.6 recording without estimate there)."""
     opts = {"source_in_plane": in_plane, **HEARSEE, **kw}
     tf = estimate_tdoas(x, fs, arr, band_hz=band, **opts)
     if fallback and not np.all(np.isfinite(tf.summary_tdoa_s)):
         HEARSEE_ABSTAINED.append(1)
-        tf = estimate_tdoas(x, fs, arr, band_hz=band, **{**opts, "min_confidence": 0.0})
+        tf = estimate_tdoas(x, fs, arr, band_hz=band,
+                            **{**opts, "min_confidence": 0.0, "min_peak_snr": 0.0})
     loc = localize_tdoa(tf.summary_tdoa_s, arr, tf.pairs, near_field=in_plane,
                         in_plane=in_plane)
     return loc.azimuth_deg
