@@ -103,17 +103,19 @@ def test_silence_and_noise_give_no_estimate(three):
 
 
 def test_two_mic_summary_detects_sources_not_noise():
-    """One independent pair has no closure test: the averaged correlation's peak must stand
-    out of its own noise floor (min_peak_snr). Noise-only two-channel recordings give no
-    whole-recording estimate; a white source at -10 dB does, on its true delay."""
+    """One independent pair has no closure test: the correlation's peak must stand out of its
+    own noise floor (min_peak_snr, min_frame_peak_snr). Noise-only two-channel recordings
+    give no whole-recording estimate and no frame estimate; a white source at -10 dB does,
+    on its true delay."""
     two = MicArray.from_preset("two-mic")
-    false = [np.isfinite(estimate_tdoas(np.random.default_rng(s).standard_normal((2, FS)), FS,
-                                        two).summary_tdoa_s[0]) for s in range(60)]
-    loose = [np.isfinite(estimate_tdoas(np.random.default_rng(s).standard_normal((2, FS)), FS,
-                                        two, min_peak_snr=0).summary_tdoa_s[0])
-             for s in range(60)]
-    assert not any(false)
-    assert any(loose)  # the confidence alone lets some noise through: the test matters
+    noise = [np.random.default_rng(s).standard_normal((2, FS)) for s in range(60)]
+    strict = [estimate_tdoas(x, FS, two) for x in noise]
+    loose = [estimate_tdoas(x, FS, two, min_peak_snr=0, min_frame_peak_snr=0) for x in noise]
+    assert not any(np.isfinite(tf.summary_tdoa_s[0]) for tf in strict)
+    assert sum(tf.n_valid for tf in strict) == 0
+    # the confidence alone lets some noise through: the tests matter
+    assert any(np.isfinite(tf.summary_tdoa_s[0]) for tf in loose)
+    assert sum(tf.n_valid for tf in loose) > 0
     src = np.array([1.0, 1.0, 0.0])
     for s in range(5):
         x = simulate_free_field(white_noise(1.0, FS, rng=s), FS, two, src, snr_db=-10, rng=s + 9)

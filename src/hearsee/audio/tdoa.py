@@ -289,9 +289,10 @@ def _lag_noise_profile(win: NDArray, nfft: int) -> NDArray:
 
 def _peak_snr(r: NDArray, lag: NDArray, max_lag: NDArray, main_lobe: int,
               profile: NDArray) -> NDArray:
-    """Height of each pair's correlation peak over the correlation's noise floor.
+    """Height of each correlation peak over the correlation's noise floor.
 
-    ``r`` (n_pairs, nfft) circular correlations, ``lag`` (n_pairs,) their peaks (samples).
+    ``r`` (..., n_pairs, nfft) circular correlations, ``lag`` (..., n_pairs) their peaks
+    (samples); returns (..., n_pairs).
     The floor is a robust standard deviation (1.4826 x median absolute deviation) of the
     correlation at the lags no source can reach (beyond ``max_lag`` plus a main lobe), each
     scaled by the window's :func:`_lag_noise_profile`; a few outlying lags (the pitch period
@@ -300,13 +301,16 @@ def _peak_snr(r: NDArray, lag: NDArray, max_lag: NDArray, main_lobe: int,
     nfft = r.shape[-1]
     lags = np.arange(nfft)
     lags = np.where(lags > nfft // 2, lags - nfft, lags)
-    out = np.zeros(r.shape[0])
-    for p in range(r.shape[0]):
+    out = np.zeros(r.shape[:-1])
+    for p in range(r.shape[-2]):
         far = (np.abs(lags) > max_lag[p] + main_lobe) & (profile >= _FLOOR_MIN_PROFILE)
-        ref = r[p, far] / profile[far]
-        sig = 1.4826 * float(np.median(np.abs(ref - np.median(ref))))
-        peak = float(r[p, int(round(float(lag[p]))) % nfft])
-        out[p] = peak / sig if sig > 0 else (np.inf if peak > 0 else 0.0)
+        ref = r[..., p, far] / profile[far]
+        med = np.median(ref, axis=-1, keepdims=True)
+        sig = 1.4826 * np.median(np.abs(ref - med), axis=-1)
+        k = (np.round(lag[..., p]).astype(int) % nfft)[..., None]
+        peak = np.take_along_axis(r[..., p, :], k, axis=-1)[..., 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out[..., p] = np.where(sig > 0, peak / sig, np.where(peak > 0, np.inf, 0.0))
     return out
 
 
@@ -654,6 +658,7 @@ def estimate_tdoas(
     source_in_plane: bool = False,
     whole_recording: bool = True,
     min_peak_snr: float = 5.5,
+    min_frame_peak_snr: float = 4.5,
     chunk_frames: int = 128,
     progress: Callable[[int], None] | None = None,
 ) -> TdoaFrames:
@@ -762,6 +767,12 @@ def estimate_tdoas(
         each: a white source at -10 dB 40 (before 40), at -15 dB 9 (before 23, some of them
         2 samples off), a male voice at 0 / -5 dB 40 / 34 (before 40 / 40), a female voice
         40 / 6 (before 40 / 37): the price of the test is the weakest voices.
+    min_frame_peak_snr : float
+        The same test for each frame's own estimate without redundant pairs (0 = off). Of
+        100 two-microphone noise-only recordings (2 s) the confidence alone let 2.1 % of the
+        frames through, whose peaks reached at most 4.2; of the frames a voice at 10 dB left
+        valid (free field, 20 recordings each) 99.9 % (male) and 98.9 % (female) pass 4.5,
+        at 0 dB (male) 72 %.
     whole_recording : bool
         Compute the whole-recording estimate (default). ``False`` gives the per-frame results
         only (``summary_tdoa_s`` all NaN): what a stream needs for each batch of frames, at
@@ -824,8 +835,9 @@ def estimate_tdoas(
     energy, active = frame_activity(a32, frame_len, hop, n_frames, vad_db)
     if joint not in ("pairs", "coherent"):
         raise ConfigError(f"joint must be 'pairs' or 'coherent', got {joint!r}")
-    if not float(min_peak_snr) >= 0:
-        raise ConfigError(f"min_peak_snr must be >= 0, got {min_peak_snr}")
+    if not (float(min_peak_snr) >= 0 and float(min_frame_peak_snr) >= 0):
+        raise ConfigError("min_peak_snr and min_frame_peak_snr must be >= 0, got "
+                          f"{min_peak_snr} and {min_frame_peak_snr}")
     if not (0.0 <= float(phat_beta) <= 1.0):
         raise ConfigError(f"phat_beta must be in [0, 1], got {phat_beta}")
     if float(onset_weight) < 0:
@@ -853,6 +865,10 @@ def estimate_tdoas(
             Xq = sfft.rfft(frames[:, quiet, :] * win, nfft, axis=-1)[..., k0:k1]
             noise_psd = np.mean(Xq.real**2 + Xq.imag**2, axis=1)  # (n_ch, band bins)
             noise_psd = np.maximum(noise_psd, 1e-12 * noise_psd.max(initial=0.0) + _TINY)
+
+    redundant = _closure_residual(np.zeros(n_pairs), prs, arr.n_mics) is not None
+    noise_profile = _lag_noise_profile(win, nfft)
+    frame_cfar = not redundant and min_frame_peak_snr > 0
 
     def corr(Pb: NDArray) -> NDArray:
         full = np.zeros(Pb.shape[:-1] + (n_bins,), dtype=Pb.dtype)
@@ -903,6 +919,9 @@ def estimate_tdoas(
         lag, c = _peaks(r, P, nfft, max_lag, refine, main_lobe, band_bins, need=act)
         c = np.where(act[:, None], c, 0.0)
         ok = act & np.all(c >= min_confidence, axis=1)
+        if frame_cfar and ok.any():  # one independent pair: no closure to test, so CFAR
+            ok[ok] = np.all(_peak_snr(r[ok], lag[ok], max_lag, main_lobe, noise_profile)
+                            >= min_frame_peak_snr, axis=-1)
         tdoa[s0:s1] = np.where(ok[:, None], lag / fs, np.nan)
         conf[s0:s1] = c
         # normalise each frame's weighted spectrum so that every frame counts equally
@@ -978,8 +997,8 @@ def estimate_tdoas(
             ok = np.all(c[0] >= (_FALLBACK_CONFIDENCE * need if fallback else need))
             if ok and min_peak_snr > 0:
                 r_sum = corr(acc)
-                ok = bool(np.all(_peak_snr(r_sum, lag[0], max_lag, main_lobe,
-                                           _lag_noise_profile(win, nfft)) >= min_peak_snr))
+                ok = bool(np.all(_peak_snr(r_sum, lag[0], max_lag, main_lobe, noise_profile)
+                                 >= min_peak_snr))
             if summary_upsample > 1:
                 lag = _fine_peaks(acc, band_bins, nfft, max_lag, int(summary_upsample))[None]
         if ok:
