@@ -10,8 +10,9 @@ Three parts, all in one process on the same inputs:
    errors > 10 deg, CPU seconds per second of audio (ratio vs SRP-PHAT). The two-mic array is
    scored modulo front/back (azimuths folded to [-90, 90]).
 2. **TDOA vs Cramer-Rao bound** (Knapp & Carter 1976) for a free-field white-noise source,
-   per 64 ms frame, over SNR; the threshold SNR where anomalies (errors > 1 sample) begin is
-   marked.
+   per 64 ms frame, over SNR: the estimator alone (no detection test); the threshold SNR where
+   anomalies (errors > 1 sample) begin is marked, and the table gives the share of frames
+   hearsee's default detection test (``min_frame_peak_snr``) lets through.
 3. **Real acoustics.** ARCTIC speech convolved with the measured RIRs of a 32-microphone ULA
    (Pezzoli et al. 2018/2021, ``../shared/data/audio/rirs_ula32``); microphone pairs 3-18 cm
    apart; whole-recording TDOA error in samples against the geometric truth, hearsee vs a plain
@@ -331,15 +332,23 @@ def run_crb(trials: int, seed: int) -> tuple[list, list, dict]:
     src = 2.0 * np.array([np.cos(0.5), np.sin(0.5), 0.0])
     true = arr.tdoa_far(src)[0]
     out: dict = {v: {"std": [], "anom": []} for v in variants}
+    detected = []
+    opts = {"frame_ms": frame_ms, "hop_ms": frame_ms, "min_confidence": 0.0,
+            "window": ("tukey", 0.1), "whole_recording": False}
     for snr in snrs:
         errs: dict = {v: [] for v in variants}
+        det = []
         for _ in range(trials):
             s = white_noise(2.0, fs, rng)
             x = simulate_free_field(s, fs, arr, src, snr_db=snr, rng=rng, far_field=True)
+            # the estimator alone: no detection test, every frame with energy gives a TDOA
             for v, kw in variants.items():
-                tf = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=frame_ms,
-                                    min_confidence=0.0, window=("tukey", 0.1), **kw)
+                tf = estimate_tdoas(x, fs, arr, min_frame_peak_snr=0.0, **opts, **kw)
                 errs[v].append(tf.tdoa_s[:, 0] - true)
+            # ... and the share of frames hearsee's default detection test
+            # (min_frame_peak_snr) lets through, which is where it stops answering
+            det.append(estimate_tdoas(x, fs, arr, **opts, **variants["phat/interp"]).valid)
+        detected.append(float(np.mean(np.concatenate(det))) * 100)
         for v in variants:
             e = np.concatenate(errs[v])
             e = e[np.isfinite(e)]
@@ -348,12 +357,12 @@ def run_crb(trials: int, seed: int) -> tuple[list, list, dict]:
             good = e[~anom] if (~anom).sum() > 2 else e
             out[v]["std"].append(float(np.sqrt(np.mean(good**2))))
     crb = np.array([crb_std_s(s, n, fs) for s in snrs])
-    headers = ["SNR dB", "CRB [samples]"]
+    headers = ["SNR dB", "CRB [samples]", "frames detected % (phat/interp, default test)"]
     for v in variants:
         headers += [f"{v} std [samples]", f"{v} / CRB", f"{v} anomalies %"]
     rows = []
     for k, snr in enumerate(snrs):
-        row = [float(snr), crb[k] * fs]
+        row = [float(snr), crb[k] * fs, detected[k]]
         for v in variants:
             row += [out[v]["std"][k] * fs, out[v]["std"][k] / crb[k], out[v]["anom"][k] * 100]
         rows.append(row)

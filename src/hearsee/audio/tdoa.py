@@ -299,19 +299,32 @@ def _peak_snr(r: NDArray, lag: NDArray, max_lag: NDArray, main_lobe: int,
     of a voice) barely move it. A constant-false-alarm-rate detector (e.g. Richards,
     *Fundamentals of Radar Signal Processing*, ch. 7)."""
     nfft = r.shape[-1]
-    lags = np.arange(nfft)
-    lags = np.where(lags > nfft // 2, lags - nfft, lags)
+    alag = np.abs(np.fft.fftfreq(nfft, 1.0 / nfft))
+    usable = profile >= _FLOOR_MIN_PROFILE
     out = np.zeros(r.shape[:-1])
     for p in range(r.shape[-2]):
-        far = (np.abs(lags) > max_lag[p] + main_lobe) & (profile >= _FLOOR_MIN_PROFILE)
-        ref = r[..., p, far] / profile[far]
-        med = np.median(ref, axis=-1, keepdims=True)
-        sig = 1.4826 * np.median(np.abs(ref - med), axis=-1)
+        idx = np.flatnonzero((alag > max_lag[p] + main_lobe) & usable)
+        rp = r[..., p, :]
+        ref = rp[..., idx] * (1.0 / profile[idx])
+        ref -= _median_last(ref)[..., None]
+        np.abs(ref, out=ref)
+        sig = 1.4826 * _median_last(ref)
         k = (np.round(lag[..., p]).astype(int) % nfft)[..., None]
-        peak = np.take_along_axis(r[..., p, :], k, axis=-1)[..., 0]
+        peak = np.take_along_axis(rp, k, axis=-1)[..., 0]
         with np.errstate(divide="ignore", invalid="ignore"):
             out[..., p] = np.where(sig > 0, peak / sig, np.where(peak > 0, np.inf, 0.0))
     return out
+
+
+def _median_last(a: NDArray) -> NDArray:
+    """``np.median(a, axis=-1)`` by one partial sort: a third of np.median's time on the
+    small arrays of :func:`_peak_snr`, where the per-call overhead dominates."""
+    n = a.shape[-1]
+    m = n // 2
+    part = np.partition(a, m, axis=-1)
+    if n % 2:
+        return part[..., m]
+    return 0.5 * (part[..., :m].max(axis=-1) + part[..., m])
 
 
 def _band_mask(n_bins: int, nfft: int, fs: float, band_hz: tuple[float, float] | None) -> NDArray:
@@ -869,8 +882,8 @@ def estimate_tdoas(
             noise_psd = np.maximum(noise_psd, 1e-12 * noise_psd.max(initial=0.0) + _TINY)
 
     redundant = _closure_residual(np.zeros(n_pairs), prs, arr.n_mics) is not None
-    noise_profile = _lag_noise_profile(win, nfft)
     frame_cfar = not redundant and min_frame_peak_snr > 0
+    noise_profile = _lag_noise_profile(win, nfft) if not redundant else None
 
     def corr(Pb: NDArray) -> NDArray:
         full = np.zeros(Pb.shape[:-1] + (n_bins,), dtype=Pb.dtype)
