@@ -1,10 +1,12 @@
-"""Shared fixtures: the real data beside the repository (skipped cleanly when absent)."""
+"""Shared fixtures: the real data beside the repository (skipped cleanly when absent) and a
+reference GCC-PHAT written independently of hearsee's."""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
@@ -23,3 +25,21 @@ def shared_data() -> Path:
     if not d.is_dir():
         pytest.skip(f"shared data not present at {d}")
     return d
+
+
+def _reference_gcc_phat(a, b, fs: float, max_lag_s: float, interp: int = 256) -> float:
+    """Textbook whole-signal GCC-PHAT, ``t_a - t_b`` in seconds, interpolated by zero padding
+    the spectrum ``interp`` times: the ground-truth check of delays the tests simulate."""
+    n = len(a) + len(b)
+    G = np.fft.rfft(a, n) * np.conj(np.fft.rfft(b, n))
+    G /= np.abs(G) + 1e-12
+    cc = np.fft.irfft(G, n * interp)
+    m = int(np.ceil(max_lag_s * fs * interp))
+    cc = np.concatenate([cc[-m:], cc[: m + 1]])
+    return (np.argmax(cc) - m) / (interp * fs)
+
+
+@pytest.fixture(scope="session")
+def gcc_phat_ref():
+    """The reference GCC-PHAT ``(a, b, fs, max_lag_s, interp=256) -> seconds``."""
+    return _reference_gcc_phat
