@@ -6,6 +6,7 @@ from hearsee.audio.propagation import delay_signals, simulate_free_field
 from hearsee.audio.signals import white_noise
 from hearsee.audio.tdoa import (
     METHODS,
+    _median_last,
     estimate_tdoas,
     frame_signals,
     gcc,
@@ -123,6 +124,16 @@ def test_two_mic_summary_detects_sources_not_noise():
         assert tf.summary_tdoa_s[0] * FS == pytest.approx(two.tdoa(src)[0] * FS, abs=0.3)
     with pytest.raises(ConfigError):
         estimate_tdoas(x, FS, two, min_peak_snr=-1)
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 8, 403, 404])
+def test_median_last_is_numpys_median(n):
+    """The CFAR floor's partial-sort median equals np.median on odd and even lengths,
+    with repeated values too."""
+    rng = np.random.default_rng(n)
+    a = rng.standard_normal((3, 2, n))
+    a[0, 0] = np.round(a[0, 0])  # ties
+    np.testing.assert_allclose(_median_last(a.copy()), np.median(a, axis=-1), rtol=0, atol=0)
 
 
 def test_pairs_subset_and_method_aliases(recording, three):
