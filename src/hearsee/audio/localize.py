@@ -249,11 +249,8 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray,
     geo = array_geometry(array)
     if geo.kind != "planar":
         raise GeometryError("far_field_planar needs coplanar (and not collinear) microphones")
-    A = _design(array, prs)
-    B = A @ geo.basis.T  # (n_pairs, 2)
-    if np.linalg.matrix_rank(B, tol=1e-9 * np.abs(B).max()) < 2:
-        raise GeometryError("the pairs given do not span the array plane (need two independent)")
-    q, *_ = np.linalg.lstsq(B, tau, rcond=None)
+    A, B_pinv = _planar_solver(array, tuple(prs))
+    q = B_pinv @ tau  # least squares in the array plane
     norm_p = float(np.linalg.norm(q))
     extra = {"in_plane_norm": norm_p}
     if norm_p > 1.0 + in_plane_tol:
@@ -276,6 +273,21 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray,
     n_sol = len(us) if feasible else 0
     return Localization(cands[0][0], cands[0][1], cands, n_sol, feasible, direction=us[0],
                         residual_s=resid, geometry="planar", extra=extra)
+
+
+@lru_cache(maxsize=64)
+def _planar_solver(array: MicArray, prs: tuple[tuple[int, int], ...]) -> tuple[NDArray, NDArray]:
+    """The geometry-only part of :func:`far_field_planar`, once per array and pair set (a
+    stream localizes every frame with the same ones): the design ``A`` and the pseudo-inverse
+    of its in-plane part."""
+    A = _design(array, list(prs))
+    B = A @ array_geometry(array).basis.T  # (n_pairs, 2)
+    if np.linalg.matrix_rank(B, tol=1e-9 * np.abs(B).max()) < 2:
+        raise GeometryError("the pairs given do not span the array plane (need two independent)")
+    A.flags.writeable = False
+    B_pinv = np.linalg.pinv(B)
+    B_pinv.flags.writeable = False
+    return A, B_pinv
 
 
 # ---------------------------------------------------------------------------------- volume

@@ -508,14 +508,28 @@ def frame_activity(x: NDArray, frame_len: int, hop: int, n_frames: int,
 def _closure_residual(lag: NDArray, pairs: list[tuple[int, int]], n_mics: int) -> float | None:
     """RMS residual (same unit as ``lag``) of the pair TDOAs against the best consistent set
     ``t_i - t_j``; None when the pairs hold no redundancy (no closed cycle)."""
+    proj = _closure_projector(tuple(map(tuple, pairs)), int(n_mics))
+    if proj is None:
+        return None
+    P, dof = proj
+    r = P @ np.asarray(lag, dtype=float)
+    return float(np.sqrt(np.sum(r**2) / dof))
+
+
+@functools.lru_cache(maxsize=64)
+def _closure_projector(pairs: tuple[tuple[int, int], ...], n_mics: int
+                       ) -> tuple[NDArray, int] | None:
+    """``(I - H H^+, n_pairs - rank H)`` for the pair matrix ``H`` (the residual of a least
+    squares fit of consistent ``t_i - t_j``), or None without redundancy; once per pair set."""
     from hearsee.audio.itd_filter import pair_matrix
 
-    H = pair_matrix(n_mics, pairs, ref=0)
-    rank = np.linalg.matrix_rank(H)
+    H = pair_matrix(n_mics, list(pairs), ref=0)
+    rank = int(np.linalg.matrix_rank(H))
     if len(pairs) <= rank:
         return None
-    s_ls, *_ = np.linalg.lstsq(H, lag, rcond=None)
-    return float(np.sqrt(np.sum((H @ s_ls - lag) ** 2) / (len(pairs) - rank)))
+    P = np.eye(len(pairs)) - H @ np.linalg.pinv(H)
+    P.flags.writeable = False
+    return P, len(pairs) - rank
 
 
 def _fibonacci_sphere(n: int) -> NDArray:
