@@ -285,7 +285,11 @@ def test_summary_upsample_finds_the_correlation_maximum():
     k = tf.summary_bins
     dense = np.real(np.exp(2j * np.pi * np.outer(taus, k / tf.nfft)) @ tf.summary_spectrum[0])
     assert tf.summary_tdoa_s[0] * FS == pytest.approx(taus[np.argmax(dense)], abs=6e-3)
-    assert estimate_tdoas(x, FS, two, method="phat").summary_method == "phat"
+    default = estimate_tdoas(x, FS, two, method="phat")  # summary_upsample=4
+    assert default.summary_method == "phat"
+    assert default.summary_tdoa_s[0] * FS == pytest.approx(taus[np.argmax(dense)], abs=6e-3)
+    integer = estimate_tdoas(x, FS, two, method="phat", summary_upsample=1)
+    assert abs(integer.summary_tdoa_s[0] * FS - taus[np.argmax(dense)]) > 0.05
 
 
 def test_source_in_plane_joint_search_ignores_elevated_reflection(three):

@@ -681,7 +681,7 @@ def estimate_tdoas(
     onset_weight: float = 0.0,
     reverb_method: str | None = None,
     reverb_coherence: float = 0.9,
-    summary_upsample: int = 1,
+    summary_upsample: int = 4,
     source_in_plane: bool = False,
     whole_recording: bool = True,
     min_peak_snr: float = 5.5,
@@ -772,11 +772,15 @@ def estimate_tdoas(
     summary_upsample : int
         Without redundant pairs (two microphones, or pairs that share no triangle), the
         whole-recording peak is searched on the averaged correlation upsampled this many times
-        before the sub-sample refinement (default 1: on the integer lags). A broadband
+        before the sub-sample refinement (default 4; 1 = on the integer lags). A broadband
         correlation oscillates within ~2 samples; with two close peaks (direct path and an
         early reflection) the integer samples can peak *between* them and the refinement then
         stops in the valley -- upsampling finds the true maximum (three or more microphones
-        already choose their peaks on a 4x upsampled grid).
+        already choose their peaks on a 4x upsampled grid). On held-out two-microphone
+        recordings of ``bench/doa.py`` (seed 777, 30 each) it cut the azimuth RMSE of white
+        noise in the RT60 0.6 s room from 8.0 to 4.9 deg (10 dB) and 5.4 to 4.9 deg (20 dB)
+        and left every other condition unchanged (seed 778: anechoic and RT60 0.3 s, voices
+        and noise, 0-20 dB); it costs one upsampled inverse FFT per recording.
     source_in_plane : bool
         With a planar array of 3+ microphones, the joint whole-recording peak search
         (``joint``) steers only directions in the array plane instead of the whole sphere --
