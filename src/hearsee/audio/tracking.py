@@ -406,25 +406,31 @@ class MotionKalman(_Kalman):
         self._model_cache: dict[float, tuple[NDArray, NDArray]] = {}
         self.reset()
 
+    _DIM = 9  # state size; subclasses with another motion model change it and _model
+
     def reset(self) -> None:
-        self.x = np.zeros(9)
-        self.P = np.eye(9) * 1e6
-        self.F = np.eye(9)
-        self.Q = np.zeros((9, 9))
+        """Forget the track."""
+        n = self._DIM
+        self.x = np.zeros(n)
+        self.P = np.eye(n) * 1e6
+        self.F = np.eye(n)
+        self.Q = np.zeros((n, n))
         self.t: float | None = None
         self.initialized = False
         self.n_rejects = 0
 
+    def _model(self, dt: float) -> tuple[NDArray, NDArray]:
+        """Transition and process noise ``(F, Q)`` over ``dt`` seconds."""
+        decay = 1.0 if self.accel_tau_s is None else float(np.exp(-dt / self.accel_tau_s))
+        f = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, decay]])
+        return (np.kron(np.eye(3), f),
+                Q_discrete_white_noise(dim=3, dt=dt, var=self.sigma_jerk**2, block_size=3,
+                                       order_by_dim=True))
+
     def _set_dt(self, dt: float) -> None:
         key = round(dt, 9)
         if key not in self._model_cache:
-            decay = 1.0 if self.accel_tau_s is None else float(np.exp(-dt / self.accel_tau_s))
-            f = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, decay]])
-            self._model_cache[key] = (
-                np.kron(np.eye(3), f),
-                Q_discrete_white_noise(dim=3, dt=dt, var=self.sigma_jerk**2, block_size=3,
-                                       order_by_dim=True),
-            )
+            self._model_cache[key] = self._model(dt)
         self.F, self.Q = self._model_cache[key]
 
 

@@ -308,27 +308,15 @@ class RayTracker(MotionKalman):
         self.H = np.zeros((3, 6))
         self.H[[0, 1, 2], self._POS] = 1.0
 
-    def reset(self) -> None:
-        """Forget the track."""
-        self.x = np.zeros(6)
-        self.P = np.eye(6) * 1e6
-        self.F = np.eye(6)
-        self.Q = np.zeros((6, 6))
-        self.t: float | None = None
-        self.initialized = False
-        self.n_rejects = 0
+    _DIM = 6
 
-    def _set_dt(self, dt: float) -> None:
+    def _model(self, dt: float) -> tuple[NDArray, NDArray]:
+        """Constant velocity with white acceleration over ``dt`` seconds: ``(F, Q)``."""
         from filterpy.common import Q_discrete_white_noise
 
-        key = round(dt, 9)
-        if key not in self._model_cache:
-            self._model_cache[key] = (
-                np.kron(np.eye(3), np.array([[1.0, dt], [0.0, 1.0]])),
+        return (np.kron(np.eye(3), np.array([[1.0, dt], [0.0, 1.0]])),
                 Q_discrete_white_noise(dim=2, dt=dt, var=self.sigma_accel**2, block_size=3,
-                                       order_by_dim=True),
-            )
-        self.F, self.Q = self._model_cache[key]
+                                       order_by_dim=True))
 
     def _start(self, z: NDArray, R: NDArray) -> None:
         self.x = np.zeros(6)
