@@ -541,6 +541,22 @@ def _fibonacci_sphere(n: int) -> NDArray:
     return np.stack([rho * np.cos(phi), rho * np.sin(phi), z], axis=1)
 
 
+@functools.lru_cache(maxsize=32)
+def _steer_directions(positions: bytes, n_mics: int, n_dirs: int, in_plane: bool) -> NDArray:
+    """Unit vectors steered by :func:`_joint_peaks`, once per array geometry: ``n_dirs`` over
+    the sphere, or with ``in_plane`` and a planar array the directions of its plane only
+    (0.1 deg apart). ``positions`` is the (n_mics, 3) float64 array's bytes (hashable)."""
+    pos = np.frombuffer(positions, dtype=float).reshape(n_mics, 3)
+    U = _fibonacci_sphere(n_dirs)
+    if in_plane:
+        _, sv, vt = np.linalg.svd(pos - pos.mean(axis=0))
+        if len(sv) >= 3 and sv[2] < 1e-6 * sv[0]:
+            phi = np.radians(np.arange(3600) / 10.0)
+            U = np.outer(np.cos(phi), vt[0]) + np.outer(np.sin(phi), vt[1])
+    U.flags.writeable = False
+    return U
+
+
 def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
                  pairs: list[tuple[int, int]], c: float, fs: float, max_lag: NDArray,
                  up: int = 4, n_dirs: int = 4000, coherent: bool = False,
@@ -559,12 +575,8 @@ def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
     r = sfft.irfft(full, n_up, axis=-1)
     I = np.array([p[0] for p in pairs])
     J = np.array([p[1] for p in pairs])
-    U = _fibonacci_sphere(n_dirs)
-    if in_plane:  # directions in the plane of a planar array only (0.1 deg apart)
-        _, sv, vt = np.linalg.svd(positions - positions.mean(axis=0))
-        if len(sv) >= 3 and sv[2] < 1e-6 * sv[0]:
-            phi = np.radians(np.arange(3600) / 10.0)
-            U = np.outer(np.cos(phi), vt[0]) + np.outer(np.sin(phi), vt[1])
+    pos = np.ascontiguousarray(positions, dtype=float)
+    U = _steer_directions(pos.tobytes(), pos.shape[0], int(n_dirs), bool(in_plane))
     tau = -((positions[I] - positions[J]) @ U.T) / c * fs  # (n_pairs, n_dirs) samples
     idx = np.round(tau * up).astype(int) % n_up
     score = np.take_along_axis(r, idx, axis=1).sum(axis=0)
