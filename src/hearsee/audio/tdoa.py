@@ -911,7 +911,7 @@ def estimate_tdoas(
             noise_psd = np.mean(Xq.real**2 + Xq.imag**2, axis=1)  # (n_ch, band bins)
             noise_psd = np.maximum(noise_psd, 1e-12 * noise_psd.max(initial=0.0) + _TINY)
 
-    redundant = _closure_residual(np.zeros(n_pairs), prs, arr.n_mics) is not None
+    redundant = _closure_projector(tuple(prs), arr.n_mics) is not None  # a closed cycle
     frame_cfar = not redundant and min_frame_peak_snr > 0
     noise_profile = _lag_noise_profile(win, nfft) if not redundant else None
 

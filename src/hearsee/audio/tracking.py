@@ -380,6 +380,7 @@ class MotionKalman(_Kalman):
         extrapolate at nearly constant velocity. None (default) = pure constant acceleration.
     """
 
+    _DIM = 9  # state size; subclasses with another motion model change it and _model
     _POS = np.array([0, 3, 6])
     _VEL = np.array([1, 4, 7])
     _ACC = np.array([2, 5, 8])
@@ -406,7 +407,6 @@ class MotionKalman(_Kalman):
         self._model_cache: dict[float, tuple[NDArray, NDArray]] = {}
         self.reset()
 
-    _DIM = 9  # state size; subclasses with another motion model change it and _model
 
     def reset(self) -> None:
         """Forget the track."""

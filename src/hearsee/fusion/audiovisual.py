@@ -293,6 +293,7 @@ class RayTracker(MotionKalman):
     Navigation* (2001), ch. 6 (white-acceleration model) and 5.4 (gating).
     """
 
+    _DIM = 6
     _POS = np.array([0, 2, 4])
     _VEL = np.array([1, 3, 5])
 
@@ -307,8 +308,6 @@ class RayTracker(MotionKalman):
                          init_vel_sigma=init_vel_sigma)
         self.H = np.zeros((3, 6))
         self.H[[0, 1, 2], self._POS] = 1.0
-
-    _DIM = 6
 
     def _model(self, dt: float) -> tuple[NDArray, NDArray]:
         """Constant velocity with white acceleration over ``dt`` seconds: ``(F, Q)``."""
