@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 
 from hearsee.audio.tracking import (
+    DirectionIMM,
     DirectionKalman,
     MotionKalman,
     track_directions,
@@ -175,3 +176,91 @@ def test_closed_form_small_inverse_and_scalar_wrap_match_numpy():
         np.testing.assert_allclose(_inv_small(S), np.linalg.inv(S), rtol=1e-12, atol=1e-12)
     for a in [-900.0, -540.0, -180.0, -179.5, 0.0, 179.9, 180.0, 359.0, 540.0, 725.25]:
         assert _wrap1(a) == float(wrap_deg(a))
+
+
+# ---------------------------------------------------------------------------- IMM
+def _run(trk, t, az, el=None, delay=0.0):
+    out = np.full(t.size, np.nan)
+    for k in range(t.size):
+        meas = None if not np.isfinite(az[k]) else (az[k], None if el is None else el[k])
+        trk.update(t[k], meas, delay_s=delay)
+        out[k] = trk.azimuth_deg
+    return out
+
+
+def test_imm_with_equal_modes_is_the_single_kalman_filter():
+    rng = np.random.default_rng(5)
+    t = np.arange(120) * DT
+    az = wrap_deg(170 + 25 * t + 3 * rng.standard_normal(t.size))  # crosses +-180
+    el = 5 + 3 * rng.standard_normal(t.size)
+    az[40:50] = np.nan
+    kf = DirectionKalman(sigma_meas_deg=3.0, sigma_accel_dps2=80.0)
+    imm = DirectionIMM(sigma_meas_deg=3.0, sigma_accel_dps2=(80.0, 80.0))
+    for k in range(t.size):
+        meas = None if not np.isfinite(az[k]) else (az[k], el[k])
+        assert imm.update(t[k], meas, delay_s=0.02) == kf.update(t[k], meas, delay_s=0.02)
+        np.testing.assert_allclose(wrap_deg(imm.x[0] - kf.x[0]), 0.0, atol=1e-9)
+        np.testing.assert_allclose(imm.x[1:], kf.x[1:], atol=1e-9)
+        np.testing.assert_allclose(imm.P, kf.P, rtol=1e-9, atol=1e-9)
+
+
+def _turning_walk(seed):
+    """A speaker walks past at 40 deg/s, reverses within 0.2 s at t = 4 s and walks back;
+    measurements with 3 deg noise every 32 ms. Returns t, truth, measurements, turn, steady."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(250) * DT
+    rate = np.where(t < 4.0, 40.0, -40.0)
+    ramp = (t > 3.9) & (t < 4.1)
+    rate[ramp] = 40.0 - 400.0 * (t[ramp] - 3.9)  # 40 -> -40 deg/s in 0.2 s
+    az_true = -80.0 + np.concatenate([[0.0], np.cumsum(rate[:-1]) * DT])
+    az = az_true + 3.0 * rng.standard_normal(t.size)
+    return t, az_true, az, (t > 4.0) & (t < 4.6), (t > 1.0) & (t < 3.7)
+
+
+def test_imm_follows_a_turn_faster_than_the_quiet_filter_and_smooths_more_than_the_agile_one():
+    """Pooled over 8 walks (one walk's turn error varies ~2x with the noise draw)."""
+    se = {k: {"turn": [], "steady": []} for k in ("quiet", "agile", "imm")}
+    for seed in range(8):
+        t, az_true, az, turn, steady = _turning_walk(seed)
+        for key, trk in (("quiet", DirectionKalman(3.0, 30.0)),
+                         ("agile", DirectionKalman(3.0, 1500.0)),
+                         ("imm", DirectionIMM(3.0, (30.0, 1500.0), mode_dwell_s=2.0))):
+            e = _err(_run(trk, t, az), az_true)
+            se[key]["turn"].append(e[turn] ** 2)
+            se[key]["steady"].append(e[steady] ** 2)
+    rms = {k: {m: float(np.sqrt(np.mean(np.concatenate(v[m])))) for m in v}
+           for k, v in se.items()}
+    assert rms["imm"]["turn"] < 0.6 * rms["quiet"]["turn"]  # the quiet filter overshoots turns
+    assert rms["imm"]["steady"] < 0.75 * rms["agile"]["steady"]  # the agile one passes noise on
+    assert rms["imm"]["steady"] < 1.8  # measurements: 3 deg
+
+
+def test_imm_mode_probabilities_say_which_motion_it_sees():
+    mu_steady, mu_turn_min = [], []
+    for seed in range(8):
+        t, az_true, az, turn, steady = _turning_walk(seed)
+        imm = DirectionIMM(3.0, (30.0, 1500.0), mode_dwell_s=2.0)
+        mu_quiet = np.empty(t.size)
+        for k in range(t.size):
+            imm.update(t[k], (az[k], None))
+            mu_quiet[k] = imm.mu[0]
+            assert imm.mu.sum() == pytest.approx(1.0)
+        mu_steady.append(mu_quiet[steady].mean())
+        mu_turn_min.append(mu_quiet[turn].min())
+    assert np.mean(mu_steady) > 0.8  # a steady walk: the quiet mode explains it
+    assert np.mean(mu_turn_min) < 0.4  # the turn: the agile mode takes over
+
+
+def test_imm_rejects_bad_parameters_and_time_going_backwards():
+    with pytest.raises(EstimationError):
+        DirectionIMM(sigma_accel_dps2=(100.0,))
+    with pytest.raises(EstimationError):
+        DirectionIMM(mode_dwell_s=0.0)
+    with pytest.raises(EstimationError):
+        DirectionIMM(sigma_accel_dps2=(100.0, -1.0))
+    imm = DirectionIMM()
+    assert not imm.update(0.0, None) and not imm.initialized
+    assert imm.update(0.1, (30.0, None)) and imm.azimuth_deg == pytest.approx(30.0)
+    assert np.isnan(imm.elevation_deg)
+    with pytest.raises(EstimationError):
+        imm.update(0.05, (30.0, None))

@@ -398,9 +398,11 @@ def _fitted_lag_frames(t, az, measured, traj, hop_s):
     return float(shifts[int(np.argmin(sse))])
 
 
-def test_default_tracker_follows_a_turning_voice_within_two_frames():
+@pytest.mark.parametrize("modes", [None, (50.0, 600.0)], ids=["cv", "imm"])
+def test_default_tracker_follows_a_turning_voice_within_two_frames(modes):
     """A male voice walking past at 1.2 m/s that turns back halfway (free field, SNR 20 dB): the
-    default stream's track is at most 2 frames behind (lag and offset fitted jointly)."""
+    default stream's track, and the stream with the IMM direction tracker, are at most 2 frames
+    behind (lag and offset fitted jointly)."""
     from hearsee.audio.signals import synthetic_voice
     from hearsee.sim.moving import Trajectory
 
@@ -410,7 +412,9 @@ def test_default_tracker_follows_a_turning_voice_within_two_frames():
     p0, p1, p2 = [1.5, -1.2, -0.5], [1.5, 0.6, -0.5], [0.6, -0.6, -0.5]
     traj = Trajectory([0.0, 1.5, dur], [p0, p1, p2])
     y = simulate_moving_free_field(x, FS, arr, traj, snr_db=20, rng=4)
-    cfg = StreamConfig(frame_ms=64, hop_ms=32)
+    cfg = StreamConfig(frame_ms=64, hop_ms=32, direction_modes_dps2=modes)
+    assert type(pl.TrackingProcessor(arr, FS, cfg).direction).__name__ == (
+        "DirectionKalman" if modes is None else "DirectionIMM")
     ups = StreamPipeline(arr, cfg).run(ArraySource(y, FS, 2048))
     t = np.array([u.t for u in ups])
     az = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in ups])
@@ -418,3 +422,11 @@ def test_default_tracker_follows_a_turning_voice_within_two_frames():
     assert measured.mean() > 0.5
     lag = _fitted_lag_frames(t, az, measured, traj, 0.032)
     assert abs(lag) <= 2.0
+
+
+def test_bad_imm_settings_are_a_config_error():
+    arr = MicArray.from_preset("three-mic")
+    for bad in ({"direction_modes_dps2": (100.0,)}, {"direction_modes_dps2": (50.0, 600.0),
+                                                     "mode_dwell_s": 0.0}):
+        with pytest.raises(ConfigError, match="direction_modes_dps2"):
+            pl.TrackingProcessor(arr, FS, StreamConfig(**bad))

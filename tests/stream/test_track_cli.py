@@ -44,8 +44,10 @@ def _lines(capsys):
     return [json.loads(s) for s in out]
 
 
-def test_track_direction_jsonl(scene, capsys):
-    assert main(["track", str(scene["wav"]), "--array", str(scene["array"])]) == 0
+@pytest.mark.parametrize("tracker", ["cv", "imm"])
+def test_track_direction_jsonl(scene, capsys, tracker):
+    assert main(["track", str(scene["wav"]), "--array", str(scene["array"]),
+                 "--tracker", tracker]) == 0
     rows = _lines(capsys)
     assert len(rows) == (int(1.5 * FS) - 1024) // 512 + 1
     for key in ("t", "azimuth_deg", "elevation_deg", "position_m", "velocity_mps",
@@ -81,6 +83,7 @@ def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, caps
     (["--image-points", "PTS"], "need --camera"),
     (["--device", "0"], "either a recording"),
     (["--frame-ms", "0"], "must be > 0"),
+    (["--tracker", "particle"], "--tracker"),
 ])
 def test_track_bad_options(scene, capsys, args, msg):
     args = [a.replace("CAM", str(scene["cam"])).replace("PTS", str(scene["pts"])) for a in args]

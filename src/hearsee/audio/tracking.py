@@ -39,6 +39,7 @@ from scipy.stats import chi2
 from hearsee.errors import EstimationError
 
 __all__ = [
+    "DirectionIMM",
     "DirectionKalman",
     "DirectionTrack",
     "MotionKalman",
@@ -124,6 +125,18 @@ class _Kalman:
 
 
 # ---------------------------------------------------------------------------- directions
+def _clean_candidates(measurement: tuple[float, float | None] | None,
+                      candidates: Sequence[tuple[float, float | None]] | None
+                      ) -> list[tuple[float, float | None]]:
+    """The measurement first, then the alternatives; entries without a finite azimuth dropped,
+    a non-finite elevation read as unknown (None)."""
+    cands = list(candidates or [])
+    if measurement is not None:
+        cands = [measurement, *cands]
+    return [(float(a), None if e is None or not math.isfinite(e) else float(e))
+            for a, e in cands if a is not None and math.isfinite(a)]
+
+
 @dataclass
 class DirectionTrack:
     """Output of :func:`track_directions`, one row per input frame.
@@ -264,25 +277,13 @@ class DirectionKalman(_Kalman):
             missing or its measurement fell outside the gate.
         """
         self.predict(t)
-        cands = list(candidates or [])
-        if measurement is not None:
-            cands = [measurement, *cands]
-        cands = [(float(a), None if e is None or not math.isfinite(e) else float(e))
-                 for a, e in cands if a is not None and math.isfinite(a)]
+        cands = _clean_candidates(measurement, candidates)
         if not cands:
             return False
-        v = None if sigma_meas_deg is None else float(sigma_meas_deg) ** 2
-        Rf = None if v is None else np.array([[v, 0.0], [0.0, v]])
         if not self.initialized:
             self._start(*cands[0])
             return True
-        best = None
-        for a, e in cands:  # nearest neighbour: the candidate with the smallest gate distance
-            z, H, R, wrap = self._parts(a, e, Rf, delay_s)
-            y, S, d2 = self._innovation(z, H, R, wrap)
-            if best is None or d2 < best[0]:
-                best = (d2, a, e, z, H, R, y, S)
-        dist2, az, el, z, H, R, y, S = best
+        dist2, az, el, z, H, R, y, S = self._nearest(cands, sigma_meas_deg, delay_s)
         if dist2 > self._gate[len(z)]:
             self.n_rejects += 1
             if self.n_rejects >= self.max_rejects:
@@ -290,11 +291,29 @@ class DirectionKalman(_Kalman):
                 return True
             return False
         self._correct(y, S, H, R)
+        self._settle(el)
+        self.n_rejects = 0
+        return True
+
+    def _nearest(self, cands: list[tuple[float, float | None]], sigma_meas_deg: float | None,
+                 delay_s: float) -> tuple:
+        """Nearest-neighbour association: ``(d2, az, el, z, H, R, y, S)`` of the candidate with
+        the smallest gate distance from this filter's prediction."""
+        v = None if sigma_meas_deg is None else float(sigma_meas_deg) ** 2
+        Rf = None if v is None else np.array([[v, 0.0], [0.0, v]])
+        best = None
+        for a, e in cands:
+            z, H, R, wrap = self._parts(a, e, Rf, delay_s)
+            y, S, d2 = self._innovation(z, H, R, wrap)
+            if best is None or d2 < best[0]:
+                best = (d2, a, e, z, H, R, y, S)
+        return best
+
+    def _settle(self, el: float | None) -> None:
+        """After a correction: azimuth wrapped, elevation clipped to +-90 deg."""
         self.x[0] = _wrap1(float(self.x[0]))
         self.x[1] = float(np.clip(self.x[1], -90.0, 90.0))
         self.has_elevation = self.has_elevation or el is not None
-        self.n_rejects = 0
-        return True
 
     # -- read-out ------------------------------------------------------------------------
     @property
@@ -309,6 +328,185 @@ class DirectionKalman(_Kalman):
     def rate_dps(self) -> NDArray:
         """Angular rates (d az/dt, d el/dt) in deg/s."""
         return self.x[2:].copy() if self.initialized else np.full(2, np.nan)
+
+
+class DirectionIMM:
+    """Interacting-multiple-model (IMM) direction tracker for speakers who walk, turn and stop.
+
+    Not in the thesis (its 5.2 tracker is one Kalman filter): the standard remedy for a single
+    constant-velocity model's trade-off between smoothing and lag on manoeuvring targets (Blom
+    & Bar-Shalom 1988; Bar-Shalom, Li & Kirubarajan 2001, sec. 11.6). Several
+    :class:`DirectionKalman` modes share the state ``[az, el, d az/dt, d el/dt]`` (deg, deg/s)
+    and differ only in their angular acceleration noise -- a quiet mode that smooths a steady
+    walk and a manoeuvre mode that follows a turn. Each frame: the modes' estimates are mixed
+    with the Markov switching probabilities, every mode predicts and corrects with the same
+    measurement, the mode probabilities are reweighted by each mode's innovation likelihood,
+    and the output is the moment-matched mixture (``x``, ``P``). The mixing wraps azimuth
+    differences to (-180, 180] deg, so the modes may straddle the +-180 deg seam. Data
+    association (nearest candidate) and the chi-square gate use the mixture's prediction, as
+    :class:`DirectionKalman` does with its own; the measurement delay ``delay_s`` is modelled
+    the same way.
+
+    Parameters
+    ----------
+    sigma_meas_deg : float
+        Default standard deviation of one frame's direction measurement, degrees.
+    sigma_accel_dps2 : sequence of float
+        Angular acceleration noise of each mode, deg/s^2 (at least two, ascending by
+        convention: quiet first).
+    mode_dwell_s : float
+        Mean time the speaker stays in one mode, seconds: per step of ``dt`` the probability of
+        leaving the current mode is ``1 - exp(-dt / mode_dwell_s)``, shared evenly among the
+        others (so the switching does not depend on the frame rate).
+    gate_prob, max_rejects, init_rate_sigma_dps :
+        As for :class:`DirectionKalman`.
+    """
+
+    def __init__(self, sigma_meas_deg: float = 10.0,
+                 sigma_accel_dps2: Sequence[float] = (50.0, 600.0), mode_dwell_s: float = 1.0,
+                 gate_prob: float = 0.997, max_rejects: int = 4,
+                 init_rate_sigma_dps: float = 60.0) -> None:
+        qs = [float(q) for q in sigma_accel_dps2]
+        if len(qs) < 2:
+            raise EstimationError("an IMM needs at least two modes (sigma_accel_dps2)")
+        if not mode_dwell_s > 0:
+            raise EstimationError(f"mode_dwell_s must be > 0 s, got {mode_dwell_s}")
+        self.modes = [DirectionKalman(sigma_meas_deg, q, gate_prob, max_rejects,
+                                      init_rate_sigma_dps) for q in qs]
+        # the mixture's prediction, as a filter object: association and gate reuse its methods
+        self._mix = DirectionKalman(sigma_meas_deg, qs[0], gate_prob, max_rejects,
+                                    init_rate_sigma_dps)
+        self.mode_dwell_s = float(mode_dwell_s)
+        self.max_rejects = int(max_rejects)
+        self._tpm_cache: dict[float, NDArray] = {}
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the track (the next measurement starts a new one)."""
+        for k in (*self.modes, self._mix):
+            k.reset()
+        self.mu = np.full(len(self.modes), 1.0 / len(self.modes))
+        self.n_rejects = 0
+
+    # -- the mixture, read like a DirectionKalman -----------------------------------------
+    @property
+    def x(self) -> NDArray:
+        return self._mix.x
+
+    @property
+    def P(self) -> NDArray:
+        return self._mix.P
+
+    @property
+    def t(self) -> float | None:
+        return self._mix.t
+
+    @property
+    def initialized(self) -> bool:
+        return self._mix.initialized
+
+    @property
+    def has_elevation(self) -> bool:
+        return self._mix.has_elevation
+
+    @property
+    def azimuth_deg(self) -> float:
+        return self._mix.azimuth_deg
+
+    @property
+    def elevation_deg(self) -> float:
+        return self._mix.elevation_deg
+
+    @property
+    def rate_dps(self) -> NDArray:
+        return self._mix.rate_dps
+
+    # -- IMM steps ------------------------------------------------------------------------
+    def _tpm(self, dt: float) -> NDArray:
+        """Markov switching matrix ``p[i, j]`` = P(mode j now | mode i before) for a step dt."""
+        key = round(dt, 9)
+        if key not in self._tpm_cache:
+            m = len(self.modes)
+            leave = 1.0 - math.exp(-max(dt, 0.0) / self.mode_dwell_s)
+            T = np.full((m, m), leave / (m - 1))
+            np.fill_diagonal(T, 1.0 - leave)
+            self._tpm_cache[key] = T
+        return self._tpm_cache[key]
+
+    @staticmethod
+    def _moments(xs: Sequence[NDArray], Ps: Sequence[NDArray], w: NDArray, ref_az: float
+                 ) -> tuple[NDArray, NDArray]:
+        """Weighted mean and covariance of Gaussian components; azimuths unwrapped around
+        ``ref_az`` first."""
+        d = np.array(xs, dtype=float)
+        d[:, 0] = ref_az + (d[:, 0] - ref_az + 180.0) % 360.0 - 180.0
+        x0 = w @ d
+        dev = d - x0
+        P0 = np.einsum("i,ijk->jk", w, np.asarray(Ps)) + (w[:, None] * dev).T @ dev
+        x0[0] = _wrap1(float(x0[0]))
+        return x0, P0
+
+    def _combine(self, w: NDArray) -> None:
+        ref = float(self.modes[int(np.argmax(w))].x[0])
+        self._mix.x, self._mix.P = self._moments([k.x for k in self.modes],
+                                                 [k.P for k in self.modes], w, ref)
+        self._mix.has_elevation = any(k.has_elevation for k in self.modes)
+
+    def _start(self, t: float, az: float, el: float | None) -> None:
+        for k in (*self.modes, self._mix):
+            k._start(az, el)
+            k.t = float(t)
+        self.mu = np.full(len(self.modes), 1.0 / len(self.modes))
+        self.n_rejects = 0
+
+    def update(self, t: float, measurement: tuple[float, float | None] | None = None,
+               candidates: Sequence[tuple[float, float | None]] | None = None,
+               sigma_meas_deg: float | None = None, delay_s: float = 0.0) -> bool:
+        """One frame; arguments and return value as :meth:`DirectionKalman.update`."""
+        cands = _clean_candidates(measurement, candidates)
+        if not self.initialized:
+            if cands:
+                self._start(t, *cands[0])
+                return True
+            for k in (*self.modes, self._mix):
+                k.t = float(t)
+            return False
+        dt = float(t) - float(self._mix.t)
+        if dt < 0:
+            raise EstimationError(f"tracker time went backwards ({self._mix.t} s -> {t} s)")
+        # mixing: each mode restarts from the blend of all modes it may have come from
+        c = self._tpm(dt).T @ self.mu  # predicted mode probabilities
+        W = self._tpm(dt) * self.mu[:, None] / np.maximum(c[None, :], 1e-300)
+        xs = [k.x.copy() for k in self.modes]
+        Ps = [k.P.copy() for k in self.modes]
+        for j, k in enumerate(self.modes):
+            k.x, k.P = self._moments(xs, Ps, W[:, j], float(xs[j][0]))
+            k.predict(t)
+        self._combine(c)
+        self._mix.t = float(t)
+        self.mu = c
+        if not cands:
+            return False
+        dist2, az, el, z, H, R, _, _ = self._mix._nearest(cands, sigma_meas_deg, delay_s)
+        if dist2 > self._mix._gate[len(z)]:
+            self.n_rejects += 1
+            if self.n_rejects >= self.max_rejects:
+                self._start(t, az, el)
+                return True
+            return False
+        wrap = _WRAP_AZ if len(z) == 1 else _WRAP_AZ_EL
+        log_l = np.empty(len(self.modes))
+        for j, k in enumerate(self.modes):
+            y, S, d2 = k._innovation(z, H, R, wrap)
+            log_l[j] = -0.5 * (d2 + math.log(float(np.linalg.det(2.0 * np.pi * S))))
+            k._correct(y, S, H, R)
+            k._settle(el)
+        lw = np.log(np.maximum(c, 1e-300)) + log_l
+        mu = np.exp(lw - lw.max())
+        self.mu = mu / mu.sum()
+        self._combine(self.mu)
+        self.n_rejects = 0
+        return True
 
 
 def track_directions(t: ArrayLike, azimuth_deg: ArrayLike, elevation_deg: ArrayLike | None = None,

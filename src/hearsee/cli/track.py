@@ -18,6 +18,15 @@ class TrackFormat(StrEnum):
     json = "json"
 
 
+class Tracker(StrEnum):
+    cv = "cv"
+    imm = "imm"
+
+
+#: the IMM's modes for ``--tracker imm`` (deg/s^2: walking straight, turning)
+IMM_MODES_DPS2 = (50.0, 600.0)
+
+
 class Detector(StrEnum):
     hog = "hog"
     face = "face"
@@ -59,6 +68,9 @@ def track_cmd(
     method: Annotated[GccMethod, typer.Option("--method", help="GCC weighting.")] = GccMethod.phat,
     itd_filter: Annotated[bool, typer.Option(
         "--itd-filter", help="Smooth TDOAs with the ITD Kalman filter first.")] = False,
+    tracker: Annotated[Tracker, typer.Option(
+        "--tracker", help="Direction tracker: cv (one constant-velocity Kalman filter) or imm "
+        "(interacting multiple models: a quiet and a turning mode).")] = Tracker.cv,
     fmt: Annotated[TrackFormat, typer.Option(
         "--format", help="jsonl: one JSON line per frame; json: one document.")
     ] = TrackFormat.jsonl,
@@ -104,7 +116,8 @@ def track_cmd(
     else:
         source = WavSource(recording, n_channels=arr.n_mics, block_len=4096)
     cfg = StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms, method=method.value.replace("gcc-", ""),
-                       itd_filter=itd_filter)
+                       itd_filter=itd_filter,
+                       direction_modes_dps2=IMM_MODES_DPS2 if tracker is Tracker.imm else None)
     pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
 
     def sink(u: object) -> None:

@@ -58,8 +58,8 @@ from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import localize_tdoa
 from hearsee.audio.tdoa import estimate_tdoas, frame_signals
-from hearsee.audio.tracking import DirectionKalman, MotionKalman
-from hearsee.errors import AudioInputError, ConfigError
+from hearsee.audio.tracking import DirectionIMM, DirectionKalman, MotionKalman
+from hearsee.errors import AudioInputError, ConfigError, EstimationError
 from hearsee.geometry import wrap_deg
 
 __all__ = [
@@ -717,6 +717,12 @@ class StreamConfig:
         instead of 0.7-6) with the tracked RMSE still 3.5-8x below the per-frame one (white
         noise at 10 dB: 1.98x instead of 2.07x). ``sigma_frame_deg`` 4 scored 2.03x there but
         lost one white-noise walk of the seed-0 benchmark run (1.01x): not adopted
+    direction_modes_dps2 : None (default) tracks the direction with one constant-velocity
+        :class:`~hearsee.audio.tracking.DirectionKalman` (``sigma_accel_dps2``); a tuple of
+        angular acceleration noises (deg/s^2, e.g. ``(50, 600)``) uses the interacting-multiple-
+        model :class:`~hearsee.audio.tracking.DirectionIMM` with one constant-velocity mode per
+        value instead (quiet walking / turning)
+    mode_dwell_s : the IMM's mean time in one mode, seconds
     motion_model : the 3D tracker of the camera-ray fixes: ``"cv"`` (default), the gated
         constant-velocity :class:`~hearsee.fusion.audiovisual.RayTracker`, or ``"ca"``, the
         constant-acceleration :class:`~hearsee.audio.tracking.MotionKalman`
@@ -783,6 +789,8 @@ class StreamConfig:
     sigma_frame_deg: float | None = 6.0
     sigma_srp_deg: float | None = 20.0
     sigma_min_deg: float = 1.5
+    direction_modes_dps2: tuple[float, ...] | None = None
+    mode_dwell_s: float = 1.0
 
 
 class TrackingProcessor:
@@ -810,7 +818,7 @@ class TrackingProcessor:
         self.pairs = list(array.pairs)
         self.itd = (ItdKalman(array.n_mics, self.pairs, q_std_s=0.5 / fs, r_std_s=1.0 / fs)
                     if self.cfg.itd_filter else None)
-        self.direction = DirectionKalman(self.cfg.sigma_meas_deg, self.cfg.sigma_accel_dps2)
+        self.direction = self._direction_tracker(self.cfg)
         self.motion, self.sigma_tdoa_s = self._motion_tracker(self.cfg)
         self.gcc = FrameGcc(array, fs, self.cfg)
         self.srp = None
@@ -934,6 +942,18 @@ class TrackingProcessor:
                 else:
                     cands.append((float(az), None))
         return cands
+
+    @staticmethod
+    def _direction_tracker(cfg: StreamConfig) -> DirectionKalman | DirectionIMM:
+        """The direction tracker: an IMM over ``cfg.direction_modes_dps2``, or with None one
+        constant-velocity filter with ``cfg.sigma_accel_dps2``."""
+        if cfg.direction_modes_dps2 is None:
+            return DirectionKalman(cfg.sigma_meas_deg, cfg.sigma_accel_dps2)
+        try:
+            return DirectionIMM(cfg.sigma_meas_deg, tuple(cfg.direction_modes_dps2),
+                                mode_dwell_s=cfg.mode_dwell_s)
+        except EstimationError as exc:
+            raise ConfigError(f"direction_modes_dps2 / mode_dwell_s: {exc}") from None
 
     @staticmethod
     def _motion_tracker(cfg: StreamConfig) -> tuple[Any, float]:
