@@ -79,6 +79,15 @@ def _inv_small(S: NDArray) -> NDArray:
     return np.linalg.inv(S)
 
 
+def _det_small(S: NDArray) -> float:
+    """Determinant of a 1x1 or 2x2 matrix in closed form (else LAPACK)."""
+    if S.shape == (1, 1):
+        return float(S[0, 0])
+    if S.shape == (2, 2):
+        return float(S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0])
+    return float(np.linalg.det(S))
+
+
 class _Kalman:
     """Linear Kalman core with filterpy names and an optional wrapped innovation."""
 
@@ -434,22 +443,26 @@ class DirectionIMM:
         return self._tpm_cache[key]
 
     @staticmethod
-    def _moments(xs: Sequence[NDArray], Ps: Sequence[NDArray], w: NDArray, ref_az: float
-                 ) -> tuple[NDArray, NDArray]:
-        """Weighted mean and covariance of Gaussian components; azimuths unwrapped around
-        ``ref_az`` first."""
-        d = np.array(xs, dtype=float)
-        d[:, 0] = ref_az + (d[:, 0] - ref_az + 180.0) % 360.0 - 180.0
-        x0 = w @ d
-        dev = d - x0
-        P0 = np.einsum("i,ijk->jk", w, np.asarray(Ps)) + (w[:, None] * dev).T @ dev
-        x0[0] = _wrap1(float(x0[0]))
+    def _mixtures(xs: Sequence[NDArray], Ps: Sequence[NDArray], W: NDArray, ref_az: float
+                  ) -> tuple[NDArray, NDArray]:
+        """Moment-matched Gaussian mixtures of the components ``(xs, Ps)``, one per column of
+        the weights ``W`` (n_components, k; columns sum to 1): means (k, 4) and covariances
+        (k, 4, 4). Azimuths are unwrapped around ``ref_az`` first and the means re-wrapped."""
+        X = np.array(xs, dtype=float)
+        X[:, 0] = ref_az + (X[:, 0] - ref_az + 180.0) % 360.0 - 180.0
+        x0 = W.T @ X
+        dev = X[None, :, :] - x0[:, None, :]  # (k, components, 4)
+        P0 = np.einsum("ik,ijl->kjl", W, np.asarray(Ps)) + np.einsum(
+            "ik,kij,kil->kjl", W, dev, dev)
+        x0[:, 0] = (x0[:, 0] + 180.0) % 360.0 - 180.0
         return x0, P0
 
     def _combine(self, w: NDArray) -> None:
         ref = float(self.modes[int(np.argmax(w))].x[0])
-        self._mix.x, self._mix.P = self._moments([k.x for k in self.modes],
-                                                 [k.P for k in self.modes], w, ref)
+        x, P = self._mixtures([k.x for k in self.modes], [k.P for k in self.modes],
+                              w[:, None], ref)
+        self._mix.x, self._mix.P = x[0], P[0]
+        self._mix.x[0] = _wrap1(float(self._mix.x[0]))
         self._mix.has_elevation = any(k.has_elevation for k in self.modes)
 
     def _start(self, t: float, az: float, el: float | None) -> None:
@@ -477,10 +490,11 @@ class DirectionIMM:
         # mixing: each mode restarts from the blend of all modes it may have come from
         c = self._tpm(dt).T @ self.mu  # predicted mode probabilities
         W = self._tpm(dt) * self.mu[:, None] / np.maximum(c[None, :], 1e-300)
-        xs = [k.x.copy() for k in self.modes]
-        Ps = [k.P.copy() for k in self.modes]
+        ref = float(self.modes[int(np.argmax(self.mu))].x[0])
+        x0, P0 = self._mixtures([k.x for k in self.modes], [k.P for k in self.modes], W, ref)
         for j, k in enumerate(self.modes):
-            k.x, k.P = self._moments(xs, Ps, W[:, j], float(xs[j][0]))
+            k.x, k.P = x0[j], P0[j]
+            k.x[0] = _wrap1(float(k.x[0]))
             k.predict(t)
         self._combine(c)
         self._mix.t = float(t)
@@ -498,7 +512,7 @@ class DirectionIMM:
         log_l = np.empty(len(self.modes))
         for j, k in enumerate(self.modes):
             y, S, d2 = k._innovation(z, H, R, wrap)
-            log_l[j] = -0.5 * (d2 + math.log(float(np.linalg.det(2.0 * np.pi * S))))
+            log_l[j] = -0.5 * (d2 + math.log(_det_small(2.0 * np.pi * S)))
             k._correct(y, S, H, R)
             k._settle(el)
         lw = np.log(np.maximum(c, 1e-300)) + log_l
