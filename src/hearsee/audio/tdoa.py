@@ -1020,8 +1020,8 @@ def estimate_tdoas(
         acc, n_acc = acc_active, n_active
         fallback = True
     if n_acc and whole_recording:
-        lag, c = _peaks(corr(acc)[None], acc[None], nfft, max_lag, "interp", main_lobe,
-                        band_bins)
+        r_sum = corr(acc)  # the averaged correlation, (n_pairs, nfft)
+        lag, c = _peaks(r_sum[None], acc[None], nfft, max_lag, "interp", main_lobe, band_bins)
         resid = _closure_residual(lag[0], prs, arr.n_mics)
         if resid is not None:
             # redundant pairs (>= 3 microphones). Detection: the pairs' own peaks of
@@ -1042,7 +1042,6 @@ def estimate_tdoas(
             # ~1.25 in 40 trials, a -15 dB white source 0.8-2.4)
             ok = np.all(c[0] >= (_FALLBACK_CONFIDENCE * need if fallback else need))
             if ok and min_peak_snr > 0:
-                r_sum = corr(acc)
                 ok = bool(np.all(_peak_snr(r_sum, lag[0], max_lag, main_lobe, noise_profile)
                                  >= min_peak_snr))
             if summary_upsample > 1:

@@ -39,6 +39,7 @@ from scipy.stats import chi2
 from hearsee.errors import EstimationError
 
 __all__ = [
+    "IMM_MODES_DPS2",
     "DirectionIMM",
     "DirectionKalman",
     "DirectionTrack",
@@ -339,6 +340,10 @@ class DirectionKalman(_Kalman):
         return self.x[2:].copy() if self.initialized else np.full(2, np.nan)
 
 
+#: DirectionIMM's default modes (angular acceleration noise, deg/s^2): walking straight, turning
+IMM_MODES_DPS2 = (50.0, 600.0)
+
+
 class DirectionIMM:
     """Interacting-multiple-model (IMM) direction tracker for speakers who walk, turn and stop.
 
@@ -372,7 +377,7 @@ class DirectionIMM:
     """
 
     def __init__(self, sigma_meas_deg: float = 10.0,
-                 sigma_accel_dps2: Sequence[float] = (50.0, 600.0), mode_dwell_s: float = 1.0,
+                 sigma_accel_dps2: Sequence[float] = IMM_MODES_DPS2, mode_dwell_s: float = 1.0,
                  gate_prob: float = 0.997, max_rejects: int = 4,
                  init_rate_sigma_dps: float = 60.0) -> None:
         qs = [float(q) for q in sigma_accel_dps2]
@@ -454,7 +459,7 @@ class DirectionIMM:
         dev = X[None, :, :] - x0[:, None, :]  # (k, components, 4)
         P0 = np.einsum("ik,ijl->kjl", W, np.asarray(Ps)) + np.einsum(
             "ik,kij,kil->kjl", W, dev, dev)
-        x0[:, 0] = (x0[:, 0] + 180.0) % 360.0 - 180.0
+        x0[:, 0] = [_wrap1(float(a)) for a in x0[:, 0]]
         return x0, P0
 
     def _combine(self, w: NDArray) -> None:
@@ -462,7 +467,6 @@ class DirectionIMM:
         x, P = self._mixtures([k.x for k in self.modes], [k.P for k in self.modes],
                               w[:, None], ref)
         self._mix.x, self._mix.P = x[0], P[0]
-        self._mix.x[0] = _wrap1(float(self._mix.x[0]))
         self._mix.has_elevation = any(k.has_elevation for k in self.modes)
 
     def _start(self, t: float, az: float, el: float | None) -> None:
@@ -494,7 +498,6 @@ class DirectionIMM:
         x0, P0 = self._mixtures([k.x for k in self.modes], [k.P for k in self.modes], W, ref)
         for j, k in enumerate(self.modes):
             k.x, k.P = x0[j], P0[j]
-            k.x[0] = _wrap1(float(k.x[0]))
             k.predict(t)
         self._combine(c)
         self._mix.t = float(t)

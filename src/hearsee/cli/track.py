@@ -23,10 +23,6 @@ class Tracker(StrEnum):
     imm = "imm"
 
 
-#: the IMM's modes for ``--tracker imm`` (deg/s^2: walking straight, turning)
-IMM_MODES_DPS2 = (50.0, 600.0)
-
-
 class Detector(StrEnum):
     hog = "hog"
     face = "face"
@@ -80,6 +76,7 @@ def track_cmd(
     """Track the direction (and, with a calibrated camera, the 3D position, velocity and
     acceleration) of a moving speaker; one update per audio frame."""
     from hearsee.audio.arrays import load_array
+    from hearsee.audio.tracking import IMM_MODES_DPS2
     from hearsee.errors import ConfigError
     from hearsee.stream.pipeline import DeviceSource, StreamConfig, StreamPipeline, WavSource
 
