@@ -204,6 +204,69 @@ def test_imm_with_equal_modes_is_the_single_kalman_filter():
         np.testing.assert_allclose(imm.P, kf.P, rtol=1e-9, atol=1e-9)
 
 
+def _textbook_imm(qs, dwell, sigma, t, z):
+    """Reference IMM cycle written out per mode with plain numpy (Bar-Shalom, Li &
+    Kirubarajan 2001, sec. 11.6.6): mixing, per-mode Kalman prediction and update, mode
+    likelihoods, combination. No angle wrapping or gating: the walk stays away from +-180 deg
+    and within the gate. Returns the combined states (n, 4) and mode probabilities (n, m)."""
+    from filterpy.common import Q_discrete_white_noise
+
+    m = len(qs)
+    H, R = np.eye(2, 4), sigma**2 * np.eye(2)
+    x0 = np.array([z[0, 0], z[0, 1], 0.0, 0.0])
+    P0 = np.diag([sigma**2, sigma**2, 60.0**2, 60.0**2])
+    xs, Ps, mu = [x0.copy() for _ in qs], [P0.copy() for _ in qs], np.full(m, 1.0 / m)
+    out_x, out_mu = [x0], [mu]
+    for k in range(1, t.size):
+        dt = t[k] - t[k - 1]
+        leave = 1.0 - np.exp(-dt / dwell)
+        T = np.full((m, m), leave / (m - 1))
+        np.fill_diagonal(T, 1.0 - leave)
+        c = T.T @ mu
+        W = T * mu[:, None] / c[None, :]
+        mixed = []
+        for j in range(m):
+            xm = sum(W[i, j] * xs[i] for i in range(m))
+            Pm = sum(W[i, j] * (Ps[i] + np.outer(xs[i] - xm, xs[i] - xm)) for i in range(m))
+            mixed.append((xm, Pm))
+        F = np.eye(4)
+        F[0, 2] = F[1, 3] = dt
+        lik = np.empty(m)
+        for j, (xm, Pm) in enumerate(mixed):
+            q = Q_discrete_white_noise(2, dt, qs[j] ** 2)
+            Q = np.zeros((4, 4))
+            Q[np.ix_([0, 2], [0, 2])] = Q[np.ix_([1, 3], [1, 3])] = q
+            xp, Pp = F @ xm, F @ Pm @ F.T + Q
+            y = z[k] - H @ xp
+            S = H @ Pp @ H.T + R
+            K = Pp @ H.T @ np.linalg.inv(S)
+            xs[j], Ps[j] = xp + K @ y, (np.eye(4) - K @ H) @ Pp
+            lik[j] = (np.exp(-0.5 * y @ np.linalg.solve(S, y))
+                      / np.sqrt(np.linalg.det(2 * np.pi * S)))
+        mu = c * lik / np.sum(c * lik)
+        out_x.append(sum(mu[j] * xs[j] for j in range(m)))
+        out_mu.append(mu)
+    return np.array(out_x), np.array(out_mu)
+
+
+def test_imm_with_three_unequal_modes_matches_the_textbook_cycle():
+    rng = np.random.default_rng(11)
+    t = np.cumsum(rng.uniform(0.02, 0.04, 150))
+    rate = np.where(t < 2.5, 30.0, -50.0)  # a turn halfway
+    az_true = -40.0 + np.concatenate([[0.0], np.cumsum(rate[:-1] * np.diff(t))])
+    z = np.column_stack([az_true + 2.0 * rng.standard_normal(t.size),
+                         8.0 + 2.0 * rng.standard_normal(t.size)])
+    qs, dwell, sigma = (20.0, 200.0, 1500.0), 0.7, 2.5
+    ref_x, ref_mu = _textbook_imm(qs, dwell, sigma, t, z)
+    imm = DirectionIMM(sigma, qs, mode_dwell_s=dwell, gate_prob=0.999999)
+    for k in range(t.size):
+        assert imm.update(t[k], (z[k, 0], z[k, 1]))
+        np.testing.assert_allclose(imm.x, ref_x[k], rtol=1e-7, atol=1e-7)
+        np.testing.assert_allclose(imm.mu, ref_mu[k], rtol=1e-6, atol=1e-9)
+    # not a trivial agreement: the quiet mode dominates the straight stretch, the turn not
+    assert ref_mu[(t > 1.0) & (t < 2.4), 0].mean() > 0.5 > ref_mu[(t > 2.5) & (t < 3.0), 0].min()
+
+
 def _turning_walk(seed):
     """A speaker walks past at 40 deg/s, reverses within 0.2 s at t = 4 s and walks back;
     measurements with 3 deg noise every 32 ms. Returns t, truth, measurements, turn, steady."""

@@ -723,9 +723,9 @@ class StreamConfig:
         model :class:`~hearsee.audio.tracking.DirectionIMM` with one constant-velocity mode per
         value instead (quiet walking / turning). On bench/tracking.py part A (seed 0) the IMM
         ``(50, 600)`` lowered every median lag (room 0.17-2.8 frames instead of 0.25-3.9) and
-        kept the tracked RMSE 2.1-4.5x below the per-frame one; it costs ~0.25 ms per frame,
-        so the stream runs ~45x instead of ~70x faster than real time (three-mic, 16 kHz), and
-        it is not the default for that reason
+        kept the tracked RMSE 2.1-4.5x below the per-frame one; it costs ~0.19 ms per frame
+        (one filter ~0.05), so the stream runs ~59x instead of ~70x faster than real time
+        (three-mic, 16 kHz, block 4096)
     mode_dwell_s : the IMM's mean time in one mode, seconds
     motion_model : the 3D tracker of the camera-ray fixes: ``"cv"`` (default), the gated
         constant-velocity :class:`~hearsee.fusion.audiovisual.RayTracker`, or ``"ca"``, the
