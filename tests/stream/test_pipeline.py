@@ -386,6 +386,30 @@ def test_measurement_noise_model_follows_confidence_and_coherence():
     assert fixed._frame_sigma(5.0) == 10.0 and fixed._srp_sigma(0.9) == 10.0
 
 
+def test_direction_track_is_dropped_after_max_coast_s_without_a_measurement():
+    """A source that falls silent for 2.5 s: the stream coasts for max_coast_s, then reports no
+    direction (not a guess whose uncertainty has grown past any use) until the source is heard
+    again, when the track restarts on it; with max_coast_s None it coasts throughout."""
+    arr = MicArray.from_preset("three-mic")
+    rng = np.random.default_rng(8)
+    x = rng.standard_normal(int(5.0 * FS))
+    x[int(1.0 * FS):int(3.5 * FS)] = 0.0  # silent from 1.0 to 3.5 s
+    traj = linear_trajectory([2.0, -1.0, 0.0], [0.0, 0.4, 0.0], 5.0)
+    y = simulate_moving_free_field(x, FS, arr, traj, snr_db=20, rng=9)
+    runs = {c: StreamPipeline(arr, StreamConfig(max_coast_s=c)).run(ArraySource(y, FS, 2048))
+            for c in (1.5, None)}
+    t = np.array([u.t for u in runs[1.5]])
+    last = max(u.t for u in runs[1.5] if u.measured and u.t < 2.0)
+    has = {c: np.array([u.azimuth_deg is not None for u in ups]) for c, ups in runs.items()}
+    assert 0.9 < last < 1.4  # the smoothed evidence outlives the sound by a few frames
+    assert has[1.5][(t > 0.3) & (t <= last + 1.5)].all()  # coasting within the limit
+    assert not has[1.5][(t > last + 1.6) & (t < 3.45)].any()  # then lost
+    assert has[None][t > 0.3].all()
+    assert np.all(_az_err(runs[1.5], traj)[t > 4.0] < 5.0)  # re-acquired after the silence
+    with pytest.raises(ConfigError):
+        pl.TrackingProcessor(arr, FS, StreamConfig(max_coast_s=0.0))
+
+
 def _fitted_lag_frames(t, az, measured, traj, hop_s):
     """Shift (frames, + = behind) and constant offset minimising the RMS of az(t) -
     truth(t - shift) - offset over the frames with a measurement (grid of 0.1 frames)."""

@@ -762,6 +762,10 @@ class StreamConfig:
     prefer_frame_confidence : the same for frames whose own GCC confidence (smallest pair
         peak ratio) reaches this value (inf = never; 1.5 chosen on the seed-100 walks of
         bench/tracking.py)
+    max_coast_s : seconds the direction track may go without an accepted measurement before it
+        is dropped (no azimuth reported until a measurement restarts it: the coasted direction's
+        uncertainty has grown past use by then -- ODAS's tracker deletes inactive tracks the
+        same way); None = coast for ever
     """
 
     frame_ms: float = 64.0
@@ -790,6 +794,7 @@ class StreamConfig:
     max_evidence_age_frames: float = 8.0
     prefer_frame: bool = False
     prefer_frame_confidence: float = 1.5
+    max_coast_s: float | None = 1.5
     sigma_frame_deg: float | None = 6.0
     sigma_srp_deg: float | None = 20.0
     sigma_min_deg: float = 1.5
@@ -822,7 +827,10 @@ class TrackingProcessor:
         self.pairs = list(array.pairs)
         self.itd = (ItdKalman(array.n_mics, self.pairs, q_std_s=0.5 / fs, r_std_s=1.0 / fs)
                     if self.cfg.itd_filter else None)
+        if self.cfg.max_coast_s is not None and not self.cfg.max_coast_s > 0:
+            raise ConfigError(f"max_coast_s must be > 0 s or None, got {self.cfg.max_coast_s}")
         self.direction = self._direction_tracker(self.cfg)
+        self._last_measured_t = -np.inf
         self.motion, self.sigma_tdoa_s = self._motion_tracker(self.cfg)
         self.gcc = FrameGcc(array, fs, self.cfg)
         self.srp = None
@@ -891,6 +899,11 @@ class TrackingProcessor:
                 sigma = self._srp_sigma(float(sm["coherence"][n])) if cands else None
             measured = self.direction.update(float(t), cands[0] if cands else None, cands[1:],
                                              sigma_meas_deg=sigma, delay_s=delay)
+            if measured:
+                self._last_measured_t = float(t)
+            elif (self.cfg.max_coast_s is not None and self.direction.initialized
+                  and float(t) - self._last_measured_t > self.cfg.max_coast_s):
+                self.direction.reset()  # lost: no direction until a measurement restarts it
             upd = Update(float(t), None, None, None, None, None, None,
                          float(conf[n]) if have else 0.0, measured=measured,
                          missing=bool(batch.missing[n]), raw_azimuth_deg=raw_az,
