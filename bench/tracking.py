@@ -52,7 +52,18 @@ the table also gives the share of walks whose own median is within 5 cm. The tra
 were rechecked on 32 walks each of seeds 0 and 100 (TDOA noise 4-16 us, acceleration
 0.1-0.4 m/s^2, 64-128 ms frames, onset-weighted fixes; confidence-weighted on 8 walks): none
 beat the chosen settings (pooled median 4.8-5.4 cm there); the rest were equal within the
-walks' spread or worse (a too tight or too loose chi-square gate: 6.5-12 cm).
+walks' spread or worse (a too tight or too loose chi-square gate: 6.5-12 cm). Rooms render the
+moving source with impulse responses updated at most every 0.1 s and wherever a pair's TDOA
+would move by more than 0.1 sample (:func:`hearsee.sim.moving.simulate_moving_room`'s
+``max_tdoa_step_samples``). Runs before 2026-11-24 updated them every 0.1 s only: the
+crossfade between two responses whose TDOAs differ by up to ~0.5 sample biased the fixes by
+itself (seed-100 walks, three-mic + camera 0.2 m aside: direct path only 4.9 cm vs 3.8 cm with
+0.02 s updates and 3.7 cm in exact free field; full room 6.6 vs 5.3 cm), so part of what
+earlier runs charged to the room was the renderer's. An offline Rauch-Tung-Striebel smoother
+over the same filter did not help in the room (seed 100: 7.3 vs 6.6 cm; the per-walk errors
+are slowly varying biases, not white noise); nor did other GCC weightings (SCOT, ROTH, ML,
+PHAT-beta 0.8, no SNR weight, Hann window, bands from 300-1000 Hz up: 5.3-6.6 cm, ML 9.4 cm),
+nor a free gain on the model TDOAs (range from the TDOA vector's direction alone).
 
 Part C -- the stream: real-time factor (wall clock and process CPU time; the best of 3 runs per
 block size, as timeit reports, since other jobs share the 2 cores) from a file, per-frame
