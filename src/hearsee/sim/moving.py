@@ -340,9 +340,7 @@ def _update_times(trajectory: Trajectory, mics: NDArray, c: float, fs: float, n:
         centres = np.arange(0, n, hop, dtype=float)
     else:
         tf = np.append(np.arange(0.0, (n - 1) / fs, 0.002), (n - 1) / fs)
-        dist = np.linalg.norm(trajectory.at(tf)[:, None, :] - mics[None, :, :], axis=2)
-        i, j = np.triu_indices(len(mics), k=1)
-        tau = (dist[:, i] - dist[:, j]) * (fs / c)  # (n_fine, n_pairs) samples
+        tau = MicArray(mics, speed_of_sound=c).tdoa(trajectory.at(tf)) * fs  # (n_fine, pairs)
         D = np.r_[0.0, np.cumsum(np.max(np.abs(np.diff(tau, axis=0)), axis=1))]
         picked, k = [0], 0
         while k < len(tf) - 1:
