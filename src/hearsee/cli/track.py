@@ -65,8 +65,8 @@ def track_cmd(
     itd_filter: Annotated[bool, typer.Option(
         "--itd-filter", help="Smooth TDOAs with the ITD Kalman filter first.")] = False,
     tracker: Annotated[Tracker, typer.Option(
-        "--tracker", help="Direction tracker: cv (one constant-velocity Kalman filter) or imm "
-        "(interacting multiple models: a quiet and a turning mode).")] = Tracker.cv,
+        "--tracker", help="Direction tracker: imm (interacting multiple models: a quiet and a "
+        "turning mode; the default) or cv (one constant-velocity Kalman filter).")] = Tracker.imm,
     fmt: Annotated[TrackFormat, typer.Option(
         "--format", help="jsonl: one JSON line per frame; json: one document.")
     ] = TrackFormat.jsonl,

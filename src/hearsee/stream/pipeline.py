@@ -58,7 +58,7 @@ from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import localize_tdoa
 from hearsee.audio.tdoa import estimate_tdoas, frame_signals
-from hearsee.audio.tracking import DirectionIMM, DirectionKalman, MotionKalman
+from hearsee.audio.tracking import IMM_MODES_DPS2, DirectionIMM, DirectionKalman, MotionKalman
 from hearsee.errors import AudioInputError, ConfigError, EstimationError
 from hearsee.geometry import wrap_deg
 
@@ -694,8 +694,12 @@ class StreamConfig:
 
     frame_ms, hop_ms : analysis frame and hop, milliseconds
     method : GCC weighting (``phat``, ``scot``, ...)
-    refine : sub-sample peak refinement of the GCC (``parabolic`` is the cheapest; ``interp``
-        is exact band-limited interpolation, about 1.5x the cost)
+    refine : sub-sample peak refinement of the GCC: ``interp`` (default), exact band-limited
+        interpolation, or ``parabolic``, the cheapest (stream ~1.15x faster). A parabola's
+        bias towards whole-sample lags varies slowly as a speaker walks, so the tracker cannot
+        average it away: on bench/tracking.py part A (room walks of seeds 0, 100 and 200, 24 per
+        condition) ``interp`` raised white noise's per-frame / tracked ratio from 1.49-1.53x
+        to 1.67-1.71x, voices unchanged
     min_confidence : frames whose GCC peak-to-second-peak ratio is below this in any pair give
         no measurement (:func:`~hearsee.audio.tdoa.estimate_tdoas`)
     band_hz : optional frequency band for the GCC, Hz
@@ -716,16 +720,24 @@ class StreamConfig:
         voices' tracks 1.3-6 frames behind (median), these settings 0.2-5.6 (free field 0.2-3.6
         instead of 0.7-6) with the tracked RMSE still 3.5-8x below the per-frame one (white
         noise at 10 dB: 1.98x instead of 2.07x). ``sigma_frame_deg`` 4 scored 2.03x there but
-        lost one white-noise walk of the seed-0 benchmark run (1.01x): not adopted
-    direction_modes_dps2 : None (default) tracks the direction with one constant-velocity
-        :class:`~hearsee.audio.tracking.DirectionKalman` (``sigma_accel_dps2``); a tuple of
-        angular acceleration noises (deg/s^2, e.g. ``(50, 600)``) uses the interacting-multiple-
-        model :class:`~hearsee.audio.tracking.DirectionIMM` with one constant-velocity mode per
-        value instead (quiet walking / turning). On bench/tracking.py part A (seed 0) the IMM
-        ``(50, 600)`` lowered every median lag (room 0.17-2.8 frames instead of 0.25-3.9) and
-        kept the tracked RMSE 2.1-4.5x below the per-frame one; it costs ~0.19 ms per frame
-        (one filter ~0.05), so the stream runs ~59x instead of ~70x faster than real time
-        (three-mic, 16 kHz, block 4096)
+        lost one white-noise walk of the seed-0 benchmark run (1.01x): not adopted. Rechecked
+        with the faithful moving-source renderer (seeds 100 and 200, and all three pooled):
+        ``sigma_frame_deg`` 9 / 12, ``sigma_srp_deg`` 30, ``prefer_frame_confidence`` 1.2 / 2 /
+        3 / inf, ``spectrum_alpha`` 0.3 / 0.7, an SRP band up to 6 or 7.9 kHz and a clutter-
+        weighted (probabilistic data association) update each helped one condition and hurt
+        another, or lengthened the lag; none was adopted
+    direction_modes_dps2 : angular acceleration noises (deg/s^2) of the interacting-multiple-
+        model :class:`~hearsee.audio.tracking.DirectionIMM`, one constant-velocity mode per
+        value (default ``IMM_MODES_DPS2`` = (50, 1000): quiet walking / turning); None tracks
+        the direction with one constant-velocity
+        :class:`~hearsee.audio.tracking.DirectionKalman` (``sigma_accel_dps2``) instead. The
+        IMM is the default since the moving-source renderer became faithful (2026-11-24): on
+        bench/tracking.py part A's room walks (seeds 0, 100, 200; 24 per condition, SNR 10/20
+        dB) the single filter's median lag on turning walks reached 4.8 frames (female voice,
+        10 dB; 1.7-4.9 for the voices), the IMM's 1.0-1.8 (free field 0.3-2.0), with the
+        voices' tracked RMSE still 2.4-3.0x below the per-frame one (single filter 2.4-3.2x).
+        It costs ~0.19 ms per frame (one filter ~0.05): the stream runs ~100x instead of
+        ~125x faster than real time (three-mic, 16 kHz, block 4096, process CPU time)
     mode_dwell_s : the IMM's mean time in one mode, seconds
     motion_model : the 3D tracker of the camera-ray fixes: ``"cv"`` (default), the gated
         constant-velocity :class:`~hearsee.fusion.audiovisual.RayTracker`, or ``"ca"``, the
@@ -771,7 +783,7 @@ class StreamConfig:
     frame_ms: float = 64.0
     hop_ms: float = 32.0
     method: str = "phat"
-    refine: str = "parabolic"
+    refine: str = "interp"
     min_confidence: float = 1.0
     band_hz: tuple[float, float] | None = None
     itd_filter: bool = False
@@ -798,7 +810,7 @@ class StreamConfig:
     sigma_frame_deg: float | None = 6.0
     sigma_srp_deg: float | None = 20.0
     sigma_min_deg: float = 1.5
-    direction_modes_dps2: tuple[float, ...] | None = None
+    direction_modes_dps2: tuple[float, ...] | None = IMM_MODES_DPS2
     mode_dwell_s: float = 1.0
 
 
