@@ -360,7 +360,8 @@ class DirectionKalman(_Kalman):
 
 #: DirectionIMM's default modes (angular acceleration noise, deg/s^2): walking straight, turning.
 #: (50, 1000) rather than (50, 600): on bench/tracking.py part A's room walks (seeds 0, 100, 200,
-#: 24 per condition) the median lag fell from 1.1-2.5 to 1.0-1.8 frames for the same RMSE margin
+#: 24 per condition) the voices' median lag fell from 1.1-2.5 to 1.0-1.8 frames for about the
+#: same RMSE margin (tracked 2.4-3.1x below per-frame vs 2.4-3.0x)
 IMM_MODES_DPS2 = (50.0, 1000.0)
 
 
