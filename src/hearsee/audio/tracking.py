@@ -362,6 +362,8 @@ class DirectionKalman(_Kalman):
 #: (50, 1000) rather than (50, 600): on bench/tracking.py part A's room walks (seeds 0, 100, 200,
 #: 24 per condition) the voices' median lag fell from 1.1-2.5 to 1.0-1.8 frames for about the
 #: same RMSE margin (tracked 2.4-3.1x below per-frame vs 2.4-3.0x)
+#: ((50, 2000), three modes (50, 300, 2000), (100, 1500) and a 0.5 s dwell were within the walks'
+#: spread of these: voices' lag 0.8-1.7 frames, ratios 2.4-3.0x; not adopted)
 IMM_MODES_DPS2 = (50.0, 1000.0)
 
 
