@@ -698,8 +698,8 @@ class StreamConfig:
         interpolation, or ``parabolic``, the cheapest (stream ~1.15x faster). A parabola's
         bias towards whole-sample lags varies slowly as a speaker walks, so the tracker cannot
         average it away: on bench/tracking.py part A (room walks of seeds 0, 100 and 200, 24 per
-        condition) ``interp`` raised white noise's per-frame / tracked ratio from 1.49-1.53x
-        to 1.67-1.71x, voices unchanged
+        condition; one constant-velocity filter) ``interp`` raised white noise's per-frame /
+        tracked ratio from 1.49-1.53x to 1.57-1.74x, voices unchanged (2.4-3.2x)
     min_confidence : frames whose GCC peak-to-second-peak ratio is below this in any pair give
         no measurement (:func:`~hearsee.audio.tdoa.estimate_tdoas`)
     band_hz : optional frequency band for the GCC, Hz
@@ -721,7 +721,8 @@ class StreamConfig:
         instead of 0.7-6) with the tracked RMSE still 3.5-8x below the per-frame one (white
         noise at 10 dB: 1.98x instead of 2.07x). ``sigma_frame_deg`` 4 scored 2.03x there but
         lost one white-noise walk of the seed-0 benchmark run (1.01x): not adopted. Rechecked
-        with the faithful moving-source renderer (seeds 100 and 200, and all three pooled):
+        with the faithful moving-source renderer on the seed-100 walks (the noise scales also on
+        seed 200):
         ``sigma_frame_deg`` 9 / 12, ``sigma_srp_deg`` 30, ``prefer_frame_confidence`` 1.2 / 2 /
         3 / inf, ``spectrum_alpha`` 0.3 / 0.7, an SRP band up to 6 or 7.9 kHz and a clutter-
         weighted (probabilistic data association) update each helped one condition and hurt
@@ -733,7 +734,7 @@ class StreamConfig:
         :class:`~hearsee.audio.tracking.DirectionKalman` (``sigma_accel_dps2``) instead. The
         IMM is the default since the moving-source renderer became faithful (2026-11-24): on
         bench/tracking.py part A's room walks (seeds 0, 100, 200; 24 per condition, SNR 10/20
-        dB) the single filter's median lag on turning walks reached 4.8 frames (female voice,
+        dB) the single filter's median lag on turning walks reached 4.9 frames (female voice,
         10 dB; 1.7-4.9 for the voices), the IMM's 0.3-1.8 (free field 0.3-2.0), with the
         voices' tracked RMSE still 2.4-3.0x below the per-frame one (single filter 2.4-3.2x).
         It costs ~0.19 ms per frame (one filter ~0.05): the stream runs ~100x instead of
