@@ -455,3 +455,52 @@ def test_bad_imm_settings_are_a_config_error():
                                                      "mode_dwell_s": 0.0}):
         with pytest.raises(ConfigError, match="direction_modes_dps2"):
             pl.TrackingProcessor(arr, FS, StreamConfig(**bad))
+
+
+def _two_talkers(gaps):
+    """White noise from azimuth 30 deg (2 m) with silent gaps (start, end) s, plus a static
+    talker at 150 deg (3 m) about 10 dB weaker all along; 4 s at 16 kHz, three-mic array."""
+    from hearsee.sim.moving import Trajectory
+
+    arr = MicArray.from_preset("three-mic")
+    rng = np.random.default_rng(11)
+    n = 4 * FS
+    x = rng.standard_normal(n)
+    for a, b in gaps:
+        x[int(a * FS):int(b * FS)] = 0.0
+    p = [2.0 * np.cos(np.radians(30.0)), 2.0 * np.sin(np.radians(30.0)), 0.0]
+    q = [3.0 * np.cos(np.radians(150.0)), 3.0 * np.sin(np.radians(150.0)), 0.0]
+    y = simulate_moving_free_field(x, FS, arr, Trajectory([0.0], [p]), snr_db=30, rng=12)
+    y += simulate_moving_free_field(0.45 * rng.standard_normal(n), FS, arr,
+                                    Trajectory([0.0], [q]), snr_db=30, rng=13)
+    return arr, y
+
+
+def _azimuths(arr, y, **kw):
+    ups = StreamPipeline(arr, StreamConfig(**kw)).run(ArraySource(y, FS, 2048))
+    t = np.array([u.t for u in ups])
+    az = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in ups])
+    return t, az
+
+
+def test_track_stays_on_the_speaker_through_a_pause_while_another_talks():
+    """The tracked source pauses for 0.3 s while a weaker talker elsewhere keeps going: the
+    default stream coasts through (reacquire_s 0.5 s) instead of jumping to the other talker;
+    a 0.1 s reacquire jumps. When the tracked source stops for good, the track does move to
+    the remaining talker within about reacquire_s."""
+    arr, y = _two_talkers([(1.5, 1.8)])
+    t, az = _azimuths(arr, y)
+    on = np.isfinite(az) & (t > 0.3)
+    assert np.all(np.abs(wrap_deg(az[on] - 30.0)) < 10.0)
+    _, az_fast = _azimuths(arr, y, reacquire_s=0.1)
+    assert np.nanmax(np.abs(wrap_deg(az_fast - 30.0))) > 90.0  # the test can fail
+
+    arr, y = _two_talkers([(2.0, 4.0)])
+    t, az = _azimuths(arr, y)
+    late = t > 2.0 + 0.5 + 0.2
+    assert np.all(np.abs(wrap_deg(az[late] - 150.0)) < 10.0)
+
+
+def test_bad_reacquire_is_a_config_error():
+    with pytest.raises(ConfigError, match="reacquire_s"):
+        pl.TrackingProcessor(MicArray.from_preset("three-mic"), FS, StreamConfig(reacquire_s=0))
