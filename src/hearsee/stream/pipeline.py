@@ -738,7 +738,7 @@ class StreamConfig:
         10 dB; 1.7-4.9 for the voices), the IMM's 0.3-1.8 (free field 0.3-2.0), with the
         voices' tracked RMSE still 2.4-3.0x below the per-frame one (single filter 2.4-3.2x).
         It costs ~0.19 ms per frame (one filter ~0.05): the stream runs ~100x instead of
-        ~125x faster than real time (three-mic, 16 kHz, block 4096, process CPU time; 86x in
+        ~125x faster than real time (three-mic, 16 kHz, block 4096, process CPU time; 87x in
         bench/tracking.py part C of 2026-11-24)
     mode_dwell_s : the IMM's mean time in one mode, seconds
     motion_model : the 3D tracker of the camera-ray fixes: ``"cv"`` (default), the gated
