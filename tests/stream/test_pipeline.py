@@ -33,9 +33,15 @@ def moving():
     return arr, traj, y
 
 
-def _az_err(updates, traj):
+def _times_azimuths(updates):
+    """Frame times (s) and tracked azimuths (deg, NaN = none) of stream updates."""
     t = np.array([u.t for u in updates])
     az = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in updates])
+    return t, az
+
+
+def _az_err(updates, traj):
+    t, az = _times_azimuths(updates)
     return np.abs(wrap_deg(az - direction_deg(traj.at(t))[0]))
 
 
@@ -441,8 +447,7 @@ def test_default_tracker_follows_a_turning_voice_within_two_frames(modes):
     assert type(pl.TrackingProcessor(arr, FS, cfg).direction).__name__ == (
         "DirectionKalman" if modes is None else "DirectionIMM")
     ups = StreamPipeline(arr, cfg).run(ArraySource(y, FS, 2048))
-    t = np.array([u.t for u in ups])
-    az = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in ups])
+    t, az = _times_azimuths(ups)
     measured = np.array([u.measured for u in ups])
     assert measured.mean() > 0.5
     lag = _fitted_lag_frames(t, az, measured, traj, 0.032)
@@ -460,7 +465,8 @@ def test_bad_imm_settings_are_a_config_error():
 def _two_talkers(gaps):
     """White noise from azimuth 30 deg (2 m) with silent gaps (start, end) s, plus a static
     talker at 150 deg (3 m) about 10 dB weaker all along; 4 s at 16 kHz, three-mic array."""
-    from hearsee.sim.moving import Trajectory
+    from hearsee.audio.propagation import simulate_free_field
+    from hearsee.geometry import sph_to_cart
 
     arr = MicArray.from_preset("three-mic")
     rng = np.random.default_rng(11)
@@ -468,19 +474,15 @@ def _two_talkers(gaps):
     x = rng.standard_normal(n)
     for a, b in gaps:
         x[int(a * FS):int(b * FS)] = 0.0
-    p = [2.0 * np.cos(np.radians(30.0)), 2.0 * np.sin(np.radians(30.0)), 0.0]
-    q = [3.0 * np.cos(np.radians(150.0)), 3.0 * np.sin(np.radians(150.0)), 0.0]
-    y = simulate_moving_free_field(x, FS, arr, Trajectory([0.0], [p]), snr_db=30, rng=12)
-    y += simulate_moving_free_field(0.45 * rng.standard_normal(n), FS, arr,
-                                    Trajectory([0.0], [q]), snr_db=30, rng=13)
+    y = simulate_free_field(x, FS, arr, sph_to_cart(np.radians(30.0), 0.0, 2.0), snr_db=30,
+                            rng=12)
+    y += simulate_free_field(0.45 * rng.standard_normal(n), FS, arr,
+                             sph_to_cart(np.radians(150.0), 0.0, 3.0), snr_db=30, rng=13)
     return arr, y
 
 
 def _azimuths(arr, y, **kw):
-    ups = StreamPipeline(arr, StreamConfig(**kw)).run(ArraySource(y, FS, 2048))
-    t = np.array([u.t for u in ups])
-    az = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in ups])
-    return t, az
+    return _times_azimuths(StreamPipeline(arr, StreamConfig(**kw)).run(ArraySource(y, FS, 2048)))
 
 
 def test_track_stays_on_the_speaker_through_a_pause_while_another_talks():
