@@ -61,6 +61,7 @@ __all__ = [
     "RayTracker",
     "locate_on_ray",
     "ray_residuals",
+    "ray_sigma_tdoa_s",
     "simulate_av_samples",
     "track_on_rays",
 ]
@@ -340,6 +341,24 @@ class RayTracker(MotionKalman):
         return np.zeros(3) if self.initialized else np.full(3, np.nan)
 
 
+def ray_sigma_tdoa_s(fs: float) -> float:
+    """TDOA noise (seconds) behind the camera-ray fixes' covariance for :class:`RayTracker`'s
+    defaults at sample rate ``fs`` (Hz): 8 us at 16 kHz, 8 us x 16 kHz / fs down to 4 us from
+    32 kHz up.
+
+    Chosen on the seed-100 walks of ``bench/tracking.py`` part B (three-mic preset + camera
+    0.2 m aside, male voice, RT60 0.3 s, 20 dB; 32 walks of 2 s), re-checked on seed 0: at
+    16 kHz 8 us (4 us: 9.5 vs 6.5 cm median); at 48 kHz 3-6 us were equal (2.1-2.2 cm) and
+    8 us worse (2.8 cm on both seeds), at 32 kHz 4 us beat 8 us (2.8 vs 3.7 cm). The higher
+    sample rate itself is what helps: a wider band sharpens the GCC peaks, so an early
+    reflection's peak biases the direct one less (the same 48 kHz recordings decimated to
+    16 kHz: 8.4 cm).
+    """
+    if not fs > 0:
+        raise EstimationError(f"sample rate must be > 0 Hz, got {fs}")
+    return max(4e-6, 8e-6 * 16000.0 / float(fs))
+
+
 @dataclass
 class RayTrack:
     """Output of :func:`track_on_rays`: per frame ``t`` (s), the per-frame fixes ``raw`` (m,
@@ -355,7 +374,7 @@ class RayTrack:
 
 def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Callable,
                   frame_ms: float = 64.0, hop_ms: float = 16.0,
-                  range_m: tuple[float, float] = (0.2, 4.0), sigma_tdoa_s: float = 8e-6,
+                  range_m: tuple[float, float] = (0.2, 4.0), sigma_tdoa_s: float | None = None,
                   sigma_px: float = 1.0, min_confidence: float = 1.0,
                   max_residual_samples: float = 0.5, tracker: Any = None) -> RayTrack:
     """Track a source in 3D from a recording and its image points (thesis 5.4.3).
@@ -384,8 +403,9 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
     range_m : (near, far)
         Search interval along the camera ray, metres.
     sigma_tdoa_s, sigma_px : float
-        Measurement noise behind each fix's covariance (seconds, pixels); 8e-6 s was chosen
-        with :class:`RayTracker`'s defaults on the seed-100 walks.
+        Measurement noise behind each fix's covariance (seconds, pixels); ``sigma_tdoa_s``
+        None = :func:`ray_sigma_tdoa_s` of ``fs`` (8 us at 16 kHz, 4 us at 32-48 kHz, chosen
+        with :class:`RayTracker`'s defaults).
     min_confidence : float
         Frames whose GCC confidence is below this in any pair give no fix.
     max_residual_samples : float
@@ -402,6 +422,8 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
     prs = list(rig.array.pairs)
     tf = estimate_tdoas(x, fs, rig.array, frame_ms, hop_ms, "phat", prs, refine="interp",
                         min_confidence=min_confidence)
+    if sigma_tdoa_s is None:
+        sigma_tdoa_s = ray_sigma_tdoa_s(fs)
     trk = RayTracker() if tracker is None else tracker
     n = len(tf.t)
     raw, pos, vel = (np.full((n, 3), np.nan) for _ in range(3))
