@@ -50,34 +50,43 @@ stand-in): per-frame camera-ray + ITD fixes (:func:`hearsee.fusion.audiovisual.t
 GCC-PHAT with exact peak interpolation, 64 ms frames every 16 ms, fixes whose TDOAs do not
 close discarded) and two trackers on the SAME fixes: the constant-velocity
 :class:`~hearsee.fusion.audiovisual.RayTracker` (white acceleration 0.2 m/s^2, fix covariance
-from 8 us TDOA noise, chi-square gate 0.99; chosen on the seed-100 walks) and, for comparison,
+from :func:`~hearsee.fusion.audiovisual.ray_sigma_tdoa_s` -- 8 us TDOA noise at 16 kHz, 4 us
+at 48 kHz --, chi-square gate 0.99; chosen on the seed-100 walks) and, for comparison,
 the stream's constant-acceleration :class:`~hearsee.audio.tracking.MotionKalman` with its part-B
 settings (20 us, jerk 0.3, Singer 0.5 s). Median 3D error (after 0.35 s to converge; over all
 frames and over the frames with a fix), velocity RMSE, and the fixes' signed range error along
-the camera ray (median and interquartile range: is the room's effect a bias or a spread?). Two
-rigs: the 15 cm three-mic preset with the camera 0.2 m to its side (the issue's "three
+the camera ray (median and interquartile range: is the room's effect a bias or a spread?). Rigs,
+at 16 kHz: the 15 cm three-mic preset with the camera 0.2 m to its side (the issue's "three
 microphones"), a robot-sized 0.5 m triangle with the camera 0.3 m in front of its centre, and
 the three-mic preset with the camera 0.5 m to its side (a wider camera-microphone baseline:
-the range along the ray comes from the parallax between them); each also in free field (same
-walks' statistics, no room) as a control. ``--walks-b`` walks per rig (default 32): one walk's
-own median error ranges from 1 to 20 cm (reflections bias the fixes for hundreds of
-milliseconds), so the pooled median of 8 walks moved between 3.4 and 10.5 cm with the seed;
-the table also gives the share of walks whose own median is within 5 cm. The tracker settings
-were rechecked on 32 walks each of seeds 0 and 100 (TDOA noise 4-16 us, acceleration
-0.1-0.4 m/s^2, 64-128 ms frames, onset-weighted fixes; confidence-weighted on 8 walks): none
-beat the chosen settings (pooled median 4.8-5.4 cm there); the rest were equal within the
-walks' spread or worse (a too tight or too loose chi-square gate: 6.5-12 cm). Rooms render the
-moving source with impulse responses updated at most every 0.1 s and wherever a pair's TDOA
-would move by more than 0.1 sample (:func:`hearsee.sim.moving.simulate_moving_room`'s
-``max_tdoa_step_samples``). Runs before 2026-11-24 updated them every 0.1 s only: the
-crossfade between two responses whose TDOAs differ by up to ~0.5 sample biased the fixes by
-itself (seed-100 walks, three-mic + camera 0.2 m aside: direct path only 4.9 cm vs 3.8 cm with
-0.02 s updates and 3.7 cm in exact free field; full room 6.6 vs 5.3 cm), so part of what
-earlier runs charged to the room was the renderer's. An offline Rauch-Tung-Striebel smoother
-over the same filter did not help in the room (seed 100: 7.3 vs 6.6 cm; the per-walk errors
-are slowly varying biases, not white noise); nor did other GCC weightings (SCOT, ROTH, ML,
-PHAT-beta 0.8, no SNR weight, Hann window, bands from 300-1000 Hz up: 5.3-6.6 cm, ML 9.4 cm),
-nor a free gain on the model TDOAs (range from the TDOA vector's direction alone).
+the range along the ray comes from the parallax between them); and the first rig again
+recorded at 48 kHz (the native rate of most USB microphones; the thesis's table 5.2 varies the
+sampling rate too), run last so the 16 kHz rigs keep their walks. Each also in free field
+(same walks' statistics, no room) as a control. The sample rate matters more than any
+tracker setting tried: the wider band sharpens the GCC peaks, so an early reflection's peak
+biases the direct path's less (dev seed 100, 2 s walks, first rig: tracked median 6.5 cm at
+16 kHz, 3.7 at 32 kHz and 1.8 at 48 kHz with 4 us; the same 48 kHz recordings decimated to
+16 kHz 8.4 cm, so it is the band, not the renderer). The ITD-closure threshold stays 0.5
+sample (at 48 kHz 1.0 and 1.5 samples kept more fixes but gave 2.0 and 2.1 cm).
+``--walks-b`` walks per rig (default 32): one walk's own median error ranges from 1 to 20 cm
+(reflections bias the fixes for hundreds of milliseconds), so the pooled median of 8 walks
+moved between 3.4 and 10.5 cm with the seed; the table also gives the share of walks whose own
+median is within 5 cm. The tracker settings were rechecked on 32 walks each of seeds 0 and 100
+(TDOA noise 4-16 us, acceleration 0.1-0.4 m/s^2, 64-128 ms frames, onset-weighted fixes;
+confidence-weighted on 8 walks): none beat the chosen settings (pooled median 4.8-5.4 cm
+there); the rest were equal within the walks' spread or worse (a too tight or too loose
+chi-square gate: 6.5-12 cm). Rooms render the moving source with impulse responses updated at
+most every 0.1 s and wherever a pair's TDOA would move by more than 0.1 sample
+(:func:`hearsee.sim.moving.simulate_moving_room`'s ``max_tdoa_step_samples``). Runs before
+2026-11-24 updated them every 0.1 s only: the crossfade between two responses whose TDOAs
+differ by up to ~0.5 sample biased the fixes by itself (seed-100 walks, three-mic + camera 0.2
+m aside: direct path only 4.9 cm vs 3.8 cm with 0.02 s updates and 3.7 cm in exact free field;
+full room 6.6 vs 5.3 cm), so part of what earlier runs charged to the room was the renderer's.
+An offline Rauch-Tung-Striebel smoother over the same filter did not help in the room (seed
+100: 7.3 vs 6.6 cm; the per-walk errors are slowly varying biases, not white noise); nor did
+other GCC weightings (SCOT, ROTH, ML, PHAT-beta 0.8, no SNR weight, Hann window, bands from
+300-1000 Hz up: 5.3-6.6 cm, ML 9.4 cm), nor a free gain on the model TDOAs (range from the TDOA
+vector's direction alone).
 
 Part C -- the stream: real-time factor (wall clock and process CPU time; the best of 3 runs per
 block size, as timeit reports, since other jobs share the 2 cores) from a file, per-frame
@@ -117,6 +126,8 @@ from hearsee.stream.pipeline import (  # noqa: E402
 from hearsee.vision.camera import Camera  # noqa: E402
 
 FS = 16000
+#: part B's wide-band rate (the native rate of most USB microphones)
+FS_WIDE = 48000
 ROOM = np.array([7.0, 6.0, 3.0])
 ARRAY_AT = np.array([3.5, 3.0, 1.2])
 RT60 = 0.3
@@ -126,8 +137,8 @@ CFG_CV = StreamConfig(frame_ms=64.0, hop_ms=32.0, direction_modes_dps2=None)
 BAND = (300.0, 3500.0)
 
 
-def _signal(kind: str, dur: float, rng: np.random.Generator) -> np.ndarray:
-    x = white_noise(dur, FS, rng) if kind == "noise" else synthetic_voice(kind, dur, FS, rng)
+def _signal(kind: str, dur: float, rng: np.random.Generator, fs: int = FS) -> np.ndarray:
+    x = white_noise(dur, fs, rng) if kind == "noise" else synthetic_voice(kind, dur, fs, rng)
     return 0.05 * x / np.std(x)
 
 
@@ -358,31 +369,37 @@ def view_walk(rng: np.random.Generator, rig: AudioVisualRig, dur: float) -> Traj
 
 def part_b(trials: int, seed: int, dur: float) -> tuple[list, dict]:
     from hearsee.audio.tracking import MotionKalman
-    from hearsee.fusion.audiovisual import RayTracker, track_on_rays
+    from hearsee.fusion.audiovisual import RayTracker, ray_sigma_tdoa_s, track_on_rays
 
     cam = Camera.from_fov(70.0, 640, 480)
+    three_mic = MicArray.from_preset("three-mic")
     rigs = [("three-mic + camera 0.2 m aside",
-             AudioVisualRig.mounted(MicArray.from_preset("three-mic"), cam, (0.0, 0.2, 0.0))),
+             AudioVisualRig.mounted(three_mic, cam, (0.0, 0.2, 0.0)), FS),
             ("0.5 m triangle + camera 0.3 m ahead",
-             AudioVisualRig.mounted(_tri(0.5), cam, (0.3, 0.0, 0.0))),
+             AudioVisualRig.mounted(_tri(0.5), cam, (0.3, 0.0, 0.0)), FS),
             ("three-mic + camera 0.5 m aside",
-             AudioVisualRig.mounted(MicArray.from_preset("three-mic"), cam, (0.0, 0.5, 0.0)))]
+             AudioVisualRig.mounted(three_mic, cam, (0.0, 0.5, 0.0)), FS)]
+    wide = [("three-mic + camera 0.2 m aside, 48 kHz",
+             AudioVisualRig.mounted(three_mic, cam, (0.0, 0.2, 0.0)), FS_WIDE)]
     rng = np.random.default_rng(seed + 1)
     rows, example = [], {}
-    cases = [(name, rig, True) for name, rig in rigs] + [
-        (f"{name}, FREE FIELD (control)", rig, False) for name, rig in rigs]
+    # (the 48 kHz rig last, so the 16 kHz rigs keep the walks of the runs before it existed)
+    cases = [(name if room else f"{name}, FREE FIELD (control)", rig, fs, room)
+             for group in (rigs, wide) for room in (True, False) for name, rig, fs in group]
     trackers = ("RayTracker (CV)", "CA Kalman (stream)")
-    for name, rig, room in cases:
+    for name, rig, fs, room in cases:
         e_raw, e_rng = [], []
         e_trk, e_vel, e_fix = ({k: [] for k in trackers} for _ in range(3))
+        # the stream's CA filter was tuned with fixes made with 20 us of TDOA noise
+        ca_scale = (2e-5 / ray_sigma_tdoa_s(fs)) ** 2 - 1.0
         for _ in range(trials):
             traj = view_walk(rng, rig, dur)
-            x = _signal("male", dur, rng)
+            x = _signal("male", dur, rng, fs)
             if room:
-                y = simulate_moving_room(x, FS, rig.array, traj, ROOM, RT60, ARRAY_AT,
+                y = simulate_moving_room(x, fs, rig.array, traj, ROOM, RT60, ARRAY_AT,
                                          snr_db=20.0, rng=rng, block_s=0.1)
             else:
-                y = simulate_moving_free_field(x, FS, rig.array, traj, snr_db=20.0, rng=rng)
+                y = simulate_moving_free_field(x, fs, rig.array, traj, snr_db=20.0, rng=rng)
             noise = {}
 
             def points(t: float, traj=traj, noise=noise, rig=rig) -> tuple[float, float]:
@@ -393,8 +410,8 @@ def part_b(trials: int, seed: int, dur: float) -> tuple[list, dict]:
 
             # per-frame fixes as in the stream (GCC-PHAT, exact peak interpolation, TDOAs that
             # do not close discarded) into the constant-velocity RayTracker ...
-            rt = track_on_rays(rig, y, FS, points, frame_ms=64.0, hop_ms=16.0,
-                               range_m=(0.2, 4.0), sigma_tdoa_s=8e-6, sigma_px=1.0,
+            rt = track_on_rays(rig, y, fs, points, frame_ms=64.0, hop_ms=16.0,
+                               range_m=(0.2, 4.0), sigma_px=1.0,
                                tracker=RayTracker(sigma_accel=0.2))
             # ... and the same fixes into the stream's constant-acceleration filter with its
             # part-B settings (fix covariance from sigma_tdoa 2e-5 s, jerk 0.3, Singer 0.5 s)
@@ -405,7 +422,7 @@ def part_b(trials: int, seed: int, dur: float) -> tuple[list, dict]:
                     mk.update(tk, None)
                 else:
                     d = fix.direction
-                    vs = float(d @ fix.covariance @ d) * ((2e-5 / 8e-6) ** 2 - 1.0)
+                    vs = float(d @ fix.covariance @ d) * ca_scale
                     mk.update(tk, fix.position_m, fix.covariance + vs * np.outer(d, d))
                 ca_pos[k], ca_vel[k] = mk.position, mk.velocity
             t, raw = rt.t, rt.raw

@@ -346,13 +346,14 @@ def ray_sigma_tdoa_s(fs: float) -> float:
     defaults at sample rate ``fs`` (Hz): 8 us at 16 kHz, 8 us x 16 kHz / fs down to 4 us from
     32 kHz up.
 
-    Chosen on the seed-100 walks of ``bench/tracking.py`` part B (three-mic preset + camera
-    0.2 m aside, male voice, RT60 0.3 s, 20 dB; 32 walks of 2 s), re-checked on seed 0: at
-    16 kHz 8 us (4 us: 9.5 vs 6.5 cm median); at 48 kHz 3-6 us were equal (2.1-2.2 cm) and
-    8 us worse (2.8 cm on both seeds), at 32 kHz 4 us beat 8 us (2.8 vs 3.7 cm). The higher
-    sample rate itself is what helps: a wider band sharpens the GCC peaks, so an early
-    reflection's peak biases the direct one less (the same 48 kHz recordings decimated to
-    16 kHz: 8.4 cm).
+    Chosen on the seed-100 walks of ``bench/tracking.py`` part B (three-mic preset + camera 0.2
+    m aside, male voice, RT60 0.3 s, 20 dB; 32 walks of 2 s; tracked median error), with the
+    ITD-closure threshold held at 31 us (0.5 sample at 16 kHz): at 16 kHz 8 us (6.5 cm; 4 us
+    9.5 cm); at 32 kHz 4 us (2.8 cm; 8 us 3.7 cm); at 48 kHz 3-6 us equal (2.1-2.2 cm), 2
+    and 8 us worse (2.7, 2.8 cm). Re-checked on seed 0 at 48 kHz with the default 0.5-sample
+    threshold: 4 us 1.7 cm, 3 us 1.8, 8 us 2.6. The higher sample rate itself is what helps: a
+    wider band sharpens the GCC peaks, so an early reflection's peak biases the direct one less
+    (the seed-100 48 kHz recordings decimated to 16 kHz: 8.4 cm).
     """
     if not fs > 0:
         raise EstimationError(f"sample rate must be > 0 Hz, got {fs}")
