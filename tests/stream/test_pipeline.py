@@ -19,6 +19,8 @@ from hearsee.stream.pipeline import (
     Framer,
     StreamConfig,
     StreamPipeline,
+    TrackingProcessor,
+    Update,
 )
 
 FS = 16000
@@ -210,7 +212,6 @@ def test_live_device_source_with_fake_portaudio(monkeypatch):
 
 def test_camera_fix_with_inconsistent_itds_is_discarded():
     from hearsee.fusion.audiovisual import AudioVisualRig
-    from hearsee.stream.pipeline import TrackingProcessor, Update
     from hearsee.vision.camera import Camera
 
     arr = MicArray.from_preset("three-mic")
@@ -234,7 +235,6 @@ def test_motion_models_track_a_source_moving_along_a_line(model):
     """Exact ITDs and image points of a source moving at a known 0.6 m/s along y: both 3D
     trackers end on it with its velocity; an unknown model name is a ConfigError."""
     from hearsee.fusion.audiovisual import AudioVisualRig
-    from hearsee.stream.pipeline import TrackingProcessor, Update
     from hearsee.vision.camera import Camera
 
     arr = MicArray.from_preset("three-mic")
@@ -253,6 +253,16 @@ def test_motion_models_track_a_source_moving_along_a_line(model):
     assert np.linalg.norm(np.array(u.velocity_mps) - v) < 0.1
     with pytest.raises(ConfigError, match="motion_model"):
         TrackingProcessor(arr, FS, StreamConfig(motion_model="kalman"), rig=rig)
+
+
+def test_camera_fix_tdoa_noise_follows_the_sample_rate():
+    # the cv 3D tracker's fixes assume 8 us of TDOA noise at 16 kHz and 4 us at 48 kHz
+    # (ray_sigma_tdoa_s); an explicit sigma_tdoa_s and the ca tracker keep their own
+    arr = MicArray.from_preset("three-mic")
+    assert TrackingProcessor(arr, 16000, StreamConfig()).sigma_tdoa_s == pytest.approx(8e-6)
+    assert TrackingProcessor(arr, 48000, StreamConfig()).sigma_tdoa_s == pytest.approx(4e-6)
+    assert TrackingProcessor(arr, 48000, StreamConfig(sigma_tdoa_s=1e-5)).sigma_tdoa_s == 1e-5
+    assert TrackingProcessor(arr, 48000, StreamConfig(motion_model="ca")).sigma_tdoa_s == 2e-5
 
 
 def test_smoothed_srp_finds_a_static_source_and_not_noise():
