@@ -729,7 +729,7 @@ class StreamConfig:
         another, or lengthened the lag; none was adopted
     direction_modes_dps2 : angular acceleration noises (deg/s^2) of the interacting-multiple-
         model :class:`~hearsee.audio.tracking.DirectionIMM`, one constant-velocity mode per
-        value (default ``IMM_MODES_DPS2`` = (50, 1000): quiet walking / turning); None tracks
+        value (default ``IMM_MODES_DPS2`` = (50, 2000): quiet walking / turning); None tracks
         the direction with one constant-velocity
         :class:`~hearsee.audio.tracking.DirectionKalman` (``sigma_accel_dps2``) instead. The
         IMM is the default since the moving-source renderer became faithful (2026-11-24): on
