@@ -44,15 +44,17 @@ bias the GCC peaks for as long as the geometry stays similar). Smoothing cannot 
 (weighting frames by their confidence gets the track a little below it at best), so per-frame
 RMSE / slow part shows about how far a lag-free smoother could go: white noise gives
 every frame a measurement whose error is mostly that slow bias (per-frame errors of 1-3 deg),
-which is why its per-frame / tracked ratio stays below 2 (1.3-1.4x in the 2026-11-24 run,
+which is why its per-frame / tracked ratio stays below 2 (1.2-1.4x in the 2026-11-24 runs,
 where a lag-free 9-frame smoother of the per-frame errors would reach only 1.2-1.7x) while the
-voices' sparse, outlier-ridden per-frame errors are cut 2.2-7x. The median lag on turning
-walks stays within +-1 frame except for the male voice at 10 dB (2.7 frames, standard error
-1.8; 1.5 in free field). The last three columns run the same recordings through the stream
-with one constant-velocity :class:`~hearsee.audio.tracking.DirectionKalman` instead
+voices' sparse, outlier-ridden per-frame errors are cut 2-7x. With the IMM's former 1000
+deg/s^2 turning mode the median of the per-walk lags reached 2.7 frames for the male voice at
+10 dB (standard error 1.8; 1.5 in free field); with 2000 deg/s^2 it is 1.6 and every
+condition's pooled lag is within about +-1 frame. The "one CV filter" columns run the same
+recordings through the stream with one constant-velocity
+:class:`~hearsee.audio.tracking.DirectionKalman` instead
 (``StreamConfig(direction_modes_dps2=None)``, angular acceleration noise 200 deg/s^2; the
-default before 2026-11-24): the per-frame / tracked ratio and the median lags (room, free
-field).
+default before 2026-11-24): the per-frame / tracked ratio, the median lags (room, free field)
+and, in the last two columns, its pooled lags.
 
 Part B -- calibrated camera + three microphones, sources 0.5-2 m away in the camera's view
 (SNR 20 dB, RT60 0.3 s), image points from the true projection plus 1 px noise (a detector
