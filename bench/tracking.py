@@ -231,7 +231,13 @@ def lag_frames(t: np.ndarray, est: np.ndarray, traj: Trajectory, hop_s: float,
     (at a constant rate they are the same thing), so walks whose rate hardly changes give a
     large ``se``. NaN when fewer than 10 frames had a measurement.
     """
-    prof = lag_profile(t, est, traj, hop_s, measured, max_shift)
+    return lag_fit(lag_profile(t, est, traj, hop_s, measured, max_shift))
+
+
+def lag_fit(prof: tuple[np.ndarray, np.ndarray, np.ndarray, int] | None
+            ) -> tuple[float, float, float]:
+    """:func:`lag_frames` from a walk's :func:`lag_profile`: ``(tau in frames, offset b in
+    degrees, se of tau in frames)``, NaN without a profile."""
     if prof is None:
         return float("nan"), float("nan"), float("nan")
     shifts, sse, b, n = prof
@@ -366,8 +372,9 @@ def part_a(trials: int, seed: int, dur: float) -> tuple[list, dict]:
                                 np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg
                                           for u in ut]),
                                 tw, cfg.hop_ms * 1e-3, np.array([u.measured for u in ut]))
-                        acc[k2].append(lag_frames(*args))
-                        acc[f"prof_{k2}"].append(lag_profile(*args))
+                        prof = lag_profile(*args)
+                        acc[k2].append(lag_fit(prof))
+                        acc[f"prof_{k2}"].append(prof)
                 acc["speed"].append(np.linalg.norm(traj.velocity(0.5 * dur)))
                 if not example and kind == "male" and snr == 20.0:
                     example = {"t": t, "true": true, "raw": raw, "trk": trk, "srp": srp}
@@ -434,7 +441,7 @@ def part_b(trials: int, seed: int, dur: float) -> tuple[list, dict]:
     # (the 48 kHz rig last, so the 16 kHz rigs keep the walks of the runs before it existed)
     cases = [(name if room else f"{name}, FREE FIELD (control)", rig, fs, room)
              for group in (rigs, wide) for room in (True, False) for name, rig, fs in group]
-    trackers = ("RayTracker (CV)", "CA Kalman (stream)")
+    trackers = ("RayTracker (CV; the stream's default)", "CA Kalman (stream's motion_model ca)")
     for name, rig, fs, room in cases:
         e_raw, e_rng = [], []
         e_trk, e_vel, e_fix = ({k: [] for k in trackers} for _ in range(3))
