@@ -198,11 +198,12 @@ def test_track_on_rays_at_48_khz_uses_the_wide_band(rig):
         fixes = [f for f in res.fixes if f is not None]
         # the default fix covariance is the one of ray_sigma_tdoa_s(fs) along the ray
         f = fixes[len(fixes) // 2]
-        ref = locate_on_ray(rig, rig.project(traj.at(res.t[len(res.t) // 2]))[0],
-                            rig.array.tdoa(f.position_m), sigma_tdoa_s=ray_sigma_tdoa_s(fs))
+        ref = locate_on_ray(rig, rig.project(f.position_m)[0], rig.array.tdoa(f.position_m),
+                            sigma_tdoa_s=ray_sigma_tdoa_s(fs))
+        assert np.linalg.norm(ref.position_m - f.position_m) < 1e-3
         along = float(f.direction @ f.covariance @ f.direction)
         assert along == pytest.approx(float(ref.direction @ ref.covariance @ ref.direction),
-                                      rel=0.05)
+                                      rel=0.02)
         errs[fs] = np.median(np.linalg.norm(res.raw - traj.at(res.t), axis=1)[
             np.isfinite(res.raw[:, 0])])
     # a three times wider band: sharper GCC peaks, fixes closer along the ray (here 4.2 vs
