@@ -154,6 +154,12 @@ def _signal(kind: str, dur: float, rng: np.random.Generator, fs: int = FS) -> np
     return 0.05 * x / np.std(x)
 
 
+def _azimuths(ups: list, field: str = "azimuth_deg") -> np.ndarray:
+    """One azimuth field (deg) of stream updates as an array, NaN where it is None."""
+    return np.array([np.nan if getattr(u, field) is None else getattr(u, field) for u in ups],
+                    dtype=float)
+
+
 def _leg_start(rng: np.random.Generator, r_range, speed) -> tuple[np.ndarray, float, float]:
     """A random start point r_range metres from the array (x, y), speed (m/s), heading (rad)."""
     r0 = rng.uniform(*r_range)
@@ -339,9 +345,7 @@ def part_a(trials: int, seed: int, dur: float) -> tuple[list, dict]:
                 ups = StreamPipeline(arr, CFG).run(ArraySource(y, FS, 2048))
                 t = np.array([u.t for u in ups])
                 true = direction_deg(traj.at(t))[0]
-                raw = np.array([np.nan if u.raw_azimuth_deg is None else u.raw_azimuth_deg
-                                for u in ups])
-                trk = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in ups])
+                raw, trk = _azimuths(ups, "raw_azimuth_deg"), _azimuths(ups)
                 srp, _ = srp_per_frame(y, arr, t)
                 e_raw, e_trk = wrap_deg(raw - true), wrap_deg(trk - true)
                 acc["raw"].append(e_raw)
@@ -351,9 +355,7 @@ def part_a(trials: int, seed: int, dur: float) -> tuple[list, dict]:
                 acc["srp_common"].append(np.where(np.isfinite(raw), wrap_deg(srp - true), np.nan))
                 acc["cov_raw"].append(np.mean(np.isfinite(raw)))
                 acc["slow"].append(slow_part(e_raw))
-                cv = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg
-                               for u in StreamPipeline(arr, CFG_CV).run(
-                                   ArraySource(y, FS, 2048))])
+                cv = _azimuths(StreamPipeline(arr, CFG_CV).run(ArraySource(y, FS, 2048)))
                 acc["cv_common"].append(np.where(np.isfinite(raw), wrap_deg(cv - true), np.nan))
                 # the lag: on a walk of the same kind that turns back halfway (a straight
                 # walk's nearly constant angular rate cannot tell a lag from an offset)
@@ -368,10 +370,8 @@ def part_a(trials: int, seed: int, dur: float) -> tuple[list, dict]:
                                                               rng=rng_t))):
                     for k2, cfg in ((key, CFG), (key.replace("lag", "lag_cv"), CFG_CV)):
                         ut = StreamPipeline(arr, cfg).run(ArraySource(yt, FS, 2048))
-                        args = (np.array([u.t for u in ut]),
-                                np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg
-                                          for u in ut]),
-                                tw, cfg.hop_ms * 1e-3, np.array([u.measured for u in ut]))
+                        args = (np.array([u.t for u in ut]), _azimuths(ut), tw,
+                                cfg.hop_ms * 1e-3, np.array([u.measured for u in ut]))
                         prof = lag_profile(*args)
                         acc[k2].append(lag_fit(prof))
                         acc[f"prof_{k2}"].append(prof)
@@ -548,7 +548,7 @@ def part_c(seed: int) -> list:
     st = pipe2.stats
     lat = st.latency_summary()
     t = np.array([u.t for u in ups])
-    trk = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in ups])
+    trk = _azimuths(ups)
     err = rmse(wrap_deg(trk - direction_deg(traj.at(t))[0])[10:])
     rows.append([f"dropout: {st.n_dropped_blocks} dropped, {st.n_late_blocks} late, "
                  f"{st.n_stalls} stall waits; tracked az RMSE {err:.1f} deg",
