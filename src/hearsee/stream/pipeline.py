@@ -735,8 +735,10 @@ class StreamConfig:
         IMM is the default since the moving-source renderer became faithful (2026-11-24): on
         bench/tracking.py part A's room walks (seeds 0, 100, 200; 24 per condition, SNR 10/20
         dB) the single filter's median lag on turning walks reached 4.9 frames (female voice,
-        10 dB; 1.7-4.9 for the voices), the IMM's 0.3-1.8 (free field 0.3-2.0), with the
-        voices' tracked RMSE still 2.4-3.0x below the per-frame one (single filter 2.4-3.2x).
+        10 dB; 1.7-4.9 for the voices), the IMM's (then with a 1000 deg/s^2 turning mode)
+        0.3-1.8 (free field 0.3-2.0), with the voices' tracked RMSE still 2.4-3.0x below the
+        per-frame one (single filter 2.4-3.2x); the 2000 deg/s^2 mode's numbers are at
+        :data:`~hearsee.audio.tracking.IMM_MODES_DPS2`.
         It costs ~0.19 ms per frame (one filter ~0.05): the stream runs ~100x instead of
         ~125x faster than real time (three-mic, 16 kHz, block 4096, process CPU time; 87x in
         bench/tracking.py part C of 2026-11-24)
