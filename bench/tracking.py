@@ -424,7 +424,12 @@ def view_walk(rng: np.random.Generator, rig: AudioVisualRig, dur: float) -> Traj
 
 def part_b(trials: int, seed: int, dur: float) -> tuple[list, dict]:
     from hearsee.audio.tracking import MotionKalman
-    from hearsee.fusion.audiovisual import RayTracker, ray_sigma_tdoa_s, track_on_rays
+    from hearsee.fusion.audiovisual import (
+        FIX_SIGMA_TDOA_S,
+        RayTracker,
+        ray_sigma_tdoa_s,
+        track_on_rays,
+    )
 
     cam = Camera.from_fov(70.0, 640, 480)
     three_mic = MicArray.from_preset("three-mic")
@@ -446,7 +451,7 @@ def part_b(trials: int, seed: int, dur: float) -> tuple[list, dict]:
         e_raw, e_rng = [], []
         e_trk, e_vel, e_fix = ({k: [] for k in trackers} for _ in range(3))
         # the stream's CA filter was tuned with fixes made with 20 us of TDOA noise
-        ca_scale = (2e-5 / ray_sigma_tdoa_s(fs)) ** 2 - 1.0
+        ca_scale = (FIX_SIGMA_TDOA_S / ray_sigma_tdoa_s(fs)) ** 2 - 1.0
         for _ in range(trials):
             traj = view_walk(rng, rig, dur)
             x = _signal("male", dur, rng, fs)

@@ -423,7 +423,7 @@ def test_direction_track_is_dropped_after_max_coast_s_without_a_measurement():
     assert has[None][t > 0.3].all()
     assert np.all(_az_err(runs[1.5], traj)[t > 4.0] < 5.0)  # re-acquired after the silence
     with pytest.raises(ConfigError):
-        pl.TrackingProcessor(arr, FS, StreamConfig(max_coast_s=0.0))
+        TrackingProcessor(arr, FS, StreamConfig(max_coast_s=0.0))
 
 
 def _fitted_lag_frames(t, az, measured, traj, hop_s):
@@ -454,7 +454,7 @@ def test_default_tracker_follows_a_turning_voice_within_two_frames(modes):
     y = simulate_moving_free_field(x, FS, arr, traj, snr_db=20, rng=4)
     cfg = (StreamConfig(frame_ms=64, hop_ms=32) if modes == "default"
            else StreamConfig(frame_ms=64, hop_ms=32, direction_modes_dps2=modes))
-    assert type(pl.TrackingProcessor(arr, FS, cfg).direction).__name__ == (
+    assert type(TrackingProcessor(arr, FS, cfg).direction).__name__ == (
         "DirectionKalman" if modes is None else "DirectionIMM")
     ups = StreamPipeline(arr, cfg).run(ArraySource(y, FS, 2048))
     t, az = _times_azimuths(ups)
@@ -469,7 +469,7 @@ def test_bad_imm_settings_are_a_config_error():
     for bad in ({"direction_modes_dps2": (100.0,)}, {"direction_modes_dps2": (50.0, 600.0),
                                                      "mode_dwell_s": 0.0}):
         with pytest.raises(ConfigError, match="direction_modes_dps2"):
-            pl.TrackingProcessor(arr, FS, StreamConfig(**bad))
+            TrackingProcessor(arr, FS, StreamConfig(**bad))
 
 
 def _two_talkers(gaps):
@@ -515,4 +515,4 @@ def test_track_stays_on_the_speaker_through_a_pause_while_another_talks():
 
 def test_bad_reacquire_is_a_config_error():
     with pytest.raises(ConfigError, match="reacquire_s"):
-        pl.TrackingProcessor(MicArray.from_preset("three-mic"), FS, StreamConfig(reacquire_s=0))
+        TrackingProcessor(MicArray.from_preset("three-mic"), FS, StreamConfig(reacquire_s=0))

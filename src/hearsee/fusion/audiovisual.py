@@ -53,9 +53,15 @@ from hearsee.audio.tracking import MotionKalman
 from hearsee.errors import EstimationError, GeometryError
 from hearsee.vision.camera import Camera, camera_pose
 
+#: TDOA noise (s) that :func:`locate_on_ray` assumes by default for a fix's covariance, and
+#: the one the stream's constant-acceleration 3D tracker (``motion_model="ca"``) was tuned with;
+#: the constant-velocity :class:`RayTracker` uses :func:`ray_sigma_tdoa_s` instead
+FIX_SIGMA_TDOA_S = 2e-5
+
 __all__ = [
     "AudioVisualRegressor",
     "AudioVisualRig",
+    "FIX_SIGMA_TDOA_S",
     "RayFix",
     "RayTrack",
     "RayTracker",
@@ -173,7 +179,7 @@ def locate_on_ray(
     pairs: Sequence[tuple[int, int]] | None = None,
     range_m: tuple[float, float] = (0.1, 10.0),
     n_grid: int = 256,
-    sigma_tdoa_s: float = 2e-5,
+    sigma_tdoa_s: float = FIX_SIGMA_TDOA_S,
     sigma_px: float = 1.0,
     max_candidates: int = 3,
 ) -> RayFix:

@@ -1013,7 +1013,9 @@ class TrackingProcessor:
             tdoa = ray_sigma_tdoa_s(fs) if cfg.sigma_tdoa_s is None else float(cfg.sigma_tdoa_s)
             return RayTracker(sigma_accel=cfg.sigma_accel), tdoa
         if cfg.motion_model == "ca":
-            tdoa = 2e-5 if cfg.sigma_tdoa_s is None else float(cfg.sigma_tdoa_s)
+            from hearsee.fusion.audiovisual import FIX_SIGMA_TDOA_S
+
+            tdoa = FIX_SIGMA_TDOA_S if cfg.sigma_tdoa_s is None else float(cfg.sigma_tdoa_s)
             return MotionKalman(sigma_meas_m=0.05, sigma_jerk=cfg.sigma_jerk,
                                 accel_tau_s=cfg.accel_tau_s), tdoa
         raise ConfigError(f"motion_model must be 'cv' or 'ca', got {cfg.motion_model!r}")
