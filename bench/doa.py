@@ -67,8 +67,6 @@ BANDS = {"noise": (300.0, 7500.0), "speech": (300.0, 3500.0)}
 #: coherence ratio (estimate_tdoas) says the recording is reverberant (threshold 0.9); chosen
 #: on held-out seeds 777 and 778 (10 trials per condition each; conditions won 43 -> 50 and
 #: 37 -> 42 of 72; "roth" and "scot" won 49/40 and 49/40), never on this table's seed.
-#: Since 2026-11-24 (fourth session) a lone pair's reverberant summary drops the SNR weighting
-#: (estimate_tdoas' reverb_snr_weight default, chosen on held-out seeds 779-782; see there).
 HEARSEE = {"method": "ml", "frame_ms": 64.0, "hop_ms": 64.0, "refine": "none",
            "snr_weight": True, "window": ("tukey", 0.25), "min_confidence": 0.8,
            "onset_weight": 3.0, "reverb_method": "phat"}
@@ -90,8 +88,6 @@ ABLATIONS = {
     "in-plane direction, whole-sphere search": {"source_in_plane": False},
     "no reverb_method (ML summary always)": {"reverb_method": None},
     "reverb_method=roth": {"reverb_method": "roth"},
-    "reverberant summary SNR-weighted (two-mic default before 2026-11-24)": {
-        "reverb_snr_weight": True},
     "onset_weight=0": {"onset_weight": 0.0},
     "no fallback": {"fallback": False},
 }

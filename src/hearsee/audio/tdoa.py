@@ -693,7 +693,6 @@ def estimate_tdoas(
     onset_weight: float = 0.0,
     reverb_method: str | None = None,
     reverb_coherence: float = 0.9,
-    reverb_snr_weight: bool | None = None,
     summary_upsample: int = 4,
     source_in_plane: bool = False,
     whole_recording: bool = True,
@@ -782,22 +781,6 @@ def estimate_tdoas(
         still use ``method``. Needs >= 3 inactive frames (else the summary keeps ``method``).
     reverb_coherence : float
         The ``coherence_ratio`` threshold (default 0.9).
-    reverb_snr_weight : bool, optional
-        Whether the reverberant summary keeps the SNR weighting (``snr_weight``) on top of
-        ``reverb_method``; without it each active frame's whitened cross spectrum counts
-        equally, bin by bin (the SRP-PHAT average). Default None: only with redundant pairs
-        (three or more microphones). A plausible reason, not established: reverberation
-        keeps the loud bins of a voice -- its low harmonics -- coherent with their own
-        reflections, so the SNR weighting narrows the band the estimate rests on; the joint
-        direction search of three or more microphones copes with that, a lone pair does
-        not. The default is empirical -- held-out ``bench/doa.py``
-        recordings (seeds 779-782, 20 per condition; RT60 0.3 and 0.6 s; voices, ARCTIC
-        speech and white noise at 10 and 20 dB: 16 conditions per seed; anechoic recordings
-        never switch): two microphones without the SNR weighting had the lower azimuth RMSE
-        in 35 of the 64 condition cells and the higher in 13 (pooled RMSE 12.0 -> 11.5,
-        10.5 -> 10.7, 11.9 -> 12.1, 15.8 -> 13.9 deg; conditions at or below the best
-        pyroomacoustics method 27 -> 37 of 64); three microphones (seed 780) lower in 2 of 16,
-        higher in 10 (pooled 2.2 -> 3.0 deg) -- hence the default.
     summary_upsample : int
         Without redundant pairs (two microphones, or pairs that share no triangle), the
         whole-recording peak is searched on the averaged correlation upsampled this many times
@@ -929,7 +912,6 @@ def estimate_tdoas(
             noise_psd = np.maximum(noise_psd, 1e-12 * noise_psd.max(initial=0.0) + _TINY)
 
     redundant = _closure_projector(tuple(prs), arr.n_mics) is not None  # a closed cycle
-    rev_snr = redundant if reverb_snr_weight is None else bool(reverb_snr_weight)
     frame_cfar = not redundant and min_frame_peak_snr > 0
     noise_profile = _lag_noise_profile(win, nfft) if not redundant else None
 
@@ -1012,12 +994,7 @@ def estimate_tdoas(
                 s_cross += np.sum(Ga, axis=0)
                 Xa = X[ia]
                 s_auto += np.sum(Xa.real**2 + Xa.imag**2, axis=0)
-                if rev_snr:
-                    P2 = Ga * (W2 * coh[ia]).astype(np.float32)
-                else:
-                    P2 = Ga * W2.astype(np.float32)
-                    P2 = P2 / np.maximum(np.sqrt(np.sum(P2.real**2 + P2.imag**2, axis=-1,
-                                                        keepdims=True)), _TINY)
+                P2 = Ga * (W2 * coh[ia]).astype(np.float32)
                 if onset_weight:
                     P2 = P2 * frame_w[s0:s1][act][:, None, None]
                 acc2_active += np.sum(P2, axis=0)
