@@ -67,6 +67,15 @@ BANDS = {"noise": (300.0, 7500.0), "speech": (300.0, 3500.0)}
 #: coherence ratio (estimate_tdoas) says the recording is reverberant (threshold 0.9); chosen
 #: on held-out seeds 777 and 778 (10 trials per condition each; conditions won 43 -> 50 and
 #: 37 -> 42 of 72; "roth" and "scot" won 49/40 and 49/40), never on this table's seed.
+#: Tried and rejected (2026-11-24): a two-mic reverberant summary WITHOUT the SNR weighting
+#: (each active frame's PHAT spectrum counted equally, as SRP-PHAT does). Simulated two-mic
+#: recordings liked it (held-out seeds 779-782, RT60 0.3/0.6: lower RMSE in 35 of 64
+#: condition cells, higher in 13; this table's seed 0: 48 -> 52 of 72 at or below the best peer,
+#: pooled RMSE unchanged), but the measured impulse responses (part 3) did not: median pair
+#: error 0.266 -> 0.302 samples against the calibrated truth, worse on 29 % of the pair
+#: recordings and better on 19 % (full band); band-limited to 300-3500 Hz a tie. A saturated
+#: SNR weight (min(coherence / 0.5, 1)) was neutral on both. Real acoustics decide, so the
+#: SNR weighting stays.
 HEARSEE = {"method": "ml", "frame_ms": 64.0, "hop_ms": 64.0, "refine": "none",
            "snr_weight": True, "window": ("tukey", 0.25), "min_confidence": 0.8,
            "onset_weight": 3.0, "reverb_method": "phat"}
