@@ -516,3 +516,30 @@ def test_track_stays_on_the_speaker_through_a_pause_while_another_talks():
 def test_bad_reacquire_is_a_config_error():
     with pytest.raises(ConfigError, match="reacquire_s"):
         TrackingProcessor(MicArray.from_preset("three-mic"), FS, StreamConfig(reacquire_s=0))
+
+
+def test_in_plane_reports_zero_elevation_for_a_speaker_at_the_arrays_height():
+    """A voice walking past the three-mic triangle at its height in a reverberant room: the
+    plane-wave model reads floor reflections and the wavefront's curvature as elevation;
+    ``in_plane`` reports 0 and keeps the azimuth."""
+    from hearsee.audio.signals import synthetic_voice
+    from hearsee.sim.moving import simulate_moving_room
+
+    arr = MicArray.from_preset("three-mic")
+    traj = linear_trajectory([1.2, -1.0, 0.0], [0.0, 0.8, 0.0], 2.0)
+    s = synthetic_voice("male", 2.0, FS, rng=3)
+    y = simulate_moving_room(s, FS, arr, traj, np.array([6.0, 5.0, 3.0]), 0.3,
+                             np.array([3.0, 2.5, 1.3]), snr_db=20.0, rng=5, block_s=0.1)
+    res = {}
+    for ip in (False, True):
+        ups = StreamPipeline(arr, StreamConfig(in_plane=ip)).run(ArraySource(y, FS, 4096))
+        el = np.array([np.nan if u.elevation_deg is None else u.elevation_deg for u in ups])
+        raw = [u.raw_elevation_deg for u in ups if u.raw_elevation_deg is not None]
+        res[ip] = (_az_err(ups, traj), el, raw)
+    err_in, el_in, raw_in = res[True]
+    assert np.isfinite(el_in).sum() > 0.8 * el_in.size
+    assert np.all(el_in[np.isfinite(el_in)] == 0.0) and raw_in and np.all(np.asarray(raw_in) == 0)
+    assert np.nanpercentile(np.abs(res[False][1]), 90) > 5.0  # the default's spread
+    assert np.nanmedian(err_in) < 1.2 and np.nanmedian(res[False][0]) < 1.2
+    srp = pl.SmoothedSrp(arr, FS, 1024, 0.5, in_plane=True)
+    assert np.all(srp.grid_el == 0.0) and srp.grid_az.size == srp.n_az

@@ -184,3 +184,14 @@ def test_live_camera_is_read_in_a_thread(monkeypatch):
     assert vp.ended and vp.frame_index == 4
     assert vp(1.0) is None
     vp.close()
+
+
+def test_track_in_plane_option(scene, capsys):
+    """--in-plane: every reported elevation is 0 (the source is at the array's height)."""
+    assert main(["track", str(scene["wav"]), "--array", str(scene["array"]), "--in-plane"]) == 0
+    rows = _lines(capsys)
+    el = [r["elevation_deg"] for r in rows if r["elevation_deg"] is not None]
+    assert len(el) > 0.8 * len(rows) and all(e == 0.0 for e in el)
+    t = np.array([r["t"] for r in rows])
+    az = np.array([r["azimuth_deg"] for r in rows], dtype=float)
+    assert np.median(np.abs(wrap_deg(az - direction_deg(scene["traj"].at(t))[0]))[5:]) < 3.0

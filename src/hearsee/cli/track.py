@@ -67,6 +67,9 @@ def track_cmd(
     method: Annotated[GccMethod, typer.Option("--method", help="GCC weighting.")] = GccMethod.phat,
     itd_filter: Annotated[bool, typer.Option(
         "--itd-filter", help="Smooth TDOAs with the ITD Kalman filter first.")] = False,
+    in_plane: Annotated[bool, typer.Option(
+        "--in-plane", help="The speaker is at the height of a planar (three-mic) array: "
+        "elevation 0, spherical wavefront of a source assumed 2 m away.")] = False,
     tracker: Annotated[Tracker, typer.Option(
         "--tracker", help="Direction tracker: imm (interacting multiple models: a quiet and a "
         "turning mode; the default) or cv (one constant-velocity Kalman filter).")] = Tracker.imm,
@@ -116,7 +119,7 @@ def track_cmd(
     else:
         source = WavSource(recording, n_channels=arr.n_mics, block_len=4096)
     cfg = StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms, method=method.value.replace("gcc-", ""),
-                       itd_filter=itd_filter,
+                       itd_filter=itd_filter, in_plane=in_plane,
                        direction_modes_dps2=IMM_MODES_DPS2 if tracker is Tracker.imm else None)
     pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
 

@@ -499,13 +499,18 @@ class SmoothedSrp:
     The averaged spectrum lags the source by about ``alpha / (1 - alpha)`` frames; the tracker
     accounts for it in its measurement model (:meth:`DirectionKalman.update` ``delay_s``).
 
+    The direction grid covers the sphere (volume arrays), the upper hemisphere (horizontal
+    planar arrays, which cannot tell the elevation's sign) or the horizontal plane only (linear
+    arrays; and planar ones with ``in_plane``: a source known to be at the array's height).
+
     Units: seconds, Hz, degrees. Frames are Hann-windowed ``frame_len`` samples; state persists
     across batches (missing frames leave it unchanged).
     """
 
     def __init__(self, array: MicArray, fs: float, frame_len: int, alpha: float,
                  band_hz: tuple[float, float] | None = (300.0, 3500.0), up: int = 4,
-                 grid_deg: float = 2.0, coherence_weight: bool = True) -> None:
+                 grid_deg: float = 2.0, coherence_weight: bool = True,
+                 in_plane: bool = False) -> None:
         import scipy.fft as sfft
 
         if not 0.0 <= alpha < 1.0:
@@ -531,7 +536,7 @@ class SmoothedSrp:
         planar = np.ptp(array.positions[:, 2]) < 1e-9
         els = np.radians(np.arange(0.0 if planar else -80.0, 81.0, 20.0 if planar else 10.0))
         cen = array.positions - array.positions.mean(axis=0)
-        if np.linalg.svd(cen, compute_uv=False)[1] < 1e-9:
+        if np.linalg.svd(cen, compute_uv=False)[1] < 1e-9 or (planar and in_plane):
             # linear array: every elevation on the cone gives the same TDOA; azimuth in the
             # horizontal plane, as the closed-form localizer reports it
             els = np.zeros(1)
@@ -704,6 +709,17 @@ class StreamConfig:
         no measurement (:func:`~hearsee.audio.tdoa.estimate_tdoas`)
     band_hz : optional frequency band for the GCC, Hz
     itd_filter : smooth the TDOAs with the ITD Kalman filter (thesis 2.2.2) before localizing
+    in_plane : the speaker is at the height of a planar array of three or more microphones (a
+        robot's head at mouth height): a frame's own direction models the spherical wavefront
+        of a source assumed 2 m away in the array plane
+        (:func:`~hearsee.audio.localize.near_field_in_plane`) and the smoothed steered response
+        scans only that plane, so the elevation is 0. Coplanar microphones cannot tell a
+        nearby source's curved wavefront or a floor reflection from elevation: a male voice
+        walking 1.2-1.6 m from the three-mic preset at its height (2.5 s, RT60 0.3 s, 20 dB,
+        three noise seeds) gave tracked elevations of median 1.6-10.6 deg (90th percentile
+        8-25 deg) by default, and with ``in_plane`` a lower azimuth error (median 0.9-1.3 ->
+        0.7-0.8 deg).
+        Ignored for linear and volume arrays. Default False
     sigma_meas_deg, sigma_accel_dps2 : direction tracker noise (degrees, deg/s^2);
         ``sigma_meas_deg`` is the measurement noise where no model below applies
     sigma_frame_deg : measurement noise model of a frame's own GCC direction: standard deviation
@@ -800,6 +816,7 @@ class StreamConfig:
     min_confidence: float = 1.0
     band_hz: tuple[float, float] | None = None
     itd_filter: bool = False
+    in_plane: bool = False
     sigma_meas_deg: float = 10.0
     sigma_accel_dps2: float = 200.0
     motion_model: str = "cv"
@@ -865,7 +882,8 @@ class TrackingProcessor:
         if self.cfg.spectrum_alpha > 0:
             self.srp = SmoothedSrp(array, fs, self.frame_len, self.cfg.spectrum_alpha,
                                    self.cfg.srp_band_hz,
-                                   coherence_weight=self.cfg.srp_coherence_weight)
+                                   coherence_weight=self.cfg.srp_coherence_weight,
+                                   in_plane=self.cfg.in_plane)
 
     def smoothed(self, batch: FrameBatch) -> dict[str, NDArray] | None:
         """The :class:`SmoothedSrp` measurements of the batch's frames (NaN rows for missing
@@ -914,7 +932,8 @@ class TrackingProcessor:
             raw_az = raw_el = None
             cands: list[tuple[float, float | None]] = []
             if have:
-                loc = localize_tdoa(z, self.array, self.pairs, near_field=False)
+                loc = localize_tdoa(z, self.array, self.pairs, near_field=self.cfg.in_plane,
+                                    in_plane=self.cfg.in_plane)
                 cands = [(a, e) for a, e in loc.candidates if a is not None]
                 raw_az, raw_el = loc.azimuth_deg, loc.elevation_deg
             delay = 0.0
