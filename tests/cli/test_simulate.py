@@ -69,6 +69,7 @@ def test_simulate_room_yaml_array_and_wav_signal(tmp_path):
     (["--source", "1,0,0", "--signal", "missing.wav"], "file not found"),
     (["--source", "1,0,0", "--duration", "-1"], "duration"),
     (["--source", "1,0,0", "--room", "6x5x3", "--rt60", "0", "--far-field"], "free field only"),
+    (["--source", "0,0,0", "--far-field"], "needs a direction"),
 ])
 def test_simulate_bad_options(tmp_path, capsys, extra, message):
     code = main(["simulate", str(tmp_path / "o.wav"), "--array", "two-mic", "--duration", "0.1",

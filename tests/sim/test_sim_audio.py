@@ -165,3 +165,15 @@ def test_save_flac(tmp_path):
     assert sf.info(str(wav)).subtype == "PCM_24"
     y, _ = read_recording(wav, 2)
     np.testing.assert_allclose(y, x * 0.5 / np.abs(x).max(), atol=1e-6)
+
+
+def test_ground_truth_of_a_source_at_the_origin_has_no_direction():
+    """Between the microphones of a triangle: the distances (and TDOAs) are defined, the
+    direction is not -- None, not a made-up 0 deg; a plane wave from there is an error."""
+    arr = MicArray.from_preset("three-mic")
+    t = ground_truth(arr, [0.0, 0.0, 0.0])
+    assert t["azimuth_deg"] is None and t["elevation_deg"] is None
+    assert t["distance_m"] == 0.0
+    np.testing.assert_allclose(list(t["tdoa_s"].values()), 0.0, atol=1e-8)  # equidistant
+    with pytest.raises(GeometryError, match="needs a direction"):
+        ground_truth(arr, [0.0, 0.0, 0.0], far_field=True)

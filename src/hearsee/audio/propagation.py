@@ -144,6 +144,9 @@ def simulate_free_field(
     if s.shape != (3,) or not np.all(np.isfinite(s)):
         raise GeometryError(f"source must be a finite [x, y, z] point, got {source!r}")
     if far_field:
+        if not np.linalg.norm(s) > 0:
+            raise GeometryError("a far-field (plane-wave) source needs a direction; the source is "
+                                "at the array-frame origin")
         u = s / np.linalg.norm(s)
         t = -(pos @ u) / c
         t = t - t.min()

@@ -132,9 +132,13 @@ def simulate_cmd(
         advance()
     wav, js = save_recording(out, x, truth, subtype="PCM_16" if pcm16 else "FLOAT",
                              protect=protect)
+    if truth["azimuth_deg"] is None:
+        where = "direction undefined (source at the array-frame origin)"
+    else:
+        where = (f"azimuth {truth['azimuth_deg']:.1f} deg, elevation "
+                 f"{truth['elevation_deg']:.1f} deg")
     err_console.print(
         f"wrote {wav} ({x.shape[0]} channels, {x.shape[1] / fs:.2f} s at {fs} Hz) and {js}: "
-        f"azimuth {truth['azimuth_deg']:.1f} deg, elevation {truth['elevation_deg']:.1f} deg, "
-        f"distance {truth['distance_m']:.2f} m",
+        f"{where}, distance {truth['distance_m']:.2f} m",
         highlight=False,
     )

@@ -150,17 +150,22 @@ def ground_truth(array: MicArray, source: ArrayLike,
     Returns ``source_m`` [x, y, z] m, ``azimuth_deg``, ``elevation_deg``, ``distance_m`` (from
     the array-frame origin) and ``tdoa_s`` {"i-j": t_i - t_j seconds} for every pair (exact
     near-field values, ``MicArray.tdoa``, or plane-wave values, ``MicArray.tdoa_far``, with
-    ``far_field=True``; with ``mic_positions`` for those positions).
+    ``far_field=True``; with ``mic_positions`` for those positions). A source at the origin
+    has no direction: azimuth and elevation are None (and ``far_field`` a GeometryError).
     """
     src = _point(source, "source")
     geo = array if mic_positions is None else MicArray(
         np.asarray(mic_positions, dtype=float), array.speed_of_sound, array.name)
     az, el, r = cart_to_sph(src)
+    at_origin = not r > 0
+    if far_field and at_origin:
+        raise GeometryError("a far-field (plane-wave) source needs a direction; the source is "
+                            "at the array-frame origin")
     tdoa = geo.tdoa_far(src) if far_field else geo.tdoa(src)
     return {
         "source_m": src.tolist(),
-        "azimuth_deg": float(np.degrees(az)),
-        "elevation_deg": float(np.degrees(el)),
+        "azimuth_deg": None if at_origin else float(np.degrees(az)),
+        "elevation_deg": None if at_origin else float(np.degrees(el)),
         "distance_m": float(r),
         "tdoa_s": {lab: float(t) for lab, t in zip(array.pair_labels, tdoa, strict=True)},
     }
