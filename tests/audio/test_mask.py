@@ -101,9 +101,12 @@ def test_microphones_inside_the_body_is_an_error():
 
 
 def test_microphones_outside_are_accepted():
+    """Microphones 3.3 cm off the egg's flanks (half width 8.66 cm) are valid positions."""
     d = _mask2_dict(mesh_subdivision=3)
     d["microphones"] = [[0.0, -0.12, 0.0], [0.0, 0.12, 0.0]]
-    mask.mask_geometry(MicArray.from_dict(d))
+    g = mask.mask_geometry(MicArray.from_dict(d))
+    assert g.shape == "egg" and g.mesh_subdivision == 3
+    assert np.all(g.inside_egg(np.array(d["microphones"])) > 1.0)  # outside the body
 
 
 def test_open_mesh_surface_is_an_error():
