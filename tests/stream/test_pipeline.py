@@ -543,3 +543,14 @@ def test_in_plane_reports_zero_elevation_for_a_speaker_at_the_arrays_height():
     assert np.nanmedian(err_in) < 1.2 and np.nanmedian(res[False][0]) < 1.2
     srp = pl.SmoothedSrp(arr, FS, 1024, 0.5, in_plane=True)
     assert np.all(srp.grid_el == 0.0) and srp.grid_az.size == srp.n_az
+
+
+def test_in_plane_changes_nothing_for_a_linear_array():
+    arr = MicArray.from_preset("two-mic")
+    traj = linear_trajectory([1.5, -0.5, 0.0], [0.0, 0.5, 0.0], 1.0)
+    x = np.random.default_rng(2).standard_normal(FS)
+    y = simulate_moving_free_field(x, FS, arr, traj, snr_db=20, rng=3)
+    az = [_times_azimuths(StreamPipeline(arr, StreamConfig(in_plane=ip)).run(
+        ArraySource(y, FS, 4096)))[1] for ip in (False, True)]
+    assert np.isfinite(az[0]).sum() > 10
+    np.testing.assert_array_equal(az[0], az[1])

@@ -56,7 +56,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
-from hearsee.audio.localize import localize_tdoa
+from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.tdoa import estimate_tdoas, frame_signals
 from hearsee.audio.tracking import IMM_MODES_DPS2, DirectionIMM, DirectionKalman, MotionKalman
 from hearsee.errors import AudioInputError, ConfigError, EstimationError
@@ -713,8 +713,9 @@ class StreamConfig:
         robot's head at mouth height): a frame's own direction models the spherical wavefront
         of a source assumed 2 m away in the array plane
         (:func:`~hearsee.audio.localize.near_field_in_plane`) and the smoothed steered response
-        scans only that plane, so the elevation is 0. Coplanar microphones cannot tell a
-        nearby source's curved wavefront or a floor reflection from elevation: a male voice
+        scans only that plane, so the elevation is 0 (for a horizontal array). Coplanar
+        microphones cannot tell a nearby source's curved wavefront or a floor reflection from
+        elevation: a male voice
         walking 1.2-1.6 m from the three-mic preset at its height (2.5 s, RT60 0.3 s, 20 dB,
         three noise seeds) gave tracked elevations of median 1.6-10.6 deg (90th percentile
         8-25 deg) by default, and with ``in_plane`` a lower azimuth error (median 0.9-1.3 ->
@@ -869,6 +870,8 @@ class TrackingProcessor:
         self.rig, self.image_points = rig, image_points
         self.frame_len, self.hop = frame_geometry(fs, self.cfg.frame_ms, self.cfg.hop_ms)
         self.pairs = list(array.pairs)
+        # the in-plane model applies to planar arrays only
+        self._in_plane = bool(self.cfg.in_plane) and array_geometry(array).kind == "planar"
         self.itd = (ItdKalman(array.n_mics, self.pairs, q_std_s=0.5 / fs, r_std_s=1.0 / fs)
                     if self.cfg.itd_filter else None)
         if self.cfg.max_coast_s is not None and not self.cfg.max_coast_s > 0:
@@ -884,7 +887,7 @@ class TrackingProcessor:
             self.srp = SmoothedSrp(array, fs, self.frame_len, self.cfg.spectrum_alpha,
                                    self.cfg.srp_band_hz,
                                    coherence_weight=self.cfg.srp_coherence_weight,
-                                   in_plane=self.cfg.in_plane)
+                                   in_plane=self._in_plane)
 
     def smoothed(self, batch: FrameBatch) -> dict[str, NDArray] | None:
         """The :class:`SmoothedSrp` measurements of the batch's frames (NaN rows for missing
@@ -933,8 +936,8 @@ class TrackingProcessor:
             raw_az = raw_el = None
             cands: list[tuple[float, float | None]] = []
             if have:
-                loc = localize_tdoa(z, self.array, self.pairs, near_field=self.cfg.in_plane,
-                                    in_plane=self.cfg.in_plane)
+                loc = localize_tdoa(z, self.array, self.pairs, near_field=self._in_plane,
+                                    in_plane=self._in_plane)
                 cands = [(a, e) for a, e in loc.candidates if a is not None]
                 raw_az, raw_el = loc.azimuth_deg, loc.elevation_deg
             delay = 0.0
