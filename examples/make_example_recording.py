@@ -10,7 +10,7 @@ centre, in a 6 x 5 x 3 m shoebox room (RT60 0.3 s, array at the room centre), SN
 
 from __future__ import annotations
 
-import sys
+import argparse
 from pathlib import Path
 
 import numpy as np
@@ -40,4 +40,7 @@ def main(out: Path) -> None:
 
 
 if __name__ == "__main__":
-    main(Path(sys.argv[1]) if len(sys.argv) > 1 else BUNDLED / EXAMPLE_RECORDING)
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("out", nargs="?", type=Path, default=BUNDLED / EXAMPLE_RECORDING,
+                    help="output .wav (default: the bundled example, rewritten)")
+    main(ap.parse_args().out)
