@@ -11,7 +11,7 @@ NLE coordinates).
 
 from __future__ import annotations
 
-import sys
+import argparse
 from pathlib import Path
 
 import matplotlib
@@ -40,8 +40,10 @@ def thumbnails(ax, Y, images, side, n_show=40, zoom=1.0, seed=0):
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    out = Path(argv[0]) if argv else Path(__file__).resolve().parent / "out"
+    ap = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    ap.add_argument("out", nargs="?", type=Path, default=Path(__file__).resolve().parent / "out",
+                    help="output folder (default: examples/out)")
+    out = ap.parse_args(argv).out
     out.mkdir(parents=True, exist_ok=True)
 
     X, pose = make_head_pose_images(400, random_state=0)

@@ -14,7 +14,7 @@ feature clustering with NLE / CNLE.
 
 from __future__ import annotations
 
-import sys
+import argparse
 import warnings
 from pathlib import Path
 
@@ -85,8 +85,10 @@ def confusion(pred: np.ndarray, lab: np.ndarray) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    out = Path(argv[0]) if argv else Path(__file__).resolve().parent / "out"
+    ap = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    ap.add_argument("out", nargs="?", type=Path, default=Path(__file__).resolve().parent / "out",
+                    help="output folder (default: examples/out)")
+    out = ap.parse_args(argv).out
     out.mkdir(parents=True, exist_ok=True)
 
     P = camera_patches()

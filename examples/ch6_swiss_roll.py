@@ -9,7 +9,7 @@ coordinate) and ``ch6_neighbour_counts.png`` (how many neighbours each point kee
 
 from __future__ import annotations
 
-import sys
+import argparse
 from pathlib import Path
 
 import matplotlib
@@ -52,8 +52,10 @@ def fig_neighbourhood(X: np.ndarray, out: Path, k: int = 12, shadow: float = 0.3
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    out = Path(argv[0]) if argv else Path(__file__).resolve().parent / "out"
+    ap = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    ap.add_argument("out", nargs="?", type=Path, default=Path(__file__).resolve().parent / "out",
+                    help="output folder (default: examples/out)")
+    out = ap.parse_args(argv).out
     out.mkdir(parents=True, exist_ok=True)
     X, t = make_swiss_roll(2000, random_state=0)
     fig_neighbourhood(X, out)

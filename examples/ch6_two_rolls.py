@@ -12,7 +12,7 @@ unrolls each, fig. 6.9) and ``ch6_two_rolls_sweep.png`` (k-means ARI of LLE for 
 
 from __future__ import annotations
 
-import sys
+import argparse
 import warnings
 from pathlib import Path
 
@@ -29,8 +29,10 @@ from hearsee.learn import ClusteredNLE, NeighborhoodLinearEmbedding, make_two_ro
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    out = Path(argv[0]) if argv else Path(__file__).resolve().parent / "out"
+    ap = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    ap.add_argument("out", nargs="?", type=Path, default=Path(__file__).resolve().parent / "out",
+                    help="output folder (default: examples/out)")
+    out = ap.parse_args(argv).out
     out.mkdir(parents=True, exist_ok=True)
     X, lab, t = make_two_rolls(2000, noise=0.1, outliers=0.02, random_state=0)
     good = lab >= 0
