@@ -22,22 +22,25 @@ def _log():
 
 def test_mcap_round_trip(tmp_path):
     pytest.importorskip("mcap_ros2")
-    from mcap_ros2.reader import read_ros2_messages
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
 
     log, frames = _log()
     path = write_mcap(tmp_path / "run.mcap", log, frames)
     msgs = {}
-    for m in read_ros2_messages(str(path)):
-        msgs.setdefault(m.channel.topic, []).append(m)
+    with open(path, "rb") as f:
+        for _, channel, _, ros_msg in make_reader(
+                f, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
+            msgs.setdefault(channel.topic, []).append(ros_msg)
     assert len(msgs["/hearsee/truth"]) == 5
     assert len(msgs["/hearsee/speaker"]) == 4  # no track in the first step
     assert len(msgs["/hearsee/head_pan"]) == 5 and len(msgs["/hearsee/overlay"]) == 2
-    p = msgs["/hearsee/speaker"][-1].ros_msg.point
+    p = msgs["/hearsee/speaker"][-1].point
     assert (p.x, p.y, p.z) == pytest.approx((1.42, 3.99, 1.1))
-    assert msgs["/hearsee/head_pan"][2].ros_msg.data == pytest.approx(20.0)
-    img = msgs["/hearsee/overlay"][1].ros_msg
+    assert msgs["/hearsee/head_pan"][2].data == pytest.approx(20.0)
+    img = msgs["/hearsee/overlay"][1]
     assert (img.width, img.height, img.encoding, img.step) == (32, 24, "bgr8", 96)
-    stamp = msgs["/hearsee/truth"][0].ros_msg.header.stamp
+    stamp = msgs["/hearsee/truth"][0].header.stamp
     assert stamp.sec == 0 and stamp.nanosec == 200_000_000
 
 
