@@ -322,6 +322,9 @@ def tables_5_2_3(quick: bool) -> None:
                 cells.append(f"{np.nanmedian(e) * 100:5.1f} ({np.mean(np.isfinite(e)) * 100:3.0f}"
                              f"%) {cpu:4.1f}ms")
             print(f"  {fs:7d} | " + " | ".join(cells))
+    print("  (synthetic male voice, whose aspiration noise fills the band up to fs/2; real speech "
+          "has far less above 8 kHz and gains little from higher rates: bench/tracking.py "
+          "part B)")
 
 
 def main() -> None:

@@ -357,9 +357,11 @@ def ray_sigma_tdoa_s(fs: float) -> float:
     ITD-closure threshold held at 31 us (0.5 sample at 16 kHz): at 16 kHz 8 us (6.5 cm; 4 us
     9.5 cm); at 32 kHz 4 us (2.8 cm; 8 us 3.7 cm); at 48 kHz 3-6 us equal (2.1-2.2 cm), 2
     and 8 us worse (2.7, 2.8 cm). Re-checked on seed 0 at 48 kHz with the default 0.5-sample
-    threshold: 4 us 1.7 cm, 3 us 1.8, 8 us 2.6. The higher sample rate itself is what helps: a
-    wider band sharpens the GCC peaks, so an early reflection's peak biases the direct one less
-    (the seed-100 48 kHz recordings decimated to 16 kHz: 8.4 cm).
+    threshold: 4 us 1.7 cm, 3 us 1.8, 8 us 2.6. The wider band sharpens the GCC peaks, so an
+    early reflection's peak biases the direct one less (the seed-100 48 kHz recordings
+    decimated to 16 kHz: 8.4 cm) -- but only if the source fills that band: the synthetic
+    voice's aspiration noise does, real speech much less (CMU ARCTIC or a real 48 kHz
+    recording: 7-8 cm at 16 and at 48 kHz on the same walks).
     """
     if not fs > 0:
         raise EstimationError(f"sample rate must be > 0 Hz, got {fs}")
