@@ -4,12 +4,12 @@ import pytest
 from hearsee.audio.arrays import MicArray
 from hearsee.errors import EstimationError, GeometryError
 from hearsee.fusion.audiovisual import (
+    RAY_SIGMA_TDOA_S,
     AudioVisualRegressor,
     AudioVisualRig,
     RayTracker,
     locate_on_ray,
     ray_residuals,
-    ray_sigma_tdoa_s,
     simulate_av_samples,
     track_on_rays,
 )
@@ -176,15 +176,6 @@ def test_track_on_rays_from_a_recording(rig):
     assert np.all(np.isnan(res2.raw[late, 0])) and np.all(np.isfinite(res2.position[late, 0]))
 
 
-def test_ray_sigma_tdoa_s_follows_the_sample_rate():
-    assert ray_sigma_tdoa_s(16000) == pytest.approx(8e-6)
-    assert ray_sigma_tdoa_s(24000) == pytest.approx(8e-6 * 16 / 24)
-    assert ray_sigma_tdoa_s(32000) == pytest.approx(4e-6)
-    assert ray_sigma_tdoa_s(48000) == pytest.approx(4e-6)
-    with pytest.raises(EstimationError):
-        ray_sigma_tdoa_s(0.0)
-
-
 def test_track_on_rays_at_48_khz_uses_the_wide_band(rig):
     from hearsee.sim.moving import Trajectory, simulate_moving_free_field
 
@@ -196,10 +187,10 @@ def test_track_on_rays_at_48_khz_uses_the_wide_band(rig):
                                        snr_db=20.0, rng=rng)
         res = track_on_rays(rig, y, fs, lambda t: rig.project(traj.at(t))[0])
         fixes = [f for f in res.fixes if f is not None]
-        # the default fix covariance is the one of ray_sigma_tdoa_s(fs) along the ray
+        # the default fix covariance is the one of RAY_SIGMA_TDOA_S along the ray
         f = fixes[len(fixes) // 2]
         ref = locate_on_ray(rig, rig.project(f.position_m)[0], rig.array.tdoa(f.position_m),
-                            sigma_tdoa_s=ray_sigma_tdoa_s(fs))
+                            sigma_tdoa_s=RAY_SIGMA_TDOA_S)
         assert np.linalg.norm(ref.position_m - f.position_m) < 1e-3
         along = float(f.direction @ f.covariance @ f.direction)
         assert along == pytest.approx(float(ref.direction @ ref.covariance @ ref.direction),

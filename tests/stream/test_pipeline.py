@@ -255,12 +255,12 @@ def test_motion_models_track_a_source_moving_along_a_line(model):
         TrackingProcessor(arr, FS, StreamConfig(motion_model="kalman"), rig=rig)
 
 
-def test_camera_fix_tdoa_noise_follows_the_sample_rate():
-    # the cv 3D tracker's fixes assume 8 us of TDOA noise at 16 kHz and 4 us at 48 kHz
-    # (ray_sigma_tdoa_s); an explicit sigma_tdoa_s and the ca tracker keep their own
+def test_camera_fix_tdoa_noise_defaults():
+    # the cv 3D tracker's fixes assume 8 us of TDOA noise at every rate (RAY_SIGMA_TDOA_S);
+    # an explicit sigma_tdoa_s and the ca tracker keep their own
     arr = MicArray.from_preset("three-mic")
     assert TrackingProcessor(arr, 16000, StreamConfig()).sigma_tdoa_s == pytest.approx(8e-6)
-    assert TrackingProcessor(arr, 48000, StreamConfig()).sigma_tdoa_s == pytest.approx(4e-6)
+    assert TrackingProcessor(arr, 48000, StreamConfig()).sigma_tdoa_s == pytest.approx(8e-6)
     assert TrackingProcessor(arr, 48000, StreamConfig(sigma_tdoa_s=1e-5)).sigma_tdoa_s == 1e-5
     assert TrackingProcessor(arr, 48000, StreamConfig(motion_model="ca")).sigma_tdoa_s == 2e-5
 

@@ -55,19 +55,30 @@ from hearsee.vision.camera import Camera, camera_pose
 
 #: TDOA noise (s) that :func:`locate_on_ray` assumes by default for a fix's covariance, and
 #: the one the stream's constant-acceleration 3D tracker (``motion_model="ca"``) was tuned with;
-#: the constant-velocity :class:`RayTracker` uses :func:`ray_sigma_tdoa_s` instead
+#: the constant-velocity :class:`RayTracker` uses :data:`RAY_SIGMA_TDOA_S` instead
 FIX_SIGMA_TDOA_S = 2e-5
+
+#: TDOA noise (s) behind the camera-ray fixes' covariance for :class:`RayTracker`'s defaults,
+#: at any sample rate. Chosen on the seed-100 walks of ``bench/tracking.py`` part B (three-mic
+#: preset + camera 0.2 m aside, RT60 0.3 s, 20 dB; tracked median error): at 16 kHz, synthetic
+#: male voice, 8 us 6.5 cm, 4 us 9.5 cm. From 2026-11-24 (third session) 48 kHz used 4 us,
+#: which suited the synthetic voice (1.4 cm; 8 us 2.2 cm) because its aspiration noise fills
+#: the band up to 24 kHz -- but not real speech, which has little energy above 8 kHz: CMU
+#: ARCTIC speech at 48 kHz 7.5 cm with 4 us, 4.1 cm with 8 us (16 walks; at 16 kHz 6.9 cm), a
+#: real 48 kHz recording 7.9 vs 8.4 cm. So 8 us at every rate; set ``sigma_tdoa_s`` lower
+#: only for sources known to be broadband.
+RAY_SIGMA_TDOA_S = 8e-6
 
 __all__ = [
     "AudioVisualRegressor",
     "AudioVisualRig",
     "FIX_SIGMA_TDOA_S",
+    "RAY_SIGMA_TDOA_S",
     "RayFix",
     "RayTrack",
     "RayTracker",
     "locate_on_ray",
     "ray_residuals",
-    "ray_sigma_tdoa_s",
     "simulate_av_samples",
     "track_on_rays",
 ]
@@ -347,27 +358,6 @@ class RayTracker(MotionKalman):
         return np.zeros(3) if self.initialized else np.full(3, np.nan)
 
 
-def ray_sigma_tdoa_s(fs: float) -> float:
-    """TDOA noise (seconds) behind the camera-ray fixes' covariance for :class:`RayTracker`'s
-    defaults at sample rate ``fs`` (Hz): 8 us at 16 kHz, 8 us x 16 kHz / fs down to 4 us from
-    32 kHz up.
-
-    Chosen on the seed-100 walks of ``bench/tracking.py`` part B (three-mic preset + camera 0.2
-    m aside, male voice, RT60 0.3 s, 20 dB; 32 walks of 2 s; tracked median error), with the
-    ITD-closure threshold held at 31 us (0.5 sample at 16 kHz): at 16 kHz 8 us (6.5 cm; 4 us
-    9.5 cm); at 32 kHz 4 us (2.8 cm; 8 us 3.7 cm); at 48 kHz 3-6 us equal (2.1-2.2 cm), 2
-    and 8 us worse (2.7, 2.8 cm). Re-checked on seed 0 at 48 kHz with the default 0.5-sample
-    threshold: 4 us 1.7 cm, 3 us 1.8, 8 us 2.6. The wider band sharpens the GCC peaks, so an
-    early reflection's peak biases the direct one less (the seed-100 48 kHz recordings
-    decimated to 16 kHz: 8.4 cm) -- but only if the source fills that band: the synthetic
-    voice's aspiration noise does, real speech much less (CMU ARCTIC or a real 48 kHz
-    recording: 7-8 cm at 16 and at 48 kHz on the same walks).
-    """
-    if not fs > 0:
-        raise EstimationError(f"sample rate must be > 0 Hz, got {fs}")
-    return max(4e-6, 8e-6 * 16000.0 / float(fs))
-
-
 @dataclass
 class RayTrack:
     """Output of :func:`track_on_rays`: per frame ``t`` (s), the per-frame fixes ``raw`` (m,
@@ -413,8 +403,7 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
         Search interval along the camera ray, metres.
     sigma_tdoa_s, sigma_px : float
         Measurement noise behind each fix's covariance (seconds, pixels); ``sigma_tdoa_s``
-        None = :func:`ray_sigma_tdoa_s` of ``fs`` (8 us at 16 kHz, 4 us at 32-48 kHz, chosen
-        with :class:`RayTracker`'s defaults).
+        None = :data:`RAY_SIGMA_TDOA_S` (8 us, chosen with :class:`RayTracker`'s defaults).
     min_confidence : float
         Frames whose GCC confidence is below this in any pair give no fix.
     max_residual_samples : float
@@ -432,7 +421,7 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
     tf = estimate_tdoas(x, fs, rig.array, frame_ms, hop_ms, "phat", prs, refine="interp",
                         min_confidence=min_confidence)
     if sigma_tdoa_s is None:
-        sigma_tdoa_s = ray_sigma_tdoa_s(fs)
+        sigma_tdoa_s = RAY_SIGMA_TDOA_S
     trk = RayTracker() if tracker is None else tracker
     n = len(tf.t)
     raw, pos, vel = (np.full((n, 3), np.nan) for _ in range(3))

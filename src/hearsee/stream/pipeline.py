@@ -769,9 +769,9 @@ class StreamConfig:
     accel_tau_s : correlation time of the ``"ca"`` tracker's acceleration (Singer), s; None =
         pure CA
     sigma_tdoa_s, sigma_px : measurement noise of the camera-ray fix (seconds, pixels);
-        ``sigma_tdoa_s`` None = the value each tracker was tuned with (``"cv"``
-        :func:`~hearsee.fusion.audiovisual.ray_sigma_tdoa_s`: 8 us at 16 kHz, 4 us at
-        32-48 kHz; ``"ca"`` 20 us; bench/tracking.py part B, seed-100 walks)
+        ``sigma_tdoa_s`` None = the value each tracker was tuned with (``"cv"`` 8 us,
+        :data:`~hearsee.fusion.audiovisual.RAY_SIGMA_TDOA_S`; ``"ca"`` 20 us; bench/tracking.py
+        part B, seed-100 walks)
     range_m : search interval along the camera ray, metres
     max_fix_residual_samples : a camera-ray fix whose RMS ITD residual exceeds this many samples
         is discarded (with three microphones the three TDOAs must close, t01 + t12 = t02; a
@@ -880,7 +880,7 @@ class TrackingProcessor:
             raise ConfigError(f"reacquire_s must be > 0 s, got {self.cfg.reacquire_s}")
         self.direction = self._direction_tracker(self.cfg, self.hop / self.fs)
         self._last_measured_t = -np.inf
-        self.motion, self.sigma_tdoa_s = self._motion_tracker(self.cfg, self.fs)
+        self.motion, self.sigma_tdoa_s = self._motion_tracker(self.cfg)
         self.gcc = FrameGcc(array, fs, self.cfg)
         self.srp = None
         if self.cfg.spectrum_alpha > 0:
@@ -1027,13 +1027,12 @@ class TrackingProcessor:
             raise ConfigError(f"direction_modes_dps2 / mode_dwell_s: {exc}") from None
 
     @staticmethod
-    def _motion_tracker(cfg: StreamConfig, fs: float) -> tuple[Any, float]:
-        """The 3D tracker of ``cfg.motion_model`` and the fixes' TDOA noise (seconds) at
-        sample rate ``fs`` (Hz)."""
+    def _motion_tracker(cfg: StreamConfig) -> tuple[Any, float]:
+        """The 3D tracker of ``cfg.motion_model`` and the fixes' TDOA noise (seconds)."""
         if cfg.motion_model == "cv":
-            from hearsee.fusion.audiovisual import RayTracker, ray_sigma_tdoa_s
+            from hearsee.fusion.audiovisual import RAY_SIGMA_TDOA_S, RayTracker
 
-            tdoa = ray_sigma_tdoa_s(fs) if cfg.sigma_tdoa_s is None else float(cfg.sigma_tdoa_s)
+            tdoa = RAY_SIGMA_TDOA_S if cfg.sigma_tdoa_s is None else float(cfg.sigma_tdoa_s)
             return RayTracker(sigma_accel=cfg.sigma_accel), tdoa
         if cfg.motion_model == "ca":
             from hearsee.fusion.audiovisual import FIX_SIGMA_TDOA_S
