@@ -538,7 +538,8 @@ class SmoothedSrp:
         cen = array.positions - array.positions.mean(axis=0)
         if np.linalg.svd(cen, compute_uv=False)[1] < 1e-9 or (planar and in_plane):
             # linear array: every elevation on the cone gives the same TDOA; azimuth in the
-            # horizontal plane, as the closed-form localizer reports it
+            # horizontal plane, as the closed-form localizer reports it (planar + in_plane:
+            # the source is known to be in that plane)
             els = np.zeros(1)
         self.grid_deg, self.n_az = float(grid_deg), az.size
         self.az_axis = np.degrees(az)
@@ -715,13 +716,12 @@ class StreamConfig:
         (:func:`~hearsee.audio.localize.near_field_in_plane`) and the smoothed steered response
         scans only that plane, so the elevation is 0 (for a horizontal array). Coplanar
         microphones cannot tell a nearby source's curved wavefront or a floor reflection from
-        elevation: a male voice
-        walking 1.2-1.6 m from the three-mic preset at its height (2.5 s, RT60 0.3 s, 20 dB,
-        three noise seeds) gave tracked elevations of median 1.6-10.6 deg (90th percentile
-        8-25 deg) by default, and with ``in_plane`` a lower azimuth error (median 0.9-1.3 ->
-        0.7-0.8 deg). The per-frame wavefront fit costs speed: ~60x real time instead of ~80x
-        (CPU, three-mic at 16 kHz, 10 s file). Ignored for linear and volume arrays. Default
-        False
+        elevation: a male voice walking 1.2-1.6 m from the three-mic preset at its height
+        (2.5 s, RT60 0.3 s, 20 dB, three noise seeds) gave tracked elevations of median
+        1.6-10.6 deg (90th percentile 8-25 deg) by default, and with ``in_plane`` a lower
+        azimuth error (median 0.9-1.3 -> 0.7-0.8 deg). The per-frame wavefront fit costs
+        speed: ~60x real time instead of ~80x (CPU, three-mic at 16 kHz, 10 s file). Ignored
+        for linear and volume arrays. Default False
     sigma_meas_deg, sigma_accel_dps2 : direction tracker noise (degrees, deg/s^2);
         ``sigma_meas_deg`` is the measurement noise where no model below applies
     sigma_frame_deg : measurement noise model of a frame's own GCC direction: standard deviation
