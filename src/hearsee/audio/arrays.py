@@ -210,11 +210,16 @@ class MicArray:
     def tdoa_far(self, direction: ArrayLike, pairs: list[tuple[int, int]] | None = None) -> NDArray:
         """Far-field TDOAs ``t_i - t_j`` in seconds for unit direction(s) ``(..., 3)``.
 
-        A plane wave from direction u reaches microphone m at time ``-m . u / c0``.
+        A plane wave from direction u reaches microphone m at time ``-m . u / c0``. A zero
+        direction is a GeometryError (it was a silent NaN).
         """
         pairs = self.pairs if pairs is None else pairs
         u = np.asarray(direction, dtype=float)
-        u = u / np.linalg.norm(u, axis=-1, keepdims=True)
+        norm = np.linalg.norm(u, axis=-1, keepdims=True)
+        if not np.all(norm > 0):
+            raise GeometryError("a far-field (plane-wave) source needs a direction; got the zero "
+                                "vector (a source at the array-frame origin)")
+        u = u / norm
         proj = u @ self.positions.T  # (..., n_mics)
         i = np.array([p[0] for p in pairs])
         j = np.array([p[1] for p in pairs])

@@ -158,10 +158,7 @@ def ground_truth(array: MicArray, source: ArrayLike,
         np.asarray(mic_positions, dtype=float), array.speed_of_sound, array.name)
     az, el, r = cart_to_sph(src)
     at_origin = not r > 0
-    if far_field and at_origin:
-        raise GeometryError("a far-field (plane-wave) source needs a direction; the source is "
-                            "at the array-frame origin")
-    tdoa = geo.tdoa_far(src) if far_field else geo.tdoa(src)
+    tdoa = geo.tdoa_far(src) if far_field else geo.tdoa(src)  # far field at the origin: error
     return {
         "source_m": src.tolist(),
         "azimuth_deg": None if at_origin else float(np.degrees(az)),
