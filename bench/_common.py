@@ -26,6 +26,15 @@ def shared_data_dir(option: str | os.PathLike | None = None) -> Path | None:
     return p if p.is_dir() else None
 
 
+def arctic_files(data: Path | None) -> list[Path]:
+    """The dry CMU ARCTIC utterances in ``data/audio/speech`` (not the dish-washing noise),
+    sorted; empty without the data."""
+    if data is None:
+        return []
+    d = data / "audio" / "speech"
+    return sorted(p for p in d.glob("*.wav") if "dishes" not in p.name) if d.is_dir() else []
+
+
 def fmt(v: Any, digits: int = 3) -> str:
     if isinstance(v, float):
         if v != v:  # NaN

@@ -36,7 +36,14 @@ import scipy.fft as sfft
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _common import RESULTS, markdown_table, print_table, shared_data_dir, write_markdown  # noqa: E402
+from _common import (  # noqa: E402
+    RESULTS,
+    arctic_files,
+    markdown_table,
+    print_table,
+    shared_data_dir,
+    write_markdown,
+)
 
 from hearsee.audio.arrays import MicArray  # noqa: E402
 from hearsee.audio.localize import localize_tdoa  # noqa: E402
@@ -149,13 +156,6 @@ def pra_azimuth(x: np.ndarray, fs: float, arr: MicArray, algo: str,
                                    num_src=1, azimuth=np.radians(np.arange(360.0)), dim=2)
     doa.locate_sources(X, freq_range=list(band))
     return float(np.degrees(doa.azimuth_recon[0]))
-
-
-def arctic_files(data: Path | None) -> list[Path]:
-    if data is None:
-        return []
-    d = data / "audio" / "speech"
-    return sorted(p for p in d.glob("*.wav") if "dishes" not in p.name) if d.is_dir() else []
 
 
 # ---------------------------------------------------------------------------------- part 1

@@ -133,6 +133,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import (  # noqa: E402
     RESULTS,
+    arctic_files,
     markdown_table,
     print_table,
     shared_data_dir,
@@ -177,8 +178,7 @@ def _signal(kind: str, dur: float, rng: np.random.Generator, fs: int = FS,
     reverberation and noise, looped from a random offset)."""
     if kind in ("arctic", "alexa"):
         if kind == "arctic":
-            files = sorted(p for p in (data / "audio" / "speech").glob("*.wav")
-                           if "dishes" not in p.name)
+            files = arctic_files(data)
             parts, n = [], 0
             while n < dur * fs:
                 parts.append(load_wav(files[rng.integers(len(files))], fs)[0])
@@ -495,13 +495,13 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
                                     ("alexa", "real 48 kHz recording 'alexa'"))
                   for f in (FS, FS_WIDE)]
     trackers = ("RayTracker (CV; the stream's default)", "CA Kalman (stream's motion_model ca)")
+    # the stream's CA filter was tuned with fixes made with 20 us of TDOA noise
+    ca_scale = (FIX_SIGMA_TDOA_S / RAY_SIGMA_TDOA_S) ** 2 - 1.0
     for name, rig, fs, room, kind in cases:
         if kind != "male":
             name = f"{name}, {fs // 1000} kHz"
         e_raw, e_rng = [], []
         e_trk, e_vel, e_fix = ({k: [] for k in trackers} for _ in range(3))
-        # the stream's CA filter was tuned with fixes made with 20 us of TDOA noise
-        ca_scale = (FIX_SIGMA_TDOA_S / RAY_SIGMA_TDOA_S) ** 2 - 1.0
         for _ in range(trials):
             traj = view_walk(rng, rig, dur)
             x = _signal(kind, dur, rng, fs, data)
