@@ -69,6 +69,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.ndimage import uniform_filter1d
 
 from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.localize import array_geometry
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
 __all__ = [
@@ -548,11 +549,10 @@ def _steer_directions(positions: bytes, n_mics: int, n_dirs: int, in_plane: bool
     (0.1 deg apart). ``positions`` is the (n_mics, 3) float64 array's bytes (hashable)."""
     pos = np.frombuffer(positions, dtype=float).reshape(n_mics, 3)
     U = _fibonacci_sphere(n_dirs)
-    if in_plane:
-        _, sv, vt = np.linalg.svd(pos - pos.mean(axis=0))
-        if len(sv) >= 3 and sv[2] < 1e-6 * sv[0]:
-            phi = np.radians(np.arange(3600) / 10.0)
-            U = np.outer(np.cos(phi), vt[0]) + np.outer(np.sin(phi), vt[1])
+    geom = array_geometry(pos) if in_plane else None
+    if geom is not None and geom.kind == "planar":
+        phi = np.radians(np.arange(3600) / 10.0)
+        U = np.outer(np.cos(phi), geom.basis[0]) + np.outer(np.sin(phi), geom.basis[1])
     U.flags.writeable = False
     return U
 
