@@ -167,6 +167,8 @@ CFG = StreamConfig(frame_ms=64.0, hop_ms=32.0)
 #: the same stream with one constant-velocity direction filter instead of the IMM
 CFG_CV = StreamConfig(frame_ms=64.0, hop_ms=32.0, direction_modes_dps2=None)
 BAND = (300.0, 3500.0)
+#: the real 48 kHz recording of a spoken word, within the shared data folder
+ALEXA = Path("audio", "tdoa_2mic", "alexa-02.wav")
 
 
 def _signal(kind: str, dur: float, rng: np.random.Generator, fs: int = FS,
@@ -185,13 +187,22 @@ def _signal(kind: str, dur: float, rng: np.random.Generator, fs: int = FS,
                 n += len(parts[-1])
             x = np.concatenate(parts)
         else:
-            a = load_wav(data / "audio" / "tdoa_2mic" / "alexa-02.wav", fs)[0]
+            a = load_wav(data / ALEXA, fs)[0]
             a = np.tile(a, int(np.ceil(dur * fs / len(a))) + 1)
             x = a[rng.integers(0, len(a) // 2):]
         x = x[: int(round(dur * fs))]
     else:
         x = white_noise(dur, fs, rng) if kind == "noise" else synthetic_voice(kind, dur, fs, rng)
     return 0.05 * x / np.std(x)
+
+
+def real_speech_kinds(data: Path | None) -> list[str]:
+    """The real-speech signal kinds of :func:`_signal` whose files are in the shared data
+    folder ``data`` (none without it)."""
+    kinds = ["arctic"] if arctic_files(data) else []
+    if data is not None and (data / ALEXA).is_file():
+        kinds.append("alexa")
+    return kinds
 
 
 def _azimuths(ups: list, field: str = "azimuth_deg") -> np.ndarray:
@@ -366,74 +377,94 @@ def rmse(err: np.ndarray) -> float:
 
 
 # ---------------------------------------------------------------------------------- part A
-def part_a(trials: int, seed: int, dur: float) -> tuple[list, dict]:
+def _part_a_condition(kind: str, snr: float, trials: int, dur: float,
+                      rng: np.random.Generator, rng_t: np.random.Generator,
+                      data: Path | None = None) -> tuple[list, dict]:
+    """One row of part A: ``trials`` straight walks (from ``rng``) and as many turning walks
+    (from ``rng_t``) of ``dur`` s, signal ``kind`` at ``snr`` dB; the row and, for the male
+    voice at 20 dB, the first walk's azimuth series for the plot."""
     arr = MicArray.from_preset("three-mic")
+    example = {}
+    acc = {k: [] for k in ("raw", "trk", "trk_common", "srp", "srp_common", "cov_raw",
+                           "lag", "lag_ff", "speed", "cv_common", "lag_cv",
+                           "lag_cv_ff", "slow", "prof_lag", "prof_lag_ff",
+                           "prof_lag_cv", "prof_lag_cv_ff")}
+    for _ in range(trials):
+        traj = walk(rng, dur)
+        x = _signal(kind, dur, rng, data=data)
+        y = simulate_moving_room(x, FS, arr, traj, ROOM, RT60, ARRAY_AT, snr_db=snr,
+                                 rng=rng, block_s=0.1)
+        ups = StreamPipeline(arr, CFG).run(ArraySource(y, FS, 2048))
+        t = np.array([u.t for u in ups])
+        true = direction_deg(traj.at(t))[0]
+        raw, trk = _azimuths(ups, "raw_azimuth_deg"), _azimuths(ups)
+        srp, _ = srp_per_frame(y, arr, t)
+        e_raw, e_trk = wrap_deg(raw - true), wrap_deg(trk - true)
+        acc["raw"].append(e_raw)
+        acc["trk"].append(e_trk)
+        acc["trk_common"].append(np.where(np.isfinite(raw), e_trk, np.nan))
+        acc["srp"].append(wrap_deg(srp - true))
+        acc["srp_common"].append(np.where(np.isfinite(raw), wrap_deg(srp - true), np.nan))
+        acc["cov_raw"].append(np.mean(np.isfinite(raw)))
+        acc["slow"].append(slow_part(e_raw))
+        cv = _azimuths(StreamPipeline(arr, CFG_CV).run(ArraySource(y, FS, 2048)))
+        acc["cv_common"].append(np.where(np.isfinite(raw), wrap_deg(cv - true), np.nan))
+        # the lag: on a walk of the same kind that turns back halfway (a straight
+        # walk's nearly constant angular rate cannot tell a lag from an offset)
+        # (in the room, and the same walk and signal in free field: the tracker's own
+        # lag without the room's slowly wandering bias)
+        tw = turn_walk(rng_t, dur)
+        xt = _signal(kind, dur, rng_t, data=data)
+        for key, yt in (
+                ("lag", simulate_moving_room(xt, FS, arr, tw, ROOM, RT60, ARRAY_AT,
+                                             snr_db=snr, rng=rng_t, block_s=0.1)),
+                ("lag_ff", simulate_moving_free_field(xt, FS, arr, tw, snr_db=snr,
+                                                      rng=rng_t))):
+            for k2, cfg in ((key, CFG), (key.replace("lag", "lag_cv"), CFG_CV)):
+                ut = StreamPipeline(arr, cfg).run(ArraySource(yt, FS, 2048))
+                args = (np.array([u.t for u in ut]), _azimuths(ut), tw,
+                        cfg.hop_ms * 1e-3, np.array([u.measured for u in ut]))
+                prof = lag_profile(*args)
+                acc[k2].append(lag_fit(prof))
+                acc[f"prof_{k2}"].append(prof)
+        acc["speed"].append(np.linalg.norm(traj.velocity(0.5 * dur)))
+        if not example and kind == "male" and snr == 20.0:
+            example = {"t": t, "true": true, "raw": raw, "trk": trk, "srp": srp}
+    cat = {k: np.concatenate(v) for k, v in acc.items()
+           if k in ("raw", "trk", "trk_common", "srp", "srp_common", "cv_common", "slow")}
+    row = [kind, snr, rmse(cat["raw"]), float(np.mean(acc["cov_raw"])) * 100, rmse(cat["trk"]),
+           rmse(cat["trk_common"]), rmse(cat["srp"]), rmse(cat["srp_common"]),
+           rmse(cat["raw"]) / rmse(cat["trk_common"]),
+           *_lag_summary(np.array(acc["lag"])),
+           *_lag_summary(np.array(acc["lag_ff"]))[:2],
+           float(np.mean(acc["speed"])), rmse(cat["slow"]),
+           rmse(cat["raw"]) / rmse(cat["slow"]),
+           rmse(cat["raw"]) / rmse(cat["cv_common"]),
+           _lag_summary(np.array(acc["lag_cv"]))[0],
+           _lag_summary(np.array(acc["lag_cv_ff"]))[0],
+           *pooled_lag(acc["prof_lag"]), pooled_lag(acc["prof_lag_ff"])[0],
+           pooled_lag(acc["prof_lag_cv"])[0], pooled_lag(acc["prof_lag_cv_ff"])[0]]
+    return row, example
+
+
+def part_a(trials: int, seed: int, dur: float, data: Path | None = None
+           ) -> tuple[list, dict]:
+    """Part A's rows: the synthetic voices and white noise at 10 and 20 dB, then, when the
+    shared data folder ``data`` is there, real speech (CMU ARCTIC) at both SNRs from random
+    streams of their own (seed + 20 / + 30), so the synthetic rows keep the walks of earlier
+    runs."""
     rng = np.random.default_rng(seed)
     rng_t = np.random.default_rng(seed + 10)  # the turning walks: the straight ones unchanged
     rows, example = [], {}
     for snr in (10.0, 20.0):
         for kind in ("male", "female", "noise"):
-            acc = {k: [] for k in ("raw", "trk", "trk_common", "srp", "srp_common", "cov_raw",
-                                   "lag", "lag_ff", "speed", "cv_common", "lag_cv",
-                                   "lag_cv_ff", "slow", "prof_lag", "prof_lag_ff",
-                                   "prof_lag_cv", "prof_lag_cv_ff")}
-            for _ in range(trials):
-                traj = walk(rng, dur)
-                x = _signal(kind, dur, rng)
-                y = simulate_moving_room(x, FS, arr, traj, ROOM, RT60, ARRAY_AT, snr_db=snr,
-                                         rng=rng, block_s=0.1)
-                ups = StreamPipeline(arr, CFG).run(ArraySource(y, FS, 2048))
-                t = np.array([u.t for u in ups])
-                true = direction_deg(traj.at(t))[0]
-                raw, trk = _azimuths(ups, "raw_azimuth_deg"), _azimuths(ups)
-                srp, _ = srp_per_frame(y, arr, t)
-                e_raw, e_trk = wrap_deg(raw - true), wrap_deg(trk - true)
-                acc["raw"].append(e_raw)
-                acc["trk"].append(e_trk)
-                acc["trk_common"].append(np.where(np.isfinite(raw), e_trk, np.nan))
-                acc["srp"].append(wrap_deg(srp - true))
-                acc["srp_common"].append(np.where(np.isfinite(raw), wrap_deg(srp - true), np.nan))
-                acc["cov_raw"].append(np.mean(np.isfinite(raw)))
-                acc["slow"].append(slow_part(e_raw))
-                cv = _azimuths(StreamPipeline(arr, CFG_CV).run(ArraySource(y, FS, 2048)))
-                acc["cv_common"].append(np.where(np.isfinite(raw), wrap_deg(cv - true), np.nan))
-                # the lag: on a walk of the same kind that turns back halfway (a straight
-                # walk's nearly constant angular rate cannot tell a lag from an offset)
-                # (in the room, and the same walk and signal in free field: the tracker's own
-                # lag without the room's slowly wandering bias)
-                tw = turn_walk(rng_t, dur)
-                xt = _signal(kind, dur, rng_t)
-                for key, yt in (
-                        ("lag", simulate_moving_room(xt, FS, arr, tw, ROOM, RT60, ARRAY_AT,
-                                                     snr_db=snr, rng=rng_t, block_s=0.1)),
-                        ("lag_ff", simulate_moving_free_field(xt, FS, arr, tw, snr_db=snr,
-                                                              rng=rng_t))):
-                    for k2, cfg in ((key, CFG), (key.replace("lag", "lag_cv"), CFG_CV)):
-                        ut = StreamPipeline(arr, cfg).run(ArraySource(yt, FS, 2048))
-                        args = (np.array([u.t for u in ut]), _azimuths(ut), tw,
-                                cfg.hop_ms * 1e-3, np.array([u.measured for u in ut]))
-                        prof = lag_profile(*args)
-                        acc[k2].append(lag_fit(prof))
-                        acc[f"prof_{k2}"].append(prof)
-                acc["speed"].append(np.linalg.norm(traj.velocity(0.5 * dur)))
-                if not example and kind == "male" and snr == 20.0:
-                    example = {"t": t, "true": true, "raw": raw, "trk": trk, "srp": srp}
-            cat = {k: np.concatenate(v) for k, v in acc.items()
-                   if k in ("raw", "trk", "trk_common", "srp", "srp_common", "cv_common",
-                            "slow")}
-            r_raw, r_trk = rmse(cat["raw"]), rmse(cat["trk"])
-            rows.append([kind, snr, r_raw, float(np.mean(acc["cov_raw"])) * 100, r_trk,
-                         rmse(cat["trk_common"]), rmse(cat["srp"]), rmse(cat["srp_common"]),
-                         rmse(cat["raw"]) / rmse(cat["trk_common"]),
-                         *_lag_summary(np.array(acc["lag"])),
-                         *_lag_summary(np.array(acc["lag_ff"]))[:2],
-                         float(np.mean(acc["speed"])), rmse(cat["slow"]),
-                         rmse(cat["raw"]) / rmse(cat["slow"]),
-                         rmse(cat["raw"]) / rmse(cat["cv_common"]),
-                         _lag_summary(np.array(acc["lag_cv"]))[0],
-                         _lag_summary(np.array(acc["lag_cv_ff"]))[0],
-                         *pooled_lag(acc["prof_lag"]), pooled_lag(acc["prof_lag_ff"])[0],
-                         pooled_lag(acc["prof_lag_cv"])[0], pooled_lag(acc["prof_lag_cv_ff"])[0]])
+            row, ex = _part_a_condition(kind, snr, trials, dur, rng, rng_t)
+            rows.append(row)
+            example = example or ex
+    if "arctic" in real_speech_kinds(data):
+        rng_s, rng_st = np.random.default_rng(seed + 20), np.random.default_rng(seed + 30)
+        for snr in (10.0, 20.0):
+            rows.append(_part_a_condition("arctic", snr, trials, dur, rng_s, rng_st, data)[0])
     return rows, example
 
 
@@ -489,11 +520,9 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
              for group in (rigs, wide) for room in (True, False) for name, rig, fs in group]
     # real speech instead of the synthetic voice, first rig, room only (after the others, so
     # their walks stay those of earlier runs; skipped without the shared data)
-    if data is not None:
-        cases += [(f"three-mic + camera 0.2 m aside, {lab}", wide[0][1], f, True, kind)
-                  for kind, lab in (("arctic", "ARCTIC speech"),
-                                    ("alexa", "real 48 kHz recording 'alexa'"))
-                  for f in (FS, FS_WIDE)]
+    labels = {"arctic": "ARCTIC speech", "alexa": "real 48 kHz recording 'alexa'"}
+    cases += [(f"three-mic + camera 0.2 m aside, {labels[kind]}", wide[0][1], f, True, kind)
+              for kind in real_speech_kinds(data) for f in (FS, FS_WIDE)]
     trackers = ("RayTracker (CV; the stream's default)", "CA Kalman (stream's motion_model ca)")
     # the stream's CA filter was tuned with fixes made with 20 us of TDOA noise
     ca_scale = (FIX_SIGMA_TDOA_S / RAY_SIGMA_TDOA_S) ** 2 - 1.0
@@ -684,7 +713,8 @@ HEAD_D = ["method", "CPU s per s of audio", "ratio"]
 def _run_parts(parts: set[str], args: argparse.Namespace) -> None:
     """Development runs of some parts only: print their tables, write nothing."""
     if "A" in parts:
-        print_table("A. moving speakers", HEAD_A, part_a(args.trials, args.seed, args.duration)[0])
+        print_table("A. moving speakers", HEAD_A,
+                    part_a(args.trials, args.seed, args.duration, shared_data_dir(args.data))[0])
     if "B" in parts:
         print_table("B. camera + 3 mics: 3D", HEAD_B,
                     part_b(args.walks_b, args.seed, 2.0, shared_data_dir(args.data))[0])
@@ -717,7 +747,7 @@ def main(argv: list[str] | None = None) -> None:
     if parts != set("ABCD"):
         _run_parts(parts, args)
         return
-    rows_a, ex_a = part_a(args.trials, args.seed, args.duration)
+    rows_a, ex_a = part_a(args.trials, args.seed, args.duration, shared_data_dir(args.data))
     head_a = HEAD_A
     print_table("A. moving speakers, three-mic, RT60 0.3 s: azimuth", head_a, rows_a)
     rows_b, ex_b = part_b(args.walks_b, args.seed, 2.0, shared_data_dir(args.data))
