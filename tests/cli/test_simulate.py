@@ -68,6 +68,9 @@ def test_simulate_room_yaml_array_and_wav_signal(tmp_path):
     (["--source", "1,0,0", "--signal", "pink"], "unknown signal"),
     (["--source", "1,0,0", "--signal", "missing.wav"], "file not found"),
     (["--source", "1,0,0", "--duration", "-1"], "duration"),
+    (["--source", "1,0,0", "--duration", "1e9"], "at most 600 s"),  # (not 116 TiB)
+    (["--source", "1,0,0", "--fs", "10"], "within 4000-384000 Hz, got 10 Hz"),
+    (["--source", "1,0,0", "--fs", "1000000000"], "within 4000-384000 Hz"),
     (["--source", "1,0,0", "--room", "6x5x3", "--rt60", "0", "--far-field"], "free field only"),
     (["--source", "0,0,0", "--far-field"], "needs a direction"),
 ])

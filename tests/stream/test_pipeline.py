@@ -554,3 +554,17 @@ def test_in_plane_changes_nothing_for_a_linear_array():
         ArraySource(y, FS, 4096)))[1] for ip in (False, True)]
     assert np.isfinite(az[0]).sum() > 10
     np.testing.assert_array_equal(az[0], az[1])
+
+
+def test_recording_shorter_than_a_frame_and_absurd_frames_are_errors():
+    """A recording shorter than one frame is an AudioInputError (it used to yield no update
+    at all), a frame beyond MAX_FRAME_MS a ConfigError (before any buffer is allocated)."""
+    arr = MicArray.from_preset("three-mic")
+    x = np.random.default_rng(0).standard_normal((3, 1000))  # 62.5 ms < the 64 ms frame
+    with pytest.raises(AudioInputError, match="1000 samples, one frame needs 1024"):
+        StreamPipeline(arr).run(ArraySource(x, FS))
+    assert len(StreamPipeline(arr).run(ArraySource(np.tile(x, 2), FS))) == 1 + (2000 - 1024) // 512
+    for frame_ms, hop_ms in ((pl.MAX_FRAME_MS * 1.01, 32.0), (64.0, 1e9), (float("nan"), 32.0)):
+        with pytest.raises(ConfigError, match="frame and hop"):
+            StreamPipeline(arr, StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms)).run(
+                ArraySource(x, FS))

@@ -83,6 +83,8 @@ def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, caps
     (["--image-points", "PTS"], "need --camera"),
     (["--device", "0"], "either a recording"),
     (["--frame-ms", "0"], "must be > 0"),
+    (["--frame-ms", "1e9"], "at most 10000 ms"),  # (not a 60 GB allocation)
+    (["--frame-ms", "2000"], "recording too short: 24000 samples, one frame needs 32000"),
     (["--tracker", "particle"], "--tracker"),
 ])
 def test_track_bad_options(scene, capsys, args, msg):

@@ -66,14 +66,22 @@ CLIP_FRACTION = 1e-3
 def white_noise(duration_s: float, fs: float,
                 rng: np.random.Generator | int | None = None) -> NDArray:
     """Unit-variance Gaussian white noise of ``duration_s`` seconds at ``fs`` Hz."""
-    rng = np.random.default_rng(rng)
-    return rng.standard_normal(int(round(duration_s * fs)))
+    n = _check_duration(duration_s, fs)
+    return np.random.default_rng(rng).standard_normal(n)
 
 
 # ---------------------------------------------------------------------------- synthetic voice
+#: Longest signal the generators make, seconds (longer scenes: simulate them in pieces; the
+#: bound keeps a mistyped duration from asking for terabytes)
+MAX_SIGNAL_S = 600.0
+
+
 def _check_duration(duration_s: float, fs: float) -> int:
     if not np.isfinite(duration_s) or duration_s <= 0:
         raise ConfigError(f"duration must be a positive number of seconds, got {duration_s!r}")
+    if duration_s > MAX_SIGNAL_S:
+        raise ConfigError(f"duration must be at most {MAX_SIGNAL_S:g} s (simulate longer scenes "
+                          f"in pieces), got {duration_s:g} s")
     if not np.isfinite(fs) or fs <= 0:
         raise ConfigError(f"sample rate must be a positive number of Hz, got {fs!r}")
     n = int(round(duration_s * fs))

@@ -62,6 +62,23 @@ def example_recording_path() -> Path:
     return p
 
 
+#: Highest sample rate the simulators accept, Hz (the highest common audio-interface rate)
+MAX_SIM_FS_HZ = 384_000
+
+
+def check_sim_fs(fs: float | None) -> int:
+    """``fs`` as a whole number of Hz within [:data:`hearsee.audio.tdoa.MIN_FS_HZ`,
+    :data:`MAX_SIM_FS_HZ`] (the rates hearsee analyses), else a ConfigError."""
+    from hearsee.audio.tdoa import MIN_FS_HZ
+
+    if fs is None or not np.isfinite(fs) or fs <= 0 or int(round(fs)) != fs:
+        raise ConfigError(f"sample rate must be a positive whole number of Hz, got {fs!r}")
+    if not MIN_FS_HZ <= fs <= MAX_SIM_FS_HZ:
+        raise ConfigError(f"sample rate must be within {MIN_FS_HZ:g}-{MAX_SIM_FS_HZ} Hz, got "
+                          f"{fs:g} Hz")
+    return int(fs)
+
+
 def _point(value: ArrayLike, what: str) -> NDArray:
     try:
         p = np.asarray(value, dtype=float)
@@ -223,9 +240,7 @@ def simulate_recording(
     """
     array = load_array(array)
     src = _point(source, "source")
-    if fs is None or not np.isfinite(fs) or fs <= 0 or int(round(fs)) != fs:
-        raise ConfigError(f"sample rate must be a positive whole number of Hz, got {fs!r}")
-    fs = int(fs)
+    fs = check_sim_fs(fs)
     if snr_db is not None and not np.isfinite(snr_db):
         raise ConfigError(f"SNR must be a finite number of dB, got {snr_db!r}")
     room = normalize_room(room)

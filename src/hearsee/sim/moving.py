@@ -489,16 +489,14 @@ def simulate_moving_recording(
     """
     from hearsee.audio.arrays import load_array
     from hearsee.audio.signals import SIGNAL_KINDS, make_signal
-    from hearsee.sim.audio import ground_truth, normalize_room
+    from hearsee.sim.audio import check_sim_fs, ground_truth, normalize_room
 
     arr = load_array(array)
     dur = float(trajectory.t[-1]) if duration_s is None else float(duration_s)
     if not dur > 0:
         raise ConfigError(
             "duration must be > 0 s (a one-point trajectory needs an explicit duration)")
-    if not fs or int(round(fs)) != fs or fs <= 0:
-        raise ConfigError(f"sample rate must be a positive whole number of Hz, got {fs!r}")
-    fs = int(fs)
+    fs = check_sim_fs(fs)
     room_n = normalize_room(room)
     rng = np.random.default_rng(seed)
     s = make_signal(signal, dur, fs, rng)

@@ -385,10 +385,19 @@ class DropoutSource:
 
 
 # ---------------------------------------------------------------------------- framer
+#: the longest analysis frame a stream accepts, milliseconds (a tracker updating less often
+#: than this follows nothing that moves; the bound also keeps a mistyped frame length from
+#: allocating gigabytes)
+MAX_FRAME_MS = 10_000.0
+
+
 def frame_geometry(fs: float, frame_ms: float, hop_ms: float) -> tuple[int, int]:
     """Frame length and hop in samples, rounded exactly as :func:`estimate_tdoas` does."""
-    if frame_ms <= 0 or hop_ms <= 0:
+    if not (frame_ms > 0 and hop_ms > 0):
         raise ConfigError(f"frame and hop must be > 0 ms, got {frame_ms} and {hop_ms}")
+    if not (frame_ms <= MAX_FRAME_MS and hop_ms <= MAX_FRAME_MS):
+        raise ConfigError(f"frame and hop must be at most {MAX_FRAME_MS:.0f} ms in a stream, "
+                          f"got {frame_ms} and {hop_ms}")
     return max(int(round(frame_ms * 1e-3 * fs)), 8), max(int(round(hop_ms * 1e-3 * fs)), 1)
 
 
@@ -1103,6 +1112,12 @@ class StreamPipeline:
                 f"{self.array.n_mics} microphones (channel k must be microphone k)"
             )
         frame_len, _ = frame_geometry(source.fs, self.config.frame_ms, self.config.hop_ms)
+        n = getattr(source, "x", np.empty((0, frame_len))).shape[1]  # a recording's length
+        if n < frame_len:
+            raise AudioInputError(
+                f"recording too short: {n} samples, one frame needs {frame_len}; use a longer "
+                "recording or a shorter frame"
+            )
         if self.array.max_tdoa().max() * source.fs + 1 >= frame_len // 2:
             raise ConfigError(
                 f"frame of {self.config.frame_ms} ms is too short for the array's largest "
