@@ -107,6 +107,7 @@ def test_bad_inputs_one_line_exit_2(rec3, tmp_path, capsys):
         ([rec3, "--array", str(yaml_coinc)], "coincide"),
         ([rec3, "--array", "no-such-preset"], "preset"),
         ([rec3, "--array", "three-mic", "--frame-ms", "0.2"], "frame"),
+        ([rec3, "--array", "three-mic", "--frame-ms", "inf"], "at most 10000 ms, got inf"),
     ]
     for args, needle in cases:
         code, out, err = _run(capsys, *args)

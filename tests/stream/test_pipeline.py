@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from hearsee.audio.arrays import MicArray
-from hearsee.audio.tdoa import frame_signals
+from hearsee.audio.tdoa import MAX_FRAME_MS, frame_geometry, frame_signals
 from hearsee.errors import AudioInputError, ConfigError
 from hearsee.geometry import direction_deg, wrap_deg
 from hearsee.sim.moving import linear_trajectory, simulate_moving_free_field
@@ -271,7 +271,7 @@ def test_smoothed_srp_finds_a_static_source_and_not_noise():
     x = rng.standard_normal(int(1.0 * FS))
     traj = linear_trajectory([1.0, 1.732, 0.0], [0.0, 0.0, 0.0], 1.0)  # azimuth 60 deg
     y = simulate_moving_free_field(x, FS, arr, traj, snr_db=5, rng=6)
-    frame_len, hop = pl.frame_geometry(FS, 64.0, 32.0)
+    frame_len, hop = frame_geometry(FS, 64.0, 32.0)
     srp = pl.SmoothedSrp(arr, FS, frame_len, alpha=0.8)
     n = (y.shape[1] - frame_len) // hop + 1
     res = srp.process(y, n, hop)
@@ -564,7 +564,7 @@ def test_recording_shorter_than_a_frame_and_absurd_frames_are_errors():
     with pytest.raises(AudioInputError, match="1000 samples, one frame needs 1024"):
         StreamPipeline(arr).run(ArraySource(x, FS))
     assert len(StreamPipeline(arr).run(ArraySource(np.tile(x, 2), FS))) == 1 + (2000 - 1024) // 512
-    for frame_ms, hop_ms in ((pl.MAX_FRAME_MS * 1.01, 32.0), (64.0, 1e9), (float("nan"), 32.0)):
+    for frame_ms, hop_ms in ((MAX_FRAME_MS * 1.01, 32.0), (64.0, 1e9), (float("nan"), 32.0)):
         with pytest.raises(ConfigError, match="frame and hop"):
             StreamPipeline(arr, StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms)).run(
                 ArraySource(x, FS))

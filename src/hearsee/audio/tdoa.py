@@ -74,6 +74,7 @@ from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
 __all__ = [
     "METHODS",
+    "MAX_FRAME_MS",
     "MIN_FS_HZ",
     "GccResult",
     "TdoaFrames",
@@ -92,6 +93,9 @@ _ALIASES = {
 }
 _REFINE = ("interp", "parabolic", "none")
 _TINY = 1e-30
+#: Longest analysis frame and hop, milliseconds (a frame updating less often than this follows
+#: nothing that moves; the bound also keeps a mistyped length from allocating gigabytes)
+MAX_FRAME_MS = 10_000.0
 #: Lowest sample rate accepted (Hz): below it the band holds too little of a voice to time.
 MIN_FS_HZ = 4000.0
 #: Fewer confident frames than this: the summary averages all frames with energy instead.
@@ -118,6 +122,18 @@ def normalize_method(method: str) -> str:
 
 
 # ---------------------------------------------------------------------------------- framing
+def frame_geometry(fs: float, frame_ms: float, hop_ms: float) -> tuple[int, int]:
+    """Frame length and hop in samples for ``frame_ms`` / ``hop_ms`` milliseconds at ``fs`` Hz
+    (at least 8 and 1 samples): the one rounding rule of :func:`estimate_tdoas`, the stream and
+    the CLI. Both must be in (0, :data:`MAX_FRAME_MS`], else a ConfigError."""
+    if not (frame_ms > 0 and hop_ms > 0):
+        raise ConfigError(f"frame and hop must be > 0 ms, got {frame_ms} and {hop_ms}")
+    if not (frame_ms <= MAX_FRAME_MS and hop_ms <= MAX_FRAME_MS):
+        raise ConfigError(f"frame and hop must be at most {MAX_FRAME_MS:.0f} ms, "
+                          f"got {frame_ms} and {hop_ms}")
+    return max(int(round(frame_ms * 1e-3 * fs)), 8), max(int(round(hop_ms * 1e-3 * fs)), 1)
+
+
 def frame_signals(x: ArrayLike, frame_len: int, hop: int) -> NDArray:
     """Cut signals into overlapping frames.
 
@@ -847,8 +863,7 @@ def estimate_tdoas(
             f"sample rate {fs:g} Hz is too low for time-delay estimation (need >= "
             f"{MIN_FS_HZ:g} Hz; 16 kHz or more recommended)"
         )
-    if frame_ms <= 0 or hop_ms <= 0:
-        raise ConfigError(f"frame and hop must be > 0 ms, got {frame_ms} and {hop_ms}")
+    frame_len, hop = frame_geometry(fs, frame_ms, hop_ms)
     method = normalize_method(method)
     if reverb_method is not None:
         reverb_method = normalize_method(reverb_method)
@@ -856,8 +871,6 @@ def estimate_tdoas(
     if summary_frames not in ("valid", "active"):
         raise ConfigError(f"summary_frames must be 'valid' or 'active', got {summary_frames!r}")
     prs = _check_pairs(pairs, arr)
-    frame_len = max(int(round(frame_ms * 1e-3 * fs)), 8)
-    hop = max(int(round(hop_ms * 1e-3 * fs)), 1)
     # single precision from here on: twice as fast, and its ~1e-7 relative error is far below
     # any sensor noise
     a32 = a.astype(np.float32)

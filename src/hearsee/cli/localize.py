@@ -91,14 +91,14 @@ def localize_cmd(
     from hearsee.audio.arrays import load_array
     from hearsee.audio.localize import localize_recording
     from hearsee.audio.signals import read_recording
+    from hearsee.audio.tdoa import frame_geometry
     from hearsee.errors import ConfigError
 
     if frame_ms <= 0 or hop_ms <= 0:
         raise ConfigError(f"--frame-ms and --hop-ms must be > 0, got {frame_ms} and {hop_ms}")
     arr = load_array(array)
     x, fs = read_recording(recording, arr)
-    frame_len = max(int(round(frame_ms * 1e-3 * fs)), 8)
-    hop = max(int(round(hop_ms * 1e-3 * fs)), 1)
+    frame_len, hop = frame_geometry(fs, frame_ms, hop_ms)
     n_frames = max((x.shape[1] - frame_len) // hop + 1, 0)
     work = x.shape[1] / fs * len(arr.pairs)
     with progress("localizing", n_frames, enabled=work > _PROGRESS_WORK_S) as advance:

@@ -57,7 +57,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
-from hearsee.audio.tdoa import estimate_tdoas, frame_signals
+from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, frame_signals
 from hearsee.audio.tracking import IMM_MODES_DPS2, DirectionIMM, DirectionKalman, MotionKalman
 from hearsee.errors import AudioInputError, ConfigError, EstimationError
 from hearsee.geometry import wrap_deg
@@ -75,7 +75,6 @@ __all__ = [
     "TrackingProcessor",
     "Update",
     "WavSource",
-    "frame_geometry",
 ]
 
 
@@ -385,22 +384,6 @@ class DropoutSource:
 
 
 # ---------------------------------------------------------------------------- framer
-#: the longest analysis frame a stream accepts, milliseconds (a tracker updating less often
-#: than this follows nothing that moves; the bound also keeps a mistyped frame length from
-#: allocating gigabytes)
-MAX_FRAME_MS = 10_000.0
-
-
-def frame_geometry(fs: float, frame_ms: float, hop_ms: float) -> tuple[int, int]:
-    """Frame length and hop in samples, rounded exactly as :func:`estimate_tdoas` does."""
-    if not (frame_ms > 0 and hop_ms > 0):
-        raise ConfigError(f"frame and hop must be > 0 ms, got {frame_ms} and {hop_ms}")
-    if not (frame_ms <= MAX_FRAME_MS and hop_ms <= MAX_FRAME_MS):
-        raise ConfigError(f"frame and hop must be at most {MAX_FRAME_MS:.0f} ms in a stream, "
-                          f"got {frame_ms} and {hop_ms}")
-    return max(int(round(frame_ms * 1e-3 * fs)), 8), max(int(round(hop_ms * 1e-3 * fs)), 1)
-
-
 class Framer:
     """Blocks -> batches of analysis frames, with missing frames where blocks were dropped.
 
