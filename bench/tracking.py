@@ -55,6 +55,13 @@ recordings through the stream with one constant-velocity
 (``StreamConfig(direction_modes_dps2=None)``, angular acceleration noise 200 deg/s^2; the
 default before 2026-11-24): the per-frame / tracked ratio, the median lags (room, free field)
 and, in the last two columns, its pooled lags.
+The last two rows ("arctic", since 2026-11-24's fifth session) repeat the conditions with real
+speech: CMU ARCTIC utterances chained in random order (shared data; skipped without it), on
+walks of their own random streams (seed + 20 straight, seed + 30 turning), so the rows above
+keep their walks. Part B found that the synthetic voice flatters the 3D fixes at 48 kHz
+(its aspiration noise fills the band); these rows check the azimuth tracking's claims with
+real speech at 16 kHz. On the dev seeds (120 / 130, 8 walks) they gave per-frame / tracked
+6.2x at both SNRs and pooled lags of 0.44 (10 dB) and 0.40 frames (20 dB).
 
 Part B -- calibrated camera + three microphones, sources 0.5-2 m away in the camera's view
 (SNR 20 dB, RT60 0.3 s), image points from the true projection plus 1 px noise (a detector
