@@ -482,6 +482,25 @@ def _tri(side: float) -> MicArray:
     return MicArray(np.c_[r * np.cos(a), r * np.sin(a), np.zeros(3)], name=f"triangle-{side}m")
 
 
+def range_sensitivity(rig: AudioVisualRig, points: np.ndarray) -> tuple[float, float]:
+    """How hard the rig makes the range: medians over array-frame ``points`` (n, 3) of the
+    error along the camera ray (metres) that 1 deg of error in the array's azimuth (seen from
+    its centre) causes, and the range standard deviation that 1 us of independent TDOA noise
+    on every pair causes (least squares along the ray, as :func:`locate_on_ray` does; this one
+    also counts the wavefront's curvature, which is where a camera in front of the array gets
+    its range from)."""
+    c = rig.camera_centre
+    d = (points - c) / np.linalg.norm(points - c, axis=1, keepdims=True)
+    h = 1e-4
+    ahead, behind = points + h * d, points - h * d
+    centre = rig.array.positions.mean(axis=0)
+    az = [np.unwrap(np.arctan2(q[:, 1] - centre[1], q[:, 0] - centre[0])) for q in (ahead, behind)]
+    per_deg = np.radians(1.0) / np.abs((az[0] - az[1]) / (2 * h))
+    dF = (rig.array.tdoa(ahead) - rig.array.tdoa(behind)) / (2 * h)  # s per metre, per pair
+    per_us = 1e-6 / np.sqrt(np.sum(dF**2, axis=1))
+    return float(np.median(per_deg)), float(np.median(per_us))
+
+
 def view_walk(rng: np.random.Generator, rig: AudioVisualRig, dur: float) -> Trajectory:
     """A walk 0.5-2 m from the array at 0.5-1.0 m/s that stays in the camera's view."""
     cam = rig.camera
@@ -536,7 +555,7 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
     for name, rig, fs, room, kind in cases:
         if kind != "male":
             name = f"{name}, {fs // 1000} kHz"
-        e_raw, e_rng = [], []
+        e_raw, e_rng, seen = [], [], []
         e_trk, e_vel, e_fix = ({k: [] for k in trackers} for _ in range(3))
         for _ in range(trials):
             traj = view_walk(rng, rig, dur)
@@ -574,6 +593,7 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
             t, raw = rt.t, rt.raw
             truth = traj.at(t)
             settle = t >= 0.35  # 0.32 s for the filter to converge (10 frames of 32 ms)
+            seen.append(truth[settle][::4])
             e_raw.append(np.linalg.norm(raw - truth, axis=1))
             cc = rig.camera_centre  # signed range error of the fixes along the camera ray
             e_rng.append(np.linalg.norm(raw - cc, axis=1) - np.linalg.norm(truth - cc, axis=1))
@@ -587,6 +607,7 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
                 example = {"t": t, "truth": truth, "raw": raw, "pos": rt.position,
                            "vel": rt.velocity, "vtrue": traj.velocity(t)}
         er, eg = np.concatenate(e_raw), np.concatenate(e_rng)
+        per_deg, per_us = range_sensitivity(rig, np.concatenate(seen))
         for key in trackers:
             et, ev, ef = (np.concatenate(a[key]) for a in (e_trk, e_vel, e_fix))
             per_walk = np.array([np.nanmedian(a) for a in e_trk[key]])
@@ -596,7 +617,7 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
                          float(np.mean(np.isfinite(er))) * 100,
                          float(np.nanmedian(et)), float(np.nanpercentile(et, 90)),
                          float(np.nanmedian(ef)), float(np.mean(per_walk <= 0.05)) * 100,
-                         rmse(ev)])
+                         rmse(ev), per_deg * 100, per_us * 100])
     return rows, example
 
 
@@ -711,7 +732,9 @@ HEAD_A = ["signal", "SNR dB", "per-frame RMSE deg", "per-frame coverage %",
 HEAD_B = ["rig", "walks", "per-frame fix median m", "fix signed range error median m",
           "fix signed range error IQR m", "fix coverage %", "tracked median m (all frames)",
           "tracked p90 m", "tracked median m (frames with a fix)",
-          "walks whose own tracked median <= 5 cm %", "velocity RMSE m/s"]
+          "walks whose own tracked median <= 5 cm %", "velocity RMSE m/s",
+          "range error per deg of array azimuth cm (median)",
+          "range std per us of TDOA noise cm (median)"]
 HEAD_C = ["run", "RTF wall", "RTF CPU", "latency median ms", "latency p95 ms", "frames",
           "missing frames", "status"]
 HEAD_D = ["method", "CPU s per s of audio", "ratio"]
