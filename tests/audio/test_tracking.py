@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 
 from hearsee.audio.tracking import (
+    ELEVATION_ACCEL_RATIO,
     DirectionIMM,
     DirectionKalman,
     MotionKalman,
@@ -204,17 +205,19 @@ def test_imm_with_equal_modes_is_the_single_kalman_filter():
         np.testing.assert_allclose(imm.P, kf.P, rtol=1e-9, atol=1e-9)
 
 
-def _textbook_imm(qs, dwell, sigma, t, z):
+def _textbook_imm(qs, dwell, sigma, t, z, el_ratio):
     """Reference IMM cycle written out per mode with plain numpy (Bar-Shalom, Li &
     Kirubarajan 2001, sec. 11.6.6): mixing, per-mode Kalman prediction and update, mode
     likelihoods, combination. No angle wrapping or gating: the walk stays away from +-180 deg
-    and within the gate. Returns the combined states (n, 4) and mode probabilities (n, m)."""
+    and within the gate. The elevation's acceleration noise and initial rate spread are
+    ``el_ratio`` times the azimuth's. Returns the combined states (n, 4) and mode
+    probabilities (n, m)."""
     from filterpy.common import Q_discrete_white_noise
 
     m = len(qs)
     H, R = np.eye(2, 4), sigma**2 * np.eye(2)
     x0 = np.array([z[0, 0], z[0, 1], 0.0, 0.0])
-    P0 = np.diag([sigma**2, sigma**2, 60.0**2, 60.0**2])
+    P0 = np.diag([sigma**2, sigma**2, 60.0**2, (60.0 * el_ratio) ** 2])
     xs, Ps, mu = [x0.copy() for _ in qs], [P0.copy() for _ in qs], np.full(m, 1.0 / m)
     out_x, out_mu = [x0], [mu]
     for k in range(1, t.size):
@@ -235,7 +238,8 @@ def _textbook_imm(qs, dwell, sigma, t, z):
         for j, (xm, Pm) in enumerate(mixed):
             q = Q_discrete_white_noise(2, dt, qs[j] ** 2)
             Q = np.zeros((4, 4))
-            Q[np.ix_([0, 2], [0, 2])] = Q[np.ix_([1, 3], [1, 3])] = q
+            Q[np.ix_([0, 2], [0, 2])] = q
+            Q[np.ix_([1, 3], [1, 3])] = q * el_ratio**2
             xp, Pp = F @ xm, F @ Pm @ F.T + Q
             y = z[k] - H @ xp
             S = H @ Pp @ H.T + R
@@ -257,12 +261,14 @@ def test_imm_with_three_unequal_modes_matches_the_textbook_cycle():
     z = np.column_stack([az_true + 2.0 * rng.standard_normal(t.size),
                          8.0 + 2.0 * rng.standard_normal(t.size)])
     qs, dwell, sigma = (20.0, 200.0, 1500.0), 0.7, 2.5
-    ref_x, ref_mu = _textbook_imm(qs, dwell, sigma, t, z)
-    imm = DirectionIMM(sigma, qs, mode_dwell_s=dwell, gate_prob=0.999999)
-    for k in range(t.size):
-        assert imm.update(t[k], (z[k, 0], z[k, 1]))
-        np.testing.assert_allclose(imm.x, ref_x[k], rtol=1e-7, atol=1e-7)
-        np.testing.assert_allclose(imm.mu, ref_mu[k], rtol=1e-6, atol=1e-9)
+    for el_ratio in (ELEVATION_ACCEL_RATIO, 1.0):  # the default, and one model for both angles
+        ref_x, ref_mu = _textbook_imm(qs, dwell, sigma, t, z, el_ratio)
+        imm = DirectionIMM(sigma, qs, mode_dwell_s=dwell, gate_prob=0.999999,
+                           elevation_accel_ratio=el_ratio)
+        for k in range(t.size):
+            assert imm.update(t[k], (z[k, 0], z[k, 1]))
+            np.testing.assert_allclose(imm.x, ref_x[k], rtol=1e-7, atol=1e-7)
+            np.testing.assert_allclose(imm.mu, ref_mu[k], rtol=1e-6, atol=1e-9)
     # not a trivial agreement: the quiet mode dominates the straight stretch, the turn not
     assert ref_mu[(t > 1.0) & (t < 2.4), 0].mean() > 0.5 > ref_mu[(t > 2.5) & (t < 3.0), 0].min()
 
@@ -327,3 +333,20 @@ def test_imm_rejects_bad_parameters_and_time_going_backwards():
     assert np.isnan(imm.elevation_deg)
     with pytest.raises(EstimationError):
         imm.update(0.05, (30.0, None))
+
+
+@pytest.mark.parametrize("make", [lambda: DirectionKalman(2.0, 150.0, elevation_accel_ratio=1.0),
+                                  lambda: DirectionIMM(2.0, elevation_accel_ratio=1.0)])
+def test_coasting_never_carries_the_elevation_over_the_pole(make):
+    """A track rising at 100 deg/s up to 80 deg, then silent for 2 s: the prediction stops at
+    +90 deg with the elevation rate stopped (it once reported several hundred deg)."""
+    trk = make()
+    t = np.arange(0.0, 0.8, 0.032)
+    for tk in t:
+        assert trk.update(tk, (30.0, 100.0 * tk))
+    assert trk.rate_dps[1] > 50.0
+    for tk in np.arange(t[-1] + 0.032, t[-1] + 2.0, 0.032):
+        trk.update(tk, None)
+        assert -90.0 <= trk.elevation_deg <= 90.0
+    assert trk.elevation_deg == 90.0 and trk.rate_dps[1] == 0.0
+    assert trk.azimuth_deg == pytest.approx(30.0, abs=1.0)  # the azimuth was steady

@@ -39,6 +39,7 @@ from scipy.stats import chi2
 from hearsee.errors import EstimationError
 
 __all__ = [
+    "ELEVATION_ACCEL_RATIO",
     "IMM_MODES_DPS2",
     "DirectionIMM",
     "DirectionKalman",
@@ -85,6 +86,17 @@ def _wrap_many(a: NDArray) -> NDArray:
     return 180.0 - (180.0 - a) % 360.0
 
 
+def _bound_elevation(X: NDArray) -> None:
+    """Clamp the elevation of direction states ``X`` (..., 4) to +-90 deg in place, stopping
+    an elevation rate that points beyond the bound (a prediction must not carry a track over
+    the pole: coasting at the last rate once reported elevations of several hundred deg)."""
+    el = X[..., 1]
+    over = np.abs(el) > 90.0
+    if np.any(over):
+        X[..., 3] = np.where(over & (X[..., 3] * el > 0), 0.0, X[..., 3])
+        X[..., 1] = np.clip(el, -90.0, 90.0)
+
+
 _ADJ_SIGN = np.array([[1.0, -1.0], [-1.0, 1.0]])
 
 
@@ -100,17 +112,32 @@ def _inv_det_batch(S: NDArray) -> tuple[NDArray, NDArray]:
     return np.linalg.inv(S), np.linalg.det(S)
 
 
-def _cv_model(dt: float, var: float) -> tuple[NDArray, NDArray]:
+def _cv_model(dt: float, var: float, el_ratio: float = 1.0) -> tuple[NDArray, NDArray]:
     """Constant-velocity model of ``[az, el, d az/dt, d el/dt]`` over ``dt`` seconds: the
-    transition F and the discrete white-noise acceleration Q for an angular acceleration
-    variance ``var`` (deg^2/s^4), both (4, 4)."""
+    transition F and the discrete white-noise acceleration Q for an azimuthal acceleration
+    variance ``var`` (deg^2/s^4) and an elevation acceleration standard deviation ``el_ratio``
+    times the azimuth's, both (4, 4)."""
     F = np.eye(4)
     F[0, 2] = F[1, 3] = dt
     q = Q_discrete_white_noise(dim=2, dt=dt, var=var)
     Q = np.zeros((4, 4))
-    for a, b in ((0, 2), (1, 3)):
-        Q[np.ix_([a, b], [a, b])] = q
+    for (a, b), scale in (((0, 2), 1.0), ((1, 3), el_ratio**2)):
+        Q[np.ix_([a, b], [a, b])] = q * scale
     return F, Q
+
+
+#: The elevation's angular acceleration noise (and initial rate spread) as a fraction of the
+#: azimuth's in the direction trackers: people walk on a floor, so seen from a robot their
+#: elevation changes far more slowly than their azimuth (1.5 m away, walking radially at
+#: 1 m/s, a mouth 0.3 m above the microphones changes elevation by ~7 deg/s). With one noise
+#: for both, a planar array's weakly observed elevation (its TDOAs change with cos(el) only)
+#: wandered, and coasted off at its last rate: on the dev walks of bench/tracking.py part A
+#: (seeds 100/110, 6 straight and 6 turning walks per condition, room, male / female / CMU
+#: ARCTIC at 10 and 20 dB; 2026-11-24, fifth session) the stream's tracked elevation had an
+#: RMSE of 16-33 deg with ratio 1 and 12-17 deg with 0.1 (azimuth RMSE +0-9 %, pooled lags
+#: within 0.4 frames); the stream adds a larger elevation measurement noise for planar arrays
+#: (:class:`hearsee.stream.pipeline.StreamConfig`'s ``planar_elevation_sigma_scale``).
+ELEVATION_ACCEL_RATIO = 0.1
 
 
 class _Kalman:
@@ -206,14 +233,21 @@ class DirectionKalman(_Kalman):
     max_rejects : int
         Consecutive rejected measurements after which the track restarts at the measurement.
     init_rate_sigma_dps : float
-        Initial standard deviation of the angular rates.
+        Initial standard deviation of the azimuth's rate, deg/s.
+    elevation_accel_ratio : float
+        The elevation's acceleration noise and initial rate spread as a fraction of the
+        azimuth's (:data:`ELEVATION_ACCEL_RATIO`; 1 = the same model for both angles).
     """
 
     def __init__(self, sigma_meas_deg: float = 5.0, sigma_accel_dps2: float = 150.0,
                  gate_prob: float = 0.997, max_rejects: int = 4,
-                 init_rate_sigma_dps: float = 60.0) -> None:
+                 init_rate_sigma_dps: float = 60.0,
+                 elevation_accel_ratio: float = ELEVATION_ACCEL_RATIO) -> None:
         if not sigma_meas_deg > 0 or not sigma_accel_dps2 > 0:
             raise EstimationError("sigma_meas_deg and sigma_accel_dps2 must be > 0")
+        if not elevation_accel_ratio > 0:
+            raise EstimationError(
+                f"elevation_accel_ratio must be > 0, got {elevation_accel_ratio}")
         if not 0 < gate_prob < 1:
             raise EstimationError(f"gate_prob must be in (0, 1), got {gate_prob}")
         self.sigma_meas_deg = float(sigma_meas_deg)
@@ -221,6 +255,7 @@ class DirectionKalman(_Kalman):
         self.gate_prob = float(gate_prob)
         self.max_rejects = int(max_rejects)
         self.init_rate_sigma_dps = float(init_rate_sigma_dps)
+        self.elevation_accel_ratio = float(elevation_accel_ratio)
         self.H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
         self.R = np.eye(2) * self.sigma_meas_deg**2
         self._gate = {1: float(chi2.ppf(self.gate_prob, 1)), 2: float(chi2.ppf(self.gate_prob, 2))}
@@ -230,8 +265,7 @@ class DirectionKalman(_Kalman):
     def reset(self) -> None:
         """Forget the track (the next measurement starts a new one)."""
         self.x = np.zeros(4)
-        self.P = np.diag([180.0**2, 90.0**2, self.init_rate_sigma_dps**2,
-                          self.init_rate_sigma_dps**2])
+        self.P = self._initial_cov(180.0**2, 90.0**2)
         self.F = np.eye(4)
         self.Q = np.zeros((4, 4))
         self.t: float | None = None
@@ -243,21 +277,28 @@ class DirectionKalman(_Kalman):
     def _set_dt(self, dt: float) -> None:
         key = round(dt, 9)
         if key not in self._model_cache:
-            self._model_cache[key] = _cv_model(dt, self.sigma_accel_dps2**2)
+            self._model_cache[key] = _cv_model(dt, self.sigma_accel_dps2**2,
+                                               self.elevation_accel_ratio)
         self.F, self.Q = self._model_cache[key]
 
     def _predict(self) -> None:
         super()._predict()
         self.x[0] = _wrap1(float(self.x[0]))
+        _bound_elevation(self.x)
 
     def _start(self, az: float, el: float | None) -> None:
         self.x = np.array([_wrap1(float(az)), 0.0 if el is None else float(el), 0.0, 0.0])
         el_var = 90.0**2 if el is None else self.sigma_meas_deg**2
-        self.P = np.diag([self.sigma_meas_deg**2, el_var, self.init_rate_sigma_dps**2,
-                          self.init_rate_sigma_dps**2])
+        self.P = self._initial_cov(self.sigma_meas_deg**2, el_var)
         self.initialized = True
         self.has_elevation = el is not None
         self.n_rejects = 0
+
+    def _initial_cov(self, az_var: float, el_var: float) -> NDArray:
+        """A new track's covariance: the given angle variances (deg^2), rates with
+        ``init_rate_sigma_dps`` (elevation's scaled by ``elevation_accel_ratio``)."""
+        rate = self.init_rate_sigma_dps
+        return np.diag([az_var, el_var, rate**2, (rate * self.elevation_accel_ratio) ** 2])
 
     def _parts(self, az: float, el: float | None, R: NDArray | None = None,
                delay_s: float = 0.0) -> tuple[NDArray, NDArray, NDArray, NDArray]:
@@ -279,7 +320,8 @@ class DirectionKalman(_Kalman):
 
     def update(self, t: float, measurement: tuple[float, float | None] | None = None,
                candidates: Sequence[tuple[float, float | None]] | None = None,
-               sigma_meas_deg: float | None = None, delay_s: float = 0.0) -> bool:
+               sigma_meas_deg: float | tuple[float, float] | None = None,
+               delay_s: float = 0.0) -> bool:
         """One frame: predict to ``t`` and correct with a measurement if there is one.
 
         Parameters
@@ -291,8 +333,9 @@ class DirectionKalman(_Kalman):
         candidates : list of (az_deg, el_deg or None), optional
             Ambiguous alternatives (the measurement is one of them); the one nearest the
             prediction is used.
-        sigma_meas_deg : float, optional
-            This frame's measurement noise (default: the filter's).
+        sigma_meas_deg : float or (float, float), optional
+            This frame's measurement noise, degrees: one for both angles or (azimuth,
+            elevation) (default: the filter's).
         delay_s : float, optional
             How old the measurement's evidence is, seconds (e.g. ``alpha / (1 - alpha)`` hops
             for recursively averaged spectra): the measurement model becomes
@@ -323,12 +366,14 @@ class DirectionKalman(_Kalman):
         self.n_rejects = 0
         return True
 
-    def _nearest(self, cands: list[tuple[float, float | None]], sigma_meas_deg: float | None,
-                 delay_s: float) -> tuple:
+    def _nearest(self, cands: list[tuple[float, float | None]],
+                 sigma_meas_deg: float | tuple[float, float] | None, delay_s: float) -> tuple:
         """Nearest-neighbour association: ``(d2, az, el, z, H, R, y, S)`` of the candidate with
         the smallest gate distance from this filter's prediction."""
-        v = None if sigma_meas_deg is None else float(sigma_meas_deg) ** 2
-        Rf = None if v is None else np.array([[v, 0.0], [0.0, v]])
+        Rf = None
+        if sigma_meas_deg is not None:
+            s_az, s_el = np.broadcast_to(np.asarray(sigma_meas_deg, dtype=float), (2,))
+            Rf = np.diag([s_az**2, s_el**2])
         best = None
         for a, e in cands:
             z, H, R, wrap = self._parts(a, e, Rf, delay_s)
@@ -340,7 +385,7 @@ class DirectionKalman(_Kalman):
     def _settle(self, el: float | None) -> None:
         """After a correction: azimuth wrapped, elevation clipped to +-90 deg."""
         self.x[0] = _wrap1(float(self.x[0]))
-        self.x[1] = float(np.clip(self.x[1], -90.0, 90.0))
+        _bound_elevation(self.x)
         self.has_elevation = self.has_elevation or el is not None
 
     # -- read-out ------------------------------------------------------------------------
@@ -401,14 +446,16 @@ class DirectionIMM:
         Mean time the speaker stays in one mode, seconds: per step of ``dt`` the probability of
         leaving the current mode is ``1 - exp(-dt / mode_dwell_s)``, shared evenly among the
         others (so the switching does not depend on the frame rate).
-    gate_prob, max_rejects, init_rate_sigma_dps :
-        As for :class:`DirectionKalman`.
+    gate_prob, max_rejects, init_rate_sigma_dps, elevation_accel_ratio :
+        As for :class:`DirectionKalman` (every mode's elevation noise is its azimuth noise
+        times ``elevation_accel_ratio``).
     """
 
     def __init__(self, sigma_meas_deg: float = 10.0,
                  sigma_accel_dps2: Sequence[float] = IMM_MODES_DPS2, mode_dwell_s: float = 1.0,
                  gate_prob: float = 0.997, max_rejects: int = 4,
-                 init_rate_sigma_dps: float = 60.0) -> None:
+                 init_rate_sigma_dps: float = 60.0,
+                 elevation_accel_ratio: float = ELEVATION_ACCEL_RATIO) -> None:
         qs = np.array([float(q) for q in sigma_accel_dps2])
         if qs.size < 2:
             raise EstimationError("an IMM needs at least two modes (sigma_accel_dps2)")
@@ -419,7 +466,7 @@ class DirectionIMM:
         # the mixture, as a filter object: association, gate and read-out reuse its methods;
         # the modes themselves are stacked arrays, so that one numpy call steps all of them
         self._mix = DirectionKalman(sigma_meas_deg, float(qs[0]), gate_prob, max_rejects,
-                                    init_rate_sigma_dps)
+                                    init_rate_sigma_dps, elevation_accel_ratio)
         self.sigma_accel_dps2 = qs
         self.mode_dwell_s = float(mode_dwell_s)
         self.max_rejects = int(max_rejects)
@@ -489,7 +536,7 @@ class DirectionIMM:
         """The shared transition F (4, 4) and every mode's process noise Q (modes, 4, 4)."""
         key = round(dt, 9)
         if key not in self._model_cache:
-            F, Q1 = _cv_model(dt, 1.0)
+            F, Q1 = _cv_model(dt, 1.0, self._mix.elevation_accel_ratio)
             self._model_cache[key] = (F, Q1[None] * (self.sigma_accel_dps2**2)[:, None, None])
         return self._model_cache[key]
 
@@ -522,7 +569,8 @@ class DirectionIMM:
 
     def update(self, t: float, measurement: tuple[float, float | None] | None = None,
                candidates: Sequence[tuple[float, float | None]] | None = None,
-               sigma_meas_deg: float | None = None, delay_s: float = 0.0) -> bool:
+               sigma_meas_deg: float | tuple[float, float] | None = None,
+               delay_s: float = 0.0) -> bool:
         """One frame; arguments and return value as :meth:`DirectionKalman.update`."""
         cands = _clean_candidates(measurement, candidates)
         if not self.initialized:
@@ -544,11 +592,13 @@ class DirectionIMM:
             X = X @ F.T
             Ps = F @ Ps @ F.T + Qs
             X[:, 0] = _wrap_many(X[:, 0])
+            _bound_elevation(X)
             # the predicted mixture: mixing only regroups the same components, so it is the
             # last output predicted with the modes' expected process noise sum_j c_j Q_j
             mix = self._mix
             mix.x = F @ mix.x
             mix.x[0] = _wrap1(float(mix.x[0]))
+            _bound_elevation(mix.x)
             mix.P = F @ mix.P @ F.T + (c @ Qs.reshape(c.size, -1)).reshape(4, 4)
         self.X, self.Ps, self.mu = X, Ps, c
         self._mix.t = float(t)
@@ -572,7 +622,7 @@ class DirectionIMM:
         I_KH = _eye(4) - K @ H
         Ps = I_KH @ Ps @ I_KH.transpose(0, 2, 1) + K @ R @ K.transpose(0, 2, 1)
         X[:, 0] = _wrap_many(X[:, 0])
-        X[:, 1] = np.minimum(np.maximum(X[:, 1], -90.0), 90.0)
+        _bound_elevation(X)
         self.X, self.Ps = X, Ps
         self._mix.has_elevation = self._mix.has_elevation or el is not None
         # mode probabilities: prior times each mode's Gaussian innovation likelihood

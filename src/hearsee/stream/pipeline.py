@@ -58,7 +58,13 @@ from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, frame_signals
-from hearsee.audio.tracking import IMM_MODES_DPS2, DirectionIMM, DirectionKalman, MotionKalman
+from hearsee.audio.tracking import (
+    ELEVATION_ACCEL_RATIO,
+    IMM_MODES_DPS2,
+    DirectionIMM,
+    DirectionKalman,
+    MotionKalman,
+)
 from hearsee.errors import AudioInputError, ConfigError, EstimationError
 from hearsee.geometry import wrap_deg
 
@@ -753,6 +759,24 @@ class StreamConfig:
         ~125x faster than real time (three-mic, 16 kHz, block 4096, process CPU time; 87x in
         bench/tracking.py part C of 2026-11-24)
     mode_dwell_s : the IMM's mean time in one mode, seconds
+    elevation_accel_ratio : the direction tracker's elevation acceleration noise as a fraction
+        of its azimuth's (default
+        :data:`~hearsee.audio.tracking.ELEVATION_ACCEL_RATIO` = 0.1: a walking speaker's
+        elevation changes slowly; 1 = one model for both angles, the default before
+        2026-11-24's fifth session)
+    planar_elevation_sigma_scale : a planar array's elevation measurement noise as a multiple
+        of its azimuth's. Its TDOAs depend on the elevation only through cos(el), so a speaker
+        10-15 deg above its plane is located 4-6x less precisely in elevation than in azimuth
+        (cot(el)); treating both alike let noisy elevations steer the gate and the IMM's mode
+        weights. With 4 and ``elevation_accel_ratio`` 0.1, on the dev walks of
+        bench/tracking.py part A (seeds 100/110, 6 straight and 6 turning walks per condition,
+        room, 2026-11-24, fifth session) the tracked elevation's RMSE fell from 16-33 deg to
+        9-19 deg; the tracked azimuth's RMSE on the per-frame frames went +3 / +4 / +4 % for
+        the synthetic male voice at 10 / 20 dB and the female at 10 dB, +0.4 % for the female at
+        20 dB and -5 / -10 % for CMU ARCTIC speech at 10 / 20 dB, pooled lags within 0.2 frames
+        (the ratio alone: elevation 12-17 deg, azimuth +0-9 %; a scale from the measured
+        elevation, cot(el) up to 10, was worse in elevation). Volume arrays measure both angles
+        alike (scale not applied); linear ones give no elevation
     motion_model : the 3D tracker of the camera-ray fixes: ``"cv"`` (default), the gated
         constant-velocity :class:`~hearsee.fusion.audiovisual.RayTracker`, or ``"ca"``, the
         constant-acceleration :class:`~hearsee.audio.tracking.MotionKalman`
@@ -837,6 +861,8 @@ class StreamConfig:
     sigma_min_deg: float = 1.5
     direction_modes_dps2: tuple[float, ...] | None = IMM_MODES_DPS2
     mode_dwell_s: float = 1.0
+    elevation_accel_ratio: float = ELEVATION_ACCEL_RATIO
+    planar_elevation_sigma_scale: float = 4.0
 
 
 class TrackingProcessor:
@@ -863,13 +889,17 @@ class TrackingProcessor:
         self.frame_len, self.hop = frame_geometry(fs, self.cfg.frame_ms, self.cfg.hop_ms)
         self.pairs = list(array.pairs)
         # the in-plane model applies to planar arrays only
-        self._in_plane = bool(self.cfg.in_plane) and array_geometry(array).kind == "planar"
+        self._planar = array_geometry(array).kind == "planar"
+        self._in_plane = bool(self.cfg.in_plane) and self._planar
         self.itd = (ItdKalman(array.n_mics, self.pairs, q_std_s=0.5 / fs, r_std_s=1.0 / fs)
                     if self.cfg.itd_filter else None)
         if self.cfg.max_coast_s is not None and not self.cfg.max_coast_s > 0:
             raise ConfigError(f"max_coast_s must be > 0 s or None, got {self.cfg.max_coast_s}")
         if not self.cfg.reacquire_s > 0:
             raise ConfigError(f"reacquire_s must be > 0 s, got {self.cfg.reacquire_s}")
+        if not self.cfg.planar_elevation_sigma_scale > 0:
+            raise ConfigError("planar_elevation_sigma_scale must be > 0, got "
+                              f"{self.cfg.planar_elevation_sigma_scale}")
         self.direction = self._direction_tracker(self.cfg, self.hop / self.fs)
         self._last_measured_t = -np.inf
         self.motion, self.sigma_tdoa_s = self._motion_tracker(self.cfg)
@@ -940,6 +970,8 @@ class TrackingProcessor:
                 cands = self._smoothed_candidates(sm, n)
                 delay = float(sm["age_frames"][n]) * self.hop / self.fs if cands else 0.0
                 sigma = self._srp_sigma(float(sm["coherence"][n])) if cands else None
+            if sigma is not None and self._planar:
+                sigma = (sigma, sigma * self.cfg.planar_elevation_sigma_scale)
             measured = self.direction.update(float(t), cands[0] if cands else None, cands[1:],
                                              sigma_meas_deg=sigma, delay_s=delay)
             if measured:
@@ -1009,14 +1041,17 @@ class TrackingProcessor:
         constant-velocity filter with ``cfg.sigma_accel_dps2``; either restarts after
         ``cfg.reacquire_s`` of consecutive gate rejections (frames of ``hop_s`` seconds)."""
         max_rejects = max(1, int(np.ceil(cfg.reacquire_s / hop_s - 1e-9)))
-        if cfg.direction_modes_dps2 is None:
-            return DirectionKalman(cfg.sigma_meas_deg, cfg.sigma_accel_dps2,
-                                   max_rejects=max_rejects)
         try:
+            if cfg.direction_modes_dps2 is None:
+                return DirectionKalman(cfg.sigma_meas_deg, cfg.sigma_accel_dps2,
+                                       max_rejects=max_rejects,
+                                       elevation_accel_ratio=cfg.elevation_accel_ratio)
             return DirectionIMM(cfg.sigma_meas_deg, tuple(cfg.direction_modes_dps2),
-                                mode_dwell_s=cfg.mode_dwell_s, max_rejects=max_rejects)
+                                mode_dwell_s=cfg.mode_dwell_s, max_rejects=max_rejects,
+                                elevation_accel_ratio=cfg.elevation_accel_ratio)
         except EstimationError as exc:
-            raise ConfigError(f"direction_modes_dps2 / mode_dwell_s: {exc}") from None
+            raise ConfigError("direction tracker (direction_modes_dps2 / mode_dwell_s / "
+                              f"elevation_accel_ratio): {exc}") from None
 
     @staticmethod
     def _motion_tracker(cfg: StreamConfig) -> tuple[Any, float]:
