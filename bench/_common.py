@@ -44,9 +44,13 @@ def fmt(v: Any, digits: int = 3) -> str:
 
 
 def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 3) -> str:
-    """A GitHub markdown table."""
-    out = ["| " + " | ".join(headers) + " |", "|" + "|".join("---" for _ in headers) + "|"]
-    out += ["| " + " | ".join(fmt(v, digits) for v in r) + " |" for r in rows]
+    """A GitHub markdown table (a '|' inside a cell, e.g. "max |lag|", is escaped: it would
+    start a new column)."""
+    def row(cells: Sequence[str]) -> str:
+        return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
+
+    out = [row(headers), "|" + "|".join("---" for _ in headers) + "|"]
+    out += [row([fmt(v, digits) for v in r]) for r in rows]
     return "\n".join(out)
 
 

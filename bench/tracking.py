@@ -125,6 +125,14 @@ An offline Rauch-Tung-Striebel smoother over the same filter did not help in the
 other GCC weightings (SCOT, ROTH, ML, PHAT-beta 0.8, no SNR weight, Hann window, bands from
 300-1000 Hz up: 5.3-6.6 cm, ML 9.4 cm), nor a free gain on the model TDOAs (range from the TDOA
 vector's direction alone).
+The last two columns (since 2026-11-24's fifth session) say how hard each rig makes the
+range, whatever the room: the error along the camera ray that 1 deg of error in the array's
+azimuth causes, and the range spread that 1 us of TDOA noise on every pair causes (medians over
+the walks' positions; :func:`range_sensitivity`). With the camera 0.2 m beside the 15 cm array
+one degree is ~17 cm, so the tracked 5.9-6.5 cm correspond to ~0.35 deg of remaining azimuth
+bias (~3 us), and the 5 cm target would need ~0.3 deg; the 0.5 m baseline has ~7 cm per
+degree; the camera ahead of the 0.5 m triangle gets its range from the wavefront's curvature
+(~1 cm per us) rather than from the azimuth.
 
 Part C -- the stream: real-time factor (wall clock and process CPU time; the best of 3 runs per
 block size, as timeit reports, since other jobs share the 2 cores) from a file, per-frame
