@@ -609,3 +609,25 @@ def test_slow_elevation_model_steadies_a_planar_arrays_elevation(seed):
     (rms1, max1, az1), (rms, mx, az) = err["old"], err["default"]
     assert rms < 0.9 * rms1 and mx <= max1
     assert az <= az1 + 1.0
+
+
+def test_planar_elevation_scale_applies_to_level_arrays_only():
+    """The larger elevation noise is for a horizontal plane (elevation seen through cos(el));
+    a vertical three-microphone array measures elevation like azimuth, so the setting leaves
+    its track unchanged, while the level preset's track changes."""
+    from hearsee.sim.audio import simulate_recording
+
+    level = MicArray.from_preset("three-mic")
+    upright = MicArray(level.positions[:, [0, 2, 1]], name="upright")  # the x-z plane
+    src = np.array([1.2, 0.9, 0.5])
+    for arr, changes in ((level, True), (upright, False)):
+        x, _ = simulate_recording(arr, src, signal="male", duration_s=1.5, fs=FS, snr_db=10.0,
+                                  seed=4)
+        el = []
+        for scale in (1.0, 4.0):
+            ups = StreamPipeline(arr, StreamConfig(planar_elevation_sigma_scale=scale)).run(
+                ArraySource(x, FS))
+            el.append(np.array([np.nan if u.elevation_deg is None else u.elevation_deg
+                                for u in ups]))
+        assert np.isfinite(el[0]).sum() > 10
+        assert (not np.allclose(el[0], el[1], equal_nan=True)) == changes
