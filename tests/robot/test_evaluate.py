@@ -23,6 +23,8 @@ def test_bad_counts_and_durations():
         evaluate(0)
     with pytest.raises(ConfigError, match="duration"):
         evaluate(1, duration_s=0.5)
+    with pytest.raises(ConfigError, match="--workers must be >= 0"):  # was a ValueError
+        evaluate(1, workers=-1)
 
 
 @pytest.mark.slow
