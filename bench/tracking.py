@@ -504,18 +504,21 @@ def range_sensitivity(rig: AudioVisualRig, points: np.ndarray) -> tuple[float, f
     """How hard the rig makes the range: medians over array-frame ``points`` (n, 3) of the
     error along the camera ray (metres) that 1 deg of error in the array's azimuth (seen from
     its centre) causes, and the range standard deviation that 1 us of independent TDOA noise
-    on every pair causes (least squares along the ray, as :func:`locate_on_ray` does; this one
-    also counts the wavefront's curvature, which is where a camera in front of the array gets
-    its range from)."""
+    on every pair causes (read from the covariance of :func:`locate_on_ray`'s fix on the exact
+    TDOAs and image point; it also counts the wavefront's curvature, which is where a camera
+    in front of the array gets its range from)."""
+    from hearsee.fusion.audiovisual import locate_on_ray
+
     c = rig.camera_centre
     d = (points - c) / np.linalg.norm(points - c, axis=1, keepdims=True)
     h = 1e-4
-    ahead, behind = points + h * d, points - h * d
     centre = rig.array.positions.mean(axis=0)
-    az = [np.unwrap(np.arctan2(q[:, 1] - centre[1], q[:, 0] - centre[0])) for q in (ahead, behind)]
+    az = [np.unwrap(np.radians(direction_deg(points + s * h * d - centre)[0])) for s in (1, -1)]
     per_deg = np.radians(1.0) / np.abs((az[0] - az[1]) / (2 * h))
-    dF = (rig.array.tdoa(ahead) - rig.array.tdoa(behind)) / (2 * h)  # s per metre, per pair
-    per_us = 1e-6 / np.sqrt(np.sum(dF**2, axis=1))
+    per_us = []
+    for uv, z in zip(rig.project(points), rig.array.tdoa(points), strict=True):
+        fix = locate_on_ray(rig, uv, z, range_m=(0.2, 4.0), sigma_tdoa_s=1e-6, sigma_px=0.0)
+        per_us.append(np.sqrt(fix.direction @ fix.covariance @ fix.direction))
     return float(np.median(per_deg)), float(np.median(per_us))
 
 
