@@ -35,11 +35,15 @@ def moving():
     return arr, traj, y
 
 
+def _values(updates, name):
+    """One angle field (deg) of stream updates as an array, NaN where it is None."""
+    return np.array([np.nan if getattr(u, name) is None else getattr(u, name) for u in updates],
+                    dtype=float)
+
+
 def _times_azimuths(updates):
     """Frame times (s) and tracked azimuths (deg, NaN = none) of stream updates."""
-    t = np.array([u.t for u in updates])
-    az = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in updates])
-    return t, az
+    return np.array([u.t for u in updates]), _values(updates, "azimuth_deg")
 
 
 def _az_err(updates, traj):
@@ -540,7 +544,7 @@ def test_in_plane_reports_zero_elevation_for_a_speaker_at_the_arrays_height():
     res = {}
     for ip in (False, True):
         ups = StreamPipeline(arr, StreamConfig(in_plane=ip)).run(ArraySource(y, FS, 4096))
-        el = np.array([np.nan if u.elevation_deg is None else u.elevation_deg for u in ups])
+        el = _values(ups, "elevation_deg")
         raw = [u.raw_elevation_deg for u in ups if u.raw_elevation_deg is not None]
         res[ip] = (_az_err(ups, traj), el, raw)
     err_in, el_in, raw_in = res[True]
@@ -600,8 +604,7 @@ def test_slow_elevation_model_steadies_a_planar_arrays_elevation(seed):
                                           planar_elevation_sigma_scale=1.0)),
                      ("default", StreamConfig())):
         ups = StreamPipeline(arr, cfg).run(ArraySource(x, FS))
-        el = np.array([np.nan if u.elevation_deg is None else u.elevation_deg for u in ups])
-        az = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in ups])
+        el, az = _values(ups, "elevation_deg"), _values(ups, "azimuth_deg")
         assert np.isfinite(el).sum() > 40
         e_el, e_az = el - 10.0, wrap_deg(az + 35.0)
         err[key] = (np.sqrt(np.nanmean(e_el**2)), np.nanmax(np.abs(e_el)),
@@ -627,7 +630,6 @@ def test_planar_elevation_scale_applies_to_level_arrays_only():
         for scale in (1.0, 4.0):
             ups = StreamPipeline(arr, StreamConfig(planar_elevation_sigma_scale=scale)).run(
                 ArraySource(x, FS))
-            el.append(np.array([np.nan if u.elevation_deg is None else u.elevation_deg
-                                for u in ups]))
+            el.append(_values(ups, "elevation_deg"))
         assert np.isfinite(el[0]).sum() > 10
         assert (not np.allclose(el[0], el[1], equal_nan=True)) == changes
