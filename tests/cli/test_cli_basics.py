@@ -1,3 +1,5 @@
+import pytest
+
 from hearsee.cli import main
 
 
@@ -9,6 +11,28 @@ def test_arrays_lists_presets(capsys):
 
 def test_unknown_command_is_usage_error(capsys):
     assert main(["no-such-command"]) == 2
+    err = capsys.readouterr().err
+    assert err == "hearsee: error: No such command 'no-such-command'. (see 'hearsee --help')\n"
+
+
+@pytest.mark.parametrize(("argv", "needle"), [
+    (["track"], "Missing option '--array'"),
+    (["localize", "--bogus", "x"], "No such option: --bogus"),
+    (["simulate", "o.wav", "--array", "two-mic", "--source", "1,2"], "expected 3 numbers"),
+])
+def test_usage_errors_are_one_line(argv, needle, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # nothing may be written, wherever the command points
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1, err
+    assert err.startswith(f"hearsee {argv[0]}: error: ") and needle in err, err
+    assert err.rstrip().endswith(f"(see 'hearsee {argv[0]} --help')") and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_bare_command_prints_help(capsys):
+    assert main([]) == 2  # click's convention for no_args_is_help
+    assert "Commands" in capsys.readouterr().err
 
 
 def test_version(capsys):

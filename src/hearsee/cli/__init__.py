@@ -1,14 +1,17 @@
 """The ``hearsee`` command line: a thin shell over the library.
 
 Every command module below registers itself on :data:`hearsee.cli._app.app`. Errors that the
-library raises on purpose (:class:`hearsee.errors.HearseeError`) become one line on stderr and
-exit code 2 -- never a traceback.
+library raises on purpose (:class:`hearsee.errors.HearseeError`) and usage errors (a missing or
+unknown option, an invalid value) become one line on stderr and exit code 2 -- never a
+traceback, never click's three-line usage block.
 """
 
 from __future__ import annotations
 
 import importlib
 import sys
+
+import typer
 
 from hearsee.cli._app import app
 from hearsee.errors import HearseeError
@@ -30,22 +33,50 @@ for _name in _COMMAND_MODULES:
     importlib.import_module(f"hearsee.cli.{_name}")
 
 
+def _click_base(name: str) -> type[Exception]:
+    """click's exception class ``name`` among typer.BadParameter's bases: typer >= 0.22 vendors
+    its own copy of click, older releases use click itself; typer exports neither directly."""
+    return next(c for c in typer.BadParameter.__mro__ if c.__name__ == name)
+
+
+_UsageError = _click_base("UsageError")
+_ClickException = _click_base("ClickException")
+
+
+def _usage_error_line(exc) -> str:
+    """One line for a usage error: the command, the message and where to get help."""
+    path = exc.ctx.command_path if exc.ctx is not None else "hearsee"
+    message = " ".join(exc.format_message().split())  # click's messages may span lines
+    return f"{path}: error: {message} (see '{path} --help')"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``hearsee`` console script.
 
     With ``argv=None`` (the console script) it exits the process; with a list (tests, embedding)
-    it returns the exit code instead. Usage errors exit 2 (typer), hearsee errors print
-    ``hearsee: error: <message>`` on stderr and exit 2.
+    it returns the exit code instead. Usage errors print ``hearsee <command>: error: <message>
+    (see 'hearsee <command> --help')``, hearsee errors ``hearsee: error: <message>``, each as
+    one line on stderr, and exit 2.
     """
     try:
-        app(args=argv, prog_name="hearsee")  # standalone mode: raises SystemExit
+        # non-standalone: click raises its errors here instead of printing its usage block
+        app(args=argv, prog_name="hearsee", standalone_mode=False)
         code = 0
     except SystemExit as exc:
         code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    except _UsageError as exc:
+        if type(exc).__name__ == "NoArgsIsHelpError":  # bare ``hearsee``: the help is the message
+            print(exc.format_message(), file=sys.stderr)
+        else:
+            print(_usage_error_line(exc), file=sys.stderr)
+        code = exc.exit_code
+    except _ClickException as exc:  # e.g. click.FileError: unreadable file option
+        print(f"hearsee: error: {' '.join(exc.format_message().split())}", file=sys.stderr)
+        code = exc.exit_code
     except HearseeError as exc:
         print(f"hearsee: error: {exc}", file=sys.stderr)
         code = 2
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, typer.Abort):
         print("hearsee: interrupted", file=sys.stderr)
         code = 130
     if argv is None:
