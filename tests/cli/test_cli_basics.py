@@ -38,3 +38,17 @@ def test_bare_command_prints_help(capsys):
 def test_version(capsys):
     assert main(["--version"]) == 0
     assert "hearsee" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv", [
+    ["localize", "missing.wav", "--array", "three-mic", "--frame-ms", "0"],
+    ["track", "missing.wav", "--array", "three-mic", "--hop-ms", "-1"],
+    ["localize3d", "missing.yaml", "--frame-ms", "1e9"],
+])
+def test_frame_options_checked_before_reading(argv, capsys, tmp_path, monkeypatch):
+    # the files do not exist: the option error must come first and name the options
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("hearsee: error: --frame-ms and --hop-ms must be ") and \
+        err.count("\n") == 1, err

@@ -78,7 +78,9 @@ __all__ = [
     "MIN_FS_HZ",
     "GccResult",
     "TdoaFrames",
+    "check_frame_ms",
     "estimate_tdoas",
+    "frame_geometry",
     "frame_signals",
     "gcc",
     "gcc_weighting",
@@ -122,15 +124,25 @@ def normalize_method(method: str) -> str:
 
 
 # ---------------------------------------------------------------------------------- framing
+def check_frame_ms(frame_ms: float, hop_ms: float, *,
+                   names: tuple[str, str] = ("frame", "hop")) -> None:
+    """ConfigError unless frame length and hop (ms) are both in (0, :data:`MAX_FRAME_MS`].
+
+    ``names`` are what the message calls them (the CLI passes its option names, so that it can
+    check them before reading a recording)."""
+    what = f"{names[0]} and {names[1]}"
+    if not (frame_ms > 0 and hop_ms > 0):
+        raise ConfigError(f"{what} must be > 0 ms, got {frame_ms} and {hop_ms}")
+    if not (frame_ms <= MAX_FRAME_MS and hop_ms <= MAX_FRAME_MS):
+        raise ConfigError(f"{what} must be at most {MAX_FRAME_MS:.0f} ms, "
+                          f"got {frame_ms} and {hop_ms}")
+
+
 def frame_geometry(fs: float, frame_ms: float, hop_ms: float) -> tuple[int, int]:
     """Frame length and hop in samples for ``frame_ms`` / ``hop_ms`` milliseconds at ``fs`` Hz
     (at least 8 and 1 samples): the one rounding rule of :func:`estimate_tdoas`, the stream and
-    the CLI. Both must be in (0, :data:`MAX_FRAME_MS`], else a ConfigError."""
-    if not (frame_ms > 0 and hop_ms > 0):
-        raise ConfigError(f"frame and hop must be > 0 ms, got {frame_ms} and {hop_ms}")
-    if not (frame_ms <= MAX_FRAME_MS and hop_ms <= MAX_FRAME_MS):
-        raise ConfigError(f"frame and hop must be at most {MAX_FRAME_MS:.0f} ms, "
-                          f"got {frame_ms} and {hop_ms}")
+    the CLI. Both must be in (0, :data:`MAX_FRAME_MS`] (:func:`check_frame_ms`)."""
+    check_frame_ms(frame_ms, hop_ms)
     return max(int(round(frame_ms * 1e-3 * fs)), 8), max(int(round(hop_ms * 1e-3 * fs)), 1)
 
 

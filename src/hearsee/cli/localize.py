@@ -91,11 +91,9 @@ def localize_cmd(
     from hearsee.audio.arrays import load_array
     from hearsee.audio.localize import localize_recording
     from hearsee.audio.signals import read_recording
-    from hearsee.audio.tdoa import frame_geometry
-    from hearsee.errors import ConfigError
+    from hearsee.audio.tdoa import check_frame_ms, frame_geometry
 
-    if frame_ms <= 0 or hop_ms <= 0:
-        raise ConfigError(f"--frame-ms and --hop-ms must be > 0, got {frame_ms} and {hop_ms}")
+    check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
     arr = load_array(array)
     x, fs = read_recording(recording, arr)
     frame_len, hop = frame_geometry(fs, frame_ms, hop_ms)

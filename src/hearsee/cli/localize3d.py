@@ -28,7 +28,9 @@ def localize3d_cmd(
     every candidate when the answer is not unique (a single pose: the mirror pair, no distance).
     """
     from hearsee.audio.active import localize_manifest
+    from hearsee.audio.tdoa import check_frame_ms
 
+    check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
     with progress("localizing", total=1) as advance:
         est = localize_manifest(manifest, frame_ms=frame_ms, hop_ms=hop_ms, method=method)
         advance()

@@ -82,6 +82,7 @@ def track_cmd(
     """Track the direction (and, with a calibrated camera, the 3D position, velocity and
     acceleration) of a moving speaker; one update per audio frame."""
     from hearsee.audio.arrays import load_array
+    from hearsee.audio.tdoa import check_frame_ms
     from hearsee.audio.tracking import IMM_MODES_DPS2
     from hearsee.errors import ConfigError
     from hearsee.stream.pipeline import DeviceSource, StreamConfig, StreamPipeline, WavSource
@@ -97,8 +98,7 @@ def track_cmd(
     if camera is not None and not visual:
         raise ConfigError("--camera needs an image-point source: --video, --camera-device or "
                           "--image-points")
-    if frame_ms <= 0 or hop_ms <= 0:
-        raise ConfigError(f"--frame-ms and --hop-ms must be > 0, got {frame_ms} and {hop_ms}")
+    check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
     arr = load_array(array)
     rig = points = None
     if camera is not None:
