@@ -19,6 +19,8 @@ def test_unknown_command_is_usage_error(capsys):
     (["track"], "Missing option '--array'"),
     (["localize", "--bogus", "x"], "No such option: --bogus"),
     (["simulate", "o.wav", "--array", "two-mic", "--source", "1,2"], "expected 3 numbers"),
+    (["simulate", "o.wav", "--array", "two-mic", "--source", "1,1,0", "--seed", "-1"], "--seed"),
+    (["eval", "--seed", "-5"], "--seed"),
 ])
 def test_usage_errors_are_one_line(argv, needle, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # nothing may be written, wherever the command points

@@ -25,6 +25,8 @@ def test_bad_counts_and_durations():
         evaluate(1, duration_s=0.5)
     with pytest.raises(ConfigError, match="--workers must be >= 0"):  # was a ValueError
         evaluate(1, workers=-1)
+    with pytest.raises(ConfigError, match="--seed must be >= 0"):  # was numpy's ValueError
+        evaluate(1, seed0=-5)
 
 
 @pytest.mark.slow

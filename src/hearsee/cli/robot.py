@@ -57,7 +57,7 @@ def _refuse_input_overwrite(out: Path, *inputs: Path | None) -> None:
 @app.command("eval")
 def eval_cmd(
     scenarios: int = typer.Option(20, "--scenarios", "-n", help="Number of random scenarios."),
-    seed0: int = typer.Option(0, "--seed", help="Seed of the first scenario."),
+    seed0: int = typer.Option(0, "--seed", min=0, help="Seed of the first scenario."),
     workers: int = typer.Option(0, "--workers", help="Local processes (0 = all cores)."),
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://...)."),
     out: Path = typer.Option(None, "--out", "-o", help="Write per-scenario results (JSON)."),

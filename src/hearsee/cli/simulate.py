@@ -81,7 +81,7 @@ def simulate_cmd(
     array_at: str | None = typer.Option(None, "--array-at",
                                         help="Array origin X,Y,Z in room coordinates "
                                         "(default: the room centre)."),
-    seed: int = typer.Option(0, "--seed", help="Random seed (signal and noise)."),
+    seed: int = typer.Option(0, "--seed", min=0, help="Random seed (signal and noise)."),
     far_field: bool = typer.Option(False, "--far-field",
                                    help="Free field only: a plane wave from the source's "
                                    "direction instead of a spherical wave."),

@@ -99,6 +99,8 @@ def evaluate(
         raise ConfigError(f"--duration must be between 2 and 120 s, got {duration_s}")
     if workers is not None and workers < 0:
         raise ConfigError(f"--workers must be >= 0 (0 = all cores), got {workers}")
+    if seed0 < 0:
+        raise ConfigError(f"--seed must be >= 0 (numpy seeds are non-negative), got {seed0}")
     seeds = list(range(seed0, seed0 + n_scenarios))
     job = partial(run_one, duration_s=float(duration_s))
     tick = progress or (lambda n=1: None)
