@@ -218,7 +218,8 @@ def pose_manifest(tmp_path_factory):
     return man, files, np.array(src)
 
 
-def test_localize3d_cli_round_trip(pose_manifest, capsys):
+@pytest.mark.parametrize("method", [[], ["--method", "gcc-scot"]], ids=["default", "scot"])
+def test_localize3d_cli_round_trip(pose_manifest, capsys, method):
     import json
 
     from hearsee.audio.active import load_pose_manifest
@@ -229,7 +230,7 @@ def test_localize3d_cli_round_trip(pose_manifest, capsys):
     m = load_pose_manifest(man)
     assert [p.as_tuple() for p in m.poses] == [tuple(map(float, p)) for p in POSES3]
     np.testing.assert_allclose(m.truth["source_m"], src)
-    assert main(["localize3d", str(man)]) == 0
+    assert main(["localize3d", str(man), *method]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["unique"] is True
     np.testing.assert_allclose(doc["position_m"], src, atol=0.1)

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from hearsee.cli._app import app, emit_json, progress
+from hearsee.cli._app import GccMethod, app, emit_json, progress
 
 
 @app.command("localize3d")
@@ -18,8 +18,7 @@ def localize3d_cmd(
         "`hearsee simulate OUT.yaml --poses ...` writes one).")],
     frame_ms: float = typer.Option(64.0, "--frame-ms", help="GCC frame length in ms."),
     hop_ms: float = typer.Option(32.0, "--hop-ms", help="GCC hop in ms."),
-    method: str = typer.Option("phat", "--method",
-                               help="GCC weighting: phat, scot, roth, ml, cc."),
+    method: GccMethod = typer.Option(GccMethod.phat, "--method", help="GCC weighting."),
 ) -> None:
     """Localize a static source in 3D (robot frame) from captures at several head poses.
 
@@ -32,6 +31,6 @@ def localize3d_cmd(
 
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
     with progress("localizing", total=1) as advance:
-        est = localize_manifest(manifest, frame_ms=frame_ms, hop_ms=hop_ms, method=method)
+        est = localize_manifest(manifest, frame_ms=frame_ms, hop_ms=hop_ms, method=method.value)
         advance()
     emit_json(est.to_dict())
