@@ -9,7 +9,7 @@ coherence-weighted SRP-PHAT over a direction grid, gated by the normalised steer
 the evidence's age as measurement delay; into the interacting-multiple-model tracker
 :class:`hearsee.audio.tracking.DirectionIMM`, quiet and turning constant-velocity modes of
 50 and 2000 deg/s^2 (1000 before 2026-11-24's third session; see IMM_MODES_DPS2), 1 s mean
-dwell) and, side by side on the same frames, pyroomacoustics'
+dwell, angular rates relaxing toward zero over 2 s since the sixth session) and, side by side on the same frames, pyroomacoustics'
 SRP-PHAT applied per frame (it has no tracker). The measurement settings (measurement noise
 6 deg / confidence for a frame's own direction, 20 (1 - c) / c deg for a smoothed one of
 normalised steered power c, floor 1.5 deg) were chosen on walks of seeds 100 (straight) and 110
@@ -52,9 +52,17 @@ deg/s^2 turning mode the median of the per-walk lags reached 2.7 frames for the 
 condition's pooled lag is within about +-1 frame. The "one CV filter" columns run the same
 recordings through the stream with one constant-velocity
 :class:`~hearsee.audio.tracking.DirectionKalman` instead
-(``StreamConfig(direction_modes_dps2=None)``, angular acceleration noise 200 deg/s^2; the
-default before 2026-11-24): the per-frame / tracked ratio, the median lags (room, free field)
-and, in the last two columns, its pooled lags.
+(``StreamConfig(direction_modes_dps2=None, direction_rate_tau_s=None)``, angular acceleration
+noise 200 deg/s^2, constant rate; the default before 2026-11-24): the per-frame / tracked
+ratio, the median lags (room, free field) and, in the two "one CV filter: pooled" columns, its
+pooled lags.
+The last two columns (since 2026-11-24's sixth session) run the straight and the turning room
+walks once more through the IMM with constant angular rates (``StreamConfig(
+direction_rate_tau_s=None)``, the default before that session): the stream's direction
+trackers now let the rate relax toward zero with a 2 s time constant
+(:data:`~hearsee.audio.tracking.DIRECTION_RATE_TAU_S`, chosen on seeds 100 and 200 with the rule
+written there: kept only if on this run every pooled lag stays within 2 frames and the voices'
+ratios do not fall).
 The last two rows ("arctic", since 2026-11-24's fifth session) repeat the conditions with real
 speech: CMU ARCTIC utterances chained in random order (shared data; skipped without it), on
 walks of their own random streams (seed + 20 straight, seed + 30 turning), so the rows above
@@ -62,7 +70,7 @@ keep their walks. Part B found that the synthetic voice flatters the 3D fixes at
 (its aspiration noise fills the band); these rows check the azimuth tracking's claims with
 real speech at 16 kHz. On the dev seeds (120 / 130, 8 walks) they gave per-frame / tracked
 6.2x at both SNRs and pooled lags of 0.44 (10 dB) and 0.40 frames (20 dB).
-The last two columns (since the same session) give the elevation's RMSE per frame and
+The two elevation columns (since the fifth session) give the elevation's RMSE per frame and
 tracked (the talkers are 0.3 m above the array, 4-17 deg): the planar array sees elevation
 only through cos(el), and the trackers now model it as the slow, weakly observed angle it is
 (:data:`~hearsee.audio.tracking.ELEVATION_ACCEL_RATIO`, ``StreamConfig``'s
@@ -185,8 +193,12 @@ ROOM = np.array([7.0, 6.0, 3.0])
 ARRAY_AT = np.array([3.5, 3.0, 1.2])
 RT60 = 0.3
 CFG = StreamConfig(frame_ms=64.0, hop_ms=32.0)
-#: the same stream with one constant-velocity direction filter instead of the IMM
-CFG_CV = StreamConfig(frame_ms=64.0, hop_ms=32.0, direction_modes_dps2=None)
+#: the same stream with one constant-velocity direction filter instead of the IMM (and constant
+#: rates: the default before 2026-11-24)
+CFG_CV = StreamConfig(frame_ms=64.0, hop_ms=32.0, direction_modes_dps2=None,
+                      direction_rate_tau_s=None)
+#: the IMM with constant rates (the default before 2026-11-24's sixth session)
+CFG_IMM0 = StreamConfig(frame_ms=64.0, hop_ms=32.0, direction_rate_tau_s=None)
 BAND = (300.0, 3500.0)
 #: the real 48 kHz recording of a spoken word, within the shared data folder
 ALEXA = Path("audio", "tdoa_2mic", "alexa-02.wav")
@@ -409,7 +421,8 @@ def _part_a_condition(kind: str, snr: float, trials: int, dur: float,
     acc = {k: [] for k in ("raw", "trk", "trk_common", "srp", "srp_common", "cov_raw",
                            "lag", "lag_ff", "speed", "cv_common", "lag_cv",
                            "lag_cv_ff", "slow", "prof_lag", "prof_lag_ff",
-                           "prof_lag_cv", "prof_lag_cv_ff", "el_raw", "el_trk")}
+                           "prof_lag_cv", "prof_lag_cv_ff", "el_raw", "el_trk",
+                           "imm0_common", "lag_imm0", "prof_lag_imm0")}
     for _ in range(trials):
         traj = walk(rng, dur)
         x = _signal(kind, dur, rng, data=data)
@@ -430,8 +443,9 @@ def _part_a_condition(kind: str, snr: float, trials: int, dur: float,
         acc["srp_common"].append(np.where(np.isfinite(raw), wrap_deg(srp - true), np.nan))
         acc["cov_raw"].append(np.mean(np.isfinite(raw)))
         acc["slow"].append(slow_part(e_raw))
-        cv = _azimuths(StreamPipeline(arr, CFG_CV).run(ArraySource(y, FS, 2048)))
-        acc["cv_common"].append(np.where(np.isfinite(raw), wrap_deg(cv - true), np.nan))
+        for k2, cfg in (("cv_common", CFG_CV), ("imm0_common", CFG_IMM0)):
+            other = _azimuths(StreamPipeline(arr, cfg).run(ArraySource(y, FS, 2048)))
+            acc[k2].append(np.where(np.isfinite(raw), wrap_deg(other - true), np.nan))
         # the lag: on a walk of the same kind that turns back halfway (a straight
         # walk's nearly constant angular rate cannot tell a lag from an offset)
         # (in the room, and the same walk and signal in free field: the tracker's own
@@ -443,7 +457,10 @@ def _part_a_condition(kind: str, snr: float, trials: int, dur: float,
                                              snr_db=snr, rng=rng_t, block_s=0.1)),
                 ("lag_ff", simulate_moving_free_field(xt, FS, arr, tw, snr_db=snr,
                                                       rng=rng_t))):
-            for k2, cfg in ((key, CFG), (key.replace("lag", "lag_cv"), CFG_CV)):
+            cfgs = [(key, CFG), (key.replace("lag", "lag_cv"), CFG_CV)]
+            if key == "lag":
+                cfgs.append(("lag_imm0", CFG_IMM0))
+            for k2, cfg in cfgs:
                 ut = StreamPipeline(arr, cfg).run(ArraySource(yt, FS, 2048))
                 args = (np.array([u.t for u in ut]), _azimuths(ut), tw,
                         cfg.hop_ms * 1e-3, np.array([u.measured for u in ut]))
@@ -455,7 +472,7 @@ def _part_a_condition(kind: str, snr: float, trials: int, dur: float,
             example = {"t": t, "true": true, "raw": raw, "trk": trk, "srp": srp}
     cat = {k: np.concatenate(v) for k, v in acc.items()
            if k in ("raw", "trk", "trk_common", "srp", "srp_common", "cv_common", "slow",
-                    "el_raw", "el_trk")}
+                    "el_raw", "el_trk", "imm0_common")}
     row = [kind, snr, rmse(cat["raw"]), float(np.mean(acc["cov_raw"])) * 100, rmse(cat["trk"]),
            rmse(cat["trk_common"]), rmse(cat["srp"]), rmse(cat["srp_common"]),
            rmse(cat["raw"]) / rmse(cat["trk_common"]),
@@ -468,7 +485,8 @@ def _part_a_condition(kind: str, snr: float, trials: int, dur: float,
            _lag_summary(np.array(acc["lag_cv_ff"]))[0],
            *pooled_lag(acc["prof_lag"]), pooled_lag(acc["prof_lag_ff"])[0],
            pooled_lag(acc["prof_lag_cv"])[0], pooled_lag(acc["prof_lag_cv_ff"])[0],
-           rmse(cat["el_raw"]), rmse(cat["el_trk"])]
+           rmse(cat["el_raw"]), rmse(cat["el_trk"]),
+           rmse(cat["raw"]) / rmse(cat["imm0_common"]), pooled_lag(acc["prof_lag_imm0"])[0]]
     return row, example
 
 
@@ -750,7 +768,9 @@ HEAD_A = ["signal", "SNR dB", "per-frame RMSE deg", "per-frame coverage %",
           "one CV filter: lag frames (median)", "one CV filter: lag frames free field (median)",
           "pooled lag frames, turning walks", "pooled lag se frames", "pooled lag free field",
           "one CV filter: pooled lag", "one CV filter: pooled lag free field",
-          "per-frame elevation RMSE deg", "tracked elevation RMSE deg"]
+          "per-frame elevation RMSE deg", "tracked elevation RMSE deg",
+          "constant-rate IMM: per-frame / tracked (same frames)",
+          "constant-rate IMM: pooled lag"]
 HEAD_B = ["rig", "walks", "per-frame fix median m", "fix signed range error median m",
           "fix signed range error IQR m", "fix coverage %", "tracked median m (all frames)",
           "tracked p90 m", "tracked median m (frames with a fix)",

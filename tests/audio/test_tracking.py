@@ -350,3 +350,34 @@ def test_coasting_never_carries_the_elevation_over_the_pole(make):
         assert -90.0 <= trk.elevation_deg <= 90.0
     assert trk.elevation_deg == 90.0 and trk.rate_dps[1] == 0.0
     assert trk.azimuth_deg == pytest.approx(30.0, abs=1.0)  # the azimuth was steady
+
+
+@pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
+@pytest.mark.parametrize("tau", [None, 0.8])
+def test_rate_relaxes_with_rate_tau_through_a_gap(cls, tau):
+    """Track a speaker turning at 20 deg/s (elevation rising 2 deg/s), then 1.2 s without a
+    measurement: with rate_tau_s the rates decay as exp(-T/tau) and the azimuth advances by
+    rate tau (1 - exp(-T/tau)) (the IMM's mixture too: its modes share the transition);
+    without, the constant-velocity coast rate T."""
+    trk = cls(2.0, rate_tau_s=tau)
+    t = np.arange(0.0, 1.0, DT)
+    for tk in t:
+        assert trk.update(tk, (-40.0 + 20.0 * tk, 10.0 + 2.0 * tk))
+    x0 = trk.x.copy()
+    assert 12.0 < x0[2] < 24.0 and x0[3] > 0.0  # (the relaxing model reads the rate low)
+    gap = np.arange(1, 38) * DT  # 1.18 s of predictions, one per hop
+    for g in gap:
+        assert not trk.update(t[-1] + g, None)
+    T = gap[-1]
+    decay, advance = (1.0, T) if tau is None else (np.exp(-T / tau), tau * (1 - np.exp(-T / tau)))
+    np.testing.assert_allclose(trk.rate_dps, x0[2:] * decay, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose([trk.azimuth_deg, trk.elevation_deg], x0[:2] + x0[2:] * advance,
+                               rtol=1e-9, atol=1e-9)
+
+
+def test_rate_tau_must_be_positive():
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(EstimationError, match="rate_tau_s"):
+            DirectionKalman(rate_tau_s=bad)
+        with pytest.raises(EstimationError, match="rate_tau_s"):
+            DirectionIMM(rate_tau_s=bad)

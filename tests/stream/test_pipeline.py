@@ -475,7 +475,10 @@ def test_bad_imm_settings_are_a_config_error():
                       "mode_dwell_s must be > 0"),
                      ({"elevation_accel_ratio": 0.0}, "elevation_accel_ratio must be > 0"),
                      ({"elevation_accel_ratio": -1.0, "direction_modes_dps2": None},
-                      "elevation_accel_ratio must be > 0")):
+                      "elevation_accel_ratio must be > 0"),
+                     ({"direction_rate_tau_s": 0.0}, "rate_tau_s must be > 0"),
+                     ({"direction_rate_tau_s": -2.0, "direction_modes_dps2": None},
+                      "rate_tau_s must be > 0")):
         with pytest.raises(ConfigError, match=f"direction_modes_dps2 .*{msg}"):
             TrackingProcessor(arr, FS, StreamConfig(**bad))
 
@@ -587,8 +590,8 @@ def test_slow_elevation_model_steadies_a_planar_arrays_elevation(seed):
     above it in a room gives scattered elevations; with the default elevation_accel_ratio and
     planar_elevation_sigma_scale the
     tracked elevation stays nearer the truth (also while coasting through the pauses) than
-    with one model and one measurement noise for both angles (the model before 2026-11-24's
-    fifth session), and the azimuth is not worse."""
+    with one model and one measurement noise for both angles and constant rates (the model
+    before 2026-11-24's fifth session), and the azimuth is not worse."""
     from hearsee.sim.audio import simulate_recording
 
     arr = MicArray.from_preset("three-mic")
@@ -601,7 +604,8 @@ def test_slow_elevation_model_steadies_a_planar_arrays_elevation(seed):
     assert truth["azimuth_deg"] == pytest.approx(-35.0)
     err = {}
     for key, cfg in (("old", StreamConfig(elevation_accel_ratio=1.0,
-                                          planar_elevation_sigma_scale=1.0)),
+                                          planar_elevation_sigma_scale=1.0,
+                                          direction_rate_tau_s=None)),
                      ("default", StreamConfig())):
         ups = StreamPipeline(arr, cfg).run(ArraySource(x, FS))
         el, az = _values(ups, "elevation_deg"), _values(ups, "azimuth_deg")

@@ -59,6 +59,7 @@ from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, frame_signals
 from hearsee.audio.tracking import (
+    DIRECTION_RATE_TAU_S,
     ELEVATION_ACCEL_RATIO,
     IMM_MODES_DPS2,
     DirectionIMM,
@@ -759,6 +760,10 @@ class StreamConfig:
         ~125x faster than real time (three-mic, 16 kHz, block 4096, process CPU time; 87x in
         bench/tracking.py part C of 2026-11-24)
     mode_dwell_s : the IMM's mean time in one mode, seconds
+    direction_rate_tau_s : time constant, seconds, with which the direction tracker's angular
+        rates relax toward zero (default
+        :data:`~hearsee.audio.tracking.DIRECTION_RATE_TAU_S`; None = constant velocity, the
+        default before 2026-11-24's sixth session)
     elevation_accel_ratio : the direction tracker's elevation acceleration noise as a fraction
         of its azimuth's (default
         :data:`~hearsee.audio.tracking.ELEVATION_ACCEL_RATIO` = 0.1: a walking speaker's
@@ -865,6 +870,7 @@ class StreamConfig:
     sigma_min_deg: float = 1.5
     direction_modes_dps2: tuple[float, ...] | None = IMM_MODES_DPS2
     mode_dwell_s: float = 1.0
+    direction_rate_tau_s: float | None = DIRECTION_RATE_TAU_S
     elevation_accel_ratio: float = ELEVATION_ACCEL_RATIO
     planar_elevation_sigma_scale: float = 4.0
 
@@ -1052,13 +1058,15 @@ class TrackingProcessor:
             if cfg.direction_modes_dps2 is None:
                 return DirectionKalman(cfg.sigma_meas_deg, cfg.sigma_accel_dps2,
                                        max_rejects=max_rejects,
-                                       elevation_accel_ratio=cfg.elevation_accel_ratio)
+                                       elevation_accel_ratio=cfg.elevation_accel_ratio,
+                                       rate_tau_s=cfg.direction_rate_tau_s)
             return DirectionIMM(cfg.sigma_meas_deg, tuple(cfg.direction_modes_dps2),
                                 mode_dwell_s=cfg.mode_dwell_s, max_rejects=max_rejects,
-                                elevation_accel_ratio=cfg.elevation_accel_ratio)
+                                elevation_accel_ratio=cfg.elevation_accel_ratio,
+                                rate_tau_s=cfg.direction_rate_tau_s)
         except EstimationError as exc:
             raise ConfigError("direction tracker (direction_modes_dps2 / mode_dwell_s / "
-                              f"elevation_accel_ratio): {exc}") from None
+                              f"elevation_accel_ratio / direction_rate_tau_s): {exc}") from None
 
     @staticmethod
     def _motion_tracker(cfg: StreamConfig) -> tuple[Any, float]:
