@@ -54,3 +54,24 @@ def test_frame_options_checked_before_reading(argv, capsys, tmp_path, monkeypatc
     err = capsys.readouterr().err
     assert err.startswith("hearsee: error: --frame-ms and --hop-ms must be ") and \
         err.count("\n") == 1, err
+
+
+def test_exit_codes_of_commands_pass_through(monkeypatch, capsys):
+    """A command that ends with typer.Exit(n) (``run`` when the audio device stalls) exits n."""
+    import typer
+
+    import hearsee.cli as cli
+
+    app = typer.Typer()
+
+    @app.command()
+    def stall(code: int = 1) -> None:
+        raise typer.Exit(code)
+
+    @app.command()
+    def fine() -> None:
+        pass
+
+    monkeypatch.setattr(cli, "app", app)
+    assert cli.main(["stall", "--code", "3"]) == 3
+    assert cli.main(["fine"]) == 0

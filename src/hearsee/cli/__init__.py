@@ -59,9 +59,10 @@ def main(argv: list[str] | None = None) -> int:
     one line on stderr, and exit 2.
     """
     try:
-        # non-standalone: click raises its errors here instead of printing its usage block
-        app(args=argv, prog_name="hearsee", standalone_mode=False)
-        code = 0
+        # non-standalone: click raises its errors here instead of printing its usage block,
+        # and returns the code of a typer.Exit (e.g. `run` when the device stalls)
+        rv = app(args=argv, prog_name="hearsee", standalone_mode=False)
+        code = rv if isinstance(rv, int) and not isinstance(rv, bool) else 0
     except SystemExit as exc:
         code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
     except _UsageError as exc:
