@@ -25,6 +25,8 @@ __all__ = [
 def load_yaml(path: str | Path) -> dict[str, Any]:
     """Read a YAML mapping from ``path``; raise typed errors for missing files and bad YAML."""
     p = Path(path)
+    if p.is_dir():
+        raise InputFileError(f"{p}: is a directory, expected a YAML file")
     if not p.is_file():
         raise InputFileError(f"{p}: file not found")
     try:

@@ -165,6 +165,8 @@ def test_bad_robot_files_and_options(robot_dir, capsys):
     assert len(err) == 1 and "unknown key 'camera'" in err[0] and str(bad) in err[0]
     assert main(["run", "--config", str(robot_dir / "none.yaml")]) == 2
     assert "file not found" in capsys.readouterr().err
+    assert main(["run", "--config", str(robot_dir)]) == 2
+    assert "is a directory, expected a YAML file" in capsys.readouterr().err
     assert main(["run", "--config", str(_config(robot_dir)), "--duration", "0"]) == 2
     assert "--duration must be > 0" in capsys.readouterr().err
     # --out must not write the report over an input (here a calibration named summary.json)
