@@ -9,7 +9,8 @@ coherence-weighted SRP-PHAT over a direction grid, gated by the normalised steer
 the evidence's age as measurement delay; into the interacting-multiple-model tracker
 :class:`hearsee.audio.tracking.DirectionIMM`, quiet and turning constant-velocity modes of
 50 and 2000 deg/s^2 (1000 before 2026-11-24's third session; see IMM_MODES_DPS2), 1 s mean
-dwell, angular rates relaxing toward zero over 2 s since the sixth session) and, side by side on the same frames, pyroomacoustics'
+dwell, angular rates relaxing toward zero over 2 s since the sixth session) and, side by side
+on the same frames, pyroomacoustics'
 SRP-PHAT applied per frame (it has no tracker). The measurement settings (measurement noise
 6 deg / confidence for a frame's own direction, 20 (1 - c) / c deg for a smoothed one of
 normalised steered power c, floor 1.5 deg) were chosen on walks of seeds 100 (straight) and 110

@@ -457,6 +457,11 @@ IMM_MODES_DPS2 = (50.0, 2000.0)
 #: measurement arrives gave the same trade as the relaxing model throughout. Rule, set before
 #: the held-out run: keep 2 s if on bench/tracking.py's seed 0 every pooled lag stays within 2
 #: frames and the voices' ratios do not fall, else go back to constant velocity (None).
+#: Held-out seed 0 (16 walks per condition, constant rate -> 2 s, same recordings): male 10 dB
+#: 2.28 -> 2.49x (pooled lag 1.05 -> 1.32 frames), female 10 dB 1.99 -> 2.12x (-1.12 ->
+#: -0.96), male 20 dB 6.11 -> 6.33x (0.57 -> 0.82), female 20 dB 3.62 -> 4.13x (0.74 -> 0.98),
+#: white noise 1.24 -> 1.24x / 1.37 -> 1.38x, CMU ARCTIC 5.39 -> 5.39x / 7.61 -> 7.87x; every
+#: pooled lag within -0.96..1.32 frames: kept.
 DIRECTION_RATE_TAU_S = 2.0
 
 

@@ -72,7 +72,8 @@ def track_cmd(
         "elevation 0, spherical wavefront of a source assumed 2 m away.")] = False,
     tracker: Annotated[Tracker, typer.Option(
         "--tracker", help="Direction tracker: imm (interacting multiple models: a quiet and a "
-        "turning mode; the default) or cv (one constant-velocity Kalman filter).")] = Tracker.imm,
+        "turning mode; the default) or cv (one Kalman filter instead of the modes).")
+    ] = Tracker.imm,
     fmt: Annotated[TrackFormat, typer.Option(
         "--format", help="jsonl: one JSON line per frame; json: one document.")
     ] = TrackFormat.jsonl,
