@@ -353,7 +353,7 @@ def test_coasting_never_carries_the_elevation_over_the_pole(make):
 
 
 @pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
-@pytest.mark.parametrize("tau", [None, 0.8])
+@pytest.mark.parametrize("tau", [None, float("inf"), 0.8, 1e9])
 def test_rate_relaxes_with_rate_tau_through_a_gap(cls, tau):
     """Track a speaker turning at 20 deg/s (elevation rising 2 deg/s), then 1.2 s without a
     measurement: with rate_tau_s the rates decay as exp(-T/tau) and the azimuth advances by
@@ -369,7 +369,8 @@ def test_rate_relaxes_with_rate_tau_through_a_gap(cls, tau):
     for g in gap:
         assert not trk.update(t[-1] + g, None)
     T = gap[-1]
-    decay, advance = (1.0, T) if tau is None else (np.exp(-T / tau), tau * (1 - np.exp(-T / tau)))
+    decay, advance = ((1.0, T) if tau is None or np.isinf(tau) else
+                      (np.exp(-T / tau), -tau * np.expm1(-T / tau)))
     np.testing.assert_allclose(trk.rate_dps, x0[2:] * decay, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose([trk.azimuth_deg, trk.elevation_deg], x0[:2] + x0[2:] * advance,
                                rtol=1e-9, atol=1e-9)

@@ -130,9 +130,8 @@ def _cv_model(dt: float, var: float, el_ratio: float = 1.0,
     if rate_tau_s is None:
         F[0, 2] = F[1, 3] = dt
     else:
-        a = math.exp(-dt / rate_tau_s)
-        F[0, 2] = F[1, 3] = rate_tau_s * (1.0 - a)
-        F[2, 2] = F[3, 3] = a
+        F[0, 2] = F[1, 3] = -rate_tau_s * math.expm1(-dt / rate_tau_s)  # tau (1 - a)
+        F[2, 2] = F[3, 3] = math.exp(-dt / rate_tau_s)
     q = Q_discrete_white_noise(dim=2, dt=dt, var=var)
     Q = np.zeros((4, 4))
     for (a, b), scale in (((0, 2), 1.0), ((1, 3), el_ratio**2)):
@@ -269,7 +268,9 @@ class DirectionKalman(_Kalman):
                 f"elevation_accel_ratio must be > 0, got {elevation_accel_ratio}")
         if rate_tau_s is not None and not rate_tau_s > 0:
             raise EstimationError(f"rate_tau_s must be > 0 s or None, got {rate_tau_s}")
-        self.rate_tau_s = None if rate_tau_s is None else float(rate_tau_s)
+        # an infinite time constant is the constant-velocity model (its F would be inf * 0)
+        self.rate_tau_s = (None if rate_tau_s is None or math.isinf(rate_tau_s)
+                           else float(rate_tau_s))
         if not 0 < gate_prob < 1:
             raise EstimationError(f"gate_prob must be in (0, 1), got {gate_prob}")
         self.sigma_meas_deg = float(sigma_meas_deg)
