@@ -60,6 +60,25 @@ def test_track_direction_jsonl(scene, capsys, tracker):
     assert rows[-1]["position_m"] is None
 
 
+@pytest.mark.parametrize(("option", "tau"), [([], 2.0), (["--rate-tau", "inf"], None),
+                                             (["--rate-tau", "0.5"], 0.5)])
+def test_rate_tau_option_reaches_the_tracker(scene, capsys, option, tau):
+    """--rate-tau sets the stream's direction_rate_tau_s: the CLI's azimuths are those of the
+    library's stream with that setting (default 2 s; inf = constant velocity)."""
+    from hearsee.stream.pipeline import StreamConfig, StreamPipeline, WavSource
+
+    assert main(["track", str(scene["wav"]), "--array", str(scene["array"]), *option]) == 0
+    cli = np.array([r["azimuth_deg"] for r in _lines(capsys)], dtype=float)
+    arr = MicArray.from_yaml(scene["array"])
+    lib = {}
+    for t in (2.0, None, 0.5):
+        ups = StreamPipeline(arr, StreamConfig(direction_rate_tau_s=t)).run(
+            WavSource(scene["wav"], n_channels=3, block_len=4096))
+        lib[t] = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in ups])
+    np.testing.assert_allclose(cli, lib[tau], atol=1e-9)
+    assert not np.allclose(lib[2.0], lib[None]) and not np.allclose(lib[2.0], lib[0.5])
+
+
 def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, capsys):
     code = main(["track", str(scene["wav"]), "--array", str(scene["array"]), "--camera",
                  str(scene["cam"]), "--image-points", str(scene["pts"]), "--camera-at",
@@ -86,6 +105,8 @@ def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, caps
     (["--frame-ms", "1e9"], "at most 10000 ms"),  # (not a 60 GB allocation)
     (["--frame-ms", "2000"], "recording too short: 24000 samples, one frame needs 32000"),
     (["--tracker", "particle"], "--tracker"),
+    (["--rate-tau", "0"], "--rate-tau must be > 0 s"),
+    (["--rate-tau", "nan"], "--rate-tau must be > 0 s"),
 ])
 def test_track_bad_options(scene, capsys, args, msg):
     args = [a.replace("CAM", str(scene["cam"])).replace("PTS", str(scene["pts"])) for a in args]

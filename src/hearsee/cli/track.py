@@ -74,6 +74,11 @@ def track_cmd(
         "--tracker", help="Direction tracker: imm (interacting multiple models: a quiet and a "
         "turning mode; the default) or cv (one Kalman filter instead of the modes).")
     ] = Tracker.imm,
+    rate_tau: Annotated[float | None, typer.Option(
+        "--rate-tau", help="Time constant (s) with which the direction tracker's angular rate "
+        "relaxes toward zero (default: audio.tracking.DIRECTION_RATE_TAU_S, 2 s); inf = "
+        "constant velocity (the thesis's model).")
+    ] = None,
     fmt: Annotated[TrackFormat, typer.Option(
         "--format", help="jsonl: one JSON line per frame; json: one document.")
     ] = TrackFormat.jsonl,
@@ -84,7 +89,7 @@ def track_cmd(
     acceleration) of a moving speaker; one update per audio frame."""
     from hearsee.audio.arrays import load_array
     from hearsee.audio.tdoa import check_frame_ms
-    from hearsee.audio.tracking import IMM_MODES_DPS2
+    from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, IMM_MODES_DPS2
     from hearsee.errors import ConfigError
     from hearsee.stream.pipeline import DeviceSource, StreamConfig, StreamPipeline, WavSource
 
@@ -100,6 +105,10 @@ def track_cmd(
         raise ConfigError("--camera needs an image-point source: --video, --camera-device or "
                           "--image-points")
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
+    if rate_tau is None:
+        rate_tau = DIRECTION_RATE_TAU_S
+    if not rate_tau > 0:
+        raise ConfigError(f"--rate-tau must be > 0 s (inf = constant velocity), got {rate_tau}")
     arr = load_array(array)
     rig = points = None
     if camera is not None:
@@ -121,7 +130,8 @@ def track_cmd(
         source = WavSource(recording, n_channels=arr.n_mics, block_len=4096)
     cfg = StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms, method=method.value.replace("gcc-", ""),
                        itd_filter=itd_filter, in_plane=in_plane,
-                       direction_modes_dps2=IMM_MODES_DPS2 if tracker is Tracker.imm else None)
+                       direction_modes_dps2=IMM_MODES_DPS2 if tracker is Tracker.imm else None,
+                       direction_rate_tau_s=rate_tau)
     pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
 
     def sink(u: object) -> None:
