@@ -79,6 +79,7 @@ __all__ = [
     "GccResult",
     "TdoaFrames",
     "check_frame_ms",
+    "check_recording_length",
     "estimate_tdoas",
     "frame_geometry",
     "frame_signals",
@@ -146,6 +147,16 @@ def frame_geometry(fs: float, frame_ms: float, hop_ms: float) -> tuple[int, int]
     return max(int(round(frame_ms * 1e-3 * fs)), 8), max(int(round(hop_ms * 1e-3 * fs)), 1)
 
 
+def check_recording_length(n_samples: int, frame_len: int) -> None:
+    """AudioInputError unless a recording of ``n_samples`` holds one frame of ``frame_len``
+    samples (:func:`frame_signals`; the stream checks a file before streaming it)."""
+    if n_samples < frame_len:
+        raise AudioInputError(
+            f"recording too short: {n_samples} samples, one frame needs {frame_len}; "
+            "use a longer recording or a shorter frame (--frame-ms)"
+        )
+
+
 def frame_signals(x: ArrayLike, frame_len: int, hop: int) -> NDArray:
     """Cut signals into overlapping frames.
 
@@ -172,11 +183,7 @@ def frame_signals(x: ArrayLike, frame_len: int, hop: int) -> NDArray:
     frame_len, hop = int(frame_len), int(hop)
     if frame_len < 2 or hop < 1:
         raise ConfigError(f"frame length must be >= 2 and hop >= 1 samples, got {frame_len}, {hop}")
-    if a.shape[1] < frame_len:
-        raise AudioInputError(
-            f"recording too short: {a.shape[1]} samples, one frame needs {frame_len}; "
-            "use a longer recording or a shorter --frame-ms"
-        )
+    check_recording_length(a.shape[1], frame_len)
     return np.lib.stride_tricks.sliding_window_view(a, frame_len, axis=-1)[:, ::hop, :]
 
 

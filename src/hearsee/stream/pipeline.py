@@ -57,7 +57,12 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
-from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, frame_signals
+from hearsee.audio.tdoa import (
+    check_recording_length,
+    estimate_tdoas,
+    frame_geometry,
+    frame_signals,
+)
 from hearsee.audio.tracking import (
     DIRECTION_RATE_TAU_S,
     ELEVATION_ACCEL_RATIO,
@@ -1146,11 +1151,8 @@ class StreamPipeline:
             )
         frame_len, _ = frame_geometry(source.fs, self.config.frame_ms, self.config.hop_ms)
         x = getattr(source, "x", None)  # a recording (a live device has no length)
-        if x is not None and x.shape[1] < frame_len:
-            raise AudioInputError(
-                f"recording too short: {x.shape[1]} samples, one frame needs {frame_len}; use a "
-                "longer recording or a shorter frame"
-            )
+        if x is not None:
+            check_recording_length(x.shape[1], frame_len)
         if self.array.max_tdoa().max() * source.fs + 1 >= frame_len // 2:
             raise ConfigError(
                 f"frame of {self.config.frame_ms} ms is too short for the array's largest "
