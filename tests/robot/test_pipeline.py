@@ -78,3 +78,29 @@ def test_demo_will_not_write_over_its_input(tmp_path, capsys):
     assert main(["demo", "--scenario", str(sc), "-o", str(tmp_path), "-q"]) == 2
     assert "overwrite" in capsys.readouterr().err
     assert sc.read_text() == "name: x\n"
+
+
+def test_associate_picks_the_nearest_person_inside_the_gate():
+    """The one association rule of the simulated and the live loop: before a 3D track, the
+    verified person nearest the audio bearing within ASSOCIATION_GATE_DEG (wrapping at 180
+    deg); with a track, the one nearest its position within TRACK_GATE_M."""
+    from hearsee.audio.tracking import MotionKalman
+    from hearsee.robot.pipeline import ASSOCIATION_GATE_DEG, TRACK_GATE_M, associate
+
+    kf = MotionKalman()
+    people = [np.array([1.0, 0.0, 1.2]), np.array([0.0, 2.0, 1.2]), np.array([-2.0, 0.1, 1.2])]
+    bearings = [0.0, 90.0, 177.0]
+    # no track: by bearing; -178 deg is 5 deg from 177 across the wrap
+    assert associate(people, bearings, kf, -178.0) == 2
+    assert associate(people, bearings, kf, 80.0) == 1
+    assert associate(people, bearings, kf, 45.0) is None  # 45 deg from both neighbours
+    assert associate(people, bearings, kf, ASSOCIATION_GATE_DEG + 0.5) is None
+    assert associate(people, bearings, kf, None) is None
+    assert associate([], [], kf, 0.0) is None
+    # with a track at (0, 1.6, 1.2): the person at (0, 2, 1.2) is 0.4 m away, whatever the
+    # audio says; moved TRACK_GATE_M + 0.1 m away, nobody is associated
+    kf.update(0.0, [0.0, 1.6, 1.2])
+    assert kf.initialized
+    assert associate(people, bearings, kf, 0.0) == 1
+    far = [p + [0.0, 0.4 + TRACK_GATE_M + 0.1, 0.0] for p in people]
+    assert associate(far, bearings, kf, 90.0) is None

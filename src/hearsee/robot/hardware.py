@@ -889,12 +889,11 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
 
     from hearsee.audio.tracking import MotionKalman
     from hearsee.config import to_jsonable
-    from hearsee.geometry import wrap_deg
     from hearsee.robot.pipeline import (
-        ASSOCIATION_GATE_DEG,
         BEARING_SIGMA_DEG,
         MIN_AUDIO_UPDATES,
         TRACK_TIMEOUT_S,
+        associate,
         bearing_update,
         stereo_position_cov,
     )
@@ -968,28 +967,18 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         from hearsee.vision.fusion import draw_detections
 
         dets: list[dict[str, Any]] = []
-        best, best_d = None, np.inf
+        verified = []  # (human, robot-frame position, azimuth, index in dets)
         for h in det.humans + det.rejected:
             p = geo.camera_to_robot(h.position_m)
             az, el = geo.bearing_deg(p)
             dets.append({**h.to_dict(), "position_m": _r(p), "azimuth_deg": _r(az, 2),
-                         "elevation_deg": _r(el, 2), "accepted": bool(h.accepted)})
-            if not h.accepted:
-                continue
-            if track.initialized:
-                d = float(np.linalg.norm(p - track.position))
-                ok = d < 0.8
-            elif bearing is not None:
-                d = abs(float(wrap_deg(az - bearing)))
-                ok = d < ASSOCIATION_GATE_DEG
-            else:
-                d, ok = np.inf, False
-            if ok and d < best_d:
-                best, best_d = (h, p, len(dets) - 1), d
-        for d in dets:
-            d["speaker"] = False
+                         "elevation_deg": _r(el, 2), "accepted": bool(h.accepted),
+                         "speaker": False})
+            if h.accepted:
+                verified.append((h, p, az, len(dets) - 1))
+        best = associate([v[1] for v in verified], [v[2] for v in verified], track, bearing)
         if best is not None:
-            h, p, k = best
+            h, p, _, k = verified[best]
             Rc = geo.R_cam.T @ stereo_position_cov(np.asarray(h.position_m), rig.focal_px,
                                                 rig.baseline_m) @ geo.R_cam
             if track.update(t, p, Rc):

@@ -33,7 +33,7 @@ centre (what the stereo detector measures); the voice comes from the mouth.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -67,8 +67,10 @@ MOUTH_FORWARD_M = 0.08
 TORSO_HEIGHT_FRACTION = 0.675
 #: Linear crossfade between consecutive impulse responses at the start of each chunk (s).
 CROSSFADE_S = 0.05
-#: Gate (degrees) for associating a verified person with the audio bearing.
+#: Gate (degrees) for associating a verified person with the audio bearing (no 3D track yet).
 ASSOCIATION_GATE_DEG = 20.0
+#: Gate (metres) for associating a verified person with the 3D track's position.
+TRACK_GATE_M = 0.8
 #: Audio bearing noise (degrees) in the bearing update of the 3D track.
 BEARING_SIGMA_DEG = 4.0
 #: Stereo disparity noise (pixels) behind the measurement covariance of a detection.
@@ -271,6 +273,29 @@ def bearing_update(kf: MotionKalman, body: _Body, bearing_robot_deg: float,
     return True
 
 
+def associate(positions: Sequence[NDArray], bearings_deg: Sequence[float],
+              track: MotionKalman, audio_bearing_deg: float | None) -> int | None:
+    """Which verified person updates the 3D track.
+
+    ``positions`` (metres) and ``bearings_deg`` (azimuths, degrees) are the verified persons'
+    in the frame of the track and of the audio bearing. With a track, the person nearest its
+    position within :data:`TRACK_GATE_M`; before there is one, the person nearest the audio
+    bearing within :data:`ASSOCIATION_GATE_DEG` (none without an audio bearing). Returns the
+    person's index, or None when nobody is inside the gate.
+    """
+    if track.initialized:
+        d = np.array([np.linalg.norm(np.asarray(p) - track.position) for p in positions])
+        gate = TRACK_GATE_M
+    elif audio_bearing_deg is not None:
+        d = np.abs(wrap_deg(np.asarray(bearings_deg, dtype=float) - audio_bearing_deg))
+        gate = ASSOCIATION_GATE_DEG
+    else:
+        return None
+    if d.size == 0 or float(d.min()) >= gate:
+        return None
+    return int(np.argmin(d))
+
+
 # ------------------------------------------------------------------------------ the loop
 def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
                  keep_images: bool = True) -> RunResult:
@@ -364,24 +389,18 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             camera_frame = True
             det = detect_humans(scene.left, scene.right, rig, scene.thermal_c,
                                 camera_height_m=float(body.pivot_w[2]))
-            best, best_d = None, np.inf
+            verified = []
             for hmn in det.humans + det.rejected:
                 p_w = R_cr.T @ np.asarray(hmn.position_m) + C_r
                 kind = _nearest_truth_kind(scene, hmn.position_m)
                 detections.append({**hmn.to_dict(), "position_m": p_w, "accepted": hmn.accepted,
                                    "truth_kind": kind})
-                if not hmn.accepted:
-                    continue
-                if track.initialized:
-                    d = float(np.linalg.norm(p_w - track.position))
-                    ok = d < 0.8
-                else:
-                    d = abs(float(wrap_deg(body.bearing_deg(p_w) - direction.azimuth_deg)))
-                    ok = d < ASSOCIATION_GATE_DEG
-                if ok and d < best_d:
-                    best, best_d = (hmn, p_w), d
-            if best is not None:
-                hmn, p_w = best
+                if hmn.accepted:
+                    verified.append((hmn, p_w))
+            k = associate([p for _, p in verified], [body.bearing_deg(p) for _, p in verified],
+                          track, direction.azimuth_deg)
+            if k is not None:
+                hmn, p_w = verified[k]
                 Rc = R_cr.T @ stereo_position_cov(np.asarray(hmn.position_m), rig.focal_px,
                                                rig.baseline_m) @ R_cr
                 if track.update(t1, p_w, Rc):
