@@ -262,6 +262,65 @@ def _jac_cart(s: NDArray, M: NDArray, a: NDArray, b: NDArray, c: float) -> NDArr
     return (u[a] - u[b]) / c
 
 
+def _mirror_images(p: NDArray, mic_sets: Sequence[ArrayLike]) -> list[NDArray]:
+    """Mirror images of the point ``p`` (metres) through the plane of each planar pose's
+    microphones (three, or more in one plane); a planar array cannot tell them from ``p``."""
+    out = []
+    for mset in mic_sets:
+        mset = np.asarray(mset, dtype=float)
+        if len(mset) < 3:
+            continue
+        cen = mset.mean(axis=0)
+        _, sv, vt = np.linalg.svd(mset - cen)
+        if sv[-1] > 1e-6 * sv[0] and len(mset) > 3:
+            continue  # not planar: no mirror
+        nrm = vt[-1]
+        out.append(p - 2.0 * ((p - cen) @ nrm) * nrm)
+    return out
+
+
+def _uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: float, y: NDArray,
+                 sig: float, ref: NDArray, max_rel_distance_std: float
+                 ) -> tuple[NDArray, float, float, float]:
+    """Uncertainty of the solution ``p`` of :func:`solve_range_differences` (its stacked
+    problem ``M, a, b, y``): position covariance (m^2), relative 1-sigma distance, angular
+    1-sigma (degrees; conditional on the distance when the distance is unknown) and the
+    Jacobian's condition number."""
+    m = len(y)
+    J = _jac_cart(p, M, a, b, c)
+    s2 = sig**2
+    if m > 3:
+        # robust residual scale (MAD): outliers down-weighted by the loss must not
+        # inflate the covariance of the estimate
+        r = (_model(p, M, a, b, c) - y) / sig
+        scale = 1.4826 * float(np.median(np.abs(r)))
+        s2 = sig**2 * max(1.0, scale**2 * m / (m - 3))
+    JtJ = J.T @ J
+    w = np.linalg.eigvalsh(JtJ)
+    cond = float(np.sqrt(w[-1] / max(w[0], 1e-300)))
+    v = p - ref
+    r = float(np.linalg.norm(v))
+    u = v / r
+    try:
+        cov = s2 * np.linalg.inv(JtJ)
+        var_r = float(u @ cov @ u)
+    except np.linalg.LinAlgError:
+        cov, var_r = np.full((3, 3), np.inf), np.inf
+    rel = np.sqrt(var_r) / r if np.isfinite(var_r) and var_r >= 0 else np.inf
+    # angular std: perpendicular spread, conditional on the distance when it is unknown
+    P = np.eye(3) - np.outer(u, u)
+    if np.isfinite(rel) and rel <= max_rel_distance_std:
+        ang = np.sqrt(max(np.trace(P @ cov @ P), 0.0)) / r
+    else:
+        E = np.linalg.svd(P)[0][:, :2]  # basis orthogonal to u
+        Jt = J @ E
+        try:
+            ang = np.sqrt(max(np.trace(s2 * np.linalg.inv(Jt.T @ Jt)), 0.0)) / r
+        except np.linalg.LinAlgError:
+            ang = np.inf
+    return cov, float(rel), float(np.degrees(ang)), cond
+
+
 def solve_range_differences(
     mic_sets: Sequence[ArrayLike],
     pairs: Sequence[Sequence[tuple[int, int]]],
@@ -329,7 +388,6 @@ def solve_range_differences(
     rmin, rmax = (float(v) for v in distance_bounds_m)
     if not 0 < rmin < rmax:
         raise GeometryError(f"distance_bounds_m must be 0 < min < max, got {distance_bounds_m}")
-    m = len(y)
     fs2 = f_scale * f_scale
     far = not resolve_distance
     if far:  # direction only: a source 1 km away is a plane wave to within 1e-7 s
@@ -384,17 +442,7 @@ def solve_range_differences(
 
     # the mirror images of the best point through each planar pose's array plane are
     # explicit starts too (the grid cannot separate a mirror pair close to the plane)
-    p_best = sols[0][2]
-    for mset in mic_sets:
-        mset = np.asarray(mset, dtype=float)
-        if len(mset) < 3:
-            continue
-        cen = mset.mean(axis=0)
-        _, sv, vt = np.linalg.svd(mset - cen)
-        if sv[-1] > 1e-6 * sv[0] and len(mset) > 3:
-            continue  # not planar: no mirror
-        nrm = vt[-1]
-        q = p_best - 2.0 * ((p_best - cen) @ nrm) * nrm
+    for q in _mirror_images(sols[0][2], mic_sets):
         v = q - ref
         rq = float(np.clip(np.linalg.norm(v), rmin * 1.0001, rmax / 1.0001))
         x0 = np.array([np.arctan2(v[1], v[0]), np.arcsin(np.clip(v[2] / np.linalg.norm(v), -1, 1)),
@@ -402,41 +450,6 @@ def solve_range_differences(
         x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
         sols.append(refine(x0))
     sols.sort(key=lambda s: s[0])
-
-    # --- uncertainty of a solution
-    def uncertainty(p: NDArray, chi2: float) -> tuple[NDArray, float, float, float]:
-        J = _jac_cart(p, M, a, b, c)
-        s2 = sig**2
-        if m > 3:
-            # robust residual scale (MAD): outliers down-weighted by the loss must not
-            # inflate the covariance of the estimate
-            r = (_model(p, M, a, b, c) - y) / sig
-            scale = 1.4826 * float(np.median(np.abs(r)))
-            s2 = sig**2 * max(1.0, scale**2 * m / (m - 3))
-        JtJ = J.T @ J
-        w = np.linalg.eigvalsh(JtJ)
-        cond = float(np.sqrt(w[-1] / max(w[0], 1e-300)))
-        v = p - ref
-        r = float(np.linalg.norm(v))
-        u = v / r
-        try:
-            cov = s2 * np.linalg.inv(JtJ)
-            var_r = float(u @ cov @ u)
-        except np.linalg.LinAlgError:
-            cov, var_r = np.full((3, 3), np.inf), np.inf
-        rel = np.sqrt(var_r) / r if np.isfinite(var_r) and var_r >= 0 else np.inf
-        # angular std: perpendicular spread, conditional on the distance when it is unknown
-        P = np.eye(3) - np.outer(u, u)
-        if np.isfinite(rel) and rel <= max_rel_distance_std:
-            ang = np.sqrt(max(np.trace(P @ cov @ P), 0.0)) / r
-        else:
-            E = np.linalg.svd(P)[0][:, :2]  # basis orthogonal to u
-            Jt = J @ E
-            try:
-                ang = np.sqrt(max(np.trace(s2 * np.linalg.inv(Jt.T @ Jt)), 0.0)) / r
-            except np.linalg.LinAlgError:
-                ang = np.inf
-        return cov, float(rel), float(np.degrees(ang)), cond
 
     best_chi2 = sols[0][1]
     gate = max(ambiguity_gate, ambiguity_ratio * best_chi2)
@@ -446,7 +459,8 @@ def solve_range_differences(
     for cost, chi2, p, _th in sols:
         if chi2 - best_chi2 > gate:
             continue
-        cov, rel, ang, cond = uncertainty(p, chi2)
+        cov, rel, ang, cond = _uncertainty(p, M, a, b, c, y, sig, ref,
+                                           max_rel_distance_std)
         known = resolve_distance and rel <= max_rel_distance_std
         u = (p - ref) / np.linalg.norm(p - ref)
         r = np.linalg.norm(p - ref)
