@@ -705,6 +705,71 @@ def _coherence_ratio(s_cross: NDArray, s_auto: NDArray, n_frames: int, noise_psd
     return float(np.mean(np.sum(g * msc, axis=-1)[ok] / den[ok]))
 
 
+def _check_options(refine: str, summary_frames: str, joint: str, min_peak_snr: float,
+                   min_frame_peak_snr: float, phat_beta: float, onset_weight: float) -> None:
+    """ConfigError for an out-of-range option of :func:`estimate_tdoas`."""
+    _check_refine(refine)
+    if summary_frames not in ("valid", "active"):
+        raise ConfigError(f"summary_frames must be 'valid' or 'active', got {summary_frames!r}")
+    if joint not in ("pairs", "coherent"):
+        raise ConfigError(f"joint must be 'pairs' or 'coherent', got {joint!r}")
+    if not (float(min_peak_snr) >= 0 and float(min_frame_peak_snr) >= 0):
+        raise ConfigError("min_peak_snr and min_frame_peak_snr must be >= 0, got "
+                          f"{min_peak_snr} and {min_frame_peak_snr}")
+    if not (0.0 <= float(phat_beta) <= 1.0):
+        raise ConfigError(f"phat_beta must be in [0, 1], got {phat_beta}")
+    if float(onset_weight) < 0:
+        raise ConfigError(f"onset_weight must be >= 0, got {onset_weight}")
+
+
+def _onset_weights(energy: NDArray, onset_weight: float) -> NDArray:
+    """Frame weights of the whole-recording average: ``1 + onset_weight * max(log10(E_f /
+    E_{f-1}), 0)`` (energy rise over the previous frame; see ``onset_weight``)."""
+    rise = np.zeros(len(energy))
+    if len(energy) > 1:
+        e = np.maximum(energy, _TINY)
+        rise[1:] = np.clip(np.log10(e[1:] / e[:-1]), 0.0, None)
+    return 1.0 + float(onset_weight) * rise
+
+
+def _noise_spectrum(frames: NDArray, active: NDArray, win: NDArray, nfft: int, k0: int,
+                    k1: int) -> NDArray | None:
+    """Each channel's noise power spectrum (n_ch, bins k0..k1-1), averaged over the inactive
+    frames of ``frames`` (n_ch, F, L); None with fewer than 3 of them."""
+    quiet = np.flatnonzero(~active)
+    if quiet.size < _MIN_SUMMARY_FRAMES:
+        return None
+    Xq = sfft.rfft(frames[:, quiet, :] * win, nfft, axis=-1)[..., k0:k1]
+    psd = np.mean(Xq.real**2 + Xq.imag**2, axis=1)
+    return np.maximum(psd, 1e-12 * psd.max(initial=0.0) + _TINY)
+
+
+def _spectral_densities(X: NDArray, G: NDArray, I: NDArray, J: NDArray, smooth_frames: int
+                        ) -> tuple[NDArray, NDArray, NDArray]:
+    """Auto spectra of each pair's microphones and the cross spectra ``G`` (frames, pairs,
+    bins), averaged over ``smooth_frames`` frames: what SCOT, ROTH and ML weigh with."""
+    auto = X.real**2 + X.imag**2
+    k = max(int(smooth_frames), 1)
+    Gii = uniform_filter1d(auto[:, I, :], k, axis=0, mode="nearest")
+    Gjj = uniform_filter1d(auto[:, J, :], k, axis=0, mode="nearest")
+    Gav = (uniform_filter1d(G.real, k, axis=0, mode="nearest")
+           + 1j * uniform_filter1d(G.imag, k, axis=0, mode="nearest"))
+    return Gii, Gjj, Gav
+
+
+def _snr_coherence(X: NDArray, noise_psd: NDArray, I: NDArray, J: NDArray,
+                   hannan_thomson: bool) -> NDArray:
+    """Per-bin coherence estimate ``xi_i xi_j / ((1 + xi_i)(1 + xi_j))`` of each pair from the
+    channels' a-priori SNRs over ``noise_psd`` (see ``snr_weight``); in the Hannan-Thomson form
+    ``g / (1 - g)`` when asked."""
+    xi = np.maximum((X.real**2 + X.imag**2) / noise_psd - 1.0, 0.0)  # (F', n_ch, B)
+    coh = xi[:, I] * xi[:, J] / ((1.0 + xi[:, I]) * (1.0 + xi[:, J]))
+    if hannan_thomson:  # gamma^2 / (1 - gamma^2)
+        coh = np.minimum(coh, 0.99)
+        coh = coh / (1.0 - coh)
+    return coh
+
+
 def estimate_tdoas(
     x: ArrayLike,
     fs: float,
@@ -886,9 +951,8 @@ def estimate_tdoas(
     method = normalize_method(method)
     if reverb_method is not None:
         reverb_method = normalize_method(reverb_method)
-    _check_refine(refine)
-    if summary_frames not in ("valid", "active"):
-        raise ConfigError(f"summary_frames must be 'valid' or 'active', got {summary_frames!r}")
+    _check_options(refine, summary_frames, joint, min_peak_snr, min_frame_peak_snr, phat_beta,
+                   onset_weight)
     prs = _check_pairs(pairs, arr)
     # single precision from here on: twice as fast, and its ~1e-7 relative error is far below
     # any sensor noise
@@ -910,21 +974,7 @@ def estimate_tdoas(
     main_lobe = max(2, int(np.ceil(fs / bw)))
     win = _window(tuple(window) if isinstance(window, list) else window, frame_len)
     energy, active = frame_activity(a32, frame_len, hop, n_frames, vad_db)
-    if joint not in ("pairs", "coherent"):
-        raise ConfigError(f"joint must be 'pairs' or 'coherent', got {joint!r}")
-    if not (float(min_peak_snr) >= 0 and float(min_frame_peak_snr) >= 0):
-        raise ConfigError("min_peak_snr and min_frame_peak_snr must be >= 0, got "
-                          f"{min_peak_snr} and {min_frame_peak_snr}")
-    if not (0.0 <= float(phat_beta) <= 1.0):
-        raise ConfigError(f"phat_beta must be in [0, 1], got {phat_beta}")
-    if float(onset_weight) < 0:
-        raise ConfigError(f"onset_weight must be >= 0, got {onset_weight}")
-    # frame weights of the summary: 1 + onset_weight * (energy rise over the previous frame, dB/10)
-    rise = np.zeros(n_frames)
-    if n_frames > 1:
-        e = np.maximum(energy, _TINY)
-        rise[1:] = np.clip(np.log10(e[1:] / e[:-1]), 0.0, None)
-    frame_w = 1.0 + float(onset_weight) * rise
+    frame_w = _onset_weights(energy, onset_weight)
     I = np.array([p[0] for p in prs])
     J = np.array([p[1] for p in prs])
     n_pairs = len(prs)
@@ -935,13 +985,7 @@ def estimate_tdoas(
     k0, k1 = int(bins[0]), int(bins[-1]) + 1  # the band is one contiguous run of bins
     band_bins = np.arange(k0, k1)
     nb = k1 - k0
-    noise_psd = None
-    if snr_weight:
-        quiet = np.flatnonzero(~active)
-        if quiet.size >= _MIN_SUMMARY_FRAMES:
-            Xq = sfft.rfft(frames[:, quiet, :] * win, nfft, axis=-1)[..., k0:k1]
-            noise_psd = np.mean(Xq.real**2 + Xq.imag**2, axis=1)  # (n_ch, band bins)
-            noise_psd = np.maximum(noise_psd, 1e-12 * noise_psd.max(initial=0.0) + _TINY)
+    noise_psd = _noise_spectrum(frames, active, win, nfft, k0, k1) if snr_weight else None
 
     redundant = _closure_projector(tuple(prs), arr.n_mics) is not None  # a closed cycle
     frame_cfar = not redundant and min_frame_peak_snr > 0
@@ -971,23 +1015,12 @@ def estimate_tdoas(
         X = sfft.rfft(frames[:, h0:h1, :] * win, nfft, axis=-1)
         X = np.moveaxis(X[..., k0:k1], 0, 1)  # (F', n_ch, band bins)
         G = X[:, I, :] * np.conj(X[:, J, :])  # (F', P, band bins)
-        Gii = Gjj = Gav = None
-        if need_stats:
-            auto = X.real**2 + X.imag**2
-            k = max(int(smooth_frames), 1)
-            Gii = uniform_filter1d(auto[:, I, :], k, axis=0, mode="nearest")
-            Gjj = uniform_filter1d(auto[:, J, :], k, axis=0, mode="nearest")
-            Gav = (uniform_filter1d(G.real, k, axis=0, mode="nearest")
-                   + 1j * uniform_filter1d(G.imag, k, axis=0, mode="nearest"))
-        W = gcc_weighting(method, G, Gii, Gjj, Gav)
+        stats = _spectral_densities(X, G, I, J, smooth_frames) if need_stats else (None,) * 3
+        W = gcc_weighting(method, G, *stats)
         if phat_beta != 1.0 and method in ("phat", "ml"):
             W = W * np.abs(G) ** (1.0 - float(phat_beta))
         if noise_psd is not None:
-            xi = np.maximum((X.real**2 + X.imag**2) / noise_psd - 1.0, 0.0)  # (F', n_ch, B)
-            coh = xi[:, I] * xi[:, J] / ((1.0 + xi[:, I]) * (1.0 + xi[:, J]))
-            if snr_weight == "ml":  # Hannan-Thomson form gamma^2 / (1 - gamma^2)
-                coh = np.minimum(coh, 0.99)
-                coh = coh / (1.0 - coh)
+            coh = _snr_coherence(X, noise_psd, I, J, snr_weight == "ml")
             W = W * coh
         sl = slice(s0 - h0, s0 - h0 + (s1 - s0))
         P = (G * W.astype(np.float32))[sl]
@@ -1021,8 +1054,8 @@ def estimate_tdoas(
             if use_rev:  # (noise_psd is known, so coh is)
                 ia = np.flatnonzero(act) + (s0 - h0)  # active frames, chunk indices
                 Ga = G[ia]
-                W2 = gcc_weighting(reverb_method, Ga, *(None if A is None else A[ia]
-                                                        for A in (Gii, Gjj, Gav)))
+                W2 = gcc_weighting(reverb_method, Ga,
+                                   *(None if A is None else A[ia] for A in stats))
                 s_cross += np.sum(Ga, axis=0)
                 Xa = X[ia]
                 s_auto += np.sum(Xa.real**2 + Xa.imag**2, axis=0)
