@@ -48,3 +48,16 @@ def test_angle_between_and_errors():
         angle_between([0, 0, 0], [1, 0, 0])
     with pytest.raises(GeometryError):
         cart_to_sph([1.0, 2.0])
+
+
+def test_fibonacci_sphere_spreads_unit_vectors_evenly():
+    from hearsee.geometry import fibonacci_sphere
+
+    U = fibonacci_sphere(500)
+    assert U.shape == (500, 3)
+    assert np.allclose(np.linalg.norm(U, axis=1), 1.0)
+    # even spread: the mean vector is near zero and every direction has a close neighbour
+    assert np.linalg.norm(U.mean(axis=0)) < 0.01
+    probe = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.6, 0.0, -0.8]])
+    nearest = np.degrees(np.arccos(np.clip(probe @ U.T, -1, 1))).min(axis=1)
+    assert nearest.max() < 8.0  # 500 points: ~9 deg apart

@@ -24,6 +24,7 @@ __all__ = [
     "as_pose",
     "cart_to_sph",
     "direction_deg",
+    "fibonacci_sphere",
     "head_rotation",
     "mic_positions_at",
     "robot_to_array",
@@ -83,6 +84,15 @@ def wrap_deg(angle: ArrayLike) -> NDArray:
     a = np.asarray(angle, dtype=float)
     w = np.mod(a + 180.0, 360.0) - 180.0
     return np.where(w == -180.0, 180.0, w)
+
+
+def fibonacci_sphere(n: int) -> NDArray:
+    """``n`` nearly uniformly spread unit vectors ``(n, 3)`` (Fibonacci lattice)."""
+    i = np.arange(n) + 0.5
+    z = 1.0 - 2.0 * i / n
+    phi = np.pi * (1.0 + 5**0.5) * i
+    rxy = np.sqrt(1.0 - z * z)
+    return np.stack([rxy * np.cos(phi), rxy * np.sin(phi), z], axis=1)
 
 
 def angle_between(u: ArrayLike, v: ArrayLike) -> NDArray:

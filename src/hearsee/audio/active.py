@@ -67,6 +67,7 @@ from hearsee.geometry import (
     angle_between,
     as_pose,
     direction_deg,
+    fibonacci_sphere,
     mic_positions_at,
     sph_to_cart,
     unit_vector_deg,
@@ -175,15 +176,6 @@ class Position3D:
 
 
 # ------------------------------------------------------------------------------- helpers
-def fibonacci_sphere(n: int) -> NDArray:
-    """``n`` nearly uniformly spread unit vectors ``(n, 3)`` (Fibonacci lattice)."""
-    i = np.arange(n) + 0.5
-    z = 1.0 - 2.0 * i / n
-    phi = np.pi * (1.0 + 5**0.5) * i
-    rxy = np.sqrt(1.0 - z * z)
-    return np.stack([rxy * np.cos(phi), rxy * np.sin(phi), z], axis=1)
-
-
 def pose_mic_positions(array: MicArray | str, poses: Sequence[HeadPose | Sequence[float]],
                        pivot_m: ArrayLike = (0.0, 0.0, 0.0),
                        offset_m: ArrayLike = (0.0, 0.0, 0.0)) -> list[NDArray]:

@@ -71,6 +71,7 @@ from scipy.ndimage import uniform_filter1d
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.localize import array_geometry
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
+from hearsee.geometry import fibonacci_sphere
 
 __all__ = [
     "METHODS",
@@ -568,22 +569,13 @@ def _closure_projector(pairs: tuple[tuple[int, int], ...], n_mics: int
     return P, len(pairs) - rank
 
 
-def _fibonacci_sphere(n: int) -> NDArray:
-    """``n`` nearly uniform unit vectors (n, 3)."""
-    k = np.arange(n) + 0.5
-    z = 1.0 - 2.0 * k / n
-    phi = np.pi * (1.0 + 5**0.5) * k
-    rho = np.sqrt(1.0 - z * z)
-    return np.stack([rho * np.cos(phi), rho * np.sin(phi), z], axis=1)
-
-
 @functools.lru_cache(maxsize=32)
 def _steer_directions(positions: bytes, n_mics: int, n_dirs: int, in_plane: bool) -> NDArray:
     """Unit vectors steered by :func:`_joint_peaks`, once per array geometry: ``n_dirs`` over
     the sphere, or with ``in_plane`` and a planar array the directions of its plane only
     (0.1 deg apart). ``positions`` is the (n_mics, 3) float64 array's bytes (hashable)."""
     pos = np.frombuffer(positions, dtype=float).reshape(n_mics, 3)
-    U = _fibonacci_sphere(n_dirs)
+    U = fibonacci_sphere(n_dirs)
     geom = array_geometry(pos) if in_plane else None
     if geom is not None and geom.kind == "planar":
         phi = np.radians(np.arange(3600) / 10.0)
