@@ -273,3 +273,54 @@ def test_cli_simulate_trajectory_writes_truth_beside_the_wav(tmp_path, capsys):
                  "--trajectory", str(tmp_path / "walk.trajectory.csv")]) == 2
     assert "overwrite" in capsys.readouterr().err
     assert (tmp_path / "walk.trajectory.csv").read_text() == before
+
+
+def test_moving_room_honours_the_arrays_speed_of_sound_and_max_order():
+    """The room renderer of moving sources uses what the static one uses: the array's speed
+    of sound (a 0.4 m pair at c = 300 m/s has a TDOA 2.2 samples longer than at 343) and the
+    room's max_order (0 = the direct path only, whatever the RT60)."""
+    from hearsee.audio.propagation import room_impulse_responses
+    from hearsee.sim.moving import simulate_moving_recording
+
+    arr = MicArray([[0.0, -0.2, 0.0], [0.0, 0.2, 0.0]], speed_of_sound=300.0, name="slow")
+    at = np.array([2.5, 2.0, 1.2])
+    dim = [5.0, 4.0, 3.0]
+    src = np.array([0.6, 1.2, 0.0])
+    x = _bandlimited_noise(FS // 4, 7)
+    y = simulate_moving_room(x, FS, arr, Trajectory([0.0], [src]), dim, 0.0, at)
+    h = room_impulse_responses(FS, arr.positions + at, src + at, dim, 0.0, speed_of_sound=300.0)
+    ref = ss.fftconvolve(x[None, :], h, axes=-1)[:, : x.size]
+    np.testing.assert_allclose(y, ref, atol=1e-9 * np.abs(ref).max())
+    G = np.fft.rfft(y[0], 8192) * np.conj(np.fft.rfft(y[1], 8192))
+    cc = np.fft.irfft(G / (np.abs(G) + 1e-12), 8192)
+    lag = int(np.argmax(np.concatenate([cc[-40:], cc[:41]]))) - 40
+    assert lag == round(arr.tdoa(src)[0] * FS)
+    assert abs(lag - round(arr.tdoa(src)[0] * 300.0 / 343.0 * FS)) >= 2
+    # max_order 0 in a reverberant room: exactly the anechoic room's recording
+    traj = linear_trajectory([1.0, -0.5, 0.0], [0.5, 1.0, 0.0], 0.3)
+    room = {"room_dim": dim, "array_at": at.tolist()}
+    direct, truth = simulate_moving_recording(arr, traj, "noise", fs=FS, seed=2,
+                                              room={**room, "rt60": 0.5, "max_order": 0})
+    anechoic, _ = simulate_moving_recording(arr, traj, "noise", fs=FS, seed=2,
+                                            room={**room, "rt60": 0.0})
+    reverberant, _ = simulate_moving_recording(arr, traj, "noise", fs=FS, seed=2,
+                                               room={**room, "rt60": 0.5})
+    assert truth["room"]["max_order"] == 0
+    np.testing.assert_allclose(direct, anechoic, atol=1e-9 * np.abs(anechoic).max())
+    assert np.linalg.norm(reverberant - anechoic) > 0.3 * np.linalg.norm(anechoic)
+
+
+def test_moving_sources_refuse_masked_arrays_and_reflections_without_rt60():
+    from hearsee.audio.propagation import room_impulse_responses
+    from hearsee.sim.moving import simulate_moving_recording
+
+    with pytest.raises(ConfigError, match="mask"):
+        simulate_moving_recording("mask2", linear_trajectory([1.0, 0.0, 0.0], [1.0, 1.0, 0.0],
+                                                             0.2))
+    # RT60 0 is anechoic; image sources of order 3 would need walls that reflect everything
+    with pytest.raises(ConfigError, match="anechoic"):
+        room_impulse_responses(FS, [[2.0, 2.0, 1.0], [2.1, 2.0, 1.0]], [3.0, 3.0, 1.0],
+                               [5.0, 4.0, 3.0], 0.0, max_order=3)
+    h = room_impulse_responses(FS, [[2.0, 2.0, 1.0], [2.1, 2.0, 1.0]], [3.0, 3.0, 1.0],
+                               [5.0, 4.0, 3.0], 0.0, max_order=0)
+    assert np.count_nonzero(np.abs(h[0]) > 1e-3 * np.abs(h[0]).max()) < 80  # one direct path

@@ -257,6 +257,10 @@ def room_impulse_responses(
         raise ConfigError(f"RT60 must be a non-negative number of seconds, got {rt60}")
     if max_order is not None and (int(max_order) != max_order or max_order < 0):
         raise ConfigError(f"max_order must be a non-negative integer, got {max_order!r}")
+    if rt60 == 0 and max_order:
+        # (pyroomacoustics' default walls reflect everything: the images would come back)
+        raise ConfigError(f"max_order {max_order} with RT60 0: an anechoic room has no "
+                          "reflections; give an RT60 > 0 or leave max_order out")
 
     if rt60 == 0:
         materials, order = None, 0

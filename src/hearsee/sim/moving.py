@@ -378,6 +378,7 @@ def simulate_moving_room(
     mic_positions: ArrayLike | None = None,
     rir_fn: Callable[[NDArray], NDArray] | None = None,
     max_tdoa_step_samples: float | None = 0.1,
+    max_order: int | None = None,
 ) -> NDArray:
     """Record a moving source in a shoebox room: block-wise image-source RIRs, crossfaded.
 
@@ -416,7 +417,10 @@ def simulate_moving_room(
         Override the array's microphone positions (array frame), e.g. a rotated head.
     rir_fn : callable, optional
         ``rir_fn(source_room (3,)) -> (n_mics, L)`` impulse responses; default
-        :func:`hearsee.audio.propagation.room_impulse_responses` with the room above.
+        :func:`hearsee.audio.propagation.room_impulse_responses` with the room above, the
+        array's speed of sound and ``max_order``.
+    max_order : int, optional
+        Image-source order override of the default ``rir_fn`` (0 = direct path only).
 
     Returns
     -------
@@ -433,7 +437,9 @@ def simulate_moving_room(
         from hearsee.audio.propagation import room_impulse_responses
 
         def rir_fn(src_room: NDArray) -> NDArray:
-            return room_impulse_responses(fs, mics_room, src_room, dim, rt60)
+            return room_impulse_responses(fs, mics_room, src_room, dim, rt60,
+                                          max_order=max_order,
+                                          speed_of_sound=array.speed_of_sound)
 
     if max_tdoa_step_samples is not None and not max_tdoa_step_samples > 0:
         raise GeometryError(
@@ -492,6 +498,9 @@ def simulate_moving_recording(
     from hearsee.sim.audio import check_sim_fs, ground_truth, normalize_room
 
     arr = load_array(array)
+    if arr.mask is not None:
+        raise ConfigError(f"array {arr.name!r} has a mask: moving sources are simulated without "
+                          "the mask's diffraction, so use a static source with masked arrays")
     dur = float(trajectory.t[-1]) if duration_s is None else float(duration_s)
     if not dur > 0:
         raise ConfigError(
@@ -504,7 +513,8 @@ def simulate_moving_recording(
         clean = simulate_moving_free_field(s, fs, arr, trajectory)
     else:
         clean = simulate_moving_room(s, fs, arr, trajectory, room_n["room_dim"], room_n["rt60"],
-                                     room_n["array_at"], block_s=block_s)
+                                     room_n["array_at"], block_s=block_s,
+                                     max_order=room_n.get("max_order"))
     x = add_noise(clean, snr_db, rng)
     truth = ground_truth(arr, trajectory.at(0.0))
     truth.update({
