@@ -16,7 +16,7 @@ from hearsee.audio.localize import (
 from hearsee.audio.propagation import simulate_free_field
 from hearsee.audio.signals import white_noise
 from hearsee.errors import GeometryError
-from hearsee.geometry import unit_vector_deg
+from hearsee.geometry import unit_vector_deg, wrap_deg
 
 TWO = MicArray.from_preset("two-mic")
 THREE = MicArray.from_preset("three-mic")
@@ -73,6 +73,20 @@ def test_three_mic_inconsistent_tdoas_flagged():
     # violated closure t01 + t12 != t02
     loc = localize_tdoa([2e-4, -2e-4, 2e-4], THREE)
     assert not loc.feasible and loc.n_solutions == 0 and loc.candidates
+
+
+def test_three_mic_exact_tdoas_of_near_in_plane_sources_are_one_solution():
+    """A talker in the array plane 1-5 m away: the curved wavefront puts the in-plane least
+    squares |u_p| a little above 1 at some azimuths (up to ~1.02); exact TDOAs are still one
+    feasible solution, near the true azimuth (they were flagged infeasible at 15 of 36)."""
+    norms = []
+    for r in (1.0, 2.0, 5.0):
+        for az in range(-180, 180, 10):
+            loc = localize_tdoa(THREE.tdoa(r * unit_vector_deg(az, 0.0)), THREE)
+            norms.append(loc.extra["in_plane_norm"])
+            assert loc.feasible and loc.n_solutions >= 1, (r, az)
+            assert abs(wrap_deg(loc.azimuth_deg - az)) < 1.5, (r, az)  # far-field model
+    assert max(norms) > 1.0 + 1e-3  # the branch this test is about was taken
 
 
 def test_planar_array_in_vertical_plane_mirrors_about_that_plane():

@@ -240,9 +240,12 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray,
     - ``|u_p| < 1``: two mirror solutions about the array plane (the one above, ``w > 0``,
       first); ``n_solutions=2``;
     - ``|u_p| = 1`` (within ``in_plane_tol``): one solution in the plane;
-    - ``|u_p| > 1`` or a TDOA residual above ``tol_s`` (inconsistent ITDs): no exact solution;
-      the nearest feasible direction (``u_p / |u_p|``) is returned, ``feasible=False``,
-      ``n_solutions=0``.
+    - ``|u_p| > 1``: the nearest direction, ``u_p / |u_p|`` in the plane. A source in the
+      array plane a few metres away gives that with exact TDOAs (its curved wavefront puts
+      ``|u_p|`` up to ~1.02 for the 15 cm triangle at 1-5 m, depending on the azimuth), so
+      it is one solution (``n_solutions=1``) when its TDOA residual is within ``tol_s``;
+    - a TDOA residual above ``tol_s`` (inconsistent ITDs): no exact solution; the nearest
+      direction is returned, ``feasible=False``, ``n_solutions=0``.
     """
     prs = _pairs(array, pairs)
     tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
@@ -257,9 +260,10 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray,
         up = q / norm_p
         u = up @ geo.basis
         resid = _rms(A @ u - tau)
+        feasible = resid <= tol_s
         az, el = _azel(u)
-        return Localization(az, el, [(az, el)], 0, False, direction=u, residual_s=resid,
-                            geometry="planar", extra=extra)
+        return Localization(az, el, [(az, el)], int(feasible), feasible, direction=u,
+                            residual_s=resid, geometry="planar", extra=extra)
     w = float(np.sqrt(max(0.0, 1.0 - min(norm_p, 1.0) ** 2)))
     up = q if norm_p <= 1.0 else q / norm_p
     base = up @ geo.basis
