@@ -210,6 +210,21 @@ def test_near_field_in_plane_fitted_range():
     assert np.linalg.norm(pos[:2]) == pytest.approx(r[k], rel=1e-3) and abs(pos[2]) < 1e-9
 
 
+def test_near_field_in_plane_fitted_range_fits_close_sources_exactly():
+    """Sources 0.5-1 m away: a joint step that would take the range past its bound used to be
+    clipped while keeping the angle step made for the unclipped range, so the fit stopped off
+    the exact solution (residuals of microseconds, azimuths degrees off) and called it
+    feasible. Two TDOAs, two unknowns: the fit is exact at every azimuth."""
+    worst = 0.0
+    for r in (0.5, 0.7, 1.0):
+        for az in np.arange(-180.0, 180.0, 2.5):
+            tau = THREE.tdoa(r * unit_vector_deg(az, 0.0))
+            loc = near_field_in_plane(tau, THREE, range_m=None)
+            worst = max(worst, loc.residual_s)
+            assert loc.feasible
+    assert worst < 1e-9
+
+
 def test_near_field_in_plane_noisy_tdoas():
     az, _, tau = _in_plane_sources(200, 5)
     rng = np.random.default_rng(6)
