@@ -434,7 +434,8 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray,
         exact fits there may sit up to ~2 deg (0.5 m), ~1 deg (1 m) or ~0.2 deg (2 m) off
         in azimuth) and TDOA errors reach the azimuth amplified -- on held-out reverberant
         recordings (``bench/doa.py``, seed 777) the fitted range multiplied the azimuth RMSE
-        by 3-4, the assumed 2 m lowered it.
+        by 3-4, the assumed 2 m lowered it (measured before the fix of the clipped range step
+        on 2026-11-24, which halved the azimuth RMS of fits on 5-us-noisy TDOAs; not re-run).
 
     This is the in-plane (``dim=2``) assumption of pyroomacoustics' DOA methods and of the
     thesis's "half horizontal plane"; Gauss-Newton on range-difference equations follows Foy
