@@ -84,6 +84,10 @@ def test_bad_inputs():
         normalize_room({"rt60": 0.3})
     with pytest.raises(GeometryError, match="positive"):
         normalize_room({"room_dim": [5, 0, 3], "rt60": 0.3})
+    for bad in ("x", -1, 2.5, True):  # ('x' was a ValueError, 2.5 silently became 2)
+        with pytest.raises(ConfigError, match="max_order"):
+            normalize_room({"room_dim": [5, 4, 3], "rt60": 0.3, "max_order": bad})
+    assert normalize_room({"room_dim": [5, 4, 3], "rt60": 0.3, "max_order": 3.0})["max_order"] == 3
     with pytest.raises(ConfigError, match="too short"):
         simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1,
                            room={"room_dim": [30, 30, 10], "rt60": 0.05})

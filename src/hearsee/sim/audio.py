@@ -124,8 +124,12 @@ def normalize_room(room: Mapping[str, Any] | None) -> dict[str, Any] | None:
         "rt60": rt60,
         "array_at": (dim / 2).tolist() if at is None else _point(at, "array_at").tolist(),
     }
-    if room.get("max_order") is not None:
-        out["max_order"] = int(room["max_order"])
+    order = room.get("max_order")
+    if order is not None:
+        ok = isinstance(order, (int, np.integer, float)) and not isinstance(order, bool)
+        if not (ok and float(order).is_integer() and order >= 0):
+            raise ConfigError(f"room: max_order must be a non-negative integer, got {order!r}")
+        out["max_order"] = int(order)
     return out
 
 

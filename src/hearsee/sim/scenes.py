@@ -24,7 +24,8 @@ into:
 Frames: every 3D coordinate is in the **left camera's optical frame** (x right, y down,
 z forward, metres). The camera looks level at ``camera_height_m`` above the floor, so a point
 ``h`` metres above the floor has ``y = camera_height_m - h``. An object's ``position_m`` is its
-torso centre (people, mannequins, coats), or the centre of the print (posters).
+torso centre (people, mannequins, coats; for posters the printed figure's torso, 0.675 of its
+height above the floor, like a person's).
 
 Everything is deterministic from the seed. The renderer is simple on purpose (Lambertian
 shading from one directional light, one ray per pixel, no shadows or inter-reflections); it is
