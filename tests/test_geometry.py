@@ -61,3 +61,11 @@ def test_fibonacci_sphere_spreads_unit_vectors_evenly():
     probe = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.6, 0.0, -0.8]])
     nearest = np.degrees(np.arccos(np.clip(probe @ U.T, -1, 1))).min(axis=1)
     assert nearest.max() < 8.0  # 500 points: ~9 deg apart
+
+
+def test_cart_to_sph_azimuth_is_in_the_half_open_interval():
+    from hearsee.geometry import cart_to_sph, direction_deg
+
+    az, _, _ = cart_to_sph(np.array([[-1.0, -0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]))
+    np.testing.assert_allclose(az, [np.pi, np.pi, -np.pi / 2])
+    assert float(direction_deg([-1.0, -0.0, 0.0])[0]) == 180.0

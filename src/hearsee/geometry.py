@@ -57,6 +57,7 @@ def cart_to_sph(xyz: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     r = np.sqrt(x * x + y * y + z * z)
     az = np.arctan2(y, x)
+    az = np.where(az == -np.pi, np.pi, az)  # arctan2(-0.0, -1) = -pi
     el = np.arctan2(z, np.hypot(x, y))
     return az, el, r
 

@@ -205,6 +205,34 @@ def test_continuous_sampling_while_turning():
     assert len(times) == len(running) and np.isfinite(running[-1]).all()
 
 
+def test_continuous_sampling_with_pan_reported_across_180_deg():
+    """An encoder reports pan in (-180, 180]: a group of frames at 178 and -178 deg is a head
+    facing backward (180), not forward (their plain mean, 0). Same capture, pan reported
+    unwrapped and wrapped: the same estimate."""
+    from hearsee.geometry import wrap_deg
+
+    fs = 16000
+    sig = white_noise(1.2, fs, np.random.default_rng(5))
+    src = np.array([-1.2, -0.3, 0.5])  # behind the robot
+
+    def pose_at(t):  # pan 140 -> 220 deg through the back, tilt -20 -> 20 deg
+        f = min(max(t / 1.2, 0.0), 1.0)
+        return HeadPose(140 + 80 * f, -20 + 40 * f)
+
+    def pose_wrapped(t):
+        p = pose_at(t)
+        return HeadPose(float(wrap_deg(p.pan_deg)), p.tilt_deg)
+
+    x = simulate_turning_capture(sig, fs, ARR, src, pose_at, offset_m=(0.2, 0, 0.1),
+                                 snr_db=25, rng=np.random.default_rng(1))
+    ests = [localize_continuous(x, fs, ARR, pa, offset_m=(0.2, 0, 0.1), group_frames=12)[0]
+            for pa in (pose_at, pose_wrapped)]
+    for est in ests:
+        assert float(np.degrees(angle_between(est.direction, src))) < 2.0
+        assert est.distance_m == pytest.approx(np.linalg.norm(src), rel=0.15)
+    assert ests[1].cost == pytest.approx(ests[0].cost, rel=1e-6, abs=1e-9)
+
+
 # ----------------------------------------------------------------------------- manifests + CLI
 @pytest.fixture(scope="module")
 def pose_manifest(tmp_path_factory):
@@ -340,6 +368,31 @@ def test_thesis_search_alignment_far_source():
     with pytest.raises(GeometryError):
         align_head_search(lambda p: np.zeros(6),
                           MicArray([[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0], [0, 0, 0.1]]))
+    # one baseline cannot give the in-plane direction (it swung the pan 0 <-> 90 deg)
+    with pytest.raises(GeometryError, match="non-collinear"):
+        align_head_search(lambda p: np.zeros(1), load_array("two-mic"))
+
+
+def test_thesis_search_alignment_nearby_sources():
+    """Sources 1-4 m away: the curved wavefront puts |u_xy| a little above 1 at every tilt
+    near the right one; clipped at 1 those samples tied and the search stopped up to ~5 deg
+    off while saying it had converged. Exact TDOAs, random sources."""
+    from hearsee.audio.active import align_head_search
+
+    rng = np.random.default_rng(12)
+    errs = []
+    for _ in range(20):
+        az, el, r = rng.uniform(-180, 180), rng.uniform(-30, 40), rng.uniform(1.0, 4.0)
+        src = r * np.array([np.cos(np.radians(el)) * np.cos(np.radians(az)),
+                            np.cos(np.radians(el)) * np.sin(np.radians(az)),
+                            np.sin(np.radians(el))])
+
+        def measure(pose, src=src):
+            return MicArray(mic_positions_at(ARR, pose)).tdoa(src)
+
+        res = align_head_search(measure, ARR)
+        errs.append(res.error_deg(src))
+    assert max(errs) < 1.0 and np.median(errs) < 0.3
 
 
 def test_simulate_poses_cli_writes_manifest(tmp_path, capsys):

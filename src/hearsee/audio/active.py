@@ -71,6 +71,7 @@ from hearsee.geometry import (
     mic_positions_at,
     sph_to_cart,
     unit_vector_deg,
+    wrap_deg,
 )
 
 __all__ = [
@@ -923,8 +924,9 @@ def localize_continuous(
     for g in groups:
         taus.append(np.nanmedian(fr.tdoa_s[g], axis=0))
         ps = [as_pose(pose_at(float(t))) for t in fr.t[g]]
-        poses.append(HeadPose(float(np.mean([p.pan_deg for p in ps])),
-                              float(np.mean([p.tilt_deg for p in ps]))))
+        pans = np.array([p.pan_deg for p in ps])  # averaged unwrapped (178 and -178 -> 180)
+        pan = float(pans[0] + np.mean(wrap_deg(pans - pans[0])))
+        poses.append(HeadPose(pan, float(np.mean([p.tilt_deg for p in ps]))))
         times.append(float(np.mean(fr.t[g])))
     est = localize_multipose(taus, poses, arr, pivot_m=pivot_m, offset_m=offset_m, **kwargs)
     running = np.full((len(taus), 3), np.nan)
@@ -1074,6 +1076,11 @@ def align_head(
     return AlignmentResult(poses, taus, moves, pose, facing, ests, converged)
 
 
+def _acos_deg(g: float) -> float:
+    """Angle in degrees whose cosine is ``g`` (clipped to 1)."""
+    return float(np.degrees(np.arccos(min(float(g), 1.0))))
+
+
 def align_head_search(
     measure: Callable[[HeadPose], ArrayLike],
     array: MicArray | str,
@@ -1109,6 +1116,9 @@ def align_head_search(
         raise GeometryError("align_head_search needs microphones in the head's horizontal plane")
     pair = facing_pair(arr)
     D = np.array([(arr.positions[i] - arr.positions[j])[:2] for i, j in arr.pairs])
+    if np.linalg.matrix_rank(D, tol=1e-6) < 2:
+        raise GeometryError("align_head_search needs two non-collinear microphone baselines in "
+                            "the head's horizontal plane (e.g. three-mic); use align_head")
     c = arr.speed_of_sound
     lo_t, hi_t = tilt_limits_deg
     pose = as_pose(start)
@@ -1125,14 +1135,16 @@ def align_head_search(
         taus.append(tau)
         facing.append(float(tau[arr.pairs.index(pair)]) if pair else float("nan"))
         uxy = np.linalg.lstsq(D, -c * tau, rcond=None)[0]
-        g = float(min(np.linalg.norm(uxy), 1.0))
+        # not clipped at 1: a nearby source's curved wavefront gives |u_xy| a little above 1
+        # at every tilt near the right one, and clipping made those samples tie
+        g = float(np.linalg.norm(uxy))
         gs.append(g)
         d_pan = float(np.degrees(np.arctan2(uxy[1], uxy[0])))
         # tilt: samples at (nearly) the current pan, i.e. taken since the pan settled
         same = [k for k in range(len(poses)) if abs(poses[k].pan_deg - pose.pan_deg) < 3.0]
         b = np.array([poses[k].tilt_deg for k in same])
         gv = np.array([gs[k] for k in same])
-        e_mag = float(np.degrees(np.arccos(g)))
+        e_mag = _acos_deg(g)
         if len(same) == 1:
             new_tilt = pose.tilt_deg + max(e_mag, probe_deg)  # first try: upward
         else:
@@ -1147,12 +1159,12 @@ def align_head_search(
                 new_tilt = float(-A[1] / (2 * A[0])) if A[0] < 0 else float(b[kb])
                 new_tilt = float(np.clip(new_tilt, bl, bu))
             elif len(lower):  # best is the highest tilt so far: go further up
-                new_tilt = b[kb] + max(float(np.degrees(np.arccos(gv[kb]))), probe_deg)
+                new_tilt = b[kb] + max(_acos_deg(gv[kb]), probe_deg)
             else:  # best is the lowest tilt so far: go further down
-                new_tilt = b[kb] - max(float(np.degrees(np.arccos(gv[kb]))), probe_deg)
+                new_tilt = b[kb] - max(_acos_deg(gv[kb]), probe_deg)
             if kb != len(same) - 1 and len(same) == 2:
                 # the upward try made g fall: the source is below
-                new_tilt = b[kb] - max(float(np.degrees(np.arccos(gv[kb]))), probe_deg)
+                new_tilt = b[kb] - max(_acos_deg(gv[kb]), probe_deg)
         new_tilt = float(np.clip(new_tilt, lo_t, hi_t))
         if abs(d_pan) >= 3.0:
             new_tilt = pose.tilt_deg  # settle the pan first (tilt samples need a fixed pan)
