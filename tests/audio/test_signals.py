@@ -167,6 +167,22 @@ def test_read_recording_warns_on_clipping(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         read_recording(ok)
+    # read at another rate: the clipping is in the file's samples, before resampling (whose
+    # low-pass smooths the flat tops below full scale)
+    rng = np.random.default_rng(3)
+    y = np.clip(0.3 * rng.standard_normal((2, 48000)), -1, 1)  # ~0.1 % beyond +-1 ...
+    y[:, ::200] = np.sign(y[:, ::200] + 1e-9)  # ... plus 0.5 % set to full scale
+    p48 = _write(tmp_path / "clip48.wav", y, fs=48000, subtype="PCM_16")
+    with pytest.warns(ClippingWarning, match="clipped"):
+        read_recording(p48, fs=16000, resample=True)
+
+
+def test_synthetic_voice_too_short_is_a_config_error():
+    for seed in range(4):  # the first syllable starts 20-80 ms in
+        with pytest.raises(ConfigError, match="too short"):
+            synthetic_voice("male", 0.01, 16000, rng=seed)
+        with pytest.raises(ConfigError, match="too short"):
+            make_signal("female", 0.015, 16000, np.random.default_rng(seed))
 
 
 def test_write_recording_refusals(tmp_path):

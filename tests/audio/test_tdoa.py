@@ -311,3 +311,35 @@ def test_source_in_plane_joint_search_ignores_elevated_reflection(three):
     assert abs(az_sphere - (-160.0)) < 3.0  # the reflection wins on the sphere
     assert abs(az_plane - 40.0) < 2.0
     assert np.abs(plane.summary_tdoa_s - three.tdoa_far(u_src)).max() * FS < 0.15
+
+
+@pytest.mark.parametrize("snr_weight", [True, "ml"])
+def test_digitally_silent_lead_in_is_not_the_noise_floor(three, snr_weight):
+    """A recording that starts with a few frames of exact zeros (a recorder's lead-in): those
+    frames are inactive, but a noise floor of zero made every SNR infinite and every estimate
+    NaN. Known delays: +3 samples on a pair, and a three-mic source at a known position."""
+    fs = 16000
+    two = MicArray(np.array([[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]]))
+    n = delay_signals(white_noise(1.0, fs, rng=1), [3 / fs, 0.0], fs)
+    x = np.concatenate([np.zeros((2, 4000)), np.round(0.1 * n * 32767) / 32767], axis=1)
+    tf = estimate_tdoas(x, fs, two, snr_weight=snr_weight)
+    assert tf.n_valid > 25
+    assert tf.summary_tdoa_s[0] * fs == pytest.approx(3.0, abs=0.05)
+    src = np.array([1.2, 0.8, 0.3])
+    x3 = simulate_free_field(white_noise(1.0, fs, rng=5), fs, three, src, snr_db=None, rng=2)
+    x3 = np.concatenate([np.zeros((3, 4000)), x3], axis=1)
+    tf = estimate_tdoas(x3, fs, three, snr_weight=snr_weight)
+    np.testing.assert_allclose(tf.summary_tdoa_s, three.tdoa(src), atol=0.05 / fs)
+
+
+def test_band_too_narrow_for_the_noise_floor_is_a_config_error():
+    """A 20 Hz band: the correlation's main lobe (~800 samples) covers every lag of a 64 ms
+    frame, so the two-microphone detection test has no floor to measure (it was numpy's
+    'zero-size array' ValueError); without the test the known delay still comes out."""
+    fs = 16000
+    two = MicArray(np.array([[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]]))
+    x = delay_signals(white_noise(1.0, fs, rng=1), [3 / fs, 0.0], fs)
+    with pytest.raises(ConfigError, match="too narrow"):
+        estimate_tdoas(x, fs, two, band_hz=(1000.0, 1020.0))
+    tf = estimate_tdoas(x, fs, two, band_hz=(1000.0, 1100.0))
+    assert tf.summary_tdoa_s[0] * fs == pytest.approx(3.0, abs=0.1)

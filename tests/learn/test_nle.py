@@ -223,6 +223,11 @@ def test_bad_parameters_are_rejected():
         NeighborhoodLinearEmbedding(shadow=1.5).fit(X)
     with pytest.raises(ValueError, match="eigen_solver"):
         NeighborhoodLinearEmbedding(eigen_solver="magic").fit(X)
+    # with more neighbours than features every local Gram matrix is singular: reg must be > 0
+    # (reg=0 passed the check and ended in numpy's LinAlgError)
+    for est in (NeighborhoodLinearEmbedding, ClusteredNLE):
+        with pytest.raises(ValueError, match="reg"):
+            est(reg=0.0).fit(X)
 
 
 def test_transform_checks_the_feature_count():

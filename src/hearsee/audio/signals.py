@@ -154,6 +154,8 @@ def synthetic_voice(kind: str = "male", duration_s: float = 2.0, fs: float = 160
     T = max(duration_s, 1e-9)
 
     starts, stops = _syllable_plan(n, fs, rng)
+    if len(starts) == 0:  # the first syllable would start after the end
+        raise ConfigError(f"duration {duration_s} s is too short for a synthetic voice")
     # ---- envelope: raised-cosine attack (30 ms) and decay (60 ms) per syllable
     idx = np.arange(n)
     k = np.clip(np.searchsorted(starts, idx, side="right") - 1, 0, None)
@@ -344,6 +346,8 @@ def read_recording(
                 f"{path}: recording has {n_ch} channel{'s' if n_ch != 1 else ''} but {what} "
                 "(channel k must be microphone k)"
             )
+    # clipping is seen on the file's own samples (resampling smooths the flat tops away)
+    clipped = float(np.mean(np.abs(x) >= CLIP_LEVEL)) if np.all(np.isfinite(x)) else 0.0
     if fs is not None and int(round(fs)) != fs_in:
         if not resample:
             raise AudioInputError(
@@ -371,7 +375,6 @@ def read_recording(
             f"{path}: channel{'s' if dead.size > 1 else ''} {', '.join(map(str, dead))} "
             "silent (all samples are zero); check the microphone wiring"
         )
-    clipped = float(np.mean(np.abs(x) >= CLIP_LEVEL))
     if clipped > CLIP_FRACTION:
         warnings.warn(
             f"{path}: {clipped * 100:.2f} % of the samples are at full scale (clipped); "

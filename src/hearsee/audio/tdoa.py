@@ -341,6 +341,11 @@ def _peak_snr(r: NDArray, lag: NDArray, max_lag: NDArray, main_lobe: int,
     out = np.zeros(r.shape[:-1])
     for p in range(r.shape[-2]):
         idx = np.flatnonzero((alag > max_lag[p] + main_lobe) & usable)
+        if idx.size == 0:
+            raise ConfigError(
+                f"band_hz is too narrow for {nfft}-point frames: the correlation's main lobe "
+                f"({main_lobe} samples) leaves no lag to measure its noise floor; widen the "
+                "band, lengthen the frames or set min_peak_snr and min_frame_peak_snr to 0")
         rp = r[..., p, :]
         ref = rp[..., idx] * (1.0 / profile[idx])
         ref -= _median_last(ref)[..., None]
@@ -727,8 +732,11 @@ def _onset_weights(energy: NDArray, onset_weight: float) -> NDArray:
 def _noise_spectrum(frames: NDArray, active: NDArray, win: NDArray, nfft: int, k0: int,
                     k1: int) -> NDArray | None:
     """Each channel's noise power spectrum (n_ch, bins k0..k1-1), averaged over the inactive
-    frames of ``frames`` (n_ch, F, L); None with fewer than 3 of them."""
-    quiet = np.flatnonzero(~active)
+    frames of ``frames`` (n_ch, F, L); None with fewer than 3 of them. Frames in which a
+    channel is digitally silent (all zeros: a recorder's lead-in, zero padding) are no noise
+    sample: a noise floor of zero would make every SNR infinite."""
+    silent = ~np.all(np.any(frames != 0, axis=-1), axis=0)  # (F,)
+    quiet = np.flatnonzero(~active & ~silent)
     if quiet.size < _MIN_SUMMARY_FRAMES:
         return None
     Xq = sfft.rfft(frames[:, quiet, :] * win, nfft, axis=-1)[..., k0:k1]
@@ -755,6 +763,7 @@ def _snr_coherence(X: NDArray, noise_psd: NDArray, I: NDArray, J: NDArray,
     channels' a-priori SNRs over ``noise_psd`` (see ``snr_weight``); in the Hannan-Thomson form
     ``g / (1 - g)`` when asked."""
     xi = np.maximum((X.real**2 + X.imag**2) / noise_psd - 1.0, 0.0)  # (F', n_ch, B)
+    xi = np.minimum(xi, 1e15)  # (a product of two must not overflow float32; coh ~ 1 anyway)
     coh = xi[:, I] * xi[:, J] / ((1.0 + xi[:, I]) * (1.0 + xi[:, J]))
     if hannan_thomson:  # gamma^2 / (1 - gamma^2)
         coh = np.minimum(coh, 0.99)

@@ -340,8 +340,9 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         Number of candidate neighbours per point (the largest neighbourhood allowed).
     shadow : float in [0, 1], default 0.3
         Strength of the shadow rule; 0 gives plain LLE with ``n_neighbors`` neighbours.
-    reg : float, default 1e-3
-        Regularisation of the local Gram matrices, relative to their trace.
+    reg : float > 0, default 1e-3
+        Regularisation of the local Gram matrices, relative to their trace (with more
+        neighbours than features a Gram matrix is singular, so 0 is not allowed).
     eigen_solver : {"auto", "arpack", "dense"}, default "auto"
         "arpack": ARPACK shift-invert around 0 with a sparse LU inverse (scales to 10^5 points);
         "dense": LAPACK on the dense ``M`` (n <= a few thousand); "auto": dense for n <= 200.
@@ -391,7 +392,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         "n_components": [Interval(Integral, 1, None, closed="left")],
         "n_neighbors": [Interval(Integral, 1, None, closed="left")],
         "shadow": [Interval(Real, 0, 1, closed="both")],
-        "reg": [Interval(Real, 0, None, closed="left")],
+        "reg": [Interval(Real, 0, None, closed="neither")],
         "eigen_solver": [StrOptions({"auto", "arpack", "dense"})],
         "tol": [Interval(Real, 0, None, closed="left")],
         "axis_scaling": [StrOptions({"edges", "unit"})],
