@@ -44,6 +44,14 @@ def board_dir(tmp_path_factory):
     return d, truth
 
 
+def _write_sequence(fs, name, values):
+    """A plain FileStorage sequence (as OpenCV's calibration sample writes grid_points)."""
+    fs.startWriteStruct(name, cv2.FileNode_SEQ)
+    for v in values:
+        fs.write("", v)
+    fs.endWriteStruct()
+
+
 def _args(d, out, *extra):
     return ["calibrate", "--left", str(d / "left*.png"), "--right", str(d / "right*.png"),
             "--board", "9x6", "--square", str(SQUARE), "-o", str(out), *extra]
@@ -68,6 +76,7 @@ def test_calibrate_writes_rig_and_prints_errors(board_dir, tmp_path, capsys):
     ref = tmp_path / "reference.yml"
     fs = cv2.FileStorage(str(ref), cv2.FILE_STORAGE_WRITE)
     fs.write("M1", truth.left.K)
+    _write_sequence(fs, "grid_points", [0.0, 0.0, 0.0, SQUARE, 0.0, 0.0])  # read, not compared
     fs.release()
     assert main(_args(d, out, "--force", "--json", "--reference", str(ref))) == 0
     data = json.loads(capsys.readouterr().out)
@@ -79,7 +88,8 @@ def test_calibrate_writes_rig_and_prints_errors(board_dir, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("case", ["no_match", "no_board", "count_mismatch", "unreadable",
-                                  "overwrite_input", "bad_board", "bad_square", "sizes_differ"])
+                                  "overwrite_input", "bad_board", "bad_square", "sizes_differ",
+                                  "reference_without_m1"])
 def test_calibrate_bad_input_exits_2_with_one_line(case, board_dir, tmp_path, capsys):
     d, _ = board_dir
     out = tmp_path / "c.yaml"
@@ -113,6 +123,19 @@ def test_calibrate_bad_input_exits_2_with_one_line(case, board_dir, tmp_path, ca
         args = _args(d, out)
         args[8] = "-1"
         expect = "--square"
+    elif case == "reference_without_m1":
+        # a single-camera file of OpenCV's calibration sample: a sequence node and a plain map
+        # are skipped (no OpenCV error), and the missing M1/M2 is reported before calibrating
+        ref = tmp_path / "camera.yml"
+        fs = cv2.FileStorage(str(ref), cv2.FILE_STORAGE_WRITE)
+        fs.write("camera_matrix", np.eye(3))
+        _write_sequence(fs, "grid_points", [0.0, 0.0, 0.0, SQUARE, 0.0, 0.0])
+        fs.startWriteStruct("board", cv2.FileNode_MAP)
+        fs.write("width", 9)
+        fs.endWriteStruct()
+        fs.release()
+        args = _args(d, out, "--reference", str(ref))
+        expect = "no M1 or M2 camera matrix"
     else:  # sizes_differ
         for i in range(3):
             cv2.imwrite(str(tmp_path / f"left{i}.png"), np.full((60, 80), 128, np.uint8))

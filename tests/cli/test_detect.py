@@ -9,6 +9,7 @@ import pytest
 from hearsee.cli import main
 from hearsee.sim.scenes import Entity, SceneSpec, default_rig, render_scene, write_scene
 from hearsee.vision.camera import StereoRig, save_rig
+from hearsee.vision.stereo import rectify_pair
 
 
 @pytest.fixture(scope="module")
@@ -62,6 +63,49 @@ def test_stereo_only_table_and_overlay(folder, capsys, tmp_path):
     assert "2 human(s)" in text  # without thermal the mannequin passes
     img = cv2.imread(str(ov))
     assert img is not None and img.shape == (240, 320, 3)
+
+
+def test_overlay_is_the_rectified_left_image_the_boxes_refer_to(tmp_path, capsys):
+    """A rig whose right camera is toed in by 4 deg (rendered exactly: a camera rotation is the
+    homography K R K^-1), so rectification also turns the left image. The person's true box is
+    known in the rectified left image; the JSON box must match it and --overlay must draw it on
+    that rectified image (not on the raw left image, where the person is elsewhere)."""
+    ideal = default_rig(320, 240, thermal_size=(80, 60))
+    spec = SceneSpec(entities=[Entity("person", -0.9, 3.0, 0.0, 1.75)], width_left_m=3.0,
+                     width_right_m=3.0, depth_m=7.0, seed=3)
+    scene = render_scene(spec, ideal)
+    K = ideal.left.K
+    Rrot = cv2.Rodrigues(np.array([0.0, np.radians(-4.0), 0.0]))[0]
+    right = cv2.warpPerspective(scene.right, K @ Rrot @ np.linalg.inv(K), (320, 240),
+                                flags=cv2.INTER_LINEAR)
+    rig = StereoRig(ideal.left, ideal.right, Rrot @ ideal.R, Rrot @ ideal.T,
+                    info=dict(ideal.info))
+    for name, img in (("left.png", scene.left), ("right.png", right)):
+        cv2.imwrite(str(tmp_path / name), img)
+    save_rig(rig, tmp_path / "calib.yaml")
+    ov = tmp_path / "ov.png"
+    assert main(_args(tmp_path, "--overlay", str(ov), thermal=None)) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert len(out["humans"]) == 1
+    # ground truth: the person's pixels, rectified like the images
+    mask = (scene.labels == 0).astype(np.uint8) * 255
+    mask_r, _, _ = rectify_pair(mask, mask, rig, interpolation=cv2.INTER_NEAREST)
+    ys, xs = np.nonzero(mask_r)
+    truth = [xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1]
+    x, y, w, h = out["humans"][0]["box"]
+    assert abs(x - truth[0]) <= 4 and abs(y - truth[1]) <= 4 and abs(w - truth[2]) <= 8
+    ys0, xs0 = np.nonzero(scene.labels == 0)
+    assert xs0.min() - x > 10  # the raw left image has the person elsewhere
+    # the overlay is the rectified left image, changed only on the drawn boxes and labels
+    rect_left, _, _ = rectify_pair(cv2.imread(str(tmp_path / "left.png")), right, rig)
+    img = cv2.imread(str(ov))
+    drawn = np.zeros(img.shape[:2], bool)
+    for b in out["humans"] + out["rejected"]:
+        bx, by, bw, bh = b["box"]
+        drawn[max(0, by - 18): by + bh + 3, max(0, bx - 3): bx + max(bw, 200) + 3] = True
+    changed = np.any(img != rect_left, axis=2)
+    assert changed[drawn].any() and not changed[~drawn].any()
+    np.testing.assert_array_equal(img[y + h // 2, x], [0, 200, 0])  # green left edge of the box
 
 
 def _err(capsys):

@@ -160,6 +160,82 @@ def test_too_few_views_and_mismatch_raise(synthetic, corners):
         C.calibrate_stereo(lp, lp[:1], obj, truth.left, truth.right)
 
 
+def _board_views(n: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``n`` random poses ``(R_board, t_board)`` (board -> left optical frame, metres) of the
+    9x6 board 0.4-0.5 m in front of the left camera."""
+    rng = np.random.default_rng(seed)
+    center = np.array([4 * SQUARE, 2.5 * SQUARE, 0.0])
+    poses = []
+    for _ in range(n):
+        Rb = cv2.Rodrigues(rng.uniform(-0.5, 0.5, 3) * np.array([1.0, 1.0, 0.3]))[0]
+        pos = np.array([0.05 + rng.uniform(-0.05, 0.05), 0.02 + rng.uniform(-0.04, 0.04),
+                        rng.uniform(0.4, 0.5)])
+        poses.append((Rb, pos - Rb @ center))
+    return poses
+
+
+@pytest.mark.parametrize("model, true_dist, n_free", [
+    ("radial", [-0.2, 0.0, 0.0, 0.0, 0.0], 1),        # k1 only
+    ("simple", [-0.2, 0.05, 0.001, -0.0008, 0.0], 4),  # k1, k2, p1, p2 (k3 fixed)
+])
+def test_stereo_refinement_keeps_the_distortion_model(model, true_dist, n_free):
+    """Exact corners (+0.05 px noise) of known boards seen through known lenses of the chosen
+    model: the joint refinement must not free the coefficients the model fixes at zero."""
+    left = Camera(K=np.array([[300.0, 0, 158.0], [0, 301.5, 122.0], [0, 0, 1]]),
+                  dist=true_dist, width=320, height=240)
+    right = Camera(K=np.array([[296.0, 0, 163.0], [0, 297.0, 118.0], [0, 0, 1]]),
+                   dist=true_dist, width=320, height=240)
+    R = cv2.Rodrigues(np.array([0.012, -0.035, 0.006]))[0]
+    T = -R @ np.array([0.10, 0.002, -0.003])
+    obj = C.board_points(PATTERN, SQUARE).astype(float)
+    rng = np.random.default_rng(1)
+    lp, rp = [], []
+    for Rb, tb in _board_views(8, seed=2):
+        X = obj @ Rb.T + tb
+        for cam, pts, Xc in ((left, lp, X), (right, rp, X @ R.T + T)):
+            pts.append(cam.project(Xc) + rng.normal(0.0, 0.05, (len(obj), 2)))
+    cl = C.calibrate_camera(lp, obj, left.size, model=model, name="left")
+    cr = C.calibrate_camera(rp, obj, right.size, model=model, name="right")
+    st = C.calibrate_stereo(lp, rp, obj, cl.camera, cr.camera, model=model)
+    assert st.refined  # the joint refinement was run and kept
+    for est, ref in ((st.rig.left, left), (st.rig.right, right)):
+        np.testing.assert_array_equal(est.dist[n_free:], 0.0)
+        assert est.dist[0] == pytest.approx(ref.dist[0], abs=0.01)
+        assert est.fx == pytest.approx(ref.fx, rel=0.003)
+        assert est.fy == pytest.approx(ref.fy, rel=0.003)
+    np.testing.assert_allclose(st.rig.T, T, atol=0.001)
+    with pytest.raises(CalibrationError, match="model must be"):
+        C.calibrate_stereo(lp, rp, obj, cl.camera, cr.camera, model="fisheye")
+
+
+def test_calibrate_rig_keeps_model_and_aspect_in_the_stereo_refinement(tmp_path):
+    """`hearsee calibrate --model radial --fix-aspect`: boards rendered through known k1-only
+    lenses with square pixels; the written rig must keep fx = fy and k2 = p1 = p2 = k3 = 0."""
+    left = Camera(K=np.array([[300.0, 0, 158.0], [0, 300.0, 122.0], [0, 0, 1]]),
+                  dist=[-0.2, 0.0, 0.0, 0.0, 0.0], width=320, height=240)
+    right = Camera(K=np.array([[296.0, 0, 163.0], [0, 296.0, 118.0], [0, 0, 1]]),
+                   dist=[-0.18, 0.0, 0.0, 0.0, 0.0], width=320, height=240)
+    R = cv2.Rodrigues(np.array([0.012, -0.035, 0.006]))[0]
+    T = -R @ np.array([0.10, 0.002, -0.003])
+    rng = np.random.default_rng(7)
+    files: dict[str, list] = {"left": [], "right": []}
+    for i, (Rb, tb) in enumerate(_board_views(6, seed=7)):
+        for key, cam, Rc, Tc in (("left", left, np.eye(3), np.zeros(3)), ("right", right, R, T)):
+            img = C.render_chessboard(cam, Rc @ Rb, Rc @ tb + Tc, PATTERN, SQUARE, rng=rng,
+                                      rays=C._subpixel_rays(cam, 2), blur_px=0.5, noise=2.0)
+            f = tmp_path / f"{key}{i}.png"
+            cv2.imwrite(str(f), img)
+            files[key].append(f)
+    res = C.calibrate_rig(files["left"], files["right"], PATTERN, SQUARE, model="radial",
+                          fix_aspect=True)
+    for est, ref in ((res.rig.left, left), (res.rig.right, right)):
+        assert est.fy == pytest.approx(est.fx, rel=1e-12)
+        np.testing.assert_array_equal(est.dist[1:], 0.0)
+        assert est.fx == pytest.approx(ref.fx, rel=0.02)
+        assert est.dist[0] == pytest.approx(ref.dist[0], abs=0.03)
+    assert res.rig.baseline_m == pytest.approx(np.linalg.norm(T), rel=0.02)
+
+
 @pytest.mark.shared
 def test_real_chessboard_pairs_close_to_reference(shared_data):
     d = shared_data / "vision" / "chessboard_stereo"

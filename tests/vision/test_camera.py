@@ -247,3 +247,74 @@ def test_head_camera_pose_follows_head_kinematics():
     # a point above the gaze (head +z) appears above the image centre (optical -y)
     up = array_to_robot(offset + np.array([3.0, 0.0, 0.5]), pose, pivot)
     assert (R @ up + t)[1] < 0
+
+
+SKEW_DISTS = [
+    [],
+    [-0.2, 0.05, 0.001, -0.002, 0.0],
+    [-0.25, 0.08, 0.001, -0.002, -0.01, 0.1, 0.02, 0.003],
+    [-0.2, 0.05, 0.001, -0.002, 0.01, 0.1, 0.02, 0.003, 0.0, 0.0, 0.0, 0.0, 0.01, -0.02],  # tilt
+]
+
+
+@pytest.mark.parametrize("dist", SKEW_DISTS)
+def test_skewed_camera_project_and_normalized_invert_each_other(dist):
+    """A skewed K is a skew-free K followed by the pixel shear u += s (v - cy) / fy: known
+    points, known lens, so both directions have an exact ground truth."""
+    s = 2.0
+    Ks = K.copy()
+    Ks[0, 1] = s
+    cam = Camera(K=Ks, dist=np.array(dist), width=640, height=480)
+    plain = Camera(K=K, dist=np.array(dist), width=640, height=480)
+    P = _points()
+    uv0 = plain.project(P)
+    truth = uv0 + np.c_[s * (uv0[:, 1] - K[1, 2]) / K[1, 1], np.zeros(len(uv0))]
+    uv = cam.project(P)
+    np.testing.assert_allclose(uv, truth, atol=1e-9)
+    np.testing.assert_allclose(cam.normalized(uv), P[:, :2] / P[:, 2:], atol=1e-9)
+    np.testing.assert_allclose(cam.pixel_rays(uv), P / np.linalg.norm(P, axis=1, keepdims=True),
+                               atol=1e-9)
+
+
+@pytest.mark.parametrize("dist", SKEW_DISTS[1:])
+def test_without_skew_normalized_is_opencv_bit_for_bit(dist):
+    cam = Camera(K=K, dist=np.array(dist), width=640, height=480)
+    rng = np.random.default_rng(3)
+    uv = np.c_[rng.uniform(-40, 680, 500), rng.uniform(-40, 520, 500)]
+    crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-10)
+    ref = cv2.undistortPointsIter(uv.reshape(-1, 1, 2), K, np.array(dist), None, None, crit)
+    np.testing.assert_array_equal(cam.normalized(uv), ref.reshape(-1, 2))
+
+
+def test_read_opencv_yaml_skips_what_it_does_not_read(tmp_path):
+    """A file like OpenCV's calibration sample writes: sequences of numbers (grid_points) are
+    read as arrays; sequences of strings and plain maps are skipped, not an OpenCV error."""
+    p = tmp_path / "camera.yml"
+    fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_WRITE)
+    fs.write("calibration_time", "Mon Jan 1")
+    fs.write("image_width", 640)
+    fs.write("camera_matrix", K)
+    fs.write("avg_reprojection_error", 0.3)
+    grid = [0.0, 0.0, 0.0, 0.025, 0.0, 0.0]
+    fs.startWriteStruct("grid_points", cv2.FileNode_SEQ)
+    for v in grid:
+        fs.write("", v)
+    fs.endWriteStruct()
+    fs.startWriteStruct("images", cv2.FileNode_SEQ)
+    for v in ("left01.jpg", "left02.jpg"):
+        fs.write("", v)
+    fs.endWriteStruct()
+    fs.startWriteStruct("settings", cv2.FileNode_MAP)
+    fs.write("rows", 6)
+    fs.endWriteStruct()
+    fs.startWriteStruct("views", cv2.FileNode_SEQ)
+    fs.write("", K)
+    fs.endWriteStruct()
+    fs.release()
+    data = read_opencv_yaml(p)
+    assert set(data) == {"calibration_time", "image_width", "camera_matrix",
+                         "avg_reprojection_error", "grid_points"}
+    assert data["calibration_time"] == "Mon Jan 1" and data["image_width"] == 640.0
+    np.testing.assert_array_equal(data["camera_matrix"], K)
+    np.testing.assert_array_equal(data["grid_points"], grid)
+    assert data["grid_points"].dtype == float

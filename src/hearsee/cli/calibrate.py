@@ -60,6 +60,8 @@ def calibrate_cmd(
         raise InputFileError(f"{out}: file exists; pass --force to overwrite it")
     if not out.parent.exists():
         raise InputFileError(f"{out}: folder {out.parent} does not exist")
+    # read the reference first: a bad file fails before the calibration and the output
+    ref_cams = _read_reference(Path(reference)) if reference is not None else None
 
     total = len(lf) + len(rf) + (len(tf) if tf else 0)
     with progress("detecting chessboards", total) as advance:
@@ -67,7 +69,7 @@ def calibrate_cmd(
                             fix_aspect=fix_aspect, progress=advance)
     save_rig(res.rig, out)
 
-    comparison = _compare(res.rig, reference) if reference is not None else None
+    comparison = _compare(res.rig, ref_cams) if ref_cams is not None else None
     if json_out:
         emit_json({
             "output": str(out),
@@ -86,27 +88,39 @@ def calibrate_cmd(
         err_console.print(f"warning: {w}", style="yellow", markup=False, highlight=False)
 
 
-def _compare(rig, reference: Path) -> dict:
-    """Focal lengths and principal points against an OpenCV stereo_calib-style file."""
+def _read_reference(reference: Path) -> dict:
+    """The camera matrices ``{"M1": K, "M2": K}`` (3x3, pixels) of an OpenCV
+    stereo_calib-style FileStorage file (at least one of them)."""
     from hearsee.errors import ConfigError
     from hearsee.vision.camera import read_opencv_yaml
 
     ref = read_opencv_yaml(reference)
     out = {}
+    for key in ("M1", "M2"):
+        if key not in ref:
+            continue
+        if getattr(ref[key], "shape", None) != (3, 3):
+            raise ConfigError(f"{reference}: {key} is not a 3x3 matrix")
+        out[key] = ref[key]
+    if not out:
+        raise ConfigError(f"{reference}: no M1 or M2 camera matrix to compare with")
+    return out
+
+
+def _compare(rig, ref: dict) -> dict:
+    """Focal lengths and principal points (pixels) against the reference camera matrices
+    (:func:`_read_reference`)."""
+    out = {}
     for key, cam in (("M1", rig.left), ("M2", rig.right)):
         if key not in ref:
             continue
         M = ref[key]
-        if getattr(M, "shape", None) != (3, 3):
-            raise ConfigError(f"{reference}: {key} is not a 3x3 matrix")
         out["left" if key == "M1" else "right"] = {
             "fx": cam.fx, "fy": cam.fy, "ref_fx": float(M[0, 0]), "ref_fy": float(M[1, 1]),
             "fx_diff_pct": 100.0 * (cam.fx / M[0, 0] - 1.0),
             "fy_diff_pct": 100.0 * (cam.fy / M[1, 1] - 1.0),
             "cx": cam.cx, "cy": cam.cy, "ref_cx": float(M[0, 2]), "ref_cy": float(M[1, 2]),
         }
-    if not out:
-        raise ConfigError(f"{reference}: no M1 or M2 camera matrix to compare with")
     return out
 
 

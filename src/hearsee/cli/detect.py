@@ -22,7 +22,9 @@ def detect_cmd(
              "16-bit PNG (centi-kelvin) or .npy (degC)."),
     fmt: str = typer.Option("json", "--format", help="json or table."),
     overlay: str | None = typer.Option(
-        None, "--overlay", help="Write the left image with the detections drawn to this file."),
+        None, "--overlay",
+        help="Write the rectified left image (the frame of the boxes) with the detections drawn "
+             "to this file."),
     tm: float = typer.Option(0.5, "--tm", help="Head-shoulder score threshold Tm (0..1)."),
     min_support: float = typer.Option(
         0.3, "--min-support", help="Thermal support needed to accept a candidate (0..1)."),
@@ -34,8 +36,9 @@ def detect_cmd(
     """Detect humans: stereo candidates (P(y,d), head-shoulder template) confirmed by thermal.
 
     Prints {"humans": [{"box": [x, y, w, h], "position_m": [x, y, z], "score", "thermal_support"}],
-    "rejected": [...]}: boxes in left-image pixels, positions in metres in the left camera's
-    optical frame (x right, y down, z forward).
+    "rejected": [...]}: boxes in rectified left-image pixels (the image --overlay writes; the
+    same as the raw left image only for a distortion-free, already rectified rig), positions in
+    metres in the left camera's own optical frame (x right, y down, z forward).
     """
     from hearsee.vision.camera import load_rig
     from hearsee.vision.fusion import detect_humans, draw_detections
@@ -77,7 +80,8 @@ def detect_cmd(
     res = detect_humans(L, R, rig, th, params=HumanDetectorParams(tm=tm), min_support=min_support,
                         camera_height_m=camera_height)
     if overlay_p is not None:
-        write_image(overlay_p, draw_detections(L, res))
+        # the boxes are in rectified left-image pixels: draw them on that image
+        write_image(overlay_p, draw_detections(res.frame.left, res))
     if fmt == "table":
         typer.echo(f"{'':9s}{'x':>5s}{'y':>5s}{'w':>5s}{'h':>5s}  {'X m':>7s}{'Y m':>7s}"
                    f"{'Z m':>7s}  {'score':>5s} {'thermal':>7s}  reason")

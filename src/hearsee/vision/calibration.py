@@ -5,13 +5,14 @@ Reconstruction. Appendix A follows Zhang ("A flexible new technique for camera c
 PAMI 2000): several views of a planar chessboard give the intrinsics K, the lens distortion and
 one board pose per view, refined by minimising the reprojection error (``cv2.calibrateCamera``).
 The stereo extrinsics (R, T) come from boards seen by both cameras (``cv2.stereoCalibrate``:
-first with the intrinsics fixed, then a joint refinement, keeping the refinement only when it
-lowers the RMS error). The thermal-to-stereo extrinsics (7.4.1) use a board visible to both
-(in practice a heated or back-lit board): for each view the board's 3D corners in the left
-camera frame come from the left camera's board pose, ``cv2.solvePnP`` gives the board pose in
-the thermal camera, each view yields one thermal-from-left transform, those are averaged
-robustly (rotation mean after rejecting views far from the median, median translation), and a
-final PnP over the corners of all views jointly refines the transform.
+first with the intrinsics fixed, then a joint refinement with the same distortion model and
+aspect-ratio constraint, keeping the refinement only when it lowers the RMS error). The
+thermal-to-stereo extrinsics (7.4.1) use a board visible to both (in practice a heated or
+back-lit board): for each view the board's 3D corners in the left camera frame come from the
+left camera's board pose, ``cv2.solvePnP`` gives the board pose in the thermal camera, each
+view yields one thermal-from-left transform, those are averaged robustly (rotation mean after
+rejecting views far from the median, median translation), and a final PnP over the corners of
+all views jointly refines the transform.
 
 All lengths (square size, translations) are metres; pixel errors are RMS pixels.
 """
@@ -259,14 +260,25 @@ class StereoCalibration:
 
 def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDArray],
                      object_points: NDArray | Sequence[NDArray], left: Camera, right: Camera,
-                     *, refine: bool = True) -> StereoCalibration:
+                     *, refine: bool = True, model: str | None = None,
+                     fix_aspect: bool = False) -> StereoCalibration:
     """Stereo extrinsics (``cv2.stereoCalibrate``) from corners seen in both cameras.
 
     First R, T with the given intrinsics fixed; then, if ``refine``, a joint refinement of the
     intrinsics and extrinsics started from there, kept only if it lowers the RMS error and
     keeps the focal lengths within 5 % (a guard against over-fitting few views).
-    Returns the rig with ``X_right = R X_left + T`` (metres, as the object points).
+
+    ``model`` and ``fix_aspect`` are those the intrinsics were calibrated with
+    (:func:`calibrate_camera`): the refinement keeps that distortion model (coefficients the
+    model fixes stay at the given cameras' values, e.g. zero) and, with ``fix_aspect``, each
+    camera's ``fx / fy``. ``model=None`` frees the 5 standard coefficients (8 with rational
+    cameras, i.e. 8 or more coefficients).
+
+    Corners are in pixels; returns the rig with ``X_right = R X_left + T`` (metres, as the
+    object points).
     """
+    if model is not None and model not in _MODELS:
+        raise CalibrationError(f"model must be one of {', '.join(_MODELS)}, got {model!r}")
     n = len(left_points)
     if n != len(right_points):
         raise CalibrationError(f"{n} left views but {len(right_points)} right views")
@@ -289,8 +301,7 @@ def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDAr
 
     d1 = _dist5(left.dist)
     d2 = _dist5(right.dist)
-    rational = max(left.dist.size, right.dist.size) >= 8
-    base = cv2.CALIB_RATIONAL_MODEL if rational else 0
+    base = _stereo_model_flags(model, max(left.dist.size, right.dist.size), fix_aspect)
     out = run(left.K, d1, right.K, d2, cv2.CALIB_FIX_INTRINSIC | base)
     refined = False
     if refine and n >= 3:
@@ -306,6 +317,15 @@ def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDAr
                 name=right.name or "right")
     rig = StereoRig(lc, rc, R, np.asarray(T).reshape(3), rms_px=float(rms))
     return StereoCalibration(rig, float(rms), per_view, refined)
+
+
+def _stereo_model_flags(model: str | None, n_coeffs: int, fix_aspect: bool) -> int:
+    """``cv2.stereoCalibrate`` flags keeping a distortion model (see :data:`_MODELS`) and, with
+    ``fix_aspect``, each camera's aspect ratio; ``model=None``: standard, or rational when the
+    cameras have ``n_coeffs >= 8`` coefficients."""
+    if model is None:
+        model = "rational" if n_coeffs >= 8 else "standard"
+    return _MODELS[model] | (cv2.CALIB_FIX_ASPECT_RATIO if fix_aspect else 0)
 
 
 def _dist5(d: NDArray) -> NDArray:
@@ -657,7 +677,7 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
     if len(both) < 1:
         raise CalibrationError("the board was never found in both images of a pair")
     st = calibrate_stereo([lp[i] for i in both], [rp[i] for i in both], obj, cl.camera,
-                          cr.camera, refine=len(both) >= 3)
+                          cr.camera, refine=len(both) >= 3, model=model, fix_aspect=fix_aspect)
     for j, i in enumerate(both):
         views[i].err_stereo_left, views[i].err_stereo_right = map(float, st.per_view_px[j])
     rig = st.rig

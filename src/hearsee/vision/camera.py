@@ -114,7 +114,9 @@ class Camera:
     Parameters
     ----------
     K : (3, 3) array
-        Intrinsic matrix in pixels.
+        Intrinsic matrix in pixels, ``[[fx, s, cx], [0, fy, cy], [0, 0, 1]]``; the skew ``s`` is
+        usually 0 (OpenCV calibrations never estimate it) but is honoured by :meth:`project`
+        and :meth:`normalized`.
     dist : (k,) array
         Distortion coefficients in OpenCV order, k in {0, 4, 5, 8, 12, 14}.
     width, height : int
@@ -255,20 +257,28 @@ class Camera:
             x = np.where(front, P[:, 0] / np.where(front, z, 1.0), np.nan)
             y = np.where(front, P[:, 1] / np.where(front, z, 1.0), np.nan)
         if self.dist.size == 14 and np.any(self.dist[12:] != 0):  # tilted sensor: defer to OpenCV
-            out = np.full((len(P), 2), np.nan)
+            xd = np.full(len(P), np.nan)
+            yd = np.full(len(P), np.nan)
             if np.any(front):
-                uv, _ = cv2.projectPoints(P[front].reshape(-1, 1, 3), np.zeros(3), np.zeros(3),
-                                          self.K, self.dist)
-                out[front] = uv.reshape(-1, 2)
-            return out
-        xd, yd = _distort(x, y, self.dist)
+                # identity K: OpenCV ignores K's skew, so K is applied below
+                xyd, _ = cv2.projectPoints(P[front].reshape(-1, 1, 3), np.zeros(3), np.zeros(3),
+                                           np.eye(3), self.dist)
+                xd[front], yd[front] = xyd.reshape(-1, 2).T
+        else:
+            xd, yd = _distort(x, y, self.dist)
+        return self._pixels(xd, yd)
+
+    def _pixels(self, xd: NDArray, yd: NDArray) -> NDArray:
+        """Pixels ``(N, 2)`` of distorted normalised coordinates: ``K @ [xd, yd, 1]`` with K's
+        skew ``K[0, 1]``."""
         K = self.K
         u = K[0, 0] * xd + K[0, 1] * yd + K[0, 2]
         v = K[1, 1] * yd + K[1, 2]
         return np.stack([u, v], axis=1)
 
     def normalized(self, uv: ArrayLike) -> NDArray:
-        """Undistorted normalised image coordinates ``(N, 2)`` (x/z, y/z) of pixels ``(N, 2)``."""
+        """Undistorted normalised image coordinates ``(N, 2)`` (x/z, y/z in the optical frame)
+        of pixels ``(N, 2)``; the inverse of :meth:`project` (K's skew included)."""
         p = np.asarray(uv, dtype=float)
         if p.ndim == 1:
             p = p[None, :]
@@ -280,9 +290,27 @@ class Camera:
             y = (p[:, 1] - self.cy) / self.fy
             x = (p[:, 0] - self.cx - self.K[0, 1] * y) / self.fx
             return np.stack([x, y], axis=1)
+        K0, p0 = self._without_skew(p)
         crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-10)
-        xy = cv2.undistortPointsIter(p.reshape(-1, 1, 2), self.K, self.dist, None, None, crit)
+        xy = cv2.undistortPointsIter(p0.reshape(-1, 1, 2), K0, self.dist, None, None, crit)
         return xy.reshape(-1, 2).astype(float)
+
+    def _without_skew(self, uv: NDArray) -> tuple[NDArray, NDArray]:
+        """``(K0, uv0)``: K without its skew and the pixels ``(N, 2)`` that K0 gives for the
+        same distorted normalised coordinates (``u0 = u - s (v - cy) / fy``, ``v0 = v``).
+
+        OpenCV's point functions ignore ``K[0, 1]``; this removes the skew exactly while keeping
+        the units of pixels (undistortPointsIter's stopping threshold is in pixels). With no
+        skew, ``(self.K, uv)`` unchanged.
+        """
+        s = self.K[0, 1]
+        if s == 0:
+            return self.K, uv
+        K0 = self.K.copy()
+        K0[0, 1] = 0.0
+        uv0 = uv.copy()
+        uv0[:, 0] -= s * (uv[:, 1] - self.cy) / self.fy
+        return K0, uv0
 
     def pixel_rays(self, uv: ArrayLike) -> NDArray:
         """Unit viewing rays ``(N, 3)`` in the optical frame through pixels ``uv`` ``(N, 2)``
@@ -767,8 +795,9 @@ def rig_from_opencv(intrinsics: str | Path, extrinsics: str | Path,
 
 
 def read_opencv_yaml(path: str | Path) -> dict[str, Any]:
-    """Read every top-level node of an OpenCV ``FileStorage`` file (matrices -> numpy arrays,
-    numbers -> float, strings -> str)."""
+    """Read the top-level nodes of an OpenCV ``FileStorage`` file: matrices (``!!opencv-matrix``)
+    and sequences of numbers -> float numpy arrays, numbers -> float, strings -> str. Other
+    nodes (plain maps, sequences of strings or of structures) are skipped."""
     p = Path(path)
     if not p.is_file():
         raise InputFileError(f"{p}: file not found")
@@ -784,15 +813,37 @@ def read_opencv_yaml(path: str | Path) -> dict[str, Any]:
     try:
         root = fs.root()
         for key in root.keys():
-            node = fs.getNode(key)
-            if node.isReal() or node.isInt():
-                out[key] = float(node.real())
-            elif node.isString():
-                out[key] = node.string()
-            else:
-                m = node.mat()
-                if m is not None:
-                    out[key] = np.asarray(m, dtype=float)
+            value = _fs_value(fs.getNode(key))
+            if value is not None:
+                out[key] = value
+    except cv2.error as exc:
+        raise ConfigError(
+            f"{p}: not a readable OpenCV FileStorage file ({exc.msg.strip()})"
+        ) from None
     finally:
         fs.release()
     return out
+
+
+def _is_number(node: cv2.FileNode) -> bool:
+    return node.isReal() or node.isInt()
+
+
+def _fs_value(node: cv2.FileNode) -> float | str | NDArray | None:
+    """The value of one FileStorage node (see :func:`read_opencv_yaml`), None to skip it."""
+    if _is_number(node):
+        return float(node.real())
+    if node.isString():
+        return node.string()
+    if node.isSeq():
+        items = [node.at(i) for i in range(node.size())]
+        if all(_is_number(it) for it in items):
+            return np.array([it.real() for it in items], dtype=float)
+        return None
+    if node.isMap():
+        try:  # only !!opencv-matrix / !!opencv-nd-matrix maps are matrices
+            m = node.mat()
+        except cv2.error:
+            return None
+        return None if m is None else np.asarray(m, dtype=float)
+    return None

@@ -55,10 +55,11 @@ DEFAULT_STEREO_OPTIONS: dict[str, Any] = {"num_disparities": 64, "block_size": 3
 class Human:
     """One detection (accepted or rejected).
 
-    ``box`` [x, y, w, h] in left-image pixels; ``position_m`` torso centre in the left camera's
-    optical frame (metres); ``score`` the head-shoulder score; ``thermal_support`` in [0, 1]
-    (None without a thermal image, NaN when the thermal camera does not see the candidate);
-    ``reason`` why it was rejected (empty when accepted).
+    ``box`` [x, y, w, h] in rectified left-image pixels (``DetectionResult.frame.left``);
+    ``position_m`` torso centre in the left camera's own optical frame (metres); ``score`` the
+    head-shoulder score; ``thermal_support`` in [0, 1] (None without a thermal image, NaN when
+    the thermal camera does not see the candidate); ``reason`` why it was rejected (empty when
+    accepted).
     """
 
     box: list[int]
@@ -203,8 +204,8 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
 
     Returns
     -------
-    :class:`DetectionResult`; boxes in left-image pixels (rectified), positions in the left
-    camera's optical frame (metres).
+    :class:`DetectionResult`; boxes in rectified left-image pixels (the image
+    ``result.frame.left``), positions in the left camera's own optical frame (metres).
     """
     if thermal is not None and rig.thermal is None:
         raise CalibrationError(
@@ -243,7 +244,11 @@ def draw_detections(image: NDArray, result: DetectionResult, *, show_rejected: b
     """The left image with accepted humans in green (distance, score, support) and, with
     ``show_rejected``, in red the rejected candidates that reached head-shoulder verification
     (thermal or template rejections; walls and furniture that failed the size test are not
-    drawn); returns a new BGR uint8 image."""
+    drawn); returns a new BGR uint8 image.
+
+    The boxes are in rectified left-image pixels: pass the rectified left image
+    ``result.frame.left`` (the raw left image is the same only for an already rectified rig,
+    :attr:`StereoRig.is_rectified`)."""
     import cv2
 
     img = np.asarray(image)

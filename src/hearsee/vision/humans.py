@@ -314,10 +314,10 @@ def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: f
 # ---------------------------------------------------------------------------------------------
 @dataclass
 class BodySegment:
-    """A candidate's silhouette: ``mask`` (bool, shape of ``box`` = [x, y, w, h] in left-image
-    pixels), 3D points ``(N, 3)`` of the silhouette (metres) with their heights above the floor,
-    ``top_m`` (height of the highest point), ``width_m`` and ``position_m`` (torso centre
-    estimate)."""
+    """A candidate's silhouette: ``mask`` (bool, shape of ``box`` = [x, y, w, h] in rectified
+    left-image pixels), 3D points ``(N, 3)`` of the silhouette (metres, rectified left frame)
+    with their heights above the floor, ``top_m`` (height of the highest point), ``width_m``
+    and ``position_m`` (torso centre estimate)."""
 
     box: list[int]
     mask: NDArray
