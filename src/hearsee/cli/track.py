@@ -124,26 +124,31 @@ def track_cmd(
         else:
             points = VideoImagePoints(camera_device if video is None else video,
                                       detector=detector.value)
-    if device is not None:
-        source = DeviceSource(_device_spec(device), arr.n_mics, fs, duration_s=duration)
-    else:
-        source = WavSource(recording, n_channels=arr.n_mics, block_len=4096)
     cfg = StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms, method=method.value.replace("gcc-", ""),
                        itd_filter=itd_filter, in_plane=in_plane,
                        direction_modes_dps2=IMM_MODES_DPS2 if tracker is Tracker.imm else None,
                        direction_rate_tau_s=rate_tau)
-    pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
 
     def sink(u: object) -> None:
         sys.stdout.write(json.dumps(to_jsonable(u.to_json())) + "\n")  # type: ignore[attr-defined]
         sys.stdout.flush()
 
-    updates = pipe.run(source, sink if fmt is TrackFormat.jsonl else None,
-                       threaded=device is not None)
+    try:
+        if device is not None:
+            source = DeviceSource(_device_spec(device), arr.n_mics, fs, duration_s=duration)
+        else:
+            source = WavSource(recording, n_channels=arr.n_mics, block_len=4096)
+        pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
+        updates = pipe.run(source, sink if fmt is TrackFormat.jsonl else None,
+                           threaded=device is not None)
+    finally:
+        close = getattr(points, "close", None)  # release a video / stop a live camera's thread
+        if close is not None:
+            close()
     st = pipe.stats
     summary = {"frames": st.n_frames, "missing_frames": st.n_missing_frames,
                "dropped_blocks": st.n_dropped_blocks, "late_blocks": st.n_late_blocks,
-               "status": st.status, "audio_s": st.audio_s,
+               "input_overflows": st.n_overflows, "status": st.status, "audio_s": st.audio_s,
                "real_time_factor": st.real_time_factor,
                "cpu_real_time_factor": st.cpu_real_time_factor, **st.latency_summary()}
     if fmt is TrackFormat.json:
@@ -155,7 +160,11 @@ def track_cmd(
             f"{st.real_time_factor:.1f}x real time ({st.cpu_real_time_factor:.1f}x in CPU "
             f"time), latency median "
             f"{summary['median_ms']:.1f} ms (p95 {summary['p95_ms']:.1f} ms), "
-            f"{st.n_dropped_blocks} dropped / {st.n_late_blocks} late blocks, status {st.status}",
+            f"{st.n_dropped_blocks} dropped / {st.n_late_blocks} late blocks, "
+            f"{st.n_overflows} input overflows, status {st.status}",
             highlight=False)
     if not any(u.measured for u in updates):
         err_console.print("track: no frame held a localizable source", highlight=False)
+    if st.status == "stalled":  # as 'hearsee run': what was printed is valid, the run is not
+        err_console.print("track: the audio input stopped delivering samples", highlight=False)
+        raise typer.Exit(1)

@@ -30,8 +30,10 @@ Systems 113, 2019): small stages with explicit configuration, connected by a bou
 * :class:`StreamPipeline` runs them: in-line (fastest, for files) or with the source in its own
   thread behind a bounded queue (live input). The consumer waits at most ``stall_timeout_s`` for
   a block; a source that stays silent longer than ``max_stall_s`` ends the run with
-  ``stats.status == "stalled"`` instead of hanging. Each :class:`Update` carries its latency:
-  wall-clock time from the arrival of the block that completed the frame to its emission.
+  ``stats.status == "stalled"`` instead of hanging, and so does a source that gives up on a
+  silent device itself (:class:`DeviceSource` after its ``timeout_s``). Each :class:`Update`
+  carries its latency: wall-clock time from the arrival of the block that completed the frame
+  to its emission.
 
 Performance (three-mic preset, 16 kHz, 64 ms frames every 32 ms, ``bench/tracking.py`` part C):
 per batch the work is a few numpy calls on (frames x pairs x bins) arrays; what remains per
@@ -129,8 +131,11 @@ class Update:
     ``azimuth_deg``/``elevation_deg`` (deg), ``position_m`` (m), ``velocity_mps``,
     ``acceleration_mps2`` and ``covariance`` (2x2 deg^2 for a direction, 3x3 m^2 for a position)
     are the trackers' filtered estimates; ``raw_*`` are this frame's own measurements (None when
-    the frame gave none); ``latency_s`` is the wall-clock time from the arrival of the block that
-    completed the frame to the update.
+    the frame gave none): ``raw_azimuth_deg``/``raw_elevation_deg`` the direction of its own
+    GCC TDOAs, also with ``itd_filter`` (the ITD-filtered TDOAs' direction, which the tracker
+    receives, is ``itd_azimuth_deg``/``itd_elevation_deg``: None without ``itd_filter`` and
+    before the filter has started); ``latency_s`` is the wall-clock time from the arrival of the
+    block that completed the frame to the update.
     """
 
     t: float
@@ -148,6 +153,8 @@ class Update:
     raw_azimuth_deg: float | None = None
     raw_elevation_deg: float | None = None
     raw_position_m: list[float] | None = None
+    itd_azimuth_deg: float | None = None
+    itd_elevation_deg: float | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The JSON object of the CLI contract (plus ``rate_dps``, ``measured``, ``missing``,
@@ -176,7 +183,11 @@ class StreamStats:
     sequence numbers and the device's own count of blocks it dropped, each block once);
     ``n_late_blocks`` blocks that arrived too late to be used (not also counted as dropped);
     ``n_frames`` updates, ``n_missing_frames`` of them frames that lost samples to a dropped or
-    late block; ``n_stalls`` waits of ``stall_timeout_s`` without a block.
+    late block; ``n_stalls`` waits of ``stall_timeout_s`` without a block; ``n_overflows`` input
+    overflows the device reported (PortAudio discarded samples; the blocks' worth of samples lost
+    count as dropped blocks); ``status`` ``"ok"`` or ``"stalled"`` (the source went silent: for
+    longer than the pipeline's ``max_stall_s``, or the source gave up itself, as
+    :class:`DeviceSource` does after its ``timeout_s``).
     """
 
     n_blocks: int = 0
@@ -185,6 +196,7 @@ class StreamStats:
     n_dropped_blocks: int = 0
     n_late_blocks: int = 0
     n_stalls: int = 0
+    n_overflows: int = 0
     audio_s: float = 0.0
     wall_s: float = 0.0
     cpu_s: float = 0.0
@@ -307,7 +319,26 @@ class DeviceSource:
         Bounded queue between the audio callback and the pipeline; a full queue drops the block
         (counted in :attr:`n_dropped`) -- the callback never blocks.
     timeout_s : float
-        A device that delivers nothing for this long ends the stream.
+        A device that delivers nothing for this long ends the stream, with :attr:`stalled` set
+        (the pipeline then reports ``status="stalled"``).
+
+    Each :meth:`blocks` call is one run (one PortAudio stream, sample 0 and sequence number 0 at
+    its start) with its own queue: blocks an earlier run left queued are discarded (also when
+    its stream closes), and the counters below count the latest run only.
+
+    Attributes
+    ----------
+    n_dropped : int
+        Blocks lost: dropped at the full queue, and the blocks' worth of samples (rounded up)
+        that PortAudio discarded in input overflows.
+    n_overflows : int
+        Callbacks flagged ``input_overflow``: PortAudio discarded input samples before the
+        block. The block is placed after a gap (so that the framer emits the frames in it as
+        missing, and later timestamps stay on the device's clock): the gap is measured from the
+        ``time_info.inputBufferAdcTime`` of this block and the previous one when the host API
+        provides them (> 0 and increasing), else it is taken as one block.
+    stalled : bool
+        The run ended because the device delivered nothing for ``timeout_s``.
     """
 
     def __init__(self, device: int | str | None, n_channels: int, fs: float = 16000.0,
@@ -330,13 +361,38 @@ class DeviceSource:
         self.device, self.n_channels, self.fs = device, int(n_channels), float(fs)
         self.block_len, self.duration_s = int(block_len), duration_s
         self.timeout_s = float(timeout_s)
-        self._q: queue.Queue = queue.Queue(maxsize=int(queue_size))
+        self._queue_size = int(queue_size)
+        self._run: object | None = None
+        self._reset_run()
+
+    def _reset_run(self) -> object:
+        """Start a run: a new (empty) queue, sample and sequence counters and loss counters;
+        returns the run's token (a stream or generator of an earlier run still alive touches
+        nothing of this one)."""
+        self._run = run = object()
+        self._q: queue.Queue = queue.Queue(maxsize=self._queue_size)
+        self._next, self._seq = 0, 0
+        self._prev_adc: float | None = None
+        self._prev_frames = 0
         self.n_dropped = 0
         self.n_overflows = 0
+        self.stalled = False
+        return run
 
     def _callback(self, indata: NDArray, frames: int, time_info: Any, status: Any) -> None:
+        adc = _adc_time(time_info)
         if status and getattr(status, "input_overflow", False):
             self.n_overflows += 1
+            if self._seq > 0:  # samples were lost after the previous block: leave a gap
+                lost = self.block_len  # unknown amount: as if one block was lost
+                if adc is not None and self._prev_adc is not None and adc > self._prev_adc:
+                    lost = int(round((adc - self._prev_adc) * self.fs)) - self._prev_frames
+                lost = max(lost, 1)
+                skipped = -(-lost // self.block_len)
+                self._next += lost
+                self._seq += skipped
+                self.n_dropped += skipped
+        self._prev_adc, self._prev_frames = adc, int(frames)
         start = self._next
         self._next += frames
         seq = self._seq
@@ -348,28 +404,56 @@ class DeviceSource:
             self.n_dropped += 1
 
     def blocks(self) -> Iterator[Block]:
-        self._next, self._seq = 0, 0
+        run = self._reset_run()
+        q = self._q
+
+        def callback(indata: NDArray, frames: int, time_info: Any, status: Any) -> None:
+            if self._run is run:  # (a stream of an earlier run still open: ignored)
+                self._callback(indata, frames, time_info, status)
+
         stream = self._sd.InputStream(device=self.device, channels=self.n_channels,
                                       samplerate=self.fs, blocksize=self.block_len,
-                                      dtype="float32", callback=self._callback)
+                                      dtype="float32", callback=callback)
         limit = None if self.duration_s is None else int(self.duration_s * self.fs)
-        with stream:
+        try:
+            with stream:
+                while True:
+                    try:
+                        blk = q.get(timeout=self.timeout_s)
+                    except queue.Empty:
+                        if self._run is run:
+                            self.stalled = True
+                        return
+                    yield blk
+                    if limit is not None and blk.start + blk.data.shape[1] >= limit:
+                        return
+        finally:
+            # the stream is closed: what it queued after the end of the run is discarded
             while True:
                 try:
-                    blk = self._q.get(timeout=self.timeout_s)
+                    q.get_nowait()
                 except queue.Empty:
-                    return
-                yield blk
-                if limit is not None and blk.start + blk.data.shape[1] >= limit:
-                    return
+                    break
+
+
+def _adc_time(time_info: Any) -> float | None:
+    """``time_info.inputBufferAdcTime`` (PortAudio stream time of the block's first sample, s),
+    or None where the host API does not provide it (missing, 0 or not finite)."""
+    try:
+        t = float(getattr(time_info, "inputBufferAdcTime", 0.0))
+    except (TypeError, ValueError):
+        return None
+    return t if np.isfinite(t) and t > 0.0 else None
 
 
 class DropoutSource:
     """Wrap a source and simulate a flaky device (for tests and benchmarks).
 
     Blocks whose sequence numbers are in ``drop`` are lost; those in ``late`` are held back and
-    delivered out of order after the following block (too late to be used); ``stall_before``
-    maps a sequence number to seconds of silence before that block is delivered.
+    delivered out of order after the following block (too late to be used); a late block that
+    no delivered block follows is delivered when the wrapped source ends (in order -- nothing
+    overtook it, so it is still used); ``stall_before`` maps a sequence number to seconds of
+    silence before that block is delivered.
     """
 
     def __init__(self, source: Any, drop: Sequence[int] = (), late: Sequence[int] = (),
@@ -393,6 +477,8 @@ class DropoutSource:
             for h in held:
                 yield Block(h.seq, h.start, h.data, time.perf_counter())
             held = []
+        for h in held:  # held back until the end
+            yield Block(h.seq, h.start, h.data, time.perf_counter())
 
 
 # ---------------------------------------------------------------------------- framer
@@ -508,7 +594,10 @@ class SmoothedSrp:
     arrays; and planar ones with ``in_plane``: a source known to be at the array's height).
 
     Units: seconds, Hz, degrees. Frames are Hann-windowed ``frame_len`` samples; state persists
-    across batches (missing frames leave it unchanged).
+    across batches. The recursion runs once per hop: a missing frame (samples lost to a dropped
+    block, :meth:`skip`) adds no evidence, like a frame without energy -- the averages decay by
+    ``alpha`` and the evidence they hold grows one frame older -- so after a gap of n frames the
+    evidence from before it weighs ``alpha**n`` and its age counts the gap.
     """
 
     def __init__(self, array: MicArray, fs: float, frame_len: int, alpha: float,
@@ -592,6 +681,20 @@ class SmoothedSrp:
         self.S = None
         self.A = None
         self._w, self._age = 0.0, 0.0
+
+    def skip(self, n_frames: int) -> None:
+        """Age the state through ``n_frames`` missing frames: what ``n_frames`` frames of zero
+        spectra would do (``S <- alpha**n S``, the same for the auto spectra and the evidence
+        weight; the evidence age grows by ``n_frames``)."""
+        n = int(n_frames)
+        if n <= 0 or self.S is None:
+            return
+        f = self.alpha ** n
+        self.S = self.S * np.float32(f)
+        if self.A is not None:
+            self.A = self.A * np.float32(f)
+        self._w *= f
+        self._age += n
 
     def _smooth(self, G: NDArray, prev: NDArray) -> NDArray:
         """``S_n = alpha S_{n-1} + (1 - alpha) G_n`` for the k frames of ``G`` (k, ...) from
@@ -939,6 +1042,8 @@ class TrackingProcessor:
                "az_deg": np.full(k, np.nan), "el_deg": np.full(k, np.nan),
                "age_frames": np.full(k, np.nan),
                "alt_az_deg": np.full((k, 2), np.nan), "alt_coherence": np.full((k, 2), np.nan)}
+        # the missing frames come first in a batch: the smoothing state ages through them
+        self.srp.skip(int(np.count_nonzero(batch.missing)))
         if batch.segment is not None:
             m = int(np.count_nonzero(~batch.missing))
             res = self.srp.process(batch.segment, m, self.hop)
@@ -967,19 +1072,25 @@ class TrackingProcessor:
         sm = self.smoothed(batch)
         out = []
         for n, t in enumerate(batch.t):
-            z = tdoa[n]
+            z = raw_z = tdoa[n]
             have = bool(np.all(np.isfinite(z)))
             if self.itd is not None:
                 self.itd.step(z if have else None)
                 if have and self.itd.initialized:
                     z = self.itd.pair_tdoas()
-            raw_az = raw_el = None
+            raw_az = raw_el = itd_az = itd_el = None
             cands: list[tuple[float, float | None]] = []
             if have:
+                # the tracker's measurement: the (ITD-filtered) TDOAs' direction
                 loc = localize_tdoa(z, self.array, self.pairs, near_field=self._in_plane,
                                     in_plane=self._in_plane)
                 cands = [(a, e) for a, e in loc.candidates if a is not None]
                 raw_az, raw_el = loc.azimuth_deg, loc.elevation_deg
+                if z is not raw_z:  # raw_*: the frame's own TDOAs, not the filter's
+                    itd_az, itd_el = raw_az, raw_el
+                    loc_raw = localize_tdoa(raw_z, self.array, self.pairs,
+                                            near_field=self._in_plane, in_plane=self._in_plane)
+                    raw_az, raw_el = loc_raw.azimuth_deg, loc_raw.elevation_deg
             delay = 0.0
             own = bool(cands) and (self.cfg.prefer_frame
                                    or conf[n] >= self.cfg.prefer_frame_confidence)
@@ -1000,7 +1111,8 @@ class TrackingProcessor:
             upd = Update(float(t), None, None, None, None, None, None,
                          float(conf[n]) if have else 0.0, measured=measured,
                          missing=bool(batch.missing[n]), raw_azimuth_deg=raw_az,
-                         raw_elevation_deg=raw_el)
+                         raw_elevation_deg=raw_el, itd_azimuth_deg=itd_az,
+                         itd_elevation_deg=itd_el)
             if self.direction.initialized:
                 upd.azimuth_deg = self.direction.azimuth_deg
                 el = self.direction.elevation_deg
@@ -1130,7 +1242,11 @@ class StreamPipeline:
     stall_timeout_s : float
         How long the consumer waits for one block before counting a stall.
     max_stall_s : float
-        Total silence after which the run ends with ``status="stalled"``.
+        Total silence after which the run ends with ``status="stalled"``. A source that ends
+        because its device went silent (its ``stalled`` attribute set, as :class:`DeviceSource`
+        does after ``timeout_s``) gives the same status; its input overflows (``n_overflows``)
+        go to :attr:`StreamStats.n_overflows`. Both are also read from a source that a wrapper
+        exposes as ``.source`` (:class:`DropoutSource`, ``robot.hardware.MappedSource``).
     """
 
     def __init__(self, array: MicArray | str, config: StreamConfig | None = None, rig: Any = None,
@@ -1260,4 +1376,19 @@ class StreamPipeline:
         # sequence numbers the framer sees -- the same block, counted once (the device's count
         # also holds drops after the last delivered block, which leave no gap)
         st.n_dropped_blocks = max(framer.n_dropped, int(getattr(source, "n_dropped", 0)))
+        chain = _source_chain(source)
+        st.n_overflows = max(int(getattr(s, "n_overflows", 0) or 0) for s in chain)
+        if any(bool(getattr(s, "stalled", False)) for s in chain):
+            st.status = "stalled"  # the source ended because its device went silent
         return updates
+
+
+def _source_chain(source: Any) -> list[Any]:
+    """``source`` and the sources it wraps (each wrapper's ``.source``, a few levels)."""
+    chain = [source]
+    while len(chain) < 8:
+        inner = getattr(chain[-1], "source", None)
+        if inner is None or any(inner is c for c in chain):
+            break
+        chain.append(inner)
+    return chain

@@ -18,7 +18,11 @@ frame, the pixel ``(u, v)`` where the source appears. Two providers, both callab
 
 Video time t = frame index / fps for files. A live camera is read in its own thread which keeps
 the latest detection; ``points(t)`` then returns that (the audio and camera clocks are not
-synchronised beyond "latest frame", about one camera frame period).
+synchronised beyond "latest frame", about one camera frame period). Either way an image point
+goes stale: a file's is None when its frame is more than two frame periods from t, a live
+camera's when the camera has ended or its latest frame is more than two frame periods old on
+the wall clock (the period being the longer of 1/fps and the camera thread's last
+read-and-detect cycle, since the detector may be slower than the camera).
 """
 
 from __future__ import annotations
@@ -176,6 +180,9 @@ class VideoImagePoints:
         self.last_point: tuple[float, float] | None = None
         self._thread = None
         self.ended = False
+        self._clock = time.perf_counter  # live camera: wall clock (s) of the frames' ages
+        self._frame_wall = -np.inf  # live: wall-clock time of the latest detection
+        self._cycle = 0.0  # live: wall-clock seconds between the last two detections
 
     def _read(self) -> bool:
         ok, frame = self.cap.read()
@@ -189,16 +196,21 @@ class VideoImagePoints:
 
     def _live_loop(self) -> None:
         """Live camera: grab frames continuously in a thread, keep the latest detection."""
-        t0 = time.perf_counter()
+        t0 = self._clock()
         while not self._stop.is_set():
             ok, frame = self.cap.read()
             if not ok:
-                self.ended = True
+                with self._lock:
+                    self.ended = True
                 return
             pt = detect_source_point(frame, self.detector)
+            now = self._clock()
             with self._lock:
+                if self.frame_index >= 0:
+                    self._cycle = now - self._frame_wall
                 self.frame_index += 1
-                self.frame_time = time.perf_counter() - t0
+                self.frame_time = now - t0
+                self._frame_wall = now
                 self.last_point = pt
 
     def __call__(self, t: float) -> tuple[float, float] | None:
@@ -212,6 +224,9 @@ class VideoImagePoints:
                                                 name="hearsee-camera")
                 self._thread.start()
             with self._lock:
+                period = max(1.0 / self.fps, self._cycle)
+                if self.ended or self._clock() - self._frame_wall > 2.0 * period:
+                    return None  # the camera has stopped: no current image of the source
                 return self.last_point
         fresh = False
         while not self.ended and (self.frame_index + 1) / self.fps <= t:

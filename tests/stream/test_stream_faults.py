@@ -1,0 +1,466 @@
+"""Live-input faults of the stream: a device source run twice, a device that goes silent, input
+overflows, a late last block, dropped frames in the smoothed steered response, a camera that
+stops, and the per-frame directions with the ITD filter.
+
+The fake PortAudio here is synchronous: opening a stream calls the callback for all its blocks
+at once (before the consumer reads any), so what the queue holds, drops and loses is known
+exactly; channel 0 of every block is a ramp of the true sample index (ground truth for the
+block starts and frame times)."""
+
+import functools
+import sys
+import threading
+import time
+import types
+
+import numpy as np
+import pytest
+
+from hearsee.audio.arrays import MicArray
+from hearsee.geometry import wrap_deg
+from hearsee.sim.moving import linear_trajectory, simulate_moving_free_field
+from hearsee.stream import pipeline as pl
+from hearsee.stream.pipeline import (
+    ArraySource,
+    DropoutSource,
+    Framer,
+    StreamConfig,
+    StreamPipeline,
+    TrackingProcessor,
+)
+
+FS = 16000
+BL = 1024
+
+
+class _Flags:
+    """sounddevice.CallbackFlags look-alike."""
+
+    def __init__(self, overflow):
+        self.input_overflow = overflow
+
+    def __bool__(self):
+        return self.input_overflow
+
+
+class _TimeInfo:
+    def __init__(self, adc):
+        self.inputBufferAdcTime = adc
+
+
+def _fake_portaudio(blocks_per_open, lose=None, adc=True):
+    """A sounddevice module whose k-th opened stream delivers ``blocks_per_open[k]`` blocks
+    (``BL`` samples; channel 0 = true sample index, the others noise) when it is entered; before
+    block i of ``lose`` (i: lost samples) PortAudio discards that many samples and flags the
+    block ``input_overflow``. ``adc``: time_info carries inputBufferAdcTime (else 0, as host APIs
+    without it report)."""
+    sd = types.ModuleType("sounddevice")
+    sd.PortAudioError = type("PortAudioError", (Exception,), {})
+    sd.query_devices = lambda device=None, kind=None: {"name": "fake", "max_input_channels": 3}
+    opens = list(blocks_per_open)
+    lose = dict(lose or {})
+
+    class InputStream:
+        n_entered = 0
+        instances = []
+
+        def __init__(self, device, channels, samplerate, blocksize, dtype, callback):
+            self.cb, self.ch = callback, channels
+            InputStream.instances.append(self)
+
+        def __enter__(self):
+            n = opens[InputStream.n_entered]
+            InputStream.n_entered += 1
+            rng = np.random.default_rng(InputStream.n_entered)
+            s = 0
+            for i in range(n):
+                s += lose.get(i, 0)
+                blk = rng.standard_normal((BL, self.ch)).astype(np.float32)
+                blk[:, 0] = np.arange(s, s + BL)
+                self.cb(blk, BL, _TimeInfo(10.0 + s / FS if adc else 0.0), _Flags(i in lose))
+                s += BL
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+    sd.InputStream = InputStream
+    return sd
+
+
+def _device(monkeypatch, sd, **kw):
+    monkeypatch.setitem(sys.modules, "sounddevice", sd)
+    kw = {"block_len": BL, "timeout_s": 0.05, **kw}
+    return pl.DeviceSource(0, 3, FS, **kw)
+
+
+# ------------------------------------------------------------------------- 1. reuse
+def test_device_source_run_twice_starts_again_at_sample_zero(monkeypatch):
+    """A second run of the same DeviceSource covers its own stream from sample 0: the blocks
+    the first run left in the queue (past its duration) and its drop count are not carried
+    over."""
+    # run 1: 40 blocks at once into a 32-block queue (8 dropped), 8 used; run 2: 8 blocks
+    src = _device(monkeypatch, _fake_portaudio([40, 8, 8]), duration_s=8 * BL / FS,
+                  queue_size=32)
+    pipe = StreamPipeline(MicArray.from_preset("three-mic"))
+    pipe.run(src)
+    assert pipe.stats.n_blocks == 8 and src.n_dropped == 8
+    assert src._q.empty()  # drained when the stream closed
+    pipe.run(src)
+    st = pipe.stats
+    assert st.n_blocks == 8 and st.n_dropped_blocks == 0 and st.n_missing_frames == 0
+    assert st.n_frames == (8 * BL - 1024) // 512 + 1 and st.audio_s == 8 * BL / FS
+    assert st.status == "ok"
+    blocks = list(src.blocks())  # a third run, block by block
+    assert [b.seq for b in blocks] == list(range(8))
+    assert [b.start for b in blocks] == [int(b.data[0, 0]) for b in blocks] == list(
+        range(0, 8 * BL, BL))
+
+
+def test_device_source_runs_do_not_mix(monkeypatch):
+    """A run abandoned mid-way (its generator not yet closed, its stream still open) while a
+    new run starts: the old stream's late callbacks and the old generator's end touch nothing
+    of the new run."""
+    sd = _fake_portaudio([4, 8])
+    src = _device(monkeypatch, sd, duration_s=8 * BL / FS)
+    g1 = src.blocks()
+    assert next(g1).seq == 0  # run 1: stream open, 3 blocks still queued
+    g2 = src.blocks()
+    first = next(g2)  # run 2 starts
+    old_stream = sd.InputStream.instances[0]
+    old_stream.cb(np.zeros((BL, 3), np.float32), BL, None, _Flags(True))  # late, overflowed
+    g1.close()  # the old generator ends (and drains its own queue only)
+    blocks = [first, *g2]
+    assert [b.seq for b in blocks] == list(range(8))
+    assert [b.start for b in blocks] == [int(b.data[0, 0]) for b in blocks]
+    assert src.n_dropped == 0 and src.n_overflows == 0 and not src.stalled
+
+
+# ------------------------------------------------------------------------- 2. dead device
+@pytest.mark.parametrize("threaded", [False, True])
+def test_device_that_goes_silent_ends_the_run_as_stalled(monkeypatch, threaded):
+    """A device that stops delivering (10 blocks, then nothing) ends the run after its
+    timeout_s with status "stalled", also behind a wrapper; one that reaches its duration
+    ends "ok"."""
+    src = _device(monkeypatch, _fake_portaudio([10, 10, 10]))
+    pipe = StreamPipeline(MicArray.from_preset("three-mic"))
+    pipe.run(src, threaded=threaded)
+    assert pipe.stats.status == "stalled" and pipe.stats.n_blocks == 10 and src.stalled
+    pipe.run(DropoutSource(src, drop=[3]), threaded=threaded)
+    assert pipe.stats.n_blocks == 9 and pipe.stats.status == "stalled"
+    src.duration_s = 10 * BL / FS
+    pipe.run(src, threaded=threaded)
+    assert not src.stalled and pipe.stats.status == "ok"
+
+
+def test_track_cli_reports_a_dead_device_like_a_pipeline_stall(monkeypatch, capsys):
+    """`hearsee track --device`: a device that goes silent ends with the stall warning on stderr
+    (the end-of-run summary with "status stalled"), as a pipeline stall does, and exit code 1
+    (as `hearsee run`); the updates printed before the stall stay."""
+    from hearsee.cli import main
+
+    monkeypatch.setitem(sys.modules, "sounddevice", _fake_portaudio([10]))
+    monkeypatch.setattr(pl, "DeviceSource", functools.partial(pl.DeviceSource, timeout_s=0.05))
+    assert main(["track", "--device", "0", "--array", "three-mic"]) == 1
+    cap = capsys.readouterr()
+    assert len(cap.out.splitlines()) == (10 * BL - 1024) // 512 + 1
+    assert "status stalled" in cap.err and "stopped delivering" in cap.err
+
+
+# ------------------------------------------------------------------------- 5. overflows
+def _frames_follow_the_ramp(blocks, frame_len=1024):
+    """Frame the blocks; every complete frame's samples must be consecutive sample indices
+    (no frame straddles lost samples) and its time the true time of its centre."""
+    fr = Framer(3, FS, 64, 32)
+    n_missing = 0
+    for b in blocks:
+        batch = fr.push(b)
+        if batch is None:
+            continue
+        n_missing += int(batch.missing.sum())
+        if batch.segment is None:
+            continue
+        ok_t = batch.t[~batch.missing]
+        for n, t in enumerate(ok_t):
+            ramp = batch.segment[0, n * fr.hop: n * fr.hop + frame_len]
+            np.testing.assert_array_equal(np.diff(ramp), 1.0)
+            assert t == pytest.approx((ramp[0] + frame_len / 2) / FS)
+    return fr, n_missing
+
+
+def test_input_overflow_leaves_a_gap_at_the_adc_time(monkeypatch):
+    """PortAudio discards 2048 samples before block 10 and flags it: the block (and all later
+    ones) start at their true sample index (from inputBufferAdcTime), the framer sees a gap of
+    two blocks, and the run reports the overflow."""
+    sd = _fake_portaudio([20, 20], lose={10: 2048})
+    src = _device(monkeypatch, sd, duration_s=(20 * BL + 2048) / FS)
+    blocks = list(src.blocks())
+    assert [b.start for b in blocks] == [int(b.data[0, 0]) for b in blocks]
+    assert blocks[10].start == 12 * BL and blocks[10].seq == 12  # 2048 samples = 2 blocks
+    assert src.n_overflows == 1 and src.n_dropped == 2
+    fr, n_missing = _frames_follow_the_ramp(blocks)
+    assert fr.n_dropped == 2 and n_missing > 0
+    pipe = StreamPipeline(MicArray.from_preset("three-mic"))
+    pipe.run(src)
+    st = pipe.stats
+    assert st.n_overflows == 1 and st.n_dropped_blocks == 2 and st.n_missing_frames == n_missing
+    assert st.audio_s == (20 * BL + 2048) / FS
+
+
+def test_input_overflow_without_adc_time_is_a_one_block_gap(monkeypatch):
+    """Without inputBufferAdcTime the amount lost is unknown: the flagged block follows a gap of
+    one block (a sequence gap and a sample gap), so that no frame mixes samples from before and
+    after the loss; an overflow flag on the first block leaves no gap (nothing precedes it)."""
+    sd = _fake_portaudio([20, 5], lose={0: 0, 10: 300}, adc=False)
+    src = _device(monkeypatch, sd, duration_s=21 * BL / FS)
+    blocks = list(src.blocks())
+    assert blocks[0].start == 0 and blocks[0].seq == 0  # flagged first block: no gap
+    assert [b.start for b in blocks[:10]] == list(range(0, 10 * BL, BL))
+    assert [b.seq for b in blocks[10:]] == list(range(11, 21))
+    assert [b.start for b in blocks[10:]] == list(range(11 * BL, 21 * BL, BL))
+    assert src.n_overflows == 2 and src.n_dropped == 1
+    fr, n_missing = _frames_follow_the_ramp([b for b in blocks[:10]])  # before: exact
+    fr = Framer(3, FS, 64, 32)
+    out = [fr.push(b) for b in blocks]
+    assert fr.n_dropped == 1 and sum(int(o.missing.sum()) for o in out if o is not None) > 0
+    for o in out:  # no complete frame straddles the 300 lost samples (ramp step != 1)
+        if o is not None and o.segment is not None:
+            for n in range(int((~o.missing).sum())):
+                assert np.all(np.diff(o.segment[0, n * fr.hop: n * fr.hop + fr.frame_len]) == 1)
+
+
+def test_track_cli_stats_report_input_overflows(monkeypatch, capsys):
+    from hearsee.cli import main
+
+    monkeypatch.setitem(sys.modules, "sounddevice", _fake_portaudio([20], lose={10: 2048}))
+    assert main(["track", "--device", "0", "--array", "three-mic", "--duration",
+                 str(20 * BL / FS), "--stats", "--format", "json"]) == 0
+    cap = capsys.readouterr()
+    assert "1 input overflows" in cap.err and "2 dropped" in cap.err
+    import json
+
+    assert json.loads(cap.out)["stats"]["input_overflows"] == 1
+
+
+# ------------------------------------------------------------------------- 7a. late last block
+def test_dropout_source_delivers_a_late_last_block():
+    y = np.random.default_rng(0).standard_normal((3, 10 * BL))
+    for late in ([9], [8, 9]):
+        src = DropoutSource(ArraySource(y, FS, BL), late=late)
+        assert [b.seq for b in src.blocks()] == list(range(10))
+        pipe = StreamPipeline("three-mic")
+        pipe.run(DropoutSource(ArraySource(y, FS, BL), late=late))
+        st = pipe.stats
+        # nothing overtook the held blocks: in order, so used (not late, not dropped)
+        assert st.n_blocks == 10 and st.n_late_blocks == 0 and st.n_dropped_blocks == 0
+        assert st.audio_s == 10 * BL / FS and st.n_frames == (10 * BL - 1024) // 512 + 1
+
+
+# ------------------------------------------------------------------------- 3. SRP through gaps
+def test_smoothed_srp_ages_its_evidence_through_dropped_frames():
+    """Source at +60 deg for 1 s, 0.5 s of blocks dropped, then at -60 deg: no smoothed
+    measurement after the gap may still point at +60 deg as if it were fresh (it is either the
+    new direction, or old enough to be refused)."""
+    arr = MicArray.from_preset("three-mic")
+    rng = np.random.default_rng(0)
+    a = simulate_moving_free_field(rng.standard_normal(2 * FS), FS, arr,
+                                   linear_trajectory([1.0, 1.732, 0.0], [0, 0, 0], 2.0),
+                                   snr_db=20, rng=1)
+    b = simulate_moving_free_field(rng.standard_normal(2 * FS), FS, arr,
+                                   linear_trajectory([1.0, -1.732, 0.0], [0, 0, 0], 2.0),
+                                   snr_db=20, rng=2)
+    y = np.concatenate([a[:, :FS + FS // 2], b[:, FS + FS // 2:]], axis=1)  # switch at 1.5 s
+    cfg = StreamConfig()
+    src = DropoutSource(ArraySource(y, FS, BL), drop=range(16, 24))  # 1.024-1.536 s lost
+    fr = Framer(3, FS, cfg.frame_ms, cfg.hop_ms)
+    proc = TrackingProcessor(arr, FS, cfg)
+    after = []
+    for blk in src.blocks():
+        batch = fr.push(blk)
+        if batch is None:
+            continue
+        sm = proc.smoothed(batch)
+        for n, t in enumerate(batch.t):
+            if t > 1.5 and not batch.missing[n]:
+                after.append((proc._smoothed_candidates(sm, n), sm["age_frames"][n]))
+    assert len(after) > 5
+    for cands, _ in after:
+        assert not cands or abs(wrap_deg(cands[0][0] + 60.0)) < 5.0
+    assert after[0][0]  # the new direction is measured at once
+
+
+def test_smoothed_srp_skip_equals_silent_frames():
+    """skip(n) does to the state what n frames of zeros do (the model: a missing frame adds no
+    evidence): the same outputs afterwards; the evidence weight decays by alpha**n and its
+    age grows by n."""
+    arr = MicArray.from_preset("three-mic")
+    frame_len, hop, n_gap = 1024, 512, 5
+    rng = np.random.default_rng(4)
+    seg1 = rng.standard_normal((3, frame_len + 7 * hop)).astype(np.float32)
+    seg2 = rng.standard_normal((3, frame_len + 3 * hop)).astype(np.float32)
+    zeros = np.zeros((3, frame_len + (n_gap - 1) * hop), np.float32)
+    s_ref = pl.SmoothedSrp(arr, FS, frame_len, alpha=0.8)
+    s_ref.process(seg1, 8, hop)
+    s_ref.process(zeros, n_gap, hop)
+    ref = s_ref.process(seg2, 4, hop)
+    s = pl.SmoothedSrp(arr, FS, frame_len, alpha=0.8)
+    s.process(seg1, 8, hop)
+    w, age = s._w, s._age
+    s.skip(n_gap)
+    assert s._w == pytest.approx(w * 0.8**n_gap) and s._age == pytest.approx(age + n_gap)
+    got = s.process(seg2, 4, hop)
+    np.testing.assert_allclose(got["age_frames"], ref["age_frames"], rtol=1e-6)
+    s_no = pl.SmoothedSrp(arr, FS, frame_len, alpha=0.8)  # the same frames without the gap
+    s_no.process(seg1, 8, hop)
+    no_gap = s_no.process(seg2, 4, hop)
+    assert got["age_frames"][0] > no_gap["age_frames"][0] + 1.0  # the gap made it older
+    np.testing.assert_allclose(got["coherence"], ref["coherence"], rtol=1e-4, atol=1e-5)
+    np.testing.assert_allclose(got["az_deg"], ref["az_deg"], atol=0.05)
+
+
+# ------------------------------------------------------------------------- 7b. raw with ITD
+def test_raw_directions_are_the_frames_own_also_with_the_itd_filter():
+    arr = MicArray.from_preset("three-mic")
+    traj = linear_trajectory([2.0, -1.0, 0.0], [0.0, 1.0, 0.0], 1.0)
+    y = simulate_moving_free_field(np.random.default_rng(0).standard_normal(FS), FS, arr, traj,
+                                   snr_db=15, rng=1)
+    plain = StreamPipeline(arr, StreamConfig()).run(ArraySource(y, FS, 4096))
+    itd = StreamPipeline(arr, StreamConfig(itd_filter=True)).run(ArraySource(y, FS, 4096))
+    assert [u.raw_azimuth_deg for u in itd] == [u.raw_azimuth_deg for u in plain]
+    assert [u.raw_elevation_deg for u in itd] == [u.raw_elevation_deg for u in plain]
+    assert all(u.itd_azimuth_deg is None for u in plain)
+    filt = [(u.raw_azimuth_deg, u.itd_azimuth_deg) for u in itd if u.itd_azimuth_deg is not None]
+    assert len(filt) > 0.8 * len(itd)
+    assert sum(abs(wrap_deg(r - f)) > 1e-6 for r, f in filt) > 0.5 * len(filt)
+
+
+# ------------------------------------------------------------------------- 4. live camera
+def test_live_camera_point_goes_stale_when_the_camera_stops(monkeypatch):
+    """A live camera that delivers 5 frames with a detection, then hangs, then fails: the point
+    is returned while its frame is fresh and None once it is older than two frame periods or
+    the camera has ended (fake clock: 1/30 s per frame)."""
+    import cv2
+
+    import hearsee.stream.video as video
+
+    now = [100.0]
+    go, hang = threading.Event(), threading.Event()
+
+    class FakeCap:
+        def __init__(self, index):
+            self.n = 0
+
+        def isOpened(self):
+            return True
+
+        def get(self, prop):
+            return 30.0
+
+        def read(self):
+            go.wait(10.0)  # the first frame comes once the test has looked before it
+            self.n += 1
+            if self.n > 5:
+                hang.wait(10.0)  # the camera hangs ...
+                return False, None  # ... then fails
+            now[0] += 1 / 30
+            return True, np.full((60, 80, 3), 100, np.uint8)
+
+        def release(self):
+            pass
+
+    monkeypatch.setattr(cv2, "VideoCapture", FakeCap)
+    monkeypatch.setattr(video, "detect_source_point", lambda img, det: (320.0, 240.0))
+    vp = video.VideoImagePoints(0, detector="hog")
+    vp._clock = lambda: now[0]
+    try:
+        assert vp(0.0) is None  # starts the thread; no frame yet
+        go.set()
+        for _ in range(500):
+            if vp.frame_index == 4:
+                break
+            time.sleep(0.01)
+        assert vp.frame_index == 4 and not vp.ended
+        last = now[0]
+        now[0] = last + 0.5 / 30
+        assert vp(0.2) == (320.0, 240.0)
+        now[0] = last + 3.0 / 30  # hung for three frame periods
+        assert vp(0.3) is None
+        hang.set()
+        for _ in range(500):
+            if vp.ended:
+                break
+            time.sleep(0.01)
+        assert vp.ended
+        now[0] = last + 0.5 / 30
+        assert vp(0.2) is None  # ended: no current image whatever the clock says
+    finally:
+        go.set()
+        hang.set()
+        vp.close()
+
+
+# ------------------------------------------------------------------------- 6. CLI closes video
+def test_track_cli_closes_its_video_source(monkeypatch, tmp_path, capsys):
+    """`hearsee track --video / --camera-device` releases the capture (and stops the live
+    camera's thread) when it returns, also when the audio input fails to open."""
+    import cv2
+
+    import hearsee.stream.video as video
+    from hearsee.audio.signals import write_recording
+    from hearsee.cli import main
+    from hearsee.vision.camera import Camera, save_camera
+
+    arr = MicArray.from_preset("three-mic")
+    y = simulate_moving_free_field(
+        0.05 * np.random.default_rng(0).standard_normal(FS // 2), FS, arr,
+        linear_trajectory([1.2, -0.5, 0.1], [0, 0.8, 0], 0.5), snr_db=25, rng=1)
+    write_recording(tmp_path / "rec.wav", y, FS)
+    save_camera(Camera.from_fov(70.0, 640, 480), tmp_path / "cam.yaml")
+    vid = tmp_path / "blank.avi"
+    w = cv2.VideoWriter(str(vid), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (160, 120))
+    for _ in range(6):
+        w.write(np.full((120, 160, 3), 90, np.uint8))
+    w.release()
+
+    real = cv2.VideoCapture
+    opened, released = [], []
+
+    class CountingCap:
+        def __init__(self, src):
+            self._c = None if isinstance(src, int) else real(src)
+            opened.append(src)
+
+        def isOpened(self):
+            return True if self._c is None else self._c.isOpened()
+
+        def get(self, p):
+            return 30.0 if self._c is None else self._c.get(p)
+
+        def read(self):
+            if self._c is not None:
+                return self._c.read()
+            time.sleep(0.002)
+            return True, np.full((60, 80, 3), 90, np.uint8)
+
+        def release(self):
+            released.append(1)
+            if self._c is not None:
+                self._c.release()
+
+    monkeypatch.setattr(cv2, "VideoCapture", CountingCap)
+    monkeypatch.setattr(video, "detect_source_point", lambda img, det: None)
+    cam = ["--camera", str(tmp_path / "cam.yaml")]
+    for extra in (["--video", str(vid)], ["--camera-device", "0"]):
+        assert main(["track", str(tmp_path / "rec.wav"), "--array", "three-mic", *cam,
+                     *extra]) == 0
+        assert len(released) == len(opened)
+        assert not [t for t in threading.enumerate() if t.name == "hearsee-camera"]
+    # the microphone cannot be opened after the camera was: the camera is still closed
+    sd = _fake_portaudio([])
+    sd.query_devices = lambda device=None, kind=None: (_ for _ in ()).throw(ValueError("none"))
+    monkeypatch.setitem(sys.modules, "sounddevice", sd)
+    n = len(opened)
+    assert main(["track", "--device", "usb", "--array", "three-mic", *cam,
+                 "--camera-device", "0"]) == 2
+    assert len(opened) == n + 1 and len(released) == len(opened)
+    capsys.readouterr()
