@@ -529,3 +529,92 @@ def test_source_rate_must_match_the_robot_file(tmp_path):
     cfg = robot_config_from_dict({"audio": {"fs": 16000}}, "r.yaml", tmp_path)
     with pytest.raises(AudioInputError, match=r"audio\.fs: the source delivers 8000 Hz"):
         run_robot(cfg, audio_source=ArraySource(np.zeros((3, 800)), 8000, 400))
+
+
+def _texture_case(folder: Path, rig, n_frames: int = 3, duration_s: float = 1.0, **cameras):
+    """The same smooth random texture in both cameras of ``rig`` (no person, no disparity),
+    camera frames at 5 Hz and ``duration_s`` of a simulated voice."""
+    from hearsee.sim.audio import simulate_recording
+
+    w, h = rig.left.size
+    rng = np.random.default_rng(0)
+    img = cv2.GaussianBlur(rng.integers(0, 255, (h, w, 3), dtype=np.uint8), (0, 0), 2.0)
+    img = cv2.normalize(img, None, 0, 255, cv2.NORM_MINMAX)
+    write_video(folder / "left.avi", [img] * n_frames)
+    write_video(folder / "right.avi", [img] * n_frames)
+    save_rig(rig, folder / "rig.yaml")
+    cfg = load_robot_config(make_config(folder, {
+        "audio": {}, "output": {"report": "out"},
+        "cameras": {"left": "left.avi", "right": "right.avi", "calib": "rig.yaml",
+                    "rate_hz": 5, **cameras}}))
+    x, _ = simulate_recording("three-mic", [1.0, 1.5, 0.0], duration_s=duration_s, fs=FS,
+                              snr_db=25.0, seed=6)
+    return cfg, x, img
+
+
+@pytest.mark.parametrize("keep", [0, 1, 2])
+def test_keep_frames_bounds_the_overlays_kept(tmp_path, keep):
+    """keep_frames=0 keeps none (it used to crash at the first camera frame); otherwise the
+    first keep-1 overlays and the latest."""
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg, x, _ = _texture_case(tmp_path, default_rig(160, 120))
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
+                    keep_frames=keep)
+    cam_t = [r["t"] for r in res.log if r["camera_t"] is not None]
+    assert res.summary["camera_frames"] == len(cam_t) == 3  # all 3 video frames were used
+    assert [t for t, _ in res.frames] == (cam_t[:keep - 1] + cam_t[-1:] if keep else [])
+    assert {"first_overlay", "latest_overlay"} <= set(res.images)  # the report still has them
+
+
+def test_overlay_is_drawn_on_the_rectified_left_image(tmp_path):
+    """Detection boxes are in rectified left-image pixels, so the overlay must be the rectified
+    left image, not the raw one: with lens distortion the two differ almost everywhere."""
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import ArraySource
+    from hearsee.vision.camera import Camera, StereoRig
+    from hearsee.vision.stereo import rectify_pair
+
+    r = default_rig(160, 120)
+    dist = np.array([-0.3, 0.0, 0.0, 0.0])  # same barrel distortion on both cameras
+    rig = StereoRig(Camera(K=r.left.K, dist=dist, width=160, height=120, name="left"),
+                    Camera(K=r.right.K, dist=dist, width=160, height=120, name="right"),
+                    r.R, r.T)
+    assert not rig.is_rectified
+    cfg, x, img = _texture_case(tmp_path, rig, duration_s=0.5)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg))
+    assert res.frames and all(r["detections"] == [] for r in res.log)  # nothing drawn on top
+    # ground truth: the raw video frame rectified with the calibration, outside the run
+    rect_left = rectify_pair(img, img, load_robot_config(cfg.path).cameras.rig)[0]
+    assert np.mean(np.all(rect_left == img, axis=2)) < 0.1  # raw and rectified do differ
+    for _, overlay in res.frames:
+        np.testing.assert_array_equal(overlay, rect_left)
+    np.testing.assert_array_equal(res.images["first_overlay"], rect_left)
+
+
+def test_jsonl_may_not_be_a_file_the_report_writes(tmp_path):
+    """output.jsonl inside output.report must not be one of the report's own files (the
+    report would overwrite the JSON lines); the file names come from an actual report."""
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource
+
+    x, _ = simulate_recording("three-mic", [2.0, -1.0, 0.0], duration_s=0.5, fs=FS,
+                              snr_db=25.0, seed=4)
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "probe"}}, "r.yaml", tmp_path)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
+                    jsonl=tmp_path / "probe.jsonl")
+    write_run_report(cfg, res)
+    written = sorted(p.relative_to(cfg.output.report).as_posix()
+                     for p in cfg.output.report.rglob("*")
+                     if p.is_file() and p.suffix in (".jsonl", ".ndjson", ".json"))
+    assert "log.json" in written and "summary.json" in written
+    for name in written:
+        with pytest.raises(ConfigError, match=rf"^r\.yaml: output\.jsonl: .*{name}"):
+            robot_config_from_dict({"audio": {}, "output": {"report": "out",
+                                                            "jsonl": f"out/{name}"}},
+                                   "r.yaml", tmp_path)
+    for ok in ("out/updates.jsonl", "out/frames/log.json", "log.json", "other/summary.json"):
+        cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out", "jsonl": ok}},
+                                     "r.yaml", tmp_path)
+        assert cfg.output.jsonl == tmp_path / ok

@@ -55,3 +55,83 @@ def test_random_scenarios_are_valid_and_deterministic():
         assert again.to_dict() == random_scenario(seed).to_dict()
         d = np.linalg.norm(sc.people[0].path_m - sc.robot.position_m, axis=1)
         assert np.all(d > 1.0)
+        assert _min_distance(sc.people[0].path_m, sc.robot.position_m) >= 0.6  # never through it
+
+
+def _min_distance(path, p, n=20001):
+    """Ground truth: the closest a person walking ``path`` comes to ``p`` (dense sampling)."""
+    path = np.asarray(path, dtype=float)
+    seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
+    s_cum = np.concatenate([[0.0], np.cumsum(seg)])
+    s = np.linspace(0.0, s_cum[-1], n)
+    pts = np.stack([np.interp(s, s_cum, path[:, 0]), np.interp(s, s_cum, path[:, 1])], -1)
+    return float(np.min(np.linalg.norm(pts - p, axis=1)))
+
+
+@pytest.mark.parametrize("path", [
+    [[1.0, 3.0], [6.0, 3.0]],                # straight through the robot
+    [[1.0, 3.5], [6.0, 3.5]],                # 0.5 m beside it
+    [[1.0, 1.0], [1.0, 5.0], [6.0, 1.0]],    # the second segment crosses the robot
+    [[1.0, 3.7], [6.0, 3.7]],                # 0.7 m beside it: fine
+    [[1.0, 1.0], [1.0, 5.0], [6.0, 5.0]],    # around it
+])
+def test_path_segments_keep_clear_of_the_robot(path):
+    robot = np.array([3.5, 3.0])  # the default: the room centre
+    data = {"robot": {"position_m": robot.tolist()}, "people": [{"path_m": path}],
+            "objects": []}
+    d = _min_distance(path, robot)
+    assert np.min(np.linalg.norm(np.array(path) - robot, axis=1)) >= 0.6  # waypoints are clear
+    if d < 0.6:
+        with pytest.raises(ConfigError, match=r"scenario\.people\[0\]\.path_m: passes within "
+                                              r"0\.6 m of the robot"):
+            scenario_from_dict(data)
+    else:
+        np.testing.assert_array_equal(scenario_from_dict(data).people[0].path_m, path)
+
+
+def test_default_people_and_objects_must_fit_the_room_and_robot():
+    base = default_scenario()
+    speaker, mannequin = base.people[0].path_m, base.objects[0].position_m
+    # the defaults are used unchanged where they fit
+    sc = scenario_from_dict({})
+    assert sc.to_dict()["people"] == base.to_dict()["people"]
+    assert sc.to_dict()["objects"] == base.to_dict()["objects"]
+    # a 4 x 4 m room: the default speaker's path lies beyond the back wall
+    assert np.max(speaker[:, 1]) > 4.0 - 0.3
+    with pytest.raises(ConfigError, match=r"^scenario\.people: not given, and the default "
+                                          r"person 'speaker' does not fit .*path_m: .*wall.*"
+                                          r"; set scenario\.people$"):
+        scenario_from_dict({"room": {"size_m": [4, 4, 3]}})
+    # the robot moved next to the default speaker's path
+    robot = [2.0, 4.6]
+    assert _min_distance(speaker, robot) < 0.6
+    with pytest.raises(ConfigError, match=r"^scenario\.people: .*default person 'speaker'.*"
+                                          r"within 0\.6 m of the robot.*set scenario\.people$"):
+        scenario_from_dict({"robot": {"position_m": robot}})
+    # people given; the default mannequin is beyond the wall of a 4.5 m wide room ...
+    people = [{"path_m": [[1.0, 1.0], [2.0, 1.0]]}]
+    assert mannequin[1] > 4.5 - 0.3
+    with pytest.raises(ConfigError, match=r"^scenario\.objects: .*default object 'mannequin'.*"
+                                          r"wall.*set scenario\.objects"):
+        scenario_from_dict({"room": {"size_m": [7, 4.5, 3]}, "people": people})
+    sc = scenario_from_dict({"room": {"size_m": [7, 4.5, 3]}, "people": people, "objects": []})
+    assert sc.objects == ()
+    # ... or too close to a robot placed beside it
+    robot = [3.3, 3.9]
+    assert np.linalg.norm(mannequin - robot) < 0.6 and _min_distance(speaker, robot) >= 0.6
+    with pytest.raises(ConfigError, match=r"^scenario\.objects: .*default object 'mannequin'.*"
+                                          r"closer than 0\.6 m to the robot"):
+        scenario_from_dict({"robot": {"position_m": robot}})
+
+
+def test_documented_audio_keys_are_accepted():
+    import re
+
+    import hearsee.robot.scenario as module
+
+    line = next(ln for ln in module.__doc__.splitlines() if ln.strip().startswith("audio:"))
+    documented = dict(re.findall(r"(\w+):[^\[,}]*\[([^\]]*)\]", line.split("{", 1)[1]))
+    assert {"fs", "snr_db", "frame_ms"} <= set(documented)
+    for key, default in documented.items():
+        sc = scenario_from_dict({"audio": {key: yaml.safe_load(default)}})
+        assert sc.to_dict()["audio"][key] == pytest.approx(float(default))

@@ -91,6 +91,9 @@ _AUDIO = ("device", "fs", "channels", "array", "block_ms", "frame_ms", "method")
 _CAMERAS = ("left", "right", "stereo", "thermal", "calib", "rate_hz", "mount_m")
 _HEAD = ("pivot_m", "offset_m", "pan_limits_deg", "pose_deg", "driver")
 _OUTPUT = ("jsonl", "report")
+#: The files :func:`hearsee.robot.report.write_report` writes at the top of the report folder
+#: (besides plots/*.png and frames/*.png): no input and no output.jsonl may be one of them.
+_REPORT_FILES = ("index.html", "log.json", "summary.json")
 
 DeviceSpec = int | str
 
@@ -398,8 +401,13 @@ def _check_outputs(cfg: RobotConfig, where: str) -> None:
             raise ConfigError(f"{where}: {name}: {p} is an input file; choose another path")
     report = cfg.output.report.resolve()
     for p in ins:
-        if p.is_relative_to(report) and p.name in ("index.html", "log.json", "summary.json"):
+        if p.is_relative_to(report) and p.name in _REPORT_FILES:
             raise ConfigError(f"{where}: output.report: writing {report} would overwrite {p}")
+    jsonl = cfg.output.jsonl.resolve()
+    if jsonl.parent == report and jsonl.name in _REPORT_FILES:
+        raise ConfigError(f"{where}: output.jsonl: {cfg.output.jsonl} is the report's "
+                          f"{jsonl.name} (output.report {cfg.output.report} writes "
+                          f"{', '.join(_REPORT_FILES)}); choose another file name")
 
 
 def load_robot_config(path: str | Path) -> RobotConfig:
@@ -875,7 +883,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         after it is ready (default: only for the live device; otherwise in line, so that runs
         over files are deterministic).
     progress : called with the seconds of audio of each update.
-    keep_frames : overlays kept in memory for the exports (the first ones and the latest).
+    keep_frames : overlays kept in memory for the exports (the first ones and the latest; 0:
+        none).
     stop : a ``threading.Event`` that ends the run cleanly when set.
 
     Returns
@@ -986,10 +995,11 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             dets[k]["speaker"] = True
             if state["first_verified"] is None:
                 state["first_verified"] = t_cap
-        overlay = draw_detections(fr.left, det)
+        # the boxes are in rectified left-image pixels: draw them on the rectified left image
+        overlay = draw_detections(det.frame.left, det)
         if len(frames) < keep_frames:
             frames.append((t, overlay))
-        else:
+        elif keep_frames > 0:
             frames[-1] = (t, overlay)
         slot = "first" if state["cam_frames"] == 1 else "latest"
         images[f"{slot}_overlay"] = overlay
@@ -1016,17 +1026,20 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         bearing = None
         if u.azimuth_deg is not None:
             az, el = geo.direction_to_robot(u.azimuth_deg, u.elevation_deg)
-            raw = None
+            raw = meas = None
             if u.raw_azimuth_deg is not None:
-                raw = geo.direction_to_robot(u.raw_azimuth_deg, u.raw_elevation_deg)[0]
+                raw = meas = geo.direction_to_robot(u.raw_azimuth_deg, u.raw_elevation_deg)[0]
+            if u.itd_azimuth_deg is not None:  # the 3D track takes the ITD-filtered bearing,
+                # as the simulated loop does (raw_* is the frame's own, logged)
+                meas = geo.direction_to_robot(u.itd_azimuth_deg, u.itd_elevation_deg)[0]
             bearing = az
             audio = {"azimuth_deg": _r(az, 2), "elevation_deg": _r(el, 2),
                      "raw_azimuth_deg": _r(raw, 2), "confidence": _r(u.confidence, 3),
                      "measured": bool(u.measured)}
             if u.measured:
                 state["n_audio"] += 1
-                if raw is not None and track.initialized:
-                    bearing_update(track, geo, raw, BEARING_SIGMA_DEG)
+                if meas is not None and track.initialized:
+                    bearing_update(track, geo, meas, BEARING_SIGMA_DEG)
         dets: list[dict[str, Any]] = []
         camera_t = None
         if (cameras is not None and not state["cam_ended"] and pending[0] is None

@@ -11,7 +11,7 @@ Schema (defaults in brackets)::
     name: str                      [default]
     seed: int                      [0]
     duration_s: float              [6.0]    simulated time
-    audio: {fs: int [16000], snr_db: float [20], frame_ms: float [64], signal_level_db: [0]}
+    audio: {fs: int [16000], snr_db: float [20], frame_ms: float [64]}
     room: {size_m: [L, W, H] [7, 6, 3], rt60_s: float [0.3]}
     robot:
       position_m: [x, y]           [room centre]    base position on the floor
@@ -28,11 +28,17 @@ Schema (defaults in brackets)::
          facing: toward-robot|path [toward-robot]}
     objects:                       [a mannequin]
       - {kind: mannequin|poster|coat, position_m: [x, y], yaw_deg [0], height_m [1.75]}
+
+Every waypoint and object keeps ``WALL_CLEARANCE_M`` from the walls, and every path (each
+segment between waypoints) and object keeps ``ROBOT_CLEARANCE_M`` from the robot base. The
+default speaker and mannequin (those of :func:`default_scenario`) are checked the same way
+when ``people`` or ``objects`` is left out: with another room or robot position they may not
+fit, and the error says which key to set.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -189,6 +195,93 @@ def _inside(xy: np.ndarray, room: np.ndarray, where: str) -> None:
         )
 
 
+def _path_distance(path: np.ndarray, p: np.ndarray) -> float:
+    """Smallest distance (m) from point ``p`` to the polyline ``path`` ((k, 2) waypoints; one
+    waypoint: the distance to it)."""
+    if len(path) == 1:
+        return float(np.linalg.norm(path[0] - p))
+    a, b = path[:-1], path[1:]
+    ab = b - a
+    L2 = np.einsum("ij,ij->i", ab, ab)
+    u = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
+    return float(np.min(np.linalg.norm(a + u[:, None] * ab - p, axis=1)))
+
+
+def _parse_person(p: Any, k: int, pw: str, size: np.ndarray, robot_xy: np.ndarray,
+                  duration: float) -> PersonSpec:
+    if not isinstance(p, Mapping):
+        raise ConfigError(f"{pw}: expected a mapping")
+    check_keys(p, ("name", "path_m", "height_m", "voice", "speaking", "facing"), pw)
+    if "path_m" not in p:
+        raise ConfigError(f"{pw}: missing required key 'path_m'")
+    path = _vec(p["path_m"], None, f"{pw}.path_m")
+    if path.ndim == 1 and path.shape == (2,):
+        path = path[None, :]
+    if path.ndim != 2 or path.shape[1] != 2 or len(path) == 0:
+        raise ConfigError(f"{pw}.path_m: expected a list of [x, y] waypoints")
+    for w in path:
+        _inside(w, size, f"{pw}.path_m")
+    d = _path_distance(path, robot_xy)
+    if d < ROBOT_CLEARANCE_M:
+        raise ConfigError(f"{pw}.path_m: passes within {ROBOT_CLEARANCE_M} m of the robot "
+                          f"at {np.round(robot_xy, 3).tolist()} (closest {d:.2f} m)")
+    voice = p.get("voice", "female")
+    if voice not in VOICES:
+        raise ConfigError(f"{pw}.voice: expected one of {VOICES}, got {voice!r}")
+    speaking = p.get("speaking", [[0.0, duration]])
+    try:
+        spk = tuple((float(a), float(b)) for a, b in speaking)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{pw}.speaking: expected [[t0, t1], ...] in seconds") from None
+    if any(not (0 <= a < b) for a, b in spk):
+        raise ConfigError(f"{pw}.speaking: each interval needs 0 <= t0 < t1")
+    facing = p.get("facing", "toward-robot")
+    if facing not in ("toward-robot", "path"):
+        raise ConfigError(f"{pw}.facing: expected 'toward-robot' or 'path'")
+    return PersonSpec(name=str(p.get("name", f"person{k}")), path_m=path,
+                      height_m=number(p, "height_m", 1.72, pw, 1.0, 2.2), voice=voice,
+                      speaking=spk, facing=facing)
+
+
+def _parse_object(o: Any, ow: str, size: np.ndarray, robot_xy: np.ndarray) -> ObjectSpec:
+    if not isinstance(o, Mapping):
+        raise ConfigError(f"{ow}: expected a mapping")
+    check_keys(o, ("kind", "position_m", "yaw_deg", "height_m"), ow)
+    kind = o.get("kind")
+    if kind not in OBJECT_KINDS:
+        raise ConfigError(f"{ow}.kind: expected one of {OBJECT_KINDS}, got {kind!r}")
+    if "position_m" not in o:
+        raise ConfigError(f"{ow}: missing required key 'position_m'")
+    pos = _vec(o["position_m"], 2, f"{ow}.position_m")
+    _inside(pos, size, f"{ow}.position_m")
+    if np.linalg.norm(pos - robot_xy) < ROBOT_CLEARANCE_M:
+        raise ConfigError(f"{ow}.position_m: closer than {ROBOT_CLEARANCE_M} m to the robot "
+                          f"at {np.round(robot_xy, 3).tolist()}")
+    return ObjectSpec(kind=kind, position_m=pos,
+                      yaw_deg=number(o, "yaw_deg", 0.0, ow, -360, 360),
+                      height_m=number(o, "height_m", 1.75, ow, 0.5, 2.2))
+
+
+def _default_entries(key: str, noun: str, entries: list[dict[str, Any]], where: str,
+                     parse: Callable[[Any, int, str], Any]) -> tuple[Any, ...]:
+    """Parse the default ``people`` / ``objects`` with the checks of user entries; when one
+    does not fit this room or robot position, say so and which key to set."""
+    out = []
+    for k, e in enumerate(entries):
+        label = f"{where}.{key}[{k}]"
+        try:
+            out.append(parse(e, k, label))
+        except ConfigError as exc:
+            msg = str(exc)
+            detail = msg[len(label):].lstrip(".: ") if msg.startswith(label) else msg
+            what = e.get("name") or e.get("kind")
+            raise ConfigError(
+                f"{where}.{key}: not given, and the default {noun} {what!r} does not fit this "
+                f"scenario ({detail}); set {where}.{key}"
+                + (" (an empty list for none)" if key == "objects" else "")) from None
+    return tuple(out)
+
+
 def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scenario:
     """Validate a scenario mapping (see module docstring) and build a :class:`Scenario`."""
     check_keys(data, ("name", "seed", "duration_s", "audio", "room", "robot", "people", "objects"),
@@ -251,74 +344,29 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scen
         thermal_hfov_deg=number(thermal, "hfov_deg", 72.0, f"{rw}.thermal", 10.0, 150.0),
     )
 
+    defaults = base.to_dict()
+
+    def person(p: Any, k: int, pw: str) -> PersonSpec:
+        return _parse_person(p, k, pw, size, robot_xy, duration)
+
+    def obj(o: Any, k: int, ow: str) -> ObjectSpec:
+        return _parse_object(o, ow, size, robot_xy)
+
     people_raw = data.get("people", None)
     if people_raw is None:
-        people = base.people
+        people = _default_entries("people", "person", defaults["people"], where, person)
     else:
         if not isinstance(people_raw, list) or not people_raw:
             raise ConfigError(f"{where}.people: expected a non-empty list")
-        plist = []
-        for k, p in enumerate(people_raw):
-            pw = f"{where}.people[{k}]"
-            if not isinstance(p, Mapping):
-                raise ConfigError(f"{pw}: expected a mapping")
-            check_keys(p, ("name", "path_m", "height_m", "voice", "speaking", "facing"), pw)
-            if "path_m" not in p:
-                raise ConfigError(f"{pw}: missing required key 'path_m'")
-            path = _vec(p["path_m"], None, f"{pw}.path_m")
-            if path.ndim == 1 and path.shape == (2,):
-                path = path[None, :]
-            if path.ndim != 2 or path.shape[1] != 2:
-                raise ConfigError(f"{pw}.path_m: expected a list of [x, y] waypoints")
-            for w in path:
-                _inside(w, size, f"{pw}.path_m")
-            if np.min(np.linalg.norm(path - robot_xy, axis=1)) < ROBOT_CLEARANCE_M:
-                raise ConfigError(f"{pw}.path_m: passes within {ROBOT_CLEARANCE_M} m of the robot")
-            voice = p.get("voice", "female")
-            if voice not in VOICES:
-                raise ConfigError(f"{pw}.voice: expected one of {VOICES}, got {voice!r}")
-            speaking = p.get("speaking", [[0.0, duration]])
-            try:
-                spk = tuple((float(a), float(b)) for a, b in speaking)
-            except (TypeError, ValueError):
-                raise ConfigError(f"{pw}.speaking: expected [[t0, t1], ...] in seconds") from None
-            if any(not (0 <= a < b) for a, b in spk):
-                raise ConfigError(f"{pw}.speaking: each interval needs 0 <= t0 < t1")
-            facing = p.get("facing", "toward-robot")
-            if facing not in ("toward-robot", "path"):
-                raise ConfigError(f"{pw}.facing: expected 'toward-robot' or 'path'")
-            plist.append(PersonSpec(
-                name=str(p.get("name", f"person{k}")), path_m=path,
-                height_m=number(p, "height_m", 1.72, pw, 1.0, 2.2), voice=voice,
-                speaking=spk, facing=facing))
-        people = tuple(plist)
+        people = tuple(person(p, k, f"{where}.people[{k}]") for k, p in enumerate(people_raw))
 
     objects_raw = data.get("objects", None)
     if objects_raw is None:
-        objects = base.objects
+        objects = _default_entries("objects", "object", defaults["objects"], where, obj)
     else:
         if not isinstance(objects_raw, list):
             raise ConfigError(f"{where}.objects: expected a list")
-        olist = []
-        for k, o in enumerate(objects_raw):
-            ow = f"{where}.objects[{k}]"
-            if not isinstance(o, Mapping):
-                raise ConfigError(f"{ow}: expected a mapping")
-            check_keys(o, ("kind", "position_m", "yaw_deg", "height_m"), ow)
-            kind = o.get("kind")
-            if kind not in OBJECT_KINDS:
-                raise ConfigError(f"{ow}.kind: expected one of {OBJECT_KINDS}, got {kind!r}")
-            if "position_m" not in o:
-                raise ConfigError(f"{ow}: missing required key 'position_m'")
-            pos = _vec(o["position_m"], 2, f"{ow}.position_m")
-            _inside(pos, size, f"{ow}.position_m")
-            if np.linalg.norm(pos - robot_xy) < ROBOT_CLEARANCE_M:
-                raise ConfigError(
-                    f"{ow}.position_m: closer than {ROBOT_CLEARANCE_M} m to the robot")
-            olist.append(ObjectSpec(kind=kind, position_m=pos,
-                                    yaw_deg=number(o, "yaw_deg", 0.0, ow, -360, 360),
-                                    height_m=number(o, "height_m", 1.75, ow, 0.5, 2.2)))
-        objects = tuple(olist)
+        objects = tuple(obj(o, k, f"{where}.objects[{k}]") for k, o in enumerate(objects_raw))
 
     name = data.get("name", "custom")
     seed = number(data, "seed", 0, where, 0, 2**32 - 1, integer=True)
@@ -354,8 +402,9 @@ def default_scenario() -> Scenario:
 
 
 def random_scenario(seed: int, duration_s: float = 6.0) -> Scenario:
-    """A random scenario for ``hearsee eval``: one speaker walking 0.2-0.8 m/s at 1.2-4 m from the
-    robot in any direction, 0-2 human-like objects, RT60 0.2-0.5 s, SNR 10-25 dB."""
+    """A random scenario for ``hearsee eval``: one speaker walking 0.2-0.8 m/s in any direction
+    from 1.5-3.5 m to 1.2-4 m from the robot, never passing within ``ROBOT_CLEARANCE_M`` of it,
+    0-2 human-like objects, RT60 0.2-0.5 s, SNR 10-25 dB."""
     rng = np.random.default_rng(seed)
     base = default_scenario()
     room = np.array([rng.uniform(6, 9), rng.uniform(5, 8), rng.uniform(2.6, 3.2)])
@@ -375,12 +424,19 @@ def random_scenario(seed: int, duration_s: float = 6.0) -> Scenario:
                 return p
         raise ConfigError(f"random scenario {seed}: could not place an object")
 
-    start = free_point(1.5, 3.5, [])
-    speed = rng.uniform(0.2, 0.8)
-    for _ in range(1000):
-        heading = rng.uniform(-np.pi, np.pi)
-        end = start + speed * duration * np.array([np.cos(heading), np.sin(heading)])
-        if inside(end) and 1.2 < np.linalg.norm(end - robot_xy) < 4.0:
+    def walk(start: np.ndarray, speed: float) -> np.ndarray | None:
+        for _ in range(1000):
+            heading = rng.uniform(-np.pi, np.pi)
+            end = start + speed * duration * np.array([np.cos(heading), np.sin(heading)])
+            if (inside(end) and 1.2 < np.linalg.norm(end - robot_xy) < 4.0
+                    and _path_distance(np.stack([start, end]), robot_xy) >= ROBOT_CLEARANCE_M):
+                return end
+        return None
+
+    for _ in range(20):  # another start and speed when no direction fits
+        start = free_point(1.5, 3.5, [])
+        end = walk(start, rng.uniform(0.2, 0.8))
+        if end is not None:
             break
     else:
         end = start
