@@ -104,3 +104,57 @@ def test_associate_picks_the_nearest_person_inside_the_gate():
     assert associate(people, bearings, kf, 0.0) == 1
     far = [p + [0.0, 0.4 + TRACK_GATE_M + 0.1, 0.0] for p in people]
     assert associate(far, bearings, kf, 90.0) is None
+
+
+def test_frame_pan_attributes_frames_to_the_pan_they_were_heard_at():
+    """A chunk starting at sample a is rendered at the new pan (after a crossfade of
+    CROSSFADE_S from the old one): frames ending before a were heard at the old pan, frames
+    starting after the crossfade at the new one, the rest mix both. (Every frame used to be
+    rotated by the new pan: bearings 20-27 deg off while the head turned.)"""
+    from hearsee.robot.pipeline import CROSSFADE_S, _frame_pan
+
+    fs, L, a = 16000, 1024, 3200
+    nx = int(round(CROSSFADE_S * fs))
+    centre = lambda start: (start + L / 2) / fs  # noqa: E731
+    assert _frame_pan(centre(a - L), L, fs, a, 24.0, 48.0) == 24.0
+    assert _frame_pan(centre(a + nx), L, fs, a, 24.0, 48.0) == 48.0
+    for start in (a - L + 1, a - L // 2, a, a + nx - 1):
+        assert _frame_pan(centre(start), L, fs, a, 24.0, 48.0) is None
+        assert _frame_pan(centre(start), L, fs, a, 30.0, 30.0) == 30.0  # no turn: all frames
+
+
+def test_truth_velocity_and_facing_along_the_path():
+    """Ground truth of a person walking a straight line at constant speed: the velocity is the
+    same at the scenario's last instant (the central difference was clipped at the end but
+    still divided by the full interval: half the speed); ``facing: path`` faces along the walk
+    (it was accepted and ignored), ``toward-robot`` faces the robot."""
+    from hearsee.robot.pipeline import _facing_xy, _person_state, _person_velocity
+
+    spec = {**SHORT, "people": [{"path_m": [[4.9, 4.3], [4.9, 5.5]], "facing": "path"},
+                                {"path_m": [[5.5, 2.0]]}]}
+    sc = scenario_from_dict(spec)
+    v = np.array([0.0, 1.2 / sc.duration_s])
+    for t in (0.0, 1.0, sc.duration_s):
+        np.testing.assert_allclose(_person_velocity(sc, 0, t), v, atol=1e-12)
+        np.testing.assert_allclose(_person_state(sc, t)["velocity"][:2], v, atol=1e-12)
+        np.testing.assert_allclose(_facing_xy(sc, 0, t), [0.0, 1.0], atol=1e-12)
+    to_robot = sc.robot.position_m - np.array([5.5, 2.0])
+    np.testing.assert_allclose(_facing_xy(sc, 1, 1.0), to_robot / np.linalg.norm(to_robot))
+    # the mouth is 8 cm ahead of the torso along the walk
+    st = _person_state(sc, 1.0)
+    np.testing.assert_allclose(st["mouth"][:2] - st["torso"][:2], [0.0, 0.08], atol=1e-12)
+
+
+def test_rendered_people_face_the_robot_or_along_their_path():
+    from hearsee.robot.pipeline import _Body, _entities
+
+    spec = {**SHORT, "people": [{"path_m": [[4.9, 4.3], [4.9, 5.5]], "facing": "path"},
+                                {"path_m": [[5.5, 2.0]]}]}
+    sc = scenario_from_dict(spec)
+    body = _Body(sc, sc.robot.array)
+    walker, stander = _entities(sc, body, 1.0)[:2]
+    # frame S: x = -(room y - pivot y), z = room x - pivot x; a renderer yaw faces the
+    # direction (-sin yaw, -cos yaw) in (x, z) (0: toward a camera at the origin); walking
+    # along room +y is S -x, i.e. yaw 90
+    assert stander.yaw_deg == pytest.approx(np.degrees(np.arctan2(stander.x, stander.z)))
+    assert walker.yaw_deg == pytest.approx(90.0)

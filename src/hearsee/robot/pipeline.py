@@ -136,15 +136,32 @@ class _Body:
 
 
 # ------------------------------------------------------------------------------ world truth
+def _person_velocity(sc: Scenario, k: int, t: float) -> NDArray:
+    """Floor velocity (room frame, m/s) of person k at time t: central difference over
+    +-50 ms, one-sided at the scenario's ends."""
+    t0, t1 = max(t - 0.05, 0.0), min(t + 0.05, sc.duration_s)
+    return (sc.person_position(k, t1) - sc.person_position(k, t0)) / (t1 - t0)
+
+
+def _facing_xy(sc: Scenario, k: int, t: float) -> NDArray:
+    """Unit floor direction (room frame) person k faces at time t: toward the robot, or with
+    ``facing: path`` along the walk (toward the robot while standing, < 5 cm/s)."""
+    xy = sc.person_position(k, t)
+    to_robot = sc.robot.position_m - xy
+    toward = to_robot / max(np.linalg.norm(to_robot), 1e-9)
+    if sc.people[k].facing != "path":
+        return toward
+    v = _person_velocity(sc, k, t)
+    speed = float(np.linalg.norm(v))
+    return v / speed if speed >= 0.05 else toward
+
+
 def _person_state(sc: Scenario, t: float) -> dict[str, NDArray]:
-    """Torso centre, mouth, velocity and facing yaw of the (first) person at time t."""
+    """Torso centre, mouth and velocity of the (first) person at time t (room frame)."""
     p = sc.people[0]
     xy = sc.person_position(0, t)
-    dt = 0.05
-    v_xy = (sc.person_position(0, t + dt) - sc.person_position(0, max(t - dt, 0.0))) / (
-        t + dt - max(t - dt, 0.0))
-    to_robot = sc.robot.position_m - xy
-    face = to_robot / max(np.linalg.norm(to_robot), 1e-9)
+    v_xy = _person_velocity(sc, 0, t)
+    face = _facing_xy(sc, 0, t)
     torso = np.array([xy[0], xy[1], TORSO_HEIGHT_FRACTION * p.height_m])
     mouth = np.array([*(xy + MOUTH_FORWARD_M * face), p.height_m - MOUTH_BELOW_TOP_M])
     return {"torso": torso, "mouth": mouth, "velocity": np.array([v_xy[0], v_xy[1], 0.0])}
@@ -229,7 +246,9 @@ def _entities(sc: Scenario, body: _Body, t: float) -> list[Any]:
     ents = []
     for k, p in enumerate(sc.people):
         x, z = to_s(sc.person_position(k, t))
-        ents.append(Entity("person", x, z, facing_robot_yaw(x, z), p.height_m))
+        f = _facing_xy(sc, k, t)  # room frame; in S: (x, z) = (-f_y, f_x); yaw 0 faces -z
+        ents.append(Entity("person", x, z, float(np.degrees(np.arctan2(f[1], -f[0]))),
+                           p.height_m))
     for o in sc.objects:
         x, z = to_s(o.position_m)
         ents.append(Entity(_OBJECT_KIND[o.kind], x, z, facing_robot_yaw(x, z) + o.yaw_deg,
@@ -296,6 +315,22 @@ def associate(positions: Sequence[NDArray], bearings_deg: Sequence[float],
     return int(np.argmin(d))
 
 
+def _frame_pan(t_centre_s: float, frame_len: int, fs: float, a: int, old_pan: float,
+               new_pan: float) -> float | None:
+    """The head pan (degrees) a frame centred at ``t_centre_s`` was heard at, when the chunk
+    starting at sample ``a`` was rendered at ``new_pan`` and the one before at ``old_pan``:
+    frames that end before ``a`` are the old pan's, frames that start after the chunk's
+    crossfade (:data:`CROSSFADE_S`) the new one's, and the frames in between mix both (None)."""
+    if new_pan == old_pan:
+        return new_pan
+    start = int(round(t_centre_s * fs - frame_len / 2))
+    if start + frame_len <= a:
+        return old_pan
+    if start >= a + int(round(CROSSFADE_S * fs)):
+        return new_pan
+    return None
+
+
 # ------------------------------------------------------------------------------ the loop
 def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
                  keep_images: bool = True) -> RunResult:
@@ -323,7 +358,10 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     S_from_room, spec0 = _scene_frame(sc, body)
     half_fov = float(np.degrees(np.arctan2(r.width / 2.0, r.focal_px)))
 
-    itd = ItdKalman(array.n_mics, q_std_s=2e-5, r_std_s=3e-5)
+    def new_itd_filter() -> ItdKalman:
+        return ItdKalman(array.n_mics, q_std_s=2e-5, r_std_s=3e-5)
+
+    itd, itd_pan = new_itd_filter(), 0.0  # (the head starts at pan 0)
     direction = DirectionKalman(sigma_meas_deg=5.0, sigma_accel_dps2=60.0)
     track = MotionKalman(sigma_meas_m=0.05, sigma_jerk=2.0)
     frame_len = int(round(sc.frame_ms / 1000 * sc.fs))
@@ -340,6 +378,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     last_visual_t = -np.inf
     n_steps = int(np.ceil(sc.duration_s / CONTROL_DT - 1e-9))
 
+    chunk_pan = pan  # the head pan the previous chunk was rendered at
     for k in range(n_steps):
         t1 = min((k + 1) * CONTROL_DT, sc.duration_s)
         a, b = audio.chunk(k, pan)
@@ -351,12 +390,17 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
         t_frames = lo / sc.fs + tf.t
         for i in np.flatnonzero(tf.valid & (t_frames > last_frame_t)):
             last_frame_t = float(t_frames[i])
+            frame_pan = _frame_pan(t_frames[i], frame_len, sc.fs, a, chunk_pan, pan)
+            if frame_pan is None:
+                continue  # heard partly at the old pan, partly at the new one
+            if frame_pan != itd_pan:  # the array-frame ITDs jump when the head turns
+                itd, itd_pan = new_itd_filter(), frame_pan
             if not itd.step(tf.tdoa_s[i]):
                 continue
             loc = localize_tdoa(itd.pair_tdoas(tf.pairs), array, tf.pairs)
             if loc.azimuth_deg is None:
                 continue
-            az_r = float(wrap_deg(loc.azimuth_deg + pan))
+            az_r = float(wrap_deg(loc.azimuth_deg + frame_pan))
             if direction.update(last_frame_t, (az_r, None)):
                 n_audio_updates += 1
                 az_meas.append(az_r)
@@ -418,6 +462,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             track.predict(t1)
 
         # ---- turn the head
+        chunk_pan = pan
         if phase == "listening" and n_audio_updates >= MIN_AUDIO_UPDATES:
             phase = "turning"
         if phase != "listening":
