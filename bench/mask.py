@@ -17,7 +17,8 @@ the same sensor-noise seed are recorded
   pair can only guess front/back (it returns the front candidate first).
 
 Front/back is "correct" unless the estimate is closer to the mirror image ``180 - az`` than to
-the true azimuth and more than 10 deg from the truth (a front/back confusion). Reported per
+the true azimuth and more than 10 deg from the truth (a front/back confusion); a trial without
+an estimate counts as a front/back error with a 180-deg azimuth error. Reported per
 signal (white noise, synthetic male and female voices), field and SNR: front/back correct rate,
 360-degree azimuth RMSE, median absolute error, mean front/back confidence, and for mask2 the
 RMSE of the sources more than 3 deg off the median plane (diagnostic: at 0 / 180 deg a
@@ -106,13 +107,18 @@ def margins(models: dict[str, MaskModel]) -> list[list]:
 
 
 def _stats(est: list, true: np.ndarray) -> tuple[float, float, float]:
+    """Front/back correct rate (%), RMSE and median absolute error (deg) over all trials; a
+    trial without an estimate counts as a front/back error and a 180-deg error (until
+    2026-11-24's seventh session such trials were dropped, which flattered the bare pair at
+    0 dB while ``n`` still said every trial counted)."""
     e = np.array(est, float)
     ok = np.isfinite(e)
-    if not ok.any():
-        return np.nan, np.nan, np.nan
-    err = np.abs(angdiff(e[ok], true[ok]))
-    return (100.0 * float(np.mean(fb_correct(e[ok], true[ok]))),
-            float(np.sqrt(np.mean(err**2))), float(np.median(err)))
+    err = np.full(len(e), 180.0)
+    err[ok] = np.abs(angdiff(e[ok], true[ok]))
+    fb = np.zeros(len(e), bool)
+    fb[ok] = fb_correct(e[ok], true[ok])
+    return (100.0 * float(np.mean(fb)), float(np.sqrt(np.mean(err**2))),
+            float(np.median(err)))
 
 
 def run(trials: int, snrs: list[float], duration: float, seed: int, mismatch: bool
