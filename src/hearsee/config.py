@@ -61,6 +61,8 @@ def to_plain(obj: Any, *, json: bool = False) -> Any:
     if isinstance(obj, float | np.floating):
         f = float(obj)
         return None if json and not math.isfinite(f) else f
+    if isinstance(obj, np.str_):
+        return str(obj)
     return obj
 
 
@@ -116,6 +118,8 @@ def number(d: Mapping[str, Any], key: str, default: float, where: str, lo: float
     ``where.key`` otherwise. With ``integer=True`` the value must be whole and an int is
     returned."""
     v = d.get(key, default)
+    if isinstance(v, np.integer | np.floating) and not isinstance(v, np.bool_):
+        v = v.item()  # numpy scalars (e.g. from arrays) as their Python number
     if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
         raise ConfigError(f"{where}.{key}: expected a number, got {v!r}")
     if integer and int(v) != v:

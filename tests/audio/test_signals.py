@@ -215,3 +215,11 @@ def test_load_wav_and_make_signal_bad_files(tmp_path):
     sf.write(empty, np.zeros((0, 1)), FS)
     with pytest.raises(AudioInputError, match="no samples"):
         load_wav(empty)
+
+
+def test_resampling_an_odd_rate_ratio_says_what_to_do():
+    from hearsee.audio.signals import resample
+
+    with pytest.raises(AudioInputError, match="common rate"):
+        resample(np.zeros((1, 4799)), 47999, 16000)
+    assert resample(np.zeros((1, 4800)), 48000, 16000).shape == (1, 1600)

@@ -343,3 +343,10 @@ def test_band_too_narrow_for_the_noise_floor_is_a_config_error():
         estimate_tdoas(x, fs, two, band_hz=(1000.0, 1020.0))
     tf = estimate_tdoas(x, fs, two, band_hz=(1000.0, 1100.0))
     assert tf.summary_tdoa_s[0] * fs == pytest.approx(3.0, abs=0.1)
+
+
+def test_gcc_refuses_a_negative_lag_bound():
+    s = white_noise(0.25, 8000, rng=3)
+    with pytest.raises(ConfigError, match="max_tau_s"):
+        gcc(s, s, 8000.0, max_tau_s=-1e-3)
+    assert gcc(np.roll(s, 2), s, 8000.0, max_tau_s=1e-3).tdoa_s == pytest.approx(2 / 8000, abs=1e-6)

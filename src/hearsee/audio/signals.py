@@ -220,8 +220,8 @@ def _resample(x: ArrayLike, fs_in: float, fs_out: float) -> NDArray:
     ratio = Fraction(float(fs_out) / float(fs_in)).limit_denominator(1000)
     if ratio.numerator == 0 or abs(float(ratio) * fs_in - fs_out) > 1e-6 * fs_out:
         raise AudioInputError(
-            f"cannot resample {fs_in} Hz to {fs_out} Hz with a rational factor; "
-            "choose integer sample rates"
+            f"cannot resample {fs_in} Hz to {fs_out} Hz: the ratio needs a polyphase filter "
+            "of more than 1000 phases; resample to a common rate (e.g. 16000 or 48000 Hz) first"
         )
     return resample_poly(x, ratio.numerator, ratio.denominator, axis=-1)
 

@@ -403,6 +403,8 @@ def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
         )
     _check_refine(refine)
     method = normalize_method(method)
+    if max_tau_s is not None and not (np.isfinite(max_tau_s) and max_tau_s >= 0):
+        raise ConfigError(f"max_tau_s must be a non-negative number of seconds, got {max_tau_s}")
     n = len(a)
     nfft = sfft.next_fast_len(2 * n, real=True)
     Xa = sfft.rfft(a, nfft)
