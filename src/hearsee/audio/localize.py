@@ -464,24 +464,28 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray,
         return _rms(_inplane_tdoa(np.array([th]), np.array([rho]), geo.basis, d, I, J, c)[0]
                     - tau)
 
+    def fit(th0: float, rho0: float) -> tuple[float, float]:
+        return _fit_in_plane(tau, geo.basis, d, I, J, c, tol_s, th0, rho0, max_inverse_range,
+                             fit_range, n_iter)
+
     if fit_range:
         # Gauss-Newton from a mid range; where it stops on a range bound short of an exact fit,
         # again from other ranges (the best fit wins)
-        th, rho = _fit_in_plane(tau, geo.basis, d, I, J, c, tol_s, th, min(0.5, max_inverse_range),
-                                max_inverse_range, True, n_iter)
+        th, rho = fit(th, min(0.5, max_inverse_range))
+        resid = residual(th, rho)
         for rho0 in (0.25, 1.0, 2.0):
-            if residual(th, rho) <= 1e-3 * tol_s or rho0 > max_inverse_range:
+            if resid <= 1e-3 * tol_s:
+                break
+            if rho0 > max_inverse_range:
                 continue
-            cand = _fit_in_plane(tau, geo.basis, d, I, J, c, tol_s, th, rho0, max_inverse_range,
-                                 True, n_iter)
-            if residual(*cand) < residual(th, rho):
-                th, rho = cand
+            cand = fit(th, rho0)
+            r = residual(*cand)
+            if r < resid:
+                (th, rho), resid = cand, r
     else:
-        rho = 1.0 / float(range_m)
-        th, rho = _fit_in_plane(tau, geo.basis, d, I, J, c, tol_s, th, rho, max_inverse_range,
-                                False, n_iter)
+        th, rho = fit(th, 1.0 / float(range_m))
+        resid = residual(th, rho)
     u = np.cos(th) * geo.basis[0] + np.sin(th) * geo.basis[1]
-    resid = residual(th, rho)
     feasible = resid <= tol_s
     az, el = _azel(u)
     pos = geo.centre + u / rho if rho > 0 else None
