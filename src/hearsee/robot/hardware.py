@@ -57,7 +57,7 @@ import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -65,6 +65,9 @@ from numpy.typing import NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.config import as_float_array, check_keys, load_yaml, number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, HearseeError
+
+if TYPE_CHECKING:  # imported when run_robot runs (the simulated loop's heavier imports)
+    from hearsee.robot.pipeline import RunResult
 
 __all__ = [
     "AudioConfig",
@@ -790,19 +793,6 @@ class PrintHeadDriver:
 # ---------------------------------------------------------------------------------------------
 # The live loop
 # ---------------------------------------------------------------------------------------------
-@dataclass
-class LiveResult:
-    """What :func:`run_robot` returns: the ``log`` (one record per update, as written to the
-    JSON lines file), the ``summary``, report ``images``/``captions`` and overlay ``frames``
-    ``(t, BGR)`` for the Rerun/MCAP exports."""
-
-    log: list[dict[str, Any]]
-    summary: dict[str, Any]
-    images: dict[str, NDArray] = field(default_factory=dict)
-    captions: dict[str, str] = field(default_factory=dict)
-    frames: list[tuple[float, NDArray]] = field(default_factory=list)
-
-
 class _Head:
     """Sensor geometry on the head at a fixed pose (robot frame, metres)."""
 
@@ -847,7 +837,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
               cameras: Cameras | None = None, head: PrintHeadDriver | None = None,
               jsonl: str | Path | None = None, threaded: bool | None = None,
               progress: Callable[[float], None] | None = None, keep_frames: int = 100,
-              stop: Any = None, async_vision: bool | None = None) -> LiveResult:
+              stop: Any = None, async_vision: bool | None = None) -> RunResult:
     """Run the robot's perception live until the audio ends, ``duration_s`` or Ctrl-C.
 
     The same perception as the simulated pipeline (:mod:`hearsee.robot.pipeline`) where it
@@ -889,7 +879,9 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
 
     Returns
     -------
-    LiveResult; ``summary["status"]`` is ``"ok"`` (source ended or duration reached),
+    :class:`~hearsee.robot.pipeline.RunResult` (as the simulated loop's; ``log`` holds one
+    record per update, as written to the JSON lines file); ``summary["status"]`` is ``"ok"``
+    (source ended or duration reached),
     ``"interrupted"`` (Ctrl-C) or ``"stalled"`` (the device stopped delivering audio).
     """
     import json
@@ -902,6 +894,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         BEARING_SIGMA_DEG,
         MIN_AUDIO_UPDATES,
         TRACK_TIMEOUT_S,
+        RunResult,
         associate,
         bearing_update,
         stereo_position_cov,
@@ -1108,7 +1101,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             cameras.close()
     summary = _live_summary(log, pipeline.stats, source.audio_s, status, state, cameras, head,
                             time.perf_counter() - t_start)
-    return LiveResult(log, summary, images, captions, frames)
+    return RunResult(log, summary, images, captions, frames)
 
 
 def _live_summary(log: list[dict[str, Any]], stats: Any, audio_s: float, status: str,
@@ -1162,7 +1155,7 @@ def _live_summary(log: list[dict[str, Any]], stats: Any, audio_s: float, status:
     return out
 
 
-def write_run_report(cfg: RobotConfig, result: LiveResult, folder: str | Path | None = None
+def write_run_report(cfg: RobotConfig, result: RunResult, folder: str | Path | None = None
                      ) -> Path:
     """Write the report folder of a live run with :func:`hearsee.robot.report.write_report`;
     returns ``index.html``. The top view is drawn in the robot frame (robot at the origin,
