@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib
 import sys
+import warnings
 
 import typer
 
@@ -56,8 +57,24 @@ def main(argv: list[str] | None = None) -> int:
     With ``argv=None`` (the console script) it exits the process; with a list (tests, embedding)
     it returns the exit code instead. Usage errors print ``hearsee <command>: error: <message>
     (see 'hearsee <command> --help')``, hearsee errors ``hearsee: error: <message>``, each as
-    one line on stderr, and exit 2.
+    one line on stderr, and exit 2. Warnings (e.g. clipped audio) print ``hearsee: warning:
+    <message>`` on stderr and the command goes on.
     """
+    with warnings.catch_warnings():  # restores the caller's warning display afterwards
+        warnings.showwarning = _warning_line
+        return _main(argv)
+
+
+def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as one line on stderr, ``hearsee: warning: <message>`` (hearsee's own, e.g.
+    clipped audio) or ``hearsee: warning: <Category>: <message>`` (another library's), instead
+    of Python's two lines with the file, line number and source of the call."""
+    own = category.__module__.split(".")[0] == "hearsee"
+    print(f"hearsee: warning: {'' if own else category.__name__ + ': '}{message}",
+          file=sys.stderr if file is None else file)
+
+
+def _main(argv: list[str] | None) -> int:
     try:
         # non-standalone: click raises its errors here instead of printing its usage block,
         # and returns the code of a typer.Exit (e.g. `run` when the device stalls)
