@@ -116,6 +116,8 @@ ABLATIONS = {
     "no reverb_method (ML summary always)": {"reverb_method": None},
     "reverb_method=roth": {"reverb_method": "roth"},
     "onset_weight=0": {"onset_weight": 0.0},
+    "band_vad=False (broadband activity test only; before 2026-11-24's eighth session)": {
+        "band_vad": False},
     "joint='steered' (in-plane steered-sum maximum, 2 m)": {"joint": "steered",
                                                           "steer_range_m": PEER_NEAR_M},
     "no fallback": {"fallback": False},
