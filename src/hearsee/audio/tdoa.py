@@ -537,11 +537,15 @@ def frame_activity(x: NDArray, frame_len: int, hop: int, n_frames: int,
     source from noise; the confidence test decides). Digitally silent frames are always
     inactive.
     """
+    energy = _frame_energy(x, frame_len, hop, n_frames)
+    return energy, _energy_vad(energy, vad_db)[0]
+
+
+def _frame_energy(x: NDArray, frame_len: int, hop: int, n_frames: int) -> NDArray:
+    """Mean-square energy of each frame of ``x`` (n_ch, n), over all channels."""
     cs = np.concatenate([[0.0], np.cumsum(np.einsum("ij,ij->j", x, x), dtype=float)])
     start = np.arange(n_frames) * hop
-    energy = (cs[start + frame_len] - cs[start]) / (frame_len * x.shape[0])
-    energy = np.maximum(energy, 0.0)
-    return energy, _energy_vad(energy, vad_db)[0]
+    return np.maximum((cs[start + frame_len] - cs[start]) / (frame_len * x.shape[0]), 0.0)
 
 
 def _energy_vad(energy: NDArray, vad_db: float) -> tuple[NDArray, bool]:
@@ -1134,7 +1138,8 @@ def estimate_tdoas(
     bw = (band.nonzero()[0][-1] - band.nonzero()[0][0] + 1) * fs / nfft
     main_lobe = max(2, int(np.ceil(fs / bw)))
     win = _window(tuple(window) if isinstance(window, list) else window, frame_len)
-    energy, active = frame_activity(a32, frame_len, hop, n_frames, vad_db)
+    energy = _frame_energy(a32, frame_len, hop, n_frames)
+    active, decided = _energy_vad(energy, vad_db)  # frame_activity's decision
     frame_w = _onset_weights(energy, onset_weight)
     I = np.array([p[0] for p in prs])
     J = np.array([p[1] for p in prs])
@@ -1147,7 +1152,7 @@ def estimate_tdoas(
     band_bins = np.arange(k0, k1)
     nb = k1 - k0
     X_all = None  # the band spectra of every frame, when the activity test computed them
-    if band_vad and (k0 > 1 or k1 < n_bins - 1) and not _energy_vad(energy, vad_db)[1]:
+    if band_vad and (k0 > 1 or k1 < n_bins - 1) and not decided:
         active, X_all = _band_activity(frames, win, nfft, k0, k1, active, vad_db,
                                        max(int(chunk_frames), 1))
     noise_psd = _noise_spectrum(frames, active, win, nfft, k0, k1) if snr_weight else None
