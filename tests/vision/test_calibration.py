@@ -151,6 +151,41 @@ def test_thermal_extrinsics_survive_missing_and_outlier_views(synthetic, corners
         C.calibrate_thermal_extrinsics(rig, truth.thermal, lp, [None] * len(lp), obj)
 
 
+def test_thermal_extrinsics_honour_a_skewed_thermal_camera(synthetic):
+    # exact projections of board poses into the left camera and a thermal camera whose K has a
+    # skew of 8 px: the extrinsics must come back exactly (OpenCV's PnP ignores the skew)
+    truth, obj, _ = synthetic
+    K = truth.thermal.K.copy()
+    K[0, 1] = 8.0
+    thermal = Camera(K=K, dist=truth.thermal.dist, width=160, height=120, name="thermal")
+    rig = StereoRig(truth.left, truth.right, truth.R, truth.T, thermal, truth.R_thermal,
+                    truth.T_thermal)
+    rng = np.random.default_rng(11)
+    lp, tp = [], []
+    for _ in range(6):
+        Rb = cv2.Rodrigues(rng.uniform(-0.4, 0.4, 3))[0]
+        X = obj @ Rb.T + np.array([0.0, 0.0, rng.uniform(0.4, 0.5)]) - Rb @ obj.mean(axis=0)
+        lp.append(truth.left.project(X).astype(np.float32))
+        tp.append(thermal.project(X @ truth.R_thermal.T + truth.T_thermal))
+    te = C.calibrate_thermal_extrinsics(rig, thermal, lp, tp, obj)
+    assert len(te.used) == 6 and te.rms_px < 0.05
+    assert _rot_deg(te.R, truth.R_thermal) < 0.05
+    np.testing.assert_allclose(-te.R.T @ te.T, truth.thermal_center_m, atol=5e-4)
+
+
+def test_stereo_routines_refuse_a_skewed_camera(synthetic, corners):
+    truth, obj, _ = synthetic
+    lp, rp, _ = corners
+    K = truth.right.K.copy()
+    K[0, 1] = 3.0
+    right = Camera(K=K, dist=truth.right.dist, width=320, height=240, name="right")
+    rig = StereoRig(truth.left, right, truth.R, truth.T)
+    with pytest.raises(CalibrationError, match="skewed"):
+        rig.rectify()
+    with pytest.raises(CalibrationError, match="skewed"):
+        C.calibrate_stereo(lp, rp, obj, truth.left, right)
+
+
 def test_too_few_views_and_mismatch_raise(synthetic, corners):
     truth, obj, views = synthetic
     lp = corners[0][:2]

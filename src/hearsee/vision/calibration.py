@@ -286,6 +286,8 @@ def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDAr
         raise CalibrationError("need at least one view with the board in both cameras")
     if left.size != right.size:
         raise CalibrationError(f"left and right image sizes differ: {left.size} vs {right.size}")
+    for cam in (left, right):
+        cam.require_no_skew("stereo calibration")
     objs = _per_view(object_points, n)
     lp = [np.asarray(p, np.float32).reshape(-1, 1, 2) for p in left_points]
     rp = [np.asarray(p, np.float32).reshape(-1, 1, 2) for p in right_points]
@@ -355,14 +357,14 @@ class ThermalExtrinsics:
 
 
 def _board_pose(camera: Camera, obj: NDArray, img: NDArray) -> tuple[NDArray, NDArray]:
-    ok, rvec, tvec = cv2.solvePnP(obj.reshape(-1, 1, 3), np.asarray(img, np.float32)
-                                  .reshape(-1, 1, 2), camera.K, camera.dist,
+    # OpenCV's PnP ignores K's skew: solve with the skew removed from K and the pixels
+    K0, uv0 = camera._without_skew(np.asarray(img, np.float64).reshape(-1, 2))
+    uv0 = uv0.reshape(-1, 1, 2)
+    ok, rvec, tvec = cv2.solvePnP(obj.reshape(-1, 1, 3), uv0, K0, camera.dist,
                                   flags=cv2.SOLVEPNP_IPPE)
     if not ok:
         raise CalibrationError("solvePnP failed for a board view")
-    rvec, tvec = cv2.solvePnPRefineLM(obj.reshape(-1, 1, 3),
-                                      np.asarray(img, np.float32).reshape(-1, 1, 2),
-                                      camera.K, camera.dist, rvec, tvec)
+    rvec, tvec = cv2.solvePnPRefineLM(obj.reshape(-1, 1, 3), uv0, K0, camera.dist, rvec, tvec)
     return cv2.Rodrigues(rvec)[0], tvec.reshape(3)
 
 
@@ -441,7 +443,8 @@ def calibrate_thermal_extrinsics(rig: StereoRig, thermal: Camera,
     used = [v for v, k in zip(views, keep, strict=True) if k]
     X = np.concatenate([X_all[j] for j in range(len(views)) if keep[j]])
     uv = np.concatenate([np.asarray(thermal_points[v], np.float64).reshape(-1, 2) for v in used])
-    rvec, tvec = cv2.solvePnPRefineLM(X.reshape(-1, 1, 3), uv.reshape(-1, 1, 2), thermal.K,
+    K0, uv0 = thermal._without_skew(uv)
+    rvec, tvec = cv2.solvePnPRefineLM(X.reshape(-1, 1, 3), uv0.reshape(-1, 1, 2), K0,
                                       thermal.dist, cv2.Rodrigues(R0)[0], T0.reshape(3, 1).copy())
     R = cv2.Rodrigues(rvec)[0]
     T = tvec.reshape(3)

@@ -115,8 +115,9 @@ class Camera:
     ----------
     K : (3, 3) array
         Intrinsic matrix in pixels, ``[[fx, s, cx], [0, fy, cy], [0, 0, 1]]``; the skew ``s`` is
-        usually 0 (OpenCV calibrations never estimate it) but is honoured by :meth:`project`
-        and :meth:`normalized`.
+        usually 0 (OpenCV calibrations never estimate it) but is honoured by :meth:`project`,
+        :meth:`normalized` and the thermal extrinsic calibration; stereo rectification and
+        stereo calibration refuse it (:meth:`require_no_skew`: OpenCV would ignore it).
     dist : (k,) array
         Distortion coefficients in OpenCV order, k in {0, 4, 5, 8, 12, 14}.
     width, height : int
@@ -294,6 +295,15 @@ class Camera:
         crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-10)
         xy = cv2.undistortPointsIter(p0.reshape(-1, 1, 2), K0, self.dist, None, None, crit)
         return xy.reshape(-1, 2).astype(float)
+
+    def require_no_skew(self, what: str) -> None:
+        """CalibrationError when ``K[0, 1] != 0``: ``what`` (an OpenCV routine that ignores the
+        skew) would silently give wrong results."""
+        if self.K[0, 1] != 0:
+            label = f"camera {self.name!r}" if self.name else "a camera"
+            raise CalibrationError(
+                f"{what} does not support a skewed intrinsic matrix ({label} has K[0][1] = "
+                f"{self.K[0, 1]:g} px; OpenCV would ignore it); recalibrate without skew")
 
     def _without_skew(self, uv: NDArray) -> tuple[NDArray, NDArray]:
         """``(K0, uv0)``: K without its skew and the pixels ``(N, 2)`` that K0 gives for the
@@ -549,6 +559,8 @@ class StereoRig:
                           [0, 0, 1.0 / B, 0]], dtype=float)
             roi = (0, 0, self.left.width, self.left.height)
             return Rectification(np.eye(3), np.eye(3), P1, P2, Q, self.left.size, roi, roi)
+        for cam in (self.left, self.right):
+            cam.require_no_skew("stereo rectification")
         R1, R2, P1, P2, Q, roi1, roi2 = cv2.stereoRectify(
             self.left.K, self.left.dist, self.right.K, self.right.dist, self.left.size,
             self.R, self.T.reshape(3, 1), flags=cv2.CALIB_ZERO_DISPARITY, alpha=alpha,
