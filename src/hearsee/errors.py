@@ -42,3 +42,8 @@ class InputFileError(HearseeError, FileNotFoundError):
 
 class ClippingWarning(UserWarning):
     """The recording contains clipped samples; estimates may be biased."""
+
+
+class InconsistentMeasurementWarning(UserWarning):
+    """The measurements contradict each other (e.g. TDOAs of several head poses that no single
+    source explains); the estimate should not be trusted."""

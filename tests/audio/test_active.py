@@ -46,6 +46,24 @@ def test_three_poses_give_a_unique_3d_point():
     assert d["unique"] is True and len(d["position_m"]) == 3
 
 
+@pytest.mark.parametrize("pan_error_deg", [0.0, 30.0, -90.0])
+def test_contradicting_poses_are_flagged_inconsistent(pan_error_deg):
+    # exact TDOAs of a source seen from three poses; the solver is told one pose's pan
+    # angle wrong by pan_error_deg: a single source cannot explain all nine TDOAs then
+    src = np.array([1.2, 0.8, 0.5])
+    taus = true_tdoas(ARR, src, POSES3)
+    told = [POSES3[0], (POSES3[1][0] + pan_error_deg, POSES3[1][1]), POSES3[2]]
+    est = localize_multipose(taus, told, ARR, offset_m=OFF)
+    if pan_error_deg == 0.0:
+        assert est.consistent and est.residual_rms_s < 1e-6
+        np.testing.assert_allclose(est.position_m, src, atol=2e-3)
+    else:
+        assert not est.consistent and est.residual_rms_s > 30e-6
+    d = est.to_dict()
+    assert d["consistent"] is est.consistent
+    assert d["residual_rms_s"] == pytest.approx(est.residual_rms_s)
+
+
 def test_single_pose_reports_mirror_and_no_distance():
     src = np.array([1.0, 0.5, 0.7])
     est = localize_multipose(true_tdoas(ARR, src, [(0, 0)]), [(0, 0)], ARR, offset_m=OFF)
@@ -259,8 +277,10 @@ def test_localize3d_cli_round_trip(pose_manifest, capsys, method):
     assert [p.as_tuple() for p in m.poses] == [tuple(map(float, p)) for p in POSES3]
     np.testing.assert_allclose(m.truth["source_m"], src)
     assert main(["localize3d", str(man), *method]) == 0
-    doc = json.loads(capsys.readouterr().out)
-    assert doc["unique"] is True
+    out = capsys.readouterr()
+    doc = json.loads(out.out)
+    assert doc["unique"] is True and doc["consistent"] is True
+    assert "warning" not in out.err
     np.testing.assert_allclose(doc["position_m"], src, atol=0.1)
     assert doc["distance_m"] == pytest.approx(np.linalg.norm(src), rel=0.08)
     assert np.array(doc["covariance"]).shape == (3, 3)
@@ -292,6 +312,28 @@ def test_localize3d_bad_manifest(pose_manifest, tmp_path, capsys, edit, needle):
     assert main(["localize3d", str(bad)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and needle in err[0]
+
+
+def test_localize3d_warns_when_the_poses_contradict_the_captures(pose_manifest, tmp_path,
+                                                                 capsys):
+    import json
+
+    import yaml
+
+    from hearsee.cli import main
+
+    man, _files, src = pose_manifest
+    doc = yaml.safe_load(man.read_text())
+    for c in doc["captures"]:
+        c["file"] = str(man.parent / c["file"])
+    doc["captures"][1]["pan_deg"] = -doc["captures"][1]["pan_deg"]  # a sign slip
+    bad = tmp_path / "slip.yaml"
+    bad.write_text(yaml.safe_dump(doc))
+    assert main(["localize3d", str(bad)]) == 0
+    out = capsys.readouterr()
+    assert json.loads(out.out)["consistent"] is False
+    err = out.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("hearsee: warning:") and "pose" in err[0]
 
 
 def test_localize3d_missing_manifest(tmp_path, capsys):

@@ -52,6 +52,7 @@ pivot (``pivot_m``), the fixed point of the pan-tilt head.
 from __future__ import annotations
 
 import functools
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -61,7 +62,12 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
 from hearsee.audio.arrays import MicArray, load_array
-from hearsee.errors import AudioInputError, EstimationError, GeometryError
+from hearsee.errors import (
+    AudioInputError,
+    EstimationError,
+    GeometryError,
+    InconsistentMeasurementWarning,
+)
 from hearsee.geometry import (
     HeadPose,
     angle_between,
@@ -103,6 +109,14 @@ __all__ = [
 #: Default TDOA standard deviation (s): whole-capture GCC-PHAT summaries of 1-2 s of speech at
 #: 16 kHz measured 1-2 us rms at SNR 20 dB in RT60 0.3 s rooms, ~6 us at SNR 10 dB (anechoic).
 DEFAULT_TDOA_STD_S = 5e-6
+#: Largest root-mean-square TDOA residual (s) of a multi-pose solution still called consistent
+#: (:attr:`Position3D.consistent`): 6x :data:`DEFAULT_TDOA_STD_S`, half a sample at 16 kHz. In a
+#: study of 2-5 poses (three-mic on a pan-tilt head, synthetic voices 0.5-3 m away, anechoic and
+#: RT60 0.3 / 0.6 s, SNR 0-20 dB; 2026-11-24, seeds 5 and 6) the true-pose solutions had
+#: residuals of 2-13 us at 20 dB; those above 30 us were 0 dB captures in rooms, whose
+#: direction errors had a median of ~12 deg (2 deg below 10 us). One pose's pan angle told 20
+#: deg wrong gave 40-55 us at 20 dB, 5 deg 7-15 us (not flagged); a sign slip, ~300 us.
+MAX_RESIDUAL_RMS_S = 30e-6
 #: Distance (m) standing in for "infinitely far" in direction-only (far-field) solves.
 FAR_DISTANCE_M = 1000.0
 
@@ -137,6 +151,13 @@ class Position3D:
         Condition number of the (column-scaled) Jacobian at the solution.
     cost : float
         Robust cost of the best candidate (residuals in units of ``tdoa_std_s``).
+    residual_rms_s : float
+        Root-mean-square TDOA residual of the best candidate, seconds: how well one source
+        explains every pose's measurements.
+    consistent : bool
+        False when ``residual_rms_s`` exceeds the solver's ``max_residual_rms_s``: the
+        measurements contradict each other (wrong pose angles, swapped channels, two
+        sources, strong reflections), and the position should not be trusted.
     n_poses : int
         Number of poses (microphone sets) used.
     """
@@ -152,6 +173,8 @@ class Position3D:
     distance_rel_std: float = float("inf")
     condition: float = float("inf")
     cost: float = float("nan")
+    residual_rms_s: float = float("nan")
+    consistent: bool = True
     n_poses: int = 0
 
     @property
@@ -172,6 +195,8 @@ class Position3D:
             "direction_std_deg": self.direction_std_deg,
             "distance_rel_std": self.distance_rel_std,
             "condition": self.condition,
+            "residual_rms_s": self.residual_rms_s,
+            "consistent": bool(self.consistent),
             "n_poses": self.n_poses,
         }
 
@@ -332,6 +357,7 @@ def solve_range_differences(
     ambiguity_gate: float = 9.0,
     ambiguity_ratio: float = 0.5,
     max_rel_distance_std: float = 0.5,
+    max_residual_rms_s: float = MAX_RESIDUAL_RMS_S,
     resolve_distance: bool = True,
 ) -> Position3D:
     """Source position from TDOAs of several microphone sets (poses) by robust least squares.
@@ -365,6 +391,9 @@ def solve_range_differences(
         ambiguity_ratio * chi2_best)`` of the best.
     max_rel_distance_std : float
         Above this relative 1-sigma distance uncertainty the distance is reported as unknown.
+    max_residual_rms_s : float
+        Above this root-mean-square TDOA residual (s) of the best candidate the answer is
+        flagged ``consistent=False`` (see :data:`MAX_RESIDUAL_RMS_S`).
     resolve_distance : bool
         False forces a direction-only answer (used for a single pose).
 
@@ -489,11 +518,13 @@ def solve_range_differences(
         kw = dict(reference_m=ref, tdoa_std_s=sig, loss=loss, f_scale=f_scale,
                   n_directions=n_directions, n_starts=n_starts,
                   min_separation_deg=min_separation_deg, ambiguity_gate=ambiguity_gate,
-                  ambiguity_ratio=ambiguity_ratio, resolve_distance=False)
+                  ambiguity_ratio=ambiguity_ratio, max_residual_rms_s=max_residual_rms_s,
+                  resolve_distance=False)
         out = solve_range_differences(mic_sets, pairs, tdoa_s, speed_of_sound, **kw)
         out.distance_rel_std = rel
         return out
     az0, el0 = direction_deg(p0 - ref)
+    rms = float(np.sqrt(np.mean((_model(p0, M, a, b, c) - y) ** 2)))
     return Position3D(
         position_m=p0 if known0 else None,
         azimuth_deg=float(az0),
@@ -506,6 +537,8 @@ def solve_range_differences(
         distance_rel_std=rel,
         condition=cond,
         cost=float(cost0),
+        residual_rms_s=rms,
+        consistent=bool(rms <= max_residual_rms_s),
         n_poses=len(mic_sets),
     )
 
@@ -765,8 +798,6 @@ class PoseItdMLP:
 
     def fit(self, X: ArrayLike, Y: ArrayLike) -> PoseItdMLP:
         """Fit on TDOAs ``X (n, K*n_pairs)`` (s) and positions ``Y (n, 3)`` (m, robot frame)."""
-        import warnings
-
         from sklearn.exceptions import ConvergenceWarning
         from sklearn.neural_network import MLPRegressor
         from threadpoolctl import threadpool_limits
@@ -1277,7 +1308,8 @@ def localize_manifest(path: Any, *, frame_ms: float = 64.0, hop_ms: float = 32.0
 
     Each capture is read and validated (:func:`hearsee.audio.signals.read_recording`), its
     whole-recording TDOAs measured (:func:`capture_tdoas`) and all poses solved together
-    (:func:`localize_multipose`).
+    (:func:`localize_multipose`). Warns (:class:`~hearsee.errors.InconsistentMeasurementWarning`)
+    when the result is not ``consistent``.
     """
     from hearsee.audio.signals import read_recording
 
@@ -1290,8 +1322,15 @@ def localize_manifest(path: Any, *, frame_ms: float = 64.0, hop_ms: float = 32.0
                                       method=method))
         except EstimationError as exc:
             raise EstimationError(f"{f}: {exc}") from None
-    return localize_multipose(taus, man.poses, man.array, pivot_m=man.pivot_m,
-                              offset_m=man.offset_m, tdoa_std_s=man.tdoa_std_s)
+    est = localize_multipose(taus, man.poses, man.array, pivot_m=man.pivot_m,
+                             offset_m=man.offset_m, tdoa_std_s=man.tdoa_std_s)
+    if not est.consistent:
+        warnings.warn(
+            f"no single source explains the captures at the manifest's poses (TDOA residual "
+            f"{est.residual_rms_s * 1e6:.0f} us rms); check the pose angles, the channel order "
+            "and the array file, or whether the source moved", InconsistentMeasurementWarning,
+            stacklevel=2)
+    return est
 
 
 def parse_poses(text: str) -> list[HeadPose]:

@@ -23,8 +23,10 @@ def localize3d_cmd(
     """Localize a static source in 3D (robot frame) from captures at several head poses.
 
     Prints JSON: position_m [x, y, z] (null when the poses do not fix the distance),
-    azimuth_deg, elevation_deg, distance_m (from the head pivot), covariance (m^2), unique, and
-    every candidate when the answer is not unique (a single pose: the mirror pair, no distance).
+    azimuth_deg, elevation_deg, distance_m (from the head pivot), covariance (m^2), unique,
+    every candidate when the answer is not unique (a single pose: the mirror pair, no distance),
+    residual_rms_s and consistent (false, with a warning on stderr, when no single source
+    explains the captures at the manifest's poses: a wrong pose angle, channel order or array).
     """
     from hearsee.audio.active import localize_manifest
     from hearsee.audio.tdoa import check_frame_ms
