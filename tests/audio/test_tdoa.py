@@ -263,13 +263,33 @@ def test_reverb_method_switches_on_measured_coherence(three):
     assert np.array_equal(never.summary_tdoa_s, plain_room.summary_tdoa_s, equal_nan=True)
 
 
-def test_reverb_method_needs_noise_frames_and_valid_name(three):
-    x = simulate_free_field(white_noise(1.0, FS, rng=3), FS, three, np.array([1.0, 1.0, 0.0]),
-                            snr_db=20, rng=4)  # steady source: no noise-only frames
-    tf = estimate_tdoas(x, FS, three, reverb_method="roth")
-    assert np.isnan(tf.coherence_ratio) and tf.summary_method == "phat"
+def test_reverb_method_without_noise_frames_tests_the_coherence_gain(three):
+    # a steady white source (no noise-only frames, so no coherence_ratio): the reverberation
+    # test is how much the coherence grows with 4x longer frames
+    from hearsee.audio.propagation import simulate_room
+
+    src = 2.0 * np.array([np.cos(np.radians(-120.0)), np.sin(np.radians(-120.0)), 0.0])
+    s = white_noise(2.0, FS, rng=3)
+    free = simulate_free_field(s, FS, three, src, snr_db=10, rng=4)
+    room = simulate_room(s, FS, three, src, room_dim=(5.0, 4.0, 3.0), rt60=0.3,
+                         array_at=(2.5, 2.2, 1.3), snr_db=10, rng=4)
+    kw = {"method": "ml", "band_hz": (300.0, 7500.0), "hop_ms": 64.0, "reverb_method": "phat"}
+    tf_free = estimate_tdoas(free, FS, three, **kw)
+    tf_room = estimate_tdoas(room, FS, three, **kw)
+    assert np.isnan(tf_free.coherence_ratio) and np.isnan(tf_room.coherence_ratio)
+    assert tf_free.coherence_gain < 1.02 and tf_free.summary_method == "ml"
+    assert tf_room.coherence_gain > 1.2 and tf_room.summary_method == "phat"
+    for tf in (tf_free, tf_room):
+        assert np.abs(tf.summary_tdoa_s - three.tdoa(src)).max() * FS < 0.5
+    # free field: identical to the call without reverb_method
+    plain = estimate_tdoas(free, FS, three, **{k: v for k, v in kw.items() if k != "reverb_method"})
+    assert np.array_equal(plain.summary_tdoa_s, tf_free.summary_tdoa_s)
+    assert np.isnan(plain.coherence_gain)
+    # too short for five 256 ms frames: not measured, the summary keeps its method
+    short = estimate_tdoas(room[:, :FS], FS, three, **kw)
+    assert np.isnan(short.coherence_gain) and short.summary_method == "ml"
     with pytest.raises(ConfigError):
-        estimate_tdoas(x, FS, three, reverb_method="bogus")
+        estimate_tdoas(free, FS, three, reverb_method="bogus")
 
 
 def test_summary_upsample_finds_the_correlation_maximum():

@@ -78,6 +78,7 @@ __all__ = [
     "METHODS",
     "MAX_FRAME_MS",
     "MIN_FS_HZ",
+    "REVERB_COHERENCE_GAIN",
     "GccResult",
     "TdoaFrames",
     "check_frame_ms",
@@ -105,6 +106,11 @@ MAX_FRAME_MS = 10_000.0
 MIN_FS_HZ = 4000.0
 #: Fewer confident frames than this: the summary averages all frames with energy instead.
 _MIN_SUMMARY_FRAMES = 3
+#: ``coherence_gain`` above which a recording without a noise reference counts as reverberant
+#: (``reverb_method``). White noise 1-3 m from the two- and three-mic presets (2 s, 64 ms
+#: frames, 300-7500 Hz, seed 901, 8 per cell): free field 0.88-1.00 at SNR 0-20 dB, RT60 0.3 s
+#: 1.04-1.69, RT60 0.6 s 1.35-2.10.
+REVERB_COHERENCE_GAIN = 1.1
 #: ... and, without redundant pairs, its confidence must exceed this multiple of
 #: ``min_confidence``.
 _FALLBACK_CONFIDENCE = 1.5
@@ -472,6 +478,11 @@ class TdoaFrames:
         NaN when it could not be measured (fewer than 3 noise-only frames).
     summary_method : str
         The GCC weighting behind ``summary_tdoa_s``.
+    coherence_gain : float
+        The reverberation test without a noise reference (see ``reverb_method`` of
+        :func:`estimate_tdoas`): the coherence with 4x longer frames over that with the
+        analysis frames; ~1 (at most 1.0 in our tests) in free field, 1.04-2.1 in RT60 0.3-0.6
+        s rooms; NaN when not measured.
     """
 
     t: NDArray
@@ -488,6 +499,7 @@ class TdoaFrames:
     nfft: int = 0
     coherence_ratio: float = float("nan")
     summary_method: str = ""
+    coherence_gain: float = float("nan")
 
     @property
     def pair_labels(self) -> list[str]:
@@ -820,6 +832,42 @@ def _coherence_ratio(s_cross: NDArray, s_auto: NDArray, n_frames: int, noise_psd
     return float(np.mean(np.sum(g * msc, axis=-1)[ok] / den[ok]))
 
 
+def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float, float],
+                    I: NDArray, J: NDArray, factor: int = 4) -> float:
+    """How much the microphones' coherence grows with the frame length: the magnitude-squared
+    coherence (MSC) measured with frames ``factor`` times ``frame_len`` over that with frames of
+    ``frame_len`` (each debiased, averaged over the pairs ``I, J`` and the bins in ``band_hz``
+    (Hz); non-overlapping Hann frames). NaN with fewer than 5 long frames.
+
+    The reverberation test of :func:`estimate_tdoas` when no inactive frame gives a noise
+    reference (a steady source). Uncorrelated sensor noise lowers the coherence by the same
+    amount at any frame length, so the gain stays ~1 in free field; a reverberant tail longer
+    than a frame decorrelates short frames more than long ones (a frame sees the tail of the
+    previous frames' sound), so the gain grows with the reverberation. An MSC averaged over n
+    independent frames is biased up by ~(1 - MSC)^2 / n; ``(n MSC - 1) / (n - 1)`` (exact for
+    incoherent signals) removes most of it. The diffuse-field test of reverberation via the
+    coherence's frame-length dependence is our construction; the coherence estimator and its
+    bias are Carter, Knapp & Nuttall (1973), "Estimation of the magnitude-squared coherence
+    function via overlapped FFT processing", IEEE Trans. Audio Electroacoust. 21(4).
+    """
+    out = []
+    for L in (int(frame_len), int(factor) * int(frame_len)):
+        n = a.shape[1] // L
+        if n < 5:
+            return float("nan")
+        X = sfft.rfft(a[:, :n * L].reshape(a.shape[0], n, L) * np.hanning(L).astype(a.dtype),
+                      axis=-1)
+        f = np.arange(X.shape[-1]) * fs / L
+        X = X[..., (f >= band_hz[0]) & (f <= band_hz[1])]
+        if X.shape[-1] == 0:
+            return float("nan")
+        auto = np.sum(X.real**2 + X.imag**2, axis=1)  # (n_ch, bins)
+        cross = np.sum(X[I] * np.conj(X[J]), axis=1)  # (n_pairs, bins)
+        msc = np.abs(cross) ** 2 / np.maximum(auto[I] * auto[J], _TINY)
+        out.append(float(np.mean((n * msc - 1.0) / (n - 1.0))))
+    return out[1] / out[0] if out[0] > 0 else float("nan")
+
+
 def _check_options(refine: str, summary_frames: str, joint: str, min_peak_snr: float,
                    min_frame_peak_snr: float, phat_beta: float, onset_weight: float) -> None:
     """ConfigError for an out-of-range option of :func:`estimate_tdoas`."""
@@ -1027,7 +1075,10 @@ def estimate_tdoas(
         ``reverb_method``: the ML weighting is optimal for uncorrelated noise but
         over-weights the strong low-frequency bins that reverberation corrupts, where a
         whitening weighting (ROTH/SCOT/PHAT) wins. Per-frame TDOAs and the frames' validity
-        still use ``method``. Needs >= 3 inactive frames (else the summary keeps ``method``).
+        still use ``method``. With fewer than 3 inactive frames (a steady source: no noise
+        reference) the test is instead how much the coherence grows with the frame length
+        (``coherence_gain``, :func:`_coherence_gain`; reverberant above
+        :data:`REVERB_COHERENCE_GAIN`), and the second weighting's frames count equally.
     reverb_coherence : float
         The ``coherence_ratio`` threshold (default 0.9).
     summary_upsample : int
@@ -1173,7 +1224,12 @@ def estimate_tdoas(
     acc_active = np.zeros((n_pairs, nb), dtype=complex)
     n_active = 0
     # second weighting for reverberant recordings, and the coherence statistics deciding it
-    use_rev = reverb_method is not None and noise_psd is not None and whole_recording
+    use_rev = reverb_method is not None and whole_recording
+    coherence_gain = float("nan")
+    if use_rev and noise_psd is None:  # no noise reference: decide by the frame-length test
+        coherence_gain = _coherence_gain(a32, frame_len, fs, (k0 * fs / nfft, (k1 - 1) * fs / nfft),
+                                         I, J)
+        use_rev = coherence_gain > REVERB_COHERENCE_GAIN
     acc2 = np.zeros((n_pairs, nb), dtype=complex)
     acc2_active = np.zeros((n_pairs, nb), dtype=complex)
     s_cross = np.zeros((n_pairs, nb), dtype=complex)
@@ -1224,15 +1280,20 @@ def estimate_tdoas(
             if okk.any():
                 acc += np.sum(Pn[okk], axis=0)
                 n_acc += int(okk.sum())
-            if use_rev:  # (noise_psd is known, so coh is)
+            if use_rev:
                 ia = np.flatnonzero(act) + (s0 - h0)  # active frames, chunk indices
                 Ga = G[ia]
                 W2 = gcc_weighting(reverb_method, Ga,
                                    *(None if A is None else A[ia] for A in stats))
-                s_cross += np.sum(Ga, axis=0)
-                Xa = X[ia]
-                s_auto += np.sum(Xa.real**2 + Xa.imag**2, axis=0)
-                P2 = Ga * (W2 * coh[ia]).astype(np.float32)
+                if noise_psd is not None:  # SNR weights, and the statistics of the test
+                    s_cross += np.sum(Ga, axis=0)
+                    Xa = X[ia]
+                    s_auto += np.sum(Xa.real**2 + Xa.imag**2, axis=0)
+                    P2 = Ga * (W2 * coh[ia]).astype(np.float32)
+                else:  # every frame counts equally, as in the first weighting's sum
+                    P2 = Ga * W2.astype(np.float32)
+                    P2 = P2 / np.maximum(np.sqrt(np.sum(P2.real**2 + P2.imag**2, axis=-1,
+                                                        keepdims=True)), _TINY)
                 if onset_weight:
                     P2 = P2 * frame_w[s0:s1][act][:, None, None]
                 acc2_active += np.sum(P2, axis=0)
@@ -1244,8 +1305,11 @@ def estimate_tdoas(
     coherence_ratio = float("nan")
     summary_method = method
     if use_rev and n_active:
-        coherence_ratio = _coherence_ratio(s_cross, s_auto, n_active, noise_psd, I, J)
-        if coherence_ratio < float(reverb_coherence):
+        reverberant = True  # decided above by the frame-length test when there is no noise
+        if noise_psd is not None:
+            coherence_ratio = _coherence_ratio(s_cross, s_auto, n_active, noise_psd, I, J)
+            reverberant = coherence_ratio < float(reverb_coherence)
+        if reverberant:
             acc, acc_active, summary_method = acc2, acc2_active, reverb_method
     summary, summary_conf = np.full(n_pairs, np.nan), np.zeros(n_pairs)
     need = min_confidence
@@ -1291,4 +1355,4 @@ def estimate_tdoas(
     t = (np.arange(n_frames) * hop + frame_len / 2.0) / fs
     return TdoaFrames(t, tdoa, conf, valid, prs, summary, summary_conf, max_lag / fs, fs,
                       acc / max(n_acc, 1) if n_acc else None, band_bins, nfft,
-                      coherence_ratio, summary_method)
+                      coherence_ratio, summary_method, coherence_gain)
