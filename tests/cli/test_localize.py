@@ -145,6 +145,7 @@ def test_in_plane_and_reverb_method_options(rec3, capsys):
     s = json.loads(out)["summary"]
     # free field: the coherence is what the noise explains, the ML summary is kept
     assert s["coherence_ratio"] > 0.9 and s["method"] == "ml"
+    assert s["coherence_gain"] is None  # only measured without a noise reference
     assert s["azimuth_deg"] == pytest.approx(-120.0, abs=1.0)
     assert len(s["candidates"]) == 1 and s["elevation_deg"] == pytest.approx(0.0, abs=1e-6)
     code, _, err = _run(capsys, rec3, "--array", "three-mic", "--reverb-method", "bogus")

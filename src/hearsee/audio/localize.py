@@ -811,6 +811,8 @@ def localize_recording(
         "method": tf.summary_method,
         "coherence_ratio": (float(tf.coherence_ratio) if np.isfinite(tf.coherence_ratio)
                             else None),
+        "coherence_gain": (float(tf.coherence_gain) if np.isfinite(tf.coherence_gain)
+                           else None),
     }
     return {
         "array": arr.to_dict(),

@@ -81,8 +81,9 @@ def localize_cmd(
         OutputFormat.json),
     reverb_method: Annotated[GccMethod | None, typer.Option(
         "--reverb-method", help="Weighting of the whole-recording estimate when the recording "
-        "measures as reverberant (coherence below what the noise explains), e.g. gcc-phat "
-        "with --method gcc-ml.")] = None,
+        "measures as reverberant (coherence below what the noise explains or, for a steady "
+        "source with no pause, growing with the frame length), e.g. gcc-phat with --method "
+        "gcc-ml.")] = None,
     in_plane: Annotated[bool, typer.Option(
         "--in-plane", help="The source is in the plane of a planar (three-mic) array: model "
         "its spherical wavefront (assumed 2 m away) instead of a plane wave.")] = False,
