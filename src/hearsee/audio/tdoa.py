@@ -832,16 +832,29 @@ def _coherence_ratio(s_cross: NDArray, s_auto: NDArray, n_frames: int, noise_psd
     return float(np.mean(np.sum(g * msc, axis=-1)[ok] / den[ok]))
 
 
-def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float, float],
-                    I: NDArray, J: NDArray, factor: int = 4) -> float:
-    """How much the microphones' coherence grows with the frame length: the magnitude-squared
-    coherence (MSC) measured with frames ``factor`` times ``frame_len`` over that with frames of
-    ``frame_len`` (each debiased, averaged over the pairs ``I, J`` and the bins in ``band_hz``
-    (Hz); non-overlapping Hann frames). NaN with fewer than 5 long frames.
+@functools.lru_cache(maxsize=8)
+def _hann_cached(n: int, dtype: str) -> NDArray:
+    w = np.hanning(n).astype(dtype)
+    w.flags.writeable = False
+    return w
 
-    The reverberation test of :func:`estimate_tdoas` when no inactive frame gives a noise
-    reference (a steady source). Uncorrelated sensor noise lowers the coherence by the same
-    amount at any frame length, so the gain stays ~1 in free field; a reverberant tail longer
+
+def _hann(n: int, dtype: np.dtype) -> NDArray:
+    """A read-only Hann window of ``n`` samples in ``dtype`` (cached)."""
+    return _hann_cached(int(n), np.dtype(dtype).str)
+
+
+def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float, float],
+                    factor: int = 4) -> float:
+    """How much two microphones' coherence grows with the frame length: the magnitude-squared
+    coherence (MSC) of the two rows of ``a`` (2, n) measured with frames ``factor`` times
+    ``frame_len`` over that with frames of ``frame_len`` (each debiased, averaged over the bins
+    in ``band_hz`` (Hz); non-overlapping Hann frames). NaN with fewer than 5 long frames.
+
+    The reverberation test of :func:`estimate_tdoas` (on its first pair) when no inactive
+    frame gives a noise reference (a steady source). Uncorrelated sensor noise lowers the
+    coherence by the same amount at any frame length, so the gain stays ~1 in free field; a
+    reverberant tail longer
     than a frame decorrelates short frames more than long ones (a frame sees the tail of the
     previous frames' sound), so the gain grows with the reverberation. An MSC averaged over n
     independent frames is biased up by ~(1 - MSC)^2 / n; ``(n MSC - 1) / (n - 1)`` (exact for
@@ -855,15 +868,14 @@ def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float,
         n = a.shape[1] // L
         if n < 5:
             return float("nan")
-        X = sfft.rfft(a[:, :n * L].reshape(a.shape[0], n, L) * np.hanning(L).astype(a.dtype),
-                      axis=-1)
-        f = np.arange(X.shape[-1]) * fs / L
-        X = X[..., (f >= band_hz[0]) & (f <= band_hz[1])]
-        if X.shape[-1] == 0:
+        b0 = max(int(np.ceil(band_hz[0] * L / fs)), 0)
+        b1 = min(int(np.floor(band_hz[1] * L / fs)) + 1, L // 2 + 1)
+        if b1 <= b0:
             return float("nan")
-        auto = np.sum(X.real**2 + X.imag**2, axis=1)  # (n_ch, bins)
-        cross = np.sum(X[I] * np.conj(X[J]), axis=1)  # (n_pairs, bins)
-        msc = np.abs(cross) ** 2 / np.maximum(auto[I] * auto[J], _TINY)
+        X = sfft.rfft(frame_signals(a, L, L) * _hann(L, a.dtype), axis=-1)[..., b0:b1]
+        auto = np.sum(X.real**2 + X.imag**2, axis=1)  # (2, bins)
+        cross = np.sum(X[0] * np.conj(X[1]), axis=0)  # (bins,)
+        msc = (cross.real**2 + cross.imag**2) / np.maximum(auto[0] * auto[1], _TINY)
         out.append(float(np.mean((n * msc - 1.0) / (n - 1.0))))
     return out[1] / out[0] if out[0] > 0 else float("nan")
 
@@ -910,16 +922,18 @@ def _onset_weights(energy: NDArray, onset_weight: float) -> NDArray:
 
 
 def _noise_spectrum(frames: NDArray, active: NDArray, win: NDArray, nfft: int, k0: int,
-                    k1: int) -> NDArray | None:
+                    k1: int, X_all: NDArray | None = None) -> NDArray | None:
     """Each channel's noise power spectrum (n_ch, bins k0..k1-1), averaged over the inactive
     frames of ``frames`` (n_ch, F, L); None with fewer than 3 of them. Frames in which a
     channel is digitally silent (all zeros: a recorder's lead-in, zero padding) are no noise
-    sample: a noise floor of zero would make every SNR infinite."""
+    sample: a noise floor of zero would make every SNR infinite. ``X_all``: the band spectra
+    of every frame when already computed (the same transform; not repeated)."""
     silent = ~np.all(np.any(frames != 0, axis=-1), axis=0)  # (F,)
     quiet = np.flatnonzero(~active & ~silent)
     if quiet.size < _MIN_SUMMARY_FRAMES:
         return None
-    Xq = sfft.rfft(frames[:, quiet, :] * win, nfft, axis=-1)[..., k0:k1]
+    Xq = (X_all[:, quiet, :] if X_all is not None
+          else sfft.rfft(frames[:, quiet, :] * win, nfft, axis=-1)[..., k0:k1])
     psd = np.mean(Xq.real**2 + Xq.imag**2, axis=1)
     return np.maximum(psd, 1e-12 * psd.max(initial=0.0) + _TINY)
 
@@ -930,11 +944,12 @@ def _spectral_densities(X: NDArray, G: NDArray, I: NDArray, J: NDArray, smooth_f
     bins), averaged over ``smooth_frames`` frames: what SCOT, ROTH and ML weigh with."""
     auto = X.real**2 + X.imag**2
     k = max(int(smooth_frames), 1)
-    Gii = uniform_filter1d(auto[:, I, :], k, axis=0, mode="nearest")
-    Gjj = uniform_filter1d(auto[:, J, :], k, axis=0, mode="nearest")
-    Gav = (uniform_filter1d(G.real, k, axis=0, mode="nearest")
-           + 1j * uniform_filter1d(G.imag, k, axis=0, mode="nearest"))
-    return Gii, Gjj, Gav
+    # one filter per channel (not per pair end), and the cross spectra's real and imaginary
+    # parts in one pass through their interleaved float view: bit-identical, ~2x faster
+    A = uniform_filter1d(auto, k, axis=0, mode="nearest")
+    Gc = np.ascontiguousarray(G)
+    Gav = uniform_filter1d(Gc.view(Gc.real.dtype), k, axis=0, mode="nearest").view(Gc.dtype)
+    return A[:, I, :], A[:, J, :], Gav
 
 
 def _snr_coherence(X: NDArray, noise_psd: NDArray, I: NDArray, J: NDArray,
@@ -1206,7 +1221,7 @@ def estimate_tdoas(
     if band_vad and (k0 > 1 or k1 < n_bins - 1) and not decided:
         active, X_all = _band_activity(frames, win, nfft, k0, k1, active, vad_db,
                                        max(int(chunk_frames), 1))
-    noise_psd = _noise_spectrum(frames, active, win, nfft, k0, k1) if snr_weight else None
+    noise_psd = _noise_spectrum(frames, active, win, nfft, k0, k1, X_all) if snr_weight else None
 
     redundant = _closure_projector(tuple(prs), arr.n_mics) is not None  # a closed cycle
     frame_cfar = not redundant and min_frame_peak_snr > 0
@@ -1227,9 +1242,12 @@ def estimate_tdoas(
     use_rev = reverb_method is not None and whole_recording
     coherence_gain = float("nan")
     if use_rev and noise_psd is None:  # no noise reference: decide by the frame-length test
-        coherence_gain = _coherence_gain(a32, frame_len, fs, (k0 * fs / nfft, (k1 - 1) * fs / nfft),
-                                         I, J)
+        # on the first pair: all pairs together separated free field from rooms no better
+        # (white noise, seed 901, 8 per cell: free field <= 0.998 either way, rooms >= 1.03)
+        coherence_gain = _coherence_gain(a32[[I[0], J[0]]], frame_len, fs,
+                                         (k0 * fs / nfft, (k1 - 1) * fs / nfft))
         use_rev = coherence_gain > REVERB_COHERENCE_GAIN
+    rev_decided = use_rev and noise_psd is None
     acc2 = np.zeros((n_pairs, nb), dtype=complex)
     acc2_active = np.zeros((n_pairs, nb), dtype=complex)
     s_cross = np.zeros((n_pairs, nb), dtype=complex)
@@ -1266,20 +1284,21 @@ def estimate_tdoas(
         conf[s0:s1] = c
         # normalise each frame's weighted spectrum so that every frame counts equally
         if whole_recording and act.any():
-            Pa = P[act]
-            if noise_psd is None:
-                norm = np.sqrt(np.sum(Pa.real**2 + Pa.imag**2, axis=-1, keepdims=True))
-                Pn = Pa / np.maximum(norm, _TINY)
-            else:  # the SNR weights already say how much each frame and bin counts
-                Pn = Pa
-            if onset_weight:
-                Pn = Pn * frame_w[s0:s1][act][:, None, None]
-            acc_active += np.sum(Pn, axis=0)
             n_active += int(act.sum())
             okk = ok_conf[act]
-            if okk.any():
-                acc += np.sum(Pn[okk], axis=0)
-                n_acc += int(okk.sum())
+            n_acc += int(okk.sum())
+            if not rev_decided:  # (else the summary is reverb_method's: skip this one)
+                Pa = P[act]
+                if noise_psd is None:
+                    norm = np.sqrt(np.sum(Pa.real**2 + Pa.imag**2, axis=-1, keepdims=True))
+                    Pn = Pa / np.maximum(norm, _TINY)
+                else:  # the SNR weights already say how much each frame and bin counts
+                    Pn = Pa
+                if onset_weight:
+                    Pn = Pn * frame_w[s0:s1][act][:, None, None]
+                acc_active += np.sum(Pn, axis=0)
+                if okk.any():
+                    acc += np.sum(Pn[okk], axis=0)
             if use_rev:
                 ia = np.flatnonzero(act) + (s0 - h0)  # active frames, chunk indices
                 Ga = G[ia]
