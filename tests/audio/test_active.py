@@ -59,6 +59,12 @@ def test_contradicting_poses_are_flagged_inconsistent(pan_error_deg):
         np.testing.assert_allclose(est.position_m, src, atol=2e-3)
     else:
         assert not est.consistent and est.residual_rms_s > 30e-6
+        # the threshold is 6 x tdoa_std_s by default, or given
+        loose = localize_multipose(taus, told, ARR, offset_m=OFF,
+                                   max_residual_rms_s=2 * est.residual_rms_s)
+        assert loose.consistent and loose.residual_rms_s == pytest.approx(est.residual_rms_s)
+        assert localize_multipose(taus, told, ARR, offset_m=OFF,
+                                  tdoa_std_s=est.residual_rms_s).consistent
     d = est.to_dict()
     assert d["consistent"] is est.consistent
     assert d["residual_rms_s"] == pytest.approx(est.residual_rms_s)

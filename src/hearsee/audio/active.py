@@ -109,14 +109,15 @@ __all__ = [
 #: Default TDOA standard deviation (s): whole-capture GCC-PHAT summaries of 1-2 s of speech at
 #: 16 kHz measured 1-2 us rms at SNR 20 dB in RT60 0.3 s rooms, ~6 us at SNR 10 dB (anechoic).
 DEFAULT_TDOA_STD_S = 5e-6
-#: Largest root-mean-square TDOA residual (s) of a multi-pose solution still called consistent
-#: (:attr:`Position3D.consistent`): 6x :data:`DEFAULT_TDOA_STD_S`, half a sample at 16 kHz. In a
+#: Largest root-mean-square TDOA residual of a multi-pose solution still called consistent
+#: (:attr:`Position3D.consistent`), in units of the solver's ``tdoa_std_s``: 30 us with the
+#: default :data:`DEFAULT_TDOA_STD_S`, half a sample at 16 kHz. In a
 #: study of 2-5 poses (three-mic on a pan-tilt head, synthetic voices 0.5-3 m away, anechoic and
 #: RT60 0.3 / 0.6 s, SNR 0-20 dB; 2026-11-24, seeds 5 and 6) the true-pose solutions had
 #: residuals of 2-13 us at 20 dB; those above 30 us were 0 dB captures in rooms, whose
 #: direction errors had a median of ~12 deg (2 deg below 10 us). One pose's pan angle told 20
 #: deg wrong gave 40-55 us at 20 dB, 5 deg 7-15 us (not flagged); a sign slip, ~300 us.
-MAX_RESIDUAL_RMS_S = 30e-6
+MAX_RESIDUAL_SIGMAS = 6.0
 #: Distance (m) standing in for "infinitely far" in direction-only (far-field) solves.
 FAR_DISTANCE_M = 1000.0
 
@@ -155,7 +156,8 @@ class Position3D:
         Root-mean-square TDOA residual of the best candidate, seconds: how well one source
         explains every pose's measurements.
     consistent : bool
-        False when ``residual_rms_s`` exceeds the solver's ``max_residual_rms_s``: the
+        False when ``residual_rms_s`` exceeds the solver's ``max_residual_rms_s`` (default 6x
+        its ``tdoa_std_s``, 30 us): the
         measurements contradict each other (wrong pose angles, swapped channels, two
         sources, strong reflections), and the position should not be trusted.
     n_poses : int
@@ -357,7 +359,7 @@ def solve_range_differences(
     ambiguity_gate: float = 9.0,
     ambiguity_ratio: float = 0.5,
     max_rel_distance_std: float = 0.5,
-    max_residual_rms_s: float = MAX_RESIDUAL_RMS_S,
+    max_residual_rms_s: float | None = None,
     resolve_distance: bool = True,
 ) -> Position3D:
     """Source position from TDOAs of several microphone sets (poses) by robust least squares.
@@ -391,9 +393,9 @@ def solve_range_differences(
         ambiguity_ratio * chi2_best)`` of the best.
     max_rel_distance_std : float
         Above this relative 1-sigma distance uncertainty the distance is reported as unknown.
-    max_residual_rms_s : float
+    max_residual_rms_s : float, optional
         Above this root-mean-square TDOA residual (s) of the best candidate the answer is
-        flagged ``consistent=False`` (see :data:`MAX_RESIDUAL_RMS_S`).
+        flagged ``consistent=False``; default :data:`MAX_RESIDUAL_SIGMAS` x ``tdoa_std_s``.
     resolve_distance : bool
         False forces a direction-only answer (used for a single pose).
 
@@ -538,7 +540,8 @@ def solve_range_differences(
         condition=cond,
         cost=float(cost0),
         residual_rms_s=rms,
-        consistent=bool(rms <= max_residual_rms_s),
+        consistent=bool(rms <= (MAX_RESIDUAL_SIGMAS * sig if max_residual_rms_s is None
+                                else float(max_residual_rms_s))),
         n_poses=len(mic_sets),
     )
 

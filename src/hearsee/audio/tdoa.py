@@ -854,9 +854,9 @@ def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float,
     The reverberation test of :func:`estimate_tdoas` (on its first pair) when no inactive
     frame gives a noise reference (a steady source). Uncorrelated sensor noise lowers the
     coherence by the same amount at any frame length, so the gain stays ~1 in free field; a
-    reverberant tail longer
-    than a frame decorrelates short frames more than long ones (a frame sees the tail of the
-    previous frames' sound), so the gain grows with the reverberation. An MSC averaged over n
+    reverberant tail longer than a frame decorrelates short frames more than long ones (a
+    frame sees the tail of the previous frames' sound), so the gain grows with the
+    reverberation. An MSC averaged over n
     independent frames is biased up by ~(1 - MSC)^2 / n; ``(n MSC - 1) / (n - 1)`` (exact for
     incoherent signals) removes most of it. The diffuse-field test of reverberation via the
     coherence's frame-length dependence is our construction; the coherence estimator and its
