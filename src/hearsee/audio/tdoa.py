@@ -109,7 +109,10 @@ _MIN_SUMMARY_FRAMES = 3
 #: ``coherence_gain`` above which a recording without a noise reference counts as reverberant
 #: (``reverb_method``). White noise 1-3 m from the two- and three-mic presets (2 s, 64 ms
 #: frames, 300-7500 Hz, seed 901, 8 per cell): free field 0.88-1.00 at SNR 0-20 dB, RT60 0.3 s
-#: 1.04-1.69, RT60 0.6 s 1.35-2.10.
+#: 1.04-1.69, RT60 0.6 s 1.35-2.10. Speech, whose spectrum changes from frame to frame, reads
+#: lower and spreads more (three-mic, 300-3500 Hz, seed 902, 5 per cell: free field 0.61-1.10,
+#: RT60 0.3 s 0.50-1.62), so a talker without pauses rarely switches -- and in free field about
+#: as rarely wrongly.
 REVERB_COHERENCE_GAIN = 1.1
 #: ... and, without redundant pairs, its confidence must exceed this multiple of
 #: ``min_confidence``.
