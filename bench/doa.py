@@ -85,6 +85,15 @@ BANDS = {"noise": (300.0, 7500.0), "speech": (300.0, 3500.0)}
 #: coherence ratio (estimate_tdoas) says the recording is reverberant (threshold 0.9); chosen
 #: on held-out seeds 777 and 778 (10 trials per condition each; conditions won 43 -> 50 and
 #: 37 -> 42 of 72; "roth" and "scot" won 49/40 and 49/40), never on this table's seed.
+#: Recordings with no noise-only frame (the white-noise source) cannot measure that ratio;
+#: since 2026-11-24's ninth session they are tested by how much the coherence grows with 4x
+#: longer frames (TdoaFrames.coherence_gain > 1.1, REVERB_COHERENCE_GAIN). Held-out seeds 777
+#: and 778 (16 trials per condition each, both arrays; the test on the first pair, as now):
+#: white noise in rooms 19 of 24 cells better (by up to 3.5 deg RMSE), 5 worse (by 0.01-0.52
+#: deg, and one two-mic outlier: RT60 0.6 10 dB 2.5 -> 14.3 deg, a trial both weightings miss
+#: by 56 deg at 0 and 20 dB); ARCTIC at 0 dB in rooms, where 2-4 of 16 recordings show no
+#: pause, 4 of 4 cells worse (by 0.04-0.74 deg: without a noise spectrum PHAT weighs the bins
+#: above the speech's energy fully).
 #: Tried and rejected (2026-11-24): a two-mic reverberant summary WITHOUT the SNR weighting
 #: (each active frame's PHAT spectrum counted equally, as SRP-PHAT does). Simulated two-mic
 #: recordings liked it (held-out seeds 779-782, RT60 0.3/0.6: lower RMSE in 35 of 64
