@@ -347,7 +347,8 @@ def main() -> None:
          markdown_table(headers, table)),
         ("Consistency check: one pose told wrong",
          "``Position3D.consistent`` is False when the best solution's TDOA residual exceeds "
-         "``hearsee.audio.active.MAX_RESIDUAL_RMS_S`` (30 us rms): no single source explains "
+         "``hearsee.audio.active.MAX_RESIDUAL_SIGMAS`` x the solver's ``tdoa_std_s`` (6 x 5 "
+         "us = 30 us rms): no single source explains "
          "the captures at the poses given. The main table's 'flagged inconsistent' is the share "
          "of the true-pose solutions flagged (false alarms, or captures too noisy to trust); "
          "here the same captures are solved again with the last pose's pan angle off by the "
