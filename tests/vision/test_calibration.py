@@ -184,6 +184,12 @@ def test_stereo_routines_refuse_a_skewed_camera(synthetic, corners):
         rig.rectify()
     with pytest.raises(CalibrationError, match="skewed"):
         C.calibrate_stereo(lp, rp, obj, truth.left, right)
+    # an already rectified rig too: its remap would drop the skew just the same
+    pinhole = Camera(K=K, width=320, height=240)
+    rectified = StereoRig(pinhole, pinhole, np.eye(3), np.array([-0.1, 0.0, 0.0]))
+    assert rectified.is_rectified
+    with pytest.raises(CalibrationError, match="skewed"):
+        rectified.rectify()
 
 
 def test_too_few_views_and_mismatch_raise(synthetic, corners):

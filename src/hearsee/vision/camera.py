@@ -548,6 +548,8 @@ class StereoRig:
                 f"left and right images differ in size ({self.left.size} vs {self.right.size}); "
                 "rectification needs equal sizes"
             )
+        for cam in (self.left, self.right):  # (the rectification maps would drop it too)
+            cam.require_no_skew("stereo rectification")
         out_size = tuple(size) if size is not None else self.left.size
         if self.is_rectified and out_size == self.left.size:
             K = self.left.K
@@ -559,8 +561,6 @@ class StereoRig:
                           [0, 0, 1.0 / B, 0]], dtype=float)
             roi = (0, 0, self.left.width, self.left.height)
             return Rectification(np.eye(3), np.eye(3), P1, P2, Q, self.left.size, roi, roi)
-        for cam in (self.left, self.right):
-            cam.require_no_skew("stereo rectification")
         R1, R2, P1, P2, Q, roi1, roi2 = cv2.stereoRectify(
             self.left.K, self.left.dist, self.right.K, self.right.dist, self.left.size,
             self.R, self.T.reshape(3, 1), flags=cv2.CALIB_ZERO_DISPARITY, alpha=alpha,
