@@ -854,7 +854,7 @@ def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float,
     ``frame_len`` over that with frames of ``frame_len`` (each debiased, averaged over the bins
     in ``band_hz`` (Hz); non-overlapping Hann frames). NaN with fewer than 5 long frames.
 
-    The reverberation test of :func:`estimate_tdoas` (on its first pair) when no inactive
+    The reverberation test of :func:`estimate_tdoas` (on its widest pair) when no inactive
     frame gives a noise reference (a steady source). Uncorrelated sensor noise lowers the
     coherence by the same amount at any frame length, so the gain stays ~1 in free field; a
     reverberant tail longer than a frame decorrelates short frames more than long ones (a
@@ -1245,9 +1245,11 @@ def estimate_tdoas(
     use_rev = reverb_method is not None and whole_recording
     coherence_gain = float("nan")
     if use_rev and noise_psd is None:  # no noise reference: decide by the frame-length test
-        # on the first pair: all pairs together separated free field from rooms no better
-        # (white noise, seed 901, 8 per cell: free field <= 0.998 either way, rooms >= 1.03)
-        coherence_gain = _coherence_gain(a32[[I[0], J[0]]], frame_len, fs,
+        # on the widest pair (a diffuse field decorrelates it most); all pairs together
+        # separated free field from rooms no better (white noise, seed 901, 8 per cell: free
+        # field <= 0.998 either way, rooms >= 1.03)
+        w = int(np.argmax(np.linalg.norm(arr.positions[I] - arr.positions[J], axis=1)))
+        coherence_gain = _coherence_gain(a32[[I[w], J[w]]], frame_len, fs,
                                          (k0 * fs / nfft, (k1 - 1) * fs / nfft))
         use_rev = coherence_gain > REVERB_COHERENCE_GAIN
     rev_decided = use_rev and noise_psd is None
