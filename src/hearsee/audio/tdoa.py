@@ -108,11 +108,11 @@ MIN_FS_HZ = 4000.0
 _MIN_SUMMARY_FRAMES = 3
 #: ``coherence_gain`` above which a recording without a noise reference counts as reverberant
 #: (``reverb_method``). White noise 1-3 m from the two- and three-mic presets (2 s, 64 ms
-#: frames, 300-7500 Hz, seed 901, 8 per cell): free field 0.88-1.00 at SNR 0-20 dB, RT60 0.3 s
-#: 1.04-1.69, RT60 0.6 s 1.35-2.10. Speech, whose spectrum changes from frame to frame, reads
-#: lower and spreads more (three-mic, 300-3500 Hz, seed 902, 5 per cell: free field 0.61-1.10,
-#: RT60 0.3 s 0.50-1.62), so a talker without pauses rarely switches -- and in free field about
-#: as rarely wrongly.
+#: frames, 300-7500 Hz, seed 901, 8 per cell, widest pair): free field 0.87-1.00 at SNR 0-20
+#: dB, RT60 0.3 s 1.03-1.69, RT60 0.6 s 1.39-2.10. Speech, whose spectrum changes from frame
+#: to frame, reads lower and spreads more (three-mic, 300-3500 Hz, seed 902, 5 per cell: free
+#: field 0.61-1.10, RT60 0.3 s 0.50-1.62), so a talker without pauses rarely switches -- and
+#: in free field about as rarely wrongly.
 REVERB_COHERENCE_GAIN = 1.1
 #: ... and, without redundant pairs, its confidence must exceed this multiple of
 #: ``min_confidence``.
@@ -484,7 +484,7 @@ class TdoaFrames:
     coherence_gain : float
         The reverberation test without a noise reference (see ``reverb_method`` of
         :func:`estimate_tdoas`): the coherence with 4x longer frames over that with the
-        analysis frames; ~1 (at most 1.0 in our tests) in free field, 1.04-2.1 in RT60 0.3-0.6
+        analysis frames; ~1 (at most 1.0 in our tests) in free field, 1.03-2.1 in RT60 0.3-0.6
         s rooms; NaN when not measured.
     """
 
@@ -835,18 +835,6 @@ def _coherence_ratio(s_cross: NDArray, s_auto: NDArray, n_frames: int, noise_psd
     return float(np.mean(np.sum(g * msc, axis=-1)[ok] / den[ok]))
 
 
-@functools.lru_cache(maxsize=8)
-def _hann_cached(n: int, dtype: str) -> NDArray:
-    w = np.hanning(n).astype(dtype)
-    w.flags.writeable = False
-    return w
-
-
-def _hann(n: int, dtype: np.dtype) -> NDArray:
-    """A read-only Hann window of ``n`` samples in ``dtype`` (cached)."""
-    return _hann_cached(int(n), np.dtype(dtype).str)
-
-
 def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float, float],
                     factor: int = 4) -> float:
     """How much two microphones' coherence grows with the frame length: the magnitude-squared
@@ -859,12 +847,12 @@ def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float,
     coherence by the same amount at any frame length, so the gain stays ~1 in free field; a
     reverberant tail longer than a frame decorrelates short frames more than long ones (a
     frame sees the tail of the previous frames' sound), so the gain grows with the
-    reverberation. An MSC averaged over n
-    independent frames is biased up by ~(1 - MSC)^2 / n; ``(n MSC - 1) / (n - 1)`` (exact for
-    incoherent signals) removes most of it. The diffuse-field test of reverberation via the
-    coherence's frame-length dependence is our construction; the coherence estimator and its
-    bias are Carter, Knapp & Nuttall (1973), "Estimation of the magnitude-squared coherence
-    function via overlapped FFT processing", IEEE Trans. Audio Electroacoust. 21(4).
+    reverberation. An MSC averaged over n independent frames is biased up by ~(1 - MSC)^2 / n;
+    ``(n MSC - 1) / (n - 1)`` (exact for incoherent signals) removes most of it. The
+    diffuse-field test of reverberation via the coherence's frame-length dependence is our
+    construction; the coherence estimator and its bias are Carter, Knapp & Nuttall (1973),
+    "Estimation of the magnitude-squared coherence function via overlapped FFT processing",
+    IEEE Trans. Audio Electroacoust. 21(4).
     """
     out = []
     for L in (int(frame_len), int(factor) * int(frame_len)):
@@ -875,7 +863,7 @@ def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float,
         b1 = min(int(np.floor(band_hz[1] * L / fs)) + 1, L // 2 + 1)
         if b1 <= b0:
             return float("nan")
-        X = sfft.rfft(frame_signals(a, L, L) * _hann(L, a.dtype), axis=-1)[..., b0:b1]
+        X = sfft.rfft(frame_signals(a, L, L) * _window("hann", L), axis=-1)[..., b0:b1]
         auto = np.sum(X.real**2 + X.imag**2, axis=1)  # (2, bins)
         cross = np.sum(X[0] * np.conj(X[1]), axis=0)  # (bins,)
         msc = (cross.real**2 + cross.imag**2) / np.maximum(auto[0] * auto[1], _TINY)
@@ -922,6 +910,13 @@ def _onset_weights(energy: NDArray, onset_weight: float) -> NDArray:
         e = np.maximum(energy, _TINY)
         rise[1:] = np.clip(np.log10(e[1:] / e[:-1]), 0.0, None)
     return 1.0 + float(onset_weight) * rise
+
+
+def _unit_frames(P: NDArray) -> NDArray:
+    """Each frame's weighted cross spectrum ``P`` (frames, pairs, bins) scaled to unit norm, so
+    that every frame counts equally in the whole-recording average."""
+    norm = np.sqrt(np.sum(P.real**2 + P.imag**2, axis=-1, keepdims=True))
+    return P / np.maximum(norm, _TINY)
 
 
 def _noise_spectrum(frames: NDArray, active: NDArray, win: NDArray, nfft: int, k0: int,
@@ -1293,12 +1288,8 @@ def estimate_tdoas(
             okk = ok_conf[act]
             n_acc += int(okk.sum())
             if not rev_decided:  # (else the summary is reverb_method's: skip this one)
-                Pa = P[act]
-                if noise_psd is None:
-                    norm = np.sqrt(np.sum(Pa.real**2 + Pa.imag**2, axis=-1, keepdims=True))
-                    Pn = Pa / np.maximum(norm, _TINY)
-                else:  # the SNR weights already say how much each frame and bin counts
-                    Pn = Pa
+                # (with SNR weights, they already say how much each frame and bin counts)
+                Pn = P[act] if noise_psd is not None else _unit_frames(P[act])
                 if onset_weight:
                     Pn = Pn * frame_w[s0:s1][act][:, None, None]
                 acc_active += np.sum(Pn, axis=0)
@@ -1315,9 +1306,7 @@ def estimate_tdoas(
                     s_auto += np.sum(Xa.real**2 + Xa.imag**2, axis=0)
                     P2 = Ga * (W2 * coh[ia]).astype(np.float32)
                 else:  # every frame counts equally, as in the first weighting's sum
-                    P2 = Ga * W2.astype(np.float32)
-                    P2 = P2 / np.maximum(np.sqrt(np.sum(P2.real**2 + P2.imag**2, axis=-1,
-                                                        keepdims=True)), _TINY)
+                    P2 = _unit_frames(Ga * W2.astype(np.float32))
                 if onset_weight:
                     P2 = P2 * frame_w[s0:s1][act][:, None, None]
                 acc2_active += np.sum(P2, axis=0)
