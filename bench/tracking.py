@@ -17,7 +17,11 @@ normalised steered power c, floor 1.5 deg) were chosen on walks of seeds 100 (st
 (turning); the IMM default and exact interpolation on the walks of seeds 0, 100 and 200 pooled
 (24 per condition, 2026-11-24, after the renderer fix below), because over 8 walks the pooled
 statistics move a lot with the seed (white noise at 20 dB: per-frame / tracked 2.48x on seed 0,
-1.43x on seed 100, 1.05x on seed 200 with the settings of that day). RMSE over each method's own
+1.43x on seed 100, 1.05x on seed 200 with the settings of that day). The truth is the
+direction heard at the array at each frame time (:meth:`hearsee.sim.moving.Trajectory.heard_at`:
+where the talker was r / c = 3-12 ms earlier; runs before 2026-11-24's tenth session took the
+position at the frame time itself, which put up to ~0.25 deg (tangential speed / c) into every
+error and 0.1-0.36 frame of propagation delay into the lags). RMSE over each method's own
 output frames; the "per-frame / tracked (same frames)" ratios take both RMSEs over the frames
 where both have an azimuth (before 2026-11-24's seventh session the per-frame RMSE also
 counted frames with a per-frame estimate but no track yet -- often large errors -- which
@@ -345,14 +349,16 @@ def lag_profile(t: np.ndarray, est: np.ndarray, traj: Trajectory, hop_s: float,
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int] | None:
     """The profile behind :func:`lag_frames`: ``(shifts in frames, SSE(shift) in deg^2 with
     the best offset for each shift, that offset in degrees, number of frames used)``, or None
-    when fewer than 10 frames had a measurement."""
+    when fewer than 10 frames had a measurement. The truth is the direction heard at the
+    array's centre (the origin), :meth:`Trajectory.heard_at`: the propagation delay r / c is
+    not the tracker's lag."""
     ok = np.isfinite(est) & measured
     n = int(ok.sum())
     if n < 10:
         return None
     shifts = np.arange(-max_shift, max_shift + 1e-9, 0.05)
     tt = t[ok][None, :] - shifts[:, None] * hop_s  # (shifts, frames)
-    truth = direction_deg(traj.at(tt.ravel()))[0].reshape(tt.shape)
+    truth = direction_deg(traj.heard_at(tt.ravel()))[0].reshape(tt.shape)
     e = wrap_deg(est[ok][None, :] - truth)
     b = np.degrees(np.angle(np.mean(np.exp(1j * np.radians(e)), axis=1)))  # circular mean
     return shifts, np.sum(wrap_deg(e - b[:, None]) ** 2, axis=1), b, n
@@ -436,7 +442,10 @@ def _part_a_condition(kind: str, snr: float, trials: int, dur: float,
                                  rng=rng, block_s=0.1)
         ups = StreamPipeline(arr, CFG).run(ArraySource(y, FS, 2048))
         t = np.array([u.t for u in ups])
-        true, true_el = direction_deg(traj.at(t))
+        # truth where the talker was when the frame's sound left them (the array is centred
+        # at the origin): r / c = 3-12 ms before the frame time (before 2026-11-24's tenth
+        # session, the position at the frame time itself)
+        true, true_el = direction_deg(traj.heard_at(t, (0.0, 0.0, 0.0), arr.speed_of_sound))
         raw, trk = _azimuths(ups, "raw_azimuth_deg"), _azimuths(ups)
         acc["el_raw"].append(_azimuths(ups, "raw_elevation_deg") - true_el)
         acc["el_trk"].append(_azimuths(ups, "elevation_deg") - true_el)

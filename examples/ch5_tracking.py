@@ -114,7 +114,7 @@ def cases_5_1(out: Path, dur: float) -> None:
         rec = rec + 1e-3 * rng.standard_normal(rec.shape)
         ups = StreamPipeline(arr, StreamConfig()).run(ArraySource(rec, fs, 2048))
         t = np.array([u.t for u in ups])
-        ta, te = direction_deg(traj.at(t))
+        ta, te = direction_deg(traj.heard_at(t, (0.0, 0.0, 0.0), arr.speed_of_sound))
         raw_a = np.array([np.nan if u.raw_azimuth_deg is None else u.raw_azimuth_deg
                           for u in ups])
         raw_e = np.array([np.nan if u.raw_elevation_deg is None else abs(u.raw_elevation_deg)

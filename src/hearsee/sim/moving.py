@@ -109,6 +109,22 @@ class Trajectory:
         out = np.stack([np.interp(flat, self.t, self.positions[:, k]) for k in range(3)], axis=-1)
         return out.reshape(tq.shape + (3,))
 
+    def heard_at(self, times: ArrayLike, point: ArrayLike = (0.0, 0.0, 0.0),
+                 speed_of_sound: float = 343.0) -> NDArray:
+        """Positions ``(..., 3)`` whose sound reaches ``point`` (metres, same frame) at
+        ``times`` (seconds): ``p(t - tau)`` with the retarded delay ``tau = |p(t - tau) -
+        point| / c`` of :func:`retarded_delays`.
+
+        The ground truth for anything estimated from sound received at ``t`` (a tracker's
+        direction at frame time ``t`` describes where the talker was ``r / c`` earlier: 3-12 ms
+        at 1-4 m, up to ``|v_tangential| / c`` rad of azimuth, ~0.25 deg at walking speed);
+        a camera's image at ``t`` shows :meth:`at` ``(t)``.
+        """
+        tq = np.asarray(times, dtype=float)
+        m = np.asarray(point, dtype=float).reshape(1, 3)
+        tau, _ = retarded_delays(self, m, tq.ravel(), float(speed_of_sound))
+        return self.at(tq.ravel() - tau[0]).reshape(tq.shape + (3,))
+
     def velocity(self, times: ArrayLike) -> NDArray:
         """Velocities ``(..., 3)`` in m/s at ``times`` (piecewise constant; zero outside)."""
         tq = np.asarray(times, dtype=float)
