@@ -122,6 +122,10 @@ def test_heard_at_is_the_retarded_position():
     # a standing source is heard where it stands
     still = linear_trajectory(p0, [0.0, 0.0, 0.0], 1.0)
     np.testing.assert_allclose(still.heard_at([0.2, 0.5]), [p0, p0])
+    with pytest.raises(GeometryError, match="point"):
+        traj.heard_at(0.05, (0.0, 0.0))
+    with pytest.raises(GeometryError, match="speed_of_sound"):
+        traj.heard_at(0.05, point, 0.0)
 
 
 def test_room_moving_source_delay_tracks_trajectory():

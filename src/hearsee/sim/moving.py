@@ -121,8 +121,12 @@ class Trajectory:
         a camera's image at ``t`` shows :meth:`at` ``(t)``.
         """
         tq = np.asarray(times, dtype=float)
-        m = np.asarray(point, dtype=float).reshape(1, 3)
-        tau, _ = retarded_delays(self, m, tq.ravel(), float(speed_of_sound))
+        m = np.asarray(point, dtype=float).reshape(-1)
+        if m.shape != (3,) or not np.all(np.isfinite(m)):
+            raise GeometryError(f"point must be 3 finite numbers (metres), got {point!r}")
+        if not np.isfinite(speed_of_sound) or not speed_of_sound > 0:
+            raise GeometryError(f"speed_of_sound must be > 0 m/s, got {speed_of_sound!r}")
+        tau, _ = retarded_delays(self, m[None, :], tq.ravel(), float(speed_of_sound))
         return self.at(tq.ravel() - tau[0]).reshape(tq.shape + (3,))
 
     def velocity(self, times: ArrayLike) -> NDArray:
