@@ -335,40 +335,22 @@ def test_raw_directions_are_the_frames_own_also_with_the_itd_filter():
 
 
 # ------------------------------------------------------------------------- 4. live camera
-def test_live_camera_point_goes_stale_when_the_camera_stops(monkeypatch):
+def test_live_camera_point_goes_stale_when_the_camera_stops(monkeypatch, fake_camera):
     """A live camera that delivers 5 frames with a detection, then hangs, then fails: the point
     is returned while its frame is fresh and None once it is older than two frame periods or
     the camera has ended (fake clock: 1/30 s per frame)."""
-    import cv2
-
     import hearsee.stream.video as video
 
     now = [100.0]
     go, hang = threading.Event(), threading.Event()
 
-    class FakeCap:
-        def __init__(self, index):
-            self.n = 0
+    def next_frame() -> None:
+        now[0] += 1 / 30
 
-        def isOpened(self):
-            return True
-
-        def get(self, prop):
-            return 30.0
-
-        def read(self):
-            go.wait(10.0)  # the first frame comes once the test has looked before it
-            self.n += 1
-            if self.n > 5:
-                hang.wait(10.0)  # the camera hangs ...
-                return False, None  # ... then fails
-            now[0] += 1 / 30
-            return True, np.full((60, 80, 3), 100, np.uint8)
-
-        def release(self):
-            pass
-
-    monkeypatch.setattr(cv2, "VideoCapture", FakeCap)
+    # the first frame comes once the test has looked before it; after 5 frames the camera
+    # hangs, then fails
+    fake_camera(5, before_read=lambda: go.wait(10.0), on_frame=next_frame,
+                on_end=lambda: hang.wait(10.0))
     monkeypatch.setattr(video, "detect_source_point", lambda img, det: (320.0, 240.0))
     vp = video.VideoImagePoints(0, detector="hog")
     vp._clock = lambda: now[0]

@@ -172,32 +172,10 @@ def test_track_with_video_and_no_detection_falls_back_to_direction(scene, capsys
     assert rows[-1]["azimuth_deg"] is not None
 
 
-def test_live_camera_is_read_in_a_thread(monkeypatch):
+def test_live_camera_is_read_in_a_thread(fake_camera):
     import time as _time
 
-    import cv2
-
-    class FakeCap:
-        def __init__(self, index):
-            self.n = 0
-
-        def isOpened(self):
-            return True
-
-        def get(self, prop):
-            return 30.0
-
-        def read(self):
-            self.n += 1
-            _time.sleep(0.005)
-            if self.n > 5:
-                return False, None
-            return True, np.full((60, 80, 3), 100, np.uint8)
-
-        def release(self):
-            pass
-
-    monkeypatch.setattr(cv2, "VideoCapture", FakeCap)
+    fake_camera(5, before_read=lambda: _time.sleep(0.005))
     vp = VideoImagePoints(0, detector="face")
     assert vp(0.0) is None  # starts the camera thread
     for _ in range(100):

@@ -1,0 +1,50 @@
+"""Fixtures of the stream tests: a fake live camera."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+
+
+def _nothing() -> None:
+    return None
+
+
+@pytest.fixture
+def fake_camera(monkeypatch: pytest.MonkeyPatch) -> Callable[..., None]:
+    """Install a fake ``cv2.VideoCapture`` (any index opens, 30 frames/s): call
+    ``fake_camera(n_frames, before_read=..., on_frame=..., on_end=...)``. Each ``read()``
+    calls ``before_read``; the first ``n_frames`` reads then call ``on_frame`` and return a
+    grey 80x60 image, later ones call ``on_end`` and fail (the camera has stopped)."""
+    import cv2
+
+    def install(n_frames: int = 5, before_read: Callable[[], None] = _nothing,
+                on_frame: Callable[[], None] = _nothing,
+                on_end: Callable[[], None] = _nothing) -> None:
+        class FakeCap:
+            def __init__(self, index: int) -> None:
+                self.n = 0
+
+            def isOpened(self) -> bool:
+                return True
+
+            def get(self, prop: int) -> float:
+                return 30.0
+
+            def read(self) -> tuple[bool, np.ndarray | None]:
+                before_read()
+                self.n += 1
+                if self.n > n_frames:
+                    on_end()
+                    return False, None
+                on_frame()
+                return True, np.full((60, 80, 3), 100, np.uint8)
+
+            def release(self) -> None:
+                pass
+
+        monkeypatch.setattr(cv2, "VideoCapture", FakeCap)
+
+    return install
