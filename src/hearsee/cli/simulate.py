@@ -68,7 +68,8 @@ def simulate_cmd(
     trajectory: Path | None = typer.Option(
         None, "--trajectory",
         help="Moving source: CSV t,x,y,z (seconds, metres, array frame); the ground-truth "
-        "trajectory is written beside the WAV as OUT.trajectory.csv."),
+        "trajectory is written beside the WAV as OUT.trajectory.csv (where the source is at t; "
+        "the array hears it r/c later, see hearsee.sim.moving.Trajectory.heard_at)."),
     signal: str = typer.Option("noise", "--signal",
                                help="noise | male | female | PATH to an audio file."),
     duration: float = typer.Option(2.0, "--duration", help="Length in seconds."),
