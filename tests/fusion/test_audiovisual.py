@@ -72,6 +72,26 @@ def test_itd_noise_gives_errors_mostly_along_the_ray(rig):
     assert np.std(along) > 5 * across.max()
 
 
+def test_a_wrongly_told_camera_position_moves_the_fix_but_not_the_itd_residual():
+    """Why hearsee cannot flag a wrong --camera-at: with exact TDOAs and pixels, a camera told
+    10 cm off sideways puts the fix 0.4-1 m along the ray while the three TDOAs still fit a
+    point on that ray to within 0.1 sample at 16 kHz (rooms leave more than that on a correct
+    rig; bench/mounting.py)."""
+    cam = Camera.from_fov(70.0, 640, 480)
+    arr = MicArray.from_preset("three-mic")
+    true = AudioVisualRig.mounted(arr, cam, (0.0, 0.2, 0.0))
+    for p in ([1.5, 0.3, 0.1], [1.0, -0.3, -0.1], [1.8, 0.5, 0.0]):
+        p = np.array(p)
+        uv, z = true.project(p)[0], arr.tdoa(p)
+        exact = locate_on_ray(true, uv, z)
+        assert np.linalg.norm(exact.position_m - p) < 1e-3
+        for dy in (0.1, -0.1):
+            told = AudioVisualRig.mounted(arr, cam, (0.0, 0.2 + dy, 0.0))
+            fix = locate_on_ray(told, uv, z)
+            assert np.linalg.norm(fix.position_m - p) > 0.4
+            assert fix.residual_s * 16000 < 0.1
+
+
 def test_bad_fusion_input(rig):
     with pytest.raises(EstimationError, match="TDOAs"):
         locate_on_ray(rig, [320, 240], [0.0, 0.0])
