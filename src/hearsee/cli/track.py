@@ -58,8 +58,8 @@ def track_cmd(
     camera_at: Annotated[str, typer.Option(
         "--camera-at", help="Camera optical centre X,Y,Z in the array frame, metres. Measure "
         "it (and the pan) carefully: the range comes from the camera-array parallax, 10 cm "
-        "off moved the 3D fixes 0.25-0.8 m in bench/mounting.py, and the audio cannot "
-        "tell.")] = "0,0,0",
+        "off sideways moved the 3D fixes 0.25-0.8 m in bench/mounting.py, and the audio "
+        "cannot tell.")] = "0,0,0",
     camera_pan: Annotated[float, typer.Option(
         "--camera-pan", help="Camera pan (deg, toward +y).")] = 0.0,
     camera_tilt: Annotated[float, typer.Option(
