@@ -513,7 +513,7 @@ def solve_range_differences(
             "cost": float(cost),
         })
     cov, rel, ang, cond = info[0]
-    cost0, _chi0, p0, known0 = kept[0]
+    cost0, chi0, p0, known0 = kept[0]
     if not known0 and not far:
         # the data do not fix the distance: answer with the far-field direction(s) instead of
         # points spread along the range valley
@@ -526,7 +526,7 @@ def solve_range_differences(
         out.distance_rel_std = rel
         return out
     az0, el0 = direction_deg(p0 - ref)
-    rms = float(np.sqrt(np.mean((_model(p0, M, a, b, c) - y) ** 2)))
+    rms = sig * float(np.sqrt(chi0 / y.size))  # chi0: the best fit's sum of squared residuals / sig
     return Position3D(
         position_m=p0 if known0 else None,
         azimuth_deg=float(az0),
