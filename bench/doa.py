@@ -88,7 +88,8 @@ BANDS = {"noise": (300.0, 7500.0), "speech": (300.0, 3500.0)}
 #: Recordings with no noise-only frame (the white-noise source) cannot measure that ratio;
 #: since 2026-11-24's ninth session they are tested by how much the coherence grows with 4x
 #: longer frames (TdoaFrames.coherence_gain > 1.1, REVERB_COHERENCE_GAIN). Held-out seeds 777
-#: and 778 (16 trials per condition each, both arrays; the test on the first pair, as now):
+#: and 778 (16 trials per condition each, both arrays; the test on the first pair, which for
+#: these two presets is also the widest pair the test has used since):
 #: white noise in rooms 19 of 24 cells better (by up to 3.5 deg RMSE), 5 worse (by 0.01-0.52
 #: deg, and one two-mic outlier: RT60 0.6 10 dB 2.5 -> 14.3 deg, a trial both weightings miss
 #: by 56 deg at 0 and 20 dB); ARCTIC at 0 dB in rooms, where 2-4 of 16 recordings show no
