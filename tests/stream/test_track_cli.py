@@ -107,6 +107,10 @@ def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, caps
     (["--tracker", "particle"], "--tracker"),
     (["--rate-tau", "0"], "--rate-tau must be > 0 s"),
     (["--rate-tau", "nan"], "--rate-tau must be > 0 s"),
+    (["--camera", "CAM", "--image-points", "PTS", "--camera-at", "1,2"],
+     "--camera-at: expected 3 numbers"),
+    (["--camera", "CAM", "--image-points", "PTS", "--camera-at", "0,nan,0"],
+     "--camera-at: numbers must be finite"),
 ])
 def test_track_bad_options(scene, capsys, args, msg):
     args = [a.replace("CAM", str(scene["cam"])).replace("PTS", str(scene["pts"])) for a in args]
