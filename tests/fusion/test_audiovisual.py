@@ -7,6 +7,7 @@ from hearsee.fusion.audiovisual import (
     RAY_SIGMA_TDOA_S,
     AudioVisualRegressor,
     AudioVisualRig,
+    RayTdoaTracker,
     RayTracker,
     locate_on_ray,
     ray_residuals,
@@ -174,6 +175,98 @@ def test_ray_tracker_bad_parameters():
     with pytest.raises(EstimationError, match="gate_prob"):
         RayTracker(gate_prob=1.5)
     assert np.all(np.isnan(RayTracker().position))
+
+
+@pytest.fixture(scope="module")
+def side_rig(rig):
+    """The camera 0.2 m beside the three-mic preset (bench/tracking.py part B's first rig)."""
+    return AudioVisualRig.mounted(rig.array, rig.camera, (0.0, 0.2, 0.0))
+
+
+def _walk_measurements(rig, rng, n=80, dt=0.016, sigma_tdoa_s=8e-6, sigma_px=1.0):
+    """(t, truth, pixel, TDOAs, fix) of a source walking at constant velocity."""
+    p0, v = np.array([1.3, -0.3, 0.05]), np.array([-0.2, 0.6, 0.0])
+    out = []
+    for k in range(n):
+        p = p0 + v * k * dt
+        uv = rig.project(p)[0] + sigma_px * rng.standard_normal(2)
+        z = rig.array.tdoa(p) + sigma_tdoa_s * rng.standard_normal(3)
+        out.append((k * dt, p, uv, z, locate_on_ray(rig, uv, z, sigma_tdoa_s=sigma_tdoa_s)))
+    return v, out
+
+
+def test_tdoa_tracker_fuses_pixels_and_tdoas_and_estimates_velocity(side_rig):
+    rig = side_rig
+    v, frames = _walk_measurements(rig, np.random.default_rng(6))
+    trk = RayTdoaTracker(rig)
+    raw, err = [], []
+    fused = []
+    for t, p, uv, z, fix in frames:
+        fused.append(trk.update_measurements(t, uv, z, fix))
+        raw.append(np.linalg.norm(fix.position_m - p))
+        err.append(np.linalg.norm(trk.position - p))
+    assert np.mean(fused) > 0.9
+    assert np.median(err[30:]) < 0.5 * np.median(raw[30:])
+    assert np.linalg.norm(trk.velocity - v) < 0.1
+    assert trk.n_rejects == 0 and trk.position_cov.shape == (3, 3)
+
+
+def test_tdoa_tracker_drops_one_bad_pair_and_keeps_the_others(side_rig):
+    rig = side_rig
+    _, frames = _walk_measurements(rig, np.random.default_rng(7), sigma_tdoa_s=1e-6,
+                                   sigma_px=0.2)
+    trk = RayTdoaTracker(rig, sigma_tdoa_s=2e-6, sigma_px=0.2)
+    for t, _, uv, z, fix in frames[:50]:
+        trk.update_measurements(t, uv, z, fix)
+    for t, _, uv, z, fix in frames[50:]:
+        bad = z + np.array([0.0, 12e-6, 0.0])  # a reflection pulls pair 0-2 by 0.2 sample
+        assert trk.update_measurements(t, uv, bad, fix)  # the other two pairs were fused
+    err = np.linalg.norm(trk.position - frames[-1][1])
+    assert err < 0.01
+    # the same bad TDOAs in a filter with a wide per-pair gate (7 sigma) pull the track off
+    loose = RayTdoaTracker(rig, sigma_tdoa_s=2e-6, sigma_px=0.2, pair_gate_prob=1 - 1e-12)
+    for t, _, uv, z, fix in frames:
+        loose.update_measurements(t, uv, z + (np.array([0.0, 12e-6, 0.0]) if t >= frames[50][0]
+                                              else 0.0), fix)
+    assert np.linalg.norm(loose.position - frames[-1][1]) > max(3 * err, 0.01)
+
+
+def test_tdoa_tracker_gates_a_far_fix_and_restarts_after_repeated_ones(side_rig):
+    rig = side_rig
+    _, frames = _walk_measurements(rig, np.random.default_rng(8), n=40)
+    trk = RayTdoaTracker(rig, max_rejects=3)
+    for t, _, uv, z, fix in frames[:30]:
+        trk.update_measurements(t, uv, z, fix)
+    # a frame whose fix fails the gate fuses none of its TDOAs, not even ones that would pass
+    # their own gates
+    t, p, uv, z, fix = frames[30]
+    far = locate_on_ray(rig, uv, rig.array.tdoa(p - 0.6 * fix.direction),
+                        sigma_tdoa_s=RAY_SIGMA_TDOA_S)
+    assert not trk.update_measurements(t, uv, z, far) and trk.n_rejects == 1
+    assert trk.update_measurements(*frames[31][:1], *frames[31][2:]) and trk.n_rejects == 0
+    # the talker heard 0.6 m nearer along the ray (a reflection): the fixes fail the gate ...
+    moved = []
+    for t, p, uv, _, fix in frames[32:35]:
+        q = p - 0.6 * fix.direction
+        zq = rig.array.tdoa(q)
+        fq = locate_on_ray(rig, uv, zq, sigma_tdoa_s=RAY_SIGMA_TDOA_S)
+        assert not trk.update_measurements(t, uv, zq, fq)
+        assert np.linalg.norm(trk.position - p) < 0.1
+        moved.append((t, uv, zq, fq))
+    # ... and the next one restarts the track there
+    t, p, uv, _, fix = frames[35]
+    fq = locate_on_ray(rig, uv, rig.array.tdoa(p - 0.6 * fix.direction),
+                       sigma_tdoa_s=RAY_SIGMA_TDOA_S)
+    assert trk.update_measurements(t, uv, None, fq)
+    np.testing.assert_allclose(trk.position, fq.position_m)
+    # a frame without a fix: camera update only, no TDOA fused
+    assert trk.update_measurements(frames[36][0], frames[36][2], None, None) is False
+    assert trk.initialized
+    with pytest.raises(EstimationError, match="sigma_tdoa_s"):
+        RayTdoaTracker(rig, sigma_tdoa_s=0.0)
+    with pytest.raises(EstimationError, match="pair_gate_prob"):
+        RayTdoaTracker(rig, pair_gate_prob=1.0)
+    assert not RayTdoaTracker(rig).update_measurements(0.0, (320.0, 240.0), None, None)
 
 
 def test_track_on_rays_from_a_recording(rig):

@@ -234,10 +234,10 @@ def test_camera_fix_with_inconsistent_itds_is_discarded():
     assert bad.position_m is not None  # the track predicts on
 
 
-@pytest.mark.parametrize("model", ["cv", "ca"])
-def test_motion_models_track_a_source_moving_along_a_line(model):
-    """Exact ITDs and image points of a source moving at a known 0.6 m/s along y: both 3D
-    trackers end on it with its velocity; an unknown model name is a ConfigError."""
+@pytest.mark.parametrize(("model", "ray"), [("cv", "tdoa"), ("cv", "fix"), ("ca", "tdoa")])
+def test_motion_models_track_a_source_moving_along_a_line(model, ray):
+    """Exact ITDs and image points of a source moving at a known 0.6 m/s along y: every 3D
+    tracker ends on it with its velocity; an unknown model name is a ConfigError."""
     from hearsee.fusion.audiovisual import AudioVisualRig
     from hearsee.vision.camera import Camera
 
@@ -248,8 +248,11 @@ def test_motion_models_track_a_source_moving_along_a_line(model):
     def at(t):
         return np.array([1.5, -0.3, 0.0]) + v * t
 
-    proc = TrackingProcessor(arr, FS, StreamConfig(motion_model=model), rig=rig,
-                             image_points=lambda t: tuple(rig.project(at(t))[0]))
+    proc = TrackingProcessor(arr, FS, StreamConfig(motion_model=model, ray_measurements=ray),
+                             rig=rig, image_points=lambda t: tuple(rig.project(at(t))[0]))
+    expected = {"tdoa": "RayTdoaTracker", "fix": "RayTracker"}[ray] if model == "cv" else (
+        "MotionKalman")
+    assert type(proc.motion).__name__ == expected
     for k in range(60):
         u = Update(k * 0.032, None, None, None, None, None, None, 1.0)
         proc._fuse(u, arr.tdoa(at(u.t)))
@@ -257,6 +260,10 @@ def test_motion_models_track_a_source_moving_along_a_line(model):
     assert np.linalg.norm(np.array(u.velocity_mps) - v) < 0.1
     with pytest.raises(ConfigError, match="motion_model"):
         TrackingProcessor(arr, FS, StreamConfig(motion_model="kalman"), rig=rig)
+    with pytest.raises(ConfigError, match="ray_measurements"):
+        TrackingProcessor(arr, FS, StreamConfig(ray_measurements="rays"), rig=rig)
+    with pytest.raises(ConfigError, match="sigma_accel"):
+        TrackingProcessor(arr, FS, StreamConfig(sigma_accel=-1.0, ray_measurements=ray), rig=rig)
 
 
 def test_camera_fix_tdoa_noise_defaults():

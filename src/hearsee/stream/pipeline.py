@@ -894,10 +894,15 @@ class StreamConfig:
         before) and white noise 1.24 / 1.37x (1.19 / 1.40x). Applied to horizontal planar
         arrays (plane within 10 deg of level, like the presets) only: volume arrays measure
         both angles alike, linear ones give no elevation
-    motion_model : the 3D tracker of the camera-ray fixes: ``"cv"`` (default), the gated
-        constant-velocity :class:`~hearsee.fusion.audiovisual.RayTracker`, or ``"ca"``, the
-        constant-acceleration :class:`~hearsee.audio.tracking.MotionKalman`
-    sigma_accel : the ``"cv"`` tracker's acceleration noise, m/s^2
+    motion_model : the 3D tracker of the camera + ITD measurements: ``"cv"`` (default),
+        constant velocity, or ``"ca"``, the constant-acceleration
+        :class:`~hearsee.audio.tracking.MotionKalman` on the camera-ray fixes
+    ray_measurements : what the ``"cv"`` tracker fuses: ``"tdoa"`` (default), the image point
+        and each pair's TDOA with its own gate
+        (:class:`~hearsee.fusion.audiovisual.RayTdoaTracker`), or ``"fix"``, the camera-ray fixes
+        (:class:`~hearsee.fusion.audiovisual.RayTracker`, the default before 2026-11-25)
+    sigma_accel : the ``"cv"`` tracker's acceleration noise, m/s^2; None = its own default
+        (0.1 for ``"tdoa"``, 0.2 for ``"fix"``)
     sigma_jerk : the ``"ca"`` tracker's process noise, m/s^3
     accel_tau_s : correlation time of the ``"ca"`` tracker's acceleration (Singer), s; None =
         pure CA
@@ -955,7 +960,8 @@ class StreamConfig:
     sigma_meas_deg: float = 10.0
     sigma_accel_dps2: float = 200.0
     motion_model: str = "cv"
-    sigma_accel: float = 0.2
+    ray_measurements: str = "tdoa"
+    sigma_accel: float | None = None
     sigma_jerk: float = 0.5
     sigma_tdoa_s: float | None = None
     sigma_px: float = 2.0
@@ -1185,14 +1191,25 @@ class TrackingProcessor:
             raise ConfigError("direction tracker (direction_modes_dps2 / mode_dwell_s / "
                               f"elevation_accel_ratio / direction_rate_tau_s): {exc}") from None
 
-    @staticmethod
-    def _motion_tracker(cfg: StreamConfig) -> tuple[Any, float]:
-        """The 3D tracker of ``cfg.motion_model`` and the fixes' TDOA noise (seconds)."""
+    def _motion_tracker(self, cfg: StreamConfig) -> tuple[Any, float]:
+        """The 3D tracker of ``cfg.motion_model`` / ``cfg.ray_measurements`` and the TDOA noise
+        (seconds) of its camera-ray fixes."""
         if cfg.motion_model == "cv":
-            from hearsee.fusion.audiovisual import RAY_SIGMA_TDOA_S, RayTracker
+            from hearsee.fusion.audiovisual import RAY_SIGMA_TDOA_S, RayTdoaTracker, RayTracker
 
+            if cfg.ray_measurements not in ("tdoa", "fix"):
+                raise ConfigError("ray_measurements must be 'tdoa' or 'fix', got "
+                                  f"{cfg.ray_measurements!r}")
             tdoa = RAY_SIGMA_TDOA_S if cfg.sigma_tdoa_s is None else float(cfg.sigma_tdoa_s)
-            return RayTracker(sigma_accel=cfg.sigma_accel), tdoa
+            acc = {} if cfg.sigma_accel is None else {"sigma_accel": float(cfg.sigma_accel)}
+            try:
+                if cfg.ray_measurements == "tdoa" and self.rig is not None:
+                    return RayTdoaTracker(self.rig, self.pairs, sigma_tdoa_s=tdoa,
+                                          sigma_px=cfg.sigma_px, **acc), tdoa
+                return RayTracker(**acc), tdoa  # (without a camera: never fed)
+            except EstimationError as exc:
+                raise ConfigError(f"3D tracker (sigma_accel / sigma_tdoa_s / sigma_px): {exc}"
+                                  ) from None
         if cfg.motion_model == "ca":
             from hearsee.fusion.audiovisual import FIX_SIGMA_TDOA_S
 
@@ -1213,6 +1230,9 @@ class TrackingProcessor:
             fix = None
         if fix is not None:
             upd.raw_position_m = fix.position_m.tolist()
+        if hasattr(self.motion, "update_measurements"):
+            self.motion.update_measurements(upd.t, uv, z, fix)
+        elif fix is not None:
             self.motion.update(upd.t, fix.position_m, fix.covariance,
                                [(a.position_m, a.covariance) for a in fix.alternatives])
         else:
