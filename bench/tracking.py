@@ -95,10 +95,10 @@ close discarded) and three trackers on the SAME frames: since 2026-11-25 the def
 m/s^2; it fuses each frame's image point and each pair's TDOA as measurements with their own
 gates, and uses the fix only to gate the frame and to start the track: a reflection that pulls
 one pair no longer moves the whole fix. Chosen on dev seeds 100-400, first rig: 128 walks,
-pooled median 6.19 -> 4.87 cm; 64 walks that turn by 60-150 deg halfway 8.62 -> 8.31 cm. On
-held-out seeds 777/778/779 a tie in position: 96 straight walks 5.48 -> 5.30 cm (per seed
-5.59/5.11/5.73 -> 5.26/5.80/4.66), 96 turning walks 7.81 -> 7.87 cm; velocity RMSE 0.31 ->
-0.25 and 0.58 -> 0.47 m/s); the constant-velocity
+pooled median 6.19 -> 4.81 cm; 64 walks that turn by 60-150 deg halfway 8.62 -> 7.66 cm. On
+held-out seeds 777/778/779 a tie in position: 96 straight walks 5.48 -> 5.26 cm (per seed
+5.59/5.11/5.73 -> 5.26/5.74/4.66), 96 turning walks 7.81 -> 7.82 cm; velocity RMSE 0.31 ->
+0.25 and 0.58 -> 0.49 m/s); the constant-velocity
 :class:`~hearsee.fusion.audiovisual.RayTracker` on the fixes (the default before; white
 acceleration 0.2 m/s^2, fix covariance
 from 8 us of TDOA noise (:data:`~hearsee.fusion.audiovisual.RAY_SIGMA_TDOA_S`; 4 us at 48 kHz

@@ -269,6 +269,28 @@ def test_tdoa_tracker_gates_a_far_fix_and_restarts_after_repeated_ones(side_rig)
     assert not RayTdoaTracker(rig).update_measurements(0.0, (320.0, 240.0), None, None)
 
 
+def test_tdoa_tracker_ignores_a_detection_on_someone_else_then_follows_them(side_rig):
+    rig = side_rig
+    _, frames = _walk_measurements(rig, np.random.default_rng(9), n=50)
+    trk = RayTdoaTracker(rig, max_rejects=3)
+    for t, _, uv, z, fix in frames[:30]:
+        trk.update_measurements(t, uv, z, fix)
+    other = np.array([1.0, 0.6, 0.0])  # another person, heard too (their TDOAs and fix)
+    zo, uo = rig.array.tdoa(other), rig.project(other)[0]
+    fo = locate_on_ray(rig, uo, zo, sigma_tdoa_s=RAY_SIGMA_TDOA_S)
+    for t, p, _, _, _ in frames[30:32]:
+        assert not trk.update_measurements(t, uo, zo, fo)  # the image point fails its gate
+        assert np.linalg.norm(trk.position - p) < 0.05
+    assert not trk.update_measurements(frames[32][0], uo, None, None) and trk.n_rejects == 3
+    assert trk.update_measurements(frames[33][0], uo, zo, fo)  # restarted on them
+    np.testing.assert_allclose(trk.position, fo.position_m)
+    for t, _, _, _, _ in frames[34:40]:
+        trk.update_measurements(t, uo, zo, fo)
+    assert np.linalg.norm(trk.position - other) < 0.02
+    with pytest.raises(EstimationError, match="pixel_gate_prob"):
+        RayTdoaTracker(rig, pixel_gate_prob=0.0)
+
+
 def test_track_on_rays_from_a_recording(rig):
     from hearsee.sim.moving import Trajectory, simulate_moving_free_field
 

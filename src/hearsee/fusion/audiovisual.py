@@ -17,10 +17,13 @@ local refinement is both robust and cheap. The fix comes with a covariance: alon
 the curvature of J (Gauss-Newton, ``var(s) = sigma_tdoa^2 / sum_k F_k'(s)^2``), across it from the
 pixel noise (``s * sigma_px / f``). That covariance is the measurement noise R of the
 constant-acceleration filter (:class:`hearsee.audio.tracking.MotionKalman`, thesis 5.4.3) or of
-the constant-velocity :class:`RayTracker`, which :func:`track_on_rays` runs on a recording: a
-single fix's range scatters by several centimetres in a room (early reflections, TDOA noise;
-~0 median, not an offset), and at walking speed the range changes slowly, so averaging the fixes
-of many frames is what brings the 3D error down (``bench/tracking.py`` part B).
+the constant-velocity :class:`RayTracker`: a single fix's range scatters by several centimetres
+in a room (early reflections, TDOA noise; ~0 median, not an offset), and at walking speed the
+range changes slowly, so averaging many frames is what brings the 3D error down
+(``bench/tracking.py`` part B). :func:`track_on_rays` and the stream run
+:class:`RayTdoaTracker` by default, which fuses the image point and each pair's TDOA as
+separate measurements (each TDOA with its own gate) and uses the fix to gate the frame and to
+start the track.
 
 **The mounting must be measured, not guessed.** The range along the ray comes from the parallax
 between camera and array, so an error in the camera's position or pan moves every fix along
@@ -396,15 +399,17 @@ class RayTdoaTracker(RayTracker):
     more frames (a lower ``sigma_accel``) without drifting. On the dev walks of
     ``bench/tracking.py`` part B (three-mic preset + camera 0.2 m aside, RT60 0.3 s, 20 dB,
     seeds 100-400, 128 straight walks of 2 s) the pooled median 3D error went from 6.19 cm
-    (:class:`RayTracker`, 0.2 m/s^2) to 4.87 cm (this filter, 0.1 m/s^2; paired walk bootstrap
-    -1.3 cm [-2.4, -0.3]); on 64 walks that turn by 60-150 deg at once halfway 8.62 -> 8.31 cm
-    (a tie). The fix-based :class:`RayTracker` gains nothing from 0.1 m/s^2 (6.32 cm). Without
-    the per-pair gates the TDOA updates were worse than the fixes (7.04 cm), and without the
-    fix gate a turn left the track behind (15 cm on the turning walks). On held-out seeds
-    777/778/779 the position gain did not carry over -- a tie: 96 straight walks 5.48 -> 5.30
-    cm (5.59/5.11/5.73 -> 5.26/5.80/4.66 per seed), 96 turning walks 7.81 -> 7.87 cm
-    (7.12/11.5/5.80 -> 7.00/9.02/7.90) -- while the velocity RMSE fell on both (0.31 -> 0.25
-    and 0.58 -> 0.47 m/s). All 224 straight walks: 5.87 -> 5.06 cm (-0.8 [-1.6, -0.03]).
+    (:class:`RayTracker`, 0.2 m/s^2) to 4.81 cm (this filter, 0.1 m/s^2; paired walk bootstrap
+    -1.4 cm [-2.4, -0.4]); on 64 walks that turn by 60-150 deg at once halfway 8.62 -> 7.66 cm.
+    The fix-based :class:`RayTracker` gains nothing from 0.1 m/s^2 (6.32 cm). Without the
+    per-pair gates the TDOA updates were worse than the fixes (7.04 cm); without the fix gate a
+    turn left the track behind (15 cm on the turning walks); the pixel gate (a frame whose image
+    point is off counts toward the restart, as a gated fix does) took the turning walks from
+    8.31 to 7.66 cm. On held-out seeds 777/778/779 the position gain mostly did not carry over:
+    96 straight walks 5.48 -> 5.26 cm (per seed 5.59/5.11/5.73 -> 5.26/5.74/4.66), 96 turning
+    walks 7.81 -> 7.82 cm (7.12/11.5/5.80 -> 7.09/9.42/7.40), a tie; the velocity RMSE fell
+    on both (0.31 -> 0.25 and 0.58 -> 0.49 m/s). All 224 straight walks: 5.87 -> 5.00 cm
+    (-0.9 [-1.7, -0.1]).
 
     Parameters
     ----------
@@ -418,8 +423,10 @@ class RayTdoaTracker(RayTracker):
         Standard deviation of one pair's TDOA, seconds.
     sigma_px : float
         Standard deviation of the image point per axis, pixels.
-    gate_prob, pair_gate_prob : float
-        Chi-square gate probabilities of the fix (3 dof) and of each TDOA (1 dof).
+    gate_prob, pair_gate_prob, pixel_gate_prob : float
+        Chi-square gate probabilities of the fix (3 dof), of each TDOA (1 dof) and of the image
+        point (2 dof; a detection on someone else). A frame whose image point or fix fails its
+        gate fuses nothing and counts toward ``max_rejects``.
     max_rejects, init_vel_sigma :
         As :class:`RayTracker`.
 
@@ -432,19 +439,21 @@ class RayTdoaTracker(RayTracker):
     def __init__(self, rig: AudioVisualRig, pairs: Sequence[tuple[int, int]] | None = None,
                  sigma_accel: float = 0.1, sigma_tdoa_s: float = RAY_SIGMA_TDOA_S,
                  sigma_px: float = 1.0, gate_prob: float = 0.99, pair_gate_prob: float = 0.99,
-                 max_rejects: int = 4, init_vel_sigma: float = 1.0) -> None:
+                 pixel_gate_prob: float = 0.9999, max_rejects: int = 4,
+                 init_vel_sigma: float = 1.0) -> None:
         super().__init__(sigma_accel=sigma_accel, gate_prob=gate_prob, max_rejects=max_rejects,
                          init_vel_sigma=init_vel_sigma)
         if not sigma_tdoa_s > 0 or not sigma_px > 0:
             raise EstimationError("sigma_tdoa_s and sigma_px must be > 0")
-        if not 0 < pair_gate_prob < 1:
-            raise EstimationError("pair_gate_prob must be in (0, 1)")
+        if not (0 < pair_gate_prob < 1 and 0 < pixel_gate_prob < 1):
+            raise EstimationError("pair_gate_prob and pixel_gate_prob must be in (0, 1)")
         from scipy.stats import chi2
 
         self.rig = rig
         self.pairs = [(int(i), int(j)) for i, j in (rig.array.pairs if pairs is None else pairs)]
         self.sigma_tdoa_s, self.sigma_px = float(sigma_tdoa_s), float(sigma_px)
         self._pair_gate = float(chi2.ppf(pair_gate_prob, 1))
+        self._pixel_gate = float(chi2.ppf(pixel_gate_prob, 2))
 
     def update_measurements(self, t: float, uv: ArrayLike | None = None,
                             tdoa_s: ArrayLike | None = None, fix: RayFix | None = None) -> bool:
@@ -459,8 +468,9 @@ class RayTdoaTracker(RayTracker):
         self.predict(t)
         if not self.initialized:
             return False
-        if uv is not None:
-            self._fuse_pixel(np.asarray(uv, dtype=float).reshape(2))
+        if uv is not None and not self._fuse_pixel(np.asarray(uv, dtype=float).reshape(2)):
+            self.n_rejects += 1
+            return False
         if fix is None or tdoa_s is None:
             return False
         pos = self.x[self._POS]
@@ -492,20 +502,23 @@ class RayTdoaTracker(RayTracker):
         self.n_rejects = 0 if fused else self.n_rejects + 1
         return fused > 0
 
-    def _fuse_pixel(self, uv: NDArray) -> None:
-        """EKF update with the image point (pixels); skipped where the prediction is not in
-        front of the camera."""
+    def _fuse_pixel(self, uv: NDArray) -> bool:
+        """EKF update with the image point (pixels). False when it fails the gate; skipped (True)
+        where it or the prediction's projection is not finite."""
         p = self.x[self._POS]
         h = 1e-4 * max(float(np.linalg.norm(p - self.rig.camera_centre)), 0.1)
         pts = np.vstack([p, p + h * np.eye(3), p - h * np.eye(3)])
         q = self.rig.project(pts)
         if not np.all(np.isfinite(q)) or not np.all(np.isfinite(uv)):
-            return
+            return True
         H = np.zeros((2, self._DIM))
         H[:, self._POS] = ((q[1:4] - q[4:7]) / (2 * h)).T
         R = np.eye(2) * self.sigma_px**2
-        y, S, _ = self._innovation(uv - q[0] + H @ self.x, H, R, None)
+        y, S, d2 = self._innovation(uv - q[0] + H @ self.x, H, R, None)
+        if d2 > self._pixel_gate:
+            return False
         self._correct(y, S, H, R)
+        return True
 
 
 @dataclass
@@ -532,8 +545,11 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
     (:func:`hearsee.audio.tdoa.estimate_tdoas`, ``min_confidence``), the camera-ray fix
     (:func:`locate_on_ray`, covariance from ``sigma_tdoa_s`` and ``sigma_px``), fixes whose RMS
     ITD residual exceeds ``max_residual_samples`` discarded (three TDOAs that do not close),
-    then the ``tracker`` (default :class:`RayTracker`; anything with the same ``update`` and
-    ``position``/``velocity`` works, e.g. :class:`hearsee.audio.tracking.MotionKalman`).
+    then the ``tracker``: by default :class:`RayTdoaTracker` (with ``sigma_tdoa_s`` and
+    ``sigma_px``), which takes each frame's image point, TDOAs and fix; a tracker without
+    ``update_measurements`` but with ``update(t, position, R, candidates)`` and
+    ``position``/``velocity`` gets the fixes (e.g. :class:`RayTracker`,
+    :class:`hearsee.audio.tracking.MotionKalman`).
 
     Parameters
     ----------
@@ -552,14 +568,15 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
     range_m : (near, far)
         Search interval along the camera ray, metres.
     sigma_tdoa_s, sigma_px : float
-        Measurement noise behind each fix's covariance (seconds, pixels); ``sigma_tdoa_s``
-        None = :data:`RAY_SIGMA_TDOA_S` (8 us, chosen with :class:`RayTracker`'s defaults).
+        Measurement noise behind each fix's covariance and the default tracker's measurements
+        (seconds, pixels); ``sigma_tdoa_s`` None = :data:`RAY_SIGMA_TDOA_S` (8 us, chosen with
+        :class:`RayTracker`'s defaults).
     min_confidence : float
         Frames whose GCC confidence is below this in any pair give no fix.
     max_residual_samples : float
         Fixes whose RMS ITD residual exceeds this many samples are discarded.
     tracker : optional
-        The filter (default ``RayTracker()``).
+        The filter (default ``RayTdoaTracker(rig, sigma_tdoa_s=..., sigma_px=...)``).
 
     Returns
     -------
