@@ -1194,12 +1194,12 @@ class TrackingProcessor:
     def _motion_tracker(self, cfg: StreamConfig) -> tuple[Any, float]:
         """The 3D tracker of ``cfg.motion_model`` / ``cfg.ray_measurements`` and the TDOA noise
         (seconds) of its camera-ray fixes."""
+        if cfg.ray_measurements not in ("tdoa", "fix"):
+            raise ConfigError("ray_measurements must be 'tdoa' or 'fix', got "
+                              f"{cfg.ray_measurements!r}")
         if cfg.motion_model == "cv":
             from hearsee.fusion.audiovisual import RAY_SIGMA_TDOA_S, RayTdoaTracker, RayTracker
 
-            if cfg.ray_measurements not in ("tdoa", "fix"):
-                raise ConfigError("ray_measurements must be 'tdoa' or 'fix', got "
-                                  f"{cfg.ray_measurements!r}")
             tdoa = RAY_SIGMA_TDOA_S if cfg.sigma_tdoa_s is None else float(cfg.sigma_tdoa_s)
             acc = {} if cfg.sigma_accel is None else {"sigma_accel": float(cfg.sigma_accel)}
             try:
