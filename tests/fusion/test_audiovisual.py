@@ -231,12 +231,18 @@ def test_tdoa_tracker_drops_one_bad_pair_and_keeps_the_others(side_rig):
     assert np.linalg.norm(loose.position - frames[-1][1]) > max(3 * err, 0.01)
 
 
-def test_tdoa_tracker_gates_a_far_fix_and_restarts_after_repeated_ones(side_rig):
-    rig = side_rig
-    _, frames = _walk_measurements(rig, np.random.default_rng(8), n=40)
+def _settled(rig, seed, n):
+    """A RayTdoaTracker (max_rejects 3) after the first 30 of n walk frames, and the frames."""
+    _, frames = _walk_measurements(rig, np.random.default_rng(seed), n=n)
     trk = RayTdoaTracker(rig, max_rejects=3)
     for t, _, uv, z, fix in frames[:30]:
         trk.update_measurements(t, uv, z, fix)
+    return trk, frames
+
+
+def test_tdoa_tracker_gates_a_far_fix_and_restarts_after_repeated_ones(side_rig):
+    rig = side_rig
+    trk, frames = _settled(rig, 8, 40)
     # a frame whose fix fails the gate fuses none of its TDOAs, not even ones that would pass
     # their own gates
     t, p, uv, z, fix = frames[30]
@@ -271,10 +277,7 @@ def test_tdoa_tracker_gates_a_far_fix_and_restarts_after_repeated_ones(side_rig)
 
 def test_tdoa_tracker_ignores_a_detection_on_someone_else_then_follows_them(side_rig):
     rig = side_rig
-    _, frames = _walk_measurements(rig, np.random.default_rng(9), n=50)
-    trk = RayTdoaTracker(rig, max_rejects=3)
-    for t, _, uv, z, fix in frames[:30]:
-        trk.update_measurements(t, uv, z, fix)
+    trk, frames = _settled(rig, 9, 50)
     other = np.array([1.0, 0.6, 0.0])  # another person, heard too (their TDOAs and fix)
     zo, uo = rig.array.tdoa(other), rig.project(other)[0]
     fo = locate_on_ray(rig, uo, zo, sigma_tdoa_s=RAY_SIGMA_TDOA_S)
