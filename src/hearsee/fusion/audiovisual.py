@@ -388,9 +388,9 @@ class RayTdoaTracker(RayTracker):
     rig's projection (1 px noise, Jacobian by central differences), then each TDOA through
     ``(|p - m_i| - |p - m_j|) / c`` with its own chi-square gate (1 degree of freedom). The
     camera-ray fix of the frame (:func:`locate_on_ray`) still starts the track, restarts it after
-    ``max_rejects`` frames whose fix fails the 3-dof gate (as :class:`RayTracker`), and decides
-    whether the frame's TDOAs are used at all (no fix, or a fix that fails the gate: the frame
-    gives the camera update only).
+    ``max_rejects`` consecutive rejected frames (image point or fix outside its gate, or no TDOA
+    inside its own; as :class:`RayTracker` does with gated fixes), and decides whether the
+    frame's TDOAs are used at all (no fix, or a fix that fails the gate: none).
 
     Why: a reflection that pulls one pair's GCC peak (a few tenths of a sample) moves a fix
     along the ray by centimetres, and the fix's 3-dof gate keeps or drops all three TDOAs
