@@ -473,13 +473,10 @@ class RayTdoaTracker(RayTracker):
             return False
         if fix is None or tdoa_s is None:
             return False
-        pos = self.x[self._POS]
-        P = self.P[np.ix_(self._POS, self._POS)]
-        d2 = []
-        for f in [fix, *fix.alternatives]:
-            e = np.asarray(f.position_m, dtype=float) - pos
-            d2.append(float(e @ np.linalg.solve(P + f.covariance, e)))
-        if min(d2) > self._gate:
+        # the fix (or an alternative) against the prediction: MotionKalman's position gate
+        if min(self._innovation(np.asarray(f.position_m, dtype=float), self.H,
+                                np.asarray(f.covariance), None)[2]
+               for f in [fix, *fix.alternatives]) > self._gate:
             self.n_rejects += 1
             return False
         z = np.asarray(tdoa_s, dtype=float).reshape(-1)
