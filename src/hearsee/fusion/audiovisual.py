@@ -100,6 +100,7 @@ __all__ = [
     "RayTrack",
     "RayTracker",
     "locate_on_ray",
+    "feed_tracker",
     "ray_residuals",
     "simulate_av_samples",
     "track_on_rays",
@@ -518,6 +519,21 @@ class RayTdoaTracker(RayTracker):
         return True
 
 
+def feed_tracker(tracker: Any, t: float, uv: ArrayLike | None, tdoa_s: ArrayLike | None,
+                 fix: RayFix | None) -> bool:
+    """One frame into a 3D tracker: one with ``update_measurements`` (:class:`RayTdoaTracker`)
+    gets the image point (pixels), the TDOAs (seconds) and the fix; any other
+    (:class:`RayTracker`, :class:`hearsee.audio.tracking.MotionKalman`) the fix and its
+    alternatives, or a prediction to ``t`` (seconds) without one. Returns the tracker's answer
+    (True when something was fused)."""
+    if hasattr(tracker, "update_measurements"):
+        return tracker.update_measurements(t, uv, tdoa_s, fix)
+    if fix is None:
+        return tracker.update(t, None)
+    return tracker.update(t, fix.position_m, fix.covariance,
+                          [(a.position_m, a.covariance) for a in fix.alternatives])
+
+
 @dataclass
 class RayTrack:
     """Output of :func:`track_on_rays`: per frame ``t`` (s), the per-frame fixes ``raw`` (m,
@@ -588,7 +604,6 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
         sigma_tdoa_s = RAY_SIGMA_TDOA_S
     trk = (RayTdoaTracker(rig, prs, sigma_tdoa_s=sigma_tdoa_s, sigma_px=sigma_px)
            if tracker is None else tracker)
-    tight = hasattr(trk, "update_measurements")
     n = len(tf.t)
     raw, pos, vel = (np.full((n, 3), np.nan) for _ in range(3))
     fixes: list[RayFix | None] = []
@@ -604,13 +619,7 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
         fixes.append(fix)
         if fix is not None:
             raw[k] = fix.position_m
-        if tight:
-            trk.update_measurements(float(t), uv, z, fix)
-        elif fix is None:
-            trk.update(float(t), None)
-        else:
-            trk.update(float(t), fix.position_m, fix.covariance,
-                       [(a.position_m, a.covariance) for a in fix.alternatives])
+        feed_tracker(trk, float(t), uv, z, fix)
         pos[k], vel[k] = trk.position, trk.velocity
     return RayTrack(np.asarray(tf.t, dtype=float), raw, fixes, pos, vel)
 

@@ -1222,7 +1222,7 @@ class TrackingProcessor:
         raise ConfigError(f"motion_model must be 'cv' or 'ca', got {cfg.motion_model!r}")
 
     def _fuse(self, upd: Update, z: NDArray | None) -> None:
-        from hearsee.fusion.audiovisual import locate_on_ray
+        from hearsee.fusion.audiovisual import feed_tracker, locate_on_ray
 
         uv = self.image_points(upd.t)
         fix = None
@@ -1233,13 +1233,7 @@ class TrackingProcessor:
             fix = None
         if fix is not None:
             upd.raw_position_m = fix.position_m.tolist()
-        if hasattr(self.motion, "update_measurements"):
-            self.motion.update_measurements(upd.t, uv, z, fix)
-        elif fix is not None:
-            self.motion.update(upd.t, fix.position_m, fix.covariance,
-                               [(a.position_m, a.covariance) for a in fix.alternatives])
-        else:
-            self.motion.update(upd.t, None)
+        feed_tracker(self.motion, upd.t, uv, z, fix)
         if self.motion.initialized:
             upd.position_m = self.motion.position.tolist()
             upd.velocity_mps = self.motion.velocity.tolist()
