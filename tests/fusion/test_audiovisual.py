@@ -121,16 +121,25 @@ def test_learned_mapping_without_calibration(rig):
         model.predict(Xt[:, :3])
 
 
-def _walk_fixes(rig, rng, n=60, dt=0.032, sigma_tdoa_s=5e-7):
-    """Fixes of a source walking at constant velocity: exact pixels, noisy ITDs."""
-    p0, v = np.array([1.2, -0.3, 0.05]), np.array([-0.2, 0.6, 0.0])
+def _walk_measurements(rig, rng, n=80, dt=0.016, sigma_tdoa_s=8e-6, sigma_px=1.0, x0=1.3):
+    """(t, truth, pixel, TDOAs, fix) of a source walking at constant velocity from
+    (x0, -0.3, 0.05) m; pixel noise drawn only when ``sigma_px`` > 0."""
+    p0, v = np.array([x0, -0.3, 0.05]), np.array([-0.2, 0.6, 0.0])
     out = []
     for k in range(n):
         p = p0 + v * k * dt
+        uv = rig.project(p)[0]
+        if sigma_px > 0:
+            uv = uv + sigma_px * rng.standard_normal(2)
         z = rig.array.tdoa(p) + sigma_tdoa_s * rng.standard_normal(3)
-        out.append((k * dt, p, locate_on_ray(rig, rig.project(p)[0], z,
-                                             sigma_tdoa_s=sigma_tdoa_s)))
+        out.append((k * dt, p, uv, z, locate_on_ray(rig, uv, z, sigma_tdoa_s=sigma_tdoa_s)))
     return v, out
+
+
+def _walk_fixes(rig, rng, n=60, dt=0.032, sigma_tdoa_s=5e-7):
+    """(t, truth, fix) of :func:`_walk_measurements` with exact pixels, from x = 1.2 m."""
+    v, frames = _walk_measurements(rig, rng, n, dt, sigma_tdoa_s, sigma_px=0.0, x0=1.2)
+    return v, [(t, p, fix) for t, p, _, _, fix in frames]
 
 
 def test_ray_tracker_averages_the_range_scatter_and_estimates_velocity(rig):
@@ -181,18 +190,6 @@ def test_ray_tracker_bad_parameters():
 def side_rig(rig):
     """The camera 0.2 m beside the three-mic preset (bench/tracking.py part B's first rig)."""
     return AudioVisualRig.mounted(rig.array, rig.camera, (0.0, 0.2, 0.0))
-
-
-def _walk_measurements(rig, rng, n=80, dt=0.016, sigma_tdoa_s=8e-6, sigma_px=1.0):
-    """(t, truth, pixel, TDOAs, fix) of a source walking at constant velocity."""
-    p0, v = np.array([1.3, -0.3, 0.05]), np.array([-0.2, 0.6, 0.0])
-    out = []
-    for k in range(n):
-        p = p0 + v * k * dt
-        uv = rig.project(p)[0] + sigma_px * rng.standard_normal(2)
-        z = rig.array.tdoa(p) + sigma_tdoa_s * rng.standard_normal(3)
-        out.append((k * dt, p, uv, z, locate_on_ray(rig, uv, z, sigma_tdoa_s=sigma_tdoa_s)))
-    return v, out
 
 
 def test_tdoa_tracker_fuses_pixels_and_tdoas_and_estimates_velocity(side_rig):
