@@ -30,6 +30,22 @@ def test_tdoa_sign_and_far_field_limit():
     assert two.max_tdoa()[0] == pytest.approx(0.15 / 343.0)
 
 
+def test_tdoa_jacobian_matches_central_differences():
+    three = MicArray.from_preset("three-mic")
+    p = np.array([0.9, -0.4, 0.3])
+    h = 1e-6
+    num = np.stack([(three.tdoa(p + h * e) - three.tdoa(p - h * e)) / (2 * h)
+                    for e in np.eye(3)], axis=1)  # (n_pairs, 3)
+    jac = three.tdoa_jacobian(p)
+    assert jac.shape == (3, 3)
+    np.testing.assert_allclose(jac, num, rtol=1e-6, atol=1e-12)
+    # one pair, in the order asked for (the reversed pair flips the sign)
+    np.testing.assert_allclose(three.tdoa_jacobian(p, [(2, 1)]), -num[[2]], rtol=1e-6,
+                               atol=1e-12)
+    with pytest.raises(GeometryError):
+        three.tdoa_jacobian(three.positions[1])
+
+
 def test_yaml_round_trip(tmp_path):
     a = MicArray.from_preset("three-mic")
     p = tmp_path / "a.yaml"

@@ -61,7 +61,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
-from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.arrays import MicArray, load_array, pair_tdoa, pair_tdoa_jacobian
 from hearsee.errors import (
     AudioInputError,
     EstimationError,
@@ -254,12 +254,6 @@ def _stack(mic_sets: Sequence[ArrayLike], pairs: Sequence[Sequence[tuple[int, in
     return np.vstack(mics), np.array(a_idx), np.array(b_idx), np.array(vals)
 
 
-def _model(points: NDArray, M: NDArray, a: NDArray, b: NDArray, c: float) -> NDArray:
-    """Predicted TDOAs ``(..., m)`` for points ``(..., 3)``."""
-    d = np.linalg.norm(points[..., None, :] - M, axis=-1)
-    return (d[..., a] - d[..., b]) / c
-
-
 def _rho(z: NDArray, loss: str) -> NDArray:
     """scipy's robust loss rho(z) of squared residuals z (f_scale applied by the caller)."""
     if loss == "linear":
@@ -273,13 +267,6 @@ def _rho(z: NDArray, loss: str) -> NDArray:
     if loss == "arctan":
         return np.arctan(z)
     raise GeometryError(f"unknown loss {loss!r} (linear, soft_l1, huber, cauchy, arctan)")
-
-
-def _jac_cart(s: NDArray, M: NDArray, a: NDArray, b: NDArray, c: float) -> NDArray:
-    """d(model)/d(position) ``(m, 3)`` in s/m."""
-    u = s - M
-    u = u / np.linalg.norm(u, axis=1, keepdims=True)
-    return (u[a] - u[b]) / c
 
 
 def _mirror_images(p: NDArray, mic_sets: Sequence[ArrayLike]) -> list[NDArray]:
@@ -307,12 +294,12 @@ def _uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: float, y: ND
     1-sigma (degrees; conditional on the distance when the distance is unknown) and the
     Jacobian's condition number."""
     m = len(y)
-    J = _jac_cart(p, M, a, b, c)
+    J = pair_tdoa_jacobian(p, M, a, b, c)
     s2 = sig**2
     if m > 3:
         # robust residual scale (MAD): outliers down-weighted by the loss must not
         # inflate the covariance of the estimate
-        r = (_model(p, M, a, b, c) - y) / sig
+        r = (pair_tdoa(p, M, a, b, c) - y) / sig
         scale = 1.4826 * float(np.median(np.abs(r)))
         s2 = sig**2 * max(1.0, scale**2 * m / (m - 3))
     JtJ = J.T @ J
@@ -422,7 +409,7 @@ def solve_range_differences(
     dists = (np.array([FAR_DISTANCE_M]) if far
              else np.geomspace(rmin * 1.05, rmax / 1.05, n_distances))
     pts = ref + dists[None, :, None] * dirs[:, None, :]  # (D, R, 3)
-    z = ((_model(pts, M, a, b, c) - y) / sig) ** 2
+    z = ((pair_tdoa(pts, M, a, b, c) - y) / sig) ** 2
     grid_cost = 0.5 * fs2 * np.sum(_rho(z / fs2, loss), axis=-1)  # (D, R)
     best_r = np.argmin(grid_cost, axis=1)
     dir_cost = grid_cost[np.arange(len(dirs)), best_r]
@@ -438,7 +425,7 @@ def solve_range_differences(
     # --- refine each start in (az, el, log r) about the reference
     def resid(theta: NDArray) -> NDArray:
         p = ref + sph_to_cart(theta[0], theta[1], np.exp(theta[2]))
-        return (_model(p, M, a, b, c) - y) / sig
+        return (pair_tdoa(p, M, a, b, c) - y) / sig
 
     lo = np.array([-np.inf, -np.pi / 2, np.log(rmin)])
     hi = np.array([np.inf, np.pi / 2, np.log(rmax)])

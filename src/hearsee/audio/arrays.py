@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.config import as_float_array, check_keys, load_yaml, require
 from hearsee.errors import ConfigError, GeometryError
 
-__all__ = ["MicArray", "list_presets", "load_array"]
+__all__ = ["MicArray", "list_presets", "load_array", "pair_tdoa", "pair_tdoa_jacobian"]
 
 #: Two microphones closer than this (metres) are treated as coincident.
 MIN_SPACING_M = 1e-3
@@ -200,12 +200,15 @@ class MicArray:
 
         Returns shape ``(..., n_pairs)``.
         """
-        pairs = self.pairs if pairs is None else pairs
-        s = np.asarray(source, dtype=float)[..., None, :]
-        dist = np.linalg.norm(s - self.positions, axis=-1)  # (..., n_mics)
-        i = np.array([p[0] for p in pairs])
-        j = np.array([p[1] for p in pairs])
-        return (dist[..., i] - dist[..., j]) / self.speed_of_sound
+        i, j = _pair_index(self.pairs if pairs is None else pairs)
+        return pair_tdoa(source, self.positions, i, j, self.speed_of_sound)
+
+    def tdoa_jacobian(self, source: ArrayLike,
+                      pairs: list[tuple[int, int]] | None = None) -> NDArray:
+        """Derivative of :meth:`tdoa` with respect to the source position at one point
+        ``(3,)`` (metres): shape ``(n_pairs, 3)``, seconds per metre."""
+        i, j = _pair_index(self.pairs if pairs is None else pairs)
+        return pair_tdoa_jacobian(source, self.positions, i, j, self.speed_of_sound)
 
     def tdoa_far(self, direction: ArrayLike, pairs: list[tuple[int, int]] | None = None) -> NDArray:
         """Far-field TDOAs ``t_i - t_j`` in seconds for unit direction(s) ``(..., 3)``.
@@ -227,6 +230,35 @@ class MicArray:
 
     def __repr__(self) -> str:
         return f"MicArray(name={self.name!r}, n_mics={self.n_mics}, aperture={self.aperture:.3f} m)"
+
+
+def _pair_index(pairs: list[tuple[int, int]]) -> tuple[NDArray, NDArray]:
+    """The pairs' first and second microphone indices as two integer arrays."""
+    return (np.array([p[0] for p in pairs], dtype=int), np.array([p[1] for p in pairs], dtype=int))
+
+
+def pair_tdoa(points: ArrayLike, positions: NDArray, i: NDArray, j: NDArray,
+              speed_of_sound: float) -> NDArray:
+    """Exact (near-field) TDOAs ``t_i - t_j`` in seconds of point(s) ``(..., 3)`` (metres) at
+    microphones ``positions`` ``(n, 3)`` (metres), for the pairs ``(i[k], j[k])``: shape
+    ``(..., n_pairs)``. The one place of this model: :meth:`MicArray.tdoa`, the moving-head
+    solver (:mod:`hearsee.audio.active`, whose poses stack several placements of the array)
+    and the 3D tracker (:class:`hearsee.fusion.audiovisual.RayTdoaTracker`) use it."""
+    d = np.linalg.norm(np.asarray(points, dtype=float)[..., None, :] - positions, axis=-1)
+    return (d[..., i] - d[..., j]) / speed_of_sound
+
+
+def pair_tdoa_jacobian(point: ArrayLike, positions: NDArray, i: NDArray, j: NDArray,
+                       speed_of_sound: float) -> NDArray:
+    """Derivative of :func:`pair_tdoa` with respect to one point ``(3,)`` (metres): ``(u_i -
+    u_j) / c`` per pair, ``u_k`` the unit vector from microphone k to the point; shape
+    ``(n_pairs, 3)``, seconds per metre. A point on a microphone has none (GeometryError)."""
+    u = np.asarray(point, dtype=float).reshape(3) - positions
+    n = np.linalg.norm(u, axis=1, keepdims=True)
+    if not np.all(n > 0):
+        raise GeometryError("the TDOA has no derivative at a microphone's position")
+    u = u / n
+    return (u[i] - u[j]) / speed_of_sound
 
 
 def load_array(spec: str | Path | MicArray) -> MicArray:

@@ -481,18 +481,16 @@ class RayTdoaTracker(RayTracker):
             self.n_rejects += 1
             return False
         z = np.asarray(tdoa_s, dtype=float).reshape(-1)
-        M, c = self.rig.array.positions, self.rig.array.speed_of_sound
+        arr = self.rig.array
         R = np.array([[self.sigma_tdoa_s**2]])
         fused = 0
         for k in np.flatnonzero(np.isfinite(z)):
-            i, j = self.pairs[k]
-            p = self.x[self._POS]
-            di, dj = p - M[i], p - M[j]
-            ri, rj = float(np.linalg.norm(di)), float(np.linalg.norm(dj))
+            # relinearised at the state each earlier pair has already corrected
+            pair, p = [self.pairs[k]], self.x[self._POS]
             H = np.zeros((1, self._DIM))
-            H[0, self._POS] = (di / ri - dj / rj) / c
-            y, S, dd = self._innovation(np.array([z[k] - (ri - rj) / c]) + H[0] @ self.x, H,
-                                        R, None)
+            H[0, self._POS] = arr.tdoa_jacobian(p, pair)[0]
+            y, S, dd = self._innovation(np.array([z[k] - arr.tdoa(p, pair)[0]]) + H[0] @ self.x,
+                                        H, R, None)
             if dd > self._pair_gate:
                 continue
             self._correct(y, S, H, R)
