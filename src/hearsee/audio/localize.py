@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.arrays import MicArray, load_array, pair_tdoa
 from hearsee.errors import GeometryError
 from hearsee.geometry import wrap_deg
 
@@ -363,12 +363,10 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray,
         x0 = geo.centre + 2.0 * u
 
     def res(p: NDArray) -> NDArray:
-        d = np.linalg.norm(pos - p, axis=1)
-        return ((d[I] - d[J]) / c - tau) / tol_s
+        return (pair_tdoa(p, pos, I, J, c) - tau) / tol_s
 
     sol = least_squares(res, np.asarray(x0, dtype=float), loss=loss, f_scale=1.0)
-    d = np.linalg.norm(pos - sol.x, axis=1)
-    return sol.x, _rms((d[I] - d[J]) / c - tau)
+    return sol.x, _rms(pair_tdoa(sol.x, pos, I, J, c) - tau)
 
 
 def _spherical_interpolation(tau: NDArray, array: MicArray,
@@ -694,9 +692,7 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
             def res(q: NDArray, r: float = r) -> NDArray:
                 u = np.array([np.cos(q[1]) * np.cos(q[0]), np.cos(q[1]) * np.sin(q[0]),
                               np.sin(q[1])])
-                P = centre + r * u
-                d = np.linalg.norm(pos - P, axis=1)
-                return ((d[I] - d[J]) / c - tau) * 1e5
+                return (pair_tdoa(centre + r * u, pos, I, J, c) - tau) * 1e5
 
             sol = least_squares(res, p)
             if np.sqrt(np.mean(sol.fun**2)) * 1e-5 < 1e-5:
