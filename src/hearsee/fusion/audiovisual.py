@@ -410,7 +410,13 @@ class RayTdoaTracker(RayTracker):
     96 straight walks 5.48 -> 5.26 cm (per seed 5.59/5.11/5.73 -> 5.26/5.74/4.66), 96 turning
     walks 7.81 -> 7.82 cm (7.12/11.5/5.80 -> 7.09/9.42/7.40), a tie; the velocity RMSE fell
     on both (0.31 -> 0.25 and 0.58 -> 0.49 m/s). All 224 straight walks: 5.87 -> 5.00 cm
-    (-0.9 [-1.7, -0.1]).
+    (-0.9 [-1.7, -0.1]). Real speech at 16 kHz (same rig and room, 16 straight walks per seed;
+    2026-11-25, twelfth session): CMU ARCTIC dev seeds 100/200 9.37 cm against
+    :class:`RayTracker`'s 6.42 (paired -2.8 [-4.5, -1.0] in the fixes' favour), held-out
+    777/778 8.14 against 8.83; the real 'alexa' recording dev 8.98 against 8.59, held-out 6.38
+    against 10.86 (+4.2 [+1.0, +7.3] in this filter's favour): no consistent winner, walks
+    differ by more than the filters. A looser white acceleration (0.15, 0.2 m/s^2) was worse
+    on all four real-speech sets (+0.4 to +1.5 cm), so real speech does not call for its own.
 
     Parameters
     ----------
