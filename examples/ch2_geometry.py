@@ -1,6 +1,6 @@
 """Thesis chapter 2 figures: ITD loci of two- and three-microphone systems.
 
-Regenerates, into OUT_DIR (default ``examples/out/``):
+Regenerates, into ``--out`` (default ``examples/out/``):
 
 * ``fig2_3_hyperboloids.png`` -- fig. 2.3: the near-field loci (hyperboloid sheets) of a
   two-microphone system (thesis frame: m1 = [0, -r, 0], m2 = [0, r, 0], r = 7.5 cm) for several
@@ -12,7 +12,7 @@ Regenerates, into OUT_DIR (default ``examples/out/``):
   for each ITD value, the azimuth sector it covers and its width. Sectors are narrow near
   broadside and wide toward the microphone axis, so the direction resolution is uneven.
 
-Usage: ``python examples/ch2_geometry.py [OUT_DIR] [--fs 16000]``.
+Usage: ``python examples/ch2_geometry.py [--out DIR] [--fs 16000]``.
 """
 
 from __future__ import annotations
@@ -146,10 +146,11 @@ def table_2_1(out: Path, fs: float) -> tuple[Path, Path]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("out_dir", nargs="?", default=str(Path(__file__).parent / "out"))
+    ap.add_argument("--out", default=str(Path(__file__).parent / "out"),
+                    help="output folder (default: examples/out)")
     ap.add_argument("--fs", type=float, default=16000.0, help="sample rate for table 2.1 (Hz)")
     args = ap.parse_args(argv)
-    out = Path(args.out_dir)
+    out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     ignore = out / ".gitignore"
     if out.resolve() == (Path(__file__).parent / "out").resolve() and not ignore.exists():

@@ -1,7 +1,7 @@
 """Thesis ch. 3 regenerated: the mask2 diffraction model, its ITD/IID responses and 360-degree
 azimuth estimates (figs. 3.6-3.17, tables 3.3/3.4).
 
-    python examples/ch3_mask.py --out ch3_out
+    python examples/ch3_mask.py                  # figures and tables in examples/out/
     python examples/ch3_mask.py --array mask2-asym --out ch3_asym   # the asymmetric design
 
 Also writes ``front_back_margin.png``: the design measure
@@ -271,7 +271,8 @@ def tables(m: MaskModel, out: Path, trials: int) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description="Regenerate thesis ch. 3 figures and tables.")
-    ap.add_argument("--out", default="ch3_out", help="output folder")
+    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "out"),
+                    help="output folder (default: examples/out)")
     ap.add_argument("--trials", type=int, default=5, help="recordings per table cell")
     ap.add_argument("--array", default="mask2", help="masked array preset or YAML path")
     a = ap.parse_args()

@@ -8,7 +8,8 @@ turning in elevation (tilt) or both makes the point unique.
 Fig. 4.13: position error vs the ratio of source distance to array size (TDOA noise 5 us, three
 poses turning in both angles, array 10 cm in front of and 5 cm above the pivot).
 
-Run: ``python examples/ch4_active.py [--out DIR]`` -> ch4_fig4_6-8.png, ch4_fig4_13.png
+Run: ``python examples/ch4_active.py [--out DIR]`` -> ch4_fig4_6-8.png, ch4_fig4_13.png (default
+folder examples/out)
 """
 
 from __future__ import annotations
@@ -127,7 +128,8 @@ def fig_4_13(out: Path, n: int = 25, sigma: float = 5e-6) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default=".", help="folder for the PNG files")
+    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "out"),
+                    help="output folder (default: examples/out)")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

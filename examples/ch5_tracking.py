@@ -14,8 +14,8 @@ Figures and tables (thesis numbering; reconstruction, see ``design/reconstructio
 * tables 5.2 / 5.3  effect of the sampling rate and of the frame length on the 3D fix, in free
              field (5.2, "simulation") and in a room with RT60 0.3 s (5.3, "tests")
 
-Run: ``python examples/ch5_tracking.py [--out ch5_out] [--quick]`` (about 2-4 min; --quick
-shortens the signals and tables).
+Run: ``python examples/ch5_tracking.py [--out DIR] [--quick]`` (default folder examples/out; about
+2-4 min; --quick shortens the signals and tables).
 """
 
 from __future__ import annotations
@@ -329,7 +329,8 @@ def tables_5_2_3(quick: bool) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description="Regenerate the thesis's ch. 5 figures and tables.")
-    ap.add_argument("--out", type=Path, default=Path("ch5_out"))
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "out",
+                    help="output folder (default: examples/out)")
     ap.add_argument("--quick", action="store_true")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)

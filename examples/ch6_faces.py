@@ -1,6 +1,6 @@
 """Thesis ch. 6, fig. 6.10 regenerated (reconstruction): NLE on face images.
 
-    python examples/ch6_faces.py [OUT_DIR]      # default examples/out/
+    python examples/ch6_faces.py [--out DIR]      # default examples/out/
 
 Two sets: 400 rendered 32 x 32 images of a rotating head with known yaw and pitch
 (``hearsee.learn.make_head_pose_images``; the thesis used a real face-pose sequence) and the 200
@@ -41,7 +41,7 @@ def thumbnails(ax, Y, images, side, n_show=40, zoom=1.0, seed=0):
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
-    ap.add_argument("out", nargs="?", type=Path, default=Path(__file__).resolve().parent / "out",
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "out",
                     help="output folder (default: examples/out)")
     out = ap.parse_args(argv).out
     out.mkdir(parents=True, exist_ok=True)

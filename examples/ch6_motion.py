@@ -1,6 +1,6 @@
 """Thesis ch. 6, fig. 6.13 regenerated (reconstruction): NLE of a motion sequence.
 
-    python examples/ch6_motion.py [OUT_DIR] [--video PATH]      # default examples/out/
+    python examples/ch6_motion.py [--out DIR] [--video PATH]      # default examples/out/
 
 Each frame (grey, downsampled to 36 x 48) is one point; NLE embeds the sequence in 2-D and the
 path through the embedding, coloured by time, shows the motion's structure. Frames come from the
@@ -73,7 +73,8 @@ def walker_frames(n: int = 300, seed: int = 0) -> np.ndarray:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description="NLE of a motion sequence (thesis fig. 6.13)")
-    ap.add_argument("out", nargs="?", default=str(Path(__file__).resolve().parent / "out"))
+    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "out"),
+                    help="output folder (default: examples/out)")
     ap.add_argument("--video", default=str(DEFAULT_VIDEO))
     a = ap.parse_args(argv)
     out = Path(a.out)

@@ -1,7 +1,7 @@
 """Thesis ch. 6, figs. 6.11-6.12 and table 6.1 regenerated (reconstruction): image patches and
 feature clustering with NLE / CNLE.
 
-    python examples/ch6_patches.py [OUT_DIR]      # default examples/out/
+    python examples/ch6_patches.py [--out DIR]      # default examples/out/
 
 * Fig. 6.11: 2000 contrast-normalised 8 x 8 patches of ``skimage.data.camera()`` (the most
   textured ones), embedded by NLE and shown as thumbnails at their coordinates.
@@ -86,7 +86,7 @@ def confusion(pred: np.ndarray, lab: np.ndarray) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
-    ap.add_argument("out", nargs="?", type=Path, default=Path(__file__).resolve().parent / "out",
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "out",
                     help="output folder (default: examples/out)")
     out = ap.parse_args(argv).out
     out.mkdir(parents=True, exist_ok=True)

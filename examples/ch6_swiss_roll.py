@@ -1,6 +1,6 @@
 """Thesis ch. 6, figs. 6.2-6.5 regenerated (reconstruction): NLE on the swiss roll.
 
-    python examples/ch6_swiss_roll.py [OUT_DIR]      # default examples/out/
+    python examples/ch6_swiss_roll.py [--out DIR]      # default examples/out/
 
 Writes ``ch6_neighbourhood.png`` (the shadow rule for one point: accepted vs shadowed
 candidates), ``ch6_swiss_roll.png`` (the data, NLE and LLE embeddings coloured by the roll
@@ -53,7 +53,7 @@ def fig_neighbourhood(X: np.ndarray, out: Path, k: int = 12, shadow: float = 0.3
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
-    ap.add_argument("out", nargs="?", type=Path, default=Path(__file__).resolve().parent / "out",
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "out",
                     help="output folder (default: examples/out)")
     out = ap.parse_args(argv).out
     out.mkdir(parents=True, exist_ok=True)

@@ -1,6 +1,6 @@
 """Thesis ch. 6, figs. 6.6-6.9 regenerated (reconstruction): two rolls, LLE vs NLE vs CNLE.
 
-    python examples/ch6_two_rolls.py [OUT_DIR]      # default examples/out/
+    python examples/ch6_two_rolls.py [--out DIR]      # default examples/out/
 
 Two swiss-roll sheets wound together, one six times denser than the other
 (``hearsee.learn.make_two_rolls``, 2000 points, noise 0.1,
@@ -30,7 +30,7 @@ from hearsee.learn import ClusteredNLE, NeighborhoodLinearEmbedding, make_two_ro
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
-    ap.add_argument("out", nargs="?", type=Path, default=Path(__file__).resolve().parent / "out",
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "out",
                     help="output folder (default: examples/out)")
     out = ap.parse_args(argv).out
     out.mkdir(parents=True, exist_ok=True)
