@@ -99,3 +99,36 @@ def test_simulate_refuses_bad_outputs(tmp_path, capsys):
     assert main(["simulate", str(tmp_path / "o.wav"), "--array", "nine-mic", "--source",
                  "1,0,0"]) == 2
     assert "unknown array preset" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("mode", ["static", "moving", "poses"])
+def test_simulate_keeps_existing_outputs_unless_forced(tmp_path, capsys, mode):
+    """A second run to the same name is refused (every file it would write is checked first,
+    nothing is touched); --force replaces them."""
+    out = tmp_path / ("rec.yaml" if mode == "poses" else "rec.wav")
+    args = ["simulate", str(out), "--array", "two-mic", "--duration", "0.1", "--seed", "1"]
+    if mode == "moving":
+        csv = tmp_path / "walk.csv"
+        csv.write_text("t,x,y,z\n0,1.5,-0.5,0.2\n1,1.5,0.5,0.2\n")
+        args += ["--trajectory", str(csv)]
+    else:
+        args += ["--source", "1,0.5,0"]
+    if mode == "poses":
+        args += ["--poses", "0,0;30,0"]
+    assert main(args) == 0
+    written = sorted(p for p in tmp_path.iterdir() if p.name.startswith("rec"))
+    assert len(written) == {"static": 2, "moving": 3, "poses": 5}[mode]
+    # any one existing output is enough to refuse, and then nothing is written
+    for victim in written:
+        for p in written:
+            p.unlink(missing_ok=True)
+        victim.write_bytes(b"mine")
+        capsys.readouterr()
+        assert main([*args, "--seed", "2"]) == 2
+        err = capsys.readouterr().err
+        assert f"{victim.name}: file exists; pass --force" in err and "Traceback" not in err
+        assert sorted(p for p in tmp_path.iterdir() if p.name.startswith("rec")) == [victim]
+        assert victim.read_bytes() == b"mine"
+    assert main([*args, "--seed", "2", "--force"]) == 0
+    assert victim.read_bytes() != b"mine"
+    assert sorted(p for p in tmp_path.iterdir() if p.name.startswith("rec")) == written

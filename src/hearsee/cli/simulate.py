@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from hearsee.cli._app import app, err_console, parse_floats, progress
-from hearsee.errors import ConfigError
+from hearsee.errors import ConfigError, InputFileError
 
 
 def _room_from_options(room: str | None, rt60: float | None,
@@ -27,9 +27,22 @@ def _room_from_options(room: str | None, rt60: float | None,
     return out
 
 
+def _refuse_existing(paths: list[Path], force: bool, inputs: list[str | Path]) -> None:
+    """Before simulating: an output that is one of the ``inputs`` (signal, array, trajectory
+    files) is refused always, one that already exists unless ``--force`` (as ``hearsee
+    calibrate``): a second run must not silently replace a recording or its ground truth."""
+    ins = {Path(q).resolve() for q in inputs}
+    for p in paths:
+        if p.resolve() in ins:
+            raise ConfigError(f"{p}: refusing to overwrite the input file; choose another "
+                              "output path")
+        if p.exists() and not force:
+            raise InputFileError(f"{p}: file exists; pass --force to overwrite it")
+
+
 def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str, duration: float,
                      fs: int, snr: float | None, room_spec: dict | None, seed: int,
-                     far_field: bool, pcm16: bool) -> None:
+                     far_field: bool, pcm16: bool, force: bool) -> None:
     """``--trajectory``: a moving source (hearsee.sim.moving), truth CSV beside the WAV."""
     import numpy as np
 
@@ -40,10 +53,8 @@ def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str, durat
         raise ConfigError("--far-field applies to a static --source only")
     traj = load_trajectory(trajectory)
     truth_csv = Path(out).with_suffix(".trajectory.csv")
-    if truth_csv.resolve() == Path(trajectory).resolve():
-        raise ConfigError(f"{truth_csv}: refusing to overwrite the input trajectory; choose "
-                          "another output name")
     protect = [p for p in (signal, array, trajectory) if Path(p).is_file()]
+    _refuse_existing([Path(out), Path(out).with_suffix(".json"), truth_csv], force, protect)
     with progress("simulating", total=1) as advance:
         x, truth = simulate_moving_recording(array, traj, signal=signal, duration_s=duration,
                                              fs=fs, snr_db=snr, room=room_spec, seed=seed)
@@ -87,6 +98,8 @@ def simulate_cmd(
                                    help="Free field only: a plane wave from the source's "
                                    "direction instead of a spherical wave."),
     pcm16: bool = typer.Option(False, "--pcm16", help="Write 16-bit PCM instead of float32."),
+    force: bool = typer.Option(False, "--force",
+                               help="Overwrite output files that already exist."),
     poses: str | None = typer.Option(
         None, "--poses", help="Head poses 'PAN,TILT;PAN,TILT;...' in degrees: one capture per "
         "pose (OUT_pose<k>.wav) and OUT.yaml, a pose manifest with the ground truth for "
@@ -109,8 +122,12 @@ def simulate_cmd(
 
         if far_field:
             raise ConfigError("--far-field does not apply with --poses")
+        pose_list = parse_poses(poses)
+        caps = [out.with_name(f"{out.stem}_pose{k}.wav") for k in range(len(pose_list))]
+        _refuse_existing([out, *caps, *(c.with_suffix(".json") for c in caps)], force,
+                         [p for p in (signal, array) if Path(p).is_file()])
         man, files = simulate_pose_manifest(
-            out, array, parse_floats(source, 3, "--source"), parse_poses(poses), signal=signal,
+            out, array, parse_floats(source, 3, "--source"), pose_list, signal=signal,
             duration_s=duration, fs=fs, snr_db=snr, room=_room_from_options(room, rt60, array_at),
             seed=seed, offset_m=parse_floats(head_offset, 3, "--head-offset"),
             subtype="PCM_16" if pcm16 else "FLOAT",
@@ -121,11 +138,13 @@ def simulate_cmd(
 
     if trajectory is not None:
         _simulate_moving(out, array, trajectory, signal, duration, fs, snr,
-                         _room_from_options(room, rt60, array_at), seed, far_field, pcm16)
+                         _room_from_options(room, rt60, array_at), seed, far_field, pcm16,
+                         force)
         return
     src = parse_floats(source, 3, "--source")
     room_spec = _room_from_options(room, rt60, array_at)
     protect = [p for p in (signal, array) if Path(p).is_file()]
+    _refuse_existing([out, out.with_suffix(".json")], force, protect)
     with progress("simulating", total=1) as advance:
         x, truth = simulate_recording(array, src, signal=signal, duration_s=duration, fs=fs,
                                       snr_db=snr, room=room_spec, seed=seed,
