@@ -135,7 +135,10 @@ ARCTIC 4.1 cm, 'alexa' 8.4 cm, synthetic voice 2.2 cm).
 ``--walks-b`` walks per rig (default 32): one walk's own median error ranges from 1 to 20 cm
 (reflections bias the fixes for hundreds of milliseconds), so the pooled median of 8 walks
 moved between 3.4 and 10.5 cm with the seed; the table also gives the share of walks whose own
-median is within 5 cm. The tracker settings were rechecked on 32 walks each of seeds 0 and 100
+median is within 5 cm and (since 2026-11-25's twelfth session; earlier runs by hand) a walk
+bootstrap of the pooled median (:func:`walk_bootstrap`: its 95 % interval and the share of
+resampled medians within 5 cm), which says how far 32 walks pin the median. The tracker
+settings were rechecked on 32 walks each of seeds 0 and 100
 (TDOA noise 4-16 us, acceleration 0.1-0.4 m/s^2, 64-128 ms frames, onset-weighted fixes;
 confidence-weighted on 8 walks): none beat the chosen settings (pooled median 4.8-5.4 cm
 there); the rest were equal within the walks' spread or worse (a too tight or too loose
@@ -159,6 +162,13 @@ one degree is ~17 cm, so the tracked 5.9-6.5 cm correspond to ~0.35 deg of remai
 bias (~3 us), and the 5 cm target would need ~0.3 deg; the 0.5 m baseline has ~7 cm per
 degree; the camera ahead of the 0.5 m triangle gets its range from the wavefront's curvature
 (~1 cm per us) rather than from the azimuth.
+The last row set (since 2026-11-25's twelfth session; before, only in the session notes) takes
+the first rig's walks that turn by 60-150 deg at once halfway (:data:`TURN_B_DEG`; room,
+synthetic voice; drawn after every other row, so those keep their walks): a straight walk is
+the constant-velocity model's best case, a sharp turn its worst, and the straight rows alone
+would reward ever smaller white accelerations (dev seeds 100-400, straight: 0.1 m/s^2 4.81 cm,
+0.07 4.66, 0.05 4.53). Where the default tracker's gain on straight walks did not carry over
+to turning ones in the held-out check (7.81 -> 7.82 cm), this row shows it on the bench seed.
 
 Part C -- the stream: real-time factor (wall clock and process CPU time; the best of 3 runs per
 block size, as timeit reports, since other jobs share the 2 cores) from a file, per-frame
@@ -171,6 +181,7 @@ Run: ``.venv/bin/python bench/tracking.py [--trials N] [--seed S]``.
 from __future__ import annotations
 
 import argparse
+import itertools
 import sys
 import time
 from pathlib import Path
@@ -210,6 +221,8 @@ FS_WIDE = 48000
 ROOM = np.array([7.0, 6.0, 3.0])
 ARRAY_AT = np.array([3.5, 3.0, 1.2])
 RT60 = 0.3
+#: part B's turning walks: heading change at once halfway, degrees (either side)
+TURN_B_DEG = (60.0, 150.0)
 CFG = StreamConfig(frame_ms=64.0, hop_ms=32.0)
 #: the same stream with one constant-velocity direction filter instead of the IMM (and constant
 #: rates: the default before 2026-11-24)
@@ -572,21 +585,30 @@ def range_sensitivity(rig: AudioVisualRig, points: np.ndarray) -> tuple[float, f
     return float(np.median(per_deg)), float(np.median(per_us))
 
 
-def view_walk(rng: np.random.Generator, rig: AudioVisualRig, dur: float) -> Trajectory:
-    """A walk 0.5-2 m from the array at 0.5-1.0 m/s that stays in the camera's view."""
+def view_walk(rng: np.random.Generator, rig: AudioVisualRig, dur: float,
+              turn_deg: tuple[float, float] | None = None) -> Trajectory:
+    """A walk 0.5-2 m from the array at 0.5-1.0 m/s that stays in the camera's view; with
+    ``turn_deg`` it turns halfway, at once, by an angle drawn from that range (degrees, either
+    side). Straight walks draw exactly as before the option existed."""
     cam = rig.camera
-    for _ in range(5000):
+    for _ in range(20000):
         r0 = rng.uniform(0.6, 1.9)
         a0 = np.radians(rng.uniform(-25, 25))
         p0 = np.array([r0 * np.cos(a0), r0 * np.sin(a0), rng.uniform(-0.15, 0.15)])
         v = rng.uniform(0.5, 1.0)
         h = rng.uniform(-np.pi, np.pi)
-        p1 = p0 + v * dur * np.array([np.cos(h), np.sin(h), 0.0])
-        path = p0 + np.linspace(0, 1, 30)[:, None] * (p1 - p0)
+        heads = [h]
+        if turn_deg is not None:
+            heads.append(h + rng.choice([-1, 1]) * np.radians(rng.uniform(*turn_deg)))
+        knots = [p0]
+        for hk in heads:
+            knots.append(knots[-1] + v * dur / len(heads) * np.array([np.cos(hk), np.sin(hk), 0.0]))
+        s = np.linspace(0, 1, 30)[:, None]
+        path = np.concatenate([a + s * (b - a) for a, b in itertools.pairwise(knots)])
         r = np.linalg.norm(path, axis=1)
         uv = rig.project(path)
         if r.min() >= 0.5 and r.max() <= 2.0 and np.all(cam.in_image(uv, margin=20)):
-            return Trajectory([0.0, dur], [p0, p1])
+            return Trajectory(np.linspace(0.0, dur, len(knots)), knots)
     raise RuntimeError("no walk in view found")
 
 
@@ -620,18 +642,24 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
     labels = {"arctic": "ARCTIC speech", "alexa": "real 48 kHz recording 'alexa'"}
     cases += [(f"three-mic + camera 0.2 m aside, {labels[kind]}", wide[0][1], f, True, kind)
               for kind in real_speech_kinds(data) for f in (FS, FS_WIDE)]
+    # the first rig's walks turning by 60-150 deg at once halfway (room, synthetic voice; last,
+    # so every row above keeps its walks): a straight walk is the constant-velocity model's
+    # best case, and the trackers' white acceleration was chosen with such turns in view
+    cases = [(*c, None) for c in cases] + [
+        ("three-mic + camera 0.2 m aside, walks turning 60-150 deg halfway", rigs[0][1], FS,
+         True, "male", TURN_B_DEG)]
     trackers = ("RayTdoaTracker (CV, pixel + per-pair TDOAs; the stream's default)",
                 "RayTracker (CV on the fixes; the default before 2026-11-25)",
                 "CA Kalman (stream's motion_model ca)")
     # the stream's CA filter was tuned with fixes made with 20 us of TDOA noise
     ca_scale = (FIX_SIGMA_TDOA_S / RAY_SIGMA_TDOA_S) ** 2 - 1.0
-    for name, rig, fs, room, kind in cases:
+    for name, rig, fs, room, kind, turn in cases:
         if kind != "male":
             name = f"{name}, {fs // 1000} kHz"
         e_raw, e_rng, seen = [], [], []
         e_trk, e_vel, e_fix = ({k: [] for k in trackers} for _ in range(3))
         for _ in range(trials):
-            traj = view_walk(rng, rig, dur)
+            traj = view_walk(rng, rig, dur, turn)
             x = _signal(kind, dur, rng, fs, data)
             if room:
                 y = simulate_moving_room(x, fs, rig.array, traj, ROOM, RT60, ARRAY_AT,
@@ -696,8 +724,22 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
                          float(np.mean(np.isfinite(er))) * 100,
                          float(np.nanmedian(et)), float(np.nanpercentile(et, 90)),
                          float(np.nanmedian(ef)), float(np.mean(per_walk <= 0.05)) * 100,
-                         rmse(ev), per_deg * 100, per_us * 100])
+                         rmse(ev), per_deg * 100, per_us * 100, *walk_bootstrap(e_trk[key])])
     return rows, example
+
+
+def walk_bootstrap(walks: list[np.ndarray], n: int = 2000, seed: int = 0
+                   ) -> tuple[str, float]:
+    """Walk bootstrap of the pooled median 3D error (metres): ``n`` resamples of whole walks
+    (their errors are correlated within a walk, so frames are not independent draws; a fixed
+    ``seed`` of its own, so the walks' random stream is untouched). Returns the 95 % interval
+    as text and the share of resampled medians within 5 cm (%)."""
+    rng = np.random.default_rng(seed)
+    meds = np.array([np.nanmedian(np.concatenate([walks[i] for i in rng.integers(len(walks),
+                                                                                 size=len(walks))]))
+                     for _ in range(n)])
+    lo, hi = np.percentile(meds, [2.5, 97.5])
+    return f"[{lo:.3g}, {hi:.3g}]", float(np.mean(meds <= 0.05)) * 100
 
 
 # ---------------------------------------------------------------------------------- part C
@@ -816,7 +858,8 @@ HEAD_B = ["rig", "walks", "per-frame fix median m", "fix signed range error medi
           "tracked p90 m", "tracked median m (frames with a fix)",
           "walks whose own tracked median <= 5 cm %", "velocity RMSE m/s",
           "range error per deg of array azimuth cm (median)",
-          "range std per us of TDOA noise cm (median)"]
+          "range std per us of TDOA noise cm (median)",
+          "tracked median 95 % CI m (walk bootstrap)", "bootstrap medians <= 5 cm %"]
 HEAD_C = ["run", "RTF wall", "RTF CPU", "latency median ms", "latency p95 ms", "frames",
           "missing frames", "status"]
 HEAD_D = ["method", "CPU s per s of audio", "ratio"]
