@@ -241,9 +241,10 @@ def pair_tdoa(points: ArrayLike, positions: NDArray, i: NDArray, j: NDArray,
               speed_of_sound: float) -> NDArray:
     """Exact (near-field) TDOAs ``t_i - t_j`` in seconds of point(s) ``(..., 3)`` (metres) at
     microphones ``positions`` ``(n, 3)`` (metres), for the pairs ``(i[k], j[k])``: shape
-    ``(..., n_pairs)``. The one place of this model: :meth:`MicArray.tdoa`, the moving-head
-    solver (:mod:`hearsee.audio.active`, whose poses stack several placements of the array)
-    and the 3D tracker (:class:`hearsee.fusion.audiovisual.RayTdoaTracker`) use it."""
+    ``(..., n_pairs)``. The one place of this model: :meth:`MicArray.tdoa`, the near-field
+    fits of :mod:`hearsee.audio.localize`, the moving-head solver (:mod:`hearsee.audio.active`,
+    whose poses stack several placements of the array) and the 3D tracker
+    (:class:`hearsee.fusion.audiovisual.RayTdoaTracker`) use it."""
     d = np.linalg.norm(np.asarray(points, dtype=float)[..., None, :] - positions, axis=-1)
     return (d[..., i] - d[..., j]) / speed_of_sound
 

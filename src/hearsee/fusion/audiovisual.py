@@ -415,8 +415,9 @@ class RayTdoaTracker(RayTracker):
     :class:`RayTracker`'s 6.42 (paired -2.8 [-4.5, -1.0] in the fixes' favour), held-out
     777/778 8.14 against 8.83; the real 'alexa' recording dev 8.98 against 8.59, held-out 6.38
     against 10.86 (+4.2 [+1.0, +7.3] in this filter's favour): no consistent winner, walks
-    differ by more than the filters. A looser white acceleration (0.15, 0.2 m/s^2) was worse
-    on all four real-speech sets (+0.4 to +1.5 cm), so real speech does not call for its own.
+    differ by more than the filters. A looser white acceleration (0.15, 0.2 m/s^2) gave a
+    higher median on all four real-speech sets (+0.4 to +1.5 cm; 4 of the 8 paired intervals
+    above zero), so real speech does not call for a setting of its own.
 
     Parameters
     ----------
