@@ -181,3 +181,15 @@ def test_thermal_wrong_size_and_overlay_over_input(folder, capsys, tmp_path):
     args = _args(d, "--overlay", str(d / "left.png"))
     assert main(args) == 2
     assert "overwrite" in _err(capsys)
+
+
+def test_existing_overlay_is_kept_unless_forced(folder, capsys, tmp_path):
+    d, _ = folder
+    ov = tmp_path / "mine.png"
+    ov.write_bytes(b"not yours")
+    assert main(_args(d, "--overlay", str(ov), thermal=None)) == 2
+    err = _err(capsys)
+    assert "file exists; pass --force" in err and "Traceback" not in err
+    assert ov.read_bytes() == b"not yours"
+    assert main(_args(d, "--overlay", str(ov), "--force", thermal=None)) == 0
+    assert cv2.imread(str(ov)) is not None

@@ -178,6 +178,18 @@ def test_bad_robot_files_and_options(robot_dir, capsys):
     assert main(["run", "--config", str(robot_dir / "robot2.yaml"), "--dry-run",
                  "--out", str(robot_dir / "prev")]) == 2
     assert "would overwrite an input file" in capsys.readouterr().err
+    # --mcap / --rerun over an input (the calibration) or an existing file: refused before the
+    # devices are opened (no sounddevice is faked here, so a run would fail differently)
+    calib = robot_dir / "rig.yaml"
+    before = calib.read_bytes()
+    assert main(["run", "--config", str(_config(robot_dir)), "--mcap", str(calib)]) == 2
+    assert "refusing to overwrite an input file" in capsys.readouterr().err
+    assert calib.read_bytes() == before
+    (robot_dir / "old.rrd").write_bytes(b"keep")
+    assert main(["run", "--config", str(_config(robot_dir)), "--rerun",
+                 str(robot_dir / "old.rrd")]) == 2
+    assert "file exists; pass --force" in capsys.readouterr().err
+    assert (robot_dir / "old.rrd").read_bytes() == b"keep"
 
 
 @pytest.mark.slow

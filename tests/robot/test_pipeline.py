@@ -158,3 +158,22 @@ def test_rendered_people_face_the_robot_or_along_their_path():
     # along room +y is S -x, i.e. yaw 90
     assert stander.yaw_deg == pytest.approx(np.degrees(np.arctan2(stander.x, stander.z)))
     assert walker.yaw_deg == pytest.approx(90.0)
+
+
+@pytest.mark.parametrize("option", ["--mcap", "--rerun"])
+def test_demo_refuses_export_over_an_input_or_an_existing_file_before_running(
+        tmp_path, capsys, option):
+    """--rerun / --mcap over the scenario is refused always, over an existing file unless
+    --force; both before the scenario runs (nothing written, not even the report)."""
+    sc = tmp_path / "s.yaml"
+    sc.write_text("name: x\n")
+    out = tmp_path / "report"
+    assert main(["demo", "--scenario", str(sc), "-o", str(out), "-q", option, str(sc)]) == 2
+    assert "refusing to overwrite an input file" in capsys.readouterr().err
+    assert sc.read_text() == "name: x\n" and not out.exists()
+    old = tmp_path / "old.bin"
+    old.write_bytes(b"keep")
+    assert main(["demo", "-o", str(out), "-q", option, str(old)]) == 2
+    err = capsys.readouterr().err
+    assert "file exists; pass --force" in err and "Traceback" not in err
+    assert old.read_bytes() == b"keep" and not out.exists()

@@ -11,9 +11,10 @@ from __future__ import annotations
 import json
 import math
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from enum import Enum, StrEnum
+from pathlib import Path
 from typing import Any
 
 import typer
@@ -54,6 +55,22 @@ class GccMethod(StrEnum):
 def emit_json(obj: Any, *, indent: int | None = 2) -> None:
     """Print ``obj`` as one JSON document on stdout."""
     sys.stdout.write(json.dumps(to_jsonable(obj), indent=indent) + "\n")
+
+
+def refuse_overwrite(outputs: Iterable[str | Path | None], inputs: Iterable[str | Path | None],
+                     force: bool) -> None:
+    """Before a command does its work, each output file it will write: one that is also an
+    input is refused always, one that exists unless ``force`` (the command's ``--force``).
+    Nothing the user gave is overwritten, and a refusal writes nothing."""
+    from hearsee.errors import InputFileError
+
+    ins = {Path(q).resolve() for q in inputs if q is not None}
+    for p in (Path(o) for o in outputs if o is not None):
+        if p.resolve() in ins:
+            raise InputFileError(f"{p}: refusing to overwrite an input file; choose another "
+                                 "output path")
+        if p.exists() and not force:
+            raise InputFileError(f"{p}: file exists; pass --force to overwrite it")
 
 
 def parse_floats(text: str, n: int | None, what: str) -> list[float]:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from hearsee.cli._app import app, emit_json, err_console, progress
+from hearsee.cli._app import app, emit_json, err_console, progress, refuse_overwrite
 
 
 def _fmt(v: float | None) -> str:
@@ -54,10 +54,7 @@ def calibrate_cmd(
     inputs = {p.resolve() for p in [*lf, *rf, *(tf or [])]}
     if reference is not None:
         inputs.add(Path(reference).resolve())
-    if out.resolve() in inputs:
-        raise InputFileError(f"{out}: refusing to overwrite an input file; choose another -o")
-    if out.exists() and not force:
-        raise InputFileError(f"{out}: file exists; pass --force to overwrite it")
+    refuse_overwrite([out], inputs, force)
     if not out.parent.exists():
         raise InputFileError(f"{out}: folder {out.parent} does not exist")
     # read the reference first: a bad file fails before the calibration and the output

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import typer
 
-from hearsee.cli._app import app, emit_json
-from hearsee.errors import ImageInputError, InputFileError
+from hearsee.cli._app import app, emit_json, refuse_overwrite
+from hearsee.errors import ImageInputError
 
 
 @app.command("detect")
@@ -25,6 +25,7 @@ def detect_cmd(
         None, "--overlay",
         help="Write the rectified left image (the frame of the boxes) with the detections drawn "
              "to this file."),
+    force: bool = typer.Option(False, "--force", help="Overwrite an existing --overlay file."),
     tm: float = typer.Option(0.5, "--tm", help="Head-shoulder score threshold Tm (0..1)."),
     min_support: float = typer.Option(
         0.3, "--min-support", help="Thermal support needed to accept a candidate (0..1)."),
@@ -57,11 +58,7 @@ def detect_cmd(
         raise typer.BadParameter(f"--min-support must be in [0, 1], got {min_support}")
     if camera_height is not None and not 0.1 <= camera_height <= 5.0:
         raise typer.BadParameter(f"--camera-height must be in [0.1, 5] metres, got {camera_height}")
-    if overlay_p is not None:
-        inputs = [left_p, right_p, calib_p] + ([thermal_p] if thermal_p else [])
-        if overlay_p.resolve() in {p.resolve() for p in inputs}:
-            raise InputFileError(f"{overlay_p}: --overlay would overwrite an input file; choose "
-                                 "another name")
+    refuse_overwrite([overlay_p], [left_p, right_p, calib_p, thermal_p], force)
     rig = load_rig(calib_p)
     L, R = read_pair(left_p, right_p, "bgr")
     if (L.shape[1], L.shape[0]) != rig.left.size:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from hearsee.cli._app import app, emit_json, print_summary, progress
+from hearsee.cli._app import app, emit_json, print_summary, progress, refuse_overwrite
 
 
 @app.command("demo")
@@ -15,6 +15,8 @@ def demo_cmd(
     out: Path = typer.Option(Path("hearsee-report"), "--out", "-o", help="Report folder."),
     rerun: Path = typer.Option(None, "--rerun", help="Also write a Rerun recording (.rrd)."),
     mcap: Path = typer.Option(None, "--mcap", help="Also write ROS 2 messages to an MCAP file."),
+    force: bool = typer.Option(False, "--force",
+                               help="Overwrite existing --rerun / --mcap files."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar or summary table."),
 ) -> None:
     """Hear a person, turn to them, see and verify them, track them in 3D; write a report.
@@ -29,6 +31,7 @@ def demo_cmd(
 
     sc = load_scenario(scenario) if scenario else default_scenario()
     _refuse_input_overwrite(out, scenario)
+    refuse_overwrite([rerun, mcap], [scenario], force)
     with progress(f"scenario {sc.name}", total=sc.duration_s, enabled=not quiet) as advance:
         result = run_scenario(sc, progress=advance)
     index = write_report(out, sc.to_dict(), result.log, result.summary, result.images,

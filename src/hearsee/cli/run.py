@@ -13,7 +13,7 @@ from typing import Annotated
 
 import typer
 
-from hearsee.cli._app import app, err_console, print_summary, progress
+from hearsee.cli._app import app, err_console, print_summary, progress, refuse_overwrite
 
 
 @app.command("run")
@@ -34,6 +34,8 @@ def run_cmd(
     mcap: Annotated[Path | None, typer.Option(
         "--mcap", help="Also write ROS 2 messages to an MCAP file (pip install 'hearsee[ros]').")
     ] = None,
+    force: Annotated[bool, typer.Option("--force",
+                                        help="Overwrite existing --rerun / --mcap files.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q",
                                         help="No progress bar or summary table.")] = False,
 ) -> None:
@@ -69,6 +71,7 @@ def run_cmd(
             raise bad.error if bad.error is not None else ConfigError(bad.detail)
         typer.echo(f"all {len(checks)} checks passed")
         return
+    refuse_overwrite([rerun, mcap], cfg.input_files(), force)
     with progress("listening", total=duration, enabled=not quiet and duration is not None) \
             as advance:
         result = run_robot(cfg, duration_s=duration, progress=advance)

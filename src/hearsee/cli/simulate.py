@@ -7,8 +7,8 @@ from typing import Annotated
 
 import typer
 
-from hearsee.cli._app import app, err_console, parse_floats, progress
-from hearsee.errors import ConfigError, InputFileError
+from hearsee.cli._app import app, err_console, parse_floats, progress, refuse_overwrite
+from hearsee.errors import ConfigError
 
 
 def _room_from_options(room: str | None, rt60: float | None,
@@ -27,19 +27,6 @@ def _room_from_options(room: str | None, rt60: float | None,
     return out
 
 
-def _refuse_existing(paths: list[Path], force: bool, inputs: list[str | Path]) -> None:
-    """Before simulating: an output that is one of the ``inputs`` (signal, array, trajectory
-    files) is refused always, one that already exists unless ``--force`` (as ``hearsee
-    calibrate``): a second run must not silently replace a recording or its ground truth."""
-    ins = {Path(q).resolve() for q in inputs}
-    for p in paths:
-        if p.resolve() in ins:
-            raise ConfigError(f"{p}: refusing to overwrite the input file; choose another "
-                              "output path")
-        if p.exists() and not force:
-            raise InputFileError(f"{p}: file exists; pass --force to overwrite it")
-
-
 def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str, duration: float,
                      fs: int, snr: float | None, room_spec: dict | None, seed: int,
                      far_field: bool, pcm16: bool, force: bool) -> None:
@@ -54,7 +41,7 @@ def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str, durat
     traj = load_trajectory(trajectory)
     truth_csv = Path(out).with_suffix(".trajectory.csv")
     protect = [p for p in (signal, array, trajectory) if Path(p).is_file()]
-    _refuse_existing([Path(out), Path(out).with_suffix(".json"), truth_csv], force, protect)
+    refuse_overwrite([Path(out), Path(out).with_suffix(".json"), truth_csv], protect, force)
     with progress("simulating", total=1) as advance:
         x, truth = simulate_moving_recording(array, traj, signal=signal, duration_s=duration,
                                              fs=fs, snr_db=snr, room=room_spec, seed=seed)
@@ -124,8 +111,8 @@ def simulate_cmd(
             raise ConfigError("--far-field does not apply with --poses")
         pose_list = parse_poses(poses)
         caps = [out.with_name(f"{out.stem}_pose{k}.wav") for k in range(len(pose_list))]
-        _refuse_existing([out, *caps, *(c.with_suffix(".json") for c in caps)], force,
-                         [p for p in (signal, array) if Path(p).is_file()])
+        refuse_overwrite([out, *caps, *(c.with_suffix(".json") for c in caps)],
+                         [p for p in (signal, array) if Path(p).is_file()], force)
         man, files = simulate_pose_manifest(
             out, array, parse_floats(source, 3, "--source"), pose_list, signal=signal,
             duration_s=duration, fs=fs, snr_db=snr, room=_room_from_options(room, rt60, array_at),
@@ -144,7 +131,7 @@ def simulate_cmd(
     src = parse_floats(source, 3, "--source")
     room_spec = _room_from_options(room, rt60, array_at)
     protect = [p for p in (signal, array) if Path(p).is_file()]
-    _refuse_existing([out, out.with_suffix(".json")], force, protect)
+    refuse_overwrite([out, out.with_suffix(".json")], protect, force)
     with progress("simulating", total=1) as advance:
         x, truth = simulate_recording(array, src, signal=signal, duration_s=duration, fs=fs,
                                       snr_db=snr, room=room_spec, seed=seed,
