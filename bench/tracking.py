@@ -619,6 +619,7 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
         FIX_SIGMA_TDOA_S,
         RAY_SIGMA_TDOA_S,
         RayTracker,
+        feed_tracker,
         track_on_rays,
     )
 
@@ -686,12 +687,10 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
             mk = MotionKalman(sigma_meas_m=0.05, sigma_jerk=0.3, accel_tau_s=0.5)
             fx_pos, fx_vel, ca_pos, ca_vel = (np.full_like(rt.raw, np.nan) for _ in range(4))
             for k, (tk, fix) in enumerate(zip(rt.t, rt.fixes, strict=True)):
+                feed_tracker(rk, tk, None, None, fix)
                 if fix is None:
-                    rk.update(tk, None)
                     mk.update(tk, None)
                 else:
-                    rk.update(tk, fix.position_m, fix.covariance,
-                              [(a.position_m, a.covariance) for a in fix.alternatives])
                     d = fix.direction
                     vs = float(d @ fix.covariance @ d) * ca_scale
                     mk.update(tk, fix.position_m, fix.covariance + vs * np.outer(d, d))
