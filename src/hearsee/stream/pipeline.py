@@ -922,7 +922,14 @@ class StreamConfig:
         TDOAs of ``method``/``refine``). The per-frame (``raw_*``) outputs of an :class:`Update`
         always stay the plain per-frame estimates.
     min_coherence : smoothed measurements whose normalised steered power is below this are not
-        used (no source, or diffuse noise and reverberation only)
+        used (no source, or diffuse noise and reverberation only). Uncorrelated sensor noise
+        alone peaked at 0.24 in 60 s (three-mic, 16 kHz, alpha 0.5). 0.3 was tried on
+        bench/tracking.py part A (2026-11-25, 16 walks per condition): on dev seed 100 it
+        raised the voices' per-frame / tracked ratios at 10 dB (male 2.32 -> 2.87, female 2.20
+        -> 2.94; more measurements where the track otherwise coasts with a stale rate), but on
+        held-out seed 777 the female voice's pooled lag at 10 dB went from 0.63 to 2.63 frames
+        (beyond the 2-frame target) and the male voice's ratios fell (10 dB 2.98 -> 2.68, tracked
+        RMSE 9.5 -> 19.5 deg; 20 dB 7.13 -> 5.96): not adopted
     srp_band_hz : frequency band of the smoothed steered response, Hz
     srp_coherence_weight : weight the smoothed PHAT spectra by their magnitude-squared
         coherence (:class:`SmoothedSrp`)
