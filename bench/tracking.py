@@ -136,7 +136,7 @@ ARCTIC 4.1 cm, 'alexa' 8.4 cm, synthetic voice 2.2 cm).
 (reflections bias the fixes for hundreds of milliseconds), so the pooled median of 8 walks
 moved between 3.4 and 10.5 cm with the seed; the table also gives the share of walks whose own
 median is within 5 cm and (since 2026-11-25's twelfth session; earlier runs by hand) a walk
-bootstrap of the pooled median (:func:`walk_bootstrap`: its 95 % interval and the share of
+bootstrap of the pooled median (:func:`median_bootstrap`: its 95 % interval and the share of
 resampled medians within 5 cm), which says how far 32 walks pin the median. The tracker
 settings were rechecked on 32 walks each of seeds 0 and 100
 (TDOA noise 4-16 us, acceleration 0.1-0.4 m/s^2, 64-128 ms frames, onset-weighted fixes;
@@ -184,6 +184,7 @@ import argparse
 import itertools
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -531,7 +532,8 @@ def _part_a_condition(kind: str, snr: float, trials: int, dur: float,
            pooled_lag(acc["prof_lag_cv"])[0], pooled_lag(acc["prof_lag_cv_ff"])[0],
            rmse(cat["el_raw"]), rmse(cat["el_trk"]),
            rmse(cat["raw_vs_imm0"]) / rmse(cat["imm0_common"]),
-           pooled_lag(acc["prof_lag_imm0"])[0]]
+           pooled_lag(acc["prof_lag_imm0"])[0],
+           *ratio_bootstrap(acc["raw_vs_trk"], acc["trk_common"])]
     return row, example
 
 
@@ -723,22 +725,41 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
                          float(np.mean(np.isfinite(er))) * 100,
                          float(np.nanmedian(et)), float(np.nanpercentile(et, 90)),
                          float(np.nanmedian(ef)), float(np.mean(per_walk <= 0.05)) * 100,
-                         rmse(ev), per_deg * 100, per_us * 100, *walk_bootstrap(e_trk[key])])
+                         rmse(ev), per_deg * 100, per_us * 100, *median_bootstrap(e_trk[key])])
     return rows, example
 
 
-def walk_bootstrap(walks: list[np.ndarray], n: int = 2000, seed: int = 0
-                   ) -> tuple[str, float]:
-    """Walk bootstrap of the pooled median 3D error (metres): ``n`` resamples of whole walks
-    (their errors are correlated within a walk, so frames are not independent draws; a fixed
-    ``seed`` of its own, so the walks' random stream is untouched). Returns the 95 % interval
-    as text and the share of resampled medians within 5 cm (%)."""
+def walk_bootstrap(walks: list, stat: Callable[[list], float], n: int = 2000, seed: int = 0
+                   ) -> np.ndarray:
+    """Walk bootstrap: ``stat`` of ``n`` resamples (with replacement) of whole walks -- a walk's
+    errors are correlated, so its frames are not independent draws. ``stat`` takes a list of
+    walks. A fixed ``seed`` of its own, so the walks' random stream is untouched."""
     rng = np.random.default_rng(seed)
-    meds = np.array([np.nanmedian(np.concatenate([walks[i] for i in rng.integers(len(walks),
-                                                                                 size=len(walks))]))
+    return np.array([stat([walks[i] for i in rng.integers(len(walks), size=len(walks))])
                      for _ in range(n)])
-    lo, hi = np.percentile(meds, [2.5, 97.5])
-    return f"[{lo:.3g}, {hi:.3g}]", float(np.mean(meds <= 0.05)) * 100
+
+
+def _interval(values: np.ndarray) -> str:
+    """The central 95 % interval of bootstrap values, as text."""
+    lo, hi = np.percentile(values, [2.5, 97.5])
+    return f"[{lo:.3g}, {hi:.3g}]"
+
+
+def median_bootstrap(walks: list[np.ndarray]) -> tuple[str, float]:
+    """Part B: walk bootstrap of the pooled median 3D error (metres); its 95 % interval and
+    the share of resampled medians within 5 cm (%)."""
+    meds = walk_bootstrap(walks, lambda ws: float(np.nanmedian(np.concatenate(ws))))
+    return _interval(meds), float(np.mean(meds <= 0.05)) * 100
+
+
+def ratio_bootstrap(raw: list[np.ndarray], trk: list[np.ndarray]) -> tuple[str, float]:
+    """Part A: walk bootstrap of the per-frame / tracked RMSE ratio (each walk's per-frame and
+    tracked errors resampled together); its 95 % interval and the share of resampled ratios
+    of at least 2 (%)."""
+    ratios = walk_bootstrap(list(zip(raw, trk, strict=True)),
+                            lambda ws: rmse(np.concatenate([w[0] for w in ws]))
+                            / rmse(np.concatenate([w[1] for w in ws])))
+    return _interval(ratios), float(np.mean(ratios >= 2.0)) * 100
 
 
 # ---------------------------------------------------------------------------------- part C
@@ -851,7 +872,8 @@ HEAD_A = ["signal", "SNR dB", "per-frame RMSE deg", "per-frame coverage %",
           "one CV filter: pooled lag", "one CV filter: pooled lag free field",
           "per-frame elevation RMSE deg", "tracked elevation RMSE deg",
           "constant-rate IMM: per-frame / tracked (same frames)",
-          "constant-rate IMM: pooled lag"]
+          "constant-rate IMM: pooled lag",
+          "per-frame / tracked 95 % CI (walk bootstrap)", "bootstrap ratios >= 2 %"]
 HEAD_B = ["rig", "walks", "per-frame fix median m", "fix signed range error median m",
           "fix signed range error IQR m", "fix coverage %", "tracked median m (all frames)",
           "tracked p90 m", "tracked median m (frames with a fix)",
