@@ -51,10 +51,7 @@ def calibrate_cmd(
     rf = glob_images(right, "right images")
     tf = glob_images(thermal, "thermal images") if thermal else None
     out = Path(output)
-    inputs = {p.resolve() for p in [*lf, *rf, *(tf or [])]}
-    if reference is not None:
-        inputs.add(Path(reference).resolve())
-    refuse_overwrite([out], inputs, force)
+    refuse_overwrite([out], [*lf, *rf, *(tf or []), reference], force)
     if not out.parent.exists():
         raise InputFileError(f"{out}: folder {out.parent} does not exist")
     # read the reference first: a bad file fails before the calibration and the output

@@ -29,8 +29,9 @@ def _room_from_options(room: str | None, rt60: float | None,
 
 def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str, duration: float,
                      fs: int, snr: float | None, room_spec: dict | None, seed: int,
-                     far_field: bool, pcm16: bool, force: bool) -> None:
-    """``--trajectory``: a moving source (hearsee.sim.moving), truth CSV beside the WAV."""
+                     far_field: bool, pcm16: bool, force: bool, protect: list) -> None:
+    """``--trajectory``: a moving source (hearsee.sim.moving), truth CSV beside the WAV.
+    ``protect``: the input files besides the trajectory that no output may replace."""
     import numpy as np
 
     from hearsee.sim.audio import save_recording
@@ -40,7 +41,7 @@ def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str, durat
         raise ConfigError("--far-field applies to a static --source only")
     traj = load_trajectory(trajectory)
     truth_csv = Path(out).with_suffix(".trajectory.csv")
-    protect = [p for p in (signal, array, trajectory) if Path(p).is_file()]
+    protect = [*protect, *([trajectory] if Path(trajectory).is_file() else [])]
     refuse_overwrite([Path(out), Path(out).with_suffix(".json"), truth_csv], protect, force)
     with progress("simulating", total=1) as advance:
         x, truth = simulate_moving_recording(array, traj, signal=signal, duration_s=duration,
@@ -104,6 +105,7 @@ def simulate_cmd(
                           "(moving source)")
     if trajectory is not None and poses is not None:
         raise ConfigError("--trajectory (moving source) cannot be combined with --poses")
+    protect = [p for p in (signal, array) if Path(p).is_file()]  # inputs no output may replace
     if poses is not None:
         from hearsee.audio.active import parse_poses, simulate_pose_manifest
 
@@ -111,14 +113,13 @@ def simulate_cmd(
             raise ConfigError("--far-field does not apply with --poses")
         pose_list = parse_poses(poses)
         caps = [out.with_name(f"{out.stem}_pose{k}.wav") for k in range(len(pose_list))]
-        refuse_overwrite([out, *caps, *(c.with_suffix(".json") for c in caps)],
-                         [p for p in (signal, array) if Path(p).is_file()], force)
+        refuse_overwrite([out, *caps, *(c.with_suffix(".json") for c in caps)], protect, force)
         man, files = simulate_pose_manifest(
             out, array, parse_floats(source, 3, "--source"), pose_list, signal=signal,
             duration_s=duration, fs=fs, snr_db=snr, room=_room_from_options(room, rt60, array_at),
             seed=seed, offset_m=parse_floats(head_offset, 3, "--head-offset"),
             subtype="PCM_16" if pcm16 else "FLOAT",
-            protect=[p for p in (signal, array) if Path(p).is_file()])
+            protect=protect)
         err_console.print(f"wrote {man} (pose manifest) and {len(files)} captures",
                           highlight=False)
         return
@@ -126,11 +127,10 @@ def simulate_cmd(
     if trajectory is not None:
         _simulate_moving(out, array, trajectory, signal, duration, fs, snr,
                          _room_from_options(room, rt60, array_at), seed, far_field, pcm16,
-                         force)
+                         force, protect)
         return
     src = parse_floats(source, 3, "--source")
     room_spec = _room_from_options(room, rt60, array_at)
-    protect = [p for p in (signal, array) if Path(p).is_file()]
     refuse_overwrite([out, out.with_suffix(".json")], protect, force)
     with progress("simulating", total=1) as advance:
         x, truth = simulate_recording(array, src, signal=signal, duration_s=duration, fs=fs,
