@@ -104,6 +104,23 @@ BANDS = {"noise": (300.0, 7500.0), "speech": (300.0, 3500.0)}
 #: recordings and better on 19 % (full band); band-limited to 300-3500 Hz a tie. A saturated
 #: SNR weight (min(coherence / 0.5, 1)) was neutral on both. Real acoustics decide, so the
 #: SNR weighting stays.
+#: Tried and rejected (2026-11-25, fourteenth session), on held-out seeds only:
+#: - Why pyroomacoustics' SRP-PHAT edges hearsee on white noise in rooms (three-mic RT60 0.6 s
+#:   at 10/20 dB on this table and on seeds 901/902, 16 recordings per cell: SRP 2.23/2.04 and
+#:   1.04/0.99 deg, hearsee 2.43/2.37 and 1.10/1.12). hearsee configured as SRP-PHAT on the same
+#:   recordings -- joint="steered" (2 m), Hann window, 32 ms hop, onset_weight 0, every active
+#:   frame in the summary -- gave 2.32/2.22 and 1.12/1.09: it does not reproduce the peer's
+#:   numbers, and no one of those changes alone closed the gap (steered 2.23/2.34, 1.09/1.05;
+#:   Hann + 32 ms hop 2.54/2.48; all active frames 2.43/2.35). Over all twelve white-noise room
+#:   cells the two methods are within 3 % on seed 901 (3.34 vs 3.42 deg pooled); the cells
+#:   are ties that either side wins by chance.
+#: - A coherence-test weighting of the reverberant summary (keep the time-frequency bins whose
+#:   5-frame magnitude-squared coherence passes a threshold: Mohan et al. 2008, "Localization
+#:   of multiple acoustic sources with small arrays using a coherence test", JASA 123(4)):
+#:   seed 901, 10 recordings per room cell, all signals: cells at or below the best peer 24 of
+#:   48 (hearsee) -> 18 (threshold 0.8) / 22 (0.5) / 24 (soft weights MSC or MSC^2); pooled
+#:   three-mic RT60 0.6 s 3.91 -> 3.46-3.49 deg with the soft weights but two-mic RT60 0.3 s
+#:   13.5 -> 14.0-14.3 deg. No gain.
 HEARSEE = {"method": "ml", "frame_ms": 64.0, "hop_ms": 64.0, "refine": "none",
            "snr_weight": True, "window": ("tukey", 0.25), "min_confidence": 0.8,
            "onset_weight": 3.0, "reverb_method": "phat"}
