@@ -79,6 +79,29 @@ def test_rate_tau_option_reaches_the_tracker(scene, capsys, option, tau):
     assert not np.allclose(lib[2.0], lib[None]) and not np.allclose(lib[2.0], lib[0.5])
 
 
+def test_gate_coherence_option_reaches_the_stream(tmp_path, capsys):
+    """A source that fades by 21 dB after one second (white noise from 40 deg, three-mic
+    array): by default the gate keeps tracking it; --gate-coherence 0 turns the gated
+    detection off and the track is dropped after max_coast_s."""
+    from hearsee.audio.propagation import simulate_free_field
+    from hearsee.geometry import sph_to_cart
+
+    arr = MicArray.from_preset("three-mic")
+    x = np.random.default_rng(31).standard_normal(5 * FS)
+    x[FS:] *= 0.085
+    y = simulate_free_field(x, FS, arr, sph_to_cart(np.radians(40.0), 0.0, 2.0), snr_db=200,
+                            rng=1)
+    wav = tmp_path / "fade.wav"
+    write_recording(wav, y + 0.1 * np.random.default_rng(5).standard_normal(y.shape), FS)
+    late = {}
+    for opt in ([], ["--gate-coherence", "0"]):
+        assert main(["track", str(wav), "--array", "three-mic", *opt]) == 0
+        rows = [r for r in _lines(capsys) if r["t"] > 3.0]
+        late[bool(opt)] = [r["azimuth_deg"] for r in rows]
+    assert all(a is not None and abs(wrap_deg(a - 40.0)) < 5.0 for a in late[False])
+    assert all(a is None for a in late[True])
+
+
 def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, capsys):
     code = main(["track", str(scene["wav"]), "--array", str(scene["array"]), "--camera",
                  str(scene["cam"]), "--image-points", str(scene["pts"]), "--camera-at",
@@ -107,6 +130,8 @@ def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, caps
     (["--tracker", "particle"], "--tracker"),
     (["--rate-tau", "0"], "--rate-tau must be > 0 s"),
     (["--rate-tau", "nan"], "--rate-tau must be > 0 s"),
+    (["--gate-coherence", "1.5"], "--gate-coherence must be in [0, 1]"),
+    (["--gate-coherence", "nan"], "--gate-coherence must be in [0, 1]"),
     (["--camera", "CAM", "--image-points", "PTS", "--camera-at", "1,2"],
      "--camera-at: expected 3 numbers"),
     (["--camera", "CAM", "--image-points", "PTS", "--camera-at", "0,nan,0"],

@@ -82,6 +82,11 @@ def track_cmd(
         "relaxes toward zero (default: audio.tracking.DIRECTION_RATE_TAU_S, 2 s); inf = "
         "constant velocity (the thesis's model).")
     ] = None,
+    gate_coherence: Annotated[float, typer.Option(
+        "--gate-coherence", help="Normalised steered power (0-1) that counts as a measurement "
+        "inside the running track's gate once it has coasted 0.2 s (tracker-aided detection, "
+        "StreamConfig.gated_min_coherence; the grid's own threshold is 0.4); 0 = off.")
+    ] = 0.3,
     fmt: Annotated[TrackFormat, typer.Option(
         "--format", help="jsonl: one JSON line per frame; json: one document.")
     ] = TrackFormat.jsonl,
@@ -112,6 +117,8 @@ def track_cmd(
         rate_tau = DIRECTION_RATE_TAU_S
     if not rate_tau > 0:
         raise ConfigError(f"--rate-tau must be > 0 s (inf = constant velocity), got {rate_tau}")
+    if not 0.0 <= gate_coherence <= 1.0:
+        raise ConfigError(f"--gate-coherence must be in [0, 1] (0 = off), got {gate_coherence}")
     arr = load_array(array)
     rig = points = None
     if camera is not None:
@@ -130,7 +137,8 @@ def track_cmd(
     cfg = StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms, method=method.value.replace("gcc-", ""),
                        itd_filter=itd_filter, in_plane=in_plane,
                        direction_modes_dps2=IMM_MODES_DPS2 if tracker is Tracker.imm else None,
-                       direction_rate_tau_s=rate_tau)
+                       direction_rate_tau_s=rate_tau,
+                       gated_min_coherence=gate_coherence if gate_coherence > 0 else None)
 
     def sink(u: object) -> None:
         sys.stdout.write(json.dumps(to_jsonable(u.to_json())) + "\n")  # type: ignore[attr-defined]
