@@ -482,13 +482,14 @@ def test_gated_detection_keeps_a_source_the_grid_threshold_loses():
     below min_coherence, so the default stream gets no measurement and drops the track after
     max_coast_s; the tracker-aided threshold inside the gate (gated_min_coherence 0.3) keeps
     measuring it, on the right azimuth: in every frame without a measurement with
-    gated_after_s 0, and after 0.2 s (the default) of coasting, so about one frame in seven."""
+    gated_after_s 0, and after 0.2 s of coasting, so about one frame in seven. Off by
+    default."""
     arr, y = _fading_source(0.085)
-    meas, has, _ = _late(arr, y, gated_min_coherence=None)
+    meas, has, _ = _late(arr, y)
     assert meas == 0.0 and has < 0.5  # the test can fail: without the gate the track is lost
     meas, has, err = _late(arr, y, gated_min_coherence=0.3, gated_after_s=0.0)
     assert meas > 0.4 and has == 1.0 and err < 5.0
-    meas, has, err = _late(arr, y)
+    meas, has, err = _late(arr, y, gated_min_coherence=0.3, gated_after_s=0.2)
     assert 0.08 < meas < 0.2 and has == 1.0 and err < 5.0
 
 
@@ -498,9 +499,9 @@ def test_gated_detection_does_not_keep_a_track_on_sensor_noise():
     track starts on it); a threshold of 0.1 would follow the noise (the test can fail)."""
     arr, y = _fading_source(0.0)
     for gated in (None, 0.3):
-        meas, has, _ = _late(arr, y, gated_min_coherence=gated)
+        meas, has, _ = _late(arr, y, gated_min_coherence=gated, gated_after_s=0.2)
         assert meas == 0.0 and has < 0.5
-    meas, has, err = _late(arr, y, gated_min_coherence=0.1)
+    meas, has, err = _late(arr, y, gated_min_coherence=0.1, gated_after_s=0.2)
     assert meas > 0.0 and has == 1.0 and err > 20.0
 
 

@@ -81,8 +81,8 @@ def test_rate_tau_option_reaches_the_tracker(scene, capsys, option, tau):
 
 def test_gate_coherence_option_reaches_the_stream(tmp_path, capsys):
     """A source that fades by 21 dB after one second (white noise from 40 deg, three-mic
-    array): by default the gate keeps tracking it; --gate-coherence 0 turns the gated
-    detection off and the track is dropped after max_coast_s."""
+    array): with --gate-coherence 0.3 the gate keeps tracking it; by default (0, off) the
+    track is dropped after max_coast_s."""
     from hearsee.audio.propagation import simulate_free_field
     from hearsee.geometry import sph_to_cart
 
@@ -94,12 +94,12 @@ def test_gate_coherence_option_reaches_the_stream(tmp_path, capsys):
     wav = tmp_path / "fade.wav"
     write_recording(wav, y + 0.1 * np.random.default_rng(5).standard_normal(y.shape), FS)
     late = {}
-    for opt in ([], ["--gate-coherence", "0"]):
+    for opt in (["--gate-coherence", "0.3"], []):
         assert main(["track", str(wav), "--array", "three-mic", *opt]) == 0
         rows = [r for r in _lines(capsys) if r["t"] > 3.0]
         late[bool(opt)] = [r["azimuth_deg"] for r in rows]
-    assert all(a is not None and abs(wrap_deg(a - 40.0)) < 5.0 for a in late[False])
-    assert all(a is None for a in late[True])
+    assert all(a is not None and abs(wrap_deg(a - 40.0)) < 5.0 for a in late[True])
+    assert all(a is None for a in late[False])
 
 
 def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, capsys):

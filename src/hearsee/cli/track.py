@@ -85,8 +85,10 @@ def track_cmd(
     gate_coherence: Annotated[float, typer.Option(
         "--gate-coherence", help="Normalised steered power (0-1) that counts as a measurement "
         "inside the running track's gate once it has coasted 0.2 s (tracker-aided detection, "
-        "StreamConfig.gated_min_coherence; the grid's own threshold is 0.4); 0 = off.")
-    ] = 0.3,
+        "StreamConfig.gated_min_coherence; the grid's own threshold is 0.4). 0.3 lowered a "
+        "weak talker's error through pauses in bench/tracking.py but lagged sharp turns by "
+        "up to ~2 more frames; 0 = off.")
+    ] = 0.0,
     fmt: Annotated[TrackFormat, typer.Option(
         "--format", help="jsonl: one JSON line per frame; json: one document.")
     ] = TrackFormat.jsonl,

@@ -949,16 +949,20 @@ class StreamConfig:
         steered power reaches this value, as a smoothed measurement of that power. Needs
         ``spectrum_alpha`` > 0; None = off. Sensor noise alone stays below it (0.24 over the
         whole grid in 60 s, see ``min_coherence``), so a track whose talker has gone silent is
-        still dropped after ``max_coast_s``; no track is ever started this way. 0.3 after 0.2 s
-        of coasting is the default since 2026-11-25 (fourteenth session), set on dev walks of
-        bench/tracking.py part A and checked on its held-out seed 777 (16 walks per condition):
-        per-frame / tracked ratio female voice 10 dB 2.15 -> 3.22x, male 10 dB 2.98 -> 2.81x,
-        20 dB 7.13 -> 7.19x / 3.53 -> 3.92x, ARCTIC speech and white noise within 1 %; pooled
-        lags on turning walks 0.24-0.91 -> 0.33-1.68 frames. Detecting in every frame without
-        a measurement (``gated_after_s`` 0) measured 3-4x more often but lengthened the lag on
-        the dev walks (male voice 10 dB: +0.35 / +1.1 frames at 0.3, +1.1 / +1.4 at 0.25): a
-        peak picked near a lagging prediction keeps the track behind in a turn. None = off
-        (the default before)
+        still dropped after ``max_coast_s``; no track is ever started this way. Default None
+        (off): with 0.3 after 0.2 s of coasting (``gated_after_s``), set on dev walks of
+        bench/tracking.py part A, the held-out seeds of that benchmark (16 walks per
+        condition) gave per-frame / tracked ratios, female voice 10 dB, 2.15 -> 3.22x (seed
+        777) and 1.74 -> 2.25x (778); male 10 dB 2.98 -> 2.81x and 2.62 -> 2.63x; 20 dB voices
+        7.13 -> 7.19x, 3.53 -> 3.92x, 7.88 -> 8.88x, 4.40 -> 4.87x; ARCTIC speech and white
+        noise within 1 % -- but the female voice's pooled lag on turning walks at 10 dB went
+        from 0.63 to 1.68 frames (777) and from 0.61 to 2.68 (778), past the 2-frame rule the
+        stream's defaults are held to (male 10 dB +0.2 / +0.04, 20 dB +0.1 / +0.2): a peak
+        picked near a lagging prediction keeps the track behind in a turn. Detecting in every
+        frame without a measurement (``gated_after_s`` 0) measured 3-4x more often and
+        lengthened the lag more (dev walks, male voice 10 dB: +0.35 / +1.1 frames at 0.3,
+        +1.1 / +1.4 at 0.25). Use it where a lower error through a weak talker's pauses matters
+        more than ~1-2 frames (32-64 ms) of lag in sharp turns
     gate_sigmas, gate_deg, gated_after_s : see ``gated_min_coherence``
     srp_band_hz : frequency band of the smoothed steered response, Hz
     srp_coherence_weight : weight the smoothed PHAT spectra by their magnitude-squared
@@ -1027,7 +1031,7 @@ class StreamConfig:
     direction_rate_tau_s: float | None = DIRECTION_RATE_TAU_S
     elevation_accel_ratio: float = ELEVATION_ACCEL_RATIO
     planar_elevation_sigma_scale: float = 4.0
-    gated_min_coherence: float | None = 0.3
+    gated_min_coherence: float | None = None
     gate_sigmas: float = 3.0
     gate_deg: tuple[float, float] = (6.0, 30.0)
     gated_after_s: float = 0.2
