@@ -507,7 +507,8 @@ def test_gated_detection_does_not_keep_a_track_on_sensor_noise():
 
 @pytest.mark.parametrize("bad", [{"gated_min_coherence": 0.0}, {"gated_min_coherence": 1.5},
                                  {"gate_sigmas": 0.0}, {"gate_deg": (10.0, 5.0)},
-                                 {"gate_deg": (0.0, 30.0)}, {"gated_after_s": -0.1}])
+                                 {"gate_deg": (0.0, 30.0)}, {"gated_after_s": -0.1},
+                                 {"gated_min_coherence": 0.3, "spectrum_alpha": 0.0}])
 def test_bad_gating_settings_are_a_config_error(bad):
     with pytest.raises(ConfigError, match="gate"):
         TrackingProcessor(MicArray.from_preset("three-mic"), FS, StreamConfig(**bad))

@@ -1042,6 +1042,9 @@ def _check_gating(cfg: StreamConfig) -> None:
     g = cfg.gated_min_coherence
     if g is not None and not 0.0 < g <= 1.0:
         raise ConfigError(f"gated_min_coherence must be in (0, 1] or None, got {g}")
+    if g is not None and not cfg.spectrum_alpha > 0:
+        raise ConfigError("gated_min_coherence needs the smoothed steered response "
+                          f"(spectrum_alpha > 0), got spectrum_alpha={cfg.spectrum_alpha}")
     lo, hi = cfg.gate_deg
     if not (cfg.gate_sigmas > 0 and 0.0 < lo <= hi <= 180.0 and cfg.gated_after_s >= 0):
         raise ConfigError(
