@@ -1,4 +1,4 @@
-"""Fixtures of the stream tests: a fake live camera."""
+"""Fixtures of the stream tests: a fake live camera, a fading source."""
 
 from __future__ import annotations
 
@@ -48,3 +48,24 @@ def fake_camera(monkeypatch: pytest.MonkeyPatch) -> Callable[..., None]:
         monkeypatch.setattr(cv2, "VideoCapture", FakeCap)
 
     return install
+
+
+@pytest.fixture
+def fading_source() -> Callable[[float], tuple]:
+    """``fading_source(gain)`` -> (three-mic MicArray, recording (3, n) at 16 kHz): white noise
+    from azimuth 40 deg, 2 m, free field, for 5 s -- full level for the first second, then
+    ``gain`` times it -- over the same sensor noise."""
+    from hearsee.audio.arrays import MicArray
+    from hearsee.audio.propagation import simulate_free_field
+    from hearsee.geometry import sph_to_cart
+
+    def make(gain: float) -> tuple:
+        fs = 16000
+        arr = MicArray.from_preset("three-mic")
+        x = np.random.default_rng(31).standard_normal(5 * fs)
+        x[fs:] *= gain
+        y = simulate_free_field(x, fs, arr, sph_to_cart(np.radians(40.0), 0.0, 2.0),
+                                snr_db=200, rng=1)
+        return arr, y + 0.1 * np.random.default_rng(5).standard_normal(y.shape)
+
+    return make

@@ -451,20 +451,6 @@ def test_direction_track_is_dropped_after_max_coast_s_without_a_measurement():
         TrackingProcessor(arr, FS, StreamConfig(max_coast_s=0.0))
 
 
-def _fading_source(gain):
-    """White noise from azimuth 40 deg, 2 m, for 5 s: full level for the first second, then
-    ``gain`` times it, over the same sensor noise (three-mic array, free field)."""
-    from hearsee.audio.propagation import simulate_free_field
-    from hearsee.geometry import sph_to_cart
-
-    arr = MicArray.from_preset("three-mic")
-    x = np.random.default_rng(31).standard_normal(5 * FS)
-    x[FS:] *= gain
-    y = simulate_free_field(x, FS, arr, sph_to_cart(np.radians(40.0), 0.0, 2.0), snr_db=200,
-                            rng=1)
-    return arr, y + 0.1 * np.random.default_rng(5).standard_normal(y.shape)
-
-
 def _late(arr, y, **kw):
     """After 1.5 s: share of frames with a measurement, share with an azimuth, and the
     largest azimuth error (deg) against the source's 40 deg."""
@@ -477,14 +463,14 @@ def _late(arr, y, **kw):
         else np.nan
 
 
-def test_gated_detection_keeps_a_source_the_grid_threshold_loses():
+def test_gated_detection_keeps_a_source_the_grid_threshold_loses(fading_source):
     """The source drops by 21 dB after one second: its smoothed steered power then stays
     below min_coherence, so the default stream gets no measurement and drops the track after
     max_coast_s; the tracker-aided threshold inside the gate (gated_min_coherence 0.3) keeps
     measuring it, on the right azimuth: in every frame without a measurement with
     gated_after_s 0, and after 0.2 s of coasting, so about one frame in seven. Off by
     default."""
-    arr, y = _fading_source(0.085)
+    arr, y = fading_source(0.085)
     meas, has, _ = _late(arr, y)
     assert meas == 0.0 and has < 0.5  # the test can fail: without the gate the track is lost
     meas, has, err = _late(arr, y, gated_min_coherence=0.3, gated_after_s=0.0)
@@ -493,11 +479,11 @@ def test_gated_detection_keeps_a_source_the_grid_threshold_loses():
     assert 0.08 < meas < 0.2 and has == 1.0 and err < 5.0
 
 
-def test_gated_detection_does_not_keep_a_track_on_sensor_noise():
+def test_gated_detection_does_not_keep_a_track_on_sensor_noise(fading_source):
     """The source falls silent after one second: with gated_min_coherence 0.3 the track is
     still dropped after max_coast_s (sensor noise never reaches the gated threshold, and no
     track starts on it); a threshold of 0.1 would follow the noise (the test can fail)."""
-    arr, y = _fading_source(0.0)
+    arr, y = fading_source(0.0)
     for gated in (None, 0.3):
         meas, has, _ = _late(arr, y, gated_min_coherence=gated, gated_after_s=0.2)
         assert meas == 0.0 and has < 0.5

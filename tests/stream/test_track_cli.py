@@ -79,20 +79,13 @@ def test_rate_tau_option_reaches_the_tracker(scene, capsys, option, tau):
     assert not np.allclose(lib[2.0], lib[None]) and not np.allclose(lib[2.0], lib[0.5])
 
 
-def test_gate_coherence_option_reaches_the_stream(tmp_path, capsys):
+def test_gate_coherence_option_reaches_the_stream(tmp_path, capsys, fading_source):
     """A source that fades by 21 dB after one second (white noise from 40 deg, three-mic
     array): with --gate-coherence 0.3 the gate keeps tracking it; by default (0, off) the
     track is dropped after max_coast_s."""
-    from hearsee.audio.propagation import simulate_free_field
-    from hearsee.geometry import sph_to_cart
-
-    arr = MicArray.from_preset("three-mic")
-    x = np.random.default_rng(31).standard_normal(5 * FS)
-    x[FS:] *= 0.085
-    y = simulate_free_field(x, FS, arr, sph_to_cart(np.radians(40.0), 0.0, 2.0), snr_db=200,
-                            rng=1)
+    _, y = fading_source(0.085)
     wav = tmp_path / "fade.wav"
-    write_recording(wav, y + 0.1 * np.random.default_rng(5).standard_normal(y.shape), FS)
+    write_recording(wav, y, FS)
     late = {}
     for opt in (["--gate-coherence", "0.3"], []):
         assert main(["track", str(wav), "--array", "three-mic", *opt]) == 0
