@@ -1169,10 +1169,11 @@ class TrackingProcessor:
             if sm is not None and not own:
                 cands = self._smoothed_candidates(sm, n)
                 c_sm = float(sm["coherence"][n])
+                age_s = float(sm["age_frames"][n]) * self.hop / self.fs
                 if not cands and self.cfg.gated_min_coherence is not None and (
                         float(t) - self._last_measured_t >= self.cfg.gated_after_s):
-                    cands, c_sm = self._gated_candidate(sm, n, float(t))
-                delay = float(sm["age_frames"][n]) * self.hop / self.fs if cands else 0.0
+                    cands, c_sm = self._gated_candidate(sm["profile"][n], float(t) - age_s)
+                delay = age_s if cands else 0.0
                 sigma = self._srp_sigma(c_sm) if cands else None
             if sigma is not None and self._level_plane:
                 sigma = (sigma, sigma * self.cfg.planar_elevation_sigma_scale)
@@ -1240,22 +1241,21 @@ class TrackingProcessor:
                     cands.append((float(az), None))
         return cands
 
-    def _gated_candidate(self, sm: dict[str, NDArray], n: int, t: float
+    def _gated_candidate(self, prof: NDArray, t_evidence: float
                          ) -> tuple[list[tuple[float, float | None]], float]:
-        """The steered response's largest local maximum within the running track's gate,
-        when it reaches ``gated_min_coherence``: ``([(azimuth, None)], its normalised steered
-        power)``, or ``([], 0.0)``."""
+        """The largest local maximum of the steered response's azimuth profile ``prof``
+        (n_az,) within the running track's gate, predicted to ``t_evidence`` (s: the frame
+        time less the smoothed evidence's age), when it reaches ``gated_min_coherence``:
+        ``([(azimuth, None)], its normalised steered power)``, or ``([], 0.0)``."""
         d = self.direction
-        if not d.initialized or d.t is None:
+        if not d.initialized:
             return [], 0.0
-        delay = float(sm["age_frames"][n]) * self.hop / self.fs
-        dt = max(t - delay - float(d.t), 0.0)
+        dt = max(t_evidence - float(d.t), 0.0)
         x, P = d.x, d.P
         az_pred = float(x[0] + x[2] * dt)
         var = float(P[0, 0] + 2.0 * P[0, 2] * dt + P[2, 2] * dt * dt)
         lo, hi = self.cfg.gate_deg
         half = float(np.clip(self.cfg.gate_sigmas * np.sqrt(max(var, 0.0)), lo, hi))
-        prof = sm["profile"][n]
         axis = self.srp.az_axis
         near = np.abs(wrap_deg(axis - az_pred)) <= half
         if not near.any():
