@@ -7,6 +7,8 @@ from hearsee.audio.signals import white_noise
 from hearsee.audio.tdoa import (
     METHODS,
     _median_last,
+    _percentiles,
+    _take_last,
     estimate_tdoas,
     frame_signals,
     gcc,
@@ -134,6 +136,27 @@ def test_median_last_is_numpys_median(n):
     a = rng.standard_normal((3, 2, n))
     a[0, 0] = np.round(a[0, 0])  # ties
     np.testing.assert_allclose(_median_last(a.copy()), np.median(a, axis=-1), rtol=0, atol=0)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 20, 31, 200])
+def test_percentiles_are_numpys(n):
+    """The frame-energy VAD's percentiles equal np.percentile to the bit (lognormal energies
+    over many decades, ties included)."""
+    rng = np.random.default_rng(n)
+    for _ in range(50):
+        e = rng.lognormal(0.0, 3.0, n) * 10.0 ** rng.uniform(-12, 3)
+        if n > 3:
+            e[: n // 4] = e[0]
+        assert _percentiles(e, (10.0, 95.0)) == [float(v) for v in np.percentile(e, [10, 95])]
+
+
+def test_take_last_is_take_along_axis():
+    rng = np.random.default_rng(3)
+    a = rng.standard_normal((4, 3, 50))
+    idx = rng.integers(0, 50, (4, 3))
+    np.testing.assert_array_equal(_take_last(a, idx),
+                                  np.take_along_axis(a, idx[..., None], axis=-1)[..., 0])
+    np.testing.assert_array_equal(_take_last(a[1, :, :], idx[1]), a[1, np.arange(3), idx[1]])
 
 
 def test_pairs_subset_and_method_aliases(recording, three):
