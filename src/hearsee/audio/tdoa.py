@@ -1243,10 +1243,12 @@ def estimate_tdoas(
     k0, k1 = int(bins[0]), int(bins[-1]) + 1  # the band is one contiguous run of bins
     band_bins = np.arange(k0, k1)
     nb = k1 - k0
-    X_all = None  # the band spectra of every frame, when the activity test computed them
+    X_all = None  # the band spectra of every frame when they fit in one chunk
     if band_vad and (k0 > 1 or k1 < n_bins - 1) and not decided:
         active, X_all = _band_activity(frames, win, nfft, k0, k1, active, vad_db,
                                        max(int(chunk_frames), 1))
+    elif n_frames <= max(int(chunk_frames), 1):  # one transform for the noise and the frames
+        X_all = sfft.rfft(frames * win, nfft, axis=-1)[..., k0:k1]
     noise_psd = _noise_spectrum(frames, active, win, nfft, k0, k1, X_all) if snr_weight else None
 
     redundant = _closure_projector(tuple(prs), arr.n_mics) is not None  # a closed cycle
@@ -1364,7 +1366,11 @@ def estimate_tdoas(
         fallback = True
     if n_acc and whole_recording:
         r_sum = corr(acc)  # the averaged correlation, (n_pairs, nfft)
-        lag, c = _peaks(r_sum[None], acc[None], nfft, max_lag, "interp", main_lobe, band_bins)
+        # the exact peak: the closure test needs it; one pair with upsampling re-estimates it
+        # below and takes only its sample (CFAR) from here
+        fine = redundant or summary_upsample <= 1
+        lag, c = _peaks(r_sum[None], acc[None], nfft, max_lag, "interp" if fine else "parabolic",
+                        main_lobe, band_bins)
         resid = _closure_residual(lag[0], prs, arr.n_mics)
         if resid is not None:
             # redundant pairs (>= 3 microphones). Detection: the pairs' own peaks of
