@@ -6,6 +6,7 @@ from hearsee.audio.propagation import delay_signals, simulate_free_field
 from hearsee.audio.signals import white_noise
 from hearsee.audio.tdoa import (
     METHODS,
+    _frame_energy,
     _median_last,
     _percentiles,
     _take_last,
@@ -148,6 +149,19 @@ def test_percentiles_are_numpys(n):
         if n > 3:
             e[: n // 4] = e[0]
         assert _percentiles(e, (10.0, 95.0)) == [float(v) for v in np.percentile(e, [10, 95])]
+
+
+@pytest.mark.parametrize("frame_len,hop", [(512, 512), (512, 256), (512, 128), (500, 200)])
+def test_frame_energy_is_each_frames_mean_square(frame_len, hop):
+    """Whole-hop frames (block sums) and other hops (running sum) give every frame's mean
+    square over all channels, also for frames far quieter than the rest."""
+    rng = np.random.default_rng(hop)
+    x = rng.standard_normal((3, 9000)) * np.exp(rng.uniform(-9.0, 0.0, 9000))
+    x32 = x.astype(np.float32)
+    n_frames = (x.shape[1] - frame_len) // hop + 1
+    starts = np.arange(n_frames) * hop
+    truth = np.array([np.mean(x32[:, s:s + frame_len].astype(float) ** 2) for s in starts])
+    np.testing.assert_allclose(_frame_energy(x32, frame_len, hop, n_frames), truth, rtol=1e-6)
 
 
 def test_take_last_is_take_along_axis():

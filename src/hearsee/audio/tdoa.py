@@ -568,10 +568,17 @@ def frame_activity(x: NDArray, frame_len: int, hop: int, n_frames: int,
 
 def _frame_energy(x: NDArray, frame_len: int, hop: int, n_frames: int) -> NDArray:
     """Mean-square energy of each frame of ``x`` (n_ch, n), over all channels."""
-    cs = np.zeros(x.shape[1] + 1)
-    np.cumsum(np.einsum("ij,ij->j", x, x), dtype=float, out=cs[1:])
-    start = np.arange(n_frames) * hop
-    return np.maximum((cs[start + frame_len] - cs[start]) / (frame_len * x.shape[0]), 0.0)
+    e = np.einsum("ij,ij->j", x, x)  # per sample, summed over the channels
+    if frame_len % hop == 0:  # frames made of whole hops: sum the hops, then the frames
+        m = frame_len // hop
+        blocks = e[: (n_frames + m - 1) * hop].reshape(-1, hop).sum(axis=1, dtype=float)
+        s = blocks if m == 1 else np.convolve(blocks, np.ones(m), mode="valid")
+    else:  # (a float64 running sum of ~n samples: ~4 ns each, slower)
+        cs = np.zeros(x.shape[1] + 1)
+        np.cumsum(e, dtype=float, out=cs[1:])
+        start = np.arange(n_frames) * hop
+        s = cs[start + frame_len] - cs[start]
+    return np.maximum(s / (frame_len * x.shape[0]), 0.0)
 
 
 def _energy_vad(energy: NDArray, vad_db: float) -> tuple[NDArray, bool]:
