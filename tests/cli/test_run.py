@@ -192,6 +192,30 @@ def test_bad_robot_files_and_options(robot_dir, capsys):
     assert (robot_dir / "old.rrd").read_bytes() == b"keep"
 
 
+def test_exports_are_checked_before_listening(robot_dir, monkeypatch, capsys):
+    """--rerun / --mcap whose extra is missing or whose folder does not exist fail at once,
+    before any device is opened (no sounddevice is faked: a run would fail differently) and
+    without writing anything; the dry run lists the exports it checked."""
+    from hearsee.robot import export
+
+    cfg = _config(robot_dir)
+    monkeypatch.setitem(export._EXTRAS, "mcap", ("hearsee_no_such_module", "--mcap needs ROS"))
+    assert main(["run", "--config", str(cfg), "--mcap", str(robot_dir / "run.mcap")]) == 2
+    assert capsys.readouterr().err.strip() == "hearsee: error: --mcap needs ROS"
+    monkeypatch.setitem(export._EXTRAS, "rerun", ("json", "--rerun needs Rerun"))  # present
+    assert main(["run", "--config", str(cfg), "--rerun", str(robot_dir / "no" / "r.rrd"),
+                 "--dry-run"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.endswith("folder " + str(robot_dir / "no") + " does not exist")
+    assert not (robot_dir / "report").exists() and not (robot_dir / "run.mcap").exists()
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES))
+    assert main(["run", "--config", str(cfg), "--rerun", str(robot_dir / "r.rrd"),
+                 "--dry-run"]) == 0
+    out = capsys.readouterr().out
+    assert "--rerun" in out and "all 7 checks passed" in out
+    assert not (robot_dir / "r.rrd").exists()
+
+
 @pytest.mark.slow
 def test_live_run_through_sounddevice(robot_dir, monkeypatch, capsys):
     """Audio only: a simulated three-mic recording on channels 1-3 of a 6-channel device."""

@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from hearsee.errors import InputFileError
-from hearsee.robot.export import write_mcap, write_rerun
+from hearsee.errors import ConfigError, InputFileError
+from hearsee.robot import export
+from hearsee.robot.export import check_export, write_mcap, write_rerun
 from hearsee.robot.scenario import default_scenario
 
 
@@ -56,3 +57,15 @@ def test_missing_folder_is_a_clear_error(tmp_path):
     log, frames = _log()
     with pytest.raises(InputFileError, match="does not exist"):
         write_mcap(tmp_path / "nope" / "run.mcap", log, frames)
+
+
+def test_check_export_before_a_run(tmp_path, monkeypatch):
+    """The up-front check names a missing extra or folder the way writing at the end would."""
+    monkeypatch.setitem(export._EXTRAS, "mcap", ("hearsee_no_such_module", "--mcap needs X"))
+    with pytest.raises(ConfigError, match="--mcap needs X"):
+        check_export("mcap", tmp_path / "run.mcap")
+    monkeypatch.setitem(export._EXTRAS, "rerun", ("json", "--rerun needs Y"))  # present
+    assert "json installed" in check_export("rerun", tmp_path / "run.rrd")
+    with pytest.raises(InputFileError, match="does not exist"):
+        check_export("rerun", tmp_path / "nope" / "run.rrd")
+    assert list(tmp_path.iterdir()) == []  # a check writes nothing

@@ -160,6 +160,17 @@ def test_rendered_people_face_the_robot_or_along_their_path():
     assert walker.yaw_deg == pytest.approx(90.0)
 
 
+def test_demo_checks_the_export_extra_before_running(tmp_path, monkeypatch, capsys):
+    """--mcap without its extra fails before the scenario runs: no report is written."""
+    from hearsee.robot import export
+
+    monkeypatch.setitem(export._EXTRAS, "mcap", ("hearsee_no_such_module", "--mcap needs ROS"))
+    out = tmp_path / "report"
+    assert main(["demo", "-o", str(out), "-q", "--mcap", str(tmp_path / "r.mcap")]) == 2
+    assert capsys.readouterr().err.strip() == "hearsee: error: --mcap needs ROS"
+    assert not out.exists() and not (tmp_path / "r.mcap").exists()
+
+
 @pytest.mark.parametrize("option", ["--mcap", "--rerun"])
 def test_demo_refuses_export_over_an_input_or_an_existing_file_before_running(
         tmp_path, capsys, option):

@@ -73,6 +73,18 @@ def refuse_overwrite(outputs: Iterable[str | Path | None], inputs: Iterable[str 
             raise InputFileError(f"{p}: file exists; pass --force to overwrite it")
 
 
+def check_exports(rerun: Path | None, mcap: Path | None,
+                  inputs: Iterable[str | Path | None], force: bool) -> list[tuple[str, str]]:
+    """Before ``hearsee demo`` / ``run`` does its work, the optional ``--rerun`` / ``--mcap``
+    files: :func:`refuse_overwrite`, then each one's extra is installed and its folder exists
+    (:func:`hearsee.robot.export.check_export`). Returns ``(option, description)`` of each."""
+    from hearsee.robot.export import check_export
+
+    refuse_overwrite([rerun, mcap], inputs, force)
+    return [(f"--{kind}", check_export(kind, p))
+            for kind, p in (("rerun", rerun), ("mcap", mcap)) if p is not None]
+
+
 def parse_floats(text: str, n: int | None, what: str) -> list[float]:
     """Parse ``"1,2,3"`` into floats; raise typer.BadParameter with a clear message."""
     try:

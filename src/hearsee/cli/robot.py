@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from hearsee.cli._app import app, emit_json, print_summary, progress, refuse_overwrite
+from hearsee.cli._app import app, check_exports, emit_json, print_summary, progress
 
 
 @app.command("demo")
@@ -31,7 +31,7 @@ def demo_cmd(
 
     sc = load_scenario(scenario) if scenario else default_scenario()
     _refuse_input_overwrite(out, scenario)
-    refuse_overwrite([rerun, mcap], [scenario], force)
+    check_exports(rerun, mcap, [scenario], force)
     with progress(f"scenario {sc.name}", total=sc.duration_s, enabled=not quiet) as advance:
         result = run_scenario(sc, progress=advance)
     index = write_report(out, sc.to_dict(), result.log, result.summary, result.images,

@@ -2,7 +2,8 @@
 
 Live microphones through sounddevice, cameras through OpenCV ``VideoCapture``, the same
 perception and outputs as ``hearsee demo``: one JSON line per update, a report folder and a
-summary. ``--dry-run`` only checks the robot file and opens every device once. The robot file's
+summary. ``--dry-run`` only checks the robot file (and the ``--rerun`` / ``--mcap`` outputs)
+and opens every device once. The robot file's
 schema is in :mod:`hearsee.robot.hardware`.
 """
 
@@ -13,7 +14,7 @@ from typing import Annotated
 
 import typer
 
-from hearsee.cli._app import app, err_console, print_summary, progress, refuse_overwrite
+from hearsee.cli._app import app, check_exports, err_console, print_summary, progress
 
 
 @app.command("run")
@@ -46,6 +47,7 @@ def run_cmd(
     """
     from hearsee.errors import ConfigError
     from hearsee.robot.hardware import (
+        Check,
         check_devices,
         first_failure,
         load_robot_config,
@@ -63,15 +65,17 @@ def run_cmd(
                 p.is_relative_to(out.resolve()) and p.name in ("index.html", "log.json",
                                                                "summary.json") for p in ins):
             raise ConfigError(f"--out {out} would overwrite an input file; choose another folder")
+    # the exports' extras, folders and overwrite rule before listening (and in the dry run):
+    # a live run must not fail only when it writes them at its end
+    exports = check_exports(rerun, mcap, cfg.input_files(), force)
     if dry_run:
-        checks = check_devices(cfg)
+        checks = check_devices(cfg) + [Check(name, True, detail) for name, detail in exports]
         _print_checks(checks)
         bad = first_failure(checks)
         if bad is not None:
             raise bad.error if bad.error is not None else ConfigError(bad.detail)
         typer.echo(f"all {len(checks)} checks passed")
         return
-    refuse_overwrite([rerun, mcap], cfg.input_files(), force)
     with progress("listening", total=duration, enabled=not quiet and duration is not None) \
             as advance:
         result = run_robot(cfg, duration_s=duration, progress=advance)

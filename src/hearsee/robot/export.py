@@ -14,6 +14,7 @@ ROS 2 messages written to MCAP (open in Foxglove or ``ros2 bag``):
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -22,7 +23,11 @@ import numpy as np
 
 from hearsee.errors import ConfigError, InputFileError
 
-__all__ = ["write_mcap", "write_rerun"]
+__all__ = ["check_export", "write_mcap", "write_rerun"]
+
+#: each export's module and the error when its extra is not installed
+_EXTRAS = {"rerun": ("rerun", "--rerun needs the Rerun extra: pip install 'hearsee[rerun]'"),
+           "mcap": ("mcap_ros2", "--mcap needs the ROS extra: pip install 'hearsee[ros]'")}
 
 _POINT_STAMPED = """std_msgs/Header header
 geometry_msgs/Point point
@@ -71,13 +76,24 @@ def _check_out(path: str | Path) -> Path:
     return p
 
 
+def check_export(kind: str, path: str | Path) -> str:
+    """Before a run that ends by writing export ``kind`` (``"rerun"`` or ``"mcap"``) to
+    ``path``: its extra is installed (else :class:`ConfigError`) and its folder exists (else
+    :class:`InputFileError`), so a long live run does not fail only at its end. Returns a
+    one-line description for ``hearsee run --dry-run``."""
+    module, missing = _EXTRAS[kind]
+    if importlib.util.find_spec(module) is None:
+        raise ConfigError(missing)
+    return f"{_check_out(path)}: {module} installed, folder exists"
+
+
 def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
                frames: Sequence[tuple[float, np.ndarray]] = ()) -> Path:
     """Write the run's estimates (and overlay images ``(t, bgr uint8)``) as ROS 2 messages."""
     try:
         from mcap_ros2.writer import Writer
     except ImportError:
-        raise ConfigError("--mcap needs the ROS extra: pip install 'hearsee[ros]'") from None
+        raise ConfigError(_EXTRAS["mcap"][1]) from None
     p = _check_out(path)
     with open(p, "wb") as fh:
         w = Writer(fh)
@@ -117,7 +133,7 @@ def write_rerun(path: str | Path, scenario: Mapping[str, Any], log: Sequence[Map
     try:
         import rerun as rr
     except ImportError:
-        raise ConfigError("--rerun needs the Rerun extra: pip install 'hearsee[rerun]'") from None
+        raise ConfigError(_EXTRAS["rerun"][1]) from None
     p = _check_out(path)
     rec = rr.RecordingStream("hearsee")
     room = np.asarray(scenario["room"]["size_m"], dtype=float)
