@@ -513,3 +513,23 @@ def test_gcc_refuses_a_negative_lag_bound():
     with pytest.raises(ConfigError, match="max_tau_s"):
         gcc(s, s, 8000.0, max_tau_s=-1e-3)
     assert gcc(np.roll(s, 2), s, 8000.0, max_tau_s=1e-3).tdoa_s == pytest.approx(2 / 8000, abs=1e-6)
+
+
+def test_a_dc_offset_is_no_source(three):
+    """A constant offset on every channel (real ADCs have one, often different per channel)
+    over a quiet noise floor: its leakage used to put a confident correlation peak at lag 0 in
+    every frame, a source straight above the array. Each frame's mean is now removed."""
+    rng = np.random.default_rng(7)
+    for offsets in ((0.5, 0.5, 0.5), (0.01, 0.01, 0.01), (0.02, -0.01, 0.005)):
+        x = 1e-4 * rng.standard_normal((3, FS)) + np.array(offsets)[:, None]
+        tf = estimate_tdoas(x, FS, three)
+        assert not tf.valid.any()
+        assert np.all(np.isnan(tf.summary_tdoa_s))
+
+
+def test_a_dc_offset_leaves_a_source_where_it_is(recording, three):
+    x, true = recording
+    tf0 = estimate_tdoas(x, FS, three)
+    tf = estimate_tdoas(x + np.array([0.3, -0.2, 0.1])[:, None] * np.std(x), FS, three)
+    np.testing.assert_allclose(tf.summary_tdoa_s, true, atol=0.25 / FS)
+    np.testing.assert_allclose(tf.summary_tdoa_s, tf0.summary_tdoa_s, atol=0.02 / FS)
