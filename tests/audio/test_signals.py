@@ -141,6 +141,10 @@ def test_read_recording_bad_inputs(tmp_path):
         read_recording(_write(tmp_path / "short.wav", good[:, :10]))
     with pytest.raises(AudioInputError, match="too short"):
         read_recording(p, min_samples=5000)
+    with warnings.catch_warnings():  # an empty file: the one error, no numpy warning first
+        warnings.simplefilter("error")
+        with pytest.raises(AudioInputError, match=r"too short \(0 samples"):
+            read_recording(_write(tmp_path / "empty.wav", good[:, :0]))
     bad = good.copy()
     bad[1, 7] = np.nan
     with pytest.raises(AudioInputError, match="NaN"):

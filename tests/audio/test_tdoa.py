@@ -533,3 +533,17 @@ def test_a_dc_offset_leaves_a_source_where_it_is(recording, three):
     tf = estimate_tdoas(x + np.array([0.3, -0.2, 0.1])[:, None] * np.std(x), FS, three)
     np.testing.assert_allclose(tf.summary_tdoa_s, true, atol=0.25 / FS)
     np.testing.assert_allclose(tf.summary_tdoa_s, tf0.summary_tdoa_s, atol=0.02 / FS)
+
+
+def test_huge_float_samples_are_scaled_not_overflowed(recording, three):
+    """A float recording has no full scale: samples of 1e25 (their squares overflow single
+    precision) give the same TDOAs as the recording itself, without numpy warnings."""
+    import warnings
+
+    x, _ = recording
+    tf0 = estimate_tdoas(x, FS, three)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tf = estimate_tdoas(x * 1e25, FS, three)
+    np.testing.assert_allclose(tf.summary_tdoa_s, tf0.summary_tdoa_s, atol=1e-3 / FS)
+    np.testing.assert_array_equal(tf.valid, tf0.valid)

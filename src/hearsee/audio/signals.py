@@ -347,7 +347,8 @@ def read_recording(
                 "(channel k must be microphone k)"
             )
     # clipping is seen on the file's own samples (resampling smooths the flat tops away)
-    clipped = float(np.mean(np.abs(x) >= CLIP_LEVEL)) if np.all(np.isfinite(x)) else 0.0
+    clipped = (float(np.mean(np.abs(x) >= CLIP_LEVEL))
+               if x.size and np.all(np.isfinite(x)) else 0.0)
     if fs is not None and int(round(fs)) != fs_in:
         if not resample:
             raise AudioInputError(

@@ -551,6 +551,11 @@ def _window(window: str | tuple, frame_len: int) -> NDArray:
     return w
 
 
+#: recordings whose largest |sample| exceeds this are scaled to a peak of 1 first (float files
+#: have no full scale; squared in single precision, samples of ~1e19 and more overflow)
+_MAX_PEAK = 1e12
+
+
 def _windowed(frames: NDArray, win: NDArray) -> NDArray:
     """Each frame (..., L) less its own mean, times the analysis window: the spectra's input.
     A DC offset (common on real ADCs, often different per channel) is the same in every
@@ -1228,6 +1233,9 @@ def estimate_tdoas(
     prs = _check_pairs(pairs, arr)
     if joint == "steered":
         _check_steered(arr, source_in_plane, steer_range_m)
+    peak = float(np.max(np.abs(a), initial=0.0))
+    if peak > _MAX_PEAK:  # (float32 powers overflow above ~1e19; every test here is scale-free)
+        a = a / peak
     # single precision from here on: twice as fast, and its ~1e-7 relative error is far below
     # any sensor noise
     a32 = a.astype(np.float32)
