@@ -1214,7 +1214,8 @@ def estimate_tdoas(
             f"recording has shape {a.shape}; array {arr.name!r} needs ({arr.n_mics}, n_samples) "
             "(one row per microphone)"
         )
-    if not np.all(np.isfinite(a)):
+    peak = float(np.max(np.abs(a), initial=0.0))  # NaN or inf when a sample is
+    if not np.isfinite(peak):
         raise AudioInputError("recording contains NaN or infinite samples")
     fs = float(fs)
     if not np.isfinite(fs) or fs <= 0:
@@ -1233,7 +1234,6 @@ def estimate_tdoas(
     prs = _check_pairs(pairs, arr)
     if joint == "steered":
         _check_steered(arr, source_in_plane, steer_range_m)
-    peak = float(np.max(np.abs(a), initial=0.0))
     if peak > _MAX_PEAK:  # (float32 powers overflow above ~1e19; every test here is scale-free)
         a = a / peak
     # single precision from here on: twice as fast, and its ~1e-7 relative error is far below
