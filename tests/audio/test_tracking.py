@@ -382,3 +382,35 @@ def test_rate_tau_must_be_positive():
             DirectionKalman(rate_tau_s=bad)
         with pytest.raises(EstimationError, match="rate_tau_s"):
             DirectionIMM(rate_tau_s=bad)
+
+
+@pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
+@pytest.mark.parametrize("tau", [None, 2.0])
+def test_predicted_is_the_next_coasting_update_without_changing_the_tracker(cls, tau):
+    """``predicted(t)`` gives the state and covariance a measurement-free update to ``t`` would
+    leave (the tracker's own model: relaxing rate, process noise, the IMM's mode mixing) and
+    leaves the tracker as it was; at or before its last time it gives the current state."""
+    trk = cls(2.0, rate_tau_s=tau)
+    with pytest.raises(EstimationError, match="no track"):
+        trk.predicted(0.0)
+    t = np.arange(0.0, 1.0, DT)
+    for tk in t:
+        trk.update(tk, (170.0 + 30.0 * tk, 5.0))  # crosses the 180 deg seam at t = 1/3 s
+    x0, P0 = trk.x.copy(), trk.P.copy()
+    xs, Ps = trk.predicted(t[-1])
+    np.testing.assert_array_equal(xs, x0)
+    np.testing.assert_array_equal(Ps, P0)
+    for dt in (DT, 0.4):
+        xp, Pp = trk.predicted(t[-1] + dt)
+        np.testing.assert_array_equal(trk.x, x0)  # nothing moved
+        np.testing.assert_array_equal(trk.P, P0)
+        assert trk.t == pytest.approx(t[-1])
+        # the rate carried the azimuth on, and the uncertainty grew with the gap
+        assert 0.0 < wrap_deg(xp[0] - x0[0]) <= 30.0 * dt * 1.05
+        assert Pp[0, 0] > P0[0, 0]
+        ref = cls(2.0, rate_tau_s=tau)
+        for tk in t:
+            ref.update(tk, (170.0 + 30.0 * tk, 5.0))
+        assert not ref.update(t[-1] + dt, None)
+        np.testing.assert_allclose(xp, ref.x, rtol=1e-12, atol=1e-9)
+        np.testing.assert_allclose(Pp, ref.P, rtol=1e-12, atol=1e-9)

@@ -298,11 +298,7 @@ class DirectionKalman(_Kalman):
 
     # -- model ---------------------------------------------------------------------------
     def _set_dt(self, dt: float) -> None:
-        key = round(dt, 9)
-        if key not in self._model_cache:
-            self._model_cache[key] = _cv_model(dt, self.sigma_accel_dps2**2,
-                                               self.elevation_accel_ratio, self.rate_tau_s)
-        self.F, self.Q = self._model_cache[key]
+        self.F, self.Q = self._cv(dt)
 
     def _predict(self) -> None:
         super()._predict()
@@ -404,6 +400,30 @@ class DirectionKalman(_Kalman):
             if best is None or d2 < best[0]:
                 best = (d2, a, e, z, H, R, y, S)
         return best
+
+    def predicted(self, t: float) -> tuple[NDArray, NDArray]:
+        """The state ``[az, el, d az/dt, d el/dt]`` (deg, deg/s) and its covariance predicted to
+        time ``t`` (seconds) with the filter's own model (relaxing rate, process noise),
+        without changing the filter; the current ones for ``t`` at or before the last update.
+        Raises :class:`EstimationError` before the track has started."""
+        if not self.initialized or self.t is None:
+            raise EstimationError("no track to predict yet")
+        dt = float(t) - self.t
+        if not dt > 0:
+            return self.x.copy(), self.P.copy()
+        F, Q = self._cv(dt)
+        x = F @ self.x
+        x[0] = _wrap1(float(x[0]))
+        _bound_elevation(x)
+        return x, F @ self.P @ F.T + Q
+
+    def _cv(self, dt: float) -> tuple[NDArray, NDArray]:
+        """The (cached) transition and process noise over ``dt`` seconds."""
+        key = round(dt, 9)
+        if key not in self._model_cache:
+            self._model_cache[key] = _cv_model(dt, self.sigma_accel_dps2**2,
+                                               self.elevation_accel_ratio, self.rate_tau_s)
+        return self._model_cache[key]
 
     def _settle(self, el: float | None) -> None:
         """After a correction: azimuth wrapped, elevation clipped to +-90 deg."""
@@ -611,6 +631,28 @@ class DirectionIMM:
         x, P = self._mixtures(self.X, self.Ps, w[:, None], float(self.X[int(np.argmax(w)), 0]))
         self._mix.x, self._mix.P = x[0], P[0]
 
+    def _predicted_mixture(self, F: NDArray, Qs: NDArray, c: NDArray
+                           ) -> tuple[NDArray, NDArray]:
+        """The output predicted by the transition F with the modes' process noises Qs and
+        predicted mode probabilities c: mixing only regroups the same components, so it is
+        the last output predicted with the expected process noise ``sum_j c_j Q_j``."""
+        x = F @ self._mix.x
+        x[0] = _wrap1(float(x[0]))
+        _bound_elevation(x)
+        return x, F @ self._mix.P @ F.T + (c @ Qs.reshape(c.size, -1)).reshape(4, 4)
+
+    def predicted(self, t: float) -> tuple[NDArray, NDArray]:
+        """The output state and covariance predicted to time ``t`` (seconds) as the next
+        :meth:`update` predicts them, without changing the tracker (see
+        :meth:`DirectionKalman.predicted`)."""
+        if not self.initialized:
+            raise EstimationError("no track to predict yet")
+        dt = float(t) - float(self._mix.t)
+        if not dt > 0:
+            return self.x.copy(), self.P.copy()
+        F, Qs = self._model(dt)
+        return self._predicted_mixture(F, Qs, self._tpm(dt).T @ self.mu)
+
     def _start(self, t: float, az: float, el: float | None) -> None:
         self._mix._start(az, el)
         self._mix.t = float(t)
@@ -643,13 +685,7 @@ class DirectionIMM:
             Ps = F @ Ps @ F.T + Qs
             X[:, 0] = _wrap_many(X[:, 0])
             _bound_elevation(X)
-            # the predicted mixture: mixing only regroups the same components, so it is the
-            # last output predicted with the modes' expected process noise sum_j c_j Q_j
-            mix = self._mix
-            mix.x = F @ mix.x
-            mix.x[0] = _wrap1(float(mix.x[0]))
-            _bound_elevation(mix.x)
-            mix.P = F @ mix.P @ F.T + (c @ Qs.reshape(c.size, -1)).reshape(4, 4)
+            self._mix.x, self._mix.P = self._predicted_mixture(F, Qs, c)
         self.X, self.Ps, self.mu = X, Ps, c
         self._mix.t = float(t)
         if not cands:

@@ -1250,10 +1250,8 @@ class TrackingProcessor:
         d = self.direction
         if not d.initialized:
             return [], 0.0
-        dt = max(t_evidence - float(d.t), 0.0)
-        x, P = d.x, d.P
-        az_pred = float(x[0] + x[2] * dt)
-        var = float(P[0, 0] + 2.0 * P[0, 2] * dt + P[2, 2] * dt * dt)
+        x, P = d.predicted(t_evidence)  # the tracker's own model: relaxing rate, process noise
+        az_pred, var = float(x[0]), float(P[0, 0])
         lo, hi = self.cfg.gate_deg
         half = float(np.clip(self.cfg.gate_sigmas * np.sqrt(max(var, 0.0)), lo, hi))
         axis = self.srp.az_axis
