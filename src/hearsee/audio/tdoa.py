@@ -581,7 +581,11 @@ def frame_activity(x: NDArray, frame_len: int, hop: int, n_frames: int,
 
 
 def _frame_energy(x: NDArray, frame_len: int, hop: int, n_frames: int) -> NDArray:
-    """Mean-square energy of each frame of ``x`` (n_ch, n), over all channels."""
+    """Mean-square energy of each frame of ``x`` (n_ch, n), over all channels, each channel
+    taken about its mean over ``x``: a DC offset (real ADCs have one, often different per
+    channel) otherwise raised every frame's energy by the same amount, so the noise floor
+    rose toward the voice and the energy VAD dropped its quieter frames."""
+    x = x - x.sum(axis=1, keepdims=True) / x.shape[1]  # (float32 stays float32)
     e = np.einsum("ij,ij->j", x, x)  # per sample, summed over the channels
     if frame_len % hop == 0:  # frames made of whole hops: sum the hops, then the frames
         m = frame_len // hop
