@@ -196,7 +196,10 @@ Since 2026-11-25's fifteenth session every GCC frame loses its own mean before t
 The simulated recordings have no offset, so nothing changes on average, but frames whose
 confidence sits at a threshold can flip (20 of ~2500 frames on 24 dev walks), and a track
 that takes or misses one such frame differs from then on: this run is not the fourteenth
-session's to the digit.
+session's to the digit. Since the sixteenth session the energy VAD measures each channel's
+frame energy about the channel's mean over the block (a DC offset had raised the noise floor
+toward the voice); on 216 bench/doa-style recordings no frame's validity changed and the
+azimuths moved by at most 0.007 deg.
 
 Run: ``.venv/bin/python bench/tracking.py [--trials N] [--seed S]``.
 """
