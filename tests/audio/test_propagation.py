@@ -3,6 +3,7 @@ import pytest
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.propagation import (
+    MAX_IMAGE_ORDER,
     MIN_WALL_DISTANCE_M,
     add_noise,
     delay_signals,
@@ -135,6 +136,12 @@ def test_room_bad_geometry_and_rt60():
         simulate_room(x, fs, arr, [1.0, 0.0, 0.0], [20.0, 20.0, 5.0], 0.1, [10, 10, 1])
     with pytest.raises(ConfigError, match="non-negative"):
         simulate_room(x, fs, arr, [1.0, 0.0, 0.0], ROOM, -0.2, AT)
+    # Sabine: 5 s in a 3 m cube needs image order 808 (it ran out of memory in pyroomacoustics)
+    with pytest.raises(ConfigError, match="order 808 .* shorter RT60 or a larger room$"):
+        simulate_room(x, fs, arr, [0.5, 0.5, 0.0], [3.0, 3.0, 3.0], 5.0, [1.5, 1.5, 1.5])
+    with pytest.raises(ConfigError, match="order 201 .* or a smaller max_order$"):
+        room_impulse_responses(fs, arr.positions + AT, [4.0, 2.5, 1.4], ROOM, 0.3,
+                               max_order=MAX_IMAGE_ORDER + 1)
 
 
 @pytest.mark.parametrize("frac", [0.1, 0.25, 0.5, 0.77, 3.33, -1.6])

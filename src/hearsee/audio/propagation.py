@@ -23,6 +23,7 @@ from hearsee.audio.arrays import MicArray
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
 __all__ = [
+    "MAX_IMAGE_ORDER",
     "MIN_WALL_DISTANCE_M",
     "add_noise",
     "delay_signals",
@@ -33,6 +34,12 @@ __all__ = [
 
 #: Sources and microphones must be at least this far (metres) from every wall of a room.
 MIN_WALL_DISTANCE_M = 0.05
+
+#: The largest image-source order :func:`room_impulse_responses` asks pyroomacoustics for.
+#: Its memory grows with the cube of the order (~4/3 N^3 images; 3 microphones, measured
+#: 2026-11-25: order 60 0.19 GB, 100 0.49 GB, 140 1.16 GB, so ~3.4 GB at 200): a long RT60 in
+#: a small room (Sabine: 5 s in a 3 m cube needs order 808) ended in a MemoryError traceback.
+MAX_IMAGE_ORDER = 200
 
 
 def _mic_positions(mics: MicArray | ArrayLike) -> NDArray:
@@ -276,6 +283,12 @@ def room_impulse_responses(
         materials = pra.Material(float(e_absorption))
     if max_order is not None:
         order = int(max_order)
+    if order > MAX_IMAGE_ORDER:
+        raise ConfigError(
+            f"RT60 {rt60:g} s in a {'x'.join(f'{v:g}' for v in dim)} m room needs image sources "
+            f"up to order {order} (~{4 * order**3 / 3:.1e} images, more memory than a simulation "
+            f"should take; the limit is order {MAX_IMAGE_ORDER}); use a shorter RT60 or a "
+            "larger room" + (", or a smaller max_order" if max_order is not None else ""))
     room = pra.ShoeBox(dim, fs=int(round(fs)), materials=materials, max_order=int(order))
     room.set_sound_speed(float(speed_of_sound))
     room.add_source(src)
