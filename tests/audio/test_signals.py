@@ -215,6 +215,11 @@ def test_load_wav_and_make_signal_bad_files(tmp_path):
     silent = _write(tmp_path / "silent.wav", np.zeros((1, 800)))
     with pytest.raises(AudioInputError, match="silent"):
         make_signal(silent, 0.5, FS)
+    nan = np.ones((1, 800))
+    nan[0, 10] = np.nan
+    sf.write(tmp_path / "nan.wav", nan.T, FS, subtype="FLOAT")
+    with pytest.raises(AudioInputError, match="nan.wav: the file contains NaN"):
+        make_signal(tmp_path / "nan.wav", 0.5, FS)
     empty = tmp_path / "empty.wav"
     sf.write(empty, np.zeros((0, 1)), FS)
     with pytest.raises(AudioInputError, match="no samples"):

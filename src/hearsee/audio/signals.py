@@ -286,6 +286,8 @@ def make_signal(spec: str | Path, duration_s: float, fs: float,
             f"unknown signal {s!r}: expected 'noise', 'male', 'female' or an audio file path"
         )
     x, _ = load_wav(p, fs)
+    if not np.all(np.isfinite(x)):
+        raise AudioInputError(f"{p}: the file contains NaN or infinite samples")
     if not np.any(x):
         raise AudioInputError(f"{p}: the file is silent (all samples are zero)")
     x = np.tile(x, int(np.ceil(n / len(x))))[:n]
