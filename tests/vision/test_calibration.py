@@ -249,9 +249,9 @@ def test_stereo_refinement_keeps_the_distortion_model(model, true_dist, n_free):
         C.calibrate_stereo(lp, rp, obj, cl.camera, cr.camera, model="fisheye")
 
 
-def test_calibrate_rig_keeps_model_and_aspect_in_the_stereo_refinement(tmp_path):
-    """`hearsee calibrate --model radial --fix-aspect`: boards rendered through known k1-only
-    lenses with square pixels; the written rig must keep fx = fy and k2 = p1 = p2 = k3 = 0."""
+def _k1_rig_files(tmp_path, n_views: int = 6):
+    """PNG files of ``n_views`` 9x6 boards rendered through a stereo pair of known k1-only
+    lenses with square pixels: ``(left files, right files, left camera, right camera, T)``."""
     left = Camera(K=np.array([[300.0, 0, 158.0], [0, 300.0, 122.0], [0, 0, 1]]),
                   dist=[-0.2, 0.0, 0.0, 0.0, 0.0], width=320, height=240)
     right = Camera(K=np.array([[296.0, 0, 163.0], [0, 296.0, 118.0], [0, 0, 1]]),
@@ -260,21 +260,41 @@ def test_calibrate_rig_keeps_model_and_aspect_in_the_stereo_refinement(tmp_path)
     T = -R @ np.array([0.10, 0.002, -0.003])
     rng = np.random.default_rng(7)
     files: dict[str, list] = {"left": [], "right": []}
-    for i, (Rb, tb) in enumerate(_board_views(6, seed=7)):
+    for i, (Rb, tb) in enumerate(_board_views(n_views, seed=7)):
         for key, cam, Rc, Tc in (("left", left, np.eye(3), np.zeros(3)), ("right", right, R, T)):
             img = C.render_chessboard(cam, Rc @ Rb, Rc @ tb + Tc, PATTERN, SQUARE, rng=rng,
                                       rays=C._subpixel_rays(cam, 2), blur_px=0.5, noise=2.0)
             f = tmp_path / f"{key}{i}.png"
             cv2.imwrite(str(f), img)
             files[key].append(f)
-    res = C.calibrate_rig(files["left"], files["right"], PATTERN, SQUARE, model="radial",
-                          fix_aspect=True)
+    return files["left"], files["right"], left, right, T
+
+
+def test_calibrate_rig_keeps_model_and_aspect_in_the_stereo_refinement(tmp_path):
+    """`hearsee calibrate --model radial --fix-aspect`: boards rendered through known k1-only
+    lenses with square pixels; the written rig must keep fx = fy and k2 = p1 = p2 = k3 = 0."""
+    lf, rf, left, right, T = _k1_rig_files(tmp_path)
+    res = C.calibrate_rig(lf, rf, PATTERN, SQUARE, model="radial", fix_aspect=True)
     for est, ref in ((res.rig.left, left), (res.rig.right, right)):
         assert est.fy == pytest.approx(est.fx, rel=1e-12)
         np.testing.assert_array_equal(est.dist[1:], 0.0)
         assert est.fx == pytest.approx(ref.fx, rel=0.02)
         assert est.dist[0] == pytest.approx(ref.dist[0], abs=0.03)
     assert res.rig.baseline_m == pytest.approx(np.linalg.norm(T), rel=0.02)
+
+
+def test_a_board_size_that_is_a_sub_grid_of_the_real_board_is_refused(tmp_path):
+    """--board 3x3 or 4x3 on a 9x6 board: OpenCV finds such a sub-grid in every image, at a
+    different place in each, and the fit was written as the rig (RMS 6-9 px, fx a third of the
+    truth). The right size calibrates to a fraction of a pixel."""
+    lf, rf, left, _, _ = _k1_rig_files(tmp_path, n_views=8)
+    for wrong in ((3, 3), (4, 3)):
+        with pytest.raises(CalibrationError, match=rf"RMS reprojection error left .* px.*"
+                                                   rf"{wrong[0]}x{wrong[1]} inner corners"):
+            C.calibrate_rig(lf, rf, wrong, SQUARE)
+    res = C.calibrate_rig(lf, rf, PATTERN, SQUARE)
+    assert max(res.rms_left_px, res.rms_right_px, res.rms_stereo_px) < 0.3 < C.MAX_RMS_PX
+    assert res.rig.left.fx == pytest.approx(left.fx, rel=0.02)
 
 
 @pytest.mark.shared

@@ -32,6 +32,7 @@ from hearsee.vision.camera import Camera, StereoRig
 from hearsee.vision.io import to_gray
 
 __all__ = [
+    "MAX_RMS_PX",
     "CameraCalibration",
     "RigCalibration",
     "StereoCalibration",
@@ -46,6 +47,15 @@ __all__ = [
     "parse_board",
     "render_chessboard",
 ]
+
+#: :func:`calibrate_rig` refuses a calibration whose RMS reprojection error (pixels; each
+#: camera's intrinsics and the stereo fit) exceeds this. Good chessboard calibrations reach
+#: 0.1-0.5 px (the real XIMEA pairs of the shared data: 0.17 / 0.17 / 0.19 px); a --board that
+#: is a sub-grid of the real board (3x3 on a 9x6 board) is still "found" in every image, at a
+#: different place in each, and gave 5.7-9.4 px intrinsics and 15-74 px stereo errors with a
+#: focal length off by a factor of 3-6 -- written as the rig, with exit status 0, until
+#: 2026-11-25's sixteenth session.
+MAX_RMS_PX = 3.0
 
 #: Distortion models: number of coefficients and calibrateCamera flags.
 _MODELS = {
@@ -576,6 +586,20 @@ class RigCalibration:
     warnings: list[str] = field(default_factory=list)
 
 
+def _check_fit(pattern: tuple[int, int], **rms_px: float) -> None:
+    """CalibrationError when an RMS reprojection error (pixels, by name) exceeds
+    :data:`MAX_RMS_PX`: the detected corners do not fit one flat board of ``pattern``."""
+    bad = {k: v for k, v in rms_px.items() if not v <= MAX_RMS_PX}
+    if bad:
+        errs = ", ".join(f"{k} {v:.2f} px" for k, v in bad.items())
+        raise CalibrationError(
+            f"calibration failed: RMS reprojection error {errs} (at most {MAX_RMS_PX:g} px "
+            f"expected; good ones are below 0.5 px): the corners do not fit one flat board of "
+            f"{pattern[0]}x{pattern[1]} inner corners; check --board (the whole board's inner "
+            "corners per row x per column, e.g. 9x6 for 10x7 squares) and that the board is flat"
+        )
+
+
 def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[int, int],
                   square_m: float, *, thermal_files: Sequence | None = None,
                   model: str = "standard", thermal_model: str = "radial",
@@ -670,6 +694,7 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
                           fix_aspect=fix_aspect, name="left")
     cr = calibrate_camera([rp[i] for i in idx_r], obj, sizes["right"], model=model,
                           fix_aspect=fix_aspect, name="right")
+    _check_fit(pattern, left=cl.rms_px, right=cr.rms_px)
     for idx, res, attr in ((idx_l, cl, "err_left"), (idx_r, cr, "err_right")):
         for j, e in zip(res.used, res.per_view_px, strict=True):
             setattr(views[idx[j]], attr, float(e))
@@ -681,6 +706,7 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
         raise CalibrationError("the board was never found in both images of a pair")
     st = calibrate_stereo([lp[i] for i in both], [rp[i] for i in both], obj, cl.camera,
                           cr.camera, refine=len(both) >= 3, model=model, fix_aspect=fix_aspect)
+    _check_fit(pattern, stereo=st.rms_px)
     for j, i in enumerate(both):
         views[i].err_stereo_left, views[i].err_stereo_right = map(float, st.per_view_px[j])
     rig = st.rig
