@@ -120,6 +120,9 @@ def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, caps
     (["--frame-ms", "0"], "must be > 0"),
     (["--frame-ms", "1e9"], "at most 10000 ms"),  # (not a 60 GB allocation)
     (["--frame-ms", "2000"], "recording too short: 24000 samples, one frame needs 32000"),
+    # (16 samples for a largest delay of 7: the stream tracked a clean source 149 deg off)
+    (["--frame-ms", "1"], "too short for the array's largest delay (0.44 ms); use a frame of "
+                          "at least 1.75 ms"),
     (["--tracker", "particle"], "--tracker"),
     (["--rate-tau", "0"], "--rate-tau must be > 0 s"),
     (["--rate-tau", "nan"], "--rate-tau must be > 0 s"),

@@ -286,12 +286,13 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
         channels = tuple(ch)
     block_ms = number(d, "block_ms", 100.0, where, 10.0, 2000.0)
     frame_ms = number(d, "frame_ms", 64.0, where, 8.0, 1000.0)
-    max_delay_ms = float(array.max_tdoa().max()) * 1e3
-    if frame_ms < 4 * max_delay_ms:
+    from hearsee.audio.tdoa import min_frame_ms, normalize_method
+
+    shortest = min_frame_ms(array)
+    if frame_ms < shortest:
         raise ConfigError(f"{where}.frame_ms: {frame_ms} ms is too short for the array's "
-                          f"largest delay ({max_delay_ms:.2f} ms); use >= {4 * max_delay_ms:.0f}")
+                          f"largest delay ({shortest / 4:.2f} ms); use >= {shortest:.0f}")
     method = d.get("method", "phat")
-    from hearsee.audio.tdoa import normalize_method
 
     try:
         method = normalize_method(str(method))

@@ -65,6 +65,7 @@ from hearsee.audio.tdoa import (
     estimate_tdoas,
     frame_geometry,
     frame_signals,
+    min_frame_ms,
 )
 from hearsee.audio.tracking import (
     DIRECTION_RATE_TAU_S,
@@ -1382,10 +1383,11 @@ class StreamPipeline:
         x = getattr(source, "x", None)  # a recording (a live device has no length)
         if x is not None:
             check_recording_length(x.shape[1], frame_len)
-        if self.array.max_tdoa().max() * source.fs + 1 >= frame_len // 2:
+        shortest = min_frame_ms(self.array)
+        if frame_len / source.fs * 1e3 < shortest:
             raise ConfigError(
-                f"frame of {self.config.frame_ms} ms is too short for the array's largest "
-                "delay; use a longer frame"
+                f"frame of {self.config.frame_ms:g} ms is too short for the array's largest "
+                f"delay ({shortest / 4:.2f} ms); use a frame of at least {shortest:.2f} ms"
             )
 
     def run(self, source: Any, sink: Callable[[Update], None] | None = None,
