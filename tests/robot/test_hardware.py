@@ -618,3 +618,78 @@ def test_jsonl_may_not_be_a_file_the_report_writes(tmp_path):
         cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out", "jsonl": ok}},
                                      "r.yaml", tmp_path)
         assert cfg.output.jsonl == tmp_path / ok
+
+
+class _TurningHead:
+    """A pan-only head that, at its first command more than 20 deg away, turns to 40 deg: it
+    reports 20 deg for ``turn_s`` seconds of audio (mid-turn), then 40 deg. Time is the audio
+    time of the last command."""
+
+    def __init__(self, turn_s: float = 0.2) -> None:
+        self.turn_s, self.t_now, self.t_turn = turn_s, 0.0, None
+        self.n_printed = 0
+
+    @property
+    def pose_deg(self) -> tuple[float, float]:
+        if self.t_turn is None:
+            return (0.0, 0.0)
+        return (20.0, 0.0) if self.t_now < self.t_turn + self.turn_s else (40.0, 0.0)
+
+    def command(self, t: float, pan_deg: float, tilt_deg: float) -> dict:
+        self.t_now = t
+        if self.t_turn is None and abs(pan_deg) > 20.0:
+            self.t_turn = t
+        self.n_printed += 1
+        return {"pan_deg": pan_deg, "tilt_deg": tilt_deg}
+
+
+def test_live_loop_follows_a_turning_head(tmp_path):
+    """A talker 40 deg left of the robot; the head turns toward them in two steps (20 deg for
+    0.2 s, then 40 deg), and the microphones hear what the turned head hears (recordings of the
+    talker at 40, 20 and 0 deg in the array's frame, switched with the head's pose when a block
+    is read -- so a block may still be the old pose's, as a device's buffer would be). The loop
+    must rotate the audio into the robot frame with the pose of the moment (it used the first
+    pose for the whole run: 0 deg after the turn), withhold the audio for one frame and one
+    block after each move while the stream's array-frame trackers restart, then hear the talker
+    where they are at once."""
+    from hearsee.robot.pipeline import MIN_AUDIO_UPDATES
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource, Block
+
+    rec = {}
+    for pan in (0.0, 20.0, 40.0):
+        a = np.radians(40.0 - pan)
+        rec[pan], _ = simulate_recording("three-mic", [2.0 * np.cos(a), 2.0 * np.sin(a), 0.0],
+                                         duration_s=3.0, fs=FS, snr_db=25.0, seed=9)
+    head = _TurningHead()
+
+    class HeadAudio:  # each block as heard at the head's pose when it is read
+        fs, n_channels = float(FS), 3
+
+        def blocks(self):
+            for b in ArraySource(rec[0.0], FS, 800).blocks():
+                x = rec[head.pose_deg[0]][:, b.start:b.start + b.data.shape[1]]
+                yield Block(b.seq, b.start, x, b.arrival)
+
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
+    res = run_robot(cfg, audio_source=HeadAudio(), head=head)
+    log, s = res.log, res.summary
+    assert s["status"] == "ok" and s["head_moves"] == 2
+    pans = [r["head_pan_deg"] for r in log]
+    assert pans[0] == 0.0 and pans[-1] == 40.0 and 20.0 in pans
+    moves = [r["t"] for r, prev in zip(log[1:], log, strict=False)
+             if r["head_pan_deg"] != prev["head_pan_deg"]]
+    assert len(moves) == 2
+    heard = [(r["t"], r["audio"]["azimuth_deg"]) for r in log
+             if r["audio"] is not None and r["audio"]["measured"]]
+    settle = (cfg.audio.frame_ms + cfg.audio.block_ms) / 1000.0
+    for tm in moves:  # deaf from the move on for one frame and one block
+        assert not [t for t, _ in heard if tm <= t < tm + settle]
+    before = [az for t, az in heard if t < moves[0]]
+    after = [az for t, az in heard if t >= moves[1]]
+    assert len(before) >= MIN_AUDIO_UPDATES and len(after) >= 50
+    # the same talker at 40 deg in the robot frame before the turn and from the first update
+    # heard after it
+    np.testing.assert_allclose(before, 40.0, atol=1.0)
+    np.testing.assert_allclose(after, 40.0, atol=1.0)
+    assert abs(s["azimuth_deg_final"] - 40.0) < 1.0

@@ -729,3 +729,45 @@ def test_a_dc_offset_is_no_source_in_the_stream(moving):
     err_ref, err_off = _az_err(ref, traj), _az_err(off, traj)
     assert np.nanmedian(err_off) < 2.0
     assert np.nanmedian(err_off) <= np.nanmedian(err_ref) + 0.2
+
+
+def test_reset_array_state_restarts_the_trackers_from_the_next_batch():
+    """A source at 30 deg for 1 s, then (as after a head turn) at -90 deg: the direction
+    tracker's gate rejects the jump until it reacquires; a sink that asks the stream to forget
+    its array-frame state at the jump gets the new direction as soon as the next batch is
+    measured, and the requests of an earlier run do not carry over."""
+    from hearsee.audio.propagation import simulate_free_field
+    from hearsee.audio.signals import white_noise
+
+    arr = MicArray.from_preset("three-mic")
+    s = white_noise(1.0, FS, rng=3)
+    parts = [simulate_free_field(s, FS, arr, 2.0 * np.array([np.cos(a), np.sin(a), 0.0]),
+                                 snr_db=20, rng=4) for a in np.radians([30.0, -90.0])]
+    y = np.concatenate(parts, axis=1)
+    block = 1600  # 0.1 s
+
+    def first_at_new_direction(ups):
+        t, az = _times_azimuths(ups)
+        ok = (t > 1.0) & (np.abs(wrap_deg(az + 90.0)) < 3.0)
+        return float(t[np.argmax(ok)]) if ok.any() else np.inf
+
+    plain = StreamPipeline(arr).run(ArraySource(y, FS, block))
+    pipe = StreamPipeline(arr)
+    asked = []
+
+    def sink(u):
+        if u.t >= 1.0 and not asked:
+            asked.append(u.t)
+            pipe.reset_array_state()
+
+    ups = pipe.run(ArraySource(y, FS, block), sink)
+    t_plain, t_reset = first_at_new_direction(plain), first_at_new_direction(ups)
+    assert t_reset <= asked[0] + 2 * block / FS < t_plain
+    # the frames of the batch being delivered keep the old state: still at 30 deg
+    t, az = _times_azimuths(ups)
+    same = (t >= asked[0]) & (t < asked[0] + 1e-9)
+    assert np.all(np.abs(wrap_deg(az[same] - 30.0)) < 3.0)
+    # a reset asked for at the very end of a run is not applied to the next one
+    pipe.reset_array_state()
+    again = pipe.run(ArraySource(y, FS, block))
+    np.testing.assert_array_equal(_times_azimuths(again)[1], _times_azimuths(plain)[1])

@@ -760,10 +760,21 @@ class Cameras:
         self.close()
 
 
+#: The live loop rebuilds its head geometry when the driver's reported pose differs from the
+#: one it was built for by more than this (degrees): encoder jitter is no head turn.
+POSE_TOLERANCE_DEG = 0.5
+
+
 class PrintHeadDriver:
     """Head driver ``none``: the head stays at ``pose_deg``; each desired pan/tilt command
     (clipped to the pan limits) is logged and printed to ``stream`` when it changes by at least
-    ``min_change_deg``."""
+    ``min_change_deg``.
+
+    The driver protocol :func:`run_robot` uses (a real pan-tilt driver implements the same):
+    ``pose_deg`` -- the head's actual (pan, tilt) in degrees, read at every update (it may
+    change while the head turns); ``command(t, pan_deg, tilt_deg)`` -- the desired pose at
+    time ``t`` (seconds of audio), returning what was sent as ``{"pan_deg", "tilt_deg"}``;
+    optionally ``n_printed`` -- how many commands were issued (the summary's count)."""
 
     def __init__(self, head: HeadConfig, stream: Any = None, min_change_deg: float = 2.0) -> None:
         self.head = head
@@ -827,6 +838,22 @@ class _Head:
                 float(np.degrees(np.arctan2(d[2], np.hypot(d[0], d[1])))))
 
 
+def _pose(head: Any) -> tuple[float, float]:
+    """The driver's actual (pan, tilt), degrees, as floats."""
+    pan, tilt = head.pose_deg
+    return float(pan), float(tilt)
+
+
+def _unheard(u: Any) -> Any:
+    """A stream update with its audio withheld (the head was turning): no direction, not
+    measured."""
+    from dataclasses import replace
+
+    return replace(u, azimuth_deg=None, elevation_deg=None, measured=False,
+                   raw_azimuth_deg=None, raw_elevation_deg=None, itd_azimuth_deg=None,
+                   itd_elevation_deg=None)
+
+
 def _r(v: Any, nd: int = 4) -> Any:
     if v is None:
         return None
@@ -849,7 +876,14 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        array-frame direction is rotated by the head pose into the robot frame.
     2. **Turn**: after a few audio updates the desired head pan/tilt (toward the 3D track once
        there is one, else the audio bearing; clipped to ``head.pan_limits_deg``) goes to the head
-       driver -- with ``driver: none`` it is printed and logged and the head stays put.
+       driver -- with ``driver: none`` it is printed and logged and the head stays put. The
+       loop reads the driver's actual pose at every update (see :class:`PrintHeadDriver` for
+       the protocol a real driver implements): when it moves by more than
+       :data:`POSE_TOLERANCE_DEG`, the sensor geometry follows it, the stream forgets its
+       array-frame state (direction tracker, ITD filter, smoothed spectra: their directions were
+       relative to the old pose) and the audio is withheld until one frame and one audio block
+       after the head stops (``summary["head_moves"]`` counts the moves). The robot-frame 3D
+       track is kept.
     3. **See and verify**: every ``1 / cameras.rate_hz`` seconds of audio, one set of camera
        frames goes through stereo + thermal human detection
        (:func:`hearsee.vision.fusion.detect_humans`).
@@ -867,7 +901,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         input channels; default: the live device (:func:`open_audio_source`). Tests pass an
         :class:`hearsee.stream.pipeline.ArraySource` of a simulated recording.
     cameras : default: :class:`Cameras` of ``cfg.cameras`` (None in the file: audio only).
-    head : default: :class:`PrintHeadDriver` printing to stderr.
+    head : default: :class:`PrintHeadDriver` printing to stderr; any object with its protocol
+        (``pose_deg``, ``command``) drives a real head.
     jsonl : the JSON lines file (default ``cfg.output.jsonl``); one line per update, flushed.
     threaded : run the source in its own thread (default: only for the live device).
     async_vision : detect humans in a worker thread, applying each result at the first update
@@ -917,7 +952,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     if own_cameras:
         cameras = Cameras(cfg.cameras, f"{cfg.path}: ")
     head = head or PrintHeadDriver(cfg.head, sys.stderr)
-    geo = _Head(cfg, head.pose_deg)
+    geo = _Head(cfg, _pose(head))
     rig = cfg.cameras.rig if cfg.cameras is not None else None
     period = 1.0 / cfg.cameras.rate_hz if cfg.cameras is not None else float("inf")
 
@@ -940,7 +975,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     frames: list[tuple[float, NDArray]] = []
     state = {"n_audio": 0, "next_cam": 0.0, "phase": "listening", "cam_frames": 0,
              "cam_ended": False, "first_verified": None, "hop": scfg.hop_ms / 1000.0,
-             "last_visual": -np.inf, "track_drops": 0}
+             "last_visual": -np.inf, "track_drops": 0, "heard_from": -np.inf, "head_moves": 0}
     # live: detection runs in a worker thread so that the audio keeps flowing; its result is
     # applied at the first update after it is ready (file sources: in line, deterministic)
     use_pool = (live if async_vision is None else async_vision) and cameras is not None
@@ -1008,8 +1043,27 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             captions[f"{slot}_thermal"] = f"t = {t:.1f} s: thermal camera (8-bit, inferno)"
         return dets
 
+    def follow_head(t: float) -> bool:
+        """Whether the audio of the update at ``t`` can be trusted: False while the driver's
+        pose moves (the geometry follows it) and for one frame plus one block after it stops
+        (frames that began during the turn; a block the device had captured before the pose
+        was read). Meanwhile the stream keeps forgetting its array-frame state (directions
+        relative to an old pose), so its trackers start afresh on the settled head's audio."""
+        nonlocal geo
+        pose = _pose(head)
+        if max(abs(pose[0] - geo.pose[0]), abs(pose[1] - geo.pose[1])) > POSE_TOLERANCE_DEG:
+            geo = _Head(cfg, pose)
+            state["heard_from"] = t + (scfg.frame_ms + a.block_ms) / 1000.0
+            state["head_moves"] += 1
+        if t < state["heard_from"]:
+            pipeline.reset_array_state()
+            return False
+        return True
+
     def sink(u: Any) -> None:
         t = float(u.t)
+        if not follow_head(t):
+            u = _unheard(u)
         if track.initialized and t - state["last_visual"] > TRACK_TIMEOUT_S:
             # no visual fix for TRACK_TIMEOUT_S: bearing-only updates would let the range
             # drift (as in the simulated pipeline); drop the track, the head follows the audio
@@ -1062,7 +1116,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             state["phase"] = "tracking"
         command = None
         if state["phase"] != "listening":
-            pan, tilt = head.pose_deg
+            pan, tilt = geo.pose
             if track.initialized:
                 pan, tilt = geo.bearing_deg(track.position)
             elif bearing is not None:
@@ -1073,8 +1127,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             rec_track = {"position_m": _r(track.position), "velocity_mps": _r(track.velocity),
                          "acceleration_mps2": _r(track.acceleration),
                          "covariance": _r(track.position_cov, 6)}
-        rec = {"t": round(t, 4), "phase": state["phase"], "head_pan_deg": head.pose_deg[0],
-               "head_tilt_deg": head.pose_deg[1], "head_command": command, "audio": audio,
+        rec = {"t": round(t, 4), "phase": state["phase"], "head_pan_deg": geo.pose[0],
+               "head_tilt_deg": geo.pose[1], "head_command": command, "audio": audio,
                "camera_t": camera_t, "detections": dets, "track": rec_track, "truth": None,
                "error_m": None}
         log.append(rec)
@@ -1141,7 +1195,8 @@ def _live_summary(log: list[dict[str, Any]], stats: Any, audio_s: float, status:
         "track_drops": int(state["track_drops"]),
         "head_pan_command_deg_final": (float(last_cmd["pan_deg"]) if last_cmd
                                        else float("nan")),
-        "head_commands_printed": int(head.n_printed),
+        "head_commands_printed": int(getattr(head, "n_printed", 0)),
+        "head_moves": int(state["head_moves"]),
         "dropped_blocks": int(stats.n_dropped_blocks),
         "missing_frames": int(stats.n_missing_frames),
         "real_time_factor": float(audio_s / runtime_s) if runtime_s > 0 else float("nan"),

@@ -1083,8 +1083,7 @@ class TrackingProcessor:
         # a horizontal plane sees elevation only through cos(el): planar_elevation_sigma_scale
         self._level_plane = geom.kind == "planar" and abs(geom.normal[2]) >= np.cos(
             np.radians(10.0))
-        self.itd = (ItdKalman(array.n_mics, self.pairs, q_std_s=0.5 / fs, r_std_s=1.0 / fs)
-                    if self.cfg.itd_filter else None)
+        self.itd = self._itd_filter()
         if self.cfg.max_coast_s is not None and not self.cfg.max_coast_s > 0:
             raise ConfigError(f"max_coast_s must be > 0 s or None, got {self.cfg.max_coast_s}")
         if not self.cfg.reacquire_s > 0:
@@ -1103,6 +1102,24 @@ class TrackingProcessor:
                                    self.cfg.srp_band_hz,
                                    coherence_weight=self.cfg.srp_coherence_weight,
                                    in_plane=self._in_plane)
+
+    def _itd_filter(self) -> ItdKalman | None:
+        """A new ITD Kalman filter (thesis 2.2.2) when ``cfg.itd_filter``, else None."""
+        if not self.cfg.itd_filter:
+            return None
+        return ItdKalman(self.array.n_mics, self.pairs, q_std_s=0.5 / self.fs,
+                         r_std_s=1.0 / self.fs)
+
+    def reset_array_state(self) -> None:
+        """Forget everything held in the array's frame -- the direction and 3D trackers, the
+        ITD filter, the smoothed spectra -- as after the array has turned (a pan-tilt head):
+        their estimates describe where the source was relative to the old pose."""
+        self.direction.reset()
+        self.motion.reset()
+        self.itd = self._itd_filter()
+        if self.srp is not None:
+            self.srp.reset()
+        self._last_measured_t = -np.inf
 
     def smoothed(self, batch: FrameBatch) -> dict[str, NDArray] | None:
         """The :class:`SmoothedSrp` measurements of the batch's frames (NaN rows for missing
@@ -1372,6 +1389,14 @@ class StreamPipeline:
         self.queue_size = int(queue_size)
         self.stall_timeout_s, self.max_stall_s = float(stall_timeout_s), float(max_stall_s)
         self.stats = StreamStats()
+        self._reset_requested = False
+
+    def reset_array_state(self) -> None:
+        """Ask the running stream to forget its array-frame state
+        (:meth:`TrackingProcessor.reset_array_state`) before its next batch of frames: call it
+        from the sink when the array has moved, e.g. after a head turn. The frames of the
+        batch being delivered were measured before the call and keep the old state."""
+        self._reset_requested = True
 
     def _check_source(self, source: Any) -> None:
         if source.n_channels != self.array.n_mics:
@@ -1406,6 +1431,7 @@ class StreamPipeline:
     def _run(self, source: Any, sink: Callable[[Update], None] | None,
              threaded: bool) -> list[Update]:
         self._check_source(source)
+        self._reset_requested = False
         framer = Framer(source.n_channels, source.fs, self.config.frame_ms, self.config.hop_ms)
         proc = TrackingProcessor(self.array, source.fs, self.config, self.rig, self.image_points)
         self.stats = st = StreamStats()
@@ -1421,6 +1447,9 @@ class StreamPipeline:
             batch = framer.push(blk)
             if batch is None:
                 return
+            if self._reset_requested:
+                proc.reset_array_state()
+                self._reset_requested = False
             for u in proc.process(batch):
                 u.latency_s = time.perf_counter() - batch.arrival
                 st.latencies_s.append(u.latency_s)
