@@ -39,6 +39,8 @@ Schema (defaults in brackets)::
                                         stays there; only the desired command is printed)
       driver: none                      [none]     only `none` is implemented: the desired
                                         pan/tilt command is printed and logged, nothing moves
+                                        (a real driver is passed to run_robot(head=...); the
+                                        loop follows its pose, see PrintHeadDriver)
     output:
       jsonl: run.jsonl                  [hearsee-run/updates.jsonl]  one JSON line per update
       report: hearsee-run               [hearsee-run]  report folder (index.html, log.json, ...)
