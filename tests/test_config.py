@@ -30,3 +30,19 @@ def test_save_yaml_and_json_take_numpy_values(tmp_path):
     assert back["name"] == "rig" and back["K"] == [[1.0, 0.0], [0.0, 1.0]] and back["n"] == 3
     assert back["ok"] is True
     assert to_jsonable(data)["bad"] is None and to_jsonable(data)["name"] == "rig"
+
+
+def test_load_yaml_reads_exponent_numbers_without_a_dot(tmp_path):
+    """YAML 1.1 (PyYAML's default) reads ``1e9`` as a string; an array file with
+    ``speed_of_sound: 1e3`` failed with "must be a number, got '1e3'"."""
+    from hearsee.audio.arrays import load_array
+
+    p = tmp_path / "a.yaml"
+    p.write_text("a: 1e9\nb: 5E-3\nc: -2.5e+1\nd: 12\ne: 1.5\nf: '1e9'\ng: 1e\nh: .5e1\n")
+    d = load_yaml(p)
+    assert d == {"a": 1e9, "b": 0.005, "c": -25.0, "d": 12, "e": 1.5, "f": "1e9", "g": "1e",
+                 "h": 5.0}
+    assert isinstance(d["d"], int) and isinstance(d["a"], float)
+    p.write_text("microphones: [[0, 0, 0], [1e-1, 0, 0]]\nspeed_of_sound: 3.4e2\n")
+    arr = load_array(p)
+    assert arr.speed_of_sound == 340.0 and arr.positions[1, 0] == 0.1

@@ -7,6 +7,7 @@ the field, e.g. ``robot.yaml: unknown key 'microphone' (expected one of: array, 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,18 @@ __all__ = [
 ]
 
 
+class _Loader(yaml.SafeLoader):
+    """PyYAML's safe loader reading ``1e9`` / ``5E-3`` as numbers: YAML 1.1's float needs a dot
+    (``1.0e9``), so ``speed_of_sound: 1e9`` used to be the string '1e9' and its error
+    "must be a number, got '1e9'" read like nonsense. The YAML 1.2 core schema's floats."""
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."))
+
+
 def load_yaml(path: str | Path) -> dict[str, Any]:
     """Read a YAML mapping from ``path``; raise typed errors for missing files and bad YAML."""
     p = Path(path)
@@ -30,7 +43,7 @@ def load_yaml(path: str | Path) -> dict[str, Any]:
     if not p.is_file():
         raise InputFileError(f"{p}: file not found")
     try:
-        data = yaml.safe_load(p.read_text(encoding="utf-8"))
+        data = yaml.load(p.read_text(encoding="utf-8"), Loader=_Loader)  # noqa: S506 (safe)
     except UnicodeDecodeError as exc:
         raise ConfigError(f"{p}: not a text YAML file ({exc.reason})") from None
     except yaml.YAMLError as exc:
