@@ -86,9 +86,9 @@ __all__ = [
     "estimate_tdoas",
     "frame_geometry",
     "frame_signals",
-    "min_frame_ms",
     "gcc",
     "gcc_weighting",
+    "min_frame_ms",
     "normalize_method",
 ]
 
