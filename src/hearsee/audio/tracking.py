@@ -98,6 +98,15 @@ def _bound_elevation(X: NDArray) -> None:
         X[..., 1] = np.clip(el, -90.0, 90.0)
 
 
+def _propagate(x: NDArray, P: NDArray, F: NDArray, Q: NDArray) -> tuple[NDArray, NDArray]:
+    """A direction state ``x`` (4,) and covariance ``P`` (4, 4) predicted by the transition F
+    with process noise Q: new arrays, the azimuth wrapped and the elevation bounded."""
+    x = F @ x
+    x[0] = _wrap1(float(x[0]))
+    _bound_elevation(x)
+    return x, F @ P @ F.T + Q
+
+
 _ADJ_SIGN = np.array([[1.0, -1.0], [-1.0, 1.0]])
 
 
@@ -301,9 +310,7 @@ class DirectionKalman(_Kalman):
         self.F, self.Q = self._cv(dt)
 
     def _predict(self) -> None:
-        super()._predict()
-        self.x[0] = _wrap1(float(self.x[0]))
-        _bound_elevation(self.x)
+        self.x, self.P = _propagate(self.x, self.P, self.F, self.Q)
 
     def _start(self, az: float, el: float | None) -> None:
         self.x = np.array([_wrap1(float(az)), 0.0 if el is None else float(el), 0.0, 0.0])
@@ -411,11 +418,7 @@ class DirectionKalman(_Kalman):
         dt = float(t) - self.t
         if not dt > 0:
             return self.x.copy(), self.P.copy()
-        F, Q = self._cv(dt)
-        x = F @ self.x
-        x[0] = _wrap1(float(x[0]))
-        _bound_elevation(x)
-        return x, F @ self.P @ F.T + Q
+        return _propagate(self.x, self.P, *self._cv(dt))
 
     def _cv(self, dt: float) -> tuple[NDArray, NDArray]:
         """The (cached) transition and process noise over ``dt`` seconds."""
@@ -636,10 +639,8 @@ class DirectionIMM:
         """The output predicted by the transition F with the modes' process noises Qs and
         predicted mode probabilities c: mixing only regroups the same components, so it is
         the last output predicted with the expected process noise ``sum_j c_j Q_j``."""
-        x = F @ self._mix.x
-        x[0] = _wrap1(float(x[0]))
-        _bound_elevation(x)
-        return x, F @ self._mix.P @ F.T + (c @ Qs.reshape(c.size, -1)).reshape(4, 4)
+        return _propagate(self._mix.x, self._mix.P, F,
+                          (c @ Qs.reshape(c.size, -1)).reshape(4, 4))
 
     def predicted(self, t: float) -> tuple[NDArray, NDArray]:
         """The output state and covariance predicted to time ``t`` (seconds) as the next
