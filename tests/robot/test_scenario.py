@@ -35,6 +35,9 @@ def test_person_walks_the_path_at_constant_speed():
     ({"robot": {"head_height_m": 3.5}}, "scenario.robot.head_height_m"),
     ({"room": {"size_m": [1, 5, 3]}}, "scenario.room.size_m"),
     ({"room": {"rt60_s": "long"}}, "scenario.room.rt60_s"),
+    # (before 2026-11-26 these two failed only when the scene was simulated, without the field)
+    ({"room": {"size_m": [2, 2, 2], "rt60_s": 2.0}}, "scenario.room.rt60_s: .* order 485"),
+    ({"room": {"size_m": [20, 20, 5], "rt60_s": 0.05}}, "scenario.room.rt60_s: .* too short"),
     ({"people": [{"height_m": 1.7}]}, r"scenario.people\[0\]: missing required key 'path_m'"),
     ({"people": [{"path_m": [[9, 9]]}]}, r"scenario.people\[0\].path_m"),
     ({"people": [{"path_m": [[3.5, 3.0]]}]}, "within 0.6 m of the robot"),

@@ -27,6 +27,7 @@ __all__ = [
     "MIN_WALL_DISTANCE_M",
     "add_noise",
     "delay_signals",
+    "image_sources",
     "room_impulse_responses",
     "simulate_free_field",
     "simulate_room",
@@ -200,6 +201,53 @@ def _fractional_delay_latency() -> int:
     return int(pra.constants.get("frac_delay_length")) // 2
 
 
+
+def image_sources(rt60: float, room_dim: ArrayLike, speed_of_sound: float = 343.0,
+                  max_order: int | None = None) -> tuple[float | None, int]:
+    """Wall energy absorption and image-source order for a shoebox room of reverberation time
+    ``rt60`` (seconds) and size ``room_dim`` (metres), from Sabine's formula
+    (``pyroomacoustics.inverse_sabine``); ``(None, 0)`` for an anechoic room (``rt60`` 0).
+    ``max_order`` overrides the order. The one place where a room's RT60 is checked:
+    :func:`room_impulse_responses` and the robot scenario files use it.
+
+    Raises
+    ------
+    ConfigError
+        A negative or non-finite RT60, one the room cannot have (too short for its size), a
+        bad ``max_order``, or an order above :data:`MAX_IMAGE_ORDER` (too much memory).
+    """
+    import pyroomacoustics as pra
+
+    dim = _room_dim(room_dim)
+    rt60 = float(rt60)
+    if not np.isfinite(rt60) or rt60 < 0:
+        raise ConfigError(f"RT60 must be a non-negative number of seconds, got {rt60}")
+    if max_order is not None and (int(max_order) != max_order or max_order < 0):
+        raise ConfigError(f"max_order must be a non-negative integer, got {max_order!r}")
+    if rt60 == 0 and max_order:
+        # (pyroomacoustics' default walls reflect everything: the images would come back)
+        raise ConfigError(f"max_order {max_order} with RT60 0: an anechoic room has no "
+                          "reflections; give an RT60 > 0 or leave max_order out")
+    if rt60 == 0:
+        return None, 0
+    try:
+        e_absorption, order = pra.inverse_sabine(rt60, dim, c=speed_of_sound)
+    except ValueError:
+        raise ConfigError(
+            f"RT60 {rt60} s is too short for a {'x'.join(f'{v:g}' for v in dim)} m room "
+            "(it would need walls absorbing more than all incident sound); "
+            "use a longer RT60 or a smaller room"
+        ) from None
+    if max_order is not None:
+        order = int(max_order)
+    if order > MAX_IMAGE_ORDER:
+        raise ConfigError(
+            f"RT60 {rt60:g} s in a {'x'.join(f'{v:g}' for v in dim)} m room needs image sources "
+            f"up to order {order} (~{4 * order**3 / 3:.1e} images, more memory than a simulation "
+            f"should take; the limit is order {MAX_IMAGE_ORDER}); use a shorter RT60 or a "
+            "larger room" + (", or a smaller max_order" if max_order is not None else ""))
+    return float(e_absorption), int(order)
+
 def room_impulse_responses(
     fs: float,
     mic_positions_room: ArrayLike,
@@ -259,36 +307,8 @@ def room_impulse_responses(
     _check_inside(src[None, :], dim, "source")
     if np.any(np.linalg.norm(mics - src, axis=1) < 1e-3):
         raise GeometryError("the source coincides with a microphone")
-    rt60 = float(rt60)
-    if not np.isfinite(rt60) or rt60 < 0:
-        raise ConfigError(f"RT60 must be a non-negative number of seconds, got {rt60}")
-    if max_order is not None and (int(max_order) != max_order or max_order < 0):
-        raise ConfigError(f"max_order must be a non-negative integer, got {max_order!r}")
-    if rt60 == 0 and max_order:
-        # (pyroomacoustics' default walls reflect everything: the images would come back)
-        raise ConfigError(f"max_order {max_order} with RT60 0: an anechoic room has no "
-                          "reflections; give an RT60 > 0 or leave max_order out")
-
-    if rt60 == 0:
-        materials, order = None, 0
-    else:
-        try:
-            e_absorption, order = pra.inverse_sabine(rt60, dim, c=speed_of_sound)
-        except ValueError:
-            raise ConfigError(
-                f"RT60 {rt60} s is too short for a {'x'.join(f'{v:g}' for v in dim)} m room "
-                "(it would need walls absorbing more than all incident sound); "
-                "use a longer RT60 or a smaller room"
-            ) from None
-        materials = pra.Material(float(e_absorption))
-    if max_order is not None:
-        order = int(max_order)
-    if order > MAX_IMAGE_ORDER:
-        raise ConfigError(
-            f"RT60 {rt60:g} s in a {'x'.join(f'{v:g}' for v in dim)} m room needs image sources "
-            f"up to order {order} (~{4 * order**3 / 3:.1e} images, more memory than a simulation "
-            f"should take; the limit is order {MAX_IMAGE_ORDER}); use a shorter RT60 or a "
-            "larger room" + (", or a smaller max_order" if max_order is not None else ""))
+    e_absorption, order = image_sources(rt60, dim, speed_of_sound, max_order)
+    materials = None if e_absorption is None else pra.Material(e_absorption)
     room = pra.ShoeBox(dim, fs=int(round(fs)), materials=materials, max_order=int(order))
     room.set_sound_speed(float(speed_of_sound))
     room.add_source(src)

@@ -45,6 +45,7 @@ from typing import Any
 
 import numpy as np
 
+from hearsee.audio.propagation import image_sources
 from hearsee.config import check_keys, load_yaml, number
 from hearsee.errors import ConfigError
 
@@ -295,6 +296,10 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scen
     if np.any(size < 2.0) or np.any(size > 50.0):
         raise ConfigError(f"{where}.room.size_m: each side must be 2-50 m, got {size.tolist()}")
     rt60 = number(room, "rt60_s", base.rt60_s, f"{where}.room", 0.0, 2.0)
+    try:  # the room's RT60 checked here, where the error can name the field
+        image_sources(rt60, size)
+    except ConfigError as e:
+        raise ConfigError(f"{where}.room.rt60_s: {e}") from None
     duration = number(data, "duration_s", base.duration_s, where, 1.0, 120.0)
 
     rob = _section(data, "robot", where)
