@@ -418,7 +418,8 @@ def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
         band_hz: tuple[float, float] | None = None) -> GccResult:
     """GCC of two whole signals (one pair, one "frame"): the peak ``t_i - t_j`` in seconds.
 
-    ``max_tau_s`` bounds the lag search (default: the whole correlation). SCOT/ROTH/ML here use
+    ``max_tau_s`` bounds the lag search (default: the whole correlation). Each signal loses its
+    mean first (a DC offset on real ADCs reads as a peak at lag 0). SCOT/ROTH/ML here use
     the single-periodogram spectra, so prefer :func:`estimate_tdoas` (frame-averaged spectra)
     for those weightings.
 
@@ -438,8 +439,10 @@ def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
         raise ConfigError(f"max_tau_s must be a non-negative number of seconds, got {max_tau_s}")
     n = len(a)
     nfft = sfft.next_fast_len(2 * n, real=True)
-    Xa = sfft.rfft(a, nfft)
-    Xb = sfft.rfft(b, nfft)
+    # each signal less its mean, as every framed spectrum (_windowed): a DC offset, zero-padded,
+    # leaks into the lowest bins, which PHAT weighs like any other, as a peak at lag 0
+    Xa = sfft.rfft(a - a.mean(), nfft)
+    Xb = sfft.rfft(b - b.mean(), nfft)
     G = Xa * np.conj(Xb)
     Gii, Gjj = np.abs(Xa) ** 2, np.abs(Xb) ** 2
     P = G * gcc_weighting(method, G, Gii, Gjj) * _band_mask(len(G), nfft, fs, band_hz)
