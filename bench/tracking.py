@@ -192,7 +192,8 @@ file, per-frame latency when the file is paced in real time, and a simulated dev
 (dropped blocks -- never delivered, each counted once --, late blocks, and stalls).
 
 Since 2026-11-25's fifteenth session every GCC frame loses its own mean before the window
-(:func:`hearsee.audio.tdoa._windowed`: a DC offset on real ADCs was read as a source at lag 0).
+(:func:`hearsee.audio.tdoa.windowed_frames`, then private: a DC offset on real ADCs was read as
+a source at lag 0).
 The simulated recordings have no offset, so nothing changes on average, but frames whose
 confidence sits at a threshold can flip (20 of ~2500 frames on 24 dev walks), and a track
 that takes or misses one such frame differs from then on: this run is not the fourteenth

@@ -90,6 +90,7 @@ __all__ = [
     "gcc_weighting",
     "min_frame_ms",
     "normalize_method",
+    "windowed_frames",
 ]
 
 #: Weighting names accepted everywhere (CLI spellings ``gcc-phat`` etc. are aliases).
@@ -439,8 +440,8 @@ def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
         raise ConfigError(f"max_tau_s must be a non-negative number of seconds, got {max_tau_s}")
     n = len(a)
     nfft = sfft.next_fast_len(2 * n, real=True)
-    # each signal less its mean, as every framed spectrum (_windowed): a DC offset, zero-padded,
-    # leaks into the lowest bins, which PHAT weighs like any other, as a peak at lag 0
+    # each signal less its mean, as every framed spectrum (windowed_frames): a DC offset,
+    # zero-padded, leaks into the lowest bins, which PHAT weighs like any other: a peak at lag 0
     Xa = sfft.rfft(a - a.mean(), nfft)
     Xb = sfft.rfft(b - b.mean(), nfft)
     G = Xa * np.conj(Xb)
@@ -570,7 +571,7 @@ def _window(window: str | tuple, frame_len: int) -> NDArray:
 _MAX_PEAK = 1e12
 
 
-def _windowed(frames: NDArray, win: NDArray) -> NDArray:
+def windowed_frames(frames: NDArray, win: NDArray) -> NDArray:
     """Each frame (..., L) less its own mean, times the analysis window: the spectra's input.
     A DC offset (common on real ADCs, often different per channel) is the same in every
     channel's spectrum and, leaking through the window into the lowest bins, puts a
@@ -655,7 +656,7 @@ def _band_activity(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int,
     in one ``chunk`` -- the frame loop then needs no second transform -- else None)."""
     e = np.empty(frames.shape[1])
     for s0 in range(0, frames.shape[1], chunk):
-        X = sfft.rfft(_windowed(frames[:, s0:s0 + chunk, :], win), nfft, axis=-1)[..., k0:k1]
+        X = sfft.rfft(windowed_frames(frames[:, s0:s0 + chunk, :], win), nfft, axis=-1)[..., k0:k1]
         e[s0:s0 + chunk] = np.sum(X.real**2 + X.imag**2, axis=(0, 2))
     band, decided = _energy_vad(e, vad_db)
     return (active & band if decided else active), (X if frames.shape[1] <= chunk else None)
@@ -930,7 +931,8 @@ def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float,
         b1 = min(int(np.floor(band_hz[1] * L / fs)) + 1, L // 2 + 1)
         if b1 <= b0:
             return float("nan")
-        X = sfft.rfft(_windowed(frame_signals(a, L, L), _window("hann", L)), axis=-1)[..., b0:b1]
+        X = sfft.rfft(windowed_frames(frame_signals(a, L, L), _window("hann", L)),
+                      axis=-1)[..., b0:b1]
         auto = np.sum(X.real**2 + X.imag**2, axis=1)  # (2, bins)
         cross = np.sum(X[0] * np.conj(X[1]), axis=0)  # (bins,)
         msc = (cross.real**2 + cross.imag**2) / np.maximum(auto[0] * auto[1], _TINY)
@@ -998,7 +1000,7 @@ def _noise_spectrum(frames: NDArray, active: NDArray, win: NDArray, nfft: int, k
     if quiet.size < _MIN_SUMMARY_FRAMES:
         return None
     Xq = (X_all[:, quiet, :] if X_all is not None
-          else sfft.rfft(_windowed(frames[:, quiet, :], win), nfft, axis=-1)[..., k0:k1])
+          else sfft.rfft(windowed_frames(frames[:, quiet, :], win), nfft, axis=-1)[..., k0:k1])
     psd = np.mean(Xq.real**2 + Xq.imag**2, axis=1)
     return np.maximum(psd, 1e-12 * psd.max(initial=0.0) + _TINY)
 
@@ -1095,7 +1097,7 @@ def estimate_tdoas(
         Analysis window (scipy.signal.get_window spec). The default Tukey window with 25 %
         tapers keeps most of each frame at full weight: with a Hann window the TDOA variance
         is ~1.7x larger (bench/doa.py, white noise vs the Cramer-Rao bound). Each frame's
-        mean is removed before windowing (:func:`_windowed`): a DC offset is no source.
+        mean is removed before windowing (:func:`windowed_frames`): a DC offset is no source.
     snr_weight : bool
         Multiply the weighting by a per-bin coherence estimate ``xi_i xi_j / ((1 + xi_i)
         (1 + xi_j))`` from each channel's a-priori SNR ``xi = max(|X|^2 / N - 1, 0)``, with the
@@ -1291,7 +1293,7 @@ def estimate_tdoas(
         active, X_all = _band_activity(frames, win, nfft, k0, k1, active, vad_db,
                                        max(int(chunk_frames), 1))
     elif n_frames <= max(int(chunk_frames), 1):  # one transform for the noise and the frames
-        X_all = sfft.rfft(_windowed(frames, win), nfft, axis=-1)[..., k0:k1]
+        X_all = sfft.rfft(windowed_frames(frames, win), nfft, axis=-1)[..., k0:k1]
     noise_psd = _noise_spectrum(frames, active, win, nfft, k0, k1, X_all) if snr_weight else None
 
     redundant = _closure_projector(tuple(prs), arr.n_mics) is not None  # a closed cycle
@@ -1332,7 +1334,7 @@ def estimate_tdoas(
         if X_all is not None:  # one chunk: h0, h1 = 0, n_frames
             X = np.moveaxis(X_all, 0, 1)
         else:
-            X = sfft.rfft(_windowed(frames[:, h0:h1, :], win), nfft, axis=-1)
+            X = sfft.rfft(windowed_frames(frames[:, h0:h1, :], win), nfft, axis=-1)
             X = np.moveaxis(X[..., k0:k1], 0, 1)  # (F', n_ch, band bins)
         G = X[:, I, :] * np.conj(X[:, J, :])  # (F', P, band bins)
         stats = _spectral_densities(X, G, I, J, smooth_frames) if need_stats else (None,) * 3

@@ -60,12 +60,12 @@ from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.tdoa import (
-    _windowed,
     check_recording_length,
     estimate_tdoas,
     frame_geometry,
     frame_signals,
     min_frame_ms,
+    windowed_frames,
 )
 from hearsee.audio.tracking import (
     DIRECTION_RATE_TAU_S,
@@ -734,7 +734,7 @@ class SmoothedSrp:
         import scipy.fft as sfft
 
         fr = frame_signals(np.asarray(segment, dtype=np.float32), self.frame_len, hop)[:, :n_frames]
-        X = sfft.rfft(_windowed(fr, self.win), self.nfft, axis=-1)[..., self.k0:self.k1]
+        X = sfft.rfft(windowed_frames(fr, self.win), self.nfft, axis=-1)[..., self.k0:self.k1]
         X = np.moveaxis(X, 0, 1)  # (k, n_ch, B) complex64
         G = X[:, self.I] * np.conj(X[:, self.J])  # (k, P, B)
         a = self.alpha
