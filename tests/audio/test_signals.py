@@ -181,6 +181,20 @@ def test_read_recording_warns_on_clipping(tmp_path):
         read_recording(p48, fs=16000, resample=True)
 
 
+def test_loud_float_recordings_are_not_called_clipped(tmp_path):
+    """A float file may go beyond +-1 without clipping: a noise at RMS 3 (~75 % of its samples
+    beyond 1) warned before 2026-11-26. Flat tops at its own peak still warn."""
+    x = 3.0 * np.random.default_rng(4).standard_normal((2, 8000))
+    p = _write(tmp_path / "loud.wav", x, subtype="FLOAT")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        y, _ = read_recording(p)
+    np.testing.assert_allclose(y, x.astype(np.float32), rtol=0, atol=0)
+    flat = _write(tmp_path / "loud_clipped.wav", np.clip(x, -4.0, 4.0), subtype="FLOAT")
+    with pytest.warns(ClippingWarning, match="clipped"):
+        read_recording(flat)
+
+
 def test_synthetic_voice_too_short_is_a_config_error():
     for seed in range(4):  # the first syllable starts 20-80 ms in
         with pytest.raises(ConfigError, match="too short"):

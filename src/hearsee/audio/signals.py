@@ -57,7 +57,10 @@ _FORMANTS = {
 }
 _BANDWIDTHS = np.array([80.0, 100.0, 140.0])
 
-#: A sample at or above this magnitude counts as clipped (full scale is 1.0).
+#: A sample at or above this magnitude counts as clipped (full scale is 1.0). In a channel
+#: whose samples go beyond full scale (a float file: no clipping at 1.0) the level is this
+#: fraction of the channel's own peak instead: flat tops wherever they are, not every sample
+#: of a loud float recording.
 CLIP_LEVEL = 0.999
 #: Fraction of clipped samples above which :func:`read_recording` warns.
 CLIP_FRACTION = 1e-3
@@ -335,7 +338,8 @@ def read_recording(
     Warns
     -----
     ClippingWarning
-        More than 0.1 % of the samples are at full scale.
+        More than 0.1 % of the samples are at full scale (float files beyond full scale:
+        at their channel's peak, see :data:`CLIP_LEVEL`).
     """
     x, fs_in = _read_file(path)
     n_ch, n = x.shape
@@ -349,8 +353,11 @@ def read_recording(
                 "(channel k must be microphone k)"
             )
     # clipping is seen on the file's own samples (resampling smooths the flat tops away)
-    clipped = (float(np.mean(np.abs(x) >= CLIP_LEVEL))
-               if x.size and np.all(np.isfinite(x)) else 0.0)
+    clipped = 0.0
+    if x.size and np.all(np.isfinite(x)):
+        mag = np.abs(x)
+        level = CLIP_LEVEL * np.maximum(1.0, mag.max(axis=1, keepdims=True))
+        clipped = float(np.mean(mag >= level))
     if fs is not None and int(round(fs)) != fs_in:
         if not resample:
             raise AudioInputError(
@@ -380,7 +387,8 @@ def read_recording(
         )
     if clipped > CLIP_FRACTION:
         warnings.warn(
-            f"{path}: {clipped * 100:.2f} % of the samples are at full scale (clipped); "
+            f"{path}: {clipped * 100:.2f} % of the samples are clipped (flat at full scale, or "
+            "at the channel's peak in a float file beyond it); "
             "estimates may be biased -- lower the input gain",
             ClippingWarning,
             stacklevel=2,
