@@ -5,6 +5,7 @@ hardware (a fake sounddevice module, video files as cameras, simulated recording
 from __future__ import annotations
 
 import io
+import json
 import sys
 import threading
 import types
@@ -693,3 +694,19 @@ def test_live_loop_follows_a_turning_head(tmp_path):
     np.testing.assert_allclose(before, 40.0, atol=1.0)
     np.testing.assert_allclose(after, 40.0, atol=1.0)
     assert abs(s["azimuth_deg_final"] - 40.0) < 1.0
+
+
+def test_a_run_without_updates_still_writes_its_report(tmp_path):
+    """A run that ends before its first update (here 300 samples, less than one frame) has an
+    empty log; its report used to die in the plots with an IndexError traceback."""
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "probe"}}, "r.yaml", tmp_path)
+    x = 0.01 * np.random.default_rng(0).standard_normal((3, 300))
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
+                    jsonl=tmp_path / "probe.jsonl")
+    assert res.log == []
+    index = write_run_report(cfg, res)
+    assert index.is_file() and json.loads((index.parent / "log.json").read_text()) == []
+    assert all((index.parent / "plots" / f).is_file()
+               for f in ("top_view.png", "error.png", "head.png"))

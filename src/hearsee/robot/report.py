@@ -61,6 +61,8 @@ def _arr(log: Sequence[Mapping[str, Any]], path: Sequence[str],
             out.append(np.full(dim, np.nan) if dim else np.nan)
         else:
             out.append(np.asarray(v, dtype=float))
+    if not out:  # an empty log (a run stopped before its first update): empty plots
+        return np.zeros((0, dim) if dim else 0)
     return np.array(out, dtype=float)
 
 
