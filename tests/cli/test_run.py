@@ -177,7 +177,7 @@ def test_bad_robot_files_and_options(robot_dir, capsys):
     (robot_dir / "robot2.yaml").write_text(yaml.safe_dump(data), encoding="utf-8")
     assert main(["run", "--config", str(robot_dir / "robot2.yaml"), "--dry-run",
                  "--out", str(robot_dir / "prev")]) == 2
-    assert "would overwrite an input file" in capsys.readouterr().err
+    assert "would overwrite the input file" in capsys.readouterr().err
     # --mcap / --rerun over an input (the calibration) or an existing file: refused before the
     # devices are opened (no sounddevice is faked here, so a run would fail differently)
     calib = robot_dir / "rig.yaml"

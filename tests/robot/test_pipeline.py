@@ -7,7 +7,7 @@ import pytest
 
 from hearsee.cli import main
 from hearsee.robot.pipeline import run_scenario
-from hearsee.robot.report import write_report
+from hearsee.robot.report import report_overwrites, write_report
 from hearsee.robot.scenario import scenario_from_dict
 
 # robot at (3.5, 2.6) facing +x; the speaker stands 2.2 m away at azimuth ~50 deg and walks
@@ -73,11 +73,28 @@ def test_demo_rejects_a_broken_scenario(tmp_path, capsys):
 
 
 def test_demo_will_not_write_over_its_input(tmp_path, capsys):
-    sc = tmp_path / "s.yaml"
-    sc.write_text("name: x\n")
+    # a scenario (YAML is a superset of JSON) saved as the report's own summary.json
+    sc = tmp_path / "summary.json"
+    sc.write_text('{"name": "x"}\n')
     assert main(["demo", "--scenario", str(sc), "-o", str(tmp_path), "-q"]) == 2
-    assert "overwrite" in capsys.readouterr().err
-    assert sc.read_text() == "name: x\n"
+    assert "the report would overwrite the input" in capsys.readouterr().err
+    assert sc.read_text() == '{"name": "x"}\n'
+
+
+def test_report_overwrites_names_only_what_the_report_writes(tmp_path):
+    """One rule for demo, run --out and a robot file's output: an input is refused only where
+    write_report would write (before 2026-11-26 the demo refused any input inside --out and
+    run --out did not look at plots/ and frames/). The report's files come from a real one."""
+    write_report(tmp_path / "r", scenario_from_dict({}).to_dict(), [], {"success": False},
+                 images={"first_overlay": np.zeros((8, 8, 3), np.uint8)})
+    written = [p for p in (tmp_path / "r").rglob("*") if p.is_file()]
+    assert {p.name for p in written} >= {"index.html", "log.json", "summary.json",
+                                        "first_overlay.png"}
+    for p in written:
+        assert report_overwrites(tmp_path / "r", [None, tmp_path / "x.yaml", p]) == p
+    for p in ("r/scenario.yaml", "r/frames/notes.txt", "r/other/log.json", "log.json",
+              "r/plots/sub/a.png"):
+        assert report_overwrites(tmp_path / "r", [tmp_path / p]) is None
 
 
 def test_associate_picks_the_nearest_person_inside_the_gate():

@@ -25,12 +25,16 @@ def demo_cmd(
     speaking while walking behind the robot, a mannequin nearby) and writes OUT/index.html, the
     JSON log of every estimate and a summary.
     """
+    from hearsee.errors import ConfigError
     from hearsee.robot.pipeline import run_scenario
-    from hearsee.robot.report import write_report
+    from hearsee.robot.report import report_overwrites, write_report
     from hearsee.robot.scenario import default_scenario, load_scenario
 
     sc = load_scenario(scenario) if scenario else default_scenario()
-    _refuse_input_overwrite(out, scenario)
+    hit = report_overwrites(out, [scenario])
+    if hit is not None:
+        raise ConfigError(f"--out {out}: the report would overwrite the input {hit}; choose "
+                          "another folder")
     check_exports(rerun, mcap, [scenario], force)
     with progress(f"scenario {sc.name}", total=sc.duration_s, enabled=not quiet) as advance:
         result = run_scenario(sc, progress=advance)
@@ -47,14 +51,6 @@ def demo_cmd(
     if not quiet:
         print_summary("hearsee demo summary", result.summary)
     typer.echo(f"report: {index}")
-
-
-def _refuse_input_overwrite(out: Path, *inputs: Path | None) -> None:
-    from hearsee.errors import ConfigError
-
-    for p in inputs:
-        if p is not None and Path(p).resolve().is_relative_to(Path(out).resolve()):
-            raise ConfigError(f"--out {out} would overwrite the input {p}; choose another folder")
 
 
 @app.command("eval")

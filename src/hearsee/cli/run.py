@@ -49,6 +49,7 @@ def run_cmd(
     from hearsee.robot.hardware import (
         Check,
         check_devices,
+        check_outputs,
         first_failure,
         load_robot_config,
         run_robot,
@@ -60,11 +61,7 @@ def run_cmd(
     cfg = load_robot_config(config)
     if out is not None:
         cfg = cfg.with_output(out)
-        ins = {p.resolve() for p in cfg.input_files() if p.exists()}
-        if cfg.output.jsonl.resolve() in ins or any(
-                p.is_relative_to(out.resolve()) and p.name in ("index.html", "log.json",
-                                                               "summary.json") for p in ins):
-            raise ConfigError(f"--out {out} would overwrite an input file; choose another folder")
+        check_outputs(cfg, f"--out {out}")
     # the exports' extras, folders and overwrite rule before listening (and in the dry run):
     # a live run must not fail only when it writes them at its end
     exports = check_exports(rerun, mcap, cfg.input_files(), force)

@@ -79,6 +79,7 @@ __all__ = [
     "OutputConfig",
     "RobotConfig",
     "check_devices",
+    "check_outputs",
     "import_sounddevice",
     "load_robot_config",
     "open_capture",
@@ -96,10 +97,6 @@ _AUDIO = ("device", "fs", "channels", "array", "block_ms", "frame_ms", "method")
 _CAMERAS = ("left", "right", "stereo", "thermal", "calib", "rate_hz", "mount_m")
 _HEAD = ("pivot_m", "offset_m", "pan_limits_deg", "pose_deg", "driver")
 _OUTPUT = ("jsonl", "report")
-#: The files :func:`hearsee.robot.report.write_report` writes at the top of the report folder
-#: (besides plots/*.png and frames/*.png): no input and no output.jsonl may be one of them.
-_REPORT_FILES = ("index.html", "log.json", "summary.json")
-
 DeviceSpec = int | str
 
 
@@ -396,24 +393,30 @@ def robot_config_from_dict(data: Mapping[str, Any], where: str = "robot.yaml",
     head = _head(_mapping(data, "head", where) or {}, f"{where}: head")
     output = _output(_mapping(data, "output", where) or {}, f"{where}: output", base)
     cfg = RobotConfig(Path(where), audio, cameras, head, output)
-    _check_outputs(cfg, where)
+    check_outputs(cfg, where)
     return cfg
 
 
-def _check_outputs(cfg: RobotConfig, where: str) -> None:
+def check_outputs(cfg: RobotConfig, where: str) -> None:
+    """ConfigError (prefixed ``where``) when the run's outputs would overwrite an input file:
+    ``output.jsonl`` or ``output.report`` is one, the report would write over one
+    (:func:`hearsee.robot.report.report_overwrites`), or the JSON lines are one of the
+    report's own files. Checked when a robot file is loaded and again for ``run --out``."""
+    from hearsee.robot.report import REPORT_FILES, report_overwrites
+
     ins = {p.resolve() for p in cfg.input_files() if p.exists()}
     for name, p in (("output.jsonl", cfg.output.jsonl), ("output.report", cfg.output.report)):
         if p.resolve() in ins:
             raise ConfigError(f"{where}: {name}: {p} is an input file; choose another path")
-    report = cfg.output.report.resolve()
-    for p in ins:
-        if p.is_relative_to(report) and p.name in _REPORT_FILES:
-            raise ConfigError(f"{where}: output.report: writing {report} would overwrite {p}")
-    jsonl = cfg.output.jsonl.resolve()
-    if jsonl.parent == report and jsonl.name in _REPORT_FILES:
-        raise ConfigError(f"{where}: output.jsonl: {cfg.output.jsonl} is the report's "
-                          f"{jsonl.name} (output.report {cfg.output.report} writes "
-                          f"{', '.join(_REPORT_FILES)}); choose another file name")
+    hit = report_overwrites(cfg.output.report, sorted(ins))
+    if hit is not None:
+        raise ConfigError(f"{where}: output.report: writing {cfg.output.report.resolve()} "
+                          f"would overwrite the input file {hit}; choose another folder")
+    if report_overwrites(cfg.output.report, [cfg.output.jsonl]) is not None:
+        raise ConfigError(f"{where}: output.jsonl: {cfg.output.jsonl} is one of the report's "
+                          f"files (output.report {cfg.output.report} writes "
+                          f"{', '.join(REPORT_FILES)} and PNGs in plots/ and frames/); "
+                          "choose another file name")
 
 
 def load_robot_config(path: str | Path) -> RobotConfig:

@@ -24,7 +24,29 @@ import numpy as np
 
 from hearsee.errors import InputFileError
 
-__all__ = ["write_report"]
+__all__ = ["REPORT_FILES", "report_overwrites", "write_report"]
+
+#: The files :func:`write_report` writes in its folder itself; it also writes PNGs into the
+#: folder's ``plots/`` and ``frames/`` (named after the plots and the images it is given).
+REPORT_FILES = ("index.html", "log.json", "summary.json")
+_REPORT_SUBFOLDERS = ("plots", "frames")
+
+
+def report_overwrites(folder: str | Path, paths: Sequence[str | Path | None]) -> Path | None:
+    """The first of ``paths`` (files; None entries skipped) that :func:`write_report` into
+    ``folder`` could overwrite -- one of :data:`REPORT_FILES` there, or a PNG in its ``plots/``
+    or ``frames/`` -- or None. The one rule behind every "the report would overwrite an input"
+    refusal (``hearsee demo``, ``hearsee run --out``, a robot file's ``output``)."""
+    f = Path(folder).resolve()
+    for p in paths:
+        if p is None:
+            continue
+        q = Path(p).resolve()
+        if (q.parent == f and q.name in REPORT_FILES) or (
+                q.parent.parent == f and q.parent.name in _REPORT_SUBFOLDERS
+                and q.suffix.lower() == ".png"):
+            return Path(p)
+    return None
 
 _CSS = """
 body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
