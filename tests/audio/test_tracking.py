@@ -335,6 +335,46 @@ def test_imm_rejects_bad_parameters_and_time_going_backwards():
         imm.update(0.05, (30.0, None))
 
 
+@pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
+def test_nan_times_and_noises_are_refused_and_leave_the_track_intact(cls):
+    """A NaN time passed the "time went backwards" test (the IMM's state became NaN for good,
+    the single filter skipped a prediction: rate -11.6 instead of ~270 deg/s), and a NaN or
+    infinite noise or delay turned the state NaN; all are EstimationErrors now, and the track
+    goes on as if the bad call had not happened."""
+    kf, ref = cls(), cls()
+    for k in range(4):
+        kf.update(k * DT, (10.0 + 8.6 * k, 0.0))
+        ref.update(k * DT, (10.0 + 8.6 * k, 0.0))
+    nan, inf = float("nan"), float("inf")
+    for bad in ({"t": nan}, {"t": inf}, {"sigma_meas_deg": nan}, {"sigma_meas_deg": inf},
+                {"sigma_meas_deg": 0.0}, {"sigma_meas_deg": (2.0, -1.0)}, {"delay_s": nan},
+                {"delay_s": inf}):
+        args = {"t": 4 * DT, **bad}
+        with pytest.raises(EstimationError, match="finite number"):
+            kf.update(args.pop("t"), (44.4, 0.0), **args)
+    for k in range(4, 8):
+        kf.update(k * DT, (10.0 + 8.6 * k, 0.0))
+        ref.update(k * DT, (10.0 + 8.6 * k, 0.0))
+    assert np.isfinite(kf.azimuth_deg) and kf.azimuth_deg == pytest.approx(ref.azimuth_deg)
+
+
+@pytest.mark.parametrize("kw", [{"sigma_meas_deg": float("inf")},
+                                {"sigma_accel_dps2": float("inf")},
+                                {"elevation_accel_ratio": float("inf")},
+                                {"init_rate_sigma_dps": float("nan")},
+                                {"init_rate_sigma_dps": 0.0}])
+def test_infinite_or_nan_settings_are_refused(kw):
+    """``> 0`` let inf through (and init_rate_sigma_dps was not checked): each gave NaN
+    directions."""
+    with pytest.raises(EstimationError, match="finite number > 0"):
+        DirectionKalman(**kw)
+    if "sigma_accel_dps2" not in kw:
+        with pytest.raises(EstimationError, match="finite number > 0"):
+            DirectionIMM(**kw)
+    with pytest.raises(EstimationError, match="finite number > 0"):
+        DirectionIMM(sigma_accel_dps2=(50.0, float("inf")))
+
+
 @pytest.mark.parametrize("make", [lambda: DirectionKalman(2.0, 150.0, elevation_accel_ratio=1.0),
                                   lambda: DirectionIMM(2.0, elevation_accel_ratio=1.0)])
 def test_coasting_never_carries_the_elevation_over_the_pole(make):

@@ -56,6 +56,23 @@ _WRAP_AZ = np.array([True])  # which measurement components are angles on a circ
 _WRAP_AZ_EL = np.array([True, False])
 
 
+def _finite_time(t: float) -> float:
+    """``t`` (seconds) as a float, or an EstimationError when it is not a finite number (a NaN
+    time would slip past the "time went backwards" test and poison the state for good)."""
+    v = float(t)
+    if not math.isfinite(v):
+        raise EstimationError(f"tracker time must be a finite number of seconds, got {t!r}")
+    return v
+
+
+def _positive(name: str, value: float) -> float:
+    """``value`` as a float when finite and > 0, else an EstimationError naming it."""
+    v = float(value)
+    if not (math.isfinite(v) and v > 0):
+        raise EstimationError(f"{name} must be a finite number > 0, got {value!r}")
+    return v
+
+
 def _wrap1(a: float) -> float:
     """One angle wrapped to (-180, 180] degrees, as :func:`hearsee.geometry.wrap_deg` does
     (a Python float: the trackers wrap their state every frame)."""
@@ -178,10 +195,11 @@ class _Kalman:
 
     def predict(self, t: float) -> None:
         """Propagate the state to time ``t`` (seconds); subclasses provide ``_set_dt``."""
+        t = _finite_time(t)
         if self.t is None or not self.initialized:
-            self.t = float(t)
+            self.t = t
             return
-        dt = float(t) - self.t
+        dt = t - self.t
         if dt < 0:
             raise EstimationError(f"tracker time went backwards ({self.t} s -> {t} s)")
         if dt > 0:
@@ -270,11 +288,10 @@ class DirectionKalman(_Kalman):
                  init_rate_sigma_dps: float = 60.0,
                  elevation_accel_ratio: float = ELEVATION_ACCEL_RATIO,
                  rate_tau_s: float | None = None) -> None:
-        if not sigma_meas_deg > 0 or not sigma_accel_dps2 > 0:
-            raise EstimationError("sigma_meas_deg and sigma_accel_dps2 must be > 0")
-        if not elevation_accel_ratio > 0:
-            raise EstimationError(
-                f"elevation_accel_ratio must be > 0, got {elevation_accel_ratio}")
+        for name, v in (("sigma_meas_deg", sigma_meas_deg), ("sigma_accel_dps2", sigma_accel_dps2),
+                        ("elevation_accel_ratio", elevation_accel_ratio),
+                        ("init_rate_sigma_dps", init_rate_sigma_dps)):
+            _positive(name, v)
         if rate_tau_s is not None and not rate_tau_s > 0:
             raise EstimationError(f"rate_tau_s must be > 0 s or None, got {rate_tau_s}")
         # an infinite time constant is the constant-velocity model (its F would be inf * 0)
@@ -399,7 +416,10 @@ class DirectionKalman(_Kalman):
         Rf = None
         if sigma_meas_deg is not None:
             s_az, s_el = np.broadcast_to(np.asarray(sigma_meas_deg, dtype=float), (2,))
-            Rf = np.diag([s_az**2, s_el**2])
+            Rf = np.diag([_positive("sigma_meas_deg", s_az) ** 2,
+                          _positive("sigma_meas_deg", s_el) ** 2])
+        if not math.isfinite(delay_s):
+            raise EstimationError(f"delay_s must be a finite number of seconds, got {delay_s!r}")
         best = None
         for a, e in cands:
             z, H, R, wrap = self._parts(a, e, Rf, delay_s)
@@ -532,8 +552,9 @@ class DirectionIMM:
         qs = np.array([float(q) for q in sigma_accel_dps2])
         if qs.size < 2:
             raise EstimationError("an IMM needs at least two modes (sigma_accel_dps2)")
-        if not np.all(qs > 0):
-            raise EstimationError(f"every mode's sigma_accel_dps2 must be > 0, got {qs.tolist()}")
+        if not np.all(np.isfinite(qs) & (qs > 0)):
+            raise EstimationError(f"every mode's sigma_accel_dps2 must be a finite number > 0, "
+                                  f"got {qs.tolist()}")
         if not mode_dwell_s > 0:
             raise EstimationError(f"mode_dwell_s must be > 0 s, got {mode_dwell_s}")
         # the mixture, as a filter object: association, gate and read-out reuse its methods;
@@ -665,6 +686,7 @@ class DirectionIMM:
                sigma_meas_deg: float | tuple[float, float] | None = None,
                delay_s: float = 0.0) -> bool:
         """One frame; arguments and return value as :meth:`DirectionKalman.update`."""
+        t = _finite_time(t)
         cands = _clean_candidates(measurement, candidates)
         if not self.initialized:
             if cands:
