@@ -11,8 +11,8 @@ from hearsee.audio.propagation import (
     simulate_free_field,
     simulate_room,
 )
-from hearsee.audio.signals import white_noise
-from hearsee.errors import ConfigError, GeometryError
+from hearsee.audio.signals import synthetic_voice, white_noise
+from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
 
 def test_integer_delay_is_exact_shift():
@@ -154,3 +154,41 @@ def test_free_field_fractional_tdoa_accuracy(frac, gcc_phat_ref):
     y = simulate_free_field(white_noise(0.5, fs, rng=9), fs, mics, src)
     est = gcc_phat_ref(y[1], y[0], fs, 4.0 / fs)
     assert est * fs == pytest.approx(frac, abs=0.02)
+
+
+def test_bad_rates_speeds_and_noise_levels_are_refused():
+    """Found by a bad-input sweep (2026-11-26); before, each gave numbers without a word:
+    speed_of_sound 0 was replaced by 343 m/s (``c or default``), a sample rate of 0 or below
+    returned the signal undelayed or at the wrong length, a NaN SNR or an infinite reference
+    power gave an all-NaN / all-inf recording, and a 1 Hz synthetic voice never returned."""
+    arr = MicArray.from_preset("two-mic")
+    s = white_noise(0.1, 16000, rng=0)
+    src = [1.0, 1.0, 0.0]
+    for c in (0.0, -343.0, float("nan"), float("inf")):
+        with pytest.raises(GeometryError, match="speed_of_sound must be a positive number"):
+            simulate_free_field(s, 16000, arr.positions, src, speed_of_sound=c)
+    with pytest.raises(GeometryError, match="speed_of_sound"):
+        room_impulse_responses(16000, arr.positions + [3.0, 3.0, 1.0], [4.0, 4.0, 1.0],
+                               [6.0, 6.0, 3.0], 0.0, speed_of_sound=0.0)
+    for fs in (0.0, -16000.0, float("nan"), float("inf")):
+        with pytest.raises(AudioInputError, match="sample rate must be a positive number"):
+            simulate_free_field(s, fs, arr, src)
+        with pytest.raises(AudioInputError, match="sample rate must be a positive number"):
+            delay_signals(s, [1e-3], fs)
+    with pytest.raises(GeometryError, match="one or more"):
+        delay_signals(s, [], 16000)
+    with pytest.raises(ConfigError, match="SNR must be a finite number"):
+        add_noise(s, float("nan"))
+    with pytest.raises(ConfigError, match="SNR must be a finite number"):
+        add_noise(s, -float("inf"))
+    with pytest.raises(ConfigError, match="reference_power"):
+        add_noise(s, 10.0, reference_power=float("inf"))
+    with pytest.raises(AudioInputError, match="NaN or inf"):
+        add_noise(np.r_[s, np.nan], 10.0)
+    with pytest.raises(ConfigError, match="at least 4000 Hz"):
+        synthetic_voice("male", 1.0, 1)
+    # and the defaults still apply: the array's own speed of sound when none is given
+    slow = MicArray(arr.positions, speed_of_sound=300.0)
+    y = simulate_free_field(s, 16000, slow, src)
+    np.testing.assert_allclose(y, simulate_free_field(s, 16000, arr.positions, src,
+                                                      speed_of_sound=300.0))

@@ -518,6 +518,24 @@ def test_gcc_refuses_a_negative_lag_bound():
     assert gcc(np.roll(s, 2), s, 8000.0, max_tau_s=1e-3).tdoa_s == pytest.approx(2 / 8000, abs=1e-6)
 
 
+def test_whole_signal_gcc_refuses_what_it_cannot_correlate():
+    """gcc() returned lags for these (bad-input sweep, 2026-11-26): a NaN sample (lag -0.25 s,
+    all-NaN correlation), silence (-6.2 ms), a negative rate (the sign flipped, full
+    confidence); an empty input raised scipy's ValueError."""
+    s = white_noise(0.1, 8000, rng=5)
+    with pytest.raises(AudioInputError, match="NaN or inf"):
+        gcc(np.r_[s[:-1], np.nan], s, 8000.0)
+    with pytest.raises(AudioInputError, match="silent"):
+        gcc(np.zeros(100), np.zeros(100), 8000.0)
+    with pytest.raises(AudioInputError, match="silent"):
+        gcc(s, np.full(s.shape, 0.3), 8000.0)
+    for fs in (-8000.0, 0.0, float("nan")):
+        with pytest.raises(AudioInputError, match="sample rate"):
+            gcc(np.roll(s, 2), s, fs)
+    with pytest.raises(AudioInputError, match="equal length"):
+        gcc(np.array([]), np.array([]), 8000.0)
+
+
 def test_whole_signal_gcc_ignores_dc_offsets():
     """gcc() on two signals with different DC offsets gives what it gives without them (before
     2026-11-26 the zero-padded offsets leaked into the lowest bins, which PHAT weighs like the

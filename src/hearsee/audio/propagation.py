@@ -26,11 +26,13 @@ __all__ = [
     "MAX_IMAGE_ORDER",
     "MIN_WALL_DISTANCE_M",
     "add_noise",
+    "check_fs",
     "delay_signals",
     "image_sources",
     "room_impulse_responses",
     "simulate_free_field",
     "simulate_room",
+    "speed_of_sound_of",
 ]
 
 #: Sources and microphones must be at least this far (metres) from every wall of a room.
@@ -50,6 +52,29 @@ def _mic_positions(mics: MicArray | ArrayLike) -> NDArray:
     if p.ndim != 2 or p.shape[1] != 3:
         raise GeometryError(f"microphone positions must be N x 3, got shape {p.shape}")
     return p
+
+
+def check_fs(fs: float) -> float:
+    """``fs`` (Hz) as a float when it is a finite number > 0, else an AudioInputError."""
+    try:
+        v = float(fs)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not (np.isfinite(v) and v > 0):
+        raise AudioInputError(f"sample rate must be a positive number of Hz, got {fs!r}")
+    return v
+
+
+def speed_of_sound_of(mics: MicArray | ArrayLike, speed_of_sound: float | None) -> float:
+    """The speed of sound to use, m/s: ``speed_of_sound`` when given (a finite number > 0, else
+    a GeometryError), otherwise the MicArray's own, otherwise 343."""
+    if speed_of_sound is None:
+        return float(mics.speed_of_sound) if isinstance(mics, MicArray) else 343.0
+    c = float(speed_of_sound)
+    if not (np.isfinite(c) and c > 0):
+        raise GeometryError(f"speed_of_sound must be a positive number of m/s, got "
+                            f"{speed_of_sound!r}")
+    return c
 
 
 def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: ArrayLike = 1.0,
@@ -77,9 +102,10 @@ def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: Arra
     x = np.asarray(signal, dtype=float)
     if x.ndim != 1:
         raise AudioInputError(f"signal must be one-dimensional, got shape {x.shape}")
+    fs = check_fs(fs)
     d = np.atleast_1d(np.asarray(delays_s, dtype=float))
-    if np.any(d < 0) or not np.all(np.isfinite(d)):
-        raise GeometryError("delays must be finite and non-negative")
+    if d.size == 0 or np.any(d < 0) or not np.all(np.isfinite(d)):
+        raise GeometryError("delays must be one or more finite, non-negative numbers of seconds")
     n_out = len(x) if n_out is None else int(n_out)
     n_fft = sfft.next_fast_len(len(x) + int(np.ceil(d.max() * fs)) + 1, real=True)
     X = sfft.rfft(x, n_fft)
@@ -103,8 +129,15 @@ def add_noise(x: ArrayLike, snr_db: float | None, rng: np.random.Generator | int
     y = np.array(x, dtype=float)
     if snr_db is None:
         return y
+    if not np.isfinite(snr_db):
+        raise ConfigError(f"SNR must be a finite number of dB (None for no noise), got {snr_db!r}")
     rng = np.random.default_rng(rng)
     p = float(np.mean(y**2)) if reference_power is None else float(reference_power)
+    if reference_power is not None and not (np.isfinite(p) and p > 0):
+        raise ConfigError(f"reference_power must be a positive finite number, got "
+                          f"{reference_power!r}")
+    if not np.isfinite(p):
+        raise AudioInputError("signal contains NaN or inf samples")
     if p <= 0:
         raise AudioInputError("cannot set an SNR for a silent signal")
     sigma = np.sqrt(p / 10 ** (snr_db / 10.0))
@@ -147,7 +180,7 @@ def simulate_free_field(
         is exactly ``MicArray.tdoa(source)`` (or ``tdoa_far``).
     """
     pos = _mic_positions(mics)
-    c = speed_of_sound or (mics.speed_of_sound if isinstance(mics, MicArray) else 343.0)
+    c = speed_of_sound_of(mics, speed_of_sound)
     s = np.asarray(source, dtype=float)
     if s.shape != (3,) or not np.all(np.isfinite(s)):
         raise GeometryError(f"source must be a finite [x, y, z] point, got {source!r}")
@@ -307,6 +340,8 @@ def room_impulse_responses(
     _check_inside(src[None, :], dim, "source")
     if np.any(np.linalg.norm(mics - src, axis=1) < 1e-3):
         raise GeometryError("the source coincides with a microphone")
+    fs = check_fs(fs)
+    speed_of_sound = speed_of_sound_of(None, speed_of_sound)
     e_absorption, order = image_sources(rt60, dim, speed_of_sound, max_order)
     materials = None if e_absorption is None else pra.Material(e_absorption)
     room = pra.ShoeBox(dim, fs=int(round(fs)), materials=materials, max_order=int(order))

@@ -57,6 +57,8 @@ _FORMANTS = {
 }
 _BANDWIDTHS = np.array([80.0, 100.0, 140.0])
 
+#: Lowest sample rate of :func:`synthetic_voice`, Hz (as the analysis's MIN_FS_HZ).
+MIN_VOICE_FS_HZ = 4000.0
 #: A sample at or above this magnitude counts as clipped (full scale is 1.0). In a channel
 #: whose samples go beyond full scale (a float file: no clipping at 1.0) the level is this
 #: fraction of the channel's own peak instead: flat tops wherever they are, not every sample
@@ -98,7 +100,7 @@ def _syllable_plan(n: int, fs: float, rng: np.random.Generator) -> tuple[NDArray
     starts, stops = [], []
     t = int(rng.uniform(0.02, 0.08) * fs)
     while t < n:
-        length = int(rng.uniform(0.12, 0.32) * fs)
+        length = max(int(rng.uniform(0.12, 0.32) * fs), 1)
         starts.append(t)
         stops.append(min(t + length, n))
         # mostly short gaps between syllables, now and then a longer phrase pause
@@ -151,6 +153,9 @@ def synthetic_voice(kind: str = "male", duration_s: float = 2.0, fs: float = 160
     if kind not in VOICE_F0_HZ:
         raise ConfigError(f"unknown voice kind {kind!r} (expected 'male' or 'female')")
     n = _check_duration(duration_s, fs)
+    if fs < MIN_VOICE_FS_HZ:  # (at 1 Hz its syllables rounded to 0 samples: an endless loop)
+        raise ConfigError(f"a synthetic voice needs a sample rate of at least "
+                          f"{MIN_VOICE_FS_HZ:g} Hz (its formants reach 3.3 kHz), got {fs:g} Hz")
     rng = np.random.default_rng(rng)
     f0 = VOICE_F0_HZ[kind]
     t = np.arange(n) / fs

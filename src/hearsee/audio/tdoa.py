@@ -430,10 +430,17 @@ def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
     """
     a = np.asarray(x_i, dtype=float)
     b = np.asarray(x_j, dtype=float)
-    if a.ndim != 1 or a.shape != b.shape:
+    if a.ndim != 1 or a.shape != b.shape or a.size < 2:
         raise AudioInputError(
-            f"gcc needs two 1-D signals of equal length, got {a.shape}, {b.shape}"
+            f"gcc needs two 1-D signals of equal length (2 samples or more), got {a.shape}, "
+            f"{b.shape}"
         )
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+        raise AudioInputError("gcc: a signal contains NaN or inf samples")
+    if not (np.isfinite(fs) and fs > 0):
+        raise AudioInputError(f"sample rate must be a positive number of Hz, got {fs!r}")
+    if np.ptp(a) == 0 or np.ptp(b) == 0:  # (a constant is silence once its mean is removed)
+        raise AudioInputError("gcc: a signal is silent (constant); there is nothing to correlate")
     _check_refine(refine)
     method = normalize_method(method)
     if max_tau_s is not None and not (np.isfinite(max_tau_s) and max_tau_s >= 0):

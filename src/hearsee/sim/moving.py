@@ -39,7 +39,7 @@ import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
-from hearsee.audio.propagation import add_noise
+from hearsee.audio.propagation import add_noise, check_fs, speed_of_sound_of
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, InputFileError
 
 __all__ = [
@@ -303,12 +303,13 @@ def retarded_delays(traj: Trajectory, mics: ArrayLike, t: ArrayLike, c: float,
 
 
 def _mics_and_c(mics: MicArray | ArrayLike, speed_of_sound: float | None) -> tuple[NDArray, float]:
+    c = speed_of_sound_of(mics, speed_of_sound)
     if isinstance(mics, MicArray):
-        return mics.positions, float(speed_of_sound or mics.speed_of_sound)
+        return mics.positions, c
     p = np.asarray(mics, dtype=float)
     if p.ndim != 2 or p.shape[1] != 3:
         raise GeometryError(f"microphone positions must be N x 3, got shape {p.shape}")
-    return p, float(speed_of_sound or 343.0)
+    return p, c
 
 
 def _check_signal(signal: ArrayLike, fs: float) -> NDArray:
@@ -317,8 +318,7 @@ def _check_signal(signal: ArrayLike, fs: float) -> NDArray:
         raise AudioInputError(f"signal must be a non-empty 1-D array, got shape {x.shape}")
     if not np.all(np.isfinite(x)):
         raise AudioInputError("signal contains NaN or inf samples")
-    if not fs > 0:
-        raise AudioInputError(f"sample rate must be > 0 Hz, got {fs}")
+    check_fs(fs)
     return x
 
 
