@@ -543,7 +543,7 @@ def test_bad_imm_settings_are_a_config_error():
     arr = MicArray.from_preset("three-mic")
     for bad, msg in (({"direction_modes_dps2": (100.0,)}, "at least two modes"),
                      ({"direction_modes_dps2": (50.0, 600.0), "mode_dwell_s": 0.0},
-                      "mode_dwell_s must be > 0"),
+                      "mode_dwell_s must be a finite number > 0"),
                      ({"elevation_accel_ratio": 0.0},
                       "elevation_accel_ratio must be a finite number > 0"),
                      ({"elevation_accel_ratio": -1.0, "direction_modes_dps2": None},
@@ -553,8 +553,41 @@ def test_bad_imm_settings_are_a_config_error():
                      ({"direction_rate_tau_s": 0.0}, "rate_tau_s must be > 0"),
                      ({"direction_rate_tau_s": -2.0, "direction_modes_dps2": None},
                       "rate_tau_s must be > 0")):
-        with pytest.raises(ConfigError, match=f"direction_modes_dps2 .*{msg}"):
+        with pytest.raises(ConfigError, match=f"(direction_modes_dps2|StreamConfig).*{msg}"):
             TrackingProcessor(arr, FS, StreamConfig(**bad))
+
+
+@pytest.mark.parametrize("bad, name", [
+    ({"sigma_min_deg": float("nan")}, "sigma_min_deg"),   # NaN azimuths in the output before
+    ({"sigma_meas_deg": float("inf")}, "sigma_meas_deg"),  # likewise
+    ({"spectrum_alpha": -0.5}, "spectrum_alpha"),          # smoothing silently off before
+    ({"spectrum_alpha": float("nan")}, "spectrum_alpha"),
+    ({"reacquire_s": float("inf")}, "reacquire_s"),        # OverflowError before
+    ({"min_confidence": float("nan")}, "min_confidence"),
+    ({"min_coherence": -1.0}, "min_coherence"),
+    ({"sigma_frame_deg": -6.0}, "sigma_frame_deg"),
+    ({"sigma_srp_deg": float("nan")}, "sigma_srp_deg"),
+    ({"alt_ratio": float("nan")}, "alt_ratio"),
+    ({"max_alt_ratio": -1.0}, "max_alt_ratio"),
+    ({"max_evidence_age_frames": -1.0}, "max_evidence_age_frames"),
+    ({"prefer_frame_confidence": float("nan")}, "prefer_frame_confidence"),
+    ({"range_m": (6.0, 0.2)}, "range_m"),
+    ({"sigma_px": float("nan")}, "sigma_px"),
+    ({"sigma_tdoa_s": float("nan")}, "sigma_tdoa_s"),
+    ({"max_fix_residual_samples": float("nan")}, "max_fix_residual_samples"),
+    ({"frame_ms": float("nan")}, "frame_ms"),
+])
+def test_stream_config_refuses_out_of_range_settings(bad, name):
+    """Found by a bad-input sweep (2026-11-26): each was accepted, most with no effect or a
+    silent change of behaviour, some with NaN azimuths in the output."""
+    with pytest.raises(ConfigError, match=rf"\b{name}\b"):
+        StreamConfig(**bad)
+
+
+def test_stream_config_keeps_its_documented_special_values():
+    cfg = StreamConfig(prefer_frame_confidence=float("inf"), max_coast_s=None, sigma_frame_deg=None,
+                       sigma_srp_deg=None, spectrum_alpha=0.0, min_confidence=0.0)
+    assert cfg.prefer_frame_confidence == float("inf") and cfg.spectrum_alpha == 0.0
 
 
 def _two_talkers(gaps):
@@ -601,7 +634,7 @@ def test_track_stays_on_the_speaker_through_a_pause_while_another_talks():
 def test_bad_reacquire_is_a_config_error():
     with pytest.raises(ConfigError, match="reacquire_s"):
         TrackingProcessor(MicArray.from_preset("three-mic"), FS, StreamConfig(reacquire_s=0))
-    with pytest.raises(ConfigError, match="planar_elevation_sigma_scale must be > 0"):
+    with pytest.raises(ConfigError, match="planar_elevation_sigma_scale must be a finite"):
         TrackingProcessor(MicArray.from_preset("three-mic"), FS,
                           StreamConfig(planar_elevation_sigma_scale=float("nan")))
 
@@ -653,7 +686,7 @@ def test_recording_shorter_than_a_frame_and_absurd_frames_are_errors():
         StreamPipeline(arr).run(ArraySource(x, FS))
     assert len(StreamPipeline(arr).run(ArraySource(np.tile(x, 2), FS))) == 1 + (2000 - 1024) // 512
     for frame_ms, hop_ms in ((MAX_FRAME_MS * 1.01, 32.0), (64.0, 1e9), (float("nan"), 32.0)):
-        with pytest.raises(ConfigError, match="frame and hop"):
+        with pytest.raises(ConfigError, match="frame(_ms)? and hop"):
             StreamPipeline(arr, StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms)).run(
                 ArraySource(x, FS))
 

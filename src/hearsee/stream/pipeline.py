@@ -45,6 +45,7 @@ Units: seconds, degrees, metres; frame times are frame centres from the start of
 
 from __future__ import annotations
 
+import math
 import queue
 import threading
 import time
@@ -60,6 +61,7 @@ from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.tdoa import (
+    check_frame_ms,
     check_recording_length,
     estimate_tdoas,
     frame_geometry,
@@ -1038,6 +1040,53 @@ class StreamConfig:
     gate_deg: tuple[float, float] = (6.0, 30.0)
     gated_after_s: float = 0.2
 
+    def __post_init__(self) -> None:
+        _check_config(self)
+
+
+#: StreamConfig's numbers that must be finite and > 0 (None allowed for the optional ones)
+_POSITIVE = ("sigma_meas_deg", "sigma_accel_dps2", "sigma_jerk", "sigma_px", "sigma_min_deg",
+             "max_fix_residual_samples", "max_evidence_age_frames", "reacquire_s",
+             "planar_elevation_sigma_scale", "mode_dwell_s")
+_POSITIVE_OR_NONE = ("sigma_accel", "sigma_tdoa_s", "accel_tau_s", "max_coast_s",
+                     "sigma_frame_deg", "sigma_srp_deg")
+#: ... that must lie in [low, high] (both inclusive; finite)
+_WITHIN = {"min_confidence": (0.0, np.inf), "min_coherence": (0.0, 1.0),
+           "alt_ratio": (0.0, 1.0), "max_alt_ratio": (0.0, 1.0)}
+
+
+def _check_config(cfg: StreamConfig) -> None:
+    """ConfigError naming the first out-of-range setting of ``cfg`` (checked when a
+    StreamConfig is made: before 2026-11-26 most were not, and a NaN noise put NaN azimuths in
+    the output, a negative ``spectrum_alpha`` silently turned the smoothing off, an infinite
+    ``reacquire_s`` raised an OverflowError). Settings that depend on the array and the
+    sample rate (frame length vs the array's delays) are checked by the stream itself."""
+    def bad(name: str, rule: str) -> ConfigError:
+        return ConfigError(f"StreamConfig.{name} must be {rule}, got {getattr(cfg, name)!r}")
+
+    check_frame_ms(cfg.frame_ms, cfg.hop_ms, names=("frame_ms", "hop_ms"))
+    for name in _POSITIVE + _POSITIVE_OR_NONE:
+        v = getattr(cfg, name)
+        if v is None and name in _POSITIVE_OR_NONE:
+            continue
+        if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+            raise bad(name, "a finite number > 0" + (" or None" if name in _POSITIVE_OR_NONE
+                                                      else ""))
+    for name, (lo, hi) in _WITHIN.items():
+        v = getattr(cfg, name)
+        if not (isinstance(v, int | float) and math.isfinite(v) and lo <= v <= hi):
+            raise bad(name, f"a number in [{lo:g}, {hi:g}]")
+    if not (isinstance(cfg.spectrum_alpha, int | float) and 0.0 <= cfg.spectrum_alpha < 1.0):
+        raise bad("spectrum_alpha", "in [0, 1) (0 = no smoothing)")
+    if not (isinstance(cfg.prefer_frame_confidence, int | float)
+            and cfg.prefer_frame_confidence > 0):  # (inf = never)
+        raise bad("prefer_frame_confidence", "> 0 (inf = never)")
+    lo, hi = np.asarray(cfg.range_m, dtype=float).reshape(2) if np.size(cfg.range_m) == 2 \
+        else (np.nan, np.nan)
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+        raise bad("range_m", "(near, far) metres with 0 < near < far")
+    _check_gating(cfg)
+
 
 def _check_gating(cfg: StreamConfig) -> None:
     """ConfigError for an out-of-range gated-detection setting of ``cfg``."""
@@ -1084,14 +1133,6 @@ class TrackingProcessor:
         self._level_plane = geom.kind == "planar" and abs(geom.normal[2]) >= np.cos(
             np.radians(10.0))
         self.itd = self._itd_filter()
-        if self.cfg.max_coast_s is not None and not self.cfg.max_coast_s > 0:
-            raise ConfigError(f"max_coast_s must be > 0 s or None, got {self.cfg.max_coast_s}")
-        if not self.cfg.reacquire_s > 0:
-            raise ConfigError(f"reacquire_s must be > 0 s, got {self.cfg.reacquire_s}")
-        if not self.cfg.planar_elevation_sigma_scale > 0:
-            raise ConfigError("planar_elevation_sigma_scale must be > 0, got "
-                              f"{self.cfg.planar_elevation_sigma_scale}")
-        _check_gating(self.cfg)
         self.direction = self._direction_tracker(self.cfg, self.hop / self.fs)
         self._last_measured_t = -np.inf
         self.motion, self.sigma_tdoa_s = self._motion_tracker(self.cfg)
