@@ -72,6 +72,11 @@ def test_bad_parameters():
         ItdKalman(1)
     with pytest.raises(ConfigError):
         ItdKalman(3, q_std_s=0.0)
+    # NaN and inf passed the "<= 0" test: NaN TDOAs, or an SVD that did not converge
+    for kw in ({"q_std_s": np.nan}, {"q_std_s": np.inf}, {"r_std_s": np.nan},
+               {"r_std_s": np.inf}, {"p0_std_s": np.nan}):
+        with pytest.raises(ConfigError, match="finite numbers > 0"):
+            ItdKalman(3, **kw)
     with pytest.raises(ConfigError):
         ItdKalman(3, gate_prob=1.5)
     with pytest.raises(GeometryError, match="do not determine"):

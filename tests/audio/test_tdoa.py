@@ -603,3 +603,26 @@ def test_huge_float_samples_are_scaled_not_overflowed(recording, three):
         tf = estimate_tdoas(x * 1e25, FS, three)
     np.testing.assert_allclose(tf.summary_tdoa_s, tf0.summary_tdoa_s, atol=1e-3 / FS)
     np.testing.assert_array_equal(tf.valid, tf0.valid)
+
+
+def test_a_very_quiet_float_recording_is_localized_like_a_loud_one(three, recording):
+    """Scaled to a peak of 1e-15 the recording gave no estimate (single-precision powers under
+    the spectra's floor); it is now scaled up first, like a huge one is scaled down."""
+    x, true = recording
+    ref = estimate_tdoas(x, FS, three).summary_tdoa_s
+    np.testing.assert_allclose(ref, true, atol=0.1 / FS)
+    for scale in (1e-15, 1e-9, 1e15):
+        got = estimate_tdoas(x * scale, FS, three).summary_tdoa_s
+        np.testing.assert_allclose(got, ref, atol=1e-3 / FS)
+
+
+@pytest.mark.parametrize("kw, name", [({"min_confidence": np.nan}, "min_confidence"),
+                                      ({"onset_weight": np.nan}, "onset_weight"),
+                                      ({"margin_samples": np.nan}, "margin_samples"),
+                                      ({"margin_samples": -100.0}, "margin_samples"),
+                                      ({"window": "bogus"}, "window")])
+def test_estimate_tdoas_refuses_nan_and_unknown_options(three, recording, kw, name):
+    """A NaN min_confidence / onset_weight gave a NaN summary; a NaN or negative margin and an
+    unknown window raised numpy's or scipy's ValueError deep inside."""
+    with pytest.raises(ConfigError, match=name):
+        estimate_tdoas(recording[0], FS, three, **kw)

@@ -110,6 +110,25 @@ def test_constant_acceleration_motion_is_recovered():
     assert not np.any(tr.accepted[60:65])
 
 
+def test_motion_filter_refuses_bad_gates_and_covariances():
+    """A NaN or out-of-range gate_prob made the gate NaN (every fix accepted); a negative R gave
+    a negative position covariance, a NaN R a NaN state, a zero R a singular innovation
+    covariance (LinAlgError) at the second fix of a frame time."""
+    for g in (np.nan, 1.5, 0.0):
+        with pytest.raises(EstimationError, match="gate_prob"):
+            MotionKalman(gate_prob=g)
+    with pytest.raises(EstimationError, match="init_vel_sigma"):
+        MotionKalman(init_vel_sigma=np.inf)
+    kf = MotionKalman(0.05, 5.0)
+    assert kf.update(0.0, [1.0, 2.0, 0.5])
+    for R in (-0.01 * np.eye(3), np.full((3, 3), np.nan), np.zeros((3, 3)),
+              np.array([[1.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]) * 1e-3, np.eye(2)):
+        with pytest.raises(EstimationError, match="covariance"):
+            kf.update(0.0, [1.0, 2.0, 0.5], R)
+    assert kf.update(0.1, [1.0, 2.0, 0.5], 1e-4 * np.eye(3))
+    assert np.all(np.linalg.eigvalsh(kf.position_cov) > 0)
+
+
 def test_motion_gate_rejects_a_wild_fix():
     kf = MotionKalman(sigma_meas_m=0.02, sigma_jerk=1.0)
     for k in range(30):

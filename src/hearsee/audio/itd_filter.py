@@ -91,8 +91,10 @@ class ItdKalman:
             raise GeometryError(f"an ITD filter needs at least 2 microphones, got {n_mics}")
         if not 0 <= ref < n_mics:
             raise GeometryError(f"reference microphone {ref} not in 0..{n_mics - 1}")
-        if q_std_s <= 0 or r_std_s <= 0 or p0_std_s <= 0:
-            raise ConfigError("q_std_s, r_std_s and p0_std_s must be > 0 seconds")
+        if not all(np.isfinite(v) and v > 0 for v in (q_std_s, r_std_s, p0_std_s)):
+            # (NaN passed "<= 0": NaN TDOAs, or an SVD that did not converge)
+            raise ConfigError("q_std_s, r_std_s and p0_std_s must be finite numbers > 0 seconds, "
+                              f"got {q_std_s}, {r_std_s}, {p0_std_s}")
         if not 0 < gate_prob < 1:
             raise ConfigError(f"gate_prob must be in (0, 1), got {gate_prob}")
         self.n_mics = int(n_mics)

@@ -568,7 +568,11 @@ def _window(window: str | tuple, frame_len: int) -> NDArray:
     """The analysis window (float32, read-only: shared between calls)."""
     from scipy.signal import get_window
 
-    w = get_window(window, frame_len).astype(np.float32)
+    try:
+        w = get_window(window, frame_len).astype(np.float32)
+    except (ValueError, TypeError) as e:
+        raise ConfigError(f"unknown analysis window {window!r} (a scipy.signal.get_window "
+                          f"name or tuple, e.g. 'hann' or ('tukey', 0.25)): {e}") from None
     w.flags.writeable = False
     return w
 
@@ -576,6 +580,9 @@ def _window(window: str | tuple, frame_len: int) -> NDArray:
 #: recordings whose largest |sample| exceeds this are scaled to a peak of 1 first (float files
 #: have no full scale; squared in single precision, samples of ~1e19 and more overflow)
 _MAX_PEAK = 1e12
+#: ... and those whose peak is below this (a float file at 1e-15 gave no estimate: its
+#: single-precision powers fell under the spectra's floor). 24-bit PCM's smallest step is 1.2e-7
+_MIN_PEAK = 1e-6
 
 
 def windowed_frames(frames: NDArray, win: NDArray) -> NDArray:
@@ -960,8 +967,8 @@ def _check_options(refine: str, summary_frames: str, joint: str, min_peak_snr: f
                           f"{min_peak_snr} and {min_frame_peak_snr}")
     if not (0.0 <= float(phat_beta) <= 1.0):
         raise ConfigError(f"phat_beta must be in [0, 1], got {phat_beta}")
-    if float(onset_weight) < 0:
-        raise ConfigError(f"onset_weight must be >= 0, got {onset_weight}")
+    if not (np.isfinite(onset_weight) and float(onset_weight) >= 0):
+        raise ConfigError(f"onset_weight must be a finite number >= 0, got {onset_weight}")
 
 
 def _check_steered(arr: MicArray, source_in_plane: bool, steer_range_m: float | None) -> None:
@@ -1258,11 +1265,15 @@ def estimate_tdoas(
         reverb_method = normalize_method(reverb_method)
     _check_options(refine, summary_frames, joint, min_peak_snr, min_frame_peak_snr, phat_beta,
                    onset_weight)
+    if not (np.isfinite(min_confidence) and min_confidence >= 0):
+        raise ConfigError(f"min_confidence must be a finite number >= 0, got {min_confidence}")
+    if not (np.isfinite(margin_samples) and margin_samples >= 0):
+        raise ConfigError(f"margin_samples must be a finite number >= 0, got {margin_samples}")
     prs = _check_pairs(pairs, arr)
     if joint == "steered":
         _check_steered(arr, source_in_plane, steer_range_m)
-    if peak > _MAX_PEAK:  # (float32 powers overflow above ~1e19; every test here is scale-free)
-        a = a / peak
+    if peak > _MAX_PEAK or 0 < peak < _MIN_PEAK:  # (float32 powers overflow above ~1e19 and
+        a = a / peak  # vanish below ~1e-19; every test here is scale-free)
     # single precision from here on: twice as fast, and its ~1e-7 relative error is far below
     # any sensor noise
     a32 = a.astype(np.float32)

@@ -56,6 +56,21 @@ _WRAP_AZ = np.array([True])  # which measurement components are angles on a circ
 _WRAP_AZ_EL = np.array([True, False])
 
 
+
+def _covariance(R: ArrayLike, n: int) -> NDArray:
+    """``R`` as an (n, n) measurement covariance, or an EstimationError unless it is finite,
+    symmetric and positive definite (a negative one made the track's covariance negative, a NaN
+    one its state NaN, a zero one the innovation covariance singular)."""
+    m = np.asarray(R, dtype=float)
+    if m.size != n * n:
+        raise EstimationError(f"a measurement covariance must be {n}x{n}, got shape {m.shape}")
+    m = m.reshape(n, n)
+    if not (np.all(np.isfinite(m)) and np.allclose(m, m.T, rtol=1e-6, atol=1e-12 * np.abs(m).max())
+            and np.linalg.eigvalsh(0.5 * (m + m.T))[0] > 0):
+        raise EstimationError("a measurement covariance must be finite, symmetric and positive "
+                              f"definite, got {m.tolist()}")
+    return m
+
 def _finite_time(t: float) -> float:
     """``t`` (seconds) as a float, or an EstimationError when it is not a finite number (a NaN
     time would slip past the "time went backwards" test and poison the state for good)."""
@@ -821,10 +836,13 @@ class MotionKalman(_Kalman):
                  gate_prob: float = 0.999, max_rejects: int = 4,
                  init_vel_sigma: float = 1.5, init_acc_sigma: float = 3.0,
                  accel_tau_s: float | None = None) -> None:
-        if not sigma_meas_m > 0 or not sigma_jerk > 0:
-            raise EstimationError("sigma_meas_m and sigma_jerk must be > 0")
-        if accel_tau_s is not None and not accel_tau_s > 0:
-            raise EstimationError(f"accel_tau_s must be > 0 s or None, got {accel_tau_s}")
+        for name, v in (("sigma_meas_m", sigma_meas_m), ("sigma_jerk", sigma_jerk),
+                        ("init_vel_sigma", init_vel_sigma), ("init_acc_sigma", init_acc_sigma)):
+            _positive(name, v)
+        if accel_tau_s is not None:
+            _positive("accel_tau_s", accel_tau_s)
+        if not 0 < gate_prob < 1:  # (NaN or 1.5 made the gate NaN: every fix was accepted)
+            raise EstimationError(f"gate_prob must be in (0, 1), got {gate_prob}")
         self.accel_tau_s = accel_tau_s
         self.sigma_meas_m = float(sigma_meas_m)
         self.sigma_jerk = float(sigma_jerk)
@@ -887,7 +905,7 @@ class MotionKalman(_Kalman):
         for pos, Rc in cands:
             z = np.asarray(pos, dtype=float).reshape(3)
             if np.all(np.isfinite(z)):
-                opts.append((z, self.R if Rc is None else np.asarray(Rc, float).reshape(3, 3)))
+                opts.append((z, self.R if Rc is None else _covariance(Rc, 3)))
         if not opts:
             return False
         if not self.initialized:
