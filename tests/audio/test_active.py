@@ -157,6 +157,27 @@ def test_bad_inputs():
         align_head(lambda pose: np.zeros(2), ARR)
 
 
+def test_bad_speed_of_sound_and_coincident_microphones_are_refused():
+    """Bad-input sweep (2026-11-26): speed_of_sound -343 returned the mirrored direction (az
+    -147 deg for a source at 56), microphones that all coincide returned a direction from
+    nothing, f_scale 0 raised scipy's ValueError."""
+    arr = load_array("three-mic")
+    src = np.array([1.0, 1.5, 0.4])
+    good = solve_range_differences([arr.positions], [arr.pairs], [arr.tdoa(src)])
+    # atan2(1.5, 1.0) = 56.31 deg; one pose is solved as a plane wave (~0.1 deg off at 1.9 m)
+    assert good.azimuth_deg == pytest.approx(56.31, abs=0.3)
+    for c in (-343.0, 0.0, np.nan):
+        with pytest.raises(GeometryError, match="speed_of_sound"):
+            solve_range_differences([arr.positions], [arr.pairs], [arr.tdoa(src)],
+                                    speed_of_sound=c)
+    with pytest.raises(GeometryError, match="coincide"):
+        solve_range_differences([np.zeros((3, 3))], [arr.pairs], [[0.0, 0.0, 0.0]])
+    with pytest.raises(GeometryError, match="coincide"):
+        localize_one_mic([0.0, 0.0, 0.0, 0.0], [[0.0, 0.0, 0.0]] * 4)
+    with pytest.raises(GeometryError, match="f_scale"):
+        solve_range_differences([arr.positions], [arr.pairs], [arr.tdoa(src)], f_scale=0.0)
+
+
 def test_mlp_maps_tdoas_over_poses_to_positions():
     mlp = train_pose_mlp(ARR, POSES3, offset_m=(0.2, 0, 0.1), n=2000, seed=1,
                          hidden_layer_sizes=(32, 32))

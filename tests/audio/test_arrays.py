@@ -82,3 +82,17 @@ def test_missing_file_and_unknown_preset(tmp_path):
         load_array(tmp_path / "nope.yaml")
     with pytest.raises(ConfigError, match="unknown array preset"):
         load_array("five-mic")
+
+
+def test_pair_indices_are_checked_everywhere():
+    """Bad-input sweep (2026-11-26): a negative index wrapped around (pair (0, -1) was (0, 2)),
+    (1, 1) gave 0 s, an index past the end raised an IndexError, no pairs an IndexError."""
+    arr = MicArray.from_preset("three-mic")
+    for pairs, msg in (([(0, -1)], "invalid microphone pair"), ([(1, 1)], "invalid"),
+                       ([(0, 7)], "invalid"), ([], "no microphone pairs")):
+        for call in (lambda p: arr.tdoa([1.0, 0.0, 0.0], p), lambda p: arr.max_tdoa(p),
+                     lambda p: arr.tdoa_far([1.0, 0.0, 0.0], p),
+                     lambda p: arr.tdoa_jacobian([1.0, 0.0, 0.0], p)):
+            with pytest.raises(GeometryError, match=msg):
+                call(pairs)
+    assert arr.tdoa([1.0, 0.0, 0.0], [(0, 2)]) == pytest.approx(arr.tdoa([1.0, 0.0, 0.0])[1])

@@ -250,6 +250,21 @@ def test_localize_bad_input(model):
         mask.localize_mask(x, FS, model)
     with pytest.raises(AudioInputError, match="too short"):
         mask.localize_mask(np.ones((2, 100)), FS, model)
+    # found by a bad-input sweep (2026-11-26): a NaN weight or a zero distance answered 0 deg,
+    # no distances raised a TypeError, a zero rate or frame a ZeroDivisionError
+    x = mask.simulate_masked(white_noise(0.5, FS, rng=3), FS, model, _src(120, 1.0), snr_db=20,
+                             rng=1)
+    for kw, msg in (({"phase_weight": np.nan}, "phase_weight"),
+                    ({"sigma_iid_db": np.nan}, "sigma_iid_db"),
+                    ({"distances": (0.0,)}, "distances"), ({"distances": ()}, "distances"),
+                    ({"frame_ms": 0.0}, "frame_ms"), ({"frame_ms": 0.05}, "shorter than 16")):
+        with pytest.raises((AudioInputError, ConfigError), match=msg):
+            mask.localize_mask(x, FS, model, **kw)
+    for fs in (0.0, -FS, np.nan):
+        with pytest.raises(AudioInputError, match="sample rate"):
+            mask.localize_mask(x, fs, model)
+        with pytest.raises(AudioInputError, match="sample rate"):
+            mask.simulate_masked(white_noise(0.1, FS, rng=3), fs, model, _src(120, 1.0))
 
 
 def test_localize_recording_document(model):

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from hearsee.audio.arrays import MicArray
+from hearsee.errors import AudioInputError, ConfigError
 from hearsee.geometry import wrap_deg
 from hearsee.sim.moving import linear_trajectory, simulate_moving_free_field
 from hearsee.stream import pipeline as pl
@@ -446,3 +447,14 @@ def test_track_cli_closes_its_video_source(monkeypatch, tmp_path, capsys):
                  "--camera-device", "0"]) == 2
     assert len(opened) == n + 1 and len(released) == len(opened)
     capsys.readouterr()
+
+
+def test_array_source_refuses_a_bad_rate_or_block():
+    """Bad-input sweep (2026-11-26): a rate of 0 divided by zero in the stream, a negative one
+    was reported as 'frame too short', a NaN block length raised numpy's ValueError."""
+    x = np.zeros((3, 1600))
+    for fs in (0.0, -16000.0, float("nan")):
+        with pytest.raises(AudioInputError, match="sample rate"):
+            ArraySource(x, fs)
+    with pytest.raises(ConfigError, match="block_len"):
+        ArraySource(x, 16000, block_len=float("nan"))

@@ -62,6 +62,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
 from hearsee.audio.arrays import MicArray, load_array, pair_tdoa, pair_tdoa_jacobian
+from hearsee.audio.propagation import speed_of_sound_of
 from hearsee.errors import (
     AudioInputError,
     EstimationError,
@@ -251,7 +252,12 @@ def _stack(mic_sets: Sequence[ArrayLike], pairs: Sequence[Sequence[tuple[int, in
         base += len(m)
     if not vals:
         raise EstimationError("no finite TDOA measurement to localize from")
-    return np.vstack(mics), np.array(a_idx), np.array(b_idx), np.array(vals)
+    M, a, b = np.vstack(mics), np.array(a_idx), np.array(b_idx)
+    if not np.any(np.linalg.norm(M[a] - M[b], axis=1) > 1e-6):
+        # (every pair's TDOA is then 0 wherever the source is: a direction was returned anyway)
+        raise GeometryError("the microphone positions of every measured pair coincide: their "
+                            "TDOAs say nothing about the source")
+    return M, a, b, np.array(vals)
 
 
 def _rho(z: NDArray, loss: str) -> NDArray:
@@ -391,13 +397,20 @@ def solve_range_differences(
     Position3D
     """
     M, a, b, y = _stack(mic_sets, pairs, tdoa_s)
-    c = float(speed_of_sound)
+    c = speed_of_sound_of(None, speed_of_sound)  # (a negative c mirrored the direction)
     ref = np.asarray(reference_m, dtype=float)
+    if ref.shape != (3,) or not np.all(np.isfinite(ref)):
+        raise GeometryError(f"reference_m must be a finite [x, y, z] point, got {reference_m!r}")
+    if not (np.isfinite(f_scale) and f_scale > 0):
+        raise GeometryError(f"f_scale must be a finite number > 0, got {f_scale}")
+    if min(n_directions, n_distances, n_starts) < 1:
+        raise GeometryError("n_directions, n_distances and n_starts must be >= 1, got "
+                            f"{n_directions}, {n_distances}, {n_starts}")
     sig = float(tdoa_std_s)
     if not np.isfinite(sig) or sig <= 0:
         raise GeometryError(f"tdoa_std_s must be > 0 seconds, got {tdoa_std_s}")
     rmin, rmax = (float(v) for v in distance_bounds_m)
-    if not 0 < rmin < rmax:
+    if not (0 < rmin < rmax and np.isfinite(rmax)):
         raise GeometryError(f"distance_bounds_m must be 0 < min < max, got {distance_bounds_m}")
     fs2 = f_scale * f_scale
     far = not resolve_distance

@@ -18,7 +18,7 @@ Presets are such files shipped in ``hearsee/data/arrays/``: see :func:`list_pres
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from importlib import resources
@@ -172,9 +172,30 @@ class MicArray:
         """JSON keys of :attr:`pairs`, e.g. ``["0-1", "0-2", "1-2"]``."""
         return [f"{i}-{j}" for i, j in self.pairs]
 
+    def checked_pairs(self, pairs: Sequence[tuple[int, int]] | None = None
+                      ) -> list[tuple[int, int]]:
+        """``pairs`` (default: all of :attr:`pairs`) as a list of ``(i, j)`` microphone indices,
+        or a GeometryError for an empty list, a pair that is not two indices of this array
+        (a negative index used to wrap around to the last microphones) or ``i == j``."""
+        if pairs is None:
+            return list(self.pairs)
+        out = []
+        for p in pairs:
+            if len(p) != 2:
+                raise GeometryError(f"a pair is two microphone indices, got {p!r}")
+            i, j = int(p[0]), int(p[1])
+            if i == j or not (0 <= i < self.n_mics and 0 <= j < self.n_mics):
+                raise GeometryError(
+                    f"invalid microphone pair {p!r} for an array of {self.n_mics} microphones"
+                )
+            out.append((i, j))
+        if not out:
+            raise GeometryError("no microphone pairs given")
+        return out
+
     def pair_distance(self, pairs: list[tuple[int, int]] | None = None) -> NDArray:
         """Distance in metres between the microphones of each pair."""
-        pairs = self.pairs if pairs is None else pairs
+        pairs = self.checked_pairs(pairs)
         p = self.positions
         return np.array([np.linalg.norm(p[i] - p[j]) for i, j in pairs])
 
@@ -200,14 +221,14 @@ class MicArray:
 
         Returns shape ``(..., n_pairs)``.
         """
-        i, j = _pair_index(self.pairs if pairs is None else pairs)
+        i, j = _pair_index(self.checked_pairs(pairs))
         return pair_tdoa(source, self.positions, i, j, self.speed_of_sound)
 
     def tdoa_jacobian(self, source: ArrayLike,
                       pairs: list[tuple[int, int]] | None = None) -> NDArray:
         """Derivative of :meth:`tdoa` with respect to the source position at one point
         ``(3,)`` (metres): shape ``(n_pairs, 3)``, seconds per metre."""
-        i, j = _pair_index(self.pairs if pairs is None else pairs)
+        i, j = _pair_index(self.checked_pairs(pairs))
         return pair_tdoa_jacobian(source, self.positions, i, j, self.speed_of_sound)
 
     def tdoa_far(self, direction: ArrayLike, pairs: list[tuple[int, int]] | None = None) -> NDArray:
@@ -216,7 +237,7 @@ class MicArray:
         A plane wave from direction u reaches microphone m at time ``-m . u / c0``. A zero
         direction is a GeometryError (it was a silent NaN).
         """
-        pairs = self.pairs if pairs is None else pairs
+        pairs = self.checked_pairs(pairs)
         u = np.asarray(direction, dtype=float)
         norm = np.linalg.norm(u, axis=-1, keepdims=True)
         if not np.all(norm > 0):

@@ -88,6 +88,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio import bem
 from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.propagation import check_fs
+from hearsee.audio.tdoa import check_frame_ms
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
 __all__ = [
@@ -649,6 +651,9 @@ def simulate_masked(signal: ArrayLike, fs: float, array: MicArray | str | Path |
     x = np.asarray(signal, dtype=float)
     if x.ndim != 1 or len(x) < 2:
         raise AudioInputError(f"signal must be a 1-D waveform, got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise AudioInputError("signal contains NaN or inf samples")
+    fs = check_fs(fs)  # (0 divided by zero; a negative rate gave garbage)
     s = np.asarray(source, dtype=float)
     if s.shape != (3,) or not np.all(np.isfinite(s)) or np.linalg.norm(s) < 1e-9:
         raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")
@@ -703,6 +708,9 @@ def _spectra(x: NDArray, fs: float, frame_ms: float
     (speech), else None (a continuous source: no noise-only frames to learn from).
     """
     n = int(2 ** np.round(np.log2(frame_ms * 1e-3 * fs)))
+    if n < 16:
+        raise AudioInputError(f"frame of {frame_ms} ms at {fs:g} Hz is shorter than 16 samples; "
+                              "use a longer frame")
     hop = n // 2
     if x.shape[1] < n:
         raise AudioInputError(f"recording too short: {x.shape[1]} samples, need at least {n}")
@@ -807,6 +815,17 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         raise AudioInputError("recording contains NaN or inf samples")
     if not np.any(x):
         raise AudioInputError("recording is all zeros")
+    fs = check_fs(fs)
+    check_frame_ms(frame_ms, frame_ms / 2, names=("frame_ms", "half frame"))
+    if not (np.isfinite(phase_weight) and phase_weight > 0
+            and np.isfinite(sigma_iid_db) and sigma_iid_db > 0):
+        # (a NaN weight made every azimuth's cost NaN: the answer was 0 deg)
+        raise ConfigError("phase_weight and sigma_iid_db must be finite numbers > 0, got "
+                          f"{phase_weight} and {sigma_iid_db}")
+    if len(distances) == 0 or not all(d is None or (np.isfinite(d) and d > 0)
+                                      for d in distances):
+        raise ConfigError("distances must be one or more source distances > 0 m (None = far "
+                          f"field), got {distances!r}")
     f, p0, p1, cr, n_used, noise_psd = _spectra(x, fs, frame_ms)
     edges = default_bands(model.f_max) if bands_hz is None else np.asarray(bands_hz, float)
     use = (f >= max(edges[0], 100.0)) & (f <= min(edges[-1], 0.9 * model.f_max))

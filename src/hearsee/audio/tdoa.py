@@ -71,7 +71,7 @@ from scipy.ndimage import uniform_filter1d
 
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.localize import _inplane_tdoa, array_geometry
-from hearsee.errors import AudioInputError, ConfigError, GeometryError
+from hearsee.errors import AudioInputError, ConfigError
 from hearsee.geometry import fibonacci_sphere
 
 __all__ = [
@@ -546,21 +546,7 @@ class TdoaFrames:
 
 
 def _check_pairs(pairs: Sequence[tuple[int, int]] | None, array: MicArray) -> list[tuple[int, int]]:
-    if pairs is None:
-        return list(array.pairs)
-    out = []
-    for p in pairs:
-        if len(p) != 2:
-            raise GeometryError(f"a pair is two microphone indices, got {p!r}")
-        i, j = int(p[0]), int(p[1])
-        if i == j or not (0 <= i < array.n_mics and 0 <= j < array.n_mics):
-            raise GeometryError(
-                f"invalid microphone pair {p!r} for an array of {array.n_mics} microphones"
-            )
-        out.append((i, j))
-    if not out:
-        raise GeometryError("no microphone pairs given")
-    return out
+    return array.checked_pairs(pairs)
 
 
 @functools.lru_cache(maxsize=16)

@@ -60,6 +60,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
+from hearsee.audio.propagation import check_fs
 from hearsee.audio.tdoa import (
     check_frame_ms,
     check_recording_length,
@@ -248,9 +249,10 @@ class ArraySource:
             raise AudioInputError(f"recording must be (n_channels, n_samples), got {a.shape}")
         if not np.all(np.isfinite(a)):
             raise AudioInputError("recording contains NaN or infinite samples")
-        if block_len < 1:
+        if not block_len >= 1:  # (NaN included)
             raise ConfigError(f"block_len must be >= 1 sample, got {block_len}")
-        self.x, self.fs, self.block_len = a, float(fs), int(block_len)
+        # (a rate of 0 divided by zero in the stream; a negative one read as "frame too short")
+        self.x, self.fs, self.block_len = a, check_fs(fs), int(block_len)
         self.n_channels = a.shape[0]
         self.realtime = bool(realtime)
 
