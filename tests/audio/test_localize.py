@@ -245,3 +245,26 @@ def test_near_field_in_plane_bad_input():
     # linear arrays ignore in_plane (their locus is a cone either way)
     tau = TWO.tdoa_far(unit_vector_deg(40.0, 0.0))
     assert localize_tdoa(tau, TWO, in_plane=True).candidates == localize_tdoa(tau, TWO).candidates
+
+
+def test_public_solvers_refuse_nan_wrong_length_and_bad_tolerance():
+    """Bad-input sweep (2026-11-26): the solvers returned NaN azimuths for NaN TDOAs (or raised
+    scipy's ValueError), numpy errors for a wrong length, and tol_s 0 divided by zero in the
+    in-plane fit. localize_tdoa keeps its documented empty result for NaN TDOAs."""
+    two, three = MicArray.from_preset("two-mic"), MicArray.from_preset("three-mic")
+    src = 2.0 * unit_vector_deg(30.0, 0.0)  # the in-plane model's assumed range: exact
+    t3 = three.tdoa(src)
+    assert localize_tdoa(t3, three, in_plane=True).azimuth_deg == pytest.approx(30.0, abs=0.01)
+    from hearsee.audio.localize import far_field_linear
+
+    for call in (lambda t: far_field_planar(t, three), lambda t: near_field_in_plane(t, three)):
+        for bad, msg in ((np.r_[t3[:2], np.nan], "finite"), (t3[:2], "2 TDOAs for 3")):
+            with pytest.raises(GeometryError, match=msg):
+                call(bad)
+    with pytest.raises(GeometryError, match="finite"):
+        far_field_linear([np.nan], two)
+    for tol in (0.0, -1e-6, np.nan):
+        with pytest.raises(GeometryError, match="tol_s"):
+            localize_tdoa(t3, three, tol_s=tol, in_plane=True)
+    empty = localize_tdoa([np.nan] * 3, three)
+    assert empty.azimuth_deg is None and empty.candidates == []

@@ -157,11 +157,23 @@ def _classify(pos: NDArray, rel_tol: float) -> ArrayGeometry:
 
 
 def _pairs(array: MicArray, pairs: Sequence[tuple[int, int]] | None) -> list[tuple[int, int]]:
-    prs = list(array.pairs) if pairs is None else [(int(i), int(j)) for i, j in pairs]
-    for i, j in prs:
-        if i == j or not (0 <= i < array.n_mics and 0 <= j < array.n_mics):
-            raise GeometryError(f"invalid pair ({i}, {j}) for {array.n_mics} microphones")
-    return prs
+    return array.checked_pairs(pairs)
+
+
+def _tdoas(tdoa_s: ArrayLike, prs: list[tuple[int, int]], tol_s: float) -> NDArray:
+    """The TDOA vector (seconds, one per pair of ``prs``) of a public solver, or a
+    GeometryError for a wrong length, a NaN/inf entry (:func:`localize_tdoa` answers those with
+    an empty result; the solvers themselves returned NaN directions or raised scipy errors) or
+    a tolerance that is not a finite number > 0."""
+    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    if tau.shape[0] != len(prs):
+        raise GeometryError(f"got {tau.shape[0]} TDOAs for {len(prs)} microphone pairs")
+    if not np.all(np.isfinite(tau)):
+        raise GeometryError("TDOAs must be finite numbers of seconds (localize_tdoa gives an "
+                            "empty result for NaN ones)")
+    if not (np.isfinite(tol_s) and tol_s > 0):
+        raise GeometryError(f"tol_s must be a finite number > 0 seconds, got {tol_s}")
+    return tau
 
 
 def _design(array: MicArray, prs: list[tuple[int, int]]) -> NDArray:
@@ -193,7 +205,7 @@ def far_field_linear(tdoa_s: ArrayLike, array: MicArray,
     front candidate (|az| <= 90) comes first. A vertical axis resolves only the elevation.
     """
     prs = _pairs(array, pairs)
-    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    tau = _tdoas(tdoa_s, prs, tol_s)
     geo = array_geometry(array)
     if geo.kind != "linear":
         raise GeometryError("far_field_linear needs collinear microphones")
@@ -248,7 +260,7 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray,
       direction is returned, ``feasible=False``, ``n_solutions=0``.
     """
     prs = _pairs(array, pairs)
-    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    tau = _tdoas(tdoa_s, prs, tol_s)
     geo = array_geometry(array)
     if geo.kind != "planar":
         raise GeometryError("far_field_planar needs coplanar (and not collinear) microphones")
@@ -307,7 +319,7 @@ def far_field_volume(tdoa_s: ArrayLike, array: MicArray,
     from scipy.optimize import least_squares
 
     prs = _pairs(array, pairs)
-    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    tau = _tdoas(tdoa_s, prs, tol_s)
     A = _design(array, prs)
     if np.linalg.matrix_rank(A, tol=1e-9 * np.abs(A).max()) < 3:
         raise GeometryError("the pairs given do not span 3D (need three independent pairs)")
@@ -345,7 +357,7 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray,
     from scipy.optimize import least_squares
 
     prs = _pairs(array, pairs)
-    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    tau = _tdoas(tdoa_s, prs, tol_s)
     pos = array.positions
     c = array.speed_of_sound
     I = np.array([p[0] for p in prs])
@@ -441,7 +453,7 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray,
     0); ``extra["inverse_range_per_m"]`` is ``rho``.
     """
     prs = _pairs(array, pairs)
-    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    tau = _tdoas(tdoa_s, prs, tol_s)
     geo = array_geometry(array)
     if geo.kind != "planar":
         raise GeometryError("near_field_in_plane needs coplanar (and not collinear) microphones")
@@ -570,6 +582,8 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
     tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
     if tau.shape[0] != len(prs):
         raise GeometryError(f"got {tau.shape[0]} TDOAs for {len(prs)} microphone pairs")
+    if not (np.isfinite(tol_s) and tol_s > 0):  # (0 divided by zero in the in-plane fit)
+        raise GeometryError(f"tol_s must be a finite number > 0 seconds, got {tol_s}")
     if not np.all(np.isfinite(tau)):
         return Localization(None, None, [], 0, False, residual_s=float("nan"),
                             geometry=array_geometry(arr).kind)
