@@ -6,7 +6,7 @@ import soundfile as sf
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.signals import read_recording
-from hearsee.errors import ConfigError, GeometryError
+from hearsee.errors import AudioInputError, ConfigError, GeometryError
 from hearsee.geometry import sph_to_cart
 from hearsee.sim.audio import (
     example_recording_path,
@@ -181,3 +181,22 @@ def test_ground_truth_of_a_source_at_the_origin_has_no_direction():
     np.testing.assert_allclose(list(t["tdoa_s"].values()), 0.0, atol=1e-8)  # equidistant
     with pytest.raises(GeometryError, match="needs a direction"):
         ground_truth(arr, [0.0, 0.0, 0.0], far_field=True)
+
+
+def test_bad_peak_rates_and_microphone_counts_are_refused(tmp_path):
+    """Bad-input sweep (2026-11-26): save_recording's peak -0.5 inverted the polarity and 0
+    wrote a silent file; resample with a zero or NaN rate raised numpy errors; mic_positions
+    of the wrong count raised zip()'s ValueError while writing the truth."""
+    x, truth = simulate_recording("two-mic", [1.0, 1.0, 0.0], duration_s=0.1, seed=1)
+    for peak in (-0.5, 0.0, 1.5, np.nan):
+        with pytest.raises(ConfigError, match="peak"):
+            save_recording(tmp_path / "r.wav", x, truth, peak=peak)
+    assert not (tmp_path / "r.wav").exists()
+    from hearsee.audio.signals import resample
+
+    for a, b in ((0.0, 16000.0), (16000.0, np.nan), (16000.0, np.inf)):
+        with pytest.raises(AudioInputError, match="sample rate"):
+            resample(x, a, b)
+    with pytest.raises(GeometryError, match="mic_positions"):
+        simulate_recording("two-mic", [1.0, 1.0, 0.0], duration_s=0.1,
+                           mic_positions=np.zeros((3, 3)))

@@ -223,6 +223,9 @@ def _resample(x: ArrayLike, fs_in: float, fs_out: float) -> NDArray:
     from scipy.signal import resample_poly
 
     x = np.asarray(x, dtype=float)
+    for rate in (fs_in, fs_out):  # (0 divided by zero, NaN and inf raised numpy errors)
+        if not (np.isfinite(rate) and rate > 0):
+            raise AudioInputError(f"sample rate must be a positive number of Hz, got {rate!r}")
     if fs_in == fs_out:
         return x.copy()
     ratio = Fraction(float(fs_out) / float(fs_in)).limit_denominator(1000)

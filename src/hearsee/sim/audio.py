@@ -248,6 +248,11 @@ def simulate_recording(
     if snr_db is not None and not np.isfinite(snr_db):
         raise ConfigError(f"SNR must be a finite number of dB, got {snr_db!r}")
     room = normalize_room(room)
+    if mic_positions is not None:  # (the wrong count raised zip()'s ValueError in the truth)
+        mp = np.asarray(mic_positions, dtype=float)
+        if mp.shape != array.positions.shape or not np.all(np.isfinite(mp)):
+            raise GeometryError(f"mic_positions must be finite {array.n_mics} x 3 (one row per "
+                                f"microphone of {array.name!r}), got shape {mp.shape}")
     rng = np.random.default_rng(seed)
     s = make_signal(signal, duration_s, fs, rng)
     clean = render(s, fs, array, src, room, mic_positions=mic_positions, far_field=far_field)
@@ -283,6 +288,8 @@ def save_recording(out: str | Path, x: ArrayLike, truth: Mapping[str, Any],
     js = wav.with_suffix(".json")
     y = np.asarray(x, dtype=float)
     m = float(np.max(np.abs(y))) if y.size else 0.0
+    if not (np.isfinite(peak) and 0 < peak <= 1):  # (-0.5 inverted the polarity, 0 wrote silence)
+        raise ConfigError(f"peak must be in (0, 1] of full scale, got {peak}")
     gain = peak / m if m > 0 else 1.0
     for q in protect or []:
         if Path(q).resolve() == js.resolve():
