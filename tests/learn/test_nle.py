@@ -12,13 +12,14 @@ from sklearn.manifold import trustworthiness
 from sklearn.metrics import adjusted_rand_score
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from hearsee.errors import HearseeError
+from hearsee.errors import ConfigError, HearseeError
 from hearsee.learn import (
     ClusteredNLE,
     DisconnectedGraphWarning,
     ManifoldInputError,
     NeighborhoodLinearEmbedding,
     adaptive_neighbors,
+    make_head_pose_images,
     make_two_rolls,
     reconstruction_weights,
 )
@@ -235,3 +236,137 @@ def test_transform_checks_the_feature_count():
     m = NeighborhoodLinearEmbedding().fit(X)
     with pytest.raises(ValueError, match="features"):
         m.transform(X[:, :2])
+
+
+# --------------------------------------------------------------------------- degenerate graphs
+
+
+@pytest.mark.parametrize("n_neighbors, n_components", [(1, 2), (2, 2), (2, 5)])
+def test_n_neighbors_must_exceed_n_components(n_neighbors, n_components):
+    # before: a neighbourhood graph in pieces, coordinates of std 1e12-1e15 and only a warning
+    X, _ = make_swiss_roll(50, random_state=0)
+    for est in (NeighborhoodLinearEmbedding, ClusteredNLE):
+        with pytest.raises(
+            ManifoldInputError,
+            match=f"n_neighbors={n_neighbors} must be > n_components={n_components}",
+        ):
+            est(n_components, n_neighbors=n_neighbors, random_state=0).fit(X)
+
+
+@pytest.mark.parametrize("solver", ["dense", "arpack"])
+def test_disconnected_graph_gives_separating_axes_in_data_units(solver):
+    # two parallel sheets far apart: the first axis is constant on each sheet and tells them
+    # apart, the second unfolds one sheet. Before, the first axis was "scaled" by the ratio of
+    # edge lengths to eigensolver noise (std 1e8-1e9)
+    rng = np.random.default_rng(0)
+    g = np.stack(np.meshgrid(np.arange(15.0), np.arange(15.0)), -1).reshape(-1, 2)
+    X = np.vstack([np.c_[g + rng.uniform(-0.3, 0.3, g.shape), np.full(len(g), z)]
+                   for z in (0.0, 50.0)])
+    nle = NeighborhoodLinearEmbedding(n_neighbors=8, eigen_solver=solver, random_state=0)
+    with pytest.warns(DisconnectedGraphWarning, match="2 connected components"):
+        Y = nle.fit_transform(X)
+    assert np.isfinite(Y).all() and np.abs(Y).max() < 30.0  # a sheet is 15 x 15
+    assert np.ptp(Y[:225, 0]) == 0.0 and np.ptp(Y[225:, 0]) == 0.0 and Y[0, 0] != Y[225, 0]
+    assert max(np.ptp(Y[:225, 1]), np.ptp(Y[225:, 1])) > 10.0
+    np.testing.assert_allclose(Y.mean(axis=0), 0.0, atol=1e-9)
+
+
+def test_graph_with_more_components_than_axes_maps_each_to_a_point():
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(60, 3))
+    X = np.vstack([a, a + 100.0, a - 100.0])
+    with pytest.warns(DisconnectedGraphWarning, match="3 connected components"):
+        Y = NeighborhoodLinearEmbedding(n_neighbors=6, random_state=0).fit_transform(X)
+    assert np.abs(Y).max() < 10.0  # was 6e9
+    assert len(np.unique(Y, axis=0)) == 3
+
+
+def test_degenerate_embedding_is_refused():
+    X, _ = make_swiss_roll(300, random_state=0)
+    # connected, but 3 groups of points choose their neighbours only among themselves: the
+    # embedding collapses them; before: an axis of std 1.8e8 and no warning at all
+    with pytest.warns(DisconnectedGraphWarning, match="3 groups of points"):
+        with pytest.raises(ManifoldInputError, match="degenerate embedding"):
+            NeighborhoodLinearEmbedding(n_neighbors=4, random_state=0).fit(X)
+    # no such group, but a few points barely tied to the rest (before: std 9e3, silently)
+    with pytest.raises(ManifoldInputError, match="degenerate embedding.*very few"):
+        NeighborhoodLinearEmbedding(n_neighbors=5, random_state=0).fit(X)
+    # two copies of the roll with 3 candidates (before: axis std 7.7e7)
+    X2 = np.vstack([X[:150], X[:150] + 1000.0])
+    with pytest.warns(DisconnectedGraphWarning), pytest.raises(ManifoldInputError,
+                                                               match="degenerate embedding"):
+        NeighborhoodLinearEmbedding(eigen_solver="dense", n_neighbors=3).fit(X2)
+    # LLE's own normalisation stays available, with the warning
+    nle = NeighborhoodLinearEmbedding(n_neighbors=4, axis_scaling="unit", random_state=0)
+    with pytest.warns(DisconnectedGraphWarning, match="collapses each group to a point"):
+        Y = nle.fit_transform(X)
+    assert np.isfinite(Y).all() and np.abs(Y).max() < 100.0
+
+
+def test_values_too_large_for_float64_distances_are_refused():
+    X, _ = make_swiss_roll(300, random_state=0)
+    with pytest.raises(ManifoldInputError, match="values too large"):  # was "cannot reshape"
+        NeighborhoodLinearEmbedding(random_state=0).fit(X * 1e200)
+    m = NeighborhoodLinearEmbedding(random_state=0).fit(X)
+    with pytest.raises(ManifoldInputError, match="values too large"):  # was NaN coordinates
+        m.transform(np.array([[1e200, 0.0, 0.0]]))
+    # large but representable data still work, in their own units
+    Y = NeighborhoodLinearEmbedding(random_state=0).fit_transform(X * 1e100) / 1e100
+    np.testing.assert_allclose(Y, m.embedding_, atol=1e-6 * np.abs(m.embedding_).max())
+
+
+def test_building_blocks_refuse_bad_arguments():
+    from sklearn.neighbors import NearestNeighbors
+
+    X, _ = make_swiss_roll(100, random_state=0)
+    dist, ind = NearestNeighbors(n_neighbors=6).fit(X).kneighbors(X)
+    dist, ind = dist[:, 1:], ind[:, 1:]
+    mask = adaptive_neighbors(X, ind, dist)
+    # NaN weights, LinAlgError, or silently accepted before
+    for reg in (np.nan, np.inf, 0.0, -1e-3):
+        with pytest.raises(ManifoldInputError, match="reg"):
+            reconstruction_weights(X, ind, mask, reg=reg)
+    with pytest.raises(ManifoldInputError, match="accept no neighbour"):  # was NaN weights
+        reconstruction_weights(X, ind, np.zeros_like(mask))
+    with pytest.raises(ManifoldInputError, match="finite"):
+        reconstruction_weights(np.where(X > 5.0, np.nan, X), ind, mask)
+    with pytest.raises(ManifoldInputError, match="shape of ind"):
+        reconstruction_weights(X, ind, mask[:, :2])
+    for shadow in (np.nan, 1.5, -0.1):  # NaN accepted every candidate
+        with pytest.raises(ManifoldInputError, match="shadow"):
+            adaptive_neighbors(X, ind, dist, shadow=shadow)
+    with pytest.raises(ManifoldInputError, match="row indices"):
+        adaptive_neighbors(X, ind + 1000, dist)
+    # valid calls are unchanged, also with the first rows of X as the centers
+    W = reconstruction_weights(X, ind, mask)
+    np.testing.assert_allclose(W.sum(axis=1), 1.0)
+    np.testing.assert_array_equal(adaptive_neighbors(X, ind[:5], dist[:5]), mask[:5])
+
+
+@pytest.mark.parametrize(
+    "name, value",
+    [("gap", np.nan), ("noise", np.nan), ("noise", -1.0), ("height", np.nan), ("height", 0.0),
+     ("density_ratio", -1.0), ("density_ratio", np.inf), ("outliers", np.nan),
+     ("n_samples", -5), ("n_samples", 10.5)],
+)
+def test_make_two_rolls_refuses_bad_parameters(name, value):
+    kwargs = {"n_samples": 50, "random_state": 0, name: value}
+    with pytest.raises(ConfigError, match=name):
+        make_two_rolls(**kwargs)
+
+
+@pytest.mark.parametrize(
+    "name, value",
+    [("yaw_range_deg", (np.nan, 0.0)), ("pitch_range_deg", (0.0, np.inf)), ("yaw_range_deg", 5.0),
+     ("noise", np.nan), ("noise", -0.1), ("size", 0), ("n_samples", -1)],
+)
+def test_make_head_pose_images_refuses_bad_parameters(name, value):
+    kwargs = {"n_samples": 3, "size": 8, "random_state": 0, name: value}
+    with pytest.raises(ConfigError, match=name):
+        make_head_pose_images(**kwargs)
+
+
+def test_make_head_pose_images_shapes():
+    images, pose = make_head_pose_images(3, size=8, yaw_range_deg=(10, -10), random_state=0)
+    assert images.shape == (3, 64) and pose.shape == (3, 2)
+    assert np.all(np.abs(pose[:, 0]) <= 10.0)

@@ -77,7 +77,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from hearsee.errors import EstimationError, HearseeError
+from hearsee.errors import ConfigError, EstimationError, HearseeError
 
 __all__ = [
     "ClusteredNLE",
@@ -93,19 +93,89 @@ __all__ = [
 # Bytes of scratch memory one chunk of the neighbourhood computations may use.
 _CHUNK_BYTES = 64 * 2**20
 
+# Largest extent of the data (norm of the per-feature ranges) the distance computations accept:
+# squared distances and the local Gram matrices (sums of them) must stay far below the float64
+# maximum (1.8e308).
+_MAX_SPAN = 1e150
+
+# An axis scaled to the units of X ("edges") may span at most this many times the total edge
+# length of the neighbourhood graph (its minimum spanning tree) of a connected component. A
+# faithful unfolding spans at most about 1 (a path of the tree joins any two points; an evenly
+# sampled curve reaches 1.0); degenerate embeddings, where a group of points is barely tied to
+# the rest, reach 1e2 to 1e12 (measured on swiss rolls, helices, circles and planes with
+# n_neighbors = n_components + 1 .. 5).
+_MAX_AXIS_EXTENT = 10.0
+
 
 class ManifoldInputError(HearseeError, ValueError):
-    """Data a manifold learner cannot use (duplicate points, too few samples for the neighbours).
+    """Data a manifold learner cannot use (duplicate points, too few samples for the neighbours,
+    values too large, a degenerate neighbourhood graph) or bad arguments of the building blocks
+    (:func:`adaptive_neighbors`, :func:`reconstruction_weights`).
 
     Derives from ``ValueError`` like scikit-learn's own input errors."""
 
 
 class DisconnectedGraphWarning(UserWarning):
-    """The neighbourhood graph has several connected components: a single embedding of all points
-    is then not meaningful (use :class:`ClusteredNLE`)."""
+    """The neighbourhood graph falls apart: it has several connected components (a single
+    embedding of all points is then not meaningful; use :class:`ClusteredNLE`), or groups of
+    points that choose their neighbours only among themselves (the embedding collapses each
+    such group to a point)."""
 
 
 # --------------------------------------------------------------------------- building blocks
+
+
+def _finite_number(name: str, value, lo: float | None = None, hi: float | None = None,
+                   lo_open: bool = False, error: type[Exception] = ManifoldInputError) -> float:
+    """``value`` as a float, refused unless finite and within ``[lo, hi]`` (``(lo, hi]`` with
+    ``lo_open``)."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise error(f"{name} must be a number, got {value!r}") from None
+    below = lo is not None and (v <= lo if lo_open else v < lo)
+    if not np.isfinite(v) or below or (hi is not None and v > hi):
+        left = "(-inf" if lo is None else f"{'(' if lo_open else '['}{lo:g}"
+        right = "inf)" if hi is None else f"{hi:g}]"
+        raise error(f"{name} must be a finite number in {left}, {right}, got {value!r}")
+    return v
+
+
+def _check_neighbourhood_args(func: str, X, ind, centers, **same_shape):
+    """Common checks of :func:`adaptive_neighbors` / :func:`reconstruction_weights` arguments;
+    returns ``X, ind, centers`` as arrays (no copy for float64 ``X`` and integer ``ind``) and the
+    ``same_shape`` arrays, each required to have the shape of ``ind``."""
+    X = np.asarray(X, dtype=float)
+    ind = np.asarray(ind)
+    if centers is None and X.ndim == 2 and ind.ndim == 2 and ind.shape[0] <= X.shape[0]:
+        centers = X[: ind.shape[0]]  # row i is point i
+    centers = X if centers is None else np.asarray(centers, dtype=float)
+    if X.ndim != 2 or centers.ndim != 2 or centers.shape[1] != X.shape[1]:
+        raise ManifoldInputError(
+            f"{func}: X and centers must be 2-D arrays with the same number of columns, got "
+            f"shapes {X.shape} and {centers.shape}"
+        )
+    if ind.ndim != 2 or ind.shape[0] != centers.shape[0]:
+        raise ManifoldInputError(
+            f"{func}: ind must be a 2-D array with one row per center ({centers.shape[0]}), got "
+            f"shape {ind.shape}"
+        )
+    if ind.size and (not np.issubdtype(ind.dtype, np.integer) or ind.min() < 0
+                     or ind.max() >= X.shape[0]):
+        raise ManifoldInputError(
+            f"{func}: ind must hold integer row indices into X (0..{X.shape[0] - 1})"
+        )
+    if not (np.isfinite(X).all() and np.isfinite(centers).all()):
+        raise ManifoldInputError(f"{func}: X and centers must be finite (no NaN or inf)")
+    out = []
+    for name, a in same_shape.items():
+        a = np.asarray(a)
+        if a.shape != ind.shape:
+            raise ManifoldInputError(
+                f"{func}: {name} must have the shape of ind {ind.shape}, got {a.shape}"
+            )
+        out.append(a)
+    return X, ind, centers, out
 
 
 def _chunks(n: int, k: int, n_features: int):
@@ -144,14 +214,26 @@ def adaptive_neighbors(
     -------
     mask : (n, K) bool array
         True where the candidate is accepted.
+
+    Raises
+    ------
+    ManifoldInputError
+        ``shadow`` outside [0, 1] or NaN, ``min_neighbors`` not an integer, non-finite ``X``,
+        ``centers`` or ``dist``, or arrays of inconsistent shapes.
     """
-    centers = X if centers is None else centers
+    X, ind, centers, (dist,) = _check_neighbourhood_args("adaptive_neighbors", X, ind, centers,
+                                                        dist=dist)
+    if not np.isfinite(dist).all():
+        raise ManifoldInputError("adaptive_neighbors: dist must be finite (no NaN or inf)")
+    shadow = _finite_number("shadow", shadow, 0.0, 1.0)
+    if isinstance(min_neighbors, bool) or not isinstance(min_neighbors, Integral):
+        raise ManifoldInputError(f"min_neighbors must be an integer, got {min_neighbors!r}")
     n, K = ind.shape
     mask = np.zeros((n, K), dtype=bool)
     if K == 0:
         return mask
     min_neighbors = int(min(max(min_neighbors, 1), K))
-    s2 = float(shadow) ** 2
+    s2 = shadow**2
     for s, e in _chunks(n, K, X.shape[1]):
         P = X[ind[s:e]] - centers[s:e, None, :]  # (c, K, D) candidate offsets
         G = np.einsum("ckd,cld->ckl", P, P)
@@ -198,8 +280,24 @@ def reconstruction_weights(
     -------
     W : (n, K) array
         Weights aligned with ``ind``; 0 where ``mask`` is False. Rows sum to 1.
+
+    Raises
+    ------
+    ManifoldInputError
+        ``reg`` not a finite number > 0 (with more neighbours than features the Gram matrix is
+        singular without it), a row of ``mask`` without any accepted neighbour, non-finite ``X``
+        or ``centers``, or arrays of inconsistent shapes.
     """
-    centers = X if centers is None else centers
+    X, ind, centers, (mask,) = _check_neighbourhood_args("reconstruction_weights", X, ind,
+                                                        centers, mask=mask)
+    mask = mask.astype(bool, copy=False)
+    reg = _finite_number("reg", reg, 0.0, lo_open=True)
+    empty = ~mask.any(axis=1)
+    if ind.shape[1] and empty.any():
+        raise ManifoldInputError(
+            f"reconstruction_weights: {int(empty.sum())} rows of mask accept no neighbour (e.g. "
+            f"row {int(np.flatnonzero(empty)[0])}); every point needs at least one"
+        )
     n, K = ind.shape
     W = np.zeros((n, K))
     idx = np.arange(K)
@@ -211,7 +309,13 @@ def reconstruction_weights(
         tr = np.trace(C, axis1=1, axis2=2)
         R = np.where(tr > 0, reg * tr, reg)
         C[:, idx, idx] += np.where(m, R[:, None], 1.0)
-        w = np.linalg.solve(C, m.astype(float)[:, :, None])[:, :, 0]
+        try:
+            w = np.linalg.solve(C, m.astype(float)[:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:
+            raise ManifoldInputError(
+                f"reconstruction_weights: a local Gram matrix is singular at reg={reg:g}; use a "
+                "larger reg"
+            ) from None
         w /= w.sum(axis=1, keepdims=True)
         W[s:e] = w
     return W
@@ -300,6 +404,66 @@ def _scale_axes_to_edges(X: np.ndarray, Y: np.ndarray, Wm: sparse.spmatrix,
     return Y * scales
 
 
+def _graph_parts(Wm: sparse.spmatrix) -> tuple[int, np.ndarray, np.ndarray]:
+    """Structure of the directed neighbourhood graph (``i -> j`` when ``j`` is an accepted
+    neighbour of ``i``).
+
+    Returns the number of weakly connected components, the component of each point, and the
+    sizes of the *closed groups*: strongly connected sets of points that choose their neighbours
+    only among themselves (no edge leaves them). Each component holds at least one. As every row
+    of ``W`` sums to one, a vector that is constant on each closed group and extended to the
+    other points by ``y_i = sum_j W_ij y_j`` has zero LLE cost: the null space of
+    ``M = (I - W)^T (I - W)`` has one dimension per closed group, and with more than one the
+    bottom eigenvectors collapse each group to a point instead of unfolding anything."""
+    Wm = sparse.csr_matrix(Wm)
+    P = sparse.csr_matrix((np.ones(Wm.indices.size), Wm.indices, Wm.indptr), shape=Wm.shape)
+    n_comp, comp = csgraph.connected_components(P, directed=True, connection="weak")
+    n_scc, scc = csgraph.connected_components(P, directed=True, connection="strong")
+    E = P.tocoo()
+    leaves = np.ones(n_scc, dtype=bool)
+    leaves[scc[E.row[scc[E.row] != scc[E.col]]]] = False
+    return n_comp, comp, np.bincount(scc, minlength=n_scc)[leaves]
+
+
+def _component_basis(comp: np.ndarray, n_comp: int, k: int) -> np.ndarray:
+    """The first ``min(k, n_comp)`` vectors of an orthonormal basis of the vectors constant on
+    each component: the constant vector, then contrasts of the components in decreasing order of
+    size. Entries are exactly equal within a component."""
+    sizes = np.bincount(comp, minlength=n_comp).astype(float)
+    order = np.argsort(-sizes, kind="stable")
+    rank = np.empty(n_comp, dtype=int)
+    rank[order] = np.arange(n_comp)
+    s = sizes[order]
+    A = np.eye(n_comp)[:, :-1]
+    Q, _ = np.linalg.qr(np.column_stack([np.sqrt(s / s.sum()), A]))
+    B = Q[:, :k] / np.sqrt(s)[:, None]  # orthonormal on the points: sum_c s_c B_cj B_cl = d_jl
+    return B[rank[comp]]
+
+
+def _axis_extent(X: np.ndarray, Y: np.ndarray, Wm: sparse.spmatrix, comp: np.ndarray,
+                 n_comp: int) -> tuple[int, float, float]:
+    """The axis whose extent within a connected component is largest relative to the total edge
+    length of that component's neighbourhood graph (its minimum spanning tree): returns
+    ``(axis, extent, tree length)``."""
+    n = X.shape[0]
+    Wm = sparse.csr_matrix(Wm)
+    P = sparse.csr_matrix((np.ones(Wm.indices.size), Wm.indices, Wm.indptr), shape=Wm.shape)
+    E = sparse.triu(P + P.T, k=1).tocoo()
+    d = np.linalg.norm(X[E.row] - X[E.col], axis=1)
+    T = csgraph.minimum_spanning_tree(sparse.csr_matrix((d, (E.row, E.col)), shape=(n, n)))
+    T = T.tocoo()
+    length = np.bincount(comp[T.row], weights=T.data, minlength=n_comp)
+    lo = np.full((n_comp, Y.shape[1]), np.inf)
+    hi = np.full((n_comp, Y.shape[1]), -np.inf)
+    np.minimum.at(lo, comp, Y)
+    np.maximum.at(hi, comp, Y)
+    extent = hi - lo
+    ratio = np.where(length[:, None] > 0, extent / np.where(length > 0, length, 1.0)[:, None],
+                     0.0)
+    c, k = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
+    return int(k), float(extent[c, k]), float(length[c])
+
+
 def _fix_signs(Y: np.ndarray) -> np.ndarray:
     """Make the largest-magnitude entry of each column positive (deterministic output)."""
     if Y.size == 0:
@@ -308,6 +472,12 @@ def _fix_signs(Y: np.ndarray) -> np.ndarray:
     signs = np.sign(Y[i, np.arange(Y.shape[1])])
     signs[signs == 0] = 1.0
     return Y * signs
+
+
+def _sizes(sizes: np.ndarray, show: int = 5) -> str:
+    """``"13, 19, 21"`` (at most ``show`` values, then ``", ..."``)."""
+    s = ", ".join(str(int(v)) for v in sizes[:show])
+    return s + (", ..." if sizes.size > show else "")
 
 
 def _weight_matrix(ind: np.ndarray, W: np.ndarray, mask: np.ndarray, n: int) -> sparse.csr_matrix:
@@ -337,7 +507,8 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
     n_components : int, default 2
         Dimension ``d`` of the embedding.
     n_neighbors : int, default 12
-        Number of candidate neighbours per point (the largest neighbourhood allowed).
+        Number of candidate neighbours per point (the largest neighbourhood allowed); must be
+        larger than ``n_components``.
     shadow : float in [0, 1], default 0.3
         Strength of the shadow rule; 0 gives plain LLE with ``n_neighbors`` neighbours.
     reg : float > 0, default 1e-3
@@ -357,10 +528,20 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         swiss roll and S-curve (0.9997 / 0.9998 vs 0.9970 / 0.9965 at n = 2000, see
         bench/nle.py); it would help any LLE-type embedding alike. On a badly undersampled
         manifold it changes little (500-point swiss roll: 0.8485 vs 0.8498 with "unit").
+        An axis that would span more than 10 times the total edge length of the neighbourhood
+        graph (its minimum spanning tree) is the mark of a degenerate embedding, where a group
+        of points is barely tied to the rest, and raises :class:`ManifoldInputError`.
     random_state : int, RandomState or None
         Seeds ARPACK's start vector.
     n_jobs : int or None
         Parallel jobs of the neighbour search (``sklearn.neighbors.NearestNeighbors``).
+
+    A neighbourhood graph that falls apart is reported by a :class:`DisconnectedGraphWarning`.
+    With several connected components the embedding separates them instead of unfolding them:
+    its first axes are constant on each component (contrasts of the components, largest first),
+    the rest are the next eigenvectors. Groups of points that choose their neighbours only among
+    themselves (more of them than components) leave the LLE cost without a tie between them, and
+    the embedding collapses each group to a point.
 
     Attributes
     ----------
@@ -427,7 +608,21 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
 
     def _validate_fit_input(self, X) -> np.ndarray:
         self._validate_params()
+        if self.n_neighbors <= self.n_components:
+            raise ManifoldInputError(
+                f"n_neighbors={self.n_neighbors} must be > n_components={self.n_components}: a "
+                f"point is reconstructed from its neighbours, and {self.n_components + 1} of them "
+                f"are needed to span a {self.n_components}-dimensional patch"
+            )
         X = validate_data(self, X, dtype=np.float64, ensure_min_samples=2)
+        with np.errstate(over="ignore", invalid="ignore"):
+            span = float(np.linalg.norm(np.ptp(X, axis=0)))
+        if not span <= _MAX_SPAN:
+            raise ManifoldInputError(
+                f"values too large: the points of X span {span:.3g}, squared distances between "
+                f"them overflow float64 beyond {_MAX_SPAN:.0e}; rescale X, e.g. "
+                "X / np.abs(X).max()"
+            )
         n = X.shape[0]
         if self.n_neighbors >= n:
             raise ManifoldInputError(
@@ -469,32 +664,103 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
                                   min_neighbors=self.n_components + 1)
         return nbrs, dist, ind, mask
 
-    def _embed(self, X, ind, W, mask, n, random_state, warn=True):
-        """Embedding from the weights; returns (Y, W sparse, error)."""
+    def _embed(self, X, ind, W, mask, n, random_state, warn=True, where=""):
+        """Embedding from the weights; returns (Y, W sparse, error).
+
+        A neighbourhood graph with several connected components gives exact zero-cost vectors,
+        constant on each component; they are set explicitly (contrasts of the components, so
+        the corresponding axes separate the components and carry no noise within them) and the
+        remaining axes are the next eigenvectors of the components, each on its own component
+        (see :meth:`_split_eigenvectors`). ``warn`` controls the disconnected-graph warning;
+        ``where`` prefixes the messages (e.g. the cluster of ClusteredNLE)."""
         Wm = _weight_matrix(ind, W, mask, n)
-        if warn and n > 1:
-            n_comp, _ = csgraph.connected_components(Wm, directed=True, connection="weak")
-            if n_comp > 1:
-                warnings.warn(
-                    f"the neighbourhood graph has {n_comp} connected components; the embedding "
-                    "separates them instead of unfolding them. Use ClusteredNLE to embed each "
-                    "component, or raise n_neighbors / lower shadow",
-                    DisconnectedGraphWarning,
-                    stacklevel=3,
-                )
+        n_comp, comp, closed = _graph_parts(Wm)
+        if warn and n_comp > 1:
+            warnings.warn(
+                f"{where}the neighbourhood graph has {n_comp} connected components; the "
+                "embedding separates them instead of unfolding them. Use ClusteredNLE to embed "
+                "each component, or raise n_neighbors / lower shadow",
+                DisconnectedGraphWarning,
+                stacklevel=3,
+            )
+        degenerate = closed.size > n_comp
+        if degenerate:
+            warnings.warn(
+                f"{where}{closed.size} groups of points (sizes {_sizes(closed)}) choose their "
+                f"neighbours only among themselves, more than the {n_comp} connected "
+                "component(s) of the neighbourhood graph: the LLE cost does not tie them "
+                "together and the embedding collapses each group to a point. Raise n_neighbors "
+                "or lower shadow",
+                DisconnectedGraphWarning,
+                stacklevel=3,
+            )
         A = sparse.eye(n, format="csr") - Wm
         M = (A.T @ A).tocsr()
-        solver = self.eigen_solver
-        if solver == "auto":
-            solver = "dense" if n <= 200 else "arpack"
         k = self.n_components + 1
-        if solver == "arpack" and k >= n - 1:
-            solver = "dense"
-        vals, vecs = _bottom_eigenvectors(M, k, solver, self.tol, random_state)
+        if n_comp == 1:
+            vals, vecs = _bottom_eigenvectors(M, k, self._solver(n, k), self.tol, random_state)
+        else:
+            vals, vecs = self._split_eigenvectors(M, comp, n_comp, k, random_state)
         Y = _fix_signs(vecs[:, 1:k] * np.sqrt(n))
         if self.axis_scaling == "edges":
             Y = _scale_axes_to_edges(X, Y, Wm)
+            axis, extent, length = _axis_extent(X, Y, Wm, comp, n_comp)
+            if extent > _MAX_AXIS_EXTENT * length:
+                cause = (
+                    f"{closed.size} groups of points choose their neighbours only among "
+                    "themselves, which leaves their placement free"
+                    if degenerate
+                    else "some points are tied to the rest by very few or very weak edges"
+                )
+                raise ManifoldInputError(
+                    f"{where}degenerate embedding: axis {axis + 1} spans {extent:.3g} in the "
+                    f"units of X, more than {_MAX_AXIS_EXTENT:g} times the total edge length of "
+                    f"the neighbourhood graph ({length:.3g}); {cause}. Raise n_neighbors or lower "
+                    "shadow (axis_scaling='unit' returns LLE's unscaled coordinates)"
+                )
         return Y, Wm, float(np.sum(vals[1:k]))
+
+    def _solver(self, n: int, k: int) -> str:
+        """The eigensolver for ``k`` eigenpairs of an ``n x n`` matrix."""
+        solver = self.eigen_solver
+        if solver == "auto":
+            solver = "dense" if n <= 200 else "arpack"
+        if solver == "arpack" and k >= n - 1:
+            solver = "dense"
+        return solver
+
+    def _split_eigenvectors(self, M, comp: np.ndarray, n_comp: int, k: int, random_state):
+        """The ``k`` bottom eigenpairs of the block-diagonal ``M`` of a graph with ``n_comp``
+        components: first the exact null vectors constant on each component (the constant, then
+        the contrasts), then the lowest non-constant eigenvectors of the blocks, each computed on
+        its own block and zero elsewhere (a solver run on the whole of ``M`` returns an arbitrary,
+        noisy basis of the null space and mixes blocks whose eigenvalues coincide)."""
+        n = M.shape[0]
+        vecs = [_component_basis(comp, n_comp, min(k, n_comp))]
+        m = k - n_comp  # non-constant vectors needed
+        if m <= 0:
+            return np.zeros(k), vecs[0]
+        cand_vals, cand_vecs = [], []
+        for c in range(n_comp):
+            idx = np.flatnonzero(comp == c)
+            kc = min(m + 1, idx.size)
+            if kc < 2:
+                continue
+            Mc = M[idx][:, idx]
+            _, V = _bottom_eigenvectors(Mc, kc, self._solver(idx.size, kc), self.tol,
+                                        random_state)
+            # drop the block's constant null vector; Rayleigh-Ritz on the rest of the span
+            U = np.linalg.svd(V - V.mean(axis=0), full_matrices=False)[0][:, : kc - 1]
+            H = U.T @ (Mc @ U)
+            rv, rV = np.linalg.eigh(0.5 * (H + H.T))
+            for j in range(kc - 1):
+                v = np.zeros(n)
+                v[idx] = U @ rV[:, j]
+                cand_vals.append(rv[j])
+                cand_vecs.append(v)
+        order = np.argsort(cand_vals, kind="stable")[:m]
+        vals = np.r_[np.zeros(n_comp), np.asarray(cand_vals)[order]]
+        return vals, np.column_stack(vecs + [cand_vecs[i] for i in order])
 
     def _fit_embedding(self, X: np.ndarray, random_state) -> None:
         n = X.shape[0]
@@ -523,6 +789,13 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         train = self.training_data_
         k = min(self.n_neighbors, train.shape[0])
         dist, ind = self.nbrs_.kneighbors(X, n_neighbors=k)
+        far = ~(dist[:, -1] <= _MAX_SPAN)
+        if far.any():
+            raise ManifoldInputError(
+                f"values too large: {int(far.sum())} points of X (e.g. row "
+                f"{int(np.flatnonzero(far)[0])}) lie farther than {_MAX_SPAN:.0e} from the "
+                "training data, where squared distances overflow float64"
+            )
         mask = adaptive_neighbors(train, ind, dist, self.shadow,
                                   min_neighbors=self.n_components + 1, centers=X)
         if allowed is not None:
@@ -729,7 +1002,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
             dc, ic = dc[:, 1:], ic[:, 1:]
             mc = adaptive_neighbors(Xc, ic, dc, self.shadow, min_neighbors=self.n_components + 1)
             Wc = reconstruction_weights(Xc, ic, mc, self.reg)
-            Yc, Wmc, e = self._embed(Xc, ic, Wc, mc, m, rs, warn=False)
+            Yc, Wmc, e = self._embed(Xc, ic, Wc, mc, m, rs, warn=False, where=f"cluster {c}: ")
             Y[idx] = Yc
             err += e
             counts[idx] = mc.sum(axis=1)
@@ -767,6 +1040,23 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
 
 
 # --------------------------------------------------------------------------- data
+
+
+def _count(name: str, value, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, Integral) or value < minimum:
+        raise ConfigError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def _angle_range(name: str, value) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in value)
+    except (TypeError, ValueError):
+        msg = f"{name} must be two numbers (low, high) in degrees, got {value!r}"
+        raise ConfigError(msg) from None
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        raise ConfigError(f"{name} must be two finite numbers in degrees, got {value!r}")
+    return lo, hi
 
 
 def make_two_rolls(
@@ -810,7 +1100,19 @@ def make_two_rolls(
         Sheet of each point (0 dense, 1 sparse, -1 outlier).
     t : (n_samples + n_outliers, 2) array
         Intrinsic coordinates: arc length along the spiral and height (NaN for outliers).
+
+    Raises
+    ------
+    ConfigError
+        ``n_samples`` not an integer >= 0, a NaN or infinite parameter, a negative
+        ``density_ratio``, ``noise`` or ``outliers``, or ``height <= 0``.
     """
+    n_samples = _count("n_samples", n_samples, 0)
+    density_ratio = _finite_number("density_ratio", density_ratio, 0.0, error=ConfigError)
+    gap = _finite_number("gap", gap, error=ConfigError)
+    noise = _finite_number("noise", noise, 0.0, error=ConfigError)
+    outliers = _finite_number("outliers", outliers, 0.0, error=ConfigError)
+    height = _finite_number("height", height, 0.0, lo_open=True, error=ConfigError)
     rs = check_random_state(random_state)
     n0 = int(round(n_samples * density_ratio / (1.0 + density_ratio)))
     n1 = n_samples - n0
@@ -885,7 +1187,18 @@ def make_head_pose_images(
         Flattened images, row-major.
     pose : (n_samples, 2) array
         (yaw, pitch) of each image in degrees.
+
+    Raises
+    ------
+    ConfigError
+        ``n_samples`` not an integer >= 0, ``size`` not an integer >= 1, a range that is not two
+        finite numbers, or ``noise`` negative or not finite.
     """
+    n_samples = _count("n_samples", n_samples, 0)
+    size = _count("size", size, 1)
+    yaw_range_deg = _angle_range("yaw_range_deg", yaw_range_deg)
+    pitch_range_deg = _angle_range("pitch_range_deg", pitch_range_deg)
+    noise = _finite_number("noise", noise, 0.0, error=ConfigError)
     rs = check_random_state(random_state)
     yaw = rs.uniform(*yaw_range_deg, n_samples)
     pitch = rs.uniform(*pitch_range_deg, n_samples)
