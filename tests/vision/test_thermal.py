@@ -103,3 +103,24 @@ def test_local_background_for_outdoor_agc_images():
     m = relative_warm_mask(img, background_px=41)
     assert m[75, 60] and not m[75, 150] and not m[10, 120]
     assert not relative_warm_mask(img)[75, 60]  # global band: the pavement is brighter
+
+
+def test_flat_8bit_frame_has_no_warm_pixels():
+    """A shutter-closed or frozen 8-bit frame has MAD = 0 and no percentile range: the threshold
+    ``median + 1e-6``, compared in float32, rounded back to the median and EVERY pixel was warm
+    (so every stereo candidate was "thermally supported"). Now a flat frame gives an all-False
+    mask, and a small warm blob on a flat background is warm while the background is not."""
+    for level in (0, 17, 100, 128, 255):
+        flat = np.full((60, 80), level, np.uint8)
+        assert not thermal_mask(flat).any(), level
+        assert not relative_warm_mask(flat, background_px=15).any(), level
+    assert not thermal_mask(np.full((60, 80), 21.5, np.float32), radiometric=False).any()
+    # 99.7 % of the frame at one value, a 15x15 warm blob (0.29 %: below the 99.5th percentile)
+    im = np.full((240, 320), 100, np.uint8)
+    im[100:115, 150:165] = 220
+    m = thermal_mask(im)
+    assert m[107, 157] and m[100:115, 150:165].mean() > 0.8
+    assert m.sum() <= 15 * 15  # nothing of the background
+    # the same blob on a frozen frame at another level, and dark blobs are not warm
+    im[100:115, 150:165] = 40
+    assert not thermal_mask(im).any()
