@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from hearsee.errors import CalibrationError
+from hearsee.errors import CalibrationError, ConfigError
 from hearsee.vision import calibration as C
 from hearsee.vision.camera import Camera, StereoRig, read_opencv_yaml
 from hearsee.vision.io import read_image
@@ -111,6 +111,8 @@ def test_full_chain_recovers_ground_truth(synthetic, corners):
     cr = C.calibrate_camera(rp, obj, truth.right.size, name="right")
     ct = C.calibrate_camera(tp, obj, truth.thermal.size, model="simple", name="thermal")
     assert cl.rms_px < 0.3 and cr.rms_px < 0.3 and ct.rms_px < 0.3
+    # focal lengths determined to +-0.1-0.4 % (measured): far from the degeneracy limit
+    assert max(cl.focal_rel_std, cr.focal_rel_std, ct.focal_rel_std) < 0.006
     assert cl.per_view_px.shape == (10,)
     for est, ref in ((cl, truth.left), (cr, truth.right), (ct, truth.thermal)):
         assert est.camera.fx == pytest.approx(ref.fx, rel=0.006)
@@ -315,6 +317,8 @@ def test_real_chessboard_pairs_close_to_reference(shared_data):
     size = (640, 512)
     cl = C.calibrate_camera(lp, obj, size, fix_aspect=True)
     cr = C.calibrate_camera(rp, obj, size, fix_aspect=True)
+    # measured 0.64 % / 0.70 %: well inside the degeneracy limit
+    assert max(cl.focal_rel_std, cr.focal_rel_std) < 0.01 < C.MAX_FOCAL_REL_STD
     ref = read_opencv_yaml(d / "reference_intrinsics.yml")
     assert cl.camera.fx == pytest.approx(ref["M1"][0, 0], rel=0.10)
     assert cr.camera.fx == pytest.approx(ref["M2"][0, 0], rel=0.10)
@@ -334,3 +338,84 @@ def test_corners_in_16bit_thermal_image(synthetic, corners):
     assert c is not None
     c = C.match_labeling(corners[0][0], c, PATTERN)
     np.testing.assert_allclose(c, corners[2][0], atol=0.05)
+
+
+def _projected_views(tilt_deg: float, n: int = 8, seed: int = 0) -> tuple[Camera, list]:
+    """Exact corners (+0.1 px noise) of ``n`` 9x6 boards 0.55-0.76 m in front of a known
+    camera (fx = 300 px), tilted by up to ``tilt_deg`` about x and y (any in-plane roll)."""
+    cam = Camera(K=np.array([[300.0, 0, 159.5], [0, 300.0, 119.5], [0, 0, 1]]),
+                 dist=[-0.1, 0.02, 0.0, 0.0, 0.0], width=320, height=240)
+    obj = C.board_points(PATTERN, SQUARE)
+    rng = np.random.default_rng(seed)
+    views = []
+    for i in range(n):
+        ax, ay = np.radians(tilt_deg) * rng.uniform(-1, 1, 2)
+        Rb = cv2.Rodrigues(np.array([ax, ay, rng.uniform(-0.2, 0.2)]))[0]
+        tb = np.array([0.0, 0.0, 0.55 + 0.03 * i]) - Rb @ np.array([4 * SQUARE, 2.5 * SQUARE, 0])
+        views.append(cam.project(obj @ Rb.T + tb) + rng.normal(0.0, 0.1, (len(obj), 2)))
+    return cam, views
+
+
+def test_boards_parallel_to_each_other_are_refused():
+    """Zhang's degenerate case: boards that never tilt (all facing the camera) fit to a
+    fraction of a pixel with any focal length -- fx came out 700-3000 px for 300. OpenCV's own
+    stdDeviationsIntrinsics hides it (pseudo-inverse: +-0.1 %); the Schur-complement
+    covariance does not. Boards tilted +-5 deg give fx +-6 %: refused too; +-30 deg: +-0.5 %."""
+    obj = C.board_points(PATTERN, SQUARE)
+    for tilt in (0.0, 5.0):
+        cam, views = _projected_views(tilt)
+        with pytest.raises(CalibrationError, match=r"focal length poorly determined .*tilt the "
+                                                   r"board more"):
+            C.calibrate_camera(views, obj, cam.size, name="left")
+        with pytest.raises(CalibrationError, match="poorly determined"):
+            C.calibrate_camera(views, obj, cam.size, model="radial", fix_aspect=True)
+    cam, views = _projected_views(30.0)
+    res = C.calibrate_camera(views, obj, cam.size)
+    assert res.focal_rel_std < 0.01
+    assert abs(res.camera.fx / 300.0 - 1.0) < 3 * res.focal_rel_std  # the std is honest
+    # the same number as OpenCV's when the problem is well posed
+    out = cv2.calibrateCameraExtended([obj.reshape(-1, 1, 3)] * 8,
+                                      [v.astype(np.float32).reshape(-1, 1, 2) for v in views],
+                                      cam.size, None, None)
+    sd = out[5].ravel()
+    assert res.focal_rel_std == pytest.approx(max(sd[0] / out[1][0, 0], sd[1] / out[1][1, 1]),
+                                              rel=0.02)
+    # the limit can be relaxed
+    _, views = _projected_views(5.0)
+    assert C.calibrate_camera(views, obj, cam.size, max_focal_rel_std=0.5).focal_rel_std > 0.03
+
+
+def test_rendered_fronto_parallel_boards_are_refused():
+    """The sweep's reproducer: 8 rendered boards facing the camera, shifted sideways, gave RMS
+    0.05 px and fx 693 px for a 300 px camera."""
+    cam = Camera(K=np.array([[300.0, 0, 159.5], [0, 300.0, 119.5], [0, 0, 1]]),
+                 dist=[-0.1, 0.02, 0.0, 0.0, 0.0], width=320, height=240)
+    pattern, square = (7, 5), 0.03
+    rays = C._subpixel_rays(cam, 2)
+    rng = np.random.default_rng(1)
+    views = []
+    for i in range(8):
+        img = C.render_chessboard(cam, np.eye(3), np.array([-0.09 + 0.01 * i, -0.06, 0.6]),
+                                  pattern, square, rays=rays, blur_px=0.6, noise=1.0, rng=rng)
+        views.append(C.find_corners(img, pattern))
+    with pytest.raises(CalibrationError, match="focal length poorly determined"):
+        C.calibrate_camera(views, C.board_points(pattern, square), cam.size)
+
+
+def test_identical_left_and_right_views_are_refused(synthetic, corners):
+    """The same corners (the same image files) for both cameras calibrated to a rig with a
+    baseline of ~5e-15 m and no error."""
+    truth, obj, _ = synthetic
+    lp, _, _ = corners
+    with pytest.raises(CalibrationError, match="the left and right images are the same"):
+        C.calibrate_stereo(lp, lp, obj, truth.left, truth.left)
+
+
+def test_find_corners_upscale_must_be_a_positive_integer(synthetic):
+    """upscale=0 returned infinite corners, a negative one garbage."""
+    img = synthetic[2][0]["l"]
+    for bad in (0, -2, 1.5, True, "2"):
+        with pytest.raises(ConfigError, match="upscale must be a positive integer"):
+            C.find_corners(img, PATTERN, upscale=bad)
+    c = C.find_corners(img, PATTERN, upscale=np.int64(1))
+    assert c is not None and np.all(np.isfinite(c))

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from hearsee.errors import CalibrationError, ConfigError, InputFileError
+from hearsee.errors import CalibrationError, ConfigError, GeometryError, InputFileError
 from hearsee.vision.camera import (
     OPTICAL_FROM_BODY,
     Camera,
@@ -19,6 +19,7 @@ from hearsee.vision.camera import (
     rig_from_opencv,
     save_camera,
     save_rig,
+    transform_points,
 )
 
 K = np.array([[500.0, 0.0, 320.0], [0.0, 505.0, 240.0], [0.0, 0.0, 1.0]])
@@ -318,3 +319,88 @@ def test_read_opencv_yaml_skips_what_it_does_not_read(tmp_path):
     np.testing.assert_array_equal(data["camera_matrix"], K)
     np.testing.assert_array_equal(data["grid_points"], grid)
     assert data["grid_points"].dtype == float
+
+
+def test_a_baseline_below_one_millimetre_is_refused(tmp_path):
+    """The same images for both cameras calibrate to |T| ~ 5e-15 m, which was accepted as a
+    rig; real stereo pairs are >= 10 mm apart."""
+    cam = Camera.from_fov(60.0, 640, 480)
+    for T in ([-5e-15, 0.0, 0.0], [-0.0009, 0.0, 0.0], [0.0, 0.0, 0.0]):
+        with pytest.raises(CalibrationError, match="baseline .* below 1 mm"):
+            StereoRig(cam, cam, np.eye(3), T)
+    with pytest.raises(CalibrationError, match="below 1 mm"):
+        StereoRig.ideal(cam, 0.0005)
+    assert StereoRig(cam, cam, np.eye(3), [-0.0011, 0.0, 0.0]).baseline_m == pytest.approx(0.0011)
+    path = tmp_path / "rig.yaml"
+    save_rig(StereoRig.ideal(cam, 0.1), path)
+    path.write_text(path.read_text().replace("T: [-0.1, 0.0, 0.0]", "T: [-1.0e-14, 0.0, 0.0]"))
+    with pytest.raises(ConfigError, match=r"rig.yaml: rig T: the baseline .* below 1 mm"):
+        load_rig(path)
+
+
+def test_camera_height_in_the_rig_info_is_checked_when_loaded(tmp_path):
+    cam = Camera.from_fov(60.0, 640, 480)
+    path = tmp_path / "rig.yaml"
+    rig = StereoRig(cam, cam, np.eye(3), [-0.1, 0.0, 0.0], info={"camera_height_m": 1.2})
+    save_rig(rig, path)
+    text = path.read_text()
+    for bad in (".nan", "-1.2", "0", "abc", "true", "[1.2]"):
+        path.write_text(text.replace("camera_height_m: 1.2", f"camera_height_m: {bad}"))
+        with pytest.raises(ConfigError, match=r"rig.yaml: info: camera_height_m must be a finite"):
+            load_rig(path)
+    path.write_text(text)
+    assert load_rig(path).camera_height_m == pytest.approx(1.2)
+    assert StereoRig.ideal(cam, 0.1).camera_height_m is None
+
+
+def test_read_opencv_yaml_refuses_files_that_are_not_filestorage(tmp_path):
+    """An empty, plain-YAML or binary file made cv2.FileStorage raise SystemError."""
+    cases = {"empty.yml": b"", "plain.yaml": b"a: 1\nb: [1, 2]\n",
+             "garbage.yml": bytes(range(256)) * 2, "broken.yml": b"%YAML:1.0\n---\nM1: [1, 2\n"}
+    for name, content in cases.items():
+        p = tmp_path / name
+        p.write_bytes(content)
+        with pytest.raises(ConfigError, match="not a readable OpenCV FileStorage file") as exc:
+            read_opencv_yaml(p)
+        assert "\n" not in str(exc.value)
+    with pytest.raises(ConfigError, match="empty"):
+        read_opencv_yaml(tmp_path / "empty.yml")
+    with pytest.raises(ConfigError, match="line 3"):
+        read_opencv_yaml(tmp_path / "broken.yml")
+
+
+def test_camera_pose_and_transform_points_refuse_bad_input():
+    """camera_pose with a NaN angle returned NaN R, t; transform_points read a flat (6,) array
+    as two points and silently dropped the second."""
+    for args in (((0, 0, 1), np.nan), ((0, 0, 1), 0.0, np.inf), ((0, 0, 1), 0, 0, "x"),
+                 ((0.0, 1.0),), ((0, 0, np.nan),)):
+        with pytest.raises(GeometryError, match="camera_pose"):
+            camera_pose(*args)
+    R, t = camera_pose((0.0, 0.0, 1.2), 30.0)
+    assert np.all(np.isfinite(R)) and np.all(np.isfinite(t))
+    for pts in ([1, 2, 3, 4, 5, 6], [[1.0, 2.0]], np.zeros((2, 2, 3)), [[1, 2, 3, 4]]):
+        with pytest.raises(GeometryError, match="points of shape"):
+            transform_points(np.eye(3), [0, 0, 1], pts)
+    with pytest.raises(GeometryError, match="R must be 3x3"):
+        transform_points(np.eye(2), [0, 0, 1], [1, 2, 3])
+    np.testing.assert_allclose(transform_points(np.eye(3), [0, 0, 1], [1, 2, 3]), [1, 2, 4])
+    assert transform_points(np.eye(3), [0, 0, 1], [[1, 2, 3]]).shape == (1, 3)
+    assert transform_points(np.eye(3), [0, 0, 1], np.zeros((0, 3))).shape == (0, 3)
+
+
+def test_load_camera_which_on_a_single_camera_file(tmp_path):
+    """Asking a single-camera file for the thermal camera returned whatever camera it held."""
+    path = tmp_path / "cam.yaml"
+    save_camera(Camera.from_fov(60.0, 640, 480), path)
+    assert load_camera(path).width == 640
+    for which in ("thermal", "left", "right"):
+        with pytest.raises(ConfigError, match=f"single-camera file .* no '{which}' camera"):
+            load_camera(path, which)
+    named = tmp_path / "thermal.yaml"
+    save_camera(Camera.from_fov(40.0, 160, 120, name="thermal"), named)
+    assert load_camera(named, "thermal").width == 160
+    with pytest.raises(ConfigError, match="holding camera 'thermal'"):
+        load_camera(named, "left")
+    rig = tmp_path / "rig.yaml"
+    save_rig(StereoRig.ideal(Camera.from_fov(60.0, 320, 240), 0.1), rig)
+    assert load_camera(rig).width == 320 and load_camera(rig, "right").width == 320

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hearsee.errors import CalibrationError, ImageInputError
+from hearsee.errors import CalibrationError, ConfigError, GeometryError, ImageInputError
 from hearsee.sim.scenes import Entity, SceneSpec, default_rig, render_scene
 from hearsee.vision.camera import StereoRig
 from hearsee.vision.fusion import detect_humans, draw_detections, thermal_support
@@ -119,3 +119,43 @@ def test_rig_that_needs_rectification(scene):
     person = scene.objects[0]
     near = [h for h in res.humans if np.linalg.norm(h.position_m - person.position_m) < 0.5]
     assert len(near) == 1
+
+
+def test_frozen_8bit_thermal_frame_verifies_nobody(scene):
+    """A flat (shutter closed / frozen) 8-bit thermal frame used to make every pixel warm, so
+    the person, the mannequin and the poster were all accepted; now nobody is verified."""
+    frozen = np.full_like(scene.thermal_8bit, 128)
+    res = detect_humans(scene.left, scene.right, RIG, frozen)
+    assert res.humans == [] and not res.warm_mask.any()
+    stereo_ok = [h for h in res.rejected if h.reason.startswith("thermal support")]
+    assert len(stereo_ok) == 3 and all(h.thermal_support == 0.0 for h in stereo_ok)
+
+
+def test_thermal_support_refuses_a_0_255_mask_and_bad_weights():
+    """A 0/255 uint8 mask gave a "fraction" of 255; a negative head weight a meaningless one."""
+    warm = np.zeros(RIG.thermal.shape, bool)
+    warm[:, : RIG.thermal.width // 2] = True
+    pts = np.array([[-0.8, y, 3.0] for y in np.linspace(-0.3, 0.9, 40)])
+    h = np.linspace(1.7, 0.5, 40)
+    with pytest.raises(ImageInputError, match="0/255"):
+        thermal_support(pts, h, RIG, warm.astype(np.uint8) * 255)
+    # 0/1 numbers are a mask too
+    assert thermal_support(pts, h, RIG, warm.astype(np.uint8)) == pytest.approx(1.0)
+    assert thermal_support(pts, h, RIG, warm.astype(float).tolist()) == pytest.approx(1.0)
+    for w in (0.0, -1.0, np.nan):
+        with pytest.raises(ConfigError, match="head_weight"):
+            thermal_support(pts, h, RIG, warm, head_weight=w)
+    with pytest.raises(GeometryError, match="heights"):
+        thermal_support(pts, h[:5], RIG, warm)
+
+
+def test_bad_camera_height_is_refused_before_matching(scene):
+    """A NaN or negative camera height (argument or the calibration's info) silently removed
+    every person (or, as a string, raised a bare ValueError)."""
+    for bad in (np.nan, -1.4, 0.0):
+        with pytest.raises(GeometryError, match="camera_height_m"):
+            detect_humans(scene.left, scene.right, RIG, camera_height_m=bad)
+    for bad in ("abc", np.nan, -1.0):
+        rig = StereoRig(RIG.left, RIG.right, RIG.R, RIG.T, info={"camera_height_m": bad})
+        with pytest.raises(ConfigError, match="info: camera_height_m"):
+            detect_humans(scene.left, scene.right, rig)

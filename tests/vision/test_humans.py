@@ -4,7 +4,13 @@ import cv2
 import numpy as np
 import pytest
 
-from hearsee.errors import EstimationError, ImageInputError
+from hearsee.errors import (
+    CalibrationError,
+    ConfigError,
+    EstimationError,
+    GeometryError,
+    ImageInputError,
+)
 from hearsee.sim.scenes import Entity, SceneSpec, default_rig, render_scene
 from hearsee.vision.humans import (
     FloorPlane,
@@ -177,3 +183,47 @@ def test_hog_baseline():
     assert detect_people_hog(np.zeros((160, 120), np.uint8)) == []
     with pytest.raises(ImageInputError):
         detect_people_hog(np.zeros((160, 120), np.float32))
+
+
+def test_bad_focal_baseline_and_camera_height_are_refused():
+    """A zero, negative or NaN focal length / baseline / camera height silently gave no people
+    (or a ValueError deep inside); now a typed error at the top."""
+    d = np.full((40, 60), 8.0, np.float32)
+    pts = np.zeros((40, 60, 3))
+    for f, b in ((0.0, B), (-F, B), (np.nan, B), (F, 0.0), (F, -B), (F, np.nan), (F, np.inf)):
+        with pytest.raises(CalibrationError, match="focal_px|baseline_m"):
+            detect_candidates(d, pts, f, b, 20.0, camera_height_m=1.4)
+    with pytest.raises(CalibrationError, match="cy"):
+        detect_candidates(d, pts, F, B, np.nan, camera_height_m=1.4)
+    for h in (np.nan, -1.4, 0.0, np.inf):
+        with pytest.raises(GeometryError, match="camera_height_m"):
+            detect_candidates(d, pts, F, B, 20.0, camera_height_m=h)
+        with pytest.raises(GeometryError, match="camera_height_m"):
+            FloorPlane.level(h)
+        with pytest.raises(GeometryError, match="prior_height_m"):
+            estimate_floor(np.full((40, 40, 3), np.nan), prior_height_m=h)
+    P = u_disparity(d)
+    with pytest.raises(CalibrationError, match="baseline_m"):
+        scale_adaptive_filter(P, F, 0.0)
+    with pytest.raises(CalibrationError, match="focal_px"):
+        find_peaks(P, np.nan, B)
+
+
+def test_hog_refuses_bad_strides_scales_and_images():
+    """win_stride=-8 SEGFAULTED and a 10x10 image corrupted the heap (OpenCV); 2-/4-channel
+    images raised cv2.error."""
+    img = np.zeros((160, 120), np.uint8)
+    for stride in (-8, 0, 8.0, True):
+        with pytest.raises(ConfigError, match="win_stride"):
+            detect_people_hog(img, win_stride=stride)
+    for scale in (1.0, 0.9, np.nan):
+        with pytest.raises(ConfigError, match="scale"):
+            detect_people_hog(img, scale=scale)
+    for shape in ((10, 10), (127, 64), (128, 63), (0, 0)):
+        with pytest.raises(ImageInputError, match="at least 64x128"):
+            detect_people_hog(np.zeros(shape, np.uint8))
+    with pytest.raises(ImageInputError, match="BGRA"):
+        detect_people_hog(np.zeros((160, 120, 2), np.uint8))
+    # BGRA (alpha dropped) and (H, W, 1) images are accepted
+    assert detect_people_hog(np.zeros((160, 120, 4), np.uint8)) == []
+    assert detect_people_hog(np.zeros((160, 120, 1), np.uint8), win_stride=np.int64(16)) == []

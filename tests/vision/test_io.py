@@ -101,3 +101,20 @@ def test_glob_images(tmp_path):
     assert [f.name for f in files] == ["left1.png", "left2.png"]
     with pytest.raises(InputFileError, match="no images matched"):
         glob_images(str(tmp_path / "nothing*.jpg"))
+
+
+def test_to_gray_names_colour_pixel_types_opencv_cannot_convert():
+    """check_image accepts e.g. float64 or int32 colour images, but cv2.cvtColor raised a bare
+    cv2.error on them (reached through compute_disparity and find_corners)."""
+    for dtype in (np.float64, np.float16, np.int8, np.int32, np.int64, np.uint32):
+        for c in (3, 4):
+            with pytest.raises(ImageInputError, match=f"unsupported pixel type {np.dtype(dtype)}"):
+                to_gray(np.zeros((4, 4, c), dtype))
+    for dtype in (np.uint8, np.uint16, np.float32):
+        assert to_gray(np.zeros((4, 4, 3), dtype)).shape == (4, 4)
+    assert to_gray(np.zeros((4, 4), np.float64)).dtype == np.float64  # grey kept as it is
+    from hearsee.vision.stereo import compute_disparity
+
+    bgr = np.zeros((48, 64, 3))
+    with pytest.raises(ImageInputError, match="float64"):
+        compute_disparity(bgr, bgr)

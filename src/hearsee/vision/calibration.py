@@ -27,11 +27,12 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.errors import CalibrationError
-from hearsee.vision.camera import Camera, StereoRig
+from hearsee.errors import CalibrationError, ConfigError
+from hearsee.vision.camera import MIN_BASELINE_M, Camera, StereoRig
 from hearsee.vision.io import to_gray
 
 __all__ = [
+    "MAX_FOCAL_REL_STD",
     "MAX_RMS_PX",
     "CameraCalibration",
     "RigCalibration",
@@ -57,6 +58,18 @@ __all__ = [
 #: 2026-11-25's sixteenth session.
 MAX_RMS_PX = 3.0
 
+#: :func:`calibrate_camera` refuses a calibration whose focal length has a relative standard
+#: deviation (1 sigma, from the Jacobian at the solution; the larger of fx, fy) above this.
+#: Measured: the real XIMEA pairs of the shared data 0.16 % with all 25 views, 0.64/0.70 %
+#: with the 6 of the tests, <= 1.33 % for any 4 consecutive views; the rendered boards of the
+#: tests 0.12-0.70 % (thermal 160x120 included). Boards parallel to each other: 200 % for 8
+#: rendered fronto-parallel views (fx 693 px for 300), 20-450 % for exact fronto-parallel
+#: corners (fx off by 10x), 4-11 % for boards tilted by only +-5 deg (fx ~6 % off). Only
+#: 3-view real sets come near: 2 of 46 consecutive triples exceed 3 % (3.2 %, 3.5 %; their fx
+#: were 10.8 % and 8.9 % off the 25-view value), and of all 2 x 2300 triples the 1.7-2.6 %
+#: above 3 % had fx 7-9 % off (median).
+MAX_FOCAL_REL_STD = 0.03
+
 #: Distortion models: number of coefficients and calibrateCamera flags.
 _MODELS = {
     "radial": cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST,  # k1 only
@@ -64,6 +77,10 @@ _MODELS = {
     "standard": 0,                                    # k1, k2, p1, p2, k3
     "rational": cv2.CALIB_RATIONAL_MODEL,             # + k4, k5, k6
 }
+
+#: Indices of the distortion coefficients each model estimates (the others are fixed).
+_FREE_DIST = {"radial": [0], "simple": [0, 1, 2, 3], "standard": [0, 1, 2, 3, 4],
+              "rational": [0, 1, 2, 3, 4, 5, 6, 7]}
 
 
 def parse_board(text: str) -> tuple[int, int]:
@@ -138,7 +155,11 @@ def find_corners(image: NDArray, pattern: tuple[int, int], *, try_inverted: bool
     makes the sub-pixel estimate several times more accurate on blurry low-resolution boards.
     ``try_inverted`` also tries the inverted image (thermal images of a heated board). Corners
     are relabelled so that corner 0 is the outer corner nearest the top-left of the image.
+    ``upscale`` must be a positive integer (ConfigError): 0 gave infinite corners.
     """
+    if upscale is not None and (isinstance(upscale, bool)
+                                or not isinstance(upscale, int | np.integer) or upscale < 1):
+        raise ConfigError(f"upscale must be a positive integer factor, got {upscale!r}")
     g = to_gray(image)
     if g.dtype != np.uint8:
         g = cv2.normalize(g, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
@@ -171,7 +192,9 @@ class CameraCalibration:
 
     ``rms_px`` is the overall RMS reprojection error, ``per_view_px`` the RMS error of each view
     (pixels); ``rvecs``/``tvecs`` are the board poses (board -> camera, Rodrigues, metres);
-    ``used`` the indices (into the input lists) of the views kept after outlier rejection.
+    ``used`` the indices (into the input lists) of the views kept after outlier rejection;
+    ``focal_rel_std`` the relative standard deviation of the focal length (the larger of fx,
+    fy; 0.01 = +-1 %).
     """
 
     camera: Camera
@@ -181,11 +204,13 @@ class CameraCalibration:
     tvecs: list[NDArray]
     used: list[int]
     rejected: list[int] = field(default_factory=list)
+    focal_rel_std: float = float("nan")
 
 
 def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | Sequence[NDArray],
                      image_size: tuple[int, int], *, model: str = "standard",
                      fix_aspect: bool = False, reject_factor: float = 3.0,
+                     max_focal_rel_std: float = MAX_FOCAL_REL_STD,
                      name: str = "") -> CameraCalibration:
     """Zhang calibration of one camera (``cv2.calibrateCamera``).
 
@@ -199,6 +224,9 @@ def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | S
     fix_aspect : force fx = fy.
     reject_factor : views whose RMS error exceeds ``reject_factor`` times the median (and
         0.5 px) are dropped and the calibration rerun once; 0 disables.
+    max_focal_rel_std : CalibrationError when the focal length's relative standard deviation
+        exceeds this (:data:`MAX_FOCAL_REL_STD`): the views do not determine it (Zhang's
+        degenerate case: boards parallel to each other, e.g. all facing the camera).
     """
     if model not in _MODELS:
         raise CalibrationError(f"model must be one of {', '.join(_MODELS)}, got {model!r}")
@@ -236,11 +264,77 @@ def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | S
             idx = keep
             out = run(idx)
     rms, K, dist, rvecs, tvecs, _, _, per_view = out
+    rel_std = _focal_rel_std([objs[i] for i in idx], [imgs[i] for i in idx], K, dist, rvecs,
+                             tvecs, model, fix_aspect)
     cam = Camera(K=K, dist=np.asarray(dist).reshape(-1), width=int(image_size[0]),
                  height=int(image_size[1]), name=name)
-    return CameraCalibration(cam, float(rms), np.asarray(per_view).reshape(-1),
-                             [np.asarray(r).reshape(3) for r in rvecs],
-                             [np.asarray(t).reshape(3) for t in tvecs], idx, rejected)
+    res = CameraCalibration(cam, float(rms), np.asarray(per_view).reshape(-1),
+                            [np.asarray(r).reshape(3) for r in rvecs],
+                            [np.asarray(t).reshape(3) for t in tvecs], idx, rejected, rel_std)
+    _check_focal(res, max_focal_rel_std)
+    return res
+
+
+def _check_focal(calib: CameraCalibration, max_rel_std: float) -> None:
+    """CalibrationError when the focal length's relative standard deviation exceeds
+    ``max_rel_std``: Zhang's degenerate views (boards parallel to each other)."""
+    rel = calib.focal_rel_std
+    if rel <= max_rel_std:
+        return
+    label = f"{calib.camera.name} camera" if calib.camera.name else "camera"
+    spread = "not at all" if np.isinf(rel) else f"+-{100 * rel:.1f} %"
+    raise CalibrationError(
+        f"{label}: focal length poorly determined ({spread}, fx {calib.camera.fx:.0f} px, RMS "
+        f"{calib.rms_px:.2f} px): the board views are too alike (boards parallel to each "
+        "other, e.g. all facing the camera); tilt the board more (30-45 deg, in different "
+        "directions) between views"
+    )
+
+
+def _focal_rel_std(objs: list[NDArray], imgs: list[NDArray], K: NDArray, dist: NDArray,
+                   rvecs: Sequence[NDArray], tvecs: Sequence[NDArray], model: str,
+                   fix_aspect: bool) -> float:
+    """Relative standard deviation (1 sigma) of the focal length of a Zhang calibration (the
+    larger of fx, fy), ``inf`` when the views do not determine it at all.
+
+    The covariance of the intrinsics is ``sigma^2 S^-1`` with ``S`` the Schur complement of the
+    board poses in ``J^T J`` (``J`` from ``cv2.projectPoints``). It equals
+    calibrateCameraExtended's ``stdDeviationsIntrinsics`` when the problem is well posed, but
+    OpenCV inverts ``J^T J`` with a pseudo-inverse, which drops the null direction of a
+    degenerate set and reported +-0.1 % for exactly fronto-parallel boards whose fx was 10x off.
+    """
+    d = np.asarray(dist, np.float64).reshape(-1)
+    free = _FREE_DIST[model]
+    n_int = (1 if fix_aspect else 2) + 2 + len(free)
+    S = np.zeros((n_int, n_int))
+    sq, n_res = 0.0, 0
+    for o, im, r, t in zip(objs, imgs, rvecs, tvecs, strict=True):
+        p, J = cv2.projectPoints(np.asarray(o, np.float64), np.asarray(r, np.float64),
+                                 np.asarray(t, np.float64), K, d)
+        e = (p - im).reshape(-1)
+        sq += float(e @ e)
+        n_res += e.size
+        # columns of J: rvec (3), tvec (3), fx, fy, cx, cy, distortion
+        Jf = (K[0, 0] / K[1, 1] * J[:, 6] + J[:, 7])[:, None] if fix_aspect else J[:, 6:8]
+        Ji = np.hstack([Jf, J[:, 8:10], J[:, 10:][:, free]])
+        Je = J[:, :6]
+        try:
+            S += Ji.T @ Ji - Ji.T @ Je @ np.linalg.solve(Je.T @ Je, Je.T @ Ji)
+        except np.linalg.LinAlgError:  # a view whose pose is undetermined
+            return float("inf")
+    sigma2 = sq / max(n_res - n_int - 6 * len(objs), 1)
+    # scale to unit diagonal: fx (~100 px) and k3 (~0.01) differ by orders of magnitude
+    diag = np.diag(S)
+    if not np.all(diag > 0):
+        return float("inf")
+    sc = 1.0 / np.sqrt(diag)
+    w, V = np.linalg.eigh(S * sc[:, None] * sc[None, :])
+    if not w[0] > 1e-12 * w[-1]:
+        return float("inf")
+    var = (V**2 / w).sum(axis=1) * sc**2 * sigma2
+    if fix_aspect:  # one focal parameter, fy (fx = a fy)
+        return float(np.sqrt(var[0]) / K[1, 1])
+    return float(max(np.sqrt(var[0]) / K[0, 0], np.sqrt(var[1]) / K[1, 1]))
 
 
 def _per_view(object_points: NDArray | Sequence[NDArray], n: int) -> list[NDArray]:
@@ -322,6 +416,13 @@ def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDAr
         if out2[0] < out[0] and f_ok:
             out, refined = out2, True
     rms, K1, D1, K2, D2, R, T = out[:7]
+    if not np.linalg.norm(T) >= MIN_BASELINE_M:
+        # identical left and right corners fit perfectly with T ~ 5e-15 (measured)
+        raise CalibrationError(
+            f"stereo calibration gave a baseline of {np.linalg.norm(T):.2g} m, below "
+            f"{MIN_BASELINE_M * 1000:g} mm: the left and right images are the same or taken "
+            "from the same place; check the left and right image lists"
+        )
     per_view = np.asarray(out[-1]).reshape(n, 2)
     lc = Camera(K=K1, dist=np.asarray(D1).reshape(-1), width=left.width, height=left.height,
                 name=left.name or "left")
@@ -690,11 +791,15 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
             )
     idx_l = [i for i in range(n) if lp[i] is not None]
     idx_r = [i for i in range(n) if rp[i] is not None]
+    # corners that do not fit one board (wrong --board) also leave fx undetermined: the RMS
+    # check first, its message names the likely cause
     cl = calibrate_camera([lp[i] for i in idx_l], obj, sizes["left"], model=model,
-                          fix_aspect=fix_aspect, name="left")
+                          fix_aspect=fix_aspect, max_focal_rel_std=np.inf, name="left")
     cr = calibrate_camera([rp[i] for i in idx_r], obj, sizes["right"], model=model,
-                          fix_aspect=fix_aspect, name="right")
+                          fix_aspect=fix_aspect, max_focal_rel_std=np.inf, name="right")
     _check_fit(pattern, left=cl.rms_px, right=cr.rms_px)
+    for calib in (cl, cr):
+        _check_focal(calib, MAX_FOCAL_REL_STD)
     for idx, res, attr in ((idx_l, cl, "err_left"), (idx_r, cr, "err_right")):
         for j, e in zip(res.used, res.per_view_px, strict=True):
             setattr(views[idx[j]], attr, float(e))

@@ -49,6 +49,7 @@ OpenCV ``FileStorage`` files (``%YAML:1.0`` with ``!!opencv-matrix``) are read w
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -64,6 +65,7 @@ from hearsee.config import as_float_array, check_keys, load_yaml, require, to_pl
 from hearsee.errors import CalibrationError, ConfigError, GeometryError, InputFileError
 
 __all__ = [
+    "MIN_BASELINE_M",
     "OPTICAL_FROM_BODY",
     "Camera",
     "Rectification",
@@ -85,6 +87,12 @@ OPTICAL_FROM_BODY: NDArray = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0,
 OPTICAL_FROM_BODY.setflags(write=False)
 
 _DIST_LENGTHS = (0, 4, 5, 8, 12, 14)
+
+#: A stereo baseline (metres) below this is refused. The same image files given for both
+#: cameras calibrate to |T| ~ 5e-15 m; the narrowest real stereo pairs are about 10 mm apart
+#: (phone dual cameras; depth cameras 18-120 mm; the robot scenarios allow 20 mm and up), so
+#: 1 mm is a safe floor that still reads as "the two images come from one place".
+MIN_BASELINE_M = 1e-3
 
 
 def _check_rotation(R: ArrayLike, what: str) -> NDArray:
@@ -438,7 +446,8 @@ class StereoRig:
     ----------
     left, right : Camera
     R, T : (3, 3), (3,)
-        Right-from-left: ``X_right = R @ X_left + T`` (metres).
+        Right-from-left: ``X_right = R @ X_left + T`` (metres); ``|T|`` must be at least
+        :data:`MIN_BASELINE_M` (1 mm).
     thermal : Camera, optional
     R_thermal, T_thermal : (3, 3), (3,), optional
         Thermal-from-left: ``X_thermal = R_thermal @ X_left + T_thermal`` (metres).
@@ -463,8 +472,12 @@ class StereoRig:
             raise CalibrationError("StereoRig: left and right must be Camera instances")
         R = _check_rotation(self.R, "rig R (right-from-left)")
         T = _check_translation(self.T, "rig T (right-from-left)")
-        if np.linalg.norm(T) <= 0:
-            raise CalibrationError("rig T: the baseline is zero (both cameras at one point)")
+        if not np.linalg.norm(T) >= MIN_BASELINE_M:
+            raise CalibrationError(
+                f"rig T: the baseline is {np.linalg.norm(T):.3g} m, below "
+                f"{MIN_BASELINE_M * 1000:g} mm: both cameras at one point (left and right images "
+                "are the same or taken from the same place?)"
+            )
         object.__setattr__(self, "R", R)
         object.__setattr__(self, "T", T)
         if self.thermal is not None:
@@ -507,6 +520,13 @@ class StereoRig:
     def baseline_m(self) -> float:
         """Distance between the two optical centres, metres (``|T|``)."""
         return float(np.linalg.norm(self.T))
+
+    @property
+    def camera_height_m(self) -> float | None:
+        """Height of the left camera above the floor, metres, from ``info: {camera_height_m}``
+        (None when absent). ConfigError when it is not a finite number > 0: a NaN or negative
+        height silently removed every person from the detections."""
+        return _info_camera_height(self.info, "rig info")
 
     @property
     def right_center_m(self) -> NDArray:
@@ -662,6 +682,7 @@ class StereoRig:
         info = data.get("info") or {}
         if not isinstance(info, dict):
             raise ConfigError(f"{where}: info must be a mapping")
+        _info_camera_height(info, f"{where}: info")
         try:
             return cls(left=left, right=right, R=R, T=T,
                        rms_px=None if rms is None else float(rms), info=info, **kw)
@@ -669,13 +690,48 @@ class StereoRig:
             raise ConfigError(f"{where}: {exc}") from None
 
 
+def _info_camera_height(info: Any, where: str) -> float | None:
+    """``info["camera_height_m"]`` (metres) as a float, None when absent; ConfigError naming
+    the field when it is not a finite number > 0."""
+    h = info.get("camera_height_m") if isinstance(info, dict) else None
+    if h is None:
+        return None
+    if isinstance(h, bool) or not isinstance(h, int | float | np.number) or \
+            not (np.isfinite(h) and h > 0):
+        raise ConfigError(
+            f"{where}: camera_height_m must be a finite number of metres > 0, got {h!r}"
+        )
+    return float(h)
+
+
 def transform_points(R: ArrayLike, t: ArrayLike, points: ArrayLike) -> NDArray:
-    """Apply ``X' = R X + t`` to points ``(N, 3)`` (or one point ``(3,)``)."""
+    """Apply ``X' = R X + t`` to points ``(N, 3)`` (or one point ``(3,)``); metres.
+
+    GeometryError for any other shape (a flat ``(6,)`` array used to be read as two points and
+    silently lose the second) or an ``R`` / ``t`` that is not 3x3 / 3 numbers."""
     P = np.asarray(points, dtype=float)
+    Rm = np.asarray(R, dtype=float)
+    tv = np.asarray(t, dtype=float)
+    if Rm.shape != (3, 3):
+        raise GeometryError(f"transform_points: R must be 3x3, got shape {Rm.shape}")
+    if tv.size != 3:
+        raise GeometryError(f"transform_points: t must have 3 numbers, got shape {tv.shape}")
+    if P.shape != (3,) and (P.ndim != 2 or P.shape[1] != 3):
+        raise GeometryError(
+            f"transform_points: expected points of shape (N, 3) or (3,), got {P.shape}"
+        )
     one = P.ndim == 1
-    P = P.reshape(-1, 3)
-    out = P @ np.asarray(R, float).T + np.asarray(t, float).reshape(1, 3)
+    out = P.reshape(-1, 3) @ Rm.T + tv.reshape(1, 3)
     return out[0] if one else out
+
+
+def _finite(values: Any, n: int) -> NDArray | None:
+    """``values`` as ``n`` finite floats, or None when they are not."""
+    try:
+        a = np.asarray(values, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        return None
+    return a if a.size == n and np.all(np.isfinite(a)) else None
 
 
 def camera_pose(position_m: ArrayLike = (0.0, 0.0, 0.0), pan_deg: float = 0.0,
@@ -692,10 +748,19 @@ def camera_pose(position_m: ArrayLike = (0.0, 0.0, 0.0), pan_deg: float = 0.0,
     >>> np.round(R @ np.array([3.0, 0.5, 1.2]) + t, 6) + 0.0  # 3 m ahead, 0.5 m left, eye height
     array([-0.5,  0. ,  3. ])
     """
+    if _finite((pan_deg, tilt_deg, roll_deg), 3) is None:
+        raise GeometryError(
+            f"camera_pose: pan, tilt and roll must be finite degrees, got "
+            f"{(pan_deg, tilt_deg, roll_deg)}"
+        )
+    c = _finite(position_m, 3)
+    if c is None:
+        raise GeometryError(
+            f"camera_pose: position_m must be 3 finite numbers (metres), got {position_m!r}"
+        )
     # body-from-mount: mount axes are body axes turned by pan (about z), tilt, roll (about x)
     mount = Rotation.from_euler("ZYX", [pan_deg, -tilt_deg, roll_deg], degrees=True).as_matrix()
     R = OPTICAL_FROM_BODY @ mount.T
-    c = np.asarray(position_m, dtype=float).reshape(3)
     return R, -R @ c
 
 
@@ -732,12 +797,17 @@ def _load_calib_yaml(path: str | Path) -> dict[str, Any]:
     return load_yaml(p)
 
 
-def load_camera(path: str | Path, which: str = "left") -> Camera:
-    """Read a camera from a camera file, or camera ``which`` ("left", "right", "thermal") from a
-    rig file. Raises InputFileError / ConfigError naming the field."""
+def load_camera(path: str | Path, which: str | None = None) -> Camera:
+    """Read the camera of a camera file, or camera ``which`` ("left", "right", "thermal";
+    default "left") from a rig file. Raises InputFileError / ConfigError naming the field.
+
+    Given a camera file, ``which`` must be left out or be the camera's own ``name``: asking a
+    single-camera file for the thermal camera used to return whatever camera it held.
+    """
     data = _load_calib_yaml(path)
     where = str(path)
     if "left" in data or data.get("kind") == "stereo_rig":
+        which = "left" if which is None else which
         if which not in ("left", "right", "thermal"):
             raise ConfigError(f"{where}: which must be left, right or thermal, got {which!r}")
         if which == "thermal":
@@ -747,7 +817,14 @@ def load_camera(path: str | Path, which: str = "left") -> Camera:
             return Camera.from_dict(require(th, "camera", f"{where}: thermal"),
                                     f"{where}: thermal: camera")
         return Camera.from_dict(require(data, which, where), f"{where}: {which}")
-    return Camera.from_dict(data, where)
+    cam = Camera.from_dict(data, where)
+    if which is not None and which != cam.name:
+        held = f"camera {cam.name!r}" if cam.name else "an unnamed camera"
+        raise ConfigError(
+            f"{where}: a single-camera file (holding {held}) has no {which!r} camera; leave out "
+            "which, or give a stereo rig file"
+        )
+    return cam
 
 
 def save_camera(camera: Camera, path: str | Path, *, rms_px: float | None = None) -> None:
@@ -815,9 +892,12 @@ def read_opencv_yaml(path: str | Path) -> dict[str, Any]:
         raise InputFileError(f"{p}: file not found")
     try:
         fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_READ)
-    except cv2.error as exc:
+    except (cv2.error, SystemError) as exc:
+        # an empty, plain-YAML or binary file makes the constructor raise SystemError (its
+        # cv2.error is only the __cause__)
         raise ConfigError(
-            f"{p}: not a readable OpenCV FileStorage file ({exc.msg.strip()})"
+            f"{p}: not a readable OpenCV FileStorage file ({_fs_error_text(exc, p)}; expected "
+            "'%YAML:1.0' with !!opencv-matrix nodes)"
         ) from None
     if not fs.isOpened():
         raise ConfigError(f"{p}: not a readable OpenCV FileStorage file")
@@ -835,6 +915,19 @@ def read_opencv_yaml(path: str | Path) -> dict[str, Any]:
     finally:
         fs.release()
     return out
+
+
+def _fs_error_text(exc: BaseException, path: Path) -> str:
+    """A short reason for a FileStorage failure (OpenCV's own text names its source files)."""
+    if path.stat().st_size == 0:
+        return "the file is empty"
+    err = exc if isinstance(exc, cv2.error) else exc.__cause__
+    if isinstance(err, cv2.error):
+        m = re.search(r"\((\d+)\): (.+)", str(getattr(err, "func", "")))
+        if m:  # parse errors: func = "name(line): message"
+            return f"line {m.group(1)}: {m.group(2).strip()}"
+        return str(getattr(err, "err", "")).strip() or "unreadable"
+    return "unreadable"
 
 
 def _is_number(node: cv2.FileNode) -> bool:

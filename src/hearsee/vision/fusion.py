@@ -27,12 +27,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.errors import CalibrationError, ImageInputError
+from hearsee.errors import CalibrationError, ConfigError, GeometryError, ImageInputError
 from hearsee.vision.camera import Rectification, StereoRig
 from hearsee.vision.humans import (
     HumanCandidate,
     HumanDetectorParams,
     StereoDetection,
+    _check_height,
     detect_candidates,
 )
 from hearsee.vision.stereo import StereoFrame, points_to_left_frame, stereo_frame
@@ -113,10 +114,15 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
 
     ``points_left`` ``(N, 3)``: silhouette points in the left optical frame (metres);
     ``heights`` ``(N,)`` their heights above the floor (the top ``head_band_m`` metres get weight
-    ``head_weight``); ``warm`` the thermal filter's mask (thermal image size). Points projecting
+    ``head_weight`` > 0); ``warm`` the thermal filter's mask (thermal image size; bool, or 0/1
+    numbers -- a 0/255 image is refused, it gave "fractions" up to 255). Points projecting
     outside the thermal image are ignored; NaN when fewer than ``min_points`` remain.
     """
     cam = rig.thermal_camera
+    warm = _check_mask(warm)
+    hw = np.asarray(head_weight)
+    if not (hw.ndim == 0 and hw.dtype.kind in "iuf" and np.isfinite(hw) and hw > 0):
+        raise ConfigError(f"head_weight must be a finite number > 0, got {head_weight!r}")
     if warm.shape != cam.shape:
         raise ImageInputError(
             f"thermal image is {warm.shape[1]}x{warm.shape[0]} pixels but the calibration's "
@@ -124,6 +130,9 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
         )
     P = np.asarray(points_left, dtype=float)
     h = np.asarray(heights, dtype=float)
+    if P.ndim != 2 or P.shape[1] != 3 or h.shape != (len(P),):
+        raise GeometryError(f"thermal_support: expected points (N, 3) and heights (N,), got "
+                            f"{P.shape} and {h.shape}")
     if len(P) > max_points:  # deterministic subsample
         idx = np.linspace(0, len(P) - 1, max_points).astype(int)
         P, h = P[idx], h[idx]
@@ -138,6 +147,20 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
     v = np.clip(np.rint(uv[:, 1]).astype(int), 0, cam.height - 1)
     w = np.where(h >= h.max() - head_band_m, head_weight, 1.0)
     return float((w * warm[v, u]).sum() / w.sum())
+
+
+def _check_mask(warm: NDArray) -> NDArray:
+    """The warm mask as bool; ImageInputError unless it is bool or holds only 0 and 1."""
+    m = np.asarray(warm)
+    if m.dtype == np.bool_:
+        return m
+    if m.dtype.kind not in "uif" or not np.all((m == 0) | (m == 1)):
+        raise ImageInputError(
+            f"warm mask must be bool (or 0/1), got {m.dtype} with values "
+            f"{np.unique(m)[:4].tolist() if m.dtype.kind in 'uif' else '?'} (a 0/255 image? use "
+            "mask > 0)"
+        )
+    return m.astype(bool)
 
 
 def _to_human(c: HumanCandidate, support: float | None, accepted: bool, reason: str) -> Human:
@@ -199,7 +222,8 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
     params : stereo detector parameters (Tm = ``params.tm``).
     min_support : thermal support needed to accept a candidate.
     band_c : radiometric human temperature band (degC).
-    camera_height_m : prior for the floor (default ``rig.info["camera_height_m"]``).
+    camera_height_m : prior for the floor, metres above it (finite, > 0; default
+        ``rig.info["camera_height_m"]``).
     stereo_options : options of :func:`hearsee.vision.stereo.compute_disparity`.
 
     Returns
@@ -212,13 +236,14 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
             "a thermal image was given but the calibration has no thermal camera: add a "
             "'thermal:' block (camera, R, T) to the calibration file or leave out the thermal image"
         )
+    # a bad camera height fails before the stereo matching, not after it
+    if camera_height_m is None:
+        camera_height_m = rig.camera_height_m  # ConfigError when info holds a bad one
+    _check_height(camera_height_m)
     opts = dict(DEFAULT_STEREO_OPTIONS)
     opts.update(stereo_options or {})
     frame = stereo_frame(left, right, rig, **opts)
     rect = frame.rectification
-    if camera_height_m is None:
-        ch = rig.info.get("camera_height_m") if isinstance(rig.info, dict) else None
-        camera_height_m = float(ch) if ch is not None else None
     det = detect_candidates(frame.disparity, frame.points(), frame.focal_px, frame.baseline_m,
                             rect.cy, camera_height_m=camera_height_m, params=params)
     warm = None

@@ -47,7 +47,13 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.errors import EstimationError, ImageInputError
+from hearsee.errors import (
+    CalibrationError,
+    ConfigError,
+    EstimationError,
+    GeometryError,
+    ImageInputError,
+)
 
 __all__ = [
     "BodySegment",
@@ -71,6 +77,35 @@ __all__ = [
 #: for a person facing the camera (torso ~0.22 m deep, legs and arms ~0.12 m) and about 0.15 m
 #: for one turned sideways (the near arm and shoulder); 0.09 m balances the two.
 BODY_SURFACE_DEPTH_M = 0.09
+
+
+# ---------------------------------------------------------------------------------------------
+# Input checks
+# ---------------------------------------------------------------------------------------------
+def _is_real(v: object) -> bool:
+    """A finite real number (Python or numpy scalar, or 0-d array; not a bool or a string)."""
+    a = np.asarray(v)
+    return a.ndim == 0 and a.dtype.kind in "iuf" and bool(np.isfinite(a))
+
+
+def _check_stereo(focal_px: float, baseline_m: float) -> None:
+    """CalibrationError unless the rectified focal length (pixels) and baseline (metres) are
+    finite and > 0 (a zero, negative or NaN one silently gave no people)."""
+    for name, v, unit in (("focal_px", focal_px, "pixels"), ("baseline_m", baseline_m, "metres")):
+        if not (_is_real(v) and v > 0):
+            raise CalibrationError(f"{name} must be a finite number of {unit} > 0, got {v!r}")
+
+
+def _check_height(camera_height_m: float | None, what: str = "camera_height_m") -> None:
+    """GeometryError unless the camera height above the floor (metres) is None or finite > 0."""
+    if camera_height_m is None:
+        return
+    v = camera_height_m
+    if not (_is_real(v) and v > 0):
+        raise GeometryError(
+            f"{what} (camera height above the floor) must be a finite number of metres > 0, "
+            f"got {v!r}"
+        )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -124,7 +159,8 @@ class FloorPlane:
 
     @classmethod
     def level(cls, camera_height_m: float) -> FloorPlane:
-        """The floor of a level camera ``camera_height_m`` metres above it."""
+        """The floor of a level camera ``camera_height_m`` metres (finite, > 0) above it."""
+        _check_height(camera_height_m)
         return cls(np.array([0.0, -1.0, 0.0]), float(camera_height_m), "prior")
 
     def height(self, points: NDArray) -> NDArray:
@@ -145,8 +181,10 @@ def estimate_floor(points: NDArray, *, prior_height_m: float | None = None, step
     ``step`` pixels); planes tilted more than ``max_tilt_deg`` from level are refused; among the
     rest the one with most inliers (within ``inlier_m``) is refined by least squares. Falls back
     to a level floor at ``prior_height_m`` when no floor is found (EstimationError when there
-    is no prior either). When a prior is given, floors more than 0.5 m from it are refused.
+    is no prior either). When a prior is given, floors more than 0.5 m from it are refused;
+    the prior must be a finite height > 0 (GeometryError).
     """
+    _check_height(prior_height_m, "prior_height_m")
     P = points[::step, ::step].reshape(-1, 3)
     P = P[np.all(np.isfinite(P), axis=1)]
     P = P[(P[:, 1] > 0.3) & (P[:, 2] < 10.0)]
@@ -247,6 +285,7 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
        not given), 3. centre mean over ``person_width_m * d / B`` columns minus the smaller of
        the two surround means (each ``surround_m * d / B`` columns). Returns ``(n_d, W)``.
     """
+    _check_stereo(focal_px, baseline_m)
     P = np.asarray(P, dtype=np.float64)
     nd, W = P.shape
     d = np.arange(nd, dtype=float)
@@ -289,6 +328,7 @@ def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: f
     """Greedy non-maximum suppression on Psi-hat: returns ``[(column, disparity, value)]``,
     strongest first. Around each peak, columns within ``person_width_m`` (scaled by ``d/B``)
     and depths within ``depth_sep_m`` are suppressed."""
+    _check_stereo(focal_px, baseline_m)
     ps = np.array(psi, dtype=float, copy=True)
     nd, W = ps.shape
     ps[: int(np.ceil(min_disparity))] = -np.inf
@@ -340,6 +380,7 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     (kernels scaled with ``d``); the connected component under the candidate column is kept
     and the depth band re-centred on its median once.
     """
+    _check_stereo(focal_px, baseline_m)
     p = params or HumanDetectorParams()
     H, W = disparity.shape
     fb = focal_px * baseline_m
@@ -568,13 +609,21 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     points : (H, W, 3) metres in the rectified left frame (from the same disparity).
     focal_px, baseline_m, cy : rectified focal length (px), baseline (m), principal row (px).
     floor : the floor plane; estimated (RANSAC, prior ``camera_height_m``) when None.
+    camera_height_m : height of the camera above the floor, metres (finite, > 0).
     params : :class:`HumanDetectorParams`.
+
+    CalibrationError for a focal length or baseline that is not finite and > 0 or a
+    non-finite ``cy``; GeometryError for a camera height that is not finite and > 0.
 
     Returns
     -------
     :class:`StereoDetection` whose candidates have ``accepted`` set by the stereo checks
     (3D extent and ``score >= params.tm``).
     """
+    _check_stereo(focal_px, baseline_m)
+    if not _is_real(cy):
+        raise CalibrationError(f"cy (principal row) must be a finite number of pixels, got {cy!r}")
+    _check_height(camera_height_m)
     p = params or HumanDetectorParams()
     d = np.asarray(disparity, dtype=np.float32)
     if d.ndim != 2 or points.shape != (*d.shape, 3):
@@ -694,10 +743,20 @@ def detect_people_hog(image: NDArray, *, win_stride: int = 8, scale: float = 1.0
     margins around the person; with ``shrink`` the boxes are shrunk by 15 % of the width on
     each side and 5 % of the height at top and bottom (as OpenCV's ``peopledetect.py`` sample
     draws them) so that they can be compared with tight person boxes.
+
+    The image must be uint8 grey, BGR or BGRA (the alpha channel is dropped) and at least
+    64x128 pixels (ImageInputError); ``win_stride`` (pixels) a positive integer and ``scale``
+    (the pyramid step) a finite number > 1 (ConfigError). OpenCV itself crashed the process on
+    a negative stride or an image smaller than the window.
     """
-    img = np.asarray(image)
-    if img.ndim not in (2, 3) or img.dtype != np.uint8:
-        raise ImageInputError(f"HOG needs an 8-bit grey or BGR image, got {img.shape} {img.dtype}")
+    img = _hog_image(image)
+    if isinstance(win_stride, bool) or not isinstance(win_stride, int | np.integer) or \
+            win_stride < 1:
+        raise ConfigError(f"win_stride must be a positive integer (pixels), got {win_stride!r}")
+    if not (_is_real(scale) and scale > 1.0):
+        raise ConfigError(f"scale must be a finite number > 1 (pyramid step), got {scale!r}")
+    if not _is_real(hit_threshold):
+        raise ConfigError(f"hit_threshold must be a finite number, got {hit_threshold!r}")
     hog = _hog()
     rects, weights = hog.detectMultiScale(img, hitThreshold=hit_threshold,
                                           winStride=(win_stride, win_stride), padding=(8, 8),
@@ -712,6 +771,28 @@ def detect_people_hog(image: NDArray, *, win_stride: int = 8, scale: float = 1.0
     return out
 
 
+def _hog_image(image: NDArray) -> NDArray:
+    """The image as OpenCV's HOG takes it (uint8, 1 or 3 channels, at least one window)."""
+    img = np.asarray(image)
+    if img.dtype != np.uint8 or img.ndim not in (2, 3) or \
+            (img.ndim == 3 and img.shape[2] not in (1, 3, 4)):
+        raise ImageInputError(
+            f"HOG needs an 8-bit grey, BGR or BGRA image, got shape {img.shape} {img.dtype}"
+        )
+    if img.shape[0] < _HOG_WIN[1] or img.shape[1] < _HOG_WIN[0]:
+        raise ImageInputError(
+            f"HOG needs an image of at least {_HOG_WIN[0]}x{_HOG_WIN[1]} pixels (its detection "
+            f"window), got {img.shape[1]}x{img.shape[0]}"
+        )
+    if img.ndim == 3 and img.shape[2] == 1:
+        return img[:, :, 0]
+    if img.ndim == 3 and img.shape[2] == 4:
+        return cv2.cvtColor(img, cv2.COLOR_BGRA2BGR)
+    return img
+
+
+#: Detection window (width, height) of OpenCV's default people detector, pixels.
+_HOG_WIN = (64, 128)
 _HOG: list = []
 
 

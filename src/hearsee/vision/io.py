@@ -126,13 +126,26 @@ def read_pair(left: str | Path, right: str | Path, mode: ColorMode = "gray",
     return check_pair(L, R, (str(left), str(right)), expected_size)
 
 
+#: Pixel types OpenCV converts from colour to grey (cv2.cvtColor).
+_COLOR_DTYPES = (np.uint8, np.uint16, np.float32)
+
+
 def to_gray(image: NDArray) -> NDArray:
-    """Single-channel view of an image (BGR/BGRA -> gray by OpenCV's weights; 1 channel kept)."""
+    """Single-channel view of an image (BGR/BGRA -> gray by OpenCV's weights; 1 channel kept).
+
+    Colour images must be uint8, uint16 or float32 (what OpenCV converts): other pixel types
+    raise ImageInputError naming the type; single-channel images of any type are kept.
+    """
     check_image(image)
     if image.ndim == 2:
         return image
     if image.shape[2] == 1:
         return image[:, :, 0]
+    if image.dtype not in _COLOR_DTYPES:
+        raise ImageInputError(
+            f"unsupported pixel type {image.dtype} for a {image.shape[2]}-channel image: colour "
+            "images must be uint8, uint16 or float32 (convert it, or pass one grey channel)"
+        )
     if image.shape[2] == 4:
         return cv2.cvtColor(image, cv2.COLOR_BGRA2GRAY)
     return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)

@@ -36,7 +36,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.errors import CalibrationError, ConfigError, ImageInputError
+from hearsee.errors import CalibrationError, ConfigError, GeometryError, ImageInputError
 from hearsee.vision.camera import Rectification, StereoRig
 from hearsee.vision.io import check_pair, to_gray
 
@@ -291,23 +291,37 @@ def fill_disparity_holes(disparity: NDArray, median: int = 5) -> NDArray:
 # ---------------------------------------------------------------------------------------------
 # Depth and 3D points
 # ---------------------------------------------------------------------------------------------
+def _check_fb(focal_px: float, baseline_m: float) -> float:
+    """``f B`` (pixel metres); GeometryError unless the focal length (pixels) and the baseline
+    (metres) are finite and > 0 (a negative one gave negative depths, NaN all-NaN ones)."""
+    for name, v, unit in (("focal_px", focal_px, "pixels"), ("baseline_m", baseline_m, "metres")):
+        a = np.asarray(v)
+        if not (a.ndim == 0 and a.dtype.kind in "iuf" and np.isfinite(a) and a > 0):
+            raise GeometryError(f"{name} must be a finite number of {unit} > 0, got {v!r}")
+    return float(focal_px) * float(baseline_m)
+
+
 def depth_from_disparity(disparity: ArrayLike, focal_px: float, baseline_m: float,
                          min_disparity: float = 0.0) -> NDArray:
-    """Depth ``Z = f B / d`` in metres (NaN where ``d <= min_disparity`` or NaN)."""
+    """Depth ``Z = f B / d`` in metres (NaN where ``d <= min_disparity`` or NaN), same shape as
+    ``disparity`` (pixels; a scalar gives a 0-d array). ``focal_px`` (pixels) and
+    ``baseline_m`` (metres) must be finite and > 0 (GeometryError)."""
+    fb = _check_fb(focal_px, baseline_m)
+    if not np.isfinite(min_disparity):
+        raise ConfigError(f"min_disparity must be a finite number of pixels, got {min_disparity}")
     d = np.asarray(disparity, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
-        z = focal_px * baseline_m / d
-    z[~(d > max(min_disparity, 0.0))] = np.nan
-    return z
+        return np.where(d > max(min_disparity, 0.0), fb / d, np.nan)
 
 
 def disparity_from_depth(depth_m: ArrayLike, focal_px: float, baseline_m: float) -> NDArray:
-    """Disparity ``d = f B / Z`` in pixels of depths in metres (NaN where Z <= 0 or NaN)."""
+    """Disparity ``d = f B / Z`` in pixels of depths in metres (NaN where Z <= 0 or NaN), same
+    shape as ``depth_m`` (a scalar gives a 0-d array). ``focal_px`` (pixels) and
+    ``baseline_m`` (metres) must be finite and > 0 (GeometryError)."""
+    fb = _check_fb(focal_px, baseline_m)
     z = np.asarray(depth_m, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
-        d = focal_px * baseline_m / z
-    d[~(z > 0)] = np.nan
-    return d
+        return np.where(z > 0, fb / z, np.nan)
 
 
 def points_from_disparity(disparity: ArrayLike, Q: ArrayLike) -> NDArray:
