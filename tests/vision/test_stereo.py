@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from hearsee.errors import CalibrationError, ConfigError, GeometryError, ImageInputError
+from hearsee.errors import CalibrationError, ConfigError, ImageInputError
 from hearsee.vision.camera import Camera, StereoRig
 from hearsee.vision.stereo import (
     compute_disparity,
@@ -180,9 +180,9 @@ def test_depth_conversions_check_focal_and_baseline_and_accept_scalars():
     """f or B <= 0 or NaN gave negative or all-NaN depths; a scalar disparity raised a
     TypeError (0-d assignment)."""
     for f, b in ((0.0, 0.1), (-500.0, 0.1), (np.nan, 0.1), (500.0, -0.1), (500.0, np.inf)):
-        with pytest.raises(GeometryError, match="focal_px|baseline_m"):
+        with pytest.raises(CalibrationError, match="focal_px|baseline_m"):
             depth_from_disparity([[1.0, 2.0]], f, b)
-        with pytest.raises(GeometryError, match="focal_px|baseline_m"):
+        with pytest.raises(CalibrationError, match="focal_px|baseline_m"):
             disparity_from_depth([[1.0, 2.0]], f, b)
     z = depth_from_disparity(5.0, 500.0, 0.1)
     assert z.shape == () and float(z) == pytest.approx(10.0)

@@ -54,6 +54,7 @@ from hearsee.errors import (
     GeometryError,
     ImageInputError,
 )
+from hearsee.vision.stereo import check_focal_baseline
 
 __all__ = [
     "BodySegment",
@@ -86,14 +87,6 @@ def _is_real(v: object) -> bool:
     """A finite real number (Python or numpy scalar, or 0-d array; not a bool or a string)."""
     a = np.asarray(v)
     return a.ndim == 0 and a.dtype.kind in "iuf" and bool(np.isfinite(a))
-
-
-def _check_stereo(focal_px: float, baseline_m: float) -> None:
-    """CalibrationError unless the rectified focal length (pixels) and baseline (metres) are
-    finite and > 0 (a zero, negative or NaN one silently gave no people)."""
-    for name, v, unit in (("focal_px", focal_px, "pixels"), ("baseline_m", baseline_m, "metres")):
-        if not (_is_real(v) and v > 0):
-            raise CalibrationError(f"{name} must be a finite number of {unit} > 0, got {v!r}")
 
 
 def _check_height(camera_height_m: float | None, what: str = "camera_height_m") -> None:
@@ -285,7 +278,7 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
        not given), 3. centre mean over ``person_width_m * d / B`` columns minus the smaller of
        the two surround means (each ``surround_m * d / B`` columns). Returns ``(n_d, W)``.
     """
-    _check_stereo(focal_px, baseline_m)
+    check_focal_baseline(focal_px, baseline_m)
     P = np.asarray(P, dtype=np.float64)
     nd, W = P.shape
     d = np.arange(nd, dtype=float)
@@ -328,7 +321,7 @@ def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: f
     """Greedy non-maximum suppression on Psi-hat: returns ``[(column, disparity, value)]``,
     strongest first. Around each peak, columns within ``person_width_m`` (scaled by ``d/B``)
     and depths within ``depth_sep_m`` are suppressed."""
-    _check_stereo(focal_px, baseline_m)
+    check_focal_baseline(focal_px, baseline_m)
     ps = np.array(psi, dtype=float, copy=True)
     nd, W = ps.shape
     ps[: int(np.ceil(min_disparity))] = -np.inf
@@ -380,7 +373,7 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     (kernels scaled with ``d``); the connected component under the candidate column is kept
     and the depth band re-centred on its median once.
     """
-    _check_stereo(focal_px, baseline_m)
+    check_focal_baseline(focal_px, baseline_m)
     p = params or HumanDetectorParams()
     H, W = disparity.shape
     fb = focal_px * baseline_m
@@ -620,7 +613,7 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     :class:`StereoDetection` whose candidates have ``accepted`` set by the stereo checks
     (3D extent and ``score >= params.tm``).
     """
-    _check_stereo(focal_px, baseline_m)
+    check_focal_baseline(focal_px, baseline_m)
     if not _is_real(cy):
         raise CalibrationError(f"cy (principal row) must be a finite number of pixels, got {cy!r}")
     _check_height(camera_height_m)

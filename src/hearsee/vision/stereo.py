@@ -36,12 +36,13 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.errors import CalibrationError, ConfigError, GeometryError, ImageInputError
+from hearsee.errors import CalibrationError, ConfigError, ImageInputError
 from hearsee.vision.camera import Rectification, StereoRig
 from hearsee.vision.io import check_pair, to_gray
 
 __all__ = [
     "StereoFrame",
+    "check_focal_baseline",
     "compute_disparity",
     "depth_from_disparity",
     "disparity_from_depth",
@@ -291,13 +292,15 @@ def fill_disparity_holes(disparity: NDArray, median: int = 5) -> NDArray:
 # ---------------------------------------------------------------------------------------------
 # Depth and 3D points
 # ---------------------------------------------------------------------------------------------
-def _check_fb(focal_px: float, baseline_m: float) -> float:
-    """``f B`` (pixel metres); GeometryError unless the focal length (pixels) and the baseline
-    (metres) are finite and > 0 (a negative one gave negative depths, NaN all-NaN ones)."""
+def check_focal_baseline(focal_px: float, baseline_m: float) -> float:
+    """``f B`` (pixel metres) of a rectified rig; CalibrationError unless the focal length
+    (pixels) and the baseline (metres) are finite numbers > 0 (a negative one gave negative
+    depths, a zero or NaN one all-NaN depths or no people at all). The one check of the depth
+    conversions and the human detector."""
     for name, v, unit in (("focal_px", focal_px, "pixels"), ("baseline_m", baseline_m, "metres")):
         a = np.asarray(v)
         if not (a.ndim == 0 and a.dtype.kind in "iuf" and np.isfinite(a) and a > 0):
-            raise GeometryError(f"{name} must be a finite number of {unit} > 0, got {v!r}")
+            raise CalibrationError(f"{name} must be a finite number of {unit} > 0, got {v!r}")
     return float(focal_px) * float(baseline_m)
 
 
@@ -305,8 +308,8 @@ def depth_from_disparity(disparity: ArrayLike, focal_px: float, baseline_m: floa
                          min_disparity: float = 0.0) -> NDArray:
     """Depth ``Z = f B / d`` in metres (NaN where ``d <= min_disparity`` or NaN), same shape as
     ``disparity`` (pixels; a scalar gives a 0-d array). ``focal_px`` (pixels) and
-    ``baseline_m`` (metres) must be finite and > 0 (GeometryError)."""
-    fb = _check_fb(focal_px, baseline_m)
+    ``baseline_m`` (metres) must be finite and > 0 (CalibrationError)."""
+    fb = check_focal_baseline(focal_px, baseline_m)
     if not np.isfinite(min_disparity):
         raise ConfigError(f"min_disparity must be a finite number of pixels, got {min_disparity}")
     d = np.asarray(disparity, dtype=np.float64)
@@ -317,8 +320,8 @@ def depth_from_disparity(disparity: ArrayLike, focal_px: float, baseline_m: floa
 def disparity_from_depth(depth_m: ArrayLike, focal_px: float, baseline_m: float) -> NDArray:
     """Disparity ``d = f B / Z`` in pixels of depths in metres (NaN where Z <= 0 or NaN), same
     shape as ``depth_m`` (a scalar gives a 0-d array). ``focal_px`` (pixels) and
-    ``baseline_m`` (metres) must be finite and > 0 (GeometryError)."""
-    fb = _check_fb(focal_px, baseline_m)
+    ``baseline_m`` (metres) must be finite and > 0 (CalibrationError)."""
+    fb = check_focal_baseline(focal_px, baseline_m)
     z = np.asarray(depth_m, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(z > 0, fb / z, np.nan)
