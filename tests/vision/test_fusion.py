@@ -159,3 +159,13 @@ def test_bad_camera_height_is_refused_before_matching(scene):
         rig = StereoRig(RIG.left, RIG.right, RIG.R, RIG.T, info={"camera_height_m": bad})
         with pytest.raises(ConfigError, match="info: camera_height_m"):
             detect_humans(scene.left, scene.right, rig)
+
+
+def test_a_nan_thermal_threshold_is_refused(scene):
+    """min_support=NaN rejected every candidate (support >= NaN is False) without a word."""
+    from hearsee.errors import ConfigError
+
+    for bad in (np.nan, -0.1, 1.5):
+        with pytest.raises(ConfigError, match="min_support"):
+            detect_humans(scene.left, scene.right, RIG, scene.thermal_c, camera_height_m=1.4,
+                          min_support=bad)

@@ -227,3 +227,21 @@ def test_hog_refuses_bad_strides_scales_and_images():
     # BGRA (alpha dropped) and (H, W, 1) images are accepted
     assert detect_people_hog(np.zeros((160, 120, 4), np.uint8)) == []
     assert detect_people_hog(np.zeros((160, 120, 1), np.uint8), win_stride=np.int64(16)) == []
+
+
+@pytest.mark.parametrize("kw, name", [({"tm": np.nan}, "tm"), ({"tm": 1.5}, "tm"),
+                                      ({"tau_m": 0.0}, "tau_m"), ({"max_range_m": 0.0},
+                                                                  "max_range_m"),
+                                      ({"min_range_m": 0.0}, "min_range_m"),
+                                      ({"min_range_m": 10.0}, "min_range_m"),
+                                      ({"depth_band_m": -1.0}, "depth_band_m"),
+                                      ({"peak_threshold": np.nan}, "peak_threshold"),
+                                      ({"person_width_m": np.nan}, "person_width_m"),
+                                      ({"max_candidates": 0}, "max_candidates")])
+def test_detector_parameters_are_checked_when_made(kw, name):
+    """Before 2026-11-26 none was: a NaN tm accepted every candidate that passed the extent
+    test, a zero range or tau_m divided by zero, a negative depth band emptied every
+    segmentation, a NaN peak threshold found nobody."""
+    with pytest.raises(ConfigError, match=name):
+        HumanDetectorParams(**kw)
+    assert HumanDetectorParams(tm=1.0).tm == 1.0  # the documented range's ends stay allowed

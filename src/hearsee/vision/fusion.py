@@ -179,6 +179,9 @@ def classify_candidates(det: StereoDetection, rig: StereoRig, rect: Rectificatio
     Duplicates and empty segmentations are dropped. Positions are returned in the left camera's
     own optical frame.
     """
+    if not (np.ndim(min_support) == 0 and np.isfinite(min_support) and 0 <= min_support <= 1):
+        # (NaN rejected every candidate: support >= NaN is False)
+        raise ConfigError(f"min_support must be a thermal support in [0, 1], got {min_support!r}")
     needs_rect = not rig.is_rectified
     humans, rejected = [], []
     for c in det.candidates:

@@ -135,6 +135,35 @@ class HumanDetectorParams:
     max_width_m: float = 1.1
     max_candidates: int = 16
 
+    def __post_init__(self) -> None:
+        """ConfigError for a setting out of range (before 2026-11-26 none was checked: a NaN
+        ``tm`` accepted every candidate, a zero range or ``tau_m`` divided by zero)."""
+        lengths = ("person_width_m", "surround_m", "depth_band_m", "max_height_m", "above_m",
+                   "max_range_m", "min_range_m", "tau_m", "max_top_m", "max_width_m")
+        for name in lengths:
+            v = getattr(self, name)
+            if not (_is_real(v) and v > 0):
+                raise ConfigError(f"HumanDetectorParams.{name} must be a finite number > 0, got "
+                                  f"{v!r}")
+        for name in ("min_height_m", "above_weight", "min_top_m", "min_width_m"):
+            v = getattr(self, name)
+            if not (_is_real(v) and v >= 0):
+                raise ConfigError(f"HumanDetectorParams.{name} must be a finite number >= 0, "
+                                  f"got {v!r}")
+        for name in ("peak_threshold", "tm"):
+            v = getattr(self, name)
+            if not (_is_real(v) and 0 <= v <= 1):
+                raise ConfigError(f"HumanDetectorParams.{name} must be in [0, 1], got {v!r}")
+        for lo, hi in (("min_height_m", "max_height_m"), ("min_range_m", "max_range_m"),
+                       ("min_top_m", "max_top_m"), ("min_width_m", "max_width_m")):
+            if not getattr(self, lo) < getattr(self, hi):
+                raise ConfigError(f"HumanDetectorParams: {lo} ({getattr(self, lo)}) must be "
+                                  f"below {hi} ({getattr(self, hi)})")
+        if isinstance(self.max_candidates, bool) or not isinstance(self.max_candidates, int) \
+                or self.max_candidates < 1:
+            raise ConfigError("HumanDetectorParams.max_candidates must be an integer >= 1, got "
+                              f"{self.max_candidates!r}")
+
 
 # ---------------------------------------------------------------------------------------------
 # Floor
