@@ -268,3 +268,21 @@ def test_public_solvers_refuse_nan_wrong_length_and_bad_tolerance():
             localize_tdoa(t3, three, tol_s=tol, in_plane=True)
     empty = localize_tdoa([np.nan] * 3, three)
     assert empty.azimuth_deg is None and empty.candidates == []
+
+
+def test_locus_plots_refuse_degenerate_input():
+    """Bad-input sweep (2026-11-26): a zero-length pair gave an all-NaN cone, NaN or negative
+    speeds, extents or ranges NaN or degenerate grids, NaN ranges a scipy ValueError."""
+    m_i, m_j = [0.0, -0.075, 0.0], [0.0, 0.075, 0.0]
+    for f in (hyperboloid_points, cone_points):
+        assert np.all(np.isfinite(f(1e-4, m_i, m_j)))
+        for args, kw in (((1e-4, m_i, m_i), {}), ((np.nan, m_i, m_j), {}),
+                         ((1e-4, m_i, m_j), {"c": 0.0}), ((1e-4, m_i, m_j), {"c": np.nan}),
+                         ((1e-4, m_i, m_j), {"extent_m": -3.0}), ((1e-4, [np.nan] * 3, m_j), {})):
+            with pytest.raises(GeometryError):
+                f(*args, **kw)
+    three = MicArray.from_preset("three-mic")
+    t = three.tdoa([1.0, 0.5, 0.2])
+    for ranges in ([np.nan, 1.0], [-1.0, 1.0], []):
+        with pytest.raises(GeometryError, match="ranges_m"):
+            three_mic_curve(t, three, ranges_m=ranges)

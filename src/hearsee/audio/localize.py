@@ -612,6 +612,26 @@ def _frame_from_axis(axis: NDArray) -> NDArray:
     return np.stack([e1, np.cross(a, e1), a])
 
 
+def _locus_input(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float,
+                 extent_m: float) -> tuple[NDArray, NDArray, float]:
+    """The pair (two finite points, metres, apart) and ``c * tdoa`` (metres) of a locus plot,
+    or a GeometryError (NaN inputs, coincident microphones or a non-positive speed or extent
+    gave all-NaN or degenerate grids)."""
+    mi = np.asarray(m_i, dtype=float).reshape(-1)
+    mj = np.asarray(m_j, dtype=float).reshape(-1)
+    if mi.shape != (3,) or mj.shape != (3,) or not (np.all(np.isfinite(mi))
+                                                   and np.all(np.isfinite(mj))):
+        raise GeometryError(f"microphone positions must be finite [x, y, z] points, got {m_i!r}, "
+                            f"{m_j!r}")
+    if not np.linalg.norm(mi - mj) > 0:
+        raise GeometryError("the two microphones coincide: a TDOA has no locus")
+    if not (np.isfinite(c) and c > 0 and np.isfinite(extent_m) and extent_m > 0):
+        raise GeometryError(f"c and extent_m must be finite numbers > 0, got {c}, {extent_m}")
+    if not np.isfinite(tdoa_s):
+        raise GeometryError(f"tdoa_s must be a finite number of seconds, got {tdoa_s}")
+    return mi, mj, c * float(tdoa_s)
+
+
 def hyperboloid_points(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float = 343.0,
                        extent_m: float = 3.0, n_radial: int = 40,
                        n_around: int = 48) -> NDArray:
@@ -622,10 +642,8 @@ def hyperboloid_points(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float =
     pair's centre, ready for ``plot_surface``. A zero TDOA gives the bisecting plane's disc;
     ``|c tdoa| >= |M_i - M_j|`` raises GeometryError (no locus).
     """
-    mi = np.asarray(m_i, dtype=float)
-    mj = np.asarray(m_j, dtype=float)
+    mi, mj, delta = _locus_input(tdoa_s, m_i, m_j, c, extent_m)
     f = np.linalg.norm(mi - mj) / 2.0
-    delta = c * float(tdoa_s)
     a = abs(delta) / 2.0
     if a >= f:
         raise GeometryError(f"|c*tdoa| = {2 * a:.4f} m is not below the spacing {2 * f:.4f} m")
@@ -655,10 +673,9 @@ def cone_points(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float = 343.0,
 
     Returns ``(n_radial, n_around, 3)`` points in metres.
     """
-    mi = np.asarray(m_i, dtype=float)
-    mj = np.asarray(m_j, dtype=float)
+    mi, mj, delta = _locus_input(tdoa_s, m_i, m_j, c, extent_m)
     d = np.linalg.norm(mi - mj)
-    cos_t = c * float(tdoa_s) / d
+    cos_t = delta / d
     if abs(cos_t) > 1:
         raise GeometryError("|c*tdoa| exceeds the microphone spacing: no cone")
     axis = (mj - mi) / d  # u . (mj - mi)/d = cos_t for delta = t_i - t_j > 0
@@ -691,6 +708,10 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
     prs = _pairs(arr, pairs)
     tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
     ranges = np.linspace(0.3, 3.0, 40) if ranges_m is None else np.asarray(ranges_m, float)
+    if ranges.ndim != 1 or ranges.size == 0 or not np.all(np.isfinite(ranges) & (ranges > 0)):
+        raise GeometryError(f"ranges_m must be finite distances > 0 m, got {ranges_m!r}")
+    if not np.all(np.isfinite(tau)):
+        raise GeometryError("three_mic_curve needs finite TDOAs")
     pos = arr.positions
     c = arr.speed_of_sound
     I = np.array([p[0] for p in prs])
