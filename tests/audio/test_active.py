@@ -178,6 +178,17 @@ def test_bad_speed_of_sound_and_coincident_microphones_are_refused():
         solve_range_differences([arr.positions], [arr.pairs], [arr.tdoa(src)], f_scale=0.0)
 
 
+def test_training_set_refuses_nan_noise_and_bad_ranges():
+    """tdoa_std_s=NaN returned all-NaN samples; an inverted or negative distance range raised
+    numpy's ValueError or was accepted (bad-input sweep, 2026-11-26)."""
+    for kw in ({"tdoa_std_s": np.nan}, {"tdoa_std_s": -1.0}, {"distance_range_m": (3.0, 0.5)},
+               {"distance_range_m": (-1.0, 2.0)}, {"elevation_range_deg": (np.nan, 10.0)}):
+        with pytest.raises(GeometryError):
+            make_pose_training_set(ARR, POSES3, 10, **kw)
+    X, Y = make_pose_training_set(ARR, POSES3, 10, tdoa_std_s=0.0)
+    assert np.all(np.isfinite(X)) and X.shape == (10, 9)
+
+
 def test_mlp_maps_tdoas_over_poses_to_positions():
     mlp = train_pose_mlp(ARR, POSES3, offset_m=(0.2, 0, 0.1), n=2000, seed=1,
                          hidden_layer_sizes=(32, 32))

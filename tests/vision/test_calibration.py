@@ -85,6 +85,9 @@ def test_board_helpers():
     np.testing.assert_allclose(p[:4], [[0, 0, 0], [0.1, 0, 0], [0.2, 0, 0], [0, 0.1, 0]])
     with pytest.raises(CalibrationError, match="square"):
         C.board_points((3, 2), 0.0)
+    for bad in (np.inf, np.nan):  # inf gave inf / NaN corners before 2026-11-26
+        with pytest.raises(CalibrationError, match="square"):
+            C.board_points((3, 2), bad)
 
 
 def test_corners_are_subpixel_accurate(synthetic):

@@ -744,6 +744,14 @@ def make_pose_training_set(
     Returns ``X (n, K * n_pairs)`` seconds and ``Y (n, 3)`` source positions in metres.
     """
     arr = load_array(array)
+    lo, hi = (float(v) for v in distance_range_m)
+    if not (0 < lo < hi and np.isfinite(hi)):
+        raise GeometryError(f"distance_range_m must be 0 < near < far metres, got "
+                            f"{distance_range_m!r}")
+    if not (np.isfinite(tdoa_std_s) and tdoa_std_s >= 0):  # (NaN made every sample NaN)
+        raise GeometryError(f"tdoa_std_s must be a finite number >= 0 seconds, got {tdoa_std_s}")
+    if not all(np.all(np.isfinite(v)) for v in (elevation_range_deg, azimuth_range_deg)):
+        raise GeometryError("elevation_range_deg and azimuth_range_deg must be finite degrees")
     rng = np.random.default_rng(rng)
     az = np.radians(rng.uniform(*azimuth_range_deg, n))
     s_lo, s_hi = np.sin(np.radians(elevation_range_deg))

@@ -99,8 +99,8 @@ def parse_board(text: str) -> tuple[int, int]:
 def board_points(pattern: tuple[int, int], square_m: float) -> NDArray:
     """3D corners ``(cols*rows, 3)`` float32 of a chessboard in its own frame (z = 0), metres,
     in OpenCV's order (along rows of ``pattern[0]`` corners)."""
-    if not square_m > 0:
-        raise CalibrationError(f"square size must be > 0 metres, got {square_m}")
+    if not (np.isfinite(square_m) and square_m > 0):  # (inf gave inf / NaN corners)
+        raise CalibrationError(f"square size must be a finite number > 0 metres, got {square_m}")
     nx, ny = pattern
     g = np.zeros((ny * nx, 3), np.float32)
     g[:, :2] = np.mgrid[0:nx, 0:ny].T.reshape(-1, 2) * square_m
