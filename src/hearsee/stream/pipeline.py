@@ -1083,9 +1083,8 @@ def _check_config(cfg: StreamConfig) -> None:
     if not (isinstance(cfg.prefer_frame_confidence, int | float)
             and cfg.prefer_frame_confidence > 0):  # (inf = never)
         raise bad("prefer_frame_confidence", "> 0 (inf = never)")
-    lo, hi = np.asarray(cfg.range_m, dtype=float).reshape(2) if np.size(cfg.range_m) == 2 \
-        else (np.nan, np.nan)
-    if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+    r = np.asarray(cfg.range_m, dtype=float).reshape(-1)
+    if not (r.size == 2 and np.all(np.isfinite(r)) and 0 < r[0] < r[1]):
         raise bad("range_m", "(near, far) metres with 0 < near < far")
     _check_gating(cfg)
 
