@@ -588,6 +588,9 @@ def test_stream_config_keeps_its_documented_special_values():
     cfg = StreamConfig(prefer_frame_confidence=float("inf"), max_coast_s=None, sigma_frame_deg=None,
                        sigma_srp_deg=None, spectrum_alpha=0.0, min_confidence=0.0)
     assert cfg.prefer_frame_confidence == float("inf") and cfg.spectrum_alpha == 0.0
+    # numpy numbers of any precision are numbers too
+    assert StreamConfig(spectrum_alpha=np.float32(0.5), sigma_meas_deg=np.float32(10.0),
+                        reacquire_s=np.int64(1)).spectrum_alpha == 0.5
 
 
 def _two_talkers(gaps):

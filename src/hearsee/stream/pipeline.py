@@ -46,6 +46,7 @@ Units: seconds, degrees, metres; frame times are frame centres from the start of
 from __future__ import annotations
 
 import math
+import numbers
 import queue
 import threading
 import time
@@ -1057,6 +1058,11 @@ _WITHIN = {"min_confidence": (0.0, np.inf), "min_coherence": (0.0, 1.0),
            "alt_ratio": (0.0, 1.0), "max_alt_ratio": (0.0, 1.0)}
 
 
+def _is_number(v: Any) -> bool:
+    """A real number (Python or numpy, any precision), not a bool."""
+    return isinstance(v, numbers.Real) and not isinstance(v, bool)
+
+
 def _check_config(cfg: StreamConfig) -> None:
     """ConfigError naming the first out-of-range setting of ``cfg`` (checked when a
     StreamConfig is made: before 2026-11-26 most were not, and a NaN noise put NaN azimuths in
@@ -1071,16 +1077,16 @@ def _check_config(cfg: StreamConfig) -> None:
         v = getattr(cfg, name)
         if v is None and name in _POSITIVE_OR_NONE:
             continue
-        if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+        if not (_is_number(v) and math.isfinite(v) and v > 0):
             raise bad(name, "a finite number > 0" + (" or None" if name in _POSITIVE_OR_NONE
                                                       else ""))
     for name, (lo, hi) in _WITHIN.items():
         v = getattr(cfg, name)
-        if not (isinstance(v, int | float) and math.isfinite(v) and lo <= v <= hi):
+        if not (_is_number(v) and math.isfinite(v) and lo <= v <= hi):
             raise bad(name, f"a number in [{lo:g}, {hi:g}]")
-    if not (isinstance(cfg.spectrum_alpha, int | float) and 0.0 <= cfg.spectrum_alpha < 1.0):
+    if not (_is_number(cfg.spectrum_alpha) and 0.0 <= cfg.spectrum_alpha < 1.0):
         raise bad("spectrum_alpha", "in [0, 1) (0 = no smoothing)")
-    if not (isinstance(cfg.prefer_frame_confidence, int | float)
+    if not (_is_number(cfg.prefer_frame_confidence)
             and cfg.prefer_frame_confidence > 0):  # (inf = never)
         raise bad("prefer_frame_confidence", "> 0 (inf = never)")
     r = np.asarray(cfg.range_m, dtype=float).reshape(-1)
