@@ -33,7 +33,7 @@ from hearsee.vision.humans import (
     HumanCandidate,
     HumanDetectorParams,
     StereoDetection,
-    _check_height,
+    check_camera_height,
     detect_candidates,
 )
 from hearsee.vision.stereo import StereoFrame, points_to_left_frame, stereo_frame
@@ -242,7 +242,7 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
     # a bad camera height fails before the stereo matching, not after it
     if camera_height_m is None:
         camera_height_m = rig.camera_height_m  # ConfigError when info holds a bad one
-    _check_height(camera_height_m)
+    check_camera_height(camera_height_m)
     opts = dict(DEFAULT_STEREO_OPTIONS)
     opts.update(stereo_options or {})
     frame = stereo_frame(left, right, rig, **opts)

@@ -62,6 +62,7 @@ __all__ = [
     "HumanCandidate",
     "HumanDetectorParams",
     "StereoDetection",
+    "check_camera_height",
     "detect_candidates",
     "detect_people_hog",
     "estimate_floor",
@@ -89,7 +90,7 @@ def _is_real(v: object) -> bool:
     return a.ndim == 0 and a.dtype.kind in "iuf" and bool(np.isfinite(a))
 
 
-def _check_height(camera_height_m: float | None, what: str = "camera_height_m") -> None:
+def check_camera_height(camera_height_m: float | None, what: str = "camera_height_m") -> None:
     """GeometryError unless the camera height above the floor (metres) is None or finite > 0."""
     if camera_height_m is None:
         return
@@ -182,7 +183,7 @@ class FloorPlane:
     @classmethod
     def level(cls, camera_height_m: float) -> FloorPlane:
         """The floor of a level camera ``camera_height_m`` metres (finite, > 0) above it."""
-        _check_height(camera_height_m)
+        check_camera_height(camera_height_m)
         return cls(np.array([0.0, -1.0, 0.0]), float(camera_height_m), "prior")
 
     def height(self, points: NDArray) -> NDArray:
@@ -206,7 +207,7 @@ def estimate_floor(points: NDArray, *, prior_height_m: float | None = None, step
     is no prior either). When a prior is given, floors more than 0.5 m from it are refused;
     the prior must be a finite height > 0 (GeometryError).
     """
-    _check_height(prior_height_m, "prior_height_m")
+    check_camera_height(prior_height_m, "prior_height_m")
     P = points[::step, ::step].reshape(-1, 3)
     P = P[np.all(np.isfinite(P), axis=1)]
     P = P[(P[:, 1] > 0.3) & (P[:, 2] < 10.0)]
@@ -645,7 +646,7 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     check_focal_baseline(focal_px, baseline_m)
     if not _is_real(cy):
         raise CalibrationError(f"cy (principal row) must be a finite number of pixels, got {cy!r}")
-    _check_height(camera_height_m)
+    check_camera_height(camera_height_m)
     p = params or HumanDetectorParams()
     d = np.asarray(disparity, dtype=np.float32)
     if d.ndim != 2 or points.shape != (*d.shape, 3):
