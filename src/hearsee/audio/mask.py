@@ -88,7 +88,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio import bem
 from hearsee.audio.arrays import MicArray, load_array
-from hearsee.audio.propagation import check_fs
+from hearsee.audio.signals import check_fs
 from hearsee.audio.tdoa import check_frame_ms
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 

@@ -20,13 +20,13 @@ import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
+from hearsee.audio.signals import check_fs
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
 __all__ = [
     "MAX_IMAGE_ORDER",
     "MIN_WALL_DISTANCE_M",
     "add_noise",
-    "check_fs",
     "delay_signals",
     "image_sources",
     "room_impulse_responses",
@@ -52,17 +52,6 @@ def _mic_positions(mics: MicArray | ArrayLike) -> NDArray:
     if p.ndim != 2 or p.shape[1] != 3:
         raise GeometryError(f"microphone positions must be N x 3, got shape {p.shape}")
     return p
-
-
-def check_fs(fs: float) -> float:
-    """``fs`` (Hz) as a float when it is a finite number > 0, else an AudioInputError."""
-    try:
-        v = float(fs)
-    except (TypeError, ValueError):
-        v = float("nan")
-    if not (np.isfinite(v) and v > 0):
-        raise AudioInputError(f"sample rate must be a positive number of Hz, got {fs!r}")
-    return v
 
 
 def speed_of_sound_of(mics: MicArray | ArrayLike, speed_of_sound: float | None) -> float:
@@ -234,7 +223,6 @@ def _fractional_delay_latency() -> int:
     return int(pra.constants.get("frac_delay_length")) // 2
 
 
-
 def image_sources(rt60: float, room_dim: ArrayLike, speed_of_sound: float = 343.0,
                   max_order: int | None = None) -> tuple[float | None, int]:
     """Wall energy absorption and image-source order for a shoebox room of reverberation time
@@ -280,6 +268,7 @@ def image_sources(rt60: float, room_dim: ArrayLike, speed_of_sound: float = 343.
             f"should take; the limit is order {MAX_IMAGE_ORDER}); use a shorter RT60 or a "
             "larger room" + (", or a smaller max_order" if max_order is not None else ""))
     return float(e_absorption), int(order)
+
 
 def room_impulse_responses(
     fs: float,

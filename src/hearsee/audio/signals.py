@@ -32,6 +32,7 @@ from hearsee.errors import AudioInputError, ClippingWarning, ConfigError, InputF
 __all__ = [
     "SIGNAL_KINDS",
     "VOICE_F0_HZ",
+    "check_fs",
     "load_wav",
     "make_signal",
     "read_recording",
@@ -79,6 +80,17 @@ def white_noise(duration_s: float, fs: float,
 #: Longest signal the generators make, seconds (longer scenes: simulate them in pieces; the
 #: bound keeps a mistyped duration from asking for terabytes)
 MAX_SIGNAL_S = 600.0
+
+
+def check_fs(fs: float) -> float:
+    """``fs`` (Hz) as a float when it is a finite number > 0, else an AudioInputError."""
+    try:
+        v = float(fs)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not (np.isfinite(v) and v > 0):
+        raise AudioInputError(f"sample rate must be a positive number of Hz, got {fs!r}")
+    return v
 
 
 def _check_duration(duration_s: float, fs: float) -> int:
@@ -224,8 +236,7 @@ def _resample(x: ArrayLike, fs_in: float, fs_out: float) -> NDArray:
 
     x = np.asarray(x, dtype=float)
     for rate in (fs_in, fs_out):  # (0 divided by zero, NaN and inf raised numpy errors)
-        if not (np.isfinite(rate) and rate > 0):
-            raise AudioInputError(f"sample rate must be a positive number of Hz, got {rate!r}")
+        check_fs(rate)
     if fs_in == fs_out:
         return x.copy()
     ratio = Fraction(float(fs_out) / float(fs_in)).limit_denominator(1000)

@@ -71,6 +71,7 @@ from scipy.ndimage import uniform_filter1d
 
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.localize import _inplane_tdoa, array_geometry
+from hearsee.audio.signals import check_fs
 from hearsee.errors import AudioInputError, ConfigError
 from hearsee.geometry import fibonacci_sphere
 
@@ -437,8 +438,7 @@ def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
         )
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
         raise AudioInputError("gcc: a signal contains NaN or inf samples")
-    if not (np.isfinite(fs) and fs > 0):
-        raise AudioInputError(f"sample rate must be a positive number of Hz, got {fs!r}")
+    fs = check_fs(fs)
     if np.ptp(a) == 0 or np.ptp(b) == 0:  # (a constant is silence once its mean is removed)
         raise AudioInputError("gcc: a signal is silent (constant); there is nothing to correlate")
     _check_refine(refine)
@@ -1237,9 +1237,7 @@ def estimate_tdoas(
     peak = float(np.max(np.abs(a), initial=0.0))  # NaN or inf when a sample is
     if not np.isfinite(peak):
         raise AudioInputError("recording contains NaN or infinite samples")
-    fs = float(fs)
-    if not np.isfinite(fs) or fs <= 0:
-        raise AudioInputError(f"sample rate must be a positive number of Hz, got {fs}")
+    fs = check_fs(fs)
     if fs < MIN_FS_HZ:
         raise AudioInputError(
             f"sample rate {fs:g} Hz is too low for time-delay estimation (need >= "

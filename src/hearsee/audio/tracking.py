@@ -56,7 +56,6 @@ _WRAP_AZ = np.array([True])  # which measurement components are angles on a circ
 _WRAP_AZ_EL = np.array([True, False])
 
 
-
 def _covariance(R: ArrayLike, n: int) -> NDArray:
     """``R`` as an (n, n) measurement covariance, or an EstimationError unless it is finite,
     symmetric and positive definite (a negative one made the track's covariance negative, a NaN
@@ -70,6 +69,7 @@ def _covariance(R: ArrayLike, n: int) -> NDArray:
         raise EstimationError("a measurement covariance must be finite, symmetric and positive "
                               f"definite, got {m.tolist()}")
     return m
+
 
 def _finite_time(t: float) -> float:
     """``t`` (seconds) as a float, or an EstimationError when it is not a finite number (a NaN

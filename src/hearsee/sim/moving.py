@@ -39,7 +39,8 @@ import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
-from hearsee.audio.propagation import add_noise, check_fs, speed_of_sound_of
+from hearsee.audio.propagation import add_noise, speed_of_sound_of
+from hearsee.audio.signals import check_fs
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, InputFileError
 
 __all__ = [

@@ -61,7 +61,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
-from hearsee.audio.propagation import check_fs
+from hearsee.audio.signals import check_fs
 from hearsee.audio.tdoa import (
     check_frame_ms,
     check_recording_length,
