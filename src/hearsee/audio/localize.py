@@ -156,23 +156,25 @@ def _classify(pos: NDArray, rel_tol: float) -> ArrayGeometry:
     return ArrayGeometry("volume", c)
 
 
-def _pairs(array: MicArray, pairs: Sequence[tuple[int, int]] | None) -> list[tuple[int, int]]:
-    return array.checked_pairs(pairs)
-
-
-def _tdoas(tdoa_s: ArrayLike, prs: list[tuple[int, int]], tol_s: float) -> NDArray:
-    """The TDOA vector (seconds, one per pair of ``prs``) of a public solver, or a
-    GeometryError for a wrong length, a NaN/inf entry (:func:`localize_tdoa` answers those with
-    an empty result; the solvers themselves returned NaN directions or raised scipy errors) or
-    a tolerance that is not a finite number > 0."""
+def _tdoa_vector(tdoa_s: ArrayLike, prs: list[tuple[int, int]], tol_s: float) -> NDArray:
+    """The TDOA vector (seconds, one per pair of ``prs``), or a GeometryError for a wrong
+    length or a tolerance ``tol_s`` that is not a finite number > 0 (0 divided by zero in the
+    in-plane fit). NaN entries pass: :func:`localize_tdoa` answers them with an empty result."""
     tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
     if tau.shape[0] != len(prs):
         raise GeometryError(f"got {tau.shape[0]} TDOAs for {len(prs)} microphone pairs")
+    if not (np.isfinite(tol_s) and tol_s > 0):
+        raise GeometryError(f"tol_s must be a finite number > 0 seconds, got {tol_s}")
+    return tau
+
+
+def _tdoas(tdoa_s: ArrayLike, prs: list[tuple[int, int]], tol_s: float) -> NDArray:
+    """:func:`_tdoa_vector` of a public solver, which also refuses NaN/inf entries (the solvers
+    returned NaN directions or raised scipy errors for them)."""
+    tau = _tdoa_vector(tdoa_s, prs, tol_s)
     if not np.all(np.isfinite(tau)):
         raise GeometryError("TDOAs must be finite numbers of seconds (localize_tdoa gives an "
                             "empty result for NaN ones)")
-    if not (np.isfinite(tol_s) and tol_s > 0):
-        raise GeometryError(f"tol_s must be a finite number > 0 seconds, got {tol_s}")
     return tau
 
 
@@ -204,7 +206,7 @@ def far_field_linear(tdoa_s: ArrayLike, array: MicArray,
     with ``phi_a`` the axis azimuth -- for the y-axis pair, ``alpha`` and ``180 - alpha``. The
     front candidate (|az| <= 90) comes first. A vertical axis resolves only the elevation.
     """
-    prs = _pairs(array, pairs)
+    prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
     geo = array_geometry(array)
     if geo.kind != "linear":
@@ -259,7 +261,7 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray,
     - a TDOA residual above ``tol_s`` (inconsistent ITDs): no exact solution; the nearest
       direction is returned, ``feasible=False``, ``n_solutions=0``.
     """
-    prs = _pairs(array, pairs)
+    prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
     geo = array_geometry(array)
     if geo.kind != "planar":
@@ -318,7 +320,7 @@ def far_field_volume(tdoa_s: ArrayLike, array: MicArray,
     """
     from scipy.optimize import least_squares
 
-    prs = _pairs(array, pairs)
+    prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
     A = _design(array, prs)
     if np.linalg.matrix_rank(A, tol=1e-9 * np.abs(A).max()) < 3:
@@ -356,7 +358,7 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray,
     """
     from scipy.optimize import least_squares
 
-    prs = _pairs(array, pairs)
+    prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
     pos = array.positions
     c = array.speed_of_sound
@@ -452,7 +454,7 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray,
     (1976). Returns one candidate (in the plane); ``position_m`` is ``P`` (None when ``rho`` =
     0); ``extra["inverse_range_per_m"]`` is ``rho``.
     """
-    prs = _pairs(array, pairs)
+    prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
     geo = array_geometry(array)
     if geo.kind != "planar":
@@ -578,12 +580,8 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
     [30, 150]
     """
     arr = load_array(array)
-    prs = _pairs(arr, pairs)
-    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
-    if tau.shape[0] != len(prs):
-        raise GeometryError(f"got {tau.shape[0]} TDOAs for {len(prs)} microphone pairs")
-    if not (np.isfinite(tol_s) and tol_s > 0):  # (0 divided by zero in the in-plane fit)
-        raise GeometryError(f"tol_s must be a finite number > 0 seconds, got {tol_s}")
+    prs = arr.checked_pairs(pairs)
+    tau = _tdoa_vector(tdoa_s, prs, tol_s)
     if not np.all(np.isfinite(tau)):
         return Localization(None, None, [], 0, False, residual_s=float("nan"),
                             geometry=array_geometry(arr).kind)
@@ -705,7 +703,7 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
     from scipy.optimize import least_squares
 
     arr = load_array(array)
-    prs = _pairs(arr, pairs)
+    prs = arr.checked_pairs(pairs)
     tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
     ranges = np.linspace(0.3, 3.0, 40) if ranges_m is None else np.asarray(ranges_m, float)
     if ranges.ndim != 1 or ranges.size == 0 or not np.all(np.isfinite(ranges) & (ranges > 0)):

@@ -545,10 +545,6 @@ class TdoaFrames:
         return int(np.count_nonzero(self.valid))
 
 
-def _check_pairs(pairs: Sequence[tuple[int, int]] | None, array: MicArray) -> list[tuple[int, int]]:
-    return array.checked_pairs(pairs)
-
-
 @functools.lru_cache(maxsize=16)
 def _window(window: str | tuple, frame_len: int) -> NDArray:
     """The analysis window (float32, read-only: shared between calls)."""
@@ -1253,7 +1249,7 @@ def estimate_tdoas(
         raise ConfigError(f"min_confidence must be a finite number >= 0, got {min_confidence}")
     if not (np.isfinite(margin_samples) and margin_samples >= 0):
         raise ConfigError(f"margin_samples must be a finite number >= 0, got {margin_samples}")
-    prs = _check_pairs(pairs, arr)
+    prs = arr.checked_pairs(pairs)
     if joint == "steered":
         _check_steered(arr, source_in_plane, steer_range_m)
     if peak > _MAX_PEAK or 0 < peak < _MIN_PEAK:  # (float32 powers overflow above ~1e19 and
