@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from hearsee.config import load_yaml, number, save_yaml, to_jsonable
-from hearsee.errors import ConfigError
+from hearsee.config import finite_number, is_real, load_yaml, number, save_yaml, to_jsonable
+from hearsee.errors import ConfigError, EstimationError
 
 
 def test_number_takes_numpy_scalars_and_refuses_non_numbers():
@@ -20,6 +20,28 @@ def test_number_takes_numpy_scalars_and_refuses_non_numbers():
     with pytest.raises(ConfigError, match="must be <= 2"):
         number(d, "a", 0, "x", hi=2)
     assert number({}, "missing", 4, "x") == 4.0
+
+
+def test_is_real_and_finite_number():
+    for v in (1, 2.5, np.float32(0.5), np.int64(-3), np.array(4.0)):
+        assert is_real(v), v
+    for v in (True, np.bool_(False), "3", float("nan"), np.float32("inf"), None, [1.0],
+              np.array([1.0]), 1 + 2j):
+        assert not is_real(v), v
+    assert finite_number("a", np.float32(0.25), 0.0, 1.0) == 0.25
+    assert isinstance(finite_number("a", np.int64(3)), float)
+    cases = [(0.0, dict(lo=0.0, lo_open=True), "a must be a finite number > 0, got 0.0"),
+             (-1, dict(lo=0.0), "a must be a finite number >= 0, got -1"),
+             (2.0, dict(lo=0.0, hi=1.0), r"a must be a finite number in \[0, 1\], got 2.0"),
+             (0.0, dict(lo=0.0, hi=1.0, lo_open=True), r"in \(0, 1\]"),
+             (5, dict(hi=4.0), "a must be a finite number <= 4, got 5"),
+             ("1", {}, "a must be a finite number, got '1'"),
+             (float("nan"), dict(lo=0.0), "got nan")]
+    for value, kw, msg in cases:
+        with pytest.raises(ConfigError, match=msg):
+            finite_number("a", value, **kw)
+    with pytest.raises(EstimationError, match="b must be"):  # the caller's own exception type
+        finite_number("b", float("inf"), error=EstimationError)
 
 
 def test_save_yaml_and_json_take_numpy_values(tmp_path):

@@ -18,8 +18,8 @@ import yaml
 from hearsee.errors import ConfigError, InputFileError
 
 __all__ = [
-    "as_float_array", "check_keys", "load_yaml", "number", "require", "save_yaml", "to_jsonable",
-    "to_plain",
+    "as_float_array", "check_keys", "finite_number", "is_real", "load_yaml", "number", "require",
+    "save_yaml", "to_jsonable", "to_plain",
 ]
 
 
@@ -100,6 +100,39 @@ def check_keys(data: Mapping[str, Any], allowed: Iterable[str], where: str) -> N
             )
 
 
+def is_real(v: Any) -> bool:
+    """True for a finite real number: a Python or numpy scalar of any precision, or a 0-d
+    array; not a bool, a string, NaN or an infinity. The one test behind every "must be a
+    finite number" check of hearsee's settings."""
+    if type(v) is float:  # the common case, without numpy
+        return math.isfinite(v)
+    if type(v) is int:
+        return True
+    a = np.asarray(v)
+    return a.ndim == 0 and a.dtype.kind in "iuf" and bool(np.isfinite(a))
+
+
+def finite_number(name: str, value: Any, lo: float | None = None, hi: float | None = None, *,
+                  lo_open: bool = False, error: type[Exception] = ConfigError) -> float:
+    """``value`` as a float when it is a finite real number (:func:`is_real`) within
+    ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``; None = unbounded), else ``error`` naming
+    ``name`` and the rule, e.g. "sigma_meas_deg must be a finite number > 0, got nan". The
+    library's modules pass their own exception type (EstimationError for tracker settings,
+    GeometryError for geometry, ...)."""
+    below = lo is not None and is_real(value) and (value <= lo if lo_open else value < lo)
+    if not is_real(value) or below or (hi is not None and value > hi):
+        if lo is not None and hi is not None:
+            rule = f" in {'(' if lo_open else '['}{lo:g}, {hi:g}]"
+        elif lo is not None:
+            rule = f" {'>' if lo_open else '>='} {lo:g}"
+        elif hi is not None:
+            rule = f" <= {hi:g}"
+        else:
+            rule = ""
+        raise error(f"{name} must be a finite number{rule}, got {value!r}")
+    return float(value)
+
+
 def require(data: Mapping[str, Any], key: str, where: str) -> Any:
     """Return ``data[key]`` or raise ConfigError saying the field is missing."""
     if key not in data:
@@ -131,10 +164,9 @@ def number(d: Mapping[str, Any], key: str, default: float, where: str, lo: float
     ``where.key`` otherwise. With ``integer=True`` the value must be whole and an int is
     returned."""
     v = d.get(key, default)
-    if isinstance(v, np.integer | np.floating) and not isinstance(v, np.bool_):
-        v = v.item()  # numpy scalars (e.g. from arrays) as their Python number
-    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+    if not is_real(v):
         raise ConfigError(f"{where}.{key}: expected a number, got {v!r}")
+    v = v.item() if isinstance(v, np.generic | np.ndarray) else v  # numpy as Python numbers
     if integer and int(v) != v:
         raise ConfigError(f"{where}.{key}: expected a whole number, got {v!r}")
     if lo is not None and v < lo:

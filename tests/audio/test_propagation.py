@@ -165,7 +165,8 @@ def test_bad_rates_speeds_and_noise_levels_are_refused():
     s = white_noise(0.1, 16000, rng=0)
     src = [1.0, 1.0, 0.0]
     for c in (0.0, -343.0, float("nan"), float("inf")):
-        with pytest.raises(GeometryError, match="speed_of_sound must be a positive number"):
+        with pytest.raises(GeometryError,
+                           match=r"speed_of_sound \(m/s\) must be a finite number > 0"):
             simulate_free_field(s, 16000, arr.positions, src, speed_of_sound=c)
     with pytest.raises(GeometryError, match="speed_of_sound"):
         room_impulse_responses(16000, arr.positions + [3.0, 3.0, 1.0], [4.0, 4.0, 1.0],

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.signals import check_fs
+from hearsee.config import finite_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
 __all__ = [
@@ -59,11 +60,8 @@ def speed_of_sound_of(mics: MicArray | ArrayLike, speed_of_sound: float | None) 
     a GeometryError), otherwise the MicArray's own, otherwise 343."""
     if speed_of_sound is None:
         return float(mics.speed_of_sound) if isinstance(mics, MicArray) else 343.0
-    c = float(speed_of_sound)
-    if not (np.isfinite(c) and c > 0):
-        raise GeometryError(f"speed_of_sound must be a positive number of m/s, got "
-                            f"{speed_of_sound!r}")
-    return c
+    return finite_number("speed_of_sound (m/s)", speed_of_sound, 0.0, lo_open=True,
+                         error=GeometryError)
 
 
 def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: ArrayLike = 1.0,

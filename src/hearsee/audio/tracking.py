@@ -36,6 +36,7 @@ from filterpy.common import Q_discrete_white_noise
 from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
+from hearsee.config import finite_number
 from hearsee.errors import EstimationError
 
 __all__ = [
@@ -82,10 +83,7 @@ def _finite_time(t: float) -> float:
 
 def _positive(name: str, value: float) -> float:
     """``value`` as a float when finite and > 0, else an EstimationError naming it."""
-    v = float(value)
-    if not (math.isfinite(v) and v > 0):
-        raise EstimationError(f"{name} must be a finite number > 0, got {value!r}")
-    return v
+    return finite_number(name, value, 0.0, lo_open=True, error=EstimationError)
 
 
 def _wrap1(a: float) -> float:

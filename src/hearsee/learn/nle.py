@@ -77,6 +77,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from hearsee.config import finite_number
 from hearsee.errors import ConfigError, EstimationError, HearseeError
 
 __all__ = [
@@ -123,22 +124,6 @@ class DisconnectedGraphWarning(UserWarning):
 
 
 # --------------------------------------------------------------------------- building blocks
-
-
-def _finite_number(name: str, value, lo: float | None = None, hi: float | None = None,
-                   lo_open: bool = False, error: type[Exception] = ManifoldInputError) -> float:
-    """``value`` as a float, refused unless finite and within ``[lo, hi]`` (``(lo, hi]`` with
-    ``lo_open``)."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise error(f"{name} must be a number, got {value!r}") from None
-    below = lo is not None and (v <= lo if lo_open else v < lo)
-    if not np.isfinite(v) or below or (hi is not None and v > hi):
-        left = "(-inf" if lo is None else f"{'(' if lo_open else '['}{lo:g}"
-        right = "inf)" if hi is None else f"{hi:g}]"
-        raise error(f"{name} must be a finite number in {left}, {right}, got {value!r}")
-    return v
 
 
 def _check_neighbourhood_args(func: str, X, ind, centers, **same_shape):
@@ -225,7 +210,7 @@ def adaptive_neighbors(
                                                         dist=dist)
     if not np.isfinite(dist).all():
         raise ManifoldInputError("adaptive_neighbors: dist must be finite (no NaN or inf)")
-    shadow = _finite_number("shadow", shadow, 0.0, 1.0)
+    shadow = finite_number("shadow", shadow, 0.0, 1.0, error=ManifoldInputError)
     if isinstance(min_neighbors, bool) or not isinstance(min_neighbors, Integral):
         raise ManifoldInputError(f"min_neighbors must be an integer, got {min_neighbors!r}")
     n, K = ind.shape
@@ -291,7 +276,7 @@ def reconstruction_weights(
     X, ind, centers, (mask,) = _check_neighbourhood_args("reconstruction_weights", X, ind,
                                                         centers, mask=mask)
     mask = mask.astype(bool, copy=False)
-    reg = _finite_number("reg", reg, 0.0, lo_open=True)
+    reg = finite_number("reg", reg, 0.0, lo_open=True, error=ManifoldInputError)
     empty = ~mask.any(axis=1)
     if ind.shape[1] and empty.any():
         raise ManifoldInputError(
@@ -1108,11 +1093,11 @@ def make_two_rolls(
         ``density_ratio``, ``noise`` or ``outliers``, or ``height <= 0``.
     """
     n_samples = _count("n_samples", n_samples, 0)
-    density_ratio = _finite_number("density_ratio", density_ratio, 0.0, error=ConfigError)
-    gap = _finite_number("gap", gap, error=ConfigError)
-    noise = _finite_number("noise", noise, 0.0, error=ConfigError)
-    outliers = _finite_number("outliers", outliers, 0.0, error=ConfigError)
-    height = _finite_number("height", height, 0.0, lo_open=True, error=ConfigError)
+    density_ratio = finite_number("density_ratio", density_ratio, 0.0, error=ConfigError)
+    gap = finite_number("gap", gap, error=ConfigError)
+    noise = finite_number("noise", noise, 0.0, error=ConfigError)
+    outliers = finite_number("outliers", outliers, 0.0, error=ConfigError)
+    height = finite_number("height", height, 0.0, lo_open=True, error=ConfigError)
     rs = check_random_state(random_state)
     n0 = int(round(n_samples * density_ratio / (1.0 + density_ratio)))
     n1 = n_samples - n0
@@ -1198,7 +1183,7 @@ def make_head_pose_images(
     size = _count("size", size, 1)
     yaw_range_deg = _angle_range("yaw_range_deg", yaw_range_deg)
     pitch_range_deg = _angle_range("pitch_range_deg", pitch_range_deg)
-    noise = _finite_number("noise", noise, 0.0, error=ConfigError)
+    noise = finite_number("noise", noise, 0.0, error=ConfigError)
     rs = check_random_state(random_state)
     yaw = rs.uniform(*yaw_range_deg, n_samples)
     pitch = rs.uniform(*pitch_range_deg, n_samples)

@@ -46,7 +46,6 @@ Units: seconds, degrees, metres; frame times are frame centres from the start of
 from __future__ import annotations
 
 import math
-import numbers
 import queue
 import threading
 import time
@@ -79,6 +78,7 @@ from hearsee.audio.tracking import (
     DirectionKalman,
     MotionKalman,
 )
+from hearsee.config import is_real
 from hearsee.errors import AudioInputError, ConfigError, EstimationError
 from hearsee.geometry import wrap_deg
 
@@ -1058,11 +1058,6 @@ _WITHIN = {"min_confidence": (0.0, np.inf), "min_coherence": (0.0, 1.0),
            "alt_ratio": (0.0, 1.0), "max_alt_ratio": (0.0, 1.0)}
 
 
-def _is_number(v: Any) -> bool:
-    """A real number (Python or numpy, any precision), not a bool."""
-    return isinstance(v, numbers.Real) and not isinstance(v, bool)
-
-
 def _check_config(cfg: StreamConfig) -> None:
     """ConfigError naming the first out-of-range setting of ``cfg`` (checked when a
     StreamConfig is made: before 2026-11-26 most were not, and a NaN noise put NaN azimuths in
@@ -1077,17 +1072,17 @@ def _check_config(cfg: StreamConfig) -> None:
         v = getattr(cfg, name)
         if v is None and name in _POSITIVE_OR_NONE:
             continue
-        if not (_is_number(v) and math.isfinite(v) and v > 0):
+        if not (is_real(v) and v > 0):
             raise bad(name, "a finite number > 0" + (" or None" if name in _POSITIVE_OR_NONE
                                                       else ""))
     for name, (lo, hi) in _WITHIN.items():
         v = getattr(cfg, name)
-        if not (_is_number(v) and math.isfinite(v) and lo <= v <= hi):
+        if not (is_real(v) and lo <= v <= hi):
             raise bad(name, f"a number in [{lo:g}, {hi:g}]")
-    if not (_is_number(cfg.spectrum_alpha) and 0.0 <= cfg.spectrum_alpha < 1.0):
+    if not (is_real(cfg.spectrum_alpha) and 0.0 <= cfg.spectrum_alpha < 1.0):
         raise bad("spectrum_alpha", "in [0, 1) (0 = no smoothing)")
-    if not (_is_number(cfg.prefer_frame_confidence)
-            and cfg.prefer_frame_confidence > 0):  # (inf = never)
+    pfc = cfg.prefer_frame_confidence
+    if not ((is_real(pfc) or pfc == math.inf) and pfc > 0):  # (inf = never)
         raise bad("prefer_frame_confidence", "> 0 (inf = never)")
     r = np.asarray(cfg.range_m, dtype=float).reshape(-1)
     if not (r.size == 2 and np.all(np.isfinite(r)) and 0 < r[0] < r[1]):

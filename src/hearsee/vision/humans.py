@@ -47,6 +47,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from hearsee.config import is_real
 from hearsee.errors import (
     CalibrationError,
     ConfigError,
@@ -84,18 +85,12 @@ BODY_SURFACE_DEPTH_M = 0.09
 # ---------------------------------------------------------------------------------------------
 # Input checks
 # ---------------------------------------------------------------------------------------------
-def _is_real(v: object) -> bool:
-    """A finite real number (Python or numpy scalar, or 0-d array; not a bool or a string)."""
-    a = np.asarray(v)
-    return a.ndim == 0 and a.dtype.kind in "iuf" and bool(np.isfinite(a))
-
-
 def check_camera_height(camera_height_m: float | None, what: str = "camera_height_m") -> None:
     """GeometryError unless the camera height above the floor (metres) is None or finite > 0."""
     if camera_height_m is None:
         return
     v = camera_height_m
-    if not (_is_real(v) and v > 0):
+    if not (is_real(v) and v > 0):
         raise GeometryError(
             f"{what} (camera height above the floor) must be a finite number of metres > 0, "
             f"got {v!r}"
@@ -143,17 +138,17 @@ class HumanDetectorParams:
                    "max_range_m", "min_range_m", "tau_m", "max_top_m", "max_width_m")
         for name in lengths:
             v = getattr(self, name)
-            if not (_is_real(v) and v > 0):
+            if not (is_real(v) and v > 0):
                 raise ConfigError(f"HumanDetectorParams.{name} must be a finite number > 0, got "
                                   f"{v!r}")
         for name in ("min_height_m", "above_weight", "min_top_m", "min_width_m"):
             v = getattr(self, name)
-            if not (_is_real(v) and v >= 0):
+            if not (is_real(v) and v >= 0):
                 raise ConfigError(f"HumanDetectorParams.{name} must be a finite number >= 0, "
                                   f"got {v!r}")
         for name in ("peak_threshold", "tm"):
             v = getattr(self, name)
-            if not (_is_real(v) and 0 <= v <= 1):
+            if not (is_real(v) and 0 <= v <= 1):
                 raise ConfigError(f"HumanDetectorParams.{name} must be in [0, 1], got {v!r}")
         for lo, hi in (("min_height_m", "max_height_m"), ("min_range_m", "max_range_m"),
                        ("min_top_m", "max_top_m"), ("min_width_m", "max_width_m")):
@@ -644,7 +639,7 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     (3D extent and ``score >= params.tm``).
     """
     check_focal_baseline(focal_px, baseline_m)
-    if not _is_real(cy):
+    if not is_real(cy):
         raise CalibrationError(f"cy (principal row) must be a finite number of pixels, got {cy!r}")
     check_camera_height(camera_height_m)
     p = params or HumanDetectorParams()
@@ -776,9 +771,9 @@ def detect_people_hog(image: NDArray, *, win_stride: int = 8, scale: float = 1.0
     if isinstance(win_stride, bool) or not isinstance(win_stride, int | np.integer) or \
             win_stride < 1:
         raise ConfigError(f"win_stride must be a positive integer (pixels), got {win_stride!r}")
-    if not (_is_real(scale) and scale > 1.0):
+    if not (is_real(scale) and scale > 1.0):
         raise ConfigError(f"scale must be a finite number > 1 (pyramid step), got {scale!r}")
-    if not _is_real(hit_threshold):
+    if not is_real(hit_threshold):
         raise ConfigError(f"hit_threshold must be a finite number, got {hit_threshold!r}")
     hog = _hog()
     rects, weights = hog.detectMultiScale(img, hitThreshold=hit_threshold,
