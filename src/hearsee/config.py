@@ -19,7 +19,7 @@ from hearsee.errors import ConfigError, InputFileError
 
 __all__ = [
     "as_float_array", "check_keys", "finite_number", "is_real", "load_yaml", "number", "require",
-    "save_yaml", "to_jsonable", "to_plain",
+    "save_yaml", "to_jsonable", "to_plain", "whole_number",
 ]
 
 
@@ -131,6 +131,18 @@ def finite_number(name: str, value: Any, lo: float | None = None, hi: float | No
             rule = ""
         raise error(f"{name} must be a finite number{rule}, got {value!r}")
     return float(value)
+
+
+def whole_number(name: str, value: Any, lo: int = 1, hi: int | None = None, *,
+                 error: type[Exception] = ConfigError) -> int:
+    """``value`` as an int when it is a Python or numpy integer (not a bool) within
+    ``[lo, hi]``, else ``error`` naming ``name`` (counts, strides, steps, lengths in samples
+    or pixels; a float such as 2.5 is refused rather than rounded)."""
+    ok = isinstance(value, int | np.integer) and not isinstance(value, bool)
+    if not ok or value < lo or (hi is not None and value > hi):
+        rule = f"in [{lo}, {hi}]" if hi is not None else f">= {lo}"
+        raise error(f"{name} must be an integer {rule}, got {value!r}")
+    return int(value)
 
 
 def require(data: Mapping[str, Any], key: str, where: str) -> Any:

@@ -19,7 +19,7 @@ from hearsee.audio.active import (
 )
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.signals import white_noise
-from hearsee.errors import AudioInputError, EstimationError, GeometryError
+from hearsee.errors import AudioInputError, ConfigError, EstimationError, GeometryError
 from hearsee.geometry import HeadPose, angle_between, direction_deg, mic_positions_at
 
 ARR = load_array("three-mic")
@@ -182,9 +182,14 @@ def test_training_set_refuses_nan_noise_and_bad_ranges():
     """tdoa_std_s=NaN returned all-NaN samples; an inverted or negative distance range raised
     numpy's ValueError or was accepted (bad-input sweep, 2026-11-26)."""
     for kw in ({"tdoa_std_s": np.nan}, {"tdoa_std_s": -1.0}, {"distance_range_m": (3.0, 0.5)},
-               {"distance_range_m": (-1.0, 2.0)}, {"elevation_range_deg": (np.nan, 10.0)}):
-        with pytest.raises(GeometryError):
+               {"distance_range_m": (-1.0, 2.0)}, {"elevation_range_deg": (np.nan, 10.0)},
+               {"elevation_range_deg": (-100.0, 0.0)}, {"elevation_range_deg": (40.0, 10.0)},
+               {"azimuth_range_deg": (90.0, -90.0)}):
+        with pytest.raises(GeometryError):  # elevation -100 folded over the pole silently
             make_pose_training_set(ARR, POSES3, 10, **kw)
+    for n in (-1, 2.5):  # -1 was numpy's "negative dimensions"
+        with pytest.raises(ConfigError, match="training samples"):
+            make_pose_training_set(ARR, POSES3, n)
     X, Y = make_pose_training_set(ARR, POSES3, 10, tdoa_std_s=0.0)
     assert np.all(np.isfinite(X)) and X.shape == (10, 9)
 

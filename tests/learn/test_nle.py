@@ -310,9 +310,21 @@ def test_values_too_large_for_float64_distances_are_refused():
     m = NeighborhoodLinearEmbedding(random_state=0).fit(X)
     with pytest.raises(ManifoldInputError, match="values too large"):  # was NaN coordinates
         m.transform(np.array([[1e200, 0.0, 0.0]]))
+    with pytest.raises(ManifoldInputError, match="values too small"):  # was "duplicate points"
+        NeighborhoodLinearEmbedding(random_state=0).fit(X * 1e-200)
     # large but representable data still work, in their own units
     Y = NeighborhoodLinearEmbedding(random_state=0).fit_transform(X * 1e100) / 1e100
     np.testing.assert_allclose(Y, m.embedding_, atol=1e-6 * np.abs(m.embedding_).max())
+
+
+@pytest.mark.parametrize("cls", [NeighborhoodLinearEmbedding, ClusteredNLE])
+def test_more_axes_than_features_is_refused(cls):
+    """Five axes for points in 3D were computed without a word (an embedding of points in a
+    D-dimensional space has at most D meaningful axes)."""
+    X, _ = make_swiss_roll(200, random_state=0)
+    with pytest.raises(ManifoldInputError, match="n_features = 3"):
+        cls(n_components=5, n_neighbors=10, random_state=0).fit(X)
+    assert cls(n_components=3, n_neighbors=10, random_state=0).fit_transform(X).shape == (200, 3)
 
 
 def test_building_blocks_refuse_bad_arguments():

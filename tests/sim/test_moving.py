@@ -4,7 +4,7 @@ import scipy.signal as ss
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.propagation import simulate_free_field
-from hearsee.errors import ConfigError, GeometryError, InputFileError
+from hearsee.errors import AudioInputError, ConfigError, GeometryError, InputFileError
 from hearsee.sim.moving import (
     Trajectory,
     fractional_delay,
@@ -22,6 +22,32 @@ FS = 16000
 def _bandlimited_noise(n, seed):
     x = np.random.default_rng(seed).standard_normal(n)
     return np.convolve(x, ss.firwin(255, 0.8), "same")
+
+
+def test_fractional_delay_refuses_bad_options_and_takes_huge_delays():
+    """half_width=0 and a negative chunk returned silence, a NaN beta NaNs, a NaN signal NaNs,
+    a 1e12-sample delay asked for terabytes of padding (bad-input sweep)."""
+    x = _bandlimited_noise(1000, 2)
+    d = np.full(1000, 3.5)
+    for kw in (dict(half_width=0), dict(half_width=-3), dict(half_width=2.5),
+               dict(half_width=10**7), dict(beta=np.nan), dict(beta=-1.0), dict(chunk=0),
+               dict(chunk=-5)):
+        with pytest.raises(ConfigError, match=next(iter(kw))):
+            fractional_delay(x, d, **kw)
+    with pytest.raises(ConfigError, match="n_out"):
+        fractional_delay(x, np.zeros(0), n_out=-1)
+    with pytest.raises(AudioInputError, match="NaN"):
+        fractional_delay(np.full(100, np.nan), np.ones(100))
+    with pytest.raises(GeometryError, match="n_ch, n_out"):
+        fractional_delay(x, np.zeros((1, 2, 3)))
+    far = np.full(10, 1e12)  # beyond the signal: silence, at once
+    assert np.array_equal(fractional_delay(x, far), np.zeros(10))
+    # a delay just past the output's reach gives the same silence as the clipped one
+    edge = np.concatenate([np.full(5, 20.0), np.full(5, 1e6)])
+    y = fractional_delay(x, edge, half_width=8)
+    np.testing.assert_array_equal(y[5:], 0.0)
+    np.testing.assert_allclose(y[:5], fractional_delay(x, np.full(5, 20.0), half_width=8),
+                               atol=1e-12)
 
 
 def test_constant_fractional_delay_matches_frequency_domain_shift():

@@ -104,6 +104,16 @@ def test_draw(scene):
     img = draw_detections(scene.left, res)
     assert img.shape == scene.left.shape and not np.array_equal(img, scene.left)
     assert warm_mask_celsius(scene.thermal_c).shape == RIG.thermal.shape
+    # grey and BGRA images are drawn in colour too; other pixel types and empty images are
+    # refused (int64 failed inside OpenCV)
+    grey = scene.left[..., 1].copy()
+    for im in (grey, grey[..., None], np.dstack([scene.left, grey])):
+        drawn = draw_detections(im, res)
+        assert drawn.shape == scene.left.shape and np.any(drawn != scene.left)
+    with pytest.raises(ImageInputError, match="8-bit"):
+        draw_detections(grey.astype(np.int64), res)
+    with pytest.raises(ImageInputError, match="empty"):
+        draw_detections(np.zeros((0, 0), np.uint8), res)
 
 
 def test_rig_that_needs_rectification(scene):

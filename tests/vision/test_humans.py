@@ -43,6 +43,23 @@ def test_u_disparity_counts():
         u_disparity(np.zeros(5))
 
 
+
+def test_u_disparity_refuses_impossible_disparities_and_bad_options():
+    """A disparity wider than the image asked for terabytes of counts (MemoryError); a
+    negative max_disparity and a mask of another shape failed inside numpy."""
+    d = np.full((4, 6), 3.0, np.float32)
+    d[1, 2] = 1e12
+    with pytest.raises(ImageInputError, match="exceeds the image width"):
+        u_disparity(d)
+    d[1, 2] = 6.0  # as wide as the image: still possible (sub-pixel), counted
+    assert u_disparity(d)[6, 2] == 1
+    for bad in (-5, 2.5, 10**9):
+        with pytest.raises(ConfigError, match="max_disparity"):
+            u_disparity(d, max_disparity=bad)
+    with pytest.raises(ImageInputError, match="mask must have"):
+        u_disparity(d, mask=np.ones((3, 3), bool))
+
+
 def _blob_P(width_cols: int, d: int, col: int, n_d: int = 40, W: int = 200, rows: float = 50):
     P = np.zeros((n_d, W))
     P[d, col - width_cols // 2: col + width_cols // 2 + 1] = rows
@@ -108,6 +125,12 @@ def test_estimate_floor_fallback_and_error():
     assert estimate_floor(empty, prior_height_m=1.2).camera_height_m == 1.2
     with pytest.raises(EstimationError, match="camera_height_m"):
         estimate_floor(empty)
+    for kw in (dict(step=0), dict(step=-1), dict(step=2.0), dict(iterations=0),
+               dict(inlier_m=0.0), dict(max_tilt_deg=np.nan), dict(max_tilt_deg=120.0)):
+        with pytest.raises(ConfigError, match=next(iter(kw))):  # step 0: numpy's slice error
+            estimate_floor(empty, prior_height_m=1.2, **kw)
+    with pytest.raises(ImageInputError, match="H, W, 3"):
+        estimate_floor(np.zeros((40, 3)), prior_height_m=1.2)
     assert FloorPlane.level(1.4).height(np.array([0.0, 1.4, 3.0])) == pytest.approx(0.0)
 
 
@@ -177,6 +200,18 @@ def test_detect_candidates_on_ground_truth_disparity(small_scene):
 def test_detect_candidates_bad_shapes():
     with pytest.raises(ImageInputError):
         detect_candidates(np.zeros((10, 10)), np.zeros((10, 11, 3)), F, B, 5.0)
+    with pytest.raises(ImageInputError, match="empty"):  # was numpy's argmax error
+        detect_candidates(np.zeros((0, 0)), np.zeros((0, 0, 3)), F, B, 5.0)
+
+
+def test_negative_disparities_are_not_matches():
+    """OpenCV matchers search negative disparities too; an all-negative map made the count
+    array's size negative (ValueError). It holds no match: no candidates, like all-NaN."""
+    H, W = 60, 80
+    pts = np.full((H, W, 3), np.nan)
+    for disparity in (np.full((H, W), -5.0), np.full((H, W), np.nan)):
+        det = detect_candidates(disparity, pts, F, B, H / 2, camera_height_m=1.2)
+        assert det.candidates == [] and det.P.sum() == 0
 
 
 def test_hog_baseline():

@@ -156,6 +156,17 @@ def test_bad_inputs():
         compute_disparity(tex, tex, block_size=4)
 
 
+
+def test_textureless_images_have_no_disparity():
+    """Two blank frames (a lens cap, a saturated sensor) match at every disparity equally
+    well; SGBM answered a full map of zeros (points at infinity) as if measured."""
+    blank = np.full((60, 80), 128, np.uint8)
+    assert np.isnan(compute_disparity(blank, blank)).all()
+    tex = _texture(5)[:60, :80]
+    assert np.isnan(compute_disparity(tex, blank)).all()
+    assert np.isfinite(compute_disparity(tex, tex)).mean() > 0.5  # texture: still matched
+
+
 @pytest.mark.shared
 def test_middlebury_teddy_quality(shared_data):
     """The tuned matcher stays well ahead of default-ish SGBM (24 % bad-2.0) on teddy."""

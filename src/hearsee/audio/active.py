@@ -63,6 +63,7 @@ from scipy.optimize import least_squares
 
 from hearsee.audio.arrays import MicArray, load_array, pair_tdoa, pair_tdoa_jacobian
 from hearsee.audio.propagation import speed_of_sound_of
+from hearsee.config import whole_number
 from hearsee.errors import (
     AudioInputError,
     EstimationError,
@@ -752,6 +753,15 @@ def make_pose_training_set(
         raise GeometryError(f"tdoa_std_s must be a finite number >= 0 seconds, got {tdoa_std_s}")
     if not all(np.all(np.isfinite(v)) for v in (elevation_range_deg, azimuth_range_deg)):
         raise GeometryError("elevation_range_deg and azimuth_range_deg must be finite degrees")
+    e_lo, e_hi = (float(v) for v in elevation_range_deg)
+    if not -90.0 <= e_lo <= e_hi <= 90.0:  # (-100 deg folded over the pole without a word)
+        raise GeometryError(f"elevation_range_deg must be (low, high) with -90 <= low <= high "
+                            f"<= 90 degrees, got {elevation_range_deg!r}")
+    a_lo, a_hi = (float(v) for v in azimuth_range_deg)
+    if not a_lo <= a_hi:
+        raise GeometryError(f"azimuth_range_deg must be (low, high) with low <= high degrees, "
+                            f"got {azimuth_range_deg!r}")
+    n = whole_number("n (training samples)", n, 0)
     rng = np.random.default_rng(rng)
     az = np.radians(rng.uniform(*azimuth_range_deg, n))
     s_lo, s_hi = np.sin(np.radians(elevation_range_deg))

@@ -98,6 +98,9 @@ _CHUNK_BYTES = 64 * 2**20
 # squared distances and the local Gram matrices (sums of them) must stay far below the float64
 # maximum (1.8e308).
 _MAX_SPAN = 1e150
+# ... and the smallest: below it squared distances underflow (to subnormals or 0, 1e-308) and
+# distinct points looked like duplicates.
+_MIN_SPAN = 1e-150
 
 # An axis scaled to the units of X ("edges") may span at most this many times the total edge
 # length of the neighbourhood graph (its minimum spanning tree) of a connected component. A
@@ -601,12 +604,26 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
             )
         X = validate_data(self, X, dtype=np.float64, ensure_min_samples=2)
         with np.errstate(over="ignore", invalid="ignore"):
-            span = float(np.linalg.norm(np.ptp(X, axis=0)))
+            r = np.ptp(X, axis=0)
+            top = float(np.max(r))  # scaled, so that a span of 1e-200 does not underflow to 0
+            span = top * float(np.linalg.norm(r / top)) if 0.0 < top < np.inf else top
         if not span <= _MAX_SPAN:
             raise ManifoldInputError(
                 f"values too large: the points of X span {span:.3g}, squared distances between "
                 f"them overflow float64 beyond {_MAX_SPAN:.0e}; rescale X, e.g. "
                 "X / np.abs(X).max()"
+            )
+        if 0.0 < span < _MIN_SPAN:
+            raise ManifoldInputError(
+                f"values too small: the points of X span {span:.3g}, squared distances between "
+                f"them underflow float64 below {_MIN_SPAN:.0e}; rescale X, e.g. "
+                "X / np.abs(X).max()"
+            )
+        if self.n_components > X.shape[1]:
+            raise ManifoldInputError(
+                f"n_components={self.n_components} must not exceed the data's dimension "
+                f"(n_features = {X.shape[1]}): an embedding has at most as many axes as the "
+                "space the points lie in"
             )
         n = X.shape[0]
         if self.n_neighbors >= n:

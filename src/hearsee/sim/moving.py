@@ -41,6 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.propagation import add_noise, speed_of_sound_of
 from hearsee.audio.signals import check_fs
+from hearsee.config import finite_number, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, InputFileError
 
 __all__ = [
@@ -61,6 +62,9 @@ __all__ = [
 SINC_HALF_WIDTH = 32
 #: Kaiser window shape parameter of the interpolator (about -80 dB side lobes).
 SINC_KAISER_BETA = 8.6
+#: The widest interpolator :func:`fractional_delay` accepts (taps on each side); 32 is already
+#: near -80 dB, and the tap matrix grows as ``chunk * 2 * half_width``.
+MAX_SINC_HALF_WIDTH = 1024
 
 
 @dataclass(frozen=True, eq=False)
@@ -227,27 +231,44 @@ def fractional_delay(signal: ArrayLike, delays_samples: ArrayLike, n_out: int | 
     delays_samples : array (n_out,) or (n_ch, n_out)
         Delay ``D`` per output sample, in samples (any non-negative real number).
     half_width : int
-        Taps on each side of the interpolation point (Kaiser-windowed sinc).
+        Taps on each side of the interpolation point (Kaiser-windowed sinc), 1 to
+        :data:`MAX_SINC_HALF_WIDTH`.
+    beta : float
+        Kaiser window parameter (finite, >= 0).
+    chunk : int
+        Output samples interpolated at once (>= 1; memory ~ ``chunk * 2 half_width``).
 
     Returns
     -------
     array shaped like ``delays_samples``.
 
     The interpolator is exact for a band-limited input below about 0.9 x Nyquist (error near
-    -80 dB); it is vectorised over chunks of ``chunk`` output samples.
+    -80 dB); it is vectorised over chunks of ``chunk`` output samples. A NaN/inf signal,
+    negative or non-finite delays are refused (AudioInputError / GeometryError), and so are
+    out-of-range options (ConfigError: ``half_width=0`` and a negative ``chunk`` used to
+    return silence, a NaN ``beta`` NaNs). A delay longer than the output leaves it silent.
     """
     x = np.asarray(signal, dtype=float)
     if x.ndim != 1:
         raise AudioInputError(f"signal must be one-dimensional, got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise AudioInputError("signal contains NaN or infinite samples")
     d = np.asarray(delays_samples, dtype=float)
+    if d.ndim not in (1, 2):
+        raise GeometryError(f"delays must be (n_out,) or (n_ch, n_out), got shape {d.shape}")
     squeeze = d.ndim == 1
     d = np.atleast_2d(d)
     if not np.all(np.isfinite(d)) or np.any(d < 0):
         raise GeometryError("delays must be finite and non-negative")
-    n_out = d.shape[1] if n_out is None else int(n_out)
+    n_out = d.shape[1] if n_out is None else whole_number("n_out", n_out, 0)
     if d.shape[1] != n_out:
         raise GeometryError(f"delays must have n_out={n_out} samples, got {d.shape[1]}")
-    L = int(half_width)
+    L = whole_number("half_width", half_width, 1, MAX_SINC_HALF_WIDTH)
+    beta = finite_number("beta", beta, 0.0)
+    chunk = whole_number("chunk", chunk)
+    # a delay beyond n_out + L puts every tap before the signal's start: the output is 0
+    # there, as it is for the clipped delay (a 1e12-sample delay asked for 7 TiB of padding)
+    d = np.minimum(d, n_out + L + 1.0)
     pad_front = int(np.ceil(d.max())) + L + 1 if d.size else L + 1
     xp = np.concatenate([np.zeros(pad_front), x, np.zeros(L + 1)])
     k = np.arange(-L + 1, L + 1)  # 2L taps

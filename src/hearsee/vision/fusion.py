@@ -36,6 +36,7 @@ from hearsee.vision.humans import (
     check_camera_height,
     detect_candidates,
 )
+from hearsee.vision.io import check_image
 from hearsee.vision.stereo import StereoFrame, points_to_left_frame, stereo_frame
 from hearsee.vision.thermal import HUMAN_BAND_C, thermal_mask
 
@@ -276,11 +277,20 @@ def draw_detections(image: NDArray, result: DetectionResult, *, show_rejected: b
 
     The boxes are in rectified left-image pixels: pass the rectified left image
     ``result.frame.left`` (the raw left image is the same only for an already rectified rig,
-    :attr:`StereoRig.is_rectified`)."""
+    :attr:`StereoRig.is_rectified`). ImageInputError unless ``image`` is a non-empty 8-bit
+    grey, BGR or BGRA image (an int64 or empty one used to fail inside OpenCV)."""
     import cv2
 
-    img = np.asarray(image)
-    out = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR) if img.ndim == 2 else img.copy()
+    img = check_image(np.asarray(image))
+    if img.dtype != np.uint8:
+        raise ImageInputError(f"draw_detections needs an 8-bit image (the rectified left "
+                              f"image), got pixel type {img.dtype}")
+    if img.ndim == 3 and img.shape[2] == 4:
+        out = cv2.cvtColor(img, cv2.COLOR_BGRA2BGR)
+    elif img.ndim == 3 and img.shape[2] == 3:
+        out = img.copy()
+    else:
+        out = cv2.cvtColor(img.reshape(img.shape[:2]), cv2.COLOR_GRAY2BGR)
     items = [(h, (0, 200, 0)) for h in result.humans]
     if show_rejected:
         items += [(h, (0, 0, 230)) for h in result.rejected if h.score > 0]

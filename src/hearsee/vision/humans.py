@@ -47,7 +47,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.config import is_real
+from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import (
     CalibrationError,
     ConfigError,
@@ -62,6 +62,7 @@ __all__ = [
     "FloorPlane",
     "HumanCandidate",
     "HumanDetectorParams",
+    "MAX_DISPARITY_PX",
     "StereoDetection",
     "check_camera_height",
     "detect_candidates",
@@ -80,6 +81,12 @@ __all__ = [
 #: for a person facing the camera (torso ~0.22 m deep, legs and arms ~0.12 m) and about 0.15 m
 #: for one turned sideways (the near arm and shoulder); 0.09 m balances the two.
 BODY_SURFACE_DEPTH_M = 0.09
+
+
+#: The largest ``max_disparity`` :func:`u_disparity` accepts, pixels: far beyond any matcher
+#: (OpenCV's SGBM stores disparities as 16 x int16, at most 2047 px), small enough that the
+#: counts of an image 10,000 px wide stay within a few GB.
+MAX_DISPARITY_PX = 65535
 
 
 # ---------------------------------------------------------------------------------------------
@@ -203,6 +210,13 @@ def estimate_floor(points: NDArray, *, prior_height_m: float | None = None, step
     the prior must be a finite height > 0 (GeometryError).
     """
     check_camera_height(prior_height_m, "prior_height_m")
+    points = np.asarray(points, dtype=float)
+    if points.ndim != 3 or points.shape[-1] != 3:
+        raise ImageInputError(f"points must be (H, W, 3) metres, got shape {points.shape}")
+    step = whole_number("step", step)  # (0 was numpy's "slice step cannot be zero")
+    iterations = whole_number("iterations", iterations)
+    inlier_m = finite_number("inlier_m", inlier_m, 0.0, lo_open=True)
+    max_tilt_deg = finite_number("max_tilt_deg", max_tilt_deg, 0.0, 90.0, lo_open=True)
     P = points[::step, ::step].reshape(-1, 3)
     P = P[np.all(np.isfinite(P), axis=1)]
     P = P[(P[:, 1] > 0.3) & (P[:, 2] < 10.0)]
@@ -251,8 +265,11 @@ def u_disparity(disparity: NDArray, mask: NDArray | None = None, max_disparity: 
                 ) -> NDArray:
     """P(y,d): counts ``(n_d, W)`` of pixels with (rounded) disparity ``d`` in image column ``y``.
 
-    ``disparity`` is ``(H, W)`` float pixels (NaN/<=0 invalid); ``mask`` selects the pixels
-    counted (e.g. not floor); ``n_d = max_disparity + 1`` (default: the largest disparity + 1).
+    ``disparity`` is ``(H, W)`` float pixels (NaN/<=0 invalid); ``mask`` (H, W) bool selects
+    the pixels counted (e.g. not floor); ``n_d = max_disparity + 1`` (default: the largest
+    disparity + 1). A disparity larger than the image width cannot come from matching two
+    images of that width (ImageInputError: a 1e12 once asked for 29 TiB of counts);
+    ``max_disparity`` is an integer in [0, :data:`MAX_DISPARITY_PX`] (ConfigError).
 
     >>> d = np.full((4, 3), np.nan); d[:, 1] = 5.0
     >>> u_disparity(d)[5].tolist()
@@ -263,8 +280,17 @@ def u_disparity(disparity: NDArray, mask: NDArray | None = None, max_disparity: 
         raise ImageInputError(f"disparity must be (H, W), got shape {d.shape}")
     H, W = d.shape
     ok = np.isfinite(d) & (d > 0)
+    if np.any(ok) and (top := float(d[ok].max())) > W:
+        raise ImageInputError(f"disparity of {top:.4g} px exceeds the image width ({W} px): not "
+                              "a disparity map of this image")
+    if max_disparity is not None:
+        max_disparity = whole_number("max_disparity", max_disparity, 0, MAX_DISPARITY_PX)
     if mask is not None:
-        ok &= mask
+        m = np.asarray(mask)
+        if m.shape != d.shape:
+            raise ImageInputError(f"mask must have the disparity's shape {d.shape}, got "
+                                  f"{m.shape}")
+        ok &= m.astype(bool)
     di = np.rint(d[ok]).astype(np.int64)
     nd = int(max_disparity + 1 if max_disparity is not None else (di.max() + 1 if di.size else 1))
     keep = di < nd
@@ -644,9 +670,12 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     check_camera_height(camera_height_m)
     p = params or HumanDetectorParams()
     d = np.asarray(disparity, dtype=np.float32)
+    points = np.asarray(points)
     if d.ndim != 2 or points.shape != (*d.shape, 3):
         raise ImageInputError(f"disparity (H, W) and points (H, W, 3) expected, got {d.shape} "
                               f"and {points.shape}")
+    if d.size == 0:
+        raise ImageInputError(f"the disparity image is empty (shape {d.shape})")
     if floor is None:
         floor = estimate_floor(points, prior_height_m=camera_height_m)
     with np.errstate(invalid="ignore"):
@@ -656,7 +685,9 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
         near = d >= d_min
         counted = (heights >= p.min_height_m) & (heights <= p.max_height_m) & near
         above = (heights > p.max_height_m) & (heights <= p.above_m) & near
-    nd = int(np.ceil(min(np.nanmax(d) if np.any(np.isfinite(d)) else 1.0, d_max))) + 1
+    # the largest VALID disparity (NaN, zero and negative ones are not matches)
+    valid = d[np.isfinite(d) & (d > 0)]
+    nd = int(np.ceil(min(valid.max() if valid.size else 1.0, d_max))) + 1
     # things that continue above a standing person (walls, tall shelves) count against P
     P = u_disparity(d, counted, max_disparity=nd)
     P_above = u_disparity(d, above, max_disparity=nd)
@@ -768,9 +799,7 @@ def detect_people_hog(image: NDArray, *, win_stride: int = 8, scale: float = 1.0
     a negative stride or an image smaller than the window.
     """
     img = _hog_image(image)
-    if isinstance(win_stride, bool) or not isinstance(win_stride, int | np.integer) or \
-            win_stride < 1:
-        raise ConfigError(f"win_stride must be a positive integer (pixels), got {win_stride!r}")
+    win_stride = whole_number("win_stride (pixels)", win_stride)
     if not (is_real(scale) and scale > 1.0):
         raise ConfigError(f"scale must be a finite number > 1 (pyramid step), got {scale!r}")
     if not is_real(hit_threshold):

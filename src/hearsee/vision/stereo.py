@@ -175,7 +175,10 @@ def compute_disparity(
 
     Returns
     -------
-    (H, W) float32 disparity in pixels (``u_left - u_right``), NaN where invalid.
+    (H, W) float32 disparity in pixels (``u_left - u_right``), NaN where invalid. All NaN
+    when either image has no horizontal texture at all (a closed lens cap, a blank or
+    saturated frame): every disparity matches such an image equally well, and SGBM used to
+    answer a full map of zeros (points at infinity) as if they were measured.
 
     Examples
     --------
@@ -207,6 +210,8 @@ def compute_disparity(
     if block_size < 1 or block_size % 2 == 0:
         raise ConfigError(f"block_size must be a positive odd number, got {block_size}")
     H, W = L.shape
+    if not (_has_texture(L) and _has_texture(R)):
+        return np.full((H, W), np.nan, np.float32)
     if scale < 1.0:
         size = (max(8, round(W * scale)), max(8, round(H * scale)))
         L = cv2.resize(L, size, interpolation=cv2.INTER_AREA)
@@ -235,6 +240,11 @@ def compute_disparity(
     if scale < 1.0:
         d = cv2.resize(d, (W, H), interpolation=cv2.INTER_NEAREST) / np.float32(sx)
     return d
+
+
+def _has_texture(gray: NDArray) -> bool:
+    """True when some row of ``gray`` changes along x (matching needs horizontal texture)."""
+    return bool(np.any(gray[:, 1:] != gray[:, :-1]))
 
 
 def lr_consistency(disp_left: NDArray, disp_right: NDArray, max_diff: float = 1.0) -> NDArray:
