@@ -120,6 +120,38 @@ def test_estimate_floor_recovers_height_and_tilt():
     assert fl.height(np.array([0.0, 0.0, 0.0])) == pytest.approx(1.3, abs=0.01)
 
 
+def _wall_scene(h: float, wall_z: float, f: float = 500.0, B: float = 0.12, W: int = 640,
+                H: int = 480, noise_px: float = 0.25, seed: int = 0) -> np.ndarray:
+    """Points (H, W, 3) of a level camera ``h`` m above the floor facing a wall ``wall_z`` m
+    away (a strip of floor, or none, in view) with a person-sized slab 0.5 m in front of the
+    wall; disparity noise ``noise_px``."""
+    v, u = np.mgrid[0:H, 0:W].astype(float)
+    rx, ry = (u - W / 2) / f, (v - H / 2) / f  # ray (rx, ry, 1), y down
+    with np.errstate(divide="ignore"):
+        Z = np.minimum(np.full((H, W), wall_z), np.where(ry > 0, h / ry, np.inf))
+    zp = wall_z - 0.5
+    person = (rx * zp > -0.3) & (rx * zp < 0.2) & (ry * zp > h - 1.75) & (ry * zp < h)
+    Z = np.where(person & (zp < Z), zp, Z)
+    d = f * B / Z + np.random.default_rng(seed).normal(0.0, noise_px, Z.shape)
+    Zn = f * B / d
+    return np.dstack([rx * Zn, ry * Zn, Zn])
+
+
+@pytest.mark.parametrize("wall_z", [2.6, 3.0, 4.0, 5.0])
+def test_estimate_floor_facing_a_wall(wall_z):
+    """With little or no floor in view, a plane tilted 8-20 deg through the wall's base and the
+    person's legs won on inliers alone (hundreds of points below it): the person's feet came
+    out 0.33-0.55 m below "the floor" with a wall 2.6 m away. Points below a hypothesis now
+    count against it; no floor in view gives the prior."""
+    h = 1.25
+    fl = estimate_floor(_wall_scene(h, wall_z), prior_height_m=h)
+    feet = np.array([0.0, h, wall_z - 0.5])
+    assert abs(float(fl.height(feet))) < 0.03
+    assert np.degrees(np.arccos(-fl.normal[1])) < 2.0
+    if wall_z == 2.6:  # the floor's first visible row is 2.6 m away: no floor in view
+        assert fl.source == "prior"
+
+
 def test_estimate_floor_fallback_and_error():
     empty = np.full((40, 40, 3), np.nan)
     assert estimate_floor(empty, prior_height_m=1.2).camera_height_m == 1.2
