@@ -813,8 +813,10 @@ class MotionKalman(_Kalman):
     ----------
     sigma_meas_m : float
         Default measurement standard deviation per axis, metres.
-    sigma_jerk : float
-        Standard deviation of the jerk (process noise), m/s^3.
+    sigma_jerk : float or (3,)
+        Standard deviation of the jerk (process noise), m/s^3: one value for all axes, or one
+        per axis ``(x, y, z)`` of the track's frame -- e.g. a small z value for a walking
+        person, whose height hardly changes (:func:`hearsee.robot.pipeline.new_person_track`).
     gate_prob : float
         Chi-square gate probability (3 degrees of freedom).
     max_rejects : int
@@ -834,16 +836,22 @@ class MotionKalman(_Kalman):
                  gate_prob: float = 0.999, max_rejects: int = 4,
                  init_vel_sigma: float = 1.5, init_acc_sigma: float = 3.0,
                  accel_tau_s: float | None = None) -> None:
-        for name, v in (("sigma_meas_m", sigma_meas_m), ("sigma_jerk", sigma_jerk),
+        for name, v in (("sigma_meas_m", sigma_meas_m),
                         ("init_vel_sigma", init_vel_sigma), ("init_acc_sigma", init_acc_sigma)):
             _positive(name, v)
+        jerk = np.asarray(sigma_jerk, dtype=float) if not isinstance(sigma_jerk, str) else None
+        if jerk is None or jerk.shape not in ((), (3,)):
+            raise EstimationError(f"sigma_jerk must be one number or three (x, y, z), m/s^3, "
+                                  f"got {sigma_jerk!r}")
+        for v in jerk.reshape(-1):
+            _positive("sigma_jerk", v)
         if accel_tau_s is not None:
             _positive("accel_tau_s", accel_tau_s)
         if not 0 < gate_prob < 1:  # (NaN or 1.5 made the gate NaN: every fix was accepted)
             raise EstimationError(f"gate_prob must be in (0, 1), got {gate_prob}")
         self.accel_tau_s = accel_tau_s
         self.sigma_meas_m = float(sigma_meas_m)
-        self.sigma_jerk = float(sigma_jerk)
+        self.sigma_jerk = float(jerk) if jerk.ndim == 0 else tuple(float(v) for v in jerk)
         self.gate_prob = float(gate_prob)
         self.max_rejects = int(max_rejects)
         self.init_vel_sigma = float(init_vel_sigma)
@@ -871,9 +879,12 @@ class MotionKalman(_Kalman):
         """Transition and process noise ``(F, Q)`` over ``dt`` seconds."""
         decay = 1.0 if self.accel_tau_s is None else float(np.exp(-dt / self.accel_tau_s))
         f = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, decay]])
-        return (np.kron(np.eye(3), f),
-                Q_discrete_white_noise(dim=3, dt=dt, var=self.sigma_jerk**2, block_size=3,
-                                       order_by_dim=True))
+        jerk = np.broadcast_to(np.asarray(self.sigma_jerk, dtype=float), (3,))
+        Q = np.zeros((9, 9))
+        for i, sj in enumerate(jerk):  # order_by_dim: [x, vx, ax, y, vy, ay, z, vz, az]
+            Q[3 * i:3 * i + 3, 3 * i:3 * i + 3] = Q_discrete_white_noise(dim=3, dt=dt,
+                                                                         var=sj**2)
+        return np.kron(np.eye(3), f), Q
 
     def _set_dt(self, dt: float) -> None:
         key = round(dt, 9)

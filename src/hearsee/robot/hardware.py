@@ -929,7 +929,6 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     import time
     from concurrent.futures import ThreadPoolExecutor
 
-    from hearsee.audio.tracking import MotionKalman
     from hearsee.config import to_jsonable
     from hearsee.robot.pipeline import (
         BEARING_SIGMA_DEG,
@@ -938,6 +937,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         RunResult,
         associate,
         bearing_update,
+        new_person_track,
         stereo_position_cov,
     )
     from hearsee.stream.pipeline import StreamConfig, StreamPipeline
@@ -964,7 +964,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     scfg = StreamConfig(frame_ms=a.frame_ms, hop_ms=a.frame_ms / 2.0, method=a.method,
                         itd_filter=True)
     pipeline = StreamPipeline(a.array, scfg, queue_size=16, max_stall_s=5.0)
-    track = MotionKalman(sigma_meas_m=0.05, sigma_jerk=2.0)
+    track = new_person_track()
     out_path = Path(jsonl) if jsonl is not None else cfg.output.jsonl
     try:
         out_path.parent.mkdir(parents=True, exist_ok=True)
@@ -1023,7 +1023,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         if best is not None:
             h, p, _, k = verified[best]
             Rc = geo.R_cam.T @ stereo_position_cov(np.asarray(h.position_m), rig.focal_px,
-                                                rig.baseline_m) @ geo.R_cam
+                                                rig.baseline_m, h.box,
+                                                (rig.left.width, rig.left.height)) @ geo.R_cam
             if track.update(t, p, Rc):
                 state["last_visual"] = t
             dets[k]["speaker"] = True

@@ -81,6 +81,18 @@ MIN_AUDIO_UPDATES = 3
 #: alone do not observe the range, so a coasting track drifts; the head then follows the audio
 #: bearing until vision re-acquires the person.
 TRACK_TIMEOUT_S = 1.0
+#: The 3D person track (:func:`new_person_track`): jerk noise per axis (x, y, z of the room or
+#: robot frame, m/s^3; a walking person's torso height hardly changes, so z gets 0.1) and the
+#: correlation time of its acceleration (s, Singer 1970; the stream's
+#: ``StreamConfig.accel_tau_s``). Before 2026-11-26 the robot's track was pure constant
+#: acceleration with 2 m/s^3 on every axis: two biased fixes of a person half out of view left
+#: an acceleration that the coasting track then integrated for a second (vertical speeds of
+#: 1-4.5 m/s, 1-3 m position errors before the timeout; bench/robot seeds 16, 42, 47).
+PERSON_JERK_MPS3 = (2.0, 2.0, 0.1)
+#: Covariance factor for a stereo fix whose silhouette is cut by the image border
+#: (:func:`stereo_position_cov`): 3x the standard deviation.
+TRUNCATED_COV_SCALE = 9.0
+PERSON_ACCEL_TAU_S = 0.5
 
 _OBJECT_KIND = {"mannequin": "mannequin", "poster": "poster", "coat": "coat_stand"}
 
@@ -256,12 +268,34 @@ def _entities(sc: Scenario, body: _Body, t: float) -> list[Any]:
     return ents
 
 
-def stereo_position_cov(p_cam: NDArray, f: float, B: float) -> NDArray:
-    """Stereo position covariance in the camera frame (m^2) from the disparity noise."""
+def stereo_position_cov(p_cam: NDArray, f: float, B: float, box: Sequence[int] | None = None,
+                        image_size: tuple[int, int] | None = None) -> NDArray:
+    """Stereo position covariance in the camera frame (m^2) from the disparity noise.
+
+    With the detection's ``box`` [x, y, w, h] and the ``image_size`` (width, height) in
+    pixels, a silhouette cut by the top, left or right image border (the head or a side
+    outside the view: a person close to the robot, or not yet centred) gets
+    :data:`TRUNCATED_COV_SCALE` times the covariance: its torso centre is biased toward the
+    visible part (0.2-0.3 m in bench/robot seed 16). A cut at the bottom (the feet) is usual
+    at close range and leaves the torso in view."""
     z = max(float(p_cam[2]), 0.3)
     sz = z * z / (f * B) * DISPARITY_SIGMA_PX
     sxy = z / f * 2.0 + 0.03  # centroid jitter of the silhouette (pixels -> metres) + body
-    return np.diag([sxy**2, sxy**2, sz**2 + 0.03**2])
+    cov = np.diag([sxy**2, sxy**2, sz**2 + 0.03**2])
+    if box is not None and image_size is not None:
+        x, y, w, _ = (int(v) for v in box)
+        if x <= 0 or y <= 0 or x + w >= int(image_size[0]):
+            cov = cov * TRUNCATED_COV_SCALE
+    return cov
+
+
+def new_person_track() -> MotionKalman:
+    """The robot's 3D track of the person (room or robot frame, metres): a constant-
+    acceleration Kalman filter whose acceleration decays with :data:`PERSON_ACCEL_TAU_S`, fed
+    with verified stereo fixes (5 cm default noise) and audio bearings (:func:`bearing_update`).
+    One place for the simulated loop and the live one (:mod:`hearsee.robot.hardware`)."""
+    return MotionKalman(sigma_meas_m=0.05, sigma_jerk=PERSON_JERK_MPS3,
+                        accel_tau_s=PERSON_ACCEL_TAU_S)
 
 
 def bearing_update(kf: MotionKalman, body: _Body, bearing_robot_deg: float,
@@ -363,7 +397,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
 
     itd, itd_pan = new_itd_filter(), 0.0  # (the head starts at pan 0)
     direction = DirectionKalman(sigma_meas_deg=5.0, sigma_accel_dps2=60.0)
-    track = MotionKalman(sigma_meas_m=0.05, sigma_jerk=2.0)
+    track = new_person_track()
     frame_len = int(round(sc.frame_ms / 1000 * sc.fs))
     pan = 0.0
     phase = "listening"
@@ -446,7 +480,8 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             if k is not None:
                 hmn, p_w = verified[k]
                 Rc = R_cr.T @ stereo_position_cov(np.asarray(hmn.position_m), rig.focal_px,
-                                               rig.baseline_m) @ R_cr
+                                               rig.baseline_m, hmn.box,
+                                               (rig.left.width, rig.left.height)) @ R_cr
                 if track.update(t1, p_w, Rc):
                     last_visual_t = t1
                 if first_turned_t is None:
