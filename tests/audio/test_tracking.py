@@ -110,6 +110,32 @@ def test_constant_acceleration_motion_is_recovered():
     assert not np.any(tr.accepted[60:65])
 
 
+def test_motion_filter_jerk_per_axis():
+    """sigma_jerk may be given per axis (x, y, z): the same three values are the scalar model,
+    a small z value keeps a noisy height from turning into vertical speed."""
+    from filterpy.common import Q_discrete_white_noise
+
+    F, Q = MotionKalman(sigma_jerk=(2.0, 2.0, 2.0))._model(0.1)
+    np.testing.assert_allclose(Q, Q_discrete_white_noise(dim=3, dt=0.1, var=4.0, block_size=3,
+                                                         order_by_dim=True))
+    vz = {}
+    for jz in (2.0, 0.05):
+        rng = np.random.default_rng(3)  # the same fixes for both
+        kf = MotionKalman(sigma_meas_m=0.05, sigma_jerk=(2.0, 2.0, jz))
+        v = []
+        for k in range(50):  # walking along x at 1 m/s, height 1.1 m measured +-5 cm
+            t = 0.1 * k
+            kf.update(t, [t, 0.0, 1.1 + rng.normal(0.0, 0.05)])
+            v.append(kf.velocity)
+        v = np.array(v[10:])
+        vz[jz] = float(np.sqrt(np.mean(v[:, 2] ** 2)))  # the truth is 0
+        assert np.sqrt(np.mean((v[:, 0] - 1.0) ** 2)) < 0.3
+    assert vz[0.05] < 0.12 and vz[0.05] < 0.5 * vz[2.0]
+    for bad in ((1.0, 2.0), (1.0, 1.0, -1.0), "2", np.nan):
+        with pytest.raises(EstimationError, match="sigma_jerk"):
+            MotionKalman(sigma_jerk=bad)
+
+
 def test_motion_filter_refuses_bad_gates_and_covariances():
     """A NaN or out-of-range gate_prob made the gate NaN (every fix accepted); a negative R gave
     a negative position covariance, a NaN R a NaN state, a zero R a singular innovation
