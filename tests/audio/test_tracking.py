@@ -131,7 +131,7 @@ def test_motion_filter_jerk_per_axis():
         vz[jz] = float(np.sqrt(np.mean(v[:, 2] ** 2)))  # the truth is 0
         assert np.sqrt(np.mean((v[:, 0] - 1.0) ** 2)) < 0.3
     assert vz[0.05] < 0.12 and vz[0.05] < 0.5 * vz[2.0]
-    for bad in ((1.0, 2.0), (1.0, 1.0, -1.0), "2", np.nan):
+    for bad in ((1.0, 2.0), (1.0, 1.0, -1.0), "2", np.nan, ["a", "b", "c"], None):
         with pytest.raises(EstimationError, match="sigma_jerk"):
             MotionKalman(sigma_jerk=bad)
 

@@ -839,7 +839,10 @@ class MotionKalman(_Kalman):
         for name, v in (("sigma_meas_m", sigma_meas_m),
                         ("init_vel_sigma", init_vel_sigma), ("init_acc_sigma", init_acc_sigma)):
             _positive(name, v)
-        jerk = np.asarray(sigma_jerk, dtype=float) if not isinstance(sigma_jerk, str) else None
+        try:
+            jerk = None if isinstance(sigma_jerk, str) else np.asarray(sigma_jerk, dtype=float)
+        except (TypeError, ValueError):
+            jerk = None
         if jerk is None or jerk.shape not in ((), (3,)):
             raise EstimationError(f"sigma_jerk must be one number or three (x, y, z), m/s^3, "
                                   f"got {sigma_jerk!r}")

@@ -52,7 +52,8 @@ from hearsee.geometry import array_to_robot, head_rotation, wrap_deg
 from hearsee.robot.scenario import Scenario
 from hearsee.vision.camera import OPTICAL_FROM_BODY
 
-__all__ = ["CONTROL_DT", "RunResult", "bearing_update", "run_scenario", "stereo_position_cov"]
+__all__ = ["CONTROL_DT", "RunResult", "bearing_update", "new_person_track", "run_scenario",
+           "stereo_position_cov"]
 
 #: Control period and audio chunk length, seconds.
 CONTROL_DT = 0.2
@@ -89,10 +90,10 @@ TRACK_TIMEOUT_S = 1.0
 #: an acceleration that the coasting track then integrated for a second (vertical speeds of
 #: 1-4.5 m/s, 1-3 m position errors before the timeout; bench/robot seeds 16, 42, 47).
 PERSON_JERK_MPS3 = (2.0, 2.0, 0.1)
+PERSON_ACCEL_TAU_S = 0.5
 #: Covariance factor for a stereo fix whose silhouette is cut by the image border
 #: (:func:`stereo_position_cov`): 3x the standard deviation.
 TRUNCATED_COV_SCALE = 9.0
-PERSON_ACCEL_TAU_S = 0.5
 
 _OBJECT_KIND = {"mannequin": "mannequin", "poster": "poster", "coat": "coat_stand"}
 
