@@ -235,7 +235,7 @@ def estimate_floor(points: NDArray, *, prior_height_m: float | None = None, step
     iterations = whole_number("iterations", iterations)
     inlier_m = finite_number("inlier_m", inlier_m, 0.0, lo_open=True)
     max_tilt_deg = finite_number("max_tilt_deg", max_tilt_deg, 0.0, 90.0, lo_open=True)
-    P = points[::step, ::step].reshape(-1, 3)
+    P = points[::step, ::step].reshape(-1, 3).astype(float)  # float64 geometry
     P = P[np.all(np.isfinite(P), axis=1)]
     P = P[(P[:, 1] > 0.3) & (P[:, 2] < 10.0)]
     best: FloorPlane | None = None
