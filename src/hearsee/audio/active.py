@@ -63,7 +63,7 @@ from scipy.optimize import least_squares
 
 from hearsee.audio.arrays import MicArray, load_array, pair_tdoa, pair_tdoa_jacobian
 from hearsee.audio.propagation import speed_of_sound_of
-from hearsee.config import whole_number
+from hearsee.config import is_real, whole_number
 from hearsee.errors import (
     AudioInputError,
     EstimationError,
@@ -749,7 +749,7 @@ def make_pose_training_set(
     if not (0 < lo < hi and np.isfinite(hi)):
         raise GeometryError(f"distance_range_m must be 0 < near < far metres, got "
                             f"{distance_range_m!r}")
-    if not (np.isfinite(tdoa_std_s) and tdoa_std_s >= 0):  # (NaN made every sample NaN)
+    if not (is_real(tdoa_std_s) and tdoa_std_s >= 0):  # (NaN made every sample NaN)
         raise GeometryError(f"tdoa_std_s must be a finite number >= 0 seconds, got {tdoa_std_s}")
     if not all(np.all(np.isfinite(v)) for v in (elevation_range_deg, azimuth_range_deg)):
         raise GeometryError("elevation_range_deg and azimuth_range_deg must be finite degrees")

@@ -39,6 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array, pair_tdoa
+from hearsee.config import is_real
 from hearsee.errors import GeometryError
 from hearsee.geometry import wrap_deg
 
@@ -163,7 +164,7 @@ def _tdoa_vector(tdoa_s: ArrayLike, prs: list[tuple[int, int]], tol_s: float) ->
     tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
     if tau.shape[0] != len(prs):
         raise GeometryError(f"got {tau.shape[0]} TDOAs for {len(prs)} microphone pairs")
-    if not (np.isfinite(tol_s) and tol_s > 0):
+    if not (is_real(tol_s) and tol_s > 0):
         raise GeometryError(f"tol_s must be a finite number > 0 seconds, got {tol_s}")
     return tau
 

@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from hearsee.config import is_real
 from hearsee.errors import CalibrationError, ConfigError
 from hearsee.vision.camera import MIN_BASELINE_M, Camera, StereoRig
 from hearsee.vision.io import to_gray
@@ -99,7 +100,7 @@ def parse_board(text: str) -> tuple[int, int]:
 def board_points(pattern: tuple[int, int], square_m: float) -> NDArray:
     """3D corners ``(cols*rows, 3)`` float32 of a chessboard in its own frame (z = 0), metres,
     in OpenCV's order (along rows of ``pattern[0]`` corners)."""
-    if not (np.isfinite(square_m) and square_m > 0):  # (inf gave inf / NaN corners)
+    if not (is_real(square_m) and square_m > 0):  # (inf gave inf / NaN corners)
         raise CalibrationError(f"square size must be a finite number > 0 metres, got {square_m}")
     nx, ny = pattern
     g = np.zeros((ny * nx, 3), np.float32)

@@ -61,7 +61,7 @@ import yaml
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.config import as_float_array, check_keys, load_yaml, require, to_plain
+from hearsee.config import as_float_array, check_keys, is_real, load_yaml, require, to_plain
 from hearsee.errors import CalibrationError, ConfigError, GeometryError, InputFileError
 
 __all__ = [
@@ -696,8 +696,7 @@ def _info_camera_height(info: Any, where: str) -> float | None:
     h = info.get("camera_height_m") if isinstance(info, dict) else None
     if h is None:
         return None
-    if isinstance(h, bool) or not isinstance(h, int | float | np.number) or \
-            not (np.isfinite(h) and h > 0):
+    if not (is_real(h) and h > 0):
         raise ConfigError(
             f"{where}: camera_height_m must be a finite number of metres > 0, got {h!r}"
         )

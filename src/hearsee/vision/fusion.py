@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from hearsee.config import is_real
 from hearsee.errors import CalibrationError, ConfigError, GeometryError, ImageInputError
 from hearsee.vision.camera import Rectification, StereoRig
 from hearsee.vision.humans import (
@@ -121,8 +122,7 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
     """
     cam = rig.thermal_camera
     warm = _check_mask(warm)
-    hw = np.asarray(head_weight)
-    if not (hw.ndim == 0 and hw.dtype.kind in "iuf" and np.isfinite(hw) and hw > 0):
+    if not (is_real(head_weight) and head_weight > 0):
         raise ConfigError(f"head_weight must be a finite number > 0, got {head_weight!r}")
     if warm.shape != cam.shape:
         raise ImageInputError(
@@ -180,7 +180,7 @@ def classify_candidates(det: StereoDetection, rig: StereoRig, rect: Rectificatio
     Duplicates and empty segmentations are dropped. Positions are returned in the left camera's
     own optical frame.
     """
-    if not (np.ndim(min_support) == 0 and np.isfinite(min_support) and 0 <= min_support <= 1):
+    if not (is_real(min_support) and 0 <= min_support <= 1):
         # (NaN rejected every candidate: support >= NaN is False)
         raise ConfigError(f"min_support must be a thermal support in [0, 1], got {min_support!r}")
     needs_rect = not rig.is_rectified

@@ -168,10 +168,7 @@ class HumanDetectorParams:
             if not getattr(self, lo) < getattr(self, hi):
                 raise ConfigError(f"HumanDetectorParams: {lo} ({getattr(self, lo)}) must be "
                                   f"below {hi} ({getattr(self, hi)})")
-        if isinstance(self.max_candidates, bool) or \
-                not isinstance(self.max_candidates, int | np.integer) or self.max_candidates < 1:
-            raise ConfigError("HumanDetectorParams.max_candidates must be an integer >= 1, got "
-                              f"{self.max_candidates!r}")
+        whole_number("HumanDetectorParams.max_candidates", self.max_candidates)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -36,6 +36,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from hearsee.config import is_real
 from hearsee.errors import CalibrationError, ConfigError, ImageInputError
 from hearsee.vision.camera import Rectification, StereoRig
 from hearsee.vision.io import check_pair, to_gray
@@ -308,8 +309,7 @@ def check_focal_baseline(focal_px: float, baseline_m: float) -> float:
     depths, a zero or NaN one all-NaN depths or no people at all). The one check of the depth
     conversions and the human detector."""
     for name, v, unit in (("focal_px", focal_px, "pixels"), ("baseline_m", baseline_m, "metres")):
-        a = np.asarray(v)
-        if not (a.ndim == 0 and a.dtype.kind in "iuf" and np.isfinite(a) and a > 0):
+        if not (is_real(v) and v > 0):
             raise CalibrationError(f"{name} must be a finite number of {unit} > 0, got {v!r}")
     return float(focal_px) * float(baseline_m)
 
@@ -320,7 +320,7 @@ def depth_from_disparity(disparity: ArrayLike, focal_px: float, baseline_m: floa
     ``disparity`` (pixels; a scalar gives a 0-d array). ``focal_px`` (pixels) and
     ``baseline_m`` (metres) must be finite and > 0 (CalibrationError)."""
     fb = check_focal_baseline(focal_px, baseline_m)
-    if not np.isfinite(min_disparity):
+    if not is_real(min_disparity):
         raise ConfigError(f"min_disparity must be a finite number of pixels, got {min_disparity}")
     d = np.asarray(disparity, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
