@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from filterpy.common import Q_discrete_white_noise
 from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import block_diag
 from scipy.stats import chi2
 
 from hearsee.config import finite_number
@@ -883,10 +884,8 @@ class MotionKalman(_Kalman):
         decay = 1.0 if self.accel_tau_s is None else float(np.exp(-dt / self.accel_tau_s))
         f = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, decay]])
         jerk = np.broadcast_to(np.asarray(self.sigma_jerk, dtype=float), (3,))
-        Q = np.zeros((9, 9))
-        for i, sj in enumerate(jerk):  # order_by_dim: [x, vx, ax, y, vy, ay, z, vz, az]
-            Q[3 * i:3 * i + 3, 3 * i:3 * i + 3] = Q_discrete_white_noise(dim=3, dt=dt,
-                                                                         var=sj**2)
+        # order_by_dim: [x, vx, ax, y, vy, ay, z, vz, az], one block per axis
+        Q = block_diag(*(Q_discrete_white_noise(dim=3, dt=dt, var=sj**2) for sj in jerk))
         return np.kron(np.eye(3), f), Q
 
     def _set_dt(self, dt: float) -> None:

@@ -77,7 +77,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from hearsee.config import finite_number
+from hearsee.config import finite_number, whole_number
 from hearsee.errors import ConfigError, EstimationError, HearseeError
 
 __all__ = [
@@ -392,6 +392,13 @@ def _scale_axes_to_edges(X: np.ndarray, Y: np.ndarray, Wm: sparse.spmatrix,
     return Y * scales
 
 
+def _pattern(Wm: sparse.spmatrix) -> sparse.csr_matrix:
+    """The neighbourhood graph's edges (``i -> j`` when ``j`` is an accepted neighbour of
+    ``i``) as a 0/1 matrix, whatever the weights (which may be negative or cancel)."""
+    Wm = sparse.csr_matrix(Wm)
+    return sparse.csr_matrix((np.ones(Wm.indices.size), Wm.indices, Wm.indptr), shape=Wm.shape)
+
+
 def _graph_parts(Wm: sparse.spmatrix) -> tuple[int, np.ndarray, np.ndarray]:
     """Structure of the directed neighbourhood graph (``i -> j`` when ``j`` is an accepted
     neighbour of ``i``).
@@ -403,8 +410,7 @@ def _graph_parts(Wm: sparse.spmatrix) -> tuple[int, np.ndarray, np.ndarray]:
     other points by ``y_i = sum_j W_ij y_j`` has zero LLE cost: the null space of
     ``M = (I - W)^T (I - W)`` has one dimension per closed group, and with more than one the
     bottom eigenvectors collapse each group to a point instead of unfolding anything."""
-    Wm = sparse.csr_matrix(Wm)
-    P = sparse.csr_matrix((np.ones(Wm.indices.size), Wm.indices, Wm.indptr), shape=Wm.shape)
+    P = _pattern(Wm)
     n_comp, comp = csgraph.connected_components(P, directed=True, connection="weak")
     n_scc, scc = csgraph.connected_components(P, directed=True, connection="strong")
     E = P.tocoo()
@@ -434,8 +440,7 @@ def _axis_extent(X: np.ndarray, Y: np.ndarray, Wm: sparse.spmatrix, comp: np.nda
     length of that component's neighbourhood graph (its minimum spanning tree): returns
     ``(axis, extent, tree length)``."""
     n = X.shape[0]
-    Wm = sparse.csr_matrix(Wm)
-    P = sparse.csr_matrix((np.ones(Wm.indices.size), Wm.indices, Wm.indptr), shape=Wm.shape)
+    P = _pattern(Wm)
     E = sparse.triu(P + P.T, k=1).tocoo()
     d = np.linalg.norm(X[E.row] - X[E.col], axis=1)
     T = csgraph.minimum_spanning_tree(sparse.csr_matrix((d, (E.row, E.col)), shape=(n, n)))
@@ -1044,12 +1049,6 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
 # --------------------------------------------------------------------------- data
 
 
-def _count(name: str, value, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, Integral) or value < minimum:
-        raise ConfigError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
-
-
 def _angle_range(name: str, value) -> tuple[float, float]:
     try:
         lo, hi = (float(v) for v in value)
@@ -1109,12 +1108,12 @@ def make_two_rolls(
         ``n_samples`` not an integer >= 0, a NaN or infinite parameter, a negative
         ``density_ratio``, ``noise`` or ``outliers``, or ``height <= 0``.
     """
-    n_samples = _count("n_samples", n_samples, 0)
-    density_ratio = finite_number("density_ratio", density_ratio, 0.0, error=ConfigError)
-    gap = finite_number("gap", gap, error=ConfigError)
-    noise = finite_number("noise", noise, 0.0, error=ConfigError)
-    outliers = finite_number("outliers", outliers, 0.0, error=ConfigError)
-    height = finite_number("height", height, 0.0, lo_open=True, error=ConfigError)
+    n_samples = whole_number("n_samples", n_samples, 0)
+    density_ratio = finite_number("density_ratio", density_ratio, 0.0)
+    gap = finite_number("gap", gap)
+    noise = finite_number("noise", noise, 0.0)
+    outliers = finite_number("outliers", outliers, 0.0)
+    height = finite_number("height", height, 0.0, lo_open=True)
     rs = check_random_state(random_state)
     n0 = int(round(n_samples * density_ratio / (1.0 + density_ratio)))
     n1 = n_samples - n0
@@ -1196,11 +1195,11 @@ def make_head_pose_images(
         ``n_samples`` not an integer >= 0, ``size`` not an integer >= 1, a range that is not two
         finite numbers, or ``noise`` negative or not finite.
     """
-    n_samples = _count("n_samples", n_samples, 0)
-    size = _count("size", size, 1)
+    n_samples = whole_number("n_samples", n_samples, 0)
+    size = whole_number("size", size, 1)
     yaw_range_deg = _angle_range("yaw_range_deg", yaw_range_deg)
     pitch_range_deg = _angle_range("pitch_range_deg", pitch_range_deg)
-    noise = finite_number("noise", noise, 0.0, error=ConfigError)
+    noise = finite_number("noise", noise, 0.0)
     rs = check_random_state(random_state)
     yaw = rs.uniform(*yaw_range_deg, n_samples)
     pitch = rs.uniform(*pitch_range_deg, n_samples)
