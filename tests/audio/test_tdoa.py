@@ -352,6 +352,35 @@ def test_summary_upsample_finds_the_correlation_maximum():
     assert abs(integer.summary_tdoa_s[0] * FS - taus[np.argmax(dense)]) > 0.05
 
 
+def test_first_arrival_prefers_the_direct_path_over_its_floor_image():
+    """Two microphones, a source at azimuth 50 deg in their plane plus an equally strong copy
+    2 ms later from its floor image (same azimuth, 60 deg below: same side, half the lag).
+    The highest averaged-correlation peak is the image's; ``first_arrival`` (default) takes
+    the direct path, 0 the highest peak, and an image clearly stronger than the tolerance
+    still wins."""
+    from hearsee.geometry import unit_vector_deg
+
+    two = MicArray.from_preset("two-mic")
+    s = white_noise(1.0, FS, rng=31)
+    u_src, u_img = unit_vector_deg(50.0, 0.0), unit_vector_deg(50.0, -60.0)
+    tau_src, tau_img = two.tdoa_far(u_src)[0] * FS, two.tdoa_far(u_img)[0] * FS  # 5.4, 2.7
+
+    def record(gain):
+        x = (delay_signals(s, 1e-3 - two.positions @ u_src / two.speed_of_sound, FS)
+             + gain * delay_signals(s, 3e-3 - two.positions @ u_img / two.speed_of_sound, FS))
+        return x + 0.01 * np.random.default_rng(32).standard_normal(x.shape)
+
+    x = record(1.0)
+    assert estimate_tdoas(x, FS, two).summary_tdoa_s[0] * FS == pytest.approx(tau_src, abs=0.1)
+    highest = estimate_tdoas(x, FS, two, first_arrival=0.0).summary_tdoa_s[0] * FS
+    assert highest == pytest.approx(tau_img, abs=0.1)
+    stronger = estimate_tdoas(record(1.1), FS, two).summary_tdoa_s[0] * FS
+    assert stronger == pytest.approx(tau_img, abs=0.1)
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(ConfigError, match="first_arrival"):
+            estimate_tdoas(x, FS, two, first_arrival=bad)
+
+
 def test_source_in_plane_joint_search_ignores_elevated_reflection(three):
     """An in-plane source plus a stronger, later copy from 50 deg elevation (a ceiling
     reflection): the whole-sphere joint search locks onto the reflection, the in-plane search
