@@ -418,7 +418,7 @@ def test_find_corners_upscale_must_be_a_positive_integer(synthetic):
     """upscale=0 returned infinite corners, a negative one garbage."""
     img = synthetic[2][0]["l"]
     for bad in (0, -2, 1.5, True, "2"):
-        with pytest.raises(ConfigError, match="upscale must be a positive integer"):
+        with pytest.raises(ConfigError, match=r"upscale must be an integer >= 1"):
             C.find_corners(img, PATTERN, upscale=bad)
     c = C.find_corners(img, PATTERN, upscale=np.int64(1))
     assert c is not None and np.all(np.isfinite(c))

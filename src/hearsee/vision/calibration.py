@@ -27,8 +27,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.config import is_real
-from hearsee.errors import CalibrationError, ConfigError
+from hearsee.config import is_real, whole_number
+from hearsee.errors import CalibrationError
 from hearsee.vision.camera import MIN_BASELINE_M, Camera, StereoRig
 from hearsee.vision.io import to_gray
 
@@ -156,11 +156,10 @@ def find_corners(image: NDArray, pattern: tuple[int, int], *, try_inverted: bool
     makes the sub-pixel estimate several times more accurate on blurry low-resolution boards.
     ``try_inverted`` also tries the inverted image (thermal images of a heated board). Corners
     are relabelled so that corner 0 is the outer corner nearest the top-left of the image.
-    ``upscale`` must be a positive integer (ConfigError): 0 gave infinite corners.
+    ``upscale`` must be an integer >= 1 (ConfigError): 0 gave infinite corners.
     """
-    if upscale is not None and (isinstance(upscale, bool)
-                                or not isinstance(upscale, int | np.integer) or upscale < 1):
-        raise ConfigError(f"upscale must be a positive integer factor, got {upscale!r}")
+    if upscale is not None:
+        upscale = whole_number("upscale", upscale)
     g = to_gray(image)
     if g.dtype != np.uint8:
         g = cv2.normalize(g, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
