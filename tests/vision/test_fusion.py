@@ -41,6 +41,7 @@ def test_fusion_keeps_the_person_and_rejects_human_like_objects(scene):
         assert r.thermal_support < 0.1 and r.reason.startswith("thermal support")
     d = res.to_dict()
     assert d["humans"][0]["box"] == h.box and d["thermal"] == "radiometric"
+    assert d["humans"][0]["truncated"] is False  # in full view
 
 
 def test_stereo_only_accepts_the_human_shaped_objects(scene):

@@ -229,6 +229,30 @@ def test_detect_candidates_on_ground_truth_disparity(small_scene):
     assert not any(c.accepted for c in det1.candidates)
 
 
+def test_silhouettes_cut_by_the_image_border_are_flagged():
+    """A person 1.3 m away at the right edge of the view is cut by the right border: flagged
+    truncated, and its torso centre lies toward the visible part (the bias the flag warns of);
+    people in full view (centred, and near the left edge) are not."""
+    rig = default_rig(320, 240, thermal_size=(80, 60))
+    spec = SceneSpec(entities=[Entity("person", 0.0, 3.0, 0.0, 1.8),
+                               Entity("person", 0.9, 1.3, 0.0, 1.8),
+                               Entity("person", -1.55, 3.2, 0.0, 1.7)],
+                     width_left_m=3.0, width_right_m=3.0, depth_m=7.0, seed=5)
+    sc = render_scene(spec, rig)
+    rect = sc.rig.rectification
+    det = detect_candidates(sc.disparity, points_from_disparity(sc.disparity, rect.Q),
+                            rect.focal_px, rect.baseline_m, rect.cy, camera_height_m=1.4)
+    segs = [c.segment for c in det.candidates if c.segment is not None]
+    W = sc.disparity.shape[1]
+    for obj in sc.objects:
+        seg = min(segs, key=lambda g: np.linalg.norm(g.position_m - obj.position_m))
+        x, y, w, _ = obj.box  # the renderer's ground-truth box
+        assert seg.truncated == (x <= 0 or y <= 0 or x + w >= W)
+        if seg.truncated:
+            assert obj.position_m[0] - seg.position_m[0] > 0.05  # biased toward the view
+    assert sum(g.truncated for g in segs if g.position_m[2] < 2.0) == 1
+
+
 def test_detect_candidates_bad_shapes():
     with pytest.raises(ImageInputError):
         detect_candidates(np.zeros((10, 10)), np.zeros((10, 11, 3)), F, B, 5.0)

@@ -269,25 +269,18 @@ def _entities(sc: Scenario, body: _Body, t: float) -> list[Any]:
     return ents
 
 
-def stereo_position_cov(p_cam: NDArray, f: float, B: float, box: Sequence[int] | None = None,
-                        image_size: tuple[int, int] | None = None) -> NDArray:
+def stereo_position_cov(p_cam: NDArray, f: float, B: float, truncated: bool = False) -> NDArray:
     """Stereo position covariance in the camera frame (m^2) from the disparity noise.
 
-    With the detection's ``box`` [x, y, w, h] and the ``image_size`` (width, height) in
-    pixels, a silhouette cut by the top, left or right image border (the head or a side
-    outside the view: a person close to the robot, or not yet centred) gets
+    A ``truncated`` detection (:attr:`hearsee.vision.fusion.Human.truncated`: the head or a
+    side outside the view, a person close to the robot or not yet centred) gets
     :data:`TRUNCATED_COV_SCALE` times the covariance: its torso centre is biased toward the
-    visible part (0.2-0.3 m in bench/robot seed 16). A cut at the bottom (the feet) is usual
-    at close range and leaves the torso in view."""
+    visible part (0.2-0.3 m in bench/robot seed 16)."""
     z = max(float(p_cam[2]), 0.3)
     sz = z * z / (f * B) * DISPARITY_SIGMA_PX
     sxy = z / f * 2.0 + 0.03  # centroid jitter of the silhouette (pixels -> metres) + body
     cov = np.diag([sxy**2, sxy**2, sz**2 + 0.03**2])
-    if box is not None and image_size is not None:
-        x, y, w, _ = (int(v) for v in box)
-        if x <= 0 or y <= 0 or x + w >= int(image_size[0]):
-            cov = cov * TRUNCATED_COV_SCALE
-    return cov
+    return cov * TRUNCATED_COV_SCALE if truncated else cov
 
 
 def new_person_track() -> MotionKalman:
@@ -481,8 +474,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             if k is not None:
                 hmn, p_w = verified[k]
                 Rc = R_cr.T @ stereo_position_cov(np.asarray(hmn.position_m), rig.focal_px,
-                                               rig.baseline_m, hmn.box,
-                                               (rig.left.width, rig.left.height)) @ R_cr
+                                               rig.baseline_m, hmn.truncated) @ R_cr
                 if track.update(t1, p_w, Rc):
                     last_visual_t = t1
                 if first_turned_t is None:

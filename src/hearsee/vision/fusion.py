@@ -62,7 +62,9 @@ class Human:
     ``position_m`` torso centre in the left camera's own optical frame (metres); ``score`` the
     head-shoulder score; ``thermal_support`` in [0, 1] (None without a thermal image, NaN when
     the thermal camera does not see the candidate); ``reason`` why it was rejected (empty when
-    accepted).
+    accepted); ``truncated`` when the silhouette is cut by the top, left or right image border,
+    so that its position and height describe the visible part only
+    (:class:`~hearsee.vision.humans.BodySegment`).
     """
 
     box: list[int]
@@ -72,6 +74,7 @@ class Human:
     height_m: float
     accepted: bool
     reason: str = ""
+    truncated: bool = False
 
     @property
     def distance_m(self) -> float:
@@ -86,6 +89,7 @@ class Human:
             "score": round(float(self.score), 3),
             "thermal_support": (None if self.thermal_support is None else
                                 round(float(self.thermal_support), 3)),
+            "truncated": bool(self.truncated),
         }
         if not self.accepted:
             d["reason"] = self.reason
@@ -167,7 +171,8 @@ def _check_mask(warm: NDArray) -> NDArray:
 def _to_human(c: HumanCandidate, support: float | None, accepted: bool, reason: str) -> Human:
     seg = c.segment
     assert seg is not None
-    return Human(list(seg.box), seg.position_m, c.score, support, seg.top_m, accepted, reason)
+    return Human(list(seg.box), seg.position_m, c.score, support, seg.top_m, accepted, reason,
+                 seg.truncated)
 
 
 def classify_candidates(det: StereoDetection, rig: StereoRig, rect: Rectification,
