@@ -43,6 +43,7 @@ def test_json_output_matches_ground_truth(folder, capsys):
     px, py, pw, ph = person.box
     assert abs(x - px) <= 4 and abs(y - py) <= 4 and abs(w - pw) <= 8
     assert 0.5 <= h["score"] <= 1.0 and h["thermal_support"] > 0.5
+    assert h["truncated"] is False  # in full view
     rej = [r for r in out["rejected"] if r["reason"].startswith("thermal")]
     assert len(rej) == 1  # the mannequin
     assert np.linalg.norm(np.array(rej[0]["position_m"]) - scene.objects[1].position_m) < 0.3
@@ -63,6 +64,27 @@ def test_stereo_only_table_and_overlay(folder, capsys, tmp_path):
     assert "2 human(s)" in text  # without thermal the mannequin passes
     img = cv2.imread(str(ov))
     assert img is not None and img.shape == (240, 320, 3)
+
+
+def test_a_person_cut_by_the_image_border_is_flagged(tmp_path, capsys):
+    """A person 1.3 m away at the right edge of the view (the renderer's box reaches the
+    border): JSON "truncated": true, and the table says so; a person in full view is not."""
+    rig = default_rig(320, 240, thermal_size=(80, 60))
+    spec = SceneSpec(entities=[Entity("person", 0.0, 3.0, 0.0, 1.8),
+                               Entity("person", 0.9, 1.3, 0.0, 1.8)],
+                     width_left_m=3.0, width_right_m=3.0, depth_m=7.0, seed=5)
+    scene = render_scene(spec, rig)
+    assert sum(o.box[0] + o.box[2] >= 320 for o in scene.objects) == 1
+    d = write_scene(scene, tmp_path)
+    assert main(_args(d, thermal=None)) == 0
+    out = json.loads(capsys.readouterr().out)
+    cands = out["humans"] + out["rejected"]
+    for obj in scene.objects:
+        c = min(cands, key=lambda h: np.linalg.norm(np.array(h["position_m"]) - obj.position_m))
+        assert c["truncated"] is bool(obj.box[0] + obj.box[2] >= 320)
+    assert main(_args(d, "--format", "table", thermal=None)) == 0
+    assert capsys.readouterr().out.count("(cut by the image border)") == sum(
+        h["truncated"] for h in cands)
 
 
 def test_overlay_is_the_rectified_left_image_the_boxes_refer_to(tmp_path, capsys):

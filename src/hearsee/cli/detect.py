@@ -36,10 +36,12 @@ def detect_cmd(
 ) -> None:
     """Detect humans: stereo candidates (P(y,d), head-shoulder template) confirmed by thermal.
 
-    Prints {"humans": [{"box": [x, y, w, h], "position_m": [x, y, z], "score", "thermal_support"}],
-    "rejected": [...]}: boxes in rectified left-image pixels (the image --overlay writes; the
-    same as the raw left image only for a distortion-free, already rectified rig), positions in
-    metres in the left camera's own optical frame (x right, y down, z forward).
+    Prints {"humans": [{"box": [x, y, w, h], "position_m": [x, y, z], "score", "thermal_support",
+    "truncated"}], "rejected": [...]}: boxes in rectified left-image pixels (the image --overlay
+    writes; the same as the raw left image only for a distortion-free, already rectified rig),
+    positions in metres in the left camera's own optical frame (x right, y down, z forward);
+    "truncated": the silhouette is cut by the top, left or right image border, so its position
+    and height describe the visible part only.
     """
     from hearsee.vision.camera import load_rig
     from hearsee.vision.fusion import detect_humans, draw_detections
@@ -88,7 +90,8 @@ def detect_cmd(
                 sup = "-" if h.thermal_support is None else f"{h.thermal_support:.2f}"
                 p = h.position_m
                 typer.echo(f"{kind:9s}{x:5d}{y:5d}{w:5d}{hh:5d}  {p[0]:7.2f}{p[1]:7.2f}{p[2]:7.2f}"
-                           f"  {h.score:5.2f} {sup:>7s}  {h.reason}")
+                           f"  {h.score:5.2f} {sup:>7s}  {h.reason}"
+                           f"{' (cut by the image border)' if h.truncated else ''}")
         typer.echo(f"{len(res.humans)} human(s), {len(res.rejected)} rejected candidate(s)")
         return
     emit_json(res.to_dict())
