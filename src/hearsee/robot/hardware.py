@@ -1023,7 +1023,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         if best is not None:
             h, p, _, k = verified[best]
             Rc = geo.R_cam.T @ stereo_position_cov(np.asarray(h.position_m), rig.focal_px,
-                                                rig.baseline_m, h.truncated) @ geo.R_cam
+                                                rig.baseline_m, truncated=h.truncated) @ geo.R_cam
             if track.update(t, p, Rc):
                 state["last_visual"] = t
             dets[k]["speaker"] = True

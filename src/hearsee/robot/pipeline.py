@@ -269,7 +269,8 @@ def _entities(sc: Scenario, body: _Body, t: float) -> list[Any]:
     return ents
 
 
-def stereo_position_cov(p_cam: NDArray, f: float, B: float, truncated: bool = False) -> NDArray:
+def stereo_position_cov(p_cam: NDArray, f: float, B: float, *, truncated: bool = False
+                        ) -> NDArray:
     """Stereo position covariance in the camera frame (m^2) from the disparity noise.
 
     A ``truncated`` detection (:attr:`hearsee.vision.fusion.Human.truncated`: the head or a
@@ -474,7 +475,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             if k is not None:
                 hmn, p_w = verified[k]
                 Rc = R_cr.T @ stereo_position_cov(np.asarray(hmn.position_m), rig.focal_px,
-                                               rig.baseline_m, hmn.truncated) @ R_cr
+                                               rig.baseline_m, truncated=hmn.truncated) @ R_cr
                 if track.update(t1, p_w, Rc):
                     last_visual_t = t1
                 if first_turned_t is None:
