@@ -152,6 +152,8 @@ ABLATIONS = {
         "band_vad": False},
     "joint='steered' (in-plane steered-sum maximum, 2 m)": {"joint": "steered",
                                                           "steer_range_m": PEER_NEAR_M},
+    "first_arrival=0 (the highest two-mic peak; before 2026-11-26's nineteenth session)": {
+        "first_arrival": 0.0},
     "no fallback": {"fallback": False},
 }
 
