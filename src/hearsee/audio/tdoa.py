@@ -1213,6 +1213,9 @@ def estimate_tdoas(
         779/780: 11.6 -> 11.0 and 12.7 -> 12.5 deg, no cell worse, a few recordings moved off
         a reflection (e.g. white noise RT60 0.6 s 10 dB 10.5 -> 7.5 deg); measured impulse
         responses (part 3): 3 of 1512 pair recordings changed, median error unchanged.
+        The reasoning holds for a level pair (axis horizontal, as two ears are at any pan and
+        tilt of hearsee's head); for a pair standing upright the floor's and ceiling's images
+        arrive at LONGER lags and this rule can pick one of them: pass 0 there.
     source_in_plane : bool
         With a planar array of 3+ microphones, the joint whole-recording peak search
         (``joint``) steers only directions in the array plane instead of the whole sphere --
