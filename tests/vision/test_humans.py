@@ -15,6 +15,7 @@ from hearsee.sim.scenes import Entity, SceneSpec, default_rig, render_scene
 from hearsee.vision.humans import (
     FloorPlane,
     HumanDetectorParams,
+    cut_by_border,
     detect_candidates,
     detect_people_hog,
     estimate_floor,
@@ -227,6 +228,15 @@ def test_detect_candidates_on_ground_truth_disparity(small_scene):
     det1 = detect_candidates(sc.disparity, pts, rect.focal_px, rect.baseline_m, rect.cy,
                              camera_height_m=1.4, params=HumanDetectorParams(tm=1.0))
     assert not any(c.accepted for c in det1.candidates)
+
+
+def test_cut_by_border_counts_the_top_left_and_right_borders_only():
+    """The rule behind BodySegment.truncated on known boxes in a 640-pixel-wide image: the top,
+    left or right border cuts the silhouette; feet cut by the bottom border do not count."""
+    for box in ([100, 0, 150, 400], [0, 50, 150, 400], [500, 50, 140, 400]):
+        assert cut_by_border(box, 640)
+    for box in ([100, 50, 150, 430], [100, 50, 150, 400], [1, 1, 638, 479]):
+        assert not cut_by_border(box, 640)  # bottom at 480 / inside
 
 
 def test_silhouettes_cut_by_the_image_border_are_flagged():

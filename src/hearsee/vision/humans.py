@@ -41,6 +41,7 @@ one) that is the left camera frame. A person's ``position_m`` is the estimated t
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import cv2
@@ -66,6 +67,7 @@ __all__ = [
     "MAX_DISPARITY_PX",
     "StereoDetection",
     "check_camera_height",
+    "cut_by_border",
     "detect_candidates",
     "detect_people_hog",
     "estimate_floor",
@@ -541,8 +543,16 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     n = floor.normal
     y = (h_t - floor.offset - n[0] * c[0] - n[2] * c[2]) / n[1]
     pos = np.array([c[0], y, c[2]])
-    cut = box[0] <= 0 or box[1] <= 0 or box[0] + box[2] >= disparity.shape[1]
-    return BodySegment(box, crop, pts, hts, Zm, top, float(xhi - xlo), pos, bool(cut))
+    return BodySegment(box, crop, pts, hts, Zm, top, float(xhi - xlo), pos,
+                       cut_by_border(box, disparity.shape[1]))
+
+
+def cut_by_border(box: Sequence[int], width: int) -> bool:
+    """Whether a silhouette's ``box`` [x, y, w, h] (pixels) touches the top, left or right
+    border of an image ``width`` pixels wide (:attr:`BodySegment.truncated`); the bottom
+    border (feet cut at close range, torso in view) does not count."""
+    x, y, w, _ = (int(v) for v in box)
+    return x <= 0 or y <= 0 or x + w >= int(width)
 
 
 def upper_contour(mask: NDArray) -> NDArray:
