@@ -649,9 +649,12 @@ def test_a_very_quiet_float_recording_is_localized_like_a_loud_one(three, record
                                       ({"onset_weight": np.nan}, "onset_weight"),
                                       ({"margin_samples": np.nan}, "margin_samples"),
                                       ({"margin_samples": -100.0}, "margin_samples"),
+                                      ({"min_confidence": "1"}, "min_confidence"),
+                                      ({"onset_weight": "3"}, "onset_weight"),
                                       ({"window": "bogus"}, "window")])
 def test_estimate_tdoas_refuses_nan_and_unknown_options(three, recording, kw, name):
     """A NaN min_confidence / onset_weight gave a NaN summary; a NaN or negative margin and an
-    unknown window raised numpy's or scipy's ValueError deep inside."""
+    unknown window raised numpy's or scipy's ValueError deep inside, a string confidence or
+    onset weight numpy's TypeError."""
     with pytest.raises(ConfigError, match=name):
         estimate_tdoas(recording[0], FS, three, **kw)

@@ -973,8 +973,7 @@ def _check_options(refine: str, summary_frames: str, joint: str, min_peak_snr: f
                           f"{min_peak_snr} and {min_frame_peak_snr}")
     if not (0.0 <= float(phat_beta) <= 1.0):
         raise ConfigError(f"phat_beta must be in [0, 1], got {phat_beta}")
-    if not (np.isfinite(onset_weight) and float(onset_weight) >= 0):
-        raise ConfigError(f"onset_weight must be a finite number >= 0, got {onset_weight}")
+    finite_number("onset_weight", onset_weight, 0.0)
 
 
 def _check_steered(arr: MicArray, source_in_plane: bool, steer_range_m: float | None) -> None:
@@ -1290,10 +1289,8 @@ def estimate_tdoas(
     _check_options(refine, summary_frames, joint, min_peak_snr, min_frame_peak_snr, phat_beta,
                    onset_weight)
     first_arrival = finite_number("first_arrival", first_arrival, 0.0, 1.0)
-    if not (np.isfinite(min_confidence) and min_confidence >= 0):
-        raise ConfigError(f"min_confidence must be a finite number >= 0, got {min_confidence}")
-    if not (np.isfinite(margin_samples) and margin_samples >= 0):
-        raise ConfigError(f"margin_samples must be a finite number >= 0, got {margin_samples}")
+    min_confidence = finite_number("min_confidence", min_confidence, 0.0)
+    margin_samples = finite_number("margin_samples", margin_samples, 0.0)
     prs = arr.checked_pairs(pairs)
     if joint == "steered":
         _check_steered(arr, source_in_plane, steer_range_m)
