@@ -651,10 +651,15 @@ def test_a_very_quiet_float_recording_is_localized_like_a_loud_one(three, record
                                       ({"margin_samples": -100.0}, "margin_samples"),
                                       ({"min_confidence": "1"}, "min_confidence"),
                                       ({"onset_weight": "3"}, "onset_weight"),
+                                      ({"min_peak_snr": "4"}, "min_peak_snr"),
+                                      ({"min_frame_peak_snr": np.inf}, "min_frame_peak_snr"),
+                                      ({"phat_beta": "0.5"}, "phat_beta"),
+                                      ({"phat_beta": np.nan}, "phat_beta"),
                                       ({"window": "bogus"}, "window")])
 def test_estimate_tdoas_refuses_nan_and_unknown_options(three, recording, kw, name):
     """A NaN min_confidence / onset_weight gave a NaN summary; a NaN or negative margin and an
     unknown window raised numpy's or scipy's ValueError deep inside, a string confidence or
-    onset weight numpy's TypeError."""
+    onset weight numpy's TypeError. A string peak-SNR threshold or phat_beta passed the check
+    (float() read it) and failed later in numpy; an infinite threshold refused every frame."""
     with pytest.raises(ConfigError, match=name):
         estimate_tdoas(recording[0], FS, three, **kw)

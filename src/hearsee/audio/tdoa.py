@@ -284,6 +284,17 @@ def _take_last(a: NDArray, idx: NDArray) -> NDArray:
     return flat[np.arange(flat.shape[0]), idx.reshape(-1)].reshape(idx.shape)
 
 
+def _lag_window(r: NDArray, max_lag: NDArray, up: int = 1) -> tuple[NDArray, NDArray]:
+    """The admissible part of circular correlations ``r`` (..., n_pairs, n) sampled ``up``
+    times per sample: the integer grid lags ``-L .. L`` (``L = ceil(max(max_lag) up)``) and
+    ``r`` at them (..., n_pairs, 2L+1), ``-inf`` beyond each pair's ``+-max_lag`` (samples)."""
+    L = int(np.ceil(max_lag.max() * up))
+    lags = np.arange(-L, L + 1)
+    win = r[..., lags % r.shape[-1]]
+    outside = np.abs(lags)[None, :] > max_lag[:, None] * up  # (n_pairs, 2L+1)
+    return lags, np.where(outside, -np.inf, win)
+
+
 def _peaks(r: NDArray, P: NDArray, nfft: int, max_lag: NDArray, refine: str,
            main_lobe: int, bins: NDArray | None = None,
            need: NDArray | None = None) -> tuple[NDArray, NDArray]:
@@ -293,11 +304,7 @@ def _peaks(r: NDArray, P: NDArray, nfft: int, max_lag: NDArray, refine: str,
     (n_pairs,) largest admissible |lag| in samples; ``need`` (...) bool selects the rows that
     get the interpolation refinement (others: parabolic). Returns (lag in samples, confidence).
     """
-    L = int(np.ceil(max_lag.max()))
-    lags = np.arange(-L, L + 1)
-    win = r[..., lags % nfft]  # (..., n_pairs, 2L+1)
-    outside = np.abs(lags)[None, :] > max_lag[:, None]  # (n_pairs, 2L+1)
-    win = np.where(outside, -np.inf, win)
+    lags, win = _lag_window(r, max_lag)
     k = np.argmax(win, axis=-1)
     peak = _take_last(win, k)
     lag_i = lags[k]
@@ -832,10 +839,7 @@ def _fine_peaks(P: NDArray, bins: NDArray, nfft: int, max_lag: NDArray, up: int,
     full = np.zeros((P.shape[0], n_up // 2 + 1), dtype=complex)
     full[:, bins] = P
     r = sfft.irfft(full, n_up, axis=-1)
-    L = int(np.ceil(max_lag.max() * up))
-    lags = np.arange(-L, L + 1)
-    win = r[:, lags % n_up]
-    win = np.where(np.abs(lags)[None, :] > max_lag[:, None] * up, -np.inf, win)
+    lags, win = _lag_window(r, max_lag, up)
     k = np.argmax(win, axis=-1)
     if first_arrival > 0:
         k = _first_arrival_peaks(win, lags, k, first_arrival)
@@ -968,11 +972,9 @@ def _check_options(refine: str, summary_frames: str, joint: str, min_peak_snr: f
         raise ConfigError(f"summary_frames must be 'valid' or 'active', got {summary_frames!r}")
     if joint not in ("pairs", "coherent", "steered"):
         raise ConfigError(f"joint must be 'pairs', 'coherent' or 'steered', got {joint!r}")
-    if not (float(min_peak_snr) >= 0 and float(min_frame_peak_snr) >= 0):
-        raise ConfigError("min_peak_snr and min_frame_peak_snr must be >= 0, got "
-                          f"{min_peak_snr} and {min_frame_peak_snr}")
-    if not (0.0 <= float(phat_beta) <= 1.0):
-        raise ConfigError(f"phat_beta must be in [0, 1], got {phat_beta}")
+    finite_number("min_peak_snr", min_peak_snr, 0.0)
+    finite_number("min_frame_peak_snr", min_frame_peak_snr, 0.0)
+    finite_number("phat_beta", phat_beta, 0.0, 1.0)
     finite_number("onset_weight", onset_weight, 0.0)
 
 
