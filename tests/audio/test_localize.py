@@ -278,7 +278,9 @@ def test_locus_plots_refuse_degenerate_input():
         assert np.all(np.isfinite(f(1e-4, m_i, m_j)))
         for args, kw in (((1e-4, m_i, m_i), {}), ((np.nan, m_i, m_j), {}),
                          ((1e-4, m_i, m_j), {"c": 0.0}), ((1e-4, m_i, m_j), {"c": np.nan}),
-                         ((1e-4, m_i, m_j), {"extent_m": -3.0}), ((1e-4, [np.nan] * 3, m_j), {})):
+                         ((1e-4, m_i, m_j), {"extent_m": -3.0}), ((1e-4, [np.nan] * 3, m_j), {}),
+                         # (float() read these before 2026-11-26; numpy warns on the array)
+                         ((np.array([1e-4]), m_i, m_j), {}), ((1e-4, m_i, m_j), {"c": "343"})):
             with pytest.raises(GeometryError):
                 f(*args, **kw)
     three = MicArray.from_preset("three-mic")

@@ -171,7 +171,8 @@ def test_bad_rates_speeds_and_noise_levels_are_refused():
     with pytest.raises(GeometryError, match="speed_of_sound"):
         room_impulse_responses(16000, arr.positions + [3.0, 3.0, 1.0], [4.0, 4.0, 1.0],
                                [6.0, 6.0, 3.0], 0.0, speed_of_sound=0.0)
-    for fs in (0.0, -16000.0, float("nan"), float("inf")):
+    # (a numeric string, a bool and a 1-element array passed float() before 2026-11-26)
+    for fs in (0.0, -16000.0, float("nan"), float("inf"), "16000", True, np.array([16000.0])):
         with pytest.raises(AudioInputError, match="sample rate must be a positive number"):
             simulate_free_field(s, fs, arr, src)
         with pytest.raises(AudioInputError, match="sample rate must be a positive number"):

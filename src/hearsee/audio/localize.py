@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array, pair_tdoa
-from hearsee.config import is_real
+from hearsee.config import finite_number, is_real
 from hearsee.errors import GeometryError
 from hearsee.geometry import wrap_deg
 
@@ -624,11 +624,9 @@ def _locus_input(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float,
                             f"{m_j!r}")
     if not np.linalg.norm(mi - mj) > 0:
         raise GeometryError("the two microphones coincide: a TDOA has no locus")
-    if not (np.isfinite(c) and c > 0 and np.isfinite(extent_m) and extent_m > 0):
-        raise GeometryError(f"c and extent_m must be finite numbers > 0, got {c}, {extent_m}")
-    if not np.isfinite(tdoa_s):
-        raise GeometryError(f"tdoa_s must be a finite number of seconds, got {tdoa_s}")
-    return mi, mj, c * float(tdoa_s)
+    c = finite_number("c (m/s)", c, 0.0, lo_open=True, error=GeometryError)
+    finite_number("extent_m", extent_m, 0.0, lo_open=True, error=GeometryError)
+    return mi, mj, c * finite_number("tdoa_s", tdoa_s, error=GeometryError)
 
 
 def hyperboloid_points(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float = 343.0,

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from hearsee.config import is_real
 from hearsee.errors import AudioInputError, ClippingWarning, ConfigError, InputFileError
 
 __all__ = [
@@ -83,14 +84,11 @@ MAX_SIGNAL_S = 600.0
 
 
 def check_fs(fs: float) -> float:
-    """``fs`` (Hz) as a float when it is a finite number > 0, else an AudioInputError."""
-    try:
-        v = float(fs)
-    except (TypeError, ValueError):
-        v = float("nan")
-    if not (np.isfinite(v) and v > 0):
+    """``fs`` (Hz) as a float when it is a finite real number > 0 (:func:`config.is_real`: not
+    a string, a bool or a 1-element array), else an AudioInputError."""
+    if not (is_real(fs) and fs > 0):
         raise AudioInputError(f"sample rate must be a positive number of Hz, got {fs!r}")
-    return v
+    return float(fs)
 
 
 def _check_duration(duration_s: float, fs: float) -> int:
