@@ -350,3 +350,27 @@ def test_band_iid_with_noise_learnt_from_pauses():
     np.testing.assert_allclose(nb[0], band[0] @ (0.5 * (q0 + q1)), rtol=0.2)
     # a continuous source has no pauses: no noise spectrum is learnt from it
     assert mask._spectra(np.stack([hi, 0.25 * hi]) + noise, FS, 32.0)[-1] is None
+
+
+def test_table_refuses_impossible_source_distances(model):
+    # found in review: table() took any distance. 0 m put every source at the origin (inside the
+    # body: an all-zero table, NaN IIDs from responses/front_back_margin), -1 m put the source
+    # for azimuth a at a + 180 deg, 2 cm inside the egg; all silently, and written to the cache
+    ok_az, ok = model.table(1.0)
+    for bad in (0.0, -1.0, np.nan, np.inf):
+        with pytest.raises(ConfigError, match="distance"):
+            model.table(bad)
+        with pytest.raises(ConfigError, match="distance"):
+            model.responses(bad)
+        with pytest.raises(ConfigError, match="distance"):
+            mask.front_back_margin(model, bad)
+    with pytest.raises(GeometryError, match="inside the mask"):
+        model.table(0.02)  # every direction: 2 cm from the origin is inside the egg
+    for step in (0.0, -1.0, np.nan):
+        with pytest.raises(ConfigError, match="az_step_deg"):
+            model.table(None, az_step_deg=step)
+    with pytest.raises(ConfigError, match="elevation_deg"):
+        model.table(None, elevation_deg=np.nan)
+    # the valid tables are unchanged: 1 m, and the far field
+    assert ok_az.shape == (360,) and ok.shape == (360, 2, len(model.freqs))
+    assert np.all(np.isfinite(model.table(None)[1]))

@@ -90,6 +90,7 @@ from hearsee.audio import bem
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.signals import check_fs
 from hearsee.audio.tdoa import check_frame_ms
+from hearsee.config import finite_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
 __all__ = [
@@ -528,8 +529,14 @@ class MaskModel:
               az_step_deg: float = 1.0) -> tuple[NDArray, NDArray]:
         """Transfer functions on an azimuth grid: ``(azimuth_deg (A,), H (A, 2, F))``.
 
-        Cached in memory and on disk (``<key>-table-*.npz``).
+        Cached in memory and on disk (``<key>-table-*.npz``). ``distance`` (metres, None = far
+        field) must put every source outside the mask body; ``az_step_deg`` > 0;
+        ``elevation_deg`` in [-90, 90].
         """
+        if distance is not None:
+            distance = finite_number("distance", distance, 0.0, lo_open=True)
+        elevation_deg = finite_number("elevation_deg", elevation_deg, -90.0, 90.0)
+        az_step_deg = finite_number("az_step_deg", az_step_deg, 0.0, 360.0, lo_open=True)
         key = (None if distance is None else round(float(distance), 4), round(elevation_deg, 3),
                round(az_step_deg, 4))
         az = np.arange(0.0, 360.0, az_step_deg)
@@ -539,14 +546,17 @@ class MaskModel:
               f"{az_step_deg:.4f}"
         path = self._path(tag)
         h = None
+        u = _direction(az, elevation_deg)
+        src = u if distance is None else u * distance
+        if distance is not None and np.any(self.geometry_inside(src)):
+            raise GeometryError(f"a source {distance:g} m from the origin lies inside the mask "
+                                "body for some azimuths; use a larger distance")
         if self.cache and path.is_file():
             try:
                 h = np.load(path)["h"]
             except (OSError, KeyError, ValueError):
                 h = None
         if h is None:
-            u = _direction(az, elevation_deg)
-            src = u if distance is None else u * float(distance)
             h = bem.transfer_functions(self.solution, src, distance is None, self.c)
             h = h.astype(np.complex64)
             if self.cache:
