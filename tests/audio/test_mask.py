@@ -374,3 +374,19 @@ def test_table_refuses_impossible_source_distances(model):
     # the valid tables are unchanged: 1 m, and the far field
     assert ok_az.shape == (360,) and ok.shape == (360, 2, len(model.freqs))
     assert np.all(np.isfinite(model.table(None)[1]))
+
+
+def test_transfer_refuses_a_zero_source_vector(model):
+    # found in review: a far-field direction [0, 0, 0] has no direction (u = s / 0): transfer and
+    # transfer_at answered NaN for every frequency; a (2, 2, 3) array raised numpy's ValueError
+    for far in (True, False):
+        with pytest.raises(GeometryError, match="non-zero"):
+            model.transfer([0.0, 0.0, 0.0], far_field=far)
+        with pytest.raises(GeometryError, match="non-zero"):
+            model.transfer_at([500.0], [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]], far_field=far)
+    with pytest.raises(GeometryError, match="source"):
+        model.transfer(np.ones((2, 2, 3)), far_field=True)
+    # a valid direction still gives finite values, the same for any length of the vector
+    np.testing.assert_allclose(model.transfer([3.0, 0.0, 0.0], far_field=True),
+                               model.transfer([1.0, 0.0, 0.0], far_field=True))
+

@@ -463,8 +463,12 @@ class MaskModel:
         free-field pressure at the array origin.
         """
         s = np.atleast_2d(np.asarray(source, dtype=float))
-        if s.shape[-1] != 3 or not np.all(np.isfinite(s)):
+        if s.ndim != 2 or s.shape[-1] != 3 or not np.all(np.isfinite(s)):
             raise GeometryError(f"source must be finite [x, y, z] point(s), got shape {s.shape}")
+        if np.any(np.linalg.norm(s, axis=1) < 1e-9):
+            # (a far-field direction of length 0 gave NaN; a source at the origin has no
+            # free-field reference pressure there)
+            raise GeometryError("source must be a finite non-zero [x, y, z], got [0, 0, 0]")
         if not far_field and np.any(self.geometry_inside(s)):
             raise GeometryError("the source lies inside the mask body; put it outside the mask")
         return bem.transfer_functions(self.solution, s, far_field, self.c)
