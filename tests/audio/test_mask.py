@@ -390,3 +390,14 @@ def test_transfer_refuses_a_zero_source_vector(model):
     np.testing.assert_allclose(model.transfer([3.0, 0.0, 0.0], far_field=True),
                                model.transfer([1.0, 0.0, 0.0], far_field=True))
 
+
+def test_impulse_responses_bad_rate_and_length(model):
+    # found in review: fs=0 or n=0 raised ZeroDivisionError, a negative rate gave a silent,
+    # meaningless response
+    for fs in (0.0, -FS, np.nan):
+        with pytest.raises(AudioInputError, match="sample rate"):
+            model.impulse_responses(_src(90), fs, 64, far_field=True)
+    for n in (0, -8):
+        with pytest.raises(ConfigError, match="n must be"):
+            model.impulse_responses(_src(90), FS, n, far_field=True)
+    assert model.impulse_responses(_src(90), FS, 64, far_field=True).shape == (2, 64)

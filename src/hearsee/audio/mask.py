@@ -90,7 +90,7 @@ from hearsee.audio import bem
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.signals import check_fs
 from hearsee.audio.tdoa import check_frame_ms
-from hearsee.config import finite_number
+from hearsee.config import finite_number, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
 __all__ = [
@@ -522,7 +522,9 @@ class MaskModel:
         Relative to the free-field arrival at the origin, shifted by ``n // 4`` samples so that
         the earlier microphone's onset is visible; amplitude 1 = free-field at the origin.
         """
-        nf = 4 * int(n)
+        fs = check_fs(fs)
+        n = whole_number("n", n, lo=1)
+        nf = 4 * n
         f = np.fft.rfftfreq(nf, 1.0 / fs)
         h = self.transfer_at(f, source, far_field)[0]  # (2, F) physics convention
         shift = np.exp(-2j * np.pi * f * (n // 4) / fs)
