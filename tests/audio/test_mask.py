@@ -401,3 +401,20 @@ def test_impulse_responses_bad_rate_and_length(model):
         with pytest.raises(ConfigError, match="n must be"):
             model.impulse_responses(_src(90), FS, n, far_field=True)
     assert model.impulse_responses(_src(90), FS, 64, far_field=True).shape == (2, 64)
+
+
+def test_mask_geometry_of_a_block_checks_the_positions():
+    # found in review: mask_geometry(block) with its default positions=None raised
+    # "TypeError: len() of unsized object", and NaN microphone positions passed the
+    # inside-the-body test (NaN depth) as valid
+    block = _mask2_dict(mesh_subdivision=3)["mask"]
+    good = MicArray.from_preset("mask2").positions
+    assert mask.mask_geometry(block, good).shape == "egg"
+    with pytest.raises(GeometryError, match="exactly 2 microphones"):
+        mask.mask_geometry(block)
+    with pytest.raises(GeometryError, match="exactly 2 microphones"):
+        mask.mask_geometry(block, good[0])
+    bad = good.copy()
+    bad[1, 0] = np.nan
+    with pytest.raises(GeometryError, match="finite"):
+        mask.mask_geometry(block, bad)

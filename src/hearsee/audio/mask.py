@@ -289,9 +289,15 @@ def mask_geometry(array: MicArray | Mapping[str, Any], positions: ArrayLike | No
     if block is None:
         raise ConfigError(f"{where}: this array has no mask: block")
     geom = MaskGeometry.from_dict(block, f"{where}: mask")
-    pos = np.asarray(positions, dtype=float)
+    try:
+        pos = np.asarray(positions, dtype=float)
+    except (TypeError, ValueError):
+        pos = np.full(0, np.nan)
     if pos.shape != (2, 3):
-        raise GeometryError(f"{where}: a masked array needs exactly 2 microphones, got {len(pos)}")
+        got = len(pos) if pos.ndim == 2 else f"positions of shape {pos.shape}"
+        raise GeometryError(f"{where}: a masked array needs exactly 2 microphones, got {got}")
+    if not np.all(np.isfinite(pos)):
+        raise GeometryError(f"{where}: microphone positions must be finite numbers (metres)")
     mesh = geom.mesh(speed_of_sound)
     bem.check_closed_mesh(mesh.vertices, mesh.faces, f"{where}: mask")
     _, dist, _ = mesh.closest_points(pos)
