@@ -84,3 +84,17 @@ def test_bad_parameters():
     kf = ItdKalman(3)
     with pytest.raises(GeometryError, match="expected 3"):
         kf.step([0.0, 0.0])
+
+
+def test_max_rejects_below_one_is_refused():
+    # found in review: max_rejects=0 (or negative) was accepted and re-initialised the filter on
+    # every rejected measurement, i.e. switched the gate off: a 4e-4 s jump after a steady 1e-4 s
+    # was taken as the state at once
+    kf = ItdKalman(2, q_std_s=1e-6, r_std_s=1e-5, max_rejects=1)
+    for _ in range(5):
+        kf.step([1e-4])
+    assert kf.step([5e-4]) is True  # max_rejects=1: the first rejection re-initialises
+    assert kf.pair_tdoas()[0] == pytest.approx(5e-4)
+    for bad in (0, -2, 1.5, np.nan, "5"):
+        with pytest.raises(ConfigError, match="max_rejects"):
+            ItdKalman(2, max_rejects=bad)

@@ -33,6 +33,7 @@ from filterpy.kalman import KalmanFilter
 from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
+from hearsee.config import whole_number
 from hearsee.errors import ConfigError, GeometryError
 
 __all__ = ["ItdKalman", "pair_matrix"]
@@ -71,7 +72,7 @@ class ItdKalman:
     gate_prob : float
         Probability mass of the validation gate (0.99 -> reject ~1 % of correct measurements).
     max_rejects : int
-        Consecutive rejections after which the filter re-initialises on the measurement.
+        Consecutive rejections after which the filter re-initialises on the measurement (>= 1).
     p0_std_s : float
         Initial state standard deviation, seconds (used at the first measurement).
 
@@ -102,7 +103,8 @@ class ItdKalman:
         self.pairs = ([(i, j) for i in range(n_mics) for j in range(i + 1, n_mics)]
                       if pairs is None else [(int(i), int(j)) for i, j in pairs])
         self.p0_std_s = float(p0_std_s)
-        self.max_rejects = int(max_rejects)
+        # (0 or less re-initialised on every rejected measurement: no gate at all)
+        self.max_rejects = whole_number("max_rejects", max_rejects, lo=1)
         dim_x, dim_z = self.n_mics - 1, len(self.pairs)
         H = pair_matrix(self.n_mics, self.pairs, self.ref)
         if np.linalg.matrix_rank(H) < dim_x:
