@@ -98,3 +98,20 @@ def test_max_rejects_below_one_is_refused():
     for bad in (0, -2, 1.5, np.nan, "5"):
         with pytest.raises(ConfigError, match="max_rejects"):
             ItdKalman(2, max_rejects=bad)
+
+
+def test_parameters_that_are_not_numbers_are_config_errors():
+    # found in review: a string noise or gate raised numpy's/Python's TypeError, n_mics=2.5 a
+    # TypeError from range(), and ref=1.5 was truncated to microphone 1 without a word
+    for kw in ({"q_std_s": "1e-5"}, {"r_std_s": None}, {"p0_std_s": "1e-3"},
+               {"gate_prob": "0.99"}, {"gate_prob": None}):
+        with pytest.raises(ConfigError):
+            ItdKalman(3, **kw)
+    for n_mics in (2.5, None, "3"):
+        with pytest.raises(GeometryError, match="n_mics"):
+            ItdKalman(n_mics)
+    for ref in (1.5, -1, 3, None):
+        with pytest.raises(GeometryError, match="ref"):
+            ItdKalman(3, ref=ref)
+    kf = ItdKalman(np.int64(3), ref=np.int64(2))  # numpy integers are fine
+    assert kf.n_mics == 3 and kf.ref == 2

@@ -33,7 +33,7 @@ from filterpy.kalman import KalmanFilter
 from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
-from hearsee.config import whole_number
+from hearsee.config import is_real, whole_number
 from hearsee.errors import ConfigError, GeometryError
 
 __all__ = ["ItdKalman", "pair_matrix"]
@@ -88,15 +88,14 @@ class ItdKalman:
     def __init__(self, n_mics: int, pairs: Sequence[tuple[int, int]] | None = None, ref: int = 0,
                  q_std_s: float = 2e-5, r_std_s: float = 3e-5, gate_prob: float = 0.99,
                  max_rejects: int = 5, p0_std_s: float = 1e-3) -> None:
-        if n_mics < 2:
-            raise GeometryError(f"an ITD filter needs at least 2 microphones, got {n_mics}")
-        if not 0 <= ref < n_mics:
-            raise GeometryError(f"reference microphone {ref} not in 0..{n_mics - 1}")
-        if not all(np.isfinite(v) and v > 0 for v in (q_std_s, r_std_s, p0_std_s)):
+        # (not numbers: TypeErrors from numpy or range(); ref=1.5 was truncated to 1)
+        n_mics = whole_number("n_mics", n_mics, lo=2, error=GeometryError)
+        ref = whole_number("ref", ref, lo=0, hi=n_mics - 1, error=GeometryError)
+        if not all(is_real(v) and v > 0 for v in (q_std_s, r_std_s, p0_std_s)):
             # (NaN passed "<= 0": NaN TDOAs, or an SVD that did not converge)
             raise ConfigError("q_std_s, r_std_s and p0_std_s must be finite numbers > 0 seconds, "
                               f"got {q_std_s}, {r_std_s}, {p0_std_s}")
-        if not 0 < gate_prob < 1:
+        if not (is_real(gate_prob) and 0 < gate_prob < 1):
             raise ConfigError(f"gate_prob must be in (0, 1), got {gate_prob}")
         self.n_mics = int(n_mics)
         self.ref = int(ref)
