@@ -118,3 +118,16 @@ def test_geodesic_sphere_is_closed_and_winding_number():
     np.testing.assert_allclose(w, [1, 0, 1], atol=1e-9)
     q, d, _ = mesh.closest_points([[2.0, 0, 0]])
     assert 1.0 - 1e-9 < d[0] < 1.05 and np.linalg.norm(q[0]) <= 1.0 + 1e-9
+
+
+def test_solve_adjoint_refuses_non_finite_frequencies_and_speed():
+    # found in review: only "f <= 0" was tested, so NaN or inf frequencies and a zero or NaN
+    # speed of sound gave an all-NaN solution (transfer functions NaN) without a word
+    mesh = bem.sphere_mesh(A, 4)
+    mics = np.array([[0.0, -A, 0.0], [0.0, A, 0.0]])
+    for freqs in ([np.nan], [300.0, np.inf], [0.0], [-300.0]):
+        with pytest.raises(GeometryError, match="frequencies"):
+            bem.solve_adjoint(mesh, freqs, mics, C, on_surface_tol=1e-3)
+    for c in (0.0, -C, np.nan, np.inf):
+        with pytest.raises(GeometryError, match="speed of sound"):
+            bem.solve_adjoint(mesh, [300.0], mics, c, on_surface_tol=1e-3)

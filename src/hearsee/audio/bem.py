@@ -369,8 +369,10 @@ def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
         Called with 1 after each frequency.
     """
     f = np.asarray(freqs, dtype=float).ravel()
-    if np.any(f <= 0):
-        raise GeometryError("BEM frequencies must be > 0 Hz")
+    if not np.all(np.isfinite(f) & (f > 0)):  # (NaN and inf passed "<= 0": a NaN solution)
+        raise GeometryError("BEM frequencies must be finite numbers > 0 Hz")
+    if not (np.isfinite(speed_of_sound) and speed_of_sound > 0):
+        raise GeometryError(f"speed of sound must be a finite number > 0 m/s, got {speed_of_sound}")
     xe = np.atleast_2d(np.asarray(eval_points, dtype=float))
     q, dist, _ = mesh.closest_points(xe)
     xe = np.where((dist <= on_surface_tol)[:, None], q, xe)
