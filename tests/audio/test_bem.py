@@ -131,3 +131,19 @@ def test_solve_adjoint_refuses_non_finite_frequencies_and_speed():
     for c in (0.0, -C, np.nan, np.inf):
         with pytest.raises(GeometryError, match="speed of sound"):
             bem.solve_adjoint(mesh, [300.0], mics, c, on_surface_tol=1e-3)
+
+
+def test_solve_adjoint_refuses_evaluation_points_inside_the_body():
+    # found in review: the docstring asks for points on or outside the body, but a point 2 cm
+    # from the centre of an 8.75 cm sphere was solved: free-term c ~ 0 and |H| ~ 1.5, while
+    # there is no sound field inside a rigid body
+    mesh = bem.sphere_mesh(A, 4)
+    with pytest.raises(GeometryError, match="inside the body"):
+        bem.solve_adjoint(mesh, [500.0], [[0.0, 0.0, 0.02], [0.0, A, 0.0]], C,
+                          on_surface_tol=1e-3)
+    # on the surface (within the tolerance) and outside stay valid
+    sol = bem.solve_adjoint(mesh, [500.0], [[0.0, A, 0.0], [0.0, 0.0, 2 * A]], C,
+                            on_surface_tol=1e-3)
+    # free term: the exterior solid-angle fraction, 1/2 on a smooth part (a bit more at a convex
+    # corner of the mesh, where this point is projected), 1 in the air
+    assert 0.5 - 1e-6 < sol.c[0] < 0.75 and sol.c[1] == pytest.approx(1.0, abs=1e-3)

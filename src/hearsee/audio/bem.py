@@ -375,6 +375,10 @@ def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
         raise GeometryError(f"speed of sound must be a finite number > 0 m/s, got {speed_of_sound}")
     xe = np.atleast_2d(np.asarray(eval_points, dtype=float))
     q, dist, _ = mesh.closest_points(xe)
+    inside = (dist > on_surface_tol) & (mesh.winding_number(xe) > 0.5)
+    if np.any(inside):  # (no field inside a rigid body: the old answer was garbage)
+        raise GeometryError(f"evaluation point(s) {np.flatnonzero(inside).tolist()} lie inside "
+                            "the body; put them on its surface or outside it")
     xe = np.where((dist <= on_surface_tol)[:, None], q, xe)
     xc = mesh.centroids
     chief = chief_points(mesh, n_chief)
