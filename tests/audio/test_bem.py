@@ -147,3 +147,18 @@ def test_solve_adjoint_refuses_evaluation_points_inside_the_body():
     # free term: the exterior solid-angle fraction, 1/2 on a smooth part (a bit more at a convex
     # corner of the mesh, where this point is projected), 1 in the air
     assert 0.5 - 1e-6 < sol.c[0] < 0.75 and sol.c[1] == pytest.approx(1.0, abs=1e-3)
+
+
+def test_sphere_series_refuses_impossible_settings():
+    # found in review: a negative radius or frequency silently gave the complex conjugate of the
+    # answer (the wrong time convention), a source inside the sphere (5 cm < 8.75 cm), a zero
+    # radius, frequency or speed of sound NaN
+    ok = bem.sphere_transfer([1000.0], A, [1.0, -1.0], 0.5)
+    assert np.all(np.isfinite(ok))
+    for kw in ({"freqs": [-1000.0]}, {"freqs": [0.0]}, {"freqs": [np.nan]},
+               {"radius": -A}, {"radius": 0.0}, {"distance": 0.05}, {"distance": A},
+               {"distance": np.nan}, {"speed_of_sound": 0.0}):
+        args = {"freqs": [1000.0], "radius": A, "cos_theta": [1.0, -1.0], "distance": 0.5}
+        args.update(kw)
+        with pytest.raises(GeometryError):
+            bem.sphere_transfer(**args)

@@ -456,9 +456,19 @@ def sphere_transfer(freqs: ArrayLike, radius: float, cos_theta: ArrayLike,
     ``theta`` is the angle between the source direction and the surface point, seen from the
     centre. Written for ``exp(-i w t)`` (``h_m`` = spherical Hankel of the first kind). Returns
     (F, T) complex; the sum stops when the terms fall below ``tol`` relative to the sum.
+    Frequencies, radius and speed of sound must be > 0, the source outside the sphere.
     """
     f = np.atleast_1d(np.asarray(freqs, dtype=float))
     ct = np.atleast_1d(np.asarray(cos_theta, dtype=float))
+    # (a negative radius or frequency gave the complex conjugate, zero or a source inside NaN)
+    if not np.all(np.isfinite(f) & (f > 0)):
+        raise GeometryError("sphere series: frequencies must be finite numbers > 0 Hz")
+    if not all(np.isfinite(v) and v > 0 for v in (radius, speed_of_sound)):
+        raise GeometryError("sphere series: radius and speed of sound must be finite numbers > 0, "
+                            f"got {radius} and {speed_of_sound}")
+    if distance is not None and not (np.isfinite(distance) and distance > radius):
+        raise GeometryError(f"sphere series: the source distance ({distance} m) must be larger "
+                            f"than the radius ({radius} m)")
     mu = 2.0 * np.pi * f * radius / speed_of_sound  # (F,)
     x = mu[:, None]
     # h_m(mu) and h_m(mu rho) by upward recursion h_{m+1} = (2m+1)/x h_m - h_{m-1}
