@@ -418,3 +418,20 @@ def test_mask_geometry_of_a_block_checks_the_positions():
     bad[1, 0] = np.nan
     with pytest.raises(GeometryError, match="finite"):
         mask.mask_geometry(block, bad)
+
+
+def test_bad_band_edges_are_config_errors(model):
+    # found in review: band edges were used as given: descending or NaN edges gave all-NaN IIDs
+    # from responses() (and localize_mask blamed the sample rate), a single edge raised numpy's
+    # "need at least one array to stack", a repeated edge an empty, NaN band
+    x = mask.simulate_masked(white_noise(0.5, FS, rng=3), FS, model, _src(120, 1.0), snr_db=20,
+                             rng=1)
+    assert np.all(np.isfinite(model.responses(bands_hz=[250, 700, 2000]).iid_db))
+    for bands in ([2000, 700, 250], [250], [250, np.nan, 2000], [250, 250, 2000], [-100, 500],
+                  [[250, 700], [700, 2000]]):
+        with pytest.raises(ConfigError, match="bands_hz"):
+            model.responses(bands_hz=bands)
+        with pytest.raises(ConfigError, match="bands_hz"):
+            mask.localize_mask(x, FS, model, bands_hz=bands)
+        with pytest.raises(ConfigError, match="bands_hz"):
+            mask.front_back_margin(model, bands_hz=bands)

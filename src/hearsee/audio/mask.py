@@ -340,6 +340,22 @@ def default_bands(f_max: float, n_bands: int = 8, f_lo: float = 250.0) -> NDArra
     return np.geomspace(f_lo, f_max, n_bands + 1)
 
 
+def _band_edges(bands_hz: ArrayLike | None, f_max: float) -> NDArray:
+    """``bands_hz`` as checked band edges (Hz): default :func:`default_bands`, else at least two
+    finite, strictly increasing edges > 0 (descending or NaN edges gave NaN band IIDs)."""
+    if bands_hz is None:
+        return default_bands(f_max)
+    try:
+        e = np.asarray(bands_hz, dtype=float)
+    except (TypeError, ValueError):
+        e = np.full(0, np.nan)
+    if e.ndim != 1 or len(e) < 2 or not np.all(np.isfinite(e)) or e[0] <= 0 \
+            or np.any(np.diff(e) <= 0):
+        raise ConfigError("bands_hz must be two or more increasing band edges > 0 Hz, "
+                          f"got {bands_hz!r}")
+    return e
+
+
 def _direction(az_deg: ArrayLike, el_deg: ArrayLike) -> NDArray:
     az, el = np.deg2rad(az_deg), np.deg2rad(el_deg)
     return np.stack(np.broadcast_arrays(np.cos(el) * np.cos(az), np.cos(el) * np.sin(az),
@@ -580,7 +596,7 @@ class MaskModel:
                   bands_hz: ArrayLike | None = None, az_step_deg: float = 1.0) -> Responses:
         """ITD and band IIDs over 360 degrees for a white source (figs. 3.10-3.11, 3.14-3.17)."""
         az, h = self.table(distance, elevation_deg, az_step_deg)
-        edges = default_bands(self.f_max) if bands_hz is None else np.asarray(bands_hz, float)
+        edges = _band_edges(bands_hz, self.f_max)
         cross = np.conj(h[:, 0]) * h[:, 1]  # numpy convention: X0 conj(X1) = conj(H0) H1
         itd = _phat_itd(cross, self.freqs, np.ones(len(self.freqs)), self.max_itd())
         p = np.abs(h) ** 2
@@ -621,7 +637,7 @@ def front_back_margin(model: MaskModel, distance: float | None = None,
     confusable azimuth and that azimuth.
     """
     az, h = model.table(distance)
-    edges = default_bands(model.f_max) if bands_hz is None else np.asarray(bands_hz, float)
+    edges = _band_edges(bands_hz, model.f_max)
     use = (model.freqs >= max(edges[0], 100.0)) & (model.freqs <= 0.9 * model.f_max)
     w = np.ones(int(use.sum())) if weights is None else np.asarray(weights, float)[use]
     w = w / w.sum()
@@ -849,7 +865,7 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         raise ConfigError("distances must be one or more source distances > 0 m (None = far "
                           f"field), got {distances!r}")
     f, p0, p1, cr, n_used, noise_psd = _spectra(x, fs, frame_ms)
-    edges = default_bands(model.f_max) if bands_hz is None else np.asarray(bands_hz, float)
+    edges = _band_edges(bands_hz, model.f_max)
     use = (f >= max(edges[0], 100.0)) & (f <= min(edges[-1], 0.9 * model.f_max))
     if use.sum() < 4:
         raise AudioInputError(f"sample rate {fs} Hz too low for the mask model's bands")
