@@ -106,6 +106,23 @@ def test_bad_fusion_input(rig):
         AudioVisualRig(rig.array, rig.camera, np.eye(3) * 2, np.zeros(3))
 
 
+def test_bad_search_parameters_are_an_estimation_error(rig):
+    """n_grid < 2, max_candidates < 1 or an infinite far end left no grid minimum to refine:
+    an IndexError escaped; a NaN sigma gave a NaN covariance that RayTracker then ignores."""
+    p = np.array([1.5, 0.3, 0.1])
+    uv, z = rig.project(p)[0], rig.array.tdoa(p)
+    for kw, name in (({"n_grid": 1}, "n_grid"), ({"n_grid": 0}, "n_grid"),
+                     ({"max_candidates": 0}, "max_candidates"),
+                     ({"range_m": (0.1, np.inf)}, "range_m"),
+                     ({"sigma_tdoa_s": np.nan}, "sigma_tdoa_s"),
+                     ({"sigma_px": -1.0}, "sigma_px")):
+        with pytest.raises(EstimationError, match=name):
+            locate_on_ray(rig, uv, z, **kw)
+    # the smallest valid search still finds the source
+    fix = locate_on_ray(rig, uv, z, n_grid=2, max_candidates=1, sigma_px=0.0)
+    assert np.linalg.norm(fix.position_m - p) < 1e-3
+
+
 def test_learned_mapping_without_calibration(rig):
     X, Y = simulate_av_samples(rig, 400, (0.5, 2.0), sigma_tdoa_s=1e-6, sigma_px=0.5, rng=1)
     Xt, Yt = simulate_av_samples(rig, 100, (0.5, 2.0), sigma_tdoa_s=1e-6, sigma_px=0.5, rng=2)

@@ -70,6 +70,7 @@ from sklearn.base import BaseEstimator, RegressorMixin
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.tracking import MotionKalman
+from hearsee.config import finite_number, whole_number
 from hearsee.errors import EstimationError, GeometryError
 from hearsee.vision.camera import Camera, camera_pose
 
@@ -254,11 +255,15 @@ def locate_on_ray(
     if p.shape != (2,) or not np.all(np.isfinite(p)):
         raise EstimationError(f"image point must be two finite pixel coordinates, got {uv!r}")
     near, far = float(range_m[0]), float(range_m[1])
-    if not 0 < near < far:
-        raise EstimationError(f"range_m must satisfy 0 < near < far, got {range_m}")
+    if not (0 < near < far and np.isfinite(far)):
+        raise EstimationError(f"range_m must satisfy 0 < near < far (finite), got {range_m}")
+    n_grid = whole_number("n_grid", n_grid, 2, error=EstimationError)
+    max_candidates = whole_number("max_candidates", max_candidates, 1, error=EstimationError)
+    sigma_tdoa_s = finite_number("sigma_tdoa_s", sigma_tdoa_s, 0.0, error=EstimationError)
+    sigma_px = finite_number("sigma_px", sigma_px, 0.0, error=EstimationError)
     o, d = rig.rays(p[None, :])
     d = d[0]
-    grid = np.geomspace(near, far, int(n_grid))
+    grid = np.geomspace(near, far, n_grid)
     J = np.sum(ray_residuals(rig.array, o, d, grid, z, prs) ** 2, axis=1)
     # every local minimum of the grid is a candidate (e.g. the mirror image of the source in
     # the plane of a planar array when the ray crosses that plane); best first
