@@ -254,6 +254,22 @@ def _settled(rig, seed, n):
     return trk, frames
 
 
+def test_tdoa_tracker_refuses_measurements_of_the_wrong_shape(side_rig):
+    """Two TDOAs for the three pairs were fused silently as pairs 0-1 and 0-2 (whatever pairs
+    they were measured on), four raised an IndexError, a 3-vector image point a ValueError."""
+    rig = side_rig
+    trk, frames = _settled(rig, 10, 32)
+    t, _, uv, z, fix = frames[30]
+    for bad in (z[:2], np.r_[z, 0.0]):
+        before = trk.x.copy()
+        with pytest.raises(EstimationError, match="TDOAs"):
+            trk.update_measurements(t, uv, bad, fix)
+        np.testing.assert_array_equal(trk.x, before)
+    with pytest.raises(EstimationError, match="image point"):
+        trk.update_measurements(t, [320.0, 240.0, 1.0], z, fix)
+    assert trk.update_measurements(t, uv, z, fix)
+
+
 def test_tdoa_tracker_gates_a_far_fix_and_restarts_after_repeated_ones(side_rig):
     rig = side_rig
     trk, frames = _settled(rig, 8, 40)

@@ -474,6 +474,16 @@ class RayTdoaTracker(RayTracker):
         TDOAs ``tdoa_s`` (seconds, one per pair; NaN = none) and the frame's camera-ray ``fix``
         (None where the TDOAs gave none or it was discarded). Returns True when a TDOA or a
         (re)start fix was fused."""
+        if uv is not None:
+            uv = np.asarray(uv, dtype=float).reshape(-1)
+            if uv.shape != (2,):
+                raise EstimationError(f"the image point must be two pixel coordinates (u, v), "
+                                      f"got shape {uv.shape}")
+        if tdoa_s is not None:
+            tdoa_s = np.asarray(tdoa_s, dtype=float).reshape(-1)
+            if tdoa_s.size != len(self.pairs):
+                raise EstimationError(f"got {tdoa_s.size} TDOAs for {len(self.pairs)} "
+                                      "microphone pairs")
         if fix is not None and (not self.initialized or self.n_rejects >= self.max_rejects):
             self._start(np.asarray(fix.position_m, dtype=float), np.asarray(fix.covariance))
             self.t = float(t)
@@ -481,7 +491,7 @@ class RayTdoaTracker(RayTracker):
         self.predict(t)
         if not self.initialized:
             return False
-        if uv is not None and not self._fuse_pixel(np.asarray(uv, dtype=float).reshape(2)):
+        if uv is not None and not self._fuse_pixel(uv):
             self.n_rejects += 1
             return False
         if fix is None or tdoa_s is None:
