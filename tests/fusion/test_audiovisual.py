@@ -106,6 +106,17 @@ def test_bad_fusion_input(rig):
         AudioVisualRig(rig.array, rig.camera, np.eye(3) * 2, np.zeros(3))
 
 
+def test_a_mirrored_mounting_is_not_a_rotation(rig):
+    """R @ R.T = I also holds for a reflection (det -1): such a 'mounting' was accepted and
+    every pixel then mirrored its ray, so the fixes were silently wrong."""
+    R = rig.R.copy()
+    R[0] *= -1.0  # optical x flipped: orthogonal, det -1
+    assert np.allclose(R @ R.T, np.eye(3)) and np.linalg.det(R) < 0
+    with pytest.raises(GeometryError, match="rotation"):
+        AudioVisualRig(rig.array, rig.camera, R, rig.t)
+    AudioVisualRig(rig.array, rig.camera, rig.R, rig.t)  # the proper rotation is fine
+
+
 def test_bad_search_parameters_are_an_estimation_error(rig):
     """n_grid < 2, max_candidates < 1 or an infinite far end left no grid minimum to refine:
     an IndexError escaped; a NaN sigma gave a NaN covariance that RayTracker then ignores."""

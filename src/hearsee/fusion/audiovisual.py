@@ -130,7 +130,8 @@ class AudioVisualRig:
     def __post_init__(self) -> None:
         R = np.asarray(self.R, dtype=float)
         t = np.asarray(self.t, dtype=float).reshape(-1)
-        if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-6):
+        if (R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-6)
+                or not np.linalg.det(R) > 0):  # (a reflection, det -1, mirrors every ray)
             raise GeometryError("rig mounting R must be a 3x3 rotation matrix")
         if t.shape != (3,) or not np.all(np.isfinite(t)):
             raise GeometryError("rig mounting t must be 3 finite numbers (metres)")
