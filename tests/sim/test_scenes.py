@@ -137,3 +137,13 @@ def test_bad_inputs():
     rig_no_thermal = StereoRig.ideal(cam, 0.1)
     with pytest.raises(GeometryError, match="thermal"):
         render_scene(SceneSpec(), rig_no_thermal)
+
+
+def test_a_rig_with_the_right_camera_on_the_left_is_refused():
+    """A rectified rig whose 'right' camera sits at -B (T_x > 0, image sets swapped) passed the
+    is_rectified check: the right view was rendered from x = -B, so the scene's true disparity
+    was -f B / Z while the ground truth said +f B / Z."""
+    rig = default_rig(160, 120, thermal_size=(40, 30)).swapped()
+    assert rig.is_rectified and rig.thermal is not None and rig.right_center_m[0] < 0
+    with pytest.raises(GeometryError, match="right camera"):
+        render_scene(SceneSpec(entities=[Entity("person", 0.0, 2.0)], seed=1), rig)

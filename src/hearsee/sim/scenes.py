@@ -721,6 +721,10 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     if not rig.is_rectified or rig.thermal is None:
         raise GeometryError("render_scene needs a rectified rig with a thermal camera "
                             "(see hearsee.sim.scenes.default_rig)")
+    if not rig.right_center_m[0] > 0:  # (else the truth disparity f B / Z has the wrong sign)
+        raise GeometryError("render_scene needs the right camera at +baseline on the left "
+                            "camera's x axis (T_x < 0); this rig has it on the left: use "
+                            "rig.swapped()")
     rng = np.random.default_rng(spec.seed)
     b = _Builder()
     floor_m = b.material(rng.uniform(0.3, 0.7, 3), 0.6, spec.room_c - 0.5, 0.3)
