@@ -147,3 +147,13 @@ def test_a_rig_with_the_right_camera_on_the_left_is_refused():
     assert rig.is_rectified and rig.thermal is not None and rig.right_center_m[0] < 0
     with pytest.raises(GeometryError, match="right camera"):
         render_scene(SceneSpec(entities=[Entity("person", 0.0, 2.0)], seed=1), rig)
+
+
+@pytest.mark.parametrize("kw", [{"x": float("nan")}, {"z": float("inf")}, {"yaw_deg": float("nan")},
+                                {"height_m": -1.7}, {"height_m": 0.0}, {"x": "1.0"}])
+def test_an_entity_with_a_bad_placement_is_a_config_error(kw):
+    """A NaN x or an infinite z reached the renderer and numpy's ValueError ("cannot convert
+    float NaN to integer") escaped; a negative height rendered nothing and returned box None."""
+    args = {"kind": "person", "x": 0.0, "z": 2.0, "yaw_deg": 0.0, "height_m": 1.75, **kw}
+    with pytest.raises(ConfigError, match=next(iter(kw))):
+        Entity(**args)

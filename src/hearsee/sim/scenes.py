@@ -45,6 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from hearsee.config import finite_number
 from hearsee.errors import ConfigError, GeometryError
 from hearsee.vision.camera import Camera, StereoRig, save_rig
 
@@ -120,6 +121,9 @@ class Entity:
     def __post_init__(self) -> None:
         if self.kind not in _ENTITY_KINDS:
             raise ConfigError(f"entity kind must be one of {_ENTITY_KINDS}, got {self.kind!r}")
+        for name in ("x", "z", "yaw_deg"):
+            finite_number(f"entity {name}", getattr(self, name))
+        finite_number("entity height_m", self.height_m, 0.0, lo_open=True)
 
 
 @dataclass
