@@ -157,3 +157,15 @@ def test_an_entity_with_a_bad_placement_is_a_config_error(kw):
     args = {"kind": "person", "x": 0.0, "z": 2.0, "yaw_deg": 0.0, "height_m": 1.75, **kw}
     with pytest.raises(ConfigError, match=next(iter(kw))):
         Entity(**args)
+
+
+@pytest.mark.parametrize("kw", [{"camera_height_m": 3.5}, {"camera_height_m": 0.0},
+                                {"depth_m": -1.0}, {"width_left_m": float("nan")},
+                                {"ceiling_m": float("inf")}, {"back_m": -0.5},
+                                {"room_c": float("nan")}])
+def test_a_bad_room_is_a_config_error(kw):
+    """A camera 3.5 m up under a 2.8 m ceiling (outside the room) rendered the person in front
+    of it as invisible (box None) without a word; a negative depth rendered a garbage room."""
+    spec = SceneSpec(entities=[Entity("person", 0.0, 2.0)], seed=1, **kw)
+    with pytest.raises(ConfigError, match=next(iter(kw))):
+        render_scene(spec, default_rig(160, 120, thermal_size=(40, 30)))

@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from hearsee.config import finite_number
+from hearsee.config import finite_number, is_real
 from hearsee.errors import ConfigError, GeometryError
 from hearsee.vision.camera import Camera, StereoRig, save_rig
 
@@ -701,6 +701,18 @@ def _thermal_image(hits: _Hits, D: NDArray, C: NDArray, b: _Builder, cam: Camera
 # ---------------------------------------------------------------------------------------------
 # Rendering
 # ---------------------------------------------------------------------------------------------
+def _check_room(spec: SceneSpec) -> None:
+    """ConfigError unless the room has finite positive extents around the camera (which must
+    be inside it: between the floor and the ceiling) and a finite temperature."""
+    for name in ("width_left_m", "width_right_m", "depth_m", "ceiling_m"):
+        finite_number(f"scene {name}", getattr(spec, name), 0.0, lo_open=True)
+    finite_number("scene back_m", spec.back_m, 0.0)
+    finite_number("scene room_c", spec.room_c)
+    if not (is_real(spec.camera_height_m) and 0 < spec.camera_height_m < spec.ceiling_m):
+        raise ConfigError(f"scene camera_height_m must be between the floor and the ceiling "
+                          f"(0, {spec.ceiling_m:g}) m, got {spec.camera_height_m!r}")
+
+
 def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: float = 2.0,
                  view: tuple[NDArray, NDArray] | None = None) -> Scene:
     """Render ``spec`` with ``rig`` (default :func:`default_rig`): stereo pair, ground-truth
@@ -716,6 +728,7 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     returned ``position_m`` are in the left camera's optical frame. Used to render what a
     panning robot head sees (:mod:`hearsee.robot.pipeline`).
     """
+    _check_room(spec)
     rig = rig or default_rig(camera_height_m=spec.camera_height_m)
     if view is None:
         Rv, Cv = np.eye(3), np.zeros(3)
