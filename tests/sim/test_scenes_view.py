@@ -40,3 +40,20 @@ def test_identity_view_is_the_default():
     a = render_scene(spec, rig)
     b = render_scene(spec, rig, view=(np.eye(3), np.zeros(3)))
     assert np.array_equal(a.left, b.left) and np.array_equal(a.disparity, b.disparity)
+
+
+@pytest.mark.parametrize("view", [
+    (np.diag([1.0, 1.0, -1.0]), np.zeros(3)),  # a mirror, not a rotation
+    (2.0 * np.eye(3), np.zeros(3)),  # a scale
+    (np.eye(3), [np.nan, 0.0, 0.0]),
+    (np.eye(2), np.zeros(3)),
+    (np.eye(3), np.zeros(2)),
+])
+def test_a_bad_view_is_a_geometry_error(view):
+    """A NaN centre or a wrongly shaped R/C let numpy's ValueError escape; a mirror or a scale
+    for R was rendered as given (the docstring says R rotates), with wrong ground truth."""
+    from hearsee.errors import GeometryError
+
+    spec = SceneSpec(entities=[Entity("person", 0.3, 3.0)], seed=2)
+    with pytest.raises(GeometryError, match="view"):
+        render_scene(spec, default_rig(160, 120), view=view)

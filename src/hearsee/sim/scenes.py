@@ -733,8 +733,16 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     if view is None:
         Rv, Cv = np.eye(3), np.zeros(3)
     else:
-        Rv = np.asarray(view[0], dtype=float).reshape(3, 3)
-        Cv = np.asarray(view[1], dtype=float).reshape(3)
+        Rv = np.asarray(view[0], dtype=float)
+        Rv = Rv.reshape(3, 3) if Rv.size == 9 else Rv
+        Cv = np.asarray(view[1], dtype=float).reshape(-1)
+        if (Rv.shape != (3, 3) or not np.all(np.isfinite(Rv))
+                or not np.allclose(Rv @ Rv.T, np.eye(3), atol=1e-6) or not np.linalg.det(Rv) > 0):
+            raise GeometryError(f"render_scene: view R must be a 3x3 rotation matrix, got "
+                                f"{Rv.tolist()}")
+        if Cv.shape != (3,) or not np.all(np.isfinite(Cv)):
+            raise GeometryError(f"render_scene: view C must be 3 finite numbers (metres), got "
+                                f"{Cv.tolist()}")
     if not rig.is_rectified or rig.thermal is None:
         raise GeometryError("render_scene needs a rectified rig with a thermal camera "
                             "(see hearsee.sim.scenes.default_rig)")
