@@ -169,3 +169,23 @@ def test_a_bad_room_is_a_config_error(kw):
     spec = SceneSpec(entities=[Entity("person", 0.0, 2.0)], seed=1, **kw)
     with pytest.raises(ConfigError, match=next(iter(kw))):
         render_scene(spec, default_rig(160, 120, thermal_size=(40, 30)))
+
+
+def test_thermal_agc_refuses_what_it_cannot_map():
+    """One NaN pixel made both percentiles NaN and the whole 8-bit image 0; swapped percentiles
+    mapped hot to dark (an inverted, mostly black image); an empty image or a percentile above
+    100 let numpy's IndexError / ValueError escape."""
+    from hearsee.errors import ImageInputError
+
+    img = np.linspace(20.0, 36.0, 16).reshape(4, 4)
+    ref = thermal_to_8bit(img)
+    assert ref[0, 0] == 0 and ref[-1, -1] == 255
+    bad = img.copy()
+    bad[1, 1] = np.nan
+    with pytest.raises(ImageInputError, match="finite"):
+        thermal_to_8bit(bad)
+    with pytest.raises(ImageInputError, match="empty"):
+        thermal_to_8bit(np.zeros((0, 0)))
+    for kw in ({"low_pct": 99.0, "high_pct": 1.0}, {"high_pct": 120.0}, {"low_pct": -1.0}):
+        with pytest.raises(ConfigError, match="pct"):
+            thermal_to_8bit(img, **kw)

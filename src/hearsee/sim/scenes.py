@@ -46,7 +46,7 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from hearsee.config import finite_number, is_real
-from hearsee.errors import ConfigError, GeometryError
+from hearsee.errors import ConfigError, GeometryError, ImageInputError
 from hearsee.vision.camera import Camera, StereoRig, save_rig
 
 __all__ = [
@@ -671,8 +671,19 @@ def _shade(hits: _Hits, D: NDArray, C: NDArray, b: _Builder, rng: np.random.Gene
 # ---------------------------------------------------------------------------------------------
 def thermal_to_8bit(thermal_c: NDArray, low_pct: float = 1.0, high_pct: float = 99.5) -> NDArray:
     """Automatic gain control: map the [low_pct, high_pct] percentiles of a radiometric image
-    (degC) linearly to 0..255 (uint8), like a non-radiometric thermal camera's video output."""
-    lo, hi = np.percentile(thermal_c, [low_pct, high_pct])
+    (degC) linearly to 0..255 (uint8), like a non-radiometric thermal camera's video output.
+    ``0 <= low_pct < high_pct <= 100``."""
+    lo_p = finite_number("low_pct", low_pct, 0.0, 100.0)
+    hi_p = finite_number("high_pct", high_pct, 0.0, 100.0)
+    if not lo_p < hi_p:
+        raise ConfigError(f"low_pct must be below high_pct, got {low_pct} and {high_pct}")
+    thermal_c = np.asarray(thermal_c)
+    if thermal_c.size == 0:
+        raise ImageInputError("thermal_to_8bit: the thermal image is empty")
+    if not np.all(np.isfinite(thermal_c)):
+        raise ImageInputError("thermal_to_8bit: the thermal image must hold finite temperatures "
+                              "(degC); it has NaN or inf pixels")
+    lo, hi = np.percentile(thermal_c, [lo_p, hi_p])
     if hi - lo < 1e-6:
         hi = lo + 1.0
     return np.clip((thermal_c - lo) / (hi - lo) * 255.0 + 0.5, 0, 255).astype(np.uint8)
