@@ -189,3 +189,16 @@ def test_thermal_agc_refuses_what_it_cannot_map():
     for kw in ({"low_pct": 99.0, "high_pct": 1.0}, {"high_pct": 120.0}, {"low_pct": -1.0}):
         with pytest.raises(ConfigError, match="pct"):
             thermal_to_8bit(img, **kw)
+
+
+@pytest.mark.parametrize("kw, name", [({"range_m": (-1.0, 3.0)}, "range_m"),
+                                      ({"range_m": (8.0, 1.0)}, "range_m"),
+                                      ({"n_people": (3, 1)}, "n_people"),
+                                      ({"n_human_like": (-1, 1)}, "n_human_like"),
+                                      ({"n_furniture": (2.5, 4)}, "n_furniture"),
+                                      ({"hfov_deg": 180.0}, "hfov_deg")])
+def test_random_spec_bad_arguments(kw, name):
+    """range_m (-1, 3) silently put people behind the camera (z < 0, never in view); swapped
+    ranges or counts let numpy's ValueError ('low >= high') escape."""
+    with pytest.raises(ConfigError, match=name):
+        random_spec(0, **kw)

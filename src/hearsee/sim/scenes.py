@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from hearsee.config import finite_number, is_real
+from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import ConfigError, GeometryError, ImageInputError
 from hearsee.vision.camera import Camera, StereoRig, save_rig
 
@@ -828,6 +828,17 @@ def random_spec(seed: int, *, n_people: tuple[int, int] = (1, 4),
     (forward distance) inside the camera's horizontal field of view ``hfov_deg``; furniture,
     a radiator and sometimes a warm appliance stand along the walls or in the room.
     """
+    for name, (lo, hi) in (("n_people", n_people), ("n_human_like", n_human_like),
+                           ("n_furniture", n_furniture)):
+        if whole_number(f"{name}[0]", lo, 0) > whole_number(f"{name}[1]", hi, 0):
+            raise ConfigError(f"{name} must be an inclusive range (low, high) with low <= high, "
+                              f"got {(lo, hi)}")
+    near = finite_number("range_m[0]", range_m[0], 0.0, lo_open=True)
+    if not near <= finite_number("range_m[1]", range_m[1], 0.0, lo_open=True):
+        raise ConfigError(f"range_m must be (near, far) metres with 0 < near <= far, got "
+                          f"{range_m}")
+    if not 0 < finite_number("hfov_deg", hfov_deg) < 180:
+        raise ConfigError(f"hfov_deg must be in (0, 180) degrees, got {hfov_deg}")
     rng = np.random.default_rng(seed)
     depth = max(range_m[1] + rng.uniform(1.0, 2.5), 4.0)
     wl, wr = rng.uniform(2.8, 4.5), rng.uniform(2.8, 4.5)
