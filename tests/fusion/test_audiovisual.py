@@ -149,6 +149,19 @@ def test_learned_mapping_without_calibration(rig):
         model.predict(Xt[:, :3])
 
 
+@pytest.mark.parametrize("kw, name", [({"range_m": (-1.0, -0.5)}, "range_m"),
+                                      ({"range_m": (0.0, 2.0)}, "range_m"),
+                                      ({"n": -1}, "n"), ({"n": 2.5}, "n"),
+                                      ({"sigma_tdoa_s": float("nan")}, "sigma_tdoa_s"),
+                                      ({"sigma_px": -1.0}, "sigma_px")])
+def test_simulate_av_samples_bad_arguments(rig, kw, name):
+    """A range behind the camera gave NaN pixels and TDOAs in X without a word; n = -1 let
+    numpy's ValueError ('negative dimensions') escape; a NaN sigma made every feature NaN."""
+    args = {"n": 5, **kw}
+    with pytest.raises(EstimationError, match=name):
+        simulate_av_samples(rig, args.pop("n"), rng=0, **args)
+
+
 def _walk_measurements(rig, rng, n=80, dt=0.016, sigma_tdoa_s=8e-6, sigma_px=1.0, x0=1.3):
     """(t, truth, pixel, TDOAs, fix) of a source walking at constant velocity from
     (x0, -0.3, 0.05) m; pixel noise drawn only when ``sigma_px`` > 0."""

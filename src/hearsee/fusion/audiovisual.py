@@ -665,6 +665,14 @@ def simulate_av_samples(rig: AudioVisualRig, n: int, range_m: tuple[float, float
     Y : array (n, 3)
         True positions, array frame, metres.
     """
+    n = whole_number("n", n, 1, error=EstimationError)
+    near = finite_number("range_m[0]", range_m[0], 0.0, lo_open=True, error=EstimationError)
+    if not near <= finite_number("range_m[1]", range_m[1], 0.0, lo_open=True,
+                                 error=EstimationError):
+        raise EstimationError(f"range_m must be (near, far) metres with 0 < near <= far, got "
+                              f"{range_m}")
+    sigma_tdoa_s = finite_number("sigma_tdoa_s", sigma_tdoa_s, 0.0, error=EstimationError)
+    sigma_px = finite_number("sigma_px", sigma_px, 0.0, error=EstimationError)
     rng = np.random.default_rng(rng)
     cam = rig.camera
     uv = np.column_stack([rng.uniform(margin_px, cam.width - 1 - margin_px, n),
