@@ -118,3 +118,12 @@ def test_to_gray_names_colour_pixel_types_opencv_cannot_convert():
     bgr = np.zeros((48, 64, 3))
     with pytest.raises(ImageInputError, match="float64"):
         compute_disparity(bgr, bgr)
+
+
+def test_write_image_unknown_format_is_an_image_input_error(tmp_path):
+    """The docstring promises ImageInputError "when OpenCV cannot" encode; an unknown suffix
+    (``hearsee detect --overlay out.txt``) raised a bare cv2.error, a CLI traceback, and wrote
+    nothing."""
+    with pytest.raises(ImageInputError, match=r"out\.txt.*\.txt"):
+        write_image(tmp_path / "out.txt", _img())
+    assert list(tmp_path.iterdir()) == []

@@ -176,7 +176,10 @@ def write_image(path: str | Path, image: NDArray) -> Path:
     p = Path(path)
     if not p.parent.is_dir():
         raise InputFileError(f"{p}: folder {p.parent} does not exist")
-    ok, buf = cv2.imencode(p.suffix or ".png", image)
+    try:
+        ok, buf = cv2.imencode(p.suffix or ".png", image)
+    except cv2.error:  # e.g. no encoder for the suffix: OpenCV raises rather than returns
+        ok = False
     if not ok:
         raise ImageInputError(f"{p}: cannot encode the image as {p.suffix or '.png'}")
     buf.tofile(str(p))
