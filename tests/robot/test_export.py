@@ -69,3 +69,28 @@ def test_check_export_before_a_run(tmp_path, monkeypatch):
     with pytest.raises(InputFileError, match="does not exist"):
         check_export("rerun", tmp_path / "nope" / "run.rrd")
     assert list(tmp_path.iterdir()) == []  # a check writes nothing
+
+
+def test_mcap_stamp_just_below_a_whole_second(tmp_path):
+    """A time a hair below a whole second (0.1 summed ten times = 0.9999999999999999 s) rounds
+    to 1 000 000 000 ns: the header stamp wrapped its nanoseconds to 0 without carrying into
+    the seconds, i.e. 0.0 s -- one second early, and one second off its own log_time."""
+    pytest.importorskip("mcap_ros2")
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    t = sum([0.1] * 10)
+    assert t < 1.0
+    log = [{"t": t, "head_pan_deg": None, "truth": {"position_m": [1.0, 2.0, 1.1]},
+            "track": None}]
+    frame_t = float(np.nextafter(3.0, 0.0))
+    path = write_mcap(tmp_path / "run.mcap", log, [(frame_t, np.zeros((4, 6, 3), np.uint8))])
+    with open(path, "rb") as f:
+        got = [(channel.topic, message.log_time, ros_msg.header.stamp)
+               for _, channel, message, ros_msg in make_reader(
+                   f, decoder_factories=[DecoderFactory()]).iter_decoded_messages()]
+    assert len(got) == 2
+    for topic, log_time, stamp in got:
+        assert stamp.sec * 1_000_000_000 + stamp.nanosec == log_time, topic
+    assert (got[0][2].sec, got[0][2].nanosec) == (1, 0)
+    assert (got[1][2].sec, got[1][2].nanosec) == (3, 0)

@@ -65,8 +65,9 @@ _FLOAT64 = "float64 data"
 
 
 def _stamp(t: float) -> dict[str, int]:
-    sec = int(np.floor(t))
-    return {"sec": sec, "nanosec": int(round((t - sec) * 1e9)) % 1_000_000_000}
+    # from the rounded nanoseconds (as log_time): a time just below a whole second carries
+    sec, nanosec = divmod(int(round(t * 1e9)), 1_000_000_000)
+    return {"sec": sec, "nanosec": nanosec}
 
 
 def _check_out(path: str | Path) -> Path:
