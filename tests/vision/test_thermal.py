@@ -124,3 +124,16 @@ def test_flat_8bit_frame_has_no_warm_pixels():
     # the same blob on a frozen frame at another level, and dark blobs are not warm
     im[100:115, 150:165] = 40
     assert not thermal_mask(im).any()
+
+
+def test_nan_in_a_float_image_is_refused_on_the_relative_path_too():
+    """A float image with one NaN (a dead pixel) raised ImageInputError as radiometric, but with
+    ``radiometric=False`` the NaN made the median and percentile NaN and the mask silently all
+    False: the warm person in it was lost."""
+    t = np.full((60, 80), 21.0, np.float32)
+    t[20:50, 30:40] = 33.0
+    assert thermal_mask(t, radiometric=False)[35, 35]  # finite: the person is warm
+    t[0, 0] = np.nan
+    for radiometric in (None, True, False):
+        with pytest.raises(ImageInputError, match="NaN"):
+            thermal_mask(t, radiometric=radiometric)

@@ -149,13 +149,13 @@ def thermal_mask(image: NDArray, *, band_c: tuple[float, float] = HUMAN_BAND_C,
         im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
     if im.ndim != 2 or im.size == 0:
         raise ImageInputError(f"thermal image must be a non-empty (h, w) array, got {im.shape}")
+    if im.dtype.kind == "f" and not np.all(np.isfinite(im)):  # (both bands: NaN medians)
+        raise ImageInputError("thermal image contains NaN or infinite values")
     if im.dtype == np.uint8 or radiometric is False:
         return relative_warm_mask(im, **kwargs)
     if im.dtype == np.uint16:
         return warm_mask_celsius(counts_to_celsius(im), band_c, **kwargs)
     if im.dtype.kind == "f":
-        if not np.all(np.isfinite(im)):
-            raise ImageInputError("thermal image contains NaN or infinite values")
         return warm_mask_celsius(im, band_c, **kwargs)
     raise ImageInputError(f"unsupported thermal pixel type {im.dtype} (use uint8, uint16 or float)")
 
