@@ -137,3 +137,27 @@ def test_nan_in_a_float_image_is_refused_on_the_relative_path_too():
     for radiometric in (None, True, False):
         with pytest.raises(ImageInputError, match="NaN"):
             thermal_mask(t, radiometric=radiometric)
+
+
+@pytest.mark.parametrize("bad", [
+    np.zeros((60, 80, 2), np.uint8),  # two channels: cv2.cvtColor raised cv2.error
+    np.zeros((0, 80, 3), np.uint8),  # empty colour image: cv2.error
+    np.zeros((0, 80), np.uint8),  # empty: numpy's IndexError (percentile of nothing)
+])
+def test_unusable_shapes_are_image_input_errors(bad):
+    """Both public masks raise the library's ImageInputError, not OpenCV's or numpy's."""
+    with pytest.raises(ImageInputError):
+        relative_warm_mask(bad)
+    with pytest.raises(ImageInputError):
+        thermal_mask(bad)
+
+
+def test_relative_mask_of_a_float_colour_image_is_an_image_input_error():
+    """A float64 3-channel image reached cv2.cvtColor, which cannot convert it (cv2.error)."""
+    with pytest.raises(ImageInputError, match="float64"):
+        relative_warm_mask(np.zeros((60, 80, 3)))
+    # replicated grey channels in a pixel type OpenCV converts: same mask as the grey image
+    g = np.full((60, 80), 20.0, np.float32)
+    g[20:40, 30:40] = 200.0
+    np.testing.assert_array_equal(relative_warm_mask(np.dstack([g, g, g])), relative_warm_mask(g))
+

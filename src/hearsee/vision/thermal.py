@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hearsee.errors import ImageInputError, InputFileError
+from hearsee.vision.io import to_gray
 
 __all__ = [
     "counts_to_celsius",
@@ -104,9 +105,10 @@ def relative_warm_mask(image: NDArray, *, k_sigma: float = 6.0, min_gap: float =
     """
     im = np.asarray(image)
     if im.ndim == 3:
-        im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
-    if im.ndim != 2:
-        raise ImageInputError(f"thermal image must be single-channel (h, w), got {im.shape}")
+        im = to_gray(im)  # ImageInputError for channel counts or pixel types OpenCV cannot convert
+    if im.ndim != 2 or im.size == 0:
+        raise ImageInputError(f"thermal image must be a non-empty single-channel (h, w) array, "
+                              f"got {im.shape}")
     # float64: in float32, med + a tiny gap rounds back to med and a flat frame was all warm
     x = im.astype(np.float64)
     if background_px:
@@ -146,7 +148,7 @@ def thermal_mask(image: NDArray, *, band_c: tuple[float, float] = HUMAN_BAND_C,
     if im.ndim == 3:
         if im.dtype != np.uint8:
             raise ImageInputError("a multi-channel thermal image must be 8-bit")
-        im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
+        im = to_gray(im)  # ImageInputError for 2 channels or an empty image
     if im.ndim != 2 or im.size == 0:
         raise ImageInputError(f"thermal image must be a non-empty (h, w) array, got {im.shape}")
     if im.dtype.kind == "f" and not np.all(np.isfinite(im)):  # (both bands: NaN medians)
