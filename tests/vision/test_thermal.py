@@ -161,3 +161,19 @@ def test_relative_mask_of_a_float_colour_image_is_an_image_input_error():
     g[20:40, 30:40] = 200.0
     np.testing.assert_array_equal(relative_warm_mask(np.dstack([g, g, g])), relative_warm_mask(g))
 
+
+def test_morphology_does_not_shift_the_mask():
+    """OpenCV's erode and dilate apply a kernel at the same offsets, so cv2.morphologyEx with
+    an even-sized kernel (the default ``open_px=2``) is not an opening: it shifted the warm
+    mask one pixel down and right, marking room-temperature pixels below and right of a person
+    as warm. The cleaned mask of a solid warm block stays inside the block's pixels and keeps
+    its extent, whatever the kernel sizes."""
+    t = np.full((40, 50), 21.0, np.float32)
+    t[10:30, 15:25] = 33.0
+    band = (t >= 26.0) & (t <= 40.0)
+    for open_px, close_px in ((2, 3), (2, 2), (4, 3), (3, 4), (5, 5)):
+        m = warm_mask_celsius(t, open_px=open_px, close_px=close_px)
+        assert not (m & ~band).any(), (open_px, close_px)  # nothing outside the warm block
+        rows, cols = np.nonzero(m)
+        assert (rows.min(), rows.max(), cols.min(), cols.max()) == (10, 29, 15, 24)
+        assert m.sum() >= band.sum() - 8  # at most the corners trimmed

@@ -54,14 +54,24 @@ def counts_to_celsius(counts: NDArray, scale: float = 0.01, offset: float = -273
     return np.asarray(counts, dtype=np.float32) * np.float32(scale) + np.float32(offset)
 
 
+def _kernels(n: int) -> tuple[NDArray, tuple[int, int], NDArray, tuple[int, int]]:
+    """An ``n`` x ``n`` elliptical kernel with its anchor, and its point reflection with the
+    reflected anchor. cv2.erode and cv2.dilate both read the pixels at (kernel - anchor)
+    offsets, so a true opening/closing dilates with the reflected kernel; cv2.morphologyEx
+    does not, and with an even ``n`` (not symmetric about its anchor) shifted the mask."""
+    k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (n, n))
+    a = n // 2
+    return k, (a, a), np.ascontiguousarray(k[::-1, ::-1]), (n - 1 - a, n - 1 - a)
+
+
 def _clean(mask: NDArray, open_px: int, close_px: int) -> NDArray:
     m = mask.astype(np.uint8)
     if open_px > 1:
-        m = cv2.morphologyEx(m, cv2.MORPH_OPEN,
-                             cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (open_px, open_px)))
+        k, a, kr, ar = _kernels(open_px)
+        m = cv2.dilate(cv2.erode(m, k, anchor=a), kr, anchor=ar)
     if close_px > 1:
-        m = cv2.morphologyEx(m, cv2.MORPH_CLOSE,
-                             cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_px, close_px)))
+        k, a, kr, ar = _kernels(close_px)
+        m = cv2.erode(cv2.dilate(m, kr, anchor=ar), k, anchor=a)
     return m.astype(bool)
 
 
@@ -72,7 +82,7 @@ def warm_mask_celsius(thermal_c: NDArray, band_c: tuple[float, float] = HUMAN_BA
     >>> t = np.full((20, 20), 21.0, np.float32); t[5:15, 8:12] = 33.0; t[0:3, 0:3] = 55.0
     >>> m = warm_mask_celsius(t)
     >>> bool(m[10, 10]), bool(m[1, 1]), int(m.sum())
-    (True, False, 40)
+    (True, False, 39)
     """
     t = np.asarray(thermal_c, dtype=np.float32)
     if t.ndim != 2:
