@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from hearsee.errors import ImageInputError, InputFileError
+from hearsee.errors import ConfigError, ImageInputError, InputFileError
 from hearsee.vision.thermal import (
     counts_to_celsius,
     load_thermal,
@@ -177,3 +177,17 @@ def test_morphology_does_not_shift_the_mask():
         rows, cols = np.nonzero(m)
         assert (rows.min(), rows.max(), cols.min(), cols.max()) == (10, 29, 15, 24)
         assert m.sum() >= band.sum() - 8  # at most the corners trimmed
+
+
+@pytest.mark.parametrize("band", [(40.0, 26.0), (np.nan, 40.0), (26.0,), (26.0, 33.0, 40.0),
+                                  "hot", None, ("26", "40"), (True, 40.0)])
+def test_malformed_band_is_a_config_error(band):
+    """A reversed band raised a builtin ValueError (the CLI's one-line errors catch only
+    hearsee's own), a one- or three-number band the unpacking ValueError, None a TypeError,
+    strings numpy's UFuncNoLoopError. An open band such as (26, inf) stays valid."""
+    t = np.full((20, 20), 30.0, np.float32)
+    with pytest.raises(ConfigError, match="band_c"):
+        warm_mask_celsius(t, band)
+    with pytest.raises(ConfigError, match="band_c"):
+        thermal_mask(t, band_c=band)
+    assert warm_mask_celsius(t, (26.0, np.inf)).all()

@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.errors import ImageInputError, InputFileError
+from hearsee.errors import ConfigError, ImageInputError, InputFileError
 from hearsee.vision.io import to_gray
 
 __all__ = [
@@ -87,12 +87,21 @@ def warm_mask_celsius(thermal_c: NDArray, band_c: tuple[float, float] = HUMAN_BA
     t = np.asarray(thermal_c, dtype=np.float32)
     if t.ndim != 2:
         raise ImageInputError(f"thermal image must be single-channel (h, w), got {t.shape}")
-    lo, hi = band_c
-    if not lo < hi:
-        raise ValueError(f"band_c must be (low, high) with low < high, got {band_c}")
+    try:
+        lo, hi = band_c
+    except (TypeError, ValueError):
+        lo = hi = None
+    if not (_degrees(lo) and _degrees(hi) and lo < hi):
+        raise ConfigError(f"band_c must be (low, high) in degC with low < high, got {band_c!r}")
     with np.errstate(invalid="ignore"):
         m = (t >= lo) & (t <= hi)
     return _clean(m, open_px, close_px)
+
+
+def _degrees(v: object) -> bool:
+    """A real number, not NaN (an infinite bound leaves that side of the band open)."""
+    return (isinstance(v, int | float | np.integer | np.floating) and not isinstance(v, bool)
+            and not np.isnan(v))
 
 
 def relative_warm_mask(image: NDArray, *, k_sigma: float = 6.0, min_gap: float = 0.15,
