@@ -205,3 +205,16 @@ def test_depth_conversions_check_focal_and_baseline_and_accept_scalars():
     assert depth_from_disparity(np.zeros((0, 0)), 500.0, 0.1).shape == (0, 0)
     with pytest.raises(ConfigError, match="min_disparity"):
         depth_from_disparity([1.0], 500.0, 0.1, min_disparity=np.nan)
+
+
+@pytest.mark.parametrize("kw", [dict(num_disparities=np.nan), dict(min_disparity=np.nan),
+                                dict(lr_max_diff=np.nan), dict(lr_max_diff=np.inf),
+                                dict(block_size=3.0), dict(block_size="3"),
+                                dict(num_disparities="64")])
+def test_non_numeric_matcher_settings_are_config_errors(kw):
+    """NaN settings reached int(np.ceil(nan)) (builtin ValueError), an infinite lr_max_diff
+    int(inf) (OverflowError), a float block_size cv2.StereoSGBM_create (TypeError), a string
+    num_disparities the comparison (TypeError)."""
+    tex = _texture(7)[:60, :80]
+    with pytest.raises(ConfigError, match=next(iter(kw))):
+        compute_disparity(np.roll(tex, 4, axis=1), tex, **kw)

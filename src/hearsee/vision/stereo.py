@@ -203,13 +203,18 @@ def compute_disparity(
         raise ConfigError(f"lr_check must be internal, full or none, got {lr_check!r}")
     if not 0.0 < scale <= 1.0:
         raise ConfigError(f"scale must be in (0, 1], got {scale}")
+    for name, v in (("num_disparities", num_disparities), ("min_disparity", min_disparity),
+                    ("lr_max_diff", lr_max_diff)):
+        if not is_real(v):  # NaN and inf reached int(np.ceil(.)), strings the comparisons
+            raise ConfigError(f"{name} must be a finite number of pixels, got {v!r}")
     if num_disparities < 1 or min_disparity < 0:
         raise ConfigError(
             f"num_disparities must be >= 1 and min_disparity >= 0, got {num_disparities}, "
             f"{min_disparity}"
         )
-    if block_size < 1 or block_size % 2 == 0:
-        raise ConfigError(f"block_size must be a positive odd number, got {block_size}")
+    if (not isinstance(block_size, int | np.integer) or isinstance(block_size, bool)
+            or block_size < 1 or block_size % 2 == 0):  # (cv2 takes integers only)
+        raise ConfigError(f"block_size must be a positive odd number, got {block_size!r}")
     H, W = L.shape
     if not (_has_texture(L) and _has_texture(R)):
         return np.full((H, W), np.nan, np.float32)
