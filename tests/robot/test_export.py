@@ -94,3 +94,27 @@ def test_mcap_stamp_just_below_a_whole_second(tmp_path):
         assert stamp.sec * 1_000_000_000 + stamp.nanosec == log_time, topic
     assert (got[0][2].sec, got[0][2].nanosec) == (1, 0)
     assert (got[1][2].sec, got[1][2].nanosec) == (3, 0)
+
+
+def test_mcap_overlay_of_bgra_and_single_channel_frames_is_bgr8(tmp_path):
+    """Only 2-D frames were expanded to 3 channels: a BGRA or (H, W, 1) frame was written as
+    "bgr8" with step = 3 * width over 4 or 1 bytes per pixel -- an Image message whose data
+    does not match its own step and height."""
+    pytest.importorskip("mcap_ros2")
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    rng = np.random.default_rng(0)
+    bgr = rng.integers(0, 256, (6, 8, 3), dtype=np.uint8)
+    grey = rng.integers(0, 256, (6, 8, 1), dtype=np.uint8)
+    bgra = np.dstack([bgr, np.full((6, 8), 255, np.uint8)])
+    path = write_mcap(tmp_path / "run.mcap", [], [(0.2, bgra), (0.4, grey)])
+    with open(path, "rb") as f:
+        imgs = [m for _, _, _, m in make_reader(
+            f, decoder_factories=[DecoderFactory()]).iter_decoded_messages()]
+    assert len(imgs) == 2
+    for img, want in zip(imgs, (bgr, np.repeat(grey, 3, axis=2)), strict=True):
+        assert (img.height, img.width, img.step, img.encoding) == (6, 8, 24, "bgr8")
+        data = np.frombuffer(bytes(img.data), np.uint8)
+        assert data.size == img.step * img.height
+        np.testing.assert_array_equal(data.reshape(6, 8, 3), want)

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from hearsee.errors import ConfigError, InputFileError
+from hearsee.errors import ConfigError, ImageInputError, InputFileError
 
 __all__ = ["check_export", "write_mcap", "write_rerun"]
 
@@ -116,8 +116,13 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
                                 log_time=ns, publish_time=ns, sequence=seq)
         for seq, (t, img) in enumerate(frames):
             img = np.ascontiguousarray(img, dtype=np.uint8)
+            if img.ndim == 3 and img.shape[2] in (1, 4):  # grey or BGRA: to the bgr8 layout
+                img = img[:, :, 0] if img.shape[2] == 1 else np.ascontiguousarray(img[:, :, :3])
             if img.ndim == 2:
                 img = np.repeat(img[:, :, None], 3, axis=2)
+            if img.ndim != 3 or img.shape[2] != 3:
+                raise ImageInputError(f"overlay frame at t = {t} s: expected an (H, W) or "
+                                      f"(H, W, 1|3|4) image, got shape {img.shape}")
             ns = int(round(t * 1e9))
             w.write_message("/hearsee/overlay", s_image, {
                 "header": {"stamp": _stamp(t), "frame_id": "left_camera"},
