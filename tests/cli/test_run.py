@@ -256,3 +256,18 @@ def test_live_run_through_sounddevice(robot_dir, monkeypatch, capsys):
         pans = [msg.data for _, _, _, msg in
                 reader.iter_decoded_messages(topics=["/hearsee/head_pan"])]
     assert pans == [r["head_pan_deg"] for r in recs]
+
+
+def test_infinite_duration_is_one_line_not_a_traceback(robot_dir, monkeypatch, capsys):
+    """--duration inf passed the '> 0' check and then raised OverflowError (int(inf * fs)) as
+    a traceback once the audio device was opened; omitting --duration is how to run until
+    Ctrl-C."""
+    rec = np.zeros((6, FS))
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES, rec))
+    cfg = _config(robot_dir, cameras=False)
+    for bad in ("inf", "nan", "-1"):
+        assert main(["run", "--config", str(cfg), "--duration", bad, "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("hearsee: error: --duration must be > 0") and "Traceback" not in err
+        assert err.count("\n") == 1
+    assert not (robot_dir / "report").exists()

@@ -9,6 +9,7 @@ schema is in :mod:`hearsee.robot.hardware`.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated
 
@@ -56,8 +57,9 @@ def run_cmd(
         write_run_report,
     )
 
-    if duration is not None and not duration > 0:
-        raise ConfigError(f"--duration must be > 0 seconds, got {duration}")
+    if duration is not None and not (math.isfinite(duration) and duration > 0):
+        raise ConfigError(f"--duration must be > 0 seconds and finite (omit it to run until "
+                          f"Ctrl-C), got {duration}")
     cfg = load_robot_config(config)
     if out is not None:
         cfg = cfg.with_output(out)
