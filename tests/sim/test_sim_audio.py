@@ -200,3 +200,27 @@ def test_bad_peak_rates_and_microphone_counts_are_refused(tmp_path):
     with pytest.raises(GeometryError, match="mic_positions"):
         simulate_recording("two-mic", [1.0, 1.0, 0.0], duration_s=0.1,
                            mic_positions=np.zeros((3, 3)))
+
+
+def test_mic_positions_of_the_wrong_shape_are_a_geometry_error():
+    """ground_truth and render are public too: ground_truth with three rows for a two-mic
+    array raised zip()'s ValueError, ragged rows numpy's ValueError (also from
+    simulate_recording), and render returned three channels for the two-mic array."""
+    from hearsee.sim.audio import render
+
+    arr = MicArray.from_preset("two-mic")
+    src = [1.0, 0.5, 0.0]
+    three_rows = [[0.0, -0.075, 0.0], [0.0, 0.075, 0.0], [0.1, 0.0, 0.0]]
+    ragged = [[0.0, -0.075, 0.0], [0.0, 0.075]]
+    for mp in (three_rows, ragged, [[0.0, -0.075, 0.0], [0.0, np.inf, 0.0]]):
+        with pytest.raises(GeometryError, match="mic_positions"):
+            ground_truth(arr, src, mic_positions=mp)
+        with pytest.raises(GeometryError, match="mic_positions"):
+            render(np.ones(100), FS, arr, src, mic_positions=mp)
+        with pytest.raises(GeometryError, match="mic_positions"):
+            simulate_recording(arr, src, duration_s=0.1, mic_positions=mp)
+    # the right shape still works, and its truth is that of the given positions
+    moved = np.array([[0.0, 0.075, 0.0], [0.0, -0.075, 0.0]])
+    t = ground_truth(arr, src, mic_positions=moved)
+    assert t["tdoa_s"]["0-1"] == pytest.approx(-arr.tdoa(src)[0])
+    assert render(np.ones(100), FS, arr, src, mic_positions=moved).shape == (2, 100)

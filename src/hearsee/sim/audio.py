@@ -89,6 +89,20 @@ def _point(value: ArrayLike, what: str) -> NDArray:
     return p
 
 
+def _mic_positions(array: MicArray, mic_positions: ArrayLike) -> NDArray:
+    """``mic_positions`` as a finite float array of ``array.positions``' shape (one row per
+    microphone), else a GeometryError."""
+    try:
+        mp = np.asarray(mic_positions, dtype=float)
+    except (TypeError, ValueError):
+        mp = None
+    if mp is None or mp.shape != array.positions.shape or not np.all(np.isfinite(mp)):
+        shape = "not numeric" if mp is None else f"shape {mp.shape}"
+        raise GeometryError(f"mic_positions must be finite {array.n_mics} x 3 (one row per "
+                            f"microphone of {array.name!r}), got {shape}")
+    return mp
+
+
 def normalize_room(room: Mapping[str, Any] | None) -> dict[str, Any] | None:
     """Validate a room mapping and fill its defaults.
 
@@ -145,6 +159,8 @@ def render(signal: ArrayLike, fs: float, array: MicArray, source: ArrayLike,
     """
     room = normalize_room(room)
     src = _point(source, "source")
+    if mic_positions is not None:
+        mic_positions = _mic_positions(array, mic_positions)
     if array.mask is not None:  # masked two-microphone array: the mask's diffraction (BEM)
         from hearsee.audio.mask import simulate_masked
 
@@ -176,7 +192,7 @@ def ground_truth(array: MicArray, source: ArrayLike,
     """
     src = _point(source, "source")
     geo = array if mic_positions is None else MicArray(
-        np.asarray(mic_positions, dtype=float), array.speed_of_sound, array.name)
+        _mic_positions(array, mic_positions), array.speed_of_sound, array.name)
     az, el, r = cart_to_sph(src)
     at_origin = not r > 0
     tdoa = geo.tdoa_far(src) if far_field else geo.tdoa(src)  # far field at the origin: error
@@ -249,10 +265,7 @@ def simulate_recording(
         raise ConfigError(f"SNR must be a finite number of dB, got {snr_db!r}")
     room = normalize_room(room)
     if mic_positions is not None:  # (the wrong count raised zip()'s ValueError in the truth)
-        mp = np.asarray(mic_positions, dtype=float)
-        if mp.shape != array.positions.shape or not np.all(np.isfinite(mp)):
-            raise GeometryError(f"mic_positions must be finite {array.n_mics} x 3 (one row per "
-                                f"microphone of {array.name!r}), got shape {mp.shape}")
+        mic_positions = _mic_positions(array, mic_positions)
     rng = np.random.default_rng(seed)
     s = make_signal(signal, duration_s, fs, rng)
     clean = render(s, fs, array, src, room, mic_positions=mic_positions, far_field=far_field)
