@@ -96,3 +96,15 @@ def test_pair_indices_are_checked_everywhere():
             with pytest.raises(GeometryError, match=msg):
                 call(pairs)
     assert arr.tdoa([1.0, 0.0, 0.0], [(0, 2)]) == pytest.approx(arr.tdoa([1.0, 0.0, 0.0])[1])
+
+
+def test_constructor_refuses_non_numeric_input_with_a_geometry_error():
+    """MicArray(...) is public: ragged or non-numeric positions raised numpy's ValueError, a
+    speed of sound of None or 'fast' float()'s TypeError / ValueError."""
+    for pos in ([[0, 0, 0], [1, 0]], [["a", 0, 0], [1, 0, 0]], None):
+        with pytest.raises(GeometryError, match="positions"):
+            MicArray(pos)
+    for c in (None, "fast", [343.0]):
+        with pytest.raises(GeometryError, match="speed_of_sound"):
+            MicArray([[0, 0, 0], [0.1, 0, 0]], c)
+    assert MicArray([[0, 0, 0], [0.1, 0, 0]], np.float32(340.0)).speed_of_sound == 340.0

@@ -70,7 +70,11 @@ class MicArray:
     mask: Mapping[str, Any] | None = field(default=None)
 
     def __post_init__(self) -> None:
-        pos = np.array(self.positions, dtype=float)
+        try:
+            pos = np.array(self.positions, dtype=float)
+        except (TypeError, ValueError):
+            raise GeometryError(f"array {self.name!r}: microphone positions must be an N x 3 "
+                                f"table of numbers (metres), got {self.positions!r}") from None
         if pos.ndim != 2 or pos.shape[1] != 3:
             raise GeometryError(
                 f"array {self.name!r}: microphone positions must be N x 3, got shape {pos.shape}"
@@ -90,7 +94,11 @@ class MicArray:
                 f"array {self.name!r}: microphones {i} and {j} coincide "
                 f"({d[iu][k] * 1000:.2f} mm apart, minimum {MIN_SPACING_M * 1000:.0f} mm)"
             )
-        c = float(self.speed_of_sound)
+        try:
+            c = float(self.speed_of_sound)
+        except (TypeError, ValueError):
+            raise GeometryError(f"array {self.name!r}: speed_of_sound must be a number > 0 "
+                                f"(m/s), got {self.speed_of_sound!r}") from None
         if not np.isfinite(c) or c <= 0:
             raise GeometryError(f"array {self.name!r}: speed_of_sound must be > 0, got {c}")
         pos.setflags(write=False)
