@@ -108,3 +108,17 @@ def test_constructor_refuses_non_numeric_input_with_a_geometry_error():
         with pytest.raises(GeometryError, match="speed_of_sound"):
             MicArray([[0, 0, 0], [0.1, 0, 0]], c)
     assert MicArray([[0, 0, 0], [0.1, 0, 0]], np.float32(340.0)).speed_of_sound == 340.0
+
+
+def test_a_pair_must_be_two_whole_indices():
+    """checked_pairs' docstring promises a GeometryError for a pair that is not two indices:
+    one pair given bare, (0, 1) instead of [(0, 1)], raised TypeError ("object of type 'int'
+    has no len()") and fractional indices were truncated, (0.7, 1.9) silently meaning (0, 1)."""
+    arr = MicArray.from_preset("three-mic")
+    src = [1.0, 0.5, 0.0]
+    for pairs in ((0, 1), [(0.7, 1.9)], [(0, np.nan)], [(0, np.inf)], 3):
+        with pytest.raises(GeometryError, match="pair"):
+            arr.tdoa(src, pairs)
+    want = arr.tdoa(src)[[1]]
+    for ok in ([(0, 2)], [(np.int64(0), np.int64(2))], np.array([[0, 2]]), [(0.0, 2.0)]):
+        np.testing.assert_allclose(arr.tdoa(src, ok), want)

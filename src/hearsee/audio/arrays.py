@@ -187,9 +187,18 @@ class MicArray:
         (a negative index used to wrap around to the last microphones) or ``i == j``."""
         if pairs is None:
             return list(self.pairs)
+        try:
+            items = list(pairs)
+        except TypeError:
+            raise GeometryError(f"pairs must be a list of (i, j) microphone index pairs, got "
+                                f"{pairs!r}") from None
         out = []
-        for p in pairs:
-            if len(p) != 2:
+        for p in items:
+            try:  # two whole numbers (0.7 used to be truncated to index 0)
+                ok = len(p) == 2 and all(int(v) == v for v in p)
+            except (TypeError, ValueError, OverflowError):
+                ok = False
+            if not ok:
                 raise GeometryError(f"a pair is two microphone indices, got {p!r}")
             i, j = int(p[0]), int(p[1])
             if i == j or not (0 <= i < self.n_mics and 0 <= j < self.n_mics):
