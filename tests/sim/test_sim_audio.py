@@ -224,3 +224,14 @@ def test_mic_positions_of_the_wrong_shape_are_a_geometry_error():
     t = ground_truth(arr, src, mic_positions=moved)
     assert t["tdoa_s"]["0-1"] == pytest.approx(-arr.tdoa(src)[0])
     assert render(np.ones(100), FS, arr, src, mic_positions=moved).shape == (2, 100)
+
+
+def test_truth_with_a_numpy_seed_is_json():
+    """simulate_recording promises a JSON-able truth, but kept a numpy integer seed as is
+    (json.dumps: 'Object of type int64 is not JSON serializable')."""
+    x, truth = simulate_recording("two-mic", [1.0, 1.0, 0.0], duration_s=0.1,
+                                  seed=np.int64(3))
+    json.dumps(truth)
+    assert truth["seed"] == 3 and type(truth["seed"]) is int
+    x3, _ = simulate_recording("two-mic", [1.0, 1.0, 0.0], duration_s=0.1, seed=3)
+    np.testing.assert_array_equal(x, x3)

@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.propagation import add_noise, simulate_free_field, simulate_room
 from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
+from hearsee.config import to_plain
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 from hearsee.geometry import cart_to_sph
 
@@ -282,7 +283,7 @@ def simulate_recording(
         "signal": str(signal) if str(signal) in SIGNAL_KINDS else str(Path(signal)),
         "snr_db": None if snr_db is None else float(snr_db),
         "room": room,
-        "seed": seed,
+        "seed": to_plain(seed),  # (a numpy integer seed made the truth not JSON-able)
     })
     return x, truth
 
