@@ -235,3 +235,20 @@ def test_truth_with_a_numpy_seed_is_json():
     assert truth["seed"] == 3 and type(truth["seed"]) is int
     x3, _ = simulate_recording("two-mic", [1.0, 1.0, 0.0], duration_s=0.1, seed=3)
     np.testing.assert_array_equal(x, x3)
+
+
+def test_save_recording_writes_both_files_or_neither(tmp_path):
+    """save_recording wrote the WAV before the JSON could fail: a truth holding numpy scalars
+    (json.dumps TypeError) or a directory at OUT.json (IsADirectoryError) left a recording
+    without its truth, and the error was a builtin one."""
+    from hearsee.errors import InputFileError
+
+    x, truth = simulate_recording("two-mic", [1.0, 1.0, 0.0], duration_s=0.1, seed=3)
+    wav, js = save_recording(tmp_path / "a.wav", x, {**truth, "seed": np.int64(3),
+                                                      "distance_m": np.float32(1.5)})
+    doc = json.loads(js.read_text())
+    assert doc["seed"] == 3 and doc["distance_m"] == 1.5
+    (tmp_path / "b.json").mkdir()
+    with pytest.raises(InputFileError, match="directory"):
+        save_recording(tmp_path / "b.wav", x, truth)
+    assert not (tmp_path / "b.wav").exists()

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.propagation import add_noise, simulate_free_field, simulate_room
 from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
-from hearsee.config import to_plain
+from hearsee.config import to_jsonable, to_plain
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 from hearsee.geometry import cart_to_sph
 
@@ -300,6 +300,8 @@ def save_recording(out: str | Path, x: ArrayLike, truth: Mapping[str, Any],
     if wav.suffix.lower() not in (".wav", ".flac"):
         raise ConfigError(f"{wav}: output must end in .wav (or .flac)")
     js = wav.with_suffix(".json")
+    if js.is_dir():
+        raise InputFileError(f"{js}: is a directory, expected the ground-truth file's name")
     y = np.asarray(x, dtype=float)
     m = float(np.max(np.abs(y))) if y.size else 0.0
     if not (np.isfinite(peak) and 0 < peak <= 1):  # (-0.5 inverted the polarity, 0 wrote silence)
@@ -311,7 +313,8 @@ def save_recording(out: str | Path, x: ArrayLike, truth: Mapping[str, Any],
                               "choose another output path")
     if wav.suffix.lower() == ".flac" and subtype.upper() in ("FLOAT", "DOUBLE"):
         subtype = "PCM_24"  # FLAC stores integers only
-    write_recording(wav, y * gain, truth["fs"], subtype=subtype, protect=protect)
     doc = {**truth, "gain": gain, "wav": wav.name}
-    js.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    text = json.dumps(to_jsonable(doc), indent=2) + "\n"  # before the WAV: both or neither
+    write_recording(wav, y * gain, truth["fs"], subtype=subtype, protect=protect)
+    js.write_text(text, encoding="utf-8")
     return wav, js
