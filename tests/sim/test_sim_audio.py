@@ -252,3 +252,17 @@ def test_save_recording_writes_both_files_or_neither(tmp_path):
     with pytest.raises(InputFileError, match="directory"):
         save_recording(tmp_path / "b.wav", x, truth)
     assert not (tmp_path / "b.wav").exists()
+
+
+def test_non_numeric_rate_and_snr_are_config_errors():
+    """A sample rate or SNR given as a string (e.g. read from a text file) raised numpy's
+    TypeError ("ufunc 'isfinite' not supported for the input types")."""
+    from hearsee.sim.audio import check_sim_fs
+
+    for fs in ("16000", [16000], True):
+        with pytest.raises(ConfigError, match="sample rate"):
+            simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1, fs=fs)
+    assert check_sim_fs(np.float64(16000.0)) == 16000
+    for snr in ("10", [10.0]):
+        with pytest.raises(ConfigError, match="SNR"):
+            simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1, snr_db=snr)

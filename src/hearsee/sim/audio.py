@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.propagation import add_noise, simulate_free_field, simulate_room
 from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
-from hearsee.config import to_jsonable, to_plain
+from hearsee.config import is_real, to_jsonable, to_plain
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 from hearsee.geometry import cart_to_sph
 
@@ -72,7 +72,7 @@ def check_sim_fs(fs: float | None) -> int:
     :data:`MAX_SIM_FS_HZ`] (the rates hearsee analyses), else a ConfigError."""
     from hearsee.audio.tdoa import MIN_FS_HZ
 
-    if fs is None or not np.isfinite(fs) or fs <= 0 or int(round(fs)) != fs:
+    if not is_real(fs) or fs <= 0 or int(round(fs)) != fs:  # (a string: numpy's TypeError)
         raise ConfigError(f"sample rate must be a positive whole number of Hz, got {fs!r}")
     if not MIN_FS_HZ <= fs <= MAX_SIM_FS_HZ:
         raise ConfigError(f"sample rate must be within {MIN_FS_HZ:g}-{MAX_SIM_FS_HZ} Hz, got "
@@ -262,7 +262,7 @@ def simulate_recording(
     array = load_array(array)
     src = _point(source, "source")
     fs = check_sim_fs(fs)
-    if snr_db is not None and not np.isfinite(snr_db):
+    if snr_db is not None and not is_real(snr_db):
         raise ConfigError(f"SNR must be a finite number of dB, got {snr_db!r}")
     room = normalize_room(room)
     if mic_positions is not None:  # (the wrong count raised zip()'s ValueError in the truth)
