@@ -122,3 +122,14 @@ def test_a_pair_must_be_two_whole_indices():
     want = arr.tdoa(src)[[1]]
     for ok in ([(0, 2)], [(np.int64(0), np.int64(2))], np.array([[0, 2]]), [(0.0, 2.0)]):
         np.testing.assert_allclose(arr.tdoa(src, ok), want)
+
+
+def test_far_field_direction_must_be_finite():
+    """tdoa_far([inf, 0, 0]) returned NaN TDOAs without a word, and a NaN direction was
+    refused as 'the zero vector'."""
+    two = MicArray.from_preset("two-mic")
+    for bad in ([np.inf, 0.0, 0.0], [1.0, np.nan, 0.0], [[1.0, 0.0, 0.0], [0.0, -np.inf, 0.0]]):
+        with pytest.raises(GeometryError, match="finite"):
+            two.tdoa_far(bad)
+    # any finite non-zero length is just a direction
+    np.testing.assert_allclose(two.tdoa_far([0.0, 5.0, 0.0]), [0.15 / 343.0])

@@ -252,10 +252,12 @@ class MicArray:
         """Far-field TDOAs ``t_i - t_j`` in seconds for unit direction(s) ``(..., 3)``.
 
         A plane wave from direction u reaches microphone m at time ``-m . u / c0``. A zero
-        direction is a GeometryError (it was a silent NaN).
+        direction is a GeometryError (it was a silent NaN), and so is a non-finite one.
         """
         pairs = self.checked_pairs(pairs)
         u = np.asarray(direction, dtype=float)
+        if not np.all(np.isfinite(u)):  # (inf gave NaN TDOAs, NaN read as "the zero vector")
+            raise GeometryError(f"a far-field direction must be finite, got {direction!r}")
         norm = np.linalg.norm(u, axis=-1, keepdims=True)
         if not np.all(norm > 0):
             raise GeometryError("a far-field (plane-wave) source needs a direction; got the zero "
