@@ -133,3 +133,15 @@ def test_far_field_direction_must_be_finite():
             two.tdoa_far(bad)
     # any finite non-zero length is just a direction
     np.testing.assert_allclose(two.tdoa_far([0.0, 5.0, 0.0]), [0.15 / 343.0])
+
+
+def test_points_that_are_not_xyz_are_a_geometry_error():
+    """A 2-D point raised numpy's ValueError from tdoa (broadcast), tdoa_far (matmul) and
+    tdoa_jacobian (reshape)."""
+    three = MicArray.from_preset("three-mic")
+    for bad in ([1.0, 0.0], [[1.0, 0.0], [0.0, 1.0]], 1.0):
+        for call in (three.tdoa, three.tdoa_far, three.tdoa_jacobian):
+            with pytest.raises(GeometryError, match=r"\[x, y, z\]"):
+                call(bad)
+    assert three.tdoa(np.ones((4, 2, 3))).shape == (4, 2, 3)  # batches still work
+    assert three.tdoa_far(np.ones((5, 3))).shape == (5, 3)

@@ -239,14 +239,15 @@ class MicArray:
         Returns shape ``(..., n_pairs)``.
         """
         i, j = _pair_index(self.checked_pairs(pairs))
-        return pair_tdoa(source, self.positions, i, j, self.speed_of_sound)
+        return pair_tdoa(_xyz(source, "source"), self.positions, i, j, self.speed_of_sound)
 
     def tdoa_jacobian(self, source: ArrayLike,
                       pairs: list[tuple[int, int]] | None = None) -> NDArray:
         """Derivative of :meth:`tdoa` with respect to the source position at one point
         ``(3,)`` (metres): shape ``(n_pairs, 3)``, seconds per metre."""
         i, j = _pair_index(self.checked_pairs(pairs))
-        return pair_tdoa_jacobian(source, self.positions, i, j, self.speed_of_sound)
+        p = _xyz(source, "source", one=True)
+        return pair_tdoa_jacobian(p, self.positions, i, j, self.speed_of_sound)
 
     def tdoa_far(self, direction: ArrayLike, pairs: list[tuple[int, int]] | None = None) -> NDArray:
         """Far-field TDOAs ``t_i - t_j`` in seconds for unit direction(s) ``(..., 3)``.
@@ -255,7 +256,7 @@ class MicArray:
         direction is a GeometryError (it was a silent NaN), and so is a non-finite one.
         """
         pairs = self.checked_pairs(pairs)
-        u = np.asarray(direction, dtype=float)
+        u = _xyz(direction, "direction")
         if not np.all(np.isfinite(u)):  # (inf gave NaN TDOAs, NaN read as "the zero vector")
             raise GeometryError(f"a far-field direction must be finite, got {direction!r}")
         norm = np.linalg.norm(u, axis=-1, keepdims=True)
@@ -270,6 +271,20 @@ class MicArray:
 
     def __repr__(self) -> str:
         return f"MicArray(name={self.name!r}, n_mics={self.n_mics}, aperture={self.aperture:.3f} m)"
+
+
+def _xyz(points: ArrayLike, what: str, one: bool = False) -> NDArray:
+    """``points`` as a float array ``(..., 3)`` (``one``: a single point, 3 numbers), else a
+    GeometryError (numpy's broadcast, matmul or reshape ValueError before)."""
+    try:
+        p = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        p = None
+    if p is None or (p.size != 3 if one else (p.ndim == 0 or p.shape[-1] != 3)):
+        got = "not numbers" if p is None else f"shape {p.shape}"
+        want = "one point, 3 numbers" if one else "shape (..., 3)"
+        raise GeometryError(f"{what} must be [x, y, z] in metres ({want}), got {got}")
+    return p
 
 
 def _pair_index(pairs: list[tuple[int, int]]) -> tuple[NDArray, NDArray]:
