@@ -266,3 +266,13 @@ def test_non_numeric_rate_and_snr_are_config_errors():
     for snr in ("10", [10.0]):
         with pytest.raises(ConfigError, match="SNR"):
             simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1, snr_db=snr)
+
+
+def test_bad_seed_is_a_config_error():
+    """A negative, fractional or text seed raised numpy's ValueError / TypeError ('expected
+    non-negative integer', 'SeedSequence expects int ...')."""
+    for seed in (-1, 1.5, "a"):
+        with pytest.raises(ConfigError, match="seed"):
+            simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1, seed=seed)
+    assert simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1, seed=None)[1][
+        "seed"] is None

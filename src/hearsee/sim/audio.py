@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.propagation import add_noise, simulate_free_field, simulate_room
 from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
-from hearsee.config import is_real, to_jsonable, to_plain
+from hearsee.config import is_real, to_jsonable, to_plain, whole_number
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 from hearsee.geometry import cart_to_sph
 
@@ -265,6 +265,8 @@ def simulate_recording(
     if snr_db is not None and not is_real(snr_db):
         raise ConfigError(f"SNR must be a finite number of dB, got {snr_db!r}")
     room = normalize_room(room)
+    if seed is not None:  # (-1 or 1.5 raised numpy's ValueError / TypeError)
+        seed = whole_number("seed", seed, lo=0)
     if mic_positions is not None:  # (the wrong count raised zip()'s ValueError in the truth)
         mic_positions = _mic_positions(array, mic_positions)
     rng = np.random.default_rng(seed)
