@@ -65,6 +65,10 @@ def test_voice_bad_args():
         synthetic_voice("child", 1.0, FS)
     with pytest.raises(ConfigError):
         synthetic_voice("male", -1.0, FS)
+    # (a numeric string raised numpy's TypeError before 2026-11-26)
+    for dur, fs in (("1.0", FS), (True, FS), (1.0, "16000"), (1.0, None)):
+        with pytest.raises(ConfigError, match="duration|sample rate"):
+            white_noise(dur, fs, rng=0)
 
 
 def test_make_signal_kinds_and_file(tmp_path):

@@ -92,12 +92,12 @@ def check_fs(fs: float) -> float:
 
 
 def _check_duration(duration_s: float, fs: float) -> int:
-    if not np.isfinite(duration_s) or duration_s <= 0:
+    if not (is_real(duration_s) and duration_s > 0):  # (a string: numpy's TypeError)
         raise ConfigError(f"duration must be a positive number of seconds, got {duration_s!r}")
     if duration_s > MAX_SIGNAL_S:
         raise ConfigError(f"duration must be at most {MAX_SIGNAL_S:g} s (simulate longer scenes "
                           f"in pieces), got {duration_s:g} s")
-    if not np.isfinite(fs) or fs <= 0:
+    if not (is_real(fs) and fs > 0):
         raise ConfigError(f"sample rate must be a positive number of Hz, got {fs!r}")
     n = int(round(duration_s * fs))
     if n < 1:
