@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.propagation import add_noise, simulate_free_field, simulate_room
 from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
-from hearsee.config import is_real, to_jsonable, to_plain, whole_number
+from hearsee.config import is_real, to_jsonable, whole_number
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 from hearsee.geometry import cart_to_sph
 
@@ -285,7 +285,7 @@ def simulate_recording(
         "signal": str(signal) if str(signal) in SIGNAL_KINDS else str(Path(signal)),
         "snr_db": None if snr_db is None else float(snr_db),
         "room": room,
-        "seed": to_plain(seed),  # (a numpy integer seed made the truth not JSON-able)
+        "seed": seed,  # (whole_number above: a plain int, JSON-able also from a numpy seed)
     })
     return x, truth
 
