@@ -294,6 +294,20 @@ def test_tdoa_tracker_refuses_measurements_of_the_wrong_shape(side_rig):
     assert trk.update_measurements(t, uv, z, fix)
 
 
+def test_tdoa_tracker_restart_keeps_the_time_checks(side_rig):
+    """The restart on a fix set the time without the checks of every other frame: a frame
+    earlier than the last one, or at a NaN time, restarted the track silently."""
+    rig = side_rig
+    trk, frames = _settled(rig, 11, 36)
+    t, _, uv, z, fix = frames[30]
+    trk.n_rejects = trk.max_rejects  # the next fix restarts the track
+    for bad in (frames[20][0], np.nan):
+        with pytest.raises(EstimationError, match="time"):
+            trk.update_measurements(bad, uv, z, fix)
+    assert trk.update_measurements(t, uv, z, fix) and trk.t == t
+    np.testing.assert_allclose(trk.position, fix.position_m)
+
+
 def test_tdoa_tracker_gates_a_far_fix_and_restarts_after_repeated_ones(side_rig):
     rig = side_rig
     trk, frames = _settled(rig, 8, 40)

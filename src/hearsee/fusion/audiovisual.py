@@ -242,7 +242,8 @@ def locate_on_ray(
     -------
     RayFix
         The best fix; ``alternatives`` holds other local minima whose ITD residual is within
-        4x the best (a planar array cannot tell a point from its mirror image in the array
+        4x the best or ``sigma_tdoa_s``, whichever is larger (an exact best fix would keep
+        none) (a planar array cannot tell a point from its mirror image in the array
         plane, so a ray that crosses that plane has two exact solutions) -- a tracker picks
         among them with its prediction.
     """
@@ -486,6 +487,7 @@ class RayTdoaTracker(RayTracker):
                 raise EstimationError(f"got {tdoa_s.size} TDOAs for {len(self.pairs)} "
                                       "microphone pairs")
         if fix is not None and (not self.initialized or self.n_rejects >= self.max_rejects):
+            self.predict(t)  # (the time's checks: finite, not before the last frame)
             self._start(np.asarray(fix.position_m, dtype=float), np.asarray(fix.covariance))
             self.t = float(t)
             return True
