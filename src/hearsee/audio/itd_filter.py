@@ -74,7 +74,9 @@ class ItdKalman:
     max_rejects : int
         Consecutive rejections after which the filter re-initialises on the measurement (>= 1).
     p0_std_s : float
-        Initial state standard deviation, seconds (used at the first measurement).
+        State standard deviation before the first measurement, seconds (``P = p0_std_s^2 I``
+        until then; the first measurement sets the state and its covariance by least squares
+        over the pairs, whatever ``p0_std_s``).
 
     Examples
     --------
@@ -149,7 +151,8 @@ class ItdKalman:
         """One frame: predict, then update with pair TDOAs ``z`` (n_pairs,) seconds.
 
         ``z`` None or containing NaN: predict only. Returns True when the measurement was
-        accepted (inside the gate), False when missing or rejected. The first measurement
+        accepted (inside the gate, or the re-initialisation on it after ``max_rejects``
+        consecutive rejections), False when missing or rejected. The first measurement
         initialises the state (least squares over the pairs).
         """
         zz = None if z is None else np.asarray(z, dtype=float).reshape(-1)
