@@ -52,6 +52,48 @@ def test_rerun_recording(tmp_path):
     assert path.stat().st_size > 1000
 
 
+def test_rerun_overlay_colours_with_a_stand_in_rerun(tmp_path, monkeypatch):
+    """The images write_rerun logs are RGB (H, W, 3) whatever the frame's layout: a BGRA frame
+    was reversed whole (ARGB: alpha read as red), grey stayed 2-D. A stand-in ``rerun`` module
+    records what is logged (the real one is an optional extra, often absent here)."""
+    import sys
+    import types
+
+    logged = []
+
+    class _Rec:
+        def __init__(self, *_):
+            pass
+
+        def log(self, name, obj, static=False):
+            if name == "camera/overlay":
+                logged.append(obj)
+
+        def set_time(self, *_, **__):
+            pass
+
+        def save(self, path):
+            open(path, "wb").close()
+
+    fake = types.ModuleType("rerun")
+    fake.RecordingStream = _Rec
+    fake.Image = lambda a: np.asarray(a)
+    for name in ("Boxes3D", "Points3D", "LineStrips3D", "Scalars"):
+        setattr(fake, name, lambda *a, **k: None)
+    monkeypatch.setitem(sys.modules, "rerun", fake)
+    bgra = np.zeros((4, 5, 4), np.uint8)
+    bgra[..., 0], bgra[..., 2], bgra[..., 3] = 200, 10, 255  # blue, a little red, opaque
+    bgr = bgra[..., :3].copy()
+    grey = np.full((4, 5), 77, np.uint8)
+    log, _ = _log()
+    write_rerun(tmp_path / "run.rrd", default_scenario().to_dict(), log,
+                [(0.2, bgra), (0.4, bgr), (0.6, grey)])
+    assert [im.shape for im in logged] == [(4, 5, 3)] * 3
+    for im in logged[:2]:
+        assert (im[0, 0] == [10, 0, 200]).all()  # RGB: red 10, green 0, blue 200
+    assert (logged[2] == 77).all()
+
+
 def test_missing_folder_is_a_clear_error(tmp_path):
     pytest.importorskip("mcap_ros2")
     log, frames = _log()

@@ -70,6 +70,20 @@ def _stamp(t: float) -> dict[str, int]:
     return {"sec": sec, "nanosec": nanosec}
 
 
+def _overlay_bgr(img: np.ndarray, t: float) -> np.ndarray:
+    """An overlay frame (H, W) grey or (H, W, 1|3|4) grey/BGR/BGRA as contiguous (H, W, 3) BGR
+    uint8 (the layout both exports describe), else an ImageInputError naming the time ``t``."""
+    img = np.ascontiguousarray(img, dtype=np.uint8)
+    if img.ndim == 3 and img.shape[2] in (1, 4):  # grey or BGRA: to the bgr8 layout
+        img = img[:, :, 0] if img.shape[2] == 1 else np.ascontiguousarray(img[:, :, :3])
+    if img.ndim == 2:
+        img = np.repeat(img[:, :, None], 3, axis=2)
+    if img.ndim != 3 or img.shape[2] != 3:
+        raise ImageInputError(f"overlay frame at t = {t} s: expected an (H, W) or "
+                              f"(H, W, 1|3|4) image, got shape {img.shape}")
+    return img
+
+
 def _check_out(path: str | Path) -> Path:
     p = Path(path)
     if not p.parent.is_dir():
@@ -115,14 +129,7 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
                 w.write_message("/hearsee/head_pan", s_float, {"data": float(rec["head_pan_deg"])},
                                 log_time=ns, publish_time=ns, sequence=seq)
         for seq, (t, img) in enumerate(frames):
-            img = np.ascontiguousarray(img, dtype=np.uint8)
-            if img.ndim == 3 and img.shape[2] in (1, 4):  # grey or BGRA: to the bgr8 layout
-                img = img[:, :, 0] if img.shape[2] == 1 else np.ascontiguousarray(img[:, :, :3])
-            if img.ndim == 2:
-                img = np.repeat(img[:, :, None], 3, axis=2)
-            if img.ndim != 3 or img.shape[2] != 3:
-                raise ImageInputError(f"overlay frame at t = {t} s: expected an (H, W) or "
-                                      f"(H, W, 1|3|4) image, got shape {img.shape}")
+            img = _overlay_bgr(img, t)
             ns = int(round(t * 1e9))
             w.write_message("/hearsee/overlay", s_image, {
                 "header": {"stamp": _stamp(t), "frame_id": "left_camera"},
@@ -168,7 +175,8 @@ def write_rerun(path: str | Path, scenario: Mapping[str, Any], log: Sequence[Map
             rec.log("head_pan_deg", rr.Scalars(float(r["head_pan_deg"])))
     for t, img in frames:
         rec.set_time("t", duration=float(t))
-        rgb = img[:, :, ::-1] if img.ndim == 3 else img
+        # (BGR to RGB; a BGRA frame reversed whole was logged as ARGB: wrong colours)
+        rgb = _overlay_bgr(img, t)[:, :, ::-1]
         rec.log("camera/overlay", rr.Image(np.ascontiguousarray(rgb)))
     rec.save(str(p))
     return p
