@@ -214,6 +214,10 @@ def test_exports_are_checked_before_listening(robot_dir, monkeypatch, capsys):
     out = capsys.readouterr().out
     assert "--rerun" in out and "all 7 checks passed" in out
     assert not (robot_dir / "r.rrd").exists()
+    # both exports to one file: the MCAP would have replaced the Rerun recording at the end
+    assert main(["run", "--config", str(cfg), "--rerun", str(robot_dir / "x.out"), "--mcap",
+                 str(robot_dir / "." / "x.out"), "--dry-run"]) == 2
+    assert "name the same file" in capsys.readouterr().err
 
 
 @pytest.mark.slow

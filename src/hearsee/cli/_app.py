@@ -78,8 +78,12 @@ def check_exports(rerun: Path | None, mcap: Path | None,
     """Before ``hearsee demo`` / ``run`` does its work, the optional ``--rerun`` / ``--mcap``
     files: :func:`refuse_overwrite`, then each one's extra is installed and its folder exists
     (:func:`hearsee.robot.export.check_export`). Returns ``(option, description)`` of each."""
+    from hearsee.errors import InputFileError
     from hearsee.robot.export import check_export
 
+    if rerun is not None and mcap is not None and Path(rerun).resolve() == Path(mcap).resolve():
+        raise InputFileError(f"{mcap}: --rerun and --mcap name the same file; the second "
+                             "export would replace the first")
     refuse_overwrite([rerun, mcap], inputs, force)
     return [(f"--{kind}", check_export(kind, p))
             for kind, p in (("rerun", rerun), ("mcap", mcap)) if p is not None]
