@@ -205,6 +205,24 @@ def test_thermal_wrong_size_and_overlay_over_input(folder, capsys, tmp_path):
     assert "overwrite" in _err(capsys)
 
 
+def test_overlay_suffix_is_checked_before_the_detection(folder, capsys, tmp_path, monkeypatch):
+    """An --overlay OpenCV cannot encode fails at once: it used to fail only after the whole
+    detection had run (write_image's refusal at the end)."""
+    from hearsee.vision import fusion
+
+    d, _ = folder
+
+    def not_now(*_, **__):
+        raise AssertionError("the detection ran before the overlay path was checked")
+
+    monkeypatch.setattr(fusion, "detect_humans", not_now)
+    for name in ("out.txt", "out"):
+        assert main(_args(d, "--overlay", str(tmp_path / name), thermal=None)) == 2
+        err = _err(capsys)
+        assert "OpenCV cannot write" in err and "Traceback" not in err
+        assert not (tmp_path / name).exists()
+
+
 def test_existing_overlay_is_kept_unless_forced(folder, capsys, tmp_path):
     d, _ = folder
     ov = tmp_path / "mine.png"

@@ -61,6 +61,13 @@ def detect_cmd(
     if camera_height is not None and not 0.1 <= camera_height <= 5.0:
         raise typer.BadParameter(f"--camera-height must be in [0.1, 5] metres, got {camera_height}")
     refuse_overwrite([overlay_p], [left_p, right_p, calib_p, thermal_p], force)
+    if overlay_p is not None:  # (else write_image refuses it only after the whole detection)
+        import cv2
+
+        if not cv2.haveImageWriter(str(overlay_p)):
+            kind = overlay_p.suffix or "a file without a suffix"
+            raise ImageInputError(f"{overlay_p}: OpenCV cannot write {kind}; use an image "
+                                  "suffix such as .png or .jpg")
     rig = load_rig(calib_p)
     L, R = read_pair(left_p, right_p, "bgr")
     if (L.shape[1], L.shape[0]) != rig.left.size:
