@@ -435,3 +435,16 @@ def test_bad_band_edges_are_config_errors(model):
             mask.localize_mask(x, FS, model, bands_hz=bands)
         with pytest.raises(ConfigError, match="bands_hz"):
             mask.front_back_margin(model, bands_hz=bands)
+
+
+def test_front_back_margin_weights_are_one_per_model_frequency(model):
+    """Weights of another length raised numpy's IndexError (undocumented length), NaN or
+    all-zero weights gave NaN margins; weights of the right length that equal the default give
+    the default's margins."""
+    ref = mask.front_back_margin(model)
+    same = mask.front_back_margin(model, weights=np.full(len(model.freqs), 3.0))
+    np.testing.assert_allclose(same[1], ref[1])
+    for bad in (np.ones(len(model.freqs) - 1), np.r_[np.nan, np.ones(len(model.freqs) - 1)],
+                np.zeros(len(model.freqs)), -np.ones(len(model.freqs))):
+        with pytest.raises(ConfigError, match="weights"):
+            mask.front_back_margin(model, weights=bad)

@@ -627,7 +627,8 @@ def front_back_margin(model: MaskModel, distance: float | None = None,
                   + sum_bands (IID_a - IID_b)^2 / (2 sigma_iid_db^2)
 
     (``phi`` the interaural phase spectrum, ``IID`` the white-source band IIDs, ``w`` the
-    frequency weights, uniform by default, over the classifier's band 250 Hz .. 0.9 f_max),
+    frequency weights -- ``weights``, one per frequency of ``model.freqs``, uniform by
+    default -- over the classifier's band 250 Hz .. 0.9 f_max),
     minimised over ``b`` at least ``min_separation_deg`` away from ``a``. Both cues are ratios
     of the two microphones' spectra, so they do not depend on the (unknown) source spectrum.
     A left/right symmetric mask has ``J(0, 180) = 0`` (both cues vanish in the median plane);
@@ -639,7 +640,15 @@ def front_back_margin(model: MaskModel, distance: float | None = None,
     az, h = model.table(distance)
     edges = _band_edges(bands_hz, model.f_max)
     use = (model.freqs >= max(edges[0], 100.0)) & (model.freqs <= 0.9 * model.f_max)
-    w = np.ones(int(use.sum())) if weights is None else np.asarray(weights, float)[use]
+    if weights is None:
+        w = np.ones(int(use.sum()))
+    else:  # (another length raised numpy's IndexError; NaN or all-zero weights gave NaN)
+        w = np.asarray(weights, float).reshape(-1)
+        if w.shape != model.freqs.shape or not (np.all(np.isfinite(w)) and np.all(w >= 0)
+                                                and w[use].sum() > 0):
+            raise ConfigError(f"weights must be {len(model.freqs)} finite numbers >= 0, one per "
+                              "frequency of the model (model.freqs), not all zero in the band")
+        w = w[use]
     w = w / w.sum()
     cross = np.conj(h[:, 0, use]) * h[:, 1, use]
     z = cross / np.maximum(np.abs(cross), 1e-300)  # unit phasors exp(i phi)
