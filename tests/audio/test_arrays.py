@@ -82,6 +82,24 @@ def test_missing_file_and_unknown_preset(tmp_path):
         load_array(tmp_path / "nope.yaml")
     with pytest.raises(ConfigError, match="unknown array preset"):
         load_array("five-mic")
+    # (both were "unknown array preset" before 2026-11-26)
+    with pytest.raises(InputFileError, match="is a folder"):
+        load_array(tmp_path)
+    with pytest.raises(InputFileError, match="no such array file"):
+        load_array(tmp_path / "my-array")
+
+
+def test_array_mapping_name_and_speed_of_sound():
+    """An empty ``name:`` named the array "None"; a numpy float speed of sound was refused as
+    "not a number", a NaN one passed to the array's own check."""
+    mics = [[0.0, -0.1, 0.0], [0.0, 0.1, 0.0]]
+    assert MicArray.from_dict({"microphones": mics, "name": None}).name == "custom"
+    assert MicArray.from_dict({"microphones": mics, "name": 7}).name == "7"
+    arr = MicArray.from_dict({"microphones": mics, "speed_of_sound": np.float64(340.0)})
+    assert arr.speed_of_sound == 340.0
+    for bad in (float("nan"), "343", True):
+        with pytest.raises(ConfigError, match="speed_of_sound must be a finite number"):
+            MicArray.from_dict({"microphones": mics, "speed_of_sound": bad})
 
 
 def test_pair_indices_are_checked_everywhere():

@@ -28,8 +28,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import as_float_array, check_keys, load_yaml, require
-from hearsee.errors import ConfigError, GeometryError
+from hearsee.config import as_float_array, check_keys, is_real, load_yaml, require
+from hearsee.errors import ConfigError, GeometryError, InputFileError
 
 __all__ = ["MicArray", "list_presets", "load_array", "pair_tdoa", "pair_tdoa_jacobian"]
 
@@ -113,12 +113,14 @@ class MicArray:
         mics = as_float_array(require(data, "microphones", where), f"{where}: microphones",
                               shape=(None, 3))
         c = data.get("speed_of_sound", 343.0)
-        if isinstance(c, bool) or not isinstance(c, int | float):
-            raise ConfigError(f"{where}: speed_of_sound must be a number, got {c!r}")
+        if not is_real(c):  # (a numpy float was refused, NaN reached the array's own check)
+            raise ConfigError(f"{where}: speed_of_sound must be a finite number, got {c!r}")
         mask = data.get("mask")
         if mask is not None and not isinstance(mask, Mapping):
             raise ConfigError(f"{where}: mask must be a mapping")
-        name = str(data.get("name", Path(where).stem if where != "array" else "custom"))
+        name = data.get("name")  # (an empty "name:" named the array "None")
+        name = str(name) if name is not None else (
+            Path(where).stem if where != "array" else "custom")
         try:
             arr = cls(mics, float(c), name, mask)
         except GeometryError as exc:
@@ -322,6 +324,10 @@ def load_array(spec: str | Path | MicArray) -> MicArray:
     if isinstance(spec, MicArray):
         return spec
     s = str(spec)
+    if Path(s).is_dir():  # (a folder or a missing path read as an unknown preset name)
+        raise InputFileError(f"{s}: is a folder; expected an array YAML file or a preset name")
     if s.endswith((".yaml", ".yml")) or Path(s).is_file():
         return MicArray.from_yaml(s)
+    if "/" in s or "\\" in s:  # preset names have no folders
+        raise InputFileError(f"{s}: no such array file")
     return MicArray.from_preset(s)
