@@ -88,6 +88,10 @@ def test_bad_inputs():
         with pytest.raises(ConfigError, match="max_order"):
             normalize_room({"room_dim": [5, 4, 3], "rt60": 0.3, "max_order": bad})
     assert normalize_room({"room_dim": [5, 4, 3], "rt60": 0.3, "max_order": 3.0})["max_order"] == 3
+    # (float() read true as 1 s and "0.3" as 0.3 s before 2026-11-26; NaN and -1 passed here)
+    for bad in (True, "0.3", float("nan"), -1.0, [0.3]):
+        with pytest.raises(ConfigError, match="rt60"):
+            normalize_room({"room_dim": [5, 4, 3], "rt60": bad})
     with pytest.raises(ConfigError, match="too short"):
         simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1,
                            room={"room_dim": [30, 30, 10], "rt60": 0.05})

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.propagation import add_noise, simulate_free_field, simulate_room
 from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
-from hearsee.config import is_real, to_jsonable, whole_number
+from hearsee.config import finite_number, is_real, to_jsonable, whole_number
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 from hearsee.geometry import cart_to_sph
 
@@ -129,10 +129,8 @@ def normalize_room(room: Mapping[str, Any] | None) -> dict[str, Any] | None:
         raise GeometryError(
             f"room_dim must be three positive lengths in metres, got {dim.tolist()}"
         )
-    try:
-        rt60 = float(room["rt60"])
-    except (TypeError, ValueError):
-        raise ConfigError(f"room: rt60 must be a number of seconds, got {room['rt60']!r}") from None
+    # (float() read true as 1 s and "0.3" as 0.3 s; NaN reached the room simulation)
+    rt60 = finite_number("room: rt60 (seconds; 0 = anechoic)", room["rt60"], 0.0)
     at = room.get("array_at")
     out: dict[str, Any] = {
         "room_dim": dim.tolist(),
