@@ -167,7 +167,9 @@ def compute_disparity(
     uniqueness_ratio, speckle_window, speckle_range, pre_filter_cap : as in cv2.StereoSGBM.
     lr_check : "internal" (SGBM's own disp12MaxDiff check, free), "full" (match right-to-left
         too and keep pixels whose two disparities agree within ``lr_max_diff``; ~2x time) or
-        "none".
+        "none". ``lr_max_diff`` is in pixels of the matching resolution: with ``scale`` < 1
+        one low-resolution pixel is ``1 / scale`` full-resolution pixels (and the internal
+        check rounds it up to a whole pixel).
     pad_left : pad the images so the leftmost ``num_disparities`` columns get disparities.
     fill_holes : fill invalid pixels from the background (see the module docstring); the
         result is then dense.
