@@ -127,3 +127,8 @@ def test_write_image_unknown_format_is_an_image_input_error(tmp_path):
     with pytest.raises(ImageInputError, match=r"out\.txt.*\.txt"):
         write_image(tmp_path / "out.txt", _img())
     assert list(tmp_path.iterdir()) == []
+    # a folder where the file should go: a bare OSError (IsADirectoryError) before
+    (tmp_path / "taken.png").mkdir()
+    with pytest.raises(InputFileError, match="cannot write"):
+        write_image(tmp_path / "taken.png", _img())
+    assert (tmp_path / "taken.png").is_dir()

@@ -182,7 +182,10 @@ def write_image(path: str | Path, image: NDArray) -> Path:
         ok = False
     if not ok:
         raise ImageInputError(f"{p}: cannot encode the image as {p.suffix or '.png'}")
-    buf.tofile(str(p))
+    try:
+        buf.tofile(str(p))
+    except OSError as exc:  # (a folder of that name, no permission: a bare OSError before)
+        raise InputFileError(f"{p}: cannot write the image ({exc.strerror or exc})") from None
     return p
 
 
