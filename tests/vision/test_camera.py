@@ -404,3 +404,19 @@ def test_load_camera_which_on_a_single_camera_file(tmp_path):
     rig = tmp_path / "rig.yaml"
     save_rig(StereoRig.ideal(Camera.from_fov(60.0, 320, 240), 0.1), rig)
     assert load_camera(rig).width == 320 and load_camera(rig, "right").width == 320
+
+
+def test_rms_in_a_rig_file_must_be_a_number(tmp_path):
+    # a non-numeric rms_px escaped as a bare ValueError / TypeError (a traceback from
+    # `hearsee detect --calib`); a NaN or negative one was loaded as the rig's RMS error
+    cam = Camera.from_fov(60.0, 640, 480)
+    path = tmp_path / "rig.yaml"
+    save_rig(StereoRig(cam, cam, np.eye(3), [-0.1, 0.0, 0.0], rms_px=0.25), path)
+    text = path.read_text()
+    assert "rms_px: 0.25" in text
+    for bad in ("abc", "[0.2, 0.3]", ".nan", "-0.5", "true"):
+        path.write_text(text.replace("rms_px: 0.25", f"rms_px: {bad}"))
+        with pytest.raises(ConfigError, match=r"rig.yaml: rms_px must be a finite number"):
+            load_rig(path)
+    path.write_text(text)
+    assert load_rig(path).rms_px == pytest.approx(0.25)

@@ -679,6 +679,10 @@ class StereoRig:
             kw["R_thermal"] = as_float_array(require(th, "R", w), f"{w}: R", (3, 3))
             kw["T_thermal"] = as_float_array(require(th, "T", w), f"{w}: T").reshape(-1)
         rms = data.get("rms_px")
+        if rms is not None and not (is_real(rms) and rms >= 0):
+            # (a string escaped as a bare ValueError, a NaN was loaded as the RMS error)
+            raise ConfigError(f"{where}: rms_px must be a finite number of pixels >= 0 (the "
+                              f"stereo RMS reprojection error), got {rms!r}")
         info = data.get("info") or {}
         if not isinstance(info, dict):
             raise ConfigError(f"{where}: info must be a mapping")
