@@ -346,3 +346,22 @@ def test_detector_parameters_are_checked_when_made(kw, name):
     with pytest.raises(ConfigError, match=name):
         HumanDetectorParams(**kw)
     assert HumanDetectorParams(tm=1.0).tm == 1.0  # the documented range's ends stay allowed
+
+
+def test_head_shoulder_score_refuses_a_depth_focal_or_tau_that_is_not_positive():
+    """A zero depth or tau_m raised a bare ZeroDivisionError, a NaN depth a numpy ValueError,
+    and a negative depth or a NaN tau_m returned a score (0.65 for this box, or NaN) as if
+    the silhouette had been measured."""
+    box = _silhouette(False)
+    assert head_shoulder_score(box, 3.0, F)[0] < 0.5
+    for depth in (0.0, -3.0, np.nan, np.inf):
+        with pytest.raises(GeometryError, match="depth_m"):
+            head_shoulder_score(box, depth, F)
+    for f in (0.0, -F, np.nan):
+        with pytest.raises(CalibrationError, match="focal_px"):
+            head_shoulder_score(box, 3.0, f)
+    for tau in (0.0, -0.08, np.nan):
+        with pytest.raises(ConfigError, match="tau_m"):
+            head_shoulder_score(box, 3.0, F, tau_m=tau)
+    with pytest.raises(ImageInputError, match="mask"):
+        head_shoulder_score(box[0], 3.0, F)

@@ -582,7 +582,16 @@ def head_shoulder_score(mask: NDArray, depth_m: float, focal_px: float, *, tau_m
 
     Returns ``(score, params)`` with the best ``head_offset_m``, ``head_half_width_m``,
     ``shoulder_width_m``, ``shoulder_drop_m`` and ``chamfer_m``.
+
+    ``mask`` must be 2-D (ImageInputError), ``depth_m`` a finite number of metres > 0
+    (GeometryError), ``focal_px`` finite > 0 (CalibrationError), ``tau_m`` finite > 0
+    (ConfigError): a zero one divided by zero, a negative depth mirrored the template.
     """
+    if np.ndim(mask) != 2:
+        raise ImageInputError(f"mask must be a 2-D silhouette, got shape {np.shape(mask)}")
+    finite_number("depth_m", depth_m, 0.0, lo_open=True, error=GeometryError)
+    finite_number("focal_px", focal_px, 0.0, lo_open=True, error=CalibrationError)
+    finite_number("tau_m", tau_m, 0.0, lo_open=True)
     top = upper_contour(mask)
     if np.all(np.isnan(top)):
         return 0.0, {}
