@@ -365,3 +365,20 @@ def test_head_shoulder_score_refuses_a_depth_focal_or_tau_that_is_not_positive()
             head_shoulder_score(box, 3.0, F, tau_m=tau)
     with pytest.raises(ImageInputError, match="mask"):
         head_shoulder_score(box[0], 3.0, F)
+
+
+def _two_peaks() -> np.ndarray:
+    psi = np.zeros((12, 60))
+    psi[8, 40] = 0.8  # strong peak: column 40, disparity 8
+    psi[3, 10] = 0.5  # weaker peak: column 10, disparity 3
+    return psi
+
+
+def test_find_peaks_refuses_a_negative_or_nan_min_disparity():
+    """A negative min_disparity sliced rows from the END of Psi-hat (ps[:-2] = -inf): both
+    peaks below were silently lost; a NaN one raised a bare ValueError."""
+    want = [(40, 8, 0.8), (10, 3, 0.5)]
+    assert find_peaks(_two_peaks(), F, B, min_disparity=0.0) == want
+    for md in (-2.0, np.nan, np.inf):
+        with pytest.raises(ConfigError, match="min_disparity"):
+            find_peaks(_two_peaks(), F, B, min_disparity=md)

@@ -391,8 +391,11 @@ def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: f
                max_peaks: int = 12) -> list[tuple[int, int, float]]:
     """Greedy non-maximum suppression on Psi-hat: returns ``[(column, disparity, value)]``,
     strongest first. Around each peak, columns within ``person_width_m`` (scaled by ``d/B``)
-    and depths within ``depth_sep_m`` are suppressed."""
+    and depths within ``depth_sep_m`` are suppressed. Disparities below ``min_disparity``
+    (pixels, a finite number >= 0: a negative one used to cut rows from the far end, ConfigError)
+    are not searched."""
     check_focal_baseline(focal_px, baseline_m)
+    min_disparity = finite_number("min_disparity", min_disparity, 0.0)
     ps = np.array(psi, dtype=float, copy=True)
     nd, W = ps.shape
     ps[: int(np.ceil(min_disparity))] = -np.inf
