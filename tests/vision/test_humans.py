@@ -382,3 +382,12 @@ def test_find_peaks_refuses_a_negative_or_nan_min_disparity():
     for md in (-2.0, np.nan, np.inf):
         with pytest.raises(ConfigError, match="min_disparity"):
             find_peaks(_two_peaks(), F, B, min_disparity=md)
+
+
+def test_find_peaks_suppresses_a_peak_at_disparity_zero():
+    """At d = 0 the depth is infinite and |Z - Z[0]| is NaN, so the peak's own row was never
+    suppressed: with min_disparity = 0 the same peak came back max_peaks times."""
+    psi = _two_peaks()
+    psi[0, 25] = 0.9
+    got = find_peaks(psi, F, B, min_disparity=0.0, max_peaks=6)
+    assert got == [(25, 0, 0.9), (40, 8, 0.8), (10, 3, 0.5)]

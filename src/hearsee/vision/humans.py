@@ -411,7 +411,9 @@ def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: f
             break
         out.append((yi, di, float(v)))
         half = max(2, int(round(person_width_m * di / baseline_m)))
-        rows = np.abs(Z - Z[di]) < depth_sep_m
+        with np.errstate(invalid="ignore"):
+            rows = np.abs(Z - Z[di]) < depth_sep_m
+        rows[di] = True  # (at d = 0, inf - inf is NaN: the peak came back every time)
         ps[rows, max(0, yi - half): yi + half + 1] = -np.inf
     return out
 
