@@ -391,3 +391,24 @@ def test_find_peaks_suppresses_a_peak_at_disparity_zero():
     psi[0, 25] = 0.9
     got = find_peaks(psi, F, B, min_disparity=0.0, max_peaks=6)
     assert got == [(25, 0, 0.9), (40, 8, 0.8), (10, 3, 0.5)]
+
+
+def test_scale_adaptive_filter_refuses_mismatched_maps_and_bad_settings():
+    """An ``above`` map of another shape raised a bare IndexError, ``expected_rows`` of
+    another length or a 1-D P a bare ValueError; a NaN above_weight or kernel width gave an
+    all-zero (or garbage) Psi-hat: nobody found, no error."""
+    d = 20
+    P = _blob_P(int(0.4 * d / B), d, 100, W=260)
+    rows = np.full(40, 50.0)
+    ok = scale_adaptive_filter(P, F, B, expected_rows=rows, above=np.zeros_like(P))
+    assert ok.max() > 0.8
+    with pytest.raises(ImageInputError, match="above"):
+        scale_adaptive_filter(P, F, B, above=P[:-1])
+    with pytest.raises(ImageInputError, match="expected_rows"):
+        scale_adaptive_filter(P, F, B, expected_rows=rows[:-5])
+    with pytest.raises(ImageInputError, match="P"):
+        scale_adaptive_filter(P[0], F, B)
+    for kw in ({"above_weight": np.nan}, {"above_weight": -1.0}, {"person_width_m": np.nan},
+               {"surround_m": 0.0}, {"depth_band_m": np.inf}):
+        with pytest.raises(ConfigError, match=next(iter(kw))):
+            scale_adaptive_filter(P, F, B, expected_rows=rows, above=np.zeros_like(P), **kw)

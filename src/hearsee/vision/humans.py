@@ -348,10 +348,25 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
        at 0 -- 2. divide by ``expected_rows[d]`` (rows a standing person covers at ``d``; 1 if
        not given), 3. centre mean over ``person_width_m * d / B`` columns minus the smaller of
        the two surround means (each ``surround_m * d / B`` columns). Returns ``(n_d, W)``.
+
+    ImageInputError when ``P`` is not 2-D, ``above`` not of its shape or ``expected_rows`` not
+    ``(n_d,)``; ConfigError for an ``above_weight`` or ``depth_band_m`` that is not a finite
+    number >= 0, or a kernel width that is not finite > 0.
     """
     check_focal_baseline(focal_px, baseline_m)
     P = np.asarray(P, dtype=np.float64)
+    if P.ndim != 2:
+        raise ImageInputError(f"P must be a (n_d, W) map of counts, got shape {P.shape}")
     nd, W = P.shape
+    above_weight = finite_number("above_weight", above_weight, 0.0)
+    depth_band_m = finite_number("depth_band_m", depth_band_m, 0.0)
+    person_width_m = finite_number("person_width_m", person_width_m, 0.0, lo_open=True)
+    surround_m = finite_number("surround_m", surround_m, 0.0, lo_open=True)
+    if above is not None and np.shape(above) != P.shape:
+        raise ImageInputError(f"above must have P's shape {P.shape}, got {np.shape(above)}")
+    if expected_rows is not None and np.shape(expected_rows) != (nd,):
+        raise ImageInputError(f"expected_rows must have one value per disparity ({nd},), got "
+                              f"shape {np.shape(expected_rows)}")
     d = np.arange(nd, dtype=float)
     band = np.maximum(1, np.rint(d * d * depth_band_m / (focal_px * baseline_m))).astype(int)
     cs = np.vstack([np.zeros((1, W)), np.cumsum(P, axis=0)])
