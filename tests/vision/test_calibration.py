@@ -422,3 +422,30 @@ def test_find_corners_upscale_must_be_a_positive_integer(synthetic):
             C.find_corners(img, PATTERN, upscale=bad)
     c = C.find_corners(img, PATTERN, upscale=np.int64(1))
     assert c is not None and np.all(np.isfinite(c))
+
+
+def test_thermal_extrinsics_refuse_views_that_do_not_match():
+    """Fewer right views than left ones raised a bare IndexError, a view with another number
+    of corners than the board a cv2.error from solvePnP; exact synthetic views still give the
+    thermal camera's known position."""
+    cam = Camera.from_fov(60.0, 320, 240)
+    th = Camera.from_fov(40.0, 160, 120)
+    rig = StereoRig.ideal(cam, 0.1, thermal=th, thermal_offset_m=(0.05, 0.04, 0.0))
+    obj = C.board_points(PATTERN, SQUARE)
+    rng = np.random.default_rng(1)
+    lp, rp, tp = [], [], []
+    for _ in range(5):
+        X = obj @ cv2.Rodrigues(rng.uniform(-0.4, 0.4, 3))[0].T + np.array([-0.1, -0.06, 0.5])
+        lp.append(cam.project(X))
+        rp.append(rig.right.project(rig.left_to_right(X)))
+        tp.append(rig.project_thermal(X))
+    te = C.calibrate_thermal_extrinsics(rig, th, lp, tp, obj, right_points=rp)
+    np.testing.assert_allclose(-te.R.T @ te.T, [0.05, 0.04, 0.0], atol=1e-6)
+    with pytest.raises(CalibrationError, match="right views"):
+        C.calibrate_thermal_extrinsics(rig, th, lp, tp, obj, right_points=rp[:3])
+    for which in ("left", "thermal", "right"):
+        pts = {"left": list(lp), "thermal": list(tp), "right": list(rp)}
+        pts[which][1] = pts[which][1][:20]
+        with pytest.raises(CalibrationError, match=f"{which} view 1 has 20 corners"):
+            C.calibrate_thermal_extrinsics(rig, th, pts["left"], pts["thermal"], obj,
+                                           right_points=pts["right"])

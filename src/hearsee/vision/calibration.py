@@ -510,6 +510,8 @@ def calibrate_thermal_extrinsics(rig: StereoRig, thermal: Camera,
     n = len(left_points)
     if len(thermal_points) != n:
         raise CalibrationError(f"{n} left views but {len(thermal_points)} thermal views")
+    if right_points is not None and len(right_points) != n:
+        raise CalibrationError(f"{n} left views but {len(right_points)} right views")
     obj = np.asarray(object_points, np.float64).reshape(-1, 3)
     views, Rs, Ts, X_all = [], [], [], []
     for i in range(n):
@@ -517,6 +519,12 @@ def calibrate_thermal_extrinsics(rig: StereoRig, thermal: Camera,
         if lp is None or tp is None:
             continue
         rp = right_points[i] if right_points is not None else None
+        for side, pts in (("left", lp), ("thermal", tp), ("right", rp)):
+            if pts is not None and np.size(pts) != 2 * len(obj):
+                raise CalibrationError(
+                    f"{side} view {i} has {np.size(pts) // 2} corners but the board "
+                    f"{len(obj)}: corners and object points must be of the same board"
+                )
         if rp is not None:
             X = _triangulate(rig, lp, rp)
         else:
