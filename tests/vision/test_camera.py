@@ -420,3 +420,26 @@ def test_rms_in_a_rig_file_must_be_a_number(tmp_path):
             load_rig(path)
     path.write_text(text)
     assert load_rig(path).rms_px == pytest.approx(0.25)
+
+
+def test_rig_from_opencv_refuses_nodes_that_are_not_matrices(tmp_path):
+    """A D2 or T node holding a plain number or a string raised a bare AttributeError
+    ('float' object has no attribute 'ravel')."""
+    intr, extr = tmp_path / "intrinsics.yml", tmp_path / "extrinsics.yml"
+
+    def write(path, **nodes):
+        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
+        for k, v in nodes.items():
+            fs.write(k, v)
+        fs.release()
+
+    write(intr, M1=K, D1=np.zeros((1, 5)), M2=K, D2=np.zeros((1, 5)))
+    write(extr, R=np.eye(3), T=np.array([[-0.1], [0.0], [0.0]]))
+    assert rig_from_opencv(intr, extr, (640, 480)).baseline_m == pytest.approx(0.1)
+    write(intr, M1=K, D1=np.zeros((1, 5)), M2=K, D2=0.0)
+    with pytest.raises(ConfigError, match="D2"):
+        rig_from_opencv(intr, extr, (640, 480))
+    write(intr, M1=K, D1=np.zeros((1, 5)), M2=K, D2=np.zeros((1, 5)))
+    write(extr, R=np.eye(3), T="abc")
+    with pytest.raises(ConfigError, match="'T'"):
+        rig_from_opencv(intr, extr, (640, 480))

@@ -867,6 +867,12 @@ def rig_from_opencv(intrinsics: str | Path, extrinsics: str | Path,
     converts it to metres (0.001 for millimetres)."""
     a = read_opencv_yaml(intrinsics)
     b = read_opencv_yaml(extrinsics)
+    for src, path, keys in ((a, intrinsics, ("M1", "D1", "M2", "D2")), (b, extrinsics, ("R", "T"))):
+        for k in keys:
+            if k in src and not isinstance(src[k], np.ndarray):
+                # (a number or a string raised a bare AttributeError on .ravel())
+                raise ConfigError(f"{path}: {k!r} must be a matrix (!!opencv-matrix), got "
+                                  f"{src[k]!r}")
     cams = []
     for src, keys in ((a, ("M1", "D1")), (a, ("M2", "D2"))):
         for k in keys:
