@@ -412,3 +412,16 @@ def test_scale_adaptive_filter_refuses_mismatched_maps_and_bad_settings():
                {"surround_m": 0.0}, {"depth_band_m": np.inf}):
         with pytest.raises(ConfigError, match=next(iter(kw))):
             scale_adaptive_filter(P, F, B, expected_rows=rows, above=np.zeros_like(P), **kw)
+
+
+def test_floor_plane_refuses_a_normal_that_is_not_a_unit_up_vector():
+    """A FloorPlane passed to detect_candidates with a non-unit normal scaled every height
+    (|n| = 2: a 0.9 m box measured 1.8 m tall), a downward one turned heights upside down, a
+    NaN one made every height NaN -- all silently."""
+    pts = np.array([[0.0, 1.2 - 0.9, 3.0]])  # the top of a 0.9 m box, camera 1.2 m high
+    assert FloorPlane(np.array([0.0, -1.0, 0.0]), 1.2).height(pts)[0] == pytest.approx(0.9)
+    for normal, offset in (([0.0, -2.0, 0.0], 1.2), ([0.0, 1.0, 0.0], 1.2),
+                           ([np.nan, -1.0, 0.0], 1.2), ([0.0, -1.0], 1.2),
+                           ([0.0, -1.0, 0.0], np.nan)):
+        with pytest.raises(GeometryError, match="FloorPlane"):
+            FloorPlane(np.asarray(normal), offset)

@@ -187,6 +187,19 @@ class FloorPlane:
     offset: float
     source: str = "prior"
 
+    def __post_init__(self) -> None:
+        """GeometryError unless ``normal`` is a finite unit vector pointing up (``-y``
+        component > 0) and ``offset`` finite: any other scaled, inverted or NaN'd every height
+        silently."""
+        n = np.asarray(self.normal, dtype=float)
+        if (n.shape != (3,) or not np.all(np.isfinite(n)) or abs(np.linalg.norm(n) - 1.0) > 1e-6
+                or not n[1] < 0):
+            raise GeometryError(f"FloorPlane: normal must be the unit 'up' vector in the optical "
+                                f"frame (about (0, -1, 0), y down), got {self.normal!r}")
+        if not is_real(self.offset):
+            raise GeometryError(f"FloorPlane: offset (camera height, metres) must be finite, "
+                                f"got {self.offset!r}")
+
     @classmethod
     def level(cls, camera_height_m: float) -> FloorPlane:
         """The floor of a level camera ``camera_height_m`` metres (finite, > 0) above it."""
