@@ -572,8 +572,11 @@ def _window(window: str | tuple, frame_len: int) -> NDArray:
 
 
 #: recordings whose largest |sample| exceeds this are scaled to a peak of 1 first (float files
-#: have no full scale; squared in single precision, samples of ~1e19 and more overflow)
-_MAX_PEAK = 1e12
+#: have no full scale). SCOT's G_ii G_jj, ML's |G|^2 and the frames' norms are *fourth* powers
+#: of a frame's spectrum (|X| up to ~peak x frame length): in single precision they overflowed
+#: from peaks of ~1e7 (64 ms frames; raw 32-bit PCM is 2e9) and, with 10 s frames at 48 kHz,
+#: between 1e4 and 1e5. Raw 16-bit PCM (3e4) is scaled too; the results are scale-free
+_MAX_PEAK = 1e3
 #: ... and those whose peak is below this (a float file at 1e-15 gave no estimate: its
 #: single-precision powers fell under the spectra's floor). 24-bit PCM's smallest step is 1.2e-7
 _MIN_PEAK = 1e-6
@@ -1296,8 +1299,8 @@ def estimate_tdoas(
     prs = arr.checked_pairs(pairs)
     if joint == "steered":
         _check_steered(arr, source_in_plane, steer_range_m)
-    if peak > _MAX_PEAK or 0 < peak < _MIN_PEAK:  # (float32 powers overflow above ~1e19 and
-        a = a / peak  # vanish below ~1e-19; every test here is scale-free)
+    if peak > _MAX_PEAK or 0 < peak < _MIN_PEAK:  # (float32 fourth powers of the spectra
+        a = a / peak  # overflow, tiny powers vanish; every test here is scale-free)
     # single precision from here on: twice as fast, and its ~1e-7 relative error is far below
     # any sensor noise
     a32 = a.astype(np.float32)
