@@ -681,3 +681,19 @@ def test_int32_scale_samples_do_not_overflow_the_spectral_products(recording, th
         tf = estimate_tdoas(x * (2.0**31 / np.max(np.abs(x))), FS, three, method=method)
     np.testing.assert_array_equal(tf.valid, ref.valid)
     np.testing.assert_allclose(tf.summary_tdoa_s, ref.summary_tdoa_s, atol=1e-3 / FS)
+
+
+@pytest.mark.parametrize("kw, name", [({"smooth_frames": -1}, "smooth_frames"),
+                                      ({"smooth_frames": np.nan}, "smooth_frames"),
+                                      ({"chunk_frames": np.nan}, "chunk_frames"),
+                                      ({"summary_upsample": np.nan}, "summary_upsample"),
+                                      ({"vad_db": np.nan}, "vad_db"),
+                                      ({"reverb_coherence": np.nan, "reverb_method": "phat"},
+                                       "reverb_coherence")])
+def test_estimate_tdoas_refuses_bad_counts_and_thresholds(three, recording, kw, name):
+    """A negative smooth_frames (ML, SCOT, ROTH) sliced the frames' statistics from the wrong
+    end (IndexError), a NaN one or a NaN chunk_frames raised int()'s ValueError, and a NaN
+    vad_db, reverb_coherence or summary_upsample silently switched their test off."""
+    x, _ = recording
+    with pytest.raises(ConfigError, match=name):
+        estimate_tdoas(x, FS, three, method="ml", **kw)

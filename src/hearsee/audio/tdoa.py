@@ -72,7 +72,7 @@ from scipy.ndimage import uniform_filter1d
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.localize import _inplane_tdoa, array_geometry
 from hearsee.audio.signals import check_fs
-from hearsee.config import finite_number
+from hearsee.config import finite_number, whole_number
 from hearsee.errors import AudioInputError, ConfigError
 from hearsee.geometry import fibonacci_sphere
 
@@ -1296,6 +1296,13 @@ def estimate_tdoas(
     first_arrival = finite_number("first_arrival", first_arrival, 0.0, 1.0)
     min_confidence = finite_number("min_confidence", min_confidence, 0.0)
     margin_samples = finite_number("margin_samples", margin_samples, 0.0)
+    # (a negative smooth_frames sliced the statistics' halo from the wrong end; NaN thresholds
+    # switched their tests off)
+    smooth_frames = whole_number("smooth_frames", smooth_frames)
+    chunk_frames = whole_number("chunk_frames", chunk_frames)
+    summary_upsample = whole_number("summary_upsample", summary_upsample)
+    vad_db = finite_number("vad_db", vad_db, 0.0)
+    reverb_coherence = finite_number("reverb_coherence", reverb_coherence, 0.0)
     prs = arr.checked_pairs(pairs)
     if joint == "steered":
         _check_steered(arr, source_in_plane, steer_range_m)
