@@ -288,3 +288,20 @@ def test_locus_plots_refuse_degenerate_input():
     for ranges in ([np.nan, 1.0], [-1.0, 1.0], []):
         with pytest.raises(GeometryError, match="ranges_m"):
             three_mic_curve(t, three, ranges_m=ranges)
+
+
+@pytest.mark.parametrize("kw", [{"band_hz": (300.0, 3500.0)}, {"reverb_method": "phat"},
+                                {"r_std_s": 1e-4}, {"pairs": [(1, 0)]}])
+def test_localize_recording_refuses_options_a_masked_array_would_ignore(kw):
+    """A masked array goes through the mask's own pipeline, which took none of these: a band,
+    a reverberation weighting, Kalman noises or pairs were dropped without a word (the
+    answer silently the default one). None values (the CLI's defaults) still pass."""
+    from hearsee.errors import ConfigError
+
+    mask = MicArray.from_preset("mask2")
+    x = white_noise(0.3, 16000, 7)
+    x = np.stack([x, np.roll(x, 2)])
+    with pytest.raises(ConfigError, match="mask"):
+        localize_recording(x, 16000, mask, **kw)
+    doc = localize_recording(x, 16000, mask, reverb_method=None, in_plane=False)
+    assert doc["frames"]

@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array, pair_tdoa
 from hearsee.config import finite_number, is_real
-from hearsee.errors import GeometryError
+from hearsee.errors import ConfigError, GeometryError
 from hearsee.geometry import wrap_deg
 
 __all__ = [
@@ -793,6 +793,13 @@ def localize_recording(
     arr = load_array(array)
     if arr.mask is not None:  # masked two-microphone array: one 360-degree azimuth (ch. 3)
         from hearsee.audio.mask import localize_recording_mask
+
+        # (its pipeline takes none of these: they were dropped without a word)
+        ignored = sorted(k for k, v in {"pairs": pairs, "q_std_s": q_std_s, "r_std_s": r_std_s,
+                                        **tdoa_kwargs}.items() if v is not None)
+        if ignored:
+            raise ConfigError(f"{', '.join(ignored)}: not available for the masked array "
+                              f"{arr.name!r} (its mask pipeline sets its own); leave them out")
 
         return localize_recording_mask(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
                                        method=method, kalman=kalman, progress=progress)
