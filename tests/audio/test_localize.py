@@ -305,3 +305,23 @@ def test_localize_recording_refuses_options_a_masked_array_would_ignore(kw):
         localize_recording(x, 16000, mask, **kw)
     doc = localize_recording(x, 16000, mask, reverb_method=None, in_plane=False)
     assert doc["frames"]
+
+
+def test_volume_solvers_refuse_a_bad_start_or_loss():
+    """A NaN, short or non-numeric start position raised scipy's or numpy's ValueError
+    ("Initial guess is outside of provided bounds", a broadcast error), an unknown loss
+    scipy's ValueError."""
+    from hearsee.audio.localize import far_field_volume
+    from hearsee.errors import ConfigError
+
+    arr = MicArray(np.vstack([THREE.positions, [[0.0, 0.0, 0.12]], [[0.02, 0.03, -0.1]]]))
+    tau = arr.tdoa(np.array([1.0, 0.6, 0.4]))
+    for x0 in ([np.nan, 0.0, 0.0], [1.0, 0.0], "abc"):
+        with pytest.raises(GeometryError, match="x0"):
+            near_field_position(tau, arr, x0=x0)
+    with pytest.raises(ConfigError, match="loss"):
+        near_field_position(tau, arr, loss="bogus")
+    with pytest.raises(ConfigError, match="loss"):
+        far_field_volume(tau, arr, loss="bogus")
+    p, _ = near_field_position(tau, arr, x0=(1, 0, 0), loss="huber")  # ints and a tuple pass
+    np.testing.assert_allclose(p, [1.0, 0.6, 0.4], atol=1e-4)

@@ -179,6 +179,18 @@ def _tdoas(tdoa_s: ArrayLike, prs: list[tuple[int, int]], tol_s: float) -> NDArr
     return tau
 
 
+#: The robust losses of scipy.optimize.least_squares (the volume solvers' ``loss``).
+_LOSSES = ("linear", "huber", "soft_l1", "cauchy", "arctan")
+
+
+def _check_loss(loss: Any) -> None:
+    """ConfigError unless ``loss`` is one of :data:`_LOSSES` or a callable (scipy raised its
+    own ValueError)."""
+    if not (callable(loss) or (isinstance(loss, str) and loss in _LOSSES)):
+        raise ConfigError(f"loss must be one of {', '.join(_LOSSES)} (or a callable), "
+                          f"got {loss!r}")
+
+
 def _design(array: MicArray, prs: list[tuple[int, int]]) -> NDArray:
     """Rows ``-(M_i - M_j) / c`` so that ``A @ u = tdoa`` in the far field."""
     p = array.positions
@@ -323,6 +335,7 @@ def far_field_volume(tdoa_s: ArrayLike, array: MicArray,
 
     prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
+    _check_loss(loss)
     A = _design(array, prs)
     if np.linalg.matrix_rank(A, tol=1e-9 * np.abs(A).max()) < 3:
         raise GeometryError("the pairs given do not span 3D (need three independent pairs)")
@@ -361,6 +374,16 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray,
 
     prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
+    _check_loss(loss)
+    if x0 is not None:  # (scipy's or numpy's ValueError for NaN, short or text starts)
+        try:
+            start = np.asarray(x0, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            start = np.full(0, np.nan)
+        if start.shape != (3,) or not np.all(np.isfinite(start)):
+            raise GeometryError(f"x0 must be a finite [x, y, z] start position in metres, "
+                                f"got {x0!r}")
+        x0 = start
     pos = array.positions
     c = array.speed_of_sound
     I = np.array([p[0] for p in prs])
