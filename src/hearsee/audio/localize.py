@@ -583,8 +583,8 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
         TDOA consistency tolerance in seconds (residual above it -> ``feasible=False``).
     near_field : bool
         For volume arrays (>= 4 non-coplanar microphones) also estimate ``position_m``; for
-        planar arrays with ``in_plane``, fit azimuth and range jointly
-        (:func:`near_field_in_plane`).
+        planar arrays with ``in_plane``, model the spherical wavefront of a source at the
+        assumed range of :func:`near_field_in_plane` (2 m; the range is not fitted).
     in_plane : bool
         The caller knows the source lies in the plane of a planar array (e.g. the three-mic
         preset and a speaker at its height; the ``dim=2`` assumption of pyroomacoustics' DOA).
