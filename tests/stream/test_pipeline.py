@@ -76,6 +76,38 @@ def test_framer_matches_offline_framing_and_marks_gaps():
     assert fr.n_late == 1
 
 
+@pytest.mark.parametrize("frame_ms, hop_ms, block, drop", [
+    (64, 32, 100, (5,)),   # blocks shorter than the hop, one dropped
+    (32, 64, 256, ()),     # hop longer than the frame, no drop at all
+    (32, 64, 300, ()),
+])
+def test_framer_keeps_blocks_shorter_than_the_skip_to_the_next_frame(frame_ms, hop_ms, block,
+                                                                    drop):
+    """When the next frame starts beyond the buffered samples (after a gap, or with a hop
+    longer than the frame), the following contiguous blocks are still used: every frame that
+    touches no dropped sample is complete and equals the offline framing."""
+    x = np.arange(2 * 16000, dtype=float).reshape(2, 16000)
+    fr = Framer(2, FS, frame_ms, hop_ms)
+    L, H = fr.frame_len, fr.hop
+    lost = [(s * block, (s + 1) * block) for s in drop]
+    starts = np.arange(0, 16000 - L + 1, H)
+    want_missing = np.array([any(a < s0 + L and s0 < b for a, b in lost) for s0 in starts])
+    src = DropoutSource(ArraySource(x, FS, block_len=block), drop=drop)
+    ts, miss, frames = [], [], []
+    for blk in src.blocks():
+        b = fr.push(blk)
+        if b is not None:
+            ts.append(b.t)
+            miss.append(b.missing)
+            if b.segment is not None:
+                frames.append(frame_signals(b.segment, L, H)[:, :int((~b.missing).sum())])
+    np.testing.assert_allclose(np.concatenate(ts), (starts + L / 2) / FS)
+    np.testing.assert_array_equal(np.concatenate(miss), want_missing)
+    ref = frame_signals(x, L, H)[:, ~want_missing]
+    np.testing.assert_array_equal(np.concatenate(frames, axis=1), ref)
+    assert fr.n_late == 0 and fr.n_dropped == len(drop)
+
+
 def test_file_stream_tracks_a_moving_source(moving):
     arr, traj, y = moving
     pipe = StreamPipeline(arr, StreamConfig(frame_ms=64, hop_ms=32))

@@ -541,7 +541,10 @@ class Framer:
             segment = self.buf[:, off: off + self.frame_len + (k - 1) * self.hop]
             ok_t = (self.next_frame + np.arange(k) * self.hop + self.frame_len / 2.0) / self.fs
             self.next_frame += k * self.hop
-        keep = max(self.next_frame - self.buf_start, 0)
+        # drop the samples before the next frame -- but never more than are held: when the next
+        # frame starts beyond them (after a gap, or a hop longer than the frame) the buffer ends
+        # where the received samples end, so that the next contiguous block is not taken as late
+        keep = min(max(self.next_frame - self.buf_start, 0), self.buf.shape[1])
         if keep:
             self.buf = self.buf[:, keep:]
             self.buf_start += keep
