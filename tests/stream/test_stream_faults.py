@@ -458,3 +458,40 @@ def test_array_source_refuses_a_bad_rate_or_block():
             ArraySource(x, fs)
     with pytest.raises(ConfigError, match="block_len"):
         ArraySource(x, 16000, block_len=float("nan"))
+
+
+@pytest.mark.parametrize("kw, err, msg", [
+    ({"fs": 0.0}, AudioInputError, "sample rate"),  # ZeroDivisionError in the stream
+    ({"fs": -16000.0}, AudioInputError, "sample rate"),  # 'frame too short'
+    ({"duration_s": float("nan")}, ConfigError, "duration"),  # ValueError (int(nan))
+    ({"duration_s": -1.0}, ConfigError, "duration"),  # one block, then 'ok'
+    ({"block_len": 0}, ConfigError, "block_len"),  # ZeroDivisionError on an overflow
+    ({"timeout_s": float("nan")}, ConfigError, "timeout_s"),
+    ({"queue_size": 0}, ConfigError, "queue_size"),  # an unbounded queue
+])
+def test_device_source_refuses_bad_settings(monkeypatch, kw, err, msg):
+    """DeviceSource checked none of its numbers: each of these raised a builtin exception (or
+    ran wrongly) only once the stream ran."""
+    monkeypatch.setitem(sys.modules, "sounddevice", _fake_portaudio([4]))
+    with pytest.raises(err, match=msg):
+        pl.DeviceSource(0, 3, **{"fs": FS, "block_len": BL, "timeout_s": 0.05, **kw})
+
+
+def test_device_source_infinite_duration_runs_until_the_device_stops(monkeypatch):
+    """duration_s=inf (``hearsee track --duration inf``) means no limit, as None does (it raised
+    an OverflowError)."""
+    src = _device(monkeypatch, _fake_portaudio([6]), duration_s=float("inf"))
+    assert len(list(src.blocks())) == 6 and src.stalled
+
+
+@pytest.mark.parametrize("args", [["--fs", "0"], ["--duration", "nan"], ["--duration", "-1"]])
+def test_track_cli_bad_live_settings_are_one_line(monkeypatch, capsys, args):
+    """`hearsee track --device 0 --fs 0` was a ZeroDivisionError traceback, `--duration nan`
+    a ValueError one; now one line on stderr and exit 2."""
+    from hearsee.cli import main
+
+    monkeypatch.setitem(sys.modules, "sounddevice", _fake_portaudio([4]))
+    monkeypatch.setattr(pl, "DeviceSource", functools.partial(pl.DeviceSource, timeout_s=0.05))
+    assert main(["track", "--device", "0", "--array", "three-mic", *args]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and len(cap.err.strip().splitlines()) == 1

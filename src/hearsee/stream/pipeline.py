@@ -78,7 +78,7 @@ from hearsee.audio.tracking import (
     DirectionKalman,
     MotionKalman,
 )
-from hearsee.config import is_real
+from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import AudioInputError, ConfigError, EstimationError
 from hearsee.geometry import wrap_deg
 
@@ -321,7 +321,7 @@ class DeviceSource:
     block_len : int
         Samples per callback block.
     duration_s : float or None
-        Stop after this much audio (None: until interrupted or the device stalls).
+        Stop after this much audio (None or inf: until interrupted or the device stalls).
     queue_size : int
         Bounded queue between the audio callback and the pipeline; a full queue drops the block
         (counted in :attr:`n_dropped`) -- the callback never blocks.
@@ -351,6 +351,16 @@ class DeviceSource:
     def __init__(self, device: int | str | None, n_channels: int, fs: float = 16000.0,
                  block_len: int = 1024, duration_s: float | None = None, queue_size: int = 32,
                  timeout_s: float = 2.0) -> None:
+        # (unchecked, a rate of 0 divided by zero in the stream, a NaN duration or a block of 0
+        # samples raised builtin errors only once the stream ran; inf seconds = no limit)
+        fs = check_fs(fs)
+        block_len = whole_number("block_len", block_len)
+        queue_size = whole_number("queue_size", queue_size)
+        timeout_s = finite_number("timeout_s", timeout_s, 0.0, lo_open=True)
+        if duration_s is not None and duration_s == math.inf:
+            duration_s = None
+        if duration_s is not None:
+            duration_s = finite_number("duration_s", duration_s, 0.0, lo_open=True)
         sd = _import_sounddevice()
         try:
             info = sd.query_devices(device, "input")
