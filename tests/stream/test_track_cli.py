@@ -221,3 +221,34 @@ def test_track_in_plane_option(scene, capsys):
     t = np.array([r["t"] for r in rows])
     az = np.array([r["azimuth_deg"] for r in rows], dtype=float)
     assert np.median(np.abs(wrap_deg(az - direction_deg(scene["traj"].at(t))[0]))[5:]) < 3.0
+
+
+def test_hog_detector_on_frames_smaller_than_its_window(scene, tmp_path):
+    """A video smaller than the HOG person window (64 x 128 px, 8 px padding), e.g. an 80 x 60
+    camera, crashed the process inside OpenCV (segmentation fault / heap corruption) or raised
+    cv2.error: no person fits such a frame, so nobody is found. Run in a subprocess, since the
+    old code killed the interpreter."""
+    import subprocess
+    import sys
+
+    import cv2
+
+    path = tmp_path / "small.avi"
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (80, 60))
+    for _ in range(16):
+        w.write(np.full((60, 80, 3), 90, np.uint8))
+    w.release()
+    code = (
+        "import sys, numpy as np\n"
+        "from hearsee.cli import main\n"
+        "from hearsee.stream.video import detect_source_point as d\n"
+        "for s in [(60, 80, 3), (20, 20, 3), (1, 1), (64, 32, 3), (111, 300), (300, 47)]:\n"
+        "    assert d(np.zeros(s, np.uint8), 'hog') is None, s\n"
+        f"sys.exit(main(['track', {str(scene['wav'])!r}, '--array', {str(scene['array'])!r},"
+        f" '--camera', {str(scene['cam'])!r}, '--video', {str(path)!r}, '--detector', 'hog']))\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    rows = [json.loads(s) for s in r.stdout.strip().splitlines()]
+    assert rows and all(row["position_m"] is None for row in rows)
+

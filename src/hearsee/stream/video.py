@@ -108,7 +108,8 @@ _DETECTORS: dict[str, Any] = {}
 
 
 def detect_source_point(image: NDArray, detector: str = "hog") -> tuple[float, float] | None:
-    """Pixel of a speaking person in a BGR or grey image, or None when nobody is found.
+    """Pixel of a speaking person in a BGR or grey image, or None when nobody is found (also
+    in a frame too small for a person).
 
     ``detector="hog"``: OpenCV HOG people detector, point 12 % down the strongest box (head);
     ``detector="face"``: Haar frontal-face cascade from ``cv2.data``, point 65 % down the
@@ -125,7 +126,14 @@ def detect_source_point(image: NDArray, detector: str = "hog") -> tuple[float, f
             hog = cv2.HOGDescriptor()
             hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
             _DETECTORS["hog"] = hog
-        boxes, weights = hog.detectMultiScale(img, winStride=(8, 8), padding=(8, 8), scale=1.05)
+        pad = 8
+        win_w, win_h = hog.winSize
+        if img.shape[0] + 2 * pad < win_h or img.shape[1] + 2 * pad < win_w:
+            # no person window fits the padded frame; OpenCV would read and write past its
+            # buffers (a segmentation fault or heap corruption on an 80 x 60 frame)
+            return None
+        boxes, weights = hog.detectMultiScale(img, winStride=(8, 8), padding=(pad, pad),
+                                              scale=1.05)
         if len(boxes) == 0:
             return None
         x, y, w, h = boxes[int(np.argmax(np.ravel(weights)))]
