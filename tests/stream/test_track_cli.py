@@ -252,3 +252,17 @@ def test_hog_detector_on_frames_smaller_than_its_window(scene, tmp_path):
     rows = [json.loads(s) for s in r.stdout.strip().splitlines()]
     assert rows and all(row["position_m"] is None for row in rows)
 
+
+@pytest.mark.parametrize("detector", ["hog", "face"])
+def test_detect_source_point_takes_grey_bgr_and_refuses_other_images(detector):
+    """A float, 16-bit or 2-channel image raised cv2.error (not an ImageInputError); a grey
+    image given as (h, w, 1) failed in the face detector, a BGRA one in the HOG detector."""
+    from hearsee.errors import ImageInputError
+    from hearsee.stream.video import detect_source_point
+
+    for shape in [(160, 120), (160, 120, 1), (160, 120, 3), (160, 120, 4)]:
+        assert detect_source_point(np.full(shape, 90, np.uint8), detector) is None
+    for img in [np.zeros((160, 120)), np.zeros((160, 120, 3), np.uint16),
+                np.zeros((160, 120, 2), np.uint8)]:
+        with pytest.raises(ImageInputError):
+            detect_source_point(img, detector)

@@ -108,8 +108,8 @@ _DETECTORS: dict[str, Any] = {}
 
 
 def detect_source_point(image: NDArray, detector: str = "hog") -> tuple[float, float] | None:
-    """Pixel of a speaking person in a BGR or grey image, or None when nobody is found (also
-    in a frame too small for a person).
+    """Pixel of a speaking person in a BGR or grey 8-bit image (``(h, w, 1)`` grey and BGRA
+    accepted too), or None when nobody is found (also in a frame too small for a person).
 
     ``detector="hog"``: OpenCV HOG people detector, point 12 % down the strongest box (head);
     ``detector="face"``: Haar frontal-face cascade from ``cv2.data``, point 65 % down the
@@ -118,8 +118,12 @@ def detect_source_point(image: NDArray, detector: str = "hog") -> tuple[float, f
     import cv2
 
     img = np.asarray(image)
-    if img.ndim not in (2, 3) or img.size == 0:
+    if img.ndim == 3 and img.shape[2] in (1, 4):  # grey as (h, w, 1); BGRA: the alpha dropped
+        img = img[:, :, 0] if img.shape[2] == 1 else np.ascontiguousarray(img[:, :, :3])
+    if img.ndim not in (2, 3) or img.size == 0 or (img.ndim == 3 and img.shape[2] != 3):
         raise ImageInputError(f"expected a 2-D grey or 3-channel image, got shape {img.shape}")
+    if img.dtype != np.uint8:  # (OpenCV's detectors take 8-bit images only: cv2.error)
+        raise ImageInputError(f"expected an 8-bit (uint8) image, got {img.dtype}")
     if detector == "hog":
         hog = _DETECTORS.get("hog")
         if hog is None:
