@@ -495,3 +495,21 @@ def test_track_cli_bad_live_settings_are_one_line(monkeypatch, capsys, args):
     assert main(["track", "--device", "0", "--array", "three-mic", *args]) == 2
     cap = capsys.readouterr()
     assert cap.out == "" and len(cap.err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("kw", [{"stall_timeout_s": -1.0}, {"stall_timeout_s": float("nan")},
+                                {"max_stall_s": float("nan")}, {"max_stall_s": 0.0},
+                                {"queue_size": 0}, {"queue_size": -1}])
+def test_stream_pipeline_refuses_bad_stall_and_queue_settings(kw):
+    """A negative stall_timeout_s raised queue's ValueError in a threaded run, a NaN
+    max_stall_s never ended a run on a silent source, a queue_size <= 0 made the bounded queue
+    unbounded: ConfigError when the pipeline is made."""
+    with pytest.raises(ConfigError, match=next(iter(kw))):
+        StreamPipeline(MicArray.from_preset("three-mic"), **kw)
+
+
+def test_stream_pipeline_with_max_stall_inf_still_runs():
+    x = np.random.default_rng(0).standard_normal((3, 8000))
+    pipe = StreamPipeline(MicArray.from_preset("three-mic"), max_stall_s=float("inf"))
+    assert len(pipe.run(ArraySource(x, FS), threaded=True)) == (8000 - 1024) // 512 + 1
+    assert pipe.stats.status == "ok"

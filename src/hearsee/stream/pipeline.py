@@ -1429,11 +1429,12 @@ class StreamPipeline:
     stall_timeout_s : float
         How long the consumer waits for one block before counting a stall.
     max_stall_s : float
-        Total silence after which the run ends with ``status="stalled"``. A source that ends
-        because its device went silent (its ``stalled`` attribute set, as :class:`DeviceSource`
-        does after ``timeout_s``) gives the same status; its input overflows (``n_overflows``)
-        go to :attr:`StreamStats.n_overflows`. Both are also read from a source that a wrapper
-        exposes as ``.source`` (:class:`DropoutSource`, ``robot.hardware.MappedSource``).
+        Total silence after which the run ends with ``status="stalled"`` (inf: never). A source
+        that ends because its device went silent (its ``stalled`` attribute set, as
+        :class:`DeviceSource` does after ``timeout_s``) gives the same status; its input
+        overflows (``n_overflows``) go to :attr:`StreamStats.n_overflows`. Both are also read
+        from a source that a wrapper exposes as ``.source`` (:class:`DropoutSource`,
+        ``robot.hardware.MappedSource``).
     """
 
     def __init__(self, array: MicArray | str, config: StreamConfig | None = None, rig: Any = None,
@@ -1442,8 +1443,16 @@ class StreamPipeline:
         self.array = load_array(array)
         self.config = config or StreamConfig()
         self.rig, self.image_points = rig, image_points
-        self.queue_size = int(queue_size)
-        self.stall_timeout_s, self.max_stall_s = float(stall_timeout_s), float(max_stall_s)
+        # (unchecked, a negative stall_timeout_s was a ValueError of queue.get in the threaded
+        # run, a NaN max_stall_s never ended the run on a silent source, a queue_size <= 0 made
+        # the bounded queue unbounded)
+        self.queue_size = whole_number("queue_size", queue_size)
+        self.stall_timeout_s = finite_number("stall_timeout_s", stall_timeout_s, 0.0,
+                                             lo_open=True)
+        if not (max_stall_s == math.inf or (is_real(max_stall_s) and max_stall_s > 0)):
+            raise ConfigError(f"max_stall_s must be a number of seconds > 0 (inf = wait for ever)"
+                              f", got {max_stall_s!r}")
+        self.max_stall_s = float(max_stall_s)
         self.stats = StreamStats()
         self._reset_requested = False
 
