@@ -266,3 +266,28 @@ def test_detect_source_point_takes_grey_bgr_and_refuses_other_images(detector):
                 np.zeros((160, 120, 2), np.uint8)]:
         with pytest.raises(ImageInputError):
             detect_source_point(img, detector)
+
+
+def test_image_point_providers_refuse_bad_settings(tmp_path):
+    """CsvImagePoints with a NaN or negative max_gap_s silently gave no image point at all (not
+    even at a row's own time); VideoImagePoints with fps=inf gave none either, and a NaN or
+    negative fps was reported as 'video has no frame rate; pass fps='."""
+    import cv2
+
+    from hearsee.errors import ConfigError
+
+    p = tmp_path / "p.csv"
+    p.write_text("t,u,v\n0.0,100,200\n0.1,110,220\n")
+    assert CsvImagePoints(p, max_gap_s=0.0)(0.1) == pytest.approx((110.0, 220.0))
+    for gap in (float("nan"), -1.0, float("inf")):
+        with pytest.raises(ConfigError, match="max_gap_s"):
+            CsvImagePoints(p, max_gap_s=gap)
+    path = tmp_path / "blank.avi"
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (160, 120))
+    for _ in range(5):
+        w.write(np.full((120, 160, 3), 128, np.uint8))
+    w.release()
+    assert VideoImagePoints(path, detector="face", fps=20.0).fps == 20.0
+    for fps in (float("inf"), float("nan"), -5.0, 0.0):
+        with pytest.raises(ConfigError, match="fps"):
+            VideoImagePoints(path, detector="face", fps=fps)

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from hearsee.config import finite_number
 from hearsee.errors import ConfigError, ImageInputError, InputFileError
 
 __all__ = ["CsvImagePoints", "VideoImagePoints", "detect_source_point", "save_image_points"]
@@ -49,6 +50,8 @@ class CsvImagePoints:
     """
 
     def __init__(self, path: str | Path, max_gap_s: float = 0.2) -> None:
+        # (a NaN or negative gap silently gave no image point at all, not even at a row's time)
+        max_gap_s = finite_number("max_gap_s", max_gap_s, 0.0)
         p = Path(path)
         if not p.is_file():
             raise InputFileError(f"{p}: image-point file not found")
@@ -167,7 +170,7 @@ class VideoImagePoints:
     detector : ``"hog"`` | ``"face"``
         See :func:`detect_source_point`.
     fps : float, optional
-        Frame rate override (files whose container lacks it).
+        Frame rate override, frames per second > 0 (files whose container lacks it).
     """
 
     def __init__(self, source: str | Path | int, detector: str = "hog",
@@ -176,6 +179,8 @@ class VideoImagePoints:
 
         if detector not in ("hog", "face"):
             raise ConfigError(f"unknown detector {detector!r} (choose hog or face)")
+        if fps is not None:  # (inf gave no image point ever; NaN/negative: 'pass fps=')
+            fps = finite_number("fps", fps, 0.0, lo_open=True)
         self.live = isinstance(source, int)
         if not self.live and not Path(source).is_file():
             raise InputFileError(f"{source}: video file not found")
