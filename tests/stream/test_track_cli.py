@@ -291,3 +291,10 @@ def test_image_point_providers_refuse_bad_settings(tmp_path):
     for fps in (float("inf"), float("nan"), -5.0, 0.0):
         with pytest.raises(ConfigError, match="fps"):
             VideoImagePoints(path, detector="face", fps=fps)
+
+
+def test_image_points_csv_with_a_byte_order_mark(tmp_path):
+    """A CSV saved as 'UTF-8 with BOM' (spreadsheets do) was refused: 'header must be t,u,v'."""
+    p = tmp_path / "p.csv"
+    p.write_bytes(b"\xef\xbb\xbft,u,v\r\n0.0,100,200\r\n0.1,110,220\r\n")
+    assert CsvImagePoints(p)(0.05) == pytest.approx((105.0, 210.0))

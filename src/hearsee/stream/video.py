@@ -56,7 +56,7 @@ class CsvImagePoints:
         if not p.is_file():
             raise InputFileError(f"{p}: image-point file not found")
         try:
-            with p.open(newline="", encoding="utf-8") as fh:
+            with p.open(newline="", encoding="utf-8-sig") as fh:  # (a spreadsheet's BOM)
                 rows = [r for r in csv.reader(fh) if r and any(c.strip() for c in r)]
         except UnicodeDecodeError:
             raise ConfigError(f"{p}: not a text CSV file") from None
