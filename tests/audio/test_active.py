@@ -501,3 +501,27 @@ def test_simulate_poses_cli_writes_manifest(tmp_path, capsys):
     assert "--poses" in capsys.readouterr().err
     assert main(["simulate", str(tmp_path / "x.wav")] + args[2:]) == 2
     assert "manifest" in capsys.readouterr().err
+
+
+
+
+def test_thesis_search_from_the_upper_tilt_limit_tries_downward():
+    """A head at its upper tilt limit cannot make the search's first (upward) tilt try: the
+    clipped move was zero, which read as 'both corrections below tol_deg', and the search
+    stopped at once with converged=True, 75 deg above a source straight ahead. Exact TDOAs,
+    sources in the pan direction; the first try now goes downward, and a source above the
+    limit still ends at the limit."""
+    from hearsee.audio.active import align_head_search
+
+    for src, tilt in (([2.0, 0.0, 0.0], None), ([3.0, 0.0, 1.0], None), ([0.3, 0.0, 2.0], 75.0)):
+        src = np.array(src)
+
+        def measure(pose, src=src):
+            return MicArray(mic_positions_at(ARR, pose)).tdoa(src)
+
+        res = align_head_search(measure, ARR, start=(0.0, 75.0))
+        assert res.converged and res.moves >= 2
+        if tilt is None:
+            assert res.error_deg(src) < 1.0
+        else:  # 81 deg up: the head stays at its limit
+            assert res.final_pose.tilt_deg == pytest.approx(tilt)

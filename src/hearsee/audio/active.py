@@ -1199,6 +1199,9 @@ def align_head_search(
         e_mag = _acos_deg(g)
         if len(same) == 1:
             new_tilt = pose.tilt_deg + max(e_mag, probe_deg)  # first try: upward
+            if min(new_tilt, hi_t) - pose.tilt_deg < tol_deg:
+                # at the upper limit the upward try is no move (read as converged): go down
+                new_tilt = pose.tilt_deg - max(e_mag, probe_deg)
         else:
             kb = int(np.argmax(gv))
             lower, upper = b[b < b[kb]], b[b > b[kb]]
@@ -1214,7 +1217,7 @@ def align_head_search(
                 new_tilt = b[kb] + max(_acos_deg(gv[kb]), probe_deg)
             else:  # best is the lowest tilt so far: go further down
                 new_tilt = b[kb] - max(_acos_deg(gv[kb]), probe_deg)
-            if kb != len(same) - 1 and len(same) == 2:
+            if kb != len(same) - 1 and len(same) == 2 and b[1] >= b[0]:
                 # the upward try made g fall: the source is below
                 new_tilt = b[kb] - max(_acos_deg(gv[kb]), probe_deg)
         new_tilt = float(np.clip(new_tilt, lo_t, hi_t))
