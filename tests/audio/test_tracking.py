@@ -176,6 +176,19 @@ def test_bad_input():
         track_positions([0, 1], np.zeros((3, 3)))
 
 
+
+def test_track_directions_checks_the_valid_mask_before_using_it():
+    """The shape check came after ``valid & isfinite(az)``: a mask of another length raised
+    numpy's broadcast ValueError, and a one-element mask was broadcast over every frame."""
+    t, az = np.arange(4) * 0.1, np.zeros(4)
+    with pytest.raises(EstimationError, match="equal 1-D"):
+        track_directions(t, az, valid=[True, False, True])
+    with pytest.raises(EstimationError, match="equal 1-D"):
+        track_directions(t, az, valid=[False])
+    tr = track_directions(t, az, valid=[True, False, True, True])
+    assert tr.accepted.tolist() == [True, False, True, True]
+
+
 def test_singer_decay_damps_acceleration_through_a_gap():
     from hearsee.errors import EstimationError as EE
 

@@ -774,9 +774,10 @@ def track_directions(t: ArrayLike, azimuth_deg: ArrayLike, elevation_deg: ArrayL
     tt = np.asarray(t, dtype=float)
     az = np.asarray(azimuth_deg, dtype=float)
     el = np.full_like(az, np.nan) if elevation_deg is None else np.asarray(elevation_deg, float)
-    ok = np.isfinite(az) if valid is None else np.asarray(valid, bool) & np.isfinite(az)
+    ok = np.ones(az.shape, bool) if valid is None else np.asarray(valid, bool)
     if not (tt.shape == az.shape == el.shape == ok.shape) or tt.ndim != 1:
         raise EstimationError("t, azimuth_deg, elevation_deg and valid must be equal 1-D arrays")
+    ok = ok & np.isfinite(az)
     kf = DirectionKalman(**params)
     n = tt.size
     out_az, out_el = np.full(n, np.nan), np.full(n, np.nan)
