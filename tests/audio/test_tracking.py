@@ -189,6 +189,24 @@ def test_track_directions_checks_the_valid_mask_before_using_it():
     assert tr.accepted.tolist() == [True, False, True, True]
 
 
+
+def test_motion_fixes_and_covariances_of_the_wrong_shape_are_refused():
+    """A two-element fix raised numpy's reshape ValueError from MotionKalman.update, and an R
+    that is neither 3x3 nor (n, 3, 3) numpy's broadcast ValueError from track_positions."""
+    kf = MotionKalman()
+    with pytest.raises(EstimationError, match="x, y, z"):
+        kf.update(0.0, [1.0, 2.0])
+    with pytest.raises(EstimationError, match="x, y, z"):
+        kf.update(0.0, None, candidates=[([1.0, 2.0, 3.0, 4.0], None)])
+    assert not kf.initialized
+    t, z = np.arange(3) * 0.1, np.zeros((3, 3))
+    with pytest.raises(EstimationError, match="3x3"):
+        track_positions(t, z, R=np.eye(2))
+    with pytest.raises(EstimationError, match="3x3"):
+        track_positions(t, z, R=np.stack([np.eye(3)] * 2))
+    assert track_positions(t, z, R=np.stack([np.eye(3) * 0.01] * 3)).accepted.all()
+
+
 def test_singer_decay_damps_acceleration_through_a_gap():
     from hearsee.errors import EstimationError as EE
 

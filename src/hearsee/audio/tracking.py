@@ -915,7 +915,11 @@ class MotionKalman(_Kalman):
         cands += list(candidates or [])
         opts = []
         for pos, Rc in cands:
-            z = np.asarray(pos, dtype=float).reshape(3)
+            z = np.asarray(pos, dtype=float)
+            if z.size != 3:
+                raise EstimationError(f"a position fix must be [x, y, z] in metres, got shape "
+                                      f"{z.shape}")
+            z = z.reshape(3)
             if np.all(np.isfinite(z)):
                 opts.append((z, self.R if Rc is None else _covariance(Rc, 3)))
         if not opts:
@@ -962,7 +966,13 @@ def track_positions(t: ArrayLike, positions: ArrayLike, R: ArrayLike | None = No
     z = np.asarray(positions, dtype=float)
     if tt.ndim != 1 or z.shape != (tt.size, 3):
         raise EstimationError(f"t (n,) and positions (n, 3) expected, got {tt.shape}, {z.shape}")
-    Rs = None if R is None else np.broadcast_to(np.asarray(R, float), (tt.size, 3, 3))
+    Rs = None
+    if R is not None:
+        Ra = np.asarray(R, float)
+        if Ra.shape not in ((3, 3), (tt.size, 3, 3)):
+            raise EstimationError(f"R must be one 3x3 covariance or one per frame (n, 3, 3) "
+                                  f"in m^2, got shape {Ra.shape} for {tt.size} frames")
+        Rs = np.broadcast_to(Ra, (tt.size, 3, 3))
     kf = MotionKalman(**params)
     n = tt.size
     pos, vel, acc = (np.full((n, 3), np.nan) for _ in range(3))
