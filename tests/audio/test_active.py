@@ -294,6 +294,23 @@ def test_continuous_sampling_with_pan_reported_across_180_deg():
     assert ests[1].cost == pytest.approx(ests[0].cost, rel=1e-6, abs=1e-9)
 
 
+
+def test_continuous_sampling_refuses_bad_group_and_block_sizes():
+    """group_frames 0 raised range()'s ValueError, 2.5 a TypeError and -1 'at least one head
+    pose is needed'; a NaN block_s raised int()'s ValueError and a negative one was taken as
+    one sample."""
+    fs = 16000
+    sig = white_noise(0.3, fs, np.random.default_rng(0))
+    src = np.array([1.0, 0.8, 0.3])
+    x = simulate_turning_capture(sig, fs, ARR, src, lambda t: (0.0, 0.0))
+    for g in (0, -1, 2.5, True):
+        with pytest.raises(GeometryError, match="group_frames"):
+            localize_continuous(x, fs, ARR, lambda t: (0.0, 0.0), group_frames=g)
+    for b in (float("nan"), -0.064, 0.0, float("inf")):
+        with pytest.raises(GeometryError, match="block_s"):
+            simulate_turning_capture(sig, fs, ARR, src, lambda t: (0.0, 0.0), block_s=b)
+
+
 # ----------------------------------------------------------------------------- manifests + CLI
 @pytest.fixture(scope="module")
 def pose_manifest(tmp_path_factory):

@@ -63,7 +63,7 @@ from scipy.optimize import least_squares
 
 from hearsee.audio.arrays import MicArray, load_array, pair_tdoa, pair_tdoa_jacobian
 from hearsee.audio.propagation import speed_of_sound_of
-from hearsee.config import is_real, whole_number
+from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import (
     AudioInputError,
     EstimationError,
@@ -916,6 +916,7 @@ def simulate_turning_capture(
     """
     from hearsee.audio.propagation import add_noise
 
+    block_s = finite_number("block_s (seconds)", block_s, 0.0, lo_open=True, error=GeometryError)
     sig = np.asarray(signal, dtype=float)
     n = len(sig)
     nb = max(int(round(block_s * fs)), 1)
@@ -966,6 +967,7 @@ def localize_continuous(
     """
     from hearsee.audio.tdoa import estimate_tdoas
 
+    group_frames = whole_number("group_frames", group_frames, 1, error=GeometryError)
     arr = load_array(array)
     fr = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms)
     idx = np.flatnonzero(fr.valid)
