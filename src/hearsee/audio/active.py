@@ -1321,7 +1321,7 @@ def load_pose_manifest(path: Any) -> PoseManifest:
             raise ConfigError(f"{w}: {exc}") from None
         files.append(f)
     std = data.get("tdoa_std_s", DEFAULT_TDOA_STD_S)
-    if isinstance(std, bool) or not isinstance(std, int | float) or not std > 0:
+    if isinstance(std, bool) or not isinstance(std, int | float) or not (is_real(std) and std > 0):
         raise ConfigError(f"{where}: tdoa_std_s must be a positive number of seconds, got {std!r}")
     truth = data.get("truth")
     return PoseManifest(arr, files, poses, pivot, offset, float(std),
