@@ -955,7 +955,7 @@ def localize_continuous(
     while the head turns along ``pose_at(t)``.
 
     Every valid frame is a sample at the pose of its centre time. The frames are averaged in
-    groups of ``group_frames`` consecutive frames (one pose sample each: mean TDOA, mean pose);
+    groups of ``group_frames`` consecutive frames (one pose sample each: median TDOA, mean pose);
     all samples are then solved together by :func:`localize_multipose`.
 
     Returns
