@@ -325,3 +325,19 @@ def test_volume_solvers_refuse_a_bad_start_or_loss():
         far_field_volume(tau, arr, loss="bogus")
     p, _ = near_field_position(tau, arr, x0=(1, 0, 0), loss="huber")  # ints and a tuple pass
     np.testing.assert_allclose(p, [1.0, 0.6, 0.4], atol=1e-4)
+
+
+def test_two_mic_tdoa_just_past_end_fire_is_feasible_within_tol():
+    """A pair's TDOA a little beyond its physical maximum (noise at end-fire) was infeasible
+    with 0 solutions whatever tol_s, unlike far_field_planar's rule: within tol_s it is the one
+    end-fire direction, beyond it infeasible (the azimuth still the nearest, end-fire)."""
+    from hearsee.audio.localize import DEFAULT_TOL_S, far_field_linear
+
+    two = MicArray.from_preset("two-mic")
+    t_max = two.tdoa_far([0.0, 1.0, 0.0])[0]  # source on the axis (+y, azimuth 90 deg)
+    assert abs(t_max) == pytest.approx(float(two.max_tdoa()[0]))
+    for excess, ok in ((0.0, True), (0.5 * DEFAULT_TOL_S, True), (2.0 * DEFAULT_TOL_S, False)):
+        loc = far_field_linear([t_max + np.sign(t_max) * excess], two)
+        assert loc.feasible is ok and loc.n_solutions == (1 if ok else 0)
+        assert loc.azimuth_deg == pytest.approx(90.0, abs=1e-6)
+        assert [a for a, _ in loc.candidates] == pytest.approx([90.0], abs=1e-6)

@@ -227,11 +227,12 @@ def far_field_linear(tdoa_s: ArrayLike, array: MicArray,
     a = geo.axis
     A = _design(array, prs) @ a  # tdoa = A * cos(theta)
     cos_t = float(np.dot(A, tau) / np.dot(A, A))
-    feasible = abs(cos_t) <= 1.0
     cos_c = float(np.clip(cos_t, -1.0, 1.0))
+    # feasible when the nearest cone (end-fire for |cos| > 1) explains the TDOAs within tol_s,
+    # as far_field_planar decides (a TDOA a hair past end-fire used to be infeasible, 0
+    # solutions, whatever tol_s)
     resid = _rms(A * cos_c - tau)
-    if resid > tol_s:
-        feasible = False
+    feasible = resid <= tol_s
     axy = float(np.hypot(a[0], a[1]))
     extra = {"cos_theta": cos_t, "cone_half_angle_deg": float(np.degrees(np.arccos(cos_c)))}
     if axy < 1e-6:  # vertical axis: elevation only
