@@ -530,3 +530,44 @@ def test_predicted_is_the_next_coasting_update_without_changing_the_tracker(cls,
         assert not ref.update(t[-1] + dt, None)
         np.testing.assert_allclose(xp, ref.x, rtol=1e-12, atol=1e-9)
         np.testing.assert_allclose(Pp, ref.P, rtol=1e-12, atol=1e-9)
+
+
+def test_trackers_per_step_caches_stay_bounded_under_clock_jitter():
+    """Every step length got its own cache entry for good: a wall clock's jitter (a new dt each
+    frame) grew the caches by one entry per frame. They are bounded now, and the estimates are
+    those of an uncached model."""
+    from hearsee.audio import tracking as trk
+
+    rng = np.random.default_rng(3)
+    t = np.cumsum(0.032 + rng.uniform(-1e-4, 1e-4, 500))
+    kf, imm, mk = DirectionKalman(), DirectionIMM(), MotionKalman()
+    for k, tk in enumerate(t):
+        kf.update(tk, (10.0 + 0.5 * k, None))
+        imm.update(tk, (10.0 + 0.5 * k, None))
+        mk.update(tk, [1.0 + 0.01 * k, 0.0, 0.0])
+    for cache in (kf._model_cache, imm._model_cache, imm._tpm_cache, mk._model_cache):
+        assert 0 < len(cache) <= trk._CACHE_SIZE
+    ref = DirectionKalman()
+    for k, tk in enumerate(t):
+        ref._model_cache.clear()
+        ref.update(tk, (10.0 + 0.5 * k, None))
+    np.testing.assert_allclose(kf.x, ref.x)
+
+
+def test_direction_trackers_refuse_impossible_times_elevations_and_settings():
+    """predicted(nan) returned the current state silently (update refuses a NaN time); a first
+    measurement at 120 deg elevation started the track there (later corrections clip to +-90);
+    a single acceleration noise for the IMM raised a TypeError, a NaN max_rejects a ValueError."""
+    for f in (DirectionKalman(), DirectionIMM()):
+        f.update(0.0, (30.0, 10.0))
+        with pytest.raises(EstimationError, match="time"):
+            f.predicted(np.nan)
+        with pytest.raises(EstimationError, match="elevation"):
+            f.update(0.1, (30.0, 120.0))
+        f.update(0.2, (31.0, 90.0))  # the pole itself is a direction (the gate may reject it)
+        assert f.update(0.3, (31.5, 10.5))
+    with pytest.raises(EstimationError, match="one angular acceleration noise per mode"):
+        DirectionIMM(sigma_accel_dps2=5.0)
+    for bad in (np.nan, 1.5, 0):
+        with pytest.raises(EstimationError, match="max_rejects"):
+            DirectionKalman(max_rejects=bad)

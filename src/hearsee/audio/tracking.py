@@ -9,7 +9,8 @@ Reconstruction (the thesis's ch. 5 text is lost; see ``design/reconstruction.md`
   re-wrapped after every step -- a source walking through the back of the robot (+-180 deg) is
   tracked without a 360 deg jump. Measurements outside the chi-square gate (Mahalanobis distance
   of the innovation) are rejected as anomalous GCC peaks; after ``max_rejects`` rejections in a
-  row the track restarts at the new measurement. Missing frames only predict. With several
+  row the track restarts at the new measurement (of several candidates, the one nearest the
+  old prediction). Missing frames only predict. With several
   candidate directions (front/back twin of two microphones, elevation sign of a planar array)
   the candidate nearest to the prediction (nearest-neighbour data association) is used.
 * :class:`MotionKalman` (thesis 5.4.3, figs. 5.18-5.20) estimates position, velocity and
@@ -28,8 +29,9 @@ Units: degrees and deg/s for directions, metres, m/s and m/s^2 for motion, secon
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from filterpy.common import Q_discrete_white_noise
@@ -37,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import block_diag
 from scipy.stats import chi2
 
-from hearsee.config import finite_number
+from hearsee.config import finite_number, whole_number
 from hearsee.errors import EstimationError
 
 __all__ = [
@@ -240,6 +242,24 @@ class _Kalman:
 
 
 # ---------------------------------------------------------------------------- directions
+#: Entries each per-step cache of a tracker (transition and noise matrices, IMM switching) keeps
+#: before it starts again: the stream's sample-clock steps take a few values, but a wall clock's
+#: jitter gives nearly every frame its own step (the caches grew by one entry per frame).
+_CACHE_SIZE = 64
+
+
+def _cached(cache: dict, dt: float, make: Callable[[], Any]) -> Any:
+    """``cache``'s entry for the step ``dt`` seconds (rounded to the nanosecond), made by
+    ``make()`` when absent; the cache is emptied when it holds :data:`_CACHE_SIZE` entries."""
+    key = round(dt, 9)
+    hit = cache.get(key)
+    if hit is None:
+        if len(cache) >= _CACHE_SIZE:
+            cache.clear()
+        hit = cache[key] = make()
+    return hit
+
+
 def _clean_candidates(measurement: tuple[float, float | None] | None,
                       candidates: Sequence[tuple[float, float | None]] | None
                       ) -> list[tuple[float, float | None]]:
@@ -248,8 +268,12 @@ def _clean_candidates(measurement: tuple[float, float | None] | None,
     cands = list(candidates or [])
     if measurement is not None:
         cands = [measurement, *cands]
-    return [(float(a), None if e is None or not math.isfinite(e) else float(e))
-            for a, e in cands if a is not None and math.isfinite(a)]
+    out = [(float(a), None if e is None or not math.isfinite(e) else float(e))
+           for a, e in cands if a is not None and math.isfinite(a)]
+    for _, e in out:  # (a track started at 120 deg reported 120; corrections clip to +-90)
+        if e is not None and abs(e) > 90.0 + 1e-6:
+            raise EstimationError(f"elevation must be within [-90, 90] deg, got {e:g}")
+    return out
 
 
 @dataclass
@@ -316,7 +340,7 @@ class DirectionKalman(_Kalman):
         self.sigma_meas_deg = float(sigma_meas_deg)
         self.sigma_accel_dps2 = float(sigma_accel_dps2)
         self.gate_prob = float(gate_prob)
-        self.max_rejects = int(max_rejects)
+        self.max_rejects = whole_number("max_rejects", max_rejects, error=EstimationError)
         self.init_rate_sigma_dps = float(init_rate_sigma_dps)
         self.elevation_accel_ratio = float(elevation_accel_ratio)
         self.H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
@@ -449,18 +473,15 @@ class DirectionKalman(_Kalman):
         Raises :class:`EstimationError` before the track has started."""
         if not self.initialized or self.t is None:
             raise EstimationError("no track to predict yet")
-        dt = float(t) - self.t
+        dt = _finite_time(t) - self.t  # (NaN returned the current state without a word)
         if not dt > 0:
             return self.x.copy(), self.P.copy()
         return _propagate(self.x, self.P, *self._cv(dt))
 
     def _cv(self, dt: float) -> tuple[NDArray, NDArray]:
         """The (cached) transition and process noise over ``dt`` seconds."""
-        key = round(dt, 9)
-        if key not in self._model_cache:
-            self._model_cache[key] = _cv_model(dt, self.sigma_accel_dps2**2,
-                                               self.elevation_accel_ratio, self.rate_tau_s)
-        return self._model_cache[key]
+        return _cached(self._model_cache, dt, lambda: _cv_model(
+            dt, self.sigma_accel_dps2**2, self.elevation_accel_ratio, self.rate_tau_s))
 
     def _settle(self, el: float | None) -> None:
         """After a correction: azimuth wrapped, elevation clipped to +-90 deg."""
@@ -563,7 +584,12 @@ class DirectionIMM:
                  init_rate_sigma_dps: float = 60.0,
                  elevation_accel_ratio: float = ELEVATION_ACCEL_RATIO,
                  rate_tau_s: float | None = None) -> None:
-        qs = np.array([float(q) for q in sigma_accel_dps2])
+        try:  # (a single number raised a TypeError)
+            qs = np.array([float(q) for q in sigma_accel_dps2])
+        except (TypeError, ValueError):
+            raise EstimationError("sigma_accel_dps2 of an IMM is one angular acceleration noise "
+                                  f"per mode (deg/s^2), e.g. (50, 2000); got {sigma_accel_dps2!r}"
+                                  ) from None
         if qs.size < 2:
             raise EstimationError("an IMM needs at least two modes (sigma_accel_dps2)")
         if not np.all(np.isfinite(qs) & (qs > 0)):
@@ -577,7 +603,7 @@ class DirectionIMM:
                                     init_rate_sigma_dps, elevation_accel_ratio, rate_tau_s)
         self.sigma_accel_dps2 = qs
         self.mode_dwell_s = float(mode_dwell_s)
-        self.max_rejects = int(max_rejects)
+        self.max_rejects = whole_number("max_rejects", max_rejects, error=EstimationError)
         self._tpm_cache: dict[float, NDArray] = {}
         self._model_cache: dict[float, tuple[NDArray, NDArray]] = {}
         self.reset()
@@ -631,22 +657,22 @@ class DirectionIMM:
     # -- IMM steps ------------------------------------------------------------------------
     def _tpm(self, dt: float) -> NDArray:
         """Markov switching matrix ``p[i, j]`` = P(mode j now | mode i before) for a step dt."""
-        key = round(dt, 9)
-        if key not in self._tpm_cache:
+        def make() -> NDArray:
             m = self.sigma_accel_dps2.size
             leave = 1.0 - math.exp(-max(dt, 0.0) / self.mode_dwell_s)
             T = np.full((m, m), leave / (m - 1))
             np.fill_diagonal(T, 1.0 - leave)
-            self._tpm_cache[key] = T
-        return self._tpm_cache[key]
+            return T
+
+        return _cached(self._tpm_cache, dt, make)
 
     def _model(self, dt: float) -> tuple[NDArray, NDArray]:
         """The shared transition F (4, 4) and every mode's process noise Q (modes, 4, 4)."""
-        key = round(dt, 9)
-        if key not in self._model_cache:
+        def make() -> tuple[NDArray, NDArray]:
             F, Q1 = _cv_model(dt, 1.0, self._mix.elevation_accel_ratio, self._mix.rate_tau_s)
-            self._model_cache[key] = (F, Q1[None] * (self.sigma_accel_dps2**2)[:, None, None])
-        return self._model_cache[key]
+            return F, Q1[None] * (self.sigma_accel_dps2**2)[:, None, None]
+
+        return _cached(self._model_cache, dt, make)
 
     @staticmethod
     def _mixtures(X: NDArray, Ps: NDArray, W: NDArray, ref_az: float
@@ -683,7 +709,7 @@ class DirectionIMM:
         :meth:`DirectionKalman.predicted`)."""
         if not self.initialized:
             raise EstimationError("no track to predict yet")
-        dt = float(t) - float(self._mix.t)
+        dt = _finite_time(t) - float(self._mix.t)
         if not dt > 0:
             return self.x.copy(), self.P.copy()
         F, Qs = self._model(dt)
@@ -858,7 +884,7 @@ class MotionKalman(_Kalman):
         self.sigma_meas_m = float(sigma_meas_m)
         self.sigma_jerk = float(jerk) if jerk.ndim == 0 else tuple(float(v) for v in jerk)
         self.gate_prob = float(gate_prob)
-        self.max_rejects = int(max_rejects)
+        self.max_rejects = whole_number("max_rejects", max_rejects, error=EstimationError)
         self.init_vel_sigma = float(init_vel_sigma)
         self.init_acc_sigma = float(init_acc_sigma)
         self.H = np.zeros((3, 9))
@@ -890,10 +916,7 @@ class MotionKalman(_Kalman):
         return np.kron(np.eye(3), f), Q
 
     def _set_dt(self, dt: float) -> None:
-        key = round(dt, 9)
-        if key not in self._model_cache:
-            self._model_cache[key] = self._model(dt)
-        self.F, self.Q = self._model_cache[key]
+        self.F, self.Q = _cached(self._model_cache, dt, lambda: self._model(dt))
 
 
     def _start(self, z: NDArray, R: NDArray) -> None:
