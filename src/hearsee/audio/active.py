@@ -1163,6 +1163,13 @@ def align_head_search(
 
     Pan and tilt are corrected together at every move (fig. 4.17, simultaneous search). Stops
     when both corrections are below ``tol_deg`` or after ``max_moves`` moves.
+
+    Limitation: ``atan2(u_y, u_x)`` is the pan error exactly at tilt 0; with the head tilted by
+    ``beta`` and the source at elevation ``e`` a small pan error ``a`` reads about ``a cos(e) /
+    cos(beta - e)``. Level starts (the default) settle the pan at tilt 0 first; a start tilted
+    far from the source (``cos(beta - e) < cos(e) / 2``, e.g. 75 deg above a talker at the
+    array's height) overshoots and may not converge (``converged=False``). The exact step needs
+    ``u_z``, whose sign a planar array cannot tell.
     """
     arr = load_array(array)
     z = arr.positions[:, 2]
