@@ -117,6 +117,9 @@ def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, caps
     (["--camera", "CAM"], "image-point source"),
     (["--image-points", "PTS"], "need --camera"),
     (["--device", "0"], "either a recording"),
+    # (ignored without a word before 2026-11-26: a file has its own rate and length)
+    (["--fs", "48000"], "--fs and --duration are for live input"),
+    (["--duration", "1"], "--fs and --duration are for live input"),
     (["--frame-ms", "0"], "must be > 0"),
     (["--frame-ms", "1e9"], "at most 10000 ms"),  # (not a 60 GB allocation)
     (["--frame-ms", "2000"], "recording too short: 24000 samples, one frame needs 32000"),

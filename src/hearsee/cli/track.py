@@ -41,10 +41,10 @@ def track_cmd(
         "--device", help="Live input: PortAudio device index or name.")] = None,
     duration: Annotated[float | None, typer.Option(
         "--duration", help="Live input: stop after this many seconds.")] = None,
-    fs: Annotated[int, typer.Option(
-        "--fs", help="Live input: sample rate in Hz (with a camera, 48000 sharpens the 3D fixes "
-        "of sources with energy above 8 kHz; bench/tracking.py part B).")
-    ] = 16000,
+    fs: Annotated[int | None, typer.Option(
+        "--fs", help="Live input: sample rate in Hz (default 16000; with a camera, 48000 "
+        "sharpens the 3D fixes of sources with energy above 8 kHz; bench/tracking.py part B).")
+    ] = None,
     video: Annotated[Path | None, typer.Option(
         "--video", help="Video of the scene (needs --camera).")] = None,
     camera_device: Annotated[int | None, typer.Option(
@@ -105,6 +105,10 @@ def track_cmd(
 
     if (recording is None) == (device is None):
         raise ConfigError("give either a recording file or --device (live input), not both")
+    if recording is not None and (fs is not None or duration is not None):
+        # (they were ignored without a word: a file has its own rate and length)
+        raise ConfigError("--fs and --duration are for live input (--device); a recording file "
+                          "is read at its own sample rate, whole")
     visual = [o for o in (video, camera_device, image_points) if o is not None]
     if len(visual) > 1:
         raise ConfigError("use only one of --video, --camera-device and --image-points")
@@ -148,7 +152,8 @@ def track_cmd(
 
     try:
         if device is not None:
-            source = DeviceSource(_device_spec(device), arr.n_mics, fs, duration_s=duration)
+            source = DeviceSource(_device_spec(device), arr.n_mics, 16000 if fs is None else fs,
+                                  duration_s=duration)
         else:
             source = WavSource(recording, n_channels=arr.n_mics, block_len=4096)
         pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
