@@ -527,10 +527,20 @@ def test_gated_detection_does_not_keep_a_track_on_sensor_noise(fading_source):
 @pytest.mark.parametrize("bad", [{"gated_min_coherence": 0.0}, {"gated_min_coherence": 1.5},
                                  {"gate_sigmas": 0.0}, {"gate_deg": (10.0, 5.0)},
                                  {"gate_deg": (0.0, 30.0)}, {"gated_after_s": -0.1},
-                                 {"gated_min_coherence": 0.3, "spectrum_alpha": 0.0}])
+                                 {"gated_min_coherence": 0.3, "spectrum_alpha": 0.0},
+                                 # (unpacking ValueError / TypeError before 2026-11-26)
+                                 {"gate_deg": 30.0}, {"gate_deg": ("a", 30.0)},
+                                 {"gated_min_coherence": "0.3"}])
 def test_bad_gating_settings_are_a_config_error(bad):
     with pytest.raises(ConfigError, match="gate"):
         TrackingProcessor(MicArray.from_preset("three-mic"), FS, StreamConfig(**bad))
+
+
+@pytest.mark.parametrize("band", [3500.0, (300.0,), ("low", 3500.0), (300.0, None)])
+def test_bad_srp_band_is_a_config_error(band):
+    """A malformed smoothed-SRP band raised Python's unpacking ValueError or a TypeError."""
+    with pytest.raises(ConfigError, match="srp_band_hz"):
+        TrackingProcessor(MicArray.from_preset("three-mic"), FS, StreamConfig(srp_band_hz=band))
 
 
 def _fitted_lag_frames(t, az, measured, traj, hop_s):

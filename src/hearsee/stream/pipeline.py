@@ -636,7 +636,8 @@ class SmoothedSrp:
                                        real=True)
         n_bins = self.nfft // 2 + 1
         f = np.arange(n_bins) * fs / self.nfft
-        lo, hi = band_hz if band_hz is not None else (0.0, fs / 2.0)
+        lo, hi = _number_pair(band_hz, "srp_band_hz", "Hz") if band_hz is not None else (
+            0.0, fs / 2.0)
         self.k0 = int(np.searchsorted(f, lo))
         self.k1 = int(np.searchsorted(f, min(hi, fs / 2.0), side="right"))
         if self.k1 - self.k0 < 4:
@@ -796,7 +797,7 @@ class SmoothedSrp:
         lag0 = self.idx[:, best].T  # (k, P) upsampled indices
         rows = np.arange(k)[:, None]
         cols = np.arange(n_p)[None, :]
-        # local maximum within +-up/2 upsampled samples of the grid lag
+        # local maximum within +-up upsampled samples (one sample) of the grid lag
         offs = np.arange(-self.up, self.up + 1)
         cand = lag0[..., None] + offs
         vals = r[rows[..., None], cols[..., None], cand]
@@ -1103,15 +1104,27 @@ def _check_config(cfg: StreamConfig) -> None:
     _check_gating(cfg)
 
 
+def _number_pair(value: Any, name: str, unit: str) -> tuple[float, float]:
+    """``value`` as two finite numbers ``(low, high)``, else a ConfigError naming ``name``
+    (a malformed pair raised Python's unpacking ValueError or numpy's TypeError)."""
+    try:
+        lo, hi = value
+    except (TypeError, ValueError):
+        lo = hi = None
+    if not (is_real(lo) and is_real(hi)):
+        raise ConfigError(f"{name} must be two numbers (low, high) in {unit}, got {value!r}")
+    return float(lo), float(hi)
+
+
 def _check_gating(cfg: StreamConfig) -> None:
     """ConfigError for an out-of-range gated-detection setting of ``cfg``."""
     g = cfg.gated_min_coherence
-    if g is not None and not 0.0 < g <= 1.0:
-        raise ConfigError(f"gated_min_coherence must be in (0, 1] or None, got {g}")
+    if g is not None and not (is_real(g) and 0.0 < g <= 1.0):
+        raise ConfigError(f"gated_min_coherence must be in (0, 1] or None, got {g!r}")
     if g is not None and not cfg.spectrum_alpha > 0:
         raise ConfigError("gated_min_coherence needs the smoothed steered response "
                           f"(spectrum_alpha > 0), got spectrum_alpha={cfg.spectrum_alpha}")
-    lo, hi = cfg.gate_deg
+    lo, hi = _number_pair(cfg.gate_deg, "gate_deg", "degrees")
     if not (cfg.gate_sigmas > 0 and 0.0 < lo <= hi <= 180.0 and cfg.gated_after_s >= 0):
         raise ConfigError(
             "gate_sigmas must be > 0, gate_deg (low, high) with 0 < low <= high <= 180 deg and "
