@@ -697,3 +697,19 @@ def test_estimate_tdoas_refuses_bad_counts_and_thresholds(three, recording, kw, 
     x, _ = recording
     with pytest.raises(ConfigError, match=name):
         estimate_tdoas(x, FS, three, method="ml", **kw)
+
+
+def test_onset_weights_after_a_digitally_silent_lead_in():
+    """Frames of digital silence (energy 0) were floored at 1e-30, so the first frame with sound
+    rose by ~24-30 decades: weight ~75-90 against 1-13 for the real onsets of the same talker
+    after a quiet analog lead-in. A zero lead-in now weighs like the quietest heard frame; a
+    recording without zero frames keeps its weights."""
+    from hearsee.audio.tdoa import _onset_weights
+
+    analog = np.array([1e-6, 1e-6, 1e-6, 1e-6, 1e-2, 1e-2, 1e-3, 1e-2])
+    digital = analog.copy()
+    digital[:2] = 0.0
+    w = _onset_weights(digital, 3.0)
+    np.testing.assert_allclose(w, _onset_weights(analog, 3.0))
+    np.testing.assert_allclose(w, [1, 1, 1, 1, 13, 1, 1, 4])
+    assert np.all(_onset_weights(np.zeros(5), 3.0) == 1.0)  # all silent: no onset at all

@@ -997,10 +997,15 @@ def _check_steered(arr: MicArray, source_in_plane: bool, steer_range_m: float | 
 
 def _onset_weights(energy: NDArray, onset_weight: float) -> NDArray:
     """Frame weights of the whole-recording average: ``1 + onset_weight * max(log10(E_f /
-    E_{f-1}), 0)`` (energy rise over the previous frame; see ``onset_weight``)."""
+    E_{f-1}), 0)`` (energy rise over the previous frame; see ``onset_weight``). Digitally
+    silent frames (a recorder's zero lead-in, energy 0) count at the quietest frame's energy
+    that is not zero: against the old 1e-30 floor the first frame with sound rose by ~30
+    decades and outweighed ~90 ordinary frames."""
     rise = np.zeros(len(energy))
     if len(energy) > 1:
-        e = np.maximum(energy, _TINY)
+        e = np.asarray(energy, dtype=float)
+        heard = e[e > 0]
+        e = np.maximum(e, max(float(heard.min()), _TINY) if heard.size else _TINY)
         rise[1:] = np.clip(np.log10(e[1:] / e[:-1]), 0.0, None)
     return 1.0 + float(onset_weight) * rise
 
