@@ -713,3 +713,25 @@ def test_onset_weights_after_a_digitally_silent_lead_in():
     np.testing.assert_allclose(w, _onset_weights(analog, 3.0))
     np.testing.assert_allclose(w, [1, 1, 1, 1, 13, 1, 1, 4])
     assert np.all(_onset_weights(np.zeros(5), 3.0) == 1.0)  # all silent: no onset at all
+
+
+def test_first_arrival_ignores_the_search_bound_as_a_peak():
+    """The last admissible lag, still rising toward the physical bound, counted as a local
+    maximum (its outer neighbour is -inf), so a correlation within 10 % of its highest peak
+    there moved the two-mic summary to the bound, i.e. to end-fire. A real peak further out
+    still wins."""
+    from hearsee.audio.tdoa import _first_arrival_peaks
+
+    lags = np.arange(-12, 13)
+    bound = np.abs(lags) > 10  # the pair's admissible window is +-10
+    rising = 0.5 + 0.075 * np.clip(lags - 4, 0, None)  # 0.95 at the bound, no peak there
+    win = np.where(lags == 4, 1.0, np.where(lags > 4, rising, 0.2))
+    win = np.where(bound, -np.inf, win)[None, :]
+    k = np.array([int(np.argmax(win[0]))])
+    assert lags[k[0]] == 4
+    assert lags[_first_arrival_peaks(win, lags, k, 0.1)[0]] == 4
+    far = win.copy()
+    far[0, lags == 8] = 0.97  # a real local maximum at lag 8 (lower on both sides)
+    far[0, lags == 9] = 0.6
+    far[0, lags == 10] = 0.55
+    assert lags[_first_arrival_peaks(far, lags, k, 0.1)[0]] == 8

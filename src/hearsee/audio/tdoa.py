@@ -858,7 +858,12 @@ def _first_arrival_peaks(win: NDArray, lags: NDArray, k: NDArray, delta: float) 
     (see ``first_arrival`` of :func:`estimate_tdoas`); ``k`` where the maximum is at lag 0."""
     top = np.take_along_axis(win, k[:, None], axis=1)
     pad = np.full((win.shape[0], 1), -np.inf)
-    peak = (win >= np.hstack([pad, win[:, :-1]])) & (win >= np.hstack([win[:, 1:], pad]))
+    inside = np.isfinite(win)  # the admissible lags of each pair
+    # a local maximum needs an admissible neighbour on each side that is not higher: the last
+    # admissible lag, still rising toward the bound, is no peak (it was taken for one)
+    left = np.hstack([pad, win[:, :-1]])
+    right = np.hstack([win[:, 1:], pad])
+    peak = inside & (win >= left) & (win >= right) & np.isfinite(left) & np.isfinite(right)
     side = np.sign(lags[k])[:, None]
     cand = (peak & (win >= top - delta * np.abs(top)) & (side != 0)
             & (lags[None, :] * side >= np.abs(lags[k])[:, None]))
