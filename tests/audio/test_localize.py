@@ -341,3 +341,15 @@ def test_two_mic_tdoa_just_past_end_fire_is_feasible_within_tol():
         assert loc.feasible is ok and loc.n_solutions == (1 if ok else 0)
         assert loc.azimuth_deg == pytest.approx(90.0, abs=1e-6)
         assert [a for a, _ in loc.candidates] == pytest.approx([90.0], abs=1e-6)
+
+
+def test_cached_array_geometry_is_read_only():
+    """array_geometry caches one ArrayGeometry per array for every caller: its arrays were
+    writable, so one caller editing (say) the centre changed every later localization."""
+    from hearsee.audio.localize import array_geometry
+
+    geo = array_geometry(MicArray.from_preset("three-mic"))
+    for v in (geo.centre, geo.basis, geo.normal):
+        with pytest.raises(ValueError):
+            v[0] = 1.0
+    assert not array_geometry(MicArray.from_preset("two-mic")).axis.flags.writeable

@@ -129,7 +129,11 @@ def array_geometry(array: MicArray | NDArray, rel_tol: float = 1e-6) -> ArrayGeo
 
 @lru_cache(maxsize=64)
 def _geometry_cached(array: MicArray) -> ArrayGeometry:
-    return _classify(array.positions, 1e-6)  # MicArray is immutable (frozen, read-only)
+    geo = _classify(array.positions, 1e-6)  # MicArray is immutable (frozen, read-only)
+    for v in (geo.centre, geo.axis, geo.basis, geo.normal):  # shared by every caller: read-only
+        if v is not None:
+            v.setflags(write=False)
+    return geo
 
 
 def _classify(pos: NDArray, rel_tol: float) -> ArrayGeometry:

@@ -495,8 +495,9 @@ class TdoaFrames:
     confidence : array (n_frames, n_pairs)
         Peak-to-second-peak ratio of each GCC (0 in silent frames).
     valid : array (n_frames,) bool
-        True where the frame holds a source (energy above the noise floor and every pair's
-        confidence >= ``min_confidence``).
+        True where the frame holds a source (energy above the noise floor, every pair's
+        confidence >= ``min_confidence`` and, for arrays without redundant pairs (two
+        microphones), each correlation peak ``min_frame_peak_snr`` above its floor).
     pairs : list of (i, j)
         The microphone pairs, columns of ``tdoa_s``.
     summary_tdoa_s : array (n_pairs,)
