@@ -56,6 +56,10 @@ def test_points_behind_camera_are_nan_and_in_image_mask():
     assert np.all(np.isnan(uv[0]))
     np.testing.assert_allclose(uv[1], [319.5, 239.5])
     assert cam.in_image(uv).tolist() == [False, True, False]
+    assert cam.in_image([319.5, 239.5]).tolist() == [True]  # one pixel
+    # an (N, 3) array was re-read as 3 pixels (x, y), (z, x), (y, z): [True, False, True] here
+    with pytest.raises(GeometryError, match=r"\(N, 2\)"):
+        cam.in_image([[100.0, 100.0, 1.0], [2000.0, 100.0, 1.0]])
 
 
 def test_from_fov_geometry():

@@ -88,6 +88,11 @@ def test_thermal_support_projection_and_weights():
     assert np.isnan(thermal_support(left_pts * [1, 1, -1], h, RIG, warm))
     with pytest.raises(ImageInputError):
         thermal_support(left_pts, h, RIG, warm[:10])
+    # (a NaN head band silently switched the head weighting off: s fell to the plain 10 / 40)
+    for kw in ({"head_band_m": np.nan}, {"head_band_m": -0.1}, {"max_points": 0},
+               {"max_points": 2.5}, {"min_points": -1}, {"min_points": np.nan}):
+        with pytest.raises(ConfigError):
+            thermal_support(mixed, h, RIG, warm, **kw)
 
 
 def test_bad_inputs(scene):

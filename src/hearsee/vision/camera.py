@@ -338,8 +338,14 @@ class Camera:
         return rays / np.linalg.norm(rays, axis=1, keepdims=True)
 
     def in_image(self, uv: ArrayLike, margin: float = 0.0) -> NDArray:
-        """Boolean mask ``(N,)``: pixel lies inside the image (shrunk by ``margin`` pixels)."""
-        p = np.asarray(uv, dtype=float).reshape(-1, 2)
+        """Boolean mask ``(N,)``: pixel lies inside the image (shrunk by ``margin`` pixels).
+        ``uv`` is one pixel ``(2,)`` or ``(N, 2)`` (an ``(N, 3)`` array was silently re-read as
+        pairs of numbers: GeometryError, as :meth:`normalized`)."""
+        p = np.asarray(uv, dtype=float)
+        if p.ndim == 1 and p.shape == (2,):
+            p = p[None, :]
+        if p.ndim != 2 or p.shape[1] != 2:
+            raise GeometryError(f"pixel coordinates: expected shape (N, 2), got {p.shape}")
         with np.errstate(invalid="ignore"):
             return ((p[:, 0] >= -0.5 + margin) & (p[:, 0] <= self.width - 0.5 - margin)
                     & (p[:, 1] >= -0.5 + margin) & (p[:, 1] <= self.height - 0.5 - margin))

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.config import is_real
+from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import CalibrationError, ConfigError, GeometryError, ImageInputError
 from hearsee.vision.camera import Rectification, StereoRig
 from hearsee.vision.humans import (
@@ -128,6 +128,11 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
     warm = _check_mask(warm)
     if not (is_real(head_weight) and head_weight > 0):
         raise ConfigError(f"head_weight must be a finite number > 0, got {head_weight!r}")
+    # (a NaN head band switched the head weighting off; a NaN or negative count raised
+    # numpy's errors or kept no point)
+    finite_number("head_band_m", head_band_m, 0.0)
+    max_points = whole_number("max_points", max_points)
+    min_points = whole_number("min_points", min_points, 0)
     if warm.shape != cam.shape:
         raise ImageInputError(
             f"thermal image is {warm.shape[1]}x{warm.shape[0]} pixels but the calibration's "
