@@ -151,7 +151,8 @@ class Position3D:
     distance_rel_std : float
         1-sigma relative distance uncertainty (inf when undetermined).
     condition : float
-        Condition number of the (column-scaled) Jacobian at the solution.
+        Condition number of the Jacobian at the solution (its columns are all in metres, so
+        it is not scaled).
     cost : float
         Robust cost of the best candidate (residuals in units of ``tdoa_std_s``).
     residual_rms_s : float
@@ -1071,8 +1072,10 @@ def align_head(
     estimate is still ambiguous the first tilt goes to the upper candidate plus a ``probe_deg``
     excursion that makes the next capture informative (also whenever the poses so far differ
     only in pan and the direction is uncertain, 1-sigma above ``max_std_deg``). Stops when the
-    suggested move is below ``tol_deg`` and the direction is unique and certain, or after
-    ``max_moves`` moves.
+    suggested move is below ``tol_deg`` and the direction is unique -- and, while the poses
+    differ only in pan, certain (1-sigma within ``max_std_deg``; once the tilt has varied, a
+    settled but noisier direction also ends the search, ``converged=True``: check
+    ``direction_std_deg`` of the last estimate) -- or after ``max_moves`` moves.
 
     Parameters
     ----------
