@@ -1074,8 +1074,9 @@ def align_head(
     only in pan and the direction is uncertain, 1-sigma above ``max_std_deg``). Stops when the
     suggested move is below ``tol_deg`` and the direction is unique -- and, while the poses
     differ only in pan, certain (1-sigma within ``max_std_deg``; once the tilt has varied, a
-    settled but noisier direction also ends the search, ``converged=True``: check
-    ``direction_std_deg`` of the last estimate) -- or after ``max_moves`` moves.
+    settled but noisier direction also ends the search, ``converged=True``; its
+    ``direction_std_deg`` is that of :func:`localize_multipose` on the result's poses and
+    TDOAs) -- or after ``max_moves`` moves.
 
     Parameters
     ----------
