@@ -999,7 +999,11 @@ class StreamConfig:
         the others use the smoothed steered response
     prefer_frame_confidence : the same for frames whose own GCC confidence (smallest pair
         peak ratio) reaches this value (inf = never; 1.5 chosen on the seed-100 walks of
-        bench/tracking.py)
+        bench/tracking.py). Tried and rejected (2026-11-26, dev seed 300 of part A, 8 walks per
+        condition): using a frame's own direction below this confidence when the smoothed
+        response gives none (after 0 or 0.2 s of coasting) -- those frames are mostly
+        reflections: per-frame / tracked ratios male 10 dB 2.89 -> 0.83 / 0.80x, female 10 dB
+        3.10 -> 0.97 / 1.17x, white noise unchanged
     max_coast_s : seconds the direction track may go without an accepted measurement before it
         is dropped (no azimuth reported until a measurement restarts it: the coasted direction's
         uncertainty has grown past use by then -- ODAS's tracker deletes inactive tracks the
