@@ -382,3 +382,30 @@ def test_make_head_pose_images_shapes():
     images, pose = make_head_pose_images(3, size=8, yaw_range_deg=(10, -10), random_state=0)
     assert images.shape == (3, 64) and pose.shape == (3, 2)
     assert np.all(np.abs(pose[:, 0]) <= 10.0)
+
+
+# --------------------------------------------------------------------------- state
+
+
+@pytest.mark.parametrize("cls, bad_k", [(NeighborhoodLinearEmbedding, 5), (ClusteredNLE, 3)])
+def test_failed_refit_leaves_the_fitted_model_consistent(cls, bad_k):
+    """A refit that raised (degenerate embedding) had already replaced ``nbrs_`` and
+    ``training_data_`` (and ``labels_``) while ``embedding_`` stayed the old one: transform then
+    indexed the old embedding with the new training set's neighbours and returned wrong numbers
+    without a word."""
+    X_good, _ = make_swiss_roll(600, random_state=1)
+    X_bad, _ = make_swiss_roll(300, random_state=0)
+    m = cls(n_neighbors=10, random_state=0).fit(X_good)
+    ref = m.transform(X_good[:20])
+    ref_labels = getattr(m, "labels_", None)
+    m.set_params(n_neighbors=bad_k)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DisconnectedGraphWarning)
+        with pytest.raises(ManifoldInputError, match="degenerate embedding"):
+            m.fit(X_bad)
+    m.set_params(n_neighbors=10)
+    np.testing.assert_array_equal(m.transform(X_good[:20]), ref)
+    assert m.training_data_ is not X_bad and m.training_data_.shape == X_good.shape
+    if ref_labels is not None:
+        np.testing.assert_array_equal(m.labels_, ref_labels)
+        np.testing.assert_array_equal(m.predict(X_good), ref_labels)

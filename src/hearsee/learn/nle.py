@@ -770,13 +770,14 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         return vals, np.column_stack(vecs + [cand_vecs[i] for i in order])
 
     def _fit_embedding(self, X: np.ndarray, random_state) -> None:
+        # the fitted attributes are set together at the end: a fit that raises leaves the
+        # previous fit whole (transform indexes embedding_ by nbrs_'s neighbours)
         n = X.shape[0]
-        self.nbrs_, dist, ind, mask = self._neighbourhoods(X, self.n_neighbors)
-        self.training_data_ = X
+        nbrs, dist, ind, mask = self._neighbourhoods(X, self.n_neighbors)
         W = reconstruction_weights(X, ind, mask, self.reg)
-        self.embedding_, self.adjacency_, self.reconstruction_error_ = self._embed(
-            X, ind, W, mask, n, random_state
-        )
+        Y, Wm, err = self._embed(X, ind, W, mask, n, random_state)
+        self.nbrs_, self.training_data_ = nbrs, X
+        self.embedding_, self.adjacency_, self.reconstruction_error_ = Y, Wm, err
         self.n_neighbors_ = mask.sum(axis=1)
 
     def fit(self, X, y=None):
@@ -987,16 +988,15 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         X = self._validate_fit_input(X)
         rs = check_random_state(self.random_state)
         n = X.shape[0]
-        self.nbrs_, dist, ind, mask = self._neighbourhoods(X, self.n_neighbors)
-        self.training_data_ = X
+        # the fitted attributes are set together at the end (see _fit_embedding)
+        nbrs, dist, ind, mask = self._neighbourhoods(X, self.n_neighbors)
         labels = self._cluster(X, dist, ind, mask)
-        self.labels_ = labels
-        self.n_clusters_ = int(labels.max()) + 1
+        n_clusters = int(labels.max()) + 1
         Y = np.zeros((n, self.n_components))
         blocks = []
         counts = np.zeros(n, dtype=int)
         err = 0.0
-        for c in range(self.n_clusters_):
+        for c in range(n_clusters):
             idx = np.flatnonzero(labels == c)
             m = idx.size
             if m <= self.n_components + 1:
@@ -1018,6 +1018,8 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         r = np.concatenate([b[0] for b in blocks if isinstance(b, tuple)] or [np.zeros(0, int)])
         c = np.concatenate([b[1] for b in blocks if isinstance(b, tuple)] or [np.zeros(0, int)])
         v = np.concatenate([b[2] for b in blocks if isinstance(b, tuple)] or [np.zeros(0)])
+        self.nbrs_, self.training_data_ = nbrs, X
+        self.labels_, self.n_clusters_ = labels, n_clusters
         self.adjacency_ = sparse.csr_matrix((v, (r, c)), shape=(n, n))
         self.embedding_ = Y
         self.n_neighbors_ = counts
