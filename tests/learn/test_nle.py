@@ -338,6 +338,12 @@ def test_building_blocks_refuse_bad_arguments():
     for reg in (np.nan, np.inf, 0.0, -1e-3):
         with pytest.raises(ManifoldInputError, match="reg"):
             reconstruction_weights(X, ind, mask, reg=reg)
+    # reg * trace(C) overflowing float64: NaN weights before (and a RuntimeError from SuperLU
+    # in fit)
+    with pytest.raises(ManifoldInputError, match="reg"), np.errstate(all="ignore"):
+        reconstruction_weights(X, ind, mask, reg=1e307)
+    with pytest.raises(ManifoldInputError, match="reg"), np.errstate(all="ignore"):
+        NeighborhoodLinearEmbedding(n_neighbors=5, reg=1e308, random_state=0).fit(X)
     with pytest.raises(ManifoldInputError, match="accept no neighbour"):  # was NaN weights
         reconstruction_weights(X, ind, np.zeros_like(mask))
     with pytest.raises(ManifoldInputError, match="finite"):

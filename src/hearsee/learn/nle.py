@@ -273,8 +273,9 @@ def reconstruction_weights(
     ------
     ManifoldInputError
         ``reg`` not a finite number > 0 (with more neighbours than features the Gram matrix is
-        singular without it), a row of ``mask`` without any accepted neighbour, non-finite ``X``
-        or ``centers``, or arrays of inconsistent shapes.
+        singular without it) or so large that the regularised Gram matrix overflows, a row of
+        ``mask`` without any accepted neighbour, non-finite ``X`` or ``centers``, or arrays of
+        inconsistent shapes.
     """
     X, ind, centers, (mask,) = _check_neighbourhood_args("reconstruction_weights", X, ind,
                                                         centers, mask=mask)
@@ -305,6 +306,11 @@ def reconstruction_weights(
                 "larger reg"
             ) from None
         w /= w.sum(axis=1, keepdims=True)
+        if not np.isfinite(w).all():  # reg * trace(C) overflowed float64
+            raise ManifoldInputError(
+                f"reconstruction_weights: reg={reg:g} is too large, the regularised local Gram "
+                "matrices overflow float64; use a smaller reg"
+            )
         W[s:e] = w
     return W
 
