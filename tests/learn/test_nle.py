@@ -373,6 +373,17 @@ def test_make_two_rolls_refuses_bad_parameters(name, value):
         make_two_rolls(**kwargs)
 
 
+def test_make_two_rolls_with_an_empty_sheet_warns_nothing():
+    # n_samples=0 and density_ratio=0 are valid; an empty sheet raised numpy's "Mean of empty
+    # slice" RuntimeWarning (an error under -W error)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        X, lab, t = make_two_rolls(10, density_ratio=0.0, random_state=0)
+        assert X.shape == (10, 3) and (lab == 1).all() and np.isfinite(X).all()
+        X, lab, t = make_two_rolls(0, random_state=0)
+        assert X.shape == (0, 3) and lab.shape == (0,) and t.shape == (0, 2)
+
+
 @pytest.mark.parametrize(
     "name, value",
     [("yaw_range_deg", (np.nan, 0.0)), ("pitch_range_deg", (0.0, np.inf)), ("yaw_range_deg", 5.0),

@@ -1140,7 +1140,7 @@ def make_two_rolls(
         tx, tz = np.cos(t) - t * np.sin(t), np.sin(t) + t * np.cos(t)
         nrm = np.hypot(tx, tz)
         nx, nz = tz / nrm, -tx / nrm
-        if np.mean(nx * np.cos(t) + nz * np.sin(t)) < 0:
+        if m and np.mean(nx * np.cos(t) + nz * np.sin(t)) < 0:
             nx, nz = -nx, -nz
         x = t * np.cos(t) + offset * nx
         z = t * np.sin(t) + offset * nz
