@@ -710,3 +710,64 @@ def test_a_run_without_updates_still_writes_its_report(tmp_path):
     assert index.is_file() and json.loads((index.parent / "log.json").read_text()) == []
     assert all((index.parent / "plots" / f).is_file()
                for f in ("top_view.png", "error.png", "head.png"))
+
+
+class _SteppingHead:
+    """A pan-only head with 10 deg resolution that turns toward its latest commanded pan in
+    10 deg steps, one every 0.1 s of audio time (the time of the commands), and reports its
+    actual pan meanwhile; ``sent`` holds (t, commanded pan, actual pan) of every command."""
+
+    def __init__(self) -> None:
+        self.pan, self.target, self.next_step = 0.0, 0.0, None
+        self.sent: list[tuple[float, float, float]] = []
+        self.n_printed = 0
+
+    @property
+    def pose_deg(self) -> tuple[float, float]:
+        return (self.pan, 0.0)
+
+    def command(self, t: float, pan_deg: float, tilt_deg: float) -> dict:
+        while self.next_step is not None and t >= self.next_step and self.pan != self.target:
+            self.pan += float(np.clip(self.target - self.pan, -10.0, 10.0))
+            self.next_step += 0.1
+        self.sent.append((t, pan_deg, self.pan))
+        self.target = 10.0 * round(pan_deg / 10.0)
+        if self.target != self.pan and (self.next_step is None or self.next_step <= t):
+            self.next_step = t + 0.1
+        self.n_printed += 1
+        return {"pan_deg": pan_deg, "tilt_deg": tilt_deg}
+
+
+def test_head_is_not_told_to_stop_while_it_turns(tmp_path):
+    """A talker 40 deg left; a head that turns toward its latest command in 10 deg steps. While
+    it turns, the loop withholds the audio (no bearing): the desired pose must stay the talker's
+    direction -- it used to be the head's pose of the moment, so every step told the head to
+    stop where it was (commands of 10, 20, 30 deg) and the turn crawled from stop to stop."""
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource, Block
+
+    rec = {}
+    for pan in (0.0, 10.0, 20.0, 30.0, 40.0):
+        a = np.radians(40.0 - pan)
+        rec[pan], _ = simulate_recording("three-mic", [2.0 * np.cos(a), 2.0 * np.sin(a), 0.0],
+                                         duration_s=2.0, fs=FS, snr_db=25.0, seed=9)
+    head = _SteppingHead()
+
+    class HeadAudio:  # each block as heard at the head's pose when it is read
+        fs, n_channels = float(FS), 3
+
+        def blocks(self):
+            for b in ArraySource(rec[0.0], FS, 800).blocks():
+                x = rec[head.pose_deg[0]][:, b.start:b.start + b.data.shape[1]]
+                yield Block(b.seq, b.start, x, b.arrival)
+
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
+    res = run_robot(cfg, audio_source=HeadAudio(), head=head)
+    assert res.summary["status"] == "ok" and head.sent
+    t0 = head.sent[0][0]
+    # every desired pan is the talker's direction, also while the head turns
+    np.testing.assert_allclose([p for _, p, _ in head.sent], 40.0, atol=3.0)
+    # so the head turns in one go: 4 steps of 0.1 s
+    arrived = [t for t, _, actual in head.sent if actual == 40.0]
+    assert arrived and arrived[0] <= t0 + 0.45
+    assert res.log[-1]["head_pan_deg"] == 40.0

@@ -887,8 +887,9 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        :data:`POSE_TOLERANCE_DEG`, the sensor geometry follows it, the stream forgets its
        array-frame state (direction tracker, ITD filter, smoothed spectra: their directions were
        relative to the old pose) and the audio is withheld until one frame and one audio block
-       after the head stops (``summary["head_moves"]`` counts the moves). The robot-frame 3D
-       track is kept.
+       after the head stops (``summary["head_moves"]`` counts the moves; meanwhile, without a
+       3D track, the desired pose stays the last one commanded). The robot-frame 3D track is
+       kept.
     3. **See and verify**: every ``1 / cameras.rate_hz`` seconds of audio, one set of camera
        frames goes through stereo + thermal human detection
        (:func:`hearsee.vision.fusion.detect_humans`).
@@ -980,7 +981,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     frames: list[tuple[float, NDArray]] = []
     state = {"n_audio": 0, "next_cam": 0.0, "phase": "listening", "cam_frames": 0,
              "cam_ended": False, "first_verified": None, "hop": scfg.hop_ms / 1000.0,
-             "last_visual": -np.inf, "track_drops": 0, "heard_from": -np.inf, "head_moves": 0}
+             "last_visual": -np.inf, "track_drops": 0, "heard_from": -np.inf, "head_moves": 0,
+             "desired": None}
     # live: detection runs in a worker thread so that the audio keeps flowing; its result is
     # applied at the first update after it is ready (file sources: in line, deterministic)
     use_pool = (live if async_vision is None else async_vision) and cameras is not None
@@ -1067,7 +1069,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
 
     def sink(u: Any) -> None:
         t = float(u.t)
-        if not follow_head(t):
+        heard = follow_head(t)
+        if not heard:
             u = _unheard(u)
         if track.initialized and t - state["last_visual"] > TRACK_TIMEOUT_S:
             # no visual fix for TRACK_TIMEOUT_S: bearing-only updates would let the range
@@ -1108,13 +1111,15 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             pending[0] = None
             dets, camera_t = apply(t, t_cap, fr, fut.result(), bearing), t_cap
         state["last_t"], state["last_bearing"] = t, bearing
-        emit(t, audio, bearing, dets, camera_t)
+        emit(t, audio, bearing, dets, camera_t, heard)
         if progress is not None:
             progress(state["hop"])
 
     def emit(t: float, audio: dict | None, bearing: float | None, dets: list[dict[str, Any]],
-             camera_t: float | None) -> None:
-        """Phase, head command and track of this update; one log record / JSON line."""
+             camera_t: float | None, heard: bool = True) -> None:
+        """Phase, head command and track of this update; one log record / JSON line. While the
+        audio is withheld (the head turns or settles) and there is no track, the desired pose
+        stays the last one commanded: the head's pose of the moment would stop the turn."""
         if state["phase"] == "listening" and state["n_audio"] >= MIN_AUDIO_UPDATES:
             state["phase"] = "turning"
         if track.initialized:
@@ -1126,7 +1131,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                 pan, tilt = geo.bearing_deg(track.position)
             elif bearing is not None:
                 pan = bearing
+            elif not heard and state["desired"] is not None:
+                pan, tilt = state["desired"]
             command = head.command(t, pan, tilt)
+            state["desired"] = (pan, tilt)
         rec_track = None
         if track.initialized:
             rec_track = {"position_m": _r(track.position), "velocity_mps": _r(track.velocity),
