@@ -771,3 +771,71 @@ def test_head_is_not_told_to_stop_while_it_turns(tmp_path):
     arrived = [t for t, _, actual in head.sent if actual == 40.0]
     assert arrived and arrived[0] <= t0 + 0.45
     assert res.log[-1]["head_pan_deg"] == 40.0
+
+
+def test_async_detection_uses_the_pose_of_its_capture(tmp_path, monkeypatch):
+    """Detection in a worker thread (the live default): a frame captured with the head at
+    pan 0 whose detection finishes after the head has turned must be placed in the robot frame
+    with the pose of its capture -- it used the pose of the update that applied it (20 or
+    40 deg), rotating the person by that much."""
+    import time
+    import types as _types
+
+    import hearsee.vision.fusion as fusion
+    from hearsee.robot.hardware import CameraFrames
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import ArraySource, Block
+    from hearsee.vision.fusion import Human
+
+    cfg, _, img = _texture_case(tmp_path, default_rig(160, 120))
+    pivot = np.asarray(cfg.head.pivot_m, float)
+    person = pivot + [2.0 * np.cos(np.radians(40.0)), 2.0 * np.sin(np.radians(40.0)), -0.2]
+    d = person - pivot  # seen from the camera (at the pivot) with the head at pan 0, tilt 0:
+    p_cam0 = np.array([-d[1], -d[2], d[0]])  # optical frame x right, y down, z forward
+    head = _TurningHead()
+    calls = []
+
+    def fake_detect(left, right, rig, thermal=None, **kw):
+        calls.append(head.pose_deg)
+        if len(calls) == 1:  # the first frame, captured at pan 0: slow, done after the turn
+            t_end = time.monotonic() + 20.0
+            while head.pose_deg == (0.0, 0.0) and time.monotonic() < t_end:
+                time.sleep(0.005)
+            humans = [Human([10, 10, 20, 40], p_cam0, 0.9, None, 1.75, True)]
+        else:
+            humans = []
+        return _types.SimpleNamespace(humans=humans, rejected=[],
+                                      frame=_types.SimpleNamespace(left=left))
+
+    monkeypatch.setattr(fusion, "detect_humans", fake_detect)
+    monkeypatch.setattr(fusion, "draw_detections", lambda image, det: image.copy())
+
+    class FakeCameras:
+        n_failures = n_consecutive_failures = 0
+
+        def read(self):
+            return CameraFrames(img, img, None)
+
+    rec = {}
+    for pan in (0.0, 20.0, 40.0):
+        a = np.radians(40.0 - pan)
+        rec[pan], _ = simulate_recording("three-mic", [2.0 * np.cos(a), 2.0 * np.sin(a), 0.0],
+                                         duration_s=2.0, fs=FS, snr_db=25.0, seed=9)
+
+    class HeadAudio:
+        fs, n_channels = float(FS), 3
+
+        def blocks(self):
+            for b in ArraySource(rec[0.0], FS, 800).blocks():
+                yield Block(b.seq, b.start, rec[head.pose_deg[0]][:, b.start:b.start + 800],
+                            b.arrival)
+
+    res = run_robot(cfg, audio_source=HeadAudio(), head=head, cameras=FakeCameras(),
+                    async_vision=True, jsonl=tmp_path / "run.jsonl")
+    assert calls and calls[0] == (0.0, 0.0) and res.summary["head_moves"] >= 1
+    first = next(r for r in res.log if r["detections"])
+    # captured at the first update (pan 0), applied after the turn
+    assert first["camera_t"] == res.log[0]["t"] and first["head_pan_deg"] != 0.0
+    np.testing.assert_allclose(first["detections"][0]["position_m"], person, atol=1e-3)
+    assert first["detections"][0]["azimuth_deg"] == pytest.approx(40.0, abs=0.01)

@@ -1000,22 +1000,24 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         state["cam_frames"] += 1
         return fr
 
-    def detect(fr: CameraFrames) -> Any:
+    def detect(fr: CameraFrames, g: _Head) -> Any:
         from hearsee.vision.fusion import detect_humans
 
         thermal = fr.thermal if rig.thermal is not None else None
         return detect_humans(fr.left, fr.right, rig, thermal,
-                             camera_height_m=float(geo.cam_centre[2]))
+                             camera_height_m=float(g.cam_centre[2]))
 
-    def apply(t: float, t_cap: float, fr: CameraFrames, det: Any, bearing: float | None
-              ) -> list[dict[str, Any]]:
+    def apply(t: float, t_cap: float, fr: CameraFrames, det: Any, bearing: float | None,
+              g: _Head) -> list[dict[str, Any]]:
+        """Log (and associate) the detections of the frames captured at ``t_cap`` with the
+        head geometry ``g`` of their capture (the head may have turned since)."""
         from hearsee.vision.fusion import draw_detections
 
         dets: list[dict[str, Any]] = []
         verified = []  # (human, robot-frame position, azimuth, index in dets)
         for h in det.humans + det.rejected:
-            p = geo.camera_to_robot(h.position_m)
-            az, el = geo.bearing_deg(p)
+            p = g.camera_to_robot(h.position_m)
+            az, el = g.bearing_deg(p)
             dets.append({**h.to_dict(), "position_m": _r(p), "azimuth_deg": _r(az, 2),
                          "elevation_deg": _r(el, 2), "accepted": bool(h.accepted),
                          "speaker": False})
@@ -1024,8 +1026,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         best = associate([v[1] for v in verified], [v[2] for v in verified], track, bearing)
         if best is not None:
             h, p, _, k = verified[best]
-            Rc = geo.R_cam.T @ stereo_position_cov(np.asarray(h.position_m), rig.focal_px,
-                                                rig.baseline_m, truncated=h.truncated) @ geo.R_cam
+            Rc = g.R_cam.T @ stereo_position_cov(np.asarray(h.position_m), rig.focal_px,
+                                              rig.baseline_m, truncated=h.truncated) @ g.R_cam
             if track.update(t, p, Rc):
                 state["last_visual"] = t
             dets[k]["speaker"] = True
@@ -1103,13 +1105,13 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             state["next_cam"] = t + period - 1e-9
             fr = grab()
             if fr is not None and pool is not None:
-                pending[0] = (t, fr, pool.submit(detect, fr))
+                pending[0] = (t, fr, pool.submit(detect, fr, geo), geo)
             elif fr is not None:
-                dets, camera_t = apply(t, t, fr, detect(fr), bearing), t
+                dets, camera_t = apply(t, t, fr, detect(fr, geo), bearing, geo), t
         if pending[0] is not None and pending[0][2].done():
-            t_cap, fr, fut = pending[0]
+            t_cap, fr, fut, g = pending[0]
             pending[0] = None
-            dets, camera_t = apply(t, t_cap, fr, fut.result(), bearing), t_cap
+            dets, camera_t = apply(t, t_cap, fr, fut.result(), bearing, g), t_cap
         state["last_t"], state["last_bearing"] = t, bearing
         emit(t, audio, bearing, dets, camera_t, heard)
         if progress is not None:
@@ -1154,11 +1156,11 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         status = pipeline.stats.status
         if pending[0] is not None and "last_t" in state:
             # the audio ended while a detection was running: log its result as a last update
-            t_cap, fr, fut = pending[0]
+            t_cap, fr, fut, g = pending[0]
             pending[0] = None
             t = state["last_t"]
             emit(t, None, state["last_bearing"],
-                 apply(t, t_cap, fr, fut.result(), state["last_bearing"]), t_cap)
+                 apply(t, t_cap, fr, fut.result(), state["last_bearing"], g), t_cap)
     except KeyboardInterrupt:
         status = "interrupted"
     finally:
