@@ -839,3 +839,20 @@ def test_async_detection_uses_the_pose_of_its_capture(tmp_path, monkeypatch):
     assert first["camera_t"] == res.log[0]["t"] and first["head_pan_deg"] != 0.0
     np.testing.assert_allclose(first["detections"][0]["position_m"], person, atol=1e-3)
     assert first["detections"][0]["azimuth_deg"] == pytest.approx(40.0, abs=0.01)
+
+
+@pytest.mark.parametrize("duration", [float("nan"), -1.0, 0.0, "2"])
+def test_bad_duration_is_a_config_error(tmp_path, duration):
+    """run_robot(duration_s=...) over a given source: a NaN duration was a builtin ValueError,
+    a negative or zero one a silent run of nothing, a string a TypeError; inf means no limit,
+    as for the live device."""
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
+    x = 0.01 * np.random.default_rng(0).standard_normal((3, 4000))
+    with pytest.raises(ConfigError, match="duration_s"):
+        run_robot(cfg, audio_source=ArraySource(x, FS, 1600), duration_s=duration,
+                  head=_quiet_head(cfg), jsonl=tmp_path / "a.jsonl")
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), duration_s=float("inf"),
+                    head=_quiet_head(cfg), jsonl=tmp_path / "b.jsonl")
+    assert res.summary["audio_s"] == pytest.approx(4000 / FS)

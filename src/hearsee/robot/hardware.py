@@ -65,7 +65,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
-from hearsee.config import as_float_array, check_keys, load_yaml, number
+from hearsee.config import as_float_array, check_keys, finite_number, load_yaml, number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, HearseeError
 
 if TYPE_CHECKING:  # imported when run_robot runs (the simulated loop's heavier imports)
@@ -621,7 +621,8 @@ def first_failure(checks: Sequence[Check]) -> Check | None:
 class MappedSource:
     """A stream source (:mod:`hearsee.stream.pipeline`) seen through the robot file: picks the
     input channel of each microphone (``channels``), ends after ``duration_s`` seconds of audio
-    (None = when the source ends) or as soon as ``stop`` (a ``threading.Event``) is set."""
+    (> 0; None or inf = when the source ends) or as soon as ``stop`` (a ``threading.Event``) is
+    set."""
 
     def __init__(self, source: Any, channels: Sequence[int], duration_s: float | None = None,
                  stop: Any = None) -> None:
@@ -632,6 +633,10 @@ class MappedSource:
             raise AudioInputError(f"audio.channels: channel {max(self.channels)} requested but "
                                   f"the input has {source.n_channels} channels")
         self.n_channels = len(self.channels)
+        if duration_s is not None and duration_s == np.inf:
+            duration_s = None  # no limit, as for DeviceSource
+        if duration_s is not None:
+            duration_s = finite_number("duration_s", duration_s, 0.0, lo_open=True)
         self.limit = None if duration_s is None else int(round(duration_s * self.fs))
         self.stop = stop
         self.n_samples = 0  #: samples delivered so far
