@@ -275,3 +275,19 @@ def test_infinite_duration_is_one_line_not_a_traceback(robot_dir, monkeypatch, c
         assert err.startswith("hearsee: error: --duration must be > 0") and "Traceback" not in err
         assert err.count("\n") == 1
     assert not (robot_dir / "report").exists()
+
+
+def test_report_folder_that_is_a_file_fails_before_listening(robot_dir, monkeypatch, capsys):
+    """output.report (or --out) naming an existing file, with the JSON lines elsewhere: the
+    dry run passed and a live run listened to the end, then died writing its report (nothing
+    of it written); the robot file is refused at once, the file untouched."""
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES))
+    notes = robot_dir / "notes.txt"
+    notes.write_text("keep", encoding="utf-8")
+    for out, args in (({"report": "notes.txt/sub", "jsonl": "run.jsonl"}, []),
+                      ({"report": "report"}, ["--out", str(notes)])):
+        cfg = _config(robot_dir, cameras=False, output=out)
+        assert main(["run", "--config", str(cfg), *args, "--dry-run"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "output.report" in err[0] and "not a folder" in err[0], err
+    assert notes.read_text(encoding="utf-8") == "keep"

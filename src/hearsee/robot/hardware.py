@@ -398,12 +398,19 @@ def robot_config_from_dict(data: Mapping[str, Any], where: str = "robot.yaml",
 
 
 def check_outputs(cfg: RobotConfig, where: str) -> None:
-    """ConfigError (prefixed ``where``) when the run's outputs would overwrite an input file:
+    """ConfigError (prefixed ``where``) when ``output.report`` (or the folder it would be made
+    in) is a file, or the run's outputs would overwrite an input file:
     ``output.jsonl`` or ``output.report`` is one, the report would write over one
     (:func:`hearsee.robot.report.report_overwrites`), or the JSON lines are one of the
     report's own files. Checked when a robot file is loaded and again for ``run --out``."""
     from hearsee.robot.report import REPORT_FILES, report_overwrites
 
+    rep = cfg.output.report
+    blocker = next((q for q in (rep, *rep.parents) if q.exists()), None)
+    if blocker is not None and not blocker.is_dir():
+        # (found only when the report was written, after the whole live run)
+        raise ConfigError(f"{where}: output.report: {blocker} is a file, not a folder; "
+                          "choose a report folder")
     ins = {p.resolve() for p in cfg.input_files() if p.exists()}
     for name, p in (("output.jsonl", cfg.output.jsonl), ("output.report", cfg.output.report)):
         if p.resolve() in ins:
