@@ -856,3 +856,32 @@ def test_bad_duration_is_a_config_error(tmp_path, duration):
     res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), duration_s=float("inf"),
                     head=_quiet_head(cfg), jsonl=tmp_path / "b.jsonl")
     assert res.summary["audio_s"] == pytest.approx(4000 / FS)
+
+
+def test_cameras_closed_when_the_head_pose_is_bad(tmp_path, monkeypatch):
+    """A driver whose first pose is impossible (NaN pan): run_robot raises GeometryError -- it
+    had already opened the cameras of the robot file and left them open."""
+    import hearsee.robot.hardware as hw
+    from hearsee.errors import GeometryError
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import ArraySource
+
+    opened = []
+
+    class Tracked(hw.Cameras):
+        def __init__(self, *a, **kw):
+            super().__init__(*a, **kw)
+            opened.append(self)
+
+    monkeypatch.setattr(hw, "Cameras", Tracked)
+    cfg, x, _ = _texture_case(tmp_path, default_rig(160, 120), duration_s=0.3)
+
+    class BadHead:
+        pose_deg = (float("nan"), 0.0)
+
+        def command(self, t, pan_deg, tilt_deg):
+            return {"pan_deg": pan_deg, "tilt_deg": tilt_deg}
+
+    with pytest.raises(GeometryError, match="pan_deg"):
+        run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=BadHead())
+    assert all(c.caps == {} for c in opened)  # none opened, or all closed again

@@ -966,9 +966,6 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     if abs(source.fs - a.fs) > 1e-6:
         raise AudioInputError(f"audio.fs: the source delivers {source.fs:g} Hz but the robot "
                               f"file says {a.fs} Hz")
-    own_cameras = cameras is None and cfg.cameras is not None
-    if own_cameras:
-        cameras = Cameras(cfg.cameras, f"{cfg.path}: ")
     head = head or PrintHeadDriver(cfg.head, sys.stderr)
     geo = _Head(cfg, _pose(head))
     rig = cfg.cameras.rig if cfg.cameras is not None else None
@@ -978,6 +975,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                         itd_filter=True)
     pipeline = StreamPipeline(a.array, scfg, queue_size=16, max_stall_s=5.0)
     track = new_person_track()
+    # the cameras last, just before the try that closes them (an error above left them open)
+    own_cameras = cameras is None and cfg.cameras is not None
+    if own_cameras:
+        cameras = Cameras(cfg.cameras, f"{cfg.path}: ")
     out_path = Path(jsonl) if jsonl is not None else cfg.output.jsonl
     try:
         out_path.parent.mkdir(parents=True, exist_ok=True)
