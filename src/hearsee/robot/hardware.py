@@ -14,8 +14,9 @@ Schema (defaults in brackets)::
       fs: 16000                         [16000]  sample rate, Hz
       channels: [1, 2, 3, 4]            [0 .. n_mics-1]  input channel (0-based) of microphone k
       array: respeaker-4 | mics.yaml    [three-mic]  array preset or YAML file (array frame)
-      block_ms: 100                     [100]  one update (one JSON line) per block, ms
-      frame_ms: 64                      [64]   TDOA analysis frame, ms (hop = frame / 2)
+      block_ms: 100                     [100]  audio block read from the device, ms
+      frame_ms: 64                      [64]   TDOA analysis frame, ms (hop = frame / 2; one
+                                        update, one JSON line, per hop)
       method: phat                      [phat] GCC weighting (phat, scot, roth, ml, cc)
     cameras:                            # optional: without it the robot only hears
       left: 0 | /dev/video0 | file.mp4 | rtsp://...   VideoCapture index, path or URL
@@ -106,8 +107,9 @@ DeviceSpec = int | str
 @dataclass(frozen=True)
 class AudioConfig:
     """Microphones: ``device`` (index, name substring or None = default input), ``fs`` Hz,
-    ``channels`` (input channel of each microphone), the ``array`` geometry, ``block_ms`` (one
-    update per block), ``frame_ms`` (TDOA frame) and the GCC ``method``."""
+    ``channels`` (input channel of each microphone), the ``array`` geometry, ``block_ms`` (the
+    device's block), ``frame_ms`` (TDOA frame; one update per hop = frame / 2) and the GCC
+    ``method``."""
 
     device: DeviceSpec | None
     fs: int
