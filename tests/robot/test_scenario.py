@@ -138,3 +138,21 @@ def test_documented_audio_keys_are_accepted():
     for key, default in documented.items():
         sc = scenario_from_dict({"audio": {key: yaml.safe_load(default)}})
         assert sc.to_dict()["audio"][key] == pytest.approx(float(default))
+
+
+@pytest.mark.parametrize("entry, field", [
+    ({"people": [{"path_m": [[1.0, 1.0]], "height_m": 2.2}], "objects": []},
+     r"scenario\.people\[0\]\.height_m"),
+    ({"people": [{"path_m": [[1.0, 1.0]]}],
+      "objects": [{"kind": "coat", "position_m": [1.0, 5.0], "height_m": 2.15}]},
+     r"scenario\.objects\[0\]\.height_m"),
+])
+def test_people_and_objects_must_fit_under_the_ceiling(entry, field):
+    """A 2.1 m high room: a 2.2 m person (mouth at 2.06 m) or a 2.15 m coat stand cannot
+    stand in it. Both were accepted; the person then failed only once the room was simulated
+    (a GeometryError about the audio source, not naming the field)."""
+    room = {"room": {"size_m": [7.0, 6.0, 2.1]}, "robot": {"head_height_m": 1.2}}
+    with pytest.raises(ConfigError, match=field + r".*ceiling"):
+        scenario_from_dict({**room, **entry})
+    # the same people and objects fit a room of the default 3 m height
+    scenario_from_dict({**entry, "robot": {"head_height_m": 1.2}})

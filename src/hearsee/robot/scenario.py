@@ -29,8 +29,9 @@ Schema (defaults in brackets)::
     objects:                       [a mannequin]
       - {kind: mannequin|poster|coat, position_m: [x, y], yaw_deg [0], height_m [1.75]}
 
-Every waypoint and object keeps ``WALL_CLEARANCE_M`` from the walls, and every path (each
-segment between waypoints) and object keeps ``ROBOT_CLEARANCE_M`` from the robot base. The
+Every waypoint and object keeps ``WALL_CLEARANCE_M`` from the walls, every person and object
+is lower than the ceiling, and every path (each segment between waypoints) and object keeps
+``ROBOT_CLEARANCE_M`` from the robot base. The
 default speaker and mannequin (those of :func:`default_scenario`) are checked the same way
 when ``people`` or ``objects`` is left out: with another room or robot position they may not
 fit, and the error says which key to set.
@@ -196,6 +197,13 @@ def _inside(xy: np.ndarray, room: np.ndarray, where: str) -> None:
         )
 
 
+def _under_ceiling(height: float, room: np.ndarray, where: str) -> float:
+    """``height`` (m) when it is below the room's ceiling, else ConfigError naming ``where``."""
+    if height >= room[2]:
+        raise ConfigError(f"{where}: {height} m does not fit under the {room[2]} m ceiling")
+    return height
+
+
 def _path_distance(path: np.ndarray, p: np.ndarray) -> float:
     """Smallest distance (m) from point ``p`` to the polyline ``path`` ((k, 2) waypoints; one
     waypoint: the distance to it)."""
@@ -239,9 +247,9 @@ def _parse_person(p: Any, k: int, pw: str, size: np.ndarray, robot_xy: np.ndarra
     facing = p.get("facing", "toward-robot")
     if facing not in ("toward-robot", "path"):
         raise ConfigError(f"{pw}.facing: expected 'toward-robot' or 'path'")
-    return PersonSpec(name=str(p.get("name", f"person{k}")), path_m=path,
-                      height_m=number(p, "height_m", 1.72, pw, 1.0, 2.2), voice=voice,
-                      speaking=spk, facing=facing)
+    height = _under_ceiling(number(p, "height_m", 1.72, pw, 1.0, 2.2), size, f"{pw}.height_m")
+    return PersonSpec(name=str(p.get("name", f"person{k}")), path_m=path, height_m=height,
+                      voice=voice, speaking=spk, facing=facing)
 
 
 def _parse_object(o: Any, ow: str, size: np.ndarray, robot_xy: np.ndarray) -> ObjectSpec:
@@ -260,7 +268,8 @@ def _parse_object(o: Any, ow: str, size: np.ndarray, robot_xy: np.ndarray) -> Ob
                           f"at {np.round(robot_xy, 3).tolist()}")
     return ObjectSpec(kind=kind, position_m=pos,
                       yaw_deg=number(o, "yaw_deg", 0.0, ow, -360, 360),
-                      height_m=number(o, "height_m", 1.75, ow, 0.5, 2.2))
+                      height_m=_under_ceiling(number(o, "height_m", 1.75, ow, 0.5, 2.2), size,
+                                              f"{ow}.height_m"))
 
 
 def _default_entries(key: str, noun: str, entries: list[dict[str, Any]], where: str,
