@@ -241,3 +241,31 @@ def test_demo_refuses_export_over_an_input_or_an_existing_file_before_running(
     err = capsys.readouterr().err
     assert "file exists; pass --force" in err and "Traceback" not in err
     assert old.read_bytes() == b"keep" and not out.exists()
+
+
+def test_track_is_dropped_without_visual_fixes_even_when_nobody_speaks(monkeypatch):
+    """The speaker talks for 1.2 s; from the fifth camera frame on the camera sees nobody.
+    With neither sound nor sight, the 3D track must still be dropped TRACK_TIMEOUT_S after
+    the last visual fix (the timeout used to be checked only in steps with audio bearings:
+    a silent person's track coasted to the end of the run and counted as tracked)."""
+    import dataclasses
+
+    import hearsee.vision.fusion as fusion
+    from hearsee.robot.pipeline import CONTROL_DT, TRACK_TIMEOUT_S
+
+    real, calls = fusion.detect_humans, []
+
+    def blind_after_four_frames(*args, **kwargs):
+        det = real(*args, **kwargs)
+        calls.append(det)
+        return det if len(calls) <= 4 else dataclasses.replace(det, humans=[], rejected=[])
+
+    monkeypatch.setattr(fusion, "detect_humans", blind_after_four_frames)
+    spec = {**SHORT, "people": [{**SHORT["people"][0], "speaking": [[0.0, 1.2]]}],
+            "objects": []}
+    res = run_scenario(scenario_from_dict(spec), keep_images=False)
+    fixes = [r["t"] for r in res.log if any(d["accepted"] for d in r["detections"])]
+    assert fixes and res.log[-1]["t"] - fixes[-1] > TRACK_TIMEOUT_S + 2 * CONTROL_DT
+    late = [r for r in res.log if r["t"] > fixes[-1] + TRACK_TIMEOUT_S + CONTROL_DT + 1e-9]
+    assert late and all(r["audio"] is None for r in late)  # silent: no bearings either
+    assert all(r["track"] is None and r["error_m"] is None for r in late)

@@ -434,12 +434,12 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
                 n_audio_updates += 1
                 az_meas.append(az_r)
         audio_rec = None
+        if track.initialized and t1 - last_visual_t > TRACK_TIMEOUT_S:
+            track.reset()  # with or without audio bearings (a silent person's track coasts)
         if direction.initialized and az_meas:
             audio_rec = {"azimuth_deg": direction.azimuth_deg, "n_frames": len(az_meas),
                          "confidence": float(np.mean(tf.confidence[tf.valid]))
                          if tf.valid.any() else 0.0}
-            if track.initialized and t1 - last_visual_t > TRACK_TIMEOUT_S:
-                track.reset()
             if track.initialized:
                 for az in az_meas:
                     bearing_update(track, body, az, BEARING_SIGMA_DEG)
