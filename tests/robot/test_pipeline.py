@@ -269,3 +269,36 @@ def test_track_is_dropped_without_visual_fixes_even_when_nobody_speaks(monkeypat
     late = [r for r in res.log if r["t"] > fixes[-1] + TRACK_TIMEOUT_S + CONTROL_DT + 1e-9]
     assert late and all(r["audio"] is None for r in late)  # silent: no bearings either
     assert all(r["track"] is None and r["error_m"] is None for r in late)
+
+
+def _array_file(path):
+    """The three-mic preset's geometry as an array file (JSON, which is YAML) at ``path``."""
+    from hearsee.audio.arrays import load_array
+
+    text = json.dumps({"microphones": load_array("three-mic").positions.tolist()}) + "\n"
+    path.write_text(text)
+    return text
+
+
+def test_demo_will_not_write_over_the_scenarios_array_file(tmp_path, monkeypatch, capsys):
+    """The array file a scenario names is an input too (``hearsee run`` protects its robot
+    file's array): neither the report nor --rerun / --mcap may replace it, not even with
+    --force. The demo used to protect the scenario file only: both cases went ahead (the
+    export here fails on its missing extra instead, and the report was written over it)."""
+    from hearsee.robot import export
+
+    monkeypatch.setitem(export._EXTRAS, "mcap", ("hearsee_no_such_module", "--mcap needs ROS"))
+    out = tmp_path / "report"
+    out.mkdir()
+    for arr in (tmp_path / "arr.json", out / "summary.json"):
+        text = _array_file(arr)
+        sc = tmp_path / "s.yaml"
+        sc.write_text(f"duration_s: 1.0\nrobot: {{array: {json.dumps(str(arr))}}}\n")
+        args = ["demo", "--scenario", str(sc), "-o", str(out), "-q"]
+        if arr.parent != out:
+            args += ["--mcap", str(arr), "--force"]
+        assert main(args) == 2
+        err = capsys.readouterr().err
+        assert "overwrite" in err and "input" in err and "Traceback" not in err, err
+        assert arr.read_text() == text
+        assert not (out / "index.html").exists()

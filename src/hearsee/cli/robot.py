@@ -31,11 +31,13 @@ def demo_cmd(
     from hearsee.robot.scenario import default_scenario, load_scenario
 
     sc = load_scenario(scenario) if scenario else default_scenario()
-    hit = report_overwrites(out, [scenario])
+    # the files the run reads: the scenario and the array file it names (not a preset)
+    inputs = [scenario, *([Path(sc.robot.array)] if Path(sc.robot.array).is_file() else [])]
+    hit = report_overwrites(out, inputs)
     if hit is not None:
         raise ConfigError(f"--out {out}: the report would overwrite the input {hit}; choose "
                           "another folder")
-    check_exports(rerun, mcap, [scenario], force)
+    check_exports(rerun, mcap, inputs, force)
     with progress(f"scenario {sc.name}", total=sc.duration_s, enabled=not quiet) as advance:
         result = run_scenario(sc, progress=advance)
     index = write_report(out, sc.to_dict(), result.log, result.summary, result.images,
