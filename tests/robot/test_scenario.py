@@ -156,3 +156,18 @@ def test_people_and_objects_must_fit_under_the_ceiling(entry, field):
         scenario_from_dict({**room, **entry})
     # the same people and objects fit a room of the default 3 m height
     scenario_from_dict({**entry, "robot": {"head_height_m": 1.2}})
+
+
+@pytest.mark.parametrize("args, field", [
+    ((-1,), "seed"), ((1.5,), "seed"), ((True,), "seed"),
+    ((0, float("nan")), "duration_s"), ((0, 0.0), "duration_s"), ((0, -3.0), "duration_s"),
+    ((0, 500.0), "duration_s"),
+])
+def test_random_scenario_checks_its_arguments(args, field):
+    """A whole seed >= 0 and the duration a scenario file may hold (1-120 s), else a
+    ConfigError naming the argument. A negative or fractional seed raised numpy's
+    ValueError/TypeError; a NaN, zero or negative duration returned a scenario that
+    scenario_from_dict refuses (its person standing still for a NaN or negative time)."""
+    with pytest.raises(ConfigError, match=field):
+        random_scenario(*args)
+    assert random_scenario(np.int64(3), 2).to_dict() == random_scenario(3, 2.0).to_dict()

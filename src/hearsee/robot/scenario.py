@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from hearsee.audio.propagation import image_sources
-from hearsee.config import check_keys, load_yaml, number
+from hearsee.config import check_keys, finite_number, load_yaml, number, whole_number
 from hearsee.errors import ConfigError
 
 __all__ = [
@@ -418,12 +418,14 @@ def default_scenario() -> Scenario:
 def random_scenario(seed: int, duration_s: float = 6.0) -> Scenario:
     """A random scenario for ``hearsee eval``: one speaker walking 0.2-0.8 m/s in any direction
     from 1.5-3.5 m to 1.2-4 m from the robot, never passing within ``ROBOT_CLEARANCE_M`` of it,
-    0-2 human-like objects, RT60 0.2-0.5 s, SNR 10-25 dB."""
+    0-2 human-like objects, RT60 0.2-0.5 s, SNR 10-25 dB. ``seed``: a whole number >= 0;
+    ``duration_s``: 1-120 s (as in a scenario file); else ConfigError."""
+    seed = whole_number("random_scenario seed", seed, 0)
+    duration = finite_number("random_scenario duration_s", duration_s, 1.0, 120.0)
     rng = np.random.default_rng(seed)
     base = default_scenario()
     room = np.array([rng.uniform(6, 9), rng.uniform(5, 8), rng.uniform(2.6, 3.2)])
     robot_xy = room[:2] / 2 + rng.uniform(-0.4, 0.4, 2)
-    duration = float(duration_s)
 
     def inside(p: np.ndarray) -> bool:
         margin = WALL_CLEARANCE_M + 0.2
