@@ -171,3 +171,23 @@ def test_random_scenario_checks_its_arguments(args, field):
     with pytest.raises(ConfigError, match=field):
         random_scenario(*args)
     assert random_scenario(np.int64(3), 2).to_dict() == random_scenario(3, 2.0).to_dict()
+
+
+def test_a_relative_array_file_is_read_next_to_the_scenario(tmp_path, monkeypatch):
+    """robot.array as a relative file path was read from the working directory (the robot
+    file's paths are relative to that file): a scenario in another folder failed with "not
+    found", or silently read another file of that name where the user stood."""
+    from hearsee.audio.arrays import MicArray
+
+    square = {"name": "square", "microphones": [[0.08, 0.08, 0], [-0.08, 0.08, 0],
+                                                 [-0.08, -0.08, 0], [0.08, -0.08, 0]]}
+    (tmp_path / "sc").mkdir()
+    (tmp_path / "sc" / "mics.yaml").write_text(yaml.safe_dump(square))
+    (tmp_path / "sc" / "demo.yaml").write_text(yaml.safe_dump({"robot": {"array": "mics.yaml"}}))
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    sc = load_scenario(tmp_path / "sc" / "demo.yaml")
+    assert MicArray.from_yaml(sc.robot.array).name == "square"
+    assert sc.robot.array == str(tmp_path.resolve() / "sc" / "mics.yaml")
+    # presets and absolute paths are unchanged
+    assert scenario_from_dict({"robot": {"array": "respeaker-4"}}).robot.array == "respeaker-4"

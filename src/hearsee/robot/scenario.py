@@ -292,8 +292,12 @@ def _default_entries(key: str, noun: str, entries: list[dict[str, Any]], where: 
     return tuple(out)
 
 
-def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scenario:
-    """Validate a scenario mapping (see module docstring) and build a :class:`Scenario`."""
+def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
+                       base_dir: str | Path | None = None) -> Scenario:
+    """Validate a scenario mapping (see module docstring) and build a :class:`Scenario`. A
+    relative ``robot.array`` file path is resolved against ``base_dir`` (the scenario file's
+    folder when loaded by :func:`load_scenario`; None = the working directory), as the robot
+    file's paths are."""
     check_keys(data, ("name", "seed", "duration_s", "audio", "room", "robot", "people", "objects"),
                where)
     base = default_scenario()
@@ -328,6 +332,11 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scen
     array = rob.get("array", base.robot.array)
     if not isinstance(array, str):
         raise ConfigError(f"{rw}.array: expected a preset name or file path, got {array!r}")
+    if base_dir is not None and not Path(array).expanduser().is_absolute():
+        # (it was read from the working directory, unlike every path of the robot file)
+        near = Path(base_dir) / Path(array).expanduser()
+        if array.endswith((".yaml", ".yml")) or near.is_file():
+            array = str(near)
     from hearsee.audio.arrays import load_array
     from hearsee.audio.localize import array_geometry
 
@@ -394,8 +403,9 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario") -> Scen
 
 
 def load_scenario(path: str | Path) -> Scenario:
-    """Load and validate a scenario YAML file."""
-    return scenario_from_dict(load_yaml(path), where=str(path))
+    """Load and validate a scenario YAML file (a relative array path is relative to it)."""
+    return scenario_from_dict(load_yaml(path), where=str(path),
+                              base_dir=Path(path).resolve().parent)
 
 
 def default_scenario() -> Scenario:
