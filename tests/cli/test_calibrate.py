@@ -149,3 +149,20 @@ def test_calibrate_bad_input_exits_2_with_one_line(case, board_dir, tmp_path, ca
     assert "Traceback" not in err
     if case != "overwrite_input":
         assert not out.exists()
+
+
+@pytest.mark.parametrize("case", ["parent_is_a_file", "output_is_a_folder"])
+def test_calibrate_unwritable_output_is_refused_before_calibrating(case, board_dir, tmp_path,
+                                                                    capsys):
+    """An output inside a regular file (NotADirectoryError) or naming a folder with --force
+    (IsADirectoryError) ended in a traceback, after the whole calibration had been done."""
+    d, _ = board_dir
+    (tmp_path / "afile").write_text("not a folder")
+    if case == "parent_is_a_file":
+        args, expect = _args(d, tmp_path / "afile" / "c.yaml"), "afile"
+    else:
+        args, expect = _args(d, tmp_path, "--force"), "is a folder"
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert expect in err and len(err.strip().splitlines()) == 1
+    assert (tmp_path / "afile").read_text() == "not a folder"
