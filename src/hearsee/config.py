@@ -51,6 +51,8 @@ def load_yaml(path: str | Path) -> dict[str, Any]:
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         problem = getattr(exc, "problem", None) or "invalid YAML"
         raise ConfigError(f"{p}: invalid YAML{where}: {problem}") from None
+    except OSError as exc:  # (e.g. no read permission: a builtin PermissionError before)
+        raise InputFileError(f"{p}: cannot be read ({exc.strerror or exc})") from None
     if data is None:
         raise ConfigError(f"{p}: file is empty")
     if not isinstance(data, dict):
