@@ -189,6 +189,8 @@ def load_trajectory(path: str | Path) -> Trajectory:
             rows = list(csv.reader(fh))
     except UnicodeDecodeError:
         raise ConfigError(f"{p}: not a text CSV file") from None
+    except OSError as exc:  # (e.g. no read permission: a builtin PermissionError before)
+        raise InputFileError(f"{p}: cannot be read ({exc.strerror or exc})") from None
     rows = [r for r in rows if r and any(c.strip() for c in r)]
     if not rows:
         raise ConfigError(f"{p}: empty trajectory file (expected header t,x,y,z)")
