@@ -194,3 +194,20 @@ def test_bad_rates_speeds_and_noise_levels_are_refused():
     y = simulate_free_field(s, 16000, slow, src)
     np.testing.assert_allclose(y, simulate_free_field(s, 16000, arr.positions, src,
                                                       speed_of_sound=300.0))
+
+
+def test_delay_signals_output_has_the_asked_length():
+    """``n_out`` longer than the signal plus its delay returned fewer samples (the FFT length),
+    and a negative ``n_out`` silently cut samples off the end (numpy slicing)."""
+    fs = 16000
+    x = white_noise(100 / fs, fs, rng=3)
+    y = delay_signals(x, [150 / fs], fs, gains=0.5, n_out=400)  # whole-sample delay: a shift
+    assert y.shape == (1, 400)
+    np.testing.assert_allclose(y[0, 150:250], 0.5 * x, atol=1e-9)
+    np.testing.assert_allclose(y[0, :150], 0.0, atol=1e-9)
+    np.testing.assert_allclose(y[0, 250:], 0.0, atol=1e-9)
+    for bad in (-3, 2.5, "10"):
+        with pytest.raises(ConfigError, match="n_out"):
+            delay_signals(x, [0.0], fs, n_out=bad)
+    # the default stays the signal's length
+    assert delay_signals(x, [0.0, 1e-3], fs).shape == (2, 100)

@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.signals import check_fs
-from hearsee.config import finite_number
+from hearsee.config import finite_number, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
 __all__ = [
@@ -93,8 +93,9 @@ def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: Arra
     d = np.atleast_1d(np.asarray(delays_s, dtype=float))
     if d.size == 0 or np.any(d < 0) or not np.all(np.isfinite(d)):
         raise GeometryError("delays must be one or more finite, non-negative numbers of seconds")
-    n_out = len(x) if n_out is None else int(n_out)
-    n_fft = sfft.next_fast_len(len(x) + int(np.ceil(d.max() * fs)) + 1, real=True)
+    n_out = len(x) if n_out is None else whole_number("n_out", n_out, 0)
+    # (an n_out past the delayed signal's end used to return only n_fft samples)
+    n_fft = sfft.next_fast_len(max(len(x), n_out) + int(np.ceil(d.max() * fs)) + 1, real=True)
     X = sfft.rfft(x, n_fft)
     f = np.arange(X.shape[0]) / n_fft  # cycles per sample
     phase = np.exp(-2j * np.pi * f[None, :] * (d[:, None] * fs))
