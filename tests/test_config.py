@@ -86,3 +86,15 @@ def test_load_yaml_unreadable_file_is_a_typed_error(tmp_path, monkeypatch):
     monkeypatch.setattr(Path, "read_text", denied)
     with pytest.raises(InputFileError, match="Permission denied"):
         load_yaml(p)
+
+
+def test_an_integer_too_large_for_a_float_is_not_a_finite_number():
+    """is_real said True for a 400-digit int (a YAML integer literal), so finite_number and
+    number raised a builtin OverflowError from float() instead of their ConfigError."""
+    huge = 10**400
+    assert not is_real(huge) and not is_real(-huge)
+    assert is_real(10**300) and is_real(2**1023)
+    with pytest.raises(ConfigError, match="a must be a finite number > 0"):
+        finite_number("a", huge, 0.0, lo_open=True)
+    with pytest.raises(ConfigError, match="w.k: expected a number"):
+        number({"k": huge}, "k", 1.0, "w")
