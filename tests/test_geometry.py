@@ -69,3 +69,13 @@ def test_cart_to_sph_azimuth_is_in_the_half_open_interval():
     az, _, _ = cart_to_sph(np.array([[-1.0, -0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]))
     np.testing.assert_allclose(az, [np.pi, np.pi, -np.pi / 2])
     assert float(direction_deg([-1.0, -0.0, 0.0])[0]) == 180.0
+
+
+def test_head_pose_refuses_an_integer_beyond_float_range():
+    """HeadPose(10**400, 0) raised a builtin TypeError from np.isfinite on the huge int."""
+    from hearsee.geometry import HeadPose
+
+    with pytest.raises(GeometryError, match="pan_deg must be finite"):
+        HeadPose(10**400, 0.0)
+    assert HeadPose(np.int64(30), np.float32(10.0)).as_tuple() == (30.0, 10.0)
+

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from hearsee.config import is_real
 from hearsee.errors import GeometryError
 
 __all__ = [
@@ -147,7 +148,7 @@ class HeadPose:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int | float | np.floating | np.integer):
                 raise GeometryError(f"HeadPose.{name} must be a number, got {v!r}")
-            if not np.isfinite(v):
+            if not is_real(v):  # (np.isfinite raised TypeError on an int beyond float range)
                 raise GeometryError(f"HeadPose.{name} must be finite, got {v!r}")
             object.__setattr__(self, name, float(v))
         if abs(self.tilt_deg) > 90.0:
