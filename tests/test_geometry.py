@@ -79,3 +79,13 @@ def test_head_pose_refuses_an_integer_beyond_float_range():
         HeadPose(10**400, 0.0)
     assert HeadPose(np.int64(30), np.float32(10.0)).as_tuple() == (30.0, 10.0)
 
+
+def test_a_scalar_is_not_a_point():
+    """cart_to_sph(5.0) and array_to_robot(5.0, ...) raised a builtin IndexError (shape[-1] of a
+    0-d array) instead of the GeometryError that a wrong number of coordinates gets."""
+    from hearsee.geometry import array_to_robot, robot_to_array
+
+    for f in (cart_to_sph, direction_deg, lambda p: array_to_robot(p, (0.0, 0.0)),
+              lambda p: robot_to_array(p, (0.0, 0.0))):
+        with pytest.raises(GeometryError, match="3 coordinates"):
+            f(5.0)

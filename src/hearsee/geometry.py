@@ -53,7 +53,7 @@ def sph_to_cart(azimuth: ArrayLike, elevation: ArrayLike, distance: ArrayLike = 
 def cart_to_sph(xyz: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
     """Cartesian points ``(..., 3)`` -> (azimuth rad in (-pi, pi], elevation rad, distance m)."""
     p = np.asarray(xyz, dtype=float)
-    if p.shape[-1] != 3:
+    if p.ndim == 0 or p.shape[-1] != 3:  # (a scalar: IndexError before)
         raise GeometryError(f"expected points with 3 coordinates, got shape {p.shape}")
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     r = np.sqrt(x * x + y * y + z * z)
@@ -209,7 +209,7 @@ def array_to_robot(points: ArrayLike, pose: HeadPose | Sequence[float],
     """
     p = as_pose(pose)
     pts = np.asarray(points, dtype=float)
-    if pts.shape[-1] != 3:
+    if pts.ndim == 0 or pts.shape[-1] != 3:
         raise GeometryError(f"expected points with 3 coordinates, got shape {pts.shape}")
     R = head_rotation(p.pan_deg, p.tilt_deg).as_matrix()
     return _vec3(pivot_m, "pivot_m") + (pts + _vec3(offset_m, "offset_m")) @ R.T
@@ -222,7 +222,7 @@ def robot_to_array(points: ArrayLike, pose: HeadPose | Sequence[float],
     :func:`array_to_robot`)."""
     p = as_pose(pose)
     pts = np.asarray(points, dtype=float)
-    if pts.shape[-1] != 3:
+    if pts.ndim == 0 or pts.shape[-1] != 3:
         raise GeometryError(f"expected points with 3 coordinates, got shape {pts.shape}")
     R = head_rotation(p.pan_deg, p.tilt_deg).as_matrix()
     return (pts - _vec3(pivot_m, "pivot_m")) @ R - _vec3(offset_m, "offset_m")
