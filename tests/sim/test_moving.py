@@ -409,3 +409,18 @@ def test_unreadable_trajectory_file_is_a_typed_error(tmp_path, monkeypatch):
     monkeypatch.setattr(Path, "open", denied)
     with pytest.raises(InputFileError, match="Permission denied"):
         load_trajectory(p)
+
+
+def test_room_updates_are_at_most_block_s_apart_below_the_tdoa_grid():
+    """With the TDOA step bound on (the default), the updates were picked on a fixed 2 ms grid,
+    so a block_s under 2 ms (1 ms = 16 samples) still updated only every 32 samples."""
+    from hearsee.sim.moving import _update_times
+
+    arr = MicArray.from_preset("three-mic")
+    slow = linear_trajectory([2.0, 0.0, 0.0], [0.0, 0.1, 0.0], 1.0)
+    for block_s in (0.001, 0.0015):
+        hop = round(block_s * FS)
+        for step in (0.1, None):
+            c = _update_times(slow, arr.positions, 343.0, FS, FS, block_s, step)
+            assert c[0] == 0 and c[-1] == FS - 1
+            assert np.diff(c).max() <= hop, (block_s, step)

@@ -395,14 +395,17 @@ def _update_times(trajectory: Trajectory, mics: NDArray, c: float, fs: float, n:
 
     At most ``block_s`` seconds apart, and closer wherever the source moves fast across the
     array: between two updates no microphone pair's direct-path TDOA changes by more than
-    ``max_tdoa_step_samples`` samples (measured on a 2 ms grid, summed step by step -- an upper
-    bound of the change). None: every ``block_s`` seconds.
+    ``max_tdoa_step_samples`` samples (measured on a 2 ms grid, or a ``block_s`` one when that
+    is finer, summed step by step -- an upper bound of the change). None: every ``block_s``
+    seconds.
     """
     hop = max(int(round(block_s * fs)), 1)
     if max_tdoa_step_samples is None:
         centres = np.arange(0, n, hop, dtype=float)
     else:
-        tf = np.append(np.arange(0.0, (n - 1) / fs, 0.002), (n - 1) / fs)
+        # (a fixed 2 ms grid spaced the updates 2 ms apart even for a shorter block_s)
+        grid = min(0.002, hop / fs)
+        tf = np.append(np.arange(0.0, (n - 1) / fs, grid), (n - 1) / fs)
         tau = MicArray(mics, speed_of_sound=c).tdoa(trajectory.at(tf)) * fs  # (n_fine, pairs)
         D = np.r_[0.0, np.cumsum(np.max(np.abs(np.diff(tau, axis=0)), axis=1))]
         picked, k = [0], 0
