@@ -250,3 +250,20 @@ def test_resampling_an_odd_rate_ratio_says_what_to_do():
     with pytest.raises(AudioInputError, match="common rate"):
         resample(np.zeros((1, 4799)), 47999, 16000)
     assert resample(np.zeros((1, 4800)), 48000, 16000).shape == (1, 1600)
+
+
+@pytest.mark.parametrize("subtype", ["PCM_U8", "ULAW", "ALAW"])
+def test_read_recording_warns_on_a_file_clipped_below_one(subtype, tmp_path):
+    """An 8-bit WAV's largest positive sample reads as 127/128 = 0.992, a mu-law one's as
+    0.980 (A-law 0.984), below the 0.999 clip level: a recording flat-topped there (here
+    ~30 % of the samples) gave no warning."""
+    t = np.arange(16000) / 16000
+    x = np.clip(1.5 * np.sin(2 * np.pi * 200 * t), -0.9, 1.0)  # only the positive tops clip
+    x = np.stack([x, x])
+    p = _write(tmp_path / "clip8.wav", x, subtype=subtype)
+    with pytest.warns(ClippingWarning, match="clipped"):
+        read_recording(p)
+    ok = _write(tmp_path / "ok8.wav", 0.5 * x, subtype=subtype)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_recording(ok)

@@ -68,6 +68,11 @@ MIN_VOICE_FS_HZ = 4000.0
 CLIP_LEVEL = 0.999
 #: Fraction of clipped samples above which :func:`read_recording` warns.
 CLIP_FRACTION = 1e-3
+#: Largest positive sample (read as float) of the file subtypes whose full scale is below
+#: 1.0; :data:`CLIP_LEVEL` applies to it instead of 1.0 (8-bit files stop at 127/128 = 0.992,
+#: so their flat tops went unnoticed, and mu-law / A-law files never reach 0.999 at all).
+_FULL_SCALE = {"PCM_U8": 127 / 128, "PCM_S8": 127 / 128, "ULAW": 32124 / 32768,
+               "ALAW": 32256 / 32768}
 
 
 def white_noise(duration_s: float, fs: float,
@@ -250,6 +255,17 @@ def _resample(x: ArrayLike, fs_in: float, fs_out: float) -> NDArray:
 resample = _resample
 
 
+def _full_scale(path: str | Path) -> float:
+    """The largest positive sample of the audio file's subtype (:data:`_FULL_SCALE`; 1.0
+    for the others)."""
+    import soundfile as sf
+
+    try:
+        return _FULL_SCALE.get(sf.info(str(path)).subtype, 1.0)
+    except Exception:  # noqa: BLE001 (the file was read already; only the warning depends on it)
+        return 1.0
+
+
 def _read_file(path: str | Path) -> tuple[NDArray, int]:
     """Read any libsndfile format -> ``(x (n_ch, n) float64, fs)`` with typed errors."""
     import soundfile as sf
@@ -373,7 +389,8 @@ def read_recording(
     clipped = 0.0
     if x.size and np.all(np.isfinite(x)):
         mag = np.abs(x)
-        level = CLIP_LEVEL * np.maximum(1.0, mag.max(axis=1, keepdims=True))
+        peak = mag.max(axis=1, keepdims=True)
+        level = CLIP_LEVEL * np.where(peak > 1.0, peak, _full_scale(path))
         clipped = float(np.mean(mag >= level))
     if fs is not None and int(round(fs)) != fs_in:
         if not resample:
