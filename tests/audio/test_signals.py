@@ -267,3 +267,14 @@ def test_read_recording_warns_on_a_file_clipped_below_one(subtype, tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         read_recording(ok)
+
+
+def test_write_recording_refuses_a_bad_sample_rate_before_writing(tmp_path):
+    """fs=inf raised a builtin OverflowError from int(round(fs)); a NaN or a string went to
+    libsndfile. Nothing is written."""
+    x = 0.1 * np.ones((2, 100))
+    for fs in (float("inf"), float("nan"), "16000", -16000.0):
+        out = tmp_path / "out.wav"
+        with pytest.raises(AudioInputError, match="sample rate"):
+            write_recording(out, x, fs)
+        assert not out.exists()

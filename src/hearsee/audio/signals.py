@@ -460,6 +460,7 @@ def write_recording(
     import soundfile as sf
 
     p = Path(path)
+    fs = check_fs(fs)  # (inf: a builtin OverflowError from int(round(fs)) before)
     if protect is not None:
         items = [protect] if isinstance(protect, str | Path) else list(protect)
         for q in items:
