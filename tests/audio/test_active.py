@@ -352,7 +352,9 @@ def test_localize3d_cli_round_trip(pose_manifest, capsys, method):
     (lambda d: d.update(extra=1), "unknown key 'extra'"),
     (lambda d: d["captures"][0].pop("tilt_deg"), "missing required key 'tilt_deg'"),
     (lambda d: d["captures"][1].update(file="nope.wav"), "not found"),
-    (lambda d: d["captures"][0].update(pan_deg="left"), "pan_deg must be a number"),
+    (lambda d: d["captures"][0].update(pan_deg="left"), "pan_deg must be a finite number"),
+    # (a 400-digit integer was an OverflowError traceback)
+    (lambda d: d["captures"][0].update(pan_deg=10**400), "pan_deg must be a finite number"),
     (lambda d: d["captures"][0].update(tilt_deg=120), "tilt_deg must be within"),
     (lambda d: d.pop("captures"), "missing required key 'captures'"),
     (lambda d: d["head"].update(offset_m=[0, 1]), "offset_m"),

@@ -1323,8 +1323,9 @@ def load_pose_manifest(path: Any) -> PoseManifest:
         pose_vals = []
         for key in ("pan_deg", "tilt_deg"):
             v = require(c, key, w)
-            if isinstance(v, bool) or not isinstance(v, int | float):
-                raise ConfigError(f"{w}: {key} must be a number of degrees, got {v!r}")
+            if isinstance(v, bool) or not isinstance(v, int | float) or not is_real(v):
+                # (a 400-digit integer raised float()'s OverflowError; NaN went to HeadPose)
+                raise ConfigError(f"{w}: {key} must be a finite number of degrees, got {v!r}")
             pose_vals.append(float(v))
         try:
             poses.append(HeadPose(*pose_vals))
