@@ -7,7 +7,8 @@ band-limited interpolation of a fractional delay has long tails, and those of th
 abrupt end do wrap onto its start -- for 2 s of white noise delayed by 46.6 samples, -34 dB
 relative to the signal over the first 47 output samples (before the sound arrives) and -45 dB
 over the first 0.3 s; below -70 dB for band-limited signals. A longer pad would remove it but
-change every free-field simulation (and benchmark table) slightly; not done yet. Rooms: pyroomacoustics' image-source model (see :func:`simulate_room`).
+change every free-field simulation (and benchmark table) slightly; not done yet.
+Rooms: pyroomacoustics' image-source model (see :func:`simulate_room`).
 
 Frames: ``source`` and ``mics`` must be given in the same frame, metres. Room functions take
 room coordinates (origin at a corner, axes along the walls) or, for :func:`simulate_room`, the
