@@ -621,6 +621,30 @@ def test_jsonl_may_not_be_a_file_the_report_writes(tmp_path):
         assert cfg.output.jsonl == tmp_path / ok
 
 
+class _HeadAudio:
+    """An audio source of a talker at pan 40 deg, 2 m away: each block as heard at the pose
+    ``head`` has when the block is read (``pans``: the head poses it can take, degrees)."""
+
+    fs, n_channels = float(FS), 3
+
+    def __init__(self, head, pans, duration_s):
+        from hearsee.sim.audio import simulate_recording
+
+        self.head, self.rec = head, {}
+        for pan in pans:
+            a = np.radians(40.0 - pan)
+            self.rec[pan], _ = simulate_recording(
+                "three-mic", [2.0 * np.cos(a), 2.0 * np.sin(a), 0.0], duration_s=duration_s,
+                fs=FS, snr_db=25.0, seed=9)
+
+    def blocks(self):
+        from hearsee.stream.pipeline import ArraySource, Block
+
+        for b in ArraySource(self.rec[0.0], FS, 800).blocks():
+            x = self.rec[self.head.pose_deg[0]][:, b.start:b.start + b.data.shape[1]]
+            yield Block(b.seq, b.start, x, b.arrival)
+
+
 class _TurningHead:
     """A pan-only head that, at its first command more than 20 deg away, turns to 40 deg: it
     reports 20 deg for ``turn_s`` seconds of audio (mid-turn), then 40 deg. Time is the audio
@@ -654,26 +678,10 @@ def test_live_loop_follows_a_turning_head(tmp_path):
     block after each move while the stream's array-frame trackers restart, then hear the talker
     where they are at once."""
     from hearsee.robot.pipeline import MIN_AUDIO_UPDATES
-    from hearsee.sim.audio import simulate_recording
-    from hearsee.stream.pipeline import ArraySource, Block
 
-    rec = {}
-    for pan in (0.0, 20.0, 40.0):
-        a = np.radians(40.0 - pan)
-        rec[pan], _ = simulate_recording("three-mic", [2.0 * np.cos(a), 2.0 * np.sin(a), 0.0],
-                                         duration_s=3.0, fs=FS, snr_db=25.0, seed=9)
     head = _TurningHead()
-
-    class HeadAudio:  # each block as heard at the head's pose when it is read
-        fs, n_channels = float(FS), 3
-
-        def blocks(self):
-            for b in ArraySource(rec[0.0], FS, 800).blocks():
-                x = rec[head.pose_deg[0]][:, b.start:b.start + b.data.shape[1]]
-                yield Block(b.seq, b.start, x, b.arrival)
-
     cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
-    res = run_robot(cfg, audio_source=HeadAudio(), head=head)
+    res = run_robot(cfg, audio_source=_HeadAudio(head, (0.0, 20.0, 40.0), 3.0), head=head)
     log, s = res.log, res.summary
     assert s["status"] == "ok" and s["head_moves"] == 2
     pans = [r["head_pan_deg"] for r in log]
@@ -743,26 +751,11 @@ def test_head_is_not_told_to_stop_while_it_turns(tmp_path):
     it turns, the loop withholds the audio (no bearing): the desired pose must stay the talker's
     direction -- it used to be the head's pose of the moment, so every step told the head to
     stop where it was (commands of 10, 20, 30 deg) and the turn crawled from stop to stop."""
-    from hearsee.sim.audio import simulate_recording
-    from hearsee.stream.pipeline import ArraySource, Block
 
-    rec = {}
-    for pan in (0.0, 10.0, 20.0, 30.0, 40.0):
-        a = np.radians(40.0 - pan)
-        rec[pan], _ = simulate_recording("three-mic", [2.0 * np.cos(a), 2.0 * np.sin(a), 0.0],
-                                         duration_s=2.0, fs=FS, snr_db=25.0, seed=9)
     head = _SteppingHead()
-
-    class HeadAudio:  # each block as heard at the head's pose when it is read
-        fs, n_channels = float(FS), 3
-
-        def blocks(self):
-            for b in ArraySource(rec[0.0], FS, 800).blocks():
-                x = rec[head.pose_deg[0]][:, b.start:b.start + b.data.shape[1]]
-                yield Block(b.seq, b.start, x, b.arrival)
-
     cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
-    res = run_robot(cfg, audio_source=HeadAudio(), head=head)
+    res = run_robot(cfg, audio_source=_HeadAudio(head, (0.0, 10.0, 20.0, 30.0, 40.0), 2.0),
+                    head=head)
     assert res.summary["status"] == "ok" and head.sent
     t0 = head.sent[0][0]
     # every desired pan is the talker's direction, also while the head turns
