@@ -73,7 +73,13 @@ def test_framer_matches_offline_framing_and_marks_gaps():
     assert fr.n_dropped == 1
     assert b.missing.sum() == len([s for s in range(768, 2000, 128)])
     assert fr.push(Block(1, 1000, x[:, 1000:2000], 0.0)) is None
-    assert fr.n_late == 1
+    assert fr.n_late == 1 and fr.n_dropped == 0  # late, not lost after all
+    # a repeated block is late too, but brings no lost block back: block 3 is still lost
+    # (the repeat of block 2 used to take it off the count)
+    fr.push(Block(4, 4000, x[:, 4000:5000], 0.0))
+    assert fr.n_dropped == 1
+    assert fr.push(Block(2, 2000, x[:, 2000:3000], 0.0)) is None
+    assert fr.n_late == 2 and fr.n_dropped == 1
 
 
 @pytest.mark.parametrize("frame_ms, hop_ms, block, drop", [

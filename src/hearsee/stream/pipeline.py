@@ -503,8 +503,12 @@ class Framer:
     """Blocks -> batches of analysis frames, with missing frames where blocks were dropped.
 
     ``n_dropped`` counts blocks that never arrived (gaps in the sequence numbers), ``n_late``
-    blocks that arrived after their samples had been declared lost (counted only there).
+    blocks that arrived after their samples had been declared lost (counted only there) or
+    twice (a repeated block is late but brings no lost block back).
     """
+
+    #: Sequence numbers of declared gaps remembered, to tell a late block from a repeated one.
+    _GAP_MEMORY = 4096
 
     def __init__(self, n_channels: int, fs: float, frame_ms: float, hop_ms: float) -> None:
         self.fs = float(fs)
@@ -516,6 +520,7 @@ class Framer:
         self.n_late = 0
         self.n_dropped = 0
         self._expected_seq = 0
+        self._gaps: set[int] = set()  # sequence numbers counted in n_dropped (the latest ones)
 
     def push(self, blk: Block) -> FrameBatch | None:
         """Add a block; return the frames it completes (or None)."""
@@ -526,11 +531,16 @@ class Framer:
         buf_end = self.buf_start + self.buf.shape[1]
         if blk.start < buf_end or blk.seq < self._expected_seq:
             self.n_late += 1  # its samples were already consumed or declared lost
-            if blk.seq < self._expected_seq and self.n_dropped > 0:
-                self.n_dropped -= 1  # counted as a gap when its successor came: late, not lost
+            if blk.seq in self._gaps:  # counted as a gap when its successor came: late, not
+                self._gaps.discard(blk.seq)  # lost (a repeat of a delivered block is neither)
+                self.n_dropped -= 1
             return None
         if blk.seq > self._expected_seq:
             self.n_dropped += blk.seq - self._expected_seq
+            self._gaps.update(range(max(self._expected_seq, blk.seq - self._GAP_MEMORY),
+                                    blk.seq))
+            if len(self._gaps) > self._GAP_MEMORY:  # keep the latest
+                self._gaps = set(sorted(self._gaps)[-self._GAP_MEMORY:])
         self._expected_seq = blk.seq + 1
         missing_t: list[float] = []
         if blk.start > buf_end:  # gap: frames touching it are lost
