@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hearsee.errors import ConfigError, InputFileError
+from hearsee.errors import ConfigError, ImageInputError, InputFileError
 from hearsee.robot import export
 from hearsee.robot.export import check_export, write_mcap, write_rerun
 from hearsee.robot.scenario import default_scenario
@@ -92,6 +92,10 @@ def test_rerun_overlay_colours_with_a_stand_in_rerun(tmp_path, monkeypatch):
     for im in logged[:2]:
         assert (im[0, 0] == [10, 0, 200]).all()  # RGB: red 10, green 0, blue 200
     assert (logged[2] == 77).all()
+    # a frame of another layout is refused, naming its time (neither export can describe it)
+    for bad in (np.zeros((4, 5, 2), np.uint8), np.zeros(20, np.uint8)):
+        with pytest.raises(ImageInputError, match=r"overlay frame at t = 0\.6 s"):
+            write_rerun(tmp_path / "bad.rrd", default_scenario().to_dict(), log, [(0.6, bad)])
 
 
 def test_missing_folder_is_a_clear_error(tmp_path):

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from hearsee.errors import ConfigError, ImageInputError, InputFileError
+from hearsee.errors import ConfigError, InputFileError
 
 __all__ = ["check_export", "write_mcap", "write_rerun"]
 
@@ -73,15 +73,11 @@ def _stamp(t: float) -> dict[str, int]:
 def _overlay_bgr(img: np.ndarray, t: float) -> np.ndarray:
     """An overlay frame (H, W) grey or (H, W, 1|3|4) grey/BGR/BGRA as contiguous (H, W, 3) BGR
     uint8 (the layout both exports describe), else an ImageInputError naming the time ``t``."""
-    img = np.ascontiguousarray(img, dtype=np.uint8)
-    if img.ndim == 3 and img.shape[2] in (1, 4):  # grey or BGRA: to the bgr8 layout
-        img = img[:, :, 0] if img.shape[2] == 1 else np.ascontiguousarray(img[:, :, :3])
-    if img.ndim == 2:
-        img = np.repeat(img[:, :, None], 3, axis=2)
-    if img.ndim != 3 or img.shape[2] != 3:
-        raise ImageInputError(f"overlay frame at t = {t} s: expected an (H, W) or "
-                              f"(H, W, 1|3|4) image, got shape {img.shape}")
-    return img
+    from hearsee.vision.io import as_detector_image
+
+    img = as_detector_image(np.ascontiguousarray(img, dtype=np.uint8),
+                            f"overlay frame at t = {t} s")
+    return np.repeat(img[:, :, None], 3, axis=2) if img.ndim == 2 else img
 
 
 def _check_out(path: str | Path) -> Path:

@@ -120,19 +120,14 @@ def detect_source_point(image: NDArray, detector: str = "hog") -> tuple[float, f
     """
     import cv2
 
-    img = np.asarray(image)
-    if img.ndim == 3 and img.shape[2] in (1, 4):  # grey as (h, w, 1); BGRA: the alpha dropped
-        img = img[:, :, 0] if img.shape[2] == 1 else np.ascontiguousarray(img[:, :, :3])
-    if img.ndim not in (2, 3) or img.size == 0 or (img.ndim == 3 and img.shape[2] != 3):
-        raise ImageInputError(f"expected a 2-D grey or 3-channel image, got shape {img.shape}")
-    if img.dtype != np.uint8:  # (OpenCV's detectors take 8-bit images only: cv2.error)
-        raise ImageInputError(f"expected an 8-bit (uint8) image, got {img.dtype}")
+    from hearsee.vision.humans import hog_people_detector
+    from hearsee.vision.io import as_detector_image
+
+    img = as_detector_image(image, "the person detector")  # (cv2.error on other layouts)
+    if img.size == 0:
+        raise ImageInputError(f"the person detector got an empty image, shape {img.shape}")
     if detector == "hog":
-        hog = _DETECTORS.get("hog")
-        if hog is None:
-            hog = cv2.HOGDescriptor()
-            hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
-            _DETECTORS["hog"] = hog
+        hog = hog_people_detector()
         pad = 8
         win_w, win_h = hog.winSize
         if img.shape[0] + 2 * pad < win_h or img.shape[1] + 2 * pad < win_w:

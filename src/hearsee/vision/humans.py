@@ -56,6 +56,7 @@ from hearsee.errors import (
     GeometryError,
     ImageInputError,
 )
+from hearsee.vision.io import as_detector_image
 from hearsee.vision.stereo import check_focal_baseline
 
 __all__ = [
@@ -73,6 +74,7 @@ __all__ = [
     "estimate_floor",
     "find_peaks",
     "head_shoulder_score",
+    "hog_people_detector",
     "scale_adaptive_filter",
     "segment_body",
     "u_disparity",
@@ -880,7 +882,7 @@ def detect_people_hog(image: NDArray, *, win_stride: int = 8, scale: float = 1.0
         raise ConfigError(f"scale must be a finite number > 1 (pyramid step), got {scale!r}")
     if not is_real(hit_threshold):
         raise ConfigError(f"hit_threshold must be a finite number, got {hit_threshold!r}")
-    hog = _hog()
+    hog = hog_people_detector()
     rects, weights = hog.detectMultiScale(img, hitThreshold=hit_threshold,
                                           winStride=(win_stride, win_stride), padding=(8, 8),
                                           scale=scale)
@@ -895,22 +897,14 @@ def detect_people_hog(image: NDArray, *, win_stride: int = 8, scale: float = 1.0
 
 
 def _hog_image(image: NDArray) -> NDArray:
-    """The image as OpenCV's HOG takes it (uint8, 1 or 3 channels, at least one window)."""
-    img = np.asarray(image)
-    if img.dtype != np.uint8 or img.ndim not in (2, 3) or \
-            (img.ndim == 3 and img.shape[2] not in (1, 3, 4)):
-        raise ImageInputError(
-            f"HOG needs an 8-bit grey, BGR or BGRA image, got shape {img.shape} {img.dtype}"
-        )
+    """The image as OpenCV's HOG takes it (:func:`~hearsee.vision.io.as_detector_image`, at
+    least one window)."""
+    img = as_detector_image(image, "HOG")
     if img.shape[0] < _HOG_WIN[1] or img.shape[1] < _HOG_WIN[0]:
         raise ImageInputError(
             f"HOG needs an image of at least {_HOG_WIN[0]}x{_HOG_WIN[1]} pixels (its detection "
             f"window), got {img.shape[1]}x{img.shape[0]}"
         )
-    if img.ndim == 3 and img.shape[2] == 1:
-        return img[:, :, 0]
-    if img.ndim == 3 and img.shape[2] == 4:
-        return cv2.cvtColor(img, cv2.COLOR_BGRA2BGR)
     return img
 
 
@@ -919,7 +913,9 @@ _HOG_WIN = (64, 128)
 _HOG: list = []
 
 
-def _hog() -> cv2.HOGDescriptor:
+def hog_people_detector() -> cv2.HOGDescriptor:
+    """OpenCV's HOG descriptor with its default people detector, made once and shared (this
+    module's baseline and the stream's image-point detector)."""
     if not _HOG:
         hog = cv2.HOGDescriptor()
         hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())

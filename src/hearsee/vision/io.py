@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from hearsee.errors import ImageInputError, InputFileError
 
 __all__ = [
+    "as_detector_image",
     "check_image",
     "check_pair",
     "glob_images",
@@ -149,6 +150,24 @@ def to_gray(image: NDArray) -> NDArray:
     if image.shape[2] == 4:
         return cv2.cvtColor(image, cv2.COLOR_BGRA2GRAY)
     return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+
+
+def as_detector_image(image: NDArray, what: str = "image") -> NDArray:
+    """``image`` in the layout OpenCV's detectors (HOG, Haar cascades) and 8-bit video take:
+    uint8 grey ``(H, W)`` or BGR ``(H, W, 3)``; ``(H, W, 1)`` is read as grey and BGRA loses its
+    alpha. Any other pixel type or channel count is an ImageInputError naming ``what`` (OpenCV
+    raised cv2.error or crashed). The size is not checked."""
+    img = np.asarray(image)
+    if img.dtype != np.uint8 or img.ndim not in (2, 3) or \
+            (img.ndim == 3 and img.shape[2] not in (1, 3, 4)):
+        raise ImageInputError(
+            f"{what} needs an 8-bit grey, BGR or BGRA image, got shape {img.shape} {img.dtype}"
+        )
+    if img.ndim == 3 and img.shape[2] == 1:
+        return img[:, :, 0]
+    if img.ndim == 3 and img.shape[2] == 4:
+        return np.ascontiguousarray(img[:, :, :3])
+    return img
 
 
 def read_thermal(path: str | Path, expected_size: tuple[int, int] | None = None) -> NDArray:
