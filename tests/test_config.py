@@ -3,7 +3,15 @@
 import numpy as np
 import pytest
 
-from hearsee.config import finite_number, is_real, load_yaml, number, save_yaml, to_jsonable
+from hearsee.config import (
+    finite_number,
+    is_real,
+    load_yaml,
+    number,
+    save_yaml,
+    time_limit,
+    to_jsonable,
+)
 from hearsee.errors import ConfigError, EstimationError
 
 
@@ -98,3 +106,16 @@ def test_an_integer_too_large_for_a_float_is_not_a_finite_number():
         finite_number("a", huge, 0.0, lo_open=True)
     with pytest.raises(ConfigError, match="w.k: expected a number"):
         number({"k": huge}, "k", 1.0, "w")
+
+
+def test_time_limit_reads_none_and_inf_as_no_limit():
+    """The one rule behind DeviceSource's and the robot's MappedSource's duration_s."""
+    assert time_limit("duration_s", None) is None
+    assert time_limit("duration_s", float("inf")) is None
+    assert time_limit("duration_s", np.float64("inf")) is None
+    assert time_limit("duration_s", 2) == 2.0 and time_limit("duration_s", np.float32(0.5)) == 0.5
+    for bad in (0, -1.0, float("nan"), -float("inf"), "inf", True, [1.0]):
+        with pytest.raises(ConfigError, match="duration_s"):
+            time_limit("duration_s", bad)
+    with pytest.raises(EstimationError):
+        time_limit("duration_s", 0.0, error=EstimationError)

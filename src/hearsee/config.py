@@ -19,7 +19,7 @@ from hearsee.errors import ConfigError, InputFileError
 
 __all__ = [
     "as_float_array", "check_keys", "finite_number", "is_real", "load_yaml", "number", "require",
-    "save_yaml", "to_jsonable", "to_plain", "whole_number",
+    "save_yaml", "time_limit", "to_jsonable", "to_plain", "whole_number",
 ]
 
 
@@ -136,6 +136,14 @@ def finite_number(name: str, value: Any, lo: float | None = None, hi: float | No
             rule = ""
         raise error(f"{name} must be a finite number{rule}, got {value!r}")
     return float(value)
+
+
+def time_limit(name: str, value: Any, *, error: type[Exception] = ConfigError) -> float | None:
+    """A run's optional time limit in seconds: None or +inf -> None (no limit), else a finite
+    number > 0 (:func:`finite_number`; ``error`` otherwise)."""
+    if value is None or (isinstance(value, float | np.floating) and value == math.inf):
+        return None
+    return finite_number(name, value, 0.0, lo_open=True, error=error)
 
 
 def whole_number(name: str, value: Any, lo: int = 1, hi: int | None = None, *,

@@ -66,7 +66,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
-from hearsee.config import as_float_array, check_keys, finite_number, load_yaml, number
+from hearsee.config import as_float_array, check_keys, load_yaml, number, time_limit
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, HearseeError
 
 if TYPE_CHECKING:  # imported when run_robot runs (the simulated loop's heavier imports)
@@ -642,10 +642,7 @@ class MappedSource:
             raise AudioInputError(f"audio.channels: channel {max(self.channels)} requested but "
                                   f"the input has {source.n_channels} channels")
         self.n_channels = len(self.channels)
-        if duration_s is not None and duration_s == np.inf:
-            duration_s = None  # no limit, as for DeviceSource
-        if duration_s is not None:
-            duration_s = finite_number("duration_s", duration_s, 0.0, lo_open=True)
+        duration_s = time_limit("duration_s", duration_s)  # (inf: no limit, as DeviceSource)
         self.limit = None if duration_s is None else int(round(duration_s * self.fs))
         self.stop = stop
         self.n_samples = 0  #: samples delivered so far

@@ -78,7 +78,7 @@ from hearsee.audio.tracking import (
     DirectionKalman,
     MotionKalman,
 )
-from hearsee.config import finite_number, is_real, whole_number
+from hearsee.config import finite_number, is_real, time_limit, whole_number
 from hearsee.errors import AudioInputError, ConfigError, EstimationError
 from hearsee.geometry import wrap_deg
 
@@ -357,10 +357,7 @@ class DeviceSource:
         block_len = whole_number("block_len", block_len)
         queue_size = whole_number("queue_size", queue_size)
         timeout_s = finite_number("timeout_s", timeout_s, 0.0, lo_open=True)
-        if duration_s is not None and duration_s == math.inf:
-            duration_s = None
-        if duration_s is not None:
-            duration_s = finite_number("duration_s", duration_s, 0.0, lo_open=True)
+        duration_s = time_limit("duration_s", duration_s)
         sd = _import_sounddevice()
         try:
             info = sd.query_devices(device, "input")
