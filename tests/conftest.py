@@ -27,6 +27,20 @@ def shared_data() -> Path:
     return d
 
 
+@pytest.fixture
+def deny_reading(monkeypatch):
+    """``deny_reading("open")`` makes that ``pathlib.Path`` method raise PermissionError, as for
+    a file without read permission (the tests run as root, where chmod does not stop reads)."""
+
+    def deny(method: str) -> None:
+        def denied(self, *args, **kwargs):
+            raise PermissionError(13, "Permission denied", str(self))
+
+        monkeypatch.setattr(Path, method, denied)
+
+    return deny
+
+
 def _reference_gcc_phat(a, b, fs: float, max_lag_s: float, interp: int = 256) -> float:
     """Textbook whole-signal GCC-PHAT, ``t_a - t_b`` in seconds, interpolated by zero padding
     the spectrum ``interp`` times: the ground-truth check of delays the tests simulate."""

@@ -78,20 +78,14 @@ def test_load_yaml_reads_exponent_numbers_without_a_dot(tmp_path):
     assert arr.speed_of_sound == 340.0 and arr.positions[1, 0] == 0.1
 
 
-def test_load_yaml_unreadable_file_is_a_typed_error(tmp_path, monkeypatch):
+def test_load_yaml_unreadable_file_is_a_typed_error(tmp_path, deny_reading):
     """A file without read permission (PermissionError) escaped load_yaml as a builtin OSError:
     a traceback in every CLI command that reads a YAML file."""
-    from pathlib import Path
-
     from hearsee.errors import InputFileError
 
     p = tmp_path / "array.yaml"
     p.write_text("microphones: [[0, 0, 0]]\n")
-
-    def denied(self, *args, **kwargs):
-        raise PermissionError(13, "Permission denied", str(self))
-
-    monkeypatch.setattr(Path, "read_text", denied)
+    deny_reading("read_text")
     with pytest.raises(InputFileError, match="Permission denied"):
         load_yaml(p)
 

@@ -395,18 +395,12 @@ def test_moving_sources_refuse_masked_arrays_and_reflections_without_rt60():
     assert np.count_nonzero(np.abs(h[0]) > 1e-3 * np.abs(h[0]).max()) < 80  # one direct path
 
 
-def test_unreadable_trajectory_file_is_a_typed_error(tmp_path, monkeypatch):
+def test_unreadable_trajectory_file_is_a_typed_error(tmp_path, deny_reading):
     """A CSV without read permission (PermissionError) escaped load_trajectory as a builtin
     OSError (a traceback from ``hearsee simulate --trajectory``)."""
-    from pathlib import Path
-
     p = tmp_path / "traj.csv"
     p.write_text("t,x,y,z\n0,1,0,0\n")
-
-    def denied(self, *args, **kwargs):
-        raise PermissionError(13, "Permission denied", str(self))
-
-    monkeypatch.setattr(Path, "open", denied)
+    deny_reading("open")
     with pytest.raises(InputFileError, match="Permission denied"):
         load_trajectory(p)
 
