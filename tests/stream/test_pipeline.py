@@ -3,6 +3,7 @@ import sys
 import threading
 import time
 import types
+import warnings
 
 import numpy as np
 import pytest
@@ -857,3 +858,51 @@ def test_reset_array_state_restarts_the_trackers_from_the_next_batch():
     pipe.reset_array_state()
     again = pipe.run(ArraySource(y, FS, block))
     np.testing.assert_array_equal(_times_azimuths(again)[1], _times_azimuths(plain)[1])
+
+
+@pytest.mark.parametrize("scale", [1e9, 2.0**31, 1e-9, 1e-12])
+def test_smoothed_srp_is_scale_free(scale):
+    """Float recordings far from unit level (raw 32-bit PCM read as floats: ~1e9): the smoothed
+    steered response's single-precision fourth powers of the spectra overflowed (NaN coherence,
+    an arbitrary direction) or underflowed (1e-12: coherences off by up to 0.96). The same
+    source at any scale gives the same measurements, also when the level rises mid-stream
+    (the first half 100x quieter: the stream's scale changes between batches), and the
+    stream built on them the same tracked directions."""
+    arr = MicArray.from_preset("three-mic")
+    x = np.random.default_rng(5).standard_normal(2 * FS)
+    x[:FS] *= 0.01
+    traj = linear_trajectory([1.0, 1.732, 0.0], [0.0, 0.0, 0.0], 2.0)  # azimuth 60 deg
+    y = simulate_moving_free_field(x, FS, arr, traj, snr_db=10, rng=6)
+    frame_len, hop = frame_geometry(FS, 64.0, 32.0)
+    batch = 8 * hop
+
+    def srp_run(sig):
+        srp = pl.SmoothedSrp(arr, FS, frame_len, alpha=0.8)
+        outs = []
+        for s in range(0, sig.shape[1] - frame_len - 8 * hop + 1, batch):
+            outs.append(srp.process(sig[:, s:s + frame_len + 7 * hop], 8, hop))
+        return {k: np.concatenate([o[k] for o in outs]) for k in ("az_deg", "coherence",
+                                                                 "age_frames", "tdoa_s")}
+
+    cfg = StreamConfig(prefer_frame_confidence=np.inf)  # the smoothed response measures
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow / invalid-value warnings
+        ref, got = srp_run(y), srp_run(scale * y)
+        ups_ref = StreamPipeline(arr, cfg).run(ArraySource(y, FS, 2048))
+        ups = StreamPipeline(arr, cfg).run(ArraySource(scale * y, FS, 2048))
+    assert np.all(np.abs(wrap_deg(ref["az_deg"][40:] - 60.0)) < 3.0)  # the ground truth
+    for k in ref:
+        assert np.all(np.isfinite(got[k]))
+        np.testing.assert_allclose(got[k], ref[k], rtol=1e-4, atol=1e-4 if k != "tdoa_s" else 1e-9)
+    assert [u.measured for u in ups] == [u.measured for u in ups_ref]
+    assert sum(u.measured for u in ups) > 20
+    np.testing.assert_allclose(_values(ups, "azimuth_deg"), _values(ups_ref, "azimuth_deg"),
+                               atol=1e-3)
+
+
+def test_smoothed_srp_refuses_non_finite_samples():
+    srp = pl.SmoothedSrp(MicArray.from_preset("three-mic"), FS, 1024, alpha=0.8)
+    y = np.zeros((3, 1024 + 512))
+    y[1, 700] = np.nan
+    with pytest.raises(AudioInputError, match="NaN or infinite"):
+        srp.process(y, 2, 512)

@@ -62,6 +62,8 @@ from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.signals import check_fs
 from hearsee.audio.tdoa import (
+    _MAX_PEAK,
+    _MIN_PEAK,
     check_frame_ms,
     check_recording_length,
     estimate_tdoas,
@@ -597,6 +599,18 @@ class FrameGcc:
 
 
 # ---------------------------------------------------------------------------- smoothed SRP stage
+def level_scale(peak: float) -> float:
+    """The power of two by which :class:`SmoothedSrp` multiplies samples once the largest
+    |sample| seen is ``peak``: 1 while ``peak`` is within the level range that
+    :func:`~hearsee.audio.tdoa.estimate_tdoas` leaves unscaled (1e-6 .. 1e3; and for silence,
+    0), else the one bringing ``peak`` to within a factor sqrt(2) of 1. A power of two scales
+    floating-point numbers exactly, so a state built at one scale can be carried to another.
+    Unitless."""
+    if peak == 0.0 or _MIN_PEAK <= peak <= _MAX_PEAK:
+        return 1.0
+    return math.ldexp(1.0, int(np.clip(-round(math.log2(peak)), -120, 120)))
+
+
 class SmoothedSrp:
     """Recursively smoothed cross-power spectra -> PHAT -> steered response over directions.
 
@@ -625,6 +639,15 @@ class SmoothedSrp:
     block, :meth:`skip`) adds no evidence, like a frame without energy -- the averages decay by
     ``alpha`` and the evidence they hold grows one frame older -- so after a gap of n frames the
     evidence from before it weighs ``alpha**n`` and its age counts the gap.
+
+    The results are scale-free (the PHAT and coherence weightings, the normalised steered
+    power and the energy-weighted age are ratios), but the single-precision spectra's fourth
+    powers are not: a float recording at 1e9 (raw 32-bit PCM read as floats) overflowed them
+    and gave NaN coherences, one at 1e-12 underflowed them. A stream cannot scale by the whole
+    recording's peak as :func:`~hearsee.audio.tdoa.estimate_tdoas` does, so the samples are
+    multiplied by :func:`level_scale` of the largest |sample| seen so far (1 at ordinary levels,
+    which are processed unchanged), and when that scale changes the state is carried to the new
+    one (a power of two: exactly).
     """
 
     def __init__(self, array: MicArray, fs: float, frame_len: int, alpha: float,
@@ -704,11 +727,32 @@ class SmoothedSrp:
         self.S: NDArray | None = None
         self.A: NDArray | None = None
         self._w, self._age = 0.0, 0.0
+        self._peak, self._scale = 0.0, 1.0  # largest |sample| seen; its level_scale
 
     def reset(self) -> None:
         self.S = None
         self.A = None
         self._w, self._age = 0.0, 0.0
+        self._peak, self._scale = 0.0, 1.0
+
+    def _rescale(self, peak: float) -> None:
+        """Take a batch's largest |sample| ``peak`` into the running maximum and, when its
+        :func:`level_scale` changes, carry the state (spectra and energies: squares of the
+        samples) to the new scale. The scale only falls as the maximum grows (the state is
+        never enlarged, so it cannot overflow)."""
+        if not np.isfinite(peak):
+            raise AudioInputError("recording contains NaN or infinite samples")
+        self._peak = max(self._peak, peak)
+        scale = level_scale(self._peak)
+        if scale == self._scale:
+            return
+        f = (scale / self._scale) ** 2  # a power of two
+        if self.S is not None:
+            self.S = self.S * np.float32(f)
+        if self.A is not None:
+            self.A = self.A * np.float32(f)
+        self._w *= f
+        self._scale = scale
 
     def skip(self, n_frames: int) -> None:
         """Age the state through ``n_frames`` missing frames: what ``n_frames`` frames of zero
@@ -759,7 +803,11 @@ class SmoothedSrp:
         """
         import scipy.fft as sfft
 
-        fr = frame_signals(np.asarray(segment, dtype=np.float32), self.frame_len, hop)[:, :n_frames]
+        seg = np.asarray(segment, dtype=np.float32)
+        self._rescale(float(np.max(np.abs(seg), initial=0.0)))
+        if self._scale != 1.0:
+            seg = seg * np.float32(self._scale)
+        fr = frame_signals(seg, self.frame_len, hop)[:, :n_frames]
         X = sfft.rfft(windowed_frames(fr, self.win), self.nfft, axis=-1)[..., self.k0:self.k1]
         X = np.moveaxis(X, 0, 1)  # (k, n_ch, B) complex64
         G = X[:, self.I] * np.conj(X[:, self.J])  # (k, P, B)
