@@ -114,31 +114,26 @@ def detect_source_point(image: NDArray, detector: str = "hog") -> tuple[float, f
     """Pixel of a speaking person in a BGR or grey 8-bit image (``(h, w, 1)`` grey and BGRA
     accepted too), or None when nobody is found (also in a frame too small for a person).
 
-    ``detector="hog"``: OpenCV HOG people detector, point 12 % down the strongest box (head);
+    ``detector="hog"``: OpenCV HOG people detector
+    (:func:`hearsee.vision.humans.detect_people_hog`, its boxes unshrunk, and its rule for
+    frames too small for the detection window), point 12 % down the strongest box (head);
     ``detector="face"``: Haar frontal-face cascade from ``cv2.data``, point 65 % down the
     largest face (mouth).
     """
     import cv2
 
-    from hearsee.vision.humans import hog_people_detector
+    from hearsee.vision.humans import detect_people_hog
     from hearsee.vision.io import as_detector_image
 
     img = as_detector_image(image, "the person detector")  # (cv2.error on other layouts)
     if img.size == 0:
         raise ImageInputError(f"the person detector got an empty image, shape {img.shape}")
     if detector == "hog":
-        hog = hog_people_detector()
-        pad = 8
-        win_w, win_h = hog.winSize
-        if img.shape[0] + 2 * pad < win_h or img.shape[1] + 2 * pad < win_w:
-            # no person window fits the padded frame; OpenCV would read and write past its
-            # buffers (a segmentation fault or heap corruption on an 80 x 60 frame)
+        # the HOG baseline's boxes, unshrunk, and its small-frame rule (no window fits: none)
+        boxes = detect_people_hog(img, shrink=False)
+        if not boxes:
             return None
-        boxes, weights = hog.detectMultiScale(img, winStride=(8, 8), padding=(pad, pad),
-                                              scale=1.05)
-        if len(boxes) == 0:
-            return None
-        x, y, w, h = boxes[int(np.argmax(np.ravel(weights)))]
+        (x, y, w, h), _ = max(boxes, key=lambda b: b[1])  # (the first of equal weights)
         return float(x + w / 2.0), float(y + 0.12 * h)
     if detector == "face":
         casc = _DETECTORS.get("face")

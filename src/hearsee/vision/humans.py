@@ -871,10 +871,17 @@ def detect_people_hog(image: NDArray, *, win_stride: int = 8, scale: float = 1.0
     each side and 5 % of the height at top and bottom (as OpenCV's ``peopledetect.py`` sample
     draws them) so that they can be compared with tight person boxes.
 
-    The image must be uint8 grey, BGR or BGRA (the alpha channel is dropped) and at least
-    64x128 pixels (ImageInputError); ``win_stride`` (pixels) a positive integer and ``scale``
-    (the pyramid step) a finite number > 1 (ConfigError). OpenCV itself crashed the process on
-    a negative stride or an image smaller than the window.
+    The search pads the image by 8 pixels on each side (boxes are clipped to the image); an
+    image in which no 64x128 window fits even so -- under 48 pixels wide or 112 high -- has no
+    detection (``[]``; OpenCV read and wrote past its buffers there: a segmentation fault or
+    heap corruption on an 80x60 frame). This is the one small-image rule of the HOG detector:
+    the stream's image-point detector (:func:`hearsee.stream.video.detect_source_point`) runs
+    through this function.
+
+    The image must be uint8 grey, BGR or BGRA (the alpha channel is dropped) and not empty
+    (ImageInputError); ``win_stride`` (pixels) a positive integer and ``scale`` (the pyramid
+    step) a finite number > 1 (ConfigError). OpenCV itself crashed the process on a negative
+    stride.
     """
     img = _hog_image(image)
     win_stride = whole_number("win_stride (pixels)", win_stride)
@@ -882,10 +889,12 @@ def detect_people_hog(image: NDArray, *, win_stride: int = 8, scale: float = 1.0
         raise ConfigError(f"scale must be a finite number > 1 (pyramid step), got {scale!r}")
     if not is_real(hit_threshold):
         raise ConfigError(f"hit_threshold must be a finite number, got {hit_threshold!r}")
+    if img.shape[0] + 2 * _HOG_PAD < _HOG_WIN[1] or img.shape[1] + 2 * _HOG_PAD < _HOG_WIN[0]:
+        return []  # no detection window fits the padded image
     hog = hog_people_detector()
     rects, weights = hog.detectMultiScale(img, hitThreshold=hit_threshold,
-                                          winStride=(win_stride, win_stride), padding=(8, 8),
-                                          scale=scale)
+                                          winStride=(win_stride, win_stride),
+                                          padding=(_HOG_PAD, _HOG_PAD), scale=scale)
     out = []
     for (x, y, w, h), wt in zip(np.asarray(rects).reshape(-1, 4),
                                 np.asarray(weights).reshape(-1), strict=True):
@@ -897,19 +906,18 @@ def detect_people_hog(image: NDArray, *, win_stride: int = 8, scale: float = 1.0
 
 
 def _hog_image(image: NDArray) -> NDArray:
-    """The image as OpenCV's HOG takes it (:func:`~hearsee.vision.io.as_detector_image`, at
-    least one window)."""
+    """The image as OpenCV's HOG takes it (:func:`~hearsee.vision.io.as_detector_image`, not
+    empty)."""
     img = as_detector_image(image, "HOG")
-    if img.shape[0] < _HOG_WIN[1] or img.shape[1] < _HOG_WIN[0]:
-        raise ImageInputError(
-            f"HOG needs an image of at least {_HOG_WIN[0]}x{_HOG_WIN[1]} pixels (its detection "
-            f"window), got {img.shape[1]}x{img.shape[0]}"
-        )
+    if img.size == 0:
+        raise ImageInputError(f"HOG got an empty image, shape {img.shape}")
     return img
 
 
 #: Detection window (width, height) of OpenCV's default people detector, pixels.
 _HOG_WIN = (64, 128)
+#: Padding of the image on each side in the HOG search, pixels (detectMultiScale's ``padding``).
+_HOG_PAD = 8
 _HOG: list = []
 
 
