@@ -168,7 +168,7 @@ def test_bad_robot_files_and_options(robot_dir, capsys):
     assert main(["run", "--config", str(robot_dir)]) == 2
     assert "is a directory, expected a YAML file" in capsys.readouterr().err
     assert main(["run", "--config", str(_config(robot_dir)), "--duration", "0"]) == 2
-    assert "--duration must be > 0" in capsys.readouterr().err
+    assert "--duration must be a finite number > 0" in capsys.readouterr().err
     # --out must not write the report over an input (here a calibration named summary.json)
     (robot_dir / "prev").mkdir()
     (robot_dir / "prev" / "summary.json").write_bytes((robot_dir / "rig.yaml").read_bytes())
@@ -262,19 +262,52 @@ def test_live_run_through_sounddevice(robot_dir, monkeypatch, capsys):
     assert pans == [r["head_pan_deg"] for r in recs]
 
 
-def test_infinite_duration_is_one_line_not_a_traceback(robot_dir, monkeypatch, capsys):
-    """--duration inf passed the '> 0' check and then raised OverflowError (int(inf * fs)) as
-    a traceback once the audio device was opened; omitting --duration is how to run until
-    Ctrl-C."""
+def test_bad_duration_is_one_line_not_a_traceback(robot_dir, monkeypatch, capsys):
+    """--duration inf once passed the '> 0' check and then raised OverflowError (int(inf * fs))
+    as a traceback once the audio device was opened (inf is now no limit: next test); a NaN,
+    zero or negative duration is one line before any device is opened."""
     rec = np.zeros((6, FS))
     monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES, rec))
     cfg = _config(robot_dir, cameras=False)
-    for bad in ("inf", "nan", "-1"):
+    for bad in ("nan", "-1", "0", "-inf"):
         assert main(["run", "--config", str(cfg), "--duration", bad, "--quiet"]) == 2
-        err = capsys.readouterr().err
-        assert err.startswith("hearsee: error: --duration must be > 0") and "Traceback" not in err
-        assert err.count("\n") == 1
+        want = f"hearsee: error: --duration must be a finite number > 0, got {float(bad)!r}\n"
+        assert capsys.readouterr().err == want
     assert not (robot_dir / "report").exists()
+
+
+def test_infinite_duration_is_no_limit(robot_dir, monkeypatch, capsys):
+    """--duration inf means no limit -- until Ctrl-C or the input stops --, as omitting it does:
+    the rule (config.time_limit) of the robot's MappedSource, the stream's DeviceSource and
+    `hearsee track --duration inf`, which accepted it while `hearsee run` refused it."""
+    from hearsee.errors import ConfigError
+    from hearsee.robot import hardware
+
+    seen = []
+
+    def fake_run_robot(cfg, *, duration_s=None, progress=None, **kw):
+        seen.append(duration_s)
+        raise ConfigError("stopped by the test")  # (no device needed)
+
+    monkeypatch.setattr(hardware, "run_robot", fake_run_robot)
+    cfg = _config(robot_dir, cameras=False)
+    for args in ([], ["--duration", "inf"], ["--duration", "1.5"]):
+        assert main(["run", "--config", str(cfg), "--quiet", *args]) == 2
+        assert capsys.readouterr().err == "hearsee: error: stopped by the test\n"
+    assert seen == [None, None, 1.5]
+
+
+def test_run_and_track_share_the_duration_rule(robot_dir, capsys):
+    """The same words for the same mistake: `hearsee track --duration nan` said 'duration_s
+    must be ...' (DeviceSource's parameter), `hearsee run` '--duration must be > 0 seconds and
+    finite'; both now name the flag with the one rule of config.time_limit."""
+    cfg = _config(robot_dir, cameras=False)
+    for bad in ("nan", "-2"):
+        want = f"hearsee: error: --duration must be a finite number > 0, got {float(bad)!r}\n"
+        assert main(["run", "--config", str(cfg), "--duration", bad]) == 2
+        assert capsys.readouterr().err == want
+        assert main(["track", "--device", "0", "--array", "three-mic", "--duration", bad]) == 2
+        assert capsys.readouterr().err == want
 
 
 def test_report_folder_that_is_a_file_fails_before_listening(robot_dir, monkeypatch, capsys):

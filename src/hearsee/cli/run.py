@@ -9,7 +9,6 @@ schema is in :mod:`hearsee.robot.hardware`.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Annotated
 
@@ -26,7 +25,8 @@ def run_cmd(
                                           help="Check the robot file and open every device "
                                           "once; exit 0 only if all checks pass.")] = False,
     duration: Annotated[float | None, typer.Option(
-        "--duration", "-d", help="Stop after this many seconds (default: until Ctrl-C).")] = None,
+        "--duration", "-d", help="Stop after this many seconds of audio, > 0 (default, or inf: "
+        "no limit -- until Ctrl-C or the input stops).")] = None,
     out: Annotated[Path | None, typer.Option(
         "--out", "-o", help="Report folder (overrides output.report; the JSON lines go to "
         "OUT/updates.jsonl).")] = None,
@@ -44,8 +44,10 @@ def run_cmd(
     """Hear, turn to, see, verify and track a person with the robot's real sensors.
 
     Writes one JSON line per update (output.jsonl), then the report folder (index.html,
-    log.json, summary.json). Stops cleanly on Ctrl-C or after --duration seconds.
+    log.json, summary.json). Stops cleanly on Ctrl-C or after --duration seconds (inf, like
+    no --duration, is no limit: the rule of the robot's and the stream's live sources).
     """
+    from hearsee.config import time_limit
     from hearsee.errors import ConfigError
     from hearsee.robot.hardware import (
         Check,
@@ -57,9 +59,7 @@ def run_cmd(
         write_run_report,
     )
 
-    if duration is not None and not (math.isfinite(duration) and duration > 0):
-        raise ConfigError(f"--duration must be > 0 seconds and finite (omit it to run until "
-                          f"Ctrl-C), got {duration}")
+    duration = time_limit("--duration", duration)  # (None: no limit)
     cfg = load_robot_config(config)
     if out is not None:
         cfg = cfg.with_output(out)

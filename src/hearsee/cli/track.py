@@ -40,7 +40,8 @@ def track_cmd(
     device: Annotated[str | None, typer.Option(
         "--device", help="Live input: PortAudio device index or name.")] = None,
     duration: Annotated[float | None, typer.Option(
-        "--duration", help="Live input: stop after this many seconds.")] = None,
+        "--duration", help="Live input: stop after this many seconds, > 0 (default, or inf: "
+        "no limit -- until Ctrl-C or the input stops).")] = None,
     fs: Annotated[int | None, typer.Option(
         "--fs", help="Live input: sample rate in Hz (default 16000; with a camera, 48000 "
         "sharpens the 3D fixes of sources with energy above 8 kHz; bench/tracking.py part B).")
@@ -100,6 +101,7 @@ def track_cmd(
     from hearsee.audio.arrays import load_array
     from hearsee.audio.tdoa import check_frame_ms
     from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, IMM_MODES_DPS2
+    from hearsee.config import time_limit
     from hearsee.errors import ConfigError
     from hearsee.stream.pipeline import DeviceSource, StreamConfig, StreamPipeline, WavSource
 
@@ -109,6 +111,7 @@ def track_cmd(
         # (they were ignored without a word: a file has its own rate and length)
         raise ConfigError("--fs and --duration are for live input (--device); a recording file "
                           "is read at its own sample rate, whole")
+    duration = time_limit("--duration", duration)  # (None: no limit; as `hearsee run`)
     visual = [o for o in (video, camera_device, image_points) if o is not None]
     if len(visual) > 1:
         raise ConfigError("use only one of --video, --camera-device and --image-points")
