@@ -89,3 +89,38 @@ def test_a_scalar_is_not_a_point():
               lambda p: robot_to_array(p, (0.0, 0.0))):
         with pytest.raises(GeometryError, match="3 coordinates"):
             f(5.0)
+
+
+# one [x, y, z] in metres: as_point, the one check of every single-point argument
+_NOT_POINTS = [
+    [True, 0.0, 1.2],  # numpy read True as 1 m
+    ["0", "0", "1.2"],  # ... and strings as numbers
+    [10**400, 0.0, 0.0],  # a builtin OverflowError
+    [[0.0, 0.0, 1.2]],  # shape (1, 3)
+    [0.0, np.nan, 1.2], [0.0, 0.0, np.inf], [0.0, 1.2], "abc", None,
+]
+
+
+@pytest.mark.parametrize("bad", _NOT_POINTS)
+def test_pivot_and_offset_must_be_one_finite_point(bad):
+    """array_to_robot / robot_to_array accepted bools and numeric strings as coordinates and
+    raised a builtin OverflowError (an int beyond float's range) or ValueError ('abc')."""
+    from hearsee.geometry import array_to_robot, robot_to_array
+
+    for f in (array_to_robot, robot_to_array):
+        for key in ("pivot_m", "offset_m"):
+            with pytest.raises(GeometryError, match=rf"^{key} must be a finite \[x, y, z\] in "
+                                                    "metres"):
+                f([0.0, 0.0, 0.0], (0.0, 0.0), **{key: bad})
+
+
+def test_as_point_keeps_valid_values_and_takes_the_callers_error():
+    from hearsee.errors import ConfigError
+    from hearsee.geometry import as_point
+
+    for ok in ([1, 2.5, -3], (np.float32(0.1), np.int64(2), 0.0), np.array([0.0, 0.0, 1.2])):
+        p = as_point(ok, "x")
+        assert p.dtype == float and p.shape == (3,)
+        np.testing.assert_array_equal(p, np.asarray(ok, dtype=float))  # same numbers as before
+    with pytest.raises(ConfigError, match=r"^r\.yaml: head\.pivot_m must .* got shape \(1, 3\)"):
+        as_point([[0, 0, 1]], "r.yaml: head.pivot_m", ConfigError)

@@ -109,6 +109,35 @@ def angle_between(u: ArrayLike, v: ArrayLike) -> NDArray:
     return np.arccos(np.clip(c, -1.0, 1.0))
 
 
+def as_point(value: Any, what: str, error: type[Exception] = GeometryError) -> NDArray:
+    """``value`` as a float array ``(3,)``: ONE finite ``[x, y, z]`` in metres (a point or an
+    offset, in whatever frame the caller documents), else ``error`` (default GeometryError)
+    naming ``what``.
+
+    The one check behind hearsee's single-point arguments (the pivot and array offsets here,
+    the simulated source and room of :mod:`hearsee.sim.audio`, the point of
+    :meth:`hearsee.audio.arrays.MicArray.tdoa_jacobian`, the robot file's ``head`` and
+    ``cameras.mount_m`` vectors, which pass ConfigError). Each coordinate must be a finite real
+    number (:func:`hearsee.config.is_real`): numpy's float conversion read ``True`` as 1 m and
+    ``"0.5"`` as 0.5 m, and raised a builtin OverflowError on an int beyond float's range; any
+    other shape, ``(1, 3)`` included, is refused too.
+
+    >>> as_point((1, 2.5, 0), "source")
+    array([1. , 2.5, 0. ])
+    """
+    try:
+        items = np.asarray(value, dtype=object)  # the coordinates as given, each checked below
+    except (TypeError, ValueError):
+        items = None
+    if items is None or items.shape != (3,):
+        got = f"shape {items.shape}" if items is not None and items.ndim else repr(value)
+        raise error(f"{what} must be a finite [x, y, z] in metres: expected shape 3, got {got}")
+    if not all(is_real(v) for v in items):
+        raise error(f"{what} must be a finite [x, y, z] in metres (3 real numbers), got "
+                    f"{value!r}")
+    return items.astype(float)
+
+
 # ---------------------------------------------------------------------------------------------
 # Pan-tilt head kinematics (thesis ch. 4, fig. 4.1)
 # ---------------------------------------------------------------------------------------------
@@ -192,13 +221,6 @@ def head_rotation(pan_deg: float, tilt_deg: float) -> Rotation:
     return Rotation.from_euler("ZY", [p.pan_deg, -p.tilt_deg], degrees=True)
 
 
-def _vec3(v: ArrayLike, what: str) -> NDArray:
-    a = np.asarray(v, dtype=float)
-    if a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise GeometryError(f"{what} must be a finite [x, y, z] in metres, got {v!r}")
-    return a
-
-
 def array_to_robot(points: ArrayLike, pose: HeadPose | Sequence[float],
                    pivot_m: ArrayLike = (0.0, 0.0, 0.0),
                    offset_m: ArrayLike = (0.0, 0.0, 0.0)) -> NDArray:
@@ -212,7 +234,7 @@ def array_to_robot(points: ArrayLike, pose: HeadPose | Sequence[float],
     if pts.ndim == 0 or pts.shape[-1] != 3:
         raise GeometryError(f"expected points with 3 coordinates, got shape {pts.shape}")
     R = head_rotation(p.pan_deg, p.tilt_deg).as_matrix()
-    return _vec3(pivot_m, "pivot_m") + (pts + _vec3(offset_m, "offset_m")) @ R.T
+    return as_point(pivot_m, "pivot_m") + (pts + as_point(offset_m, "offset_m")) @ R.T
 
 
 def robot_to_array(points: ArrayLike, pose: HeadPose | Sequence[float],
@@ -225,7 +247,7 @@ def robot_to_array(points: ArrayLike, pose: HeadPose | Sequence[float],
     if pts.ndim == 0 or pts.shape[-1] != 3:
         raise GeometryError(f"expected points with 3 coordinates, got shape {pts.shape}")
     R = head_rotation(p.pan_deg, p.tilt_deg).as_matrix()
-    return (pts - _vec3(pivot_m, "pivot_m")) @ R - _vec3(offset_m, "offset_m")
+    return (pts - as_point(pivot_m, "pivot_m")) @ R - as_point(offset_m, "offset_m")
 
 
 def mic_positions_at(array: Any, pose: HeadPose | Sequence[float],

@@ -163,3 +163,16 @@ def test_points_that_are_not_xyz_are_a_geometry_error():
                 call(bad)
     assert three.tdoa(np.ones((4, 2, 3))).shape == (4, 2, 3)  # batches still work
     assert three.tdoa_far(np.ones((5, 3))).shape == (5, 3)
+
+
+def test_tdoa_jacobian_takes_one_finite_point():
+    """tdoa_jacobian reshaped a (1, 3) point (and any 3 numbers) into one, gave NaN rows for
+    an infinite point, blamed a NaN one on "a microphone's position", read True and "0.5" as
+    numbers and raised a builtin OverflowError on a huge int."""
+    three = MicArray.from_preset("three-mic")
+    p = [0.9, -0.4, 0.3]
+    for bad in ([p], [0.9, np.inf, 0.3], [0.9, np.nan, 0.3], [True, -0.4, 0.3],
+                ["0.9", "-0.4", "0.3"], [10**400, 0.0, 0.0]):
+        with pytest.raises(GeometryError, match=r"^source must be a finite \[x, y, z\]"):
+            three.tdoa_jacobian(bad)
+    np.testing.assert_array_equal(three.tdoa_jacobian(tuple(p)), three.tdoa_jacobian(np.array(p)))

@@ -878,3 +878,21 @@ def test_cameras_closed_when_the_head_pose_is_bad(tmp_path, monkeypatch):
     with pytest.raises(GeometryError, match="pan_deg"):
         run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=BadHead())
     assert all(c.caps == {} for c in opened)  # none opened, or all closed again
+
+
+@pytest.mark.parametrize("section, key, value", [
+    ("head", "pivot_m", [0.0, 0.0, True]),  # read as 1 m
+    ("head", "offset_m", ["0", "0", "0.1"]),  # strings read as numbers
+    ("head", "pivot_m", [10**400, 0, 1]),  # a builtin OverflowError (a 400-digit YAML int)
+    ("cameras", "mount_m", [0.05, False, 0.1]),
+])
+def test_head_and_mount_vectors_are_three_numbers(small_rig, section, key, value):
+    """The robot file's [x, y, z] vectors go through the one point check
+    (hearsee.geometry.as_point): YAML booleans and quoted numbers were accepted as metres and a
+    huge int escaped as a builtin OverflowError."""
+    path = make_config(small_rig, _with(**{section: {key: value}}))
+    with pytest.raises(ConfigError) as e:
+        load_robot_config(path)
+    msg = str(e.value)
+    assert msg.startswith(f"{path}: {section}.{key} must be a finite [x, y, z] in metres")
+    assert "\n" not in msg

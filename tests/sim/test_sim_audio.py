@@ -280,3 +280,19 @@ def test_bad_seed_is_a_config_error():
             simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1, seed=seed)
     assert simulate_recording("two-mic", [1.0, 0.0, 0.0], duration_s=0.1, seed=None)[1][
         "seed"] is None
+
+
+@pytest.mark.parametrize("bad", [[True, 1.0, 0.0], ["1", "1", "0"], [10**400, 0.0, 0.0]])
+def test_source_and_room_coordinates_are_numbers(bad):
+    """simulate_recording / ground_truth read True as 1 m and "1" as 1 m (a recording of a
+    source the caller never meant) and raised a builtin OverflowError on an int beyond float's
+    range; room_dim and array_at the same. All GeometryErrors naming the argument now."""
+    arr = MicArray.from_preset("two-mic")
+    with pytest.raises(GeometryError, match=r"^source must be a finite \[x, y, z\]"):
+        simulate_recording(arr, bad, duration_s=0.1)
+    with pytest.raises(GeometryError, match=r"^source must be a finite \[x, y, z\]"):
+        ground_truth(arr, bad)
+    for key, room in (("room_dim", {"room_dim": [bad[0], 4.0, 3.0], "rt60": 0.2}),
+                      ("array_at", {"room_dim": [5, 4, 3], "rt60": 0.2, "array_at": bad})):
+        with pytest.raises(GeometryError, match=rf"^{key} must be a finite \[x, y, z\]"):
+            normalize_room(room)

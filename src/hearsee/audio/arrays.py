@@ -247,8 +247,10 @@ class MicArray:
                       pairs: list[tuple[int, int]] | None = None) -> NDArray:
         """Derivative of :meth:`tdoa` with respect to the source position at one point
         ``(3,)`` (metres): shape ``(n_pairs, 3)``, seconds per metre."""
+        from hearsee.geometry import as_point  # (here: geometry imports scipy, `info` need not)
+
         i, j = _pair_index(self.checked_pairs(pairs))
-        p = _xyz(source, "source", one=True)
+        p = as_point(source, "source")
         return pair_tdoa_jacobian(p, self.positions, i, j, self.speed_of_sound)
 
     def tdoa_far(self, direction: ArrayLike, pairs: list[tuple[int, int]] | None = None) -> NDArray:
@@ -275,17 +277,16 @@ class MicArray:
         return f"MicArray(name={self.name!r}, n_mics={self.n_mics}, aperture={self.aperture:.3f} m)"
 
 
-def _xyz(points: ArrayLike, what: str, one: bool = False) -> NDArray:
-    """``points`` as a float array ``(..., 3)`` (``one``: a single point, 3 numbers), else a
-    GeometryError (numpy's broadcast, matmul or reshape ValueError before)."""
+def _xyz(points: ArrayLike, what: str) -> NDArray:
+    """``points`` as a float array ``(..., 3)``, else a GeometryError (numpy's broadcast or
+    matmul ValueError before). One point alone: :func:`hearsee.geometry.as_point`."""
     try:
         p = np.asarray(points, dtype=float)
     except (TypeError, ValueError):
         p = None
-    if p is None or (p.size != 3 if one else (p.ndim == 0 or p.shape[-1] != 3)):
+    if p is None or p.ndim == 0 or p.shape[-1] != 3:
         got = "not numbers" if p is None else f"shape {p.shape}"
-        want = "one point, 3 numbers" if one else "shape (..., 3)"
-        raise GeometryError(f"{what} must be [x, y, z] in metres ({want}), got {got}")
+        raise GeometryError(f"{what} must be [x, y, z] in metres (shape (..., 3)), got {got}")
     return p
 
 

@@ -223,7 +223,11 @@ def _mapping(d: Mapping[str, Any], key: str, where: str, required: bool = False
 
 
 def _vec3(d: Mapping[str, Any], key: str, default: Sequence[float], where: str) -> NDArray:
-    return as_float_array(d.get(key, list(default)), f"{where}.{key}", shape=(3,))
+    """``d[key]`` (or ``default``) as one finite [x, y, z] in metres
+    (:func:`hearsee.geometry.as_point`), else a ConfigError naming ``where.key``."""
+    from hearsee.geometry import as_point
+
+    return as_point(d.get(key, list(default)), f"{where}.{key}", ConfigError)
 
 
 def _resolve(p: str | Path, base: Path) -> Path:

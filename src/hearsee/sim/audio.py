@@ -30,7 +30,7 @@ from hearsee.audio.propagation import add_noise, simulate_free_field, simulate_r
 from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
 from hearsee.config import finite_number, is_real, to_jsonable, whole_number
 from hearsee.errors import ConfigError, GeometryError, InputFileError
-from hearsee.geometry import cart_to_sph
+from hearsee.geometry import as_point, cart_to_sph
 
 __all__ = [
     "EXAMPLE_RECORDING",
@@ -80,16 +80,6 @@ def check_sim_fs(fs: float | None) -> int:
     return int(fs)
 
 
-def _point(value: ArrayLike, what: str) -> NDArray:
-    try:
-        p = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise GeometryError(f"{what} must be an [x, y, z] point in metres, got {value!r}") from None
-    if p.shape != (3,) or not np.all(np.isfinite(p)):
-        raise GeometryError(f"{what} must be a finite [x, y, z] point in metres, got {value!r}")
-    return p
-
-
 def _mic_positions(array: MicArray, mic_positions: ArrayLike) -> NDArray:
     """``mic_positions`` as a finite float array of ``array.positions``' shape (one row per
     microphone), else a GeometryError."""
@@ -124,7 +114,7 @@ def normalize_room(room: Mapping[str, Any] | None) -> dict[str, Any] | None:
         raise ConfigError("room: missing 'room_dim' ([length, width, height] in metres)")
     if "rt60" not in room or room["rt60"] is None:
         raise ConfigError("room: missing 'rt60' (reverberation time in seconds; 0 = anechoic)")
-    dim = _point(room["room_dim"], "room_dim")
+    dim = as_point(room["room_dim"], "room_dim")
     if np.any(dim <= 0):
         raise GeometryError(
             f"room_dim must be three positive lengths in metres, got {dim.tolist()}"
@@ -135,7 +125,7 @@ def normalize_room(room: Mapping[str, Any] | None) -> dict[str, Any] | None:
     out: dict[str, Any] = {
         "room_dim": dim.tolist(),
         "rt60": rt60,
-        "array_at": (dim / 2).tolist() if at is None else _point(at, "array_at").tolist(),
+        "array_at": (dim / 2).tolist() if at is None else as_point(at, "array_at").tolist(),
     }
     order = room.get("max_order")
     if order is not None:
@@ -157,7 +147,7 @@ def render(signal: ArrayLike, fs: float, array: MicArray, source: ArrayLike,
     time, so direct-path TDOAs equal ``MicArray.tdoa(source)`` (``tdoa_far`` in far field).
     """
     room = normalize_room(room)
-    src = _point(source, "source")
+    src = as_point(source, "source")
     if mic_positions is not None:
         mic_positions = _mic_positions(array, mic_positions)
     if array.mask is not None:  # masked two-microphone array: the mask's diffraction (BEM)
@@ -189,7 +179,7 @@ def ground_truth(array: MicArray, source: ArrayLike,
     ``far_field=True``; with ``mic_positions`` for those positions). A source at the origin
     has no direction: azimuth and elevation are None (and ``far_field`` a GeometryError).
     """
-    src = _point(source, "source")
+    src = as_point(source, "source")
     geo = array if mic_positions is None else MicArray(
         _mic_positions(array, mic_positions), array.speed_of_sound, array.name)
     az, el, r = cart_to_sph(src)
@@ -258,7 +248,7 @@ def simulate_recording(
     ((2, 1600), 45)
     """
     array = load_array(array)
-    src = _point(source, "source")
+    src = as_point(source, "source")
     fs = check_sim_fs(fs)
     if snr_db is not None and not is_real(snr_db):
         raise ConfigError(f"SNR must be a finite number of dB, got {snr_db!r}")
