@@ -17,6 +17,7 @@ import pytest
 import yaml
 
 from hearsee.errors import AudioInputError, ConfigError
+from hearsee.geometry import wrap_deg
 from hearsee.robot.hardware import (
     MappedSource,
     check_devices,
@@ -896,3 +897,84 @@ def test_head_and_mount_vectors_are_three_numbers(small_rig, section, key, value
     msg = str(e.value)
     assert msg.startswith(f"{path}: {section}.{key} must be a finite [x, y, z] in metres")
     assert "\n" not in msg
+
+
+def test_pan_command_is_wrapped_then_limited_to_the_nearer_limit():
+    """PrintHeadDriver clipped the raw desired pan: 340 deg (a target 170 deg left of a head at
+    pan 170) became +170 instead of -20, 190 deg (= -170) the opposite limit; and a pan that
+    crossed +-180 (179.5 -> -179.5, 1 deg) counted as a 359 deg change and was printed again."""
+    from hearsee.robot.hardware import HeadConfig, PrintHeadDriver, limit_pan_deg
+
+    def head(limits):
+        return HeadConfig(np.zeros(3), np.zeros(3), limits, (0.0, 0.0))
+
+    drv = PrintHeadDriver(head((-170.0, 170.0)))
+    for desired, sent in ((340.0, -20.0), (190.0, -170.0), (-190.0, 170.0), (175.0, 170.0),
+                          (-175.0, -170.0), (45.0, 45.0), (-530.0, -170.0)):
+        assert drv.command(0.0, desired, 0.0)["pan_deg"] == pytest.approx(sent, abs=1e-9)
+    # asymmetric limits: beyond them, the limit nearer the target round the circle
+    for desired, sent in ((-170.0, 170.0), (-10.0, 0.0), (-94.0, 0.0), (-96.0, 170.0)):
+        assert limit_pan_deg(desired, (0.0, 170.0)) == pytest.approx(sent, abs=1e-9)
+    full = PrintHeadDriver(head((-180.0, 180.0)), min_change_deg=2.0)
+    full.command(0.0, 179.5, 0.0)
+    full.command(0.1, -179.5, 0.0)  # 1 deg away, the short way round
+    assert full.n_printed == 1
+
+
+class _FixedHead:
+    """A head that stays at ``pose`` and records the pans it is sent; ``jitter`` (degrees)
+    alternates the reported pan by that much on every read (encoder noise)."""
+
+    def __init__(self, pan: float, jitter: float = 0.0) -> None:
+        self.pan, self.jitter, self.n_reads = pan, jitter, 0
+        self.sent: list[float] = []
+
+    @property
+    def pose_deg(self) -> tuple[float, float]:
+        self.n_reads += 1
+        return (float(wrap_deg(self.pan + (self.jitter if self.n_reads % 2 else 0.0))), 0.0)
+
+    def command(self, t: float, pan_deg: float, tilt_deg: float) -> dict:
+        self.sent.append(pan_deg)
+        return {"pan_deg": pan_deg, "tilt_deg": tilt_deg}
+
+
+def test_the_loop_keeps_commands_within_the_pan_limits(tmp_path):
+    """Limits [-30, 30] and a talker at 40 deg: a real driver was sent 40 deg (only
+    PrintHeadDriver clipped, the loop did not, though run_robot promised it)."""
+    from hearsee.stream.pipeline import ArraySource
+
+    x, _ = _talker(40.0, 1.5)
+    cfg = robot_config_from_dict({"audio": {}, "head": {"pan_limits_deg": [-30, 30]},
+                                  "output": {"report": "out"}}, "r.yaml", tmp_path)
+    head = _FixedHead(0.0)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=head)
+    assert abs(res.summary["azimuth_deg_final"] - 40.0) < 2.0  # heard where the talker is
+    assert head.sent and all(p == 30.0 for p in head.sent)
+    assert all(r["head_command"]["pan_deg"] == 30.0 for r in res.log if r["head_command"])
+
+
+def test_pose_jitter_across_180_is_no_head_move(tmp_path):
+    """A head looking straight back (pan 180, limits [-180, 180]) whose encoder reads 179.8
+    and -179.9 in turn: the loop took each flip for a 359.7 deg turn, restarted the stream
+    and withheld the audio for the whole run."""
+    from hearsee.stream.pipeline import ArraySource
+
+    x, _ = _talker(-10.0, 1.5)  # array frame: the talker at robot azimuth 170 deg
+    cfg = robot_config_from_dict({"audio": {}, "head": {"pan_limits_deg": [-180, 180],
+                                                        "pose_deg": [179.8, 0]},
+                                  "output": {"report": "out"}}, "r.yaml", tmp_path)
+    head = _FixedHead(179.8, jitter=0.3)  # 179.8, -179.9, 179.8, ...
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=head)
+    s = res.summary
+    assert head.n_reads > 20 and s["head_moves"] == 0
+    assert s["audio_updates"] > 20 and abs(wrap_deg(s["azimuth_deg_final"] - 170.0)) < 2.0
+
+
+def _talker(azimuth_deg: float, duration_s: float):
+    """A simulated voice 2 m away at ``azimuth_deg`` in the three-mic array's frame."""
+    from hearsee.sim.audio import simulate_recording
+
+    a = np.radians(azimuth_deg)
+    return simulate_recording("three-mic", [2.0 * np.cos(a), 2.0 * np.sin(a), 0.0],
+                              duration_s=duration_s, fs=FS, snr_db=25.0, seed=9)

@@ -35,7 +35,8 @@ Schema (defaults in brackets)::
     head:
       pivot_m: [0, 0, 1.2]              [[0, 0, 1.2]]  pan-tilt pivot in the robot frame, m
       offset_m: [0, 0, 0.08]            [[0, 0, 0]]    array origin from the pivot, head frame, m
-      pan_limits_deg: [-170, 170]       [[-170, 170]]  commanded pan is clipped to this
+      pan_limits_deg: [-170, 170]       [[-170, 170]]  the commanded pan stays within these
+                                        (a target beyond them: the nearer limit)
       pose_deg: [0, 0]                  [[0, 0]]   pan, tilt the head is at (driver none: it
                                         stays there; only the desired command is printed)
       driver: none                      [none]     only `none` is implemented: the desired
@@ -785,10 +786,34 @@ class Cameras:
 POSE_TOLERANCE_DEG = 0.5
 
 
+def pan_change_deg(a_deg: float, b_deg: float) -> float:
+    """``|a - b|`` of two pans (degrees) the short way round, in [0, 180]: 179.9 and -179.9
+    are 0.2 deg apart, not 359.8."""
+    from hearsee.geometry import wrap_deg
+
+    return abs(float(wrap_deg(a_deg - b_deg)))
+
+
+def limit_pan_deg(pan_deg: float, limits_deg: tuple[float, float]) -> float:
+    """The pan to command (degrees, robot frame, + = left) for a desired ``pan_deg`` (any
+    angle): wrapped to (-180, 180], and when outside ``limits_deg`` ([min, max] within
+    [-180, 180]), the limit angularly nearest to it. The head cannot turn through the arc
+    beyond its limits, so that limit is as near the target as it can look (a plain clip
+    chose ``max`` for a desired 190 deg, the same direction as -170 deg, and ``min`` for -170
+    deg with limits [0, 170], 20 deg from ``max``)."""
+    from hearsee.geometry import wrap_deg
+
+    pan = float(wrap_deg(pan_deg))
+    lo, hi = limits_deg
+    if lo <= pan <= hi:
+        return pan
+    return lo if pan_change_deg(pan, lo) < pan_change_deg(pan, hi) else hi
+
+
 class PrintHeadDriver:
     """Head driver ``none``: the head stays at ``pose_deg``; each desired pan/tilt command
-    (clipped to the pan limits) is logged and printed to ``stream`` when it changes by at least
-    ``min_change_deg``.
+    (pan wrapped and limited by :func:`limit_pan_deg`, tilt clipped to [-90, 90]) is logged
+    and printed to ``stream`` when it changes by at least ``min_change_deg``.
 
     The driver protocol :func:`run_robot` uses (a real pan-tilt driver implements the same):
     ``pose_deg`` -- the head's actual (pan, tilt) in degrees, read at every update (it may
@@ -809,11 +834,10 @@ class PrintHeadDriver:
         return self.head.pose_deg
 
     def command(self, t: float, pan_deg: float, tilt_deg: float) -> dict[str, float]:
-        lo, hi = self.head.pan_limits_deg
-        pan = float(np.clip(pan_deg, lo, hi))
+        pan = limit_pan_deg(pan_deg, self.head.pan_limits_deg)
         tilt = float(np.clip(tilt_deg, -90.0, 90.0))
-        if self.last is None or max(abs(pan - self.last[0]), abs(tilt - self.last[1])) \
-                >= self.min_change_deg:
+        if self.last is None or max(pan_change_deg(pan, self.last[0]),
+                                    abs(tilt - self.last[1])) >= self.min_change_deg:
             self.last = (pan, tilt)
             if self.stream is not None:
                 print(f"head: t={t:.2f} s pan {pan:+.1f} deg tilt {tilt:+.1f} deg "
@@ -895,10 +919,11 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        framer -> GCC TDOAs -> ITD Kalman filter -> localizer -> direction Kalman filter); the
        array-frame direction is rotated by the head pose into the robot frame.
     2. **Turn**: after a few audio updates the desired head pan/tilt (toward the 3D track once
-       there is one, else the audio bearing; clipped to ``head.pan_limits_deg``) goes to the head
-       driver -- with ``driver: none`` it is printed and logged and the head stays put. The
-       loop reads the driver's actual pose at every update (see :class:`PrintHeadDriver` for
-       the protocol a real driver implements): when it moves by more than
+       there is one, else the audio bearing; within ``head.pan_limits_deg``, see
+       :func:`limit_pan_deg`) goes to the head driver -- with ``driver: none`` it is printed
+       and logged and the head stays put. The loop reads the driver's actual pose at every
+       update (see :class:`PrintHeadDriver` for the protocol a real driver implements): when
+       it moves (the short way round, :func:`pan_change_deg`) by more than
        :data:`POSE_TOLERANCE_DEG`, the sensor geometry follows it, the stream forgets its
        array-frame state (direction tracker, ITD filter, smoothed spectra: their directions were
        relative to the old pose) and the audio is withheld until one frame and one audio block
@@ -1076,7 +1101,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         relative to an old pose), so its trackers start afresh on the settled head's audio."""
         nonlocal geo
         pose = _pose(head)
-        if max(abs(pose[0] - geo.pose[0]), abs(pose[1] - geo.pose[1])) > POSE_TOLERANCE_DEG:
+        if max(pan_change_deg(pose[0], geo.pose[0]), abs(pose[1] - geo.pose[1])) \
+                > POSE_TOLERANCE_DEG:
             geo = _Head(cfg, pose)
             state["heard_from"] = t + (scfg.frame_ms + a.block_ms) / 1000.0
             state["head_moves"] += 1
@@ -1151,6 +1177,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                 pan = bearing
             elif not heard and state["desired"] is not None:
                 pan, tilt = state["desired"]
+            # any driver gets a pan within the head's limits (not only PrintHeadDriver)
+            pan = limit_pan_deg(pan, cfg.head.pan_limits_deg)
             command = head.command(t, pan, tilt)
             state["desired"] = (pan, tilt)
         rec_track = None
