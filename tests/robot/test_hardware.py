@@ -353,9 +353,10 @@ def _person_case(folder: Path, n_frames: int = 8):
                                Entity("mannequin", 0.9, 3.0, 0.0, 1.75)],
                      depth_m=6.0, camera_height_m=cam_h, seed=1)
     scene = render_scene(spec)
-    write_video(folder / "left.avi", [scene.left] * n_frames)
-    write_video(folder / "right.avi", [scene.right] * n_frames)
-    write_video(folder / "thermal.avi", [scene.thermal_8bit] * n_frames)
+    # videos at the cameras' rate (files play at their own frame rate): one frame per 0.5 s
+    write_video(folder / "left.avi", [scene.left] * n_frames, fps=2.0)
+    write_video(folder / "right.avi", [scene.right] * n_frames, fps=2.0)
+    write_video(folder / "thermal.avi", [scene.thermal_8bit] * n_frames, fps=2.0)
     save_rig(scene.rig, folder / "rig.yaml")
     p = scene.people[0].position_m  # left optical frame: x right, y down, z forward
     torso = np.array([p[2], -p[0], cam_h - p[1]])  # robot frame, pivot = camera centre
@@ -808,7 +809,7 @@ def test_async_detection_uses_the_pose_of_its_capture(tmp_path, monkeypatch):
     class FakeCameras:
         n_failures = n_consecutive_failures = 0
 
-        def read(self):
+        def read(self, t=None):
             return CameraFrames(img, img, None)
 
     rec = {}
@@ -978,3 +979,51 @@ def _talker(azimuth_deg: float, duration_s: float):
     a = np.radians(azimuth_deg)
     return simulate_recording("three-mic", [2.0 * np.cos(a), 2.0 * np.sin(a), 0.0],
                               duration_s=duration_s, fs=FS, snr_db=25.0, seed=9)
+
+
+def _numbered_video(path: Path, fps: float, n: int) -> Path:
+    """An MJPG video of ``n`` uniform 160x120 frames, frame k of grey level 5 k."""
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), fps, (160, 120), True)
+    assert vw.isOpened()
+    for k in range(n):
+        vw.write(np.full((120, 160, 3), 5 * k, np.uint8))
+    vw.release()
+    return path
+
+
+@pytest.mark.parametrize("fps", [30.0, 5.0])
+def test_video_files_play_at_their_own_frame_rate(tmp_path, monkeypatch, fps):
+    """Cameras at 10 Hz reading video files: the frame detected at audio time t must be the
+    file's frame at t (30 fps: skipping frames; 5 fps: the same frame until the next is due).
+    Each read took the file's next frame, so a 30 fps file ran 3x slower than the audio (and a
+    5 fps one 2x faster)."""
+    import types as _types
+
+    import hearsee.vision.fusion as fusion
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import ArraySource
+
+    save_rig(default_rig(160, 120), tmp_path / "rig.yaml")
+    for side in ("left", "right"):
+        _numbered_video(tmp_path / f"{side}.avi", fps, int(1.6 * fps) + 1)  # > 1.5 s
+    cfg = load_robot_config(make_config(tmp_path, {
+        "audio": {}, "output": {"report": "out"},
+        "cameras": {"left": "left.avi", "right": "right.avi", "calib": "rig.yaml",
+                    "rate_hz": 10}}))
+    seen = []
+
+    def fake_detect(left, right, rig, thermal=None, **kw):
+        seen.append((round(left.mean() / 5.0), round(right.mean() / 5.0)))
+        return _types.SimpleNamespace(humans=[], rejected=[],
+                                      frame=_types.SimpleNamespace(left=left))
+
+    monkeypatch.setattr(fusion, "detect_humans", fake_detect)
+    monkeypatch.setattr(fusion, "draw_detections", lambda image, det: image.copy())
+    x, _ = _talker(40.0, 1.5)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
+                    keep_frames=0)
+    t_cam = [r["camera_t"] for r in res.log if r["camera_t"] is not None]
+    assert len(t_cam) == len(seen) == res.summary["camera_frames"] >= 10
+    want = [int(np.floor(t * fps + 1e-6)) for t in t_cam]
+    assert [s[0] for s in seen] == want and [s[1] for s in seen] == want
+    assert res.summary["camera_read_failures"] == 0

@@ -19,7 +19,8 @@ Schema (defaults in brackets)::
                                         update, one JSON line, per hop)
       method: phat                      [phat] GCC weighting (phat, scot, roth, ml, cc)
     cameras:                            # optional: without it the robot only hears
-      left: 0 | /dev/video0 | file.mp4 | rtsp://...   VideoCapture index, path or URL
+      left: 0 | /dev/video0 | file.mp4 | rtsp://...   VideoCapture index, path or URL (a
+                                                      video file plays at its own frame rate)
       right: 1                                        (left + right) ...
       stereo: 0                                       ... or ONE side-by-side device
                                                       (left image | right image)
@@ -706,6 +707,12 @@ class Cameras:
     :meth:`read` returns the next :class:`CameraFrames` (a side-by-side device is split into its
     halves), or None when a video file has ended or a device stopped delivering frames. Every
     frame is checked against the calibrated size.
+
+    A video FILE plays at its own frame rate: ``read(t)`` takes from it the frame shown at
+    ``t`` seconds (frame k at ``k / CAP_PROP_FPS``), skipping the frames in between (a 30 fps
+    file read every 0.1 s: frames 0, 3, 6, ...) or giving the same frame again while the file
+    has no newer one (a file slower than the reads). Devices and streams give their newest
+    frame; so does a file of unknown frame rate, and any source for ``read()`` without ``t``.
     """
 
     def __init__(self, cfg: CameraConfig, where: str = "") -> None:
@@ -714,23 +721,42 @@ class Cameras:
         self.cfg = cfg
         self.where = where
         self.caps: dict[str, Any] = {}
+        self.fps: dict[str, float] = {}  #: frame rate of each video file (Hz)
+        self.n_taken: dict[str, int] = {}  #: frames taken (read or skipped) from each file
+        self.last: dict[str, NDArray] = {}  #: each file's latest frame read
         self.n_failures = 0  #: reads that delivered no frame
         self.n_consecutive_failures = 0
         try:
             for field_name, spec in cfg.devices().items():
+                name = field_name.split(".")[1]
                 cap = open_capture(spec, f"{where}{field_name}")
+                self.caps[name] = cap
                 if isinstance(spec, int):  # live device: keep only the newest frame
                     cap.set(cv2.CAP_PROP_BUFFERSIZE, 1)
-                self.caps[field_name.split(".")[1]] = cap
+                fps = cap.get(cv2.CAP_PROP_FPS)
+                if isinstance(spec, str) and Path(spec).is_file() and np.isfinite(fps) \
+                        and fps > 0:
+                    self.fps[name], self.n_taken[name] = float(fps), 0
         except BaseException:
             self.close()
             raise
 
-    def _grab(self, name: str) -> NDArray | None:
+    def _grab(self, name: str, t: float | None = None) -> NDArray | None:
         cap = self.caps[name]
+        if t is not None and name in self.fps:  # a video file: its frame at t seconds
+            want = int(np.floor(t * self.fps[name] + 1e-6))
+            if want < self.n_taken[name]:  # still the frame read last
+                return self.last[name]
+            while self.n_taken[name] < want:  # the frames shown between the last read and t
+                if not cap.grab():
+                    return None
+                self.n_taken[name] += 1
         ok, frame = cap.read()
         if not ok or frame is None:
             return None
+        if name in self.n_taken:
+            self.n_taken[name] += 1
+            self.last[name] = frame
         w, h = self.cfg.expected_size(name)
         if (frame.shape[1], frame.shape[0]) != (w, h):
             raise ConfigError(f"{self.where}cameras.{name}: camera delivers "
@@ -738,8 +764,10 @@ class Cameras:
                               f"expects {w}x{h}")
         return frame
 
-    def read(self) -> CameraFrames | None:
-        fr = self._read()
+    def read(self, t: float | None = None) -> CameraFrames | None:
+        """The frames at ``t`` seconds since the run began (video files; see the class notes),
+        or the next ones; None when a source delivered none."""
+        fr = self._read(t)
         if fr is None:
             self.n_failures += 1
             self.n_consecutive_failures += 1
@@ -747,22 +775,22 @@ class Cameras:
             self.n_consecutive_failures = 0
         return fr
 
-    def _read(self) -> CameraFrames | None:
+    def _read(self, t: float | None) -> CameraFrames | None:
         import cv2
 
         if "stereo" in self.caps:
-            f = self._grab("stereo")
+            f = self._grab("stereo", t)
             if f is None:
                 return None
             w = f.shape[1] // 2
             left, right = f[:, :w], f[:, w:]
         else:
-            left, right = self._grab("left"), self._grab("right")
+            left, right = self._grab("left", t), self._grab("right", t)
             if left is None or right is None:
                 return None
         thermal = None
         if "thermal" in self.caps:
-            thermal = self._grab("thermal")
+            thermal = self._grab("thermal", t)
             if thermal is None:
                 return None
             if thermal.ndim == 3:
@@ -931,7 +959,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        3D track, the desired pose stays the last one commanded). The robot-frame 3D track is
        kept.
     3. **See and verify**: every ``1 / cameras.rate_hz`` seconds of audio, one set of camera
-       frames goes through stereo + thermal human detection
+       frames (of a video file: its frame at that audio time) goes through stereo + thermal
+       human detection
        (:func:`hearsee.vision.fusion.detect_humans`).
     4. **Fuse and track**: the verified person nearest the audio bearing (within the pipeline's
        association gate) updates a constant-acceleration 3D Kalman filter in the robot frame,
@@ -946,7 +975,9 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     audio_source : a stream source (``fs``, ``n_channels``, ``blocks()``) with ``cfg.audio``'s
         input channels; default: the live device (:func:`open_audio_source`). Tests pass an
         :class:`hearsee.stream.pipeline.ArraySource` of a simulated recording.
-    cameras : default: :class:`Cameras` of ``cfg.cameras`` (None in the file: audio only).
+    cameras : default: :class:`Cameras` of ``cfg.cameras`` (None in the file: audio only);
+        any object with its ``read(t)`` (``t``: seconds of audio), ``n_failures`` and
+        ``n_consecutive_failures``.
     head : default: :class:`PrintHeadDriver` printing to stderr; any object with its protocol
         (``pose_deg``, ``command``) drives a real head.
     jsonl : the JSON lines file (default ``cfg.output.jsonl``); one line per update, flushed.
@@ -1031,8 +1062,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     pending: list[Any] = [None]
     t_start = time.perf_counter()
 
-    def grab() -> CameraFrames | None:
-        fr = cameras.read()
+    def grab(t: float) -> CameraFrames | None:
+        fr = cameras.read(t)  # (video files: their frame at t, at the file's own rate)
         if fr is None:
             if cameras.n_consecutive_failures >= 3 and not state["cam_ended"]:
                 state["cam_ended"] = True
@@ -1145,7 +1176,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         if (cameras is not None and not state["cam_ended"] and pending[0] is None
                 and t + 1e-9 >= state["next_cam"]):
             state["next_cam"] = t + period - 1e-9
-            fr = grab()
+            fr = grab(t)
             if fr is not None and pool is not None:
                 pending[0] = (t, fr, pool.submit(detect, fr, geo), geo)
             elif fr is not None:
