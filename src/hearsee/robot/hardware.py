@@ -36,6 +36,7 @@ Schema (defaults in brackets)::
     head:
       pivot_m: [0, 0, 1.2]              [[0, 0, 1.2]]  pan-tilt pivot in the robot frame, m
       offset_m: [0, 0, 0.08]            [[0, 0, 0]]    array origin from the pivot, head frame, m
+                                        (audio bearings update the 3D track as seen from it)
       pan_limits_deg: [-170, 170]       [[-170, 170]]  the commanded pan stays within these
                                         (a target beyond them: the nearer limit)
       pose_deg: [0, 0]                  [[0, 0]]   pan, tilt the head is at (driver none: it
@@ -890,9 +891,13 @@ class _Head:
         mount = cfg.cameras.mount_m if cfg.cameras is not None else np.zeros(3)
         self.cam_centre = array_to_robot(np.zeros(3), pose, self.pivot, mount)
         self.R_cam = OPTICAL_FROM_BODY @ self.R.T  # robot -> left optical
-        # what hearsee.robot.pipeline's bearing update needs (robot frame = its "room")
+        #: the microphone array's origin, ``head.offset_m`` from the pivot in the head frame:
+        #: where the audio bearing is heard from (it was taken as heard from the pivot)
+        self.array_origin = array_to_robot(np.zeros(3), pose, self.pivot, cfg.head.offset_m)
+        # what hearsee.robot.pipeline's bearing update needs (robot frame = its "room"): its
+        # bearing origin, called pivot_w there (the simulated robot's array sits at the pivot)
         self.heading = 0.0
-        self.pivot_w = self.pivot
+        self.pivot_w = self.array_origin
 
     def direction_to_robot(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         from hearsee.geometry import direction_deg, unit_vector_deg
