@@ -79,7 +79,9 @@ from hearsee.geometry import fibonacci_sphere
 __all__ = [
     "METHODS",
     "MAX_FRAME_MS",
+    "MAX_UNSCALED_PEAK",
     "MIN_FS_HZ",
+    "MIN_UNSCALED_PEAK",
     "REVERB_COHERENCE_GAIN",
     "GccResult",
     "TdoaFrames",
@@ -572,15 +574,18 @@ def _window(window: str | tuple, frame_len: int) -> NDArray:
     return w
 
 
-#: recordings whose largest |sample| exceeds this are scaled to a peak of 1 first (float files
-#: have no full scale). SCOT's G_ii G_jj, ML's |G|^2 and the frames' norms are *fourth* powers
-#: of a frame's spectrum (|X| up to ~peak x frame length): in single precision they overflowed
-#: from peaks of ~1e7 (64 ms frames; raw 32-bit PCM is 2e9) and, with 10 s frames at 48 kHz,
-#: between 1e4 and 1e5. Raw 16-bit PCM (3e4) is scaled too; the results are scale-free
-_MAX_PEAK = 1e3
-#: ... and those whose peak is below this (a float file at 1e-15 gave no estimate: its
-#: single-precision powers fell under the spectra's floor). 24-bit PCM's smallest step is 1.2e-7
-_MIN_PEAK = 1e-6
+#: The level range :func:`estimate_tdoas` leaves unscaled: a recording whose largest |sample|
+#: (unitless sample values) is within ``[MIN_UNSCALED_PEAK, MAX_UNSCALED_PEAK]`` (or 0) is
+#: used as it is, any other is scaled to a peak of 1 first (float files have no full scale);
+#: the streaming SRP stage (:func:`hearsee.stream.pipeline.level_scale`) keeps the same range.
+#: Above: SCOT's G_ii G_jj, ML's |G|^2 and the frames' norms are *fourth* powers of a frame's
+#: spectrum (|X| up to ~peak x frame length): in single precision they overflowed from peaks of
+#: ~1e7 (64 ms frames; raw 32-bit PCM is 2e9) and, with 10 s frames at 48 kHz, between 1e4 and
+#: 1e5. Raw 16-bit PCM (3e4) is scaled too; the results are scale-free
+MAX_UNSCALED_PEAK = 1e3
+#: ... and below (a float file at 1e-15 gave no estimate: its single-precision powers fell under
+#: the spectra's floor). 24-bit PCM's smallest step is 1.2e-7
+MIN_UNSCALED_PEAK = 1e-6
 
 
 def windowed_frames(frames: NDArray, win: NDArray) -> NDArray:
@@ -1317,8 +1322,10 @@ def estimate_tdoas(
     prs = arr.checked_pairs(pairs)
     if joint == "steered":
         _check_steered(arr, source_in_plane, steer_range_m)
-    if peak > _MAX_PEAK or 0 < peak < _MIN_PEAK:  # (float32 fourth powers of the spectra
-        a = a / peak  # overflow, tiny powers vanish; every test here is scale-free)
+    # (float32 fourth powers of the spectra overflow, tiny powers vanish; every test here is
+    # scale-free)
+    if peak > MAX_UNSCALED_PEAK or 0 < peak < MIN_UNSCALED_PEAK:
+        a = a / peak
     # single precision from here on: twice as fast, and its ~1e-7 relative error is far below
     # any sensor noise
     a32 = a.astype(np.float32)

@@ -62,8 +62,8 @@ from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.signals import check_fs
 from hearsee.audio.tdoa import (
-    _MAX_PEAK,
-    _MIN_PEAK,
+    MAX_UNSCALED_PEAK,
+    MIN_UNSCALED_PEAK,
     check_frame_ms,
     check_recording_length,
     estimate_tdoas,
@@ -606,7 +606,7 @@ def level_scale(peak: float) -> float:
     0), else the one bringing ``peak`` to within a factor sqrt(2) of 1. A power of two scales
     floating-point numbers exactly, so a state built at one scale can be carried to another.
     Unitless."""
-    if peak == 0.0 or _MIN_PEAK <= peak <= _MAX_PEAK:
+    if peak == 0.0 or MIN_UNSCALED_PEAK <= peak <= MAX_UNSCALED_PEAK:
         return 1.0
     return math.ldexp(1.0, int(np.clip(-round(math.log2(peak)), -120, 120)))
 
