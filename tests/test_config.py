@@ -113,3 +113,14 @@ def test_time_limit_reads_none_and_inf_as_no_limit():
             time_limit("duration_s", bad)
     with pytest.raises(EstimationError):
         time_limit("duration_s", 0.0, error=EstimationError)
+
+
+def test_time_limit_error_says_inf_means_no_limit():
+    """It accepts inf (no limit) but said "must be a finite number > 0", as if inf were refused;
+    the message names both choices (and the value as given)."""
+    rule = "--duration must be a number of seconds > 0, or inf for no limit, got "
+    for bad, shown in ((0, "0"), (-2.5, "-2.5"), (float("nan"), "nan"), (-float("inf"), "-inf"),
+                       ("inf", "'inf'"), (True, "True")):
+        with pytest.raises(ConfigError) as exc:
+            time_limit("--duration", bad)
+        assert str(exc.value) == rule + shown

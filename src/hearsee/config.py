@@ -140,10 +140,16 @@ def finite_number(name: str, value: Any, lo: float | None = None, hi: float | No
 
 def time_limit(name: str, value: Any, *, error: type[Exception] = ConfigError) -> float | None:
     """A run's optional time limit in seconds: None or +inf -> None (no limit), else a finite
-    number > 0 (:func:`finite_number`; ``error`` otherwise)."""
+    real number > 0 (:func:`is_real`) as a float; ``error`` otherwise, naming ``name`` and both
+    choices, e.g. "--duration must be a number of seconds > 0, or inf for no limit, got nan"
+    (the rule of :func:`finite_number` alone, "a finite number > 0", read as if inf were
+    refused)."""
     if value is None or (isinstance(value, float | np.floating) and value == math.inf):
         return None
-    return finite_number(name, value, 0.0, lo_open=True, error=error)
+    if not is_real(value) or value <= 0:
+        raise error(f"{name} must be a number of seconds > 0, or inf for no limit, got "
+                    f"{value!r}")
+    return float(value)
 
 
 def whole_number(name: str, value: Any, lo: int = 1, hi: int | None = None, *,
