@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from hearsee.config import (
+    as_float_array,
     finite_number,
     is_real,
     load_yaml,
@@ -124,3 +125,28 @@ def test_time_limit_error_says_inf_means_no_limit():
         with pytest.raises(ConfigError) as exc:
             time_limit("--duration", bad)
         assert str(exc.value) == rule + shown
+
+
+def test_as_float_array_refuses_entries_that_are_not_real_numbers():
+    """numpy's float conversion read True as 1.0 and "0.5" as 0.5 (a microphone, a head offset,
+    a pan limit), converted a bool or complex array (the imaginary part dropped) and raised a
+    builtin OverflowError on an int beyond float's range; each is now the typed error."""
+    for bad in ([True, 0, 0], [[0.1, 0, 0], [0, np.bool_(False), 0]], ["0.5", 0, 0],
+                [10**400, 0, 0], np.array([True, False, True]), np.array(["1", "2", "3"]),
+                np.array([1 + 1j, 0, 0]), np.array([1.0, True, 0.0], dtype=object), None):
+        with pytest.raises(ConfigError, match="^w: expected numbers, got "):
+            as_float_array(bad, "w")
+    with pytest.raises(ConfigError, match="^w: values must be finite numbers$"):
+        as_float_array([0.0, np.nan, 1.0], "w")  # (a float entry: finite is the next check)
+
+
+def test_as_float_array_keeps_numbers_as_they_were():
+    """Lists of Python / numpy numbers and numeric arrays convert as np.asarray(value, float)
+    did; a float array is returned as it is (no copy, no entry-by-entry check)."""
+    pos = np.array([[0.1, 0.0, 0.0], [-0.05, 0.0866, 0.0], [-0.05, -0.0866, 0.0]])
+    assert as_float_array(pos, "w", (None, 3)) is pos
+    for good in ([1, 2.5, -3], [np.float32(0.1), np.int64(2), 3], (0.3, 0.1, 1e300),
+                 np.array([1, 2, 3]), np.array([0.5, 2], dtype=object), pos.tolist(), []):
+        got = as_float_array(good, "w")
+        want = np.asarray(good, dtype=float)
+        assert got.dtype == want.dtype and got.tobytes() == want.tobytes()

@@ -173,7 +173,29 @@ def require(data: Mapping[str, Any], key: str, where: str) -> Any:
 
 def as_float_array(value: Any, where: str,
                    shape: tuple[int | None, ...] | None = None) -> np.ndarray:
-    """Convert ``value`` to a finite float array, checking ``shape`` (None = any length)."""
+    """Convert ``value`` to a finite float array, checking ``shape`` (None = any length);
+    ConfigError naming ``where`` otherwise.
+
+    Every entry must be a real number: a bool, a string (``"0.5"``), an int beyond float's
+    range or a complex number is refused -- numpy's float conversion read ``True`` as 1.0 and
+    ``"0.5"`` as 0.5, and raised a builtin OverflowError on a 400-digit int. A numpy array of
+    integers or floats is converted at once (no element-wise check); lists, tuples and object
+    arrays have their entries checked one by one (:func:`is_real`; NaN and inf then get the
+    "must be finite" error). The many-number counterpart of
+    :func:`hearsee.geometry.as_point`."""
+    if isinstance(value, np.ndarray) and value.dtype.kind in "iuf":
+        ok = True  # (a numeric array: nothing to check entry by entry)
+    elif isinstance(value, np.ndarray) and value.dtype.kind != "O":
+        ok = False  # bools, strings, complex numbers, dates
+    else:
+        try:
+            items = np.asarray(value, dtype=object)
+        except (TypeError, ValueError):
+            items = None
+        ok = items is not None and all(
+            isinstance(v, float | np.floating) or is_real(v) for v in items.flat)
+    if not ok:
+        raise ConfigError(f"{where}: expected numbers, got {value!r}")
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError):

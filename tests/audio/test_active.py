@@ -358,6 +358,9 @@ def test_localize3d_cli_round_trip(pose_manifest, capsys, method):
     (lambda d: d["captures"][0].update(tilt_deg=120), "tilt_deg must be within"),
     (lambda d: d.pop("captures"), "missing required key 'captures'"),
     (lambda d: d["head"].update(offset_m=[0, 1]), "offset_m"),
+    # (true was read as 1 m and '0.5' as 0.5 m)
+    (lambda d: d["head"].update(offset_m=[True, 0, 0]), "head.offset_m: expected numbers"),
+    (lambda d: d["head"].update(pivot_m=["0.5", 0, 0]), "head.pivot_m: expected numbers"),
     # (an infinite noise passed the manifest check; the solver refused it after measuring
     # every capture, without naming the file: "tdoa_std_s must be > 0 seconds, got inf")
     (lambda d: d.update(tdoa_std_s=float("inf")), "bad.yaml: tdoa_std_s must be a positive"),

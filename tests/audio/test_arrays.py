@@ -67,6 +67,11 @@ def test_yaml_round_trip(tmp_path):
         ("name: x", ConfigError, "missing required key 'microphones'"),
         ("microphones: [[0,0,0],[1,0,0]]\nspeed_of_sound: -3", GeometryError, "speed_of_sound"),
         ("microphones: [[0,0,0], [1, 0, .nan]]", ConfigError, "finite"),
+        # (true read as 1 m, '0.5' as 0.5 m; a 400-digit int was a builtin OverflowError)
+        ("microphones: [[0,0,0], [true, 0, 0]]", ConfigError, "microphones: expected numbers"),
+        ("microphones: [[0,0,0], ['0.5', 0, 0]]", ConfigError, "microphones: expected numbers"),
+        ("microphones: [[0,0,0], [1" + "0" * 400 + ", 0, 0]]", ConfigError,
+         "microphones: expected numbers"),
         ("microphones: [[0,0,0", ConfigError, "invalid YAML"),
     ],
 )
