@@ -462,6 +462,23 @@ def test_localize3d_single_pose_reports_ambiguity(tmp_path, capsys):
     assert els[1] == pytest.approx(el_true, abs=4.0)
 
 
+def test_simulate_pose_manifest_checks_its_points(tmp_path):
+    """source_m, pivot_m and offset_m went through np.asarray(float): True was read as 1 m and
+    "0.1" as 0.1 m (a manifest written with the wrong geometry), a huge int was a builtin
+    OverflowError. Each is a GeometryError naming the argument, before anything is written."""
+    from hearsee.audio.active import simulate_pose_manifest
+
+    good = {"source_m": [1.0, 0.8, 0.6], "pivot_m": (0.0, 0.0, 0.0), "offset_m": (0.1, 0.0, 0.0)}
+    for name in good:
+        for bad in ([True, 0.0, 0.0], ["0.1", 0.0, 0.0], [10**400, 0.0, 0.0], [0.1, 0.0]):
+            kw = good | {name: bad}
+            src = kw.pop("source_m")
+            with pytest.raises(GeometryError, match=rf"^{name} must be a finite \[x, y, z\]"):
+                simulate_pose_manifest(tmp_path / "m.yaml", "three-mic", src, [(0, 0)],
+                                       duration_s=0.1, **kw)
+    assert not list(tmp_path.iterdir())
+
+
 def test_thesis_search_alignment_far_source():
     from hearsee.audio.active import align_head_search
 

@@ -73,6 +73,7 @@ from hearsee.errors import (
 from hearsee.geometry import (
     HeadPose,
     angle_between,
+    as_point,
     as_pose,
     direction_deg,
     fibonacci_sphere,
@@ -1421,6 +1422,9 @@ def simulate_pose_manifest(
     coordinates. The same source signal is used for every pose; sensor noise is independent.
     The manifest's ``truth`` holds the source position, its azimuth/elevation/distance from the
     pivot, and the true TDOAs per pose. Returns (manifest path, capture paths).
+    ``source_m``, ``pivot_m`` (robot frame) and ``offset_m`` (head frame, from the pivot; as in
+    :func:`~hearsee.geometry.mic_positions_at`) are each one finite ``[x, y, z]`` in metres,
+    else GeometryError (:func:`~hearsee.geometry.as_point`).
     """
     from pathlib import Path
 
@@ -1437,15 +1441,16 @@ def simulate_pose_manifest(
         if Path(q).resolve() == man.resolve():
             raise ConfigError(f"{man}: refusing to overwrite the input file {q}")
     arr = load_array(array)
-    src = np.asarray(source_m, dtype=float)
+    # (each read as np.asarray(float): True as 1 m, "0.5" as 0.5 m, a huge int an OverflowError)
+    src = as_point(source_m, "source_m")
+    pivot = as_point(pivot_m, "pivot_m")
+    offset = as_point(offset_m, "offset_m")
     poses = [as_pose(p) for p in poses]
     if not poses:
         raise ConfigError("--poses needs at least one PAN,TILT pose")
     room = normalize_room(room)
     rng = np.random.default_rng(seed)
     sig = make_signal(signal, duration_s, fs, rng)
-    pivot = np.asarray(pivot_m, dtype=float)
-    offset = np.asarray(offset_m, dtype=float)
     files, true_tdoas = [], []
     for k, pose in enumerate(poses):
         mics = mic_positions_at(arr, pose, pivot, offset)
