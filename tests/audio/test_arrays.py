@@ -158,6 +158,22 @@ def test_far_field_direction_must_be_finite():
     np.testing.assert_allclose(two.tdoa_far([0.0, 5.0, 0.0]), [0.15 / 343.0])
 
 
+def test_tdoa_source_must_be_finite():
+    """tdoa of a NaN or infinite source returned NaN TDOAs without a word (tdoa_far checks);
+    a batch with one bad point names how many and the first."""
+    three = MicArray.from_preset("three-mic")
+    for bad in ([np.nan, 0.0, 1.0], [1.0, np.inf, 0.0], [0.0, 0.0, -np.inf]):
+        with pytest.raises(GeometryError, match=r"^source must be finite \[x, y, z\] in metres"):
+            three.tdoa(bad)
+    batch = np.ones((4, 2, 3))
+    batch[2, 1, 0] = np.nan
+    batch[3, 0, 2] = np.inf
+    with pytest.raises(GeometryError, match=r"got 2 of 8 points, e\.g\. \[nan, 1\.0, 1\.0\]$"):
+        three.tdoa(batch, [(0, 1)])
+    good = np.ones((4, 2, 3))
+    np.testing.assert_array_equal(three.tdoa(good[2, 1]), three.tdoa(good)[2, 1])
+
+
 def test_points_that_are_not_xyz_are_a_geometry_error():
     """A 2-D point raised numpy's ValueError from tdoa (broadcast), tdoa_far (matmul) and
     tdoa_jacobian (reshape)."""

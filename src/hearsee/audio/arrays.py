@@ -236,12 +236,20 @@ class MicArray:
         return bool(s[-1] < 1e-6 * max(s[0], 1e-12))
 
     def tdoa(self, source: ArrayLike, pairs: list[tuple[int, int]] | None = None) -> NDArray:
-        """Exact (near-field) TDOAs ``t_i - t_j`` in seconds for source point(s) ``(..., 3)``.
+        """Exact (near-field) TDOAs ``t_i - t_j`` in seconds for source point(s) ``(..., 3)``
+        in metres, in the array frame.
 
-        Returns shape ``(..., n_pairs)``.
+        Returns shape ``(..., n_pairs)``. A non-finite coordinate is a GeometryError (it gave
+        NaN TDOAs without a word), as in :meth:`tdoa_far`.
         """
         i, j = _pair_index(self.checked_pairs(pairs))
-        return pair_tdoa(_xyz(source, "source"), self.positions, i, j, self.speed_of_sound)
+        p = _xyz(source, "source")
+        finite = np.isfinite(p).all(axis=-1)
+        if not finite.all():
+            n_bad, first = int(np.count_nonzero(~finite)), p[~finite][0].tolist()
+            which = f"{n_bad} of {finite.size} points, e.g. " if p.ndim > 1 else ""
+            raise GeometryError(f"source must be finite [x, y, z] in metres, got {which}{first}")
+        return pair_tdoa(p, self.positions, i, j, self.speed_of_sound)
 
     def tdoa_jacobian(self, source: ArrayLike,
                       pairs: list[tuple[int, int]] | None = None) -> NDArray:
