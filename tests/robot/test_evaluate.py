@@ -23,10 +23,18 @@ def test_bad_counts_and_durations():
         evaluate(0)
     with pytest.raises(ConfigError, match="duration"):
         evaluate(1, duration_s=0.5)
-    with pytest.raises(ConfigError, match="--workers must be >= 0"):  # was a ValueError
+    with pytest.raises(ConfigError, match="--workers must be an integer >= 0"):  # was a ValueError
         evaluate(1, workers=-1)
-    with pytest.raises(ConfigError, match="--seed must be >= 0"):  # was numpy's ValueError
+    with pytest.raises(ConfigError, match="--seed must be an integer >= 0"):  # was numpy's ValueError
         evaluate(1, seed0=-5)
+    # wrong types: one typed error naming the option (were builtin TypeErrors from comparing a
+    # string or None with a number)
+    for kw, name in [({"n_scenarios": "3"}, "--scenarios"), ({"duration_s": "5"}, "--duration"),
+                     ({"duration_s": None}, "--duration"), ({"workers": 1.5}, "--workers"),
+                     ({"seed0": None}, "--seed")]:
+        args = {"n_scenarios": 1} | kw
+        with pytest.raises(ConfigError, match=f"^{name} must be "):
+            evaluate(**args)
 
 
 @pytest.mark.slow

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from hearsee.config import finite_number, whole_number
 from hearsee.errors import ConfigError
 
 __all__ = ["EvalResult", "evaluate", "run_one", "summarize"]
@@ -93,14 +94,12 @@ def evaluate(
     duration_s : float
         Simulated seconds per scenario.
     """
-    if n_scenarios < 1:
-        raise ConfigError(f"--scenarios must be >= 1, got {n_scenarios}")
-    if not 2.0 <= duration_s <= 120.0:
-        raise ConfigError(f"--duration must be between 2 and 120 s, got {duration_s}")
-    if workers is not None and workers < 0:
-        raise ConfigError(f"--workers must be >= 0 (0 = all cores), got {workers}")
-    if seed0 < 0:
-        raise ConfigError(f"--seed must be >= 0 (numpy seeds are non-negative), got {seed0}")
+    # (a string or None raised a builtin TypeError from the comparisons)
+    n_scenarios = whole_number("--scenarios", n_scenarios, 1)
+    duration_s = finite_number("--duration", duration_s, 2.0, 120.0)  # seconds
+    if workers is not None:
+        workers = whole_number("--workers", workers, 0)  # (0 = all cores)
+    seed0 = whole_number("--seed", seed0, 0)
     seeds = list(range(seed0, seed0 + n_scenarios))
     job = partial(run_one, duration_s=float(duration_s))
     tick = progress or (lambda n=1: None)
