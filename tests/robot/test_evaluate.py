@@ -25,7 +25,7 @@ def test_bad_counts_and_durations():
         evaluate(1, duration_s=0.5)
     with pytest.raises(ConfigError, match="--workers must be an integer >= 0"):  # was a ValueError
         evaluate(1, workers=-1)
-    with pytest.raises(ConfigError, match="--seed must be an integer >= 0"):  # was numpy's ValueError
+    with pytest.raises(ConfigError, match="--seed must be an integer >= 0"):  # (numpy ValueError)
         evaluate(1, seed0=-5)
     # wrong types: one typed error naming the option (were builtin TypeErrors from comparing a
     # string or None with a number)
