@@ -567,3 +567,17 @@ def test_thesis_search_from_the_upper_tilt_limit_tries_downward():
             assert res.error_deg(src) < 1.0
         else:  # 81 deg up: the head stays at its limit
             assert res.final_pose.tilt_deg == pytest.approx(tilt)
+
+
+def test_train_pose_mlp_checks_its_settings_before_the_cache_key():
+    """The cache key converted them first: float() read True as 1 m (a pivot 1 m off, trained
+    without a word), int() 2.5 training samples as 2 and -1 as an empty set."""
+    from hearsee.errors import GeometryError
+
+    poses = [(0.0, 0.0), (0.0, 30.0)]
+    for kw, what in [({"pivot_m": (True, 0.0, 0.0)}, "pivot_m"),
+                     ({"offset_m": ("0.1", 0.0, 0.0)}, "offset_m"),
+                     ({"n": 2.5}, "n \\(training samples\\)"), ({"n": 0}, "n \\(training"),
+                     ({"tdoa_std_s": True}, "tdoa_std_s"), ({"seed": -1}, "seed")]:
+        with pytest.raises(GeometryError, match=f"^{what}"):
+            train_pose_mlp("three-mic", poses, **kw)

@@ -885,11 +885,17 @@ def train_pose_mlp(array: MicArray | str, poses: Sequence[HeadPose | Sequence[fl
     and head geometry on ``n`` simulated samples (a few seconds; no model file is written)."""
     arr = load_array(array)
     key = tuple(map(tuple, arr.positions.tolist()))
+    # checked before the cache key's conversions (float() read True as 1 m or 1 s, int() 2.5
+    # training samples as 2)
     return _train_cached(key, arr.speed_of_sound,
                          tuple(as_pose(p).as_tuple() for p in poses),
-                         tuple(float(v) for v in np.asarray(pivot_m, dtype=float)),
-                         tuple(float(v) for v in np.asarray(offset_m, dtype=float)),
-                         int(n), float(tdoa_std_s), int(seed), tuple(hidden_layer_sizes))
+                         tuple(as_point(pivot_m, "pivot_m").tolist()),
+                         tuple(as_point(offset_m, "offset_m").tolist()),
+                         whole_number("n (training samples)", n, 1, error=GeometryError),
+                         finite_number("tdoa_std_s (seconds)", tdoa_std_s, 0.0,
+                                       error=GeometryError),
+                         whole_number("seed", seed, 0, error=GeometryError),
+                         tuple(hidden_layer_sizes))
 
 
 # ------------------------------------------------------------------------ continuous sampling
