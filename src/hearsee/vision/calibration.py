@@ -663,7 +663,13 @@ def _subpixel_rays(camera: Camera, k: int = 4) -> NDArray:
 @dataclass
 class ViewReport:
     """One image pair (or triplet) of a rig calibration: whether the board was found in each
-    image and the RMS reprojection errors (pixels; NaN where not used)."""
+    image and the RMS reprojection errors (pixels; NaN where not used).
+
+    ``rejected``: an outlier of the left or right intrinsics, left out of the stereo and
+    thermal extrinsics. ``rejected_thermal``: left out of the thermal calibration by its own
+    outlier tests (an outlier of the thermal intrinsics, which has no ``err_thermal``, or of the
+    thermal extrinsics' robust averaging, whose ``err_thermal`` is its error under the final
+    extrinsics)."""
 
     left: str
     right: str
@@ -677,6 +683,7 @@ class ViewReport:
     err_stereo_right: float = float("nan")
     err_thermal: float = float("nan")
     rejected: bool = False
+    rejected_thermal: bool = False
 
 
 @dataclass
@@ -718,7 +725,9 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
     ``left_files[i]``, ``right_files[i]`` (and ``thermal_files[i]``) are simultaneous views,
     paired by position. Intrinsics of each camera use every image where the board was found,
     the stereo extrinsics the pairs found in both, the thermal extrinsics the views found in
-    the left and thermal images (board triangulated by the rig when also found on the right).
+    the left and thermal images (board triangulated by the rig when also found on the right);
+    views an intrinsic calibration rejects as outliers are left out of the extrinsics that
+    involve that camera (see :class:`ViewReport`).
     ``progress`` is an optional callable called once per image read.
 
     Raises CalibrationError (mismatched counts, board never found, too few views) and
@@ -841,13 +850,20 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
         th = [tp[i] for i in idx_t]
         ct = calibrate_camera(th, obj, sizes["thermal"], model=thermal_model,
                               fix_aspect=fix_aspect, name="thermal")
+        # the extrinsics use only the views kept by the stereo and the thermal calibrations: a
+        # thermal view whose corners fit no board pose of the thermal camera (an outlier of its
+        # intrinsics) can still pass the extrinsics' own test (per-view poses near the median)
+        # and pull the thermal camera's position by millimetres
+        dropped_t = {idx_t[j] for j in ct.rejected}
+        kept = [i not in rejected and i not in dropped_t for i in range(n)]
         te = calibrate_thermal_extrinsics(
-            rig, ct.camera, [lp[i] if i not in rejected else None for i in range(n)], tp, obj,
-            right_points=[rp[i] if i not in rejected else None for i in range(n)])
-        used_views = [i for i in range(n) if lp[i] is not None and tp[i] is not None
-                      and i not in rejected]
+            rig, ct.camera, [lp[i] if kept[i] else None for i in range(n)], tp, obj,
+            right_points=[rp[i] if kept[i] else None for i in range(n)])
+        used_views = [i for i in range(n) if lp[i] is not None and tp[i] is not None and kept[i]]
         for j, i in enumerate(used_views):
             views[i].err_thermal = float(te.per_view_px[j])
+        for i in idx_t:
+            views[i].rejected_thermal = i in dropped_t or (kept[i] and i not in te.used)
         rig = rig.with_thermal(ct.camera, te.R, te.T)
         rms_t, rms_te = ct.rms_px, te.rms_px
     info = {"board": f"{pattern[0]}x{pattern[1]}", "square_m": float(square_m),
