@@ -388,8 +388,8 @@ def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDAr
     model fixes stay at the given cameras' values, e.g. zero) and, with ``fix_aspect``, each
     camera's ``fx / fy``. ``model=None`` frees the 5 standard coefficients (8 with rational
     cameras, i.e. 8 or more coefficients); the thin-prism and tilt terms of 12- and
-    14-coefficient cameras are never estimated and stay as given. The cameras come back with
-    OpenCV's 14 coefficients (the terms they did not have are 0).
+    14-coefficient cameras are never estimated and stay as given. Cameras of 8 or more
+    coefficients come back with OpenCV's 14 (the terms they did not have are 0).
 
     Corners are in pixels; returns the rig with ``X_right = R X_left + T`` (metres, as the
     object points).
