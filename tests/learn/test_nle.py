@@ -426,3 +426,38 @@ def test_failed_refit_leaves_the_fitted_model_consistent(cls, bad_k):
     if ref_labels is not None:
         np.testing.assert_array_equal(m.labels_, ref_labels)
         np.testing.assert_array_equal(m.predict(X_good), ref_labels)
+
+
+def test_cnle_transform_reconstructs_from_the_cluster_alone():
+    """A sparse sheet (12 x 12, spacing 1, z = 1.5) above a dense one (40 x 40, spacing 0.3,
+    z = 0): CNLE separates them exactly. New points of the sparse sheet, 0.5 off it towards the
+    dense one (noise), have mostly dense-sheet points among their 8 nearest training points.
+    transform took its candidates among all training points and shadowed them before keeping
+    the cluster's: 1-4 neighbours were left (19 of 40 points fewer than the d + 1 = 3 fit keeps) and
+    the points landed up to 0.25 (mean 0.062) from where their sheet's embedding puts them;
+    from the cluster's own adaptive neighbourhood (as fit embeds it) at most 0.015 (mean
+    0.007, measured)."""
+    rng = np.random.default_rng(0)
+
+    def grid(n, step):
+        g = np.stack(np.meshgrid(np.arange(n) * step, np.arange(n) * step), -1).reshape(-1, 2)
+        return g + rng.uniform(-0.2, 0.2, g.shape) * step
+
+    dense = np.c_[grid(40, 0.3), np.zeros(1600)]
+    sparse = np.c_[grid(12, 1.0), np.full(144, 1.5)]
+    X = np.vstack([dense, sparse])
+    m = ClusteredNLE(random_state=0).fit(X)
+    assert m.n_clusters_ == 2
+    c = m.labels_[1600]
+    np.testing.assert_array_equal(m.labels_ == c, np.arange(1744) >= 1600)
+    # the sparse sheet is flat: its embedding is an affine image of (x, y), to 0.02 rms
+    A = np.c_[sparse[:, :2], np.ones(144)]
+    coef, *_ = np.linalg.lstsq(A, m.embedding_[1600:], rcond=None)
+    assert np.sqrt(np.mean(np.sum((A @ coef - m.embedding_[1600:]) ** 2, axis=1))) < 0.03
+    # new points near the sparse sheet's inner points, 0.5 below it
+    inner = sparse[(sparse[:, :2].min(axis=1) > 1.5) & (sparse[:, :2].max(axis=1) < 9.5)]
+    q = inner[rng.choice(len(inner), 40, replace=False)] + np.c_[
+        rng.uniform(-0.3, 0.3, (40, 2)), np.full(40, -0.5)]
+    assert np.all(m.predict(q) == c)
+    err = np.linalg.norm(m.transform(q) - np.c_[q[:, :2], np.ones(40)] @ coef, axis=1)
+    assert err.max() < 0.06

@@ -796,13 +796,12 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         """Fit and return ``embedding_``."""
         return self.fit(X).embedding_
 
-    def _reconstruct(self, X: np.ndarray, allowed=None):
-        """Out-of-sample neighbourhoods and weights of X in the training set.
-
-        ``allowed`` (n_query, n_neighbors) bool masks candidates that may be used."""
-        train = self.training_data_
+    def _reconstruct(self, X: np.ndarray, train: np.ndarray, nbrs: NearestNeighbors):
+        """Out-of-sample neighbourhoods and weights of X among the training points ``train``
+        (``nbrs`` is fitted on them): the same candidate search, shadow rule and weights as in
+        fit. Returns ``(ind, W, mask)``, ``ind`` indexing ``train``."""
         k = min(self.n_neighbors, train.shape[0])
-        dist, ind = self.nbrs_.kneighbors(X, n_neighbors=k)
+        dist, ind = nbrs.kneighbors(X, n_neighbors=k)
         far = ~(dist[:, -1] <= _MAX_SPAN)
         if far.any():
             raise ManifoldInputError(
@@ -812,9 +811,6 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
             )
         mask = adaptive_neighbors(train, ind, dist, self.shadow,
                                   min_neighbors=self.n_components + 1, centers=X)
-        if allowed is not None:
-            mask &= allowed(ind)
-            mask[~mask.any(axis=1), 0] = True  # the nearest is always allowed by construction
         W = reconstruction_weights(train, ind, mask, self.reg, centers=X)
         exact = dist[:, 0] <= 0.0  # query coincides with a training point: use its embedding
         W[exact] = 0.0
@@ -830,7 +826,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         """
         check_is_fitted(self, "embedding_")
         X = validate_data(self, X, dtype=np.float64, reset=False)
-        ind, W, mask = self._reconstruct(X)
+        ind, W, mask = self._reconstruct(X, self.training_data_, self.nbrs_)
         return np.einsum("nk,nkd->nd", W * mask, self.embedding_[ind])
 
     def __sklearn_tags__(self):
@@ -873,6 +869,10 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
     n_clusters_ : int
     embedding_ : (n_samples, n_components) array
         Per-cluster NLE coordinates (each cluster zero-mean, axes scaled as ``axis_scaling``).
+    cluster_nbrs_ : list of NearestNeighbors or None
+        Per cluster, the search fitted on its training points (in the order of
+        ``np.flatnonzero(labels_ == c)``; None for a cluster too small to embed); used by
+        :meth:`transform`.
     adjacency_, n_neighbors_, reconstruction_error_, nbrs_, training_data_, n_features_in_
         As in :class:`NeighborhoodLinearEmbedding` (``adjacency_`` holds the per-cluster weights;
         the error is summed over clusters).
@@ -1000,6 +1000,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         n_clusters = int(labels.max()) + 1
         Y = np.zeros((n, self.n_components))
         blocks = []
+        cluster_nbrs: list[NearestNeighbors | None] = []
         counts = np.zeros(n, dtype=int)
         err = 0.0
         for c in range(n_clusters):
@@ -1007,10 +1008,12 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
             m = idx.size
             if m <= self.n_components + 1:
                 blocks.append(sparse.csr_matrix((m, n)))
+                cluster_nbrs.append(None)
                 continue
             Xc = X[idx]
             k = min(self.n_neighbors, m - 1)
             nn = NearestNeighbors(n_neighbors=k + 1, n_jobs=self.n_jobs).fit(Xc)
+            cluster_nbrs.append(nn)
             dc, ic = nn.kneighbors(Xc)
             dc, ic = dc[:, 1:], ic[:, 1:]
             mc = adaptive_neighbors(Xc, ic, dc, self.shadow, min_neighbors=self.n_components + 1)
@@ -1025,7 +1028,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         c = np.concatenate([b[1] for b in blocks if isinstance(b, tuple)] or [np.zeros(0, int)])
         v = np.concatenate([b[2] for b in blocks if isinstance(b, tuple)] or [np.zeros(0)])
         self.nbrs_, self.training_data_ = nbrs, X
-        self.labels_, self.n_clusters_ = labels, n_clusters
+        self.labels_, self.n_clusters_, self.cluster_nbrs_ = labels, n_clusters, cluster_nbrs
         self.adjacency_ = sparse.csr_matrix((v, (r, c)), shape=(n, n))
         self.embedding_ = Y
         self.n_neighbors_ = counts
@@ -1045,13 +1048,30 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
 
     def transform(self, X) -> np.ndarray:
         """Embed new points in the frame of their cluster (see :meth:`predict`): reconstruct each
-        from its adaptive neighbourhood among that cluster's training points."""
+        from its adaptive neighbourhood among that cluster's training points, as fit embedded
+        the cluster (NLE on the cluster alone): the ``n_neighbors`` nearest candidates of the
+        cluster, then the shadow rule among them. Points of a cluster too small to embed (its
+        coordinates are 0) get 0.
+
+        Until 2026-11-26 the candidates were the nearest of all training points and the shadow rule
+        ran over them before the other clusters' points were dropped: those took candidate
+        places and shadowed the cluster's own points, leaving points near another cluster
+        (a sparse sheet beside a dense one) with fewer or other neighbours than fit gives them.
+        """
         check_is_fitted(self, "embedding_")
         X = validate_data(self, X, dtype=np.float64, reset=False)
         _, near = self.nbrs_.kneighbors(X, n_neighbors=1)
         lab = self.labels_[near[:, 0]]
-        ind, W, mask = self._reconstruct(X, allowed=lambda ind: self.labels_[ind] == lab[:, None])
-        return np.einsum("nk,nkd->nd", W * mask, self.embedding_[ind])
+        Y = np.zeros((X.shape[0], self.n_components))
+        for c in np.unique(lab):
+            nbrs = self.cluster_nbrs_[c]
+            if nbrs is None:
+                continue
+            q = lab == c
+            idx = np.flatnonzero(self.labels_ == c)
+            ind, W, mask = self._reconstruct(X[q], self.training_data_[idx], nbrs)
+            Y[q] = np.einsum("nk,nkd->nd", W * mask, self.embedding_[idx][ind])
+        return Y
 
 
 # --------------------------------------------------------------------------- data
