@@ -1102,8 +1102,11 @@ def make_two_rolls(
 
     Sheet 0 follows the spiral ``r = t`` (``t`` from 1.5 pi to 3.5 pi, one full turn), sheet 1
     the same spiral pushed ``gap`` outwards along its normal (the default, pi, puts it halfway
-    between the turns of sheet 0). Points are uniform by area on each sheet; sheet 0 is
-    ``density_ratio`` times denser than sheet 1, and ``outliers`` adds noise points uniform in the
+    between the turns of sheet 0). Points are uniform by area on each sheet (uniform in the
+    sheet's own arc length and in height; until 2026-11-26 sheet 1 was uniform in the arc length
+    of sheet 0, up to 1.3 times denser at its outer end than at its inner one); sheet 0 holds
+    ``density_ratio`` times as many points as sheet 1 (sheet 1 is 1.4 times larger at the
+    default gap), and ``outliers`` adds noise points uniform in the
     bounding box (label -1) that chain the sheets together in any fixed-K neighbour graph.
 
     Parameters
@@ -1113,7 +1116,8 @@ def make_two_rolls(
     density_ratio : float
         Ratio of the number of points on sheet 0 to sheet 1.
     gap : float
-        Normal distance between the sheets (same units as the spiral radius).
+        Normal distance between the sheets (same units as the spiral radius); negative: sheet 1
+        inside sheet 0, by less than the spiral's smallest radius of curvature (4.6).
     noise : float
         Standard deviation of isotropic Gaussian noise added to the sheet points.
     outliers : float
@@ -1128,13 +1132,16 @@ def make_two_rolls(
     labels : (n_samples + n_outliers,) int array
         Sheet of each point (0 dense, 1 sparse, -1 outlier).
     t : (n_samples + n_outliers, 2) array
-        Intrinsic coordinates: arc length along the spiral and height (NaN for outliers).
+        Intrinsic coordinates: arc length along the point's sheet (from the sheet's inner end)
+        and height (NaN for outliers). Until 2026-11-26 sheet 1's arc length was that of
+        sheet 0 at the same spiral parameter.
 
     Raises
     ------
     ConfigError
         ``n_samples`` not an integer >= 0, a NaN or infinite parameter, a negative
-        ``density_ratio``, ``noise`` or ``outliers``, or ``height <= 0``.
+        ``density_ratio``, ``noise`` or ``outliers``, ``height <= 0``, or ``gap`` at or below
+        minus the spiral's smallest radius of curvature (-4.6).
     """
     n_samples = whole_number("n_samples", n_samples, 0)
     density_ratio = finite_number("density_ratio", density_ratio, 0.0)
@@ -1142,26 +1149,36 @@ def make_two_rolls(
     noise = finite_number("noise", noise, 0.0)
     outliers = finite_number("outliers", outliers, 0.0)
     height = finite_number("height", height, 0.0, lo_open=True)
+    t_lo, t_hi = 1.5 * np.pi, 3.5 * np.pi
+    max_curvature = (t_lo**2 + 2) / (t_lo**2 + 1) ** 1.5  # of the spiral, at its inner end
+    if not gap > -1.0 / max_curvature:
+        raise ConfigError(
+            f"gap must be > {-1.0 / max_curvature:.3f} (an inward offset beyond the spiral's "
+            f"radius of curvature folds sheet 1 onto itself), got {gap}"
+        )
     rs = check_random_state(random_state)
     n0 = int(round(n_samples * density_ratio / (1.0 + density_ratio)))
     n1 = n_samples - n0
-    t_lo, t_hi = 1.5 * np.pi, 3.5 * np.pi
 
     def arclen(t):
         return 0.5 * (t * np.sqrt(1 + t * t) + np.arcsinh(t))
 
+    def heading(t):  # direction angle of the spiral's tangent: polar angle + atan(r / r')
+        return t + np.arctan(t)
+
     grid = np.linspace(t_lo, t_hi, 4096)
-    s_grid = arclen(grid) - arclen(t_lo)
 
     def sheet(m, offset):
+        # arc length of the curve pushed `offset` along the outward normal: ds (1 + offset k)
+        # with k ds = d(heading) (k: the spiral's curvature); uniform in it is uniform by area
+        s_grid = arclen(grid) - arclen(t_lo) + offset * (heading(grid) - heading(t_lo))
         s = rs.uniform(0, s_grid[-1], m)
         t = np.interp(s, s_grid, grid)
-        # outward normal of the spiral (t cos t, t sin t)
+        # outward normal of the spiral (t cos t, t sin t): its tangent (tx, tz) turned clockwise
+        # (the spiral turns counterclockwise as t grows)
         tx, tz = np.cos(t) - t * np.sin(t), np.sin(t) + t * np.cos(t)
         nrm = np.hypot(tx, tz)
         nx, nz = tz / nrm, -tx / nrm
-        if m and np.mean(nx * np.cos(t) + nz * np.sin(t)) < 0:
-            nx, nz = -nx, -nz
         x = t * np.cos(t) + offset * nx
         z = t * np.sin(t) + offset * nz
         y = rs.uniform(0, height, m)
