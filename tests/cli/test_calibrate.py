@@ -166,3 +166,28 @@ def test_calibrate_unwritable_output_is_refused_before_calibrating(case, board_d
     err = capsys.readouterr().err
     assert expect in err and len(err.strip().splitlines()) == 1
     assert (tmp_path / "afile").read_text() == "not a folder"
+
+
+def test_report_marks_views_the_thermal_calibration_rejected(capsys, tmp_path, monkeypatch):
+    """ViewReport.rejected_thermal (a thermal view left out of the thermal intrinsics or
+    extrinsics) was computed but never shown: the table printed its error like a used view's."""
+    from types import SimpleNamespace
+
+    from hearsee.cli.calibrate import _print_report
+    from hearsee.vision.calibration import ViewReport
+    from hearsee.vision.camera import Camera, StereoRig
+
+    rig = StereoRig.ideal(Camera.from_fov(60.0, 640, 480), 0.08,
+                          thermal=Camera.from_fov(50.0, 160, 120))
+    monkeypatch.setenv("COLUMNS", "200")  # (one table row per line)
+    views = [ViewReport(f"l{i}.png", f"r{i}.png", found_left=True, found_right=True,
+                        found_thermal=True,
+                        err_left=0.1, err_right=0.1, err_thermal=0.2 + i,
+                        rejected_thermal=i == 1) for i in range(2)]
+    res = SimpleNamespace(rig=rig, views=views, rms_left_px=0.1, rms_right_px=0.1,
+                          rms_stereo_px=0.1, rms_thermal_px=0.2, rms_thermal_extrinsics_px=0.3)
+    _print_report(res, tmp_path / "rig.yaml", None)
+    rows = {line.split()[1]: line for line in capsys.readouterr().out.splitlines()
+            if line.lstrip("│ ").startswith("l") and ".png" in line}
+    assert "(rejected)" not in rows["l0.png"]
+    assert "(rejected)" in rows["l1.png"]

@@ -141,6 +141,8 @@ def _print_report(res, out: Path, comparison: dict | None) -> None:
             row.append(_fmt(v.err_thermal) if v.found_thermal else "no board")
         if v.rejected:
             row[2] += " (rejected)"
+        if has_t and v.rejected_thermal:  # (left out of the thermal calibration)
+            row[-1] += " (rejected)"
         t.add_row(*row)
     con.print(t)
     rig = res.rig
