@@ -600,3 +600,24 @@ def test_rational_model_focal_length_uncertainty_ignores_the_coefficients_trade_
     _, views = _projected_views(0.0)
     with pytest.raises(CalibrationError, match="focal length poorly determined"):
         C.calibrate_camera(views, obj, cam.size, model="rational")
+
+
+def test_stereo_refinement_of_a_standard_and_a_rational_camera_keeps_both_models():
+    """A 5-coefficient (standard) left lens beside an 8-coefficient (rational) right one,
+    model=None: OpenCV's flags hold for both cameras. The rational flags freed k4..k6 of the
+    standard camera (measured -0.003, 0.029, -0.014: another lens model); the standard ones
+    made OpenCV return 5 coefficients for both (the rational camera's k4..k6 dropped: 0.65 px
+    off). Now k4..k6 are not refined: 0 and 5 coefficients for the standard camera, as given
+    for the rational one; both lenses still project within 0.35 px of the truth."""
+    std = [-0.2, 0.05, 0.001, -0.0008, 0.01]
+    left, right0, R, T, Xs, lp, _ = _exact_stereo_views(std)
+    right = Camera(K=right0.K, dist=_RATIONAL, width=320, height=240)
+    rng = np.random.default_rng(5)
+    rp = [right.project(X @ R.T + T) + rng.normal(0.0, 0.05, (len(X), 2)) for X in Xs]
+    st = C.calibrate_stereo(lp, rp, C.board_points(PATTERN, SQUARE), left, right)
+    assert st.refined
+    assert st.rig.left.dist.shape == (5,)
+    np.testing.assert_array_equal(st.rig.right.dist[5:8], _RATIONAL[5:])
+    np.testing.assert_array_equal(st.rig.right.dist[8:], 0.0)
+    np.testing.assert_allclose(st.rig.T, T, atol=0.001)
+    assert _max_projection_gap_px(st.rig, left, right, R, T, Xs) < 0.35

@@ -389,7 +389,10 @@ def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDAr
     camera's ``fx / fy``. ``model=None`` frees the 5 standard coefficients (8 with rational
     cameras, i.e. 8 or more coefficients); the thin-prism and tilt terms of 12- and
     14-coefficient cameras are never estimated and stay as given. Cameras of 8 or more
-    coefficients come back with OpenCV's 14 (the terms they did not have are 0).
+    coefficients come back with OpenCV's 14 (the terms they did not have are 0), those of fewer
+    with 5. A rational camera beside a standard one (``model=None``): k4..k6 are not refined
+    (OpenCV's flags hold for both cameras; they stay 0 for the standard camera and as given for
+    the rational one).
 
     Corners are in pixels; returns the rig with ``X_right = R X_left + T`` (metres, as the
     object points).
@@ -420,7 +423,7 @@ def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDAr
 
     d1 = _dist5(left.dist)
     d2 = _dist5(right.dist)
-    base = _stereo_model_flags(model, max(left.dist.size, right.dist.size), fix_aspect)
+    base = _stereo_model_flags(model, (left.dist.size, right.dist.size), fix_aspect)
     out = run(left.K, d1, right.K, d2, cv2.CALIB_FIX_INTRINSIC | base)
     refined = False
     if refine and n >= 3:
@@ -437,21 +440,38 @@ def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDAr
             "from the same place; check the left and right image lists"
         )
     per_view = np.asarray(out[-1]).reshape(n, 2)
-    lc = Camera(K=K1, dist=np.asarray(D1).reshape(-1), width=left.width, height=left.height,
-                name=left.name or "left")
-    rc = Camera(K=K2, dist=np.asarray(D2).reshape(-1), width=right.width, height=right.height,
-                name=right.name or "right")
+    lc = Camera(K=K1, dist=_model_length(D1, left.dist.size), width=left.width,
+                height=left.height, name=left.name or "left")
+    rc = Camera(K=K2, dist=_model_length(D2, right.dist.size), width=right.width,
+                height=right.height, name=right.name or "right")
     rig = StereoRig(lc, rc, R, np.asarray(T).reshape(3), rms_px=float(rms))
     return StereoCalibration(rig, float(rms), per_view, refined)
 
 
-def _stereo_model_flags(model: str | None, n_coeffs: int, fix_aspect: bool) -> int:
+def _stereo_model_flags(model: str | None, n_coeffs: tuple[int, int], fix_aspect: bool) -> int:
     """``cv2.stereoCalibrate`` flags keeping a distortion model (see :data:`_MODELS`) and, with
-    ``fix_aspect``, each camera's aspect ratio; ``model=None``: standard, or rational when the
-    cameras have ``n_coeffs >= 8`` coefficients."""
+    ``fix_aspect``, each camera's aspect ratio. ``model=None``: standard when both cameras have
+    fewer than 8 coefficients (``n_coeffs``: the left and right counts), rational when both
+    have 8 or more; one of each: rational with k4..k6 fixed -- OpenCV's flags hold for both
+    cameras, and the standard model's flags made it return 5 coefficients for both (the
+    rational camera's k4..k6 dropped), the rational ones freed k4..k6 of the standard camera."""
+    mixed = False
     if model is None:
-        model = "rational" if n_coeffs >= 8 else "standard"
-    return _MODELS[model] | (cv2.CALIB_FIX_ASPECT_RATIO if fix_aspect else 0)
+        rational = [n >= 8 for n in n_coeffs]
+        model = "rational" if any(rational) else "standard"
+        mixed = any(rational) and not all(rational)
+    flags = _MODELS[model] | (cv2.CALIB_FIX_ASPECT_RATIO if fix_aspect else 0)
+    if mixed:
+        flags |= cv2.CALIB_FIX_K4 | cv2.CALIB_FIX_K5 | cv2.CALIB_FIX_K6
+    return flags
+
+
+def _model_length(d: NDArray, n_given: int) -> NDArray:
+    """Refined distortion ``d`` of a camera given with ``n_given`` coefficients: a camera of
+    fewer than 8 (no rational terms) keeps its 5 -- OpenCV returns 14 when the other camera's
+    rational model set the flags, with this one's extra terms fixed at 0."""
+    d = np.asarray(d, float).reshape(-1)
+    return d[:5].copy() if n_given < 8 and d.size > 5 and not np.any(d[5:]) else d
 
 
 def _dist5(d: NDArray) -> NDArray:
