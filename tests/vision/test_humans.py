@@ -22,6 +22,7 @@ from hearsee.vision.humans import (
     find_peaks,
     head_shoulder_score,
     scale_adaptive_filter,
+    segment_body,
     u_disparity,
     upper_contour,
 )
@@ -425,3 +426,50 @@ def test_floor_plane_refuses_a_normal_that_is_not_a_unit_up_vector():
                            ([0.0, -1.0, 0.0], np.nan)):
         with pytest.raises(GeometryError, match="FloorPlane"):
             FloorPlane(np.asarray(normal), offset)
+
+
+def _cardboard_person(shape, f, b, cx, cy, *, z_m, x_m=0.0, camera_height_m=1.4, top_m=1.75):
+    """Disparity (px) and points (m, left optical frame) of a flat person-shaped cut-out
+    ``z_m`` metres ahead of a level rig (NaN elsewhere): a head (ellipse, 0.18 x 0.22 m), a neck,
+    a torso 0.44 m wide from the shoulders (0.25 m below the top) to the hips (0.85 m above the
+    floor) and two legs."""
+    H, W = shape
+    v, u = np.mgrid[0:H, 0:W].astype(float)
+    X = (u - cx) * z_m / f - x_m
+    h = camera_height_m - (v - cy) * z_m / f  # height above the floor
+    head = (X / 0.09) ** 2 + ((h - (top_m - 0.11)) / 0.11) ** 2 <= 1.0
+    neck = (np.abs(X) <= 0.05) & (h <= top_m - 0.2) & (h > top_m - 0.26)
+    torso = (np.abs(X) <= 0.22) & (h <= top_m - 0.25) & (h > 0.85)
+    legs = (np.abs(X) >= 0.03) & (np.abs(X) <= 0.17) & (h <= 0.85) & (h >= 0.0)
+    body = head | neck | torso | legs
+    d = np.where(body, f * b / z_m, np.nan).astype(np.float32)
+    Z = np.where(body, z_m, np.nan)
+    pts = np.dstack([(u - cx) * Z / f, (v - cy) * Z / f, Z]).astype(np.float32)
+    return d, pts, body
+
+
+def test_segmentation_rows_follow_the_principal_row():
+    """A rig whose principal row cy = 60 px is far above the image centre (239.5): the row
+    window of segment_body was centred on the image centre, and for a person 6 m away it
+    started at row 74, cutting off the head and shoulders (box top 74 instead of 31, height
+    1.23 m instead of 1.75 m, candidate rejected). Counted from cy the whole person is
+    segmented and accepted."""
+    H, W, f, b, cx, cy = 480, 640, 500.0, 0.12, 319.5, 60.0
+    d, pts, body = _cardboard_person((H, W), f, b, cx, cy, z_m=6.0)
+    floor = FloorPlane.level(1.4)
+    heights = floor.height(pts)
+    # rows of the body above the floor band that the detector ignores (min_height_m)
+    rows = np.nonzero((body & (heights >= HumanDetectorParams().min_height_m)).any(axis=1))[0]
+    assert rows[0] == 31  # the test's ground truth: the head top is well inside the image
+    det = detect_candidates(d, pts, f, b, cy, floor=floor)
+    segs = [c for c in det.candidates if c.segment is not None]
+    c = min(segs, key=lambda c: abs(c.column - cx))
+    assert c.accepted, c.reason
+    x, y, w, h = c.box
+    assert y == rows[0] and y + h - 1 == rows[-1]
+    assert c.segment.top_m == pytest.approx(1.75, abs=0.03)
+    # segment_body itself takes the principal row from its caller, checked like the caller's
+    seg = segment_body(c.column, float(c.disparity), d, pts, heights, floor, f, b, cy)
+    assert seg is not None and seg.box == c.box
+    with pytest.raises(CalibrationError, match="principal row"):
+        segment_body(c.column, float(c.disparity), d, pts, heights, floor, f, b, np.nan)

@@ -68,6 +68,7 @@ __all__ = [
     "MAX_DISPARITY_PX",
     "StereoDetection",
     "check_camera_height",
+    "check_principal_row",
     "cut_by_border",
     "detect_candidates",
     "detect_people_hog",
@@ -112,6 +113,12 @@ def check_camera_height(camera_height_m: float | None, what: str = "camera_heigh
             f"{what} (camera height above the floor) must be a finite number of metres > 0, "
             f"got {v!r}"
         )
+
+
+def check_principal_row(cy: float) -> None:
+    """CalibrationError unless the principal row ``cy`` (pixels) is a finite number."""
+    if not is_real(cy):
+        raise CalibrationError(f"cy (principal row) must be a finite number of pixels, got {cy!r}")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -474,9 +481,15 @@ class BodySegment:
 
 
 def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
-                 heights: NDArray, floor: FloorPlane, focal_px: float, baseline_m: float, *,
-                 params: HumanDetectorParams | None = None) -> BodySegment | None:
+                 heights: NDArray, floor: FloorPlane, focal_px: float, baseline_m: float,
+                 cy: float, *, params: HumanDetectorParams | None = None) -> BodySegment | None:
     """Back-project candidate (column, disparity) to a silhouette (7.2.2); None if empty.
+
+    ``focal_px``, ``baseline_m``, ``cy``: rectified focal length (px), baseline (m) and
+    principal row (px) of the rig (CalibrationError unless finite, the first two > 0). Only the
+    rows where a body standing on ``floor`` can appear at the candidate's depth are searched,
+    counted from the principal row ``cy`` (before 2026-11-26 from the image centre
+    ``(H - 1) / 2``: on a rig whose ``cy`` is far from it the window cut heads or feet off).
 
     Pixels within ``0.6 m`` (scaled by ``d/B``) of the column whose depth is within
     ``depth_band_m + 0.15 m`` of the candidate's, above ``min_height_m`` and below
@@ -485,6 +498,7 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     and the depth band re-centred on its median once.
     """
     check_focal_baseline(focal_px, baseline_m)
+    check_principal_row(cy)
     p = params or HumanDetectorParams()
     H, W = disparity.shape
     fb = focal_px * baseline_m
@@ -495,12 +509,11 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     Zc = fb / max(disp, 1e-6)
     # rows where a body between the floor and above_m can appear at this depth (level-ish rig)
     zn = max(Zc - p.depth_band_m - 0.15, 0.3)
-    cyc = (H - 1) / 2.0
     y_top = (floor.offset - p.above_m) / max(-floor.normal[1], 0.5)
     y_bot = floor.offset / max(-floor.normal[1], 0.5)
     tilt = abs(floor.normal[2]) * zn * focal_px / zn + 0.15 * H
-    v0 = int(max(0, np.floor(cyc + focal_px * y_top / zn - tilt)))
-    v1 = int(min(H, np.ceil(cyc + focal_px * y_bot / zn + tilt)))
+    v0 = int(max(0, np.floor(cy + focal_px * y_top / zn - tilt)))
+    v1 = int(min(H, np.ceil(cy + focal_px * y_bot / zn + tilt)))
     if v1 - v0 < 3:
         return None
     sub_d = disparity[v0:v1, u0:u1]
@@ -743,8 +756,7 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     (3D extent and ``score >= params.tm``).
     """
     check_focal_baseline(focal_px, baseline_m)
-    if not is_real(cy):
-        raise CalibrationError(f"cy (principal row) must be a finite number of pixels, got {cy!r}")
+    check_principal_row(cy)
     check_camera_height(camera_height_m)
     p = params or HumanDetectorParams()
     d = np.asarray(disparity, dtype=np.float32)
@@ -791,7 +803,7 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
                                         "candidate (same silhouette)"))
             continue
         seg = segment_body(col, float(disp), d, points, heights, floor, focal_px, baseline_m,
-                           params=p)
+                           cy, params=p)
         c = HumanCandidate(col, disp, val, seg)
         if seg is None:
             c.reason = "empty segmentation"
