@@ -185,3 +185,24 @@ def test_a_nan_thermal_threshold_is_refused(scene):
         with pytest.raises(ConfigError, match="min_support"):
             detect_humans(scene.left, scene.right, RIG, scene.thermal_c, camera_height_m=1.4,
                           min_support=bad)
+
+
+def test_thermal_support_head_band_ignores_one_stray_high_point():
+    """The head band is counted down from the silhouette's robust top (as BodySegment.top_m),
+    not its highest point: one stray point 2.6 m up (a wall pixel in the depth band) moved the
+    band onto itself, the warm head lost its double weight and the support fell from
+    120 / 362 = 0.331 to 60 / 302 = 0.199, below the default min_support of 0.3 (the stray
+    point, above the top, weighs double either way)."""
+    warm = np.zeros(RIG.thermal.shape, bool)
+    warm[:, : RIG.thermal.width // 2] = True  # left half of the thermal image is warm
+    cam_h, z = 1.4, 3.0
+    head_h = np.linspace(1.36, 1.75, 60)  # top 0.4 m: warm (left of centre)
+    body_h = np.linspace(0.3, 1.3, 240)  # cold (right of centre)
+    h = np.concatenate([head_h, body_h])
+    x = np.concatenate([np.full(60, -0.8), np.full(240, 0.8)])
+    pts = np.column_stack([x, cam_h - h, np.full(len(h), z)])
+    expected = 2 * 60 / (2 * 60 + 240)
+    assert thermal_support(pts, h, RIG, warm) == pytest.approx(expected)
+    stray = np.array([[0.8, cam_h - 2.6, z]])  # cold, inside the thermal view
+    pts1, h1 = np.vstack([pts, stray]), np.append(h, 2.6)
+    assert thermal_support(pts1, h1, RIG, warm) == pytest.approx(2 * 60 / (2 * 60 + 240 + 2))

@@ -36,6 +36,7 @@ from hearsee.vision.humans import (
     StereoDetection,
     check_camera_height,
     detect_candidates,
+    robust_top_m,
 )
 from hearsee.vision.io import check_image
 from hearsee.vision.stereo import StereoFrame, points_to_left_frame, stereo_frame
@@ -123,6 +124,12 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
     ``head_weight`` > 0); ``warm`` the thermal filter's mask (thermal image size; bool, or 0/1
     numbers -- a 0/255 image is refused, it gave "fractions" up to 255). Points projecting
     outside the thermal image are ignored; NaN when fewer than ``min_points`` remain.
+
+    The head band is counted down from the robust top of the points the thermal camera sees
+    (:func:`~hearsee.vision.humans.robust_top_m`, as
+    :attr:`~hearsee.vision.humans.BodySegment.top_m`); before 2026-11-26 it was counted from
+    the highest point, so one stray point above the head (a wall pixel that passed the depth
+    band) moved the band off the head.
     """
     cam = rig.thermal_camera
     warm = _check_mask(warm)
@@ -155,7 +162,7 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
     uv, h = uv[ok], h[ok]
     u = np.clip(np.rint(uv[:, 0]).astype(int), 0, cam.width - 1)
     v = np.clip(np.rint(uv[:, 1]).astype(int), 0, cam.height - 1)
-    w = np.where(h >= h.max() - head_band_m, head_weight, 1.0)
+    w = np.where(h >= robust_top_m(h) - head_band_m, head_weight, 1.0)
     return float((w * warm[v, u]).sum() / w.sum())
 
 

@@ -67,6 +67,7 @@ __all__ = [
     "HumanDetectorParams",
     "MAX_DISPARITY_PX",
     "StereoDetection",
+    "TOP_PERCENTILE",
     "check_camera_height",
     "check_principal_row",
     "cut_by_border",
@@ -76,6 +77,7 @@ __all__ = [
     "find_peaks",
     "head_shoulder_score",
     "hog_people_detector",
+    "robust_top_m",
     "scale_adaptive_filter",
     "segment_body",
     "u_disparity",
@@ -93,6 +95,10 @@ BODY_SURFACE_DEPTH_M = 0.09
 #: :func:`estimate_floor` (the camera cannot see below the floor; 3x the default inlier band,
 #: above the stereo noise of floor points within ~6 m).
 FLOOR_BELOW_M = 0.12
+
+#: Percentile of a silhouette's point heights taken as its top (:func:`robust_top_m`): one
+#: stray point in 200 does not move it.
+TOP_PERCENTILE = 99.5
 
 #: The largest ``max_disparity`` :func:`u_disparity` accepts, pixels: far beyond any matcher
 #: (OpenCV's SGBM stores disparities as 16 x int16, at most 2047 px), small enough that the
@@ -480,6 +486,14 @@ class BodySegment:
     truncated: bool = False
 
 
+def robust_top_m(heights: NDArray) -> float:
+    """Top of a silhouette, metres above the floor: the :data:`TOP_PERCENTILE` percentile of
+    its points' ``heights`` (metres), so that a few stray points above the head (a wall pixel
+    that passed the depth band, a matching error) do not move it. :attr:`BodySegment.top_m`
+    and the head band of :func:`hearsee.vision.fusion.thermal_support`."""
+    return float(np.percentile(heights, TOP_PERCENTILE))
+
+
 def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
                  heights: NDArray, floor: FloorPlane, focal_px: float, baseline_m: float,
                  cy: float, *, params: HumanDetectorParams | None = None) -> BodySegment | None:
@@ -578,7 +592,7 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     if len(pts) > 4000:  # statistics on a deterministic subsample (speed)
         sel = np.linspace(0, len(pts) - 1, 4000).astype(int)
         pts, hts = pts[sel], hts[sel]
-    top = float(np.percentile(hts, 99.5))
+    top = robust_top_m(hts)
     xlo, xhi = np.percentile(pts[:, 0], [3, 97])
     Zm = float(np.median(pts[:, 2]))
     Xm = float(np.median(pts[:, 0]))
