@@ -25,7 +25,8 @@ the standard literature:
 * **Body segmentation** (7.2.2): the candidate's column range and disparity band are
   back-projected to the pixels that have them; morphological closing/opening and the connected
   component under the peak give the silhouette, its box and its 3D extent (height above the
-  floor, width, position).
+  floor, width, position). The depth band is the body's depth or three standard deviations of
+  the stereo depth noise ``Z^2 sigma_d / (f B)``, whichever is wider (far people are noisy).
 * **Head-shoulder verification** (7.2.3, figs. 7.7-7.9): a head-shoulder contour template
   (Zhao & Nevatia, "Stochastic human segmentation from a static camera", 2002/2003; Li, Huang,
   Nevatia et al., "Rapid and robust human detection and tracking based on omega-shape
@@ -73,12 +74,14 @@ __all__ = [
     "cut_by_border",
     "detect_candidates",
     "detect_people_hog",
+    "disparity_band_px",
     "estimate_floor",
     "find_peaks",
     "head_shoulder_score",
     "hog_people_detector",
     "robust_top_m",
     "scale_adaptive_filter",
+    "segment_band_m",
     "segment_body",
     "u_disparity",
     "upper_contour",
@@ -141,6 +144,13 @@ class HumanDetectorParams:
     Psi-hat (scale-normalised occupancy, 0..1) of a candidate; ``tm``: head-shoulder score
     threshold Tm; ``tau_m``: chamfer truncation/normalisation of the score; the extent limits
     reject silhouettes too short/tall/narrow/wide for a standing adult.
+
+    ``disparity_sigma_px`` (pixels) is the disparity noise of the matcher and ``band_sigmas``
+    (a count) how many of the resulting depth standard deviations ``sigma_Z = Z^2 sigma_d /
+    (f B)`` metres the segmentation band spans at least (:func:`segment_band_m`): far people are
+    noisy in depth. 0.21 px is the robust (MAD) standard deviation of the detector's SGBM
+    disparity (``fusion.DEFAULT_STEREO_OPTIONS``) minus the ground truth on the bodies of 40
+    hearsee.sim.scenes rooms (seeds 2000-2039; 0.21 px at 2-8.5 m, 0.26 px at 1-2 m).
     """
 
     person_width_m: float = 0.4
@@ -160,6 +170,8 @@ class HumanDetectorParams:
     min_width_m: float = 0.12
     max_width_m: float = 1.1
     max_candidates: int = 16
+    disparity_sigma_px: float = 0.21
+    band_sigmas: float = 3.0
 
     def __post_init__(self) -> None:
         """ConfigError for a setting out of range (before 2026-11-26 none was checked: a NaN
@@ -171,7 +183,8 @@ class HumanDetectorParams:
             if not (is_real(v) and v > 0):
                 raise ConfigError(f"HumanDetectorParams.{name} must be a finite number > 0, got "
                                   f"{v!r}")
-        for name in ("min_height_m", "above_weight", "min_top_m", "min_width_m"):
+        for name in ("min_height_m", "above_weight", "min_top_m", "min_width_m",
+                     "disparity_sigma_px", "band_sigmas"):
             v = getattr(self, name)
             if not (is_real(v) and v >= 0):
                 raise ConfigError(f"HumanDetectorParams.{name} must be a finite number >= 0, "
@@ -364,6 +377,16 @@ def _expected_rows(n_d: int, height: int, focal_px: float, baseline_m: float, cy
     return rows
 
 
+def disparity_band_px(disparity: NDArray | float, depth_band_m: float, focal_px: float,
+                      baseline_m: float) -> NDArray:
+    """Half width (whole pixels, at least 1) of the disparity band that ``depth_band_m`` metres
+    of depth span at ``disparity`` pixels: ``max(1, rint(d^2 depth_band_m / (f B)))``. Psi-hat
+    (:func:`scale_adaptive_filter`) sums P(y,d) over it, so a peak at ``d`` places the body
+    only within this many pixels (plus half a pixel of rounding) of ``d``."""
+    d = np.asarray(disparity, dtype=float)
+    return np.maximum(1, np.rint(d * d * depth_band_m / (focal_px * baseline_m))).astype(int)
+
+
 def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
                           expected_rows: NDArray | None = None, above: NDArray | None = None,
                           above_weight: float = 3.0, person_width_m: float = 0.4,
@@ -396,7 +419,7 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
         raise ImageInputError(f"expected_rows must have one value per disparity ({nd},), got "
                               f"shape {np.shape(expected_rows)}")
     d = np.arange(nd, dtype=float)
-    band = np.maximum(1, np.rint(d * d * depth_band_m / (focal_px * baseline_m))).astype(int)
+    band = disparity_band_px(d, depth_band_m, focal_px, baseline_m)
     cs = np.vstack([np.zeros((1, W)), np.cumsum(P, axis=0)])
     lo = np.clip(np.arange(nd) - band, 0, nd)
     hi = np.clip(np.arange(nd) + band + 1, 0, nd)
@@ -494,6 +517,22 @@ def robust_top_m(heights: NDArray) -> float:
     return float(np.percentile(heights, TOP_PERCENTILE))
 
 
+def segment_band_m(depth_m: float, focal_px: float, baseline_m: float,
+                   params: HumanDetectorParams) -> float:
+    """Half depth (metres) of the band :func:`segment_body` keeps around a candidate
+    ``depth_m`` metres away: ``max(depth_band_m + 0.15, band_sigmas * sigma_Z)`` with the stereo
+    depth noise ``sigma_Z = Z^2 disparity_sigma_px / (f B)`` metres (``focal_px`` pixels,
+    ``baseline_m`` metres).
+
+    The fixed 0.35 m holds a body's depth (about +-0.15 m) plus the noise of near people;
+    beyond ~5.8 m (f B = 60 px m, 0.21 px, 3 sigma) the noise is larger, and before 2026-11-26
+    people 6-8.5 m away were cut down to the pixels that happened to fall in the band (often
+    the head: a head-sized false detection plus a missed person).
+    """
+    sigma_z = depth_m * depth_m * params.disparity_sigma_px / (focal_px * baseline_m)
+    return max(params.depth_band_m + 0.15, params.band_sigmas * sigma_z)
+
+
 def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
                  heights: NDArray, floor: FloorPlane, focal_px: float, baseline_m: float,
                  cy: float, *, params: HumanDetectorParams | None = None) -> BodySegment | None:
@@ -506,10 +545,15 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     ``(H - 1) / 2``: on a rig whose ``cy`` is far from it the window cut heads or feet off).
 
     Pixels within ``0.6 m`` (scaled by ``d/B``) of the column whose depth is within
-    ``depth_band_m + 0.15 m`` of the candidate's, above ``min_height_m`` and below
+    :func:`segment_band_m` of the candidate's, above ``min_height_m`` and below
     ``above_m`` (so walls keep their full height and fail the extent test), closed and opened
     (kernels scaled with ``d``); the connected component under the candidate column is kept
-    and the depth band re-centred on its median once.
+    and the depth band re-centred on its median once. The candidate's depth is first taken
+    from the median of the central strip's pixels near the peak: within the band of the
+    peak's depth or within the disparity band Psi-hat summed at the peak
+    (:func:`disparity_band_px`, plus half a pixel of rounding), whichever is wider -- a far
+    person's peak is often one whole disparity off (at 7 m the body at d = 9 px also makes a
+    stronger peak at d = 8, 0.8 m farther), and the depth band alone missed the body.
     """
     check_focal_baseline(focal_px, baseline_m)
     check_principal_row(cy)
@@ -522,7 +566,8 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
         return None
     Zc = fb / max(disp, 1e-6)
     # rows where a body between the floor and above_m can appear at this depth (level-ish rig)
-    zn = max(Zc - p.depth_band_m - 0.15, 0.3)
+    band0 = segment_band_m(Zc, focal_px, baseline_m, p)
+    zn = max(Zc - band0, 0.3)
     y_top = (floor.offset - p.above_m) / max(-floor.normal[1], 0.5)
     y_bot = floor.offset / max(-floor.normal[1], 0.5)
     tilt = abs(floor.normal[2]) * zn * focal_px / zn + 0.15 * H
@@ -540,14 +585,16 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     cw0 = max(1, int(round(0.1 * disp / baseline_m)))
     c0 = column - u0
     strip = sub_d[:, max(0, c0 - cw0): c0 + cw0 + 1]
-    band0 = p.depth_band_m + 0.15
+    dpk = float(disparity_band_px(disp, p.depth_band_m, focal_px, baseline_m)) + 0.5
+    s_lo = min(fb / (Zc + band0), disp - dpk)
+    s_hi = max(fb / max(Zc - band0, 0.2), disp + dpk)
     with np.errstate(invalid="ignore"):
-        near_pk = strip[(strip >= fb / (Zc + band0)) & (strip <= fb / max(Zc - band0, 0.2))]
+        near_pk = strip[(strip >= s_lo) & (strip <= s_hi)]
     if near_pk.size >= 10:
         Zc = float(fb / np.median(near_pk))
     mask = None
     for _ in range(2):
-        band = p.depth_band_m + 0.15
+        band = segment_band_m(Zc, focal_px, baseline_m, p)
         dlo, dhi = fb / (Zc + band), fb / max(Zc - band, 0.2)
         with np.errstate(invalid="ignore"):
             m = (sub_d >= dlo) & (sub_d <= dhi) & (sub_h >= p.min_height_m) & \
