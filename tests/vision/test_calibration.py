@@ -621,3 +621,33 @@ def test_stereo_refinement_of_a_standard_and_a_rational_camera_keeps_both_models
     np.testing.assert_array_equal(st.rig.right.dist[8:], 0.0)
     np.testing.assert_allclose(st.rig.T, T, atol=0.001)
     assert _max_projection_gap_px(st.rig, left, right, R, T, Xs) < 0.35
+
+
+def test_thermal_view_without_a_left_board_is_not_reported_rejected(monkeypatch):
+    """A view whose board the thermal camera found but the left camera did not cannot enter
+    the thermal extrinsics (they need the left corners); it was not left out by the thermal
+    calibration's outlier tests, so ``rejected_thermal`` stays False (it was True: "i not in
+    te.used" held for every view the extrinsics never saw)."""
+    cam = Camera.from_fov(60.0, 320, 240)
+    th = Camera.from_fov(40.0, 160, 120)
+    truth = StereoRig.ideal(cam, 0.1, thermal=th, thermal_offset_m=(0.05, 0.04, 0.0))
+    obj = C.board_points(PATTERN, SQUARE)
+    center = np.array([4 * SQUARE, 2.5 * SQUARE, 0.0])
+    rng = np.random.default_rng(0)
+    corners = {}
+    for i in range(8):
+        Rb = cv2.Rodrigues(rng.uniform(-0.5, 0.5, 3) * np.array([1.0, 1.0, 0.3]))[0]
+        X = obj @ Rb.T + np.array([0.02, 0.0, rng.uniform(0.4, 0.5)]) - Rb @ center
+        for key, uv in (("left", cam.project(X)),
+                        ("right", truth.right.project(truth.left_to_right(X))),
+                        ("thermal", truth.project_thermal(X))):
+            corners[f"{key}{i}"] = (uv + rng.normal(0.0, 0.05, uv.shape)).astype(np.float32)
+    corners["left5"] = None  # board not found in the left image
+    _fake_image_files(monkeypatch, corners, {"left": cam.size, "right": cam.size,
+                                             "thermal": th.size})
+    files = {k: [f"{k}{i}" for i in range(8)] for k in ("left", "right", "thermal")}
+    res = C.calibrate_rig(files["left"], files["right"], PATTERN, SQUARE,
+                          thermal_files=files["thermal"])
+    assert not res.views[5].found_left and res.views[5].found_thermal
+    assert not any(v.rejected_thermal for v in res.views)
+    assert np.isnan(res.views[5].err_thermal)

@@ -895,8 +895,8 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
         used_views = [i for i in range(n) if lp[i] is not None and tp[i] is not None and kept[i]]
         for j, i in enumerate(used_views):
             views[i].err_thermal = float(te.per_view_px[j])
-        for i in idx_t:
-            views[i].rejected_thermal = i in dropped_t or (kept[i] and i not in te.used)
+        for i in idx_t:  # (a view without left corners never entered the extrinsics)
+            views[i].rejected_thermal = i in dropped_t or (i in used_views and i not in te.used)
         rig = rig.with_thermal(ct.camera, te.R, te.T)
         rms_t, rms_te = ct.rms_px, te.rms_px
     info = {"board": f"{pattern[0]}x{pattern[1]}", "square_m": float(square_m),
