@@ -479,6 +479,23 @@ def test_segmentation_rows_follow_the_principal_row():
         segment_body(c.column, float(c.disparity), d, pts, heights, floor, f, b, np.nan)
 
 
+@pytest.mark.parametrize("z_m", [7.0, 8.0])
+def test_segmentation_ignores_zero_disparities_of_far_people(z_m):
+    """Zero marks an invalid disparity as NaN does (u_disparity, detect_candidates). A far
+    person on a short rig (f B = 9.6 px m: 1.37 px at 7 m, 1.2 px at 8 m) has a disparity
+    within the peak's disparity band of 0, so the starting strip took the background's zeros
+    into its median depth (fb / 0: inf) and the person was not segmented at all."""
+    H, W, f, b, cx, cy = 240, 320, 160.0, 0.06, 159.5, 119.5
+    d, pts, _ = _cardboard_person((H, W), f, b, cx, cy, z_m=z_m)
+    floor = FloorPlane.level(1.4)
+    heights = floor.height(pts)
+    zeros = np.where(np.isnan(d), 0.0, d).astype(np.float32)
+    segs = [segment_body(int(cx), f * b / z_m, dd, pts, heights, floor, f, b, cy)
+            for dd in (d, zeros)]
+    assert segs[0] is not None and segs[1] is not None
+    assert segs[1].box == segs[0].box and segs[1].top_m == segs[0].top_m
+
+
 def test_segmentation_band_grows_with_the_stereo_depth_noise():
     """segment_band_m: the fixed 0.35 m near, 3 sigma_Z (sigma_Z = Z^2 sigma_d / (f B)) far;
     disparity_band_px: the disparity band Psi-hat sums at d (whole pixels, at least 1)."""

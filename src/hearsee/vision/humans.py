@@ -589,7 +589,9 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     s_lo = min(fb / (Zc + band0), disp - dpk)
     s_hi = max(fb / max(Zc - band0, 0.2), disp + dpk)
     with np.errstate(invalid="ignore"):
-        near_pk = strip[(strip >= s_lo) & (strip <= s_hi)]
+        # (s_lo <= 0 for a peak within its disparity band of 0: zeros and negative values
+        # are invalid disparities, as NaN)
+        near_pk = strip[(strip >= s_lo) & (strip <= s_hi) & (strip > 0)]
     if near_pk.size >= 10:
         Zc = float(fb / np.median(near_pk))
     mask = None
