@@ -86,6 +86,8 @@ def test_thermal_support_projection_and_weights():
     assert s > 10 / 40
     # behind the camera / outside the thermal view -> NaN
     assert np.isnan(thermal_support(left_pts * [1, 1, -1], h, RIG, warm))
+    # ... also with min_points=0 (the robust top of no points: a builtin IndexError)
+    assert np.isnan(thermal_support(left_pts * [1, 1, -1], h, RIG, warm, min_points=0))
     with pytest.raises(ImageInputError):
         thermal_support(left_pts, h, RIG, warm[:10])
     # (a NaN head band silently switched the head weighting off: s fell to the plain 10 / 40)

@@ -157,7 +157,7 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
         return float("nan")
     uv = rig.project_thermal(P)
     ok = cam.in_image(uv)
-    if ok.sum() < min_points:
+    if ok.sum() < max(min_points, 1):  # (none: no top, no fraction)
         return float("nan")
     uv, h = uv[ok], h[ok]
     u = np.clip(np.rint(uv[:, 0]).astype(int), 0, cam.width - 1)
