@@ -1055,3 +1055,60 @@ def test_audio_bearings_update_the_track_from_the_array_not_the_pivot(tmp_path):
         track.predict(0.032 * k)
         assert bearing_update(track, geo, heard, BEARING_SIGMA_DEG)
     np.testing.assert_allclose(track.position, person, atol=1e-6)
+
+
+def test_speaker_chosen_by_the_bearing_from_the_array_not_the_pivot(tmp_path, monkeypatch):
+    """Before there is a track, the verified person nearest the audio bearing becomes the
+    speaker. The bearing is heard from the array origin (head.offset_m; the track's bearing
+    update already took it from there), but the persons' azimuths were taken from the pivot:
+    with the array 0.4 m left of the pivot and the talker 1.2 m straight ahead of it (bearing
+    0 deg), the talker is at 18.4 deg from the pivot and a silent person 0.45 m to their right
+    at -2.4 deg -- the silent one was chosen (from the array: 0 and -20.6 deg)."""
+    import types as _types
+
+    import hearsee.vision.fusion as fusion
+    from hearsee.robot.hardware import CameraFrames
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import ArraySource
+    from hearsee.vision.fusion import Human
+
+    save_rig(default_rig(160, 120), tmp_path / "rig.yaml")
+    img = np.zeros((120, 160, 3), np.uint8)
+    for side in ("left", "right"):
+        write_video(tmp_path / f"{side}.avi", [img])
+    pivot, offset = np.array([0.0, 0.0, 1.2]), np.array([0.0, 0.4, 0.0])
+    cfg = load_robot_config(make_config(tmp_path, {
+        "audio": {}, "output": {"report": "out"},
+        "head": {"pivot_m": pivot.tolist(), "offset_m": offset.tolist()},
+        "cameras": {"left": "left.avi", "right": "right.avi", "calib": "rig.yaml",
+                    "rate_hz": 5}}))
+    talker = pivot + offset + [1.2, 0.0, -0.2]
+    silent = talker + [0.0, -0.45, 0.0]
+
+    def cam(p):  # robot frame -> left optical frame (camera at the pivot, head at pan 0)
+        d = p - pivot
+        return np.array([-d[1], -d[2], d[0]])
+
+    def fake_detect(left, right, rig, thermal=None, **kw):
+        humans = [Human([10, 10, 20, 40], cam(p), 0.9, None, 1.75, True)
+                  for p in (talker, silent)]
+        return _types.SimpleNamespace(humans=humans, rejected=[],
+                                      frame=_types.SimpleNamespace(left=left))
+
+    monkeypatch.setattr(fusion, "detect_humans", fake_detect)
+    monkeypatch.setattr(fusion, "draw_detections", lambda image, det: image.copy())
+
+    class FakeCameras:
+        n_failures = n_consecutive_failures = 0
+
+        def read(self, t=None):
+            return CameraFrames(img, img, None)
+
+    x, _ = simulate_recording("three-mic", talker - pivot - offset, duration_s=1.5, fs=FS,
+                              snr_db=25.0, seed=6)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
+                    cameras=FakeCameras(), keep_frames=0)
+    first = next(r for r in res.log if any(d["speaker"] for d in r["detections"]))
+    assert first["audio"] is not None
+    assert [d["speaker"] for d in first["detections"]] == [True, False]

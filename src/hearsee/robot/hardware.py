@@ -1091,15 +1091,17 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         from hearsee.vision.fusion import draw_detections
 
         dets: list[dict[str, Any]] = []
-        verified = []  # (human, robot-frame position, azimuth, index in dets)
+        verified = []  # (human, robot-frame position, azimuth heard from the array, index)
         for h in det.humans + det.rejected:
             p = g.camera_to_robot(h.position_m)
             az, el = g.bearing_deg(p)
             dets.append({**h.to_dict(), "position_m": _r(p), "azimuth_deg": _r(az, 2),
                          "elevation_deg": _r(el, 2), "accepted": bool(h.accepted),
                          "speaker": False})
-            if h.accepted:
-                verified.append((h, p, az, len(dets) - 1))
+            if h.accepted:  # (compared with the audio bearing: from the array origin)
+                d = p - g.array_origin
+                verified.append((h, p, float(np.degrees(np.arctan2(d[1], d[0]))),
+                                 len(dets) - 1))
         best = associate([v[1] for v in verified], [v[2] for v in verified], track, bearing)
         if best is not None:
             h, p, _, k = verified[best]
