@@ -152,7 +152,24 @@ def _with(**sections) -> dict:
     return data
 
 
+class _StillCameras:
+    """Cameras that deliver the same ``img`` as left and right frames at every read (no thermal
+    camera): the protocol run_robot uses (``read(t)``, the failure counters)."""
+
+    n_failures = n_consecutive_failures = 0
+
+    def __init__(self, img) -> None:
+        self.img = img
+
+    def read(self, t=None):
+        from hearsee.robot.hardware import CameraFrames
+
+        return CameraFrames(self.img, self.img, None)
+
+
 # ------------------------------------------------------------------------------- schema
+
+
 def test_config_loads_with_defaults_and_relative_paths(small_rig):
     cfg = load_robot_config(make_config(small_rig, _with()))
     assert cfg.audio.array.n_mics == 4 and cfg.audio.channels == (1, 2, 3, 4)
@@ -777,7 +794,6 @@ def test_async_detection_uses_the_pose_of_its_capture(tmp_path, monkeypatch):
     import types as _types
 
     import hearsee.vision.fusion as fusion
-    from hearsee.robot.hardware import CameraFrames
     from hearsee.sim.audio import simulate_recording
     from hearsee.sim.scenes import default_rig
     from hearsee.stream.pipeline import ArraySource, Block
@@ -806,12 +822,6 @@ def test_async_detection_uses_the_pose_of_its_capture(tmp_path, monkeypatch):
     monkeypatch.setattr(fusion, "detect_humans", fake_detect)
     monkeypatch.setattr(fusion, "draw_detections", lambda image, det: image.copy())
 
-    class FakeCameras:
-        n_failures = n_consecutive_failures = 0
-
-        def read(self, t=None):
-            return CameraFrames(img, img, None)
-
     rec = {}
     for pan in (0.0, 20.0, 40.0):
         a = np.radians(40.0 - pan)
@@ -826,7 +836,7 @@ def test_async_detection_uses_the_pose_of_its_capture(tmp_path, monkeypatch):
                 yield Block(b.seq, b.start, rec[head.pose_deg[0]][:, b.start:b.start + 800],
                             b.arrival)
 
-    res = run_robot(cfg, audio_source=HeadAudio(), head=head, cameras=FakeCameras(),
+    res = run_robot(cfg, audio_source=HeadAudio(), head=head, cameras=_StillCameras(img),
                     async_vision=True, jsonl=tmp_path / "run.jsonl")
     assert calls and calls[0] == (0.0, 0.0) and res.summary["head_moves"] >= 1
     first = next(r for r in res.log if r["detections"])
@@ -1067,7 +1077,6 @@ def test_speaker_chosen_by_the_bearing_from_the_array_not_the_pivot(tmp_path, mo
     import types as _types
 
     import hearsee.vision.fusion as fusion
-    from hearsee.robot.hardware import CameraFrames
     from hearsee.sim.audio import simulate_recording
     from hearsee.sim.scenes import default_rig
     from hearsee.stream.pipeline import ArraySource
@@ -1099,16 +1108,10 @@ def test_speaker_chosen_by_the_bearing_from_the_array_not_the_pivot(tmp_path, mo
     monkeypatch.setattr(fusion, "detect_humans", fake_detect)
     monkeypatch.setattr(fusion, "draw_detections", lambda image, det: image.copy())
 
-    class FakeCameras:
-        n_failures = n_consecutive_failures = 0
-
-        def read(self, t=None):
-            return CameraFrames(img, img, None)
-
     x, _ = simulate_recording("three-mic", talker - pivot - offset, duration_s=1.5, fs=FS,
                               snr_db=25.0, seed=6)
     res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
-                    cameras=FakeCameras(), keep_frames=0)
+                    cameras=_StillCameras(img), keep_frames=0)
     first = next(r for r in res.log if any(d["speaker"] for d in r["detections"]))
     assert first["audio"] is not None
     assert [d["speaker"] for d in first["detections"]] == [True, False]

@@ -468,6 +468,23 @@ def _fake_image_files(monkeypatch, corners: dict, sizes: dict) -> None:
     monkeypatch.setattr(C, "find_corners", lambda img, pattern, **kw: found[id(img)])
 
 
+def _rig_corners(truth: StereoRig, n: int = 8, seed: int = 0) -> dict:
+    """Corners (+0.05 px noise) of ``n`` known 9x6 boards 0.4-0.5 m in front of the stereo +
+    thermal rig ``truth``, keyed ``left{i}``, ``right{i}``, ``thermal{i}`` (pixels, float32)."""
+    obj = C.board_points(PATTERN, SQUARE)
+    center = np.array([4 * SQUARE, 2.5 * SQUARE, 0.0])
+    rng = np.random.default_rng(seed)
+    corners = {}
+    for i in range(n):
+        Rb = cv2.Rodrigues(rng.uniform(-0.5, 0.5, 3) * np.array([1.0, 1.0, 0.3]))[0]
+        X = obj @ Rb.T + np.array([0.02, 0.0, rng.uniform(0.4, 0.5)]) - Rb @ center
+        for key, uv in (("left", truth.left.project(X)),
+                        ("right", truth.right.project(truth.left_to_right(X))),
+                        ("thermal", truth.project_thermal(X))):
+            corners[f"{key}{i}"] = (uv + rng.normal(0.0, 0.05, uv.shape)).astype(np.float32)
+    return corners
+
+
 def test_thermal_outliers_of_the_intrinsics_do_not_feed_the_extrinsics(monkeypatch):
     """Exact corners (+0.05 px noise) of 8 known boards seen by a known stereo + thermal rig;
     one thermal view is smeared: its corners jitter by +-4 px and are off by 2 px. The thermal
@@ -479,17 +496,7 @@ def test_thermal_outliers_of_the_intrinsics_do_not_feed_the_extrinsics(monkeypat
     th = Camera(K=np.array([[160.0, 0, 81.0], [0, 160.0, 59.0], [0, 0, 1]]),
                 dist=[-0.1, 0.0, 0.0, 0.0, 0.0], width=160, height=120)
     truth = StereoRig.ideal(cam, 0.1, thermal=th, thermal_offset_m=(0.05, 0.04, 0.0))
-    obj = C.board_points(PATTERN, SQUARE)
-    center = np.array([4 * SQUARE, 2.5 * SQUARE, 0.0])
-    rng = np.random.default_rng(0)
-    corners = {}
-    for i in range(8):
-        Rb = cv2.Rodrigues(rng.uniform(-0.5, 0.5, 3) * np.array([1.0, 1.0, 0.3]))[0]
-        X = obj @ Rb.T + np.array([0.02, 0.0, rng.uniform(0.4, 0.5)]) - Rb @ center
-        for key, uv in (("left", cam.project(X)),
-                        ("right", truth.right.project(truth.left_to_right(X))),
-                        ("thermal", truth.project_thermal(X))):
-            corners[f"{key}{i}"] = (uv + rng.normal(0.0, 0.05, uv.shape)).astype(np.float32)
+    corners = _rig_corners(truth)
     checker = np.where((np.arange(54) % 9 + np.arange(54) // 9) % 2 == 0, 1.0, -1.0)
     corners["thermal3"] += np.float32([2.0, 0.0]) + 4.0 * np.c_[checker, 0 * checker]
     _fake_image_files(monkeypatch, corners, {"left": cam.size, "right": cam.size,
@@ -631,17 +638,7 @@ def test_thermal_view_without_a_left_board_is_not_reported_rejected(monkeypatch)
     cam = Camera.from_fov(60.0, 320, 240)
     th = Camera.from_fov(40.0, 160, 120)
     truth = StereoRig.ideal(cam, 0.1, thermal=th, thermal_offset_m=(0.05, 0.04, 0.0))
-    obj = C.board_points(PATTERN, SQUARE)
-    center = np.array([4 * SQUARE, 2.5 * SQUARE, 0.0])
-    rng = np.random.default_rng(0)
-    corners = {}
-    for i in range(8):
-        Rb = cv2.Rodrigues(rng.uniform(-0.5, 0.5, 3) * np.array([1.0, 1.0, 0.3]))[0]
-        X = obj @ Rb.T + np.array([0.02, 0.0, rng.uniform(0.4, 0.5)]) - Rb @ center
-        for key, uv in (("left", cam.project(X)),
-                        ("right", truth.right.project(truth.left_to_right(X))),
-                        ("thermal", truth.project_thermal(X))):
-            corners[f"{key}{i}"] = (uv + rng.normal(0.0, 0.05, uv.shape)).astype(np.float32)
+    corners = _rig_corners(truth)
     corners["left5"] = None  # board not found in the left image
     _fake_image_files(monkeypatch, corners, {"left": cam.size, "right": cam.size,
                                              "thermal": th.size})
