@@ -127,6 +127,17 @@ def test_time_limit_error_says_inf_means_no_limit():
         assert str(exc.value) == rule + shown
 
 
+def test_a_time_limit_no_run_reaches_is_no_limit():
+    """1e306 s passed the check and overflowed the sample count (int(d * fs)) into a builtin
+    OverflowError once a live stream started; from MAX_TIME_LIMIT_S (31.7 years) on it is no
+    limit (the stream's DeviceSource: tests/stream/test_pipeline.py)."""
+    from hearsee.config import MAX_TIME_LIMIT_S
+
+    assert time_limit("duration_s", 1e306) is None
+    assert time_limit("duration_s", MAX_TIME_LIMIT_S) is None
+    assert time_limit("duration_s", MAX_TIME_LIMIT_S / 2) == MAX_TIME_LIMIT_S / 2
+
+
 def test_as_float_array_refuses_entries_that_are_not_real_numbers():
     """numpy's float conversion read True as 1.0 and "0.5" as 0.5 (a microphone, a head offset,
     a pan limit), converted a bool or complex array (the imaginary part dropped) and raised a

@@ -138,18 +138,24 @@ def finite_number(name: str, value: Any, lo: float | None = None, hi: float | No
     return float(value)
 
 
+#: A run's time limit at or beyond this many seconds (31.7 years) is no limit (:func:`time_limit`).
+MAX_TIME_LIMIT_S = 1e9
+
+
 def time_limit(name: str, value: Any, *, error: type[Exception] = ConfigError) -> float | None:
-    """A run's optional time limit in seconds: None or +inf -> None (no limit), else a finite
-    real number > 0 (:func:`is_real`) as a float; ``error`` otherwise, naming ``name`` and both
-    choices, e.g. "--duration must be a number of seconds > 0, or inf for no limit, got nan"
-    (the rule of :func:`finite_number` alone, "a finite number > 0", read as if inf were
-    refused)."""
+    """A run's optional time limit in seconds: None, +inf or at least :data:`MAX_TIME_LIMIT_S`
+    -> None (no limit), else a finite real number > 0 (:func:`is_real`) as a float; ``error``
+    otherwise, naming ``name`` and both choices, e.g. "--duration must be a number of seconds
+    > 0, or inf for no limit, got nan" (the rule of :func:`finite_number` alone, "a finite
+    number > 0", read as if inf were refused)."""
     if value is None or (isinstance(value, float | np.floating) and value == math.inf):
         return None
     if not is_real(value) or value <= 0:
         raise error(f"{name} must be a number of seconds > 0, or inf for no limit, got "
                     f"{value!r}")
-    return float(value)
+    # (a limit no run reaches is none; 1e306 s overflowed the sample count, int(d * fs), into a
+    # builtin OverflowError once the stream started)
+    return None if value >= MAX_TIME_LIMIT_S else float(value)
 
 
 def whole_number(name: str, value: Any, lo: int = 1, hi: int | None = None, *,

@@ -906,3 +906,10 @@ def test_smoothed_srp_refuses_non_finite_samples():
     y[1, 700] = np.nan
     with pytest.raises(AudioInputError, match="NaN or infinite"):
         srp.process(y, 2, 512)
+
+
+def test_device_source_duration_no_run_reaches_is_no_limit(monkeypatch):
+    """duration_s=1e306 overflowed int(duration_s * fs) (a builtin OverflowError once the
+    stream started); it is no limit, as inf (config.time_limit)."""
+    monkeypatch.setitem(sys.modules, "sounddevice", _fake_sounddevice(4))
+    assert pl.DeviceSource(0, 3, FS, duration_s=1e306).duration_s is None
