@@ -738,8 +738,9 @@ class SmoothedSrp:
     def _rescale(self, peak: float) -> None:
         """Take a batch's largest |sample| ``peak`` into the running maximum and, when its
         :func:`level_scale` changes, carry the state (spectra and energies: squares of the
-        samples) to the new scale. The scale only falls as the maximum grows (the state is
-        never enlarged, so it cannot overflow)."""
+        samples) to the new scale. Once a sample is non-zero the scale only falls as the maximum
+        grows (the state is never enlarged, so it cannot overflow); the one rise, from digital
+        silence (scale 1) to a tiny first level, finds the state all zeros."""
         if not np.isfinite(peak):
             raise AudioInputError("recording contains NaN or infinite samples")
         self._peak = max(self._peak, peak)
