@@ -91,6 +91,21 @@ def test_a_scalar_is_not_a_point():
             f(5.0)
 
 
+def test_points_that_are_not_numbers_are_a_geometry_error():
+    """cart_to_sph('abc') and array_to_robot of a ragged list raised numpy's ValueError; the
+    one batch check (as_points) of geometry and MicArray's TDOAs names the argument."""
+    from hearsee.audio.arrays import MicArray
+    from hearsee.geometry import array_to_robot, robot_to_array
+
+    for f in (cart_to_sph, direction_deg, lambda p: array_to_robot(p, (0.0, 0.0)),
+              lambda p: robot_to_array(p, (0.0, 0.0))):
+        for bad in ("abc", [[1.0, 2.0, 3.0], [1.0, 2.0]]):
+            with pytest.raises(GeometryError, match=r"3 coordinates \[x, y, z\].*not numbers"):
+                f(bad)
+    with pytest.raises(GeometryError, match=r"^source: expected points .*not numbers"):
+        MicArray.from_preset("three-mic").tdoa("abc")
+
+
 # one [x, y, z] in metres: as_point, the one check of every single-point argument
 _NOT_POINTS = [
     [True, 0.0, 1.2],  # numpy read True as 1 m

@@ -52,9 +52,7 @@ def sph_to_cart(azimuth: ArrayLike, elevation: ArrayLike, distance: ArrayLike = 
 
 def cart_to_sph(xyz: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
     """Cartesian points ``(..., 3)`` -> (azimuth rad in (-pi, pi], elevation rad, distance m)."""
-    p = np.asarray(xyz, dtype=float)
-    if p.ndim == 0 or p.shape[-1] != 3:  # (a scalar: IndexError before)
-        raise GeometryError(f"expected points with 3 coordinates, got shape {p.shape}")
+    p = as_points(xyz)
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     r = np.sqrt(x * x + y * y + z * z)
     az = np.arctan2(y, x)
@@ -107,6 +105,23 @@ def angle_between(u: ArrayLike, v: ArrayLike) -> NDArray:
         raise GeometryError("angle between a zero-length vector and another is undefined")
     c = np.sum(a * b, axis=-1) / (na * nb)
     return np.arccos(np.clip(c, -1.0, 1.0))
+
+
+def as_points(points: ArrayLike, what: str = "points") -> NDArray:
+    """``points`` as a float array ``(..., 3)``: [x, y, z] coordinates in metres (any batch
+    shape, in the frame the caller documents), else a GeometryError naming ``what`` (numpy's
+    ValueError or IndexError before: a scalar, text, a ragged list, 2 coordinates). The one
+    batch check of :func:`cart_to_sph`, :func:`array_to_robot`, :func:`robot_to_array` and
+    :class:`hearsee.audio.arrays.MicArray`'s TDOAs; one point alone: :func:`as_point`."""
+    try:
+        p = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        p = None
+    if p is None or p.ndim == 0 or p.shape[-1] != 3:
+        got = "not numbers" if p is None else f"shape {p.shape}"
+        raise GeometryError(f"{what}: expected points with 3 coordinates [x, y, z] in metres, "
+                            f"shape (..., 3), got {got}")
+    return p
 
 
 def as_point(value: Any, what: str, error: type[Exception] = GeometryError) -> NDArray:
@@ -230,9 +245,7 @@ def array_to_robot(points: ArrayLike, pose: HeadPose | Sequence[float],
     to the pivot in the head frame (see the notes above :class:`HeadPose`).
     """
     p = as_pose(pose)
-    pts = np.asarray(points, dtype=float)
-    if pts.ndim == 0 or pts.shape[-1] != 3:
-        raise GeometryError(f"expected points with 3 coordinates, got shape {pts.shape}")
+    pts = as_points(points)
     R = head_rotation(p.pan_deg, p.tilt_deg).as_matrix()
     return as_point(pivot_m, "pivot_m") + (pts + as_point(offset_m, "offset_m")) @ R.T
 
@@ -243,9 +256,7 @@ def robot_to_array(points: ArrayLike, pose: HeadPose | Sequence[float],
     """Points ``(..., 3)`` in the robot frame -> array frame at ``pose`` (inverse of
     :func:`array_to_robot`)."""
     p = as_pose(pose)
-    pts = np.asarray(points, dtype=float)
-    if pts.ndim == 0 or pts.shape[-1] != 3:
-        raise GeometryError(f"expected points with 3 coordinates, got shape {pts.shape}")
+    pts = as_points(points)
     R = head_rotation(p.pan_deg, p.tilt_deg).as_matrix()
     return (pts - as_point(pivot_m, "pivot_m")) @ R - as_point(offset_m, "offset_m")
 

@@ -242,8 +242,10 @@ class MicArray:
         Returns shape ``(..., n_pairs)``. A non-finite coordinate is a GeometryError (it gave
         NaN TDOAs without a word), as in :meth:`tdoa_far`.
         """
+        from hearsee.geometry import as_points  # (here: geometry imports scipy, `info` need not)
+
         i, j = _pair_index(self.checked_pairs(pairs))
-        p = _xyz(source, "source")
+        p = as_points(source, "source")
         finite = np.isfinite(p).all(axis=-1)
         if not finite.all():
             n_bad, first = int(np.count_nonzero(~finite)), p[~finite][0].tolist()
@@ -267,8 +269,10 @@ class MicArray:
         A plane wave from direction u reaches microphone m at time ``-m . u / c0``. A zero
         direction is a GeometryError (it was a silent NaN), and so is a non-finite one.
         """
+        from hearsee.geometry import as_points
+
         pairs = self.checked_pairs(pairs)
-        u = _xyz(direction, "direction")
+        u = as_points(direction, "direction")
         if not np.all(np.isfinite(u)):  # (inf gave NaN TDOAs, NaN read as "the zero vector")
             raise GeometryError(f"a far-field direction must be finite, got {direction!r}")
         norm = np.linalg.norm(u, axis=-1, keepdims=True)
@@ -283,19 +287,6 @@ class MicArray:
 
     def __repr__(self) -> str:
         return f"MicArray(name={self.name!r}, n_mics={self.n_mics}, aperture={self.aperture:.3f} m)"
-
-
-def _xyz(points: ArrayLike, what: str) -> NDArray:
-    """``points`` as a float array ``(..., 3)``, else a GeometryError (numpy's broadcast or
-    matmul ValueError before). One point alone: :func:`hearsee.geometry.as_point`."""
-    try:
-        p = np.asarray(points, dtype=float)
-    except (TypeError, ValueError):
-        p = None
-    if p is None or p.ndim == 0 or p.shape[-1] != 3:
-        got = "not numbers" if p is None else f"shape {p.shape}"
-        raise GeometryError(f"{what} must be [x, y, z] in metres (shape (..., 3)), got {got}")
-    return p
 
 
 def _pair_index(pairs: list[tuple[int, int]]) -> tuple[NDArray, NDArray]:
