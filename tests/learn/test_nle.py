@@ -501,3 +501,46 @@ def test_cnle_transform_reconstructs_from_the_cluster_alone():
     assert np.all(m.predict(q) == c)
     err = np.linalg.norm(m.transform(q) - np.c_[q[:, :2], np.ones(40)] @ coef, axis=1)
     assert err.max() < 0.06
+
+
+def _saved_by_an_older_hearsee(model, *missing):
+    """``model`` as pickled by a hearsee whose fit did not keep the ``missing`` attributes."""
+    import pickle
+
+    old = pickle.loads(pickle.dumps(model))
+    for attribute in missing:
+        delattr(old, attribute)
+    return pickle.loads(pickle.dumps(old))
+
+
+@pytest.mark.parametrize("cls, missing", [
+    (ClusteredNLE, ("cluster_nbrs_",)),  # saved before 2026-11-26
+    (ClusteredNLE, ("cluster_nbrs_", "training_data_")),  # saved before 2026-11-22
+    (NeighborhoodLinearEmbedding, ("training_data_",)),
+])
+def test_a_model_saved_by_an_older_hearsee_transforms_as_a_fresh_fit(cls, missing):
+    """Models pickled before ``cluster_nbrs_`` (or ``training_data_``) existed lack them, and
+    transform raised a builtin AttributeError. They are rebuilt from what the model stores
+    (``labels_``, ``nbrs_``'s training points): the same numbers as a model fitted afresh."""
+    X, _ = _two_sheets_with_noise_bridges(0)
+    q = X[::7] + np.random.default_rng(1).uniform(-0.4, 0.4, X[::7].shape)
+    q[:5] = X[:5]  # some queries coincide with training points
+    fresh = cls(random_state=0).fit(X)
+    old = _saved_by_an_older_hearsee(cls(random_state=0).fit(X), *missing)
+    if cls is ClusteredNLE:
+        assert old.n_clusters_ == 2
+    np.testing.assert_array_equal(old.transform(q), fresh.transform(q))
+    np.testing.assert_array_equal(old.training_data_, X)
+
+
+def test_an_old_model_that_cannot_be_rebuilt_asks_for_a_refit():
+    """Without ``training_data_`` and without the training points in ``nbrs_`` (where a
+    scikit-learn of another version may keep them elsewhere) nothing can be rebuilt: hearsee's
+    typed error, one line, saying to re-fit."""
+    X, _ = _two_sheets_with_noise_bridges(0)
+    old = _saved_by_an_older_hearsee(ClusteredNLE(random_state=0).fit(X), "cluster_nbrs_",
+                                     "training_data_")
+    del old.nbrs_._fit_X
+    with pytest.raises(ManifoldInputError, match="older hearsee.*re-fit the model") as exc:
+        old.transform(X[:3])
+    assert "\n" not in str(exc.value)

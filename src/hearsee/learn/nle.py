@@ -113,8 +113,10 @@ _MAX_AXIS_EXTENT = 10.0
 
 class ManifoldInputError(HearseeError, ValueError):
     """Data a manifold learner cannot use (duplicate points, too few samples for the neighbours,
-    values too large, a degenerate neighbourhood graph) or bad arguments of the building blocks
-    (:func:`adaptive_neighbors`, :func:`reconstruction_weights`).
+    values too large, a degenerate neighbourhood graph), bad arguments of the building blocks
+    (:func:`adaptive_neighbors`, :func:`reconstruction_weights`), or a model saved by an older
+    hearsee that lacks state :meth:`~NeighborhoodLinearEmbedding.transform` needs and that cannot
+    be rebuilt (re-fit it).
 
     Derives from ``ValueError`` like scikit-learn's own input errors."""
 
@@ -825,9 +827,36 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         embedding, ``y = sum_j w_j y_j`` (LLE's out-of-sample map, Saul & Roweis 2003, sec. 6.1).
         """
         check_is_fitted(self, "embedding_")
+        self._restore_fitted_state()
         X = validate_data(self, X, dtype=np.float64, reset=False)
         ind, W, mask = self._reconstruct(X, self.training_data_, self.nbrs_)
         return np.einsum("nk,nkd->nd", W * mask, self.embedding_[ind])
+
+    # -- models saved by older versions -------------------------------------------------------
+
+    def _restore_fitted_state(self) -> None:
+        """Fill in the fitted attributes :meth:`transform` needs that a model saved (pickled,
+        joblib) by an older hearsee lacks, rebuilt exactly from what the model stores:
+        ``training_data_`` (kept since 2026-11-22; before, transform read the same array from
+        ``nbrs_``, where ``NearestNeighbors`` keeps its training points). Rebuilt on the first
+        transform and kept.
+
+        Raises
+        ------
+        ManifoldInputError
+            An attribute is missing and cannot be rebuilt: the model must be re-fitted.
+        """
+        if not hasattr(self, "training_data_"):
+            train = getattr(self.nbrs_, "_fit_X", None)
+            if train is None:
+                raise self._refit_error("training_data_")
+            self.training_data_ = train
+
+    def _refit_error(self, attribute: str) -> ManifoldInputError:
+        return ManifoldInputError(
+            f"this {type(self).__name__} was saved by an older hearsee and lacks {attribute}, "
+            "which transform needs; re-fit the model"
+        )
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
@@ -1006,14 +1035,12 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         for c in range(n_clusters):
             idx = np.flatnonzero(labels == c)
             m = idx.size
-            if m <= self.n_components + 1:
-                blocks.append(sparse.csr_matrix((m, n)))
-                cluster_nbrs.append(None)
-                continue
             Xc = X[idx]
-            k = min(self.n_neighbors, m - 1)
-            nn = NearestNeighbors(n_neighbors=k + 1, n_jobs=self.n_jobs).fit(Xc)
+            nn = self._cluster_search(Xc)
             cluster_nbrs.append(nn)
+            if nn is None:
+                blocks.append(sparse.csr_matrix((m, n)))
+                continue
             dc, ic = nn.kneighbors(Xc)
             dc, ic = dc[:, 1:], ic[:, 1:]
             mc = adaptive_neighbors(Xc, ic, dc, self.shadow, min_neighbors=self.n_components + 1)
@@ -1034,6 +1061,24 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         self.n_neighbors_ = counts
         self.reconstruction_error_ = err
         return self
+
+    def _cluster_search(self, Xc: np.ndarray) -> NearestNeighbors | None:
+        """The candidate search of one cluster's training points ``Xc`` as fit builds it (its
+        ``n_neighbors`` nearest, self excluded); None for a cluster too small to embed."""
+        m = Xc.shape[0]
+        if m <= self.n_components + 1:
+            return None
+        k = min(self.n_neighbors, m - 1)
+        return NearestNeighbors(n_neighbors=k + 1, n_jobs=self.n_jobs).fit(Xc)
+
+    def _restore_fitted_state(self) -> None:
+        """As in :class:`NeighborhoodLinearEmbedding`, and ``cluster_nbrs_`` (kept since
+        2026-11-26): rebuilt from ``training_data_`` and ``labels_`` as fit builds it (with the
+        parameters the model holds, those it was fitted with unless changed since)."""
+        super()._restore_fitted_state()
+        if not hasattr(self, "cluster_nbrs_"):
+            self.cluster_nbrs_ = [self._cluster_search(self.training_data_[self.labels_ == c])
+                                  for c in range(self.n_clusters_)]
 
     def fit_predict(self, X, y=None) -> np.ndarray:
         """Fit and return ``labels_``."""
@@ -1059,6 +1104,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         (a sparse sheet beside a dense one) with fewer or other neighbours than fit gives them.
         """
         check_is_fitted(self, "embedding_")
+        self._restore_fitted_state()
         X = validate_data(self, X, dtype=np.float64, reset=False)
         _, near = self.nbrs_.kneighbors(X, n_neighbors=1)
         lab = self.labels_[near[:, 0]]
