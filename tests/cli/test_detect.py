@@ -233,3 +233,34 @@ def test_existing_overlay_is_kept_unless_forced(folder, capsys, tmp_path):
     assert ov.read_bytes() == b"not yours"
     assert main(_args(d, "--overlay", str(ov), "--force", thermal=None)) == 0
     assert cv2.imread(str(ov)) is not None
+
+
+class _TouchOnLoad:
+    """Unpickling this creates ``marker``: shows whether a file was unpickled."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return (self.marker.touch, ())
+
+
+@pytest.mark.parametrize("option, name", [("--thermal", "model.npy"), ("--thermal", "model.pkl"),
+                                          ("--calib", "model.pkl")])
+def test_a_pickle_given_for_a_file_is_one_line_and_never_unpickled(folder, capsys, tmp_path,
+                                                                  option, name):
+    """No hearsee command loads pickles (saved models included): a pickle given for the
+    thermal image or the calibration is refused in one line, exit 2, without running it."""
+    import pickle
+
+    from hearsee.learn import ClusteredNLE
+
+    d, _ = folder
+    marker = tmp_path / "unpickled"
+    (tmp_path / name).write_bytes(pickle.dumps([ClusteredNLE(), _TouchOnLoad(marker)]))
+    args = _args(d)
+    args[args.index(option) + 1] = str(tmp_path / name)
+    assert main(args) == 2
+    err = _err(capsys)
+    assert name in err and err.count("\n") == 1
+    assert not marker.exists()
