@@ -161,3 +161,123 @@ def test_as_float_array_keeps_numbers_as_they_were():
         got = as_float_array(good, "w")
         want = np.asarray(good, dtype=float)
         assert got.dtype == want.dtype and got.tobytes() == want.tobytes()
+
+
+# as_float_array and hearsee.geometry.as_point share one entry-by-entry check (all_real): the
+# outcome of both on each input, recorded from the code before they did. Per row: as_float_array
+# (value, "w"), as_float_array(value, "w", (3,)), as_point(value, "p"); a list or number is the
+# float64 array returned, a string the message raised (ConfigError; as_point: GeometryError, or
+# the class it is given), "{v}" standing for repr(value).
+_NUM = "w: expected numbers, got {v}"
+_FIN = "w: values must be finite numbers"
+_P = "p must be a finite [x, y, z] in metres"
+_P_SHAPE = _P + ": expected shape 3, got "
+_P_REAL = _P + " (3 real numbers), got {v}"
+
+
+class _Opaque:
+    """An object that is no number (numpy keeps it as an object)."""
+
+    def __repr__(self):
+        return "_Opaque()"
+
+
+_ENTRY_TABLE = [
+    (True, _NUM, _NUM, _P_SHAPE + "{v}"),
+    (np.True_, _NUM, _NUM, _P_SHAPE + "{v}"),
+    ("0.5", _NUM, _NUM, _P_SHAPE + "{v}"),
+    (10**400, _NUM, _NUM, _P_SHAPE + "{v}"),
+    (float("nan"), _FIN, "w: expected shape 3, got ()", _P_SHAPE + "{v}"),
+    (float("inf"), _FIN, "w: expected shape 3, got ()", _P_SHAPE + "{v}"),
+    (0.5, 0.5, "w: expected shape 3, got ()", _P_SHAPE + "{v}"),
+    (3, 3.0, "w: expected shape 3, got ()", _P_SHAPE + "{v}"),
+    (np.float64(2.0), 2.0, "w: expected shape 3, got ()", _P_SHAPE + "{v}"),
+    (np.array(2.0), 2.0, "w: expected shape 3, got ()", _P_SHAPE + "{v}"),
+    (None, _NUM, _NUM, _P_SHAPE + "{v}"),
+    (1 + 2j, _NUM, _NUM, _P_SHAPE + "{v}"),
+    ({"x": 1}, _NUM, _NUM, _P_SHAPE + "{v}"),
+    ({1, 2, 3}, _NUM, _NUM, _P_SHAPE + "{v}"),
+    (range(3), [0.0, 1.0, 2.0], [0.0, 1.0, 2.0], [0.0, 1.0, 2.0]),
+    ([1, 2.5, -3], [1.0, 2.5, -3.0], [1.0, 2.5, -3.0], [1.0, 2.5, -3.0]),
+    ((np.float32(0.5), np.int64(2), np.uint8(7)), [0.5, 2.0, 7.0], [0.5, 2.0, 7.0],
+     [0.5, 2.0, 7.0]),
+    ([int(np.finfo(float).max), 0, 0], [1.7976931348623157e308, 0.0, 0.0],
+     [1.7976931348623157e308, 0.0, 0.0], [1.7976931348623157e308, 0.0, 0.0]),
+    ([True, 0.0, 1.2], _NUM, _NUM, _P_REAL),
+    ([0.0, np.bool_(False), 1.0], _NUM, _NUM, _P_REAL),
+    (["0", "0", "1.2"], _NUM, _NUM, _P_REAL),
+    (["0.5", 0, 0], _NUM, _NUM, _P_REAL),
+    ([10**400, 0, 0], _NUM, _NUM, _P_REAL),
+    ([0.0, np.nan, 1.2], _FIN, _FIN, _P_REAL),
+    ([0.0, 0.0, np.inf], _FIN, _FIN, _P_REAL),
+    ([np.float32("nan"), 0.0, 1.0], _FIN, _FIN, _P_REAL),
+    ([1 + 1j, 0, 0], _NUM, _NUM, _P_REAL),
+    ([None, 0, 0], _NUM, _NUM, _P_REAL),
+    ([_Opaque(), 0, 0], _NUM, _NUM, _P_REAL),
+    ([0.0, 1.2], [0.0, 1.2], "w: expected shape 3, got (2,)", _P_SHAPE + "shape (2,)"),
+    ([0, 0, 0, 0], [0.0] * 4, "w: expected shape 3, got (4,)", _P_SHAPE + "shape (4,)"),
+    ([], [], "w: expected shape 3, got (0,)", _P_SHAPE + "shape (0,)"),
+    ([[0.0, 0.0, 1.2]], [[0.0, 0.0, 1.2]], "w: expected shape 3, got (1, 3)",
+     _P_SHAPE + "shape (1, 3)"),
+    ([[1, 2, 3], [4, 5, 6]], [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]],
+     "w: expected shape 3, got (2, 3)", _P_SHAPE + "shape (2, 3)"),
+    ([[1], [2], [3]], [[1.0], [2.0], [3.0]], "w: expected shape 3, got (3, 1)",
+     _P_SHAPE + "shape (3, 1)"),
+    ([[0.1, 0, 0], [0, True, 0]], _NUM, _NUM, _P_SHAPE + "shape (2, 3)"),
+    ([[1, 2], [3]], _NUM, _NUM, _P_SHAPE + "shape (2,)"),  # ragged
+    ([[1, 2], [3], 4], _NUM, _NUM, _P_REAL),
+    ([[1, [2, 3]], 4, 5], ValueError, ValueError, ValueError),  # numpy's, from is_real
+    (np.array([0.0, 0.0, 1.2]), [0.0, 0.0, 1.2], [0.0, 0.0, 1.2], [0.0, 0.0, 1.2]),
+    (np.array([1, 2, 3]), [1.0, 2.0, 3.0], [1.0, 2.0, 3.0], [1.0, 2.0, 3.0]),
+    (np.array([0.5, 1.5, 2.5], dtype=np.float32), [0.5, 1.5, 2.5], [0.5, 1.5, 2.5],
+     [0.5, 1.5, 2.5]),
+    (np.array([0.0, np.nan, 1.0]), _FIN, _FIN, _P_REAL),
+    (np.array([[1.0, 2.0, 3.0]]), [[1.0, 2.0, 3.0]], "w: expected shape 3, got (1, 3)",
+     _P_SHAPE + "shape (1, 3)"),
+    (np.array([True, False, True]), _NUM, _NUM, _P_REAL),
+    (np.array([[True], [False], [True]]), _NUM, _NUM, _P_SHAPE + "shape (3, 1)"),
+    (np.array(["1", "2", "3"]), _NUM, _NUM, _P_REAL),
+    (np.array([1 + 1j, 0, 0]), _NUM, _NUM, _P_REAL),
+    (np.array([1, 2, 3], dtype=complex), _NUM, _NUM, _P_REAL),
+    (np.array(["2020-01-01"] * 3, dtype="datetime64[D]"), _NUM, _NUM, _P_REAL),
+    (np.array([1.0, True, 0.0], dtype=object), _NUM, _NUM, _P_REAL),
+    (np.array([0.5, 2, np.float32(3)], dtype=object), [0.5, 2.0, 3.0], [0.5, 2.0, 3.0],
+     [0.5, 2.0, 3.0]),
+    (np.array([0.5, np.nan, 3], dtype=object), _FIN, _FIN, _P_REAL),
+    (np.array([10**400, 0, 0], dtype=object), _NUM, _NUM, _P_REAL),
+    (np.array([[1, 2], [3], None], dtype=object)[:2], _NUM, _NUM, _P_SHAPE + "shape (2,)"),
+]
+
+
+def _check_outcome(call, value, want, error):
+    """``call()`` gives ``want`` (see _ENTRY_TABLE), raising ``error`` if it raises, and warns
+    nothing."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        if want is ValueError:
+            with pytest.raises(ValueError) as exc:
+                call()
+            assert type(exc.value) is ValueError  # not one of hearsee's
+        elif isinstance(want, str):
+            with pytest.raises(error) as exc:
+                call()
+            assert type(exc.value) is error
+            assert str(exc.value) == want.replace("{v}", repr(value))
+        else:
+            got = call()
+            assert got.dtype == np.float64 and got.shape == np.shape(want)
+            np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize("value, many, three, point", _ENTRY_TABLE,
+                         ids=[repr(r[0])[:40] for r in _ENTRY_TABLE])
+def test_as_float_array_and_as_point_outcomes_on_every_kind_of_entry(value, many, three, point):
+    from hearsee.errors import GeometryError
+    from hearsee.geometry import as_point
+
+    _check_outcome(lambda: as_float_array(value, "w"), value, many, ConfigError)
+    _check_outcome(lambda: as_float_array(value, "w", (3,)), value, three, ConfigError)
+    _check_outcome(lambda: as_point(value, "p"), value, point, GeometryError)
+    _check_outcome(lambda: as_point(value, "p", ConfigError), value, point, ConfigError)

@@ -18,8 +18,9 @@ import yaml
 from hearsee.errors import ConfigError, InputFileError
 
 __all__ = [
-    "as_float_array", "check_keys", "finite_number", "is_real", "load_yaml", "number", "require",
-    "save_yaml", "time_limit", "to_jsonable", "to_plain", "whole_number",
+    "all_real", "as_float_array", "check_keys", "finite_number", "is_real", "load_yaml", "number",
+    "object_entries", "require", "save_yaml", "time_limit", "to_jsonable", "to_plain",
+    "whole_number",
 ]
 
 
@@ -117,6 +118,25 @@ def is_real(v: Any) -> bool:
     return a.ndim == 0 and a.dtype.kind in "iuf" and bool(np.isfinite(a))
 
 
+def object_entries(value: Any) -> np.ndarray | None:
+    """``value`` as an object array of any shape with its entries as given (no number converted,
+    so that :func:`all_real` can check each one); None where numpy cannot form one."""
+    try:
+        return np.asarray(value, dtype=object)
+    except (TypeError, ValueError):
+        return None
+
+
+def all_real(entries: np.ndarray, *, finite: bool = True) -> bool:
+    """True when every entry of the object array ``entries`` (:func:`object_entries`) is a real
+    number (:func:`is_real`): not a bool, a string, a complex number, None, a list (of a ragged
+    nesting) or an int beyond float's range. With ``finite=False`` NaN and infinite floats
+    count too (for a caller whose next check reports them as not finite). The one
+    entry-by-entry check of :func:`as_float_array` and :func:`hearsee.geometry.as_point`."""
+    return all((not finite and isinstance(v, float | np.floating)) or is_real(v)
+               for v in entries.flat)
+
+
 def finite_number(name: str, value: Any, lo: float | None = None, hi: float | None = None, *,
                   lo_open: bool = False, error: type[Exception] = ConfigError) -> float:
     """``value`` as a float when it is a finite real number (:func:`is_real`) within
@@ -186,7 +206,7 @@ def as_float_array(value: Any, where: str,
     range or a complex number is refused -- numpy's float conversion read ``True`` as 1.0 and
     ``"0.5"`` as 0.5, and raised a builtin OverflowError on a 400-digit int. A numpy array of
     integers or floats is converted at once (no element-wise check); lists, tuples and object
-    arrays have their entries checked one by one (:func:`is_real`; NaN and inf then get the
+    arrays have their entries checked one by one (:func:`all_real`; NaN and inf then get the
     "must be finite" error). The many-number counterpart of
     :func:`hearsee.geometry.as_point`."""
     if isinstance(value, np.ndarray) and value.dtype.kind in "iuf":
@@ -194,12 +214,8 @@ def as_float_array(value: Any, where: str,
     elif isinstance(value, np.ndarray) and value.dtype.kind != "O":
         ok = False  # bools, strings, complex numbers, dates
     else:
-        try:
-            items = np.asarray(value, dtype=object)
-        except (TypeError, ValueError):
-            items = None
-        ok = items is not None and all(
-            isinstance(v, float | np.floating) or is_real(v) for v in items.flat)
+        items = object_entries(value)
+        ok = items is not None and all_real(items, finite=False)
     if not ok:
         raise ConfigError(f"{where}: expected numbers, got {value!r}")
     try:

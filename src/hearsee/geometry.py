@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.config import is_real
+from hearsee.config import all_real, is_real, object_entries
 from hearsee.errors import GeometryError
 
 __all__ = [
@@ -133,21 +133,18 @@ def as_point(value: Any, what: str, error: type[Exception] = GeometryError) -> N
     the simulated source and room of :mod:`hearsee.sim.audio`, the point of
     :meth:`hearsee.audio.arrays.MicArray.tdoa_jacobian`, the robot file's ``head`` and
     ``cameras.mount_m`` vectors, which pass ConfigError). Each coordinate must be a finite real
-    number (:func:`hearsee.config.is_real`): numpy's float conversion read ``True`` as 1 m and
+    number (:func:`hearsee.config.all_real`): numpy's float conversion read ``True`` as 1 m and
     ``"0.5"`` as 0.5 m, and raised a builtin OverflowError on an int beyond float's range; any
     other shape, ``(1, 3)`` included, is refused too.
 
     >>> as_point((1, 2.5, 0), "source")
     array([1. , 2.5, 0. ])
     """
-    try:
-        items = np.asarray(value, dtype=object)  # the coordinates as given, each checked below
-    except (TypeError, ValueError):
-        items = None
+    items = object_entries(value)  # the coordinates as given, each checked below
     if items is None or items.shape != (3,):
         got = f"shape {items.shape}" if items is not None and items.ndim else repr(value)
         raise error(f"{what} must be a finite [x, y, z] in metres: expected shape 3, got {got}")
-    if not all(is_real(v) for v in items):
+    if not all_real(items):
         raise error(f"{what} must be a finite [x, y, z] in metres (3 real numbers), got "
                     f"{value!r}")
     return items.astype(float)
