@@ -108,13 +108,16 @@ _FLOAT_MAX = int(np.finfo(float).max)
 
 def is_real(v: Any) -> bool:
     """True for a finite real number: a Python or numpy scalar of any precision, or a 0-d
-    array; not a bool, a string, NaN or an infinity. The one test behind every "must be a
-    finite number" check of hearsee's settings."""
+    array; not a bool, a string, NaN, an infinity or a list (a ragged one included). The one
+    test behind every "must be a finite number" check of hearsee's settings."""
     if type(v) is float:  # the common case, without numpy
         return math.isfinite(v)
     if type(v) is int:  # (one beyond float's range, a 400-digit YAML literal: OverflowError)
         return abs(v) <= _FLOAT_MAX
-    a = np.asarray(v)
+    try:
+        a = np.asarray(v)
+    except (TypeError, ValueError):  # (numpy's ValueError on a ragged list, [1, [2, 3]])
+        return False
     return a.ndim == 0 and a.dtype.kind in "iuf" and bool(np.isfinite(a))
 
 

@@ -117,6 +117,21 @@ def test_bad_inputs_one_line_exit_2(rec3, tmp_path, capsys):
         assert "Traceback" not in err and out == ""
 
 
+def test_a_ragged_list_in_the_array_file_is_one_line_exit_2(rec3, tmp_path, capsys):
+    """A microphone [0.1, [0, 0]] or a speed of sound [1, [2, 3]] in the array YAML was a
+    builtin ValueError traceback (numpy's, from config.is_real)."""
+    mics = "[[0.1, 0, 0], [0, 0.1, 0], [0, 0, 0.1]]"
+    for text, needle in ((f"microphones: [[0.1, [0, 0]], {mics[1:]}\n", "microphones"),
+                         (f"speed_of_sound: [1, [2, 3]]\nmicrophones: {mics}\n",
+                          "speed_of_sound")):
+        path = tmp_path / "ragged.yaml"
+        path.write_text(text)
+        code, out, err = _run(capsys, rec3, "--array", path)
+        assert code == 2 and out == ""
+        assert err.startswith("hearsee: error: ") and err.count("\n") == 1, err
+        assert f"ragged.yaml: {needle}" in err
+
+
 def test_bad_method_is_usage_error(rec3, capsys):
     code, _, err = _run(capsys, rec3, "--array", "three-mic", "--method", "music")
     assert code == 2 and "Traceback" not in err
