@@ -932,6 +932,90 @@ def test_pan_command_is_wrapped_then_limited_to_the_nearer_limit():
     assert full.n_printed == 1
 
 
+@pytest.mark.parametrize("pan", [float("nan"), float("inf"), -float("inf"), None, "10", True])
+def test_a_desired_pan_that_is_no_finite_number_is_a_geometry_error(pan):
+    """limit_pan_deg(NaN) (or +-inf) returned the max limit: wrap_deg(NaN) is NaN and every
+    comparison with it False; None gave max too, "10" 10 deg and "abc" a builtin ValueError.
+    pan_change_deg(NaN, x) was NaN (below every threshold: no change)."""
+    from hearsee.errors import GeometryError
+    from hearsee.robot.hardware import HeadConfig, PrintHeadDriver, limit_pan_deg, pan_change_deg
+
+    with pytest.raises(GeometryError, match="^desired pan_deg must be a finite number"):
+        limit_pan_deg(pan, (-170.0, 170.0))
+    with pytest.raises(GeometryError, match="^pan_deg must be a finite number"):
+        pan_change_deg(pan, 0.0)
+    with pytest.raises(GeometryError, match="^pan_deg must be a finite number"):
+        pan_change_deg(0.0, pan)
+    drv = PrintHeadDriver(HeadConfig(np.zeros(3), np.zeros(3)))
+    with pytest.raises(GeometryError, match="^desired pan_deg"):
+        drv.command(0.0, pan, 0.0)
+    with pytest.raises(GeometryError, match="^desired tilt_deg"):  # (a NaN tilt was sent)
+        drv.command(0.0, 10.0, pan)
+    assert drv.n_printed == 0 and drv.last is None
+    # finite values: as before
+    assert limit_pan_deg(np.float64(200.0), (-170.0, 170.0)) == pytest.approx(-160.0)
+    assert pan_change_deg(179.0, -179.0) == pytest.approx(2.0)
+
+
+@pytest.mark.parametrize("limits", [(170.0, -170.0), (float("nan"), 170.0), (-200.0, 170.0),
+                                    (0.0, 0.0), (-10.0, float("inf")), ("-10", "10"),
+                                    (-10.0, 0.0, 10.0), 170.0, None])
+def test_bad_pan_limits_are_a_config_error(limits):
+    """limit_pan_deg checked nothing of its limits: [170, -170] or [NaN, 170] sent 170 for any
+    pan, [-200, 170] passed 10 deg through unchecked; the robot file's own rule
+    (-180 <= min < max <= 180) now holds wherever the limits come from."""
+    from hearsee.robot.hardware import limit_pan_deg
+
+    with pytest.raises(ConfigError, match="^pan_limits_deg: "):
+        limit_pan_deg(10.0, limits)
+    from hearsee.robot.hardware import pan_limits_deg  # (the one check, new)
+
+    with pytest.raises(ConfigError, match="^head.pan_limits_deg: "):
+        pan_limits_deg(limits, "head.pan_limits_deg")
+    assert pan_limits_deg((-180, 180)) == (-180.0, 180.0)
+
+
+class _SendingHead:
+    """A driver that stays at pan 0 and records every (pan, tilt) it is sent."""
+
+    pose_deg = (0.0, 0.0)
+
+    def __init__(self) -> None:
+        self.sent: list[tuple[float, float]] = []
+
+    def command(self, t: float, pan_deg: float, tilt_deg: float) -> dict:
+        self.sent.append((pan_deg, tilt_deg))
+        return {"pan_deg": pan_deg, "tilt_deg": tilt_deg}
+
+
+def test_no_nan_and_no_bad_limit_reaches_the_driver(tmp_path, monkeypatch):
+    """run_robot sent its driver limit_pan_deg's answer: a NaN audio bearing (here forced)
+    went out as the max limit (170 deg), and a head whose limits were [NaN, 170] was sent
+    commands all the same. Now bad limits stop the run before it starts and a NaN pan stops it
+    with a typed error before the command."""
+    import dataclasses
+
+    import hearsee.robot.hardware as hw
+    from hearsee.errors import GeometryError
+    from hearsee.stream.pipeline import ArraySource
+
+    x, _ = _talker(40.0, 1.0)
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
+    bad = dataclasses.replace(cfg, head=dataclasses.replace(cfg.head,
+                                                            pan_limits_deg=(np.nan, 170.0)))
+    head = _SendingHead()
+    with pytest.raises(ConfigError, match=r"^r\.yaml: head\.pan_limits_deg: need -180"):
+        run_robot(bad, audio_source=ArraySource(x, FS, 1600), head=head,
+                  jsonl=tmp_path / "a.jsonl")
+    assert head.sent == []
+    monkeypatch.setattr(hw._Head, "direction_to_robot",
+                        lambda self, az, el: (float("nan"), None if el is None else 0.0))
+    with pytest.raises(GeometryError, match="desired pan_deg"):
+        run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=head,
+                  jsonl=tmp_path / "b.jsonl")
+    assert head.sent == []
+
+
 class _FixedHead:
     """A head that stays at ``pose`` and records the pans it is sent; ``jitter`` (degrees)
     alternates the reported pan by that much on every read (encoder noise)."""

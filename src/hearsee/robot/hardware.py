@@ -69,7 +69,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
-from hearsee.config import as_float_array, check_keys, load_yaml, number, time_limit
+from hearsee.config import (
+    as_float_array,
+    check_keys,
+    finite_number,
+    is_real,
+    load_yaml,
+    number,
+    time_limit,
+)
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, HearseeError
 
 if TYPE_CHECKING:  # imported when run_robot runs (the simulated loop's heavier imports)
@@ -358,10 +366,8 @@ def _head(d: Mapping[str, Any], where: str) -> HeadConfig:
     offset = _vec3(d, "offset_m", (0.0, 0.0, 0.0), where)
     if np.linalg.norm(offset) > 1.0:
         raise ConfigError(f"{where}.offset_m: {offset.tolist()} is more than 1 m from the pivot")
-    lo, hi = _pair(d, "pan_limits_deg", (-170.0, 170.0), where)
-    if not -180.0 <= lo < hi <= 180.0:
-        raise ConfigError(f"{where}.pan_limits_deg: need -180 <= min < max <= 180, got "
-                          f"[{lo}, {hi}]")
+    lo, hi = pan_limits_deg(_pair(d, "pan_limits_deg", (-170.0, 170.0), where),
+                            f"{where}.pan_limits_deg")
     pan, tilt = _pair(d, "pose_deg", (0.0, 0.0), where)
     if not lo <= pan <= hi:
         raise ConfigError(f"{where}.pose_deg: pan {pan} is outside pan_limits_deg [{lo}, {hi}]")
@@ -817,32 +823,60 @@ POSE_TOLERANCE_DEG = 0.5
 
 def pan_change_deg(a_deg: float, b_deg: float) -> float:
     """``|a - b|`` of two pans (degrees) the short way round, in [0, 180]: 179.9 and -179.9
-    are 0.2 deg apart, not 359.8."""
+    are 0.2 deg apart, not 359.8. A pan that is not a finite number is a GeometryError (a NaN
+    change compared False with every threshold: a NaN pose read as no head move)."""
     from hearsee.geometry import wrap_deg
 
-    return abs(float(wrap_deg(a_deg - b_deg)))
+    a = finite_number("pan_deg", a_deg, error=GeometryError)
+    b = finite_number("pan_deg", b_deg, error=GeometryError)
+    return abs(float(wrap_deg(a - b)))
+
+
+def pan_limits_deg(limits_deg: Any, where: str = "pan_limits_deg") -> tuple[float, float]:
+    """``limits_deg`` as the head's ``(min, max)`` pan in degrees (robot frame), checked:
+    two finite numbers with ``-180 <= min < max <= 180``; else ConfigError naming ``where``.
+    The one rule of the robot file's ``head.pan_limits_deg`` and of :func:`limit_pan_deg`."""
+    try:
+        lo, hi = limits_deg
+    except (TypeError, ValueError):
+        raise ConfigError(f"{where}: expected [min, max] in degrees, got {limits_deg!r}"
+                          ) from None
+    if not (is_real(lo) and is_real(hi) and -180.0 <= lo < hi <= 180.0):
+        raise ConfigError(f"{where}: need -180 <= min < max <= 180, got [{lo}, {hi}]")
+    return float(lo), float(hi)
 
 
 def limit_pan_deg(pan_deg: float, limits_deg: tuple[float, float]) -> float:
     """The pan to command (degrees, robot frame, + = left) for a desired ``pan_deg`` (any
-    angle): wrapped to (-180, 180], and when outside ``limits_deg`` ([min, max] within
+    finite angle): wrapped to (-180, 180], and when outside ``limits_deg`` ([min, max] within
     [-180, 180]), the limit angularly nearest to it. The head cannot turn through the arc
     beyond its limits, so that limit is as near the target as it can look (a plain clip
     chose ``max`` for a desired 190 deg, the same direction as -170 deg, and ``min`` for -170
-    deg with limits [0, 170], 20 deg from ``max``)."""
+    deg with limits [0, 170], 20 deg from ``max``).
+
+    A desired pan that is not a finite number is a GeometryError and bad limits a ConfigError
+    (:func:`pan_limits_deg`): NaN and inf fell through every comparison to ``max``."""
     from hearsee.geometry import wrap_deg
 
-    pan = float(wrap_deg(pan_deg))
-    lo, hi = limits_deg
+    pan = float(wrap_deg(finite_number("desired pan_deg", pan_deg, error=GeometryError)))
+    lo, hi = pan_limits_deg(limits_deg)
     if lo <= pan <= hi:
         return pan
     return lo if pan_change_deg(pan, lo) < pan_change_deg(pan, hi) else hi
 
 
+def limit_tilt_deg(tilt_deg: float) -> float:
+    """The tilt to command (degrees, + = gaze up) for a desired ``tilt_deg``: clipped to
+    [-90, 90]; not a finite number: GeometryError (a NaN went to the driver as it was)."""
+    tilt = finite_number("desired tilt_deg", tilt_deg, error=GeometryError)
+    return float(np.clip(tilt, -90.0, 90.0))
+
+
 class PrintHeadDriver:
     """Head driver ``none``: the head stays at ``pose_deg``; each desired pan/tilt command
-    (pan wrapped and limited by :func:`limit_pan_deg`, tilt clipped to [-90, 90]) is logged
-    and printed to ``stream`` when it changes by at least ``min_change_deg``.
+    (pan wrapped and limited by :func:`limit_pan_deg`, tilt clipped by :func:`limit_tilt_deg`;
+    either not a finite number: GeometryError) is logged and printed to ``stream`` when it
+    changes by at least ``min_change_deg``.
 
     The driver protocol :func:`run_robot` uses (a real pan-tilt driver implements the same):
     ``pose_deg`` -- the head's actual (pan, tilt) in degrees, read at every update (it may
@@ -864,7 +898,7 @@ class PrintHeadDriver:
 
     def command(self, t: float, pan_deg: float, tilt_deg: float) -> dict[str, float]:
         pan = limit_pan_deg(pan_deg, self.head.pan_limits_deg)
-        tilt = float(np.clip(tilt_deg, -90.0, 90.0))
+        tilt = limit_tilt_deg(tilt_deg)
         if self.last is None or max(pan_change_deg(pan, self.last[0]),
                                     abs(tilt - self.last[1])) >= self.min_change_deg:
             self.last = (pan, tilt)
@@ -1020,6 +1054,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     from hearsee.stream.pipeline import StreamConfig, StreamPipeline
 
     a = cfg.audio
+    # (a HeadConfig built in code skipped the robot file's check; before any device opens)
+    pan_limits_deg(cfg.head.pan_limits_deg, f"{cfg.path}: head.pan_limits_deg")
     live = audio_source is None
     if live:
         source = open_audio_source(cfg, duration_s)
@@ -1215,8 +1251,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                 pan = bearing
             elif not heard and state["desired"] is not None:
                 pan, tilt = state["desired"]
-            # any driver gets a pan within the head's limits (not only PrintHeadDriver)
+            # any driver gets a pan within the head's limits and a tilt within [-90, 90] (not
+            # only PrintHeadDriver); a NaN never reaches it (GeometryError)
             pan = limit_pan_deg(pan, cfg.head.pan_limits_deg)
+            tilt = limit_tilt_deg(tilt)
             command = head.command(t, pan, tilt)
             state["desired"] = (pan, tilt)
         rec_track = None
