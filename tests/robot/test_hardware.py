@@ -1016,6 +1016,45 @@ def test_no_nan_and_no_bad_limit_reaches_the_driver(tmp_path, monkeypatch):
     assert head.sent == []
 
 
+class _BrokenEncoderHead(_SendingHead):
+    """A head at pan 0 whose encoder reads ``bad`` from its ``after``-th read on."""
+
+    def __init__(self, bad, after: int) -> None:
+        super().__init__()
+        self.bad, self.after, self.n_reads = bad, after, 0
+
+    @property
+    def pose_deg(self):
+        self.n_reads += 1
+        return self.bad if self.n_reads > self.after else (0.0, 0.0)
+
+
+@pytest.mark.parametrize("bad, words", [
+    ((0.0, float("nan")), "head driver pose_deg: HeadPose.tilt_deg must be finite"),
+    ((float("inf"), 0.0), "head driver pose_deg: HeadPose.pan_deg must be finite"),
+    ((0.0, 95.0), "head driver pose_deg: HeadPose.tilt_deg must be within [-90, 90]"),
+    (("left", 0.0), "head driver pose_deg must be (pan_deg, tilt_deg) in degrees"),
+    ((0.0,), "head driver pose_deg must be (pan_deg, tilt_deg) in degrees"),
+    (None, "head driver pose_deg must be (pan_deg, tilt_deg) in degrees"),
+])
+def test_an_impossible_pose_during_the_run_is_a_geometry_error(tmp_path, bad, words):
+    """The driver's pose is read at every update: a NaN tilt there (max(0, NaN) is 0) read as
+    no head move and the run went on with the old geometry, unnoticed; a pose that was no pair
+    of numbers was a builtin ValueError / TypeError. Now a GeometryError naming the pose."""
+    from hearsee.errors import GeometryError
+    from hearsee.stream.pipeline import ArraySource
+
+    x, _ = _talker(40.0, 1.0)
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
+    head = _BrokenEncoderHead(bad, after=5)
+    with pytest.raises(GeometryError) as e:
+        run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=head,
+                  jsonl=tmp_path / "a.jsonl")
+    assert str(e.value).startswith(words), e.value
+    assert head.n_reads == 6  # stopped at the first bad read
+    assert len((tmp_path / "a.jsonl").read_text().splitlines()) == 4  # (updates before it)
+
+
 class _FixedHead:
     """A head that stays at ``pose`` and records the pans it is sent; ``jitter`` (degrees)
     alternates the reported pan by that much on every read (encoder noise)."""

@@ -950,9 +950,22 @@ class _Head:
 
 
 def _pose(head: Any) -> tuple[float, float]:
-    """The driver's actual (pan, tilt), degrees, as floats."""
-    pan, tilt = head.pose_deg
-    return float(pan), float(tilt)
+    """The driver's actual (pan, tilt), degrees, as floats; GeometryError when that is no head
+    pose (:class:`hearsee.geometry.HeadPose`: finite, tilt within [-90, 90]). Checked at every
+    read: a NaN tilt during the run compared as no head move and was never noticed, a pose
+    that was no pair of numbers a builtin TypeError or ValueError."""
+    from hearsee.geometry import as_pose
+
+    pose = head.pose_deg
+    try:
+        pan, tilt = (float(v) for v in pose)
+    except (TypeError, ValueError):
+        raise GeometryError(f"head driver pose_deg must be (pan_deg, tilt_deg) in degrees, got "
+                            f"{pose!r}") from None
+    try:
+        return as_pose((pan, tilt)).as_tuple()
+    except GeometryError as exc:
+        raise GeometryError(f"head driver pose_deg: {exc}") from None
 
 
 def _unheard(u: Any) -> Any:
