@@ -1055,6 +1055,35 @@ def test_an_impossible_pose_during_the_run_is_a_geometry_error(tmp_path, bad, wo
     assert len((tmp_path / "a.jsonl").read_text().splitlines()) == 4  # (updates before it)
 
 
+def test_head_bearings_are_geometry_direction_deg_also_at_the_branch_cut(tmp_path):
+    """The live loop's azimuths of a seen person (from the pivot: logged and commanded; from
+    the array origin: compared with the audio bearing) were its own atan2s; now
+    hearsee.geometry.direction_deg. Same numbers on constructed points all round the head,
+    and straight behind it (y exactly -0.0) 180 deg, within direction_deg's (-180, 180]:
+    the own atan2 gave -180 there (atan2(-0.0, -1) = -pi; the same direction)."""
+    from hearsee.robot.hardware import _Head
+
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"},
+                                  "head": {"pivot_m": [0.0, 0.0, 1.2],
+                                           "offset_m": [0.0, 0.0, 0.0]}}, "r.yaml", tmp_path)
+    g = _Head(cfg, (0.0, 0.0))
+    for az in np.arange(-179.0, 180.0, 7.0):
+        for el in (-40.0, 0.0, 25.0):
+            d = 2.0 * np.array([np.cos(np.radians(el)) * np.cos(np.radians(az)),
+                                np.cos(np.radians(el)) * np.sin(np.radians(az)),
+                                np.sin(np.radians(el))])
+            p = g.pivot + d
+            d = p - g.pivot  # (the old code's own difference, bit for bit)
+            want = (np.degrees(np.arctan2(d[1], d[0])),
+                    np.degrees(np.arctan2(d[2], np.hypot(d[0], d[1]))))
+            assert g.bearing_deg(p) == want  # bit for bit
+            assert g.heard_azimuth_deg(p) == want[0]  # (array origin = pivot here)
+    behind = np.array([-1.5, -0.0, 1.2])  # y exactly -0.0: on the branch cut
+    assert g.bearing_deg(behind) == (180.0, 0.0)
+    assert g.heard_azimuth_deg(behind) == 180.0
+    assert g.bearing_deg(np.array([-1.5, 0.0, 1.2])) == (180.0, 0.0)
+
+
 class _FixedHead:
     """A head that stays at ``pose`` and records the pans it is sent; ``jitter`` (degrees)
     alternates the reported pan by that much on every read (encoder noise)."""

@@ -944,9 +944,19 @@ class _Head:
         return self.R_cam.T @ np.asarray(p_cam, float) + self.cam_centre
 
     def bearing_deg(self, p: NDArray) -> tuple[float, float]:
-        d = np.asarray(p, float) - self.pivot
-        return (float(np.degrees(np.arctan2(d[1], d[0]))),
-                float(np.degrees(np.arctan2(d[2], np.hypot(d[0], d[1])))))
+        """Azimuth in (-180, 180] and elevation, degrees, of the robot-frame point ``p``
+        (metres) seen from the head pivot (:func:`hearsee.geometry.direction_deg`)."""
+        from hearsee.geometry import direction_deg
+
+        az, el = direction_deg(np.asarray(p, float) - self.pivot)
+        return float(az), float(el)
+
+    def heard_azimuth_deg(self, p: NDArray) -> float:
+        """Azimuth in (-180, 180], degrees, of the robot-frame point ``p`` (metres) seen from
+        the array origin, where the audio bearing is heard."""
+        from hearsee.geometry import direction_deg
+
+        return float(direction_deg(np.asarray(p, float) - self.array_origin)[0])
 
 
 def _pose(head: Any) -> tuple[float, float]:
@@ -1148,9 +1158,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                          "elevation_deg": _r(el, 2), "accepted": bool(h.accepted),
                          "speaker": False})
             if h.accepted:  # (compared with the audio bearing: from the array origin)
-                d = p - g.array_origin
-                verified.append((h, p, float(np.degrees(np.arctan2(d[1], d[0]))),
-                                 len(dets) - 1))
+                verified.append((h, p, g.heard_azimuth_deg(p), len(dets) - 1))
         best = associate([v[1] for v in verified], [v[2] for v in verified], track, bearing)
         if best is not None:
             h, p, _, k = verified[best]
