@@ -5,12 +5,12 @@ import pytest
 from hearsee.cli import main
 
 
-@pytest.mark.parametrize("value", ["inf", "nan", "-inf", "1.5", "200"])
+@pytest.mark.parametrize("value", ["inf", "nan", "-inf", "0.5", "200"])
 def test_eval_duration_error_names_the_flag(value, capsys, tmp_path, monkeypatch):
     """A review reported `hearsee eval --duration inf` as "random_scenario duration_s must be
-    ..." (random_scenario's parameter, 1-120 s); evaluate's own check (2-120 s) answers first,
-    naming the flag. A guard (the rule's words are evaluate's): inf is not "no limit" here -- a
-    simulated scenario has a length."""
+    ..." (random_scenario's parameter); evaluate's own check (the same 1-120 s, a scenario's
+    range) answers first, naming the flag. A guard (the rule's words are evaluate's): inf is
+    not "no limit" here -- a simulated scenario has a length."""
     monkeypatch.chdir(tmp_path)
     assert main(["eval", "-n", "1", "--workers", "1", "--duration", value]) == 2
     out, err = capsys.readouterr()
@@ -18,3 +18,22 @@ def test_eval_duration_error_names_the_flag(value, capsys, tmp_path, monkeypatch
     assert err.startswith("hearsee: error: --duration must be ") and err.count("\n") == 1, err
     assert err.endswith(f", got {float(value)}\n") and "duration_s" not in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_eval_takes_any_scenario_length(capsys, tmp_path, monkeypatch):
+    """`hearsee eval --duration 1.5` was refused ("in [2, 120]") though a scenario file and
+    random_scenario take 1-120 s and nothing in a run needs 2 s; one range now
+    (hearsee.robot.scenario.MIN_DURATION_S / MAX_DURATION_S). The runs are stubbed: what
+    reaches them is checked."""
+    import json
+
+    import hearsee.robot.evaluate as ev
+
+    got = []
+    monkeypatch.setattr(ev, "run_one", lambda seed, duration_s: got.append((seed, duration_s))
+                        or {"success": True, "seed": seed})
+    monkeypatch.chdir(tmp_path)
+    assert main(["eval", "-n", "2", "--seed", "3", "--workers", "1", "--duration", "1.5"]) == 0
+    out, _ = capsys.readouterr()
+    assert got == [(3, 1.5), (4, 1.5)]
+    assert json.loads(out[out.index("{"):])["scenarios"] == 2

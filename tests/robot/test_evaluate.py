@@ -37,6 +37,40 @@ def test_bad_counts_and_durations():
             evaluate(**args)
 
 
+def test_duration_range_is_a_scenarios(monkeypatch):
+    """evaluate took 2-120 s, a scenario file and random_scenario 1-120 s: a 1.5 s scenario
+    file was fine for `hearsee demo`, its length refused by `hearsee eval`. One named range
+    now, the same edges everywhere (runs stubbed: what reaches them is checked)."""
+    import hearsee.robot.evaluate as ev
+
+    got = []
+    monkeypatch.setattr(ev, "run_one",
+                        lambda seed, duration_s: got.append(duration_s) or {"seed": seed})
+    assert evaluate(2, seed0=5, workers=1, duration_s=1.5).runs == [{"seed": 5}, {"seed": 6}]
+    from hearsee.robot.scenario import (  # (the one range, new)
+        MAX_DURATION_S,
+        MIN_DURATION_S,
+        random_scenario,
+        scenario_from_dict,
+    )
+
+    assert (MIN_DURATION_S, MAX_DURATION_S) == (1.0, 120.0)
+    got.clear()
+    for d in (MIN_DURATION_S, 1.5, MAX_DURATION_S):
+        evaluate(1, workers=1, duration_s=d)
+        assert scenario_from_dict({"duration_s": d}).duration_s == d
+        assert random_scenario(0, d).duration_s == d
+    for d in (np.nextafter(MIN_DURATION_S, 0), np.nextafter(MAX_DURATION_S, 200)):
+        with pytest.raises(ConfigError, match=r"^--duration must be a finite number in "
+                                              r"\[1, 120\]"):
+            evaluate(1, workers=1, duration_s=d)
+        with pytest.raises(ConfigError, match="duration_s"):
+            scenario_from_dict({"duration_s": float(d)})
+        with pytest.raises(ConfigError, match="duration_s"):
+            random_scenario(0, d)
+    assert got == [MIN_DURATION_S, 1.5, MAX_DURATION_S]
+
+
 @pytest.mark.slow
 def test_dask_local_cluster_gives_identical_results():
     distributed = pytest.importorskip("distributed")

@@ -20,6 +20,7 @@ import numpy as np
 
 from hearsee.config import finite_number, whole_number
 from hearsee.errors import ConfigError
+from hearsee.robot.scenario import MAX_DURATION_S, MIN_DURATION_S
 
 __all__ = ["EvalResult", "evaluate", "run_one", "summarize"]
 
@@ -92,11 +93,13 @@ def evaluate(
     progress : callable, optional
         Called with 1 after each finished scenario.
     duration_s : float
-        Simulated seconds per scenario.
+        Simulated seconds per scenario, within a scenario's range
+        (:data:`hearsee.robot.scenario.MIN_DURATION_S` - ``MAX_DURATION_S``, 1-120 s).
     """
     # (a string or None raised a builtin TypeError from the comparisons)
     n_scenarios = whole_number("--scenarios", n_scenarios, 1)
-    duration_s = finite_number("--duration", duration_s, 2.0, 120.0)  # seconds
+    # seconds: a scenario's range (a scenario file's duration_s; was 2-120 s here, 1-120 there)
+    duration_s = finite_number("--duration", duration_s, MIN_DURATION_S, MAX_DURATION_S)
     if workers is not None:
         workers = whole_number("--workers", workers, 0)  # (0 = all cores)
     seed0 = whole_number("--seed", seed0, 0)

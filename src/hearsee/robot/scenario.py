@@ -51,6 +51,8 @@ from hearsee.config import check_keys, finite_number, load_yaml, number, whole_n
 from hearsee.errors import ConfigError
 
 __all__ = [
+    "MAX_DURATION_S",
+    "MIN_DURATION_S",
     "ObjectSpec",
     "PersonSpec",
     "RobotSpec",
@@ -67,6 +69,11 @@ VOICES = ("male", "female")
 ROBOT_CLEARANCE_M = 0.6
 #: Minimum distance (m) of people and objects from the walls.
 WALL_CLEARANCE_M = 0.3
+#: A scenario's simulated length, seconds: the range of a scenario file's ``duration_s``, of
+#: :func:`random_scenario` and of ``hearsee eval --duration`` (:func:`hearsee.robot.evaluate.
+#: evaluate`). A 1 s scenario runs; it is too short for most speakers to be verified.
+MIN_DURATION_S = 1.0
+MAX_DURATION_S = 120.0
 
 
 @dataclass(frozen=True)
@@ -313,7 +320,8 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
         image_sources(rt60, size)
     except ConfigError as e:
         raise ConfigError(f"{where}.room.rt60_s: {e}") from None
-    duration = number(data, "duration_s", base.duration_s, where, 1.0, 120.0)
+    duration = number(data, "duration_s", base.duration_s, where, MIN_DURATION_S,
+                      MAX_DURATION_S)
 
     rob = _section(data, "robot", where)
     rw = f"{where}.robot"
@@ -429,9 +437,11 @@ def random_scenario(seed: int, duration_s: float = 6.0) -> Scenario:
     """A random scenario for ``hearsee eval``: one speaker walking 0.2-0.8 m/s in any direction
     from 1.5-3.5 m to 1.2-4 m from the robot, never passing within ``ROBOT_CLEARANCE_M`` of it,
     0-2 human-like objects, RT60 0.2-0.5 s, SNR 10-25 dB. ``seed``: a whole number >= 0;
-    ``duration_s``: 1-120 s (as in a scenario file); else ConfigError."""
+    ``duration_s``: :data:`MIN_DURATION_S` - :data:`MAX_DURATION_S` (as in a scenario file);
+    else ConfigError."""
     seed = whole_number("random_scenario seed", seed, 0)
-    duration = finite_number("random_scenario duration_s", duration_s, 1.0, 120.0)
+    duration = finite_number("random_scenario duration_s", duration_s, MIN_DURATION_S,
+                             MAX_DURATION_S)
     rng = np.random.default_rng(seed)
     base = default_scenario()
     room = np.array([rng.uniform(6, 9), rng.uniform(5, 8), rng.uniform(2.6, 3.2)])
