@@ -37,3 +37,18 @@ def test_eval_takes_any_scenario_length(capsys, tmp_path, monkeypatch):
     out, _ = capsys.readouterr()
     assert got == [(3, 1.5), (4, 1.5)]
     assert json.loads(out[out.index("{"):])["scenarios"] == 2
+
+
+@pytest.mark.parametrize("address", ["not an address", "tcp://"])
+def test_eval_bad_scheduler_address_is_one_line(address, capsys, tmp_path, monkeypatch):
+    """A --scheduler that distributed cannot parse (no port, nothing) was a builtin ValueError
+    traceback; an unreachable one already was one line. Now one ConfigError line naming the
+    option, exit 2, nothing written."""
+    pytest.importorskip("distributed")
+    monkeypatch.chdir(tmp_path)
+    assert main(["eval", "-n", "1", "--scheduler", address, "-o", "runs.json"]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err.startswith(f"hearsee: error: --scheduler {address!r} is not a Dask scheduler "
+                          "address (tcp://HOST:PORT)") and err.count("\n") == 1, err
+    assert list(tmp_path.iterdir()) == []

@@ -71,6 +71,15 @@ def test_duration_range_is_a_scenarios(monkeypatch):
     assert got == [MIN_DURATION_S, 1.5, MAX_DURATION_S]
 
 
+@pytest.mark.parametrize("scheduler", ["not an address", 5])
+def test_bad_scheduler_is_a_config_error(scheduler):
+    """distributed's own errors for an address it cannot parse or a value of the wrong type
+    (ValueError, TypeError) passed through as builtins."""
+    pytest.importorskip("distributed")
+    with pytest.raises(ConfigError, match=r"^--scheduler .* is not a Dask scheduler address"):
+        evaluate(1, scheduler=scheduler)
+
+
 @pytest.mark.slow
 def test_dask_local_cluster_gives_identical_results():
     distributed = pytest.importorskip("distributed")

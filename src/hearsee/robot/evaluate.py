@@ -140,6 +140,9 @@ def _evaluate_dask(seeds: list[int], scheduler: Any, tick: Callable[[int], None]
         client = Client(scheduler, timeout="10s") if own else scheduler
     except (OSError, TimeoutError) as exc:
         raise ConfigError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
+    except (TypeError, ValueError) as exc:  # (distributed's own: not a str, no port, ...)
+        raise ConfigError(f"--scheduler {scheduler!r} is not a Dask scheduler address "
+                          f"(tcp://HOST:PORT) or Client: {exc}") from None
     try:
         futures = client.map(job, seeds, pure=False)
         index = {f.key: s for f, s in zip(futures, seeds, strict=True)}
