@@ -551,6 +551,29 @@ def test_source_rate_must_match_the_robot_file(tmp_path):
         run_robot(cfg, audio_source=ArraySource(np.zeros((3, 800)), 8000, 400))
 
 
+@pytest.mark.parametrize("fs, n_channels, words", [
+    (float("nan"), 3, "audio source fs must be a finite number > 0, got nan"),
+    (None, 3, "audio source fs must be a finite number > 0, got None"),
+    (float("inf"), 3, "audio source fs must be a finite number > 0, got inf"),
+    (0.0, 3, "audio source fs must be a finite number > 0, got 0.0"),
+    (16000.0, None, "audio source n_channels must be an integer >= 1, got None"),
+    (16000.0, "3", "audio source n_channels must be an integer >= 1, got '3'"),
+])
+def test_a_source_without_a_usable_rate_or_channel_count(tmp_path, fs, n_channels, words):
+    """run_robot(audio_source=...) with a NaN sample rate slipped past the rate check (NaN
+    compares False) into a builtin ValueError once the stream started; None for the rate or
+    the channel count was a builtin TypeError. Now AudioInputError naming the attribute."""
+    from hearsee.stream.pipeline import ArraySource
+
+    inner = ArraySource(np.zeros((3, 3200)), FS, 1600)
+    src = types.SimpleNamespace(fs=fs, n_channels=n_channels, blocks=inner.blocks)
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
+    with pytest.raises(AudioInputError) as e:
+        run_robot(cfg, audio_source=src, head=_quiet_head(cfg), jsonl=tmp_path / "a.jsonl")
+    assert str(e.value) == words
+    assert not (tmp_path / "a.jsonl").exists()  # (refused before anything was written)
+
+
 def _texture_case(folder: Path, rig, n_frames: int = 3, duration_s: float = 1.0, **cameras):
     """The same smooth random texture in both cameras of ``rig`` (no person, no disparity),
     camera frames at 5 Hz and ``duration_s`` of a simulated voice."""

@@ -77,6 +77,7 @@ from hearsee.config import (
     load_yaml,
     number,
     time_limit,
+    whole_number,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, HearseeError
 
@@ -644,16 +645,21 @@ class MappedSource:
     """A stream source (:mod:`hearsee.stream.pipeline`) seen through the robot file: picks the
     input channel of each microphone (``channels``), ends after ``duration_s`` seconds of audio
     (> 0; None or inf = when the source ends) or as soon as ``stop`` (a ``threading.Event``) is
-    set."""
+    set. The source's ``fs`` (Hz, finite, > 0) and ``n_channels`` (an integer >= 1) are
+    checked: AudioInputError otherwise."""
 
     def __init__(self, source: Any, channels: Sequence[int], duration_s: float | None = None,
                  stop: Any = None) -> None:
         self.source = source
-        self.fs = float(source.fs)
+        # (a NaN rate was a builtin ValueError once the stream started, None a TypeError)
+        self.fs = finite_number("audio source fs", source.fs, 0.0, lo_open=True,
+                                error=AudioInputError)  # Hz
+        n_in = whole_number("audio source n_channels", source.n_channels, 1,
+                            error=AudioInputError)
         self.channels = list(channels)
-        if max(self.channels) >= source.n_channels:
+        if max(self.channels) >= n_in:
             raise AudioInputError(f"audio.channels: channel {max(self.channels)} requested but "
-                                  f"the input has {source.n_channels} channels")
+                                  f"the input has {n_in} channels")
         self.n_channels = len(self.channels)
         duration_s = time_limit("duration_s", duration_s)  # (inf: no limit, as DeviceSource)
         self.limit = None if duration_s is None else int(round(duration_s * self.fs))
