@@ -998,6 +998,24 @@ def test_bad_pan_limits_are_a_config_error(limits):
     assert pan_limits_deg((-180, 180)) == (-180.0, 180.0)
 
 
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), -1.0, "2", None])
+def test_print_driver_min_change_must_be_a_finite_angle(value):
+    """PrintHeadDriver(min_change_deg=NaN) printed the first command and never another (each
+    change compared False with NaN), inf the same, -1 every command, "2" was read as 2 and
+    None a builtin TypeError. Now ConfigError naming the setting; 0 still prints every
+    command."""
+    from hearsee.robot.hardware import HeadConfig, PrintHeadDriver
+
+    head = HeadConfig(np.zeros(3), np.zeros(3))
+    with pytest.raises(ConfigError, match=r"^min_change_deg must be a finite number >= 0"):
+        PrintHeadDriver(head, min_change_deg=value)
+    out = io.StringIO()
+    drv = PrintHeadDriver(head, out, min_change_deg=0)
+    for k in range(3):
+        drv.command(float(k), 10.0 * k, 0.0)
+    assert drv.n_printed == 3 and out.getvalue().count("head: t=") == 3
+
+
 class _SendingHead:
     """A driver that stays at pan 0 and records every (pan, tilt) it is sent."""
 

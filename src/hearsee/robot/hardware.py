@@ -882,7 +882,7 @@ class PrintHeadDriver:
     """Head driver ``none``: the head stays at ``pose_deg``; each desired pan/tilt command
     (pan wrapped and limited by :func:`limit_pan_deg`, tilt clipped by :func:`limit_tilt_deg`;
     either not a finite number: GeometryError) is logged and printed to ``stream`` when it
-    changes by at least ``min_change_deg``.
+    changes by at least ``min_change_deg`` (degrees, finite, >= 0; else ConfigError).
 
     The driver protocol :func:`run_robot` uses (a real pan-tilt driver implements the same):
     ``pose_deg`` -- the head's actual (pan, tilt) in degrees, read at every update (it may
@@ -893,7 +893,8 @@ class PrintHeadDriver:
     def __init__(self, head: HeadConfig, stream: Any = None, min_change_deg: float = 2.0) -> None:
         self.head = head
         self.stream = stream
-        self.min_change_deg = float(min_change_deg)
+        # (NaN printed the first command only: every change compared False with it)
+        self.min_change_deg = finite_number("min_change_deg", min_change_deg, 0.0)  # degrees
         self.last: tuple[float, float] | None = None
         self.n_printed = 0
 
