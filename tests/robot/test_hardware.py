@@ -611,6 +611,19 @@ def test_keep_frames_bounds_the_overlays_kept(tmp_path, keep):
     assert {"first_overlay", "latest_overlay"} <= set(res.images)  # the report still has them
 
 
+@pytest.mark.parametrize("keep", [-1, 2.5, "3", None])
+def test_keep_frames_must_be_a_count(tmp_path, keep):
+    """keep_frames=-1 silently kept none, 2.5 kept three, "3" or None was a builtin TypeError
+    at the first camera frame (after the devices were open). Now ConfigError at the start."""
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
+    with pytest.raises(ConfigError, match=r"^keep_frames must be an integer >= 0, got "):
+        run_robot(cfg, audio_source=ArraySource(np.zeros((3, 3200)), FS, 1600),
+                  head=_quiet_head(cfg), keep_frames=keep, jsonl=tmp_path / "a.jsonl")
+    assert not (tmp_path / "a.jsonl").exists()
+
+
 def test_overlay_is_drawn_on_the_rectified_left_image(tmp_path):
     """Detection boxes are in rectified left-image pixels, so the overlay must be the rectified
     left image, not the raw one: with lens distortion the two differ almost everywhere."""

@@ -1056,7 +1056,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         over files are deterministic).
     progress : called with the seconds of audio of each update.
     keep_frames : overlays kept in memory for the exports (the first ones and the latest; 0:
-        none).
+        none); an integer >= 0, else ConfigError.
     stop : a ``threading.Event`` that ends the run cleanly when set.
 
     Returns
@@ -1086,6 +1086,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     a = cfg.audio
     # (a HeadConfig built in code skipped the robot file's check; before any device opens)
     pan_limits_deg(cfg.head.pan_limits_deg, f"{cfg.path}: head.pan_limits_deg")
+    # (-1 kept none, 2.5 three, "3" was a builtin TypeError at the first camera frame)
+    keep_frames = whole_number("keep_frames", keep_frames, 0)
     live = audio_source is None
     if live:
         source = open_audio_source(cfg, duration_s)
