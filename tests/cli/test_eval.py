@@ -52,3 +52,44 @@ def test_eval_bad_scheduler_address_is_one_line(address, capsys, tmp_path, monke
     assert err.startswith(f"hearsee: error: --scheduler {address!r} is not a Dask scheduler "
                           "address (tcp://HOST:PORT)") and err.count("\n") == 1, err
     assert list(tmp_path.iterdir()) == []
+
+
+def _no_run(*args, **kwargs):
+    raise AssertionError("the scenarios ran although --out is refused")
+
+
+@pytest.mark.parametrize("case", ["missing folder", "folder", "existing file"])
+def test_eval_out_is_checked_before_the_scenarios_run(case, capsys, monkeypatch, tmp_path):
+    """`hearsee eval -o` wrote the results only after every scenario had run: into a missing
+    folder or onto a folder it raised a builtin FileNotFoundError / IsADirectoryError (a
+    traceback, the run lost), and an existing file was replaced without a word. Now each is
+    refused before any scenario runs, and an existing file is kept unless --force."""
+    import hearsee.robot.evaluate as ev
+
+    monkeypatch.setattr(ev, "evaluate", _no_run)
+    kept = tmp_path / "results.json"
+    kept.write_text("my earlier results\n", encoding="utf-8")
+    out, expect = {"missing folder": (tmp_path / "no" / "r.json", "does not exist"),
+                   "folder": (tmp_path, "is a folder"),
+                   "existing file": (kept, "file exists; pass --force")}[case]
+    assert main(["eval", "-n", "1", "--duration", "2", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"hearsee: error: {out}: ") and expect in err, err
+    assert err.count("\n") == 1
+    assert kept.read_text(encoding="utf-8") == "my earlier results\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.json"]
+
+
+def test_eval_force_overwrites_the_out_file(capsys, monkeypatch, tmp_path):
+    """--force: the existing --out file is replaced by the results."""
+    import json
+
+    import hearsee.robot.evaluate as ev
+
+    monkeypatch.setattr(ev, "evaluate", lambda *a, **k: ev.EvalResult(
+        runs=[{"seed": 0}], summary={"scenarios": 1}))
+    out = tmp_path / "results.json"
+    out.write_text("old\n", encoding="utf-8")
+    assert main(["eval", "-n", "1", "--duration", "2", "-o", str(out), "--force"]) == 0
+    assert json.loads(out.read_text(encoding="utf-8"))["summary"] == {"scenarios": 1}
+    assert json.loads(capsys.readouterr().out) == {"scenarios": 1}

@@ -60,8 +60,9 @@ def emit_json(obj: Any, *, indent: int | None = 2) -> None:
 def refuse_overwrite(outputs: Iterable[str | Path | None], inputs: Iterable[str | Path | None],
                      force: bool) -> None:
     """Before a command does its work, each output file it will write: one that is also an
-    input is refused always, one that exists unless ``force`` (the command's ``--force``).
-    Nothing the user gave is overwritten, and a refusal writes nothing."""
+    input is refused always, one that exists unless ``force`` (the command's ``--force``), and
+    so are a folder and a file whose folder does not exist (which failed only once the work
+    was done). Nothing the user gave is overwritten, and a refusal writes nothing."""
     from hearsee.errors import InputFileError
 
     ins = {Path(q).resolve() for q in inputs if q is not None}
@@ -69,6 +70,11 @@ def refuse_overwrite(outputs: Iterable[str | Path | None], inputs: Iterable[str 
         if p.resolve() in ins:
             raise InputFileError(f"{p}: refusing to overwrite an input file; choose another "
                                  "output path")
+        if p.is_dir():
+            raise InputFileError(f"{p}: is a folder, expected an output file name")
+        if not p.parent.is_dir():
+            raise InputFileError(f"{p}: folder {p.parent} does not exist"
+                                 if not p.parent.exists() else f"{p}: {p.parent} is not a folder")
         if p.exists() and not force:
             raise InputFileError(f"{p}: file exists; pass --force to overwrite it")
 

@@ -37,7 +37,7 @@ def calibrate_cmd(
     Prints the RMS reprojection error and the error of every image, and writes the rig in
     hearsee's calibration YAML format (see hearsee.vision.camera).
     """
-    from hearsee.errors import CalibrationError, ConfigError, InputFileError
+    from hearsee.errors import CalibrationError, ConfigError
     from hearsee.vision.calibration import calibrate_rig, parse_board
     from hearsee.vision.camera import save_rig
     from hearsee.vision.io import glob_images
@@ -51,12 +51,7 @@ def calibrate_cmd(
     rf = glob_images(right, "right images")
     tf = glob_images(thermal, "thermal images") if thermal else None
     out = Path(output)
-    if out.is_dir():
-        raise InputFileError(f"{out}: is a folder, expected an output file name")
     refuse_overwrite([out], [*lf, *rf, *(tf or []), reference], force)
-    if not out.parent.is_dir():  # (a regular file there: NotADirectoryError after calibrating)
-        raise InputFileError(f"{out}: folder {out.parent} does not exist"
-                             if not out.parent.exists() else f"{out}: {out.parent} is not a folder")
     # read the reference first: a bad file fails before the calibration and the output
     ref_cams = _read_reference(Path(reference)) if reference is not None else None
 

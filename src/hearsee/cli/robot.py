@@ -6,7 +6,14 @@ from pathlib import Path
 
 import typer
 
-from hearsee.cli._app import app, check_exports, emit_json, print_summary, progress
+from hearsee.cli._app import (
+    app,
+    check_exports,
+    emit_json,
+    print_summary,
+    progress,
+    refuse_overwrite,
+)
 
 
 @app.command("demo")
@@ -63,6 +70,7 @@ def eval_cmd(
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://...)."),
     out: Path = typer.Option(None, "--out", "-o", help="Write per-scenario results (JSON)."),
     duration: float = typer.Option(6.0, "--duration", help="Simulated seconds per scenario."),
+    force: bool = typer.Option(False, "--force", help="Overwrite an existing --out file."),
 ) -> None:
     """Run many random scenarios and summarise success rate and error percentiles (JSON).
 
@@ -71,6 +79,7 @@ def eval_cmd(
     """
     from hearsee.robot.evaluate import evaluate
 
+    refuse_overwrite([out], [], force)  # before the scenarios run, not after
     with progress("scenarios", total=scenarios) as advance:
         res = evaluate(scenarios, seed0=seed0, workers=workers or None, scheduler=scheduler,
                        progress=advance, duration_s=duration)
