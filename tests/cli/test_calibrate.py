@@ -88,8 +88,8 @@ def test_calibrate_writes_rig_and_prints_errors(board_dir, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("case", ["no_match", "no_board", "count_mismatch", "unreadable",
-                                  "overwrite_input", "bad_board", "bad_square", "sizes_differ",
-                                  "reference_without_m1"])
+                                  "overwrite_input", "bad_board", "huge_board", "bad_square",
+                                  "sizes_differ", "reference_without_m1"])
 def test_calibrate_bad_input_exits_2_with_one_line(case, board_dir, tmp_path, capsys):
     d, _ = board_dir
     out = tmp_path / "c.yaml"
@@ -119,6 +119,10 @@ def test_calibrate_bad_input_exits_2_with_one_line(case, board_dir, tmp_path, ca
         args = _args(d, out)
         args[6] = "nine"
         expect = "9x6"
+    elif case == "huge_board":  # (a builtin MemoryError for 6.5 TiB of corners before)
+        args = _args(d, out)
+        args[6] = "99999999999x6"
+        expect = "at most 1000 inner corners"
     elif case == "bad_square":
         args = _args(d, out)
         args[8] = "-1"

@@ -81,6 +81,10 @@ def test_board_helpers():
         C.parse_board("nine by six")
     with pytest.raises(CalibrationError, match="at least 2x2"):
         C.parse_board("1x6")
+    assert C.parse_board("1000x6") == (1000, 6)
+    for huge in ("99999999999x6", "6x1001"):  # (a builtin MemoryError in board_points before)
+        with pytest.raises(CalibrationError, match="at most 1000 inner corners"):
+            C.parse_board(huge)
     p = C.board_points((3, 2), 0.1)
     np.testing.assert_allclose(p[:4], [[0, 0, 0], [0.1, 0, 0], [0.2, 0, 0], [0, 0.1, 0]])
     with pytest.raises(CalibrationError, match="square"):

@@ -71,6 +71,10 @@ MAX_RMS_PX = 3.0
 #: above 3 % had fx 7-9 % off (median).
 MAX_FOCAL_REL_STD = 0.03
 
+#: :func:`parse_board` refuses more inner corners than this per side: no printed board has
+#: them, and ``99999999999x6`` asked :func:`board_points` for 6.5 TiB (a builtin MemoryError).
+MAX_BOARD_CORNERS = 1000
+
 #: Distortion models: number of coefficients and calibrateCamera flags.
 _MODELS = {
     "radial": cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST,  # k1 only
@@ -94,6 +98,9 @@ def parse_board(text: str) -> tuple[int, int]:
         ) from None
     if a < 2 or b < 2:
         raise CalibrationError(f"board needs at least 2x2 inner corners, got {text!r}")
+    if max(a, b) > MAX_BOARD_CORNERS:
+        raise CalibrationError(f"board has at most {MAX_BOARD_CORNERS} inner corners per side, "
+                               f"got {text!r}")
     return a, b
 
 
