@@ -448,3 +448,12 @@ def test_front_back_margin_weights_are_one_per_model_frequency(model):
                 np.zeros(len(model.freqs)), -np.ones(len(model.freqs))):
         with pytest.raises(ConfigError, match="weights"):
             mask.front_back_margin(model, weights=bad)
+
+
+def test_simulate_masked_refuses_a_source_heard_after_the_signal_ends():
+    """A masked array's source 1000 m away (2.9 s of bulk delay) in 0.1 s of signal gave
+    near-silence, one 1e8 m away a 10^10-sample FFT; the free field's rule now applies."""
+    sig = np.random.default_rng(0).standard_normal(1600)
+    for far in (1000.0, 1e8):
+        with pytest.raises(GeometryError, match="longer than the 0.1 s simulated"):
+            mask.simulate_masked(sig, FS, "mask2", [far, 0.0, 0.0])

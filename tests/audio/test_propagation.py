@@ -211,3 +211,31 @@ def test_delay_signals_output_has_the_asked_length():
             delay_signals(x, [0.0], fs, n_out=bad)
     # the default stays the signal's length
     assert delay_signals(x, [0.0, 1e-3], fs).shape == (2, 100)
+
+
+def test_a_source_whose_sound_arrives_after_the_signal_ends_is_refused():
+    """Sample 0 is the emission time: a source 1000 m away (2.9 s) in a 2 s simulation was
+    recorded as the delay filter's sinc tails (then scaled to full scale by save_recording and
+    written with a truth it does not hold), and one 1e8 m away asked for 10^10 FFT bins. A
+    source whose sound arrives before the end is simulated as before: silent until r / c."""
+    fs, c = 8000, 343.0
+    x = white_noise(0.5, fs, rng=3)
+    mics = np.array([[0.0, -0.1, 0.0], [0.0, 0.1, 0.0]])
+    for far in (0.51 * c, 1e8, 1e300):  # (the last overflowed r: two RuntimeWarnings first)
+        with pytest.raises(GeometryError, match=r"longer than the 0\.5 s simulated"):
+            simulate_free_field(x, fs, mics, [far, 0.0, 0.0])
+    src = np.array([0.25 * c, 0.0, 0.0])  # heard from ~0.25 s on
+    y = simulate_free_field(x, fs, mics, src)
+    arrive = int(np.linalg.norm(mics[0] - src) / c * fs)
+    assert np.max(np.abs(y[:, arrive + 50:])) > 100 * np.max(np.abs(y[:, :arrive - 50]))
+    room = dict(room_dim=[400.0, 4.0, 3.0], rt60=0.0, array_at=[2.0, 2.0, 1.5])
+    arr = MicArray(mics, name="pair")
+    with pytest.raises(GeometryError, match="its sound takes 0.5"):
+        simulate_room(x, fs, arr, [0.51 * c, 0.0, 0.0], **room)
+
+
+def test_an_impulse_response_longer_than_memory_allows_is_refused():
+    """A 1e9 m long room with RT60 0.3 s (image order 42) asked pyroomacoustics for 7 TiB of
+    impulse response: a MemoryError traceback. Now a ConfigError before it is computed."""
+    with pytest.raises(ConfigError, match="impulse responses up to .* more memory"):
+        room_impulse_responses(16000, [[2.0, 2.0, 1.5]], [3.0, 2.0, 1.5], [1e9, 4.0, 3.0], 0.3)

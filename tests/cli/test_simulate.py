@@ -73,6 +73,10 @@ def test_simulate_room_yaml_array_and_wav_signal(tmp_path):
     (["--source", "1,0,0", "--fs", "1000000000"], "within 4000-384000 Hz"),
     (["--source", "1,0,0", "--room", "6x5x3", "--rt60", "0", "--far-field"], "free field only"),
     (["--source", "0,0,0", "--far-field"], "needs a direction"),
+    # (a silent or sinc-tail recording written with this truth, exit 0, before)
+    (["--source", "100,0,0"], "its sound takes 0.2915 s to arrive, longer than the 0.1 s"),
+    (["--source", "1,0,0", "--room", "1e9x4x3", "--rt60", "0.3"],
+     "impulse responses up to"),  # (a MemoryError traceback before)
 ])
 def test_simulate_bad_options(tmp_path, capsys, extra, message):
     code = main(["simulate", str(tmp_path / "o.wav"), "--array", "two-mic", "--duration", "0.1",

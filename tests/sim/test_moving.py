@@ -418,3 +418,20 @@ def test_room_updates_are_at_most_block_s_apart_below_the_tdoa_grid():
             c = _update_times(slow, arr.positions, 343.0, FS, FS, block_s, step)
             assert c[0] == 0 and c[-1] == FS - 1
             assert np.diff(c).max() <= hop, (block_s, step)
+
+
+def test_a_moving_source_never_heard_within_the_signal_is_refused():
+    """A walker 1000 m away (2.9 s of delay) in 1 s of signal was simulated as all zeros (and
+    written as a silent WAV with a truth): now a GeometryError, free field and room alike.
+    One that comes into earshot before the end is simulated."""
+    x = _bandlimited_noise(FS, 4)  # 1 s
+    arr = MicArray(np.array([[0.0, -0.1, 0.0], [0.0, 0.1, 0.0]]), name="pair")
+    far = linear_trajectory([1000.0, 0.0, 0.0], [-1.0, 0.0, 0.0], 1.0)
+    with pytest.raises(GeometryError, match="longer than the 1 s simulated"):
+        simulate_moving_free_field(x, FS, arr, far)
+    with pytest.raises(GeometryError, match="longer than the 1 s simulated"):
+        simulate_moving_room(x, FS, arr, far, [1200.0, 4.0, 3.0], 0.0, [2.0, 2.0, 1.5],
+                             max_tdoa_step_samples=None, block_s=0.5)
+    near = linear_trajectory([300.0, 0.0, 0.0], [-1.0, 0.0, 0.0], 1.0)  # heard from ~0.87 s
+    y = simulate_moving_free_field(x, FS, arr, near)
+    assert not np.any(y[:, : int(0.8 * FS)]) and np.any(y[:, int(0.95 * FS):])

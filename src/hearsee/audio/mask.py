@@ -692,7 +692,7 @@ def simulate_masked(signal: ArrayLike, fs: float, array: MicArray | str | Path |
         interpolated in frequency). Far field: a fixed bulk delay of 1 ms. Content above the
         model's ``f_max`` is tapered away (see the module docstring).
     """
-    from hearsee.audio.propagation import add_noise
+    from hearsee.audio.propagation import add_noise, check_heard
 
     model = array if isinstance(array, MaskModel) else MaskModel(array)
     x = np.asarray(signal, dtype=float)
@@ -710,6 +710,7 @@ def simulate_masked(signal: ArrayLike, fs: float, array: MicArray | str | Path |
         d0 = float(np.linalg.norm(s))
         if model.geometry_inside(s[None])[0]:
             raise GeometryError("the source lies inside the mask body")
+        check_heard(d0, model.c, len(x), fs)
         bulk, gain = d0 / model.c, 1.0 / d0
     tail = int(np.ceil((bulk + 2 * model.max_itd() + 0.01) * fs))
     nf = sfft.next_fast_len(len(x) + tail, real=True)

@@ -32,8 +32,10 @@ from hearsee.errors import AudioInputError, ConfigError, GeometryError
 
 __all__ = [
     "MAX_IMAGE_ORDER",
+    "MAX_RIR_SAMPLES",
     "MIN_WALL_DISTANCE_M",
     "add_noise",
+    "check_heard",
     "delay_signals",
     "image_sources",
     "room_impulse_responses",
@@ -51,6 +53,12 @@ MIN_WALL_DISTANCE_M = 0.05
 #: a small room (Sabine: 5 s in a 3 m cube needs order 808) ended in a MemoryError traceback.
 MAX_IMAGE_ORDER = 200
 
+#: The longest impulse response :func:`room_impulse_responses` asks pyroomacoustics for, in
+#: samples (bounded by ``(order + 1) x`` the room's diagonal: no image of that order is
+#: farther). 2**25 is 35 min at 16 kHz, 87 s at 384 kHz, ~0.4 GB per microphone; a 1e9 m room
+#: with RT60 0.3 s asked for 7 TiB (a MemoryError traceback).
+MAX_RIR_SAMPLES = 2**25
+
 
 def _mic_positions(mics: MicArray | ArrayLike) -> NDArray:
     if isinstance(mics, MicArray):
@@ -59,6 +67,22 @@ def _mic_positions(mics: MicArray | ArrayLike) -> NDArray:
     if p.ndim != 2 or p.shape[1] != 3:
         raise GeometryError(f"microphone positions must be N x 3, got shape {p.shape}")
     return p
+
+
+def check_heard(distance_m: float, speed_of_sound: float, n_samples: int, fs: float) -> None:
+    """GeometryError unless the direct sound of a source ``distance_m`` metres from the nearest
+    microphone arrives within a simulated signal of ``n_samples`` at ``fs`` Hz (sample 0 is the
+    emission time). A source farther than ``c * n / fs`` is not heard at all: its recording was
+    silence, or the sinc tails of the delay filter that :func:`hearsee.sim.audio.save_recording`
+    then scaled up to full scale -- written with a ground truth it does not hold (and a source
+    1e8 m away asked the delay filter for more memory than the machine had)."""
+    delay_s = distance_m / speed_of_sound
+    if not delay_s * fs < n_samples:
+        far = f"{distance_m:.4g} m" if np.isfinite(distance_m) else "too far (beyond float range)"
+        raise GeometryError(
+            f"the source is {far} from the nearest microphone: its sound takes "
+            f"{delay_s:.4g} s to arrive, longer than the {n_samples / fs:.4g} s simulated, so "
+            "the recording would not hold it; move the source closer or simulate longer")
 
 
 def speed_of_sound_of(mics: MicArray | ArrayLike, speed_of_sound: float | None) -> float:
@@ -187,9 +211,11 @@ def simulate_free_field(
         t = t - t.min()
         gains = np.ones(len(pos))
     else:
-        r = np.linalg.norm(pos - s, axis=1)
+        with np.errstate(over="ignore"):  # (a source 1e300 m away: inf, refused just below)
+            r = np.linalg.norm(pos - s, axis=1)
         if np.any(r < 1e-3):
             raise GeometryError("the source coincides with a microphone")
+        check_heard(float(r.min()), c, np.size(signal), check_fs(fs))
         t = r / c
         gains = 1.0 / r
     y = delay_signals(signal, t, fs, gains)
@@ -337,6 +363,13 @@ def room_impulse_responses(
     fs = check_fs(fs)
     speed_of_sound = speed_of_sound_of(None, speed_of_sound)
     e_absorption, order = image_sources(rt60, dim, speed_of_sound, max_order)
+    n_rir = (order + 1) * float(np.linalg.norm(dim)) / speed_of_sound * fs
+    if n_rir > MAX_RIR_SAMPLES:
+        raise ConfigError(
+            f"a {'x'.join(f'{v:g}' for v in dim)} m room (image order {order}) has impulse "
+            f"responses up to {n_rir / fs:.3g} s long ({n_rir:.3g} samples at {fs:g} Hz, more "
+            f"memory than a simulation should take; the limit is {MAX_RIR_SAMPLES} samples); "
+            "use a smaller room, a shorter RT60 or a lower sample rate")
     materials = None if e_absorption is None else pra.Material(e_absorption)
     room = pra.ShoeBox(dim, fs=int(round(fs)), materials=materials, max_order=int(order))
     room.set_sound_speed(float(speed_of_sound))
@@ -415,6 +448,8 @@ def simulate_room(
     src = np.asarray(source, dtype=float)
     if src.shape != (3,) or not np.all(np.isfinite(src)):
         raise GeometryError(f"source must be a finite [x, y, z] point, got {source!r}")
+    check_heard(float(np.linalg.norm(pos - src, axis=1).min()), array.speed_of_sound, x.size,
+                check_fs(fs))
     h = room_impulse_responses(fs, pos + at, src + at, room_dim, rt60, max_order=max_order,
                                speed_of_sound=array.speed_of_sound, align=False)
     lat = _fractional_delay_latency()

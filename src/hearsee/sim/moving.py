@@ -39,7 +39,7 @@ import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
-from hearsee.audio.propagation import add_noise, speed_of_sound_of
+from hearsee.audio.propagation import add_noise, check_heard, speed_of_sound_of
 from hearsee.audio.signals import check_fs
 from hearsee.config import finite_number, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, InputFileError
@@ -309,7 +309,8 @@ def retarded_delays(traj: Trajectory, mics: ArrayLike, t: ArrayLike, c: float,
     ``MAX_SPEED_FRACTION`` of ``c`` (the iteration's error shrinks by ``|v| / c`` per step).
     """
     if traj.t.size > 1:
-        v = np.linalg.norm(np.diff(traj.positions, axis=0), axis=1) / np.diff(traj.t)
+        with np.errstate(over="ignore"):  # (a 1e300 m jump: inf m/s, refused just below)
+            v = np.linalg.norm(np.diff(traj.positions, axis=0), axis=1) / np.diff(traj.t)
         k = int(np.argmax(v))
         if v[k] > MAX_SPEED_FRACTION * c:
             raise GeometryError(
@@ -383,6 +384,8 @@ def simulate_moving_free_field(
     tau, r = retarded_delays(trajectory, pos, t, c)
     if np.any(r < 1e-3):
         raise GeometryError("the moving source passes through a microphone")
+    # (t - tau grows with t below the speed of sound: heard at all means heard at the end)
+    check_heard(float(r[:, -1].min()), c, x.size, fs)
     y = fractional_delay(x, tau * fs) / r
     return add_noise(y, snr_db, rng)
 
@@ -511,6 +514,9 @@ def simulate_moving_room(
         raise GeometryError(
             f"max_tdoa_step_samples must be > 0 or None, got {max_tdoa_step_samples}")
     n = x.size
+    # the direct sound must reach the array by the last sample (as in the free field)
+    r_end = retarded_delays(trajectory, mics, [(n - 1) / fs], array.speed_of_sound)[1]
+    check_heard(float(r_end.min()), array.speed_of_sound, n, fs)
     centres = _update_times(trajectory, mics, array.speed_of_sound, fs, n, block_s,
                             max_tdoa_step_samples)
     # positions at block centres, evaluated at the (approximate) emission time
