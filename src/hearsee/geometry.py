@@ -7,6 +7,7 @@ from +x toward +y (0 = front, 90 deg = left, 180 deg = back), elevation from the
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -24,6 +25,7 @@ __all__ = [
     "array_to_robot",
     "as_pose",
     "cart_to_sph",
+    "check_head_offset",
     "direction_deg",
     "fibonacci_sphere",
     "head_rotation",
@@ -174,6 +176,25 @@ def as_point(value: Any, what: str, error: type[Exception] = GeometryError) -> N
 #
 #     p_robot = pivot_m + R(pan, tilt) @ (offset_m + p_array)
 #     p_array = R(pan, tilt)^T @ (p_robot - pivot_m) - offset_m
+
+
+#: The array origin is at most this far (metres) from the head pivot: a head carries its
+#: microphones centimetres, not metres, from its pan-tilt axes.
+MAX_HEAD_OFFSET_M = 1.0
+
+
+def check_head_offset(offset_m: Any, what: str = "offset_m",
+                      error: type[Exception] = GeometryError) -> NDArray:
+    """``offset_m`` (the array origin from the head pivot, head frame, metres) as a float array
+    ``(3,)`` (:func:`as_point`), else ``error`` naming ``what``; one at most
+    :data:`MAX_HEAD_OFFSET_M` from the pivot. The one rule of the robot file's head, a pose
+    manifest's and ``hearsee simulate --poses --head-offset``: a 1e300 m offset overflowed the
+    robot file's check into a RuntimeWarning and a manifest's localization into scipy's
+    builtin ValueError."""
+    off = as_point(offset_m, what, error)
+    if not math.hypot(*off) <= MAX_HEAD_OFFSET_M:
+        raise error(f"{what}: {off.tolist()} is more than {MAX_HEAD_OFFSET_M:g} m from the pivot")
+    return off
 
 
 @dataclass(frozen=True)

@@ -361,6 +361,9 @@ def test_localize3d_cli_round_trip(pose_manifest, capsys, method):
     # (true was read as 1 m and '0.5' as 0.5 m)
     (lambda d: d["head"].update(offset_m=[True, 0, 0]), "head.offset_m: expected numbers"),
     (lambda d: d["head"].update(pivot_m=["0.5", 0, 0]), "head.pivot_m: expected numbers"),
+    # (scipy's builtin ValueError 'Residuals are not finite' traceback; the robot file's rule)
+    (lambda d: d["head"].update(offset_m=[1e300, 0, 0]),
+     "bad.yaml: head.offset_m: [1e+300, 0.0, 0.0] is more than 1 m from the pivot"),
     # (an infinite noise passed the manifest check; the solver refused it after measuring
     # every capture, without naming the file: "tdoa_std_s must be > 0 seconds, got inf")
     (lambda d: d.update(tdoa_std_s=float("inf")), "bad.yaml: tdoa_std_s must be a positive"),
@@ -476,6 +479,10 @@ def test_simulate_pose_manifest_checks_its_points(tmp_path):
             with pytest.raises(GeometryError, match=rf"^{name} must be a finite \[x, y, z\]"):
                 simulate_pose_manifest(tmp_path / "m.yaml", "three-mic", src, [(0, 0)],
                                        duration_s=0.1, **kw)
+    assert not list(tmp_path.iterdir())
+    with pytest.raises(GeometryError, match=r"^offset_m: \[1e\+300, 0.0, 0.0\] is more than 1 m"):
+        simulate_pose_manifest(tmp_path / "m.yaml", "three-mic", good["source_m"], [(0, 0)],
+                               duration_s=0.1, offset_m=(1e300, 0.0, 0.0))  # (RuntimeWarnings)
     assert not list(tmp_path.iterdir())
 
 

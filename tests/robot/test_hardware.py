@@ -946,6 +946,21 @@ def test_head_and_mount_vectors_are_three_numbers(small_rig, section, key, value
     assert "\n" not in msg
 
 
+def test_a_huge_head_offset_is_refused_without_a_warning(small_rig):
+    """head.offset_m [1e300, 0, 0]: the robot file's 1 m rule overflowed np.linalg.norm first
+    (a RuntimeWarning line before the error); the rule is now geometry.check_head_offset, the
+    one of pose manifests too. 1 m itself stays allowed."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ConfigError, match=r"head.offset_m: \[1e\+300, 0.0, 0.0\] is more "
+                                              "than 1 m from the pivot"):
+            load_robot_config(make_config(small_rig, _with(head={"offset_m": [1e300, 0, 0]})))
+        cfg = load_robot_config(make_config(small_rig, _with(head={"offset_m": [0, 0.6, 0.8]})))
+    np.testing.assert_allclose(cfg.head.offset_m, [0.0, 0.6, 0.8])
+
+
 def test_pan_command_is_wrapped_then_limited_to_the_nearer_limit():
     """PrintHeadDriver clipped the raw desired pan: 340 deg (a target 170 deg left of a head at
     pan 170) became +170 instead of -20, 190 deg (= -170) the opposite limit; and a pan that

@@ -75,6 +75,7 @@ from hearsee.geometry import (
     angle_between,
     as_point,
     as_pose,
+    check_head_offset,
     direction_deg,
     fibonacci_sphere,
     mic_positions_at,
@@ -1312,7 +1313,9 @@ def load_pose_manifest(path: Any) -> PoseManifest:
         raise ConfigError(f"{where}: head must be a mapping with pivot_m and/or offset_m")
     check_keys(head, _HEAD_KEYS, f"{where}: head")
     pivot = as_float_array(head.get("pivot_m", [0, 0, 0]), f"{where}: head.pivot_m", (3,))
-    offset = as_float_array(head.get("offset_m", [0, 0, 0]), f"{where}: head.offset_m", (3,))
+    offset = check_head_offset(
+        as_float_array(head.get("offset_m", [0, 0, 0]), f"{where}: head.offset_m", (3,)),
+        f"{where}: head.offset_m", ConfigError)
     caps = require(data, "captures", where)
     if not isinstance(caps, list) or not caps:
         raise ConfigError(f"{where}: captures must be a non-empty list of "
@@ -1450,7 +1453,7 @@ def simulate_pose_manifest(
     # (each read as np.asarray(float): True as 1 m, "0.5" as 0.5 m, a huge int an OverflowError)
     src = as_point(source_m, "source_m")
     pivot = as_point(pivot_m, "pivot_m")
-    offset = as_point(offset_m, "offset_m")
+    offset = check_head_offset(offset_m)
     poses = [as_pose(p) for p in poses]
     if not poses:
         raise ConfigError("--poses needs at least one PAN,TILT pose")

@@ -362,11 +362,12 @@ def _pair(d: Mapping[str, Any], key: str, default: tuple[float, float], where: s
 
 
 def _head(d: Mapping[str, Any], where: str) -> HeadConfig:
+    from hearsee.geometry import check_head_offset
+
     check_keys(d, _HEAD, where)
     pivot = _vec3(d, "pivot_m", (0.0, 0.0, 1.2), where)
-    offset = _vec3(d, "offset_m", (0.0, 0.0, 0.0), where)
-    if np.linalg.norm(offset) > 1.0:
-        raise ConfigError(f"{where}.offset_m: {offset.tolist()} is more than 1 m from the pivot")
+    offset = check_head_offset(d.get("offset_m", [0.0, 0.0, 0.0]), f"{where}.offset_m",
+                               ConfigError)
     lo, hi = pan_limits_deg(_pair(d, "pan_limits_deg", (-170.0, 170.0), where),
                             f"{where}.pan_limits_deg")
     pan, tilt = _pair(d, "pose_deg", (0.0, 0.0), where)
