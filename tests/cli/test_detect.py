@@ -56,6 +56,17 @@ def test_other_thermal_formats(folder, capsys, thermal):
     assert len(json.loads(capsys.readouterr().out)["humans"]) == 1
 
 
+def test_the_same_image_as_left_and_right_is_refused(folder, capsys):
+    """--right naming the left image (a slip of tab completion) printed "0 human(s)" and exited
+    0: the pair has zero disparity everywhere. Now one line, exit 2."""
+    d, _ = folder
+    args = _args(d, thermal=None)
+    args[args.index("--right") + 1] = str(d / "left.png")
+    assert main(args) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "are the same image" in err, err
+
+
 def test_stereo_only_table_and_overlay(folder, capsys, tmp_path):
     d, _ = folder
     ov = tmp_path / "ov.png"

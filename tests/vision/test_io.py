@@ -67,6 +67,11 @@ def test_wrong_size_and_mismatched_pair(tmp_path):
     assert L.shape == R.shape == (48, 64)
     with pytest.raises(ImageInputError, match="channels"):
         check_pair(_img(), _img(c=3))
+    # the same view twice: zero disparity, no candidate at all -- refused (read as a pair before)
+    write_image(tmp_path / "copy.png", _img(48, 64))
+    for right in ("l.png", "copy.png"):
+        with pytest.raises(ImageInputError, match="are the same image"):
+            read_pair(tmp_path / "l.png", tmp_path / right)
 
 
 @pytest.mark.parametrize("bad, match", [

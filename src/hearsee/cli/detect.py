@@ -69,12 +69,7 @@ def detect_cmd(
             raise ImageInputError(f"{overlay_p}: OpenCV cannot write {kind}; use an image "
                                   "suffix such as .png or .jpg")
     rig = load_rig(calib_p)
-    L, R = read_pair(left_p, right_p, "bgr")
-    if (L.shape[1], L.shape[0]) != rig.left.size:
-        raise ImageInputError(
-            f"{left}: images are {L.shape[1]}x{L.shape[0]} pixels but the calibration expects "
-            f"{rig.left.width}x{rig.left.height} (use images from the calibrated rig)"
-        )
+    L, R = read_pair(left_p, right_p, "bgr", expected_size=rig.left.size)
     th = None
     if thermal_p is not None:
         if rig.thermal is None:

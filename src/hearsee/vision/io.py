@@ -121,10 +121,17 @@ def read_image(path: str | Path, mode: ColorMode = "gray",
 def read_pair(left: str | Path, right: str | Path, mode: ColorMode = "gray",
               expected_size: tuple[int, int] | None = None) -> tuple[NDArray, NDArray]:
     """Read a stereo pair and check that both images have the same size (and
-    ``expected_size`` = (width, height) when given)."""
+    ``expected_size`` = (width, height) when given), and that they are two views: the same
+    file twice (or a copy) gave zero disparity everywhere, "no human" without a word."""
     L = read_image(left, mode)
     R = read_image(right, mode)
-    return check_pair(L, R, (str(left), str(right)), expected_size)
+    names = (str(left), str(right))
+    check_pair(L, R, names)  # (sizes that differ first, then the calibration's size)
+    check_pair(L, R, names, expected_size)
+    if np.array_equal(L, R):  # (two cameras' images always differ, by their noise at least)
+        raise ImageInputError(f"{left} and {right} are the same image; a stereo pair needs the "
+                              "left and the right camera's views")
+    return L, R
 
 
 #: Pixel types OpenCV converts from colour to grey (cv2.cvtColor).
