@@ -1,5 +1,7 @@
 """Thermal filter: radiometric band, 8-bit relative band, loading, overlay."""
 
+import re
+
 import cv2
 import numpy as np
 import pytest
@@ -83,6 +85,26 @@ def test_load_thermal(tmp_path):
     cv2.imwrite(str(tmp_path / "t16.png"), ck)
     got = load_thermal(tmp_path / "t16.png")
     assert got.dtype == np.uint16 and np.array_equal(got, ck)
+
+
+@pytest.mark.parametrize("name, image, needle", [
+    ("kelvin.npy", lambda t: t + 273.15, "(is it in kelvin?)"),
+    ("below_zero.npy", lambda t: t - 400.0, "below absolute zero"),
+    ("counts.png", lambda t: np.rint(t * 10).astype(np.uint16), "centi-kelvin"),  # dK counts
+])
+def test_load_thermal_refuses_temperatures_in_other_units(tmp_path, name, image, needle):
+    """A .npy written in kelvin (the room at 293 "degC"), one below absolute zero, or 16-bit
+    counts of another scale (deci-kelvin read as centi-kelvin: -250 degC) were read as is:
+    the person had "thermal support 0.00" and was rejected, exit 0. The room's own image
+    (20-35 degC) and its centi-kelvin PNG are read as before (test_load_thermal)."""
+    t = _room(np.random.default_rng(3))
+    img = image(t)
+    if name.endswith(".npy"):
+        np.save(tmp_path / name, img)
+    else:
+        cv2.imwrite(str(tmp_path / name), img)
+    with pytest.raises(ImageInputError, match=re.escape(needle)):
+        load_thermal(tmp_path / name)
 
 
 def test_overlay_shape():

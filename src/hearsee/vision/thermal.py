@@ -44,6 +44,11 @@ __all__ = [
 #: Default human skin/clothing band in degC.
 HUMAN_BAND_C = (26.0, 40.0)
 
+#: A radiometric frame of a robot's surroundings has its coldest pixel below the upper bound
+#: (degC) and its warmest above the lower one; a frame entirely outside is in other units:
+#: kelvin read as degC (a 20 degC room is 293), or raw counts of another scale.
+SCENE_C = (-60.0, 100.0)
+
 
 def counts_to_celsius(counts: NDArray, scale: float = 0.01, offset: float = -273.15) -> NDArray:
     """Convert raw radiometric counts to degC: ``T = counts * scale + offset``.
@@ -204,10 +209,29 @@ def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
         arr = arr.astype(np.float32)
         if not np.all(np.isfinite(arr)):
             raise ImageInputError(f"{p}: thermal image contains NaN or infinite values")
+        _check_scene_celsius(arr, f"{p}: .npy thermal images are degC")
         return arr
     from hearsee.vision.io import read_thermal
 
-    return read_thermal(p, expected_size)
+    img = read_thermal(p, expected_size)
+    if img.dtype == np.uint16:
+        _check_scene_celsius(counts_to_celsius(img), f"{p}: 16-bit thermal images are "
+                             "centi-kelvin (degC = value / 100 - 273.15)")
+    elif img.dtype.kind == "f":
+        _check_scene_celsius(img, f"{p}: float thermal images are degC")
+    return img
+
+
+def _check_scene_celsius(t: NDArray, what: str) -> None:
+    """ImageInputError unless the temperatures ``t`` (degC) can be a scene's (:data:`SCENE_C`,
+    nothing below absolute zero): a .npy in kelvin (293 "degC" for a 20 degC room) gave
+    "thermal support 0.00" for every person, without a word."""
+    lo, hi = float(np.min(t)), float(np.max(t))
+    if lo < -273.15 or lo > SCENE_C[1] or hi < SCENE_C[0]:
+        hint = (" (is it in kelvin?)" if SCENE_C[1] < lo < SCENE_C[1] + 273.15 else
+                ", and nothing is below absolute zero" if lo < -273.15 else "")
+        raise ImageInputError(f"{what}, but this one spans {lo:.4g} to {hi:.4g} degC{hint}; "
+                              "convert it to degC")
 
 
 def overlay_thermal(visible: NDArray, thermal: NDArray, warm: NDArray | None = None, *,
