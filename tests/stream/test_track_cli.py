@@ -156,6 +156,22 @@ def test_track_bad_files(scene, capsys, tmp_path):
     assert "hearsee: error:" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("fs", [100, 2000])
+def test_track_a_rate_too_low_is_named(tmp_path, capsys, fs):
+    """A 100 Hz file failed on the SRP grid's band ("band (300.0, 3500.0) Hz holds too few
+    frequency bins at fs=100 Hz") while `localize` named the rate: both now say the rate is
+    too low for time-delay estimation (the one check, tdoa.check_analysis_fs)."""
+    import soundfile as sf
+
+    wav = tmp_path / f"fs{fs}.wav"
+    sf.write(str(wav), np.random.default_rng(1).standard_normal((fs, 3)) * 0.1, fs)
+    for cmd in ("track", "localize"):
+        assert main([cmd, str(wav), "--array", "three-mic"]) == 2
+        err = capsys.readouterr().err
+        assert err == (f"hearsee: error: sample rate {fs} Hz is too low for time-delay "
+                       "estimation (need >= 4000 Hz; 16 kHz or more recommended)\n"), err
+
+
 def test_image_points_csv_interpolation_and_gaps(tmp_path):
     p = tmp_path / "p.csv"
     p.write_text("t,u,v\n0.0,100,200\n0.1,110,220\n0.2,,\n0.5,300,300\n")

@@ -85,6 +85,7 @@ __all__ = [
     "REVERB_COHERENCE_GAIN",
     "GccResult",
     "TdoaFrames",
+    "check_analysis_fs",
     "check_frame_ms",
     "check_recording_length",
     "estimate_tdoas",
@@ -168,6 +169,20 @@ def check_frame_ms(frame_ms: float, hop_ms: float, *,
     if not (frame_ms <= MAX_FRAME_MS and hop_ms <= MAX_FRAME_MS):
         raise ConfigError(f"{what} must be at most {MAX_FRAME_MS:.0f} ms, "
                           f"got {frame_ms} and {hop_ms}")
+
+
+def check_analysis_fs(fs: float) -> float:
+    """``fs`` (Hz, :func:`hearsee.audio.signals.check_fs`) as a float, else an AudioInputError
+    when it is below :data:`MIN_FS_HZ`: the one rate check of :func:`estimate_tdoas` and the
+    stream (whose 100 Hz file failed on its SRP band instead, "band ... holds too few
+    frequency bins")."""
+    fs = check_fs(fs)
+    if fs < MIN_FS_HZ:
+        raise AudioInputError(
+            f"sample rate {fs:g} Hz is too low for time-delay estimation (need >= "
+            f"{MIN_FS_HZ:g} Hz; 16 kHz or more recommended)"
+        )
+    return fs
 
 
 def frame_geometry(fs: float, frame_ms: float, hop_ms: float) -> tuple[int, int]:
@@ -1297,12 +1312,7 @@ def estimate_tdoas(
     peak = float(np.max(np.abs(a), initial=0.0))  # NaN or inf when a sample is
     if not np.isfinite(peak):
         raise AudioInputError("recording contains NaN or infinite samples")
-    fs = check_fs(fs)
-    if fs < MIN_FS_HZ:
-        raise AudioInputError(
-            f"sample rate {fs:g} Hz is too low for time-delay estimation (need >= "
-            f"{MIN_FS_HZ:g} Hz; 16 kHz or more recommended)"
-        )
+    fs = check_analysis_fs(fs)
     frame_len, hop = frame_geometry(fs, frame_ms, hop_ms)
     method = normalize_method(method)
     if reverb_method is not None:

@@ -64,6 +64,7 @@ from hearsee.audio.signals import check_fs
 from hearsee.audio.tdoa import (
     MAX_UNSCALED_PEAK,
     MIN_UNSCALED_PEAK,
+    check_analysis_fs,
     check_frame_ms,
     check_recording_length,
     estimate_tdoas,
@@ -1209,7 +1210,7 @@ class TrackingProcessor:
 
     def __init__(self, array: MicArray, fs: float, config: StreamConfig | None = None,
                  rig: Any = None, image_points: Callable[[float], Any] | None = None) -> None:
-        self.array, self.fs = array, float(fs)
+        self.array, self.fs = array, check_analysis_fs(fs)
         self.cfg = config or StreamConfig()
         self.rig, self.image_points = rig, image_points
         self.frame_len, self.hop = frame_geometry(fs, self.cfg.frame_ms, self.cfg.hop_ms)
