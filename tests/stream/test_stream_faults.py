@@ -398,7 +398,7 @@ def test_track_cli_closes_its_video_source(monkeypatch, tmp_path, capsys):
         0.05 * np.random.default_rng(0).standard_normal(FS // 2), FS, arr,
         linear_trajectory([1.2, -0.5, 0.1], [0, 0.8, 0], 0.5), snr_db=25, rng=1)
     write_recording(tmp_path / "rec.wav", y, FS)
-    save_camera(Camera.from_fov(70.0, 640, 480), tmp_path / "cam.yaml")
+    save_camera(Camera.from_fov(70.0, 160, 120), tmp_path / "cam.yaml")  # the video's size
     vid = tmp_path / "blank.avi"
     w = cv2.VideoWriter(str(vid), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (160, 120))
     for _ in range(6):

@@ -6,6 +6,7 @@ import pytest
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.signals import write_recording
 from hearsee.cli import main
+from hearsee.errors import ConfigError
 from hearsee.fusion.audiovisual import AudioVisualRig
 from hearsee.geometry import direction_deg, wrap_deg
 from hearsee.sim.moving import linear_trajectory, simulate_moving_free_field
@@ -172,6 +173,28 @@ def test_track_a_rate_too_low_is_named(tmp_path, capsys, fs):
                        "estimation (need >= 4000 Hz; 16 kHz or more recommended)\n"), err
 
 
+def test_track_video_of_another_size_than_the_camera_is_refused(scene, capsys, tmp_path):
+    """A 160x120 video with a 640x480 calibration: its image points were read through the
+    wrong intrinsics (3D fixes off, without a word). Now refused before the audio is read;
+    --camera-device -1 (OpenCV's "any camera") crashed the process: refused too."""
+    import cv2
+
+    path = tmp_path / "small.avi"
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (160, 120))
+    for _ in range(3):
+        w.write(np.full((120, 160, 3), 90, np.uint8))
+    w.release()
+    base = ["track", str(scene["wav"]), "--array", str(scene["array"]), "--camera",
+            str(scene["cam"])]
+    assert main([*base, "--video", str(path)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == (f"hearsee: error: {path}: frames are 160x120 pixels but the "
+                                 "calibration expects 640x480 (use the calibrated camera's "
+                                 "video)\n")
+    with pytest.raises(ConfigError, match="camera index must be an integer >= 0, got -1"):
+        VideoImagePoints(-1)
+
+
 def test_image_points_csv_interpolation_and_gaps(tmp_path):
     p = tmp_path / "p.csv"
     p.write_text("t,u,v\n0.0,100,200\n0.1,110,220\n0.2,,\n0.5,300,300\n")
@@ -208,8 +231,10 @@ def test_track_with_video_and_no_detection_falls_back_to_direction(scene, capsys
     for _ in range(16):
         w.write(np.full((120, 160, 3), 90, np.uint8))
     w.release()
+    cam = tmp_path / "cam160.yaml"  # a camera of the video's size
+    save_camera(Camera.from_fov(70.0, 160, 120), cam)
     code = main(["track", str(scene["wav"]), "--array", str(scene["array"]), "--camera",
-                 str(scene["cam"]), "--video", str(path), "--detector", "face"])
+                 str(cam), "--video", str(path), "--detector", "face"])
     assert code == 0
     rows = _lines(capsys)
     assert all(r["position_m"] is None for r in rows)
@@ -257,6 +282,8 @@ def test_hog_detector_on_frames_smaller_than_its_window(scene, tmp_path):
     for _ in range(16):
         w.write(np.full((60, 80, 3), 90, np.uint8))
     w.release()
+    cam = tmp_path / "cam80.yaml"  # the 80 x 60 camera
+    save_camera(Camera.from_fov(70.0, 80, 60), cam)
     code = (
         "import sys, numpy as np\n"
         "from hearsee.cli import main\n"
@@ -264,7 +291,7 @@ def test_hog_detector_on_frames_smaller_than_its_window(scene, tmp_path):
         "for s in [(60, 80, 3), (20, 20, 3), (1, 1), (64, 32, 3), (111, 300), (300, 47)]:\n"
         "    assert d(np.zeros(s, np.uint8), 'hog') is None, s\n"
         f"sys.exit(main(['track', {str(scene['wav'])!r}, '--array', {str(scene['array'])!r},"
-        f" '--camera', {str(scene['cam'])!r}, '--video', {str(path)!r}, '--detector', 'hog']))\n"
+        f" '--camera', {str(cam)!r}, '--video', {str(path)!r}, '--detector', 'hog']))\n"
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr[-2000:]

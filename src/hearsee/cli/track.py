@@ -142,7 +142,7 @@ def track_cmd(
             points = CsvImagePoints(image_points)
         else:
             points = VideoImagePoints(camera_device if video is None else video,
-                                      detector=detector.value)
+                                      detector=detector.value, expected_size=cam.size)
     cfg = StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms, method=method.value.replace("gcc-", ""),
                        itd_filter=itd_filter, in_plane=in_plane,
                        direction_modes_dps2=IMM_MODES_DPS2 if tracker is Tracker.imm else None,

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.config import finite_number
+from hearsee.config import finite_number, whole_number
 from hearsee.errors import ConfigError, ImageInputError, InputFileError
 
 __all__ = ["CsvImagePoints", "VideoImagePoints", "detect_source_point", "save_image_points"]
@@ -161,23 +161,36 @@ class VideoImagePoints:
         See :func:`detect_source_point`.
     fps : float, optional
         Frame rate override, frames per second > 0 (files whose container lacks it).
+    expected_size : (width, height), optional
+        The calibrated camera's image size in pixels: a video file of another size is refused
+        (its image points would be read through the wrong intrinsics). Not checked for a live
+        camera, whose driver may report its size only once it streams.
     """
 
     def __init__(self, source: str | Path | int, detector: str = "hog",
-                 fps: float | None = None) -> None:
+                 fps: float | None = None,
+                 expected_size: tuple[int, int] | None = None) -> None:
         import cv2
 
         if detector not in ("hog", "face"):
             raise ConfigError(f"unknown detector {detector!r} (choose hog or face)")
         if fps is not None:  # (inf gave no image point ever; NaN/negative: 'pass fps=')
             fps = finite_number("fps", fps, 0.0, lo_open=True)
-        self.live = isinstance(source, int)
-        if not self.live and not Path(source).is_file():
+        self.live = isinstance(source, int) and not isinstance(source, bool)
+        if self.live:  # (OpenCV's "any camera" -1 crashed the process: a segmentation fault)
+            source = whole_number("camera index", source, 0)
+        elif not Path(source).is_file():
             raise InputFileError(f"{source}: video file not found")
+        what = f"camera {source}" if self.live else f"{source}"
         cap = cv2.VideoCapture(int(source) if self.live else str(source))
         if not cap.isOpened():
-            what = f"camera {source}" if self.live else f"{source}"
             raise ImageInputError(f"{what}: cannot be opened as a video (OpenCV VideoCapture)")
+        size = (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
+        if not self.live and expected_size is not None and size != tuple(expected_size):
+            cap.release()
+            raise ImageInputError(
+                f"{what}: frames are {size[0]}x{size[1]} pixels but the calibration expects "
+                f"{expected_size[0]}x{expected_size[1]} (use the calibrated camera's video)")
         rate = fps or cap.get(cv2.CAP_PROP_FPS) or 0.0
         if not self.live and not rate > 0:
             raise ImageInputError(f"{source}: video has no frame rate; pass fps=")
