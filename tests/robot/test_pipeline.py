@@ -302,3 +302,24 @@ def test_demo_will_not_write_over_the_scenarios_array_file(tmp_path, monkeypatch
         assert "overwrite" in err and "input" in err and "Traceback" not in err, err
         assert arr.read_text() == text
         assert not (out / "index.html").exists()
+
+
+@pytest.mark.parametrize("where", ["out", "parent"])
+def test_demo_refuses_a_report_folder_that_is_a_file_before_running(tmp_path, monkeypatch,
+                                                                     capsys, where):
+    """-o naming a file (or a folder inside one) failed only when the report was written,
+    after the whole scenario had run ('cannot create report folder ...: File exists'). Now
+    refused first, as a robot file's output.report; the file is kept."""
+    import hearsee.robot.pipeline as pipeline
+
+    def no_run(*a, **k):
+        raise AssertionError("the scenario ran although -o is refused")
+
+    monkeypatch.setattr(pipeline, "run_scenario", no_run)
+    f = tmp_path / "notes.txt"
+    f.write_text("mine\n")
+    out = f if where == "out" else f / "report"
+    assert main(["demo", "-o", str(out), "-q"]) == 2
+    assert capsys.readouterr().err == (f"hearsee: error: --out {out}: {f} is a file, not a "
+                                       "folder; choose a report folder\n")
+    assert f.read_text() == "mine\n"

@@ -34,12 +34,16 @@ def demo_cmd(
     """
     from hearsee.errors import ConfigError
     from hearsee.robot.pipeline import run_scenario
-    from hearsee.robot.report import report_overwrites, write_report
+    from hearsee.robot.report import report_folder_blocker, report_overwrites, write_report
     from hearsee.robot.scenario import default_scenario, load_scenario
 
     sc = load_scenario(scenario) if scenario else default_scenario()
     # the files the run reads: the scenario and the array file it names (not a preset)
     inputs = [scenario, *([Path(sc.robot.array)] if Path(sc.robot.array).is_file() else [])]
+    blocker = report_folder_blocker(out)  # (found only after the whole scenario before)
+    if blocker is not None:
+        raise ConfigError(f"--out {out}: {blocker} is a file, not a folder; choose a report "
+                          "folder")
     hit = report_overwrites(out, inputs)
     if hit is not None:
         raise ConfigError(f"--out {out}: the report would overwrite the input {hit}; choose "

@@ -420,12 +420,10 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
     ``output.jsonl`` or ``output.report`` is one, the report would write over one
     (:func:`hearsee.robot.report.report_overwrites`), or the JSON lines are one of the
     report's own files. Checked when a robot file is loaded and again for ``run --out``."""
-    from hearsee.robot.report import REPORT_FILES, report_overwrites
+    from hearsee.robot.report import REPORT_FILES, report_folder_blocker, report_overwrites
 
-    rep = cfg.output.report
-    blocker = next((q for q in (rep, *rep.parents) if q.exists()), None)
-    if blocker is not None and not blocker.is_dir():
-        # (found only when the report was written, after the whole live run)
+    blocker = report_folder_blocker(cfg.output.report)
+    if blocker is not None:  # (found only when the report was written, after the live run)
         raise ConfigError(f"{where}: output.report: {blocker} is a file, not a folder; "
                           "choose a report folder")
     ins = {p.resolve() for p in cfg.input_files() if p.exists()}

@@ -24,12 +24,21 @@ import numpy as np
 
 from hearsee.errors import InputFileError
 
-__all__ = ["REPORT_FILES", "report_overwrites", "write_report"]
+__all__ = ["REPORT_FILES", "report_folder_blocker", "report_overwrites", "write_report"]
 
 #: The files :func:`write_report` writes in its folder itself; it also writes PNGs into the
 #: folder's ``plots/`` and ``frames/`` (named after the plots and the images it is given).
 REPORT_FILES = ("index.html", "log.json", "summary.json")
 _REPORT_SUBFOLDERS = ("plots", "frames")
+
+
+def report_folder_blocker(folder: str | Path) -> Path | None:
+    """The file that keeps :func:`write_report` from making ``folder`` -- the folder itself, or
+    one of its parents, is a file -- or None. Checked before a run (``hearsee demo -o``, a
+    robot file's ``output.report``), not found only once the whole run is done."""
+    p = Path(folder)
+    blocker = next((q for q in (p, *p.parents) if q.exists()), None)
+    return blocker if blocker is not None and not blocker.is_dir() else None
 
 
 def report_overwrites(folder: str | Path, paths: Sequence[str | Path | None]) -> Path | None:
