@@ -44,6 +44,11 @@ class ClippingWarning(UserWarning):
     """The recording contains clipped samples; estimates may be biased."""
 
 
+class TruncatedFileWarning(UserWarning):
+    """The audio file ends before the length its header declares (a recording cut short, a
+    copy interrupted); only the samples present are used."""
+
+
 class InconsistentMeasurementWarning(UserWarning):
     """The measurements contradict each other (e.g. TDOAs of several head poses that no single
     source explains); the estimate should not be trusted."""

@@ -20,6 +20,7 @@ from hearsee.errors import (
     ConfigError,
     HearseeError,
     InputFileError,
+    TruncatedFileWarning,
 )
 
 FS = 16000
@@ -278,3 +279,34 @@ def test_write_recording_refuses_a_bad_sample_rate_before_writing(tmp_path):
         with pytest.raises(AudioInputError, match="sample rate"):
             write_recording(out, x, fs)
         assert not out.exists()
+
+
+def test_a_wav_cut_short_is_read_with_a_warning(tmp_path, capsys):
+    """A WAV whose data chunk ends before its header's size (a recording cut short, a copy
+    interrupted) was read as the samples present without a word; now with a
+    TruncatedFileWarning (and `hearsee localize` prints it as one line). Intact files and the
+    streaming size 0xFFFFFFFF of a recorder writing to a pipe give no warning."""
+    from hearsee.cli import main
+
+    s = np.random.default_rng(5).uniform(-0.5, 0.5, 8002)
+    x = np.stack([s[2:], s[:-2]])  # one source, 2 samples (125 us) closer to microphone 0
+    full = write_recording(tmp_path / "full.wav", x, FS, subtype="FLOAT")
+    data = full.read_bytes()
+    cut = tmp_path / "cut.wav"
+    cut.write_bytes(data[: 44 + 2 * 4 * 3000 + 58])  # 3000 frames after a <= 58-byte header
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        y, fs = read_recording(full, 2)  # intact: no warning
+        np.testing.assert_allclose(y, x, atol=1e-7)
+        i = data.index(b"data")
+        stream = tmp_path / "stream.wav"
+        stream.write_bytes(data[: i + 4] + b"\xff\xff\xff\xff" + data[i + 8:])
+        assert read_recording(stream, 2)[0].shape == (2, 8000)
+    with pytest.warns(TruncatedFileWarning, match="cut short: its header declares 64000 bytes"):
+        y, fs = read_recording(cut, 2)
+    assert fs == FS and 3000 <= y.shape[1] < 8000
+    np.testing.assert_allclose(y, x[:, : y.shape[1]], atol=1e-7)
+    assert main(["localize", str(cut), "--array", "two-mic"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith(f"hearsee: warning: {cut}: the file is cut short") and \
+        err.count("\n") == 1, err

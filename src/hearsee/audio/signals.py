@@ -28,7 +28,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.config import is_real
-from hearsee.errors import AudioInputError, ClippingWarning, ConfigError, InputFileError
+from hearsee.errors import (
+    AudioInputError,
+    ClippingWarning,
+    ConfigError,
+    InputFileError,
+    TruncatedFileWarning,
+)
 
 __all__ = [
     "SIGNAL_KINDS",
@@ -266,6 +272,30 @@ def _full_scale(path: str | Path) -> float:
         return 1.0
 
 
+def _wav_data_shortfall(path: Path) -> tuple[int, int] | None:
+    """``(declared, present)`` bytes of a RIFF/WAVE file's data chunk when the file ends before
+    the size its header declares, else None (other formats, intact files, and the unknown size
+    0xFFFFFFFF of a recorder that streamed to a pipe). libsndfile reads such a file without a
+    word, as the samples present."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(12)
+            if len(head) < 12 or head[:4] != b"RIFF" or head[8:12] != b"WAVE":
+                return None
+            size = os.fstat(f.fileno()).st_size
+            while True:
+                chunk = f.read(8)
+                if len(chunk) < 8:
+                    return None
+                n = int.from_bytes(chunk[4:], "little")
+                if chunk[:4] == b"data":
+                    present = size - f.tell()
+                    return (n, present) if n != 0xFFFFFFFF and n > present else None
+                f.seek(n + (n & 1), os.SEEK_CUR)
+    except OSError:
+        return None
+
+
 def _read_file(path: str | Path) -> tuple[NDArray, int]:
     """Read any libsndfile format -> ``(x (n_ch, n) float64, fs)`` with typed errors."""
     import soundfile as sf
@@ -373,9 +403,17 @@ def read_recording(
     ClippingWarning
         More than 0.1 % of the samples are at full scale (float files beyond full scale:
         at their channel's peak, see :data:`CLIP_LEVEL`).
+    TruncatedFileWarning
+        A WAV file ends before its header's data size: the samples present are used.
     """
     x, fs_in = _read_file(path)
     n_ch, n = x.shape
+    cut = _wav_data_shortfall(Path(path))
+    if cut is not None:
+        warnings.warn(
+            f"{path}: the file is cut short: its header declares {cut[0]} bytes of audio, the "
+            f"file holds {cut[1]} ({n / fs_in:.3g} s); only those samples are used",
+            TruncatedFileWarning, stacklevel=2)
     if n_channels is not None:
         want = int(getattr(n_channels, "n_mics", n_channels))
         if n_ch != want:
