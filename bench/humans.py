@@ -394,7 +394,10 @@ def main(argv: list[str] | None = None) -> int:
     sections, res = run_synthetic(args.scenes, args.seed, not args.no_hog)
     sections += run_real(shared_data_dir(args.data))
     described = "\n\n".join(__doc__.split("\n\n")[1:-1])
-    intro = (described + "\n\nTargets (fusion, people 1-6 m): recall and precision "
+    # (the run writes the same files whatever its scenes: say which ones it was)
+    ran = (f"Produced by `python bench/humans.py --scenes {args.scenes} --seed {args.seed}"
+           f"{' --no-hog' if args.no_hog else ''}`.")
+    intro = (ran + "\n\n" + described + "\n\nTargets (fusion, people 1-6 m): recall and precision "
              ">= 0.95; >= 95 % of human-like objects rejected; median 3D error <= 5 % of range; "
              ">= 10 frames/s at 640x480 including disparity on one core.\n\nPlots: `humans.png` "
              "(fig. 7.9 and the method comparison), `humans_example.png` (detections, thermal, "
