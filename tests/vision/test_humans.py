@@ -535,3 +535,88 @@ def test_far_people_are_segmented_whole(entities, room):
         best = max(res.humans, key=lambda h: _iou(h.box, person.box))
         assert _iou(best.box, person.box) >= 0.6, (best.box, person.box)
         assert best.height_m == pytest.approx(person.height_m, abs=0.12)
+
+
+def _fragment(seg, keep_m: float, focal_px: float):
+    """The top ``keep_m`` metres of a silhouette: what segmentation returns when it keeps only
+    the head and shoulders of a person (rows and points above top - keep_m)."""
+    import dataclasses
+
+    rows = max(3, int(round(keep_m * focal_px / seg.depth_m)))
+    sel = seg.heights >= seg.top_m - keep_m
+    box = [seg.box[0], seg.box[1], seg.box[2], rows]
+    return dataclasses.replace(seg, box=box, mask=seg.mask[:rows], points=seg.points[sel],
+                               heights=seg.heights[sel])
+
+
+def test_head_sized_fragments_fail_the_extent_test(small_scene, monkeypatch):
+    """A silhouette must span min_extent_m of height itself, not only reach a person's height
+    with its top: the head-and-shoulders fragment (0.3 m) of the scene's person, at the
+    person's top (1.8 m) with a head-shoulder score above Tm, used to be accepted."""
+    import hearsee.vision.humans as hm
+
+    sc = small_scene
+    rect = sc.rig.rectification
+    pts = points_from_disparity(sc.disparity, rect.Q)
+    real = hm.segment_body
+
+    def run(keep_m):
+        def seg(*a, **k):
+            s = real(*a, **k)
+            return s if s is None or keep_m is None else _fragment(s, keep_m, rect.focal_px)
+        monkeypatch.setattr(hm, "segment_body", seg)
+        return detect_candidates(sc.disparity, pts, rect.focal_px, rect.baseline_m, rect.cy,
+                                 camera_height_m=1.4)
+
+    whole = [c for c in run(None).candidates if c.accepted]
+    # (from min_height_m = 0.12 m above the floor to the top at 1.8 m)
+    assert len(whole) == 1 and whole[0].segment.extent_m == pytest.approx(1.68, abs=0.1)
+    frag = [c for c in run(0.3).candidates
+            if c.segment is not None and abs(c.column - whole[0].column) <= 2]
+    assert frag and frag[0].segment.top_m == pytest.approx(1.8, abs=0.06)
+    assert frag[0].segment.extent_m == pytest.approx(0.3, abs=0.05)
+    assert not any(c.accepted for c in frag)
+    assert "tall < min_extent_m" in frag[0].reason
+    # a person visible from 0.7 m below the top (legs cut off) still passes
+    part = [c for c in run(0.7).candidates if c.accepted]
+    assert len(part) == 1 and part[0].segment.extent_m == pytest.approx(0.7, abs=0.05)
+
+
+def _candidate(box, extent_m, score, accepted=True, reason="", depth_m=4.0):
+    """A HumanCandidate whose silhouette (box [x, y, w, h] px) spans ``extent_m`` metres
+    below a top of 1.75 m."""
+    from hearsee.vision.humans import BodySegment, HumanCandidate
+
+    h = np.linspace(1.75 - extent_m, 1.75, 200)
+    seg = BodySegment(list(box), np.ones(box[2:][::-1], bool), np.zeros((200, 3)), h, depth_m,
+                      1.75, 0.4, np.zeros(3))
+    return HumanCandidate(box[0], 15, 0.5, seg, score=score, accepted=accepted, reason=reason)
+
+
+def test_dedupe_keeps_the_more_complete_silhouette():
+    """Two accepted peaks on one person: the higher head-shoulder score used to win even when
+    its silhouette was the torso without the head; a silhouette taller by more than
+    MORE_COMPLETE_M wins now, within that margin the score still decides, and a rejected
+    duplicate keeps why it was rejected."""
+    from hearsee.vision.humans import MORE_COMPLETE_M, _dedupe
+
+    headless = _candidate([100, 130, 40, 90], 1.2, 0.9)
+    whole = _candidate([100, 100, 40, 120], 1.6, 0.7)
+    other = _candidate([300, 100, 40, 120], 1.6, 0.95)  # another person, kept first
+    _dedupe([headless, whole, other])
+    assert whole.accepted and not headless.accepted and other.accepted
+    assert headless.reason == "duplicate of a stronger candidate"
+    assert whole.segment.extent_m - headless.segment.extent_m > MORE_COMPLETE_M
+    a = _candidate([100, 100, 40, 118], 1.55, 0.9)
+    b = _candidate([100, 100, 40, 120], 1.6, 0.7)  # only 5 cm taller: the score decides
+    _dedupe([b, a])
+    assert a.accepted and not b.accepted
+    tall = _candidate([95, 60, 50, 160], 2.3, 0.0, accepted=False,
+                      reason="height 2.30 m outside [1.2, 2.2]")
+    keep = _candidate([100, 100, 40, 120], 1.6, 0.8)
+    _dedupe([tall, keep])
+    assert keep.accepted
+    assert tall.reason == ("duplicate of a stronger candidate (height 2.30 m outside "
+                           "[1.2, 2.2])")
+    # a rejected taller silhouette never replaces an accepted one
+    assert not tall.accepted
