@@ -250,6 +250,11 @@ def test_localize_bad_input(model):
         mask.localize_mask(x, FS, model)
     with pytest.raises(AudioInputError, match="too short"):
         mask.localize_mask(np.ones((2, 100)), FS, model)
+    # (bad-input sweep of the public API: a complex recording lost its imaginary part, a
+    # bool one was read as 0/1 samples)
+    for bad in (np.ones((2, 4000)) + 1j, np.ones((2, 4000), dtype=bool)):
+        with pytest.raises(AudioInputError, match="real numbers"):
+            mask.localize_mask(bad, FS, model)
     # found by a bad-input sweep (2026-11-26): a NaN weight or a zero distance answered 0 deg,
     # no distances raised a TypeError, a zero rate or frame a ZeroDivisionError
     x = mask.simulate_masked(white_noise(0.5, FS, rng=3), FS, model, _src(120, 1.0), snr_db=20,

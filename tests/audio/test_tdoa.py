@@ -735,3 +735,31 @@ def test_first_arrival_ignores_the_search_bound_as_a_peak():
     far[0, lags == 9] = 0.6
     far[0, lags == 10] = 0.55
     assert lags[_first_arrival_peaks(far, lags, k, 0.1)[0]] == 8
+
+
+@pytest.mark.parametrize("kind", ["complex", "bool", "text", "none"])
+def test_a_recording_of_no_real_numbers_is_refused(recording, kind):
+    """Bad-input sweep of the public API: estimate_tdoas and gcc converted any recording with
+    numpy's float(): a complex one lost its imaginary part (a ComplexWarning at most), a bool
+    one was read as 0/1 samples, text as the numbers it spells -- each gave TDOAs. Now an
+    AudioInputError (audio.signals.as_samples). An object array of numbers is still fine."""
+    x, _ = recording
+    bad = {"complex": x + 1j * x[::-1], "bool": x > 0, "text": x.astype(str),
+           "none": np.where(x > 0, x, None)}[kind]
+    with pytest.raises(AudioInputError, match="real numbers"):
+        estimate_tdoas(bad, FS, "three-mic")
+    with pytest.raises(AudioInputError, match="real numbers"):
+        gcc(bad[0], x[1], FS)
+
+
+def test_integer_pcm_and_object_arrays_of_numbers_keep_their_tdoas(recording):
+    """Integer PCM counts and an object array of floats are real samples: the same TDOAs as
+    the float recording (estimates are scale-free)."""
+    x, true_tdoa = recording
+    ref = estimate_tdoas(x, FS, "three-mic").summary_tdoa_s
+    np.testing.assert_allclose(ref, true_tdoa, atol=1.5 / FS)
+    pcm = np.round(x / np.abs(x).max() * 32000).astype(np.int16)
+    np.testing.assert_allclose(estimate_tdoas(pcm, FS, "three-mic").summary_tdoa_s, ref,
+                               atol=0.05 / FS)
+    np.testing.assert_array_equal(
+        estimate_tdoas(x.astype(object), FS, "three-mic").summary_tdoa_s, ref)

@@ -913,3 +913,14 @@ def test_device_source_duration_no_run_reaches_is_no_limit(monkeypatch):
     stream started); it is no limit, as inf (config.time_limit)."""
     monkeypatch.setitem(sys.modules, "sounddevice", _fake_sounddevice(4))
     assert pl.DeviceSource(0, 3, FS, duration_s=1e306).duration_s is None
+
+
+def test_array_source_refuses_samples_that_are_no_real_numbers():
+    """ArraySource took a complex recording (imaginary part dropped), a bool one (0/1) and text
+    (the numbers it spells) as audio; AudioInputError now (audio.signals.as_samples)."""
+    x = np.zeros((3, 4096))
+    x[:, ::7] = 0.5
+    for bad in (x + 1j, x > 0, x.astype(str)):
+        with pytest.raises(AudioInputError, match="real numbers"):
+            pl.ArraySource(bad, FS)
+    assert pl.ArraySource(x.astype(np.int16), FS).x.dtype == float

@@ -88,7 +88,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio import bem
 from hearsee.audio.arrays import MicArray, load_array
-from hearsee.audio.signals import check_fs
+from hearsee.audio.signals import as_samples, check_fs
 from hearsee.audio.tdoa import check_frame_ms
 from hearsee.config import finite_number, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
@@ -856,11 +856,9 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         parabola-refined minimum of J.
     """
     model = array if isinstance(array, MaskModel) else MaskModel(array)
-    x = np.asarray(x, dtype=float)
+    x = as_samples(x)
     if x.ndim != 2 or x.shape[0] != 2:
         raise AudioInputError(f"a masked array recording needs 2 channels (2, n), got {x.shape}")
-    if not np.all(np.isfinite(x)):
-        raise AudioInputError("recording contains NaN or inf samples")
     if not np.any(x):
         raise AudioInputError("recording is all zeros")
     fs = check_fs(fs)
@@ -994,7 +992,7 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
 
     model = array if isinstance(array, MaskModel) else MaskModel(array)
     arr = model.array
-    x = np.asarray(x, dtype=float)
+    x = as_samples(x)
     method = normalize_method(method)
     est = localize_mask(x, fs, model)
     margin = max(1.0, (model.max_itd() - float(arr.max_tdoa()[0])) * fs)

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import is_real
+from hearsee.config import all_real, is_real
 from hearsee.errors import (
     AudioInputError,
     ClippingWarning,
@@ -39,6 +39,7 @@ from hearsee.errors import (
 __all__ = [
     "SIGNAL_KINDS",
     "VOICE_F0_HZ",
+    "as_samples",
     "check_fs",
     "load_wav",
     "make_signal",
@@ -100,6 +101,33 @@ def check_fs(fs: float) -> float:
     if not (is_real(fs) and fs > 0):
         raise AudioInputError(f"sample rate must be a positive number of Hz, got {fs!r}")
     return float(fs)
+
+
+def as_samples(x: ArrayLike, what: str = "recording") -> NDArray:
+    """``x`` as a float array of audio samples (any shape: the caller checks it), else an
+    AudioInputError naming ``what``.
+
+    Samples are real numbers: floats, or integer PCM counts (int16, int32, uint8, ...) taken as
+    they are -- every estimate of hearsee is scale-free. Booleans, complex numbers, text and
+    None are refused: numpy's float conversion read ``True`` as 1.0 and ``"0.5"`` as 0.5, and
+    dropped an imaginary part (with a mere ComplexWarning). NaN and infinite samples are
+    refused too. The one check of a recording given to the library's estimators
+    (:func:`hearsee.audio.tdoa.estimate_tdoas`, :func:`hearsee.audio.tdoa.gcc`,
+    :func:`hearsee.audio.mask.localize_mask`, :class:`hearsee.stream.pipeline.ArraySource`)."""
+    try:
+        a = np.asarray(x)
+    except (TypeError, ValueError):  # (a ragged nesting of lists)
+        a = None
+    ok = a is not None and (a.dtype.kind in "iuf" or (a.dtype.kind == "O"
+                                                       and all_real(a, finite=False)))
+    if not ok:
+        got = f"a {a.dtype} array" if a is not None and a.dtype.kind != "O" else repr(x)[:60]
+        raise AudioInputError(f"{what}: samples must be real numbers (floats or integer PCM "
+                              f"counts), got {got}")
+    a = a.astype(float, copy=False)
+    if not np.all(np.isfinite(a)):
+        raise AudioInputError(f"{what} contains NaN or infinite samples")
+    return a
 
 
 def _check_duration(duration_s: float, fs: float) -> int:

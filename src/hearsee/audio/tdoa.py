@@ -71,7 +71,7 @@ from scipy.ndimage import uniform_filter1d
 
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.localize import _inplane_tdoa, array_geometry
-from hearsee.audio.signals import check_fs
+from hearsee.audio.signals import as_samples, check_fs
 from hearsee.config import finite_number, whole_number
 from hearsee.errors import AudioInputError, ConfigError
 from hearsee.geometry import fibonacci_sphere
@@ -458,15 +458,13 @@ def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
     >>> round(gcc(np.roll(s, 3), s, 1000.0).tdoa_s, 6)   # x_i lags x_j by 3 samples
     0.003
     """
-    a = np.asarray(x_i, dtype=float)
-    b = np.asarray(x_j, dtype=float)
+    a = as_samples(x_i, "gcc: x_i")
+    b = as_samples(x_j, "gcc: x_j")
     if a.ndim != 1 or a.shape != b.shape or a.size < 2:
         raise AudioInputError(
             f"gcc needs two 1-D signals of equal length (2 samples or more), got {a.shape}, "
             f"{b.shape}"
         )
-    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
-        raise AudioInputError("gcc: a signal contains NaN or inf samples")
     fs = check_fs(fs)
     if np.ptp(a) == 0 or np.ptp(b) == 0:  # (a constant is silence once its mean is removed)
         raise AudioInputError("gcc: a signal is silent (constant); there is nothing to correlate")
@@ -1303,15 +1301,13 @@ def estimate_tdoas(
     TdoaFrames
     """
     arr = load_array(array)
-    a = np.asarray(x, dtype=float)
+    a = as_samples(x)
     if a.ndim != 2 or a.shape[0] != arr.n_mics:
         raise AudioInputError(
             f"recording has shape {a.shape}; array {arr.name!r} needs ({arr.n_mics}, n_samples) "
             "(one row per microphone)"
         )
-    peak = float(np.max(np.abs(a), initial=0.0))  # NaN or inf when a sample is
-    if not np.isfinite(peak):
-        raise AudioInputError("recording contains NaN or infinite samples")
+    peak = float(np.max(np.abs(a), initial=0.0))
     fs = check_analysis_fs(fs)
     frame_len, hop = frame_geometry(fs, frame_ms, hop_ms)
     method = normalize_method(method)

@@ -60,7 +60,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
-from hearsee.audio.signals import check_fs
+from hearsee.audio.signals import as_samples, check_fs
 from hearsee.audio.tdoa import (
     MAX_UNSCALED_PEAK,
     MIN_UNSCALED_PEAK,
@@ -248,11 +248,9 @@ class ArraySource:
 
     def __init__(self, x: ArrayLike, fs: float, block_len: int = 2048,
                  realtime: bool = False) -> None:
-        a = np.asarray(x, dtype=float)
+        a = as_samples(x)
         if a.ndim != 2 or a.shape[1] == 0:
             raise AudioInputError(f"recording must be (n_channels, n_samples), got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise AudioInputError("recording contains NaN or infinite samples")
         if not block_len >= 1:  # (NaN included)
             raise ConfigError(f"block_len must be >= 1 sample, got {block_len}")
         # (a rate of 0 divided by zero in the stream; a negative one read as "frame too short")
