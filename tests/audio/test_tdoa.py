@@ -763,3 +763,24 @@ def test_integer_pcm_and_object_arrays_of_numbers_keep_their_tdoas(recording):
                                atol=0.05 / FS)
     np.testing.assert_array_equal(
         estimate_tdoas(x.astype(object), FS, "three-mic").summary_tdoa_s, ref)
+
+
+@pytest.mark.parametrize("kw, msg", [
+    ({"band_hz": 300}, "band_hz"), ({"band_hz": (300, 3000, 8000)}, "band_hz"),
+    ({"band_hz": ("300", "3000")}, "band_hz"), ({"band_hz": (True, 3000)}, "band_hz"),
+    ({"snr_weight": "yes"}, "snr_weight"), ({"snr_weight": None}, "snr_weight"),
+    ({"snr_weight": "ML"}, "snr_weight")])
+def test_band_and_snr_weight_options_are_checked(recording, kw, msg):
+    """Bad-input sweep of the public API: band_hz=300 raised a builtin TypeError, three numbers
+    used the first two, text was parsed; any snr_weight other than False/True/'ml' silently
+    switched the SNR weighting on (as True) or off (None)."""
+    x, _ = recording
+    with pytest.raises(ConfigError, match=msg):
+        estimate_tdoas(x, FS, "three-mic", **kw)
+
+
+def test_band_up_to_infinity_is_still_the_whole_upper_band(recording):
+    x, _ = recording
+    a = estimate_tdoas(x, FS, "three-mic", band_hz=(300, np.inf)).summary_tdoa_s
+    b = estimate_tdoas(x, FS, "three-mic", band_hz=(300, FS / 2)).summary_tdoa_s
+    np.testing.assert_array_equal(a, b)

@@ -72,7 +72,7 @@ from scipy.ndimage import uniform_filter1d
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.localize import _inplane_tdoa, array_geometry
 from hearsee.audio.signals import as_samples, check_fs
-from hearsee.config import finite_number, whole_number
+from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import AudioInputError, ConfigError
 from hearsee.geometry import fibonacci_sphere
 
@@ -434,8 +434,11 @@ def _median_last(a: NDArray) -> NDArray:
 def _band_mask(n_bins: int, nfft: int, fs: float, band_hz: tuple[float, float] | None) -> NDArray:
     if band_hz is None:
         return np.ones(n_bins)
-    lo, hi = float(band_hz[0]), float(band_hz[1])
-    if not (0 <= lo < hi):
+    try:  # (a single number was a builtin TypeError, three numbers used the first two)
+        lo, hi = band_hz
+    except (TypeError, ValueError):
+        lo = hi = None
+    if not (is_real(lo) and (is_real(hi) or hi == np.inf) and 0 <= lo < hi):
         raise ConfigError(f"band_hz must be (low, high) with 0 <= low < high, got {band_hz}")
     f = np.arange(n_bins) * fs / nfft
     m = ((f >= lo) & (f <= hi)).astype(float)
@@ -992,7 +995,8 @@ def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float,
 
 
 def _check_options(refine: str, summary_frames: str, joint: str, min_peak_snr: float,
-                   min_frame_peak_snr: float, phat_beta: float, onset_weight: float) -> None:
+                   min_frame_peak_snr: float, phat_beta: float, onset_weight: float,
+                   snr_weight: bool | str) -> None:
     """ConfigError for an out-of-range option of :func:`estimate_tdoas`."""
     _check_refine(refine)
     if summary_frames not in ("valid", "active"):
@@ -1003,6 +1007,9 @@ def _check_options(refine: str, summary_frames: str, joint: str, min_peak_snr: f
     finite_number("min_frame_peak_snr", min_frame_peak_snr, 0.0)
     finite_number("phat_beta", phat_beta, 0.0, 1.0)
     finite_number("onset_weight", onset_weight, 0.0)
+    if not (isinstance(snr_weight, bool | np.bool_) or snr_weight == "ml"):
+        # (any other value switched the SNR weighting on, as True: "ML", "off", None is False)
+        raise ConfigError(f"snr_weight must be True, False or 'ml', got {snr_weight!r}")
 
 
 def _check_steered(arr: MicArray, source_in_plane: bool, steer_range_m: float | None) -> None:
@@ -1152,7 +1159,7 @@ def estimate_tdoas(
         tapers keeps most of each frame at full weight: with a Hann window the TDOA variance
         is ~1.7x larger (bench/doa.py, white noise vs the Cramer-Rao bound). Each frame's
         mean is removed before windowing (:func:`windowed_frames`): a DC offset is no source.
-    snr_weight : bool
+    snr_weight : bool or "ml"
         Multiply the weighting by a per-bin coherence estimate ``xi_i xi_j / ((1 + xi_i)
         (1 + xi_j))`` from each channel's a-priori SNR ``xi = max(|X|^2 / N - 1, 0)``, with the
         noise spectrum ``N`` averaged over the recording's inactive (noise-only) frames
@@ -1314,7 +1321,7 @@ def estimate_tdoas(
     if reverb_method is not None:
         reverb_method = normalize_method(reverb_method)
     _check_options(refine, summary_frames, joint, min_peak_snr, min_frame_peak_snr, phat_beta,
-                   onset_weight)
+                   onset_weight, snr_weight)
     first_arrival = finite_number("first_arrival", first_arrival, 0.0, 1.0)
     min_confidence = finite_number("min_confidence", min_confidence, 0.0)
     margin_samples = finite_number("margin_samples", margin_samples, 0.0)
