@@ -353,3 +353,33 @@ def test_cached_array_geometry_is_read_only():
         with pytest.raises(ValueError):
             v[0] = 1.0
     assert not array_geometry(MicArray.from_preset("two-mic")).axis.flags.writeable
+
+
+_SOLVERS = [localize_tdoa, near_field_position, three_mic_curve]
+
+
+@pytest.mark.parametrize("solver", _SOLVERS)
+@pytest.mark.parametrize("bad", [["1e-4", "2e-4", "0"], [True, False, True],
+                                 np.array([1e-4, 2e-4, 0.0]) + 0j])
+def test_tdoas_that_are_no_real_numbers_are_refused(solver, bad):
+    """Bad-input sweep of the public API: the solvers read text as the numbers it spells, True
+    as a TDOA of 1 s and dropped an imaginary part, and answered; a list of words raised
+    numpy's builtin ValueError."""
+    with pytest.raises(GeometryError, match="real numbers"):
+        solver(bad, MicArray.from_preset("three-mic"))
+
+
+@pytest.mark.parametrize("solver", _SOLVERS)
+def test_absurdly_long_tdoas_are_refused(solver):
+    """TDOAs of 1e160 s overflowed: localize_tdoa answered a NaN elevation, near_field_position
+    and three_mic_curve raised numpy's / scipy's builtin ValueError. Up to an hour an
+    impossible TDOA is still answered (feasible=False)."""
+    three = MicArray.from_preset("three-mic")
+    true = three.tdoa([1.0, 1.7, 0.35])
+    with pytest.raises(GeometryError, match="at most 3600 s"):
+        solver(true * 1e163, three)
+    loc = localize_tdoa(true * 1e3, three)
+    assert not loc.feasible and np.isfinite(loc.elevation_deg)
+    as_list = localize_tdoa(list(true), three)  # a list of floats is as good as an array
+    np.testing.assert_array_equal(as_list.direction, localize_tdoa(true, three).direction)
+    assert as_list.azimuth_deg == pytest.approx(np.degrees(np.arctan2(1.7, 1.0)), abs=0.1)

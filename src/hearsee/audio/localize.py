@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array, pair_tdoa
-from hearsee.config import finite_number, is_real
+from hearsee.config import all_real, finite_number, is_real, object_entries
 from hearsee.errors import ConfigError, GeometryError
 from hearsee.geometry import wrap_deg
 
@@ -161,13 +161,40 @@ def _classify(pos: NDArray, rel_tol: float) -> ArrayGeometry:
     return ArrayGeometry("volume", c)
 
 
-def _tdoa_vector(tdoa_s: ArrayLike, prs: list[tuple[int, int]], tol_s: float) -> NDArray:
-    """The TDOA vector (seconds, one per pair of ``prs``), or a GeometryError for a wrong
-    length or a tolerance ``tol_s`` that is not a finite number > 0 (0 divided by zero in the
-    in-plane fit). NaN entries pass: :func:`localize_tdoa` answers them with an empty result."""
-    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+#: No TDOA is longer than this (seconds; sound travels 1235 km in an hour). Larger values are
+#: no measured delay, and beyond ~1e150 s their squares overflowed the solvers (a NaN
+#: elevation, scipy's builtin ValueError); up to it an impossible TDOA is answered as any other,
+#: ``feasible=False``.
+MAX_TDOA_S = 3600.0
+
+
+def _as_tdoas(tdoa_s: ArrayLike, prs: list[tuple[int, int]]) -> NDArray:
+    """The TDOA vector (seconds, one per pair of ``prs``) as floats, or a GeometryError for a
+    wrong length, entries that are no real numbers (text, bools, complex numbers: numpy read
+    ``"1e-4"`` as 1e-4 s, ``True`` as 1 s and dropped an imaginary part) or beyond
+    :data:`MAX_TDOA_S`. NaN and inf entries pass (the callers decide)."""
+    if isinstance(tdoa_s, np.ndarray) and tdoa_s.dtype.kind in "iuf":
+        ok = True
+    else:
+        items = object_entries(tdoa_s)
+        ok = items is not None and (items.ndim == 0 and items.item() is None
+                                    or all_real(items, finite=False))
+    tau = np.asarray(tdoa_s, dtype=float).reshape(-1) if ok else None
+    if tau is None:
+        raise GeometryError(f"TDOAs must be real numbers of seconds, got {tdoa_s!r}")
     if tau.shape[0] != len(prs):
         raise GeometryError(f"got {tau.shape[0]} TDOAs for {len(prs)} microphone pairs")
+    if np.any(np.abs(tau[np.isfinite(tau)]) > MAX_TDOA_S):
+        raise GeometryError(f"TDOAs must be at most {MAX_TDOA_S:g} s in magnitude, got "
+                            f"{tau.tolist()}")
+    return tau
+
+
+def _tdoa_vector(tdoa_s: ArrayLike, prs: list[tuple[int, int]], tol_s: float) -> NDArray:
+    """:func:`_as_tdoas`, or a GeometryError for a tolerance ``tol_s`` that is not a finite
+    number > 0 (0 divided by zero in the in-plane fit). NaN entries pass:
+    :func:`localize_tdoa` answers them with an empty result."""
+    tau = _as_tdoas(tdoa_s, prs)
     if not (is_real(tol_s) and tol_s > 0):
         raise GeometryError(f"tol_s must be a finite number > 0 seconds, got {tol_s}")
     return tau
@@ -731,7 +758,7 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
 
     arr = load_array(array)
     prs = arr.checked_pairs(pairs)
-    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    tau = _as_tdoas(tdoa_s, prs)
     ranges = np.linspace(0.3, 3.0, 40) if ranges_m is None else np.asarray(ranges_m, float)
     if ranges.ndim != 1 or ranges.size == 0 or not np.all(np.isfinite(ranges) & (ranges > 0)):
         raise GeometryError(f"ranges_m must be finite distances > 0 m, got {ranges_m!r}")
