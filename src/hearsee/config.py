@@ -140,6 +140,21 @@ def all_real(entries: np.ndarray, *, finite: bool = True) -> bool:
                for v in entries.flat)
 
 
+def real_entries(value: Any) -> bool:
+    """True when every entry of ``value`` (an array, a list or tuple of any nesting, a scalar)
+    is a real number, NaN and the infinities included (the caller's own finiteness check names
+    them): a numpy array of integers or floats at once, any other numpy array never (bools,
+    strings, complex numbers, dates), lists, tuples and object arrays entry by entry
+    (:func:`all_real`; numpy's float conversion read ``True`` as 1.0, ``"0.5"`` as 0.5 and
+    dropped an imaginary part). The one "numbers only" rule of :func:`as_float_array`, the
+    microphone table of :class:`hearsee.audio.arrays.MicArray`, audio samples
+    (:func:`hearsee.audio.signals.as_samples`) and TDOA vectors (:mod:`hearsee.audio.localize`)."""
+    if isinstance(value, np.ndarray) and value.dtype.kind != "O":
+        return value.dtype.kind in "iuf"
+    items = object_entries(value)
+    return items is not None and all_real(items, finite=False)
+
+
 def finite_number(name: str, value: Any, lo: float | None = None, hi: float | None = None, *,
                   lo_open: bool = False, error: type[Exception] = ConfigError) -> float:
     """``value`` as a float when it is a finite real number (:func:`is_real`) within
@@ -212,14 +227,7 @@ def as_float_array(value: Any, where: str,
     arrays have their entries checked one by one (:func:`all_real`; NaN and inf then get the
     "must be finite" error). The many-number counterpart of
     :func:`hearsee.geometry.as_point`."""
-    if isinstance(value, np.ndarray) and value.dtype.kind in "iuf":
-        ok = True  # (a numeric array: nothing to check entry by entry)
-    elif isinstance(value, np.ndarray) and value.dtype.kind != "O":
-        ok = False  # bools, strings, complex numbers, dates
-    else:
-        items = object_entries(value)
-        ok = items is not None and all_real(items, finite=False)
-    if not ok:
+    if not real_entries(value):
         raise ConfigError(f"{where}: expected numbers, got {value!r}")
     try:
         arr = np.asarray(value, dtype=float)

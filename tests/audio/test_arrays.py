@@ -197,3 +197,38 @@ def test_tdoa_jacobian_takes_one_finite_point():
         with pytest.raises(GeometryError, match=r"^source must be a finite \[x, y, z\]"):
             three.tdoa_jacobian(bad)
     np.testing.assert_array_equal(three.tdoa_jacobian(tuple(p)), three.tdoa_jacobian(np.array(p)))
+
+
+def test_positions_and_speed_of_sound_must_be_real_numbers():
+    """Bad-input sweep of the public API: MicArray read complex positions without their
+    imaginary part, bools as 0/1 m and text ('0.1') as the numbers it spells; a speed of sound
+    '343' as 343 m/s; positions of 1e200 m made an array of aperture inf (every TDOA NaN)."""
+    ok = [[0, 0, 0], [0.1, 0, 0]]
+    for bad in (np.array(ok, dtype=complex), np.array(ok, dtype=bool),
+                [["0", "0", "0"], ["0.1", "0", "0"]], [[0, 0, 0], [True, 0, 0]]):
+        with pytest.raises(GeometryError, match="table of numbers"):
+            MicArray(bad)
+    for c in ("343", True):
+        with pytest.raises(GeometryError, match="speed_of_sound"):
+            MicArray(ok, c)
+    with pytest.raises(GeometryError, match="overflow"):
+        MicArray([[0, 0, 0], [1e200, 0, 0], [0, 1e200, 0]])
+    with pytest.raises(ConfigError, match="mapping"):
+        MicArray.from_dict(None)
+    assert MicArray(np.array([[0, 0, 0], [1, 0, 0]], dtype=np.int64)).aperture == 1.0
+
+
+def test_far_field_direction_of_any_length_and_too_distant_source():
+    """tdoa_far([1e300, 1e300, 0]) gave TDOAs of 0 (u / inf) and [1e-300, 0, 0] was refused as
+    the zero vector; tdoa of a source 1e300 m away gave NaN TDOAs. Directions of any finite
+    non-zero length are the same direction now; a source that far is a GeometryError."""
+    three = MicArray.from_preset("three-mic")
+    for scale in (1e300, 1e-300, 1e-160, 1e160):
+        np.testing.assert_allclose(three.tdoa_far(np.array([1.0, 1.0, 0.0]) * scale),
+                                   three.tdoa_far([1.0, 1.0, 0.0]), rtol=1e-12, atol=0)
+    d = np.array([[3.0, -4.0, 0.0], [0.0, 0.0, 2.0]])  # ordinary lengths: bit-identical
+    np.testing.assert_array_equal(three.tdoa_far(d), three.tdoa_far(d / 5.0 * [[1], [2.5]]))
+    with pytest.raises(GeometryError, match="too far"):
+        three.tdoa([1e300, 0.0, 0.0])
+    np.testing.assert_allclose(three.tdoa([1e6, 1e6, 0.0]), three.tdoa_far([1.0, 1.0, 0.0]),
+                               atol=1e-12)

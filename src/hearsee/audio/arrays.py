@@ -28,7 +28,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import as_float_array, check_keys, is_real, load_yaml, require
+from hearsee.config import (
+    as_float_array,
+    check_keys,
+    is_real,
+    load_yaml,
+    real_entries,
+    require,
+)
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 
 __all__ = ["MicArray", "list_presets", "load_array", "pair_tdoa", "pair_tdoa_jacobian"]
@@ -70,9 +77,9 @@ class MicArray:
     mask: Mapping[str, Any] | None = field(default=None)
 
     def __post_init__(self) -> None:
-        try:
-            pos = np.array(self.positions, dtype=float)
-        except (TypeError, ValueError):
+        # (numpy read True as 1 m, "0.1" as 0.1 m and dropped an imaginary part)
+        pos = np.array(self.positions, dtype=float) if real_entries(self.positions) else None
+        if pos is None:
             raise GeometryError(f"array {self.name!r}: microphone positions must be an N x 3 "
                                 f"table of numbers (metres), got {self.positions!r}") from None
         if pos.ndim != 2 or pos.shape[1] != 3:
@@ -85,7 +92,11 @@ class MicArray:
             )
         if not np.all(np.isfinite(pos)):
             raise GeometryError(f"array {self.name!r}: microphone positions must be finite")
-        d = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=-1)
+        with np.errstate(over="ignore"):
+            d = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=-1)
+        if not np.all(np.isfinite(d)):  # (an aperture of inf: every TDOA NaN or inf)
+            raise GeometryError(f"array {self.name!r}: microphone positions too large: their "
+                                f"distances overflow float64 (metres expected)")
         iu = np.triu_indices(len(pos), 1)
         k = int(np.argmin(d[iu]))
         if d[iu][k] < MIN_SPACING_M:
@@ -94,12 +105,12 @@ class MicArray:
                 f"array {self.name!r}: microphones {i} and {j} coincide "
                 f"({d[iu][k] * 1000:.2f} mm apart, minimum {MIN_SPACING_M * 1000:.0f} mm)"
             )
-        try:
-            c = float(self.speed_of_sound)
-        except (TypeError, ValueError):
+        c = self.speed_of_sound
+        if not is_real(c):  # (float() read "343" as 343 m/s and True as 1 m/s)
             raise GeometryError(f"array {self.name!r}: speed_of_sound must be a number > 0 "
-                                f"(m/s), got {self.speed_of_sound!r}") from None
-        if not np.isfinite(c) or c <= 0:
+                                f"(m/s), got {c!r}")
+        c = float(c)
+        if c <= 0:
             raise GeometryError(f"array {self.name!r}: speed_of_sound must be > 0, got {c}")
         pos.setflags(write=False)
         object.__setattr__(self, "positions", pos)
@@ -109,6 +120,8 @@ class MicArray:
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], where: str = "array") -> MicArray:
         """Build from a mapping with the YAML schema above; ConfigError names bad fields."""
+        if not isinstance(data, Mapping):  # (None: a builtin TypeError in check_keys)
+            raise ConfigError(f"{where}: expected a mapping with 'microphones', got {data!r}")
         check_keys(data, _KEYS, where)
         mics = as_float_array(require(data, "microphones", where), f"{where}: microphones",
                               shape=(None, 3))
@@ -251,7 +264,12 @@ class MicArray:
             n_bad, first = int(np.count_nonzero(~finite)), p[~finite][0].tolist()
             which = f"{n_bad} of {finite.size} points, e.g. " if p.ndim > 1 else ""
             raise GeometryError(f"source must be finite [x, y, z] in metres, got {which}{first}")
-        return pair_tdoa(p, self.positions, i, j, self.speed_of_sound)
+        with np.errstate(over="ignore", invalid="ignore"):
+            tau = pair_tdoa(p, self.positions, i, j, self.speed_of_sound)
+        if not np.all(np.isfinite(tau)):  # (1e300 m: inf - inf, NaN TDOAs without a word)
+            raise GeometryError("source too far: its distances to the microphones overflow "
+                                "float64 (metres expected; a source at infinity: tdoa_far)")
+        return tau
 
     def tdoa_jacobian(self, source: ArrayLike,
                       pairs: list[tuple[int, int]] | None = None) -> NDArray:
@@ -275,11 +293,19 @@ class MicArray:
         u = as_points(direction, "direction")
         if not np.all(np.isfinite(u)):  # (inf gave NaN TDOAs, NaN read as "the zero vector")
             raise GeometryError(f"a far-field direction must be finite, got {direction!r}")
-        norm = np.linalg.norm(u, axis=-1, keepdims=True)
-        if not np.all(norm > 0):
+        top = np.max(np.abs(u), axis=-1, keepdims=True)
+        if not np.all(top > 0):
             raise GeometryError("a far-field (plane-wave) source needs a direction; got the zero "
                                 "vector (a source at the array-frame origin)")
-        u = u / norm
+        with np.errstate(over="ignore", under="ignore"):
+            norm = np.linalg.norm(u, axis=-1, keepdims=True)
+        # a length whose squares overflow or underflow (beyond 1e150 or below 1e-150) is
+        # measured on the direction scaled by its largest component: [1e300, 1e300, 0] gave
+        # TDOAs of 0 (u / inf), [1e-300, 0, 0] was refused as the zero vector
+        fine = np.isfinite(norm) & (norm > 1e-150)
+        v = u / top
+        u = np.where(fine, u / np.where(fine, norm, 1.0),
+                     v / np.linalg.norm(v, axis=-1, keepdims=True))
         proj = u @ self.positions.T  # (..., n_mics)
         i = np.array([p[0] for p in pairs])
         j = np.array([p[1] for p in pairs])

@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array, pair_tdoa
-from hearsee.config import all_real, finite_number, is_real, object_entries
+from hearsee.config import finite_number, is_real, real_entries
 from hearsee.errors import ConfigError, GeometryError
 from hearsee.geometry import wrap_deg
 
@@ -173,15 +173,9 @@ def _as_tdoas(tdoa_s: ArrayLike, prs: list[tuple[int, int]]) -> NDArray:
     wrong length, entries that are no real numbers (text, bools, complex numbers: numpy read
     ``"1e-4"`` as 1e-4 s, ``True`` as 1 s and dropped an imaginary part) or beyond
     :data:`MAX_TDOA_S`. NaN and inf entries pass (the callers decide)."""
-    if isinstance(tdoa_s, np.ndarray) and tdoa_s.dtype.kind in "iuf":
-        ok = True
-    else:
-        items = object_entries(tdoa_s)
-        ok = items is not None and (items.ndim == 0 and items.item() is None
-                                    or all_real(items, finite=False))
-    tau = np.asarray(tdoa_s, dtype=float).reshape(-1) if ok else None
-    if tau is None:
+    if not (tdoa_s is None or real_entries(tdoa_s)):  # (None: "got 1 TDOAs" below)
         raise GeometryError(f"TDOAs must be real numbers of seconds, got {tdoa_s!r}")
+    tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
     if tau.shape[0] != len(prs):
         raise GeometryError(f"got {tau.shape[0]} TDOAs for {len(prs)} microphone pairs")
     if np.any(np.abs(tau[np.isfinite(tau)]) > MAX_TDOA_S):

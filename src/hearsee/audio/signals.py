@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import all_real, is_real
+from hearsee.config import is_real, real_entries
 from hearsee.errors import (
     AudioInputError,
     ClippingWarning,
@@ -114,17 +114,11 @@ def as_samples(x: ArrayLike, what: str = "recording") -> NDArray:
     refused too. The one check of a recording given to the library's estimators
     (:func:`hearsee.audio.tdoa.estimate_tdoas`, :func:`hearsee.audio.tdoa.gcc`,
     :func:`hearsee.audio.mask.localize_mask`, :class:`hearsee.stream.pipeline.ArraySource`)."""
-    try:
-        a = np.asarray(x)
-    except (TypeError, ValueError):  # (a ragged nesting of lists)
-        a = None
-    ok = a is not None and (a.dtype.kind in "iuf" or (a.dtype.kind == "O"
-                                                       and all_real(a, finite=False)))
-    if not ok:
-        got = f"a {a.dtype} array" if a is not None and a.dtype.kind != "O" else repr(x)[:60]
+    if not real_entries(x):
+        got = f"a {x.dtype} array" if isinstance(x, np.ndarray) else repr(x)[:60]
         raise AudioInputError(f"{what}: samples must be real numbers (floats or integer PCM "
                               f"counts), got {got}")
-    a = a.astype(float, copy=False)
+    a = np.asarray(x, dtype=float)
     if not np.all(np.isfinite(a)):
         raise AudioInputError(f"{what} contains NaN or infinite samples")
     return a
