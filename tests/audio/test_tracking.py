@@ -571,3 +571,51 @@ def test_direction_trackers_refuse_impossible_times_elevations_and_settings():
     for bad in (np.nan, 1.5, 0):
         with pytest.raises(EstimationError, match="max_rejects"):
             DirectionKalman(max_rejects=bad)
+
+
+@pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
+def test_direction_measurements_must_be_pairs_of_angles(cls):
+    """Bad-input sweep of the public API: update() with three numbers raised a builtin
+    ValueError ('too many values to unpack'), text a TypeError, a bool elevation was read as
+    1 deg; sigma_meas_deg of three numbers raised numpy's broadcast ValueError."""
+    k = cls()
+    assert k.update(0.0, (10.0, 5.0))
+    for bad in ((1.0, 2.0, 3.0), "ab", (10.0, True), ("10", 5.0), 7.0):
+        with pytest.raises(EstimationError, match="direction measurement"):
+            k.update(0.1, bad)
+    with pytest.raises(EstimationError, match="direction measurement"):
+        k.update(0.1, None, candidates=[(10.0,)])
+    with pytest.raises(EstimationError, match="sigma_meas_deg"):
+        k.update(0.1, (10.0, 5.0), sigma_meas_deg=(1.0, 2.0, 3.0))
+    # a missing angle (NaN) and a per-angle noise still work: the track holds 10 deg
+    assert not k.update(0.2, (np.nan, 5.0))
+    assert k.update(0.3, (10.0, 5.0), sigma_meas_deg=(2.0, 4.0))
+    assert k.x[0] == pytest.approx(10.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("cls, meas", [(DirectionKalman, (10.0, 5.0)),
+                                       (DirectionIMM, (10.0, 5.0)),
+                                       (MotionKalman, [1.0, 0.0, 0.0])])
+def test_a_time_jump_beyond_any_run_is_refused(cls, meas):
+    """A step of 1e300 s overflowed the process noise into filterpy's builtin OverflowError (the
+    IMM's mixing went NaN from ~1e40 s). Steps up to 1e9 s (31.7 years) are steps; Unix-epoch
+    times are fine."""
+    k = cls()
+    k.update(1.7e9, meas)
+    assert k.update(1.7e9 + 0.1, meas)
+    with pytest.raises(EstimationError, match="jumped"):
+        k.update(1e300, meas)
+    if cls is not MotionKalman:
+        with pytest.raises(EstimationError, match="jumped"):
+            k.predicted(1e300)
+    assert k.update(1.7e9 + 0.2, meas)
+
+
+def test_gate_distance_needs_a_track():
+    """gate_distance before any measurement measured from the initial zeros (0.003 for a
+    candidate at 10 deg) as if there were a prediction."""
+    k = DirectionKalman()
+    with pytest.raises(EstimationError, match="no track"):
+        k.gate_distance(10.0, 0.0)
+    k.update(0.0, (10.0, 0.0))
+    assert k.gate_distance(10.0, 0.0) == pytest.approx(0.0, abs=1e-12)

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import block_diag
 from scipy.stats import chi2
 
-from hearsee.config import finite_number, whole_number
+from hearsee.config import MAX_TIME_LIMIT_S, finite_number, is_real, whole_number
 from hearsee.errors import EstimationError
 
 __all__ = [
@@ -82,6 +82,39 @@ def _finite_time(t: float) -> float:
     if not math.isfinite(v):
         raise EstimationError(f"tracker time must be a finite number of seconds, got {t!r}")
     return v
+
+
+def _time_step(t0: float, t: float, *, past: bool = False) -> float:
+    """The step ``t - t0`` (seconds) from a tracker's last time ``t0`` to a finite ``t``; an
+    EstimationError when time went backwards (unless ``past``: :meth:`predicted` answers an
+    earlier time with the current state) or jumped more than
+    :data:`hearsee.config.MAX_TIME_LIMIT_S` (31.7 years: no run lasts longer; beyond ~1e60 s
+    the process noise overflowed into a builtin OverflowError, and the IMM's mixing into NaN
+    from ~1e40 s)."""
+    dt = t - t0
+    if dt < 0 and not past:
+        raise EstimationError(f"tracker time went backwards ({t0} s -> {t} s)")
+    if dt > MAX_TIME_LIMIT_S:
+        raise EstimationError(f"tracker time jumped {dt:.3g} s ({t0} s -> {t} s); the frames "
+                              f"of a track are at most {MAX_TIME_LIMIT_S:g} s apart")
+    return dt
+
+
+def _sigma_pair(sigma_meas_deg: Any) -> tuple[float, float]:
+    """A frame's measurement noise ``sigma_meas_deg`` (degrees): one number for both angles or
+    (azimuth, elevation), each finite and > 0; EstimationError otherwise (three numbers were
+    numpy's broadcast ValueError, text float()'s)."""
+    pair = (sigma_meas_deg,) * 2 if np.ndim(sigma_meas_deg) == 0 else tuple(sigma_meas_deg)
+    if len(pair) != 2:
+        raise EstimationError(f"sigma_meas_deg must be one number or (azimuth, elevation) in "
+                              f"degrees, got {sigma_meas_deg!r}")
+    return _positive("sigma_meas_deg", pair[0]), _positive("sigma_meas_deg", pair[1])
+
+
+def _angle(v: Any) -> bool:
+    """True for an angle a measurement may hold: None (unknown) or a real number, NaN and
+    infinities included (a missing angle), not a bool or text."""
+    return v is None or isinstance(v, float | np.floating) or is_real(v)
 
 
 def _positive(name: str, value: float) -> float:
@@ -215,9 +248,7 @@ class _Kalman:
         if self.t is None or not self.initialized:
             self.t = t
             return
-        dt = t - self.t
-        if dt < 0:
-            raise EstimationError(f"tracker time went backwards ({self.t} s -> {t} s)")
+        dt = _time_step(self.t, t)
         if dt > 0:
             self._set_dt(dt)
             self._predict()
@@ -264,10 +295,19 @@ def _clean_candidates(measurement: tuple[float, float | None] | None,
                       candidates: Sequence[tuple[float, float | None]] | None
                       ) -> list[tuple[float, float | None]]:
     """The measurement first, then the alternatives; entries without a finite azimuth dropped,
-    a non-finite elevation read as unknown (None)."""
+    a non-finite elevation read as unknown (None). A candidate that is no pair of angles is an
+    EstimationError (it was a builtin ValueError / TypeError)."""
     cands = list(candidates or [])
     if measurement is not None:
         cands = [measurement, *cands]
+    for c in cands:
+        try:
+            ok = len(c) == 2 and _angle(c[0]) and _angle(c[1])
+        except TypeError:
+            ok = False
+        if not ok:
+            raise EstimationError(f"a direction measurement is (azimuth_deg, elevation_deg or "
+                                  f"None), got {c!r}")
     out = [(float(a), None if e is None or not math.isfinite(e) else float(e))
            for a, e in cands if a is not None and math.isfinite(a)]
     for _, e in out:  # (a track started at 120 deg reported 120; corrections clip to +-90)
@@ -395,7 +435,11 @@ class DirectionKalman(_Kalman):
 
     def gate_distance(self, az: float, el: float | None = None, R: NDArray | None = None,
                       delay_s: float = 0.0) -> float:
-        """Squared Mahalanobis distance of a candidate measurement from the prediction."""
+        """Squared Mahalanobis distance of a candidate measurement from the prediction; an
+        EstimationError before the track has started (there is no prediction: the initial
+        state's zeros were used)."""
+        if not self.initialized:
+            raise EstimationError("no track to measure a gate distance from yet")
         z, H, Rm, wrap = self._parts(az, el, R, delay_s)
         return self._innovation(z, H, Rm, wrap)[2]
 
@@ -453,9 +497,8 @@ class DirectionKalman(_Kalman):
         the smallest gate distance from this filter's prediction."""
         Rf = None
         if sigma_meas_deg is not None:
-            s_az, s_el = np.broadcast_to(np.asarray(sigma_meas_deg, dtype=float), (2,))
-            Rf = np.diag([_positive("sigma_meas_deg", s_az) ** 2,
-                          _positive("sigma_meas_deg", s_el) ** 2])
+            s_az, s_el = _sigma_pair(sigma_meas_deg)
+            Rf = np.diag([s_az**2, s_el**2])
         if not math.isfinite(delay_s):
             raise EstimationError(f"delay_s must be a finite number of seconds, got {delay_s!r}")
         best = None
@@ -473,7 +516,8 @@ class DirectionKalman(_Kalman):
         Raises :class:`EstimationError` before the track has started."""
         if not self.initialized or self.t is None:
             raise EstimationError("no track to predict yet")
-        dt = _finite_time(t) - self.t  # (NaN returned the current state without a word)
+        # (NaN returned the current state without a word)
+        dt = _time_step(self.t, _finite_time(t), past=True)
         if not dt > 0:
             return self.x.copy(), self.P.copy()
         return _propagate(self.x, self.P, *self._cv(dt))
@@ -709,7 +753,7 @@ class DirectionIMM:
         :meth:`DirectionKalman.predicted`)."""
         if not self.initialized:
             raise EstimationError("no track to predict yet")
-        dt = _finite_time(t) - float(self._mix.t)
+        dt = _time_step(float(self._mix.t), _finite_time(t), past=True)
         if not dt > 0:
             return self.x.copy(), self.P.copy()
         F, Qs = self._model(dt)
@@ -734,9 +778,7 @@ class DirectionIMM:
                 return True
             self._mix.t = float(t)
             return False
-        dt = float(t) - float(self._mix.t)
-        if dt < 0:
-            raise EstimationError(f"tracker time went backwards ({self._mix.t} s -> {t} s)")
+        dt = _time_step(float(self._mix.t), float(t))
         # mixing: each mode restarts from the blend of all modes it may have come from
         T = self._tpm(dt)
         c = T.T @ self.mu  # predicted mode probabilities
