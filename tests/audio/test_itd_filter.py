@@ -115,3 +115,32 @@ def test_parameters_that_are_not_numbers_are_config_errors():
             ItdKalman(3, ref=ref)
     kf = ItdKalman(np.int64(3), ref=np.int64(2))  # numpy integers are fine
     assert kf.n_mics == 3 and kf.ref == 2
+
+
+def test_step_refuses_tdoas_that_are_no_real_numbers_or_absurd():
+    """Bad-input sweep of the public API: step(['a', 'b', 'c']) raised numpy's builtin
+    ValueError, and a TDOA of 1e300 s made the gate distance NaN, which passed the gate: the
+    state became 1e300 s."""
+    kf = ItdKalman(3)
+    truth = np.array([1e-4, 2e-4, 1e-4])  # pairs 0-1, 0-2, 1-2: t0 - t1 = 1e-4, t0 - t2 = 2e-4
+    assert kf.step(truth)
+    for bad in (["a", "b", "c"], [True, False, True], [1e300, 2e-4, 1e-4]):
+        with pytest.raises(GeometryError, match="TDOAs"):
+            kf.step(bad)
+    assert not kf.step([np.nan, 2e-4, 1e-4])  # missing: predict only
+    np.testing.assert_allclose(kf.pair_tdoas(), truth, atol=1e-12)
+
+
+def test_pair_matrix_checks_its_arguments_as_the_filter_does():
+    """pair_matrix is public: n_mics 0 raised numpy's builtin ValueError, a reference of 9 for
+    3 microphones gave a matrix as if no microphone were the reference, and the filter
+    truncated a pair (0.7, 1.9) to (0, 1)."""
+    for kw, msg in (({"n_mics": 0}, "n_mics"), ({"ref": 9}, "ref"),
+                    ({"pairs": [(0.7, 1.9)]}, "pair"), ({"pairs": [(0, 3)]}, "pair")):
+        args = {"n_mics": 3, "pairs": [(0, 1), (0, 2)], "ref": 0} | kw
+        with pytest.raises(GeometryError, match=msg):
+            pair_matrix(**args)
+    with pytest.raises(GeometryError, match="pair"):
+        ItdKalman(3, pairs=[(0.7, 1.9), (0, 2)])
+    np.testing.assert_array_equal(pair_matrix(3, [(0, 1), (1, 2), (0, 2)], ref=0),
+                                  [[-1, 0], [1, -1], [0, -1]])

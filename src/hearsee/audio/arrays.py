@@ -38,7 +38,8 @@ from hearsee.config import (
 )
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 
-__all__ = ["MicArray", "list_presets", "load_array", "pair_tdoa", "pair_tdoa_jacobian"]
+__all__ = ["MicArray", "check_pairs", "list_presets", "load_array", "pair_tdoa",
+           "pair_tdoa_jacobian"]
 
 #: Two microphones closer than this (metres) are treated as coincident.
 MIN_SPACING_M = 1e-3
@@ -202,28 +203,7 @@ class MicArray:
         (a negative index used to wrap around to the last microphones) or ``i == j``."""
         if pairs is None:
             return list(self.pairs)
-        try:
-            items = list(pairs)
-        except TypeError:
-            raise GeometryError(f"pairs must be a list of (i, j) microphone index pairs, got "
-                                f"{pairs!r}") from None
-        out = []
-        for p in items:
-            try:  # two whole numbers (0.7 used to be truncated to index 0)
-                ok = len(p) == 2 and all(int(v) == v for v in p)
-            except (TypeError, ValueError, OverflowError):
-                ok = False
-            if not ok:
-                raise GeometryError(f"a pair is two microphone indices, got {p!r}")
-            i, j = int(p[0]), int(p[1])
-            if i == j or not (0 <= i < self.n_mics and 0 <= j < self.n_mics):
-                raise GeometryError(
-                    f"invalid microphone pair {p!r} for an array of {self.n_mics} microphones"
-                )
-            out.append((i, j))
-        if not out:
-            raise GeometryError("no microphone pairs given")
-        return out
+        return check_pairs(pairs, self.n_mics)
 
     def pair_distance(self, pairs: list[tuple[int, int]] | None = None) -> NDArray:
         """Distance in metres between the microphones of each pair."""
@@ -313,6 +293,36 @@ class MicArray:
 
     def __repr__(self) -> str:
         return f"MicArray(name={self.name!r}, n_mics={self.n_mics}, aperture={self.aperture:.3f} m)"
+
+
+def check_pairs(pairs: Sequence[tuple[int, int]], n_mics: int) -> list[tuple[int, int]]:
+    """``pairs`` as a list of ``(i, j)`` indices of ``n_mics`` microphones, or a GeometryError
+    for an empty list, a pair that is not two whole numbers (0.7 used to be truncated to index
+    0), an index outside ``[0, n_mics)`` (a negative one used to wrap around to the last
+    microphones) or ``i == j``. The one rule of :meth:`MicArray.checked_pairs` and
+    :class:`hearsee.audio.itd_filter.ItdKalman`."""
+    try:
+        items = list(pairs)
+    except TypeError:
+        raise GeometryError(f"pairs must be a list of (i, j) microphone index pairs, got "
+                            f"{pairs!r}") from None
+    out = []
+    for p in items:
+        try:  # two whole numbers
+            ok = len(p) == 2 and all(int(v) == v for v in p)
+        except (TypeError, ValueError, OverflowError):
+            ok = False
+        if not ok:
+            raise GeometryError(f"a pair is two microphone indices, got {p!r}")
+        i, j = int(p[0]), int(p[1])
+        if i == j or not (0 <= i < n_mics and 0 <= j < n_mics):
+            raise GeometryError(
+                f"invalid microphone pair {p!r} for an array of {n_mics} microphones"
+            )
+        out.append((i, j))
+    if not out:
+        raise GeometryError("no microphone pairs given")
+    return out
 
 
 def _pair_index(pairs: list[tuple[int, int]]) -> tuple[NDArray, NDArray]:

@@ -33,6 +33,8 @@ from filterpy.kalman import KalmanFilter
 from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
+from hearsee.audio.arrays import check_pairs
+from hearsee.audio.localize import _as_tdoas
 from hearsee.config import is_real, whole_number
 from hearsee.errors import ConfigError, GeometryError
 
@@ -40,18 +42,30 @@ __all__ = ["ItdKalman", "pair_matrix"]
 
 
 def pair_matrix(n_mics: int, pairs: Sequence[tuple[int, int]], ref: int = 0) -> NDArray:
-    """``H`` (n_pairs, n_mics - 1) mapping the reference ITD state to pair TDOAs ``t_i - t_j``."""
+    """``H`` (n_pairs, n_mics - 1) mapping the reference ITD state to pair TDOAs ``t_i - t_j``.
+    GeometryError for fewer than 2 microphones, a reference that is not one of them, or pairs
+    :func:`hearsee.audio.arrays.check_pairs` refuses (n_mics 0 was numpy's builtin ValueError,
+    a reference of 9 for 3 microphones a matrix as if there were none)."""
+    n_mics = whole_number("n_mics", n_mics, lo=2, error=GeometryError)
+    ref = whole_number("ref", ref, lo=0, hi=n_mics - 1, error=GeometryError)
+    pairs = check_pairs(pairs, n_mics)
     others = [k for k in range(n_mics) if k != ref]
     col = {k: c for c, k in enumerate(others)}
     H = np.zeros((len(pairs), n_mics - 1))
     for r, (i, j) in enumerate(pairs):
-        if i == j or not (0 <= i < n_mics and 0 <= j < n_mics):
-            raise GeometryError(f"invalid pair ({i}, {j}) for {n_mics} microphones")
         if i != ref:
             H[r, col[i]] += 1.0
         if j != ref:
             H[r, col[j]] -= 1.0
     return H
+
+
+def _size(z: ArrayLike) -> int | None:
+    """How many numbers ``z`` holds (None for a ragged nesting)."""
+    try:
+        return int(np.size(z))
+    except ValueError:
+        return None
 
 
 class ItdKalman:
@@ -93,6 +107,8 @@ class ItdKalman:
         # (not numbers: TypeErrors from numpy or range(); ref=1.5 was truncated to 1)
         n_mics = whole_number("n_mics", n_mics, lo=2, error=GeometryError)
         ref = whole_number("ref", ref, lo=0, hi=n_mics - 1, error=GeometryError)
+        # (pairs: check_pairs; (0.7, 1.9) was truncated to (0, 1))
+        pairs = None if pairs is None else check_pairs(pairs, n_mics)
         if not all(is_real(v) and v > 0 for v in (q_std_s, r_std_s, p0_std_s)):
             # (NaN passed "<= 0": NaN TDOAs, or an SVD that did not converge)
             raise ConfigError("q_std_s, r_std_s and p0_std_s must be finite numbers > 0 seconds, "
@@ -102,7 +118,7 @@ class ItdKalman:
         self.n_mics = int(n_mics)
         self.ref = int(ref)
         self.pairs = ([(i, j) for i in range(n_mics) for j in range(i + 1, n_mics)]
-                      if pairs is None else [(int(i), int(j)) for i, j in pairs])
+                      if pairs is None else pairs)
         self.p0_std_s = float(p0_std_s)
         # (0 or less re-initialised on every rejected measurement: no gate at all)
         self.max_rejects = whole_number("max_rejects", max_rejects, lo=1)
@@ -155,9 +171,10 @@ class ItdKalman:
         consecutive rejections), False when missing or rejected. The first measurement
         initialises the state (least squares over the pairs).
         """
-        zz = None if z is None else np.asarray(z, dtype=float).reshape(-1)
-        if zz is not None and zz.shape[0] != len(self.pairs):
-            raise GeometryError(f"expected {len(self.pairs)} pair TDOAs, got {zz.shape[0]}")
+        if z is not None and _size(z) != len(self.pairs):
+            raise GeometryError(f"expected {len(self.pairs)} pair TDOAs, got {_size(z)}")
+        # (text raised numpy's ValueError; 1e300 s made the gate distance NaN: accepted)
+        zz = None if z is None else _as_tdoas(z, self.pairs)
         self.last_d2 = float("nan")
         self.last_accepted = False
         if not self.initialized:
@@ -172,7 +189,7 @@ class ItdKalman:
         S = self.kf.H @ self.kf.P @ self.kf.H.T + self.kf.R
         d2 = float(y @ np.linalg.solve(S, y))
         self.last_d2 = d2
-        if d2 > self.gate:
+        if not d2 <= self.gate:  # (NaN included)
             self.n_rejected += 1
             self._run += 1
             if self._run >= self.max_rejects:
