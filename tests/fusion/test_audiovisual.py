@@ -406,3 +406,12 @@ def test_track_on_rays_at_48_khz_uses_the_wide_band(rig):
     # a three times wider band: sharper GCC peaks, fixes closer along the ray (here 4.2 vs
     # 6.9 cm; in the room of bench/tracking.py part B the gap is wider)
     assert errs[48000] < 0.75 * errs[16000]
+
+
+def test_tdoa_tracker_pairs_are_checked_when_it_is_made(side_rig):
+    """Bad-input sweep of the public API: RayTdoaTracker(rig, pairs=[(0, 9)]) was accepted (an
+    IndexError at the first frame) and (0.7, 1.9) was truncated to (0, 1)."""
+    for pairs in ([(0, 9)], [(0.7, 1.9)], [(1, 1)], []):
+        with pytest.raises(GeometryError, match="pair"):
+            RayTdoaTracker(side_rig, pairs=pairs)
+    assert RayTdoaTracker(side_rig, pairs=[(0.0, 1.0)]).pairs == [(0, 1)]

@@ -465,7 +465,8 @@ class RayTdoaTracker(RayTracker):
         from scipy.stats import chi2
 
         self.rig = rig
-        self.pairs = [(int(i), int(j)) for i, j in (rig.array.pairs if pairs is None else pairs)]
+        # (a pair (0, 9) was taken unchecked: IndexError at the first frame; 0.7 truncated)
+        self.pairs = rig.array.checked_pairs(pairs)
         self.sigma_tdoa_s, self.sigma_px = float(sigma_tdoa_s), float(sigma_px)
         self._pair_gate = float(chi2.ppf(pair_gate_prob, 1))
         self._pixel_gate = float(chi2.ppf(pixel_gate_prob, 2))
