@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from hearsee.errors import CalibrationError, ConfigError, ImageInputError
+from hearsee.errors import CalibrationError, ConfigError, GeometryError, ImageInputError
 from hearsee.vision.camera import Camera, StereoRig
 from hearsee.vision.stereo import (
     compute_disparity,
@@ -15,6 +15,7 @@ from hearsee.vision.stereo import (
     fill_disparity_holes,
     lr_consistency,
     points_from_disparity,
+    points_to_left_frame,
     rectify_pair,
     stereo_frame,
 )
@@ -218,3 +219,29 @@ def test_non_numeric_matcher_settings_are_config_errors(kw):
     tex = _texture(7)[:60, :80]
     with pytest.raises(ConfigError, match=next(iter(kw))):
         compute_disparity(np.roll(tex, 4, axis=1), tex, **kw)
+
+
+def test_disparity_helpers_check_their_settings_and_shapes():
+    """Bad-input sweep of the public API: lr_consistency with a NaN or negative max_diff set
+    every pixel invalid without a word; fill_disparity_holes took median 4, 3.0 or NaN when
+    the map had no hole (and a 1-D map raised a builtin ValueError); points_to_left_frame of
+    (N, 2) points raised numpy's matmul ValueError; StereoFrame.points('Left') answered in the
+    rectified frame."""
+    dl = np.full((4, 20), 5.0, np.float32)
+    for bad in (np.nan, -1.0, "1"):
+        with pytest.raises(ConfigError, match="max_diff"):
+            lr_consistency(dl, dl, bad)
+    for bad in (4, 3.0, np.nan, True):
+        with pytest.raises(ConfigError, match="median"):
+            fill_disparity_holes(dl, median=bad)
+    with pytest.raises(ImageInputError, match="disparity map"):
+        fill_disparity_holes(np.ones(10))
+    rig = StereoRig.ideal(Camera.from_fov(60.0, 160, 120), baseline_m=0.1)
+    right = np.random.default_rng(1).integers(0, 255, (120, 160), dtype=np.uint8)
+    f = stereo_frame(np.roll(right, 8, axis=1), right, rig, num_disparities=16)
+    with pytest.raises(GeometryError, match="3 coordinates"):
+        points_to_left_frame(np.ones((5, 2)), f.rectification)
+    with pytest.raises(ConfigError, match="frame"):
+        f.points("Left")
+    # the rectified and left frames of an ideal rig are one frame: same points
+    np.testing.assert_array_equal(f.points("left"), f.points("rectified"))

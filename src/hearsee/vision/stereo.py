@@ -36,8 +36,9 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import is_real
+from hearsee.config import finite_number, is_real
 from hearsee.errors import CalibrationError, ConfigError, ImageInputError
+from hearsee.geometry import as_points
 from hearsee.vision.camera import Rectification, StereoRig
 from hearsee.vision.io import check_pair, to_gray
 
@@ -266,6 +267,8 @@ def lr_consistency(disp_left: NDArray, disp_right: NDArray, max_diff: float = 1.
     dr = np.asarray(disp_right, dtype=np.float32)
     if dl.shape != dr.shape or dl.ndim != 2:
         raise ImageInputError(f"disparity maps differ in shape: {dl.shape} vs {dr.shape}")
+    # (NaN or a negative tolerance silently invalidated every pixel)
+    max_diff = finite_number("max_diff", max_diff, 0.0)
     H, W = dl.shape
     u = np.arange(W, dtype=np.float32)[None, :]
     ur = np.rint(u - np.nan_to_num(dl, nan=0.0)).astype(np.int64)
@@ -284,6 +287,12 @@ def fill_disparity_holes(disparity: NDArray, median: int = 5) -> NDArray:
     ``median`` x ``median`` median filter (3 or 5; 0 to skip). Rows without any valid pixel
     stay NaN. Returns float32 pixels."""
     d = np.asarray(disparity, dtype=np.float32)
+    if d.ndim != 2:  # (a builtin ValueError unpacking the shape)
+        raise ImageInputError(f"expected an (H, W) disparity map, got shape {d.shape}")
+    # (checked first: a map without holes returned early and took any median, 4 or NaN)
+    if not (isinstance(median, int | np.integer) and not isinstance(median, bool)
+            and median in (0, 3, 5)):
+        raise ConfigError(f"median must be 0, 3 or 5, got {median}")
     H, W = d.shape
     valid = np.isfinite(d)
     if valid.all() or not valid.any():
@@ -299,8 +308,6 @@ def fill_disparity_holes(disparity: NDArray, median: int = 5) -> NDArray:
     filled[~np.isfinite(filled)] = np.nan
     out = np.where(valid, d, filled).astype(np.float32)
     if median:
-        if median not in (3, 5):
-            raise ConfigError(f"median must be 0, 3 or 5, got {median}")
         good = np.isfinite(out)
         sm = cv2.medianBlur(np.where(good, out, 0).astype(np.float32), median)
         out = np.where(valid | ~good, out, sm).astype(np.float32)
@@ -369,7 +376,7 @@ def points_from_disparity(disparity: ArrayLike, Q: ArrayLike) -> NDArray:
 def points_to_left_frame(points: ArrayLike, rectification: Rectification) -> NDArray:
     """Rotate points ``(..., 3)`` from the rectified left frame back to the (unrectified) left
     camera's optical frame -- the frame the rig's thermal extrinsics refer to."""
-    p = np.asarray(points, dtype=np.float64)
+    p = as_points(points, "points_to_left_frame")  # (numpy's matmul ValueError for (N, 2))
     return p @ rectification.R1  # R1 maps left -> rectified, so R1^T maps back (row vectors)
 
 
@@ -405,6 +412,8 @@ class StereoFrame:
     def points(self, frame: Literal["rectified", "left"] = "rectified") -> NDArray:
         """3D points ``(H, W, 3)`` in metres in the rectified left frame or, with
         ``frame="left"``, the left camera's own optical frame."""
+        if frame not in ("rectified", "left"):  # (any other name gave the rectified frame)
+            raise ConfigError(f"frame must be 'rectified' or 'left', got {frame!r}")
         if self._points is None:
             self._points = points_from_disparity(self.disparity, self.rectification.Q)
         if frame == "left":
