@@ -447,3 +447,21 @@ def test_rig_from_opencv_refuses_nodes_that_are_not_matrices(tmp_path):
     write(extr, R=np.eye(3), T="abc")
     with pytest.raises(ConfigError, match="'T'"):
         rig_from_opencv(intr, extr, (640, 480))
+
+
+def test_camera_numbers_must_be_real_and_sizes_whole():
+    """Bad-input sweep of the public API: Camera read a K of text ('277.1') as numbers, dropped
+    a complex K's imaginary part, and a NaN width raised int()'s builtin ValueError (None a
+    TypeError)."""
+    good = Camera.from_fov(60.0, 320, 240)
+    for K in (good.K.astype(str), good.K + 1j, good.K.astype(bool)):
+        with pytest.raises(CalibrationError, match="camera K"):
+            Camera(K, width=320, height=240)
+    with pytest.raises(CalibrationError, match="camera dist"):
+        Camera(good.K, dist=["0.1", "0", "0", "0"], width=320, height=240)
+    for w in (np.nan, None, "320", True, 320.5):
+        with pytest.raises(CalibrationError, match="camera size"):
+            Camera(good.K, width=w, height=240)
+    same = Camera(good.K.tolist(), width=320.0, height=np.int64(240))
+    assert (same.width, same.height) == (320, 240) and isinstance(same.width, int)
+    np.testing.assert_array_equal(same.K, good.K)

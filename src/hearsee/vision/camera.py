@@ -61,7 +61,15 @@ import yaml
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.config import as_float_array, check_keys, is_real, load_yaml, require, to_plain
+from hearsee.config import (
+    as_float_array,
+    check_keys,
+    is_real,
+    load_yaml,
+    real_entries,
+    require,
+    to_plain,
+)
 from hearsee.errors import CalibrationError, ConfigError, GeometryError, InputFileError
 
 __all__ = [
@@ -147,6 +155,11 @@ class Camera:
     name: str = ""
 
     def __post_init__(self) -> None:
+        for what, v in (("K", self.K), ("dist", self.dist)):
+            # (numpy read text as the numbers it spells, True as 1, and dropped an imaginary
+            # part)
+            if v is not None and not real_entries(v):
+                raise CalibrationError(f"camera {what}: expected real numbers, got {v!r}")
         K = np.asarray(self.K, dtype=float)
         if K.shape != (3, 3) or not np.all(np.isfinite(K)):
             raise CalibrationError(f"camera K: expected a finite 3x3 matrix, got shape {K.shape}")
@@ -161,12 +174,15 @@ class Camera:
             )
         if np.all(d == 0):
             d = np.zeros(0)
-        w, h = int(self.width), int(self.height)
-        if w <= 0 or h <= 0 or w != self.width or h != self.height:
+        # (NaN or None: int()'s builtin ValueError / TypeError)
+        whole = all(is_real(v) and not isinstance(v, bool) and v == int(v) and v > 0
+                    for v in (self.width, self.height))
+        if not whole:
             raise CalibrationError(
                 f"camera size: width and height must be positive integers, got "
                 f"{self.width}x{self.height}"
             )
+        w, h = int(self.width), int(self.height)
         K.setflags(write=False)
         d.setflags(write=False)
         object.__setattr__(self, "K", K)
