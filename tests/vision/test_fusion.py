@@ -208,3 +208,10 @@ def test_thermal_support_head_band_ignores_one_stray_high_point():
     stray = np.array([[0.8, cam_h - 2.6, z]])  # cold, inside the thermal view
     pts1, h1 = np.vstack([pts, stray]), np.append(h, 2.6)
     assert thermal_support(pts1, h1, RIG, warm) == pytest.approx(2 * 60 / (2 * 60 + 240 + 2))
+
+
+def test_detect_humans_needs_a_rig():
+    """detect_humans(left, right, None) raised a builtin AttributeError."""
+    img = np.zeros((120, 160), np.uint8)
+    with pytest.raises(CalibrationError, match="StereoRig"):
+        detect_humans(img, img, None)

@@ -245,3 +245,20 @@ def test_disparity_helpers_check_their_settings_and_shapes():
         f.points("Left")
     # the rectified and left frames of an ideal rig are one frame: same points
     np.testing.assert_array_equal(f.points("left"), f.points("rectified"))
+
+
+def test_rig_and_rectification_settings_are_checked():
+    """Bad-input sweep of the public API: StereoRig.rectify took alpha NaN or 5 and a size
+    (0, 0) into OpenCV without a word; rectify_pair / stereo_frame with no rig (None) raised a
+    builtin AttributeError."""
+    rig = StereoRig.ideal(Camera.from_fov(60.0, 160, 120), baseline_m=0.1)
+    for kw in ({"alpha": np.nan}, {"alpha": 5.0}, {"size": (0, 0)}, {"size": (160.5, 120)},
+               {"size": 160}):
+        with pytest.raises(ConfigError, match="alpha|size"):
+            rig.rectify(**kw)
+    img = np.zeros((120, 160), np.uint8)
+    for call in (lambda: rectify_pair(img, img, None), lambda: stereo_frame(img, img, "rig.yaml")):
+        with pytest.raises(CalibrationError, match="StereoRig"):
+            call()
+    r = rig.rectify(alpha=1.0, size=(160, 120))  # valid settings: the ideal rig's identity
+    np.testing.assert_array_equal(r.R1, np.eye(3))

@@ -64,11 +64,13 @@ from scipy.spatial.transform import Rotation
 from hearsee.config import (
     as_float_array,
     check_keys,
+    finite_number,
     is_real,
     load_yaml,
     real_entries,
     require,
     to_plain,
+    whole_number,
 )
 from hearsee.errors import CalibrationError, ConfigError, GeometryError, InputFileError
 
@@ -79,6 +81,7 @@ __all__ = [
     "Rectification",
     "StereoRig",
     "camera_pose",
+    "check_rig",
     "head_camera_pose",
     "load_camera",
     "load_rig",
@@ -583,8 +586,18 @@ class StereoRig:
 
         ``alpha`` in [0, 1]: 0 keeps only valid pixels, 1 keeps all source pixels. ``size`` is
         the output (w, h), default the left image size. For an already rectified rig the result
-        is the identity with the left K.
+        is the identity with the left K. A NaN or out-of-range ``alpha`` and a size that is
+        not two whole numbers > 0 are a ConfigError (they reached OpenCV unchecked: an alpha
+        of NaN or 5 and a size of (0, 0) gave a rectification without a word).
         """
+        finite_number("alpha", alpha, 0.0, 1.0)
+        if size is not None:
+            try:
+                w, h = size
+            except (TypeError, ValueError):
+                w = h = None
+            for v in (w, h):
+                whole_number("rectified size (w, h)", v)
         if self.left.size != self.right.size:
             raise CalibrationError(
                 f"left and right images differ in size ({self.left.size} vs {self.right.size}); "
@@ -757,6 +770,15 @@ def _finite(values: Any, n: int) -> NDArray | None:
     except (TypeError, ValueError):
         return None
     return a if a.size == n and np.all(np.isfinite(a)) else None
+
+
+def check_rig(rig: Any, what: str) -> StereoRig:
+    """``rig`` when it is a :class:`StereoRig`, else a CalibrationError naming ``what`` (None or
+    a file name raised a builtin AttributeError in rectification or detection)."""
+    if not isinstance(rig, StereoRig):
+        raise CalibrationError(f"{what} needs a StereoRig (e.g. hearsee.vision.camera.load_rig"
+                               f"(path)), got {type(rig).__name__}")
+    return rig
 
 
 def camera_pose(position_m: ArrayLike = (0.0, 0.0, 0.0), pan_deg: float = 0.0,

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import CalibrationError, ConfigError, GeometryError, ImageInputError
-from hearsee.vision.camera import Rectification, StereoRig
+from hearsee.vision.camera import Rectification, StereoRig, check_rig
 from hearsee.vision.humans import (
     HumanCandidate,
     HumanDetectorParams,
@@ -252,6 +252,7 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
     :class:`DetectionResult`; boxes in rectified left-image pixels (the image
     ``result.frame.left``), positions in the left camera's own optical frame (metres).
     """
+    check_rig(rig, "detect_humans")
     if thermal is not None and rig.thermal is None:
         raise CalibrationError(
             "a thermal image was given but the calibration has no thermal camera: add a "

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.config import finite_number, is_real
 from hearsee.errors import CalibrationError, ConfigError, ImageInputError
 from hearsee.geometry import as_points
-from hearsee.vision.camera import Rectification, StereoRig
+from hearsee.vision.camera import Rectification, StereoRig, check_rig
 from hearsee.vision.io import check_pair, to_gray
 
 __all__ = [
@@ -73,6 +73,7 @@ _MAPS_CACHE: dict[tuple[int, float, tuple[int, int]], tuple] = {}
 def rectification_maps(rig: StereoRig, alpha: float = 0.0) -> tuple[Rectification, tuple]:
     """The rectification of ``rig`` and its remap tables ``(map1x, map1y, map2x, map2y)``
     (``cv2.initUndistortRectifyMap``, fixed-point maps), cached per rig."""
+    check_rig(rig, "stereo rectification")
     key = (id(rig), float(alpha), rig.left.size)
     hit = _MAPS_CACHE.get(key)
     if hit is not None and hit[0] is rig:
@@ -96,7 +97,7 @@ def rectify_pair(left: NDArray, right: NDArray, rig: StereoRig, alpha: float = 0
     Images must have the rig's size (``ImageInputError`` otherwise). For an already rectified
     rig (:attr:`StereoRig.is_rectified`) the images are returned unchanged.
     """
-    check_pair(left, right, expected_size=rig.left.size)
+    check_pair(left, right, expected_size=check_rig(rig, "rectify_pair").left.size)
     rect, maps = rectification_maps(rig, alpha)
     if rect.baseline_m <= 0:
         raise CalibrationError(
