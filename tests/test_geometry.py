@@ -139,3 +139,32 @@ def test_as_point_keeps_valid_values_and_takes_the_callers_error():
         np.testing.assert_array_equal(p, np.asarray(ok, dtype=float))  # same numbers as before
     with pytest.raises(ConfigError, match=r"^r\.yaml: head\.pivot_m must .* got shape \(1, 3\)"):
         as_point([[0, 0, 1]], "r.yaml: head.pivot_m", ConfigError)
+
+
+def test_distances_and_directions_of_huge_points_do_not_overflow():
+    """cart_to_sph summed squares: (1e300, 1e300, 0) was inf metres away (a RuntimeWarning).
+    Ordinary points keep their distance bit for bit; a point beyond float's range (its
+    distance is inf) is not a point for as_point."""
+    import math
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        az, el, r = cart_to_sph([[1e300, 1e300, 0.0], [0.0, -3e200, 4e200]])
+        np.testing.assert_allclose(np.degrees(az), [45.0, -90.0])
+        np.testing.assert_allclose(np.degrees(el), [0.0, np.degrees(np.arctan2(4, 3))])
+        np.testing.assert_allclose(r, [math.hypot(1e300, 1e300), 5e200], rtol=1e-15)
+    from hearsee.geometry import as_point, norm_scale
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p = as_point([1e300, 1e300, 0.0], "p")
+        k = norm_scale(p)
+        np.testing.assert_allclose(p / k / np.linalg.norm(p / k), [0.5**0.5, 0.5**0.5, 0.0])
+    pts = np.random.default_rng(0).normal(size=(1000, 3)) * 10.0
+    assert np.all(norm_scale(pts) == 1.0)
+    x, y, z = pts.T
+    assert cart_to_sph(pts)[2].tobytes() == np.sqrt(x * x + y * y + z * z).tobytes()
+    assert np.isinf(cart_to_sph([np.inf, 0.0, 0.0])[2])  # (as before)
+    with pytest.raises(GeometryError, match=r"^p: \[1e\+308, -1\.5e\+308, 0\.0\] is farther "):
+        as_point([1e308, -1.5e308, 0.0], "p")

@@ -30,6 +30,7 @@ __all__ = [
     "fibonacci_sphere",
     "head_rotation",
     "mic_positions_at",
+    "norm_scale",
     "robot_to_array",
     "sph_to_cart",
     "unit_vector_deg",
@@ -52,11 +53,34 @@ def sph_to_cart(azimuth: ArrayLike, elevation: ArrayLike, distance: ArrayLike = 
                     axis=-1)
 
 
+#: A coordinate beyond this magnitude (metres) is scaled down before squares are summed: the
+#: square of 1.4e154 already overflows float.
+_SQUARE_SAFE = 1e150
+
+
+def norm_scale(v: ArrayLike) -> NDArray:
+    """The factor ``(..., 1)`` to divide vector(s) ``(..., 3)`` by before a Euclidean norm: the
+    largest |coordinate| of a vector with one beyond 1e150, else 1.0 (``v / 1.0`` is ``v`` bit
+    for bit, so every ordinary result stays as it was). ``v / k`` has the direction of ``v``
+    and squares that cannot overflow: its norm gives the direction of (1e300, 1e300, 0), which
+    ``np.linalg.norm`` made inf (a RuntimeWarning, then zero TDOAs); ``k * |v / k|`` is the
+    length. A non-finite vector is left as it is (1.0). The one guard of :func:`cart_to_sph`,
+    the far-field directions of :meth:`hearsee.audio.arrays.MicArray.tdoa_far` and the
+    free-field and masked simulators."""
+    p = np.asarray(v, dtype=float)
+    big = np.max(np.abs(p), axis=-1, keepdims=True)
+    return np.where((big > _SQUARE_SAFE) & np.isfinite(big), big, 1.0)
+
+
 def cart_to_sph(xyz: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
-    """Cartesian points ``(..., 3)`` -> (azimuth rad in (-pi, pi], elevation rad, distance m)."""
+    """Cartesian points ``(..., 3)`` -> (azimuth rad in (-pi, pi], elevation rad, distance m).
+    The distance is computed without overflow (:func:`norm_scale`): 1.41e300 m for
+    (1e300, 1e300, 0), not inf."""
     p = as_points(xyz)
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
-    r = np.sqrt(x * x + y * y + z * z)
+    k = norm_scale(p)[..., 0]
+    xs, ys, zs = x / k, y / k, z / k
+    r = k * np.sqrt(xs * xs + ys * ys + zs * zs)
     az = np.arctan2(y, x)
     az = np.where(az == -np.pi, np.pi, az)  # arctan2(-0.0, -1) = -pi
     el = np.arctan2(z, np.hypot(x, y))
@@ -137,7 +161,9 @@ def as_point(value: Any, what: str, error: type[Exception] = GeometryError) -> N
     ``cameras.mount_m`` vectors, which pass ConfigError). Each coordinate must be a finite real
     number (:func:`hearsee.config.all_real`): numpy's float conversion read ``True`` as 1 m and
     ``"0.5"`` as 0.5 m, and raised a builtin OverflowError on an int beyond float's range; any
-    other shape, ``(1, 3)`` included, is refused too.
+    other shape, ``(1, 3)`` included, is refused too. So is a point farther from the origin
+    than float's range (1.8e308 m: its distance, ``math.hypot``, is inf), which no distance,
+    truth or TDOA could hold; (1e300, 1e300, 0), 1.41e300 m away, is a point.
 
     >>> as_point((1, 2.5, 0), "source")
     array([1. , 2.5, 0. ])
@@ -149,7 +175,11 @@ def as_point(value: Any, what: str, error: type[Exception] = GeometryError) -> N
     if not all_real(items):
         raise error(f"{what} must be a finite [x, y, z] in metres (3 real numbers), got "
                     f"{value!r}")
-    return items.astype(float)
+    p = items.astype(float)
+    if not math.isfinite(math.hypot(*p)):
+        raise error(f"{what}: {p.tolist()} is farther from the origin than a float can hold "
+                    "(its distance overflows); give a point within 1e308 m")
+    return p
 
 
 # ---------------------------------------------------------------------------------------------

@@ -136,3 +136,19 @@ def test_simulate_keeps_existing_outputs_unless_forced(tmp_path, capsys, mode):
     assert main([*args, "--seed", "2", "--force"]) == 0
     assert victim.read_bytes() != b"mine"
     assert sorted(p for p in tmp_path.iterdir() if p.name.startswith("rec")) == written
+
+
+def test_simulate_far_field_source_1e300_m_away(tmp_path, capsys):
+    """`simulate --far-field --source 1e300,1e300,0` printed three numpy RuntimeWarning lines
+    and wrote TDOAs of -0.0 and a null distance; the direction (45 deg) is well defined. Now
+    the truth is that of --source 1,1,0 (its distance 1.41e300 m), without a warning."""
+    base = ["--array", "respeaker-4", "--duration", "0.1", "--far-field"]
+    assert main(["simulate", str(tmp_path / "far.wav"), *base, "--source", "1e300,1e300,0"]) == 0
+    err = " ".join(capsys.readouterr().err.split())  # (the console wraps long lines)
+    assert "Warning" not in err and "distance 1.41e+300 m" in err
+    assert main(["simulate", str(tmp_path / "one.wav"), *base, "--source", "1,1,0"]) == 0
+    far = json.loads((tmp_path / "far.json").read_text())
+    one = json.loads((tmp_path / "one.json").read_text())
+    assert far["tdoa_s"] == one["tdoa_s"] and far["azimuth_deg"] == one["azimuth_deg"] == 45.0
+    assert far["distance_m"] == pytest.approx(2**0.5 * 1e300)
+    assert "distance 1.41 m" in " ".join(capsys.readouterr().err.split())

@@ -296,3 +296,36 @@ def test_source_and_room_coordinates_are_numbers(bad):
                       ("array_at", {"room_dim": [5, 4, 3], "rt60": 0.2, "array_at": bad})):
         with pytest.raises(GeometryError, match=rf"^{key} must be a finite \[x, y, z\]"):
             normalize_room(room)
+
+
+@pytest.mark.parametrize("array", ["respeaker-4", "mask2"])
+def test_a_far_field_source_1e300_m_away_has_its_direction(array):
+    """A far-field source is a direction: (1e300, 1e300, 0) is 45 deg. np.linalg.norm summed
+    its squares to inf: RuntimeWarnings, every truth TDOA -0.0 and the distance inf (null in
+    the JSON), the recording that of no direction at all (all channels in phase; the masked
+    array's too). Now the recording and the truth TDOAs are those of (1, 1, 0), bit for bit,
+    and the distance is the point's own, 1.41e300 m."""
+    import math
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        x, truth = simulate_recording(array, [1e300, 1e300, 0.0], duration_s=0.1,
+                                      far_field=True)
+    x1, truth1 = simulate_recording(array, [1.0, 1.0, 0.0], duration_s=0.1, far_field=True)
+    np.testing.assert_array_equal(x, x1)
+    assert truth["tdoa_s"] == truth1["tdoa_s"]
+    assert any(t != 0 for t in truth["tdoa_s"].values())
+    assert truth["azimuth_deg"] == pytest.approx(45.0) and truth["elevation_deg"] == 0.0
+    assert truth["distance_m"] == math.hypot(1e300, 1e300) != math.inf
+
+
+def test_a_source_beyond_float_range_is_refused():
+    """(1.7e308, 1.7e308, 0) is 2.4e308 m away: beyond float's range, no distance or truth can
+    hold it (it was written with distance inf, TDOAs -0.0, after RuntimeWarnings). A
+    GeometryError names it, near or far field."""
+    for far_field in (False, True):
+        with pytest.raises(GeometryError, match=r"^source: \[1\.7e\+308, 1\.7e\+308, 0\.0\] is "
+                                                "farther from the origin than a float can hold"):
+            simulate_recording("respeaker-4", [1.7e308, 1.7e308, 0.0], duration_s=0.1,
+                               far_field=far_field)

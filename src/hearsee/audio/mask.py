@@ -92,6 +92,7 @@ from hearsee.audio.signals import as_samples, check_fs
 from hearsee.audio.tdoa import check_frame_ms
 from hearsee.config import finite_number, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
+from hearsee.geometry import norm_scale
 
 __all__ = [
     "CODE_VERSION",
@@ -702,15 +703,19 @@ def simulate_masked(signal: ArrayLike, fs: float, array: MicArray | str | Path |
         raise AudioInputError("signal contains NaN or inf samples")
     fs = check_fs(fs)  # (0 divided by zero; a negative rate gave garbage)
     s = np.asarray(source, dtype=float)
-    if s.shape != (3,) or not np.all(np.isfinite(s)) or np.linalg.norm(s) < 1e-9:
+    if s.shape != (3,) or not np.all(np.isfinite(s)):
+        raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")
+    k = norm_scale(s)  # (a source 1e300 m away: its norm overflowed, with RuntimeWarnings)
+    d0 = float(k[0] * np.linalg.norm(s / k))
+    if d0 < 1e-9:
         raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")
     if far_field:
+        s = s / k  # (only its direction counts)
         bulk, gain = 1e-3, 1.0
     else:
-        d0 = float(np.linalg.norm(s))
+        check_heard(d0, model.c, len(x), fs)
         if model.geometry_inside(s[None])[0]:
             raise GeometryError("the source lies inside the mask body")
-        check_heard(d0, model.c, len(x), fs)
         bulk, gain = d0 / model.c, 1.0 / d0
     tail = int(np.ceil((bulk + 2 * model.max_itd() + 0.01) * fs))
     nf = sfft.next_fast_len(len(x) + tail, real=True)

@@ -29,6 +29,7 @@ from hearsee.audio.arrays import MicArray
 from hearsee.audio.signals import check_fs
 from hearsee.config import finite_number, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
+from hearsee.geometry import norm_scale
 
 __all__ = [
     "MAX_IMAGE_ORDER",
@@ -203,6 +204,7 @@ def simulate_free_field(
     if s.shape != (3,) or not np.all(np.isfinite(s)):
         raise GeometryError(f"source must be a finite [x, y, z] point, got {source!r}")
     if far_field:
+        s = s / norm_scale(s)  # (the direction of a source 1e300 m away, without overflow)
         if not np.linalg.norm(s) > 0:
             raise GeometryError("a far-field (plane-wave) source needs a direction; the source is "
                                 "at the array-frame origin")
@@ -211,8 +213,9 @@ def simulate_free_field(
         t = t - t.min()
         gains = np.ones(len(pos))
     else:
-        with np.errstate(over="ignore"):  # (a source 1e300 m away: inf, refused just below)
-            r = np.linalg.norm(pos - s, axis=1)
+        d = pos - s
+        k = norm_scale(d)  # (a source 1e300 m away: that distance, refused just below)
+        r = k[:, 0] * np.linalg.norm(d / k, axis=1)
         if np.any(r < 1e-3):
             raise GeometryError("the source coincides with a microphone")
         check_heard(float(r.min()), c, np.size(signal), check_fs(fs))

@@ -27,6 +27,12 @@ def _room_from_options(room: str | None, rt60: float | None,
     return out
 
 
+def _metres(d: float) -> str:
+    """A distance in metres for the summary line: centimetres (``1.41``), or 3 significant
+    digits beyond 1e6 m (a far-field source 1e300 m away printed 300 digits)."""
+    return f"{d:.2f}" if d < 1e6 else f"{d:.3g}"
+
+
 def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str, duration: float,
                      fs: int, snr: float | None, room_spec: dict | None, seed: int,
                      far_field: bool, pcm16: bool, force: bool, protect: list) -> None:
@@ -146,6 +152,6 @@ def simulate_cmd(
                  f"{truth['elevation_deg']:.1f} deg")
     err_console.print(
         f"wrote {wav} ({x.shape[0]} channels, {x.shape[1] / fs:.2f} s at {fs} Hz) and {js}: "
-        f"{where}, distance {truth['distance_m']:.2f} m",
+        f"{where}, distance {_metres(truth['distance_m'])} m",
         highlight=False,
     )
