@@ -26,6 +26,7 @@ __all__ = [
     "as_pose",
     "cart_to_sph",
     "check_head_offset",
+    "check_head_pivot",
     "direction_deg",
     "fibonacci_sphere",
     "head_rotation",
@@ -225,6 +226,27 @@ def check_head_offset(offset_m: Any, what: str = "offset_m",
     if not math.hypot(*off) <= MAX_HEAD_OFFSET_M:
         raise error(f"{what}: {off.tolist()} is more than {MAX_HEAD_OFFSET_M:g} m from the pivot")
     return off
+
+
+#: The head pivot is at most this far (metres) from the robot-frame origin: it is a point of
+#: the robot (the robot file's default is 1.2 m up).
+MAX_HEAD_PIVOT_M = 10.0
+
+
+def check_head_pivot(pivot_m: Any, what: str = "pivot_m",
+                     error: type[Exception] = GeometryError) -> NDArray:
+    """``pivot_m`` (the pan-tilt pivot, robot frame, metres) as a float array ``(3,)``
+    (:func:`as_point`), else ``error`` naming ``what``; one at most :data:`MAX_HEAD_PIVOT_M`
+    from the robot-frame origin. The one rule of the robot file's head, a pose manifest's and
+    :func:`hearsee.audio.active.pose_mic_positions` (the moving-head solver's): a pivot 1e300 m
+    away put every microphone on the same float (centimetres are below its resolution), and
+    ``hearsee localize3d`` reported a wrong direction with only its consistency warning (one
+    1e308 m away ran for minutes)."""
+    piv = as_point(pivot_m, what, error)
+    if not math.hypot(*piv) <= MAX_HEAD_PIVOT_M:
+        raise error(f"{what}: {piv.tolist()} is more than {MAX_HEAD_PIVOT_M:g} m from the "
+                    "robot-frame origin (the head pivot is a point of the robot)")
+    return piv
 
 
 @dataclass(frozen=True)

@@ -364,6 +364,9 @@ def test_localize3d_cli_round_trip(pose_manifest, capsys, method):
     # (scipy's builtin ValueError 'Residuals are not finite' traceback; the robot file's rule)
     (lambda d: d["head"].update(offset_m=[1e300, 0, 0]),
      "bad.yaml: head.offset_m: [1e+300, 0.0, 0.0] is more than 1 m from the pivot"),
+    # (every microphone on one float: a wrong direction with only the consistency warning)
+    (lambda d: d["head"].update(pivot_m=[1e300, 0, 0]),
+     "bad.yaml: head.pivot_m: [1e+300, 0.0, 0.0] is more than 10 m from the robot-frame origin"),
     # (an infinite noise passed the manifest check; the solver refused it after measuring
     # every capture, without naming the file: "tdoa_std_s must be > 0 seconds, got inf")
     (lambda d: d.update(tdoa_std_s=float("inf")), "bad.yaml: tdoa_std_s must be a positive"),
@@ -588,3 +591,29 @@ def test_train_pose_mlp_checks_its_settings_before_the_cache_key():
                      ({"tdoa_std_s": True}, "tdoa_std_s"), ({"seed": -1}, "seed")]:
         with pytest.raises(GeometryError, match=f"^{what}"):
             train_pose_mlp("three-mic", poses, **kw)
+
+
+def test_a_head_pivot_is_a_point_of_the_robot(tmp_path):
+    """A pivot 1e300 m from the robot-frame origin put all microphones on one float (their
+    centimetres below its resolution): localize_multipose returned a wrong direction, flagged
+    only as inconsistent (one 1e308 m away ran for minutes). The pivot must be within 10 m
+    (geometry.check_head_pivot); one there localizes as one at the origin does."""
+    from hearsee.audio.active import localize_manifest, pose_mic_positions, simulate_pose_manifest
+
+    arr = load_array("three-mic")
+    src = np.array([1.5, 0.9, 0.4])
+    poses = [(0.0, 0.0), (40.0, 25.0), (-40.0, -20.0)]
+    for pivot in ([1e300, 0.0, 0.0], [0.0, 0.0, 10.01]):
+        taus = [MicArray(m).tdoa(src) for m in pose_mic_positions(arr, poses)]
+        with pytest.raises(GeometryError, match=r"^pivot_m: \[.*\] is more than 10 m from the "
+                                                "robot-frame origin"):
+            localize_multipose(taus, poses, arr, pivot_m=pivot)
+        with pytest.raises(GeometryError, match="^pivot_m: .* more than 10 m"):
+            simulate_pose_manifest(tmp_path / "m.yaml", arr, src, poses, duration_s=0.1,
+                                   pivot_m=pivot)
+    pivot = np.array([0.0, 6.0, 8.0])  # 10 m: still a pivot
+    man, _ = simulate_pose_manifest(tmp_path / "m.yaml", arr, pivot + src, poses,
+                                    duration_s=0.5, seed=2, pivot_m=pivot)
+    est = localize_manifest(man)
+    np.testing.assert_allclose([est.azimuth_deg, est.elevation_deg], direction_deg(src),
+                               atol=2.0)

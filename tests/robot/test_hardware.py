@@ -1336,3 +1336,15 @@ def test_speaker_chosen_by_the_bearing_from_the_array_not_the_pivot(tmp_path, mo
     first = next(r for r in res.log if any(d["speaker"] for d in r["detections"]))
     assert first["audio"] is not None
     assert [d["speaker"] for d in first["detections"]] == [True, False]
+
+
+def test_a_head_pivot_far_off_the_robot_is_refused(small_rig):
+    """head.pivot_m [1e300, 0, 0] was taken: every microphone and the camera on one float,
+    bearings from nowhere. The pivot is a point of the robot, within 10 m of its origin
+    (geometry.check_head_pivot, the pose manifests' rule too); 10 m itself is allowed."""
+    for bad in ([1e300, 0, 0], [0, 0, 10.5]):
+        with pytest.raises(ConfigError, match=r"head.pivot_m: \[.*\] is more than 10 m from "
+                                              "the robot-frame origin"):
+            load_robot_config(make_config(small_rig, _with(head={"pivot_m": bad})))
+    cfg = load_robot_config(make_config(small_rig, _with(head={"pivot_m": [0, 6, 8]})))
+    np.testing.assert_allclose(cfg.head.pivot_m, [0.0, 6.0, 8.0])

@@ -76,6 +76,7 @@ from hearsee.geometry import (
     as_point,
     as_pose,
     check_head_offset,
+    check_head_pivot,
     direction_deg,
     fibonacci_sphere,
     mic_positions_at,
@@ -212,9 +213,12 @@ class Position3D:
 def pose_mic_positions(array: MicArray | str, poses: Sequence[HeadPose | Sequence[float]],
                        pivot_m: ArrayLike = (0.0, 0.0, 0.0),
                        offset_m: ArrayLike = (0.0, 0.0, 0.0)) -> list[NDArray]:
-    """Microphone positions ``(n_mics, 3)`` in the robot frame for each pose."""
+    """Microphone positions ``(n_mics, 3)`` in the robot frame for each pose; ``pivot_m``
+    within :data:`~hearsee.geometry.MAX_HEAD_PIVOT_M` of the origin
+    (:func:`~hearsee.geometry.check_head_pivot`)."""
     arr = load_array(array)
-    return [mic_positions_at(arr, as_pose(p), pivot_m, offset_m) for p in poses]
+    pivot = check_head_pivot(pivot_m)
+    return [mic_positions_at(arr, as_pose(p), pivot, offset_m) for p in poses]
 
 
 def facing_pair(array: MicArray) -> tuple[int, int] | None:
@@ -1312,7 +1316,9 @@ def load_pose_manifest(path: Any) -> PoseManifest:
     if not isinstance(head, dict):
         raise ConfigError(f"{where}: head must be a mapping with pivot_m and/or offset_m")
     check_keys(head, _HEAD_KEYS, f"{where}: head")
-    pivot = as_float_array(head.get("pivot_m", [0, 0, 0]), f"{where}: head.pivot_m", (3,))
+    pivot = check_head_pivot(
+        as_float_array(head.get("pivot_m", [0, 0, 0]), f"{where}: head.pivot_m", (3,)),
+        f"{where}: head.pivot_m", ConfigError)
     offset = check_head_offset(
         as_float_array(head.get("offset_m", [0, 0, 0]), f"{where}: head.offset_m", (3,)),
         f"{where}: head.offset_m", ConfigError)
@@ -1452,7 +1458,7 @@ def simulate_pose_manifest(
     arr = load_array(array)
     # (each read as np.asarray(float): True as 1 m, "0.5" as 0.5 m, a huge int an OverflowError)
     src = as_point(source_m, "source_m")
-    pivot = as_point(pivot_m, "pivot_m")
+    pivot = check_head_pivot(pivot_m)
     offset = check_head_offset(offset_m)
     poses = [as_pose(p) for p in poses]
     if not poses:

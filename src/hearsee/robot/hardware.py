@@ -362,10 +362,10 @@ def _pair(d: Mapping[str, Any], key: str, default: tuple[float, float], where: s
 
 
 def _head(d: Mapping[str, Any], where: str) -> HeadConfig:
-    from hearsee.geometry import check_head_offset
+    from hearsee.geometry import check_head_offset, check_head_pivot
 
     check_keys(d, _HEAD, where)
-    pivot = _vec3(d, "pivot_m", (0.0, 0.0, 1.2), where)
+    pivot = check_head_pivot(d.get("pivot_m", [0.0, 0.0, 1.2]), f"{where}.pivot_m", ConfigError)
     offset = check_head_offset(d.get("offset_m", [0.0, 0.0, 0.0]), f"{where}.offset_m",
                                ConfigError)
     lo, hi = pan_limits_deg(_pair(d, "pan_limits_deg", (-170.0, 170.0), where),
