@@ -344,3 +344,27 @@ def test_image_points_csv_with_a_byte_order_mark(tmp_path):
     p = tmp_path / "p.csv"
     p.write_bytes(b"\xef\xbb\xbft,u,v\r\n0.0,100,200\r\n0.1,110,220\r\n")
     assert CsvImagePoints(p)(0.05) == pytest.approx((105.0, 210.0))
+
+
+@pytest.mark.parametrize(("u", "v", "line"), [("1e300", "240", 3), ("inf", "240", 3),
+                                              ("704.6", "240", 3), ("320", "-65", 3)])
+def test_track_refuses_image_points_off_the_camera_image(scene, tmp_path, capsys, u, v, line):
+    """Image points of 1e300 px ran (exit 0) after a numpy RuntimeWarning, and points far
+    outside the calibrated 640x480 image were used as rays of no pixel of the camera. A point
+    more than 10 % of the larger side (64 px) off the image, or infinite, is now refused with
+    the file and line; one just past the edge (a detector's box) is still used."""
+    bad = tmp_path / "bad.csv"
+    bad.write_text(f"t,u,v\n0.0,320,240\n\n0.1,{u},{v}\n0.2,,\n")
+    args = ["track", str(scene["wav"]), "--array", str(scene["array"]), "--camera",
+            str(scene["cam"]), "--image-points", str(bad)]
+    assert main(args) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and len(err.splitlines()) == 1 and "Warning" not in err
+    assert err.startswith(f"hearsee: error: {bad}: line {line + 1}: image point (")
+    cam = Camera.from_fov(70.0, 640, 480)
+    with pytest.raises(ConfigError, match=rf"line {line + 1}: image point"):
+        CsvImagePoints(bad, camera=cam)
+    ok = tmp_path / "ok.csv"
+    ok.write_text("t,u,v\n0.0,-60,240\n0.1,320,539\n0.2,nan,\n")  # (within 64 px of the edge)
+    pts = CsvImagePoints(ok, camera=cam)
+    assert pts(0.0) == (-60.0, 240.0) and pts(0.1) == (320.0, 539.0) and pts(0.2) is None

@@ -51,7 +51,8 @@ def track_cmd(
     camera_device: Annotated[int | None, typer.Option(
         "--camera-device", help="Live camera index (needs --camera).")] = None,
     image_points: Annotated[Path | None, typer.Option(
-        "--image-points", help="CSV t,u,v of the source's image point (needs --camera).")] = None,
+        "--image-points", help="CSV t,u,v of the source's image point (needs --camera; "
+        "empty u,v = not visible; a point off the camera's image is an error).")] = None,
     detector: Annotated[Detector, typer.Option(
         "--detector", help="Person detector for --video / --camera-device.")] = Detector.hog,
     camera: Annotated[Path | None, typer.Option(
@@ -139,7 +140,7 @@ def track_cmd(
         rig = AudioVisualRig.mounted(arr, cam, parse_floats(camera_at, 3, "--camera-at"),
                                      camera_pan, camera_tilt)
         if image_points is not None:
-            points = CsvImagePoints(image_points)
+            points = CsvImagePoints(image_points, camera=cam)
         else:
             points = VideoImagePoints(camera_device if video is None else video,
                                       detector=detector.value, expected_size=cam.size)

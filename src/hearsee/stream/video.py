@@ -6,7 +6,9 @@ frame, the pixel ``(u, v)`` where the source appears. Two providers, both callab
 
 * :class:`CsvImagePoints` reads ``t,u,v`` rows (seconds, pixels; empty u/v = not seen), e.g.
   written by a simulation or an external detector, and interpolates linearly between rows that
-  are at most ``max_gap_s`` apart.
+  are at most ``max_gap_s`` apart. An infinite pixel, or (given the calibrated camera) one
+  outside its image by more than :data:`IMAGE_POINT_MARGIN` of the image size, is refused
+  with an error naming the file and line, like any other row it cannot use.
 * :class:`VideoImagePoints` reads a video file or a camera (OpenCV ``VideoCapture``) and runs a
   simple detector on the frame at time t: OpenCV's HOG people detector (Dalal & Triggs 2005;
   ``detector="hog"``, image point = 12 % down the person box, about the mouth of a standing
@@ -38,7 +40,13 @@ from numpy.typing import NDArray
 from hearsee.config import finite_number, whole_number
 from hearsee.errors import ConfigError, ImageInputError, InputFileError
 
-__all__ = ["CsvImagePoints", "VideoImagePoints", "detect_source_point", "save_image_points"]
+__all__ = ["IMAGE_POINT_MARGIN", "CsvImagePoints", "VideoImagePoints", "detect_source_point",
+           "save_image_points"]
+
+#: How far outside the camera image (a fraction of its larger side, e.g. 64 px of a 640 x 480
+#: image) an image point of a CSV may lie: a detector's point just past the edge is still a
+#: usable ray, one farther off is a wrong column, a swapped u/v or another camera's pixels.
+IMAGE_POINT_MARGIN = 0.1
 
 
 class CsvImagePoints:
@@ -47,9 +55,15 @@ class CsvImagePoints:
     Rows with empty ``u``/``v`` mean "source not visible". ``points(t)`` interpolates between
     the two rows around t when they are at most ``max_gap_s`` apart, returns the nearest row
     within ``max_gap_s / 2`` otherwise, else None.
+
+    ``camera`` (a :class:`hearsee.vision.camera.Camera`; ``hearsee track`` passes the
+    calibrated one) bounds the pixels: a point outside its image by more than
+    :data:`IMAGE_POINT_MARGIN` of the larger side is a ConfigError naming the file and line
+    (it was used as a ray through no pixel of the camera). An infinite pixel (``inf``,
+    ``1e400``) is one always; empty cells (or NaN) mean "not visible".
     """
 
-    def __init__(self, path: str | Path, max_gap_s: float = 0.2) -> None:
+    def __init__(self, path: str | Path, max_gap_s: float = 0.2, camera: Any = None) -> None:
         # (a NaN or negative gap silently gave no image point at all, not even at a row's time)
         max_gap_s = finite_number("max_gap_s", max_gap_s, 0.0)
         p = Path(path)
@@ -57,13 +71,14 @@ class CsvImagePoints:
             raise InputFileError(f"{p}: image-point file not found")
         try:
             with p.open(newline="", encoding="utf-8-sig") as fh:  # (a spreadsheet's BOM)
-                rows = [r for r in csv.reader(fh) if r and any(c.strip() for c in r)]
+                reader = csv.reader(fh)  # (its line_num: the file's line, blank ones counted)
+                rows = [(reader.line_num, r) for r in reader if r and any(c.strip() for c in r)]
         except UnicodeDecodeError:
             raise ConfigError(f"{p}: not a text CSV file") from None
-        if not rows or [c.strip().lower() for c in rows[0]] != ["t", "u", "v"]:
+        if not rows or [c.strip().lower() for c in rows[0][1]] != ["t", "u", "v"]:
             raise ConfigError(f"{p}: header must be 't,u,v' (seconds, pixels)")
         data = []
-        for k, r in enumerate(rows[1:], start=2):
+        for k, r in rows[1:]:
             if len(r) != 3:
                 raise ConfigError(f"{p}: line {k}: expected 3 values t,u,v")
             try:
@@ -72,6 +87,7 @@ class CsvImagePoints:
                 v = float(r[2]) if r[2].strip() else np.nan
             except ValueError:
                 raise ConfigError(f"{p}: line {k}: non-numeric value in {','.join(r)!r}") from None
+            _check_pixel(p, k, u, v, camera)
             data.append((t, u, v))
         if not data:
             raise ConfigError(f"{p}: no image points after the header")
@@ -95,6 +111,25 @@ class CsvImagePoints:
         if abs(self.t[best] - t) <= self.max_gap_s / 2 and np.all(np.isfinite(self.uv[best])):
             return float(self.uv[best, 0]), float(self.uv[best, 1])
         return None
+
+
+def _check_pixel(path: Path, line: int, u: float, v: float, camera: Any) -> None:
+    """ConfigError naming ``path`` and ``line`` unless the pixel ``(u, v)`` is not visible
+    (a NaN: an empty cell) or finite and, with ``camera``, within :data:`IMAGE_POINT_MARGIN`
+    of its image (:meth:`hearsee.vision.camera.Camera.in_image`)."""
+    if np.isnan(u) or np.isnan(v):
+        return
+    if not (np.isfinite(u) and np.isfinite(v)):
+        raise ConfigError(f"{path}: line {line}: image point ({u:g}, {v:g}) is not a finite "
+                          "pixel (leave u and v empty where the source is not visible)")
+    if camera is None:
+        return
+    margin = IMAGE_POINT_MARGIN * max(camera.width, camera.height)
+    if not camera.in_image((u, v), margin=-margin)[0]:
+        raise ConfigError(
+            f"{path}: line {line}: image point ({u:g}, {v:g}) px is outside the calibrated "
+            f"{camera.width}x{camera.height} image by more than {margin:g} px (check the "
+            "columns, and that the points are of this camera)")
 
 
 def save_image_points(path: str | Path, t: NDArray, uv: NDArray) -> None:
