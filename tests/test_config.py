@@ -13,7 +13,7 @@ from hearsee.config import (
     time_limit,
     to_jsonable,
 )
-from hearsee.errors import ConfigError, EstimationError
+from hearsee.errors import ConfigError, EstimationError, InputFileError
 
 
 def test_number_takes_numpy_scalars_and_refuses_non_numbers():
@@ -289,3 +289,68 @@ def test_as_float_array_and_as_point_outcomes_on_every_kind_of_entry(value, many
     _check_outcome(lambda: as_float_array(value, "w", (3,)), value, three, ConfigError)
     _check_outcome(lambda: as_point(value, "p"), value, point, GeometryError)
     _check_outcome(lambda: as_point(value, "p", ConfigError), value, point, ConfigError)
+
+
+def _manifest_with_a_folder(d):
+    import yaml
+
+    (d / "cap.wav").mkdir()
+    m = d / "m.yaml"
+    m.write_text(yaml.safe_dump({"array": "three-mic", "captures": [
+        {"file": "cap.wav", "pan_deg": 0, "tilt_deg": 0}]}))
+    return m
+
+
+def _loaders():
+    """(call on a folder, what its error must name) of each input-file loader."""
+    from hearsee.audio.active import load_pose_manifest
+    from hearsee.audio.signals import read_recording
+    from hearsee.sim.moving import load_trajectory
+    from hearsee.stream.video import CsvImagePoints, VideoImagePoints
+    from hearsee.vision.camera import load_camera, load_rig, read_opencv_yaml
+    from hearsee.vision.io import read_image
+    from hearsee.vision.thermal import load_thermal
+
+    return [
+        (lambda d: load_yaml(d / "x.yaml"), "x.yaml: is a folder, expected a YAML file"),
+        (lambda d: read_recording(d / "x.wav"), "x.wav: is a folder, expected an audio file"),
+        (lambda d: load_pose_manifest(_manifest_with_a_folder(d)),
+         "m.yaml: captures[0]: {d}/cap.wav: is a folder, expected a capture file"),
+        (lambda d: load_camera(d / "x.yaml"), "x.yaml: is a folder, expected a calibration file"),
+        (lambda d: load_rig(d / "x.yaml"), "x.yaml: is a folder, expected a calibration file"),
+        (lambda d: read_opencv_yaml(d / "x.yml"), "x.yml: is a folder, expected a file"),
+        (lambda d: read_image(d / "x.png"), "x.png: is a folder, expected an image file"),
+        (lambda d: load_thermal(d / "x.npy"), "x.npy: is a folder, expected a thermal file"),
+        (lambda d: load_trajectory(d / "x.csv"), "x.csv: is a folder, expected a trajectory file"),
+        (lambda d: VideoImagePoints(d / "x.avi"), "x.avi: is a folder, expected a video file"),
+        (lambda d: CsvImagePoints(d / "x.csv"),
+         "x.csv: is a folder, expected an image-point file"),
+    ]
+
+
+@pytest.mark.parametrize("k", range(11))
+def test_an_input_file_that_is_a_folder_says_so(tmp_path, k):
+    """Capture files, calibrations, images, thermal arrays, trajectories, videos and image
+    points said '<name>: ... file not found' for a folder of that name (YAML and audio files
+    'is a directory'); config.input_file is now the one check, saying 'is a folder, expected
+    a <kind> file'. A missing file is still 'not found'."""
+    call, want = _loaders()[k]
+    for name in ("x.yaml", "x.wav", "x.yml", "x.png", "x.npy", "x.csv", "x.avi"):
+        (tmp_path / name).mkdir()
+    with pytest.raises(InputFileError) as exc:
+        call(tmp_path)
+    assert str(exc.value).endswith(want.format(d=tmp_path)) and "\n" not in str(exc.value)
+    for name in ("x.yaml", "x.wav", "x.yml", "x.png", "x.npy", "x.csv", "x.avi", "cap.wav"):
+        if (tmp_path / name).is_dir():
+            (tmp_path / name).rmdir()
+    if k != 2:  # (the manifest's capture: the manifest itself is written by the call)
+        with pytest.raises(InputFileError, match="not found"):
+            call(tmp_path)
+
+
+def test_input_file_names_the_kind():
+    from hearsee.config import input_file
+
+    assert input_file(__file__, "test file").name == "test_config.py"
+    with pytest.raises(InputFileError, match=r"^nowhere\.csv: trajectory file not found \(hint\)$"):
+        input_file("nowhere.csv", "trajectory file", " (hint)")

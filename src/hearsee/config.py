@@ -18,9 +18,9 @@ import yaml
 from hearsee.errors import ConfigError, InputFileError
 
 __all__ = [
-    "all_real", "as_float_array", "check_keys", "finite_number", "is_real", "load_yaml", "number",
-    "object_entries", "require", "save_yaml", "time_limit", "to_jsonable", "to_plain",
-    "whole_number",
+    "all_real", "as_float_array", "check_keys", "finite_number", "input_file", "is_real",
+    "load_yaml", "number", "object_entries", "require", "save_yaml", "time_limit", "to_jsonable",
+    "to_plain", "whole_number",
 ]
 
 
@@ -36,13 +36,27 @@ _Loader.add_implicit_resolver(
     list("-+0123456789."))
 
 
-def load_yaml(path: str | Path) -> dict[str, Any]:
-    """Read a YAML mapping from ``path``; raise typed errors for missing files and bad YAML."""
+def input_file(path: str | Path, kind: str = "file", hint: str = "") -> Path:
+    """``path`` as a Path when it names something to read, else InputFileError: ``"P: is a
+    folder, expected a <kind>"`` for a folder, ``"P: <kind> not found<hint>"`` when nothing is
+    there (``kind`` e.g. "trajectory file", ``hint`` e.g. " (create one with ...)").
+
+    The one check of hearsee's input files (YAML, audio, captures, calibration, images,
+    thermal arrays, trajectories, videos, image points): most said "not found" for a folder.
+    A file that exists but is not a regular one (a FIFO, ``/dev/stdin``) is left to the
+    reader, whose own typed error reports what it cannot read."""
     p = Path(path)
     if p.is_dir():
-        raise InputFileError(f"{p}: is a directory, expected a YAML file")
-    if not p.is_file():
-        raise InputFileError(f"{p}: file not found")
+        article = "an" if kind[:1].lower() in "aeiou" else "a"
+        raise InputFileError(f"{p}: is a folder, expected {article} {kind}")
+    if not p.exists():
+        raise InputFileError(f"{p}: {kind} not found{hint}")
+    return p
+
+
+def load_yaml(path: str | Path) -> dict[str, Any]:
+    """Read a YAML mapping from ``path``; raise typed errors for missing files and bad YAML."""
+    p = input_file(path, "YAML file")
     try:
         data = yaml.load(p.read_text(encoding="utf-8"), Loader=_Loader)  # noqa: S506 (safe)
     except UnicodeDecodeError as exc:

@@ -126,7 +126,7 @@ def test_read_recording_bad_inputs(tmp_path):
     good = 0.1 * np.random.default_rng(1).standard_normal((2, 2000))
     with pytest.raises(InputFileError, match="not found"):
         read_recording(tmp_path / "nope.wav")
-    with pytest.raises(InputFileError, match="directory"):
+    with pytest.raises(InputFileError, match="is a folder, expected an audio file"):
         read_recording(tmp_path)
     text = tmp_path / "notes.wav"
     text.write_text("this is not audio\n" * 50)

@@ -166,7 +166,7 @@ def test_bad_robot_files_and_options(robot_dir, capsys):
     assert main(["run", "--config", str(robot_dir / "none.yaml")]) == 2
     assert "file not found" in capsys.readouterr().err
     assert main(["run", "--config", str(robot_dir)]) == 2
-    assert "is a directory, expected a YAML file" in capsys.readouterr().err
+    assert "is a folder, expected a YAML file" in capsys.readouterr().err
     assert main(["run", "--config", str(_config(robot_dir)), "--duration", "0"]) == 2
     assert capsys.readouterr().err == ("hearsee: error: --duration must be a number of seconds "
                                        "> 0, or inf for no limit, got 0.0\n")

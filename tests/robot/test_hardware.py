@@ -1348,3 +1348,20 @@ def test_a_head_pivot_far_off_the_robot_is_refused(small_rig):
             load_robot_config(make_config(small_rig, _with(head={"pivot_m": bad})))
     cfg = load_robot_config(make_config(small_rig, _with(head={"pivot_m": [0, 6, 8]})))
     np.testing.assert_allclose(cfg.head.pivot_m, [0.0, 6.0, 8.0])
+
+
+def test_a_robot_files_calibration_or_array_that_is_a_folder_says_so(small_rig):
+    """cameras.calib and audio.array naming a folder said 'calibration file ... not found' /
+    'array file ... not found'; now the loaders' own 'is a folder, expected ...' (the one
+    input-file check, config.input_file), under the field's name."""
+    (small_rig / "calib").mkdir()
+    (small_rig / "arr.yaml").mkdir()
+    with pytest.raises(ConfigError, match=r"^.*robot\.yaml: cameras\.calib: .*calib: is a folder, "
+                                          "expected a calibration file$"):
+        load_robot_config(make_config(small_rig, _with(cameras={"calib": "calib"})))
+    with pytest.raises(ConfigError, match=r"audio\.array: .*arr\.yaml: is a folder; expected an "
+                                          "array YAML file"):
+        load_robot_config(make_config(small_rig, _with(audio={"array": "arr.yaml"})))
+    with pytest.raises(ConfigError, match=r"cameras\.calib: calibration file 'none\.yaml' not "
+                                          "found"):
+        load_robot_config(make_config(small_rig, _with(cameras={"calib": "none.yaml"})))

@@ -1297,7 +1297,7 @@ def load_pose_manifest(path: Any) -> PoseManifest:
     """Read and validate a pose manifest; ConfigError / InputFileError name the problem."""
     from pathlib import Path
 
-    from hearsee.config import as_float_array, check_keys, load_yaml, require
+    from hearsee.config import as_float_array, check_keys, input_file, load_yaml, require
     from hearsee.errors import ConfigError, InputFileError
 
     p = Path(path)
@@ -1334,8 +1334,10 @@ def load_pose_manifest(path: Any) -> PoseManifest:
         check_keys(c, _CAPTURE_KEYS, w)
         f = Path(str(require(c, "file", w)))
         f = f if f.is_absolute() else p.parent / f
-        if not f.is_file():
-            raise InputFileError(f"{w}: capture file {f} not found")
+        try:
+            input_file(f, "capture file")
+        except InputFileError as exc:
+            raise InputFileError(f"{w}: {exc}") from None
         pose_vals = []
         for key in ("pan_deg", "tilt_deg"):
             v = require(c, key, w)

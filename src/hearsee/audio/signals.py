@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import is_real, real_entries
+from hearsee.config import input_file, is_real, real_entries
 from hearsee.errors import (
     AudioInputError,
     ClippingWarning,
@@ -322,11 +322,7 @@ def _read_file(path: str | Path) -> tuple[NDArray, int]:
     """Read any libsndfile format -> ``(x (n_ch, n) float64, fs)`` with typed errors."""
     import soundfile as sf
 
-    p = Path(path)
-    if not p.exists():
-        raise InputFileError(f"{p}: file not found")
-    if p.is_dir():
-        raise InputFileError(f"{p}: is a directory, expected an audio file")
+    p = input_file(path, "audio file")
     try:
         data, fs = sf.read(str(p), dtype="float64", always_2d=True)
     except (RuntimeError, sf.LibsndfileError, TypeError, ValueError) as exc:

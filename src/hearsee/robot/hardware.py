@@ -281,12 +281,12 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
         raise ConfigError(f"{where}.array: expected a preset name or YAML path, got {spec!r}")
     spec_path = _resolve(spec, base)
     if spec.endswith((".yaml", ".yml")) or spec_path.is_file():
-        if not spec_path.is_file():
+        if not spec_path.exists():  # (a folder: load_array's InputFileError says so)
             raise ConfigError(f"{where}.array: array file {spec!r} not found")
         spec = str(spec_path)
     try:
         array = load_array(spec)
-    except (ConfigError, GeometryError) as exc:
+    except HearseeError as exc:  # (a folder's InputFileError too)
         raise ConfigError(f"{where}.array: {exc}") from None
     ch = d.get("channels")
     if ch is None:
@@ -335,7 +335,7 @@ def _cameras(d: Mapping[str, Any], where: str, base: Path) -> CameraConfig:
     if not isinstance(d["calib"], str):
         raise ConfigError(f"{where}.calib: expected a file path, got {d['calib']!r}")
     calib = _resolve(d["calib"], base)
-    if not calib.is_file():
+    if not calib.exists():  # (a folder: load_rig's InputFileError says so, below)
         raise ConfigError(f"{where}.calib: calibration file {d['calib']!r} not found "
                           "(create one with `hearsee calibrate`)")
     from hearsee.vision.camera import load_rig

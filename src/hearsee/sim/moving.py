@@ -41,7 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.propagation import add_noise, check_heard, speed_of_sound_of
 from hearsee.audio.signals import check_fs
-from hearsee.config import finite_number, whole_number
+from hearsee.config import finite_number, input_file, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, InputFileError
 
 __all__ = [
@@ -181,9 +181,7 @@ def waypoint_trajectory(waypoints: ArrayLike, speed_mps: float, t0: float = 0.0)
 
 def load_trajectory(path: str | Path) -> Trajectory:
     """Read a trajectory CSV with header ``t,x,y,z`` (seconds, metres)."""
-    p = Path(path)
-    if not p.is_file():
-        raise InputFileError(f"{p}: trajectory file not found")
+    p = input_file(path, "trajectory file")
     try:
         with p.open(newline="", encoding="utf-8") as fh:
             rows = list(csv.reader(fh))

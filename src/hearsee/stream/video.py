@@ -37,8 +37,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.config import finite_number, whole_number
-from hearsee.errors import ConfigError, ImageInputError, InputFileError
+from hearsee.config import finite_number, input_file, whole_number
+from hearsee.errors import ConfigError, ImageInputError
 
 __all__ = ["IMAGE_POINT_MARGIN", "CsvImagePoints", "VideoImagePoints", "detect_source_point",
            "save_image_points"]
@@ -66,9 +66,7 @@ class CsvImagePoints:
     def __init__(self, path: str | Path, max_gap_s: float = 0.2, camera: Any = None) -> None:
         # (a NaN or negative gap silently gave no image point at all, not even at a row's time)
         max_gap_s = finite_number("max_gap_s", max_gap_s, 0.0)
-        p = Path(path)
-        if not p.is_file():
-            raise InputFileError(f"{p}: image-point file not found")
+        p = input_file(path, "image-point file")
         try:
             with p.open(newline="", encoding="utf-8-sig") as fh:  # (a spreadsheet's BOM)
                 reader = csv.reader(fh)  # (its line_num: the file's line, blank ones counted)
@@ -214,8 +212,8 @@ class VideoImagePoints:
         self.live = isinstance(source, int) and not isinstance(source, bool)
         if self.live:  # (OpenCV's "any camera" -1 crashed the process: a segmentation fault)
             source = whole_number("camera index", source, 0)
-        elif not Path(source).is_file():
-            raise InputFileError(f"{source}: video file not found")
+        else:
+            input_file(source, "video file")
         what = f"camera {source}" if self.live else f"{source}"
         cap = cv2.VideoCapture(int(source) if self.live else str(source))
         if not cap.isOpened():

@@ -65,6 +65,7 @@ from hearsee.config import (
     as_float_array,
     check_keys,
     finite_number,
+    input_file,
     is_real,
     load_yaml,
     real_entries,
@@ -72,7 +73,7 @@ from hearsee.config import (
     to_plain,
     whole_number,
 )
-from hearsee.errors import CalibrationError, ConfigError, GeometryError, InputFileError
+from hearsee.errors import CalibrationError, ConfigError, GeometryError
 
 __all__ = [
     "MIN_BASELINE_M",
@@ -830,11 +831,7 @@ def head_camera_pose(pose: Any, pivot_m: ArrayLike = (0.0, 0.0, 0.0),
 # Files
 # ---------------------------------------------------------------------------------------------
 def _load_calib_yaml(path: str | Path) -> dict[str, Any]:
-    p = Path(path)
-    if not p.is_file():
-        raise InputFileError(
-            f"{p}: calibration file not found (create one with `hearsee calibrate`)"
-        )
+    p = input_file(path, "calibration file", " (create one with `hearsee calibrate`)")
     head = p.read_bytes()[:16]
     if head.startswith(b"%YAML:1.0") or head.startswith(b"%YAML 1.0"):
         raise ConfigError(
@@ -940,9 +937,7 @@ def read_opencv_yaml(path: str | Path) -> dict[str, Any]:
     """Read the top-level nodes of an OpenCV ``FileStorage`` file: matrices (``!!opencv-matrix``)
     and sequences of numbers -> float numpy arrays, numbers -> float, strings -> str. Other
     nodes (plain maps, sequences of strings or of structures) are skipped."""
-    p = Path(path)
-    if not p.is_file():
-        raise InputFileError(f"{p}: file not found")
+    p = input_file(path)
     try:
         fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_READ)
     except (cv2.error, SystemError) as exc:

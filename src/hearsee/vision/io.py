@@ -16,6 +16,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from hearsee.config import input_file
 from hearsee.errors import ImageInputError, InputFileError
 
 __all__ = [
@@ -102,9 +103,7 @@ def read_image(path: str | Path, mode: ColorMode = "gray",
     """
     if mode not in _IMREAD:
         raise ImageInputError(f"mode must be one of {', '.join(_IMREAD)}, got {mode!r}")
-    p = Path(path)
-    if not p.is_file():
-        raise InputFileError(f"{p}: image file not found")
+    p = input_file(path, "image file")
     try:
         data = np.fromfile(str(p), dtype=np.uint8)
     except OSError as exc:

@@ -29,7 +29,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.errors import ConfigError, ImageInputError, InputFileError
+from hearsee.config import input_file
+from hearsee.errors import ConfigError, ImageInputError
 from hearsee.vision.io import to_gray
 
 __all__ = [
@@ -192,8 +193,7 @@ def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
     float TIFF degC). ``expected_size`` is (width, height)."""
     p = Path(path)
     if p.suffix.lower() == ".npy":
-        if not p.is_file():
-            raise InputFileError(f"{p}: thermal file not found")
+        input_file(p, "thermal file")
         try:
             arr = np.load(p, allow_pickle=False)
         except (ValueError, OSError) as exc:
