@@ -435,3 +435,24 @@ def test_a_moving_source_never_heard_within_the_signal_is_refused():
     near = linear_trajectory([300.0, 0.0, 0.0], [-1.0, 0.0, 0.0], 1.0)  # heard from ~0.87 s
     y = simulate_moving_free_field(x, FS, arr, near)
     assert not np.any(y[:, : int(0.8 * FS)]) and np.any(y[:, int(0.95 * FS):])
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("t,x,y,z\n0,1,0,0\n1,1,1\n", "line 3: expected 4 values t,x,y,z, got 3: '1,1,1'"),
+    ("t,x,y,z\n\n0,1,0,0\n1,1,1,0,5\n", "line 4: expected 4 values t,x,y,z, got 5: '1,1,1,0,5'"),
+    ("t,x,y,z\n0,1,0,0\n1,1,1,abc\n", "line 3: non-numeric value in '1,1,1,abc'"),
+])
+def test_a_ragged_trajectory_row_is_named(tmp_path, capsys, text, message):
+    """A row of 3 or 5 values showed numpy's internal text ('setting an array element with a
+    sequence. The requested array has an inhomogeneous shape after 1 dimensions...') as a
+    'non-numeric value'. Now one line naming the file and the line (blank lines counted)."""
+    from hearsee.cli import main
+
+    bad = tmp_path / "bad.csv"
+    bad.write_text(text)
+    with pytest.raises(ConfigError) as exc:
+        load_trajectory(bad)
+    assert str(exc.value) == f"{bad}: {message}"
+    assert main(["simulate", str(tmp_path / "o.wav"), "--array", "two-mic", "--trajectory",
+                 str(bad), "--duration", "0.1"]) == 2
+    assert capsys.readouterr().err == f"hearsee: error: {bad}: {message}\n"

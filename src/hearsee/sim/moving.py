@@ -184,27 +184,37 @@ def load_trajectory(path: str | Path) -> Trajectory:
     p = input_file(path, "trajectory file")
     try:
         with p.open(newline="", encoding="utf-8") as fh:
-            rows = list(csv.reader(fh))
+            reader = csv.reader(fh)  # (its line_num: the file's line, blank ones counted)
+            rows = [(reader.line_num, r) for r in reader if r and any(c.strip() for c in r)]
     except UnicodeDecodeError:
         raise ConfigError(f"{p}: not a text CSV file") from None
     except OSError as exc:  # (e.g. no read permission: a builtin PermissionError before)
         raise InputFileError(f"{p}: cannot be read ({exc.strerror or exc})") from None
-    rows = [r for r in rows if r and any(c.strip() for c in r)]
     if not rows:
         raise ConfigError(f"{p}: empty trajectory file (expected header t,x,y,z)")
-    header = [c.strip().lower() for c in rows[0]]
+    header = [c.strip().lower() for c in rows[0][1]]
     if header != ["t", "x", "y", "z"]:
-        raise ConfigError(f"{p}: header must be 't,x,y,z', got {','.join(rows[0])!r}")
-    try:
-        data = np.array([[float(c) for c in r] for r in rows[1:]], dtype=float)
-    except ValueError as exc:
-        raise ConfigError(f"{p}: non-numeric value in trajectory ({exc})") from None
-    if data.ndim != 2 or data.shape[0] < 1 or data.shape[1] != 4:
+        raise ConfigError(f"{p}: header must be 't,x,y,z', got {','.join(rows[0][1])!r}")
+    data = np.array([_trajectory_row(p, line, r) for line, r in rows[1:]], dtype=float)
+    if data.shape[0] < 1:
         raise ConfigError(f"{p}: expected rows of 4 numbers t,x,y,z after the header")
     try:
         return Trajectory(data[:, 0], data[:, 1:])
     except GeometryError as exc:
         raise ConfigError(f"{p}: {exc}") from None
+
+
+def _trajectory_row(path: Path, line: int, row: list[str]) -> list[float]:
+    """The 4 numbers t, x, y, z (seconds, metres) of a trajectory CSV row, else a ConfigError
+    naming ``path`` and ``line`` (a ragged row showed numpy's 'inhomogeneous shape' text)."""
+    if len(row) != 4:
+        raise ConfigError(f"{path}: line {line}: expected 4 values t,x,y,z, got {len(row)}: "
+                          f"{','.join(row)!r}")
+    try:
+        return [float(c) for c in row]
+    except ValueError:
+        raise ConfigError(f"{path}: line {line}: non-numeric value in {','.join(row)!r}"
+                          ) from None
 
 
 def save_trajectory(traj: Trajectory, path: str | Path, times: ArrayLike | None = None) -> None:
