@@ -310,3 +310,26 @@ def test_a_wav_cut_short_is_read_with_a_warning(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith(f"hearsee: warning: {cut}: the file is cut short") and \
         err.count("\n") == 1, err
+
+
+def test_a_signal_file_too_short_to_loop_is_refused(tmp_path):
+    """make_signal loops a short file to the duration: a 1-sample file became a constant (DC)
+    signal, simulated and localized as if it were sound. Fewer than MIN_SAMPLES (64, a
+    recording's minimum too) samples at the simulation rate are refused; 64 samples of noise
+    still loop, repeating exactly."""
+    rng = np.random.default_rng(4)
+    for n in (1, 2, 63):
+        p = _write(tmp_path / f"s{n}.wav", 0.3 * rng.standard_normal((1, n)))
+        with pytest.raises(AudioInputError, match=rf"^{p}: the signal is too short to simulate: "
+                                                  rf"{n} samples? at 16000 Hz; it is looped"):
+            make_signal(p, 0.5, FS)
+    with pytest.raises(AudioInputError, match="too short to simulate: 3 samples at 48000 Hz"):
+        make_signal(tmp_path / "s1.wav", 0.5, 48000)  # (resampled first)
+    from hearsee.audio.signals import MIN_SAMPLES
+
+    assert MIN_SAMPLES == 64
+    x = 0.3 * rng.standard_normal(MIN_SAMPLES)
+    y = make_signal(_write(tmp_path / "ok.wav", x[None]), 0.5, FS)
+    assert y.shape == (FS // 2,) and np.mean(y**2) == pytest.approx(1.0)
+    np.testing.assert_allclose(y[MIN_SAMPLES:2 * MIN_SAMPLES], y[:MIN_SAMPLES])
+    np.testing.assert_allclose(y[:MIN_SAMPLES] / y[0], x / x[0], rtol=1e-5)

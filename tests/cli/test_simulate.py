@@ -152,3 +152,16 @@ def test_simulate_far_field_source_1e300_m_away(tmp_path, capsys):
     assert far["tdoa_s"] == one["tdoa_s"] and far["azimuth_deg"] == one["azimuth_deg"] == 45.0
     assert far["distance_m"] == pytest.approx(2**0.5 * 1e300)
     assert "distance 1.41 m" in " ".join(capsys.readouterr().err.split())
+
+
+def test_simulate_refuses_a_one_sample_signal(tmp_path, capsys):
+    """A 1-sample --signal WAV was looped into a constant signal and written (exit 0) with a
+    truth its recording does not carry; now one line, exit 2, nothing written."""
+    sig = tmp_path / "one.wav"
+    write_recording(sig, np.array([0.5]), 16000)
+    out = tmp_path / "o.wav"
+    assert main(["simulate", str(out), "--array", "two-mic", "--source", "1,0,0",
+                 "--signal", str(sig), "--duration", "0.1"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"hearsee: error: {sig}: the signal is too short to simulate: 1 sample")
+    assert len(err.splitlines()) == 1 and not out.exists()

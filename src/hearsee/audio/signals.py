@@ -37,6 +37,7 @@ from hearsee.errors import (
 )
 
 __all__ = [
+    "MIN_SAMPLES",
     "SIGNAL_KINDS",
     "VOICE_F0_HZ",
     "as_samples",
@@ -52,6 +53,12 @@ __all__ = [
 
 #: Built-in source signal names accepted by :func:`make_signal` (anything else is a file path).
 SIGNAL_KINDS = ("noise", "male", "female")
+
+#: The fewest samples of audio hearsee works with: a recording (:func:`read_recording`'s
+#: default) and a source signal file (:func:`make_signal`, which loops a shorter one: fewer
+#: samples repeat so fast that no delay can be told from the next repetition; one sample
+#: loops into a constant).
+MIN_SAMPLES = 64
 
 #: Nominal (mean) fundamental frequency of the synthetic voices, Hz.
 VOICE_F0_HZ = {"male": 120.0, "female": 220.0}
@@ -356,7 +363,9 @@ def make_signal(spec: str | Path, duration_s: float, fs: float,
 
     ``spec`` is ``"noise"`` (white noise), ``"male"`` / ``"female"`` (:func:`synthetic_voice`)
     or the path of an audio file (mono mixdown, resampled to ``fs``, looped or trimmed to the
-    duration and scaled to unit mean power).
+    duration and scaled to unit mean power). A file shorter than :data:`MIN_SAMPLES` samples
+    at ``fs`` is an AudioInputError: looped, it repeats faster than a delay can be measured
+    (a 1-sample file was looped into a constant signal, recorded and localized as noise).
     """
     n = _check_duration(duration_s, fs)
     s = str(spec)
@@ -370,6 +379,12 @@ def make_signal(spec: str | Path, duration_s: float, fs: float,
             f"unknown signal {s!r}: expected 'noise', 'male', 'female' or an audio file path"
         )
     x, _ = load_wav(p, fs)
+    if len(x) < MIN_SAMPLES:
+        raise AudioInputError(
+            f"{p}: the signal is too short to simulate: {len(x)} sample"
+            f"{'s' if len(x) != 1 else ''} at {fs:g} Hz; it is looped to the duration, and "
+            f"fewer than {MIN_SAMPLES} repeat too fast to localize (give at least "
+            f"{MIN_SAMPLES / fs * 1000:.3g} ms of sound)")
     if not np.all(np.isfinite(x)):
         raise AudioInputError(f"{p}: the file contains NaN or infinite samples")
     if not np.any(x):
@@ -387,7 +402,7 @@ def read_recording(
     fs: float | None = None,
     *,
     resample: bool = False,
-    min_samples: int = 64,
+    min_samples: int = MIN_SAMPLES,
 ) -> tuple[NDArray, int]:
     """Read and validate a multichannel recording (channel k = microphone k).
 
