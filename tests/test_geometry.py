@@ -168,3 +168,15 @@ def test_distances_and_directions_of_huge_points_do_not_overflow():
     assert np.isinf(cart_to_sph([np.inf, 0.0, 0.0])[2])  # (as before)
     with pytest.raises(GeometryError, match=r"^p: \[1e\+308, -1\.5e\+308, 0\.0\] is farther "):
         as_point([1e308, -1.5e308, 0.0], "p")
+
+
+def test_cart_to_sph_measures_tiny_vectors():
+    """norm_scale also scales vectors whose squares underflow: (1e-300, 1e-300, 0) is
+    1.414e-300 m away at azimuth 45 deg (its squares summed to 0); ordinary vectors keep every
+    bit (a factor of 1.0)."""
+    from hearsee.geometry import cart_to_sph, norm_scale
+
+    az, el, r = cart_to_sph([1e-300, 1e-300, 0.0])
+    assert r == pytest.approx(np.sqrt(2) * 1e-300, rel=1e-12)
+    assert np.degrees(az) == pytest.approx(45.0) and el == 0.0
+    assert np.all(norm_scale([[0.3, -2.0, 1e-200], [0.0, 0.0, 0.0]]) == 1.0)

@@ -54,23 +54,27 @@ def sph_to_cart(azimuth: ArrayLike, elevation: ArrayLike, distance: ArrayLike = 
                     axis=-1)
 
 
-#: A coordinate beyond this magnitude (metres) is scaled down before squares are summed: the
-#: square of 1.4e154 already overflows float.
+#: A coordinate beyond this magnitude (metres) is scaled down before squares are summed (the
+#: square of 1.4e154 already overflows float), and a vector whose largest coordinate is below
+#: its inverse is scaled up (the squares of 1e-160 underflow to zero).
 _SQUARE_SAFE = 1e150
 
 
 def norm_scale(v: ArrayLike) -> NDArray:
     """The factor ``(..., 1)`` to divide vector(s) ``(..., 3)`` by before a Euclidean norm: the
-    largest |coordinate| of a vector with one beyond 1e150, else 1.0 (``v / 1.0`` is ``v`` bit
-    for bit, so every ordinary result stays as it was). ``v / k`` has the direction of ``v``
-    and squares that cannot overflow: its norm gives the direction of (1e300, 1e300, 0), which
-    ``np.linalg.norm`` made inf (a RuntimeWarning, then zero TDOAs); ``k * |v / k|`` is the
-    length. A non-finite vector is left as it is (1.0). The one guard of :func:`cart_to_sph`,
-    the far-field directions of :meth:`hearsee.audio.arrays.MicArray.tdoa_far` and the
-    free-field and masked simulators."""
+    largest |coordinate| of a vector with one beyond 1e150 or with none above 1e-150 (and not
+    all zero), else 1.0 (``v / 1.0`` is ``v`` bit for bit, so every ordinary result stays as
+    it was). ``v / k`` has the direction of ``v`` and squares that cannot overflow or vanish:
+    its norm gives the direction of (1e300, 1e300, 0), which ``np.linalg.norm`` made inf (a
+    RuntimeWarning, then zero TDOAs), and of (1e-300, 0, 0), which it made 0; ``k * |v / k|``
+    is the length. A non-finite vector is left as it is (1.0). The one guard of
+    :func:`cart_to_sph`, the far-field directions of
+    :meth:`hearsee.audio.arrays.MicArray.tdoa_far` and the free-field and masked
+    simulators."""
     p = np.asarray(v, dtype=float)
     big = np.max(np.abs(p), axis=-1, keepdims=True)
-    return np.where((big > _SQUARE_SAFE) & np.isfinite(big), big, 1.0)
+    scale = np.isfinite(big) & ((big > _SQUARE_SAFE) | ((big > 0) & (big < 1.0 / _SQUARE_SAFE)))
+    return np.where(scale, big, 1.0)
 
 
 def cart_to_sph(xyz: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:

@@ -267,25 +267,20 @@ class MicArray:
         A plane wave from direction u reaches microphone m at time ``-m . u / c0``. A zero
         direction is a GeometryError (it was a silent NaN), and so is a non-finite one.
         """
-        from hearsee.geometry import as_points
+        from hearsee.geometry import as_points, norm_scale
 
         pairs = self.checked_pairs(pairs)
         u = as_points(direction, "direction")
         if not np.all(np.isfinite(u)):  # (inf gave NaN TDOAs, NaN read as "the zero vector")
             raise GeometryError(f"a far-field direction must be finite, got {direction!r}")
-        top = np.max(np.abs(u), axis=-1, keepdims=True)
-        if not np.all(top > 0):
+        # ([1e300, 1e300, 0]: its norm overflowed, TDOAs of 0; [1e-300, 0, 0] was refused as
+        # the zero vector)
+        u = u / norm_scale(u)
+        norm = np.linalg.norm(u, axis=-1, keepdims=True)
+        if not np.all(norm > 0):
             raise GeometryError("a far-field (plane-wave) source needs a direction; got the zero "
                                 "vector (a source at the array-frame origin)")
-        with np.errstate(over="ignore", under="ignore"):
-            norm = np.linalg.norm(u, axis=-1, keepdims=True)
-        # a length whose squares overflow or underflow (beyond 1e150 or below 1e-150) is
-        # measured on the direction scaled by its largest component: [1e300, 1e300, 0] gave
-        # TDOAs of 0 (u / inf), [1e-300, 0, 0] was refused as the zero vector
-        fine = np.isfinite(norm) & (norm > 1e-150)
-        v = u / top
-        u = np.where(fine, u / np.where(fine, norm, 1.0),
-                     v / np.linalg.norm(v, axis=-1, keepdims=True))
+        u = u / norm
         proj = u @ self.positions.T  # (..., n_mics)
         i = np.array([p[0] for p in pairs])
         j = np.array([p[1] for p in pairs])
