@@ -954,10 +954,12 @@ def _dedupe(cands: list[HumanCandidate]) -> None:
     candidate whose silhouette is taller by more than :data:`MORE_COMPLETE_M` than every
     accepted one it duplicates replaces them: it is the more complete view of the person (the
     other is the torso without the head, or the legs without the torso). In a 150-scene dev run
-    (seeds 5000-5149) the higher score alone kept the shorter box in 3 of the 208 duplicate
-    pairs (IoU with the person 0.65 vs 0.79, 0.54 vs 0.66, 0.62 vs 0.75; the first two without
-    the head); in every other pair whose heights differ by more than 0.1 m it already kept
-    the taller one."""
+    (seeds 5000-5149) the higher score alone kept the shorter of two accepted silhouettes
+    (shorter by more than 0.1 m) in 5 of the 208 duplicate pairs: 3 on people (IoU with the
+    person 0.65 vs 0.79, 0.54 vs 0.66, 0.62 vs 0.75; the first two without the head) and 2 on
+    objects; in every other pair of accepted silhouettes whose heights differ by more than
+    0.1 m it already kept the taller one. (A rejected candidate never replaces an accepted
+    one: the taller ones there are mostly a person merged with the wall behind.)"""
     segs = [c for c in cands if c.segment is not None]
     segs.sort(key=lambda c: (not c.accepted, -c.score))
     kept: list[HumanCandidate] = []
