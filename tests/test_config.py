@@ -354,3 +354,19 @@ def test_input_file_names_the_kind():
     assert input_file(__file__, "test file").name == "test_config.py"
     with pytest.raises(InputFileError, match=r"^nowhere\.csv: trajectory file not found \(hint\)$"):
         input_file("nowhere.csv", "trajectory file", " (hint)")
+
+
+def test_output_file_refuses_folders_and_missing_or_file_parents(tmp_path):
+    """config.output_file, the one output-path check of refuse_overwrite, save_wav and the
+    robot's exports (each had its own copy)."""
+    from hearsee.config import output_file
+
+    assert output_file(tmp_path / "out.wav") == tmp_path / "out.wav"
+    with pytest.raises(InputFileError, match=r"out: is a folder, expected an output file name$"):
+        (tmp_path / "out").mkdir()
+        output_file(tmp_path / "out")
+    with pytest.raises(InputFileError, match=r"x\.wav: folder .*no does not exist$"):
+        output_file(tmp_path / "no" / "x.wav")
+    (tmp_path / "f").write_text("a file", encoding="utf-8")
+    with pytest.raises(InputFileError, match=r"x\.wav: .*f is not a folder$"):
+        output_file(tmp_path / "f" / "x.wav")

@@ -19,8 +19,8 @@ from hearsee.errors import ConfigError, InputFileError
 
 __all__ = [
     "all_real", "as_float_array", "check_keys", "finite_number", "input_file", "is_real",
-    "load_yaml", "number", "object_entries", "require", "save_yaml", "time_limit", "to_jsonable",
-    "to_plain", "whole_number",
+    "load_yaml", "number", "object_entries", "output_file", "require", "save_yaml", "time_limit",
+    "to_jsonable", "to_plain", "whole_number",
 ]
 
 
@@ -51,6 +51,22 @@ def input_file(path: str | Path, kind: str = "file", hint: str = "") -> Path:
         raise InputFileError(f"{p}: is a folder, expected {article} {kind}")
     if not p.exists():
         raise InputFileError(f"{p}: {kind} not found{hint}")
+    return p
+
+
+def output_file(path: str | Path) -> Path:
+    """``path`` as a Path when a file can be written there, else InputFileError: ``"P: is a
+    folder, expected an output file name"`` for a folder, ``"P: folder D does not exist"`` or
+    ``"P: D is not a folder"`` for its parent ``D``. The counterpart of :func:`input_file`: the
+    check of an output path made before the work that ends by writing it (the CLI's
+    ``refuse_overwrite``, ``save_wav``, the robot's exports; ``write_image`` and the
+    simulator's ground-truth file keep their own messages, which tests anchor)."""
+    p = Path(path)
+    if p.is_dir():
+        raise InputFileError(f"{p}: is a folder, expected an output file name")
+    if not p.parent.is_dir():
+        raise InputFileError(f"{p}: folder {p.parent} does not exist"
+                             if not p.parent.exists() else f"{p}: {p.parent} is not a folder")
     return p
 
 

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import input_file, is_real, real_entries
+from hearsee.config import input_file, is_real, output_file, real_entries
 from hearsee.errors import (
     AudioInputError,
     ClippingWarning,
@@ -539,10 +539,7 @@ def write_recording(
                 raise ConfigError(
                     f"{p}: refusing to overwrite the input file {q}; choose another output path"
                 )
-    if not p.parent.is_dir():
-        raise InputFileError(f"{p}: output directory {p.parent} does not exist; create it first")
-    if p.is_dir():
-        raise InputFileError(f"{p}: is a directory, expected an output file name")
+    output_file(p)
     y = np.asarray(x, dtype=float)
     if y.ndim == 1:
         y = y[None, :]

@@ -63,6 +63,7 @@ def refuse_overwrite(outputs: Iterable[str | Path | None], inputs: Iterable[str 
     input is refused always, one that exists unless ``force`` (the command's ``--force``), and
     so are a folder and a file whose folder does not exist (which failed only once the work
     was done). Nothing the user gave is overwritten, and a refusal writes nothing."""
+    from hearsee.config import output_file
     from hearsee.errors import InputFileError
 
     ins = {Path(q).resolve() for q in inputs if q is not None}
@@ -70,11 +71,7 @@ def refuse_overwrite(outputs: Iterable[str | Path | None], inputs: Iterable[str 
         if p.resolve() in ins:
             raise InputFileError(f"{p}: refusing to overwrite an input file; choose another "
                                  "output path")
-        if p.is_dir():
-            raise InputFileError(f"{p}: is a folder, expected an output file name")
-        if not p.parent.is_dir():
-            raise InputFileError(f"{p}: folder {p.parent} does not exist"
-                                 if not p.parent.exists() else f"{p}: {p.parent} is not a folder")
+        output_file(p)
         if p.exists() and not force:
             raise InputFileError(f"{p}: file exists; pass --force to overwrite it")
 

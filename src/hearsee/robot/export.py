@@ -21,7 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from hearsee.errors import ConfigError, InputFileError
+from hearsee.config import output_file
+from hearsee.errors import ConfigError
 
 __all__ = ["check_export", "write_mcap", "write_rerun"]
 
@@ -80,13 +81,6 @@ def _overlay_bgr(img: np.ndarray, t: float) -> np.ndarray:
     return np.repeat(img[:, :, None], 3, axis=2) if img.ndim == 2 else img
 
 
-def _check_out(path: str | Path) -> Path:
-    p = Path(path)
-    if not p.parent.is_dir():
-        raise InputFileError(f"{p}: folder {p.parent} does not exist")
-    return p
-
-
 def check_export(kind: str, path: str | Path) -> str:
     """Before a run that ends by writing export ``kind`` (``"rerun"`` or ``"mcap"``) to
     ``path``: its extra is installed (else :class:`ConfigError`) and its folder exists (else
@@ -95,7 +89,7 @@ def check_export(kind: str, path: str | Path) -> str:
     module, missing = _EXTRAS[kind]
     if importlib.util.find_spec(module) is None:
         raise ConfigError(missing)
-    return f"{_check_out(path)}: {module} installed, folder exists"
+    return f"{output_file(path)}: {module} installed, folder exists"
 
 
 def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
@@ -105,7 +99,7 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
         from mcap_ros2.writer import Writer
     except ImportError:
         raise ConfigError(_EXTRAS["mcap"][1]) from None
-    p = _check_out(path)
+    p = output_file(path)
     with open(p, "wb") as fh:
         w = Writer(fh)
         s_point = w.register_msgdef("geometry_msgs/msg/PointStamped", _POINT_STAMPED)
@@ -143,7 +137,7 @@ def write_rerun(path: str | Path, scenario: Mapping[str, Any], log: Sequence[Map
         import rerun as rr
     except ImportError:
         raise ConfigError(_EXTRAS["rerun"][1]) from None
-    p = _check_out(path)
+    p = output_file(path)
     rec = rr.RecordingStream("hearsee")
     room = np.asarray(scenario["room"]["size_m"], dtype=float)
     rec.log("room", rr.Boxes3D(centers=[room / 2], half_sizes=[room / 2]), static=True)
