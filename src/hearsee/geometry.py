@@ -226,10 +226,7 @@ def check_head_offset(offset_m: Any, what: str = "offset_m",
     manifest's and ``hearsee simulate --poses --head-offset``: a 1e300 m offset overflowed the
     robot file's check into a RuntimeWarning and a manifest's localization into scipy's
     builtin ValueError."""
-    off = as_point(offset_m, what, error)
-    if not math.hypot(*off) <= MAX_HEAD_OFFSET_M:
-        raise error(f"{what}: {off.tolist()} is more than {MAX_HEAD_OFFSET_M:g} m from the pivot")
-    return off
+    return _point_within(offset_m, what, error, MAX_HEAD_OFFSET_M, "the pivot")
 
 
 #: The head pivot is at most this far (metres) from the robot-frame origin: it is a point of
@@ -246,11 +243,19 @@ def check_head_pivot(pivot_m: Any, what: str = "pivot_m",
     away put every microphone on the same float (centimetres are below its resolution), and
     ``hearsee localize3d`` reported a wrong direction with only its consistency warning (one
     1e308 m away ran for minutes)."""
-    piv = as_point(pivot_m, what, error)
-    if not math.hypot(*piv) <= MAX_HEAD_PIVOT_M:
-        raise error(f"{what}: {piv.tolist()} is more than {MAX_HEAD_PIVOT_M:g} m from the "
-                    "robot-frame origin (the head pivot is a point of the robot)")
-    return piv
+    return _point_within(pivot_m, what, error, MAX_HEAD_PIVOT_M,
+                         "the robot-frame origin (the head pivot is a point of the robot)")
+
+
+def _point_within(value: Any, what: str, error: type[Exception], limit_m: float,
+                  origin: str) -> NDArray:
+    """:func:`as_point` of ``value``, and ``error`` ("``what``: [x, y, z] is more than
+    ``limit_m`` m from ``origin``") unless it lies within ``limit_m`` metres of the origin of
+    its frame: the rule of :func:`check_head_offset` and :func:`check_head_pivot`."""
+    p = as_point(value, what, error)
+    if not math.hypot(*p) <= limit_m:
+        raise error(f"{what}: {p.tolist()} is more than {limit_m:g} m from {origin}")
+    return p
 
 
 @dataclass(frozen=True)
