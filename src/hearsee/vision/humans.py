@@ -47,6 +47,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -519,12 +520,13 @@ class BodySegment:
     position_m: NDArray
     truncated: bool = False
 
-    @property
+    @cached_property
     def extent_m(self) -> float:
         """The silhouette's own height (metres): its ``top_m`` less the height of its lowest
         points (the ``100 - TOP_PERCENTILE`` percentile of ``heights``, as robust as the
         top). A whole standing person spans 1-1.9 m, a person whose feet the image's bottom
-        border cuts 0.7 m or more; a head-sized fragment a few tenths."""
+        border cuts 0.7 m or more; a head-sized fragment a few tenths. Computed once (the
+        extent test and every duplicate comparison read it)."""
         return self.top_m - float(np.percentile(self.heights, 100.0 - TOP_PERCENTILE))
 
 
