@@ -17,7 +17,9 @@ detections matched to people beyond 6 m, and unmatched stereo detections estimat
 people (1-8 m). Human-like objects count as rejected when no accepted detection matches them.
 3D position error is ``|p_est - p_true| / |p_true|`` (torso centre, left camera frame).
 Frames per second: CPU time of one :func:`hearsee.vision.fusion.detect_humans` call (disparity
-included) at 640x480 with ``cv2.setNumThreads(1)``. Fig. 7.9: detection rate vs Tm.
+included) at 640x480 on one core: ``cv2.setNumThreads(1)`` and numpy's BLAS held to one thread
+(``threadpoolctl``; with its default two threads OpenBLAS's idle worker adds CPU time to every
+frame without making it faster). Fig. 7.9: detection rate vs Tm.
 
 Real data (skipped when ``../shared/data`` is absent): thermal filter + visible/thermal overlay
 on the LLVIP pairs (``vision/rgb_thermal``), HOG on frames of ``vision/pedestrian_video``.
@@ -34,6 +36,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import RESULTS, markdown_table, print_table, shared_data_dir, write_markdown  # noqa: E402
@@ -149,6 +152,11 @@ def _as_dets(humans) -> list[dict]:
 
 def run_synthetic(n_scenes: int, seed0: int, hog: bool) -> tuple[list[tuple[str, str]], dict]:
     cv2.setNumThreads(1)
+    with threadpool_limits(1):  # one core: the BLAS of numpy too, not only OpenCV
+        return _run_synthetic(n_scenes, seed0, hog)
+
+
+def _run_synthetic(n_scenes: int, seed0: int, hog: bool) -> tuple[list[tuple[str, str]], dict]:
     rig = default_rig()
     methods = ["stereo", "fusion", "fusion-8bit"] + (["HOG"] if hog else [])
     stats = {m: _new_stats() for m in methods}
