@@ -619,3 +619,27 @@ def test_gate_distance_needs_a_track():
         k.gate_distance(10.0, 0.0)
     k.update(0.0, (10.0, 0.0))
     assert k.gate_distance(10.0, 0.0) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_track_directions_refuses_arrays_that_are_not_numbers():
+    """Text angles were read as numbers (["10", "20"] tracked as 10 and 20 deg, True as 1 deg),
+    a text mask as all True, and "a", a complex number or a ragged list raised numpy's builtin
+    ValueError / TypeError. Now an EstimationError naming the array; numbers, NaN and None
+    (missing frames) and 0/1 masks are tracked as before."""
+    t, az = [0.0, 0.1, 0.2], [10.0, 20.0, 30.0]
+    for kwargs, name in (
+        (dict(azimuth_deg=["10", "20", "30"]), "azimuth_deg"),
+        (dict(azimuth_deg=["a", "b", "c"]), "azimuth_deg"),
+        (dict(azimuth_deg=[True, False, True]), "azimuth_deg"),
+        (dict(azimuth_deg=[1 + 1j, 2.0, 3.0]), "azimuth_deg"),
+        (dict(azimuth_deg=[10.0, [1.0, 2.0], 3.0]), "azimuth_deg"),
+        (dict(azimuth_deg=az, elevation_deg=["1", "2", "3"]), "elevation_deg"),
+        (dict(t=["0", "0.1", "0.2"], azimuth_deg=az), "t"),
+        (dict(azimuth_deg=az, valid=["x", "", "y"]), "valid"),
+    ):
+        with pytest.raises(EstimationError, match=f"^{name} must hold"):
+            track_directions(**{"t": t, **kwargs})
+    ref = track_directions(t, [10.0, np.nan, 30.0], valid=[True, True, False])
+    same = track_directions(np.array(t), [10, None, 30], valid=[1, 1, 0])
+    assert np.array_equal(ref.azimuth_deg, same.azimuth_deg)
+    assert ref.accepted.tolist() == same.accepted.tolist() == [True, False, False]

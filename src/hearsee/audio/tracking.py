@@ -39,7 +39,14 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import block_diag
 from scipy.stats import chi2
 
-from hearsee.config import MAX_TIME_LIMIT_S, finite_number, is_real, whole_number
+from hearsee.config import (
+    MAX_TIME_LIMIT_S,
+    finite_number,
+    is_real,
+    object_entries,
+    real_entries,
+    whole_number,
+)
 from hearsee.errors import EstimationError
 
 __all__ = [
@@ -825,6 +832,35 @@ class DirectionIMM:
         return True
 
 
+def _series(name: str, value: Any, unit: str, *, angles: bool = False) -> NDArray:
+    """``value`` as a float array when every entry is a real number (:func:`real_entries`; NaN
+    and infinities pass, the caller reads them as missing) -- or, with ``angles``, None too (an
+    unknown angle, as :func:`_angle` takes it; read as NaN) -- else an EstimationError naming
+    ``name`` (text such as "10" was read as 10 deg, True as 1 deg, and "a", a complex number or
+    a ragged list raised numpy's builtin ValueError / TypeError)."""
+    ok = real_entries(value) or (angles and (items := object_entries(value)) is not None
+                                 and all(_angle(v) for v in items.flat))
+    if not ok:
+        missing = "; NaN marks a missing frame" if angles else ""
+        raise EstimationError(f"{name} must hold real numbers ({unit}{missing}), got "
+                              f"{value!r:.80}")
+    return np.asarray(value, dtype=float)
+
+
+def _flags(name: str, value: Any) -> NDArray:
+    """``value`` as a bool array when every entry is a bool or the integer 0 or 1, else an
+    EstimationError naming ``name`` (numpy's bool conversion read any text but "" as True)."""
+    if isinstance(value, np.ndarray) and value.dtype.kind == "b":
+        return value
+    items = object_entries(value)
+    if items is None or not all(
+            isinstance(v, bool | np.bool_) or (isinstance(v, int | np.integer) and v in (0, 1))
+            for v in items.flat):
+        raise EstimationError(f"{name} must hold booleans (True = use the frame), got "
+                              f"{value!r:.80}")
+    return np.asarray(value, dtype=bool)
+
+
 def track_directions(t: ArrayLike, azimuth_deg: ArrayLike, elevation_deg: ArrayLike | None = None,
                      valid: ArrayLike | None = None, **params: float) -> DirectionTrack:
     """Run a :class:`DirectionKalman` over per-frame directions.
@@ -839,10 +875,11 @@ def track_directions(t: ArrayLike, azimuth_deg: ArrayLike, elevation_deg: ArrayL
     **params
         Passed to :class:`DirectionKalman` (``sigma_meas_deg``, ``sigma_accel_dps2``, ...).
     """
-    tt = np.asarray(t, dtype=float)
-    az = np.asarray(azimuth_deg, dtype=float)
-    el = np.full_like(az, np.nan) if elevation_deg is None else np.asarray(elevation_deg, float)
-    ok = np.ones(az.shape, bool) if valid is None else np.asarray(valid, bool)
+    tt = _series("t", t, "seconds")
+    az = _series("azimuth_deg", azimuth_deg, "degrees", angles=True)
+    el = (np.full_like(az, np.nan) if elevation_deg is None
+          else _series("elevation_deg", elevation_deg, "degrees", angles=True))
+    ok = np.ones(az.shape, bool) if valid is None else _flags("valid", valid)
     if not (tt.shape == az.shape == el.shape == ok.shape) or tt.ndim != 1:
         raise EstimationError("t, azimuth_deg, elevation_deg and valid must be equal 1-D arrays")
     ok = ok & np.isfinite(az)
