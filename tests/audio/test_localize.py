@@ -383,3 +383,38 @@ def test_absurdly_long_tdoas_are_refused(solver):
     as_list = localize_tdoa(list(true), three)  # a list of floats is as good as an array
     np.testing.assert_array_equal(as_list.direction, localize_tdoa(true, three).direction)
     assert as_list.azimuth_deg == pytest.approx(np.degrees(np.arctan2(1.7, 1.0)), abs=0.1)
+
+
+def test_iteration_and_grid_counts_must_be_whole_numbers():
+    """near_field_in_plane(n_iter=NaN or 2.5) raised range()'s builtin TypeError and n_iter=-1
+    returned the unfitted start; cone_points / hyperboloid_points with n_radial=-1 raised
+    numpy's builtin ValueError and 0 returned an empty grid. Now GeometryError naming the
+    count; whole counts give the same answers."""
+    tau = THREE.tdoa_far(unit_vector_deg(17.0, 0.0))
+    for bad in (np.nan, 2.5, -1, 0, True, "8"):
+        with pytest.raises(GeometryError, match="^n_iter must be an integer >= 1"):
+            near_field_in_plane(tau, THREE, n_iter=bad)
+    assert near_field_in_plane(tau, THREE, n_iter=np.int64(8)).azimuth_deg == \
+        near_field_in_plane(tau, THREE).azimuth_deg
+    mi, mj = [0.0, 0.0, 0.0], [0.1, 0.0, 0.0]
+    for f in (cone_points, hyperboloid_points):
+        for name in ("n_radial", "n_around"):
+            for bad in (-1, 0, 2.5):
+                with pytest.raises(GeometryError, match=f"^{name} must be an integer >= 1"):
+                    f(1e-4, mi, mj, **{name: bad})
+        assert f(1e-4, mi, mj, n_radial=3, n_around=5).shape == (3, 5, 3)
+
+
+def test_array_geometry_checks_positions_given_as_an_array():
+    """A NaN microphone position raised numpy's LinAlgError ("SVD did not converge"), an
+    infinite one a RuntimeWarning and a made-up classification, text was read as numbers.
+    Positions given as an array are now checked as a MicArray's (GeometryError)."""
+    tri = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0]]
+    for bad, msg in (([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [np.nan, 0.1, 0.0]], "finite"),
+                     ([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [np.inf, 0.1, 0.0]], "finite"),
+                     ([[0.0, 0.0, 0.0], ["0.1", 0.0, 0.0], [0.0, 0.1, 0.0]], "numbers"),
+                     ([[0.0, 0.0], [0.1, 0.0]], "N x 3")):
+        with pytest.raises(GeometryError, match=msg):
+            array_geometry(bad)
+    geo = array_geometry(np.array(tri))
+    assert geo.kind == "planar" and np.array_equal(geo.centre, np.mean(tri, axis=0))

@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array, pair_tdoa
-from hearsee.config import finite_number, is_real, real_entries
+from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, GeometryError
 from hearsee.geometry import wrap_deg
 
@@ -120,10 +120,14 @@ class ArrayGeometry:
 
 
 def array_geometry(array: MicArray | NDArray, rel_tol: float = 1e-6) -> ArrayGeometry:
-    """Classify microphone positions ``(n, 3)`` as linear, planar or volume."""
+    """Classify microphone positions ``(n, 3)`` as linear, planar or volume.
+
+    Positions given as an array are checked as a :class:`MicArray`'s (an N x 3 table of finite
+    numbers, at least two distinct microphones): a NaN position raised numpy's LinAlgError
+    ("SVD did not converge"), an infinite one a RuntimeWarning and a made-up answer."""
     if isinstance(array, MicArray) and rel_tol == 1e-6:
         return _geometry_cached(array)
-    pos = array.positions if isinstance(array, MicArray) else np.asarray(array, dtype=float)
+    pos = (array if isinstance(array, MicArray) else MicArray(array)).positions
     return _classify(pos, rel_tol)
 
 
@@ -513,6 +517,8 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray,
         raise GeometryError(f"range_m must be a positive number of metres or None, got {range_m}")
     if not max_inverse_range >= 0:
         raise GeometryError(f"max_inverse_range must be >= 0 (1/m), got {max_inverse_range}")
+    # (NaN or 2.5 raised range()'s builtin TypeError; -1 and 0 gave the unfitted start)
+    n_iter = whole_number("n_iter", n_iter, 1, error=GeometryError)
     ff = far_field_planar(tau, array, prs, tol_s)
     c = array.speed_of_sound
     d = array.positions - geo.centre
@@ -661,10 +667,14 @@ def _frame_from_axis(axis: NDArray) -> NDArray:
 
 
 def _locus_input(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float,
-                 extent_m: float) -> tuple[NDArray, NDArray, float]:
+                 extent_m: float, n_radial: int, n_around: int
+                 ) -> tuple[NDArray, NDArray, float]:
     """The pair (two finite points, metres, apart) and ``c * tdoa`` (metres) of a locus plot,
     or a GeometryError (NaN inputs, coincident microphones or a non-positive speed or extent
-    gave all-NaN or degenerate grids)."""
+    gave all-NaN or degenerate grids; a negative grid size numpy's builtin ValueError, 0 an
+    empty grid, 2.5 a TypeError)."""
+    whole_number("n_radial", n_radial, 1, error=GeometryError)
+    whole_number("n_around", n_around, 1, error=GeometryError)
     mi = np.asarray(m_i, dtype=float).reshape(-1)
     mj = np.asarray(m_j, dtype=float).reshape(-1)
     if mi.shape != (3,) or mj.shape != (3,) or not (np.all(np.isfinite(mi))
@@ -688,7 +698,7 @@ def hyperboloid_points(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float =
     pair's centre, ready for ``plot_surface``. A zero TDOA gives the bisecting plane's disc;
     ``|c tdoa| >= |M_i - M_j|`` raises GeometryError (no locus).
     """
-    mi, mj, delta = _locus_input(tdoa_s, m_i, m_j, c, extent_m)
+    mi, mj, delta = _locus_input(tdoa_s, m_i, m_j, c, extent_m, n_radial, n_around)
     f = np.linalg.norm(mi - mj) / 2.0
     a = abs(delta) / 2.0
     if a >= f:
@@ -719,7 +729,7 @@ def cone_points(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float = 343.0,
 
     Returns ``(n_radial, n_around, 3)`` points in metres.
     """
-    mi, mj, delta = _locus_input(tdoa_s, m_i, m_j, c, extent_m)
+    mi, mj, delta = _locus_input(tdoa_s, m_i, m_j, c, extent_m, n_radial, n_around)
     d = np.linalg.norm(mi - mj)
     cos_t = delta / d
     if abs(cos_t) > 1:
