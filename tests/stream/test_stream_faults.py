@@ -460,6 +460,35 @@ def test_array_source_refuses_a_bad_rate_or_block():
         ArraySource(x, 16000, block_len=float("nan"))
 
 
+def test_array_source_block_len_is_a_whole_number_of_samples():
+    """ArraySource(block_len=2.5) truncated the length to 2 samples without a word (DeviceSource
+    refused it). Now the same rule as DeviceSource's (config.whole_number): an integer >= 1; a
+    float is refused even when whole (2.0), as every count of the package is."""
+    x = np.arange(3 * 10, dtype=float).reshape(3, 10)
+    for bad in (2.5, 2.0, True, "4", -3):
+        with pytest.raises(ConfigError, match=r"^block_len must be an integer >= 1, got"):
+            ArraySource(x, 16000, block_len=bad)
+    blocks = list(ArraySource(x, 16000, block_len=np.int64(4)).blocks())
+    assert [b.data.shape[1] for b in blocks] == [4, 4, 2]
+    assert np.array_equal(np.concatenate([b.data for b in blocks], axis=1), x)
+
+
+@pytest.mark.parametrize("config", [{"frame_ms": 32.0}, {}, "StreamConfig()", 5])
+def test_a_stream_config_that_is_no_stream_config_is_refused(config):
+    """StreamPipeline / TrackingProcessor(config={"frame_ms": 32.0}) were made and failed at
+    the first frame with a builtin AttributeError ('dict' object has no attribute 'frame_ms');
+    an empty dict silently meant the defaults. The package builds StreamConfigs by keyword, so
+    anything else is a ConfigError naming StreamConfig, when the pipeline is made."""
+    arr = MicArray.from_preset("three-mic")
+    with pytest.raises(ConfigError, match="^config must be a StreamConfig"):
+        StreamPipeline(arr, config=config)
+    with pytest.raises(ConfigError, match="^config must be a StreamConfig"):
+        TrackingProcessor(arr, FS, config)
+    cfg = StreamConfig(frame_ms=32.0)
+    assert StreamPipeline(arr, config=cfg).config is cfg
+    assert TrackingProcessor(arr, FS, None).cfg == StreamConfig()
+
+
 @pytest.mark.parametrize("kw, err, msg", [
     ({"fs": 0.0}, AudioInputError, "sample rate"),  # ZeroDivisionError in the stream
     ({"fs": -16000.0}, AudioInputError, "sample rate"),  # 'frame too short'

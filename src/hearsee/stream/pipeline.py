@@ -251,10 +251,11 @@ class ArraySource:
         a = as_samples(x)
         if a.ndim != 2 or a.shape[1] == 0:
             raise AudioInputError(f"recording must be (n_channels, n_samples), got {a.shape}")
-        if not block_len >= 1:  # (NaN included)
-            raise ConfigError(f"block_len must be >= 1 sample, got {block_len}")
+        # (NaN raised numpy's ValueError; 2.5 was truncated to 2 -- DeviceSource's rule: a
+        # float, 2.0 included, is refused rather than rounded)
+        block_len = whole_number("block_len", block_len)
         # (a rate of 0 divided by zero in the stream; a negative one read as "frame too short")
-        self.x, self.fs, self.block_len = a, check_fs(fs), int(block_len)
+        self.x, self.fs, self.block_len = a, check_fs(fs), block_len
         self.n_channels = a.shape[0]
         self.realtime = bool(realtime)
 
@@ -1163,6 +1164,19 @@ def _check_config(cfg: StreamConfig) -> None:
     _check_gating(cfg)
 
 
+def _stream_config(config: StreamConfig | None) -> StreamConfig:
+    """``config``, or the default StreamConfig for None; a ConfigError for anything else (a
+    plain dict such as ``{"frame_ms": 32}`` was taken and failed at the first frame with a
+    builtin AttributeError, an empty one silently meant the defaults). The package builds its
+    StreamConfigs by keyword (``StreamConfig(frame_ms=32)``), never from a mapping."""
+    if config is None:
+        return StreamConfig()
+    if not isinstance(config, StreamConfig):
+        raise ConfigError(f"config must be a StreamConfig (e.g. StreamConfig(frame_ms=32)) or "
+                          f"None, got {type(config).__name__} {config!r:.60}")
+    return config
+
+
 def _number_pair(value: Any, name: str, unit: str) -> tuple[float, float]:
     """``value`` as two finite numbers ``(low, high)``, else a ConfigError naming ``name``
     (a malformed pair raised Python's unpacking ValueError or numpy's TypeError)."""
@@ -1209,7 +1223,7 @@ class TrackingProcessor:
     def __init__(self, array: MicArray, fs: float, config: StreamConfig | None = None,
                  rig: Any = None, image_points: Callable[[float], Any] | None = None) -> None:
         self.array, self.fs = array, check_analysis_fs(fs)
-        self.cfg = config or StreamConfig()
+        self.cfg = _stream_config(config)
         self.rig, self.image_points = rig, image_points
         self.frame_len, self.hop = frame_geometry(fs, self.cfg.frame_ms, self.cfg.hop_ms)
         self.pairs = list(array.pairs)
@@ -1513,7 +1527,7 @@ class StreamPipeline:
                  image_points: Callable[[float], Any] | None = None, queue_size: int = 8,
                  stall_timeout_s: float = 0.5, max_stall_s: float = 5.0) -> None:
         self.array = load_array(array)
-        self.config = config or StreamConfig()
+        self.config = _stream_config(config)
         self.rig, self.image_points = rig, image_points
         # (unchecked, a negative stall_timeout_s was a ValueError of queue.get in the threaded
         # run, a NaN max_stall_s never ended the run on a silent source, a queue_size <= 0 made
