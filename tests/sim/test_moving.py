@@ -1,3 +1,6 @@
+import re
+import warnings
+
 import numpy as np
 import pytest
 import scipy.signal as ss
@@ -10,6 +13,7 @@ from hearsee.sim.moving import (
     fractional_delay,
     linear_trajectory,
     load_trajectory,
+    retarded_delays,
     save_trajectory,
     simulate_moving_free_field,
     simulate_moving_room,
@@ -168,6 +172,26 @@ def test_a_trajectory_faster_than_a_tenth_of_the_speed_of_sound_is_refused():
         jump.heard_at(0.5)
     ok = Trajectory([0.0, 1.0], [[1.0, 0.0, 0.0], [1.0, 34.0, 0.0]])  # just below the limit
     assert np.all(np.isfinite(simulate_moving_free_field(x, fs, mics, ok)))
+
+
+def test_an_absurd_trajectory_step_is_reported_at_its_true_speed():
+    """A 1e300 m jump was reported as "moves at inf m/s" (np.linalg.norm squares the step and
+    overflows), and so was 1 m in 1e-310 s. The message now gives the step's true figure,
+    computed in decimal arithmetic (beyond float's range too), without a RuntimeWarning."""
+    mics = [[0.0, 0.0, 1.0]]
+    for t1, p1, want in ((0.01, [1e300, 0.0, 0.0], "1e+302"),
+                         (1.0, [1e300, 1e300, 0.0], "1.414e+300"),
+                         (1e-300, [1e300, 0.0, 0.0], "1e+600"),
+                         (1e-310, [1.0, 0.0, 0.0], "1e+310")):
+        traj = Trajectory([0.0, t1], [[0.0, 0.0, 0.0], p1])
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with pytest.raises(GeometryError, match=rf"^the trajectory moves at {re.escape(want)}"
+                                                    r" m/s between t = 0 and "):
+                retarded_delays(traj, mics, [0.0], 343.0)
+    wide = Trajectory([0.0, 1.0], [[-1e308, 0.0, 0.0], [1e308, 0.0, 0.0]])
+    with pytest.raises(GeometryError, match=r"moves at 2e\+308 m/s"):
+        retarded_delays(wide, mics, [0.0], 343.0)
 
 
 def test_room_moving_source_delay_tracks_trajectory():

@@ -30,8 +30,10 @@ Trajectory files are CSV with a header ``t,x,y,z`` (seconds, metres).
 from __future__ import annotations
 
 import csv
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from decimal import Decimal, localcontext
 from pathlib import Path
 
 import numpy as np
@@ -307,6 +309,21 @@ def fractional_delay(signal: ArrayLike, delays_samples: ArrayLike, n_out: int | 
 MAX_SPEED_FRACTION = 0.1
 
 
+def _step_speed(traj: Trajectory, k: int, v: float) -> str:
+    """The speed (m/s) of the trajectory's step ``k`` as text: ``v`` (the float figure) to 4
+    digits, or where it overflowed (a 1e300 m jump: np.linalg.norm squares it) the step's
+    exact figure in decimal arithmetic, which has no float's range (1.414e+300, 2e+618)."""
+    if math.isfinite(v):
+        return f"{v:.4g}"
+    with localcontext() as ctx:
+        ctx.prec = 20
+        d = [Decimal(b) - Decimal(a) for a, b in zip(traj.positions[k], traj.positions[k + 1],
+                                                     strict=True)]
+        speed = sum(x * x for x in d).sqrt() / (Decimal(traj.t[k + 1]) - Decimal(traj.t[k]))
+        ctx.prec = 4
+        return format((+speed).normalize(), "g")
+
+
 def retarded_delays(traj: Trajectory, mics: ArrayLike, t: ArrayLike, c: float,
                     n_iter: int = 4) -> tuple[NDArray, NDArray]:
     """Propagation delay and distance per microphone for reception times ``t``.
@@ -322,7 +339,8 @@ def retarded_delays(traj: Trajectory, mics: ArrayLike, t: ArrayLike, c: float,
         k = int(np.argmax(v))
         if v[k] > MAX_SPEED_FRACTION * c:
             raise GeometryError(
-                f"the trajectory moves at {v[k]:.4g} m/s between t = {traj.t[k]:g} and "
+                f"the trajectory moves at {_step_speed(traj, k, v[k])} m/s between t = "
+                f"{traj.t[k]:g} and "
                 f"{traj.t[k + 1]:g} s; moving sources must be slower than "
                 f"{MAX_SPEED_FRACTION:g} times the speed of sound ({MAX_SPEED_FRACTION * c:.1f} "
                 "m/s)")
