@@ -10,6 +10,7 @@ from hearsee.audio.tdoa import (
     _median_last,
     _percentiles,
     _take_last,
+    dominant_sample,
     estimate_tdoas,
     frame_signals,
     gcc,
@@ -784,3 +785,24 @@ def test_band_up_to_infinity_is_still_the_whole_upper_band(recording):
     a = estimate_tdoas(x, FS, "three-mic", band_hz=(300, np.inf)).summary_tdoa_s
     b = estimate_tdoas(x, FS, "three-mic", band_hz=(300, FS / 2)).summary_tdoa_s
     np.testing.assert_array_equal(a, b)
+
+
+def test_dominant_sample_names_a_corrupt_sample_and_no_level(recording, three):
+    """The diagnosis behind the localize CLI's message when no frame is valid: a float sample
+    of 1e30 among a source at ~1 (every other frame then falls below single precision) is
+    named; a recording at any level (raw 32-bit PCM's 2**31, 1e25, 1e-15: hearsee is
+    scale-free), integer PCM counts and a mostly silent recording with a click are not."""
+    x, _ = recording
+    y = x.copy()
+    y[1, 4321] = -1e30
+    assert estimate_tdoas(y, FS, three).valid.sum() == 0
+    ch, i, v, ratio = dominant_sample(y)
+    assert (ch, i, v) == (1, 4321, -1e30)
+    assert ratio == pytest.approx(1e30 / np.median(np.abs(y)))
+    for scale in (2.0**31 / np.max(np.abs(x)), 1e25, 1e-15):
+        assert dominant_sample(x * scale) is None
+    pcm = np.round(x / np.max(np.abs(x)) * (2**31 - 1)).astype(np.int32)
+    assert dominant_sample(pcm) is None
+    click = np.zeros((3, FS))
+    click[:, 100] = 1.0
+    assert dominant_sample(click) is None

@@ -165,3 +165,27 @@ def test_in_plane_and_reverb_method_options(rec3, capsys):
     assert len(s["candidates"]) == 1 and s["elevation_deg"] == pytest.approx(0.0, abs=1e-6)
     code, _, err = _run(capsys, rec3, "--array", "three-mic", "--reverb-method", "bogus")
     assert code == 2 and "Traceback" not in err
+
+
+def test_a_corrupt_sample_is_named_when_no_frame_is_valid(rec3, tmp_path, capsys):
+    """One float sample of 1e30 in a recording of a source at ~0.5: the analysis scales the
+    recording to its loudest sample, every other frame fell below single precision and the
+    run said "no frame holds a detectable source (silence or uncorrelated noise)". It now names
+    the sample (index, channel, time, value, its ratio to the median |sample|); a recording of
+    uncorrelated noise keeps the old words."""
+    x, fs = sf.read(rec3, always_2d=True)
+    x[9000, 2] = 1e30
+    p = tmp_path / "spike.wav"
+    sf.write(p, x, fs, subtype="FLOAT")
+    code, out, err = _run(capsys, p, "--array", "three-mic", "--format", "json")
+    assert code == 0 and json.loads(out)["summary"]["n_valid_frames"] == 0
+    assert err.strip().splitlines() == [err.strip()]
+    assert err.startswith(f"{p}: no frame holds a detectable source; sample 9000 of channel 2 "
+                          f"({9000 / FS:.3f} s) is 1e+30, ")
+    assert "integer PCM" in err and "uncorrelated" not in err
+    noise = np.random.default_rng(7).standard_normal((FS, 3)) * 0.1  # no source at all
+    q = tmp_path / "noise.wav"
+    sf.write(q, noise, FS, subtype="FLOAT")
+    code, out, err = _run(capsys, q, "--array", "three-mic", "--format", "json")
+    assert code == 0 and json.loads(out)["summary"]["n_valid_frames"] == 0
+    assert err == f"{q}: no frame holds a detectable source (silence or uncorrelated noise)\n"

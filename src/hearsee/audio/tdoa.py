@@ -79,6 +79,7 @@ from hearsee.geometry import fibonacci_sphere
 __all__ = [
     "METHODS",
     "MAX_FRAME_MS",
+    "MAX_PCM_RANGE",
     "MAX_UNSCALED_PEAK",
     "MIN_FS_HZ",
     "MIN_UNSCALED_PEAK",
@@ -88,6 +89,7 @@ __all__ = [
     "check_analysis_fs",
     "check_frame_ms",
     "check_recording_length",
+    "dominant_sample",
     "estimate_tdoas",
     "frame_geometry",
     "frame_signals",
@@ -602,6 +604,34 @@ MAX_UNSCALED_PEAK = 1e3
 #: ... and below (a float file at 1e-15 gave no estimate: its single-precision powers fell under
 #: the spectra's floor). 24-bit PCM's smallest step is 1.2e-7
 MIN_UNSCALED_PEAK = 1e-6
+
+
+#: No integer PCM recording spans more than this ratio of its loudest |sample| to its median
+#: |sample| when that is not zero: 32-bit PCM's full scale is 2**31 steps, and a median of
+#: integers that is not zero is at least half a step (:func:`dominant_sample`).
+MAX_PCM_RANGE = 2.0**32
+
+
+def dominant_sample(x: NDArray) -> tuple[int, int, float, float] | None:
+    """``(channel, index, value, ratio)`` of the loudest sample of the recording ``x``
+    (n_ch, n) when it is more than :data:`MAX_PCM_RANGE` times the recording's median |sample|
+    (``ratio``; a median of 0, a mostly silent recording, is never such), else None.
+
+    A diagnosis, not a check: float recordings have no full scale and every estimate here is
+    scale-free (a recording at 1e25 is analysed like one at 1), so no level is refused. But
+    :func:`estimate_tdoas` scales a recording to its loudest sample, and one corrupt float
+    sample of 1e30 among speech at ~0.1 puts every other frame below single precision's range:
+    no frame is valid. The CLI names the sample then, instead of "silence or uncorrelated
+    noise"."""
+    a = np.abs(np.asarray(x, dtype=float))
+    if a.size == 0:
+        return None
+    k = int(np.argmax(a))
+    ch, i = np.unravel_index(k, a.shape) if a.ndim > 1 else (0, k)
+    peak, median = float(a.flat[k]), float(np.median(a))
+    if not (median > 0 and peak > MAX_PCM_RANGE * median):
+        return None
+    return int(ch), int(i), float(np.asarray(x).flat[k]), peak / median
 
 
 def windowed_frames(frames: NDArray, win: NDArray) -> NDArray:

@@ -92,7 +92,7 @@ def localize_cmd(
     from hearsee.audio.arrays import load_array
     from hearsee.audio.localize import localize_recording
     from hearsee.audio.signals import read_recording
-    from hearsee.audio.tdoa import check_frame_ms, frame_geometry
+    from hearsee.audio.tdoa import check_frame_ms, dominant_sample, frame_geometry
 
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
     arr = load_array(array)
@@ -114,5 +114,14 @@ def localize_cmd(
     else:
         _print_table(doc)
     if doc["summary"]["n_valid_frames"] == 0:
-        err_console.print(f"{recording}: no frame holds a detectable source "
-                          "(silence or uncorrelated noise)", highlight=False)
+        spike = dominant_sample(x)
+        if spike is None:
+            err_console.print(f"{recording}: no frame holds a detectable source "
+                              "(silence or uncorrelated noise)", highlight=False, soft_wrap=True)
+        else:  # (it was called silence or noise: one corrupt float sample of 1e30 does that)
+            ch, i, v, ratio = spike
+            err_console.print(
+                f"{recording}: no frame holds a detectable source; sample {i} of channel {ch} "
+                f"({i / fs:.3f} s) is {v:.3g}, {ratio:.2g} times the median |sample|, beyond "
+                "any integer PCM range (a corrupt sample? the analysis scales the recording to "
+                "its loudest sample)", highlight=False, soft_wrap=True)
