@@ -643,3 +643,22 @@ def test_track_directions_refuses_arrays_that_are_not_numbers():
     same = track_directions(np.array(t), [10, None, 30], valid=[1, 1, 0])
     assert np.array_equal(ref.azimuth_deg, same.azimuth_deg)
     assert ref.accepted.tolist() == same.accepted.tolist() == [True, False, False]
+
+
+def test_track_positions_refuses_arrays_that_are_not_numbers():
+    """track_directions' rule for track_positions: text fixes, times or covariances were read
+    as numbers ("1" as 1 m) and True as 1 m. Now an EstimationError naming the array; NaN and
+    None entries still mark a missing fix."""
+    t = [0.0, 0.1, 0.2]
+    fixes = [[1.0, 2.0, 3.0], [1.1, 2.0, 3.0], [1.2, 2.0, 3.0]]
+    for kwargs, name in ((dict(positions=[["1", "2", "3"]] * 3), "positions"),
+                         (dict(positions=[[1.0, 2.0, 3.0], [True, 2.0, 3.0], fixes[2]]),
+                          "positions"),
+                         (dict(t=["0", "0.1", "0.2"], positions=fixes), "t"),
+                         (dict(positions=fixes, R=[["1", 0, 0], [0, 1, 0], [0, 0, 1]]), "R")):
+        with pytest.raises(EstimationError, match=f"^{name} must hold real numbers"):
+            track_positions(**{"t": t, **kwargs})
+    ref = track_positions(t, [fixes[0], [np.nan] * 3, fixes[2]])
+    same = track_positions(t, [fixes[0], [None] * 3, fixes[2]])
+    assert ref.accepted.tolist() == same.accepted.tolist() == [True, False, True]
+    assert np.array_equal(ref.position, same.position)

@@ -832,17 +832,17 @@ class DirectionIMM:
         return True
 
 
-def _series(name: str, value: Any, unit: str, *, angles: bool = False) -> NDArray:
+def _series(name: str, value: Any, unit: str, *, missing: bool = False) -> NDArray:
     """``value`` as a float array when every entry is a real number (:func:`real_entries`; NaN
-    and infinities pass, the caller reads them as missing) -- or, with ``angles``, None too (an
-    unknown angle, as :func:`_angle` takes it; read as NaN) -- else an EstimationError naming
+    and infinities pass, the caller reads them as missing) -- or, with ``missing``, None too (an
+    unknown value, as :func:`_angle` takes it; read as NaN) -- else an EstimationError naming
     ``name`` (text such as "10" was read as 10 deg, True as 1 deg, and "a", a complex number or
     a ragged list raised numpy's builtin ValueError / TypeError)."""
-    ok = real_entries(value) or (angles and (items := object_entries(value)) is not None
+    ok = real_entries(value) or (missing and (items := object_entries(value)) is not None
                                  and all(_angle(v) for v in items.flat))
     if not ok:
-        missing = "; NaN marks a missing frame" if angles else ""
-        raise EstimationError(f"{name} must hold real numbers ({unit}{missing}), got "
+        hint = "; NaN marks a missing frame" if missing else ""
+        raise EstimationError(f"{name} must hold real numbers ({unit}{hint}), got "
                               f"{value!r:.80}")
     return np.asarray(value, dtype=float)
 
@@ -876,9 +876,9 @@ def track_directions(t: ArrayLike, azimuth_deg: ArrayLike, elevation_deg: ArrayL
         Passed to :class:`DirectionKalman` (``sigma_meas_deg``, ``sigma_accel_dps2``, ...).
     """
     tt = _series("t", t, "seconds")
-    az = _series("azimuth_deg", azimuth_deg, "degrees", angles=True)
+    az = _series("azimuth_deg", azimuth_deg, "degrees", missing=True)
     el = (np.full_like(az, np.nan) if elevation_deg is None
-          else _series("elevation_deg", elevation_deg, "degrees", angles=True))
+          else _series("elevation_deg", elevation_deg, "degrees", missing=True))
     ok = np.ones(az.shape, bool) if valid is None else _flags("valid", valid)
     if not (tt.shape == az.shape == el.shape == ok.shape) or tt.ndim != 1:
         raise EstimationError("t, azimuth_deg, elevation_deg and valid must be equal 1-D arrays")
@@ -1064,13 +1064,13 @@ def track_positions(t: ArrayLike, positions: ArrayLike, R: ArrayLike | None = No
 
     ``R`` is one 3x3 covariance for all frames or ``(n, 3, 3)`` per frame (m^2).
     """
-    tt = np.asarray(t, dtype=float)
-    z = np.asarray(positions, dtype=float)
+    tt = _series("t", t, "seconds")
+    z = _series("positions", positions, "metres", missing=True)
     if tt.ndim != 1 or z.shape != (tt.size, 3):
         raise EstimationError(f"t (n,) and positions (n, 3) expected, got {tt.shape}, {z.shape}")
     Rs = None
     if R is not None:
-        Ra = np.asarray(R, float)
+        Ra = _series("R", R, "m^2")
         if Ra.shape not in ((3, 3), (tt.size, 3, 3)):
             raise EstimationError(f"R must be one 3x3 covariance or one per frame (n, 3, 3) "
                                   f"in m^2, got shape {Ra.shape} for {tt.size} frames")
