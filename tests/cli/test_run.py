@@ -153,8 +153,9 @@ def test_dry_run_without_portaudio(robot_dir, monkeypatch, capsys):
     code = main(["run", "--config", str(_config(robot_dir)), "--dry-run"])
     err = capsys.readouterr().err.strip()
     assert code == 2
-    assert err == ("hearsee: error: audio: PortAudio library not found "
-                   "(apt-get install libportaudio2)")
+    assert err == ("hearsee: error: live audio input needs the sounddevice package and the "
+                   "PortAudio library (PortAudio library not found): pip install "
+                   "'hearsee[live]' (Debian/Ubuntu also: apt-get install libportaudio2)")
 
 
 def test_bad_robot_files_and_options(robot_dir, capsys):

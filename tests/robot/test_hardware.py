@@ -339,7 +339,9 @@ def test_portaudio_missing_is_a_clear_error(small_rig, monkeypatch):
     cfg = load_robot_config(make_config(small_rig, _with()))
     bad = first_failure(check_devices(cfg))
     assert bad.name == "audio.device" and isinstance(bad.error, AudioInputError)
-    assert bad.detail == "audio: PortAudio library not found (apt-get install libportaudio2)"
+    assert bad.detail == ("live audio input needs the sounddevice package and the PortAudio "
+                          "library (PortAudio library not found): pip install 'hearsee[live]' "
+                          "(Debian/Ubuntu also: apt-get install libportaudio2)")
 
 
 # ------------------------------------------------------------------------------- live loop

@@ -80,6 +80,7 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, HearseeError
+from hearsee.stream.device import import_sounddevice  # (re-exported: __all__)
 
 if TYPE_CHECKING:  # imported when run_robot runs (the simulated loop's heavier imports)
     from hearsee.robot.pipeline import RunResult
@@ -452,20 +453,6 @@ def load_robot_config(path: str | Path) -> RobotConfig:
 # ---------------------------------------------------------------------------------------------
 # Devices
 # ---------------------------------------------------------------------------------------------
-def import_sounddevice() -> Any:
-    """Import :mod:`sounddevice` lazily; a missing module or PortAudio library becomes a clear
-    :class:`hearsee.errors.AudioInputError`."""
-    try:
-        import sounddevice
-    except ImportError:
-        raise AudioInputError("audio: the sounddevice package is not installed "
-                              "(pip install 'hearsee[live]')") from None
-    except OSError:
-        raise AudioInputError("audio: PortAudio library not found "
-                              "(apt-get install libportaudio2)") from None
-    return sounddevice
-
-
 def _device_list(sd: Any) -> list[dict[str, Any]]:
     devs = sd.query_devices()
     out = []

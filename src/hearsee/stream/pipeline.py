@@ -84,6 +84,7 @@ from hearsee.audio.tracking import (
 from hearsee.config import finite_number, is_real, time_limit, whole_number
 from hearsee.errors import AudioInputError, ConfigError, EstimationError
 from hearsee.geometry import wrap_deg
+from hearsee.stream.device import import_sounddevice
 
 __all__ = [
     "ArraySource",
@@ -284,21 +285,6 @@ class WavSource(ArraySource):
         self.path = Path(path)
 
 
-def _import_sounddevice() -> Any:
-    try:
-        import sounddevice
-    except OSError as exc:  # PortAudio shared library missing
-        raise AudioInputError(
-            f"live microphone input needs the PortAudio library ({exc}); install it (Debian/"
-            "Ubuntu: apt install libportaudio2) or process a recorded WAV file instead"
-        ) from None
-    except ImportError:
-        raise AudioInputError(
-            "live microphone input needs the 'sounddevice' package: pip install 'hearsee[live]'"
-        ) from None
-    return sounddevice
-
-
 def _device_listing(sd: Any) -> str:
     try:
         devs = sd.query_devices()
@@ -360,7 +346,7 @@ class DeviceSource:
         queue_size = whole_number("queue_size", queue_size)
         timeout_s = finite_number("timeout_s", timeout_s, 0.0, lo_open=True)
         duration_s = time_limit("duration_s", duration_s)
-        sd = _import_sounddevice()
+        sd = import_sounddevice()
         try:
             info = sd.query_devices(device, "input")
         except (ValueError, sd.PortAudioError) as exc:

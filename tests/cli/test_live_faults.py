@@ -1,0 +1,238 @@
+"""The live paths' failure modes, through a fake ``sounddevice`` (no hardware, no PortAudio):
+``hearsee run`` (and ``--dry-run``) and ``hearsee track --device``.
+
+Each user-facing fault -- sounddevice or PortAudio missing, a device that does not exist or is
+no input, too few input channels, a sample rate the device refuses, a PortAudio error when the
+stream starts, blocks of another shape -- is one line on stderr and exit 2, never a traceback,
+and nothing the user gave is written over; input overflows are counted and the run goes on;
+Ctrl-C ends a live run cleanly with what was written kept.
+
+The fake follows sounddevice's behaviour: ``query_devices(device, kind)`` raises ValueError for
+a name that matches no input device or a device without inputs and PortAudioError for an index
+that does not exist; ``check_input_settings`` and opening an ``InputStream`` raise
+PortAudioError for a channel count or rate the device does not support; the stream calls
+``callback(indata (frames, channels) float32, frames, time_info, status)`` from its own thread
+once started, ``status.input_overflow`` set where PortAudio discarded input.
+"""
+
+from __future__ import annotations
+
+import _thread
+import signal
+import sys
+import threading
+import time
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from hearsee.cli import main
+
+FS = 16000
+DEVICES = [{"name": "Built-in Microphone", "max_input_channels": 2, "max_output_channels": 2},
+           {"name": "HDMI Output", "max_input_channels": 0, "max_output_channels": 8},
+           {"name": "USB 6ch Array", "max_input_channels": 6, "max_output_channels": 0}]
+
+
+class _Flags:
+    """sounddevice.CallbackFlags look-alike."""
+
+    def __init__(self, overflow: bool) -> None:
+        self.input_overflow = overflow
+
+    def __bool__(self) -> bool:
+        return self.input_overflow
+
+
+class FakeSoundDevice(types.ModuleType):
+    """sounddevice with ``DEVICES`` that accept 16 and 48 kHz.
+
+    open_error / start_error : PortAudio's message when the stream is opened / started
+    deliver_channels : channels of every delivered block (default: those opened)
+    overflow_at : blocks flagged ``input_overflow``
+    interrupt_at : before this block, wait until the consumer is idle, then press Ctrl-C
+        (``_thread.interrupt_main``); the stream goes on delivering until it is closed
+    """
+
+    class PortAudioError(Exception):
+        pass
+
+    def __init__(self, open_error=None, start_error=None, deliver_channels=None,
+                 overflow_at=(), interrupt_at=None, speed=20.0) -> None:
+        super().__init__("sounddevice")
+        self.default = types.SimpleNamespace(device=[0, -1])
+        self.open_error, self.start_error = open_error, start_error
+        self.deliver_channels, self.overflow_at = deliver_channels, set(overflow_at)
+        self.interrupt_at, self.speed = interrupt_at, speed
+        self.n_streams_closed = 0
+
+    def query_devices(self, device=None, kind=None):
+        if device is None and kind is None:
+            return [dict(d) for d in DEVICES]
+        if device is None:
+            device = self.default.device[0]
+        if isinstance(device, str):
+            hits = [i for i, d in enumerate(DEVICES) if device.lower() in d["name"].lower()
+                    and (kind is None or d[f"max_{kind}_channels"] > 0)]
+            if not hits:
+                raise ValueError(f"No {kind} device matching {device!r}")
+            device = hits[0]
+        if not 0 <= device < len(DEVICES):
+            raise self.PortAudioError(f"Error querying device {device}")
+        d = dict(DEVICES[device])
+        if kind is not None and d[f"max_{kind}_channels"] < 1:
+            raise ValueError(f"Not an {kind} device: {d['name']!r}")
+        return d
+
+    def _check(self, device, channels, samplerate, what=""):
+        if channels > DEVICES[device]["max_input_channels"]:
+            raise self.PortAudioError(f"{what}Invalid number of channels [PaErrorCode -9998]")
+        if samplerate not in (16000, 48000):
+            raise self.PortAudioError(f"{what}Invalid sample rate [PaErrorCode -9997]")
+
+    def check_input_settings(self, device=None, channels=None, dtype=None, extra_settings=None,
+                             samplerate=None):
+        self._check(device, channels, samplerate)
+
+    def InputStream(self, device=None, channels=None, samplerate=None, blocksize=None,
+                    dtype=None, callback=None):
+        index = self.query_devices(device, "input")["name"]
+        index = next(i for i, d in enumerate(DEVICES) if d["name"] == index)
+        self._check(index, channels, samplerate, "Error opening InputStream: ")
+        if self.open_error is not None:
+            raise self.PortAudioError(f"Error opening InputStream: {self.open_error}")
+        return _Stream(self, channels, blocksize, callback)
+
+
+class _Stream:
+    def __init__(self, sd, channels, blocksize, callback):
+        self.sd, self.channels, self.bs, self.cb = sd, channels, int(blocksize), callback
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._play, daemon=True)
+
+    def _play(self):
+        sd = self.sd
+        rng = np.random.default_rng(0)
+        k = 0
+        while not self._stop.is_set() and k < 2000:  # (a test gone wrong ends: stalled)
+            if k == sd.interrupt_at:
+                time.sleep(0.3)  # the consumer has handled every block and waits for one
+                _thread.interrupt_main()
+            block = 0.1 * rng.standard_normal((self.bs, sd.deliver_channels or self.channels))
+            self.cb(block.astype(np.float32), self.bs, None, _Flags(k in sd.overflow_at))
+            k += 1
+            time.sleep(self.bs / FS / sd.speed)
+
+    def __enter__(self):
+        if self.sd.start_error is not None:
+            raise self.sd.PortAudioError(f"Error starting stream: {self.sd.start_error}")
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        self.sd.n_streams_closed += 1
+
+
+@pytest.fixture
+def fake_sd(monkeypatch):
+    # Ctrl-C is _thread.interrupt_main(): it needs Python's SIGINT handler (a test runner
+    # may have replaced it)
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+
+    def install(**kw):
+        sd = FakeSoundDevice(**kw)
+        monkeypatch.setitem(sys.modules, "sounddevice", sd)
+        return sd
+
+    yield install
+    signal.signal(signal.SIGINT, old)
+
+
+@pytest.fixture
+def robot(tmp_path):
+    """``robot(**audio)``: an audio-only robot file in tmp_path (the USB array's channels 1-3
+    by default), its report folder holding a previous run's files."""
+    prev = tmp_path / "report"
+    prev.mkdir()
+    for name in ("updates.jsonl", "summary.json", "index.html"):
+        (prev / name).write_text(f"previous {name}", encoding="utf-8")
+
+    def make(**audio):
+        data = {"audio": {"device": "USB 6ch", "fs": FS, "array": "three-mic",
+                          "channels": [1, 2, 3], **audio},
+                "head": {"pivot_m": [0.0, 0.0, 1.2], "driver": "none"},
+                "output": {"report": "report"}}
+        p = tmp_path / "robot.yaml"
+        p.write_text(yaml.safe_dump(data), encoding="utf-8")
+        return p
+
+    return make
+
+
+def _untouched(cfg: Path) -> None:
+    """The robot file and the previous run's report are as they were; nothing else was
+    written."""
+    folder = cfg.parent
+    assert sorted(p.name for p in folder.iterdir()) == ["report", "robot.yaml"]
+    assert yaml.safe_load(cfg.read_text(encoding="utf-8"))["audio"]["array"] == "three-mic"
+    for name in ("updates.jsonl", "summary.json", "index.html"):
+        assert (folder / "report" / name).read_text(encoding="utf-8") == f"previous {name}"
+    assert sorted(p.name for p in (folder / "report").iterdir()) == [
+        "index.html", "summary.json", "updates.jsonl"]
+
+
+def _one_line(capsys, code: int, want: str, *, stdout_empty: bool = True) -> str:
+    """The command exited 2 with one line on stderr, ``hearsee: error: `` + ``want``..."""
+    out = capsys.readouterr()
+    assert code == 2, out.err
+    lines = out.err.strip().splitlines()
+    assert len(lines) == 1, out.err
+    assert lines[0].startswith("hearsee: error: " + want), lines[0]
+    if stdout_empty:
+        assert out.out == ""
+    return lines[0]
+
+
+# ------------------------------------------------------------------- sounddevice missing
+class _Refuse:
+    """A meta-path finder that makes ``import sounddevice`` fail with ``exc``."""
+
+    def __init__(self, exc):
+        self.exc = exc
+
+    def find_spec(self, name, path=None, target=None):
+        if name == "sounddevice":
+            raise self.exc
+        return None
+
+
+@pytest.mark.parametrize("exc", [ModuleNotFoundError("No module named 'sounddevice'"),
+                                 OSError("PortAudio library not found")])
+def test_missing_sounddevice_is_one_message_on_every_live_path(robot, monkeypatch, capsys,
+                                                                exc):
+    """Two importers said it two ways ('audio: the sounddevice package is not installed' /
+    'audio: PortAudio library not found (apt-get install libportaudio2)' for `run`, 'live
+    microphone input needs ...' for `track --device`); one importer now, one message naming
+    the extra to install and the cause."""
+    from hearsee.robot import hardware
+    from hearsee.stream import device
+
+    assert hardware.import_sounddevice is device.import_sounddevice
+    monkeypatch.delitem(sys.modules, "sounddevice", raising=False)
+    monkeypatch.setattr(sys, "meta_path", [_Refuse(exc), *sys.meta_path])
+    cfg = robot()
+    want = (f"live audio input needs the sounddevice package and the PortAudio library ({exc}):"
+            " pip install 'hearsee[live]' (Debian/Ubuntu also: apt-get install libportaudio2)")
+    for args in (["run", "--config", str(cfg), "--quiet"],
+                 ["track", "--device", "0", "--array", "three-mic"]):
+        line = _one_line(capsys, main(args), want)
+        assert line == "hearsee: error: " + want
+    main(["run", "--config", str(cfg), "--dry-run"])
+    assert capsys.readouterr().err == "hearsee: error: " + want + "\n"
+    _untouched(cfg)
+
