@@ -236,3 +236,77 @@ def test_missing_sounddevice_is_one_message_on_every_live_path(robot, monkeypatc
     assert capsys.readouterr().err == "hearsee: error: " + want + "\n"
     _untouched(cfg)
 
+
+# ------------------------------------------------------------------- the device
+@pytest.mark.parametrize("device, want", [
+    ("ReSpeaker", "audio.device: no input device named 'ReSpeaker' (available: 0 'Built-in "
+                  "Microphone' (2 in), 2 'USB 6ch Array' (6 in))"),
+    (7, "audio.device: no device with index 7"),
+    (1, "audio.device: device 1 'HDMI Output' has no input channels"),
+])
+def test_run_device_not_found_is_one_line(robot, fake_sd, capsys, device, want):
+    fake_sd()
+    cfg = robot(device=device)
+    _one_line(capsys, main(["run", "--config", str(cfg), "--quiet"]), f"{cfg}: {want}")
+    _untouched(cfg)
+
+
+@pytest.mark.parametrize("device, cause", [
+    ("ReSpeaker", "No input device matching 'ReSpeaker'"),
+    ("7", "Error querying device 7"),
+    ("1", "Not an input device: 'HDMI Output'"),
+])
+def test_track_device_not_found_is_one_line(fake_sd, capsys, device, cause):
+    fake_sd()
+    want = f"audio input device {device if device.isalpha() else int(device)!r} not found"
+    line = _one_line(capsys, main(["track", "--device", device, "--array", "three-mic"]), want)
+    assert cause in line and "available: 0: Built-in Microphone (2 in); 2: USB 6ch Array" in line
+
+
+def test_too_few_input_channels_is_one_line(robot, fake_sd, capsys):
+    fake_sd()
+    cfg = robot(channels=[1, 2, 6])  # channel 6 of a 6-channel device
+    _one_line(capsys, main(["run", "--config", str(cfg), "--quiet"]),
+              f"{cfg}: audio.channels: device 2 'USB 6ch Array' has 6 input channels; the array "
+              "needs 7")
+    cfg = robot(device="Built-in", channels=None)
+    _one_line(capsys, main(["run", "--config", str(cfg), "--quiet"]),
+              f"{cfg}: audio.device: device 0 'Built-in Microphone' has 2 input channels; the "
+              "array needs 3")
+    _untouched(cfg)
+    _one_line(capsys, main(["track", "--device", "0", "--array", "three-mic"]),
+              "device 'Built-in Microphone' has 2 input channels; the array needs 3")
+
+
+def test_sample_rate_the_device_refuses_is_one_line(robot, fake_sd, capsys):
+    """`track --device 2 --fs 22050`: PortAudio refuses the rate when the stream opens, in the
+    source's thread -- its PortAudioError came out of the CLI as a traceback."""
+    fake_sd()
+    cfg = robot(fs=22050)
+    _one_line(capsys, main(["run", "--config", str(cfg), "--quiet"]),
+              f"{cfg}: audio.fs: device 2 'USB 6ch Array' does not accept 4 channels at 22050 Hz "
+              "(Invalid sample rate [PaErrorCode -9997])")
+    _untouched(cfg)
+    _one_line(capsys, main(["track", "--device", "2", "--array", "three-mic", "--fs", "22050"]),
+              "audio input device 'USB 6ch Array': cannot record 3 channels at 22050 Hz (Error "
+              "opening InputStream: Invalid sample rate [PaErrorCode -9997])")
+
+
+@pytest.mark.parametrize("where", ["open", "start"])
+def test_portaudio_error_at_stream_start_is_one_line(robot, fake_sd, capsys, where):
+    """A device another program holds passes the settings check and fails when the stream
+    opens or starts: a PortAudioError traceback from `run` and `track --device`."""
+    sd = fake_sd(**{f"{where}_error": "Device unavailable [PaErrorCode -9985]"})
+    cause = ("Error opening InputStream: " if where == "open" else "Error starting stream: ") \
+        + "Device unavailable [PaErrorCode -9985]"
+    cfg = robot()
+    _one_line(capsys, main(["run", "--config", str(cfg), "--quiet"]),
+              f"audio input device 'USB 6ch Array': cannot record 4 channels at 16000 Hz "
+              f"({cause})")
+    assert not (cfg.parent / "report" / "log.json").exists()  # no report of a run that wasn't
+    _one_line(capsys, main(["track", "--device", "USB", "--array", "three-mic"]),
+              f"audio input device 'USB 6ch Array': cannot record 3 channels at 16000 Hz "
+              f"({cause})")
+    assert sd.n_streams_closed == 0  # (none was started)
+
+

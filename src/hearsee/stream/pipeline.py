@@ -45,6 +45,7 @@ Units: seconds, degrees, metres; frame times are frame centres from the start of
 
 from __future__ import annotations
 
+import contextlib
 import math
 import queue
 import threading
@@ -334,6 +335,11 @@ class DeviceSource:
         provides them (> 0 and increasing), else it is taken as one block.
     stalled : bool
         The run ended because the device delivered nothing for ``timeout_s``.
+    name : str
+        The device's name (PortAudio's), for messages.
+
+    A stream the device refuses to open or start (a sample rate or channel count it does not
+    support, a device another program holds) is an AudioInputError when the run starts.
     """
 
     def __init__(self, device: int | str | None, n_channels: int, fs: float = 16000.0,
@@ -360,6 +366,7 @@ class DeviceSource:
                 f"array needs {n_channels}"
             )
         self._sd = sd
+        self.name = str(info.get("name", device))  #: the device's name (PortAudio's)
         self.device, self.n_channels, self.fs = device, int(n_channels), float(fs)
         self.block_len, self.duration_s = int(block_len), duration_s
         self.timeout_s = float(timeout_s)
@@ -413,12 +420,20 @@ class DeviceSource:
             if self._run is run:  # (a stream of an earlier run still open: ignored)
                 self._callback(indata, frames, time_info, status)
 
-        stream = self._sd.InputStream(device=self.device, channels=self.n_channels,
-                                      samplerate=self.fs, blocksize=self.block_len,
-                                      dtype="float32", callback=callback)
+        sd = self._sd
         limit = None if self.duration_s is None else int(self.duration_s * self.fs)
         try:
-            with stream:
+            with contextlib.ExitStack() as opened:
+                try:  # PortAudio opens the device here and starts it on entering
+                    opened.enter_context(sd.InputStream(
+                        device=self.device, channels=self.n_channels, samplerate=self.fs,
+                        blocksize=self.block_len, dtype="float32", callback=callback))
+                except (ValueError, sd.PortAudioError) as exc:
+                    # (a rate or channel count the device refuses, a device another program
+                    # holds: PortAudioError escaped as a traceback)
+                    raise AudioInputError(
+                        f"audio input device {self.name!r}: cannot record {self.n_channels} "
+                        f"channels at {self.fs:g} Hz ({exc})") from None
                 while True:
                     try:
                         blk = q.get(timeout=self.timeout_s)
