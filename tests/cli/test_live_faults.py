@@ -310,3 +310,16 @@ def test_portaudio_error_at_stream_start_is_one_line(robot, fake_sd, capsys, whe
     assert sd.n_streams_closed == 0  # (none was started)
 
 
+# ------------------------------------------------------------------- the stream
+def test_blocks_of_another_shape_are_one_line(robot, fake_sd, capsys):
+    """A device delivering 2 channels where 4 were opened: `run` picked the robot's channels
+    out of the block with numpy indexing (an IndexError traceback)."""
+    sd = fake_sd(deliver_channels=2)
+    cfg = robot()
+    _one_line(capsys, main(["run", "--config", str(cfg), "--quiet"]),
+              "block has shape (2, 1600); expected 4 channels")
+    _one_line(capsys, main(["track", "--device", "2", "--array", "three-mic"]),
+              "block has shape (2, 1024); expected 3 channels")
+    assert sd.n_streams_closed == 2  # each stream was closed
+
+

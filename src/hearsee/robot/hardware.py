@@ -640,8 +640,8 @@ class MappedSource:
         # (a NaN rate was a builtin ValueError once the stream started, None a TypeError)
         self.fs = finite_number("audio source fs", source.fs, 0.0, lo_open=True,
                                 error=AudioInputError)  # Hz
-        n_in = whole_number("audio source n_channels", source.n_channels, 1,
-                            error=AudioInputError)
+        self.n_in = n_in = whole_number("audio source n_channels", source.n_channels, 1,
+                                        error=AudioInputError)
         self.channels = list(channels)
         if max(self.channels) >= n_in:
             raise AudioInputError(f"audio.channels: channel {max(self.channels)} requested but "
@@ -662,12 +662,13 @@ class MappedSource:
         return int(getattr(self.source, "n_dropped", 0))
 
     def blocks(self) -> Any:
-        from hearsee.stream.pipeline import Block
+        from hearsee.stream.pipeline import Block, block_samples
 
         for blk in self.source.blocks():
             if self.stop is not None and self.stop.is_set():
                 return
-            data = np.asarray(blk.data)[self.channels]
+            # (a block of fewer channels than the source declared was an IndexError traceback)
+            data = block_samples(blk.data, self.n_in)[self.channels]
             if self.limit is not None:
                 if blk.start >= self.limit:
                     return

@@ -120,6 +120,15 @@ class Block:
     arrival: float
 
 
+def block_samples(data: ArrayLike, n_channels: int) -> NDArray:
+    """A block's samples as a float (n_channels, n) array; AudioInputError when it has another
+    shape (a source or device delivering other channels than it declared)."""
+    a = np.asarray(data, dtype=float)
+    if a.ndim != 2 or a.shape[0] != n_channels:
+        raise AudioInputError(f"block has shape {a.shape}; expected {n_channels} channels")
+    return a
+
+
 @dataclass
 class FrameBatch:
     """Consecutive analysis frames produced by one block.
@@ -524,10 +533,7 @@ class Framer:
 
     def push(self, blk: Block) -> FrameBatch | None:
         """Add a block; return the frames it completes (or None)."""
-        data = np.asarray(blk.data, dtype=float)
-        if data.ndim != 2 or data.shape[0] != self.n_channels:
-            raise AudioInputError(
-                f"block has shape {data.shape}; expected {self.n_channels} channels")
+        data = block_samples(blk.data, self.n_channels)
         buf_end = self.buf_start + self.buf.shape[1]
         if blk.start < buf_end or blk.seq < self._expected_seq:
             self.n_late += 1  # its samples were already consumed or declared lost
