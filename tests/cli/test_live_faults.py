@@ -18,6 +18,7 @@ once started, ``status.input_overflow`` set where PortAudio discarded input.
 from __future__ import annotations
 
 import _thread
+import json
 import signal
 import sys
 import threading
@@ -323,3 +324,71 @@ def test_blocks_of_another_shape_are_one_line(robot, fake_sd, capsys):
     assert sd.n_streams_closed == 2  # each stream was closed
 
 
+def test_input_overflow_is_counted_and_the_run_goes_on(robot, fake_sd, capsys):
+    """PortAudio discarding input (status.input_overflow) is no error: the block after it is
+    placed after a gap of one block, whose frames are reported missing."""
+    fake_sd(overflow_at={3})
+    cfg = robot()
+    assert main(["run", "--config", str(cfg), "--quiet", "--duration", "1.0"]) == 0, \
+        capsys.readouterr().err
+    assert "Traceback" not in capsys.readouterr().err
+    summary = json.loads((cfg.parent / "report" / "summary.json").read_text(encoding="utf-8"))
+    assert summary["status"] == "ok" and summary["dropped_blocks"] == 1
+    # the frames touching the lost samples [4800, 6400): those starting at 4096 ... 6144
+    assert summary["missing_frames"] == 5 and summary["audio_s"] == 1.0
+    assert main(["track", "--device", "2", "--array", "three-mic", "--duration", "1",
+                 "--stats"]) == 0
+    out = capsys.readouterr()
+    assert "1 dropped / 0 late blocks, 1 input overflows, status ok" in " ".join(out.err.split())
+    recs = [json.loads(s) for s in out.out.splitlines()]
+    # blocks of 1024: the frames touching the lost samples [3072, 4096) start at 2560 ... 3584
+    # (16 blocks: the device's last block is not cut at --duration)
+    assert sum(r["missing"] for r in recs) == 3 and len(recs) == (16 * 1024 - 1024) // 512 + 1
+
+
+def test_ctrl_c_ends_a_live_run_cleanly(robot, fake_sd, capsys):
+    """Ctrl-C (no --duration) ends `hearsee run` with its report and JSON lines; the report
+    counted no dropped block where the device had dropped one (the stream's stats were only
+    filled in when the run ended normally)."""
+    fake_sd(overflow_at={2}, interrupt_at=12)
+    cfg = robot()
+    code = main(["run", "--config", str(cfg), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 0 and "Traceback" not in err, err
+    report = cfg.parent / "report"
+    summary = json.loads((report / "summary.json").read_text(encoding="utf-8"))
+    assert summary["status"] == "interrupted" and summary["dropped_blocks"] == 1
+    lines = (report / "updates.jsonl").read_text(encoding="utf-8").splitlines()
+    log = json.loads((report / "log.json").read_text(encoding="utf-8"))
+    assert [json.loads(s) for s in lines] == log and len(log) == summary["updates"] > 20
+    # 12 blocks of 1600 samples before Ctrl-C and the one lost before the third: 20800
+    # samples, frames of 1024 every 512 samples (the last one centred at 19456 + 512)
+    n = 13 * 1600
+    assert summary["audio_s"] == n / FS
+    assert len(log) == (n - 1024) // 512 + 1 and log[-1]["t"] == (19456 + 512) / FS
+    # the frames that touch the lost samples [3200, 4800): those starting at 2560 ... 4608
+    assert summary["missing_frames"] == 5
+
+
+@pytest.mark.parametrize("fmt", ["json", "jsonl"])
+def test_ctrl_c_ends_live_track_cleanly(fake_sd, capsys, fmt):
+    """`track --device` runs until Ctrl-C without --duration: the updates so far and the stats
+    are reported (--format json printed nothing at all, and the exit was 130)."""
+    fake_sd(overflow_at={2}, interrupt_at=16)
+    code = main(["track", "--device", "2", "--array", "three-mic", "--format", fmt])
+    out = capsys.readouterr()
+    assert code == 0 and "Traceback" not in out.err, out.err
+    assert "1 dropped / 0 late blocks, 1 input overflows, status interrupted" in " ".join(
+        out.err.split())
+    if fmt == "json":
+        doc = json.loads(out.out)
+        ups, stats = doc["updates"], doc["stats"]
+        assert stats["status"] == "interrupted" and stats["dropped_blocks"] == 1
+        assert stats["frames"] == len(ups) and stats["audio_s"] == 17 * 1024 / FS
+    else:
+        ups = [json.loads(s) for s in out.out.splitlines()]
+    # 16 blocks of 1024 samples before Ctrl-C and the one lost before the third: frames of
+    # 1024 every 512 samples
+    assert len(ups) == (17 * 1024 - 1024) // 512 + 1
+    # the frames touching the samples lost before the third block, [2048, 3072)
+    assert [u["t"] for u in ups if u["missing"]] == [(s + 512) / FS for s in (1536, 2048, 2560)]

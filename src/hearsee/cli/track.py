@@ -98,7 +98,12 @@ def track_cmd(
         "--stats", help="Print real-time factor and latency on stderr.")] = False,
 ) -> None:
     """Track the direction (and, with a calibrated camera, the 3D position, velocity and
-    acceleration) of a moving speaker; one update per audio frame."""
+    acceleration) of a moving speaker; one update per audio frame.
+
+    Live input (--device) runs for --duration seconds, until the input stops, or until Ctrl-C,
+    which ends it cleanly: the updates so far and the stats (status "interrupted") are
+    reported, as by `hearsee run`.
+    """
     from hearsee.audio.arrays import load_array
     from hearsee.audio.tdoa import check_frame_ms
     from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, IMM_MODES_DPS2
@@ -150,9 +155,13 @@ def track_cmd(
                        direction_rate_tau_s=rate_tau,
                        gated_min_coherence=gate_coherence if gate_coherence > 0 else None)
 
+    updates: list = []  # (kept by the sink: what a Ctrl-C leaves is still reported)
+
     def sink(u: object) -> None:
-        sys.stdout.write(json.dumps(to_jsonable(u.to_json())) + "\n")  # type: ignore[attr-defined]
-        sys.stdout.flush()
+        updates.append(u)
+        if fmt is TrackFormat.jsonl:
+            sys.stdout.write(json.dumps(to_jsonable(u.to_json())) + "\n")  # type: ignore[attr-defined]
+            sys.stdout.flush()
 
     try:
         if device is not None:
@@ -161,8 +170,14 @@ def track_cmd(
         else:
             source = WavSource(recording, n_channels=arr.n_mics, block_len=4096)
         pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
-        updates = pipe.run(source, sink if fmt is TrackFormat.jsonl else None,
-                           threaded=device is not None)
+        try:
+            pipe.run(source, sink, threaded=device is not None)
+        except KeyboardInterrupt:
+            if device is None:
+                raise  # a file: the CLI's 'interrupted' (exit 130)
+            # live input runs until Ctrl-C (no --duration): the run ends there, as `hearsee
+            # run` does -- the updates so far and the stats (status "interrupted") are
+            # reported; --format json printed nothing and --stats no stats
     finally:
         close = getattr(points, "close", None)  # release a video / stop a live camera's thread
         if close is not None:

@@ -1306,8 +1306,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         fh.close()
         if own_cameras:
             cameras.close()
-    summary = _live_summary(log, pipeline.stats, source.audio_s, status, state, cameras, head,
-                            time.perf_counter() - t_start)
+    # the audio processed (the stream's stats, filled in after a Ctrl-C too): the source's
+    # own count also held the blocks still queued when Ctrl-C came
+    summary = _live_summary(log, pipeline.stats, pipeline.stats.audio_s, status, state, cameras,
+                            head, time.perf_counter() - t_start)
     return RunResult(log, summary, images, captions, frames)
 
 

@@ -205,9 +205,11 @@ class StreamStats:
     ``n_frames`` updates, ``n_missing_frames`` of them frames that lost samples to a dropped or
     late block; ``n_stalls`` waits of ``stall_timeout_s`` without a block; ``n_overflows`` input
     overflows the device reported (PortAudio discarded samples; the blocks' worth of samples lost
-    count as dropped blocks); ``status`` ``"ok"`` or ``"stalled"`` (the source went silent: for
+    count as dropped blocks); ``status`` ``"ok"``, ``"stalled"`` (the source went silent: for
     longer than the pipeline's ``max_stall_s``, or the source gave up itself, as
-    :class:`DeviceSource` does after its ``timeout_s``).
+    :class:`DeviceSource` does after its ``timeout_s``) or ``"interrupted"`` (Ctrl-C: the run
+    re-raises the KeyboardInterrupt; the stats describe what was processed until then, as they
+    do after an error).
     """
 
     n_blocks: int = 0
@@ -1617,71 +1619,76 @@ class StreamPipeline:
                 if sink is not None:
                     sink(u)
 
-        if not threaded:
-            for blk in source.blocks():
-                handle(blk)
-        else:
-            q: queue.Queue = queue.Queue(maxsize=self.queue_size)
-            stop = threading.Event()
-            errors: list[BaseException] = []
+        try:
+            if not threaded:
+                for blk in source.blocks():
+                    handle(blk)
+            else:
+                q: queue.Queue = queue.Queue(maxsize=self.queue_size)
+                stop = threading.Event()
+                errors: list[BaseException] = []
 
-            def produce() -> None:
-                try:
-                    for blk in source.blocks():
-                        while not stop.is_set():
+                def produce() -> None:
+                    try:
+                        for blk in source.blocks():
+                            while not stop.is_set():
+                                try:
+                                    q.put(blk, timeout=0.1)
+                                    break
+                                except queue.Full:
+                                    continue
+                            if stop.is_set():
+                                return
+                    except BaseException as exc:  # noqa: BLE001 - re-raised in the consumer
+                        errors.append(exc)
+                    finally:
+                        while True:
                             try:
-                                q.put(blk, timeout=0.1)
+                                q.put(_END, timeout=0.1)
                                 break
                             except queue.Full:
-                                continue
-                        if stop.is_set():
-                            return
-                except BaseException as exc:  # noqa: BLE001 - re-raised in the consumer
-                    errors.append(exc)
-                finally:
+                                if stop.is_set():
+                                    break
+
+                th = threading.Thread(target=produce, name="hearsee-source", daemon=True)
+                th.start()
+                silent = 0.0
+                try:
                     while True:
                         try:
-                            q.put(_END, timeout=0.1)
-                            break
-                        except queue.Full:
-                            if stop.is_set():
+                            item = q.get(timeout=self.stall_timeout_s)
+                        except queue.Empty:
+                            st.n_stalls += 1
+                            silent += self.stall_timeout_s
+                            if silent >= self.max_stall_s:
+                                st.status = "stalled"
                                 break
-
-            th = threading.Thread(target=produce, name="hearsee-source", daemon=True)
-            th.start()
-            silent = 0.0
-            try:
-                while True:
-                    try:
-                        item = q.get(timeout=self.stall_timeout_s)
-                    except queue.Empty:
-                        st.n_stalls += 1
-                        silent += self.stall_timeout_s
-                        if silent >= self.max_stall_s:
-                            st.status = "stalled"
+                            continue
+                        silent = 0.0
+                        if item is _END:
                             break
-                        continue
-                    silent = 0.0
-                    if item is _END:
-                        break
-                    handle(item)
-            finally:
-                stop.set()
-                th.join(timeout=1.0)
-            if errors:
-                raise errors[0]
-        st.wall_s = time.perf_counter() - t_start
-        st.cpu_s = time.process_time() - c_start
-        st.audio_s = last_sample / source.fs
-        st.n_late_blocks = framer.n_late
-        # a block a device drops shows up twice: in the device's own count and as a gap in the
-        # sequence numbers the framer sees -- the same block, counted once (the device's count
-        # also holds drops after the last delivered block, which leave no gap)
-        st.n_dropped_blocks = max(framer.n_dropped, int(getattr(source, "n_dropped", 0)))
-        chain = _source_chain(source)
-        st.n_overflows = max(int(getattr(s, "n_overflows", 0) or 0) for s in chain)
-        if any(bool(getattr(s, "stalled", False)) for s in chain):
-            st.status = "stalled"  # the source ended because its device went silent
+                        handle(item)
+                finally:
+                    stop.set()
+                    th.join(timeout=1.0)
+                if errors:
+                    raise errors[0]
+        except KeyboardInterrupt:  # Ctrl-C: the stats still describe what was processed
+            st.status = "interrupted"
+            raise
+        finally:
+            st.wall_s = time.perf_counter() - t_start
+            st.cpu_s = time.process_time() - c_start
+            st.audio_s = last_sample / source.fs
+            st.n_late_blocks = framer.n_late
+            # a block a device drops shows up twice: in the device's own count and as a gap in the
+            # sequence numbers the framer sees -- the same block, counted once (the device's count
+            # also holds drops after the last delivered block, which leave no gap)
+            st.n_dropped_blocks = max(framer.n_dropped, int(getattr(source, "n_dropped", 0)))
+            chain = _source_chain(source)
+            st.n_overflows = max(int(getattr(s, "n_overflows", 0) or 0) for s in chain)
+            if st.status == "ok" and any(bool(getattr(s, "stalled", False)) for s in chain):
+                st.status = "stalled"  # the source ended because its device went silent
         return updates
 
 
