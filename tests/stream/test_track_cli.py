@@ -368,3 +368,13 @@ def test_track_refuses_image_points_off_the_camera_image(scene, tmp_path, capsys
     ok.write_text("t,u,v\n0.0,-60,240\n0.1,320,539\n0.2,nan,\n")  # (within 64 px of the edge)
     pts = CsvImagePoints(ok, camera=cam)
     assert pts(0.0) == (-60.0, 240.0) and pts(0.1) == (320.0, 539.0) and pts(0.2) is None
+
+
+def test_track_stats_are_one_line(scene, capsys):
+    """--stats prints one line on stderr, however narrow the console (rich wrapped it at 80
+    columns when stderr is not a terminal: three lines in a log)."""
+    assert main(["track", str(scene["wav"]), "--array", str(scene["array"]), "--stats"]) == 0
+    out, err = capsys.readouterr()
+    n_frames = len(out.strip().splitlines())
+    assert err.count("\n") == 1, err
+    assert err.startswith(f"track: {n_frames} frames, 1.50 s of audio") and "status ok" in err

@@ -32,8 +32,10 @@ app = typer.Typer(
     rich_markup_mode=None,
 )
 
-#: Human-facing messages and progress go to stderr; results go to stdout.
-err_console = Console(stderr=True)
+#: Human-facing messages and progress go to stderr; results go to stdout. A message is one
+#: line whatever the width (rich wrapped at 80 columns when stderr is not a terminal: the
+#: stats line of ``track`` came out as three lines in a log).
+err_console = Console(stderr=True, soft_wrap=True)
 
 
 class OutputFormat(str, Enum):  # noqa: UP042 (typer choices)

@@ -117,11 +117,11 @@ def localize_cmd(
         spike = dominant_sample(x)
         if spike is None:
             err_console.print(f"{recording}: no frame holds a detectable source "
-                              "(silence or uncorrelated noise)", highlight=False, soft_wrap=True)
+                              "(silence or uncorrelated noise)", highlight=False)
         else:  # (it was called silence or noise: one corrupt float sample of 1e30 does that)
             ch, i, v, ratio = spike
             err_console.print(
                 f"{recording}: no frame holds a detectable source; sample {i} of channel {ch} "
                 f"({i / fs:.3f} s) is {v:.3g}, {ratio:.2g} times the median |sample|, beyond "
                 "any integer PCM range (a corrupt sample? the analysis scales the recording to "
-                "its loudest sample)", highlight=False, soft_wrap=True)
+                "its loudest sample)", highlight=False)
