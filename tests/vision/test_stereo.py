@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import cv2
 import numpy as np
 import pytest
@@ -219,6 +221,59 @@ def test_non_numeric_matcher_settings_are_config_errors(kw):
     tex = _texture(7)[:60, :80]
     with pytest.raises(ConfigError, match=next(iter(kw))):
         compute_disparity(np.roll(tex, 4, axis=1), tex, **kw)
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(num_disparities=4096), "num_disparities"),  # cv2.error (a 1.8e19-byte buffer)
+    (dict(num_disparities=10**6), "num_disparities"),  # (a 640x480 pair: cv2.error, no memory)
+    (dict(min_disparity=2**40), "num_disparities"),  # cv2.error (not a C int)
+    (dict(num_disparities=96, pad_left=False), "too narrow"),  # wider than the image: cv2.error
+    (dict(block_size=21, min_disparity=6, pad_left=False), "too narrow"),  # 10 columns
+    (dict(p1=100, p2=10), "p2 must be greater than p1"),  # OpenCV used P2 = P1 + 1
+    (dict(p1=0), "p1"), (dict(p2=-5), "p2"),  # OpenCV used 2 and 5
+    (dict(p1=np.nan), "p1"), (dict(p1=8.7), "p1"), (dict(p2=40000), "p2"),
+    (dict(block_size=33), "p2 .default 32 . block_size"),  # P2 wrapped to 16 bits: no pixel
+    (dict(block_size=257, p1=8, p2=32), "block_size"),
+    (dict(block_size=2**31 + 1), "block_size"),  # builtin ValueError (not a C int)
+    (dict(uniqueness_ratio=100, mode="sgbm"), "uniqueness_ratio"),  # no pixel (3-way: SIGFPE)
+    (dict(uniqueness_ratio=-1), "uniqueness_ratio"),  # OpenCV used 10
+    (dict(uniqueness_ratio=2.5), "uniqueness_ratio"),  # builtin TypeError
+    (dict(pre_filter_cap=5), "pre_filter_cap"),  # OpenCV used 15
+    (dict(pre_filter_cap=200), "pre_filter_cap"),  # beyond SGBM's 8-bit pre-filter table
+    (dict(speckle_range=-1), "speckle_range"),  # removed every pixel
+    (dict(speckle_window=10**12), "speckle_window"),  # builtin ValueError
+    (dict(lr_max_diff=-1), "lr_max_diff"),  # OpenCV used 1
+    (dict(scale="1"), "scale"),  # builtin TypeError
+    (dict(mode=["sgbm"]), "mode"),  # builtin TypeError (unhashable)
+])
+def test_sgbm_settings_opencv_cannot_take_are_config_errors(kw, match):
+    """Every matcher setting reached cv2.StereoSGBM as given: a search beyond 2048 pixels (the
+    largest disparity of SGBM's 16-bit fixed-point output) or wider than the image raised
+    cv2.error or asked for terabytes, P1 > P2 was silently replaced by P2 = P1 + 1, floats,
+    NaN and ints beyond C's raised builtin errors, and other out-of-range values were
+    silently replaced or gave no disparity at all."""
+    tex = _texture(7)[:60, :80]
+    with pytest.raises(ConfigError, match=match):
+        compute_disparity(np.roll(tex, 4, axis=1), tex, **kw)
+
+
+def test_sgbm_settings_at_their_limits_still_match():
+    """The limits refuse nothing SGBM can do: a 2048-pixel search, uniqueness 99 and cap 127
+    still find the shift; a tolerance beyond float's range (1e300 raised a builtin
+    OverflowError, and a numpy RuntimeWarning with lr_check="full") keeps what one of 10**6
+    pixels keeps."""
+    tex = _texture(8)[:64, :160]
+    left = np.roll(tex, 6, axis=1)
+    for kw in (dict(num_disparities=2048), dict(num_disparities=2032, min_disparity=4),
+               dict(uniqueness_ratio=99), dict(pre_filter_cap=127)):
+        d = compute_disparity(left, tex, **kw)
+        assert np.nanmedian(d[:, 20:]) == pytest.approx(6.0, abs=0.5), kw
+    for check in ("internal", "full"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            far = compute_disparity(left, tex, lr_check=check, lr_max_diff=1e300)
+        np.testing.assert_array_equal(
+            far, compute_disparity(left, tex, lr_check=check, lr_max_diff=1e6))
 
 
 def test_disparity_helpers_check_their_settings_and_shapes():

@@ -36,7 +36,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import finite_number, is_real
+from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import CalibrationError, ConfigError, ImageInputError
 from hearsee.geometry import as_points
 from hearsee.vision.camera import Rectification, StereoRig, check_rig
@@ -136,6 +136,37 @@ def _sgbm(left: NDArray, right: NDArray, *, min_disparity: int, num_disparities:
     return d
 
 
+#: The largest disparity (pixels) SGBM can report: its output is int16 with 4 fractional bits,
+#: so ``min_disparity + num_disparities`` may not exceed it (a larger search wrapped to negative
+#: values, i.e. no disparity at all, or asked for terabytes of buffer).
+_MAX_DISPARITY = 2048
+#: SGBM keeps its path costs in 16 bits: the penalties P1 < P2 must fit.
+_MAX_PENALTY = 32767
+#: The largest matching block (OpenCV's limit of its block matcher StereoBM).
+_MAX_BLOCK = 255
+_INT_MAX = 2**31 - 1
+
+
+def _penalties(p1: object, p2: object, b2: int) -> tuple[int, int]:
+    """The smoothness penalties ``(P1, P2)`` (defaults ``8 b^2`` and ``32 b^2``), ConfigError
+    unless they are integers with ``1 <= P1 < P2 <= 32767``: OpenCV replaced a P1 <= 0 by 2, a
+    P2 <= P1 by P1 + 1 and cast both to 16 bits (a default P2 above 32767, blocks of 33 pixels
+    or more, wrapped to a negative penalty and no disparity at all)."""
+    vals = []
+    for name, v, k in (("p1", p1, 8), ("p2", p2, 32)):
+        if v is None:
+            v = k * b2
+            if v > _MAX_PENALTY:
+                raise ConfigError(
+                    f"{name} (default {k} * block_size**2 = {v}) must be at most {_MAX_PENALTY}, "
+                    "the largest of SGBM's 16-bit costs: use a smaller block_size")
+        vals.append(whole_number(name, v, 1, _MAX_PENALTY))
+    if vals[1] <= vals[0]:
+        raise ConfigError(f"p2 must be greater than p1 (SGBM needs P2 > P1), got p1={vals[0]}, "
+                          f"p2={vals[1]}")
+    return vals[0], vals[1]
+
+
 def compute_disparity(
     left: NDArray,
     right: NDArray,
@@ -161,12 +192,17 @@ def compute_disparity(
     Parameters
     ----------
     left, right : (H, W) or (H, W, 3) uint8 rectified images (colour is converted to grey).
-    num_disparities : disparity search range in pixels (rounded up to a multiple of 16).
+    num_disparities : disparity search range in pixels (rounded up to a multiple of 16;
+        ``min_disparity + num_disparities`` at most 2048, the largest disparity SGBM reports).
     min_disparity : smallest disparity searched, pixels (>= 0).
-    block_size : odd matching block size in pixels.
+    block_size : odd matching block size in pixels (1 to 255).
     mode : SGBM variant; "sgbm3way" is fastest.
-    p1, p2 : smoothness penalties (default ``8 b^2`` and ``32 b^2``).
-    uniqueness_ratio, speckle_window, speckle_range, pre_filter_cap : as in cv2.StereoSGBM.
+    p1, p2 : smoothness penalties, integers ``1 <= p1 < p2 <= 32767`` (default ``8 b^2`` and
+        ``32 b^2``).
+    uniqueness_ratio, speckle_window, speckle_range, pre_filter_cap : as in cv2.StereoSGBM
+        (integers: uniqueness 0 to 99 percent, speckle settings >= 0, cap 15 to 127). A
+        setting out of these ranges is a ConfigError: OpenCV replaced some silently, failed
+        on others (a uniqueness ratio of 100 killed the process).
     lr_check : "internal" (SGBM's own disp12MaxDiff check, free), "full" (match right-to-left
         too and keep pixels whose two disparities agree within ``lr_max_diff``; ~2x time) or
         "none". ``lr_max_diff`` is in pixels of the matching resolution: with ``scale`` < 1
@@ -201,14 +237,12 @@ def compute_disparity(
             f"stereo images must be 8-bit (got {L.dtype}); convert with cv2.normalize or "
             "cv2.convertScaleAbs"
         )
-    if mode not in _MODES:
+    if not isinstance(mode, str) or mode not in _MODES:  # (a list: a builtin TypeError)
         raise ConfigError(f"mode must be one of {', '.join(_MODES)}, got {mode!r}")
     if lr_check not in ("internal", "full", "none"):
         raise ConfigError(f"lr_check must be internal, full or none, got {lr_check!r}")
-    if not 0.0 < scale <= 1.0:
-        raise ConfigError(f"scale must be in (0, 1], got {scale}")
-    for name, v in (("num_disparities", num_disparities), ("min_disparity", min_disparity),
-                    ("lr_max_diff", lr_max_diff)):
+    scale = finite_number("scale", scale, 0.0, 1.0, lo_open=True)  # (a string: TypeError)
+    for name, v in (("num_disparities", num_disparities), ("min_disparity", min_disparity)):
         if not is_real(v):  # NaN and inf reached int(np.ceil(.)), strings the comparisons
             raise ConfigError(f"{name} must be a finite number of pixels, got {v!r}")
     if num_disparities < 1 or min_disparity < 0:
@@ -216,26 +250,57 @@ def compute_disparity(
             f"num_disparities must be >= 1 and min_disparity >= 0, got {num_disparities}, "
             f"{min_disparity}"
         )
+    # (a negative tolerance silently became SGBM's 1 px; inf or NaN a builtin error)
+    lr_max_diff = finite_number("lr_max_diff", lr_max_diff, 0.0)
     if (not isinstance(block_size, int | np.integer) or isinstance(block_size, bool)
-            or block_size < 1 or block_size % 2 == 0):  # (cv2 takes integers only)
-        raise ConfigError(f"block_size must be a positive odd number, got {block_size!r}")
+            or not 1 <= block_size <= _MAX_BLOCK or block_size % 2 == 0):  # (cv2: ints only)
+        raise ConfigError(f"block_size must be an odd integer in [1, {_MAX_BLOCK}], got "
+                          f"{block_size!r}")
+    b2 = block_size * block_size
+    p1, p2 = _penalties(p1, p2, b2)
+    # (each reached cv2.StereoSGBM_create as given: a float or NaN was a builtin TypeError, an
+    # int beyond C's a ValueError; a negative uniqueness ratio became 10, 100 killed the
+    # process with SIGFPE in the 3-way mode and more left no pixel in the others (SGBM tests
+    # cost * (100 - ratio)); a cap below 15 became 15 and one above 127 overflows SGBM's 8-bit
+    # pre-filter table; a negative speckle range removed every pixel)
+    uniqueness_ratio = whole_number("uniqueness_ratio", uniqueness_ratio, 0, 99)
+    speckle_window = whole_number("speckle_window", speckle_window, 0, _INT_MAX)
+    speckle_range = whole_number("speckle_range", speckle_range, 0, _INT_MAX // 16)
+    pre_filter_cap = whole_number("pre_filter_cap", pre_filter_cap, 15, 127)
     H, W = L.shape
+    # the matching resolution (Wm columns) and its search range
+    Wm = max(8, round(W * scale)) if scale < 1.0 else W
+    sx = Wm / W if scale < 1.0 else 1.0
+    nd = int(np.ceil(num_disparities * sx / 16.0) * 16)
+    md = int(np.floor(min_disparity * sx))
+    if md + nd > _MAX_DISPARITY:  # (10**6 ended in cv2.error: out of memory)
+        raise ConfigError(
+            f"min_disparity + num_disparities must be at most {_MAX_DISPARITY} pixels at the "
+            f"matching resolution (OpenCV's disparities are 16-bit with 4 fractional bits; "
+            f"num_disparities is rounded up to a multiple of 16), got {md} + {nd}")
+    # SGBM matches the columns right of its largest disparity (all of them when padded), and
+    # needs more than half a block of them: fewer raised cv2.error, answered uninitialised
+    # memory (3-way: all NaN) or, a search wider than the image, crashed the process
+    cols = Wm if pad_left else Wm - md - nd
+    if cols <= block_size // 2:
+        unpadded = "" if pad_left else f" less min_disparity + num_disparities = {md + nd}"
+        raise ConfigError(
+            f"the images are too narrow for this search: {cols} column(s) to match (width "
+            f"{Wm} at the matching resolution{unpadded}), block_size {block_size} needs more "
+            f"than {block_size // 2}; lower num_disparities, min_disparity or block_size"
+            + ("" if pad_left else ", or keep pad_left=True"))
     if not (_has_texture(L) and _has_texture(R)):
         return np.full((H, W), np.nan, np.float32)
     if scale < 1.0:
         size = (max(8, round(W * scale)), max(8, round(H * scale)))
         L = cv2.resize(L, size, interpolation=cv2.INTER_AREA)
         R = cv2.resize(R, size, interpolation=cv2.INTER_AREA)
-        sx = size[0] / W
-    else:
-        sx = 1.0
-    nd = int(np.ceil(num_disparities * sx / 16.0) * 16)
-    md = int(np.floor(min_disparity * sx))
-    b2 = block_size * block_size
     kw = dict(
-        min_disparity=md, num_disparities=nd, block_size=block_size,
-        p1=int(p1 if p1 is not None else 8 * b2), p2=int(p2 if p2 is not None else 32 * b2),
-        lr_max_diff=int(np.ceil(lr_max_diff)) if lr_check == "internal" else -1,
+        min_disparity=md, num_disparities=nd, block_size=block_size, p1=p1, p2=p2,
+        # (a tolerance of the largest disparity or more keeps every pixel: capped so that it
+        # fits OpenCV's int)
+        lr_max_diff=min(int(np.ceil(lr_max_diff)), _MAX_DISPARITY)
+        if lr_check == "internal" else -1,
         pre_filter_cap=pre_filter_cap, uniqueness_ratio=uniqueness_ratio,
         speckle_window=speckle_window, speckle_range=speckle_range, mode=_MODES[mode],
         pad_left=pad_left,
@@ -277,7 +342,8 @@ def lr_consistency(disp_left: NDArray, disp_right: NDArray, max_diff: float = 1.
     rows = np.broadcast_to(np.arange(H)[:, None], (H, W))
     back = np.full_like(dl, np.nan)
     back[inside] = dr[rows[inside], ur[inside]]
-    with np.errstate(invalid="ignore"):
+    # (over: a tolerance beyond float32's range, 1e300, is inf in the float32 comparison)
+    with np.errstate(invalid="ignore", over="ignore"):
         ok = inside & (np.abs(back - dl) <= max_diff)
     return np.where(ok, dl, np.float32(np.nan)).astype(np.float32)
 
