@@ -213,3 +213,46 @@ def test_malformed_band_is_a_config_error(band):
     with pytest.raises(ConfigError, match="band_c"):
         thermal_mask(t, band_c=band)
     assert warm_mask_celsius(t, (26.0, np.inf)).all()
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda im, t: counts_to_celsius(t, scale=np.nan), "scale"),  # an all-NaN image
+    (lambda im, t: counts_to_celsius(t, scale="0.01"), "scale"),  # parsed as 0.01
+    (lambda im, t: counts_to_celsius(t, scale=0.0), "scale"),  # every pixel -273.15
+    (lambda im, t: counts_to_celsius(t, scale=1e300), "scale"),  # RuntimeWarning, inf
+    (lambda im, t: counts_to_celsius(t, offset=np.inf), "offset"),
+    (lambda im, t: overlay_thermal(im, im, alpha=np.nan), "alpha"),  # a black overlay
+    (lambda im, t: overlay_thermal(im, im, alpha=2.0), "alpha"),
+    (lambda im, t: overlay_thermal(im, im, alpha="0.5"), "alpha"),  # builtin TypeError
+    (lambda im, t: relative_warm_mask(im, k_sigma=np.nan), "k_sigma"),  # an empty mask
+    (lambda im, t: relative_warm_mask(im, k_sigma="6"), "k_sigma"),  # builtin TypeError
+    (lambda im, t: relative_warm_mask(im, min_gap=np.nan), "min_gap"),
+    (lambda im, t: relative_warm_mask(im, max_gap=np.inf), "max_gap"),  # an empty mask
+    (lambda im, t: relative_warm_mask(im, min_gap=0.7, max_gap=0.6), "min_gap must be <="),
+    (lambda im, t: relative_warm_mask(im, background_px=-3), "background_px"),  # cv2.error
+    (lambda im, t: relative_warm_mask(im, background_px=np.nan), "background_px"),
+    (lambda im, t: relative_warm_mask(im, open_px=np.nan), "open_px"),  # step skipped
+    (lambda im, t: relative_warm_mask(im, open_px=10**6), "open_px"),  # cv2.error, memory
+    (lambda im, t: relative_warm_mask(im, close_px=-4), "close_px"),  # step skipped
+    (lambda im, t: warm_mask_celsius(t, open_px="3"), "open_px"),  # builtin TypeError
+    (lambda im, t: warm_mask_celsius(t, close_px=2**40), "close_px"),  # builtin TypeError
+    (lambda im, t: thermal_mask(im, open_px=2.5), "open_px"),  # builtin TypeError
+])
+def test_thermal_settings_are_config_errors(call, match):
+    """The float settings of the thermal filter reached numpy and OpenCV unchecked: NaN gave
+    all-NaN temperatures, an empty mask or a black overlay without a word, strings and floats
+    builtin TypeErrors, huge or negative kernels cv2.error."""
+    rng = np.random.default_rng(5)
+    im = rng.integers(0, 120, (40, 50), dtype=np.uint8)
+    im[10:20, 10:20] = 250
+    t = _room(rng)
+    with pytest.raises(ConfigError, match=match):
+        call(im, t)
+
+
+def test_counts_must_be_numbers():
+    """Text counts raised numpy's ValueError."""
+    with pytest.raises(ImageInputError, match="counts must be numbers"):
+        counts_to_celsius(np.array([["30000", "abc"]]))
+    ck = np.array([[29315, 30315]], np.uint16)  # 20 and 30 degC in centi-kelvin
+    np.testing.assert_allclose(counts_to_celsius(ck), [[20.0, 30.0]], atol=1e-3)

@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.config import input_file
+from hearsee.config import finite_number, input_file, real_entries, whole_number
 from hearsee.errors import ConfigError, ImageInputError
 from hearsee.vision.io import to_gray
 
@@ -50,14 +50,32 @@ HUMAN_BAND_C = (26.0, 40.0)
 #: kelvin read as degC (a 20 degC room is 293), or raw counts of another scale.
 SCENE_C = (-60.0, 100.0)
 
+#: The largest float32 (the type of :func:`counts_to_celsius`'s arithmetic).
+_F32_MAX = float(np.finfo(np.float32).max)
+
 
 def counts_to_celsius(counts: NDArray, scale: float = 0.01, offset: float = -273.15) -> NDArray:
     """Convert raw radiometric counts to degC: ``T = counts * scale + offset``.
 
     The defaults read 16-bit images stored in centi-kelvin (FLIR "TLinear" high resolution,
     also what :func:`hearsee.sim.scenes.write_scene` writes to ``thermal_radiometric.png``).
+    ``scale`` (degC per count, > 0) and ``offset`` must be finite float32 numbers (ConfigError:
+    a NaN scale gave an all-NaN image, a string was parsed); ``counts`` numbers
+    (ImageInputError).
     """
+    if not real_entries(counts):  # (numpy's ValueError on text, True read as 1)
+        raise ImageInputError(f"counts must be numbers, got {np.asarray(counts).dtype}")
+    # (checked, not converted: a numpy scalar stays what it was, and so does the result)
+    finite_number("scale", scale, 0.0, _F32_MAX, lo_open=True)
+    finite_number("offset", offset, -_F32_MAX, _F32_MAX)
     return np.asarray(counts, dtype=np.float32) * np.float32(scale) + np.float32(offset)
+
+
+def _kernel_px(name: str, value: object, shape: tuple[int, ...]) -> int:
+    """A morphology kernel size in pixels (0 or 1 = none), ConfigError unless it is an integer
+    from 0 to the image's larger side: a float or NaN reached cv2 (a builtin TypeError) or
+    skipped the step, a negative one skipped it too, 10**6 asked OpenCV for a terabyte."""
+    return whole_number(name, value, 0, max(shape))
 
 
 def _kernels(n: int) -> tuple[NDArray, tuple[int, int], NDArray, tuple[int, int]]:
@@ -93,6 +111,8 @@ def warm_mask_celsius(thermal_c: NDArray, band_c: tuple[float, float] = HUMAN_BA
     t = np.asarray(thermal_c, dtype=np.float32)
     if t.ndim != 2:
         raise ImageInputError(f"thermal image must be single-channel (h, w), got {t.shape}")
+    open_px = _kernel_px("open_px", open_px, t.shape)
+    close_px = _kernel_px("close_px", close_px, t.shape)
     try:
         lo, hi = band_c
     except (TypeError, ValueError):
@@ -127,6 +147,10 @@ def relative_warm_mask(image: NDArray, *, k_sigma: float = 6.0, min_gap: float =
     frozen or saturated camera -- has no warm pixels at all (an all-False mask, so that no
     stereo candidate is "thermally verified" by it), and a small warm blob on an otherwise flat
     background is warm while the background is not.
+
+    ``k_sigma``, ``min_gap`` and ``max_gap`` are finite numbers >= 0 with ``min_gap <=
+    max_gap``, the kernel sizes integers from 0 (none) to the image's larger side
+    (ConfigError: a NaN gap or k_sigma gave an empty or a wrong mask without a word).
     """
     im = np.asarray(image)
     if im.ndim == 3:
@@ -134,6 +158,14 @@ def relative_warm_mask(image: NDArray, *, k_sigma: float = 6.0, min_gap: float =
     if im.ndim != 2 or im.size == 0:
         raise ImageInputError(f"thermal image must be a non-empty single-channel (h, w) array, "
                               f"got {im.shape}")
+    finite_number("k_sigma", k_sigma, 0.0)  # (checked, not converted: see counts_to_celsius)
+    if finite_number("min_gap", min_gap, 0.0) > finite_number("max_gap", max_gap, 0.0):
+        # (the clip's bounds reversed: min_gap silently won)
+        raise ConfigError(f"min_gap must be <= max_gap, got {min_gap} and {max_gap}")
+    if background_px is not None:
+        background_px = _kernel_px("background_px", background_px, im.shape)
+    open_px = _kernel_px("open_px", open_px, im.shape)
+    close_px = _kernel_px("close_px", close_px, im.shape)
     # float64: in float32, med + a tiny gap rounds back to med and a flat frame was all warm
     x = im.astype(np.float64)
     if background_px:
@@ -239,7 +271,9 @@ def overlay_thermal(visible: NDArray, thermal: NDArray, warm: NDArray | None = N
     """Visible/thermal overlay of a *registered* pair (same geometry, as LLVIP's): the thermal
     image in a colour map blended over the visible image where ``warm`` (default: everywhere),
     the rest of the visible image darkened; the thermal image is resized to the visible one.
-    Returns BGR uint8."""
+    ``alpha`` (the thermal image's weight) is in [0, 1] (ConfigError: NaN gave a black
+    overlay). Returns BGR uint8."""
+    finite_number("alpha", alpha, 0.0, 1.0)  # (checked, not converted: see counts_to_celsius)
     vis = np.asarray(visible)
     if vis.ndim == 2:
         vis = cv2.cvtColor(vis, cv2.COLOR_GRAY2BGR)
