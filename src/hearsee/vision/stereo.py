@@ -241,7 +241,9 @@ def compute_disparity(
         raise ConfigError(f"mode must be one of {', '.join(_MODES)}, got {mode!r}")
     if lr_check not in ("internal", "full", "none"):
         raise ConfigError(f"lr_check must be internal, full or none, got {lr_check!r}")
-    scale = finite_number("scale", scale, 0.0, 1.0, lo_open=True)  # (a string: TypeError)
+    # (checked, not converted, as lr_max_diff below: a numpy scalar stays what it was, and so
+    # do the sizes computed from it; a string was a builtin TypeError)
+    finite_number("scale", scale, 0.0, 1.0, lo_open=True)
     for name, v in (("num_disparities", num_disparities), ("min_disparity", min_disparity)):
         if not is_real(v):  # NaN and inf reached int(np.ceil(.)), strings the comparisons
             raise ConfigError(f"{name} must be a finite number of pixels, got {v!r}")
@@ -251,7 +253,7 @@ def compute_disparity(
             f"{min_disparity}"
         )
     # (a negative tolerance silently became SGBM's 1 px; inf or NaN a builtin error)
-    lr_max_diff = finite_number("lr_max_diff", lr_max_diff, 0.0)
+    finite_number("lr_max_diff", lr_max_diff, 0.0)
     if (not isinstance(block_size, int | np.integer) or isinstance(block_size, bool)
             or not 1 <= block_size <= _MAX_BLOCK or block_size % 2 == 0):  # (cv2: ints only)
         raise ConfigError(f"block_size must be an odd integer in [1, {_MAX_BLOCK}], got "
