@@ -106,6 +106,33 @@ def test_bad_fusion_input(rig):
         AudioVisualRig(rig.array, rig.camera, np.eye(3) * 2, np.zeros(3))
 
 
+def test_text_image_points_and_tdoas_are_refused(rig, side_rig):
+    """numpy read the text ("320", "240") as a pixel, "1e-4" as a TDOA and True as 1 in
+    locate_on_ray, the rig's rays, RayTdoaTracker.update_measurements and the regressor's
+    features: a fix from text, no error. The same numbers as numbers still work."""
+    p = np.array([1.4, 0.2, 0.1])
+    uv, z = rig.project(p)[0], rig.array.tdoa(p)
+    for bad_uv in (("320", "240"), [True, 240.0], ["a", "b"]):
+        with pytest.raises(EstimationError, match="image point"):
+            locate_on_ray(rig, bad_uv, z)
+        with pytest.raises(GeometryError, match="pixel coordinates"):
+            rig.rays([bad_uv])
+    with pytest.raises(EstimationError, match="TDOAs must be real numbers"):
+        locate_on_ray(rig, uv, [str(v) for v in z])
+    np.testing.assert_allclose(locate_on_ray(rig, uv, z).position_m, p, atol=1e-6)
+    trk, frames = _settled(side_rig, 10, 32)
+    t, _, uv2, z2, fix = frames[30]
+    with pytest.raises(EstimationError, match="image point"):
+        trk.update_measurements(t, [str(v) for v in uv2], z2, fix)
+    with pytest.raises(EstimationError, match="TDOAs must be real numbers"):
+        trk.update_measurements(t, uv2, [str(v) for v in z2], fix)
+    assert trk.update_measurements(t, uv2, z2, fix)
+    X, y = simulate_av_samples(rig, 40, rng=np.random.default_rng(0))
+    reg = AudioVisualRegressor(hidden_layer_sizes=(4,), max_iter=20).fit(X, y)
+    with pytest.raises(EstimationError, match="features must be numbers"):
+        reg.predict(X.astype(str))
+
+
 def test_a_mirrored_mounting_is_not_a_rotation(rig):
     """R @ R.T = I also holds for a reflection (det -1): such a 'mounting' was accepted and
     every pixel then mirrored its ray, so the fixes were silently wrong."""

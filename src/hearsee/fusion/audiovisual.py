@@ -70,7 +70,7 @@ from sklearn.base import BaseEstimator, RegressorMixin
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.tracking import MotionKalman
-from hearsee.config import finite_number, whole_number
+from hearsee.config import finite_number, real_entries, whole_number
 from hearsee.errors import EstimationError, GeometryError
 from hearsee.vision.camera import Camera, camera_pose
 
@@ -162,6 +162,8 @@ class AudioVisualRig:
     def rays(self, uv: ArrayLike) -> tuple[NDArray, NDArray]:
         """Back-projected rays of pixels ``(N, 2)``: (origin (3,), unit directions (N, 3)),
         array frame."""
+        if not real_entries(uv):  # (numpy read ("320", "240") as pixels and True as 1)
+            raise GeometryError(f"pixel coordinates: expected numbers, got {uv!r}")
         d_opt = self.camera.pixel_rays(np.atleast_2d(np.asarray(uv, dtype=float)))
         return self.camera_centre, d_opt @ self.R  # R^T d for each row
 
@@ -247,14 +249,18 @@ def locate_on_ray(
         plane, so a ray that crosses that plane has two exact solutions) -- a tracker picks
         among them with its prediction.
     """
+    # (numpy read text as the numbers it spells -- ("320", "240") as a pixel, "1e-4" as a TDOA
+    # -- and True as 1; text that spells none was a builtin ValueError)
+    if not real_entries(tdoa_s):
+        raise EstimationError(f"TDOAs must be real numbers of seconds, got {tdoa_s!r}")
     z = np.asarray(tdoa_s, dtype=float).reshape(-1)
     prs = list(rig.array.pairs if pairs is None else pairs)
     if z.size != len(prs):
         raise EstimationError(f"got {z.size} TDOAs for {len(prs)} microphone pairs")
     if not np.all(np.isfinite(z)):
         raise EstimationError("TDOAs must be finite to fuse with the camera ray")
-    p = np.asarray(uv, dtype=float).reshape(-1)
-    if p.shape != (2,) or not np.all(np.isfinite(p)):
+    p = np.asarray(uv, dtype=float).reshape(-1) if real_entries(uv) else None
+    if p is None or p.shape != (2,) or not np.all(np.isfinite(p)):
         raise EstimationError(f"image point must be two finite pixel coordinates, got {uv!r}")
     near, far = float(range_m[0]), float(range_m[1])
     if not (0 < near < far and np.isfinite(far)):
@@ -478,11 +484,16 @@ class RayTdoaTracker(RayTracker):
         (None where the TDOAs gave none or it was discarded). Returns True when a TDOA or a
         (re)start fix was fused."""
         if uv is not None:
+            if not real_entries(uv):  # (as locate_on_ray's: text read as pixels)
+                raise EstimationError(f"the image point must be two pixel coordinates (u, v), "
+                                      f"got {uv!r}")
             uv = np.asarray(uv, dtype=float).reshape(-1)
             if uv.shape != (2,):
                 raise EstimationError(f"the image point must be two pixel coordinates (u, v), "
                                       f"got shape {uv.shape}")
         if tdoa_s is not None:
+            if not real_entries(tdoa_s):
+                raise EstimationError(f"TDOAs must be real numbers of seconds, got {tdoa_s!r}")
             tdoa_s = np.asarray(tdoa_s, dtype=float).reshape(-1)
             if tdoa_s.size != len(self.pairs):
                 raise EstimationError(f"got {tdoa_s.size} TDOAs for {len(self.pairs)} "
@@ -721,6 +732,8 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
 
     @staticmethod
     def _features(X: ArrayLike) -> NDArray:
+        if not real_entries(X):  # (text read as TDOAs and pixels, True as 1)
+            raise EstimationError("features must be numbers [tdoas..., u, v]")
         A = np.asarray(X, dtype=float)
         if A.ndim != 2 or A.shape[1] < 3:
             raise EstimationError(
