@@ -25,6 +25,7 @@ __all__ = [
     "array_to_robot",
     "as_pose",
     "cart_to_sph",
+    "check_camera_mount",
     "check_head_offset",
     "check_head_pivot",
     "direction_deg",
@@ -247,11 +248,27 @@ def check_head_pivot(pivot_m: Any, what: str = "pivot_m",
                          "the robot-frame origin (the head pivot is a point of the robot)")
 
 
+#: A camera's optical centre is at most this far (metres) from the head pivot (the robot file's
+#: ``cameras.mount_m``, head frame).
+MAX_CAMERA_MOUNT_M = 2.0
+
+
+def check_camera_mount(mount_m: Any, what: str = "mount_m",
+                       error: type[Exception] = GeometryError) -> NDArray:
+    """``mount_m`` (the left camera's optical centre from the head pivot, head frame, metres)
+    as a float array ``(3,)`` (:func:`as_point`), else ``error`` naming ``what``; one at most
+    :data:`MAX_CAMERA_MOUNT_M` from the pivot. The rule of the robot file's
+    ``cameras.mount_m``: its own ``np.linalg.norm`` test overflowed on [1e300, 0, 0] into a
+    RuntimeWarning printed before the (right) error."""
+    return _point_within(mount_m, what, error, MAX_CAMERA_MOUNT_M, "the pivot")
+
+
 def _point_within(value: Any, what: str, error: type[Exception], limit_m: float,
                   origin: str) -> NDArray:
     """:func:`as_point` of ``value``, and ``error`` ("``what``: [x, y, z] is more than
     ``limit_m`` m from ``origin``") unless it lies within ``limit_m`` metres of the origin of
-    its frame: the rule of :func:`check_head_offset` and :func:`check_head_pivot`."""
+    its frame: the rule of :func:`check_head_offset`, :func:`check_head_pivot` and
+    :func:`check_camera_mount`."""
     p = as_point(value, what, error)
     if not math.hypot(*p) <= limit_m:
         raise error(f"{what}: {p.tolist()} is more than {limit_m:g} m from {origin}")

@@ -948,6 +948,24 @@ def test_head_and_mount_vectors_are_three_numbers(small_rig, section, key, value
     assert "\n" not in msg
 
 
+def test_a_huge_camera_mount_is_refused_without_a_warning(small_rig):
+    """cameras.mount_m [1e300, 0, 0]: the 2 m rule was np.linalg.norm, which overflowed
+    first (a numpy RuntimeWarning line before the error); the rule is now
+    geometry.check_camera_mount (as_point, then the distance). 2 m itself stays allowed."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for bad, shown in (([1e300, 0, 0], r"\[1e\+300, 0.0, 0.0\]"),
+                           ([1e300, 1e300, 0], r"\[1e\+300, 1e\+300, 0.0\]"),
+                           ([0, 1.2, 1.7], r"\[0.0, 1.2, 1.7\]")):
+            with pytest.raises(ConfigError, match=rf"cameras.mount_m: {shown} is more than "
+                                                  "2 m from the pivot"):
+                load_robot_config(make_config(small_rig, _with(cameras={"mount_m": bad})))
+        cfg = load_robot_config(make_config(small_rig, _with(cameras={"mount_m": [0, 1.2, 1.6]})))
+    np.testing.assert_array_equal(cfg.cameras.mount_m, [0.0, 1.2, 1.6])
+
+
 def test_a_huge_head_offset_is_refused_without_a_warning(small_rig):
     """head.offset_m [1e300, 0, 0]: the robot file's 1 m rule overflowed np.linalg.norm first
     (a RuntimeWarning line before the error); the rule is now geometry.check_head_offset, the

@@ -235,14 +235,6 @@ def _mapping(d: Mapping[str, Any], key: str, where: str, required: bool = False
     return v
 
 
-def _vec3(d: Mapping[str, Any], key: str, default: Sequence[float], where: str) -> NDArray:
-    """``d[key]`` (or ``default``) as one finite [x, y, z] in metres
-    (:func:`hearsee.geometry.as_point`), else a ConfigError naming ``where.key``."""
-    from hearsee.geometry import as_point
-
-    return as_point(d.get(key, list(default)), f"{where}.{key}", ConfigError)
-
-
 def _resolve(p: str | Path, base: Path) -> Path:
     q = Path(p).expanduser()
     return q if q.is_absolute() else base / q
@@ -349,9 +341,10 @@ def _cameras(d: Mapping[str, Any], where: str, base: Path) -> CameraConfig:
         raise ConfigError(f"{where}.thermal: the calibration {d['calib']!r} has no thermal "
                           "camera (add a 'thermal:' block or leave out cameras.thermal)")
     rate = number(d, "rate_hz", 2.0, where, 0.1, 60.0)
-    mount = _vec3(d, "mount_m", (0.0, 0.0, 0.0), where)
-    if np.linalg.norm(mount) > 2.0:
-        raise ConfigError(f"{where}.mount_m: {mount.tolist()} is more than 2 m from the pivot")
+    from hearsee.geometry import check_camera_mount
+
+    mount = check_camera_mount(d.get("mount_m", [0.0, 0.0, 0.0]), f"{where}.mount_m",
+                               ConfigError)
     return CameraConfig(dev["left"], dev["right"], dev["stereo"], dev["thermal"], calib, rig,
                         rate, mount)
 
