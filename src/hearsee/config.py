@@ -59,8 +59,8 @@ def output_file(path: str | Path) -> Path:
     folder, expected an output file name"`` for a folder, ``"P: folder D does not exist"`` or
     ``"P: D is not a folder"`` for its parent ``D``. The counterpart of :func:`input_file`: the
     check of an output path made before the work that ends by writing it (the CLI's
-    ``refuse_overwrite``, ``save_wav``, the robot's exports; ``write_image`` and the
-    simulator's ground-truth file keep their own messages, which tests anchor)."""
+    ``refuse_overwrite``, ``save_wav``, the robot's exports, ``write_image`` and the
+    simulator's ground-truth file)."""
     p = Path(path)
     if p.is_dir():
         raise InputFileError(f"{p}: is a folder, expected an output file name")

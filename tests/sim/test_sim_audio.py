@@ -253,9 +253,14 @@ def test_save_recording_writes_both_files_or_neither(tmp_path):
     doc = json.loads(js.read_text())
     assert doc["seed"] == 3 and doc["distance_m"] == 1.5
     (tmp_path / "b.json").mkdir()
-    with pytest.raises(InputFileError, match="directory"):
+    # ('is a directory' before: now config.output_file's wording, as every output path's)
+    with pytest.raises(InputFileError, match=r"b\.json: is a folder, expected an output file "
+                                             "name$"):
         save_recording(tmp_path / "b.wav", x, truth)
     assert not (tmp_path / "b.wav").exists()
+    # a missing folder is named for the WAV the caller gave, before any work
+    with pytest.raises(InputFileError, match=r"c\.wav: folder .*no does not exist$"):
+        save_recording(tmp_path / "no" / "c.wav", x, truth)
 
 
 def test_non_numeric_rate_and_snr_are_config_errors():

@@ -132,8 +132,22 @@ def test_write_image_unknown_format_is_an_image_input_error(tmp_path):
     with pytest.raises(ImageInputError, match=r"out\.txt.*\.txt"):
         write_image(tmp_path / "out.txt", _img())
     assert list(tmp_path.iterdir()) == []
-    # a folder where the file should go: a bare OSError (IsADirectoryError) before
+    # a folder where the file should go: a bare OSError (IsADirectoryError) before; then
+    # "cannot write the image (Is a directory)"; now config.output_file's wording
     (tmp_path / "taken.png").mkdir()
-    with pytest.raises(InputFileError, match="cannot write"):
+    with pytest.raises(InputFileError, match=r"taken\.png: is a folder, expected an output "
+                                             "file name$"):
         write_image(tmp_path / "taken.png", _img())
     assert (tmp_path / "taken.png").is_dir()
+
+
+def test_write_image_checks_its_path_as_every_output_does(tmp_path):
+    """write_image had its own parent check: a FILE where the folder should be was reported
+    as "folder D does not exist". It is config.output_file now (the one output-path check),
+    whose messages say what is wrong."""
+    (tmp_path / "f").write_text("a file", encoding="utf-8")
+    with pytest.raises(InputFileError, match=r"x\.png: .*f is not a folder$"):
+        write_image(tmp_path / "f" / "x.png", _img())
+    with pytest.raises(InputFileError, match=r"x\.png: folder .*no does not exist$"):
+        write_image(tmp_path / "no" / "x.png", _img())
+    assert write_image(tmp_path / "x.png", _img()) == tmp_path / "x.png"

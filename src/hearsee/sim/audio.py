@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.propagation import add_noise, simulate_free_field, simulate_room
 from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
-from hearsee.config import finite_number, is_real, to_jsonable, whole_number
+from hearsee.config import finite_number, is_real, output_file, to_jsonable, whole_number
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 from hearsee.geometry import as_point, cart_to_sph
 
@@ -290,8 +290,10 @@ def save_recording(out: str | Path, x: ArrayLike, truth: Mapping[str, Any],
     if wav.suffix.lower() not in (".wav", ".flac"):
         raise ConfigError(f"{wav}: output must end in .wav (or .flac)")
     js = wav.with_suffix(".json")
-    if js.is_dir():
-        raise InputFileError(f"{js}: is a directory, expected the ground-truth file's name")
+    # (the WAV first, so that a missing folder is named as the path the user gave; the truth
+    # beside it said "is a directory" where every other output check says "is a folder")
+    output_file(wav)
+    output_file(js)
     y = np.asarray(x, dtype=float)
     m = float(np.max(np.abs(y))) if y.size else 0.0
     if not (np.isfinite(peak) and 0 < peak <= 1):  # (-0.5 inverted the polarity, 0 wrote silence)

@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.config import input_file
+from hearsee.config import input_file, output_file
 from hearsee.errors import ImageInputError, InputFileError
 
 __all__ = [
@@ -198,9 +198,10 @@ def read_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
 def write_image(path: str | Path, image: NDArray) -> Path:
     """Write an image (format from the suffix); raise ImageInputError when OpenCV cannot."""
     check_image(image, str(path))
-    p = Path(path)
-    if not p.parent.is_dir():
-        raise InputFileError(f"{p}: folder {p.parent} does not exist")
+    # (config.output_file: a folder at the path is refused before the encoding -- it was
+    # "cannot write the image (Is a directory)" after it -- and a file where the folder should
+    # be is "D is not a folder", no longer "folder D does not exist")
+    p = output_file(path)
     try:
         ok, buf = cv2.imencode(p.suffix or ".png", image)
     except cv2.error:  # e.g. no encoder for the suffix: OpenCV raises rather than returns
@@ -209,7 +210,7 @@ def write_image(path: str | Path, image: NDArray) -> Path:
         raise ImageInputError(f"{p}: cannot encode the image as {p.suffix or '.png'}")
     try:
         buf.tofile(str(p))
-    except OSError as exc:  # (a folder of that name, no permission: a bare OSError before)
+    except OSError as exc:  # (no permission: a bare OSError before)
         raise InputFileError(f"{p}: cannot write the image ({exc.strerror or exc})") from None
     return p
 
