@@ -142,6 +142,41 @@ def test_fill_makes_dense_and_full_lr_check_runs():
             assert np.isfinite(d).all()
 
 
+def _occlusion_pair() -> tuple[np.ndarray, np.ndarray, slice]:
+    """A background at 4 px disparity behind a foreground block at 20 px (columns 100-159 of
+    the left image); the 16 background columns just left of the block, seen by the left
+    camera only, are returned as the occluded band."""
+    bg, fg = _texture(11, 256)[:120, :256], _texture(12, 256)[:120, :256]
+    right = bg.copy()
+    right[:, 80:140] = fg[:, 80:140]             # the block at columns 80-139 in the right view
+    left = np.roll(bg, 4, axis=1)                 # background: d = 4
+    left[:, 100:160] = fg[:, 80:140]              # block: d = 20 (covers 100-159)
+    return left, right, slice(86, 98)             # visible in the left image only
+
+
+def test_lr_check_none_keeps_occluded_pixels_and_full_honours_its_tolerance():
+    """"none" switches SGBM's own left-right check off: OpenCV reads a tolerance below 1 as
+    1 px, so "none" was "internal" with 1 px (occluded pixels removed), and "full" ran that
+    1-px check before its own tolerance."""
+    left, right, occ = _occlusion_pair()
+    none = compute_disparity(left, right, num_disparities=32, lr_check="none")
+    internal = compute_disparity(left, right, num_disparities=32, lr_check="internal")
+    keep_all = compute_disparity(left, right, num_disparities=32, lr_check="internal",
+                                 lr_max_diff=64)
+    # the scene: background 4 px, block 20 px, wherever both checks keep a pixel
+    assert np.nanmedian(internal[:, 40:80]) == pytest.approx(4.0, abs=0.3)
+    assert np.nanmedian(internal[:, 110:150]) == pytest.approx(20.0, abs=0.3)
+    np.testing.assert_array_equal(none, keep_all)
+    assert np.isfinite(none[:, occ]).mean() > np.isfinite(internal[:, occ]).mean() + 0.3
+    # "full" with a 64-px tolerance keeps the occluded pixels "none" keeps (it still drops
+    # pixels whose right-to-left match has no disparity); with its default 1 px, none of them
+    full_loose = compute_disparity(left, right, num_disparities=32, lr_check="full",
+                                   lr_max_diff=64)
+    full_tight = compute_disparity(left, right, num_disparities=32, lr_check="full")
+    np.testing.assert_array_equal(full_loose[:, occ], none[:, occ])
+    assert np.isfinite(full_tight[:, occ]).mean() < np.isfinite(none[:, occ]).mean() - 0.3
+
+
 def test_bad_inputs():
     tex = _texture(5)[:60, :80]
     with pytest.raises(ImageInputError, match="differ in size"):
