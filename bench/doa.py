@@ -21,7 +21,7 @@ Three parts, all in one process on the same inputs:
    alone), so the table also scores both against the truth corrected by that latency,
    measured for each source on the other eight (leave-one-source-out).
 
-Run ``python bench/doa.py`` (full: 30 trials per condition, ~20-25 min on 2 cores) or ``--quick``.
+Run ``python bench/doa.py`` (full: 30 trials per condition, ~20-25 min) or ``--quick``.
 """
 
 from __future__ import annotations
@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 import scipy.fft as sfft
+from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -73,6 +74,11 @@ PRA_TIMING_GRID_DEG = 1.0
 #: (since 2026-11-25's fifteenth session; one run each before: the same code measured 5.1x
 #: and 4.9x for hearsee vs SRP-PHAT in two runs while other jobs shared the cores)
 TIMING_REPEATS = 3
+#: since 2026-11-26's twenty-third session the whole run holds numpy's BLAS to one thread
+#: (threadpoolctl), as bench/humans does: process CPU time also counted the idle spinning of
+#: OpenBLAS's second thread after every matrix product, of hearsee and of the peers (quick runs
+#: of the same code: hearsee vs SRP-PHAT 5.44x with two BLAS threads, 5.68x with one; the
+#: accuracy tables identical)
 PEER_NEAR_M = 2.0
 #: frequency range given to every method (pyroomacoustics' freq_range; hearsee's band_hz)
 BANDS = {"noise": (300.0, 7500.0), "speech": (300.0, 3500.0)}
@@ -685,7 +691,8 @@ def main(argv: list[str] | None = None) -> int:
         print("shared data not found: ARCTIC speech and the real-RIR part are skipped")
     t0 = time.time()
     print(f"[1/3] simulated DOA: {trials} trials per condition")
-    results, timing = run_doa(trials, args.seed, data, args.duration)
+    with threadpool_limits(1):  # one core, BLAS included (see TIMING_REPEATS)
+        results, timing = run_doa(trials, args.seed, data, args.duration)
     headers, rows, cpu_rows = summarize_doa(results, timing)
     print_table("Azimuth error [deg] (two-mic folded front/back)", headers, rows)
     pool_headers, pool_rows = pooled_paired(results, np.random.default_rng(args.seed + 2))
