@@ -261,7 +261,21 @@ def test_track_device_not_found_is_one_line(fake_sd, capsys, device, cause):
     fake_sd()
     want = f"audio input device {device if device.isalpha() else int(device)!r} not found"
     line = _one_line(capsys, main(["track", "--device", device, "--array", "three-mic"]), want)
-    assert cause in line and "available: 0: Built-in Microphone (2 in); 2: USB 6ch Array" in line
+    assert cause in line and line.endswith(
+        "available: 0 'Built-in Microphone' (2 in), 2 'USB 6ch Array' (6 in)")
+
+
+def test_run_and_track_list_the_devices_alike(robot, fake_sd, capsys):
+    """Two listings of the same devices: `run` said ``0 'Built-in Microphone' (2 in), 2 'USB
+    6ch Array' (6 in)`` and `track --device` ``0: Built-in Microphone (2 in); 2: USB 6ch Array
+    (6 in)``; one function (stream.device.input_devices) now, one wording."""
+    fake_sd()
+    cfg = robot(device="ReSpeaker")
+    run = _one_line(capsys, main(["run", "--config", str(cfg), "--quiet"]), str(cfg))
+    track = _one_line(capsys, main(["track", "--device", "ReSpeaker", "--array", "three-mic"]),
+                      "audio input device 'ReSpeaker' not found")
+    listing = "0 'Built-in Microphone' (2 in), 2 'USB 6ch Array' (6 in)"  # DEVICES' inputs
+    assert run.endswith(f"(available: {listing})") and track.endswith(f"available: {listing}")
 
 
 def test_too_few_input_channels_is_one_line(robot, fake_sd, capsys):

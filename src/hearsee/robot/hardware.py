@@ -80,7 +80,10 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, HearseeError
-from hearsee.stream.device import import_sounddevice  # (re-exported: __all__)
+from hearsee.stream.device import (  # (import_sounddevice: re-exported, __all__)
+    import_sounddevice,
+    input_devices,
+)
 
 if TYPE_CHECKING:  # imported when run_robot runs (the simulated loop's heavier imports)
     from hearsee.robot.pipeline import RunResult
@@ -456,12 +459,6 @@ def _device_list(sd: Any) -> list[dict[str, Any]]:
     return out
 
 
-def _describe(devs: Sequence[Mapping[str, Any]]) -> str:
-    ins = [f"{d['index']} {d['name']!r} ({d['max_input_channels']} in)" for d in devs
-           if d.get("max_input_channels", 0) > 0]
-    return ", ".join(ins) if ins else "none"
-
-
 def resolve_input_device(sd: Any, spec: DeviceSpec | None, where: str = "audio.device"
                          ) -> dict[str, Any]:
     """The input device (a dict with ``index``, ``name``, ``max_input_channels``, ...) named by
@@ -481,12 +478,12 @@ def resolve_input_device(sd: Any, spec: DeviceSpec | None, where: str = "audio.d
             return resolve_input_device(sd, idx, where)
         if not isinstance(idx, int) or idx < 0 or idx >= len(devs):
             raise ConfigError(f"{where}: no default input device (available: "
-                              f"{_describe(devs)}); name one in audio.device")
+                              f"{input_devices(sd)}); name one in audio.device")
         dev = devs[idx]
     elif isinstance(spec, int):
         if spec >= len(devs):
             raise ConfigError(f"{where}: no device with index {spec} (available: "
-                              f"{_describe(devs)})")
+                              f"{input_devices(sd)})")
         dev = devs[spec]
     else:
         key = spec.lower()
@@ -494,7 +491,7 @@ def resolve_input_device(sd: Any, spec: DeviceSpec | None, where: str = "audio.d
         hits = exact or [d for d in inputs if key in str(d["name"]).lower()]
         if not hits:
             raise ConfigError(f"{where}: no input device named {spec!r} (available: "
-                              f"{_describe(devs)})")
+                              f"{input_devices(sd)})")
         if len(hits) > 1:
             names = ", ".join(f"{d['index']} {d['name']!r}" for d in hits)
             raise ConfigError(f"{where}: {spec!r} matches several input devices ({names}); "
@@ -502,7 +499,7 @@ def resolve_input_device(sd: Any, spec: DeviceSpec | None, where: str = "audio.d
         dev = hits[0]
     if dev.get("max_input_channels", 0) <= 0:
         raise ConfigError(f"{where}: device {dev['index']} {dev['name']!r} has no input "
-                          f"channels (available: {_describe(devs)})")
+                          f"channels (available: {input_devices(sd)})")
     return dev
 
 

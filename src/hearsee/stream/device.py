@@ -11,7 +11,7 @@ from typing import Any
 
 from hearsee.errors import AudioInputError
 
-__all__ = ["import_sounddevice"]
+__all__ = ["import_sounddevice", "input_devices"]
 
 
 def import_sounddevice() -> Any:
@@ -25,3 +25,17 @@ def import_sounddevice() -> Any:
             " pip install 'hearsee[live]' (Debian/Ubuntu also: apt-get install libportaudio2)"
         ) from None
     return sounddevice
+
+
+def input_devices(sd: Any) -> str:
+    """The input devices of ``sd`` (``sounddevice.query_devices()``) for an error message, one
+    wording on every live path: ``0 'Built-in Microphone' (2 in), 2 'USB 6ch Array' (6 in)``
+    (index, name, input channels); ``none`` without any, ``(could not list devices)`` when the
+    query itself fails (the listing only completes a message about another error)."""
+    try:
+        devs = [dict(d) for d in sd.query_devices()]
+        ins = [f"{d.get('index', k)} {d['name']!r} ({d['max_input_channels']} in)"
+               for k, d in enumerate(devs) if d.get("max_input_channels", 0) > 0]
+    except Exception:  # noqa: BLE001 - listing is best effort inside an error message
+        return "(could not list devices)"
+    return ", ".join(ins) if ins else "none"

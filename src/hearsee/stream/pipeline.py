@@ -85,7 +85,7 @@ from hearsee.audio.tracking import (
 from hearsee.config import finite_number, is_real, time_limit, whole_number
 from hearsee.errors import AudioInputError, ConfigError, EstimationError
 from hearsee.geometry import wrap_deg
-from hearsee.stream.device import import_sounddevice
+from hearsee.stream.device import import_sounddevice, input_devices
 
 __all__ = [
     "ArraySource",
@@ -297,16 +297,6 @@ class WavSource(ArraySource):
         self.path = Path(path)
 
 
-def _device_listing(sd: Any) -> str:
-    try:
-        devs = sd.query_devices()
-        names = [f"{i}: {d['name']} ({d['max_input_channels']} in)"
-                 for i, d in enumerate(devs) if d.get("max_input_channels", 0) > 0]
-    except Exception:  # noqa: BLE001 - listing is best effort inside an error message
-        return "(could not list devices)"
-    return "; ".join(names) if names else "(no input devices found)"
-
-
 class DeviceSource:
     """Live multichannel input through sounddevice (PortAudio).
 
@@ -369,7 +359,7 @@ class DeviceSource:
         except (ValueError, sd.PortAudioError) as exc:
             raise AudioInputError(
                 f"audio input device {device!r} not found or not an input ({exc}); "
-                f"available: {_device_listing(sd)}"
+                f"available: {input_devices(sd)}"
             ) from None
         if int(info["max_input_channels"]) < n_channels:
             raise AudioInputError(
