@@ -360,6 +360,22 @@ def test_input_overflow_is_counted_and_the_run_goes_on(robot, fake_sd, capsys):
     assert sum(r["missing"] for r in recs) == 3 and len(recs) == (16 * 1024 - 1024) // 512 + 1
 
 
+def test_run_reports_input_overflows_as_track_does(robot, fake_sd, capsys):
+    """The stream counts the callbacks PortAudio flagged ``input_overflow``
+    (StreamStats.n_overflows) and `track` reports them; `run`'s summary (and so its report
+    and summary table) had only the dropped blocks."""
+    fake_sd(overflow_at={3, 7})
+    cfg = robot()
+    assert main(["run", "--config", str(cfg), "--duration", "1.0"]) == 0
+    err = capsys.readouterr().err
+    assert "input_overflows" in err  # the summary table
+    report = cfg.parent / "report"
+    summary = json.loads((report / "summary.json").read_text(encoding="utf-8"))
+    assert summary["input_overflows"] == 2 and summary["dropped_blocks"] == 2
+    assert "<tr><td>input_overflows</td><td>2</td></tr>" in (
+        report / "index.html").read_text(encoding="utf-8")
+
+
 def test_ctrl_c_ends_a_live_run_cleanly(robot, fake_sd, capsys):
     """Ctrl-C (no --duration) ends `hearsee run` with its report and JSON lines; the report
     counted no dropped block where the device had dropped one (the stream's stats were only

@@ -1342,6 +1342,7 @@ def _live_summary(log: list[dict[str, Any]], stats: Any, audio_s: float, status:
         "head_commands_printed": int(getattr(head, "n_printed", 0)),
         "head_moves": int(state["head_moves"]),
         "dropped_blocks": int(stats.n_dropped_blocks),
+        "input_overflows": int(stats.n_overflows),  # (as `hearsee track`'s stats)
         "missing_frames": int(stats.n_missing_frames),
         "real_time_factor": float(audio_s / runtime_s) if runtime_s > 0 else float("nan"),
         "runtime_s": float(runtime_s),
