@@ -57,3 +57,21 @@ def _reference_gcc_phat(a, b, fs: float, max_lag_s: float, interp: int = 256) ->
 def gcc_phat_ref():
     """The reference GCC-PHAT ``(a, b, fs, max_lag_s, interp=256) -> seconds``."""
     return _reference_gcc_phat
+
+
+@pytest.fixture
+def unraisable():
+    """The exceptions Python could only report as "Exception ignored in" (``sys.unraisablehook``:
+    e.g. one raised while a generator is closed at garbage collection) during the test, listed
+    instead of printed (pytest turns them into a warning issued after the test)."""
+    import gc
+    import sys
+
+    seen: list = []
+    old = sys.unraisablehook
+    sys.unraisablehook = lambda u: seen.append(u.exc_value)
+    try:
+        yield seen
+    finally:
+        gc.collect()
+        sys.unraisablehook = old

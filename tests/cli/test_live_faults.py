@@ -18,6 +18,7 @@ once started, ``status.input_overflow`` set where PortAudio discarded input.
 from __future__ import annotations
 
 import _thread
+import gc
 import json
 import signal
 import sys
@@ -52,6 +53,8 @@ class FakeSoundDevice(types.ModuleType):
     """sounddevice with ``DEVICES`` that accept 16 and 48 kHz.
 
     open_error / start_error : PortAudio's message when the stream is opened / started
+    close_error : PortAudio's message when the stream stops (its exit raises, as
+        sounddevice's stop() does; the stream is stopped all the same)
     deliver_channels : channels of every delivered block (default: those opened)
     overflow_at : blocks flagged ``input_overflow``
     interrupt_at : before this block, wait until the consumer is idle, then press Ctrl-C
@@ -62,10 +65,11 @@ class FakeSoundDevice(types.ModuleType):
         pass
 
     def __init__(self, open_error=None, start_error=None, deliver_channels=None,
-                 overflow_at=(), interrupt_at=None, speed=20.0) -> None:
+                 overflow_at=(), interrupt_at=None, speed=20.0, close_error=None) -> None:
         super().__init__("sounddevice")
         self.default = types.SimpleNamespace(device=[0, -1])
         self.open_error, self.start_error = open_error, start_error
+        self.close_error = close_error
         self.deliver_channels, self.overflow_at = deliver_channels, set(overflow_at)
         self.interrupt_at, self.speed = interrupt_at, speed
         self.n_streams_closed = 0
@@ -137,6 +141,8 @@ class _Stream:
         self._stop.set()
         self._thread.join(timeout=2.0)
         self.sd.n_streams_closed += 1
+        if self.sd.close_error is not None:
+            raise self.sd.PortAudioError(f"Error stopping stream: {self.sd.close_error}")
 
 
 @pytest.fixture
@@ -398,6 +404,44 @@ def test_ctrl_c_ends_a_live_run_cleanly(robot, fake_sd, capsys):
     assert len(log) == (n - 1024) // 512 + 1 and log[-1]["t"] == (19456 + 512) / FS
     # the frames that touch the lost samples [3200, 4800): those starting at 2560 ... 4608
     assert summary["missing_frames"] == 5
+
+
+_HOST_ERROR = "Unanticipated host error [PaErrorCode -9999]"
+
+
+def test_portaudio_error_when_the_stream_stops_is_one_line(robot, fake_sd, capsys, unraisable):
+    """The stream's stop/close failing at the end of the run (--duration reached): `track`
+    died with a PortAudioError traceback; `run` printed "Exception ignored in" with one when
+    the device's generator was collected and went on as if nothing happened."""
+    sd = fake_sd(close_error=_HOST_ERROR)
+    cfg = robot()
+    want = ("audio input device 'USB 6ch Array': cannot stop the input stream (Error stopping "
+            f"stream: {_HOST_ERROR})")
+    line = _one_line(capsys, main(["run", "--config", str(cfg), "--quiet", "--duration", "1"]),
+                     want)
+    assert line == "hearsee: error: " + want
+    assert not (cfg.parent / "report" / "log.json").exists()  # no report of a failed run
+    line = _one_line(capsys, main(["track", "--device", "2", "--array", "three-mic",
+                                   "--duration", "1"]), want, stdout_empty=False)
+    assert line == "hearsee: error: " + want  # (the updates were printed as they came)
+    assert sd.n_streams_closed == 2
+    gc.collect()
+    assert unraisable == []
+
+
+def test_ctrl_c_stays_the_reason_when_the_stream_then_fails_to_stop(robot, fake_sd, capsys,
+                                                                     unraisable):
+    """Ctrl-C ends the run; the stream failing to stop afterwards changes nothing (it was
+    printed as "Exception ignored in", from the source's thread)."""
+    fake_sd(interrupt_at=12, close_error=_HOST_ERROR)
+    cfg = robot()
+    code = main(["run", "--config", str(cfg), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 0 and "Traceback" not in err and "Exception ignored" not in err, err
+    summary = json.loads((cfg.parent / "report" / "summary.json").read_text(encoding="utf-8"))
+    assert summary["status"] == "interrupted"
+    gc.collect()
+    assert unraisable == []
 
 
 @pytest.mark.parametrize("fmt", ["json", "jsonl"])

@@ -8,6 +8,7 @@ exactly; channel 0 of every block is a ramp of the true sample index (ground tru
 block starts and frame times)."""
 
 import functools
+import gc
 import sys
 import threading
 import time
@@ -49,12 +50,13 @@ class _TimeInfo:
         self.inputBufferAdcTime = adc
 
 
-def _fake_portaudio(blocks_per_open, lose=None, adc=True):
+def _fake_portaudio(blocks_per_open, lose=None, adc=True, close_error=None):
     """A sounddevice module whose k-th opened stream delivers ``blocks_per_open[k]`` blocks
     (``BL`` samples; channel 0 = true sample index, the others noise) when it is entered; before
     block i of ``lose`` (i: lost samples) PortAudio discards that many samples and flags the
     block ``input_overflow``. ``adc``: time_info carries inputBufferAdcTime (else 0, as host APIs
-    without it report)."""
+    without it report). ``close_error``: PortAudio's message when the stream stops (its exit
+    raises PortAudioError, as sounddevice's stop() does)."""
     sd = types.ModuleType("sounddevice")
     sd.PortAudioError = type("PortAudioError", (Exception,), {})
     sd.query_devices = lambda device=None, kind=None: {"name": "fake", "max_input_channels": 3}
@@ -83,7 +85,12 @@ def _fake_portaudio(blocks_per_open, lose=None, adc=True):
             return self
 
         def __exit__(self, *exc):
+            InputStream.n_exited += 1
+            if close_error is not None:
+                raise sd.PortAudioError(close_error)
             return False
+
+        n_exited = 0
 
     sd.InputStream = InputStream
     return sd
@@ -542,3 +549,49 @@ def test_stream_pipeline_with_max_stall_inf_still_runs():
     pipe = StreamPipeline(MicArray.from_preset("three-mic"), max_stall_s=float("inf"))
     assert len(pipe.run(ArraySource(x, FS), threaded=True)) == (8000 - 1024) // 512 + 1
     assert pipe.stats.status == "ok"
+
+
+# ------------------------------------------------------------------------- stopping fails
+_STOP = "Error stopping stream: Unanticipated host error [PaErrorCode -9999]"
+_STOP_MSG = f"audio input device 'fake': cannot stop the input stream ({_STOP})"
+
+
+def test_a_stream_that_fails_to_stop_is_an_audio_input_error(monkeypatch):
+    """PortAudio failing when the stream stops or closes (the ``with`` exit in
+    DeviceSource.blocks) escaped as a PortAudioError: at the run's end (its duration) and when
+    its consumer closed it."""
+    sd = _fake_portaudio([8, 8, 8], close_error=_STOP)
+    src = _device(monkeypatch, sd, duration_s=4 * BL / FS)
+    with pytest.raises(AudioInputError) as exc:
+        list(src.blocks())
+    assert str(exc.value) == _STOP_MSG
+    g = src.blocks()
+    next(g)
+    with pytest.raises(AudioInputError) as exc:
+        g.close()  # (the consumer ends the run: the error is the only one)
+    assert str(exc.value) == _STOP_MSG and sd.InputStream.n_exited == 2
+    with pytest.raises(AudioInputError, match="cannot stop the input stream"):
+        StreamPipeline(MicArray.from_preset("three-mic")).run(src)
+
+
+def test_a_stream_that_fails_to_stop_does_not_hide_the_error_that_ends_the_run(monkeypatch,
+                                                                               unraisable):
+    """A Ctrl-C in the wait for a block, or an error of the consumer, ends the run: the stream's
+    error when it then stops replaced the Ctrl-C, or was printed as "Exception ignored in"
+    when the generator was collected."""
+    sd = _fake_portaudio([8, 8, 8], close_error=_STOP)
+    src = _device(monkeypatch, sd)
+    g = src.blocks()
+    next(g)
+    with pytest.raises(KeyboardInterrupt):
+        g.throw(KeyboardInterrupt)
+    assert sd.InputStream.n_exited == 1
+
+    def sink(u):
+        raise ValueError("the sink's own error")
+
+    for threaded in (False, True):
+        with pytest.raises(ValueError, match="the sink's own error"):
+            StreamPipeline(MicArray.from_preset("three-mic")).run(src, sink, threaded=threaded)
+        gc.collect()
+        assert unraisable == [] and sd.InputStream.n_exited == 2 + threaded

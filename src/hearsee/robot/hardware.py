@@ -652,21 +652,31 @@ class MappedSource:
         return int(getattr(self.source, "n_dropped", 0))
 
     def blocks(self) -> Any:
-        from hearsee.stream.pipeline import Block, block_samples
+        """The source's blocks, mapped; the source's own iterator is closed when they end (a
+        device's error while stopping is raised, unless another error ends the run)."""
+        from hearsee.stream.pipeline import Block, block_samples, close_blocks
 
-        for blk in self.source.blocks():
-            if self.stop is not None and self.stop.is_set():
-                return
-            # (a block of fewer channels than the source declared was an IndexError traceback)
-            data = block_samples(blk.data, self.n_in)[self.channels]
-            if self.limit is not None:
-                if blk.start >= self.limit:
-                    return
-                data = data[:, : self.limit - blk.start]
-            self.n_samples = max(self.n_samples, blk.start + data.shape[1])
-            yield Block(blk.seq, blk.start, data, blk.arrival)
-            if self.limit is not None and blk.start + data.shape[1] >= self.limit:
-                return
+        blocks = self.source.blocks()
+        try:
+            for blk in blocks:
+                if self.stop is not None and self.stop.is_set():
+                    break
+                # (a block of fewer channels than the source declared was an IndexError)
+                data = block_samples(blk.data, self.n_in)[self.channels]
+                if self.limit is not None:
+                    if blk.start >= self.limit:
+                        break
+                    data = data[:, : self.limit - blk.start]
+                self.n_samples = max(self.n_samples, blk.start + data.shape[1])
+                yield Block(blk.seq, blk.start, data, blk.arrival)
+                if self.limit is not None and blk.start + data.shape[1] >= self.limit:
+                    break
+        except BaseException as exc:  # (GeneratorExit: our consumer ended the run normally)
+            close_blocks(blocks, quiet=not isinstance(exc, GeneratorExit))
+            raise
+        # (the device's stream used to stop only when its generator was garbage collected:
+        # a PortAudioError there was printed as "Exception ignored in", the run went on)
+        close_blocks(blocks)
 
 
 def open_audio_source(cfg: RobotConfig, duration_s: float | None = None) -> MappedSource:

@@ -340,7 +340,9 @@ class DeviceSource:
         The device's name (PortAudio's), for messages.
 
     A stream the device refuses to open or start (a sample rate or channel count it does not
-    support, a device another program holds) is an AudioInputError when the run starts.
+    support, a device another program holds) is an AudioInputError when the run starts; one
+    that fails to stop or close, an AudioInputError when the run ends (unless the run is ending
+    with another error or Ctrl-C: that stays the error).
     """
 
     def __init__(self, device: int | str | None, n_channels: int, fs: float = 16000.0,
@@ -426,15 +428,33 @@ class DeviceSource:
         try:
             with contextlib.ExitStack() as opened:
                 try:  # PortAudio opens the device here and starts it on entering
-                    opened.enter_context(sd.InputStream(
+                    stream = sd.InputStream(
                         device=self.device, channels=self.n_channels, samplerate=self.fs,
-                        blocksize=self.block_len, dtype="float32", callback=callback))
+                        blocksize=self.block_len, dtype="float32", callback=callback)
+                    stream.__enter__()
                 except (ValueError, sd.PortAudioError) as exc:
                     # (a rate or channel count the device refuses, a device another program
                     # holds: PortAudioError escaped as a traceback)
                     raise AudioInputError(
                         f"audio input device {self.name!r}: cannot record {self.n_channels} "
                         f"channels at {self.fs:g} Hz ({exc})") from None
+
+                def stop_stream(exc_type: Any, exc: Any, tb: Any) -> bool:
+                    """The stream's exit (stop, close). PortAudio failing there (a device
+                    unplugged) is an AudioInputError when the run ended normally or its
+                    consumer closed it (GeneratorExit); while another error propagates (Ctrl-C
+                    in the wait for a block, ...) that one stays the error (the PortAudioError
+                    hid it, chained to it)."""
+                    try:
+                        stream.__exit__(exc_type, exc, tb)
+                    except sd.PortAudioError as err:
+                        if exc_type is None or issubclass(exc_type, GeneratorExit):
+                            raise AudioInputError(
+                                f"audio input device {self.name!r}: cannot stop the input "
+                                f"stream ({err})") from None
+                    return False
+
+                opened.push(stop_stream)
                 while True:
                     try:
                         blk = q.get(timeout=self.timeout_s)
@@ -1611,8 +1631,13 @@ class StreamPipeline:
 
         try:
             if not threaded:
-                for blk in source.blocks():
-                    handle(blk)
+                blocks = source.blocks()
+                try:
+                    for blk in blocks:
+                        handle(blk)
+                except BaseException:
+                    close_blocks(blocks, quiet=True)  # (this error stays the error)
+                    raise
             else:
                 q: queue.Queue = queue.Queue(maxsize=self.queue_size)
                 stop = threading.Event()
@@ -1620,14 +1645,17 @@ class StreamPipeline:
 
                 def produce() -> None:
                     try:
-                        for blk in source.blocks():
+                        blocks = source.blocks()
+                        for blk in blocks:
                             while not stop.is_set():
                                 try:
                                     q.put(blk, timeout=0.1)
                                     break
                                 except queue.Full:
                                     continue
-                            if stop.is_set():
+                            if stop.is_set():  # the consumer ended the run (Ctrl-C, a stall,
+                                # an error): that is the reason, not the source's while closing
+                                close_blocks(blocks, quiet=True)
                                 return
                     except BaseException as exc:  # noqa: BLE001 - re-raised in the consumer
                         errors.append(exc)
@@ -1680,6 +1708,22 @@ class StreamPipeline:
             if st.status == "ok" and any(bool(getattr(s, "stalled", False)) for s in chain):
                 st.status = "stalled"  # the source ended because its device went silent
         return updates
+
+
+def close_blocks(blocks: Any, *, quiet: bool = False) -> None:
+    """End a source's ``blocks()`` iterator now (a generator's ``close()``: the source releases
+    its device there, :class:`DeviceSource` stops its stream) rather than whenever it is garbage
+    collected, where an error was only printed as "Exception ignored in". The source's error
+    while closing (AudioInputError) is raised -- or, with ``quiet=True``, dropped: for a run
+    that ends with another error, Ctrl-C or its consumer's stop, which stays the reason."""
+    close = getattr(blocks, "close", None)
+    if close is None:
+        return
+    if not quiet:
+        close()
+        return
+    with contextlib.suppress(Exception):
+        close()
 
 
 def _source_chain(source: Any) -> list[Any]:
