@@ -331,6 +331,17 @@ def test_portaudio_error_at_stream_start_is_one_line(robot, fake_sd, capsys, whe
     assert sd.n_streams_closed == 0  # (none was started)
 
 
+def test_a_device_that_fails_when_its_stream_starts_keeps_the_previous_run(robot, fake_sd,
+                                                                           capsys):
+    """`run` emptied output.jsonl before the stream started: a busy device then left the
+    previous run's updates.jsonl empty beside its report (summary.json, index.html)."""
+    fake_sd(start_error="Device unavailable [PaErrorCode -9985]")
+    cfg = robot()
+    _one_line(capsys, main(["run", "--config", str(cfg), "--quiet"]),
+              "audio input device 'USB 6ch Array': cannot record 4 channels at 16000 Hz")
+    _untouched(cfg)
+
+
 # ------------------------------------------------------------------- the stream
 def test_blocks_of_another_shape_are_one_line(robot, fake_sd, capsys):
     """A device delivering 2 channels where 4 were opened: `run` picked the robot's channels

@@ -1385,3 +1385,66 @@ def test_a_robot_files_calibration_or_array_that_is_a_folder_says_so(small_rig):
     with pytest.raises(ConfigError, match=r"cameras\.calib: calibration file 'none\.yaml' not "
                                           "found"):
         load_robot_config(make_config(small_rig, _with(cameras={"calib": "none.yaml"})))
+
+
+# ------------------------------------------------------------------------------- JSON lines
+def _talk(tmp_path, duration_s=1.0):
+    """A robot file (audio only, report in tmp_path/out) and 1 s of a talker at 3 m."""
+    from hearsee.sim.audio import simulate_recording
+
+    x, _ = simulate_recording("three-mic", [2.0, -1.0, 0.0], duration_s=duration_s, fs=FS,
+                              snr_db=25.0, seed=4)
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
+    return cfg, x
+
+
+class _FailingSource:
+    """A source that fails as the live device does when its stream starts (busy, a refused
+    rate): before its first block."""
+
+    fs, n_channels = float(FS), 3
+
+    def blocks(self):
+        raise AudioInputError("audio input device 'X': cannot record 3 channels at 16000 Hz")
+        yield
+
+
+def test_a_run_that_fails_before_its_first_update_keeps_the_previous_lines(tmp_path):
+    """The JSON lines file was opened for writing (emptied) before the stream started: a device
+    that then failed left the previous run's updates.jsonl empty beside its report."""
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg, x = _talk(tmp_path)
+    cfg.output.report.mkdir()
+    cfg.output.jsonl.write_text("previous run\n", encoding="utf-8")
+    with pytest.raises(AudioInputError, match="cannot record"):
+        run_robot(cfg, audio_source=_FailingSource(), head=_quiet_head(cfg))
+    assert cfg.output.jsonl.read_text(encoding="utf-8") == "previous run\n"
+    other = tmp_path / "new" / "run.jsonl"  # none before: none after
+    with pytest.raises(AudioInputError, match="cannot record"):
+        run_robot(cfg, audio_source=_FailingSource(), head=_quiet_head(cfg), jsonl=other)
+    assert not other.exists()
+    # a run that ends (or is interrupted) before its first update: its log is empty, so is
+    # the file (the report written next is of this run)
+    res = run_robot(cfg, audio_source=ArraySource(x[:, :300], FS, 1600), head=_quiet_head(cfg))
+    assert res.log == [] and cfg.output.jsonl.read_text(encoding="utf-8") == ""
+    # and a run replaces the previous lines with its own
+    cfg.output.jsonl.write_text("previous run\n", encoding="utf-8")
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg))
+    lines = cfg.output.jsonl.read_text(encoding="utf-8").splitlines()
+    assert [json.loads(s) for s in lines] == json.loads(json.dumps(res.log)) and len(lines) > 20
+
+
+def test_an_unwritable_jsonl_is_refused_before_the_audio_starts(tmp_path):
+    cfg, x = _talk(tmp_path)
+    (tmp_path / "dir.jsonl").mkdir()
+
+    class Untouched:
+        fs, n_channels = float(FS), 3
+
+        def blocks(self):
+            raise AssertionError("the audio started")
+
+    with pytest.raises(ConfigError, match=r"^output\.jsonl: cannot write .*dir\.jsonl: Is a "):
+        run_robot(cfg, audio_source=Untouched(), head=_quiet_head(cfg),
+                  jsonl=tmp_path / "dir.jsonl")

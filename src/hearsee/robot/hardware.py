@@ -989,6 +989,58 @@ def _r(v: Any, nd: int = 4) -> Any:
     return np.round(a, nd).tolist() if a.ndim else round(float(a), nd)
 
 
+class _JsonLines:
+    """The JSON lines file of a live run (``output.jsonl``): one line per update, written and
+    flushed as it comes, so that the run can be followed while it goes (``tail -f``).
+
+    Checked when the run starts -- its folder is made, and a path that cannot be written is a
+    ConfigError before any device runs -- but not emptied then: the previous run's file is
+    replaced at the first update (or, when the run ends without one, at its end: its report
+    has no update either). A run that fails before its first update (a device that is busy or
+    refuses the rate when its stream starts) thus leaves the previous run's lines as they were,
+    beside the previous run's report; it used to leave them empty. (Writing beside the file and
+    replacing it at the end would keep it whenever a run fails, but nothing could be followed
+    during the run.)"""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.fh: Any = None
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            existed = path.exists() or path.is_symlink()
+            with open(path, "a", encoding="utf-8"):  # writable? (appends nothing)
+                pass
+            if not existed:
+                path.unlink()
+        except OSError as exc:
+            raise self._error(exc) from None
+
+    def _error(self, exc: OSError) -> ConfigError:
+        return ConfigError(f"output.jsonl: cannot write {self.path}: {exc.strerror}")
+
+    def _start(self) -> None:
+        if self.fh is None:
+            try:
+                self.fh = open(self.path, "w", encoding="utf-8")  # noqa: SIM115 - see close()
+            except OSError as exc:
+                raise self._error(exc) from None
+
+    def write(self, line: str) -> None:
+        """Append ``line`` (ending in a newline) and flush it."""
+        self._start()
+        self.fh.write(line)
+        self.fh.flush()
+
+    def close(self, ended: bool) -> None:
+        """Close the file. ``ended``: the run ended (``ok``, ``stalled`` or Ctrl-C); a file
+        not started yet is emptied. Else the run failed; the file stays as it is (the previous
+        run's when no update came)."""
+        if ended:
+            self._start()
+        if self.fh is not None:
+            self.fh.close()
+
+
 def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source: Any = None,
               cameras: Cameras | None = None, head: PrintHeadDriver | None = None,
               jsonl: str | Path | None = None, threaded: bool | None = None,
@@ -1036,7 +1088,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         ``n_consecutive_failures``.
     head : default: :class:`PrintHeadDriver` printing to stderr; any object with its protocol
         (``pose_deg``, ``command``) drives a real head.
-    jsonl : the JSON lines file (default ``cfg.output.jsonl``); one line per update, flushed.
+    jsonl : the JSON lines file (default ``cfg.output.jsonl``); one line per update, flushed
+        (it can be followed during the run). It is emptied at the first update, not when the
+        run starts: a run that fails before its first update (a busy device, a refused rate)
+        leaves a previous run's file as it was.
     threaded : run the source in its own thread (default: only for the live device).
     async_vision : detect humans in a worker thread, applying each result at the first update
         after it is ready (default: only for the live device; otherwise in line, so that runs
@@ -1098,14 +1153,12 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     own_cameras = cameras is None and cfg.cameras is not None
     if own_cameras:
         cameras = Cameras(cfg.cameras, f"{cfg.path}: ")
-    out_path = Path(jsonl) if jsonl is not None else cfg.output.jsonl
     try:
-        out_path.parent.mkdir(parents=True, exist_ok=True)
-        fh = open(out_path, "w", encoding="utf-8")  # noqa: SIM115 - closed in finally
-    except OSError as exc:
+        lines = _JsonLines(Path(jsonl) if jsonl is not None else cfg.output.jsonl)
+    except ConfigError:
         if own_cameras:
             cameras.close()
-        raise ConfigError(f"output.jsonl: cannot write {out_path}: {exc.strerror}") from None
+        raise
 
     log: list[dict[str, Any]] = []
     images: dict[str, NDArray] = {}
@@ -1284,10 +1337,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                "camera_t": camera_t, "detections": dets, "track": rec_track, "truth": None,
                "error_m": None}
         log.append(rec)
-        fh.write(json.dumps(to_jsonable(rec)) + "\n")
-        fh.flush()
+        lines.write(json.dumps(to_jsonable(rec)) + "\n")
 
     status = "ok"
+    ended = False  # (else the run failed: the JSON lines stay as they are)
     try:
         pipeline.run(source, sink, threaded=live if threaded is None else threaded)
         status = pipeline.stats.status
@@ -1298,14 +1351,18 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             t = state["last_t"]
             emit(t, None, state["last_bearing"],
                  apply(t, t_cap, fr, fut.result(), state["last_bearing"], g), t_cap)
+        ended = True
     except KeyboardInterrupt:
         status = "interrupted"
+        ended = True
     finally:
         if pool is not None:
             pool.shutdown(wait=False, cancel_futures=True)
-        fh.close()
-        if own_cameras:
-            cameras.close()
+        try:
+            if own_cameras:
+                cameras.close()
+        finally:
+            lines.close(ended)
     # the audio processed (the stream's stats, filled in after a Ctrl-C too): the source's
     # own count also held the blocks still queued when Ctrl-C came
     summary = _live_summary(log, pipeline.stats, pipeline.stats.audio_s, status, state, cameras,
