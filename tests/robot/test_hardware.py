@@ -1448,3 +1448,52 @@ def test_an_unwritable_jsonl_is_refused_before_the_audio_starts(tmp_path):
     with pytest.raises(ConfigError, match=r"^output\.jsonl: cannot write .*dir\.jsonl: Is a "):
         run_robot(cfg, audio_source=Untouched(), head=_quiet_head(cfg),
                   jsonl=tmp_path / "dir.jsonl")
+
+
+class _CtrlCFile:
+    """A text file whose ``what`` ("write": before writing, "written": after writing, "flush":
+    in the flush) raises KeyboardInterrupt once, at line ``at``: Ctrl-C landing there."""
+
+    def __init__(self, fh, what, at):
+        self.fh, self.what, self.at, self.n = fh, what, at, 0
+
+    def write(self, s):
+        self.n += 1
+        if self.what == "write" and self.n == self.at:
+            raise KeyboardInterrupt
+        out = self.fh.write(s)
+        if self.what == "written" and self.n == self.at:
+            raise KeyboardInterrupt
+        return out
+
+    def flush(self):
+        if self.what == "flush" and self.n == self.at:
+            self.what = None
+            raise KeyboardInterrupt
+        self.fh.flush()
+
+    def __getattr__(self, name):
+        return getattr(self.fh, name)
+
+
+@pytest.mark.parametrize("what", ["write", "written", "flush"])
+def test_ctrl_c_in_the_jsonl_write_keeps_the_lines_and_the_log_one_for_one(tmp_path,
+                                                                          monkeypatch, what):
+    """The record was appended to the log before its line was written: Ctrl-C in the write
+    left log.json one record longer than updates.jsonl."""
+    import builtins
+
+    from hearsee.robot import hardware as hw
+    from hearsee.stream.pipeline import ArraySource
+
+    def fake_open(path, mode="r", *a, **kw):
+        fh = builtins.open(path, mode, *a, **kw)
+        return _CtrlCFile(fh, what, at=5) if mode == "w" else fh
+
+    monkeypatch.setattr(hw, "open", fake_open, raising=False)
+    cfg, x = _talk(tmp_path)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg))
+    assert res.summary["status"] == "interrupted" and res.summary["updates"] == len(res.log)
+    lines = cfg.output.jsonl.read_text(encoding="utf-8").splitlines()
+    assert [json.loads(s) for s in lines] == json.loads(json.dumps(res.log))
+    assert len(res.log) == 4  # the fifth line was being written: neither has it

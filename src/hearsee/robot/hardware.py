@@ -1000,11 +1000,12 @@ class _JsonLines:
     refuses the rate when its stream starts) thus leaves the previous run's lines as they were,
     beside the previous run's report; it used to leave them empty. (Writing beside the file and
     replacing it at the end would keep it whenever a run fails, but nothing could be followed
-    during the run.)"""
+    during the run.) :meth:`close` keeps the lines and the run's log records one for one."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
         self.fh: Any = None
+        self.starts: list[int] = []  #: offset of each line written
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             existed = path.exists() or path.is_symlink()
@@ -1028,15 +1029,19 @@ class _JsonLines:
     def write(self, line: str) -> None:
         """Append ``line`` (ending in a newline) and flush it."""
         self._start()
+        self.starts.append(self.fh.tell())
         self.fh.write(line)
         self.fh.flush()
 
-    def close(self, ended: bool) -> None:
-        """Close the file. ``ended``: the run ended (``ok``, ``stalled`` or Ctrl-C); a file
-        not started yet is emptied. Else the run failed; the file stays as it is (the previous
-        run's when no update came)."""
-        if ended:
+    def close(self, n_lines: int | None = None) -> None:
+        """Close the file. ``n_lines``: the run ended (``ok``, ``stalled`` or Ctrl-C) with that
+        many log records; a file not started yet is emptied, and lines beyond them are cut (a
+        Ctrl-C that came when a line had been written, before its record was logged). None: the
+        run failed; the file stays as it is (the previous run's when no update came)."""
+        if n_lines is not None:
             self._start()
+            if n_lines < len(self.starts):
+                self.fh.truncate(self.starts[n_lines])
         if self.fh is not None:
             self.fh.close()
 
@@ -1091,7 +1096,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     jsonl : the JSON lines file (default ``cfg.output.jsonl``); one line per update, flushed
         (it can be followed during the run). It is emptied at the first update, not when the
         run starts: a run that fails before its first update (a busy device, a refused rate)
-        leaves a previous run's file as it was.
+        leaves a previous run's file as it was. The lines are the log's records, one for one,
+        also after a Ctrl-C.
     threaded : run the source in its own thread (default: only for the live device).
     async_vision : detect humans in a worker thread, applying each result at the first update
         after it is ready (default: only for the live device; otherwise in line, so that runs
@@ -1336,8 +1342,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                "head_tilt_deg": geo.pose[1], "head_command": command, "audio": audio,
                "camera_t": camera_t, "detections": dets, "track": rec_track, "truth": None,
                "error_m": None}
-        log.append(rec)
+        # the line first, then the record (a Ctrl-C in the write left the record logged and
+        # its line not written; one after it: lines.close cuts the line)
         lines.write(json.dumps(to_jsonable(rec)) + "\n")
+        log.append(rec)
 
     status = "ok"
     ended = False  # (else the run failed: the JSON lines stay as they are)
@@ -1362,7 +1370,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             if own_cameras:
                 cameras.close()
         finally:
-            lines.close(ended)
+            lines.close(len(log) if ended else None)
     # the audio processed (the stream's stats, filled in after a Ctrl-C too): the source's
     # own count also held the blocks still queued when Ctrl-C came
     summary = _live_summary(log, pipeline.stats, pipeline.stats.audio_s, status, state, cameras,
