@@ -106,6 +106,23 @@ def test_points_that_are_not_numbers_are_a_geometry_error():
         MicArray.from_preset("three-mic").tdoa("abc")
 
 
+def test_points_of_text_or_bools_are_refused():
+    """as_points read text as the numbers it spells and True as 1 m: cart_to_sph([["1", "0",
+    "0"]]) gave azimuth 0, MicArray.tdoa(["1", "0.5", "0"]) TDOAs. Numbers (NaN included, the
+    callers' own rule) pass as before."""
+    from hearsee.audio.arrays import MicArray
+    from hearsee.geometry import array_to_robot, as_points
+
+    arr = MicArray.from_preset("three-mic")
+    for bad in ([["1", "0", "0"]], ("1", "0.5", "0"), [True, 0.0, 0.0],
+                np.array([1.0, 0.0, 0.0]).astype(object).astype(str)):
+        for f in (cart_to_sph, lambda p: array_to_robot(p, (0.0, 0.0)), arr.tdoa, arr.tdoa_far):
+            with pytest.raises(GeometryError, match="not numbers"):
+                f(bad)
+    np.testing.assert_array_equal(as_points([[1, 2, np.nan]]), [[1.0, 2.0, np.nan]])
+    np.testing.assert_array_equal(arr.tdoa([1, 0.5, 0]), arr.tdoa(np.array([1.0, 0.5, 0.0])))
+
+
 # one [x, y, z] in metres: as_point, the one check of every single-point argument
 _NOT_POINTS = [
     [True, 0.0, 1.2],  # numpy read True as 1 m

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.config import all_real, is_real, object_entries
+from hearsee.config import all_real, is_real, object_entries, real_entries
 from hearsee.errors import GeometryError
 
 __all__ = [
@@ -142,13 +142,12 @@ def angle_between(u: ArrayLike, v: ArrayLike) -> NDArray:
 def as_points(points: ArrayLike, what: str = "points") -> NDArray:
     """``points`` as a float array ``(..., 3)``: [x, y, z] coordinates in metres (any batch
     shape, in the frame the caller documents), else a GeometryError naming ``what`` (numpy's
-    ValueError or IndexError before: a scalar, text, a ragged list, 2 coordinates). The one
-    batch check of :func:`cart_to_sph`, :func:`array_to_robot`, :func:`robot_to_array` and
+    ValueError or IndexError before: a scalar, text, a ragged list, 2 coordinates). Every
+    coordinate must be a real number (:func:`hearsee.config.real_entries`; NaN and inf pass,
+    the callers decide): numpy read ``"1.2"`` as 1.2 m and True as 1 m. The one batch check of
+    :func:`cart_to_sph`, :func:`array_to_robot`, :func:`robot_to_array` and
     :class:`hearsee.audio.arrays.MicArray`'s TDOAs; one point alone: :func:`as_point`."""
-    try:
-        p = np.asarray(points, dtype=float)
-    except (TypeError, ValueError):
-        p = None
+    p = np.asarray(points, dtype=float) if real_entries(points) else None
     if p is None or p.ndim == 0 or p.shape[-1] != 3:
         got = "not numbers" if p is None else f"shape {p.shape}"
         raise GeometryError(f"{what}: expected points with 3 coordinates [x, y, z] in metres, "

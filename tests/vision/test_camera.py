@@ -465,3 +465,88 @@ def test_camera_numbers_must_be_real_and_sizes_whole():
     same = Camera(good.K.tolist(), width=320.0, height=np.int64(240))
     assert (same.width, same.height) == (320, 240) and isinstance(same.width, int)
     np.testing.assert_array_equal(same.K, good.K)
+
+
+def test_pixels_points_and_settings_must_be_numbers():
+    """Bad-input sweep of Camera's siblings: numpy read text as the numbers it spells and True
+    as 1 -- ("320", "240") was a pixel for normalized / pixel_rays / in_image, ("0", "0", "1")
+    a point for project and transform_points, "30" an angle for camera_pose, True a 1 deg
+    field of view and a 1 m baseline, "640" an image size for rig_from_opencv; text sizes,
+    baselines and margins raised builtin TypeErrors and a NaN margin put every pixel outside.
+    The same values as numbers give the same results as before."""
+    cam = Camera(K=K, dist=np.array([-0.25, 0.08, 0.001, -0.002]), width=640, height=480)
+    for bad in (("320", "240"), [[True, 240.0]], [["a", "b"]], [320.0 + 1j, 240.0]):
+        for f in (cam.normalized, cam.pixel_rays, cam.in_image):
+            with pytest.raises(GeometryError, match="^pixel coordinates: expected numbers"):
+                f(bad)
+    for bad in (("0", "0", "1"), [[0.0, True, 2.0]]):
+        with pytest.raises(GeometryError, match="^project: expected points as numbers"):
+            cam.project(bad)
+        with pytest.raises(GeometryError, match="^transform_points: points must hold numbers"):
+            transform_points(np.eye(3), [0, 0, 1], bad)
+    with pytest.raises(GeometryError, match="^transform_points: R must hold numbers"):
+        transform_points(np.eye(3).astype(str), [0, 0, 1], [1, 2, 3])
+    with pytest.raises(GeometryError, match="^transform_points: t must hold numbers"):
+        transform_points(np.eye(3), ["0", "0", "1"], [1, 2, 3])
+    for margin in (np.nan, "5", None):
+        with pytest.raises(GeometryError, match=r"^margin \(pixels\) must be a finite number"):
+            cam.in_image([320.0, 240.0], margin)
+    for args in ((("0", "0", "1"),), ((0, 0, 1), "30"), ((0, 0, 1), 0.0, True)):
+        with pytest.raises(GeometryError, match="camera_pose"):
+            camera_pose(*args)
+    for hfov in (True, "60", None):
+        with pytest.raises(CalibrationError, match="hfov_deg must be in"):
+            Camera.from_fov(hfov, 640, 480)
+    with pytest.raises(CalibrationError, match="vfov_deg must be in"):
+        Camera.from_fov(60.0, 640, 480, vfov_deg="45")
+    for w in ("640", np.nan, True):
+        with pytest.raises(CalibrationError, match="camera size"):
+            Camera.from_fov(60.0, w, 480)
+        with pytest.raises(CalibrationError, match="camera size"):
+            cam.with_size(w, 240)
+    for b in (True, "0.1", np.nan, 0.0):
+        with pytest.raises(CalibrationError, match="baseline_m must be a finite number > 0"):
+            StereoRig.ideal(cam, b)
+    with pytest.raises(CalibrationError, match="thermal_offset_m"):
+        StereoRig.ideal(cam, 0.1, thermal=cam, thermal_offset_m=("0.05", 0, 0))
+    with pytest.raises(CalibrationError, match="thermal_rotation: expected real numbers"):
+        StereoRig.ideal(cam, 0.1, thermal=cam, thermal_rotation=np.eye(3).astype(str))
+    with pytest.raises(CalibrationError, match=r"rig R \(right-from-left\): expected real"):
+        StereoRig(cam, cam, np.eye(3).astype(str), [-0.1, 0.0, 0.0])
+    with pytest.raises(CalibrationError, match=r"rig T \(right-from-left\): expected real"):
+        StereoRig(cam, cam, np.eye(3), ["-0.1", "0", "0"])
+    # the same values as numbers: unchanged
+    P = _points(20)
+    uv = cam.project(P)
+    np.testing.assert_array_equal(cam.project(P.tolist()), uv)
+    np.testing.assert_allclose(cam.pixel_rays(uv), P / np.linalg.norm(P, axis=1, keepdims=True),
+                               atol=1e-7)
+    assert cam.in_image([320, 240], margin=np.float32(10.0)).tolist() == [True]
+    assert cam.in_image([[-0.6, 0.0], [0.0, 0.0]]).tolist() == [False, True]
+    R, t = camera_pose([0, 0, 1], 30, 0, 0)
+    np.testing.assert_allclose(R @ np.array([np.cos(np.radians(30)), np.sin(np.radians(30)),
+                                             1.0]) + t, [0, 0, 1], atol=1e-12)
+    rig = StereoRig.ideal(cam, 0.1, thermal=cam, thermal_offset_m=[0.05, 0, 0],
+                          thermal_rotation=np.eye(3))
+    np.testing.assert_allclose(rig.thermal_center_m, [0.05, 0.0, 0.0])
+    assert Camera.from_fov(60.0, 640.0, 480).size == (640, 480)
+
+
+def test_rig_from_opencv_checks_its_size_and_scale(tmp_path):
+    """rig_from_opencv read image_size ("640", "480") as 640 x 480 and truncated 640.7 to 640;
+    a text scale_to_m was numpy's builtin TypeError and a NaN one blamed the extrinsics file."""
+    intr, extr = tmp_path / "intrinsics.yml", tmp_path / "extrinsics.yml"
+    for path, nodes in ((intr, dict(M1=K, D1=np.zeros((1, 5)), M2=K, D2=np.zeros((1, 5)))),
+                        (extr, dict(R=np.eye(3), T=np.array([[-100.0], [0.0], [0.0]])))):
+        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
+        for k, v in nodes.items():
+            fs.write(k, v)
+        fs.release()
+    for size in (("640", "480"), (640.7, 480), (640,), None):
+        with pytest.raises(CalibrationError, match="^image_size: width and height must be"):
+            rig_from_opencv(intr, extr, size, scale_to_m=0.001)
+    for scale in ("0.001", np.nan, 0.0, True):
+        with pytest.raises(ConfigError, match="^scale_to_m must be a finite number > 0"):
+            rig_from_opencv(intr, extr, (640, 480), scale_to_m=scale)
+    rig = rig_from_opencv(intr, extr, (640.0, np.int64(480)), scale_to_m=0.001)
+    assert rig.left.size == (640, 480) and rig.baseline_m == pytest.approx(0.1)

@@ -161,10 +161,9 @@ class AudioVisualRig:
 
     def rays(self, uv: ArrayLike) -> tuple[NDArray, NDArray]:
         """Back-projected rays of pixels ``(N, 2)``: (origin (3,), unit directions (N, 3)),
-        array frame."""
-        if not real_entries(uv):  # (numpy read ("320", "240") as pixels and True as 1)
-            raise GeometryError(f"pixel coordinates: expected numbers, got {uv!r}")
-        d_opt = self.camera.pixel_rays(np.atleast_2d(np.asarray(uv, dtype=float)))
+        array frame. Pixels that are no numbers or not ``(N, 2)``: the camera's GeometryError
+        (:meth:`hearsee.vision.camera.Camera.pixel_rays`)."""
+        d_opt = self.camera.pixel_rays(uv)
         return self.camera_centre, d_opt @ self.R  # R^T d for each row
 
 

@@ -74,6 +74,7 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import CalibrationError, ConfigError, GeometryError
+from hearsee.geometry import as_point
 
 __all__ = [
     "MIN_BASELINE_M",
@@ -108,6 +109,8 @@ MIN_BASELINE_M = 1e-3
 
 
 def _check_rotation(R: ArrayLike, what: str) -> NDArray:
+    if not real_entries(R):  # (numpy read text as the numbers it spells, True as 1)
+        raise CalibrationError(f"{what}: expected real numbers, got {R!r:.80}")
     R = np.asarray(R, dtype=float)
     if R.shape == (3,) or R.shape == (3, 1) or R.shape == (1, 3):  # Rodrigues vector
         R = cv2.Rodrigues(R.reshape(3, 1))[0]
@@ -121,6 +124,8 @@ def _check_rotation(R: ArrayLike, what: str) -> NDArray:
 
 
 def _check_translation(T: ArrayLike, what: str) -> NDArray:
+    if not real_entries(T):
+        raise CalibrationError(f"{what}: expected real numbers (metres), got {T!r:.80}")
     T = np.asarray(T, dtype=float).reshape(-1)
     if T.shape != (3,) or not np.all(np.isfinite(T)):
         raise CalibrationError(f"{what}: expected 3 finite numbers (metres), got {T.shape}")
@@ -178,15 +183,7 @@ class Camera:
             )
         if np.all(d == 0):
             d = np.zeros(0)
-        # (NaN or None: int()'s builtin ValueError / TypeError)
-        whole = all(is_real(v) and not isinstance(v, bool) and v == int(v) and v > 0
-                    for v in (self.width, self.height))
-        if not whole:
-            raise CalibrationError(
-                f"camera size: width and height must be positive integers, got "
-                f"{self.width}x{self.height}"
-            )
-        w, h = int(self.width), int(self.height)
+        w, h = _check_size(self.width, self.height)
         K.setflags(write=False)
         d.setflags(write=False)
         object.__setattr__(self, "K", K)
@@ -203,14 +200,16 @@ class Camera:
         Square pixels unless ``vfov_deg`` is given; principal point at the image centre
         ``((width - 1) / 2, (height - 1) / 2)``.
         """
-        if not 0.0 < hfov_deg < 180.0:
-            raise CalibrationError(f"hfov_deg must be in (0, 180), got {hfov_deg}")
+        # (True was read as 1 deg; text and a text size raised builtin TypeErrors)
+        if not (is_real(hfov_deg) and 0.0 < hfov_deg < 180.0):
+            raise CalibrationError(f"hfov_deg must be in (0, 180), got {hfov_deg!r}")
+        _check_size(width, height)
         fx = (width / 2.0) / np.tan(np.radians(hfov_deg) / 2.0)
         if vfov_deg is None:
             fy = fx
         else:
-            if not 0.0 < vfov_deg < 180.0:
-                raise CalibrationError(f"vfov_deg must be in (0, 180), got {vfov_deg}")
+            if not (is_real(vfov_deg) and 0.0 < vfov_deg < 180.0):
+                raise CalibrationError(f"vfov_deg must be in (0, 180), got {vfov_deg!r}")
             fy = (height / 2.0) / np.tan(np.radians(vfov_deg) / 2.0)
         K = np.array([[fx, 0.0, (width - 1) / 2.0], [0.0, fy, (height - 1) / 2.0], [0, 0, 1.0]])
         return cls(K=K, dist=np.zeros(0), width=width, height=height, name=name)
@@ -260,6 +259,7 @@ class Camera:
 
     def with_size(self, width: int, height: int) -> Camera:
         """The same camera resampled to ``width x height`` pixels (K scaled; dist unchanged)."""
+        _check_size(width, height)  # (text: a builtin TypeError)
         sx, sy = width / self.width, height / self.height
         S = np.diag([sx, sy, 1.0])
         K = S @ self.K
@@ -275,6 +275,9 @@ class Camera:
         Returns ``(N, 2)`` float ``(u, v)`` including lens distortion; points with ``z <= 0``
         (behind the camera) give NaN. Pixels may lie outside the image: see :meth:`in_image`.
         """
+        if not real_entries(points):  # (numpy read text as the numbers it spells, True as 1)
+            raise GeometryError(f"project: expected points as numbers (metres), got "
+                                f"{points!r:.80}")
         P = np.asarray(points, dtype=float)
         if P.ndim == 1:
             P = P[None, :]
@@ -308,11 +311,7 @@ class Camera:
     def normalized(self, uv: ArrayLike) -> NDArray:
         """Undistorted normalised image coordinates ``(N, 2)`` (x/z, y/z in the optical frame)
         of pixels ``(N, 2)``; the inverse of :meth:`project` (K's skew included)."""
-        p = np.asarray(uv, dtype=float)
-        if p.ndim == 1:
-            p = p[None, :]
-        if p.ndim != 2 or p.shape[1] != 2:
-            raise GeometryError(f"pixel coordinates: expected shape (N, 2), got {p.shape}")
+        p = _as_pixels(uv)
         if len(p) == 0:
             return np.zeros((0, 2))
         if not self.has_distortion:
@@ -360,12 +359,10 @@ class Camera:
     def in_image(self, uv: ArrayLike, margin: float = 0.0) -> NDArray:
         """Boolean mask ``(N,)``: pixel lies inside the image (shrunk by ``margin`` pixels).
         ``uv`` is one pixel ``(2,)`` or ``(N, 2)`` (an ``(N, 3)`` array was silently re-read as
-        pairs of numbers: GeometryError, as :meth:`normalized`)."""
-        p = np.asarray(uv, dtype=float)
-        if p.ndim == 1 and p.shape == (2,):
-            p = p[None, :]
-        if p.ndim != 2 or p.shape[1] != 2:
-            raise GeometryError(f"pixel coordinates: expected shape (N, 2), got {p.shape}")
+        pairs of numbers: GeometryError, as :meth:`normalized`); ``margin`` a finite number of
+        pixels (a NaN one made every pixel "outside")."""
+        p = _as_pixels(uv)
+        finite_number("margin (pixels)", margin, error=GeometryError)  # (kept as given)
         with np.errstate(invalid="ignore"):
             return ((p[:, 0] >= -0.5 + margin) & (p[:, 0] <= self.width - 0.5 - margin)
                     & (p[:, 1] >= -0.5 + margin) & (p[:, 1] <= self.height - 0.5 - margin))
@@ -401,6 +398,34 @@ class Camera:
             return cls(K=K, dist=dist, width=width, height=height, name=str(data.get("name", "")))
         except CalibrationError as exc:
             raise ConfigError(f"{where}: {exc}") from None
+
+
+def _check_size(width: Any, height: Any, what: str = "camera size") -> tuple[int, int]:
+    """``(width, height)`` in pixels as ints when both are whole numbers > 0 (640.0 too; not a
+    bool or text), else a CalibrationError naming ``what``: the one image-size rule of
+    :class:`Camera`, :meth:`Camera.from_fov`, :meth:`Camera.with_size` and
+    :func:`rig_from_opencv` (NaN or None raised int()'s builtin ValueError / TypeError)."""
+    whole = all(is_real(v) and not isinstance(v, bool) and v == int(v) and v > 0
+                for v in (width, height))
+    if not whole:
+        raise CalibrationError(
+            f"{what}: width and height must be positive integers, got {width!r}x{height!r}")
+    return int(width), int(height)
+
+
+def _as_pixels(uv: ArrayLike) -> NDArray:
+    """Pixels as a float array ``(N, 2)`` (one pixel ``(2,)`` becomes ``(1, 2)``), else a
+    GeometryError: numbers only (:func:`hearsee.config.real_entries`; numpy read ("320",
+    "240") as a pixel and True as 1), two coordinates each. The pixel check of
+    :meth:`Camera.normalized`, :meth:`Camera.pixel_rays` and :meth:`Camera.in_image`."""
+    if not real_entries(uv):
+        raise GeometryError(f"pixel coordinates: expected numbers, got {uv!r:.80}")
+    p = np.asarray(uv, dtype=float)
+    if p.ndim == 1:
+        p = p[None, :]
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise GeometryError(f"pixel coordinates: expected shape (N, 2), got {p.shape}")
+    return p
 
 
 def _distort(x: NDArray, y: NDArray, d: NDArray) -> tuple[NDArray, NDArray]:
@@ -527,16 +552,18 @@ class StereoRig:
         ``+baseline_m`` along the left camera's x axis); optional thermal camera whose optical
         centre is at ``thermal_offset_m`` in the left optical frame (rotation thermal-from-left
         ``thermal_rotation``, default identity)."""
-        if not baseline_m > 0:
-            raise CalibrationError(f"baseline_m must be > 0, got {baseline_m}")
+        if not (is_real(baseline_m) and baseline_m > 0):  # (True was 1 m, text a TypeError)
+            raise CalibrationError(f"baseline_m must be a finite number > 0 (metres), got "
+                                   f"{baseline_m!r}")
         right = Camera(K=camera.K.copy(), dist=camera.dist.copy(), width=camera.width,
                        height=camera.height, name="right")
         left = Camera(K=camera.K.copy(), dist=camera.dist.copy(), width=camera.width,
                       height=camera.height, name="left")
         kw: dict[str, Any] = {}
         if thermal is not None:
-            Rt = np.eye(3) if thermal_rotation is None else np.asarray(thermal_rotation, float)
-            c = np.asarray(thermal_offset_m, float).reshape(3)
+            Rt = (np.eye(3) if thermal_rotation is None
+                  else _check_rotation(thermal_rotation, "thermal_rotation"))
+            c = as_point(thermal_offset_m, "thermal_offset_m", CalibrationError)
             kw = dict(thermal=thermal, R_thermal=Rt, T_thermal=-Rt @ c)
         return cls(left=left, right=right, R=np.eye(3), T=np.array([-baseline_m, 0.0, 0.0]),
                    **kw)
@@ -747,7 +774,11 @@ def transform_points(R: ArrayLike, t: ArrayLike, points: ArrayLike) -> NDArray:
     """Apply ``X' = R X + t`` to points ``(N, 3)`` (or one point ``(3,)``); metres.
 
     GeometryError for any other shape (a flat ``(6,)`` array used to be read as two points and
-    silently lose the second) or an ``R`` / ``t`` that is not 3x3 / 3 numbers."""
+    silently lose the second) or an ``R`` / ``t`` that is not 3x3 / 3 numbers; text or bools
+    in any of them too (numpy read "1" as 1 m, True as 1)."""
+    for name, v in (("R", R), ("t", t), ("points", points)):
+        if not real_entries(v):
+            raise GeometryError(f"transform_points: {name} must hold numbers, got {v!r:.80}")
     P = np.asarray(points, dtype=float)
     Rm = np.asarray(R, dtype=float)
     tv = np.asarray(t, dtype=float)
@@ -765,11 +796,11 @@ def transform_points(R: ArrayLike, t: ArrayLike, points: ArrayLike) -> NDArray:
 
 
 def _finite(values: Any, n: int) -> NDArray | None:
-    """``values`` as ``n`` finite floats, or None when they are not."""
-    try:
-        a = np.asarray(values, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
+    """``values`` as ``n`` finite floats, or None when they are not (text or bools included:
+    :func:`hearsee.config.real_entries`; numpy read "30" as 30 deg and True as 1)."""
+    if not real_entries(values):
         return None
+    a = np.asarray(values, dtype=float).reshape(-1)
     return a if a.size == n and np.all(np.isfinite(a)) else None
 
 
@@ -906,6 +937,12 @@ def rig_from_opencv(intrinsics: str | Path, extrinsics: str | Path,
     ``D2`` in ``intrinsics`` and ``R``, ``T`` in ``extrinsics``. Those files do not store the
     image size (``(width, height)``, pixels) nor the length unit of ``T``: ``scale_to_m``
     converts it to metres (0.001 for millimetres)."""
+    try:
+        size = _check_size(*image_size, what="image_size")
+    except TypeError:  # (not a pair)
+        size = _check_size(None, None, what="image_size")
+    # (int() read "640" as 640 and truncated 640.7; a text scale was numpy's builtin TypeError)
+    scale_to_m = finite_number("scale_to_m", scale_to_m, 0.0, lo_open=True)
     a = read_opencv_yaml(intrinsics)
     b = read_opencv_yaml(extrinsics)
     for src, path, keys in ((a, intrinsics, ("M1", "D1", "M2", "D2")), (b, extrinsics, ("R", "T"))):
@@ -920,8 +957,8 @@ def rig_from_opencv(intrinsics: str | Path, extrinsics: str | Path,
             if k not in src:
                 raise ConfigError(f"{intrinsics}: missing matrix {k!r}")
         try:
-            cams.append(Camera(src[keys[0]], src[keys[1]].ravel(), int(image_size[0]),
-                               int(image_size[1]), "left" if keys[0] == "M1" else "right"))
+            cams.append(Camera(src[keys[0]], src[keys[1]].ravel(), size[0], size[1],
+                               "left" if keys[0] == "M1" else "right"))
         except CalibrationError as exc:
             raise ConfigError(f"{intrinsics}: {keys[0]}/{keys[1]}: {exc}") from None
     for k in ("R", "T"):
