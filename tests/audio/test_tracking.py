@@ -662,3 +662,58 @@ def test_track_positions_refuses_arrays_that_are_not_numbers():
     same = track_positions(t, [fixes[0], [None] * 3, fixes[2]])
     assert ref.accepted.tolist() == same.accepted.tolist() == [True, False, True]
     assert np.array_equal(ref.position, same.position)
+
+
+def test_an_azimuth_beyond_any_turn_count_is_refused():
+    """track_directions took an azimuth of 1e300 deg as -170.5 deg (its float wrap) and the
+    track followed it; gate_distance gave 648 for it, NaN for a NaN azimuth and numpy's builtin
+    error for text. Now azimuths beyond MAX_AZIMUTH_DEG (1e9 deg) are an EstimationError;
+    non-finite angles stay missing frames (NaN, inf: the elevation's rule), and unwrapped
+    azimuths of many turns are tracked as their wrap, as before."""
+    from hearsee.audio.tracking import MAX_AZIMUTH_DEG
+
+    t = np.arange(3) * DT
+    for big in (1e300, -1e10, np.nextafter(MAX_AZIMUTH_DEG, np.inf)):
+        with pytest.raises(EstimationError, match=r"^azimuth must be within \+-1e\+09 deg"):
+            track_directions(t, [10.0, big, 12.0])
+        for cls in (DirectionKalman, DirectionIMM):
+            k = cls()
+            with pytest.raises(EstimationError, match="azimuth must be within"):
+                k.update(0.0, (big, None))
+            k.update(0.0, (10.0, None))
+            with pytest.raises(EstimationError, match="azimuth must be within"):
+                k.update(DT, (11.0, None), candidates=[(big, None)])
+    turns = 360.0 * 1e6  # a million turns: the same directions
+    a = track_directions(t, [10.0, 11.0, 12.0])
+    b = track_directions(t, [10.0 + turns, 11.0 - turns, 12.0 + turns])
+    np.testing.assert_allclose(b.azimuth_deg, a.azimuth_deg, atol=1e-6)
+    for missing in (np.nan, np.inf, -np.inf):
+        tr = track_directions(t, [10.0, missing, 12.0])
+        assert tr.accepted.tolist() == [True, False, True]
+    k = DirectionKalman()
+    k.update(0.0, (10.0, 0.0))
+    for bad, msg in ((1e300, "azimuth must be within"), (np.nan, "needs a finite azimuth"),
+                     ("10", "is \\(azimuth_deg"), (True, "is \\(azimuth_deg")):
+        with pytest.raises(EstimationError, match=msg):
+            k.gate_distance(bad, 0.0)
+    assert k.gate_distance(10.0, np.nan) == k.gate_distance(10.0)
+
+
+def test_motion_fixes_and_covariances_must_be_numbers():
+    """MotionKalman.update read a fix ["1", "2", "3"] as (1, 2, 3) m and a covariance of text
+    ("1" as 1 m^2) or bools as numbers. Now an EstimationError; the same numbers fuse as
+    before."""
+    k = MotionKalman()
+    with pytest.raises(EstimationError, match="a position fix must be"):
+        k.update(0.0, ["1", "2", "3"])
+    with pytest.raises(EstimationError, match="a position fix must be"):
+        k.update(0.0, None, candidates=[([True, 2.0, 3.0], None)])
+    R = np.eye(3) * 0.01
+    for bad in (R.astype(str), np.eye(3, dtype=bool), [["0.01", 0, 0], [0, 0.01, 0], [0, 0, 0.01]]):
+        with pytest.raises(EstimationError, match="covariance must hold real numbers"):
+            k.update(0.0, [1.0, 2.0, 3.0], bad)
+    a, b = MotionKalman(), MotionKalman()
+    for j, p in enumerate(([1.0, 2.0, 3.0], [1.1, 2.0, 3.0])):
+        a.update(j * DT, p, R)
+        b.update(j * DT, np.array(p), R.tolist())
+    np.testing.assert_array_equal(a.x, b.x)

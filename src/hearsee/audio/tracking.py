@@ -53,6 +53,7 @@ __all__ = [
     "DIRECTION_RATE_TAU_S",
     "ELEVATION_ACCEL_RATIO",
     "IMM_MODES_DPS2",
+    "MAX_AZIMUTH_DEG",
     "DirectionIMM",
     "DirectionKalman",
     "DirectionTrack",
@@ -68,9 +69,12 @@ _WRAP_AZ_EL = np.array([True, False])
 
 
 def _covariance(R: ArrayLike, n: int) -> NDArray:
-    """``R`` as an (n, n) measurement covariance, or an EstimationError unless it is finite,
-    symmetric and positive definite (a negative one made the track's covariance negative, a NaN
-    one its state NaN, a zero one the innovation covariance singular)."""
+    """``R`` as an (n, n) measurement covariance, or an EstimationError unless it holds real
+    numbers (text such as "1" was read as 1, True as 1) and is finite, symmetric and positive
+    definite (a negative one made the track's covariance negative, a NaN one its state NaN, a
+    zero one the innovation covariance singular)."""
+    if not real_entries(R):
+        raise EstimationError(f"a measurement covariance must hold real numbers, got {R!r:.80}")
     m = np.asarray(R, dtype=float)
     if m.size != n * n:
         raise EstimationError(f"a measurement covariance must be {n}x{n}, got shape {m.shape}")
@@ -298,12 +302,21 @@ def _cached(cache: dict, dt: float, make: Callable[[], Any]) -> Any:
     return hit
 
 
+#: A measured azimuth is at most this many degrees in magnitude (2.8 million turns: an unwrapped
+#: angle of any real run; a float there still resolves 1.2e-7 deg). Beyond it the wrap to
+#: (-180, 180] says nothing about a direction -- at 1e17 deg neighbouring floats are 16 deg
+#: apart, and track_directions took an azimuth of 1e300 deg as -170.5 deg. Non-finite angles
+#: are no value at all: a missing measurement, as NaN (the elevation's rule too).
+MAX_AZIMUTH_DEG = 1e9
+
+
 def _clean_candidates(measurement: tuple[float, float | None] | None,
                       candidates: Sequence[tuple[float, float | None]] | None
                       ) -> list[tuple[float, float | None]]:
     """The measurement first, then the alternatives; entries without a finite azimuth dropped,
     a non-finite elevation read as unknown (None). A candidate that is no pair of angles is an
-    EstimationError (it was a builtin ValueError / TypeError)."""
+    EstimationError (it was a builtin ValueError / TypeError), and so is a finite azimuth beyond
+    :data:`MAX_AZIMUTH_DEG` or elevation beyond +-90 deg."""
     cands = list(candidates or [])
     if measurement is not None:
         cands = [measurement, *cands]
@@ -317,9 +330,12 @@ def _clean_candidates(measurement: tuple[float, float | None] | None,
                                   f"None), got {c!r}")
     out = [(float(a), None if e is None or not math.isfinite(e) else float(e))
            for a, e in cands if a is not None and math.isfinite(a)]
-    for _, e in out:  # (a track started at 120 deg reported 120; corrections clip to +-90)
+    for a, e in out:  # (a track started at 120 deg reported 120; corrections clip to +-90)
         if e is not None and abs(e) > 90.0 + 1e-6:
             raise EstimationError(f"elevation must be within [-90, 90] deg, got {e:g}")
+        if abs(a) > MAX_AZIMUTH_DEG:
+            raise EstimationError(f"azimuth must be within +-{MAX_AZIMUTH_DEG:g} deg (its wrap "
+                                  f"to (-180, 180] holds no direction beyond), got {a:g}")
     return out
 
 
@@ -444,10 +460,14 @@ class DirectionKalman(_Kalman):
                       delay_s: float = 0.0) -> float:
         """Squared Mahalanobis distance of a candidate measurement from the prediction; an
         EstimationError before the track has started (there is no prediction: the initial
-        state's zeros were used)."""
+        state's zeros were used) and for a candidate :meth:`update` would not take (text was
+        numpy's builtin error, NaN gave a NaN distance, 1e300 deg a distance of its wrap)."""
         if not self.initialized:
             raise EstimationError("no track to measure a gate distance from yet")
-        z, H, Rm, wrap = self._parts(az, el, R, delay_s)
+        cand = _clean_candidates((az, el), None)
+        if not cand:
+            raise EstimationError(f"a gate distance needs a finite azimuth, got {az!r}")
+        z, H, Rm, wrap = self._parts(*cand[0], R, delay_s)
         return self._innovation(z, H, Rm, wrap)[2]
 
     def update(self, t: float, measurement: tuple[float, float | None] | None = None,
@@ -1017,6 +1037,9 @@ class MotionKalman(_Kalman):
         cands += list(candidates or [])
         opts = []
         for pos, Rc in cands:
+            if not real_entries(pos):  # (text such as "1" was read as 1 m, True as 1 m)
+                raise EstimationError(f"a position fix must be [x, y, z] in metres, got "
+                                      f"{pos!r:.80}")
             z = np.asarray(pos, dtype=float)
             if z.size != 3:
                 raise EstimationError(f"a position fix must be [x, y, z] in metres, got shape "
