@@ -418,3 +418,33 @@ def test_array_geometry_checks_positions_given_as_an_array():
             array_geometry(bad)
     geo = array_geometry(np.array(tri))
     assert geo.kind == "planar" and np.array_equal(geo.centre, np.mean(tri, axis=0))
+
+
+def test_locus_grids_are_bounded_and_rel_tol_checked():
+    """cone_points / hyperboloid_points(n_radial=10**9) asked numpy for a grid it could not
+    allocate (a builtin MemoryError) and read text microphone positions as numbers;
+    array_geometry(rel_tol=NaN) called every array a volume (a line of microphones included)
+    and text raised a builtin TypeError. Now GeometryErrors; valid grids and tolerances give
+    the same answers."""
+    line = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.2, 0.0, 0.0]]
+    for bad in (np.nan, np.inf, "1e-6", True, 0.0, -1e-6, 2.0):
+        with pytest.raises(GeometryError, match=r"^rel_tol must be a finite number in \(0, 1\]"):
+            array_geometry(line, rel_tol=bad)
+    assert array_geometry(line, rel_tol=1e-3).kind == "linear"
+    tri = MicArray.from_preset("three-mic")
+    assert array_geometry(tri, rel_tol=1e-3).kind == array_geometry(tri).kind == "planar"
+    from hearsee.audio.localize import MAX_LOCUS_POINTS
+
+    mi, mj = [0.0, 0.0, 0.0], [0.1, 0.0, 0.0]
+    for f in (cone_points, hyperboloid_points):
+        for a, b in ((["0", "0", "0"], mj), (mi, [True, 0.0, 0.0])):
+            with pytest.raises(GeometryError, match="microphone positions must be finite"):
+                f(1e-4, a, b)
+        # (just over the bound first: the old code allocated this one, not the others)
+        for kw in ({"n_radial": MAX_LOCUS_POINTS + 1, "n_around": 1},
+                   {"n_radial": 10**9}, {"n_around": 10**9}):
+            with pytest.raises(GeometryError, match=r"points; a locus plot samples at most 1e\+07"):
+                f(1e-4, mi, mj, **kw)
+        assert f(1e-4, mi, mj, n_radial=MAX_LOCUS_POINTS // 10, n_around=1).shape == (
+            MAX_LOCUS_POINTS // 10, 1, 3)
+        np.testing.assert_array_equal(f(1e-4, np.array(mi), tuple(mj)), f(1e-4, mi, mj))

@@ -44,6 +44,7 @@ from hearsee.errors import ConfigError, GeometryError
 from hearsee.geometry import wrap_deg
 
 __all__ = [
+    "MAX_LOCUS_POINTS",
     "Localization",
     "array_geometry",
     "cone_points",
@@ -124,9 +125,13 @@ def array_geometry(array: MicArray | NDArray, rel_tol: float = 1e-6) -> ArrayGeo
 
     Positions given as an array are checked as a :class:`MicArray`'s (an N x 3 table of finite
     numbers, at least two distinct microphones): a NaN position raised numpy's LinAlgError
-    ("SVD did not converge"), an infinite one a RuntimeWarning and a made-up answer."""
+    ("SVD did not converge"), an infinite one a RuntimeWarning and a made-up answer.
+    ``rel_tol`` (the singular-value ratio below which a direction counts as flat) must be a
+    finite number in (0, 1]: NaN (and 0) classified every array as "volume", text raised a
+    builtin TypeError."""
     if isinstance(array, MicArray) and rel_tol == 1e-6:
         return _geometry_cached(array)
+    finite_number("rel_tol", rel_tol, 0.0, 1.0, lo_open=True, error=GeometryError)
     pos = (array if isinstance(array, MicArray) else MicArray(array)).positions
     return _classify(pos, rel_tol)
 
@@ -666,17 +671,29 @@ def _frame_from_axis(axis: NDArray) -> NDArray:
     return np.stack([e1, np.cross(a, e1), a])
 
 
+#: The most points a locus plot (:func:`cone_points`, :func:`hyperboloid_points`) samples,
+#: ``n_radial * n_around``: 10 million (a 240 MB grid, ~0.8 GB and 3 s while it is made; a
+#: surface plot shows far fewer). ``n_radial=10**9`` asked numpy for a grid it could not
+#: allocate (a builtin MemoryError).
+MAX_LOCUS_POINTS = 10**7
+
+
 def _locus_input(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float,
                  extent_m: float, n_radial: int, n_around: int
                  ) -> tuple[NDArray, NDArray, float]:
     """The pair (two finite points, metres, apart) and ``c * tdoa`` (metres) of a locus plot,
     or a GeometryError (NaN inputs, coincident microphones or a non-positive speed or extent
     gave all-NaN or degenerate grids; a negative grid size numpy's builtin ValueError, 0 an
-    empty grid, 2.5 a TypeError)."""
-    whole_number("n_radial", n_radial, 1, error=GeometryError)
-    whole_number("n_around", n_around, 1, error=GeometryError)
-    mi = np.asarray(m_i, dtype=float).reshape(-1)
-    mj = np.asarray(m_j, dtype=float).reshape(-1)
+    empty grid, 2.5 a TypeError, a grid beyond :data:`MAX_LOCUS_POINTS` a MemoryError; text
+    positions were read as numbers)."""
+    nr = whole_number("n_radial", n_radial, 1, error=GeometryError)
+    na = whole_number("n_around", n_around, 1, error=GeometryError)
+    if nr * na > MAX_LOCUS_POINTS:
+        raise GeometryError(f"n_radial x n_around = {nr} x {na} = {nr * na} points; a locus "
+                            f"plot samples at most {MAX_LOCUS_POINTS:.0e}")
+    ok = real_entries(m_i) and real_entries(m_j)
+    mi = np.asarray(m_i, dtype=float).reshape(-1) if ok else np.zeros(0)
+    mj = np.asarray(m_j, dtype=float).reshape(-1) if ok else np.zeros(0)
     if mi.shape != (3,) or mj.shape != (3,) or not (np.all(np.isfinite(mi))
                                                    and np.all(np.isfinite(mj))):
         raise GeometryError(f"microphone positions must be finite [x, y, z] points, got {m_i!r}, "
