@@ -480,3 +480,65 @@ def test_a_ragged_trajectory_row_is_named(tmp_path, capsys, text, message):
     assert main(["simulate", str(tmp_path / "o.wav"), "--array", "two-mic", "--trajectory",
                  str(bad), "--duration", "0.1"]) == 2
     assert capsys.readouterr().err == f"hearsee: error: {bad}: {message}\n"
+
+
+def test_trajectory_numbers_must_be_numbers_and_steps_bounded(tmp_path):
+    """Trajectory read times ("0", "1") as 0 and 1 s and positions of text or bools as metres
+    (and so did linear_trajectory, waypoint_trajectory, at, velocity, heard_at and
+    retarded_delays); text speeds and durations raised builtin TypeErrors. Times from -1e308 to
+    1e308 s made np.diff overflow to an inf step: velocity() read the 2e308 m move over it as
+    0 m/s. Now GeometryErrors (ConfigError naming the file in load_trajectory); knots at most
+    MAX_TIME_LIMIT_S (1e9 s) apart, the trackers' rule; Unix-epoch times stay valid."""
+    p2 = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]
+    for t, p in ((["0", "1"], p2), ([0.0, True], p2), ([0.0, 1.0], [["0", 0, 0], [1, 0, 0]]),
+                 ([0.0, 1.0], [[False, 0.0, 0.0], [1.0, 0.0, 0.0]])):
+        with pytest.raises(GeometryError, match="^trajectory (times|positions) must be real"):
+            Trajectory(t, p)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # (np.diff's overflow RuntimeWarning)
+        for t in ([-1e308, 1e308], [0.0, 1e300], [0.0, 1.0, 1.0 + 2e9]):
+            with pytest.raises(GeometryError, match=r"^trajectory times jump .* at most 1e\+09 s"):
+                Trajectory(t, [[0.0, 0.0, 0.0]] * len(t))
+    path = tmp_path / "far.csv"
+    path.write_text("t,x,y,z\n-1e308,0,0,0\n1e308,1,0,0\n")
+    with pytest.raises(ConfigError, match=r"far.csv: trajectory times jump"):
+        load_trajectory(path)
+    epoch = Trajectory([1.7e9, 1.7e9 + 1e9], p2)  # exactly the bound: kept
+    np.testing.assert_allclose(epoch.velocity(1.7e9 + 5e8), [1e-9, 0.0, 0.0])
+    traj = Trajectory([0.0, 1.0], p2)
+    for f in (traj.at, traj.velocity, traj.acceleration, traj.heard_at):
+        with pytest.raises(GeometryError, match="^times must be real numbers of seconds"):
+            f(["0.5"])
+    with pytest.raises(GeometryError, match="point must be 3 finite numbers"):
+        traj.heard_at(0.5, ("0", "0", "0"))
+    with pytest.raises(GeometryError, match="speed_of_sound must be > 0"):
+        traj.heard_at(0.5, (0.0, 0.0, 0.0), "343")
+    mics = [[0.0, 0.0, 1.0]]
+    with pytest.raises(GeometryError, match="^microphone positions must be real numbers"):
+        retarded_delays(traj, [["0", "0", "1"]], [0.5], 343.0)
+    with pytest.raises(GeometryError, match="^times must be real numbers"):
+        retarded_delays(traj, mics, ["0.5"], 343.0)
+    with pytest.raises(GeometryError, match=r"^c \(m/s\) must be a finite number > 0"):
+        retarded_delays(traj, mics, [0.5], "343")
+    for args, msg in ((([1, 0, 0], [0, 1, 0], "1"), "duration must be > 0 s"),
+                      (([1, 0, 0], [0, 1, 0], True), "duration must be > 0 s"),
+                      ((["1", 0, 0], [0, 1, 0], 1.0), "start must be a finite"),
+                      (([1, 0, 0], [0, "1", 0], 1.0), "velocity must be real numbers"),
+                      (([1, 0, 0], [0, 1, 0], 1.0, 2.7), "n_points must be an integer"),
+                      (([1, 0, 0], [0, 1, 0], 1.0, "3"), "n_points must be an integer")):
+        with pytest.raises(GeometryError, match=msg):
+            linear_trajectory(*args)
+    w = [[1, 0, 0], [1, 1, 0]]
+    for args, msg in (((w, "0.5"), "speed must be > 0"), ((w, True), "speed must be > 0"),
+                      (([["1", 0, 0], [1, 1, 0]], 0.5), "waypoints must be real numbers"),
+                      ((w, 0.5, "1"), r"t0 \(s\) must be a finite number")):
+        with pytest.raises(GeometryError, match=msg):
+            waypoint_trajectory(*args)
+    # the same values as numbers: unchanged
+    a = linear_trajectory([1, 0, 0], [0, 1, 0], 1.0, 5)
+    np.testing.assert_array_equal(a.t, np.linspace(0.0, 1.0, 5))
+    np.testing.assert_array_equal(a.positions[-1], [1.0, 1.0, 0.0])
+    assert linear_trajectory([1, 0, 0], [0, 1, 0], 1.0, 1).t.size == 2
+    b = waypoint_trajectory(w, 0.5, np.float32(2.0))
+    np.testing.assert_array_equal(b.t, [2.0, 4.0])
+    np.testing.assert_array_equal(traj.at([0.5, 2]), traj.at(np.array([0.5, 2.0])))

@@ -43,8 +43,16 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.propagation import add_noise, check_heard, speed_of_sound_of
 from hearsee.audio.signals import check_fs
-from hearsee.config import finite_number, input_file, whole_number
+from hearsee.config import (
+    MAX_TIME_LIMIT_S,
+    finite_number,
+    input_file,
+    is_real,
+    real_entries,
+    whole_number,
+)
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, InputFileError
+from hearsee.geometry import as_point
 
 __all__ = [
     "MAX_SPEED_FRACTION",
@@ -76,10 +84,14 @@ class Trajectory:
     Parameters
     ----------
     t : array (n,)
-        Strictly increasing times in seconds (n >= 1).
+        Strictly increasing times in seconds (n >= 1), consecutive ones at most
+        :data:`hearsee.config.MAX_TIME_LIMIT_S` (1e9 s, 31.7 years) apart -- the trackers' rule
+        for their frames: the step from -1e308 to 1e308 s overflowed to inf, and every speed
+        over it read as 0 m/s.
     positions : array (n, 3)
         Positions in metres (array frame unless said otherwise).
 
+    Both must hold real numbers (text such as "1" was read as 1 s / 1 m, True as 1).
     Outside ``[t[0], t[-1]]`` the source stands still at the first / last position.
     """
 
@@ -87,6 +99,10 @@ class Trajectory:
     positions: NDArray
 
     def __post_init__(self) -> None:
+        for what, v in (("times", self.t), ("positions", self.positions)):
+            if not real_entries(v):
+                raise GeometryError(f"trajectory {what} must be real numbers (seconds, metres), "
+                                    f"got {v!r:.80}")
         t = np.atleast_1d(np.asarray(self.t, dtype=float))
         p = np.atleast_2d(np.asarray(self.positions, dtype=float))
         if t.ndim != 1 or p.ndim != 2 or p.shape != (t.size, 3):
@@ -98,8 +114,15 @@ class Trajectory:
             raise GeometryError("trajectory needs at least one point")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p))):
             raise GeometryError("trajectory times and positions must be finite")
-        if np.any(np.diff(t) <= 0):
+        with np.errstate(over="ignore"):  # (-1e308 -> 1e308: an inf step, refused below)
+            steps = np.diff(t)
+        if np.any(steps <= 0):
             raise GeometryError("trajectory times must be strictly increasing")
+        if np.any(steps > MAX_TIME_LIMIT_S):
+            k = int(np.argmax(steps))
+            raise GeometryError(f"trajectory times jump {steps[k]:.3g} s (t = {t[k]:g} s -> "
+                                f"{t[k + 1]:g} s); its points are at most "
+                                f"{MAX_TIME_LIMIT_S:g} s apart")
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "positions", p)
 
@@ -110,7 +133,7 @@ class Trajectory:
 
     def at(self, times: ArrayLike) -> NDArray:
         """Positions ``(..., 3)`` at ``times`` (seconds), linear interpolation, clamped ends."""
-        tq = np.asarray(times, dtype=float)
+        tq = _times(times)
         if self.t.size == 1:
             return np.broadcast_to(self.positions[0], tq.shape + (3,)).copy()
         flat = tq.ravel()
@@ -128,18 +151,18 @@ class Trajectory:
         at 1-4 m, up to ``|v_tangential| / c`` rad of azimuth, ~0.25 deg at walking speed);
         a camera's image at ``t`` shows :meth:`at` ``(t)``.
         """
-        tq = np.asarray(times, dtype=float)
-        m = np.asarray(point, dtype=float).reshape(-1)
+        tq = _times(times)
+        m = np.asarray(point, dtype=float).reshape(-1) if real_entries(point) else np.zeros(0)
         if m.shape != (3,) or not np.all(np.isfinite(m)):
             raise GeometryError(f"point must be 3 finite numbers (metres), got {point!r}")
-        if not np.isfinite(speed_of_sound) or not speed_of_sound > 0:
+        if not (is_real(speed_of_sound) and speed_of_sound > 0):  # (text: a builtin TypeError)
             raise GeometryError(f"speed_of_sound must be > 0 m/s, got {speed_of_sound!r}")
         tau, _ = retarded_delays(self, m[None, :], tq.ravel(), float(speed_of_sound))
         return self.at(tq.ravel() - tau[0]).reshape(tq.shape + (3,))
 
     def velocity(self, times: ArrayLike) -> NDArray:
         """Velocities ``(..., 3)`` in m/s at ``times`` (piecewise constant; zero outside)."""
-        tq = np.asarray(times, dtype=float)
+        tq = _times(times)
         if self.t.size == 1:
             return np.zeros(tq.shape + (3,))
         v_seg = np.diff(self.positions, axis=0) / np.diff(self.t)[:, None]
@@ -151,29 +174,46 @@ class Trajectory:
 
     def acceleration(self, times: ArrayLike) -> NDArray:
         """Accelerations ``(..., 3)`` in m/s^2 by central differences of :meth:`velocity` (5 ms)."""
-        tq = np.asarray(times, dtype=float)
+        tq = _times(times)
         h = 5e-3
         return (self.velocity(tq + h) - self.velocity(tq - h)) / (2 * h)
 
 
+def _times(times: ArrayLike) -> NDArray:
+    """Query times (seconds) as a float array, else a GeometryError: numbers only
+    (:func:`hearsee.config.real_entries`; numpy read "0.5" as 0.5 s and True as 1 s)."""
+    if not real_entries(times):
+        raise GeometryError(f"times must be real numbers of seconds, got {times!r:.80}")
+    return np.asarray(times, dtype=float)
+
+
 def linear_trajectory(start: ArrayLike, velocity: ArrayLike, duration_s: float,
                       n_points: int = 2) -> Trajectory:
-    """A straight path from ``start`` (m) at constant ``velocity`` (m/s) for ``duration_s``."""
-    if not duration_s > 0:
-        raise GeometryError(f"duration must be > 0 s, got {duration_s}")
-    t = np.linspace(0.0, float(duration_s), max(int(n_points), 2))
-    p0 = np.asarray(start, dtype=float)
+    """A straight path from ``start`` (m) at constant ``velocity`` (m/s) for ``duration_s``
+    (``n_points`` >= 1 knots, at least 2 used). Text, bools and a fractional ``n_points`` are
+    a GeometryError (numpy read "1" as 1 m, int() truncated 2.7 and read "3" as 3)."""
+    if not (is_real(duration_s) and duration_s > 0):
+        raise GeometryError(f"duration must be > 0 s, got {duration_s!r}")
+    n = whole_number("n_points", n_points, 1, error=GeometryError)
+    p0 = as_point(start, "start")
+    if not real_entries(velocity):
+        raise GeometryError(f"velocity must be real numbers (m/s), got {velocity!r:.80}")
     v = np.asarray(velocity, dtype=float)
+    t = np.linspace(0.0, float(duration_s), max(n, 2))
     return Trajectory(t, p0[None, :] + t[:, None] * v[None, :])
 
 
 def waypoint_trajectory(waypoints: ArrayLike, speed_mps: float, t0: float = 0.0) -> Trajectory:
-    """A polyline through ``waypoints`` (k, 3) walked at constant ``speed_mps``."""
+    """A polyline through ``waypoints`` (k, 3) walked at constant ``speed_mps`` from ``t0``
+    (seconds). Text or bools are a GeometryError (numpy read "1" as 1 m, True as 1 m/s)."""
+    if not real_entries(waypoints):
+        raise GeometryError(f"waypoints must be real numbers (metres), got {waypoints!r:.80}")
     w = np.asarray(waypoints, dtype=float)
     if w.ndim != 2 or w.shape[1] != 3 or len(w) < 2:
         raise GeometryError(f"waypoints must be k x 3 with k >= 2, got shape {w.shape}")
-    if not speed_mps > 0:
-        raise GeometryError(f"speed must be > 0 m/s, got {speed_mps}")
+    if not (is_real(speed_mps) and speed_mps > 0):
+        raise GeometryError(f"speed must be > 0 m/s, got {speed_mps!r}")
+    finite_number("t0 (s)", t0, error=GeometryError)
     seg = np.linalg.norm(np.diff(w, axis=0), axis=1)
     if np.any(seg <= 0):
         raise GeometryError("consecutive waypoints must differ")
@@ -331,8 +371,15 @@ def retarded_delays(traj: Trajectory, mics: ArrayLike, t: ArrayLike, c: float,
     Solves ``tau = |p(t - tau) - m| / c`` by fixed-point iteration (a contraction with factor
     ``|v| / c``). Returns ``(tau (n_mics, n) seconds, r (n_mics, n) metres at emission)``.
     Raises :class:`GeometryError` when a segment of the trajectory is faster than
-    ``MAX_SPEED_FRACTION`` of ``c`` (the iteration's error shrinks by ``|v| / c`` per step).
+    ``MAX_SPEED_FRACTION`` of ``c`` (the iteration's error shrinks by ``|v| / c`` per step),
+    and for microphones, times or a speed of sound that are no numbers (text was read as
+    numbers, a text ``c`` raised a builtin TypeError).
     """
+    if not real_entries(mics):
+        raise GeometryError(f"microphone positions must be real numbers (metres), got "
+                            f"{mics!r:.80}")
+    finite_number("c (m/s)", c, 0.0, lo_open=True, error=GeometryError)
+    tq = _times(t)
     if traj.t.size > 1:
         with np.errstate(over="ignore"):  # (a 1e300 m jump: inf m/s, refused just below)
             v = np.linalg.norm(np.diff(traj.positions, axis=0), axis=1) / np.diff(traj.t)
@@ -345,7 +392,6 @@ def retarded_delays(traj: Trajectory, mics: ArrayLike, t: ArrayLike, c: float,
                 f"{MAX_SPEED_FRACTION:g} times the speed of sound ({MAX_SPEED_FRACTION * c:.1f} "
                 "m/s)")
     m = np.asarray(mics, dtype=float)
-    tq = np.asarray(t, dtype=float)
     tau = np.linalg.norm(traj.at(tq)[None, :, :] - m[:, None, :], axis=-1) / c
     for _ in range(n_iter):
         r = np.linalg.norm(traj.at(tq[None, :] - tau) - m[:, None, :], axis=-1)
