@@ -442,3 +442,62 @@ def test_tdoa_tracker_pairs_are_checked_when_it_is_made(side_rig):
         with pytest.raises(GeometryError, match="pair"):
             RayTdoaTracker(side_rig, pairs=pairs)
     assert RayTdoaTracker(side_rig, pairs=[(0.0, 1.0)]).pairs == [(0, 1)]
+
+
+def test_settings_and_geometry_of_the_fusion_must_be_numbers(rig):
+    """Bad-input sweep of the public fusion API: numpy and float() read text as the numbers it
+    spells and True as 1 -- a rig mounting R / t of text, to_optical's and ray_residuals'
+    points, locate_on_ray's range_m ('0.1', '10') and (True, 10), RayTracker(sigma_accel=True),
+    targets of text for the regressor; infinite sigma_accel / sigma_px were taken (the state or
+    the pixel update NaN or void), text settings raised builtin TypeErrors, NaN
+    max_residual_samples kept every fix and a NaN margin_px raised numpy's OverflowError. The
+    same values as numbers give the same results."""
+    p = np.array([1.4, 0.2, 0.1])
+    uv, z = rig.project(p)[0], rig.array.tdoa(p)
+    with pytest.raises(GeometryError, match="rig mounting R"):
+        AudioVisualRig(rig.array, rig.camera, rig.R.astype(str), rig.t)
+    with pytest.raises(GeometryError, match="rig mounting t"):
+        AudioVisualRig(rig.array, rig.camera, rig.R, [str(v) for v in rig.t])
+    for bad in ([["1.4", "0.2", "0.1"]], [1.4, True, 0.1]):
+        with pytest.raises(GeometryError, match="not numbers"):
+            rig.to_optical(bad)
+        with pytest.raises(GeometryError, match="not numbers"):
+            rig.project(bad)
+    o, d = rig.rays(uv[None, :])
+    args = dict(array=rig.array, origin=o, direction=d[0], s=[1.0], tdoa_s=z)
+    for name in ("origin", "direction", "s", "tdoa_s"):
+        bad = dict(args, **{name: np.asarray(args[name]).astype(str)})
+        with pytest.raises(GeometryError, match=f"^ray_residuals: {name} must hold numbers"):
+            ray_residuals(**bad)
+    for rng in (("0.1", "10"), (True, 10.0), (0.1, "10"), (0.1,), None):
+        with pytest.raises(EstimationError, match="range_m must satisfy"):
+            locate_on_ray(rig, uv, z, range_m=rng)
+    for kw in ({"sigma_accel": np.inf}, {"sigma_accel": True}, {"sigma_accel": "0.2"},
+               {"gate_prob": "0.99"}, {"max_rejects": "4"}, {"init_vel_sigma": np.inf}):
+        with pytest.raises(EstimationError, match=next(iter(kw))):
+            RayTracker(**kw)
+        with pytest.raises(EstimationError, match=next(iter(kw))):
+            RayTdoaTracker(rig, **kw)
+    for kw in ({"sigma_px": np.inf}, {"sigma_tdoa_s": True}, {"sigma_px": "1"},
+               {"pair_gate_prob": "0.99"}, {"pixel_gate_prob": np.nan}):
+        with pytest.raises(EstimationError, match=next(iter(kw))):
+            RayTdoaTracker(rig, **kw)
+    trk = RayTracker()
+    with pytest.raises(EstimationError, match="covariance must hold real numbers"):
+        trk.update(0.0, p, np.eye(3).astype(str))
+    x = np.zeros((3, 1600))
+    for bad in (np.nan, "0.5"):
+        with pytest.raises(EstimationError, match="max_residual_samples must be a finite"):
+            track_on_rays(rig, x, 16000, lambda t: None, max_residual_samples=bad)
+    for bad in (np.nan, "10"):
+        with pytest.raises(EstimationError, match="margin_px must be a finite"):
+            simulate_av_samples(rig, 5, margin_px=bad, rng=0)
+    X, Y = simulate_av_samples(rig, 40, rng=np.random.default_rng(0))
+    with pytest.raises(EstimationError, match="targets must be numbers"):
+        AudioVisualRegressor(hidden_layer_sizes=(4,), max_iter=5).fit(X, Y.astype(str))
+    # numbers: the same answers
+    fix = locate_on_ray(rig, uv, z, range_m=[0.1, 10])
+    np.testing.assert_array_equal(fix.position_m, locate_on_ray(rig, uv, z).position_m)
+    np.testing.assert_array_equal(rig.to_optical(p), rig.to_optical(p.tolist()))
+    np.testing.assert_array_equal(ray_residuals(**args), ray_residuals(**dict(args, s=1.0)))
+    assert trk.update(0.0, p, np.eye(3) * 1e-4)

@@ -70,8 +70,9 @@ from sklearn.base import BaseEstimator, RegressorMixin
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.tracking import MotionKalman
-from hearsee.config import finite_number, real_entries, whole_number
+from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import EstimationError, GeometryError
+from hearsee.geometry import as_points
 from hearsee.vision.camera import Camera, camera_pose
 
 #: TDOA noise (s) that :func:`locate_on_ray` assumes by default for a fix's covariance, and
@@ -128,8 +129,9 @@ class AudioVisualRig:
     t: NDArray
 
     def __post_init__(self) -> None:
-        R = np.asarray(self.R, dtype=float)
-        t = np.asarray(self.t, dtype=float).reshape(-1)
+        # (numpy read text as the numbers it spells and True as 1)
+        R = np.asarray(self.R, dtype=float) if real_entries(self.R) else np.zeros(0)
+        t = np.asarray(self.t, dtype=float).reshape(-1) if real_entries(self.t) else np.zeros(0)
         if (R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-6)
                 or not np.linalg.det(R) > 0):  # (a reflection, det -1, mirrors every ray)
             raise GeometryError("rig mounting R must be a 3x3 rotation matrix")
@@ -152,8 +154,9 @@ class AudioVisualRig:
         return -self.R.T @ self.t
 
     def to_optical(self, points: ArrayLike) -> NDArray:
-        """Array-frame points ``(N, 3)`` -> camera optical frame."""
-        return np.atleast_2d(np.asarray(points, dtype=float)) @ self.R.T + self.t
+        """Array-frame points ``(N, 3)`` -> camera optical frame (GeometryError for anything
+        but numbers ``(..., 3)``: :func:`hearsee.geometry.as_points`)."""
+        return np.atleast_2d(as_points(points)) @ self.R.T + self.t
 
     def project(self, points: ArrayLike) -> NDArray:
         """Pixels ``(N, 2)`` of array-frame points ``(N, 3)`` (NaN behind the camera)."""
@@ -200,8 +203,20 @@ def ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: A
     """ITD residuals ``F_k(s)`` (seconds) of the points ``origin + s * direction``.
 
     ``s`` (n,) ranges in metres; returns ``(n, n_pairs)``. ``sum(F**2, axis=1)`` is the cost
-    J(s) plotted in the thesis's figs. 5.14-5.16.
+    J(s) plotted in the thesis's figs. 5.14-5.16. Arguments that are no numbers are a
+    GeometryError (numpy read text as the numbers it spells, True as 1).
     """
+    for name, v in (("origin", origin), ("direction", direction), ("s", s),
+                    ("tdoa_s", tdoa_s)):
+        if not real_entries(v):
+            raise GeometryError(f"ray_residuals: {name} must hold numbers, got {v!r:.80}")
+    return _ray_residuals(array, origin, direction, s, tdoa_s, pairs)
+
+
+def _ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: ArrayLike,
+                   tdoa_s: ArrayLike, pairs: Sequence[tuple[int, int]] | None) -> NDArray:
+    """:func:`ray_residuals` of checked arguments (the fix's search and refinement call it per
+    grid point)."""
     o = np.asarray(origin, dtype=float)
     d = np.asarray(direction, dtype=float)
     ss_ = np.atleast_1d(np.asarray(s, dtype=float))
@@ -261,9 +276,14 @@ def locate_on_ray(
     p = np.asarray(uv, dtype=float).reshape(-1) if real_entries(uv) else None
     if p is None or p.shape != (2,) or not np.all(np.isfinite(p)):
         raise EstimationError(f"image point must be two finite pixel coordinates, got {uv!r}")
-    near, far = float(range_m[0]), float(range_m[1])
-    if not (0 < near < far and np.isfinite(far)):
-        raise EstimationError(f"range_m must satisfy 0 < near < far (finite), got {range_m}")
+    try:
+        near, far = range_m[0], range_m[1]
+    except (TypeError, IndexError, KeyError):
+        near = far = None
+    # (float() read ("0.1", "10") as numbers and True as 1 m)
+    if not (is_real(near) and is_real(far) and 0 < near < far):
+        raise EstimationError(f"range_m must satisfy 0 < near < far (finite), got {range_m!r}")
+    near, far = float(near), float(far)
     n_grid = whole_number("n_grid", n_grid, 2, error=EstimationError)
     max_candidates = whole_number("max_candidates", max_candidates, 1, error=EstimationError)
     sigma_tdoa_s = finite_number("sigma_tdoa_s", sigma_tdoa_s, 0.0, error=EstimationError)
@@ -271,7 +291,7 @@ def locate_on_ray(
     o, d = rig.rays(p[None, :])
     d = d[0]
     grid = np.geomspace(near, far, n_grid)
-    J = np.sum(ray_residuals(rig.array, o, d, grid, z, prs) ** 2, axis=1)
+    J = np.sum(_ray_residuals(rig.array, o, d, grid, z, prs) ** 2, axis=1)
     # every local minimum of the grid is a candidate (e.g. the mirror image of the source in
     # the plane of a planar array when the ray crosses that plane); best first
     interior = np.r_[J[0] <= J[1], (J[1:-1] <= J[:-2]) & (J[1:-1] <= J[2:]), J[-1] <= J[-2]]
@@ -293,17 +313,17 @@ def _refine_on_ray(rig: AudioVisualRig, o: NDArray, d: NDArray, z: NDArray,
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
 
     def cost(s: float) -> float:
-        return float(np.sum(ray_residuals(rig.array, o, d, [s], z, prs) ** 2))
+        return float(np.sum(_ray_residuals(rig.array, o, d, [s], z, prs) ** 2))
 
     s_hat = float(grid[k])
     if hi > lo:
         res = minimize_scalar(cost, bounds=(lo, hi), method="bounded", options={"xatol": 1e-6})
         if res.fun <= J[k]:
             s_hat = float(res.x)
-    F = ray_residuals(rig.array, o, d, [s_hat], z, prs)[0]
+    F = _ray_residuals(rig.array, o, d, [s_hat], z, prs)[0]
     h = 1e-4 * max(s_hat, 1e-2)
-    dF = (ray_residuals(rig.array, o, d, [s_hat + h], z, prs)[0]
-          - ray_residuals(rig.array, o, d, [s_hat - h], z, prs)[0]) / (2 * h)
+    dF = (_ray_residuals(rig.array, o, d, [s_hat + h], z, prs)[0]
+          - _ray_residuals(rig.array, o, d, [s_hat - h], z, prs)[0]) / (2 * h)
     var_s = sigma_tdoa_s**2 / max(float(dF @ dF), 1e-30)
     var_s = min(var_s, (grid[-1] - grid[0]) ** 2)
     var_lat = (s_hat * sigma_px / rig.camera.fx) ** 2
@@ -352,10 +372,11 @@ class RayTracker(MotionKalman):
 
     def __init__(self, sigma_accel: float = 0.2, gate_prob: float = 0.99, max_rejects: int = 4,
                  init_vel_sigma: float = 1.0) -> None:
-        if not sigma_accel > 0 or not init_vel_sigma > 0:
-            raise EstimationError("sigma_accel and init_vel_sigma must be > 0")
-        if not 0 < gate_prob < 1 or int(max_rejects) < 1:
-            raise EstimationError("gate_prob must be in (0, 1) and max_rejects >= 1")
+        # (an infinite sigma_accel made the state NaN, True was 1 m/s^2, text and
+        # max_rejects='a' builtin errors; init_vel_sigma and max_rejects: MotionKalman's rules)
+        finite_number("sigma_accel", sigma_accel, 0.0, lo_open=True, error=EstimationError)
+        if not (is_real(gate_prob) and 0 < gate_prob < 1):
+            raise EstimationError(f"gate_prob must be in (0, 1), got {gate_prob!r}")
         self.sigma_accel = float(sigma_accel)
         super().__init__(sigma_meas_m=0.05, gate_prob=gate_prob, max_rejects=max_rejects,
                          init_vel_sigma=init_vel_sigma)
@@ -384,7 +405,10 @@ class RayTracker(MotionKalman):
         with covariance ``R`` (3x3, m^2; default 5 cm per axis); ``candidates`` are ambiguous
         alternatives (see :meth:`MotionKalman.update`). Returns True when a fix was fused."""
         cands = ([] if position is None else [(position, R)]) + list(candidates or [])
-        finite = [(p, Rc) for p, Rc in cands if Rc is None or np.all(np.isfinite(Rc))]
+        # (a covariance that is no numbers: MotionKalman's EstimationError, not np.isfinite's
+        # builtin TypeError)
+        finite = [(p, Rc) for p, Rc in cands
+                  if Rc is None or not real_entries(Rc) or np.all(np.isfinite(Rc))]
         return super().update(t, None, None, finite)
 
     @property
@@ -463,10 +487,12 @@ class RayTdoaTracker(RayTracker):
                  init_vel_sigma: float = 1.0) -> None:
         super().__init__(sigma_accel=sigma_accel, gate_prob=gate_prob, max_rejects=max_rejects,
                          init_vel_sigma=init_vel_sigma)
-        if not sigma_tdoa_s > 0 or not sigma_px > 0:
-            raise EstimationError("sigma_tdoa_s and sigma_px must be > 0")
-        if not (0 < pair_gate_prob < 1 and 0 < pixel_gate_prob < 1):
-            raise EstimationError("pair_gate_prob and pixel_gate_prob must be in (0, 1)")
+        # (inf was taken and True was 1; text raised builtin TypeErrors)
+        finite_number("sigma_tdoa_s", sigma_tdoa_s, 0.0, lo_open=True, error=EstimationError)
+        finite_number("sigma_px", sigma_px, 0.0, lo_open=True, error=EstimationError)
+        if not all(is_real(g) and 0 < g < 1 for g in (pair_gate_prob, pixel_gate_prob)):
+            raise EstimationError(f"pair_gate_prob and pixel_gate_prob must be in (0, 1), got "
+                                  f"{pair_gate_prob!r} and {pixel_gate_prob!r}")
         from scipy.stats import chi2
 
         self.rig = rig
@@ -631,6 +657,8 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
     """
     from hearsee.audio.tdoa import estimate_tdoas
 
+    # (NaN kept every fix -- residual > NaN is False -- and text raised a builtin TypeError)
+    finite_number("max_residual_samples", max_residual_samples, 0.0, error=EstimationError)
     prs = list(rig.array.pairs)
     tf = estimate_tdoas(x, fs, rig.array, frame_ms, hop_ms, "phat", prs, refine="interp",
                         min_confidence=min_confidence)
@@ -686,6 +714,8 @@ def simulate_av_samples(rig: AudioVisualRig, n: int, range_m: tuple[float, float
                               f"{range_m}")
     sigma_tdoa_s = finite_number("sigma_tdoa_s", sigma_tdoa_s, 0.0, error=EstimationError)
     sigma_px = finite_number("sigma_px", sigma_px, 0.0, error=EstimationError)
+    # (NaN: numpy's builtin OverflowError; text a TypeError)
+    finite_number("margin_px", margin_px, error=EstimationError)
     rng = np.random.default_rng(rng)
     cam = rig.camera
     uv = np.column_stack([rng.uniform(margin_px, cam.width - 1 - margin_px, n),
@@ -750,6 +780,8 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
         from sklearn.preprocessing import StandardScaler
 
         A = self._features(X)
+        if not real_entries(y):  # (text read as metres, True as 1 m)
+            raise EstimationError("targets must be numbers (n_samples, 3) positions in metres")
         Y = np.asarray(y, dtype=float)
         if Y.shape != (A.shape[0], 3):
             raise EstimationError(f"targets must be (n_samples, 3) positions, got {Y.shape}")
