@@ -215,3 +215,17 @@ def test_detect_humans_needs_a_rig():
     img = np.zeros((120, 160), np.uint8)
     with pytest.raises(CalibrationError, match="StereoRig"):
         detect_humans(img, img, None)
+
+
+def test_thermal_support_points_must_be_numbers():
+    """thermal_support read silhouette points and heights of text as metres (a support from
+    text). Now a GeometryError; the same numbers give the same support."""
+    warm = np.zeros(RIG.thermal.shape, bool)
+    warm[:, : RIG.thermal.width // 2] = True
+    pts = np.array([[-0.8, y, 3.0] for y in np.linspace(-0.3, 0.9, 40)])
+    h = np.linspace(1.7, 0.5, 40)
+    for P, hh in ((pts.astype(str), h), (pts, h.astype(str)), (pts.tolist(), [True] * 40)):
+        with pytest.raises(GeometryError, match="points and heights must be numbers"):
+            thermal_support(P, hh, RIG, warm)
+    assert thermal_support(pts.tolist(), h.tolist(), RIG, warm) == \
+        thermal_support(pts, h, RIG, warm) == pytest.approx(1.0)

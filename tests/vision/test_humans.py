@@ -620,3 +620,49 @@ def test_dedupe_keeps_the_more_complete_silhouette():
                            "[1.2, 2.2])")
     # a rejected taller silhouette never replaces an accepted one
     assert not tall.accepted
+
+
+def test_detector_maps_and_peak_settings_must_be_numbers():
+    """numpy read a disparity, a count map or Psi-hat of text as numbers (u_disparity,
+    scale_adaptive_filter, find_peaks, detect_candidates; a text mask as all True) and a floor
+    normal of text was kept as given (every height then a builtin error); find_peaks found no
+    peak for a NaN threshold without a word, and a NaN width or a count of 2.5 raised builtin
+    errors. Now ImageInputError for the maps, GeometryError for the normal, ConfigError for the
+    settings; numbers give the same answers."""
+    d = np.full((4, 3), np.nan)
+    d[:, 1] = 2.0
+    with pytest.raises(ImageInputError, match="^disparity must hold numbers"):
+        u_disparity(d.astype(str))
+    with pytest.raises(ImageInputError, match="^mask must be bool"):
+        u_disparity(d, mask=np.full(d.shape, "0"))
+    np.testing.assert_array_equal(u_disparity(d.tolist()), u_disparity(d))
+    P = np.zeros((10, 50))
+    P[5, 18:23] = 40.0
+    for kw in ({"P": P.astype(str)}, {"above": P.astype(str)},
+               {"expected_rows": np.full(10, "5")}, {"P": [[1.0, 2.0], [3.0]]}):
+        args = {"P": P, **kw}
+        with pytest.raises(ImageInputError, match=f"^{next(iter(kw))} must hold numbers"):
+            scale_adaptive_filter(args.pop("P"), 500.0, 0.1, **args)
+    psi = np.zeros((10, 50))
+    psi[5, 20] = 0.8
+    with pytest.raises(ImageInputError, match="^psi must hold numbers"):
+        find_peaks(psi.astype(str), 500.0, 0.1)
+    with pytest.raises(ImageInputError, match="^psi must be a"):
+        find_peaks(psi[0], 500.0, 0.1)
+    for kw in ({"threshold": np.nan}, {"threshold": "0.3"}, {"person_width_m": np.nan},
+               {"person_width_m": 0.0}, {"depth_sep_m": -1.0}, {"max_peaks": 2.5},
+               {"max_peaks": -1}, {"max_peaks": "3"}):
+        with pytest.raises(ConfigError, match=f"^{next(iter(kw))} must be"):
+            find_peaks(psi, 500.0, 0.1, **kw)
+    assert find_peaks(psi.tolist(), 500.0, 0.1) == find_peaks(psi, 500.0, 0.1) == [(20, 5, 0.8)]
+    assert find_peaks(psi, 500.0, 0.1, max_peaks=0) == []
+    with pytest.raises(GeometryError, match="FloorPlane: normal"):
+        FloorPlane(["0", "-1", "0"], 1.2)
+    np.testing.assert_array_equal(FloorPlane([0, -1, 0], 1.2).height(np.zeros((1, 3))), [1.2])
+    disp = np.full((40, 60), 5.0, np.float32)
+    pts = np.zeros((40, 60, 3))
+    floor = FloorPlane.level(1.2)
+    with pytest.raises(ImageInputError, match="^disparity must hold numbers"):
+        detect_candidates(disp.astype(str), pts, 500.0, 0.1, 20.0, floor=floor)
+    with pytest.raises(ImageInputError, match="^points must be"):
+        detect_candidates(disp, pts.astype(str), 500.0, 0.1, 20.0, floor=floor)

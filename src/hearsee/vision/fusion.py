@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.config import finite_number, is_real, whole_number
+from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import CalibrationError, ConfigError, GeometryError, ImageInputError
 from hearsee.vision.camera import Rectification, StereoRig, check_rig
 from hearsee.vision.humans import (
@@ -145,6 +145,8 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
             f"thermal image is {warm.shape[1]}x{warm.shape[0]} pixels but the calibration's "
             f"thermal camera is {cam.width}x{cam.height}"
         )
+    if not (real_entries(points_left) and real_entries(heights)):  # (text read as metres)
+        raise GeometryError("thermal_support: points and heights must be numbers (metres)")
     P = np.asarray(points_left, dtype=float)
     h = np.asarray(heights, dtype=float)
     if P.ndim != 2 or P.shape[1] != 3 or h.shape != (len(P),):

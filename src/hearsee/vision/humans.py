@@ -53,7 +53,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.config import finite_number, is_real, whole_number
+from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import (
     CalibrationError,
     ConfigError,
@@ -132,6 +132,17 @@ def check_principal_row(cy: float) -> None:
     """CalibrationError unless the principal row ``cy`` (pixels) is a finite number."""
     if not is_real(cy):
         raise CalibrationError(f"cy (principal row) must be a finite number of pixels, got {cy!r}")
+
+
+def _numbers(name: str, value: NDArray, dtype: type = np.float64, *,
+             copy: bool = False) -> NDArray:
+    """``value`` as an array of ``dtype`` (a copy with ``copy``) when it holds real numbers
+    (:func:`hearsee.config.real_entries`), else an ImageInputError naming it: numpy read a
+    disparity or count map of text as numbers. An array of numbers costs one dtype test."""
+    if not real_entries(value):
+        got = value.dtype if isinstance(value, np.ndarray) else f"{value!r:.60}"
+        raise ImageInputError(f"{name} must hold numbers, got {got}")
+    return np.array(value, dtype=dtype, copy=True) if copy else np.asarray(value, dtype=dtype)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -231,7 +242,9 @@ class FloorPlane:
         """GeometryError unless ``normal`` is a finite unit vector pointing up (``-y``
         component > 0) and ``offset`` finite: any other scaled, inverted or NaN'd every height
         silently."""
-        n = np.asarray(self.normal, dtype=float)
+        # (a normal of text was kept as given: numpy read it as numbers here and every height
+        # failed later with a builtin error)
+        n = np.asarray(self.normal, dtype=float) if real_entries(self.normal) else np.zeros(0)
         if (n.shape != (3,) or not np.all(np.isfinite(n)) or abs(np.linalg.norm(n) - 1.0) > 1e-6
                 or not n[1] < 0):
             raise GeometryError(f"FloorPlane: normal must be the unit 'up' vector in the optical "
@@ -342,13 +355,15 @@ def u_disparity(disparity: NDArray, mask: NDArray | None = None, max_disparity: 
     the pixels counted (e.g. not floor); ``n_d = max_disparity + 1`` (default: the largest
     disparity + 1). A disparity larger than the image width cannot come from matching two
     images of that width (ImageInputError: a 1e12 once asked for 29 TiB of counts);
-    ``max_disparity`` is an integer in [0, :data:`MAX_DISPARITY_PX`] (ConfigError).
+    ``max_disparity`` is an integer in [0, :data:`MAX_DISPARITY_PX`] (ConfigError). A
+    disparity or mask that is no numbers (text, read as numbers; a text mask as all True) is
+    an ImageInputError.
 
     >>> d = np.full((4, 3), np.nan); d[:, 1] = 5.0
     >>> u_disparity(d)[5].tolist()
     [0.0, 4.0, 0.0]
     """
-    d = np.asarray(disparity, dtype=np.float32)
+    d = _numbers("disparity", disparity, np.float32)
     if d.ndim != 2:
         raise ImageInputError(f"disparity must be (H, W), got shape {d.shape}")
     H, W = d.shape
@@ -360,6 +375,8 @@ def u_disparity(disparity: NDArray, mask: NDArray | None = None, max_disparity: 
         max_disparity = whole_number("max_disparity", max_disparity, 0, MAX_DISPARITY_PX)
     if mask is not None:
         m = np.asarray(mask)
+        if m.dtype.kind not in "biuf":
+            raise ImageInputError(f"mask must be bool (H, W), got {m.dtype}")
         if m.shape != d.shape:
             raise ImageInputError(f"mask must have the disparity's shape {d.shape}, got "
                                   f"{m.shape}")
@@ -417,7 +434,7 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
     number >= 0, or a kernel width that is not finite > 0.
     """
     check_focal_baseline(focal_px, baseline_m)
-    P = np.asarray(P, dtype=np.float64)
+    P = _numbers("P", P)
     if P.ndim != 2:
         raise ImageInputError(f"P must be a (n_d, W) map of counts, got shape {P.shape}")
     nd, W = P.shape
@@ -437,11 +454,11 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
     hi = np.clip(np.arange(nd) + band + 1, 0, nd)
     Pb = cs[hi] - cs[lo]
     if above is not None:
-        A = np.asarray(above, dtype=np.float64)
+        A = _numbers("above", above)
         ca = np.vstack([np.zeros((1, W)), np.cumsum(A, axis=0)])
         Pb = np.clip(Pb - above_weight * (ca[hi] - ca[lo]), 0.0, None)
     if expected_rows is not None:
-        e = np.asarray(expected_rows, float)
+        e = _numbers("expected_rows", expected_rows)
         Pb = np.where(e[:, None] > 3, Pb / np.maximum(e[:, None], 1.0), 0.0)
     half = np.maximum(1, np.rint(0.5 * person_width_m * d / baseline_m)).astype(int)[:, None]
     sur = np.maximum(1, np.rint(surround_m * d / baseline_m)).astype(int)[:, None]
@@ -471,10 +488,19 @@ def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: f
     strongest first. Around each peak, columns within ``person_width_m`` (scaled by ``d/B``)
     and depths within ``depth_sep_m`` are suppressed. Disparities below ``min_disparity``
     (pixels, a finite number >= 0: a negative one used to cut rows from the far end, ConfigError)
-    are not searched."""
+    are not searched. ``threshold``, ``person_width_m`` (> 0), ``depth_sep_m`` (>= 0) and
+    ``max_peaks`` (an integer >= 0) are ConfigErrors otherwise (a NaN threshold found no peak
+    without a word; a NaN width, a fractional count or text raised builtin errors), ``psi``
+    that is not a 2-D map of numbers an ImageInputError."""
     check_focal_baseline(focal_px, baseline_m)
     min_disparity = finite_number("min_disparity", min_disparity, 0.0)
-    ps = np.array(psi, dtype=float, copy=True)
+    finite_number("threshold", threshold)
+    finite_number("person_width_m", person_width_m, 0.0, lo_open=True)
+    finite_number("depth_sep_m", depth_sep_m, 0.0)
+    max_peaks = whole_number("max_peaks", max_peaks, 0)
+    ps = _numbers("psi", psi, copy=True)
+    if ps.ndim != 2:
+        raise ImageInputError(f"psi must be a (n_d, W) map, got shape {ps.shape}")
     nd, W = ps.shape
     ps[: int(np.ceil(min_disparity))] = -np.inf
     d = np.arange(nd, dtype=float)
@@ -843,8 +869,10 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     check_principal_row(cy)
     check_camera_height(camera_height_m)
     p = params or HumanDetectorParams()
-    d = np.asarray(disparity, dtype=np.float32)
+    d = _numbers("disparity", disparity, np.float32)
     points = np.asarray(points)
+    if points.dtype.kind not in "fiu":  # (estimate_floor's rule; text was read as metres)
+        raise ImageInputError(f"points must be (H, W, 3) metres, got {points.dtype}")
     if d.ndim != 2 or points.shape != (*d.shape, 3):
         raise ImageInputError(f"disparity (H, W) and points (H, W, 3) expected, got {d.shape} "
                               f"and {points.shape}")
