@@ -80,6 +80,20 @@ def test_head_pose_refuses_an_integer_beyond_float_range():
     assert HeadPose(np.int64(30), np.float32(10.0)).as_tuple() == (30.0, 10.0)
 
 
+def test_head_pose_pan_beyond_any_turn_count_is_refused():
+    """A pan of 1e300 deg was taken (its wrap names no direction: at 1e17 deg neighbouring
+    floats are 16 deg apart); within MAX_ANGLE_DEG a multi-turn pan still points where its
+    wrap does."""
+    from hearsee.geometry import MAX_ANGLE_DEG, HeadPose
+
+    for big in (1e300, -1e10, np.nextafter(MAX_ANGLE_DEG, np.inf)):
+        with pytest.raises(GeometryError, match="pan_deg must be within"):
+            HeadPose(big, 0.0)
+    np.testing.assert_allclose(HeadPose(720.0 + 30.0, 0.0).gaze, HeadPose(30.0, 0.0).gaze,
+                               atol=1e-12)
+    assert HeadPose(-MAX_ANGLE_DEG, 0.0).pan_deg == -MAX_ANGLE_DEG
+
+
 def test_a_scalar_is_not_a_point():
     """cart_to_sph(5.0) and array_to_robot(5.0, ...) raised a builtin IndexError (shape[-1] of a
     0-d array) instead of the GeometryError that a wrong number of coordinates gets."""

@@ -20,6 +20,7 @@ from hearsee.config import all_real, is_real, object_entries, real_entries
 from hearsee.errors import GeometryError
 
 __all__ = [
+    "MAX_ANGLE_DEG",
     "HeadPose",
     "angle_between",
     "array_to_robot",
@@ -274,6 +275,14 @@ def _point_within(value: Any, what: str, error: type[Exception], limit_m: float,
     return p
 
 
+#: An angle (degrees) that names a direction is at most this large in magnitude: 2.8 million
+#: turns, more than any unwrapped run, and a float there still resolves 1.2e-7 deg. Beyond it
+#: the wrap to (-180, 180] names no direction (at 1e17 deg neighbouring floats are 16 deg
+#: apart). The rule of a head's pan (:class:`HeadPose`) and of a tracked azimuth
+#: (:data:`hearsee.audio.tracking.MAX_AZIMUTH_DEG`).
+MAX_ANGLE_DEG = 1e9
+
+
 @dataclass(frozen=True)
 class HeadPose:
     """Pose of a pan-tilt head in degrees: ``pan_deg`` (alpha, + = left, about robot +z) and
@@ -290,6 +299,9 @@ class HeadPose:
             if not is_real(v):  # (np.isfinite raised TypeError on an int beyond float range)
                 raise GeometryError(f"HeadPose.{name} must be finite, got {v!r}")
             object.__setattr__(self, name, float(v))
+        if abs(self.pan_deg) > MAX_ANGLE_DEG:  # (1e300 deg was taken, as its wrap)
+            raise GeometryError(f"HeadPose.pan_deg must be within +-{MAX_ANGLE_DEG:g} degrees "
+                                f"(beyond, its wrap names no direction), got {self.pan_deg:g}")
         if abs(self.tilt_deg) > 90.0:
             raise GeometryError(
                 f"HeadPose.tilt_deg must be within [-90, 90] degrees, got {self.tilt_deg}"

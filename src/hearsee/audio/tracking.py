@@ -48,6 +48,7 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import EstimationError
+from hearsee.geometry import MAX_ANGLE_DEG
 
 __all__ = [
     "DIRECTION_RATE_TAU_S",
@@ -302,12 +303,11 @@ def _cached(cache: dict, dt: float, make: Callable[[], Any]) -> Any:
     return hit
 
 
-#: A measured azimuth is at most this many degrees in magnitude (2.8 million turns: an unwrapped
-#: angle of any real run; a float there still resolves 1.2e-7 deg). Beyond it the wrap to
-#: (-180, 180] says nothing about a direction -- at 1e17 deg neighbouring floats are 16 deg
-#: apart, and track_directions took an azimuth of 1e300 deg as -170.5 deg. Non-finite angles
-#: are no value at all: a missing measurement, as NaN (the elevation's rule too).
-MAX_AZIMUTH_DEG = 1e9
+#: A measured azimuth is at most this many degrees in magnitude (:data:`hearsee.geometry.
+#: MAX_ANGLE_DEG`, the package's one bound on an angle that names a direction):
+#: track_directions took an azimuth of 1e300 deg as -170.5 deg. Non-finite angles are no
+#: value at all: a missing measurement, as NaN (the elevation's rule too).
+MAX_AZIMUTH_DEG = MAX_ANGLE_DEG
 
 
 def _clean_candidates(measurement: tuple[float, float | None] | None,
