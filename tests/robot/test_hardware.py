@@ -301,6 +301,26 @@ def test_resolve_input_device(fake_sd):
         resolve_input_device(fake_sd, None)
 
 
+def test_resolve_input_device_refuses_what_names_no_device(fake_sd):
+    """A negative index took a device from the list's end (-1: the ReSpeaker); a bool read as
+    an index and a blank name matched every device."""
+    with pytest.raises(ConfigError, match=r"^audio.device: no device with index -1 \("):
+        resolve_input_device(fake_sd, -1)
+    assert resolve_input_device(fake_sd, np.int64(2))["index"] == 2
+    for bad in (True, " ", 2.0):
+        with pytest.raises(ConfigError, match="expected a device index or name, got "):
+            resolve_input_device(fake_sd, bad)
+
+
+def test_resolve_input_device_has_one_home():
+    """stream.device is its home (DeviceSource uses it); hardware re-exports it."""
+    from hearsee.robot import hardware
+    from hearsee.stream import device
+
+    assert hardware.resolve_input_device is device.resolve_input_device
+    assert "resolve_input_device" in hardware.__all__
+
+
 def test_check_devices_all_pass(small_rig, fake_sd):
     cfg = load_robot_config(make_config(small_rig, _with()))
     checks = check_devices(cfg)

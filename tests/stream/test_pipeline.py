@@ -240,7 +240,7 @@ def _fake_sounddevice(blocks_to_send, gap_after=None):
 
 def test_live_device_source_with_fake_portaudio(monkeypatch):
     monkeypatch.setitem(sys.modules, "sounddevice", _fake_sounddevice(20, gap_after=10))
-    with pytest.raises(AudioInputError, match="not found"):
+    with pytest.raises(AudioInputError, match="no input device named 'usb-array'"):
         pl.DeviceSource("usb-array", 3, FS)
     with pytest.raises(AudioInputError, match="input channels"):
         pl.DeviceSource(0, 4, FS)

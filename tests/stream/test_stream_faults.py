@@ -59,7 +59,9 @@ def _fake_portaudio(blocks_per_open, lose=None, adc=True, close_error=None):
     raises PortAudioError, as sounddevice's stop() does)."""
     sd = types.ModuleType("sounddevice")
     sd.PortAudioError = type("PortAudioError", (Exception,), {})
-    sd.query_devices = lambda device=None, kind=None: {"name": "fake", "max_input_channels": 3}
+    dev = {"name": "fake", "max_input_channels": 3}  # (the device list without arguments)
+    sd.query_devices = lambda device=None, kind=None: (
+        [dev] if device is None and kind is None else dev)
     opens = list(blocks_per_open)
     lose = dict(lose or {})
 

@@ -29,7 +29,11 @@ class Detector(StrEnum):
 
 
 def _device_spec(text: str) -> int | str:
-    return int(text) if text.strip().lstrip("-").isdigit() else text
+    """--device as an index (ASCII digits, optionally negative: then refused as no device) or
+    a name, stripped as ``audio.device`` is (``--1`` and ``²`` raised builtin ValueErrors)."""
+    s = text.strip()
+    digits = s[1:] if s.startswith("-") else s
+    return int(s) if digits.isascii() and digits.isdigit() else s
 
 
 @app.command("track")
@@ -166,7 +170,7 @@ def track_cmd(
     try:
         if device is not None:
             source = DeviceSource(_device_spec(device), arr.n_mics, 16000 if fs is None else fs,
-                                  duration_s=duration)
+                                  duration_s=duration, where="--device")
         else:
             source = WavSource(recording, n_channels=arr.n_mics, block_len=4096)
         pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)

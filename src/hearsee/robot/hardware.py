@@ -80,9 +80,9 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, HearseeError
-from hearsee.stream.device import (  # (import_sounddevice: re-exported, __all__)
+from hearsee.stream.device import (  # (import_sounddevice, resolve_input_device: re-exported)
     import_sounddevice,
-    input_devices,
+    resolve_input_device,
 )
 
 if TYPE_CHECKING:  # imported when run_robot runs (the simulated loop's heavier imports)
@@ -255,7 +255,7 @@ def _device(v: Any, where: str, base: Path, *, camera: bool) -> DeviceSpec:
     if not isinstance(v, str) or not v.strip():
         raise ConfigError(f"{where}: expected a device index or name, got {v!r}")
     s = v.strip()
-    if s.isdigit():
+    if s.isascii() and s.isdigit():  # (int("²") raised a builtin ValueError)
         return int(s)
     if not camera:
         return s
@@ -449,60 +449,6 @@ def load_robot_config(path: str | Path) -> RobotConfig:
 # ---------------------------------------------------------------------------------------------
 # Devices
 # ---------------------------------------------------------------------------------------------
-def _device_list(sd: Any) -> list[dict[str, Any]]:
-    devs = sd.query_devices()
-    out = []
-    for k, d in enumerate(devs):
-        d = dict(d)
-        d.setdefault("index", k)
-        out.append(d)
-    return out
-
-
-def resolve_input_device(sd: Any, spec: DeviceSpec | None, where: str = "audio.device"
-                         ) -> dict[str, Any]:
-    """The input device (a dict with ``index``, ``name``, ``max_input_channels``, ...) named by
-    ``spec``: an index, a (case-insensitive) name substring, or None for the default input.
-    Raises ConfigError naming ``where`` and listing the available input devices."""
-    devs = _device_list(sd)
-    inputs = [d for d in devs if d.get("max_input_channels", 0) > 0]
-    if spec is None:
-        default = sd.default.device  # an [input, output] pair, or one value for both
-        idx = default
-        if not isinstance(default, str | int):
-            try:
-                idx = default[0]
-            except (TypeError, IndexError, KeyError):
-                idx = default
-        if isinstance(idx, str):
-            return resolve_input_device(sd, idx, where)
-        if not isinstance(idx, int) or idx < 0 or idx >= len(devs):
-            raise ConfigError(f"{where}: no default input device (available: "
-                              f"{input_devices(sd)}); name one in audio.device")
-        dev = devs[idx]
-    elif isinstance(spec, int):
-        if spec >= len(devs):
-            raise ConfigError(f"{where}: no device with index {spec} (available: "
-                              f"{input_devices(sd)})")
-        dev = devs[spec]
-    else:
-        key = spec.lower()
-        exact = [d for d in inputs if str(d["name"]).lower() == key]
-        hits = exact or [d for d in inputs if key in str(d["name"]).lower()]
-        if not hits:
-            raise ConfigError(f"{where}: no input device named {spec!r} (available: "
-                              f"{input_devices(sd)})")
-        if len(hits) > 1:
-            names = ", ".join(f"{d['index']} {d['name']!r}" for d in hits)
-            raise ConfigError(f"{where}: {spec!r} matches several input devices ({names}); "
-                              "use a longer name or the index")
-        dev = hits[0]
-    if dev.get("max_input_channels", 0) <= 0:
-        raise ConfigError(f"{where}: device {dev['index']} {dev['name']!r} has no input "
-                          f"channels (available: {input_devices(sd)})")
-    return dev
-
-
 def open_capture(spec: DeviceSpec, where: str) -> Any:
     """``cv2.VideoCapture(spec)``, opened, or ConfigError naming ``where``."""
     import cv2

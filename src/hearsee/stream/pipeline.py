@@ -85,7 +85,7 @@ from hearsee.audio.tracking import (
 from hearsee.config import finite_number, is_real, time_limit, whole_number
 from hearsee.errors import AudioInputError, ConfigError, EstimationError
 from hearsee.geometry import wrap_deg
-from hearsee.stream.device import import_sounddevice, input_devices
+from hearsee.stream.device import import_sounddevice, resolve_input_device
 
 __all__ = [
     "ArraySource",
@@ -318,6 +318,13 @@ class DeviceSource:
     timeout_s : float
         A device that delivers nothing for this long ends the stream, with :attr:`stalled` set
         (the pipeline then reports ``status="stalled"``).
+    where : str
+        What ``device`` is called in messages (``--device`` for ``hearsee track``).
+
+    ``device`` picks the device as ``hearsee run``'s ``audio.device`` does
+    (:func:`hearsee.stream.device.resolve_input_device`: an exact name before a unique
+    substring, an ambiguous name refused); one that is not found, has no input channels or too
+    few is an AudioInputError.
 
     Each :meth:`blocks` call is one run (one PortAudio stream, sample 0 and sequence number 0 at
     its start) with its own queue: blocks an earlier run left queued are discarded (also when
@@ -347,7 +354,7 @@ class DeviceSource:
 
     def __init__(self, device: int | str | None, n_channels: int, fs: float = 16000.0,
                  block_len: int = 1024, duration_s: float | None = None, queue_size: int = 32,
-                 timeout_s: float = 2.0) -> None:
+                 timeout_s: float = 2.0, where: str = "device") -> None:
         # (unchecked, a rate of 0 divided by zero in the stream, a NaN duration or a block of 0
         # samples raised builtin errors only once the stream ran; inf seconds = no limit)
         fs = check_fs(fs)
@@ -356,13 +363,9 @@ class DeviceSource:
         timeout_s = finite_number("timeout_s", timeout_s, 0.0, lo_open=True)
         duration_s = time_limit("duration_s", duration_s)
         sd = import_sounddevice()
-        try:
-            info = sd.query_devices(device, "input")
-        except (ValueError, sd.PortAudioError) as exc:
-            raise AudioInputError(
-                f"audio input device {device!r} not found or not an input ({exc}); "
-                f"available: {input_devices(sd)}"
-            ) from None
+        # (PortAudio's look-up took the first device containing a name, where `hearsee run`
+        # refused an ambiguous one and preferred an exact name: one rule now)
+        info = resolve_input_device(sd, device, where, AudioInputError)
         if int(info["max_input_channels"]) < n_channels:
             raise AudioInputError(
                 f"device {info['name']!r} has {info['max_input_channels']} input channels; the "
@@ -371,6 +374,7 @@ class DeviceSource:
         self._sd = sd
         self.name = str(info.get("name", device))  #: the device's name (PortAudio's)
         self.device, self.n_channels, self.fs = device, int(n_channels), float(fs)
+        self._index = info["index"]  # (the stream opens the device resolved here, not the name)
         self.block_len, self.duration_s = int(block_len), duration_s
         self.timeout_s = float(timeout_s)
         self._queue_size = int(queue_size)
@@ -429,7 +433,7 @@ class DeviceSource:
             with contextlib.ExitStack() as opened:
                 try:  # PortAudio opens the device here and starts it on entering
                     stream = sd.InputStream(
-                        device=self.device, channels=self.n_channels, samplerate=self.fs,
+                        device=self._index, channels=self.n_channels, samplerate=self.fs,
                         blocksize=self.block_len, dtype="float32", callback=callback)
                     stream.__enter__()
                 except (ValueError, sd.PortAudioError) as exc:
