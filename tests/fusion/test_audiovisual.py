@@ -501,3 +501,26 @@ def test_settings_and_geometry_of_the_fusion_must_be_numbers(rig):
     np.testing.assert_array_equal(rig.to_optical(p), rig.to_optical(p.tolist()))
     np.testing.assert_array_equal(ray_residuals(**args), ray_residuals(**dict(args, s=1.0)))
     assert trk.update(0.0, p, np.eye(3) * 1e-4)
+
+
+def test_track_on_rays_checks_its_search_settings_before_any_frame(rig):
+    """range_m (and the sigmas) reached locate_on_ray only once a frame had an image point:
+    a recording without one took (0.0, -1) and ("0.2", "4") silently. Given a custom
+    tracker, nothing else checked the sigmas."""
+    x = np.zeros((3, 1600))
+    for bad in ((0.0, -1.0), ("0.2", "4"), (4.0, 0.2), None):
+        with pytest.raises(EstimationError, match="range_m must satisfy"):
+            track_on_rays(rig, x, 16000, lambda t: None, range_m=bad)
+    for kw in ({"sigma_px": "1"}, {"sigma_px": np.nan}, {"sigma_tdoa_s": -1e-6}):
+        with pytest.raises(EstimationError, match=f"{next(iter(kw))} must be a finite"):
+            track_on_rays(rig, x, 16000, lambda t: None, tracker=RayTracker(), **kw)
+    res = track_on_rays(rig, x, 16000, lambda t: None, range_m=[0.2, 4])  # numbers: fine
+    assert len(res.t) > 0 and np.all(np.isnan(res.raw))
+
+
+@pytest.mark.parametrize("max_iter", [2.5, "500", True, 0])
+def test_regressor_max_iter_must_be_a_whole_number(rig, max_iter):
+    """int(max_iter) read 2.5 as 2, "500" as 500 and True as 1."""
+    X, Y = simulate_av_samples(rig, 40, rng=np.random.default_rng(0))
+    with pytest.raises(EstimationError, match=r"^max_iter must be an integer >= 1, got "):
+        AudioVisualRegressor(hidden_layer_sizes=(4,), max_iter=max_iter).fit(X, Y)

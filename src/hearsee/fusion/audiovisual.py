@@ -224,6 +224,19 @@ def _ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: 
     return array.tdoa(pts, list(pairs) if pairs is not None else None) - np.asarray(tdoa_s, float)
 
 
+def _ray_range(range_m: Any) -> tuple[float, float]:
+    """``range_m`` (near, far) of a search along a camera ray, metres, as floats;
+    EstimationError unless 0 < near < far (finite)."""
+    try:
+        near, far = range_m[0], range_m[1]
+    except (TypeError, IndexError, KeyError):
+        near = far = None
+    # (float() read ("0.1", "10") as numbers and True as 1 m)
+    if not (is_real(near) and is_real(far) and 0 < near < far):
+        raise EstimationError(f"range_m must satisfy 0 < near < far (finite), got {range_m!r}")
+    return float(near), float(far)
+
+
 def locate_on_ray(
     rig: AudioVisualRig,
     uv: ArrayLike,
@@ -276,14 +289,7 @@ def locate_on_ray(
     p = np.asarray(uv, dtype=float).reshape(-1) if real_entries(uv) else None
     if p is None or p.shape != (2,) or not np.all(np.isfinite(p)):
         raise EstimationError(f"image point must be two finite pixel coordinates, got {uv!r}")
-    try:
-        near, far = range_m[0], range_m[1]
-    except (TypeError, IndexError, KeyError):
-        near = far = None
-    # (float() read ("0.1", "10") as numbers and True as 1 m)
-    if not (is_real(near) and is_real(far) and 0 < near < far):
-        raise EstimationError(f"range_m must satisfy 0 < near < far (finite), got {range_m!r}")
-    near, far = float(near), float(far)
+    near, far = _ray_range(range_m)
     n_grid = whole_number("n_grid", n_grid, 2, error=EstimationError)
     max_candidates = whole_number("max_candidates", max_candidates, 1, error=EstimationError)
     sigma_tdoa_s = finite_number("sigma_tdoa_s", sigma_tdoa_s, 0.0, error=EstimationError)
@@ -659,6 +665,12 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
 
     # (NaN kept every fix -- residual > NaN is False -- and text raised a builtin TypeError)
     finite_number("max_residual_samples", max_residual_samples, 0.0, error=EstimationError)
+    # (checked by locate_on_ray only once a frame had an image point and TDOAs: a bad range
+    # or sigma ran the whole GCC-PHAT first, and a recording without a fix never raised)
+    _ray_range(range_m)
+    if sigma_tdoa_s is not None:
+        finite_number("sigma_tdoa_s", sigma_tdoa_s, 0.0, error=EstimationError)
+    finite_number("sigma_px", sigma_px, 0.0, error=EstimationError)
     prs = list(rig.array.pairs)
     tf = estimate_tdoas(x, fs, rig.array, frame_ms, hop_ms, "phat", prs, refine="interp",
                         min_confidence=min_confidence)
@@ -788,7 +800,9 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
         self.model_ = make_pipeline(
             StandardScaler(),
             MLPRegressor(hidden_layer_sizes=tuple(self.hidden_layer_sizes), alpha=self.alpha,
-                         solver=self.solver, max_iter=int(self.max_iter),
+                         solver=self.solver,  # (int() read 2.5 as 2 and "500" as 500)
+                         max_iter=whole_number("max_iter", self.max_iter,
+                                               error=EstimationError),
                          random_state=self.random_state, tol=1e-7),
         )
         with warnings.catch_warnings():
