@@ -24,6 +24,7 @@ from hearsee.vision.humans import (
     estimate_floor,
     find_peaks,
     head_shoulder_score,
+    robust_top_m,
     scale_adaptive_filter,
     segment_band_m,
     segment_body,
@@ -666,3 +667,53 @@ def test_detector_maps_and_peak_settings_must_be_numbers():
         detect_candidates(disp.astype(str), pts, 500.0, 0.1, 20.0, floor=floor)
     with pytest.raises(ImageInputError, match="^points must be"):
         detect_candidates(disp, pts.astype(str), 500.0, 0.1, 20.0, floor=floor)
+
+
+def test_silhouette_helpers_refuse_text_and_builtin_errors():
+    """The public per-candidate helpers read text: upper_contour / head_shoulder_score took a
+    mask of text as all True, cut_by_border int()ed "3" (and 2.7 to 2), disparity_band_px
+    read "20" as 20 px and NaN as the most negative int, robust_top_m and FloorPlane.height
+    raised numpy's builtin errors (text, an empty set, points not (..., 3)). Now typed errors;
+    numbers give the same answers."""
+    mask = np.zeros((30, 20), bool)
+    mask[5:, 6:14] = True
+    want = np.where(mask.any(axis=0), 5.0, np.nan)
+    np.testing.assert_array_equal(upper_contour(mask), want)
+    np.testing.assert_array_equal(upper_contour(mask.astype(np.uint8)), want)
+    for bad in (np.where(mask, "1", "0"), mask.astype(complex)):
+        with pytest.raises(ImageInputError, match="^mask must be a bool silhouette, got "):
+            upper_contour(bad)
+        with pytest.raises(ImageInputError, match="^mask must be a bool silhouette, got "):
+            head_shoulder_score(bad, 2.0, 500.0)
+    assert cut_by_border([0, 4, 5, 6], 320) and cut_by_border((3, 4, 317, 6), 320)
+    assert not cut_by_border(np.array([3, 4, 5, 6]), np.int64(320))
+    for box, width, name in (([3, "4", 5, 6], 320, "box y"), ([3, 4, 2.7, 6], 320, "box w"),
+                             ([-1, 4, 5, 6], 320, "box x"), ([3, 4, 5, 6], "320", "width"),
+                             ([3, 4, 5, 6], 0, "width")):
+        with pytest.raises(ImageInputError, match=f"^{name} must be an integer"):
+            cut_by_border(box, width)
+    for box in ([3, 4, 5], 7, "3456"):
+        with pytest.raises(ImageInputError, match="box"):
+            cut_by_border(box, 320)
+    np.testing.assert_array_equal(disparity_band_px([12.0, 40.0], 0.25, 100.0, 0.1), [4, 40])
+    assert disparity_band_px(2.0, 0.25, 100.0, 0.1) == 1
+    for d in ("20", [20.0, np.nan], True):
+        with pytest.raises(ImageInputError, match="^disparity must"):
+            disparity_band_px(d, 0.25, 100.0, 0.1)
+    with pytest.raises(ConfigError, match="^depth_band_m must be a finite number"):
+        disparity_band_px(20.0, "0.25", 100.0, 0.1)
+    with pytest.raises(CalibrationError, match="^focal_px must be"):
+        disparity_band_px(20.0, 0.25, np.nan, 0.1)
+    h = np.linspace(0.0, 1.8, 200)
+    assert robust_top_m(h) == robust_top_m(h.tolist()) == float(np.percentile(h, 99.5))
+    for bad, msg in ((h.astype(str), "^heights must hold numbers"),
+                     (np.zeros(0), "^heights must hold at least one")):
+        with pytest.raises(ImageInputError, match=msg):
+            robust_top_m(bad)
+    floor = FloorPlane.level(1.2)
+    pts = np.array([[0.0, 0.2, 2.0], [0.1, -0.5, 3.0]])
+    np.testing.assert_array_equal(floor.height(pts.tolist()), [1.0, 1.7])
+    for bad, msg in ((pts.astype(str), "^points must hold numbers"),
+                     (pts[:, :2], r"^points must be \(\.\.\., 3\)"), (1.0, "^points must be")):
+        with pytest.raises(ImageInputError, match=msg):
+            floor.height(bad)

@@ -134,11 +134,12 @@ def check_principal_row(cy: float) -> None:
         raise CalibrationError(f"cy (principal row) must be a finite number of pixels, got {cy!r}")
 
 
-def _numbers(name: str, value: NDArray, dtype: type = np.float64, *,
+def _numbers(name: str, value: NDArray, dtype: type | None = np.float64, *,
              copy: bool = False) -> NDArray:
-    """``value`` as an array of ``dtype`` (a copy with ``copy``) when it holds real numbers
-    (:func:`hearsee.config.real_entries`), else an ImageInputError naming it: numpy read a
-    disparity or count map of text as numbers. An array of numbers costs one dtype test."""
+    """``value`` as an array of ``dtype`` (None: its own; a copy with ``copy``) when it holds
+    real numbers (:func:`hearsee.config.real_entries`), else an ImageInputError naming it: numpy
+    read a disparity or count map of text as numbers. An array of numbers costs one dtype
+    test."""
     if not real_entries(value):
         got = value.dtype if isinstance(value, np.ndarray) else f"{value!r:.60}"
         raise ImageInputError(f"{name} must hold numbers, got {got}")
@@ -260,7 +261,11 @@ class FloorPlane:
         return cls(np.array([0.0, -1.0, 0.0]), float(camera_height_m), "prior")
 
     def height(self, points: NDArray) -> NDArray:
-        """Height above the floor (metres) of points ``(..., 3)``."""
+        """Height above the floor (metres) of points ``(..., 3)``; ImageInputError unless they
+        are numbers (text raised numpy's UFuncTypeError) of that shape."""
+        points = _numbers("points", points, None)
+        if points.ndim == 0 or points.shape[-1] != 3:
+            raise ImageInputError(f"points must be (..., 3) metres, got shape {points.shape}")
         return points @ self.normal + self.offset
 
     @property
@@ -411,8 +416,23 @@ def disparity_band_px(disparity: NDArray | float, depth_band_m: float, focal_px:
     """Half width (whole pixels, at least 1) of the disparity band that ``depth_band_m`` metres
     of depth span at ``disparity`` pixels: ``max(1, rint(d^2 depth_band_m / (f B)))``. Psi-hat
     (:func:`scale_adaptive_filter`) sums P(y,d) over it, so a peak at ``d`` places the body
-    only within this many pixels (plus half a pixel of rounding) of ``d``."""
-    d = np.asarray(disparity, dtype=float)
+    only within this many pixels (plus half a pixel of rounding) of ``d``.
+
+    ImageInputError unless ``disparity`` holds finite numbers (text was read as the numbers it
+    spells, NaN gave the most negative int); ConfigError unless ``depth_band_m`` is a finite
+    number >= 0; CalibrationError for a focal length or baseline that is not finite > 0."""
+    d = _numbers("disparity", disparity)
+    if not np.all(np.isfinite(d)):
+        raise ImageInputError(f"disparity must be finite pixels, got {disparity!r:.60}")
+    depth_band_m = finite_number("depth_band_m", depth_band_m, 0.0)
+    check_focal_baseline(focal_px, baseline_m)
+    return _band_px(d, depth_band_m, focal_px, baseline_m)
+
+
+def _band_px(d: NDArray | float, depth_band_m: float, focal_px: float, baseline_m: float
+             ) -> NDArray:
+    """:func:`disparity_band_px` of checked numbers (the detector's per-candidate calls)."""
+    d = np.asarray(d, dtype=float)
     return np.maximum(1, np.rint(d * d * depth_band_m / (focal_px * baseline_m))).astype(int)
 
 
@@ -448,7 +468,7 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
         raise ImageInputError(f"expected_rows must have one value per disparity ({nd},), got "
                               f"shape {np.shape(expected_rows)}")
     d = np.arange(nd, dtype=float)
-    band = disparity_band_px(d, depth_band_m, focal_px, baseline_m)
+    band = _band_px(d, depth_band_m, focal_px, baseline_m)
     cs = np.vstack([np.zeros((1, W)), np.cumsum(P, axis=0)])
     lo = np.clip(np.arange(nd) - band, 0, nd)
     hi = np.clip(np.arange(nd) + band + 1, 0, nd)
@@ -560,7 +580,12 @@ def robust_top_m(heights: NDArray) -> float:
     """Top of a silhouette, metres above the floor: the :data:`TOP_PERCENTILE` percentile of
     its points' ``heights`` (metres), so that a few stray points above the head (a wall pixel
     that passed the depth band, a matching error) do not move it. :attr:`BodySegment.top_m`
-    and the head band of :func:`hearsee.vision.fusion.thermal_support`."""
+    and the head band of :func:`hearsee.vision.fusion.thermal_support`. ImageInputError
+    unless ``heights`` are numbers, at least one (text and an empty set raised builtin
+    errors)."""
+    heights = _numbers("heights", heights, None)
+    if heights.size == 0:
+        raise ImageInputError("heights must hold at least one point")
     return float(np.percentile(heights, TOP_PERCENTILE))
 
 
@@ -632,7 +657,7 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     cw0 = max(1, int(round(0.1 * disp / baseline_m)))
     c0 = column - u0
     strip = sub_d[:, max(0, c0 - cw0): c0 + cw0 + 1]
-    dpk = float(disparity_band_px(disp, p.depth_band_m, focal_px, baseline_m)) + 0.5
+    dpk = float(_band_px(disp, p.depth_band_m, focal_px, baseline_m)) + 0.5
     s_lo = min(fb / (Zc + band0), disp - dpk)
     s_hi = max(fb / max(Zc - band0, 0.2), disp + dpk)
     with np.errstate(invalid="ignore"):
@@ -702,20 +727,34 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     y = (h_t - floor.offset - n[0] * c[0] - n[2] * c[2]) / n[1]
     pos = np.array([c[0], y, c[2]])
     return BodySegment(box, crop, pts, hts, Zm, top, float(xhi - xlo), pos,
-                       cut_by_border(box, disparity.shape[1]))
+                       _cut_by_border(box, disparity.shape[1]))
 
 
 def cut_by_border(box: Sequence[int], width: int) -> bool:
     """Whether a silhouette's ``box`` [x, y, w, h] (pixels) touches the top, left or right
     border of an image ``width`` pixels wide (:attr:`BodySegment.truncated`); the bottom
-    border (feet cut at close range, torso in view) does not count."""
-    x, y, w, _ = (int(v) for v in box)
-    return x <= 0 or y <= 0 or x + w >= int(width)
+    border (feet cut at close range, torso in view) does not count. ImageInputError unless the
+    box is four whole numbers >= 0 and ``width`` one >= 1 (int() read "3" as 3 and 2.7 as 2)."""
+    if not isinstance(box, Sequence | np.ndarray) or len(box) != 4:
+        raise ImageInputError(f"box must be [x, y, w, h] pixels, got {box!r}")
+    x, y, w, _ = (whole_number(f"box {k}", v, 0, error=ImageInputError)
+                  for k, v in zip("xywh", box, strict=True))
+    return _cut_by_border([x, y, w, 0], whole_number("width", width, error=ImageInputError))
+
+
+def _cut_by_border(box: Sequence[int], width: int) -> bool:
+    """:func:`cut_by_border` of a box and width of ints (the detector's per-candidate call)."""
+    x, y, w, _ = box
+    return x <= 0 or y <= 0 or x + w >= width
 
 
 def upper_contour(mask: NDArray) -> NDArray:
-    """Row of the topmost silhouette pixel of each column of a bool mask (NaN where empty)."""
-    m = np.asarray(mask, bool)
+    """Row of the topmost silhouette pixel of each column of a bool mask (NaN where empty);
+    ImageInputError unless ``mask`` is bool or numbers (a mask of text read as all True)."""
+    m = np.asarray(mask)
+    if m.dtype.kind not in "biuf":
+        raise ImageInputError(f"mask must be a bool silhouette, got {m.dtype}")
+    m = m.astype(bool, copy=False)
     has = m.any(axis=0)
     top = np.argmax(m, axis=0).astype(float)
     top[~has] = np.nan
