@@ -294,7 +294,7 @@ def compute_disparity(
     if not (_has_texture(L) and _has_texture(R)):
         return np.full((H, W), np.nan, np.float32)
     if scale < 1.0:
-        size = (max(8, round(W * scale)), max(8, round(H * scale)))
+        size = (Wm, max(8, round(H * scale)))  # (Wm: the matching width above)
         L = cv2.resize(L, size, interpolation=cv2.INTER_AREA)
         R = cv2.resize(R, size, interpolation=cv2.INTER_AREA)
     kw = dict(
