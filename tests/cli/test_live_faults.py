@@ -333,6 +333,16 @@ def test_an_exact_name_picks_that_device_in_track_as_in_run(robot, fake_sd, caps
     assert sd.opened == [1, 1]
 
 
+def test_track_json_names_the_device_it_opened(fake_sd, capsys):
+    """`track --device 2 --format json` gave "source": "2" (the spec typed); it is the name
+    of the device opened now."""
+    fake_sd()
+    for spec in ("2", "6ch"):
+        assert main(["track", "--device", spec, "--array", "three-mic", "--duration", "0.2",
+                     "--format", "json"]) == 0, capsys.readouterr().err
+        assert json.loads(capsys.readouterr().out)["source"] == "USB 6ch Array"
+
+
 def test_too_few_input_channels_is_one_line(robot, fake_sd, capsys):
     fake_sd()
     cfg = robot(channels=[1, 2, 6])  # channel 6 of a 6-channel device

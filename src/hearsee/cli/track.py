@@ -193,7 +193,10 @@ def track_cmd(
                "real_time_factor": st.real_time_factor,
                "cpu_real_time_factor": st.cpu_real_time_factor, **st.latency_summary()}
     if fmt is TrackFormat.json:
-        emit_json({"array": arr.to_dict(), "source": str(recording or device),
+        # (a device by the name PortAudio gives it: "--device 2" or a part of a name is not
+        # what was opened)
+        emit_json({"array": arr.to_dict(),
+                   "source": str(recording) if device is None else source.name,
                    "updates": [u.to_json() for u in updates], "stats": summary})
     if stats or st.status != "ok":
         err_console.print(
