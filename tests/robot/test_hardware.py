@@ -1440,10 +1440,13 @@ def test_a_run_that_fails_before_its_first_update_keeps_the_previous_lines(tmp_p
     with pytest.raises(AudioInputError, match="cannot record"):
         run_robot(cfg, audio_source=_FailingSource(), head=_quiet_head(cfg))
     assert cfg.output.jsonl.read_text(encoding="utf-8") == "previous run\n"
-    other = tmp_path / "new" / "run.jsonl"  # none before: none after
+    other = tmp_path / "new" / "deeper" / "run.jsonl"  # none before: none after
     with pytest.raises(AudioInputError, match="cannot record"):
         run_robot(cfg, audio_source=_FailingSource(), head=_quiet_head(cfg), jsonl=other)
     assert not other.exists()
+    # nor the folders made for it (two empty new folders were left behind); the report folder
+    # that was there before stays
+    assert not (tmp_path / "new").exists() and cfg.output.report.is_dir()
     # a run that ends (or is interrupted) before its first update: its log is empty, so is
     # the file (the report written next is of this run)
     res = run_robot(cfg, audio_source=ArraySource(x[:, :300], FS, 1600), head=_quiet_head(cfg))

@@ -952,6 +952,9 @@ class _JsonLines:
         self.path = path
         self.fh: Any = None
         self.starts: list[int] = []  #: offset of each line written
+        #: the folders made for the file, deepest first: removed again (when still empty) by a
+        #: run that fails before its first line (it left an empty new folder behind)
+        self.made = [d for d in (path.parent, *path.parent.parents) if not d.exists()]
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             existed = path.exists() or path.is_symlink()
@@ -983,13 +986,20 @@ class _JsonLines:
         """Close the file. ``n_lines``: the run ended (``ok``, ``stalled`` or Ctrl-C) with that
         many log records; a file not started yet is emptied, and lines beyond them are cut (a
         Ctrl-C that came when a line had been written, before its record was logged). None: the
-        run failed; the file stays as it is (the previous run's when no update came)."""
+        run failed; the file stays as it is (the previous run's when no update came), and the
+        folders made for a file never started are removed when empty."""
         if n_lines is not None:
             self._start()
             if n_lines < len(self.starts):
                 self.fh.truncate(self.starts[n_lines])
         if self.fh is not None:
             self.fh.close()
+            return
+        for d in self.made:  # a failed run that wrote nothing: the folders made for it
+            try:
+                d.rmdir()  # (only an empty folder; one the user filled meanwhile stays)
+            except OSError:
+                break
 
 
 def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source: Any = None,
