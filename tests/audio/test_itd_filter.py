@@ -131,6 +131,19 @@ def test_step_refuses_tdoas_that_are_no_real_numbers_or_absurd():
     np.testing.assert_allclose(kf.pair_tdoas(), truth, atol=1e-12)
 
 
+def test_filter_refuses_what_step_refuses():
+    """filter() converted its frames with numpy first: [["1e-4", ...]] was read as seconds and
+    True as 1 s, which step() refuses; a ragged list raised numpy's builtin ValueError."""
+    frames = [[1e-4, 2e-4, 1e-4]] * 3
+    for bad in ([["1e-4", "2e-4", "1e-4"]] * 3, [[True, 2e-4, 1e-4]] * 3,
+                [[1e-4, 2e-4, 1e-4], [1e-4]]):
+        with pytest.raises(GeometryError, match="TDOAs must be real numbers"):
+            ItdKalman(3).filter(bad)
+    out, acc = ItdKalman(3).filter(frames)
+    np.testing.assert_allclose(out[-1], frames[0], atol=1e-12)
+    assert acc.all()
+
+
 def test_pair_matrix_checks_its_arguments_as_the_filter_does():
     """pair_matrix is public: n_mics 0 raised numpy's builtin ValueError, a reference of 9 for
     3 microphones gave a matrix as if no microphone were the reference, and the filter

@@ -35,7 +35,7 @@ from scipy.stats import chi2
 
 from hearsee.audio.arrays import check_pairs
 from hearsee.audio.localize import _as_tdoas
-from hearsee.config import is_real, whole_number
+from hearsee.config import is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, GeometryError
 
 __all__ = ["ItdKalman", "pair_matrix"]
@@ -207,6 +207,9 @@ class ItdKalman:
         Returns (pair TDOAs (n_frames, n_pairs) from the state after each step -- NaN before the
         first measurement --, accepted (n_frames,) bool).
         """
+        # (text such as "1e-4" was read as seconds and True as 1 s, which step() refuses)
+        if not real_entries(Z):
+            raise GeometryError(f"TDOAs must be real numbers of seconds, got {Z!r:.80}")
         Zm = np.asarray(Z, dtype=float)
         if Zm.ndim != 2:
             raise GeometryError(f"expected (n_frames, n_pairs) TDOAs, got shape {Zm.shape}")
