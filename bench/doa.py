@@ -149,9 +149,10 @@ HEARSEE_ABSTAINED: list = []  # one entry per fallback taken (all calls, ablatio
 #: hop (50 % overlap) with a Hann window, as the peers' STFT. On dev seed 777 (12 room
 #: recordings per cell, voices only, 2026-11-26's twenty-fourth session) it lowered the
 #: pooled RMSE of all six array x RT60 pools (e.g. two-mic RT60 0.3 s 9.39 -> 8.38 deg,
-#: three-mic 2.47 -> 1.88) but cost 1.7-2.2x hearsee's CPU per recording (3.1-3.4x less
-#: than SRP-PHAT instead of >= 5x): the benchmarked setting keeps non-overlapping frames for
-#: the CPU target, and this row shows what the accuracy/CPU trade costs on this table's seed.
+#: three-mic 2.47 -> 1.88) but costs more CPU (a dev timing of 12 recordings on a loaded
+#: machine read 1.7-2.2x hearsee's; the full run below 1.32x): the benchmarked setting keeps
+#: non-overlapping frames for the CPU target, and this row shows what the accuracy/CPU trade
+#: costs on this table's seed.
 #: This table's seed (full run, quiet machine, same session): 54/72 conditions at or below the
 #: best peer (the benchmarked setting 47/72), pooled two-mic RT60 0.3 / 0.6 s 11.0 -> 9.63 /
 #: 21.0 -> 19.1 deg, at 3.97x less CPU than SRP-PHAT (the benchmarked setting 5.24x).
