@@ -586,12 +586,6 @@ class MappedSource:
         duration_s = time_limit("duration_s", duration_s)  # (inf: no limit, as DeviceSource)
         self.limit = None if duration_s is None else int(round(duration_s * self.fs))
         self.stop = stop
-        self.n_samples = 0  #: samples delivered so far
-
-    @property
-    def audio_s(self) -> float:
-        """Seconds of audio delivered so far."""
-        return self.n_samples / self.fs
 
     @property
     def n_dropped(self) -> int:
@@ -613,7 +607,6 @@ class MappedSource:
                     if blk.start >= self.limit:
                         break
                     data = data[:, : self.limit - blk.start]
-                self.n_samples = max(self.n_samples, blk.start + data.shape[1])
                 yield Block(blk.seq, blk.start, data, blk.arrival)
                 if self.limit is not None and blk.start + data.shape[1] >= self.limit:
                     break
@@ -1327,18 +1320,19 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                 cameras.close()
         finally:
             lines.close(len(log) if ended else None)
-    # the audio processed (the stream's stats, filled in after a Ctrl-C too): the source's
-    # own count also held the blocks still queued when Ctrl-C came
-    summary = _live_summary(log, pipeline.stats, pipeline.stats.audio_s, status, state, cameras,
-                            head, time.perf_counter() - t_start)
+    # the audio processed is the stream's (its stats are filled in after a Ctrl-C too; the
+    # source's own count also held the blocks still queued when Ctrl-C came)
+    summary = _live_summary(log, pipeline.stats, status, state, cameras, head,
+                            time.perf_counter() - t_start)
     return RunResult(log, summary, images, captions, frames)
 
 
-def _live_summary(log: list[dict[str, Any]], stats: Any, audio_s: float, status: str,
-                  state: dict,
+def _live_summary(log: list[dict[str, Any]], stats: Any, status: str, state: dict,
                   cameras: Cameras | None, head: PrintHeadDriver, runtime_s: float
                   ) -> dict[str, Any]:
-    """Summary metrics from the live log (nothing canned)."""
+    """Summary metrics from the live log (nothing canned); the audio processed is the
+    stream's ``stats.audio_s``."""
+    audio_s = stats.audio_s
     from hearsee.geometry import wrap_deg
 
     az = np.array([r["audio"]["azimuth_deg"] for r in log
