@@ -36,15 +36,16 @@ def input_devices(sd: Any) -> str:
     (index, name, input channels); ``none`` without any, ``(could not list devices)`` when the
     query itself fails (the listing only completes a message about another error)."""
     try:
-        devs = [dict(d) for d in sd.query_devices()]
-        ins = [f"{d.get('index', k)} {d['name']!r} ({d['max_input_channels']} in)"
-               for k, d in enumerate(devs) if d.get("max_input_channels", 0) > 0]
+        ins = [f"{d['index']} {d['name']!r} ({d['max_input_channels']} in)"
+               for d in _device_list(sd) if d.get("max_input_channels", 0) > 0]
     except Exception:  # noqa: BLE001 - listing is best effort inside an error message
         return "(could not list devices)"
     return ", ".join(ins) if ins else "none"
 
 
 def _device_list(sd: Any) -> list[dict[str, Any]]:
+    """``sd.query_devices()`` as dicts, each with its ``index`` (PortAudio's position when
+    the entry has none)."""
     out = []
     for k, d in enumerate(sd.query_devices()):
         d = dict(d)
