@@ -299,11 +299,10 @@ def compute_disparity(
         R = cv2.resize(R, size, interpolation=cv2.INTER_AREA)
     kw = dict(
         min_disparity=md, num_disparities=nd, block_size=block_size, p1=p1, p2=p2,
-        # (a tolerance of the largest disparity or more keeps every pixel: capped so that it
-        # fits OpenCV's int). SGBM cannot switch its own check off: it reads a tolerance < 1
-        # (the -1 passed here before 2026-11-26's twenty-third session) as 1 px, so "none"
-        # was "internal" with 1 px, and "full" ran that 1-px check before its own; the
-        # largest disparity as tolerance keeps every pixel
+        # SGBM cannot switch its own check off: it reads a tolerance < 1 (the -1 passed here
+        # before 2026-11-26's twenty-third session) as 1 px, so "none" was "internal" with
+        # 1 px, and "full" ran that 1-px check before its own. A tolerance of the largest
+        # disparity keeps every pixel; "internal"'s own is capped there (it fits OpenCV's int)
         lr_max_diff=min(int(np.ceil(lr_max_diff)), _MAX_DISPARITY)
         if lr_check == "internal" else _MAX_DISPARITY,
         pre_filter_cap=pre_filter_cap, uniqueness_ratio=uniqueness_ratio,
