@@ -15,6 +15,7 @@ import yaml
 from sklearn.metrics import adjusted_rand_score
 
 from hearsee.cli import main
+from hearsee.geometry import wrap_deg
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 #: tour commands run here (``calibrate``/``detect`` need images, ``demo``/``eval``/``run`` are
@@ -39,7 +40,7 @@ def _commands() -> list[str]:
 
 
 def _azimuth_error(a: float, b: float) -> float:
-    return abs((a - b + 180.0) % 360.0 - 180.0)
+    return abs(float(wrap_deg(a - b)))
 
 
 def test_readme_python_blocks_run_and_agree_with_their_truth(capsys):
