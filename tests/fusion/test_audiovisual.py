@@ -321,6 +321,25 @@ def test_tdoa_tracker_refuses_measurements_of_the_wrong_shape(side_rig):
     assert trk.update_measurements(t, uv, z, fix)
 
 
+def test_fusion_refuses_tdoas_no_sound_can_take(rig, side_rig):
+    """A TDOA of 1e300 s (a corrupt value, no delay) is localization's GeometryError ("at most
+    3600 s"); the fusion took it: locate_on_ray searched the ray for it (a fix, no error) and
+    RayTdoaTracker.update_measurements fed it to its gate. Now the same rule, as the fusion's
+    EstimationError, and the tracker's state untouched."""
+    p = np.array([1.4, 0.2, 0.1])
+    uv, z = rig.project(p)[0], rig.array.tdoa(p)
+    for big in (1e300, -4000.0):
+        with pytest.raises(EstimationError, match="at most 3600 s"):
+            locate_on_ray(rig, uv, np.r_[z[:2], big])
+    trk, frames = _settled(side_rig, 10, 32)
+    t, _, uv2, z2, fix = frames[30]
+    before = trk.x.copy()
+    with pytest.raises(EstimationError, match="at most 3600 s"):
+        trk.update_measurements(t, uv2, np.r_[1e300, z2[1:]], fix)
+    np.testing.assert_array_equal(trk.x, before)
+    assert trk.update_measurements(t, uv2, z2, fix)
+
+
 def test_tdoa_tracker_restart_keeps_the_time_checks(side_rig):
     """The restart on a fix set the time without the checks of every other frame: a frame
     earlier than the last one, or at a NaN time, restarted the track silently."""

@@ -34,8 +34,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
 from hearsee.audio.arrays import check_pairs
-from hearsee.audio.localize import _as_tdoas
-from hearsee.config import is_real, real_entries, whole_number
+from hearsee.audio.localize import as_tdoas, check_real_tdoas
+from hearsee.config import is_real, whole_number
 from hearsee.errors import ConfigError, GeometryError
 
 __all__ = ["ItdKalman", "pair_matrix"]
@@ -174,7 +174,7 @@ class ItdKalman:
         if z is not None and _size(z) != len(self.pairs):
             raise GeometryError(f"expected {len(self.pairs)} pair TDOAs, got {_size(z)}")
         # (text raised numpy's ValueError; 1e300 s made the gate distance NaN: accepted)
-        zz = None if z is None else _as_tdoas(z, self.pairs)
+        zz = None if z is None else as_tdoas(z, len(self.pairs))
         self.last_d2 = float("nan")
         self.last_accepted = False
         if not self.initialized:
@@ -207,9 +207,7 @@ class ItdKalman:
         Returns (pair TDOAs (n_frames, n_pairs) from the state after each step -- NaN before the
         first measurement --, accepted (n_frames,) bool).
         """
-        # (text such as "1e-4" was read as seconds and True as 1 s, which step() refuses)
-        if not real_entries(Z):
-            raise GeometryError(f"TDOAs must be real numbers of seconds, got {Z!r:.80}")
+        check_real_tdoas(Z)  # (text was read as seconds and True as 1 s, which step() refuses)
         Zm = np.asarray(Z, dtype=float)
         if Zm.ndim != 2:
             raise GeometryError(f"expected (n_frames, n_pairs) TDOAs, got shape {Zm.shape}")

@@ -177,27 +177,37 @@ def _classify(pos: NDArray, rel_tol: float) -> ArrayGeometry:
 MAX_TDOA_S = 3600.0
 
 
-def _as_tdoas(tdoa_s: ArrayLike, prs: list[tuple[int, int]]) -> NDArray:
-    """The TDOA vector (seconds, one per pair of ``prs``) as floats, or a GeometryError for a
-    wrong length, entries that are no real numbers (text, bools, complex numbers: numpy read
-    ``"1e-4"`` as 1e-4 s, ``True`` as 1 s and dropped an imaginary part) or beyond
-    :data:`MAX_TDOA_S`. NaN and inf entries pass (the callers decide)."""
-    if not (tdoa_s is None or real_entries(tdoa_s)):  # (None: "got 1 TDOAs" below)
-        raise GeometryError(f"TDOAs must be real numbers of seconds, got {tdoa_s!r}")
+def check_real_tdoas(tdoa_s: Any, error: type[Exception] = GeometryError) -> None:
+    """``error`` unless every entry of ``tdoa_s`` (any shape) is a real number of seconds, NaN
+    and inf included (:func:`hearsee.config.real_entries`): numpy read text such as ``"1e-4"``
+    as 1e-4 s, ``True`` as 1 s and dropped an imaginary part. The one message of every TDOA
+    input (localization, the ITD filter, the audio-visual fusion); each passes its own
+    exception type."""
+    if not real_entries(tdoa_s):
+        raise error(f"TDOAs must be real numbers of seconds, got {tdoa_s!r:.80}")
+
+
+def as_tdoas(tdoa_s: ArrayLike, n_pairs: int, error: type[Exception] = GeometryError
+             ) -> NDArray:
+    """The TDOA vector (seconds, one per microphone pair) as floats, or ``error`` for entries
+    that are no real numbers (:func:`check_real_tdoas`), a count other than ``n_pairs`` or an
+    entry beyond :data:`MAX_TDOA_S`. NaN and inf entries pass (the callers decide)."""
+    if tdoa_s is not None:  # (None: "got 1 TDOAs" below)
+        check_real_tdoas(tdoa_s, error)
     tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
-    if tau.shape[0] != len(prs):
-        raise GeometryError(f"got {tau.shape[0]} TDOAs for {len(prs)} microphone pairs")
+    if tau.shape[0] != n_pairs:
+        raise error(f"got {tau.shape[0]} TDOAs for {n_pairs} microphone pairs")
     if np.any(np.abs(tau[np.isfinite(tau)]) > MAX_TDOA_S):
-        raise GeometryError(f"TDOAs must be at most {MAX_TDOA_S:g} s in magnitude, got "
-                            f"{tau.tolist()}")
+        raise error(f"TDOAs must be at most {MAX_TDOA_S:g} s in magnitude, got "
+                    f"{tau.tolist()!r:.80}")
     return tau
 
 
 def _tdoa_vector(tdoa_s: ArrayLike, prs: list[tuple[int, int]], tol_s: float) -> NDArray:
-    """:func:`_as_tdoas`, or a GeometryError for a tolerance ``tol_s`` that is not a finite
+    """:func:`as_tdoas`, or a GeometryError for a tolerance ``tol_s`` that is not a finite
     number > 0 (0 divided by zero in the in-plane fit). NaN entries pass:
     :func:`localize_tdoa` answers them with an empty result."""
-    tau = _as_tdoas(tdoa_s, prs)
+    tau = as_tdoas(tdoa_s, len(prs))
     if not (is_real(tol_s) and tol_s > 0):
         raise GeometryError(f"tol_s must be a finite number > 0 seconds, got {tol_s}")
     return tau
@@ -779,7 +789,7 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
 
     arr = load_array(array)
     prs = arr.checked_pairs(pairs)
-    tau = _as_tdoas(tdoa_s, prs)
+    tau = as_tdoas(tdoa_s, len(prs))
     ranges = np.linspace(0.3, 3.0, 40) if ranges_m is None else np.asarray(ranges_m, float)
     if ranges.ndim != 1 or ranges.size == 0 or not np.all(np.isfinite(ranges) & (ranges > 0)):
         raise GeometryError(f"ranges_m must be finite distances > 0 m, got {ranges_m!r}")

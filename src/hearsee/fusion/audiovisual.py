@@ -69,6 +69,7 @@ from scipy.optimize import minimize_scalar
 from sklearn.base import BaseEstimator, RegressorMixin
 
 from hearsee.audio.arrays import MicArray
+from hearsee.audio.localize import as_tdoas
 from hearsee.audio.tracking import MotionKalman
 from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import EstimationError, GeometryError
@@ -237,6 +238,19 @@ def _ray_range(range_m: Any) -> tuple[float, float]:
     return float(near), float(far)
 
 
+def _image_point(uv: ArrayLike, finite: bool) -> NDArray:
+    """The image point ``(u, v)`` in pixels as a float array (2,), or an EstimationError: two
+    real numbers (:func:`hearsee.config.real_entries`; numpy read ("320", "240") as a pixel and
+    True as 1, and text that spells no number was a builtin ValueError), finite where
+    ``finite``. The image-point check of :func:`locate_on_ray` and
+    :meth:`RayTdoaTracker.update_measurements`."""
+    p = np.asarray(uv, dtype=float).reshape(-1) if real_entries(uv) else None
+    if p is None or p.shape != (2,) or (finite and not np.all(np.isfinite(p))):
+        raise EstimationError(f"the image point must be two {'finite ' if finite else ''}pixel "
+                              f"coordinates (u, v), got {uv!r:.80}")
+    return p
+
+
 def locate_on_ray(
     rig: AudioVisualRig,
     uv: ArrayLike,
@@ -276,19 +290,11 @@ def locate_on_ray(
         plane, so a ray that crosses that plane has two exact solutions) -- a tracker picks
         among them with its prediction.
     """
-    # (numpy read text as the numbers it spells -- ("320", "240") as a pixel, "1e-4" as a TDOA
-    # -- and True as 1; text that spells none was a builtin ValueError)
-    if not real_entries(tdoa_s):
-        raise EstimationError(f"TDOAs must be real numbers of seconds, got {tdoa_s!r}")
-    z = np.asarray(tdoa_s, dtype=float).reshape(-1)
     prs = list(rig.array.pairs if pairs is None else pairs)
-    if z.size != len(prs):
-        raise EstimationError(f"got {z.size} TDOAs for {len(prs)} microphone pairs")
+    z = as_tdoas(tdoa_s, len(prs), EstimationError)
     if not np.all(np.isfinite(z)):
         raise EstimationError("TDOAs must be finite to fuse with the camera ray")
-    p = np.asarray(uv, dtype=float).reshape(-1) if real_entries(uv) else None
-    if p is None or p.shape != (2,) or not np.all(np.isfinite(p)):
-        raise EstimationError(f"image point must be two finite pixel coordinates, got {uv!r}")
+    p = _image_point(uv, finite=True)
     near, far = _ray_range(range_m)
     n_grid = whole_number("n_grid", n_grid, 2, error=EstimationError)
     max_candidates = whole_number("max_candidates", max_candidates, 1, error=EstimationError)
@@ -515,20 +521,9 @@ class RayTdoaTracker(RayTracker):
         (None where the TDOAs gave none or it was discarded). Returns True when a TDOA or a
         (re)start fix was fused."""
         if uv is not None:
-            if not real_entries(uv):  # (as locate_on_ray's: text read as pixels)
-                raise EstimationError(f"the image point must be two pixel coordinates (u, v), "
-                                      f"got {uv!r}")
-            uv = np.asarray(uv, dtype=float).reshape(-1)
-            if uv.shape != (2,):
-                raise EstimationError(f"the image point must be two pixel coordinates (u, v), "
-                                      f"got shape {uv.shape}")
+            uv = _image_point(uv, finite=False)  # (NaN: not seen in this frame)
         if tdoa_s is not None:
-            if not real_entries(tdoa_s):
-                raise EstimationError(f"TDOAs must be real numbers of seconds, got {tdoa_s!r}")
-            tdoa_s = np.asarray(tdoa_s, dtype=float).reshape(-1)
-            if tdoa_s.size != len(self.pairs):
-                raise EstimationError(f"got {tdoa_s.size} TDOAs for {len(self.pairs)} "
-                                      "microphone pairs")
+            tdoa_s = as_tdoas(tdoa_s, len(self.pairs), EstimationError)
         if fix is not None and (not self.initialized or self.n_rejects >= self.max_rejects):
             self.predict(t)  # (the time's checks: finite, not before the last frame)
             self._start(np.asarray(fix.position_m, dtype=float), np.asarray(fix.covariance))
