@@ -634,7 +634,7 @@ def test_detector_maps_and_peak_settings_must_be_numbers():
     d[:, 1] = 2.0
     with pytest.raises(ImageInputError, match="^disparity must hold numbers"):
         u_disparity(d.astype(str))
-    with pytest.raises(ImageInputError, match="^mask must be bool"):
+    with pytest.raises(ImageInputError, match="^mask must be a bool silhouette, got <U1"):
         u_disparity(d, mask=np.full(d.shape, "0"))
     np.testing.assert_array_equal(u_disparity(d.tolist()), u_disparity(d))
     P = np.zeros((10, 50))

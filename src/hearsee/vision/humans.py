@@ -51,7 +51,7 @@ from functools import cached_property
 
 import cv2
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import (
@@ -144,6 +144,27 @@ def _numbers(name: str, value: NDArray, dtype: type | None = np.float64, *,
         got = value.dtype if isinstance(value, np.ndarray) else f"{value!r:.60}"
         raise ImageInputError(f"{name} must hold numbers, got {got}")
     return np.array(value, dtype=dtype, copy=True) if copy else np.asarray(value, dtype=dtype)
+
+
+def _silhouette(mask: ArrayLike) -> NDArray:
+    """``mask`` as a bool array, or an ImageInputError unless it holds bools or numbers (numpy
+    took a mask of text as all True). The mask check of :func:`u_disparity` and
+    :func:`upper_contour`."""
+    m = np.asarray(mask)
+    if m.dtype.kind not in "biuf":
+        raise ImageInputError(f"mask must be a bool silhouette, got {m.dtype}")
+    return m.astype(bool, copy=False)
+
+
+def _point_image(points: ArrayLike) -> NDArray:
+    """``points`` as an (H, W, 3) array of numbers (metres; its own dtype: no float64 copy of a
+    whole image), or an ImageInputError (text was read as metres). The check of
+    :func:`estimate_floor` and :func:`detect_candidates`."""
+    p = np.asarray(points)
+    if p.ndim != 3 or p.shape[-1] != 3 or p.dtype.kind not in "fiu":
+        raise ImageInputError(f"points must be (H, W, 3) metres, got shape {p.shape} of "
+                              f"{p.dtype}")
+    return p
 
 
 # ---------------------------------------------------------------------------------------------
@@ -297,10 +318,7 @@ def estimate_floor(points: NDArray, *, prior_height_m: float | None = None, step
     the lowest-envelope line of the v-disparity image, Labayrade, Aubert & Tarel 2002).
     """
     check_camera_height(prior_height_m, "prior_height_m")
-    points = np.asarray(points)  # (no float64 copy of the whole image: it is subsampled)
-    if points.ndim != 3 or points.shape[-1] != 3 or points.dtype.kind not in "fiu":
-        raise ImageInputError(f"points must be (H, W, 3) metres, got shape {points.shape} "
-                              f"of {points.dtype}")
+    points = _point_image(points)  # (no float64 copy of the whole image: it is subsampled)
     step = whole_number("step", step)  # (0 was numpy's "slice step cannot be zero")
     iterations = whole_number("iterations", iterations)
     inlier_m = finite_number("inlier_m", inlier_m, 0.0, lo_open=True)
@@ -379,13 +397,11 @@ def u_disparity(disparity: NDArray, mask: NDArray | None = None, max_disparity: 
     if max_disparity is not None:
         max_disparity = whole_number("max_disparity", max_disparity, 0, MAX_DISPARITY_PX)
     if mask is not None:
-        m = np.asarray(mask)
-        if m.dtype.kind not in "biuf":
-            raise ImageInputError(f"mask must be bool (H, W), got {m.dtype}")
+        m = _silhouette(mask)
         if m.shape != d.shape:
             raise ImageInputError(f"mask must have the disparity's shape {d.shape}, got "
                                   f"{m.shape}")
-        ok &= m.astype(bool)
+        ok &= m
     di = np.rint(d[ok]).astype(np.int64)
     nd = int(max_disparity + 1 if max_disparity is not None else (di.max() + 1 if di.size else 1))
     keep = di < nd
@@ -751,10 +767,7 @@ def _cut_by_border(box: Sequence[int], width: int) -> bool:
 def upper_contour(mask: NDArray) -> NDArray:
     """Row of the topmost silhouette pixel of each column of a bool mask (NaN where empty);
     ImageInputError unless ``mask`` is bool or numbers (a mask of text read as all True)."""
-    m = np.asarray(mask)
-    if m.dtype.kind not in "biuf":
-        raise ImageInputError(f"mask must be a bool silhouette, got {m.dtype}")
-    m = m.astype(bool, copy=False)
+    m = _silhouette(mask)
     has = m.any(axis=0)
     top = np.argmax(m, axis=0).astype(float)
     top[~has] = np.nan
@@ -909,9 +922,7 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     check_camera_height(camera_height_m)
     p = params or HumanDetectorParams()
     d = _numbers("disparity", disparity, np.float32)
-    points = np.asarray(points)
-    if points.dtype.kind not in "fiu":  # (estimate_floor's rule; text was read as metres)
-        raise ImageInputError(f"points must be (H, W, 3) metres, got {points.dtype}")
+    points = _point_image(points)
     if d.ndim != 2 or points.shape != (*d.shape, 3):
         raise ImageInputError(f"disparity (H, W) and points (H, W, 3) expected, got {d.shape} "
                               f"and {points.shape}")
