@@ -542,9 +542,11 @@ def test_rig_from_opencv_checks_its_size_and_scale(tmp_path):
         for k, v in nodes.items():
             fs.write(k, v)
         fs.release()
-    for size in (("640", "480"), (640.7, 480), (640,), None):
+    for size in (("640", "480"), (640.7, 480), (640,), None, (640, 480, 3), "64", 640):
         with pytest.raises(CalibrationError, match="^image_size: width and height must be"):
             rig_from_opencv(intr, extr, size, scale_to_m=0.001)
+    with pytest.raises(CalibrationError, match=r"got \(640, 480, 3\)$"):  # what was given
+        rig_from_opencv(intr, extr, (640, 480, 3), scale_to_m=0.001)
     for scale in ("0.001", np.nan, 0.0, True):
         with pytest.raises(ConfigError, match="^scale_to_m must be a finite number > 0"):
             rig_from_opencv(intr, extr, (640, 480), scale_to_m=scale)

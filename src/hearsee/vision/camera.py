@@ -937,10 +937,10 @@ def rig_from_opencv(intrinsics: str | Path, extrinsics: str | Path,
     ``D2`` in ``intrinsics`` and ``R``, ``T`` in ``extrinsics``. Those files do not store the
     image size (``(width, height)``, pixels) nor the length unit of ``T``: ``scale_to_m``
     converts it to metres (0.001 for millimetres)."""
-    try:
-        size = _check_size(*image_size, what="image_size")
-    except TypeError:  # (not a pair)
-        size = _check_size(None, None, what="image_size")
+    if isinstance(image_size, str) or not hasattr(image_size, "__len__") or len(image_size) != 2:
+        raise CalibrationError(f"image_size: width and height must be positive integers, got "
+                               f"{image_size!r:.80}")
+    size = _check_size(*image_size, what="image_size")
     # (int() read "640" as 640 and truncated 640.7; a text scale was numpy's builtin TypeError)
     scale_to_m = finite_number("scale_to_m", scale_to_m, 0.0, lo_open=True)
     a = read_opencv_yaml(intrinsics)
