@@ -685,6 +685,13 @@ def test_silhouette_helpers_refuse_text_and_builtin_errors():
             upper_contour(bad)
         with pytest.raises(ImageInputError, match="^mask must be a bool silhouette, got "):
             head_shoulder_score(bad, 2.0, 500.0)
+    # a ragged list was numpy's ValueError; a 1-D mask a builtin TypeError (or, empty,
+    # "attempt to get argmax of an empty sequence")
+    for bad in ([[True, False], [True]], mask[0], np.zeros(0, bool), mask[None]):
+        with pytest.raises(ImageInputError, match=r"^mask must be a bool silhouette \(H, W\)"):
+            upper_contour(bad)
+        with pytest.raises(ImageInputError, match=r"^mask must be a bool silhouette \(H, W\)"):
+            u_disparity(np.full((30, 20), 2.0), mask=bad)
     assert cut_by_border([0, 4, 5, 6], 320) and cut_by_border((3, 4, 317, 6), 320)
     assert not cut_by_border(np.array([3, 4, 5, 6]), np.int64(320))
     for box, width, name in (([3, "4", 5, 6], 320, "box y"), ([3, 4, 2.7, 6], 320, "box w"),
@@ -717,3 +724,14 @@ def test_silhouette_helpers_refuse_text_and_builtin_errors():
                      (pts[:, :2], r"^points must be \(\.\.\., 3\)"), (1.0, "^points must be")):
         with pytest.raises(ImageInputError, match=msg):
             floor.height(bad)
+
+
+def test_point_images_of_ragged_rows_are_refused():
+    """estimate_floor and detect_candidates raised numpy's builtin ValueError on a ragged list
+    of points; now the same ImageInputError as for points of the wrong shape."""
+    ragged = [[[0.0, 1.0, 2.0], [0.0, 1.0, 2.0]], [[0.0, 1.0, 2.0]]]
+    with pytest.raises(ImageInputError, match=r"^points must be \(H, W, 3\) metres"):
+        estimate_floor(ragged)
+    with pytest.raises(ImageInputError, match=r"^points must be \(H, W, 3\) metres"):
+        detect_candidates(np.full((2, 2), 5.0, np.float32), ragged, 500.0, 0.1, 1.0,
+                          floor=FloorPlane.level(1.2))

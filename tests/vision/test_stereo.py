@@ -352,3 +352,30 @@ def test_rig_and_rectification_settings_are_checked():
             call()
     r = rig.rectify(alpha=1.0, size=(160, 120))  # valid settings: the ideal rig's identity
     np.testing.assert_array_equal(r.R1, np.eye(3))
+
+
+def test_disparity_helpers_refuse_text_and_ragged_maps():
+    """lr_consistency, fill_disparity_holes and points_from_disparity read a disparity map of
+    text through numpy (a builtin ValueError, or numbers from text such as "3") and raised
+    numpy's ValueError on a ragged list; a Q of text likewise. Now ImageInputError for the
+    maps, ConfigError for Q; numbers give the same answers as before."""
+    d = np.full((4, 6), 2.0, np.float32)
+    d[1, 2] = np.nan
+    # OpenCV's Q for f = 100 px, baseline 0.1 m, principal point (0, 0): Z = f B / d = 5 m
+    Q = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 0, 100.0], [0, 0, 10.0, 0]])
+    for bad in (d.astype(str), [[2.0, 2.0], [2.0]]):
+        with pytest.raises(ImageInputError, match="^disp_left must hold numbers"):
+            lr_consistency(bad, d)
+        with pytest.raises(ImageInputError, match="^disp_right must hold numbers"):
+            lr_consistency(d, bad)
+        with pytest.raises(ImageInputError, match="^disparity must hold numbers"):
+            fill_disparity_holes(bad)
+        with pytest.raises(ImageInputError, match="^disparity must hold numbers"):
+            points_from_disparity(bad, Q)
+    with pytest.raises(ConfigError, match="^Q must be a 4x4 matrix of numbers"):
+        points_from_disparity(d, Q.astype(str))
+    np.testing.assert_array_equal(lr_consistency(d.tolist(), d), lr_consistency(d, d))
+    np.testing.assert_array_equal(fill_disparity_holes(d.tolist()), fill_disparity_holes(d))
+    pts = points_from_disparity(d, Q)
+    np.testing.assert_allclose(pts[2, 4], [4 / 20, 2 / 20, 5.0])  # (u, v) / (d / B), Z
+    assert np.all(np.isnan(pts[1, 2]))  # the invalid disparity

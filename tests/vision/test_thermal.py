@@ -251,8 +251,22 @@ def test_thermal_settings_are_config_errors(call, match):
 
 
 def test_counts_must_be_numbers():
-    """Text counts raised numpy's ValueError."""
-    with pytest.raises(ImageInputError, match="counts must be numbers"):
-        counts_to_celsius(np.array([["30000", "abc"]]))
+    """Text counts raised numpy's ValueError; a ragged list raised it while the error message
+    was being written."""
+    for bad in (np.array([["30000", "abc"]]), [[30000, 30100], [30200]]):
+        with pytest.raises(ImageInputError, match="^counts must hold numbers"):
+            counts_to_celsius(bad)
     ck = np.array([[29315, 30315]], np.uint16)  # 20 and 30 degC in centi-kelvin
     np.testing.assert_allclose(counts_to_celsius(ck), [[20.0, 30.0]], atol=1e-3)
+
+
+@pytest.mark.parametrize("fn", [warm_mask_celsius, relative_warm_mask, thermal_mask])
+def test_thermal_images_of_text_or_ragged_rows_are_refused(fn):
+    """A thermal image of text or a ragged list of rows was numpy's builtin ValueError (or a
+    mask computed from text); now the module's ImageInputError. Numbers still work."""
+    t = np.full((20, 20), 21.0, np.float32)
+    t[5:15, 8:12] = 33.0
+    for bad in (t.astype(str), [[21.0, 22.0], [21.0]]):
+        with pytest.raises(ImageInputError, match="^thermal image must hold numbers"):
+            fn(bad)
+    assert fn(t).shape == t.shape and fn(t.tolist()).shape == t.shape

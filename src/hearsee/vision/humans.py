@@ -61,7 +61,7 @@ from hearsee.errors import (
     GeometryError,
     ImageInputError,
 )
-from hearsee.vision.io import as_detector_image
+from hearsee.vision.io import as_detector_image, numeric_map
 from hearsee.vision.stereo import check_focal_baseline
 
 __all__ = [
@@ -134,33 +134,29 @@ def check_principal_row(cy: float) -> None:
         raise CalibrationError(f"cy (principal row) must be a finite number of pixels, got {cy!r}")
 
 
-def _numbers(name: str, value: NDArray, dtype: type | None = np.float64, *,
-             copy: bool = False) -> NDArray:
-    """``value`` as an array of ``dtype`` (None: its own; a copy with ``copy``) when it holds
-    real numbers (:func:`hearsee.config.real_entries`), else an ImageInputError naming it: numpy
-    read a disparity or count map of text as numbers. An array of numbers costs one dtype
-    test."""
-    if not real_entries(value):
-        got = value.dtype if isinstance(value, np.ndarray) else f"{value!r:.60}"
-        raise ImageInputError(f"{name} must hold numbers, got {got}")
-    return np.array(value, dtype=dtype, copy=True) if copy else np.asarray(value, dtype=dtype)
-
-
 def _silhouette(mask: ArrayLike) -> NDArray:
-    """``mask`` as a bool array, or an ImageInputError unless it holds bools or numbers (numpy
-    took a mask of text as all True). The mask check of :func:`u_disparity` and
-    :func:`upper_contour`."""
-    m = np.asarray(mask)
+    """``mask`` as a bool (H, W) array, or an ImageInputError unless it is one of bools or
+    numbers (numpy took a mask of text as all True; a ragged list was its builtin ValueError).
+    The mask check of :func:`u_disparity` and :func:`upper_contour`."""
+    try:
+        m = np.asarray(mask)
+    except (TypeError, ValueError):  # (a ragged list)
+        raise ImageInputError(f"mask must be a bool silhouette (H, W), got {mask!r:.60}") from None
     if m.dtype.kind not in "biuf":
         raise ImageInputError(f"mask must be a bool silhouette, got {m.dtype}")
+    if m.ndim != 2:
+        raise ImageInputError(f"mask must be a bool silhouette (H, W), got shape {m.shape}")
     return m.astype(bool, copy=False)
 
 
 def _point_image(points: ArrayLike) -> NDArray:
     """``points`` as an (H, W, 3) array of numbers (metres; its own dtype: no float64 copy of a
-    whole image), or an ImageInputError (text was read as metres). The check of
-    :func:`estimate_floor` and :func:`detect_candidates`."""
-    p = np.asarray(points)
+    whole image), or an ImageInputError (text was read as metres; a ragged list was numpy's
+    builtin ValueError). The check of :func:`estimate_floor` and :func:`detect_candidates`."""
+    try:
+        p = np.asarray(points)
+    except (TypeError, ValueError):  # (a ragged list: named by its shape () below)
+        p = np.asarray(None)
     if p.ndim != 3 or p.shape[-1] != 3 or p.dtype.kind not in "fiu":
         raise ImageInputError(f"points must be (H, W, 3) metres, got shape {p.shape} of "
                               f"{p.dtype}")
@@ -284,7 +280,7 @@ class FloorPlane:
     def height(self, points: NDArray) -> NDArray:
         """Height above the floor (metres) of points ``(..., 3)``; ImageInputError unless they
         are numbers (text raised numpy's UFuncTypeError) of that shape."""
-        points = _numbers("points", points, None)
+        points = numeric_map("points", points, None)
         if points.ndim == 0 or points.shape[-1] != 3:
             raise ImageInputError(f"points must be (..., 3) metres, got shape {points.shape}")
         return points @ self.normal + self.offset
@@ -386,7 +382,7 @@ def u_disparity(disparity: NDArray, mask: NDArray | None = None, max_disparity: 
     >>> u_disparity(d)[5].tolist()
     [0.0, 4.0, 0.0]
     """
-    d = _numbers("disparity", disparity, np.float32)
+    d = numeric_map("disparity", disparity, np.float32)
     if d.ndim != 2:
         raise ImageInputError(f"disparity must be (H, W), got shape {d.shape}")
     H, W = d.shape
@@ -437,7 +433,7 @@ def disparity_band_px(disparity: NDArray | float, depth_band_m: float, focal_px:
     ImageInputError unless ``disparity`` holds finite numbers (text was read as the numbers it
     spells, NaN gave the most negative int); ConfigError unless ``depth_band_m`` is a finite
     number >= 0; CalibrationError for a focal length or baseline that is not finite > 0."""
-    d = _numbers("disparity", disparity)
+    d = numeric_map("disparity", disparity)
     if not np.all(np.isfinite(d)):
         raise ImageInputError(f"disparity must be finite pixels, got {disparity!r:.60}")
     depth_band_m = finite_number("depth_band_m", depth_band_m, 0.0)
@@ -470,7 +466,7 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
     number >= 0, or a kernel width that is not finite > 0.
     """
     check_focal_baseline(focal_px, baseline_m)
-    P = _numbers("P", P)
+    P = numeric_map("P", P)
     if P.ndim != 2:
         raise ImageInputError(f"P must be a (n_d, W) map of counts, got shape {P.shape}")
     nd, W = P.shape
@@ -490,11 +486,11 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
     hi = np.clip(np.arange(nd) + band + 1, 0, nd)
     Pb = cs[hi] - cs[lo]
     if above is not None:
-        A = _numbers("above", above)
+        A = numeric_map("above", above)
         ca = np.vstack([np.zeros((1, W)), np.cumsum(A, axis=0)])
         Pb = np.clip(Pb - above_weight * (ca[hi] - ca[lo]), 0.0, None)
     if expected_rows is not None:
-        e = _numbers("expected_rows", expected_rows)
+        e = numeric_map("expected_rows", expected_rows)
         Pb = np.where(e[:, None] > 3, Pb / np.maximum(e[:, None], 1.0), 0.0)
     half = np.maximum(1, np.rint(0.5 * person_width_m * d / baseline_m)).astype(int)[:, None]
     sur = np.maximum(1, np.rint(surround_m * d / baseline_m)).astype(int)[:, None]
@@ -534,7 +530,7 @@ def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: f
     finite_number("person_width_m", person_width_m, 0.0, lo_open=True)
     finite_number("depth_sep_m", depth_sep_m, 0.0)
     max_peaks = whole_number("max_peaks", max_peaks, 0)
-    ps = _numbers("psi", psi, copy=True)
+    ps = numeric_map("psi", psi, copy=True)
     if ps.ndim != 2:
         raise ImageInputError(f"psi must be a (n_d, W) map, got shape {ps.shape}")
     nd, W = ps.shape
@@ -599,7 +595,7 @@ def robust_top_m(heights: NDArray) -> float:
     and the head band of :func:`hearsee.vision.fusion.thermal_support`. ImageInputError
     unless ``heights`` are numbers, at least one (text and an empty set raised builtin
     errors)."""
-    heights = _numbers("heights", heights, None)
+    heights = numeric_map("heights", heights, None)
     if heights.size == 0:
         raise ImageInputError("heights must hold at least one point")
     return float(np.percentile(heights, TOP_PERCENTILE))
@@ -921,7 +917,7 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     check_principal_row(cy)
     check_camera_height(camera_height_m)
     p = params or HumanDetectorParams()
-    d = _numbers("disparity", disparity, np.float32)
+    d = numeric_map("disparity", disparity, np.float32)
     points = _point_image(points)
     if d.ndim != 2 or points.shape != (*d.shape, 3):
         raise ImageInputError(f"disparity (H, W) and points (H, W, 3) expected, got {d.shape} "

@@ -14,9 +14,9 @@ from typing import Literal
 
 import cv2
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import input_file, output_file
+from hearsee.config import input_file, output_file, real_entries
 from hearsee.errors import ImageInputError, InputFileError
 
 __all__ = [
@@ -38,6 +38,20 @@ _IMREAD = {
     "bgr": cv2.IMREAD_COLOR,
     "unchanged": cv2.IMREAD_UNCHANGED,
 }
+
+
+def numeric_map(name: str, value: ArrayLike, dtype: type | None = np.float64, *,
+                copy: bool = False) -> NDArray:
+    """``value`` (an image-shaped map: disparities, temperatures, counts, a mask, points) as an
+    array of ``dtype`` (None: its own; a copy with ``copy``) when it holds real numbers
+    (:func:`hearsee.config.real_entries`), else an ImageInputError naming it: numpy read a map
+    of text as numbers, True as 1, and raised its builtin ValueError on a ragged list. An array
+    of numbers costs one dtype test. The "numbers only" rule of :mod:`hearsee.vision`'s map
+    functions."""
+    if not real_entries(value):
+        got = value.dtype if isinstance(value, np.ndarray) else f"{value!r:.60}"
+        raise ImageInputError(f"{name} must hold numbers, got {got}")
+    return np.array(value, dtype=dtype, copy=True) if copy else np.asarray(value, dtype=dtype)
 
 
 def _size_text(size: tuple[int, int]) -> str:

@@ -36,11 +36,11 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import finite_number, is_real, whole_number
+from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import CalibrationError, ConfigError, ImageInputError
 from hearsee.geometry import as_points
 from hearsee.vision.camera import Rectification, StereoRig, check_rig
-from hearsee.vision.io import check_pair, to_gray
+from hearsee.vision.io import check_pair, numeric_map, to_gray
 
 __all__ = [
     "StereoFrame",
@@ -333,8 +333,8 @@ def lr_consistency(disp_left: NDArray, disp_right: NDArray, max_diff: float = 1.
     ``disp_right`` is the disparity map of the right image (``u_left - u_right`` at right
     pixels). Returns a copy of ``disp_left`` with inconsistent pixels set to NaN.
     """
-    dl = np.asarray(disp_left, dtype=np.float32)
-    dr = np.asarray(disp_right, dtype=np.float32)
+    dl = numeric_map("disp_left", disp_left, np.float32)
+    dr = numeric_map("disp_right", disp_right, np.float32)
     if dl.shape != dr.shape or dl.ndim != 2:
         raise ImageInputError(f"disparity maps differ in shape: {dl.shape} vs {dr.shape}")
     # (NaN or a negative tolerance silently invalidated every pixel)
@@ -357,7 +357,7 @@ def fill_disparity_holes(disparity: NDArray, median: int = 5) -> NDArray:
     right on the same row (background fill), then smooth only the filled pixels with a
     ``median`` x ``median`` median filter (3 or 5; 0 to skip). Rows without any valid pixel
     stay NaN. Returns float32 pixels."""
-    d = np.asarray(disparity, dtype=np.float32)
+    d = numeric_map("disparity", disparity, np.float32)
     if d.ndim != 2:  # (a builtin ValueError unpacking the shape)
         raise ImageInputError(f"expected an (H, W) disparity map, got shape {d.shape}")
     # (checked first: a map without holes returned early and took any median, 4 or NaN)
@@ -426,7 +426,9 @@ def points_from_disparity(disparity: ArrayLike, Q: ArrayLike) -> NDArray:
     """3D points ``(H, W, 3)`` in metres in the rectified left optical frame,
     ``[X Y Z W]^T = Q [u v d 1]^T`` (``Q`` from :class:`hearsee.vision.camera.Rectification`);
     NaN where the disparity is invalid or non-positive."""
-    d = np.asarray(disparity, dtype=np.float64)
+    d = numeric_map("disparity", disparity)
+    if not real_entries(Q):
+        raise ConfigError(f"Q must be a 4x4 matrix of numbers, got {Q!r:.80}")
     Q = np.asarray(Q, dtype=np.float64)
     if d.ndim != 2 or Q.shape != (4, 4):
         raise ConfigError(f"expected (H, W) disparity and 4x4 Q, got {d.shape} and {Q.shape}")

@@ -29,9 +29,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.config import finite_number, input_file, real_entries, whole_number
+from hearsee.config import finite_number, input_file, whole_number
 from hearsee.errors import ConfigError, ImageInputError
-from hearsee.vision.io import to_gray
+from hearsee.vision.io import numeric_map, to_gray
 
 __all__ = [
     "counts_to_celsius",
@@ -63,12 +63,12 @@ def counts_to_celsius(counts: NDArray, scale: float = 0.01, offset: float = -273
     a NaN scale gave an all-NaN image, a string was parsed); ``counts`` numbers
     (ImageInputError).
     """
-    if not real_entries(counts):  # (numpy's ValueError on text, True read as 1)
-        raise ImageInputError(f"counts must be numbers, got {np.asarray(counts).dtype}")
+    # (numpy's ValueError on text and ragged lists, True read as 1)
+    c = numeric_map("counts", counts, np.float32)
     # (checked, not converted: a numpy scalar stays what it was, and so does the result)
     finite_number("scale", scale, 0.0, _F32_MAX, lo_open=True)
     finite_number("offset", offset, -_F32_MAX, _F32_MAX)
-    return np.asarray(counts, dtype=np.float32) * np.float32(scale) + np.float32(offset)
+    return c * np.float32(scale) + np.float32(offset)
 
 
 def _kernel_px(name: str, value: object, shape: tuple[int, ...]) -> int:
@@ -108,7 +108,7 @@ def warm_mask_celsius(thermal_c: NDArray, band_c: tuple[float, float] = HUMAN_BA
     >>> bool(m[10, 10]), bool(m[1, 1]), int(m.sum())
     (True, False, 39)
     """
-    t = np.asarray(thermal_c, dtype=np.float32)
+    t = numeric_map("thermal image", thermal_c, np.float32)
     if t.ndim != 2:
         raise ImageInputError(f"thermal image must be single-channel (h, w), got {t.shape}")
     open_px = _kernel_px("open_px", open_px, t.shape)
@@ -152,7 +152,7 @@ def relative_warm_mask(image: NDArray, *, k_sigma: float = 6.0, min_gap: float =
     max_gap``, the kernel sizes integers from 0 (none) to the image's larger side
     (ConfigError: a NaN gap or k_sigma gave an empty or a wrong mask without a word).
     """
-    im = np.asarray(image)
+    im = numeric_map("thermal image", image, None)
     if im.ndim == 3:
         im = to_gray(im)  # ImageInputError for channel counts or pixel types OpenCV cannot convert
     if im.ndim != 2 or im.size == 0:
@@ -201,7 +201,7 @@ def thermal_mask(image: NDArray, *, band_c: tuple[float, float] = HUMAN_BAND_C,
     A flat 8-bit frame (shutter closed, frozen camera) gives an all-False mask rather than an
     error: on a live robot "nobody is thermally verified" is the safe answer for that frame.
     """
-    im = np.asarray(image)
+    im = numeric_map("thermal image", image, None)
     if im.ndim == 3:
         if im.dtype != np.uint8:
             raise ImageInputError("a multi-channel thermal image must be 8-bit")
