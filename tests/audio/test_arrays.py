@@ -232,3 +232,13 @@ def test_far_field_direction_of_any_length_and_too_distant_source():
         three.tdoa([1e300, 0.0, 0.0])
     np.testing.assert_allclose(three.tdoa([1e6, 1e6, 0.0]), three.tdoa_far([1.0, 1.0, 0.0]),
                                atol=1e-12)
+
+
+def test_an_array_spec_that_is_no_name_is_refused():
+    """An array of positions where a MicArray or a name belongs (estimate_tdoas(x, fs,
+    positions)) was read as a file name: an OSError "File name too long", or for a short one an
+    "unknown array preset" named after numpy's printout. Now one ConfigError naming what came."""
+    for bad in (np.zeros((3, 3)), 3, None, [[0.0, 0.1, 0.0], [0.0, -0.1, 0.0]]):
+        with pytest.raises(ConfigError, match="^array: expected a MicArray, a preset name or a"):
+            load_array(bad)
+    assert load_array("two-mic").n_mics == 2 and load_array(MicArray.from_preset("two-mic"))

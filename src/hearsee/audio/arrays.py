@@ -354,6 +354,9 @@ def load_array(spec: str | Path | MicArray) -> MicArray:
     """A MicArray from a preset name, a YAML path, or an existing MicArray."""
     if isinstance(spec, MicArray):
         return spec
+    if not isinstance(spec, str | Path):  # (an array of positions was read as a file name)
+        raise ConfigError(f"array: expected a MicArray, a preset name or a YAML path, got "
+                          f"{type(spec).__name__} {spec!r:.60}")
     s = str(spec)
     if Path(s).is_dir():  # (a folder or a missing path read as an unknown preset name)
         raise InputFileError(f"{s}: is a folder; expected an array YAML file or a preset name")
