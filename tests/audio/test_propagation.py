@@ -239,3 +239,23 @@ def test_an_impulse_response_longer_than_memory_allows_is_refused():
     impulse response: a MemoryError traceback. Now a ConfigError before it is computed."""
     with pytest.raises(ConfigError, match="impulse responses up to .* more memory"):
         room_impulse_responses(16000, [[2.0, 2.0, 1.5]], [3.0, 2.0, 1.5], [1e9, 4.0, 3.0], 0.3)
+
+
+def test_signal_helpers_refuse_text_and_ragged_signals():
+    """delay_signals, add_noise and resample read a signal of text through numpy ("0.5" as
+    0.5, True as 1) or raised its builtin ValueError ("x", a ragged list). Now the recording
+    check's AudioInputError; a NaN sample in delay_signals too (it gave an all-NaN recording).
+    Numbers still work."""
+    from hearsee.audio.signals import resample
+
+    s = np.sin(np.arange(400) / 5.0)
+    for bad in (s.astype(str), ["x", "y"], [True, False, True], [[1.0, 2.0], [3.0]]):
+        for call in (lambda v: delay_signals(v, [1e-4], 16000),
+                     lambda v: add_noise(v, 10.0, 0), lambda v: resample(v, 16000, 8000)):
+            with pytest.raises(AudioInputError, match="^signal: samples must be real numbers"):
+                call(bad)
+    with pytest.raises(AudioInputError, match="^signal contains NaN or infinite samples"):
+        delay_signals(np.r_[s, np.nan], [1e-4], 16000)
+    assert delay_signals(s.tolist(), [1e-4], 16000).shape == (1, 400)
+    assert resample(s, 16000, 8000).shape == (200,)
+    np.testing.assert_array_equal(add_noise(s, None), s)

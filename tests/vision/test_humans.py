@@ -692,6 +692,8 @@ def test_silhouette_helpers_refuse_text_and_builtin_errors():
             upper_contour(bad)
         with pytest.raises(ImageInputError, match=r"^mask must be a bool silhouette \(H, W\)"):
             u_disparity(np.full((30, 20), 2.0), mask=bad)
+    assert np.isnan(upper_contour(np.zeros((0, 4), bool))).all()  # (was a builtin ValueError)
+    assert upper_contour(np.zeros((0, 4), bool)).shape == (4,)
     assert cut_by_border([0, 4, 5, 6], 320) and cut_by_border((3, 4, 317, 6), 320)
     assert not cut_by_border(np.array([3, 4, 5, 6]), np.int64(320))
     for box, width, name in (([3, "4", 5, 6], 320, "box y"), ([3, 4, 2.7, 6], 320, "box w"),

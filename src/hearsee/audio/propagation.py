@@ -26,7 +26,7 @@ import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
-from hearsee.audio.signals import check_fs
+from hearsee.audio.signals import as_samples, check_fs
 from hearsee.config import finite_number, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 from hearsee.geometry import norm_scale
@@ -117,7 +117,7 @@ def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: Arra
     array (n_ch, n_out)
         ``y[k](t) = gains[k] * signal(t - delays_s[k])`` with band-limited interpolation.
     """
-    x = np.asarray(signal, dtype=float)
+    x = as_samples(signal, "signal")  # (text was read as numbers; NaN gave a NaN recording)
     if x.ndim != 1:
         raise AudioInputError(f"signal must be one-dimensional, got shape {x.shape}")
     fs = check_fs(fs)
@@ -145,7 +145,7 @@ def add_noise(x: ArrayLike, snr_db: float | None, rng: np.random.Generator | int
     The SNR is relative to ``reference_power`` (default: the mean power of ``x`` over all
     channels). ``snr_db=None`` returns a copy of ``x``.
     """
-    y = np.array(x, dtype=float)
+    y = np.array(as_samples(x, "signal", finite=False), dtype=float)  # (text: read as numbers)
     if snr_db is None:
         return y
     if not np.isfinite(snr_db):

@@ -110,7 +110,7 @@ def check_fs(fs: float) -> float:
     return float(fs)
 
 
-def as_samples(x: ArrayLike, what: str = "recording") -> NDArray:
+def as_samples(x: ArrayLike, what: str = "recording", *, finite: bool = True) -> NDArray:
     """``x`` as a float array of audio samples (any shape: the caller checks it), else an
     AudioInputError naming ``what``.
 
@@ -118,15 +118,18 @@ def as_samples(x: ArrayLike, what: str = "recording") -> NDArray:
     they are -- every estimate of hearsee is scale-free. Booleans, complex numbers, text and
     None are refused: numpy's float conversion read ``True`` as 1.0 and ``"0.5"`` as 0.5, and
     dropped an imaginary part (with a mere ComplexWarning). NaN and infinite samples are
-    refused too. The one check of a recording given to the library's estimators
+    refused too (``finite=False`` lets them through, for a caller that names them itself). The
+    one check of a recording given to the library's estimators
     (:func:`hearsee.audio.tdoa.estimate_tdoas`, :func:`hearsee.audio.tdoa.gcc`,
-    :func:`hearsee.audio.mask.localize_mask`, :class:`hearsee.stream.pipeline.ArraySource`)."""
+    :func:`hearsee.audio.mask.localize_mask`, :class:`hearsee.stream.pipeline.ArraySource`) and
+    of a signal given to the simulation's helpers (:func:`resample` and
+    :mod:`hearsee.audio.propagation`'s ``delay_signals`` and ``add_noise``)."""
     if not real_entries(x):
         got = f"a {x.dtype} array" if isinstance(x, np.ndarray) else repr(x)[:60]
         raise AudioInputError(f"{what}: samples must be real numbers (floats or integer PCM "
                               f"counts), got {got}")
     a = np.asarray(x, dtype=float)
-    if not np.all(np.isfinite(a)):
+    if finite and not np.all(np.isfinite(a)):
         raise AudioInputError(f"{what} contains NaN or infinite samples")
     return a
 
@@ -272,7 +275,7 @@ def _resample(x: ArrayLike, fs_in: float, fs_out: float) -> NDArray:
     """Resample ``x`` (last axis) from ``fs_in`` to ``fs_out`` Hz with a polyphase filter."""
     from scipy.signal import resample_poly
 
-    x = np.asarray(x, dtype=float)
+    x = as_samples(x, "signal", finite=False)  # (text was read as numbers; NaN: the caller's)
     for rate in (fs_in, fs_out):  # (0 divided by zero, NaN and inf raised numpy errors)
         check_fs(rate)
     if fs_in == fs_out:

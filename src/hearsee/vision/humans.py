@@ -764,6 +764,8 @@ def upper_contour(mask: NDArray) -> NDArray:
     """Row of the topmost silhouette pixel of each column of a bool mask (NaN where empty);
     ImageInputError unless ``mask`` is bool or numbers (a mask of text read as all True)."""
     m = _silhouette(mask)
+    if m.shape[0] == 0:  # (no rows: numpy's "argmax of an empty sequence")
+        return np.full(m.shape[1], np.nan)
     has = m.any(axis=0)
     top = np.argmax(m, axis=0).astype(float)
     top[~has] = np.nan
