@@ -806,3 +806,25 @@ def test_dominant_sample_names_a_corrupt_sample_and_no_level(recording, three):
     click = np.zeros((3, FS))
     click[:, 100] = 1.0
     assert dominant_sample(click) is None
+
+
+def test_frame_moving_mean_is_ndimage_uniform_filter():
+    """The statistics' smoothing over frames (_frame_moving_mean, which replaced
+    scipy.ndimage.uniform_filter1d(axis=0, mode="nearest") for speed) gives ndimage's window for
+    odd and even lengths, recordings shorter than the window and one frame, to single
+    precision."""
+    from scipy.ndimage import uniform_filter1d
+
+    from hearsee.audio.tdoa import _frame_moving_mean
+
+    rng = np.random.default_rng(0)
+    for F in (1, 2, 3, 7, 40):
+        a = rng.standard_normal((F, 3, 17)).astype(np.float32) + 2.0
+        for k in (1, 2, 3, 4, 5, 8):
+            np.testing.assert_allclose(_frame_moving_mean(a, k),
+                                       uniform_filter1d(a, k, axis=0, mode="nearest"),
+                                       rtol=1e-6, atol=1e-6)
+    a = rng.standard_normal((6, 2)).astype(np.float32)
+    out = _frame_moving_mean(a, 3)
+    assert out.dtype == np.float32 and out is not a
+    np.testing.assert_allclose(out[0], (2 * a[0] + a[1]) / 3, rtol=1e-6)  # edge frame repeated
