@@ -820,7 +820,7 @@ def test_frame_moving_mean_is_ndimage_uniform_filter():
     rng = np.random.default_rng(0)
     for F in (1, 2, 3, 7, 40):
         a = rng.standard_normal((F, 3, 17)).astype(np.float32) + 2.0
-        for k in (1, 2, 3, 4, 5, 8):
+        for k in (1, 2, 3, 4, 5, 8, 17, 60):  # (above 16: the running-sum path)
             np.testing.assert_allclose(_frame_moving_mean(a, k),
                                        uniform_filter1d(a, k, axis=0, mode="nearest"),
                                        rtol=1e-6, atol=1e-6)

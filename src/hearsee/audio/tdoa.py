@@ -1120,6 +1120,10 @@ def _frame_moving_mean(a: NDArray, k: int) -> NDArray:
         return a.copy()
     lo, hi = k // 2, (k - 1) // 2
     p = a[np.clip(np.arange(-lo, F + hi), 0, F - 1)]  # (F + k - 1, ...), edges repeated
+    if k > 16:  # (a long window: running sums in double precision, O(F) rather than O(k F))
+        c = np.zeros((F + k,) + a.shape[1:])
+        np.cumsum(p, axis=0, dtype=float, out=c[1:])
+        return ((c[k:] - c[:F]) / k).astype(a.dtype)
     s = p[0:F].copy()
     for j in range(1, k):
         s += p[j:j + F]
