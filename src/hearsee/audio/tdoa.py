@@ -257,9 +257,9 @@ def gcc_weighting(method: str, G: NDArray, Gii: NDArray | None = None,
         return 1.0 / np.maximum(Gjj, floor)
     # ml / Hannan-Thomson
     Gc = G if Gij_avg is None else Gij_avg
-    cmag2 = np.abs(Gc) ** 2
-    coh = np.clip(cmag2 / np.maximum(Gii * Gjj, floor * floor), 0.0, 0.99)
-    return coh / ((1.0 - coh) * np.maximum(np.abs(Gc), floor))
+    mag = np.abs(Gc)
+    coh = np.clip(mag**2 / np.maximum(Gii * Gjj, floor * floor), 0.0, 0.99)
+    return coh / ((1.0 - coh) * np.maximum(mag, floor))
 
 
 # ---------------------------------------------------------------------------------- peaks
@@ -327,13 +327,14 @@ def _peaks(r: NDArray, P: NDArray, nfft: int, max_lag: NDArray, refine: str,
     peak = _take_last(win, k)
     lag_i = lags[k]
     lag0 = lag_i.astype(float)
-    # parabolic fit on the integer samples around the peak (values from the full circle)
-    ym = _take_last(r, (lag_i - 1) % nfft)
-    yp = _take_last(r, (lag_i + 1) % nfft)
-    den = ym - 2.0 * peak + yp
-    with np.errstate(divide="ignore", invalid="ignore"):
-        delta = np.where(den < 0, 0.5 * (ym - yp) / den, 0.0)
-    lag_par = lag0 + np.clip(delta, -0.5, 0.5)
+    if refine != "none":
+        # parabolic fit on the integer samples around the peak (values from the full circle)
+        ym = _take_last(r, (lag_i - 1) % nfft)
+        yp = _take_last(r, (lag_i + 1) % nfft)
+        den = ym - 2.0 * peak + yp
+        with np.errstate(divide="ignore", invalid="ignore"):
+            delta = np.where(den < 0, 0.5 * (ym - yp) / den, 0.0)
+        lag_par = lag0 + np.clip(delta, -0.5, 0.5)
     if refine == "none":
         lag = lag0
     elif refine == "parabolic":
@@ -708,20 +709,23 @@ def _percentiles(v: NDArray, qs: tuple[float, ...]) -> list[float]:
 
 def _band_activity(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int,
                    active: NDArray, vad_db: float, chunk: int
-                   ) -> tuple[NDArray, NDArray | None]:
+                   ) -> tuple[NDArray, NDArray | None, NDArray | None]:
     """:func:`frame_activity`'s decision from each frame's energy in the analysis band (bins
     ``k0..k1-1``) instead of the whole spectrum; ``active`` (the broadband decision) where the
     band energy does not decide either. Used when the broadband energy looked stationary: white
     sensor noise outside a voice's band (e.g. 3.5-8 kHz at 16 kHz) can hide the syllables that
     the band's energy still shows, and without inactive frames there is no noise spectrum for
-    the SNR weighting. Returns (active, the band spectra (n_ch, F, bins) when all frames fit
-    in one ``chunk`` -- the frame loop then needs no second transform -- else None)."""
+    the SNR weighting. Returns (active, the band spectra (n_ch, F, bins) and their power
+    ``|X|^2`` when all frames fit in one ``chunk`` -- the frame loop then needs no second
+    transform -- else None, None)."""
     e = np.empty(frames.shape[1])
     for s0 in range(0, frames.shape[1], chunk):
         X = sfft.rfft(windowed_frames(frames[:, s0:s0 + chunk, :], win), nfft, axis=-1)[..., k0:k1]
-        e[s0:s0 + chunk] = np.sum(X.real**2 + X.imag**2, axis=(0, 2))
+        power = X.real**2 + X.imag**2
+        e[s0:s0 + chunk] = np.sum(power, axis=(0, 2))
     band, decided = _energy_vad(e, vad_db)
-    return (active & band if decided else active), (X if frames.shape[1] <= chunk else None)
+    whole = frames.shape[1] <= chunk
+    return (active & band if decided else active), *((X, power) if whole else (None, None))
 
 
 def _closure_residual(lag: NDArray, pairs: list[tuple[int, int]], n_mics: int) -> float | None:
@@ -1078,27 +1082,30 @@ def _unit_frames(P: NDArray) -> NDArray:
 
 
 def _noise_spectrum(frames: NDArray, active: NDArray, win: NDArray, nfft: int, k0: int,
-                    k1: int, X_all: NDArray | None = None) -> NDArray | None:
+                    k1: int, power_all: NDArray | None = None) -> NDArray | None:
     """Each channel's noise power spectrum (n_ch, bins k0..k1-1), averaged over the inactive
     frames of ``frames`` (n_ch, F, L); None with fewer than 3 of them. Frames in which a
     channel is digitally silent (all zeros: a recorder's lead-in, zero padding) are no noise
-    sample: a noise floor of zero would make every SNR infinite. ``X_all``: the band spectra
-    of every frame when already computed (the same transform; not repeated)."""
+    sample: a noise floor of zero would make every SNR infinite. ``power_all``: the band power
+    spectra ``|X|^2`` (n_ch, F, bins) of every frame when already computed (not repeated)."""
     silent = ~np.all(np.any(frames != 0, axis=-1), axis=0)  # (F,)
     quiet = np.flatnonzero(~active & ~silent)
     if quiet.size < _MIN_SUMMARY_FRAMES:
         return None
-    Xq = (X_all[:, quiet, :] if X_all is not None
-          else sfft.rfft(windowed_frames(frames[:, quiet, :], win), nfft, axis=-1)[..., k0:k1])
-    psd = np.mean(Xq.real**2 + Xq.imag**2, axis=1)
+    if power_all is not None:
+        pq = power_all[:, quiet, :]
+    else:
+        Xq = sfft.rfft(windowed_frames(frames[:, quiet, :], win), nfft, axis=-1)[..., k0:k1]
+        pq = Xq.real**2 + Xq.imag**2
+    psd = np.mean(pq, axis=1)
     return np.maximum(psd, 1e-12 * psd.max(initial=0.0) + _TINY)
 
 
-def _spectral_densities(X: NDArray, G: NDArray, I: NDArray, J: NDArray, smooth_frames: int
+def _spectral_densities(auto: NDArray, G: NDArray, I: NDArray, J: NDArray, smooth_frames: int
                         ) -> tuple[NDArray, NDArray, NDArray]:
     """Auto spectra of each pair's microphones and the cross spectra ``G`` (frames, pairs,
-    bins), averaged over ``smooth_frames`` frames: what SCOT, ROTH and ML weigh with."""
-    auto = X.real**2 + X.imag**2
+    bins), averaged over ``smooth_frames`` frames: what SCOT, ROTH and ML weigh with.
+    ``auto`` (frames, n_ch, bins): each channel's power spectrum ``|X|^2``."""
     k = max(int(smooth_frames), 1)
     # one mean per channel (not per pair end), and the cross spectra's real and imaginary
     # parts in one pass through their interleaved float view
@@ -1131,12 +1138,12 @@ def _frame_moving_mean(a: NDArray, k: int) -> NDArray:
     return s
 
 
-def _snr_coherence(X: NDArray, noise_psd: NDArray, I: NDArray, J: NDArray,
+def _snr_coherence(power: NDArray, noise_psd: NDArray, I: NDArray, J: NDArray,
                    hannan_thomson: bool) -> NDArray:
     """Per-bin coherence estimate ``xi_i xi_j / ((1 + xi_i)(1 + xi_j))`` of each pair from the
     channels' a-priori SNRs over ``noise_psd`` (see ``snr_weight``); in the Hannan-Thomson form
-    ``g / (1 - g)`` when asked."""
-    xi = np.maximum((X.real**2 + X.imag**2) / noise_psd - 1.0, 0.0)  # (F', n_ch, B)
+    ``g / (1 - g)`` when asked. ``power`` (F', n_ch, B): the channels' ``|X|^2``."""
+    xi = np.maximum(power / noise_psd - 1.0, 0.0)  # (F', n_ch, B)
     xi = np.minimum(xi, 1e15)  # (a product of two must not overflow float32; coh ~ 1 anyway)
     coh = xi[:, I] * xi[:, J] / ((1.0 + xi[:, I]) * (1.0 + xi[:, J]))
     if hannan_thomson:  # gamma^2 / (1 - gamma^2)
@@ -1424,13 +1431,15 @@ def estimate_tdoas(
     k0, k1 = int(bins[0]), int(bins[-1]) + 1  # the band is one contiguous run of bins
     band_bins = np.arange(k0, k1)
     nb = k1 - k0
-    X_all = None  # the band spectra of every frame when they fit in one chunk
+    X_all = power_all = None  # the band spectra of every frame when they fit in one chunk
     if band_vad and (k0 > 1 or k1 < n_bins - 1) and not decided:
-        active, X_all = _band_activity(frames, win, nfft, k0, k1, active, vad_db,
-                                       max(int(chunk_frames), 1))
+        active, X_all, power_all = _band_activity(frames, win, nfft, k0, k1, active, vad_db,
+                                                  max(int(chunk_frames), 1))
     elif n_frames <= max(int(chunk_frames), 1):  # one transform for the noise and the frames
         X_all = sfft.rfft(windowed_frames(frames, win), nfft, axis=-1)[..., k0:k1]
-    noise_psd = _noise_spectrum(frames, active, win, nfft, k0, k1, X_all) if snr_weight else None
+        power_all = X_all.real**2 + X_all.imag**2
+    noise_psd = (_noise_spectrum(frames, active, win, nfft, k0, k1, power_all) if snr_weight
+                 else None)
 
     redundant = _closure_projector(tuple(prs), arr.n_mics) is not None  # a closed cycle
     frame_cfar = not redundant and min_frame_peak_snr > 0
@@ -1470,28 +1479,33 @@ def estimate_tdoas(
         s1 = min(s0 + chunk, n_frames)
         h0, h1 = max(s0 - halo, 0), min(s1 + halo, n_frames)
         if X_all is not None:  # one chunk: h0, h1 = 0, n_frames
-            X = np.moveaxis(X_all, 0, 1)
+            X, power = np.moveaxis(X_all, 0, 1), np.moveaxis(power_all, 0, 1)
         else:
             X = sfft.rfft(windowed_frames(frames[:, h0:h1, :], win), nfft, axis=-1)
             X = np.moveaxis(X[..., k0:k1], 0, 1)  # (F', n_ch, band bins)
+            power = X.real**2 + X.imag**2  # |X|^2, for the statistics and the SNR weights
         G = X[:, I, :] * np.conj(X[:, J, :])  # (F', P, band bins)
-        stats = _spectral_densities(X, G, I, J, smooth_frames) if need_stats else (None,) * 3
+        stats = (_spectral_densities(power, G, I, J, smooth_frames) if need_stats
+                 else (None,) * 3)
         W = gcc_weighting(method, G, *stats)
         if phat_beta != 1.0 and method in ("phat", "ml"):
             W = W * np.abs(G) ** (1.0 - float(phat_beta))
         if noise_psd is not None:
-            coh = _snr_coherence(X, noise_psd, I, J, snr_weight == "ml")
+            coh = _snr_coherence(power, noise_psd, I, J, snr_weight == "ml")
             W = W * coh
         sl = slice(s0 - h0, s0 - h0 + (s1 - s0))
-        P = (G * W.astype(np.float32))[sl]
-        r = corr(P)
+        P = G[sl] * W[sl].astype(np.float32, copy=False)
         act = active[s0:s1]
-        lag, c = _peaks(r, P, nfft, max_lag, refine, main_lobe, band_bins, need=act)
-        c = np.where(act[:, None], c, 0.0)
+        Pa = P if act.all() else P[act]  # only frames with a source get a correlation
+        lag = np.zeros((s1 - s0, n_pairs))
+        c = np.zeros((s1 - s0, n_pairs))  # (an inactive frame has confidence 0)
+        if len(Pa):
+            r = corr(Pa)
+            lag[act], c[act] = _peaks(r, Pa, nfft, max_lag, refine, main_lobe, band_bins)
         ok = act & np.all(c >= min_confidence, axis=1)
         ok_conf = ok.copy()  # the summary averages these; it has its own detection test
         if frame_cfar and ok.any():  # one independent pair: no closure to test, so CFAR
-            ok[ok] = np.all(_peak_snr(r[ok], lag[ok], max_lag, main_lobe, noise_profile)
+            ok[ok] = np.all(_peak_snr(r[ok[act]], lag[ok], max_lag, main_lobe, noise_profile)
                             >= min_frame_peak_snr, axis=-1)
         tdoa[s0:s1] = np.where(ok[:, None], lag / fs, np.nan)
         conf[s0:s1] = c
@@ -1502,7 +1516,7 @@ def estimate_tdoas(
             n_acc += int(okk.sum())
             if not rev_decided:  # (else the summary is reverb_method's: skip this one)
                 # (with SNR weights, they already say how much each frame and bin counts)
-                Pn = P[act] if noise_psd is not None else _unit_frames(P[act])
+                Pn = Pa if noise_psd is not None else _unit_frames(Pa)
                 if onset_weight:
                     Pn = Pn * frame_w[s0:s1][act][:, None, None]
                 acc_active += np.sum(Pn, axis=0)
@@ -1515,11 +1529,10 @@ def estimate_tdoas(
                                    *(None if A is None else A[ia] for A in stats))
                 if noise_psd is not None:  # SNR weights, and the statistics of the test
                     s_cross += np.sum(Ga, axis=0)
-                    Xa = X[ia]
-                    s_auto += np.sum(Xa.real**2 + Xa.imag**2, axis=0)
-                    P2 = Ga * (W2 * coh[ia]).astype(np.float32)
+                    s_auto += np.sum(power[ia], axis=0)
+                    P2 = Ga * (W2 * coh[ia]).astype(np.float32, copy=False)
                 else:  # every frame counts equally, as in the first weighting's sum
-                    P2 = _unit_frames(Ga * W2.astype(np.float32))
+                    P2 = _unit_frames(Ga * W2.astype(np.float32, copy=False))
                 if onset_weight:
                     P2 = P2 * frame_w[s0:s1][act][:, None, None]
                 acc2_active += np.sum(P2, axis=0)
