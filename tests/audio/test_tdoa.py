@@ -828,3 +828,24 @@ def test_frame_moving_mean_is_ndimage_uniform_filter():
     out = _frame_moving_mean(a, 3)
     assert out.dtype == np.float32 and out is not a
     np.testing.assert_allclose(out[0], (2 * a[0] + a[1]) / 3, rtol=1e-6)  # edge frame repeated
+
+
+def test_frame_spectra_pad_in_place_as_the_transform_would():
+    """frame_spectra writes the windowed frames into a zero-padded buffer (no second padding
+    copy in the transform): the same spectra as numpy's own padded rfft of frames less their
+    means times the window, in float32 and float64; a buffer shorter than a frame is refused."""
+    from hearsee.audio.tdoa import frame_spectra, windowed_frames
+
+    rng = np.random.default_rng(5)
+    win = np.hanning(64).astype(np.float32)
+    for dtype in (np.float32, np.float64):
+        frames = (rng.standard_normal((3, 7, 64)) + 2.5).astype(dtype)  # a DC offset
+        ref = np.fft.rfft((frames - frames.mean(axis=-1, keepdims=True)) * win, 90, axis=-1)
+        got = frame_spectra(frames, win, 90, 3, 40)
+        assert got.shape == (3, 7, 37)
+        np.testing.assert_allclose(got, ref[..., 3:40], rtol=0, atol=2e-4 * np.abs(ref).max())
+        padded = windowed_frames(frames, win, 90)
+        assert padded.shape == (3, 7, 90) and not padded[..., 64:].any()
+        np.testing.assert_array_equal(padded[..., :64], windowed_frames(frames, win))
+    with pytest.raises(ConfigError, match="nfft"):
+        windowed_frames(frames, win, 63)

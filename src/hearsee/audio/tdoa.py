@@ -92,6 +92,7 @@ __all__ = [
     "estimate_tdoas",
     "frame_geometry",
     "frame_signals",
+    "frame_spectra",
     "gcc",
     "gcc_weighting",
     "min_frame_ms",
@@ -634,13 +635,34 @@ def dominant_sample(x: NDArray) -> tuple[int, int, float, float] | None:
     return int(ch), int(i), float(np.asarray(x).flat[k]), peak / median
 
 
-def windowed_frames(frames: NDArray, win: NDArray) -> NDArray:
+def windowed_frames(frames: NDArray, win: NDArray, nfft: int | None = None) -> NDArray:
     """Each frame (..., L) less its own mean, times the analysis window: the spectra's input.
     A DC offset (common on real ADCs, often different per channel) is the same in every
     channel's spectrum and, leaking through the window into the lowest bins, puts a
     correlation peak at lag 0 -- a pure offset read as a source straight above the array.
-    Removing each frame's mean drops it (a digitally silent frame stays all zeros)."""
-    return (frames - frames.mean(axis=-1, keepdims=True, dtype=np.float32)) * win
+    Removing each frame's mean drops it (a digitally silent frame stays all zeros).
+    ``nfft`` (>= L): the frames zero-padded to (..., nfft), written in place (the transform
+    then pads no copy of its own)."""
+    mean = frames.mean(axis=-1, keepdims=True, dtype=np.float32)
+    if nfft is None:
+        return (frames - mean) * win
+    L = frames.shape[-1]
+    if not (isinstance(nfft, (int, np.integer)) and nfft >= L):
+        raise ConfigError(f"nfft must be a whole number of samples >= the frame length {L}, "
+                          f"got {nfft!r}")
+    dtype = np.result_type(np.result_type(frames.dtype, mean.dtype), np.asarray(win).dtype)
+    out = np.zeros(frames.shape[:-1] + (int(nfft),), dtype)
+    body = out[..., :L]
+    np.subtract(frames, mean, out=body)
+    body *= win
+    return out
+
+
+def frame_spectra(frames: NDArray, win: NDArray, nfft: int, k0: int = 0,
+                  k1: int | None = None) -> NDArray:
+    """The spectra (..., k1 - k0) at rfft bins ``k0..k1-1`` of ``frames`` (..., L) less their
+    means, windowed by ``win`` and zero-padded to ``nfft`` samples (:func:`windowed_frames`)."""
+    return sfft.rfft(windowed_frames(frames, win, nfft), axis=-1)[..., k0:k1]
 
 
 def frame_activity(x: NDArray, frame_len: int, hop: int, n_frames: int,
@@ -720,7 +742,7 @@ def _band_activity(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int,
     transform -- else None, None)."""
     e = np.empty(frames.shape[1])
     for s0 in range(0, frames.shape[1], chunk):
-        X = sfft.rfft(windowed_frames(frames[:, s0:s0 + chunk, :], win), nfft, axis=-1)[..., k0:k1]
+        X = frame_spectra(frames[:, s0:s0 + chunk, :], win, nfft, k0, k1)
         power = X.real**2 + X.imag**2
         e[s0:s0 + chunk] = np.sum(power, axis=(0, 2))
     band, decided = _energy_vad(e, vad_db)
@@ -1018,8 +1040,7 @@ def _coherence_gain(a: NDArray, frame_len: int, fs: float, band_hz: tuple[float,
         b1 = min(int(np.floor(band_hz[1] * L / fs)) + 1, L // 2 + 1)
         if b1 <= b0:
             return float("nan")
-        X = sfft.rfft(windowed_frames(frame_signals(a, L, L), _window("hann", L)),
-                      axis=-1)[..., b0:b1]
+        X = frame_spectra(frame_signals(a, L, L), _window("hann", L), L, b0, b1)
         auto = np.sum(X.real**2 + X.imag**2, axis=1)  # (2, bins)
         cross = np.sum(X[0] * np.conj(X[1]), axis=0)  # (bins,)
         msc = (cross.real**2 + cross.imag**2) / np.maximum(auto[0] * auto[1], _TINY)
@@ -1095,7 +1116,7 @@ def _noise_spectrum(frames: NDArray, active: NDArray, win: NDArray, nfft: int, k
     if power_all is not None:
         pq = power_all[:, quiet, :]
     else:
-        Xq = sfft.rfft(windowed_frames(frames[:, quiet, :], win), nfft, axis=-1)[..., k0:k1]
+        Xq = frame_spectra(frames[:, quiet, :], win, nfft, k0, k1)
         pq = Xq.real**2 + Xq.imag**2
     psd = np.mean(pq, axis=1)
     return np.maximum(psd, 1e-12 * psd.max(initial=0.0) + _TINY)
@@ -1436,7 +1457,7 @@ def estimate_tdoas(
         active, X_all, power_all = _band_activity(frames, win, nfft, k0, k1, active, vad_db,
                                                   max(int(chunk_frames), 1))
     elif n_frames <= max(int(chunk_frames), 1):  # one transform for the noise and the frames
-        X_all = sfft.rfft(windowed_frames(frames, win), nfft, axis=-1)[..., k0:k1]
+        X_all = frame_spectra(frames, win, nfft, k0, k1)
         power_all = X_all.real**2 + X_all.imag**2
     noise_psd = (_noise_spectrum(frames, active, win, nfft, k0, k1, power_all) if snr_weight
                  else None)
@@ -1481,8 +1502,8 @@ def estimate_tdoas(
         if X_all is not None:  # one chunk: h0, h1 = 0, n_frames
             X, power = np.moveaxis(X_all, 0, 1), np.moveaxis(power_all, 0, 1)
         else:
-            X = sfft.rfft(windowed_frames(frames[:, h0:h1, :], win), nfft, axis=-1)
-            X = np.moveaxis(X[..., k0:k1], 0, 1)  # (F', n_ch, band bins)
+            X = np.moveaxis(frame_spectra(frames[:, h0:h1, :], win, nfft, k0, k1), 0, 1)
+            # (F', n_ch, band bins)
             power = X.real**2 + X.imag**2  # |X|^2, for the statistics and the SNR weights
         G = X[:, I, :] * np.conj(X[:, J, :])  # (F', P, band bins)
         stats = (_spectral_densities(power, G, I, J, smooth_frames) if need_stats
@@ -1525,8 +1546,9 @@ def estimate_tdoas(
             if use_rev:
                 ia = np.flatnonzero(act) + (s0 - h0)  # active frames, chunk indices
                 Ga = G[ia]
-                W2 = gcc_weighting(reverb_method, Ga,
-                                   *(None if A is None else A[ia] for A in stats))
+                W2 = gcc_weighting(reverb_method, Ga, *(
+                    None if A is None or reverb_method in ("phat", "cc") else A[ia]
+                    for A in stats))
                 if noise_psd is not None:  # SNR weights, and the statistics of the test
                     s_cross += np.sum(Ga, axis=0)
                     s_auto += np.sum(power[ia], axis=0)

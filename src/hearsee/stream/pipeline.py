@@ -71,8 +71,8 @@ from hearsee.audio.tdoa import (
     estimate_tdoas,
     frame_geometry,
     frame_signals,
+    frame_spectra,
     min_frame_ms,
-    windowed_frames,
 )
 from hearsee.audio.tracking import (
     DIRECTION_RATE_TAU_S,
@@ -825,14 +825,13 @@ class SmoothedSrp:
         of the grid maximum and ``alt_az_deg`` (k, 2) of the two strongest other local maxima (NaN
         when none) with their ``alt_coherence`` (k, 2).
         """
-        import scipy.fft as sfft
 
         seg = np.asarray(segment, dtype=np.float32)
         self._rescale(float(np.max(np.abs(seg), initial=0.0)))
         if self._scale != 1.0:
             seg = seg * np.float32(self._scale)
         fr = frame_signals(seg, self.frame_len, hop)[:, :n_frames]
-        X = sfft.rfft(windowed_frames(fr, self.win), self.nfft, axis=-1)[..., self.k0:self.k1]
+        X = frame_spectra(fr, self.win, self.nfft, self.k0, self.k1)
         X = np.moveaxis(X, 0, 1)  # (k, n_ch, B) complex64
         G = X[:, self.I] * np.conj(X[:, self.J])  # (k, P, B)
         a = self.alpha
