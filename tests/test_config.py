@@ -370,3 +370,18 @@ def test_output_file_refuses_folders_and_missing_or_file_parents(tmp_path):
     (tmp_path / "f").write_text("a file", encoding="utf-8")
     with pytest.raises(InputFileError, match=r"x\.wav: .*f is not a folder$"):
         output_file(tmp_path / "f" / "x.wav")
+
+
+def test_as_float_array_with_the_callers_error_and_non_finite_values_allowed():
+    """finite=False lets NaN and infinities through (only non-numbers are refused) and
+    ``error`` is the caller's type."""
+    from hearsee.errors import GeometryError
+
+    got = as_float_array([1.0, np.nan, -np.inf], "w", finite=False)
+    assert np.isnan(got[1]) and got[2] == -np.inf
+    with pytest.raises(GeometryError, match="^w: expected numbers, got "):
+        as_float_array(["x"], "w", finite=False, error=GeometryError)
+    with pytest.raises(GeometryError, match="^w: values must be finite numbers$"):
+        as_float_array([np.nan], "w", error=GeometryError)
+    with pytest.raises(GeometryError, match=r"expected shape 3, got \(2,\)"):
+        as_float_array([1, 2], "w", (3,), error=GeometryError)

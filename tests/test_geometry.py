@@ -211,3 +211,42 @@ def test_cart_to_sph_measures_tiny_vectors():
     assert r == pytest.approx(np.sqrt(2) * 1e-300, rel=1e-12)
     assert np.degrees(az) == pytest.approx(45.0) and el == 0.0
     assert np.all(norm_scale([[0.3, -2.0, 1e-200], [0.0, 0.0, 0.0]]) == 1.0)
+
+
+def test_angle_helpers_refuse_what_is_no_number_and_keep_numpy_semantics_otherwise():
+    """The numpy-style angle helpers raised numpy's builtin TypeError / ValueError on text, a
+    ragged list or vectors of other shapes, and read True as 1; now a GeometryError naming the
+    argument. NaN is still mapped as numpy maps it, and numbers give the
+    values they gave."""
+    from hearsee.geometry import fibonacci_sphere
+
+    bad_calls = [
+        (lambda: wrap_deg("190"), "angle"),
+        (lambda: wrap_rad([0.0, "x"]), "angle"),
+        (lambda: wrap_deg(np.array([True, False])), "angle"),
+        (lambda: sph_to_cart("a", 0.0), "azimuth"),
+        (lambda: sph_to_cart(0.0, [[0.1], [0.2, 0.3]]), "elevation"),
+        (lambda: sph_to_cart(0.0, 0.0, None), "distance"),
+        (lambda: unit_vector_deg(["x"], 0.0), "azimuth_deg"),
+        (lambda: angle_between([1.0, 0.0, 0.0], "v"), "v"),
+        (lambda: angle_between(np.ones((2, 3)), np.ones((3, 3))), "broadcastable"),
+        (lambda: angle_between([1.0, 0.0], [0.0, 1.0]), r"\(\.\.\., 3\)"),
+        (lambda: fibonacci_sphere(2.5), "n must be an integer"),
+        (lambda: fibonacci_sphere("12"), "n must be an integer"),
+        (lambda: fibonacci_sphere(0), "n must be an integer"),
+    ]
+    for call, match in bad_calls:
+        with pytest.raises(GeometryError, match=match):
+            call()
+    # numbers: the values of the formulas, NaN passing through
+    np.testing.assert_array_equal(wrap_deg([190.0, -190.0, 180.0, -180.0]),
+                                  [-170.0, 170.0, 180.0, 180.0])
+    assert np.isnan(wrap_deg(np.nan)) and np.isnan(wrap_rad(float("nan")))
+    assert wrap_deg(np.float64(370.0)) == pytest.approx(10.0)
+    np.testing.assert_allclose(sph_to_cart([0.0, np.pi / 2], 0.0, 2), [[2, 0, 0], [0, 2, 0]],
+                               atol=1e-12)
+    assert angle_between([1, 0, 0], np.array([[0, 1, 0], [1, 0, 0]])) == pytest.approx(
+        [np.pi / 2, 0.0])
+    u = fibonacci_sphere(np.int64(7))
+    assert u.shape == (7, 3)
+    np.testing.assert_allclose(np.linalg.norm(u, axis=1), 1.0)

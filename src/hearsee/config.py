@@ -246,9 +246,12 @@ def require(data: Mapping[str, Any], key: str, where: str) -> Any:
 
 
 def as_float_array(value: Any, where: str,
-                   shape: tuple[int | None, ...] | None = None) -> np.ndarray:
+                   shape: tuple[int | None, ...] | None = None, *, finite: bool = True,
+                   error: type[Exception] = ConfigError) -> np.ndarray:
     """Convert ``value`` to a finite float array, checking ``shape`` (None = any length);
-    ConfigError naming ``where`` otherwise.
+    ``error`` (ConfigError unless the caller's module has its own type) naming ``where``
+    otherwise. With ``finite=False`` NaN and infinities pass (numpy-style helpers such as
+    :func:`hearsee.geometry.wrap_deg` map them as numpy does); only non-numbers are refused.
 
     Every entry must be a real number: a bool, a string (``"0.5"``), an int beyond float's
     range or a complex number is refused -- numpy's float conversion read ``True`` as 1.0 and
@@ -258,19 +261,19 @@ def as_float_array(value: Any, where: str,
     "must be finite" error). The many-number counterpart of
     :func:`hearsee.geometry.as_point`."""
     if not real_entries(value):
-        raise ConfigError(f"{where}: expected numbers, got {value!r}")
+        raise error(f"{where}: expected numbers, got {value!r}")
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
-        raise ConfigError(f"{where}: expected numbers, got {value!r}") from None
+        raise error(f"{where}: expected numbers, got {value!r}") from None
     if shape is not None:
         if arr.ndim != len(shape) or any(
             s is not None and s != a for s, a in zip(shape, arr.shape, strict=True)
         ):
             want = "x".join("N" if s is None else str(s) for s in shape)
-            raise ConfigError(f"{where}: expected shape {want}, got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ConfigError(f"{where}: values must be finite numbers")
+            raise error(f"{where}: expected shape {want}, got {arr.shape}")
+    if finite and not np.all(np.isfinite(arr)):
+        raise error(f"{where}: values must be finite numbers")
     return arr
 
 

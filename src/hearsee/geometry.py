@@ -16,7 +16,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.config import all_real, is_real, object_entries, real_entries
+from hearsee.config import (
+    all_real,
+    as_float_array,
+    is_real,
+    object_entries,
+    real_entries,
+    whole_number,
+)
 from hearsee.errors import GeometryError
 
 __all__ = [
@@ -48,9 +55,8 @@ def sph_to_cart(azimuth: ArrayLike, elevation: ArrayLike, distance: ArrayLike = 
     >>> np.round(sph_to_cart(np.pi / 2, 0.0, 2.0), 6)
     array([0., 2., 0.])
     """
-    az = np.asarray(azimuth, dtype=float)
-    el = np.asarray(elevation, dtype=float)
-    r = np.asarray(distance, dtype=float)
+    az, el, r = (_reals(v, what) for v, what in ((azimuth, "azimuth"), (elevation, "elevation"),
+                                                  (distance, "distance")))
     ce = np.cos(el)
     return np.stack(np.broadcast_arrays(r * ce * np.cos(az), r * ce * np.sin(az), r * np.sin(el)),
                     axis=-1)
@@ -60,6 +66,17 @@ def sph_to_cart(azimuth: ArrayLike, elevation: ArrayLike, distance: ArrayLike = 
 #: square of 1.4e154 already overflows float), and a vector whose largest coordinate is below
 #: its inverse is scaled up (the squares of 1e-160 underflow to zero).
 _SQUARE_SAFE = 1e150
+
+
+def _reals(value: Any, what: str) -> NDArray:
+    """``value`` as a float array of any shape when every entry is a real number (NaN and the
+    infinities pass through, as numpy would map them); GeometryError naming ``what`` for text,
+    bools, complex numbers, None or a ragged list (numpy raised a builtin TypeError or
+    ValueError, or read ``True`` as 1). A float (Python's or numpy's float64) is taken as it
+    is."""
+    if isinstance(value, float):
+        return np.asarray(value)
+    return as_float_array(value, what, finite=False, error=GeometryError)
 
 
 def norm_scale(v: ArrayLike) -> NDArray:
@@ -96,7 +113,8 @@ def cart_to_sph(xyz: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
 
 def unit_vector_deg(azimuth_deg: ArrayLike, elevation_deg: ArrayLike = 0.0) -> NDArray:
     """Unit direction vector(s) ``(..., 3)`` for azimuth/elevation in degrees."""
-    return sph_to_cart(np.radians(azimuth_deg), np.radians(elevation_deg), 1.0)
+    return sph_to_cart(np.radians(_reals(azimuth_deg, "azimuth_deg")),
+                       np.radians(_reals(elevation_deg, "elevation_deg")), 1.0)
 
 
 def direction_deg(xyz: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -107,20 +125,22 @@ def direction_deg(xyz: ArrayLike) -> tuple[NDArray, NDArray]:
 
 def wrap_rad(angle: ArrayLike) -> NDArray:
     """Wrap angle(s) in radians to (-pi, pi]."""
-    a = np.asarray(angle, dtype=float)
+    a = _reals(angle, "angle")
     w = np.mod(a + np.pi, 2 * np.pi) - np.pi
     return np.where(w == -np.pi, np.pi, w)
 
 
 def wrap_deg(angle: ArrayLike) -> NDArray:
     """Wrap angle(s) in degrees to (-180, 180]."""
-    a = np.asarray(angle, dtype=float)
+    a = _reals(angle, "angle")
     w = np.mod(a + 180.0, 360.0) - 180.0
     return np.where(w == -180.0, 180.0, w)
 
 
 def fibonacci_sphere(n: int) -> NDArray:
-    """``n`` nearly uniformly spread unit vectors ``(n, 3)`` (Fibonacci lattice)."""
+    """``n`` nearly uniformly spread unit vectors ``(n, 3)`` (Fibonacci lattice); ``n`` an
+    integer >= 1 (GeometryError otherwise: 2.5 is not rounded)."""
+    n = whole_number("n", n, error=GeometryError)
     i = np.arange(n) + 0.5
     z = 1.0 - 2.0 * i / n
     phi = np.pi * (1.0 + 5**0.5) * i
@@ -130,8 +150,15 @@ def fibonacci_sphere(n: int) -> NDArray:
 
 def angle_between(u: ArrayLike, v: ArrayLike) -> NDArray:
     """Angle in radians between direction vectors ``(..., 3)`` (need not be unit length)."""
-    a = np.asarray(u, dtype=float)
-    b = np.asarray(v, dtype=float)
+    a, b = _reals(u, "u"), _reals(v, "v")
+    try:
+        np.broadcast_shapes(a.shape, b.shape)
+        ok = a.shape[-1:] == (3,) and b.shape[-1:] == (3,)
+    except ValueError:
+        ok = False
+    if not ok:
+        raise GeometryError(f"angle_between needs vectors (..., 3) of broadcastable shapes, got "
+                            f"{a.shape} and {b.shape}")
     na = np.linalg.norm(a, axis=-1)
     nb = np.linalg.norm(b, axis=-1)
     if np.any(na == 0) or np.any(nb == 0):

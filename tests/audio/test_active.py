@@ -617,3 +617,48 @@ def test_a_head_pivot_is_a_point_of_the_robot(tmp_path):
     est = localize_manifest(man)
     np.testing.assert_allclose([est.azimuth_deg, est.elevation_deg], direction_deg(src),
                                atol=2.0)
+
+
+def test_range_difference_solvers_refuse_what_is_no_number():
+    """The range-difference solvers converted their inputs with numpy and compared them:
+    text, a ragged list, a pair of text or of three numbers, a 2.5 grid size were numpy's or
+    Python's builtin errors (or read as numbers). Each is now a GeometryError naming what was
+    wrong; a distant source in a known direction is still found from the same geometry."""
+    from hearsee.audio.active import one_mic_arrival_differences
+    from hearsee.geometry import unit_vector_deg
+
+    M = ARR.positions
+    prs = [(0, 1), (0, 2), (1, 2)]
+    tau = MicArray(M).tdoa_far(unit_vector_deg(26.5, 15.0))  # a plane wave
+    good = dict(mic_sets=[M], pairs=[prs], tdoa_s=[tau])
+    bad = [
+        (dict(pairs=[[("a", 1), (0, 2), (1, 2)]]), "pairs must be"),
+        (dict(pairs=[[(0, 1, 2), (0, 2), (1, 2)]]), "pairs must be"),
+        (dict(pairs=[5]), "pairs must be"),
+        (dict(tdoa_s=[["x", 0.0, 0.0]]), "TDOAs: expected numbers"),
+        (dict(mic_sets=[[[0, 0, 0], [1, 0]]]), "microphone positions: expected numbers"),
+        (dict(reference_m="origin"), "reference_m"),
+        (dict(f_scale="3"), "f_scale must be a finite number"),
+        (dict(n_directions=2.5), "n_directions must be an integer"),
+        (dict(tdoa_std_s="1e-5"), "tdoa_std_s must be > 0 seconds"),
+        (dict(distance_bounds_m=("a", 5.0)), "distance_bounds_m: expected numbers"),
+        (dict(distance_bounds_m=(0.2, 5.0, 9.0)), "distance_bounds_m must be 0 < min < max"),
+    ]
+    for change, match in bad:
+        kw = {**good, **change}
+        with pytest.raises(GeometryError, match=match):
+            solve_range_differences(kw.pop("mic_sets"), kw.pop("pairs"), kw.pop("tdoa_s"),
+                                    **kw)
+    est = solve_range_differences(**good, distance_bounds_m=np.array([0.2, 5.0]),
+                                  n_directions=np.int64(400))
+    # (one planar pose: the azimuth is determined, the elevation's sign is not)
+    assert est.azimuth_deg == pytest.approx(26.5, abs=0.2)
+    assert abs(est.elevation_deg) == pytest.approx(15.0, abs=0.2)
+    with pytest.raises(GeometryError, match="arrival_times_s: expected numbers"):
+        localize_one_mic(["0.1", 0.2, 0.3, 0.4], np.eye(4, 3))
+    with pytest.raises(GeometryError, match="mic_positions_m: expected numbers"):
+        localize_one_mic([0.1, 0.2, 0.3, 0.4], "square")
+    with pytest.raises(GeometryError, match="one \\[x, y, z\\] position per capture"):
+        one_mic_arrival_differences([np.zeros(64), np.zeros(64)], 16000, 1.0)
+    with pytest.raises(AudioInputError, match="capture 1"):
+        one_mic_arrival_differences([np.zeros(64), ["a"] * 64], 16000, np.eye(2, 3))

@@ -462,3 +462,18 @@ def test_simulate_masked_refuses_a_source_heard_after_the_signal_ends():
     for far in (1000.0, 1e8):
         with pytest.raises(GeometryError, match="longer than the 0.1 s simulated"):
             mask.simulate_masked(sig, FS, "mask2", [far, 0.0, 0.0])
+
+
+def test_default_bands_checks_its_edges():
+    """default_bands took text into np.geomspace (builtin TypeError) and an upper edge below
+    the lower one gave descending band edges; both are ConfigErrors. Valid edges are the
+    log-spaced ones."""
+    for args, match in (((100.0,), "f_max must be a finite number > 250"),
+                        (("8000",), "f_max must be a finite number"),
+                        ((8000.0, 2.5), "n_bands must be an integer"),
+                        ((8000.0, 8, 0.0), "f_lo must be a finite number > 0")):
+        with pytest.raises(ConfigError, match=match):
+            mask.default_bands(*args)
+    e = mask.default_bands(8000.0, 5, 250.0)
+    assert len(e) == 6 and e[0] == pytest.approx(250.0) and e[-1] == pytest.approx(8000.0)
+    np.testing.assert_allclose(np.diff(np.log(e)), np.log(32.0) / 5)

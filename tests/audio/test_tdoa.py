@@ -849,3 +849,34 @@ def test_frame_spectra_pad_in_place_as_the_transform_would():
         np.testing.assert_array_equal(padded[..., :64], windowed_frames(frames, win))
     with pytest.raises(ConfigError, match="nfft"):
         windowed_frames(frames, win, 63)
+
+
+def test_framing_helpers_refuse_what_is_no_number():
+    """The framing checks compared text with numbers (builtin TypeError) or took a string
+    sample rate into the rounding; the frame cutter read a ragged signal with numpy's
+    ValueError. Each is now hearsee's error naming the value; numbers keep their results
+    (NaN still gets the range message)."""
+    from hearsee.audio.tdoa import check_frame_ms, check_recording_length, frame_geometry
+
+    with pytest.raises(ConfigError, match="--frame-ms must be a number of milliseconds"):
+        check_frame_ms("64", 32.0, names=("--frame-ms", "--hop-ms"))
+    with pytest.raises(ConfigError, match="hop must be a number of milliseconds"):
+        check_frame_ms(64.0, np.array([32.0, 16.0]))
+    with pytest.raises(ConfigError, match="must be > 0 ms, got nan"):
+        check_frame_ms(float("nan"), 32.0)
+    with pytest.raises(AudioInputError, match="sample rate"):
+        frame_geometry("16000", 64.0, 32.0)
+    assert frame_geometry(16000, 64.0, 32.0) == (1024, 512)
+    with pytest.raises(ConfigError, match="n_samples must be an integer"):
+        check_recording_length("100", 64)
+    with pytest.raises(ConfigError, match="frame_len must be an integer"):
+        check_recording_length(100, 64.5)
+    with pytest.raises(AudioInputError, match="recording too short: 10 samples"):
+        check_recording_length(np.int64(10), 64)
+    check_recording_length(64, 64)  # exactly one frame
+    with pytest.raises(AudioInputError, match="samples must be real numbers"):
+        frame_signals([[0.0, 1.0], [2.0]], 1, 1)
+    with pytest.raises(ConfigError, match="numbers of samples"):
+        frame_signals(np.zeros((2, 32)), "8", 4)
+    fr = frame_signals(np.arange(12, dtype=np.float32).reshape(1, 12), 4, 4)
+    assert fr.dtype == np.float32 and fr[0, 2].tolist() == [8.0, 9.0, 10.0, 11.0]

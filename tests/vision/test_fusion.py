@@ -122,6 +122,8 @@ def test_draw(scene):
         draw_detections(grey.astype(np.int64), res)
     with pytest.raises(ImageInputError, match="empty"):
         draw_detections(np.zeros((0, 0), np.uint8), res)
+    with pytest.raises(ImageInputError, match="image must hold numbers"):
+        draw_detections([[1, 2], [3]], res)  # (a ragged list: numpy's ValueError)
 
 
 def test_rig_that_needs_rectification(scene):

@@ -81,3 +81,13 @@ def test_an_empty_image_is_an_error_in_both():
             detect_people_hog(np.zeros(shape, np.uint8))
         with pytest.raises(ImageInputError, match="empty"):
             detect_source_point(np.zeros(shape, np.uint8), "hog")
+
+
+def test_a_ragged_or_text_image_is_an_error_in_both():
+    """A ragged list was numpy's builtin ValueError and an image of text reached the dtype
+    test as '<U1'; both are ImageInputErrors naming what the detector needs."""
+    for bad in ([[1, 2], [3]], [["a"] * 64] * 128):
+        with pytest.raises(ImageInputError, match="HOG must hold numbers"):
+            detect_people_hog(bad)
+        with pytest.raises(ImageInputError):
+            detect_source_point(bad, "hog")

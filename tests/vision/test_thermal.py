@@ -270,3 +270,27 @@ def test_thermal_images_of_text_or_ragged_rows_are_refused(fn):
         with pytest.raises(ImageInputError, match="^thermal image must hold numbers"):
             fn(bad)
     assert fn(t).shape == t.shape and fn(t.tolist()).shape == t.shape
+
+
+def test_overlay_refuses_images_opencv_cannot_blend():
+    """An empty, float, BGRA or text visible image, an empty thermal image and a warm mask of
+    text failed inside OpenCV (cv2.error) or numpy; each is now an ImageInputError. A BGRA or
+    (H, W, 1) visible image is blended like its BGR / grey version."""
+    vis = np.full((40, 60, 3), 100, np.uint8)
+    th = np.zeros((20, 30), np.uint8)
+    th[5:15, 10:20] = 255
+    warm = th > 0
+    for v, t, w, match in ((np.zeros((0, 0, 3), np.uint8), th, warm, "empty"),
+                           (vis.astype(np.float64), th, warm, "8-bit"),
+                           ([[1, 2], [3]], th, warm, "visible must hold numbers"),
+                           (vis, np.zeros((0, 5)), warm, "empty"),
+                           (vis, th, [["a"] * 30] * 20, "warm must be a bool silhouette"),
+                           (vis, th, np.zeros((0, 4), bool), "warm mask is empty")):
+        with pytest.raises(ImageInputError, match=match):
+            overlay_thermal(v, t, w)
+    ref = overlay_thermal(vis, th, warm)
+    bgra = np.dstack([vis, np.full(vis.shape[:2], 7, np.uint8)])
+    np.testing.assert_array_equal(overlay_thermal(bgra, th, warm), ref)
+    grey = vis[..., 0].copy()
+    np.testing.assert_array_equal(overlay_thermal(grey[..., None], th, warm),
+                                  overlay_thermal(grey, th, warm))

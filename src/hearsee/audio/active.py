@@ -63,7 +63,8 @@ from scipy.optimize import least_squares
 
 from hearsee.audio.arrays import MicArray, load_array, pair_tdoa, pair_tdoa_jacobian
 from hearsee.audio.propagation import speed_of_sound_of
-from hearsee.config import finite_number, is_real, whole_number
+from hearsee.audio.signals import as_samples
+from hearsee.config import as_float_array, finite_number, is_real, whole_number
 from hearsee.errors import (
     AudioInputError,
     EstimationError,
@@ -243,12 +244,14 @@ def _stack(mic_sets: Sequence[ArrayLike], pairs: Sequence[Sequence[tuple[int, in
     mics, a_idx, b_idx, vals = [], [], [], []
     base = 0
     for k, (m, prs, t) in enumerate(zip(mic_sets, pairs, tdoa_s, strict=True)):
-        m = np.asarray(m, dtype=float)
+        m = as_float_array(m, f"pose {k}: microphone positions", finite=False, error=GeometryError)
         if m.ndim != 2 or m.shape[1] != 3 or not np.all(np.isfinite(m)):
             raise GeometryError(f"pose {k}: microphone positions must be finite N x 3")
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        if len(t) != len(prs):
-            raise GeometryError(f"pose {k}: {len(t)} TDOAs for {len(prs)} pairs")
+        t = np.atleast_1d(as_float_array(t, f"pose {k}: TDOAs", finite=False,
+                                         error=GeometryError))
+        prs = _index_pairs(prs, k)
+        if t.ndim != 1 or len(t) != len(prs):
+            raise GeometryError(f"pose {k}: {t.size} TDOAs for {len(prs)} pairs")
         for (i, j), v in zip(prs, t, strict=True):
             if not (0 <= i < len(m) and 0 <= j < len(m)) or i == j:
                 raise GeometryError(f"pose {k}: invalid pair ({i}, {j}) for {len(m)} microphones")
@@ -266,6 +269,21 @@ def _stack(mic_sets: Sequence[ArrayLike], pairs: Sequence[Sequence[tuple[int, in
         raise GeometryError("the microphone positions of every measured pair coincide: their "
                             "TDOAs say nothing about the source")
     return M, a, b, np.array(vals)
+
+
+def _index_pairs(prs: Any, k: int) -> list[tuple[int, int]]:
+    """Pose ``k``'s pairs as a list of (i, j) microphone indices; GeometryError for anything
+    else (a pair of text, floats or three numbers was a builtin TypeError or ValueError)."""
+    try:
+        out = [tuple(p) for p in prs]
+    except TypeError:
+        out = None
+    if out is None or not all(
+            len(p) == 2 and all(isinstance(i, int | np.integer) and not isinstance(i, bool)
+                                for i in p) for p in out):
+        raise GeometryError(f"pose {k}: pairs must be (i, j) microphone indices, got "
+                            f"{repr(prs)[:80]}")
+    return [(int(i), int(j)) for i, j in out]
 
 
 def _rho(z: NDArray, loss: str) -> NDArray:
@@ -406,20 +424,19 @@ def solve_range_differences(
     """
     M, a, b, y = _stack(mic_sets, pairs, tdoa_s)
     c = speed_of_sound_of(None, speed_of_sound)  # (a negative c mirrored the direction)
-    ref = np.asarray(reference_m, dtype=float)
-    if ref.shape != (3,) or not np.all(np.isfinite(ref)):
-        raise GeometryError(f"reference_m must be a finite [x, y, z] point, got {reference_m!r}")
-    if not (np.isfinite(f_scale) and f_scale > 0):
-        raise GeometryError(f"f_scale must be a finite number > 0, got {f_scale}")
-    if min(n_directions, n_distances, n_starts) < 1:
-        raise GeometryError("n_directions, n_distances and n_starts must be >= 1, got "
-                            f"{n_directions}, {n_distances}, {n_starts}")
+    ref = as_point(reference_m, "reference_m")
+    f_scale = finite_number("f_scale", f_scale, 0.0, lo_open=True, error=GeometryError)
+    n_directions, n_distances, n_starts = (
+        whole_number(name, v, error=GeometryError) for name, v in
+        (("n_directions", n_directions), ("n_distances", n_distances), ("n_starts", n_starts)))
+    if not is_real(tdoa_std_s) or tdoa_std_s <= 0:
+        raise GeometryError(f"tdoa_std_s must be > 0 seconds, got {tdoa_std_s!r}")
     sig = float(tdoa_std_s)
-    if not np.isfinite(sig) or sig <= 0:
-        raise GeometryError(f"tdoa_std_s must be > 0 seconds, got {tdoa_std_s}")
-    rmin, rmax = (float(v) for v in distance_bounds_m)
-    if not (0 < rmin < rmax and np.isfinite(rmax)):
+    bounds = as_float_array(distance_bounds_m, "distance_bounds_m", finite=False,
+                            error=GeometryError)
+    if bounds.shape != (2,) or not (0 < bounds[0] < bounds[1] < np.inf):
         raise GeometryError(f"distance_bounds_m must be 0 < min < max, got {distance_bounds_m}")
+    rmin, rmax = float(bounds[0]), float(bounds[1])
     fs2 = f_scale * f_scale
     far = not resolve_distance
     if far:  # direction only: a source 1 km away is a plane wave to within 1e-7 s
@@ -597,7 +614,8 @@ def localize_multipose(
     poses = [as_pose(p) for p in poses]
     if not poses:
         raise GeometryError("at least one head pose is needed")
-    t = [np.atleast_1d(np.asarray(v, dtype=float)) for v in tdoa_s]
+    t = [np.atleast_1d(as_float_array(v, f"pose {k}: TDOAs", finite=False, error=GeometryError))
+         for k, v in enumerate(tdoa_s)]
     if len(t) != len(poses):
         raise GeometryError(f"{len(t)} TDOA vectors for {len(poses)} poses")
     mic_sets = pose_mic_positions(arr, poses, pivot_m, offset_m)
@@ -630,8 +648,9 @@ def localize_one_mic(
     **kwargs
         Passed to :func:`solve_range_differences`.
     """
-    t = np.asarray(arrival_times_s, dtype=float).ravel()
-    P = np.asarray(mic_positions_m, dtype=float)
+    t = as_float_array(arrival_times_s, "arrival_times_s", finite=False,
+                       error=GeometryError).ravel()
+    P = as_float_array(mic_positions_m, "mic_positions_m", finite=False, error=GeometryError)
     if P.ndim != 2 or P.shape[1] != 3 or len(P) != len(t):
         raise GeometryError(
             f"need one [x, y, z] microphone position per arrival time, got {P.shape} for {len(t)}"
@@ -658,10 +677,11 @@ def one_mic_arrival_differences(captures: Sequence[ArrayLike], fs: float,
     """
     from hearsee.audio.tdoa import estimate_tdoas
 
-    P = np.asarray(mic_positions_m, dtype=float)
-    caps = [np.asarray(c, dtype=float).ravel() for c in captures]
-    if len(caps) != len(P) or len(caps) < 2:
-        raise GeometryError(f"need one position per capture (>= 2), got {len(P)} for {len(caps)}")
+    P = as_float_array(mic_positions_m, "mic_positions_m", finite=False, error=GeometryError)
+    caps = [as_samples(c, f"capture {k}").ravel() for k, c in enumerate(captures)]
+    if P.ndim != 2 or len(caps) != len(P) or len(caps) < 2:
+        raise GeometryError(f"need one [x, y, z] position per capture (>= 2), got positions of "
+                            f"shape {P.shape} for {len(caps)} captures")
     n = min(len(c) for c in caps)
     virt = MicArray(P, speed_of_sound, name="one-mic-virtual")
     fr = estimate_tdoas(np.stack([c[:n] for c in caps]), fs, virt,

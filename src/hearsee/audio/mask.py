@@ -337,7 +337,12 @@ class Responses:
 
 
 def default_bands(f_max: float, n_bands: int = 8, f_lo: float = 250.0) -> NDArray:
-    """Log-spaced band edges (Hz) from ``f_lo`` to ``f_max``."""
+    """``n_bands`` + 1 log-spaced band edges (Hz) from ``f_lo`` > 0 to ``f_max`` > ``f_lo``
+    (ConfigError otherwise: text was a builtin TypeError, f_max <= f_lo gave descending or
+    NaN edges)."""
+    f_lo = finite_number("f_lo", f_lo, 0.0, lo_open=True)
+    f_max = finite_number("f_max", f_max, f_lo, lo_open=True)
+    n_bands = whole_number("n_bands", n_bands)
     return np.geomspace(f_lo, f_max, n_bands + 1)
 
 

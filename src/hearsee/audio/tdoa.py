@@ -166,6 +166,11 @@ def check_frame_ms(frame_ms: float, hop_ms: float, *,
     ``names`` are what the message calls them (the CLI passes its option names, so that it can
     check them before reading a recording)."""
     what = f"{names[0]} and {names[1]}"
+    for name, v in zip(names, (frame_ms, hop_ms), strict=True):
+        # (NaN and inf are numbers: the range checks below name them; text or an array was a
+        # builtin TypeError or ValueError of the comparison)
+        if not (is_real(v) or isinstance(v, float | np.floating)):
+            raise ConfigError(f"{name} must be a number of milliseconds, got {v!r}")
     if not (frame_ms > 0 and hop_ms > 0):
         raise ConfigError(f"{what} must be > 0 ms, got {frame_ms} and {hop_ms}")
     if not (frame_ms <= MAX_FRAME_MS and hop_ms <= MAX_FRAME_MS):
@@ -190,14 +195,19 @@ def check_analysis_fs(fs: float) -> float:
 def frame_geometry(fs: float, frame_ms: float, hop_ms: float) -> tuple[int, int]:
     """Frame length and hop in samples for ``frame_ms`` / ``hop_ms`` milliseconds at ``fs`` Hz
     (at least 8 and 1 samples): the one rounding rule of :func:`estimate_tdoas`, the stream and
-    the CLI. Both must be in (0, :data:`MAX_FRAME_MS`] (:func:`check_frame_ms`)."""
+    the CLI. Both must be in (0, :data:`MAX_FRAME_MS`] (:func:`check_frame_ms`); ``fs`` a
+    sample rate (:func:`hearsee.audio.signals.check_fs`)."""
     check_frame_ms(frame_ms, hop_ms)
+    fs = check_fs(fs)
     return max(int(round(frame_ms * 1e-3 * fs)), 8), max(int(round(hop_ms * 1e-3 * fs)), 1)
 
 
 def check_recording_length(n_samples: int, frame_len: int) -> None:
     """AudioInputError unless a recording of ``n_samples`` holds one frame of ``frame_len``
-    samples (:func:`frame_signals`; the stream checks a file before streaming it)."""
+    samples (:func:`frame_signals`; the stream checks a file before streaming it). Both are
+    sample counts (ConfigError for anything else)."""
+    n_samples = whole_number("n_samples", n_samples, lo=0)
+    frame_len = whole_number("frame_len", frame_len)
     if n_samples < frame_len:
         raise AudioInputError(
             f"recording too short: {n_samples} samples, one frame needs {frame_len}; "
@@ -221,13 +231,15 @@ def frame_signals(x: ArrayLike, frame_len: int, hop: int) -> NDArray:
         A read-only strided view: frame f of channel c is ``x[c, f*hop : f*hop + frame_len]``.
         Trailing samples that do not fill a frame are dropped.
     """
-    a = np.asarray(x)
-    if a.dtype.kind != "f":
-        a = a.astype(float)
+    a = np.asarray(x) if isinstance(x, np.ndarray) and x.dtype.kind == "f" else as_samples(
+        x, "signals", finite=False)  # (float arrays keep their precision)
     if a.ndim == 1:
         a = a[None, :]
     if a.ndim != 2:
         raise AudioInputError(f"signals must be (n_channels, n_samples), got shape {a.shape}")
+    if not (is_real(frame_len) and is_real(hop)):
+        raise ConfigError(f"frame length and hop must be numbers of samples, got {frame_len!r} "
+                          f"and {hop!r}")
     frame_len, hop = int(frame_len), int(hop)
     if frame_len < 2 or hop < 1:
         raise ConfigError(f"frame length must be >= 2 and hop >= 1 samples, got {frame_len}, {hop}")

@@ -38,7 +38,7 @@ from hearsee.vision.humans import (
     detect_candidates,
     robust_top_m,
 )
-from hearsee.vision.io import check_image
+from hearsee.vision.io import check_image, numeric_map
 from hearsee.vision.stereo import StereoFrame, points_to_left_frame, stereo_frame
 from hearsee.vision.thermal import HUMAN_BAND_C, thermal_mask
 
@@ -301,7 +301,7 @@ def draw_detections(image: NDArray, result: DetectionResult, *, show_rejected: b
     grey, BGR or BGRA image (an int64 or empty one used to fail inside OpenCV)."""
     import cv2
 
-    img = check_image(np.asarray(image))
+    img = check_image(numeric_map("image", image, None))
     if img.dtype != np.uint8:
         raise ImageInputError(f"draw_detections needs an 8-bit image (the rectified left "
                               f"image), got pixel type {img.dtype}")

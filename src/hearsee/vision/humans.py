@@ -61,7 +61,7 @@ from hearsee.errors import (
     GeometryError,
     ImageInputError,
 )
-from hearsee.vision.io import as_detector_image, numeric_map
+from hearsee.vision.io import as_detector_image, bool_mask, numeric_map
 from hearsee.vision.stereo import check_focal_baseline
 
 __all__ = [
@@ -132,21 +132,6 @@ def check_principal_row(cy: float) -> None:
     """CalibrationError unless the principal row ``cy`` (pixels) is a finite number."""
     if not is_real(cy):
         raise CalibrationError(f"cy (principal row) must be a finite number of pixels, got {cy!r}")
-
-
-def _silhouette(mask: ArrayLike) -> NDArray:
-    """``mask`` as a bool (H, W) array, or an ImageInputError unless it is one of bools or
-    numbers (numpy took a mask of text as all True; a ragged list was its builtin ValueError).
-    The mask check of :func:`u_disparity` and :func:`upper_contour`."""
-    try:
-        m = np.asarray(mask)
-    except (TypeError, ValueError):  # (a ragged list)
-        raise ImageInputError(f"mask must be a bool silhouette (H, W), got {mask!r:.60}") from None
-    if m.dtype.kind not in "biuf":
-        raise ImageInputError(f"mask must be a bool silhouette, got {m.dtype}")
-    if m.ndim != 2:
-        raise ImageInputError(f"mask must be a bool silhouette (H, W), got shape {m.shape}")
-    return m.astype(bool, copy=False)
 
 
 def _point_image(points: ArrayLike) -> NDArray:
@@ -393,7 +378,7 @@ def u_disparity(disparity: NDArray, mask: NDArray | None = None, max_disparity: 
     if max_disparity is not None:
         max_disparity = whole_number("max_disparity", max_disparity, 0, MAX_DISPARITY_PX)
     if mask is not None:
-        m = _silhouette(mask)
+        m = bool_mask(mask)
         if m.shape != d.shape:
             raise ImageInputError(f"mask must have the disparity's shape {d.shape}, got "
                                   f"{m.shape}")
@@ -763,7 +748,7 @@ def _cut_by_border(box: Sequence[int], width: int) -> bool:
 def upper_contour(mask: NDArray) -> NDArray:
     """Row of the topmost silhouette pixel of each column of a bool mask (NaN where empty);
     ImageInputError unless ``mask`` is bool or numbers (a mask of text read as all True)."""
-    m = _silhouette(mask)
+    m = bool_mask(mask)
     if m.shape[0] == 0:  # (no rows: numpy's "argmax of an empty sequence")
         return np.full(m.shape[1], np.nan)
     has = m.any(axis=0)

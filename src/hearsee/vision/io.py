@@ -54,6 +54,22 @@ def numeric_map(name: str, value: ArrayLike, dtype: type | None = np.float64, *,
     return np.array(value, dtype=dtype, copy=True) if copy else np.asarray(value, dtype=dtype)
 
 
+def bool_mask(mask: ArrayLike, name: str = "mask") -> NDArray:
+    """``mask`` as a bool (H, W) array, or an ImageInputError naming it unless it is one of
+    bools or numbers (numpy took a mask of text as all True; a ragged list was its builtin
+    ValueError). The mask check of :mod:`hearsee.vision` (silhouettes, warm-pixel masks)."""
+    try:
+        m = np.asarray(mask)
+    except (TypeError, ValueError):  # (a ragged list)
+        raise ImageInputError(f"{name} must be a bool silhouette (H, W), got {mask!r:.60}"
+                              ) from None
+    if m.dtype.kind not in "biuf":
+        raise ImageInputError(f"{name} must be a bool silhouette, got {m.dtype}")
+    if m.ndim != 2:
+        raise ImageInputError(f"{name} must be a bool silhouette (H, W), got shape {m.shape}")
+    return m.astype(bool, copy=False)
+
+
 def _size_text(size: tuple[int, int]) -> str:
     return f"{size[0]}x{size[1]}"
 
@@ -176,8 +192,9 @@ def as_detector_image(image: NDArray, what: str = "image") -> NDArray:
     """``image`` in the layout OpenCV's detectors (HOG, Haar cascades) and 8-bit video take:
     uint8 grey ``(H, W)`` or BGR ``(H, W, 3)``; ``(H, W, 1)`` is read as grey and BGRA loses its
     alpha. Any other pixel type or channel count is an ImageInputError naming ``what`` (OpenCV
-    raised cv2.error or crashed). The size is not checked."""
-    img = np.asarray(image)
+    raised cv2.error or crashed; a ragged list was numpy's ValueError). The size is not
+    checked."""
+    img = numeric_map(what, image, None)
     if img.dtype != np.uint8 or img.ndim not in (2, 3) or \
             (img.ndim == 3 and img.shape[2] not in (1, 3, 4)):
         raise ImageInputError(

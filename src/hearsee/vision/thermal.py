@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from hearsee.config import finite_number, input_file, whole_number
 from hearsee.errors import ConfigError, ImageInputError
-from hearsee.vision.io import numeric_map, to_gray
+from hearsee.vision.io import as_detector_image, bool_mask, check_image, numeric_map, to_gray
 
 __all__ = [
     "counts_to_celsius",
@@ -272,20 +272,26 @@ def overlay_thermal(visible: NDArray, thermal: NDArray, warm: NDArray | None = N
     image in a colour map blended over the visible image where ``warm`` (default: everywhere),
     the rest of the visible image darkened; the thermal image is resized to the visible one.
     ``alpha`` (the thermal image's weight) is in [0, 1] (ConfigError: NaN gave a black
-    overlay). Returns BGR uint8."""
+    overlay). ``visible`` is an 8-bit grey, BGR or BGRA image, ``thermal`` any non-empty
+    image (colour ones uint8, uint16 or float32) and ``warm`` a bool mask (ImageInputError
+    otherwise: an empty or float visible image failed inside OpenCV). Returns BGR uint8."""
     finite_number("alpha", alpha, 0.0, 1.0)  # (checked, not converted: see counts_to_celsius)
-    vis = np.asarray(visible)
+    vis = as_detector_image(check_image(numeric_map("visible", visible, None), "visible"),
+                            "the visible image of an overlay")
     if vis.ndim == 2:
         vis = cv2.cvtColor(vis, cv2.COLOR_GRAY2BGR)
-    th = np.asarray(thermal)
-    if th.ndim == 3:
-        th = cv2.cvtColor(th, cv2.COLOR_BGR2GRAY)
+    th = to_gray(check_image(numeric_map("thermal", thermal, None), "thermal"))
     if th.dtype != np.uint8:
         th = cv2.normalize(th.astype(np.float32), None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
     size = (vis.shape[1], vis.shape[0])
     col = cv2.applyColorMap(cv2.resize(th, size), cv2.COLORMAP_INFERNO)
-    m = np.ones(vis.shape[:2], bool) if warm is None else \
-        cv2.resize(warm.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST).astype(bool)
+    if warm is None:
+        m = np.ones(vis.shape[:2], bool)
+    else:
+        w8 = bool_mask(warm, "warm").astype(np.uint8)
+        if w8.size == 0:
+            raise ImageInputError(f"warm mask is empty (shape {w8.shape})")
+        m = cv2.resize(w8, size, interpolation=cv2.INTER_NEAREST).astype(bool)
     out = (0.55 * vis).astype(np.uint8)
     blend = cv2.addWeighted(vis, 1.0 - alpha, col, alpha, 0.0)
     out[m] = blend[m]
