@@ -83,8 +83,10 @@ PEER_NEAR_M = 2.0
 #: frequency range given to every method (pyroomacoustics' freq_range; hearsee's band_hz)
 BANDS = {"noise": (300.0, 7500.0), "speech": (300.0, 3500.0)}
 #: hearsee's settings in this benchmark (see the docstring of estimate_tdoas)
-#: (ML/Hannan-Thomson weighting x SNR weighting, non-overlapping 64 ms Tukey frames; per-frame
-#: TDOAs unrefined because only the whole-recording estimate -- always refined -- is scored;
+#: (ML/Hannan-Thomson weighting x SNR weighting, 64 ms Hann frames at a 32 ms hop since
+#: 2026-11-26's twenty-sixth session -- non-overlapping Tukey frames before, see TIMED_VARIANT;
+#: per-frame TDOAs unrefined and without the per-frame detection test (min_frame_peak_snr=0)
+#: because only the whole-recording estimate -- always refined, its own test -- is scored;
 #: frame confidence threshold 0.8 instead of the library's 1.0 so that reverberant 0 dB
 #: recordings still get an estimate -- with 3 microphones the closure test keeps noise-only
 #: recordings at 0 false estimates in 60 trials, see tests)
@@ -132,9 +134,9 @@ BANDS = {"noise": (300.0, 7500.0), "speech": (300.0, 3500.0)}
 #:   48 (hearsee) -> 18 (threshold 0.8) / 22 (0.5) / 24 (soft weights MSC or MSC^2); pooled
 #:   three-mic RT60 0.6 s 3.91 -> 3.46-3.49 deg with the soft weights but two-mic RT60 0.3 s
 #:   13.5 -> 14.0-14.3 deg. No gain.
-HEARSEE = {"method": "ml", "frame_ms": 64.0, "hop_ms": 64.0, "refine": "none",
-           "snr_weight": True, "window": ("tukey", 0.25), "min_confidence": 0.8,
-           "onset_weight": 3.0, "reverb_method": "phat"}
+HEARSEE = {"method": "ml", "frame_ms": 64.0, "hop_ms": 32.0, "refine": "none",
+           "snr_weight": True, "window": "hann", "min_confidence": 0.8,
+           "onset_weight": 3.0, "reverb_method": "phat", "min_frame_peak_snr": 0.0}
 #: the direction: sources are in the array plane (the peers are run with dim=2, the same
 #: assumption), so the three-mic azimuth models the spherical wavefront of a source assumed
 #: 2 m away (localize_tdoa(in_plane=True); removes the ~0.5 deg far-field bias of the 15 cm
@@ -145,34 +147,37 @@ HEARSEE = {"method": "ml", "frame_ms": 64.0, "hop_ms": 64.0, "refine": "none",
 IN_PLANE = True
 N_BOOT = 2000
 HEARSEE_ABSTAINED: list = []  # one entry per fallback taken (all calls, ablations included)
-#: the one ablation that is also timed (its CPU row in the CPU table): the library's default
-#: hop (50 % overlap) with a Hann window, as the peers' STFT. It wins more conditions but costs
-#: more CPU per second of audio, so the benchmarked setting keeps non-overlapping frames for
-#: the CPU target and this row shows the trade. Evidence, oldest first (all 2026-11-26):
-#: - dev seed 777 (twenty-fourth session; 12 room recordings per cell, voices only): lower
-#:   pooled RMSE in all six array x RT60 pools (e.g. two-mic RT60 0.3 s 9.39 -> 8.38 deg,
-#:   three-mic 2.47 -> 1.88);
-#: - this table's seed (twenty-fourth session, full run, quiet machine): 54/72 conditions at or
-#:   below the best peer (the benchmarked setting 47/72), pooled two-mic RT60 0.3 / 0.6 s 11.0
-#:   -> 9.63 / 21.0 -> 19.1 deg, at 3.97x less CPU than SRP-PHAT (the benchmarked setting 5.24x);
+#: the one ablation that is also timed (its CPU row in the CPU table): the benchmarked setting
+#: until 2026-11-26's twenty-sixth session, non-overlapping 64 ms frames with a Tukey (0.25)
+#: window. Since then HEARSEE takes 50 % overlap with a Hann window (as the peers' STFT) and no
+#: per-frame detection test (min_frame_peak_snr=0: only the whole-recording summary is scored,
+#: and it does not use that test, as refine="none"): more conditions won, more CPU per second
+#: of audio. Evidence, oldest first (all 2026-11-26):
+#: - dev seed 777 (twenty-fourth session; 12 room recordings per cell, voices only): the overlap
+#:   setting gave lower pooled RMSE in all six array x RT60 pools (e.g. two-mic RT60 0.3 s
+#:   9.39 -> 8.38 deg, three-mic 2.47 -> 1.88);
+#: - this table's seed (twenty-fourth session, full run with it as a timed ablation): 54/72
+#:   conditions at or below the best peer (the Tukey setting 47/72), pooled two-mic RT60
+#:   0.3 / 0.6 s 11.0 -> 9.63 / 21.0 -> 19.1 deg, at 3.97x less CPU than SRP-PHAT (5.24x);
 #: - held out (twenty-fifth session; `--trials 10 --seed 778`, the whole table): 41/72 vs 30/72,
 #:   lower pooled RMSE in all six pools (two-mic RT60 0.3 s 8.71 -> 7.86 deg, paired CI of the
-#:   difference [+0.26, +1.4]; three-mic RT60 0.3 s 2.14 -> 1.73, [+0.04, +0.76]), 4.18x vs
-#:   5.5x less CPU than SRP-PHAT (a loaded machine);
-#: - the same session made estimate_tdoas ~17 % (64 ms hop) / ~25 % (32 ms hop) cheaper and,
-#:   under a rule written before the run (adopt iff CPU >= 5.0x less than SRP-PHAT and the
-#:   measured RIRs no worse than 0.266 + 0.01 samples), ran the whole table with this setting as
-#:   the benchmarked one and the per-frame detection test off (the scored summary does not use
-#:   it): 54/72, measured RIRs 0.271 samples, but 4.71x (the non-overlapping setting 6.56x in the
-#:   same run, its pooled RMSEs unchanged to the digit). Not adopted: 5.0x missed. The results
-#:   file holds the re-run of the non-overlapping setting that followed (5.64x; this row 4.44x).
+#:   difference [+0.26, +1.4]; three-mic RT60 0.3 s 2.14 -> 1.73, [+0.04, +0.76]);
+#: - twenty-fifth session, under a rule written before the run (adopt iff CPU >= 5.0x less than
+#:   SRP-PHAT and the measured RIRs no worse than 0.266 + 0.01 samples): 54/72, RIRs 0.271
+#:   samples, but 4.71x. Not adopted then;
+#: - twenty-sixth session: estimate_tdoas ~8 % fewer instructions on this setting (power spectra
+#:   once per chunk, correlations only for frames with a source, no second zero-padding copy;
+#:   outputs bit-identical), then the same rule on a full run: 54/72, RIRs 0.271 samples,
+#:   **5.03x** (the Tukey setting 6.84x in the same run). Adopted -- at the line: earlier runs
+#:   of unchanged code spread by +-10 %, so 5x is not a robust margin for this setting.
 #: The Hann window alone (64 ms hop, no extra CPU) was tested on the held-out run under a rule
 #: written before it (at least 2 more conditions won, at most one pool worse and none by > 5 %,
 #: measured RIRs no worse than 0.27 + 0.01 samples): 31/72, pools three-mic RT60 0.6 s 3.90 ->
 #: 9.31 deg (one recording), two-mic anechoic 0.444 -> 0.543, measured RIRs 0.266 -> 0.280
 #: samples. Rejected.
-OVERLAP_VARIANT = "window='hann', hop_ms=32 (50 % overlap; timed)"
-#: hearsee variants scored on the same recordings (ablation; only OVERLAP_VARIANT timed)
+TIMED_VARIANT = ("window=('tukey', 0.25), hop_ms=64 (no overlap; the setting before "
+                 "2026-11-26; timed)")
+#: hearsee variants scored on the same recordings (ablation; only TIMED_VARIANT timed)
 ABLATIONS = {
     "previous setting (far field, no reverb_method)": {"in_plane": False,
                                                        "reverb_method": None},
@@ -188,7 +193,7 @@ ABLATIONS = {
     "first_arrival=0 (the highest two-mic peak; before 2026-11-26's nineteenth session)": {
         "first_arrival": 0.0},
     "no fallback": {"fallback": False},
-    OVERLAP_VARIANT: {"window": "hann", "hop_ms": 32.0},
+    TIMED_VARIANT: {"window": ("tukey", 0.25), "hop_ms": 64.0},
 }
 
 
@@ -304,7 +309,7 @@ def run_doa(trials: int, seed: int, data: Path | None, duration: float,
     kinds = ["noise", "male", "female"] + (["arctic"] if speech else [])
     methods = ["hearsee", *PRA_METHODS]
     errors: dict = {}
-    cpu: dict = {m: 0.0 for m in [*methods, OVERLAP_VARIANT]}
+    cpu: dict = {m: 0.0 for m in [*methods, TIMED_VARIANT]}
     cpu_fine: dict = {m: 0.0 for m in PRA_METHODS}  # the peers on the scored (fine) grid
     audio_s = 0.0
     t_start = time.time()
@@ -357,7 +362,7 @@ def run_doa(trials: int, seed: int, data: Path | None, duration: float,
                             errors.setdefault(key, {k: [] for k in methods})[m].append(
                                 az_error(est, az, two))
                         for name, kw in ABLATIONS.items():  # same recording
-                            if name == OVERLAP_VARIANT:
+                            if name == TIMED_VARIANT:
                                 est_v, dt = best_cpu(hearsee_azimuth, x, FS, arr, band, **kw)
                                 cpu[name] += dt
                             else:
@@ -397,7 +402,7 @@ def summarize_doa(results: list, timing: dict) -> tuple[list, list, list]:
                 int(np.sum(errs["abstained"]))]
         rows.append(row)
     cpu_rows = []
-    for m in [*methods, *(v for v in [OVERLAP_VARIANT] if v in timing["cpu"])]:
+    for m in [*methods, *(v for v in [TIMED_VARIANT] if v in timing["cpu"])]:
         per_s = timing["cpu"][m] / timing["audio_s"]
         fine = timing.get("cpu_fine", {}).get(m)
         cpu_rows.append([m, per_s * 1e3, timing["cpu"]["SRP"] / max(timing["cpu"][m], 1e-12),
