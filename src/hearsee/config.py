@@ -7,6 +7,7 @@ the field, e.g. ``robot.yaml: unknown key 'microphone' (expected one of: array, 
 from __future__ import annotations
 
 import math
+import os
 import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -36,6 +37,16 @@ _Loader.add_implicit_resolver(
     list("-+0123456789."))
 
 
+def as_path(path: Any, what: str = "path") -> Path:
+    """``path`` as a Path when it is a string or a path-like object, else InputFileError
+    naming ``what`` (Path() raised its builtin TypeError on a number or None). The type check
+    of :func:`input_file`, :func:`output_file` and every reader that looks at a path's suffix
+    before it opens the file."""
+    if not isinstance(path, str | os.PathLike) or (isinstance(path, str) and not path):
+        raise InputFileError(f"{what} must be a file name, got {path!r:.60}")
+    return Path(path)
+
+
 def input_file(path: str | Path, kind: str = "file", hint: str = "") -> Path:
     """``path`` as a Path when it names something to read, else InputFileError: ``"P: is a
     folder, expected a <kind>"`` for a folder, ``"P: <kind> not found<hint>"`` when nothing is
@@ -45,7 +56,7 @@ def input_file(path: str | Path, kind: str = "file", hint: str = "") -> Path:
     thermal arrays, trajectories, videos, image points): most said "not found" for a folder.
     A file that exists but is not a regular one (a FIFO, ``/dev/stdin``) is left to the
     reader, whose own typed error reports what it cannot read."""
-    p = Path(path)
+    p = as_path(path, f"the {kind}'s path")
     if p.is_dir():
         article = "an" if kind[:1].lower() in "aeiou" else "a"
         raise InputFileError(f"{p}: is a folder, expected {article} {kind}")
@@ -61,7 +72,7 @@ def output_file(path: str | Path) -> Path:
     check of an output path made before the work that ends by writing it (the CLI's
     ``refuse_overwrite``, ``save_wav``, the robot's exports, ``write_image`` and the
     simulator's ground-truth file)."""
-    p = Path(path)
+    p = as_path(path, "the output path")
     if p.is_dir():
         raise InputFileError(f"{p}: is a folder, expected an output file name")
     if not p.parent.is_dir():

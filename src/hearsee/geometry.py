@@ -90,7 +90,9 @@ def norm_scale(v: ArrayLike) -> NDArray:
     :func:`cart_to_sph`, the far-field directions of
     :meth:`hearsee.audio.arrays.MicArray.tdoa_far` and the free-field and masked
     simulators."""
-    p = np.asarray(v, dtype=float)
+    p = _reals(v, "vector")
+    if p.shape[-1:] != (3,):
+        raise GeometryError(f"norm_scale needs vectors (..., 3), got shape {p.shape}")
     big = np.max(np.abs(p), axis=-1, keepdims=True)
     scale = np.isfinite(big) & ((big > _SQUARE_SAFE) | ((big > 0) & (big < 1.0 / _SQUARE_SAFE)))
     return np.where(scale, big, 1.0)
@@ -407,8 +409,8 @@ def mic_positions_at(array: Any, pose: HeadPose | Sequence[float],
     >>> np.round(mic_positions_at([[0.1, 0, 0]], (90.0, 0.0)), 6)
     array([[0. , 0.1, 0. ]])
     """
-    pos = getattr(array, "positions", array)
-    pos = np.asarray(pos, dtype=float)
+    pos = as_float_array(getattr(array, "positions", array), "microphone positions",
+                         error=GeometryError)
     if pos.ndim != 2 or pos.shape[1] != 3:
         raise GeometryError(f"microphone positions must be N x 3, got shape {pos.shape}")
     return array_to_robot(pos, pose, pivot_m, offset_m)

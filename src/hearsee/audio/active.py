@@ -239,7 +239,11 @@ def facing_pair(array: MicArray) -> tuple[int, int] | None:
 def _stack(mic_sets: Sequence[ArrayLike], pairs: Sequence[Sequence[tuple[int, int]]],
            tdoa_s: Sequence[ArrayLike]) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Stack per-set measurements into global microphone rows (a, b) and values."""
-    if not (len(mic_sets) == len(pairs) == len(tdoa_s)):
+    try:
+        counts = (len(mic_sets), len(pairs), len(tdoa_s))
+    except TypeError:  # (a number where a list of poses belongs)
+        counts = None
+    if counts is None or not (counts[0] == counts[1] == counts[2]):
         raise GeometryError("mic_sets, pairs and tdoa_s must have one entry per pose")
     mics, a_idx, b_idx, vals = [], [], [], []
     base = 0
@@ -678,6 +682,10 @@ def one_mic_arrival_differences(captures: Sequence[ArrayLike], fs: float,
     from hearsee.audio.tdoa import estimate_tdoas
 
     P = as_float_array(mic_positions_m, "mic_positions_m", finite=False, error=GeometryError)
+    if not isinstance(captures, list | tuple) and not (
+            isinstance(captures, np.ndarray) and captures.ndim == 2):
+        raise AudioInputError(f"captures must be a list of 1-D recordings, got "
+                              f"{type(captures).__name__}")
     caps = [as_samples(c, f"capture {k}").ravel() for k, c in enumerate(captures)]
     if P.ndim != 2 or len(caps) != len(P) or len(caps) < 2:
         raise GeometryError(f"need one [x, y, z] position per capture (>= 2), got positions of "
@@ -1317,10 +1325,17 @@ def load_pose_manifest(path: Any) -> PoseManifest:
     """Read and validate a pose manifest; ConfigError / InputFileError name the problem."""
     from pathlib import Path
 
-    from hearsee.config import as_float_array, check_keys, input_file, load_yaml, require
+    from hearsee.config import (
+        as_float_array,
+        as_path,
+        check_keys,
+        input_file,
+        load_yaml,
+        require,
+    )
     from hearsee.errors import ConfigError, InputFileError
 
-    p = Path(path)
+    p = as_path(path, "the pose manifest's path")
     data = load_yaml(p)
     where = str(p)
     check_keys(data, MANIFEST_KEYS, where)

@@ -192,6 +192,7 @@ def as_tdoas(tdoa_s: ArrayLike, n_pairs: int, error: type[Exception] = GeometryE
     """The TDOA vector (seconds, one per microphone pair) as floats, or ``error`` for entries
     that are no real numbers (:func:`check_real_tdoas`), a count other than ``n_pairs`` or an
     entry beyond :data:`MAX_TDOA_S`. NaN and inf entries pass (the callers decide)."""
+    n_pairs = whole_number("n_pairs", n_pairs, lo=0, error=error)
     if tdoa_s is not None:  # (None: "got 1 TDOAs" below)
         check_real_tdoas(tdoa_s, error)
     tau = np.asarray(tdoa_s, dtype=float).reshape(-1)

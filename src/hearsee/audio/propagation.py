@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.signals import as_samples, check_fs
-from hearsee.config import finite_number, whole_number
+from hearsee.config import as_float_array, finite_number, is_real, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 from hearsee.geometry import norm_scale
 
@@ -148,7 +148,7 @@ def add_noise(x: ArrayLike, snr_db: float | None, rng: np.random.Generator | int
     y = np.array(as_samples(x, "signal", finite=False), dtype=float)  # (text: read as numbers)
     if snr_db is None:
         return y
-    if not np.isfinite(snr_db):
+    if not is_real(snr_db):  # (an array was numpy's ambiguous truth value, text a TypeError)
         raise ConfigError(f"SNR must be a finite number of dB (None for no noise), got {snr_db!r}")
     rng = np.random.default_rng(rng)
     p = float(np.mean(y**2)) if reference_power is None else float(reference_power)
@@ -227,7 +227,7 @@ def simulate_free_field(
 
 # ---------------------------------------------------------------------------- rooms
 def _room_dim(room_dim: ArrayLike) -> NDArray:
-    d = np.asarray(room_dim, dtype=float)
+    d = as_float_array(room_dim, "room dimensions", finite=False, error=GeometryError)
     if d.shape != (3,) or not np.all(np.isfinite(d)) or np.any(d <= 0):
         raise GeometryError(
             f"room dimensions must be three positive lengths [L, W, H] in metres, got {room_dim!r}"
@@ -274,10 +274,11 @@ def image_sources(rt60: float, room_dim: ArrayLike, speed_of_sound: float = 343.
     import pyroomacoustics as pra
 
     dim = _room_dim(room_dim)
+    if not is_real(rt60) or rt60 < 0:
+        raise ConfigError(f"RT60 must be a non-negative number of seconds, got {rt60!r}")
     rt60 = float(rt60)
-    if not np.isfinite(rt60) or rt60 < 0:
-        raise ConfigError(f"RT60 must be a non-negative number of seconds, got {rt60}")
-    if max_order is not None and (int(max_order) != max_order or max_order < 0):
+    if max_order is not None and (not is_real(max_order) or int(max_order) != max_order
+                                  or max_order < 0):
         raise ConfigError(f"max_order must be a non-negative integer, got {max_order!r}")
     if rt60 == 0 and max_order:
         # (pyroomacoustics' default walls reflect everything: the images would come back)

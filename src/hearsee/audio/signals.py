@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import input_file, is_real, output_file, real_entries
+from hearsee.config import as_path, input_file, is_real, output_file, real_entries
 from hearsee.errors import (
     AudioInputError,
     ClippingWarning,
@@ -533,7 +533,7 @@ def write_recording(
     """
     import soundfile as sf
 
-    p = Path(path)
+    p = as_path(path, "the output path")
     fs = check_fs(fs)  # (inf: a builtin OverflowError from int(round(fs)) before)
     if protect is not None:
         items = [protect] if isinstance(protect, str | Path) else list(protect)

@@ -636,7 +636,9 @@ def dominant_sample(x: NDArray) -> tuple[int, int, float, float] | None:
     sample of 1e30 among speech at ~0.1 puts every other frame below single precision's range:
     no frame is valid. The CLI names the sample then, instead of "silence or uncorrelated
     noise"."""
-    a = np.abs(np.asarray(x, dtype=float))
+    a = np.abs(as_samples(x, finite=False))
+    if a.ndim > 2:
+        raise AudioInputError(f"a recording is (n_channels, n_samples), got shape {a.shape}")
     if a.size == 0:
         return None
     k = int(np.argmax(a))
@@ -654,7 +656,15 @@ def windowed_frames(frames: NDArray, win: NDArray, nfft: int | None = None) -> N
     correlation peak at lag 0 -- a pure offset read as a source straight above the array.
     Removing each frame's mean drops it (a digitally silent frame stays all zeros).
     ``nfft`` (>= L): the frames zero-padded to (..., nfft), written in place (the transform
-    then pads no copy of its own)."""
+    then pads no copy of its own). Frames and window are real samples, the window as long as a
+    frame (AudioInputError / ConfigError otherwise)."""
+    if not (isinstance(frames, np.ndarray) and frames.dtype.kind == "f"):
+        frames = as_samples(frames, "frames", finite=False)  # (float arrays: as they are)
+    if not (isinstance(win, np.ndarray) and win.dtype.kind == "f"):
+        win = as_samples(win, "window", finite=False)
+    if frames.ndim < 1 or win.shape != frames.shape[-1:]:
+        raise ConfigError(f"a window of shape {win.shape} for frames of shape {frames.shape}: "
+                          "the window must be as long as a frame")
     mean = frames.mean(axis=-1, keepdims=True, dtype=np.float32)
     if nfft is None:
         return (frames - mean) * win

@@ -42,12 +42,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.propagation import add_noise, check_heard, speed_of_sound_of
-from hearsee.audio.signals import check_fs
+from hearsee.audio.signals import as_samples, check_fs
 from hearsee.config import (
     MAX_TIME_LIMIT_S,
+    as_float_array,
     finite_number,
     input_file,
     is_real,
+    output_file,
     real_entries,
     whole_number,
 )
@@ -263,7 +265,7 @@ def save_trajectory(traj: Trajectory, path: str | Path, times: ArrayLike | None 
     """Write ``traj`` (sampled at ``times`` if given, else its own knots) as CSV ``t,x,y,z``."""
     t = traj.t if times is None else np.asarray(times, dtype=float)
     p = traj.at(t)
-    with Path(path).open("w", newline="", encoding="utf-8") as fh:
+    with output_file(path).open("w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
         w.writerow(["t", "x", "y", "z"])
         for ti, pi in zip(t, p, strict=True):
@@ -300,12 +302,12 @@ def fractional_delay(signal: ArrayLike, delays_samples: ArrayLike, n_out: int | 
     out-of-range options (ConfigError: ``half_width=0`` and a negative ``chunk`` used to
     return silence, a NaN ``beta`` NaNs). A delay longer than the output leaves it silent.
     """
-    x = np.asarray(signal, dtype=float)
+    x = as_samples(signal, "signal", finite=False)
     if x.ndim != 1:
         raise AudioInputError(f"signal must be one-dimensional, got shape {x.shape}")
     if not np.all(np.isfinite(x)):
         raise AudioInputError("signal contains NaN or infinite samples")
-    d = np.asarray(delays_samples, dtype=float)
+    d = as_float_array(delays_samples, "delays", finite=False, error=GeometryError)
     if d.ndim not in (1, 2):
         raise GeometryError(f"delays must be (n_out,) or (n_ch, n_out), got shape {d.shape}")
     squeeze = d.ndim == 1

@@ -780,8 +780,7 @@ def head_shoulder_score(mask: NDArray, depth_m: float, focal_px: float, *, tau_m
     (GeometryError), ``focal_px`` finite > 0 (CalibrationError), ``tau_m`` finite > 0
     (ConfigError): a zero one divided by zero, a negative depth mirrored the template.
     """
-    if np.ndim(mask) != 2:
-        raise ImageInputError(f"mask must be a 2-D silhouette, got shape {np.shape(mask)}")
+    mask = bool_mask(mask)  # (np.ndim of a ragged list was numpy's ValueError)
     finite_number("depth_m", depth_m, 0.0, lo_open=True, error=GeometryError)
     finite_number("focal_px", focal_px, 0.0, lo_open=True, error=CalibrationError)
     finite_number("tau_m", tau_m, 0.0, lo_open=True)

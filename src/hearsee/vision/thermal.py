@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.config import finite_number, input_file, whole_number
+from hearsee.config import as_path, finite_number, input_file, whole_number
 from hearsee.errors import ConfigError, ImageInputError
 from hearsee.vision.io import as_detector_image, bool_mask, check_image, numeric_map, to_gray
 
@@ -223,7 +223,7 @@ def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
     """Read a thermal image: ``.npy`` (float degC, (h, w)), or any image file through
     :func:`hearsee.vision.io.read_thermal` (8-bit non-radiometric, 16-bit centi-kelvin counts,
     float TIFF degC). ``expected_size`` is (width, height)."""
-    p = Path(path)
+    p = as_path(path, "the thermal file's path")
     if p.suffix.lower() == ".npy":
         input_file(p, "thermal file")
         try:

@@ -1,0 +1,118 @@
+"""Values of the wrong kind (text, None, a number for a path, a ragged list, an empty array for
+a number) given to the library's lower-level functions: each is hearsee's own error naming
+what was wrong, where numpy or Python raised a builtin TypeError / ValueError / AttributeError
+before. Well-formed calls next to them keep their results."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hearsee.errors import (
+    AudioInputError,
+    ConfigError,
+    GeometryError,
+    ImageInputError,
+    InputFileError,
+)
+
+
+@pytest.mark.parametrize("path", [float("nan"), None, 3, "", ["a.wav"]])
+def test_paths_must_be_file_names(path, tmp_path):
+    from hearsee.audio.signals import read_recording, write_recording
+    from hearsee.config import input_file, output_file
+    from hearsee.sim.moving import linear_trajectory, load_trajectory, save_trajectory
+    from hearsee.vision.thermal import load_thermal
+
+    for call in (lambda: input_file(path), lambda: output_file(path),
+                 lambda: read_recording(path), lambda: load_thermal(path),
+                 lambda: load_trajectory(path),
+                 lambda: write_recording(path, np.zeros((2, 160)), 16000),
+                 lambda: save_trajectory(linear_trajectory([1, 0, 0], [0, 1, 0], 1.0), path)):
+        with pytest.raises(InputFileError, match="must be a file name"):
+            call()
+    # a file name is still one, and a trajectory still goes to a folder that exists
+    out = tmp_path / "t.csv"
+    save_trajectory(linear_trajectory([1, 0, 0], [0, 1, 0], 1.0), out)
+    np.testing.assert_allclose(load_trajectory(out).at(np.array([0.5])), [[1.0, 0.5, 0.0]])
+    with pytest.raises(InputFileError, match="does not exist"):
+        save_trajectory(linear_trajectory([1, 0, 0], [0, 1, 0], 1.0), tmp_path / "no" / "t.csv")
+
+
+def test_simulation_helpers_refuse_what_is_no_number():
+    from hearsee.audio.propagation import add_noise, image_sources
+    from hearsee.sim.moving import fractional_delay
+
+    x = np.ones((2, 64))
+    for snr in (np.array([]), "10", [10.0]):
+        with pytest.raises(ConfigError, match="SNR must be a finite number"):
+            add_noise(x, snr, 0)
+    with pytest.raises(ConfigError, match="RT60 must be a non-negative number"):
+        image_sources("0.3", (5.0, 4.0, 3.0))
+    with pytest.raises(ConfigError, match="max_order must be a non-negative integer"):
+        image_sources(0.3, (5.0, 4.0, 3.0), max_order="2")
+    with pytest.raises(GeometryError, match="room dimensions"):
+        image_sources(0.3, "5x4x3")
+    assert image_sources(0.0, (5.0, 4.0, 3.0)) == (None, 0)
+    with pytest.raises(AudioInputError, match="signal: samples must be real numbers"):
+        fractional_delay("chirp", np.zeros(4))
+    with pytest.raises(GeometryError, match="delays: expected numbers"):
+        fractional_delay(np.ones(8), ["a"] * 8)
+    y = fractional_delay(np.arange(16.0), np.full(16, 2.0))
+    np.testing.assert_allclose(y[4:12], np.arange(2.0, 10.0), atol=1e-3)
+
+
+def test_geometry_and_localization_helpers_refuse_what_is_no_number():
+    from hearsee.audio.localize import as_tdoas
+    from hearsee.geometry import mic_positions_at, norm_scale
+
+    with pytest.raises(GeometryError, match="microphone positions: expected numbers"):
+        mic_positions_at("three-mic", (0.0, 0.0))
+    with pytest.raises(GeometryError, match="microphone positions: values must be finite"):
+        mic_positions_at([[np.nan, 0, 0]], (0.0, 0.0))
+    np.testing.assert_allclose(mic_positions_at([[0.1, 0, 0]], (90.0, 0.0)), [[0, 0.1, 0]],
+                               atol=1e-12)
+    for v, match in (([], r"vectors \(\.\.\., 3\)"), ("x", "vector: expected numbers"),
+                     (np.zeros((2, 2)), r"vectors \(\.\.\., 3\)")):
+        with pytest.raises(GeometryError, match=match):
+            norm_scale(v)
+    np.testing.assert_array_equal(norm_scale([[1e300, 0, 0], [1.0, 2.0, 3.0]]), [[1e300], [1.0]])
+    with pytest.raises(GeometryError, match="n_pairs must be an integer"):
+        as_tdoas([0.0], np.array([]))
+    np.testing.assert_array_equal(as_tdoas([1e-4, -2e-4], 2), [1e-4, -2e-4])
+
+
+def test_framing_and_solver_entry_points_refuse_other_kinds():
+    from hearsee.audio.active import one_mic_arrival_differences, solve_range_differences
+    from hearsee.audio.tdoa import dominant_sample, frame_spectra, windowed_frames
+
+    win = np.hanning(8).astype(np.float32)
+    with pytest.raises(AudioInputError, match="frames: samples must be real numbers"):
+        windowed_frames("abc", win)
+    with pytest.raises(AudioInputError, match="window: samples must be real numbers"):
+        windowed_frames(np.zeros((2, 8)), "hann")
+    with pytest.raises(ConfigError, match="window must be as long as a frame"):
+        frame_spectra(np.zeros((2, 8)), np.hanning(7), 16)
+    with pytest.raises(ConfigError, match="window must be as long as a frame"):
+        windowed_frames(np.float64(1.0), win)
+    frames = [[0.0, 1.0, 0.0, -1.0, 0.0, 1.0, 0.0, -1.0]]  # (a list of numbers is fine)
+    X = frame_spectra(frames, np.ones(8), 8)
+    assert X.shape == (1, 5) and abs(X[0, 2]) == pytest.approx(4.0)
+    with pytest.raises(AudioInputError, match="samples must be real numbers"):
+        dominant_sample("x")
+    with pytest.raises(AudioInputError, match="n_channels, n_samples"):
+        dominant_sample(np.zeros((2, 3, 4)))
+    x = np.full((2, 50_000), 0.1)
+    x[1, 7] = 1e30  # one corrupt sample
+    assert dominant_sample(x)[:2] == (1, 7)
+    with pytest.raises(GeometryError, match="one entry per pose"):
+        solve_range_differences(float("nan"), float("nan"), float("nan"))
+    with pytest.raises(AudioInputError, match="captures must be a list"):
+        one_mic_arrival_differences(float("nan"), 16000, np.eye(2, 3))
+
+
+def test_head_shoulder_score_refuses_a_ragged_mask():
+    from hearsee.vision.humans import head_shoulder_score
+
+    with pytest.raises(ImageInputError, match="mask must be a bool silhouette"):
+        head_shoulder_score([[1, 0], [1]], 2.0, 500.0)
