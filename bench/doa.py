@@ -168,8 +168,9 @@ HEARSEE_ABSTAINED: list = []  # one entry per fallback taken (all calls, ablatio
 #: - twenty-sixth session: estimate_tdoas ~8 % fewer instructions on this setting (power spectra
 #:   once per chunk, correlations only for frames with a source, no second zero-padding copy;
 #:   outputs bit-identical), then the same rule on a full run: 54/72, RIRs 0.271 samples,
-#:   **5.03x** (the Tukey setting 6.84x in the same run). Adopted -- at the line: earlier runs
-#:   of unchanged code spread by +-10 %, so 5x is not a robust margin for this setting.
+#:   **5.03x** (the Tukey setting 6.84x in the same run). Adopted -- at the line: a second
+#:   full run of the same code (the results file) read 4.94x (Tukey 6.69x), accuracy tables
+#:   identical, so 5x is not a robust margin for this setting.
 #: The Hann window alone (64 ms hop, no extra CPU) was tested on the held-out run under a rule
 #: written before it (at least 2 more conditions won, at most one pool worse and none by > 5 %,
 #: measured RIRs no worse than 0.27 + 0.01 samples): 31/72, pools three-mic RT60 0.6 s 3.90 ->
