@@ -116,3 +116,39 @@ def test_head_shoulder_score_refuses_a_ragged_mask():
 
     with pytest.raises(ImageInputError, match="mask must be a bool silhouette"):
         head_shoulder_score([[1, 0], [1]], 2.0, 500.0)
+
+
+def test_array_parameters_take_a_micarray_or_a_preset_and_nothing_else():
+    """The localizers, min_frame_ms and facing_pair read attributes of their ``array``
+    argument: a number there was an AttributeError. They now go through load_array, which
+    also takes a preset name: the same answers as with the MicArray."""
+    from hearsee.audio.active import facing_pair
+    from hearsee.audio.arrays import load_array
+    from hearsee.audio.localize import (
+        far_field_linear,
+        far_field_planar,
+        near_field_in_plane,
+        near_field_position,
+    )
+    from hearsee.audio.tdoa import min_frame_ms
+    from hearsee.geometry import unit_vector_deg
+
+    three, two = load_array("three-mic"), load_array("two-mic")
+    tau3 = three.tdoa_far(unit_vector_deg(40.0, 0.0))
+    tau2 = two.tdoa_far(unit_vector_deg(40.0, 0.0))
+    near3 = three.tdoa(2.0 * unit_vector_deg(40.0, 0.0))  # (in the plane, 2 m: its model)
+    for fn, arr, tau in ((far_field_planar, three, tau3), (near_field_in_plane, three, near3),
+                         (far_field_linear, two, tau2)):
+        with pytest.raises(ConfigError, match="expected a MicArray"):
+            fn(tau, float("nan"))
+        by_name = fn(tau, arr.name)
+        assert by_name.azimuth_deg == pytest.approx(fn(tau, arr).azimuth_deg)
+        assert by_name.azimuth_deg == pytest.approx(40.0, abs=0.5)
+    with pytest.raises(ConfigError, match="expected a MicArray"):
+        near_field_position(tau3, 3)
+    with pytest.raises(ConfigError, match="expected a MicArray"):
+        min_frame_ms(None)
+    assert min_frame_ms("three-mic") == min_frame_ms(three) > 0
+    with pytest.raises(ConfigError, match="expected a MicArray"):
+        facing_pair(0.0)
+    assert facing_pair("three-mic") == facing_pair(three) == (1, 2)

@@ -222,9 +222,11 @@ def pose_mic_positions(array: MicArray | str, poses: Sequence[HeadPose | Sequenc
     return [mic_positions_at(arr, as_pose(p), pivot, offset_m) for p in poses]
 
 
-def facing_pair(array: MicArray) -> tuple[int, int] | None:
+def facing_pair(array: MicArray | str) -> tuple[int, int] | None:
     """The pair of microphones mirror-symmetric about the array's x-z plane (their TDOA
-    vanishes when the head faces the source), or None. For ``three-mic`` it is (1, 2)."""
+    vanishes when the head faces the source), or None. For ``three-mic`` it is (1, 2).
+    ``array``: a MicArray, a preset name or a YAML path."""
+    array = load_array(array)
     p = array.positions
     best, err = None, np.inf
     for i, j in array.pairs:

@@ -253,7 +253,7 @@ def _rms(r: NDArray) -> float:
 
 
 # ---------------------------------------------------------------------------------- linear
-def far_field_linear(tdoa_s: ArrayLike, array: MicArray,
+def far_field_linear(tdoa_s: ArrayLike, array: MicArray | str,
                      pairs: Sequence[tuple[int, int]] | None = None,
                      tol_s: float = DEFAULT_TOL_S) -> Localization:
     """Two microphones (or a collinear array): cone about the axis; azimuth and mirror twin.
@@ -264,6 +264,7 @@ def far_field_linear(tdoa_s: ArrayLike, array: MicArray,
     with ``phi_a`` the axis azimuth -- for the y-axis pair, ``alpha`` and ``180 - alpha``. The
     front candidate (|az| <= 90) comes first. A vertical axis resolves only the elevation.
     """
+    array = load_array(array)  # (a MicArray, or a preset name / YAML path)
     prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
     geo = array_geometry(array)
@@ -302,7 +303,7 @@ def far_field_linear(tdoa_s: ArrayLike, array: MicArray,
 
 
 # ---------------------------------------------------------------------------------- planar
-def far_field_planar(tdoa_s: ArrayLike, array: MicArray,
+def far_field_planar(tdoa_s: ArrayLike, array: MicArray | str,
                      pairs: Sequence[tuple[int, int]] | None = None,
                      tol_s: float = DEFAULT_TOL_S, in_plane_tol: float = 1e-3) -> Localization:
     """Three (or coplanar) microphones, far field: closed form with all solutions (thesis 2.4).
@@ -320,6 +321,7 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray,
     - a TDOA residual above ``tol_s`` (inconsistent ITDs): no exact solution; the nearest
       direction is returned, ``feasible=False``, ``n_solutions=0``.
     """
+    array = load_array(array)  # (a MicArray, or a preset name / YAML path)
     prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
     geo = array_geometry(array)
@@ -368,7 +370,7 @@ def _planar_solver(array: MicArray, prs: tuple[tuple[int, int], ...]) -> tuple[N
 
 
 # ---------------------------------------------------------------------------------- volume
-def far_field_volume(tdoa_s: ArrayLike, array: MicArray,
+def far_field_volume(tdoa_s: ArrayLike, array: MicArray | str,
                      pairs: Sequence[tuple[int, int]] | None = None,
                      tol_s: float = DEFAULT_TOL_S, loss: str = "soft_l1") -> Localization:
     """>= 4 non-coplanar microphones: unique far-field direction.
@@ -377,6 +379,7 @@ def far_field_volume(tdoa_s: ArrayLike, array: MicArray,
     unit sphere (azimuth, elevation) with scipy's robust ``least_squares`` (``loss``, scale
     ``tol_s``). ``feasible`` is False when the RMS residual exceeds ``tol_s``.
     """
+    array = load_array(array)  # (a MicArray, or a preset name / YAML path)
     from scipy.optimize import least_squares
 
     prs = array.checked_pairs(pairs)
@@ -405,7 +408,7 @@ def far_field_volume(tdoa_s: ArrayLike, array: MicArray,
                         extra={"lls_norm": float(np.linalg.norm(u0))})
 
 
-def near_field_position(tdoa_s: ArrayLike, array: MicArray,
+def near_field_position(tdoa_s: ArrayLike, array: MicArray | str,
                         pairs: Sequence[tuple[int, int]] | None = None,
                         x0: ArrayLike | None = None, loss: str = "soft_l1",
                         tol_s: float = DEFAULT_TOL_S) -> tuple[NDArray, float]:
@@ -416,6 +419,7 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray,
     else the far-field direction at 2 m. Returns (position, RMS residual in seconds). Meaningful
     only for arrays whose aperture is not tiny compared with the range.
     """
+    array = load_array(array)  # (a MicArray, or a preset name / YAML path)
     from scipy.optimize import least_squares
 
     prs = array.checked_pairs(pairs)
@@ -491,7 +495,7 @@ def _inplane_tdoa(theta: NDArray, rho: NDArray, basis: NDArray, d: NDArray, I: N
     return num / ((q[..., I] + q[..., J]) * c)
 
 
-def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray,
+def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
                         pairs: Sequence[tuple[int, int]] | None = None,
                         tol_s: float = DEFAULT_TOL_S, range_m: float | None = 2.0,
                         max_inverse_range: float = 2.0, n_iter: int = 8) -> Localization:
@@ -524,6 +528,7 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray,
     (1976). Returns one candidate (in the plane); ``position_m`` is ``P`` (None when ``rho`` =
     0); ``extra["inverse_range_per_m"]`` is ``rho``.
     """
+    array = load_array(array)  # (a MicArray, or a preset name / YAML path)
     prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
     geo = array_geometry(array)

@@ -149,14 +149,15 @@ def normalize_method(method: str) -> str:
 
 
 # ---------------------------------------------------------------------------------- framing
-def min_frame_ms(array: MicArray) -> float:
+def min_frame_ms(array: MicArray | str) -> float:
     """The shortest analysis frame, milliseconds, that the stream and the robot accept for
     ``array``: four times its largest pair delay. In a frame not much longer than a pair's
     delay the window leaves the far lags a few overlapping samples and biases the peaks toward
     lag 0: with 1 ms frames (16 samples at 16 kHz; the three-mic preset's largest delay is 7
     samples) the stream tracked a clean white-noise source 149 deg off, 2 ms gave 0.6 deg.
-    (:func:`estimate_tdoas` itself only needs the delays inside half a frame.)"""
-    return 4e3 * float(np.max(array.max_tdoa()))
+    (:func:`estimate_tdoas` itself only needs the delays inside half a frame.) ``array``: a
+    MicArray, a preset name or a YAML path."""
+    return 4e3 * float(np.max(load_array(array).max_tdoa()))
 
 
 def check_frame_ms(frame_ms: float, hop_ms: float, *,
