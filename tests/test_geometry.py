@@ -216,8 +216,7 @@ def test_cart_to_sph_measures_tiny_vectors():
 def test_angle_helpers_refuse_what_is_no_number_and_keep_numpy_semantics_otherwise():
     """The numpy-style angle helpers raised numpy's builtin TypeError / ValueError on text, a
     ragged list or vectors of other shapes, and read True as 1; now a GeometryError naming the
-    argument. NaN is still mapped as numpy maps it, and numbers give the
-    values they gave."""
+    argument. NaN is still mapped as numpy maps it, and numbers give the values they gave."""
     from hearsee.geometry import fibonacci_sphere
 
     bad_calls = [
