@@ -167,13 +167,14 @@ def read_pair(left: str | Path, right: str | Path, mode: ColorMode = "gray",
 _COLOR_DTYPES = (np.uint8, np.uint16, np.float32)
 
 
-def to_gray(image: NDArray) -> NDArray:
+def to_gray(image: NDArray, name: str = "image") -> NDArray:
     """Single-channel view of an image (BGR/BGRA -> gray by OpenCV's weights; 1 channel kept).
 
     Colour images must be uint8, uint16 or float32 (what OpenCV converts): other pixel types
-    raise ImageInputError naming the type; single-channel images of any type are kept.
+    raise ImageInputError naming the type; single-channel images of any type are kept. The
+    image is checked first (:func:`check_image`, its messages naming ``name``).
     """
-    check_image(image)
+    check_image(image, name)
     if image.ndim == 2:
         return image
     if image.shape[2] == 1:

@@ -276,11 +276,10 @@ def overlay_thermal(visible: NDArray, thermal: NDArray, warm: NDArray | None = N
     image (colour ones uint8, uint16 or float32) and ``warm`` a bool mask (ImageInputError
     otherwise: an empty or float visible image failed inside OpenCV). Returns BGR uint8."""
     finite_number("alpha", alpha, 0.0, 1.0)  # (checked, not converted: see counts_to_celsius)
-    vis = as_detector_image(check_image(numeric_map("visible", visible, None), "visible"),
-                            "the visible image of an overlay")
+    vis = check_image(as_detector_image(visible, "visible"), "visible")
     if vis.ndim == 2:
         vis = cv2.cvtColor(vis, cv2.COLOR_GRAY2BGR)
-    th = to_gray(check_image(numeric_map("thermal", thermal, None), "thermal"))
+    th = to_gray(numeric_map("thermal", thermal, None), "thermal")
     if th.dtype != np.uint8:
         th = cv2.normalize(th.astype(np.float32), None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
     size = (vis.shape[1], vis.shape[0])
