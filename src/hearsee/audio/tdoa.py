@@ -216,6 +216,15 @@ def check_recording_length(n_samples: int, frame_len: int) -> None:
         )
 
 
+def _float_samples(x: ArrayLike, what: str) -> NDArray:
+    """``x`` as it is when it is a float array (its precision kept: the analysis runs in
+    float32), else :func:`hearsee.audio.signals.as_samples`' float64 samples (AudioInputError
+    naming ``what`` for what is no number). NaN passes: the callers' own checks name it."""
+    if isinstance(x, np.ndarray) and x.dtype.kind == "f":
+        return x
+    return as_samples(x, what, finite=False)
+
+
 def frame_signals(x: ArrayLike, frame_len: int, hop: int) -> NDArray:
     """Cut signals into overlapping frames.
 
@@ -232,8 +241,7 @@ def frame_signals(x: ArrayLike, frame_len: int, hop: int) -> NDArray:
         A read-only strided view: frame f of channel c is ``x[c, f*hop : f*hop + frame_len]``.
         Trailing samples that do not fill a frame are dropped.
     """
-    a = np.asarray(x) if isinstance(x, np.ndarray) and x.dtype.kind == "f" else as_samples(
-        x, "signals", finite=False)  # (float arrays keep their precision)
+    a = _float_samples(x, "signals")
     if a.ndim == 1:
         a = a[None, :]
     if a.ndim != 2:
@@ -659,10 +667,7 @@ def windowed_frames(frames: NDArray, win: NDArray, nfft: int | None = None) -> N
     ``nfft`` (>= L): the frames zero-padded to (..., nfft), written in place (the transform
     then pads no copy of its own). Frames and window are real samples, the window as long as a
     frame (AudioInputError / ConfigError otherwise)."""
-    if not (isinstance(frames, np.ndarray) and frames.dtype.kind == "f"):
-        frames = as_samples(frames, "frames", finite=False)  # (float arrays: as they are)
-    if not (isinstance(win, np.ndarray) and win.dtype.kind == "f"):
-        win = as_samples(win, "window", finite=False)
+    frames, win = _float_samples(frames, "frames"), _float_samples(win, "window")
     if frames.ndim < 1 or win.shape != frames.shape[-1:]:
         raise ConfigError(f"a window of shape {win.shape} for frames of shape {frames.shape}: "
                           "the window must be as long as a frame")
@@ -673,7 +678,7 @@ def windowed_frames(frames: NDArray, win: NDArray, nfft: int | None = None) -> N
     if not (isinstance(nfft, (int, np.integer)) and nfft >= L):
         raise ConfigError(f"nfft must be a whole number of samples >= the frame length {L}, "
                           f"got {nfft!r}")
-    dtype = np.result_type(np.result_type(frames.dtype, mean.dtype), np.asarray(win).dtype)
+    dtype = np.result_type(np.result_type(frames.dtype, mean.dtype), win.dtype)
     out = np.zeros(frames.shape[:-1] + (int(nfft),), dtype)
     body = out[..., :L]
     np.subtract(frames, mean, out=body)
