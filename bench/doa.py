@@ -1,4 +1,5 @@
-"""Benchmark: hearsee's ITD localization vs pyroomacoustics SRP-PHAT, MUSIC and NormMUSIC.
+"""Benchmark: hearsee's ITD localization vs pyroomacoustics SRP-PHAT, MUSIC and NormMUSIC
+(and acoular's delay-and-sum, Capon and MUSIC beamformers when the extra ``peers`` is installed).
 
 Three parts, all in one process on the same inputs:
 
@@ -8,7 +9,8 @@ Three parts, all in one process on the same inputs:
    present); sources at random azimuths 1-3 m away in the array's horizontal plane. Each
    method gives one whole-recording azimuth. Reported: azimuth RMSE, median error, share of
    errors > 10 deg, CPU seconds per second of audio (ratio vs SRP-PHAT). The two-mic array is
-   scored modulo front/back (azimuths folded to [-90, 90]).
+   scored modulo front/back (azimuths folded to [-90, 90]). acoular's beamformers (see
+   ``ACOULAR_METHODS``) run on the same recordings in a table of their own.
 2. **TDOA vs Cramer-Rao bound** (Knapp & Carter 1976) for a free-field white-noise source,
    per 64 ms frame, over SNR: the estimator alone (no detection test); the threshold SNR where
    anomalies (errors > 1 sample) begin is marked, and the table gives the share of frames
@@ -80,6 +82,27 @@ TIMING_REPEATS = 3
 #: of the same code: hearsee vs SRP-PHAT 5.44x with two BLAS threads, 5.68x with one; the
 #: accuracy tables identical)
 PEER_NEAR_M = 2.0
+#: acoular (the optional extra ``peers``: ``pip install -e '.[peers]'``), the brief's other
+#: Python peer for audition: its frequency-domain beamformers on the same recordings, in a
+#: table of their own beside the issue's pyroomacoustics peers (the issue's "best peer" column
+#: and its literal count stay pyroomacoustics'). Each is given what its documentation
+#: recommends and what pyroomacoustics gets: the cross-spectral matrix of 1024-sample Hann
+#: blocks at 50 % overlap, the same band, the same 0.1-deg in-plane grid and wavefront model
+#: (three-mic: points PEER_NEAR_M from the array centre; two-mic: points 1 km away, a plane
+#: wave to within 1e-8 s), the power summed over the band's bins; delay-and-sum with the
+#: cross-spectral matrix's diagonal removed (the sensor noise's autopower), Capon (minimum
+#: variance) and MUSIC with one source. Skipped (not failed) when acoular is not installed.
+ACOULAR_METHODS = {"ac-Base": "BeamformerBase", "ac-Capon": "BeamformerCapon",
+                   "ac-MUSIC": "BeamformerMusic"}
+#: acoular's steering-vector formulation (Sarradj 2012, "Three-dimensional acoustic source
+#: mapping with different beamforming steering vector formulations", Adv. Acoust. Vib.).
+#: Chosen for the peer on a dev seed (78; 6 recordings x white noise and male voice at 10 dB
+#: per cell, delay-and-sum): three-mic RMSE at RT60 0.3 / 0.6 s 'true location' 1.50 / 9.39
+#: deg, 'true level' 1.50 / 9.42, 'classic' 1.34 / 8.54, 'inverse' 1.23 / 7.69; the two-mic
+#: array's far-field grid makes the four identical. Block sizes 512 / 2048 were no better.
+ACOULAR_STEER = "inverse"
+#: far-field stand-in for acoular's steering (m): it steers to points, not directions
+ACOULAR_FAR_M = 1000.0
 #: frequency range given to every method (pyroomacoustics' freq_range; hearsee's band_hz)
 BANDS = {"noise": (300.0, 7500.0), "speech": (300.0, 3500.0)}
 #: hearsee's settings in this benchmark (see the docstring of estimate_tdoas)
@@ -290,6 +313,69 @@ def check_near_steering() -> None:
                 raise RuntimeError(f"{m}: near-field steering {err:.2f} deg off at az {az}")
 
 
+def acoular_module():
+    """acoular, configured for this benchmark (no result cache on disk: it would write HDF5
+    files into the working directory), or None when it is not installed."""
+    import warnings
+
+    try:
+        with warnings.catch_warnings():  # (its note that numpy came first and uses OpenBLAS:
+            warnings.simplefilter("ignore")  # numba's parallel mode is then off -- one core,
+            import acoular  # as every method here is timed)
+    except ImportError:
+        return None
+    acoular.config.global_caching = "none"
+    return acoular
+
+
+def acoular_azimuth(x: np.ndarray, fs: float, arr: MicArray, method: str,
+                    band: tuple[float, float], grid_deg: float = PRA_GRID_DEG,
+                    near_m: float = PEER_NEAR_M) -> float:
+    """An acoular beamformer's azimuth (deg): ``method`` is a key of :data:`ACOULAR_METHODS`;
+    the map is computed on in-plane points ``near_m`` metres from the array centre every
+    ``grid_deg`` degrees (two microphones: :data:`ACOULAR_FAR_M`, the far field, as for the
+    pyroomacoustics peers), summed over the bins of ``band`` (Hz), and its maximum taken."""
+    ac = acoular_module()
+    centre = arr.positions.mean(axis=0)
+    az = np.radians(np.arange(0.0, 360.0, grid_deg))
+    r = near_m if arr.n_mics >= 3 else ACOULAR_FAR_M
+    pts = centre[:, None] + r * np.vstack([np.cos(az), np.sin(az), np.zeros_like(az)])
+    steer = ac.SteeringVector(grid=ac.ImportGrid(pos=pts),
+                              mics=ac.MicGeom(pos_total=np.ascontiguousarray(arr.positions.T)),
+                              steer_type=ACOULAR_STEER, ref=centre,
+                              env=ac.Environment(c=arr.speed_of_sound))
+    ps = ac.PowerSpectra(source=ac.TimeSamples(data=np.ascontiguousarray(x.T), sample_freq=fs),
+                         block_size=PRA_NFFT, window="Hanning", overlap="50%")
+    bins = np.flatnonzero((ps.fftfreq() >= band[0]) & (ps.fftfreq() <= band[1]))
+    ps.ind_low, ps.ind_high = int(bins[0]), int(bins[-1]) + 1
+    cls = getattr(ac, ACOULAR_METHODS[method])
+    opts = {"r_diag": True} if method == "ac-Base" else {"n": 1} if method == "ac-MUSIC" else {}
+    bf = cls(freq_data=ps, steer=steer, **opts)
+    power = np.asarray(bf.result[ps.ind_low:ps.ind_high]).sum(axis=0)
+    return float(np.degrees(az[int(np.argmax(power))]))
+
+
+def check_acoular_steering(ac_methods: list[str]) -> None:
+    """acoular's steering must put an exactly simulated in-plane source 2 m from the
+    three-mic preset at its azimuth (as :func:`check_near_steering` for pyroomacoustics), and
+    a far source at the two-mic preset's folded azimuth: a guard on the array-frame
+    conversions (acoular's positions are (3, n_mics), its time data (n_samples, n_mics)).
+    Sensor noise at 30 dB: without any, MUSIC's noise subspace is rounding error and its
+    pseudo-spectrum (1 / a projection on it) peaks ~5 deg off at every bin."""
+    rng = np.random.default_rng(0)
+    for name, dist in (("three-mic", PEER_NEAR_M), ("two-mic", 50.0)):
+        arr = MicArray.from_preset(name)
+        for az in (23.0, 141.0, -97.0):
+            src = dist * np.array([np.cos(np.radians(az)), np.sin(np.radians(az)), 0.0])
+            x = add_noise(simulate_free_field(white_noise(1.0, FS, rng), FS, arr, src), 30.0,
+                          rng)
+            for m in ac_methods:
+                err = az_error(acoular_azimuth(x, FS, arr, m, BANDS["noise"]), az,
+                               name == "two-mic")
+                if err > 0.15:
+                    raise RuntimeError(f"{m} ({name}): steering {err:.2f} deg off at az {az}")
+
+
 # ---------------------------------------------------------------------------------- part 1
 def best_cpu(fn: Callable, *args, **kwargs) -> tuple[object, float]:
     """``(fn(*args, **kwargs)``'s result, the least process CPU time of
@@ -304,18 +390,24 @@ def best_cpu(fn: Callable, *args, **kwargs) -> tuple[object, float]:
 
 
 def run_doa(trials: int, seed: int, data: Path | None, duration: float,
-            arrays: tuple[str, ...] = ("three-mic", "two-mic")) -> tuple[list, dict]:
+            arrays: tuple[str, ...] = ("three-mic", "two-mic"),
+            ac_methods: tuple[str, ...] = ()) -> tuple[list, dict]:
+    """Part 1: every method on the same recordings; ``ac_methods`` (keys of
+    :data:`ACOULAR_METHODS`) adds acoular's beamformers, scored and timed (one call each, on
+    the scored grid) after the pyroomacoustics peers."""
     rng = np.random.default_rng(seed)
     speech = arctic_files(data)
     kinds = ["noise", "male", "female"] + (["arctic"] if speech else [])
     methods = ["hearsee", *PRA_METHODS]
     errors: dict = {}
     cpu: dict = {m: 0.0 for m in [*methods, TIMED_VARIANT]}
-    cpu_fine: dict = {m: 0.0 for m in PRA_METHODS}  # the peers on the scored (fine) grid
+    # the peers on the scored (fine) grid
+    cpu_fine: dict = {m: 0.0 for m in [*PRA_METHODS, *ac_methods]}
     audio_s = 0.0
     t_start = time.time()
     # warm-up: module imports and first-call costs are not part of the per-second CPU time
     check_near_steering()
+    check_acoular_steering(list(ac_methods))  # (also compiles acoular's numba kernels)
     for arr_name in arrays:
         arr = MicArray.from_preset(arr_name)
         w = rng.standard_normal((arr.n_mics, FS // 2))
@@ -362,6 +454,11 @@ def run_doa(trials: int, seed: int, data: Path | None, duration: float,
                             key = (arr_name, rt, snr, kind)
                             errors.setdefault(key, {k: [] for k in methods})[m].append(
                                 az_error(est, az, two))
+                        for m in ac_methods:
+                            t1 = time.process_time()
+                            est = acoular_azimuth(x, FS, arr, m, band)
+                            cpu_fine[m] += time.process_time() - t1
+                            errors[key].setdefault(m, []).append(az_error(est, az, two))
                         for name, kw in ABLATIONS.items():  # same recording
                             if name == TIMED_VARIANT:
                                 est_v, dt = best_cpu(hearsee_azimuth, x, FS, arr, band, **kw)
@@ -408,6 +505,8 @@ def summarize_doa(results: list, timing: dict) -> tuple[list, list, list]:
         fine = timing.get("cpu_fine", {}).get(m)
         cpu_rows.append([m, per_s * 1e3, timing["cpu"]["SRP"] / max(timing["cpu"][m], 1e-12),
                          "" if fine is None else fine / timing["audio_s"] * 1e3])
+    for m in (m for m in timing.get("cpu_fine", {}) if m in ACOULAR_METHODS):
+        cpu_rows.append([m, "", "", timing["cpu_fine"][m] / timing["audio_s"] * 1e3])
     return headers, rows, cpu_rows
 
 
@@ -435,23 +534,32 @@ def pooled_paired(results: list, rng: np.random.Generator) -> tuple[list, list]:
     """Per array and RT60, all SNRs and signals pooled: hearsee vs each peer on the same
     recordings (RMSE difference with bootstrap CI, share of recordings where hearsee's error
     is smaller, Wilcoxon signed-rank p-value of the paired errors)."""
-    from scipy.stats import wilcoxon
-
     groups = _pool_by_array_rt(results)
     headers = ["array", "RT60", "n", "peer", "hearsee RMSE", "peer RMSE",
                "dRMSE [95% CI]", "hearsee better %", "Wilcoxon p"]
     rows = []
-    for (arr, rt), g in sorted(groups.items()):
-        eh = np.asarray(g["hearsee"])
-        for m in PRA_METHODS:
-            ep = np.asarray(g[m])
-            lo, hi = paired_rmse_ci(eh, ep, rng)
-            d = eh - ep
-            p = float(wilcoxon(d).pvalue) if np.any(d != 0) else 1.0
-            rh, rp = float(np.sqrt(np.mean(eh**2))), float(np.sqrt(np.mean(ep**2)))
-            rows.append([arr, rt, len(eh), m, rh, rp, f"{rh - rp:+.2g} [{lo:+.2g}, {hi:+.2g}]",
-                         float(np.mean(eh < ep) * 100 + 50 * np.mean(eh == ep)), p])
+    # (acoular's rows after all of pyroomacoustics': their bootstrap draws come later, so the
+    # pyroomacoustics rows keep the CIs of runs without acoular)
+    for peers in (PRA_METHODS, ACOULAR_METHODS):
+        for (arr, rt), g in sorted(groups.items()):
+            _pooled_rows(rows, arr, rt, g, [m for m in peers if m in g], rng)
     return headers, rows
+
+
+def _pooled_rows(rows: list, arr: str, rt: float, g: dict, peers: list[str],
+                 rng: np.random.Generator) -> None:
+    """:func:`pooled_paired`'s rows of one (array, RT60) pool ``g`` for ``peers``."""
+    from scipy.stats import wilcoxon
+
+    eh = np.asarray(g["hearsee"])
+    for m in peers:
+        ep = np.asarray(g[m])
+        lo, hi = paired_rmse_ci(eh, ep, rng)
+        d = eh - ep
+        p = float(wilcoxon(d).pvalue) if np.any(d != 0) else 1.0
+        rh, rp = float(np.sqrt(np.mean(eh**2))), float(np.sqrt(np.mean(ep**2)))
+        rows.append([arr, rt, len(eh), m, rh, rp, f"{rh - rp:+.2g} [{lo:+.2g}, {hi:+.2g}]",
+                     float(np.mean(eh < ep) * 100 + 50 * np.mean(eh == ep)), p])
 
 
 def ablation(results: list, rng: np.random.Generator) -> tuple[list, list]:
@@ -478,6 +586,32 @@ def literal_count(results: list, variant: str) -> int:
         r = float(np.sqrt(np.mean(np.square(errs[variant]))))
         n += r <= min(float(np.sqrt(np.mean(np.square(errs[m])))) for m in PRA_METHODS) + 1e-9
     return n
+
+
+def summarize_acoular(results: list, rng: np.random.Generator) -> tuple[list, list, int]:
+    """hearsee vs acoular's beamformers per condition (RMSE, deg), with the best
+    pyroomacoustics RMSE for reference; and the number of conditions where hearsee's RMSE is
+    at or below the best acoular one. Empty when acoular did not run."""
+    ac = [m for m in ACOULAR_METHODS if results and m in results[0][1]]
+    if not ac:
+        return [], [], 0
+    headers = ["array", "RT60", "SNR", "signal", "n", "hearsee RMSE",
+               *(f"{m} RMSE" for m in ac), "best pyroomacoustics RMSE", "best acoular",
+               "hearsee <= best acoular?", "dRMSE vs best acoular [95% CI]"]
+    rows, n_best = [], 0
+    for (arr, rt, snr, kind), errs in results:
+        rmse = {m: float(np.sqrt(np.mean(np.square(errs[m])))) for m in
+                ["hearsee", *PRA_METHODS, *ac]}
+        best = min(ac, key=lambda m: rmse[m])
+        eh, eb = np.asarray(errs["hearsee"]), np.asarray(errs[best])
+        lo, hi = paired_rmse_ci(eh, eb, rng)
+        ok = rmse["hearsee"] <= rmse[best] + 1e-9
+        n_best += ok
+        rows.append([arr, rt, snr, kind, len(eh), rmse["hearsee"], *(rmse[m] for m in ac),
+                     min(rmse[m] for m in PRA_METHODS), best,
+                     "yes" if ok else f"no (+{rmse['hearsee'] - rmse[best]:.2g})",
+                     f"{rmse['hearsee'] - rmse[best]:+.2g} [{lo:+.2g}, {hi:+.2g}]"])
+    return headers, rows, n_best
 
 
 # ---------------------------------------------------------------------------------- part 2
@@ -722,19 +856,31 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--data", default=None, help="shared data folder (default ../shared/data)")
     ap.add_argument("--duration", type=float, default=2.0, help="signal length in seconds")
+    ap.add_argument("--no-acoular", action="store_true",
+                    help="leave out acoular's beamformers (the optional extra 'peers')")
     args = ap.parse_args(argv)
     trials = args.trials or (3 if args.quick else 30)
     data = shared_data_dir(args.data)
     if data is None:
         print("shared data not found: ARCTIC speech and the real-RIR part are skipped")
     t0 = time.time()
+    ac_methods = () if args.no_acoular else tuple(ACOULAR_METHODS)
+    if ac_methods and acoular_module() is None:
+        print("acoular not installed (pip install -e '.[peers]'): its beamformers are skipped")
+        ac_methods = ()
     print(f"[1/3] simulated DOA: {trials} trials per condition")
     with threadpool_limits(1):  # one core, BLAS included (see TIMING_REPEATS)
-        results, timing = run_doa(trials, args.seed, data, args.duration)
+        results, timing = run_doa(trials, args.seed, data, args.duration,
+                                  ac_methods=ac_methods)
     headers, rows, cpu_rows = summarize_doa(results, timing)
     print_table("Azimuth error [deg] (two-mic folded front/back)", headers, rows)
     pool_headers, pool_rows = pooled_paired(results, np.random.default_rng(args.seed + 2))
     print_table("Paired comparison, pooled over SNR and signal", pool_headers, pool_rows)
+    ac_headers, ac_rows, ac_best = summarize_acoular(results,
+                                                     np.random.default_rng(args.seed + 4))
+    if ac_rows:
+        print_table("hearsee vs acoular's beamformers: azimuth RMSE [deg]", ac_headers, ac_rows)
+        print(f"hearsee <= best acoular beamformer in {ac_best}/{len(ac_rows)} conditions")
     abl_headers, abl_rows = ablation(results, np.random.default_rng(args.seed + 3))
     abl_counts = {v: literal_count(results, v) for v in ["hearsee", *ABLATIONS]}
     print_table("hearsee ablation (same recordings)", abl_headers, abl_rows)
@@ -787,6 +933,16 @@ def main(argv: list[str] | None = None) -> int:
         ("Paired comparison per array and RT60 (all SNRs and signals pooled; same recordings; "
          f"dRMSE = hearsee - peer, {N_BOOT}-resample paired bootstrap)",
          markdown_table(pool_headers, pool_rows)),
+        ("acoular's beamformers on the same recordings (azimuth RMSE, deg)",
+         "skipped: acoular not installed (`pip install -e '.[peers]'`) or --no-acoular"
+         if not ac_rows else
+         f"hearsee RMSE <= the best acoular beamformer in {ac_best}/{len(ac_rows)} "
+         "conditions. acoular is not one of the issue's peers (its best-peer column and count "
+         "above are pyroomacoustics'); it runs here because the project measures itself "
+         "against the field's Python libraries. Settings: see ACOULAR_METHODS and "
+         f"ACOULAR_STEER ('{ACOULAR_STEER}') in bench/doa.py; its CPU per second of audio, "
+         "on the scored grid, is in the CPU table; the pooled paired comparison is in the "
+         "table above.\n\n" + markdown_table(ac_headers, ac_rows)),
         ("hearsee ablation on the same recordings (pooled per array and RT60)",
          markdown_table(abl_headers, abl_rows)
          + "\n\nConditions where the variant's RMSE <= the best pyroomacoustics RMSE: "
