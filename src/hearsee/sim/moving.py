@@ -77,6 +77,14 @@ SINC_KAISER_BETA = 8.6
 #: The widest interpolator :func:`fractional_delay` accepts (taps on each side); 32 is already
 #: near -80 dB, and the tap matrix grows as ``chunk * 2 * half_width``.
 MAX_SINC_HALF_WIDTH = 1024
+#: Image-source order up to which :func:`simulate_moving_room` renders a moving source's
+#: reflections on the finer schedule of :data:`EARLY_BLOCK_S` (see there): at RT60 0.3 s in a
+#: 7 x 6 x 3 m room these early reflections carry ~90 % of the response's energy, and
+#: pyroomacoustics computes them ~25x faster than the whole response (2.3 vs 58 ms).
+EARLY_ORDER = 3
+#: Largest spacing (s) of the early reflections' updates: at 1.5 m/s an image source's delay
+#: changes by at most ~0.7 sample (16 kHz) between two.
+EARLY_BLOCK_S = 0.005
 
 
 @dataclass(frozen=True, eq=False)
@@ -522,6 +530,8 @@ def simulate_moving_room(
     rir_fn: Callable[[NDArray], NDArray] | None = None,
     max_tdoa_step_samples: float | None = 0.1,
     max_order: int | None = None,
+    early_order: int | None = EARLY_ORDER,
+    early_block_s: float = EARLY_BLOCK_S,
 ) -> NDArray:
     """Record a moving source in a shoebox room: block-wise image-source RIRs, crossfaded.
 
@@ -557,16 +567,7 @@ def simulate_moving_room(
         the geometry needs it without computing responses every 20 ms for slow, distant
         sources.
 
-        Limitation (measured 2026-11-26): the bound is on the direct path's TDOAs only. The
-        reflections' delays change faster (an image source can recede while the source
-        approaches), and between updates the crossfade renders each reflection as two copies
-        at the two updates' delays instead of one sweeping copy. Per-frame statistics in rooms
-        depend on that: on 8 walks of ``bench/tracking.py`` (white noise, RT60 0.3 s, 10 dB,
-        dev seed 300) the stream's per-frame azimuth RMSE was 3.29 deg with 0.1 s updates (the
-        bench's), 2.42 deg with 0.01 s updates and a 0.02-sample step, and single walks still
-        moved at 3 ms; direct path alone (``max_order=0``) the spacing changed nothing
-        (0.46-0.47 deg, as the free-field renderer). A continuous time-varying image-source
-        rendering of the early reflections would remove the dependence.
+        The bound is on the direct path's TDOAs only; see ``early_order`` for the reflections.
     mic_positions : array (n_mics, 3), optional
         Override the array's microphone positions (array frame), e.g. a rotated head.
     rir_fn : callable, optional
@@ -575,6 +576,25 @@ def simulate_moving_room(
         array's speed of sound and ``max_order``.
     max_order : int, optional
         Image-source order override of the default ``rir_fn`` (0 = direct path only).
+    early_order : int or None
+        The default ``rir_fn``'s responses are split in two (since 2026-11-26): the images up to
+        this order (the early reflections, direct path included) are updated every
+        ``early_block_s`` seconds (and as often as ``max_tdoa_step_samples`` asks), the rest
+        (the whole response minus that part, from the same pyroomacoustics model) on the
+        schedule above; the two renderings add up. The reflections' delays change faster than
+        the direct path's TDOAs (an image source recedes while the source approaches it), and
+        between two updates the crossfade renders each reflection as two copies at the two
+        updates' delays rather than one moving copy; with 0.1 s updates that changed the
+        room's per-frame statistics: on 8 walks of ``bench/tracking.py`` (white noise, RT60
+        0.3 s, 10 dB, dev seed 300) the stream's per-frame / tracked azimuth RMSE was 3.29 /
+        2.44 deg with whole responses every 0.1 s, 2.40 / 1.36 with this split (early order 3
+        every 5 ms), 2.41 / 1.38 with early reflections every 2 ms, and on three of the walks
+        whole responses every 3 ms (the reference, 25x the CPU) matched the 2-ms split to
+        within 0.04 deg per walk. The direct path alone is rendered faithfully either way
+        (``max_order=0``: 0.46-0.47 deg for every spacing, as the free-field renderer). None
+        (or a custom ``rir_fn``, or an order not above it) renders whole responses only.
+    early_block_s : float
+        Largest spacing in seconds of the early reflections' updates (default 5 ms).
 
     Returns
     -------
@@ -583,17 +603,34 @@ def simulate_moving_room(
     x = _check_signal(signal, fs)
     if not block_s > 0:
         raise GeometryError(f"block_s must be > 0, got {block_s}")
+    if not (is_real(early_block_s) and early_block_s > 0):
+        raise GeometryError(f"early_block_s must be > 0 seconds, got {early_block_s!r}")
+    if early_order is not None:
+        early_order = whole_number("early_order", early_order, 0, error=GeometryError)
     at = np.asarray(array_at, dtype=float)
     mics = array.positions if mic_positions is None else np.asarray(mic_positions, dtype=float)
     mics_room = mics + at
     dim = np.asarray(room_dim, dtype=float)
+    early_fn = None
     if rir_fn is None:
-        from hearsee.audio.propagation import room_impulse_responses
+        from hearsee.audio.propagation import image_sources, room_impulse_responses
 
-        def rir_fn(src_room: NDArray) -> NDArray:
-            return room_impulse_responses(fs, mics_room, src_room, dim, rt60,
-                                          max_order=max_order,
+        def rir_at(src_room: NDArray, order: int | None) -> NDArray:
+            return room_impulse_responses(fs, mics_room, src_room, dim, rt60, max_order=order,
                                           speed_of_sound=array.speed_of_sound)
+
+        order = image_sources(rt60, dim, array.speed_of_sound, max_order)[1]
+        if early_order is not None and order > early_order:
+            def early_fn(src_room: NDArray) -> NDArray:
+                return rir_at(src_room, early_order)
+
+            def rir_fn(src_room: NDArray) -> NDArray:  # the rest: whole minus early
+                h, e = rir_at(src_room, max_order), early_fn(src_room)
+                h[:, : e.shape[1]] -= e
+                return h
+        else:
+            def rir_fn(src_room: NDArray) -> NDArray:
+                return rir_at(src_room, max_order)
 
     if max_tdoa_step_samples is not None and not max_tdoa_step_samples > 0:
         raise GeometryError(
@@ -602,11 +639,22 @@ def simulate_moving_room(
     # the direct sound must reach the array by the last sample (as in the free field)
     r_end = retarded_delays(trajectory, mics, [(n - 1) / fs], array.speed_of_sound)[1]
     check_heard(float(r_end.min()), array.speed_of_sound, n, fs)
-    centres = _update_times(trajectory, mics, array.speed_of_sound, fs, n, block_s,
-                            max_tdoa_step_samples)
-    # positions at block centres, evaluated at the (approximate) emission time
-    src_room = trajectory.at(centres / fs) + at
     out = np.zeros((len(mics), n))
+    for fn, spacing in ((rir_fn, block_s), (early_fn, early_block_s)):
+        if fn is not None:
+            centres = _update_times(trajectory, mics, array.speed_of_sound, fs, n, spacing,
+                                    max_tdoa_step_samples)
+            # positions at block centres, evaluated at the (approximate) emission time
+            _render_blocks(x, centres, trajectory.at(centres / fs) + at, fn, out)
+    return add_noise(out, snr_db, rng)
+
+
+def _render_blocks(x: NDArray, centres: NDArray, src_room: NDArray,
+                   rir_fn: Callable[[NDArray], NDArray], out: NDArray) -> None:
+    """Add to ``out`` (n_mics, n) the signal ``x`` through ``rir_fn``'s responses for the
+    source at ``src_room`` (room frame, metres) at the update times ``centres`` (sample
+    indices), crossfaded by triangular weights in emission time."""
+    n_mics, n = out.shape
     for b in range(len(centres)):
         lo = int(np.floor(centres[b - 1])) if b > 0 else 0
         hi = int(np.ceil(centres[b + 1])) + 1 if b + 1 < len(centres) else n
@@ -614,12 +662,11 @@ def simulate_moving_room(
         if not np.any(seg):
             continue
         h = np.atleast_2d(np.asarray(rir_fn(src_room[b]), dtype=float))
-        if h.shape[0] != len(mics):
-            raise GeometryError(f"rir_fn returned {h.shape[0]} channels for {len(mics)} mics")
+        if h.shape[0] != n_mics:
+            raise GeometryError(f"rir_fn returned {h.shape[0]} channels for {n_mics} mics")
         y = ss.fftconvolve(seg[None, :], h, axes=-1)
         stop = min(n, lo + y.shape[1])
         out[:, lo:stop] += y[:, : stop - lo]
-    return add_noise(out, snr_db, rng)
 
 
 # ---------------------------------------------------------------------------- recordings
