@@ -348,7 +348,7 @@ def _peaks(r: NDArray, P: NDArray, nfft: int, max_lag: NDArray, refine: str,
     k = np.argmax(win, axis=-1)
     peak = _take_last(win, k)
     lag_i = lags[k]
-    lag0 = lag_i.astype(float)
+    lag = lag_i.astype(float)
     if refine != "none":
         # parabolic fit on the integer samples around the peak (values from the full circle)
         ym = _take_last(r, (lag_i - 1) % nfft)
@@ -356,19 +356,14 @@ def _peaks(r: NDArray, P: NDArray, nfft: int, max_lag: NDArray, refine: str,
         den = ym - 2.0 * peak + yp
         with np.errstate(divide="ignore", invalid="ignore"):
             delta = np.where(den < 0, 0.5 * (ym - yp) / den, 0.0)
-        lag_par = lag0 + np.clip(delta, -0.5, 0.5)
-    if refine == "none":
-        lag = lag0
-    elif refine == "parabolic":
-        lag = lag_par
-    else:
-        lag = lag_par.copy()
-        sel = np.ones(lag.shape[:-1], bool) if need is None else np.asarray(need, bool)
-        if sel.any():
-            n_p = lag.shape[-1]
-            Ps = P[sel].reshape(-1, P.shape[-1])
-            lag[sel] = _refine_interp(Ps, lag_par[sel].reshape(-1), nfft,
-                                      bins=bins).reshape(-1, n_p)
+        lag = lag + np.clip(delta, -0.5, 0.5)
+        if refine != "parabolic":  # "interp": Newton steps from the parabolic peak
+            sel = np.ones(lag.shape[:-1], bool) if need is None else np.asarray(need, bool)
+            if sel.any():
+                n_p = lag.shape[-1]
+                Ps = P[sel].reshape(-1, P.shape[-1])
+                lag[sel] = _refine_interp(Ps, lag[sel].reshape(-1), nfft,
+                                          bins=bins).reshape(-1, n_p)
     lag = np.clip(lag, -max_lag, max_lag)
     # confidence: peak over the highest value of the correlation outside the main lobe (the
     # lobe is ~fs / bandwidth wide, so outside it only competing peaks and side lobes remain)
@@ -693,6 +688,14 @@ def frame_spectra(frames: NDArray, win: NDArray, nfft: int, k0: int = 0,
     return sfft.rfft(windowed_frames(frames, win, nfft), axis=-1)[..., k0:k1]
 
 
+def _spectra_power(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int
+                   ) -> tuple[NDArray, NDArray]:
+    """:func:`frame_spectra` of ``frames`` and their power ``|X|^2``: the pair that the
+    activity test, the noise spectrum, the spectral statistics and the SNR weights share."""
+    X = frame_spectra(frames, win, nfft, k0, k1)
+    return X, X.real**2 + X.imag**2
+
+
 def frame_activity(x: NDArray, frame_len: int, hop: int, n_frames: int,
                    vad_db: float) -> tuple[NDArray, NDArray]:
     """Energy voice-activity decision per frame.
@@ -770,8 +773,7 @@ def _band_activity(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int,
     transform -- else None, None)."""
     e = np.empty(frames.shape[1])
     for s0 in range(0, frames.shape[1], chunk):
-        X = frame_spectra(frames[:, s0:s0 + chunk, :], win, nfft, k0, k1)
-        power = X.real**2 + X.imag**2
+        X, power = _spectra_power(frames[:, s0:s0 + chunk, :], win, nfft, k0, k1)
         e[s0:s0 + chunk] = np.sum(power, axis=(0, 2))
     band, decided = _energy_vad(e, vad_db)
     whole = frames.shape[1] <= chunk
@@ -1141,11 +1143,8 @@ def _noise_spectrum(frames: NDArray, active: NDArray, win: NDArray, nfft: int, k
     quiet = np.flatnonzero(~active & ~silent)
     if quiet.size < _MIN_SUMMARY_FRAMES:
         return None
-    if power_all is not None:
-        pq = power_all[:, quiet, :]
-    else:
-        Xq = frame_spectra(frames[:, quiet, :], win, nfft, k0, k1)
-        pq = Xq.real**2 + Xq.imag**2
+    pq = (power_all[:, quiet, :] if power_all is not None
+          else _spectra_power(frames[:, quiet, :], win, nfft, k0, k1)[1])
     psd = np.mean(pq, axis=1)
     return np.maximum(psd, 1e-12 * psd.max(initial=0.0) + _TINY)
 
@@ -1485,8 +1484,7 @@ def estimate_tdoas(
         active, X_all, power_all = _band_activity(frames, win, nfft, k0, k1, active, vad_db,
                                                   max(int(chunk_frames), 1))
     elif n_frames <= max(int(chunk_frames), 1):  # one transform for the noise and the frames
-        X_all = frame_spectra(frames, win, nfft, k0, k1)
-        power_all = X_all.real**2 + X_all.imag**2
+        X_all, power_all = _spectra_power(frames, win, nfft, k0, k1)
     noise_psd = (_noise_spectrum(frames, active, win, nfft, k0, k1, power_all) if snr_weight
                  else None)
 
@@ -1527,12 +1525,10 @@ def estimate_tdoas(
     for s0 in range(0, n_frames, chunk):
         s1 = min(s0 + chunk, n_frames)
         h0, h1 = max(s0 - halo, 0), min(s1 + halo, n_frames)
-        if X_all is not None:  # one chunk: h0, h1 = 0, n_frames
-            X, power = np.moveaxis(X_all, 0, 1), np.moveaxis(power_all, 0, 1)
-        else:
-            X = np.moveaxis(frame_spectra(frames[:, h0:h1, :], win, nfft, k0, k1), 0, 1)
-            # (F', n_ch, band bins)
-            power = X.real**2 + X.imag**2  # |X|^2, for the statistics and the SNR weights
+        # (one chunk: h0, h1 = 0, n_frames) -> (F', n_ch, band bins)
+        X, power = (np.moveaxis(a, 0, 1) for a in (
+            (X_all, power_all) if X_all is not None
+            else _spectra_power(frames[:, h0:h1, :], win, nfft, k0, k1)))
         G = X[:, I, :] * np.conj(X[:, J, :])  # (F', P, band bins)
         stats = (_spectral_densities(power, G, I, J, smooth_frames) if need_stats
                  else (None,) * 3)

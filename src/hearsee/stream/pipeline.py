@@ -825,7 +825,6 @@ class SmoothedSrp:
         of the grid maximum and ``alt_az_deg`` (k, 2) of the two strongest other local maxima (NaN
         when none) with their ``alt_coherence`` (k, 2).
         """
-
         seg = np.asarray(segment, dtype=np.float32)
         self._rescale(float(np.max(np.abs(seg), initial=0.0)))
         if self._scale != 1.0:
