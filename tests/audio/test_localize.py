@@ -166,6 +166,33 @@ def test_localize_recording_document():
     assert f["azimuth_deg"] == pytest.approx(60.0, abs=3.0)
 
 
+def test_localize_recording_in_plane_also_steers_the_summary_search_in_plane():
+    """``in_plane`` reaches the whole-recording peak search (estimate_tdoas(source_in_plane)),
+    as in bench/doa.py's benchmarked setting, unless the caller sets it. A female voice in the
+    array plane of a reverberant room (RT60 0.6 s, 10 dB), placed by the test: the whole-sphere
+    search lands on a reflection (~11 deg off), the in-plane one on the talker."""
+    from hearsee.audio.propagation import add_noise, room_impulse_responses
+    from hearsee.audio.signals import synthetic_voice
+    from hearsee.audio.tdoa import estimate_tdoas
+
+    rng = np.random.default_rng(0)
+    az, dist = rng.uniform(-180, 180), rng.uniform(1, 3)
+    at = np.array([3.5, 3.0, 1.2])
+    src = dist * unit_vector_deg(az, 0.0)
+    h = room_impulse_responses(16000, THREE.positions + at, src + at, np.array([8.0, 7.0, 3.0]),
+                               0.6, speed_of_sound=THREE.speed_of_sound)
+    s = synthetic_voice("female", 1.0, 16000, rng)
+    x = add_noise(np.array([np.convolve(s, hh)[: len(s)] for hh in h]), 10, rng)
+    doc = localize_recording(x, 16000, THREE, in_plane=True)
+    sphere = localize_recording(x, 16000, THREE, in_plane=True, source_in_plane=False)
+    for flag, d in ((True, doc), (False, sphere)):
+        tf = estimate_tdoas(x, 16000, THREE, source_in_plane=flag)
+        assert list(d["summary"]["tdoa_s"].values()) == pytest.approx(tf.summary_tdoa_s,
+                                                                      abs=1e-9)
+    assert abs(wrap_deg(doc["summary"]["azimuth_deg"] - az)) < 2.0
+    assert abs(wrap_deg(sphere["summary"]["azimuth_deg"] - az)) > 5.0
+
+
 def _in_plane_sources(n, seed):
     """Exact near-field TDOAs of in-plane sources 1-3 m from the three-mic centre."""
     rng = np.random.default_rng(seed)

@@ -167,6 +167,43 @@ def test_in_plane_and_reverb_method_options(rec3, capsys):
     assert code == 2 and "Traceback" not in err
 
 
+def test_summary_tuned_is_the_benchmarked_summary(tmp_path, capsys):
+    """--summary-tuned --in-plane runs bench/doa.py's benchmarked whole-recording estimate
+    (hearsee.audio.tdoa.SUMMARY_TUNED): a voice 2 m away in a reverberant room (RT60 0.6 s),
+    whose truth the test places; the document's summary is the library's, and frames after the
+    voice stopped still give no estimate."""
+    from hearsee.audio.localize import localize_recording
+    from hearsee.audio.propagation import add_noise, room_impulse_responses
+    from hearsee.audio.signals import synthetic_voice
+    from hearsee.audio.tdoa import SUMMARY_TUNED
+
+    arr = MicArray.from_preset("three-mic")
+    at = np.array([3.5, 3.0, 1.2])
+    src = 2.0 * unit_vector_deg(130.0, 0.0)
+    h = room_impulse_responses(FS, arr.positions + at, src + at, np.array([8.0, 7.0, 3.0]), 0.6,
+                               speed_of_sound=arr.speed_of_sound)
+    rng = np.random.default_rng(5)
+    s = synthetic_voice("male", 1.5, FS, rng)
+    s[int(1.2 * FS):] = 0.0  # the last 0.3 s: sensor noise only
+    x = add_noise(np.array([np.convolve(s, hh)[: len(s)] for hh in h]), 20, rng)
+    x = (0.5 * x / np.abs(x).max()).astype(np.float32)
+    p = tmp_path / "room.wav"
+    sf.write(p, x.T, FS, subtype="FLOAT")
+    code, out, _ = _run(capsys, p, "--array", "three-mic", "--summary-tuned", "--in-plane")
+    assert code == 0
+    doc = json.loads(out)
+    ref = localize_recording(x.astype(float), FS, arr, in_plane=True, **SUMMARY_TUNED)
+    assert doc["method"] == "ml" and doc["summary"]["tdoa_s"] == ref["summary"]["tdoa_s"]
+    assert doc["summary"]["azimuth_deg"] == pytest.approx(130.0, abs=3.0)
+    late = [g for g in doc["frames"] if g["t"] > 1.35]
+    assert late and all(g["azimuth_deg"] is None for g in late)
+    # it sets the weightings itself: giving them too is a one-line usage error
+    for extra in (["--method", "gcc-phat"], ["--reverb-method", "gcc-roth"]):
+        code, out, err = _run(capsys, p, "--array", "three-mic", "--summary-tuned", *extra)
+        assert code == 2 and out == "" and err.count("\n") == 1
+        assert f"--summary-tuned sets {extra[0]} itself" in err
+
+
 def test_a_corrupt_sample_is_named_when_no_frame_is_valid(rec3, tmp_path, capsys):
     """One float sample of 1e30 in a recording of a source at ~0.5: the analysis scales the
     recording to its loudest sample, every other frame fell below single precision and the

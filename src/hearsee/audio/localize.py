@@ -861,7 +861,13 @@ def localize_recording(
     progress : callable(n_frames_done), optional
     in_plane : bool
         The source lies in the plane of a planar array: directions model its spherical
-        wavefront (:func:`near_field_in_plane`, assumed range 2 m). Default False.
+        wavefront (:func:`near_field_in_plane`, assumed range 2 m), and the whole-recording
+        peak search steers in-plane directions only (``estimate_tdoas(source_in_plane=True)``,
+        unless ``tdoa_kwargs`` says otherwise; before 2026-11-27 it searched the whole sphere,
+        unlike bench/doa.py's benchmarked setting). Default False.
+    tdoa_kwargs :
+        Further :func:`hearsee.audio.tdoa.estimate_tdoas` settings, e.g.
+        ``**hearsee.audio.tdoa.SUMMARY_TUNED`` (the benchmarked whole-recording estimate).
 
     Returns
     -------
@@ -896,6 +902,7 @@ def localize_recording(
         return localize_recording_mask(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
                                        method=method, kalman=kalman, progress=progress)
     method = normalize_method(method)
+    tdoa_kwargs.setdefault("source_in_plane", bool(in_plane))
     tf = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method,
                         pairs=pairs, progress=progress, **tdoa_kwargs)
     labels = tf.pair_labels

@@ -11,6 +11,7 @@ from typing import Annotated, Any
 import typer
 
 from hearsee.cli._app import GccMethod, OutputFormat, app, emit_json, err_console, progress
+from hearsee.errors import ConfigError
 
 #: Above this much audio x pairs (seconds) processing takes about a second: show a bar.
 _PROGRESS_WORK_S = 60.0
@@ -73,8 +74,9 @@ def localize_cmd(
     frame_ms: Annotated[float, typer.Option("--frame-ms",
                                             help="Frame length in milliseconds.")] = 64.0,
     hop_ms: Annotated[float, typer.Option("--hop-ms", help="Frame hop in milliseconds.")] = 32.0,
-    method: Annotated[GccMethod, typer.Option(
-        "--method", help="GCC weighting (gcc-ml = Hannan-Thomson).")] = GccMethod.phat,
+    method: Annotated[GccMethod | None, typer.Option(
+        "--method", help="GCC weighting (gcc-ml = Hannan-Thomson); default gcc-phat, or gcc-ml "
+        "with --summary-tuned.", show_default=False)] = None,
     no_kalman: Annotated[bool, typer.Option(
         "--no-kalman", help="Report the raw per-frame TDOAs (no ITD Kalman filter).")] = False,
     fmt: Annotated[OutputFormat, typer.Option("--format", help="Output format.")] = (
@@ -86,15 +88,32 @@ def localize_cmd(
         "gcc-ml.")] = None,
     in_plane: Annotated[bool, typer.Option(
         "--in-plane", help="The source is in the plane of a planar (three-mic) array: model "
-        "its spherical wavefront (assumed 2 m away) instead of a plane wave.")] = False,
+        "its spherical wavefront (assumed 2 m away) instead of a plane wave, and search the "
+        "whole-recording peak among in-plane directions only.")] = False,
+    summary_tuned: Annotated[bool, typer.Option(
+        "--summary-tuned", help="The whole-recording estimate's settings that bench/doa.py "
+        "measures against pyroomacoustics (hearsee.audio.tdoa.SUMMARY_TUNED: gcc-ml, gcc-phat "
+        "when reverberant, Hann frames, onset weighting); with --in-plane exactly the "
+        "benchmarked setting. Sets --method and --reverb-method itself.")] = False,
 ) -> None:
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
     from hearsee.audio.arrays import load_array
     from hearsee.audio.localize import localize_recording
     from hearsee.audio.signals import read_recording
-    from hearsee.audio.tdoa import check_frame_ms, dominant_sample, frame_geometry
+    from hearsee.audio.tdoa import SUMMARY_TUNED, check_frame_ms, dominant_sample, frame_geometry
 
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
+    if summary_tuned:
+        given = [name for name, v in (("--method", method), ("--reverb-method", reverb_method))
+                 if v is not None]
+        if given:
+            raise ConfigError(f"--summary-tuned sets {' and '.join(given)} itself (method "
+                              f"{SUMMARY_TUNED['method']}, reverb method "
+                              f"{SUMMARY_TUNED['reverb_method']}): leave {' and '.join(given)} out")
+        settings = dict(SUMMARY_TUNED)
+    else:
+        settings = {"method": (method or GccMethod.phat).value,
+                    "reverb_method": None if reverb_method is None else reverb_method.value}
     arr = load_array(array)
     x, fs = read_recording(recording, arr)
     frame_len, hop = frame_geometry(fs, frame_ms, hop_ms)
@@ -102,10 +121,8 @@ def localize_cmd(
     work = x.shape[1] / fs * len(arr.pairs)
     with progress("localizing", n_frames, enabled=work > _PROGRESS_WORK_S) as advance:
         doc = localize_recording(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
-                                 method=method.value, kalman=not no_kalman, progress=advance,
-                                 in_plane=in_plane,
-                                 reverb_method=None if reverb_method is None else
-                                 reverb_method.value)
+                                 kalman=not no_kalman, progress=advance, in_plane=in_plane,
+                                 **settings)
     doc["recording"] = str(recording)
     if fmt is OutputFormat.json:
         emit_json(doc)
