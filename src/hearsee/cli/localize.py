@@ -115,6 +115,9 @@ def localize_cmd(
         settings = {"method": (method or GccMethod.phat).value,
                     "reverb_method": None if reverb_method is None else reverb_method.value}
     arr = load_array(array)
+    if summary_tuned and arr.mask is not None:
+        raise ConfigError(f"--summary-tuned: the masked array {arr.name!r} has a pipeline of its "
+                          "own (ch. 3) that takes none of those settings; leave it out")
     x, fs = read_recording(recording, arr)
     frame_len, hop = frame_geometry(fs, frame_ms, hop_ms)
     n_frames = max((x.shape[1] - frame_len) // hop + 1, 0)
