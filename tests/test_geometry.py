@@ -71,6 +71,18 @@ def test_cart_to_sph_azimuth_is_in_the_half_open_interval():
     assert float(direction_deg([-1.0, -0.0, 0.0])[0]) == 180.0
 
 
+def test_cart_to_sph_gives_no_negative_zero_angles():
+    """A point with -0.0 coordinates (an in-plane solution's z) gave elevation -0.0, printed
+    as "elevation -0.0 deg"; the angles are now +0.0, the point's other angles unchanged."""
+    from hearsee.geometry import cart_to_sph
+
+    az, el, _ = cart_to_sph(np.array([[1.0, -0.0, -0.0], [2.0, 0.0, 0.0]]))
+    assert np.all(az == 0.0) and np.all(el == 0.0)
+    assert not np.any(np.signbit(az)) and not np.any(np.signbit(el))
+    az, el, _ = cart_to_sph([0.0, -1.0, -1.0])
+    assert float(az) == -np.pi / 2 and float(el) == pytest.approx(-np.pi / 4)
+
+
 def test_head_pose_refuses_an_integer_beyond_float_range():
     """HeadPose(10**400, 0) raised a builtin TypeError from np.isfinite on the huge int."""
     from hearsee.geometry import HeadPose

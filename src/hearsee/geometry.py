@@ -110,7 +110,9 @@ def cart_to_sph(xyz: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
     az = np.arctan2(y, x)
     az = np.where(az == -np.pi, np.pi, az)  # arctan2(-0.0, -1) = -pi
     el = np.arctan2(z, np.hypot(x, y))
-    return az, el, r
+    # + 0.0 turns arctan2's -0.0 (a coordinate of -0.0, e.g. an in-plane solution) into 0.0,
+    # which users saw printed as "elevation -0.0"; every other value is unchanged
+    return az + 0.0, el + 0.0, r
 
 
 def unit_vector_deg(azimuth_deg: ArrayLike, elevation_deg: ArrayLike = 0.0) -> NDArray:

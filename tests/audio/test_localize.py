@@ -193,6 +193,18 @@ def test_localize_recording_in_plane_also_steers_the_summary_search_in_plane():
     assert abs(wrap_deg(sphere["summary"]["azimuth_deg"] - az)) > 5.0
 
 
+def test_in_plane_solutions_report_elevation_plus_zero():
+    """The in-plane solver's direction has z = -0.0, reported as elevation -0.0 (printed
+    "elevation -0.0 deg" by ``hearsee localize --format table``): now +0.0."""
+    src = np.array([-1.2, 1.5, 0.0])
+    r = np.linalg.norm(src - THREE.positions, axis=1)
+    tau = [(r[i] - r[j]) / THREE.speed_of_sound for i, j in THREE.pairs]
+    loc = localize_tdoa(tau, THREE, in_plane=True)
+    assert loc.elevation_deg == 0.0 and not np.signbit(loc.elevation_deg)
+    assert loc.candidates == [(loc.azimuth_deg, 0.0)]
+    assert loc.azimuth_deg == pytest.approx(np.degrees(np.arctan2(1.5, -1.2)), abs=0.05)
+
+
 def _in_plane_sources(n, seed):
     """Exact near-field TDOAs of in-plane sources 1-3 m from the three-mic centre."""
     rng = np.random.default_rng(seed)

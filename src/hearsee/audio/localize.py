@@ -243,9 +243,11 @@ def _design(array: MicArray, prs: list[tuple[int, int]]) -> NDArray:
 
 
 def _azel(u: NDArray) -> tuple[float, float]:
-    az = float(np.degrees(np.arctan2(u[1], u[0])))
-    el = float(np.degrees(np.arcsin(np.clip(u[2] / np.linalg.norm(u), -1.0, 1.0))))
-    return az, el
+    """Azimuth in (-180, 180] and elevation (degrees) of direction ``u``; + 0.0 turns the
+    -0.0 of a -0.0 component (an in-plane solution's z) into 0.0, as cart_to_sph does."""
+    az = float(np.degrees(np.arctan2(u[1], u[0]))) + 0.0
+    el = float(np.degrees(np.arcsin(np.clip(u[2] / np.linalg.norm(u), -1.0, 1.0)))) + 0.0
+    return (180.0 if az == -180.0 else az), el
 
 
 def _rms(r: NDArray) -> float:
