@@ -569,7 +569,8 @@ def test_room_reflections_of_a_fast_source_converge_with_the_early_split():
 
 
 @pytest.mark.parametrize("kw", [{"early_block_s": 0.0}, {"early_block_s": "5 ms"},
-                                {"early_order": -1}, {"early_order": 2.5}])
+                                {"early_order": -1}, {"early_order": 2.5}, {"block_s": 0.0},
+                                {"block_s": "0.1"}, {"block_s": float("inf")}])
 def test_room_early_split_options_are_checked(kw):
     arr = MicArray.from_preset("two-mic")
     with pytest.raises(GeometryError):

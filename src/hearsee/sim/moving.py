@@ -601,10 +601,11 @@ def simulate_moving_room(
     array (n_mics, n)
     """
     x = _check_signal(signal, fs)
-    if not block_s > 0:
-        raise GeometryError(f"block_s must be > 0, got {block_s}")
-    if not (is_real(early_block_s) and early_block_s > 0):
-        raise GeometryError(f"early_block_s must be > 0 seconds, got {early_block_s!r}")
+    for name, spacing in (("block_s", block_s), ("early_block_s", early_block_s)):
+        # (block_s had only a "> 0" test: a string raised a builtin TypeError, inf an
+        # OverflowError in the update grid)
+        if not (is_real(spacing) and spacing > 0):
+            raise GeometryError(f"{name} must be > 0 seconds, got {spacing!r}")
     if early_order is not None:
         early_order = whole_number("early_order", early_order, 0, error=GeometryError)
     at = np.asarray(array_at, dtype=float)
