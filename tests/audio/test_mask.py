@@ -369,6 +369,8 @@ def test_table_refuses_impossible_source_distances(model):
             model.responses(bad)
         with pytest.raises(ConfigError, match="distance"):
             mask.front_back_margin(model, bad)
+    with pytest.raises(ConfigError, match="expected a MaskModel"):
+        mask.front_back_margin(model.array)  # (was AttributeError)
     with pytest.raises(GeometryError, match="inside the mask"):
         model.table(0.02)  # every direction: 2 cm from the origin is inside the egg
     for step in (0.0, -1.0, np.nan):

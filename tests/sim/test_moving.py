@@ -266,6 +266,9 @@ def test_trajectory_interpolation_velocity_and_csv_roundtrip(tmp_path):
     save_trajectory(traj, p)
     back = load_trajectory(p)
     np.testing.assert_allclose(back.positions, traj.positions, atol=1e-6)
+    with pytest.raises(GeometryError, match="expected a Trajectory"):
+        save_trajectory(traj.positions, tmp_path / "other.csv")  # (was AttributeError)
+    assert not (tmp_path / "other.csv").exists()
 
 
 def test_bad_trajectories(tmp_path):

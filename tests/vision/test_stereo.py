@@ -331,6 +331,8 @@ def test_disparity_helpers_check_their_settings_and_shapes():
     f = stereo_frame(np.roll(right, 8, axis=1), right, rig, num_disparities=16)
     with pytest.raises(GeometryError, match="3 coordinates"):
         points_to_left_frame(np.ones((5, 2)), f.rectification)
+    with pytest.raises(CalibrationError, match="expected a Rectification"):
+        points_to_left_frame(np.ones((5, 3)), f.rectification.R1)  # (was AttributeError)
     with pytest.raises(ConfigError, match="frame"):
         f.points("Left")
     # the rectified and left frames of an ideal rig are one frame: same points

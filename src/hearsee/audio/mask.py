@@ -643,6 +643,9 @@ def front_back_margin(model: MaskModel, distance: float | None = None,
     Returns ``(azimuth_deg (A,), margin (A,), partner_deg (A,))``: the cost of the nearest
     confusable azimuth and that azimuth.
     """
+    if not isinstance(model, MaskModel):  # (any other object: a builtin AttributeError)
+        raise ConfigError(f"model: expected a MaskModel, e.g. MaskModel('mask2'), got "
+                          f"{type(model).__name__}")
     az, h = model.table(distance)
     edges = _band_edges(bands_hz, model.f_max)
     use = (model.freqs >= max(edges[0], 100.0)) & (model.freqs <= 0.9 * model.f_max)

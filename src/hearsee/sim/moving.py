@@ -271,6 +271,8 @@ def _trajectory_row(path: Path, line: int, row: list[str]) -> list[float]:
 
 def save_trajectory(traj: Trajectory, path: str | Path, times: ArrayLike | None = None) -> None:
     """Write ``traj`` (sampled at ``times`` if given, else its own knots) as CSV ``t,x,y,z``."""
+    if not isinstance(traj, Trajectory):  # (any other object: a builtin AttributeError)
+        raise GeometryError(f"traj: expected a Trajectory, got {type(traj).__name__}")
     t = traj.t if times is None else np.asarray(times, dtype=float)
     p = traj.at(t)
     with output_file(path).open("w", newline="", encoding="utf-8") as fh:

@@ -449,6 +449,9 @@ def points_from_disparity(disparity: ArrayLike, Q: ArrayLike) -> NDArray:
 def points_to_left_frame(points: ArrayLike, rectification: Rectification) -> NDArray:
     """Rotate points ``(..., 3)`` from the rectified left frame back to the (unrectified) left
     camera's optical frame -- the frame the rig's thermal extrinsics refer to."""
+    if not isinstance(rectification, Rectification):  # (else a builtin AttributeError)
+        raise CalibrationError("rectification: expected a Rectification (stereo_frame(...)."
+                               f"rectification), got {type(rectification).__name__}")
     p = as_points(points, "points_to_left_frame")  # (numpy's matmul ValueError for (N, 2))
     return p @ rectification.R1  # R1 maps left -> rectified, so R1^T maps back (row vectors)
 
