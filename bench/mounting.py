@@ -70,10 +70,11 @@ def condition(aside: float, kind: str, snr: float, room: bool, walks: int,
         traj = view_walk(rng, true, 2.0)
         x = _signal(kind, 2.0, rng, FS)
         if room:
-            # (whole responses only: the renderer of this benchmark's committed results; the
-            # early-reflection split of 2026-11-26 was not re-run here)
+            # (the renderer's defaults: early reflections updated every 5 ms; before
+            # 2026-11-27 this benchmark rendered whole responses every 0.1 s, early_order=None,
+            # which doubled each reflection -- see simulate_moving_room)
             y = simulate_moving_room(x, FS, arr, traj, ROOM, RT60, ARRAY_AT, snr_db=snr,
-                                     rng=rng, block_s=0.1, early_order=None)
+                                     rng=rng, block_s=0.1)
         else:
             y = simulate_moving_free_field(x, FS, arr, traj, snr_db=snr, rng=rng)
         tf = estimate_tdoas(y, FS, arr, 64.0, 16.0, "phat", refine="interp",
