@@ -150,7 +150,12 @@ class Update:
 
     ``azimuth_deg``/``elevation_deg`` (deg), ``position_m`` (m), ``velocity_mps``,
     ``acceleration_mps2`` and ``covariance`` (2x2 deg^2 for a direction, 3x3 m^2 for a position)
-    are the trackers' filtered estimates; ``raw_*`` are this frame's own measurements (None when
+    are the trackers' filtered estimates. The direction covariance is the tracker's own and
+    conservative: its measurement noise is declared several times the measurements' actual
+    error (see ``StreamConfig.sigma_srp_deg``), so on ``bench/tracking.py``'s room walks (RT60
+    0.3 s, 10 / 20 dB; measured 2026-11-27) the actual azimuth error was 0.2-0.45 times the
+    reported standard deviation for voices and 0.7 times for white noise. ``raw_*`` are this
+    frame's own measurements (None when
     the frame gave none): ``raw_azimuth_deg``/``raw_elevation_deg`` the direction of its own
     GCC TDOAs, also with ``itd_filter`` (the ITD-filtered TDOAs' direction, which the tracker
     receives, is ``itd_azimuth_deg``/``itd_elevation_deg``: None without ``itd_filter`` and
@@ -956,7 +961,13 @@ class StreamConfig:
         ``sigma_frame_deg`` 9 / 12, ``sigma_srp_deg`` 30, ``prefer_frame_confidence`` 1.2 / 2 /
         3 / inf, ``spectrum_alpha`` 0.3 / 0.7, an SRP band up to 6 or 7.9 kHz and a clutter-
         weighted (probabilistic data association) update each helped one condition and hurt
-        another, or lengthened the lag; none was adopted
+        another, or lengthened the lag; none was adopted.
+        The declared noise is several times the measurements' actual spread, on purpose
+        (measured 2026-11-27 on part-A-like room walks: median 25 deg declared for the smoothed
+        directions of voices at 10 dB, whose robust spread is 4-5 deg): a 10 dB voice gives a
+        measurement in only 12-23 % of the frames, and calibrated values (``sigma_srp_deg`` 5)
+        let a noisy angular rate carry the track off between syllables (female voice: tracked
+        RMSE 8.6 -> 12.2 deg, lag 2.0 -> 0.7 frames; see bench/results/HISTORY.md).
     direction_modes_dps2 : angular acceleration noises (deg/s^2) of the interacting-multiple-
         model :class:`~hearsee.audio.tracking.DirectionIMM`, one constant-velocity mode per
         value (default ``IMM_MODES_DPS2`` = (50, 2000): quiet walking / turning); None tracks
