@@ -3,6 +3,7 @@ import pytest
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.localize import (
+    DEFAULT_TOL_S,
     array_geometry,
     cone_points,
     far_field_planar,
@@ -123,6 +124,27 @@ def test_volume_array_direction_and_position():
     np.testing.assert_allclose(p, src, atol=1e-4)
     assert r < 1e-8
 
+
+
+def test_near_field_position_does_not_flip_to_the_far_side():
+    # found by a property check (2026-11-27): started from the spherical interpolation only,
+    # noisy TDOAs of a five-microphone array (a 15 cm tetrahedron and its centre) could land
+    # the fit hundreds of metres away on the far side of the array; both starts (that one and
+    # the far-field direction at 2 m) keep the better fit
+    from hearsee.audio.localize import _spherical_interpolation
+
+    side = 0.15
+    tet = side / np.sqrt(8) * np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]])
+    arr = MicArray(np.vstack([tet, [[0.0, 0.0, 0.0]]]))
+    rng = np.random.default_rng(2785)
+    src = np.array([rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-0.5, 0.5)])
+    tau = arr.tdoa(src) + rng.normal(0.0, 20e-6, 10)  # 20 us of TDOA noise on 10 pairs
+    p_si, r_si = near_field_position(tau, arr, x0=_spherical_interpolation(
+        tau, arr, arr.checked_pairs(None)))
+    assert p_si @ src < 0 and r_si > DEFAULT_TOL_S  # the failure this guards against
+    p, r = near_field_position(tau, arr)
+    cos = p @ src / np.linalg.norm(p) / np.linalg.norm(src)
+    assert np.degrees(np.arccos(min(cos, 1.0))) < 5.0 and r <= DEFAULT_TOL_S
 
 def test_nan_tdoa_gives_empty_localization():
     loc = localize_tdoa([np.nan, 0.0, 0.0], THREE)
