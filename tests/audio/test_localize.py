@@ -125,7 +125,6 @@ def test_volume_array_direction_and_position():
     assert r < 1e-8
 
 
-
 def test_near_field_position_does_not_flip_to_the_far_side():
     # found by a property check (2026-11-27): started from the spherical interpolation only,
     # noisy TDOAs of a five-microphone array (a 15 cm tetrahedron and its centre) could land
@@ -145,6 +144,12 @@ def test_near_field_position_does_not_flip_to_the_far_side():
     p, r = near_field_position(tau, arr)
     cos = p @ src / np.linalg.norm(p) / np.linalg.norm(src)
     assert np.degrees(np.arccos(min(cos, 1.0))) < 5.0 and r <= DEFAULT_TOL_S
+    # a line of five microphones has a circle of positions, not one: the spherical
+    # interpolation used to return one of them with zero residual (0.71 m off here)
+    line = MicArray(np.c_[np.linspace(-0.2, 0.2, 5), np.zeros(5), np.zeros(5)])
+    with pytest.raises(GeometryError, match="linear"):
+        near_field_position(line.tdoa(np.array([1.0, 1.0, 0.0])), line)
+
 
 def test_nan_tdoa_gives_empty_localization():
     loc = localize_tdoa([np.nan, 0.0, 0.0], THREE)

@@ -422,9 +422,8 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray | str,
     spherical interpolation alone, noisy TDOAs (20 us) of five-microphone arrays put up to 2 %
     of the fits on the far side of the array, 150-175 deg off (flagged only by their
     residual), both starts together none (300 random sources 0.5-4 m away per array,
-    2026-11-27). Returns
-    (position, RMS residual in seconds). Meaningful only for arrays whose aperture is not tiny
-    compared with the range.
+    2026-11-27). Returns (position, RMS residual in seconds). Meaningful only for arrays whose
+    aperture is not tiny compared with the range; a linear array has no position (GeometryError).
     """
     array = load_array(array)  # (a MicArray, or a preset name / YAML path)
     from scipy.optimize import least_squares
