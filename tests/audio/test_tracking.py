@@ -396,6 +396,55 @@ def test_imm_mode_probabilities_say_which_motion_it_sees():
     assert np.mean(mu_turn_min) < 0.4  # the turn: the agile mode takes over
 
 
+
+def _sparse_turn(seed: int, every: int, sigma_true: float):
+    """A talker turning back at 2 s (+-30 deg/s, 32 ms frames) measured every ``every``-th
+    frame with ``sigma_true`` deg of noise: (t, truth, measurement or NaN)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(125) * 0.032
+    truth = np.where(t < 2.0, 30.0 * t, 60.0 - 30.0 * (t - 2.0))
+    meas = np.full(t.size, np.nan)
+    k = np.arange(rng.integers(every), t.size, every)
+    meas[k] = truth[k] + rng.normal(0.0, sigma_true, k.size)
+    return t, truth, meas
+
+
+def _run_declared(trk, t, meas, sigma_declared):
+    out = np.full(t.size, np.nan)
+    for k in range(t.size):
+        m = None if np.isnan(meas[k]) else (meas[k], None)
+        trk.update(t[k], m, sigma_meas_deg=sigma_declared if m else None)
+        out[k] = trk.azimuth_deg
+    return out
+
+
+def test_imm_angle_random_walk_follows_sparse_measurements_closer():
+    """Sparse measurements (every 8th frame) that declare 25 deg of noise but hold 4 deg, as a
+    voice's at 10 dB do: the azimuth random walk (angle_noise_ratio) lets them move the
+    azimuth more, so the track trails the turn less; dense precise measurements (white noise:
+    every frame, 2 deg declared and held) it leaves nearly alone."""
+    err = {0.0: [], 8.0: []}
+    for seed in range(8):
+        t, truth, meas = _sparse_turn(seed, 8, 4.0)
+        after = (t > 2.0) & (t < 3.0) & ~np.isnan(meas)
+        for ratio in err:
+            est = _run_declared(DirectionIMM(angle_noise_ratio=ratio), t, meas, 25.0)
+            err[ratio].append(wrap_deg(est - truth)[after])
+    rms = {r: float(np.sqrt(np.mean(np.concatenate(v) ** 2))) for r, v in err.items()}
+    # after the turn the truth falls: a positive error is the track trailing it
+    trail = {r: float(np.mean(np.concatenate(v))) for r, v in err.items()}
+    assert trail[0.0] > 2.0 and trail[8.0] < 0.7 * trail[0.0]  # 2.95 -> 1.78 deg
+    assert rms[8.0] < rms[0.0]
+    t, truth, meas = _sparse_turn(0, 1, 2.0)
+    a = _run_declared(DirectionIMM(), t, meas, 2.0)
+    b = _run_declared(DirectionIMM(angle_noise_ratio=8.0), t, meas, 2.0)
+    rmse_a, rmse_b = (float(np.sqrt(np.mean(wrap_deg(x - truth)[10:] ** 2))) for x in (a, b))
+    assert rmse_b < 1.1 * rmse_a  # and well below the 2 deg of one measurement
+    assert rmse_b < 1.5
+    for bad in (-1.0, np.nan, np.inf, "8"):
+        with pytest.raises(EstimationError, match="angle_noise_ratio"):
+            DirectionIMM(angle_noise_ratio=bad)
+
 def test_imm_rejects_bad_parameters_and_time_going_backwards():
     with pytest.raises(EstimationError):
         DirectionIMM(sigma_accel_dps2=(100.0,))

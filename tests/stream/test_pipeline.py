@@ -625,6 +625,8 @@ def test_bad_imm_settings_are_a_config_error():
     ({"sigma_tdoa_s": float("nan")}, "sigma_tdoa_s"),
     ({"max_fix_residual_samples": float("nan")}, "max_fix_residual_samples"),
     ({"frame_ms": float("nan")}, "frame_ms"),
+    ({"direction_angle_noise_ratio": -1.0}, "direction_angle_noise_ratio"),
+    ({"direction_angle_noise_ratio": float("inf")}, "direction_angle_noise_ratio"),
 ])
 def test_stream_config_refuses_out_of_range_settings(bad, name):
     """Found by a bad-input sweep (2026-11-26): each was accepted, most with no effect or a

@@ -75,6 +75,7 @@ from hearsee.audio.tdoa import (
     min_frame_ms,
 )
 from hearsee.audio.tracking import (
+    DIRECTION_ANGLE_NOISE_RATIO,
     DIRECTION_RATE_TAU_S,
     ELEVATION_ACCEL_RATIO,
     IMM_MODES_DPS2,
@@ -988,6 +989,10 @@ class StreamConfig:
         rates relax toward zero (default
         :data:`~hearsee.audio.tracking.DIRECTION_RATE_TAU_S`; None = constant velocity, the
         default before 2026-11-24's sixth session)
+    direction_angle_noise_ratio : the IMM direction tracker's azimuth random walk, times the
+        latest measurement's azimuth variance per second (1/s; default
+        :data:`~hearsee.audio.tracking.DIRECTION_ANGLE_NOISE_RATIO`; 0 = none; not used by the
+        one-filter tracker, ``direction_modes_dps2=None``)
     elevation_accel_ratio : the direction tracker's elevation acceleration noise as a fraction
         of its azimuth's (default
         :data:`~hearsee.audio.tracking.ELEVATION_ACCEL_RATIO` = 0.1: a walking speaker's
@@ -1142,6 +1147,7 @@ class StreamConfig:
     direction_modes_dps2: tuple[float, ...] | None = IMM_MODES_DPS2
     mode_dwell_s: float = 1.0
     direction_rate_tau_s: float | None = DIRECTION_RATE_TAU_S
+    direction_angle_noise_ratio: float = DIRECTION_ANGLE_NOISE_RATIO
     elevation_accel_ratio: float = ELEVATION_ACCEL_RATIO
     planar_elevation_sigma_scale: float = 4.0
     gated_min_coherence: float | None = None
@@ -1160,7 +1166,8 @@ _POSITIVE = ("sigma_meas_deg", "sigma_accel_dps2", "sigma_jerk", "sigma_px", "si
 _POSITIVE_OR_NONE = ("sigma_accel", "sigma_tdoa_s", "accel_tau_s", "max_coast_s",
                      "sigma_frame_deg", "sigma_srp_deg")
 #: ... that must lie in [low, high] (both inclusive; finite)
-_WITHIN = {"min_confidence": (0.0, np.inf), "min_coherence": (0.0, 1.0),
+_WITHIN = {"min_confidence": (0.0, np.inf), "direction_angle_noise_ratio": (0.0, np.inf),
+           "min_coherence": (0.0, 1.0),
            "alt_ratio": (0.0, 1.0), "max_alt_ratio": (0.0, 1.0)}
 
 
@@ -1477,7 +1484,8 @@ class TrackingProcessor:
             return DirectionIMM(cfg.sigma_meas_deg, tuple(cfg.direction_modes_dps2),
                                 mode_dwell_s=cfg.mode_dwell_s, max_rejects=max_rejects,
                                 elevation_accel_ratio=cfg.elevation_accel_ratio,
-                                rate_tau_s=cfg.direction_rate_tau_s)
+                                rate_tau_s=cfg.direction_rate_tau_s,
+                                angle_noise_ratio=cfg.direction_angle_noise_ratio)
         except EstimationError as exc:
             raise ConfigError("direction tracker (direction_modes_dps2 / mode_dwell_s / "
                               f"elevation_accel_ratio / direction_rate_tau_s): {exc}") from None
