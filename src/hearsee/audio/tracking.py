@@ -623,7 +623,17 @@ DIRECTION_RATE_TAU_S = 2.0
 #: track lag a turn: error-free measurements at the same frames and noises still lag 1.3
 #: frames. The random walk lets a measurement move the azimuth more than the rate (an alpha-
 #: beta split a white-acceleration model cannot make); scaled by the measurement's variance it
-#: leaves frequent, precise measurements (white noise) nearly alone. 0 = none.
+#: leaves frequent, precise measurements (white noise) nearly alone. 0 = none: opt-in. Measured
+#: with ``sigma_srp_deg`` 15 (vs the defaults 0 and 20) on part-A-like room walks of
+#: bench/tracking.py, ratio = per-frame / tracked azimuth RMSE, lag = pooled over the turning
+#: walks: dev seeds 100/110/2701-2704 (48 + 48 walks per condition) female voice 10 dB lag 2.02
+#: -> 1.37 frames at ratio 2.73 -> 2.65x, male 1.48 -> 1.21 at 2.62 -> 2.63x, 20 dB ratios
+#: 5.17 -> 4.82x / 5.17 -> 4.91x, white noise 1.42 -> 1.38x / 1.14 -> 1.13x; held-out seeds
+#: 3101-3104 (32 + 32 walks) female 10 dB lag 2.36 -> 1.76 at 1.86x both, male 0.46 -> 0.07 at
+#: 2.28 -> 2.32x, 20 dB ratios 3.80 -> 3.52x / 5.25 -> 5.04x, white noise 1.59 -> 1.50x / 1.45
+#: -> 1.43x. Its adoption rule (written before the held-out run: both 10 dB lags <= 1.6 frames
+#: and >= 0.3 lower, 10 dB ratios >= 0.95x, 20 dB >= 0.92x, white noise >= 0.95x the
+#: default's) failed on the female lag (1.76) and white noise at 10 dB (0.94x): not the default.
 DIRECTION_ANGLE_NOISE_RATIO = 0.0
 
 
