@@ -396,7 +396,6 @@ def test_imm_mode_probabilities_say_which_motion_it_sees():
     assert np.mean(mu_turn_min) < 0.4  # the turn: the agile mode takes over
 
 
-
 def _sparse_turn(seed: int, every: int, sigma_true: float):
     """A talker turning back at 2 s (+-30 deg/s, 32 ms frames) measured every ``every``-th
     frame with ``sigma_true`` deg of noise: (t, truth, measurement or NaN)."""
@@ -444,6 +443,7 @@ def test_imm_angle_random_walk_follows_sparse_measurements_closer():
     for bad in (-1.0, np.nan, np.inf, "8"):
         with pytest.raises(EstimationError, match="angle_noise_ratio"):
             DirectionIMM(angle_noise_ratio=bad)
+
 
 def test_imm_rejects_bad_parameters_and_time_going_backwards():
     with pytest.raises(EstimationError):
