@@ -256,11 +256,13 @@ def test_closed_form_small_inverse_and_scalar_wrap_match_numpy():
 
 
 # ---------------------------------------------------------------------------- IMM
-def _run(trk, t, az, el=None, delay=0.0):
+def _run(trk, t, az, el=None, delay=0.0, sigma=None):
+    """The track's azimuth per frame; NaN azimuths are frames without a measurement, ``sigma``
+    the noise (deg) each measurement declares (None: the tracker's own)."""
     out = np.full(t.size, np.nan)
     for k in range(t.size):
         meas = None if not np.isfinite(az[k]) else (az[k], None if el is None else el[k])
-        trk.update(t[k], meas, delay_s=delay)
+        trk.update(t[k], meas, sigma_meas_deg=sigma if meas else None, delay_s=delay)
         out[k] = trk.azimuth_deg
     return out
 
@@ -408,15 +410,6 @@ def _sparse_turn(seed: int, every: int, sigma_true: float):
     return t, truth, meas
 
 
-def _run_declared(trk, t, meas, sigma_declared):
-    out = np.full(t.size, np.nan)
-    for k in range(t.size):
-        m = None if np.isnan(meas[k]) else (meas[k], None)
-        trk.update(t[k], m, sigma_meas_deg=sigma_declared if m else None)
-        out[k] = trk.azimuth_deg
-    return out
-
-
 def test_imm_angle_random_walk_follows_sparse_measurements_closer():
     """Sparse measurements (every 8th frame) that declare 25 deg of noise but hold 4 deg, as a
     voice's at 10 dB do: the azimuth random walk (angle_noise_ratio) lets them move the
@@ -427,7 +420,7 @@ def test_imm_angle_random_walk_follows_sparse_measurements_closer():
         t, truth, meas = _sparse_turn(seed, 8, 4.0)
         after = (t > 2.0) & (t < 3.0) & ~np.isnan(meas)
         for ratio in err:
-            est = _run_declared(DirectionIMM(angle_noise_ratio=ratio), t, meas, 25.0)
+            est = _run(DirectionIMM(angle_noise_ratio=ratio), t, meas, sigma=25.0)
             err[ratio].append(wrap_deg(est - truth)[after])
     rms = {r: float(np.sqrt(np.mean(np.concatenate(v) ** 2))) for r, v in err.items()}
     # after the turn the truth falls: a positive error is the track trailing it
@@ -435,8 +428,8 @@ def test_imm_angle_random_walk_follows_sparse_measurements_closer():
     assert trail[0.0] > 2.0 and trail[8.0] < 0.7 * trail[0.0]  # 2.95 -> 1.78 deg
     assert rms[8.0] < rms[0.0]
     t, truth, meas = _sparse_turn(0, 1, 2.0)
-    a = _run_declared(DirectionIMM(), t, meas, 2.0)
-    b = _run_declared(DirectionIMM(angle_noise_ratio=8.0), t, meas, 2.0)
+    a = _run(DirectionIMM(), t, meas, sigma=2.0)
+    b = _run(DirectionIMM(angle_noise_ratio=8.0), t, meas, sigma=2.0)
     rmse_a, rmse_b = (float(np.sqrt(np.mean(wrap_deg(x - truth)[10:] ** 2))) for x in (a, b))
     assert rmse_b < 1.1 * rmse_a  # and well below the 2 deg of one measurement
     assert rmse_b < 1.5
