@@ -125,6 +125,51 @@ def test_volume_array_direction_and_position():
     assert r < 1e-8
 
 
+def _tetra_and_centre(side: float = 0.15) -> MicArray:
+    tet = side / np.sqrt(8) * np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]])
+    return MicArray(np.vstack([tet, [[0.0, 0.0, 0.0]]]))
+
+
+def test_volume_array_direction_from_the_wavefront_curvature():
+    """Five or more microphones: a near source's direction comes from the fitted position
+    when the point source explains the TDOAs better than a plane wave (Akaike's criterion);
+    a plane wave keeps the plane wave's answer; four microphones always do."""
+    from hearsee.audio.localize import far_field_volume
+    from hearsee.geometry import angle_between
+
+    arr = _tetra_and_centre()
+    src = 0.7 * unit_vector_deg(130.0, 20.0)  # 0.7 m from the 15 cm array
+    plane = far_field_volume(arr.tdoa(src), arr)
+    assert np.degrees(angle_between(plane.direction, unit_vector_deg(130.0, 20.0))) > 0.5
+    loc = localize_tdoa(arr.tdoa(src), arr)
+    assert loc.extra["direction_model"] == "position"
+    assert (loc.azimuth_deg, loc.elevation_deg) == pytest.approx((130.0, 20.0), abs=1e-4)
+    assert loc.candidates == [(loc.azimuth_deg, loc.elevation_deg)] and loc.feasible
+    assert loc.residual_s < 1e-9 and loc.extra["far_field"]["residual_s"] > 1e-7
+    assert loc.extra["far_field"]["azimuth_deg"] == pytest.approx(plane.azimuth_deg)
+    # a plane wave: the plane wave's exact answer
+    far = localize_tdoa(arr.tdoa_far(unit_vector_deg(-60.0, -25.0)), arr)
+    assert far.extra["direction_model"] == "plane_wave" and "far_field" not in far.extra
+    assert (far.azimuth_deg, far.elevation_deg) == pytest.approx((-60.0, -25.0), abs=1e-6)
+    # four microphones: three TDOAs fit a position exactly, so the plane wave stays
+    tet = MicArray(arr.positions[:4])
+    four = localize_tdoa(tet.tdoa(src), tet)
+    assert four.extra["direction_model"] == "plane_wave"
+    assert four.azimuth_deg == pytest.approx(far_field_volume(tet.tdoa(src), tet).azimuth_deg)
+    # without near_field nothing is fitted
+    assert localize_tdoa(arr.tdoa(src), arr, near_field=False).position_m is None
+
+
+def test_near_model_needs_akaike_margin():
+    from hearsee.audio.localize import _near_model_wins
+
+    n = 4  # five microphones
+    assert _near_model_wins(1e-6, 0.0, n)  # exact point source, inexact plane wave
+    assert not _near_model_wins(0.0, 0.0, n)  # both exact: the plane wave
+    assert not _near_model_wins(1e-5, 1e-5 / np.exp(1 / n) * 1.001, n)
+    assert _near_model_wins(1e-5, 1e-5 / np.exp(1 / n) * 0.999, n)
+
+
 def test_near_field_position_does_not_flip_to_the_far_side():
     # found by a property check (2026-11-27): started from the spherical interpolation only,
     # noisy TDOAs of a five-microphone array (a 15 cm tetrahedron and its centre) could land
@@ -132,9 +177,7 @@ def test_near_field_position_does_not_flip_to_the_far_side():
     # the far-field direction at 2 m) keep the better fit
     from hearsee.audio.localize import _spherical_interpolation
 
-    side = 0.15
-    tet = side / np.sqrt(8) * np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]])
-    arr = MicArray(np.vstack([tet, [[0.0, 0.0, 0.0]]]))
+    arr = _tetra_and_centre()
     rng = np.random.default_rng(2785)
     src = np.array([rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-0.5, 0.5)])
     tau = arr.tdoa(src) + rng.normal(0.0, 20e-6, 10)  # 20 us of TDOA noise on 10 pairs

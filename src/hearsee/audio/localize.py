@@ -30,6 +30,7 @@ Angles: azimuth from +x toward +y, elevation from the xy-plane toward +z, degree
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -74,7 +75,9 @@ class Localization:
     n_solutions : int               exact solutions: 1 or 2 (mirror twins), 0 when the TDOAs are
                                     inconsistent (``candidates`` then holds the nearest feasible)
     feasible : bool                 False when the TDOAs admit no direction exactly
-    position_m : array (3,) or None near-field position (volume arrays with >= 4 microphones)
+    position_m : array (3,) or None near-field position (volume arrays with >= 4 microphones;
+                                    with >= 5 the primary direction may be its direction, see
+                                    :func:`localize_tdoa`)
     direction : array (3,) or None  unit vector of the primary candidate (None for linear arrays)
     residual_s : float              RMS TDOA residual of the primary solution, seconds
     geometry : str                  "linear", "planar" or "volume"
@@ -658,15 +661,28 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
     Returns
     -------
     Localization
-        NaN TDOAs give ``Localization(None, None, [], 0, False)``. For a volume array the
-        azimuth and elevation are the far-field (plane-wave) direction even when
-        ``position_m`` is also fitted, so the two can disagree for a source near a large
+        NaN TDOAs give ``Localization(None, None, [], 0, False)``. For a volume array of four
+        microphones the azimuth and elevation are the far-field (plane-wave) direction even
+        when ``position_m`` is also fitted, so the two can disagree for a source near a large
         array: with exact TDOAs of sources 0.5-1 m away (300 random directions, elevation
         within +-40 deg), a regular tetrahedron of 15 cm (30 cm) sides gives a far-field
         direction 1.5 deg (2.6 deg) RMS off, the direction of ``position_m`` from the array
         centre 0.4 (1.1) -- not 0: four microphones' three independent TDOAs can fit two
         positions, and the fit returns one. With 20 us of TDOA noise the two directions are
-        equally good (2.92 vs 2.95 deg RMS for the 15 cm tetrahedron).
+        equally good (2.92 vs 2.95 deg RMS for the 15 cm tetrahedron). With five or more
+        (:data:`NEAR_DIRECTION_MIN_MICS`, ``near_field``) the direction of ``position_m`` from
+        the array centre is the answer when Akaike's criterion prefers the point source to the
+        plane wave (:func:`_near_model_wins`; ``extra["direction_model"]`` says which, and
+        ``extra["far_field"]`` keeps the plane wave's answer then): the wavefront's curvature is
+        used where the TDOAs measure it, and ignored where noise would only add the range's
+        uncertainty to the direction. Random sources (elevation within +-34 deg, 300 per cell,
+        i.i.d. TDOA noise per pair, 2026-11-27): a 15 cm tetrahedron and its centre, 0.5-1 m,
+        RMS direction error 1.47 -> 0.00 deg (exact TDOAs), 1.49 -> 0.74 (5 us), 2.68 -> 2.61
+        (20 us); 2-4 m 0.35 -> 0.00, 0.69 -> 0.68, 2.34 -> 2.35; a 20 cm cube of eight, 0.5-1 m,
+        0.27 -> 0.00, 0.35 -> 0.18, 0.84 -> 0.74; a 5 cm hexagon with a microphone 8 cm above
+        its centre, 0.5-1 m, 2.08 -> 0.87, 2.14 -> 1.55, 3.37 -> 3.36. In no cell (three
+        ranges from 0.5 to 4 m, three noise levels, these three arrays) worse by more than
+        0.03 deg.
 
     >>> arr = MicArray.from_preset("two-mic")
     >>> u = np.array([np.cos(np.radians(30)), np.sin(np.radians(30)), 0.0])
@@ -692,7 +708,46 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
         p, r = near_field_position(tau, arr, prs, tol_s=tol_s)
         loc.position_m = p
         loc.extra["position_residual_s"] = r
+        loc.extra["direction_model"] = "plane_wave"
+        if arr.n_mics >= NEAR_DIRECTION_MIN_MICS and _near_model_wins(
+                loc.residual_s, r, arr.n_mics - 1):
+            _direction_from_position(loc, p, r, geo.centre, tol_s)
     return loc
+
+
+#: Volume arrays with at least this many microphones may take their direction from the
+#: near-field position (:func:`_near_model_wins`); four give three independent TDOAs, which
+#: the position's three coordinates always fit exactly, often by the wrong one of two points.
+NEAR_DIRECTION_MIN_MICS = 5
+
+
+def _near_model_wins(rms_far_s: float, rms_near_s: float, n_independent: int) -> bool:
+    """Akaike's criterion between the plane wave (direction: 2 parameters) and the point
+    source (position: 3) fitted to ``n_independent`` independent TDOAs with Gaussian errors:
+    ``n ln(RSS_far / RSS_near) > 2``, i.e. the near model wins when its RMS residual is below
+    the far one's by more than the factor ``exp(1 / n)`` (RMS over all pairs: the ratio is
+    the same as over independent ones for residuals consistent with one set of arrival
+    times). Ties (both exact) keep the plane wave."""
+    return bool(rms_far_s > rms_near_s * math.exp(1.0 / n_independent))
+
+
+def _direction_from_position(loc: Localization, p: NDArray, rms_s: float, centre: NDArray,
+                             tol_s: float) -> None:
+    """Make the direction of ``p`` (metres, array frame) from the array ``centre`` the primary
+    answer of the volume-array localization ``loc`` (far-field answer kept in ``extra``)."""
+    v = p - centre
+    n = float(np.linalg.norm(v))
+    if not (np.isfinite(n) and n > 0):
+        return
+    loc.extra["far_field"] = {"azimuth_deg": loc.azimuth_deg,
+                              "elevation_deg": loc.elevation_deg, "residual_s": loc.residual_s}
+    a, e = _azel(v / n)
+    loc.azimuth_deg, loc.elevation_deg, loc.candidates = a, e, [(a, e)]
+    loc.direction = v / n
+    loc.residual_s = rms_s
+    loc.feasible = rms_s <= tol_s
+    loc.n_solutions = 1 if loc.feasible else 0
+    loc.extra["direction_model"] = "position"
 
 
 # ---------------------------------------------------------------------------------- loci
