@@ -132,7 +132,7 @@ def _tetra_and_centre(side: float = 0.15) -> MicArray:
 
 def test_volume_array_direction_from_the_wavefront_curvature():
     """Five or more microphones: a near source's direction comes from the fitted position
-    when the point source explains the TDOAs better than a plane wave (Akaike's criterion);
+    when the point source explains the TDOAs significantly better than a plane wave;
     a plane wave keeps the plane wave's answer; four microphones always do."""
     from hearsee.audio.localize import far_field_volume
     from hearsee.geometry import angle_between
@@ -160,14 +160,15 @@ def test_volume_array_direction_from_the_wavefront_curvature():
     assert localize_tdoa(arr.tdoa(src), arr, near_field=False).position_m is None
 
 
-def test_near_model_needs_akaike_margin():
+def test_near_model_needs_a_significant_likelihood_ratio():
     from hearsee.audio.localize import _near_model_wins
 
-    n = 4  # five microphones
+    n = 4  # five microphones: the point source must explain the TDOAs by more than
+    margin = np.exp(3.84 / (2 * n))  # chi-square(1) at 5 %: n ln(RSS ratio) > 3.84
     assert _near_model_wins(1e-6, 0.0, n)  # exact point source, inexact plane wave
     assert not _near_model_wins(0.0, 0.0, n)  # both exact: the plane wave
-    assert not _near_model_wins(1e-5, 1e-5 / np.exp(1 / n) * 1.001, n)
-    assert _near_model_wins(1e-5, 1e-5 / np.exp(1 / n) * 0.999, n)
+    assert not _near_model_wins(1e-5, 1e-5 / margin * 1.001, n)
+    assert _near_model_wins(1e-5, 1e-5 / margin * 0.999, n)
 
 
 def test_near_field_position_does_not_flip_to_the_far_side():
