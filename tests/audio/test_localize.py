@@ -158,6 +158,14 @@ def test_volume_array_direction_from_the_wavefront_curvature():
     assert four.azimuth_deg == pytest.approx(far_field_volume(tet.tdoa(src), tet).azimuth_deg)
     # without near_field nothing is fitted
     assert localize_tdoa(arr.tdoa(src), arr, near_field=False).position_m is None
+    # the direction is the frame's (from its origin, as ground_truth), not the centroid's: a
+    # hexagon with a microphone above has its centroid 11 mm above the origin
+    ring = [[0.05 * np.cos(a), 0.05 * np.sin(a), 0.0] for a in np.radians(np.arange(0, 360, 60))]
+    hex_top = MicArray(np.vstack([ring, [[0.0, 0.0, 0.08]]]))
+    near = 0.6 * unit_vector_deg(-100.0, 30.0)
+    loc = localize_tdoa(hex_top.tdoa(near), hex_top)
+    assert loc.extra["direction_model"] == "position"
+    assert (loc.azimuth_deg, loc.elevation_deg) == pytest.approx((-100.0, 30.0), abs=1e-4)
 
 
 def test_near_model_needs_a_significant_likelihood_ratio():
