@@ -156,6 +156,11 @@ def test_volume_array_direction_from_the_wavefront_curvature():
     four = localize_tdoa(tet.tdoa(src), tet)
     assert four.extra["direction_model"] == "plane_wave"
     assert four.azimuth_deg == pytest.approx(far_field_volume(tet.tdoa(src), tet).azimuth_deg)
+    # five microphones, but pairs among four of them (microphone 3 left out): three independent
+    # TDOAs, which a position fits exactly too, so the plane wave stays
+    sub = [(0, 4), (1, 4), (2, 4), (0, 1)]
+    few = localize_tdoa(arr.tdoa(src, sub), arr, sub)
+    assert few.extra["direction_model"] == "plane_wave"
     # without near_field nothing is fitted
     assert localize_tdoa(arr.tdoa(src), arr, near_field=False).position_m is None
     # the direction is the frame's (from its origin, as ground_truth), not the centroid's: a

@@ -711,19 +711,29 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
         loc.position_m = p
         loc.extra["position_residual_s"] = r
         loc.extra["direction_model"] = "plane_wave"
-        if arr.n_mics >= NEAR_DIRECTION_MIN_MICS and _near_model_wins(
-                loc.residual_s, r, arr.n_mics - 1):
+        n_ind = _independent_tdoas(prs, arr.n_mics)
+        if n_ind >= NEAR_DIRECTION_MIN_MICS - 1 and _near_model_wins(loc.residual_s, r, n_ind):
             _direction_from_position(loc, p, r, tol_s)
     return loc
 
 
-#: Volume arrays with at least this many microphones may take their direction from the
-#: near-field position (:func:`_near_model_wins`); four give three independent TDOAs, which
-#: the position's three coordinates always fit exactly, often by the wrong one of two points.
+#: Volume arrays with at least this many microphones -- TDOAs of at least this many minus one
+#: independent pairs -- may take their direction from the near-field position
+#: (:func:`_near_model_wins`); four give three independent TDOAs, which the position's three
+#: coordinates always fit exactly, often by the wrong one of two points.
 NEAR_DIRECTION_MIN_MICS = 5
 #: Critical value of the likelihood-ratio test of :func:`_near_model_wins`: chi-square with one
 #: degree of freedom (the range) at the 5 % level.
 NEAR_MODEL_LR_CRITICAL = 3.84
+
+
+def _independent_tdoas(pairs: Sequence[tuple[int, int]], n_mics: int) -> int:
+    """How many of the pairs' TDOAs are independent: the rank of their incidence matrix
+    (``n_mics - 1`` for all pairs of one connected array)."""
+    inc = np.zeros((len(pairs), n_mics))
+    for k, (i, j) in enumerate(pairs):
+        inc[k, i], inc[k, j] = 1.0, -1.0
+    return int(np.linalg.matrix_rank(inc)) if len(pairs) else 0
 
 
 def _near_model_wins(rms_far_s: float, rms_near_s: float, n_independent: int) -> bool:
