@@ -745,9 +745,9 @@ def _near_model_wins(rms_far_s: float, rms_near_s: float, n_independent: int) ->
     all pairs: the same ratio as over independent ones for residuals consistent with one set
     of arrival times). Noise alone lowers the point source's residual too, by pulling the fit
     toward the array (fitted ranges of 0.07-0.9 m for sources 0.7-4 m away in the hexagon of
-    :func:`localize_tdoa`'s numbers), and the direction of such
-    a fit from the frame's origin is poor: Akaike's criterion (threshold 2) let those through
-    and was up to 5 % worse than the plane wave on noisy TDOAs. Ties keep the plane wave."""
+    :func:`localize_tdoa`'s numbers), and the direction of such a fit from the frame's origin
+    is poor: Akaike's criterion (threshold 2) let those through and was up to 5 % worse than
+    the plane wave on noisy TDOAs. Ties keep the plane wave."""
     return bool(rms_far_s > rms_near_s * math.exp(NEAR_MODEL_LR_CRITICAL / (2.0 * n_independent)))
 
 
