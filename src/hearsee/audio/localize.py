@@ -715,7 +715,9 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
         loc.position_m = p
         loc.extra["position_residual_s"] = r
         loc.extra["direction_model"] = "plane_wave"
-        n_ind = _independent_tdoas(prs, arr.n_mics)
+        from hearsee.audio.itd_filter import pair_matrix  # (itd_filter imports this module)
+
+        n_ind = int(np.linalg.matrix_rank(pair_matrix(arr.n_mics, prs)))  # independent TDOAs
         if (n_ind >= NEAR_DIRECTION_MIN_MICS - 1 and _outside_array(p, arr)
                 and _near_model_wins(loc.residual_s, r, n_ind)):
             _direction_from_position(loc, p, r, tol_s)
@@ -735,22 +737,13 @@ NEAR_DIRECTION_MIN_MICS = 5
 NEAR_MODEL_LR_CRITICAL = 6.63
 
 
-def _independent_tdoas(pairs: Sequence[tuple[int, int]], n_mics: int) -> int:
-    """How many of the pairs' TDOAs are independent: the rank of their incidence matrix
-    (``n_mics - 1`` for all pairs of one connected array)."""
-    inc = np.zeros((len(pairs), n_mics))
-    for k, (i, j) in enumerate(pairs):
-        inc[k, i], inc[k, j] = 1.0, -1.0
-    return int(np.linalg.matrix_rank(inc)) if len(pairs) else 0
-
-
 def _outside_array(p: NDArray, arr: MicArray) -> bool:
     """Whether position ``p`` (metres) lies farther from the microphones' centroid than every
     microphone. A point-source fit inside the array's own extent is not taken for a talker's
     position: noisy TDOAs of a far source can pull the fit there (a random-array check,
     2026-11-27: 0.11 m from a 32 cm array's centre for a source 0.33 m away with 30 us of
     noise, its direction 31 deg off where the plane wave's was 8)."""
-    c = arr.positions.mean(axis=0)
+    c = arr.centre
     return bool(np.linalg.norm(p - c) > np.max(np.linalg.norm(arr.positions - c, axis=1)))
 
 
