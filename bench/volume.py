@@ -1,0 +1,385 @@
+"""Benchmark: volume arrays (five or more microphones, not coplanar) -- hearsee's 3D direction vs
+pyroomacoustics SRP-PHAT, MUSIC and NormMUSIC on the whole sphere (issue 2's "N >= 4
+microphones ... so users of larger arrays are served too").
+
+Two parts, in one process:
+
+1. **TDOA level** (no audio): exact TDOAs of random sources plus i.i.d. Gaussian noise per pair,
+   for three arrays (a 15 cm tetrahedron and its centre, a 20 cm cube of eight, a 5 cm hexagon
+   with a microphone 8 cm above its centre), sources 0.5-1, 1-2 and 2-4 m away: the RMS
+   direction error of the plane wave (:func:`hearsee.audio.localize.far_field_volume`) and of
+   :func:`~hearsee.audio.localize.localize_tdoa`'s answer, which takes the direction of the
+   fitted point source when a likelihood-ratio test finds the wavefront's curvature
+   (``extra["direction_model"]``); and the share of answers from the position. Then random
+   arrays (5-8 microphones, 5-40 cm, sources 0.3-5 m, 0-30 us). These are the numbers of
+   ``localize_tdoa``'s docstring and the README (2026-11-27), made reproducible here.
+2. **Recordings in rooms**, side by side: the tetrahedron + centre and the cube in the
+   8 x 7 x 3 m room of ``bench/doa.py`` (anechoic, RT60 0.3 / 0.6 s; pyroomacoustics image
+   sources), SNR 10 / 20 dB, white noise, synthetic male / female voices and CMU ARCTIC speech
+   (when ``../shared`` is present), sources 0.5-3 m away in random directions (elevation
+   within +-30 deg, inside the room). Each method gives one whole-recording direction, scored
+   by its great-circle error from the true direction (seen from the array centre, the frame's
+   origin): RMSE, median, share above 10 deg, CPU per second of audio. hearsee runs
+   ``bench/doa.py``'s benchmarked setting (its ``HEARSEE``) and is scored twice: its answer
+   (curvature test) and the plane wave alone (``extra["far_field"]``), which isolates what
+   the curvature test does on reverberant TDOAs -- it was chosen on TDOAs with Gaussian noise,
+   and reflections bias TDOAs instead. The peers steer plane waves (their default; no fixed
+   range suits sources 0.5-3 m away) on a Fibonacci grid of :data:`PEER_GRID_POINTS`
+   directions, then on a local azimuth x colatitude grid of :data:`PEER_FINE_DEG` around
+   its maximum (so their grid does not round their answers: the coarse grid alone would cost
+   ~0.5 deg RMS). Their CPU time is that of both stages.
+
+Run: ``.venv/bin/python bench/volume.py [--trials N] [--seed S] [--quick]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy.fft as sfft
+from threadpoolctl import threadpool_limits
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import (  # noqa: E402
+    RESULTS,
+    arctic_files,
+    markdown_table,
+    print_table,
+    shared_data_dir,
+    write_markdown,
+)
+from doa import ARRAY_AT, BANDS, FS, HEARSEE, PRA_METHODS, PRA_NFFT, ROOM  # noqa: E402
+
+from hearsee.audio.arrays import MicArray  # noqa: E402
+from hearsee.audio.localize import array_geometry, far_field_volume, localize_tdoa  # noqa: E402
+from hearsee.audio.propagation import add_noise, room_impulse_responses  # noqa: E402
+from hearsee.audio.signals import load_wav, synthetic_voice, white_noise  # noqa: E402
+from hearsee.audio.tdoa import estimate_tdoas  # noqa: E402
+from hearsee.errors import HearseeError  # noqa: E402
+from hearsee.geometry import angle_between  # noqa: E402
+
+_TET = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], float) * (0.15 / np.sqrt(8))
+#: the arrays (metres, array frame): a 15 cm regular tetrahedron (side) and its centre, a 20 cm
+#: cube of eight, and a 5 cm-radius hexagon with a microphone 8 cm above its centre
+ARRAYS = {
+    "tetrahedron 15 cm + centre": np.vstack([_TET, [0.0, 0.0, 0.0]]),
+    "cube 20 cm": np.array([[x, y, z] for x in (-.1, .1) for y in (-.1, .1) for z in (-.1, .1)]),
+    "hexagon 5 cm + top": np.vstack(
+        [[[0.05 * np.cos(a), 0.05 * np.sin(a), 0.0] for a in np.radians(np.arange(0, 360, 60))],
+         [[0.0, 0.0, 0.08]]]),
+}
+#: part 2's arrays (the hexagon's range is barely measured: part 1 shows it)
+ROOM_ARRAYS = ("tetrahedron 15 cm + centre", "cube 20 cm")
+TDOA_RANGES_M = ((0.5, 1.0), (1.0, 2.0), (2.0, 4.0))
+TDOA_NOISE_S = (0.0, 5e-6, 20e-6)
+TDOA_EL_MAX_RAD = 0.6  # +-34 deg
+RT60S = (0.0, 0.3, 0.6)
+SNRS = (10.0, 20.0)
+RANGE_M = (0.5, 3.0)
+EL_MAX_DEG = 30.0
+#: distance from the walls, floor and ceiling (m) a source keeps
+WALL_MARGIN_M = 0.3
+#: the peers' coarse grid (Fibonacci sphere; ~3.2 deg between neighbours) and local fine grid
+PEER_GRID_POINTS = 4000
+PEER_FINE_DEG = (4.0, 0.2)  # half-width and step of the azimuth x colatitude refinement
+METHODS = ("hearsee", "hearsee plane wave", *PRA_METHODS)
+
+
+def unit(az: float, el: float) -> np.ndarray:
+    """Unit vector of azimuth ``az`` and elevation ``el`` (radians), array frame."""
+    return np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+
+
+def angle_deg(u: np.ndarray | None, v: np.ndarray) -> float:
+    """Great-circle angle in degrees (180 for no answer)."""
+    if u is None or not np.all(np.isfinite(u)):
+        return 180.0
+    return float(np.degrees(angle_between(u, v)))
+
+
+# ------------------------------------------------------------------------------ part 1: TDOAs
+def run_tdoa(trials: int, seed: int, random_arrays: int) -> tuple[list, list]:
+    """Rows of the structured sweep and of the random-array summary."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for name, P in ARRAYS.items():
+        arr = MicArray(P, name=name)
+        for rlo, rhi in TDOA_RANGES_M:
+            for sig in TDOA_NOISE_S:
+                e_ff, e_sel, n_pos = [], [], 0
+                for _ in range(trials):
+                    u = unit(rng.uniform(-np.pi, np.pi),
+                             rng.uniform(-TDOA_EL_MAX_RAD, TDOA_EL_MAX_RAD))
+                    tau = arr.tdoa(rng.uniform(rlo, rhi) * u)
+                    tau = tau + sig * rng.standard_normal(len(arr.pairs))
+                    e_ff.append(angle_deg(far_field_volume(tau, arr).direction, u))
+                    loc = localize_tdoa(tau, arr)
+                    e_sel.append(angle_deg(loc.direction, u))
+                    n_pos += loc.extra.get("direction_model") == "position"
+                rows.append([name, f"{rlo:g}-{rhi:g}", sig * 1e6, _rms(e_ff), _rms(e_sel),
+                             100.0 * n_pos / trials])
+    e_ff, e_sel, worse, n_pos = [], [], 0, 0
+    while len(e_ff) < random_arrays:
+        n = int(rng.integers(5, 9))
+        ap = rng.uniform(0.05, 0.4)
+        P = rng.uniform(-ap / 2, ap / 2, (n, 3))
+        try:
+            arr = MicArray(P)
+        except HearseeError:  # (two microphones drawn too close)
+            continue
+        if array_geometry(arr).kind != "volume":
+            continue
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        sig = rng.choice([0.0, 2e-6, 10e-6, 30e-6])
+        tau = arr.tdoa(rng.uniform(0.3, 5.0) * u) + sig * rng.standard_normal(len(arr.pairs))
+        loc = localize_tdoa(tau, arr)
+        e_ff.append(angle_deg(far_field_volume(tau, arr).direction, u))
+        e_sel.append(angle_deg(loc.direction, u))
+        n_pos += loc.extra.get("direction_model") == "position"
+        worse += e_sel[-1] > e_ff[-1] + 10.0
+    rnd = [[len(e_ff), _rms(e_ff), _rms(e_sel), float(np.median(e_ff)), float(np.median(e_sel)),
+            100.0 * n_pos / len(e_ff), worse]]
+    return rows, rnd
+
+
+def _rms(e: list[float] | np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(e)))) if len(e) else float("nan")
+
+
+# ------------------------------------------------------------------------- part 2: recordings
+def draw_source(rng: np.random.Generator) -> np.ndarray:
+    """A source position (array frame, m) RANGE_M away, elevation within EL_MAX_DEG, at least
+    WALL_MARGIN_M inside the room."""
+    while True:
+        u = unit(rng.uniform(-np.pi, np.pi), np.radians(rng.uniform(-EL_MAX_DEG, EL_MAX_DEG)))
+        p = rng.uniform(*RANGE_M) * u
+        q = p + ARRAY_AT
+        if np.all(q > WALL_MARGIN_M) and np.all(q < ROOM - WALL_MARGIN_M):
+            return p
+
+
+def hearsee_direction(x: np.ndarray, arr: MicArray, band: tuple[float, float]
+                      ) -> tuple[np.ndarray | None, np.ndarray | None, str]:
+    """hearsee's whole-recording direction (its answer and the plane wave's) with
+    ``bench/doa.py``'s setting and fallback (an abstention is replaced by the estimate without
+    the detection test, then from every frame with energy: the peers always answer)."""
+    tf = estimate_tdoas(x, FS, arr, band_hz=band, **HEARSEE)
+    for relax in ({"min_peak_snr": 0.0}, {"min_confidence": 0.0, "min_peak_snr": 0.0}):
+        if np.all(np.isfinite(tf.summary_tdoa_s)):
+            break
+        tf = estimate_tdoas(x, FS, arr, band_hz=band, **{**HEARSEE, **relax})
+    loc = localize_tdoa(tf.summary_tdoa_s, arr, tf.pairs)
+    if loc.azimuth_deg is None:
+        return None, None, "none"
+    model = loc.extra.get("direction_model", "plane_wave")
+    ff = loc.extra.get("far_field")
+    u_ff = (unit(np.radians(ff["azimuth_deg"]), np.radians(ff["elevation_deg"]))
+            if model == "position" and ff else loc.direction)
+    return loc.direction, u_ff, model
+
+
+def pra_direction(x: np.ndarray, arr: MicArray, algo: str, band: tuple[float, float]
+                  ) -> np.ndarray:
+    """A pyroomacoustics DOA method's direction on the whole sphere (``dim=3``, plane waves):
+    the maximum of its spatial spectrum on a Fibonacci grid, then on a local azimuth x
+    colatitude grid around it."""
+    import pyroomacoustics as pra
+
+    X = pra.transform.stft.analysis(x.T, PRA_NFFT, PRA_NFFT // 2, win=pra.hann(PRA_NFFT))
+    X = X.transpose([2, 1, 0])
+    L = arr.positions.T
+    doa = pra.doa.algorithms[algo](L, FS, PRA_NFFT, c=arr.speed_of_sound, num_src=1, dim=3,
+                                   n_grid=PEER_GRID_POINTS)
+    doa.locate_sources(X, freq_range=list(band))
+    az0, col0 = float(doa.azimuth_recon[0]), float(doa.colatitude_recon[0])
+    half, step = np.radians(PEER_FINE_DEG[0]), np.radians(PEER_FINE_DEG[1])
+    d = np.arange(-half, half + step / 2, step)
+    col = np.clip(col0 + d, 1e-6, np.pi - 1e-6)
+    fine = pra.doa.algorithms[algo](L, FS, PRA_NFFT, c=arr.speed_of_sound, num_src=1, dim=3,
+                                    azimuth=az0 + d, colatitude=col)
+    fine.locate_sources(X, freq_range=list(band))
+    az, co = float(fine.azimuth_recon[0]), float(fine.colatitude_recon[0])
+    return unit(az, np.pi / 2 - co)
+
+
+def run_rooms(trials: int, seed: int, data: Path | None, duration: float) -> tuple[dict, dict]:
+    """Errors per (array, RT60, SNR, signal, method), with each trial's distance, and CPU."""
+    rng = np.random.default_rng(seed)
+    speech = arctic_files(data)
+    kinds = ["noise", "male", "female"] + (["arctic"] if speech else [])
+    errors: dict = {}
+    cpu = {m: 0.0 for m in METHODS if m != "hearsee plane wave"}
+    audio_s = 0.0
+    t_start = time.time()
+    for name in ROOM_ARRAYS:
+        arr = MicArray(ARRAYS[name], name=name)
+        w = rng.standard_normal((arr.n_mics, FS // 2))  # warm-up: first-call costs
+        hearsee_direction(w, arr, BANDS["speech"])
+        for m in PRA_METHODS:
+            pra_direction(w, arr, m, BANDS["speech"])
+        for rt in RT60S:
+            for _ in range(trials):
+                src = draw_source(rng)
+                u = src / np.linalg.norm(src)
+                h = room_impulse_responses(FS, arr.positions + ARRAY_AT, src + ARRAY_AT, ROOM,
+                                           rt, speed_of_sound=arr.speed_of_sound)
+                for kind in kinds:
+                    if kind == "noise":
+                        s = white_noise(duration, FS, rng)
+                    elif kind == "arctic":
+                        s, _ = load_wav(speech[rng.integers(len(speech))], FS)
+                        s = s[: int(3.0 * FS)]
+                    else:
+                        s = synthetic_voice(kind, duration, FS, rng)
+                    band = BANDS["noise" if kind == "noise" else "speech"]
+                    n = sfft.next_fast_len(len(s) + h.shape[1])
+                    clean = sfft.irfft(sfft.rfft(s, n)[None] * sfft.rfft(h, n, axis=-1), n,
+                                       axis=-1)[:, : len(s)]
+                    for snr in SNRS:
+                        x = add_noise(clean, snr, rng)
+                        audio_s += x.shape[1] / FS
+                        cell = errors.setdefault((name, rt, snr, kind),
+                                                 {m: [] for m in (*METHODS, "r", "model")})
+                        cell["r"].append(float(np.linalg.norm(src)))
+                        t0 = time.process_time()
+                        u_sel, u_ff, model = hearsee_direction(x, arr, band)
+                        cpu["hearsee"] += time.process_time() - t0
+                        cell["hearsee"].append(angle_deg(u_sel, u))
+                        cell["hearsee plane wave"].append(angle_deg(u_ff, u))
+                        cell["model"].append(model)
+                        for m in PRA_METHODS:
+                            t0 = time.process_time()
+                            est = pra_direction(x, arr, m, band)
+                            cpu[m] += time.process_time() - t0
+                            cell[m].append(angle_deg(est, u))
+            print(f"  {name} rt60={rt}: done ({time.time() - t_start:.0f} s)", flush=True)
+    return errors, {"cpu": cpu, "audio_s": audio_s}
+
+
+def summarize_rooms(errors: dict, timing: dict
+                    ) -> tuple[list, list, list, list, int, int, list]:
+    """Headers and rows of the per-condition table, headers and rows of the per-(array, RT60)
+    pools by distance, the count of conditions where hearsee is at or below the best peer,
+    the number of conditions, and the CPU table's rows."""
+    headers = ["array", "RT60 s", "SNR dB", "signal", "n"]
+    for m in METHODS:
+        headers += [f"{m} RMSE deg", f"{m} median deg"]
+    headers += ["best peer RMSE deg", "hearsee <= best peer", "hearsee from position %",
+                "hearsee > 10 deg %", "SRP > 10 deg %"]
+    rows, won = [], 0
+    for (name, rt, snr, kind), cell in sorted(errors.items()):
+        row: list = [name, rt, snr, kind, len(cell["hearsee"])]
+        for m in METHODS:
+            row += [_rms(cell[m]), float(np.median(cell[m]))]
+        best = min(_rms(cell[m]) for m in PRA_METHODS)
+        ok = _rms(cell["hearsee"]) <= best
+        won += ok
+        row += [best, "yes" if ok else "no",
+                100.0 * np.mean([m == "position" for m in cell["model"]]),
+                100.0 * np.mean(np.array(cell["hearsee"]) > 10.0),
+                100.0 * np.mean(np.array(cell["SRP"]) > 10.0)]
+        rows.append(row)
+    pool_h = ["array", "RT60 s", "distance m", "n", *(f"{m} RMSE deg" for m in METHODS),
+              "hearsee from position %"]
+    pools = []
+    for name in ROOM_ARRAYS:
+        for rt in RT60S:
+            cells = [c for (a, r, _, _), c in errors.items() if a == name and r == rt]
+            if not cells:
+                continue
+            dist = np.concatenate([c["r"] for c in cells])
+            for lo, hi in ((0.5, 1.0), (1.0, 2.0), (2.0, 3.0)):
+                sel = (dist >= lo) & (dist < hi)
+                if not sel.any():
+                    continue
+                pools.append([name, rt, f"{lo:g}-{hi:g}", int(sel.sum()),
+                              *(_rms(np.concatenate([c[m] for c in cells])[sel]) for m in METHODS),
+                              100.0 * np.mean(np.concatenate(
+                                  [np.array(c["model"]) == "position" for c in cells])[sel])])
+    cpu = timing["cpu"]
+    cpu_rows = [[m, cpu[m] / timing["audio_s"] * 1e3, cpu["SRP"] / max(cpu[m], 1e-12)]
+                for m in cpu]
+    return headers, rows, pool_h, pools, won, len(rows), cpu_rows
+
+
+def plot(pools: list, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(ROOM_ARRAYS), figsize=(6 * len(ROOM_ARRAYS), 4), sharey=True)
+    for ax, name in zip(np.atleast_1d(axes), ROOM_ARRAYS, strict=True):
+        rows = [r for r in pools if r[0] == name]
+        labels = [f"RT60 {r[1]:g}\n{r[2]} m" for r in rows]
+        xs = np.arange(len(rows))
+        width = 0.8 / len(METHODS)
+        for k, m in enumerate(METHODS):
+            ax.bar(xs + (k - len(METHODS) / 2 + 0.5) * width, [r[4 + k] for r in rows], width,
+                   label=m)
+        ax.set_xticks(xs, labels, fontsize=7)
+        ax.set_title(name)
+        ax.set_ylabel("direction RMSE (deg)")
+        ax.set_yscale("log")
+    np.atleast_1d(axes)[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="few trials (a couple of minutes)")
+    ap.add_argument("--trials", type=int, default=None, help="room recordings per condition")
+    ap.add_argument("--tdoa-trials", type=int, default=300, help="sources per TDOA-level cell")
+    ap.add_argument("--random-arrays", type=int, default=1500)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--data", default=None, help="shared data folder (default ../shared/data)")
+    ap.add_argument("--duration", type=float, default=2.0, help="signal length in seconds")
+    args = ap.parse_args(argv)
+    trials = args.trials or (2 if args.quick else 10)
+    tdoa_trials = 30 if args.quick else args.tdoa_trials
+    n_random = 100 if args.quick else args.random_arrays
+    data = shared_data_dir(args.data)
+    t0 = time.time()
+    with threadpool_limits(1):  # (as bench/doa.py: BLAS's idle second thread is no work)
+        tdoa_rows, rnd_rows = run_tdoa(tdoa_trials, args.seed + 3106, n_random)
+        errors, timing = run_rooms(trials, args.seed, data, args.duration)
+    tdoa_h = ["array", "range m", "TDOA noise us", "plane wave RMSE deg",
+              "hearsee RMSE deg", "answers from the position %"]
+    rnd_h = ["random arrays", "plane wave RMSE deg", "hearsee RMSE deg",
+             "plane wave median deg", "hearsee median deg", "answers from the position %",
+             "hearsee worse by > 10 deg"]
+    print_table("TDOA level: plane wave vs hearsee", tdoa_h, tdoa_rows)
+    print_table("TDOA level: random arrays", rnd_h, rnd_rows)
+    headers, rows, pool_h, pools, won, n_cells, cpu_rows = summarize_rooms(errors, timing)
+    print_table("Rooms: direction error", headers, rows)
+    print_table("Rooms: pooled by distance", pool_h, pools)
+    cpu_h = ["method", "CPU ms per s of audio", "speed-up vs SRP-PHAT"]
+    print_table("CPU", cpu_h, cpu_rows)
+    print(f"hearsee RMSE <= best pyroomacoustics method in {won}/{n_cells} conditions")
+    plot(pools, RESULTS / "volume.png")
+    intro = (f"`python bench/volume.py --trials {trials} --seed {args.seed}"
+             f"{' --quick' if args.quick else ''}`; wall time {time.time() - t0:.0f} s on a "
+             f"shared 2-core machine. ![volume](volume.png)\n\n" + __doc__.split("\n\n", 1)[1])
+    path = write_markdown("volume", [
+        ("1. TDOA level: plane wave vs hearsee's answer", markdown_table(tdoa_h, tdoa_rows)),
+        ("1b. Random volume arrays", markdown_table(rnd_h, rnd_rows)),
+        ("2. Recordings in rooms: 3D direction error",
+         markdown_table(headers, rows)
+         + f"\n\nhearsee RMSE <= the best pyroomacoustics method in {won}/{n_cells} "
+           "conditions."),
+        ("2b. Pooled by the source's distance", markdown_table(pool_h, pools)),
+        ("CPU time per second of audio", markdown_table(cpu_h, cpu_rows)),
+    ], intro=intro)
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
