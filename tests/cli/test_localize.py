@@ -202,6 +202,7 @@ def test_summary_tuned_is_the_benchmarked_summary(tmp_path, capsys):
         code, out, err = _run(capsys, p, "--array", "three-mic", "--summary-tuned", *extra)
         assert code == 2 and out == "" and err.count("\n") == 1
         assert f"--summary-tuned sets {extra[0]} itself" in err
+        assert err.rstrip().endswith("leave it out")
     # a masked pair (ch. 3) runs its own pipeline, which takes none of these settings
     code, out, err = _run(capsys, p, "--array", "mask2-asym", "--summary-tuned")
     assert code == 2 and out == "" and err.count("\n") == 1

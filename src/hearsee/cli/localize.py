@@ -109,7 +109,8 @@ def localize_cmd(
         if given:
             raise ConfigError(f"--summary-tuned sets {' and '.join(given)} itself (method "
                               f"{SUMMARY_TUNED['method']}, reverb method "
-                              f"{SUMMARY_TUNED['reverb_method']}): leave {' and '.join(given)} out")
+                              f"{SUMMARY_TUNED['reverb_method']}): leave "
+                              f"{'it' if len(given) == 1 else 'them'} out")
         settings = dict(SUMMARY_TUNED)
     else:
         settings = {"method": (method or GccMethod.phat).value,
