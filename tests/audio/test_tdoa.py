@@ -880,3 +880,18 @@ def test_framing_helpers_refuse_what_is_no_number():
         frame_signals(np.zeros((2, 32)), "8", 4)
     fr = frame_signals(np.arange(12, dtype=np.float32).reshape(1, 12), 4, 4)
     assert fr.dtype == np.float32 and fr[0, 2].tolist() == [8.0, 9.0, 10.0, 11.0]
+
+
+def test_whole_sphere_summary_reaches_each_pairs_peak_of_a_near_source():
+    """A 20 cm cube of eight microphones and white noise 0.76 m away in free field (10 dB):
+    the whole-sphere grid's plane-wave TDOAs miss the longest pairs' peaks by up to ~1 sample
+    (the grid is ~3 deg coarse and the wavefront is curved), and Newton steps from there
+    stopped 0.7-0.9 sample short on five pairs. Every pair's whole-recording TDOA is now
+    within 0.05 sample of the geometric truth the test constructs."""
+    cube = MicArray([[x, y, z] for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)])
+    rng = np.random.default_rng(7)
+    src = np.array([-0.49, -0.58, 0.10])
+    x = simulate_free_field(white_noise(2.0, FS, rng), FS, cube, src, snr_db=10.0, rng=rng)
+    tf = estimate_tdoas(x, FS, cube, method="ml", window="hann", band_hz=(300.0, 7500.0))
+    err = (tf.summary_tdoa_s - cube.tdoa(src)) * FS
+    assert np.max(np.abs(err)) < 0.05
