@@ -895,3 +895,14 @@ def test_whole_sphere_summary_reaches_each_pairs_peak_of_a_near_source():
     tf = estimate_tdoas(x, FS, cube, method="ml", window="hann", band_hz=(300.0, 7500.0))
     err = (tf.summary_tdoa_s - cube.tdoa(src)) * FS
     assert np.max(np.abs(err)) < 0.05
+
+
+def test_steered_search_on_a_square_array():
+    """joint="steered" on the respeaker-4 preset (a square: some pairs are broadside to some
+    grid angles, where a TDOA of ~-1e-20 s wrapped to one index past the upsampled correlation
+    and raised IndexError): the known azimuth of a source 2 m away in free field."""
+    arr = MicArray.from_preset("respeaker-4")
+    src = 2.0 * np.array([np.cos(np.radians(40.0)), np.sin(np.radians(40.0)), 0.0])
+    x = simulate_free_field(white_noise(1.0, FS, rng=5), FS, arr, src, snr_db=20, rng=6)
+    tf = estimate_tdoas(x, FS, arr, joint="steered", source_in_plane=True, steer_range_m=2.0)
+    np.testing.assert_allclose(tf.summary_tdoa_s, arr.tdoa(src, tf.pairs), atol=0.1 / FS)

@@ -947,8 +947,11 @@ def _steered_in_plane(P: NDArray, bins: NDArray, nfft: int, r_up: NDArray, up: i
                                                  float(c), range_m)
     n_up = r_up.shape[-1]
     x = (tau_s * (fs * up)) % n_up  # (n_grid, n_pairs) upsampled lag positions
-    i0 = np.floor(x).astype(int)
-    frac = x - i0
+    fl = np.floor(x)
+    frac = x - fl
+    # (a TDOA of -1e-20 s -- a pair broadside to the angle, e.g. on a square array -- gives
+    # x == n_up after rounding: index 0, not one past the end)
+    i0 = fl.astype(int) % n_up
     rows = np.arange(len(pairs))
     score = np.sum(r_up[rows, i0] * (1.0 - frac) + r_up[rows, (i0 + 1) % n_up] * frac, axis=1)
     g = int(np.argmax(score))
