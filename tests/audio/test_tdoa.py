@@ -906,3 +906,44 @@ def test_steered_search_on_a_square_array():
     x = simulate_free_field(white_noise(1.0, FS, rng=5), FS, arr, src, snr_db=20, rng=6)
     tf = estimate_tdoas(x, FS, arr, joint="steered", source_in_plane=True, steer_range_m=2.0)
     np.testing.assert_allclose(tf.summary_tdoa_s, arr.tdoa(src, tf.pairs), atol=0.1 / FS)
+
+
+def test_joint_auto_steers_reverberant_recordings_of_larger_planar_arrays(three):
+    """joint="auto" (in SUMMARY_TUNED): a male voice in the plane of the respeaker-6 preset,
+    placed by the test 1.7 m away in a room with RT60 0.6 s (judged reverberant) gets the
+    in-plane steered search at the in-plane localizer's 2 m; in free field (not reverberant),
+    and on the three-microphone preset in the room, each pair's own peak ("pairs")."""
+    from hearsee.audio.localize import IN_PLANE_RANGE_M, localize_tdoa
+    from hearsee.audio.propagation import simulate_room
+    from hearsee.audio.signals import synthetic_voice
+    from hearsee.audio.tdoa import SUMMARY_TUNED
+
+    six = MicArray.from_preset("respeaker-6")
+    az = 65.0
+    src = 1.7 * np.array([np.cos(np.radians(az)), np.sin(np.radians(az)), 0.0])
+    s = synthetic_voice("male", 1.5, FS, np.random.default_rng(5))
+    room = dict(room_dim=[8.0, 7.0, 3.0], rt60=0.6, array_at=[4.0, 3.5, 1.3], snr_db=20.0)
+    band = {"band_hz": (300.0, 3500.0), "source_in_plane": True}
+    for arr in (six, three):
+        x = simulate_room(s, FS, arr, src, rng=4, **room)
+        auto = estimate_tdoas(x, FS, arr, **SUMMARY_TUNED, **band)
+        assert auto.summary_method == "phat"  # judged reverberant
+        kw = {**SUMMARY_TUNED, **band}
+        if arr is six:
+            kw.update(joint="steered", steer_range_m=IN_PLANE_RANGE_M)
+        else:
+            kw.update(joint="pairs")
+        ref = estimate_tdoas(x, FS, arr, **kw)
+        np.testing.assert_array_equal(auto.summary_tdoa_s, ref.summary_tdoa_s)
+        loc = localize_tdoa(auto.summary_tdoa_s, arr, auto.pairs, in_plane=True)
+        assert abs((loc.azimuth_deg - az + 180.0) % 360.0 - 180.0) < 5.0
+    x = simulate_free_field(s, FS, six, src, snr_db=20.0, rng=4)
+    auto = estimate_tdoas(x, FS, six, **SUMMARY_TUNED, **band)
+    assert auto.summary_method == "ml"
+    pairs = estimate_tdoas(x, FS, six, **{**SUMMARY_TUNED, "joint": "pairs"}, **band)
+    np.testing.assert_array_equal(auto.summary_tdoa_s, pairs.summary_tdoa_s)
+    steered = estimate_tdoas(x, FS, six, **{**SUMMARY_TUNED, "joint": "steered",
+                                              "steer_range_m": IN_PLANE_RANGE_M}, **band)
+    assert not np.array_equal(auto.summary_tdoa_s, steered.summary_tdoa_s)
+    with pytest.raises(ConfigError, match="steer_range_m"):
+        estimate_tdoas(x, FS, six, joint="auto", steer_range_m=-1.0)

@@ -508,9 +508,15 @@ def _inplane_tdoa(theta: NDArray, rho: NDArray, basis: NDArray, d: NDArray, I: N
     return num / ((q[..., I] + q[..., J]) * c)
 
 
+#: Assumed range (metres from the array centre) of an in-plane source: a person talking to a
+#: robot (:func:`near_field_in_plane`; the whole-recording search of ``estimate_tdoas(joint=
+#: "auto")`` steers the same wavefront)
+IN_PLANE_RANGE_M = 2.0
+
+
 def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
                         pairs: Sequence[tuple[int, int]] | None = None,
-                        tol_s: float = DEFAULT_TOL_S, range_m: float | None = 2.0,
+                        tol_s: float = DEFAULT_TOL_S, range_m: float | None = IN_PLANE_RANGE_M,
                         max_inverse_range: float = 2.0, n_iter: int = 8) -> Localization:
     """Planar array, source known to lie in the array plane: spherical-wavefront azimuth.
 

@@ -70,7 +70,7 @@ import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
-from hearsee.audio.localize import _inplane_tdoa, array_geometry
+from hearsee.audio.localize import IN_PLANE_RANGE_M, _inplane_tdoa, array_geometry
 from hearsee.audio.signals import as_samples, check_fs
 from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import AudioInputError, ConfigError
@@ -139,9 +139,13 @@ FIRST_ARRIVAL = 0.1
 #: (with ``--in-plane`` for a talker at a planar array's height, as the benchmark) gives the
 #: benchmarked summary; the bench's other settings (``refine="none"``, no per-frame detection
 #: test) only save CPU, the summary is the same (162 recordings of the bench's kinds checked,
-#: 2026-11-27).
+#: 2026-11-27). ``joint="auto"`` changes nothing for the benchmark's two- and three-microphone
+#: arrays; it serves planar arrays of four or more (``respeaker-4/6``) in reverberant rooms.
 SUMMARY_TUNED: dict[str, Any] = {"method": "ml", "window": "hann", "min_confidence": 0.8,
-                                 "onset_weight": 3.0, "reverb_method": "phat"}
+                                 "onset_weight": 3.0, "reverb_method": "phat", "joint": "auto"}
+#: ``joint="auto"`` steers the in-plane search (``"steered"``) for planar arrays of at least this
+#: many microphones (see ``joint`` of :func:`estimate_tdoas`)
+AUTO_STEERED_MIN_MICS = 4
 #: Largest RMS violation (samples) of t_ij + t_jk = t_ik accepted for a summary estimate.
 _CLOSURE_TOL_SAMPLES = 2.0
 #: Lags whose noise-only correlation has less than this share of the zero-lag standard
@@ -1131,8 +1135,8 @@ def _check_options(refine: str, summary_frames: str, joint: str, min_peak_snr: f
     _check_refine(refine)
     if summary_frames not in ("valid", "active"):
         raise ConfigError(f"summary_frames must be 'valid' or 'active', got {summary_frames!r}")
-    if joint not in ("pairs", "coherent", "steered"):
-        raise ConfigError(f"joint must be 'pairs', 'coherent' or 'steered', got {joint!r}")
+    if joint not in ("pairs", "coherent", "steered", "auto"):
+        raise ConfigError(f"joint must be 'pairs', 'coherent', 'steered' or 'auto', got {joint!r}")
     finite_number("min_peak_snr", min_peak_snr, 0.0)
     finite_number("min_frame_peak_snr", min_frame_peak_snr, 0.0)
     finite_number("phat_beta", phat_beta, 0.0, 1.0)
@@ -1326,7 +1330,7 @@ def estimate_tdoas(
         Which frames the whole-recording estimate averages: the valid ones (default) or every
         frame with energy (then weighted by the GCC weighting alone -- useful with
         ``snr_weight``, which already down-weights unreliable bins).
-    joint : ``"pairs"`` | ``"coherent"``
+    joint : ``"pairs"`` | ``"coherent"`` | ``"steered"`` | ``"auto"``
         With 3+ microphones, how the whole-recording peaks are refined after the direction
         grid search: each pair's peak on its own (``"pairs"``, default) or jointly by Newton
         iterations on the far-field direction maximising the *sum* of the pairs' averaged
@@ -1343,11 +1347,24 @@ def estimate_tdoas(
         lowered the azimuth RMSE against ``"pairs"`` in 19 of 36 conditions and raised it in
         17 (reverberant ARCTIC speech worse, e.g. RT60 0.6 s 10 dB 2.3 -> 2.9 deg; male voice
         and white noise in reverberation better, e.g. RT60 0.6 s 20 dB 2.7 -> 1.9 and 1.4 ->
-        1.1 deg), so the benchmark keeps ``"pairs"``.
+        1.1 deg), so the benchmark keeps ``"pairs"``. ``"auto"`` (in
+        :data:`SUMMARY_TUNED`): ``"steered"`` when the recording is judged reverberant (see
+        ``reverb_method``; it needs one), the source is in the plane (``source_in_plane``) of
+        a planar array of at least :data:`AUTO_STEERED_MIN_MICS` microphones, at
+        ``steer_range_m`` or else :data:`~hearsee.audio.localize.IN_PLANE_RANGE_M`;
+        ``"pairs"`` otherwise. With more pairs the steered sum outvotes a reflection that
+        bends one pair's peak, and in free field each pair's own peak is the better estimate
+        (``respeaker-4``: 0.44 -> 0.53 and 0.45 -> 0.64 deg steered everywhere). Held out
+        under a rule written first (2026-11-27; seeds 23/24, ``bench/doa.py``'s recordings and
+        setting, 8 sources per room x 4 signals x 10/20 dB): ``respeaker-6`` RT60 0.3 s
+        1.84 -> 1.78 and 1.50 -> 1.44 deg, 0.6 s 2.78 -> 2.57 and 3.91 -> 3.44; ``respeaker-4``
+        0.3 s 1.26 -> 1.27 and 2.24 -> 2.25, 0.6 s 3.09 -> 2.92 and 3.22 -> 2.92; anechoic
+        unchanged (no recording judged reverberant).
     steer_range_m : float or None
         With ``joint="steered"``: the assumed source range in metres from the array centre
         (spherical wavefront; use the ``range_m`` of the in-plane localization, 2 m by
-        default there); None steers plane waves. Default None.
+        default there); None steers plane waves. Default None (with ``"auto"``:
+        :data:`~hearsee.audio.localize.IN_PLANE_RANGE_M`).
     phat_beta : float in [0, 1]
         Partial whitening for PHAT and ML: the weighting is multiplied by ``|G|^(1 - beta)``
         (``beta = 1``: unchanged, default; PHAT-beta of Donohue et al. 2007). Values of 0.6-0.8
@@ -1488,6 +1505,11 @@ def estimate_tdoas(
     prs = arr.checked_pairs(pairs)
     if joint == "steered":
         _check_steered(arr, source_in_plane, steer_range_m)
+    elif joint == "auto" and steer_range_m is not None:
+        finite_number("steer_range_m", steer_range_m, 0.0)
+        if steer_range_m <= 0:
+            raise ConfigError(f"steer_range_m must be a positive number of metres or None, got "
+                              f"{steer_range_m}")
     # (float32 fourth powers of the spectra overflow, tiny powers vanish; every test here is
     # scale-free)
     if peak > MAX_UNSCALED_PEAK or 0 < peak < MIN_UNSCALED_PEAK:
@@ -1635,6 +1657,7 @@ def estimate_tdoas(
     valid = ~np.isnan(tdoa).any(axis=1)
     coherence_ratio = float("nan")
     summary_method = method
+    reverberant = False  # (judged only with a reverb_method)
     if use_rev and n_active:
         reverberant = True  # decided above by the frame-length test when there is no noise
         if noise_psd is not None:
@@ -1671,11 +1694,14 @@ def estimate_tdoas(
             need_c = min_confidence if resid <= _CLOSURE_TOL_SAMPLES else (
                 _FALLBACK_CONFIDENCE * min_confidence)
             ok = np.all(c[0] >= need_c)
+            steer: float | None | bool = steer_range_m if joint == "steered" else False
+            if (joint == "auto" and reverberant and source_in_plane
+                    and arr.n_mics >= AUTO_STEERED_MIN_MICS
+                    and array_geometry(arr).kind == "planar"):
+                steer = IN_PLANE_RANGE_M if steer_range_m is None else steer_range_m
             lag = _joint_peaks(acc, band_bins, nfft, arr.positions, prs, arr.speed_of_sound,
                                fs, max_lag, coherent=joint == "coherent",
-                               in_plane=bool(source_in_plane),
-                               steer_range_m=steer_range_m if joint == "steered" else False
-                               )[None]
+                               in_plane=bool(source_in_plane), steer_range_m=steer)[None]
         else:
             # one independent pair: only the confidence can tell (noise-only recordings reach
             # ~1.25 in 40 trials, a -15 dB white source 0.8-2.4)

@@ -93,8 +93,9 @@ def localize_cmd(
     summary_tuned: Annotated[bool, typer.Option(
         "--summary-tuned", help="The whole-recording estimate's settings that bench/doa.py "
         "measures against pyroomacoustics (hearsee.audio.tdoa.SUMMARY_TUNED: gcc-ml, gcc-phat "
-        "when reverberant, Hann frames, onset weighting); with --in-plane exactly the "
-        "benchmarked setting. Sets --method and --reverb-method itself.")] = False,
+        "when reverberant, Hann frames, onset weighting; with --in-plane and a planar array of "
+        "4+ microphones the steered in-plane search when reverberant); with --in-plane exactly "
+        "the benchmarked setting. Sets --method and --reverb-method itself.")] = False,
 ) -> None:
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
     from hearsee.audio.arrays import load_array
