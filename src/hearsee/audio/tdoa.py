@@ -841,14 +841,18 @@ def _steer_directions(positions: bytes, n_mics: int, n_dirs: int, in_plane: bool
 def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
                  pairs: list[tuple[int, int]], c: float, fs: float, max_lag: NDArray,
                  up: int = 4, n_dirs: int = 4000, coherent: bool = False,
-                 in_plane: bool = False, steer_range_m: float | None | bool = False
-                 ) -> NDArray:
+                 in_plane: bool = False, steer_range_m: float | None | bool = False,
+                 climb: bool = False) -> NDArray:
     """Pick each pair's GCC peak consistently with one far-field direction.
 
     The weighted spectra ``P`` (n_pairs, band bins) are turned into correlations upsampled
     ``up`` times; their sum is evaluated at the TDOAs of ``n_dirs`` directions (a steered
     response of the averaged GCCs, as SRP-PHAT does per frame) and each pair's peak is then
-    refined from the best direction's TDOA. A reflection that tops one pair's correlation is
+    refined from the best direction's TDOA (with ``climb``, from the nearest peak
+    :func:`_climb` reaches: what volume arrays get, whose localizer fits the curved wavefront
+    that the plane-wave grid misses; with planar arrays in reverberant rooms the climb also
+    reached reflections' peaks -- held-out respeaker-6, RT60 0.6 s, whole-sphere search, 4.5 %
+    higher RMSE). A reflection that tops one pair's correlation is
     thus not chosen when the other pairs disagree. With ``steer_range_m`` other than False
     (planar array, ``in_plane``) the TDOAs are instead those of the in-plane source maximising
     the steered sum (:func:`_steered_in_plane`). Returns lags in samples (n_pairs,).
@@ -872,11 +876,7 @@ def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
         D = -(positions[I] - positions[J]) / c * fs  # tau = D @ u (samples)
         lag = _coherent_refine(P, bins, nfft, D, U[int(np.argmax(score))])
     else:
-        # (only a volume array's localizer fits the curved wavefront that the plane-wave
-        # grid misses; with planar arrays in reverberant rooms the climb also reached
-        # reflections' peaks: held-out respeaker-6, RT60 0.6 s, whole-sphere search, 4.5 %
-        # higher RMSE)
-        if array_geometry(pos).kind == "volume":
+        if climb:
             tau0 = _climb(r, tau0, up)
         lag = _refine_interp(P, tau0, nfft, bins=bins)
     return np.clip(lag, -max_lag, max_lag)
@@ -1701,7 +1701,8 @@ def estimate_tdoas(
                 steer = IN_PLANE_RANGE_M if steer_range_m is None else steer_range_m
             lag = _joint_peaks(acc, band_bins, nfft, arr.positions, prs, arr.speed_of_sound,
                                fs, max_lag, coherent=joint == "coherent",
-                               in_plane=bool(source_in_plane), steer_range_m=steer)[None]
+                               in_plane=bool(source_in_plane), steer_range_m=steer,
+                               climb=array_geometry(arr).kind == "volume")[None]
         else:
             # one independent pair: only the confidence can tell (noise-only recordings reach
             # ~1.25 in 40 trials, a -15 dB white source 0.8-2.4)
