@@ -45,6 +45,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -200,6 +201,33 @@ def _convolve(s: np.ndarray, h: np.ndarray) -> np.ndarray:
     return sfft.irfft(sfft.rfft(s, n)[None] * sfft.rfft(h, n, axis=-1), n, axis=-1)[:, : len(s)]
 
 
+def _recordings(arr: MicArray, trials: int, rng: np.random.Generator, kinds: list[str],
+                speech: list[Path], duration: float, snrs: tuple[float, ...],
+                draw: Callable[[np.random.Generator], np.ndarray], t_start: float
+                ) -> Iterator[tuple]:
+    """``(rt60, source, kind, band, snr, x)`` for each recording of ``arr`` in the room:
+    ``trials`` sources drawn by ``draw`` (array frame, m) per RT60, each signal kind, each
+    SNR (sensor noise drawn per recording); progress printed after each RT60."""
+    for rt in RT60S:
+        for _ in range(trials):
+            src = draw(rng)
+            h = room_impulse_responses(FS, arr.positions + ARRAY_AT, src + ARRAY_AT, ROOM, rt,
+                                       speed_of_sound=arr.speed_of_sound)
+            for kind in kinds:
+                s = _source_signal(kind, duration, rng, speech)
+                clean = _convolve(s, h)
+                for snr in snrs:
+                    yield (rt, src, kind, BANDS["noise" if kind == "noise" else "speech"], snr,
+                           add_noise(clean, snr, rng))
+        print(f"  {arr.name} rt60={rt}: done ({time.time() - t_start:.0f} s)", flush=True)
+
+
+def _in_plane_source(rng: np.random.Generator) -> np.ndarray:
+    """``bench/doa.py``'s source: a random azimuth, 1-3 m away in the array plane."""
+    az = rng.uniform(-180, 180)
+    return rng.uniform(1.0, 3.0) * unit(np.radians(az), 0.0)
+
+
 def hearsee_direction(x: np.ndarray, arr: MicArray, band: tuple[float, float]
                       ) -> tuple[np.ndarray | None, np.ndarray | None, str]:
     """hearsee's whole-recording direction (its answer and the plane wave's) with
@@ -259,34 +287,24 @@ def run_rooms(trials: int, seed: int, data: Path | None, duration: float) -> tup
         hearsee_direction(w, arr, BANDS["speech"])
         for m in PRA_METHODS:
             pra_direction(w, arr, m, BANDS["speech"])
-        for rt in RT60S:
-            for _ in range(trials):
-                src = draw_source(rng)
-                u = src / np.linalg.norm(src)
-                h = room_impulse_responses(FS, arr.positions + ARRAY_AT, src + ARRAY_AT, ROOM,
-                                           rt, speed_of_sound=arr.speed_of_sound)
-                for kind in kinds:
-                    s = _source_signal(kind, duration, rng, speech)
-                    band = BANDS["noise" if kind == "noise" else "speech"]
-                    clean = _convolve(s, h)
-                    for snr in SNRS:
-                        x = add_noise(clean, snr, rng)
-                        audio_s += x.shape[1] / FS
-                        cell = errors.setdefault((name, rt, snr, kind),
-                                                 {m: [] for m in (*METHODS, "r", "model")})
-                        cell["r"].append(float(np.linalg.norm(src)))
-                        t0 = time.process_time()
-                        u_sel, u_ff, model = hearsee_direction(x, arr, band)
-                        cpu["hearsee"] += time.process_time() - t0
-                        cell["hearsee"].append(angle_deg(u_sel, u))
-                        cell["hearsee plane wave"].append(angle_deg(u_ff, u))
-                        cell["model"].append(model)
-                        for m in PRA_METHODS:
-                            t0 = time.process_time()
-                            est = pra_direction(x, arr, m, band)
-                            cpu[m] += time.process_time() - t0
-                            cell[m].append(angle_deg(est, u))
-            print(f"  {name} rt60={rt}: done ({time.time() - t_start:.0f} s)", flush=True)
+        for rt, src, kind, band, snr, x in _recordings(arr, trials, rng, kinds, speech, duration,
+                                                        SNRS, draw_source, t_start):
+            u = src / np.linalg.norm(src)
+            audio_s += x.shape[1] / FS
+            cell = errors.setdefault((name, rt, snr, kind),
+                                     {m: [] for m in (*METHODS, "r", "model")})
+            cell["r"].append(float(np.linalg.norm(src)))
+            t0 = time.process_time()
+            u_sel, u_ff, model = hearsee_direction(x, arr, band)
+            cpu["hearsee"] += time.process_time() - t0
+            cell["hearsee"].append(angle_deg(u_sel, u))
+            cell["hearsee plane wave"].append(angle_deg(u_ff, u))
+            cell["model"].append(model)
+            for m in PRA_METHODS:
+                t0 = time.process_time()
+                est = pra_direction(x, arr, m, band)
+                cpu[m] += time.process_time() - t0
+                cell[m].append(angle_deg(est, u))
     return errors, {"cpu": cpu, "audio_s": audio_s}
 
 
@@ -357,33 +375,22 @@ def run_planar(trials: int, seed: int, data: Path | None, duration: float) -> tu
         hearsee_azimuth(w, FS, arr, BANDS["speech"])
         for m in PRA_METHODS:
             pra_azimuth(w, FS, arr, m, BANDS["speech"])
-        for rt in RT60S:
-            for _ in range(trials):
-                az = rng.uniform(-180, 180)
-                src = rng.uniform(1.0, 3.0) * unit(np.radians(az), 0.0)
-                h = room_impulse_responses(FS, arr.positions + ARRAY_AT, src + ARRAY_AT, ROOM,
-                                           rt, speed_of_sound=arr.speed_of_sound)
-                for kind in kinds:
-                    s = _source_signal(kind, duration, rng, speech)
-                    band = BANDS["noise" if kind == "noise" else "speech"]
-                    clean = _convolve(s, h)
-                    for snr in PLANAR_SNRS:
-                        x = add_noise(clean, snr, rng)
-                        audio_s += x.shape[1] / FS
-                        cell = errors.setdefault((name, rt, snr, kind),
-                                                 {m: [] for m in PLANAR_METHODS})
-                        t0 = time.process_time()
-                        est = hearsee_azimuth(x, FS, arr, band)
-                        cpu["hearsee"] += time.process_time() - t0
-                        cell["hearsee"].append(az_error(est, az, False))
-                        est = hearsee_azimuth(x, FS, arr, band, joint="pairs")
-                        cell["hearsee joint='pairs'"].append(az_error(est, az, False))
-                        for m in PRA_METHODS:
-                            t0 = time.process_time()
-                            est = pra_azimuth(x, FS, arr, m, band)
-                            cpu[m] += time.process_time() - t0
-                            cell[m].append(az_error(est, az, False))
-            print(f"  {name} rt60={rt}: done ({time.time() - t_start:.0f} s)", flush=True)
+        for rt, src, kind, band, snr, x in _recordings(arr, trials, rng, kinds, speech, duration,
+                                                        PLANAR_SNRS, _in_plane_source, t_start):
+            az = float(np.degrees(np.arctan2(src[1], src[0])))
+            audio_s += x.shape[1] / FS
+            cell = errors.setdefault((name, rt, snr, kind), {m: [] for m in PLANAR_METHODS})
+            t0 = time.process_time()
+            est = hearsee_azimuth(x, FS, arr, band)
+            cpu["hearsee"] += time.process_time() - t0
+            cell["hearsee"].append(az_error(est, az, False))
+            est = hearsee_azimuth(x, FS, arr, band, joint="pairs")
+            cell["hearsee joint='pairs'"].append(az_error(est, az, False))
+            for m in PRA_METHODS:
+                t0 = time.process_time()
+                est = pra_azimuth(x, FS, arr, m, band)
+                cpu[m] += time.process_time() - t0
+                cell[m].append(az_error(est, az, False))
     return errors, {"cpu": cpu, "audio_s": audio_s}
 
 

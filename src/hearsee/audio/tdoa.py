@@ -891,7 +891,7 @@ def _climb(r: NDArray, tau0: NDArray, up: int, max_shift: float = 1.0) -> NDArra
     exactly (a 20 cm cube, sources 0.5-1 m away: 0.6-1.4 samples on its longest pairs) --
     and Newton steps from there stopped short of a main lobe as narrow as a broadband
     source's: a 20 cm cube of eight microphones, white noise ~1 m away in free field, had
-    pairs 0.7-0.9 sample off (``bench/volume.py``, 2026-11-27). The bound keeps what the joint
+    pairs 0.7-0.9 sample off (``bench/nmic.py``, 2026-11-27). The bound keeps what the joint
     search chose -- the lobe the direction points into, not a reflection's peak further on."""
     n = r.shape[-1]
     rows = np.arange(r.shape[0])
