@@ -1506,10 +1506,7 @@ def estimate_tdoas(
     if joint == "steered":
         _check_steered(arr, source_in_plane, steer_range_m)
     elif joint == "auto" and steer_range_m is not None:
-        finite_number("steer_range_m", steer_range_m, 0.0)
-        if steer_range_m <= 0:
-            raise ConfigError(f"steer_range_m must be a positive number of metres or None, got "
-                              f"{steer_range_m}")
+        finite_number("steer_range_m", steer_range_m, 0.0, lo_open=True)
     # (float32 fourth powers of the spectra overflow, tiny powers vanish; every test here is
     # scale-free)
     if peak > MAX_UNSCALED_PEAK or 0 < peak < MIN_UNSCALED_PEAK:
