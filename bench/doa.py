@@ -53,7 +53,7 @@ from hearsee.audio.arrays import MicArray  # noqa: E402
 from hearsee.audio.localize import localize_tdoa  # noqa: E402
 from hearsee.audio.propagation import add_noise, room_impulse_responses, simulate_free_field  # noqa: E402
 from hearsee.audio.signals import load_wav, synthetic_voice, white_noise  # noqa: E402
-from hearsee.audio.tdoa import SUMMARY_TUNED, estimate_tdoas, gcc  # noqa: E402
+from hearsee.audio.tdoa import SUMMARY_TUNED, TdoaFrames, estimate_tdoas, gcc  # noqa: E402
 
 FS = 16000
 ROOM = np.array([8.0, 7.0, 3.0])
@@ -238,6 +238,23 @@ def az_error(est: float, true: float, two_mic: bool) -> float:
     return float(abs((est - true + 180.0) % 360.0 - 180.0))
 
 
+def summary_tdoas(x: np.ndarray, fs: float, arr: MicArray, band: tuple[float, float],
+                  fallback: bool = True, **kw) -> TdoaFrames:
+    """hearsee's TDOAs with the benchmarked setting (:data:`HEARSEE`, then ``kw``); with
+    ``fallback`` an abstention (NaN summary, recorded in :data:`HEARSEE_ABSTAINED`) is retried
+    without the detection test, then from every frame with energy (see
+    :func:`hearsee_azimuth`)."""
+    opts = {**HEARSEE, **kw}
+    tf = estimate_tdoas(x, fs, arr, band_hz=band, **opts)
+    if fallback and not np.all(np.isfinite(tf.summary_tdoa_s)):
+        HEARSEE_ABSTAINED.append(1)
+        for relax in ({"min_peak_snr": 0.0}, {"min_confidence": 0.0, "min_peak_snr": 0.0}):
+            tf = estimate_tdoas(x, fs, arr, band_hz=band, **{**opts, **relax})
+            if np.all(np.isfinite(tf.summary_tdoa_s)):
+                break
+    return tf
+
+
 def hearsee_azimuth(x: np.ndarray, fs: float, arr: MicArray, band: tuple[float, float],
                     fallback: bool = True, in_plane: bool = IN_PLANE, **kw) -> float | None:
     """hearsee's whole-recording azimuth. hearsee abstains (NaN summary) when its averaged
@@ -248,14 +265,7 @@ def hearsee_azimuth(x: np.ndarray, fs: float, arr: MicArray, band: tuple[float, 
     existed), then, if the averaged confidence is still too low, from every frame with
     energy (``min_confidence=0``). The abstention policy was decided on held-out seed 777
     (one three-mic RT60 0.6 recording without estimate there)."""
-    opts = {"source_in_plane": in_plane, **HEARSEE, **kw}
-    tf = estimate_tdoas(x, fs, arr, band_hz=band, **opts)
-    if fallback and not np.all(np.isfinite(tf.summary_tdoa_s)):
-        HEARSEE_ABSTAINED.append(1)
-        for relax in ({"min_peak_snr": 0.0}, {"min_confidence": 0.0, "min_peak_snr": 0.0}):
-            tf = estimate_tdoas(x, fs, arr, band_hz=band, **{**opts, **relax})
-            if np.all(np.isfinite(tf.summary_tdoa_s)):
-                break
+    tf = summary_tdoas(x, fs, arr, band, fallback, **{"source_in_plane": in_plane, **kw})
     loc = localize_tdoa(tf.summary_tdoa_s, arr, tf.pairs, near_field=in_plane,
                         in_plane=in_plane)
     return loc.azimuth_deg

@@ -65,13 +65,13 @@ from doa import (  # noqa: E402
     ARRAY_AT,
     BANDS,
     FS,
-    HEARSEE,
     PRA_METHODS,
     PRA_NFFT,
     ROOM,
     az_error,
     hearsee_azimuth,
     pra_azimuth,
+    summary_tdoas,
 )
 from doa import SNRS as PLANAR_SNRS  # noqa: E402
 
@@ -79,9 +79,8 @@ from hearsee.audio.arrays import MicArray  # noqa: E402
 from hearsee.audio.localize import array_geometry, far_field_volume, localize_tdoa  # noqa: E402
 from hearsee.audio.propagation import add_noise, room_impulse_responses  # noqa: E402
 from hearsee.audio.signals import load_wav, synthetic_voice, white_noise  # noqa: E402
-from hearsee.audio.tdoa import estimate_tdoas  # noqa: E402
 from hearsee.errors import HearseeError  # noqa: E402
-from hearsee.geometry import angle_between  # noqa: E402
+from hearsee.geometry import angle_between, sph_to_cart, unit_vector_deg  # noqa: E402
 
 _TET = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], float) * (0.15 / np.sqrt(8))
 #: the arrays (metres, array frame): a 15 cm regular tetrahedron (side) and its centre, a 20 cm
@@ -110,11 +109,6 @@ PEER_FINE_DEG = (4.0, 0.2)  # half-width and step of the azimuth x colatitude re
 METHODS = ("hearsee", "hearsee plane wave", *PRA_METHODS)
 
 
-def unit(az: float, el: float) -> np.ndarray:
-    """Unit vector of azimuth ``az`` and elevation ``el`` (radians), array frame."""
-    return np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
-
-
 def angle_deg(u: np.ndarray | None, v: np.ndarray) -> float:
     """Great-circle angle in degrees (180 for no answer)."""
     if u is None or not np.all(np.isfinite(u)):
@@ -133,8 +127,8 @@ def run_tdoa(trials: int, seed: int, random_arrays: int) -> tuple[list, list]:
             for sig in TDOA_NOISE_S:
                 e_ff, e_sel, n_pos = [], [], 0
                 for _ in range(trials):
-                    u = unit(rng.uniform(-np.pi, np.pi),
-                             rng.uniform(-TDOA_EL_MAX_RAD, TDOA_EL_MAX_RAD))
+                    u = sph_to_cart(rng.uniform(-np.pi, np.pi),
+                                    rng.uniform(-TDOA_EL_MAX_RAD, TDOA_EL_MAX_RAD))
                     tau = arr.tdoa(rng.uniform(rlo, rhi) * u)
                     tau = tau + sig * rng.standard_normal(len(arr.pairs))
                     e_ff.append(angle_deg(far_field_volume(tau, arr).direction, u))
@@ -177,7 +171,8 @@ def draw_source(rng: np.random.Generator) -> np.ndarray:
     """A source position (array frame, m) RANGE_M away, elevation within EL_MAX_DEG, at least
     WALL_MARGIN_M inside the room."""
     while True:
-        u = unit(rng.uniform(-np.pi, np.pi), np.radians(rng.uniform(-EL_MAX_DEG, EL_MAX_DEG)))
+        u = sph_to_cart(rng.uniform(-np.pi, np.pi),
+                        np.radians(rng.uniform(-EL_MAX_DEG, EL_MAX_DEG)))
         p = rng.uniform(*RANGE_M) * u
         q = p + ARRAY_AT
         if np.all(q > WALL_MARGIN_M) and np.all(q < ROOM - WALL_MARGIN_M):
@@ -225,7 +220,7 @@ def _recordings(arr: MicArray, trials: int, rng: np.random.Generator, kinds: lis
 def _in_plane_source(rng: np.random.Generator) -> np.ndarray:
     """``bench/doa.py``'s source: a random azimuth, 1-3 m away in the array plane."""
     az = rng.uniform(-180, 180)
-    return rng.uniform(1.0, 3.0) * unit(np.radians(az), 0.0)
+    return rng.uniform(1.0, 3.0) * sph_to_cart(np.radians(az), 0.0)
 
 
 def hearsee_direction(x: np.ndarray, arr: MicArray, band: tuple[float, float]
@@ -233,17 +228,13 @@ def hearsee_direction(x: np.ndarray, arr: MicArray, band: tuple[float, float]
     """hearsee's whole-recording direction (its answer and the plane wave's) with
     ``bench/doa.py``'s setting and fallback (an abstention is replaced by the estimate without
     the detection test, then from every frame with energy: the peers always answer)."""
-    tf = estimate_tdoas(x, FS, arr, band_hz=band, **HEARSEE)
-    for relax in ({"min_peak_snr": 0.0}, {"min_confidence": 0.0, "min_peak_snr": 0.0}):
-        if np.all(np.isfinite(tf.summary_tdoa_s)):
-            break
-        tf = estimate_tdoas(x, FS, arr, band_hz=band, **{**HEARSEE, **relax})
+    tf = summary_tdoas(x, FS, arr, band)
     loc = localize_tdoa(tf.summary_tdoa_s, arr, tf.pairs)
     if loc.azimuth_deg is None:
         return None, None, "none"
     model = loc.extra.get("direction_model", "plane_wave")
     ff = loc.extra.get("far_field")
-    u_ff = (unit(np.radians(ff["azimuth_deg"]), np.radians(ff["elevation_deg"]))
+    u_ff = (unit_vector_deg(ff["azimuth_deg"], ff["elevation_deg"])
             if model == "position" and ff else loc.direction)
     return loc.direction, u_ff, model
 
@@ -269,7 +260,7 @@ def pra_direction(x: np.ndarray, arr: MicArray, algo: str, band: tuple[float, fl
                                     azimuth=az0 + d, colatitude=col)
     fine.locate_sources(X, freq_range=list(band))
     az, co = float(fine.azimuth_recon[0]), float(fine.colatitude_recon[0])
-    return unit(az, np.pi / 2 - co)
+    return sph_to_cart(az, np.pi / 2 - co)
 
 
 def run_rooms(trials: int, seed: int, data: Path | None, duration: float) -> tuple[dict, dict]:

@@ -1691,15 +1691,15 @@ def estimate_tdoas(
             need_c = min_confidence if resid <= _CLOSURE_TOL_SAMPLES else (
                 _FALLBACK_CONFIDENCE * min_confidence)
             ok = np.all(c[0] >= need_c)
+            kind = array_geometry(arr).kind
             steer: float | None | bool = steer_range_m if joint == "steered" else False
             if (joint == "auto" and reverberant and source_in_plane
-                    and arr.n_mics >= AUTO_STEERED_MIN_MICS
-                    and array_geometry(arr).kind == "planar"):
+                    and arr.n_mics >= AUTO_STEERED_MIN_MICS and kind == "planar"):
                 steer = IN_PLANE_RANGE_M if steer_range_m is None else steer_range_m
             lag = _joint_peaks(acc, band_bins, nfft, arr.positions, prs, arr.speed_of_sound,
                                fs, max_lag, coherent=joint == "coherent",
                                in_plane=bool(source_in_plane), steer_range_m=steer,
-                               climb=array_geometry(arr).kind == "volume")[None]
+                               climb=kind == "volume")[None]
         else:
             # one independent pair: only the confidence can tell (noise-only recordings reach
             # ~1.25 in 40 trials, a -15 dB white source 0.8-2.4)
