@@ -178,6 +178,73 @@ def test_volume_array_direction_from_the_wavefront_curvature():
     assert (loc.azimuth_deg, loc.elevation_deg) == pytest.approx((-100.0, 30.0), abs=1e-4)
 
 
+def _circle(n: int, radius: float) -> MicArray:
+    phi = 2.0 * np.pi * np.arange(n) / n
+    return MicArray(np.c_[radius * np.cos(phi), radius * np.sin(phi), np.zeros(n)])
+
+
+@pytest.mark.parametrize("el", [1.5, -1.5, 20.0, -35.0])
+def test_planar_array_position_up_to_its_mirror(el):
+    """A planar array fixes a near source's position up to its mirror image about the array
+    plane: the fit returns the image on the normal's side (+z for a horizontal array). A fit
+    started in the plane (a far-field answer there, the spherical interpolation's minimum-norm
+    solution) used to stay in it: the distance from the plane has no gradient there."""
+    from hearsee.audio.localize import _spherical_interpolation
+
+    arr = _circle(8, 0.10)
+    src = 0.6 * unit_vector_deg(40.0, el)
+    above = src * [1.0, 1.0, -1.0] if el < 0 else src
+    p, r = near_field_position(arr.tdoa(src), arr)
+    np.testing.assert_allclose(p, above, atol=1e-6)
+    assert r < 1e-10
+    # the spherical interpolation completes the distance from the plane from its range
+    np.testing.assert_allclose(_spherical_interpolation(arr.tdoa(src), arr,
+                                                        arr.checked_pairs(None)), above, atol=1e-9)
+    # a start in the plane (x0) is lifted off it
+    p, _ = near_field_position(arr.tdoa(src), arr, x0=[0.3, 0.3, 0.0])
+    np.testing.assert_allclose(p, above, atol=1e-6)
+
+
+def test_planar_array_direction_from_the_wavefront_curvature():
+    """Planar arrays of five or more microphones take a near source's direction from its
+    position as volume arrays do (the 1 % likelihood-ratio test), with the mirror image's
+    direction as the second candidate; a plane wave, four microphones and ``in_plane`` keep
+    their answers."""
+    arr = _circle(6, 0.15)
+    src = 0.7 * unit_vector_deg(-120.0, 12.0)
+    plane = far_field_planar(arr.tdoa(src), arr)
+    assert abs(plane.elevation_deg - 12.0) > 0.5  # the curved wavefront misleads the plane wave
+    loc = localize_tdoa(arr.tdoa(src), arr)
+    assert loc.geometry == "planar" and loc.extra["direction_model"] == "position"
+    np.testing.assert_allclose(loc.candidates, [(-120.0, 12.0), (-120.0, -12.0)], atol=1e-5)
+    assert (loc.azimuth_deg, loc.elevation_deg) == loc.candidates[0]
+    assert loc.n_solutions == 2 and loc.feasible and loc.residual_s < 1e-10
+    np.testing.assert_allclose(loc.position_m, src, atol=1e-6)
+    assert loc.extra["far_field"]["elevation_deg"] == pytest.approx(plane.elevation_deg)
+    # below the plane: the same answer (the array cannot tell), position on the +z side
+    below = localize_tdoa(arr.tdoa(src * [1.0, 1.0, -1.0]), arr)
+    np.testing.assert_allclose(below.candidates, loc.candidates, atol=1e-5)
+    # a plane wave keeps the plane wave's answer
+    far = localize_tdoa(arr.tdoa_far(unit_vector_deg(75.0, 30.0)), arr)
+    assert far.extra["direction_model"] == "plane_wave" and "far_field" not in far.extra
+    np.testing.assert_allclose(far.candidates, [(75.0, 30.0), (75.0, -30.0)], atol=1e-6)
+    # a far source with 20 us of TDOA noise: the test keeps the plane wave
+    rng = np.random.default_rng(33)
+    tau = arr.tdoa(4.0 * unit_vector_deg(10.0, 20.0)) + rng.normal(0.0, 20e-6, 15)
+    noisy = localize_tdoa(tau, arr)
+    assert noisy.extra["direction_model"] == "plane_wave"
+    assert noisy.candidates == far_field_planar(tau, arr).candidates
+    # four microphones: a position, but three TDOAs fit it exactly, so the plane wave stays
+    four = _circle(4, 0.15)
+    loc4 = localize_tdoa(four.tdoa(src), four)
+    assert loc4.extra["direction_model"] == "plane_wave" and loc4.position_m is not None
+    assert loc4.candidates == far_field_planar(four.tdoa(src), four).candidates
+    # in_plane (a source at the array's height) and near_field=False: unchanged
+    assert localize_tdoa(arr.tdoa(src), arr, near_field=False).position_m is None
+    assert "direction_model" not in localize_tdoa(arr.tdoa(0.7 * unit_vector_deg(50.0)), arr,
+                                                  in_plane=True).extra
+
+
 def test_near_model_needs_a_significant_likelihood_ratio():
     from hearsee.audio.localize import _near_model_wins
 
