@@ -231,3 +231,32 @@ def test_a_corrupt_sample_is_named_when_no_frame_is_valid(rec3, tmp_path, capsys
     code, out, err = _run(capsys, q, "--array", "three-mic", "--format", "json")
     assert code == 0 and json.loads(out)["summary"]["n_valid_frames"] == 0
     assert err == f"{q}: no frame holds a detectable source (silence or uncorrelated noise)\n"
+
+
+def test_eight_mic_circle_table_and_position(tmp_path, capsys):
+    """A planar circle of eight: the summary gives the near source's position (on the +z side
+    of the array plane, where this one is) in JSON and in the table's summary line; the table
+    shows the seven pairs with microphone 0, not 28 squeezed columns."""
+    import re
+
+    phi = np.radians(np.arange(0, 360, 45))
+    pos = np.c_[0.1 * np.cos(phi), 0.1 * np.sin(phi), np.zeros(8)]
+    yml = tmp_path / "circle8.yaml"
+    yml.write_text("microphones:\n" + "".join(f"  - [{x}, {y}, {z}]\n" for x, y, z in pos))
+    src = np.array([0.5, -0.4, 0.2])
+    x = simulate_free_field(white_noise(1.0, FS, rng=3), FS, MicArray(pos), src, snr_db=30,
+                            rng=4)
+    rec = tmp_path / "c8.wav"
+    sf.write(rec, (x / np.abs(x).max() * 0.5).T, FS, subtype="FLOAT")
+    code, out, _ = _run(capsys, rec, "--array", yml, "--format", "json")
+    assert code == 0
+    s = json.loads(out)["summary"]
+    np.testing.assert_allclose(s["position_m"], src, atol=0.01)
+    assert [c["elevation_deg"] for c in s["candidates"]] == pytest.approx(
+        [17.35, -17.35], abs=0.2)
+    code, out, _ = _run(capsys, rec, "--array", yml, "--format", "table")
+    assert code == 0
+    heads = re.findall(r"tdoa (\d-\d)", out)
+    assert heads == [f"0-{k}" for k in range(1, 8)]
+    assert "TDOAs of 7 of 28 pairs" in out
+    assert "position (0.50, -0.40, 0.20) m" in out

@@ -38,12 +38,29 @@ def _write_csv(doc: dict[str, Any]) -> None:
     sys.stdout.write(buf.getvalue())
 
 
+#: The table shows every pair's TDOA up to this many pairs (four microphones), else only the
+#: pairs with microphone 0 (the ITD filter's states): the 28 pairs of eight microphones were
+#: squeezed to unreadable one-character columns in 160 characters. JSON and CSV keep them all.
+TABLE_MAX_PAIRS = 6
+
+
+def _table_pairs(labels: list[str]) -> list[str]:
+    """The pair labels ("i-j") the table shows (:data:`TABLE_MAX_PAIRS`)."""
+    if len(labels) <= TABLE_MAX_PAIRS:
+        return labels
+    ref = [k for k in labels if k.split("-")[0] == "0"]
+    return ref or labels[:TABLE_MAX_PAIRS]
+
+
 def _print_table(doc: dict[str, Any]) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    labels = list(doc["summary"]["tdoa_s"])
-    t = Table(title=f"hearsee localize ({doc['array']['name']}, {doc['method']})")
+    every = list(doc["summary"]["tdoa_s"])
+    labels = _table_pairs(every)
+    t = Table(title=f"hearsee localize ({doc['array']['name']}, {doc['method']})",
+              caption=None if labels == every else
+              f"TDOAs of {len(labels)} of {len(every)} pairs; --format json or csv has all")
     t.add_column("t [s]")
     for k in labels:
         t.add_column(f"tdoa {k} [us]")
@@ -61,8 +78,10 @@ def _print_table(doc: dict[str, Any]) -> None:
     s = doc["summary"]
     cands = ", ".join(f"({_fmt(c['azimuth_deg'])}, {_fmt(c['elevation_deg'])})"
                       for c in s["candidates"]) or "none"
+    pos = s.get("position_m")
+    where = "" if pos is None else f", position ({', '.join(_fmt(v, 2) for v in pos)}) m"
     con.print(f"summary: azimuth {_fmt(s['azimuth_deg'])} deg, elevation "
-              f"{_fmt(s['elevation_deg'])} deg, candidates {cands}, "
+              f"{_fmt(s['elevation_deg'])} deg, candidates {cands}{where}, "
               f"{s['n_valid_frames']} valid frames", highlight=False)
 
 
