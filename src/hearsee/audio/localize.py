@@ -438,8 +438,6 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray | str,
     the position returned is the one on the side of the plane's normal.
     """
     array = load_array(array)  # (a MicArray, or a preset name / YAML path)
-    from scipy.optimize import least_squares
-
     prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
     _check_loss(loss)
@@ -452,24 +450,36 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray | str,
             raise GeometryError(f"x0 must be a finite [x, y, z] start position in metres, "
                                 f"got {x0!r}")
         x0 = start
+    return _fit_position(tau, array, prs, [x0] if x0 is not None else
+                         _position_starts(tau, array, prs), loss, tol_s)
+
+
+def _position_starts(tau: NDArray, array: MicArray, prs: list[tuple[int, int]],
+                     u: NDArray | None = None) -> list[NDArray]:
+    """:func:`near_field_position`'s starts: spherical interpolation (when it exists) and the
+    far-field direction ``u`` (solved here when None) at 2 m from the array centre."""
+    geo = array_geometry(array)
+    if geo.kind == "linear":
+        raise GeometryError("a linear array cannot fix a source position (only a cone)")
+    if u is None:
+        solve = far_field_volume if geo.kind == "volume" else far_field_planar
+        u = solve(tau, array, prs).direction
+    starts = [geo.centre + 2.0 * u]
+    si = _spherical_interpolation(tau, array, prs)
+    if si is not None:
+        starts.insert(0, si)
+    return starts
+
+
+def _fit_position(tau: NDArray, array: MicArray, prs: list[tuple[int, int]],
+                  starts: list[NDArray], loss: str, tol_s: float) -> tuple[NDArray, float]:
+    """The fit of :func:`near_field_position` from ``starts`` (checked arguments)."""
+    from scipy.optimize import least_squares
+
     pos = array.positions
     c = array.speed_of_sound
     I = np.array([p[0] for p in prs])
     J = np.array([p[1] for p in prs])
-    if x0 is not None:
-        starts = [x0]
-    else:
-        geo = array_geometry(array)
-        if geo.kind == "volume":
-            u = far_field_volume(tau, array, prs).direction
-        elif geo.kind == "planar":
-            u = far_field_planar(tau, array, prs).direction
-        else:
-            raise GeometryError("a linear array cannot fix a source position (only a cone)")
-        starts = [geo.centre + 2.0 * u]
-        si = _spherical_interpolation(tau, array, prs)
-        if si is not None:
-            starts.insert(0, si)
     geo = array_geometry(array)
     if geo.kind == "planar":
         starts = [_off_plane(np.asarray(s0, dtype=float), geo) for s0 in starts]
@@ -777,7 +787,9 @@ def _add_position(loc: Localization, tau: NDArray, arr: MicArray, prs: list[tupl
     """Give the far-field localization ``loc`` of a planar or volume array its near-field
     ``position_m``, and the direction of that position when :func:`localize_tdoa`'s test
     prefers the point source (``extra["direction_model"]`` says which)."""
-    p, r = near_field_position(tau, arr, prs, tol_s=tol_s)
+    # (the far-field direction that near_field_position would solve for again is loc's)
+    p, r = _fit_position(tau, arr, prs, _position_starts(tau, arr, prs, loc.direction),
+                         "soft_l1", tol_s)
     loc.position_m = p
     loc.extra["position_residual_s"] = r
     loc.extra["direction_model"] = "plane_wave"
