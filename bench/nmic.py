@@ -3,7 +3,7 @@ larger arrays are served too") -- volume arrays' 3D direction vs pyroomacoustics
 and NormMUSIC on the whole sphere, and planar arrays of four and six microphones in the array
 plane as ``bench/doa.py`` measures its two- and three-microphone arrays.
 
-Three parts, in one process:
+Four parts, in one process:
 
 1. **TDOA level** (no audio): exact TDOAs of random sources plus i.i.d. Gaussian noise per pair,
    for three arrays (a 15 cm tetrahedron and its centre, a 20 cm cube of eight, a 5 cm hexagon
@@ -36,6 +36,14 @@ Three parts, in one process:
    (``dim=2``) on the 0.1-deg grid, steered to points 2 m away (``pra_azimuth``). hearsee is
    also scored with ``joint="pairs"``, the summary's search before ``joint="auto"`` (which
    steers the in-plane search for these arrays when the recording is judged reverberant).
+4. **Planar arrays on the whole sphere**: part 2's recordings (room, sources 0.5-3 m away,
+   elevation within +-30 deg, signals, SNRs, scoring, peers with ``dim=3``) for two planar
+   arrays -- ``respeaker-6`` and a circle of eight microphones of 10 cm radius -- whose
+   answers hold a mirror twin about the array plane: every method is scored by the nearer of
+   its direction and that direction's mirror image (a planar array cannot tell them apart;
+   hearsee lists both as candidates, the peers' spectra are symmetric). hearsee's answer
+   takes the direction of its near-field position when the curvature test finds it, as in
+   part 2; "hearsee plane wave" is the plane wave's answer alone.
 
 Run: ``.venv/bin/python bench/nmic.py [--trials N] [--seed S] [--quick]``.
 """
@@ -94,6 +102,12 @@ ARRAYS = {
 }
 #: part 2's arrays (the hexagon's range is barely measured: part 1 shows it)
 ROOM_ARRAYS = ("tetrahedron 15 cm + centre", "cube 20 cm")
+#: part 4's planar arrays on the whole sphere (in the z = 0 plane, centred at the origin)
+SPHERE_PLANAR_ARRAYS = {
+    "respeaker-6": MicArray.from_preset("respeaker-6").positions,
+    "circle of 8, 10 cm radius": np.array(
+        [[0.1 * np.cos(a), 0.1 * np.sin(a), 0.0] for a in np.radians(np.arange(0, 360, 45))]),
+}
 TDOA_RANGES_M = ((0.5, 1.0), (1.0, 2.0), (2.0, 4.0))
 TDOA_NOISE_S = (0.0, 5e-6, 20e-6)
 TDOA_EL_MAX_RAD = 0.6  # +-34 deg
@@ -114,6 +128,13 @@ def angle_deg(u: np.ndarray | None, v: np.ndarray) -> float:
     if u is None or not np.all(np.isfinite(u)):
         return 180.0
     return float(np.degrees(angle_between(u, v)))
+
+
+def mirror_blind_deg(u: np.ndarray | None, v: np.ndarray) -> float:
+    """:func:`angle_deg` to ``v`` of the nearer of ``u`` and its mirror image about the
+    z = 0 plane (part 4's arrays lie in it)."""
+    return angle_deg(u, v) if u is None else min(angle_deg(u, v),
+                                                 angle_deg(u * [1.0, 1.0, -1.0], v))
 
 
 # ------------------------------------------------------------------------------ part 1: TDOAs
@@ -263,8 +284,14 @@ def pra_direction(x: np.ndarray, arr: MicArray, algo: str, band: tuple[float, fl
     return sph_to_cart(az, np.pi / 2 - co)
 
 
-def run_rooms(trials: int, seed: int, data: Path | None, duration: float) -> tuple[dict, dict]:
-    """Errors per (array, RT60, SNR, signal, method), with each trial's distance, and CPU."""
+def run_rooms(trials: int, seed: int, data: Path | None, duration: float,
+              arrays: dict[str, np.ndarray] | None = None,
+              score: Callable[[np.ndarray | None, np.ndarray], float] = angle_deg
+              ) -> tuple[dict, dict]:
+    """Errors per (array, RT60, SNR, signal, method), with each trial's distance, and CPU:
+    part 2 (``arrays`` None: :data:`ROOM_ARRAYS`), or part 4 (its arrays, ``score``
+    :func:`mirror_blind_deg`)."""
+    arrays = arrays or {name: ARRAYS[name] for name in ROOM_ARRAYS}
     rng = np.random.default_rng(seed)
     speech = arctic_files(data)
     kinds = ["noise", "male", "female"] + (["arctic"] if speech else [])
@@ -272,8 +299,8 @@ def run_rooms(trials: int, seed: int, data: Path | None, duration: float) -> tup
     cpu = {m: 0.0 for m in METHODS if m != "hearsee plane wave"}
     audio_s = 0.0
     t_start = time.time()
-    for name in ROOM_ARRAYS:
-        arr = MicArray(ARRAYS[name], name=name)
+    for name, positions in arrays.items():
+        arr = MicArray(positions, name=name)
         w = rng.standard_normal((arr.n_mics, FS // 2))  # warm-up: first-call costs
         hearsee_direction(w, arr, BANDS["speech"])
         for m in PRA_METHODS:
@@ -288,18 +315,18 @@ def run_rooms(trials: int, seed: int, data: Path | None, duration: float) -> tup
             t0 = time.process_time()
             u_sel, u_ff, model = hearsee_direction(x, arr, band)
             cpu["hearsee"] += time.process_time() - t0
-            cell["hearsee"].append(angle_deg(u_sel, u))
-            cell["hearsee plane wave"].append(angle_deg(u_ff, u))
+            cell["hearsee"].append(score(u_sel, u))
+            cell["hearsee plane wave"].append(score(u_ff, u))
             cell["model"].append(model)
             for m in PRA_METHODS:
                 t0 = time.process_time()
                 est = pra_direction(x, arr, m, band)
                 cpu[m] += time.process_time() - t0
-                cell[m].append(angle_deg(est, u))
+                cell[m].append(score(est, u))
     return errors, {"cpu": cpu, "audio_s": audio_s}
 
 
-def summarize_rooms(errors: dict, timing: dict
+def summarize_rooms(errors: dict, timing: dict, arrays: tuple[str, ...] = ROOM_ARRAYS
                     ) -> tuple[list, list, list, list, int, int, list]:
     """Headers and rows of the per-condition table, headers and rows of the per-(array, RT60)
     pools by distance, the count of conditions where hearsee is at or below the best peer,
@@ -325,7 +352,7 @@ def summarize_rooms(errors: dict, timing: dict
     pool_h = ["array", "RT60 s", "distance m", "n", *(f"{m} RMSE deg" for m in METHODS),
               "hearsee from position %"]
     pools = []
-    for name in ROOM_ARRAYS:
+    for name in arrays:
         for rt in RT60S:
             cells = [c for (a, r, _, _), c in errors.items() if a == name and r == rt]
             if not cells:
@@ -416,14 +443,14 @@ def summarize_planar(errors: dict, timing: dict) -> tuple[list, list, list, list
     return headers, rows, pool_h, pools, won, len(rows), cpu_rows
 
 
-def plot(pools: list, path: Path) -> None:
+def plot(pools: list, path: Path, arrays: tuple[str, ...] = ROOM_ARRAYS) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(ROOM_ARRAYS), figsize=(6 * len(ROOM_ARRAYS), 4), sharey=True)
-    for ax, name in zip(np.atleast_1d(axes), ROOM_ARRAYS, strict=True):
+    fig, axes = plt.subplots(1, len(arrays), figsize=(6 * len(arrays), 4), sharey=True)
+    for ax, name in zip(np.atleast_1d(axes), arrays, strict=True):
         rows = [r for r in pools if r[0] == name]
         labels = [f"RT60 {r[1]:g}\n{r[2]} m" for r in rows]
         xs = np.arange(len(rows))
@@ -460,6 +487,8 @@ def main(argv: list[str] | None = None) -> int:
         tdoa_rows, rnd_rows = run_tdoa(tdoa_trials, args.seed + 3106, n_random)
         errors, timing = run_rooms(trials, args.seed, data, args.duration)
         p_errors, p_timing = run_planar(trials, args.seed + 1, data, args.duration)
+        s_errors, s_timing = run_rooms(trials, args.seed + 2, data, args.duration,
+                                       SPHERE_PLANAR_ARRAYS, mirror_blind_deg)
     tdoa_h = ["array", "range m", "TDOA noise us", "plane wave RMSE deg",
               "hearsee RMSE deg", "answers from the position %"]
     rnd_h = ["random arrays", "plane wave RMSE deg", "hearsee RMSE deg",
@@ -478,7 +507,16 @@ def main(argv: list[str] | None = None) -> int:
     print_table("Planar arrays: pooled", p_pool_h, p_pools)
     print_table("Planar arrays: CPU", cpu_h, p_cpu)
     print(f"planar: hearsee RMSE <= best pyroomacoustics method in {p_won}/{p_cells} conditions")
+    sphere_arrays = tuple(SPHERE_PLANAR_ARRAYS)
+    s_h, s_rows, s_pool_h, s_pools, s_won, s_cells, s_cpu = summarize_rooms(
+        s_errors, s_timing, sphere_arrays)
+    print_table("Planar arrays, whole sphere: mirror-blind direction error", s_h, s_rows)
+    print_table("Planar arrays, whole sphere: pooled by distance", s_pool_h, s_pools)
+    print_table("Planar arrays, whole sphere: CPU", cpu_h, s_cpu)
+    print(f"planar, whole sphere: hearsee RMSE <= best pyroomacoustics method in "
+          f"{s_won}/{s_cells} conditions")
     plot(pools, RESULTS / "nmic.png")
+    plot(s_pools, RESULTS / "nmic_planar.png", sphere_arrays)
     intro = (f"`python bench/nmic.py --trials {trials} --seed {args.seed}"
              f"{' --quick' if args.quick else ''}`; wall time {time.time() - t0:.0f} s on a "
              f"shared 2-core machine. ![nmic](nmic.png)\n\n" + __doc__.split("\n\n", 1)[1])
@@ -498,6 +536,13 @@ def main(argv: list[str] | None = None) -> int:
         ("3b. Pooled per array and room", markdown_table(p_pool_h, p_pools)),
         ("CPU time per second of audio (part 3; peers on the scored 0.1-deg grid)",
          markdown_table(cpu_h, p_cpu)),
+        ("4. Planar arrays on the whole sphere: mirror-blind 3D direction error "
+         "![nmic_planar](nmic_planar.png)",
+         markdown_table(s_h, s_rows)
+         + f"\n\nhearsee RMSE <= the best pyroomacoustics method in {s_won}/{s_cells} "
+           "conditions."),
+        ("4b. Pooled by the source's distance", markdown_table(s_pool_h, s_pools)),
+        ("CPU time per second of audio (part 4)", markdown_table(cpu_h, s_cpu)),
     ], intro=intro)
     print(f"wrote {path}")
     return 0

@@ -751,10 +751,10 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
         (2026-11-27, seed 3311; rule and numbers in bench/results/HISTORY.md): a 6-mic circle of
         15 cm radius, 0.5-1 m, 2.16 -> 0.00 deg (exact TDOAs), 2.13 -> 0.92 (5 us), 3.48 ->
         3.23 (20 us); an 8-mic circle of 10 cm, 0.5-1 m, 1.16 -> 0.00, 1.58 -> 1.15; exact
-        TDOAs 2-4 m away 0.30-0.47 -> 0.00 on every array (``respeaker-6`` 0.38); no cell of
-        five arrays (with ``respeaker-6`` and a 7 cm pentagon) worse by more than 0.3 %; 1000
-        random planar arrays (5-8 microphones, 5-40 cm, 0.3-5 m, 0-30 us) RMS 7.15 -> 6.84,
-        none worse by more than 10 deg.
+        TDOAs 2-4 m away 0.30-0.47 -> 0.00 on these, ``respeaker-6`` (0.38) and a 7 cm
+        pentagon; no cell of them (nor of a 30 cm square of four, which keeps the plane wave)
+        worse by more than 0.3 %; 1000 random planar arrays (5-8 microphones, 5-40 cm, 0.3-5
+        m, 0-30 us) RMS 7.15 -> 6.84, none worse by more than 10 deg.
 
     >>> arr = MicArray.from_preset("two-mic")
     >>> u = np.array([np.cos(np.radians(30)), np.sin(np.radians(30)), 0.0])
