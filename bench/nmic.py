@@ -238,6 +238,12 @@ def _recordings(arr: MicArray, trials: int, rng: np.random.Generator, kinds: lis
         print(f"  {arr.name} rt60={rt}: done ({time.time() - t_start:.0f} s)", flush=True)
 
 
+def _signal_kinds(data: Path | None) -> tuple[list[Path], list[str]]:
+    """The ARCTIC utterances (none without ``../shared``) and the signal kinds of parts 2-4."""
+    speech = arctic_files(data)
+    return speech, ["noise", "male", "female"] + (["arctic"] if speech else [])
+
+
 def _in_plane_source(rng: np.random.Generator) -> np.ndarray:
     """``bench/doa.py``'s source: a random azimuth, 1-3 m away in the array plane."""
     az = rng.uniform(-180, 180)
@@ -293,8 +299,7 @@ def run_rooms(trials: int, seed: int, data: Path | None, duration: float,
     :func:`mirror_blind_deg`)."""
     arrays = arrays or {name: ARRAYS[name] for name in ROOM_ARRAYS}
     rng = np.random.default_rng(seed)
-    speech = arctic_files(data)
-    kinds = ["noise", "male", "female"] + (["arctic"] if speech else [])
+    speech, kinds = _signal_kinds(data)
     errors: dict = {}
     cpu = {m: 0.0 for m in METHODS if m != "hearsee plane wave"}
     audio_s = 0.0
@@ -331,24 +336,12 @@ def summarize_rooms(errors: dict, timing: dict, arrays: tuple[str, ...] = ROOM_A
     """Headers and rows of the per-condition table, headers and rows of the per-(array, RT60)
     pools by distance, the count of conditions where hearsee is at or below the best peer,
     the number of conditions, and the CPU table's rows."""
-    headers = ["array", "RT60 s", "SNR dB", "signal", "n"]
-    for m in METHODS:
-        headers += [f"{m} RMSE deg", f"{m} median deg"]
-    headers += ["best peer RMSE deg", "hearsee <= best peer", "hearsee from position %",
-                "hearsee > 10 deg %", "SRP > 10 deg %"]
-    rows, won = [], 0
-    for (name, rt, snr, kind), cell in sorted(errors.items()):
-        row: list = [name, rt, snr, kind, len(cell["hearsee"])]
-        for m in METHODS:
-            row += [_rms(cell[m]), float(np.median(cell[m]))]
-        best = min(_rms(cell[m]) for m in PRA_METHODS)
-        ok = _rms(cell["hearsee"]) <= best
-        won += ok
-        row += [best, "yes" if ok else "no",
-                100.0 * np.mean([m == "position" for m in cell["model"]]),
+    headers, rows, won = _condition_table(errors, METHODS)
+    headers += ["hearsee from position %", "hearsee > 10 deg %", "SRP > 10 deg %"]
+    for row, (_, cell) in zip(rows, sorted(errors.items()), strict=True):
+        row += [100.0 * np.mean([m == "position" for m in cell["model"]]),
                 100.0 * np.mean(np.array(cell["hearsee"]) > 10.0),
                 100.0 * np.mean(np.array(cell["SRP"]) > 10.0)]
-        rows.append(row)
     pool_h = ["array", "RT60 s", "distance m", "n", *(f"{m} RMSE deg" for m in METHODS),
               "hearsee from position %"]
     pools = []
@@ -366,10 +359,34 @@ def summarize_rooms(errors: dict, timing: dict, arrays: tuple[str, ...] = ROOM_A
                               *(_rms(np.concatenate([c[m] for c in cells])[sel]) for m in METHODS),
                               100.0 * np.mean(np.concatenate(
                                   [np.array(c["model"]) == "position" for c in cells])[sel])])
+    return headers, rows, pool_h, pools, won, len(rows), _cpu_rows(timing)
+
+
+def _condition_table(errors: dict, methods: tuple[str, ...]) -> tuple[list, list, int]:
+    """Headers and rows of a per-condition table -- (array, RT60, SNR, signal, n), each
+    method's RMSE and median, the best peer's RMSE and whether hearsee is at or below it --
+    and the count of conditions where it is (parts 2-4)."""
+    headers = ["array", "RT60 s", "SNR dB", "signal", "n"]
+    for m in methods:
+        headers += [f"{m} RMSE deg", f"{m} median deg"]
+    headers += ["best peer RMSE deg", "hearsee <= best peer"]
+    rows, won = [], 0
+    for (name, rt, snr, kind), cell in sorted(errors.items()):
+        row: list = [name, rt, snr, kind, len(cell["hearsee"])]
+        for m in methods:
+            row += [_rms(cell[m]), float(np.median(cell[m]))]
+        best = min(_rms(cell[m]) for m in PRA_METHODS)
+        ok = _rms(cell["hearsee"]) <= best
+        won += ok
+        rows.append(row + [best, "yes" if ok else "no"])
+    return headers, rows, won
+
+
+def _cpu_rows(timing: dict) -> list:
+    """Rows of a CPU table: each timed method's ms per second of audio and SRP-PHAT's CPU over
+    its own."""
     cpu = timing["cpu"]
-    cpu_rows = [[m, cpu[m] / timing["audio_s"] * 1e3, cpu["SRP"] / max(cpu[m], 1e-12)]
-                for m in cpu]
-    return headers, rows, pool_h, pools, won, len(rows), cpu_rows
+    return [[m, cpu[m] / timing["audio_s"] * 1e3, cpu["SRP"] / max(cpu[m], 1e-12)] for m in cpu]
 
 
 # ---------------------------------------------------------------- part 3: planar 4-6 microphones
@@ -381,8 +398,7 @@ def run_planar(trials: int, seed: int, data: Path | None, duration: float) -> tu
     """Azimuth errors per (array, RT60, SNR, signal, method) as ``bench/doa.py`` part 1
     scores them, and CPU (hearsee and the peers, on the scored grid)."""
     rng = np.random.default_rng(seed)
-    speech = arctic_files(data)
-    kinds = ["noise", "male", "female"] + (["arctic"] if speech else [])
+    speech, kinds = _signal_kinds(data)
     errors: dict = {}
     cpu = {m: 0.0 for m in PLANAR_METHODS if m != "hearsee joint='pairs'"}
     audio_s = 0.0
@@ -415,19 +431,7 @@ def run_planar(trials: int, seed: int, data: Path | None, duration: float) -> tu
 def summarize_planar(errors: dict, timing: dict) -> tuple[list, list, list, list, int, int, list]:
     """Per-condition table, per-(array, RT60) pools, count at or below the best peer, number
     of conditions, CPU rows."""
-    headers = ["array", "RT60 s", "SNR dB", "signal", "n"]
-    for m in PLANAR_METHODS:
-        headers += [f"{m} RMSE deg", f"{m} median deg"]
-    headers += ["best peer RMSE deg", "hearsee <= best peer"]
-    rows, won = [], 0
-    for (name, rt, snr, kind), cell in sorted(errors.items()):
-        row: list = [name, rt, snr, kind, len(cell["hearsee"])]
-        for m in PLANAR_METHODS:
-            row += [_rms(cell[m]), float(np.median(cell[m]))]
-        best = min(_rms(cell[m]) for m in PRA_METHODS)
-        ok = _rms(cell["hearsee"]) <= best
-        won += ok
-        rows.append(row + [best, "yes" if ok else "no"])
+    headers, rows, won = _condition_table(errors, PLANAR_METHODS)
     pool_h = ["array", "RT60 s", "n", *(f"{m} RMSE deg" for m in PLANAR_METHODS)]
     pools = []
     for name in PLANAR_ARRAYS:
@@ -437,10 +441,7 @@ def summarize_planar(errors: dict, timing: dict) -> tuple[list, list, list, list
                 pools.append([name, rt, sum(len(c["hearsee"]) for c in cells),
                               *(_rms(np.concatenate([c[m] for c in cells]))
                                 for m in PLANAR_METHODS)])
-    cpu = timing["cpu"]
-    cpu_rows = [[m, cpu[m] / timing["audio_s"] * 1e3, cpu["SRP"] / max(cpu[m], 1e-12)]
-                for m in cpu]
-    return headers, rows, pool_h, pools, won, len(rows), cpu_rows
+    return headers, rows, pool_h, pools, won, len(rows), _cpu_rows(timing)
 
 
 def plot(pools: list, path: Path, arrays: tuple[str, ...] = ROOM_ARRAYS) -> None:
