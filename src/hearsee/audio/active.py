@@ -61,7 +61,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
-from hearsee.audio.arrays import MicArray, load_array, pair_tdoa, pair_tdoa_jacobian
+from hearsee.audio.arrays import (
+    DEFAULT_TDOA_STD_S,
+    MicArray,
+    load_array,
+    pair_tdoa,
+    position_uncertainty,
+)
 from hearsee.audio.propagation import speed_of_sound_of
 from hearsee.audio.signals import as_samples
 from hearsee.config import as_float_array, finite_number, is_real, whole_number
@@ -112,9 +118,6 @@ __all__ = [
     "train_pose_mlp",
 ]
 
-#: Default TDOA standard deviation (s): whole-capture GCC-PHAT summaries of 1-2 s of speech at
-#: 16 kHz measured 1-2 us rms at SNR 20 dB in RT60 0.3 s rooms, ~6 us at SNR 10 dB (anechoic).
-DEFAULT_TDOA_STD_S = 5e-6
 #: Largest root-mean-square TDOA residual of a multi-pose solution still called consistent
 #: (:attr:`Position3D.consistent`), in units of the solver's ``tdoa_std_s``: 30 us with the
 #: default :data:`DEFAULT_TDOA_STD_S`, half a sample at 16 kHz. In a
@@ -324,48 +327,6 @@ def _mirror_images(p: NDArray, mic_sets: Sequence[ArrayLike]) -> list[NDArray]:
     return out
 
 
-def _uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: float, y: NDArray,
-                 sig: float, ref: NDArray, max_rel_distance_std: float
-                 ) -> tuple[NDArray, float, float, float]:
-    """Uncertainty of the solution ``p`` of :func:`solve_range_differences` (its stacked
-    problem ``M, a, b, y``): position covariance (m^2), relative 1-sigma distance, angular
-    1-sigma (degrees; conditional on the distance when the distance is unknown) and the
-    Jacobian's condition number."""
-    m = len(y)
-    J = pair_tdoa_jacobian(p, M, a, b, c)
-    s2 = sig**2
-    if m > 3:
-        # robust residual scale (MAD): outliers down-weighted by the loss must not
-        # inflate the covariance of the estimate
-        r = (pair_tdoa(p, M, a, b, c) - y) / sig
-        scale = 1.4826 * float(np.median(np.abs(r)))
-        s2 = sig**2 * max(1.0, scale**2 * m / (m - 3))
-    JtJ = J.T @ J
-    w = np.linalg.eigvalsh(JtJ)
-    cond = float(np.sqrt(w[-1] / max(w[0], 1e-300)))
-    v = p - ref
-    r = float(np.linalg.norm(v))
-    u = v / r
-    try:
-        cov = s2 * np.linalg.inv(JtJ)
-        var_r = float(u @ cov @ u)
-    except np.linalg.LinAlgError:
-        cov, var_r = np.full((3, 3), np.inf), np.inf
-    rel = np.sqrt(var_r) / r if np.isfinite(var_r) and var_r >= 0 else np.inf
-    # angular std: perpendicular spread, conditional on the distance when it is unknown
-    P = np.eye(3) - np.outer(u, u)
-    if np.isfinite(rel) and rel <= max_rel_distance_std:
-        ang = np.sqrt(max(np.trace(P @ cov @ P), 0.0)) / r
-    else:
-        E = np.linalg.svd(P)[0][:, :2]  # basis orthogonal to u
-        Jt = J @ E
-        try:
-            ang = np.sqrt(max(np.trace(s2 * np.linalg.inv(Jt.T @ Jt)), 0.0)) / r
-        except np.linalg.LinAlgError:
-            ang = np.inf
-    return cov, float(rel), float(np.degrees(ang)), cond
-
-
 def solve_range_differences(
     mic_sets: Sequence[ArrayLike],
     pairs: Sequence[Sequence[tuple[int, int]]],
@@ -514,8 +475,8 @@ def solve_range_differences(
     for cost, chi2, p, _th in sols:
         if chi2 - best_chi2 > gate:
             continue
-        cov, rel, ang, cond = _uncertainty(p, M, a, b, c, y, sig, ref,
-                                           max_rel_distance_std)
+        cov, rel, ang, cond = position_uncertainty(p, M, a, b, c, y, sig, ref,
+                                                   max_rel_distance_std)
         known = resolve_distance and rel <= max_rel_distance_std
         u = (p - ref) / np.linalg.norm(p - ref)
         r = np.linalg.norm(p - ref)

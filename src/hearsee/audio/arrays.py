@@ -39,7 +39,11 @@ from hearsee.config import (
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 
 __all__ = ["MicArray", "check_pairs", "list_presets", "load_array", "pair_tdoa",
-           "pair_tdoa_jacobian"]
+           "pair_tdoa_jacobian", "position_uncertainty"]
+
+#: Default TDOA standard deviation (s): whole-capture GCC-PHAT summaries of 1-2 s of speech at
+#: 16 kHz measured 1-2 us rms at SNR 20 dB in RT60 0.3 s rooms, ~6 us at SNR 10 dB (anechoic).
+DEFAULT_TDOA_STD_S = 5e-6
 
 #: Two microphones closer than this (metres) are treated as coincident.
 MIN_SPACING_M = 1e-3
@@ -348,6 +352,58 @@ def pair_tdoa_jacobian(point: ArrayLike, positions: NDArray, i: NDArray, j: NDAr
         raise GeometryError("the TDOA has no derivative at a microphone's position")
     u = u / n
     return (u[i] - u[j]) / speed_of_sound
+
+
+def position_uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: float, y: NDArray,
+                         sig: float, ref: NDArray, max_rel_distance_std: float
+                         ) -> tuple[NDArray, float, float, float]:
+    """Linearised uncertainty of a source position ``p`` (metres) fitted to TDOAs ``y``
+    (seconds) of the pairs ``(a[k], b[k])`` of microphones ``M`` (n, 3) (metres), speed of
+    sound ``c`` (m/s): position covariance (m^2), relative 1-sigma distance from ``ref``,
+    angular 1-sigma seen from ``ref`` (degrees; conditional on the distance when its relative
+    1-sigma exceeds ``max_rel_distance_std``) and the Jacobian's condition number.
+
+    ``C = s^2 (J^T J)^-1`` with J = :func:`pair_tdoa_jacobian` at ``p`` (per-pair TDOA errors
+    taken as independent) and ``s^2`` the larger of ``sig^2`` (the declared TDOA standard
+    deviation, seconds) and the robust residual variance ``(1.4826 MAD)^2 m / (m - 3)`` of
+    the ``m`` TDOAs. The one place of this model: the multi-pose solver
+    (:func:`hearsee.audio.active.solve_range_differences`, ``M`` stacking every pose's
+    microphones) and the one-pose near-field position of
+    :func:`hearsee.audio.localize.localize_tdoa` use it. A linearisation: where the distance
+    is poorly determined (relative 1-sigma above ~0.3) it is optimistic."""
+    m = len(y)
+    J = pair_tdoa_jacobian(p, M, a, b, c)
+    s2 = sig**2
+    if m > 3:
+        # robust residual scale (MAD): outliers down-weighted by the loss must not
+        # inflate the covariance of the estimate
+        r = (pair_tdoa(p, M, a, b, c) - y) / sig
+        scale = 1.4826 * float(np.median(np.abs(r)))
+        s2 = sig**2 * max(1.0, scale**2 * m / (m - 3))
+    JtJ = J.T @ J
+    w = np.linalg.eigvalsh(JtJ)
+    cond = float(np.sqrt(w[-1] / max(w[0], 1e-300)))
+    v = p - ref
+    r = float(np.linalg.norm(v))
+    u = v / r
+    try:
+        cov = s2 * np.linalg.inv(JtJ)
+        var_r = float(u @ cov @ u)
+    except np.linalg.LinAlgError:
+        cov, var_r = np.full((3, 3), np.inf), np.inf
+    rel = np.sqrt(var_r) / r if np.isfinite(var_r) and var_r >= 0 else np.inf
+    # angular std: perpendicular spread, conditional on the distance when it is unknown
+    P = np.eye(3) - np.outer(u, u)
+    if np.isfinite(rel) and rel <= max_rel_distance_std:
+        ang = np.sqrt(max(np.trace(P @ cov @ P), 0.0)) / r
+    else:
+        E = np.linalg.svd(P)[0][:, :2]  # basis orthogonal to u
+        Jt = J @ E
+        try:
+            ang = np.sqrt(max(np.trace(s2 * np.linalg.inv(Jt.T @ Jt)), 0.0)) / r
+        except np.linalg.LinAlgError:
+            ang = np.inf
+    return cov, float(rel), float(np.degrees(ang)), cond
 
 
 def load_array(spec: str | Path | MicArray) -> MicArray:
