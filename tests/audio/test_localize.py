@@ -245,6 +245,75 @@ def test_planar_array_direction_from_the_wavefront_curvature():
                                                   in_plane=True).extra
 
 
+def test_position_only_where_the_tdoas_determine_the_distance():
+    """A 4.5 cm array's TDOAs with 5 us of noise cannot tell a source 2-4 m away from a plane
+    wave: no position (every fit used to be reported, most off by more than half the
+    distance); the fit stays in ``extra``. A larger array's near source gets one, and a
+    declared TDOA error that explains the curvature away withdraws it."""
+    from hearsee.audio.localize import MAX_POSITION_REL_STD
+
+    small = MicArray.from_preset("respeaker-4")
+    rng = np.random.default_rng(34)
+    for _ in range(20):
+        src = rng.uniform(2.0, 4.0) * unit_vector_deg(rng.uniform(-180, 180), rng.uniform(-30, 30))
+        loc = localize_tdoa(small.tdoa(src) + rng.normal(0.0, 5e-6, 6), small)
+        assert loc.position_m is None and loc.position_covariance_m2 is None
+        assert loc.extra["position_fit_m"].shape == (3,)
+        assert loc.distance_rel_std > MAX_POSITION_REL_STD
+        assert loc.to_dict()["position_m"] is None
+    four = _circle(4, 0.15)  # exact TDOAs of a source 0.7 m from a 30 cm square
+    src = 0.7 * unit_vector_deg(-120.0, 12.0)
+    loc = localize_tdoa(four.tdoa(src), four)
+    np.testing.assert_allclose(loc.position_m, src, atol=1e-6)
+    std = np.sqrt(np.diag(loc.position_covariance_m2))
+    assert np.all((std > 1e-3) & (std < 0.5)) and loc.distance_rel_std < MAX_POSITION_REL_STD
+    # 50 us per pair would explain its curvature (~20 us from the plane wave) away
+    loose = localize_tdoa(four.tdoa(src), four, tdoa_std_s=50e-6)
+    assert loose.position_m is None
+    np.testing.assert_allclose(loose.extra["position_fit_m"], src, atol=1e-6)
+    # without near_field nothing is fitted or reported
+    none = localize_tdoa(four.tdoa(src), four, near_field=False)
+    assert none.distance_rel_std is None and none.to_dict()["position_covariance_m2"] is None
+    for bad in (0.0, -1e-6, float("nan"), "5us"):
+        with pytest.raises(GeometryError, match="tdoa_std_s"):
+            localize_tdoa(four.tdoa(src), four, tdoa_std_s=bad)
+
+
+def test_position_covariance_matches_the_scatter():
+    """A 20 cm cube of eight, sources 1-2 m away, 5 us of i.i.d. TDOA noise declared as such:
+    nearly every source gets a position, and the truth lies inside the covariance's 95 %
+    ellipsoid about 95 % of the time."""
+    from scipy.stats import chi2
+
+    cube = MicArray(0.1 * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1)
+                                    for z in (-1, 1)], dtype=float))
+    rng = np.random.default_rng(341)
+    inside, n = [], 200
+    for _ in range(n):
+        src = rng.uniform(1.0, 2.0) * unit_vector_deg(rng.uniform(-180, 180),
+                                                      rng.uniform(-30, 30))
+        loc = localize_tdoa(cube.tdoa(src) + rng.normal(0.0, 5e-6, 28), cube)
+        if loc.position_m is not None:
+            d = loc.position_m - src
+            inside.append(float(d @ np.linalg.solve(loc.position_covariance_m2, d))
+                          <= chi2.ppf(0.95, 3))
+    assert len(inside) >= 0.95 * n  # (a curvature the noise hides: no position, rarely)
+    assert 0.90 <= np.mean(inside) <= 0.99
+
+
+def test_in_plane_position_only_when_the_range_is_fitted():
+    """``in_plane`` assumes the range (2 m) unless asked to fit it: the assumed point is not a
+    position (it was reported as one, every source 2 m away)."""
+    src = np.array([0.5, 0.3, 0.0])
+    loc = localize_tdoa(THREE.tdoa(src), THREE, in_plane=True)
+    assert loc.position_m is None and loc.to_dict()["position_m"] is None
+    assumed = loc.extra["assumed_position_m"]
+    assert np.linalg.norm(assumed) == pytest.approx(2.0, abs=1e-5)
+    assert np.degrees(np.arctan2(assumed[1], assumed[0])) == pytest.approx(loc.azimuth_deg)
+    fitted = near_field_in_plane(THREE.tdoa(src), THREE, range_m=None)
+    np.testing.assert_allclose(fitted.position_m, src, atol=1e-3)
+
+
 def test_near_model_needs_a_significant_likelihood_ratio():
     from hearsee.audio.localize import _near_model_wins
 

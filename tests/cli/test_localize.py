@@ -252,11 +252,23 @@ def test_eight_mic_circle_table_and_position(tmp_path, capsys):
     assert code == 0
     s = json.loads(out)["summary"]
     np.testing.assert_allclose(s["position_m"], src, atol=0.01)
+    # the covariance of the declared 5 us per pair: a few centimetres, the truth inside 3 sigma
+    std = np.sqrt(np.diag(s["position_covariance_m2"]))
+    assert np.all((std > 1e-3) & (std < 0.1)) and np.all(np.abs(s["position_m"] - src) < 3 * std)
+    assert 0 < s["distance_rel_std"] < 0.3
     assert [c["elevation_deg"] for c in s["candidates"]] == pytest.approx(
         [17.35, -17.35], abs=0.2)
+    # declared TDOA errors of 200 us explain the curvature away: no position, the fit's
+    # distance uncertainty still reported
+    code, out, _ = _run(capsys, rec, "--array", yml, "--format", "json", "--tdoa-std-us", "200")
+    s200 = json.loads(out)["summary"]
+    assert code == 0 and s200["position_m"] is None and s200["position_covariance_m2"] is None
+    assert s200["distance_rel_std"] > 0.3
+    code, out, err = _run(capsys, rec, "--array", yml, "--tdoa-std-us", "-1")
+    assert code == 2 and out == "" and err.count("\n") == 1 and "--tdoa-std-us" in err
     code, out, _ = _run(capsys, rec, "--array", yml, "--format", "table")
     assert code == 0
     heads = re.findall(r"tdoa (\d-\d)", out)
     assert heads == [f"0-{k}" for k in range(1, 8)]
     assert "TDOAs of 7 of 28 pairs" in out
-    assert "position (0.50, -0.40, 0.20) m" in out
+    assert re.search(r"position \(0\.50, -0\.40, 0\.20\) m \+- \(0\.0\d, 0\.0\d, 0\.0\d\)", out)

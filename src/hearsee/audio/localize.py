@@ -39,7 +39,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.audio.arrays import MicArray, load_array, pair_tdoa
+from hearsee.audio.arrays import (
+    DEFAULT_TDOA_STD_S,
+    MicArray,
+    load_array,
+    pair_tdoa,
+    position_uncertainty,
+)
 from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, GeometryError
 from hearsee.geometry import wrap_deg
@@ -79,7 +85,13 @@ class Localization:
                                     linear; with >= 5 the primary direction may be its
                                     direction, see :func:`localize_tdoa`); for a planar array
                                     the one on the normal's side (its mirror image about the
-                                    array plane fits the TDOAs equally)
+                                    array plane fits the TDOAs equally). None where the TDOAs
+                                    do not determine the distance (the fit is then in
+                                    ``extra["position_fit_m"]``)
+    position_covariance_m2 : array (3, 3) or None
+                                    linearised covariance of ``position_m`` (m^2, array frame)
+    distance_rel_std : float or None relative 1-sigma of the fitted position's distance from
+                                    the array centre (None when no position was fitted)
     direction : array (3,) or None  unit vector of the primary candidate (None for linear arrays)
     residual_s : float              RMS TDOA residual of the primary solution, seconds
     geometry : str                  "linear", "planar" or "volume"
@@ -95,6 +107,8 @@ class Localization:
     residual_s: float = 0.0
     geometry: str = "planar"
     extra: dict[str, Any] = field(default_factory=dict)
+    position_covariance_m2: NDArray | None = None
+    distance_rel_std: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (degrees; None where unresolvable)."""
@@ -105,6 +119,10 @@ class Localization:
             "n_solutions": self.n_solutions,
             "feasible": self.feasible,
             "position_m": None if self.position_m is None else list(map(float, self.position_m)),
+            "position_covariance_m2": (None if self.position_covariance_m2 is None
+                                       else np.asarray(self.position_covariance_m2).tolist()),
+            "distance_rel_std": (None if self.distance_rel_std is None
+                                 else float(self.distance_rel_std)),
         }
 
 
@@ -589,8 +607,11 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
 
     This is the in-plane (``dim=2``) assumption of pyroomacoustics' DOA methods and of the
     thesis's "half horizontal plane"; Gauss-Newton on range-difference equations follows Foy
-    (1976). Returns one candidate (in the plane); ``position_m`` is ``P`` (None when ``rho`` =
-    0); ``extra["inverse_range_per_m"]`` is ``rho``.
+    (1976). Returns one candidate (in the plane); ``position_m`` is ``P`` when the range is
+    fitted (``range_m=None``; None when ``rho`` = 0), None when it is assumed (the assumed
+    point is ``extra["assumed_position_m"]``: before 2026-11-27 it was ``position_m``, and
+    ``hearsee localize --in-plane`` printed every source 2 m away);
+    ``extra["inverse_range_per_m"]`` is ``rho``.
     """
     array = load_array(array)  # (a MicArray, or a preset name / YAML path)
     prs = array.checked_pairs(pairs)
@@ -642,10 +663,11 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
     feasible = resid <= tol_s
     az, el = _azel(u)
     pos = geo.centre + u / rho if rho > 0 else None
+    extra = {"inverse_range_per_m": rho, "far_field_azimuth_deg": ff.azimuth_deg}
+    if not fit_range:
+        extra["assumed_position_m"], pos = pos, None
     return Localization(az, el, [(az, el)], 1 if feasible else 0, feasible, position_m=pos,
-                        direction=u, residual_s=resid, geometry="planar",
-                        extra={"inverse_range_per_m": rho,
-                               "far_field_azimuth_deg": ff.azimuth_deg})
+                        direction=u, residual_s=resid, geometry="planar", extra=extra)
 
 
 def _fit_in_plane(tau: NDArray, basis: NDArray, d: NDArray, I: NDArray, J: NDArray, c: float,
@@ -688,7 +710,8 @@ def _fit_in_plane(tau: NDArray, basis: NDArray, d: NDArray, I: NDArray, J: NDArr
 def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
                   pairs: Sequence[tuple[int, int]] | None = None,
                   tol_s: float = DEFAULT_TOL_S, near_field: bool = True,
-                  in_plane: bool = False) -> Localization:
+                  in_plane: bool = False,
+                  tdoa_std_s: float = DEFAULT_TDOA_STD_S) -> Localization:
     """Localize from one TDOA vector, dispatching on the array's geometry.
 
     Parameters
@@ -712,6 +735,11 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
         With ``near_field`` the spherical wavefront is modelled (removes the ~0.5 deg far-field
         bias of the 15 cm triangle at 1-3 m); without it, the far-field answer. Ignored for
         linear and volume arrays. Default False (unchanged behaviour).
+    tdoa_std_s : float
+        Expected standard deviation of each pair's TDOA error in seconds (default
+        :data:`hearsee.audio.arrays.DEFAULT_TDOA_STD_S`, 5 us: a whole-recording GCC summary);
+        sets the near-field position's covariance and whether it is reported, see
+        :func:`_add_position`.
 
     Returns
     -------
@@ -768,6 +796,7 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
     arr = load_array(array)
     prs = arr.checked_pairs(pairs)
     tau = _tdoa_vector(tdoa_s, prs, tol_s)
+    tdoa_std_s = finite_number("tdoa_std_s", tdoa_std_s, 0.0, lo_open=True, error=GeometryError)
     if not np.all(np.isfinite(tau)):
         return Localization(None, None, [], 0, False, residual_s=float("nan"),
                             geometry=array_geometry(arr).kind)
@@ -781,25 +810,72 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
     else:
         loc = far_field_volume(tau, arr, prs, tol_s)
     if near_field and arr.n_mics >= 4:
-        _add_position(loc, tau, arr, prs, tol_s)
+        _add_position(loc, tau, arr, prs, tol_s, tdoa_std_s)
     return loc
 
 
+#: Largest relative 1-sigma distance (from the linearised covariance,
+#: :func:`hearsee.audio.arrays.position_uncertainty`) at which :func:`localize_tdoa` reports a
+#: near-field ``position_m``. Random sources 0.5-4 m away (elevation within +-34 deg, 150 per
+#: cell, declared 5 us, TDOA noise 2 / 5 / 20 us; scratch study of 2026-11-27): with 0.5 the
+#: reported positions of small arrays were often wrong -- noise pulls the fit toward the array,
+#: where the linearised distance looks well determined (``respeaker-6`` 0.5-1 m at 5 us: 13 %
+#: reported, 30 % of those off by more than half the distance) -- with 0.3, at most 3 % of
+#: ``respeaker-4/6``'s sources got a position and a 15 cm tetrahedron's were within 15 % (median)
+#: at 0.5-1 m and 2-5 us, while a 20 cm cube of eight kept 86-100 % (median error 1-9 %) and an
+#: 8-mic 10 cm circle 81-100 % within 2 m at 2-5 us.
+MAX_POSITION_REL_STD = 0.3
+
+
 def _add_position(loc: Localization, tau: NDArray, arr: MicArray, prs: list[tuple[int, int]],
-                  tol_s: float) -> None:
-    """Give the far-field localization ``loc`` of a planar or volume array its near-field
-    ``position_m``, and the direction of that position when :func:`localize_tdoa`'s test
-    prefers the point source (``extra["direction_model"]`` says which)."""
+                  tol_s: float, tdoa_std_s: float) -> None:
+    """Fit the near-field position of the far-field localization ``loc`` of a planar or volume
+    array; make it ``loc.position_m`` (with its covariance) when the TDOAs determine it; take
+    its direction when :func:`localize_tdoa`'s test prefers the point source
+    (``extra["direction_model"]`` says which).
+
+    The position is reported when (1) the point source explains the TDOAs significantly
+    better than a plane wave (:func:`_curvature_significant`: a plane wave is a source at
+    infinite distance, so otherwise no finite distance is supported) and (2) its linearised
+    relative distance 1-sigma is at most :data:`MAX_POSITION_REL_STD`. Otherwise
+    ``position_m`` is None and the fit stays in ``extra["position_fit_m"]``: a 4.5 cm
+    ``respeaker-4`` fitted sources 0.5-4 m away with a median distance error of 57-98 % for
+    2-20 us of TDOA noise, and reported every one of them before 2026-11-27."""
     # (the far-field direction that near_field_position would solve for again is loc's)
     p, r = _fit_position(tau, arr, prs, _position_starts(tau, arr, prs, loc.direction),
                          "soft_l1", tol_s)
-    loc.position_m = p
+    i, j = np.array([q[0] for q in prs]), np.array([q[1] for q in prs])
+    geo = array_geometry(arr)
+    cov, rel, _, _ = position_uncertainty(p, arr.positions, i, j, arr.speed_of_sound, tau,
+                                          tdoa_std_s, geo.centre, MAX_POSITION_REL_STD)
+    loc.extra["position_fit_m"] = p
     loc.extra["position_residual_s"] = r
     loc.extra["direction_model"] = "plane_wave"
+    loc.distance_rel_std = rel
+    if _curvature_significant(loc.residual_s, r, len(prs), tdoa_std_s) and \
+            rel <= MAX_POSITION_REL_STD:
+        loc.position_m, loc.position_covariance_m2 = p, cov
     n_ind = _independent_tdoas(arr.n_mics, tuple(prs))
     if (n_ind >= NEAR_DIRECTION_MIN_MICS - 1 and _outside_array(p, arr)
             and _near_model_wins(loc.residual_s, r, n_ind)):
-        _direction_from_position(loc, p, r, tol_s, array_geometry(arr))
+        _direction_from_position(loc, p, r, tol_s, geo)
+
+
+def _curvature_significant(rms_far_s: float, rms_near_s: float, n_pairs: int,
+                           tdoa_std_s: float) -> bool:
+    """Whether a point source (3 parameters) fits ``n_pairs`` TDOAs significantly better than
+    a plane wave (2), with per-pair errors of standard deviation at least ``tdoa_std_s``
+    seconds: ``m (rms_far^2 - rms_near^2) / s^2`` above :data:`NEAR_MODEL_LR_CRITICAL`
+    (chi-square, one degree of freedom, 1 %), ``s^2`` the larger of ``tdoa_std_s^2`` and the
+    point source's residual variance ``m rms_near^2 / (m - 3)``. Unlike
+    :func:`_near_model_wins` (the direction's choice, residual ratio only) it needs the
+    declared noise: four microphones' TDOAs consistent with one set of arrival times are
+    fitted exactly by a point source, and a ratio then always favours it."""
+    m = n_pairs
+    s2 = tdoa_std_s**2
+    if m > 3:
+        s2 = max(s2, m * rms_near_s**2 / (m - 3))
+    return bool(m * (rms_far_s**2 - rms_near_s**2) / s2 > NEAR_MODEL_LR_CRITICAL)
 
 
 @lru_cache(maxsize=64)
@@ -1041,6 +1117,7 @@ def localize_recording(
     r_std_s: float | None = None,
     progress: Any = None,
     in_plane: bool = False,
+    tdoa_std_s: float = DEFAULT_TDOA_STD_S,
     **tdoa_kwargs: Any,
 ) -> dict[str, Any]:
     """The per-frame pipeline behind ``hearsee localize``: GCC TDOAs -> ITD Kalman -> solver.
@@ -1063,6 +1140,10 @@ def localize_recording(
         peak search steers in-plane directions only (``estimate_tdoas(source_in_plane=True)``,
         unless ``tdoa_kwargs`` says otherwise; before 2026-11-27 it searched the whole sphere,
         unlike bench/doa.py's benchmarked setting). Default False.
+    tdoa_std_s : float
+        Expected TDOA error (s) of the whole-recording summary, for its near-field position
+        (arrays of >= 4 microphones): whether the position is reported and its covariance
+        (:func:`localize_tdoa`).
     tdoa_kwargs :
         Further :func:`hearsee.audio.tdoa.estimate_tdoas` settings, e.g.
         ``**hearsee.audio.tdoa.SUMMARY_TUNED`` (the benchmarked whole-recording estimate).
@@ -1077,7 +1158,8 @@ def localize_recording(
                          "candidates": [{"azimuth_deg", "elevation_deg"}], "confidence",
                          "valid", "feasible"}],
              "summary": {"tdoa_s", "azimuth_deg", "elevation_deg", "candidates", "n_solutions",
-                         "feasible", "confidence", "n_valid_frames", "position_m"}}
+                         "feasible", "confidence", "n_valid_frames", "position_m",
+                         "position_covariance_m2", "distance_rel_std"}}
 
         with None where a quantity is not resolvable (no source in the frame, elevation of a
         linear array, ...). The summary localizes the whole-recording TDOA estimate (weighted
@@ -1129,7 +1211,8 @@ def localize_recording(
         })
     summ = tf.summary_tdoa_s
     have = bool(np.all(np.isfinite(summ)))
-    sloc = localize_tdoa(summ, arr, tf.pairs, in_plane=in_plane) if have else None
+    sloc = (localize_tdoa(summ, arr, tf.pairs, in_plane=in_plane, tdoa_std_s=tdoa_std_s)
+            if have else None)
     summary = {
         "tdoa_s": {k: (float(v) if have else None) for k, v in zip(labels, summ, strict=True)},
         "azimuth_deg": sloc.azimuth_deg if sloc else None,
@@ -1139,7 +1222,8 @@ def localize_recording(
         "feasible": sloc.feasible if sloc else None,
         "confidence": float(np.min(tf.summary_confidence)) if have else None,
         "n_valid_frames": tf.n_valid,
-        "position_m": sloc.to_dict()["position_m"] if sloc else None,
+        **{k: sloc.to_dict()[k] if sloc else None
+           for k in ("position_m", "position_covariance_m2", "distance_rel_std")},
         "method": tf.summary_method,
         "coherence_ratio": (float(tf.coherence_ratio) if np.isfinite(tf.coherence_ratio)
                             else None),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import sys
 from pathlib import Path
 from typing import Annotated, Any
@@ -11,6 +12,7 @@ from typing import Annotated, Any
 import typer
 
 from hearsee.cli._app import GccMethod, OutputFormat, app, emit_json, err_console, progress
+from hearsee.config import finite_number
 from hearsee.errors import ConfigError
 
 #: Above this much audio x pairs (seconds) processing takes about a second: show a bar.
@@ -78,8 +80,10 @@ def _print_table(doc: dict[str, Any]) -> None:
     s = doc["summary"]
     cands = ", ".join(f"({_fmt(c['azimuth_deg'])}, {_fmt(c['elevation_deg'])})"
                       for c in s["candidates"]) or "none"
-    pos = s.get("position_m")
+    pos, cov = s.get("position_m"), s.get("position_covariance_m2")
     where = "" if pos is None else f", position ({', '.join(_fmt(v, 2) for v in pos)}) m"
+    if pos is not None and cov is not None:
+        where += f" +- ({', '.join(_fmt(math.sqrt(max(cov[k][k], 0.0)), 2) for k in range(3))})"
     con.print(f"summary: azimuth {_fmt(s['azimuth_deg'])} deg, elevation "
               f"{_fmt(s['elevation_deg'])} deg, candidates {cands}{where}, "
               f"{s['n_valid_frames']} valid frames", highlight=False)
@@ -115,6 +119,11 @@ def localize_cmd(
         "when reverberant, Hann frames, onset weighting; with --in-plane and a planar array of "
         "4+ microphones the steered in-plane search when reverberant); with --in-plane exactly "
         "the benchmarked setting. Sets --method and --reverb-method itself.")] = False,
+    tdoa_std_us: Annotated[float, typer.Option(
+        "--tdoa-std-us", help="Expected error of the whole-recording TDOAs in microseconds, for "
+        "the source position of arrays of 4+ microphones: the position is reported (with its "
+        "covariance) only where these errors cannot explain the wavefront's curvature away.")
+    ] = 5.0,
 ) -> None:
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
     from hearsee.audio.arrays import load_array
@@ -123,6 +132,7 @@ def localize_cmd(
     from hearsee.audio.tdoa import SUMMARY_TUNED, check_frame_ms, dominant_sample, frame_geometry
 
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
+    finite_number("--tdoa-std-us", tdoa_std_us, 0.0, lo_open=True)
     if summary_tuned:
         given = [name for name, v in (("--method", method), ("--reverb-method", reverb_method))
                  if v is not None]
@@ -146,7 +156,7 @@ def localize_cmd(
     with progress("localizing", n_frames, enabled=work > _PROGRESS_WORK_S) as advance:
         doc = localize_recording(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
                                  kalman=not no_kalman, progress=advance, in_plane=in_plane,
-                                 **settings)
+                                 tdoa_std_s=tdoa_std_us * 1e-6, **settings)
     doc["recording"] = str(recording)
     if fmt is OutputFormat.json:
         emit_json(doc)
