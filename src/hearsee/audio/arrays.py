@@ -42,7 +42,10 @@ __all__ = ["MicArray", "check_pairs", "list_presets", "load_array", "pair_tdoa",
            "pair_tdoa_jacobian", "position_uncertainty"]
 
 #: Default TDOA standard deviation (s): whole-capture GCC-PHAT summaries of 1-2 s of speech at
-#: 16 kHz measured 1-2 us rms at SNR 20 dB in RT60 0.3 s rooms, ~6 us at SNR 10 dB (anechoic).
+#: 16 kHz measured 1-2 us rms at SNR 20 dB in RT60 0.3 s rooms, ~6 us at SNR 10 dB (anechoic)
+#: (the multi-pose study of :mod:`hearsee.audio.active`, three-mic). Arrays of 4-8 microphones
+#: in ``bench/nmic.py``'s room (sources 0.5-3 m, 2 s, 10 / 20 dB; 2026-11-27): median per
+#: condition 0.4-1 us anechoic, 4-14 us at RT60 0.3 s, 13-35 us at RT60 0.6 s.
 DEFAULT_TDOA_STD_S = 5e-6
 
 #: Two microphones closer than this (metres) are treated as coincident.
