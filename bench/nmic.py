@@ -45,6 +45,13 @@ Four parts, in one process:
    takes the direction of its near-field position when the curvature test finds it, as in
    part 2; "hearsee plane wave" is the plane wave's answer alone.
 
+Parts 2 and 4 also score hearsee's near-field position (tables 2c and 4c; no peer gives one):
+how often :func:`~hearsee.audio.localize.localize_tdoa` reports it (its default 5 us of TDOA
+error; it withholds a position whose distance the TDOAs do not fix), the relative distance
+error of the reported positions and whether the truth lies inside their covariance's 95 %
+ellipsoid, and the distance error of every fit, reported or withheld (what was reported before
+2026-11-27).
+
 Run: ``.venv/bin/python bench/nmic.py [--trials N] [--seed S] [--quick]``.
 """
 
@@ -84,7 +91,12 @@ from doa import (  # noqa: E402
 from doa import SNRS as PLANAR_SNRS  # noqa: E402
 
 from hearsee.audio.arrays import MicArray  # noqa: E402
-from hearsee.audio.localize import array_geometry, far_field_volume, localize_tdoa  # noqa: E402
+from hearsee.audio.localize import (  # noqa: E402
+    Localization,
+    array_geometry,
+    far_field_volume,
+    localize_tdoa,
+)
 from hearsee.audio.propagation import add_noise, room_impulse_responses  # noqa: E402
 from hearsee.audio.signals import load_wav, synthetic_voice, white_noise  # noqa: E402
 from hearsee.errors import HearseeError  # noqa: E402
@@ -121,6 +133,8 @@ WALL_MARGIN_M = 0.3
 PEER_GRID_POINTS = 4000
 PEER_FINE_DEG = (4.0, 0.2)  # half-width and step of the azimuth x colatitude refinement
 METHODS = ("hearsee", "hearsee plane wave", *PRA_METHODS)
+#: chi-square quantile: a 3D Gaussian's 95 % ellipsoid (scipy.stats.chi2.ppf(0.95, 3))
+CHI2_95_3DOF = 7.814727903251178
 
 
 def angle_deg(u: np.ndarray | None, v: np.ndarray) -> float:
@@ -251,19 +265,40 @@ def _in_plane_source(rng: np.random.Generator) -> np.ndarray:
 
 
 def hearsee_direction(x: np.ndarray, arr: MicArray, band: tuple[float, float]
-                      ) -> tuple[np.ndarray | None, np.ndarray | None, str]:
+                      ) -> tuple[np.ndarray | None, np.ndarray | None, str, Localization | None]:
     """hearsee's whole-recording direction (its answer and the plane wave's) with
     ``bench/doa.py``'s setting and fallback (an abstention is replaced by the estimate without
-    the detection test, then from every frame with energy: the peers always answer)."""
+    the detection test, then from every frame with energy: the peers always answer), and the
+    localization itself (its near-field position)."""
     tf = summary_tdoas(x, FS, arr, band)
     loc = localize_tdoa(tf.summary_tdoa_s, arr, tf.pairs)
     if loc.azimuth_deg is None:
-        return None, None, "none"
+        return None, None, "none", None
     model = loc.extra.get("direction_model", "plane_wave")
     ff = loc.extra.get("far_field")
     u_ff = (unit_vector_deg(ff["azimuth_deg"], ff["elevation_deg"])
             if model == "position" and ff else loc.direction)
-    return loc.direction, u_ff, model
+    return loc.direction, u_ff, model, loc
+
+
+def position_score(loc: Localization | None, src: np.ndarray, planar: bool
+                   ) -> tuple[bool, float, bool, float]:
+    """``(reported, relative distance error of the reported position, truth inside its 95 %
+    ellipsoid, relative distance error of the fit whether reported or not)`` of a near-field
+    position against the source ``src`` (array frame, m); a planar array's (in the z = 0
+    plane) against the source's image on the fit's side."""
+    nan = float("nan")
+    fit = None if loc is None else loc.extra.get("position_fit_m")
+    if fit is None:
+        return False, nan, False, nan
+    s = np.array([src[0], src[1], abs(src[2]) * np.sign(fit[2] or 1.0)]) if planar else src
+    r = float(np.linalg.norm(s))
+    fit_err = abs(float(np.linalg.norm(fit)) - r) / r
+    if loc.position_m is None:
+        return False, nan, False, fit_err
+    d = loc.position_m - s
+    inside = float(d @ np.linalg.solve(loc.position_covariance_m2, d)) <= CHI2_95_3DOF
+    return True, abs(float(np.linalg.norm(loc.position_m)) - r) / r, inside, fit_err
 
 
 def pra_direction(x: np.ndarray, arr: MicArray, algo: str, band: tuple[float, float]
@@ -318,11 +353,13 @@ def run_rooms(trials: int, seed: int, data: Path | None, duration: float,
                                      {m: [] for m in (*METHODS, "r", "model")})
             cell["r"].append(float(np.linalg.norm(src)))
             t0 = time.process_time()
-            u_sel, u_ff, model = hearsee_direction(x, arr, band)
+            u_sel, u_ff, model, loc = hearsee_direction(x, arr, band)
             cpu["hearsee"] += time.process_time() - t0
             cell["hearsee"].append(score(u_sel, u))
             cell["hearsee plane wave"].append(score(u_ff, u))
             cell["model"].append(model)
+            cell.setdefault("position", []).append(
+                position_score(loc, src, score is mirror_blind_deg))
             for m in PRA_METHODS:
                 t0 = time.process_time()
                 est = pra_direction(x, arr, m, band)
@@ -360,6 +397,33 @@ def summarize_rooms(errors: dict, timing: dict, arrays: tuple[str, ...] = ROOM_A
                               100.0 * np.mean(np.concatenate(
                                   [np.array(c["model"]) == "position" for c in cells])[sel])])
     return headers, rows, pool_h, pools, won, len(rows), _cpu_rows(timing)
+
+
+POSITION_HEADERS = ["array", "RT60 s", "n", "position reported %",
+                    "reported: median distance error %", "reported: off by > 50 % (share %)",
+                    "reported: truth in 95 % ellipsoid %", "every fit: median distance error %"]
+
+
+def summarize_positions(errors: dict, arrays: tuple[str, ...]) -> list:
+    """Rows of the near-field position table per (array, RT60): how often ``localize_tdoa``
+    reports a position (default 5 us TDOA error), how good the reported ones are, and how good
+    every fit was (reported or withheld). No peer gives a position."""
+    rows = []
+    for name in arrays:
+        for rt in RT60S:
+            sc = [t for (a, r, _, _), c in errors.items() if a == name and r == rt
+                  for t in c.get("position", [])]
+            if not sc:
+                continue
+            rep = np.array([t[0] for t in sc])
+            err = np.array([t[1] for t in sc])[rep]
+            ins = np.array([t[2] for t in sc])[rep]
+            fit = np.array([t[3] for t in sc])
+            pct = (lambda v: 100.0 * float(np.mean(v)) if len(v) else float("nan"))  # noqa: E731
+            rows.append([name, rt, len(sc), pct(rep),
+                         100.0 * float(np.median(err)) if len(err) else float("nan"),
+                         pct(err > 0.5), pct(ins), 100.0 * float(np.nanmedian(fit))])
+    return rows
 
 
 def _condition_table(errors: dict, methods: tuple[str, ...]) -> tuple[list, list, int]:
@@ -503,6 +567,8 @@ def main(argv: list[str] | None = None) -> int:
     cpu_h = ["method", "CPU ms per s of audio", "speed-up vs SRP-PHAT"]
     print_table("CPU", cpu_h, cpu_rows)
     print(f"hearsee RMSE <= best pyroomacoustics method in {won}/{n_cells} conditions")
+    pos_rows = summarize_positions(errors, ROOM_ARRAYS)
+    print_table("Rooms: near-field positions", POSITION_HEADERS, pos_rows)
     p_h, p_rows, p_pool_h, p_pools, p_won, p_cells, p_cpu = summarize_planar(p_errors, p_timing)
     print_table("Planar arrays of 4 and 6: azimuth error", p_h, p_rows)
     print_table("Planar arrays: pooled", p_pool_h, p_pools)
@@ -516,6 +582,9 @@ def main(argv: list[str] | None = None) -> int:
     print_table("Planar arrays, whole sphere: CPU", cpu_h, s_cpu)
     print(f"planar, whole sphere: hearsee RMSE <= best pyroomacoustics method in "
           f"{s_won}/{s_cells} conditions")
+    s_pos_rows = summarize_positions(s_errors, sphere_arrays)
+    print_table("Planar arrays, whole sphere: near-field positions", POSITION_HEADERS,
+                s_pos_rows)
     plot(pools, RESULTS / "nmic.png")
     plot(s_pools, RESULTS / "nmic_planar.png", sphere_arrays)
     intro = (f"`python bench/nmic.py --trials {trials} --seed {args.seed}"
@@ -529,6 +598,8 @@ def main(argv: list[str] | None = None) -> int:
          + f"\n\nhearsee RMSE <= the best pyroomacoustics method in {won}/{n_cells} "
            "conditions."),
         ("2b. Pooled by the source's distance", markdown_table(pool_h, pools)),
+        ("2c. Near-field positions (no peer gives one; planar arrays' up to the mirror image)",
+         markdown_table(POSITION_HEADERS, pos_rows)),
         ("CPU time per second of audio (part 2)", markdown_table(cpu_h, cpu_rows)),
         ("3. Planar arrays of four and six microphones: azimuth error",
          markdown_table(p_h, p_rows)
@@ -543,6 +614,8 @@ def main(argv: list[str] | None = None) -> int:
          + f"\n\nhearsee RMSE <= the best pyroomacoustics method in {s_won}/{s_cells} "
            "conditions."),
         ("4b. Pooled by the source's distance", markdown_table(s_pool_h, s_pools)),
+        ("4c. Near-field positions (up to the mirror image)",
+         markdown_table(POSITION_HEADERS, s_pos_rows)),
         ("CPU time per second of audio (part 4)", markdown_table(cpu_h, s_cpu)),
     ], intro=intro)
     print(f"wrote {path}")
