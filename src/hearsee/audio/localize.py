@@ -853,7 +853,10 @@ def _add_position(loc: Localization, tau: NDArray, arr: MicArray, prs: list[tupl
     declared TDOA error: the recordings' whole-recording TDOAs erred by 0.4-1 us (median per
     cell) anechoic, 4-14 us at RT60 0.3 s and 13-35 us at 0.6 s, so in rooms the 95 %
     ellipsoid held the truth for only 58-86 % of the reported positions (anechoic 100 %);
-    reflections that mimic a nearer source are not in it."""
+    reflections that mimic a nearer source are not in it. ``bench/nmic.py``'s own run (seed 0,
+    tables 2c / 4c, 80 recordings per cell) is worse at RT60 0.6 s: the cube reported 49 %,
+    21 % of those off by more than half the distance; the 95 % ellipsoids held 54-92 % in
+    the rooms. In a reverberant room, declare a larger ``tdoa_std_s``."""
     # (the far-field direction that near_field_position would solve for again is loc's)
     p, r = _fit_position(tau, arr, prs, _position_starts(tau, arr, prs, loc.direction),
                          "soft_l1", tol_s)
