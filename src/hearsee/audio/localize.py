@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import (
     DEFAULT_TDOA_STD_S,
     MicArray,
+    _pair_index,
     load_array,
     pair_tdoa,
     position_uncertainty,
@@ -496,8 +497,7 @@ def _fit_position(tau: NDArray, array: MicArray, prs: list[tuple[int, int]],
 
     pos = array.positions
     c = array.speed_of_sound
-    I = np.array([p[0] for p in prs])
-    J = np.array([p[1] for p in prs])
+    I, J = _pair_index(prs)
     geo = array_geometry(array)
     if geo.kind == "planar":
         starts = [_off_plane(np.asarray(s0, dtype=float), geo) for s0 in starts]
@@ -860,7 +860,7 @@ def _add_position(loc: Localization, tau: NDArray, arr: MicArray, prs: list[tupl
     # (the far-field direction that near_field_position would solve for again is loc's)
     p, r = _fit_position(tau, arr, prs, _position_starts(tau, arr, prs, loc.direction),
                          "soft_l1", tol_s)
-    i, j = np.array([q[0] for q in prs]), np.array([q[1] for q in prs])
+    i, j = _pair_index(prs)
     geo = array_geometry(arr)
     cov, rel, _, _ = position_uncertainty(p, arr.positions, i, j, arr.speed_of_sound, tau,
                                           tdoa_std_s, geo.centre, MAX_POSITION_REL_STD)
