@@ -533,6 +533,32 @@ def plot(pools: list, path: Path, arrays: tuple[str, ...] = ROOM_ARRAYS) -> None
     plt.close(fig)
 
 
+CPU_HEADERS = ["method", "CPU ms per s of audio", "speed-up vs SRP-PHAT"]
+
+
+def report_rooms(errors: dict, timing: dict, arrays: tuple[str, ...], name: str, part: str,
+                 title: str, position_note: str, plot_file: str, link_plot: bool
+                 ) -> list[tuple[str, str]]:
+    """Print part 2's or part 4's tables (whole-recording directions in the rooms, pooled by
+    distance, CPU, near-field positions), draw its plot, and return its markdown sections (the
+    first titled with a link to the plot when ``link_plot``)."""
+    headers, rows, pool_h, pools, won, n_cells, cpu_rows = summarize_rooms(errors, timing, arrays)
+    pos_rows = summarize_positions(errors, arrays)
+    print_table(f"{part}. {title}", headers, rows)
+    print_table(f"{name}: pooled by distance", pool_h, pools)
+    print_table(f"{name}: CPU", CPU_HEADERS, cpu_rows)
+    won_line = f"hearsee RMSE <= the best pyroomacoustics method in {won}/{n_cells} conditions"
+    print(f"{name}: {won_line}")
+    print_table(f"{name}: near-field positions", POSITION_HEADERS, pos_rows)
+    plot(pools, RESULTS / plot_file, arrays)
+    link = f" ![{Path(plot_file).stem}]({plot_file})" if link_plot else ""
+    return [(f"{part}. {title}{link}", markdown_table(headers, rows) + f"\n\n{won_line}."),
+            (f"{part}b. Pooled by the source's distance", markdown_table(pool_h, pools)),
+            (f"{part}c. Near-field positions ({position_note})",
+             markdown_table(POSITION_HEADERS, pos_rows)),
+            (f"CPU time per second of audio (part {part})", markdown_table(CPU_HEADERS, cpu_rows))]
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="few trials (a couple of minutes)")
@@ -561,62 +587,35 @@ def main(argv: list[str] | None = None) -> int:
              "hearsee worse by > 10 deg"]
     print_table("TDOA level: plane wave vs hearsee", tdoa_h, tdoa_rows)
     print_table("TDOA level: random arrays", rnd_h, rnd_rows)
-    headers, rows, pool_h, pools, won, n_cells, cpu_rows = summarize_rooms(errors, timing)
-    print_table("Rooms: direction error", headers, rows)
-    print_table("Rooms: pooled by distance", pool_h, pools)
-    cpu_h = ["method", "CPU ms per s of audio", "speed-up vs SRP-PHAT"]
-    print_table("CPU", cpu_h, cpu_rows)
-    print(f"hearsee RMSE <= best pyroomacoustics method in {won}/{n_cells} conditions")
-    pos_rows = summarize_positions(errors, ROOM_ARRAYS)
-    print_table("Rooms: near-field positions", POSITION_HEADERS, pos_rows)
+    rooms_md = report_rooms(errors, timing, ROOM_ARRAYS, "Rooms", "2",
+                            "Recordings in rooms: 3D direction error",
+                            "no peer gives one; planar arrays' up to the mirror image",
+                            "nmic.png", link_plot=False)  # (its plot heads the report)
     p_h, p_rows, p_pool_h, p_pools, p_won, p_cells, p_cpu = summarize_planar(p_errors, p_timing)
     print_table("Planar arrays of 4 and 6: azimuth error", p_h, p_rows)
     print_table("Planar arrays: pooled", p_pool_h, p_pools)
-    print_table("Planar arrays: CPU", cpu_h, p_cpu)
+    print_table("Planar arrays: CPU", CPU_HEADERS, p_cpu)
     print(f"planar: hearsee RMSE <= best pyroomacoustics method in {p_won}/{p_cells} conditions")
-    sphere_arrays = tuple(SPHERE_PLANAR_ARRAYS)
-    s_h, s_rows, s_pool_h, s_pools, s_won, s_cells, s_cpu = summarize_rooms(
-        s_errors, s_timing, sphere_arrays)
-    print_table("Planar arrays, whole sphere: mirror-blind direction error", s_h, s_rows)
-    print_table("Planar arrays, whole sphere: pooled by distance", s_pool_h, s_pools)
-    print_table("Planar arrays, whole sphere: CPU", cpu_h, s_cpu)
-    print(f"planar, whole sphere: hearsee RMSE <= best pyroomacoustics method in "
-          f"{s_won}/{s_cells} conditions")
-    s_pos_rows = summarize_positions(s_errors, sphere_arrays)
-    print_table("Planar arrays, whole sphere: near-field positions", POSITION_HEADERS,
-                s_pos_rows)
-    plot(pools, RESULTS / "nmic.png")
-    plot(s_pools, RESULTS / "nmic_planar.png", sphere_arrays)
+    sphere_md = report_rooms(s_errors, s_timing, tuple(SPHERE_PLANAR_ARRAYS),
+                             "Planar arrays, whole sphere", "4",
+                             "Planar arrays on the whole sphere: mirror-blind 3D direction "
+                             "error", "up to the mirror image", "nmic_planar.png",
+                             link_plot=True)
     intro = (f"`python bench/nmic.py --trials {trials} --seed {args.seed}"
              f"{' --quick' if args.quick else ''}`; wall time {time.time() - t0:.0f} s on a "
              f"shared 2-core machine. ![nmic](nmic.png)\n\n" + __doc__.split("\n\n", 1)[1])
     path = write_markdown("nmic", [
         ("1. TDOA level: plane wave vs hearsee's answer", markdown_table(tdoa_h, tdoa_rows)),
         ("1b. Random volume arrays", markdown_table(rnd_h, rnd_rows)),
-        ("2. Recordings in rooms: 3D direction error",
-         markdown_table(headers, rows)
-         + f"\n\nhearsee RMSE <= the best pyroomacoustics method in {won}/{n_cells} "
-           "conditions."),
-        ("2b. Pooled by the source's distance", markdown_table(pool_h, pools)),
-        ("2c. Near-field positions (no peer gives one; planar arrays' up to the mirror image)",
-         markdown_table(POSITION_HEADERS, pos_rows)),
-        ("CPU time per second of audio (part 2)", markdown_table(cpu_h, cpu_rows)),
+        *rooms_md,
         ("3. Planar arrays of four and six microphones: azimuth error",
          markdown_table(p_h, p_rows)
          + f"\n\nhearsee RMSE <= the best pyroomacoustics method in {p_won}/{p_cells} "
            "conditions."),
         ("3b. Pooled per array and room", markdown_table(p_pool_h, p_pools)),
         ("CPU time per second of audio (part 3; peers on the scored 0.1-deg grid)",
-         markdown_table(cpu_h, p_cpu)),
-        ("4. Planar arrays on the whole sphere: mirror-blind 3D direction error "
-         "![nmic_planar](nmic_planar.png)",
-         markdown_table(s_h, s_rows)
-         + f"\n\nhearsee RMSE <= the best pyroomacoustics method in {s_won}/{s_cells} "
-           "conditions."),
-        ("4b. Pooled by the source's distance", markdown_table(s_pool_h, s_pools)),
-        ("4c. Near-field positions (up to the mirror image)",
-         markdown_table(POSITION_HEADERS, s_pos_rows)),
-        ("CPU time per second of audio (part 4)", markdown_table(cpu_h, s_cpu)),
+         markdown_table(CPU_HEADERS, p_cpu)),
+        *sphere_md,
     ], intro=intro)
     print(f"wrote {path}")
     return 0
