@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from hearsee.audio.arrays import MicArray
+from hearsee.audio.arrays import MicArray, closure_rms
 from hearsee.audio.localize import (
     DEFAULT_TOL_S,
     array_geometry,
@@ -299,6 +299,27 @@ def test_position_covariance_matches_the_scatter():
                           <= chi2.ppf(0.95, 3))
     assert len(inside) >= 0.95 * n  # (a curvature the noise hides: no position, rarely)
     assert 0.90 <= np.mean(inside) <= 0.99
+
+
+def _cube_8() -> MicArray:
+    return MicArray(0.1 * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1)
+                                    for z in (-1, 1)], dtype=float))
+
+
+def test_closure_rms_measures_independent_pair_errors():
+    """The closure RMS of pair TDOAs is zero for any consistent set of arrival times and, for
+    errors independent between pairs, their standard deviation; pairs without a cycle have
+    none."""
+    cube = _cube_8()
+    prs = cube.checked_pairs(None)
+    rng = np.random.default_rng(3501)
+    t = rng.normal(0.0, 1e-3, 8)  # arbitrary arrival times: consistent pair differences
+    i, j = np.array(prs).T
+    assert closure_rms(t[i] - t[j], prs, 8) == pytest.approx(0.0, abs=1e-15)
+    noise = [closure_rms(rng.normal(0.0, 7e-6, len(prs)), prs, 8) for _ in range(400)]
+    assert np.sqrt(np.mean(np.square(noise))) == pytest.approx(7e-6, rel=0.05)
+    star = [(0, k) for k in range(1, 8)]  # n - 1 pairs sharing microphone 0: no cycle
+    assert closure_rms(rng.normal(0.0, 7e-6, 7), star, 8) is None
 
 
 def test_in_plane_position_only_when_the_range_is_fitted():

@@ -44,6 +44,7 @@ from hearsee.audio.arrays import (
     MicArray,
     _pair_index,
     load_array,
+    pair_closure_projector,
     pair_tdoa,
     position_uncertainty,
 )
@@ -897,9 +898,8 @@ def _curvature_significant(rms_far_s: float, rms_near_s: float, n_pairs: int,
 @lru_cache(maxsize=64)
 def _independent_tdoas(n_mics: int, prs: tuple[tuple[int, int], ...]) -> int:
     """How many of the pairs' TDOAs are independent (the pair matrix's rank), once per set."""
-    from hearsee.audio.itd_filter import pair_matrix  # (itd_filter imports this module)
-
-    return int(np.linalg.matrix_rank(pair_matrix(n_mics, list(prs))))
+    proj = pair_closure_projector(prs, n_mics)
+    return len(prs) if proj is None else len(prs) - proj[1]
 
 
 #: Volume and planar arrays with at least this many microphones -- TDOAs of at least this many

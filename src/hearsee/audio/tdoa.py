@@ -69,7 +69,7 @@ import numpy as np
 import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.arrays import MicArray, closure_rms, load_array, pair_closure_projector
 from hearsee.audio.localize import IN_PLANE_RANGE_M, _inplane_tdoa, array_geometry
 from hearsee.audio.signals import as_samples, check_fs
 from hearsee.config import finite_number, is_real, whole_number
@@ -794,33 +794,6 @@ def _band_activity(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int,
     band, decided = _energy_vad(e, vad_db)
     whole = frames.shape[1] <= chunk
     return (active & band if decided else active), *((X, power) if whole else (None, None))
-
-
-def _closure_residual(lag: NDArray, pairs: list[tuple[int, int]], n_mics: int) -> float | None:
-    """RMS residual (same unit as ``lag``) of the pair TDOAs against the best consistent set
-    ``t_i - t_j``; None when the pairs hold no redundancy (no closed cycle)."""
-    proj = _closure_projector(tuple(map(tuple, pairs)), int(n_mics))
-    if proj is None:
-        return None
-    P, dof = proj
-    r = P @ np.asarray(lag, dtype=float)
-    return float(np.sqrt(np.sum(r**2) / dof))
-
-
-@functools.lru_cache(maxsize=64)
-def _closure_projector(pairs: tuple[tuple[int, int], ...], n_mics: int
-                       ) -> tuple[NDArray, int] | None:
-    """``(I - H H^+, n_pairs - rank H)`` for the pair matrix ``H`` (the residual of a least
-    squares fit of consistent ``t_i - t_j``), or None without redundancy; once per pair set."""
-    from hearsee.audio.itd_filter import pair_matrix
-
-    H = pair_matrix(n_mics, list(pairs), ref=0)
-    rank = int(np.linalg.matrix_rank(H))
-    if len(pairs) <= rank:
-        return None
-    P = np.eye(len(pairs)) - H @ np.linalg.pinv(H)
-    P.flags.writeable = False
-    return P, len(pairs) - rank
 
 
 @functools.lru_cache(maxsize=32)
@@ -1553,7 +1526,7 @@ def estimate_tdoas(
     noise_psd = (_noise_spectrum(frames, active, win, nfft, k0, k1, power_all) if snr_weight
                  else None)
 
-    redundant = _closure_projector(tuple(prs), arr.n_mics) is not None  # a closed cycle
+    redundant = pair_closure_projector(tuple(prs), arr.n_mics) is not None  # a closed cycle
     frame_cfar = not redundant and min_frame_peak_snr > 0
     noise_profile = _lag_noise_profile(win, nfft) if not redundant else None
 
@@ -1679,7 +1652,7 @@ def estimate_tdoas(
         fine = redundant or summary_upsample <= 1
         lag, c = _peaks(r_sum[None], acc[None], nfft, max_lag, "interp" if fine else "parabolic",
                         main_lobe, band_bins)
-        resid = _closure_residual(lag[0], prs, arr.n_mics)
+        resid = closure_rms(lag[0], prs, arr.n_mics)
         if resid is not None:
             # redundant pairs (>= 3 microphones). Detection: the pairs' own peaks of
             # uncorrelated noise are random and violate t_ij + t_jk = t_ik; a source's do not.
