@@ -3,6 +3,7 @@ import pytest
 
 from hearsee.audio.arrays import MicArray, closure_rms
 from hearsee.audio.localize import (
+    CLOSURE_STD_FACTOR,
     DEFAULT_TOL_S,
     array_geometry,
     cone_points,
@@ -277,12 +278,18 @@ def test_position_only_where_the_tdoas_determine_the_distance():
     for bad in (0.0, -1e-6, float("nan"), "5us"):
         with pytest.raises(GeometryError, match="tdoa_std_s"):
             localize_tdoa(four.tdoa(src), four, tdoa_std_s=bad)
+    for bad in (-1.0, float("inf"), None):
+        with pytest.raises(GeometryError, match="closure_std_factor"):
+            localize_tdoa(four.tdoa(src), four, closure_std_factor=bad)
+    # exact TDOAs close every cycle: the declared error is the one used
+    assert loc.position_tdoa_std_s == 5e-6 and loose.position_tdoa_std_s == 50e-6
 
 
 def test_position_covariance_matches_the_scatter():
-    """A 20 cm cube of eight, sources 1-2 m away, 5 us of i.i.d. TDOA noise declared as such:
-    nearly every source gets a position, and the truth lies inside the covariance's 95 %
-    ellipsoid about 95 % of the time."""
+    """A 20 cm cube of eight, sources 1-2 m away, 5 us of i.i.d. TDOA noise declared as such
+    (and as independent between pairs: no closure factor): nearly every source gets a
+    position, and the truth lies inside the covariance's 95 % ellipsoid about 95 % of the
+    time."""
     from scipy.stats import chi2
 
     cube = MicArray(0.1 * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1)
@@ -292,7 +299,9 @@ def test_position_covariance_matches_the_scatter():
     for _ in range(n):
         src = rng.uniform(1.0, 2.0) * unit_vector_deg(rng.uniform(-180, 180),
                                                       rng.uniform(-30, 30))
-        loc = localize_tdoa(cube.tdoa(src) + rng.normal(0.0, 5e-6, 28), cube)
+        loc = localize_tdoa(cube.tdoa(src) + rng.normal(0.0, 5e-6, 28), cube,
+                            closure_std_factor=0.0)
+        assert loc.position_tdoa_std_s == 5e-6
         if loc.position_m is not None:
             d = loc.position_m - src
             inside.append(float(d @ np.linalg.solve(loc.position_covariance_m2, d))
@@ -320,6 +329,38 @@ def test_closure_rms_measures_independent_pair_errors():
     assert np.sqrt(np.mean(np.square(noise))) == pytest.approx(7e-6, rel=0.05)
     star = [(0, k) for k in range(1, 8)]  # n - 1 pairs sharing microphone 0: no cycle
     assert closure_rms(rng.normal(0.0, 7e-6, 7), star, 8) is None
+
+
+def test_disagreeing_pairs_raise_the_position_error():
+    """TDOAs that err like whole-recording GCC peaks in a room -- a part shared by each
+    microphone's pairs (3 us per microphone) and a part of each pair's own (5 us), ~6.6 us per
+    pair in all -- while 5 us is declared, as independent errors: taken at their word the
+    covariance is overconfident (the truth outside the 95 % ellipsoid for ~40 % of the
+    sources: errors shared by a microphone's 7 pairs do not average out over 28 pairs). The
+    pairs' closure shows the per-pair part; the default raises the TDOA standard deviation to
+    3x it, which covers the truth for nearly every reported position."""
+    from scipy.stats import chi2
+
+    cube = _cube_8()
+    i, j = np.array(cube.checked_pairs(None)).T
+    rng = np.random.default_rng(3502)
+    naive, raised, used = [], [], []
+    for _ in range(150):
+        src = rng.uniform(0.8, 1.6) * unit_vector_deg(rng.uniform(-180, 180),
+                                                      rng.uniform(-30, 30))
+        e = rng.normal(0.0, 3e-6, 8)
+        tau = cube.tdoa(src) + e[i] - e[j] + rng.normal(0.0, 5e-6, 28)
+        for out, factor in ((naive, 0.0), (raised, CLOSURE_STD_FACTOR)):
+            loc = localize_tdoa(tau, cube, closure_std_factor=factor)
+            if factor:
+                used.append(loc.position_tdoa_std_s)
+            if loc.position_m is not None:
+                d = loc.position_m - src
+                out.append(float(d @ np.linalg.solve(loc.position_covariance_m2, d))
+                           <= chi2.ppf(0.95, 3))
+    assert np.median(used) == pytest.approx(3 * 5e-6, rel=0.1)
+    assert len(naive) > 140 and np.mean(naive) < 0.75
+    assert len(raised) > 100 and np.mean(raised) >= 0.95
 
 
 def test_in_plane_position_only_when_the_range_is_fitted():

@@ -256,6 +256,8 @@ def test_eight_mic_circle_table_and_position(tmp_path, capsys):
     std = np.sqrt(np.diag(s["position_covariance_m2"]))
     assert np.all((std > 1e-3) & (std < 0.1)) and np.all(np.abs(s["position_m"] - src) < 3 * std)
     assert 0 < s["distance_rel_std"] < 0.3
+    # free field at 30 dB: the pairs agree to well under 5 / 3 us, so the declared 5 us is used
+    assert s["position_tdoa_std_s"] == pytest.approx(5e-6)
     assert [c["elevation_deg"] for c in s["candidates"]] == pytest.approx(
         [17.35, -17.35], abs=0.2)
     # declared TDOA errors of 200 us explain the curvature away: no position, the fit's
@@ -271,4 +273,5 @@ def test_eight_mic_circle_table_and_position(tmp_path, capsys):
     heads = re.findall(r"tdoa (\d-\d)", out)
     assert heads == [f"0-{k}" for k in range(1, 8)]
     assert "TDOAs of 7 of 28 pairs" in out
-    assert re.search(r"position \(0\.50, -0\.40, 0\.20\) m \+- \(0\.0\d, 0\.0\d, 0\.0\d\)", out)
+    assert re.search(r"position \(0\.50, -0\.40, 0\.20\) m \+- \(0\.0\d, 0\.0\d, 0\.0\d\) "
+                     r"\(TDOA error 5\.0 us\)", out)

@@ -84,9 +84,11 @@ def _print_table(doc: dict[str, Any]) -> None:
     where = "" if pos is None else f", position ({', '.join(_fmt(v, 2) for v in pos)}) m"
     if pos is not None and cov is not None:
         where += f" +- ({', '.join(_fmt(math.sqrt(max(cov[k][k], 0.0)), 2) for k in range(3))})"
+        if s.get("position_tdoa_std_s") is not None:
+            where += f" (TDOA error {s['position_tdoa_std_s'] * 1e6:.1f} us)"
     con.print(f"summary: azimuth {_fmt(s['azimuth_deg'])} deg, elevation "
               f"{_fmt(s['elevation_deg'])} deg, candidates {cands}{where}, "
-              f"{s['n_valid_frames']} valid frames", highlight=False)
+              f"{s['n_valid_frames']} valid frames", highlight=False, soft_wrap=True)
 
 
 @app.command("localize")
@@ -122,7 +124,9 @@ def localize_cmd(
     tdoa_std_us: Annotated[float, typer.Option(
         "--tdoa-std-us", help="Expected error of the whole-recording TDOAs in microseconds, for "
         "the source position of arrays of 4+ microphones: the position is reported (with its "
-        "covariance) only where these errors cannot explain the wavefront's curvature away.")
+        "covariance) only where these errors cannot explain the wavefront's curvature away. A "
+        "lower bound: raised to 3x the pairs' disagreement (closure) where that is larger, "
+        "as in reverberant rooms (the JSON summary's position_tdoa_std_s).")
     ] = 5.0,
 ) -> None:
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
