@@ -46,8 +46,10 @@ Four parts, in one process:
    part 2; "hearsee plane wave" is the plane wave's answer alone.
 
 Parts 2 and 4 also score hearsee's near-field position (tables 2c and 4c; no peer gives one):
-how often :func:`~hearsee.audio.localize.localize_tdoa` reports it (its default 5 us of TDOA
-error; it withholds a position whose distance the TDOAs do not fix), the relative distance
+how often :func:`~hearsee.audio.localize.localize_tdoa` reports it (its default TDOA error:
+5 us, raised to 3x the pairs' closure RMS where they disagree more -- since 2026-11-27's
+thirty-fourth session, before which the declared 5 us alone was used; it withholds a position
+whose distance the TDOAs do not fix), the relative distance
 error of the reported positions and whether the truth lies inside their covariance's 95 %
 ellipsoid, and the distance error of every fit, reported or withheld (what was reported before
 2026-11-27).
