@@ -5,6 +5,7 @@ from hearsee.audio.arrays import MicArray, closure_rms
 from hearsee.audio.localize import (
     CLOSURE_STD_FACTOR,
     DEFAULT_TOL_S,
+    MAX_POSITION_REL_STD,
     array_geometry,
     cone_points,
     far_field_planar,
@@ -251,7 +252,6 @@ def test_position_only_where_the_tdoas_determine_the_distance():
     wave: no position (every fit used to be reported, most off by more than half the
     distance); the fit stays in ``extra``. A larger array's near source gets one, and a
     declared TDOA error that explains the curvature away withdraws it."""
-    from hearsee.audio.localize import MAX_POSITION_REL_STD
 
     small = MicArray.from_preset("respeaker-4")
     rng = np.random.default_rng(34)
@@ -373,7 +373,38 @@ def test_in_plane_position_only_when_the_range_is_fitted():
     assert np.linalg.norm(assumed) == pytest.approx(2.0, abs=1e-5)
     assert np.degrees(np.arctan2(assumed[1], assumed[0])) == pytest.approx(loc.azimuth_deg)
     fitted = near_field_in_plane(THREE.tdoa(src), THREE, range_m=None)
-    np.testing.assert_allclose(fitted.position_m, src, atol=1e-3)
+    np.testing.assert_allclose(fitted.extra["position_fit_m"], src, atol=1e-3)
+    # ... but a 15 cm triangle's two TDOAs do not fix the distance at 5 us: no position
+    assert fitted.position_m is None and fitted.distance_rel_std > MAX_POSITION_REL_STD
+    exact = near_field_in_plane(THREE.tdoa(src), THREE, range_m=None, tdoa_std_s=1e-8)
+    np.testing.assert_allclose(exact.position_m, src, atol=1e-3)
+
+
+def test_in_plane_fitted_position_reported_where_the_distance_is_fixed():
+    """A circle of eight, 15 cm radius, sources in its plane 0.5-2 m away: its 28 TDOAs fix
+    the distance (a few per cent at 5 us); the covariance holds the position in the plane
+    (zero along the normal) and its in-plane 95 % ellipse covers noisy fits about 95 % of the
+    time (noise independent between pairs, declared as such)."""
+    from scipy.stats import chi2
+
+    a = 2 * np.pi * np.arange(8) / 8
+    c8 = MicArray(np.c_[0.15 * np.cos(a), 0.15 * np.sin(a), 0 * a])
+    rng = np.random.default_rng(3530)
+    inside, n = [], 200
+    for _ in range(n):
+        src = rng.uniform(0.5, 2.0) * unit_vector_deg(rng.uniform(-180, 180), 0.0)
+        loc = near_field_in_plane(c8.tdoa(src) + rng.normal(0.0, 5e-6, 28), c8, range_m=None,
+                                  closure_std_factor=0.0)
+        assert loc.position_tdoa_std_s == 5e-6 and loc.position_m is not None
+        cov = loc.position_covariance_m2
+        np.testing.assert_allclose(cov[2], 0.0, atol=1e-15)  # held in the plane z = 0
+        d = (loc.position_m - src)[:2]
+        inside.append(float(d @ np.linalg.solve(cov[:2, :2], d)) <= chi2.ppf(0.95, 2))
+    assert 0.90 <= np.mean(inside) <= 0.99
+    with pytest.raises(GeometryError, match="tdoa_std_s"):
+        near_field_in_plane(c8.tdoa(src), c8, range_m=None, tdoa_std_s=-1.0)
+    with pytest.raises(GeometryError, match="closure_std_factor"):
+        near_field_in_plane(c8.tdoa(src), c8, range_m=None, closure_std_factor=float("nan"))
 
 
 def test_near_model_needs_a_significant_likelihood_ratio():
@@ -531,7 +562,7 @@ def test_near_field_in_plane_fitted_range():
     inv = np.array([lo.extra["inverse_range_per_m"] for lo in locs])
     good = err < 1e-3
     assert np.allclose(inv[good], 1.0 / r[good], atol=1e-3)
-    pos = locs[int(np.argmax(good))].position_m
+    pos = locs[int(np.argmax(good))].extra["position_fit_m"]
     k = int(np.argmax(good))
     assert np.linalg.norm(pos[:2]) == pytest.approx(r[k], rel=1e-3) and abs(pos[2]) < 1e-9
 

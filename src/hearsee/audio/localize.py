@@ -47,6 +47,7 @@ from hearsee.audio.arrays import (
     load_array,
     pair_closure_projector,
     pair_tdoa,
+    pair_tdoa_jacobian,
     position_uncertainty,
 )
 from hearsee.config import finite_number, is_real, real_entries, whole_number
@@ -72,6 +73,23 @@ __all__ = [
 
 #: Default TDOA consistency tolerance (seconds): ~1 cm of path difference.
 DEFAULT_TOL_S = 3e-5
+
+#: Factor on the pairs' closure RMS (:func:`hearsee.audio.arrays.closure_rms`) that
+#: :func:`position_tdoa_std` takes as a lower bound on the TDOA error. Independently measured
+#: pair TDOAs of one recording disagree (closure ``t_ij + t_jk != t_ik``) by about as much as they
+#: err, but part of their error is consistent -- shared by a microphone's pairs, as a reflection
+#: or sensor noise at that microphone is -- and the closure cannot see it. Such a shared part
+#: also does not average out over the pairs: for a complete set of n microphones' pairs the
+#: position's true covariance is that of independent pair errors of ``n sigma_mic^2 +
+#: sigma_pair^2``, not of their per-pair ``2 sigma_mic^2 + sigma_pair^2`` (sqrt(n / 2), 2x for
+#: eight microphones). Whole recordings in ``bench/nmic.py``'s room (20 cm cube of eight, 15 cm
+#: tetrahedron and its centre, 8-mic 10 cm circle; 2026-11-27, seeds 351-354, 204 recordings
+#: per array and RT60) erred in their consistent part by 2.1-2.7x the closure RMS anechoic
+#: (median per seed and cell), 0.6-1.5x at RT60 0.3 / 0.6 s (90th percentile 0.9-3.2x), their
+#: logarithms correlated by 0.85-0.97; 3 (one factor for 5-8 microphones) held the rooms' reported
+#: positions in their 95 % ellipsoids 77-100 % of the time on those seeds (pooled 93.5 %;
+#: sqrt(n / 2) x 2 held 97 % but reported 15 % fewer). Anechoic the declared 5 us is larger.
+CLOSURE_STD_FACTOR = 3.0
 
 
 @dataclass
@@ -591,7 +609,9 @@ IN_PLANE_RANGE_M = 2.0
 def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
                         pairs: Sequence[tuple[int, int]] | None = None,
                         tol_s: float = DEFAULT_TOL_S, range_m: float | None = IN_PLANE_RANGE_M,
-                        max_inverse_range: float = 2.0, n_iter: int = 8) -> Localization:
+                        max_inverse_range: float = 2.0, n_iter: int = 8,
+                        tdoa_std_s: float = DEFAULT_TDOA_STD_S,
+                        closure_std_factor: float = CLOSURE_STD_FACTOR) -> Localization:
     """Planar array, source known to lie in the array plane: spherical-wavefront azimuth.
 
     The far-field fit of :func:`far_field_planar` treats the spherical wavefront of a nearby
@@ -618,11 +638,20 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
 
     This is the in-plane (``dim=2``) assumption of pyroomacoustics' DOA methods and of the
     thesis's "half horizontal plane"; Gauss-Newton on range-difference equations follows Foy
-    (1976). Returns one candidate (in the plane); ``position_m`` is ``P`` when the range is
-    fitted (``range_m=None``; None when ``rho`` = 0), None when it is assumed (the assumed
-    point is ``extra["assumed_position_m"]``: before 2026-11-27 it was ``position_m``, and
-    ``hearsee localize --in-plane`` printed every source 2 m away);
-    ``extra["inverse_range_per_m"]`` is ``rho``.
+    (1976). Returns one candidate (in the plane); ``extra["inverse_range_per_m"]`` is ``rho``.
+    With the range assumed, ``position_m`` is None (the assumed point is
+    ``extra["assumed_position_m"]``: before 2026-11-27 it was ``position_m``, and ``hearsee
+    localize --in-plane`` printed every source 2 m away). With the range fitted, ``P`` (also
+    ``extra["position_fit_m"]``) is ``position_m`` only where the TDOAs fix the distance, as
+    :func:`localize_tdoa` decides for volume arrays: the linearised relative 1-sigma of the
+    distance (``distance_rel_std``, for the TDOA error ``position_tdoa_std_s`` of
+    :func:`position_tdoa_std` from ``tdoa_std_s`` and ``closure_std_factor``) at most
+    :data:`MAX_POSITION_REL_STD`; its covariance (``position_covariance_m2``) is singular
+    along the array normal, where the source is held. Before 2026-11-27's thirty-fourth
+    session every fit with ``rho > 0`` was reported, without covariance: exact TDOAs of the
+    15 cm three-mic triangle, declared 5 us, fix the distance of 32 % of in-plane sources
+    0.5-0.7 m away, 2 % at 0.7-1 m and none at 1-2 m (300 random azimuths each, seed 3531),
+    while an 8-mic circle of 15 cm radius fixes it within a few per cent.
     """
     array = load_array(array)  # (a MicArray, or a preset name / YAML path)
     prs = array.checked_pairs(pairs)
@@ -634,6 +663,9 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
         raise GeometryError(f"range_m must be a positive number of metres or None, got {range_m}")
     if not max_inverse_range >= 0:
         raise GeometryError(f"max_inverse_range must be >= 0 (1/m), got {max_inverse_range}")
+    tdoa_std_s = finite_number("tdoa_std_s", tdoa_std_s, 0.0, lo_open=True, error=GeometryError)
+    closure_std_factor = finite_number("closure_std_factor", closure_std_factor, 0.0,
+                                       error=GeometryError)
     # (NaN or 2.5 raised range()'s builtin TypeError; -1 and 0 gave the unfitted start)
     n_iter = whole_number("n_iter", n_iter, 1, error=GeometryError)
     ff = far_field_planar(tau, array, prs, tol_s)
@@ -675,10 +707,38 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
     az, el = _azel(u)
     pos = geo.centre + u / rho if rho > 0 else None
     extra = {"inverse_range_per_m": rho, "far_field_azimuth_deg": ff.azimuth_deg}
+    loc = Localization(az, el, [(az, el)], 1 if feasible else 0, feasible, direction=u,
+                       residual_s=resid, geometry="planar", extra=extra)
     if not fit_range:
-        extra["assumed_position_m"], pos = pos, None
-    return Localization(az, el, [(az, el)], 1 if feasible else 0, feasible, position_m=pos,
-                        direction=u, residual_s=resid, geometry="planar", extra=extra)
+        extra["assumed_position_m"] = pos
+    elif pos is not None:
+        extra["position_fit_m"] = pos
+        sig = position_tdoa_std(tau, prs, array.n_mics, tdoa_std_s, closure_std_factor)
+        cov, rel = _in_plane_uncertainty(pos, array, prs, sig, geo)
+        loc.distance_rel_std, loc.position_tdoa_std_s = rel, sig
+        if rel <= MAX_POSITION_REL_STD:
+            loc.position_m, loc.position_covariance_m2 = pos, cov
+    return loc
+
+
+def _in_plane_uncertainty(p: NDArray, arr: MicArray, prs: list[tuple[int, int]], sig: float,
+                          geo: ArrayGeometry) -> tuple[NDArray, float]:
+    """Linearised covariance (m^2, array frame; zero along the array normal) of an in-plane
+    position ``p`` (metres) of a planar array fitted to its pairs' TDOAs with independent
+    errors of ``sig`` seconds, and the relative 1-sigma of its distance from the array
+    centre: :func:`hearsee.audio.arrays.position_uncertainty`'s model with the position held
+    in the plane (two unknowns)."""
+    i, j = _pair_index(prs)
+    B = geo.basis
+    Jp = pair_tdoa_jacobian(p, arr.positions, i, j, arr.speed_of_sound) @ B.T
+    try:
+        cov = B.T @ (sig**2 * np.linalg.inv(Jp.T @ Jp)) @ B
+    except np.linalg.LinAlgError:
+        return np.full((3, 3), np.inf), float("inf")
+    v = p - geo.centre
+    r = float(np.linalg.norm(v))
+    var_r = float(v @ cov @ v) / r**2
+    return cov, (float(np.sqrt(var_r)) / r if np.isfinite(var_r) and var_r >= 0 else float("inf"))
 
 
 def _fit_in_plane(tau: NDArray, basis: NDArray, d: NDArray, I: NDArray, J: NDArray, c: float,
@@ -718,24 +778,6 @@ def _fit_in_plane(tau: NDArray, basis: NDArray, d: NDArray, I: NDArray, J: NDArr
 
 
 # ---------------------------------------------------------------------------------- dispatch
-#: Factor on the pairs' closure RMS (:func:`hearsee.audio.arrays.closure_rms`) that
-#: :func:`position_tdoa_std` takes as a lower bound on the TDOA error. Independently measured
-#: pair TDOAs of one recording disagree (closure ``t_ij + t_jk != t_ik``) by about as much as they
-#: err, but part of their error is consistent -- shared by a microphone's pairs, as a reflection
-#: or sensor noise at that microphone is -- and the closure cannot see it. Such a shared part
-#: also does not average out over the pairs: for a complete set of n microphones' pairs the
-#: position's true covariance is that of independent pair errors of ``n sigma_mic^2 +
-#: sigma_pair^2``, not of their per-pair ``2 sigma_mic^2 + sigma_pair^2`` (sqrt(n / 2), 2x for
-#: eight microphones). Whole recordings in ``bench/nmic.py``'s room (20 cm cube of eight, 15 cm
-#: tetrahedron and its centre, 8-mic 10 cm circle; 2026-11-27, seeds 351-354, 204 recordings
-#: per array and RT60) erred in their consistent part by 2.1-2.7x the closure RMS anechoic
-#: (median per seed and cell), 0.6-1.5x at RT60 0.3 / 0.6 s (90th percentile 0.9-3.2x), their
-#: logarithms correlated by 0.85-0.97; 3 (one factor for 5-8 microphones) held the rooms' reported
-#: positions in their 95 % ellipsoids 77-100 % of the time on those seeds (pooled 93.5 %;
-#: sqrt(n / 2) x 2 held 97 % but reported 15 % fewer). Anechoic the declared 5 us is larger.
-CLOSURE_STD_FACTOR = 3.0
-
-
 def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
                   pairs: Sequence[tuple[int, int]] | None = None,
                   tol_s: float = DEFAULT_TOL_S, near_field: bool = True,
