@@ -329,6 +329,10 @@ def test_closure_rms_measures_independent_pair_errors():
     assert np.sqrt(np.mean(np.square(noise))) == pytest.approx(7e-6, rel=0.05)
     star = [(0, k) for k in range(1, 8)]  # n - 1 pairs sharing microphone 0: no cycle
     assert closure_rms(rng.normal(0.0, 7e-6, 7), star, 8) is None
+    with pytest.raises(GeometryError, match="pair"):
+        closure_rms(np.zeros(2), [(0, 8), (1, 2)], 8)
+    with pytest.raises(GeometryError, match="one value per pair"):
+        closure_rms(np.zeros(3), prs, 8)
 
 
 def test_disagreeing_pairs_raise_the_position_error():

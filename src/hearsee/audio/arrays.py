@@ -358,13 +358,18 @@ def closure_rms(values: ArrayLike, pairs: Sequence[tuple[int, int]], n_mics: int
     part of them that no set of arrival times ``t_k`` explains, per degree of freedom of
     :func:`pair_closure_projector`. Independently measured pair TDOAs (one GCC peak per pair)
     disagree by it; None when the pairs hold no closed cycle (e.g. ``n - 1`` pairs sharing a
-    reference microphone)."""
-    proj = pair_closure_projector(tuple((int(a), int(b)) for a, b in pairs), int(n_mics))
+    reference microphone). GeometryError for pairs :func:`check_pairs` refuses or values that
+    are not one per pair."""
+    prs = tuple(check_pairs(pairs, n_mics))
+    v = np.asarray(values, dtype=float)
+    if v.shape != (len(prs),):
+        raise GeometryError(f"closure_rms needs one value per pair ({len(prs)}), got shape "
+                            f"{v.shape}")
+    proj = pair_closure_projector(prs, n_mics)
     if proj is None:
         return None
     P, dof = proj
-    r = P @ np.asarray(values, dtype=float)
-    return float(np.sqrt(np.sum(r**2) / dof))
+    return float(np.sqrt(np.sum((P @ v) ** 2) / dof))
 
 
 def pair_tdoa(points: ArrayLike, positions: NDArray, i: NDArray, j: NDArray,
