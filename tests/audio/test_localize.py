@@ -285,6 +285,12 @@ def test_position_only_where_the_tdoas_determine_the_distance():
     assert loc.position_tdoa_std_s == 5e-6 and loose.position_tdoa_std_s == 50e-6
 
 
+def _cube_8() -> MicArray:
+    """A 20 cm cube of eight microphones."""
+    return MicArray(0.1 * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1)
+                                    for z in (-1, 1)], dtype=float))
+
+
 def test_position_covariance_matches_the_scatter():
     """A 20 cm cube of eight, sources 1-2 m away, 5 us of i.i.d. TDOA noise declared as such
     (and as independent between pairs: no closure factor): nearly every source gets a
@@ -292,8 +298,7 @@ def test_position_covariance_matches_the_scatter():
     time."""
     from scipy.stats import chi2
 
-    cube = MicArray(0.1 * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1)
-                                    for z in (-1, 1)], dtype=float))
+    cube = _cube_8()
     rng = np.random.default_rng(341)
     inside, n = [], 200
     for _ in range(n):
@@ -308,11 +313,6 @@ def test_position_covariance_matches_the_scatter():
                           <= chi2.ppf(0.95, 3))
     assert len(inside) >= 0.95 * n  # (a curvature the noise hides: no position, rarely)
     assert 0.90 <= np.mean(inside) <= 0.99
-
-
-def _cube_8() -> MicArray:
-    return MicArray(0.1 * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1)
-                                    for z in (-1, 1)], dtype=float))
 
 
 def test_closure_rms_measures_independent_pair_errors():
