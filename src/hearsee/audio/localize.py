@@ -727,7 +727,9 @@ def _in_plane_uncertainty(p: NDArray, arr: MicArray, prs: list[tuple[int, int]],
     position ``p`` (metres) of a planar array fitted to its pairs' TDOAs with independent
     errors of ``sig`` seconds, and the relative 1-sigma of its distance from the array
     centre: :func:`hearsee.audio.arrays.position_uncertainty`'s model with the position held
-    in the plane (two unknowns)."""
+    in the plane (two unknowns), without its residual scaling -- three microphones' two
+    independent TDOAs fit the two unknowns exactly, and what the pairs disagree by is already
+    in ``sig`` (:func:`position_tdoa_std`)."""
     i, j = _pair_index(prs)
     B = geo.basis
     Jp = pair_tdoa_jacobian(p, arr.positions, i, j, arr.speed_of_sound) @ B.T
