@@ -429,12 +429,7 @@ def position_uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: floa
     v = p - ref
     r = float(np.linalg.norm(v))
     u = v / r
-    try:
-        cov = s2 * np.linalg.inv(JtJ)
-        var_r = float(u @ cov @ u)
-    except np.linalg.LinAlgError:
-        cov, var_r = np.full((3, 3), np.inf), np.inf
-    rel = np.sqrt(var_r) / r if np.isfinite(var_r) and var_r >= 0 else np.inf
+    cov, rel = _linearised_covariance(JtJ, s2, v)
     # angular std: perpendicular spread, conditional on the distance when it is unknown
     P = np.eye(3) - np.outer(u, u)
     if np.isfinite(rel) and rel <= max_rel_distance_std:
@@ -447,6 +442,29 @@ def position_uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: floa
         except np.linalg.LinAlgError:
             ang = np.inf
     return cov, float(rel), float(np.degrees(ang)), cond
+
+
+def _linearised_covariance(JtJ: NDArray, s2: float, v: NDArray,
+                           basis: NDArray | None = None) -> tuple[NDArray, float]:
+    """``(C, rel)``: the covariance ``C = s2 (J^T J)^-1`` (m^2) of a position fitted by least
+    squares to measurements of variance ``s2`` with Jacobian ``J`` (given as ``J^T J``), and
+    the relative 1-sigma of the length of ``v`` (the position from its reference point,
+    metres) under it; with ``basis`` (k, 3) orthonormal rows, ``J`` was taken along them
+    (``J B^T``: the position held in their span) and ``C = B^T s2 (J^T J)^-1 B`` (zero across
+    it). A singular ``J^T J`` gives an infinite C and rel. The step shared by
+    :func:`position_uncertainty` and the in-plane fit of
+    :func:`hearsee.audio.localize.near_field_in_plane`."""
+    try:
+        cov = s2 * np.linalg.inv(JtJ)
+    except np.linalg.LinAlgError:
+        return np.full((3, 3), np.inf), float("inf")
+    if basis is not None:
+        cov = basis.T @ cov @ basis
+    r = float(np.linalg.norm(v))
+    u = v / r
+    var_r = float(u @ cov @ u)
+    return cov, (float(np.sqrt(var_r)) / r if np.isfinite(var_r) and var_r >= 0
+                 else float("inf"))
 
 
 def load_array(spec: str | Path | MicArray) -> MicArray:

@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import (
     DEFAULT_TDOA_STD_S,
     MicArray,
+    _linearised_covariance,
     _pair_index,
     closure_rms,
     load_array,
@@ -731,16 +732,8 @@ def _in_plane_uncertainty(p: NDArray, arr: MicArray, prs: list[tuple[int, int]],
     independent TDOAs fit the two unknowns exactly, and what the pairs disagree by is already
     in ``sig`` (:func:`position_tdoa_std`)."""
     i, j = _pair_index(prs)
-    B = geo.basis
-    Jp = pair_tdoa_jacobian(p, arr.positions, i, j, arr.speed_of_sound) @ B.T
-    try:
-        cov = B.T @ (sig**2 * np.linalg.inv(Jp.T @ Jp)) @ B
-    except np.linalg.LinAlgError:
-        return np.full((3, 3), np.inf), float("inf")
-    v = p - geo.centre
-    r = float(np.linalg.norm(v))
-    var_r = float(v @ cov @ v) / r**2
-    return cov, (float(np.sqrt(var_r)) / r if np.isfinite(var_r) and var_r >= 0 else float("inf"))
+    Jp = pair_tdoa_jacobian(p, arr.positions, i, j, arr.speed_of_sound) @ geo.basis.T
+    return _linearised_covariance(Jp.T @ Jp, sig**2, p - geo.centre, geo.basis)
 
 
 def _fit_in_plane(tau: NDArray, basis: NDArray, d: NDArray, I: NDArray, J: NDArray, c: float,
