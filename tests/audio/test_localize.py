@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from hearsee.audio.arrays import MicArray, closure_rms
+from hearsee.audio.arrays import MicArray, closure_rms, pair_closure_projector
 from hearsee.audio.localize import (
     CLOSURE_STD_FACTOR,
     DEFAULT_TOL_S,
@@ -333,6 +333,8 @@ def test_closure_rms_measures_independent_pair_errors():
         closure_rms(np.zeros(2), [(0, 8), (1, 2)], 8)
     with pytest.raises(GeometryError, match="one value per pair"):
         closure_rms(np.zeros(3), prs, 8)
+    with pytest.raises(GeometryError, match="pair"):
+        pair_closure_projector(((0, 1), (1, 1), (0, 2)), 3)
 
 
 def test_disagreeing_pairs_raise_the_position_error():

@@ -339,8 +339,8 @@ def pair_closure_projector(pairs: tuple[tuple[int, int], ...], n_mics: int
     ``pairs[k][0]``, -1 at ``pairs[k][1]``), i.e. the residual of a least-squares fit of
     consistent ``t_i - t_j`` to pair values, and its degrees of freedom; None when the pairs
     hold no redundancy (no closed cycle ``t_ij + t_jk = t_ik``). Cached per pair set (a tuple of
-    tuples); the projector is read-only."""
-    i, j = _pair_index(list(pairs))
+    tuples); the projector is read-only. GeometryError for pairs :func:`check_pairs` refuses."""
+    i, j = _pair_index(check_pairs(pairs, n_mics))
     H = np.zeros((len(pairs), int(n_mics)))
     np.add.at(H, (np.arange(len(pairs)), i), 1.0)
     np.add.at(H, (np.arange(len(pairs)), j), -1.0)
