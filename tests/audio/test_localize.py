@@ -413,6 +413,44 @@ def test_in_plane_fitted_position_reported_where_the_distance_is_fixed():
         near_field_in_plane(c8.tdoa(src), c8, range_m=None, closure_std_factor=float("nan"))
 
 
+def test_in_plane_fitted_position_of_a_source_off_the_plane_is_not_confident():
+    """Sources 20-40 deg above an 8-mic circle's plane break the in-plane model; their exact
+    TDOAs misfit it (28 pairs, 7 independent, 2 unknowns) and the residual widens the
+    covariance: a reported position's 95 % ellipse holds the source's projection on the plane
+    (without the residual scaling all 60 were reported, 8 ellipses held it and 32 fits were
+    more than 20 % off; now 7). The three-mic triangle's exact fit has no residual: its
+    covariance is the TDOA error's alone."""
+    from scipy.stats import chi2
+
+    a = 2 * np.pi * np.arange(8) / 8
+    c8 = MicArray(np.c_[0.15 * np.cos(a), 0.15 * np.sin(a), 0 * a])
+    rng = np.random.default_rng(3604)
+    reported = 0
+    for _ in range(60):
+        src = rng.uniform(0.5, 2.0) * unit_vector_deg(rng.uniform(-180, 180),
+                                                      rng.uniform(20, 40))
+        loc = near_field_in_plane(c8.tdoa(src), c8, range_m=None)
+        fit = loc.extra["position_fit_m"]
+        assert abs(loc.azimuth_deg - np.degrees(np.arctan2(src[1], src[0]))) < 0.05
+        if loc.position_m is None:
+            assert loc.distance_rel_std > MAX_POSITION_REL_STD
+            continue
+        reported += 1
+        d = (fit - src)[:2]  # the projection of src on the plane z = 0
+        assert float(d @ np.linalg.solve(loc.position_covariance_m2[:2, :2], d)) <= chi2.ppf(
+            0.95, 2)
+    assert 3 <= reported <= 30
+    # TDOAs whose pairs disagree by ~5 us, the closure ignored (factor 0): the three-mic
+    # triangle's relative distance 1-sigma is proportional to the declared error alone, the
+    # circle's is held up by its residual at the smaller declared error
+    noise = np.random.default_rng(3605).normal(0.0, 5e-6, 28)
+    for arr, scaled in ((THREE, False), (c8, True)):
+        tau = arr.tdoa(0.6 * unit_vector_deg(40.0, 0.0)) + noise[:len(arr.checked_pairs())]
+        rel = [near_field_in_plane(tau, arr, range_m=None, tdoa_std_s=s,
+                                   closure_std_factor=0.0).distance_rel_std for s in (1e-6, 2e-6)]
+        assert (rel[1] / rel[0] < 1.9) if scaled else rel[1] / rel[0] == pytest.approx(2.0)
+
+
 def test_near_model_needs_a_significant_likelihood_ratio():
     from hearsee.audio.localize import _near_model_wins
 

@@ -39,7 +39,8 @@ from hearsee.config import (
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 
 __all__ = ["MicArray", "check_pairs", "closure_rms", "list_presets", "load_array",
-           "pair_closure_projector", "pair_tdoa", "pair_tdoa_jacobian", "position_uncertainty"]
+           "pair_closure_projector", "pair_tdoa", "pair_tdoa_jacobian", "position_uncertainty",
+           "residual_scaled_variance"]
 
 #: Default TDOA standard deviation (s): whole-capture GCC-PHAT summaries of 1-2 s of speech at
 #: 16 kHz measured 1-2 us rms at SNR 20 dB in RT60 0.3 s rooms, ~6 us at SNR 10 dB (anechoic)
@@ -414,15 +415,8 @@ def position_uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: floa
     microphones) and the one-pose near-field position of
     :func:`hearsee.audio.localize.localize_tdoa` use it. A linearisation: where the distance
     is poorly determined (relative 1-sigma above ~0.3) it is optimistic."""
-    m = len(y)
     J = pair_tdoa_jacobian(p, M, a, b, c)
-    s2 = sig**2
-    if m > 3:
-        # robust residual scale (MAD): outliers down-weighted by the loss must not
-        # inflate the covariance of the estimate
-        r = (pair_tdoa(p, M, a, b, c) - y) / sig
-        scale = 1.4826 * float(np.median(np.abs(r)))
-        s2 = sig**2 * max(1.0, scale**2 * m / (m - 3))
+    s2 = residual_scaled_variance(pair_tdoa(p, M, a, b, c) - y, sig, 3)
     JtJ = J.T @ J
     w = np.linalg.eigvalsh(JtJ)
     cond = float(np.sqrt(w[-1] / max(w[0], 1e-300)))
@@ -442,6 +436,21 @@ def position_uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: floa
         except np.linalg.LinAlgError:
             ang = np.inf
     return cov, float(rel), float(np.degrees(ang)), cond
+
+
+def residual_scaled_variance(residual_s: ArrayLike, sig: float, n_params: int) -> float:
+    """The measurement variance (s^2) behind a fitted position's covariance: the declared
+    ``sig^2`` (seconds), or the robust residual variance ``(1.4826 MAD)^2 m / (m - n_params)``
+    of the fit's ``m`` TDOA residuals (seconds) where that is larger (MAD: outliers that a
+    robust loss down-weighted must not inflate it); ``sig^2`` alone when ``m <= n_params``.
+    Used with the 3-D position (``n_params`` 3, :func:`position_uncertainty`) and the in-plane
+    one (2, :func:`hearsee.audio.localize.near_field_in_plane`)."""
+    r = np.asarray(residual_s, dtype=float).ravel()
+    m = r.size
+    if m <= n_params:
+        return sig**2
+    scale = 1.4826 * float(np.median(np.abs(r / sig)))
+    return sig**2 * max(1.0, scale**2 * m / (m - n_params))
 
 
 def _linearised_covariance(JtJ: NDArray, s2: float, v: NDArray,

@@ -50,6 +50,7 @@ from hearsee.audio.arrays import (
     pair_tdoa,
     pair_tdoa_jacobian,
     position_uncertainty,
+    residual_scaled_variance,
 )
 from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, GeometryError
@@ -648,11 +649,13 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
     distance (``distance_rel_std``, for the TDOA error ``position_tdoa_std_s`` of
     :func:`position_tdoa_std` from ``tdoa_std_s`` and ``closure_std_factor``) at most
     :data:`MAX_POSITION_REL_STD`; its covariance (``position_covariance_m2``) is singular
-    along the array normal, where the source is held. Before 2026-11-27's thirty-fourth
-    session every fit with ``rho > 0`` was reported, without covariance: exact TDOAs of the
-    15 cm three-mic triangle, declared 5 us, fix the distance of 32 % of in-plane sources
-    0.5-0.7 m away, 2 % at 0.7-1 m and none at 1-2 m (300 random azimuths each, seed 3531),
-    while an 8-mic circle of 15 cm radius fixes it within a few per cent.
+    along the array normal, where the source is held, and grows with the fit's residual where
+    the pairs hold more than two independent TDOAs (a source off the plane misfits). Before
+    2026-11-27's thirty-fourth session every fit with ``rho > 0`` was reported, without
+    covariance: exact TDOAs of the 15 cm three-mic triangle, declared 5 us, fix the distance
+    of 32 % of in-plane sources 0.5-0.7 m away, 2 % at 0.7-1 m and none at 1-2 m (300 random
+    azimuths each, seed 3531), while an 8-mic circle of 15 cm radius fixes it within a few per
+    cent.
     """
     array = load_array(array)  # (a MicArray, or a preset name / YAML path)
     prs = array.checked_pairs(pairs)
@@ -715,25 +718,36 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
     elif pos is not None:
         extra["position_fit_m"] = pos
         sig = position_tdoa_std(tau, prs, array.n_mics, tdoa_std_s, closure_std_factor)
-        cov, rel = _in_plane_uncertainty(pos, array, prs, sig, geo)
+        cov, rel = _in_plane_uncertainty(pos, array, prs, tau, sig, geo)
         loc.distance_rel_std, loc.position_tdoa_std_s = rel, sig
         if rel <= MAX_POSITION_REL_STD:
             loc.position_m, loc.position_covariance_m2 = pos, cov
     return loc
 
 
-def _in_plane_uncertainty(p: NDArray, arr: MicArray, prs: list[tuple[int, int]], sig: float,
-                          geo: ArrayGeometry) -> tuple[NDArray, float]:
+def _in_plane_uncertainty(p: NDArray, arr: MicArray, prs: list[tuple[int, int]], tau: NDArray,
+                          sig: float, geo: ArrayGeometry) -> tuple[NDArray, float]:
     """Linearised covariance (m^2, array frame; zero along the array normal) of an in-plane
-    position ``p`` (metres) of a planar array fitted to its pairs' TDOAs with independent
-    errors of ``sig`` seconds, and the relative 1-sigma of its distance from the array
-    centre: :func:`hearsee.audio.arrays.position_uncertainty`'s model with the position held
-    in the plane (two unknowns), without its residual scaling -- three microphones' two
-    independent TDOAs fit the two unknowns exactly, and what the pairs disagree by is already
-    in ``sig`` (:func:`position_tdoa_std`)."""
+    position ``p`` (metres) of a planar array fitted to its pairs' TDOAs ``tau`` (seconds)
+    with independent errors of ``sig`` seconds, and the relative 1-sigma of its distance from
+    the array centre: :func:`hearsee.audio.arrays.position_uncertainty`'s model with the
+    position held in the plane (two unknowns), its residual scaling included
+    (:func:`hearsee.audio.arrays.residual_scaled_variance` with two unknowns). Three
+    microphones' two independent TDOAs fit the two unknowns exactly (what their pairs
+    disagree by is in ``sig``, :func:`position_tdoa_std`), so they are not scaled; a larger
+    array's misfit -- a source off the plane, which the model cannot place -- widens the
+    covariance. Without it (before 2026-11-27's thirty-fifth session) an 8-mic circle of 15
+    cm radius reported every source 0.4-2 m away and 10-40 deg above its plane from exact
+    TDOAs, a third of them more than 25 % off the source's projection on the plane, the 95 %
+    ellipses holding that projection for 40 %; now 88 of 300 (3 of them > 25 % off, every
+    ellipse holding it; held-out seed 3603, rule and study in the thirty-fifth session's
+    closing note), with in-plane sources' reports unchanged to within 1 %."""
     i, j = _pair_index(prs)
-    Jp = pair_tdoa_jacobian(p, arr.positions, i, j, arr.speed_of_sound) @ geo.basis.T
-    return _linearised_covariance(Jp.T @ Jp, sig**2, p - geo.centre, geo.basis)
+    M, c = arr.positions, arr.speed_of_sound
+    Jp = pair_tdoa_jacobian(p, M, i, j, c) @ geo.basis.T
+    s2 = (residual_scaled_variance(pair_tdoa(p, M, i, j, c) - tau, sig, 2)
+          if _independent_tdoas(arr.n_mics, tuple(prs)) > 2 else sig**2)
+    return _linearised_covariance(Jp.T @ Jp, s2, p - geo.centre, geo.basis)
 
 
 def _fit_in_plane(tau: NDArray, basis: NDArray, d: NDArray, I: NDArray, J: NDArray, c: float,
