@@ -108,6 +108,7 @@ def test_bad_inputs_one_line_exit_2(rec3, tmp_path, capsys):
         ([rec3, "--array", "no-such-preset"], "preset"),
         ([rec3, "--array", "three-mic", "--frame-ms", "0.2"], "frame"),
         ([rec3, "--array", "three-mic", "--frame-ms", "inf"], "at most 10000 ms, got inf"),
+        ([rec3, "--array", "three-mic", "--tdoa-std-us", "3"], "'three-mic' does not get"),
     ]
     for args, needle in cases:
         code, out, err = _run(capsys, *args)
@@ -268,6 +269,9 @@ def test_eight_mic_circle_table_and_position(tmp_path, capsys):
     assert s200["distance_rel_std"] > 0.3
     code, out, err = _run(capsys, rec, "--array", yml, "--tdoa-std-us", "-1")
     assert code == 2 and out == "" and err.count("\n") == 1 and "--tdoa-std-us" in err
+    # where no position is fitted the option sets nothing: said, not silently taken
+    code, out, err = _run(capsys, rec, "--array", yml, "--tdoa-std-us", "3", "--in-plane")
+    assert code == 2 and out == "" and err.count("\n") == 1 and "--in-plane" in err
     code, out, _ = _run(capsys, rec, "--array", yml, "--format", "table")
     assert code == 0
     heads = re.findall(r"tdoa (\d-\d)", out)

@@ -64,6 +64,7 @@ __all__ = [
     "far_field_linear",
     "far_field_planar",
     "far_field_volume",
+    "fits_position",
     "hyperboloid_points",
     "localize_recording",
     "localize_tdoa",
@@ -898,9 +899,20 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
         loc = far_field_planar(tau, arr, prs, tol_s)
     else:
         loc = far_field_volume(tau, arr, prs, tol_s)
-    if near_field and arr.n_mics >= 4:
+    if near_field and fits_position(arr):
         _add_position(loc, tau, arr, prs, tol_s, tdoa_std_s, closure_std_factor)
     return loc
+
+
+def fits_position(array: MicArray | str, in_plane: bool = False) -> bool:
+    """Whether :func:`localize_tdoa` (``near_field=True``) fits a source position (metres,
+    array frame) for ``array``: four or more microphones, not collinear, no mask, and not a
+    planar array held to its plane (``in_plane``: the range is assumed there). Only then do
+    ``tdoa_std_s`` and ``closure_std_factor`` matter."""
+    arr = load_array(array)
+    kind = array_geometry(arr).kind
+    return (arr.mask is None and arr.n_mics >= 4
+            and (kind == "volume" or (kind == "planar" and not in_plane)))
 
 
 #: Largest relative 1-sigma distance (from the linearised covariance,

@@ -121,22 +121,24 @@ def localize_cmd(
         "when reverberant, Hann frames, onset weighting; with --in-plane and a planar array of "
         "4+ microphones the steered in-plane search when reverberant); with --in-plane exactly "
         "the benchmarked setting. Sets --method and --reverb-method itself.")] = False,
-    tdoa_std_us: Annotated[float, typer.Option(
+    tdoa_std_us: Annotated[float | None, typer.Option(
         "--tdoa-std-us", help="Expected error of the whole-recording TDOAs in microseconds, for "
         "the source position of arrays of 4+ microphones: the position is reported (with its "
         "covariance) only where these errors cannot explain the wavefront's curvature away. A "
         "lower bound: raised to 3x the pairs' disagreement (closure) where that is larger, "
-        "as in reverberant rooms (the JSON summary's position_tdoa_std_s).")
-    ] = 5.0,
+        "as in reverberant rooms (the JSON summary's position_tdoa_std_s). Default 5.",
+        show_default=False)
+    ] = None,
 ) -> None:
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
     from hearsee.audio.arrays import load_array
-    from hearsee.audio.localize import localize_recording
+    from hearsee.audio.localize import array_geometry, fits_position, localize_recording
     from hearsee.audio.signals import read_recording
     from hearsee.audio.tdoa import SUMMARY_TUNED, check_frame_ms, dominant_sample, frame_geometry
 
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
-    finite_number("--tdoa-std-us", tdoa_std_us, 0.0, lo_open=True)
+    if tdoa_std_us is not None:
+        finite_number("--tdoa-std-us", tdoa_std_us, 0.0, lo_open=True)
     if summary_tuned:
         given = [name for name, v in (("--method", method), ("--reverb-method", reverb_method))
                  if v is not None]
@@ -153,6 +155,14 @@ def localize_cmd(
     if summary_tuned and arr.mask is not None:
         raise ConfigError(f"--summary-tuned: the masked array {arr.name!r} has a pipeline of its "
                           "own (ch. 3) that takes none of those settings; leave it out")
+    if tdoa_std_us is not None and not fits_position(arr, in_plane):
+        # (it was taken and did nothing: only a fitted position uses it)
+        why = ("--in-plane does not fit (it assumes the range)" if arr.n_mics >= 4
+               and arr.mask is None and array_geometry(arr).kind == "planar"
+               else f"array {arr.name!r} does not get (that needs 4+ microphones, not in a "
+               "line, without a mask)")
+        raise ConfigError(f"--tdoa-std-us sets the TDOA error behind the source position, which "
+                          f"{why}; leave it out")
     x, fs = read_recording(recording, arr)
     frame_len, hop = frame_geometry(fs, frame_ms, hop_ms)
     n_frames = max((x.shape[1] - frame_len) // hop + 1, 0)
@@ -160,7 +170,8 @@ def localize_cmd(
     with progress("localizing", n_frames, enabled=work > _PROGRESS_WORK_S) as advance:
         doc = localize_recording(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
                                  kalman=not no_kalman, progress=advance, in_plane=in_plane,
-                                 tdoa_std_s=tdoa_std_us * 1e-6, **settings)
+                                 **settings, **({} if tdoa_std_us is None else
+                                                {"tdoa_std_s": tdoa_std_us * 1e-6}))
     doc["recording"] = str(recording)
     if fmt is OutputFormat.json:
         emit_json(doc)
