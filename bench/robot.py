@@ -43,7 +43,8 @@ def main() -> None:
     demo = run_scenario(default_scenario(), keep_images=False).summary
     demo_wall = time.perf_counter() - t0
     keys = ["position_error_median_m", "position_error_p90_m", "velocity_rmse_mps",
-            "azimuth_error_initial_deg", "time_to_verify_s", "person_detections_verified",
+            "azimuth_error_initial_deg", "azimuth_error_at_turn_deg", "time_to_verify_s",
+            "person_detections_verified",
             "human_like_objects_rejected", "false_person_objects"]
     demo_rows = [[k, demo[k]] for k in keys] + [["wall time (s)", demo_wall]]
     print_table("default demo scenario", ["metric", "value"], demo_rows)
@@ -53,8 +54,8 @@ def main() -> None:
     eval_wall = time.perf_counter() - t0
     s = res.summary
     rows = [["success rate", s["success_rate"], "", "", "", ""]]
-    for k in ("position_error_median_m", "azimuth_error_initial_deg", "velocity_rmse_mps",
-              "time_to_verify_s"):
+    for k in ("position_error_median_m", "azimuth_error_initial_deg",
+              "azimuth_error_at_turn_deg", "velocity_rmse_mps", "time_to_verify_s"):
         d = s[k]
         rows.append([k, d.get("n", 0), d.get("p50", np.nan), d.get("p75", np.nan),
                      d.get("p90", np.nan), d.get("p95", np.nan)])
@@ -79,9 +80,10 @@ def main() -> None:
     fails = [r for r in res.runs if not r["success"]]
     if fails:
         sections.append(("Failed scenarios", markdown_table(
-            ["seed", "median error (m)", "initial azimuth error (deg)", "tracked steps"],
+            ["seed", "median error (m)", "initial azimuth error (deg)",
+             "azimuth error at the turn (deg)", "tracked steps"],
             [[r["seed"], r["position_error_median_m"], r["azimuth_error_initial_deg"],
-              r["tracked_steps"]] for r in fails])))
+              r["azimuth_error_at_turn_deg"], r["tracked_steps"]] for r in fails])))
     fooled = [r for r in res.runs if r.get("false_person_objects", 0)]
     if fooled:
         sections.append(("Scenarios where an object was reported as a person", markdown_table(

@@ -39,6 +39,10 @@ def test_hears_turns_verifies_and_tracks(short_run):
     assert 40 < truth_az < 60
     # the first audio bearing is within a few degrees of the truth (full 360-degree azimuth)
     assert s["azimuth_error_initial_deg"] < 5.0
+    # ... and so is the direction filter's bearing the head starts turning to
+    turn = next(i for i, r in enumerate(res.log) if r["phase"] != "listening")
+    assert any(r["audio"] is not None for r in res.log[:turn + 1])
+    assert s["azimuth_error_at_turn_deg"] < 5.0
     # the head turned toward the person
     assert abs(res.log[-1]["head_pan_deg"] - res.log[-1]["truth"]["azimuth_robot_deg"]) < 5.0
     # verified by stereo + thermal and tracked in 3D within 15 cm (room frame, torso centre)

@@ -60,8 +60,8 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     n = len(runs)
     success = [bool(r.get("success", False)) for r in runs]
     out: dict[str, Any] = {"scenarios": n, "success_rate": float(np.mean(success)) if n else 0.0}
-    for key in ("position_error_median_m", "azimuth_error_initial_deg", "velocity_rmse_mps",
-                "time_to_verify_s"):
+    for key in ("position_error_median_m", "azimuth_error_initial_deg",
+                "azimuth_error_at_turn_deg", "velocity_rmse_mps", "time_to_verify_s"):
         vals = np.array([r.get(key, np.nan) for r in runs], dtype=float)
         vals = vals[np.isfinite(vals)]
         out[key] = (

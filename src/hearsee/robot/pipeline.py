@@ -562,17 +562,35 @@ def _keep_view(images: dict, captions: dict, t: float, overlay: NDArray, scene: 
     captions[f"{slot}_thermal"] = f"t = {t:.1f} s: thermal view (radiometric, inferno colours)"
 
 
+def _bearing_error(rec: dict[str, Any] | None) -> float:
+    """|audio bearing - true bearing| (degrees, robot frame) of a log record with audio; NaN
+    without one."""
+    if rec is None:
+        return float("nan")
+    return abs(float(wrap_deg(rec["audio"]["azimuth_deg"] - rec["truth"]["azimuth_robot_deg"])))
+
+
 def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | None,
                runtime_s: float) -> dict[str, Any]:
-    """Metrics from the log (nothing canned)."""
+    """Metrics from the log (nothing canned). ``azimuth_error_initial_deg``: the first audio
+    record's bearing error (often a single frame's); ``azimuth_error_at_turn_deg``: that of the
+    direction filter when the head starts turning (after :data:`MIN_AUDIO_UPDATES` updates),
+    the bearing the turn aims at; both degrees, against the true bearing at the record's end."""
     errs = np.array([r["error_m"] for r in log if r["error_m"] is not None], dtype=float)
     vel = np.array([np.linalg.norm(np.asarray(r["track"]["velocity_mps"]) -
                                    np.asarray(r["truth"]["velocity_mps"]))
                     for r in log if r["track"] is not None], dtype=float)
     first_audio = next((r for r in log if r["audio"] is not None), None)
-    az0 = (abs(float(wrap_deg(first_audio["audio"]["azimuth_deg"] -
-                              first_audio["truth"]["azimuth_robot_deg"])))
-           if first_audio else float("nan"))
+    az0 = _bearing_error(first_audio)
+    # the bearing the head starts turning to: the direction filter after MIN_AUDIO_UPDATES
+    # updates (the first audio record is often one frame's bearing, which no turn follows)
+    at_turn = None
+    for r in log:
+        at_turn = r if r["audio"] is not None else at_turn
+        if r["phase"] != "listening":
+            break
+    else:
+        at_turn = None  # the head never turned
     dets = [d for r in log for d in r["detections"]]
     false_obj = sum(1 for d in dets if d["accepted"] and d["truth_kind"] not in (None, "person"))
     rejected_obj = sum(1 for d in dets if not d["accepted"] and d["truth_kind"] not in
@@ -588,6 +606,7 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
         "position_error_final_m": final_err,
         "velocity_rmse_mps": float(np.sqrt(np.mean(vel**2))) if len(vel) else float("nan"),
         "azimuth_error_initial_deg": az0,
+        "azimuth_error_at_turn_deg": _bearing_error(at_turn),
         "time_to_verify_s": first_turned_t if first_turned_t is not None else float("nan"),
         "tracked_steps": int(len(errs)),
         "camera_frames": int(sum(1 for r in log if r["camera_frame"])),
