@@ -4,6 +4,7 @@ import pytest
 from hearsee.audio.arrays import MicArray
 from hearsee.errors import EstimationError, GeometryError
 from hearsee.fusion.audiovisual import (
+    RAY_COVARIANCE_SCALE,
     RAY_SIGMA_TDOA_S,
     AudioVisualRegressor,
     AudioVisualRig,
@@ -274,6 +275,17 @@ def test_tdoa_tracker_fuses_pixels_and_tdoas_and_estimates_velocity(side_rig):
     assert np.median(err[30:]) < 0.5 * np.median(raw[30:])
     assert np.linalg.norm(trk.velocity - v) < 0.1
     assert trk.n_rejects == 0 and trk.position_cov.shape == (3, 3)
+    # the reported covariance is RAY_COVARIANCE_SCALE times the filter's own; the filter, its
+    # gates and its estimates do not depend on the scale
+    own = RayTdoaTracker(rig, covariance_scale=1.0)
+    for t, _, uv, z, fix in frames:
+        own.update_measurements(t, uv, z, fix)
+    np.testing.assert_array_equal(own.position, trk.position)
+    np.testing.assert_allclose(trk.position_cov, RAY_COVARIANCE_SCALE * own.position_cov,
+                               rtol=1e-12)
+    assert RAY_COVARIANCE_SCALE > 1.0
+    with pytest.raises(EstimationError, match="covariance_scale"):
+        RayTdoaTracker(rig, covariance_scale=0.0)
 
 
 def test_tdoa_tracker_drops_one_bad_pair_and_keeps_the_others(side_rig):
