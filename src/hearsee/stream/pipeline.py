@@ -156,9 +156,10 @@ class Update:
     error (see ``StreamConfig.sigma_srp_deg``), so on ``bench/tracking.py``'s room walks (RT60
     0.3 s, 10 / 20 dB; measured 2026-11-27) the actual azimuth error was 0.2-0.45 times the
     reported standard deviation for voices and 0.7 times for white noise. The default 3D
-    tracker's position covariance is scaled to hold the truth at its stated confidence in a
-    room (:data:`~hearsee.fusion.audiovisual.RAY_COVARIANCE_SCALE`: 95 % ellipsoids held it for
-    0.92-0.94 of the frames of held-out part-B walks; its filter's own, 0.65-0.70). ``raw_*``
+    tracker's position covariance is its filter's own scaled by
+    :data:`~hearsee.fusion.audiovisual.RAY_COVARIANCE_SCALE`: 95 % ellipsoids held the truth
+    for 0.92-0.94 of the frames of held-out part-B room walks at 20 dB (the filter's own
+    0.65-0.70), but only 0.71 at 10 dB (own 0.40). ``raw_*``
     are this frame's own measurements (None when the frame gave none):
     ``raw_azimuth_deg``/``raw_elevation_deg`` the direction of its own GCC TDOAs, also with
     ``itd_filter`` (the ITD-filtered TDOAs' direction, which the tracker
