@@ -160,8 +160,8 @@ class Update:
     :data:`~hearsee.fusion.audiovisual.RAY_COVARIANCE_SCALE`: 95 % ellipsoids held the truth
     for 0.87-0.94 of the frames of held-out part-B room walks at 20 dB (the filter's own
     0.61-0.70), but only 0.57-0.75 at 10 dB (own 0.25-0.40). The opt-in 3D trackers report
-    their own, unscaled: on 24 such walks at 20 dB (seed 8) 0.59 (``ray_measurements="fix"``)
-    and 0.78 (``motion_model="ca"``). ``raw_*``
+    their own, unscaled: on 24 such walks at 20 dB (seeds 8 / 9) 0.59 / 0.72
+    (``ray_measurements="fix"``) and 0.78 / 0.76 (``motion_model="ca"``). ``raw_*``
     are this frame's own measurements (None when the frame gave none):
     ``raw_azimuth_deg``/``raw_elevation_deg`` the direction of its own GCC TDOAs, also with
     ``itd_filter`` (the ITD-filtered TDOAs' direction, which the tracker
