@@ -9,6 +9,7 @@ from hearsee.audio.localize import (
     array_geometry,
     cone_points,
     far_field_planar,
+    fits_position,
     hyperboloid_points,
     localize_recording,
     localize_tdoa,
@@ -411,6 +412,25 @@ def test_in_plane_fitted_position_reported_where_the_distance_is_fixed():
         near_field_in_plane(c8.tdoa(src), c8, range_m=None, tdoa_std_s=-1.0)
     with pytest.raises(GeometryError, match="closure_std_factor"):
         near_field_in_plane(c8.tdoa(src), c8, range_m=None, closure_std_factor=float("nan"))
+
+
+def test_fits_position_says_where_localize_tdoa_fits_one():
+    """fits_position is True exactly where localize_tdoa returns a fitted position (the cube,
+    respeaker-4 without in_plane), False for three microphones, a mask, four in a line."""
+    cube = MicArray(0.1 * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1)
+                                    for z in (-1, 1)], dtype=float))
+    line = MicArray(np.c_[0.05 * np.arange(4), np.zeros(4), np.zeros(4)])
+    for arr, in_plane, want in ((cube, False, True), ("respeaker-4", False, True),
+                                ("respeaker-4", True, False), (THREE, False, False),
+                                ("mask2", False, False), (line, False, False)):
+        assert fits_position(arr, in_plane) is want, (arr, in_plane)
+    src = np.array([0.4, 0.3, 0.2])
+    assert "position_fit_m" in localize_tdoa(cube.tdoa(src), cube).extra
+    assert "position_fit_m" not in localize_tdoa(THREE.tdoa(src), THREE).extra
+    assert "position_fit_m" not in localize_tdoa(line.tdoa(src), line).extra
+    r4 = MicArray.from_preset("respeaker-4")
+    assert "position_fit_m" in localize_tdoa(r4.tdoa(src), r4).extra
+    assert "position_fit_m" not in localize_tdoa(r4.tdoa(src), r4, in_plane=True).extra
 
 
 def test_in_plane_fitted_position_of_a_source_off_the_plane_is_not_confident():
