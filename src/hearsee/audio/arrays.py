@@ -35,12 +35,13 @@ from hearsee.config import (
     load_yaml,
     real_entries,
     require,
+    whole_number,
 )
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 
 __all__ = ["MicArray", "check_pairs", "closure_rms", "list_presets", "load_array",
-           "pair_closure_projector", "pair_tdoa", "pair_tdoa_jacobian", "position_uncertainty",
-           "residual_scaled_variance"]
+           "pair_closure_projector", "pair_matrix", "pair_tdoa", "pair_tdoa_jacobian",
+           "position_uncertainty", "residual_scaled_variance"]
 
 #: Default TDOA standard deviation (s): whole-capture GCC-PHAT summaries of 1-2 s of speech at
 #: 16 kHz measured 1-2 us rms at SNR 20 dB in RT60 0.3 s rooms, ~6 us at SNR 10 dB (anechoic)
@@ -333,18 +334,35 @@ def _pair_index(pairs: list[tuple[int, int]]) -> tuple[NDArray, NDArray]:
     return (np.array([p[0] for p in pairs], dtype=int), np.array([p[1] for p in pairs], dtype=int))
 
 
+def pair_matrix(n_mics: int, pairs: Sequence[tuple[int, int]], ref: int = 0) -> NDArray:
+    """``H`` (n_pairs, n_mics - 1) mapping the reference ITD state to pair TDOAs ``t_i - t_j``.
+    GeometryError for fewer than 2 microphones, a reference that is not one of them, or pairs
+    :func:`check_pairs` refuses (n_mics 0 was numpy's builtin ValueError, a reference of 9 for
+    3 microphones a matrix as if there were none). The ITD Kalman filter's measurement matrix
+    (:mod:`hearsee.audio.itd_filter`) and the closure of :func:`pair_closure_projector`."""
+    n_mics = whole_number("n_mics", n_mics, lo=2, error=GeometryError)
+    ref = whole_number("ref", ref, lo=0, hi=n_mics - 1, error=GeometryError)
+    pairs = check_pairs(pairs, n_mics)
+    others = [k for k in range(n_mics) if k != ref]
+    col = {k: c for c, k in enumerate(others)}
+    H = np.zeros((len(pairs), n_mics - 1))
+    for r, (i, j) in enumerate(pairs):
+        if i != ref:
+            H[r, col[i]] += 1.0
+        if j != ref:
+            H[r, col[j]] -= 1.0
+    return H
+
+
 @lru_cache(maxsize=64)
 def pair_closure_projector(pairs: tuple[tuple[int, int], ...], n_mics: int
                            ) -> tuple[NDArray, int] | None:
-    """``(I - H H^+, n_pairs - rank H)`` for the pair matrix ``H`` (row k: +1 at microphone
-    ``pairs[k][0]``, -1 at ``pairs[k][1]``), i.e. the residual of a least-squares fit of
-    consistent ``t_i - t_j`` to pair values, and its degrees of freedom; None when the pairs
-    hold no redundancy (no closed cycle ``t_ij + t_jk = t_ik``). Cached per pair set (a tuple of
-    tuples); the projector is read-only. GeometryError for pairs :func:`check_pairs` refuses."""
-    i, j = _pair_index(check_pairs(pairs, n_mics))
-    H = np.zeros((len(pairs), int(n_mics)))
-    np.add.at(H, (np.arange(len(pairs)), i), 1.0)
-    np.add.at(H, (np.arange(len(pairs)), j), -1.0)
+    """``(I - H H^+, n_pairs - rank H)`` for the pair matrix ``H`` (:func:`pair_matrix`),
+    i.e. the residual of a least-squares fit of consistent ``t_i - t_j`` to pair values, and its
+    degrees of freedom; None when the pairs hold no redundancy (no closed cycle ``t_ij + t_jk =
+    t_ik``). Cached per pair set (a tuple of tuples); the projector is read-only. GeometryError
+    for pairs :func:`check_pairs` refuses."""
+    H = pair_matrix(n_mics, pairs)
     rank = int(np.linalg.matrix_rank(H))
     if len(pairs) <= rank:
         return None

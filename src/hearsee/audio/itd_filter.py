@@ -33,31 +33,12 @@ from filterpy.kalman import KalmanFilter
 from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
-from hearsee.audio.arrays import check_pairs
+from hearsee.audio.arrays import check_pairs, pair_matrix
 from hearsee.audio.localize import as_tdoas, check_real_tdoas
 from hearsee.config import is_real, whole_number
 from hearsee.errors import ConfigError, GeometryError
 
 __all__ = ["ItdKalman", "pair_matrix"]
-
-
-def pair_matrix(n_mics: int, pairs: Sequence[tuple[int, int]], ref: int = 0) -> NDArray:
-    """``H`` (n_pairs, n_mics - 1) mapping the reference ITD state to pair TDOAs ``t_i - t_j``.
-    GeometryError for fewer than 2 microphones, a reference that is not one of them, or pairs
-    :func:`hearsee.audio.arrays.check_pairs` refuses (n_mics 0 was numpy's builtin ValueError,
-    a reference of 9 for 3 microphones a matrix as if there were none)."""
-    n_mics = whole_number("n_mics", n_mics, lo=2, error=GeometryError)
-    ref = whole_number("ref", ref, lo=0, hi=n_mics - 1, error=GeometryError)
-    pairs = check_pairs(pairs, n_mics)
-    others = [k for k in range(n_mics) if k != ref]
-    col = {k: c for c, k in enumerate(others)}
-    H = np.zeros((len(pairs), n_mics - 1))
-    for r, (i, j) in enumerate(pairs):
-        if i != ref:
-            H[r, col[i]] += 1.0
-        if j != ref:
-            H[r, col[j]] -= 1.0
-    return H
 
 
 def _size(z: ArrayLike) -> int | None:
