@@ -681,8 +681,7 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
     ff = far_field_planar(tau, array, prs, tol_s)
     c = array.speed_of_sound
     d = array.positions - geo.centre
-    I = np.array([p[0] for p in prs])
-    J = np.array([p[1] for p in prs])
+    I, J = _pair_index(prs)
     u0 = ff.direction
     th = float(np.arctan2(u0 @ geo.basis[1], u0 @ geo.basis[0]))
     fit_range = range_m is None

@@ -132,7 +132,7 @@ def localize_cmd(
 ) -> None:
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
     from hearsee.audio.arrays import load_array
-    from hearsee.audio.localize import array_geometry, fits_position, localize_recording
+    from hearsee.audio.localize import fits_position, localize_recording
     from hearsee.audio.signals import read_recording
     from hearsee.audio.tdoa import SUMMARY_TUNED, check_frame_ms, dominant_sample, frame_geometry
 
@@ -157,8 +157,7 @@ def localize_cmd(
                           "own (ch. 3) that takes none of those settings; leave it out")
     if tdoa_std_us is not None and not fits_position(arr, in_plane):
         # (it was taken and did nothing: only a fitted position uses it)
-        why = ("--in-plane does not fit (it assumes the range)" if arr.n_mics >= 4
-               and arr.mask is None and array_geometry(arr).kind == "planar"
+        why = ("--in-plane does not fit (it assumes the range)" if fits_position(arr)
                else f"array {arr.name!r} does not get (that needs 4+ microphones, not in a "
                "line, without a mask)")
         raise ConfigError(f"--tdoa-std-us sets the TDOA error behind the source position, which "
