@@ -1300,34 +1300,6 @@ def test_video_files_play_at_their_own_frame_rate(tmp_path, monkeypatch, fps):
     assert res.summary["camera_read_failures"] == 0
 
 
-def test_audio_bearings_update_the_track_from_the_array_not_the_pivot(tmp_path):
-    """head.offset_m was read and then ignored: the live loop's bearing update took the audio
-    bearing as heard from the pan pivot. With the array 15 cm left of and 5 cm in front of
-    the pivot, a talker 2 m away is 4 deg off that line, so exact bearings dragged an exact
-    track sideways. Ground truth: the track at the talker, the bearing from the array origin
-    (head frame offset turned by the pan) -- it must not move the track."""
-    from hearsee.geometry import head_rotation
-    from hearsee.robot.hardware import _Head
-    from hearsee.robot.pipeline import BEARING_SIGMA_DEG, bearing_update, new_person_track
-
-    pivot, offset, pose = np.array([0.0, 0.0, 1.2]), np.array([0.05, 0.15, 0.08]), (30.0, 0.0)
-    cfg = robot_config_from_dict({"audio": {}, "head": {"pivot_m": pivot.tolist(),
-                                                        "offset_m": offset.tolist(),
-                                                        "pose_deg": list(pose)},
-                                  "output": {"report": "out"}}, "r.yaml", tmp_path)
-    geo = _Head(cfg, pose)
-    origin = pivot + head_rotation(*pose).apply(offset)
-    person = pivot + [1.6, 0.9, -0.2]
-    d = person - origin
-    heard = float(np.degrees(np.arctan2(d[1], d[0])))
-    track = new_person_track()
-    track.update(0.0, person, 0.05**2 * np.eye(3))
-    for k in range(1, 21):
-        track.predict(0.032 * k)
-        assert bearing_update(track, geo, heard, BEARING_SIGMA_DEG)
-    np.testing.assert_allclose(track.position, person, atol=1e-6)
-
-
 def test_speaker_chosen_by_the_bearing_from_the_array_not_the_pivot(tmp_path, monkeypatch):
     """Before there is a track, the verified person nearest the audio bearing becomes the
     speaker. The bearing is heard from the array origin (head.offset_m; the track's bearing

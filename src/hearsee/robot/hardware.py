@@ -36,7 +36,7 @@ Schema (defaults in brackets)::
     head:
       pivot_m: [0, 0, 1.2]              [[0, 0, 1.2]]  pan-tilt pivot in the robot frame, m
       offset_m: [0, 0, 0.08]            [[0, 0, 0]]    array origin from the pivot, head frame, m
-                                        (audio bearings update the 3D track as seen from it)
+                                        (the audio bearing is heard from it)
       pan_limits_deg: [-170, 170]       [[-170, 170]]  the commanded pan stays within these
                                         (a target beyond them: the nearer limit)
       pose_deg: [0, 0]                  [[0, 0]]   pan, tilt the head is at (driver none: it
@@ -861,10 +861,6 @@ class _Head:
         #: the microphone array's origin, ``head.offset_m`` from the pivot in the head frame:
         #: where the audio bearing is heard from (it was taken as heard from the pivot)
         self.array_origin = array_to_robot(np.zeros(3), pose, self.pivot, cfg.head.offset_m)
-        # what hearsee.robot.pipeline's bearing update needs (robot frame = its "room"): its
-        # bearing origin, called pivot_w there (the simulated robot's array sits at the pivot)
-        self.heading = 0.0
-        self.pivot_w = self.array_origin
 
     def direction_to_robot(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         from hearsee.geometry import direction_deg, unit_vector_deg
@@ -1025,9 +1021,9 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        human detection
        (:func:`hearsee.vision.fusion.detect_humans`).
     4. **Fuse and track**: the verified person nearest the audio bearing (within the pipeline's
-       association gate) updates a constant-acceleration 3D Kalman filter in the robot frame,
-       and audio bearings update it too (the pipeline's bearing update). A track without a
-       visual fix for ``TRACK_TIMEOUT_S`` seconds is dropped (counted in
+       association gate) updates a constant-acceleration 3D Kalman filter in the robot frame
+       (vision only, as the simulated loop: see the pipeline's ``TRACK_TIMEOUT_S``). A track
+       without a visual fix for ``TRACK_TIMEOUT_S`` seconds is dropped (counted in
        ``summary["track_drops"]``) and the head follows the audio bearing again.
 
     Parameters
@@ -1069,12 +1065,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
 
     from hearsee.config import to_jsonable
     from hearsee.robot.pipeline import (
-        BEARING_SIGMA_DEG,
         MIN_AUDIO_UPDATES,
         TRACK_TIMEOUT_S,
         RunResult,
         associate,
-        bearing_update,
         new_person_track,
         stereo_position_cov,
     )
@@ -1216,8 +1210,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         if not heard:
             u = _unheard(u)
         if track.initialized and t - state["last_visual"] > TRACK_TIMEOUT_S:
-            # no visual fix for TRACK_TIMEOUT_S: bearing-only updates would let the range
-            # drift (as in the simulated pipeline); drop the track, the head follows the audio
+            # no visual fix for TRACK_TIMEOUT_S: a coasting track drifts (as in the simulated
+            # pipeline); drop the track, the head follows the audio
             track.reset()
             state["track_drops"] += 1
         track.predict(t)
@@ -1225,20 +1219,15 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         bearing = None
         if u.azimuth_deg is not None:
             az, el = geo.direction_to_robot(u.azimuth_deg, u.elevation_deg)
-            raw = meas = None
-            if u.raw_azimuth_deg is not None:
-                raw = meas = geo.direction_to_robot(u.raw_azimuth_deg, u.raw_elevation_deg)[0]
-            if u.itd_azimuth_deg is not None:  # the 3D track takes the ITD-filtered bearing,
-                # as the simulated loop does (raw_* is the frame's own, logged)
-                meas = geo.direction_to_robot(u.itd_azimuth_deg, u.itd_elevation_deg)[0]
+            raw = None
+            if u.raw_azimuth_deg is not None:  # (the frame's own bearing, logged)
+                raw = geo.direction_to_robot(u.raw_azimuth_deg, u.raw_elevation_deg)[0]
             bearing = az
             audio = {"azimuth_deg": _r(az, 2), "elevation_deg": _r(el, 2),
                      "raw_azimuth_deg": _r(raw, 2), "confidence": _r(u.confidence, 3),
                      "measured": bool(u.measured)}
             if u.measured:
                 state["n_audio"] += 1
-                if meas is not None and track.initialized:
-                    bearing_update(track, geo, meas, BEARING_SIGMA_DEG)
         dets: list[dict[str, Any]] = []
         camera_t = None
         if (cameras is not None and not state["cam_ended"] and pending[0] is None
