@@ -82,13 +82,13 @@ MIN_AUDIO_UPDATES = 3
 #: Until 2026-11-27 every audio frame's bearing also updated the 3D track (an extended-Kalman
 #: bearing update, 4 deg): it made the track run away while it coasted. A person 0.6-0.9 m away
 #: is too close for the stereo detector, the bearing is the mouth's (8 cm ahead of the torso the
-#: track follows: ~8 deg at that range) and six correlated frames per 0.2 s step were fused as
-#: independent, so the coasting track was pushed 1-2.5 m off at 2-3 m/s (bench/robot seeds 16,
-#: 20, 32, 34, 42, 47). Without them, on held-out scenarios 200-319 (rule written before the
-#: run): velocity RMSE mean 0.206 -> 0.170 m/s, p90 0.446 -> 0.329; position-median p95 6.84 ->
-#: 6.48 cm, position-p90 p90 34.6 -> 33.6 cm, successes 119 -> 119 of 120. Adding the mouth's
-#: offset to the bearing noise instead (atan(0.1 m / r)) kept the fusion but failed the same
-#: rule (velocity mean -7 %).
+#: track follows: up to ~8 deg at that range) and six correlated frames per 0.2 s step were
+#: fused as independent, so the coasting track was pushed 1-2.5 m off at 2-3 m/s (traced in
+#: bench/robot seeds 20, 32 and 34). Without them, on held-out scenarios 200-319 (rule written
+#: before the run): velocity RMSE mean 0.206 -> 0.170 m/s, p90 0.446 -> 0.329; position-median
+#: p95 6.84 -> 6.48 cm, position-p90 p90 34.6 -> 33.6 cm, successes 119 -> 119 of 120. Adding
+#: the mouth's offset to the bearing noise instead (atan(0.1 m / r)) kept the fusion but failed
+#: the same rule (velocity mean -7 %).
 TRACK_TIMEOUT_S = 1.0
 #: The 3D person track (:func:`new_person_track`): jerk noise per axis (x, y, z of the room or
 #: robot frame, m/s^3; a walking person's torso height hardly changes, so z gets 0.1) and the
