@@ -1302,8 +1302,8 @@ def test_video_files_play_at_their_own_frame_rate(tmp_path, monkeypatch, fps):
 
 def test_speaker_chosen_by_the_bearing_from_the_array_not_the_pivot(tmp_path, monkeypatch):
     """Before there is a track, the verified person nearest the audio bearing becomes the
-    speaker. The bearing is heard from the array origin (head.offset_m; the track's bearing
-    update already took it from there), but the persons' azimuths were taken from the pivot:
+    speaker. The bearing is heard from the array origin (head.offset_m), but the persons'
+    azimuths were taken from the pivot:
     with the array 0.4 m left of the pivot and the talker 1.2 m straight ahead of it (bearing
     0 deg), the talker is at 18.4 deg from the pivot and a silent person 0.45 m to their right
     at -2.4 deg -- the silent one was chosen (from the array: 0 and -20.6 deg)."""
