@@ -396,7 +396,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
         lo = max(0, a - frame_len)
         tf = estimate_tdoas(audio.out[:, lo:b], sc.fs, array, frame_ms=sc.frame_ms,
                             hop_ms=sc.frame_ms / 2)
-        n_meas = 0  # this chunk's frames that updated the direction filter
+        n_before = n_audio_updates
         t_frames = lo / sc.fs + tf.t
         for i in np.flatnonzero(tf.valid & (t_frames > last_frame_t)):
             last_frame_t = float(t_frames[i])
@@ -415,10 +415,10 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             az_r = float(wrap_deg(loc.azimuth_deg + frame_pan))
             if direction.update(last_frame_t, (az_r, None)):
                 n_audio_updates += 1
-                n_meas += 1
         audio_rec = None
         if track.initialized and t1 - last_visual_t > TRACK_TIMEOUT_S:
             track.reset()  # (vision only: a track that no fix updates just coasts)
+        n_meas = n_audio_updates - n_before  # this chunk's frames that updated the filter
         if direction.initialized and n_meas:
             audio_rec = {"azimuth_deg": direction.azimuth_deg, "n_frames": n_meas,
                          "confidence": float(np.mean(tf.confidence[tf.valid]))
