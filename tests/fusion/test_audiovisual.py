@@ -555,3 +555,17 @@ def test_regressor_max_iter_must_be_a_whole_number(rig, max_iter):
     X, Y = simulate_av_samples(rig, 40, rng=np.random.default_rng(0))
     with pytest.raises(EstimationError, match=r"^max_iter must be an integer >= 1, got "):
         AudioVisualRegressor(hidden_layer_sizes=(4,), max_iter=max_iter).fit(X, Y)
+
+
+def test_rig_keeps_copies_of_the_callers_mounting():
+    """AudioVisualRig copies (and freezes) its mounting R, t: editing the caller's arrays
+    afterwards does not move the rig's camera."""
+    R = np.eye(3)
+    t = np.array([0.0, -0.1, 0.0])
+    rig = AudioVisualRig(MicArray.from_preset("three-mic"), Camera.from_fov(60.0, 640, 480), R, t)
+    centre = rig.camera_centre.copy()
+    t[1] = 5.0
+    R[0, 0] = -1.0
+    assert R.flags.writeable and t.flags.writeable
+    np.testing.assert_array_equal(rig.camera_centre, centre)
+    np.testing.assert_array_equal(rig.R, np.eye(3))

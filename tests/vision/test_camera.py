@@ -552,3 +552,28 @@ def test_rig_from_opencv_checks_its_size_and_scale(tmp_path):
             rig_from_opencv(intr, extr, (640, 480), scale_to_m=scale)
     rig = rig_from_opencv(intr, extr, (640.0, np.int64(480)), scale_to_m=0.001)
     assert rig.left.size == (640, 480) and rig.baseline_m == pytest.approx(0.1)
+
+
+def test_camera_and_rig_keep_copies_of_the_callers_arrays():
+    """Building a Camera or a StereoRig neither freezes nor shares the caller's arrays: the
+    caller can still write to them, and doing so does not change the (frozen) rig or leave
+    its cached rectification stale."""
+    K0 = K.copy()
+    dist = np.array([-0.25, 0.08, 0.001, -0.002])
+    cam = Camera(K0, dist)
+    assert K0.flags.writeable and dist.flags.writeable
+    K0[0, 0] = 900.0
+    dist[0] = 0.0
+    assert cam.fx == 500.0 and cam.dist[0] == -0.25
+    R = np.eye(3)
+    T = np.array([-0.1, 0.0, 0.0])
+    rig = StereoRig(cam, cam, R, T)
+    assert rig.Q[3, 2] == pytest.approx(10.0)  # 1 / baseline, computed before the edit
+    assert R.flags.writeable and T.flags.writeable
+    T[0] = -0.5
+    R[0, 0] = -1.0
+    assert rig.baseline_m == pytest.approx(0.1)
+    assert rig.Q[3, 2] == pytest.approx(10.0)
+    np.testing.assert_array_equal(rig.R, np.eye(3))
+    with pytest.raises(ValueError):
+        rig.T[0] = -0.5  # the rig's own arrays are read-only

@@ -151,13 +151,16 @@ class AudioVisualRig:
 
     def __post_init__(self) -> None:
         # (numpy read text as the numbers it spells and True as 1)
-        R = np.asarray(self.R, dtype=float) if real_entries(self.R) else np.zeros(0)
-        t = np.asarray(self.t, dtype=float).reshape(-1) if real_entries(self.t) else np.zeros(0)
+        # (copies, frozen: the rig must not share -- or freeze -- the caller's arrays)
+        R = np.array(self.R, dtype=float) if real_entries(self.R) else np.zeros(0)
+        t = np.array(self.t, dtype=float).reshape(-1) if real_entries(self.t) else np.zeros(0)
         if (R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-6)
                 or not np.linalg.det(R) > 0):  # (a reflection, det -1, mirrors every ray)
             raise GeometryError("rig mounting R must be a 3x3 rotation matrix")
         if t.shape != (3,) or not np.all(np.isfinite(t)):
             raise GeometryError("rig mounting t must be 3 finite numbers (metres)")
+        R.setflags(write=False)
+        t.setflags(write=False)
         object.__setattr__(self, "R", R)
         object.__setattr__(self, "t", t)
 

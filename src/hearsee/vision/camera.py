@@ -111,7 +111,7 @@ MIN_BASELINE_M = 1e-3
 def _check_rotation(R: ArrayLike, what: str) -> NDArray:
     if not real_entries(R):  # (numpy read text as the numbers it spells, True as 1)
         raise CalibrationError(f"{what}: expected real numbers, got {R!r:.80}")
-    R = np.asarray(R, dtype=float)
+    R = np.array(R, dtype=float)  # (a copy: the rig must not share the caller's array)
     if R.shape == (3,) or R.shape == (3, 1) or R.shape == (1, 3):  # Rodrigues vector
         R = cv2.Rodrigues(R.reshape(3, 1))[0]
     if R.shape != (3, 3) or not np.all(np.isfinite(R)):
@@ -120,15 +120,17 @@ def _check_rotation(R: ArrayLike, what: str) -> NDArray:
         )
     if not np.allclose(R @ R.T, np.eye(3), atol=1e-5) or np.linalg.det(R) < 0:
         raise CalibrationError(f"{what}: not a rotation matrix (R R^T != I or det(R) < 0)")
+    R.setflags(write=False)
     return R
 
 
 def _check_translation(T: ArrayLike, what: str) -> NDArray:
     if not real_entries(T):
         raise CalibrationError(f"{what}: expected real numbers (metres), got {T!r:.80}")
-    T = np.asarray(T, dtype=float).reshape(-1)
+    T = np.array(T, dtype=float).reshape(-1)  # (a copy, as _check_rotation)
     if T.shape != (3,) or not np.all(np.isfinite(T)):
         raise CalibrationError(f"{what}: expected 3 finite numbers (metres), got {T.shape}")
+    T.setflags(write=False)
     return T
 
 
@@ -169,14 +171,15 @@ class Camera:
             # part)
             if v is not None and not real_entries(v):
                 raise CalibrationError(f"camera {what}: expected real numbers, got {v!r}")
-        K = np.asarray(self.K, dtype=float)
+        # (copies: freezing them read-only must not freeze the caller's arrays)
+        K = np.array(self.K, dtype=float)
         if K.shape != (3, 3) or not np.all(np.isfinite(K)):
             raise CalibrationError(f"camera K: expected a finite 3x3 matrix, got shape {K.shape}")
         if not np.allclose(K[2], [0.0, 0.0, 1.0]) or K[1, 0] != 0 or K[0, 0] <= 0 or K[1, 1] <= 0:
             raise CalibrationError(
                 "camera K: expected [[fx, s, cx], [0, fy, cy], [0, 0, 1]] with fx, fy > 0"
             )
-        d = np.asarray(self.dist if self.dist is not None else [], dtype=float).reshape(-1)
+        d = np.array(self.dist if self.dist is not None else [], dtype=float).reshape(-1)
         if d.size not in _DIST_LENGTHS or not np.all(np.isfinite(d)):
             raise CalibrationError(
                 f"camera dist: expected 0, 4, 5, 8, 12 or 14 finite coefficients, got {d.size}"
