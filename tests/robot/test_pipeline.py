@@ -132,6 +132,30 @@ def test_associate_picks_the_nearest_person_inside_the_gate():
     assert associate(far, bearings, kf, 90.0) is None
 
 
+def test_associate_never_picks_what_is_not_a_number():
+    """A NaN audio bearing (a direction filter's before it starts) is no bearing, a person
+    with a NaN bearing or position is never the nearest (numpy's argmin took the NaN), and
+    positions and bearings of different lengths are an EstimationError, not an index
+    without a position."""
+    from hearsee.audio.tracking import MotionKalman
+    from hearsee.errors import EstimationError
+    from hearsee.robot.pipeline import associate
+
+    kf = MotionKalman()
+    people = [np.array([1.0, 0.0, 1.2]), np.array([0.0, 2.0, 1.2])]
+    assert associate(people, [0.0, 90.0], kf, float("nan")) is None
+    assert associate(people, [0.0, 90.0], kf, float("inf")) is None
+    assert associate(people, [float("nan"), 90.0], kf, 85.0) == 1
+    assert associate(people, [float("nan"), 90.0], kf, 0.0) is None
+    with pytest.raises(EstimationError, match="bearings"):
+        associate(people[:1], [0.0, 1.0, 5.0], kf, 5.0)
+    kf.update(0.0, [0.0, 1.8, 1.2])
+    assert associate([np.full(3, np.nan), people[1]], [0.0, 90.0], kf, None) == 1
+    assert associate([np.full(3, np.nan)], [0.0], kf, None) is None
+    with pytest.raises(EstimationError, match="x, y, z"):
+        associate([np.zeros(2)], [0.0], kf, None)
+
+
 def test_person_track_coasts_without_running_away():
     """A person walks along x at 0.7 m/s at constant height; the last two stereo fixes are
     biased upward (half the person out of view), then the camera loses them for the 1 s the

@@ -49,6 +49,7 @@ from hearsee.audio.propagation import room_impulse_responses
 from hearsee.audio.signals import synthetic_voice
 from hearsee.audio.tdoa import estimate_tdoas
 from hearsee.audio.tracking import DirectionKalman, MotionKalman
+from hearsee.errors import EstimationError
 from hearsee.geometry import array_to_robot, head_rotation, wrap_deg
 from hearsee.robot.scenario import Scenario
 from hearsee.vision.camera import OPTICAL_FROM_BODY
@@ -309,17 +310,27 @@ def associate(positions: Sequence[NDArray], bearings_deg: Sequence[float],
     ``positions`` (metres) and ``bearings_deg`` (azimuths, degrees) are the verified persons'
     in the frame of the track and of the audio bearing. With a track, the person nearest its
     position within :data:`TRACK_GATE_M`; before there is one, the person nearest the audio
-    bearing within :data:`ASSOCIATION_GATE_DEG` (none without an audio bearing). Returns the
-    person's index, or None when nobody is inside the gate.
+    bearing within :data:`ASSOCIATION_GATE_DEG` (none without an audio bearing; a NaN bearing,
+    e.g. a direction filter's before it starts, is none). Returns the person's index, or None
+    when nobody is inside the gate; a person whose position or bearing is not finite is never
+    chosen. EstimationError when ``positions`` and ``bearings_deg`` differ in length or a
+    position is not three numbers.
     """
+    if len(positions) != len(bearings_deg):
+        raise EstimationError(f"associate: {len(positions)} positions but {len(bearings_deg)} "
+                              "bearings (one of each per verified person)")
     if track.initialized:
-        d = np.array([np.linalg.norm(np.asarray(p) - track.position) for p in positions])
+        pts = [np.asarray(p, dtype=float) for p in positions]
+        if any(p.shape != (3,) for p in pts):
+            raise EstimationError("associate: each position must be [x, y, z] in metres")
+        d = np.array([np.linalg.norm(p - track.position) for p in pts], dtype=float)
         gate = TRACK_GATE_M
-    elif audio_bearing_deg is not None:
+    elif audio_bearing_deg is not None and np.isfinite(audio_bearing_deg):
         d = np.abs(wrap_deg(np.asarray(bearings_deg, dtype=float) - audio_bearing_deg))
         gate = ASSOCIATION_GATE_DEG
     else:
         return None
+    d = np.where(np.isfinite(d), d, np.inf)  # (argmin took a NaN for the nearest)
     if d.size == 0 or float(d.min()) >= gate:
         return None
     return int(np.argmin(d))
