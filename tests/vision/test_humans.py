@@ -14,6 +14,7 @@ from hearsee.errors import (
 from hearsee.sim.scenes import Entity, SceneSpec, default_rig, render_scene
 from hearsee.vision.fusion import detect_humans
 from hearsee.vision.humans import (
+    TOP_PERCENTILE,
     FloorPlane,
     HumanDetectorParams,
     _iou,
@@ -420,6 +421,35 @@ def test_scale_adaptive_filter_refuses_mismatched_maps_and_bad_settings():
             scale_adaptive_filter(P, F, B, expected_rows=rows, above=np.zeros_like(P), **kw)
 
 
+def test_maps_with_nan_or_inf_are_refused_not_emptied():
+    """One NaN (or inf) in P(y,d) made the whole Psi-hat 0 (every person silently lost), one
+    in Psi-hat hid every peak from find_peaks, one in a silhouette's heights gave a NaN top:
+    each is an ImageInputError now; the clean maps still give the person and both peaks."""
+    d = 20
+    P = _blob_P(int(0.4 * d / B), d, 100, W=260)
+    assert scale_adaptive_filter(P, F, B).max() > 0.8
+    assert find_peaks(_two_peaks(), F, B, min_disparity=0.0) == [(40, 8, 0.8), (10, 3, 0.5)]
+    assert robust_top_m([1.0, 1.5, 1.7]) == pytest.approx(np.percentile([1.0, 1.5, 1.7],
+                                                                         TOP_PERCENTILE))
+    for bad in (np.nan, np.inf):
+        Pb = P.copy()
+        Pb[3, 0] = bad
+        with pytest.raises(ImageInputError, match="P must hold finite"):
+            scale_adaptive_filter(Pb, F, B)
+        with pytest.raises(ImageInputError, match="above must hold finite"):
+            scale_adaptive_filter(P, F, B, above=Pb)
+        rows = np.full(P.shape[0], 50.0)
+        rows[2] = bad
+        with pytest.raises(ImageInputError, match="expected_rows must hold finite"):
+            scale_adaptive_filter(P, F, B, expected_rows=rows)
+        psi = _two_peaks()
+        psi[3, 0] = bad
+        with pytest.raises(ImageInputError, match="psi must hold finite"):
+            find_peaks(psi, F, B)
+        with pytest.raises(ImageInputError, match="heights must hold finite"):
+            robust_top_m([1.0, bad, 1.7])
+
+
 def test_floor_plane_refuses_a_normal_that_is_not_a_unit_up_vector():
     """A FloorPlane passed to detect_candidates with a non-unit normal scaled every height
     (|n| = 2: a 0.9 m box measured 1.8 m tall), a downward one turned heights upside down, a
@@ -507,6 +537,8 @@ def test_segmentation_band_grows_with_the_stereo_depth_noise():
     assert segment_band_m(7.4, f, b, HumanDetectorParams(disparity_sigma_px=0.0)) == \
         pytest.approx(0.35)
     assert disparity_band_px(np.array([8.0, 20.0, 40.0]), 0.2, f, b).tolist() == [1, 1, 5]
+    with pytest.raises(ImageInputError, match="not a disparity"):  # (the int cast wrapped)
+        disparity_band_px(1e200, 0.2, f, b)
     for kw in ({"disparity_sigma_px": -0.1}, {"band_sigmas": np.nan}):
         with pytest.raises(ConfigError, match=next(iter(kw))):
             HumanDetectorParams(**kw)

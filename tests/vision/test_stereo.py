@@ -381,3 +381,25 @@ def test_disparity_helpers_refuse_text_and_ragged_maps():
     pts = points_from_disparity(d, Q)
     np.testing.assert_allclose(pts[2, 4], [4 / 20, 2 / 20, 5.0])  # (u, v) / (d / B), Z
     assert np.all(np.isnan(pts[1, 2]))  # the invalid disparity
+
+
+def test_depth_conversions_refuse_what_is_not_a_disparity_and_q_that_cannot_reproject():
+    """An infinite disparity gave a depth of 0 m, complex disparities lost their imaginary
+    part and bools were read as 1 px; a NaN or all-zero Q gave an all-NaN point cloud. Now
+    inf is no measurement (NaN), the others an ImageInputError / ConfigError; an infinite
+    depth is still 0 px of disparity."""
+    np.testing.assert_array_equal(
+        np.isnan(depth_from_disparity(np.array([np.inf, -np.inf, 20.0]), 500.0, 0.1)),
+        [True, True, False])
+    assert disparity_from_depth(np.array([np.inf]), 500.0, 0.1)[0] == 0.0
+    for bad in (np.array([20.0 + 1j]), np.array([True]), "20"):
+        with pytest.raises(ImageInputError, match="^disparity must hold numbers"):
+            depth_from_disparity(bad, 500.0, 0.1)
+        with pytest.raises(ImageInputError, match="^depth_m must hold numbers"):
+            disparity_from_depth(bad, 500.0, 0.1)
+    d = np.full((4, 6), 2.0)
+    Q = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 0, 100.0], [0, 0, 10.0, 0]])
+    assert np.all(np.isfinite(points_from_disparity(d, Q)))
+    for Qb in (np.zeros((4, 4)), np.where(np.eye(4) > 0, np.nan, Q)):
+        with pytest.raises(ConfigError, match="^Q must be a finite reprojection matrix"):
+            points_from_disparity(d, Qb)

@@ -159,6 +159,11 @@ def test_nan_in_a_float_image_is_refused_on_the_relative_path_too():
     for radiometric in (None, True, False):
         with pytest.raises(ImageInputError, match="NaN"):
             thermal_mask(t, radiometric=radiometric)
+    # relative_warm_mask itself (public) refused it too: it gave an all-False mask
+    for bad in (np.nan, np.inf):
+        t[0, 0] = bad
+        with pytest.raises(ImageInputError, match="NaN or inf"):
+            relative_warm_mask(t)
 
 
 @pytest.mark.parametrize("bad", [

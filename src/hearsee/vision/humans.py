@@ -423,6 +423,11 @@ def disparity_band_px(disparity: NDArray | float, depth_band_m: float, focal_px:
         raise ImageInputError(f"disparity must be finite pixels, got {disparity!r:.60}")
     depth_band_m = finite_number("depth_band_m", depth_band_m, 0.0)
     check_focal_baseline(focal_px, baseline_m)
+    with np.errstate(over="ignore"):
+        if not np.all(d * d * depth_band_m / (focal_px * baseline_m) < 2.0**31):
+            # (the int cast wrapped: 1e200 px gave the most negative int)
+            raise ImageInputError(f"disparity {float(np.max(np.abs(d))):.3g} px gives a band "
+                                  "wider than any image: not a disparity")
     return _band_px(d, depth_band_m, focal_px, baseline_m)
 
 
@@ -447,11 +452,12 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
        the two surround means (each ``surround_m * d / B`` columns). Returns ``(n_d, W)``.
 
     ImageInputError when ``P`` is not 2-D, ``above`` not of its shape or ``expected_rows`` not
-    ``(n_d,)``; ConfigError for an ``above_weight`` or ``depth_band_m`` that is not a finite
-    number >= 0, or a kernel width that is not finite > 0.
+    ``(n_d,)``, or any of them holds NaN or inf; ConfigError for an ``above_weight`` or
+    ``depth_band_m`` that is not a finite number >= 0, or a kernel width that is not finite
+    > 0.
     """
     check_focal_baseline(focal_px, baseline_m)
-    P = numeric_map("P", P)
+    P = numeric_map("P", P, finite=True)  # (one NaN made the whole map 0: every person lost)
     if P.ndim != 2:
         raise ImageInputError(f"P must be a (n_d, W) map of counts, got shape {P.shape}")
     nd, W = P.shape
@@ -471,11 +477,11 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
     hi = np.clip(np.arange(nd) + band + 1, 0, nd)
     Pb = cs[hi] - cs[lo]
     if above is not None:
-        A = numeric_map("above", above)
+        A = numeric_map("above", above, finite=True)
         ca = np.vstack([np.zeros((1, W)), np.cumsum(A, axis=0)])
         Pb = np.clip(Pb - above_weight * (ca[hi] - ca[lo]), 0.0, None)
     if expected_rows is not None:
-        e = numeric_map("expected_rows", expected_rows)
+        e = numeric_map("expected_rows", expected_rows, finite=True)
         Pb = np.where(e[:, None] > 3, Pb / np.maximum(e[:, None], 1.0), 0.0)
     half = np.maximum(1, np.rint(0.5 * person_width_m * d / baseline_m)).astype(int)[:, None]
     sur = np.maximum(1, np.rint(surround_m * d / baseline_m)).astype(int)[:, None]
@@ -508,14 +514,14 @@ def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: f
     are not searched. ``threshold``, ``person_width_m`` (> 0), ``depth_sep_m`` (>= 0) and
     ``max_peaks`` (an integer >= 0) are ConfigErrors otherwise (a NaN threshold found no peak
     without a word; a NaN width, a fractional count or text raised builtin errors), ``psi``
-    that is not a 2-D map of numbers an ImageInputError."""
+    that is not a 2-D map of finite numbers an ImageInputError."""
     check_focal_baseline(focal_px, baseline_m)
     min_disparity = finite_number("min_disparity", min_disparity, 0.0)
     finite_number("threshold", threshold)
     finite_number("person_width_m", person_width_m, 0.0, lo_open=True)
     finite_number("depth_sep_m", depth_sep_m, 0.0)
     max_peaks = whole_number("max_peaks", max_peaks, 0)
-    ps = numeric_map("psi", psi, copy=True)
+    ps = numeric_map("psi", psi, copy=True, finite=True)  # (a NaN hid every peak: argmax)
     if ps.ndim != 2:
         raise ImageInputError(f"psi must be a (n_d, W) map, got shape {ps.shape}")
     nd, W = ps.shape
@@ -578,9 +584,9 @@ def robust_top_m(heights: NDArray) -> float:
     its points' ``heights`` (metres), so that a few stray points above the head (a wall pixel
     that passed the depth band, a matching error) do not move it. :attr:`BodySegment.top_m`
     and the head band of :func:`hearsee.vision.fusion.thermal_support`. ImageInputError
-    unless ``heights`` are numbers, at least one (text and an empty set raised builtin
-    errors)."""
-    heights = numeric_map("heights", heights, None)
+    unless ``heights`` are finite numbers, at least one (text and an empty set raised builtin
+    errors, a NaN gave a NaN top)."""
+    heights = numeric_map("heights", heights, None, finite=True)  # (a NaN made the top NaN)
     if heights.size == 0:
         raise ImageInputError("heights must hold at least one point")
     return float(np.percentile(heights, TOP_PERCENTILE))

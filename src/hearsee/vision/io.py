@@ -41,17 +41,21 @@ _IMREAD = {
 
 
 def numeric_map(name: str, value: ArrayLike, dtype: type | None = np.float64, *,
-                copy: bool = False) -> NDArray:
+                copy: bool = False, finite: bool = False) -> NDArray:
     """``value`` (an image-shaped map: disparities, temperatures, counts, a mask, points) as an
     array of ``dtype`` (None: its own; a copy with ``copy``) when it holds real numbers
     (:func:`hearsee.config.real_entries`), else an ImageInputError naming it: numpy read a map
     of text as numbers, True as 1, and raised its builtin ValueError on a ragged list. An array
-    of numbers costs one dtype test. The "numbers only" rule of :mod:`hearsee.vision`'s map
-    functions."""
+    of numbers costs one dtype test. With ``finite``, NaN or inf entries are an ImageInputError
+    too (for maps where they mean nothing: counts, filter responses, heights). The "numbers
+    only" rule of :mod:`hearsee.vision`'s map functions."""
     if not real_entries(value):
         got = value.dtype if isinstance(value, np.ndarray) else f"{value!r:.60}"
         raise ImageInputError(f"{name} must hold numbers, got {got}")
-    return np.array(value, dtype=dtype, copy=True) if copy else np.asarray(value, dtype=dtype)
+    out = np.array(value, dtype=dtype, copy=True) if copy else np.asarray(value, dtype=dtype)
+    if finite and out.dtype.kind == "f" and not np.all(np.isfinite(out)):
+        raise ImageInputError(f"{name} must hold finite numbers, got NaN or inf entries")
+    return out
 
 
 def bool_mask(mask: ArrayLike, name: str = "mask") -> NDArray:

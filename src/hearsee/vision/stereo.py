@@ -401,23 +401,26 @@ def check_focal_baseline(focal_px: float, baseline_m: float) -> float:
 
 def depth_from_disparity(disparity: ArrayLike, focal_px: float, baseline_m: float,
                          min_disparity: float = 0.0) -> NDArray:
-    """Depth ``Z = f B / d`` in metres (NaN where ``d <= min_disparity`` or NaN), same shape as
-    ``disparity`` (pixels; a scalar gives a 0-d array). ``focal_px`` (pixels) and
-    ``baseline_m`` (metres) must be finite and > 0 (CalibrationError)."""
+    """Depth ``Z = f B / d`` in metres (NaN where ``d <= min_disparity``, NaN or infinite: an
+    infinite disparity is no measurement, not a depth of 0 m), same shape as ``disparity``
+    (pixels; a scalar gives a 0-d array; ImageInputError unless real numbers: text, bools and
+    complex values were read as numbers). ``focal_px`` (pixels) and ``baseline_m`` (metres)
+    must be finite and > 0 (CalibrationError)."""
     fb = check_focal_baseline(focal_px, baseline_m)
     if not is_real(min_disparity):
         raise ConfigError(f"min_disparity must be a finite number of pixels, got {min_disparity}")
-    d = np.asarray(disparity, dtype=np.float64)
+    d = numeric_map("disparity", disparity)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(d > max(min_disparity, 0.0), fb / d, np.nan)
+        return np.where((d > max(min_disparity, 0.0)) & np.isfinite(d), fb / d, np.nan)
 
 
 def disparity_from_depth(depth_m: ArrayLike, focal_px: float, baseline_m: float) -> NDArray:
-    """Disparity ``d = f B / Z`` in pixels of depths in metres (NaN where Z <= 0 or NaN), same
-    shape as ``depth_m`` (a scalar gives a 0-d array). ``focal_px`` (pixels) and
-    ``baseline_m`` (metres) must be finite and > 0 (CalibrationError)."""
+    """Disparity ``d = f B / Z`` in pixels of depths in metres (NaN where Z <= 0 or NaN; 0 for
+    an infinite depth), same shape as ``depth_m`` (a scalar gives a 0-d array; ImageInputError
+    unless real numbers). ``focal_px`` (pixels) and ``baseline_m`` (metres) must be finite and
+    > 0 (CalibrationError)."""
     fb = check_focal_baseline(focal_px, baseline_m)
-    z = np.asarray(depth_m, dtype=np.float64)
+    z = numeric_map("depth_m", depth_m)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(z > 0, fb / z, np.nan)
 
@@ -425,13 +428,18 @@ def disparity_from_depth(depth_m: ArrayLike, focal_px: float, baseline_m: float)
 def points_from_disparity(disparity: ArrayLike, Q: ArrayLike) -> NDArray:
     """3D points ``(H, W, 3)`` in metres in the rectified left optical frame,
     ``[X Y Z W]^T = Q [u v d 1]^T`` (``Q`` from :class:`hearsee.vision.camera.Rectification`);
-    NaN where the disparity is invalid or non-positive."""
+    NaN where the disparity is invalid or non-positive. ConfigError for a ``Q`` that is not a
+    finite 4x4 matrix with a focal length ``Q[2, 3]`` and an inverse baseline ``Q[3, 2]``
+    (a NaN or all-zero Q gave an all-NaN cloud without a word)."""
     d = numeric_map("disparity", disparity)
     if not real_entries(Q):
         raise ConfigError(f"Q must be a 4x4 matrix of numbers, got {Q!r:.80}")
     Q = np.asarray(Q, dtype=np.float64)
     if d.ndim != 2 or Q.shape != (4, 4):
         raise ConfigError(f"expected (H, W) disparity and 4x4 Q, got {d.shape} and {Q.shape}")
+    if not np.all(np.isfinite(Q)) or Q[2, 3] == 0 or Q[3, 2] == 0:
+        raise ConfigError("Q must be a finite reprojection matrix with Q[2, 3] = f and "
+                          "Q[3, 2] = -1/T_x nonzero (see cv2.stereoRectify)")
     H, W = d.shape
     u = np.arange(W, dtype=np.float64)[None, :]
     v = np.arange(H, dtype=np.float64)[:, None]

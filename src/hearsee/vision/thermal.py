@@ -150,9 +150,11 @@ def relative_warm_mask(image: NDArray, *, k_sigma: float = 6.0, min_gap: float =
 
     ``k_sigma``, ``min_gap`` and ``max_gap`` are finite numbers >= 0 with ``min_gap <=
     max_gap``, the kernel sizes integers from 0 (none) to the image's larger side
-    (ConfigError: a NaN gap or k_sigma gave an empty or a wrong mask without a word).
+    (ConfigError: a NaN gap or k_sigma gave an empty or a wrong mask without a word); an image
+    with NaN or inf pixels is an ImageInputError (as in :func:`thermal_mask`).
     """
-    im = numeric_map("thermal image", image, None)
+    # (one NaN pixel made the median NaN: an all-False mask without a word)
+    im = numeric_map("thermal image", image, None, finite=True)
     if im.ndim == 3:
         im = to_gray(im)  # ImageInputError for channel counts or pixel types OpenCV cannot convert
     if im.ndim != 2 or im.size == 0:
