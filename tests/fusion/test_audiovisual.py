@@ -8,6 +8,7 @@ from hearsee.fusion.audiovisual import (
     RAY_SIGMA_TDOA_S,
     AudioVisualRegressor,
     AudioVisualRig,
+    RayFix,
     RayTdoaTracker,
     RayTracker,
     locate_on_ray,
@@ -103,6 +104,20 @@ def test_bad_fusion_input(rig):
         locate_on_ray(rig, [320], [0.0, 0.0, 0.0])
     with pytest.raises(EstimationError, match="range_m"):
         locate_on_ray(rig, [320, 240], [0.0, 0.0, 0.0], range_m=(2.0, 1.0))
+    # TDOAs 50x the physical maximum (e.g. samples or ms for seconds) gave a confident fix
+    big = 50 * rig.array.max_tdoa()
+    with pytest.raises(EstimationError, match="seconds"):
+        locate_on_ray(rig, [320, 240], big)
+    edge = rig.array.max_tdoa() + 6.25e-5  # a GCC peak at its lag bound plus one sample
+    fix = locate_on_ray(rig, [320, 240], edge)
+    assert np.isfinite(fix.residual_s)
+    # a fix that is not finite does not start (and poison) the tight-coupling tracker
+    trk = RayTdoaTracker(rig)
+    for bad in (RayFix(np.array([np.nan, 0.0, 1.0]), 1.0, 0.0, fix.covariance, fix.direction),
+                RayFix(fix.position_m, 1.0, 0.0, np.full((3, 3), np.nan), fix.direction)):
+        with pytest.raises(EstimationError, match="RayFix"):
+            trk.update_measurements(0.0, None, None, bad)
+        assert not trk.initialized
     with pytest.raises(GeometryError):
         AudioVisualRig(rig.array, rig.camera, np.eye(3) * 2, np.zeros(3))
 

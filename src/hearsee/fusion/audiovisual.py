@@ -294,7 +294,8 @@ def locate_on_ray(
     uv : array (2,)
         Image point of the source, pixels.
     tdoa_s : array (n_pairs,)
-        Measured ``t_i - t_j`` in seconds for ``pairs`` (default: all pairs of the array).
+        Measured ``t_i - t_j`` in seconds for ``pairs`` (default: all pairs of the array);
+        finite, and within twice each pair's physical maximum plus 0.1 ms (EstimationError).
     range_m : (near, far)
         Search interval along the ray, metres from the camera centre.
     n_grid : int
@@ -317,6 +318,15 @@ def locate_on_ray(
     z = as_tdoas(tdoa_s, len(prs), EstimationError)
     if not np.all(np.isfinite(z)):
         raise EstimationError("TDOAs must be finite to fuse with the camera ray")
+    bound = 2.0 * rig.array.max_tdoa(prs) + 1e-4
+    if np.any(np.abs(z) > bound):
+        # (50x the physical maximum gave a confident fix at the near end of the ray; a GCC
+        # peak is within its lag bound plus a sample, so only a unit mistake reaches here)
+        k = int(np.argmax(np.abs(z) / bound))
+        raise EstimationError(
+            f"TDOA of pair {prs[k]} is {z[k]:.3g} s, more than twice that pair's physical "
+            f"maximum {rig.array.max_tdoa([prs[k]])[0]:.3g} s: TDOAs are seconds (not samples "
+            "or milliseconds)")
     p = _image_point(uv, finite=True)
     near, far = _ray_range(range_m)
     n_grid = whole_number("n_grid", n_grid, 2, error=EstimationError)
@@ -554,6 +564,10 @@ class RayTdoaTracker(RayTracker):
             uv = _image_point(uv, finite=False)  # (NaN: not seen in this frame)
         if tdoa_s is not None:
             tdoa_s = as_tdoas(tdoa_s, len(self.pairs), EstimationError)
+        if fix is not None and not (np.all(np.isfinite(fix.position_m))
+                                    and np.all(np.isfinite(fix.covariance))):
+            # (a NaN fix started the track at NaN; the next frame failed far from the cause)
+            raise EstimationError("a RayFix must have a finite position and covariance")
         if fix is not None and (not self.initialized or self.n_rejects >= self.max_rejects):
             self.predict(t)  # (the time's checks: finite, not before the last frame)
             self._start(np.asarray(fix.position_m, dtype=float), np.asarray(fix.covariance))
