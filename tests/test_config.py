@@ -372,6 +372,44 @@ def test_output_file_refuses_folders_and_missing_or_file_parents(tmp_path):
         output_file(tmp_path / "f" / "x.wav")
 
 
+def test_output_file_refuses_what_the_system_would_not_let_it_write(tmp_path, monkeypatch):
+    """A read-only output file or folder raised PermissionError only once the work was done
+    (a whole evaluation, a calibration). The tests run as root, where permissions do not stop
+    writes: os.access is made to answer as for another user."""
+    import os
+
+    from hearsee.config import output_file
+
+    (tmp_path / "old.json").write_text("{}", encoding="utf-8")
+    monkeypatch.setattr(os, "access", lambda path, mode: False)
+    with pytest.raises(InputFileError, match=r"old\.json: the file is not writable$"):
+        output_file(tmp_path / "old.json")
+    with pytest.raises(InputFileError, match=r"new\.json: folder .* is not writable$"):
+        output_file(tmp_path / "new.json")
+
+
+def test_same_file_sees_hard_links_and_refuse_overwrite_uses_it(tmp_path):
+    """A hard link to an input passed the resolved-path test: `hearsee detect --overlay
+    LINK --force` overwrote the left image it was reading."""
+    import os
+
+    from hearsee.cli._app import refuse_overwrite
+    from hearsee.config import same_file
+
+    src = tmp_path / "left.png"
+    src.write_bytes(b"image")
+    os.link(src, tmp_path / "hard.png")
+    (tmp_path / "other.png").write_bytes(b"image")
+    assert same_file(tmp_path / "hard.png", src)
+    assert same_file(tmp_path / "sub" / ".." / "left.png", src)
+    assert not same_file(tmp_path / "other.png", src)
+    assert not same_file(tmp_path / "missing.png", src)
+    with pytest.raises(InputFileError, match="refusing to overwrite an input file"):
+        refuse_overwrite([tmp_path / "hard.png"], [src], force=True)
+    refuse_overwrite([tmp_path / "other.png"], [src], force=True)
+    assert src.read_bytes() == b"image"
+
+
 def test_as_float_array_with_the_callers_error_and_non_finite_values_allowed():
     """finite=False lets NaN and infinities through (only non-numbers are refused) and
     ``error`` is the caller's type."""

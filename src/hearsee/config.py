@@ -65,19 +65,39 @@ def input_file(path: str | Path, kind: str = "file", hint: str = "") -> Path:
     return p
 
 
+def same_file(a: str | Path, b: str | Path) -> bool:
+    """Whether paths ``a`` and ``b`` name one file: the same inode where both exist (hard
+    links, symlinks, ``..``), else the same resolved path. The one test behind every "refusing
+    to overwrite an input file" (a hard link to an input passed the resolved-path test and
+    was overwritten)."""
+    a, b = Path(a), Path(b)
+    try:
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return a.resolve() == b.resolve()
+
+
 def output_file(path: str | Path) -> Path:
     """``path`` as a Path when a file can be written there, else InputFileError: ``"P: is a
     folder, expected an output file name"`` for a folder, ``"P: folder D does not exist"`` or
-    ``"P: D is not a folder"`` for its parent ``D``. The counterpart of :func:`input_file`: the
-    check of an output path made before the work that ends by writing it (the CLI's
-    ``refuse_overwrite``, ``save_wav``, the robot's exports, ``write_image`` and the
-    simulator's ground-truth file)."""
+    ``"P: D is not a folder"`` for its parent ``D``, and ``"P: the file is not writable"`` /
+    ``"P: folder D is not writable"`` where the system would refuse to write it. The
+    counterpart of :func:`input_file`: the check of an output path made before the work
+    that ends by writing it (the CLI's ``refuse_overwrite``, ``save_wav``, the robot's
+    exports, ``write_image`` and the simulator's ground-truth file)."""
     p = as_path(path, "the output path")
     if p.is_dir():
         raise InputFileError(f"{p}: is a folder, expected an output file name")
     if not p.parent.is_dir():
         raise InputFileError(f"{p}: folder {p.parent} does not exist"
                              if not p.parent.exists() else f"{p}: {p.parent} is not a folder")
+    # (a PermissionError came only once the work was done, e.g. after a whole evaluation)
+    if p.exists() and not os.access(p, os.W_OK):
+        raise InputFileError(f"{p}: the file is not writable")
+    if not p.exists() and not os.access(p.parent, os.W_OK | os.X_OK):
+        raise InputFileError(f"{p}: folder {p.parent} is not writable")
     return p
 
 

@@ -70,7 +70,7 @@ from hearsee.audio.arrays import (
 )
 from hearsee.audio.propagation import speed_of_sound_of
 from hearsee.audio.signals import as_samples
-from hearsee.config import as_float_array, finite_number, is_real, whole_number
+from hearsee.config import as_float_array, finite_number, is_real, same_file, whole_number
 from hearsee.errors import (
     AudioInputError,
     EstimationError,
@@ -1453,7 +1453,7 @@ def simulate_pose_manifest(
     if man.suffix.lower() not in (".yaml", ".yml"):
         raise ConfigError(f"{man}: with --poses the output is a manifest; use a .yaml name")
     for q in protect:
-        if Path(q).resolve() == man.resolve():
+        if same_file(q, man):
             raise ConfigError(f"{man}: refusing to overwrite the input file {q}")
     arr = load_array(array)
     # (each read as np.asarray(float): True as 1 m, "0.5" as 0.5 m, a huge int an OverflowError)

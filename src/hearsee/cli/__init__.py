@@ -56,9 +56,10 @@ def main(argv: list[str] | None = None) -> int:
 
     With ``argv=None`` (the console script) it exits the process; with a list (tests, embedding)
     it returns the exit code instead. Usage errors print ``hearsee <command>: error: <message>
-    (see 'hearsee <command> --help')``, hearsee errors ``hearsee: error: <message>``, each as
-    one line on stderr, and exit 2. Warnings (e.g. clipped audio) print ``hearsee: warning:
-    <message>`` on stderr and the command goes on.
+    (see 'hearsee <command> --help')``, hearsee errors and files the system refuses (OSError:
+    permissions, a full disk) ``hearsee: error: <message>``, each as one line on stderr, and
+    exit 2 (out of memory: one line, exit 1). Warnings (e.g. clipped audio) print
+    ``hearsee: warning: <message>`` on stderr and the command goes on.
     """
     with warnings.catch_warnings():  # restores the caller's warning display afterwards
         warnings.showwarning = _warning_line
@@ -94,6 +95,18 @@ def _main(argv: list[str] | None) -> int:
     except HearseeError as exc:
         print(f"hearsee: error: {exc}", file=sys.stderr)
         code = 2
+    except BrokenPipeError:  # (stdout piped into e.g. `head`, which has closed it)
+        code = 141
+    except OSError as exc:
+        # the safety net behind the commands' own checks: a file the system refused (no
+        # permission, disk full, ...) is one line, not a traceback
+        what = f"{exc.filename}: " if exc.filename else ""
+        print(f"hearsee: error: {what}{exc.strerror or exc}", file=sys.stderr)
+        code = 2
+    except MemoryError:
+        print("hearsee: error: out of memory (is an option, e.g. a count, duration or sample "
+              "rate, far larger than intended?)", file=sys.stderr)
+        code = 1
     except (KeyboardInterrupt, typer.Abort):
         print("hearsee: interrupted", file=sys.stderr)
         code = 130

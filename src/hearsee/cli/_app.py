@@ -65,12 +65,12 @@ def refuse_overwrite(outputs: Iterable[str | Path | None], inputs: Iterable[str 
     input is refused always, one that exists unless ``force`` (the command's ``--force``), and
     so are a folder and a file whose folder does not exist (which failed only once the work
     was done). Nothing the user gave is overwritten, and a refusal writes nothing."""
-    from hearsee.config import output_file
+    from hearsee.config import output_file, same_file
     from hearsee.errors import InputFileError
 
-    ins = {Path(q).resolve() for q in inputs if q is not None}
+    ins = [Path(q) for q in inputs if q is not None]
     for p in (Path(o) for o in outputs if o is not None):
-        if p.resolve() in ins:
+        if any(same_file(p, q) for q in ins):
             raise InputFileError(f"{p}: refusing to overwrite an input file; choose another "
                                  "output path")
         output_file(p)

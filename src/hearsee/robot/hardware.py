@@ -76,6 +76,7 @@ from hearsee.config import (
     is_real,
     load_yaml,
     number,
+    same_file,
     time_limit,
     whole_number,
 )
@@ -425,7 +426,7 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
                           "choose a report folder")
     ins = {p.resolve() for p in cfg.input_files() if p.exists()}
     for name, p in (("output.jsonl", cfg.output.jsonl), ("output.report", cfg.output.report)):
-        if p.resolve() in ins:
+        if any(same_file(p, q) for q in ins):
             raise ConfigError(f"{where}: {name}: {p} is an input file; choose another path")
     hit = report_overwrites(cfg.output.report, sorted(ins))
     if hit is not None:

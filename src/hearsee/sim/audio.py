@@ -28,7 +28,14 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.propagation import add_noise, simulate_free_field, simulate_room
 from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
-from hearsee.config import finite_number, is_real, output_file, to_jsonable, whole_number
+from hearsee.config import (
+    finite_number,
+    is_real,
+    output_file,
+    same_file,
+    to_jsonable,
+    whole_number,
+)
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 from hearsee.geometry import as_point, cart_to_sph
 
@@ -300,7 +307,7 @@ def save_recording(out: str | Path, x: ArrayLike, truth: Mapping[str, Any],
         raise ConfigError(f"peak must be in (0, 1] of full scale, got {peak}")
     gain = peak / m if m > 0 else 1.0
     for q in protect or []:
-        if Path(q).resolve() == js.resolve():
+        if same_file(q, js):
             raise ConfigError(f"{js}: refusing to overwrite the input file {q}; "
                               "choose another output path")
     if wav.suffix.lower() == ".flac" and subtype.upper() in ("FLOAT", "DOUBLE"):
