@@ -93,3 +93,18 @@ def test_eval_force_overwrites_the_out_file(capsys, monkeypatch, tmp_path):
     assert main(["eval", "-n", "1", "--duration", "2", "-o", str(out), "--force"]) == 0
     assert json.loads(out.read_text(encoding="utf-8"))["summary"] == {"scenarios": 1}
     assert json.loads(capsys.readouterr().out) == {"scenarios": 1}
+
+
+@pytest.mark.parametrize("n", ["0", "1000001", "100000000000"])
+def test_eval_scenario_count_out_of_range_is_one_line(n, capsys, tmp_path, monkeypatch):
+    """`hearsee eval -n 100000000000` built a list of every seed first: a MemoryError
+    traceback. The count is checked (1 to MAX_SCENARIOS) before anything runs."""
+    from hearsee.robot.evaluate import MAX_SCENARIOS
+
+    assert MAX_SCENARIOS == 1_000_000
+    monkeypatch.chdir(tmp_path)
+    assert main(["eval", "-n", n, "--workers", "1"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.startswith("hearsee: error: --scenarios must be ") and \
+        err.count("\n") == 1, err
+    assert list(tmp_path.iterdir()) == []

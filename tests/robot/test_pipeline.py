@@ -284,6 +284,13 @@ def test_demo_refuses_export_over_an_input_or_an_existing_file_before_running(
     err = capsys.readouterr().err
     assert "file exists; pass --force" in err and "Traceback" not in err
     assert old.read_bytes() == b"keep" and not out.exists()
+    # the report's own files, even with --force (it replaced an earlier report's log.json)
+    out.mkdir()
+    (out / "log.json").write_text("[]", encoding="utf-8")
+    assert main(["demo", "-o", str(out), "-q", "--force", option, str(out / "log.json")]) == 2
+    err = capsys.readouterr().err
+    assert "one of the report's own files" in err and err.count("\n") == 1
+    assert (out / "log.json").read_text(encoding="utf-8") == "[]"
 
 
 def test_track_is_dropped_without_visual_fixes_even_when_nobody_speaks(monkeypatch):

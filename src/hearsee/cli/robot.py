@@ -48,6 +48,11 @@ def demo_cmd(
     if hit is not None:
         raise ConfigError(f"--out {out}: the report would overwrite the input {hit}; choose "
                           "another folder")
+    for opt, p in (("--rerun", rerun), ("--mcap", mcap)):
+        if p is not None and report_overwrites(out, [p]) is not None:
+            # (--force let the export replace the report's log.json: a broken report)
+            raise ConfigError(f"{opt} {p} is one of the report's own files (--out {out}); "
+                              "choose another path")
     check_exports(rerun, mcap, inputs, force)
     with progress(f"scenario {sc.name}", total=sc.duration_s, enabled=not quiet) as advance:
         result = run_scenario(sc, progress=advance)

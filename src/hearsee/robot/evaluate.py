@@ -22,7 +22,7 @@ from hearsee.config import finite_number, whole_number
 from hearsee.errors import ConfigError
 from hearsee.robot.scenario import MAX_DURATION_S, MIN_DURATION_S
 
-__all__ = ["EvalResult", "evaluate", "run_one", "summarize"]
+__all__ = ["MAX_SCENARIOS", "EvalResult", "evaluate", "run_one", "summarize"]
 
 
 def run_one(seed: int, duration_s: float = 6.0) -> dict[str, Any]:
@@ -74,6 +74,11 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
+#: Most scenarios one evaluation runs: a million is about 6 CPU-years at ~6 s each (the
+#: per-scenario results are held in memory); a larger count is a typo, not a plan.
+MAX_SCENARIOS = 1_000_000
+
+
 def evaluate(
     n_scenarios: int,
     seed0: int = 0,
@@ -82,7 +87,8 @@ def evaluate(
     progress: Callable[[int], None] | None = None,
     duration_s: float = 6.0,
 ) -> EvalResult:
-    """Run ``n_scenarios`` random scenarios with seeds ``seed0 .. seed0 + n - 1``.
+    """Run ``n_scenarios`` random scenarios (1 to :data:`MAX_SCENARIOS`) with seeds
+    ``seed0 .. seed0 + n - 1``.
 
     Parameters
     ----------
@@ -96,8 +102,8 @@ def evaluate(
         Simulated seconds per scenario, within a scenario's range
         (:data:`hearsee.robot.scenario.MIN_DURATION_S` - ``MAX_DURATION_S``, 1-120 s).
     """
-    # (a string or None raised a builtin TypeError from the comparisons)
-    n_scenarios = whole_number("--scenarios", n_scenarios, 1)
+    # (a string or None raised a builtin TypeError from the comparisons; 1e11 a MemoryError)
+    n_scenarios = whole_number("--scenarios", n_scenarios, 1, MAX_SCENARIOS)
     # seconds: a scenario's range (a scenario file's duration_s; was 2-120 s here, 1-120 there)
     duration_s = finite_number("--duration", duration_s, MIN_DURATION_S, MAX_DURATION_S)
     if workers is not None:
