@@ -66,6 +66,11 @@ def test_yaml_round_trip(tmp_path):
         ("micro: [[0,0,0],[1,0,0]]", ConfigError, "unknown key 'micro'"),
         ("name: x", ConfigError, "missing required key 'microphones'"),
         ("microphones: [[0,0,0],[1,0,0]]\nspeed_of_sound: -3", GeometryError, "speed_of_sound"),
+        # (1e12 m/s made every TDOA ~0: a confident answer 180 deg off; 34.3: cm/ms mixed up)
+        ("microphones: [[0,0,0],[1,0,0]]\nspeed_of_sound: 1e12", GeometryError,
+         "speed_of_sound must be 100 to 2000 m/s"),
+        ("microphones: [[0,0,0],[1,0,0]]\nspeed_of_sound: 34.3", GeometryError,
+         "speed_of_sound must be 100 to 2000 m/s"),
         ("microphones: [[0,0,0], [1, 0, .nan]]", ConfigError, "finite"),
         # (true read as 1 m, '0.5' as 0.5 m; a 400-digit int was a builtin OverflowError)
         ("microphones: [[0,0,0], [true, 0, 0]]", ConfigError, "microphones: expected numbers"),

@@ -39,9 +39,9 @@ from hearsee.config import (
 )
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 
-__all__ = ["MicArray", "check_pairs", "closure_rms", "list_presets", "load_array",
-           "pair_closure_projector", "pair_matrix", "pair_tdoa", "pair_tdoa_jacobian",
-           "position_uncertainty", "residual_scaled_variance"]
+__all__ = ["SPEED_OF_SOUND_RANGE_MPS", "MicArray", "check_pairs", "closure_rms",
+           "list_presets", "load_array", "pair_closure_projector", "pair_matrix", "pair_tdoa",
+           "pair_tdoa_jacobian", "position_uncertainty", "residual_scaled_variance"]
 
 #: Default TDOA standard deviation (s): whole-capture GCC-PHAT summaries of 1-2 s of speech at
 #: 16 kHz measured 1-2 us rms at SNR 20 dB in RT60 0.3 s rooms, ~6 us at SNR 10 dB (anechoic)
@@ -52,6 +52,12 @@ DEFAULT_TDOA_STD_S = 5e-6
 
 #: Two microphones closer than this (metres) are treated as coincident.
 MIN_SPACING_M = 1e-3
+
+#: Range of an array's ``speed_of_sound`` (m/s): air from -100 to +250 degC (250-480),
+#: helium (~970) and water (~1480) fit; outside it the value is a unit or typing mistake
+#: (1e12 m/s made every TDOA ~0: `hearsee localize` answered -136 deg with confidence 1000
+#: for a source at 45 deg).
+SPEED_OF_SOUND_RANGE_MPS = (100.0, 2000.0)
 _KEYS = ("name", "speed_of_sound", "microphones", "mask")
 
 
@@ -73,7 +79,7 @@ class MicArray:
     positions : array (n_mics, 3)
         Microphone positions in metres, array frame.
     speed_of_sound : float
-        c0 in m/s.
+        c0 in m/s, within :data:`SPEED_OF_SOUND_RANGE_MPS`.
     name : str
         Label used in reports and JSON.
     mask : mapping or None
@@ -120,8 +126,10 @@ class MicArray:
             raise GeometryError(f"array {self.name!r}: speed_of_sound must be a number > 0 "
                                 f"(m/s), got {c!r}")
         c = float(c)
-        if c <= 0:
-            raise GeometryError(f"array {self.name!r}: speed_of_sound must be > 0, got {c}")
+        lo, hi = SPEED_OF_SOUND_RANGE_MPS
+        if not lo <= c <= hi:
+            raise GeometryError(f"array {self.name!r}: speed_of_sound must be {lo:g} to "
+                                f"{hi:g} m/s (air: about 343), got {c}")
         pos.setflags(write=False)
         object.__setattr__(self, "positions", pos)
         object.__setattr__(self, "speed_of_sound", c)
