@@ -577,3 +577,14 @@ def test_camera_and_rig_keep_copies_of_the_callers_arrays():
     np.testing.assert_array_equal(rig.R, np.eye(3))
     with pytest.raises(ValueError):
         rig.T[0] = -0.5  # the rig's own arrays are read-only
+
+
+@pytest.mark.parametrize("T", [[0.0, 1e6, 0.0], [-0.12, 0.12 * 1.5, 0.0], [-0.12, 0.0, 5.0]])
+def test_a_rig_whose_cameras_are_not_side_by_side_says_so(T):
+    """A vertical or forward baseline was refused as "the right camera is to the LEFT (T_x >
+    0)" although T_x <= 0, or with "focal_px must be ... got -67.85": neither the cause."""
+    cam = Camera.from_fov(60.0, 640, 480)
+    rig = StereoRig(cam, cam, np.eye(3), T)
+    with pytest.raises(CalibrationError, match="not side by side"):
+        rig.rectify()
+    assert StereoRig(cam, cam, np.eye(3), [-0.12, 0.01, 0.02]).rectify().baseline_m > 0

@@ -100,6 +100,7 @@ def run_cmd(
 
 def _print_checks(checks: list) -> None:
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
     t = Table(title="hearsee run --dry-run")
@@ -107,5 +108,7 @@ def _print_checks(checks: list) -> None:
     t.add_column("result")
     t.add_column("detail", overflow="fold")
     for c in checks:
-        t.add_row(c.name, "[green]ok[/green]" if c.ok else "[red]FAIL[/red]", c.detail)
+        # (escaped: rich took the "[live]" of "pip install 'hearsee[live]'" for markup)
+        t.add_row(escape(c.name), "[green]ok[/green]" if c.ok else "[red]FAIL[/red]",
+                  escape(c.detail))
     Console(width=140).print(t)

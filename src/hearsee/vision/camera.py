@@ -619,7 +619,8 @@ class StereoRig:
         the output (w, h), default the left image size. For an already rectified rig the result
         is the identity with the left K. A NaN or out-of-range ``alpha`` and a size that is
         not two whole numbers > 0 are a ConfigError (they reached OpenCV unchecked: an alpha
-        of NaN or 5 and a size of (0, 0) gave a rectification without a word).
+        of NaN or 5 and a size of (0, 0) gave a rectification without a word); a rig whose
+        cameras are not side by side (``|T_x|`` not T's largest component) a CalibrationError.
         """
         finite_number("alpha", alpha, 0.0, 1.0)
         if size is not None:
@@ -636,6 +637,13 @@ class StereoRig:
             )
         for cam in (self.left, self.right):  # (the rectification maps would drop it too)
             cam.require_no_skew("stereo rectification")
+        if abs(self.T[0]) < max(abs(self.T[1]), abs(self.T[2])):
+            # (stereoRectify then made a vertical or forward pair: the error named the LEFT
+            # camera's side, T_x > 0, or a negative focal length, neither the cause)
+            raise CalibrationError(
+                f"rig T = {np.round(self.T, 4).tolist()} m: the cameras are not side by side "
+                "(the baseline is mostly vertical or along the optical axis); hearsee's stereo "
+                "needs |T_x| to be T's largest component")
         out_size = tuple(size) if size is not None else self.left.size
         if self.is_rectified and out_size == self.left.size:
             K = self.left.K
