@@ -89,7 +89,8 @@ def test_calibrate_writes_rig_and_prints_errors(board_dir, tmp_path, capsys):
 
 @pytest.mark.parametrize("case", ["no_match", "no_board", "count_mismatch", "unreadable",
                                   "overwrite_input", "bad_board", "huge_board", "bad_square",
-                                  "sizes_differ", "reference_without_m1"])
+                                  "sizes_differ", "reference_without_m1",
+                                  "reference_zero_m1", "reference_nan_m2"])
 def test_calibrate_bad_input_exits_2_with_one_line(case, board_dir, tmp_path, capsys):
     d, _ = board_dir
     out = tmp_path / "c.yaml"
@@ -140,6 +141,16 @@ def test_calibrate_bad_input_exits_2_with_one_line(case, board_dir, tmp_path, ca
         fs.release()
         args = _args(d, out, "--reference", str(ref))
         expect = "no M1 or M2 camera matrix"
+    elif case in ("reference_zero_m1", "reference_nan_m2"):
+        # (exit 0 with divide-by-zero warnings and an inf / null comparison before)
+        ref = tmp_path / "ref.yml"
+        fs = cv2.FileStorage(str(ref), cv2.FILE_STORAGE_WRITE)
+        good = np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]])
+        fs.write("M1", np.zeros((3, 3)) if case == "reference_zero_m1" else good)
+        fs.write("M2", good if case == "reference_zero_m1" else np.full((3, 3), np.nan))
+        fs.release()
+        args = _args(d, out, "--reference", str(ref))
+        expect = ": M1: camera K" if case == "reference_zero_m1" else ": M2: camera K"
     else:  # sizes_differ
         for i in range(3):
             cv2.imwrite(str(tmp_path / f"left{i}.png"), np.full((60, 80), 128, np.uint8))

@@ -83,8 +83,8 @@ def calibrate_cmd(
 def _read_reference(reference: Path) -> dict:
     """The camera matrices ``{"M1": K, "M2": K}`` (3x3, pixels) of an OpenCV
     stereo_calib-style FileStorage file (at least one of them)."""
-    from hearsee.errors import ConfigError
-    from hearsee.vision.camera import read_opencv_yaml
+    from hearsee.errors import CalibrationError, ConfigError
+    from hearsee.vision.camera import Camera, read_opencv_yaml
 
     ref = read_opencv_yaml(reference)
     out = {}
@@ -93,6 +93,10 @@ def _read_reference(reference: Path) -> dict:
             continue
         if getattr(ref[key], "shape", None) != (3, 3):
             raise ConfigError(f"{reference}: {key} is not a 3x3 matrix")
+        try:  # (an all-zero or NaN matrix gave divide warnings and an inf/null comparison)
+            Camera(ref[key])
+        except CalibrationError as exc:
+            raise ConfigError(f"{reference}: {key}: {exc}") from None
         out[key] = ref[key]
     if not out:
         raise ConfigError(f"{reference}: no M1 or M2 camera matrix to compare with")
