@@ -182,6 +182,15 @@ def test_bad_robot_files_and_options(robot_dir, capsys):
     assert main(["run", "--config", str(robot_dir / "robot2.yaml"), "--dry-run",
                  "--out", str(robot_dir / "prev")]) == 2
     assert "would overwrite the input file" in capsys.readouterr().err
+    # a head pivot at or below the floor passed the dry run (the detector then got a camera
+    # height below the floor)
+    for z in (-5.0, 0.0):
+        below = {**yaml.safe_load(_config(robot_dir).read_text(encoding="utf-8"))}
+        below["head"] = {**below.get("head", {}), "pivot_m": [0.0, 0.0, z]}
+        (robot_dir / "below.yaml").write_text(yaml.safe_dump(below), encoding="utf-8")
+        assert main(["run", "--config", str(robot_dir / "below.yaml"), "--dry-run"]) == 2
+        err = capsys.readouterr().err
+        assert "pivot must be above the floor" in err and err.count("\n") == 1
     # --mcap / --rerun over an input (the calibration) or an existing file: refused before the
     # devices are opened (no sounddevice is faked here, so a run would fail differently)
     calib = robot_dir / "rig.yaml"

@@ -364,6 +364,9 @@ def _head(d: Mapping[str, Any], where: str) -> HeadConfig:
 
     check_keys(d, _HEAD, where)
     pivot = check_head_pivot(d.get("pivot_m", [0.0, 0.0, 1.2]), f"{where}.pivot_m", ConfigError)
+    if not pivot[2] > 0:  # (passed: the live loop then gave the detector a camera under the floor)
+        raise ConfigError(f"{where}.pivot_m: the pivot must be above the floor (z > 0 m; the "
+                          f"robot frame's origin is on the floor), got z = {pivot[2]:g} m")
     offset = check_head_offset(d.get("offset_m", [0.0, 0.0, 0.0]), f"{where}.offset_m",
                                ConfigError)
     lo, hi = pan_limits_deg(_pair(d, "pan_limits_deg", (-170.0, 170.0), where),
