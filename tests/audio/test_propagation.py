@@ -259,3 +259,24 @@ def test_signal_helpers_refuse_text_and_ragged_signals():
     assert delay_signals(s.tolist(), [1e-4], 16000).shape == (1, 400)
     assert resample(s, 16000, 8000).shape == (200,)
     np.testing.assert_array_equal(add_noise(s, None), s)
+
+
+def test_add_noise_refuses_an_snr_out_of_its_range():
+    """10**(snr/10) overflowed (OverflowError) at 1e6 dB, and -500 dB drowned the signal in
+    noise 1e50 times its power, silently. The range is [-60, 200] dB, its ends included."""
+    from hearsee.audio.propagation import MAX_SNR_DB, MIN_SNR_DB, check_snr_db
+
+    assert (MIN_SNR_DB, MAX_SNR_DB) == (-60.0, 200.0)
+    s = white_noise(0.1, 16000, rng=1)
+    for snr in (1e6, -500.0, 200.001, -60.001, np.float32(1e30), 10**400 // 10**100):
+        with pytest.raises(ConfigError, match="SNR must be within -60 to 200 dB"):
+            add_noise(s, snr, rng=0)
+    for snr in (float("nan"), "10", [10.0]):
+        with pytest.raises(ConfigError, match="SNR must be a finite number of dB"):
+            check_snr_db(snr)
+    assert check_snr_db(None) is None and check_snr_db(np.int64(20)) == 20.0
+    # at the ends: the noise is the clean signal's power times 10**(-snr/10)
+    low = add_noise(s, -60.0, rng=3) - s
+    assert np.mean(low**2) / np.mean(s**2) == pytest.approx(1e6, rel=0.15)
+    high = add_noise(s, 200.0, rng=3) - s
+    assert np.mean(high**2) / np.mean(s**2) == pytest.approx(1e-20, rel=0.15)

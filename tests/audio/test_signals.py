@@ -333,3 +333,56 @@ def test_a_signal_file_too_short_to_loop_is_refused(tmp_path):
     assert y.shape == (FS // 2,) and np.mean(y**2) == pytest.approx(1.0)
     np.testing.assert_allclose(y[MIN_SAMPLES:2 * MIN_SAMPLES], y[:MIN_SAMPLES])
     np.testing.assert_allclose(y[:MIN_SAMPLES] / y[0], x / x[0], rtol=1e-5)
+
+
+def test_a_signal_file_below_1000_hz_is_refused(tmp_path):
+    """A signal file at 1 Hz (a wrong header) was resampled to the simulation's rate: 100
+    samples became 1.6 million (and 200000 asked for 23.8 GiB). 1000 Hz is the least."""
+    from hearsee.audio.signals import MIN_SIGNAL_FILE_FS_HZ
+
+    assert MIN_SIGNAL_FILE_FS_HZ == 1000
+    x = 0.3 * np.random.default_rng(3).standard_normal(100)
+    for rate in (1, 999):
+        p = tmp_path / f"r{rate}.wav"
+        sf.write(p, x, rate)
+        with pytest.raises(AudioInputError, match=rf"^{p}: the file's sample rate is {rate} Hz, "
+                                                  "below the 1000 Hz a source signal needs"):
+            make_signal(p, 0.1, FS)
+    sf.write(tmp_path / "r1000.wav", x, 1000)
+    assert make_signal(tmp_path / "r1000.wav", 0.1, FS).shape == (1600,)
+
+
+@pytest.mark.parametrize("rate, fs", [(44100, 16000), (8000, 16000), (16000, 16000),
+                                      (48000, 4000)])
+def test_make_signal_resamples_only_the_part_of_a_long_file_it_uses(tmp_path, monkeypatch,
+                                                                    rate, fs):
+    """The whole file was resampled before the trim to the duration (a long file: all of it,
+    for 0.1 s). Now only the part used plus the resampler's margin is read and resampled, and
+    the signal is the same as from the whole file resampled (scipy's resample_poly here)."""
+    from fractions import Fraction
+
+    from scipy.signal import resample_poly
+
+    import hearsee.audio.signals as signals
+
+    stereo = 0.3 * np.random.default_rng(6).standard_normal((20 * rate, 2))  # 20 s
+    p = tmp_path / "long.wav"
+    sf.write(p, stereo, rate, subtype="DOUBLE")
+    sizes = []
+    real = signals._resample
+
+    def spy(x, fs_in, fs_out):
+        sizes.append(np.shape(x)[-1])
+        return real(x, fs_in, fs_out)
+
+    monkeypatch.setattr(signals, "_resample", spy)
+    y = make_signal(p, 0.1, fs)
+    n = int(0.1 * fs)
+    mono = stereo.mean(axis=1)
+    r = Fraction(fs, rate)
+    ref = resample_poly(mono, r.numerator, r.denominator)[:n] if rate != fs else mono[:n]
+    ref = ref / np.sqrt(np.mean(ref**2))
+    assert y.shape == (n,)
+    np.testing.assert_allclose(y, ref, rtol=1e-12, atol=1e-12)
+    # at most the 0.1 s used and a margin of 20 * max(1, rate / fs) + 64 samples went through
+    assert all(k <= 0.1 * rate + 20 * max(1, rate / fs) + 66 for k in sizes), sizes

@@ -165,3 +165,119 @@ def test_simulate_refuses_a_one_sample_signal(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith(f"hearsee: error: {sig}: the signal is too short to simulate: 1 sample")
     assert len(err.splitlines()) == 1 and not out.exists()
+
+
+def _mode_args(tmp_path, mode):
+    """(output path, the options of ``simulate`` in ``mode``): static, moving or poses."""
+    if mode == "moving":
+        csv = tmp_path / "walk.csv"
+        csv.write_text("t,x,y,z\n0,1.5,-0.5,0.2\n1,1.5,0.5,0.2\n")
+        return tmp_path / "o.wav", ["--trajectory", str(csv)]
+    if mode == "poses":
+        return tmp_path / "o.yaml", ["--source", "1,0.5,0", "--poses", "0,0;30,0"]
+    return tmp_path / "o.wav", ["--source", "1,0.5,0"]
+
+
+def _outputs(tmp_path):
+    return sorted(p.name for p in tmp_path.iterdir() if p.name.startswith("o"))
+
+
+@pytest.mark.parametrize("mode", ["static", "moving", "poses"])
+@pytest.mark.parametrize("snr", ["1e6", "-500", "200.5", "-60.5", "1e308"])
+def test_simulate_refuses_an_snr_out_of_range_before_simulating(tmp_path, capsys, monkeypatch,
+                                                                 mode, snr):
+    """--snr 1e6 raised an OverflowError traceback from add_noise (10**(snr/10)), after the
+    whole simulation; --snr -500 wrote pure noise (source gain 1e-26), exit 0. Now one line,
+    exit 2, before any simulation (the simulators here fail the test if they are reached)."""
+    import hearsee.audio.active
+    import hearsee.sim.audio
+    import hearsee.sim.moving
+
+    def reached(*args, **kwargs):
+        raise AssertionError("the simulation ran before the SNR was checked")
+
+    monkeypatch.setattr(hearsee.sim.audio, "simulate_recording", reached)
+    monkeypatch.setattr(hearsee.sim.moving, "simulate_moving_recording", reached)
+    monkeypatch.setattr(hearsee.audio.active, "simulate_pose_manifest", reached)
+    out, extra = _mode_args(tmp_path, mode)
+    assert main(["simulate", str(out), "--array", "two-mic", "--duration", "0.1",
+                 "--snr", snr, *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"hearsee: error: SNR must be within -60 to 200 dB, got {float(snr):g}")
+    assert len(err.splitlines()) == 1 and _outputs(tmp_path) == []
+
+
+@pytest.mark.parametrize("snr", [-60.0, 200.0])
+def test_simulate_accepts_the_snr_range_ends(tmp_path, snr):
+    """The ends of the range are valid, and the noise is at that SNR: at -60 dB the recording
+    is 1e6 times the clean one's power of noise, at 200 dB it equals the clean one."""
+    out = tmp_path / "o.wav"
+    assert main(["simulate", str(out), "--array", "two-mic", "--source", "1,0.5,0",
+                 "--duration", "0.1", "--snr", str(snr)]) == 0
+    arr = MicArray.from_preset("two-mic")
+    x, _ = read_recording(out, arr, fs=16000)
+    gain = json.loads(out.with_suffix(".json").read_text())["gain"]
+    clean, _ = simulate_recording(arr, [1.0, 0.5, 0.0], "noise", 0.1, 16000, seed=0)
+    noise = x / gain - clean
+    ratio_db = 10 * np.log10(np.mean(clean**2) / np.mean(noise**2))
+    if snr < 0:
+        assert ratio_db == pytest.approx(snr, abs=0.2)
+    else:  # (float32 rounding of the written file only: -140 dB or so, nowhere near 200)
+        assert ratio_db > 120
+
+
+@pytest.mark.parametrize("mode", ["static", "moving", "poses"])
+@pytest.mark.parametrize("out", [".", "./", "/", "", ".."])
+def test_simulate_refuses_a_folder_as_output(tmp_path, capsys, monkeypatch, mode, out):
+    """`simulate .` (also '/', './', '') raised "ValueError: PosixPath('.') has an empty name"
+    deriving OUT.json / OUT_pose<k>.wav from it; '..' was refused in one line. Now all alike."""
+    monkeypatch.chdir(tmp_path)
+    _, extra = _mode_args(tmp_path, mode)
+    assert main(["simulate", out, "--array", "two-mic", "--duration", "0.1", *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("hearsee: error: ") and len(err.splitlines()) == 1, err
+    assert "is a folder, expected an output file name (e.g. OUT." in err
+    assert _outputs(tmp_path) == []
+
+
+@pytest.mark.parametrize("mode", ["static", "moving"])
+@pytest.mark.parametrize("offset", ["nan,0,0", "5,5", "0,0,0", "0,0.1,0"])
+def test_simulate_head_offset_needs_poses(tmp_path, capsys, mode, offset):
+    """--head-offset without --poses was ignored, exit 0 -- even a malformed one (nan,0,0 or
+    5,5). Now one line, exit 2, nothing written."""
+    out, extra = _mode_args(tmp_path, mode)
+    assert main(["simulate", str(out), "--array", "two-mic", "--duration", "0.1",
+                 "--head-offset", offset, *extra]) == 2
+    err = capsys.readouterr().err
+    assert err == "hearsee: error: --head-offset needs --poses (it places the array on the " \
+                  "turning head of a pose capture)\n"
+    assert _outputs(tmp_path) == []
+
+
+def test_simulate_head_offset_with_poses_still_applies(tmp_path):
+    """With --poses, --head-offset is the manifest's offset; without it 0,0,0."""
+    import yaml
+
+    out, extra = _mode_args(tmp_path, "poses")
+    base = ["simulate", str(out), "--array", "two-mic", "--duration", "0.1", *extra]
+    assert main([*base, "--head-offset", "0,0.1,0"]) == 0
+    assert yaml.safe_load(out.read_text())["head"]["offset_m"] == [0.0, 0.1, 0.0]
+    assert main([*base, "--force"]) == 0
+    assert yaml.safe_load(out.read_text())["head"]["offset_m"] == [0.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize("rate", [1, 999])
+def test_simulate_refuses_a_signal_file_below_1000_hz(tmp_path, capsys, rate):
+    """A --signal file at 1 Hz (a wrong header) was resampled to --fs: 100 samples became 1.6
+    million, exit 0 (200000 samples asked for 23.8 GiB). Now one line, exit 2."""
+    import soundfile as sf
+
+    sig = tmp_path / "slow.wav"
+    sf.write(sig, 0.3 * np.random.default_rng(2).standard_normal(100), rate)
+    out = tmp_path / "o.wav"
+    assert main(["simulate", str(out), "--array", "two-mic", "--source", "1,0,0",
+                 "--signal", str(sig), "--duration", "0.1"]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"hearsee: error: {sig}: the file's sample rate is {rate} Hz, below the 1000 "
+                   "Hz a source signal needs (a wrong header?); resample it to e.g. 16000 Hz\n")
+    assert not out.exists()

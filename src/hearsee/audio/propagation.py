@@ -34,9 +34,12 @@ from hearsee.geometry import norm_scale
 __all__ = [
     "MAX_IMAGE_ORDER",
     "MAX_RIR_SAMPLES",
+    "MAX_SNR_DB",
+    "MIN_SNR_DB",
     "MIN_WALL_DISTANCE_M",
     "add_noise",
     "check_heard",
+    "check_snr_db",
     "delay_signals",
     "image_sources",
     "room_impulse_responses",
@@ -59,6 +62,17 @@ MAX_IMAGE_ORDER = 200
 #: farther). 2**25 is 35 min at 16 kHz, 87 s at 384 kHz, ~0.4 GB per microphone; a 1e9 m room
 #: with RT60 0.3 s asked for 7 TiB (a MemoryError traceback).
 MAX_RIR_SAMPLES = 2**25
+
+#: The range of sensor-noise SNRs (dB) :func:`add_noise` accepts, ``[MIN_SNR_DB, MAX_SNR_DB]``.
+#: Below -60 dB no source is detectable in any recording hearsee simulates: the cross-correlation
+#: peak of two channels stands ~``sqrt(n) * 10**(snr/10)`` noise deviations high, under 0.02 at
+#: -60 dB even for the longest simulation (600 s at 384 kHz, n = 2.3e8 samples) -- such a
+#: recording is pure noise (-500 dB was written, exit 0, with a source gain of 1e-26). Above
+#: 200 dB the noise (10 orders of magnitude below the signal's amplitude) is far below the
+#: rounding of the written file (float32: ~-150 dB, 16-bit PCM: ~-98 dB), so the recording is the
+#: one without noise (leave the SNR out); ``10**(snr/10)`` overflowed beyond ~3083 dB.
+MIN_SNR_DB = -60.0
+MAX_SNR_DB = 200.0
 
 
 def _mic_positions(mics: MicArray | ArrayLike) -> NDArray:
@@ -138,18 +152,36 @@ def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: Arra
     return y * np.broadcast_to(np.asarray(gains, dtype=float), d.shape)[:, None]
 
 
+def check_snr_db(snr_db: float | None) -> float | None:
+    """``snr_db`` (dB) as a float within [:data:`MIN_SNR_DB`, :data:`MAX_SNR_DB`] (None: no
+    noise, returned as is), else a ConfigError. The check of :func:`add_noise`, which the
+    simulators reach only once the clean signals are computed: a caller with expensive work
+    before it (``hearsee simulate``) checks the SNR first with this."""
+    if snr_db is None:
+        return None
+    if not is_real(snr_db):  # (an array was numpy's ambiguous truth value, text a TypeError)
+        raise ConfigError(f"SNR must be a finite number of dB, got {snr_db!r}")
+    if not MIN_SNR_DB <= snr_db <= MAX_SNR_DB:
+        raise ConfigError(
+            f"SNR must be within {MIN_SNR_DB:g} to {MAX_SNR_DB:g} dB, got {float(snr_db):g} dB "
+            f"(below {MIN_SNR_DB:g} dB the recording is noise only; above {MAX_SNR_DB:g} dB the "
+            "noise is below the rounding of the samples: leave the SNR out for no noise)")
+    return float(snr_db)
+
+
 def add_noise(x: ArrayLike, snr_db: float | None, rng: np.random.Generator | int | None = None,
               reference_power: float | None = None) -> NDArray:
-    """Add uncorrelated white Gaussian sensor noise at ``snr_db`` per channel.
+    """Add uncorrelated white Gaussian sensor noise at ``snr_db`` (dB) per channel.
 
     The SNR is relative to ``reference_power`` (default: the mean power of ``x`` over all
-    channels). ``snr_db=None`` returns a copy of ``x``.
+    channels, in squared sample units). ``snr_db=None`` returns a copy of ``x``; otherwise it
+    must be within [:data:`MIN_SNR_DB`, :data:`MAX_SNR_DB`] dB (:func:`check_snr_db`), else a
+    ConfigError.
     """
     y = np.array(as_samples(x, "signal", finite=False), dtype=float)  # (text: read as numbers)
+    snr_db = check_snr_db(snr_db)
     if snr_db is None:
         return y
-    if not is_real(snr_db):  # (an array was numpy's ambiguous truth value, text a TypeError)
-        raise ConfigError(f"SNR must be a finite number of dB (None for no noise), got {snr_db!r}")
     rng = np.random.default_rng(rng)
     p = float(np.mean(y**2)) if reference_power is None else float(reference_power)
     if reference_power is not None and not (np.isfinite(p) and p > 0):
@@ -187,7 +219,8 @@ def simulate_free_field(
         Source position, metres. With ``far_field=True`` only its direction is used: a plane
         wave with equal amplitudes at all microphones.
     snr_db : float, optional
-        Per-channel SNR of added white sensor noise (relative to the mean received power).
+        Per-channel SNR of added white sensor noise in dB (relative to the mean received
+        power), within [:data:`MIN_SNR_DB`, :data:`MAX_SNR_DB`]; None = no noise.
     speed_of_sound : float, optional
         Defaults to the MicArray's value or 343 m/s.
 
@@ -422,7 +455,8 @@ def simulate_room(
         Position of the array-frame origin in room coordinates; the array axes are parallel
         to the room's.
     snr_db : float, optional
-        Per-channel SNR of added white sensor noise (relative to the mean received power).
+        Per-channel SNR of added white sensor noise in dB (relative to the mean received
+        power), within [:data:`MIN_SNR_DB`, :data:`MAX_SNR_DB`]; None = no noise.
     mic_positions : array (n_mics, 3), optional
         Microphone positions in the array frame overriding ``array.positions`` (e.g. a rotated
         head from ``hearsee.geometry.mic_positions_at``).

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -27,17 +27,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import as_path, input_file, is_real, output_file, real_entries
+from hearsee.config import as_path, input_file, is_real, output_file, real_entries, same_file
 from hearsee.errors import (
     AudioInputError,
     ClippingWarning,
     ConfigError,
+    HearseeError,
     InputFileError,
     TruncatedFileWarning,
 )
 
 __all__ = [
     "MIN_SAMPLES",
+    "MIN_SIGNAL_FILE_FS_HZ",
     "SIGNAL_KINDS",
     "VOICE_F0_HZ",
     "as_samples",
@@ -59,6 +61,12 @@ SIGNAL_KINDS = ("noise", "male", "female")
 #: samples repeat so fast that no delay can be told from the next repetition; one sample
 #: loops into a constant).
 MIN_SAMPLES = 64
+
+#: Lowest sample rate of a source signal file (:func:`make_signal`), Hz. No audio format in
+#: use records below it (telephone speech is 8 kHz); a lower rate is a wrong header (a script
+#: that wrote ``samplerate=1``), and resampling such a file to the simulation's rate multiplied
+#: its length by up to fs / rate: a 200000-sample file at 1 Hz asked for 23.8 GiB.
+MIN_SIGNAL_FILE_FS_HZ = 1000
 
 #: Nominal (mean) fundamental frequency of the synthetic voices, Hz.
 VOICE_F0_HZ = {"male": 120.0, "female": 220.0}
@@ -328,13 +336,23 @@ def _wav_data_shortfall(path: Path) -> tuple[int, int] | None:
         return None
 
 
-def _read_file(path: str | Path) -> tuple[NDArray, int]:
-    """Read any libsndfile format -> ``(x (n_ch, n) float64, fs)`` with typed errors."""
+def _read_file(path: str | Path,
+               frames_at: Callable[[int], int] | None = None) -> tuple[NDArray, int]:
+    """Read any libsndfile format -> ``(x (n_ch, n) float64, fs)`` with typed errors.
+
+    ``frames_at(fs)``, given the file's sample rate (Hz) before any sample is read, returns how
+    many frames to read from the start (-1: all; it may also raise to refuse the rate);
+    default: the whole file."""
     import soundfile as sf
 
     p = input_file(path, "audio file")
     try:
-        data, fs = sf.read(str(p), dtype="float64", always_2d=True)
+        with sf.SoundFile(str(p)) as f:  # (what sf.read does, with the rate known first)
+            fs = f.samplerate
+            frames = -1 if frames_at is None else frames_at(int(fs))
+            data = f.read(frames, dtype="float64", always_2d=True)
+    except HearseeError:  # frames_at's refusal (an AudioInputError is a ValueError too)
+        raise
     except (RuntimeError, sf.LibsndfileError, TypeError, ValueError) as exc:
         raise AudioInputError(
             f"{p}: not an audio file or a format libsndfile cannot read ({exc}); "
@@ -368,7 +386,10 @@ def make_signal(spec: str | Path, duration_s: float, fs: float,
     or the path of an audio file (mono mixdown, resampled to ``fs``, looped or trimmed to the
     duration and scaled to unit mean power). A file shorter than :data:`MIN_SAMPLES` samples
     at ``fs`` is an AudioInputError: looped, it repeats faster than a delay can be measured
-    (a 1-sample file was looped into a constant signal, recorded and localized as noise).
+    (a 1-sample file was looped into a constant signal, recorded and localized as noise). So is
+    a file sampled below :data:`MIN_SIGNAL_FILE_FS_HZ` (1000 Hz). Only the part of a long file
+    that the duration needs is read and resampled (the samples are those of the whole file
+    resampled: the part read extends past the duration by the resampler's filter length).
     """
     n = _check_duration(duration_s, fs)
     s = str(spec)
@@ -381,7 +402,35 @@ def make_signal(spec: str | Path, duration_s: float, fs: float,
         raise ConfigError(
             f"unknown signal {s!r}: expected 'noise', 'male', 'female' or an audio file path"
         )
-    x, _ = load_wav(p, fs)
+    fs_out = int(round(fs))
+
+    def frames_at(fs_in: int) -> int:
+        """The file's first frames that make the signal: the whole file would be resampled
+        before the trim to ``n`` (a 10-minute file for a 2 s simulation). Its margin, twice
+        resample_poly's filter half-length (10 * max(up, down) output samples = 10 * max(1,
+        fs_in / fs) input samples) plus 64, leaves the ``n`` samples used bit-identical to
+        those of the whole file resampled (checked for 44.1k/48k/8k -> 16k, 1k -> 384k and
+        384k -> 4k Hz; each needs about half this margin). At least MIN_SAMPLES output samples
+        are kept, so the length check below still sees a long file as long."""
+        if fs_in < MIN_SIGNAL_FILE_FS_HZ:
+            raise AudioInputError(
+                f"{p}: the file's sample rate is {fs_in} Hz, below the {MIN_SIGNAL_FILE_FS_HZ} Hz "
+                "a source signal needs (a wrong header?); resample it to e.g. 16000 Hz")
+        if fs_in == fs_out:
+            asked[0] = max(n, MIN_SAMPLES)
+        else:
+            margin = int(np.ceil(20 * max(1.0, fs_in / fs))) + 64
+            asked[0] = int(np.ceil(max(n, MIN_SAMPLES) * fs_in / fs)) + margin
+        return asked[0]
+
+    asked = [0]
+    x, fs_in = _read_file(p, frames_at)
+    if x.shape[1] == 0:
+        raise AudioInputError(f"{p}: the file contains no samples")
+    whole = x.shape[1] < asked[0]  # (else the file may go on past the part read)
+    x = x.mean(axis=0)
+    if fs_in != fs_out:
+        x = _resample(x, fs_in, fs)
     if len(x) < MIN_SAMPLES:
         raise AudioInputError(
             f"{p}: the signal is too short to simulate: {len(x)} sample"
@@ -391,7 +440,8 @@ def make_signal(spec: str | Path, duration_s: float, fs: float,
     if not np.all(np.isfinite(x)):
         raise AudioInputError(f"{p}: the file contains NaN or infinite samples")
     if not np.any(x):
-        raise AudioInputError(f"{p}: the file is silent (all samples are zero)")
+        raise AudioInputError(f"{p}: the file is silent (all samples are zero)" if whole else
+                              f"{p}: the first {duration_s} s of the file are silent")
     x = np.tile(x, int(np.ceil(n / len(x))))[:n]
     power = np.mean(x**2)
     if power <= 0:  # the looped/trimmed part is silent
@@ -504,15 +554,6 @@ def read_recording(
     return x, fs_in
 
 
-def _same_file(a: Path, b: Path) -> bool:
-    try:
-        if a.exists() and b.exists():
-            return os.path.samefile(a, b)
-    except OSError:
-        pass
-    return a.resolve() == b.resolve()
-
-
 def write_recording(
     path: str | Path,
     x: ArrayLike,
@@ -538,7 +579,7 @@ def write_recording(
     if protect is not None:
         items = [protect] if isinstance(protect, str | Path) else list(protect)
         for q in items:
-            if q is not None and _same_file(p, Path(q)):
+            if q is not None and same_file(p, q):
                 raise ConfigError(
                     f"{p}: refusing to overwrite the input file {q}; choose another output path"
                 )

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from hearsee.cli._app import app, err_console, parse_floats, progress, refuse_overwrite
-from hearsee.errors import ConfigError
+from hearsee.errors import ConfigError, InputFileError
 
 
 def _room_from_options(room: str | None, rt60: float | None,
@@ -25,6 +25,18 @@ def _room_from_options(room: str | None, rt60: float | None,
     if array_at is not None:
         out["array_at"] = parse_floats(array_at, 3, "--array-at")
     return out
+
+
+def _check_output(out: Path, poses: bool) -> None:
+    """Before any work: ``out`` names a file of the right type, else one line. ``.``, ``/`` and
+    ``''`` (a folder, with an empty name) crashed deriving OUT.json / OUT_pose<k>.wav from it
+    (ValueError traceback); a wrong suffix was refused only after the whole simulation."""
+    example = "OUT.yaml" if poses else "OUT.wav"
+    if out.is_dir() or out.name in ("", ".", ".."):
+        raise InputFileError(f"{out}: is a folder, expected an output file name (e.g. "
+                             f"{example})")
+    if not poses and out.suffix.lower() not in (".wav", ".flac"):
+        raise ConfigError(f"{out}: output must end in .wav (or .flac)")
 
 
 def _metres(d: float) -> str:
@@ -99,11 +111,13 @@ def simulate_cmd(
         "pose (OUT_pose<k>.wav) and OUT.yaml, a pose manifest with the ground truth for "
         "`hearsee localize3d`. --source is then in the robot frame (head pivot at the origin; "
         "--array-at puts the pivot in the room)."),
-    head_offset: str = typer.Option(
-        "0,0,0", "--head-offset",
-        help="With --poses: array origin relative to the head pivot (head frame), X,Y,Z m."),
+    head_offset: str | None = typer.Option(
+        None, "--head-offset",
+        help="With --poses: array origin relative to the head pivot (head frame), X,Y,Z m "
+        "(default 0,0,0)."),
 ) -> None:
     """Simulate a recording of a static source and write OUT.wav + OUT.json (ground truth)."""
+    from hearsee.audio.propagation import check_snr_db
     from hearsee.sim.audio import save_recording, simulate_recording
 
     if (source is None) == (trajectory is None):
@@ -111,6 +125,11 @@ def simulate_cmd(
                           "(moving source)")
     if trajectory is not None and poses is not None:
         raise ConfigError("--trajectory (moving source) cannot be combined with --poses")
+    if head_offset is not None and poses is None:  # (it was ignored, even when malformed)
+        raise ConfigError("--head-offset needs --poses (it places the array on the turning "
+                          "head of a pose capture)")
+    _check_output(out, poses is not None)
+    snr = check_snr_db(snr)  # (before the simulation: add_noise checks it only at its end)
     protect = [p for p in (signal, array) if Path(p).is_file()]  # inputs no output may replace
     if poses is not None:
         from hearsee.audio.active import parse_poses, simulate_pose_manifest
@@ -118,12 +137,13 @@ def simulate_cmd(
         if far_field:
             raise ConfigError("--far-field does not apply with --poses")
         pose_list = parse_poses(poses)
+        offset = parse_floats("0,0,0" if head_offset is None else head_offset, 3, "--head-offset")
         caps = [out.with_name(f"{out.stem}_pose{k}.wav") for k in range(len(pose_list))]
         refuse_overwrite([out, *caps, *(c.with_suffix(".json") for c in caps)], protect, force)
         man, files = simulate_pose_manifest(
             out, array, parse_floats(source, 3, "--source"), pose_list, signal=signal,
             duration_s=duration, fs=fs, snr_db=snr, room=_room_from_options(room, rt60, array_at),
-            seed=seed, offset_m=parse_floats(head_offset, 3, "--head-offset"),
+            seed=seed, offset_m=offset,
             subtype="PCM_16" if pcm16 else "FLOAT",
             protect=protect)
         err_console.print(f"wrote {man} (pose manifest) and {len(files)} captures",
