@@ -52,3 +52,9 @@ class TruncatedFileWarning(UserWarning):
 class InconsistentMeasurementWarning(UserWarning):
     """The measurements contradict each other (e.g. TDOAs of several head poses that no single
     source explains); the estimate should not be trusted."""
+
+
+class DegenerateInputWarning(UserWarning):
+    """The input is valid but degenerate for the task (stereo images that barely match, a flat
+    thermal frame, image points outside the recording): the answer describes the input more
+    than the scene."""

@@ -67,6 +67,29 @@ def test_the_same_image_as_left_and_right_is_refused(folder, capsys):
     assert out == "" and err.count("\n") == 1 and "are the same image" in err, err
 
 
+def test_swapped_images_and_a_flat_thermal_image_are_warned_about(folder, capsys, tmp_path):
+    """Left and right swapped, or a flat thermal frame (lens cap, frozen camera), printed
+    "0 human(s)" without a word. Now a warning names the likely cause (the answer stays: it
+    is what the input gives); the correct pair and a real thermal image warn nothing."""
+    d, _ = folder
+    assert main(_args(d)) == 0
+    assert capsys.readouterr().err == ""
+    args = _args(d, thermal=None)
+    i, j = args.index("--left") + 1, args.index("--right") + 1
+    args[i], args[j] = args[j], args[i]
+    assert main(args) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["humans"] == []
+    assert err.startswith("hearsee: warning: only ") and "swapped" in err and \
+        err.count("\n") == 1, err
+    flat = tmp_path / "flat.npy"
+    np.save(flat, np.full((60, 80), 21.0, np.float32))
+    assert main(_args(d, thermal=None) + ["--thermal", str(flat)]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["humans"] == []
+    assert "thermal image is flat" in err and err.count("\n") == 1, err
+
+
 def test_stereo_only_table_and_overlay(folder, capsys, tmp_path):
     d, _ = folder
     ov = tmp_path / "ov.png"
