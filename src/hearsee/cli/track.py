@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
+import warnings
+from collections.abc import Sequence
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
@@ -26,6 +29,34 @@ class Tracker(StrEnum):
 class Detector(StrEnum):
     hog = "hog"
     face = "face"
+
+
+#: How far (m) the camera's optical centre may be from the array's centre (mean microphone
+#: position): the rig is one robot head or body, where a camera sits well within a metre or
+#: two of its microphones; 5 m leaves room for any real robot, while a position beyond it is a
+#: wrong unit (cm, mm) or a swapped coordinate, which gave no 3D fix without a word.
+CAMERA_MAX_OFFSET_M = 5.0
+
+
+def _camera_pose(camera_at: str | None, pan: float | None, tilt: float | None,
+                 array_centre: Sequence[float]) -> tuple[list[float], float, float]:
+    """--camera-at, --camera-pan, --camera-tilt checked (defaults 0,0,0 / 0 / 0): pan in
+    [-180, 180] deg, tilt in [-90, 90] deg, the centre within :data:`CAMERA_MAX_OFFSET_M` of
+    the array's centre; typer.BadParameter otherwise (a pan of 1e300, a tilt of 95 or a
+    camera 100 m away gave no 3D fix and no message)."""
+    pos = parse_floats("0,0,0" if camera_at is None else camera_at, 3, "--camera-at")
+    pan = 0.0 if pan is None else pan
+    tilt = 0.0 if tilt is None else tilt
+    if not -180.0 <= pan <= 180.0:
+        raise typer.BadParameter(f"--camera-pan must be in [-180, 180] degrees, got {pan:g}")
+    if not -90.0 <= tilt <= 90.0:
+        raise typer.BadParameter(f"--camera-tilt must be in [-90, 90] degrees, got {tilt:g}")
+    off = math.dist(pos, array_centre)
+    if not off <= CAMERA_MAX_OFFSET_M:
+        raise typer.BadParameter(
+            f"--camera-at: {camera_at} is {off:.3g} m from the array's centre; the camera must "
+            f"be within {CAMERA_MAX_OFFSET_M:g} m of its microphones (metres, array frame)")
+    return pos, pan, tilt
 
 
 def _device_spec(text: str) -> int | str:
@@ -56,20 +87,24 @@ def track_cmd(
         "--camera-device", help="Live camera index (needs --camera).")] = None,
     image_points: Annotated[Path | None, typer.Option(
         "--image-points", help="CSV t,u,v of the source's image point (needs --camera; "
-        "empty u,v = not visible; a point off the camera's image is an error).")] = None,
+        "empty u and v = not visible; only one of them, or a point off the camera's image, is "
+        "an error).")] = None,
     detector: Annotated[Detector, typer.Option(
         "--detector", help="Person detector for --video / --camera-device.")] = Detector.hog,
     camera: Annotated[Path | None, typer.Option(
         "--camera", help="Camera calibration YAML.")] = None,
-    camera_at: Annotated[str, typer.Option(
-        "--camera-at", help="Camera optical centre X,Y,Z in the array frame, metres. Measure "
+    camera_at: Annotated[str | None, typer.Option(
+        "--camera-at", help="Camera optical centre X,Y,Z in the array frame, metres (needs "
+        "--camera; default 0,0,0; at most 5 m from the array's centre). Measure "
         "it (and the pan) carefully: the range comes from the camera-array parallax, 10 cm "
         "off sideways moved the 3D fixes 0.25-0.8 m in bench/mounting.py, and the audio "
-        "cannot tell.")] = "0,0,0",
-    camera_pan: Annotated[float, typer.Option(
-        "--camera-pan", help="Camera pan (deg, toward +y).")] = 0.0,
-    camera_tilt: Annotated[float, typer.Option(
-        "--camera-tilt", help="Camera tilt (deg, up).")] = 0.0,
+        "cannot tell.")] = None,
+    camera_pan: Annotated[float | None, typer.Option(
+        "--camera-pan", help="Camera pan (deg, toward +y; -180 to 180; needs --camera; "
+        "default 0).")] = None,
+    camera_tilt: Annotated[float | None, typer.Option(
+        "--camera-tilt", help="Camera tilt (deg, up; -90 to 90; needs --camera; default 0).")
+    ] = None,
     frame_ms: Annotated[float, typer.Option(
         "--frame-ms", help="Frame length in milliseconds.")] = 64.0,
     hop_ms: Annotated[float, typer.Option("--hop-ms", help="Frame hop in milliseconds.")] = 32.0,
@@ -115,7 +150,9 @@ def track_cmd(
     from hearsee.errors import ConfigError
     from hearsee.stream.pipeline import DeviceSource, StreamConfig, StreamPipeline, WavSource
 
-    if (recording is None) == (device is None):
+    if recording is None and device is None:
+        raise ConfigError("give a recording file or --device (live input)")
+    if recording is not None and device is not None:
         raise ConfigError("give either a recording file or --device (live input), not both")
     if recording is not None and (fs is not None or duration is not None):
         # (they were ignored without a word: a file has its own rate and length)
@@ -131,6 +168,11 @@ def track_cmd(
     if camera is not None and not visual:
         raise ConfigError("--camera needs an image-point source: --video, --camera-device or "
                           "--image-points")
+    pose = [n for n, o in (("--camera-at", camera_at), ("--camera-pan", camera_pan),
+                           ("--camera-tilt", camera_tilt)) if o is not None]
+    if pose and camera is None:  # (they were ignored without a word)
+        raise ConfigError(f"{' / '.join(pose)} need{'s' if len(pose) == 1 else ''} --camera "
+                          "CAM.yaml and an image-point source (they place the camera)")
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
     if rate_tau is None:
         rate_tau = DIRECTION_RATE_TAU_S
@@ -145,14 +187,15 @@ def track_cmd(
         from hearsee.stream.video import CsvImagePoints, VideoImagePoints
         from hearsee.vision.camera import load_camera
 
+        pos, pan, tilt = _camera_pose(camera_at, camera_pan, camera_tilt, arr.centre)
         cam = load_camera(camera)
-        rig = AudioVisualRig.mounted(arr, cam, parse_floats(camera_at, 3, "--camera-at"),
-                                     camera_pan, camera_tilt)
+        rig = AudioVisualRig.mounted(arr, cam, pos, pan, tilt)
         if image_points is not None:
             points = CsvImagePoints(image_points, camera=cam)
-        else:
+        else:  # (a video file that delivers no frame: refused here, before the audio)
             points = VideoImagePoints(camera_device if video is None else video,
-                                      detector=detector.value, expected_size=cam.size)
+                                      detector=detector.value, expected_size=cam.size,
+                                      where="--video")
     cfg = StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms, method=method.value.replace("gcc-", ""),
                        itd_filter=itd_filter, in_plane=in_plane,
                        direction_modes_dps2=IMM_MODES_DPS2 if tracker is Tracker.imm else None,
@@ -209,6 +252,18 @@ def track_cmd(
             highlight=False)
     if not any(u.measured for u in updates):
         err_console.print("track: no frame held a localizable source", highlight=False)
+    if image_points is not None and updates and not points.visible_within(
+            updates[0].t, updates[-1].t):
+        # (rows all outside the recording, e.g. times in ms or of another take: no 3D fix
+        # and no message)
+        from hearsee.errors import DegenerateInputWarning
+
+        span = points.visible_span()
+        where = ("the file has no visible point: every u,v is empty" if span is None else
+                 f"the file's visible points are from {span[0]:g} s to {span[1]:g} s")
+        warnings.warn(f"{image_points}: no image point lies within the recording's time span "
+                      f"(0-{st.audio_s:.2f} s; {where}), so no 3D position can be given",
+                      DegenerateInputWarning, stacklevel=1)
     if st.status == "stalled":  # as 'hearsee run': what was printed is valid, the run is not
         err_console.print("track: the audio input stopped delivering samples", highlight=False)
         raise typer.Exit(1)

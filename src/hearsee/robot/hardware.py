@@ -85,6 +85,7 @@ from hearsee.stream.device import (  # (import_sounddevice, resolve_input_device
     import_sounddevice,
     resolve_input_device,
 )
+from hearsee.stream.video import read_frame  # (re-exported: its home was here)
 
 if TYPE_CHECKING:  # imported when run_robot runs (the simulated loop's heavier imports)
     from hearsee.robot.pipeline import RunResult
@@ -463,19 +464,6 @@ def open_capture(spec: DeviceSpec, where: str) -> Any:
         raise ConfigError(f"{where}: cannot open camera {spec!r} (check the index, path or URL "
                           "and that no other program uses it)")
     return cap
-
-
-def read_frame(cap: Any, spec: DeviceSpec, where: str, size: tuple[int, int] | None = None
-               ) -> NDArray:
-    """One frame from an open capture; ConfigError when none comes or it has the wrong size
-    (``size`` = (width, height))."""
-    ok, frame = cap.read()
-    if not ok or frame is None:
-        raise ConfigError(f"{where}: camera {spec!r} opened but delivered no frame")
-    if size is not None and (frame.shape[1], frame.shape[0]) != tuple(size):
-        raise ConfigError(f"{where}: camera {spec!r} delivers {frame.shape[1]}x{frame.shape[0]} "
-                          f"frames but the calibration expects {size[0]}x{size[1]}")
-    return frame
 
 
 def verify_audio_device(cfg: RobotConfig, sd: Any = None) -> dict[str, Any]:

@@ -4,16 +4,18 @@ The camera-ray + ITD fusion (:func:`hearsee.fusion.audiovisual.locate_on_ray`) n
 frame, the pixel ``(u, v)`` where the source appears. Two providers, both callables
 ``points(t_seconds) -> (u, v) or None``:
 
-* :class:`CsvImagePoints` reads ``t,u,v`` rows (seconds, pixels; empty u/v = not seen), e.g.
-  written by a simulation or an external detector, and interpolates linearly between rows that
-  are at most ``max_gap_s`` apart. An infinite pixel, or (given the calibrated camera) one
-  outside its image by more than :data:`IMAGE_POINT_MARGIN` of the image size, is refused
-  with an error naming the file and line, like any other row it cannot use.
-* :class:`VideoImagePoints` reads a video file or a camera (OpenCV ``VideoCapture``) and runs a
-  simple detector on the frame at time t: OpenCV's HOG people detector (Dalal & Triggs 2005;
-  ``detector="hog"``, image point = 12 % down the person box, about the mouth of a standing
-  person) or the Haar frontal-face cascade that ships in ``cv2.data`` (Viola & Jones 2001;
-  ``detector="face"``, image point = 65 % down the face box). These are honest baselines, not
+* :class:`CsvImagePoints` reads ``t,u,v`` rows (seconds, pixels; empty u and v = not seen),
+  e.g. written by a simulation or an external detector, and interpolates linearly between rows
+  that are at most ``max_gap_s`` apart. An infinite pixel, a row with only one of u and v,
+  or (given the calibrated camera) a pixel outside its image by more than
+  :data:`IMAGE_POINT_MARGIN` of the image size, is refused with an error naming the file and
+  line, like any other row it cannot use.
+* :class:`VideoImagePoints` reads a video file (which must deliver a first frame: a corrupt or
+  empty one is refused) or a camera (OpenCV ``VideoCapture``) and runs a simple detector on
+  the frame at time t: OpenCV's HOG people detector (Dalal & Triggs 2005; ``detector="hog"``,
+  image point = 12 % down the person box, about the mouth of a standing person) or the Haar
+  frontal-face cascade that ships in ``cv2.data`` (Viola & Jones 2001; ``detector="face"``,
+  image point = 65 % down the face box). These are honest baselines, not
   state-of-the-art detectors: they miss people seen from the side or partly out of view
   (then the tracker falls back to direction-only updates), and with several people they
   pick the strongest detection, which need not be the speaker.
@@ -41,7 +43,7 @@ from hearsee.config import finite_number, input_file, whole_number
 from hearsee.errors import ConfigError, ImageInputError
 
 __all__ = ["IMAGE_POINT_MARGIN", "CsvImagePoints", "VideoImagePoints", "detect_source_point",
-           "save_image_points"]
+           "read_frame", "save_image_points"]
 
 #: How far outside the camera image (a fraction of its larger side, e.g. 64 px of a 640 x 480
 #: image) an image point of a CSV may lie: a detector's point just past the edge is still a
@@ -49,10 +51,27 @@ __all__ = ["IMAGE_POINT_MARGIN", "CsvImagePoints", "VideoImagePoints", "detect_s
 IMAGE_POINT_MARGIN = 0.1
 
 
+def read_frame(cap: Any, spec: Any, where: str, size: tuple[int, int] | None = None
+               ) -> NDArray:
+    """One frame from an open OpenCV capture ``cap`` (of the camera or file ``spec``);
+    ConfigError prefixed ``where`` when none comes or it has the wrong size (``size`` =
+    (width, height), pixels). The one "delivers frames" check of ``hearsee run --dry-run`` and
+    ``hearsee track --video``."""
+    ok, frame = cap.read()
+    if not ok or frame is None:
+        raise ConfigError(f"{where}: camera {spec!r} opened but delivered no frame")
+    if size is not None and (frame.shape[1], frame.shape[0]) != tuple(size):
+        raise ConfigError(f"{where}: camera {spec!r} delivers {frame.shape[1]}x{frame.shape[0]} "
+                          f"frames but the calibration expects {size[0]}x{size[1]}")
+    return frame
+
+
 class CsvImagePoints:
     """Image points from a CSV file with header ``t,u,v`` (seconds, pixels).
 
-    Rows with empty ``u``/``v`` mean "source not visible". ``points(t)`` interpolates between
+    Rows with empty ``u`` and ``v`` mean "source not visible"; a row with only one of them
+    (``0.5,195,``) is ambiguous -- a lost column or a typo -- and a ConfigError naming the file
+    and line. ``points(t)`` interpolates between
     the two rows around t when they are at most ``max_gap_s`` apart, returns the nearest row
     within ``max_gap_s / 2`` otherwise, else None.
 
@@ -61,6 +80,8 @@ class CsvImagePoints:
     :data:`IMAGE_POINT_MARGIN` of the larger side is a ConfigError naming the file and line
     (it was used as a ray through no pixel of the camera). An infinite pixel (``inf``,
     ``1e400``) is one always; empty cells (or NaN) mean "not visible".
+    :meth:`visible_within` tells whether any visible row can be used in a time span (``hearsee
+    track`` warns when none lies within the recording).
     """
 
     def __init__(self, path: str | Path, max_gap_s: float = 0.2, camera: Any = None) -> None:
@@ -110,13 +131,30 @@ class CsvImagePoints:
             return float(self.uv[best, 0]), float(self.uv[best, 1])
         return None
 
+    def visible_within(self, t_start: float, t_end: float) -> bool:
+        """Whether ``points(t)`` can give an image point for some t in ``[t_start, t_end]``:
+        a visible row (finite u, v) lies within ``max_gap_s / 2`` of the span (interpolation
+        needs two visible rows, the nearer of which is that close)."""
+        seen = self.t[np.all(np.isfinite(self.uv), axis=1)]
+        half = self.max_gap_s / 2
+        return bool(np.any((seen >= t_start - half) & (seen <= t_end + half)))
+
+    def visible_span(self) -> tuple[float, float] | None:
+        """Times (s) of the first and last visible rows, or None when no row is visible."""
+        seen = self.t[np.all(np.isfinite(self.uv), axis=1)]
+        return (float(seen[0]), float(seen[-1])) if len(seen) else None
+
 
 def _check_pixel(path: Path, line: int, u: float, v: float, camera: Any) -> None:
     """ConfigError naming ``path`` and ``line`` unless the pixel ``(u, v)`` is not visible
-    (a NaN: an empty cell) or finite and, with ``camera``, within :data:`IMAGE_POINT_MARGIN`
-    of its image (:meth:`hearsee.vision.camera.Camera.in_image`)."""
-    if np.isnan(u) or np.isnan(v):
+    (both NaN: empty cells) or finite and, with ``camera``, within :data:`IMAGE_POINT_MARGIN`
+    of its image (:meth:`hearsee.vision.camera.Camera.in_image`). Only one of u and v given
+    is an error too (a half-empty row was silently read as "not visible")."""
+    if np.isnan(u) and np.isnan(v):
         return
+    if np.isnan(u) or np.isnan(v):
+        raise ConfigError(f"{path}: line {line}: only one of u and v is given ({u:g}, {v:g}); "
+                          "give both, or leave both empty where the source is not visible")
     if not (np.isfinite(u) and np.isfinite(v)):
         raise ConfigError(f"{path}: line {line}: image point ({u:g}, {v:g}) is not a finite "
                           "pixel (leave u and v empty where the source is not visible)")
@@ -198,11 +236,17 @@ class VideoImagePoints:
         The calibrated camera's image size in pixels: a video file of another size is refused
         (its image points would be read through the wrong intrinsics). Not checked for a live
         camera, whose driver may report its size only once it streams.
+    where : str
+        Prefix of the error when a video file opens but delivers no frame (a corrupt or
+        truncated file; :func:`read_frame`, the check of ``hearsee run --dry-run`` too), e.g.
+        ``"--video"``. The first frame is read when the object is made, before any audio is,
+        and kept for ``points(t)``. (A still image that OpenCV opens, e.g. a PNG, passes: a
+        one-frame video.) A live camera is not read here: its thread does.
     """
 
     def __init__(self, source: str | Path | int, detector: str = "hog",
                  fps: float | None = None,
-                 expected_size: tuple[int, int] | None = None) -> None:
+                 expected_size: tuple[int, int] | None = None, where: str = "video file") -> None:
         import cv2
 
         if detector not in ("hog", "face"):
@@ -226,7 +270,17 @@ class VideoImagePoints:
                 f"{expected_size[0]}x{expected_size[1]} (use the calibrated camera's video)")
         rate = fps or cap.get(cv2.CAP_PROP_FPS) or 0.0
         if not self.live and not rate > 0:
+            cap.release()
             raise ImageInputError(f"{source}: video has no frame rate; pass fps=")
+        self._first: NDArray | None = None  # a file's first frame, read below
+        if not self.live:
+            # (a corrupt or truncated file opened, delivered nothing, and the run went on
+            # audio-only without a word): the dry-run's check, before the audio is read
+            try:
+                self._first = read_frame(cap, str(source), where)
+            except ConfigError:
+                cap.release()
+                raise
         self.cap, self.fps, self.detector = cap, float(rate or 30.0), detector
         self.frame_index = -1
         self.frame_time = -np.inf
@@ -238,7 +292,10 @@ class VideoImagePoints:
         self._cycle = 0.0  # live: wall-clock seconds between the last two detections
 
     def _read(self) -> bool:
-        ok, frame = self.cap.read()
+        if self._first is not None:  # (read by __init__'s check)
+            ok, frame, self._first = True, self._first, None
+        else:
+            ok, frame = self.cap.read()
         if not ok:
             self.ended = True
             return False

@@ -1,0 +1,221 @@
+"""``hearsee track`` on bad input: a video that delivers no frame, image points that cannot be
+used, a missing or doubled audio source, camera-pose options without a camera or out of range.
+Each was run without a word (exit 0, no 3D fix) or with a wrong message before."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.signals import write_recording
+from hearsee.cli import main
+from hearsee.errors import ConfigError
+from hearsee.fusion.audiovisual import AudioVisualRig
+from hearsee.sim.moving import linear_trajectory, simulate_moving_free_field
+from hearsee.stream.video import CsvImagePoints, VideoImagePoints, save_image_points
+from hearsee.vision.camera import Camera, save_camera
+
+FS = 16000
+DUR = 0.5
+CAM_AT = (0.0, 0.0, 0.25)
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    """A 0.5 s recording of a talker 1.2 m ahead (wide three-mic array), a 640x480 camera at
+    CAM_AT and the talker's image points every 1/30 s (projected through the same rig)."""
+    d = tmp_path_factory.mktemp("track_bad")
+    arr = MicArray(np.array([[0.2, 0.0, 0.0], [-0.1, 0.25, 0.0], [-0.1, -0.25, 0.0]]),
+                   name="wide")
+    traj = linear_trajectory([1.2, -0.3, 0.1], [0.0, 0.4, 0.0], DUR)
+    x = 0.05 * np.random.default_rng(0).standard_normal(int(DUR * FS))
+    wav = d / "rec.wav"
+    write_recording(wav, simulate_moving_free_field(x, FS, arr, traj, snr_db=25, rng=1), FS)
+    cam = Camera.from_fov(70.0, 640, 480)
+    cam_file = d / "cam.yaml"
+    save_camera(cam, cam_file)
+    t = np.arange(0, DUR, 1 / 30)
+    pts = d / "points.csv"
+    save_image_points(pts, t, AudioVisualRig.mounted(arr, cam, CAM_AT).project(traj.at(t)))
+    arr_file = d / "wide.yaml"
+    arr_file.write_text("name: wide\nmicrophones:\n" + "".join(
+        f"  - [{p[0]}, {p[1]}, {p[2]}]\n" for p in arr.positions))
+    base = ["track", str(wav), "--array", str(arr_file), "--camera", str(cam_file)]
+    return {"wav": wav, "cam": cam_file, "pts": pts, "array": arr_file, "base": base,
+            "centre": arr.centre}
+
+
+def _positions(out: str) -> list:
+    return [json.loads(s)["position_m"] for s in out.strip().splitlines()]
+
+
+def _write_video(path, n_frames, size=(640, 480)):
+    import cv2
+
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, size)
+    for _ in range(n_frames):
+        w.write(np.full((size[1], size[0], 3), 90, np.uint8))
+    w.release()
+
+
+# ---------------------------------------------------------------------------------------------
+# 1. a video file that opens but delivers no frame
+# ---------------------------------------------------------------------------------------------
+def test_track_refuses_a_video_that_delivers_no_frame(scene, tmp_path, capsys):
+    """A truncated AVI (header, no frame data) opened, delivered nothing, and the run went on
+    audio-only with exit 0. Now the dry-run's check (stream.video.read_frame) refuses it, in
+    one line, before any audio is read."""
+    import cv2
+
+    full = tmp_path / "full.avi"
+    _write_video(full, 5)
+    data = full.read_bytes()
+    cut = tmp_path / "cut.avi"
+    cut.write_bytes(data[:data.index(b"movi") + 4])  # (the header; no frame)
+    cap = cv2.VideoCapture(str(cut))  # ground truth: OpenCV opens it and reads nothing
+    assert cap.isOpened() and not cap.read()[0]
+    cap.release()
+    assert main([*scene["base"], "--video", str(cut)]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err == f"hearsee: error: --video: camera '{cut}' opened but delivered no frame\n"
+    with pytest.raises(ConfigError, match="video file: camera .* opened but delivered no frame"):
+        VideoImagePoints(cut, detector="face")
+    # the whole file: accepted, and its first frame (read by the check) is frame 0
+    vp = VideoImagePoints(full, detector="face")
+    assert vp(0.0) is None and vp.frame_index == 0
+    assert vp(0.25) is None and vp.frame_index == 2
+    assert vp(10.0) is None and vp.frame_index == 4 and vp.ended
+    vp.close()
+
+
+def test_a_still_image_given_as_video_is_a_one_frame_video(tmp_path):
+    """OpenCV opens a PNG as a one-frame video (image-sequence reader, 25 fps): it delivers a
+    frame, so it passes the check; the image points then cover its first 2/25 s only."""
+    import cv2
+
+    png = tmp_path / "still.png"
+    cv2.imwrite(str(png), np.full((120, 160, 3), 90, np.uint8))
+    vp = VideoImagePoints(png, detector="face")
+    assert vp(0.0) is None and vp.frame_index == 0
+    assert vp(1.0) is None and vp.ended and vp.frame_index == 0
+    vp.close()
+
+
+# ---------------------------------------------------------------------------------------------
+# 2. image points that cannot be used
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("row", ["0.1,195,", "0.1,,190", "0.1,195,nan", "0.1, ,190"])
+def test_image_point_row_with_only_u_or_v_is_refused(scene, tmp_path, capsys, row):
+    """A row with u but no v (or v but no u) was read as "not visible" without a word; it is
+    ambiguous (a lost column, a typo) and now an error naming the file and line. Both empty
+    still means "not visible"."""
+    p = tmp_path / "half.csv"
+    p.write_text(f"t,u,v\n0.0,320,240\n{row}\n0.2,,\n")
+    assert main([*scene["base"], "--image-points", str(p)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and len(err.splitlines()) == 1
+    assert err.startswith(f"hearsee: error: {p}: line 3: only one of u and v is given")
+    with pytest.raises(ConfigError, match="line 3: only one of u and v"):
+        CsvImagePoints(p)
+    ok = tmp_path / "ok.csv"
+    ok.write_text("t,u,v\n0.0,320,240\n0.1,,\n0.2,nan,nan\n")
+    pts = CsvImagePoints(ok, max_gap_s=0.0)
+    assert pts(0.0) == (320.0, 240.0) and pts(0.1) is None and pts(0.2) is None
+
+
+@pytest.mark.parametrize(("rows", "where"), [
+    ("100,320,240\n101,330,240\n", "the file's visible points are from 100 s to 101 s"),
+    ("0.0,,\n0.2,,\n", "the file has no visible point: every u,v is empty"),
+    ("-5,320,240\n0.1,,\n0.9,320,240\n", "the file's visible points are from -5 s to 0.9 s"),
+])
+def test_track_warns_when_no_image_point_lies_within_the_recording(scene, tmp_path, capsys,
+                                                                   rows, where):
+    """Rows all outside the 0.5 s recording (times in ms, another take) or all empty gave exit
+    0, no 3D fix and no message; now a warning says why there is no 3D position."""
+    p = tmp_path / "far.csv"
+    p.write_text(f"t,u,v\n{rows}")
+    assert main([*scene["base"], "--image-points", str(p), "--camera-at",
+                 ",".join(map(str, CAM_AT))]) == 0
+    out, err = capsys.readouterr()
+    assert all(pos is None for pos in _positions(out))
+    assert err == (f"hearsee: warning: {p}: no image point lies within the recording's time "
+                   f"span (0-{DUR:.2f} s; {where}), so no 3D position can be given\n")
+
+
+def test_image_points_within_the_recording_give_3d_fixes_and_no_warning(scene, tmp_path,
+                                                                        capsys):
+    """The control: the talker's own image points give 3D fixes and no warning; so does a file
+    whose only visible row is near the recording's end (within max_gap_s / 2 of a frame)."""
+    assert main([*scene["base"], "--image-points", str(scene["pts"]), "--camera-at",
+                 ",".join(map(str, CAM_AT))]) == 0
+    out, err = capsys.readouterr()
+    assert err == "" and any(pos is not None for pos in _positions(out))
+    pts = CsvImagePoints(scene["pts"])
+    assert pts.visible_within(0.03, 0.47) and not pts.visible_within(0.7, 1.0)
+    late = tmp_path / "late.csv"
+    late.write_text("t,u,v\n0.0,,\n0.5,320,240\n")
+    assert main([*scene["base"], "--image-points", str(late)]) == 0
+    assert "warning" not in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------------
+# 3. neither or both audio sources
+# ---------------------------------------------------------------------------------------------
+def test_track_names_a_missing_and_a_doubled_audio_source(scene, capsys):
+    """Neither a recording nor --device was reported as "..., not both"."""
+    assert main(["track", "--array", "three-mic"]) == 2
+    assert capsys.readouterr().err == ("hearsee: error: give a recording file or --device "
+                                       "(live input)\n")
+    assert main(["track", str(scene["wav"]), "--device", "0", "--array", "three-mic"]) == 2
+    assert capsys.readouterr().err == ("hearsee: error: give either a recording file or "
+                                       "--device (live input), not both\n")
+
+
+# ---------------------------------------------------------------------------------------------
+# 4. camera-pose options
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(("args", "names"), [
+    (["--camera-at", "0,0,0.2"], "--camera-at needs"),
+    (["--camera-pan", "10"], "--camera-pan needs"),
+    (["--camera-tilt", "0"], "--camera-tilt needs"),
+    (["--camera-at", "0,0,0", "--camera-pan", "5"], "--camera-at / --camera-pan need"),
+])
+def test_camera_pose_options_need_a_camera(scene, capsys, args, names):
+    """--camera-at / --camera-pan / --camera-tilt without --camera were ignored (exit 0)."""
+    assert main(["track", str(scene["wav"]), "--array", str(scene["array"]), *args]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == (f"hearsee: error: {names} --camera CAM.yaml and an "
+                                 "image-point source (they place the camera)\n")
+
+
+@pytest.mark.parametrize(("args", "msg"), [
+    (["--camera-pan", "1e300"], "--camera-pan must be in [-180, 180] degrees, got 1e+300"),
+    (["--camera-pan", "-180.5"], "--camera-pan must be in [-180, 180] degrees, got -180.5"),
+    (["--camera-pan", "nan"], "--camera-pan must be in [-180, 180] degrees, got nan"),
+    (["--camera-tilt", "95"], "--camera-tilt must be in [-90, 90] degrees, got 95"),
+    (["--camera-tilt", "-inf"], "--camera-tilt must be in [-90, 90] degrees, got -inf"),
+    (["--camera-at", "100,0,0"], "--camera-at: 100,0,0 is 100 m from the array's centre; the "
+                                 "camera must be within 5 m of its microphones"),
+    (["--camera-at", "0,3,4.01"], "--camera-at: 0,3,4.01 is 5.01 m from the array's centre"),
+])
+def test_camera_pose_out_of_range_is_a_usage_error(scene, capsys, args, msg):
+    """A pan of 1e300, a tilt of 95 deg or a camera 100 m away gave exit 0, no 3D fix and no
+    message; now a usage error (one line, exit 2) before the audio is read."""
+    assert main([*scene["base"], "--image-points", str(scene["pts"]), *args]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and len(err.splitlines()) == 1
+    assert err.startswith("hearsee track: error: ") and msg in err
+
+
+@pytest.mark.parametrize("args", [["--camera-pan", "180", "--camera-tilt", "-90"],
+                                  ["--camera-pan", "-180", "--camera-tilt", "90"],
+                                  ["--camera-at", "0,3,3.99"]])
+def test_camera_pose_limits_are_inclusive(scene, capsys, args):
+    """The bounds themselves are accepted (a camera straight up, turned round, 4.99 m off)."""
+    assert np.linalg.norm(np.array([0, 3, 3.99]) - scene["centre"]) < 5.0  # (the array's centre)
+    assert main([*scene["base"], "--image-points", str(scene["pts"]), *args]) == 0
+    assert "error" not in capsys.readouterr().err
