@@ -202,6 +202,27 @@ def test_nan_input_is_rejected():
         NeighborhoodLinearEmbedding().fit(X)
 
 
+@pytest.mark.parametrize("cls", [NeighborhoodLinearEmbedding, ClusteredNLE])
+def test_data_scikit_learn_refuses_is_a_manifold_input_error(cls):
+    """NaN, inf, empty, 1-D, complex or text data, and new points with another feature
+    count, raised scikit-learn's plain ValueError: now ManifoldInputError (still a
+    ValueError, with scikit-learn's message), in fit, transform and predict alike."""
+    X, _ = make_swiss_roll(120, random_state=0)
+    bad_fit = [np.where(np.arange(X.size).reshape(X.shape) == 4, np.nan, X),
+               np.where(np.arange(X.size).reshape(X.shape) == 4, np.inf, X),
+               X[:0], X[:, 0], X + 0j, X.astype(str).astype(object) + "x"]
+    for B in bad_fit:
+        with pytest.raises(ManifoldInputError):
+            cls(n_neighbors=10).fit(B)
+    est = cls(n_neighbors=10).fit(X)
+    methods = [est.transform] + ([est.predict] if hasattr(est, "predict") else [])
+    for method in methods:
+        for B in (X[:5, :2], np.full((2, 3), np.nan)):
+            with pytest.raises(ManifoldInputError) as exc:
+                method(B)
+            assert isinstance(exc.value, ValueError)
+
+
 def test_too_many_neighbours_is_rejected():
     X, _ = make_swiss_roll(30, random_state=0)
     with pytest.raises(ManifoldInputError, match="n_neighbors=30 must be smaller") as exc:

@@ -131,6 +131,18 @@ class DisconnectedGraphWarning(UserWarning):
 # --------------------------------------------------------------------------- building blocks
 
 
+def _validated(est, X, **kw) -> np.ndarray:
+    """scikit-learn's ``validate_data`` (float64), its ValueErrors (NaN, inf, empty, 1-D,
+    text, complex, a wrong feature count) raised as :class:`ManifoldInputError` with the same
+    message: still a ValueError, as scikit-learn's conventions want, and hearsee's own type."""
+    try:
+        return validate_data(est, X, dtype=np.float64, **kw)
+    except ManifoldInputError:
+        raise
+    except ValueError as exc:
+        raise ManifoldInputError(str(exc)) from None
+
+
 def _check_neighbourhood_args(func: str, X, ind, centers, **same_shape):
     """Common checks of :func:`adaptive_neighbors` / :func:`reconstruction_weights` arguments;
     returns ``X, ind, centers`` as arrays (no copy for float64 ``X`` and integer ``ind``) and the
@@ -615,7 +627,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
                 f"point is reconstructed from its neighbours, and {self.n_components + 1} of them "
                 f"are needed to span a {self.n_components}-dimensional patch"
             )
-        X = validate_data(self, X, dtype=np.float64, ensure_min_samples=2)
+        X = _validated(self, X, ensure_min_samples=2)
         with np.errstate(over="ignore", invalid="ignore"):
             r = np.ptp(X, axis=0)
             top = float(np.max(r))  # scaled, so that a span of 1e-200 does not underflow to 0
@@ -828,7 +840,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         """
         check_is_fitted(self, "embedding_")
         self._restore_fitted_state()
-        X = validate_data(self, X, dtype=np.float64, reset=False)
+        X = _validated(self, X, reset=False)
         ind, W, mask = self._reconstruct(X, self.training_data_, self.nbrs_)
         return np.einsum("nk,nkd->nd", W * mask, self.embedding_[ind])
 
@@ -1087,7 +1099,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
     def predict(self, X) -> np.ndarray:
         """Cluster of new points: that of their nearest training point."""
         check_is_fitted(self, "labels_")
-        X = validate_data(self, X, dtype=np.float64, reset=False)
+        X = _validated(self, X, reset=False)
         _, ind = self.nbrs_.kneighbors(X, n_neighbors=1)
         return self.labels_[ind[:, 0]]
 
@@ -1105,7 +1117,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         """
         check_is_fitted(self, "embedding_")
         self._restore_fitted_state()
-        X = validate_data(self, X, dtype=np.float64, reset=False)
+        X = _validated(self, X, reset=False)
         _, near = self.nbrs_.kneighbors(X, n_neighbors=1)
         lab = self.labels_[near[:, 0]]
         Y = np.zeros((X.shape[0], self.n_components))
