@@ -160,6 +160,22 @@ def test_thermal_extrinsics_survive_missing_and_outlier_views(synthetic, corners
         C.calibrate_thermal_extrinsics(rig, truth.thermal, lp, [None] * len(lp), obj)
 
 
+def test_thermal_extrinsics_refuse_degenerate_corners_and_limits(synthetic, corners):
+    """Every thermal corner at one pixel gave T ~ [-23, -945, -7905] m with rms NaN, and a
+    negative or NaN max_rotation_deg silently kept every view: CalibrationErrors now."""
+    truth, obj, _ = synthetic
+    lp, _, tp = corners
+    flat = [np.full_like(np.asarray(tp[0]), 80.0)] * len(lp)
+    with pytest.raises(CalibrationError, match="do not span a pixel"):
+        C.calibrate_thermal_extrinsics(truth, truth.thermal, lp, flat, obj)
+    for bad in (-1.0, np.nan):
+        with pytest.raises(CalibrationError, match="max_rotation_deg"):
+            C.calibrate_thermal_extrinsics(truth, truth.thermal, lp, tp, obj,
+                                           max_rotation_deg=bad)
+    with pytest.raises(CalibrationError, match="max_translation_m"):
+        C.calibrate_thermal_extrinsics(truth, truth.thermal, lp, tp, obj, max_translation_m=0.0)
+
+
 def test_thermal_extrinsics_honour_a_skewed_thermal_camera(synthetic):
     # exact projections of board poses into the left camera and a thermal camera whose K has a
     # skew of 8 px: the extrinsics must come back exactly (OpenCV's PnP ignores the skew)

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.config import is_real, whole_number
+from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import CalibrationError
 from hearsee.vision.camera import MIN_BASELINE_M, Camera, StereoRig
 from hearsee.vision.io import to_gray
@@ -547,6 +547,12 @@ def calibrate_thermal_extrinsics(rig: StereoRig, thermal: Camera,
     -------
     ThermalExtrinsics with ``X_thermal = R X_left + T``.
     """
+    # (a negative or NaN rotation limit silently kept every view)
+    finite_number("max_rotation_deg", max_rotation_deg, 0.0, lo_open=True,
+                  error=CalibrationError)
+    if max_translation_m is not None:
+        finite_number("max_translation_m", max_translation_m, 0.0, lo_open=True,
+                      error=CalibrationError)
     n = len(left_points)
     if len(thermal_points) != n:
         raise CalibrationError(f"{n} left views but {len(thermal_points)} thermal views")
@@ -565,6 +571,12 @@ def calibrate_thermal_extrinsics(rig: StereoRig, thermal: Camera,
                     f"{side} view {i} has {np.size(pts) // 2} corners but the board "
                     f"{len(obj)}: corners and object points must be of the same board"
                 )
+            if pts is not None and not np.all(np.ptp(np.asarray(pts, float).reshape(-1, 2),
+                                                     axis=0) >= 1.0):
+                # (every corner at one pixel gave T ~ [-23, -945, -7905] m, rms NaN)
+                raise CalibrationError(
+                    f"{side} view {i}: the board's corners do not span a pixel in both "
+                    "directions (all at one point, or not finite): no pose can be fitted")
         if rp is not None:
             X = _triangulate(rig, lp, rp)
         else:
@@ -614,6 +626,10 @@ def calibrate_thermal_extrinsics(rig: StereoRig, thermal: Camera,
         per_view.append(float(np.sqrt(np.mean(np.sum(e * e, axis=1)))))
     per_view_arr = np.asarray(per_view)
     rms = float(np.sqrt(np.mean(per_view_arr[keep] ** 2)))
+    if not (np.isfinite(rms) and np.all(np.isfinite(T))):
+        raise CalibrationError("the thermal extrinsics did not converge (reprojection error "
+                               f"{rms}): check that the thermal corners are of the same board "
+                               "and labelled like the left ones (match_labeling)")
     return ThermalExtrinsics(R, T, rms, per_view_arr, used)
 
 
