@@ -378,3 +378,23 @@ def test_track_stats_are_one_line(scene, capsys):
     n_frames = len(out.strip().splitlines())
     assert err.count("\n") == 1, err
     assert err.startswith(f"track: {n_frames} frames, 1.50 s of audio") and "status ok" in err
+
+
+def test_save_image_points_writes_only_what_csv_image_points_reads(tmp_path):
+    """save_image_points wrote files CsvImagePoints refuses (times not increasing, NaN times,
+    one NaN of a row's two, inf pixels written as empty 'not visible' cells); now those are
+    ConfigErrors before anything is written, and what it writes reads back."""
+    p = tmp_path / "pts.csv"
+    t = np.array([0.0, 0.1, 0.2])
+    uv = np.array([[100.0, 200.0], [np.nan, np.nan], [120.0, 220.0]])
+    save_image_points(p, t, uv)
+    back = CsvImagePoints(p, max_gap_s=0.25)
+    assert back(0.0) == pytest.approx((100.0, 200.0)) and back(0.2) == pytest.approx((120.0, 220.0))
+    assert back(0.1) is None  # the row that is not visible
+    for tb, uvb in ((t[::-1], uv), (np.array([0.0, np.nan, 0.2]), uv), (t, uv[:2]),
+                    (t, np.array([[100.0, 200.0], [np.nan, 5.0], [1.0, 2.0]])),
+                    (t, np.array([[100.0, 200.0], [np.inf, 5.0], [1.0, 2.0]]))):
+        q = tmp_path / "bad.csv"
+        with pytest.raises(ConfigError):
+            save_image_points(q, tb, uvb)
+        assert not q.exists()

@@ -169,11 +169,27 @@ def _check_pixel(path: Path, line: int, u: float, v: float, camera: Any) -> None
 
 
 def save_image_points(path: str | Path, t: NDArray, uv: NDArray) -> None:
-    """Write ``t,u,v`` rows (NaN pixels become empty cells)."""
-    with Path(path).open("w", newline="", encoding="utf-8") as fh:
+    """Write ``t,u,v`` rows (``t`` seconds, ``uv`` ``(n, 2)`` pixels; a NaN pixel -- both of a
+    row's, for "not visible" -- becomes an empty cell): the file :class:`CsvImagePoints`
+    reads. What it would refuse is a ConfigError here, before anything is written: times
+    that are not finite and strictly increasing, rows with one NaN of two, infinite pixels,
+    t and uv of different lengths (such files were written and refused only when read)."""
+    from hearsee.config import as_float_array, output_file
+
+    tt = as_float_array(t, "image-point times t", error=ConfigError).reshape(-1)
+    pts = as_float_array(uv, "image points uv", error=ConfigError, finite=False)
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) != len(tt):
+        raise ConfigError(f"image points: expected uv (n, 2) for n = {len(tt)} times, got shape "
+                          f"{pts.shape}")
+    if len(tt) and (not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0)):
+        raise ConfigError("image points: times must be finite and strictly increasing")
+    if np.any(np.isinf(pts)) or np.any(np.isnan(pts[:, 0]) != np.isnan(pts[:, 1])):
+        raise ConfigError("image points: each row's u and v must be both finite pixels or both "
+                          "NaN (not visible)")
+    with output_file(path).open("w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
         w.writerow(["t", "u", "v"])
-        for ti, (u, v) in zip(np.asarray(t), np.asarray(uv), strict=True):
+        for ti, (u, v) in zip(tt, pts, strict=True):
             w.writerow([f"{ti:.6f}", "" if not np.isfinite(u) else f"{u:.3f}",
                         "" if not np.isfinite(v) else f"{v:.3f}"])
 
