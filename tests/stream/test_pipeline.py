@@ -926,3 +926,12 @@ def test_array_source_refuses_samples_that_are_no_real_numbers():
         with pytest.raises(AudioInputError, match="real numbers"):
             pl.ArraySource(bad, FS)
     assert pl.ArraySource(x.astype(np.int16), FS).x.dtype == float
+
+
+@pytest.mark.parametrize("n", [2.5, 0, -2, "a", True])
+def test_framer_channel_count_is_a_whole_number_of_at_least_one(n):
+    """Framer(2.5, ...) was truncated to 2 channels, Framer(0, ...) accepted, "a" a builtin
+    ValueError: ConfigError now."""
+    with pytest.raises(ConfigError, match="n_channels"):
+        Framer(n, FS, 16, 8)
+    assert Framer(3, FS, 16, 8).n_channels == 3

@@ -550,7 +550,8 @@ class Framer:
     def __init__(self, n_channels: int, fs: float, frame_ms: float, hop_ms: float) -> None:
         self.fs = float(fs)
         self.frame_len, self.hop = frame_geometry(fs, frame_ms, hop_ms)
-        self.n_channels = int(n_channels)
+        # (2.5 was truncated to 2 channels, 0 accepted, "a" a builtin ValueError)
+        self.n_channels = whole_number("n_channels", n_channels, 1)
         self.buf = np.zeros((self.n_channels, 0))
         self.buf_start = 0
         self.next_frame = 0  # absolute start sample of the next frame to emit
