@@ -110,6 +110,32 @@ def test_constant_acceleration_motion_is_recovered():
     assert not np.any(tr.accepted[60:65])
 
 
+def test_velocity_is_known_once_the_fixes_determine_it_and_again_after_a_restart():
+    """A new track's velocity is its prior, 0 m/s: velocity_known is False at the first fix
+    and turns True when the fixes bring every axis's standard deviation below
+    VELOCITY_KNOWN_FRACTION of init_vel_sigma (here the second fix, 0.2 s and 0.7 m later);
+    it stays known while the track coasts, and a restart forgets it."""
+    from hearsee.audio.tracking import VELOCITY_KNOWN_FRACTION
+
+    kf = MotionKalman(sigma_meas_m=0.05, sigma_jerk=5.0, init_vel_sigma=1.5)
+    assert not kf.velocity_known
+    kf.update(0.0, [1.0, 0.0, 1.2])
+    assert kf.initialized and not kf.velocity_known
+    np.testing.assert_array_equal(kf.velocity, 0.0)
+    kf.update(0.2, [1.7, 0.0, 1.2])
+    sd = np.sqrt(np.diag(kf.P)[kf._VEL])
+    assert np.all(sd < VELOCITY_KNOWN_FRACTION * 1.5) and kf.velocity_known
+    assert kf.velocity[0] > 1.0  # 3.5 m/s between the fixes, shrunk toward the prior
+    kf.predict(0.6)  # coasting: the covariance grows, the velocity stays an estimate
+    assert kf.velocity_known
+    for k in range(kf.max_rejects):  # fixes far outside the gate restart the track
+        kf.update(0.7 + 0.1 * k, [100.0, 100.0, 1.2])
+    np.testing.assert_allclose(kf.position, [100.0, 100.0, 1.2])  # restarted there
+    assert kf.initialized and not kf.velocity_known
+    kf.reset()
+    assert not kf.velocity_known
+
+
 def test_motion_filter_jerk_per_axis():
     """sigma_jerk may be given per axis (x, y, z): the same three values are the scalar model,
     a small z value keeps a noisy height from turning into vertical speed."""

@@ -55,6 +55,7 @@ __all__ = [
     "ELEVATION_ACCEL_RATIO",
     "IMM_MODES_DPS2",
     "MAX_AZIMUTH_DEG",
+    "VELOCITY_KNOWN_FRACTION",
     "DirectionIMM",
     "DirectionKalman",
     "DirectionTrack",
@@ -972,6 +973,14 @@ class MotionTrack:
     accepted: NDArray
 
 
+#: A 3D track's velocity counts as determined (:attr:`MotionKalman.velocity_known`) once its
+#: standard deviation on every axis has fallen below this fraction of the initial one
+#: (``init_vel_sigma``). Until then the velocity state is its prior, 0 m/s, and the stream and
+#: the robot report it as unknown (None) instead of a person standing still: the robot's person
+#: track gets there at its second stereo fix (0.2 s apart, 5 cm: 1.5 -> 0.5 m/s).
+VELOCITY_KNOWN_FRACTION = 0.5
+
+
 class MotionKalman(_Kalman):
     """Constant-acceleration Kalman filter on a 3D position (thesis 5.4.3).
 
@@ -1046,6 +1055,23 @@ class MotionKalman(_Kalman):
         self.t: float | None = None
         self.initialized = False
         self.n_rejects = 0
+        self._velocity_known = False
+
+    def _correct(self, y: NDArray, S: NDArray, H: NDArray, R: NDArray) -> None:
+        super()._correct(y, S, H, R)
+        if not self._velocity_known:
+            sd = np.sqrt(np.diag(self.P)[self._VEL])
+            self._velocity_known = bool(np.all(sd < VELOCITY_KNOWN_FRACTION
+                                               * self.init_vel_sigma))
+
+    @property
+    def velocity_known(self) -> bool:
+        """Whether the measurements have determined the velocity since the track (re)started:
+        its standard deviation fell below :data:`VELOCITY_KNOWN_FRACTION` of
+        ``init_vel_sigma`` on every axis at some update (and stays known while the track
+        coasts: its growing covariance says how well). A new track's :attr:`velocity` is the
+        prior 0 m/s, not an estimate."""
+        return self.initialized and self._velocity_known
 
     def _model(self, dt: float) -> tuple[NDArray, NDArray]:
         """Transition and process noise ``(F, Q)`` over ``dt`` seconds."""
@@ -1067,6 +1093,7 @@ class MotionKalman(_Kalman):
         self.P[np.ix_(self._POS, self._POS)] = R
         self.initialized = True
         self.n_rejects = 0
+        self._velocity_known = False
 
     def update(self, t: float, position: ArrayLike | None = None,
                R: ArrayLike | None = None,

@@ -443,6 +443,7 @@ class RayTracker(MotionKalman):
         self.P[np.ix_(self._POS, self._POS)] = R
         self.initialized = True
         self.n_rejects = 0
+        self._velocity_known = False
 
     def update(self, t: float, position: ArrayLike | None = None, R: ArrayLike | None = None,
                candidates: Sequence[tuple[ArrayLike, ArrayLike | None]] | None = None) -> bool:

@@ -360,7 +360,9 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     Each log record: ``t`` (s, end of the step), ``phase`` (listening | turning | tracking),
     ``head_pan_deg``, ``audio`` {azimuth_deg (robot frame), n_frames, confidence} or None,
     ``detections`` [{box, position_m (room), score, thermal_support, accepted, reason,
-    truth_kind}], ``track`` {position_m, velocity_mps, acceleration_mps2, covariance} or None,
+    truth_kind}], ``track`` {position_m, velocity_mps (None until the track's fixes determine
+    it, :attr:`~hearsee.audio.tracking.MotionKalman.velocity_known`), acceleration_mps2,
+    covariance} or None,
     ``truth`` {position_m, velocity_mps, azimuth_robot_deg}, ``error_m``.
     """
     from hearsee.sim.scenes import default_rig, render_scene
@@ -493,7 +495,8 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
         rec_track = None
         error = None
         if track.initialized:
-            rec_track = {"position_m": track.position, "velocity_mps": track.velocity,
+            rec_track = {"position_m": track.position,
+                         "velocity_mps": track.velocity if track.velocity_known else None,
                          "acceleration_mps2": track.acceleration,
                          "covariance": track.position_cov}
             error = float(np.linalg.norm(track.position - st["torso"]))
@@ -564,11 +567,14 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
     """Metrics from the log (nothing canned). ``azimuth_error_initial_deg``: the first audio
     record's bearing error (often a single frame's); ``azimuth_error_at_turn_deg``: that of the
     direction filter when the head starts turning (after :data:`MIN_AUDIO_UPDATES` updates),
-    the bearing the turn aims at; both degrees, against the true bearing at the record's end."""
+    the bearing the turn aims at; both degrees, against the true bearing at the record's end.
+    ``velocity_rmse_mps`` is over the tracked steps with a velocity (not those of a new track,
+    whose velocity is still its prior: until 2026-11-27 counted as 0 m/s)."""
     errs = np.array([r["error_m"] for r in log if r["error_m"] is not None], dtype=float)
     vel = np.array([np.linalg.norm(np.asarray(r["track"]["velocity_mps"]) -
                                    np.asarray(r["truth"]["velocity_mps"]))
-                    for r in log if r["track"] is not None], dtype=float)
+                    for r in log if r["track"] is not None
+                    and r["track"]["velocity_mps"] is not None], dtype=float)
     first_audio = next((r for r in log if r["audio"] is not None), None)
     az0 = _bearing_error(first_audio)
     # the bearing the head starts turning to: the direction filter after MIN_AUDIO_UPDATES

@@ -151,7 +151,9 @@ class Update:
 
     ``azimuth_deg``/``elevation_deg`` (deg), ``position_m`` (m), ``velocity_mps``,
     ``acceleration_mps2`` and ``covariance`` (2x2 deg^2 for a direction, 3x3 m^2 for a position)
-    are the trackers' filtered estimates. The direction covariance is the tracker's own and
+    are the trackers' filtered estimates; ``velocity_mps`` is None until the 3D track's
+    measurements have determined it (:attr:`~hearsee.audio.tracking.MotionKalman.velocity_known`:
+    a new track's velocity is its prior, 0 m/s). The direction covariance is the tracker's own and
     conservative: its measurement noise is declared several times the measurements' actual
     error (see ``StreamConfig.sigma_srp_deg``), so on ``bench/tracking.py``'s room walks (RT60
     0.3 s, 10 / 20 dB; measured 2026-11-27) the actual azimuth error was 0.2-0.45 times the
@@ -1539,7 +1541,9 @@ class TrackingProcessor:
         feed_tracker(self.motion, upd.t, uv, z, fix)
         if self.motion.initialized:
             upd.position_m = self.motion.position.tolist()
-            upd.velocity_mps = self.motion.velocity.tolist()
+            # (None until the fixes determine it: a new track's velocity is its 0 m/s prior)
+            upd.velocity_mps = (self.motion.velocity.tolist() if self.motion.velocity_known
+                                else None)
             upd.acceleration_mps2 = self.motion.acceleration.tolist()
             upd.covariance = self.motion.position_cov.tolist()
 
