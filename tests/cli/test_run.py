@@ -339,3 +339,31 @@ def test_report_folder_that_is_a_file_fails_before_listening(robot_dir, monkeypa
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and "output.report" in err[0] and "not a folder" in err[0], err
     assert notes.read_text(encoding="utf-8") == "keep"
+
+
+def test_report_folder_that_cannot_be_written_or_is_the_jsonl_fails_before_listening(
+        robot_dir, monkeypatch, capsys):
+    """An output.report folder without write permission was refused only when the report was
+    written, after the live run (a PermissionError); output.jsonl and output.report naming
+    one path passed the dry run. Both are one line before any device opens. (The tests run
+    as root, where permissions do not stop writes: os.access answers as for another user.)"""
+    import os
+
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES))
+    same = _config(robot_dir, cameras=False,
+                   output={"report": "out.jsonl", "jsonl": "out.jsonl"})
+    assert main(["run", "--config", str(same), "--dry-run"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "output.jsonl and output.report are both" in err[0], err
+    (robot_dir / "locked").mkdir()
+    cfg = _config(robot_dir, cameras=False, output={"report": "locked/report",
+                                                    "jsonl": "run.jsonl"})
+    real = os.access
+    monkeypatch.setattr(os, "access", lambda p, mode: Path(p).name != "locked" and real(p, mode))
+    assert main(["run", "--config", str(cfg), "--dry-run"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "locked is not writable" in err[0], err
+    assert main(["demo", "-q", "-o", str(robot_dir / "locked" / "r")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "locked is not writable" in err[0], err
+    assert list((robot_dir / "locked").iterdir()) == []

@@ -34,7 +34,12 @@ def demo_cmd(
     """
     from hearsee.errors import ConfigError
     from hearsee.robot.pipeline import run_scenario
-    from hearsee.robot.report import report_folder_blocker, report_overwrites, write_report
+    from hearsee.robot.report import (
+        report_folder_blocker,
+        report_folder_unwritable,
+        report_overwrites,
+        write_report,
+    )
     from hearsee.robot.scenario import default_scenario, load_scenario
 
     sc = load_scenario(scenario) if scenario else default_scenario()
@@ -44,6 +49,9 @@ def demo_cmd(
     if blocker is not None:
         raise ConfigError(f"--out {out}: {blocker} is a file, not a folder; choose a report "
                           "folder")
+    locked = report_folder_unwritable(out)
+    if locked is not None:  # (a PermissionError traceback after the whole scenario)
+        raise ConfigError(f"--out {out}: folder {locked} is not writable; choose another")
     hit = report_overwrites(out, inputs)
     if hit is not None:
         raise ConfigError(f"--out {out}: the report would overwrite the input {hit}; choose "

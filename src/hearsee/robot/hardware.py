@@ -418,16 +418,29 @@ def robot_config_from_dict(data: Mapping[str, Any], where: str = "robot.yaml",
 
 def check_outputs(cfg: RobotConfig, where: str) -> None:
     """ConfigError (prefixed ``where``) when ``output.report`` (or the folder it would be made
-    in) is a file, or the run's outputs would overwrite an input file:
+    in) is a file or not writable, ``output.jsonl`` names the same path, or the run's outputs
+    would overwrite an input file:
     ``output.jsonl`` or ``output.report`` is one, the report would write over one
     (:func:`hearsee.robot.report.report_overwrites`), or the JSON lines are one of the
     report's own files. Checked when a robot file is loaded and again for ``run --out``."""
-    from hearsee.robot.report import REPORT_FILES, report_folder_blocker, report_overwrites
+    from hearsee.robot.report import (
+        REPORT_FILES,
+        report_folder_blocker,
+        report_folder_unwritable,
+        report_overwrites,
+    )
 
     blocker = report_folder_blocker(cfg.output.report)
     if blocker is not None:  # (found only when the report was written, after the live run)
         raise ConfigError(f"{where}: output.report: {blocker} is a file, not a folder; "
                           "choose a report folder")
+    locked = report_folder_unwritable(cfg.output.report)
+    if locked is not None:  # (likewise: a PermissionError after the live run)
+        raise ConfigError(f"{where}: output.report: folder {locked} is not writable; choose "
+                          "another")
+    if same_file(cfg.output.jsonl, cfg.output.report):
+        raise ConfigError(f"{where}: output.jsonl and output.report are both "
+                          f"{cfg.output.report}: the report is a folder, the JSON lines a file")
     ins = {p.resolve() for p in cfg.input_files() if p.exists()}
     for name, p in (("output.jsonl", cfg.output.jsonl), ("output.report", cfg.output.report)):
         if any(same_file(p, q) for q in ins):

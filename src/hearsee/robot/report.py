@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import html
 import json
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -24,7 +25,8 @@ import numpy as np
 
 from hearsee.errors import InputFileError
 
-__all__ = ["REPORT_FILES", "report_folder_blocker", "report_overwrites", "write_report"]
+__all__ = ["REPORT_FILES", "report_folder_blocker", "report_folder_unwritable", "report_overwrites",
+           "write_report"]
 
 #: The files :func:`write_report` writes in its folder itself; it also writes PNGs into the
 #: folder's ``plots/`` and ``frames/`` (named after the plots and the images it is given).
@@ -39,6 +41,18 @@ def report_folder_blocker(folder: str | Path) -> Path | None:
     p = Path(folder)
     blocker = next((q for q in (p, *p.parents) if q.exists()), None)
     return blocker if blocker is not None and not blocker.is_dir() else None
+
+
+def report_folder_unwritable(folder: str | Path) -> Path | None:
+    """The existing folder -- ``folder`` itself or its nearest existing parent -- in which
+    :func:`write_report` could not write (no write permission), or None. Checked before a run
+    with :func:`report_folder_blocker`: the report was refused only at the end (a
+    PermissionError once a whole run, or a live session, was done)."""
+    p = Path(folder)
+    q = next((q for q in (p, *p.parents) if q.exists()), None)
+    if q is not None and q.is_dir() and not os.access(q, os.W_OK | os.X_OK):
+        return q
+    return None
 
 
 def report_overwrites(folder: str | Path, paths: Sequence[str | Path | None]) -> Path | None:
