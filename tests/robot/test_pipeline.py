@@ -209,6 +209,15 @@ def test_fixes_of_silhouettes_cut_by_the_image_border_count_less():
     assert base[2, 2] > base[0, 0] > 0  # depth is the noisy axis at 2.5 m
     np.testing.assert_allclose(stereo_position_cov(p, 500.0, 0.12, truncated=True),
                                base * TRUNCATED_COV_SCALE)
+    # NaN gave a NaN covariance, f < 0 was taken, a point behind the camera moved in front
+    from hearsee.errors import CalibrationError, GeometryError
+
+    for f, b in ((np.nan, 0.12), (-500.0, 0.12), (500.0, 0.0)):
+        with pytest.raises(CalibrationError):
+            stereo_position_cov(p, f, b)
+    for bad in (np.array([np.nan, 0.0, 2.5]), np.array([0.1, 0.0, -2.5]), np.zeros(2)):
+        with pytest.raises(GeometryError, match="p_cam"):
+            stereo_position_cov(bad, 500.0, 0.12)
 
 
 def test_frame_pan_attributes_frames_to_the_pan_they_were_heard_at():

@@ -49,7 +49,7 @@ from hearsee.audio.propagation import room_impulse_responses
 from hearsee.audio.signals import synthetic_voice
 from hearsee.audio.tdoa import estimate_tdoas
 from hearsee.audio.tracking import DirectionKalman, MotionKalman
-from hearsee.errors import EstimationError
+from hearsee.errors import EstimationError, GeometryError
 from hearsee.geometry import array_to_robot, head_rotation, wrap_deg
 from hearsee.robot.scenario import Scenario
 from hearsee.vision.camera import OPTICAL_FROM_BODY
@@ -285,7 +285,17 @@ def stereo_position_cov(p_cam: NDArray, f: float, B: float, *, truncated: bool =
     A ``truncated`` detection (:attr:`hearsee.vision.fusion.Human.truncated`: the head or a
     side outside the view, a person close to the robot or not yet centred) gets
     :data:`TRUNCATED_COV_SCALE` times the covariance: its torso centre is biased toward the
-    visible part (0.2-0.3 m in bench/robot seed 16)."""
+    visible part (0.2-0.3 m in bench/robot seed 16). ``p_cam`` is a point in front of the
+    camera (metres, optical frame, z > 0: GeometryError otherwise), ``f`` (pixels) and ``B``
+    (metres) finite and > 0 (CalibrationError): NaN gave a NaN covariance, a negative focal
+    length was taken, a point behind the camera was moved to 0.3 m in front of it."""
+    from hearsee.geometry import as_point
+    from hearsee.vision.stereo import check_focal_baseline
+
+    check_focal_baseline(f, B)
+    p_cam = as_point(p_cam, "p_cam")
+    if not p_cam[2] > 0:
+        raise GeometryError(f"p_cam must be in front of the camera (z > 0 m), got {p_cam}")
     z = max(float(p_cam[2]), 0.3)
     sz = z * z / (f * B) * DISPARITY_SIGMA_PX
     sxy = z / f * 2.0 + 0.03  # centroid jitter of the silhouette (pixels -> metres) + body
