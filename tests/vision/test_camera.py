@@ -588,3 +588,17 @@ def test_a_rig_whose_cameras_are_not_side_by_side_says_so(T):
     with pytest.raises(CalibrationError, match="not side by side"):
         rig.rectify()
     assert StereoRig(cam, cam, np.eye(3), [-0.12, 0.01, 0.02]).rectify().baseline_m > 0
+
+
+def test_a_rig_of_cameras_that_do_not_look_the_same_way_is_refused():
+    """Cameras back to back (R = 180 deg about y) made a rig that rectified and gave depths;
+    a rig toed in by 10 deg is a rig."""
+    from scipy.spatial.transform import Rotation
+
+    cam = Camera.from_fov(60.0, 640, 480)
+    for deg in (180.0, 60.0):
+        R = Rotation.from_euler("y", deg, degrees=True).as_matrix()
+        with pytest.raises(CalibrationError, match="optical axes are"):
+            StereoRig(cam, cam, R, [-0.12, 0.0, 0.0])
+    R = Rotation.from_euler("y", -10.0, degrees=True).as_matrix()
+    assert StereoRig(cam, cam, R, [-0.12, 0.0, 0.0]).baseline_m == pytest.approx(0.12)

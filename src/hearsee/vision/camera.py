@@ -108,6 +108,12 @@ _DIST_LENGTHS = (0, 4, 5, 8, 12, 14)
 MIN_BASELINE_M = 1e-3
 
 
+#: The most a stereo rig's two optical axes may diverge, degrees: convergent rigs toe in by a
+#: few degrees; beyond this the two views barely overlap (R = 180 deg about y, cameras back to
+#: back, rectified and gave depths).
+MAX_AXES_ANGLE_DEG = 45.0
+
+
 def _check_rotation(R: ArrayLike, what: str) -> NDArray:
     if not real_entries(R):  # (numpy read text as the numbers it spells, True as 1)
         raise CalibrationError(f"{what}: expected real numbers, got {R!r:.80}")
@@ -526,6 +532,13 @@ class StereoRig:
             raise CalibrationError("StereoRig: left and right must be Camera instances")
         R = _check_rotation(self.R, "rig R (right-from-left)")
         T = _check_translation(self.T, "rig T (right-from-left)")
+        # the right camera's optical axis in the left frame is R^T z: stereo needs both to look
+        # the same way (a rig of cameras 180 deg apart rectified and gave depths)
+        axes_deg = float(np.degrees(np.arccos(np.clip(R[2, 2], -1.0, 1.0))))
+        if axes_deg > MAX_AXES_ANGLE_DEG:
+            raise CalibrationError(
+                f"rig R: the cameras' optical axes are {axes_deg:.0f} deg apart (at most "
+                f"{MAX_AXES_ANGLE_DEG:g}): they do not look at the same scene")
         if not np.linalg.norm(T) >= MIN_BASELINE_M:
             raise CalibrationError(
                 f"rig T: the baseline is {np.linalg.norm(T):.3g} m, below "
