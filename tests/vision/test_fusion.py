@@ -167,6 +167,9 @@ def test_thermal_support_refuses_a_0_255_mask_and_bad_weights():
             thermal_support(pts, h, RIG, warm, head_weight=w)
     with pytest.raises(GeometryError, match="heights"):
         thermal_support(pts, h[:5], RIG, warm)
+    # a (H, W, 1) mask was "20x15 pixels but the thermal camera is 20x15"
+    with pytest.raises(ImageInputError, match=r"must be \(H, W\) = .* got shape \(\d+, \d+, 1\)"):
+        thermal_support(pts, h, RIG, warm[..., None])
 
 
 def test_bad_camera_height_is_refused_before_matching(scene):

@@ -140,6 +140,9 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
     finite_number("head_band_m", head_band_m, 0.0)
     max_points = whole_number("max_points", max_points)
     min_points = whole_number("min_points", min_points, 0)
+    if warm.ndim != 2:  # ((15, 20, 1) was "20x15 pixels but ... is 20x15")
+        raise ImageInputError(f"thermal mask must be (H, W) = {cam.shape}, got shape "
+                              f"{warm.shape}")
     if warm.shape != cam.shape:
         raise ImageInputError(
             f"thermal image is {warm.shape[1]}x{warm.shape[0]} pixels but the calibration's "
