@@ -335,6 +335,11 @@ def test_smoothed_srp_finds_a_static_source_and_not_noise():
     assert np.all(noise["coherence"][5:] < StreamConfig().min_coherence)
     with pytest.raises(ConfigError):
         pl.SmoothedSrp(arr, FS, frame_len, alpha=1.0)
+    # more frames asked than the segment holds: fewer rows came back without a word
+    from hearsee.errors import EstimationError
+
+    with pytest.raises(EstimationError, match=f"holds {n} frames"):
+        pl.SmoothedSrp(arr, FS, frame_len, alpha=0.8).process(y, n + 1, hop)
 
 
 def test_sensor_noise_alone_never_gives_a_direction():

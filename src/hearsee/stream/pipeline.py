@@ -845,6 +845,9 @@ class SmoothedSrp:
         if self._scale != 1.0:
             seg = seg * np.float32(self._scale)
         fr = frame_signals(seg, self.frame_len, hop)[:, :n_frames]
+        if fr.shape[1] != n_frames:  # (fewer rows came back without a word)
+            raise EstimationError(f"SmoothedSrp.process: the segment holds {fr.shape[1]} frames "
+                                  f"of {self.frame_len} samples (hop {hop}), not {n_frames}")
         X = frame_spectra(fr, self.win, self.nfft, self.k0, self.k1)
         X = np.moveaxis(X, 0, 1)  # (k, n_ch, B) complex64
         G = X[:, self.I] * np.conj(X[:, self.J])  # (k, P, B)
