@@ -334,3 +334,27 @@ def test_a_source_beyond_float_range_is_refused():
                                                 "farther from the origin than a float can hold"):
             simulate_recording("respeaker-4", [1.7e308, 1.7e308, 0.0], duration_s=0.1,
                                far_field=far_field)
+
+
+@pytest.mark.parametrize("snr", [1e6, -500.0, float("nan")])
+def test_the_simulators_refuse_an_snr_before_any_work(snr, monkeypatch, tmp_path):
+    """simulate_recording, simulate_moving_recording and simulate_pose_manifest checked the
+    SNR only in add_noise, after the whole clean simulation (1e6 dB: an OverflowError there
+    before that check existed). Now at once: the source signal is never made."""
+    import hearsee.audio.signals as signals
+    from hearsee.audio.active import simulate_pose_manifest
+    from hearsee.sim.moving import linear_trajectory, simulate_moving_recording
+
+    def never(*args, **kwargs):
+        raise AssertionError("the simulation started before the SNR was checked")
+
+    monkeypatch.setattr(signals, "make_signal", never)
+    traj = linear_trajectory([1.0, 0.0, 0.0], [1.0, 1.0, 0.0], 1.0)
+    calls = (lambda: simulate_recording("three-mic", [1.0, 1.0, 0.0], snr_db=snr),
+             lambda: simulate_moving_recording("three-mic", traj, snr_db=snr),
+             lambda: simulate_pose_manifest(tmp_path / "m.yaml", "three-mic", [1.0, 1.0, 0.0],
+                                            [(0.0, 0.0), (30.0, 0.0)], snr_db=snr))
+    for call in calls:
+        with pytest.raises(ConfigError, match="SNR"):
+            call()
+    assert list(tmp_path.iterdir()) == []

@@ -68,7 +68,7 @@ from hearsee.audio.arrays import (
     pair_tdoa,
     position_uncertainty,
 )
-from hearsee.audio.propagation import speed_of_sound_of
+from hearsee.audio.propagation import check_snr_db, speed_of_sound_of
 from hearsee.audio.signals import as_samples
 from hearsee.config import as_float_array, finite_number, is_real, same_file, whole_number
 from hearsee.errors import (
@@ -1457,6 +1457,7 @@ def simulate_pose_manifest(
             raise ConfigError(f"{man}: refusing to overwrite the input file {q}")
     arr = load_array(array)
     # (each read as np.asarray(float): True as 1 m, "0.5" as 0.5 m, a huge int an OverflowError)
+    snr_db = check_snr_db(snr_db)  # (before the simulation of every pose)
     src = as_point(source_m, "source_m")
     pivot = check_head_pivot(pivot_m)
     offset = check_head_offset(offset_m)

@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
-from hearsee.audio.propagation import add_noise, simulate_free_field, simulate_room
+from hearsee.audio.propagation import add_noise, check_snr_db, simulate_free_field, simulate_room
 from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
 from hearsee.config import (
     finite_number,
@@ -225,8 +225,9 @@ def simulate_recording(
     duration_s, fs : float
         Length in seconds and sample rate in Hz.
     snr_db : float, optional
-        Per-channel SNR of white sensor noise, relative to the mean received signal power
-        (None = no noise).
+        Per-channel SNR of white sensor noise in dB, relative to the mean received signal power,
+        within [:data:`~hearsee.audio.propagation.MIN_SNR_DB`,
+        :data:`~hearsee.audio.propagation.MAX_SNR_DB`] (None = no noise).
     room : mapping, optional
         ``{"room_dim": [L, W, H], "rt60": s, "array_at": [x, y, z]}`` (see
         :func:`normalize_room`); None = free field.
@@ -257,8 +258,7 @@ def simulate_recording(
     array = load_array(array)
     src = as_point(source, "source")
     fs = check_sim_fs(fs)
-    if snr_db is not None and not is_real(snr_db):
-        raise ConfigError(f"SNR must be a finite number of dB, got {snr_db!r}")
+    snr_db = check_snr_db(snr_db)  # (before the simulation: add_noise checks it at its end)
     room = normalize_room(room)
     if seed is not None:  # (-1 or 1.5 raised numpy's ValueError / TypeError)
         seed = whole_number("seed", seed, lo=0)

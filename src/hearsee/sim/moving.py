@@ -41,7 +41,7 @@ import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
-from hearsee.audio.propagation import add_noise, check_heard, speed_of_sound_of
+from hearsee.audio.propagation import add_noise, check_heard, check_snr_db, speed_of_sound_of
 from hearsee.audio.signals import as_samples, check_fs
 from hearsee.config import (
     MAX_TIME_LIMIT_S,
@@ -713,6 +713,7 @@ def simulate_moving_recording(
         raise ConfigError(
             "duration must be > 0 s (a one-point trajectory needs an explicit duration)")
     fs = check_sim_fs(fs)
+    snr_db = check_snr_db(snr_db)  # (before the simulation: add_noise checks it at its end)
     room_n = normalize_room(room)
     rng = np.random.default_rng(seed)
     s = make_signal(signal, dur, fs, rng)
