@@ -219,3 +219,17 @@ def test_camera_pose_limits_are_inclusive(scene, capsys, args):
     assert np.linalg.norm(np.array([0, 3, 3.99]) - scene["centre"]) < 5.0  # (the array's centre)
     assert main([*scene["base"], "--image-points", str(scene["pts"]), *args]) == 0
     assert "error" not in capsys.readouterr().err
+
+
+def test_a_video_shorter_than_the_recording_is_warned_about(scene, tmp_path, capsys):
+    """A 0.2 s video under a 0.5 s recording gave no image point (so no 3D position) after
+    0.2 s without a word; now a warning says where the video ends. A video as long as the
+    recording warns nothing."""
+    short, full = tmp_path / "short.avi", tmp_path / "full.avi"
+    _write_video(short, 2)  # 10 fps: frames at 0 and 0.1 s, ends at 0.2 s
+    _write_video(full, 6)
+    assert main([*scene["base"], "--video", str(short), "--detector", "face"]) == 0
+    err = capsys.readouterr().err
+    assert "the video ends at 0.20 s, before the recording" in err and err.count("\n") == 1
+    assert main([*scene["base"], "--video", str(full), "--detector", "face"]) == 0
+    assert "video ends" not in capsys.readouterr().err

@@ -59,6 +59,27 @@ def _camera_pose(camera_at: str | None, pan: float | None, tilt: float | None,
     return pos, pan, tilt
 
 
+def _warn_short_video(points, what: object, t_end: float) -> None:
+    """A warning when the video (or live camera) ``what`` stopped giving frames more than two
+    frames before the last update at ``t_end`` seconds: the updates after it had no image
+    point, so no 3D position (they went direction-only without a word)."""
+    from hearsee.errors import DegenerateInputWarning
+
+    if not points.ended:
+        return
+    last = points.frame_time if points.frame_index >= 0 else None
+    if last is None:
+        warnings.warn(f"{what}: delivered no frame: the run was direction-only",
+                      DegenerateInputWarning, stacklevel=2)
+    elif not points.live and last + 2.0 / points.fps < t_end:
+        warnings.warn(f"{what}: the video ends at {last + 1.0 / points.fps:.2f} s, before the "
+                      f"recording ({t_end:.2f} s): no 3D position after it",
+                      DegenerateInputWarning, stacklevel=2)
+    elif points.live:
+        warnings.warn(f"{what}: stopped delivering frames at {last:.2f} s: direction-only "
+                      "after it", DegenerateInputWarning, stacklevel=2)
+
+
 def _device_spec(text: str) -> int | str:
     """--device as an index (ASCII digits, optionally negative: then refused as no device) or
     a name, stripped as ``audio.device`` is (``--1`` and ``²`` raised builtin ValueErrors)."""
@@ -264,6 +285,9 @@ def track_cmd(
         warnings.warn(f"{image_points}: no image point lies within the recording's time span "
                       f"(0-{st.audio_s:.2f} s; {where}), so no 3D position can be given",
                       DegenerateInputWarning, stacklevel=1)
+    if points is not None and image_points is None and updates:
+        _warn_short_video(points, video if video is not None else f"camera {camera_device}",
+                          updates[-1].t)
     if st.status == "stalled":  # as 'hearsee run': what was printed is valid, the run is not
         err_console.print("track: the audio input stopped delivering samples", highlight=False)
         raise typer.Exit(1)
