@@ -92,6 +92,23 @@ def test_board_helpers():
     for bad in (np.inf, np.nan):  # inf gave inf / NaN corners before 2026-11-26
         with pytest.raises(CalibrationError, match="square"):
             C.board_points((3, 2), bad)
+    # the building blocks check the pattern too: (0, 0) and "9x6" were cv2.error, (-2, 3)
+    # and (2.5, 3) numpy's errors; match_labeling's NaN a LinAlgError, a wrong count a
+    # reshape ValueError
+    img = np.full((60, 80), 128, np.uint8)
+    for pat, words in (((0, 0), "at least 2x2"), ((-2, 3), "at least 2x2"),
+                       ((2.5, 3), "whole numbers"), ("9x6", "whole numbers"),
+                       ((3,), "whole numbers"), ((5, 1001), "at most 1000")):
+        for func, args in ((C.board_points, (pat, 0.1)), (C.find_corners, (img, pat)),
+                           (C.match_labeling, (np.zeros((6, 2)), np.zeros((6, 2)), pat))):
+            with pytest.raises(CalibrationError, match=words):
+                func(*args)
+    assert C.check_pattern(np.array([9, 6])) == (9, 6)
+    ref = C.board_points((3, 2), 10.0)[:, :2] + 50.0
+    np.testing.assert_array_equal(C.match_labeling(ref, ref, (3, 2)), ref)
+    for bad in (np.where(np.arange(12).reshape(6, 2) == 3, np.nan, ref), ref[:5]):
+        with pytest.raises(CalibrationError, match="match_labeling"):
+            C.match_labeling(ref, bad, (3, 2))
 
 
 def test_corners_are_subpixel_accurate(synthetic):

@@ -21,13 +21,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.config import finite_number, is_real, whole_number
+from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import CalibrationError
 from hearsee.vision.camera import MIN_BASELINE_M, Camera, StereoRig
 from hearsee.vision.io import to_gray
@@ -44,6 +45,7 @@ __all__ = [
     "calibrate_rig",
     "calibrate_stereo",
     "calibrate_thermal_extrinsics",
+    "check_pattern",
     "find_corners",
     "match_labeling",
     "parse_board",
@@ -96,12 +98,29 @@ def parse_board(text: str) -> tuple[int, int]:
         raise CalibrationError(
             f"board must look like 9x6 (inner corners per row x per column), got {text!r}"
         ) from None
+    return check_pattern((a, b), text)
+
+
+def check_pattern(pattern: Any, text: Any = None) -> tuple[int, int]:
+    """``pattern`` (inner corners per row, per column) as two ints from 2 to
+    :data:`MAX_BOARD_CORNERS`, else a CalibrationError quoting ``text`` (default the pattern).
+    The board check of :func:`parse_board`, :func:`board_points`, :func:`find_corners` and
+    :func:`match_labeling` (a pattern of (0, 0) or "9x6" reached OpenCV: cv2.error; (-2, 3)
+    and (2.5, 3) numpy's ValueError / TypeError)."""
+    shown = pattern if text is None else text
+    try:
+        a, b = pattern
+    except (TypeError, ValueError):
+        a = b = None
+    if not all(isinstance(v, int | np.integer) and not isinstance(v, bool) for v in (a, b)):
+        raise CalibrationError(f"board must be two whole numbers of inner corners (per row, per "
+                               f"column), e.g. (9, 6), got {shown!r}")
     if a < 2 or b < 2:
-        raise CalibrationError(f"board needs at least 2x2 inner corners, got {text!r}")
+        raise CalibrationError(f"board needs at least 2x2 inner corners, got {shown!r}")
     if max(a, b) > MAX_BOARD_CORNERS:
         raise CalibrationError(f"board has at most {MAX_BOARD_CORNERS} inner corners per side, "
-                               f"got {text!r}")
-    return a, b
+                               f"got {shown!r}")
+    return int(a), int(b)
 
 
 def board_points(pattern: tuple[int, int], square_m: float) -> NDArray:
@@ -109,7 +128,7 @@ def board_points(pattern: tuple[int, int], square_m: float) -> NDArray:
     in OpenCV's order (along rows of ``pattern[0]`` corners)."""
     if not (is_real(square_m) and square_m > 0):  # (inf gave inf / NaN corners)
         raise CalibrationError(f"square size must be a finite number > 0 metres, got {square_m}")
-    nx, ny = pattern
+    nx, ny = check_pattern(pattern)
     g = np.zeros((ny * nx, 3), np.float32)
     g[:, :2] = np.mgrid[0:nx, 0:ny].T.reshape(-1, 2) * square_m
     return g
@@ -137,7 +156,15 @@ def _canonical(corners: NDArray, pattern: tuple[int, int]) -> NDArray:
 def match_labeling(reference: NDArray, corners: NDArray, pattern: tuple[int, int]) -> NDArray:
     """Relabel ``corners`` (another camera's view of the same board) to match ``reference``:
     among the grid's relabelings, the one best explained by a scale + translation of the
-    reference corners (cameras of a rig are roughly aligned, never rolled 180 deg apart)."""
+    reference corners (cameras of a rig are roughly aligned, never rolled 180 deg apart).
+    CalibrationError unless both hold the pattern's corners as finite pixels (a NaN was
+    numpy's LinAlgError, another count a reshape ValueError)."""
+    pattern = check_pattern(pattern)
+    n = pattern[0] * pattern[1]
+    for what, c in (("reference", reference), ("corners", corners)):
+        if not real_entries(c) or np.size(c) != 2 * n or not np.all(np.isfinite(c)):
+            raise CalibrationError(f"match_labeling: {what} must be the board's {n} corners as "
+                                   f"finite pixels (n, 2), got {np.shape(c)}")
     ref = np.asarray(reference, float).reshape(-1, 2)
     best, best_res = None, np.inf
     for cand in _labelings(np.asarray(corners, np.float32), pattern):
@@ -165,6 +192,7 @@ def find_corners(image: NDArray, pattern: tuple[int, int], *, try_inverted: bool
     are relabelled so that corner 0 is the outer corner nearest the top-left of the image.
     ``upscale`` must be an integer >= 1 (ConfigError): 0 gave infinite corners.
     """
+    pattern = check_pattern(pattern)
     if upscale is not None:
         upscale = whole_number("upscale", upscale)
     g = to_gray(image)
