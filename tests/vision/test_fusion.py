@@ -184,6 +184,34 @@ def test_bad_camera_height_is_refused_before_matching(scene):
             detect_humans(scene.left, scene.right, rig)
 
 
+def test_detect_humans_refuses_bad_thermal_images_params_and_options_before_matching(
+        scene, monkeypatch):
+    """A thermal 'image' of text or a number was an IndexError, params given as a dict an
+    AttributeError, an unknown stereo option a builtin TypeError; each is hearsee's own error
+    now, before the stereo matching (which is made to fail the test if reached)."""
+    import hearsee.vision.fusion as fusion
+    from hearsee.vision.humans import HumanDetectorParams
+    from hearsee.vision.stereo import stereo_frame
+
+    def never(*args, **kwargs):
+        raise AssertionError("the stereo matching ran before the inputs were checked")
+
+    monkeypatch.setattr(fusion, "stereo_frame", never)
+    for bad in ("abc", 5.0, np.zeros(7)):
+        with pytest.raises(ImageInputError, match="thermal image"):
+            detect_humans(scene.left, scene.right, RIG, bad, camera_height_m=1.4)
+    with pytest.raises(ImageInputError, match="thermal image is"):
+        detect_humans(scene.left, scene.right, RIG, scene.thermal_c[:-1], camera_height_m=1.4)
+    with pytest.raises(ConfigError, match="HumanDetectorParams"):
+        detect_humans(scene.left, scene.right, RIG, params={"tm": 0.5}, camera_height_m=1.4)
+    monkeypatch.undo()
+    with pytest.raises(ConfigError, match="unknown disparity option.*foo"):
+        stereo_frame(scene.left, scene.right, RIG, foo=1)
+    with pytest.raises(ConfigError, match="unknown disparity option"):
+        detect_humans(scene.left, scene.right, RIG, stereo_options={"foo": 1},
+                      params=HumanDetectorParams(), camera_height_m=1.4)
+
+
 def test_a_nan_thermal_threshold_is_refused(scene):
     """min_support=NaN rejected every candidate (support >= NaN is False) without a word."""
     from hearsee.errors import ConfigError

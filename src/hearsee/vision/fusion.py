@@ -263,6 +263,21 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
             "a thermal image was given but the calibration has no thermal camera: add a "
             "'thermal:' block (camera, R, T) to the calibration file or leave out the thermal image"
         )
+    if params is not None and not isinstance(params, HumanDetectorParams):
+        # (a dict was an AttributeError deep in the candidate detector)
+        raise ConfigError(f"params must be a HumanDetectorParams, got {type(params).__name__}")
+    th = None
+    if thermal is not None:  # checked before the stereo matching, not after it
+        th = numeric_map("thermal image", thermal, None)  # (text / a number: IndexError)
+        cam = rig.thermal_camera
+        if th.ndim not in (2, 3):
+            raise ImageInputError(f"thermal image must be (H, W) or (H, W, C), got shape "
+                                  f"{th.shape}")
+        if th.shape[:2] != cam.shape:
+            raise ImageInputError(
+                f"thermal image is {th.shape[1]}x{th.shape[0]} pixels but the calibration's "
+                f"thermal camera is {cam.width}x{cam.height}"
+            )
     # a bad camera height fails before the stereo matching, not after it
     if camera_height_m is None:
         camera_height_m = rig.camera_height_m  # ConfigError when info holds a bad one
@@ -274,20 +289,13 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
     det = detect_candidates(frame.disparity, frame.points(), frame.focal_px, frame.baseline_m,
                             rect.cy, camera_height_m=camera_height_m, params=params)
     warm = None
-    if thermal is not None:
-        cam = rig.thermal_camera
-        th = np.asarray(thermal)
-        if th.shape[:2] != cam.shape:
-            raise ImageInputError(
-                f"thermal image is {th.shape[1]}x{th.shape[0]} pixels but the calibration's "
-                f"thermal camera is {cam.width}x{cam.height}"
-            )
+    if th is not None:
         warm = thermal_mask(th, band_c=band_c)
     humans, rejected = classify_candidates(det, rig, rect, warm, min_support=min_support)
     info = {"floor": {"source": det.floor.source,
                       "camera_height_m": round(det.floor.camera_height_m, 3)},
             "thermal": None if thermal is None else
-            ("radiometric" if np.asarray(thermal).dtype != np.uint8 else "relative")}
+            ("radiometric" if th.dtype != np.uint8 else "relative")}
     return DetectionResult(humans, rejected, frame, det, warm, info)
 
 

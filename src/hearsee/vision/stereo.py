@@ -519,6 +519,13 @@ def stereo_frame(left: NDArray, right: NDArray, rig: StereoRig, **disparity_opti
     >>> round(float(np.nanmedian(f.depth()[:, 30:])), 3)  # f B / d = 138.56 * 0.1 / 8
     1.732
     """
+    import inspect
+
+    known = set(inspect.signature(compute_disparity).parameters) - {"left", "right"}
+    unknown = sorted(set(disparity_options) - known)
+    if unknown:  # (a builtin TypeError from compute_disparity's call, after the rectification)
+        raise ConfigError(f"unknown disparity option(s) {', '.join(unknown)}; expected some of "
+                          f"{', '.join(sorted(known))}")
     lr, rr, rect = rectify_pair(left, right, rig)
     d = compute_disparity(lr, rr, **disparity_options)
     return StereoFrame(lr, rr, d, rect)
