@@ -95,11 +95,10 @@ def _main(argv: list[str] | None) -> int:
     except HearseeError as exc:
         print(f"hearsee: error: {exc}", file=sys.stderr)
         code = 2
-    except BrokenPipeError:  # (stdout piped into e.g. `head`, which has closed it)
-        code = 141
     except OSError as exc:
         # the safety net behind the commands' own checks: a file the system refused (no
-        # permission, disk full, ...) is one line, not a traceback
+        # permission, disk full, ...) is one line, not a traceback (a closed stdout pipe,
+        # `hearsee track ... | head`, never gets here: click exits 1 quietly)
         what = f"{exc.filename}: " if exc.filename else ""
         print(f"hearsee: error: {what}{exc.strerror or exc}", file=sys.stderr)
         code = 2
