@@ -206,3 +206,17 @@ def test_report_marks_views_the_thermal_calibration_rejected(capsys, tmp_path, m
             if line.lstrip("│ ").startswith("l") and ".png" in line}
     assert "(rejected)" not in rows["l0.png"]
     assert "(rejected)" in rows["l1.png"]
+
+
+@pytest.mark.parametrize("square", ["1e300", "1e-300", "nan", "2.5"])
+def test_calibrate_square_outside_any_board_is_one_line(square, board_dir, tmp_path, capsys):
+    """--square 1e300 or 1e-300 reached OpenCV: a numpy RuntimeWarning and an OpenCV
+    "(-215:Assertion failed)" line. Now one line naming the option and its range."""
+    d, _ = board_dir
+    args = _args(d, tmp_path / "c.yaml")
+    args[8] = square
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("hearsee: error: --square must be the side of one square in metres") \
+        and err.count("\n") == 1, err
+    assert not (tmp_path / "c.yaml").exists()

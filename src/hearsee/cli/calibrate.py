@@ -42,8 +42,10 @@ def calibrate_cmd(
     from hearsee.vision.camera import save_rig
     from hearsee.vision.io import glob_images
 
-    if not (square > 0 and math.isfinite(square)):
-        raise CalibrationError(f"--square must be a positive length in metres, got {square}")
+    # (1e300 or 1e-300 reached OpenCV: a RuntimeWarning and an "Assertion failed" message)
+    if not 1e-3 <= square <= 2.0:
+        raise CalibrationError(f"--square must be the side of one square in metres, 0.001 to 2 "
+                               f"(e.g. 0.025 for 25 mm), got {square}")
     if model not in ("radial", "simple", "standard", "rational"):
         raise ConfigError(f"--model must be radial, simple, standard or rational, got {model!r}")
     pattern = parse_board(board)
