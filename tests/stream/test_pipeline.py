@@ -293,11 +293,21 @@ def test_motion_models_track_a_source_moving_along_a_line(model, ray):
     expected = {"tdoa": "RayTdoaTracker", "fix": "RayTracker"}[ray] if model == "cv" else (
         "MotionKalman")
     assert type(proc.motion).__name__ == expected
+    ups = []
     for k in range(60):
         u = Update(k * 0.032, None, None, None, None, None, None, 1.0)
         proc._fuse(u, arr.tdoa(at(u.t)))
+        ups.append(u)
     assert np.linalg.norm(np.array(u.position_m) - at(u.t)) < 0.02
     assert np.linalg.norm(np.array(u.velocity_mps) - v) < 0.1
+    # the first update's velocity is the prior: unknown (None); the constant-velocity trackers
+    # estimate no acceleration (None, not a modelled 0), the constant-acceleration one does
+    assert ups[0].position_m is not None and ups[0].velocity_mps is None
+    assert ups[0].acceleration_mps2 is None
+    if model == "cv":
+        assert all(w.acceleration_mps2 is None for w in ups)
+    else:
+        assert np.linalg.norm(np.array(u.acceleration_mps2)) < 0.5  # (it moves steadily)
     with pytest.raises(ConfigError, match="motion_model"):
         TrackingProcessor(arr, FS, StreamConfig(motion_model="kalman"), rig=rig)
     with pytest.raises(ConfigError, match="ray_measurements"):

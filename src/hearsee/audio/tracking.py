@@ -1006,6 +1006,9 @@ class MotionKalman(_Kalman):
     """
 
     _DIM = 9  # state size; subclasses with another motion model change it and _model
+    #: Whether the model has an acceleration state (a constant-velocity subclass reports a
+    #: modelled 0, which the stream does not pass on as an estimate).
+    estimates_acceleration = True
     _POS = np.array([0, 3, 6])
     _VEL = np.array([1, 4, 7])
     _ACC = np.array([2, 5, 8])

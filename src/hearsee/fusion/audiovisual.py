@@ -412,6 +412,7 @@ class RayTracker(MotionKalman):
     """
 
     _DIM = 6
+    estimates_acceleration = False  # (constant velocity: its acceleration is the model's 0)
     _POS = np.array([0, 2, 4])
     _VEL = np.array([1, 3, 5])
 

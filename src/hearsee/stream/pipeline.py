@@ -153,7 +153,9 @@ class Update:
     ``acceleration_mps2`` and ``covariance`` (2x2 deg^2 for a direction, 3x3 m^2 for a position)
     are the trackers' filtered estimates; ``velocity_mps`` is None until the 3D track's
     measurements have determined it (:attr:`~hearsee.audio.tracking.MotionKalman.velocity_known`:
-    a new track's velocity is its prior, 0 m/s). The direction covariance is the tracker's own and
+    a new track's velocity is its prior, 0 m/s), ``acceleration_mps2`` likewise and always
+    with the default constant-velocity 3D tracker, which does not estimate one
+    (``motion_model="ca"`` does). The direction covariance is the tracker's own and
     conservative: its measurement noise is declared several times the measurements' actual
     error (see ``StreamConfig.sigma_srp_deg``), so on ``bench/tracking.py``'s room walks (RT60
     0.3 s, 10 / 20 dB; measured 2026-11-27) the actual azimuth error was 0.2-0.45 times the
@@ -1547,7 +1549,12 @@ class TrackingProcessor:
             # (None until the fixes determine it: a new track's velocity is its 0 m/s prior)
             upd.velocity_mps = (self.motion.velocity.tolist() if self.motion.velocity_known
                                 else None)
-            upd.acceleration_mps2 = self.motion.acceleration.tolist()
+            # (None for the constant-velocity default, whose 0 is a model assumption, not an
+            # estimate -- it read as "not accelerating" for a walker who turned -- and, like
+            # the velocity, before the track's measurements determine it)
+            upd.acceleration_mps2 = (self.motion.acceleration.tolist()
+                                     if self.motion.estimates_acceleration
+                                     and self.motion.velocity_known else None)
             upd.covariance = self.motion.position_cov.tolist()
 
 
