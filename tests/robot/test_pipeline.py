@@ -195,6 +195,7 @@ def test_track_does_not_run_away_while_the_person_is_too_close_to_see():
     # fixes determine it; the velocity RMSE is over the steps with a velocity
     tracks = [r for r in res.log if r["track"] is not None]
     assert tracks[0]["track"]["velocity_mps"] is None
+    assert tracks[0]["track"]["acceleration_mps2"] is None
     known = [r for r in tracks if r["track"]["velocity_mps"] is not None]
     assert len(known) >= len(tracks) - 3
     err = [np.linalg.norm(r["track"]["velocity_mps"] - r["truth"]["velocity_mps"]) for r in known]

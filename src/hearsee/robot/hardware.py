@@ -1280,7 +1280,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         if track.initialized:
             rec_track = {"position_m": _r(track.position),
                          "velocity_mps": _r(track.velocity) if track.velocity_known else None,
-                         "acceleration_mps2": _r(track.acceleration),
+                         "acceleration_mps2": (_r(track.acceleration) if track.velocity_known
+                                               else None),
                          "covariance": _r(track.position_cov, 6)}
         rec = {"t": round(t, 4), "phase": state["phase"], "head_pan_deg": geo.pose[0],
                "head_tilt_deg": geo.pose[1], "head_command": command, "audio": audio,

@@ -371,8 +371,8 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     ``head_pan_deg``, ``audio`` {azimuth_deg (robot frame), n_frames, confidence} or None,
     ``detections`` [{box, position_m (room), score, thermal_support, accepted, reason,
     truth_kind}], ``track`` {position_m, velocity_mps (None until the track's fixes determine
-    it, :attr:`~hearsee.audio.tracking.MotionKalman.velocity_known`), acceleration_mps2,
-    covariance} or None,
+    it, :attr:`~hearsee.audio.tracking.MotionKalman.velocity_known`), acceleration_mps2
+    (likewise), covariance} or None,
     ``truth`` {position_m, velocity_mps, azimuth_robot_deg}, ``error_m``.
     """
     from hearsee.sim.scenes import default_rig, render_scene
@@ -507,7 +507,8 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
         if track.initialized:
             rec_track = {"position_m": track.position,
                          "velocity_mps": track.velocity if track.velocity_known else None,
-                         "acceleration_mps2": track.acceleration,
+                         "acceleration_mps2": track.acceleration if track.velocity_known
+                         else None,
                          "covariance": track.position_cov}
             error = float(np.linalg.norm(track.position - st["torso"]))
         log.append({"t": round(t1, 4), "phase": phase, "head_pan_deg": pan, "audio": audio_rec,
