@@ -114,7 +114,21 @@ def test_check_export_before_a_run(tmp_path, monkeypatch):
     assert "json installed" in check_export("rerun", tmp_path / "run.rrd")
     with pytest.raises(InputFileError, match="does not exist"):
         check_export("rerun", tmp_path / "nope" / "run.rrd")
+    with pytest.raises(ConfigError, match="export kind must be one of"):  # (a KeyError)
+        check_export("foo", tmp_path / "run.foo")
     assert list(tmp_path.iterdir()) == []  # a check writes nothing
+
+
+def test_overlay_frames_that_are_not_8_bit_are_refused():
+    """The exports cast any frame to uint8 unsafely: uint16 300 became 44, float 0.7 became
+    0 and -1 255. An ImageInputError naming the frame's time now; uint8 frames pass."""
+    from hearsee.errors import ImageInputError
+
+    ok = np.full((4, 6, 3), 200, np.uint8)
+    np.testing.assert_array_equal(export._overlay_bgr(ok, 0.5), ok)
+    for bad in (np.full((4, 6, 3), 300, np.uint16), np.full((4, 6), 0.7)):
+        with pytest.raises(ImageInputError, match="t = 0.5 s: expected 8-bit pixels"):
+            export._overlay_bgr(bad, 0.5)
 
 
 def test_mcap_stamp_just_below_a_whole_second(tmp_path):

@@ -74,10 +74,13 @@ def _stamp(t: float) -> dict[str, int]:
 def _overlay_bgr(img: np.ndarray, t: float) -> np.ndarray:
     """An overlay frame (H, W) grey or (H, W, 1|3|4) grey/BGR/BGRA as contiguous (H, W, 3) BGR
     uint8 (the layout both exports describe), else an ImageInputError naming the time ``t``."""
+    from hearsee.errors import ImageInputError
     from hearsee.vision.io import as_detector_image
 
-    img = as_detector_image(np.ascontiguousarray(img, dtype=np.uint8),
-                            f"overlay frame at t = {t} s")
+    if np.asarray(img).dtype != np.uint8:  # (cast unsafely: uint16 300 -> 44, float 0.7 -> 0)
+        raise ImageInputError(f"overlay frame at t = {t} s: expected 8-bit pixels (uint8), got "
+                              f"{np.asarray(img).dtype}")
+    img = as_detector_image(np.ascontiguousarray(img), f"overlay frame at t = {t} s")
     return np.repeat(img[:, :, None], 3, axis=2) if img.ndim == 2 else img
 
 
@@ -86,6 +89,8 @@ def check_export(kind: str, path: str | Path) -> str:
     ``path``: its extra is installed (else :class:`ConfigError`) and its folder exists (else
     :class:`InputFileError`), so a long live run does not fail only at its end. Returns a
     one-line description for ``hearsee run --dry-run``."""
+    if kind not in _EXTRAS:  # (a KeyError)
+        raise ConfigError(f"export kind must be one of {', '.join(_EXTRAS)}, got {kind!r}")
     module, missing = _EXTRAS[kind]
     if importlib.util.find_spec(module) is None:
         raise ConfigError(missing)
