@@ -572,6 +572,27 @@ def test_regressor_max_iter_must_be_a_whole_number(rig, max_iter):
         AudioVisualRegressor(hidden_layer_sizes=(4,), max_iter=max_iter).fit(X, Y)
 
 
+def test_regressor_refuses_what_scikit_learn_would_raise_on(rig):
+    """NaN targets, a single sample and settings MLPRegressor refuses (hidden_layer_sizes
+    (0,), a NaN alpha, an unknown solver) raised scikit-learn's errors; an empty predict
+    its ValueError. EstimationError now (the failed fit leaves no model behind); an empty
+    predict gives no positions."""
+    X, Y = simulate_av_samples(rig, 40, rng=np.random.default_rng(0))
+    Yn = Y.copy()
+    Yn[3, 1] = np.nan
+    with pytest.raises(EstimationError, match="targets contain NaN"):
+        AudioVisualRegressor(hidden_layer_sizes=(4,), max_iter=5).fit(X, Yn)
+    with pytest.raises(EstimationError, match="at least 2 samples"):
+        AudioVisualRegressor(hidden_layer_sizes=(4,), max_iter=5).fit(X[:1], Y[:1])
+    for kw in ({"hidden_layer_sizes": (0,)}, {"alpha": np.nan}, {"solver": "x"}):
+        reg = AudioVisualRegressor(max_iter=5, **kw)
+        with pytest.raises(EstimationError, match="AudioVisualRegressor settings"):
+            reg.fit(X, Y)
+        assert not hasattr(reg, "model_")
+    reg = AudioVisualRegressor(hidden_layer_sizes=(4,), max_iter=5).fit(X, Y)
+    assert reg.predict(X[:0]).shape == (0, 3)
+
+
 def test_rig_keeps_copies_of_the_callers_mounting():
     """AudioVisualRig copies (and freezes) its mounting R, t: editing the caller's arrays
     afterwards does not move the rig's camera."""

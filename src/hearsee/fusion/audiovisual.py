@@ -844,6 +844,10 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
         Y = np.asarray(y, dtype=float)
         if Y.shape != (A.shape[0], 3):
             raise EstimationError(f"targets must be (n_samples, 3) positions, got {Y.shape}")
+        if not np.all(np.isfinite(Y)):  # (scikit-learn's ValueError)
+            raise EstimationError("targets contain NaN or inf")
+        if A.shape[0] < 2:
+            raise EstimationError(f"fit needs at least 2 samples, got {A.shape[0]}")
         self.model_ = make_pipeline(
             StandardScaler(),
             MLPRegressor(hidden_layer_sizes=tuple(self.hidden_layer_sizes), alpha=self.alpha,
@@ -854,7 +858,11 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
         )
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ConvergenceWarning)
-            self.model_.fit(A, Y)
+            try:
+                self.model_.fit(A, Y)
+            except (TypeError, ValueError) as exc:  # bad hidden_layer_sizes, alpha, solver
+                del self.model_
+                raise EstimationError(f"AudioVisualRegressor settings: {exc}") from None
         self.n_features_in_ = A.shape[1]
         return self
 
@@ -865,5 +873,7 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
         if A.shape[1] != self.n_features_in_:
             raise EstimationError(
                 f"expected {self.n_features_in_} features, got {A.shape[1]}")
+        if A.shape[0] == 0:  # (scikit-learn's ValueError for no sample)
+            return np.zeros((0, 3))
         return self.model_.predict(A)
 
