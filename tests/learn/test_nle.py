@@ -359,6 +359,8 @@ def test_building_blocks_refuse_bad_arguments():
     for reg in (np.nan, np.inf, 0.0, -1e-3):
         with pytest.raises(ManifoldInputError, match="reg"):
             reconstruction_weights(X, ind, mask, reg=reg)
+    with pytest.raises(ManifoldInputError, match="mask must be bool"):  # (strings: all True)
+        reconstruction_weights(X, ind, np.where(mask, "yes", "no"))
     # reg * trace(C) overflowing float64: NaN weights before (and a RuntimeError from SuperLU
     # in fit)
     with pytest.raises(ManifoldInputError, match="reg"), np.errstate(all="ignore"):

@@ -241,6 +241,16 @@ def test_too_few_views_and_mismatch_raise(synthetic, corners):
         C.calibrate_camera(lp, obj, truth.left.size)
     with pytest.raises(CalibrationError, match="right views"):
         C.calibrate_stereo(lp, lp[:1], obj, truth.left, truth.right)
+    # a NaN reject factor rejected nothing without a word; complex corners lost their
+    # imaginary part
+    lp3 = list(corners[0][:3])
+    for bad in (np.nan, -1.0):
+        with pytest.raises(CalibrationError, match="reject_factor"):
+            C.calibrate_camera(lp3, obj, truth.left.size, reject_factor=bad)
+    for bad in (lp3[0] + 0j, np.where(np.arange(lp3[0].size).reshape(lp3[0].shape) == 0, np.nan,
+                                       lp3[0])):
+        with pytest.raises(CalibrationError, match="finite real pixel"):
+            C.calibrate_camera([bad, *lp3[1:]], obj, truth.left.size)
 
 
 def _board_views(n: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -293,6 +293,8 @@ def reconstruction_weights(
     """
     X, ind, centers, (mask,) = _check_neighbourhood_args("reconstruction_weights", X, ind,
                                                         centers, mask=mask)
+    if mask.dtype.kind not in "biuf":  # (a mask of strings was all True)
+        raise ManifoldInputError(f"reconstruction_weights: mask must be bool, got {mask.dtype}")
     mask = mask.astype(bool, copy=False)
     reg = finite_number("reg", reg, 0.0, lo_open=True, error=ManifoldInputError)
     empty = ~mask.any(axis=1)

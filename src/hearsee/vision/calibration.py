@@ -271,6 +271,11 @@ def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | S
             f"need the board in at least 3 images to calibrate, found it in {n}; add views of "
             "the board at different angles"
         )
+    # (a NaN factor rejected no view without a word; complex corners lost their imaginary part)
+    finite_number("reject_factor", reject_factor, 0.0, error=CalibrationError)
+    if not all(real_entries(p) and np.all(np.isfinite(np.asarray(p, float)))
+               for p in image_points):
+        raise CalibrationError("image points must be finite real pixel coordinates")
     objs = _per_view(object_points, n)
     imgs = [np.asarray(p, np.float32).reshape(-1, 1, 2) for p in image_points]
     flags = _MODELS[model] | (cv2.CALIB_FIX_ASPECT_RATIO if fix_aspect else 0)
