@@ -367,3 +367,18 @@ def test_report_folder_that_cannot_be_written_or_is_the_jsonl_fails_before_liste
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "locked is not writable" in err[0], err
     assert list((robot_dir / "locked").iterdir()) == []
+
+
+def test_report_folder_of_someone_elses_files_is_kept_unless_forced(robot_dir, monkeypatch,
+                                                                    capsys):
+    """A report folder holding an index.html that no hearsee report wrote was overwritten at
+    the end of the live run; now refused before listening (the dry run too), unless --force."""
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES))
+    (robot_dir / "site").mkdir()
+    (robot_dir / "site" / "index.html").write_text("<title>mine</title>", encoding="utf-8")
+    cfg = _config(robot_dir, cameras=False, output={"report": "site", "jsonl": "run.jsonl"})
+    assert main(["run", "--config", str(cfg), "--dry-run"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is not a hearsee report's" in err[0], err
+    assert main(["run", "--config", str(cfg), "--dry-run", "--force"]) == 0
+    assert (robot_dir / "site" / "index.html").read_text(encoding="utf-8") == "<title>mine</title>"

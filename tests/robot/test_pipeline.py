@@ -392,3 +392,28 @@ def test_demo_refuses_a_report_folder_that_is_a_file_before_running(tmp_path, mo
     assert capsys.readouterr().err == (f"hearsee: error: --out {out}: {f} is a file, not a "
                                        "folder; choose a report folder\n")
     assert f.read_text() == "mine\n"
+
+
+def test_demo_keeps_report_files_it_did_not_write_unless_forced(tmp_path, capsys):
+    """--out pointed at a folder of the user's overwrote their index.html (and log.json,
+    summary.json) without a word. Now refused unless --force; a folder holding an earlier
+    hearsee report is replaced as before (re-running the README's `hearsee demo`)."""
+    from hearsee.robot.report import report_foreign_file
+
+    out = tmp_path / "site"
+    out.mkdir()
+    (out / "index.html").write_text("<html><title>my site</title></html>", encoding="utf-8")
+    assert report_foreign_file(out) == out / "index.html"
+    assert main(["demo", "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "index.html exists and is not a hearsee report's" in err and err.count("\n") == 1
+    assert (out / "index.html").read_text(encoding="utf-8") == \
+        "<html><title>my site</title></html>"
+    only_log = tmp_path / "logs"
+    only_log.mkdir()
+    (only_log / "log.json").write_text("[]", encoding="utf-8")
+    assert report_foreign_file(only_log) == only_log / "log.json"
+    ours = tmp_path / "ours"
+    write_report(ours, scenario_from_dict({}).to_dict(), [], {"success": False})
+    assert report_foreign_file(ours) is None
+    assert report_foreign_file(tmp_path / "new") is None

@@ -23,7 +23,8 @@ def demo_cmd(
     rerun: Path = typer.Option(None, "--rerun", help="Also write a Rerun recording (.rrd)."),
     mcap: Path = typer.Option(None, "--mcap", help="Also write ROS 2 messages to an MCAP file."),
     force: bool = typer.Option(False, "--force",
-                               help="Overwrite existing --rerun / --mcap files."),
+                               help="Overwrite existing --rerun / --mcap files, and report files "
+                                    "in --out that an earlier hearsee report did not write."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar or summary table."),
 ) -> None:
     """Hear a person, turn to them, see and verify them, track them in 3D; write a report.
@@ -37,6 +38,7 @@ def demo_cmd(
     from hearsee.robot.report import (
         report_folder_blocker,
         report_folder_unwritable,
+        report_foreign_file,
         report_overwrites,
         write_report,
     )
@@ -61,6 +63,10 @@ def demo_cmd(
             # (--force let the export replace the report's log.json: a broken report)
             raise ConfigError(f"{opt} {p} is one of the report's own files (--out {out}); "
                               "choose another path")
+    foreign = report_foreign_file(out)
+    if foreign is not None and not force:
+        raise ConfigError(f"--out {out}: {foreign} exists and is not a hearsee report's; "
+                          "choose another folder or pass --force to overwrite it")
     check_exports(rerun, mcap, inputs, force)
     with progress(f"scenario {sc.name}", total=sc.duration_s, enabled=not quiet) as advance:
         result = run_scenario(sc, progress=advance)

@@ -36,8 +36,9 @@ def run_cmd(
     mcap: Annotated[Path | None, typer.Option(
         "--mcap", help="Also write ROS 2 messages to an MCAP file (pip install 'hearsee[ros]').")
     ] = None,
-    force: Annotated[bool, typer.Option("--force",
-                                        help="Overwrite existing --rerun / --mcap files.")] = False,
+    force: Annotated[bool, typer.Option(
+        "--force", help="Overwrite existing --rerun / --mcap files, and report files in the "
+        "report folder that an earlier hearsee report did not write.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q",
                                         help="No progress bar or summary table.")] = False,
 ) -> None:
@@ -67,6 +68,12 @@ def run_cmd(
     # the exports' extras, folders and overwrite rule before listening (and in the dry run):
     # a live run must not fail only when it writes them at its end
     exports = check_exports(rerun, mcap, cfg.input_files(), force)
+    from hearsee.robot.report import report_foreign_file
+
+    foreign = report_foreign_file(cfg.output.report)
+    if foreign is not None and not force:  # (the report replaced them after the live run)
+        raise ConfigError(f"output.report: {foreign} exists and is not a hearsee report's; "
+                          "choose another folder or pass --force to overwrite it")
     if dry_run:
         checks = check_devices(cfg) + [Check(name, True, detail) for name, detail in exports]
         _print_checks(checks)

@@ -25,8 +25,8 @@ import numpy as np
 
 from hearsee.errors import InputFileError
 
-__all__ = ["REPORT_FILES", "report_folder_blocker", "report_folder_unwritable", "report_overwrites",
-           "write_report"]
+__all__ = ["REPORT_FILES", "report_folder_blocker", "report_folder_unwritable",
+           "report_foreign_file", "report_overwrites", "write_report"]
 
 #: The files :func:`write_report` writes in its folder itself; it also writes PNGs into the
 #: folder's ``plots/`` and ``frames/`` (named after the plots and the images it is given).
@@ -52,6 +52,30 @@ def report_folder_unwritable(folder: str | Path) -> Path | None:
     q = next((q for q in (p, *p.parents) if q.exists()), None)
     if q is not None and q.is_dir() and not os.access(q, os.W_OK | os.X_OK):
         return q
+    return None
+
+
+def report_foreign_file(folder: str | Path) -> Path | None:
+    """The first of :data:`REPORT_FILES` in ``folder`` that an earlier hearsee report did not
+    write -- an ``index.html`` whose title is not a hearsee report's, or a ``log.json`` /
+    ``summary.json`` beside no hearsee ``index.html`` -- or None. A report replaces its own
+    earlier files (re-running ``hearsee demo``); pointed at a folder of the user's, it
+    overwrote their index.html, log.json and summary.json without a word."""
+    f = Path(folder)
+    index = f / "index.html"
+    ours = False
+    if index.is_file():
+        try:
+            with index.open("rb") as fh:
+                ours = b"<title>hearsee report:" in fh.read(4096)
+        except OSError:
+            ours = False
+        if not ours:
+            return index
+    if not ours:
+        for name in REPORT_FILES[1:]:
+            if (f / name).exists():
+                return f / name
     return None
 
 
