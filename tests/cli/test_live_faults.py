@@ -162,14 +162,20 @@ def fake_sd(monkeypatch):
     signal.signal(signal.SIGINT, old)
 
 
+#: A previous run's report folder (its index.html titled as hearsee's reports are, which a
+#: new report may replace; report_foreign_file).
+PREVIOUS = {"updates.jsonl": "previous updates.jsonl", "summary.json": "previous summary.json",
+            "index.html": "<title>hearsee report: previous</title> previous index.html"}
+
+
 @pytest.fixture
 def robot(tmp_path):
     """``robot(**audio)``: an audio-only robot file in tmp_path (the USB array's channels 1-3
     by default), its report folder holding a previous run's files."""
     prev = tmp_path / "report"
     prev.mkdir()
-    for name in ("updates.jsonl", "summary.json", "index.html"):
-        (prev / name).write_text(f"previous {name}", encoding="utf-8")
+    for name, text in PREVIOUS.items():
+        (prev / name).write_text(text, encoding="utf-8")
 
     def make(**audio):
         data = {"audio": {"device": "USB 6ch", "fs": FS, "array": "three-mic",
@@ -189,8 +195,8 @@ def _untouched(cfg: Path) -> None:
     folder = cfg.parent
     assert sorted(p.name for p in folder.iterdir()) == ["report", "robot.yaml"]
     assert yaml.safe_load(cfg.read_text(encoding="utf-8"))["audio"]["array"] == "three-mic"
-    for name in ("updates.jsonl", "summary.json", "index.html"):
-        assert (folder / "report" / name).read_text(encoding="utf-8") == f"previous {name}"
+    for name, text in PREVIOUS.items():
+        assert (folder / "report" / name).read_text(encoding="utf-8") == text
     assert sorted(p.name for p in (folder / "report").iterdir()) == [
         "index.html", "summary.json", "updates.jsonl"]
 
