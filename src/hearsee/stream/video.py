@@ -115,6 +115,7 @@ class CsvImagePoints:
             raise ConfigError(f"{p}: times must be finite and strictly increasing")
         self.t, self.uv = a[:, 0], a[:, 1:]
         self.max_gap_s = float(max_gap_s)
+        self._seen_t = self.t[np.all(np.isfinite(self.uv), axis=1)]  # times of visible rows
 
     def __call__(self, t: float) -> tuple[float, float] | None:
         k = int(np.searchsorted(self.t, t))
@@ -135,13 +136,12 @@ class CsvImagePoints:
         """Whether ``points(t)`` can give an image point for some t in ``[t_start, t_end]``:
         a visible row (finite u, v) lies within ``max_gap_s / 2`` of the span (interpolation
         needs two visible rows, the nearer of which is that close)."""
-        seen = self.t[np.all(np.isfinite(self.uv), axis=1)]
-        half = self.max_gap_s / 2
+        seen, half = self._seen_t, self.max_gap_s / 2
         return bool(np.any((seen >= t_start - half) & (seen <= t_end + half)))
 
     def visible_span(self) -> tuple[float, float] | None:
         """Times (s) of the first and last visible rows, or None when no row is visible."""
-        seen = self.t[np.all(np.isfinite(self.uv), axis=1)]
+        seen = self._seen_t
         return (float(seen[0]), float(seen[-1])) if len(seen) else None
 
 
@@ -183,9 +183,8 @@ def save_image_points(path: str | Path, t: NDArray, uv: NDArray) -> None:
                           f"{pts.shape}")
     if len(tt) and (not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0)):
         raise ConfigError("image points: times must be finite and strictly increasing")
-    if np.any(np.isinf(pts)) or np.any(np.isnan(pts[:, 0]) != np.isnan(pts[:, 1])):
-        raise ConfigError("image points: each row's u and v must be both finite pixels or both "
-                          "NaN (not visible)")
+    for k, (u, v) in enumerate(pts):  # the reader's row rule (line k + 2 of the file to be)
+        _check_pixel(Path(path), k + 2, float(u), float(v), None)
     with output_file(path).open("w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
         w.writerow(["t", "u", "v"])
