@@ -1076,6 +1076,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         associate,
         new_person_track,
         stereo_position_cov,
+        track_record,
     )
     from hearsee.stream.pipeline import StreamConfig, StreamPipeline
 
@@ -1276,13 +1277,9 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             tilt = limit_tilt_deg(tilt)
             command = head.command(t, pan, tilt)
             state["desired"] = (pan, tilt)
-        rec_track = None
-        if track.initialized:
-            rec_track = {"position_m": _r(track.position),
-                         "velocity_mps": _r(track.velocity) if track.velocity_known else None,
-                         "acceleration_mps2": (_r(track.acceleration) if track.velocity_known
-                                               else None),
-                         "covariance": _r(track.position_cov, 6)}
+        rec_track = track_record(track)  # (rounded for the JSON line: mm, covariance 1e-6)
+        if rec_track is not None:
+            rec_track = {k: _r(v, 6 if k == "covariance" else 4) for k, v in rec_track.items()}
         rec = {"t": round(t, 4), "phase": state["phase"], "head_pan_deg": geo.pose[0],
                "head_tilt_deg": geo.pose[1], "head_command": command, "audio": audio,
                "camera_t": camera_t, "detections": dets, "track": rec_track, "truth": None,

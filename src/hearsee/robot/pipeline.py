@@ -55,7 +55,7 @@ from hearsee.robot.scenario import Scenario
 from hearsee.vision.camera import OPTICAL_FROM_BODY
 
 __all__ = ["CONTROL_DT", "RunResult", "new_person_track", "run_scenario",
-           "stereo_position_cov"]
+           "stereo_position_cov", "track_record"]
 
 #: Control period and audio chunk length, seconds.
 CONTROL_DT = 0.2
@@ -313,6 +313,20 @@ def new_person_track() -> MotionKalman:
                         accel_tau_s=PERSON_ACCEL_TAU_S)
 
 
+def track_record(track: MotionKalman) -> dict[str, Any] | None:
+    """The log's ``track`` entry of the simulated and the live loop: ``position_m`` (m),
+    ``velocity_mps`` and ``acceleration_mps2`` (None until the track's fixes determine the
+    velocity, :attr:`~hearsee.audio.tracking.MotionKalman.velocity_known`: before, they are
+    the 0 priors of a new track), ``covariance`` (3x3 m^2); None without a track."""
+    if not track.initialized:
+        return None
+    known = track.velocity_known
+    return {"position_m": track.position,
+            "velocity_mps": track.velocity if known else None,
+            "acceleration_mps2": track.acceleration if known else None,
+            "covariance": track.position_cov}
+
+
 def associate(positions: Sequence[NDArray], bearings_deg: Sequence[float],
               track: MotionKalman, audio_bearing_deg: float | None) -> int | None:
     """Which verified person updates the 3D track.
@@ -502,14 +516,9 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             step = np.clip(err, -r.pan_speed_dps * CONTROL_DT, r.pan_speed_dps * CONTROL_DT)
             pan = float(wrap_deg(pan + step))
 
-        rec_track = None
+        rec_track = track_record(track)
         error = None
         if track.initialized:
-            rec_track = {"position_m": track.position,
-                         "velocity_mps": track.velocity if track.velocity_known else None,
-                         "acceleration_mps2": track.acceleration if track.velocity_known
-                         else None,
-                         "covariance": track.position_cov}
             error = float(np.linalg.norm(track.position - st["torso"]))
         log.append({"t": round(t1, 4), "phase": phase, "head_pan_deg": pan, "audio": audio_rec,
                     "camera_frame": camera_frame, "detections": detections, "track": rec_track,
