@@ -38,9 +38,14 @@ def report_folder_blocker(folder: str | Path) -> Path | None:
     """The file that keeps :func:`write_report` from making ``folder`` -- the folder itself, or
     one of its parents, is a file -- or None. Checked before a run (``hearsee demo -o``, a
     robot file's ``output.report``), not found only once the whole run is done."""
-    p = Path(folder)
-    blocker = next((q for q in (p, *p.parents) if q.exists()), None)
+    blocker = _nearest_existing(folder)
     return blocker if blocker is not None and not blocker.is_dir() else None
+
+
+def _nearest_existing(folder: str | Path) -> Path | None:
+    """``folder`` itself or its nearest parent that exists (None if none does)."""
+    p = Path(folder)
+    return next((q for q in (p, *p.parents) if q.exists()), None)
 
 
 def report_folder_unwritable(folder: str | Path) -> Path | None:
@@ -48,8 +53,7 @@ def report_folder_unwritable(folder: str | Path) -> Path | None:
     :func:`write_report` could not write (no write permission), or None. Checked before a run
     with :func:`report_folder_blocker`: the report was refused only at the end (a
     PermissionError once a whole run, or a live session, was done)."""
-    p = Path(folder)
-    q = next((q for q in (p, *p.parents) if q.exists()), None)
+    q = _nearest_existing(folder)
     if q is not None and q.is_dir() and not os.access(q, os.W_OK | os.X_OK):
         return q
     return None
@@ -63,20 +67,14 @@ def report_foreign_file(folder: str | Path) -> Path | None:
     overwrote their index.html, log.json and summary.json without a word."""
     f = Path(folder)
     index = f / "index.html"
-    ours = False
     if index.is_file():
         try:
             with index.open("rb") as fh:
                 ours = b"<title>hearsee report:" in fh.read(4096)
         except OSError:
             ours = False
-        if not ours:
-            return index
-    if not ours:
-        for name in REPORT_FILES[1:]:
-            if (f / name).exists():
-                return f / name
-    return None
+        return None if ours else index
+    return next((f / name for name in REPORT_FILES[1:] if (f / name).exists()), None)
 
 
 def report_overwrites(folder: str | Path, paths: Sequence[str | Path | None]) -> Path | None:
