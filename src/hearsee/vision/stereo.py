@@ -29,6 +29,7 @@ rectification that frame is rotated by ``rectification.R1`` from the left camera
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -505,6 +506,11 @@ class StereoFrame:
         return self._points
 
 
+#: The keyword options of :func:`compute_disparity` (:func:`stereo_frame` checks its own
+#: against them once per call, not by inspecting the signature each time).
+_DISPARITY_OPTIONS = frozenset(inspect.signature(compute_disparity).parameters) - {"left", "right"}
+
+
 def stereo_frame(left: NDArray, right: NDArray, rig: StereoRig, **disparity_options) -> StereoFrame:
     """Rectify a pair with ``rig`` and compute its disparity (options of
     :func:`compute_disparity`). The usual per-frame entry point.
@@ -519,13 +525,10 @@ def stereo_frame(left: NDArray, right: NDArray, rig: StereoRig, **disparity_opti
     >>> round(float(np.nanmedian(f.depth()[:, 30:])), 3)  # f B / d = 138.56 * 0.1 / 8
     1.732
     """
-    import inspect
-
-    known = set(inspect.signature(compute_disparity).parameters) - {"left", "right"}
-    unknown = sorted(set(disparity_options) - known)
+    unknown = sorted(set(disparity_options) - _DISPARITY_OPTIONS)
     if unknown:  # (a builtin TypeError from compute_disparity's call, after the rectification)
         raise ConfigError(f"unknown disparity option(s) {', '.join(unknown)}; expected some of "
-                          f"{', '.join(sorted(known))}")
+                          f"{', '.join(sorted(_DISPARITY_OPTIONS))}")
     lr, rr, rect = rectify_pair(left, right, rig)
     d = compute_disparity(lr, rr, **disparity_options)
     return StereoFrame(lr, rr, d, rect)
