@@ -8,6 +8,7 @@ import io
 import json
 import sys
 import threading
+import time
 import types
 from pathlib import Path
 
@@ -351,6 +352,92 @@ def test_check_devices_failures_name_the_field(small_rig, fake_sd):
     assert "140x100 frames but the calibration expects 160x120" in checks["cameras.left"].detail
     assert not checks["cameras.right"].ok and "cannot open camera" in checks["cameras.right"].detail
     assert checks["cameras.thermal"].ok and checks["audio.device"].ok
+
+
+class _HangingDevice:
+    """A camera device that opens, then blocks in its first read until ``go`` is set; later
+    reads deliver ``frame``. ``released`` counts release() calls."""
+
+    def __init__(self, frame):
+        self.frame, self.go, self.reads, self.released = frame, threading.Event(), 0, 0
+
+    def read(self):
+        self.reads += 1
+        if self.reads == 1:
+            self.go.wait(10.0)
+            return False, None
+        return True, self.frame.copy()
+
+    def get(self, prop):
+        return 30.0
+
+    def set(self, prop, value):
+        return True
+
+    def release(self):
+        self.released += 1
+
+
+def _hang_device_zero(monkeypatch, frame):
+    """cameras.left = 0 opens a _HangingDevice; the files open as before."""
+    from hearsee.robot import hardware
+
+    dev = _HangingDevice(frame)
+    real = hardware.open_capture
+    monkeypatch.setattr(hardware, "open_capture",
+                        lambda spec, where: dev if spec == 0 else real(spec, where))
+    return dev
+
+
+def test_dry_run_names_a_camera_that_opens_but_never_delivers(small_rig, fake_sd, monkeypatch):
+    """`hearsee run --dry-run` read one frame of each camera with a plain cap.read(): a device
+    that opened and then blocked (a stalled driver, a dead network stream) hung the check
+    forever. Now the read gives up after FIRST_FRAME_TIMEOUT_S and the check fails naming the
+    field; the other cameras are still checked."""
+    from hearsee.robot import hardware
+
+    dev = _hang_device_zero(monkeypatch, np.zeros((120, 160, 3), np.uint8))
+    monkeypatch.setattr(hardware, "FIRST_FRAME_TIMEOUT_S", 0.1)
+    cfg = load_robot_config(make_config(small_rig, _with(cameras={"left": 0})))
+    try:
+        checks = {c.name: c for c in check_devices(cfg)}
+    finally:
+        dev.go.set()
+    assert not checks["cameras.left"].ok
+    assert checks["cameras.left"].detail.endswith(
+        "cameras.left: camera 0 opened but delivered no frame within 0.1 s")
+    assert checks["cameras.right"].ok and checks["cameras.thermal"].ok
+    assert dev.reads == 1
+
+
+def test_live_cameras_do_not_stall_on_a_device_that_hangs(small_rig, monkeypatch):
+    """The live loop read its cameras in line: a device blocking in its read stopped the loop,
+    and the audio with it, for good. Now a device's read gives up after
+    CAMERA_READ_TIMEOUT_S and counts as a failed read; while it hangs no second read is
+    started (later reads fail at once); once it returns, frames flow again."""
+    from hearsee.robot import hardware
+
+    frame = np.random.default_rng(1).integers(0, 255, (120, 320, 3), dtype=np.uint8)
+    dev = _hang_device_zero(monkeypatch, frame)
+    monkeypatch.setattr(hardware, "CAMERA_READ_TIMEOUT_S", 0.1)
+    cfg = load_robot_config(make_config(small_rig, _with(cameras={
+        "left": None, "right": None, "stereo": 0, "thermal": None})))
+    cams = hardware.Cameras(cfg.cameras, "robot.yaml: ")
+    try:
+        t0 = time.perf_counter()
+        assert cams.read() is None  # the hung read, given up
+        assert cams.read() is None and cams.read() is None  # still hung: at once
+        assert time.perf_counter() - t0 < 5.0
+        assert cams.n_consecutive_failures == 3 and dev.reads == 1
+        dev.go.set()
+        cams.caps["stereo"]._pending.join(5.0)
+        fr = cams.read()
+        assert fr is not None and np.array_equal(np.hstack([fr.left, fr.right]), frame)
+        assert cams.n_consecutive_failures == 0 and cams.n_failures == 3
+    finally:
+        dev.go.set()
+        cams.close()
+    assert dev.released == 1
 
 
 def test_portaudio_missing_is_a_clear_error(small_rig, monkeypatch):

@@ -597,3 +597,83 @@ def test_a_stream_that_fails_to_stop_does_not_hide_the_error_that_ends_the_run(m
             StreamPipeline(MicArray.from_preset("three-mic")).run(src, sink, threaded=threaded)
         gc.collect()
         assert unraisable == [] and sd.InputStream.n_exited == 2 + threaded
+
+
+# ------------------------------------------------------------------- 4b. a camera read that hangs
+class _HangingCap:
+    """A capture whose reads wait for ``go`` (set by the test) before delivering a frame;
+    ``released`` counts release() calls."""
+
+    def __init__(self) -> None:
+        self.go = threading.Event()
+        self.reads = 0
+        self.released = 0
+
+    def read(self):
+        self.reads += 1
+        self.go.wait(10.0)
+        return True, np.full((60, 80, 3), self.reads, np.uint8)
+
+    def get(self, prop):
+        return 30.0
+
+    def release(self) -> None:
+        self.released += 1
+
+
+def test_timed_capture_gives_up_on_a_read_that_hangs_and_resumes_when_it_returns():
+    """cv2.VideoCapture.read of a device that opened and then delivers nothing blocks forever:
+    TimedCapture returns "no frame" after its timeout, starts no second read while the first
+    hangs, leaves the capture unreleased while it does (releasing under a blocked read is not
+    safe), and reads again once the hung read has returned."""
+    from hearsee.stream.video import TimedCapture
+
+    cap = _HangingCap()
+    timed = TimedCapture(cap, 0.05)
+    t0 = time.perf_counter()
+    assert timed.read() == (False, None)
+    assert 0.05 <= time.perf_counter() - t0 < 5.0
+    assert timed.stuck and cap.reads == 1
+    assert timed.read() == (False, None) and cap.reads == 1  # no second read meanwhile
+    timed.release()
+    assert cap.released == 0
+    assert timed.get(0) == 30.0  # the capture's own attributes
+    cap.go.set()
+    timed._pending.join(5.0)
+    assert not timed.stuck
+    ok, frame = timed.read()  # (the hung read's late frame, number 1, was dropped)
+    assert ok and frame[0, 0, 0] == 2 and cap.reads == 2
+    timed.release()
+    assert cap.released == 1
+
+
+def test_timed_capture_passes_on_the_read_error_and_refuses_a_bad_timeout():
+    import cv2
+
+    from hearsee.stream.video import TimedCapture
+
+    class Broken:
+        def read(self):
+            raise cv2.error("driver gone")
+
+    with pytest.raises(cv2.error, match="driver gone"):
+        TimedCapture(Broken(), 1.0).read()
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(ConfigError, match="camera read timeout"):
+            TimedCapture(Broken(), bad)
+
+
+def test_read_frame_names_a_camera_that_delivers_nothing_in_time():
+    from hearsee.stream.video import TimedCapture, read_frame
+
+    cap = _HangingCap()
+    try:
+        with pytest.raises(ConfigError, match=r"^robot\.yaml: cameras\.left: camera 0 opened "
+                                              r"but delivered no frame within 0\.05 s$"):
+            read_frame(TimedCapture(cap, 0.05), 0, "robot.yaml: cameras.left")
+    finally:
+        cap.go.set()
+    cap2 = _HangingCap()
+    cap2.go.set()
+    frame = read_frame(TimedCapture(cap2, 5.0), 0, "robot.yaml: cameras.left", (80, 60))
+    assert frame.shape == (60, 80, 3)

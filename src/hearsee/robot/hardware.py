@@ -54,7 +54,10 @@ Frames follow REP 103 (x forward, y left, z up). Azimuths in the log are in the 
 
 ``--dry-run`` (:func:`check_devices`) opens every device once: PortAudio is there, the input
 device exists with enough channels and accepts the sample rate (``sd.check_input_settings``),
-each camera opens and delivers a frame of the calibrated size, the calibration loads.
+each camera opens and delivers a frame of the calibrated size (within
+:data:`~hearsee.stream.video.FIRST_FRAME_TIMEOUT_S`), the calibration loads. In the live loop a
+camera device or stream that stops delivering does not stall the audio: its reads give up after
+:data:`CAMERA_READ_TIMEOUT_S`, and after three failed reads the loop goes on with audio only.
 """
 
 from __future__ import annotations
@@ -85,7 +88,11 @@ from hearsee.stream.device import (  # (import_sounddevice, resolve_input_device
     import_sounddevice,
     resolve_input_device,
 )
-from hearsee.stream.video import read_frame  # (re-exported: its home was here)
+from hearsee.stream.video import (  # (read_frame re-exported: its home was here)
+    FIRST_FRAME_TIMEOUT_S,
+    TimedCapture,
+    read_frame,
+)
 
 if TYPE_CHECKING:  # imported when run_robot runs (the simulated loop's heavier imports)
     from hearsee.robot.pipeline import RunResult
@@ -548,7 +555,8 @@ def check_devices(cfg: RobotConfig) -> list[Check]:
 
             def camera(where: str = f"{cfg.path}: {field_name}", spec: DeviceSpec = spec,
                        name: str = name) -> str:
-                cap = open_capture(spec, where)
+                # (a device that opens and then blocks in every read hung the check)
+                cap = TimedCapture(open_capture(spec, where), FIRST_FRAME_TIMEOUT_S)
                 try:
                     size = cams.expected_size(name)
                     frame = read_frame(cap, spec, where, size)
@@ -645,6 +653,13 @@ class CameraFrames:
     thermal: NDArray | None = None
 
 
+#: How long the live loop waits for one frame of a camera device or stream (seconds) before
+#: it counts the read as failed (:class:`~hearsee.stream.video.TimedCapture`): a device that
+#: blocks in its read stalled the loop, and with it the audio, forever. Three failed reads in a
+#: row and the loop goes on with audio only; reads resume when the device delivers again.
+CAMERA_READ_TIMEOUT_S = 1.0
+
+
 class Cameras:
     """The cameras of a robot file, read through OpenCV ``VideoCapture``.
 
@@ -674,12 +689,14 @@ class Cameras:
             for field_name, spec in cfg.devices().items():
                 name = field_name.split(".")[1]
                 cap = open_capture(spec, f"{where}{field_name}")
+                is_file = isinstance(spec, str) and Path(spec).is_file()
+                if not is_file:  # a device or stream, whose read may block: see TimedCapture
+                    cap = TimedCapture(cap, CAMERA_READ_TIMEOUT_S)
                 self.caps[name] = cap
                 if isinstance(spec, int):  # live device: keep only the newest frame
                     cap.set(cv2.CAP_PROP_BUFFERSIZE, 1)
                 fps = cap.get(cv2.CAP_PROP_FPS)
-                if isinstance(spec, str) and Path(spec).is_file() and np.isfinite(fps) \
-                        and fps > 0:
+                if is_file and np.isfinite(fps) and fps > 0:
                     self.fps[name], self.n_taken[name] = float(fps), 0
         except BaseException:
             self.close()

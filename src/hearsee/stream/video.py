@@ -42,8 +42,8 @@ from numpy.typing import NDArray
 from hearsee.config import finite_number, input_file, whole_number
 from hearsee.errors import ConfigError, ImageInputError
 
-__all__ = ["IMAGE_POINT_MARGIN", "CsvImagePoints", "VideoImagePoints", "detect_source_point",
-           "read_frame", "save_image_points"]
+__all__ = ["FIRST_FRAME_TIMEOUT_S", "IMAGE_POINT_MARGIN", "CsvImagePoints", "TimedCapture",
+           "VideoImagePoints", "detect_source_point", "read_frame", "save_image_points"]
 
 #: How far outside the camera image (a fraction of its larger side, e.g. 64 px of a 640 x 480
 #: image) an image point of a CSV may lie: a detector's point just past the edge is still a
@@ -51,13 +51,80 @@ __all__ = ["IMAGE_POINT_MARGIN", "CsvImagePoints", "VideoImagePoints", "detect_s
 IMAGE_POINT_MARGIN = 0.1
 
 
+#: How long a live camera or stream may take to deliver its first frame (seconds) before
+#: ``hearsee run --dry-run`` reports it as delivering none: a device that opens and then blocks
+#: in every read (a camera held by a stalled driver, a network stream that stopped) otherwise
+#: hung the check forever. Cameras take up to a second or two to start streaming.
+FIRST_FRAME_TIMEOUT_S = 5.0
+
+
+class TimedCapture:
+    """An OpenCV capture whose :meth:`read` gives up after ``timeout_s`` seconds.
+
+    ``cv2.VideoCapture.read`` of a live device or a network stream can block forever (a camera
+    that opens and then delivers nothing, a stream whose server stopped), which stalled the
+    robot's loop and ``hearsee run --dry-run``. Each read runs in a daemon thread; when it has
+    not returned within ``timeout_s``, :meth:`read` returns ``(False, None)`` -- "no frame", as a
+    capture that ended -- and the capture counts as :attr:`stuck` until that read returns (its
+    late frame is dropped): no second read is started on the same capture meanwhile, and
+    :meth:`release` leaves a stuck capture alone (releasing it under a blocked read is not
+    safe in OpenCV; the daemon thread does not keep the process alive). Other attributes
+    (``get``, ``set``, ``grab``, ``isOpened``) are the capture's own. Video files do not need
+    this (their reads do not block) and are read directly, deterministically.
+    """
+
+    def __init__(self, cap: Any, timeout_s: float) -> None:
+        self.cap = cap
+        self.timeout_s = finite_number("camera read timeout", timeout_s, 0.0, lo_open=True)
+        self._pending: Any = None  # the thread of a read that has not returned yet
+
+    @property
+    def stuck(self) -> bool:
+        """True while a read that timed out has still not returned."""
+        return self._pending is not None and self._pending.is_alive()
+
+    def read(self) -> tuple[bool, Any]:
+        import threading
+
+        if self.stuck:
+            return False, None
+        box: list[Any] = [(False, None)]
+
+        def run() -> None:
+            try:
+                box[0] = self.cap.read()
+            except BaseException as exc:  # (raised in the caller's thread below)
+                box[0] = exc
+
+        th = threading.Thread(target=run, daemon=True, name="hearsee-camera-read")
+        th.start()
+        th.join(self.timeout_s)
+        if th.is_alive():
+            self._pending = th
+            return False, None
+        self._pending = None
+        if isinstance(box[0], BaseException):
+            raise box[0]
+        return box[0]
+
+    def release(self) -> None:
+        if not self.stuck:
+            self.cap.release()
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.cap, name)
+
+
 def read_frame(cap: Any, spec: Any, where: str, size: tuple[int, int] | None = None
                ) -> NDArray:
-    """One frame from an open OpenCV capture ``cap`` (of the camera or file ``spec``);
-    ConfigError prefixed ``where`` when none comes or it has the wrong size (``size`` =
-    (width, height), pixels). The one "delivers frames" check of ``hearsee run --dry-run`` and
-    ``hearsee track --video``."""
+    """One frame from an open OpenCV capture ``cap`` (of the camera or file ``spec``; a
+    :class:`TimedCapture` for a device that may block); ConfigError prefixed ``where`` when
+    none comes (in time) or it has the wrong size (``size`` = (width, height), pixels). The one
+    "delivers frames" check of ``hearsee run --dry-run`` and ``hearsee track --video``."""
     ok, frame = cap.read()
+    if isinstance(cap, TimedCapture) and cap.stuck:
+        raise ConfigError(f"{where}: camera {spec!r} opened but delivered no frame within "
+                          f"{cap.timeout_s:g} s")
     if not ok or frame is None:
         raise ConfigError(f"{where}: camera {spec!r} opened but delivered no frame")
     if size is not None and (frame.shape[1], frame.shape[0]) != tuple(size):
@@ -366,4 +433,6 @@ class VideoImagePoints:
         if self._thread is not None:
             self._stop.set()
             self._thread.join(timeout=1.0)
+            if self._thread.is_alive():  # blocked in a read: releasing under it is not safe
+                return  # (a daemon thread; see TimedCapture)
         self.cap.release()
