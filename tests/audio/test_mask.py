@@ -273,18 +273,32 @@ def test_localize_bad_input(model):
 
 
 def test_localize_recording_document(model):
+    """A source behind on the right (200 deg = -160 deg): the summary and every frame give it in
+    (-180, 180] as on every other array (the document gave 200 until 2026-12-01), the frames
+    behind; the summary holds every key of localize_recording's contract."""
+    from hearsee.audio.localize import localize_recording
+
     az = 200.0
     x = mask.simulate_masked(white_noise(1.0, FS, rng=9), FS, model, _src(az), snr_db=20, rng=2,
                              far_field=True)
     doc = mask.localize_recording_mask(x, FS, model)
     s = doc["summary"]
-    assert abs((s["azimuth_deg"] - az + 180) % 360 - 180) < 5
+    assert -180.0 < s["azimuth_deg"] < -150.0 and abs(s["azimuth_deg"] - (az - 360)) < 5
     assert len(s["candidates"]) == 2 and s["elevation_deg"] is None
+    assert all(-180.0 < c["azimuth_deg"] <= 180.0 for c in s["candidates"])
     assert s["front_probability"] < 0.5 and s["n_valid_frames"] > 0
     valid = [f for f in doc["frames"] if f["valid"]]
-    assert valid and all(f["candidates"][0]["azimuth_deg"] > 90 for f in valid)
+    assert valid and all(-180.0 < f["candidates"][0]["azimuth_deg"] < -90 for f in valid)
+    assert all(-180.0 < c["azimuth_deg"] <= 180.0 for f in valid for c in f["candidates"])
     med = np.median([f["azimuth_deg"] for f in valid])
-    assert abs(med - az) < 10
+    assert abs(med - (az - 360)) < 10
+    # the keys of the contract (localize_recording's docstring) on a two-microphone array
+    bare = localize_recording(x, FS, "two-mic")["summary"]
+    contract = ("tdoa_s", "azimuth_deg", "elevation_deg", "candidates", "n_solutions",
+                "feasible", "confidence", "n_valid_frames", "position_m",
+                "position_covariance_m2", "distance_rel_std", "position_tdoa_std_s")
+    assert set(contract) <= set(bare) and set(contract) <= set(s)
+    assert all(s[k] is None for k in contract[8:])
     json_doc = __import__("json").dumps(doc)  # JSON-able
     assert '"summary"' in json_doc
 

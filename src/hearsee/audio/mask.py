@@ -92,7 +92,7 @@ from hearsee.audio.signals import as_samples, check_fs
 from hearsee.audio.tdoa import check_frame_ms
 from hearsee.config import finite_number, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
-from hearsee.geometry import norm_scale
+from hearsee.geometry import norm_scale, wrap_deg
 
 __all__ = [
     "CODE_VERSION",
@@ -998,7 +998,11 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
     :func:`localize_mask` -- one 360-degree azimuth, the runner-up (ITD mirror) as the second
     candidate, ``front_probability`` and ``confidence`` of the front/back decision,
     ``distance_m`` of the best-fitting response table. Elevation is null (not resolvable with
-    two microphones; the tables are for the horizontal plane).
+    two microphones; the tables are for the horizontal plane), and so are the position keys of
+    the contract (``position_m``, ``position_covariance_m2``, ``distance_rel_std``,
+    ``position_tdoa_std_s``: a masked pair gives no position). Azimuths are in (-180, 180] deg,
+    as on every other array (:class:`MaskLocalization` keeps its [0, 360); this document gave
+    315 for a source the bare pair reports at -45 until 2026-12-01).
     """
     from hearsee.audio.itd_filter import ItdKalman
     from hearsee.audio.tdoa import estimate_tdoas, normalize_method
@@ -1028,7 +1032,7 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
             err = np.abs(itd_tab - tdoa[n])
             a_f = float(az_tab[np.argmin(np.where(front_tab, err, np.inf))])
             a_b = float(az_tab[np.argmin(np.where(~front_tab, err, np.inf))])
-            cands = [a_f, a_b] if want_front else [a_b, a_f]
+            cands = [float(wrap_deg(a)) for a in ([a_f, a_b] if want_front else [a_b, a_f])]
         frames.append({
             "t": float(tf.t[n]),
             "tdoa_s": {"0-1": float(tdoa[n]) if ok else None},
@@ -1039,12 +1043,13 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
             "valid": ok,
             "feasible": True if ok else None,
         })
+    az, runner_up = float(wrap_deg(est.azimuth_deg)), float(wrap_deg(est.runner_up_deg))
     summary = {
         "tdoa_s": {"0-1": est.itd_s},
-        "azimuth_deg": est.azimuth_deg,
+        "azimuth_deg": az,
         "elevation_deg": None,
-        "candidates": [{"azimuth_deg": est.azimuth_deg, "elevation_deg": None},
-                       {"azimuth_deg": est.runner_up_deg, "elevation_deg": None}],
+        "candidates": [{"azimuth_deg": az, "elevation_deg": None},
+                       {"azimuth_deg": runner_up, "elevation_deg": None}],
         "n_solutions": 1,
         "feasible": True,
         "confidence": est.confidence,
@@ -1053,7 +1058,8 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
         "iid_db": {f"{lo:.0f}-{hi:.0f}": float(v) for lo, hi, v in
                    zip(est.band_edges_hz[:-1], est.band_edges_hz[1:], est.iid_db, strict=True)},
         "n_valid_frames": tf.n_valid,
-        "position_m": None,
+        **dict.fromkeys(("position_m", "position_covariance_m2", "distance_rel_std",
+                         "position_tdoa_std_s")),
     }
     return {
         "array": arr.to_dict(),
