@@ -154,6 +154,7 @@ def _figure(rig: StereoRig, lf, rf, i: int, swapped: bool, figure: Path) -> None
         a_.set_xticks([])
         a_.set_yticks([])
     fig.tight_layout()
+    Path(figure).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(figure, dpi=80)
     plt.close(fig)
     print(f"wrote {figure}")

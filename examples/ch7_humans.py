@@ -20,6 +20,8 @@ With ``--scene-dir`` the first scene is also written as files, so that the CLI c
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -98,7 +100,9 @@ def main() -> None:
         np.hstack([label(thermal_view(warm), "thermal: warm mannequin"),
                    label(draw_detections(warm.left, warm_res), "failure: warm mannequin")]),
     ]
-    cv2.imwrite(args.figure, np.vstack(rows))
+    Path(args.figure).parent.mkdir(parents=True, exist_ok=True)
+    if not cv2.imwrite(args.figure, np.vstack(rows)):  # (False, not an error, on a bad path)
+        sys.exit(f"could not write {args.figure}")
     print(f"\nfigure written to {args.figure}")
 
 
