@@ -774,10 +774,20 @@ def head_shoulder_score(mask: NDArray, depth_m: float, focal_px: float, *, tau_m
     head top, sloping down 0.12 m/m out to half the shoulder width ``S/2``; beyond the
     shoulders the contour must fall at least 0.12 m below the shoulder line; in the 5 cm
     "neck" beside the head it must lie between 0.1 m below the head top and the shoulder line
-    (weighted 3x: this omega notch is what boxes and poles lack). The head may be
+    (weighted 3x: this omega notch is what wide boxes lack). The head may be
     offset from the silhouette's highest column. Over all (offset, a, S, s) the mean truncated
     vertical distance between contour and template (a vertical chamfer distance, truncated at
     ``tau_m``) is minimised; ``score = 1 - best / tau_m`` in [0, 1].
+
+    Limitation (measured 2026-12-01): a narrow upright post passes. Flat-topped posts
+    0.08-0.3 m wide score 0.53-0.66 (above the default ``tm`` = 0.5), because the narrowest
+    template (``S`` = 0.22 m, ``a`` = 0.11 m) has no shoulders and "beyond the shoulders",
+    where a contour falling away costs nothing, then covers most of the neck. Stereo alone
+    cannot tell such a post from a person seen side-on; the thermal stage
+    (:mod:`hearsee.vision.fusion`) rejects it. A stricter template (shoulders never inside
+    the neck, weighted 2x) scored the posts 0.40-0.46 and cut other stereo false accepts per
+    frame from 0.29 to 0.21 on bench/humans (seed 1000, 300 scenes), but cost 1 point of
+    recall (0.988 -> 0.978, stereo and fusion): not adopted.
 
     Returns ``(score, params)`` with the best ``head_offset_m``, ``head_half_width_m``,
     ``shoulder_width_m``, ``shoulder_drop_m`` and ``chamfer_m``.
