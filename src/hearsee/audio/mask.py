@@ -1020,9 +1020,9 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
         kf = ItdKalman(2, tf.pairs, ref=0, q_std_s=0.25 / fs, r_std_s=1.0 / fs)
         filt, _ = kf.filter(tf.tdoa_s)
         tdoa = np.where(tf.valid, filt[:, 0], np.nan)
-    az_tab = np.arange(0.0, 360.0, 1.0)
+    az_tab = wrap_deg(np.arange(0.0, 360.0, 1.0))  # (the ITD table's grid, in (-180, 180])
     itd_tab = _itd_table(model, None)
-    front_tab = (az_tab < 90) | (az_tab > 270)
+    front_tab = np.abs(az_tab) < 90
     want_front = est.front_probability >= 0.5
     frames = []
     for n in range(len(tf.t)):
@@ -1032,7 +1032,7 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
             err = np.abs(itd_tab - tdoa[n])
             a_f = float(az_tab[np.argmin(np.where(front_tab, err, np.inf))])
             a_b = float(az_tab[np.argmin(np.where(~front_tab, err, np.inf))])
-            cands = [float(wrap_deg(a)) for a in ([a_f, a_b] if want_front else [a_b, a_f])]
+            cands = [a_f, a_b] if want_front else [a_b, a_f]
         frames.append({
             "t": float(tf.t[n]),
             "tdoa_s": {"0-1": float(tdoa[n]) if ok else None},
