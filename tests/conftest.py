@@ -1,9 +1,11 @@
-"""Shared fixtures: the real data beside the repository (skipped cleanly when absent) and a
-reference GCC-PHAT written independently of hearsee's."""
+"""Shared fixtures: the real data beside the repository (skipped cleanly when absent), a
+reference GCC-PHAT written independently of hearsee's, and a camera capture that hangs."""
 
 from __future__ import annotations
 
 import os
+import threading
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -75,3 +77,44 @@ def unraisable():
     finally:
         gc.collect()
         sys.unraisablehook = old
+
+
+class HangingCapture:
+    """A camera capture (OpenCV's read/get/set/release) whose reads block until ``go`` is set
+    (by the test), then deliver ``frame_for(n)`` for the n-th read (1-based); ``reads`` and
+    ``released`` count the calls. A device that opened and then delivers nothing."""
+
+    def __init__(self, frame_for: Callable[[int], np.ndarray]) -> None:
+        self.frame_for = frame_for
+        self.go = threading.Event()
+        self.reads = 0
+        self.released = 0
+
+    def read(self) -> tuple[bool, np.ndarray]:
+        self.reads += 1
+        self.go.wait(10.0)
+        return True, self.frame_for(self.reads)
+
+    def get(self, prop: int) -> float:
+        return 30.0
+
+    def set(self, prop: int, value: float) -> bool:
+        return True
+
+    def release(self) -> None:
+        self.released += 1
+
+
+@pytest.fixture
+def hanging_capture():
+    """``hanging_capture(frame_for)`` -> a :class:`HangingCapture`; every one made is let go
+    (``go`` set) when the test ends, so that no read thread outlives it."""
+    made: list[HangingCapture] = []
+
+    def make(frame_for: Callable[[int], np.ndarray]) -> HangingCapture:
+        made.append(HangingCapture(frame_for))
+        return made[-1]
+
+    yield make
+    for cap in made:
+        cap.go.set()

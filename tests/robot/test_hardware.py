@@ -354,49 +354,27 @@ def test_check_devices_failures_name_the_field(small_rig, fake_sd):
     assert checks["cameras.thermal"].ok and checks["audio.device"].ok
 
 
-class _HangingDevice:
-    """A camera device that opens, then blocks in its first read until ``go`` is set; later
-    reads deliver ``frame``. ``released`` counts release() calls."""
-
-    def __init__(self, frame):
-        self.frame, self.go, self.reads, self.released = frame, threading.Event(), 0, 0
-
-    def read(self):
-        self.reads += 1
-        if self.reads == 1:
-            self.go.wait(10.0)
-            return False, None
-        return True, self.frame.copy()
-
-    def get(self, prop):
-        return 30.0
-
-    def set(self, prop, value):
-        return True
-
-    def release(self):
-        self.released += 1
-
-
-def _hang_device_zero(monkeypatch, frame):
-    """cameras.left = 0 opens a _HangingDevice; the files open as before."""
+def _hang_device_zero(monkeypatch, hanging_capture, frame):
+    """Camera device 0 opens a capture that hangs until ``go`` (then delivers ``frame``); the
+    files open as before."""
     from hearsee.robot import hardware
 
-    dev = _HangingDevice(frame)
+    dev = hanging_capture(lambda n: frame.copy())
     real = hardware.open_capture
     monkeypatch.setattr(hardware, "open_capture",
                         lambda spec, where: dev if spec == 0 else real(spec, where))
     return dev
 
 
-def test_dry_run_names_a_camera_that_opens_but_never_delivers(small_rig, fake_sd, monkeypatch):
+def test_dry_run_names_a_camera_that_opens_but_never_delivers(small_rig, fake_sd, monkeypatch,
+                                                              hanging_capture):
     """`hearsee run --dry-run` read one frame of each camera with a plain cap.read(): a device
     that opened and then blocked (a stalled driver, a dead network stream) hung the check
     forever. Now the read gives up after FIRST_FRAME_TIMEOUT_S and the check fails naming the
     field; the other cameras are still checked."""
     from hearsee.robot import hardware
 
-    dev = _hang_device_zero(monkeypatch, np.zeros((120, 160, 3), np.uint8))
+    dev = _hang_device_zero(monkeypatch, hanging_capture, np.zeros((120, 160, 3), np.uint8))
     monkeypatch.setattr(hardware, "FIRST_FRAME_TIMEOUT_S", 0.1)
     cfg = load_robot_config(make_config(small_rig, _with(cameras={"left": 0})))
     try:
@@ -410,7 +388,8 @@ def test_dry_run_names_a_camera_that_opens_but_never_delivers(small_rig, fake_sd
     assert dev.reads == 1
 
 
-def test_live_cameras_do_not_stall_on_a_device_that_hangs(small_rig, monkeypatch):
+def test_live_cameras_do_not_stall_on_a_device_that_hangs(small_rig, monkeypatch,
+                                                          hanging_capture):
     """The live loop read its cameras in line: a device blocking in its read stopped the loop,
     and the audio with it, for good. Now a device's read gives up after
     CAMERA_READ_TIMEOUT_S and counts as a failed read; while it hangs no second read is
@@ -418,7 +397,7 @@ def test_live_cameras_do_not_stall_on_a_device_that_hangs(small_rig, monkeypatch
     from hearsee.robot import hardware
 
     frame = np.random.default_rng(1).integers(0, 255, (120, 320, 3), dtype=np.uint8)
-    dev = _hang_device_zero(monkeypatch, frame)
+    dev = _hang_device_zero(monkeypatch, hanging_capture, frame)
     monkeypatch.setattr(hardware, "CAMERA_READ_TIMEOUT_S", 0.1)
     cfg = load_robot_config(make_config(small_rig, _with(cameras={
         "left": None, "right": None, "stereo": 0, "thermal": None})))

@@ -600,35 +600,20 @@ def test_a_stream_that_fails_to_stop_does_not_hide_the_error_that_ends_the_run(m
 
 
 # ------------------------------------------------------------------- 4b. a camera read that hangs
-class _HangingCap:
-    """A capture whose reads wait for ``go`` (set by the test) before delivering a frame;
-    ``released`` counts release() calls."""
-
-    def __init__(self) -> None:
-        self.go = threading.Event()
-        self.reads = 0
-        self.released = 0
-
-    def read(self):
-        self.reads += 1
-        self.go.wait(10.0)
-        return True, np.full((60, 80, 3), self.reads, np.uint8)
-
-    def get(self, prop):
-        return 30.0
-
-    def release(self) -> None:
-        self.released += 1
+def _numbered(n: int) -> np.ndarray:
+    """Frame n of a hanging capture: 80x60, every pixel n."""
+    return np.full((60, 80, 3), n, np.uint8)
 
 
-def test_timed_capture_gives_up_on_a_read_that_hangs_and_resumes_when_it_returns():
+def test_timed_capture_gives_up_on_a_read_that_hangs_and_resumes_when_it_returns(
+        hanging_capture):
     """cv2.VideoCapture.read of a device that opened and then delivers nothing blocks forever:
     TimedCapture returns "no frame" after its timeout, starts no second read while the first
     hangs, leaves the capture unreleased while it does (releasing under a blocked read is not
     safe), and reads again once the hung read has returned."""
     from hearsee.stream.video import TimedCapture
 
-    cap = _HangingCap()
+    cap = hanging_capture(_numbered)
     timed = TimedCapture(cap, 0.05)
     t0 = time.perf_counter()
     assert timed.read() == (False, None)
@@ -663,17 +648,13 @@ def test_timed_capture_passes_on_the_read_error_and_refuses_a_bad_timeout():
             TimedCapture(Broken(), bad)
 
 
-def test_read_frame_names_a_camera_that_delivers_nothing_in_time():
+def test_read_frame_names_a_camera_that_delivers_nothing_in_time(hanging_capture):
     from hearsee.stream.video import TimedCapture, read_frame
 
-    cap = _HangingCap()
-    try:
-        with pytest.raises(ConfigError, match=r"^robot\.yaml: cameras\.left: camera 0 opened "
-                                              r"but delivered no frame within 0\.05 s$"):
-            read_frame(TimedCapture(cap, 0.05), 0, "robot.yaml: cameras.left")
-    finally:
-        cap.go.set()
-    cap2 = _HangingCap()
+    with pytest.raises(ConfigError, match=r"^robot\.yaml: cameras\.left: camera 0 opened "
+                                          r"but delivered no frame within 0\.05 s$"):
+        read_frame(TimedCapture(hanging_capture(_numbered), 0.05), 0, "robot.yaml: cameras.left")
+    cap2 = hanging_capture(_numbered)
     cap2.go.set()
     frame = read_frame(TimedCapture(cap2, 5.0), 0, "robot.yaml: cameras.left", (80, 60))
     assert frame.shape == (60, 80, 3)
