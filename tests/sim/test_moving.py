@@ -353,6 +353,15 @@ def test_cli_simulate_trajectory_writes_truth_beside_the_wav(tmp_path, capsys):
     gt = load_trajectory(tmp_path / "walk.trajectory.csv")
     np.testing.assert_allclose(gt.at(0.25), [1.5, -0.25, 0.2], atol=1e-6)
     assert csv_in.read_text().startswith("t,x,y,z")  # the input is untouched
+    # without --duration the whole trajectory is rendered (it was always 2 s)
+    longer = tmp_path / "walk3.csv"
+    save_trajectory(linear_trajectory([1.5, -0.5, 0.2], [0.0, 0.5, 0.0], 3.0), longer)
+    assert main(["simulate", str(tmp_path / "w3.wav"), "--array", "three-mic", "--trajectory",
+                 str(longer), "--fs", "8000"]) == 0
+    x3, _ = read_recording(tmp_path / "w3.wav")
+    assert x3.shape == (3, 24000)
+    gt3 = load_trajectory(tmp_path / "w3.trajectory.csv")
+    assert gt3.t[-1] == pytest.approx(2.99)
     capsys.readouterr()
     # bad combinations are one clear line, exit 2
     assert main(["simulate", str(out), "--array", "three-mic"]) == 2

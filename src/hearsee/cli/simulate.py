@@ -10,6 +10,9 @@ import typer
 from hearsee.cli._app import app, err_console, parse_floats, progress, refuse_overwrite
 from hearsee.errors import ConfigError, InputFileError
 
+#: Length of a static source's recording without ``--duration``, seconds.
+DEFAULT_DURATION_S = 2.0
+
 
 def _room_from_options(room: str | None, rt60: float | None,
                        array_at: str | None) -> dict | None:
@@ -45,7 +48,8 @@ def _metres(d: float) -> str:
     return f"{d:.2f}" if d < 1e6 else f"{d:.3g}"
 
 
-def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str, duration: float,
+def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str,
+                     duration: float | None,
                      fs: int, snr: float | None, room_spec: dict | None, seed: int,
                      far_field: bool, pcm16: bool, force: bool, protect: list) -> None:
     """``--trajectory``: a moving source (hearsee.sim.moving), truth CSV beside the WAV.
@@ -68,7 +72,7 @@ def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str, durat
     truth["trajectory_csv"] = truth_csv.name
     wav, js = save_recording(out, x, truth, subtype="PCM_16" if pcm16 else "FLOAT",
                              protect=protect)
-    save_trajectory(traj, truth_csv, times=np.arange(0.0, duration, 0.01))
+    save_trajectory(traj, truth_csv, times=np.arange(0.0, truth["duration_s"], 0.01))
     err_console.print(
         f"wrote {wav} ({x.shape[0]} channels, {x.shape[1] / fs:.2f} s at {fs} Hz), {js} and "
         f"{truth_csv} (moving source, {len(traj.t)} trajectory points)", highlight=False)
@@ -89,7 +93,9 @@ def simulate_cmd(
         "the array hears it r/c later, see hearsee.sim.moving.Trajectory.heard_at)."),
     signal: str = typer.Option("noise", "--signal",
                                help="noise | male | female | PATH to an audio file."),
-    duration: float = typer.Option(2.0, "--duration", help="Length in seconds."),
+    duration: float | None = typer.Option(
+        None, "--duration", help="Length in seconds (default: 2 s; with --trajectory, the "
+        "trajectory's last time)."),
     fs: int = typer.Option(16000, "--fs", help="Sample rate in Hz."),
     snr: float | None = typer.Option(None, "--snr", help="Sensor-noise SNR in dB (default: none)."),
     room: str | None = typer.Option(None, "--room",
@@ -131,6 +137,8 @@ def simulate_cmd(
     _check_output(out, poses is not None)
     snr = check_snr_db(snr)  # (before the simulation: add_noise checks it only at its end)
     protect = [p for p in (signal, array) if Path(p).is_file()]  # inputs no output may replace
+    if trajectory is None and duration is None:
+        duration = DEFAULT_DURATION_S
     if poses is not None:
         from hearsee.audio.active import parse_poses, simulate_pose_manifest
 
