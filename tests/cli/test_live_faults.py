@@ -163,8 +163,10 @@ def fake_sd(monkeypatch):
 
 
 #: A previous run's report folder (its index.html titled as hearsee's reports are, which a
-#: new report may replace; report_foreign_file).
-PREVIOUS = {"updates.jsonl": "previous updates.jsonl", "summary.json": "previous summary.json",
+#: new report may replace; report_foreign_file) and its JSON lines (a run's update records,
+#: which a new run may replace; jsonl_foreign_file).
+PREVIOUS = {"updates.jsonl": '{"t": 0.032, "phase": "listening", "note": "previous run"}\n',
+            "summary.json": "previous summary.json",
             "index.html": "<title>hearsee report: previous</title> previous index.html"}
 
 

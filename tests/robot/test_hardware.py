@@ -764,6 +764,36 @@ def test_jsonl_may_not_be_a_file_the_report_writes(tmp_path):
         assert cfg.output.jsonl == tmp_path / ok
 
 
+def test_jsonl_replaces_its_own_lines_but_not_a_file_of_the_user(tmp_path):
+    """output.jsonl pointed at the user's notes.json replaced it without a word; a run still
+    replaces the lines of an earlier run."""
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource
+
+    x, _ = simulate_recording("three-mic", [2.0, -1.0, 0.0], duration_s=0.5, fs=FS,
+                              snr_db=25.0, seed=4)
+    cfg = robot_config_from_dict({"audio": {}}, "r.yaml", tmp_path)
+    ours = tmp_path / "run.jsonl"
+    for _ in range(2):  # the second run replaces the first one's lines
+        res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
+                        jsonl=ours)
+        assert len(ours.read_text(encoding="utf-8").splitlines()) == len(res.log) > 0
+    notes = tmp_path / "notes.json"
+    for text in ('{"todo": "buy mics"}\n', "my notes\n", "\n\n"):
+        notes.write_text(text, encoding="utf-8")
+        with pytest.raises(ConfigError, match=r"output\.jsonl: .*notes\.json exists and is not "
+                                              r"a hearsee run's"):
+            run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
+                      jsonl=notes)
+        with pytest.raises(ConfigError, match=r"^r\.yaml: output\.jsonl: .*notes\.json exists"):
+            robot_config_from_dict({"audio": {}, "output": {"jsonl": "notes.json"}}, "r.yaml",
+                                   tmp_path)
+        assert notes.read_text(encoding="utf-8") == text
+    notes.write_text("", encoding="utf-8")  # an empty file is free to use
+    run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg), jsonl=notes)
+    assert notes.read_text(encoding="utf-8").startswith('{"t": ')
+
+
 class _HeadAudio:
     """An audio source of a talker at pan 40 deg, 2 m away: each block as heard at the pose
     ``head`` has when the block is read (``pans``: the head poses it can take, degrees)."""
@@ -1474,10 +1504,11 @@ def test_a_run_that_fails_before_its_first_update_keeps_the_previous_lines(tmp_p
 
     cfg, x = _talk(tmp_path)
     cfg.output.report.mkdir()
-    cfg.output.jsonl.write_text("previous run\n", encoding="utf-8")
+    previous = '{"t": 0.032, "phase": "listening", "note": "previous run"}\n'  # a run's line
+    cfg.output.jsonl.write_text(previous, encoding="utf-8")
     with pytest.raises(AudioInputError, match="cannot record"):
         run_robot(cfg, audio_source=_FailingSource(), head=_quiet_head(cfg))
-    assert cfg.output.jsonl.read_text(encoding="utf-8") == "previous run\n"
+    assert cfg.output.jsonl.read_text(encoding="utf-8") == previous
     other = tmp_path / "new" / "deeper" / "run.jsonl"  # none before: none after
     with pytest.raises(AudioInputError, match="cannot record"):
         run_robot(cfg, audio_source=_FailingSource(), head=_quiet_head(cfg), jsonl=other)
@@ -1490,7 +1521,7 @@ def test_a_run_that_fails_before_its_first_update_keeps_the_previous_lines(tmp_p
     res = run_robot(cfg, audio_source=ArraySource(x[:, :300], FS, 1600), head=_quiet_head(cfg))
     assert res.log == [] and cfg.output.jsonl.read_text(encoding="utf-8") == ""
     # and a run replaces the previous lines with its own
-    cfg.output.jsonl.write_text("previous run\n", encoding="utf-8")
+    cfg.output.jsonl.write_text(previous, encoding="utf-8")
     res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg))
     lines = cfg.output.jsonl.read_text(encoding="utf-8").splitlines()
     assert [json.loads(s) for s in lines] == json.loads(json.dumps(res.log)) and len(lines) > 20

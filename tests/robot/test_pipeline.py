@@ -413,6 +413,14 @@ def test_demo_keeps_report_files_it_did_not_write_unless_forced(tmp_path, capsys
     only_log.mkdir()
     (only_log / "log.json").write_text("[]", encoding="utf-8")
     assert report_foreign_file(only_log) == only_log / "log.json"
+    # the user's own plots/ and frames/ PNGs (no index.html) were overwritten too
+    pics = tmp_path / "pics"
+    (pics / "frames").mkdir(parents=True)
+    (pics / "frames" / "latest_overlay.png").write_bytes(b"mine")
+    assert report_foreign_file(pics) == pics / "frames" / "latest_overlay.png"
+    assert main(["demo", "-o", str(pics), "-q"]) == 2
+    assert "latest_overlay.png exists" in capsys.readouterr().err
+    assert (pics / "frames" / "latest_overlay.png").read_bytes() == b"mine"
     ours = tmp_path / "ours"
     write_report(ours, scenario_from_dict({}).to_dict(), [], {"success": False})
     assert report_foreign_file(ours) is None

@@ -62,6 +62,7 @@ camera device or stream that stops delivering does not stall the audio: its read
 
 from __future__ import annotations
 
+import json
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -456,6 +457,8 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
     if hit is not None:
         raise ConfigError(f"{where}: output.report: writing {cfg.output.report.resolve()} "
                           f"would overwrite the input file {hit}; choose another folder")
+    if jsonl_foreign_file(cfg.output.jsonl):
+        raise _foreign_jsonl_error(cfg.output.jsonl, f"{where}: ")
     if report_overwrites(cfg.output.report, [cfg.output.jsonl]) is not None:
         raise ConfigError(f"{where}: output.jsonl: {cfg.output.jsonl} is one of the report's "
                           f"files (output.report {cfg.output.report} writes "
@@ -946,6 +949,33 @@ def _r(v: Any, nd: int = 4) -> Any:
     return np.round(a, nd).tolist() if a.ndim else round(float(a), nd)
 
 
+def jsonl_foreign_file(path: str | Path) -> bool:
+    """Whether ``path`` is an existing, non-empty file that is not a hearsee run's JSON lines
+    (its first line is not a JSON object with the keys ``t`` and ``phase``). A run replaces
+    its own earlier lines; pointed at a file of the user's (``output.jsonl: notes.json``), it
+    replaced that file without a word."""
+    p = Path(path)
+    if not p.is_file():
+        return False
+    try:
+        with p.open("rb") as fh:
+            first = fh.readline(65536)
+    except OSError:
+        return False  # (unreadable: the write check names it)
+    if not first.strip():
+        return bool(p.stat().st_size)  # (an empty file is free to use; blank lines are not ours)
+    try:
+        rec = json.loads(first)
+    except (ValueError, UnicodeDecodeError):
+        return True
+    return not (isinstance(rec, dict) and "t" in rec and "phase" in rec)
+
+
+def _foreign_jsonl_error(path: Path, where: str) -> ConfigError:
+    return ConfigError(f"{where}output.jsonl: {path} exists and is not a hearsee run's JSON "
+                       "lines; choose another file (or remove it)")
+
+
 class _JsonLines:
     """The JSON lines file of a live run (``output.jsonl``): one line per update, written and
     flushed as it comes, so that the run can be followed while it goes (``tail -f``).
@@ -966,6 +996,8 @@ class _JsonLines:
         #: the folders made for the file, deepest first: removed again (when still empty) by a
         #: run that fails before its first line (it left an empty new folder behind)
         self.made = [d for d in (path.parent, *path.parent.parents) if not d.exists()]
+        if jsonl_foreign_file(path):
+            raise _foreign_jsonl_error(path, "")
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             existed = path.exists() or path.is_symlink()
@@ -1081,7 +1113,6 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     (source ended or duration reached),
     ``"interrupted"`` (Ctrl-C) or ``"stalled"`` (the device stopped delivering audio).
     """
-    import json
     import time
     from concurrent.futures import ThreadPoolExecutor
 

@@ -60,11 +60,12 @@ def report_folder_unwritable(folder: str | Path) -> Path | None:
 
 
 def report_foreign_file(folder: str | Path) -> Path | None:
-    """The first of :data:`REPORT_FILES` in ``folder`` that an earlier hearsee report did not
-    write -- an ``index.html`` whose title is not a hearsee report's, or a ``log.json`` /
-    ``summary.json`` beside no hearsee ``index.html`` -- or None. A report replaces its own
-    earlier files (re-running ``hearsee demo``); pointed at a folder of the user's, it
-    overwrote their index.html, log.json and summary.json without a word."""
+    """The first file in ``folder`` that a report would write over and that an earlier hearsee
+    report did not write -- an ``index.html`` whose title is not a hearsee report's, or a
+    ``log.json`` / ``summary.json`` / PNG in ``plots/`` or ``frames/`` beside no hearsee
+    ``index.html`` -- or None. A report replaces its own earlier files (re-running ``hearsee
+    demo``); pointed at a folder of the user's, it overwrote their index.html, log.json and
+    summary.json without a word (and, until 2026-12-01, their PNGs in plots/ and frames/)."""
     f = Path(folder)
     index = f / "index.html"
     if index.is_file():
@@ -74,7 +75,11 @@ def report_foreign_file(folder: str | Path) -> Path | None:
         except OSError:
             ours = False
         return None if ours else index
-    return next((f / name for name in REPORT_FILES[1:] if (f / name).exists()), None)
+    hit = next((f / name for name in REPORT_FILES[1:] if (f / name).exists()), None)
+    if hit is None:
+        hit = next((q for sub in _REPORT_SUBFOLDERS if (f / sub).is_dir()
+                    for q in sorted((f / sub).iterdir()) if q.suffix.lower() == ".png"), None)
+    return hit
 
 
 def report_overwrites(folder: str | Path, paths: Sequence[str | Path | None]) -> Path | None:
