@@ -35,6 +35,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -281,18 +282,20 @@ def main() -> None:
     for i in range(n_al):
         src = random_source(rng)
         sig = synthetic_voice(("male", "female")[i % 2], 1.0, fs, rng)
-        r_i = np.random.default_rng(200 + i)
 
-        def measure(pose, src=src, sig=sig, r_i=r_i):
+        def measure(pose, *, r_i, src=src, sig=sig):
             x = simulate_pose_captures(sig, fs, arr, src, [pose], offset_m=offset, snr_db=20,
                                        rng=r_i, rt60=0.3, **ROOM)[0]
             return capture_tdoas(x, fs, arr)
 
-        res = align_head(measure, arr, offset_m=offset)
+        # each strategy draws its sensor noise from its own generator with the same seed (they
+        # shared one, so a change in one strategy's moves changed the other's noise)
+        res = align_head(partial(measure, r_i=np.random.default_rng(200 + i)), arr,
+                         offset_m=offset)
         al_rows.append((res.moves, res.error_deg(src, offset_m=offset), res.converged))
         if al_trace is None:
             al_trace = (res, src)
-        res_s = align_head_search(measure, arr)
+        res_s = align_head_search(partial(measure, r_i=np.random.default_rng(200 + i)), arr)
         al_search.append((res_s.moves, res_s.error_deg(src, offset_m=offset)))
     al_table = []
     for name, rows_ in (("pooled multi-pose solver (align_head)", al_rows),

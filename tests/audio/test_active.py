@@ -222,6 +222,24 @@ def test_facing_pair_and_alignment_free_field_geometry():
         assert abs(res.facing_tdoa_s[-1]) < 10e-6  # the symmetric pair's ITD vanishes
 
 
+@pytest.mark.parametrize("az, el, dist", [(-21.464, 36.821, 2.5), (155.5, -22.0, 3.2),
+                                          (28.9, -9.1, 3.0)])
+def test_alignment_with_exact_tdoas_corrects_the_offset_parallax(az, el, dist):
+    # the array origin sits 0.1 m in front of the pivot: aiming along the far-field direction
+    # seen from the pivot (distance unresolved) left the gaze off by the parallax, 0.7-1.2 deg
+    src = dist * np.array([np.cos(np.radians(el)) * np.cos(np.radians(az)),
+                           np.cos(np.radians(el)) * np.sin(np.radians(az)),
+                           np.sin(np.radians(el))])
+
+    def measure(pose):
+        return MicArray(mic_positions_at(ARR, pose, offset_m=OFF)).tdoa(src)
+
+    res = align_head(measure, ARR, offset_m=OFF, tol_deg=0.1)
+    assert res.converged and res.moves <= 4
+    assert res.error_deg(src, offset_m=OFF) < 0.05
+    assert abs(res.facing_tdoa_s[-1]) < 0.05e-6
+
+
 @pytest.mark.slow
 def test_room_captures_and_alignment_with_audio():
     fs = 16000
