@@ -104,7 +104,11 @@ deg, the azimuth's by -10 to +4 %).
 
 Part B -- calibrated camera + three microphones, sources 0.5-2 m away in the camera's view
 (SNR 20 dB, RT60 0.3 s), image points from the true projection plus 1 px noise (a detector
-stand-in): per-frame camera-ray + ITD fixes (:func:`hearsee.fusion.audiovisual.track_on_rays`:
+stand-in; since 2026-12-01 taken, as in the stream, at the instant the frame's sound left the
+walker, r/c before the frame time, and scored against the walker's position then: with the
+image at the frame time the camera-array parallax turned the few mm walked in r/c into a 1-3.5
+cm range bias whose sign followed the walking direction): per-frame camera-ray + ITD fixes
+(:func:`hearsee.fusion.audiovisual.track_on_rays`:
 GCC-PHAT with exact peak interpolation, 64 ms frames every 16 ms, fixes whose TDOAs do not
 close discarded) and three trackers on the SAME frames: since 2026-11-25 the default
 :class:`~hearsee.fusion.audiovisual.RayTdoaTracker` (constant velocity, white acceleration 0.1
@@ -240,6 +244,7 @@ from hearsee.fusion.audiovisual import AudioVisualRig  # noqa: E402
 from hearsee.geometry import direction_deg, wrap_deg  # noqa: E402
 from hearsee.sim.moving import (  # noqa: E402
     Trajectory,
+    retarded_delays,
     simulate_moving_free_field,
     simulate_moving_room,
 )
@@ -742,7 +747,12 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
                 fx_pos[k], fx_vel[k] = rk.position, rk.velocity
                 ca_pos[k], ca_vel[k] = mk.position, mk.velocity
             t, raw = rt.t, rt.raw
-            truth = traj.at(t)
+            # where the walker was when the sound heard at frame time t left them (the camera
+            # sees at once; track_on_rays takes the image at that instant)
+            tau, _ = retarded_delays(traj, rig.array.positions.mean(axis=0)[None], t,
+                                     rig.array.speed_of_sound)
+            t_emit = t - tau[0]
+            truth = traj.at(t_emit)
             settle = t >= 0.35  # 0.32 s for the filter to converge (10 frames of 32 ms)
             seen.append(truth[settle][::4])
             e_raw.append(np.linalg.norm(raw - truth, axis=1))
@@ -753,10 +763,10 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
                 e_trk[key].append(np.linalg.norm(pos - truth, axis=1)[settle])
                 e_fix[key].append(np.where(np.isfinite(raw[:, 0]),
                                            np.linalg.norm(pos - truth, axis=1), np.nan)[settle])
-                e_vel[key].append(np.linalg.norm(vel - traj.velocity(t), axis=1)[settle])
+                e_vel[key].append(np.linalg.norm(vel - traj.velocity(t_emit), axis=1)[settle])
             if not example and name.startswith("0.5") and room:
                 example = {"t": t, "truth": truth, "raw": raw, "pos": rt.position,
-                           "vel": rt.velocity, "vtrue": traj.velocity(t)}
+                           "vel": rt.velocity, "vtrue": traj.velocity(t_emit)}
         er, eg = np.concatenate(e_raw), np.concatenate(e_rng)
         per_deg, per_us = range_sensitivity(rig, np.concatenate(seen))
         for key in trackers:

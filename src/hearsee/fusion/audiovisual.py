@@ -124,6 +124,7 @@ __all__ = [
     "RayTracker",
     "locate_on_ray",
     "feed_tracker",
+    "frame_fix",
     "ray_residuals",
     "simulate_av_samples",
     "track_on_rays",
@@ -647,6 +648,51 @@ def feed_tracker(tracker: Any, t: float, uv: ArrayLike | None, tdoa_s: ArrayLike
                           [(a.position_m, a.covariance) for a in fix.alternatives])
 
 
+def frame_fix(rig: AudioVisualRig, image_points: Callable[[float], Any], t: float,
+              tdoa_s: ArrayLike | None, pairs: Sequence[tuple[int, int]], tracker: Any = None,
+              *, range_m: tuple[float, float], sigma_tdoa_s: float, sigma_px: float,
+              max_residual_s: float) -> tuple[Any, RayFix | None]:
+    """One frame's image point and camera-ray fix, both of the same instant.
+
+    The TDOAs of the frame centred at ``t`` (s) describe where the source was when it emitted
+    that sound, ``r / c`` earlier; the camera sees it at once. So the image point is taken at
+    ``t - r / c``, with ``r`` the distance from the array centre to the ``tracker``'s position
+    (when it has one) or else to the frame's own first fix (made with the image at ``t``).
+    Taken at ``t`` the image described a point a few millimetres further along the walk, and
+    the camera-array parallax turned that into a range error about range / baseline times
+    larger (1-3.5 cm at 0.5-1.5 m/s, 1.3 m, camera 0.2 m aside; found by an audit).
+
+    Returns ``(uv, fix)``: the image point (None when the camera has none) and the fix (None
+    without TDOAs or image point, or when the fix's RMS ITD residual exceeds
+    ``max_residual_s``). ``fix.position_m`` is therefore where the source was when it emitted
+    the frame's sound.
+    """
+    c = rig.array.speed_of_sound
+    centre = rig.array.positions.mean(axis=0)
+    r = None
+    if getattr(tracker, "initialized", False):
+        p = np.asarray(tracker.position, dtype=float)
+        if np.all(np.isfinite(p)):
+            r = float(np.linalg.norm(p - centre))
+    uv = image_points(t if r is None else t - r / c)
+    ok = tdoa_s is not None and np.all(np.isfinite(tdoa_s))
+    if uv is None or not ok:
+        return uv, None
+
+    def fix_at(point: Any) -> RayFix:
+        return locate_on_ray(rig, point, tdoa_s, pairs, range_m=range_m,
+                             sigma_tdoa_s=sigma_tdoa_s, sigma_px=sigma_px)
+
+    fix = fix_at(uv)
+    if r is None:  # no track yet: the image at the first fix's emission time
+        uv2 = image_points(t - float(np.linalg.norm(fix.position_m - centre)) / c)
+        if uv2 is not None:
+            uv, fix = uv2, fix_at(uv2)
+    if fix.residual_s > max_residual_s:
+        fix = None
+    return uv, fix
+
+
 @dataclass
 class RayTrack:
     """Output of :func:`track_on_rays`: per frame ``t`` (s), the per-frame fixes ``raw`` (m,
@@ -685,7 +731,9 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
     fs : float
         Sample rate, Hz.
     image_points : callable ``t -> (u, v) or None``
-        Image point of the source at frame time t (seconds, frame centre).
+        Image point of the source at time t (seconds); called at each frame centre minus the
+        source's propagation delay (:func:`frame_fix`), so the fixes, the track and ``raw``
+        are where the source was when it emitted each frame's sound.
     frame_ms, hop_ms : float
         Analysis frames, milliseconds. The 16 ms hop (75 % overlap) gives the tracker twice
         as many, partly independent fixes as the stream's 32 ms: on the seed-100 walks of
@@ -730,13 +778,9 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
     fixes: list[RayFix | None] = []
     for k, t in enumerate(tf.t):
         z = tf.tdoa_s[k]
-        uv = image_points(float(t))
-        fix = None
-        if uv is not None and np.all(np.isfinite(z)):
-            fix = locate_on_ray(rig, uv, z, prs, range_m=range_m, sigma_tdoa_s=sigma_tdoa_s,
-                                sigma_px=sigma_px)
-            if fix.residual_s > max_residual_samples / fs:
-                fix = None
+        uv, fix = frame_fix(rig, image_points, float(t), z, prs, trk, range_m=range_m,
+                            sigma_tdoa_s=sigma_tdoa_s, sigma_px=sigma_px,
+                            max_residual_s=max_residual_samples / fs)
         fixes.append(fix)
         if fix is not None:
             raw[k] = fix.position_m

@@ -1270,7 +1270,10 @@ class TrackingProcessor:
         Calibrated camera + array; with ``image_points`` the tracker also estimates the 3D
         position, velocity and acceleration.
     image_points : callable ``t -> (u, v) or None``, optional
-        Image point of the source at time t (seconds), e.g. from a detector or a CSV file.
+        Image point of the source at time t (seconds), e.g. from a detector or a CSV file;
+        called at each update's ``t`` minus the source's propagation delay
+        (:func:`hearsee.fusion.audiovisual.frame_fix`), so ``position_m`` is where the source
+        was when it emitted the frame's sound.
     """
 
     def __init__(self, array: MicArray, fs: float, config: StreamConfig | None = None,
@@ -1532,15 +1535,12 @@ class TrackingProcessor:
         raise ConfigError(f"motion_model must be 'cv' or 'ca', got {cfg.motion_model!r}")
 
     def _fuse(self, upd: Update, z: NDArray | None) -> None:
-        from hearsee.fusion.audiovisual import feed_tracker, locate_on_ray
+        from hearsee.fusion.audiovisual import feed_tracker, frame_fix
 
-        uv = self.image_points(upd.t)
-        fix = None
-        if z is not None and uv is not None:
-            fix = locate_on_ray(self.rig, uv, z, self.pairs, range_m=self.cfg.range_m,
-                                sigma_tdoa_s=self.sigma_tdoa_s, sigma_px=self.cfg.sigma_px)
-        if fix is not None and fix.residual_s > self.cfg.max_fix_residual_samples / self.fs:
-            fix = None
+        uv, fix = frame_fix(self.rig, self.image_points, upd.t, z, self.pairs, self.motion,
+                            range_m=self.cfg.range_m, sigma_tdoa_s=self.sigma_tdoa_s,
+                            sigma_px=self.cfg.sigma_px,
+                            max_residual_s=self.cfg.max_fix_residual_samples / self.fs)
         if fix is not None:
             upd.raw_position_m = fix.position_m.tolist()
         feed_tracker(self.motion, upd.t, uv, z, fix)
