@@ -218,8 +218,10 @@ def test_video_image_points_read_frames_and_detect_nothing_in_blank_video(tmp_pa
         w.write(np.full((120, 160, 3), 128, np.uint8))
     w.release()
     vp = VideoImagePoints(path, detector="face")
-    assert vp(0.25) is None
-    assert vp.frame_index == 2
+    assert vp(0.24) is None
+    assert vp.frame_index == 2  # the nearest frame (0.2 s), as at the tie 0.25 s
+    assert vp(0.25) is None and vp.frame_index == 2
+    assert vp(0.26) is None and vp.frame_index == 3  # (the latest at or before t was 2)
     assert vp(10.0) is None and vp.ended
     from hearsee.errors import InputFileError
 
