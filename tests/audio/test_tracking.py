@@ -144,6 +144,11 @@ def test_motion_filter_jerk_per_axis():
     F, Q = MotionKalman(sigma_jerk=(2.0, 2.0, 2.0))._model(0.1)
     np.testing.assert_allclose(Q, Q_discrete_white_noise(dim=3, dt=0.1, var=4.0, block_size=3,
                                                          order_by_dim=True))
+    # the documented meaning: the acceleration's white increment per update step (m/s^2),
+    # whatever the step -- not a jerk in m/s^3, whose increment would grow with dt
+    for dt in (0.016, 0.064, 0.2):
+        Qa = MotionKalman(sigma_jerk=0.5)._model(dt)[1][np.ix_([2, 5, 8], [2, 5, 8])]
+        np.testing.assert_allclose(Qa, 0.25 * np.eye(3))
     vz = {}
     for jz in (2.0, 0.05):
         rng = np.random.default_rng(3)  # the same fixes for both

@@ -14,8 +14,9 @@ Reconstruction (the thesis's ch. 5 text is lost; see ``design/reconstruction.md`
   candidate directions (front/back twin of two microphones, elevation sign of a planar array)
   the candidate nearest to the prediction (nearest-neighbour data association) is used.
 * :class:`MotionKalman` (thesis 5.4.3, figs. 5.18-5.20) estimates position, velocity and
-  acceleration in 3D with a constant-acceleration model (discrete white-noise jerk, same
-  reference, sec. 6.3.3), measurement = position with a per-measurement covariance (e.g. the
+  acceleration in 3D with a constant-acceleration model (the discrete Wiener process
+  acceleration model, same reference, sec. 6.3.3: a white acceleration increment per update
+  step), measurement = position with a per-measurement covariance (e.g. the
   elongated covariance of the camera-ray + ITD fix of :mod:`hearsee.fusion.audiovisual`).
 
 Both are written with filterpy's textbook names (``x``, ``P``, ``F``, ``H``, ``Q``, ``R``) and
@@ -992,7 +993,12 @@ class MotionKalman(_Kalman):
     sigma_meas_m : float
         Default measurement standard deviation per axis, metres.
     sigma_jerk : float or (3,)
-        Standard deviation of the jerk (process noise), m/s^3: one value for all axes, or one
+        Process noise: standard deviation of the acceleration's white increment over one
+        update step, m/s^2 (Bar-Shalom et al. 2001, sec. 6.3.3; filterpy's
+        ``Q_discrete_white_noise(dim=3)``). It is per step, not a jerk in m/s^3 as this
+        docstring said until 2026-12-01: as a jerk it is about ``sigma_jerk / dt``, so the
+        same value makes a filter updated every 16 ms twice as agile, per second, as one
+        updated every 32 ms. One value for all axes, or one
         per axis ``(x, y, z)`` of the track's frame -- e.g. a small z value for a walking
         person, whose height hardly changes (:func:`hearsee.robot.pipeline.new_person_track`).
     gate_prob : float

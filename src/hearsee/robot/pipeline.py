@@ -91,14 +91,16 @@ MIN_AUDIO_UPDATES = 3
 #: the mouth's offset to the bearing noise instead (atan(0.1 m / r)) kept the fusion but failed
 #: the same rule (velocity mean -7 %).
 TRACK_TIMEOUT_S = 1.0
-#: The 3D person track (:func:`new_person_track`): jerk noise per axis (x, y, z of the room or
-#: robot frame, m/s^3; a walking person's torso height hardly changes, so z gets 0.1) and the
+#: The 3D person track (:func:`new_person_track`): process noise per axis (x, y, z of the room
+#: or robot frame; the acceleration's white increment per update, m/s^2 -- called a jerk in
+#: m/s^3 until 2026-12-01, see MotionKalman's ``sigma_jerk``; a walking person's torso height
+#: hardly changes, so z gets 0.1) and the
 #: correlation time of its acceleration (s, Singer 1970; the stream's
 #: ``StreamConfig.accel_tau_s``). Before 2026-11-26 the robot's track was pure constant
-#: acceleration with 2 m/s^3 on every axis: two biased fixes of a person half out of view left
+#: acceleration with 2 on every axis: two biased fixes of a person half out of view left
 #: an acceleration that the coasting track then integrated for a second (vertical speeds of
 #: 1-4.5 m/s, 1-3 m position errors before the timeout; bench/robot seeds 16, 42, 47).
-PERSON_JERK_MPS3 = (2.0, 2.0, 0.1)
+PERSON_ACCEL_STEP_MPS2 = (2.0, 2.0, 0.1)
 PERSON_ACCEL_TAU_S = 0.5
 #: Covariance factor for a stereo fix whose silhouette is cut by the image border
 #: (:func:`stereo_position_cov`): 3x the standard deviation.
@@ -309,7 +311,7 @@ def new_person_track() -> MotionKalman:
     with verified stereo fixes (5 cm default noise; no audio bearings, see
     :data:`TRACK_TIMEOUT_S`). One place for the simulated loop and the live one
     (:mod:`hearsee.robot.hardware`)."""
-    return MotionKalman(sigma_meas_m=0.05, sigma_jerk=PERSON_JERK_MPS3,
+    return MotionKalman(sigma_meas_m=0.05, sigma_jerk=PERSON_ACCEL_STEP_MPS2,
                         accel_tau_s=PERSON_ACCEL_TAU_S)
 
 

@@ -1041,7 +1041,8 @@ class StreamConfig:
         -> 0.19 m/s
     sigma_accel : the ``"cv"`` tracker's acceleration noise, m/s^2; None = its own default
         (0.1 for ``"tdoa"``, 0.2 for ``"fix"``)
-    sigma_jerk : the ``"ca"`` tracker's process noise, m/s^3
+    sigma_jerk : the ``"ca"`` tracker's process noise: the acceleration's white increment
+        per update (hop), m/s^2 (:class:`hearsee.audio.tracking.MotionKalman`)
     accel_tau_s : correlation time of the ``"ca"`` tracker's acceleration (Singer), s; None =
         pure CA
     sigma_tdoa_s, sigma_px : measurement noise of the camera-ray fix (seconds, pixels);
