@@ -790,3 +790,16 @@ def test_motion_fixes_and_covariances_must_be_numbers():
         a.update(j * DT, p, R)
         b.update(j * DT, np.array(p), R.tolist())
     np.testing.assert_array_equal(a.x, b.x)
+
+
+def test_motion_filter_predicted_to_leaves_the_track_alone():
+    kf = MotionKalman(sigma_meas_m=0.01, sigma_jerk=0.5)
+    for k in range(30):  # 1 m/s along x, exact fixes every 0.1 s
+        kf.update(0.1 * k, [0.1 * k, 2.0, 1.0])
+    x0, P0, t0 = kf.x.copy(), kf.P.copy(), kf.t
+    ahead = kf.predicted_to(t0 + 0.5)
+    np.testing.assert_allclose(ahead.position, [t0 + 0.5, 2.0, 1.0], atol=0.01)
+    assert ahead.t == pytest.approx(t0 + 0.5) and np.trace(ahead.P) > np.trace(P0)
+    assert kf.t == t0 and np.array_equal(kf.x, x0) and np.array_equal(kf.P, P0)
+    np.testing.assert_array_equal(kf.predicted_to(t0 - 1.0).x, x0)  # the past: as it is
+    assert not MotionKalman().predicted_to(1.0).initialized

@@ -29,6 +29,7 @@ Units: degrees and deg/s for directions, metres, m/s and m/s^2 for motion, secon
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -1157,6 +1158,16 @@ class MotionKalman(_Kalman):
     @property
     def position_cov(self) -> NDArray:
         return self.P[np.ix_(self._POS, self._POS)].copy()
+
+    def predicted_to(self, t: float) -> MotionKalman:
+        """A copy of the track predicted to ``t`` (seconds) with its own model; this track is
+        unchanged. The state to report at ``t`` when the last fix is older (e.g. one applied
+        after a detector's latency, at its capture time). For ``t`` at or before the last
+        update, or without a track, the copy holds the current state."""
+        c = copy.copy(self)  # (predict rebinds x, P, F, Q and t: the arrays are not shared)
+        if self.initialized and self.t is not None and _finite_time(t) > self.t:
+            c.predict(t)
+        return c
 
 
 def track_positions(t: ArrayLike, positions: ArrayLike, R: ArrayLike | None = None,

@@ -1211,13 +1211,20 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                          "speaker": False})
             if h.accepted:  # (compared with the audio bearing: from the array origin)
                 verified.append((h, p, g.heard_azimuth_deg(p), len(dets) - 1))
+        # the track holds the state of its last fix (the loop reports it predicted to each
+        # update's time): the frames' fix is of their capture time, earlier than t by the
+        # detector's latency (0.3-0.5 s on 2 cores; applied at t, a walker's track lagged by
+        # that much, 0.12-0.25 m at 0.5 m/s)
+        if track.initialized:
+            track.predict(t_cap)
         best = associate([v[1] for v in verified], [v[2] for v in verified], track, bearing)
         if best is not None:
             h, p, _, k = verified[best]
             Rc = g.R_cam.T @ stereo_position_cov(np.asarray(h.position_m), rig.focal_px,
                                               rig.baseline_m, truncated=h.truncated) @ g.R_cam
-            if track.update(t, p, Rc):
-                state["last_visual"] = t
+            if track.update(t_cap, p, Rc):
+                state["last_visual"] = t  # (when the fix arrived: TRACK_TIMEOUT_S counts from
+                # there, as before -- from the capture, a 0.5 s latency dropped every track)
             dets[k]["speaker"] = True
             if state["first_verified"] is None:
                 state["first_verified"] = t_cap
@@ -1268,7 +1275,6 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             # pipeline); drop the track, the head follows the audio
             track.reset()
             state["track_drops"] += 1
-        track.predict(t)
         audio = None
         bearing = None
         if u.azimuth_deg is not None:
@@ -1308,13 +1314,14 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         stays the last one commanded: the head's pose of the moment would stop the turn."""
         if state["phase"] == "listening" and state["n_audio"] >= MIN_AUDIO_UPDATES:
             state["phase"] = "turning"
-        if track.initialized:
+        now = track.predicted_to(t)  # (the track's state is its last fix's)
+        if now.initialized:
             state["phase"] = "tracking"
         command = None
         if state["phase"] != "listening":
             pan, tilt = geo.pose
-            if track.initialized:
-                pan, tilt = geo.bearing_deg(track.position)
+            if now.initialized:
+                pan, tilt = geo.bearing_deg(now.position)
             elif bearing is not None:
                 pan = bearing
             elif not heard and state["desired"] is not None:
@@ -1325,7 +1332,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             tilt = limit_tilt_deg(tilt)
             command = head.command(t, pan, tilt)
             state["desired"] = (pan, tilt)
-        rec_track = track_record(track)  # (rounded for the JSON line: mm, covariance 1e-6)
+        rec_track = track_record(now)  # (rounded for the JSON line: mm, covariance 1e-6)
         if rec_track is not None:
             rec_track = {k: _r(v, 6 if k == "covariance" else 4) for k, v in rec_track.items()}
         rec = {"t": round(t, 4), "phase": state["phase"], "head_pan_deg": geo.pose[0],
