@@ -43,6 +43,14 @@ def test_mcap_round_trip(tmp_path):
     assert (img.width, img.height, img.encoding, img.step) == (32, 24, "bgr8", 96)
     stamp = msgs["/hearsee/truth"][0].header.stamp
     assert stamp.sec == 0 and stamp.nanosec == 200_000_000
+    assert {m.header.frame_id for m in msgs["/hearsee/speaker"]} == {"room"}
+    # a live run's positions are in the robot frame (they were labelled room)
+    live = write_mcap(tmp_path / "live.mcap", log, frames, frame_id="robot")
+    with open(live, "rb") as f:
+        ids = {m.header.frame_id for _, ch, _, m in make_reader(
+            f, decoder_factories=[DecoderFactory()]).iter_decoded_messages()
+            if ch.topic == "/hearsee/speaker"}
+    assert ids == {"robot"}
 
 
 def test_rerun_recording(tmp_path):

@@ -94,7 +94,7 @@ def run_cmd(
     if mcap is not None:
         from hearsee.robot.export import write_mcap
 
-        write_mcap(mcap, result.log, result.frames)
+        write_mcap(mcap, result.log, result.frames, frame_id="robot")
     if not quiet:
         print_summary("hearsee run summary", result.summary)
     typer.echo(f"updates: {cfg.output.jsonl}")

@@ -1,8 +1,9 @@
 """Optional exports of a robot run: a Rerun recording and an MCAP file of ROS 2 messages.
 
 Both are behind extras (``pip install 'hearsee[rerun]'``, ``'hearsee[ros]'``); a missing extra is a
-clear :class:`hearsee.errors.ConfigError`. Positions are in the ROOM frame (ROS frame id
-``room``); times are seconds from the start of the run.
+clear :class:`hearsee.errors.ConfigError`. Positions are in the ROOM frame of a simulated run
+(ROS frame id ``room``) and in the robot's own frame for a live run (``hearsee run``, frame id
+``robot``); times are seconds from the start of the run.
 
 ROS 2 messages written to MCAP (open in Foxglove or ``ros2 bag``):
 
@@ -98,8 +99,11 @@ def check_export(kind: str, path: str | Path) -> str:
 
 
 def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
-               frames: Sequence[tuple[float, np.ndarray]] = ()) -> Path:
-    """Write the run's estimates (and overlay images ``(t, bgr uint8)``) as ROS 2 messages."""
+               frames: Sequence[tuple[float, np.ndarray]] = (), frame_id: str = "room") -> Path:
+    """Write the run's estimates (and overlay images ``(t, bgr uint8)``) as ROS 2 messages;
+    ``frame_id`` names the frame of the positions: ``"room"`` for a simulated run, ``"robot"``
+    for a live one (its log is in the robot frame; it was labelled ``room`` until
+    2026-12-01)."""
     try:
         from mcap_ros2.writer import Writer
     except ImportError:
@@ -117,7 +121,7 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
                 pos = (rec.get(key) or {}).get("position_m")
                 if pos is not None:
                     w.write_message(topic, s_point, {
-                        "header": {"stamp": _stamp(t), "frame_id": "room"},
+                        "header": {"stamp": _stamp(t), "frame_id": frame_id},
                         "point": {"x": float(pos[0]), "y": float(pos[1]), "z": float(pos[2])},
                     }, log_time=ns, publish_time=ns, sequence=seq)
             if rec.get("head_pan_deg") is not None:
