@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from hearsee.cli import main
+from hearsee.errors import ConfigError
 from hearsee.robot.pipeline import (
     TRUNCATED_COV_SCALE,
     new_person_track,
@@ -46,7 +47,7 @@ def test_hears_turns_verifies_and_tracks(short_run):
     # the head turned toward the person
     assert abs(res.log[-1]["head_pan_deg"] - res.log[-1]["truth"]["azimuth_robot_deg"]) < 5.0
     # verified by stereo + thermal and tracked in 3D within 15 cm (room frame, torso centre)
-    assert s["success"] and s["tracked_steps"] >= 5
+    assert s["success"] and s["tracked_steps"] >= 5 and s["tracked_at_end"]
     assert s["position_error_median_m"] < 0.15
     # the mannequin was seen and never reported as a person
     assert s["human_like_objects_rejected"] >= 1
@@ -338,6 +339,29 @@ def test_track_is_dropped_without_visual_fixes_even_when_nobody_speaks(monkeypat
     late = [r for r in res.log if r["t"] > fixes[-1] + TRACK_TIMEOUT_S + CONTROL_DT + 1e-9]
     assert late and all(r["audio"] is None for r in late)  # silent: no bearings either
     assert all(r["track"] is None and r["error_m"] is None for r in late)
+    # ... and the phase says so (it stayed "tracking")
+    assert all(r["phase"] == "turning" for r in late)
+    # a run that ends without its track is no success: its final error is the end's, none
+    # (it was the last tracked step's, and the run counted as a success)
+    s = res.summary
+    assert not s["tracked_at_end"] and np.isnan(s["position_error_final_m"])
+    assert not s["success"] and s["position_error_median_m"] < 0.3
+
+
+@pytest.mark.slow
+def test_camera_rate_is_the_frames_per_second_asked_for():
+    """Frames at the first control step at or after each of the rate's slots: 4 Hz gave a frame
+    every 0.4 s (2.5 Hz), 3 Hz likewise; above one per 0.2 s step is refused (60 Hz was
+    accepted and gave 5)."""
+    for rate in (4.0, 3.0):
+        spec = {**SHORT, "robot": {**SHORT["robot"], "camera_rate_hz": rate}, "objects": []}
+        res = run_scenario(scenario_from_dict(spec), keep_images=False)
+        t = np.array([r["t"] for r in res.log if r["camera_frame"]])
+        assert len(t) >= 5
+        span = t[-1] - t[0]
+        assert len(t) - 1 == pytest.approx(rate * span, abs=1.0)
+    with pytest.raises(ConfigError, match="camera_rate_hz"):
+        scenario_from_dict({**SHORT, "robot": {**SHORT["robot"], "camera_rate_hz": 6}})
 
 
 def _array_file(path):

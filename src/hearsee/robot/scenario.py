@@ -19,7 +19,8 @@ Schema (defaults in brackets)::
       head_height_m: float         [1.25]           pan/tilt pivot height above the floor
       array: str                   [three-mic]      preset name or YAML path
       pan_speed_dps: float         [120]            maximum pan rate
-      camera_rate_hz: float        [5]              stereo + thermal frames per second
+      camera_rate_hz: float        [5]              stereo + thermal frames per second (at
+                                                    most 5: one per 0.2 s control step)
       stereo: {baseline_m [0.12], focal_px [500], width [640], height [480]}
       thermal: {width [160], height [120], hfov_deg [72]}   (mounted 7 cm above the left camera)
     people:                        [one walking speaker]
@@ -73,6 +74,9 @@ WALL_CLEARANCE_M = 0.3
 #: :func:`random_scenario` and of ``hearsee eval --duration`` (:func:`hearsee.robot.evaluate.
 #: evaluate`). A 1 s scenario runs; it is too short for most speakers to be verified.
 MIN_DURATION_S = 1.0
+#: The simulated loop renders at most one camera frame per control step
+#: (:data:`hearsee.robot.pipeline.CONTROL_DT`, 0.2 s), so ``camera_rate_hz`` is at most 5.
+MAX_CAMERA_RATE_HZ = 5.0
 MAX_DURATION_S = 120.0
 
 
@@ -365,7 +369,10 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
         head_height_m=head_h,
         array=array,
         pan_speed_dps=number(rob, "pan_speed_dps", base.robot.pan_speed_dps, rw, 1.0, 2000.0),
-        camera_rate_hz=number(rob, "camera_rate_hz", base.robot.camera_rate_hz, rw, 0.5, 60.0),
+        # (at most one frame per control step: up to 60 was accepted, and above 5 Hz the
+        # simulated loop gave 5)
+        camera_rate_hz=number(rob, "camera_rate_hz", base.robot.camera_rate_hz, rw, 0.5,
+                              MAX_CAMERA_RATE_HZ),
         baseline_m=number(stereo, "baseline_m", 0.12, f"{rw}.stereo", 0.02, 1.0),
         focal_px=number(stereo, "focal_px", 500.0, f"{rw}.stereo", 50.0, 5000.0),
         width=number(stereo, "width", 640, f"{rw}.stereo", 64, 4096, integer=True),
