@@ -61,6 +61,19 @@ def test_random_scenarios_are_valid_and_deterministic():
         assert _min_distance(sc.people[0].path_m, sc.robot.position_m) >= 0.6  # never through it
 
 
+def test_long_random_scenarios_keep_the_speaker_walking():
+    """No straight walk of 0.2-0.8 m/s x 60 s fits a room: the speaker stood still (every seed
+    at 60 s). Now they walk back and forth, inside the room, clear of the robot."""
+    for seed in range(12):
+        sc = random_scenario(seed, 60.0)
+        path = sc.people[0].path_m
+        speed = np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)) / sc.duration_s
+        assert 0.2 <= speed <= 0.8
+        assert np.all(path > 0.3) and np.all(path < sc.room_size_m[:2] - 0.3)
+        assert _min_distance(path, sc.robot.position_m) >= 0.6
+        assert scenario_from_dict(sc.to_dict()).to_dict() == sc.to_dict()
+
+
 def _min_distance(path, p, n=20001):
     """Ground truth: the closest a person walking ``path`` comes to ``p`` (dense sampling)."""
     path = np.asarray(path, dtype=float)
