@@ -597,6 +597,7 @@ def test_track_dropped_after_cameras_end(tmp_path):
     tracked_t = [r["t"] for r in res.log if r["track"] is not None]
     assert tracked_t and max(tracked_t) <= fix_t + TRACK_TIMEOUT_S + 1e-9
     assert res.log[-1]["track"] is None and res.log[-1]["t"] > fix_t + TRACK_TIMEOUT_S
+    assert res.log[-1]["phase"] == "turning"  # (it stayed "tracking" without a track)
     # without a track the desired pan is the audio bearing, which points at the talker
     assert abs(s["head_pan_command_deg_final"] - truth["azimuth_deg"]) < 3.0
 

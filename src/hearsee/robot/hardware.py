@@ -1317,6 +1317,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         now = track.predicted_to(t)  # (the track's state is its last fix's)
         if now.initialized:
             state["phase"] = "tracking"
+        elif state["phase"] == "tracking":  # the track was dropped (it stayed "tracking")
+            state["phase"] = "turning"
         command = None
         if state["phase"] != "listening":
             pan, tilt = geo.pose
