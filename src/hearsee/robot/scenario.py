@@ -27,6 +27,8 @@ Schema (defaults in brackets)::
       - {name, path_m: [[x, y], ...] (waypoints, walked at constant speed over the run),
          height_m [1.72], voice: male|female [female], speaking: [[t0, t1], ...] [whole run],
          facing: toward-robot|path [toward-robot]}
+      (only the FIRST person speaks in the simulated audio, and the ground truth follows
+      them; the others are seen, not heard: their voice and speaking are read but not used)
     objects:                       [a mannequin]
       - {kind: mannequin|poster|coat, position_m: [x, y], yaw_deg [0], height_m [1.75]}
 
