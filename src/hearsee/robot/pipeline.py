@@ -385,8 +385,9 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
 
     Each log record: ``t`` (s, end of the step), ``phase`` (listening | turning | tracking),
     ``head_pan_deg``, ``audio`` {azimuth_deg (robot frame), n_frames, confidence} or None,
-    ``detections`` [{box, position_m (room), score, thermal_support, accepted, reason,
-    truth_kind}], ``track`` {position_m, velocity_mps (None until the track's fixes determine
+    ``detections`` [{box, position_m (room), distance_m (from the left camera, not from
+    the robot), height_m, score, thermal_support, truncated, accepted, reason, truth_kind}],
+    ``track`` {position_m, velocity_mps (None until the track's fixes determine
     it, :attr:`~hearsee.audio.tracking.MotionKalman.velocity_known`), acceleration_mps2
     (likewise), covariance} or None,
     ``truth`` {position_m, velocity_mps, azimuth_robot_deg}, ``error_m``.
