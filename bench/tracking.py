@@ -718,10 +718,15 @@ def part_b(trials: int, seed: int, dur: float, data: Path | None = None
             else:
                 y = simulate_moving_free_field(x, fs, rig.array, traj, snr_db=20.0, rng=rng)
             noise = {}
+            # the pixel noise from the walk's own generator (one draw of the bench's): drawn
+            # from the bench's, any change in how often the fusion queries image points (since
+            # 2026-12-01 at t - r/c, sometimes twice a frame) changed every later walk
+            prng = np.random.default_rng(int(rng.integers(2**63)))
 
-            def points(t: float, traj=traj, noise=noise, rig=rig) -> tuple[float, float]:
+            def points(t: float, traj=traj, noise=noise, rig=rig,
+                       prng=prng) -> tuple[float, float]:
                 if t not in noise:
-                    noise[t] = rng.standard_normal(2)
+                    noise[t] = prng.standard_normal(2)
                 uv = rig.project(traj.at(t))[0] + noise[t]
                 return float(uv[0]), float(uv[1])
 
