@@ -281,32 +281,28 @@ def test_motion_models_track_a_source_moving_along_a_line(model, ray):
     the frame at t are those of the sound emitted r/c earlier (the camera sees at once), and
     the track is where the source was then."""
     from hearsee.fusion.audiovisual import AudioVisualRig
+    from hearsee.sim.moving import linear_trajectory
     from hearsee.vision.camera import Camera
 
     arr = MicArray.from_preset("three-mic")
     rig = AudioVisualRig.mounted(arr, Camera.from_fov(70.0, 640, 480), (0.0, 0.2, 0.0))
     v = np.array([0.0, 0.6, 0.0])
+    traj = linear_trajectory([1.5, -0.3, 0.0], v, 2.0)
 
-    def at(t):
-        return np.array([1.5, -0.3, 0.0]) + v * t
-
-    def emitted(t):  # when the sound heard at the array centre at t left the source
-        te = t
-        for _ in range(4):
-            te = t - np.linalg.norm(at(te) - arr.positions.mean(axis=0)) / arr.speed_of_sound
-        return te
+    def heard(t):  # where the source was when the sound heard at the array centre left it
+        return traj.heard_at(t, arr.positions.mean(axis=0), arr.speed_of_sound)
 
     proc = TrackingProcessor(arr, FS, StreamConfig(motion_model=model, ray_measurements=ray),
-                             rig=rig, image_points=lambda t: tuple(rig.project(at(t))[0]))
+                             rig=rig, image_points=lambda t: tuple(rig.project(traj.at(t))[0]))
     expected = {"tdoa": "RayTdoaTracker", "fix": "RayTracker"}[ray] if model == "cv" else (
         "MotionKalman")
     assert type(proc.motion).__name__ == expected
     ups = []
     for k in range(60):
         u = Update(k * 0.032, None, None, None, None, None, None, 1.0)
-        proc._fuse(u, arr.tdoa(at(emitted(u.t))))
+        proc._fuse(u, arr.tdoa(heard(u.t)))
         ups.append(u)
-    assert np.linalg.norm(np.array(u.position_m) - at(emitted(u.t))) < 0.02
+    assert np.linalg.norm(np.array(u.position_m) - heard(u.t)) < 0.02
     assert np.linalg.norm(np.array(u.velocity_mps) - v) < 0.1
     # the first update's velocity is the prior: unknown (None); the constant-velocity trackers
     # estimate no acceleration (None, not a modelled 0), the constant-acceleration one does
