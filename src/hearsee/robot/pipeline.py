@@ -53,6 +53,7 @@ from hearsee.errors import EstimationError, GeometryError
 from hearsee.geometry import array_to_robot, head_rotation, wrap_deg
 from hearsee.robot.scenario import Scenario
 from hearsee.vision.camera import OPTICAL_FROM_BODY
+from hearsee.vision.humans import TORSO_HEIGHT_FRACTION
 
 __all__ = ["CONTROL_DT", "RunResult", "new_person_track", "run_scenario",
            "stereo_position_cov", "track_record"]
@@ -66,8 +67,6 @@ CAMERA_FORWARD_M = 0.05
 #: Mouth below the top of the head and in front of the body axis (metres).
 MOUTH_BELOW_TOP_M = 0.14
 MOUTH_FORWARD_M = 0.08
-#: Torso centre height as a fraction of body height (hearsee.sim.scenes' body model).
-TORSO_HEIGHT_FRACTION = 0.675
 #: Linear crossfade between consecutive impulse responses at the start of each chunk (s).
 CROSSFADE_S = 0.05
 #: Gate (degrees) for associating a verified person with the audio bearing (no 3D track yet).

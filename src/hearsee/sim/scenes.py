@@ -24,8 +24,9 @@ into:
 Frames: every 3D coordinate is in the **left camera's optical frame** (x right, y down,
 z forward, metres). The camera looks level at ``camera_height_m`` above the floor, so a point
 ``h`` metres above the floor has ``y = camera_height_m - h``. An object's ``position_m`` is its
-torso centre (people, mannequins, coats; for posters the printed figure's torso, 0.675 of its
-height above the floor, like a person's).
+torso centre (people, mannequins, coats; for posters the printed figure's torso,
+:data:`hearsee.vision.humans.TORSO_HEIGHT_FRACTION` of its height above the floor, like a
+person's).
 
 Everything is deterministic from the seed. The renderer is simple on purpose (Lambertian
 shading from one directional light, one ray per pixel, no shadows or inter-reflections); it is
@@ -48,6 +49,7 @@ from scipy import ndimage
 from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import ConfigError, GeometryError, ImageInputError
 from hearsee.vision.camera import Camera, StereoRig, save_rig
+from hearsee.vision.humans import TORSO_HEIGHT_FRACTION
 
 __all__ = [
     "HUMAN_LIKE_KINDS",
@@ -274,7 +276,7 @@ def _body_parts(height: float, build: float) -> list[tuple[str, tuple, tuple]]:
         ("hair", (0.0, H - 0.085, -0.02), (0.082, 0.09, 0.095)),
         ("neck", (0.0, H - 0.25, 0.0), (0.052, 0.07, 0.05)),
         ("shoulders", (0.0, 0.815 * H, 0.0), (0.205 * w, 0.055, 0.1)),
-        ("torso", (0.0, 0.675 * H, 0.0), (0.17 * w, 0.17 * H, 0.11)),
+        ("torso", (0.0, TORSO_HEIGHT_FRACTION * H, 0.0), (0.17 * w, 0.17 * H, 0.11)),
         ("pelvis", (0.0, 0.515 * H, 0.0), (0.16 * w, 0.09 * H, 0.11)),
     ]
     for sgn in (-1.0, 1.0):
@@ -384,7 +386,7 @@ def _add_entity(b: _Builder, e: Entity, owner: int, spec: SceneSpec,
         foot = center + R[:, 2] * 0.15
         b.box(foot + [-0.15, cam_h - foot[1] - 0.05, -0.1], foot + [0.15, cam_h - foot[1], 0.1],
               m_st, owner)
-        return np.array([e.x, cam_h - 0.675 * e.height_m, e.z])
+        return np.array([e.x, cam_h - TORSO_HEIGHT_FRACTION * e.height_m, e.z])
     if e.kind == "coat_stand":
         t = float(p.get("temp_c", room + rng.uniform(-0.5, 0.3)))
         H = e.height_m

@@ -99,9 +99,16 @@ BODY_SURFACE_DEPTH_M = 0.09
 #: Height (metres) of the crown above a silhouette's robust top (:func:`robust_top_m`, the
 #: :data:`TOP_PERCENTILE` percentile of its points' heights): the rounded head puts the last
 #: half percent of the points 3.1-4.0 cm below the crown on hearsee.sim.scenes bodies at
-#: 1.5-5.5 m. The torso centre is placed at 0.675 of ``top + CROWN_ABOVE_TOP_M``; at 0.675 of
-#: the top itself it was 2.3 cm too low (found by an audit of the robot's 3D errors).
+#: 1.5-5.5 m. The torso centre is placed at :data:`TORSO_HEIGHT_FRACTION` of
+#: ``top + CROWN_ABOVE_TOP_M``; at that fraction of the top itself it was 2.3 cm too low (found
+#: by an audit of the robot's 3D errors).
 CROWN_ABOVE_TOP_M = 0.035
+#: Height of the torso centre (the point a person's ``position_m`` names) as a fraction of the
+#: body height, floor to crown: midway between the shoulders (0.818) and the hips (0.530) of
+#: Drillis & Contini's segment lengths (as drawn in Winter, *Biomechanics and Motor Control of
+#: Human Movement*, anthropometry chapter). One place for the detector, the scene renderer's
+#: body model (:mod:`hearsee.sim.scenes`) and the robot's ground truth.
+TORSO_HEIGHT_FRACTION = 0.675
 
 
 #: A point this far below a floor hypothesis (metres) counts against it in
@@ -726,12 +733,13 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     xlo, xhi = np.percentile(pts[:, 0], [3, 97])
     Zm = float(np.median(pts[:, 2]))
     Xm = float(np.median(pts[:, 0]))
-    # torso centre: at 0.675 of the body height (the crown, CROWN_ABOVE_TOP_M above the robust
-    # top), BODY_SURFACE_DEPTH_M behind the median of the silhouette's visible surface
+    # torso centre: at TORSO_HEIGHT_FRACTION of the body height (the crown, CROWN_ABOVE_TOP_M
+    # above the robust top), BODY_SURFACE_DEPTH_M behind the median of the silhouette's
+    # visible surface
     ray = np.array([Xm, 0.0, Zm])
     ray /= np.linalg.norm(ray)
     c = np.array([Xm, 0.0, Zm]) + BODY_SURFACE_DEPTH_M * ray
-    h_t = 0.675 * (top + CROWN_ABOVE_TOP_M)
+    h_t = TORSO_HEIGHT_FRACTION * (top + CROWN_ABOVE_TOP_M)
     n = floor.normal
     y = (h_t - floor.offset - n[0] * c[0] - n[2] * c[2]) / n[1]
     pos = np.array([c[0], y, c[2]])
