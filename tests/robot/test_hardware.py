@@ -584,19 +584,23 @@ def test_duration_and_ctrl_c_stop_cleanly(tmp_path):
 @pytest.mark.slow
 def test_track_dropped_after_cameras_end(tmp_path):
     """Videos of 2 frames (camera at 2 Hz) and 3 s of audio: the person is verified and tracked,
-    then the cameras end; after TRACK_TIMEOUT_S without a visual fix the 3D track is dropped
+    then the cameras end; after the track timeout without a visual fix the 3D track is dropped
     (bearing-only updates would let its range drift) and the head follows the audio."""
-    from hearsee.robot.pipeline import TRACK_TIMEOUT_S
+    from hearsee.robot.pipeline import track_timeout_s
     from hearsee.stream.pipeline import ArraySource
 
     cfg, x, truth, torso, _ = _person_case(tmp_path, n_frames=2)
     res = run_robot(cfg, audio_source=ArraySource(x, FS, block_len=1600), head=_quiet_head(cfg))
     s = res.summary
     assert s["person_reported"] and s["camera_frames"] == 2 and s["track_drops"] == 1
+    # frames at the first 32 ms update at or after each 0.5 s slot; detection in line (no lag)
+    assert 0.5 <= s["vision_frame_interval_s"] <= 0.5 + 0.032 + 1e-9
+    timeout = track_timeout_s(s["vision_frame_interval_s"])
+    assert 1.25 <= timeout <= 1.33
     fix_t = max(r["camera_t"] for r in res.log if r["camera_t"] is not None)
     tracked_t = [r["t"] for r in res.log if r["track"] is not None]
-    assert tracked_t and max(tracked_t) <= fix_t + TRACK_TIMEOUT_S + 1e-9
-    assert res.log[-1]["track"] is None and res.log[-1]["t"] > fix_t + TRACK_TIMEOUT_S
+    assert tracked_t and max(tracked_t) <= fix_t + timeout + 1e-9
+    assert res.log[-1]["track"] is None and res.log[-1]["t"] > fix_t + timeout
     assert res.log[-1]["phase"] == "turning"  # (it stayed "tracking" without a track)
     # without a track the desired pan is the audio bearing, which points at the talker
     assert abs(s["head_pan_command_deg_final"] - truth["azimuth_deg"]) < 3.0
@@ -1592,14 +1596,12 @@ def test_ctrl_c_in_the_jsonl_write_keeps_the_lines_and_the_log_one_for_one(tmp_p
     assert len(res.log) == 4  # the fifth line was being written: neither has it
 
 
-@pytest.mark.slow
-def test_a_late_detection_updates_the_track_at_its_capture_time(tmp_path, monkeypatch):
-    """Detection runs beside the audio and its result arrives later (here 10 audio updates,
-    0.32 s of audio, by a stand-in executor: deterministic, whatever the machine's load): the
-    fix is of the capture time. Applied at its arrival time, the track of a person walking
-    away at 0.5 m/s lagged by the latency (0.12-0.25 m; and, predicted at every 32 ms audio
-    update between fixes 0.7 s apart, its velocity never became known); now the track is fused
-    at the capture time and reported predicted to each update's time."""
+def _walker_run(tmp_path, monkeypatch, polls):
+    """The live loop over 4.5 s of a person walking straight away from the robot at
+    0.5 m/s (free field, rendered stereo + thermal frames asked at 2 Hz), detection
+    results arriving ``polls`` audio updates (32 ms each) after their capture, by a
+    stand-in executor: deterministic, whatever the machine's load. Returns the run's
+    result and the walker's true floor position (robot frame, m) as a function of t."""
     import concurrent.futures
 
     from hearsee.audio.arrays import load_array
@@ -1611,13 +1613,13 @@ def test_a_late_detection_updates_the_track_at_its_capture_time(tmp_path, monkey
     from hearsee.stream.pipeline import ArraySource
     from hearsee.vision.camera import OPTICAL_FROM_BODY
 
-    class Late:  # a finished detection that reports done at the 11th poll (one per update)
+    class Late:  # a finished detection that reports done after `polls` polls (one per update)
         def __init__(self, value):
-            self.value, self.polls = value, 0
+            self.value, self.n = value, 0
 
         def done(self):
-            self.polls += 1
-            return self.polls > 10
+            self.n += 1
+            return self.n > polls
 
         def result(self):
             return self.value
@@ -1666,6 +1668,18 @@ def test_a_late_detection_updates_the_track_at_its_capture_time(tmp_path, monkey
     res = run_robot(cfg, async_vision=True, cameras=Cams(),
                     audio_source=ArraySource(x, FS, block_len=1600),
                     head=PrintHeadDriver(cfg.head, None), jsonl=tmp_path / "u.jsonl")
+    return res, xy_at
+
+
+@pytest.mark.slow
+def test_a_late_detection_updates_the_track_at_its_capture_time(tmp_path, monkeypatch):
+    """Detection runs beside the audio and its result arrives later (here 10 audio updates,
+    0.32 s of audio, by a stand-in executor: deterministic, whatever the machine's load): the
+    fix is of the capture time. Applied at its arrival time, the track of a person walking
+    away at 0.5 m/s lagged by the latency (0.12-0.25 m; and, predicted at every 32 ms audio
+    update between fixes 0.7 s apart, its velocity never became known); now the track is fused
+    at the capture time and reported predicted to each update's time."""
+    res, xy_at = _walker_run(tmp_path, monkeypatch, 10)
     fused = [r for r in res.log if r["camera_t"] is not None and r["track"] is not None
              and r["track"]["velocity_mps"] is not None]
     assert len(fused) >= 3
@@ -1678,3 +1692,24 @@ def test_a_late_detection_updates_the_track_at_its_capture_time(tmp_path, monkey
     # metres; the walker moved >= 0.15 m since each capture
     assert np.median(at_t) < 0.08
     assert np.median(at_t) < 0.5 * np.median(at_cap)  # (the old track sat at the capture's)
+
+
+@pytest.mark.slow
+def test_a_detector_slower_than_the_track_timeout_keeps_the_track(tmp_path, monkeypatch):
+    """Results 40 updates (1.28 s) after their capture: the detector gives a frame every
+    ~1.3 s. The track timeout counted 1 s from each fix's arrival, so the track was dropped
+    before every next fix (twice in 4.5 s) and, restarted from one fix each time, its
+    velocity never became known. It now lasts 2.5 of the detector's frame intervals."""
+    res, xy_at = _walker_run(tmp_path, monkeypatch, 40)
+    fixes = [r for r in res.log if any(d["speaker"] for d in r["detections"])]
+    assert len(fixes) >= 3
+    assert all(r["t"] - r["camera_t"] > 1.2 for r in fixes if r is not res.log[-1])
+    assert res.summary["track_drops"] == 0
+    assert res.summary["vision_frame_interval_s"] == pytest.approx(1.3, abs=0.05)
+    # tracked from the first fix to the end
+    assert all(r["track"] is not None for r in res.log if r["t"] >= fixes[0]["t"])
+    last = fixes[-1]["track"]
+    assert last["velocity_mps"] is not None
+    # the walker's velocity: 0.5 m/s straight away from the robot (robot frame, floor)
+    v_true = 0.5 * xy_at(1.0) / np.linalg.norm(xy_at(1.0))
+    assert np.linalg.norm(np.array(last["velocity_mps"][:2]) - v_true) < 0.25

@@ -364,6 +364,26 @@ def test_camera_rate_is_the_frames_per_second_asked_for():
         scenario_from_dict({**SHORT, "robot": {**SHORT["robot"], "camera_rate_hz": 6}})
 
 
+@pytest.mark.slow
+def test_track_lasts_two_frame_intervals_when_frames_are_slower_than_the_timeout():
+    """Frames every 2 s (0.5 Hz, the slowest rate a scenario takes): the track lasts
+    track_timeout_s (2.5 frame intervals, 5 s) without a fix. With the plain 1 s timeout it
+    was dropped a second after each fix, a second before the next frame could confirm it, so
+    half of the run had no track and every fix started a new one."""
+    from hearsee.robot.pipeline import track_timeout_s
+
+    assert track_timeout_s(2.0) == 5.0 and track_timeout_s(0.2) == track_timeout_s(0.4) == 1.0
+    assert track_timeout_s(0.5) == 1.25
+    spec = {**SHORT, "duration_s": 6.0, "robot": {**SHORT["robot"], "camera_rate_hz": 0.5},
+            "objects": []}
+    res = run_scenario(scenario_from_dict(spec), keep_images=False)
+    fixes = [r["t"] for r in res.log if any(d["accepted"] for d in r["detections"])]
+    assert len(fixes) >= 3 and np.diff(fixes).min() > 1.3  # (the rate's slots: k / 0.5 Hz)
+    after = [r for r in res.log if r["t"] >= fixes[0]]
+    assert all(r["track"] is not None for r in after)
+    assert res.summary["tracked_at_end"] and res.summary["position_error_median_m"] < 0.3
+
+
 def _array_file(path):
     """The three-mic preset's geometry as an array file (JSON, which is YAML) at ``path``."""
     from hearsee.audio.arrays import load_array

@@ -1077,7 +1077,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     4. **Fuse and track**: the verified person nearest the audio bearing (within the pipeline's
        association gate) updates a constant-acceleration 3D Kalman filter in the robot frame
        (vision only, as the simulated loop: see the pipeline's ``TRACK_TIMEOUT_S``). A track
-       without a visual fix for ``TRACK_TIMEOUT_S`` seconds is dropped (counted in
+       without a visual fix for :func:`~hearsee.robot.pipeline.track_timeout_s` of the
+       detector's achieved frame interval (``summary["vision_frame_interval_s"]``: 1 s, or
+       2.5 intervals when its results come more than 0.4 s apart -- a slow detector, a low
+       ``rate_hz``) since the last fix arrived is dropped (counted in
        ``summary["track_drops"]``) and the head follows the audio bearing again.
 
     Parameters
@@ -1119,12 +1122,12 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     from hearsee.config import to_jsonable
     from hearsee.robot.pipeline import (
         MIN_AUDIO_UPDATES,
-        TRACK_TIMEOUT_S,
         RunResult,
         associate,
         new_person_track,
         stereo_position_cov,
         track_record,
+        track_timeout_s,
     )
     from hearsee.stream.pipeline import StreamConfig, StreamPipeline
 
@@ -1170,7 +1173,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     state = {"n_audio": 0, "next_cam": 0.0, "phase": "listening", "cam_frames": 0,
              "cam_ended": False, "first_verified": None, "hop": scfg.hop_ms / 1000.0,
              "last_visual": -np.inf, "track_drops": 0, "heard_from": -np.inf, "head_moves": 0,
-             "desired": None}
+             "desired": None, "last_capture": None, "frame_interval": period}
     # live: detection runs in a worker thread so that the audio keeps flowing; its result is
     # applied at the first update after it is ready (file sources: in line, deterministic)
     use_pool = (live if async_vision is None else async_vision) and cameras is not None
@@ -1215,6 +1218,12 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         # update's time): the frames' fix is of their capture time, earlier than t by the
         # detector's latency (0.3-0.5 s on 2 cores; applied at t, a walker's track lagged by
         # that much, 0.12-0.25 m at 0.5 m/s)
+        # the frame interval the detector achieves, for the track's timeout: the rate's period,
+        # or longer -- frames are captured one detection at a time, so at least its latency
+        # (t - t_cap: known from the first result on), and the captures' own spacing
+        gap = t_cap - state["last_capture"] if state["last_capture"] is not None else 0.0
+        state["frame_interval"] = max(period, t - t_cap, gap)
+        state["last_capture"] = t_cap
         if track.initialized:
             track.predict(t_cap)
         best = associate([v[1] for v in verified], [v[2] for v in verified], track, bearing)
@@ -1223,8 +1232,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             Rc = g.R_cam.T @ stereo_position_cov(np.asarray(h.position_m), rig.focal_px,
                                               rig.baseline_m, truncated=h.truncated) @ g.R_cam
             if track.update(t_cap, p, Rc):
-                state["last_visual"] = t  # (when the fix arrived: TRACK_TIMEOUT_S counts from
-                # there, as before -- from the capture, a 0.5 s latency dropped every track)
+                state["last_visual"] = t  # (when the fix arrived: the timeout counts from
+                # there -- from the capture, a 0.5 s latency dropped every track)
             dets[k]["speaker"] = True
             if state["first_verified"] is None:
                 state["first_verified"] = t_cap
@@ -1270,8 +1279,9 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         heard = follow_head(t)
         if not heard:
             u = _unheard(u)
-        if track.initialized and t - state["last_visual"] > TRACK_TIMEOUT_S:
-            # no visual fix for TRACK_TIMEOUT_S: a coasting track drifts (as in the simulated
+        if (track.initialized
+                and t - state["last_visual"] > track_timeout_s(state["frame_interval"])):
+            # no visual fix for the timeout: a coasting track drifts (as in the simulated
             # pipeline); drop the track, the head follows the audio
             track.reset()
             state["track_drops"] += 1
@@ -1412,6 +1422,10 @@ def _live_summary(log: list[dict[str, Any]], stats: Any, status: str, state: dic
                              is not None else float("nan")),
         "tracked_updates": int(tracked),
         "track_drops": int(state["track_drops"]),
+        # (seconds between the frames the detector got through, as the track's timeout uses
+        # it: the rate's period, or the detector's latency when it is slower; NaN: no frame)
+        "vision_frame_interval_s": (float(state["frame_interval"])
+                                    if state["last_capture"] is not None else float("nan")),
         "head_pan_command_deg_final": (float(last_cmd["pan_deg"]) if last_cmd
                                        else float("nan")),
         "head_commands_printed": int(getattr(head, "n_printed", 0)),

@@ -24,7 +24,7 @@ where it has turned its head):
    (covariance from the disparity noise) updates a constant-acceleration Kalman filter
    (:class:`hearsee.audio.tracking.MotionKalman`) in the room frame. The track gives position,
    velocity and acceleration. Audio bearings do not update it (they did until 2026-11-27, see
-   :data:`TRACK_TIMEOUT_S`).
+   :data:`TRACK_TIMEOUT_S`); without a fix for :func:`track_timeout_s` it is dropped.
 
 Frames: positions are metres in the ROOM frame (x, y on the floor, z up); bearings in the robot
 frame (REP 103, azimuth from the robot's +x toward +y). The person's reference point is the torso
@@ -56,7 +56,7 @@ from hearsee.vision.camera import OPTICAL_FROM_BODY
 from hearsee.vision.humans import TORSO_HEIGHT_FRACTION
 
 __all__ = ["CONTROL_DT", "RunResult", "new_person_track", "run_scenario",
-           "stereo_position_cov", "track_record"]
+           "stereo_position_cov", "track_record", "track_timeout_s"]
 
 #: Control period and audio chunk length, seconds.
 CONTROL_DT = 0.2
@@ -90,6 +90,11 @@ MIN_AUDIO_UPDATES = 3
 #: the mouth's offset to the bearing noise instead (atan(0.1 m / r)) kept the fusion but failed
 #: the same rule (velocity mean -7 %).
 TRACK_TIMEOUT_S = 1.0
+#: ... or this many camera frame intervals, when frames come slower than one per
+#: ``TRACK_TIMEOUT_S / TRACK_TIMEOUT_FRAMES`` (see :func:`track_timeout_s`): a track survives
+#: one frame without a fix and is dropped half an interval after a second one (the half: the
+#: live loop's frames jitter by an audio update).
+TRACK_TIMEOUT_FRAMES = 2.5
 #: The 3D person track (:func:`new_person_track`): process noise per axis (x, y, z of the room
 #: or robot frame; the acceleration's white increment per update, m/s^2 -- called a jerk in
 #: m/s^3 until 2026-12-01, see MotionKalman's ``sigma_jerk``; a walking person's torso height
@@ -304,6 +309,19 @@ def stereo_position_cov(p_cam: NDArray, f: float, B: float, *, truncated: bool =
     return cov * TRUNCATED_COV_SCALE if truncated else cov
 
 
+def track_timeout_s(frame_interval_s: float) -> float:
+    """Seconds without a verified visual fix after which the 3D track is dropped, for camera
+    frames (or, live, the detector's results) every ``frame_interval_s`` seconds:
+    :data:`TRACK_TIMEOUT_S`, or :data:`TRACK_TIMEOUT_FRAMES` frame intervals when that is
+    longer (frames more than 0.4 s apart). At 5 Hz (the simulated default) it is the 1 s; at
+    the live default 2 Hz, 1.25 s or a little more. With frames 1 s or more apart (a camera
+    rate below 1 Hz, a detector slower than a frame a second) a plain 1 s dropped the track
+    before every next frame could confirm it, and its velocity never became known; now it
+    survives one frame without a fix, as the 5 Hz track survives four. One place for the
+    simulated loop and the live one."""
+    return max(TRACK_TIMEOUT_S, TRACK_TIMEOUT_FRAMES * float(frame_interval_s))
+
+
 def new_person_track() -> MotionKalman:
     """The robot's 3D track of the person (room or robot frame, metres): a constant-
     acceleration Kalman filter whose acceleration decays with :data:`PERSON_ACCEL_TAU_S`, fed
@@ -425,6 +443,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     frames: list[tuple[float, NDArray]] = []
     first_turned_t: float | None = None
     last_visual_t = -np.inf
+    timeout_s = track_timeout_s(1.0 / r.camera_rate_hz)
     n_steps = int(np.ceil(sc.duration_s / CONTROL_DT - 1e-9))
 
     chunk_pan = pan  # the head pan the previous chunk was rendered at
@@ -457,7 +476,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
         audio_rec = None
         # (a tolerance: on the float step grid t1 - last_visual_t read 1.0000000000000002 for
         # some fixes and 0.9999999999999999 for others, so a track went after 1.0 or 1.2 s)
-        if track.initialized and t1 - last_visual_t > TRACK_TIMEOUT_S + 1e-9:
+        if track.initialized and t1 - last_visual_t > timeout_s + 1e-9:
             track.reset()  # (vision only: a track that no fix updates just coasts)
         n_meas = n_audio_updates - n_before  # this chunk's frames that updated the filter
         if direction.initialized and n_meas:
