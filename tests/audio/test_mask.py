@@ -304,6 +304,23 @@ def test_localize_recording_document(model):
 
 
 # ------------------------------------------------------------------ CLI: simulate + localize
+def test_document_frames_where_the_itd_peaks_inside_a_half(model):
+    """The mask's far-field ITD peaks inside the front half (this coarse mask2: 568 us at 77
+    deg, 540 us at 90), so one frame's ITD matches two azimuths there. Each frame now takes the
+    match nearest the recording's estimate; the nearest ITD alone put the frame median of a
+    source at 65 deg at 76.5 (53 % of the frames > 10 deg off) and at 85 deg at 77."""
+    itd = mask._itd_table(model, None)
+    assert 60 < int(np.argmax(itd)) < 90 and itd.max() > itd[90] + 1e-5  # (the premise)
+    for az in (65.0, 85.0):
+        x = mask.simulate_masked(white_noise(1.0, FS, rng=9), FS, model, _src(az), snr_db=25,
+                                 rng=2, far_field=True)
+        doc = mask.localize_recording_mask(x, FS, model)
+        assert abs(doc["summary"]["azimuth_deg"] - az) < 1.0
+        fr = np.array([f["azimuth_deg"] for f in doc["frames"] if f["valid"]])
+        assert len(fr) >= 20
+        assert abs(np.median(fr) - az) < 3.0 and np.mean(np.abs(fr - az) > 10) <= 0.2
+
+
 def test_cli_simulate_and_localize_masked(model, tmp_path, capsys):
     import json
 

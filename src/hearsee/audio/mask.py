@@ -983,6 +983,24 @@ def _refine(az: NDArray, cost: NDArray, k: int) -> float:
     return float((az[k] + np.clip(off, -1, 1) * step) % 360.0)
 
 
+def _invert_itd(itd_tab: NDArray, az_tab: NDArray, half: NDArray, itd_s: float,
+                prior_deg: float, tol_s: float) -> float:
+    """The azimuth (deg, from ``az_tab``'s circular 1-degree grid) within ``half`` whose table
+    ITD ``itd_tab`` (s) matches ``itd_s``. A mask's ITD need not rise steadily within a half
+    (mask2's far-field ITD peaks at 71 deg, 552 us, and falls to 500 us at 90 deg), so one ITD
+    can match on two branches: every branch's best match (a local minimum of the misfit, or
+    the half's overall best) within ``tol_s`` of the best one is a candidate, and the one
+    nearest ``prior_deg`` (the whole recording's estimate) is taken. Until 2026-12-02 the
+    overall best match was taken: for a source at 60 deg, 63 % of the frames read 70-84."""
+    err = np.abs(itd_tab - itd_s)
+    local = (err <= np.roll(err, 1)) & (err <= np.roll(err, -1)) & half
+    best = int(np.argmin(np.where(half, err, np.inf)))
+    local[best] = True
+    cand = np.flatnonzero(local & (err <= err[best] + tol_s))
+    gap = np.abs(wrap_deg(az_tab[cand] - prior_deg))
+    return float(az_tab[cand[int(np.argmin(gap))]])
+
+
 # ------------------------------------------------------------------------------- CLI document
 def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskModel,
                             frame_ms: float = 64.0, hop_ms: float = 32.0,
@@ -994,7 +1012,9 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
     Per frame: the GCC TDOA of :func:`hearsee.audio.tdoa.estimate_tdoas` (lag bound widened to
     the mask's largest ITD; optionally smoothed by :class:`hearsee.audio.itd_filter.ItdKalman`)
     is inverted through the mask's far-field ITD table into its two candidates, alpha and its
-    mirror; the primary is the one in the half chosen for the whole recording. Summary:
+    mirror (where the ITD matches twice within a half, the match nearest the summary's azimuth
+    in that half: :func:`_invert_itd`); the primary is the one in the half chosen for the
+    whole recording. Summary:
     :func:`localize_mask` -- one 360-degree azimuth, the runner-up (ITD mirror) as the second
     candidate, ``front_probability`` and ``confidence`` of the front/back decision,
     ``distance_m`` of the best-fitting response table. Elevation is null (not resolvable with
@@ -1024,14 +1044,18 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
     itd_tab = _itd_table(model, None)
     front_tab = np.abs(az_tab) < 90
     want_front = est.front_probability >= 0.5
+    # each half's candidate: the ITD's match nearest the summary's azimuth in that half (the
+    # runner-up's in the other), within half a sample (see _invert_itd)
+    prior_f, prior_b = ((est.azimuth_deg, est.runner_up_deg) if want_front
+                        else (est.runner_up_deg, est.azimuth_deg))
+    tol = 0.5 / float(fs)
     frames = []
     for n in range(len(tf.t)):
         ok = bool(tf.valid[n]) and bool(np.isfinite(tdoa[n]))
         cands = []
         if ok:
-            err = np.abs(itd_tab - tdoa[n])
-            a_f = float(az_tab[np.argmin(np.where(front_tab, err, np.inf))])
-            a_b = float(az_tab[np.argmin(np.where(~front_tab, err, np.inf))])
+            a_f = _invert_itd(itd_tab, az_tab, front_tab, tdoa[n], prior_f, tol)
+            a_b = _invert_itd(itd_tab, az_tab, ~front_tab, tdoa[n], prior_b, tol)
             cands = [a_f, a_b] if want_front else [a_b, a_f]
         frames.append({
             "t": float(tf.t[n]),
