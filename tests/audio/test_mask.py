@@ -321,6 +321,23 @@ def test_document_frames_where_the_itd_peaks_inside_a_half(model):
         assert abs(np.median(fr) - az) < 3.0 and np.mean(np.abs(fr - az) > 10) <= 0.2
 
 
+def test_no_source_is_not_reported_as_one(model):
+    """Uncorrelated noise on the two microphones, or a constant: no source. The fit answered
+    with 0.99-1.0 "confidence" anyway; now the estimate says detected=False (the GCC-PHAT
+    test every array's summary uses) and the document gives no azimuth, as on a bare pair."""
+    rng = np.random.default_rng(0)
+    for x in (rng.normal(size=(2, FS)), rng.normal(size=(2, 2 * FS)), np.ones((2, FS))):
+        est = mask.localize_mask(x, FS, model)
+        assert not est.detected
+        s = mask.localize_recording_mask(x, FS, model)["summary"]
+        assert s["azimuth_deg"] is None and s["candidates"] == [] and s["confidence"] is None
+        assert s["front_probability"] is None and s["n_solutions"] == 0
+    x = mask.simulate_masked(white_noise(1.0, FS, rng=9), FS, model, _src(130), snr_db=0,
+                             rng=2, far_field=True)
+    est = mask.localize_mask(x, FS, model)
+    assert est.detected and abs(est.azimuth_deg - 130) < 5
+
+
 def test_cli_simulate_and_localize_masked(model, tmp_path, capsys):
     import json
 
