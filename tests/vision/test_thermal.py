@@ -107,6 +107,26 @@ def test_load_thermal_refuses_temperatures_in_other_units(tmp_path, name, image,
         load_thermal(tmp_path / name)
 
 
+def test_flat_radiometric_frame_has_no_warm_pixels_and_units_are_checked():
+    """A flat frame at a skin temperature (a lens cap on a warm camera, a frozen stream) was
+    warm everywhere, so every stereo candidate -- mannequins, coat stands -- was "thermally
+    verified"; a frame in kelvin or in raw 14-bit counts made every person "thermal support
+    0.00". Now: no warm pixel, and ImageInputError naming the units (as load_thermal)."""
+    for flat in (np.full((60, 80), 30.0, np.float32), np.full((60, 80), 34.0),
+                 np.full((60, 80), round((33.0 + 273.15) * 100), np.uint16)):
+        assert not thermal_mask(flat).any()
+    room = np.full((60, 80), 21.0, np.float32)
+    room[30:32, 40:41] = 33.0  # two warm pixels: not flat (no morphology, to keep them)
+    m = thermal_mask(room, open_px=0, close_px=0)
+    assert m[30, 40] and m[31, 40] and m.sum() == 2
+    t = _room(np.random.default_rng(3))
+    assert thermal_mask(t).any()  # the room's own frame, as before
+    for bad, needle in ((t + 273.15, "is it in kelvin?"),
+                        (np.full((60, 80), 8000, np.uint16), "centi-kelvin")):
+        with pytest.raises(ImageInputError, match=re.escape(needle)):
+            thermal_mask(bad)
+
+
 def test_overlay_shape():
     vis = np.full((120, 160, 3), 100, np.uint8)
     th = np.zeros((60, 80), np.uint8)

@@ -50,6 +50,13 @@ HUMAN_BAND_C = (26.0, 40.0)
 #: kelvin read as degC (a 20 degC room is 293), or raw counts of another scale.
 SCENE_C = (-60.0, 100.0)
 
+#: A radiometric frame whose warmest and coldest pixels are less than this apart (degC) is
+#: flat (shutter, lens cap, frozen stream): no scene, no warm pixels (:func:`thermal_mask`).
+#: Sensor noise (NETD 0.03-0.1 degC) can spread a capped lens's frame beyond it: the rule
+#: catches frames flat to the digit (a frozen stream, a constant), not every lens cap, and
+#: never a frame with anything warmer in it, however small.
+FLAT_SPREAD_C = 0.1
+
 #: The largest float32 (the type of :func:`counts_to_celsius`'s arithmetic).
 _F32_MAX = float(np.finfo(np.float32).max)
 
@@ -200,8 +207,13 @@ def thermal_mask(image: NDArray, *, band_c: tuple[float, float] = HUMAN_BAND_C,
     overrides the guess for float/uint16 images. Extra keyword arguments go to
     :func:`warm_mask_celsius` or :func:`relative_warm_mask`.
 
-    A flat 8-bit frame (shutter closed, frozen camera) gives an all-False mask rather than an
-    error: on a live robot "nobody is thermally verified" is the safe answer for that frame.
+    A flat frame (shutter closed, lens cap on, frozen camera) gives an all-False mask rather
+    than an error: on a live robot "nobody is thermally verified" is the safe answer for that
+    frame. For 8-bit frames see :func:`relative_warm_mask`; a radiometric frame is flat when all
+    its pixels lie within :data:`FLAT_SPREAD_C`. Radiometric
+    frames must hold a scene's temperatures in degC (:data:`SCENE_C`; ImageInputError
+    otherwise, as :func:`load_thermal`): a frame in kelvin or raw 14-bit counts rejected every
+    person ("thermal support 0.00") without a word.
     """
     im = numeric_map("thermal image", image, None)
     if im.ndim == 3:
@@ -215,10 +227,21 @@ def thermal_mask(image: NDArray, *, band_c: tuple[float, float] = HUMAN_BAND_C,
     if im.dtype == np.uint8 or radiometric is False:
         return relative_warm_mask(im, **kwargs)
     if im.dtype == np.uint16:
-        return warm_mask_celsius(counts_to_celsius(im), band_c, **kwargs)
-    if im.dtype.kind == "f":
-        return warm_mask_celsius(im, band_c, **kwargs)
-    raise ImageInputError(f"unsupported thermal pixel type {im.dtype} (use uint8, uint16 or float)")
+        t = counts_to_celsius(im)
+        _check_scene_celsius(t, "16-bit thermal images are centi-kelvin (degC = value / 100 - "
+                             "273.15)")
+    elif im.dtype.kind == "f":
+        t = im
+        _check_scene_celsius(t, "float thermal images are degC")
+    else:
+        raise ImageInputError(f"unsupported thermal pixel type {im.dtype} (use uint8, uint16 or "
+                              "float)")
+    m = warm_mask_celsius(t, band_c, **kwargs)  # (checks the band and kernels, flat or not)
+    if float(np.max(t)) - float(np.min(t)) < FLAT_SPREAD_C:
+        # (a flat 30-34 degC frame -- a lens cap on a warm camera, a frozen stream -- was warm
+        # everywhere: every candidate, mannequins and coat stands too, "thermally verified")
+        m[:] = False
+    return m
 
 
 def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None) -> NDArray:
