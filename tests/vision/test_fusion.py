@@ -141,6 +141,65 @@ def test_rig_that_needs_rectification(scene):
     assert len(near) == 1
 
 
+def test_candidates_of_a_rig_that_needs_rectification_meet_the_thermal_camera_in_its_frame():
+    """The stereo points are in the rectified left frame; the thermal extrinsics refer to the
+    left camera's own frame. With a rig rotated by 4 deg (test_rig_that_needs_rectification's
+    0.11 deg could not tell the frames apart), a person's points carried back to the left frame
+    land on their warm pixels in the thermal image and the position comes back in the left
+    frame; read in the rectified frame they are 2 deg (10 cm at 3 m) off."""
+    import cv2
+
+    from hearsee.vision.fusion import classify_candidates
+    from hearsee.vision.humans import BodySegment, HumanCandidate, StereoDetection
+
+    R = cv2.Rodrigues(np.array([0.0, np.radians(4.0), 0.0]))[0]
+    rig = StereoRig(RIG.left, RIG.right, R, RIG.T, RIG.thermal, RIG.R_thermal, RIG.T_thermal,
+                    info=dict(RIG.info))
+    rect = rig.rectify()
+    assert np.degrees(np.arccos((np.trace(rect.R1) - 1) / 2)) > 1.5  # (the premise)
+    # a person-sized slab of points 3 m ahead, 0.2 m right, in the left camera's own frame
+    g = np.stack(np.meshgrid(np.linspace(-0.2, 0.2, 9), np.linspace(-0.5, 1.0, 31)), -1)
+    X = np.column_stack([g[..., 0].ravel() + 0.2, g[..., 1].ravel(), np.full(g[..., 0].size, 3.0)])
+    warm = np.zeros(rig.thermal.shape, bool)
+    uv = np.rint(rig.project_thermal(X)).astype(int)
+    warm[uv[:, 1], uv[:, 0]] = True
+    warm = cv2.dilate(warm.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+    Xr = X @ rect.R1.T  # the stereo's frame
+    seg = BodySegment([0, 0, 1, 1], np.ones((1, 1), bool), Xr, 1.2 - Xr[:, 1], 3.0,
+                      float(1.2 - Xr[:, 1].min()), 0.4, Xr.mean(axis=0))
+    det = StereoDetection([HumanCandidate(0, 0, 1.0, seg, accepted=True)], None, None, None,
+                          None)
+    humans, rejected = classify_candidates(det, rig, rect, warm)
+    assert len(humans) == 1 and not rejected
+    assert humans[0].thermal_support > 0.95
+    np.testing.assert_allclose(humans[0].position_m, X.mean(axis=0), atol=1e-9)
+
+
+def test_a_point_outside_a_distorting_thermal_lens_view_is_not_seen():
+    """A 60-deg thermal lens with k1 = -0.35: its radial model r (1 - 0.35 r^2) peaks at
+    r = 1/sqrt(1.05) (44.3 deg off the axis) and folds back beyond, so a point 60 deg off the
+    axis projected to u = 67 of 160, inside the image, and a candidate standing there got
+    thermal support 1.0 from the warm person in the middle of the view. Now it is not seen."""
+    from hearsee.vision.camera import Camera, fold_radius
+
+    assert fold_radius([-0.35, 0, 0, 0]) == pytest.approx(1 / np.sqrt(1.05), abs=2e-3)
+    assert fold_radius([0.1, 0, 0, 0, 0]) == np.inf and fold_radius([]) == np.inf
+    f = 80 / np.tan(np.radians(30))
+    th = Camera(np.array([[f, 0, 79.5], [0, f, 59.5], [0, 0, 1]]), np.array([-0.35, 0, 0, 0]),
+                160, 120)
+    rig = RIG.with_thermal(th, np.eye(3), np.zeros(3))
+    warm = np.zeros(th.shape, bool)
+    warm[:, 55:105] = True  # a warm person in the middle of the thermal view
+    ys = np.linspace(-0.3, 1.0, 60)
+    for ang, want in ((60.0, None), (0.0, 1.0)):
+        pts = np.column_stack([np.full(60, 3 * np.tan(np.radians(ang))), ys, np.full(60, 3.0)])
+        if ang == 60.0:
+            assert th.in_image(th.project(pts)).all()  # (the fold: "inside" the image)
+            assert not th.in_lens_field(pts).any()
+        got = thermal_support(pts, 1.4 - ys, rig, warm)
+        assert np.isnan(got) if want is None else got == want
+
+
 def test_frozen_8bit_thermal_frame_verifies_nobody(scene):
     """A flat (shutter closed / frozen) 8-bit thermal frame used to make every pixel warm, so
     the person, the mannequin and the poster were all accepted; now nobody is verified."""

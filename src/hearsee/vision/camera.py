@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -84,6 +84,7 @@ __all__ = [
     "StereoRig",
     "camera_pose",
     "check_rig",
+    "fold_radius",
     "head_camera_pose",
     "load_camera",
     "load_rig",
@@ -365,6 +366,20 @@ class Camera:
         rays = np.concatenate([xy, np.ones((len(xy), 1))], axis=1)
         return rays / np.linalg.norm(rays, axis=1, keepdims=True)
 
+    def in_lens_field(self, points: ArrayLike) -> NDArray:
+        """Boolean mask ``(N,)`` of points ``(N, 3)`` (this camera's optical frame, metres) in
+        front of the camera whose direction the lens model maps to pixels one to one: normalised
+        radius below :func:`fold_radius` of the distortion. Beyond it the radial polynomial
+        folds back and :meth:`project` (like OpenCV's projectPoints) can put a point far
+        outside the field of view inside the image: a point 60 deg off the axis of a 60-deg
+        lens with k1 = -0.35 landed at u = 67 of 160. Use it with :meth:`in_image` to ask
+        whether the camera sees a point."""
+        P = np.asarray(points, dtype=float).reshape(-1, 3)
+        z = P[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.hypot(P[:, 0], P[:, 1]) / z
+            return (z > 0) & (r < fold_radius(self.dist))
+
     def in_image(self, uv: ArrayLike, margin: float = 0.0) -> NDArray:
         """Boolean mask ``(N,)``: pixel lies inside the image (shrunk by ``margin`` pixels).
         ``uv`` is one pixel ``(2,)`` or ``(N, 2)`` (an ``(N, 3)`` array was silently re-read as
@@ -435,6 +450,31 @@ def _as_pixels(uv: ArrayLike) -> NDArray:
     if p.ndim != 2 or p.shape[1] != 2:
         raise GeometryError(f"pixel coordinates: expected shape (N, 2), got {p.shape}")
     return p
+
+
+def fold_radius(dist: ArrayLike, r_max: float = 5.0) -> float:
+    """The normalised image radius (``sqrt(x^2 + y^2) / z``) up to which OpenCV's radial
+    distortion ``r (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 + k6 r^6)`` keeps
+    increasing: beyond it the model folds back and two directions share a pixel. ``inf`` when it
+    increases up to ``r_max`` (5: 79 deg off the axis). Tangential and thin-prism terms are
+    left out (they are small). Computed on a 0.001 grid, cached per coefficient set."""
+    c = np.zeros(8)
+    d = np.asarray(dist, dtype=float).ravel()[:8]
+    c[: d.size] = d
+    return _fold_radius(tuple(float(v) for v in c), float(r_max))
+
+
+@lru_cache(maxsize=64)
+def _fold_radius(c: tuple[float, ...], r_max: float) -> float:
+    k1, k2, _, _, k3, k4, k5, k6 = c
+    if not any((k1, k2, k3, k4, k5, k6)):
+        return float("inf")
+    r = np.arange(0.0, r_max + 5e-4, 1e-3)
+    r2 = r * r
+    with np.errstate(all="ignore"):
+        rd = r * (1 + k1 * r2 + k2 * r2**2 + k3 * r2**3) / (1 + k4 * r2 + k5 * r2**2 + k6 * r2**3)
+        bad = ~(np.diff(rd) > 0) | ~np.isfinite(rd[1:])
+    return float(r[int(np.argmax(bad))]) if bad.any() else float("inf")
 
 
 def _distort(x: NDArray, y: NDArray, d: NDArray) -> tuple[NDArray, NDArray]:

@@ -160,8 +160,11 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
         P, h = P[idx], h[idx]
     if len(P) == 0:
         return float("nan")
-    uv = rig.project_thermal(P)
-    ok = cam.in_image(uv)
+    P_t = rig.left_to_thermal(P)
+    uv = cam.project(P_t)
+    # (in the image, and where the lens model is one to one: a strongly distorting lens's
+    # polynomial folds points far outside its view back into the image)
+    ok = cam.in_image(uv) & cam.in_lens_field(P_t)
     if ok.sum() < max(min_points, 1):  # (none: no top, no fraction)
         return float("nan")
     uv, h = uv[ok], h[ok]
