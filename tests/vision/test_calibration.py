@@ -406,6 +406,21 @@ def _projected_views(tilt_deg: float, n: int = 8, seed: int = 0) -> tuple[Camera
     return cam, views
 
 
+def test_image_size_given_as_height_width_is_refused():
+    """image_size (480, 640) for a 640x480 camera was accepted: the camera came back 480 px
+    wide with a 33-deg field of view for a 44-deg lens (K itself right). Corners outside the
+    image now refuse it, with the hint when they fit the swapped size."""
+    cam, views = _projected_views(35.0)
+    views = [v + [80.0, 0.0] for v in views]  # (boards right of the centre: u up to ~300)
+    assert max(v[:, 0].max() for v in views) > cam.height + 1
+    obj = C.board_points(PATTERN, SQUARE)
+    with pytest.raises(CalibrationError, match=r"lie outside the 240x320 image .*image_size "
+                       r"is \(width, height\)"):
+        C.calibrate_camera(views, obj, (cam.height, cam.width))
+    with pytest.raises(CalibrationError, match="image_size must be"):
+        C.calibrate_camera(views, obj, (0, 240))
+
+
 def test_boards_parallel_to_each_other_are_refused():
     """Zhang's degenerate case: boards that never tilt (all facing the camera) fit to a
     fraction of a pixel with any focal length -- fx came out 700-3000 px for 300. OpenCV's own

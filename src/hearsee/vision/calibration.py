@@ -278,6 +278,7 @@ def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | S
         raise CalibrationError("image points must be finite real pixel coordinates")
     objs = _per_view(object_points, n)
     imgs = [np.asarray(p, np.float32).reshape(-1, 1, 2) for p in image_points]
+    _check_corners_in_image(imgs, image_size)
     flags = _MODELS[model] | (cv2.CALIB_FIX_ASPECT_RATIO if fix_aspect else 0)
     idx = list(range(n))
 
@@ -313,6 +314,34 @@ def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | S
                             [np.asarray(t).reshape(3) for t in tvecs], idx, rejected, rel_std)
     _check_focal(res, max_focal_rel_std)
     return res
+
+
+def _check_corners_in_image(imgs: list[NDArray], image_size: tuple[int, int]) -> None:
+    """CalibrationError when more than 1 % of the corners lie outside a ``image_size`` =
+    (width, height) image (by more than a pixel): a size given as (height, width) was accepted
+    (17 of 540 corners outside), the camera came back with the wrong size and field of view
+    (33 deg instead of 44) while K looked right. Detected corners are always inside; the 1 %
+    lets a projected (synthetic) set graze the border."""
+    try:
+        w, h = (float(v) for v in image_size)
+    except (TypeError, ValueError):
+        raise CalibrationError(f"image_size must be (width, height) in pixels, got "
+                               f"{image_size!r}") from None
+    if not (w >= 1 and h >= 1):
+        raise CalibrationError(f"image_size must be (width, height) in pixels, got "
+                               f"{image_size!r}")
+    p = np.concatenate([im.reshape(-1, 2) for im in imgs]) if imgs else np.zeros((0, 2))
+
+    def outside(w_: float, h_: float) -> int:
+        return int(np.sum((p[:, 0] < -1.5) | (p[:, 0] > w_ + 0.5)
+                          | (p[:, 1] < -1.5) | (p[:, 1] > h_ + 0.5)))
+
+    bad = outside(w, h)
+    if bad > 0.01 * len(p):
+        hint = (f"; they all fit a {h:g}x{w:g} image: image_size is (width, height)"
+                if outside(h, w) == 0 else "")
+        raise CalibrationError(f"{bad} of {len(p)} corners lie outside the {w:g}x{h:g} image "
+                               f"(image_size = (width, height)){hint}")
 
 
 def _check_focal(calib: CameraCalibration, max_rel_std: float) -> None:
