@@ -553,7 +553,29 @@ def test_a_model_saved_by_an_older_hearsee_transforms_as_a_fresh_fit(cls, missin
     if cls is ClusteredNLE:
         assert old.n_clusters_ == 2
     np.testing.assert_array_equal(old.transform(q), fresh.transform(q))
-    np.testing.assert_array_equal(old.training_data_, X)
+    np.testing.assert_array_equal(old.training_data_, fresh.training_data_)
+    np.testing.assert_allclose(fresh.training_data_ + fresh.offset_, X, rtol=0, atol=1e-12)
+
+
+def test_data_far_from_the_origin_in_many_dimensions():
+    """A swiss roll in 60 dimensions moved by 1e6: scikit-learn's brute-force neighbour search
+    (|x|^2 + |y|^2 - 2 x.y) cancelled nearby distances to 0 and fit refused "6 points that
+    duplicate another point" (the nearest pair is 0.049 apart). Fit centres the data: the
+    embedding, the out-of-sample map and the clusters are those of the unmoved roll."""
+    from sklearn.datasets import make_swiss_roll
+
+    X, _ = make_swiss_roll(800, random_state=0)
+    Q = np.linalg.qr(np.random.default_rng(0).normal(size=(60, 3)))[0]  # (60, 3) orthonormal
+    X60 = X @ Q.T
+    assert np.min(np.linalg.norm(X60[:, None] - X60[None], axis=-1)[np.triu_indices(800, 1)]) > 0.04
+    for cls in (NeighborhoodLinearEmbedding, ClusteredNLE):
+        near, far = cls(random_state=0).fit(X60), cls(random_state=0).fit(X60 + 1e6)
+        # (coordinates span ~50; the eigensolver's answers differ by ~1e-4 of that)
+        np.testing.assert_allclose(far.embedding_, near.embedding_, atol=1e-3)
+        q = X60[:20] + 0.01
+        np.testing.assert_allclose(far.transform(q + 1e6), near.transform(q), atol=1e-3)
+        if cls is ClusteredNLE:
+            np.testing.assert_array_equal(far.predict(q + 1e6), near.predict(q))
 
 
 def test_an_old_model_that_cannot_be_rebuilt_asks_for_a_refit():

@@ -570,9 +570,13 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         Sum of the ``n_components`` eigenvalues used (the LLE cost of the unscaled embedding).
     n_features_in_ : int
     nbrs_ : NearestNeighbors
-        Fitted on the training data; used by :meth:`transform`.
+        Fitted on the (centred) training data; used by :meth:`transform`.
     training_data_ : (n_samples, n_features) array
-        The training points (a reference, not a copy, where X was already float64).
+        The training points less ``offset_`` (centred since 2026-12-02, see
+        :meth:`_centred`; a model saved before has no ``offset_`` and uncentred points).
+    offset_ : (n_features,) array
+        The training points' mean, subtracted from X in fit and from new points in
+        :meth:`transform` (and ClusteredNLE's :meth:`predict`).
 
     Examples
     --------
@@ -805,8 +809,18 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
     def fit(self, X, y=None):
         """Compute the embedding of X (n_samples, n_features). ``y`` is ignored."""
         X = self._validate_fit_input(X)
-        self._fit_embedding(X, check_random_state(self.random_state))
+        offset = X.mean(axis=0)
+        self._fit_embedding(X - offset, check_random_state(self.random_state))
+        self.offset_ = offset
         return self
+
+    def _centred(self, X: np.ndarray) -> np.ndarray:
+        """``X`` less the training data's mean ``offset_``: fit works on centred data (the
+        embedding does not depend on a translation). scikit-learn's brute-force neighbour
+        search (more than 15 features) takes ``|x|^2 + |y|^2 - 2 x.y``, which cancels to 0 for
+        nearby points far from the origin: a swiss roll in 60 dimensions moved by 1e6 had "6
+        points that duplicate another point" (its nearest pair is 0.049 apart)."""
+        return X - getattr(self, "offset_", 0.0)
 
     def fit_transform(self, X, y=None) -> np.ndarray:
         """Fit and return ``embedding_``."""
@@ -842,7 +856,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         """
         check_is_fitted(self, "embedding_")
         self._restore_fitted_state()
-        X = _validated(self, X, reset=False)
+        X = self._centred(_validated(self, X, reset=False))
         ind, W, mask = self._reconstruct(X, self.training_data_, self.nbrs_)
         return np.einsum("nk,nkd->nd", W * mask, self.embedding_[ind])
 
@@ -1035,6 +1049,8 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
     def fit(self, X, y=None):
         """Cluster X by the adaptive neighbourhood graph and embed each cluster."""
         X = self._validate_fit_input(X)
+        offset = X.mean(axis=0)  # (centred, see NeighborhoodLinearEmbedding._centred)
+        X = X - offset
         rs = check_random_state(self.random_state)
         n = X.shape[0]
         # the fitted attributes are set together at the end (see _fit_embedding)
@@ -1074,6 +1090,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         self.embedding_ = Y
         self.n_neighbors_ = counts
         self.reconstruction_error_ = err
+        self.offset_ = offset
         return self
 
     def _cluster_search(self, Xc: np.ndarray) -> NearestNeighbors | None:
@@ -1101,7 +1118,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
     def predict(self, X) -> np.ndarray:
         """Cluster of new points: that of their nearest training point."""
         check_is_fitted(self, "labels_")
-        X = _validated(self, X, reset=False)
+        X = self._centred(_validated(self, X, reset=False))
         _, ind = self.nbrs_.kneighbors(X, n_neighbors=1)
         return self.labels_[ind[:, 0]]
 
@@ -1119,7 +1136,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         """
         check_is_fitted(self, "embedding_")
         self._restore_fitted_state()
-        X = _validated(self, X, reset=False)
+        X = self._centred(_validated(self, X, reset=False))
         _, near = self.nbrs_.kneighbors(X, n_neighbors=1)
         lab = self.labels_[near[:, 0]]
         Y = np.zeros((X.shape[0], self.n_components))
