@@ -464,6 +464,20 @@ def test_make_head_pose_images_shapes():
     assert np.all(np.abs(pose[:, 0]) <= 10.0)
 
 
+def test_head_pose_directions_are_those_documented():
+    """Noise-free 64-px faces: the nose (the brightest pixel) moves to the image right for a
+    positive yaw and down for a positive pitch (the face looks down; the docstring said up)."""
+    def nose(yaw, pitch):
+        img = make_head_pose_images(1, size=64, yaw_range_deg=(yaw, yaw),
+                                    pitch_range_deg=(pitch, pitch), noise=0.0,
+                                    random_state=0)[0][0].reshape(64, 64)
+        return np.unravel_index(np.argmax(img), img.shape)  # (row: down, column: right)
+
+    r0, c0 = nose(0, 0)
+    assert nose(40, 0)[1] > c0 + 8 and nose(-40, 0)[1] < c0 - 8
+    assert nose(0, 30)[0] > r0 + 8 and nose(0, -30)[0] < r0 - 8
+
+
 # --------------------------------------------------------------------------- state
 
 

@@ -1299,7 +1299,8 @@ def make_head_pose_images(
         Image side in pixels.
     yaw_range_deg, pitch_range_deg : (float, float)
         Head rotation about the vertical axis (positive: the face turns towards the image right) and
-        about the horizontal axis (positive: the face looks up), degrees.
+        about the horizontal axis (positive: the face looks down, its nose lower in the image;
+        said "up" until 2026-12-02, the images did not change), degrees.
     noise : float
         Standard deviation of additive Gaussian pixel noise (intensities are in [0, 1]).
     random_state : int, RandomState or None
