@@ -18,9 +18,12 @@ the same sensor-noise seed are recorded
 
 Front/back is "correct" unless the estimate is closer to the mirror image ``180 - az`` than to
 the true azimuth and more than 10 deg from the truth (a front/back confusion); a trial without
-an estimate counts as a front/back error with a 180-deg azimuth error. Reported per
-signal (white noise, synthetic male and female voices), field and SNR: front/back correct rate,
-360-degree azimuth RMSE, median absolute error, mean front/back confidence, and for mask2 the
+an estimate counts as a front/back error with a 180-deg azimuth error -- for the masks since
+2026-12-02 also a recording in which the GCC-PHAT detection every array's summary uses finds no
+source (``MaskLocalization.detected``; before, the masks always answered). Reported per
+signal (white noise, synthetic male and female voices), field and SNR: the masks' detected
+share, front/back correct rate, 360-degree azimuth RMSE, median absolute error, mean
+front/back confidence of the detected recordings, and for mask2 the
 RMSE of the sources more than 3 deg off the median plane (diagnostic: at 0 / 180 deg a
 left/right symmetric mask has ITD = IID = 0 for the source and its mirror alike). The design
 measure :func:`hearsee.audio.mask.front_back_margin` (the classifier's noiseless cost of the
@@ -149,13 +152,18 @@ def run(trials: int, snrs: list[float], duration: float, seed: int, mismatch: bo
                         t0 = time.process_time()
                         est = localize_mask(x, FS, model)
                         cpu[k] += time.process_time() - t0
-                        res.setdefault(k, []).append(est.azimuth_deg)
-                        res.setdefault(f"{k}_conf", []).append(est.confidence)
+                        # (no source detected: no answer, as the bare pair's document)
+                        res.setdefault(k, []).append(est.azimuth_deg if est.detected
+                                                     else np.nan)
+                        res.setdefault(f"{k}_conf", []).append(est.confidence if est.detected
+                                                               else np.nan)
+                        res.setdefault(f"{k}_det", []).append(est.detected)
                         if k in perts:
                             xm = simulate_masked(sig, FS, perts[k], src, snr, nseed,
                                                  far_field=far)
+                            em = localize_mask(xm, FS, model)
                             res.setdefault(f"{k}_mis", []).append(
-                                localize_mask(xm, FS, model).azimuth_deg)
+                                em.azimuth_deg if em.detected else np.nan)
                     xb = simulate_free_field(sig, FS, bare, src, snr, nseed, far_field=far)
                     doc = localize_recording(xb, FS, bare, kalman=False)
                     a = doc["summary"]["azimuth_deg"]
@@ -164,14 +172,20 @@ def run(trials: int, snrs: list[float], duration: float, seed: int, mismatch: bo
                 row = {"signal": kind, "field": fld, "snr": snr, "n": trials}
                 for k in models:
                     row[f"{k}_cpu_ms"] = 1000 * cpu[k] / trials / duration
-                    row[f"{k}_conf"] = float(np.mean(res[f"{k}_conf"]))
+                    c = np.array(res[f"{k}_conf"], float)
+                    row[f"{k}_conf"] = float(np.nanmean(c)) if np.isfinite(c).any() else np.nan
+                    row[f"{k}_det"] = 100.0 * float(np.mean(res[f"{k}_det"]))
                 for name in [*models, *(f"{k}_mis" for k in perts), "bare"]:
                     row[f"{name}_fb"], row[f"{name}_rmse"], row[f"{name}_med"] = _stats(
                         res[name], true)
                 # diagnostic: the median plane (within 3 deg of 0 / 180 deg) is where the left/right
                 # symmetric mask2 cannot tell front from back (ITD = IID = 0 for both)
                 off = np.abs(np.sin(np.radians(true))) > np.sin(np.radians(3.0))
-                e = np.abs(angdiff(np.array(res.get("mask2", true)), true))[off]
+                est2 = np.array(res.get("mask2", true), float)
+                e = np.full(len(true), 180.0)  # (no answer: 180 deg, as in _stats)
+                ok2 = np.isfinite(est2)
+                e[ok2] = np.abs(angdiff(est2[ok2], true[ok2]))
+                e = e[off]
                 row["mask2_rmse_off"] = float(np.sqrt(np.mean(e**2))) if len(e) else np.nan
                 rows.append(row)
                 print(f"{kind:6s} {fld:4s} {snr:4.0f} dB  " + "  ".join(
@@ -254,7 +268,8 @@ def main(argv: list[str] | None = None) -> None:
     rows, models = run(trials, snrs, a.duration, a.seed, mis)
     headers = ["signal", "field", "SNR dB", "n"]
     for k, preset in DESIGNS:
-        headers += [f"{preset} F/B %", f"{preset} RMSE", f"{preset} median", f"{preset} conf"]
+        headers += [f"{preset} detected %", f"{preset} F/B %", f"{preset} RMSE",
+                    f"{preset} median", f"{preset} conf"]
         if k == "mask2":
             headers += ["mask2 RMSE off median plane"]
         if mis:
@@ -265,7 +280,8 @@ def main(argv: list[str] | None = None) -> None:
     for r in rows:
         line = [r["signal"], r["field"], r["snr"], r["n"]]
         for k, _ in DESIGNS:
-            line += [r[f"{k}_fb"], r[f"{k}_rmse"], r[f"{k}_med"], r[f"{k}_conf"]]
+            line += [r[f"{k}_det"], r[f"{k}_fb"], r[f"{k}_rmse"], r[f"{k}_med"],
+                     r[f"{k}_conf"]]
             if k == "mask2":
                 line += [r["mask2_rmse_off"]]
             if mis:
