@@ -740,7 +740,13 @@ class MaskLocalization:
     """A 360-degree azimuth from a masked two-microphone recording.
 
     ``azimuth_deg`` in [0, 360) (0 front, 90 left); ``runner_up_deg``: the best candidate in the
-    other half (front/back mirror); ``front_probability``: P(source in front, |az| < 90);
+    other half (front/back mirror); ``front_probability``: P(source in front, |az| < 90), the
+    logistic of the two halves' best-cost difference (a score, not a fitted probability: on
+    two sets of 849 and 829 detected recordings of 1 s -- mask2 and mask2-asym, white noise
+    and voices at -5 to 20 dB, random azimuths, far and near field -- those with confidence
+    >= 0.99 had the right half 97.4 and 98.8 % of the time, and at 0 dB a mean confidence of
+    0.97-0.99 came with 89-94 % right; a temperature fitted on the first set halved the log
+    loss on the second but doubled its calibration error, 0.020 -> 0.041: none is applied);
     ``confidence``: probability of the chosen half; ``itd_s``: GCC-PHAT t_0 - t_1 (s);
     ``iid_db``: measured band IIDs (dB, E_0/E_1); ``band_edges_hz``; ``distance_m``: the best
     fitting response table (None = far field); ``detected``: whether the recording holds a
