@@ -336,6 +336,12 @@ def test_no_source_is_not_reported_as_one(model):
                              rng=2, far_field=True)
     est = mask.localize_mask(x, FS, model)
     assert est.detected and abs(est.azimuth_deg - 130) < 5
+    # a recording shorter than the detection's 64 ms frame is tested with localize_mask's own
+    # (its first version raised "recording too short" for 40 ms, which localize_mask takes)
+    short = mask.simulate_masked(white_noise(0.04, FS, rng=9), FS, model, _src(130), snr_db=20,
+                                 rng=2, far_field=True)
+    est = mask.localize_mask(short, FS, model)
+    assert est.detected and abs(est.azimuth_deg - 130) < 5
 
 
 def test_cli_simulate_and_localize_masked(model, tmp_path, capsys):
