@@ -937,7 +937,9 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         src = (s0 + s1)[None] / np.maximum(g0 + g1, 1e-12)
         with np.errstate(divide="ignore", invalid="ignore"):
             iid_t = 10 * np.log10((src * g0) @ onehot.T / ((src * g1) @ onehot.T))
-        chi = np.nansum(((iid_meas[None] - iid_t) ** 2 / (2 * var_b))[:, valid_b], axis=1)
+        # (only the valid bands: a constant recording's invalid ones divided 0 by 0)
+        chi = np.nansum((iid_meas[valid_b][None] - iid_t[:, valid_b]) ** 2
+                        / (2 * var_b[valid_b]), axis=1)
         cost = phase_weight * (1.0 - rho) + chi
         if best is None or cost.min() < best[0].min():
             best = (cost, dist, az)
