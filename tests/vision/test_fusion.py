@@ -198,6 +198,10 @@ def test_a_point_outside_a_distorting_thermal_lens_view_is_not_seen():
             assert not th.in_lens_field(pts).any()
         got = thermal_support(pts, 1.4 - ys, rig, warm)
         assert np.isnan(got) if want is None else got == want
+    with pytest.raises(GeometryError, match=r"shape \(N, 3\)"):
+        th.in_lens_field(np.ones((5, 2)))
+    with pytest.raises(GeometryError, match="numbers"):
+        th.in_lens_field("1, 2, 3")
 
 
 def test_frozen_8bit_thermal_frame_verifies_nobody(scene):

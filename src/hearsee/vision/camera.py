@@ -374,7 +374,13 @@ class Camera:
         outside the field of view inside the image: a point 60 deg off the axis of a 60-deg
         lens with k1 = -0.35 landed at u = 67 of 160. Use it with :meth:`in_image` to ask
         whether the camera sees a point."""
-        P = np.asarray(points, dtype=float).reshape(-1, 3)
+        if not real_entries(points):
+            raise GeometryError(f"in_lens_field: expected points as numbers (metres), got "
+                                f"{points!r:.80}")
+        P = np.asarray(points, dtype=float)
+        P = P[None, :] if P.ndim == 1 else P
+        if P.ndim != 2 or P.shape[1] != 3:
+            raise GeometryError(f"in_lens_field: expected points of shape (N, 3), got {P.shape}")
         z = P[:, 2]
         with np.errstate(divide="ignore", invalid="ignore"):
             r = np.hypot(P[:, 0], P[:, 1]) / z
