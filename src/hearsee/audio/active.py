@@ -1111,8 +1111,21 @@ def align_head(
         # direction candidates that differ in direction (the mirror)
         dirs = [(c["azimuth_deg"], c["elevation_deg"]) for c in est.candidates]
         ambiguous = len(dirs) > 1
+        below = None
         if ambiguous:
-            az, el = max(dirs, key=lambda d: d[1])  # the upper mirror candidate first
+            # the upper mirror candidate first -- unless the head has been there already: a
+            # capture at a pose already held adds nothing (a near-field minimum at the pose
+            # just probed held the head there for every remaining move: 6 and 17 of 30 noisy
+            # alignments to a source straight ahead at 2 and 1 m ended 23-26 deg off)
+            def held(d: tuple[float, float]) -> bool:
+                g = HeadPose(float(d[0]), float(np.clip(d[1], lo_t, hi_t))).gaze
+                return any(np.degrees(angle_between(g, p.gaze)) < tol_deg for p in poses)
+
+            order = sorted(dirs, key=lambda d: -d[1])
+            az, el = next((d for d in order if not held(d)), order[0])
+            # every candidate's pose captured and still two candidates (a near-field minimum
+            # beside the source): look from below the lowest, a view that tells them apart
+            below = None if any(not held(d) for d in order) else order[-1]
         elif est.position_m is not None:
             az, el = _aim_at(est.position_m, pivot_m, offset_m)
         else:
@@ -1129,6 +1142,8 @@ def align_head(
                     az, el = _aim_at(near.position_m, pivot_m, offset_m)
         ests.append((float(az), float(el)))
         target = HeadPose(float(az), float(np.clip(el, lo_t, hi_t)))
+        if ambiguous and below is not None:
+            target = HeadPose(float(below[0]), float(np.clip(below[1] - probe_deg, lo_t, hi_t)))
         tilts = [p.tilt_deg for p in poses]
         uncertain = ambiguous or not est.direction_std_deg <= max_std_deg
         pan_only = max(tilts) - min(tilts) < probe_deg / 2
@@ -1254,6 +1269,15 @@ def align_head_search(
         if abs(d_pan) >= 3.0:
             new_tilt = pose.tilt_deg  # settle the pan first (tilt samples need a fixed pan)
         target = HeadPose(pose.pan_deg + d_pan, new_tilt)
+        if (len(poses) >= 2 and abs(d_pan) > 90.0 and poses[-1].tilt_deg > poses[-2].tilt_deg
+                and abs(poses[-1].pan_deg - poses[-2].pan_deg) < 3.0):
+            # the upward tilt try put the source behind the head (it is more than 45 deg below
+            # the gaze: tilting up by its elevation's size turned it ~2x that away): not a pan
+            # error but the wrong tilt sign -- back, and down. Read as a 180-deg pan error, the
+            # head spun 3.5 turns without tilting (every source 46-60 deg below a level start)
+            p0 = poses[-2]
+            target = HeadPose(p0.pan_deg, float(np.clip(
+                p0.tilt_deg - max(_acos_deg(gs[-2]), probe_deg), lo_t, hi_t)))
         ests.append((target.pan_deg, target.tilt_deg))
         if abs(d_pan) < tol_deg and abs(new_tilt - pose.tilt_deg) < tol_deg:
             converged = True
