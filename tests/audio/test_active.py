@@ -723,3 +723,20 @@ def test_thesis_search_finds_a_source_far_below_a_level_start():
         res = align_head_search(measure, ARR)
         assert res.converged and res.error_deg(src) < 1.5, (az, el)
         assert abs(res.final_pose.pan_deg - az) < 360.0
+
+
+def test_infinite_tdoa_and_a_second_speed_of_sound_are_refused():
+    """An infinite TDOA was dropped as if the pair had not been measured (only NaN means
+    that); a speed_of_sound keyword raised Python's "multiple values" TypeError."""
+    src = np.array([1.0, 0.5, 0.3])
+    poses = [(0, 0), (40, 20), (-40, -15)]
+    taus = true_tdoas(ARR, src, poses)
+    taus[1] = taus[1].copy()
+    taus[1][0] = np.inf
+    with pytest.raises(EstimationError, match=r"pose 1: TDOA of pair \(0, 1\) is inf"):
+        localize_multipose(taus, poses, ARR, offset_m=OFF)
+    taus[1][0] = np.nan  # not measured: fine
+    assert localize_multipose(taus, poses, ARR, offset_m=OFF).position_m is not None
+    with pytest.raises(ConfigError, match="speed of sound from the array"):
+        localize_multipose(true_tdoas(ARR, src, poses), poses, ARR, offset_m=OFF,
+                           speed_of_sound=340.0)

@@ -73,6 +73,7 @@ from hearsee.audio.signals import as_samples
 from hearsee.config import as_float_array, finite_number, is_real, same_file, whole_number
 from hearsee.errors import (
     AudioInputError,
+    ConfigError,
     EstimationError,
     GeometryError,
     InconsistentMeasurementWarning,
@@ -264,6 +265,9 @@ def _stack(mic_sets: Sequence[ArrayLike], pairs: Sequence[Sequence[tuple[int, in
         for (i, j), v in zip(prs, t, strict=True):
             if not (0 <= i < len(m) and 0 <= j < len(m)) or i == j:
                 raise GeometryError(f"pose {k}: invalid pair ({i}, {j}) for {len(m)} microphones")
+            if np.isinf(v):  # (NaN is "not measured"; an infinite one was dropped silently)
+                raise EstimationError(f"pose {k}: TDOA of pair ({i}, {j}) is {v}; give NaN "
+                                      "for a pair that was not measured")
             if np.isfinite(v):
                 a_idx.append(base + i)
                 b_idx.append(base + j)
@@ -586,6 +590,9 @@ def localize_multipose(
     if len(t) != len(poses):
         raise GeometryError(f"{len(t)} TDOA vectors for {len(poses)} poses")
     mic_sets = pose_mic_positions(arr, poses, pivot_m, offset_m)
+    if "speed_of_sound" in kwargs:  # (a builtin "multiple values" TypeError)
+        raise ConfigError("localize_multipose takes the speed of sound from the array "
+                          "(its speed_of_sound); do not pass it")
     kwargs.setdefault("reference_m", np.asarray(pivot_m, dtype=float))
     if len(poses) == 1:
         kwargs["resolve_distance"] = False
