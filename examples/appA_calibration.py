@@ -1,5 +1,5 @@
 """Thesis appendix A regenerated: Zhang calibration of a real stereo rig from chessboard images
-(figs. 8.1-8.2, table 8.1), compared with an independent reference calibration.
+(figs. A.1-A.2, table A.1), compared with an independent reference calibration.
 
     python examples/appA_calibration.py [--data ../shared/data] [--square 0.025] [--figure out.png]
 
@@ -195,10 +195,14 @@ def main() -> None:
     data = Path(args.data) if args.data else Path(__file__).resolve().parents[1].parent / \
         "shared" / "data"
     cv2.setNumThreads(1)
-    if (data / "vision" / "chessboard_stereo" / "left01.jpg").is_file():
+    d = data / "vision" / "chessboard_stereo"
+    need = [d / "left01.jpg", d / "reference_intrinsics.yml", d / "reference_extrinsics.yml"]
+    if all(f.is_file() for f in need):
         real(data, args.square, args.figure)
     else:
-        print(f"{data}/vision/chessboard_stereo not found: running on synthetic boards")
+        missing = next(f for f in need if not f.is_file())
+        print(f"{missing} not found: running on synthetic boards"
+              + (f" (no figure: {args.figure} needs the real images)" if args.figure else ""))
     synthetic()
 
 

@@ -5,8 +5,9 @@ branches); turning the head gives new curves that meet at the source. Turning on
 (pan) keeps the up/down mirror of a horizontal array, so the solver reports two candidates;
 turning in elevation (tilt) or both makes the point unique.
 
-Fig. 4.13: position error vs the ratio of source distance to array size (TDOA noise 5 us, three
-poses turning in both angles, array 10 cm in front of and 5 cm above the pivot).
+Fig. 4.13: position error vs the ratio of source distance to array size (TDOA noise 5 us, five
+poses turning in both angles -- fig. 4.8's three and two more -- array 10 cm in front of and
+5 cm above the pivot).
 
 Run: ``python examples/ch4_active.py [--out DIR]`` -> ch4_fig4_6-8.png, ch4_fig4_13.png (default
 folder examples/out)

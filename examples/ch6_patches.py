@@ -4,7 +4,8 @@ feature clustering with NLE / CNLE.
     python examples/ch6_patches.py [--out DIR]      # default examples/out/
 
 * Fig. 6.11: 2000 contrast-normalised 8 x 8 patches of ``skimage.data.camera()`` (the most
-  textured ones), embedded by NLE and shown as thumbnails at their coordinates.
+  textured ones; duplicates removed, ~1850 remain), embedded by NLE and shown as thumbnails
+  at their coordinates.
 * Fig. 6.12 / table 6.1: 9 x 9 patches of three kinds of image feature -- step edges (any
   orientation and offset), thin bars (any orientation and offset) and blobs (any position) --
   each kind a 2-D manifold in pixel space. CNLE's clusters vs the feature kind, next to k-means

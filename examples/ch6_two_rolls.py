@@ -6,7 +6,7 @@ Two swiss-roll sheets wound together, one six times denser than the other
 (``hearsee.learn.make_two_rolls``, 2000 points, noise 0.1,
 2 % outliers between the sheets). Writes ``ch6_two_rolls_data.png`` (fig. 6.7),
 ``ch6_two_rolls_embeddings.png`` (LLE and NLE mix the sheets, fig. 6.8; CNLE separates them and
-unrolls each, fig. 6.9) and ``ch6_two_rolls_sweep.png`` (k-means ARI of LLE for every K from 5 to
+unrolls each, fig. 6.9) and ``ch6_two_rolls_sweep.png`` (k-means ARI of LLE for K = 5, 10, ... up to
 30 vs CNLE's clusters).
 """
 

@@ -33,6 +33,7 @@ def main(out: Path) -> None:
         room={"room_dim": [6.0, 5.0, 3.0], "rt60": 0.3, "array_at": [3.0, 2.5, 1.5]},
         seed=0,
     )
+    Path(out).parent.mkdir(parents=True, exist_ok=True)  # (as every other example's --out)
     wav, js = save_recording(out, x, truth, subtype="PCM_16")
     print(f"wrote {wav} ({wav.stat().st_size / 1000:.0f} kB) and {js}")
     print(f"truth: azimuth {truth['azimuth_deg']:.1f} deg, elevation "
