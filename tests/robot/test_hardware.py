@@ -1713,3 +1713,23 @@ def test_a_detector_slower_than_the_track_timeout_keeps_the_track(tmp_path, monk
     # the walker's velocity: 0.5 m/s straight away from the robot (robot frame, floor)
     v_true = 0.5 * xy_at(1.0) / np.linalg.norm(xy_at(1.0))
     assert np.linalg.norm(np.array(last["velocity_mps"][:2]) - v_true) < 0.25
+
+
+def test_a_missing_camera_is_one_line_without_opencv_warnings(capfd):
+    """A camera index with no device behind it: hearsee's one-line error, and nothing of
+    OpenCV's own on stderr (its V4L2 and FFMPEG backends printed two "[ WARN ]" lines first,
+    against the one-line promise of `hearsee run --dry-run` and `hearsee track --camera`)."""
+    import cv2.utils.logging as cv_log
+
+    from hearsee.errors import ImageInputError
+    from hearsee.robot.hardware import open_capture
+    from hearsee.stream.video import VideoImagePoints
+
+    level = cv_log.getLogLevel()
+    with pytest.raises(ConfigError, match="cameras.left: cannot open camera 57"):
+        open_capture(57, "cameras.left")
+    with pytest.raises(ImageInputError, match="camera 57: cannot be opened"):
+        VideoImagePoints(57)
+    err = capfd.readouterr().err
+    assert "WARN" not in err and err == ""
+    assert cv_log.getLogLevel() == level  # (OpenCV's log level restored afterwards)

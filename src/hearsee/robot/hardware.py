@@ -479,9 +479,9 @@ def load_robot_config(path: str | Path) -> RobotConfig:
 # ---------------------------------------------------------------------------------------------
 def open_capture(spec: DeviceSpec, where: str) -> Any:
     """``cv2.VideoCapture(spec)``, opened, or ConfigError naming ``where``."""
-    import cv2
+    from hearsee.vision.io import video_capture
 
-    cap = cv2.VideoCapture(spec)
+    cap = video_capture(spec)
     if not cap.isOpened():
         cap.release()
         raise ConfigError(f"{where}: cannot open camera {spec!r} (check the index, path or URL "

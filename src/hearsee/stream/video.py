@@ -333,6 +333,8 @@ class VideoImagePoints:
                  expected_size: tuple[int, int] | None = None, where: str = "video file") -> None:
         import cv2
 
+        from hearsee.vision.io import video_capture
+
         if detector not in ("hog", "face"):
             raise ConfigError(f"unknown detector {detector!r} (choose hog or face)")
         if fps is not None:  # (inf gave no image point ever; NaN/negative: 'pass fps=')
@@ -343,7 +345,7 @@ class VideoImagePoints:
         else:
             input_file(source, "video file")
         what = f"camera {source}" if self.live else f"{source}"
-        cap = cv2.VideoCapture(int(source) if self.live else str(source))
+        cap = video_capture(int(source) if self.live else str(source))
         if not cap.isOpened():
             raise ImageInputError(f"{what}: cannot be opened as a video (OpenCV VideoCapture)")
         size = (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))

@@ -28,6 +28,7 @@ __all__ = [
     "read_pair",
     "read_thermal",
     "to_gray",
+    "video_capture",
     "write_image",
 ]
 
@@ -38,6 +39,21 @@ _IMREAD = {
     "bgr": cv2.IMREAD_COLOR,
     "unchanged": cv2.IMREAD_UNCHANGED,
 }
+
+
+def video_capture(source: int | str) -> cv2.VideoCapture:
+    """``cv2.VideoCapture(source)`` (a camera index, a file, a URL) with OpenCV's own log
+    silenced to errors while it opens: a camera that is not there printed two ``[ WARN ]``
+    lines of its backends (V4L2, FFMPEG) on stderr before hearsee's one-line message. The
+    caller checks ``isOpened()``."""
+    import cv2.utils.logging as cv_log
+
+    level = cv_log.getLogLevel()
+    cv_log.setLogLevel(cv_log.LOG_LEVEL_ERROR)
+    try:
+        return cv2.VideoCapture(source)
+    finally:
+        cv_log.setLogLevel(level)
 
 
 def numeric_map(name: str, value: ArrayLike, dtype: type | None = np.float64, *,
