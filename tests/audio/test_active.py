@@ -153,6 +153,16 @@ def test_bad_inputs():
         localize_multipose([np.zeros(3)], [(0, 0)], ARR, tdoa_std_s=0.0)
     with pytest.raises(EstimationError):
         PoseItdMLP().predict(np.zeros((1, 9)))
+    # scikit-learn's ValueErrors: a training position at the reference point (log 0), a NaN
+    # position, a NaN TDOA to predict from (helper audit)
+    rng = np.random.default_rng(0)
+    X, Y = rng.normal(0, 1e-4, (40, 9)), rng.uniform(-2, 2, (40, 3))
+    for bad_y in (np.vstack([Y[:-1], [0.0, 0.0, 0.0]]), np.vstack([Y[:-1], [np.nan, 0, 1]])):
+        with pytest.raises(EstimationError, match="PoseItdMLP.fit"):
+            PoseItdMLP(max_iter=5).fit(X, bad_y)
+    mlp = PoseItdMLP(max_iter=5).fit(X, Y)
+    with pytest.raises(EstimationError, match="finite TDOAs"):
+        mlp.predict(np.full((1, 9), np.nan))
     with pytest.raises(AudioInputError):
         align_head(lambda pose: np.zeros(2), ARR)
 

@@ -830,10 +830,14 @@ class PoseItdMLP:
 
         X = np.asarray(X, dtype=float)
         Y = np.asarray(Y, dtype=float)
-        if X.ndim != 2 or Y.shape != (len(X), 3) or not np.all(np.isfinite(X)):
+        if (X.ndim != 2 or Y.shape != (len(X), 3) or not np.all(np.isfinite(X))
+                or not np.all(np.isfinite(Y))):
             raise EstimationError("PoseItdMLP.fit needs finite X (n, n_features) and Y (n, 3)")
         v = Y - np.asarray(self.reference_m, dtype=float)
         r = np.linalg.norm(v, axis=1)
+        if not np.all(r > 0):  # (direction and log-distance targets: scikit-learn's ValueError)
+            raise EstimationError(f"PoseItdMLP.fit: {int(np.sum(~(r > 0)))} training positions "
+                                  "lie at the reference point (no direction, log(0) distance)")
         T = np.column_stack([v / r[:, None], np.log(r)])
         self.target_mean_ = T.mean(axis=0)
         self.target_std_ = T.std(axis=0) + 1e-12
@@ -852,11 +856,14 @@ class PoseItdMLP:
         if not hasattr(self, "mlp_"):
             raise EstimationError("PoseItdMLP is not fitted; call fit() first")
         X = np.atleast_2d(np.asarray(X, dtype=float))
-        if X.shape[1] != self.n_features_in_:
+        if X.ndim != 2 or X.shape[1] != self.n_features_in_:
             raise EstimationError(
                 f"expected {self.n_features_in_} TDOAs per sample (K poses x pairs), "
-                f"got {X.shape[1]}"
+                f"got shape {X.shape}"
             )
+        if not np.all(np.isfinite(X)):  # (scikit-learn's ValueError)
+            raise EstimationError("PoseItdMLP.predict needs finite TDOAs (a NaN or inf one "
+                                  "was given: the MLP needs every pose's pairs)")
         from threadpoolctl import threadpool_limits
 
         with threadpool_limits(1):
