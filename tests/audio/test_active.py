@@ -538,24 +538,28 @@ def test_thesis_search_alignment_far_source():
         align_head_search(lambda p: np.zeros(1), load_array("two-mic"))
 
 
+def _search_a_random_source(rng, el_lo: float, el_hi: float):
+    """A source at a random azimuth, an elevation in [el_lo, el_hi] deg and 1-4 m from the
+    pivot (built here from the angles), and the thesis search's alignment to it from exact
+    TDOAs, level start: ``(az, el, source, result)``."""
+    from hearsee.audio.active import align_head_search
+
+    az, el, r = rng.uniform(-180, 180), rng.uniform(el_lo, el_hi), rng.uniform(1.0, 4.0)
+    src = r * np.array([np.cos(np.radians(el)) * np.cos(np.radians(az)),
+                        np.cos(np.radians(el)) * np.sin(np.radians(az)),
+                        np.sin(np.radians(el))])
+    res = align_head_search(lambda pose: MicArray(mic_positions_at(ARR, pose)).tdoa(src), ARR)
+    return az, el, src, res
+
+
 def test_thesis_search_alignment_nearby_sources():
     """Sources 1-4 m away: the curved wavefront puts |u_xy| a little above 1 at every tilt
     near the right one; clipped at 1 those samples tied and the search stopped up to ~5 deg
     off while saying it had converged. Exact TDOAs, random sources."""
-    from hearsee.audio.active import align_head_search
-
     rng = np.random.default_rng(12)
     errs = []
     for _ in range(20):
-        az, el, r = rng.uniform(-180, 180), rng.uniform(-30, 40), rng.uniform(1.0, 4.0)
-        src = r * np.array([np.cos(np.radians(el)) * np.cos(np.radians(az)),
-                            np.cos(np.radians(el)) * np.sin(np.radians(az)),
-                            np.sin(np.radians(el))])
-
-        def measure(pose, src=src):
-            return MicArray(mic_positions_at(ARR, pose)).tdoa(src)
-
-        res = align_head_search(measure, ARR)
+        _, _, src, res = _search_a_random_source(rng, -30.0, 40.0)
         errs.append(res.error_deg(src))
     assert max(errs) < 1.0 and np.median(errs) < 0.3
 
@@ -718,19 +722,9 @@ def test_thesis_search_finds_a_source_far_below_a_level_start():
     try (upward, by the elevation's size) puts such a source behind the head, which read as a
     180-deg pan error -- the head spun 3.5 turns without tilting, 0 of 60 converged. Now a
     tilt try that turns the source behind goes back and down."""
-    from hearsee.audio.active import align_head_search
-
     rng = np.random.default_rng(7)
     for _ in range(12):
-        az, el, r = rng.uniform(-180, 180), rng.uniform(-60, -46), rng.uniform(1.0, 4.0)
-        src = r * np.array([np.cos(np.radians(el)) * np.cos(np.radians(az)),
-                            np.cos(np.radians(el)) * np.sin(np.radians(az)),
-                            np.sin(np.radians(el))])
-
-        def measure(pose, src=src):
-            return MicArray(mic_positions_at(ARR, pose)).tdoa(src)
-
-        res = align_head_search(measure, ARR)
+        az, el, src, res = _search_a_random_source(rng, -60.0, -46.0)
         assert res.converged and res.error_deg(src) < 1.5, (az, el)
         assert abs(res.final_pose.pan_deg - az) < 360.0
 
