@@ -61,9 +61,12 @@ def fig_2_3(out: Path) -> Path:
             ax2.plot(cone[:, k, 0], cone[:, k, 1], color=col, lw=1, ls="--")
         ax2.annotate(f"{tau * 1e6:+.0f} us", h[-1, k0, :2], fontsize=8, color=col)
     ax2.plot(*arr.positions[:, :2].T, "ko")
+    ax2.plot([], [], color="grey", lw=2, label="hyperbola (exact, near field)")
+    ax2.plot([], [], color="grey", lw=1, ls="--", label="cone line (far-field asymptote)")
+    ax2.legend(fontsize=8, loc="upper center")  # (between the branches: nothing there)
     ax2.set(xlabel="x [m] (forward)", ylabel="y [m] (left)", aspect="equal",
-            title="Horizontal plane: hyperbolas (near field) and\ncone lines (far field); "
-            "front/back mirror about the y axis")
+            title="Horizontal plane: hyperbolas and their far-field\ncone lines (apart only "
+            "near the pair); front/back mirror about the y axis")
     ax2.grid(alpha=0.3)
     fig.tight_layout()
     path = out / "fig2_3_hyperboloids.png"
@@ -132,7 +135,8 @@ def table_2_1(out: Path, fs: float) -> tuple[Path, Path]:
         ax.set(xlabel="ITD [samples]", ylabel="density over uniform azimuths",
                title=f"{name} pair {pair[0]}-{pair[1]}: ITD distribution "
                f"(fs = {fs / 1000:g} kHz)")
-        for v in range(int(np.floor(itd.min())), int(np.ceil(itd.max())) + 1):
+        # (the boundaries between integer delays, on both sides of the extreme ones)
+        for v in range(int(np.floor(itd.min())) - 1, int(np.ceil(itd.max())) + 1):
             ax.axvline(v + 0.5, color="k", lw=0.3)
         ax.grid(alpha=0.3)
     fig.tight_layout()
