@@ -120,6 +120,8 @@ def fig_waveforms(m: MaskModel, out: Path) -> None:
         a.legend(fontsize=7)
     ax[1, 0].set_xlabel("time (ms)")
     ax[1, 1].set_xlabel("time (ms)")
+    for a in ax.ravel():
+        a.set_ylabel("pressure (a.u.)")  # (simulated, relative to the free-field source)
     fig.tight_layout()
     fig.savefig(out / "fig3_06-08_waveforms.png", dpi=110)
     plt.close(fig)
@@ -138,6 +140,7 @@ def fig_itd_iid_derivation(m: MaskModel, out: Path) -> None:
     ax.plot(1e3 * lags / FS, cc / cc.max())
     ax.axvline(1e3 * itd, color="k", ls=":")
     ax.set_xlabel("lag t_0 - t_1 (ms)")
+    ax.set_ylabel("cross-correlation (normalised)")
     ax.set_title(f"alpha = 30 deg: ITD = {itd * 1e6:.0f} us, IID = {iid:.1f} dB (fig. 3.9)")
     fig.tight_layout()
     fig.savefig(out / "fig3_09_itd_iid.png", dpi=110)
@@ -213,7 +216,8 @@ def fig_estimation(m: MaskModel, out: Path) -> None:
     ax.semilogy(az, est.score - est.score.min() + 1e-2)
     ax.axvline(150, color="k", ls=":", label="true 150 deg")
     ax.axvline(est.azimuth_deg, color="C1", ls="--", label=f"estimate {est.azimuth_deg:.1f}")
-    ax.axvline(est.runner_up_deg, color="C2", ls="--", label=f"ITD mirror {est.runner_up_deg:.0f}")
+    ax.axvline(est.runner_up_deg, color="C2", ls="--",
+               label=f"runner-up (other half) {est.runner_up_deg:.0f}")
     ax.set_xlabel("azimuth (deg)")
     ax.set_ylabel("cost J - min J")
     ax.set_title(f"fig. 3.13: estimation of azimuth (P(front) = {est.front_probability:.3f})")
