@@ -285,14 +285,7 @@ class Camera:
         Returns ``(N, 2)`` float ``(u, v)`` including lens distortion; points with ``z <= 0``
         (behind the camera) give NaN. Pixels may lie outside the image: see :meth:`in_image`.
         """
-        if not real_entries(points):  # (numpy read text as the numbers it spells, True as 1)
-            raise GeometryError(f"project: expected points as numbers (metres), got "
-                                f"{points!r:.80}")
-        P = np.asarray(points, dtype=float)
-        if P.ndim == 1:
-            P = P[None, :]
-        if P.ndim != 2 or P.shape[1] != 3:
-            raise GeometryError(f"project: expected points of shape (N, 3), got {P.shape}")
+        P = _as_points(points, "project")
         z = P[:, 2]
         front = z > 0
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -374,13 +367,7 @@ class Camera:
         outside the field of view inside the image: a point 60 deg off the axis of a 60-deg
         lens with k1 = -0.35 landed at u = 67 of 160. Use it with :meth:`in_image` to ask
         whether the camera sees a point."""
-        if not real_entries(points):
-            raise GeometryError(f"in_lens_field: expected points as numbers (metres), got "
-                                f"{points!r:.80}")
-        P = np.asarray(points, dtype=float)
-        P = P[None, :] if P.ndim == 1 else P
-        if P.ndim != 2 or P.shape[1] != 3:
-            raise GeometryError(f"in_lens_field: expected points of shape (N, 3), got {P.shape}")
+        P = _as_points(points, "in_lens_field")
         z = P[:, 2]
         with np.errstate(divide="ignore", invalid="ignore"):
             r = np.hypot(P[:, 0], P[:, 1]) / z
@@ -441,6 +428,21 @@ def _check_size(width: Any, height: Any, what: str = "camera size") -> tuple[int
         raise CalibrationError(
             f"{what}: width and height must be positive integers, got {width!r}x{height!r}")
     return int(width), int(height)
+
+
+def _as_points(points: ArrayLike, what: str) -> NDArray:
+    """3D points as a float array ``(N, 3)`` (one point ``(3,)`` becomes ``(1, 3)``), else a
+    GeometryError naming ``what``: numbers only (numpy read text as the numbers it spells, True
+    as 1), three coordinates each. The point check of :meth:`Camera.project` and
+    :meth:`Camera.in_lens_field`, as :func:`_as_pixels` is the pixel one."""
+    if not real_entries(points):
+        raise GeometryError(f"{what}: expected points as numbers (metres), got {points!r:.80}")
+    P = np.asarray(points, dtype=float)
+    if P.ndim == 1:
+        P = P[None, :]
+    if P.ndim != 2 or P.shape[1] != 3:
+        raise GeometryError(f"{what}: expected points of shape (N, 3), got {P.shape}")
+    return P
 
 
 def _as_pixels(uv: ArrayLike) -> NDArray:
