@@ -1136,10 +1136,11 @@ def align_head(
                 return any(np.degrees(angle_between(g, p.gaze)) < tol_deg for p in poses)
 
             order = sorted(dirs, key=lambda d: -d[1])
-            az, el = next((d for d in order if not held(d)), order[0])
+            fresh = [d for d in order if not held(d)]
+            az, el = fresh[0] if fresh else order[0]
             # every candidate's pose captured and still two candidates (a near-field minimum
             # beside the source): look from below the lowest, a view that tells them apart
-            below = None if any(not held(d) for d in order) else order[-1]
+            below = None if fresh else order[-1]
         elif est.position_m is not None:
             az, el = _aim_at(est.position_m, pivot_m, offset_m)
         else:
@@ -1156,7 +1157,7 @@ def align_head(
                     az, el = _aim_at(near.position_m, pivot_m, offset_m)
         ests.append((float(az), float(el)))
         target = HeadPose(float(az), float(np.clip(el, lo_t, hi_t)))
-        if ambiguous and below is not None:
+        if below is not None:  # (set only when ambiguous)
             target = HeadPose(float(below[0]), float(np.clip(below[1] - probe_deg, lo_t, hi_t)))
         tilts = [p.tilt_deg for p in poses]
         uncertain = ambiguous or not est.direction_std_deg <= max_std_deg
