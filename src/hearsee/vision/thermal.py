@@ -228,16 +228,16 @@ def thermal_mask(image: NDArray, *, band_c: tuple[float, float] = HUMAN_BAND_C,
         return relative_warm_mask(im, **kwargs)
     if im.dtype == np.uint16:
         t = counts_to_celsius(im)
-        _check_scene_celsius(t, "16-bit thermal images are centi-kelvin (degC = value / 100 - "
-                             "273.15)")
+        spread = _check_scene_celsius(t, "16-bit thermal images are centi-kelvin (degC = "
+                                      "value / 100 - 273.15)")
     elif im.dtype.kind == "f":
         t = im
-        _check_scene_celsius(t, "float thermal images are degC")
+        spread = _check_scene_celsius(t, "float thermal images are degC")
     else:
         raise ImageInputError(f"unsupported thermal pixel type {im.dtype} (use uint8, uint16 or "
                               "float)")
     m = warm_mask_celsius(t, band_c, **kwargs)  # (checks the band and kernels, flat or not)
-    if float(np.max(t)) - float(np.min(t)) < FLAT_SPREAD_C:
+    if spread < FLAT_SPREAD_C:
         # (a flat 30-34 degC frame -- a lens cap on a warm camera, a frozen stream -- was warm
         # everywhere: every candidate, mannequins and coat stands too, "thermally verified")
         m[:] = False
@@ -279,16 +279,18 @@ def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
     return img
 
 
-def _check_scene_celsius(t: NDArray, what: str) -> None:
+def _check_scene_celsius(t: NDArray, what: str) -> float:
     """ImageInputError unless the temperatures ``t`` (degC) can be a scene's (:data:`SCENE_C`,
     nothing below absolute zero): a .npy in kelvin (293 "degC" for a 20 degC room) gave
-    "thermal support 0.00" for every person, without a word."""
+    "thermal support 0.00" for every person, without a word. Returns the frame's spread
+    (warmest - coldest, degC)."""
     lo, hi = float(np.min(t)), float(np.max(t))
     if lo < -273.15 or lo > SCENE_C[1] or hi < SCENE_C[0]:
         hint = (" (is it in kelvin?)" if SCENE_C[1] < lo < SCENE_C[1] + 273.15 else
                 ", and nothing is below absolute zero" if lo < -273.15 else "")
         raise ImageInputError(f"{what}, but this one spans {lo:.4g} to {hi:.4g} degC{hint}; "
                               "convert it to degC")
+    return hi - lo
 
 
 def overlay_thermal(visible: NDArray, thermal: NDArray, warm: NDArray | None = None, *,
