@@ -434,15 +434,8 @@ def _as_points(points: ArrayLike, what: str) -> NDArray:
     """3D points as a float array ``(N, 3)`` (one point ``(3,)`` becomes ``(1, 3)``), else a
     GeometryError naming ``what``: numbers only (numpy read text as the numbers it spells, True
     as 1), three coordinates each. The point check of :meth:`Camera.project` and
-    :meth:`Camera.in_lens_field`, as :func:`_as_pixels` is the pixel one."""
-    if not real_entries(points):
-        raise GeometryError(f"{what}: expected points as numbers (metres), got {points!r:.80}")
-    P = np.asarray(points, dtype=float)
-    if P.ndim == 1:
-        P = P[None, :]
-    if P.ndim != 2 or P.shape[1] != 3:
-        raise GeometryError(f"{what}: expected points of shape (N, 3), got {P.shape}")
-    return P
+    :meth:`Camera.in_lens_field`."""
+    return _as_rows(points, 3, what, "points as numbers (metres)", "points of shape")
 
 
 def _as_pixels(uv: ArrayLike) -> NDArray:
@@ -450,13 +443,20 @@ def _as_pixels(uv: ArrayLike) -> NDArray:
     GeometryError: numbers only (:func:`hearsee.config.real_entries`; numpy read ("320",
     "240") as a pixel and True as 1), two coordinates each. The pixel check of
     :meth:`Camera.normalized`, :meth:`Camera.pixel_rays` and :meth:`Camera.in_image`."""
-    if not real_entries(uv):
-        raise GeometryError(f"pixel coordinates: expected numbers, got {uv!r:.80}")
-    p = np.asarray(uv, dtype=float)
+    return _as_rows(uv, 2, "pixel coordinates", "numbers", "shape")
+
+
+def _as_rows(value: ArrayLike, width: int, what: str, numbers: str, shape: str) -> NDArray:
+    """``value`` as a float array ``(N, width)`` (one row becomes ``(1, width)``), else a
+    GeometryError ``"{what}: expected {numbers}, got ..."`` or ``"{what}: expected {shape}
+    (N, width), got ..."``: the one check of :func:`_as_points` and :func:`_as_pixels`."""
+    if not real_entries(value):
+        raise GeometryError(f"{what}: expected {numbers}, got {value!r:.80}")
+    p = np.asarray(value, dtype=float)
     if p.ndim == 1:
         p = p[None, :]
-    if p.ndim != 2 or p.shape[1] != 2:
-        raise GeometryError(f"pixel coordinates: expected shape (N, 2), got {p.shape}")
+    if p.ndim != 2 or p.shape[1] != width:
+        raise GeometryError(f"{what}: expected {shape} (N, {width}), got {p.shape}")
     return p
 
 
