@@ -1,6 +1,6 @@
 """Thesis ch. 7 regenerated: robust human detection with stereo and thermal cameras.
 
-    python examples/ch7_humans.py [--figure ch7_humans.png] [--scene-dir DIR]
+    python examples/ch7_humans.py [--out DIR | --figure PATH] [--scene-dir DIR]  # examples/out/
 
 Builds one synthetic room (``hearsee.sim.scenes``) with a person, a mannequin, a poster
 cut-out of a person and a coat on a stand, and runs
@@ -60,9 +60,14 @@ def report(title: str, scene, res) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description="thesis ch. 7: stereo + thermal human detection")
-    ap.add_argument("--figure", default="ch7_humans.png", help="output figure (PNG)")
+    ap.add_argument("--out", default=str(Path(__file__).parent / "out"),
+                    help="output folder (default: examples/out), as every example's")
+    ap.add_argument("--figure", default=None,
+                    help="output figure (PNG; default: ch7_humans.png in --out)")
     ap.add_argument("--scene-dir", default=None, help="also write the scene files here")
     args = ap.parse_args()
+    if args.figure is None:
+        args.figure = str(Path(args.out) / "ch7_humans.png")
     cv2.setNumThreads(1)
     rig = default_rig()
     normal = render_scene(room(), rig)
