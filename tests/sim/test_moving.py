@@ -361,7 +361,7 @@ def test_cli_simulate_trajectory_writes_truth_beside_the_wav(tmp_path, capsys):
     x3, _ = read_recording(tmp_path / "w3.wav")
     assert x3.shape == (3, 24000)
     gt3 = load_trajectory(tmp_path / "w3.trajectory.csv")
-    assert gt3.t[-1] == pytest.approx(2.99)
+    assert gt3.t[-1] == pytest.approx(3.0)  # (the recording's end: the 10 ms grid stopped at 2.99)
     capsys.readouterr()
     # bad combinations are one clear line, exit 2
     assert main(["simulate", str(out), "--array", "three-mic"]) == 2
@@ -588,3 +588,88 @@ def test_room_early_split_options_are_checked(kw):
     with pytest.raises(GeometryError):
         simulate_moving_room(np.ones(800), FS, arr, Trajectory([0.0], [[1.0, 0.5, 0.0]]),
                              [5.0, 4.0, 3.0], 0.25, [2.5, 2.0, 1.2], **kw)
+
+
+def test_truth_csv_holds_the_corners_and_the_end(tmp_path):
+    """The CLI's truth CSV sampled the trajectory on a 10 ms grid that stopped before the end
+    and cut its corners: a 1 m/s walk turning at t = 0.505 s was 9.9 mm off at the end and
+    3.5 mm at the corner. Now the grid, the knots and the end, each exact."""
+    from hearsee.cli import main
+    from hearsee.sim.moving import truth_times
+
+    walk = Trajectory([0.0, 0.505, 1.0], [[1.0, 0.0, 0.0], [1.505, 0.0, 0.0], [1.505, 0.495, 0.0]])
+    t = truth_times(walk, 1.0)
+    assert t[0] == 0.0 and t[-1] == 1.0 and 0.505 in t and np.all(np.diff(t) > 0)
+    assert np.max(np.diff(t)) <= 0.01 + 1e-12 and len(t) == 102  # 0..1 by 10 ms + the corner
+    csv_in = tmp_path / "turn.csv"
+    save_trajectory(walk, csv_in)
+    out = tmp_path / "turn.wav"
+    assert main(["simulate", str(out), "--array", "two-mic", "--trajectory", str(csv_in),
+                 "--fs", "8000"]) == 0
+    gt = load_trajectory(tmp_path / "turn.trajectory.csv")
+    for tk in (0.0, 0.3, 0.505, 0.77, 1.0):  # the written truth interpolates the true path
+        np.testing.assert_allclose(gt.at(tk), walk.at(tk), atol=2e-6)
+    # a duration off the grid and knots beyond the recording: the end is written, once
+    t2 = truth_times(walk, 0.0731)
+    assert t2[-1] == pytest.approx(0.0731) and np.sum(t2 > 0.07) == 1
+
+
+def test_a_trajectory_csv_with_a_byte_order_mark_loads(tmp_path):
+    """Excel's "CSV UTF-8" starts the file with a byte-order mark: its first header cell read
+    "\ufefft" and the file was refused."""
+    path = tmp_path / "bom.csv"
+    path.write_bytes("t,x,y,z\n0,1,0,0\n1,1,1,0\n".encode("utf-8-sig"))
+    traj = load_trajectory(path)
+    np.testing.assert_allclose(traj.at(0.5), [1.0, 0.5, 0.0])
+
+
+def _sim_calls():
+    from hearsee.sim.moving import simulate_moving_recording
+
+    arr = MicArray.from_preset("two-mic")
+    traj = Trajectory([0.0, 0.2], [[1.0, 0.0, 0.0], [1.0, 0.1, 0.0]])
+    room = ([5.0, 4.0, 3.0], 0.0, [2.5, 2.0, 1.2])
+    sig = np.ones(800)
+    return {
+        "seed -1": lambda: simulate_moving_recording(arr, traj, seed=-1),
+        "seed 1.5": lambda: simulate_moving_recording(arr, traj, seed=1.5),
+        "duration list": lambda: simulate_moving_recording(arr, traj, duration_s=[0.1]),
+        "duration text": lambda: simulate_moving_recording(arr, traj, duration_s="0.1"),
+        "array_at 2-D": lambda: simulate_moving_room(sig, FS, arr, traj, room[0], room[1],
+                                                     [2.0, 2.0]),
+        "room text": lambda: simulate_moving_room(sig, FS, arr, traj, "5x4x3", *room[1:]),
+        "step text": lambda: simulate_moving_room(sig, FS, arr, traj, *room,
+                                                  max_tdoa_step_samples="0.1"),
+        "mics N x 2": lambda: simulate_moving_room(sig, FS, arr, traj, *room,
+                                                   mic_positions=np.zeros((2, 2))),
+        "signal text": lambda: simulate_moving_free_field(["a"] * 800, FS, arr, traj),
+        "signal bools": lambda: simulate_moving_free_field([True] * 800, FS, arr, traj),
+        "trajectory None": lambda: simulate_moving_free_field(sig, FS, arr, None),
+        "room trajectory None": lambda: simulate_moving_room(sig, FS, arr, None, *room),
+        "n_iter 0": lambda: retarded_delays(traj, arr.positions, [0.1], 343.0, n_iter=0),
+        "one mic as (3,)": lambda: retarded_delays(traj, [0.0, 0.0, 0.0], [0.1], 343.0),
+        "times text": lambda: save_trajectory(traj, "unused.csv", times=["a"]),
+        "velocity 2-D": lambda: linear_trajectory([1.0, 0.0, 0.0], [1.0, 0.0], 1.0),
+    }
+
+
+@pytest.mark.parametrize("case", sorted(_sim_calls()))
+def test_moving_simulation_bad_arguments_are_typed_errors(case, tmp_path, monkeypatch):
+    """Each raised a builtin ValueError, TypeError, IndexError, AttributeError or
+    UnboundLocalError (or, text durations and boolean samples, was taken as a number)."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises((ConfigError, GeometryError, AudioInputError)):
+        _sim_calls()[case]()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_save_trajectory_takes_one_time_and_save_recording_a_text_peak_is_refused(tmp_path):
+    from hearsee.sim.audio import save_recording
+
+    traj = Trajectory([0.0, 1.0], [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]])
+    save_trajectory(traj, tmp_path / "one.csv", times=0.25)  # (a builtin TypeError before)
+    np.testing.assert_allclose(load_trajectory(tmp_path / "one.csv").positions,
+                               [[1.0, 0.25, 0.0]])
+    with pytest.raises(ConfigError, match="peak"):
+        save_recording(tmp_path / "r.wav", np.ones((2, 100)), {"fs": 16000}, peak="0.5")
+    assert not (tmp_path / "r.wav").exists()

@@ -54,10 +54,14 @@ def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str,
                      far_field: bool, pcm16: bool, force: bool, protect: list) -> None:
     """``--trajectory``: a moving source (hearsee.sim.moving), truth CSV beside the WAV.
     ``protect``: the input files besides the trajectory that no output may replace."""
-    import numpy as np
 
     from hearsee.sim.audio import save_recording
-    from hearsee.sim.moving import load_trajectory, save_trajectory, simulate_moving_recording
+    from hearsee.sim.moving import (
+        load_trajectory,
+        save_trajectory,
+        simulate_moving_recording,
+        truth_times,
+    )
 
     if far_field:
         raise ConfigError("--far-field applies to a static --source only")
@@ -72,7 +76,7 @@ def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str,
     truth["trajectory_csv"] = truth_csv.name
     wav, js = save_recording(out, x, truth, subtype="PCM_16" if pcm16 else "FLOAT",
                              protect=protect)
-    save_trajectory(traj, truth_csv, times=np.arange(0.0, truth["duration_s"], 0.01))
+    save_trajectory(traj, truth_csv, times=truth_times(traj, truth["duration_s"]))
     err_console.print(
         f"wrote {wav} ({x.shape[0]} channels, {x.shape[1] / fs:.2f} s at {fs} Hz), {js} and "
         f"{truth_csv} (moving source, {len(traj.t)} trajectory points)", highlight=False)

@@ -303,7 +303,8 @@ def save_recording(out: str | Path, x: ArrayLike, truth: Mapping[str, Any],
     output_file(js)
     y = np.asarray(x, dtype=float)
     m = float(np.max(np.abs(y))) if y.size else 0.0
-    if not (np.isfinite(peak) and 0 < peak <= 1):  # (-0.5 inverted the polarity, 0 wrote silence)
+    # (-0.5 inverted the polarity, 0 wrote silence, the text "0.5" raised numpy's TypeError)
+    if not (is_real(peak) and np.isfinite(peak) and 0 < peak <= 1):
         raise ConfigError(f"peak must be in (0, 1] of full scale, got {peak}")
     gain = peak / m if m > 0 else 1.0
     for q in protect or []:

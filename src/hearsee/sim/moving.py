@@ -35,6 +35,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from decimal import Decimal, localcontext
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import scipy.signal as ss
@@ -209,6 +210,8 @@ def linear_trajectory(start: ArrayLike, velocity: ArrayLike, duration_s: float,
     if not real_entries(velocity):
         raise GeometryError(f"velocity must be real numbers (m/s), got {velocity!r:.80}")
     v = np.asarray(velocity, dtype=float)
+    if v.shape != (3,):  # ([1, 0] raised numpy's broadcasting ValueError)
+        raise GeometryError(f"velocity must be 3 numbers vx, vy, vz (m/s), got shape {v.shape}")
     t = np.linspace(0.0, float(duration_s), max(n, 2))
     return Trajectory(t, p0[None, :] + t[:, None] * v[None, :])
 
@@ -235,7 +238,9 @@ def load_trajectory(path: str | Path) -> Trajectory:
     """Read a trajectory CSV with header ``t,x,y,z`` (seconds, metres)."""
     p = input_file(path, "trajectory file")
     try:
-        with p.open(newline="", encoding="utf-8") as fh:
+        # (utf-8-sig: the byte-order mark of Excel's "CSV UTF-8" stayed in the first header
+        # cell, and a valid file was refused)
+        with p.open(newline="", encoding="utf-8-sig") as fh:
             reader = csv.reader(fh)  # (its line_num: the file's line, blank ones counted)
             rows = [(reader.line_num, r) for r in reader if r and any(c.strip() for c in r)]
     except UnicodeDecodeError:
@@ -271,15 +276,29 @@ def _trajectory_row(path: Path, line: int, row: list[str]) -> list[float]:
 
 def save_trajectory(traj: Trajectory, path: str | Path, times: ArrayLike | None = None) -> None:
     """Write ``traj`` (sampled at ``times`` if given, else its own knots) as CSV ``t,x,y,z``."""
-    if not isinstance(traj, Trajectory):  # (any other object: a builtin AttributeError)
-        raise GeometryError(f"traj: expected a Trajectory, got {type(traj).__name__}")
-    t = traj.t if times is None else np.asarray(times, dtype=float)
+    _check_trajectory(traj, "traj")
+    # (a scalar time raised a builtin TypeError, text a ValueError)
+    t = traj.t if times is None else np.atleast_1d(_times(times)).ravel()
     p = traj.at(t)
     with output_file(path).open("w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
         w.writerow(["t", "x", "y", "z"])
         for ti, pi in zip(t, p, strict=True):
             w.writerow([f"{ti:.6f}", f"{pi[0]:.6f}", f"{pi[1]:.6f}", f"{pi[2]:.6f}"])
+
+
+def truth_times(traj: Trajectory, duration_s: float, step_s: float = 0.01) -> NDArray:
+    """Times (seconds) at which to write a recording's ground-truth trajectory: a ``step_s``
+    grid from 0, the trajectory's own knots within the recording (its corners) and the
+    recording's end ``duration_s``, rounded to the microsecond the CSV keeps (so that no two
+    rows share a time). The 10 ms grid alone stopped up to one step before the end (the truth
+    of the last 10 ms was a held position) and cut the trajectory's corners."""
+    _check_trajectory(traj)
+    dur = finite_number("duration_s", duration_s, 0.0, lo_open=True, error=GeometryError)
+    step = finite_number("step_s", step_s, 0.0, lo_open=True, error=GeometryError)
+    grid = np.arange(int(math.floor(dur / step + 1e-9)) + 1) * step
+    knots = traj.t[(traj.t > 0.0) & (traj.t < dur)]
+    return np.unique(np.round(np.concatenate([grid[grid < dur], knots, [dur]]), 6))
 
 
 # ---------------------------------------------------------------------------- free field
@@ -391,6 +410,12 @@ def retarded_delays(traj: Trajectory, mics: ArrayLike, t: ArrayLike, c: float,
         raise GeometryError(f"microphone positions must be real numbers (metres), got "
                             f"{mics!r:.80}")
     finite_number("c (m/s)", c, 0.0, lo_open=True, error=GeometryError)
+    _check_trajectory(traj)
+    # (n_iter 0 raised UnboundLocalError, one microphone given as (3,) numpy's IndexError)
+    n_iter = whole_number("n_iter", n_iter, 1, error=GeometryError)
+    m = np.asarray(mics, dtype=float)
+    if m.ndim != 2 or m.shape[1] != 3 or len(m) == 0:
+        raise GeometryError(f"microphone positions must be N x 3 (N >= 1), got shape {m.shape}")
     tq = _times(t)
     if traj.t.size > 1:
         with np.errstate(over="ignore"):  # (a 1e300 m jump: inf m/s, refused just below)
@@ -403,7 +428,6 @@ def retarded_delays(traj: Trajectory, mics: ArrayLike, t: ArrayLike, c: float,
                 f"{traj.t[k + 1]:g} s; moving sources must be slower than "
                 f"{MAX_SPEED_FRACTION:g} times the speed of sound ({MAX_SPEED_FRACTION * c:.1f} "
                 "m/s)")
-    m = np.asarray(mics, dtype=float)
     tau = np.linalg.norm(traj.at(tq)[None, :, :] - m[:, None, :], axis=-1) / c
     for _ in range(n_iter):
         r = np.linalg.norm(traj.at(tq[None, :] - tau) - m[:, None, :], axis=-1)
@@ -422,13 +446,19 @@ def _mics_and_c(mics: MicArray | ArrayLike, speed_of_sound: float | None) -> tup
 
 
 def _check_signal(signal: ArrayLike, fs: float) -> NDArray:
-    x = np.asarray(signal, dtype=float)
+    # (as_samples: text raised numpy's ValueError, booleans were taken as samples)
+    x = as_samples(signal, "signal")
     if x.ndim != 1 or x.size == 0:
         raise AudioInputError(f"signal must be a non-empty 1-D array, got shape {x.shape}")
-    if not np.all(np.isfinite(x)):
-        raise AudioInputError("signal contains NaN or inf samples")
     check_fs(fs)
     return x
+
+
+def _check_trajectory(traj: Any, what: str = "trajectory") -> None:
+    """A :class:`Trajectory`, else a GeometryError (any other object raised a builtin
+    AttributeError deep in the simulators)."""
+    if not isinstance(traj, Trajectory):
+        raise GeometryError(f"{what}: expected a Trajectory, got {type(traj).__name__}")
 
 
 def simulate_moving_free_field(
@@ -610,10 +640,18 @@ def simulate_moving_room(
             raise GeometryError(f"{name} must be > 0 seconds, got {spacing!r}")
     if early_order is not None:
         early_order = whole_number("early_order", early_order, 0, error=GeometryError)
-    at = np.asarray(array_at, dtype=float)
-    mics = array.positions if mic_positions is None else np.asarray(mic_positions, dtype=float)
+    from hearsee.sim.audio import _mic_positions
+
+    if not isinstance(array, MicArray):
+        raise GeometryError(f"array: expected a MicArray, got {type(array).__name__}")
+    _check_trajectory(trajectory)
+    # (a 2-D array_at, N x 2 microphones or a "5x4x3" room raised numpy's ValueError)
+    at = as_point(array_at, "array_at")
+    mics = array.positions if mic_positions is None else _mic_positions(array, mic_positions)
     mics_room = mics + at
-    dim = np.asarray(room_dim, dtype=float)
+    dim = as_point(room_dim, "room_dim")
+    if np.any(dim <= 0):
+        raise GeometryError(f"room_dim must be positive lengths in metres, got {dim.tolist()}")
     early_fn = None
     if rir_fn is None:
         from hearsee.audio.propagation import image_sources, room_impulse_responses
@@ -635,7 +673,8 @@ def simulate_moving_room(
             def rir_fn(src_room: NDArray) -> NDArray:
                 return rir_at(src_room, max_order)
 
-    if max_tdoa_step_samples is not None and not max_tdoa_step_samples > 0:
+    if max_tdoa_step_samples is not None and not (is_real(max_tdoa_step_samples)
+                                                  and max_tdoa_step_samples > 0):
         raise GeometryError(
             f"max_tdoa_step_samples must be > 0 or None, got {max_tdoa_step_samples}")
     n = x.size
@@ -705,13 +744,20 @@ def simulate_moving_recording(
     from hearsee.sim.audio import check_sim_fs, ground_truth, normalize_room
 
     arr = load_array(array)
+    _check_trajectory(trajectory)
     if arr.mask is not None:
         raise ConfigError(f"array {arr.name!r} has a mask: moving sources are simulated without "
                           "the mask's diffraction, so use a static source with masked arrays")
+    # (a list raised float()'s TypeError and the text "0.1" was read as 0.1 s, which the
+    # static simulate_recording refuses)
+    if duration_s is not None and not is_real(duration_s):
+        raise ConfigError(f"duration must be a number of seconds, got {duration_s!r:.60}")
     dur = float(trajectory.t[-1]) if duration_s is None else float(duration_s)
     if not dur > 0:
         raise ConfigError(
             "duration must be > 0 s (a one-point trajectory needs an explicit duration)")
+    if seed is not None:  # (-1 or 1.5 raised numpy's ValueError / TypeError)
+        seed = whole_number("seed", seed, lo=0)
     fs = check_sim_fs(fs)
     snr_db = check_snr_db(snr_db)  # (before the simulation: add_noise checks it at its end)
     room_n = normalize_room(room)
