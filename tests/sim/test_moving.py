@@ -224,7 +224,7 @@ def test_room_updates_follow_the_tdoas_of_a_fast_crossing_source():
     err = {}
     for step in (None, 0.1):
         y = simulate_moving_room(x, FS, arr, traj, [6, 6, 3], 0.3, at, rir_fn=rir, block_s=0.1,
-                                 max_tdoa_step_samples=step)
+                                 max_tdoa_step_samples=step, max_delay_step_samples=None)
         tf = estimate_tdoas(y, FS, arr, 64.0, 16.0, "phat", refine="interp",
                             whole_recording=False, snr_weight=False)
         keep = (tf.t > 0.1) & (tf.t < 1.4)
@@ -566,7 +566,8 @@ def test_room_reflections_of_a_fast_source_converge_with_the_early_split():
     x = np.random.default_rng(3).standard_normal(FS // 2)
     traj = linear_trajectory([0.8, 0.3, 0.2], [1.5, 0.3, 0.0], 0.5)
     ref = simulate_moving_room(x, FS, arr, traj, dim, 0.25, at, block_s=0.004, early_order=None)
-    whole = simulate_moving_room(x, FS, arr, traj, dim, 0.25, at, block_s=0.1, early_order=None)
+    whole = simulate_moving_room(x, FS, arr, traj, dim, 0.25, at, block_s=0.1, early_order=None,
+                                 max_delay_step_samples=None)  # (every 0.1 s, as before)
     split = simulate_moving_room(x, FS, arr, traj, dim, 0.25, at, block_s=0.1)
 
     def rel(y):
@@ -673,3 +674,31 @@ def test_save_trajectory_takes_one_time_and_save_recording_a_text_peak_is_refuse
     with pytest.raises(ConfigError, match="peak"):
         save_recording(tmp_path / "r.wav", np.ones((2, 100)), {"fs": 16000}, peak="0.5")
     assert not (tmp_path / "r.wav").exists()
+
+
+def test_room_renders_a_receding_source_without_a_comb():
+    """A source receding at 1 m/s barely changes the TDOAs, so the updates were 50 ms apart and
+    the crossfade summed two copies 2.3 samples apart: a 3.43 kHz tone (the comb's first notch)
+    fell to 0.13 of its level between updates in a room without reflections. With the direct
+    path's delay bounded too (MAX_DELAY_STEP_SAMPLES) the envelope follows the exact free-field
+    rendering; updates are at most 0.5 sample of delay apart."""
+    import scipy.signal as ss
+
+    from hearsee.sim.moving import MAX_DELAY_STEP_SAMPLES, _update_times
+
+    arr = MicArray([[0.0, -0.1, 0.0], [0.0, 0.1, 0.0]], name="pair")
+    n = int(0.6 * FS)
+    away = linear_trajectory([1.0, 0.0, 0.0], [1.0, 0.0, 0.0], 0.6)
+    step = 0.05 / 343.0 * FS  # delay change over one 50 ms block
+    x = np.sin(2 * np.pi * FS / (2 * step) * np.arange(n) / FS)
+    ff = simulate_moving_free_field(x, FS, arr, away)[0]
+    room = simulate_moving_room(x, FS, arr, away, [8.0, 6.0, 3.0], 0.0, [1.0, 3.0, 1.5])[0]
+    k = slice(int(0.1 * FS), n - 400)
+    env_ff, env_room = np.abs(ss.hilbert(ff))[k], np.abs(ss.hilbert(room))[k]
+    assert np.min(env_room / env_ff) > 0.85  # (0.18 before)
+    c = _update_times(away, arr.positions, 343.0, FS, n, 0.05, 0.1, MAX_DELAY_STEP_SAMPLES)
+    d = np.linalg.norm(away.at(c / FS)[:, None] - arr.positions[None], axis=-1) / 343.0 * FS
+    assert np.abs(np.diff(d, axis=0)).max() <= MAX_DELAY_STEP_SAMPLES + 1e-6
+    with pytest.raises(GeometryError, match="max_delay_step_samples"):
+        simulate_moving_room(x, FS, arr, away, [8.0, 6.0, 3.0], 0.0, [1.0, 3.0, 1.5],
+                             max_delay_step_samples=-1.0)
