@@ -684,6 +684,32 @@ def test_a_time_jump_beyond_any_run_is_refused(cls, meas):
     assert k.update(1.7e9 + 0.2, meas)
 
 
+@pytest.mark.parametrize("cls, meas", [(DirectionKalman, (10.0, 5.0)),
+                                       (DirectionIMM, (10.0, 5.0)),
+                                       (MotionKalman, [1.0, 0.0, 0.0])])
+def test_tracker_times_must_be_real_numbers(cls, meas):
+    """float() read the text "1.0" and True as 1 s (a track stepped to t = 1.0 without a word)
+    and None raised a builtin TypeError; each is an EstimationError now, the track untouched.
+    Numbers of any real type still are times: an int, numpy's float32 and a 0-d array."""
+    k = cls()
+    assert k.update(0.5, meas)
+    before = (k.t, k.x.copy())
+    for bad in ("1.0", True, None, [1.0], 1 + 0j):
+        with pytest.raises(EstimationError, match="time must be a finite number of seconds"):
+            k.update(bad, meas)
+        assert k.t == before[0]
+        np.testing.assert_array_equal(k.x, before[1])
+        if cls is MotionKalman:
+            with pytest.raises(EstimationError, match="time"):
+                k.predicted_to(bad)
+        else:
+            with pytest.raises(EstimationError, match="time"):
+                k.predicted(bad)
+    for good in (1, np.float32(1.5), np.array(2.0)):
+        k.update(good, meas)
+        assert type(k.t) is float and k.t == float(good)
+
+
 def test_gate_distance_needs_a_track():
     """gate_distance before any measurement measured from the initial zeros (0.003 for a
     candidate at 10 deg) as if there were a prediction."""

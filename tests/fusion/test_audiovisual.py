@@ -381,6 +381,27 @@ def test_tdoa_tracker_restart_keeps_the_time_checks(side_rig):
     np.testing.assert_allclose(trk.position, fix.position_m)
 
 
+def test_ray_trackers_refuse_times_that_are_no_numbers(side_rig):
+    """RayTracker.update and RayTdoaTracker.update_measurements (also on the restart path)
+    read the time "1.0" and True as 1 s and raised a builtin TypeError on None."""
+    trk, frames = _settled(side_rig, 11, 32)
+    t, _, uv, z, fix = frames[30]
+    ray = RayTracker()
+    ray.update(frames[0][0], fix.position_m, fix.covariance)
+    for bad in ("1.0", True, None):
+        with pytest.raises(EstimationError, match="time"):
+            ray.update(bad, fix.position_m, fix.covariance)
+        with pytest.raises(EstimationError, match="time"):
+            trk.update_measurements(bad, uv, z, fix)
+        trk.n_rejects = trk.max_rejects  # the next fix would restart the track
+        with pytest.raises(EstimationError, match="time"):
+            trk.update_measurements(bad, uv, z, fix)
+        trk.n_rejects = 0
+    assert ray.t == frames[0][0] and trk.t == frames[29][0]
+    assert trk.update_measurements(t, uv, z, fix) and ray.update(t, fix.position_m,
+                                                                  fix.covariance)
+
+
 def test_tdoa_tracker_gates_a_far_fix_and_restarts_after_repeated_ones(side_rig):
     rig = side_rig
     trk, frames = _settled(rig, 8, 40)

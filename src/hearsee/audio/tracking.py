@@ -91,12 +91,16 @@ def _covariance(R: ArrayLike, n: int) -> NDArray:
 
 
 def _finite_time(t: float) -> float:
-    """``t`` (seconds) as a float, or an EstimationError when it is not a finite number (a NaN
-    time would slip past the "time went backwards" test and poison the state for good)."""
-    v = float(t)
-    if not math.isfinite(v):
-        raise EstimationError(f"tracker time must be a finite number of seconds, got {t!r}")
-    return v
+    """``t`` (seconds) as a float, or an EstimationError when it is not a finite real number
+    (:func:`hearsee.config.is_real`): a NaN time would slip past the "time went backwards" test
+    and poison the state for good; float() read the text "1.0" and True as 1 s and raised a
+    builtin TypeError on None."""
+    if type(t) is float:  # the common case, without numpy
+        if math.isfinite(t):
+            return t
+    elif is_real(t):
+        return float(t)
+    raise EstimationError(f"tracker time must be a finite number of seconds, got {t!r:.80}")
 
 
 def _time_step(t0: float, t: float, *, past: bool = False) -> float:
