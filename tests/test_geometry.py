@@ -50,6 +50,21 @@ def test_angle_between_and_errors():
         cart_to_sph([1.0, 2.0])
 
 
+@pytest.mark.parametrize("scale", [1.0, 1e200, 1e300, 1e-200, 1e-300])
+@pytest.mark.parametrize("angle", [1e-9, 1e-8, 3e-8, 0.25, np.pi / 4, np.pi - 1e-9])
+def test_angle_between_is_accurate_at_every_angle_and_length(angle, scale):
+    """The arccos of the cosine returned 0.0 for angles of 1e-9 and 1e-8 rad, NaN for vectors
+    of length 1e200 (the norm overflowed) and 'zero-length vector' for 1e-200 (it underflowed).
+    The vectors are built at a known angle, the second 3x longer than the first."""
+    u = scale * np.array([1.0, 0.0, 0.0])
+    v = 3 * scale * np.array([np.cos(angle), np.sin(angle), 0.0])
+    assert float(angle_between(u, v)) == pytest.approx(angle, rel=1e-12)
+    assert float(angle_between(v, u)) == pytest.approx(angle, rel=1e-12)
+    # batches broadcast as before, each vector scaled on its own
+    got = angle_between([[1e-200, 0.0, 0.0], [1e200, 0.0, 0.0]], v)
+    np.testing.assert_allclose(got, [angle, angle], rtol=1e-12)
+
+
 def test_fibonacci_sphere_spreads_unit_vectors_evenly():
     from hearsee.geometry import fibonacci_sphere
 

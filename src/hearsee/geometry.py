@@ -153,7 +153,14 @@ def fibonacci_sphere(n: int) -> NDArray:
 
 
 def angle_between(u: ArrayLike, v: ArrayLike) -> NDArray:
-    """Angle in radians between direction vectors ``(..., 3)`` (need not be unit length)."""
+    """Angle in radians, in [0, pi], between direction vectors ``(..., 3)`` (any length but
+    zero: GeometryError).
+
+    Each vector is scaled (:func:`norm_scale`) and made unit length, and the angle is
+    ``arctan2(|a x b|, a . b)``: accurate at every angle (the arccos of the cosine returned 0.0
+    for 1e-8 rad) and at every length (a norm of (1e200, 1e200, 0) overflowed to inf and gave
+    NaN; one of (1e-200, 0, 0) underflowed to 0, 'a zero-length vector'). A vector that is not
+    finite gives NaN."""
     a, b = _reals(u, "u"), _reals(v, "v")
     try:
         np.broadcast_shapes(a.shape, b.shape)
@@ -163,12 +170,20 @@ def angle_between(u: ArrayLike, v: ArrayLike) -> NDArray:
     if not ok:
         raise GeometryError(f"angle_between needs vectors (..., 3) of broadcastable shapes, got "
                             f"{a.shape} and {b.shape}")
-    na = np.linalg.norm(a, axis=-1)
-    nb = np.linalg.norm(b, axis=-1)
-    if np.any(na == 0) or np.any(nb == 0):
+    ua, ub = _unit_rows(a), _unit_rows(b)
+    if ua is None or ub is None:
         raise GeometryError("angle between a zero-length vector and another is undefined")
-    c = np.sum(a * b, axis=-1) / (na * nb)
-    return np.arccos(np.clip(c, -1.0, 1.0))
+    return np.arctan2(np.linalg.norm(np.cross(ua, ub), axis=-1), np.sum(ua * ub, axis=-1))
+
+
+def _unit_rows(v: NDArray) -> NDArray | None:
+    """Vectors ``(..., 3)`` scaled to unit length without overflow or underflow
+    (:func:`norm_scale`); None when one of them has length zero."""
+    s = v / norm_scale(v)
+    n = np.linalg.norm(s, axis=-1, keepdims=True)
+    if np.any(n == 0):
+        return None
+    return s / n
 
 
 def as_points(points: ArrayLike, what: str = "points") -> NDArray:
