@@ -65,6 +65,17 @@ def test_angle_between_is_accurate_at_every_angle_and_length(angle, scale):
     np.testing.assert_allclose(got, [angle, angle], rtol=1e-12)
 
 
+def test_sph_to_cart_refuses_shapes_that_do_not_broadcast():
+    """Two azimuths and three elevations raised numpy's builtin broadcast ValueError; now a
+    GeometryError; shapes that broadcast give the points they gave."""
+    with pytest.raises(GeometryError, match="broadcastable shapes"):
+        sph_to_cart([0.0, 1.0], [0.0, 1.0, 2.0])
+    with pytest.raises(GeometryError, match="broadcastable shapes"):
+        sph_to_cart([0.0, 1.0], 0.0, np.ones(3))
+    np.testing.assert_allclose(sph_to_cart([[0.0], [np.pi / 2]], [0.0, np.pi / 2], 2.0),
+                               [[[2, 0, 0], [0, 0, 2]], [[0, 2, 0], [0, 0, 2]]], atol=1e-12)
+
+
 def test_fibonacci_sphere_spreads_unit_vectors_evenly():
     from hearsee.geometry import fibonacci_sphere
 

@@ -50,13 +50,20 @@ __all__ = [
 
 
 def sph_to_cart(azimuth: ArrayLike, elevation: ArrayLike, distance: ArrayLike = 1.0) -> NDArray:
-    """Spherical (radians, metres) -> cartesian points, shape ``(..., 3)``.
+    """Spherical (radians, metres) -> cartesian points, shape ``(..., 3)``; the three arguments
+    broadcast together (GeometryError when their shapes do not).
 
     >>> np.round(sph_to_cart(np.pi / 2, 0.0, 2.0), 6)
     array([0., 2., 0.])
     """
     az, el, r = (_reals(v, what) for v, what in ((azimuth, "azimuth"), (elevation, "elevation"),
                                                   (distance, "distance")))
+    try:  # (numpy's broadcast ValueError before, e.g. two azimuths and three elevations)
+        np.broadcast_shapes(az.shape, el.shape, r.shape)
+    except ValueError:
+        raise GeometryError(f"sph_to_cart: azimuth, elevation and distance must have "
+                            f"broadcastable shapes, got {az.shape}, {el.shape} and "
+                            f"{r.shape}") from None
     ce = np.cos(el)
     return np.stack(np.broadcast_arrays(r * ce * np.cos(az), r * ce * np.sin(az), r * np.sin(el)),
                     axis=-1)
