@@ -149,6 +149,24 @@ def test_text_image_points_and_tdoas_are_refused(rig, side_rig):
         reg.predict(X.astype(str))
 
 
+def test_an_absurd_pixel_gives_a_unit_ray_or_a_geometry_error(rig):
+    """uv = (1e300, 240) gave the ray direction [0, 0, 0] and a 'fix' at the camera centre
+    (only an overflow warning); with lens distortion a misleading 'source must be finite'.
+    Without distortion the pinhole's ray is the optical x axis (R^T [1, 0, 0] in the array
+    frame), a unit vector; with distortion the camera refuses the pixel."""
+    p = np.array([1.2, 0.2, 0.05])
+    z = rig.array.tdoa(p)
+    pinhole = AudioVisualRig(rig.array, Camera(rig.camera.K, np.zeros(5), 640, 480), rig.R,
+                             rig.t)
+    o, d = pinhole.rays([1e300, 240.0])
+    np.testing.assert_allclose(d[0], rig.R.T @ [1.0, 0.0, 0.0], rtol=0, atol=1e-12)
+    fix = locate_on_ray(pinhole, [1e300, 240.0], z)
+    assert np.linalg.norm(fix.direction) == pytest.approx(1.0)
+    assert np.linalg.norm(fix.position_m - o) == pytest.approx(fix.range_m) and fix.range_m > 0
+    with pytest.raises(GeometryError, match="too far outside"):
+        locate_on_ray(rig, [1e300, 240.0], z)
+
+
 def test_a_mirrored_mounting_is_not_a_rotation(rig):
     """R @ R.T = I also holds for a reflection (det -1): such a 'mounting' was accepted and
     every pixel then mirrored its ray, so the fixes were silently wrong."""

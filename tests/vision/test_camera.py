@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import cv2
 import numpy as np
 import pytest
@@ -48,6 +50,30 @@ def test_project_matches_opencv_and_rays_invert_it(dist):
     rays = cam.pixel_rays(uv)
     np.testing.assert_allclose(np.linalg.norm(rays, axis=1), 1.0)
     np.testing.assert_allclose(rays, P / np.linalg.norm(P, axis=1, keepdims=True), atol=1e-7)
+
+
+def test_pixel_rays_of_pixels_far_outside_the_image_are_unit_rays_or_refused():
+    """A pixel at u = 1e300 gave the ray [0, 0, 0] (its length overflowed, a RuntimeWarning);
+    with lens distortion OpenCV's NaN became a NaN ray that failed far from the cause. The
+    pinhole's ray of (u, v) is [(u - cx) / fx, (v - cy) / fy, 1]: for u = 1e300 almost the
+    optical x axis, for (-1e300, 1e300) the diagonal (-1 / fx, 1 / fy, 0) normalised."""
+    cam = Camera(K=K, width=640, height=480)
+    uv = [[1e300, 240.0], [-1e300, 1e300], [1e6, 240.0], [np.nan, 240.0]]
+    diag = np.array([-1 / 500.0, 1 / 505.0, 0.0])
+    far = np.array([1e6 - 320.0, 0.0, 500.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # (no overflow warning either)
+        rays = cam.pixel_rays(uv)
+    np.testing.assert_allclose(rays[:3], [[1.0, 0.0, 0.0], diag / np.linalg.norm(diag),
+                                          far / np.linalg.norm(far)], rtol=0, atol=1e-15)
+    assert np.all(np.isnan(rays[3]))  # a pixel that is not finite: a NaN ray, as before
+    lens = Camera(K=K, dist=np.array([-0.25, 0.08, 0.001, -0.002]), width=640, height=480)
+    for bad in ([1e300, 240.0], [[320.0, 240.0], [-1e300, 1e300]]):
+        with pytest.raises(GeometryError, match="too far outside the 640x480 image"):
+            lens.pixel_rays(bad)
+    assert np.all(np.isnan(lens.pixel_rays([np.nan, 240.0])))
+    np.testing.assert_allclose(lens.pixel_rays([320.0, 240.0]), [[0.0, 0.0, 1.0]],
+                               atol=1e-12)
 
 
 def test_points_behind_camera_are_nan_and_in_image_mask():

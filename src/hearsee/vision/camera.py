@@ -74,7 +74,7 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import CalibrationError, ConfigError, GeometryError
-from hearsee.geometry import as_point
+from hearsee.geometry import as_point, norm_scale
 
 __all__ = [
     "MIN_BASELINE_M",
@@ -354,9 +354,23 @@ class Camera:
 
     def pixel_rays(self, uv: ArrayLike) -> NDArray:
         """Unit viewing rays ``(N, 3)`` in the optical frame through pixels ``uv`` ``(N, 2)``
-        (lens distortion removed)."""
-        xy = self.normalized(uv)
+        (lens distortion removed); a NaN or infinite pixel gives no ray (NaN entries).
+
+        Every finite pixel gives a unit ray: the length is taken without overflow
+        (:func:`hearsee.geometry.norm_scale`; a pixel at u = 1e300 gave the ray [0, 0, 0] and
+        an overflow warning, now the pinhole's ray almost perpendicular to the optical axis).
+        A finite pixel the lens model cannot undistort at all (OpenCV answers NaN, from about
+        1e155 px: its squares overflow) is a GeometryError, not a NaN ray."""
+        p = _as_pixels(uv)
+        xy = self.normalized(p)
+        lost = np.isfinite(p).all(axis=1) & ~np.isfinite(xy).all(axis=1)
+        if np.any(lost):
+            u, v = p[np.argmax(lost)]
+            raise GeometryError(f"pixel ({u:.6g}, {v:.6g}) lies too far outside the "
+                                f"{self.width}x{self.height} image for the camera model to give "
+                                "its ray")
         rays = np.concatenate([xy, np.ones((len(xy), 1))], axis=1)
+        rays = rays / norm_scale(rays)
         return rays / np.linalg.norm(rays, axis=1, keepdims=True)
 
     def in_lens_field(self, points: ArrayLike) -> NDArray:
