@@ -122,6 +122,45 @@ def test_bad_fusion_input(rig):
         AudioVisualRig(rig.array, rig.camera, np.eye(3) * 2, np.zeros(3))
 
 
+def test_tdoa_tracker_refuses_a_fix_covariance_ray_tracker_refuses(side_rig):
+    """RayTdoaTracker started (or restarted) on the fix's covariance unchecked: -I was taken
+    and position_cov became -4 I (RayTracker refuses the same fix), a 2x2 one raised numpy's
+    ValueError, and an alternative's bad covariance went into the gate. Now RayTracker's
+    EstimationError, the tracker as it was; a good fix still starts the track on its own
+    position and covariance."""
+    rig = side_rig
+    p = np.array([1.2, 0.2, 0.05])
+    uv, z = rig.project(p)[0], rig.array.tdoa(p)
+    fix = locate_on_ray(rig, uv, z, sigma_tdoa_s=RAY_SIGMA_TDOA_S)
+    bads = [RayFix(p, 1.0, 0.0, -np.eye(3), fix.direction),
+            RayFix(p, 1.0, 0.0, np.eye(2), fix.direction),
+            RayFix(p, 1.0, 0.0, np.diag([1e-4, 1e-4, 0.0]), fix.direction),
+            RayFix(p[:2], 1.0, 0.0, fix.covariance, fix.direction),
+            RayFix(p, 1.0, 0.0, fix.covariance, fix.direction,
+                   [RayFix(p, 1.0, 0.0, -np.eye(3), fix.direction)])]
+    for bad in bads:
+        with pytest.raises(EstimationError):
+            RayTracker().update(0.0, bad.position_m, bad.covariance,
+                                [(a.position_m, a.covariance) for a in bad.alternatives])
+        trk = RayTdoaTracker(rig)
+        with pytest.raises(EstimationError, match="RayFix"):
+            trk.update_measurements(0.0, uv, z, bad)
+        assert not trk.initialized
+    trk, frames = _settled(rig, 11, 32)  # a restart checks the fix as well
+    t, _, uv2, z2, fix2 = frames[30]
+    trk.n_rejects = trk.max_rejects
+    before = (trk.x.copy(), trk.P.copy())
+    for bad in bads:
+        with pytest.raises(EstimationError, match="RayFix"):
+            trk.update_measurements(t, uv2, z2, bad)
+        np.testing.assert_array_equal(trk.x, before[0])
+        np.testing.assert_array_equal(trk.P, before[1])
+    assert trk.update_measurements(t, uv2, z2, fix2)
+    np.testing.assert_array_equal(trk.position, fix2.position_m)
+    np.testing.assert_allclose(trk.position_cov, RAY_COVARIANCE_SCALE * fix2.covariance,
+                               rtol=1e-12)
+
+
 def test_text_image_points_and_tdoas_are_refused(rig, side_rig):
     """numpy read the text ("320", "240") as a pixel, "1e-4" as a TDOA and True as 1 in
     locate_on_ray, the rig's rays, RayTdoaTracker.update_measurements and the regressor's

@@ -70,7 +70,7 @@ from sklearn.base import BaseEstimator, RegressorMixin
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.localize import as_tdoas
-from hearsee.audio.tracking import MotionKalman
+from hearsee.audio.tracking import MotionKalman, _covariance
 from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import EstimationError, GeometryError
 from hearsee.geometry import as_points
@@ -561,19 +561,18 @@ class RayTdoaTracker(RayTracker):
                             tdoa_s: ArrayLike | None = None, fix: RayFix | None = None) -> bool:
         """One frame at ``t`` (seconds): the image point ``uv`` (pixels; None = not seen), the
         TDOAs ``tdoa_s`` (seconds, one per pair; NaN = none) and the frame's camera-ray ``fix``
-        (None where the TDOAs gave none or it was discarded). Returns True when a TDOA or a
-        (re)start fix was fused."""
+        (None where the TDOAs gave none or it was discarded; it and its alternatives need a
+        finite position and a finite, symmetric, positive definite covariance, as
+        :class:`RayTracker`'s fixes: EstimationError). Returns True when a TDOA or a (re)start
+        fix was fused."""
         if uv is not None:
             uv = _image_point(uv, finite=False)  # (NaN: not seen in this frame)
         if tdoa_s is not None:
             tdoa_s = as_tdoas(tdoa_s, len(self.pairs), EstimationError)
-        if fix is not None and not (np.all(np.isfinite(fix.position_m))
-                                    and np.all(np.isfinite(fix.covariance))):
-            # (a NaN fix started the track at NaN; the next frame failed far from the cause)
-            raise EstimationError("a RayFix must have a finite position and covariance")
+        cands = [] if fix is None else [_checked_fix(f) for f in (fix, *fix.alternatives)]
         if fix is not None and (not self.initialized or self.n_rejects >= self.max_rejects):
             self.predict(t)  # (the time's checks: finite, not before the last frame)
-            self._start(np.asarray(fix.position_m, dtype=float), np.asarray(fix.covariance))
+            self._start(*cands[0])
             self.t = float(t)
             return True
         self.predict(t)
@@ -585,9 +584,7 @@ class RayTdoaTracker(RayTracker):
         if fix is None or tdoa_s is None:
             return False
         # the fix (or an alternative) against the prediction: MotionKalman's position gate
-        if min(self._innovation(np.asarray(f.position_m, dtype=float), self.H,
-                                np.asarray(f.covariance), None)[2]
-               for f in [fix, *fix.alternatives]) > self._gate:
+        if min(self._innovation(pos, self.H, cov, None)[2] for pos, cov in cands) > self._gate:
             self.n_rejects += 1
             return False
         z = np.asarray(tdoa_s, dtype=float).reshape(-1)
@@ -631,6 +628,24 @@ class RayTdoaTracker(RayTracker):
             return False
         self._correct(y, S, H, R)
         return True
+
+
+def _checked_fix(fix: RayFix) -> tuple[NDArray, NDArray]:
+    """A fix's position (3,) in metres and covariance (3, 3) in m^2 as float arrays, or an
+    EstimationError naming the RayFix unless the position is three finite numbers and the
+    covariance finite, symmetric and positive definite (:class:`RayTracker`'s rule; a NaN fix
+    started the track at NaN, a covariance of -I gave a negative position_cov and a 2x2 one a
+    builtin ValueError). The fix check of :meth:`RayTdoaTracker.update_measurements`."""
+    pos = (np.asarray(fix.position_m, dtype=float).reshape(-1)
+           if real_entries(fix.position_m) else np.zeros(0))
+    if pos.shape != (3,) or not np.all(np.isfinite(pos)):
+        raise EstimationError(f"a RayFix must have a finite position [x, y, z] in metres, got "
+                              f"{fix.position_m!r:.80}")
+    try:
+        cov = _covariance(fix.covariance, 3)
+    except EstimationError as exc:
+        raise EstimationError(f"a RayFix's covariance: {exc}") from None
+    return pos, cov
 
 
 def feed_tracker(tracker: Any, t: float, uv: ArrayLike | None, tdoa_s: ArrayLike | None,
