@@ -671,6 +671,40 @@ def test_regressor_refuses_what_scikit_learn_would_raise_on(rig):
     assert reg.predict(X[:0]).shape == (0, 3)
 
 
+def test_regressor_takes_one_layer_size_as_mlp_regressor_does(rig):
+    """hidden_layer_sizes=16 raised a builtin TypeError (tuple(16)) although MLPRegressor
+    takes an int as one hidden layer; now the same model as (16,). Text, a bool, None or 0
+    are an EstimationError."""
+    X, Y = simulate_av_samples(rig, 40, rng=np.random.default_rng(0))
+    one = AudioVisualRegressor(hidden_layer_sizes=16, max_iter=20).fit(X, Y)
+    ref = AudioVisualRegressor(hidden_layer_sizes=(16,), max_iter=20).fit(X, Y)
+    assert [c.shape for c in one.model_[-1].coefs_] == [(5, 16), (16, 3)]
+    np.testing.assert_array_equal(one.predict(X), ref.predict(X))
+    assert one.get_params()["hidden_layer_sizes"] == 16  # (the parameter as given)
+    np.testing.assert_array_equal(
+        AudioVisualRegressor(hidden_layer_sizes=np.int64(16), max_iter=20).fit(X, Y).predict(X),
+        ref.predict(X))
+    for bad in (True, "16", None, 0):
+        with pytest.raises(EstimationError, match="hidden_layer_sizes"):
+            AudioVisualRegressor(hidden_layer_sizes=bad, max_iter=5).fit(X, Y)
+
+
+def test_regressor_predict_before_fit_is_scikit_learns_not_fitted_error(rig):
+    """predict before fit raised hearsee's EstimationError only, which scikit-learn does not
+    recognise (check_estimator's check_estimators_unfitted failed); now an error that is both."""
+    from sklearn.exceptions import NotFittedError
+    from sklearn.utils.estimator_checks import check_estimators_unfitted
+
+    X, _ = simulate_av_samples(rig, 5, rng=np.random.default_rng(0))
+    with pytest.raises(NotFittedError, match="not fitted") as info:
+        AudioVisualRegressor().predict(X)
+    assert isinstance(info.value, EstimationError)
+    check_estimators_unfitted("AudioVisualRegressor", AudioVisualRegressor())
+    from hearsee.fusion.audiovisual import RegressorNotFittedError
+
+    assert type(info.value) is RegressorNotFittedError
+
+
 def test_rig_keeps_copies_of_the_callers_mounting():
     """AudioVisualRig copies (and freezes) its mounting R, t: editing the caller's arrays
     afterwards does not move the rig's camera."""

@@ -59,7 +59,7 @@ Geometry* (2003), ch. 6 for the back-projected ray; Brent (1973) for the bounded
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -67,6 +67,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar
 from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.exceptions import NotFittedError
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.localize import as_tdoas
@@ -122,6 +123,7 @@ __all__ = [
     "RayTdoaTracker",
     "RayTrack",
     "RayTracker",
+    "RegressorNotFittedError",
     "locate_on_ray",
     "feed_tracker",
     "frame_fix",
@@ -846,6 +848,26 @@ def simulate_av_samples(rig: AudioVisualRig, n: int, range_m: tuple[float, float
     return np.column_stack([tdoa, uv_n]), Y
 
 
+class RegressorNotFittedError(EstimationError, NotFittedError):
+    """:meth:`AudioVisualRegressor.predict` before ``fit``: hearsee's EstimationError and
+    scikit-learn's ``NotFittedError`` at once (scikit-learn's tools and
+    ``check_estimator`` recognise an unfitted estimator by the latter)."""
+
+
+def _layer_sizes(sizes: Any) -> tuple[Any, ...]:
+    """``hidden_layer_sizes`` as a tuple for MLPRegressor: one whole number >= 1 is one hidden
+    layer, as MLPRegressor takes it (tuple() raised a builtin TypeError on 16); a sequence is
+    passed on for MLPRegressor's own checks (fit's EstimationError); anything else (text, a
+    bool, None) an EstimationError."""
+    if isinstance(sizes, str) or not isinstance(sizes, Iterable):
+        return (whole_number("hidden_layer_sizes", sizes, 1, error=EstimationError),)
+    try:
+        return tuple(sizes)
+    except TypeError:  # (a 0-d array)
+        raise EstimationError(f"hidden_layer_sizes must be an integer >= 1 or a sequence of "
+                              f"them, got {sizes!r:.80}") from None
+
+
 class AudioVisualRegressor(RegressorMixin, BaseEstimator):
     """(ITDs, image point) -> 3D position by a multi-layer perceptron (thesis 5.3.3).
 
@@ -856,8 +878,8 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
 
     Parameters
     ----------
-    hidden_layer_sizes : tuple of int
-        Hidden layers of the MLP.
+    hidden_layer_sizes : int or tuple of int
+        Hidden layers of the MLP (one int: one layer of that many units, as MLPRegressor).
     alpha : float
         L2 penalty.
     solver : str
@@ -909,7 +931,8 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
             raise EstimationError(f"fit needs at least 2 samples, got {A.shape[0]}")
         self.model_ = make_pipeline(
             StandardScaler(),
-            MLPRegressor(hidden_layer_sizes=tuple(self.hidden_layer_sizes), alpha=self.alpha,
+            MLPRegressor(hidden_layer_sizes=_layer_sizes(self.hidden_layer_sizes),
+                         alpha=self.alpha,
                          solver=self.solver,  # (int() read 2.5 as 2 and "500" as 500)
                          max_iter=whole_number("max_iter", self.max_iter,
                                                error=EstimationError),
@@ -926,8 +949,10 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
         return self
 
     def predict(self, X: ArrayLike) -> NDArray:
+        """Positions ``(n, 3)`` in metres (array frame) of features ``(n, n_pairs + 2)``;
+        :class:`RegressorNotFittedError` before :meth:`fit`."""
         if not hasattr(self, "model_"):
-            raise EstimationError("AudioVisualRegressor is not fitted; call fit() first")
+            raise RegressorNotFittedError("AudioVisualRegressor is not fitted; call fit() first")
         A = self._features(X)
         if A.shape[1] != self.n_features_in_:
             raise EstimationError(
