@@ -262,6 +262,25 @@ def test_simulate_av_samples_bad_arguments(rig, kw, name):
         simulate_av_samples(rig, args.pop("n"), rng=0, **args)
 
 
+def test_simulate_av_samples_refuses_a_margin_without_image_and_a_short_range(rig):
+    """margin_px=400 of a 640x480 image raised numpy's ValueError 'high - low < 0', -1e308 its
+    OverflowError, range_m=(1.0,) a builtin IndexError. Now EstimationErrors; the largest
+    margin (239.5 px: the row v = 239.5) and a range of one distance still give samples, on
+    that row and at that distance from the camera centre."""
+    for kw, match in (({"margin_px": 400.0}, r"margin_px must be a finite number in "
+                       r"\[-1e\+300, 239.5\]"),
+                      ({"margin_px": 240}, "margin_px"), ({"margin_px": -1e308}, "margin_px"),
+                      ({"range_m": (1.0,)}, "range_m must satisfy 0 < near <= far"),
+                      ({"range_m": 1.0}, "range_m"), ({"range_m": (2.0, 1.0)}, "range_m")):
+        with pytest.raises(EstimationError, match=match):
+            simulate_av_samples(rig, 5, rng=0, **kw)
+    X, Y = simulate_av_samples(rig, 5, range_m=(1.5, 1.5), margin_px=239.5, rng=0)
+    np.testing.assert_allclose(X[:, -1], 239.5, atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(Y - rig.camera_centre, axis=1), 1.5, rtol=1e-12)
+    X2, _ = simulate_av_samples(rig, 5, margin_px=-50, rng=0)  # beyond the border: allowed
+    assert X2.shape == (5, 5) and np.all(np.isfinite(X2))
+
+
 def _walk_measurements(rig, rng, n=80, dt=0.016, sigma_tdoa_s=8e-6, sigma_px=1.0, x0=1.3):
     """(t, truth, pixel, TDOAs, fix) of a source walking at constant velocity from
     (x0, -0.3, 0.05) m; pixel noise drawn only when ``sigma_px`` > 0."""

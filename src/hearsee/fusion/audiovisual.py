@@ -251,16 +251,18 @@ def _ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: 
     return array.tdoa(pts, list(pairs) if pairs is not None else None) - np.asarray(tdoa_s, float)
 
 
-def _ray_range(range_m: Any) -> tuple[float, float]:
+def _ray_range(range_m: Any, *, equal_ok: bool = False) -> tuple[float, float]:
     """``range_m`` (near, far) of a search along a camera ray, metres, as floats;
-    EstimationError unless 0 < near < far (finite)."""
+    EstimationError unless 0 < near < far (near <= far where ``equal_ok``), both finite."""
     try:
         near, far = range_m[0], range_m[1]
     except (TypeError, IndexError, KeyError):
         near = far = None
     # (float() read ("0.1", "10") as numbers and True as 1 m)
-    if not (is_real(near) and is_real(far) and 0 < near < far):
-        raise EstimationError(f"range_m must satisfy 0 < near < far (finite), got {range_m!r}")
+    if not (is_real(near) and is_real(far) and 0 < near and (near <= far if equal_ok
+                                                             else near < far)):
+        raise EstimationError(f"range_m must satisfy 0 < near {'<=' if equal_ok else '<'} far "
+                              f"(finite), got {range_m!r}")
     return float(near), float(far)
 
 
@@ -817,7 +819,9 @@ def simulate_av_samples(rig: AudioVisualRig, n: int, range_m: tuple[float, float
     Draws ``n`` source positions uniformly in the camera's view (pixel uniform in the image,
     range uniform in ``range_m`` metres from the camera centre), computes their exact TDOAs
     (all pairs) and pixels, and adds Gaussian noise (``sigma_tdoa_s`` seconds,
-    ``sigma_px`` pixels).
+    ``sigma_px`` pixels). ``range_m`` is (near, far) in metres, 0 < near <= far; ``margin_px``
+    the pixels kept clear of the image border (negative: beyond it), at most
+    (min(width, height) - 1) / 2.
 
     Returns
     -------
@@ -827,25 +831,31 @@ def simulate_av_samples(rig: AudioVisualRig, n: int, range_m: tuple[float, float
         True positions, array frame, metres.
     """
     n = whole_number("n", n, 1, error=EstimationError)
-    near = finite_number("range_m[0]", range_m[0], 0.0, lo_open=True, error=EstimationError)
-    if not near <= finite_number("range_m[1]", range_m[1], 0.0, lo_open=True,
-                                 error=EstimationError):
-        raise EstimationError(f"range_m must be (near, far) metres with 0 < near <= far, got "
-                              f"{range_m}")
+    # ((1.0,) raised a builtin IndexError)
+    near, far = _ray_range(range_m, equal_ok=True)
     sigma_tdoa_s = finite_number("sigma_tdoa_s", sigma_tdoa_s, 0.0, error=EstimationError)
     sigma_px = finite_number("sigma_px", sigma_px, 0.0, error=EstimationError)
-    # (NaN: numpy's builtin OverflowError; text a TypeError)
-    finite_number("margin_px", margin_px, error=EstimationError)
-    rng = np.random.default_rng(rng)
     cam = rig.camera
+    margin_px = _image_margin(margin_px, cam)
+    rng = np.random.default_rng(rng)
     uv = np.column_stack([rng.uniform(margin_px, cam.width - 1 - margin_px, n),
                           rng.uniform(margin_px, cam.height - 1 - margin_px, n)])
     o, d = rig.rays(uv)
-    s = rng.uniform(range_m[0], range_m[1], n)
+    s = rng.uniform(near, far, n)
     Y = o[None, :] + s[:, None] * d
     tdoa = rig.array.tdoa(Y) + sigma_tdoa_s * rng.standard_normal((n, len(rig.array.pairs)))
     uv_n = rig.project(Y) + sigma_px * rng.standard_normal((n, 2))
     return np.column_stack([tdoa, uv_n]), Y
+
+
+def _image_margin(margin_px: Any, camera: Camera) -> float:
+    """``margin_px`` (pixels kept clear of the image border; negative: beyond it) as a float,
+    or an EstimationError unless it is a finite number that leaves part of the ``camera``'s
+    image, at most (min(width, height) - 1) / 2, and at least -1e300 (NaN was numpy's builtin
+    OverflowError, text a TypeError, 400 px of a 640x480 image its ValueError 'high - low <
+    0', -1e308 its OverflowError)."""
+    most = (min(camera.width, camera.height) - 1) / 2
+    return finite_number("margin_px", margin_px, -1e300, most, error=EstimationError)
 
 
 class RegressorNotFittedError(EstimationError, NotFittedError):
