@@ -60,6 +60,29 @@ def test_cost_along_ray_has_its_minimum_at_the_source(rig):
     assert s[np.argmin(J)] == pytest.approx(s_true, abs=0.01)
 
 
+def test_ray_residuals_refuses_arguments_of_other_shapes(rig):
+    """A direction of 2 numbers, an origin of 4, ranges (1, 2) or 2 TDOAs for 3 pairs raised
+    numpy's builtin broadcast ValueError; now GeometryErrors. The residuals of valid arguments
+    are the TDOAs of the points on the ray minus the measured ones, pair by pair."""
+    arr = rig.array
+    o, d = np.array([0.05, 0.0, 0.12]), np.array([0.6, 0.8, 0.0])
+    z = arr.tdoa(o + 1.5 * d)
+    for kw, match in (({"direction": [1.0, 0.0]}, r"origin and direction .* \(3,\) and \(2,\)"),
+                      ({"origin": [0.0, 0.0, 0.0, 0.0]}, r"got \(4,\) and \(3,\)"),
+                      ({"direction": d[None, :]}, r"\(1, 3\)"),
+                      ({"s": [[1.0, 2.0]]}, r"s must be one range"),
+                      ({"tdoa_s": z[:2]}, "got 2 TDOAs for 3 microphone pairs"),
+                      ({"tdoa_s": np.r_[z, 0.0]}, "got 4 TDOAs for 3 microphone pairs"),
+                      ({"tdoa_s": z, "pairs": [(0, 1)]}, "got 3 TDOAs for 1 microphone pairs")):
+        args = {"array": arr, "origin": o, "direction": d, "s": [1.0], "tdoa_s": z, **kw}
+        with pytest.raises(GeometryError, match=match):
+            ray_residuals(**args)
+    F = ray_residuals(arr, o, d, [1.0, 1.5], z)
+    np.testing.assert_allclose(F, [arr.tdoa(o + d) - z, np.zeros(3)], rtol=0, atol=1e-15)
+    F1 = ray_residuals(arr, o, d, 1.0, z[:1], pairs=[arr.pairs[0]])
+    np.testing.assert_allclose(F1, [arr.tdoa(o + d)[:1] - z[:1]], rtol=0, atol=1e-15)
+
+
 def test_itd_noise_gives_errors_mostly_along_the_ray(rig):
     rng = np.random.default_rng(0)
     p = np.array([1.0, 0.1, 0.0])

@@ -229,15 +229,29 @@ def ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: A
                   tdoa_s: ArrayLike, pairs: Sequence[tuple[int, int]] | None = None) -> NDArray:
     """ITD residuals ``F_k(s)`` (seconds) of the points ``origin + s * direction``.
 
-    ``s`` (n,) ranges in metres; returns ``(n, n_pairs)``. ``sum(F**2, axis=1)`` is the cost
-    J(s) plotted in the thesis's figs. 5.14-5.16. Arguments that are no numbers are a
-    GeometryError (numpy read text as the numbers it spells, True as 1).
+    ``origin`` and ``direction`` (3,) in the array frame (metres), ``s`` one range or (n,)
+    ranges in metres, ``tdoa_s`` one TDOA per pair of ``pairs`` (default all pairs of
+    ``array``), seconds; returns ``(n, n_pairs)``. ``sum(F**2, axis=1)`` is the cost J(s)
+    plotted in the thesis's figs. 5.14-5.16. Arguments that are no numbers (numpy read text as
+    the numbers it spells, True as 1) or of other shapes (numpy's broadcast ValueError) are a
+    GeometryError.
     """
     for name, v in (("origin", origin), ("direction", direction), ("s", s),
                     ("tdoa_s", tdoa_s)):
         if not real_entries(v):
             raise GeometryError(f"ray_residuals: {name} must hold numbers, got {v!r:.80}")
-    return _ray_residuals(array, origin, direction, s, tdoa_s, pairs)
+    o, d = np.asarray(origin, dtype=float), np.asarray(direction, dtype=float)
+    if o.shape != (3,) or d.shape != (3,):
+        raise GeometryError(f"ray_residuals: origin and direction must be [x, y, z] each, shape "
+                            f"(3,), got {o.shape} and {d.shape}")
+    if np.ndim(s) > 1:
+        raise GeometryError(f"ray_residuals: s must be one range or ranges (n,) in metres, got "
+                            f"shape {np.shape(s)}")
+    prs = array.checked_pairs(pairs)
+    z = np.asarray(tdoa_s, dtype=float).reshape(-1)
+    if z.size != len(prs):
+        raise GeometryError(f"ray_residuals: got {z.size} TDOAs for {len(prs)} microphone pairs")
+    return _ray_residuals(array, o, d, s, z, prs)
 
 
 def _ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: ArrayLike,
