@@ -229,6 +229,26 @@ def test_an_absurd_pixel_gives_a_unit_ray_or_a_geometry_error(rig):
         locate_on_ray(rig, [1e300, 240.0], z)
 
 
+def test_rig_parts_must_be_a_mic_array_and_a_camera(rig):
+    """AudioVisualRig('three-mic', None, I, 0) was built, and locate_on_ray then failed with a
+    builtin AttributeError; a MicArray and a Camera (subclasses included) still make a rig."""
+    for array, camera, match in (("three-mic", rig.camera, "rig array must be a MicArray"),
+                                 (rig.array.positions, rig.camera, "rig array must be a"),
+                                 (rig.array, None, "rig camera must be a Camera"),
+                                 (rig.array, rig.camera.K, "rig camera must be a Camera"),
+                                 ("three-mic", None, "rig array")):
+        with pytest.raises(GeometryError, match=match):
+            AudioVisualRig(array, camera, np.eye(3), np.zeros(3))
+
+    class MyCamera(Camera):
+        pass
+
+    mine = MyCamera(rig.camera.K, rig.camera.dist, 640, 480)
+    same = AudioVisualRig(rig.array, mine, rig.R, rig.t)
+    p = np.array([1.2, 0.2, 0.05])
+    np.testing.assert_array_equal(same.project(p), rig.project(p))
+
+
 def test_a_mirrored_mounting_is_not_a_rotation(rig):
     """R @ R.T = I also holds for a reflection (det -1): such a 'mounting' was accepted and
     every pixel then mirrored its ray, so the fixes were silently wrong."""

@@ -140,9 +140,10 @@ class AudioVisualRig:
     Parameters
     ----------
     array : MicArray
-        Microphones (array frame).
+        Microphones (array frame); anything else is a GeometryError (a preset name:
+        :func:`hearsee.audio.arrays.load_array` first).
     camera : Camera
-        Calibrated pinhole camera (intrinsics, distortion).
+        Calibrated pinhole camera (intrinsics, distortion); anything else a GeometryError.
     R, t : arrays (3, 3), (3,)
         Mounting: ``p_optical = R @ p_array + t`` (metres).
     """
@@ -153,6 +154,15 @@ class AudioVisualRig:
     t: NDArray
 
     def __post_init__(self) -> None:
+        # (any object was taken: AudioVisualRig("three-mic", None, I, 0) built, and the first
+        # fix failed with an AttributeError; as StereoRig, the parts must be what they are)
+        if not isinstance(self.array, MicArray):
+            raise GeometryError(f"rig array must be a MicArray (hearsee.audio.arrays.load_array "
+                                f"makes one of a preset name or a file), got "
+                                f"{type(self.array).__name__} {self.array!r:.40}")
+        if not isinstance(self.camera, Camera):
+            raise GeometryError(f"rig camera must be a Camera (hearsee.vision.camera), got "
+                                f"{type(self.camera).__name__} {self.camera!r:.40}")
         # (numpy read text as the numbers it spells and True as 1)
         # (copies, frozen: the rig must not share -- or freeze -- the caller's arrays)
         R = np.array(self.R, dtype=float) if real_entries(self.R) else np.zeros(0)
