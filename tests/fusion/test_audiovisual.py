@@ -595,6 +595,49 @@ def test_track_on_rays_from_a_recording(rig):
     assert np.all(np.isnan(res2.raw[late, 0])) and np.all(np.isfinite(res2.position[late, 0]))
 
 
+@pytest.mark.parametrize("tracker", [None, "ray"])
+def test_an_image_point_of_nan_is_not_seen_like_none(rig, tracker):
+    """An image_points callback that answered (nan, nan) for frames where the detector lost
+    the source aborted the whole track_on_rays run with EstimationError, though None worked
+    and RayTdoaTracker reads NaN as 'not seen'. Now a NaN or infinite coordinate is None:
+    the same fixes and track, frame for frame, as with None; no fix in those frames."""
+    from hearsee.fusion.audiovisual import frame_fix
+    from hearsee.sim.moving import Trajectory, simulate_moving_free_field
+
+    rng = np.random.default_rng(5)
+    fs = 16000
+    traj = Trajectory([0.0, 0.6], [[1.0, -0.2, 0.0], [1.0, 0.1, 0.0]])
+    y = simulate_moving_free_field(rng.standard_normal(fs * 6 // 10), fs, rig.array, traj,
+                                   snr_db=30.0, rng=rng)
+
+    def points(missing):
+        return lambda t: missing if 0.3 < t < 0.4 else rig.project(traj.at(t))[0]
+
+    def run(missing):
+        return track_on_rays(rig, y, fs, points(missing),
+                             tracker=None if tracker is None else RayTracker())
+
+    ref = run(None)
+    lost = (ref.t > 0.3 + 0.01) & (ref.t < 0.4 - 0.01)
+    assert lost.sum() >= 4 and np.all(np.isnan(ref.raw[lost]))
+    for missing in ((np.nan, np.nan), [np.nan, 240.0], np.array([np.inf, 240.0])):
+        res = run(missing)
+        np.testing.assert_array_equal(res.raw, ref.raw)
+        np.testing.assert_array_equal(res.position, ref.position)
+        np.testing.assert_array_equal(res.velocity, ref.velocity)
+    # one frame: no image point, no fix; a NaN at the emission time keeps the first answer
+    p = traj.at(0.2)
+    z, uv = rig.array.tdoa(p), rig.project(p)[0]
+    kw = dict(range_m=(0.2, 4.0), sigma_tdoa_s=8e-6, sigma_px=1.0, max_residual_s=1e-4)
+    assert frame_fix(rig, lambda t: (np.nan, np.nan), 0.2, z, rig.array.pairs, **kw) == (None,
+                                                                                          None)
+    calls = iter([uv, (np.nan, np.nan)])
+    got, fix = frame_fix(rig, lambda t: next(calls), 0.2, z, rig.array.pairs, **kw)
+    assert got is uv and np.linalg.norm(fix.position_m - p) < 1e-3
+    with pytest.raises(EstimationError, match="image point"):
+        frame_fix(rig, lambda t: (np.nan, 240.0, 1.0), 0.2, z, rig.array.pairs, **kw)
+
+
 def test_track_on_rays_at_48_khz_uses_the_wide_band(rig):
     from hearsee.sim.moving import Trajectory, simulate_moving_free_field
 

@@ -691,6 +691,16 @@ def feed_tracker(tracker: Any, t: float, uv: ArrayLike | None, tdoa_s: ArrayLike
                           [(a.position_m, a.covariance) for a in fix.alternatives])
 
 
+def _seen(uv: Any) -> Any:
+    """An ``image_points`` answer as :func:`frame_fix` uses it: None (not seen) for None or a
+    point with a NaN or infinite coordinate (a NaN point aborted the whole run with
+    locate_on_ray's EstimationError), else the point as given; anything but two pixel
+    coordinates is an EstimationError (:func:`_image_point`)."""
+    if uv is None or not np.all(np.isfinite(_image_point(uv, finite=False))):
+        return None
+    return uv
+
+
 def frame_fix(rig: AudioVisualRig, image_points: Callable[[float], Any], t: float,
               tdoa_s: ArrayLike | None, pairs: Sequence[tuple[int, int]], tracker: Any = None,
               *, range_m: tuple[float, float], sigma_tdoa_s: float, sigma_px: float,
@@ -705,6 +715,10 @@ def frame_fix(rig: AudioVisualRig, image_points: Callable[[float], Any], t: floa
     the camera-array parallax turned that into a range error about range / baseline times
     larger (1-3.5 cm at 0.5-1.5 m/s, 1.3 m, camera 0.2 m aside; found by an audit).
 
+    ``image_points`` answers None, or a point with a NaN or infinite coordinate (as
+    :meth:`RayTdoaTracker.update_measurements` reads NaN), when the camera does not see the
+    source; anything else must be two pixel coordinates (EstimationError).
+
     Returns ``(uv, fix)``: the image point (None when the camera has none) and the fix (None
     without TDOAs or image point, or when the fix's RMS ITD residual exceeds
     ``max_residual_s``). ``fix.position_m`` is therefore where the source was when it emitted
@@ -717,7 +731,7 @@ def frame_fix(rig: AudioVisualRig, image_points: Callable[[float], Any], t: floa
         p = np.asarray(tracker.position, dtype=float)
         if np.all(np.isfinite(p)):
             r = float(np.linalg.norm(p - centre))
-    uv = image_points(t if r is None else t - r / c)
+    uv = _seen(image_points(t if r is None else t - r / c))
     ok = tdoa_s is not None and np.all(np.isfinite(tdoa_s))
     if uv is None or not ok:
         return uv, None
@@ -728,7 +742,7 @@ def frame_fix(rig: AudioVisualRig, image_points: Callable[[float], Any], t: floa
 
     fix = fix_at(uv)
     if r is None:  # no track yet: the image at the first fix's emission time
-        uv2 = image_points(t - float(np.linalg.norm(fix.position_m - centre)) / c)
+        uv2 = _seen(image_points(t - float(np.linalg.norm(fix.position_m - centre)) / c))
         if uv2 is not None:
             uv, fix = uv2, fix_at(uv2)
     if fix.residual_s > max_residual_s:
