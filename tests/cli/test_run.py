@@ -382,3 +382,42 @@ def test_report_folder_of_someone_elses_files_is_kept_unless_forced(robot_dir, m
     assert len(err) == 1 and "is not a hearsee report's" in err[0], err
     assert main(["run", "--config", str(cfg), "--dry-run", "--force"]) == 0
     assert (robot_dir / "site" / "index.html").read_text(encoding="utf-8") == "<title>mine</title>"
+
+
+@pytest.mark.parametrize("option", ["--mcap", "--rerun"])
+def test_exports_over_the_runs_own_outputs_are_refused_before_listening(
+        robot_dir, monkeypatch, capsys, option):
+    """--mcap / --rerun naming the run's JSON lines or one of its report's files were only
+    checked against the inputs: the run went ahead and the export, written last, replaced
+    them (updates.jsonl / log.json began with MCAP bytes). Refused as `hearsee demo` does,
+    --force or not, dry run or not, before any device opens; every earlier file kept."""
+    x = np.zeros((6, 2 * FS))  # (a device that would play 2 s, were the run started)
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES, x))
+    rep = robot_dir / "report"
+    rep.mkdir()
+    earlier = {rep / "index.html": "<title>hearsee report: earlier</title>",
+               rep / "log.json": "[]", rep / "summary.json": "{}",
+               rep / "updates.jsonl": '{"t": 0.0, "phase": "listening"}\n',
+               robot_dir / "run.jsonl": '{"t": 0.0, "phase": "listening"}\n'}
+    for p, text in earlier.items():
+        p.write_text(text, encoding="utf-8")
+    default = robot_dir / "default.yaml"  # (JSON lines: report/updates.jsonl)
+    default.write_bytes(_config(robot_dir, cameras=False).read_bytes())
+    cases = [(default, [], rep / "updates.jsonl", "is the run's JSON lines file"),
+             (default, [], rep / "log.json", "one of the report's own files (output.report"),
+             (default, [], rep / "index.html", "one of the report's own files"),
+             (default, ["--out", str(rep)], rep / "summary.json",
+              f"one of the report's own files (--out {rep})"),
+             (default, ["--out", str(rep)], rep / "updates.jsonl", "JSON lines file"),
+             (_config(robot_dir, cameras=False, output={"report": "report", "jsonl": "run.jsonl"}),
+              [], robot_dir / "run.jsonl", "JSON lines file (output.jsonl")]
+    for cfg, args, target, words in cases:
+        for dry in (["--dry-run"], ["--duration", "1"]):
+            code = main(["run", "--config", str(cfg), "-q", "--force", *args, *dry,
+                         option, str(target)])
+            out = capsys.readouterr()
+            assert code == 2, (target, dry, out.err)
+            assert words in out.err and out.err.count("\n") == 1, out.err
+            assert out.err.startswith(f"hearsee: error: {option} {target} ")
+    for p, text in earlier.items():
+        assert p.read_text(encoding="utf-8") == text, p

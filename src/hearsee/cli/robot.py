@@ -34,6 +34,7 @@ def demo_cmd(
     JSON log of every estimate and a summary.
     """
     from hearsee.errors import ConfigError
+    from hearsee.robot.export import check_export_targets
     from hearsee.robot.pipeline import run_scenario
     from hearsee.robot.report import (
         report_folder_blocker,
@@ -58,11 +59,8 @@ def demo_cmd(
     if hit is not None:
         raise ConfigError(f"--out {out}: the report would overwrite the input {hit}; choose "
                           "another folder")
-    for opt, p in (("--rerun", rerun), ("--mcap", mcap)):
-        if p is not None and report_overwrites(out, [p]) is not None:
-            # (--force let the export replace the report's log.json: a broken report)
-            raise ConfigError(f"{opt} {p} is one of the report's own files (--out {out}); "
-                              "choose another path")
+    # (--force let the export replace the report's log.json: a broken report)
+    check_export_targets((("--rerun", rerun), ("--mcap", mcap)), out, f"--out {out}")
     foreign = report_foreign_file(out)
     if foreign is not None and not force:
         raise ConfigError(f"--out {out}: {foreign} exists and is not a hearsee report's; "

@@ -65,6 +65,13 @@ def run_cmd(
     if out is not None:
         cfg = cfg.with_output(out)
         check_outputs(cfg, f"--out {out}")
+    # the exports are written last: never over the run's own JSON lines or report files
+    # (they replaced them, --force or not); checked before listening and in the dry run
+    from hearsee.robot.export import check_export_targets
+
+    report_name = f"--out {out}" if out is not None else f"output.report {cfg.output.report}"
+    check_export_targets((("--rerun", rerun), ("--mcap", mcap)), cfg.output.report,
+                         report_name, cfg.output.jsonl)
     # the exports' extras, folders and overwrite rule before listening (and in the dry run):
     # a live run must not fail only when it writes them at its end
     exports = check_exports(rerun, mcap, cfg.input_files(), force)

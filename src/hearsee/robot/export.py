@@ -22,10 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from hearsee.config import output_file
+from hearsee.config import output_file, same_file
 from hearsee.errors import ConfigError
 
-__all__ = ["check_export", "write_mcap", "write_rerun"]
+__all__ = ["check_export", "check_export_targets", "write_mcap", "write_rerun"]
 
 #: each export's module and the error when its extra is not installed
 _EXTRAS = {"rerun": ("rerun", "--rerun needs the Rerun extra: pip install 'hearsee[rerun]'"),
@@ -96,6 +96,28 @@ def check_export(kind: str, path: str | Path) -> str:
     if importlib.util.find_spec(module) is None:
         raise ConfigError(missing)
     return f"{output_file(path)}: {module} installed, folder exists"
+
+
+def check_export_targets(exports: Sequence[tuple[str, str | Path | None]], report: str | Path,
+                         report_name: str, jsonl: str | Path | None = None) -> None:
+    """Before a run that writes its report folder ``report`` (and, for ``hearsee run``, its
+    JSON lines file ``jsonl``) and then its exports: ConfigError when an export ``(option,
+    path)`` (None paths skipped) is one of the run's own outputs -- one of the report's files
+    (:func:`hearsee.robot.report.report_overwrites`) or the JSON lines file. The exports are
+    written last and replaced them (an MCAP over log.json: a broken report), so this holds
+    with ``--force`` too. ``report_name`` names the folder in the message, e.g.
+    ``"--out hearsee-report"``. The one check of ``hearsee demo`` and ``hearsee run``."""
+    from hearsee.robot.report import report_overwrites
+
+    for opt, p in exports:
+        if p is None:
+            continue
+        if jsonl is not None and same_file(p, jsonl):
+            raise ConfigError(f"{opt} {p} is the run's JSON lines file (output.jsonl "
+                              f"{jsonl}); choose another path")
+        if report_overwrites(report, [p]) is not None:
+            raise ConfigError(f"{opt} {p} is one of the report's own files ({report_name}); "
+                              "choose another path")
 
 
 def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
