@@ -83,6 +83,9 @@ def test_rerun_overlay_colours_with_a_stand_in_rerun(tmp_path, monkeypatch):
         def save(self, path):
             open(path, "wb").close()
 
+        def disconnect(self):
+            pass
+
     fake = types.ModuleType("rerun")
     fake.RecordingStream = _Rec
     fake.Image = lambda a: np.asarray(a)
@@ -186,3 +189,83 @@ def test_mcap_overlay_of_bgra_and_single_channel_frames_is_bgr8(tmp_path):
         data = np.frombuffer(bytes(img.data), np.uint8)
         assert data.size == img.step * img.height
         np.testing.assert_array_equal(data.reshape(6, 8, 3), want)
+
+
+def test_mcap_error_part_way_keeps_the_existing_file(tmp_path):
+    """A frame write_mcap cannot describe (16-bit pixels) is found after the messages of the
+    log were written: the target had been opened "wb", so the previous MCAP was truncated
+    and a corrupt one left (70 bytes). It is now written beside the target and replaces it
+    only when complete: the earlier file stays byte for byte, no temporary file is left."""
+    pytest.importorskip("mcap_ros2")
+    from mcap.reader import make_reader
+
+    log, frames = _log()
+    path = tmp_path / "run.mcap"
+    write_mcap(path, log, frames)
+    path.chmod(0o640)
+    before = path.read_bytes()
+    with pytest.raises(ImageInputError, match=r"overlay frame at t = 0\.8 s"):
+        write_mcap(path, log, [frames[0], (0.8, np.zeros((24, 32, 3), np.uint16))])
+    assert path.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["run.mcap"]
+    with open(path, "rb") as f:  # (still a whole MCAP: every message of the first write)
+        assert sum(1 for _ in make_reader(f).iter_messages()) == 5 + 4 + 5 + 2
+    # a complete rewrite replaces it (fewer frames, same permissions) and leaves nothing else
+    write_mcap(path, log, frames[:1])
+    with open(path, "rb") as f:
+        topics = [ch.topic for _, ch, _ in make_reader(f).iter_messages()]
+    assert topics.count("/hearsee/overlay") == 1 and len(topics) == 5 + 4 + 5 + 1
+    assert path.stat().st_mode & 0o777 == 0o640
+    assert [p.name for p in tmp_path.iterdir()] == ["run.mcap"]
+
+
+def test_rerun_save_error_keeps_the_existing_file(tmp_path, monkeypatch):
+    """write_rerun saved straight into the target: a save that failed part way (here a
+    stand-in rerun whose sink writes some bytes, then fails) left them in place of the
+    earlier recording. Now the recording is saved beside it, its sink closed, and only then
+    moved over the target; on error the earlier file stays and no temporary file is left."""
+    import sys
+    import types
+
+    events = []
+
+    class _Rec:
+        def __init__(self, *_):
+            self.path = None
+
+        def log(self, *_, **__):
+            pass
+
+        def set_time(self, *_, **__):
+            pass
+
+        def save(self, path):
+            self.path = path
+            with open(path, "wb") as fh:
+                fh.write(b"partial")
+            if fail:
+                raise RuntimeError("disk full")
+
+        def disconnect(self):  # the sink closes: the recording is complete
+            with open(self.path, "ab") as fh:
+                fh.write(b" complete")
+            events.append(("disconnect", self.path))
+
+    fake = types.ModuleType("rerun")
+    fake.RecordingStream = _Rec
+    for name in ("Image", "Boxes3D", "Points3D", "LineStrips3D", "Scalars"):
+        setattr(fake, name, lambda *a, **k: None)
+    monkeypatch.setitem(sys.modules, "rerun", fake)
+    log, frames = _log()
+    path = tmp_path / "run.rrd"
+    path.write_bytes(b"earlier recording")
+    fail = True
+    with pytest.raises(RuntimeError, match="disk full"):
+        write_rerun(path, default_scenario().to_dict(), log, frames)
+    assert path.read_bytes() == b"earlier recording"
+    assert [p.name for p in tmp_path.iterdir()] == ["run.rrd"]
+    fail = False
+    assert write_rerun(path, default_scenario().to_dict(), log, frames) == path
+    assert path.read_bytes() == b"partial complete"
+    assert len(events) == 1 and events[0][1] != str(path)  # (closed before the move)
+    assert [p.name for p in tmp_path.iterdir()] == ["run.rrd"]

@@ -15,8 +15,12 @@ ROS 2 messages written to MCAP (open in Foxglove or ``ros2 bag``):
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
-from collections.abc import Mapping, Sequence
+import os
+import secrets
+import stat
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -85,6 +89,27 @@ def _overlay_bgr(img: np.ndarray, t: float) -> np.ndarray:
     return np.repeat(img[:, :, None], 3, axis=2) if img.ndim == 2 else img
 
 
+@contextlib.contextmanager
+def _replacing(path: Path) -> Iterator[Path]:
+    """A temporary file name beside ``path`` (its folder: the same file system) for an export
+    to write instead of ``path``; when the block ends without error the file replaces
+    ``path`` in one step (``os.replace``, keeping the permissions of a file it replaces),
+    and on any error it is removed and ``path`` is left as it was. An export that failed part
+    way (a frame it could not describe, a full disk, Ctrl-C) truncated the previous file
+    and left a corrupt one. A symlink's target is replaced, as writing through it did."""
+    target = Path(os.path.realpath(path))
+    tmp = target.with_name(f".{target.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
+    try:
+        yield tmp
+        if target.exists():
+            os.chmod(tmp, stat.S_IMODE(target.stat().st_mode))
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
 def check_export(kind: str, path: str | Path) -> str:
     """Before a run that ends by writing export ``kind`` (``"rerun"`` or ``"mcap"``) to
     ``path``: its extra is installed (else :class:`ConfigError`) and its folder exists (else
@@ -125,13 +150,14 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
     """Write the run's estimates (and overlay images ``(t, bgr uint8)``) as ROS 2 messages;
     ``frame_id`` names the frame of the positions: ``"room"`` for a simulated run, ``"robot"``
     for a live one (its log is in the robot frame; it was labelled ``room`` until
-    2026-12-01)."""
+    2026-12-01). The file is written beside ``path`` and replaces it only when complete: an
+    error leaves an existing file as it was."""
     try:
         from mcap_ros2.writer import Writer
     except ImportError:
         raise ConfigError(_EXTRAS["mcap"][1]) from None
     p = output_file(path)
-    with open(p, "wb") as fh:
+    with _replacing(p) as tmp, open(tmp, "xb") as fh:
         w = Writer(fh)
         s_point = w.register_msgdef("geometry_msgs/msg/PointStamped", _POINT_STAMPED)
         s_image = w.register_msgdef("sensor_msgs/msg/Image", _IMAGE)
@@ -163,7 +189,8 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
 
 def write_rerun(path: str | Path, scenario: Mapping[str, Any], log: Sequence[Mapping[str, Any]],
                 frames: Sequence[tuple[float, np.ndarray]] = ()) -> Path:
-    """Write a Rerun recording (``.rrd``): room, robot, truth and track in 3D, and the images."""
+    """Write a Rerun recording (``.rrd``): room, robot, truth and track in 3D, and the images.
+    As :func:`write_mcap`, the file replaces an existing ``path`` only when complete."""
     try:
         import rerun as rr
     except ImportError:
@@ -199,5 +226,7 @@ def write_rerun(path: str | Path, scenario: Mapping[str, Any], log: Sequence[Map
         # (BGR to RGB; a BGRA frame reversed whole was logged as ARGB: wrong colours)
         rgb = _overlay_bgr(img, t)[:, :, ::-1]
         rec.log("camera/overlay", rr.Image(np.ascontiguousarray(rgb)))
-    rec.save(str(p))
+    with _replacing(p) as tmp:
+        rec.save(str(tmp))
+        rec.disconnect()  # (the file is complete only once its sink is closed)
     return p
