@@ -79,6 +79,32 @@ def test_load_yaml_reads_exponent_numbers_without_a_dot(tmp_path):
     assert arr.speed_of_sound == 340.0 and arr.positions[1, 0] == 0.1
 
 
+def test_load_yaml_refuses_a_key_given_twice(tmp_path):
+    """PyYAML kept the last of two equal keys of a mapping without a word (a second ``head:``
+    block of a robot file dropped the first's pivot, offset and limits). load_yaml refuses
+    it, naming the key, the file and both lines; a key that overrides one a merge (``<<``)
+    brings in is no duplicate, and keys in different mappings never are."""
+    p = tmp_path / "robot.yaml"
+    p.write_text("audio:\n  array: three-mic\nhead:\n  pivot_m: [0, 0, 1.4]\n"
+                 "output: {report: out}\nhead:\n  pose_deg: [30, 0]\n", encoding="utf-8")
+    with pytest.raises(ConfigError) as exc:
+        load_yaml(p)
+    assert str(exc.value) == (f"{p}: invalid YAML at line 6, column 1: duplicate key 'head' "
+                              "(first given at line 3; a key may be given once)")
+    for text, key, line in (("a:\n  b: 1\n  c: 2\n  b: 3\n", "'b'", 2),
+                            ("a: [{x: 1, y: 2, x: 1}]\n", "'x'", 1),
+                            ("a: {1: 2, 1.0: 3}\n", "1.0", 1)):
+        p.write_text(text, encoding="utf-8")
+        with pytest.raises(ConfigError, match=f"duplicate key {key} \\(first given at line "
+                                              f"{line};"):
+            load_yaml(p)
+    p.write_text("base: &b {array: three-mic, fs: 8000}\naudio: {<<: *b, fs: 16000}\n"
+                 "x: [{k: 1}, {k: 2}]\ny: {k: 3}\n", encoding="utf-8")
+    assert load_yaml(p) == {"base": {"array": "three-mic", "fs": 8000},
+                            "audio": {"array": "three-mic", "fs": 16000},
+                            "x": [{"k": 1}, {"k": 2}], "y": {"k": 3}}
+
+
 def test_load_yaml_unreadable_file_is_a_typed_error(tmp_path, deny_reading):
     """A file without read permission (PermissionError) escaped load_yaml as a builtin OSError:
     a traceback in every CLI command that reads a YAML file."""

@@ -28,7 +28,40 @@ __all__ = [
 class _Loader(yaml.SafeLoader):
     """PyYAML's safe loader reading ``1e9`` / ``5E-3`` as numbers: YAML 1.1's float needs a dot
     (``1.0e9``), so ``speed_of_sound: 1e9`` used to be the string '1e9' and its error
-    "must be a number, got '1e9'" read like nonsense. The YAML 1.2 core schema's floats."""
+    "must be a number, got '1e9'" read like nonsense. The YAML 1.2 core schema's floats.
+
+    A key given twice in one mapping is refused (:meth:`flatten_mapping`): PyYAML kept the
+    last silently, so a second ``head:`` block dropped every field of the first."""
+
+    def __init__(self, stream: Any) -> None:
+        super().__init__(stream)
+        self._checked: set[int] = set()  # ids of the mapping nodes checked for duplicates
+
+    def flatten_mapping(self, node: yaml.MappingNode) -> None:
+        """Check the keys written in ``node`` (before a merge ``<<`` adds its keys, which a
+        key written there may override) once, then merge as PyYAML does."""
+        if id(node) not in self._checked:
+            self._checked.add(id(node))
+            self._refuse_duplicate_keys(node)
+        super().flatten_mapping(node)
+
+    def _refuse_duplicate_keys(self, node: yaml.MappingNode) -> None:
+        """A ConstructorError at the second of two equal keys of ``node``, naming the key and
+        the line of the first (load_yaml reports it with the file and the line)."""
+        first: dict[Any, Any] = {}
+        for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":
+                continue
+            key = self.construct_object(key_node)
+            try:
+                seen = first.setdefault(key, key_node)
+            except TypeError:  # (an unhashable key: PyYAML's own error says so)
+                continue
+            if seen is not key_node:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {key!r} (first given at line "
+                    f"{seen.start_mark.line + 1}; a key may be given once)",
+                    key_node.start_mark)
 
 
 _Loader.add_implicit_resolver(
