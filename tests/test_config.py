@@ -105,6 +105,24 @@ def test_load_yaml_refuses_a_key_given_twice(tmp_path):
                             "x": [{"k": 1}, {"k": 2}], "y": {"k": 3}}
 
 
+def test_load_yaml_nested_too_deeply_is_a_config_error(tmp_path):
+    """PyYAML's parser recurses once per level: a file nested a few hundred levels deep
+    raised a builtin RecursionError (a traceback from `hearsee run`). It is a ConfigError;
+    a deep but ordinary nesting still loads."""
+    p = tmp_path / "deep.yaml"
+    for text in ("audio: " + "[" * 3000 + "]" * 3000 + "\n",
+                 "a:\n" + "".join("  " * k + "b:\n" for k in range(1, 3000))):
+        p.write_text(text, encoding="utf-8")
+        with pytest.raises(ConfigError) as exc:
+            load_yaml(p)
+        assert str(exc.value) == f"{p}: invalid YAML: nested too deeply"
+    p.write_text("a: " + "[" * 50 + "1" + "]" * 50 + "\n", encoding="utf-8")
+    v = load_yaml(p)["a"]
+    for _ in range(50):
+        v = v[0]
+    assert v == 1
+
+
 def test_load_yaml_unreadable_file_is_a_typed_error(tmp_path, deny_reading):
     """A file without read permission (PermissionError) escaped load_yaml as a builtin OSError:
     a traceback in every CLI command that reads a YAML file."""

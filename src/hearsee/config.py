@@ -141,6 +141,8 @@ def load_yaml(path: str | Path) -> dict[str, Any]:
         data = yaml.load(p.read_text(encoding="utf-8"), Loader=_Loader)  # noqa: S506 (safe)
     except UnicodeDecodeError as exc:
         raise ConfigError(f"{p}: not a text YAML file ({exc.reason})") from None
+    except RecursionError:  # (PyYAML's parser recurses per level: a builtin error escaped)
+        raise ConfigError(f"{p}: invalid YAML: nested too deeply") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""

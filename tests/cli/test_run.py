@@ -205,6 +205,15 @@ def test_bad_robot_files_and_options(robot_dir, capsys):
     assert (robot_dir / "old.rrd").read_bytes() == b"keep"
 
 
+def test_robot_file_nested_too_deeply_is_one_line(tmp_path, capsys):
+    """A robot file nested 3000 levels deep: a RecursionError traceback and exit 1 before;
+    now one line naming the file, exit 2."""
+    deep = tmp_path / "deep.yaml"
+    deep.write_text("audio: " + "[" * 3000 + "]" * 3000 + "\n", encoding="utf-8")
+    assert main(["run", "--config", str(deep), "--dry-run"]) == 2
+    assert capsys.readouterr().err == f"hearsee: error: {deep}: invalid YAML: nested too deeply\n"
+
+
 def test_exports_are_checked_before_listening(robot_dir, monkeypatch, capsys):
     """--rerun / --mcap whose extra is missing or whose folder does not exist fail at once,
     before any device is opened (no sounddevice is faked: a run would fail differently) and
