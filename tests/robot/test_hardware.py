@@ -253,6 +253,30 @@ def test_impossible_geometry_and_bad_calibration(small_rig):
         load_robot_config(make_config(small_rig, _with(cameras={"calib": "no_thermal.yaml"})))
 
 
+@pytest.mark.parametrize("half_m", [0.5317, 0.515, 0.6])
+def test_frame_ms_advice_is_a_value_that_is_accepted(tmp_path, half_m):
+    """frame_ms below four times the array's largest delay is refused with 'use >= N'; N
+    was rounded to the nearest ms (12.4 -> 12, itself refused). N is now the smallest whole
+    number of ms accepted: 4 x the largest delay (2 half_m / c), rounded up."""
+    import math
+
+    (tmp_path / "wide.yaml").write_text(
+        f"microphones: [[{half_m}, 0, 0], [{-half_m}, 0, 0]]\nspeed_of_sound: 343.0\n",
+        encoding="utf-8")
+    want = math.ceil(4e3 * 2 * half_m / 343.0)  # ms
+
+    def load(frame_ms):
+        return robot_config_from_dict({"audio": {"array": "wide.yaml", "frame_ms": frame_ms}},
+                                      "robot.yaml", tmp_path)
+
+    with pytest.raises(ConfigError) as exc:
+        load(8.0)
+    assert str(exc.value).endswith(f"; use >= {want}")
+    assert load(float(want)).audio.frame_ms == want
+    with pytest.raises(ConfigError, match="is too short"):
+        load(want - 1.0)
+
+
 def test_outputs_never_overwrite_inputs(small_rig):
     path = make_config(small_rig, _with(output={"jsonl": "robot.json"}), name="robot.json")
     with pytest.raises(ConfigError, match=r"output\.jsonl: .*robot\.json is an input file"):

@@ -63,6 +63,7 @@ camera device or stream that stops delivering does not stall the audio: its read
 from __future__ import annotations
 
 import json
+import math
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -314,7 +315,8 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
     shortest = min_frame_ms(array)
     if frame_ms < shortest:
         raise ConfigError(f"{where}.frame_ms: {frame_ms} ms is too short for the array's "
-                          f"largest delay ({shortest / 4:.2f} ms); use >= {shortest:.0f}")
+                          f"largest delay ({shortest / 4:.2f} ms); use >= "
+                          f"{math.ceil(shortest)}")  # (rounded to nearest: a refused value)
     method = d.get("method", "phat")
 
     try:
