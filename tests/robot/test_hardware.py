@@ -229,6 +229,19 @@ def test_bad_config_names_the_field(small_rig, data, field, words):
     assert "\n" not in msg
 
 
+@pytest.mark.parametrize("section, value, kind", [
+    ("audio", [1, 2], "list"), ("cameras", 5, "int"), ("head", "up", "str"),
+    ("output", [], "list")])
+def test_a_section_that_is_not_a_mapping_names_the_file_then_the_section(small_rig, section,
+                                                                         value, kind):
+    """The message read 'robot.yaml.audio: expected a mapping' (the section glued to the file
+    name); it is 'robot.yaml: audio: expected a mapping, got list', as every field's is."""
+    path = make_config(small_rig, {**_with(), section: value})
+    with pytest.raises(ConfigError) as e:
+        load_robot_config(path)
+    assert str(e.value) == f"{path}: {section}: expected a mapping, got {kind}"
+
+
 def test_impossible_geometry_and_bad_calibration(small_rig):
     (small_rig / "coincident.yaml").write_text(
         "microphones:\n- [0.0, 0.0, 0.0]\n- [0.0, 0.0, 0.0]\n", encoding="utf-8")

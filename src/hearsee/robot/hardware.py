@@ -245,7 +245,8 @@ def _mapping(d: Mapping[str, Any], key: str, where: str, required: bool = False
         return None
     v = d[key]
     if not isinstance(v, Mapping):
-        raise ConfigError(f"{where}.{key}: expected a mapping, got {type(v).__name__}")
+        # (it was "robot.yaml.audio: ...", as if the section were part of the file name)
+        raise ConfigError(f"{where}: {key}: expected a mapping, got {type(v).__name__}")
     return v
 
 
