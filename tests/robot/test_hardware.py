@@ -1517,6 +1517,46 @@ def test_a_robot_files_calibration_or_array_that_is_a_folder_says_so(small_rig):
         load_robot_config(make_config(small_rig, _with(cameras={"calib": "none.yaml"})))
 
 
+def test_audio_array_is_looked_up_in_the_robot_files_folder_never_the_current_one(
+        tmp_path, monkeypatch):
+    """audio.array not found as a file in the robot file's folder (and not ending in a
+    lowercase .yaml/.yml) went to load_array as it was, which looked in the CURRENT folder:
+    a file there named like the preset ('three-mic') or like the file ('mics.YAML')
+    replaced it, and input_files() listed it. Now only the robot file's folder counts; a
+    name is a preset only when no such file is there and it has no folder and no YAML
+    suffix."""
+    from hearsee.audio.arrays import MicArray
+
+    robot, cwd = tmp_path / "robot", tmp_path / "cwd"
+    (robot / "sub").mkdir(parents=True)
+    (cwd / "sub").mkdir(parents=True)
+    two = "microphones: [[0.3, 0, 0], [-0.3, 0, 0]]\n"
+    for name in ("three-mic", "mics.YAML", "sub/m.yaml"):
+        (cwd / name).write_text(two, encoding="utf-8")  # decoys in the current folder
+    monkeypatch.chdir(cwd)
+    preset = MicArray.from_preset("three-mic")
+
+    def load(spec, name="robot.yaml"):
+        path = make_config(robot, {"audio": {"array": spec}, "output": {"report": "out"}}, name)
+        return path, load_robot_config(path)
+
+    path, cfg = load("three-mic")
+    np.testing.assert_array_equal(cfg.audio.array.positions, preset.positions)
+    assert cfg.audio.array_spec == "three-mic" and cfg.input_files() == [path]
+    for spec in ("mics.YAML", "sub/m.yaml", "other.yml"):
+        with pytest.raises(ConfigError) as e:
+            load(spec)
+        assert str(e.value) == (f"{robot / 'robot.yaml'}: audio.array: array file {spec!r} not "
+                                f"found in {robot}")
+    # files in the robot file's folder, whatever the case of their suffix (or none)
+    four = "microphones: [[0.1, 0, 0], [-0.1, 0, 0], [0, 0.1, 0], [0, -0.1, 0]]\n"
+    for name in ("Mics.YML", "sub/m.yaml", "three-mic"):
+        (robot / name).write_text(four, encoding="utf-8")
+        path, cfg = load(name)
+        assert cfg.audio.array.n_mics == 4 and cfg.audio.array_spec == str(robot / name)
+        assert cfg.input_files() == [path, robot / name]
+
+
 # ------------------------------------------------------------------------------- JSON lines
 def _talk(tmp_path, duration_s=1.0):
     """A robot file (audio only, report in tmp_path/out) and 1 s of a talker at 3 m."""

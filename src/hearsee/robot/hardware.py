@@ -134,7 +134,8 @@ DeviceSpec = int | str
 @dataclass(frozen=True)
 class AudioConfig:
     """Microphones: ``device`` (index, name substring or None = default input), ``fs`` Hz,
-    ``channels`` (input channel of each microphone), the ``array`` geometry, ``block_ms`` (the
+    ``channels`` (input channel of each microphone), the ``array`` geometry and its
+    ``array_spec`` (its YAML file's absolute path, or its preset's name), ``block_ms`` (the
     device's block), ``frame_ms`` (TDOA frame; one update per hop = frame / 2) and the GCC
     ``method``."""
 
@@ -221,8 +222,8 @@ class RobotConfig:
     def input_files(self) -> list[Path]:
         """Files the run reads (never to be overwritten by its outputs)."""
         files = [self.path]
-        a = Path(self.audio.array_spec)
-        if a.is_file():
+        a = Path(self.audio.array_spec)  # (a file's absolute path, or a preset's name)
+        if a.is_absolute() and a.is_file():
             files.append(a)
         if self.cameras is not None:
             files.append(self.cameras.calib)
@@ -279,23 +280,34 @@ def _device(v: Any, where: str, base: Path, *, camera: bool) -> DeviceSpec:
     return str(p)
 
 
+def _array(spec: Any, where: str, base: Path) -> tuple[MicArray, str]:
+    """``audio.array`` (``where``): the array and its spec -- the absolute path of a YAML file
+    (relative to the robot file's folder ``base``) or the name of a preset shipped with
+    hearsee. A name is a preset only when no such file is in ``base`` and it has neither a
+    folder nor a YAML suffix (any case): else "array file ... not found". A name not found in
+    ``base`` was looked up in the current folder (load_array): a file there named like the
+    preset, or like the file, was loaded instead."""
+    if not isinstance(spec, str) or not spec.strip():
+        raise ConfigError(f"{where}: expected a preset name or YAML path, got {spec!r}")
+    path = _resolve(spec, base)
+    is_file_name = "/" in spec or "\\" in spec or spec.lower().endswith((".yaml", ".yml"))
+    if not path.exists() and is_file_name:
+        raise ConfigError(f"{where}: array file {spec!r} not found in {base}")
+    try:
+        if path.exists():  # (a folder: load_array's InputFileError says so)
+            path = path.absolute()
+            return load_array(path), str(path)
+        return MicArray.from_preset(spec), spec
+    except HearseeError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+
+
 def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
     check_keys(d, _AUDIO, where)
     dev = d.get("device")
     device = None if dev is None else _device(dev, f"{where}.device", base, camera=False)
     fs = number(d, "fs", 16000, where, 4000, 384000, integer=True)
-    spec = d.get("array", "three-mic")
-    if not isinstance(spec, str) or not spec.strip():
-        raise ConfigError(f"{where}.array: expected a preset name or YAML path, got {spec!r}")
-    spec_path = _resolve(spec, base)
-    if spec.endswith((".yaml", ".yml")) or spec_path.is_file():
-        if not spec_path.exists():  # (a folder: load_array's InputFileError says so)
-            raise ConfigError(f"{where}.array: array file {spec!r} not found")
-        spec = str(spec_path)
-    try:
-        array = load_array(spec)
-    except HearseeError as exc:  # (a folder's InputFileError too)
-        raise ConfigError(f"{where}.array: {exc}") from None
+    array, spec = _array(d.get("array", "three-mic"), f"{where}.array", base)
     ch = d.get("channels")
     if ch is None:
         channels = tuple(range(array.n_mics))
