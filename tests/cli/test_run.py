@@ -214,6 +214,21 @@ def test_robot_file_nested_too_deeply_is_one_line(tmp_path, capsys):
     assert capsys.readouterr().err == f"hearsee: error: {deep}: invalid YAML: nested too deeply\n"
 
 
+def test_a_camera_below_the_floor_fails_the_dry_run(robot_dir, monkeypatch, capsys):
+    """The audit's robot file: pivot 0.1 m up, camera mounted 0.15 m below it. It passed the
+    dry run and the live run died at its first frame; now one line naming cameras.mount_m."""
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES))
+    data = yaml.safe_load(_config(robot_dir).read_text(encoding="utf-8"))
+    data["head"]["pivot_m"] = [0.0, 0.0, 0.1]
+    data["cameras"]["mount_m"] = [0.0, 0.0, -0.15]
+    cfg = robot_dir / "under.yaml"
+    cfg.write_text(yaml.safe_dump(data), encoding="utf-8")
+    assert main(["run", "--config", str(cfg), "--dry-run"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"hearsee: error: {cfg}: cameras.mount_m: the left camera's centre")
+    assert "z = -0.050 m at head tilt +0.0 deg" in err and err.count("\n") == 1
+
+
 def test_exports_are_checked_before_listening(robot_dir, monkeypatch, capsys):
     """--rerun / --mcap whose extra is missing or whose folder does not exist fail at once,
     before any device is opened (no sounddevice is faked: a run would fail differently) and

@@ -1302,6 +1302,92 @@ def test_an_impossible_pose_during_the_run_is_a_geometry_error(tmp_path, bad, wo
     assert len((tmp_path / "a.jsonl").read_text().splitlines()) == 4  # (updates before it)
 
 
+def _lowest_camera_by_brute_force(pivot_z, mount):
+    """(z, tilt): the camera centre's lowest height over tilts -90..90 deg in 0.01 deg steps,
+    written out here: R = Rz(pan) Ry(-tilt) (+ tilt = gaze up) gives z = pivot_z + x sin b +
+    z cos b (pan does not change it)."""
+    b = np.radians(np.linspace(-90.0, 90.0, 18001))
+    z = pivot_z + mount[0] * np.sin(b) + mount[2] * np.cos(b)
+    return float(z.min()), float(np.degrees(b[np.argmin(z)]))
+
+
+@pytest.mark.parametrize("pivot_z, mount", [
+    (0.1, [0.0, 0.0, -0.15]),     # below the floor at the rest pose (the audit's file)
+    (0.1, [0.15, 0.0, 0.0]),      # only when tilted fully down
+    (0.1, [-0.15, 0.0, 0.0]),     # behind the pivot: only when tilted fully up
+    (0.105, [0.05, 0.0, -0.1]),   # lowest between the limits (tilt -26.6 deg)
+    (0.12, [0.05, 0.0, -0.1]),    # the same mount, 15 mm higher: 8 mm above the floor
+    (0.1, [0.0, 0.5, -0.05]),     # sideways does not lower it
+    (1.2, [0.05, 0.06, 0.10]),    # the documented example
+])
+def test_a_camera_that_can_go_below_the_floor_is_refused_at_load(small_rig, pivot_z, mount):
+    """Only head.pivot_m z > 0 was checked: pivot + R(pose) @ mount_m could be below the floor,
+    which loaded and passed the dry run, and the live run died at its first frame with a
+    GeometryError naming neither file nor field. The camera centre must now be above the
+    floor at every tilt the head can take ([-90, 90] deg): else a ConfigError naming
+    cameras.mount_m, the lowest height and its tilt (from the test's own formula)."""
+    from hearsee.robot.hardware import _Head
+
+    want_z, want_tilt = _lowest_camera_by_brute_force(pivot_z, mount)
+    assert abs(want_z) > 1e-3  # (no case on the edge)
+    path = make_config(small_rig, _with(head={"pivot_m": [0.0, 0.0, pivot_z]},
+                                        cameras={"mount_m": mount}))
+    if want_z < 0:
+        with pytest.raises(ConfigError) as e:
+            load_robot_config(path)
+        msg = str(e.value)
+        assert msg.startswith(f"{path}: cameras.mount_m: the left camera's centre, ") and \
+            "\n" not in msg
+        assert f"comes down to z = {want_z:.3f} m at head tilt " in msg
+        tilt = float(msg.split("at head tilt ")[1].split(" deg")[0])
+        assert tilt == pytest.approx(want_tilt, abs=0.05)
+    else:
+        cfg = load_robot_config(path)
+        for tilt in (-90.0, want_tilt, 0.0, 90.0):  # the loop's geometry at any tilt is fine
+            assert _Head(cfg, (30.0, tilt)).cam_centre[2] >= want_z - 1e-9
+
+
+@pytest.mark.parametrize("mount, start, after, words", [
+    ([0.2, 0.0, 0.0], (0.0, 0.0), (0.0, -60.0), "head pose pan 0 deg, tilt -60 deg puts the "
+                                                "left camera's centre at z = -0.073 m"),
+    ([0.0, 0.0, -0.15], (10.0, 0.0), None, "head pose pan 10 deg, tilt 0 deg puts the left "
+                                           "camera's centre at z = -0.050 m"),
+])
+def test_a_head_pose_that_puts_the_camera_below_the_floor_is_named(small_rig, mount, start,
+                                                                    after, words):
+    """A geometry built in code skips the robot file's check: a pose putting the camera below
+    the floor reached the detector, whose error named neither the pose nor the file. It is
+    now a GeometryError naming the head pose, at the start or when the head moves there
+    (pivot 0.1 m: 0.1 - 0.2 sin 60 = -0.073 m; 0.1 - 0.15 = -0.05 m)."""
+    import dataclasses
+
+    from hearsee.errors import GeometryError
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg = load_robot_config(make_config(small_rig, _with(audio={"array": "three-mic",
+                                                                "channels": [0, 1, 2]})))
+    cfg = dataclasses.replace(
+        cfg, head=dataclasses.replace(cfg.head, pivot_m=np.array([0.0, 0.0, 0.1])),
+        cameras=dataclasses.replace(cfg.cameras, mount_m=np.array(mount, float)))
+
+    class Head(_SendingHead):
+        n_reads = 0
+
+        @property
+        def pose_deg(self):
+            self.n_reads += 1
+            return after if after is not None and self.n_reads > 5 else start
+
+    x, _ = _talker(40.0, 1.0)
+    img = np.random.default_rng(0).integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    head = Head()
+    with pytest.raises(GeometryError) as e:
+        run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=head,
+                  cameras=_StillCameras(img), jsonl=small_rig / "a.jsonl")
+    assert str(e.value).startswith(f"{cfg.path}: {words}, not above the floor (cameras.mount_m ")
+    assert head.n_reads == (6 if after is not None else 1)  # (at the pose's first read)
+
+
 def test_head_bearings_are_geometry_direction_deg_also_at_the_branch_cut(tmp_path):
     """The live loop's azimuths of a seen person (from the pivot: logged and commanded; from
     the array origin: compared with the audio bearing) were its own atan2s; now

@@ -110,6 +110,7 @@ __all__ = [
     "check_outputs",
     "import_sounddevice",
     "load_robot_config",
+    "lowest_camera_m",
     "open_capture",
     "report_scenario",
     "resolve_input_device",
@@ -409,6 +410,36 @@ def _head(d: Mapping[str, Any], where: str) -> HeadConfig:
     return HeadConfig(pivot, offset, (lo, hi), (pan, tilt), str(driver))
 
 
+def lowest_camera_m(pivot_m: Any, mount_m: Any) -> tuple[float, float]:
+    """``(z_m, tilt_deg)``: the lowest height (robot-frame z, metres above the floor) that
+    the left camera's centre -- ``mount_m`` from the pivot ``pivot_m`` (head frame and robot
+    frame, metres) -- reaches over the head's tilts [-90, 90] deg (+ = gaze up; the loop's
+    commands are clipped to them and a driver's pose beyond them is refused), and that tilt.
+    The pan turns about z and leaves the height alone; over tilt b it is pivot_z + mount_x
+    sin b + mount_z cos b, lowest at a tilt limit or, for a camera below the pivot
+    (mount_z < 0), at b = atan(mount_x / mount_z), where the camera swings lowest."""
+    from hearsee.geometry import array_to_robot
+
+    mx, mz = float(mount_m[0]), float(mount_m[2])
+    tilts = [-90.0, 90.0] + ([math.degrees(math.atan(mx / mz)) + 0.0] if mz < 0 else [])
+    heights = [float(array_to_robot(np.zeros(3), (0.0, b), pivot_m, mount_m)[2]) for b in tilts]
+    k = int(np.argmin(heights))
+    return heights[k], tilts[k]
+
+
+def _check_camera_above_floor(cameras: CameraConfig, head: HeadConfig, where: str) -> None:
+    """ConfigError naming ``where`` (``cameras.mount_m``) unless the left camera's centre stays
+    above the floor at every tilt the head can take (:func:`lowest_camera_m`). Only the
+    pivot was checked: a camera mounted below it passed the load and the dry run, and the
+    live run died at its first frame (the detector's camera height below the floor)."""
+    z, tilt = lowest_camera_m(head.pivot_m, cameras.mount_m)
+    if not z > 0:
+        raise ConfigError(f"{where}: the left camera's centre, {cameras.mount_m.tolist()} m "
+                          f"from head.pivot_m {head.pivot_m.tolist()} m (head frame), comes "
+                          f"down to z = {z:.3f} m at head tilt {tilt:+.1f} deg; it must stay "
+                          "above the floor (z > 0 m) at every tilt in [-90, 90] deg")
+
+
 def _output(d: Mapping[str, Any], where: str, base: Path) -> OutputConfig:
     check_keys(d, _OUTPUT, where)
     for k in _OUTPUT:
@@ -433,6 +464,8 @@ def robot_config_from_dict(data: Mapping[str, Any], where: str = "robot.yaml",
     cams = _mapping(data, "cameras", where)
     cameras = None if cams is None else _cameras(cams, f"{where}: cameras", base)
     head = _head(_mapping(data, "head", where) or {}, f"{where}: head")
+    if cameras is not None:
+        _check_camera_above_floor(cameras, head, f"{where}: cameras.mount_m")
     output = _output(_mapping(data, "output", where) or {}, f"{where}: output", base)
     cfg = RobotConfig(Path(where), audio, cameras, head, output)
     check_outputs(cfg, where)
@@ -897,6 +930,14 @@ class _Head:
         self.pivot = np.asarray(cfg.head.pivot_m, float)
         mount = cfg.cameras.mount_m if cfg.cameras is not None else np.zeros(3)
         self.cam_centre = array_to_robot(np.zeros(3), pose, self.pivot, mount)
+        if cfg.cameras is not None and not self.cam_centre[2] > 0:
+            # (a geometry built in code skips the robot file's check: the detector then
+            # refused a camera height below the floor, naming neither the pose nor the file)
+            raise GeometryError(f"{cfg.path}: head pose pan {pose[0]:g} deg, tilt {pose[1]:g} "
+                                f"deg puts the left camera's centre at z = "
+                                f"{self.cam_centre[2]:.3f} m, not above the floor "
+                                f"(cameras.mount_m {mount.tolist()} m from head.pivot_m "
+                                f"{self.pivot.tolist()} m)")
         self.R_cam = OPTICAL_FROM_BODY @ self.R.T  # robot -> left optical
         #: the microphone array's origin, ``head.offset_m`` from the pivot in the head frame:
         #: where the audio bearing is heard from (it was taken as heard from the pivot)
