@@ -1042,6 +1042,73 @@ def test_async_detection_uses_the_pose_of_its_capture(tmp_path, monkeypatch):
     assert first["detections"][0]["azimuth_deg"] == pytest.approx(40.0, abs=0.01)
 
 
+def test_async_overlays_and_captions_carry_their_capture_time(tmp_path, monkeypatch):
+    """Live (asynchronous detection), the overlay frames handed to the exports and the
+    report's captions carried the time the detection was APPLIED, not the capture time the
+    log records as camera_t: the MCAP / Rerun images were stamped 0.3-0.5 s after the
+    frames they show. Here each detection is reported done 10 updates (0.32 s) after its
+    capture by a stand-in executor (deterministic): every overlay's time is its record's
+    camera_t, and the captions say so."""
+    import concurrent.futures
+    import types as _types
+
+    import hearsee.vision.fusion as fusion
+    from hearsee.robot.hardware import CameraFrames
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import ArraySource
+
+    class Late:  # a finished detection that reports done at its 11th poll (one per update)
+        def __init__(self, value):
+            self.value, self.n = value, 0
+
+        def done(self):
+            self.n += 1
+            return self.n > 10
+
+        def result(self):
+            return self.value
+
+    class LatePool:
+        def __init__(self, *args, **kwargs):
+            pass
+
+        def submit(self, fn, *args):
+            return Late(fn(*args))
+
+        def shutdown(self, **kwargs):
+            pass
+
+    monkeypatch.setattr(concurrent.futures, "ThreadPoolExecutor", LatePool)
+    monkeypatch.setattr(fusion, "detect_humans", lambda left, right, rig, thermal=None, **kw:
+                        _types.SimpleNamespace(humans=[], rejected=[],
+                                               frame=_types.SimpleNamespace(left=left)))
+    monkeypatch.setattr(fusion, "draw_detections", lambda image, det: image.copy())
+    save_rig(default_rig(160, 120, thermal_size=(80, 60)), tmp_path / "rig.yaml")
+    cfg = robot_config_from_dict(
+        {"audio": {}, "output": {"report": "rep"},
+         "cameras": {"left": 0, "right": 1, "thermal": 2, "calib": "rig.yaml", "rate_hz": 2}},
+        "r.yaml", tmp_path)
+    img, th = np.zeros((120, 160, 3), np.uint8), np.zeros((60, 80), np.uint8)
+
+    class Cams:
+        n_failures = n_consecutive_failures = 0
+
+        def read(self, t):
+            return CameraFrames(img, img, th)
+
+    x, _ = _talker(40.0, 2.0)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), cameras=Cams(),
+                    head=_SendingHead(), async_vision=True, jsonl=tmp_path / "u.jsonl")
+    seen = [(r["t"], r["camera_t"]) for r in res.log if r["camera_t"] is not None]
+    assert len(seen) >= 3 and all(t - t_cap > 0.3 for t, t_cap in seen)  # (applied late)
+    assert [t for t, _ in res.frames] == [t_cap for _, t_cap in seen]
+    first, last = seen[0][1], seen[-1][1]
+    assert res.captions["first_overlay"].startswith(f"t = {first:.1f} s: 0 verified")
+    assert res.captions["latest_overlay"].startswith(f"t = {last:.1f} s: 0 verified")
+    assert res.captions["first_thermal"] == f"t = {first:.1f} s: thermal camera (8-bit, inferno)"
+    assert res.captions["latest_thermal"].startswith(f"t = {last:.1f} s: thermal")
+
+
 @pytest.mark.parametrize("duration", [float("nan"), -1.0, 0.0, "2"])
 def test_bad_duration_is_a_config_error(tmp_path, duration):
     """run_robot(duration_s=...) over a given source: a NaN duration was a builtin ValueError,

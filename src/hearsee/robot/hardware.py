@@ -1293,23 +1293,25 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             dets[k]["speaker"] = True
             if state["first_verified"] is None:
                 state["first_verified"] = t_cap
-        # the boxes are in rectified left-image pixels: draw them on the rectified left image
+        # the boxes are in rectified left-image pixels: draw them on the rectified left image;
+        # the overlay shows the frames of t_cap (the log's camera_t), not the later t at which
+        # their detection was applied (the exports' image stamps were late by its latency)
         overlay = draw_detections(det.frame.left, det)
         if len(frames) < keep_frames:
-            frames.append((t, overlay))
+            frames.append((t_cap, overlay))
         elif keep_frames > 0:
-            frames[-1] = (t, overlay)
+            frames[-1] = (t_cap, overlay)
         slot = "first" if state["cam_frames"] == 1 else "latest"
         images[f"{slot}_overlay"] = overlay
-        captions[f"{slot}_overlay"] = (f"t = {t:.1f} s: {len(det.humans)} verified person(s), "
-                                       f"{len(det.rejected)} rejected candidate(s)")
+        captions[f"{slot}_overlay"] = (f"t = {t_cap:.1f} s: {len(det.humans)} verified "
+                                       f"person(s), {len(det.rejected)} rejected candidate(s)")
         if fr.thermal is not None:
             import cv2
 
             th = cv2.applyColorMap(fr.thermal, cv2.COLORMAP_INFERNO)
             images[f"{slot}_thermal"] = cv2.resize(th, (overlay.shape[1], overlay.shape[0]),
                                                    interpolation=cv2.INTER_NEAREST)
-            captions[f"{slot}_thermal"] = f"t = {t:.1f} s: thermal camera (8-bit, inferno)"
+            captions[f"{slot}_thermal"] = f"t = {t_cap:.1f} s: thermal camera (8-bit, inferno)"
         return dets
 
     def follow_head(t: float) -> bool:
