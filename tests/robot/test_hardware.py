@@ -1414,6 +1414,37 @@ def test_a_camera_that_can_go_below_the_floor_is_refused_at_load(small_rig, pivo
             assert _Head(cfg, (30.0, tilt)).cam_centre[2] >= want_z - 1e-9
 
 
+def test_tilt_limits_keep_a_small_robots_camera_above_the_floor(small_rig):
+    """A small robot (pivot 0.15 m, camera 0.2 m ahead of it) reaches the floor only when tilted
+    more than 48.6 deg down: refused with the head's full [-90, 90] tilt range, loaded once
+    head.tilt_limits_deg says the head stops at -30 deg (asin(0.15 / 0.2) = 48.6), and every
+    tilt command is then clipped to those limits."""
+    from hearsee.robot.hardware import PrintHeadDriver, limit_tilt_deg, lowest_camera_m
+
+    small = {"pivot_m": [0.0, 0.0, 0.15]}
+    cams = {"mount_m": [0.2, 0.0, 0.0]}
+    with pytest.raises(ConfigError, match=r"tilt -90.0 deg.*tilt_limits_deg \[-90, 90\]"):
+        load_robot_config(make_config(small_rig, _with(head=small, cameras=cams)))
+    cfg = load_robot_config(make_config(small_rig, _with(
+        head={**small, "tilt_limits_deg": [-30, 60]}, cameras=cams)))
+    assert cfg.head.tilt_limits_deg == (-30.0, 60.0)
+    z, tilt = lowest_camera_m([0.0, 0.0, 0.15], [0.2, 0.0, 0.0], (-30.0, 60.0))
+    assert (z, tilt) == (pytest.approx(0.15 - 0.2 * np.sin(np.radians(30.0))), -30.0)
+    with pytest.raises(ConfigError, match="tilt_limits_deg"):  # down to -50: z = -0.003 m
+        load_robot_config(make_config(small_rig, _with(
+            head={**small, "tilt_limits_deg": [-50, 60]}, cameras=cams)))
+    drv = PrintHeadDriver(cfg.head)
+    for desired, sent in ((-80.0, -30.0), (75.0, 60.0), (10.0, 10.0)):
+        assert drv.command(0.0, 0.0, desired)["tilt_deg"] == pytest.approx(sent)
+    assert limit_tilt_deg(-95.0) == -90.0  # (the default range)
+    for bad in ([-91, 0], [10, 10], [0], "up", [float("nan"), 10]):
+        with pytest.raises(ConfigError, match="tilt_limits_deg"):
+            load_robot_config(make_config(small_rig, _with(head={"tilt_limits_deg": bad})))
+    with pytest.raises(ConfigError, match="outside tilt_limits_deg"):
+        load_robot_config(make_config(small_rig, _with(
+            head={"tilt_limits_deg": [-30, 60], "pose_deg": [0, -45]})))
+
+
 @pytest.mark.parametrize("mount, start, after, words", [
     ([0.2, 0.0, 0.0], (0.0, 0.0), (0.0, -60.0), "head pose pan 0 deg, tilt -60 deg puts the "
                                                 "left camera's centre at z = -0.073 m"),

@@ -39,6 +39,9 @@ Schema (defaults in brackets)::
                                         (the audio bearing is heard from it)
       pan_limits_deg: [-170, 170]       [[-170, 170]]  the commanded pan stays within these
                                         (a target beyond them: the nearer limit)
+      tilt_limits_deg: [-30, 60]        [[-90, 90]]    the commanded tilt (+ = gaze up) stays
+                                        within these; the camera must stay above the floor
+                                        over the whole range
       pose_deg: [0, 0]                  [[0, 0]]   pan, tilt the head is at (driver none: it
                                         stays there; only the desired command is printed)
       driver: none                      [none]     only `none` is implemented: the desired
@@ -124,7 +127,7 @@ DRIVERS = ("none",)
 _TOP = ("audio", "cameras", "head", "output")
 _AUDIO = ("device", "fs", "channels", "array", "block_ms", "frame_ms", "method")
 _CAMERAS = ("left", "right", "stereo", "thermal", "calib", "rate_hz", "mount_m")
-_HEAD = ("pivot_m", "offset_m", "pan_limits_deg", "pose_deg", "driver")
+_HEAD = ("pivot_m", "offset_m", "pan_limits_deg", "tilt_limits_deg", "pose_deg", "driver")
 _OUTPUT = ("jsonl", "report")
 DeviceSpec = int | str
 
@@ -195,13 +198,15 @@ class CameraConfig:
 @dataclass(frozen=True)
 class HeadConfig:
     """The pan-tilt head: ``pivot_m`` (robot frame), ``offset_m`` (array origin, head frame),
-    ``pan_limits_deg``, the current ``pose_deg`` (pan, tilt) and the ``driver``."""
+    ``pan_limits_deg``, the current ``pose_deg`` (pan, tilt), the ``driver`` and
+    ``tilt_limits_deg`` (degrees, + = gaze up)."""
 
     pivot_m: NDArray
     offset_m: NDArray
     pan_limits_deg: tuple[float, float] = (-170.0, 170.0)
     pose_deg: tuple[float, float] = (0.0, 0.0)
     driver: str = "none"
+    tilt_limits_deg: tuple[float, float] = (-90.0, 90.0)
 
 
 @dataclass(frozen=True)
@@ -396,32 +401,39 @@ def _head(d: Mapping[str, Any], where: str) -> HeadConfig:
                                ConfigError)
     lo, hi = pan_limits_deg(_pair(d, "pan_limits_deg", (-170.0, 170.0), where),
                             f"{where}.pan_limits_deg")
+    t_lo, t_hi = tilt_limits_deg(_pair(d, "tilt_limits_deg", (-90.0, 90.0), where),
+                                 f"{where}.tilt_limits_deg")
     pan, tilt = _pair(d, "pose_deg", (0.0, 0.0), where)
     if not lo <= pan <= hi:
         raise ConfigError(f"{where}.pose_deg: pan {pan} is outside pan_limits_deg [{lo}, {hi}]")
-    if abs(tilt) > 90.0:
-        raise ConfigError(f"{where}.pose_deg: tilt must be within [-90, 90], got {tilt}")
+    if not t_lo <= tilt <= t_hi:
+        raise ConfigError(f"{where}.pose_deg: tilt {tilt} is outside tilt_limits_deg "
+                          f"[{t_lo:g}, {t_hi:g}]")
     driver = d.get("driver", "none")
     if driver is None:
         driver = "none"
     if driver not in DRIVERS:
         raise ConfigError(f"{where}.driver: {driver!r} is not supported (available: "
                           f"{', '.join(DRIVERS)}: print the desired pan/tilt command only)")
-    return HeadConfig(pivot, offset, (lo, hi), (pan, tilt), str(driver))
+    return HeadConfig(pivot, offset, (lo, hi), (pan, tilt), str(driver), (t_lo, t_hi))
 
 
-def lowest_camera_m(pivot_m: Any, mount_m: Any) -> tuple[float, float]:
+def lowest_camera_m(pivot_m: Any, mount_m: Any,
+                    tilt_limits: tuple[float, float] = (-90.0, 90.0)) -> tuple[float, float]:
     """``(z_m, tilt_deg)``: the lowest height (robot-frame z, metres above the floor) that
     the left camera's centre -- ``mount_m`` from the pivot ``pivot_m`` (head frame and robot
-    frame, metres) -- reaches over the head's tilts [-90, 90] deg (+ = gaze up; the loop's
-    commands are clipped to them and a driver's pose beyond them is refused), and that tilt.
+    frame, metres) -- reaches over the head's tilts ``tilt_limits`` (degrees, + = gaze up;
+    the robot file's ``head.tilt_limits_deg``: the loop's commands are clipped to them), and
+    that tilt.
     The pan turns about z and leaves the height alone; over tilt b it is pivot_z + mount_x
     sin b + mount_z cos b, lowest at a tilt limit or, for a camera below the pivot
     (mount_z < 0), at b = atan(mount_x / mount_z), where the camera swings lowest."""
     from hearsee.geometry import array_to_robot
 
     mx, mz = float(mount_m[0]), float(mount_m[2])
-    tilts = [-90.0, 90.0] + ([math.degrees(math.atan(mx / mz)) + 0.0] if mz < 0 else [])
+    lo, hi = (float(b) for b in tilt_limits)
+    swing = math.degrees(math.atan(mx / mz)) + 0.0 if mz < 0 else None
+    tilts = [lo, hi] + ([swing] if swing is not None and lo < swing < hi else [])
     heights = [float(array_to_robot(np.zeros(3), (0.0, b), pivot_m, mount_m)[2]) for b in tilts]
     k = int(np.argmin(heights))
     return heights[k], tilts[k]
@@ -432,12 +444,14 @@ def _check_camera_above_floor(cameras: CameraConfig, head: HeadConfig, where: st
     above the floor at every tilt the head can take (:func:`lowest_camera_m`). Only the
     pivot was checked: a camera mounted below it passed the load and the dry run, and the
     live run died at its first frame (the detector's camera height below the floor)."""
-    z, tilt = lowest_camera_m(head.pivot_m, cameras.mount_m)
+    lo, hi = head.tilt_limits_deg
+    z, tilt = lowest_camera_m(head.pivot_m, cameras.mount_m, (lo, hi))
     if not z > 0:
         raise ConfigError(f"{where}: the left camera's centre, {cameras.mount_m.tolist()} m "
                           f"from head.pivot_m {head.pivot_m.tolist()} m (head frame), comes "
                           f"down to z = {z:.3f} m at head tilt {tilt:+.1f} deg; it must stay "
-                          "above the floor (z > 0 m) at every tilt in [-90, 90] deg")
+                          f"above the floor (z > 0 m) at every tilt in head.tilt_limits_deg "
+                          f"[{lo:g}, {hi:g}] (narrow them if the head cannot tilt that far)")
 
 
 def _output(d: Mapping[str, Any], where: str, base: Path) -> OutputConfig:
@@ -870,11 +884,27 @@ def limit_pan_deg(pan_deg: float, limits_deg: tuple[float, float]) -> float:
     return lo if pan_change_deg(pan, lo) < pan_change_deg(pan, hi) else hi
 
 
-def limit_tilt_deg(tilt_deg: float) -> float:
-    """The tilt to command (degrees, + = gaze up) for a desired ``tilt_deg``: clipped to
-    [-90, 90]; not a finite number: GeometryError (a NaN went to the driver as it was)."""
+def tilt_limits_deg(limits_deg: Any, where: str = "tilt_limits_deg") -> tuple[float, float]:
+    """``limits_deg`` as the head's ``(min, max)`` tilt in degrees (+ = gaze up), checked: two
+    finite numbers with ``-90 <= min < max <= 90``; else ConfigError naming ``where``. The
+    one rule of the robot file's ``head.tilt_limits_deg`` and of :func:`limit_tilt_deg`."""
+    try:
+        lo, hi = limits_deg
+    except (TypeError, ValueError):
+        raise ConfigError(f"{where}: expected [min, max] in degrees, got {limits_deg!r}"
+                          ) from None
+    if not (is_real(lo) and is_real(hi) and -90.0 <= lo < hi <= 90.0):
+        raise ConfigError(f"{where}: need -90 <= min < max <= 90, got [{lo}, {hi}]")
+    return float(lo), float(hi)
+
+
+def limit_tilt_deg(tilt_deg: float, limits_deg: tuple[float, float] = (-90.0, 90.0)) -> float:
+    """The tilt to command (degrees, + = gaze up) for a desired ``tilt_deg``: clipped to the
+    head's ``limits_deg`` (:func:`tilt_limits_deg`; default [-90, 90]); not a finite number:
+    GeometryError (a NaN went to the driver as it was)."""
     tilt = finite_number("desired tilt_deg", tilt_deg, error=GeometryError)
-    return float(np.clip(tilt, -90.0, 90.0))
+    lo, hi = tilt_limits_deg(limits_deg)
+    return float(np.clip(tilt, lo, hi))
 
 
 class PrintHeadDriver:
@@ -904,7 +934,7 @@ class PrintHeadDriver:
 
     def command(self, t: float, pan_deg: float, tilt_deg: float) -> dict[str, float]:
         pan = limit_pan_deg(pan_deg, self.head.pan_limits_deg)
-        tilt = limit_tilt_deg(tilt_deg)
+        tilt = limit_tilt_deg(tilt_deg, self.head.tilt_limits_deg)
         if self.last is None or max(pan_change_deg(pan, self.last[0]),
                                     abs(tilt - self.last[1])) >= self.min_change_deg:
             self.last = (pan, tilt)
@@ -1396,10 +1426,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                 pan = bearing
             elif not heard and state["desired"] is not None:
                 pan, tilt = state["desired"]
-            # any driver gets a pan within the head's limits and a tilt within [-90, 90] (not
-            # only PrintHeadDriver); a NaN never reaches it (GeometryError)
+            # any driver gets a pan and a tilt within the head's limits (not only
+            # PrintHeadDriver); a NaN never reaches it (GeometryError)
             pan = limit_pan_deg(pan, cfg.head.pan_limits_deg)
-            tilt = limit_tilt_deg(tilt)
+            tilt = limit_tilt_deg(tilt, cfg.head.tilt_limits_deg)
             command = head.command(t, pan, tilt)
             state["desired"] = (pan, tilt)
         rec_track = track_record(now)  # (rounded for the JSON line: mm, covariance 1e-6)
