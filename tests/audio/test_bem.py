@@ -14,17 +14,17 @@ import pytest
 from scipy.special import eval_legendre, spherical_jn, spherical_yn
 
 from hearsee.audio import bem
-from hearsee.errors import GeometryError
+from hearsee.errors import ConfigError, GeometryError
 
 A = 0.0875
 C = 343.0
 
 
-def _series_scipy(f, a, ct, r0=None):
+def _series_scipy(f, a, ct, r0=None, n_terms=80):
     """Independent evaluation of the same series with scipy's special functions."""
     mu = 2 * np.pi * f * a / C
     tot = 0
-    for m in range(80):
+    for m in range(n_terms):
         dh = spherical_jn(m, mu, derivative=True) + 1j * spherical_yn(m, mu, derivative=True)
         if r0 is None:
             t = (2 * m + 1) * (-1j) ** (m + 1) / dh
@@ -56,6 +56,86 @@ def test_sphere_series_limits():
     # the lit side is louder than the shadow side at 3 kHz (head shadow)
     h = bem.sphere_transfer([3000.0], A, np.array([1.0, -1.0]))
     assert abs(h[0, 0]) > 1.5 * abs(h[0, 1])
+
+
+def _potential_flow(f, a, ct, r0):
+    """The rigid sphere near a point source at low frequency, to first order in ka.
+
+    ka -> 0 is potential flow (Laplace's equation, rigid = Neumann): h_m(z) ~ -i (2m-1)!! /
+    z^(m+1) turns the series into sum_m (2m+1)/(m+1) t^m P_m(cos theta), t = a / r0, which is
+    2 / R - ln((t - c + R) / (1 - c)) / t with R = sqrt(1 - 2 t c + t^2) (Kelvin's image source
+    and line sink; generating function of P_m and its integral). The next order, i k (r0 - r0 H0):
+    the free field's uniform i k / (4 pi) term, which a rigid body does not scatter, minus the
+    reference's e^(i k r0). What is left is O((ka)^2)."""
+    t = a / r0
+    c = np.asarray(ct, dtype=float)
+    root = np.sqrt(1 - 2 * t * c + t * t)
+    with np.errstate(divide="ignore", invalid="ignore"):  # each form is 0/0 at one pole
+        log = np.where(c > 0, np.log((1 + c) / (root - t + c)), np.log((t - c + root) / (1 - c)))
+    h0 = 2 / root - log / t
+    x = 2 * np.pi * np.asarray(f, dtype=float)[:, None] * a / C
+    return h0[None] + 1j * x * (r0 / a) * (1 - h0[None])
+
+
+def _series_rescaled(f, a, ct, r0, n_terms):
+    """The series of bem.sphere_transfer by the textbook upward recursion of the Hankel
+    functions themselves (h_{m+1} = (2m+1)/z h_m - h_{m-1}, h_m' = h_{m-1} - (m+1)/z h_m) and
+    scipy's Legendre polynomials, a fixed number of terms; h_m(ka) and h_m(k r0) are divided by
+    a common factor whenever they grow past 1e200 (their ratio, all the series uses, stays)."""
+    out = np.zeros((len(f), len(ct)), dtype=complex)
+    for i, fi in enumerate(f):
+        x = 2 * np.pi * fi * a / C
+        y = x * r0 / a
+        hx = [np.exp(1j * x) / (1j * x), np.exp(1j * x) * (-1 / x - 1j / x**2)]
+        hy = [np.exp(1j * y) / (1j * y), np.exp(1j * y) * (-1 / y - 1j / y**2)]
+        tot = -hy[0] / hx[1] * np.ones(len(ct))
+        for m in range(1, n_terms):
+            tot = tot + (2 * m + 1) * eval_legendre(m, ct) * hy[1] / (hx[0] - (m + 1) / x * hx[1])
+            hx = [hx[1], (2 * m + 1) / x * hx[1] - hx[0]]
+            hy = [hy[1], (2 * m + 1) / y * hy[1] - hy[0]]
+            if abs(hx[1]) > 1e200:
+                s = abs(hx[1])
+                hx, hy = [h / s for h in hx], [h / s for h in hy]
+        out[i] = -(r0 / a / x) * np.exp(-1j * y) * tot
+    return out
+
+
+def test_sphere_series_near_source_matches_the_potential_flow_limit():
+    # audit p03: h_m(ka) overflowed (inf / inf = NaN) for the many terms a source near the
+    # sphere needs, and the stop test took the largest term over all frequencies, so one such
+    # frequency kept every row summing into NaN. Before: all NaN for 1 Hz and 12 kHz asked
+    # together (1.25 cm off the sphere), NaN at 0.5 mm off it.
+    ct = np.array([1.0, 0.5, 0.0, -0.5, -1.0])
+    for r0 in (0.1, 0.088):
+        got = bem.sphere_transfer([1.0, 2.0, 12000.0], A, ct, r0)
+        exact = _potential_flow([1.0, 2.0], A, ct, r0)
+        # (the O((ka)^2) left: 1.4e-6 and 5.6e-6 of the largest |H| at 1 and 2 Hz)
+        np.testing.assert_allclose(got[:2], exact, rtol=0, atol=1e-5 * np.abs(exact).max())
+        assert abs(got[0, 0]) > 13.6  # the lit side: ~2 a / (r0 - a) times the free field
+    # 12 kHz (ka = 19), 1.25 cm off: scipy's Hankel functions stay finite over the terms needed
+    got = bem.sphere_transfer([1.0, 12000.0], A, ct, 0.1)[1:]
+    ref = _series_scipy(np.array([12000.0]), A, ct, 0.1, n_terms=230)
+    assert np.all(np.isfinite(ref))
+    np.testing.assert_allclose(got, ref, rtol=1e-8)
+
+
+def test_sphere_series_near_source_matches_the_rescaled_textbook_recursion():
+    # audit p03: 1 kHz with the source 2.5 mm off the sphere gave -3.104-68.211j on the lit side
+    # (the sum cut at 400 terms, 1 % off, no warning); 50-12000 Hz 1.25 cm off: all NaN.
+    ct = np.array([1.0, 0.0, -1.0])
+    ref_ok = _series_rescaled([1000.0, 4000.0], A, ct, 0.5, 80)  # the reference itself
+    np.testing.assert_allclose(ref_ok, _series_scipy(np.array([1000.0, 4000.0]), A, ct, 0.5),
+                               rtol=1e-10)
+    f = np.array([50.0, 500.0, 2000.0, 12000.0])
+    np.testing.assert_allclose(bem.sphere_transfer(f, A, ct, 0.1),
+                               _series_rescaled(f, A, ct, 0.1, 400), rtol=1e-8)
+    got = bem.sphere_transfer([1000.0], A, ct, 0.09)
+    ref = _series_rescaled([1000.0], A, ct, 0.09, 1400)  # (a / r0)^1400 = 1e-17
+    np.testing.assert_allclose(got, ref, rtol=1e-8)
+    assert abs(ref[0, 0] - (-3.159 - 68.917j)) < 1e-3
+    # a cap that the sum needs more terms than is an error, not a truncated sum
+    with pytest.raises(ConfigError, match="not converged within 300 terms at 1000 Hz"):
+        bem.sphere_transfer([1000.0], A, ct, 0.09, max_terms=300)
 
 
 @pytest.mark.slow

@@ -44,7 +44,8 @@ import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from hearsee.errors import GeometryError
+from hearsee.config import whole_number
+from hearsee.errors import ConfigError, GeometryError
 
 __all__ = [
     "TriMesh",
@@ -441,22 +442,46 @@ def transfer_functions(sol: AdjointSolution, source: ArrayLike, far_field: bool 
 
 
 # ------------------------------------------------------------------------------ exact sphere
+def _series_terms(mu: NDArray, rho: float, tol: float) -> int:
+    """How many terms :func:`sphere_transfer` may need (an upper bound for its stop test).
+
+    For a source at ``rho = r / a`` the terms fall like ``rho**-m`` once ``m`` passes
+    ``mu * rho`` (the Hankel function of the source distance stops oscillating), so reaching
+    ``tol`` relative to the sum (and the ``rho / (rho - 1)`` of the geometric tail, and a margin
+    e^10 for sums smaller than their largest terms) takes ``ln(rho / ((rho - 1) tol)) + 10``
+    over ``ln(rho)`` more terms: ~170 at 1.25 cm off a 8.75 cm sphere, ~5000 at 0.5 mm.
+    """
+    if np.isinf(rho):
+        return 400
+    grow = np.log(rho / (rho - 1.0) / tol) + 10.0
+    return max(400, int(np.ceil(np.max(mu) * rho + 60.0 + grow / np.log(rho))))
+
+
 def sphere_transfer(freqs: ArrayLike, radius: float, cos_theta: ArrayLike,
                     distance: float | None = None, speed_of_sound: float = 343.0,
-                    tol: float = 1e-10, max_terms: int = 400) -> NDArray:
+                    tol: float = 1e-10, max_terms: int | None = None) -> NDArray:
     """Pressure on a rigid sphere by Rayleigh's series, normalised by the free field at its centre.
 
-    Duda & Martens (1998), eq. (10) with their recursions for the Legendre polynomials and the
-    spherical Hankel functions: with ``mu = k a`` and ``rho = r / a`` (``r`` the source distance
-    from the centre; ``distance=None`` = plane wave)::
+    Duda & Martens (1998), eq. (10): with ``mu = k a`` and ``rho = r / a`` (``r`` the source
+    distance from the centre; ``distance=None`` = plane wave)::
 
         H = -(rho / mu) exp(-i mu rho) sum_m (2m + 1) P_m(cos theta) h_m(mu rho) / h_m'(mu)
         H_far = -(1 / mu^2) sum_m (2m + 1) (-i)^(m+1) P_m(cos theta) / h_m'(mu)
 
     ``theta`` is the angle between the source direction and the surface point, seen from the
     centre. Written for ``exp(-i w t)`` (``h_m`` = spherical Hankel of the first kind). Returns
-    (F, T) complex; the sum stops when the terms fall below ``tol`` relative to the sum.
-    Frequencies, radius and speed of sound must be > 0, the source outside the sphere.
+    (F, T) complex.
+
+    The Hankel functions are carried as ratios ``h_m(x) / h_{m-1}(x)`` (upward recursion, stable
+    for ``h_m``): ``h_m(mu)`` itself overflows past ~100 terms at low ``ka``, and a source close
+    to the sphere needs hundreds to thousands of terms (they fall like ``rho**-m``), which gave
+    inf / inf = NaN. Each frequency stops on its own once the bound ``(2m + 1) |h_m(mu rho) /
+    h_m'(mu)|`` of its terms (``|P_m| <= 1``), times the ``rho / (rho - 1)`` of the geometric
+    tail, falls below ``tol`` relative to its largest sum, with ``m > 2 ka + 10``. ``max_terms``
+    caps the terms (default: sized from ``ka`` and ``rho``, :func:`_series_terms`); a frequency
+    not converged within it is a ConfigError, never a truncated sum.
+    Frequencies (Hz), radius (metres) and speed of sound (m/s) must be > 0, the source outside
+    the sphere, ``cos_theta`` within [-1, 1], ``tol`` in (0, 1).
     """
     f = np.atleast_1d(np.asarray(freqs, dtype=float))
     ct = np.atleast_1d(np.asarray(cos_theta, dtype=float))
@@ -469,38 +494,44 @@ def sphere_transfer(freqs: ArrayLike, radius: float, cos_theta: ArrayLike,
     if distance is not None and not (np.isfinite(distance) and distance > radius):
         raise GeometryError(f"sphere series: the source distance ({distance} m) must be larger "
                             f"than the radius ({radius} m)")
-    mu = 2.0 * np.pi * f * radius / speed_of_sound  # (F,)
-    x = mu[:, None]
-    # h_m(mu) and h_m(mu rho) by upward recursion h_{m+1} = (2m+1)/x h_m - h_{m-1}
-    h_prev = np.exp(1j * x) / (1j * x)  # h_0(x) = e^{ix} / (i x)
-    h_cur = np.exp(1j * x) * (-1.0 / x - 1j / x**2)  # h_1(x)
-    if distance is not None:
-        rho = float(distance) / radius
-        y = x * rho
-        g_prev = np.exp(1j * y) / (1j * y)
-        g_cur = np.exp(1j * y) * (-1.0 / y - 1j / y**2)
+    if not np.all(np.abs(ct) <= 1.0 + 1e-9):  # (NaN included: |P_m| <= 1 bounds the terms)
+        raise GeometryError("sphere series: cos_theta must be finite numbers within [-1, 1]")
+    if not (np.isfinite(tol) and 0.0 < tol < 1.0):
+        raise ConfigError(f"sphere series: tol must be a number in (0, 1), got {tol!r}")
+    ct = np.clip(ct, -1.0, 1.0)
+    x = 2.0 * np.pi * f * radius / speed_of_sound  # mu = ka, (F,)
+    rho = np.inf if distance is None else float(distance) / radius
+    n_terms = _series_terms(x, rho, tol) if max_terms is None else whole_number(
+        "sphere series: max_terms", max_terms, 1)
+    y = x * rho
+    tail = 1.0 if distance is None else rho / (rho - 1.0)
+    # m = 0: h_0'(x) / h_0(x) = -h_1(x) / h_0(x), with h_1(x) / h_0(x) = 1/x - i
+    rx = 1.0 / x - 1j  # R_m(x) = h_m(x) / h_{m-1}(x), here m = 1
+    ry = None if distance is None else 1.0 / y - 1j
+    w = np.ones(len(x), dtype=complex)  # h_m(y) h_0(x) / (h_0(y) h_m(x)), or (-i)^m h_0/h_m(x)
+    total = (w / -rx)[:, None] * np.ones_like(ct)[None]
     p_prev, p_cur = np.ones_like(ct), ct.copy()  # P_0, P_1
-    total = np.zeros((len(f), len(ct)), dtype=complex)
-    # m = 0 term: h_0'(x) = -h_1(x)
-    dh = -h_cur
-    if distance is None:
-        term = 1.0 * ((-1j) ** 1) * p_prev[None] / dh
-    else:
-        term = 1.0 * g_prev * p_prev[None] / dh
-    total += term
-    for m in range(1, max_terms):
-        h_next = (2 * m + 1) / x * h_cur - h_prev
-        dh = h_prev - (m + 1) / x * h_cur  # h_m' = h_{m-1} - (m+1)/x h_m
-        if distance is None:
-            term = (2 * m + 1) * ((-1j) ** (m + 1)) * p_cur[None] / dh
-        else:
-            term = (2 * m + 1) * g_cur * p_cur[None] / dh
-            g_prev, g_cur = g_cur, (2 * m + 1) / y * g_cur - g_prev
-        total += term
-        h_prev, h_cur = h_cur, h_next
-        p_prev, p_cur = p_cur, ((2 * m + 1) * ct * p_cur - m * p_prev) / (m + 1)
-        if m > 2 * np.max(x) + 10 and np.max(np.abs(term)) < tol * np.max(np.abs(total)):
+    done = np.zeros(len(x), dtype=bool)
+    m_min = 2.0 * x + 10.0
+    for m in range(1, n_terms):
+        w = w * ((-1j if ry is None else ry) / rx)
+        coef = (2 * m + 1) * w / (1.0 / rx - (m + 1) / x)  # h_m'/h_m = 1/R_m - (m+1)/x
+        coef = np.where(done, 0.0, coef)
+        total += coef[:, None] * p_cur[None]
+        bound = np.abs(coef) * tail
+        done |= (m > m_min) & (bound < tol * np.max(np.abs(total), axis=1))
+        if done.all():
             break
-    if distance is None:
-        return -total / (mu[:, None] ** 2)
-    return -(rho / mu[:, None]) * np.exp(-1j * mu[:, None] * rho) * total
+        rx = (2 * m + 1) / x - 1.0 / rx
+        if ry is not None:
+            ry = (2 * m + 1) / y - 1.0 / ry
+        p_prev, p_cur = p_cur, ((2 * m + 1) * ct * p_cur - m * p_prev) / (m + 1)
+    if not done.all():
+        bad = f[~done]
+        raise ConfigError(
+            f"sphere series: not converged within {n_terms} terms at {bad.min():g}"
+            + (f"-{bad.max():g}" if len(bad) > 1 else "") + " Hz (ka up to "
+            f"{np.max(x[~done]):.4g}" + ("" if distance is None else f", r/a = {rho:.6g}")
+            + "); give a larger max_terms")
+    # both forms: -(e^{-i mu} / mu) sum_m (2m + 1) P_m w_m h_m(mu) / h_m'(mu)
+    return -(np.exp(-1j * x) / x)[:, None] * total
