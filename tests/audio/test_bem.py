@@ -138,6 +138,25 @@ def test_sphere_series_near_source_matches_the_rescaled_textbook_recursion():
         bem.sphere_transfer([1000.0], A, ct, 0.09, max_terms=300)
 
 
+def test_sphere_series_converges_at_high_ka():
+    # audit p11: the sum stopped at max_terms=400 whatever ka, so above ka ~ 350 it was cut
+    # while its terms were still large: a = 0.3 m at 96 kHz (ka = 528) gave |H| = 4.158 on the
+    # lit side, where a large rigid sphere doubles the pressure (geometric acoustics: 2.000).
+    ct = np.array([1.0, 0.0, -1.0])
+    for f, a in ((96e3, 0.3), (1e6, A)):  # ka = 528 and 1603
+        ka = 2 * np.pi * f * a / C
+        n_ref = int(ka) + 200  # past ka the terms fall faster than exponentially
+        for r0 in (None, 3 * a):
+            got = bem.sphere_transfer([f], a, ct, r0)
+            ref = _series_scipy(np.array([f]), a, ct, r0, n_terms=n_ref)
+            assert np.all(np.isfinite(ref))
+            np.testing.assert_allclose(got, ref, rtol=1e-8, atol=1e-10)
+        assert abs(bem.sphere_transfer([f], a, [1.0])[0, 0]) == pytest.approx(2.0, abs=0.01)
+    # more terms than MAX_SERIES_TERMS (a source 30 um off the sphere): an error, not minutes
+    with pytest.raises(GeometryError, match="too close to the sphere or the frequency too high"):
+        bem.sphere_transfer([100.0], A, [1.0], A + 30e-6)
+
+
 @pytest.mark.slow
 def test_bem_reproduces_rigid_sphere_itd_iid():
     mesh = bem.sphere_mesh(A, 4)

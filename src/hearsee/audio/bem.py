@@ -48,6 +48,7 @@ from hearsee.config import whole_number
 from hearsee.errors import ConfigError, GeometryError
 
 __all__ = [
+    "MAX_SERIES_TERMS",
     "TriMesh",
     "check_closed_mesh",
     "geodesic_sphere",
@@ -442,19 +443,25 @@ def transfer_functions(sol: AdjointSolution, source: ArrayLike, far_field: bool 
 
 
 # ------------------------------------------------------------------------------ exact sphere
+#: The most terms :func:`sphere_transfer` sums unless told otherwise (``max_terms``): ~1 s per
+#: frequency. A source closer than ~35 um to a sphere of 8.75 cm, or ka above 50000,
+#: needs more (a GeometryError).
+MAX_SERIES_TERMS = 100_000
+
+
 def _series_terms(mu: NDArray, rho: float, tol: float) -> int:
     """How many terms :func:`sphere_transfer` may need (an upper bound for its stop test).
 
-    For a source at ``rho = r / a`` the terms fall like ``rho**-m`` once ``m`` passes
-    ``mu * rho`` (the Hankel function of the source distance stops oscillating), so reaching
-    ``tol`` relative to the sum (and the ``rho / (rho - 1)`` of the geometric tail, and a margin
-    e^10 for sums smaller than their largest terms) takes ``ln(rho / ((rho - 1) tol)) + 10``
-    over ``ln(rho)`` more terms: ~170 at 1.25 cm off a 8.75 cm sphere, ~5000 at 0.5 mm.
+    The terms oscillate without decaying up to ``m ~ ka`` and fall faster than exponentially
+    past ``2 ka`` for a plane wave or a far source (``2 ka + 60`` is the classic count); a
+    source at ``rho = r / a`` near 1 makes them fall only like ``rho**-m``, so reaching ``tol``
+    relative to the sum (and the ``rho / (rho - 1)`` of the geometric tail, and a margin e^10
+    for sums smaller than their largest terms) takes ``ln(rho / ((rho - 1) tol)) + 10`` over
+    ``ln(rho)`` more terms: ~170 at 1.25 cm off a 8.75 cm sphere, ~5000 at 0.5 mm.
     """
-    if np.isinf(rho):
-        return 400
-    grow = np.log(rho / (rho - 1.0) / tol) + 10.0
-    return max(400, int(np.ceil(np.max(mu) * rho + 60.0 + grow / np.log(rho))))
+    tail = 1.0 if np.isinf(rho) else rho / (rho - 1.0)
+    decay = 1.0 if np.isinf(rho) else min(np.log(rho), 1.0)  # per term, at least e^-1
+    return int(np.ceil(2.0 * np.max(mu) + 60.0 + (np.log(tail / tol) + 10.0) / decay))
 
 
 def sphere_transfer(freqs: ArrayLike, radius: float, cos_theta: ArrayLike,
@@ -478,8 +485,9 @@ def sphere_transfer(freqs: ArrayLike, radius: float, cos_theta: ArrayLike,
     inf / inf = NaN. Each frequency stops on its own once the bound ``(2m + 1) |h_m(mu rho) /
     h_m'(mu)|`` of its terms (``|P_m| <= 1``), times the ``rho / (rho - 1)`` of the geometric
     tail, falls below ``tol`` relative to its largest sum, with ``m > 2 ka + 10``. ``max_terms``
-    caps the terms (default: sized from ``ka`` and ``rho``, :func:`_series_terms`); a frequency
-    not converged within it is a ConfigError, never a truncated sum.
+    caps the terms (default: sized from ``ka`` and ``rho``, :func:`_series_terms`, at most
+    :data:`MAX_SERIES_TERMS`, else a GeometryError); a frequency not converged within the cap is
+    a ConfigError, never a truncated sum.
     Frequencies (Hz), radius (metres) and speed of sound (m/s) must be > 0, the source outside
     the sphere, ``cos_theta`` within [-1, 1], ``tol`` in (0, 1).
     """
@@ -501,10 +509,18 @@ def sphere_transfer(freqs: ArrayLike, radius: float, cos_theta: ArrayLike,
     ct = np.clip(ct, -1.0, 1.0)
     x = 2.0 * np.pi * f * radius / speed_of_sound  # mu = ka, (F,)
     rho = np.inf if distance is None else float(distance) / radius
-    n_terms = _series_terms(x, rho, tol) if max_terms is None else whole_number(
-        "sphere series: max_terms", max_terms, 1)
+    if max_terms is None:
+        n_terms = _series_terms(x, rho, tol)
+        if n_terms > MAX_SERIES_TERMS:
+            raise GeometryError(
+                f"sphere series: ka up to {np.max(x):.4g}" + ("" if distance is None else
+                f" with the source at {rho:.6g} radii") + f" needs ~{n_terms} terms, more than "
+                f"{MAX_SERIES_TERMS}; the source is too close to the sphere or the frequency "
+                "too high (or give max_terms)")
+    else:
+        n_terms = whole_number("sphere series: max_terms", max_terms, 1)
     y = x * rho
-    tail = 1.0 if distance is None else rho / (rho - 1.0)
+    tail = 1.0 if np.isinf(rho) else rho / (rho - 1.0)  # (rho inf: also 1e308 m away)
     # m = 0: h_0'(x) / h_0(x) = -h_1(x) / h_0(x), with h_1(x) / h_0(x) = 1/x - i
     rx = 1.0 / x - 1j  # R_m(x) = h_m(x) / h_{m-1}(x), here m = 1
     ry = None if distance is None else 1.0 / y - 1j
