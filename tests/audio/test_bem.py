@@ -248,6 +248,27 @@ def test_solve_adjoint_refuses_evaluation_points_inside_the_body():
     assert 0.5 - 1e-6 < sol.c[0] < 0.75 and sol.c[1] == pytest.approx(1.0, abs=1e-3)
 
 
+def test_solve_adjoint_refuses_open_and_degenerate_meshes():
+    # audit p09: solve_adjoint never checked the mesh: a sphere with a hole (1.3 cm wide at +x,
+    # away from the ears) gave |H| = [0.969, 1.361] for the exact [1.108, 1.538] at 1 kHz, an
+    # open hemisphere [0.833, 1.252], a zero-area face NaN, all without an error; inverted
+    # faces were "too thin for CHIEF interior points"
+    v, f = bem.geodesic_sphere(3)
+    v = v * A
+    mics = np.array([[0.0, -A, 0.0], [0.0, A, 0.0]])
+    centre_x = v[f].mean(axis=1)[:, 0]
+    bad = {"open": (v, f[centre_x < 0.6 * A]), "open ": (v, f[centre_x < 0.0]),
+           "degenerate": (v, np.vstack([f, [[0, 0, 1]]])), "inward": (v, f[:, ::-1]),
+           "oriented": (v, np.vstack([f[:1, ::-1], f[1:]]))}
+    for what, (vv, ff) in bad.items():
+        with pytest.raises(GeometryError, match=f"^BEM mesh: .*{what.strip()}"):
+            bem.solve_adjoint(bem.TriMesh(vv, ff), [1000.0], mics, C, on_surface_tol=1e-3)
+    with pytest.raises(GeometryError, match="TriMesh"):
+        bem.solve_adjoint((v, f), [1000.0], mics, C, on_surface_tol=1e-3)
+    sol = bem.solve_adjoint(bem.TriMesh(v, f), [1000.0], mics, C, on_surface_tol=1e-3)
+    assert np.all(np.isfinite(sol.v))  # the closed sphere is solved as before
+
+
 def test_sphere_series_refuses_impossible_settings():
     # found in review: a negative radius or frequency silently gave the complex conjugate of the
     # answer (the wrong time convention), a source inside the sphere (5 cm < 8.75 cm), a zero

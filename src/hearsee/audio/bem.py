@@ -361,7 +361,8 @@ def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
     Parameters
     ----------
     mesh : TriMesh
-        Closed body, metres.
+        Closed body, metres: a watertight, consistently oriented triangulation with outward
+        faces and no zero-area face (:func:`check_closed_mesh`, else a GeometryError).
     freqs : array (F,)
         Frequencies in Hz (> 0).
     eval_points : array (E, 3)
@@ -370,6 +371,11 @@ def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
     progress : callable, optional
         Called with 1 after each frequency.
     """
+    if not isinstance(mesh, TriMesh):
+        raise GeometryError(f"BEM mesh must be a TriMesh, got {type(mesh).__name__}")
+    # (an open surface -- a hole, a hemisphere -- gave numbers 10-25 % off without a word, a
+    # zero-area face NaN, inverted faces "too thin for CHIEF points")
+    check_closed_mesh(mesh.vertices, mesh.faces, "BEM mesh")
     f = np.asarray(freqs, dtype=float).ravel()
     if not np.all(np.isfinite(f) & (f > 0)):  # (NaN and inf passed "<= 0": a NaN solution)
         raise GeometryError("BEM frequencies must be finite numbers > 0 Hz")
