@@ -219,6 +219,42 @@ def test_geodesic_sphere_is_closed_and_winding_number():
     assert 1.0 - 1e-9 < d[0] < 1.05 and np.linalg.norm(q[0]) <= 1.0 + 1e-9
 
 
+def test_winding_number_is_one_half_on_the_surface():
+    # audit p15: a point on a face got 0 or 1 by the rounding of its own face's solid angle
+    # (+-2 pi across the face): 5 of 20 centroids and 3 of 20 barycentric points read "inside"
+    mesh = bem.sphere_mesh(A, 3)
+    c = mesh.corners[:40]
+    on = {"centroid": mesh.centroids[:40], "barycentric": c.transpose(0, 2, 1) @ [0.2, 0.3, 0.5],
+          "edge midpoint": 0.5 * (c[:, 0] + c[:, 1]), "vertex": c[:, 2]}
+    for what, p in on.items():
+        np.testing.assert_array_equal(mesh.winding_number(p), 0.5, err_msg=what)
+    # just off the faces (1e-7 of the radius): exactly 0 outside and 1 inside, as before
+    n = mesh.normals[:40]
+    np.testing.assert_allclose(mesh.winding_number(on["barycentric"] + 1e-7 * A * n), 0.0,
+                               atol=1e-9)
+    np.testing.assert_allclose(mesh.winding_number(on["barycentric"] - 1e-7 * A * n), 1.0,
+                               atol=1e-9)
+
+
+def test_solve_adjoint_at_panel_centroids_with_the_default_tolerance():
+    # audit p15/p16: with on_surface_tol = 0 (the default) a point on a panel (dist 1e-17 m)
+    # whose winding rounded to 1 was "inside the body", and at a panel centroid one of the 8x8
+    # quadrature points of its own panel coincided with it: free term c ~ 1e27 instead of 1/2
+    mesh = bem.sphere_mesh(A, 4)
+    x = mesh.centroids[:6]
+    freqs = np.array([500.0, 1500.0])
+    sol = bem.solve_adjoint(mesh, freqs, x, C)
+    # on a flat face the free term is exactly 1/2 (the quadrature of the neighbours: 0.13 %)
+    np.testing.assert_allclose(sol.c, 0.5, atol=2e-3)
+    # a plane wave from straight above each centroid: the lit side of a rigid sphere of the
+    # centroid's radius (the mesh is inscribed in the 8.75 cm sphere)
+    for e in range(len(x)):
+        u = x[e] / np.linalg.norm(x[e])
+        h = bem.transfer_functions(sol, [u], True, C)[0, e]
+        exact = bem.sphere_transfer(freqs, np.linalg.norm(x[e]), [1.0], None, C)[:, 0]
+        np.testing.assert_allclose(np.abs(h), np.abs(exact), rtol=5e-3)
+
+
 def test_solve_adjoint_refuses_non_finite_frequencies_and_speed():
     # found in review: only "f <= 0" was tested, so NaN or inf frequencies and a zero or NaN
     # speed of sound gave an all-NaN solution (transfer functions NaN) without a word

@@ -60,6 +60,13 @@ __all__ = [
 
 _FOUR_PI = 4.0 * np.pi
 
+#: A point closer to a flat panel's plane than this fraction of the panel's size lies in that
+#: plane. Coordinates computed on the surface (centroids, barycentric points, projections) are
+#: off the plane by rounding only, ~1e-16 of the panel's size; treating them as off it gave a
+#: winding number of 0 or 1 at random instead of 1/2, and a near-singular double-layer kernel
+#: (y - x).n / r^3 of ~1e27 where a quadrature point coincides with the point.
+_PLANE_RTOL = 1e-9
+
 
 # ---------------------------------------------------------------------------------------- meshes
 def geodesic_sphere(n: int) -> tuple[NDArray, NDArray]:
@@ -197,7 +204,12 @@ class TriMesh:
     def winding_number(self, points: ArrayLike) -> NDArray:
         """Generalised winding number of each point (1 inside, 0 outside, 1/2 on the surface).
 
-        Solid angles by Van Oosterom & Strackee (1983).
+        Solid angles by Van Oosterom & Strackee (1983): ``tan(omega / 2) = num / den`` with
+        ``num = a . (b x c)``, six times the volume of the tetrahedron of the point and the
+        triangle. A point on a face (``|num|`` below :data:`_PLANE_RTOL` of ``|a| |b| |c|``,
+        and ``den <= 0``: inside the triangle or on its edges and corners) is on the surface:
+        exactly 1/2 (its own face's solid angle jumps there from -2 pi to 2 pi, and rounding
+        picked either end: 0 or 1).
         """
         p = np.atleast_2d(np.asarray(points, dtype=float))
         a = self.corners[None, :, 0] - p[:, None]
@@ -207,7 +219,10 @@ class TriMesh:
         num = np.einsum("pfi,pfi->pf", a, np.cross(b, c))
         den = (la * lb * lc + np.einsum("pfi,pfi->pf", a, b) * lc
                + np.einsum("pfi,pfi->pf", b, c) * la + np.einsum("pfi,pfi->pf", c, a) * lb)
-        return 2.0 * np.arctan2(num, den).sum(axis=1) / _FOUR_PI
+        small = _PLANE_RTOL * la * lb * lc
+        on_face = (np.abs(num) <= small) & (den <= small)
+        w = 2.0 * np.arctan2(num, den).sum(axis=1) / _FOUR_PI
+        return np.where(on_face.any(axis=1), 0.5, w)
 
     def closest_points(self, points: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
         """Closest surface point to each point: ``(closest (P, 3), distance (P,), face (P,))``."""
@@ -283,7 +298,9 @@ class _DlpOperator:
 
     Frequency-independent geometry is computed once; :meth:`matrix` costs one complex exponential
     per entry. Centroid rule for far panels, ``m*m`` sub-triangle rule for panels within
-    ``radius`` of the target, zero for a target on a flat panel's own plane.
+    ``radius`` of the target, zero for a target on a flat panel's own plane (within
+    :data:`_PLANE_RTOL` of the panel's size: there ``(y - x) . n = 0`` for every ``y`` of the
+    panel, and the principal value, which gives the free term 1/2 on a face, is 0).
     """
 
     def __init__(self, targets: NDArray, mesh: TriMesh, radius: float, m: int,
@@ -303,6 +320,12 @@ class _DlpOperator:
         y = np.einsum("qk,pki->pqi", bary, mesh.corners[cols])
         nr, nlap = _dlp_geometry(targets[rows][:, None], y, mesh.normals[cols][:, None])
         nlap = nlap * (mesh.areas[cols][:, None] / len(bary))
+        # a target in a panel's plane: rounding left (y - x).n ~ 1e-18 m, and where a quadrature
+        # point coincides with the target (a panel centroid) r ~ 1e-18 m too: a kernel of 1e27
+        h = np.einsum("tfi,fi->tf", targets[:, None, :] - mesh.centroids[None], mesh.normals)
+        in_plane = np.abs(h) <= _PLANE_RTOL * np.sqrt(mesh.areas)[None]
+        lap[in_plane] = 0.0
+        nlap[in_plane[rows, cols]] = 0.0
         lap[rows, cols] = 0.0
         r[rows, cols] = 0.0
         self.r, self.lap = r, lap
