@@ -305,6 +305,40 @@ def test_solve_adjoint_refuses_open_and_degenerate_meshes():
     assert np.all(np.isfinite(sol.v))  # the closed sphere is solved as before
 
 
+def test_transfer_functions_refuse_impossible_sources():
+    # audit p08: no check at all: a source inside the rigid body gave finite numbers (no sound
+    # leaves a closed rigid body), one at the origin H = 0 everywhere (the normalising free
+    # field is infinite there), on the surface or at a microphone NaN (RuntimeWarnings only),
+    # a far-field direction [0, 0, 0] or a NaN coordinate NaN
+    mesh = bem.sphere_mesh(A, 3)
+    mics = np.array([[0.0, -A, 0.0], [0.0, 0.0, 2 * A]])  # on the surface, in the air
+    sol = bem.solve_adjoint(mesh, [1000.0], mics, C, on_surface_tol=2e-3)  # (mesh 1.8 mm in)
+    cases = [([[0.03, 0.0, 0.0]], False, "inside the body"),
+             ([[0.0, 0.0, 0.0]], False, "inside the body"),
+             ([[1.0, 0.0, 0.0], mesh.centroids[5]], False, "^source 1 .* on the surface of"),
+             ([mesh.vertices[7]], False, "on the surface of"),
+             ([sol.eval_points[0]], False, "on the surface of"),
+             ([sol.eval_points[1]], False, "coincides with evaluation point 1"),
+             ([[0.0, 0.0, 0.0]], True, "no direction"),
+             ([[np.nan, 0.0, 1.0]], False, "finite"), ([[np.inf, 0.0, 1.0]], True, "finite")]
+    for src, far, match in cases:
+        with pytest.raises(GeometryError, match=match):
+            bem.transfer_functions(sol, src, far, C)
+    # incident_field alone: a source at the origin of the frame or at one of its points
+    with pytest.raises(GeometryError, match="origin of the frame"):
+        bem.incident_field([[0.0, 0.0, 1.0]], [1.0], [[0.0, 0.0, 0.0]])
+    with pytest.raises(GeometryError, match="coincides with point 0"):
+        bem.incident_field([[0.0, 0.0, 1.0]], [1.0], [[0.0, 0.0, 1.0]])
+    # a source 1 mm above a panel is a valid source: its field is the exact point source's
+    x = mesh.centroids[5] + 1e-3 * mesh.normals[5]
+    h = bem.transfer_functions(sol, [x], False, C)
+    assert np.all(np.isfinite(h))
+    k = 2 * np.pi * 1000.0 / C
+    r, d0 = np.linalg.norm(x - mics[1]), np.linalg.norm(x)
+    np.testing.assert_allclose(bem.incident_field(mics[1:], [k], [x])[0, 0, 0],
+                               d0 / r * np.exp(1j * k * (r - d0)), rtol=1e-12)
+
+
 def test_sphere_series_refuses_impossible_settings():
     # found in review: a negative radius or frequency silently gave the complex conjugate of the
     # answer (the wrong time convention), a source inside the sphere (5 cm < 8.75 cm), a zero

@@ -46,6 +46,7 @@ from scipy.spatial import cKDTree
 
 from hearsee.config import whole_number
 from hearsee.errors import ConfigError, GeometryError
+from hearsee.geometry import as_points
 
 __all__ = [
     "MAX_SERIES_TERMS",
@@ -211,6 +212,11 @@ class TriMesh:
         exactly 1/2 (its own face's solid angle jumps there from -2 pi to 2 pi, and rounding
         picked either end: 0 or 1).
         """
+        w, on_surface = self._winding(points)
+        return np.where(on_surface, 0.5, w)
+
+    def _winding(self, points: ArrayLike) -> tuple[NDArray, NDArray]:
+        """Winding numbers as summed (P,) and which points lie on a face (P,) bool."""
         p = np.atleast_2d(np.asarray(points, dtype=float))
         a = self.corners[None, :, 0] - p[:, None]
         b = self.corners[None, :, 1] - p[:, None]
@@ -221,8 +227,7 @@ class TriMesh:
                + np.einsum("pfi,pfi->pf", b, c) * la + np.einsum("pfi,pfi->pf", c, a) * lb)
         small = _PLANE_RTOL * la * lb * lc
         on_face = (np.abs(num) <= small) & (den <= small)
-        w = 2.0 * np.arctan2(num, den).sum(axis=1) / _FOUR_PI
-        return np.where(on_face.any(axis=1), 0.5, w)
+        return 2.0 * np.arctan2(num, den).sum(axis=1) / _FOUR_PI, on_face.any(axis=1)
 
     def closest_points(self, points: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
         """Closest surface point to each point: ``(closest (P, 3), distance (P,), face (P,))``."""
@@ -346,6 +351,8 @@ class AdjointSolution:
     """Per-frequency adjoint vectors of a rigid-body BEM problem.
 
     ``p(eval_points[e], f_i) = (p_inc(eval_points[e]) + v[i, e] . p_inc(row_points)) / c[e]``.
+    ``mesh`` is the body (None when unknown: :func:`transfer_functions` then cannot tell a
+    source inside the body or on its surface).
     """
 
     freqs: NDArray  # (F,) Hz
@@ -353,6 +360,7 @@ class AdjointSolution:
     c: NDArray  # (E,) free-term coefficient at the evaluation points
     eval_points: NDArray  # (E, 3) metres
     row_points: NDArray  # (R, 3) collocation centroids then CHIEF points, metres
+    mesh: TriMesh | None = None
 
 
 def chief_points(mesh: TriMesh, n: int = 16, rng: int = 0) -> NDArray:
@@ -434,7 +442,54 @@ def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
         v_all[i] = (sysm @ u).conj().T
         if progress is not None:
             progress(1)
-    return AdjointSolution(f, v_all, c_e, xe, np.vstack([xc, chief]))
+    return AdjointSolution(f, v_all, c_e, xe, np.vstack([xc, chief]), mesh)
+
+
+def _as_sources(source: ArrayLike, far_field: bool) -> NDArray:
+    """``source`` as finite (S, 3) positions (metres) or, with ``far_field``, unit directions."""
+    s = np.atleast_2d(as_points(source, "sources"))  # (text, ragged lists: GeometryError)
+    if s.ndim != 2 or len(s) == 0:
+        raise GeometryError(f"sources must be [x, y, z] points in metres, shape (S, 3), got "
+                            f"shape {s.shape}")
+    if not np.all(np.isfinite(s)):  # (gave NaN)
+        i = int(np.flatnonzero(~np.isfinite(s).all(axis=1))[0])
+        raise GeometryError(f"source {i} must be a finite [x, y, z] in metres, got "
+                            f"{s[i].tolist()}")
+    if far_field:
+        big = np.abs(s).max(axis=1, keepdims=True)
+        if np.any(big == 0):  # (gave NaN)
+            raise GeometryError(f"far-field source {int(np.flatnonzero(big == 0)[0])} has no "
+                                "direction: [0, 0, 0]")
+        s = s / big  # (scaled first: a direction of 1e-200 m does not underflow)
+        s = s / np.linalg.norm(s, axis=1, keepdims=True)
+    return s
+
+
+def _check_sources(points: NDArray, s: NDArray, what: str = "point") -> None:
+    """GeometryError unless every point source ``s`` (S, 3) is off the origin of the frame
+    (where the transfer functions are normalised by the free field) and off every point (P, 3),
+    both within :data:`_PLANE_RTOL` of the coordinates' magnitude (their rounding)."""
+    scale = np.abs(points).max(initial=0.0)
+    d0 = np.linalg.norm(s, axis=1)
+    near = d0 <= _PLANE_RTOL * scale
+    if np.any(near):  # (gave H = 0 everywhere)
+        raise GeometryError(
+            f"source {int(np.flatnonzero(near)[0])} is at the origin of the frame, where the "
+            "transfer functions are normalised by its free field (infinite there); move it")
+    r = np.linalg.norm(s[:, None, :] - points[None], axis=-1)  # (S, P)
+    hit = r <= _PLANE_RTOL * np.maximum(scale, d0)[:, None]
+    if np.any(hit):  # (gave NaN with RuntimeWarnings)
+        i, j = np.argwhere(hit)[0]
+        raise GeometryError(f"source {i} coincides with {what} {j} at "
+                            f"{np.round(points[j], 6).tolist()} m (its field is infinite there)")
+
+
+def _incident(x: NDArray, k: NDArray, s: NDArray, far_field: bool) -> NDArray:
+    if far_field:
+        return np.exp(-1j * k[:, None, None] * (s @ x.T)[None])
+    d0 = np.linalg.norm(s, axis=1)  # (S,)
+    r = np.linalg.norm(s[:, None, :] - x[None], axis=-1)  # (S, P)
+    return (d0[:, None] / r)[None] * np.exp(1j * k[:, None, None] * (r - d0[:, None])[None])
 
 
 def incident_field(points: ArrayLike, k: ArrayLike, source: ArrayLike,
@@ -443,29 +498,44 @@ def incident_field(points: ArrayLike, k: ArrayLike, source: ArrayLike,
 
     ``points`` (P, 3) metres; ``k`` (F,) wavenumbers rad/m; ``source`` (S, 3) source positions
     (metres) or, with ``far_field``, directions towards the source. Returns (F, S, P) complex.
+    GeometryError for a source that is not finite, a direction [0, 0, 0], or a source at the
+    origin or at one of the points (within :data:`_PLANE_RTOL` of the coordinates).
     """
     x = np.atleast_2d(np.asarray(points, dtype=float))
-    s = np.atleast_2d(np.asarray(source, dtype=float))
+    s = _as_sources(source, far_field)
     k = np.atleast_1d(np.asarray(k, dtype=float))
-    if far_field:
-        u = s / np.linalg.norm(s, axis=1, keepdims=True)
-        return np.exp(-1j * k[:, None, None] * (u @ x.T)[None])
-    d0 = np.linalg.norm(s, axis=1)  # (S,)
-    r = np.linalg.norm(s[:, None, :] - x[None], axis=-1)  # (S, P)
-    return (d0[:, None] / r)[None] * np.exp(1j * k[:, None, None] * (r - d0[:, None])[None])
+    if not far_field:
+        _check_sources(x, s)
+    return _incident(x, k, s, far_field)
 
 
 def transfer_functions(sol: AdjointSolution, source: ArrayLike, far_field: bool = False,
                        speed_of_sound: float = 343.0, chunk: int = 256) -> NDArray:
     """Pressure at the evaluation points for sources ``(S, 3)``: ``(S, E, F)`` complex
-    (``exp(-i w t)`` convention, normalised by the free field at the origin)."""
-    s = np.atleast_2d(np.asarray(source, dtype=float))
+    (``exp(-i w t)`` convention, normalised by the free field at the origin).
+
+    ``source``: positions in metres or, with ``far_field``, directions. GeometryError for a
+    source that is not finite, a direction [0, 0, 0], and for a point source inside the body
+    (no sound reaches the air from there), on its surface, at an evaluation point or at the
+    origin of the frame (infinite fields, NaN before)."""
+    s = _as_sources(source, far_field)
+    if not far_field:
+        if sol.mesh is not None:
+            for a in range(0, len(s), chunk):
+                w, on = sol.mesh._winding(s[a:a + chunk])
+                for bad, where in ((on, "on the surface of"), (~on & (w > 0.5), "inside")):
+                    if np.any(bad):  # (inside: finite numbers; on the surface: NaN)
+                        i = a + int(np.flatnonzero(bad)[0])
+                        raise GeometryError(f"source {i} at {np.round(s[i], 6).tolist()} m lies "
+                                            f"{where} the body; put it outside")
+        _check_sources(sol.eval_points, s, "evaluation point")
+        _check_sources(sol.row_points, s, "BEM collocation point")
     k = 2.0 * np.pi * sol.freqs / speed_of_sound
     out = np.empty((len(s), len(sol.eval_points), len(k)), dtype=complex)
     for a in range(0, len(s), chunk):
         ss = s[a:a + chunk]
-        b = incident_field(sol.row_points, k, ss, far_field)  # (F, S, R)
-        pe = incident_field(sol.eval_points, k, ss, far_field)  # (F, S, E)
+        b = _incident(sol.row_points, k, ss, far_field)  # (F, S, R)
+        pe = _incident(sol.eval_points, k, ss, far_field)  # (F, S, E)
         tot = (pe + np.einsum("fer,fsr->fse", sol.v, b)) / sol.c[None, None, :]
         out[a:a + chunk] = tot.transpose(1, 2, 0)
     return out

@@ -442,7 +442,7 @@ class MaskModel:
             try:
                 z = np.load(path)
                 return bem.AdjointSolution(z["freqs"], z["v"], z["c"], z["eval_points"],
-                                           z["row_points"])
+                                           z["row_points"], mesh=self.mesh)
             except (OSError, KeyError, ValueError):
                 pass  # unreadable cache file: recompute and overwrite
         sol = self._compute()
