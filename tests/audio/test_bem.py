@@ -339,6 +339,28 @@ def test_transfer_functions_refuse_impossible_sources():
                                d0 / r * np.exp(1j * k * (r - d0)), rtol=1e-12)
 
 
+def test_transfer_functions_use_the_solutions_speed_of_sound():
+    # audit p20: the solution did not record its speed of sound and transfer_functions took
+    # 343 m/s unless told: solved for 330 m/s, the default call was 0.61 dB and 6.2 degrees
+    # off the rigid sphere at 1.5 kHz (0.16 dB and 1.8 degrees with the right c)
+    c = 330.0
+    mesh = bem.sphere_mesh(A, 4)
+    mics = np.array([[0.0, -A, 0.0], [0.0, A, 0.0]])
+    freqs = np.array([500.0, 1500.0])
+    sol = bem.solve_adjoint(mesh, freqs, mics, speed_of_sound=c, on_surface_tol=1e-3)
+    u = np.array([[0.0, 1.0, 0.0]])
+    exact = bem.sphere_transfer(freqs, A, [-1.0, 1.0], None, c).T  # (2 ears, F)
+    h = bem.transfer_functions(sol, u, True)[0]
+    assert np.max(np.abs(20 * np.log10(np.abs(h / exact)))) < 0.25
+    assert np.max(np.abs(np.degrees(np.angle(h / exact)))) < 2.5
+    # the same c given explicitly (as every caller did) is the same answer; another is refused
+    np.testing.assert_array_equal(bem.transfer_functions(sol, u, True, c)[0], h)
+    with pytest.raises(ConfigError, match="computed for a speed of sound of 330 m/s, not 343"):
+        bem.transfer_functions(sol, u, True, 343.0)
+    with pytest.raises(GeometryError, match="speed of sound must be a finite number > 0"):
+        bem.transfer_functions(sol, u, True, np.nan)
+
+
 def test_sphere_series_refuses_impossible_settings():
     # found in review: a negative radius or frequency silently gave the complex conjugate of the
     # answer (the wrong time convention), a source inside the sphere (5 cm < 8.75 cm), a zero

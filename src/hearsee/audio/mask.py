@@ -442,7 +442,8 @@ class MaskModel:
             try:
                 z = np.load(path)
                 return bem.AdjointSolution(z["freqs"], z["v"], z["c"], z["eval_points"],
-                                           z["row_points"], mesh=self.mesh)
+                                           z["row_points"], mesh=self.mesh,
+                                           speed_of_sound=self.c)
             except (OSError, KeyError, ValueError):
                 pass  # unreadable cache file: recompute and overwrite
         sol = self._compute()
