@@ -234,6 +234,21 @@ def test_a_source_whose_sound_arrives_after_the_signal_ends_is_refused():
         simulate_room(x, fs, arr, [0.51 * c, 0.0, 0.0], **room)
 
 
+def test_every_microphone_must_hear_the_free_field_source():
+    """Audit p21: only the nearest microphone was checked, so with microphones 4 m and 9 m
+    from the source and 400 samples at 16 kHz (25 ms, 8.6 m of sound) the far channel got no
+    direct sound (arrival at sample 419.8) and no error: RMS 0.0016 of the tails only. Now a
+    GeometryError; a far microphone that hears it gets the exact delay and 1 / r."""
+    fs, c = 16000, 343.0
+    x = white_noise(400 / fs, fs, rng=0)
+    with pytest.raises(GeometryError, match=r"9 m from the farthest microphone.*0\.02624 s"):
+        simulate_free_field(x, fs, [[0.0, 0.0, 0.0], [5.0, 0.0, 0.0]], [-4.0, 0.0, 0.0])
+    r = 300 * c / fs  # 300 samples away: heard from sample 300 to the end
+    y = simulate_free_field(x, fs, [[0.0, 0.0, 0.0], [r - 4.0, 0.0, 0.0]], [-4.0, 0.0, 0.0])
+    np.testing.assert_allclose(y[1, 300:], x[:100] / r, atol=1e-6)
+    np.testing.assert_allclose(y[1, :290], 0.0, atol=1e-3 * np.abs(x).max() / r)
+
+
 def test_an_impulse_response_longer_than_memory_allows_is_refused():
     """A 1e9 m long room with RT60 0.3 s (image order 42) asked pyroomacoustics for 7 TiB of
     impulse response: a MemoryError traceback. Now a ConfigError before it is computed."""

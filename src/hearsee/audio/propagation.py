@@ -84,18 +84,20 @@ def _mic_positions(mics: MicArray | ArrayLike) -> NDArray:
     return p
 
 
-def check_heard(distance_m: float, speed_of_sound: float, n_samples: int, fs: float) -> None:
-    """GeometryError unless the direct sound of a source ``distance_m`` metres from the nearest
-    microphone arrives within a simulated signal of ``n_samples`` at ``fs`` Hz (sample 0 is the
-    emission time). A source farther than ``c * n / fs`` is not heard at all: its recording was
-    silence, or the sinc tails of the delay filter that :func:`hearsee.sim.audio.save_recording`
-    then scaled up to full scale -- written with a ground truth it does not hold (and a source
-    1e8 m away asked the delay filter for more memory than the machine had)."""
+def check_heard(distance_m: float, speed_of_sound: float, n_samples: int, fs: float,
+                which: str = "nearest") -> None:
+    """GeometryError unless the direct sound of a source ``distance_m`` metres from the
+    ``which`` microphone (the nearest one unless said, the message names it) arrives within a
+    simulated signal of ``n_samples`` at ``fs`` Hz (sample 0 is the emission time). A source
+    farther than ``c * n / fs`` is not heard at all: its recording was silence, or the sinc
+    tails of the delay filter that :func:`hearsee.sim.audio.save_recording` then scaled up to
+    full scale -- written with a ground truth it does not hold (and a source 1e8 m away asked
+    the delay filter for more memory than the machine had)."""
     delay_s = distance_m / speed_of_sound
     if not delay_s * fs < n_samples:
         far = f"{distance_m:.4g} m" if np.isfinite(distance_m) else "too far (beyond float range)"
         raise GeometryError(
-            f"the source is {far} from the nearest microphone: its sound takes "
+            f"the source is {far} from the {which} microphone: its sound takes "
             f"{delay_s:.4g} s to arrive, longer than the {n_samples / fs:.4g} s simulated, so "
             "the recording would not hold it; move the source closer or simulate longer")
 
@@ -230,6 +232,12 @@ def simulate_free_field(
         The microphone signals with their absolute propagation delays ``r_k / c`` (near field)
         or plane-wave delays relative to the first-hit microphone (far field), so ``t_i - t_j``
         is exactly ``MicArray.tdoa(source)`` (or ``tdoa_far``).
+
+    Raises
+    ------
+    GeometryError
+        Near field: a source at a microphone, or one whose direct sound reaches the farthest
+        microphone only after the signal's ``n`` samples (:func:`check_heard`).
     """
     pos = _mic_positions(mics)
     c = speed_of_sound_of(mics, speed_of_sound)
@@ -251,7 +259,9 @@ def simulate_free_field(
         r = k[:, 0] * np.linalg.norm(d / k, axis=1)
         if np.any(r < 1e-3):
             raise GeometryError("the source coincides with a microphone")
-        check_heard(float(r.min()), c, np.size(signal), check_fs(fs))
+        # every microphone must hear it: the farthest one's direct sound arriving after the
+        # signal's end left that channel without it (the nearest one was checked)
+        check_heard(float(r.max()), c, np.size(signal), check_fs(fs), "farthest")
         t = r / c
         gains = 1.0 / r
     y = delay_signals(signal, t, fs, gains)
