@@ -249,6 +249,30 @@ def test_every_microphone_must_hear_the_free_field_source():
     np.testing.assert_allclose(y[1, :290], 0.0, atol=1e-3 * np.abs(x).max() / r)
 
 
+def test_delay_signals_and_microphones_refuse_bad_input():
+    """Audit p21: a delay of 1e12 s was a MemoryError traceback (114 PiB asked), gains of the
+    wrong count numpy's broadcast ValueError, a NaN gain an all-NaN recording, no microphone
+    at all numpy's ValueError. Now typed errors; valid gains scale each channel exactly."""
+    from hearsee.audio.propagation import MAX_RIR_SAMPLES
+
+    fs = 16000
+    x = white_noise(400 / fs, fs, rng=0)
+    for d in ([1e12], [0.0, (MAX_RIR_SAMPLES + 1) / fs]):
+        with pytest.raises(ConfigError, match=f"the limit is {MAX_RIR_SAMPLES} samples"):
+            delay_signals(x, d, fs)
+    for g in ([1.0, 2.0, 3.0], np.nan, [1.0, np.inf], "2", [[1.0, 2.0]]):
+        with pytest.raises(ConfigError, match="gains"):
+            delay_signals(x, [0.001, 0.002], fs, gains=g)
+    y = delay_signals(x, [3 / fs, 10 / fs], fs, gains=[0.5, -2.0])  # whole samples: a shift
+    np.testing.assert_allclose(y[0, 3:], 0.5 * x[:-3], atol=1e-9)
+    np.testing.assert_allclose(y[1, 10:], -2.0 * x[:-10], atol=1e-9)
+    np.testing.assert_allclose(delay_signals(x, [3 / fs], fs, gains=[0.5]), y[:1], atol=1e-12)
+    for mics, match in ((np.zeros((0, 3)), "N >= 1"), ([[0.0, 0.0, np.nan]], "finite"),
+                        ([["a", "b", "c"]], "expected numbers"), ([0.0, 0.0, 0.0], "N x 3")):
+        with pytest.raises(GeometryError, match=match):
+            simulate_free_field(x, fs, mics, [1.0, 0.0, 0.0])
+
+
 def test_an_impulse_response_longer_than_memory_allows_is_refused():
     """A 1e9 m long room with RT60 0.3 s (image order 42) asked pyroomacoustics for 7 TiB of
     impulse response: a MemoryError traceback. Now a ConfigError before it is computed."""

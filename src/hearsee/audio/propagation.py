@@ -76,11 +76,16 @@ MAX_SNR_DB = 200.0
 
 
 def _mic_positions(mics: MicArray | ArrayLike) -> NDArray:
+    """``mics`` as finite (N, 3) positions in metres, N >= 1, else a GeometryError (no
+    microphone was numpy's ValueError of an empty reduction, text its ValueError, a NaN
+    coordinate "too far (beyond float range)")."""
     if isinstance(mics, MicArray):
         return mics.positions
-    p = np.asarray(mics, dtype=float)
-    if p.ndim != 2 or p.shape[1] != 3:
-        raise GeometryError(f"microphone positions must be N x 3, got shape {p.shape}")
+    p = as_float_array(mics, "microphone positions", finite=False, error=GeometryError)
+    if p.ndim != 2 or p.shape[1] != 3 or len(p) < 1:
+        raise GeometryError(f"microphone positions must be N x 3 with N >= 1, got shape {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise GeometryError("microphone positions must be finite numbers (metres)")
     return p
 
 
@@ -124,7 +129,7 @@ def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: Arra
     fs : float
         Sample rate in Hz.
     gains : float or array (n_ch,)
-        Amplitude factor per channel.
+        Amplitude factor per channel: finite numbers, one for all or one per delay.
     n_out : int, optional
         Output length in samples (default: ``n``).
 
@@ -132,6 +137,15 @@ def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: Arra
     -------
     array (n_ch, n_out)
         ``y[k](t) = gains[k] * signal(t - delays_s[k])`` with band-limited interpolation.
+
+    Raises
+    ------
+    GeometryError
+        No delay, a negative or non-finite one.
+    ConfigError
+        A delay longer than :data:`MAX_RIR_SAMPLES` samples (the FFT is padded past it: more
+        memory than a simulation should take), gains that are not finite numbers or not one
+        per delay, a bad ``n_out``.
     """
     x = as_samples(signal, "signal")  # (text was read as numbers; NaN gave a NaN recording)
     if x.ndim != 1:
@@ -140,6 +154,16 @@ def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: Arra
     d = np.atleast_1d(np.asarray(delays_s, dtype=float))
     if d.size == 0 or np.any(d < 0) or not np.all(np.isfinite(d)):
         raise GeometryError("delays must be one or more finite, non-negative numbers of seconds")
+    if d.max() * fs > MAX_RIR_SAMPLES:  # (1e12 samples: a MemoryError traceback)
+        raise ConfigError(
+            f"a delay of {d.max():.4g} s is {d.max() * fs:.4g} samples at {fs:g} Hz, more "
+            f"memory than a simulation should take (the limit is {MAX_RIR_SAMPLES} samples, as "
+            "for room impulse responses); move the source closer or use a lower sample rate")
+    # (a wrong count was numpy's broadcast ValueError, NaN a NaN recording)
+    g = as_float_array(gains, "gains")
+    if g.ndim > 1 or g.size not in (1, d.size):
+        raise ConfigError(f"gains must be one number or one per delay ({d.size}), got shape "
+                          f"{g.shape}")
     n_out = len(x) if n_out is None else whole_number("n_out", n_out, 0)
     # (an n_out past the delayed signal's end used to return only n_fft samples)
     n_fft = sfft.next_fast_len(max(len(x), n_out) + int(np.ceil(d.max() * fs)) + 1, real=True)
@@ -151,7 +175,7 @@ def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: Arra
     if n_fft % 2 == 0:
         Y[:, -1] = Y[:, -1].real
     y = sfft.irfft(Y, n_fft, axis=-1)[:, :n_out]
-    return y * np.broadcast_to(np.asarray(gains, dtype=float), d.shape)[:, None]
+    return y * np.broadcast_to(g.ravel(), d.shape)[:, None]
 
 
 def check_snr_db(snr_db: float | None) -> float | None:
