@@ -468,22 +468,23 @@ def _as_sources(source: ArrayLike, far_field: bool) -> NDArray:
     return s
 
 
-def _check_sources(points: NDArray, s: NDArray, what: str = "point") -> None:
+def _check_sources(points: NDArray, s: NDArray, what: str = "point", first: int = 0) -> None:
     """GeometryError unless every point source ``s`` (S, 3) is off the origin of the frame
     (where the transfer functions are normalised by the free field) and off every point (P, 3),
-    both within :data:`_PLANE_RTOL` of the coordinates' magnitude (their rounding)."""
+    both within :data:`_PLANE_RTOL` of the coordinates' magnitude (their rounding). The
+    message numbers the sources from ``first``."""
     scale = np.abs(points).max(initial=0.0)
     d0 = np.linalg.norm(s, axis=1)
     near = d0 <= _PLANE_RTOL * scale
     if np.any(near):  # (gave H = 0 everywhere)
         raise GeometryError(
-            f"source {int(np.flatnonzero(near)[0])} is at the origin of the frame, where the "
-            "transfer functions are normalised by its free field (infinite there); move it")
+            f"source {first + int(np.flatnonzero(near)[0])} is at the origin of the frame, where "
+            "the transfer functions are normalised by its free field (infinite there); move it")
     r = np.linalg.norm(s[:, None, :] - points[None], axis=-1)  # (S, P)
     hit = r <= _PLANE_RTOL * np.maximum(scale, d0)[:, None]
     if np.any(hit):  # (gave NaN with RuntimeWarnings)
         i, j = np.argwhere(hit)[0]
-        raise GeometryError(f"source {i} coincides with {what} {j} at "
+        raise GeometryError(f"source {first + i} coincides with {what} {j} at "
                             f"{np.round(points[j], 6).tolist()} m (its field is infinite there)")
 
 
@@ -540,16 +541,17 @@ def transfer_functions(sol: AdjointSolution, source: ArrayLike, far_field: bool 
     c = 343.0 if c is None else c
     s = _as_sources(source, far_field)
     if not far_field:
-        if sol.mesh is not None:
-            for a in range(0, len(s), chunk):
-                w, on = sol.mesh._winding(s[a:a + chunk])
+        for a in range(0, len(s), chunk):  # (in chunks: (S, F) and (S, R) arrays)
+            ss = s[a:a + chunk]
+            if sol.mesh is not None:
+                w, on = sol.mesh._winding(ss)
                 for bad, where in ((on, "on the surface of"), (~on & (w > 0.5), "inside")):
                     if np.any(bad):  # (inside: finite numbers; on the surface: NaN)
                         i = a + int(np.flatnonzero(bad)[0])
                         raise GeometryError(f"source {i} at {np.round(s[i], 6).tolist()} m lies "
                                             f"{where} the body; put it outside")
-        _check_sources(sol.eval_points, s, "evaluation point")
-        _check_sources(sol.row_points, s, "BEM collocation point")
+            _check_sources(sol.eval_points, ss, "evaluation point", a)
+            _check_sources(sol.row_points, ss, "BEM collocation or CHIEF point", a)
     k = 2.0 * np.pi * sol.freqs / c
     out = np.empty((len(s), len(sol.eval_points), len(k)), dtype=complex)
     for a in range(0, len(s), chunk):
