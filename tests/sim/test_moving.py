@@ -702,3 +702,23 @@ def test_room_renders_a_receding_source_without_a_comb():
     with pytest.raises(GeometryError, match="max_delay_step_samples"):
         simulate_moving_room(x, FS, arr, away, [8.0, 6.0, 3.0], 0.0, [1.0, 3.0, 1.5],
                              max_delay_step_samples=-1.0)
+
+
+def test_every_microphone_must_hear_the_moving_or_room_source():
+    """Only the nearest microphone's direct sound had to arrive within the signal: with
+    microphones 1 m and 6 m from the source and 10 ms of signal (3.4 m of sound), the far
+    channel held no direct sound, and its recording came with a ground truth it did not hold."""
+    from hearsee.audio.propagation import simulate_room
+
+    arr = MicArray([[0.0, 0.0, 0.0], [-5.0, 0.0, 0.0]], name="far pair")
+    x = np.ones(int(0.01 * FS))
+    still = Trajectory([0.0], [[1.0, 0.0, 0.0]])
+    for run in (lambda: simulate_moving_free_field(x, FS, arr, still),
+                lambda: simulate_moving_room(x, FS, arr, still, [9.0, 4.0, 3.0], 0.2,
+                                             [6.5, 2.0, 1.5]),
+                lambda: simulate_room(x, FS, arr, [1.0, 0.0, 0.0], [9.0, 4.0, 3.0], 0.2,
+                                      [6.5, 2.0, 1.5])):
+        with pytest.raises(GeometryError, match="from the farthest microphone"):
+            run()
+    long = np.ones(int(0.03 * FS))  # 10.3 m of sound: both hear it
+    assert simulate_moving_free_field(long, FS, arr, still).shape == (2, long.size)

@@ -520,8 +520,9 @@ def simulate_room(
     src = np.asarray(source, dtype=float)
     if src.shape != (3,) or not np.all(np.isfinite(src)):
         raise GeometryError(f"source must be a finite [x, y, z] point, got {source!r}")
-    check_heard(float(np.linalg.norm(pos - src, axis=1).min()), array.speed_of_sound, x.size,
-                check_fs(fs))
+    # (every microphone must hear it: only the nearest one was checked)
+    check_heard(float(np.linalg.norm(pos - src, axis=1).max()), array.speed_of_sound, x.size,
+                check_fs(fs), "farthest")
     h = room_impulse_responses(fs, pos + at, src + at, room_dim, rt60, max_order=max_order,
                                speed_of_sound=array.speed_of_sound, align=False)
     lat = _fractional_delay_latency()
