@@ -371,7 +371,7 @@ def locate_on_ray(
     interior = np.r_[J[0] <= J[1], (J[1:-1] <= J[:-2]) & (J[1:-1] <= J[2:]), J[-1] <= J[-2]]
     idx = np.flatnonzero(interior)
     idx = idx[np.argsort(J[idx])][:max_candidates]
-    fixes = [_refine_on_ray(rig, o, d, z, prs, grid, J, int(k), sigma_tdoa_s, sigma_px)
+    fixes = [_refine_on_ray(rig, o, d, z, prs, grid, J, int(k), sigma_tdoa_s, sigma_px, p)
              for k in idx]
     fixes.sort(key=lambda f: f.residual_s)
     best = fixes[0]
@@ -383,7 +383,15 @@ def locate_on_ray(
 
 def _refine_on_ray(rig: AudioVisualRig, o: NDArray, d: NDArray, z: NDArray,
                    prs: list[tuple[int, int]], grid: NDArray, J: NDArray, k: int,
-                   sigma_tdoa_s: float, sigma_px: float) -> RayFix:
+                   sigma_tdoa_s: float, sigma_px: float, uv: NDArray) -> RayFix:
+    """The fix at the ``k``-th grid minimum of J along the ray ``o + s d`` of pixel ``uv``,
+    refined, with its covariance (m^2): the TDOA noise moves it along the ray by
+    ``sigma_tdoa_s / |dF/ds|``, and a pixel's noise moves the ray sideways and, through the
+    TDOA surface the shifted ray meets at another range, along it too (``dp/du = s dd/du +
+    d ds/du``, ``ds/du = -(dF/ds . dF/du) / |dF/ds|^2``: the implicit function F(s; u, v) =
+    0). Before 2026-12-02 the pixel moved it sideways only, which made the fixes
+    overconfident wherever the TDOA noise is small (0.5 us, 1 px, camera 0.2 m aside: mean
+    NEES 7.2 instead of 3, found by an audit)."""
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
 
     def cost(s: float) -> float:
@@ -398,10 +406,23 @@ def _refine_on_ray(rig: AudioVisualRig, o: NDArray, d: NDArray, z: NDArray,
     h = 1e-4 * max(s_hat, 1e-2)
     dF = (_ray_residuals(rig.array, o, d, [s_hat + h], z, prs)[0]
           - _ray_residuals(rig.array, o, d, [s_hat - h], z, prs)[0]) / (2 * h)
-    var_s = sigma_tdoa_s**2 / max(float(dF @ dF), 1e-30)
-    var_s = min(var_s, (grid[-1] - grid[0]) ** 2)
-    var_lat = (s_hat * sigma_px / rig.camera.fx) ** 2
-    cov = var_s * np.outer(d, d) + var_lat * (np.eye(3) - np.outer(d, d))
+    g = max(float(dF @ dF), 1e-30)
+    span2 = (grid[-1] - grid[0]) ** 2  # (no parallax: the range is only known to the search)
+    var_s = min(sigma_tdoa_s**2 / g, span2)
+    cov = var_s * np.outer(d, d)
+    if sigma_px > 0:
+        hp = 0.5  # pixels: the rays of uv +- hp along each image axis
+        offsets = np.array([[hp, 0.0], [-hp, 0.0], [0.0, hp], [0.0, -hp]])
+        d4 = rig.rays(np.asarray(uv, dtype=float)[None, :] + offsets)[1]
+        lat = []
+        for a in (0, 2):
+            dd = (d4[a] - d4[a + 1]) / (2 * hp)  # ray direction per pixel
+            dFdu = (_ray_residuals(rig.array, o, d4[a], [s_hat], z, prs)[0]
+                    - _ray_residuals(rig.array, o, d4[a + 1], [s_hat], z, prs)[0]) / (2 * hp)
+            ds = -float(dF @ dFdu) / g
+            ds = float(np.clip(ds, -np.sqrt(span2) / sigma_px, np.sqrt(span2) / sigma_px))
+            lat.append(s_hat * dd + ds * d)
+        cov = cov + sigma_px**2 * sum(np.outer(j, j) for j in lat)
     return RayFix(o + s_hat * d, s_hat, float(np.sqrt(np.mean(F**2))), cov, d)
 
 
