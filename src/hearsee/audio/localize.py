@@ -345,13 +345,18 @@ def far_field_linear(tdoa_s: ArrayLike, array: MicArray | str,
                             residual_s=resid, geometry="linear", extra=extra)
     phi_a = np.arctan2(a[1], a[0])
     ratio = cos_c / axy
-    if abs(ratio) > 1.0:  # the cone misses the horizontal plane: nearest azimuth on the axis
+    # (1e-9: an axis computed as 0.9999999999999999 long made an exact end-fire TDOA's ratio
+    # exceed 1 -- "infeasible, 0 solutions" for the true direction in 18-26 % of random
+    # horizontal line orientations)
+    if abs(ratio) > 1.0 + 1e-9:  # the cone misses the horizontal plane: nearest azimuth on the axis
         feasible = False
         ratio = float(np.sign(ratio))
     d = np.arccos(np.clip(ratio, -1.0, 1.0))
     azs = [float(np.degrees(phi_a + d)), float(np.degrees(phi_a - d))]
     azs = [float(wrap_deg(v)) for v in azs]
-    if abs(azs[0] - azs[1]) < 1e-9 or abs(abs(azs[0] - azs[1]) - 360) < 1e-9:
+    # one solution at end-fire: the twins meet (1e-5 deg, since arccos near 1 turns the
+    # ratio's rounding, ~1e-16, into ~1e-6 deg: two "solutions" 2e-6 deg apart)
+    if abs(float(wrap_deg(azs[0] - azs[1]))) < 1e-5:
         azs = azs[:1]
     azs.sort(key=lambda v: (abs(v) > 90.0 + 1e-9, -np.cos(np.radians(v))))
     cands = [(v, None) for v in azs]
