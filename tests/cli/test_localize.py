@@ -75,6 +75,8 @@ def test_other_formats(rec3, capsys, fmt):
         assert len(lines) > 10
     else:
         assert "summary: azimuth" in out
+        # (rich read "[s]", "[us]" and "[deg]" as style tags: the header had no units)
+        assert "t [s]" in out and "tdoa 0-1 [us]" in out and "azimuth [deg]" in out
 
 
 def _bad(tmp_path, name, data, fs=FS, subtype="FLOAT"):

@@ -281,3 +281,12 @@ def test_simulate_refuses_a_signal_file_below_1000_hz(tmp_path, capsys, rate):
     assert err == (f"hearsee: error: {sig}: the file's sample rate is {rate} Hz, below the 1000 "
                    "Hz a source signal needs (a wrong header?); resample it to e.g. 16000 Hz\n")
     assert not out.exists()
+
+
+def test_messages_name_the_files_written_even_with_brackets(tmp_path, capsys):
+    """Rich read "[bold]" in a file name as markup: 'wrote .../take2.wav' for take[bold]2.wav."""
+    out = tmp_path / "take[bold]2.wav"
+    assert main(["simulate", str(out), "--array", "two-mic", "--source", "1,0.5,0",
+                 "--duration", "0.2"]) == 0
+    err = capsys.readouterr().err
+    assert out.is_file() and "take[bold]2.wav" in err and "take[bold]2.json" in err

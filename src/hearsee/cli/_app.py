@@ -35,7 +35,9 @@ app = typer.Typer(
 #: Human-facing messages and progress go to stderr; results go to stdout. A message is one
 #: line whatever the width (rich wrapped at 80 columns when stderr is not a terminal: the
 #: stats line of ``track`` came out as three lines in a log).
-err_console = Console(stderr=True, soft_wrap=True)
+# (markup off: a file name such as take[bold]2.wav lost its "[bold]" in the messages; the
+# progress bars' own columns parse theirs)
+err_console = Console(stderr=True, soft_wrap=True, markup=False)
 
 
 class OutputFormat(str, Enum):  # noqa: UP042 (typer choices)

@@ -56,6 +56,7 @@ def _table_pairs(labels: list[str]) -> list[str]:
 
 def _print_table(doc: dict[str, Any]) -> None:
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
     every = list(doc["summary"]["tdoa_s"])
@@ -63,11 +64,12 @@ def _print_table(doc: dict[str, Any]) -> None:
     t = Table(title=f"hearsee localize ({doc['array']['name']}, {doc['method']})",
               caption=None if labels == every else
               f"TDOAs of {len(labels)} of {len(every)} pairs; --format json or csv has all")
-    t.add_column("t [s]")
+    # (escaped: rich read "[s]", "[us]" and "[deg]" as style tags and dropped the units)
+    t.add_column(escape("t [s]"))
     for k in labels:
-        t.add_column(f"tdoa {k} [us]")
+        t.add_column(escape(f"tdoa {k} [us]"))
     for h in ("azimuth [deg]", "elevation [deg]", "candidates", "confidence"):
-        t.add_column(h)
+        t.add_column(escape(h))
     for f in doc["frames"]:
         t.add_row(f"{f['t']:.3f}",
                   *[_fmt(None if f["tdoa_s"][k] is None else f["tdoa_s"][k] * 1e6) for k in labels],
