@@ -398,6 +398,9 @@ def test_localize3d_cli_round_trip(pose_manifest, capsys, method):
     # (an infinite noise passed the manifest check; the solver refused it after measuring
     # every capture, without naming the file: "tdoa_std_s must be > 0 seconds, got inf")
     (lambda d: d.update(tdoa_std_s=float("inf")), "bad.yaml: tdoa_std_s must be a positive"),
+    # (the captures of a masked pair were solved as the bare pair's: cone azimuths, -30.8 deg
+    # for a source at -153 deg)
+    (lambda d: d.update(array="mask2-asym"), "bad.yaml: array 'mask2-asym' has a mask"),
 ])
 def test_localize3d_bad_manifest(pose_manifest, tmp_path, capsys, edit, needle):
     import yaml

@@ -1994,3 +1994,16 @@ def test_a_missing_camera_is_one_line_without_opencv_warnings(capfd):
     err = capfd.readouterr().err
     assert "WARN" not in err and err == ""
     assert cv_log.getLogLevel() == level  # (OpenCV's log level restored afterwards)
+
+
+def test_a_masked_pair_or_a_vertical_line_is_refused_in_the_robot_file(small_rig):
+    """The live loop's stream took a masked pair for the bare pair (no front/back) and dropped
+    every frame of a vertical line (elevation only): refused when the file is loaded."""
+    import yaml
+
+    (small_rig / "vert.yaml").write_text(yaml.safe_dump({"microphones": [[0, 0, 0],
+                                                                         [0, 0, 0.2]]}))
+    for array, words in (("mask2", "has a mask"), ("vert.yaml", "is a vertical line")):
+        path = make_config(small_rig, _with(audio={"array": array, "channels": [0, 1]}))
+        with pytest.raises(ConfigError, match=f"audio.array: .*{words}"):
+            load_robot_config(path)

@@ -954,3 +954,39 @@ def test_framer_channel_count_is_a_whole_number_of_at_least_one(n):
     with pytest.raises(ConfigError, match="n_channels"):
         Framer(n, FS, 16, 8)
     assert Framer(3, FS, 16, 8).n_channels == 3
+
+
+@pytest.mark.parametrize(("model", "ray"), [("cv", "tdoa"), ("cv", "fix"), ("ca", "tdoa")])
+def test_the_3d_track_is_dropped_after_max_coast_s_without_a_measurement(model, ray):
+    """When the camera lost the talker the 3D track coasted for the rest of the run: a
+    constant-velocity extrapolation reported as position_m (2 m from a talker who had stopped,
+    4 s later). Now it is dropped, as the direction track, once max_coast_s (1.5 s) passes
+    without a fused measurement, and restarts when the camera sees the talker again."""
+    from hearsee.fusion.audiovisual import AudioVisualRig
+    from hearsee.sim.moving import linear_trajectory
+    from hearsee.vision.camera import Camera
+
+    arr = MicArray.from_preset("three-mic")
+    rig = AudioVisualRig.mounted(arr, Camera.from_fov(70.0, 640, 480), (0.0, 0.2, 0.0))
+    traj = linear_trajectory([1.5, -0.3, 0.0], [0.0, 0.6, 0.0], 2.0)
+    seen = {"on": True}
+
+    def points(t):
+        return tuple(rig.project(traj.at(min(t, 1.0)))[0]) if seen["on"] else None
+
+    proc = TrackingProcessor(arr, FS, StreamConfig(motion_model=model, ray_measurements=ray),
+                             rig=rig, image_points=points)
+    ups = []
+    for k in range(160):  # 5.1 s; the camera loses the talker after 1 s, sees them at 4.5 s
+        t = k * 0.032
+        seen["on"] = t < 1.0 or t >= 4.5
+        u = Update(t, None, None, None, None, None, None, 1.0)
+        proc._fuse(u, arr.tdoa(traj.at(min(t, 1.0))) if seen["on"] else None)
+        ups.append(u)
+    t = np.array([u.t for u in ups])
+    has = np.array([u.position_m is not None for u in ups])
+    assert has[(t > 0.1) & (t < 2.45)].all()  # coasting within max_coast_s: still reported
+    assert not has[(t > 2.6) & (t < 4.5)].any()  # then dropped
+    assert all(u.velocity_mps is None and u.covariance is None for u in ups if 2.6 < u.t < 4.5)
+    assert has[t >= 4.5].all()  # restarted by the next fix
+    assert np.linalg.norm(np.array(ups[-1].position_m) - traj.at(1.0)) < 0.05

@@ -1363,6 +1363,10 @@ def load_pose_manifest(path: Any) -> PoseManifest:
         arr = load_array(str(cand) if cand.is_file() else spec)
     else:
         raise ConfigError(f"{where}: array must be a preset name, a YAML path or a mapping")
+    if arr.mask is not None:  # (its captures were solved as the bare pair's: cone twins)
+        raise ConfigError(f"{where}: array {arr.name!r} has a mask; the poses are solved with "
+                          "the bare microphones' free-field delays, which a mask changes (use "
+                          "the bare pair's preset or file)")
     head = data.get("head") or {}
     if not isinstance(head, dict):
         raise ConfigError(f"{where}: head must be a mapping with pivot_m and/or offset_m")

@@ -169,7 +169,13 @@ def track_cmd(
     from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, IMM_MODES_DPS2
     from hearsee.config import time_limit
     from hearsee.errors import ConfigError
-    from hearsee.stream.pipeline import DeviceSource, StreamConfig, StreamPipeline, WavSource
+    from hearsee.stream.pipeline import (
+        DeviceSource,
+        StreamConfig,
+        StreamPipeline,
+        WavSource,
+        check_trackable,
+    )
 
     if recording is None and device is None:
         raise ConfigError("give a recording file or --device (live input)")
@@ -202,6 +208,7 @@ def track_cmd(
     if not 0.0 <= gate_coherence <= 1.0:
         raise ConfigError(f"--gate-coherence must be in [0, 1] (0 = off), got {gate_coherence}")
     arr = load_array(array)
+    check_trackable(arr)  # (a masked pair or a vertical line: refused before any audio)
     rig = points = None
     if camera is not None:
         from hearsee.fusion.audiovisual import AudioVisualRig

@@ -622,7 +622,7 @@ class RayTdoaTracker(RayTracker):
         if fix is not None and (not self.initialized or self.n_rejects >= self.max_rejects):
             self.predict(t)  # (the time's checks: finite, not before the last frame)
             self._start(*cands[0])
-            self.t = float(t)
+            self.t = self.last_fused_t = float(t)
             return True
         self.predict(t)
         if not self.initialized:
@@ -652,6 +652,8 @@ class RayTdoaTracker(RayTracker):
             self._correct(y, S, H, R)
             fused += 1
         self.n_rejects = 0 if fused else self.n_rejects + 1
+        if fused:
+            self.last_fused_t = self.t
         return fused > 0
 
     @property
@@ -659,6 +661,14 @@ class RayTdoaTracker(RayTracker):
         """The position covariance (m^2, array frame): ``covariance_scale`` times the filter's
         own ``P`` block (see :data:`RAY_COVARIANCE_SCALE`)."""
         return self.covariance_scale * super().position_cov
+
+    def reset(self) -> None:
+        """Forget the track."""
+        super().reset()
+        #: time (seconds) of the last measurement fused -- an image point, a TDOA or a
+        #: (re)start fix -- or None: the stream drops a track that has gone without one for
+        #: its ``max_coast_s`` (update_measurements' result counts TDOAs and starts only)
+        self.last_fused_t: float | None = None
 
     def _fuse_pixel(self, uv: NDArray) -> bool:
         """EKF update with the image point (pixels). False when it fails the gate; skipped (True)
@@ -676,6 +686,7 @@ class RayTdoaTracker(RayTracker):
         if d2 > self._pixel_gate:
             return False
         self._correct(y, S, H, R)
+        self.last_fused_t = self.t
         return True
 
 

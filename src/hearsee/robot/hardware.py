@@ -314,6 +314,12 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
     device = None if dev is None else _device(dev, f"{where}.device", base, camera=False)
     fs = number(d, "fs", 16000, where, 4000, 384000, integer=True)
     array, spec = _array(d.get("array", "three-mic"), f"{where}.array", base)
+    from hearsee.stream.pipeline import check_trackable
+
+    try:  # (the live loop's stream cannot use a masked pair or a vertical line: say so now)
+        check_trackable(array)
+    except ConfigError as exc:
+        raise ConfigError(f"{where}.array: {exc}") from None
     ch = d.get("channels")
     if ch is None:
         channels = tuple(range(array.n_mics))

@@ -1258,6 +1258,25 @@ def _check_gating(cfg: StreamConfig) -> None:
             f"gated_after_s >= 0 s; got {cfg.gate_sigmas}, {cfg.gate_deg}, {cfg.gated_after_s}")
 
 
+def check_trackable(array: MicArray) -> None:
+    """ConfigError unless the stream can track a direction with ``array``: a masked pair's
+    front/back decision (:func:`hearsee.audio.mask.localize_mask`) is not part of the stream,
+    which took it for the bare pair (a source at -153 deg came out at -29 deg: use ``hearsee
+    localize``); a vertical line of microphones hears the elevation only, and the stream's
+    direction trackers follow an azimuth (every frame was dropped: "no localizable source")."""
+    if array.mask is not None:
+        raise ConfigError(
+            f"array {array.name!r} has a mask: its front/back decision is made on whole "
+            "recordings (hearsee localize), not in the stream; track with the bare pair's "
+            "preset to get the front/back twins")
+    geo = array_geometry(array)
+    if geo.kind == "linear" and float(np.hypot(geo.axis[0], geo.axis[1])) < 1e-6:
+        raise ConfigError(
+            f"array {array.name!r} is a vertical line: it hears the elevation only, and the "
+            "stream tracks an azimuth; use hearsee localize (its elevation) or an array with "
+            "a horizontal extent")
+
+
 class TrackingProcessor:
     """TDOA -> ITD filter -> localizer -> tracker(s) for batches of frames.
 
@@ -1280,6 +1299,7 @@ class TrackingProcessor:
     def __init__(self, array: MicArray, fs: float, config: StreamConfig | None = None,
                  rig: Any = None, image_points: Callable[[float], Any] | None = None) -> None:
         self.array, self.fs = array, check_analysis_fs(fs)
+        check_trackable(array)
         self.cfg = _stream_config(config)
         self.rig, self.image_points = rig, image_points
         self.frame_len, self.hop = frame_geometry(fs, self.cfg.frame_ms, self.cfg.hop_ms)
@@ -1294,6 +1314,7 @@ class TrackingProcessor:
         self.direction = self._direction_tracker(self.cfg, self.hop / self.fs)
         self._last_measured_t = -np.inf
         self.motion, self.sigma_tdoa_s = self._motion_tracker(self.cfg)
+        self._motion_measured_t = -np.inf
         self.gcc = FrameGcc(array, fs, self.cfg)
         self.srp = None
         if self.cfg.spectrum_alpha > 0:
@@ -1319,6 +1340,7 @@ class TrackingProcessor:
         if self.srp is not None:
             self.srp.reset()
         self._last_measured_t = -np.inf
+        self._motion_measured_t = -np.inf
 
     def smoothed(self, batch: FrameBatch) -> dict[str, NDArray] | None:
         """The :class:`SmoothedSrp` measurements of the batch's frames (NaN rows for missing
@@ -1544,7 +1566,16 @@ class TrackingProcessor:
                             max_residual_s=self.cfg.max_fix_residual_samples / self.fs)
         if fix is not None:
             upd.raw_position_m = fix.position_m.tolist()
-        feed_tracker(self.motion, upd.t, uv, z, fix)
+        fused = feed_tracker(self.motion, upd.t, uv, z, fix)
+        if fused or getattr(self.motion, "last_fused_t", None) == upd.t:
+            self._motion_measured_t = upd.t
+        elif (self.cfg.max_coast_s is not None and self.motion.initialized
+              and upd.t - self._motion_measured_t > self.cfg.max_coast_s):
+            # lost, as the direction track after max_coast_s: without image points (or any
+            # fused measurement) the 3D state was a constant-velocity extrapolation for the
+            # rest of the run (2 m from a talker who had stopped, 4 s after the camera lost
+            # them, outside its own covariance)
+            self.motion.reset()
         if self.motion.initialized:
             upd.position_m = self.motion.position.tolist()
             # (None until the fixes determine it: a new track's velocity is its 0 m/s prior)
@@ -1589,6 +1620,7 @@ class StreamPipeline:
                  image_points: Callable[[float], Any] | None = None, queue_size: int = 8,
                  stall_timeout_s: float = 0.5, max_stall_s: float = 5.0) -> None:
         self.array = load_array(array)
+        check_trackable(self.array)  # (before any audio)
         self.config = _stream_config(config)
         self.rig, self.image_points = rig, image_points
         # (unchecked, a negative stall_timeout_s was a ValueError of queue.get in the threaded
