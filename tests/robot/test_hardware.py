@@ -1622,6 +1622,70 @@ def test_video_files_play_at_their_own_frame_rate(tmp_path, monkeypatch, fps):
     assert res.summary["camera_read_failures"] == 0
 
 
+def _mjpeg_avi(path: Path, frames: list[np.ndarray], fps: float, dropped=()) -> Path:
+    """An MJPEG AVI of ``frames`` at ``fps`` whose frames ``dropped`` are empty chunks, as
+    capture tools record a dropped frame (the frame slot is kept, with no picture)."""
+    import struct
+
+    def chunk(tag: bytes, data: bytes) -> bytes:
+        return tag + struct.pack("<I", len(data)) + data + (b"\0" if len(data) % 2 else b"")
+
+    def lst(kind: bytes, data: bytes) -> bytes:
+        return b"LIST" + struct.pack("<I", len(data) + 4) + kind + data
+
+    h, w = frames[0].shape[:2]
+    jpgs = [b"" if k in dropped else cv2.imencode(".jpg", f)[1].tobytes()
+            for k, f in enumerate(frames)]
+    n = len(frames)
+    avih = struct.pack("<IIIIIIIIII4I", int(round(1e6 / fps)), 0, 0, 0x10, n, 0, 1, 0, w, h,
+                       0, 0, 0, 0)
+    strh = b"vidsMJPG" + struct.pack("<IHHIIIIIIIIhhhh", 0, 0, 0, 0, 1000,
+                                     int(round(fps * 1000)), 0, n, 0, 0xFFFFFFFF, 0, 0, 0, w, h)
+    strf = struct.pack("<IiiHH4sIiiII", 40, w, h, 1, 24, b"MJPG", w * h * 3, 0, 0, 0, 0)
+    hdrl = lst(b"hdrl", chunk(b"avih", avih)
+               + lst(b"strl", chunk(b"strh", strh) + chunk(b"strf", strf)))
+    movi, idx, off = b"", b"", 4
+    for j in jpgs:
+        c = chunk(b"00dc", j)
+        idx += b"00dc" + struct.pack("<III", 0x10 if j else 0, off, len(j))
+        movi, off = movi + c, off + len(c)
+    body = b"AVI " + hdrl + lst(b"movi", movi) + chunk(b"idx1", idx)
+    path.write_bytes(b"RIFF" + struct.pack("<I", len(body)) + body)
+    return path
+
+
+def test_video_files_keep_the_time_of_frames_after_a_dropped_one(tmp_path):
+    """A 10 fps file whose frames 2 and 3 were dropped (empty chunks): OpenCV delivers frames
+    0, 1, 4, 5, 6, 7, and the cameras counted frames, so at t = 0.4 s they showed frame 6 (the
+    5th delivered) and every frame after the drop came 0.2 s early. Frame k is at k / 10 s:
+    read(t) shows the latest delivered frame at or before t (None after the last one's
+    period)."""
+    from hearsee.robot.hardware import Cameras
+    from hearsee.sim.scenes import default_rig
+
+    save_rig(default_rig(160, 120), tmp_path / "rig.yaml")
+    frames = [np.full((120, 160, 3), 20 * k, np.uint8) for k in range(8)]
+    for side in ("left", "right"):
+        _mjpeg_avi(tmp_path / f"{side}.avi", frames, 10.0, dropped=(2, 3))
+    cap = cv2.VideoCapture(str(tmp_path / "left.avi"))  # ground truth: what OpenCV delivers
+    got = []
+    while (f := cap.read()[1]) is not None:
+        got.append(round(f.mean() / 20))
+    cap.release()
+    assert got == [0, 1, 4, 5, 6, 7]
+    cfg = load_robot_config(make_config(tmp_path, {
+        "audio": {}, "cameras": {"left": "left.avi", "right": "right.avi", "calib": "rig.yaml",
+                                 "rate_hz": 10}}))
+    shown = []
+    with Cameras(cfg.cameras, "robot.yaml: ") as cams:
+        for t in (0.0, 0.05, 0.2, 0.3, 0.4, 0.45, 0.5, 0.6, 0.75, 0.85):
+            fr = cams.read(t)
+            shown.append(None if fr is None else (round(fr.left.mean() / 20),
+                                                  round(fr.right.mean() / 20)))
+    assert shown == [(0, 0), (0, 0), (1, 1), (1, 1), (4, 4), (4, 4), (5, 5), (6, 6), (7, 7),
+                     None]
+
+
 def test_speaker_chosen_by_the_bearing_from_the_array_not_the_pivot(tmp_path, monkeypatch):
     """Before there is a track, the verified person nearest the audio bearing becomes the
     speaker. The bearing is heard from the array origin (head.offset_m), but the persons'

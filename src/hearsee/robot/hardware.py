@@ -739,10 +739,14 @@ class Cameras:
     frame is checked against the calibrated size.
 
     A video FILE plays at its own frame rate: ``read(t)`` takes from it the frame shown at
-    ``t`` seconds (frame k at ``k / CAP_PROP_FPS``), skipping the frames in between (a 30 fps
-    file read every 0.1 s: frames 0, 3, 6, ...) or giving the same frame again while the file
-    has no newer one (a file slower than the reads). Devices and streams give their newest
-    frame; so does a file of unknown frame rate, and any source for ``read()`` without ``t``.
+    ``t`` seconds (the latest frame whose time is at or before t, the first frame before
+    that; frame times from :func:`hearsee.stream.video.file_frame_time`: the file's
+    timestamps, which keep the gaps of dropped frames, else frame k at ``k / CAP_PROP_FPS``),
+    skipping the frames in between (a 30 fps file read every 0.1 s: frames 0, 3, 6, ...) or
+    giving the same frame again while the file has no newer one (a file slower than the
+    reads; None once its last frame's period is over). Devices and streams give their newest
+    frame; so does a file of unknown frame rate; ``read()`` without ``t`` takes a file's next
+    frame.
     """
 
     def __init__(self, cfg: CameraConfig, where: str = "") -> None:
@@ -754,6 +758,8 @@ class Cameras:
         self.fps: dict[str, float] = {}  #: frame rate of each video file (Hz)
         self.n_taken: dict[str, int] = {}  #: frames taken (read or skipped) from each file
         self.last: dict[str, NDArray] = {}  #: each file's latest frame read
+        self.last_t: dict[str, float] = {}  #: its time in the file (s)
+        self._pending_t: dict[str, float] = {}  # a file's frame grabbed ahead: its time (s)
         self.n_failures = 0  #: reads that delivered no frame
         self.n_consecutive_failures = 0
         try:
@@ -773,22 +779,41 @@ class Cameras:
             self.close()
             raise
 
-    def _grab(self, name: str, t: float | None = None) -> NDArray | None:
-        cap = self.caps[name]
-        if t is not None and name in self.fps:  # a video file: its frame at t seconds
-            want = int(np.floor(t * self.fps[name] + 1e-6))
-            if want < self.n_taken[name]:  # still the frame read last
-                return self.last[name]
-            while self.n_taken[name] < want:  # the frames shown between the last read and t
-                if not cap.grab():
-                    return None
-                self.n_taken[name] += 1
-        ok, frame = cap.read()
-        if not ok or frame is None:
-            return None
-        if name in self.n_taken:
+    def _file_frame(self, name: str, t: float | None) -> NDArray | None:
+        """A video file's frame shown at ``t`` seconds (its next frame for None; see the class
+        notes), or None when the file has ended. Frames are grabbed one ahead to learn their
+        time; a grabbed frame is decoded (retrieved) once it is due."""
+        from hearsee.stream.video import file_frame_time
+
+        cap, fps = self.caps[name], self.fps[name]
+        eps = 1e-6 / fps  # (a frame due at t up to rounding)
+        while True:
+            if name not in self._pending_t:
+                if not cap.grab():  # ended: the last frame until its period is over
+                    last_t = self.last_t.get(name)
+                    due = t is not None and last_t is not None and t + eps < last_t + 1.0 / fps
+                    return self.last[name] if due else None
+                self._pending_t[name] = file_frame_time(cap, self.n_taken[name], fps,
+                                                        self.last_t.get(name, -np.inf))
+            if t is not None and name in self.last and self._pending_t[name] > t + eps:
+                return self.last[name]  # the next frame is not due yet
+            ok, frame = cap.retrieve()
             self.n_taken[name] += 1
-            self.last[name] = frame
+            frame_t = self._pending_t.pop(name)
+            if not ok or frame is None:
+                return None
+            self.last[name], self.last_t[name] = frame, frame_t
+            if t is None:
+                return frame
+
+    def _grab(self, name: str, t: float | None = None) -> NDArray | None:
+        if name in self.fps:  # a video file: its frame at t seconds
+            frame = self._file_frame(name, t)
+        else:
+            ok, frame = self.caps[name].read()
+            frame = frame if ok else None
+        if frame is None:
+            return None
         w, h = self.cfg.expected_size(name)
         if (frame.shape[1], frame.shape[0]) != (w, h):
             raise ConfigError(f"{self.where}cameras.{name}: camera delivers "

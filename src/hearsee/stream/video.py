@@ -20,8 +20,11 @@ frame, the pixel ``(u, v)`` where the source appears. Two providers, both callab
   (then the tracker falls back to direction-only updates), and with several people they
   pick the strongest detection, which need not be the speaker.
 
-Video time t = frame index / fps for files, whose image point at t is that of the nearest
-frame (the earlier at a tie; frames are read forward only). A live camera is read in its own
+A video file's frame carries its own time (:func:`file_frame_time`: OpenCV's
+``CAP_PROP_POS_MSEC``, which counts the frames a capture tool dropped -- frame index / fps
+only where the file gives no usable timestamp, or with an explicit ``fps``); the image point
+at t is that of the frame nearest t (the earlier at a tie; frames are read forward only, one
+ahead). A live camera is read in its own
 thread which keeps the latest detection; ``points(t)`` then returns that (the audio and
 camera clocks are not synchronised beyond "latest frame", about one camera frame period).
 Either way an image point
@@ -45,7 +48,8 @@ from hearsee.config import finite_number, input_file, whole_number
 from hearsee.errors import ConfigError, ImageInputError
 
 __all__ = ["FIRST_FRAME_TIMEOUT_S", "IMAGE_POINT_MARGIN", "CsvImagePoints", "TimedCapture",
-           "VideoImagePoints", "detect_source_point", "read_frame", "save_image_points"]
+           "VideoImagePoints", "detect_source_point", "file_frame_time", "read_frame",
+           "save_image_points"]
 
 #: How far outside the camera image (a fraction of its larger side, e.g. 64 px of a 640 x 480
 #: image) an image point of a CSV may lie: a detector's point just past the edge is still a
@@ -133,6 +137,27 @@ def read_frame(cap: Any, spec: Any, where: str, size: tuple[int, int] | None = N
         raise ConfigError(f"{where}: camera {spec!r} delivers {frame.shape[1]}x{frame.shape[0]} "
                           f"frames but the calibration expects {size[0]}x{size[1]}")
     return frame
+
+
+def file_frame_time(cap: Any, index: int, fps: float, previous: float) -> float:
+    """Time (seconds from the start of the video) of the frame a video FILE's capture ``cap``
+    has just read or grabbed, its ``index``-th delivered frame (from 0), ``previous`` being the
+    time of the frame before it (-inf for the first).
+
+    OpenCV's ``CAP_PROP_POS_MSEC`` / 1000 when it is finite, >= 0 and after ``previous``: a
+    capture tool records a dropped frame as an empty chunk, which OpenCV skips, and the
+    timestamp keeps the gap where ``index / fps`` put every later frame too early (one frame
+    period per drop). Otherwise (a backend without timestamps) ``index / fps`` (``fps`` frames
+    per second > 0), or ``previous + 1 / fps`` where that is not after ``previous``. The one
+    frame clock of :class:`VideoImagePoints` and the robot's video-file cameras."""
+    import cv2
+
+    pos = cap.get(cv2.CAP_PROP_POS_MSEC)
+    t = pos / 1000.0 if isinstance(pos, float | int) and np.isfinite(pos) else np.nan
+    if t >= 0.0 and t > previous:
+        return float(t)
+    t = index / fps
+    return float(t if t > previous else previous + 1.0 / fps)
 
 
 class CsvImagePoints:
@@ -315,7 +340,8 @@ class VideoImagePoints:
     detector : ``"hog"`` | ``"face"``
         See :func:`detect_source_point`.
     fps : float, optional
-        Frame rate override, frames per second > 0 (files whose container lacks it).
+        Frame rate override, frames per second > 0 (files whose container lacks it); a file's
+        frame k is then at k / fps seconds (its own timestamps are not used).
     expected_size : (width, height), optional
         The calibrated camera's image size in pixels: a video file of another size is refused
         (its image points would be read through the wrong intrinsics). Not checked for a live
@@ -326,6 +352,10 @@ class VideoImagePoints:
         ``"--video"``. The first frame is read when the object is made, before any audio is,
         and kept for ``points(t)``. (A still image that OpenCV opens, e.g. a PNG, passes: a
         one-frame video.) A live camera is not read here: its thread does.
+
+    A file's frames are timed by :func:`file_frame_time` (their timestamps, which keep the
+    gaps of dropped frames); ``frame_index`` counts the frames shown (from 0) and
+    ``frame_time`` is the shown frame's time in seconds.
     """
 
     def __init__(self, source: str | Path | int, detector: str = "hog",
@@ -358,16 +388,18 @@ class VideoImagePoints:
         if not self.live and not rate > 0:
             cap.release()
             raise ImageInputError(f"{source}: video has no frame rate; pass fps=")
-        self._first: NDArray | None = None  # a file's first frame, read below
+        self.cap, self.fps, self.detector = cap, float(rate or 30.0), detector
+        self._own_clock = fps is None  # a file's timestamps, unless fps overrides them
+        self._next: tuple[NDArray, float] | None = None  # a file's frame read ahead, its time
         if not self.live:
             # (a corrupt or truncated file opened, delivered nothing, and the run went on
             # audio-only without a word): the dry-run's check, before the audio is read
             try:
-                self._first = read_frame(cap, str(source), where)
+                first = read_frame(cap, str(source), where)
             except ConfigError:
                 cap.release()
                 raise
-        self.cap, self.fps, self.detector = cap, float(rate or 30.0), detector
+            self._next = (first, self._time_of(0, -np.inf))
         self.frame_index = -1
         self.frame_time = -np.inf
         self.last_point: tuple[float, float] | None = None
@@ -377,17 +409,36 @@ class VideoImagePoints:
         self._frame_wall = -np.inf  # live: wall-clock time of the latest detection
         self._cycle = 0.0  # live: wall-clock seconds between the last two detections
 
-    def _read(self) -> bool:
-        if self._first is not None:  # (read by __init__'s check)
-            ok, frame, self._first = True, self._first, None
-        else:
+    def _time_of(self, index: int, previous: float) -> float:
+        """Time (s) of the file's frame just read, its ``index``-th (:func:`file_frame_time`;
+        ``index / fps`` with an explicit fps)."""
+        if self._own_clock:
+            return file_frame_time(self.cap, index, self.fps, previous)
+        return index / self.fps
+
+    def _peek(self) -> tuple[NDArray, float] | None:
+        """A file's next frame and its time (s), read ahead once and kept until shown; None
+        (and ``ended``) when the file has no more."""
+        if self._next is None and not self.ended:
             ok, frame = self.cap.read()
-        if not ok:
-            self.ended = True
+            if not ok or frame is None:
+                self.ended = True
+                return None
+            previous = self.frame_time if self.frame_index >= 0 else -np.inf
+            self._next = (frame, self._time_of(self.frame_index + 1, previous))
+        return self._next
+
+    def _advance(self, t: float) -> bool:
+        """Show a file's next frame when it is nearer ``t`` (s) than the shown one (the
+        earlier at a tie; the first frame always); whether it did."""
+        if self.frame_index >= 0 and not t > self.frame_time:
+            return False  # (frames only come later: the shown one is the nearest)
+        nxt = self._peek()
+        if nxt is None or (self.frame_index >= 0 and not (self.frame_time + nxt[1]) / 2 < t):
             return False
+        self._frame, self.frame_time = nxt
+        self._next = None
         self.frame_index += 1
-        self.frame_time = self.frame_index / self.fps
-        self._frame = frame
         return True
 
     def _live_loop(self) -> None:
@@ -428,8 +479,8 @@ class VideoImagePoints:
         # the frame nearest t (the earlier one at a tie); the latest frame at or before t was
         # on average half a frame period old, which a moving talker's camera-ray fix turned
         # into a range error (about 9 cm at 30 fps, 1 m/s, camera 0.2 m aside; an audit)
-        while not self.ended and (2 * self.frame_index + 1) / (2 * self.fps) < t:
-            fresh = self._read() or fresh
+        while self._advance(t):
+            fresh = True
         if fresh:
             self.last_point = detect_source_point(self._frame, self.detector)
         if self.frame_index < 0 or abs(self.frame_time - t) > 2.0 / self.fps:
