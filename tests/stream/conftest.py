@@ -14,15 +14,16 @@ def _nothing() -> None:
 
 @pytest.fixture
 def fake_camera(monkeypatch: pytest.MonkeyPatch) -> Callable[..., None]:
-    """Install a fake ``cv2.VideoCapture`` (any index opens, 30 frames/s): call
-    ``fake_camera(n_frames, before_read=..., on_frame=..., on_end=...)``. Each ``read()``
+    """Install a fake ``cv2.VideoCapture`` (any index opens, reporting ``fps`` frames/s, 30
+    unless given): call ``fake_camera(n_frames, before_read=..., on_frame=..., on_end=...,
+    fps=...)``. Each ``read()``
     calls ``before_read``; the first ``n_frames`` reads then call ``on_frame`` and return a
     grey 80x60 image, later ones call ``on_end`` and fail (the camera has stopped)."""
     import cv2
 
     def install(n_frames: int = 5, before_read: Callable[[], None] = _nothing,
                 on_frame: Callable[[], None] = _nothing,
-                on_end: Callable[[], None] = _nothing) -> None:
+                on_end: Callable[[], None] = _nothing, fps: float = 30.0) -> None:
         class FakeCap:
             def __init__(self, index: int) -> None:
                 self.n = 0
@@ -31,7 +32,7 @@ def fake_camera(monkeypatch: pytest.MonkeyPatch) -> Callable[..., None]:
                 return True
 
             def get(self, prop: int) -> float:
-                return 30.0
+                return fps if prop == cv2.CAP_PROP_FPS else 30.0
 
             def read(self) -> tuple[bool, np.ndarray | None]:
                 before_read()

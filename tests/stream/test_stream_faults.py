@@ -391,6 +391,42 @@ def test_live_camera_point_goes_stale_when_the_camera_stops(monkeypatch, fake_ca
         vp.close()
 
 
+@pytest.mark.parametrize("reported", [float("nan"), -1.0, 0.0, float("inf")])
+def test_a_live_camera_without_a_usable_frame_rate_counts_30_fps(monkeypatch, fake_camera,
+                                                                  reported):
+    """A driver reporting CAP_PROP_FPS NaN (or -1, inf) set the camera's rate to it: with NaN
+    the staleness test (older than two frame periods) compared False, and the point of a camera
+    hung for a second was still returned. Now 30 frames/s unless the rate is finite and > 0
+    (fake clock: 1/30 s per frame; 3 frames, then the camera hangs)."""
+    import hearsee.stream.video as video
+
+    now, hang = [100.0], threading.Event()
+
+    def next_frame() -> None:
+        now[0] += 1 / 30
+
+    fake_camera(3, on_frame=next_frame, on_end=lambda: hang.wait(10.0), fps=reported)
+    monkeypatch.setattr(video, "detect_source_point", lambda img, det: (320.0, 240.0))
+    vp = video.VideoImagePoints(0, detector="hog")
+    vp._clock = lambda: now[0]
+    try:
+        assert vp.fps == 30.0
+        vp(0.0)  # starts the thread
+        for _ in range(500):
+            if vp.frame_index == 2:
+                break
+            time.sleep(0.01)
+        assert vp.frame_index == 2
+        last = now[0]
+        now[0] = last + 0.5 / 30
+        assert vp(0.1) == (320.0, 240.0)
+        now[0] = last + 1.0  # hung for a second
+        assert vp(1.1) is None
+    finally:
+        hang.set()
+        vp.close()
+
+
 # ------------------------------------------------------------------------- 6. CLI closes video
 def test_track_cli_closes_its_video_source(monkeypatch, tmp_path, capsys):
     """`hearsee track --video / --camera-device` releases the capture (and stops the live

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.config import finite_number, input_file, whole_number
+from hearsee.config import finite_number, input_file, is_real, whole_number
 from hearsee.errors import ConfigError, ImageInputError
 
 __all__ = ["FIRST_FRAME_TIMEOUT_S", "IMAGE_POINT_MARGIN", "CsvImagePoints", "TimedCapture",
@@ -330,6 +330,12 @@ def detect_source_point(image: NDArray, detector: str = "hog") -> tuple[float, f
     raise ConfigError(f"unknown detector {detector!r} (choose hog or face)")
 
 
+def _reported_fps(value: Any) -> float | None:
+    """A capture's ``CAP_PROP_FPS`` as frames per second when it is a finite number > 0, else
+    None (drivers report 0, -1 or NaN for "unknown")."""
+    return float(value) if is_real(value) and value > 0 else None
+
+
 class VideoImagePoints:
     """Image points from a video file or camera via ``cv2.VideoCapture`` + a detector.
 
@@ -384,10 +390,12 @@ class VideoImagePoints:
             raise ImageInputError(
                 f"{what}: frames are {size[0]}x{size[1]} pixels but the calibration expects "
                 f"{expected_size[0]}x{expected_size[1]} (use the calibrated camera's video)")
-        rate = fps or cap.get(cv2.CAP_PROP_FPS) or 0.0
-        if not self.live and not rate > 0:
+        rate = fps or _reported_fps(cap.get(cv2.CAP_PROP_FPS))
+        if not self.live and rate is None:
             cap.release()
             raise ImageInputError(f"{source}: video has no frame rate; pass fps=")
+        # (a live camera's driver may report no rate, 0, -1 or NaN: 30 frames/s then; a NaN
+        # rate made its image point never go stale when the camera hung)
         self.cap, self.fps, self.detector = cap, float(rate or 30.0), detector
         self._own_clock = fps is None  # a file's timestamps, unless fps overrides them
         self._next: tuple[NDArray, float] | None = None  # a file's frame read ahead, its time
