@@ -385,6 +385,29 @@ def test_detect_source_point_takes_grey_bgr_and_refuses_other_images(detector):
             detect_source_point(img, detector)
 
 
+def test_image_point_providers_refuse_a_time_that_is_not_a_number(tmp_path):
+    """points("0.1") let a builtin TypeError (numpy's UFuncTypeError for the CSV) escape, and
+    a NaN time compared False with every frame time. Both are a ConfigError naming t now;
+    a number still gives the point of the row (the frame) at t."""
+    import cv2
+
+    p = tmp_path / "p.csv"
+    p.write_text("t,u,v\n0.0,100,200\n0.1,110,220\n")
+    path = tmp_path / "blank.avi"
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (160, 120))
+    for _ in range(3):
+        w.write(np.full((120, 160, 3), 128, np.uint8))
+    w.release()
+    csv_points, video_points = CsvImagePoints(p), VideoImagePoints(path, detector="face")
+    for points in (csv_points, video_points):
+        for t in ("0.1", None, float("nan"), float("inf"), [0.1]):
+            with pytest.raises(ConfigError, match="image-point time t"):
+                points(t)
+    assert csv_points(np.float64(0.1)) == pytest.approx((110.0, 220.0))
+    assert video_points(np.float32(0.1)) is None and video_points.frame_index == 1
+    video_points.close()
+
+
 def test_image_point_providers_refuse_bad_settings(tmp_path):
     """CsvImagePoints with a NaN or negative max_gap_s silently gave no image point at all (not
     even at a row's own time); VideoImagePoints with fps=inf gave none either, and a NaN or

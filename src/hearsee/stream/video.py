@@ -212,6 +212,7 @@ class CsvImagePoints:
         self._seen_t = self.t[np.all(np.isfinite(self.uv), axis=1)]  # times of visible rows
 
     def __call__(self, t: float) -> tuple[float, float] | None:
+        t = _point_time(t)
         k = int(np.searchsorted(self.t, t))
         lo, hi = max(k - 1, 0), min(k, len(self.t) - 1)
         t0, t1 = self.t[lo], self.t[hi]
@@ -237,6 +238,13 @@ class CsvImagePoints:
         """Times (s) of the first and last visible rows, or None when no row is visible."""
         seen = self._seen_t
         return (float(seen[0]), float(seen[-1])) if len(seen) else None
+
+
+def _point_time(t: Any) -> float:
+    """``points(t)``'s time as a float (seconds), or a ConfigError unless it is a finite real
+    number: text (``"0.1"``) or None let a builtin TypeError escape, and a NaN time compared
+    False with every frame time."""
+    return finite_number("image-point time t (s)", t)
 
 
 def _check_pixel(path: Path, line: int, u: float, v: float, camera: Any) -> None:
@@ -469,6 +477,7 @@ class VideoImagePoints:
                 self.last_point = pt
 
     def __call__(self, t: float) -> tuple[float, float] | None:
+        t = _point_time(t)
         if self.live:
             if self._thread is None:
                 import threading
