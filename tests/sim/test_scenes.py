@@ -202,3 +202,33 @@ def test_random_spec_bad_arguments(kw, name):
     ranges or counts let numpy's ValueError ('low >= high') escape."""
     with pytest.raises(ConfigError, match=name):
         random_spec(0, **kw)
+
+
+def test_the_scene_rig_has_the_camera_height_it_was_rendered_at(tmp_path):
+    """render_scene returned the caller's rig unchanged: rendered at 1.0 m with a rig made for
+    1.4 m, scene.rig and write_scene's calib.yaml said 1.4 (truth.json 1.0), and a detector
+    reading its floor prior from the calibration was 0.4 m off. The floor's height in the
+    left optical frame is the bottom of a box standing on it (position y + height / 2)."""
+    rig = default_rig(160, 120, thermal_size=(40, 30))
+    assert rig.camera_height_m == pytest.approx(1.4)
+    spec = SceneSpec(entities=[Entity("box", 0.0, 3.0, 0.0, 0.5)], camera_height_m=1.0, seed=1)
+    s = render_scene(spec, rig)
+    floor_y = s.objects[0].position_m[1] + 0.25
+    assert floor_y == pytest.approx(1.0)
+    assert s.rig.camera_height_m == pytest.approx(floor_y)
+    assert s.truth()["camera_height_m"] == pytest.approx(floor_y)
+    out = write_scene(s, tmp_path / "s")
+    assert load_rig(out / "calib.yaml").camera_height_m == pytest.approx(floor_y)
+    assert json.loads((out / "truth.json").read_text())["camera_height_m"] == pytest.approx(1.0)
+    assert rig.camera_height_m == pytest.approx(1.4)  # (the caller's rig is not changed)
+    assert np.allclose(s.rig.left.K, rig.left.K) and np.allclose(s.rig.T_thermal, rig.T_thermal)
+    g = generate_scene(3, rig, camera_height_m=1.1)
+    assert g.rig.camera_height_m == pytest.approx(1.1) == g.spec.camera_height_m
+
+
+@pytest.mark.parametrize("height", [float("nan"), -1.0, 0.0, float("inf"), "1.4", None])
+def test_default_rig_refuses_a_camera_height_that_is_not_one(height):
+    """default_rig(camera_height_m=nan or -1) stored it in rig.info: write_scene then wrote a
+    calib.yaml that load_rig refuses."""
+    with pytest.raises(ConfigError, match="camera_height_m"):
+        default_rig(160, 120, camera_height_m=height)

@@ -57,3 +57,16 @@ def test_a_bad_view_is_a_geometry_error(view):
     spec = SceneSpec(entities=[Entity("person", 0.3, 3.0)], seed=2)
     with pytest.raises(GeometryError, match="view"):
         render_scene(spec, default_rig(160, 120), view=view)
+
+
+def test_a_raised_view_reports_the_height_it_was_rendered_at():
+    """A view raising the camera 0.3 m (C_y = -0.3, y down) rendered from 1.7 m while the
+    truth and the returned rig said spec.camera_height_m = 1.4. The floor's height in the
+    left optical frame is the bottom of a box standing on it."""
+    rig = default_rig(160, 120, thermal_size=(40, 30))
+    spec = SceneSpec(entities=[Entity("box", 0.0, 3.0, 0.0, 0.5)], seed=1)
+    s = render_scene(spec, rig, view=(np.eye(3), np.array([0.0, -0.3, 0.0])))
+    floor_y = s.objects[0].position_m[1] + 0.25
+    assert floor_y == pytest.approx(1.7)
+    assert s.truth()["camera_height_m"] == pytest.approx(floor_y)
+    assert s.rig.camera_height_m == pytest.approx(floor_y)

@@ -81,9 +81,12 @@ def default_rig(width: int = 640, height: int = 480, *, focal_px: float | None =
     ``focal_px`` defaults to ``500 * width / 640`` (f = 500 px at 640x480). The thermal camera
     (``thermal_size`` pixels, ``thermal_hfov_deg`` degrees, k1 = -0.05) sits 6 cm right of and
     7 cm above the left camera, turned by a fraction of a degree, like a camera bolted on top of
-    the rig. ``camera_height_m`` (height of the left camera above the floor) is stored in
-    ``rig.info`` so detectors can use it as a prior.
+    the rig. ``camera_height_m`` (height of the left camera above the floor, metres, finite
+    and > 0; else a ConfigError) is stored in ``rig.info`` so detectors can use it as a prior
+    (:func:`render_scene` returns the rig with the height it rendered at).
     """
+    # (NaN or -1 was stored, and the calib.yaml of write_scene was refused by load_rig)
+    height_m = finite_number("camera_height_m", camera_height_m, 0.0, lo_open=True)
     f = 500.0 * width / 640.0 if focal_px is None else float(focal_px)
     K = np.array([[f, 0, (width - 1) / 2.0], [0, f, (height - 1) / 2.0], [0, 0, 1.0]])
     cam = Camera(K=K, width=width, height=height, name="left")
@@ -96,8 +99,16 @@ def default_rig(width: int = 640, height: int = 480, *, focal_px: float | None =
     rig = StereoRig.ideal(cam, baseline_m, thermal=thermal, thermal_offset_m=(0.06, -0.07, 0.0),
                           thermal_rotation=R_t)
     return StereoRig(rig.left, rig.right, rig.R, rig.T, rig.thermal, rig.R_thermal,
-                     rig.T_thermal, None, {"camera_height_m": float(camera_height_m),
+                     rig.T_thermal, None, {"camera_height_m": height_m,
                                            "source": "hearsee.sim.scenes"})
+
+
+def _rig_at_height(rig: StereoRig, camera_height_m: float) -> StereoRig:
+    """``rig`` with ``info["camera_height_m"]`` = ``camera_height_m`` (metres above the floor;
+    the rest of its info kept)."""
+    return StereoRig(rig.left, rig.right, rig.R, rig.T, rig.thermal, rig.R_thermal,
+                     rig.T_thermal, rig.rms_px,
+                     {**rig.info, "camera_height_m": float(camera_height_m)})
 
 
 # ---------------------------------------------------------------------------------------------
@@ -192,7 +203,9 @@ class Scene:
     ``left``/``right``: (H, W, 3) uint8 BGR rectified pair; ``disparity``: (H, W) float32
     ground-truth disparity of the left view, pixels; ``labels``: (H, W) int16 entity index per
     left pixel (-1 = room); ``thermal_c``: (h, w) float32 radiometric thermal image, degC;
-    ``thermal_8bit``: the same with automatic gain control, uint8.
+    ``thermal_8bit``: the same with automatic gain control, uint8; ``rig``: the rig with
+    ``info["camera_height_m"]`` the height (metres above the floor) of the left camera that
+    rendered the scene; ``camera_height_m``: that height (None: ``spec.camera_height_m``).
     """
 
     left: NDArray
@@ -204,6 +217,7 @@ class Scene:
     rig: StereoRig
     objects: list[SceneObject]
     spec: SceneSpec
+    camera_height_m: float | None = None
 
     @property
     def people(self) -> list[SceneObject]:
@@ -218,7 +232,8 @@ class Scene:
         return {
             "frame": "left camera optical frame (x right, y down, z forward), metres",
             "seed": self.spec.seed,
-            "camera_height_m": self.spec.camera_height_m,
+            "camera_height_m": (self.spec.camera_height_m if self.camera_height_m is None
+                                else self.camera_height_m),
             "room_c": self.spec.room_c,
             "people": [o.to_dict() for o in self.people],
             "objects": [o.to_dict() for o in self.objects if o.kind != "person"],
@@ -740,9 +755,15 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     the origin. The rig moves rigidly with the left camera; ground-truth disparity and the
     returned ``position_m`` are in the left camera's optical frame. Used to render what a
     panning robot head sees (:mod:`hearsee.robot.pipeline`).
+
+    The returned scene's ``rig`` is ``rig`` with ``info["camera_height_m"]`` the height of the
+    left camera above the floor that rendered it: ``spec.camera_height_m - C_y`` metres (the
+    scene frame's y points down), which the scene's ``truth()`` and :func:`write_scene`'s
+    ``calib.yaml`` report too.
     """
     _check_room(spec)
-    rig = rig or default_rig(camera_height_m=spec.camera_height_m)
+    if rig is None:
+        rig = default_rig(camera_height_m=spec.camera_height_m)
     if view is None:
         Rv, Cv = np.eye(3), np.zeros(3)
     else:
@@ -812,8 +833,9 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
         objects.append(SceneObject(i, e.kind, Rv @ (refs[i] - Cv), box,
                                    n / total if total else 0.0,
                                    trunc, float(e.yaw_deg), float(e.height_m), n))
-    return Scene(left, right, disparity, labels, thermal_c, thermal_to_8bit(thermal_c), rig,
-                 objects, spec)
+    height_m = float(spec.camera_height_m - Cv[1])  # (y down: a camera raised has C_y < 0)
+    return Scene(left, right, disparity, labels, thermal_c, thermal_to_8bit(thermal_c),
+                 _rig_at_height(rig, height_m), objects, spec, height_m)
 
 
 def _free(x: float, z: float, placed: list[tuple[float, float, float]], r: float) -> bool:
