@@ -70,3 +70,30 @@ def test_a_raised_view_reports_the_height_it_was_rendered_at():
     assert floor_y == pytest.approx(1.7)
     assert s.truth()["camera_height_m"] == pytest.approx(floor_y)
     assert s.rig.camera_height_m == pytest.approx(floor_y)
+
+
+@pytest.mark.parametrize("centre, camera", [
+    ([0.0, -2.0, 0.0], "left"),  # 3.4 m up under a 2.8 m ceiling
+    ([0.0, 1.5, 2.0], "left"),  # under the floor
+    ([0.0, 0.0, -2.0], "left"),  # behind the back wall (0.5 m behind the origin)
+    ([5.0, 0.0, 3.0], "left"),  # beyond the right wall (4 m)
+    ([0.0, 0.0, 12.0], "left"),  # beyond the far wall (10 m)
+    ([3.95, 0.0, 3.0], "right"),  # the left camera in, the right one 0.07 m through the wall
+])
+def test_a_view_with_a_camera_outside_the_room_is_a_geometry_error(centre, camera):
+    """A camera centre outside the room was rendered: the walls seen from behind, a person
+    'seen' through them, ground truth for a picture no camera in the room takes. (The room:
+    x in [-4, 4], y in [-1.4, 1.4] (ceiling 2.8 m, camera 1.4 m, y down), z in [-0.5, 10].)"""
+    from hearsee.errors import GeometryError
+
+    spec = SceneSpec(entities=[Entity("person", 0.3, 3.0)], seed=2)
+    with pytest.raises(GeometryError, match=f"the {camera} camera's centre .* outside the room"):
+        render_scene(spec, default_rig(160, 120), view=(np.eye(3), np.array(centre)))
+
+
+def test_a_view_on_the_room_s_boundary_is_rendered():
+    """Inside the room, its walls included (a camera against the back wall), is rendered."""
+    spec = SceneSpec(entities=[Entity("person", 0.3, 3.0)], seed=2)
+    for centre in ([0.0, 0.0, -0.5], [-4.0, 1.3, 0.0], [3.0, -1.3, 9.0]):
+        s = render_scene(spec, default_rig(160, 120), view=(np.eye(3), np.array(centre)))
+        assert np.all(np.isfinite(s.disparity)) and np.all(s.disparity > 0)

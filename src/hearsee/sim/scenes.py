@@ -741,6 +741,21 @@ def _check_room(spec: SceneSpec) -> None:
                           f"(0, {spec.ceiling_m:g}) m, got {spec.camera_height_m!r}")
 
 
+def _check_cameras_in_room(spec: SceneSpec, centres: dict[str, NDArray]) -> None:
+    """GeometryError unless every camera centre (scene frame, metres; y down, the floor at
+    ``y = camera_height_m``) lies in the room, its walls, floor and ceiling included: a camera
+    outside saw the room's walls from behind (a picture of nothing with ground truth)."""
+    lo = np.array([-spec.width_left_m, spec.camera_height_m - spec.ceiling_m, -spec.back_m])
+    hi = np.array([spec.width_right_m, spec.camera_height_m, spec.depth_m])
+    for name, c in centres.items():
+        if not (np.all(c >= lo - 1e-9) and np.all(c <= hi + 1e-9)):
+            raise GeometryError(
+                f"render_scene: the {name} camera's centre {np.round(c, 3).tolist()} m (scene "
+                f"frame: x right, y down, z forward) is outside the room (x in "
+                f"[{lo[0]:g}, {hi[0]:g}], y in [{lo[1]:g}, {hi[1]:g}], z in [{lo[2]:g}, "
+                f"{hi[2]:g}]); move the view's C or enlarge the room")
+
+
 def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: float = 2.0,
                  view: tuple[NDArray, NDArray] | None = None) -> Scene:
     """Render ``spec`` with ``rig`` (default :func:`default_rig`): stereo pair, ground-truth
@@ -754,7 +769,8 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     and ``C`` is the camera centre in the scene frame (metres). The default is the identity at
     the origin. The rig moves rigidly with the left camera; ground-truth disparity and the
     returned ``position_m`` are in the left camera's optical frame. Used to render what a
-    panning robot head sees (:mod:`hearsee.robot.pipeline`).
+    panning robot head sees (:mod:`hearsee.robot.pipeline`). Every camera of the rig must be
+    in the room (its walls included), else a GeometryError.
 
     The returned scene's ``rig`` is ``rig`` with ``info["camera_height_m"]`` the height of the
     left camera above the floor that rendered it: ``spec.camera_height_m - C_y`` metres (the
@@ -784,6 +800,8 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
         raise GeometryError("render_scene needs the right camera at +baseline on the left "
                             "camera's x axis (T_x < 0); this rig has it on the left: use "
                             "rig.swapped()")
+    _check_cameras_in_room(spec, {"left": Cv, "right": Cv + Rv.T @ rig.right_center_m,
+                                  "thermal": Cv + Rv.T @ rig.thermal_center_m})
     rng = np.random.default_rng(spec.seed)
     b = _Builder()
     floor_m = b.material(rng.uniform(0.3, 0.7, 3), 0.6, spec.room_c - 0.5, 0.3)
