@@ -232,3 +232,26 @@ def test_default_rig_refuses_a_camera_height_that_is_not_one(height):
     calib.yaml that load_rig refuses."""
     with pytest.raises(ConfigError, match="camera_height_m"):
         default_rig(160, 120, camera_height_m=height)
+
+
+@pytest.mark.parametrize("yaw", [0.0, 45.0, 90.0, 180.0, -120.0])
+def test_a_poster_s_truth_yaw_is_the_turn_it_is_rendered_at(yaw):
+    """A poster is rendered turned by 0.3 of its entity's yaw_deg (a cut-out faces the room
+    roughly), but the truth reported yaw_deg itself: 180 (its back, the same plane as 0) for a
+    cut-out turned 54 deg. The turn of the printed plane is measured from the ground-truth
+    disparity: the (x, z) of its pixels above the stand lie on a line along (cos a, -sin a)."""
+    rig = default_rig(320, 240, thermal_size=(80, 60))
+    s = render_scene(SceneSpec(entities=[Entity("poster", 0.0, 3.0, yaw, 1.75)], seed=2), rig)
+    obj = s.objects[0]
+    _, y0, _, h = obj.box
+    vv, uu = np.nonzero(s.labels == 0)
+    keep = vv < y0 + 0.6 * h  # (the printed figure; the stand is at its foot)
+    f = rig.focal_px
+    z = f * rig.baseline_m / s.disparity[vv[keep], uu[keep]]
+    x = (uu[keep] - rig.left.cx) * z / f
+    pts = np.stack([x - x.mean(), z - z.mean()], axis=1)
+    dx, dz = np.linalg.svd(pts, full_matrices=False)[2][0]
+    measured = np.degrees(np.arctan(-dz / dx))  # the turn, modulo 180 (a plane)
+    reported = s.truth()["objects"][0]["yaw_deg"]
+    assert abs((measured - reported + 90.0) % 180.0 - 90.0) < 0.5
+    assert reported == pytest.approx(0.3 * yaw)

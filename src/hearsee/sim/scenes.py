@@ -68,6 +68,9 @@ __all__ = [
 #: Kinds of human-shaped objects that are not people.
 HUMAN_LIKE_KINDS = ("mannequin", "poster", "coat_stand")
 _ENTITY_KINDS = ("person", *HUMAN_LIKE_KINDS, "box", "radiator", "appliance")
+#: A poster (a flat cut-out facing the room roughly) is turned by this fraction of its
+#: entity's ``yaw_deg``; its ground truth reports the turn it is rendered at.
+_POSTER_YAW_FRACTION = 0.3
 
 
 # ---------------------------------------------------------------------------------------------
@@ -165,7 +168,9 @@ class SceneObject:
     ``box`` is ``[x, y, w, h]`` of its visible pixels in the left image (None when not visible);
     ``position_m`` its reference point in the left optical frame (metres; torso centre for
     bodies); ``visible_fraction`` = visible pixels / pixels it would cover unoccluded in the
-    left image; ``truncated`` = it touches the image border.
+    left image; ``truncated`` = it touches the image border; ``yaw_deg`` the turn it is
+    rendered at (degrees about the vertical, 0 = facing the camera; for a poster a fraction of
+    its entity's ``yaw_deg``).
     """
 
     index: int
@@ -380,6 +385,12 @@ def _cutout_print(height: float, seed: int) -> tuple[NDArray, NDArray]:
     return mask, col
 
 
+def _rendered_yaw_deg(e: Entity) -> float:
+    """The turn (degrees about the vertical, 0 = facing the camera) ``e`` is rendered at:
+    its ``yaw_deg``, a fraction of it for a poster (:data:`_POSTER_YAW_FRACTION`)."""
+    return e.yaw_deg * _POSTER_YAW_FRACTION if e.kind == "poster" else e.yaw_deg
+
+
 def _add_entity(b: _Builder, e: Entity, owner: int, spec: SceneSpec,
                 rng: np.random.Generator) -> NDArray:
     """Add an entity's primitives; returns its reference position (left frame)."""
@@ -393,7 +404,7 @@ def _add_entity(b: _Builder, e: Entity, owner: int, spec: SceneSpec,
         mask, col = _cutout_print(round(e.height_m, 2), int(rng.integers(1 << 30)))
         t = float(p.get("temp_c", room + rng.uniform(-0.3, 0.5)))
         m = b.material([1, 1, 1], 0.25, t, 0.2)
-        R = _rot_y(e.yaw_deg * 0.3)  # a cut-out faces the room roughly
+        R = _rot_y(_rendered_yaw_deg(e))  # a cut-out faces the room roughly
         center = np.array([e.x, cam_h - (mask.shape[0] - 1) * 0.005, e.z])
         b.cutouts.append((center, R[:, 0], np.array([0.0, 1.0, 0.0]), mask, col, m, owner))
         # a small stand at the back (invisible from the front mostly)
@@ -850,7 +861,7 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
                          or rys.max() == H - 1)
         objects.append(SceneObject(i, e.kind, Rv @ (refs[i] - Cv), box,
                                    n / total if total else 0.0,
-                                   trunc, float(e.yaw_deg), float(e.height_m), n))
+                                   trunc, float(_rendered_yaw_deg(e)), float(e.height_m), n))
     height_m = float(spec.camera_height_m - Cv[1])  # (y down: a camera raised has C_y < 0)
     return Scene(left, right, disparity, labels, thermal_c, thermal_to_8bit(thermal_c),
                  _rig_at_height(rig, height_m), objects, spec, height_m)
