@@ -255,3 +255,20 @@ def test_a_poster_s_truth_yaw_is_the_turn_it_is_rendered_at(yaw):
     reported = s.truth()["objects"][0]["yaw_deg"]
     assert abs((measured - reported + 90.0) % 180.0 - 90.0) < 0.5
     assert reported == pytest.approx(0.3 * yaw)
+
+
+def test_generate_scene_places_people_in_the_rig_s_own_view():
+    """generate_scene(seed, rig) placed people in a 65 deg field of view whatever the rig's:
+    with a 35.5 deg rig (f doubled) 8 of 28 people of 12 seeds were not in its image at all.
+    Each person's and human-like object's torso centre must project into the image; the
+    default rig's scenes are those of random_spec's 65 deg default, as before."""
+    narrow = default_rig(160, 120, focal_px=250.0, thermal_size=(40, 30))
+    assert narrow.left.hfov_deg == pytest.approx(35.5, abs=0.1)
+    for seed in range(12):
+        s = generate_scene(seed, narrow)
+        for o in s.people + s.human_like:
+            u, v = narrow.left.project(o.position_m[None])[0]
+            assert 0 <= u <= narrow.left.width - 1, (seed, o.kind, u)
+    small = default_rig(160, 120, thermal_size=(40, 30))
+    for seed in range(3):
+        assert generate_scene(seed, small).spec == random_spec(seed)

@@ -952,8 +952,25 @@ def random_spec(seed: int, *, n_people: tuple[int, int] = (1, 4),
     return spec
 
 
+#: random_spec's default ``hfov_deg`` (65 deg) stands for the default rig's view, 2 atan(320 /
+#: 500) = 65.24 deg; :func:`generate_scene` keeps it for rigs within this many degrees of that.
+_DEFAULT_VIEW_TOLERANCE_DEG = 0.05
+
+
 def generate_scene(seed: int, rig: StereoRig | None = None, **kwargs: Any) -> Scene:
-    """Render :func:`random_spec` ``(seed, **kwargs)`` (deterministic from ``seed``)."""
+    """Render :func:`random_spec` ``(seed, **kwargs)`` (deterministic from ``seed``) with
+    ``rig`` (default :func:`default_rig`).
+
+    Unless ``hfov_deg`` is given, people and human-like objects stand in the rig's own
+    horizontal field of view: random_spec's 65 deg for the default rig's 65.24 deg view (and
+    any rig within :data:`_DEFAULT_VIEW_TOLERANCE_DEG` of it: those scenes are as before),
+    the left camera's ``hfov_deg`` for a rig with another one (65 deg put a narrower rig's
+    "people" outside its image).
+    """
+    if rig is not None and "hfov_deg" not in kwargs:
+        hfov = rig.left.hfov_deg
+        if abs(hfov - np.degrees(2.0 * np.arctan2(320.0, 500.0))) > _DEFAULT_VIEW_TOLERANCE_DEG:
+            kwargs["hfov_deg"] = hfov
     spec = random_spec(seed, **kwargs)
     return render_scene(spec, rig)
 
