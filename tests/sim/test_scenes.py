@@ -272,3 +272,15 @@ def test_generate_scene_places_people_in_the_rig_s_own_view():
     small = default_rig(160, 120, thermal_size=(40, 30))
     for seed in range(3):
         assert generate_scene(seed, small).spec == random_spec(seed)
+
+
+@pytest.mark.parametrize("noise", [float("nan"), -1.0, float("inf"), "2", None])
+def test_render_scene_refuses_a_noise_level_that_is_not_one(noise):
+    """noise_std NaN rendered both images black (all 0) without a word; -1 let numpy's bare
+    ValueError ('scale < 0') escape."""
+    spec = SceneSpec(entities=[Entity("person", 0.0, 3.0)], seed=1)
+    rig = default_rig(64, 48, thermal_size=(16, 12))
+    with pytest.raises(ConfigError, match="noise_std"):
+        render_scene(spec, rig, noise_std=noise)
+    clean = render_scene(spec, rig, noise_std=0)  # 0: no noise, a valid level
+    assert 0 < clean.left.mean() < 255

@@ -773,7 +773,8 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     disparity, thermal images and per-entity ground truth. Deterministic from ``spec.seed``.
 
     The rig must be rectified (identical distortion-free cameras, right camera at +B on x) and
-    carry a thermal camera.
+    carry a thermal camera. ``noise_std`` is the standard deviation of the stereo images'
+    Gaussian pixel noise (grey levels of 0..255, finite and >= 0; else a ConfigError).
 
     ``view`` = ``(R, C)`` places the left camera in the scene's frame (the frame the entities
     and the room are written in): ``R`` rotates scene-frame vectors into the left optical frame
@@ -789,6 +790,8 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     ``calib.yaml`` report too.
     """
     _check_room(spec)
+    # (NaN made both images black without a word, -1 let numpy's ValueError escape)
+    noise_std = finite_number("render_scene noise_std", noise_std, 0.0)
     if rig is None:
         rig = default_rig(camera_height_m=spec.camera_height_m)
     if view is None:
