@@ -284,3 +284,38 @@ def test_render_scene_refuses_a_noise_level_that_is_not_one(noise):
         render_scene(spec, rig, noise_std=noise)
     clean = render_scene(spec, rig, noise_std=0)  # 0: no noise, a valid level
     assert 0 < clean.left.mean() < 255
+
+
+@pytest.mark.parametrize("kind, params, key", [
+    ("person", {"build": 0.0}, "build"),  # NaN bodies (divide by zero), drawn as a speck
+    ("person", {"skin_c": float("nan")}, "skin_c"),  # a NaN thermal image
+    ("person", {"clothing_c": "warm"}, "clothing_c"),  # a builtin ValueError
+    ("person", {"arm_swing_deg": float("inf")}, "arm_swing_deg"),
+    ("person", {"covered_head": "no"}, "covered_head"),  # read as True
+    ("mannequin", {"temp_c": -300.0}, "temp_c"),  # below absolute zero
+    ("box", {"width_m": -1.0}, "width_m"),  # an inside-out box, rendered
+    ("box", {"temp_c": "hot"}, "temp_c"),
+    ("radiator", {"depth_m": 0.0}, "depth_m"),
+    ("appliance", {"lift_m": -0.2}, "lift_m"),  # sunk into the floor
+    ("poster", {"temp_c": True}, "temp_c"),
+])
+def test_entity_params_that_are_not_usable_are_a_config_error(kind, params, key):
+    """Entity checked its placement but not its params: a build of 0 rendered a NaN body, a
+    negative width an inside-out box, 'hot' let float()'s ValueError escape from the renderer,
+    a NaN temperature gave a NaN thermal image."""
+    with pytest.raises(ConfigError, match=rf"entity params\['{key}'\]"):
+        Entity(kind, 0.0, 3.0, params=params)
+
+
+def test_entity_params_in_range_are_rendered_as_given():
+    """Good params are kept: a 0.4 m wide box at 40 degC is 0.4 m wide in the image and the
+    warmest thing in the thermal image; a mapping is required."""
+    rig = default_rig(320, 240, thermal_size=(80, 60))
+    box = Entity("box", 0.0, 3.0, 0.0, 1.0, {"width_m": 0.4, "depth_m": 0.3, "lift_m": 0.0,
+                                             "temp_c": 40.0})
+    s = render_scene(SceneSpec(entities=[box], seed=1), rig)
+    # the front face, 2.85 m away: 0.4 m is f * 0.4 / 2.85 pixels wide
+    assert s.objects[0].box[2] == pytest.approx(rig.focal_px * 0.4 / 2.85, abs=1.5)
+    assert s.thermal_c.max() == pytest.approx(40.0, abs=1.5)
+    with pytest.raises(ConfigError, match="params"):
+        Entity("box", 0.0, 3.0, params=None)

@@ -36,6 +36,7 @@ a test bed for the geometry of ch. 7, not a photo-realistic simulator.
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -71,6 +72,14 @@ _ENTITY_KINDS = ("person", *HUMAN_LIKE_KINDS, "box", "radiator", "appliance")
 #: A poster (a flat cut-out facing the room roughly) is turned by this fraction of its
 #: entity's ``yaw_deg``; its ground truth reports the turn it is rendered at.
 _POSTER_YAW_FRACTION = 0.3
+#: Entity.params the renderer reads as numbers: key -> (lower bound, bound excluded); degC
+#: temperatures are above absolute zero, sizes (metres) and a body's build factor > 0.
+_NUMERIC_PARAMS: dict[str, tuple[float | None, bool]] = {
+    **{k: (-273.15, True) for k in ("temp_c", "skin_c", "clothing_c", "legs_c", "hair_c")},
+    "build": (0.0, True), "width_m": (0.0, True), "depth_m": (0.0, True),
+    "lift_m": (0.0, False), "arm_swing_deg": (None, False)}
+#: Entity.params the renderer reads as flags (True / False).
+_FLAG_PARAMS = ("covered_head", "short_sleeves")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -123,8 +132,11 @@ class Entity:
 
     ``x`` (lateral, + right) and ``z`` (forward) place it in the left camera frame (metres);
     ``yaw_deg`` turns it about the vertical (0 = facing the camera, 90 = side, 180 = back);
-    ``height_m`` is its height. ``params`` holds kind-specific options (sizes, colours,
-    temperatures in degC: e.g. ``clothing_c``, ``skin_c``, ``temp_c``, ``covered_head``).
+    ``height_m`` is its height. ``params`` holds kind-specific options: temperatures in degC
+    (``temp_c``; for people ``skin_c``, ``clothing_c``, ``legs_c``, ``hair_c``), sizes in
+    metres (``width_m``, ``depth_m`` > 0, ``lift_m`` >= 0), a body's ``build`` factor (> 0)
+    and ``arm_swing_deg``, and the flags ``covered_head``, ``short_sleeves`` (True / False);
+    a bad one is a ConfigError naming its key.
     """
 
     kind: str
@@ -140,6 +152,23 @@ class Entity:
         for name in ("x", "z", "yaw_deg"):
             finite_number(f"entity {name}", getattr(self, name))
         finite_number("entity height_m", self.height_m, 0.0, lo_open=True)
+        _check_params(self.params)
+
+
+def _check_params(params: Any) -> None:
+    """ConfigError naming the key unless ``params`` is a mapping whose numeric options
+    (:data:`_NUMERIC_PARAMS`) are finite numbers within their bounds and whose flags
+    (:data:`_FLAG_PARAMS`) are True or False: a build of 0 rendered NaN bodies, a negative box
+    width an inside-out box, text a builtin ValueError, a NaN temperature a NaN thermal image,
+    and "no" for a flag read as True. Keys the renderer does not read are left alone."""
+    if not isinstance(params, Mapping):
+        raise ConfigError(f"entity params must be a mapping of options, got {params!r:.60}")
+    for key, value in params.items():
+        if key in _NUMERIC_PARAMS:
+            lo, lo_open = _NUMERIC_PARAMS[key]
+            finite_number(f"entity params[{key!r}]", value, lo, lo_open=lo_open)
+        elif key in _FLAG_PARAMS and not isinstance(value, bool | np.bool_):
+            raise ConfigError(f"entity params[{key!r}] must be True or False, got {value!r:.60}")
 
 
 @dataclass
