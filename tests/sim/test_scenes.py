@@ -319,3 +319,25 @@ def test_entity_params_in_range_are_rendered_as_given():
     assert s.thermal_c.max() == pytest.approx(40.0, abs=1.5)
     with pytest.raises(ConfigError, match="params"):
         Entity("box", 0.0, 3.0, params=None)
+
+
+def test_write_scene_to_a_file_or_below_one_is_an_input_file_error(tmp_path, scene):
+    """write_scene to a path that is a file let the bare FileExistsError of mkdir escape, and
+    to a path below a file a bare NotADirectoryError; a Scene is required (None was an
+    AttributeError). Nothing is written then."""
+    from hearsee.errors import InputFileError
+
+    f = tmp_path / "a_file.txt"
+    f.write_text("x", encoding="utf-8")
+    with pytest.raises(InputFileError, match=r"a_file\.txt: is a file, expected a folder"):
+        write_scene(scene, f)
+    with pytest.raises(InputFileError, match=r"scene: .*a_file\.txt is not a folder$"):
+        write_scene(scene, f / "scene")
+    with pytest.raises(InputFileError, match=r"scene: .*a_file\.txt is not a folder$"):
+        write_scene(scene, f / "deeper" / "scene")
+    with pytest.raises(ConfigError, match="Scene"):
+        write_scene(None, tmp_path / "none")
+    assert f.read_text(encoding="utf-8") == "x"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file.txt"]
+    out = write_scene(scene, tmp_path / "new" / "scene")  # missing parents are created
+    assert (out / "truth.json").is_file()

@@ -47,8 +47,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from hearsee.config import finite_number, is_real, whole_number
-from hearsee.errors import ConfigError, GeometryError, ImageInputError
+from hearsee.config import as_path, finite_number, is_real, whole_number
+from hearsee.errors import ConfigError, GeometryError, ImageInputError, InputFileError
 from hearsee.vision.camera import Camera, StereoRig, save_rig
 from hearsee.vision.humans import TORSO_HEIGHT_FRACTION
 
@@ -1011,16 +1011,45 @@ def write_scene(scene: Scene, folder: str | Path) -> Path:
     """Write ``left.png``, ``right.png``, ``thermal.png`` (8-bit AGC),
     ``thermal_radiometric.png`` (16-bit centi-kelvin), ``thermal_c.npy`` (float32 degC),
     ``disparity.npy`` (float32 px), ``calib.yaml`` (the rig) and ``truth.json`` into
-    ``folder`` (created if needed). Returns the folder."""
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(out / "left.png"), scene.left)
-    cv2.imwrite(str(out / "right.png"), scene.right)
-    cv2.imwrite(str(out / "thermal.png"), scene.thermal_8bit)
+    ``folder`` (created if needed). Returns the folder.
+
+    A ``folder`` that is a file or lies below one, or that cannot be created or written, is an
+    InputFileError naming it (bare FileExistsError / NotADirectoryError before; a PNG that
+    could not be written was skipped without a word).
+    """
+    from hearsee.vision.io import write_image
+
+    if not isinstance(scene, Scene):
+        raise ConfigError(f"write_scene needs a Scene (render_scene's), got {scene!r:.60}")
+    out = _scene_folder(folder)
+    write_image(out / "left.png", scene.left)
+    write_image(out / "right.png", scene.right)
+    write_image(out / "thermal.png", scene.thermal_8bit)
     ck = np.clip(np.rint((scene.thermal_c + 273.15) * 100.0), 0, 65535).astype(np.uint16)
-    cv2.imwrite(str(out / "thermal_radiometric.png"), ck)
-    np.save(out / "thermal_c.npy", scene.thermal_c.astype(np.float32))
-    np.save(out / "disparity.npy", scene.disparity.astype(np.float32))
-    save_rig(scene.rig, out / "calib.yaml")
-    (out / "truth.json").write_text(json.dumps(scene.truth(), indent=2), encoding="utf-8")
+    write_image(out / "thermal_radiometric.png", ck)
+    try:
+        np.save(out / "thermal_c.npy", scene.thermal_c.astype(np.float32))
+        np.save(out / "disparity.npy", scene.disparity.astype(np.float32))
+        save_rig(scene.rig, out / "calib.yaml")
+        (out / "truth.json").write_text(json.dumps(scene.truth(), indent=2), encoding="utf-8")
+    except OSError as exc:
+        raise InputFileError(f"{out}: cannot write the scene ({exc.strerror or exc})") from None
+    return out
+
+
+def _scene_folder(folder: str | Path) -> Path:
+    """``folder`` as a Path, created with its parents if needed; InputFileError naming it when
+    it is a file, lies below one, or cannot be created (the messages of
+    :func:`hearsee.config.output_file`)."""
+    out = as_path(folder, "the scene folder")
+    if out.exists() and not out.is_dir():
+        raise InputFileError(f"{out}: is a file, expected a folder for the scene")
+    above = next((a for a in out.parents if a.exists()), None)
+    if above is not None and not above.is_dir():
+        raise InputFileError(f"{out}: {above} is not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:  # (no permission)
+        raise InputFileError(f"{out}: cannot create the folder ({exc.strerror or exc})"
+                             ) from None
     return out
