@@ -341,3 +341,42 @@ def test_write_scene_to_a_file_or_below_one_is_an_input_file_error(tmp_path, sce
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file.txt"]
     out = write_scene(scene, tmp_path / "new" / "scene")  # missing parents are created
     assert (out / "truth.json").is_file()
+
+
+@pytest.mark.parametrize("kw, name", [
+    ({"width": "640"}, "width"),  # a builtin TypeError
+    ({"height": 480.5}, "height"),
+    ({"thermal_size": (160,)}, "thermal_size"),  # a builtin ValueError
+    ({"thermal_size": (160, "120")}, "thermal_size"),
+    ({"thermal_hfov_deg": 180.0}, "thermal_hfov_deg"),  # a thermal focal length of 5e-15 px
+    ({"thermal_hfov_deg": "72"}, "thermal_hfov_deg"),
+    ({"focal_px": "500"}, "focal_px"),  # read as 500.0
+])
+def test_default_rig_bad_arguments(kw, name):
+    with pytest.raises(ConfigError, match=name):
+        default_rig(**kw)
+
+
+def test_scene_inputs_of_the_wrong_type_are_typed_errors():
+    """A seed of -1 or 1.5 let numpy's ValueError / TypeError escape from render_scene and
+    random_spec; entities=None, spec=None and a rig that is not one were AttributeErrors or
+    TypeErrors; thermal_to_8bit of text or bools a numpy TypeError."""
+    from hearsee.errors import ImageInputError
+
+    rig = default_rig(32, 24, thermal_size=(8, 6))
+    for seed in (-1, 1.5, "1"):
+        with pytest.raises(ConfigError, match="seed"):
+            render_scene(SceneSpec(seed=seed), rig)
+        with pytest.raises(ConfigError, match="seed"):
+            random_spec(seed)
+    with pytest.raises(ConfigError, match="entities"):
+        render_scene(SceneSpec(entities=None), rig)
+    with pytest.raises(ConfigError, match="SceneSpec"):
+        render_scene(None, rig)
+    with pytest.raises(ConfigError, match="StereoRig"):
+        render_scene(SceneSpec(), "rig.yaml")
+    for bad in ([["a", "b"]], np.ones((2, 2), bool)):
+        with pytest.raises(ImageInputError, match="numbers"):
+            thermal_to_8bit(bad)
+    assert thermal_to_8bit(np.arange(16).reshape(4, 4))[-1, -1] == 255  # integers still map
+    assert render_scene(SceneSpec(seed=np.int64(3)), rig).spec.seed == 3

@@ -96,14 +96,26 @@ def default_rig(width: int = 640, height: int = 480, *, focal_px: float | None =
     the rig. ``camera_height_m`` (height of the left camera above the floor, metres, finite
     and > 0; else a ConfigError) is stored in ``rig.info`` so detectors can use it as a prior
     (:func:`render_scene` returns the rig with the height it rendered at).
+
+    Sizes are whole numbers of pixels >= 1, ``focal_px`` (pixels) finite and > 0,
+    ``thermal_hfov_deg`` in (0, 180) degrees; else a ConfigError naming the argument (text
+    for a size was a builtin TypeError, a 1-tuple thermal size a ValueError, a 180 deg
+    thermal view a focal length of 5e-15 px). A bad ``baseline_m`` is StereoRig's
+    CalibrationError.
     """
     # (NaN or -1 was stored, and the calib.yaml of write_scene was refused by load_rig)
     height_m = finite_number("camera_height_m", camera_height_m, 0.0, lo_open=True)
-    f = 500.0 * width / 640.0 if focal_px is None else float(focal_px)
+    width, height = whole_number("width", width), whole_number("height", height)
+    tw, th = _pixel_size("thermal_size", thermal_size)
+    hfov_t = finite_number("thermal_hfov_deg", thermal_hfov_deg, 0.0, lo_open=True)
+    if not hfov_t < 180.0:
+        raise ConfigError(f"thermal_hfov_deg must be in (0, 180) degrees, got "
+                          f"{thermal_hfov_deg!r}")
+    f = 500.0 * width / 640.0 if focal_px is None else \
+        finite_number("focal_px", focal_px, 0.0, lo_open=True)
     K = np.array([[f, 0, (width - 1) / 2.0], [0, f, (height - 1) / 2.0], [0, 0, 1.0]])
     cam = Camera(K=K, width=width, height=height, name="left")
-    tw, th = thermal_size
-    tf = (tw / 2.0) / np.tan(np.radians(thermal_hfov_deg) / 2.0)
+    tf = (tw / 2.0) / np.tan(np.radians(hfov_t) / 2.0)
     Kt = np.array([[tf, 0, (tw - 1) / 2.0], [0, tf, (th - 1) / 2.0], [0, 0, 1.0]])
     thermal = Camera(K=Kt, dist=np.array([-0.05, 0.0, 0.0, 0.0]), width=tw, height=th,
                      name="thermal")
@@ -113,6 +125,14 @@ def default_rig(width: int = 640, height: int = 480, *, focal_px: float | None =
     return StereoRig(rig.left, rig.right, rig.R, rig.T, rig.thermal, rig.R_thermal,
                      rig.T_thermal, None, {"camera_height_m": height_m,
                                            "source": "hearsee.sim.scenes"})
+
+
+def _pixel_size(name: str, size: Any) -> tuple[int, int]:
+    """``size`` as (width, height) whole numbers of pixels >= 1, else a ConfigError naming
+    ``name``."""
+    if not isinstance(size, tuple | list | np.ndarray) or len(size) != 2:
+        raise ConfigError(f"{name} must be (width, height) in pixels, got {size!r:.60}")
+    return whole_number(f"{name}[0]", size[0]), whole_number(f"{name}[1]", size[1])
 
 
 def _rig_at_height(rig: StereoRig, camera_height_m: float) -> StereoRig:
@@ -734,7 +754,10 @@ def thermal_to_8bit(thermal_c: NDArray, low_pct: float = 1.0, high_pct: float = 
     hi_p = finite_number("high_pct", high_pct, 0.0, 100.0)
     if not lo_p < hi_p:
         raise ConfigError(f"low_pct must be below high_pct, got {low_pct} and {high_pct}")
-    thermal_c = np.asarray(thermal_c)
+    from hearsee.vision.io import numeric_map
+
+    # (text or bools let numpy's TypeError escape; numbers of any dtype are mapped as before)
+    thermal_c = numeric_map("thermal_to_8bit: the thermal image", thermal_c, None)
     if thermal_c.size == 0:
         raise ImageInputError("thermal_to_8bit: the thermal image is empty")
     if not np.all(np.isfinite(thermal_c)):
@@ -770,8 +793,17 @@ def _thermal_image(hits: _Hits, D: NDArray, C: NDArray, b: _Builder, cam: Camera
 # Rendering
 # ---------------------------------------------------------------------------------------------
 def _check_room(spec: SceneSpec) -> None:
-    """ConfigError unless the room has finite positive extents around the camera (which must
-    be inside it: between the floor and the ceiling) and a finite temperature."""
+    """ConfigError unless ``spec`` is a SceneSpec whose room has finite positive extents
+    around the camera (which must be inside it: between the floor and the ceiling) and a
+    finite temperature, whose entities are a list of Entity and whose seed is a whole number
+    >= 0 (numpy's generator raised a builtin ValueError for -1 and TypeError for 1.5)."""
+    if not isinstance(spec, SceneSpec):
+        raise ConfigError(f"render_scene needs a SceneSpec, got {spec!r:.60}")
+    if not isinstance(spec.entities, list) or \
+            not all(isinstance(e, Entity) for e in spec.entities):
+        raise ConfigError(f"scene entities must be a list of Entity, got "
+                          f"{spec.entities!r:.60}")
+    whole_number("scene seed", spec.seed, 0)
     for name in ("width_left_m", "width_right_m", "depth_m", "ceiling_m"):
         finite_number(f"scene {name}", getattr(spec, name), 0.0, lo_open=True)
     finite_number("scene back_m", spec.back_m, 0.0)
@@ -823,6 +855,9 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     noise_std = finite_number("render_scene noise_std", noise_std, 0.0)
     if rig is None:
         rig = default_rig(camera_height_m=spec.camera_height_m)
+    if not isinstance(rig, StereoRig):
+        raise ConfigError(f"render_scene: rig must be a StereoRig (see default_rig), got "
+                          f"{rig!r:.60}")
     if view is None:
         Rv, Cv = np.eye(3), np.zeros(3)
     else:
@@ -924,7 +959,7 @@ def random_spec(seed: int, *, n_people: tuple[int, int] = (1, 4),
                           f"{range_m}")
     if not 0 < finite_number("hfov_deg", hfov_deg) < 180:
         raise ConfigError(f"hfov_deg must be in (0, 180) degrees, got {hfov_deg}")
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(whole_number("seed", seed, 0))
     depth = max(range_m[1] + rng.uniform(1.0, 2.5), 4.0)
     wl, wr = rng.uniform(2.8, 4.5), rng.uniform(2.8, 4.5)
     spec = SceneSpec(width_left_m=wl, width_right_m=wr, depth_m=depth,
