@@ -1005,6 +1005,11 @@ def random_spec(seed: int, *, n_people: tuple[int, int] = (1, 4),
         if rng.random() < 0.6:  # along a wall
             z = rng.uniform(1.5, depth - d / 2 - 0.05)
             x = (wr - d / 2 - 0.05) if rng.random() < 0.5 else (-wl + d / 2 + 0.05)
+            # its depth along the wall is w: the range above (kept, so that the rooms that
+            # were right stay as they were) let one in ~40 stick through the far wall; such
+            # a cabinet is moved in, 5 cm from the wall (no draw changes)
+            if z + w / 2 > depth:
+                z = depth - w / 2 - 0.05
             spec.entities.append(Entity("box", float(x), float(z), 0, h,
                                         {"width_m": d, "depth_m": w}))
         else:
