@@ -151,3 +151,36 @@ def test_write_image_checks_its_path_as_every_output_does(tmp_path):
     with pytest.raises(InputFileError, match=r"x\.png: folder .*no does not exist$"):
         write_image(tmp_path / "no" / "x.png", _img())
     assert write_image(tmp_path / "x.png", _img()) == tmp_path / "x.png"
+
+
+def _jpeg_with_orientation(img: np.ndarray, orientation: int) -> bytes:
+    """``img`` as a JPEG (quality 98) with an EXIF APP1 segment holding only the orientation
+    tag (0x0112, SHORT) = ``orientation`` (3: rotate 180 deg to display, 6: 90 deg)."""
+    import struct
+
+    data = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, 98])[1].tobytes()
+    ifd = struct.pack("<H", 1) + struct.pack("<HHIHH", 0x0112, 3, 1, orientation, 0) + \
+        struct.pack("<I", 0)
+    app1 = b"Exif\x00\x00" + b"II*\x00" + struct.pack("<I", 8) + ifd
+    return data[:2] + b"\xff\xe1" + struct.pack(">H", len(app1) + 2) + app1 + data[2:]
+
+
+@pytest.mark.parametrize("orientation", [3, 6])
+def test_every_read_mode_gives_a_jpeg_s_pixels_as_stored(tmp_path, orientation):
+    """'gray' and 'bgr' applied a JPEG's EXIF orientation and 'unchanged' (read_thermal)
+    did not: calibration (grey) and detection (read_thermal) saw the same file 180 deg apart
+    (orientation 6: 90 deg, transposed sizes). Every mode now gives the stored pixels: a ramp
+    dark at the left, bright at the right, 64x48."""
+    ramp = np.tile((np.arange(64) * 4).astype(np.uint8), (48, 1))
+    path = tmp_path / "exif.jpg"
+    path.write_bytes(_jpeg_with_orientation(np.dstack([ramp] * 3), orientation))
+    stored = cv2.imdecode(np.fromfile(str(path), np.uint8), cv2.IMREAD_UNCHANGED)
+    assert stored.shape == (48, 64, 3)  # ground truth: the pixels in the file
+    gray, bgr = read_image(path, "gray"), read_image(path, "bgr")
+    unchanged, thermal = read_image(path, "unchanged"), read_thermal(path)
+    np.testing.assert_array_equal(bgr, stored)
+    np.testing.assert_array_equal(unchanged, stored)
+    assert gray.shape == thermal.shape == (48, 64)
+    assert np.abs(gray.astype(int) - ramp).max() <= 3
+    assert np.abs(thermal.astype(int) - ramp).max() <= 3
+    assert read_image(path, "gray", expected_size=(64, 48)).shape == (48, 64)

@@ -34,9 +34,13 @@ __all__ = [
 
 ColorMode = Literal["gray", "bgr", "unchanged"]
 
+#: OpenCV's decoding flags of each read mode. None of them applies a JPEG's EXIF orientation
+#: tag ("unchanged" never does): "gray" and "bgr" rotated such a file and "unchanged" (so
+#: read_thermal) did not, so calibration (grey) and detection saw the same file 90 or 180 deg
+#: apart. Pixels are taken as stored.
 _IMREAD = {
-    "gray": cv2.IMREAD_GRAYSCALE,
-    "bgr": cv2.IMREAD_COLOR,
+    "gray": cv2.IMREAD_GRAYSCALE | cv2.IMREAD_IGNORE_ORIENTATION,
+    "bgr": cv2.IMREAD_COLOR | cv2.IMREAD_IGNORE_ORIENTATION,
     "unchanged": cv2.IMREAD_UNCHANGED,
 }
 
@@ -148,7 +152,8 @@ def read_image(path: str | Path, mode: ColorMode = "gray",
     ----------
     path : file name (any format OpenCV decodes: PNG, JPEG, TIFF, PGM, ...).
     mode : "gray" (uint8 (H, W)), "bgr" (uint8 (H, W, 3)) or "unchanged" (bit depth and
-        channels as stored, e.g. 16-bit PGM/PNG).
+        channels as stored, e.g. 16-bit PGM/PNG). In every mode the pixels are those stored:
+        a JPEG's EXIF orientation tag is not applied.
     expected_size : (width, height) in pixels, checked when given.
     """
     if mode not in _IMREAD:
