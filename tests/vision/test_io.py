@@ -184,3 +184,25 @@ def test_every_read_mode_gives_a_jpeg_s_pixels_as_stored(tmp_path, orientation):
     assert np.abs(gray.astype(int) - ramp).max() <= 3
     assert np.abs(thermal.astype(int) - ramp).max() <= 3
     assert read_image(path, "gray", expected_size=(64, 48)).shape == (48, 64)
+
+
+def test_read_thermal_refuses_a_false_colour_image(tmp_path):
+    """A false-colour export (a palette over temperature) was converted to its luminance
+    without a word: with JET the hottest pixels came back darker than warm ones (luminance
+    peaks at rank 159 of 255). Colour files whose channels differ are refused; a grey image
+    with a slight colour cast (channels 1-2 levels apart) is still read as grey."""
+    ramp = np.tile(np.arange(256, dtype=np.uint8), (20, 1))  # temperature rank, cold -> hot
+    for cmap in (cv2.COLORMAP_JET, cv2.COLORMAP_HOT, cv2.COLORMAP_INFERNO):
+        write_image(tmp_path / "false.png", cv2.applyColorMap(ramp, cmap))
+        with pytest.raises(ImageInputError, match=r"false\.png: a colour thermal image"):
+            read_thermal(tmp_path / "false.png")
+    jet16 = cv2.applyColorMap(ramp, cv2.COLORMAP_JET).astype(np.uint16) * 257
+    write_image(tmp_path / "false16.png", jet16)
+    with pytest.raises(ImageInputError, match="colour thermal image"):
+        read_thermal(tmp_path / "false16.png")
+    cast = np.dstack([ramp, ramp, ramp]).astype(np.int16)
+    cast[:, :, 0] += 2  # a bluish grey
+    cast[:, :, 2] -= 1
+    write_image(tmp_path / "cast.png", np.clip(cast, 0, 255).astype(np.uint8))
+    out = read_thermal(tmp_path / "cast.png")
+    assert out.shape == (20, 256) and np.all(np.diff(out[0].astype(int)) >= 0)

@@ -233,6 +233,12 @@ def as_detector_image(image: NDArray, what: str = "image") -> NDArray:
     return img
 
 
+#: A colour thermal file is a grey image when its channels differ by at most this fraction of
+#: its pixel type's full scale (a float file: of its value range) -- a grey export's JPEG or
+#: colour-cast noise; a false-colour palette (iron, rainbow, JET) differs by far more.
+GREY_CHANNEL_TOLERANCE = 0.02
+
+
 def read_thermal(path: str | Path, expected_size: tuple[int, int] | None = None) -> NDArray:
     """Read a thermal image as a single channel, keeping its bit depth.
 
@@ -240,16 +246,41 @@ def read_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
     are reduced to it) come back as uint8; 16-bit files (raw radiometric counts) as uint16;
     float TIFFs (e.g. degrees Celsius) as float32. Converting counts to temperature is the
     thermal filter's business (:mod:`hearsee.vision.thermal`).
+
+    A colour file whose channels differ by more than :data:`GREY_CHANNEL_TOLERANCE` (a
+    false-colour palette export) is an ImageInputError: its luminance is not monotonic in
+    temperature (JET's hottest pixels are darker than its warm ones); nearly grey colour files
+    are converted to grey as before.
     """
     img = read_image(path, "unchanged", expected_size)
     if img.ndim == 3:
+        chans = img[:, :, :3] if img.shape[2] >= 3 else img
         if img.dtype == np.uint8 or img.dtype == np.uint16:
-            chans = img[:, :, :3] if img.shape[2] >= 3 else img
             if chans.ndim == 3 and np.array_equal(chans[:, :, 0], chans[:, :, 1]) and \
                     np.array_equal(chans[:, :, 0], chans[:, :, 2]):
                 return np.ascontiguousarray(chans[:, :, 0])
+        if chans.shape[2] == 3:
+            _refuse_false_colour(chans, path)
         img = to_gray(img)
     return img
+
+
+def _refuse_false_colour(chans: NDArray, path: str | Path) -> None:
+    """ImageInputError naming ``path`` when the three channels ``chans`` (H, W, 3) differ by
+    more than :data:`GREY_CHANNEL_TOLERANCE` of the full scale: a false-colour thermal image,
+    whose grey conversion was silently used as temperatures before."""
+    c = chans.astype(np.float64)
+    spread = max(float(np.max(np.abs(c[:, :, i] - c[:, :, j]))) for i, j in ((0, 1), (0, 2),
+                                                                           (1, 2)))
+    if chans.dtype.kind in "iu":
+        scale = float(np.iinfo(chans.dtype).max)
+    else:
+        scale = float(np.max(c) - np.min(c))
+    if spread > GREY_CHANNEL_TOLERANCE * scale:
+        raise ImageInputError(
+            f"{path}: a colour thermal image (its channels differ by up to {spread:g} of "
+            f"{scale:g}): a false-colour palette is not a temperature scale; export the "
+            "thermal image in grey, as radiometric 16-bit counts or as float degC")
 
 
 def write_image(path: str | Path, image: NDArray) -> Path:
