@@ -206,3 +206,33 @@ def test_read_thermal_refuses_a_false_colour_image(tmp_path):
     write_image(tmp_path / "cast.png", np.clip(cast, 0, 255).astype(np.uint8))
     out = read_thermal(tmp_path / "cast.png")
     assert out.shape == (20, 256) and np.all(np.diff(out[0].astype(int)) >= 0)
+
+
+@pytest.mark.parametrize("name, image", [
+    ("f32.png", np.linspace(0.0, 1.0, 12, dtype=np.float32).reshape(3, 4)),  # all 0 back
+    ("f32.png", np.linspace(20.0, 40.0, 12, dtype=np.float32).reshape(3, 4)),  # rounded
+    ("u16.jpg", np.arange(12, dtype=np.uint16).reshape(3, 4) * 5000),  # clipped at 255
+    ("i16.png", np.arange(12, dtype=np.int16).reshape(3, 4) * 1000 - 5000),  # negatives 0
+    ("i32.png", np.arange(12, dtype=np.int32).reshape(3, 4) * 100000),
+    ("u16.webp", np.arange(12 * 3, dtype=np.uint16).reshape(3, 4, 3) * 1000),
+])
+def test_write_image_refuses_a_pixel_type_the_format_cannot_hold(tmp_path, name, image):
+    """OpenCV's encoders wrote what they cannot hold as 8 bits without a word (a float32
+    0..1 image as all 0, uint16 in a JPEG clipped at 255, negative int16 as 0): the file read
+    back other numbers than were written. Nothing is written now."""
+    with pytest.raises(ImageInputError, match=f"cannot hold {image.dtype} pixels"):
+        write_image(tmp_path / name, image)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("name, image", [
+    ("u16.png", np.arange(12, dtype=np.uint16).reshape(3, 4) * 5000),
+    ("u16.pgm", np.arange(12, dtype=np.uint16).reshape(3, 4) * 5000),
+    ("f32.tif", np.linspace(20.0, 40.0, 12, dtype=np.float32).reshape(3, 4)),
+    ("f64.tif", np.linspace(20.0, 40.0, 12).reshape(3, 4)),
+    ("i16.tif", np.arange(12, dtype=np.int16).reshape(3, 4) * 1000 - 5000),
+    ("bgr.png", np.arange(36, dtype=np.uint8).reshape(3, 4, 3)),
+])
+def test_write_image_keeps_a_pixel_type_the_format_holds(tmp_path, name, image):
+    write_image(tmp_path / name, image)
+    np.testing.assert_array_equal(read_image(tmp_path / name, "unchanged"), image)

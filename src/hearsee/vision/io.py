@@ -9,6 +9,8 @@ size or type, or a left/right pair that does not match. Images follow OpenCV con
 from __future__ import annotations
 
 import glob
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Literal
 
@@ -56,6 +58,20 @@ def video_capture(source: int | str) -> cv2.VideoCapture:
     cv_log.setLogLevel(cv_log.LOG_LEVEL_ERROR)
     try:
         return cv2.VideoCapture(source)
+    finally:
+        cv_log.setLogLevel(level)
+
+
+@contextmanager
+def _opencv_log_silenced() -> Iterator[None]:
+    """OpenCV's own log off for the block (an encoder's warnings and errors that hearsee
+    reports as its own typed error)."""
+    import cv2.utils.logging as cv_log
+
+    level = cv_log.getLogLevel()
+    cv_log.setLogLevel(cv_log.LOG_LEVEL_SILENT)
+    try:
+        yield
     finally:
         cv_log.setLogLevel(level)
 
@@ -284,18 +300,32 @@ def _refuse_false_colour(chans: NDArray, path: str | Path) -> None:
 
 
 def write_image(path: str | Path, image: NDArray) -> Path:
-    """Write an image (format from the suffix); raise ImageInputError when OpenCV cannot."""
+    """Write an image (format from the suffix); raise ImageInputError when OpenCV cannot.
+
+    The format must hold the image's pixel type: OpenCV's encoders converted what they cannot
+    hold to 8 bits without a word (float32 0..1 written as all 0, uint16 to a JPEG clipped at
+    255, negative int16 to 0), so a pixel type the written file would not read back as is an
+    ImageInputError naming both (PNG and PGM hold uint8 and uint16, JPEG uint8, TIFF also
+    int8-int32, float32 and float64).
+    """
     check_image(image, str(path))
     # (config.output_file: a folder at the path is refused before the encoding -- it was
     # "cannot write the image (Is a directory)" after it -- and a file where the folder should
     # be is "D is not a folder", no longer "folder D does not exist")
     p = output_file(path)
-    try:
-        ok, buf = cv2.imencode(p.suffix or ".png", image)
-    except cv2.error:  # e.g. no encoder for the suffix: OpenCV raises rather than returns
-        ok = False
+    suffix = p.suffix or ".png"
+    with _opencv_log_silenced():  # (its "fallbacked to CV_8U" warning; the error below says it)
+        try:
+            ok, buf = cv2.imencode(suffix, image)
+        except cv2.error:  # e.g. no encoder for the suffix: OpenCV raises rather than returns
+            ok = False
+        back = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED) if ok else None
     if not ok:
-        raise ImageInputError(f"{p}: cannot encode the image as {p.suffix or '.png'}")
+        raise ImageInputError(f"{p}: cannot encode the image as {suffix}")
+    if back is not None and back.dtype != image.dtype:
+        raise ImageInputError(
+            f"{p}: {suffix} cannot hold {image.dtype} pixels (it would be written as "
+            f"{back.dtype}); convert the image or use a format that holds them (.tif)")
     try:
         buf.tofile(str(p))
     except OSError as exc:  # (no permission: a bare OSError before)
