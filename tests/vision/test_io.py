@@ -236,3 +236,42 @@ def test_write_image_refuses_a_pixel_type_the_format_cannot_hold(tmp_path, name,
 def test_write_image_keeps_a_pixel_type_the_format_holds(tmp_path, name, image):
     write_image(tmp_path / name, image)
     np.testing.assert_array_equal(read_image(tmp_path / name, "unchanged"), image)
+
+
+def _tiff(img: np.ndarray) -> bytes:
+    """An uncompressed little-endian TIFF of ``img`` ((H, W) or (H, W, 2) unsigned integers,
+    interleaved samples, minimum-is-black, one strip; a second sample is an unspecified
+    extra sample)."""
+    import struct
+
+    h, w = img.shape[:2]
+    spp, bits = (1 if img.ndim == 2 else img.shape[2]), img.dtype.itemsize * 8
+    data = np.ascontiguousarray(img).astype(img.dtype.newbyteorder("<")).tobytes()
+    entries = [(256, 4, 1, w), (257, 4, 1, h), (258, 3, spp, bits), (259, 3, 1, 1),
+               (262, 3, 1, 1), (273, 4, 1, 8), (277, 3, 1, spp), (278, 4, 1, h),
+               (279, 4, 1, len(data)), (284, 3, 1, 1)] + ([(338, 3, 1, 0)] if spp == 2 else [])
+    ifd = struct.pack("<H", len(entries))
+    for tag, kind, count, value in entries:
+        packed = struct.pack("<I", value) if kind == 4 else struct.pack("<HH", value,
+                                                                        value if count == 2
+                                                                        else 0)
+        ifd += struct.pack("<HHI", tag, kind, count) + packed
+    return b"II*\x00" + struct.pack("<I", 8 + len(data)) + data + ifd + struct.pack("<I", 0)
+
+
+def test_a_tiff_whose_depth_or_channels_opencv_drops_is_refused(tmp_path):
+    """A 16-bit 2-channel TIFF (radiometric counts and a second plane) came back from
+    read_thermal / read_image 'unchanged' as one uint8 channel (the counts' high bytes)
+    without a word, though both promise the stored bit depth. A 16-bit 1-channel TIFF written
+    the same way reads back exactly."""
+    t16 = (np.arange(48 * 64, dtype=np.uint32).reshape(48, 64) * 20 + 1000).astype(np.uint16)
+    one = tmp_path / "one.tif"
+    one.write_bytes(_tiff(t16))
+    np.testing.assert_array_equal(read_thermal(one), t16)
+    two = tmp_path / "two.tif"
+    two.write_bytes(_tiff(np.dstack([t16, t16 // 2])))
+    with pytest.raises(ImageInputError, match=r"two\.tif: a TIFF of 2 channel\(s\) of 16 bits"):
+        read_thermal(two)
+    with pytest.raises(ImageInputError, match="2 channel"):
+        read_image(two, "unchanged")
+    assert read_image(two, "gray").dtype == np.uint8  # (grey asked for: converted, as before)

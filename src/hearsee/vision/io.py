@@ -185,7 +185,55 @@ def read_image(path: str | Path, mode: ColorMode = "gray",
             f"{p}: not a readable image (corrupt or unsupported format; expected PNG, JPEG, "
             "TIFF or PGM)"
         )
+    if mode == "unchanged":
+        _check_tiff_kept(p, data, img)
     return check_image(img, str(p), expected_size)
+
+
+def _check_tiff_kept(p: Path, data: NDArray, img: NDArray) -> None:
+    """ImageInputError when ``data`` is a TIFF whose first image has more samples per pixel
+    or more bits per sample than OpenCV's decoding ``img`` kept: a 16-bit 2-channel TIFF (e.g.
+    radiometric counts and a second plane) came back as one 8-bit channel without a word."""
+    layout = _tiff_layout(data)
+    if layout is None:
+        return
+    samples, bits = layout
+    channels = 1 if img.ndim == 2 else img.shape[2]
+    if samples > channels or bits > 8 * img.dtype.itemsize:
+        raise ImageInputError(
+            f"{p}: a TIFF of {samples} channel(s) of {bits} bits that OpenCV reads as "
+            f"{channels} channel(s) of {img.dtype}: its values would not be kept; save it "
+            "with 1, 3 or 4 channels (e.g. one 16-bit plane per file)")
+
+
+def _tiff_layout(data: NDArray) -> tuple[int, int] | None:
+    """(samples per pixel, bits per sample) of the first image of the TIFF file ``data``
+    (uint8 bytes), from its first IFD (TIFF 6.0 defaults: 1 and 1); None when ``data`` is
+    not a classic TIFF or the directory cannot be read."""
+    import struct
+
+    order = {b"II*\x00": "<", b"MM\x00*": ">"}.get(data[:4].tobytes())
+    if order is None:
+        return None
+    try:
+        (ifd,) = struct.unpack(order + "I", data[4:8].tobytes())
+        (n,) = struct.unpack(order + "H", data[ifd:ifd + 2].tobytes())
+        found = {277: 1, 258: 1}  # SamplesPerPixel, BitsPerSample
+        for k in range(n):
+            entry = data[ifd + 2 + 12 * k:ifd + 14 + 12 * k].tobytes()
+            tag, kind, count = struct.unpack(order + "HHI", entry[:8])
+            size = {3: 2, 4: 4}.get(kind)  # SHORT, LONG
+            if tag not in found or size is None:
+                continue
+            if count * size > 4:  # the values elsewhere: the first one is enough
+                (at,) = struct.unpack(order + "I", entry[8:12])
+                raw = data[at:at + size].tobytes()
+            else:
+                raw = entry[8:8 + size]
+            (found[tag],) = struct.unpack(order + ("H" if size == 2 else "I"), raw)
+    except struct.error:  # (a directory cut short: OpenCV decoded what it could)
+        return None
+    return found[277], found[258]
 
 
 def read_pair(left: str | Path, right: str | Path, mode: ColorMode = "gray",
