@@ -118,3 +118,45 @@ def hanging_capture():
     yield make
     for cap in made:
         cap.go.set()
+
+
+def _mjpeg_avi(path: Path, frames: list[np.ndarray], fps: float, dropped=()) -> Path:
+    """An MJPEG AVI of ``frames`` at ``fps`` whose frames ``dropped`` are empty chunks, as
+    capture tools record a dropped frame (the frame slot is kept, with no picture)."""
+    import struct
+
+    import cv2
+
+    def chunk(tag: bytes, data: bytes) -> bytes:
+        return tag + struct.pack("<I", len(data)) + data + (b"\0" if len(data) % 2 else b"")
+
+    def lst(kind: bytes, data: bytes) -> bytes:
+        return b"LIST" + struct.pack("<I", len(data) + 4) + kind + data
+
+    h, w = frames[0].shape[:2]
+    jpgs = [b"" if k in dropped else cv2.imencode(".jpg", f)[1].tobytes()
+            for k, f in enumerate(frames)]
+    n = len(frames)
+    avih = struct.pack("<IIIIIIIIII4I", int(round(1e6 / fps)), 0, 0, 0x10, n, 0, 1, 0, w, h,
+                       0, 0, 0, 0)
+    strh = b"vidsMJPG" + struct.pack("<IHHIIIIIIIIhhhh", 0, 0, 0, 0, 1000,
+                                     int(round(fps * 1000)), 0, n, 0, 0xFFFFFFFF, 0, 0, 0, w, h)
+    strf = struct.pack("<IiiHH4sIiiII", 40, w, h, 1, 24, b"MJPG", w * h * 3, 0, 0, 0, 0)
+    hdrl = lst(b"hdrl", chunk(b"avih", avih)
+               + lst(b"strl", chunk(b"strh", strh) + chunk(b"strf", strf)))
+    movi, idx, off = b"", b"", 4
+    for j in jpgs:
+        c = chunk(b"00dc", j)
+        idx += b"00dc" + struct.pack("<III", 0x10 if j else 0, off, len(j))
+        movi, off = movi + c, off + len(c)
+    body = b"AVI " + hdrl + lst(b"movi", movi) + chunk(b"idx1", idx)
+    path.write_bytes(b"RIFF" + struct.pack("<I", len(body)) + body)
+    return path
+
+
+@pytest.fixture(scope="session")
+def mjpeg_avi() -> Callable[..., Path]:
+    """``mjpeg_avi(path, frames, fps, dropped=())``: writes a hand-built MJPEG AVI whose frames
+    ``dropped`` are empty chunks (a capture tool's dropped frames; OpenCV's writer cannot make
+    them) and returns its path."""
+    return _mjpeg_avi

@@ -1042,28 +1042,18 @@ def test_async_detection_uses_the_pose_of_its_capture(tmp_path, monkeypatch):
     assert first["detections"][0]["azimuth_deg"] == pytest.approx(40.0, abs=0.01)
 
 
-def test_async_overlays_and_captions_carry_their_capture_time(tmp_path, monkeypatch):
-    """Live (asynchronous detection), the overlay frames handed to the exports and the
-    report's captions carried the time the detection was APPLIED, not the capture time the
-    log records as camera_t: the MCAP / Rerun images were stamped 0.3-0.5 s after the
-    frames they show. Here each detection is reported done 10 updates (0.32 s) after its
-    capture by a stand-in executor (deterministic): every overlay's time is its record's
-    camera_t, and the captions say so."""
+def _late_detections(monkeypatch, polls: int) -> None:
+    """The live loop's detection pool replaced by one whose finished detections report done
+    only after ``polls`` polls (one per update): a detector slower than the frames."""
     import concurrent.futures
-    import types as _types
 
-    import hearsee.vision.fusion as fusion
-    from hearsee.robot.hardware import CameraFrames
-    from hearsee.sim.scenes import default_rig
-    from hearsee.stream.pipeline import ArraySource
-
-    class Late:  # a finished detection that reports done at its 11th poll (one per update)
+    class Late:
         def __init__(self, value):
             self.value, self.n = value, 0
 
         def done(self):
             self.n += 1
-            return self.n > 10
+            return self.n > polls
 
         def result(self):
             return self.value
@@ -1079,6 +1069,23 @@ def test_async_overlays_and_captions_carry_their_capture_time(tmp_path, monkeypa
             pass
 
     monkeypatch.setattr(concurrent.futures, "ThreadPoolExecutor", LatePool)
+
+
+def test_async_overlays_and_captions_carry_their_capture_time(tmp_path, monkeypatch):
+    """Live (asynchronous detection), the overlay frames handed to the exports and the
+    report's captions carried the time the detection was APPLIED, not the capture time the
+    log records as camera_t: the MCAP / Rerun images were stamped 0.3-0.5 s after the
+    frames they show. Here each detection is reported done 10 updates (0.32 s) after its
+    capture by a stand-in executor (deterministic): every overlay's time is its record's
+    camera_t, and the captions say so."""
+    import types as _types
+
+    import hearsee.vision.fusion as fusion
+    from hearsee.robot.hardware import CameraFrames
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import ArraySource
+
+    _late_detections(monkeypatch, 10)  # done at its 11th poll
     monkeypatch.setattr(fusion, "detect_humans", lambda left, right, rig, thermal=None, **kw:
                         _types.SimpleNamespace(humans=[], rejected=[],
                                                frame=_types.SimpleNamespace(left=left)))
@@ -1622,39 +1629,7 @@ def test_video_files_play_at_their_own_frame_rate(tmp_path, monkeypatch, fps):
     assert res.summary["camera_read_failures"] == 0
 
 
-def _mjpeg_avi(path: Path, frames: list[np.ndarray], fps: float, dropped=()) -> Path:
-    """An MJPEG AVI of ``frames`` at ``fps`` whose frames ``dropped`` are empty chunks, as
-    capture tools record a dropped frame (the frame slot is kept, with no picture)."""
-    import struct
-
-    def chunk(tag: bytes, data: bytes) -> bytes:
-        return tag + struct.pack("<I", len(data)) + data + (b"\0" if len(data) % 2 else b"")
-
-    def lst(kind: bytes, data: bytes) -> bytes:
-        return b"LIST" + struct.pack("<I", len(data) + 4) + kind + data
-
-    h, w = frames[0].shape[:2]
-    jpgs = [b"" if k in dropped else cv2.imencode(".jpg", f)[1].tobytes()
-            for k, f in enumerate(frames)]
-    n = len(frames)
-    avih = struct.pack("<IIIIIIIIII4I", int(round(1e6 / fps)), 0, 0, 0x10, n, 0, 1, 0, w, h,
-                       0, 0, 0, 0)
-    strh = b"vidsMJPG" + struct.pack("<IHHIIIIIIIIhhhh", 0, 0, 0, 0, 1000,
-                                     int(round(fps * 1000)), 0, n, 0, 0xFFFFFFFF, 0, 0, 0, w, h)
-    strf = struct.pack("<IiiHH4sIiiII", 40, w, h, 1, 24, b"MJPG", w * h * 3, 0, 0, 0, 0)
-    hdrl = lst(b"hdrl", chunk(b"avih", avih)
-               + lst(b"strl", chunk(b"strh", strh) + chunk(b"strf", strf)))
-    movi, idx, off = b"", b"", 4
-    for j in jpgs:
-        c = chunk(b"00dc", j)
-        idx += b"00dc" + struct.pack("<III", 0x10 if j else 0, off, len(j))
-        movi, off = movi + c, off + len(c)
-    body = b"AVI " + hdrl + lst(b"movi", movi) + chunk(b"idx1", idx)
-    path.write_bytes(b"RIFF" + struct.pack("<I", len(body)) + body)
-    return path
-
-
-def test_video_files_keep_the_time_of_frames_after_a_dropped_one(tmp_path):
+def test_video_files_keep_the_time_of_frames_after_a_dropped_one(tmp_path, mjpeg_avi):
     """A 10 fps file whose frames 2 and 3 were dropped (empty chunks): OpenCV delivers frames
     0, 1, 4, 5, 6, 7, and the cameras counted frames, so at t = 0.4 s they showed frame 6 (the
     5th delivered) and every frame after the drop came 0.2 s early. Frame k is at k / 10 s:
@@ -1666,7 +1641,7 @@ def test_video_files_keep_the_time_of_frames_after_a_dropped_one(tmp_path):
     save_rig(default_rig(160, 120), tmp_path / "rig.yaml")
     frames = [np.full((120, 160, 3), 20 * k, np.uint8) for k in range(8)]
     for side in ("left", "right"):
-        _mjpeg_avi(tmp_path / f"{side}.avi", frames, 10.0, dropped=(2, 3))
+        mjpeg_avi(tmp_path / f"{side}.avi", frames, 10.0, dropped=(2, 3))
     cap = cv2.VideoCapture(str(tmp_path / "left.avi"))  # ground truth: what OpenCV delivers
     got = []
     while (f := cap.read()[1]) is not None:
@@ -1927,7 +1902,6 @@ def _walker_run(tmp_path, monkeypatch, polls):
     results arriving ``polls`` audio updates (32 ms each) after their capture, by a
     stand-in executor: deterministic, whatever the machine's load. Returns the run's
     result and the walker's true floor position (robot frame, m) as a function of t."""
-    import concurrent.futures
 
     from hearsee.audio.arrays import load_array
     from hearsee.audio.propagation import simulate_free_field
@@ -1938,28 +1912,7 @@ def _walker_run(tmp_path, monkeypatch, polls):
     from hearsee.stream.pipeline import ArraySource
     from hearsee.vision.camera import OPTICAL_FROM_BODY
 
-    class Late:  # a finished detection that reports done after `polls` polls (one per update)
-        def __init__(self, value):
-            self.value, self.n = value, 0
-
-        def done(self):
-            self.n += 1
-            return self.n > polls
-
-        def result(self):
-            return self.value
-
-    class LatePool:
-        def __init__(self, *args, **kwargs):
-            pass
-
-        def submit(self, fn, *args):
-            return Late(fn(*args))
-
-        def shutdown(self, **kwargs):
-            pass
-
-    monkeypatch.setattr(concurrent.futures, "ThreadPoolExecutor", LatePool)
+    _late_detections(monkeypatch, polls)
     pose, az = (68.0, 0.0), np.radians(68.0)
     u = np.array([np.cos(az), np.sin(az)])
     rig = default_rig(camera_height_m=1.2)

@@ -229,41 +229,8 @@ def test_video_image_points_read_frames_and_detect_nothing_in_blank_video(tmp_pa
         VideoImagePoints(tmp_path / "missing.mp4")
 
 
-def _mjpeg_avi(path, frames, fps, dropped=()):
-    """An MJPEG AVI of ``frames`` at ``fps`` whose frames ``dropped`` are empty chunks, as
-    capture tools record a dropped frame (the frame slot is kept, with no picture)."""
-    import struct
-
-    import cv2
-
-    def chunk(tag, data):
-        return tag + struct.pack("<I", len(data)) + data + (b"\0" if len(data) % 2 else b"")
-
-    def lst(kind, data):
-        return b"LIST" + struct.pack("<I", len(data) + 4) + kind + data
-
-    h, w = frames[0].shape[:2]
-    jpgs = [b"" if k in dropped else cv2.imencode(".jpg", f)[1].tobytes()
-            for k, f in enumerate(frames)]
-    n = len(frames)
-    avih = struct.pack("<IIIIIIIIII4I", int(round(1e6 / fps)), 0, 0, 0x10, n, 0, 1, 0, w, h,
-                       0, 0, 0, 0)
-    strh = b"vidsMJPG" + struct.pack("<IHHIIIIIIIIhhhh", 0, 0, 0, 0, 1000,
-                                     int(round(fps * 1000)), 0, n, 0, 0xFFFFFFFF, 0, 0, 0, w, h)
-    strf = struct.pack("<IiiHH4sIiiII", 40, w, h, 1, 24, b"MJPG", w * h * 3, 0, 0, 0, 0)
-    hdrl = lst(b"hdrl", chunk(b"avih", avih)
-               + lst(b"strl", chunk(b"strh", strh) + chunk(b"strf", strf)))
-    movi, idx, off = b"", b"", 4
-    for j in jpgs:
-        c = chunk(b"00dc", j)
-        idx += b"00dc" + struct.pack("<III", 0x10 if j else 0, off, len(j))
-        movi, off = movi + c, off + len(c)
-    body = b"AVI " + hdrl + lst(b"movi", movi) + chunk(b"idx1", idx)
-    path.write_bytes(b"RIFF" + struct.pack("<I", len(body)) + body)
-    return path
-
-
-def test_video_image_points_keep_the_time_of_frames_after_a_dropped_one(tmp_path, monkeypatch):
+def test_video_image_points_keep_the_time_of_frames_after_a_dropped_one(tmp_path, monkeypatch,
+                                                                         mjpeg_avi):
     """A 10 fps file whose frames 2 and 3 were dropped (empty chunks): OpenCV delivers frames
     0, 1, 4, 5, 6, 7, and each was timed by its count / fps, so frame 4 was taken for the frame
     at 0.2 s and every later one 0.2 s early. Frame k is at k / 10 s: at t the image point is
@@ -273,7 +240,7 @@ def test_video_image_points_keep_the_time_of_frames_after_a_dropped_one(tmp_path
     import hearsee.stream.video as video
 
     frames = [np.full((48, 64, 3), 20 * k, np.uint8) for k in range(8)]
-    path = _mjpeg_avi(tmp_path / "dropped.avi", frames, 10.0, dropped=(2, 3))
+    path = mjpeg_avi(tmp_path / "dropped.avi", frames, 10.0, dropped=(2, 3))
     cap = cv2.VideoCapture(str(path))  # ground truth: what OpenCV delivers
     got = []
     while (f := cap.read()[1]) is not None:
