@@ -121,8 +121,9 @@ def localize_cmd(
         "--summary-tuned", help="The whole-recording estimate's settings that bench/doa.py "
         "measures against pyroomacoustics (hearsee.audio.tdoa.SUMMARY_TUNED: gcc-ml, gcc-phat "
         "when reverberant, Hann frames, onset weighting; with --in-plane and a planar array of "
-        "4+ microphones the steered in-plane search when reverberant); with --in-plane exactly "
-        "the benchmarked setting. Sets --method and --reverb-method itself.")] = False,
+        "4+ microphones the steered in-plane search when reverberant); with --in-plane the "
+        "benchmarked settings but for the benchmark's band limits and its best guess where "
+        "hearsee abstains. Sets --method and --reverb-method itself.")] = False,
     tdoa_std_us: Annotated[float | None, typer.Option(
         "--tdoa-std-us", help="Expected error of the whole-recording TDOAs in microseconds, for "
         "the source position of arrays of 4+ microphones: the position is reported (with its "
