@@ -261,6 +261,30 @@ def test_video_image_points_keep_the_time_of_frames_after_a_dropped_one(tmp_path
     vp.close()
 
 
+def test_video_frame_times_start_at_the_first_frame(shared_data, monkeypatch):
+    """The frame clock takes the container's timestamps from the first frame's: the shared
+    pedestrian clip (10 frames/s, no drops) reads 0.2 s at its first frame, which put every
+    image point 0.2 s late against the recording (before the timestamps were used it started
+    at 0, as it must)."""
+    import cv2
+
+    import hearsee.stream.video as video
+
+    clip = shared_data / "vision" / "pedestrian_video" / "vtest.avi"
+    if not clip.is_file():
+        pytest.skip(f"{clip} not present")
+    cap = cv2.VideoCapture(str(clip))
+    cap.read()
+    assert cap.get(cv2.CAP_PROP_POS_MSEC) == pytest.approx(200.0)  # the container's own start
+    cap.release()
+    monkeypatch.setattr(video, "detect_source_point", lambda img, det: (1.0, 1.0))
+    vp = VideoImagePoints(clip, detector="face")
+    for k in range(6):
+        vp(k / 10.0)
+        assert vp.frame_index == k and vp.frame_time == pytest.approx(k / 10.0)
+    vp.close()
+
+
 def test_track_with_video_and_no_detection_falls_back_to_direction(scene, capsys, tmp_path):
     import cv2
 

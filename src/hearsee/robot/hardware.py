@@ -740,7 +740,7 @@ class Cameras:
 
     A video FILE plays at its own frame rate: ``read(t)`` takes from it the frame shown at
     ``t`` seconds (the latest frame whose time is at or before t, the first frame before
-    that; frame times from :func:`hearsee.stream.video.file_frame_time`: the file's
+    that; frame times from :class:`hearsee.stream.video.FileFrameClock`: the file's
     timestamps, which keep the gaps of dropped frames, else frame k at ``k / CAP_PROP_FPS``),
     skipping the frames in between (a 30 fps file read every 0.1 s: frames 0, 3, 6, ...) or
     giving the same frame again while the file has no newer one (a file slower than the
@@ -760,6 +760,7 @@ class Cameras:
         self.last: dict[str, NDArray] = {}  #: each file's latest frame read
         self.last_t: dict[str, float] = {}  #: its time in the file (s)
         self._pending_t: dict[str, float] = {}  # a file's frame grabbed ahead: its time (s)
+        self._clocks: dict[str, Any] = {}  # each file's FileFrameClock
         self.n_failures = 0  #: reads that delivered no frame
         self.n_consecutive_failures = 0
         try:
@@ -783,9 +784,10 @@ class Cameras:
         """A video file's frame shown at ``t`` seconds (its next frame for None; see the class
         notes), or None when the file has ended. Frames are grabbed one ahead to learn their
         time; a grabbed frame is decoded (retrieved) once it is due."""
-        from hearsee.stream.video import file_frame_time
+        from hearsee.stream.video import FileFrameClock
 
         cap, fps = self.caps[name], self.fps[name]
+        clock = self._clocks.setdefault(name, FileFrameClock(fps))
         eps = 1e-6 / fps  # (a frame due at t up to rounding)
         while True:
             if name not in self._pending_t:
@@ -793,8 +795,7 @@ class Cameras:
                     last_t = self.last_t.get(name)
                     due = t is not None and last_t is not None and t + eps < last_t + 1.0 / fps
                     return self.last[name] if due else None
-                self._pending_t[name] = file_frame_time(cap, self.n_taken[name], fps,
-                                                        self.last_t.get(name, -np.inf))
+                self._pending_t[name] = clock(cap)
             if t is not None and name in self.last and self._pending_t[name] > t + eps:
                 return self.last[name]  # the next frame is not due yet
             ok, frame = cap.retrieve()

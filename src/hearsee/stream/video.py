@@ -20,11 +20,11 @@ frame, the pixel ``(u, v)`` where the source appears. Two providers, both callab
   (then the tracker falls back to direction-only updates), and with several people they
   pick the strongest detection, which need not be the speaker.
 
-A video file's frame carries its own time (:func:`file_frame_time`: OpenCV's
-``CAP_PROP_POS_MSEC``, which counts the frames a capture tool dropped -- frame index / fps
-only where the file gives no usable timestamp, or with an explicit ``fps``); the image point
-at t is that of the frame nearest t (the earlier at a tie; frames are read forward only, one
-ahead). A live camera is read in its own
+A video file's frame carries its own time (:class:`FileFrameClock`: OpenCV's
+``CAP_PROP_POS_MSEC`` from the first frame's, which counts the frames a capture tool dropped --
+frame index / fps only where the file gives no usable timestamp, or with an explicit
+``fps``); the image point at t is that of the frame nearest t (the earlier at a tie; frames
+are read forward only, one ahead). A live camera is read in its own
 thread which keeps the latest detection; ``points(t)`` then returns that (the audio and
 camera clocks are not synchronised beyond "latest frame", about one camera frame period).
 Either way an image point
@@ -48,7 +48,7 @@ from hearsee.config import finite_number, input_file, is_real, whole_number
 from hearsee.errors import ConfigError, ImageInputError
 
 __all__ = ["FIRST_FRAME_TIMEOUT_S", "IMAGE_POINT_MARGIN", "CsvImagePoints", "TimedCapture",
-           "VideoImagePoints", "detect_source_point", "file_frame_time", "read_frame",
+           "FileFrameClock", "VideoImagePoints", "detect_source_point", "read_frame",
            "save_image_points"]
 
 #: How far outside the camera image (a fraction of its larger side, e.g. 64 px of a 640 x 480
@@ -139,25 +139,40 @@ def read_frame(cap: Any, spec: Any, where: str, size: tuple[int, int] | None = N
     return frame
 
 
-def file_frame_time(cap: Any, index: int, fps: float, previous: float) -> float:
-    """Time (seconds from the start of the video) of the frame a video FILE's capture ``cap``
-    has just read or grabbed, its ``index``-th delivered frame (from 0), ``previous`` being the
-    time of the frame before it (-inf for the first).
+class FileFrameClock:
+    """The times (seconds) of a video FILE's frames, called once per frame as a capture reads
+    or grabs them: the first frame at 0 s, each later one at its timestamp (OpenCV's
+    ``CAP_PROP_POS_MSEC``) minus the first frame's. A capture tool records a dropped frame as an
+    empty chunk, which OpenCV skips, and the timestamps keep that gap where frame index / fps
+    put every later frame one period early per drop. Only differences count: containers may
+    start their clock elsewhere (the pedestrian clip of the shared data reads 0.2 s at its
+    first frame), and the video starts with the recording. A frame without a usable timestamp
+    (not finite, or not after the frame before: a backend without them) is at index / ``fps``
+    (frames per second > 0), or one period after the frame before where that is not later.
+    The one frame clock of :class:`VideoImagePoints` and the robot's video-file cameras."""
 
-    OpenCV's ``CAP_PROP_POS_MSEC`` / 1000 when it is finite, >= 0 and after ``previous``: a
-    capture tool records a dropped frame as an empty chunk, which OpenCV skips, and the
-    timestamp keeps the gap where ``index / fps`` put every later frame too early (one frame
-    period per drop). Otherwise (a backend without timestamps) ``index / fps`` (``fps`` frames
-    per second > 0), or ``previous + 1 / fps`` where that is not after ``previous``. The one
-    frame clock of :class:`VideoImagePoints` and the robot's video-file cameras."""
-    import cv2
+    def __init__(self, fps: float) -> None:
+        self.fps = finite_number("fps", fps, 0.0, lo_open=True)
+        self.index = 0  # frames timed so far
+        self.previous = -np.inf  # the last frame's time (s)
+        self._origin: float | None = None  # the first frame's timestamp (s; NaN: none)
 
-    pos = cap.get(cv2.CAP_PROP_POS_MSEC)
-    t = pos / 1000.0 if isinstance(pos, float | int) and np.isfinite(pos) else np.nan
-    if t >= 0.0 and t > previous:
-        return float(t)
-    t = index / fps
-    return float(t if t > previous else previous + 1.0 / fps)
+    def __call__(self, cap: Any) -> float:
+        """Time (s) of the frame ``cap`` has just read or grabbed."""
+        import cv2
+
+        pos = cap.get(cv2.CAP_PROP_POS_MSEC)
+        stamp = pos / 1000.0 if is_real(pos) and np.isfinite(pos) else np.nan
+        if self._origin is None:
+            self._origin = stamp
+        t = stamp - self._origin
+        if not (np.isfinite(t) and t >= 0.0 and t > self.previous):
+            t = self.index / self.fps
+            if not t > self.previous:
+                t = self.previous + 1.0 / self.fps
+        self.index += 1
+        self.previous = float(t)
+        return self.previous
 
 
 class CsvImagePoints:
@@ -367,7 +382,7 @@ class VideoImagePoints:
         and kept for ``points(t)``. (A still image that OpenCV opens, e.g. a PNG, passes: a
         one-frame video.) A live camera is not read here: its thread does.
 
-    A file's frames are timed by :func:`file_frame_time` (their timestamps, which keep the
+    A file's frames are timed by :class:`FileFrameClock` (their timestamps, which keep the
     gaps of dropped frames); ``frame_index`` counts the frames shown (from 0) and
     ``frame_time`` is the shown frame's time in seconds.
     """
@@ -405,7 +420,8 @@ class VideoImagePoints:
         # (a live camera's driver may report no rate, 0, -1 or NaN: 30 frames/s then; a NaN
         # rate made its image point never go stale when the camera hung)
         self.cap, self.fps, self.detector = cap, float(rate or 30.0), detector
-        self._own_clock = fps is None  # a file's timestamps, unless fps overrides them
+        # a file's timestamps, unless fps overrides them
+        self._frame_clock = FileFrameClock(self.fps) if fps is None and not self.live else None
         self._next: tuple[NDArray, float] | None = None  # a file's frame read ahead, its time
         if not self.live:
             # (a corrupt or truncated file opened, delivered nothing, and the run went on
@@ -415,7 +431,7 @@ class VideoImagePoints:
             except ConfigError:
                 cap.release()
                 raise
-            self._next = (first, self._time_of(0, -np.inf))
+            self._next = (first, self._time_of(0))
         self.frame_index = -1
         self.frame_time = -np.inf
         self.last_point: tuple[float, float] | None = None
@@ -425,11 +441,11 @@ class VideoImagePoints:
         self._frame_wall = -np.inf  # live: wall-clock time of the latest detection
         self._cycle = 0.0  # live: wall-clock seconds between the last two detections
 
-    def _time_of(self, index: int, previous: float) -> float:
-        """Time (s) of the file's frame just read, its ``index``-th (:func:`file_frame_time`;
+    def _time_of(self, index: int) -> float:
+        """Time (s) of the file's frame just read, its ``index``-th (:class:`FileFrameClock`;
         ``index / fps`` with an explicit fps)."""
-        if self._own_clock:
-            return file_frame_time(self.cap, index, self.fps, previous)
+        if self._frame_clock is not None:
+            return self._frame_clock(self.cap)
         return index / self.fps
 
     def _peek(self) -> tuple[NDArray, float] | None:
@@ -440,8 +456,7 @@ class VideoImagePoints:
             if not ok or frame is None:
                 self.ended = True
                 return None
-            previous = self.frame_time if self.frame_index >= 0 else -np.inf
-            self._next = (frame, self._time_of(self.frame_index + 1, previous))
+            self._next = (frame, self._time_of(self.frame_index + 1))
         return self._next
 
     def _advance(self, t: float) -> bool:
