@@ -206,6 +206,14 @@ def test_read_thermal_refuses_a_false_colour_image(tmp_path):
     write_image(tmp_path / "cast.png", np.clip(cast, 0, 255).astype(np.uint8))
     out = read_thermal(tmp_path / "cast.png")
     assert out.shape == (20, 256) and np.all(np.diff(out[0].astype(int)) >= 0)
+    # a grey export with a red crosshair (2 % of the pixels) is a grey image: read, and its
+    # grey pixels are the ramp (the largest channel difference alone refused it)
+    marked = cv2.cvtColor(np.tile(np.arange(256, dtype=np.uint8), (60, 1)), cv2.COLOR_GRAY2BGR)
+    marked[29:31, 100:156] = (0, 0, 255)
+    marked[10:50, 127:129] = (0, 0, 255)
+    write_image(tmp_path / "marked.png", marked)
+    out = read_thermal(tmp_path / "marked.png")
+    assert out.shape == (60, 256) and np.array_equal(out[0], np.arange(256))
 
 
 @pytest.mark.parametrize("name, image", [

@@ -301,6 +301,10 @@ def as_detector_image(image: NDArray, what: str = "image") -> NDArray:
 #: its pixel type's full scale (a float file: of its value range) -- a grey export's JPEG or
 #: colour-cast noise; a false-colour palette (iron, rainbow, JET) differs by far more.
 GREY_CHANNEL_TOLERANCE = 0.02
+#: ... and it is a false-colour image when more than this share of its pixels differ by more:
+#: a grey export with a coloured overlay (a crosshair, a temperature label, a scale bar) is
+#: still a grey image, a palette colours most of the picture.
+FALSE_COLOUR_SHARE = 0.05
 
 
 def read_thermal(path: str | Path, expected_size: tuple[int, int] | None = None) -> NDArray:
@@ -311,10 +315,11 @@ def read_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
     float TIFFs (e.g. degrees Celsius) as float32. Converting counts to temperature is the
     thermal filter's business (:mod:`hearsee.vision.thermal`).
 
-    A colour file whose channels differ by more than :data:`GREY_CHANNEL_TOLERANCE` (a
-    false-colour palette export) is an ImageInputError: its luminance is not monotonic in
-    temperature (JET's hottest pixels are darker than its warm ones); nearly grey colour files
-    are converted to grey as before.
+    A colour file whose channels differ by more than :data:`GREY_CHANNEL_TOLERANCE` in more
+    than :data:`FALSE_COLOUR_SHARE` of its pixels (a false-colour palette export) is an
+    ImageInputError: its luminance is not monotonic in temperature (JET's hottest pixels are
+    darker than its warm ones); nearly grey colour files, and grey ones with a small coloured
+    overlay, are converted to grey as before.
     """
     img = read_image(path, "unchanged", expected_size)
     if img.ndim == 3:
@@ -331,20 +336,24 @@ def read_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
 
 def _refuse_false_colour(chans: NDArray, path: str | Path) -> None:
     """ImageInputError naming ``path`` when the three channels ``chans`` (H, W, 3) differ by
-    more than :data:`GREY_CHANNEL_TOLERANCE` of the full scale: a false-colour thermal image,
-    whose grey conversion was silently used as temperatures before."""
+    more than :data:`GREY_CHANNEL_TOLERANCE` of the full scale in more than
+    :data:`FALSE_COLOUR_SHARE` of the pixels: a false-colour thermal image, whose grey
+    conversion was silently used as temperatures before. (The largest difference alone refused
+    a grey export with a coloured crosshair or label.)"""
     c = chans.astype(np.float64)
-    spread = max(float(np.max(np.abs(c[:, :, i] - c[:, :, j]))) for i, j in ((0, 1), (0, 2),
-                                                                           (1, 2)))
+    spread = np.max(np.stack([np.abs(c[:, :, i] - c[:, :, j])
+                              for i, j in ((0, 1), (0, 2), (1, 2))]), axis=0)  # (H, W)
     if chans.dtype.kind in "iu":
         scale = float(np.iinfo(chans.dtype).max)
     else:
         scale = float(np.max(c) - np.min(c))
-    if spread > GREY_CHANNEL_TOLERANCE * scale:
+    share = float(np.mean(spread > GREY_CHANNEL_TOLERANCE * scale))
+    if share > FALSE_COLOUR_SHARE:
         raise ImageInputError(
-            f"{path}: a colour thermal image (its channels differ by up to {spread:g} of "
-            f"{scale:g}): a false-colour palette is not a temperature scale; export the "
-            "thermal image in grey, as radiometric 16-bit counts or as float degC")
+            f"{path}: a colour thermal image ({share:.0%} of its pixels have channels that "
+            f"differ by more than {GREY_CHANNEL_TOLERANCE:.0%} of {scale:g}): a false-colour "
+            "palette is not a temperature scale; export the thermal image in grey, as "
+            "radiometric 16-bit counts or as float degC")
 
 
 def write_image(path: str | Path, image: NDArray) -> Path:
