@@ -669,6 +669,10 @@ def simulate_moving_room(
         # OverflowError in the update grid)
         if not (is_real(spacing) and spacing > 0):
             raise GeometryError(f"{name} must be > 0 seconds, got {spacing!r}")
+    for name, bound in (("max_tdoa_step_samples", max_tdoa_step_samples),
+                        ("max_delay_step_samples", max_delay_step_samples)):
+        if bound is not None and not (is_real(bound) and bound > 0):
+            raise GeometryError(f"{name} must be > 0 or None, got {bound!r}")
     if early_order is not None:
         early_order = whole_number("early_order", early_order, 0, error=GeometryError)
     from hearsee.sim.audio import _mic_positions
@@ -704,19 +708,11 @@ def simulate_moving_room(
             def rir_fn(src_room: NDArray) -> NDArray:
                 return rir_at(src_room, max_order)
 
-    if max_tdoa_step_samples is not None and not (is_real(max_tdoa_step_samples)
-                                                  and max_tdoa_step_samples > 0):
-        raise GeometryError(
-            f"max_tdoa_step_samples must be > 0 or None, got {max_tdoa_step_samples}")
     n = x.size
     # the direct sound must reach the array by the last sample (as in the free field)
     r_end = retarded_delays(trajectory, mics, [(n - 1) / fs], array.speed_of_sound)[1]
     check_heard(float(r_end.max()), array.speed_of_sound, n, fs, "farthest")
     out = np.zeros((len(mics), n))
-    if max_delay_step_samples is not None and not (is_real(max_delay_step_samples)
-                                                   and max_delay_step_samples > 0):
-        raise GeometryError(
-            f"max_delay_step_samples must be > 0 or None, got {max_delay_step_samples!r}")
     direct = early_fn if early_fn is not None else rir_fn  # (the part holding the direct path)
     for fn, spacing in ((rir_fn, block_s), (early_fn, early_block_s)):
         if fn is not None:
