@@ -95,6 +95,7 @@ from hearsee.stream.device import (  # (import_sounddevice, resolve_input_device
 )
 from hearsee.stream.video import (  # (read_frame re-exported: its home was here)
     FIRST_FRAME_TIMEOUT_S,
+    FileFrameClock,
     TimedCapture,
     read_frame,
 )
@@ -756,11 +757,10 @@ class Cameras:
         self.where = where
         self.caps: dict[str, Any] = {}
         self.fps: dict[str, float] = {}  #: frame rate of each video file (Hz)
-        self.n_taken: dict[str, int] = {}  #: frames taken (read or skipped) from each file
         self.last: dict[str, NDArray] = {}  #: each file's latest frame read
         self.last_t: dict[str, float] = {}  #: its time in the file (s)
         self._pending_t: dict[str, float] = {}  # a file's frame grabbed ahead: its time (s)
-        self._clocks: dict[str, Any] = {}  # each file's FileFrameClock
+        self._clocks: dict[str, FileFrameClock] = {}  # each file's frame clock
         self.n_failures = 0  #: reads that delivered no frame
         self.n_consecutive_failures = 0
         try:
@@ -775,7 +775,8 @@ class Cameras:
                     cap.set(cv2.CAP_PROP_BUFFERSIZE, 1)
                 fps = cap.get(cv2.CAP_PROP_FPS)
                 if is_file and np.isfinite(fps) and fps > 0:
-                    self.fps[name], self.n_taken[name] = float(fps), 0
+                    self.fps[name] = float(fps)
+                    self._clocks[name] = FileFrameClock(fps)
         except BaseException:
             self.close()
             raise
@@ -784,10 +785,7 @@ class Cameras:
         """A video file's frame shown at ``t`` seconds (its next frame for None; see the class
         notes), or None when the file has ended. Frames are grabbed one ahead to learn their
         time; a grabbed frame is decoded (retrieved) once it is due."""
-        from hearsee.stream.video import FileFrameClock
-
-        cap, fps = self.caps[name], self.fps[name]
-        clock = self._clocks.setdefault(name, FileFrameClock(fps))
+        cap, fps, clock = self.caps[name], self.fps[name], self._clocks[name]
         eps = 1e-6 / fps  # (a frame due at t up to rounding)
         while True:
             if name not in self._pending_t:
@@ -799,7 +797,6 @@ class Cameras:
             if t is not None and name in self.last and self._pending_t[name] > t + eps:
                 return self.last[name]  # the next frame is not due yet
             ok, frame = cap.retrieve()
-            self.n_taken[name] += 1
             frame_t = self._pending_t.pop(name)
             if not ok or frame is None:
                 return None
