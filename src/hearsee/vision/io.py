@@ -52,28 +52,23 @@ def video_capture(source: int | str) -> cv2.VideoCapture:
     silenced to errors while it opens: a camera that is not there printed two ``[ WARN ]``
     lines of its backends (V4L2, FFMPEG) on stderr before hearsee's one-line message. The
     caller checks ``isOpened()``."""
-    import cv2.utils.logging as cv_log
-
-    level = cv_log.getLogLevel()
-    cv_log.setLogLevel(cv_log.LOG_LEVEL_ERROR)
-    try:
+    with _opencv_log("error"):
         return cv2.VideoCapture(source)
-    finally:
-        cv_log.setLogLevel(level)
 
 
 @contextmanager
-def _opencv_log_silenced() -> Iterator[None]:
-    """OpenCV's own log off for the block (an encoder's warnings and errors that hearsee
-    reports as its own typed error)."""
+def _opencv_log(level: str) -> Iterator[None]:
+    """OpenCV's own log at ``level`` (``"error"``: its warnings off; ``"silent"``: all off)
+    for the block, restored after it: messages hearsee reports as its own error, or that
+    would precede it."""
     import cv2.utils.logging as cv_log
 
-    level = cv_log.getLogLevel()
-    cv_log.setLogLevel(cv_log.LOG_LEVEL_SILENT)
+    before = cv_log.getLogLevel()
+    cv_log.setLogLevel({"error": cv_log.LOG_LEVEL_ERROR, "silent": cv_log.LOG_LEVEL_SILENT}[level])
     try:
         yield
     finally:
-        cv_log.setLogLevel(level)
+        cv_log.setLogLevel(before)
 
 
 def numeric_map(name: str, value: ArrayLike, dtype: type | None = np.float64, *,
@@ -371,7 +366,7 @@ def write_image(path: str | Path, image: NDArray) -> Path:
     # be is "D is not a folder", no longer "folder D does not exist")
     p = output_file(path)
     suffix = p.suffix or ".png"
-    with _opencv_log_silenced():  # (its "fallbacked to CV_8U" warning; the error below says it)
+    with _opencv_log("silent"):  # (its "fallbacked to CV_8U" warning; the error below says it)
         try:
             ok, buf = cv2.imencode(suffix, image)
         except cv2.error:  # e.g. no encoder for the suffix: OpenCV raises rather than returns
