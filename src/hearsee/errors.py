@@ -7,6 +7,9 @@ of them into one line on stderr and exit code 2. Subclasses also derive from the
 
 from __future__ import annotations
 
+import functools
+from typing import Any
+
 
 class HearseeError(Exception):
     """Base class of every error hearsee raises on purpose."""
@@ -58,3 +61,26 @@ class DegenerateInputWarning(UserWarning):
     """The input is valid but degenerate for the task (stereo images that barely match, a flat
     thermal frame, image points outside the recording): the answer describes the input more
     than the scene."""
+
+
+@functools.cache
+def _regressor_not_fitted_error() -> type:
+    from sklearn.exceptions import NotFittedError
+
+    class RegressorNotFittedError(EstimationError, NotFittedError):
+        """``predict`` of a learned mapping (:class:`hearsee.fusion.audiovisual.
+        AudioVisualRegressor`, :class:`hearsee.audio.active.PoseItdMLP`) before ``fit``:
+        hearsee's EstimationError and scikit-learn's ``NotFittedError`` at once
+        (scikit-learn's tools and ``check_estimator`` recognise an unfitted estimator by the
+        latter). Built on first use, so that importing hearsee's errors does not import
+        scikit-learn."""
+
+    RegressorNotFittedError.__module__ = __name__  # (pickled by name: hearsee.errors.X)
+    RegressorNotFittedError.__qualname__ = "RegressorNotFittedError"
+    return RegressorNotFittedError
+
+
+def __getattr__(name: str) -> Any:
+    if name == "RegressorNotFittedError":
+        return _regressor_not_fitted_error()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -153,6 +153,11 @@ def test_bad_inputs():
         localize_multipose([np.zeros(3)], [(0, 0)], ARR, tdoa_std_s=0.0)
     with pytest.raises(EstimationError):
         PoseItdMLP().predict(np.zeros((1, 9)))
+    # ... which is scikit-learn's NotFittedError too (as AudioVisualRegressor's)
+    from sklearn.exceptions import NotFittedError
+
+    with pytest.raises(NotFittedError):
+        PoseItdMLP().predict(np.zeros((1, 9)))
     # scikit-learn's ValueErrors: a training position at the reference point (log 0), a NaN
     # position, a NaN TDOA to predict from (helper audit)
     rng = np.random.default_rng(0)

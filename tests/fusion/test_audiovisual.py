@@ -808,6 +808,13 @@ def test_regressor_predict_before_fit_is_scikit_learns_not_fitted_error(rig):
     from hearsee.fusion.audiovisual import RegressorNotFittedError
 
     assert type(info.value) is RegressorNotFittedError
+    # one class, in hearsee.errors (built on first use there), and it pickles by that name
+    import pickle
+
+    import hearsee.errors
+
+    assert RegressorNotFittedError is hearsee.errors.RegressorNotFittedError
+    assert type(pickle.loads(pickle.dumps(info.value))) is RegressorNotFittedError
 
 
 def test_rig_keeps_copies_of_the_callers_mounting():

@@ -852,9 +852,14 @@ class PoseItdMLP:
         return self
 
     def predict(self, X: ArrayLike) -> NDArray:
-        """Positions ``(n, 3)`` in the robot frame for TDOAs ``X (n, K*n_pairs)``."""
+        """Positions ``(n, 3)`` in the robot frame for TDOAs ``X (n, K*n_pairs)``;
+        :class:`hearsee.errors.RegressorNotFittedError` before :meth:`fit`."""
         if not hasattr(self, "mlp_"):
-            raise EstimationError("PoseItdMLP is not fitted; call fit() first")
+            # (scikit-learn's NotFittedError too, as AudioVisualRegressor's: a plain
+            # EstimationError did not tell sklearn's tools the estimator was unfitted)
+            from hearsee.errors import RegressorNotFittedError
+
+            raise RegressorNotFittedError("PoseItdMLP is not fitted; call fit() first")
         X = np.atleast_2d(np.asarray(X, dtype=float))
         if X.ndim != 2 or X.shape[1] != self.n_features_in_:
             raise EstimationError(

@@ -67,13 +67,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar
 from sklearn.base import BaseEstimator, RegressorMixin
-from sklearn.exceptions import NotFittedError
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.localize import as_tdoas
 from hearsee.audio.tracking import MotionKalman, _covariance
 from hearsee.config import finite_number, is_real, real_entries, whole_number
-from hearsee.errors import EstimationError, GeometryError
+from hearsee.errors import EstimationError, GeometryError, RegressorNotFittedError
 from hearsee.geometry import as_points
 from hearsee.vision.camera import Camera, camera_pose
 
@@ -926,12 +925,6 @@ def _image_margin(margin_px: Any, camera: Camera) -> float:
     0', -1e308 its OverflowError)."""
     most = (min(camera.width, camera.height) - 1) / 2
     return finite_number("margin_px", margin_px, -1e300, most, error=EstimationError)
-
-
-class RegressorNotFittedError(EstimationError, NotFittedError):
-    """:meth:`AudioVisualRegressor.predict` before ``fit``: hearsee's EstimationError and
-    scikit-learn's ``NotFittedError`` at once (scikit-learn's tools and
-    ``check_estimator`` recognise an unfitted estimator by the latter)."""
 
 
 def _layer_sizes(sizes: Any) -> tuple[Any, ...]:
