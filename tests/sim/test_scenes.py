@@ -321,6 +321,24 @@ def test_entity_params_in_range_are_rendered_as_given():
         Entity("box", 0.0, 3.0, params=None)
 
 
+@pytest.mark.parametrize("kind, params, key", [
+    ("person", {"temp_c": 30.0}, "temp_c"),          # a person's temperatures are per part
+    ("box", {"width": 0.4}, "width"),                # a typo of width_m
+    ("mannequin", {"short_sleeves": True}, "short_sleeves"),
+    ("poster", {"depth_m": 0.1}, "depth_m"),
+])
+def test_entity_params_its_kind_does_not_read_are_a_config_error(kind, params, key):
+    """A key the entity's renderer never reads was ignored silently: a person given
+    temp_c=30 rendered at the random 33-35 degC skin, a box's "width" at the default 0.8 m."""
+    with pytest.raises(ConfigError, match=rf"\['{key}'\] are not options of a {kind}"):
+        Entity(kind, 0.0, 3.0, params=params)
+    ok = Entity(kind, 0.0, 3.0, params={"build": 1.0} if kind in ("person", "mannequin")
+                else {"temp_c": 30.0})  # (a key it reads is kept)
+    ok.params.update(params)  # (edited afterwards: render_scene checks again)
+    with pytest.raises(ConfigError, match=rf"\['{key}'\] are not options of a {kind}"):
+        render_scene(SceneSpec([ok]), default_rig(160, 120))
+
+
 def test_write_scene_to_a_file_or_below_one_is_an_input_file_error(tmp_path, scene):
     """write_scene to a path that is a file let the bare FileExistsError of mkdir escape, and
     to a path below a file a bare NotADirectoryError; a Scene is required (None was an

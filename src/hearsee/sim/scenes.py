@@ -80,6 +80,14 @@ _NUMERIC_PARAMS: dict[str, tuple[float | None, bool]] = {
     "lift_m": (0.0, False), "arm_swing_deg": (None, False)}
 #: Entity.params the renderer reads as flags (True / False).
 _FLAG_PARAMS = ("covered_head", "short_sleeves")
+#: The Entity.params each kind's renderer reads (any other key is a ConfigError: a person's
+#: ``temp_c`` or a box's ``width`` was ignored silently and the scene rendered with defaults).
+_KIND_PARAMS: dict[str, tuple[str, ...]] = {
+    "person": ("build", "skin_c", "clothing_c", "legs_c", "hair_c", "covered_head",
+               "short_sleeves", "arm_swing_deg"),
+    "mannequin": ("build", "temp_c", "covered_head", "arm_swing_deg"),
+    "poster": ("temp_c",), "coat_stand": ("temp_c",),
+    **{k: ("width_m", "depth_m", "lift_m", "temp_c") for k in ("box", "radiator", "appliance")}}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -156,7 +164,8 @@ class Entity:
     (``temp_c``; for people ``skin_c``, ``clothing_c``, ``legs_c``, ``hair_c``), sizes in
     metres (``width_m``, ``depth_m`` > 0, ``lift_m`` >= 0), a body's ``build`` factor (> 0)
     and ``arm_swing_deg``, and the flags ``covered_head``, ``short_sleeves`` (True / False);
-    a bad one is a ConfigError naming its key.
+    a bad one, or one the kind does not use (:data:`_KIND_PARAMS`), is a ConfigError naming
+    its key.
     """
 
     kind: str
@@ -167,12 +176,23 @@ class Entity:
     params: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.kind not in _ENTITY_KINDS:
-            raise ConfigError(f"entity kind must be one of {_ENTITY_KINDS}, got {self.kind!r}")
-        for name in ("x", "z", "yaw_deg"):
-            finite_number(f"entity {name}", getattr(self, name))
-        finite_number("entity height_m", self.height_m, 0.0, lo_open=True)
-        _check_params(self.params)
+        _check_entity(self)
+
+
+def _check_entity(e: Entity) -> None:
+    """ConfigError unless ``e``'s kind is known, its placement finite, its height > 0 and its
+    params valid for its kind (:func:`_check_params`, :data:`_KIND_PARAMS`). Run when an
+    Entity is made and again by render_scene (its fields and params dict can be edited)."""
+    if e.kind not in _ENTITY_KINDS:
+        raise ConfigError(f"entity kind must be one of {_ENTITY_KINDS}, got {e.kind!r}")
+    for name in ("x", "z", "yaw_deg"):
+        finite_number(f"entity {name}", getattr(e, name))
+    finite_number("entity height_m", e.height_m, 0.0, lo_open=True)
+    _check_params(e.params)
+    unused = sorted(set(e.params) - set(_KIND_PARAMS[e.kind]), key=str)
+    if unused:
+        raise ConfigError(f"entity params {unused!r:.80} are not options of a {e.kind} (it "
+                          f"reads {', '.join(_KIND_PARAMS[e.kind])})")
 
 
 def _check_params(params: Any) -> None:
@@ -180,7 +200,7 @@ def _check_params(params: Any) -> None:
     (:data:`_NUMERIC_PARAMS`) are finite numbers within their bounds and whose flags
     (:data:`_FLAG_PARAMS`) are True or False: a build of 0 rendered NaN bodies, a negative box
     width an inside-out box, text a builtin ValueError, a NaN temperature a NaN thermal image,
-    and "no" for a flag read as True. Keys the renderer does not read are left alone."""
+    and "no" for a flag read as True. (Keys the entity's kind does not read: Entity's check.)"""
     if not isinstance(params, Mapping):
         raise ConfigError(f"entity params must be a mapping of options, got {params!r:.60}")
     for key, value in params.items():
@@ -795,7 +815,7 @@ def _thermal_image(hits: _Hits, D: NDArray, C: NDArray, b: _Builder, cam: Camera
 def _check_room(spec: SceneSpec) -> None:
     """ConfigError unless ``spec`` is a SceneSpec whose room has finite positive extents
     around the camera (which must be inside it: between the floor and the ceiling) and a
-    finite temperature, whose entities are a list of Entity and whose seed is a whole number
+    finite temperature, whose entities are a list of valid Entity and whose seed is a whole number
     >= 0 (numpy's generator raised a builtin ValueError for -1 and TypeError for 1.5)."""
     if not isinstance(spec, SceneSpec):
         raise ConfigError(f"render_scene needs a SceneSpec, got {spec!r:.60}")
@@ -803,6 +823,8 @@ def _check_room(spec: SceneSpec) -> None:
             not all(isinstance(e, Entity) for e in spec.entities):
         raise ConfigError(f"scene entities must be a list of Entity, got "
                           f"{spec.entities!r:.60}")
+    for e in spec.entities:  # (edited after construction: a params dict is mutable)
+        _check_entity(e)
     whole_number("scene seed", spec.seed, 0)
     for name in ("width_left_m", "width_right_m", "depth_m", "ceiling_m"):
         finite_number(f"scene {name}", getattr(spec, name), 0.0, lo_open=True)
