@@ -15,15 +15,16 @@ def _nothing() -> None:
 @pytest.fixture
 def fake_camera(monkeypatch: pytest.MonkeyPatch) -> Callable[..., None]:
     """Install a fake ``cv2.VideoCapture`` (any index opens, reporting ``fps`` frames/s, 30
-    unless given): call ``fake_camera(n_frames, before_read=..., on_frame=..., on_end=...,
-    fps=...)``. Each ``read()``
+    unless given, and ``size`` for any other property): call ``fake_camera(n_frames,
+    before_read=..., on_frame=..., on_end=..., fps=..., size=...)``. Each ``read()``
     calls ``before_read``; the first ``n_frames`` reads then call ``on_frame`` and return a
     grey 80x60 image, later ones call ``on_end`` and fail (the camera has stopped)."""
     import cv2
 
     def install(n_frames: int = 5, before_read: Callable[[], None] = _nothing,
                 on_frame: Callable[[], None] = _nothing,
-                on_end: Callable[[], None] = _nothing, fps: float = 30.0) -> None:
+                on_end: Callable[[], None] = _nothing, fps: float = 30.0,
+                size: float = 30.0) -> None:
         class FakeCap:
             def __init__(self, index: int) -> None:
                 self.n = 0
@@ -32,7 +33,7 @@ def fake_camera(monkeypatch: pytest.MonkeyPatch) -> Callable[..., None]:
                 return True
 
             def get(self, prop: int) -> float:
-                return fps if prop == cv2.CAP_PROP_FPS else 30.0
+                return fps if prop == cv2.CAP_PROP_FPS else size
 
             def read(self) -> tuple[bool, np.ndarray | None]:
                 before_read()

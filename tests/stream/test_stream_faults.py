@@ -391,6 +391,25 @@ def test_live_camera_point_goes_stale_when_the_camera_stops(monkeypatch, fake_ca
         vp.close()
 
 
+def test_a_live_camera_that_reports_no_frame_size_opens(monkeypatch, fake_camera):
+    """A driver reporting CAP_PROP_FRAME_WIDTH / HEIGHT NaN: int(nan) was a builtin ValueError
+    before the camera was used at all; a live camera's frames need no reported size."""
+    import hearsee.stream.video as video
+
+    fake_camera(2, size=float("nan"))
+    monkeypatch.setattr(video, "detect_source_point", lambda img, det: (40.0, 30.0))
+    vp = video.VideoImagePoints(0, detector="hog", expected_size=(80, 60))
+    try:
+        vp(0.0)  # starts the thread
+        for _ in range(500):
+            if vp.frame_index == 1:
+                break
+            time.sleep(0.01)
+        assert vp.frame_index == 1 and vp.last_point == (40.0, 30.0)
+    finally:
+        vp.close()
+
+
 @pytest.mark.parametrize("reported", [float("nan"), -1.0, 0.0, float("inf")])
 def test_a_live_camera_without_a_usable_frame_rate_counts_30_fps(monkeypatch, fake_camera,
                                                                   reported):

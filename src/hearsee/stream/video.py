@@ -37,6 +37,7 @@ read-and-detect cycle, since the detector may be slower than the camera).
 from __future__ import annotations
 
 import csv
+import math
 import time
 from pathlib import Path
 from typing import Any
@@ -353,6 +354,15 @@ def detect_source_point(image: NDArray, detector: str = "hog") -> tuple[float, f
     raise ConfigError(f"unknown detector {detector!r} (choose hog or face)")
 
 
+def _reported_size(cap: Any) -> tuple[int, int] | None:
+    """A capture's ``(width, height)`` in pixels from CAP_PROP_FRAME_WIDTH / HEIGHT, or None
+    where either is not a finite number (a driver that does not know)."""
+    import cv2
+
+    wh = [cap.get(p) for p in (cv2.CAP_PROP_FRAME_WIDTH, cv2.CAP_PROP_FRAME_HEIGHT)]
+    return (int(wh[0]), int(wh[1])) if all(is_real(v) and math.isfinite(v) for v in wh) else None
+
+
 def _reported_fps(value: Any) -> float | None:
     """A capture's ``CAP_PROP_FPS`` as frames per second when it is a finite number > 0, else
     None (drivers report 0, -1 or NaN for "unknown")."""
@@ -407,8 +417,11 @@ class VideoImagePoints:
         cap = video_capture(int(source) if self.live else str(source))
         if not cap.isOpened():
             raise ImageInputError(f"{what}: cannot be opened as a video (OpenCV VideoCapture)")
-        size = (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
-        if not self.live and expected_size is not None and size != tuple(expected_size):
+        # a file's size against the calibration (a live camera's is not checked here: a driver
+        # may report no size, and NaN made int() a builtin ValueError; a file's missing size is
+        # its first frame's)
+        size = None if self.live else _reported_size(cap)
+        if expected_size is not None and size is not None and size != tuple(expected_size):
             cap.release()
             raise ImageInputError(
                 f"{what}: frames are {size[0]}x{size[1]} pixels but the calibration expects "
@@ -427,7 +440,8 @@ class VideoImagePoints:
             # (a corrupt or truncated file opened, delivered nothing, and the run went on
             # audio-only without a word): the dry-run's check, before the audio is read
             try:
-                first = read_frame(cap, str(source), where)
+                first = read_frame(cap, str(source), where,
+                                   expected_size if size is None else None)
             except ConfigError:
                 cap.release()
                 raise
