@@ -209,6 +209,9 @@ def test_delay_signals_output_has_the_asked_length():
     for bad in (-3, 2.5, "10"):
         with pytest.raises(ConfigError, match="n_out"):
             delay_signals(x, [0.0], fs, n_out=bad)
+    # a huge n_out: the delays' memory rule, not numpy's MemoryError (10**12 samples)
+    with pytest.raises(ConfigError, match=r"n_out = 1000000000000 samples is more than"):
+        delay_signals(x, [0.0], fs, n_out=10**12)
     # the default stays the signal's length
     assert delay_signals(x, [0.0, 1e-3], fs).shape == (2, 100)
 

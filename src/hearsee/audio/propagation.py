@@ -145,7 +145,8 @@ def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: Arra
     ConfigError
         A delay longer than :data:`MAX_RIR_SAMPLES` samples (the FFT is padded past it: more
         memory than a simulation should take), gains that are not finite numbers or not one
-        per delay, a bad ``n_out``.
+        per delay, a bad ``n_out`` (or one more than :data:`MAX_RIR_SAMPLES` past the
+        signal's length).
     """
     x = as_samples(signal, "signal")  # (text was read as numbers; NaN gave a NaN recording)
     if x.ndim != 1:
@@ -165,6 +166,11 @@ def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: Arra
         raise ConfigError(f"gains must be one number or one per delay ({d.size}), got shape "
                           f"{g.shape}")
     n_out = len(x) if n_out is None else whole_number("n_out", n_out, 0)
+    if n_out > len(x) + MAX_RIR_SAMPLES:  # (1e12 samples: a MemoryError traceback)
+        raise ConfigError(
+            f"n_out = {n_out} samples is more than {MAX_RIR_SAMPLES} samples (the limit for "
+            f"room impulse responses) past the signal's {len(x)}: more memory than a "
+            "simulation should take")
     # (an n_out past the delayed signal's end used to return only n_fft samples)
     n_fft = sfft.next_fast_len(max(len(x), n_out) + int(np.ceil(d.max() * fs)) + 1, real=True)
     X = sfft.rfft(x, n_fft)
