@@ -829,3 +829,50 @@ def test_motion_filter_predicted_to_leaves_the_track_alone():
     assert kf.t == t0 and np.array_equal(kf.x, x0) and np.array_equal(kf.P, P0)
     np.testing.assert_array_equal(kf.predicted_to(t0 - 1.0).x, x0)  # the past: as it is
     assert not MotionKalman().predicted_to(1.0).initialized
+
+
+@pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
+def test_a_track_starts_with_the_noise_its_first_measurement_declares(cls):
+    """A start (and a restart after max_rejects) took the filter's default sigma_meas_deg (10
+    deg here) as the angles' initial sd whatever the frame declared: the stream's planar frames
+    declare (s, 4 s). Ground truth: measurements of one direction at one time fuse to their
+    inverse-variance weighted mean, with variance 1 / sum(1 / s^2) per angle."""
+    k = cls(10.0)
+    assert k.update(0.0, (30.0, 20.0), sigma_meas_deg=(25.0, 100.0))
+    assert np.diag(k.P)[:2] == pytest.approx([25.0**2, 100.0**2], rel=1e-12)
+    zs = [((30.0, 20.0), (25.0, 100.0)), ((36.0, 10.0), (5.0, 20.0)), ((33.0, 40.0), 8.0)]
+    k = cls(10.0)
+    for z, s in zs:
+        assert k.update(0.0, z, sigma_meas_deg=s)
+    for i in range(2):
+        w = np.array([1.0 / np.broadcast_to(s, 2)[i] ** 2 for _, s in zs])
+        v = np.array([z[i] for z, _ in zs])
+        assert k.x[i] == pytest.approx(np.sum(w * v) / np.sum(w), abs=1e-9)
+        assert k.P[i, i] == pytest.approx(1.0 / np.sum(w), rel=1e-9)
+    # an azimuth-only start: the elevation stays unknown (90 deg sd)
+    k = cls(10.0)
+    assert k.update(0.0, (30.0, None), sigma_meas_deg=2.0)
+    assert np.diag(k.P)[:2] == pytest.approx([4.0, 90.0**2], rel=1e-12)
+    # the restart after max_rejects takes the restarting frame's noise too
+    k = cls(10.0, max_rejects=2)
+    for n in range(10):
+        k.update(n * DT, (30.0, 20.0), sigma_meas_deg=2.0)
+    for n in range(10, 12):
+        assert k.update(n * DT, (-120.0, 0.0), sigma_meas_deg=(40.0, 160.0)) == (n == 11)
+    assert k.x[:2] == pytest.approx([-120.0, 0.0])
+    assert np.diag(k.P)[:2] == pytest.approx([40.0**2, 160.0**2], rel=1e-12)
+
+
+@pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
+@pytest.mark.parametrize("kw", [{"sigma_meas_deg": -1.0}, {"sigma_meas_deg": "abc"},
+                                {"sigma_meas_deg": (1.0, np.nan)}, {"delay_s": np.nan}])
+def test_the_first_frame_noise_and_delay_are_checked_as_later_ones(cls, kw):
+    """The first frame started the track before its sigma_meas_deg / delay_s were checked (a
+    negative or text noise and a NaN delay were taken); the second frame refused them."""
+    k = cls()
+    with pytest.raises(EstimationError, match="sigma_meas_deg|delay_s"):
+        k.update(0.0, (10.0, 5.0), **kw)
+    assert not k.initialized
+    assert k.update(0.0, (10.0, 5.0))
+    with pytest.raises(EstimationError, match="sigma_meas_deg|delay_s"):
+        k.update(0.1, (10.0, 5.0), **kw)

@@ -437,10 +437,18 @@ class DirectionKalman(_Kalman):
     def _predict(self) -> None:
         self.x, self.P = _propagate(self.x, self.P, self.F, self.Q)
 
-    def _start(self, az: float, el: float | None) -> None:
+    def _start(self, az: float, el: float | None, R: NDArray | None = None) -> None:
+        """A new track at the measurement ``(az, el)`` (deg) whose noise covariance is ``R``
+        (2x2 deg^2, this frame's ``sigma_meas_deg``; None = the filter's ``R``): the angles'
+        initial variances are the measurement's own (the posterior of one measurement under a
+        flat prior on the direction), an unknown elevation's 90^2 deg^2. (Until 2026-12-02 a
+        start took the filter's default noise whatever the frame declared: the stream's
+        planar-array frames declare (s, 4 s) and got (10, 10) deg, a mean NEES(az, el) of ~30
+        instead of 2 over a track's first three frames.)"""
+        R = self.R if R is None else R
         self.x = np.array([_wrap1(float(az)), 0.0 if el is None else float(el), 0.0, 0.0])
-        el_var = 90.0**2 if el is None else self.sigma_meas_deg**2
-        self.P = self._initial_cov(self.sigma_meas_deg**2, el_var)
+        el_var = 90.0**2 if el is None else float(R[1, 1])
+        self.P = self._initial_cov(float(R[0, 0]), el_var)
         self.initialized = True
         self.has_elevation = el is not None
         self.n_rejects = 0
@@ -510,14 +518,15 @@ class DirectionKalman(_Kalman):
         cands = _clean_candidates(measurement, candidates)
         if not cands:
             return False
+        Rf, delay_s = self._frame_noise(sigma_meas_deg, delay_s)  # (the first frame's too)
         if not self.initialized:
-            self._start(*cands[0])
+            self._start(*cands[0], Rf)
             return True
-        dist2, az, el, z, H, R, y, S = self._nearest(cands, sigma_meas_deg, delay_s)
+        dist2, az, el, z, H, R, y, S = self._nearest(cands, Rf, delay_s)
         if dist2 > self._gate[len(z)]:
             self.n_rejects += 1
             if self.n_rejects >= self.max_rejects:
-                self._start(az, el)
+                self._start(az, el, Rf)
                 return True
             return False
         self._correct(y, S, H, R)
@@ -525,16 +534,26 @@ class DirectionKalman(_Kalman):
         self.n_rejects = 0
         return True
 
-    def _nearest(self, cands: list[tuple[float, float | None]],
-                 sigma_meas_deg: float | tuple[float, float] | None, delay_s: float) -> tuple:
-        """Nearest-neighbour association: ``(d2, az, el, z, H, R, y, S)`` of the candidate with
-        the smallest gate distance from this filter's prediction."""
+    @staticmethod
+    def _frame_noise(sigma_meas_deg: float | tuple[float, float] | None, delay_s: float
+                     ) -> tuple[NDArray | None, float]:
+        """A frame's checked ``(R, delay_s)``: its measurement covariance ``diag(s_az^2,
+        s_el^2)`` (deg^2; None = the filter's default) and delay (seconds), or an
+        EstimationError. Checked before the track starts (the first frame's noise and delay
+        were taken unchecked: a negative or text sigma, a NaN delay)."""
         Rf = None
         if sigma_meas_deg is not None:
             s_az, s_el = _sigma_pair(sigma_meas_deg)
             Rf = np.diag([s_az**2, s_el**2])
         if not math.isfinite(delay_s):
             raise EstimationError(f"delay_s must be a finite number of seconds, got {delay_s!r}")
+        return Rf, delay_s
+
+    def _nearest(self, cands: list[tuple[float, float | None]], Rf: NDArray | None,
+                 delay_s: float) -> tuple:
+        """Nearest-neighbour association: ``(d2, az, el, z, H, R, y, S)`` of the candidate with
+        the smallest gate distance from this filter's prediction, for a frame's checked noise
+        ``Rf`` (2x2 deg^2, None = the filter's) and delay (seconds) (:meth:`_frame_noise`)."""
         best = None
         for a, e in cands:
             z, H, R, wrap = self._parts(a, e, Rf, delay_s)
@@ -831,8 +850,10 @@ class DirectionIMM:
         F, Qs = self._model(dt)
         return self._predicted_mixture(F, Qs, self._tpm(dt).T @ self.mu)
 
-    def _start(self, t: float, az: float, el: float | None) -> None:
-        self._mix._start(az, el)
+    def _start(self, t: float, az: float, el: float | None, R: NDArray | None) -> None:
+        """Every mode restarted at the measurement ``(az, el)`` (deg) with its noise ``R``
+        (2x2 deg^2, None = the default; :meth:`DirectionKalman._start`) at time ``t`` (s)."""
+        self._mix._start(az, el, R)
         self._mix.t = float(t)
         self._restart_modes()
         self.n_rejects = 0
@@ -844,13 +865,13 @@ class DirectionIMM:
         """One frame; arguments and return value as :meth:`DirectionKalman.update`."""
         t = _finite_time(t)
         cands = _clean_candidates(measurement, candidates)
+        Rf, delay_s = self._mix._frame_noise(sigma_meas_deg, delay_s) if cands else (None, 0.0)
         if self.angle_noise_ratio and cands:  # this frame's measurement sets the random walk
-            s_az = (_sigma_pair(sigma_meas_deg)[0] if sigma_meas_deg is not None
-                    else self._mix.sigma_meas_deg)
+            s_az = math.sqrt(Rf[0, 0]) if Rf is not None else self._mix.sigma_meas_deg
             self._angle_q = self.angle_noise_ratio * s_az**2
         if not self.initialized:
             if cands:
-                self._start(t, *cands[0])
+                self._start(t, *cands[0], Rf)
                 return True
             self._mix.t = float(t)
             return False
@@ -871,11 +892,11 @@ class DirectionIMM:
         self._mix.t = float(t)
         if not cands:
             return False
-        dist2, az, el, z, H, R, _, _ = self._mix._nearest(cands, sigma_meas_deg, delay_s)
+        dist2, az, el, z, H, R, _, _ = self._mix._nearest(cands, Rf, delay_s)
         if dist2 > self._mix._gate[len(z)]:
             self.n_rejects += 1
             if self.n_rejects >= self.max_rejects:
-                self._start(t, az, el)
+                self._start(t, az, el, Rf)
                 return True
             return False
         # every mode corrects with the same measurement (Joseph form, as _Kalman._correct)
