@@ -344,6 +344,42 @@ def test_raw_directions_are_the_frames_own_also_with_the_itd_filter():
     assert sum(abs(wrap_deg(r - f)) > 1e-6 for r, f in filt) > 0.5 * len(filt)
 
 
+def test_frames_the_itd_gate_rejects_give_the_tracker_no_measurement():
+    """The ITD filter's gate rejected a frame's TDOAs (an anomalous GCC peak) and the stream
+    fed the filter's prediction to the direction tracker as that frame's measurement: the
+    update said measured=True, the azimuth variance shrank and the max_coast_s timer restarted.
+    TDOAs injected: a source at 30 deg for 20 frames, then peaks at -100 deg, which the filter
+    rejects 4 times (its max_rejects 5 re-initialises on the 5th)."""
+    arr = MicArray.from_preset("three-mic")
+    proc = TrackingProcessor(arr, FS, StreamConfig(itd_filter=True, spectrum_alpha=0.0))
+
+    def d(az):
+        return np.array([np.cos(np.radians(az)), np.sin(np.radians(az)), 0.0])
+
+    n = 26
+    Z = np.tile(arr.tdoa_far(d(30.0), proc.pairs), (n, 1))
+    Z[20:] = arr.tdoa_far(d(-100.0), proc.pairs)
+    k = [0]
+    proc.tdoas = lambda batch: (Z[k[0]][None], np.array([3.0]))
+    ups, taken = [], []
+    for k[0] in range(n):
+        t = np.array([k[0] * 0.032])
+        ups += proc.process(pl.FrameBatch(t, np.zeros(1, bool), None, 0.0))
+        taken.append(proc.itd.last_accepted)
+    assert all(taken[:20]) and not any(taken[20:24]) and taken[24]
+    assert all(u.measured for u in ups[:20])
+    var = [u.covariance[0][0] for u in ups]
+    for u in ups[20:24]:
+        assert not u.measured
+        assert u.itd_azimuth_deg is None
+        assert u.raw_azimuth_deg == pytest.approx(-100.0, abs=1e-6)
+        assert u.azimuth_deg == pytest.approx(30.0, abs=1e-6)
+    assert all(var[i + 1] > var[i] for i in range(19, 23))  # coasting
+    assert proc._last_measured_t == pytest.approx(19 * 0.032)
+    # the re-initialised filter's direction is taken again (it is the frame's own)
+    assert ups[24].itd_azimuth_deg == pytest.approx(-100.0, abs=1e-6)
+
+
 # ------------------------------------------------------------------------- 4. live camera
 def test_live_camera_point_goes_stale_when_the_camera_stops(monkeypatch, fake_camera):
     """A live camera that delivers 5 frames with a detection, then hangs, then fails: the point

@@ -170,8 +170,9 @@ class Update:
     ``raw_azimuth_deg``/``raw_elevation_deg`` the direction of its own GCC TDOAs, also with
     ``itd_filter`` (the ITD-filtered TDOAs' direction, which the tracker
     receives, is ``itd_azimuth_deg``/``itd_elevation_deg``: None without ``itd_filter`` and
-    before the filter has started); ``latency_s`` is the wall-clock time from the arrival of the
-    block that completed the frame to the update.
+    on frames whose TDOAs the filter did not take -- none, or rejected by its gate, which then
+    give the trackers no measurement of their own); ``latency_s`` is the wall-clock time from
+    the arrival of the block that completed the frame to the update.
     """
 
     t: float
@@ -1385,23 +1386,29 @@ class TrackingProcessor:
         for n, t in enumerate(batch.t):
             z = raw_z = tdoa[n]
             have = bool(np.all(np.isfinite(z)))
+            # whether the frame's TDOAs measure: with itd_filter only when its gate took them
+            # (a rejected frame, an anomalous GCC peak, fed the filter's prediction to the
+            # trackers as a fresh measurement: measured=True, the variance shrank, and the
+            # max_coast_s timer restarted)
+            use = have
             if self.itd is not None:
-                self.itd.step(z if have else None)
-                if have and self.itd.initialized:
+                use = self.itd.step(z if have else None)
+                if use:
                     z = self.itd.pair_tdoas()
             raw_az = raw_el = itd_az = itd_el = None
             cands: list[tuple[float, float | None]] = []
-            if have:
+            if have:  # raw_*: the frame's own TDOAs, not the filter's, taken or not
+                loc_raw = localize_tdoa(raw_z, self.array, self.pairs,
+                                        near_field=self._in_plane, in_plane=self._in_plane)
+                raw_az, raw_el = loc_raw.azimuth_deg, loc_raw.elevation_deg
+            if use:
                 # the tracker's measurement: the (ITD-filtered) TDOAs' direction
-                loc = localize_tdoa(z, self.array, self.pairs, near_field=self._in_plane,
-                                    in_plane=self._in_plane)
+                loc = (loc_raw if z is raw_z else
+                       localize_tdoa(z, self.array, self.pairs, near_field=self._in_plane,
+                                     in_plane=self._in_plane))
                 cands = [(a, e) for a, e in loc.candidates if a is not None]
-                raw_az, raw_el = loc.azimuth_deg, loc.elevation_deg
-                if z is not raw_z:  # raw_*: the frame's own TDOAs, not the filter's
-                    itd_az, itd_el = raw_az, raw_el
-                    loc_raw = localize_tdoa(raw_z, self.array, self.pairs,
-                                            near_field=self._in_plane, in_plane=self._in_plane)
-                    raw_az, raw_el = loc_raw.azimuth_deg, loc_raw.elevation_deg
+                if z is not raw_z:
+                    itd_az, itd_el = loc.azimuth_deg, loc.elevation_deg
             delay = 0.0
             own = bool(cands) and (self.cfg.prefer_frame
                                    or conf[n] >= self.cfg.prefer_frame_confidence)
@@ -1436,7 +1443,7 @@ class TrackingProcessor:
                 upd.rate_dps = self.direction.rate_dps.tolist()
                 upd.covariance = self.direction.P[:2, :2].tolist()
             if self.rig is not None and self.image_points is not None:
-                self._fuse(upd, z if have else None)
+                self._fuse(upd, z if use else None)
             out.append(upd)
         return out
 
