@@ -5,6 +5,7 @@ import pytest
 
 from hearsee.audio.tracking import (
     ELEVATION_ACCEL_RATIO,
+    LOST_AZIMUTH_SD_DEG,
     DirectionIMM,
     DirectionKalman,
     MotionKalman,
@@ -926,3 +927,34 @@ def test_singer_prediction_does_not_depend_on_how_a_gap_is_stepped():
     ca.update(t[-1] + gap)
     assert ca.position == pytest.approx(x0 + v0 * gap + 0.5 * a0 * gap**2, rel=1e-12)
     assert ca.velocity == pytest.approx(v0 + a0 * gap, rel=1e-12)
+
+
+@pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
+@pytest.mark.parametrize("gap", [1e7, 1e8, 9.9e8])
+def test_a_gap_that_loses_the_direction_restarts_the_track(cls, gap):
+    """Time gaps up to 1e9 s are steps, but after ~1e7 s the predicted covariance (~1e40
+    deg^2) and the measurement's cancelled in the Joseph update: a negative azimuth variance
+    (DirectionKalman, 1e7 s) or a NaN azimuth (DirectionIMM, 1e8 s). A prediction whose azimuth
+    sd exceeds LOST_AZIMUTH_SD_DEG holds no direction; the next measurement starts the track
+    anew. Ground truth: a static source at (30, 10) deg, measured with 5 deg noise."""
+    rng = np.random.default_rng(0)
+    k = cls(5.0)
+    for n in range(10):
+        assert k.update(n * DT, (30.0, 10.0))
+    assert not k.lost
+    t0 = 9 * DT + gap
+    assert not k.update(t0 - 1.0, None)  # coasting: the old direction, with no weight
+    assert k.lost and k.azimuth_deg == pytest.approx(30.0, abs=1e-6)
+    assert np.sqrt(k.P[0, 0]) > LOST_AZIMUTH_SD_DEG
+    assert k.update(t0, (31.0, 12.0), sigma_meas_deg=(4.0, 8.0))  # a first measurement
+    assert k.x == pytest.approx([31.0, 12.0, 0.0, 0.0], abs=1e-12)
+    assert np.diag(k.P)[:2] == pytest.approx([16.0, 64.0], rel=1e-12)
+    for n in range(1, 10):
+        assert k.update(t0 + n * DT, tuple(rng.normal([30.0, 10.0], 5.0)))
+        assert np.all(np.isfinite(k.x)) and np.linalg.eigvalsh(k.P)[0] > 0
+        assert not k.lost
+    assert abs(k.azimuth_deg - 30.0) < 3.0 * np.sqrt(k.P[0, 0])
+    # a short coast keeps the track: its next measurement is a correction, not a restart
+    # (a restart would give the measurement's own variance, 5^2)
+    assert k.update(t0 + 10 * DT + 0.2, (35.0, 10.0))
+    assert k.P[0, 0] < 5.0**2 - 1.0 and k.x[2] != 0.0 and not k.lost

@@ -56,6 +56,7 @@ __all__ = [
     "DIRECTION_RATE_TAU_S",
     "ELEVATION_ACCEL_RATIO",
     "IMM_MODES_DPS2",
+    "LOST_AZIMUTH_SD_DEG",
     "MAX_AZIMUTH_DEG",
     "VELOCITY_KNOWN_FRACTION",
     "DirectionIMM",
@@ -316,6 +317,17 @@ def _cached(cache: dict, dt: float, make: Callable[[], Any]) -> Any:
 #: value at all: a missing measurement, as NaN (the elevation's rule too).
 MAX_AZIMUTH_DEG = MAX_ANGLE_DEG
 
+#: A direction track whose predicted azimuth standard deviation exceeds this many degrees holds
+#: no direction (a wrapped normal with an sd of 360 deg is uniform on the circle to within
+#: exp(-(2 pi)^2 / 2) ~ 3e-9), so its next measurement starts it anew, as a first one would:
+#: rate 0, the measurement's own noise (:meth:`DirectionKalman.update`, :meth:`DirectionIMM.
+#: update`). Coasting frames still report the growing prediction. Before 2026-12-02 such a
+#: track was corrected: after the time gaps a track may take (up to :data:`hearsee.config.
+#: MAX_TIME_LIMIT_S`, 1e9 s) the predicted covariance (~1e40 deg^2) and the measurement's
+#: (~1e2) cancelled in the Joseph update -- a negative azimuth variance after a 1e7 s gap,
+#: and a NaN azimuth from the IMM (log of a negative determinant) after 1e8 s.
+LOST_AZIMUTH_SD_DEG = 360.0
+
 
 def _clean_candidates(measurement: tuple[float, float | None] | None,
                       candidates: Sequence[tuple[float, float | None]] | None
@@ -512,14 +524,15 @@ class DirectionKalman(_Kalman):
         -------
         bool
             True when a measurement was fused (or started the track), False when the frame was
-            missing or its measurement fell outside the gate.
+            missing or its measurement fell outside the gate. A track whose prediction has
+            lost the direction (:attr:`lost`) starts anew at the measurement.
         """
         self.predict(t)
         cands = _clean_candidates(measurement, candidates)
         if not cands:
             return False
         Rf, delay_s = self._frame_noise(sigma_meas_deg, delay_s)  # (the first frame's too)
-        if not self.initialized:
+        if not self.initialized or self.lost:
             self._start(*cands[0], Rf)
             return True
         dist2, az, el, z, H, R, y, S = self._nearest(cands, Rf, delay_s)
@@ -533,6 +546,12 @@ class DirectionKalman(_Kalman):
         self._settle(el)
         self.n_rejects = 0
         return True
+
+    @property
+    def lost(self) -> bool:
+        """Whether the track's azimuth standard deviation exceeds
+        :data:`LOST_AZIMUTH_SD_DEG` (it holds no direction: its next measurement restarts it)."""
+        return self.initialized and not self.P[0, 0] <= LOST_AZIMUTH_SD_DEG**2
 
     @staticmethod
     def _frame_noise(sigma_meas_deg: float | tuple[float, float] | None, delay_s: float
@@ -774,6 +793,11 @@ class DirectionIMM:
         return self._mix.has_elevation
 
     @property
+    def lost(self) -> bool:
+        """As :attr:`DirectionKalman.lost`, for the mixture."""
+        return self._mix.lost
+
+    @property
     def azimuth_deg(self) -> float:
         return self._mix.azimuth_deg
 
@@ -892,6 +916,9 @@ class DirectionIMM:
         self._mix.t = float(t)
         if not cands:
             return False
+        if self.lost:  # (no direction left: a first measurement, see LOST_AZIMUTH_SD_DEG)
+            self._start(t, *cands[0], Rf)
+            return True
         dist2, az, el, z, H, R, _, _ = self._mix._nearest(cands, Rf, delay_s)
         if dist2 > self._mix._gate[len(z)]:
             self.n_rejects += 1
