@@ -958,3 +958,61 @@ def test_a_gap_that_loses_the_direction_restarts_the_track(cls, gap):
     # (a restart would give the measurement's own variance, 5^2)
     assert k.update(t0 + 10 * DT + 0.2, (35.0, 10.0))
     assert k.P[0, 0] < 5.0**2 - 1.0 and k.x[2] != 0.0 and not k.lost
+
+
+def test_settings_and_frame_arguments_that_are_not_numbers_are_estimation_errors():
+    """Builtin TypeErrors / ValueErrors (a bare ``0 < gate_prob < 1``, ``rate_tau_s > 0``,
+    math.isfinite(delay_s), unpacking a motion candidate, an unknown keyword), and bools or text
+    read as numbers (rate_tau_s=True as 1 s, a delay True as 1 s, sigma_jerk=True as 1 m/s^2,
+    the IMM's modes ("50", "2000") as numbers): each is an EstimationError now. Valid
+    spellings still work: numpy scalars, inf time constants, a numpy array of candidates."""
+    bad_settings = [
+        (DirectionKalman, {"gate_prob": "0.99"}), (DirectionKalman, {"gate_prob": None}),
+        (DirectionKalman, {"gate_prob": True}), (DirectionKalman, {"rate_tau_s": "2"}),
+        (DirectionKalman, {"rate_tau_s": True}), (DirectionIMM, {"gate_prob": None}),
+        (DirectionIMM, {"mode_dwell_s": "1"}), (DirectionIMM, {"mode_dwell_s": None}),
+        (DirectionIMM, {"mode_dwell_s": True}),
+        (DirectionIMM, {"sigma_accel_dps2": ("50", "2000")}),
+        (DirectionIMM, {"sigma_accel_dps2": (50.0, True)}), (MotionKalman, {"gate_prob": "0.99"}),
+        (MotionKalman, {"sigma_jerk": True}), (MotionKalman, {"sigma_jerk": (1.0, True, 1.0)}),
+    ]
+    for cls, kw in bad_settings:
+        with pytest.raises(EstimationError, match=next(iter(kw))):
+            cls(**kw)
+    for cls in (DirectionKalman, DirectionIMM):
+        k = cls()
+        assert k.update(0.0, (10.0, 5.0))
+        for delay in ("0.1", None, True):
+            with pytest.raises(EstimationError, match="delay_s"):
+                k.update(0.1, (10.0, 5.0), delay_s=delay)
+        with pytest.raises(EstimationError, match="candidates"):
+            k.update(0.1, (10.0, 5.0), candidates=5)
+        assert k.update(0.1, None, candidates=np.array([[10.0, 5.0], [170.0, 5.0]]),
+                        delay_s=np.float64(0.01))
+        assert k.azimuth_deg == pytest.approx(10.0, abs=1e-6)
+    k = DirectionKalman()
+    k.update(0.0, (10.0, 5.0))
+    for delay in (np.nan, "1", True):
+        with pytest.raises(EstimationError, match="delay_s"):
+            k.gate_distance(10.0, 5.0, delay_s=delay)
+    with pytest.raises(EstimationError, match="covariance"):
+        k.gate_distance(10.0, 5.0, R="a")
+    assert k.gate_distance(10.0, 5.0, R=np.eye(2), delay_s=np.float32(0.5)) == pytest.approx(0.0)
+    m = MotionKalman()
+    for cands in ([[1.0, 2.0, 3.0]], [([1.0, 2.0, 3.0],)], 5, [7.0]):
+        with pytest.raises(EstimationError, match="candidates"):
+            m.update(0.0, None, candidates=cands)
+    with pytest.raises(EstimationError, match="time"):
+        m.predicted_to("x")
+    assert m.update(0.0, None, candidates=[([1.0, 2.0, 3.0], None)])
+    with pytest.raises(EstimationError, match="bogus"):
+        track_directions([0.0, 0.1], [10.0, 11.0], bogus=1)
+    with pytest.raises(EstimationError, match="bogus"):
+        track_positions([0.0, 0.1], np.zeros((2, 3)), bogus=1)
+    # valid spellings: numpy numbers, an infinite time constant (none)
+    assert DirectionKalman(gate_prob=np.float32(0.99), rate_tau_s=float("inf")).rate_tau_s is None
+    assert DirectionKalman(rate_tau_s=np.int64(2)).rate_tau_s == 2.0
+    assert DirectionIMM(mode_dwell_s=float("inf"), sigma_accel_dps2=np.array([50, 2000])
+                        ).mode_dwell_s == float("inf")
+    assert MotionKalman(sigma_jerk=np.array([2.0, 2.0, 0.1])).sigma_jerk == (2.0, 2.0, 0.1)
+    assert track_directions([0.0, 0.1], [10.0, 11.0], sigma_meas_deg=2.0).accepted.all()

@@ -30,6 +30,7 @@ Units: degrees and deg/s for directions, metres, m/s and m/s^2 for motion, secon
 from __future__ import annotations
 
 import copy
+import inspect
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -129,6 +130,49 @@ def _sigma_pair(sigma_meas_deg: Any) -> tuple[float, float]:
         raise EstimationError(f"sigma_meas_deg must be one number or (azimuth, elevation) in "
                               f"degrees, got {sigma_meas_deg!r}")
     return _positive("sigma_meas_deg", pair[0]), _positive("sigma_meas_deg", pair[1])
+
+
+def _gate_prob(value: Any) -> float:
+    """A chi-square gate's probability mass as a float in (0, 1), or an EstimationError (text
+    and None raised a builtin TypeError from the comparison; NaN or 1.5 made the gate NaN)."""
+    if not (is_real(value) and 0 < value < 1):
+        raise EstimationError(f"gate_prob must be a number in (0, 1), got {value!r:.80}")
+    return float(value)
+
+
+def _time_constant(name: str, value: Any, *, none: bool = True) -> float:
+    """A time constant in seconds: a finite number > 0 as a float, or inf for none (also
+    None when ``none``); an EstimationError otherwise (text and None raised a builtin
+    TypeError from ``> 0``, True was read as 1 s)."""
+    if (value is None and none) or (isinstance(value, float | np.floating)
+                                    and value == math.inf):
+        return math.inf
+    if not (is_real(value) and value > 0):
+        rule = "inf or None" if none else "inf"
+        raise EstimationError(f"{name} must be > 0 s, a number of seconds ({rule}: none), "
+                              f"got {value!r:.80}")
+    return float(value)
+
+
+def _delay(value: Any) -> float:
+    """A measurement's ``delay_s`` (seconds) as a float, or an EstimationError unless it is a
+    finite real number (text and None raised math.isfinite's builtin TypeError, True was read
+    as a 1 s delay, NaN made a gate distance NaN)."""
+    if type(value) is float and math.isfinite(value):  # the common case (0.0), without numpy
+        return value
+    if not is_real(value):
+        raise EstimationError(f"delay_s must be a finite number of seconds, got {value!r:.80}")
+    return float(value)
+
+
+def _unknown_settings(cls: type, params: dict[str, Any]) -> None:
+    """An EstimationError naming the first of ``params`` that ``cls`` takes no setting of (a
+    builtin TypeError from the constructor before)."""
+    known = [n for n in inspect.signature(cls).parameters if n != "self"]
+    for key in params:
+        if key not in known:
+            raise EstimationError(f"unknown {cls.__name__} setting {key!r} (expected one of: "
+                                  f"{', '.join(known)})")
 
 
 def _angle(v: Any) -> bool:
@@ -336,7 +380,11 @@ def _clean_candidates(measurement: tuple[float, float | None] | None,
     a non-finite elevation read as unknown (None). A candidate that is no pair of angles is an
     EstimationError (it was a builtin ValueError / TypeError), and so is a finite azimuth beyond
     :data:`MAX_AZIMUTH_DEG` or elevation beyond +-90 deg."""
-    cands = list(candidates or [])
+    try:  # (a number raised a builtin TypeError, a numpy array numpy's ValueError)
+        cands = [] if candidates is None else list(candidates)
+    except TypeError:
+        raise EstimationError("candidates must be a list of (azimuth_deg, elevation_deg or "
+                              f"None), got {candidates!r:.80}") from None
     if measurement is not None:
         cands = [measurement, *cands]
     for c in cands:
@@ -412,16 +460,12 @@ class DirectionKalman(_Kalman):
                         ("elevation_accel_ratio", elevation_accel_ratio),
                         ("init_rate_sigma_dps", init_rate_sigma_dps)):
             _positive(name, v)
-        if rate_tau_s is not None and not rate_tau_s > 0:
-            raise EstimationError(f"rate_tau_s must be > 0 s or None, got {rate_tau_s}")
         # an infinite time constant is the constant-velocity model (its F would be inf * 0)
-        self.rate_tau_s = (None if rate_tau_s is None or math.isinf(rate_tau_s)
-                           else float(rate_tau_s))
-        if not 0 < gate_prob < 1:
-            raise EstimationError(f"gate_prob must be in (0, 1), got {gate_prob}")
+        tau = _time_constant("rate_tau_s", rate_tau_s)
+        self.rate_tau_s = None if math.isinf(tau) else tau
         self.sigma_meas_deg = float(sigma_meas_deg)
         self.sigma_accel_dps2 = float(sigma_accel_dps2)
-        self.gate_prob = float(gate_prob)
+        self.gate_prob = _gate_prob(gate_prob)
         self.max_rejects = whole_number("max_rejects", max_rejects, error=EstimationError)
         self.init_rate_sigma_dps = float(init_rate_sigma_dps)
         self.elevation_accel_ratio = float(elevation_accel_ratio)
@@ -494,7 +538,8 @@ class DirectionKalman(_Kalman):
         cand = _clean_candidates((az, el), None)
         if not cand:
             raise EstimationError(f"a gate distance needs a finite azimuth, got {az!r}")
-        z, H, Rm, wrap = self._parts(*cand[0], R, delay_s)
+        Rm = None if R is None else _covariance(R, 2)
+        z, H, Rm, wrap = self._parts(*cand[0], Rm, _delay(delay_s))
         return self._innovation(z, H, Rm, wrap)[2]
 
     def update(self, t: float, measurement: tuple[float, float | None] | None = None,
@@ -564,9 +609,7 @@ class DirectionKalman(_Kalman):
         if sigma_meas_deg is not None:
             s_az, s_el = _sigma_pair(sigma_meas_deg)
             Rf = np.diag([s_az**2, s_el**2])
-        if not math.isfinite(delay_s):
-            raise EstimationError(f"delay_s must be a finite number of seconds, got {delay_s!r}")
-        return Rf, delay_s
+        return Rf, _delay(delay_s)
 
     def _nearest(self, cands: list[tuple[float, float | None]], Rf: NDArray | None,
                  delay_s: float) -> tuple:
@@ -733,25 +776,28 @@ class DirectionIMM:
             raise EstimationError("angle_noise_ratio must be a finite number >= 0 (1/s), got "
                                   f"{angle_noise_ratio!r}")
         self.angle_noise_ratio = float(angle_noise_ratio)
-        try:  # (a single number raised a TypeError)
-            qs = np.array([float(q) for q in sigma_accel_dps2])
-        except (TypeError, ValueError):
+        try:  # (a single number raised a TypeError; text such as "50" was read as 50)
+            items = list(sigma_accel_dps2)
+        except TypeError:
+            items = None
+        if items is None or not all(isinstance(q, float | np.floating) or is_real(q)
+                                    for q in items):
             raise EstimationError("sigma_accel_dps2 of an IMM is one angular acceleration noise "
-                                  f"per mode (deg/s^2), e.g. (50, 2000); got {sigma_accel_dps2!r}"
-                                  ) from None
+                                  f"per mode (deg/s^2), e.g. (50, 2000); got {sigma_accel_dps2!r}")
+        qs = np.array([float(q) for q in items])
         if qs.size < 2:
             raise EstimationError("an IMM needs at least two modes (sigma_accel_dps2)")
         if not np.all(np.isfinite(qs) & (qs > 0)):
             raise EstimationError(f"every mode's sigma_accel_dps2 must be a finite number > 0, "
                                   f"got {qs.tolist()}")
-        if not mode_dwell_s > 0:
-            raise EstimationError(f"mode_dwell_s must be > 0 s, got {mode_dwell_s}")
+        # (inf: the modes never switch)
+        dwell = _time_constant("mode_dwell_s", mode_dwell_s, none=False)
         # the mixture, as a filter object: association, gate and read-out reuse its methods;
         # the modes themselves are stacked arrays, so that one numpy call steps all of them
         self._mix = DirectionKalman(sigma_meas_deg, float(qs[0]), gate_prob, max_rejects,
                                     init_rate_sigma_dps, elevation_accel_ratio, rate_tau_s)
         self.sigma_accel_dps2 = qs
-        self.mode_dwell_s = float(mode_dwell_s)
+        self.mode_dwell_s = dwell
         self.max_rejects = whole_number("max_rejects", max_rejects, error=EstimationError)
         self._tpm_cache: dict[float, NDArray] = {}
         self._model_cache: dict[float, tuple[NDArray, NDArray]] = {}
@@ -1000,6 +1046,7 @@ def track_directions(t: ArrayLike, azimuth_deg: ArrayLike, elevation_deg: ArrayL
     if not (tt.shape == az.shape == el.shape == ok.shape) or tt.ndim != 1:
         raise EstimationError("t, azimuth_deg, elevation_deg and valid must be equal 1-D arrays")
     ok = ok & np.isfinite(az)
+    _unknown_settings(DirectionKalman, params)
     kf = DirectionKalman(**params)
     n = tt.size
     out_az, out_el = np.full(n, np.nan), np.full(n, np.nan)
@@ -1111,10 +1158,8 @@ class MotionKalman(_Kalman):
         for name, v in (("sigma_meas_m", sigma_meas_m),
                         ("init_vel_sigma", init_vel_sigma), ("init_acc_sigma", init_acc_sigma)):
             _positive(name, v)
-        try:
-            jerk = None if isinstance(sigma_jerk, str) else np.asarray(sigma_jerk, dtype=float)
-        except (TypeError, ValueError):
-            jerk = None
+        # (True was read as 1 m/s^2)
+        jerk = np.asarray(sigma_jerk, dtype=float) if real_entries(sigma_jerk) else None
         if jerk is None or jerk.shape not in ((), (3,)):
             raise EstimationError(f"sigma_jerk must be one number or three (x, y, z), m/s^3, "
                                   f"got {sigma_jerk!r}")
@@ -1122,12 +1167,11 @@ class MotionKalman(_Kalman):
             _positive("sigma_jerk", v)
         if accel_tau_s is not None:
             _positive("accel_tau_s", accel_tau_s)
-        if not 0 < gate_prob < 1:  # (NaN or 1.5 made the gate NaN: every fix was accepted)
-            raise EstimationError(f"gate_prob must be in (0, 1), got {gate_prob}")
         self.accel_tau_s = accel_tau_s
         self.sigma_meas_m = float(sigma_meas_m)
         self.sigma_jerk = float(jerk) if jerk.ndim == 0 else tuple(float(v) for v in jerk)
-        self.gate_prob = float(gate_prob)
+        # (NaN or 1.5 made the gate NaN: every fix was accepted)
+        self.gate_prob = _gate_prob(gate_prob)
         self.max_rejects = whole_number("max_rejects", max_rejects, error=EstimationError)
         self.init_vel_sigma = float(init_vel_sigma)
         self.init_acc_sigma = float(init_acc_sigma)
@@ -1208,7 +1252,22 @@ class MotionKalman(_Kalman):
         nearest the prediction (Mahalanobis) is used. Returns True when a fix was fused."""
         self.predict(t)
         cands = [] if position is None else [(position, R)]
-        cands += list(candidates or [])
+        try:  # (a number raised a builtin TypeError)
+            extra = [] if candidates is None else list(candidates)
+        except TypeError:
+            extra = None
+        for c in extra or []:
+            try:
+                pair = len(c) == 2
+            except TypeError:
+                pair = False
+            if not pair:  # ([x, y, z] alone raised a builtin "too many values to unpack")
+                extra = None
+                break
+        if extra is None:
+            raise EstimationError("candidates must be a list of (position [x, y, z] in metres, R "
+                                  f"3x3 in m^2 or None), got {candidates!r:.80}")
+        cands += extra
         opts = []
         for pos, Rc in cands:
             if not real_entries(pos):  # (text such as "1" was read as 1 m, True as 1 m)
@@ -1259,8 +1318,9 @@ class MotionKalman(_Kalman):
         unchanged. The state to report at ``t`` when the last fix is older (e.g. one applied
         after a detector's latency, at its capture time). For ``t`` at or before the last
         update, or without a track, the copy holds the current state."""
+        t = _finite_time(t)  # (without a track "x" returned a copy)
         c = copy.copy(self)  # (predict rebinds x, P, F, Q and t: the arrays are not shared)
-        if self.initialized and self.t is not None and _finite_time(t) > self.t:
+        if self.initialized and self.t is not None and t > self.t:
             c.predict(t)
         return c
 
@@ -1282,6 +1342,7 @@ def track_positions(t: ArrayLike, positions: ArrayLike, R: ArrayLike | None = No
             raise EstimationError(f"R must be one 3x3 covariance or one per frame (n, 3, 3) "
                                   f"in m^2, got shape {Ra.shape} for {tt.size} frames")
         Rs = np.broadcast_to(Ra, (tt.size, 3, 3))
+    _unknown_settings(MotionKalman, params)
     kf = MotionKalman(**params)
     n = tt.size
     pos, vel, acc = (np.full((n, 3), np.nan) for _ in range(3))
