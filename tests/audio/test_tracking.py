@@ -1016,3 +1016,27 @@ def test_settings_and_frame_arguments_that_are_not_numbers_are_estimation_errors
                         ).mode_dwell_s == float("inf")
     assert MotionKalman(sigma_jerk=np.array([2.0, 2.0, 0.1])).sigma_jerk == (2.0, 2.0, 0.1)
     assert track_directions([0.0, 0.1], [10.0, 11.0], sigma_meas_deg=2.0).accepted.all()
+
+
+@pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
+def test_a_refused_update_leaves_the_tracker_as_it_was(cls):
+    """The IMM set its azimuth random walk from a call's noise before refusing the call for its
+    time (P_az after the next coasting frame 414 instead of 5.7 deg^2), and the single filter
+    predicted to a call's time before refusing its noise (a later frame at an earlier time was
+    then "time going backwards"). Ground truth: a twin that never saw the refused calls."""
+    kw = {"angle_noise_ratio": 8.0} if cls is DirectionIMM else {}
+    k, twin = cls(**kw), cls(**kw)
+    for f in (k, twin):
+        for n in range(10):
+            f.update(n * DT, (10.0 + n, None), sigma_meas_deg=2.0)
+    with pytest.raises(EstimationError, match="backwards"):
+        k.update(0.0, (10.0, None), sigma_meas_deg=40.0)
+    for bad in ({"sigma_meas_deg": -1.0}, {"delay_s": "x"}, {"candidates": 5}):
+        with pytest.raises(EstimationError):
+            k.update(1.0, (10.0, None), **bad)
+    assert k.t == twin.t
+    for f in (k, twin):
+        assert not f.update(10 * DT, None)  # coasting
+        assert f.update(11 * DT, (21.0, None), sigma_meas_deg=2.0)
+    np.testing.assert_array_equal(k.x, twin.x)
+    np.testing.assert_array_equal(k.P, twin.P)

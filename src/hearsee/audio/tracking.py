@@ -572,11 +572,13 @@ class DirectionKalman(_Kalman):
             missing or its measurement fell outside the gate. A track whose prediction has
             lost the direction (:attr:`lost`) starts anew at the measurement.
         """
-        self.predict(t)
+        # every argument checked before the track changes (a refused call had predicted it
+        # to its time; and the first frame's noise and delay were taken unchecked)
         cands = _clean_candidates(measurement, candidates)
+        Rf, delay_s = self._frame_noise(sigma_meas_deg, delay_s) if cands else (None, 0.0)
+        self.predict(t)
         if not cands:
             return False
-        Rf, delay_s = self._frame_noise(sigma_meas_deg, delay_s)  # (the first frame's too)
         if not self.initialized or self.lost:
             self._start(*cands[0], Rf)
             return True
@@ -933,9 +935,12 @@ class DirectionIMM:
                sigma_meas_deg: float | tuple[float, float] | None = None,
                delay_s: float = 0.0) -> bool:
         """One frame; arguments and return value as :meth:`DirectionKalman.update`."""
+        # every argument checked before the tracker changes (a call refused for its time had
+        # set the random walk's _angle_q from its noise)
         t = _finite_time(t)
         cands = _clean_candidates(measurement, candidates)
         Rf, delay_s = self._mix._frame_noise(sigma_meas_deg, delay_s) if cands else (None, 0.0)
+        dt = _time_step(float(self._mix.t), t) if self.initialized else 0.0
         if self.angle_noise_ratio and cands:  # this frame's measurement sets the random walk
             s_az = math.sqrt(Rf[0, 0]) if Rf is not None else self._mix.sigma_meas_deg
             self._angle_q = self.angle_noise_ratio * s_az**2
@@ -945,7 +950,6 @@ class DirectionIMM:
                 return True
             self._mix.t = float(t)
             return False
-        dt = _time_step(float(self._mix.t), float(t))
         # mixing: each mode restarts from the blend of all modes it may have come from
         T = self._tpm(dt)
         c = T.T @ self.mu  # predicted mode probabilities
