@@ -157,3 +157,23 @@ def test_pair_matrix_checks_its_arguments_as_the_filter_does():
         ItdKalman(3, pairs=[(0.7, 1.9), (0, 2)])
     np.testing.assert_array_equal(pair_matrix(3, [(0, 1), (1, 2), (0, 2)], ref=0),
                                   [[-1, 0], [1, -1], [0, -1]])
+
+
+def test_no_state_is_reported_before_the_first_measurement():
+    """pair_tdoas() and x returned the prior's zeros (broadside, 0 s) before any measurement, as
+    if estimated; they refuse now, as the direction trackers' gate_distance does without a
+    track. Missing frames do not start the filter; the first measurement does (ground truth:
+    the TDOAs it was given)."""
+    from hearsee.errors import EstimationError
+
+    kf = ItdKalman(3, q_std_s=1e-6, r_std_s=2e-5)
+    for _ in range(2):
+        with pytest.raises(EstimationError, match="before its first measurement"):
+            kf.pair_tdoas()
+        with pytest.raises(EstimationError, match="before its first measurement"):
+            _ = kf.x
+        assert kf.step(None) is False and not kf.initialized
+    assert kf.P.shape == (2, 2)  # the prior's covariance stays readable
+    assert kf.step([1e-4, 2e-4, 1e-4])
+    np.testing.assert_allclose(kf.pair_tdoas(), [1e-4, 2e-4, 1e-4], atol=1e-12)
+    np.testing.assert_allclose(kf.x, [-1e-4, -2e-4], atol=1e-12)

@@ -36,7 +36,7 @@ from scipy.stats import chi2
 from hearsee.audio.arrays import check_pairs, pair_matrix
 from hearsee.audio.localize import as_tdoas, check_real_tdoas
 from hearsee.config import is_real, whole_number
-from hearsee.errors import ConfigError, GeometryError
+from hearsee.errors import ConfigError, EstimationError, GeometryError
 
 __all__ = ["ItdKalman", "pair_matrix"]
 
@@ -124,7 +124,11 @@ class ItdKalman:
     # textbook views
     @property
     def x(self) -> NDArray:
-        """State: ``t_k - t_ref`` for k != ref, seconds."""
+        """State: ``t_k - t_ref`` for k != ref, seconds. An EstimationError before the first
+        measurement (:attr:`initialized`): there is no estimate yet (the prior's zeros read
+        as a source at broadside)."""
+        if not self.initialized:
+            raise EstimationError("the ITD filter has no state before its first measurement")
         return self.kf.x.reshape(-1)
 
     @property
@@ -133,7 +137,8 @@ class ItdKalman:
         return self.kf.P
 
     def pair_tdoas(self, pairs: Sequence[tuple[int, int]] | None = None) -> NDArray:
-        """TDOAs ``t_i - t_j`` (seconds) of any pairs, from the state."""
+        """TDOAs ``t_i - t_j`` (seconds) of any pairs, from the state; an EstimationError
+        before the first measurement (see :attr:`x`)."""
         prs = self.pairs if pairs is None else list(pairs)
         return pair_matrix(self.n_mics, prs, self.ref) @ self.x
 
