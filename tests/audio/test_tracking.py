@@ -1040,3 +1040,11 @@ def test_a_refused_update_leaves_the_tracker_as_it_was(cls):
         assert f.update(11 * DT, (21.0, None), sigma_meas_deg=2.0)
     np.testing.assert_array_equal(k.x, twin.x)
     np.testing.assert_array_equal(k.P, twin.P)
+
+
+def test_sigma_jerk_error_states_its_documented_unit():
+    """The message said m/s^3 (a jerk); sigma_jerk is the acceleration's increment per update
+    step in m/s^2 (the docstring since 2026-12-01)."""
+    for bad in ("a", True, (1.0, 2.0)):
+        with pytest.raises(EstimationError, match=r"increment per update step, m/s\^2"):
+            MotionKalman(sigma_jerk=bad)

@@ -1165,8 +1165,9 @@ class MotionKalman(_Kalman):
         # (True was read as 1 m/s^2)
         jerk = np.asarray(sigma_jerk, dtype=float) if real_entries(sigma_jerk) else None
         if jerk is None or jerk.shape not in ((), (3,)):
-            raise EstimationError(f"sigma_jerk must be one number or three (x, y, z), m/s^3, "
-                                  f"got {sigma_jerk!r}")
+            raise EstimationError("sigma_jerk must be one number or three (x, y, z): the "
+                                  "acceleration's increment per update step, m/s^2, got "
+                                  f"{sigma_jerk!r}")
         for v in jerk.reshape(-1):
             _positive("sigma_jerk", v)
         if accel_tau_s is not None:

@@ -168,11 +168,17 @@ class Update:
     (``ray_measurements="fix"``) and 0.78 / 0.76 (``motion_model="ca"``). ``raw_*``
     are this frame's own measurements (None when the frame gave none):
     ``raw_azimuth_deg``/``raw_elevation_deg`` the direction of its own GCC TDOAs, also with
-    ``itd_filter`` (the ITD-filtered TDOAs' direction, which the tracker
-    receives, is ``itd_azimuth_deg``/``itd_elevation_deg``: None without ``itd_filter`` and
-    on frames whose TDOAs the filter did not take -- none, or rejected by its gate, which then
-    give the trackers no measurement of their own); ``latency_s`` is the wall-clock time from
-    the arrival of the block that completed the frame to the update.
+    ``itd_filter``; ``itd_azimuth_deg``/``itd_elevation_deg`` the direction of the
+    ITD-filtered TDOAs (None without ``itd_filter`` and on frames whose TDOAs the filter did
+    not take -- none, or rejected by its gate). Neither is necessarily what the direction
+    tracker receives: it takes the frame's own direction (the ITD-filtered one with
+    ``itd_filter``) only from a confident frame (``StreamConfig.prefer_frame``, or a GCC
+    confidence of at least ``prefer_frame_confidence``) or with ``spectrum_alpha=0``; with
+    the default ``spectrum_alpha`` (0.5) any other frame gives it the smoothed steered
+    response's candidate (with its age as measurement delay) or nothing, and ``measured``
+    says whether it took a measurement. (Until 2026-12-02 this said the tracker receives
+    ``itd_*``.) ``latency_s`` is the wall-clock time from the arrival of the block that
+    completed the frame to the update.
     """
 
     t: float
