@@ -226,8 +226,11 @@ def test_stereo_routines_refuse_a_skewed_camera(synthetic, corners):
         rig.rectify()
     with pytest.raises(CalibrationError, match="skewed"):
         C.calibrate_stereo(lp, rp, obj, truth.left, right)
-    # an already rectified rig too: its remap would drop the skew just the same
-    pinhole = Camera(K=K, width=320, height=240)
+    # an already rectified rig too: its remap would drop the skew just the same (square
+    # pixels: with fx != fy a rig is not already rectified)
+    Ksq = K.copy()
+    Ksq[1, 1] = Ksq[0, 0]
+    pinhole = Camera(K=Ksq, width=320, height=240)
     rectified = StereoRig(pinhole, pinhole, np.eye(3), np.array([-0.1, 0.0, 0.0]))
     assert rectified.is_rectified
     with pytest.raises(CalibrationError, match="skewed"):

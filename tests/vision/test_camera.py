@@ -144,6 +144,48 @@ def test_ideal_rig_rectification_and_depth_formula():
     np.testing.assert_allclose(h[:3] / h[3], X[0], atol=1e-9)
 
 
+@pytest.mark.parametrize("cam", [Camera.from_fov(60.0, 640, 480, vfov_deg=40.0),
+                                 Camera(K=K, width=640, height=480)])
+def test_ideal_rig_with_non_square_pixels_recovers_y(cam):
+    """An ideal rig with fx != fy took the identity shortcut with the left K as is: Q's
+    Y = (v - cy) B / d assumes fx = fy, so Y came out fx / fy times too large (-0.476 m for a
+    true -0.40 m at fx 554 / fy 659; 1 % with fx 500 / fy 505). Ground truth: the raw pixels
+    of a known point, taken through OpenCV's own undistortPoints with the rig's R1/P1, R2/P2,
+    then Q and R1^T back to the left frame."""
+    rig = StereoRig.ideal(cam, 0.12)
+    rect = rig.rectification
+    X = np.array([[0.3, -0.4, 2.5], [-0.5, 0.6, 4.0]])
+    ul = cam.project(X)
+    ur = rig.right.project(rig.left_to_right(X))
+    pl = cv2.undistortPoints(ul.reshape(-1, 1, 2), cam.K, None, R=rect.R1, P=rect.P1)
+    pr = cv2.undistortPoints(ur.reshape(-1, 1, 2), cam.K, None, R=rect.R2, P=rect.P2)
+    pl, pr = pl.reshape(-1, 2), pr.reshape(-1, 2)
+    np.testing.assert_allclose(pl[:, 1], pr[:, 1], atol=1e-9)  # same rows
+    d = pl[:, 0] - pr[:, 0]
+    np.testing.assert_allclose(d, rect.focal_px * 0.12 / X[:, 2], rtol=1e-12)
+    h = np.c_[pl, d, np.ones(len(d))] @ rect.Q.T
+    np.testing.assert_allclose((h[:, :3] / h[:, 3:]) @ rect.R1, X, atol=1e-9)
+    # Y from the rectified camera's one focal length (humans' expected rows): the truth too
+    np.testing.assert_allclose((pl[:, 1] - rect.cy) / rect.focal_px * X[:, 2], X[:, 1],
+                               atol=1e-9)
+    assert rect.camera.fx == rect.camera.fy == rect.focal_px
+    assert not rig.is_rectified  # (non-square pixels: the images need resampling)
+
+
+def test_ideal_rig_shortcut_q_is_the_square_pixel_formula():
+    """With square pixels the identity shortcut stays: R1 = R2 = I, P1 = [K | 0] and
+    Q = [[1, 0, 0, -cx], [0, 1, 0, -cy], [0, 0, 0, f], [0, 0, 1 / B, 0]] exactly."""
+    cam = Camera.from_fov(60.0, 640, 480)
+    rig = StereoRig.ideal(cam, 0.12)
+    assert rig.is_rectified
+    rect = rig.rectification
+    f = cam.fx
+    np.testing.assert_array_equal(rect.R1, np.eye(3))
+    np.testing.assert_array_equal(rect.P1[:, :3], cam.K)
+    np.testing.assert_array_equal(rect.Q, [[1, 0, 0, -cam.cx], [0, 1, 0, -cam.cy], [0, 0, 0, f],
+                                           [0, 0, 1 / 0.12, 0]])
+
+
 def test_general_rig_rectification_matches_opencv():
     cam = Camera(K=K, dist=[-0.1, 0.01, 0.0, 0.0], width=640, height=480)
     R = cv2.Rodrigues(np.array([0.01, -0.02, 0.005]))[0]

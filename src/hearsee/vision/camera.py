@@ -674,10 +674,18 @@ class StereoRig:
     @property
     def is_rectified(self) -> bool:
         """True when images need no rectification: no distortion, identical K and size,
-        R = I and T along x (so disparity is purely horizontal)."""
+        square pixels (``fx == fy`` to 1e-9, as OpenCV's rectified cameras have), R = I and T
+        along x (so disparity is purely horizontal).
+
+        A pair of ideal cameras with ``fx != fy`` (``Camera.from_fov(..., vfov_deg=...)``) is
+        not: its rectification (``cv2.stereoRectify``) resamples to square pixels, the form
+        :attr:`Rectification.focal_px` and ``Q`` assume (kept as is, Y = (v - cy) B / d came
+        out fx / fy times too large: -0.476 m for a true -0.40 m)."""
+        fx, fy = self.left.K[0, 0], self.left.K[1, 1]
         return bool(
             not self.left.has_distortion and not self.right.has_distortion
             and np.allclose(self.left.K, self.right.K) and self.left.size == self.right.size
+            and abs(fx - fy) <= 1e-9 * fx
             and np.allclose(self.R, np.eye(3), atol=1e-9)
             and abs(self.T[1]) < 1e-9 * self.baseline_m and abs(self.T[2]) < 1e-9 * self.baseline_m
         )
@@ -691,11 +699,13 @@ class StereoRig:
         """``cv2.stereoRectify`` (CALIB_ZERO_DISPARITY) of this rig.
 
         ``alpha`` in [0, 1]: 0 keeps only valid pixels, 1 keeps all source pixels. ``size`` is
-        the output (w, h), default the left image size. For an already rectified rig the result
-        is the identity with the left K. A NaN or out-of-range ``alpha`` and a size that is
-        not two whole numbers > 0 are a ConfigError (they reached OpenCV unchecked: an alpha
-        of NaN or 5 and a size of (0, 0) gave a rectification without a word); a rig whose
-        cameras are not side by side (``|T_x|`` not T's largest component) a CalibrationError.
+        the output (w, h), default the left image size. For an already rectified rig
+        (:attr:`is_rectified`: square pixels among others) the result is the identity with the
+        left K; ``Q`` maps ``[u v d 1]`` (pixels) to the rectified left frame (metres). A NaN
+        or out-of-range ``alpha`` and a size that is not two whole numbers > 0 are a
+        ConfigError (they reached OpenCV unchecked: an alpha of NaN or 5 and a size of (0, 0)
+        gave a rectification without a word); a rig whose cameras are not side by side
+        (``|T_x|`` not T's largest component) a CalibrationError.
         """
         finite_number("alpha", alpha, 0.0, 1.0)
         if size is not None:
@@ -726,7 +736,8 @@ class StereoRig:
             P2 = P1.copy()
             P2[0, 3] = self.T[0] * K[0, 0]
             f, B = K[0, 0], -self.T[0]
-            Q = np.array([[1, 0, 0, -K[0, 2]], [0, 1, 0, -K[1, 2]], [0, 0, 0, f],
+            a = f / K[1, 1]  # 1 (to 1e-9: is_rectified): Y = (v - cy) Z / fy exactly
+            Q = np.array([[1, 0, 0, -K[0, 2]], [0, a, 0, -K[1, 2] * a], [0, 0, 0, f],
                           [0, 0, 1.0 / B, 0]], dtype=float)
             roi = (0, 0, self.left.width, self.left.height)
             return Rectification(np.eye(3), np.eye(3), P1, P2, Q, self.left.size, roi, roi)
