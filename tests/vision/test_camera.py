@@ -76,6 +76,40 @@ def test_pixel_rays_of_pixels_far_outside_the_image_are_unit_rays_or_refused():
                                atol=1e-12)
 
 
+def test_pixel_rays_past_the_lens_fold_are_refused_and_near_it_exact():
+    """A 640x480 camera, f 520 px, k1 = -0.28: the radial map rd = r (1 + k1 r^2) peaks at
+    r_f = 1 / sqrt(-3 k1) = 1.0911 with rd_max = 2 r_f / 3 = 0.7274, below the corners'
+    0.768: no direction reaches them, yet OpenCV's ray for pixel (0, 0) reprojected 21.9 px
+    away (2164 such pixels), and directions at 0.95-0.999 r_f came back up to 0.34 deg off."""
+    f, k1 = 520.0, -0.28
+    cam = Camera(np.array([[f, 0, 319.5], [0, f, 239.5], [0, 0, 1]]), [k1, 0, 0, 0], 640, 480)
+    r_f = 1.0 / np.sqrt(-3.0 * k1)
+    rd_max = 2.0 * r_f / 3.0
+    with pytest.raises(GeometryError, match=r"pixel \(0, 0\) of the 640x480 image is beyond"):
+        cam.pixel_rays([[320.0, 240.0], [0.0, 0.0]])
+    u, v = np.meshgrid(np.arange(640.0), np.arange(480.0))
+    uv = np.c_[u.ravel(), v.ravel()]
+    rd = np.hypot(uv[:, 0] - 319.5, uv[:, 1] - 239.5) / f
+    rays = cam.pixel_rays(uv, unreachable="nan")
+    lost = np.isnan(rays).any(axis=1)
+    assert np.array_equal(lost, np.isnan(cam.normalized(uv)).any(axis=1))
+    assert np.all(lost[rd > rd_max + 1e-9]) and not np.any(lost[rd < rd_max - 1e-6])
+    assert lost.sum() > 2000
+    np.testing.assert_allclose(cam.project(rays[~lost]), uv[~lost], rtol=0, atol=1e-6)
+    assert np.all(cam.in_lens_field(rays[~lost]))
+    # directions just inside the fold: recovered exactly
+    rng = np.random.default_rng(1)
+    r = rng.uniform(0.95, 0.999, 300) * r_f
+    a = rng.uniform(0.0, 2 * np.pi, 300)
+    P = np.c_[r * np.cos(a), r * np.sin(a), np.ones_like(r)]
+    px = cam.project(P)
+    back = cam.pixel_rays(px)
+    np.testing.assert_allclose(back, P / np.linalg.norm(P, axis=1, keepdims=True), atol=1e-9)
+    np.testing.assert_allclose(cam.project(back), px, rtol=0, atol=1e-6)
+    with pytest.raises(GeometryError, match="unreachable must be"):
+        cam.pixel_rays(px, unreachable="zero")
+
+
 def test_points_behind_camera_are_nan_and_in_image_mask():
     cam = Camera.from_fov(90.0, 640, 480)
     uv = cam.project([[0.0, 0.0, -1.0], [0.0, 0.0, 1.0], [10.0, 0.0, 1.0]])
@@ -351,12 +385,29 @@ def test_skewed_camera_project_and_normalized_invert_each_other(dist):
 
 @pytest.mark.parametrize("dist", SKEW_DISTS[1:])
 def test_without_skew_normalized_is_opencv_bit_for_bit(dist):
+    """Where OpenCV's own answer maps back onto its pixel (1e-9 px) inside the lens field,
+    normalized is that answer bit for bit. Elsewhere (the rational lens folds at r = 1.47:
+    13 of these pixels outside the image have no ray, and OpenCV's reprojected up to 41 px
+    away; 18 more stopped early, up to 0.027 px off) it is the ray that maps back to 1e-9 px,
+    or NaN where OpenCV's answer was wrong."""
     cam = Camera(K=K, dist=np.array(dist), width=640, height=480)
     rng = np.random.default_rng(3)
     uv = np.c_[rng.uniform(-40, 680, 500), rng.uniform(-40, 520, 500)]
     crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-10)
     ref = cv2.undistortPointsIter(uv.reshape(-1, 1, 2), K, np.array(dist), None, None, crit)
-    np.testing.assert_array_equal(cam.normalized(uv), ref.reshape(-1, 2))
+    ref = ref.reshape(-1, 2)
+    got = cam.normalized(uv)
+
+    def reprojection_px(xy, at):
+        return np.linalg.norm(cam.project(np.c_[xy, np.ones(len(xy))]) - at, axis=1)
+
+    ref_ok = ((reprojection_px(ref, uv) <= 1e-9)
+              & cam.in_lens_field(np.c_[ref, np.ones(len(ref))]))
+    np.testing.assert_array_equal(got[ref_ok], ref[ref_ok])
+    found = np.isfinite(got).all(axis=1)
+    assert np.all(reprojection_px(got[found], uv[found]) < 1e-9)
+    assert np.all(cam.in_lens_field(np.c_[got[found], np.ones(found.sum())]))
+    assert not np.any(ref_ok & ~found)
 
 
 def test_read_opencv_yaml_skips_what_it_does_not_read(tmp_path):

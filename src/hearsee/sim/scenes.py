@@ -856,8 +856,12 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     disparity, thermal images and per-entity ground truth. Deterministic from ``spec.seed``.
 
     The rig must be rectified (identical distortion-free cameras, right camera at +B on x) and
-    carry a thermal camera. ``noise_std`` is the standard deviation of the stereo images'
-    Gaussian pixel noise (grey levels of 0..255, finite and >= 0; else a ConfigError).
+    carry a thermal camera whose lens model reaches every pixel of its image (a distortion
+    that folds back before the corners, e.g. k1 = -0.45 at f 60 px for 160x120, leaves
+    pixels no direction projects to: :meth:`Camera.pixel_rays`' GeometryError names the
+    first; their rays were wrong and rendered without a word). ``noise_std`` is the standard
+    deviation of the stereo images' Gaussian pixel noise (grey levels of 0..255, finite and
+    >= 0; else a ConfigError).
 
     ``view`` = ``(R, C)`` places the left camera in the scene's frame (the frame the entities
     and the room are written in): ``R`` rotates scene-frame vectors into the left optical frame

@@ -641,6 +641,12 @@ def calibrate_thermal_extrinsics(rig: StereoRig, thermal: Camera,
                     "directions (all at one point, or not finite): no pose can be fitted")
         if rp is not None:
             X = _triangulate(rig, lp, rp)
+            if not np.all(np.isfinite(X)):  # (they were triangulated from wrong rays)
+                raise CalibrationError(
+                    f"view {i}: corners of the left or right image lie beyond the reach of "
+                    "that camera's lens model (its distortion folds back before them: "
+                    "Camera.normalized gives NaN); recalibrate the rig with a lens model that "
+                    "covers the whole image")
         else:
             Rb, tb = _board_pose(rig.left, obj, lp)
             X = obj @ Rb.T + tb
@@ -696,7 +702,9 @@ def calibrate_thermal_extrinsics(rig: StereoRig, thermal: Camera,
 
 
 def _triangulate(rig: StereoRig, lp: NDArray, rp: NDArray) -> NDArray:
-    """3D points (N, 3) in the left optical frame from undistorted stereo correspondences."""
+    """3D points (N, 3) in the left optical frame (metres) from stereo correspondences
+    (pixels); NaN rows for pixels a camera's lens model cannot reach
+    (:meth:`Camera.normalized`)."""
     xl = rig.left.normalized(np.asarray(lp, float).reshape(-1, 2))
     xr = rig.right.normalized(np.asarray(rp, float).reshape(-1, 2))
     P1 = np.hstack([np.eye(3), np.zeros((3, 1))])
@@ -765,13 +773,16 @@ def render_chessboard(camera: Camera, R_board: NDArray, t_board: NDArray,
 
 
 def _subpixel_rays(camera: Camera, k: int = 4) -> NDArray:
-    """Unit rays (H, W, k*k, 3) through a k x k grid inside every pixel."""
+    """Unit rays (H, W, k*k, 3) (optical frame) through a k x k grid inside every pixel; NaN
+    where no direction of the lens field reaches the sub-pixel (a distortion that folds back
+    before the image corners: :meth:`Camera.pixel_rays`), which :func:`render_chessboard`
+    draws as background."""
     off = (np.arange(k) + 0.5) / k - 0.5
     ou, ov = np.meshgrid(off, off)
     u, v = np.meshgrid(np.arange(camera.width, dtype=float), np.arange(camera.height, dtype=float))
     U = (u[..., None] + ou.ravel()).ravel()
     V = (v[..., None] + ov.ravel()).ravel()
-    rays = camera.pixel_rays(np.c_[U, V])
+    rays = camera.pixel_rays(np.c_[U, V], unreachable="nan")
     return rays.reshape(camera.height, camera.width, k * k, 3)
 
 

@@ -291,17 +291,44 @@ class Camera:
         with np.errstate(divide="ignore", invalid="ignore"):
             x = np.where(front, P[:, 0] / np.where(front, z, 1.0), np.nan)
             y = np.where(front, P[:, 1] / np.where(front, z, 1.0), np.nan)
-        if self.dist.size == 14 and np.any(self.dist[12:] != 0):  # tilted sensor: defer to OpenCV
+        if self._tilted:  # tilted sensor: defer to OpenCV
             xd = np.full(len(P), np.nan)
             yd = np.full(len(P), np.nan)
             if np.any(front):
-                # identity K: OpenCV ignores K's skew, so K is applied below
-                xyd, _ = cv2.projectPoints(P[front].reshape(-1, 1, 3), np.zeros(3), np.zeros(3),
-                                           np.eye(3), self.dist)
-                xd[front], yd[front] = xyd.reshape(-1, 2).T
+                xd[front], yd[front] = _distort_tilted(P[front], self.dist)
         else:
             xd, yd = _distort(x, y, self.dist)
         return self._pixels(xd, yd)
+
+    @property
+    def _tilted(self) -> bool:
+        """Whether the distortion has tilted-sensor terms (``tx``, ``ty``: OpenCV's own)."""
+        return self.dist.size == 14 and bool(np.any(self.dist[12:] != 0))
+
+    def _distorted(self, x: NDArray, y: NDArray) -> tuple[NDArray, NDArray]:
+        """Distorted normalised coordinates of undistorted ones ``(x, y)``: the model of
+        :meth:`project` without K."""
+        if self._tilted:
+            return _distort_tilted(np.stack([x, y, np.ones_like(x)], axis=1), self.dist)
+        return _distort(x, y, self.dist)
+
+    def _distort_with_jacobian(self, x: NDArray, y: NDArray
+                               ) -> tuple[NDArray, NDArray, NDArray]:
+        """Distorted normalised coordinates ``(xd, yd)`` of undistorted ones ``(x, y)`` (the
+        model of :meth:`project`, tilt terms included) and the Jacobian ``(N, 2, 2)``
+        ``d(xd, yd) / d(x, y)``: analytic, central differences for a tilted sensor."""
+        if not self._tilted:
+            return _distort_jacobian(x, y, self.dist)
+        f = self._distorted
+        xd, yd = f(x, y)
+        h = 1e-6 * np.maximum(1.0, np.hypot(x, y))
+        J = np.empty((len(x), 2, 2))
+        for j, (dx, dy) in enumerate(((h, 0.0), (0.0, h))):
+            xp, yp = f(x + dx, y + dy)
+            xm, ym = f(x - dx, y - dy)
+            J[:, 0, j] = (xp - xm) / (2 * h)
+            J[:, 1, j] = (yp - ym) / (2 * h)
+        return xd, yd, J
 
     def _pixels(self, xd: NDArray, yd: NDArray) -> NDArray:
         """Pixels ``(N, 2)`` of distorted normalised coordinates: ``K @ [xd, yd, 1]`` with K's
@@ -313,7 +340,19 @@ class Camera:
 
     def normalized(self, uv: ArrayLike) -> NDArray:
         """Undistorted normalised image coordinates ``(N, 2)`` (x/z, y/z in the optical frame)
-        of pixels ``(N, 2)``; the inverse of :meth:`project` (K's skew included)."""
+        of pixels ``(N, 2)``; the inverse of :meth:`project` (K's skew included).
+
+        With lens distortion: OpenCV's ``undistortPointsIter``, then each result is projected
+        back and, where it misses its pixel by more than 1e-9 px (OpenCV's fixed-point
+        iteration stops early near :func:`fold_radius`) or lies at or beyond the fold, refined
+        by Newton steps on the distortion model kept inside the fold. A pixel that still misses
+        by more than 1e-6 px has no direction within the lens field (normalised radius below
+        :func:`fold_radius`) that projects to it -- the radial model peaks below its distorted
+        radius (k1 = -0.28 at f 520 px cannot reach the corners of 640x480), or it is too far
+        out for the model's squares -- and gives NaN (OpenCV returned a point that reprojected
+        up to 200 px away). Both tolerances grow with the pixel's distance from the principal
+        point beyond 1000 px (1e-12 relative: float precision). A non-finite pixel gives NaN.
+        """
         p = _as_pixels(uv)
         if len(p) == 0:
             return np.zeros((0, 2))
@@ -324,7 +363,79 @@ class Camera:
         K0, p0 = self._without_skew(p)
         crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-10)
         xy = cv2.undistortPointsIter(p0.reshape(-1, 1, 2), K0, self.dist, None, None, crit)
-        return xy.reshape(-1, 2).astype(float)
+        return self._refine_normalized(xy.reshape(-1, 2).astype(float), p)
+
+    def _refine_normalized(self, xy: NDArray, p: NDArray) -> NDArray:
+        """Check (and Newton-refine) undistorted normalised coordinates ``xy`` ``(N, 2)`` of
+        pixels ``p`` ``(N, 2)``; NaN rows where no direction inside the lens field reaches
+        the pixel (see :meth:`normalized`)."""
+        fx, fy, s, cx, cy = self.fx, self.fy, self.K[0, 1], self.cx, self.cy
+        fold = fold_radius(self.dist)
+        yt = (p[:, 1] - cy) / fy  # target distorted normalised coordinates
+        xt = (p[:, 0] - cx - s * yt) / fx
+        scale = np.maximum(1.0, np.maximum(np.abs(p[:, 0] - cx), np.abs(p[:, 1] - cy)) / 1e3)
+        finite = np.isfinite(p).all(axis=1)
+
+        def residual_px(x: NDArray, y: NDArray, i: NDArray) -> tuple[NDArray, ...]:
+            xd, yd, J = self._distort_with_jacobian(x, y)
+            ex, ey = xt[i] - xd, yt[i] - yd
+            return np.hypot(fx * ex + s * ey, fy * ey), ex, ey, J
+
+        with np.errstate(all="ignore"):
+            x, y = xy[:, 0].copy(), xy[:, 1].copy()
+            res = np.full(len(p), np.inf)
+            idx = np.flatnonzero(finite)
+            xd, yd = self._distorted(x[idx], y[idx])
+            res[idx] = np.hypot(fx * (xt[idx] - xd) + s * (yt[idx] - yd), fy * (yt[idx] - yd))
+            inside = np.hypot(x, y) < fold
+            act = np.flatnonzero(finite & ~((res <= 1e-9 * scale) & inside))
+            if act.size:
+                # restart outside the fold (or NaN) from the distorted point, pulled inside
+                t = np.hypot(xt[act], yt[act])
+                shrink = np.minimum(1.0, 0.9 * fold / np.where(t > 0, t, 1.0))
+                redo = ~(inside[act] & np.isfinite(res[act]))
+                x[act] = np.where(redo, xt[act] * shrink, x[act])
+                y[act] = np.where(redo, yt[act] * shrink, y[act])
+                self._newton(x, y, act, res, scale, fold, residual_px)
+            ok = finite & (res <= 1e-6 * scale) & (np.hypot(x, y) < fold)
+        out = np.stack([x, y], axis=1)
+        out[~ok] = np.nan
+        return out
+
+    @staticmethod
+    def _newton(x: NDArray, y: NDArray, act: NDArray, res: NDArray, scale: NDArray,
+                fold: float, residual_px: Any, steps: int = 50) -> None:
+        """Newton iterations on the pixels ``act`` (in place on ``x``, ``y``, ``res``): each
+        step halved (up to 40 times) until it lowers the residual and stays inside ``fold``;
+        a pixel stops at 1e-12 px (times ``scale``) or when no step helps."""
+        res[act], ex, ey, J = residual_px(x[act], y[act], act)
+        for _ in range(steps):
+            keep = (res[act] > 1e-12 * scale[act]) & np.isfinite(res[act])
+            act, ex, ey, J = act[keep], ex[keep], ey[keep], J[keep]
+            if act.size == 0:
+                return
+            det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
+            dx = (J[:, 1, 1] * ex - J[:, 0, 1] * ey) / det
+            dy = (J[:, 0, 0] * ey - J[:, 1, 0] * ex) / det
+            lam = np.ones(act.size)
+            todo = np.isfinite(dx) & np.isfinite(dy)
+            moved = np.zeros(act.size, bool)
+            ex2, ey2, J2 = np.empty(act.size), np.empty(act.size), np.empty((act.size, 2, 2))
+            for _ in range(40):
+                if not todo.any():
+                    break
+                i = np.flatnonzero(todo)
+                xn, yn = x[act[i]] + lam[i] * dx[i], y[act[i]] + lam[i] * dy[i]
+                rn, exn, eyn, Jn = residual_px(xn, yn, act[i])
+                good = (rn < res[act[i]]) & (np.hypot(xn, yn) < fold)
+                g = i[good]
+                x[act[g]], y[act[g]] = xn[good], yn[good]
+                res[act[g]] = rn[good]
+                ex2[g], ey2[g], J2[g] = exn[good], eyn[good], Jn[good]
+                moved[g] = True
+                todo[g] = False
+                lam[i[~good]] *= 0.5
+            act, ex, ey, J = act[moved], ex2[moved], ey2[moved], J2[moved]
 
     def require_no_skew(self, what: str) -> None:
         """CalibrationError when ``K[0, 1] != 0``: ``what`` (an OpenCV routine that ignores the
@@ -352,23 +463,37 @@ class Camera:
         uv0[:, 0] -= s * (uv[:, 1] - self.cy) / self.fy
         return K0, uv0
 
-    def pixel_rays(self, uv: ArrayLike) -> NDArray:
+    def pixel_rays(self, uv: ArrayLike, *, unreachable: str = "raise") -> NDArray:
         """Unit viewing rays ``(N, 3)`` in the optical frame through pixels ``uv`` ``(N, 2)``
         (lens distortion removed); a NaN or infinite pixel gives no ray (NaN entries).
 
-        Every finite pixel gives a unit ray: the length is taken without overflow
-        (:func:`hearsee.geometry.norm_scale`; a pixel at u = 1e300 gave the ray [0, 0, 0] and
-        an overflow warning, now the pinhole's ray almost perpendicular to the optical axis).
-        A finite pixel the lens model cannot undistort at all (OpenCV answers NaN, from about
-        1e155 px: its squares overflow) is a GeometryError, not a NaN ray."""
+        Every finite pixel gives a unit ray that :meth:`project` maps back onto it (to 1e-6 px)
+        and that lies in the lens field (:meth:`in_lens_field`): the length is taken without
+        overflow (:func:`hearsee.geometry.norm_scale`; a pixel at u = 1e300 gave the ray
+        [0, 0, 0] and an overflow warning, now the pinhole's ray almost perpendicular to the
+        optical axis). A finite pixel no direction of the lens field projects to (see
+        :meth:`normalized`: the distortion model folds back before reaching it, e.g. the
+        corners of a 640x480 image with k1 = -0.28 at f 520 px, or its squares overflow, from
+        about 1e155 px) is a GeometryError with ``unreachable="raise"`` (OpenCV's ray for
+        pixel (0, 0) there reprojected 21.9 px away), a NaN ray with ``unreachable="nan"``:
+        the choice of callers that map whole images (rendering), where such pixels see
+        nothing."""
+        if unreachable not in ("raise", "nan"):
+            raise GeometryError(f"pixel_rays: unreachable must be 'raise' or 'nan', got "
+                                f"{unreachable!r:.40}")
         p = _as_pixels(uv)
         xy = self.normalized(p)
         lost = np.isfinite(p).all(axis=1) & ~np.isfinite(xy).all(axis=1)
-        if np.any(lost):
+        if np.any(lost) and unreachable == "raise":
             u, v = p[np.argmax(lost)]
-            raise GeometryError(f"pixel ({u:.6g}, {v:.6g}) lies too far outside the "
-                                f"{self.width}x{self.height} image for the camera model to give "
-                                "its ray")
+            where = (f"pixel ({u:.6g}, {v:.6g}) of the {self.width}x{self.height} image is "
+                     "beyond the reach of the lens model: no direction inside its field "
+                     f"(normalised radius < fold_radius = {fold_radius(self.dist):.4g}) "
+                     "projects there (the distortion folds back before it)"
+                     if self.in_image(p[np.argmax(lost)])[0] else
+                     f"pixel ({u:.6g}, {v:.6g}) lies too far outside the "
+                     f"{self.width}x{self.height} image for the camera model to give its ray")
+            raise GeometryError(where)
         rays = np.concatenate([xy, np.ones((len(xy), 1))], axis=1)
         rays = rays / norm_scale(rays)
         return rays / np.linalg.norm(rays, axis=1, keepdims=True)
@@ -497,6 +622,40 @@ def _fold_radius(c: tuple[float, ...], r_max: float) -> float:
         rd = r * (1 + k1 * r2 + k2 * r2**2 + k3 * r2**3) / (1 + k4 * r2 + k5 * r2**2 + k6 * r2**3)
         bad = ~(np.diff(rd) > 0) | ~np.isfinite(rd[1:])
     return float(r[int(np.argmax(bad))]) if bad.any() else float("inf")
+
+
+def _distort_tilted(P: NDArray, d: NDArray) -> tuple[NDArray, NDArray]:
+    """OpenCV's distortion with tilt terms of points ``(N, 3)`` (z > 0): distorted normalised
+    ``(xd, yd)`` (``cv2.projectPoints`` with an identity K: OpenCV ignores K's skew, so K is
+    applied by the caller)."""
+    if len(P) == 0:
+        return np.zeros(0), np.zeros(0)
+    xyd, _ = cv2.projectPoints(np.asarray(P, float).reshape(-1, 1, 3), np.zeros(3), np.zeros(3),
+                               np.eye(3), d)
+    return xyd.reshape(-1, 2).T
+
+
+def _distort_jacobian(x: NDArray, y: NDArray, d: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """:func:`_distort` and its Jacobian ``(N, 2, 2)`` ``d(xd, yd) / d(x, y)`` (normalised
+    coordinates; without the tilt terms)."""
+    c = np.zeros(12)
+    c[: min(d.size, 12)] = d[:12]
+    k1, k2, p1, p2, k3, k4, k5, k6, s1, s2, s3, s4 = c
+    r2 = x * x + y * y
+    r4 = r2 * r2
+    a = 1 + k1 * r2 + k2 * r4 + k3 * r4 * r2
+    b = 1 + k4 * r2 + k5 * r4 + k6 * r4 * r2
+    radial = a / b
+    da = k1 + 2 * k2 * r2 + 3 * k3 * r4
+    db = k4 + 2 * k5 * r2 + 3 * k6 * r4
+    dradial = (da * b - a * db) / (b * b)  # d radial / d r2
+    xd, yd = _distort(x, y, d)
+    J = np.empty((len(x), 2, 2))
+    J[:, 0, 0] = radial + 2 * x * x * dradial + 2 * p1 * y + 6 * p2 * x + 2 * x * (s1 + 2 * s2 * r2)
+    J[:, 0, 1] = 2 * x * y * dradial + 2 * p1 * x + 2 * p2 * y + 2 * y * (s1 + 2 * s2 * r2)
+    J[:, 1, 0] = 2 * x * y * dradial + 2 * p1 * x + 2 * p2 * y + 2 * x * (s3 + 2 * s4 * r2)
+    J[:, 1, 1] = radial + 2 * y * y * dradial + 6 * p1 * y + 2 * p2 * x + 2 * y * (s3 + 2 * s4 * r2)
+    return xd, yd, J
 
 
 def _distort(x: NDArray, y: NDArray, d: NDArray) -> tuple[NDArray, NDArray]:
