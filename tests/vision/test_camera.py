@@ -76,6 +76,20 @@ def test_pixel_rays_of_pixels_far_outside_the_image_are_unit_rays_or_refused():
                                atol=1e-12)
 
 
+@pytest.mark.parametrize("dist", [[], [-0.25, 0.08, 0.001, -0.002]])
+def test_infinite_pixels_give_all_nan_rays_without_warnings(dist):
+    """Without distortion, pixel (inf, 240) gave the ray [nan, 0, 0] and two RuntimeWarnings
+    (inf / inf, 0 / inf); a distorted camera gave [nan, nan, nan], the documented "no ray"."""
+    cam = Camera(K=K, dist=dist, width=640, height=480)
+    uv = [[np.inf, 240.0], [320.0, -np.inf], [np.inf, np.nan], [320.0, 240.0]]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rays = cam.pixel_rays(uv)
+        xy = cam.normalized(uv)
+    assert np.all(np.isnan(rays[:3])) and np.all(np.isnan(xy[:3]))
+    np.testing.assert_allclose(rays[3], [0.0, 0.0, 1.0], atol=1e-12)
+
+
 def test_pixel_rays_past_the_lens_fold_are_refused_and_near_it_exact():
     """A 640x480 camera, f 520 px, k1 = -0.28: the radial map rd = r (1 + k1 r^2) peaks at
     r_f = 1 / sqrt(-3 k1) = 1.0911 with rd_max = 2 r_f / 3 = 0.7274, below the corners'

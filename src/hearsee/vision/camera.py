@@ -351,15 +351,20 @@ class Camera:
         radius (k1 = -0.28 at f 520 px cannot reach the corners of 640x480), or it is too far
         out for the model's squares -- and gives NaN (OpenCV returned a point that reprojected
         up to 200 px away). Both tolerances grow with the pixel's distance from the principal
-        point beyond 1000 px (1e-12 relative: float precision). A non-finite pixel gives NaN.
+        point beyond 1000 px (1e-12 relative: float precision). A non-finite pixel (NaN or
+        infinite coordinate) gives a NaN row, with or without distortion.
         """
         p = _as_pixels(uv)
         if len(p) == 0:
             return np.zeros((0, 2))
         if not self.has_distortion:
-            y = (p[:, 1] - self.cy) / self.fy
-            x = (p[:, 0] - self.cx - self.K[0, 1] * y) / self.fx
-            return np.stack([x, y], axis=1)
+            with np.errstate(invalid="ignore"):  # (inf - inf, 0 * inf: rows set NaN below)
+                y = (p[:, 1] - self.cy) / self.fy
+                x = (p[:, 0] - self.cx - self.K[0, 1] * y) / self.fx
+            xy = np.stack([x, y], axis=1)
+            # (an infinite pixel gave (inf, 0): pixel_rays made it [nan, 0, 0] and warned)
+            xy[~np.isfinite(p).all(axis=1)] = np.nan
+            return xy
         K0, p0 = self._without_skew(p)
         crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-10)
         xy = cv2.undistortPointsIter(p0.reshape(-1, 1, 2), K0, self.dist, None, None, crit)
@@ -371,10 +376,11 @@ class Camera:
         the pixel (see :meth:`normalized`)."""
         fx, fy, s, cx, cy = self.fx, self.fy, self.K[0, 1], self.cx, self.cy
         fold = fold_radius(self.dist)
-        yt = (p[:, 1] - cy) / fy  # target distorted normalised coordinates
-        xt = (p[:, 0] - cx - s * yt) / fx
-        scale = np.maximum(1.0, np.maximum(np.abs(p[:, 0] - cx), np.abs(p[:, 1] - cy)) / 1e3)
         finite = np.isfinite(p).all(axis=1)
+        q = np.where(finite[:, None], p, 0.0)  # (non-finite rows: NaN at the end, no warning)
+        yt = (q[:, 1] - cy) / fy  # target distorted normalised coordinates
+        xt = (q[:, 0] - cx - s * yt) / fx
+        scale = np.maximum(1.0, np.maximum(np.abs(q[:, 0] - cx), np.abs(q[:, 1] - cy)) / 1e3)
 
         def residual_px(x: NDArray, y: NDArray, i: NDArray) -> tuple[NDArray, ...]:
             xd, yd, J = self._distort_with_jacobian(x, y)
