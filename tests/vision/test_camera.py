@@ -241,13 +241,27 @@ def test_general_rig_rectification_matches_opencv():
     assert not rig.is_rectified
     rect = rig.rectification
     assert rect.baseline_m == pytest.approx(0.1, rel=1e-3)
-    # a point projected into both rectified images lies on the same row
+    # a point projected into both rectified images lies on the same row, at the disparity
+    # f B / Z of its depth Z in the rectified frame. P2 takes rectified-LEFT-frame points
+    # (its 4th column holds the baseline): P2 [R2 X_right, 1] applied the baseline twice
+    # (d 33.5 px for a true 16.75).
     X = np.array([[0.2, 0.1, 3.0]])
     pl = rect.P1 @ np.r_[rect.R1 @ X[0], 1.0]
-    pr = rect.P2 @ np.r_[rect.R2 @ rig.left_to_right(X)[0], 1.0]
+    pr = rect.P2 @ np.r_[rect.R1 @ X[0], 1.0]
     assert pl[1] / pl[2] == pytest.approx(pr[1] / pr[2], abs=1e-6)
     d = pl[0] / pl[2] - pr[0] / pr[2]
-    assert d > 0
+    Z = (rect.R1 @ X[0])[2]
+    assert d == pytest.approx(rect.focal_px * rect.baseline_m / Z, rel=1e-12)
+    # the same from the raw distorted pixels, through OpenCV's own undistortion
+    ul = cam.project(X).reshape(-1, 1, 2)
+    ur = cam.project(rig.left_to_right(X)).reshape(-1, 1, 2)
+    crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)
+    ql = cv2.undistortPointsIter(ul, K, cam.dist, rect.R1, rect.P1, crit).reshape(2)
+    qr = cv2.undistortPointsIter(ur, K, cam.dist, rect.R2, rect.P2, crit).reshape(2)
+    assert ql[1] == pytest.approx(qr[1], abs=1e-6)
+    assert ql[0] - qr[0] == pytest.approx(rect.focal_px * rect.baseline_m / Z, abs=1e-6)
+    h = rect.Q @ np.r_[ql, ql[0] - qr[0], 1.0]
+    np.testing.assert_allclose(rect.R1.T @ (h[:3] / h[3]), X[0], atol=1e-6)
 
 
 def test_rig_roundtrip_with_thermal(tmp_path):
