@@ -19,9 +19,9 @@ import yaml
 from hearsee.errors import ConfigError, InputFileError
 
 __all__ = [
-    "all_real", "as_float_array", "check_keys", "finite_number", "input_file", "is_real",
-    "load_yaml", "number", "object_entries", "output_file", "require", "save_yaml", "time_limit",
-    "to_jsonable", "to_plain", "whole_number",
+    "YamlDumper", "all_real", "as_float_array", "check_keys", "finite_number", "input_file",
+    "is_real", "load_yaml", "number", "object_entries", "output_file", "require", "save_yaml",
+    "time_limit", "to_jsonable", "to_plain", "whole_number",
 ]
 
 
@@ -64,10 +64,19 @@ class _Loader(yaml.SafeLoader):
                     key_node.start_mark)
 
 
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
-    list("-+0123456789."))
+_EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
+_Loader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_FLOAT,
+                              list("-+0123456789."))
+
+
+class YamlDumper(yaml.SafeDumper):
+    """PyYAML's safe dumper with :class:`_Loader`'s extra float rule: a string that reader
+    would take for a number (``"2e5"``, ``"1E6"``) is written quoted. With the plain
+    SafeDumper a camera named "2e5" was saved unquoted and loaded back as 200000.0."""
+
+
+YamlDumper.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_FLOAT,
+                                 list("-+0123456789."))
 
 
 def as_path(path: Any, what: str = "path") -> Path:

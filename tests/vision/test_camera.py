@@ -749,3 +749,19 @@ def test_a_rig_of_cameras_that_do_not_look_the_same_way_is_refused():
             StereoRig(cam, cam, R, [-0.12, 0.0, 0.0])
     R = Rotation.from_euler("y", -10.0, degrees=True).as_matrix()
     assert StereoRig(cam, cam, R, [-0.12, 0.0, 0.0]).baseline_m == pytest.approx(0.12)
+
+
+def test_text_that_reads_as_a_number_is_saved_quoted(tmp_path):
+    """A camera named "2e5" was written unquoted and load_yaml (which reads 1e3 as a number,
+    YAML 1.2) loaded it as 200000.0 (load_camera(path, "2e5") then refused its own file);
+    an info serial "1E6" came back as 1000000.0."""
+    cam = Camera.from_fov(60.0, 640, 480, name="2e5")
+    save_camera(cam, tmp_path / "cam.yaml")
+    assert load_camera(tmp_path / "cam.yaml", "2e5").name == "2e5"
+    info = {"serial": "1E6", "note": "-3.5e-2", "board": "9x6", "n": 5, "eps": 1e-17}
+    rig = StereoRig(Camera(K=K, name="1e3"), Camera(K=K, name="right"), np.eye(3),
+                    [-0.1, 0.0, 0.0], info=info)
+    save_rig(rig, tmp_path / "rig.yaml")
+    back = load_rig(tmp_path / "rig.yaml")
+    assert back.info == info and back.left.name == "1e3"
+    assert type(back.info["n"]) is int and type(back.info["eps"]) is float

@@ -62,6 +62,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from hearsee.config import (
+    YamlDumper,
     as_float_array,
     check_keys,
     finite_number,
@@ -1187,7 +1188,9 @@ def save_rig(rig: StereoRig, path: str | Path) -> None:
 
 def _dump_calib_yaml(data: dict[str, Any], path: str | Path, title: str) -> None:
     """YAML with matrices written one row per line (flow style for the innermost lists)."""
-    text = yaml.safe_dump(to_plain(data), sort_keys=False, default_flow_style=None, width=100)
+    # (YamlDumper: text such as a name "2e5" is quoted, else load_yaml read it as a number)
+    text = yaml.dump(to_plain(data), Dumper=YamlDumper, sort_keys=False,
+                     default_flow_style=None, width=100)
     header = (f"# {title}\n# optical frame x right, y down, z forward; K in pixels; "
               "T in metres; X_to = R X_from + T\n")
     Path(path).write_text(header + text, encoding="utf-8")
