@@ -765,3 +765,28 @@ def test_text_that_reads_as_a_number_is_saved_quoted(tmp_path):
     back = load_rig(tmp_path / "rig.yaml")
     assert back.info == info and back.left.name == "1e3"
     assert type(back.info["n"]) is int and type(back.info["eps"]) is float
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(rms_px=np.nan), "rms_px"), (dict(rms_px=-1.0), "rms_px"), (dict(rms_px="abc"), "rms_px"),
+    (dict(rms_px="0.3"), "rms_px"), (dict(rms_px=True), "rms_px"), (dict(info=["ab"]), "info"),
+    (dict(info={"camera_height_m": np.nan}), "camera_height_m"),
+    (dict(info={"camera_height_m": -1.4}), "camera_height_m"),
+])
+def test_rig_refuses_rms_and_info_its_files_would_refuse(kw, match, tmp_path):
+    """StereoRig did not check rms_px or info: NaN / -1 and a NaN camera height made files
+    load_rig refused, rms_px "abc" was a builtin ValueError in save_rig, "0.3" was read as a
+    number and info ["ab"] was saved as {"a": "b"}."""
+    cam = Camera(K=K)
+    with pytest.raises(CalibrationError, match=match):
+        StereoRig(cam, cam, np.eye(3), [-0.1, 0.0, 0.0], **kw)
+
+
+def test_rig_with_good_rms_and_info_round_trips(tmp_path):
+    cam = Camera(K=K)
+    rig = StereoRig(cam, cam, np.eye(3), [-0.1, 0.0, 0.0], rms_px=np.float32(0.25),
+                    info={"camera_height_m": 1.4})
+    assert type(rig.rms_px) is float
+    save_rig(rig, tmp_path / "rig.yaml")
+    back = load_rig(tmp_path / "rig.yaml")
+    assert back.rms_px == 0.25 and back.camera_height_m == 1.4

@@ -740,9 +740,11 @@ class StereoRig:
     R_thermal, T_thermal : (3, 3), (3,), optional
         Thermal-from-left: ``X_thermal = R_thermal @ X_left + T_thermal`` (metres).
     rms_px : float, optional
-        RMS reprojection error of the stereo calibration (pixels), when known.
+        RMS reprojection error of the stereo calibration (pixels), when known: a finite
+        number >= 0 (else a CalibrationError, as :meth:`from_dict`'s ConfigError).
     info : dict
-        Free-form metadata saved with the rig.
+        Free-form metadata saved with the rig; ``camera_height_m`` (metres above the floor
+        of the left camera), when present, a finite number > 0 (else a CalibrationError).
     """
 
     left: Camera
@@ -775,6 +777,22 @@ class StereoRig:
             )
         object.__setattr__(self, "R", R)
         object.__setattr__(self, "T", T)
+        # (the rules of from_dict: a NaN or negative rms_px and a NaN camera height were saved
+        # into files load_rig refused; rms_px "abc" was a builtin ValueError in save_rig, "0.3"
+        # read as a number; info ["ab"] was saved as {"a": "b"})
+        if self.rms_px is not None:
+            if not (is_real(self.rms_px) and self.rms_px >= 0):
+                raise CalibrationError(
+                    f"rig rms_px must be None or a finite number of pixels >= 0 (the stereo "
+                    f"RMS reprojection error), got {self.rms_px!r:.40}")
+            object.__setattr__(self, "rms_px", float(self.rms_px))
+        if not isinstance(self.info, dict):
+            raise CalibrationError(f"rig info must be a dict (free-form metadata), got "
+                                   f"{type(self.info).__name__}")
+        try:
+            _info_camera_height(self.info, "rig info")
+        except ConfigError as exc:
+            raise CalibrationError(str(exc)) from None
         if self.thermal is not None:
             if not isinstance(self.thermal, Camera):
                 raise CalibrationError("StereoRig: thermal must be a Camera")
