@@ -790,3 +790,22 @@ def test_rig_with_good_rms_and_info_round_trips(tmp_path):
     save_rig(rig, tmp_path / "rig.yaml")
     back = load_rig(tmp_path / "rig.yaml")
     assert back.rms_px == 0.25 and back.camera_height_m == 1.4
+
+
+def test_saving_to_a_path_that_cannot_be_written_is_an_input_file_error(tmp_path):
+    """save_rig / save_camera raised builtin IsADirectoryError, FileNotFoundError and
+    TypeError (Path(path).write_text); every other writer checks with output_file first."""
+    cam = Camera(K=K)
+    rig = StereoRig.ideal(cam, 0.1)
+    for path, match in ((tmp_path, "is a folder"), (tmp_path / "no" / "rig.yaml",
+                                                     "does not exist"),
+                        (123, "must be a file name"), (None, "must be a file name")):
+        with pytest.raises(InputFileError, match=match):
+            save_rig(rig, path)
+        with pytest.raises(InputFileError, match=match):
+            save_camera(cam, path)
+    with pytest.raises(CalibrationError, match="rms_px"):
+        save_camera(cam, tmp_path / "c.yaml", rms_px="abc")
+    with pytest.raises(CalibrationError, match="StereoRig"):
+        save_rig(cam, tmp_path / "r.yaml")
+    assert not (tmp_path / "c.yaml").exists() and not (tmp_path / "r.yaml").exists()

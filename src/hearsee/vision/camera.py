@@ -69,6 +69,7 @@ from hearsee.config import (
     input_file,
     is_real,
     load_yaml,
+    output_file,
     real_entries,
     require,
     to_plain,
@@ -1184,9 +1185,17 @@ def load_camera(path: str | Path, which: str | None = None) -> Camera:
 
 
 def save_camera(camera: Camera, path: str | Path, *, rms_px: float | None = None) -> None:
-    """Write ``camera`` as a camera YAML file (see the module docstring)."""
+    """Write ``camera`` as a camera YAML file (see the module docstring); ``rms_px`` in
+    pixels. InputFileError for a path that cannot be written (checked before writing),
+    CalibrationError for a camera that is not a Camera or an rms_px that is not a finite
+    number >= 0."""
+    if not isinstance(camera, Camera):
+        raise CalibrationError(f"save_camera needs a Camera, got {type(camera).__name__}")
     d = {"kind": "camera", **camera.to_dict()}
     if rms_px is not None:
+        if not (is_real(rms_px) and rms_px >= 0):  # (text was a builtin ValueError)
+            raise CalibrationError(f"save_camera: rms_px must be None or a finite number of "
+                                   f"pixels >= 0, got {rms_px!r:.40}")
         d["rms_px"] = float(rms_px)
     _dump_calib_yaml(d, path, "hearsee camera (see hearsee.vision.camera)")
 
@@ -1200,18 +1209,25 @@ def load_rig(path: str | Path) -> StereoRig:
 
 
 def save_rig(rig: StereoRig, path: str | Path) -> None:
-    """Write ``rig`` as a stereo rig YAML file (see the module docstring)."""
+    """Write ``rig`` as a stereo rig YAML file (see the module docstring). InputFileError
+    for a path that cannot be written (checked before writing), CalibrationError for a rig
+    that is not a StereoRig."""
+    check_rig(rig, "save_rig")
     _dump_calib_yaml(rig.to_dict(), path, "hearsee stereo rig (see hearsee.vision.camera)")
 
 
 def _dump_calib_yaml(data: dict[str, Any], path: str | Path, title: str) -> None:
-    """YAML with matrices written one row per line (flow style for the innermost lists)."""
+    """YAML with matrices written one row per line (flow style for the innermost lists).
+    InputFileError (:func:`hearsee.config.output_file`) when ``path`` cannot be written: a
+    folder, a missing folder, not a path (builtin IsADirectoryError, FileNotFoundError and
+    TypeError before)."""
+    p = output_file(path)
     # (YamlDumper: text such as a name "2e5" is quoted, else load_yaml read it as a number)
     text = yaml.dump(to_plain(data), Dumper=YamlDumper, sort_keys=False,
                      default_flow_style=None, width=100)
     header = (f"# {title}\n# optical frame x right, y down, z forward; K in pixels; "
               "T in metres; X_to = R X_from + T\n")
-    Path(path).write_text(header + text, encoding="utf-8")
+    p.write_text(header + text, encoding="utf-8")
 
 
 def rig_from_opencv(intrinsics: str | Path, extrinsics: str | Path,
