@@ -809,3 +809,30 @@ def test_saving_to_a_path_that_cannot_be_written_is_an_input_file_error(tmp_path
     with pytest.raises(CalibrationError, match="StereoRig"):
         save_rig(cam, tmp_path / "r.yaml")
     assert not (tmp_path / "c.yaml").exists() and not (tmp_path / "r.yaml").exists()
+
+
+def test_dist_and_t_of_other_shapes_are_refused(tmp_path):
+    """dist and T were flattened whatever their shape: a (2, 7) dist table was read as 14
+    coefficients (its second row became thin-prism and tilt terms), a (2, 2) one as k1, k2,
+    p1, p2, and a T of shape (1, 3, 1) was taken. OpenCV's own shapes still are."""
+    d7 = np.array([[-0.1, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0] * 5 + [0.0, 0.01]])
+    for bad in (d7, np.full((2, 2), 0.01), np.zeros((1, 1, 4))):
+        with pytest.raises(CalibrationError, match="camera dist: expected one row or column"):
+            Camera(K=K, dist=bad)
+    d = [-0.1, 0.01, 0.001, 0.0, 0.002]
+    for ok in (np.array(d), np.array([d]), np.array(d).reshape(5, 1)):
+        np.testing.assert_array_equal(Camera(K=K, dist=ok).dist, d)
+    cam = Camera(K=K)
+    for bad in (np.array([-0.1, 0.0, 0.0]).reshape(1, 3, 1), np.zeros((3, 3)) - 0.1):
+        with pytest.raises(CalibrationError, match=r"rig T \(right-from-left\): expected 3"):
+            StereoRig(cam, cam, np.eye(3), bad)
+        with pytest.raises(CalibrationError, match="rig T_thermal: expected 3"):
+            StereoRig(cam, cam, np.eye(3), [-0.1, 0.0, 0.0], cam, np.eye(3), bad)
+    for ok in ([[-0.1], [0.0], [0.0]], [[-0.1, 0.0, 0.0]]):
+        np.testing.assert_array_equal(StereoRig(cam, cam, np.eye(3), ok).T, [-0.1, 0.0, 0.0])
+    # the same through a file: a nested dist table is a ConfigError naming the field
+    path = tmp_path / "cam.yaml"
+    path.write_text("width: 640\nheight: 480\nK: [[500, 0, 320], [0, 505, 240], [0, 0, 1]]\n"
+                    "dist: [[-0.1, 0.01], [0.0, 0.0]]\n")
+    with pytest.raises(ConfigError, match="dist: expected one row or column"):
+        load_camera(path)

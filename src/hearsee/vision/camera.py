@@ -136,9 +136,12 @@ def _check_rotation(R: ArrayLike, what: str) -> NDArray:
 def _check_translation(T: ArrayLike, what: str) -> NDArray:
     if not real_entries(T):
         raise CalibrationError(f"{what}: expected real numbers (metres), got {T!r:.80}")
-    T = np.array(T, dtype=float).reshape(-1)  # (a copy, as _check_rotation)
-    if T.shape != (3,) or not np.all(np.isfinite(T)):
-        raise CalibrationError(f"{what}: expected 3 finite numbers (metres), got {T.shape}")
+    T = np.array(T, dtype=float)  # (a copy, as _check_rotation)
+    if T.shape not in ((3,), (3, 1), (1, 3)) or not np.all(np.isfinite(T)):
+        # (any shape of 3 numbers was flattened: a (1, 3, 1) T was taken)
+        raise CalibrationError(f"{what}: expected 3 finite numbers (metres) of shape (3,), "
+                               f"(3, 1) or (1, 3), got shape {T.shape}")
+    T = T.reshape(3)
     T.setflags(write=False)
     return T
 
@@ -155,7 +158,8 @@ class Camera:
         :meth:`normalized` and the thermal extrinsic calibration; stereo rectification and
         stereo calibration refuse it (:meth:`require_no_skew`: OpenCV would ignore it).
     dist : (k,) array
-        Distortion coefficients in OpenCV order, k in {0, 4, 5, 8, 12, 14}.
+        Distortion coefficients in OpenCV order, k in {0, 4, 5, 8, 12, 14}; a (1, k) or
+        (k, 1) array (OpenCV's shapes) is read as (k,), any other 2-D shape refused.
     width, height : int
         Image size in pixels.
     name : str
@@ -188,7 +192,13 @@ class Camera:
             raise CalibrationError(
                 "camera K: expected [[fx, s, cx], [0, fy, cy], [0, 0, 1]] with fx, fy > 0"
             )
-        d = np.array(self.dist if self.dist is not None else [], dtype=float).reshape(-1)
+        d = np.array(self.dist if self.dist is not None else [], dtype=float)
+        if d.ndim > 2 or (d.ndim == 2 and 1 not in d.shape):
+            # (flattened: a (2, 7) table was read as 14 coefficients, its second row as
+            # thin-prism and tilt terms)
+            raise CalibrationError(f"camera dist: expected one row or column of coefficients "
+                                   f"((k,), (1, k) or (k, 1), as OpenCV's), got shape {d.shape}")
+        d = d.reshape(-1)
         if d.size not in _DIST_LENGTHS or not np.all(np.isfinite(d)):
             raise CalibrationError(
                 f"camera dist: expected 0, 4, 5, 8, 12 or 14 finite coefficients, got {d.size}"
@@ -553,7 +563,7 @@ class Camera:
             if isinstance(val, bool) or not isinstance(val, int) or val <= 0:
                 raise ConfigError(f"{where}: {key} must be a positive integer, got {val!r}")
         K = as_float_array(require(data, "K", where), f"{where}: K", (3, 3))
-        dist = as_float_array(data.get("dist", []) or [], f"{where}: dist").reshape(-1)
+        dist = as_float_array(data.get("dist", []) or [], f"{where}: dist")  # (shape: Camera)
         if dist.size not in _DIST_LENGTHS:
             raise ConfigError(
                 f"{where}: dist must have 0, 4, 5, 8, 12 or 14 coefficients, got {dist.size}"
@@ -1012,7 +1022,7 @@ class StereoRig:
         left = Camera.from_dict(require(data, "left", where), f"{where}: left")
         right = Camera.from_dict(require(data, "right", where), f"{where}: right")
         R = as_float_array(require(data, "R", where), f"{where}: R", (3, 3))
-        T = as_float_array(require(data, "T", where), f"{where}: T").reshape(-1)
+        T = as_float_array(require(data, "T", where), f"{where}: T")  # (shape: StereoRig)
         kw: dict[str, Any] = {}
         if data.get("thermal") is not None:
             th = data["thermal"]
@@ -1022,7 +1032,7 @@ class StereoRig:
             check_keys(th, ["camera", "R", "T"], w)
             kw["thermal"] = Camera.from_dict(require(th, "camera", w), f"{w}: camera")
             kw["R_thermal"] = as_float_array(require(th, "R", w), f"{w}: R", (3, 3))
-            kw["T_thermal"] = as_float_array(require(th, "T", w), f"{w}: T").reshape(-1)
+            kw["T_thermal"] = as_float_array(require(th, "T", w), f"{w}: T")
         rms = data.get("rms_px")
         if rms is not None and not (is_real(rms) and rms >= 0):
             # (a string escaped as a bare ValueError, a NaN was loaded as the RMS error)
