@@ -836,3 +836,19 @@ def test_dist_and_t_of_other_shapes_are_refused(tmp_path):
                     "dist: [[-0.1, 0.01], [0.0, 0.0]]\n")
     with pytest.raises(ConfigError, match="dist: expected one row or column"):
         load_camera(path)
+
+
+def test_fold_radius_checks_its_input():
+    """fold_radius(["a", 0, 0, 0]) was a builtin ValueError and a NaN coefficient gave 0.0,
+    which put every direction outside the lens field. The fold of r (1 + k1 r^2) is at
+    1 / sqrt(-3 k1) (to its 0.001 grid)."""
+    from hearsee.vision.camera import fold_radius
+
+    for bad in (["a", 0, 0, 0], [np.nan, 0, 0, 0], [-0.28, 0, 0], [[-0.28, 0], [0, 0]], None):
+        with pytest.raises(CalibrationError, match="fold_radius: dist"):
+            fold_radius(bad)
+    for r_max in (np.nan, 0.0, "5"):
+        with pytest.raises(CalibrationError, match="r_max"):
+            fold_radius([-0.28, 0, 0, 0], r_max)
+    assert fold_radius([-0.28, 0, 0, 0]) == pytest.approx(1 / np.sqrt(0.84), abs=1e-3)
+    assert fold_radius([]) == np.inf and fold_radius(np.zeros((1, 5))) == np.inf

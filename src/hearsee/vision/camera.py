@@ -622,9 +622,22 @@ def fold_radius(dist: ArrayLike, r_max: float = 5.0) -> float:
     distortion ``r (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 + k6 r^6)`` keeps
     increasing: beyond it the model folds back and two directions share a pixel. ``inf`` when it
     increases up to ``r_max`` (5: 79 deg off the axis). Tangential and thin-prism terms are
-    left out (they are small). Computed on a 0.001 grid, cached per coefficient set."""
+    left out (they are small). Computed on a 0.001 grid, cached per coefficient set.
+
+    ``dist`` must hold 0, 4, 5, 8, 12 or 14 finite numbers (OpenCV order, a row or a column)
+    and ``r_max`` be a finite number > 0, else a CalibrationError (text was a builtin
+    ValueError, a NaN coefficient gave 0.0: every direction "outside the lens field")."""
+    if not real_entries(dist):
+        raise CalibrationError(f"fold_radius: dist must hold real numbers, got {dist!r:.80}")
+    d = np.asarray(dist, dtype=float)
+    if (d.ndim > 2 or (d.ndim == 2 and 1 not in d.shape) or d.size not in _DIST_LENGTHS
+            or not np.all(np.isfinite(d))):
+        raise CalibrationError(f"fold_radius: dist must be 0, 4, 5, 8, 12 or 14 finite "
+                               f"coefficients, got {d.size} of shape {d.shape}")
+    r_max = finite_number("fold_radius: r_max", r_max, 0.0, lo_open=True,
+                          error=CalibrationError)
     c = np.zeros(8)
-    d = np.asarray(dist, dtype=float).ravel()[:8]
+    d = d.ravel()[:8]
     c[: d.size] = d
     return _fold_radius(tuple(float(v) for v in c), float(r_max))
 
