@@ -242,7 +242,12 @@ def test_bad_camera_height_is_refused_before_matching(scene):
         with pytest.raises(GeometryError, match="camera_height_m"):
             detect_humans(scene.left, scene.right, RIG, camera_height_m=bad)
     for bad in ("abc", np.nan, -1.0):
-        rig = StereoRig(RIG.left, RIG.right, RIG.R, RIG.T, info={"camera_height_m": bad})
+        # refused when the rig is built (StereoRig checks its info since the rule of load_rig)
+        with pytest.raises(CalibrationError, match="info: camera_height_m"):
+            StereoRig(RIG.left, RIG.right, RIG.R, RIG.T, info={"camera_height_m": bad})
+        # and by the detector when the (mutable) info dict is edited afterwards
+        rig = StereoRig(RIG.left, RIG.right, RIG.R, RIG.T, info={"camera_height_m": 1.4})
+        rig.info["camera_height_m"] = bad
         with pytest.raises(ConfigError, match="info: camera_height_m"):
             detect_humans(scene.left, scene.right, rig)
 
