@@ -61,6 +61,9 @@ def test_save_yaml_and_json_take_numpy_values(tmp_path):
     assert back["name"] == "rig" and back["K"] == [[1.0, 0.0], [0.0, 1.0]] and back["n"] == 3
     assert back["ok"] is True
     assert to_jsonable(data)["bad"] is None and to_jsonable(data)["name"] == "rig"
+    # text load_yaml would read as a number comes back as text (a bare 2e5 was 200000.0)
+    save_yaml({"name": "2e5", "serial": "1E6", "x": 2e5}, tmp_path / "b.yaml")
+    assert load_yaml(tmp_path / "b.yaml") == {"name": "2e5", "serial": "1E6", "x": 2e5}
 
 
 def test_load_yaml_reads_exponent_numbers_without_a_dot(tmp_path):

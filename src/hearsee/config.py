@@ -193,8 +193,10 @@ def to_jsonable(obj: Any) -> Any:
 
 
 def save_yaml(data: Mapping[str, Any], path: str | Path) -> None:
-    """Write ``data`` as YAML (numpy arrays and scalars converted to lists and floats)."""
-    Path(path).write_text(yaml.safe_dump(to_plain(dict(data)), sort_keys=False),
+    """Write ``data`` as YAML (numpy arrays and scalars converted to lists and floats) that
+    :func:`load_yaml` reads back as written (:class:`YamlDumper`: text such as "2e5" quoted;
+    the plain safe dumper wrote it bare and it came back as the number 200000.0)."""
+    Path(path).write_text(yaml.dump(to_plain(dict(data)), Dumper=YamlDumper, sort_keys=False),
                           encoding="utf-8")
 
 
