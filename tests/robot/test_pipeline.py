@@ -25,6 +25,10 @@ SHORT = {
     "objects": [{"kind": "mannequin", "position_m": [3.8, 4.2]}],
 }
 
+# (a quick run: small stereo images, the robot as in SHORT)
+SMALL_CAMERA = {"robot": {"position_m": [3.5, 2.6],
+                          "stereo": {"width": 160, "height": 120, "focal_px": 125.0}}}
+
 
 @pytest.fixture(scope="module")
 def short_run():
@@ -469,3 +473,31 @@ def test_demo_keeps_report_files_it_did_not_write_unless_forced(tmp_path, capsys
     write_report(ours, scenario_from_dict({}).to_dict(), [], {"success": False})
     assert report_foreign_file(ours) is None
     assert report_foreign_file(tmp_path / "new") is None
+
+
+@pytest.mark.parametrize("duration, fs", [(1.00001, 16000), (2.00002, 16000), (6.00003, 16000),
+                                          (1.05, 16000), (1.3, 44100), (1.00004, 16000),
+                                          (1.2, 8000), (3.0, 16000)])
+def test_every_control_step_has_audio(duration, fs):
+    """The run's round(duration fs) samples split into 0.2 s chunks [round(k 0.2 fs),
+    round((k + 1) 0.2 fs)): every step gets a non-empty chunk and together they cover every
+    sample. 1.00001 s at 16 kHz is 16000 samples, five chunks; a sixth step (counted from
+    the time) had an empty chunk, and the loop crashed (IndexError)."""
+    from hearsee.robot.pipeline import _n_steps
+
+    n = int(round(duration * fs))
+    k = _n_steps(duration, fs)
+    bounds = [(int(round(i * 0.2 * fs)), min(int(round((i + 1) * 0.2 * fs)), n))
+              for i in range(k)]
+    assert all(b > a for a, b in bounds)
+    assert bounds[0][0] == 0 and bounds[-1][1] == n
+    assert all(b0 == a1 for (_, b0), (a1, _) in zip(bounds, bounds[1:], strict=False))
+
+
+def test_a_run_just_past_a_step_boundary_ends_normally():
+    """1.00001 s: the loop ran a sixth, empty step and crashed with an IndexError (`hearsee
+    demo` and `hearsee eval --duration 1.00001` printed a traceback). It runs five steps."""
+    spec = {**SHORT, "duration_s": 1.00001, "people": [{"path_m": [[4.9, 4.3]]}],
+            "objects": [], "room": {"rt60_s": 0.0}, **SMALL_CAMERA}
+    res = run_scenario(scenario_from_dict(spec), keep_images=False)
+    assert [r["t"] for r in res.log] == pytest.approx([0.2, 0.4, 0.6, 0.8, 1.0])

@@ -245,6 +245,20 @@ class _RoomAudio:
         self.out[:, a:stop] += y[:, : stop - a]
 
 
+def _n_steps(duration_s: float, fs: int) -> int:
+    """Control steps of a ``duration_s``-second run (s) at ``fs`` Hz: one per audio chunk
+    ``[round(k CONTROL_DT fs), round((k + 1) CONTROL_DT fs))`` (:meth:`_RoomAudio.chunk`, in
+    samples) that holds at least one of the run's ``round(duration_s fs)`` samples. Counted
+    from the time alone (``ceil(duration_s / CONTROL_DT)``), a run up to half a sample past a
+    step boundary (1.00001 s at 16 kHz) had a last step with an empty chunk, and the loop
+    crashed on it (IndexError)."""
+    n = int(round(duration_s * fs))
+    k = int(np.ceil(duration_s / CONTROL_DT - 1e-9))
+    while k > 0 and int(round((k - 1) * CONTROL_DT * fs)) >= n:
+        k -= 1  # (the last chunk would start at or after the last sample)
+    return k
+
+
 # ------------------------------------------------------------------------------ seeing
 def _scene_frame(sc: Scenario, body: _Body) -> tuple[NDArray, Any]:
     """The renderer's world frame S for this room: optical axes of a camera at the pivot
@@ -444,7 +458,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     first_turned_t: float | None = None
     last_visual_t = -np.inf
     timeout_s = track_timeout_s(1.0 / r.camera_rate_hz)
-    n_steps = int(np.ceil(sc.duration_s / CONTROL_DT - 1e-9))
+    n_steps = _n_steps(sc.duration_s, sc.fs)
 
     chunk_pan = pan  # the head pan the previous chunk was rendered at
     for k in range(n_steps):
