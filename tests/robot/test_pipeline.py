@@ -501,3 +501,13 @@ def test_a_run_just_past_a_step_boundary_ends_normally():
             "objects": [], "room": {"rt60_s": 0.0}, **SMALL_CAMERA}
     res = run_scenario(scenario_from_dict(spec), keep_images=False)
     assert [r["t"] for r in res.log] == pytest.approx([0.2, 0.4, 0.6, 0.8, 1.0])
+
+
+def test_the_longest_audio_frame_runs():
+    """audio.frame_ms at its maximum, 200 ms (one control step): the first step's chunk holds
+    exactly one frame, and the loop hears the speaker."""
+    spec = {**SHORT, "duration_s": 1.0, "audio": {"frame_ms": 200}, "objects": [],
+            "room": {"rt60_s": 0.0}, **SMALL_CAMERA}
+    res = run_scenario(scenario_from_dict(spec), keep_images=False)
+    assert any(r["audio"] is not None for r in res.log)
+    assert res.summary["azimuth_error_initial_deg"] < 10.0

@@ -204,3 +204,26 @@ def test_a_relative_array_file_is_read_next_to_the_scenario(tmp_path, monkeypatc
     assert sc.robot.array == str(tmp_path.resolve() / "sc" / "mics.yaml")
     # presets and absolute paths are unchanged
     assert scenario_from_dict({"robot": {"array": "respeaker-4"}}).robot.array == "respeaker-4"
+
+
+def test_audio_frames_are_at_most_one_control_step(tmp_path, capsys):
+    """The loop localizes each 0.2 s step's audio, the first without history: a frame of up
+    to 200 ms fits. 8-512 ms was accepted, and 256 ms then failed at the first step with
+    "recording too short ... (--frame-ms)", an option `hearsee demo` does not have."""
+    from hearsee.cli import main
+
+    for ok in (8.0, 64.0, 200.0):
+        assert scenario_from_dict({"audio": {"frame_ms": ok}}).frame_ms == ok
+    for bad in (200.5, 256, 512):
+        with pytest.raises(ConfigError, match=r"^scenario\.audio\.frame_ms: must be <= 200 ms"):
+            scenario_from_dict({"audio": {"frame_ms": bad}})
+    f = tmp_path / "s.yaml"
+    f.write_text("audio: {frame_ms: 256}\n")
+    assert main(["demo", "--scenario", str(f), "-o", str(tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert f"{f}.audio.frame_ms: must be <= 200 ms" in err and "--frame-ms" not in err
+    assert not (tmp_path / "out").exists()
+    from hearsee.robot.pipeline import CONTROL_DT
+    from hearsee.robot.scenario import MAX_FRAME_MS  # (new)
+
+    assert MAX_FRAME_MS == pytest.approx(1000 * CONTROL_DT)

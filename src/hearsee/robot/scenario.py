@@ -12,6 +12,8 @@ Schema (defaults in brackets)::
     seed: int                      [0]
     duration_s: float              [6.0]    simulated time
     audio: {fs: int [16000], snr_db: float [20], frame_ms: float [64]}
+                                   (frame_ms: TDOA frame length, 8-200 ms: at most one
+                                   0.2 s control step)
     room: {size_m: [L, W, H] [7, 6, 3], rt60_s: float [0.3]}
     robot:
       position_m: [x, y]           [room centre]    base position on the floor
@@ -55,6 +57,7 @@ from hearsee.errors import ConfigError
 
 __all__ = [
     "MAX_DURATION_S",
+    "MAX_FRAME_MS",
     "MIN_DURATION_S",
     "ObjectSpec",
     "PersonSpec",
@@ -79,6 +82,11 @@ MIN_DURATION_S = 1.0
 #: The simulated loop renders at most one camera frame per control step
 #: (:data:`hearsee.robot.pipeline.CONTROL_DT`, 0.2 s), so ``camera_rate_hz`` is at most 5.
 MAX_CAMERA_RATE_HZ = 5.0
+#: ... and localizes each step's 0.2 s of audio (with one frame of the step before): the
+#: first step has no history, so ``audio.frame_ms`` is at most one step, 200 ms. (8-512 ms was
+#: accepted, and a frame over 200 ms failed at the first step with an audio-input error that
+#: named no scenario field.)
+MAX_FRAME_MS = 200.0
 MAX_DURATION_S = 120.0
 
 
@@ -414,9 +422,18 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
         name=str(name), seed=int(seed), duration_s=duration,
         fs=int(number(audio, "fs", 16000, f"{where}.audio", 8000, 96000, integer=True)),
         snr_db=number(audio, "snr_db", 20.0, f"{where}.audio", -20.0, 80.0),
-        frame_ms=number(audio, "frame_ms", 64.0, f"{where}.audio", 8.0, 512.0),
+        frame_ms=_frame_ms(audio, f"{where}.audio"),
         room_size_m=size, rt60_s=rt60, robot=robot, people=people, objects=objects,
     )
+
+
+def _frame_ms(audio: Mapping[str, Any], where: str) -> float:
+    """``audio.frame_ms`` (ms): 8 to :data:`MAX_FRAME_MS`, else ConfigError naming it."""
+    frame_ms = number(audio, "frame_ms", 64.0, where, 8.0)
+    if frame_ms > MAX_FRAME_MS:
+        raise ConfigError(f"{where}.frame_ms: must be <= {MAX_FRAME_MS:g} ms, one 0.2 s control "
+                          f"step (the robot localizes each step's audio), got {frame_ms:g}")
+    return frame_ms
 
 
 def load_scenario(path: str | Path) -> Scenario:
