@@ -55,7 +55,7 @@ from hearsee.robot.scenario import Scenario
 from hearsee.vision.camera import OPTICAL_FROM_BODY
 from hearsee.vision.humans import TORSO_HEIGHT_FRACTION
 
-__all__ = ["CONTROL_DT", "RunResult", "new_person_track", "run_scenario",
+__all__ = ["CONTROL_DT", "RunResult", "frame_noise_seed", "new_person_track", "run_scenario",
            "stereo_position_cov", "track_record", "track_timeout_s"]
 
 #: Control period and audio chunk length, seconds.
@@ -273,6 +273,15 @@ def _scene_frame(sc: Scenario, body: _Body) -> tuple[NDArray, Any]:
     return OPTICAL_FROM_BODY, spec
 
 
+def frame_noise_seed(seed: int, index: int) -> int:
+    """The sensor-noise seed of camera frame ``index`` (0, 1, ...) of a run with scenario seed
+    ``seed`` (render_scene's ``noise_seed``): one per frame, deterministic from both. The room's
+    appearance is ``seed``'s in every frame; until 2026-12-02 the noise was too, so every frame
+    of a still scene had the same noise (a still person's stereo range error was a constant
+    bias, and the track never saw independent measurements)."""
+    return int(np.random.SeedSequence([int(seed), int(index)]).generate_state(1)[0])
+
+
 def _entities(sc: Scenario, body: _Body, t: float) -> list[Any]:
     """People and objects at time t as renderer entities (frame S)."""
     from hearsee.sim.scenes import Entity
@@ -451,6 +460,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     n_audio_updates = 0
     last_frame_t = -1.0
     next_camera_t = 0.0
+    n_camera_frames = 0
     log: list[dict[str, Any]] = []
     images: dict[str, NDArray] = {}
     captions: dict[str, str] = {}
@@ -515,7 +525,9 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             R_cr, C_r = body.camera_room(pan)
             spec = _with_entities(spec0, _entities(sc, body, t1))
             view = (R_cr @ S_from_room.T, S_from_room @ (C_r - body.pivot_w))
-            scene = render_scene(spec, rig, view=view)
+            scene = render_scene(spec, rig, view=view,
+                                 noise_seed=frame_noise_seed(sc.seed, n_camera_frames))
+            n_camera_frames += 1
             camera_frame = True
             det = detect_humans(scene.left, scene.right, rig, scene.thermal_c,
                                 camera_height_m=float(body.pivot_w[2]))

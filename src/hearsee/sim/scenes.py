@@ -790,7 +790,11 @@ def thermal_to_8bit(thermal_c: NDArray, low_pct: float = 1.0, high_pct: float = 
 
 
 def _thermal_image(hits: _Hits, D: NDArray, C: NDArray, b: _Builder, cam: Camera,
-                   rng: np.random.Generator, tex_offsets: NDArray) -> NDArray:
+                   rng: np.random.Generator, tex_offsets: NDArray,
+                   column_fpn: NDArray | None = None) -> NDArray:
+    """Radiometric thermal image (degC). ``rng`` draws the temporal noise (NETD, 0.08 degC)
+    and, when ``column_fpn`` (a (1, w) column offset, degC) is None, first the column
+    fixed-pattern noise (0.05 degC)."""
     coarse, _ = _textures()
     P = C.astype(np.float32) + D * hits.t[..., None]
     mats = b.materials
@@ -805,7 +809,8 @@ def _thermal_image(hits: _Hits, D: NDArray, C: NDArray, b: _Builder, cam: Camera
     yy, xx = np.mgrid[0:h, 0:w]
     r2 = ((xx - cam.cx) / (w / 2)) ** 2 + ((yy - cam.cy) / (h / 2)) ** 2
     img = img - 1.2 * r2 / 2.0  # vignetting: corners read ~1.2 degC colder
-    img = img + rng.normal(0, 0.05, (1, w)) + rng.normal(0, 0.08, (h, w))  # column FPN + NETD
+    fpn = rng.normal(0, 0.05, (1, w)) if column_fpn is None else column_fpn
+    img = img + fpn + rng.normal(0, 0.08, (h, w))  # column FPN + NETD
     return img.astype(np.float32)
 
 
@@ -851,9 +856,11 @@ def _check_cameras_in_room(spec: SceneSpec, centres: dict[str, NDArray]) -> None
 
 
 def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: float = 2.0,
-                 view: tuple[NDArray, NDArray] | None = None) -> Scene:
+                 view: tuple[NDArray, NDArray] | None = None,
+                 noise_seed: int | None = None) -> Scene:
     """Render ``spec`` with ``rig`` (default :func:`default_rig`): stereo pair, ground-truth
-    disparity, thermal images and per-entity ground truth. Deterministic from ``spec.seed``.
+    disparity, thermal images and per-entity ground truth. Deterministic from ``spec.seed``
+    (and ``noise_seed``).
 
     The rig must be rectified (identical distortion-free cameras, right camera at +B on x) and
     carry a thermal camera whose lens model reaches every pixel of its image (a distortion
@@ -862,6 +869,15 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     first; their rays were wrong and rendered without a word). ``noise_std`` is the standard
     deviation of the stereo images' Gaussian pixel noise (grey levels of 0..255, finite and
     >= 0; else a ConfigError).
+
+    ``noise_seed`` (a whole number >= 0, else a ConfigError) seeds the sensor's temporal
+    noise on its own: the stereo images' pixel noise and the thermal image's NETD. The room's
+    appearance (materials, colours, temperatures, texture offsets) and the thermal camera's
+    column fixed-pattern noise stay those of ``spec.seed``, so frames of one scene rendered
+    with different noise seeds differ only by independent noise, as a video's frames do
+    (:mod:`hearsee.robot.pipeline` renders every camera frame with its own). None (the
+    default) draws the noise from ``spec.seed`` as well, in one stream: the images are those
+    rendered before this argument existed.
 
     ``view`` = ``(R, C)`` places the left camera in the scene's frame (the frame the entities
     and the room are written in): ``R`` rotates scene-frame vectors into the left optical frame
@@ -906,6 +922,8 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
                             "rig.swapped()")
     _check_cameras_in_room(spec, {"left": Cv, "right": Cv + Rv.T @ rig.right_center_m,
                                   "thermal": Cv + Rv.T @ rig.thermal_center_m})
+    if noise_seed is not None:
+        noise_seed = whole_number("render_scene noise_seed", noise_seed, 0)
     rng = np.random.default_rng(spec.seed)
     b = _Builder()
     floor_m = b.material(rng.uniform(0.3, 0.7, 3), 0.6, spec.room_c - 0.5, 0.3)
@@ -913,6 +931,10 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     ceil_m = b.material([0.9, 0.9, 0.9], 0.35, spec.room_c + 0.7, 0.2)
     refs = [_add_entity(b, e, i, spec, rng) for i, e in enumerate(spec.entities)]
     tex_offsets = rng.uniform(0, 5.0, (len(b.materials), 3))
+    column_fpn, noise = None, rng  # (noise_seed None: one stream, as before it existed)
+    if noise_seed is not None:  # the sensor's fixed pattern is the scene's, its noise not
+        column_fpn = rng.normal(0, 0.05, (1, rig.thermal.width))
+        noise = np.random.default_rng(noise_seed)
 
     cam = rig.left
     views = {}
@@ -921,7 +943,7 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
         hits, D = _cast(cam, Rc, Cc, b, spec, (floor_m, wall_m, ceil_m), name == "left")
         img = _shade(hits, D, Cc, b, rng, tex_offsets)
         img = cv2.GaussianBlur(img.astype(np.float32), (0, 0), 0.5)
-        img = img * 255.0 + rng.normal(0, noise_std, img.shape)
+        img = img * 255.0 + noise.normal(0, noise_std, img.shape)
         views[name] = (np.clip(img + 0.5, 0, 255).astype(np.uint8), hits, D)
     left, hits_l, D_l = views["left"]
     right = views["right"][0]
@@ -931,8 +953,8 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     C_t = Cv + Rv.T @ rig.thermal_center_m
     hits_t, D_t = _cast(rig.thermal, rig.R_thermal @ Rv, C_t, b, spec,
                         (floor_m, wall_m, ceil_m), False)
-    thermal_c = _thermal_image(hits_t, D_t, C_t, b, rig.thermal, rng,
-                               tex_offsets)
+    thermal_c = _thermal_image(hits_t, D_t, C_t, b, rig.thermal, noise,
+                               tex_offsets, column_fpn)
 
     labels = hits_l.owner.astype(np.int16)
     objects = []
