@@ -45,7 +45,8 @@ def main() -> None:
     keys = ["position_error_median_m", "position_error_p90_m", "velocity_rmse_mps",
             "azimuth_error_initial_deg", "azimuth_error_at_turn_deg", "time_to_verify_s",
             "person_detections_verified",
-            "human_like_objects_rejected", "false_person_objects"]
+            "human_like_objects_rejected", "false_person_objects",
+            "object_detections_rejected", "object_detections_accepted_as_person"]
     demo_rows = [[k, demo[k]] for k in keys] + [["wall time (s)", demo_wall]]
     print_table("default demo scenario", ["metric", "value"], demo_rows)
 
@@ -60,6 +61,8 @@ def main() -> None:
         rows.append([k, d.get("n", 0), d.get("p50", np.nan), d.get("p75", np.nan),
                      d.get("p90", np.nan), d.get("p95", np.nan)])
     rows.append(["objects reported as person", s["objects_reported_as_person"], "", "", "", ""])
+    rows.append(["object detections accepted as person (object x frame)",
+                 s["object_detections_accepted_as_person"], "", "", "", ""])
     headers = ["metric", "n / value", "p50", "p75", "p90", "p95"]
     print_table(f"{args.scenarios} random scenarios ({eval_wall:.0f} s wall)", headers, rows)
 
@@ -87,10 +90,11 @@ def main() -> None:
     fooled = [r for r in res.runs if r.get("false_person_objects", 0)]
     if fooled:
         sections.append(("Scenarios where an object was reported as a person", markdown_table(
-            ["seed", "camera frames with an object accepted", "person detections verified",
-             "objects rejected", "success"],
-            [[r["seed"], r["false_person_objects"], r["person_detections_verified"],
-              r["human_like_objects_rejected"], r["success"]] for r in fooled])))
+            ["seed", "objects accepted as person", "their accepted detections (object x frame)",
+             "person detections verified", "objects rejected", "success"],
+            [[r["seed"], r["false_person_objects"], r["object_detections_accepted_as_person"],
+              r["person_detections_verified"], r["human_like_objects_rejected"], r["success"]]
+             for r in fooled])))
     write_markdown("robot", sections, intro="Produced by `python bench/robot.py` "
                    f"(--scenarios {args.scenarios}).")
 

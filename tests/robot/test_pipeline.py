@@ -54,8 +54,13 @@ def test_hears_turns_verifies_and_tracks(short_run):
     assert s["success"] and s["tracked_steps"] >= 5 and s["tracked_at_end"]
     assert s["position_error_median_m"] < 0.15
     # the mannequin was seen and never reported as a person
-    assert s["human_like_objects_rejected"] >= 1
+    assert s["human_like_objects_rejected"] == 1  # the one mannequin (per frame: >= 1)
     assert s["false_person_objects"] == 0
+    rejected = [d for r in res.log for d in r["detections"]
+                if d["truth_kind"] == "mannequin" and not d["accepted"]]
+    assert {d["truth_id"] for d in rejected} == {"objects[0]"}
+    assert s["object_detections_rejected"] == len(rejected) >= 1
+    assert s["object_detections_accepted_as_person"] == 0
     # errors in the log are the distance between the track and the truth
     rec = next(r for r in res.log if r["track"] is not None)
     d = np.linalg.norm(np.asarray(rec["track"]["position_m"]) - rec["truth"]["position_m"])
@@ -564,3 +569,36 @@ def test_camera_frames_have_their_own_sensor_noise(monkeypatch):
 
     assert seeds == [frame_noise_seed(3, i) for i in range(len(seeds))]
     assert len(set(seeds)) == len(seeds)
+
+
+def test_object_metrics_count_objects_and_detections_apart():
+    """A mannequin rejected in 22 camera frames and a poster accepted as a person in 2 of 5:
+    two human-like objects, one of them never accepted (human_like_objects_rejected 1), one
+    reported as a person (false_person_objects 1); 25 and 2 detections (object x frame). The
+    object keys counted detections: "22 human-like objects rejected" for one mannequin."""
+    from hearsee.robot.evaluate import summarize
+    from hearsee.robot.pipeline import _summarize
+
+    def det(kind, truth_id, accepted):
+        return {"truth_kind": kind, "truth_id": truth_id, "accepted": accepted}
+
+    log = []
+    for k in range(22):
+        dets = [det("mannequin", "objects[0]", False), det("person", "people[0]", True)]
+        if k < 5:
+            dets.append(det("poster", "objects[1]", k < 2))
+        if k == 3:
+            dets.append(det(None, None, False))  # near nothing: not scored
+        log.append({"t": 0.2 * (k + 1), "phase": "tracking", "head_pan_deg": 0.0,
+                    "audio": None, "camera_frame": True, "detections": dets, "track": None,
+                    "truth": {}, "error_m": None})
+    s = _summarize(scenario_from_dict(SHORT), log, None, 0.0)
+    assert s["human_like_objects_rejected"] == 1
+    assert s["false_person_objects"] == 1
+    assert s["object_detections_rejected"] == 22 + 3
+    assert s["object_detections_accepted_as_person"] == 2
+    assert s["person_detections_verified"] == 22
+    # hearsee eval sums the objects over runs (each run's objects once) and the detections
+    ev = summarize([s, s])
+    assert ev["objects_reported_as_person"] == 2
+    assert ev["object_detections_accepted_as_person"] == 4

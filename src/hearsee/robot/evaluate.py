@@ -56,7 +56,10 @@ class EvalResult:
 
 
 def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
-    """Success rate and error percentiles over runs (NaN errors are excluded from percentiles)."""
+    """Success rate and error percentiles over runs (NaN errors are excluded from percentiles);
+    ``objects_reported_as_person``: the human-like objects accepted as a person in at least
+    one camera frame, summed over the runs (each object of a run counted once);
+    ``object_detections_accepted_as_person``: their accepted detections (object x frame)."""
     n = len(runs)
     success = [bool(r.get("success", False)) for r in runs]
     out: dict[str, Any] = {"scenarios": n, "success_rate": float(np.mean(success)) if n else 0.0}
@@ -69,8 +72,12 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
             | {"n": int(len(vals))}
             if len(vals) else {"n": 0}
         )
+    # distinct objects summed over the runs (a run's false_person_objects counts each object
+    # once; until 2026-12-02 it counted object x frame detections), and those detections
     out["objects_reported_as_person"] = int(
         sum(int(r.get("false_person_objects", 0)) for r in runs))
+    out["object_detections_accepted_as_person"] = int(
+        sum(int(r.get("object_detections_accepted_as_person", 0)) for r in runs))
     return out
 
 

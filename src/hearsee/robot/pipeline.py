@@ -426,7 +426,8 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     Each log record: ``t`` (s, end of the step), ``phase`` (listening | turning | tracking),
     ``head_pan_deg``, ``audio`` {azimuth_deg (robot frame), n_frames, confidence} or None,
     ``detections`` [{box, position_m (room), distance_m (from the left camera, not from
-    the robot), height_m, score, thermal_support, truncated, accepted, reason, truth_kind}],
+    the robot), height_m, score, thermal_support, truncated, accepted, reason, truth_kind,
+    truth_id (the scenario entity it is scored against, e.g. ``objects[0]``, or None)}],
     ``track`` {position_m, velocity_mps (None until the track's fixes determine
     it, :attr:`~hearsee.audio.tracking.MotionKalman.velocity_known`), acceleration_mps2
     (likewise), covariance} or None,
@@ -446,6 +447,9 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
                       thermal_hfov_deg=r.thermal_hfov_deg,
                       camera_height_m=float(body.pivot_w[2]))
     S_from_room, spec0 = _scene_frame(sc, body)
+    # the scenario's name of each rendered entity (_entities: the people, then the objects)
+    truth_ids = ([f"people[{k}]" for k in range(len(sc.people))]
+                 + [f"objects[{k}]" for k in range(len(sc.objects))])
     half_fov = float(np.degrees(np.arctan2(r.width / 2.0, r.focal_px)))
 
     def new_itd_filter() -> ItdKalman:
@@ -534,9 +538,9 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             verified = []
             for hmn in det.humans + det.rejected:
                 p_w = R_cr.T @ np.asarray(hmn.position_m) + C_r
-                kind = _nearest_truth_kind(scene, hmn.position_m)
+                kind, truth_id = _nearest_truth(scene, hmn.position_m, truth_ids)
                 detections.append({**hmn.to_dict(), "position_m": p_w, "accepted": hmn.accepted,
-                                   "truth_kind": kind})
+                                   "truth_kind": kind, "truth_id": truth_id})
                 if hmn.accepted:
                     verified.append((hmn, p_w))
             k = associate([p for _, p in verified], [body.bearing_deg(p) for _, p in verified],
@@ -597,14 +601,17 @@ def _with_entities(spec: Any, entities: list[Any]) -> Any:
     return replace(spec, entities=entities)
 
 
-def _nearest_truth_kind(scene: Any, p_cam: NDArray) -> str | None:
-    """Kind of the ground-truth entity nearest a detection (within 0.6 m), for scoring."""
+def _nearest_truth(scene: Any, p_cam: NDArray, ids: Sequence[str]
+                   ) -> tuple[str | None, str | None]:
+    """Kind and scenario name (``ids[entity index]``, e.g. ``objects[0]``) of the ground-truth
+    entity nearest a detection (within 0.6 m; ``p_cam`` in metres, left optical frame), for
+    scoring; (None, None) when none is that near."""
     best, best_d = None, 0.6
     for o in scene.objects:
         d = float(np.linalg.norm(np.asarray(o.position_m) - np.asarray(p_cam)))
         if d < best_d:
-            best, best_d = o.kind, d
-    return best
+            best, best_d = o, d
+    return (None, None) if best is None else (best.kind, ids[best.index])
 
 
 def _keep_view(images: dict, captions: dict, t: float, overlay: NDArray, scene: Any, det: Any,
@@ -646,7 +653,17 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
     ``position_error_final_m`` is the error at the run's last step (NaN when there is no track
     then; ``tracked_at_end``), and ``success`` means: tracked, with a median 3D error under
     0.3 m and a final one under 0.5 m -- so a run whose track was dropped before its end is no
-    success (until 2026-12-01 "final" was the last tracked step's, and such runs counted)."""
+    success (until 2026-12-01 "final" was the last tracked step's, and such runs counted).
+
+    Detections are scored against the ground-truth entity nearest them (within 0.6 m): a
+    human-like object's (``truth_kind`` mannequin / poster / coat_stand, ``truth_id`` e.g.
+    ``objects[0]``) or a person's. ``person_detections_verified``: person detections accepted,
+    counted per camera frame. ``human_like_objects_rejected``: distinct human-like objects of
+    the scenario that the camera detected and never accepted as a person;
+    ``false_person_objects``: distinct objects accepted as a person in at least one frame.
+    ``object_detections_rejected`` / ``object_detections_accepted_as_person``: the same
+    detections counted per camera frame (object x frame). Until 2026-12-02 the two object
+    keys held these per-frame counts (a single mannequin: "22 objects rejected")."""
     errs = np.array([r["error_m"] for r in log if r["error_m"] is not None], dtype=float)
     vel = np.array([np.linalg.norm(np.asarray(r["track"]["velocity_mps"]) -
                                    np.asarray(r["truth"]["velocity_mps"]))
@@ -664,9 +681,11 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
     else:
         at_turn = None  # the head never turned
     dets = [d for r in log for d in r["detections"]]
-    false_obj = sum(1 for d in dets if d["accepted"] and d["truth_kind"] not in (None, "person"))
-    rejected_obj = sum(1 for d in dets if not d["accepted"] and d["truth_kind"] not in
-                       (None, "person"))
+    obj_dets = [d for d in dets if d["truth_kind"] not in (None, "person")]
+    # distinct objects (they were object x frame detections, under the objects' names: one
+    # mannequin rejected in 22 frames read "human_like_objects_rejected: 22")
+    fooled = {d["truth_id"] for d in obj_dets if d["accepted"]}
+    rejected = {d["truth_id"] for d in obj_dets} - fooled
     person_verified = sum(1 for d in dets if d["accepted"] and d["truth_kind"] == "person")
     # the error at the END of the run (it was the last tracked step's: a track dropped seconds
     # before the end still counted as a success)
@@ -688,7 +707,9 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
         "tracked_steps": int(len(errs)),
         "camera_frames": int(sum(1 for r in log if r["camera_frame"])),
         "person_detections_verified": int(person_verified),
-        "human_like_objects_rejected": int(rejected_obj),
-        "false_person_objects": int(false_obj),
+        "human_like_objects_rejected": len(rejected),
+        "false_person_objects": len(fooled),
+        "object_detections_rejected": sum(1 for d in obj_dets if not d["accepted"]),
+        "object_detections_accepted_as_person": sum(1 for d in obj_dets if d["accepted"]),
         "runtime_s": float(runtime_s),
     }
