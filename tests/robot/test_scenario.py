@@ -227,3 +227,45 @@ def test_audio_frames_are_at_most_one_control_step(tmp_path, capsys):
     from hearsee.robot.scenario import MAX_FRAME_MS  # (new)
 
     assert MAX_FRAME_MS == pytest.approx(1000 * CONTROL_DT)
+
+
+def _cameras_outside_the_room(sc, pans):
+    """Ground truth: the pans (degrees) at which a camera centre of the simulated head (left,
+    right, thermal; the loop's geometry) lies outside the room's floor plan."""
+    from hearsee.robot.pipeline import _Body
+    from hearsee.sim.scenes import default_rig
+
+    body = _Body(sc, sc.robot.array)
+    rig = default_rig(baseline_m=sc.robot.baseline_m)
+    out = []
+    for pan in pans:
+        R, C = body.camera_room(pan)
+        for o in (np.zeros(3), rig.right_center_m, rig.thermal_center_m):
+            p = C + R.T @ o
+            if np.any(p[:2] < -1e-9) or np.any(p[:2] > sc.room_size_m[:2] + 1e-9):
+                out.append(pan)
+                break
+    return out
+
+
+def test_a_wide_stereo_rig_must_clear_the_walls_when_the_head_pans():
+    """A robot 0.35 m from a wall (0.3 m are allowed) carries a stereo rig whose cameras
+    reach sqrt(0.05^2 + (B/2)^2) m from the pan axis: up to B = 0.693 m they stay in the room
+    at every pan, a 0.70 m rig pans one behind the wall. Such rigs (0.02-1.0 m are
+    accepted) failed at the first camera frame with a renderer error about 'the view's C'."""
+    from dataclasses import replace
+
+    base = {"duration_s": 2.0, "robot": {"position_m": [0.35, 2.0]},
+            "people": [{"path_m": [[0.6, 4.5]]}], "objects": []}
+    pans = np.arange(-180.0, 180.0, 1.0)
+    ok = scenario_from_dict({**base, "robot": {**base["robot"], "stereo": {"baseline_m": 0.68}}})
+    assert _cameras_outside_the_room(ok, pans) == []
+    wide = replace(ok, robot=replace(ok.robot, baseline_m=0.70))
+    assert _cameras_outside_the_room(wide, pans)  # (the ground truth: the rig hits the wall)
+    for b in (0.70, 1.0):
+        with pytest.raises(ConfigError, match=r"^scenario\.robot\.stereo\.baseline_m: .*from a "
+                                              r"wall.*scenario\.robot\.position_m"):
+            scenario_from_dict({**base, "robot": {**base["robot"], "stereo": {"baseline_m": b}}})
+    # the same 1 m rig fits a robot 0.6 m from the walls
+    scenario_from_dict({**base, "robot": {"position_m": [0.6, 2.0], "stereo": {"baseline_m": 1.0}},
+                        "people": [{"path_m": [[1.0, 4.5]]}]})

@@ -56,7 +56,7 @@ from hearsee.vision.camera import OPTICAL_FROM_BODY
 from hearsee.vision.humans import TORSO_HEIGHT_FRACTION
 
 __all__ = ["CONTROL_DT", "RunResult", "frame_noise_seed", "new_person_track", "run_scenario",
-           "stereo_position_cov", "track_record", "track_timeout_s"]
+           "sensor_reach_m", "stereo_position_cov", "track_record", "track_timeout_s"]
 
 #: Control period and audio chunk length, seconds.
 CONTROL_DT = 0.2
@@ -161,6 +161,20 @@ class _Body:
         """Azimuth (robot frame, degrees) of a room point seen from the pivot."""
         d = (np.asarray(p_w) - self.pivot_w) @ self.R_wb
         return float(np.degrees(np.arctan2(d[1], d[0])))
+
+
+def sensor_reach_m(baseline_m: float) -> float:
+    """Horizontal distance (metres) from the head's pan axis to the farthest camera centre of
+    the simulated rig (left, right and thermal camera; ``baseline_m`` metres between the
+    stereo pair, :func:`hearsee.sim.scenes.default_rig`'s thermal offset): the radius every
+    camera stays within however the head pans. A robot closer than this to a wall can pan a
+    camera behind it (:func:`hearsee.robot.scenario.scenario_from_dict` refuses that)."""
+    from hearsee.sim.scenes import default_rig
+
+    rig = default_rig(baseline_m=baseline_m)
+    # left optical frame (x right, y down, z forward) -> head frame (x forward, y left)
+    return max(float(np.hypot(CAMERA_FORWARD_M + o[2], baseline_m / 2.0 - o[0]))
+               for o in (np.zeros(3), rig.right_center_m, rig.thermal_center_m))
 
 
 # ------------------------------------------------------------------------------ world truth

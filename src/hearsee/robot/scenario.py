@@ -36,7 +36,9 @@ Schema (defaults in brackets)::
 
 Every waypoint and object keeps ``WALL_CLEARANCE_M`` from the walls, every person and object
 is lower than the ceiling, and every path (each segment between waypoints) and object keeps
-``ROBOT_CLEARANCE_M`` from the robot base. The
+``ROBOT_CLEARANCE_M`` from the robot base; the robot keeps its cameras inside the room
+however the head pans (:func:`hearsee.robot.pipeline.sensor_reach_m`: a wide stereo baseline
+needs the robot farther from the walls). The
 default speaker and mannequin (those of :func:`default_scenario`) are checked the same way
 when ``people`` or ``objects`` is left out: with another room or robot position they may not
 fit, and the error says which key to set.
@@ -392,6 +394,7 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
         thermal_hfov_deg=number(thermal, "hfov_deg", 72.0, f"{rw}.thermal", 10.0, 150.0),
     )
 
+    _check_rig_clear_of_walls(robot, size, rw)
     defaults = base.to_dict()
 
     def person(p: Any, k: int, pw: str) -> PersonSpec:
@@ -425,6 +428,25 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
         frame_ms=_frame_ms(audio, f"{where}.audio"),
         room_size_m=size, rt60_s=rt60, robot=robot, people=people, objects=objects,
     )
+
+
+def _check_rig_clear_of_walls(robot: RobotSpec, size: np.ndarray, rw: str) -> None:
+    """ConfigError naming ``robot.stereo.baseline_m`` and ``robot.position_m`` when a camera
+    of the panning head (:func:`hearsee.robot.pipeline.sensor_reach_m`, metres from the pan
+    axis) can reach behind a wall of the room (``size`` metres). Accepted, such a robot
+    failed at its first camera frame, after the audio was simulated, with a renderer error
+    naming no scenario field."""
+    from hearsee.robot.pipeline import sensor_reach_m
+
+    reach = sensor_reach_m(robot.baseline_m)
+    xy = robot.position_m
+    clear = float(min(xy.min(), (size[:2] - xy).min()))  # to the nearest wall
+    if reach > clear + 1e-9:
+        raise ConfigError(
+            f"{rw}.stereo.baseline_m: a {robot.baseline_m:g} m stereo rig puts a camera up to "
+            f"{reach:.3f} m from the head's pan axis, but the robot at "
+            f"{np.round(xy, 3).tolist()} is {clear:.3f} m from a wall: a camera would pan "
+            f"behind it; use a shorter baseline or move {rw}.position_m away from the wall")
 
 
 def _frame_ms(audio: Mapping[str, Any], where: str) -> float:
