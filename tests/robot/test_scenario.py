@@ -269,3 +269,23 @@ def test_a_wide_stereo_rig_must_clear_the_walls_when_the_head_pans():
     # the same 1 m rig fits a robot 0.6 m from the walls
     scenario_from_dict({**base, "robot": {"position_m": [0.6, 2.0], "stereo": {"baseline_m": 1.0}},
                         "people": [{"path_m": [[1.0, 4.5]]}]})
+
+
+@pytest.mark.parametrize("speaking, why", [
+    ([[3.0, 5.0]], "every interval starts at or after 2 s"),
+    ([[2.0, 2.5]], "every interval starts at or after 2 s"),
+    ([], "an empty list"),
+])
+def test_the_heard_person_must_speak_during_the_run(speaking, why):
+    """The robot hears only the first person: a 2 s run in which they speak from 3 s on (or
+    never) was accepted, ran silent and summarized to nulls (exit 0). Refused now, naming
+    the field; others' speaking is not used and stays free; an interval that starts inside
+    the run and ends after it is fine."""
+    base = {"duration_s": 2.0, "objects": []}
+    with pytest.raises(ConfigError, match=r"^scenario\.people\[0\]\.speaking: the first person "
+                                          r".*never speak.*" + why):
+        scenario_from_dict({**base, "people": [{"path_m": [[1, 1]], "speaking": speaking}]})
+    sc = scenario_from_dict({**base, "people": [{"path_m": [[1, 1]], "speaking": [[1.9, 5]]},
+                                                {"path_m": [[1, 5]], "speaking": speaking}]})
+    assert sc.people[0].speaking == ((1.9, 5.0),)
+    assert sc.people[1].speaking == tuple(tuple(s) for s in speaking)

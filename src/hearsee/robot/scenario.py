@@ -30,7 +30,9 @@ Schema (defaults in brackets)::
          height_m [1.72], voice: male|female [female], speaking: [[t0, t1], ...] [whole run],
          facing: toward-robot|path [toward-robot]}
       (only the FIRST person speaks in the simulated audio, and the ground truth follows
-      them; the others are seen, not heard: their voice and speaking are read but not used)
+      them; the others are seen, not heard: their voice and speaking are read but not used.
+      The first person must speak during the run: an interval with t0 < duration_s; a
+      silent or empty ``speaking`` is refused, as the robot would have nothing to turn to)
     objects:                       [a mannequin]
       - {kind: mannequin|poster|coat, position_m: [x, y], yaw_deg [0], height_m [1.75]}
 
@@ -267,6 +269,14 @@ def _parse_person(p: Any, k: int, pw: str, size: np.ndarray, robot_xy: np.ndarra
         raise ConfigError(f"{pw}.speaking: expected [[t0, t1], ...] in seconds") from None
     if any(not (0 <= a < b) for a, b in spk):
         raise ConfigError(f"{pw}.speaking: each interval needs 0 <= t0 < t1")
+    if k == 0 and not any(a < duration for a, _ in spk):
+        # (the robot hears the first person only: a run in which they never speak heard
+        # nothing, saw nothing and summarized to nulls, exit 0)
+        raise ConfigError(
+            f"{pw}.speaking: the first person is the one the robot hears, and they never "
+            f"speak during the run ({duration:g} s): "
+            + ("an empty list" if not spk else f"every interval starts at or after {duration:g} s")
+            + f"; give an interval [t0, t1] with t0 < {duration:g}")
     facing = p.get("facing", "toward-robot")
     if facing not in ("toward-robot", "path"):
         raise ConfigError(f"{pw}.facing: expected 'toward-robot' or 'path'")
