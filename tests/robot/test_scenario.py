@@ -289,3 +289,20 @@ def test_the_heard_person_must_speak_during_the_run(speaking, why):
                                                 {"path_m": [[1, 5]], "speaking": speaking}]})
     assert sc.people[0].speaking == ((1.9, 5.0),)
     assert sc.people[1].speaking == tuple(tuple(s) for s in speaking)
+
+
+def test_a_missing_array_file_names_the_field(tmp_path, capsys):
+    """robot.array naming a file that is not there (or a folder): the error named the file
+    only ('nope.yaml: YAML file not found'), not the scenario field the module docstring
+    promises. It keeps its type (InputFileError) and names scenario.robot.array."""
+    from hearsee.cli import main
+    from hearsee.errors import InputFileError
+
+    for array in (str(tmp_path / "nope.yaml"), str(tmp_path)):
+        with pytest.raises(InputFileError, match=r"^scenario\.robot\.array: "):
+            scenario_from_dict({"robot": {"array": array}})
+    f = tmp_path / "s.yaml"
+    f.write_text("robot: {array: missing-mics.yaml}\n")
+    assert main(["demo", "--scenario", str(f), "-o", str(tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert f"{f}.robot.array: " in err and "missing-mics.yaml" in err and err.count("\n") == 1

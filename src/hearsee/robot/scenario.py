@@ -57,7 +57,7 @@ import numpy as np
 
 from hearsee.audio.propagation import image_sources
 from hearsee.config import check_keys, finite_number, load_yaml, number, whole_number
-from hearsee.errors import ConfigError
+from hearsee.errors import ConfigError, HearseeError
 
 __all__ = [
     "MAX_DURATION_S",
@@ -376,8 +376,8 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
 
     try:
         arr = load_array(array)
-    except ConfigError as exc:
-        raise ConfigError(f"{rw}.array: {exc}") from None
+    except HearseeError as exc:  # (a missing file's InputFileError named no field)
+        raise type(exc)(f"{rw}.array: {exc}") from None
     if arr.mask is not None or array_geometry(arr).kind == "linear":
         raise ConfigError(
             f"{rw}.array: {arr.name!r} cannot be simulated in a room for 360-degree hearing "
