@@ -602,3 +602,29 @@ def test_object_metrics_count_objects_and_detections_apart():
     ev = summarize([s, s])
     assert ev["objects_reported_as_person"] == 2
     assert ev["object_detections_accepted_as_person"] == 4
+
+
+def test_time_to_verify_counts_from_the_speech_onset():
+    """The same still speaker, silent for the first second or not: the robot needs the same
+    reaction time after the voice begins (it was counted from the start of the run, so the
+    late speaker read a second slower). A log whose first verified fix is at 2.6 s, of a
+    speaker starting at 2 s (intervals in any order), reads 0.6 s."""
+    from hearsee.robot.pipeline import _summarize
+
+    ttv = {}
+    for onset in (0.0, 1.0):
+        spec = {**SHORT, "duration_s": 2.6, "room": {"rt60_s": 0.0}, **SMALL_CAMERA,
+                "people": [{"path_m": [[4.9, 4.3]], "voice": "male",
+                            "speaking": [[onset, 2.6]]}], "objects": []}
+        res = run_scenario(scenario_from_dict(spec), keep_images=False)
+        first_fix = next(r["t"] for r in res.log if r["track"] is not None)
+        ttv[onset] = res.summary["time_to_verify_s"]
+        assert ttv[onset] == pytest.approx(first_fix - onset)
+    assert 0.2 <= ttv[1.0] <= 1.2 and abs(ttv[1.0] - ttv[0.0]) <= 0.2 + 1e-9, ttv
+    spec = {**SHORT, "duration_s": 4.0,
+            "people": [{"path_m": [[4.9, 4.3]], "speaking": [[3.0, 3.5], [2.0, 2.4]]}]}
+    s = _summarize(scenario_from_dict(spec), [{"t": 4.0, "phase": "tracking", "audio": None,
+                                               "camera_frame": False, "detections": [],
+                                               "track": None, "truth": {}, "error_m": None}],
+                   2.6, 0.0)
+    assert s["time_to_verify_s"] == pytest.approx(0.6)

@@ -656,6 +656,13 @@ def _bearing_error(rec: dict[str, Any] | None) -> float:
     return abs(float(wrap_deg(rec["audio"]["azimuth_deg"] - rec["truth"]["azimuth_robot_deg"])))
 
 
+def _speech_onset_s(sc: Scenario) -> float:
+    """When the heard (first) person first speaks in the run, seconds from its start: the
+    earliest start of their speaking intervals (the scenario guarantees one inside the run)."""
+    starts = [a for a, _ in sc.people[0].speaking if a < sc.duration_s]
+    return float(min(starts)) if starts else 0.0
+
+
 def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | None,
                runtime_s: float) -> dict[str, Any]:
     """Metrics from the log (nothing canned). ``azimuth_error_initial_deg``: the first audio
@@ -668,6 +675,10 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
     then; ``tracked_at_end``), and ``success`` means: tracked, with a median 3D error under
     0.3 m and a final one under 0.5 m -- so a run whose track was dropped before its end is no
     success (until 2026-12-01 "final" was the last tracked step's, and such runs counted).
+    ``time_to_verify_s``: the reaction time, seconds from the speaker's first speech onset in
+    the run (:func:`_speech_onset_s`) to the end of the control step whose verified stereo
+    fix was first associated with them (NaN: never); until 2026-12-02 it was counted from
+    the start of the run (a speaker silent for the first 2 s read 2 s slower).
 
     Detections are scored against the ground-truth entity nearest them (within 0.6 m): a
     human-like object's (``truth_kind`` mannequin / poster / coat_stand, ``truth_id`` e.g.
@@ -717,7 +728,8 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
         "velocity_rmse_mps": float(np.sqrt(np.mean(vel**2))) if len(vel) else float("nan"),
         "azimuth_error_initial_deg": az0,
         "azimuth_error_at_turn_deg": _bearing_error(at_turn),
-        "time_to_verify_s": first_turned_t if first_turned_t is not None else float("nan"),
+        "time_to_verify_s": (first_turned_t - _speech_onset_s(sc) if first_turned_t is not None
+                             else float("nan")),
         "tracked_steps": int(len(errs)),
         "camera_frames": int(sum(1 for r in log if r["camera_frame"])),
         "person_detections_verified": int(person_verified),
