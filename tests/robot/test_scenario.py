@@ -306,3 +306,17 @@ def test_a_missing_array_file_names_the_field(tmp_path, capsys):
     assert main(["demo", "--scenario", str(f), "-o", str(tmp_path / "out"), "-q"]) == 2
     err = capsys.readouterr().err
     assert f"{f}.robot.array: " in err and "missing-mics.yaml" in err and err.count("\n") == 1
+
+
+def test_documented_top_level_defaults_are_the_code_s():
+    """The schema said ``name: str [default]``; a scenario without a name is 'custom'."""
+    import re
+
+    import hearsee.robot.scenario as module
+
+    doc = dict(re.findall(r"^    (name|seed|duration_s): \w+ +\[([^\]]*)\]", module.__doc__,
+                          re.M))
+    assert set(doc) == {"name", "seed", "duration_s"}
+    sc = scenario_from_dict({})
+    assert sc.name == doc["name"]
+    assert sc.seed == int(doc["seed"]) and sc.duration_s == float(doc["duration_s"])

@@ -8,7 +8,7 @@ follows REP 103 (x forward, y left, z up) and is placed by ``robot.position_m`` 
 
 Schema (defaults in brackets)::
 
-    name: str                      [default]
+    name: str                      [custom]
     seed: int                      [0]
     duration_s: float              [6.0]    simulated time
     audio: {fs: int [16000], snr_db: float [20], frame_ms: float [64]}
