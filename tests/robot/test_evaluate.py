@@ -25,7 +25,8 @@ def test_bad_counts_and_durations():
         evaluate(1, duration_s=0.5)
     with pytest.raises(ConfigError, match="--workers must be an integer >= 0"):  # was a ValueError
         evaluate(1, workers=-1)
-    with pytest.raises(ConfigError, match="--seed must be an integer >= 0"):  # (numpy ValueError)
+    # (numpy ValueError; the rule gained an upper bound, 2**32 - 1 less the count)
+    with pytest.raises(ConfigError, match=r"--seed must be an integer in \[0, "):
         evaluate(1, seed0=-5)
     # wrong types: one typed error naming the option (were builtin TypeErrors from comparing a
     # string or None with a number)
@@ -93,3 +94,24 @@ def test_dask_local_cluster_gives_identical_results():
     assert evaluate(2, seed0=11, workers=2, duration_s=2.5).runs == local.runs
     assert [r["seed"] for r in remote.runs] == [11, 12]
     assert np.isfinite(local.summary["success_rate"])
+
+
+def test_eval_seeds_are_the_seeds_a_scenario_file_takes(monkeypatch):
+    """One seed range: 0 to 2**32 - 1. random_scenario(2**32) and `hearsee eval --seed
+    4294967295 -n 2` were accepted, and such a scenario, saved, was refused by
+    scenario_from_dict ('scenario.seed: must be <= 4294967295')."""
+    import hearsee.robot.evaluate as ev
+    from hearsee.robot.scenario import random_scenario, scenario_from_dict
+
+    top = 2**32 - 1
+    sc = random_scenario(top, 1.0)
+    assert scenario_from_dict(sc.to_dict()).to_dict() == sc.to_dict()
+    with pytest.raises(ConfigError, match="seed"):
+        scenario_from_dict({**sc.to_dict(), "seed": top + 1})
+    with pytest.raises(ConfigError, match="seed"):
+        random_scenario(top + 1, 1.0)
+    monkeypatch.setattr(ev, "run_one", lambda seed, duration_s: {"seed": seed})
+    assert evaluate(2, seed0=top - 1, workers=1).runs == [{"seed": top - 1}, {"seed": top}]
+    for seed0, n in ((top, 2), (top + 1, 1), (2**40, 3)):
+        with pytest.raises(ConfigError, match=r"^--seed must be an integer in \[0, "):
+            evaluate(n, seed0=seed0, workers=1)

@@ -20,7 +20,7 @@ import numpy as np
 
 from hearsee.config import finite_number, whole_number
 from hearsee.errors import ConfigError
-from hearsee.robot.scenario import MAX_DURATION_S, MIN_DURATION_S
+from hearsee.robot.scenario import MAX_DURATION_S, MAX_SEED, MIN_DURATION_S
 
 __all__ = ["MAX_SCENARIOS", "EvalResult", "evaluate", "run_one", "summarize"]
 
@@ -95,7 +95,8 @@ def evaluate(
     duration_s: float = 6.0,
 ) -> EvalResult:
     """Run ``n_scenarios`` random scenarios (1 to :data:`MAX_SCENARIOS`) with seeds
-    ``seed0 .. seed0 + n - 1``.
+    ``seed0 .. seed0 + n - 1``, each at most :data:`hearsee.robot.scenario.MAX_SEED`
+    (2**32 - 1, a scenario file's range; else a ConfigError naming --seed).
 
     Parameters
     ----------
@@ -115,7 +116,9 @@ def evaluate(
     duration_s = finite_number("--duration", duration_s, MIN_DURATION_S, MAX_DURATION_S)
     if workers is not None:
         workers = whole_number("--workers", workers, 0)  # (0 = all cores)
-    seed0 = whole_number("--seed", seed0, 0)
+    # (every seed a scenario file takes, so that any run can be saved and re-run with
+    # `hearsee demo --scenario`; there was no upper bound)
+    seed0 = whole_number("--seed", seed0, 0, MAX_SEED - n_scenarios + 1)
     seeds = list(range(seed0, seed0 + n_scenarios))
     job = partial(run_one, duration_s=float(duration_s))
     tick = progress or (lambda n=1: None)

@@ -9,7 +9,7 @@ follows REP 103 (x forward, y left, z up) and is placed by ``robot.position_m`` 
 Schema (defaults in brackets)::
 
     name: str                      [custom]
-    seed: int                      [0]
+    seed: int                      [0]      0 to 2**32 - 1 (MAX_SEED)
     duration_s: float              [6.0]    simulated time
     audio: {fs: int [16000], snr_db: float [20], frame_ms: float [64]}
                                    (frame_ms: TDOA frame length, 8-200 ms: at most one
@@ -62,6 +62,7 @@ from hearsee.errors import ConfigError, HearseeError
 __all__ = [
     "MAX_DURATION_S",
     "MAX_FRAME_MS",
+    "MAX_SEED",
     "MIN_DURATION_S",
     "ObjectSpec",
     "PersonSpec",
@@ -92,6 +93,11 @@ MAX_CAMERA_RATE_HZ = 5.0
 #: named no scenario field.)
 MAX_FRAME_MS = 200.0
 MAX_DURATION_S = 120.0
+#: A scenario's seed: a whole number 0 to 2**32 - 1, in a scenario file, in
+#: :func:`random_scenario` and in ``hearsee eval --seed`` (every seed of the evaluation). The
+#: last two had no upper bound, so an eval scenario seeded 2**32 could not be saved and re-run
+#: as a scenario file.
+MAX_SEED = 2**32 - 1
 
 
 @dataclass(frozen=True)
@@ -430,7 +436,7 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
         objects = tuple(obj(o, k, f"{where}.objects[{k}]") for k, o in enumerate(objects_raw))
 
     name = data.get("name", "custom")
-    seed = number(data, "seed", 0, where, 0, 2**32 - 1, integer=True)
+    seed = number(data, "seed", 0, where, 0, MAX_SEED, integer=True)
     return Scenario(
         name=str(name), seed=int(seed), duration_s=duration,
         fs=int(number(audio, "fs", 16000, f"{where}.audio", 8000, 96000, integer=True)),
@@ -496,10 +502,11 @@ def random_scenario(seed: int, duration_s: float = 6.0) -> Scenario:
     from 1.5-3.5 m to 1.2-4 m from the robot, never passing within ``ROBOT_CLEARANCE_M`` of it
     (when no straight walk that long fits the room -- runs longer than about 10 s, which also
     favour the slower walks that do fit -- back and forth along a shorter line),
-    0-2 human-like objects, RT60 0.2-0.5 s, SNR 10-25 dB. ``seed``: a whole number >= 0;
+    0-2 human-like objects, RT60 0.2-0.5 s, SNR 10-25 dB. ``seed``: a whole number 0 to
+    :data:`MAX_SEED` (as in a scenario file);
     ``duration_s``: :data:`MIN_DURATION_S` - :data:`MAX_DURATION_S` (as in a scenario file);
     else ConfigError."""
-    seed = whole_number("random_scenario seed", seed, 0)
+    seed = whole_number("random_scenario seed", seed, 0, MAX_SEED)
     duration = finite_number("random_scenario duration_s", duration_s, MIN_DURATION_S,
                              MAX_DURATION_S)
     rng = np.random.default_rng(seed)
