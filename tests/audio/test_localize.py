@@ -886,3 +886,55 @@ def test_exact_end_fire_of_a_horizontal_line_is_feasible():
                 assert loc.feasible and loc.n_solutions == 1, (n, phi, sign)
                 assert abs(wrap_deg(loc.azimuth_deg - np.degrees(np.arctan2(*(sign * u)[1::-1]))
                                     )) < 1e-4
+
+
+def _rotated(pos, axis: str, deg: float):
+    from scipy.spatial.transform import Rotation
+
+    return np.asarray(pos) @ Rotation.from_euler(axis, deg, degrees=True).as_matrix().T
+
+
+def test_micrometre_rounding_does_not_change_the_array_geometry():
+    """Positions written with six decimals (micrometres) are no real geometry: a 4-mic line
+    along azimuth 30 deg went to the planar solver (one answer, the front/back twin dropped;
+    2 us of noise: median error 88.6 deg) and a respeaker-6 tilted by 30 deg to the volume
+    solver (median 8 deg, up to 109). Now a direction counts as flat when it adds at most
+    FLAT_TDOA_S to any pair's TDOA; extents of 1-2 cm (29-58 us) stay volume."""
+    line = np.round(np.outer(0.05 * np.arange(4), unit_vector_deg(30.0, 0.0)), 6)
+    arr = MicArray(line)
+    assert array_geometry(arr).kind == "linear" and arr.is_planar
+    loc = localize_tdoa(arr.tdoa_far(unit_vector_deg(60.0, 0.0)), arr)
+    assert loc.feasible and loc.n_solutions == 2
+    assert sorted(_az(loc.candidates)) == pytest.approx([0.0, 60.0], abs=1e-3)
+
+    tilted = MicArray(np.round(_rotated(MicArray.from_preset("respeaker-6").positions, "y",
+                                        30.0), 6))
+    assert array_geometry(tilted).kind == "planar" and tilted.is_planar
+    rng = np.random.default_rng(11)
+    errs = []
+    for _ in range(40):
+        u = unit_vector_deg(rng.uniform(-180, 180), rng.uniform(-30, 30))
+        loc = localize_tdoa(tilted.tdoa_far(u) + rng.normal(0, 2e-6, 15), tilted,
+                            near_field=False)
+        errs.append(min(np.degrees(np.arccos(np.clip(unit_vector_deg(a, e) @ u, -1, 1)))
+                        for a, e in loc.candidates))
+    assert np.median(errs) < 1.5 and max(errs) < 10.0
+
+    # real extents: a fourth microphone 1 or 2 cm off the three-mic plane, one of respeaker-6's
+    # raised by 1 cm, the middle of three 1 cm off their line
+    for e in (0.01, 0.02):
+        assert array_geometry(MicArray(np.vstack([THREE.positions, [[0.03, 0.02, e]]]))
+                              ).kind == "volume"
+    raised = MicArray.from_preset("respeaker-6").positions.copy()
+    raised[0, 2] = 0.01
+    raised = MicArray(raised)
+    assert array_geometry(raised).kind == "volume" and not raised.is_planar
+    assert array_geometry(np.array([[0.0, -0.075, 0], [0.01, 0, 0], [0.0, 0.075, 0]])
+                          ).kind == "planar"
+    # the rule's boundary, in seconds of TDOA: just inside linear, just outside planar
+    from hearsee.audio.arrays import FLAT_TDOA_S
+
+    c = 343.0
+    for f, kind in ((0.99, "linear"), (1.01, "planar")):
+        pos = np.array([[0.0, -0.075, 0], [f * FLAT_TDOA_S * c, 0, 0], [0.0, 0.075, 0]])
+        assert array_geometry(pos).kind == kind

@@ -51,6 +51,7 @@ from hearsee.audio.arrays import (
     pair_tdoa_jacobian,
     position_uncertainty,
     residual_scaled_variance,
+    span_dimension,
 )
 from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, GeometryError
@@ -182,36 +183,38 @@ def array_geometry(array: MicArray | NDArray, rel_tol: float = 1e-6) -> ArrayGeo
     Positions given as an array are checked as a :class:`MicArray`'s (an N x 3 table of finite
     numbers, at least two distinct microphones): a NaN position raised numpy's LinAlgError
     ("SVD did not converge"), an infinite one a RuntimeWarning and a made-up answer.
-    ``rel_tol`` (the singular-value ratio below which a direction counts as flat) must be a
-    finite number in (0, 1]: NaN (and 0) classified every array as "volume", text raised a
-    builtin TypeError."""
+    A direction counts as flat when no far-field direction's part along it changes a pair's
+    TDOA by more than :data:`hearsee.audio.arrays.FLAT_TDOA_S` (10 us, 3.4 mm at 343 m/s), or
+    when its singular value is below ``rel_tol`` times the largest
+    (:func:`hearsee.audio.arrays.span_dimension`: until 2026-11-28 the ratio alone decided,
+    and micrometre-rounded positions went to the wrong solver). ``rel_tol`` must be a finite
+    number in (0, 1]: NaN (and 0) classified every array as "volume", text raised a builtin
+    TypeError."""
     if isinstance(array, MicArray) and rel_tol == 1e-6:
         return _geometry_cached(array)
     finite_number("rel_tol", rel_tol, 0.0, 1.0, lo_open=True, error=GeometryError)
-    pos = (array if isinstance(array, MicArray) else MicArray(array)).positions
-    return _classify(pos, rel_tol)
+    arr = array if isinstance(array, MicArray) else MicArray(array)
+    return _classify(arr.positions, rel_tol, arr.speed_of_sound)
 
 
 @lru_cache(maxsize=64)
 def _geometry_cached(array: MicArray) -> ArrayGeometry:
-    geo = _classify(array.positions, 1e-6)  # MicArray is immutable (frozen, read-only)
+    # (MicArray is immutable: frozen, read-only)
+    geo = _classify(array.positions, 1e-6, array.speed_of_sound)
     for v in (geo.centre, geo.axis, geo.basis, geo.normal):  # shared by every caller: read-only
         if v is not None:
             v.setflags(write=False)
     return geo
 
 
-def _classify(pos: NDArray, rel_tol: float) -> ArrayGeometry:
-    c = pos.mean(axis=0)
-    _, s, vt = np.linalg.svd(pos - c)
-    s = np.concatenate([s, np.zeros(3 - len(s))])
-    scale = max(s[0], 1e-12)
-    if s[1] < rel_tol * scale:
+def _classify(pos: NDArray, rel_tol: float, speed_of_sound: float) -> ArrayGeometry:
+    dim, c, vt = span_dimension(pos, speed_of_sound, rel_tol)
+    if dim == 1:
         axis = vt[0]
         if np.dot(axis, pos[-1] - pos[0]) < 0:
             axis = -axis
         return ArrayGeometry("linear", c, axis=axis)
-    if s[2] < rel_tol * scale:
+    if dim == 2:
         n = np.cross(vt[0], vt[1])
         n = n / np.linalg.norm(n)
         # orientation: prefer +z, then +x, then +y for "above"
@@ -579,12 +582,12 @@ def _spherical_interpolation(tau: NDArray, array: MicArray,
         return None
     c = array.speed_of_sound
     m = array.positions[1:] - array.positions[0]
+    geo = array_geometry(array)
     d = np.array([lookup[(k, 0)] for k in range(1, n)]) * c  # |P-M_k| - |P-M_0|
     M = np.column_stack([m, d])
     rhs = 0.5 * (np.sum(m * m, axis=1) - d * d)
     sol, *_ = np.linalg.lstsq(M, rhs, rcond=None)
     p = sol[:3] + array.positions[0]
-    geo = array_geometry(array)
     if geo.kind == "planar":
         # the minimum-norm solution lies in the plane; its range from microphone 0, sol[3],
         # gives the distance from the plane (up to the mirror sign)
