@@ -380,10 +380,19 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray | str,
     - ``|u_p| < 1``: two mirror solutions about the array plane (the one above, ``w > 0``,
       first); ``n_solutions=2``;
     - ``|u_p| = 1`` (within ``in_plane_tol``): one solution in the plane;
-    - ``|u_p| > 1``: the nearest direction, ``u_p / |u_p|`` in the plane. A source in the
-      array plane a few metres away gives that with exact TDOAs (its curved wavefront puts
+    - ``|u_p| > 1``: the nearest direction, the in-plane unit vector ``v`` of least TDOA
+      residual ``|B v - tdoa|`` (``B`` the in-plane part of the design; the boundary solution
+      of the trust-region problem, ``(B^T B + lambda I) v = B^T tdoa`` with ``lambda > 0`` such
+      that ``|v| = 1``, Nocedal & Wright, *Numerical Optimization*, 2nd ed., 4.3). A source in
+      the array plane a few metres away gives that with exact TDOAs (its curved wavefront puts
       ``|u_p|`` up to ~1.02 for the 15 cm triangle at 1-5 m, depending on the azimuth), so
-      it is one solution (``n_solutions=1``) when its TDOA residual is within ``tol_s``;
+      it is one solution (``n_solutions=1``) when its TDOA residual is within ``tol_s``.
+      Before 2026-11-28 this was ``u_p / |u_p|``, the nearest only where ``B^T B`` is
+      isotropic (an equilateral triangle with all pairs, regular polygons): a 40 x 3 cm
+      L-shaped array answered -31.35 deg for a source at -25 deg with 45 us of residual,
+      flagged infeasible, where -25.36 deg fits within 7.5 us. The ``three-mic`` preset's
+      answers move by less than 1e-4 deg (its six-decimal coordinates are equilateral to
+      ~1e-6);
     - a TDOA residual above ``tol_s`` (inconsistent ITDs): no exact solution; the nearest
       direction is returned, ``feasible=False``, ``n_solutions=0``.
     """
@@ -393,20 +402,19 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray | str,
     geo = array_geometry(array)
     if geo.kind != "planar":
         raise GeometryError("far_field_planar needs coplanar (and not collinear) microphones")
-    A, B_pinv = _planar_solver(array, tuple(prs))
+    A, B_pinv, B = _planar_solver(array, tuple(prs))
     q = B_pinv @ tau  # least squares in the array plane
     norm_p = float(np.linalg.norm(q))
     extra = {"in_plane_norm": norm_p}
     if norm_p > 1.0 + in_plane_tol:
-        up = q / norm_p
-        u = up @ geo.basis
+        u = _nearest_unit(B, tau, q) @ geo.basis
         resid = _rms(A @ u - tau)
         feasible = resid <= tol_s
         az, el = _azel(u)
         return Localization(az, el, [(az, el)], int(feasible), feasible, direction=u,
                             residual_s=resid, geometry="planar", extra=extra)
     w = float(np.sqrt(max(0.0, 1.0 - min(norm_p, 1.0) ** 2)))
-    up = q if norm_p <= 1.0 else q / norm_p
+    up = q if norm_p <= 1.0 else _nearest_unit(B, tau, q)
     base = up @ geo.basis
     if w < np.sqrt(2 * in_plane_tol):  # in the plane: one solution
         us = [base / np.linalg.norm(base)]
@@ -421,10 +429,12 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray | str,
 
 
 @lru_cache(maxsize=64)
-def _planar_solver(array: MicArray, prs: tuple[tuple[int, int], ...]) -> tuple[NDArray, NDArray]:
+def _planar_solver(array: MicArray, prs: tuple[tuple[int, int], ...]
+                   ) -> tuple[NDArray, NDArray, NDArray]:
     """The geometry-only part of :func:`far_field_planar`, once per array and pair set (a
-    stream localizes every frame with the same ones): the design ``A`` and the pseudo-inverse
-    of its in-plane part."""
+    stream localizes every frame with the same ones): the design ``A``, the pseudo-inverse
+    of its in-plane part and that part ``B`` (seconds per unit direction: rows ``-(M_i -
+    M_j) / c0`` in the plane basis)."""
     A = _design(array, list(prs))
     B = A @ array_geometry(array).basis.T  # (n_pairs, 2)
     if np.linalg.matrix_rank(B, tol=1e-9 * np.abs(B).max()) < 2:
@@ -432,7 +442,35 @@ def _planar_solver(array: MicArray, prs: tuple[tuple[int, int], ...]) -> tuple[N
     A.flags.writeable = False
     B_pinv = np.linalg.pinv(B)
     B_pinv.flags.writeable = False
-    return A, B_pinv
+    B.flags.writeable = False
+    return A, B_pinv, B
+
+
+def _nearest_unit(B: NDArray, tau: NDArray, q: NDArray) -> NDArray:
+    """The unit vector ``v`` (2,) minimising ``|B v - tau|`` (``B`` (n_pairs, 2) seconds per
+    unit direction, ``tau`` seconds) when the unconstrained least squares ``q`` lies outside
+    the unit circle: ``v = (H + lambda I)^-1 g`` with ``H = B^T B``, ``g = B^T tau`` and the
+    ``lambda > 0`` at which ``|v| = 1`` -- the trust-region boundary solution (Nocedal &
+    Wright, *Numerical Optimization*, 2nd ed., 4.3: with ``|q| > 1`` and ``H`` positive
+    definite it is the global minimum on the circle). ``lambda`` by Newton's method on
+    ``1 / |v(lambda)| - 1`` from 0 (their algorithm 4.3: increasing and concave there, so the
+    iterates rise monotonically to the root), in ``H``'s eigenbasis. An isotropic ``H`` gives
+    ``q / |q|``."""
+    h, V = np.linalg.eigh(B.T @ B)
+    a = V.T @ (B.T @ tau)
+    lam = 0.0
+    for _ in range(100):
+        x = a / (h + lam)
+        nx = float(np.linalg.norm(x))
+        if nx <= 1.0 + 1e-15:
+            break
+        dx = -float(np.sum(x * x / (h + lam))) / nx  # d|x| / d lambda
+        step = -(1.0 / nx - 1.0) / (-dx / nx**2)  # Newton on 1/|x| - 1
+        if not step > 1e-15 * (lam + float(h[-1])):
+            break
+        lam += step
+    v = V @ (a / (h + lam))
+    return v / np.linalg.norm(v)
 
 
 # ---------------------------------------------------------------------------------- volume
