@@ -989,3 +989,24 @@ def test_planar_nearest_direction_is_the_least_residual_one():
             assert abs(wrap_deg(loc.azimuth_deg - az)) < 1e-3
             assert loc.residual_s == pytest.approx(r, rel=1e-6)
             assert loc.feasible == (r <= DEFAULT_TOL_S)
+
+
+def test_near_field_position_needs_three_independent_tdoas():
+    """Two independent TDOAs (three microphones; a volume array given two pairs) fix a curve
+    of positions, not one: near_field_position returned one point of it with a residual of
+    ~0, 1.09 m off for the three-mic preset and a source at (1, 0.5, 0.2), 0.28 m off for a
+    cube given two pairs and a start. Now a GeometryError, as for a linear array."""
+    src = np.array([1.0, 0.5, 0.2])
+    for x0 in (None, [1.0, 0.0, 0.0]):
+        with pytest.raises(GeometryError, match="2 independent TDOAs"):
+            near_field_position(THREE.tdoa(src), THREE, x0=x0)
+    cube = MicArray(np.array([[x, y, z] for x in (-.1, .1) for y in (-.1, .1) for z in (-.1, .1)]))
+    for prs in ([(0, 1), (0, 2)], [(0, 1), (1, 2), (0, 2)]):
+        with pytest.raises(GeometryError, match="2 independent TDOAs"):
+            near_field_position(cube.tdoa(src, prs), cube, pairs=prs, x0=[1.0, 0.0, 0.0])
+    line = MicArray(np.c_[np.linspace(-0.2, 0.2, 3), np.zeros(3), np.zeros(3)])
+    with pytest.raises(GeometryError, match="linear"):  # (x0 skipped this check)
+        near_field_position(line.tdoa(src), line, x0=[1.0, 0.0, 0.0])
+    prs = [(0, 1), (0, 2), (0, 4)]  # three independent: the position is fixed
+    p, r = near_field_position(cube.tdoa(src, prs), cube, pairs=prs, x0=[1.0, 0.4, 0.1])
+    np.testing.assert_allclose(p, src, atol=1e-6)

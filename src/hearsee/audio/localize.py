@@ -525,7 +525,13 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray | str,
     of the fits on the far side of the array, 150-175 deg off (flagged only by their
     residual), both starts together none (300 random sources 0.5-4 m away per array,
     2026-11-27). Returns (position, RMS residual in seconds). Meaningful only for arrays whose
-    aperture is not tiny compared with the range; a linear array has no position (GeometryError).
+    aperture is not tiny compared with the range. A linear array has no position, and neither
+    have pairs of fewer than three independent TDOAs (:func:`_independent_tdoas`: three
+    microphones, or any array given two pairs): two TDOAs leave a curve of positions
+    (:func:`three_mic_curve`, thesis fig. 2.6) for three unknowns. Both are GeometryErrors
+    (before 2026-11-28 the second returned one point of the curve with a residual of ~0,
+    1.1 m off for the three-mic preset and a source 1.1 m away). Three independent TDOAs
+    (four microphones) fit exactly and may fit two positions; the fit returns one.
 
     A planar array fixes the position up to its mirror image about the array plane (the TDOAs
     are even in the distance from it): the starts are lifted off the plane, where that
@@ -538,6 +544,12 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray | str,
     prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
     _check_loss(loss)
+    if array_geometry(array).kind == "linear":  # (checked here too: x0 skips the starts)
+        raise GeometryError("a linear array cannot fix a source position (only a cone)")
+    n_ind = _independent_tdoas(array.n_mics, tuple(prs))
+    if n_ind < 3:
+        raise GeometryError(f"the pairs give {n_ind} independent TDOAs: they fix a curve of "
+                            f"source positions, not one (3 unknowns; see three_mic_curve)")
     if x0 is not None:  # (scipy's or numpy's ValueError for NaN, short or text starts)
         try:
             start = np.asarray(x0, dtype=float).reshape(-1)
