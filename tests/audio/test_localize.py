@@ -1010,3 +1010,21 @@ def test_near_field_position_needs_three_independent_tdoas():
     prs = [(0, 1), (0, 2), (0, 4)]  # three independent: the position is fixed
     p, r = near_field_position(cube.tdoa(src, prs), cube, pairs=prs, x0=[1.0, 0.4, 0.1])
     np.testing.assert_allclose(p, src, atol=1e-6)
+
+
+@pytest.mark.parametrize("tilt", [0.0, 0.001, -0.001, 1.0, -1.0, 20.0, -20.0])
+def test_vertical_planar_array_keeps_its_front_side_when_slightly_tilted(tilt):
+    """The normal's sign followed any z component above 1e-9: tilting the vertical array of
+    test_planar_array_in_vertical_plane_mirrors_about_that_plane by 0.001 deg about y made
+    the mirror behind, (150, 10), the primary answer of a source at (30, 10) in front. The
+    largest component now decides: +x for this array up to a 45 deg tilt."""
+    base = np.array([[0.0, 0.1, 0.0], [0.0, -0.1, 0.0], [0.0, 0.0, 0.12]])
+    arr = MicArray(_rotated(base, "y", tilt))
+    geo = array_geometry(arr)
+    assert geo.kind == "planar" and geo.normal[0] > 0.9
+    u = unit_vector_deg(30.0, 10.0)
+    loc = localize_tdoa(arr.tdoa_far(u), arr)
+    assert loc.n_solutions == 2
+    assert np.degrees(np.arccos(min(1.0, loc.direction @ u))) < 1e-6  # the front one first
+    flat = MicArray(_rotated(THREE.positions, "y", tilt))  # a horizontal one: +z, as before
+    assert array_geometry(flat).normal[2] > 0.9

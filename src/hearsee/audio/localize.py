@@ -166,8 +166,14 @@ class ArrayGeometry:
     """Span of the microphone positions: ``kind`` and an orthonormal basis.
 
     axis : (3,) for linear arrays (unit, from the first toward the last microphone)
-    basis : (2, 3) in-plane basis and normal (3,) for planar arrays (normal with z >= 0 when
-    possible, so that "above the plane" is +z for a horizontal array)
+    basis : (2, 3) in-plane basis and normal (3,) for planar arrays. The normal's sign makes
+    its largest component positive (ties: z, then x, then y): "above the plane" (the first
+    of two mirror candidates, the side a planar position is reported on) is +z for a
+    horizontal array or one tilted less than 45 deg, +x for one in a vertical plane facing
+    forward. Before 2026-11-28 the sign of any z component above 1e-9 decided, so a vertical
+    array tilted by 0.001 deg (a z component of 2e-5) turned its primary answer of a source
+    in front (30 deg) to the mirror behind (150 deg); now sign flips only where two components
+    are equal in size (planes at 45 deg), far from level or upright mountings.
     """
 
     kind: str
@@ -217,12 +223,9 @@ def _classify(pos: NDArray, rel_tol: float, speed_of_sound: float) -> ArrayGeome
     if dim == 2:
         n = np.cross(vt[0], vt[1])
         n = n / np.linalg.norm(n)
-        # orientation: prefer +z, then +x, then +y for "above"
-        for k in (2, 0, 1):
-            if abs(n[k]) > 1e-9:
-                if n[k] < 0:
-                    n = -n
-                break
+        # orientation: the largest component positive (ties: z, then x, then y)
+        if n[max((2, 0, 1), key=lambda k: abs(n[k]))] < 0:
+            n = -n
         e1 = vt[0]
         e2 = np.cross(n, e1)
         return ArrayGeometry("planar", c, basis=np.stack([e1, e2]), normal=n)
