@@ -1028,3 +1028,24 @@ def test_vertical_planar_array_keeps_its_front_side_when_slightly_tilted(tilt):
     assert np.degrees(np.arccos(min(1.0, loc.direction @ u))) < 1e-6  # the front one first
     flat = MicArray(_rotated(THREE.positions, "y", tilt))  # a horizontal one: +z, as before
     assert array_geometry(flat).normal[2] > 0.9
+
+
+def test_in_plane_source_of_a_planar_array_is_one_solution_from_the_position():
+    """Planar arrays of 5+ microphones take the direction of the near-field position; its fit
+    of an in-plane source stops a hair off the plane (elevation ~0.0014 deg), and any height
+    above it added the mirror: two "solutions" at +-0.0014 deg where the plane wave of the
+    same TDOAs says one. Sources clearly off the plane keep their two mirror solutions."""
+    c8 = MicArray(np.array([[0.15 * np.cos(a), 0.15 * np.sin(a), 0.0]
+                            for a in np.arange(8) * np.pi / 4]))
+    for src in ([1.0, 0.0, 0.0], [-2.0, 0.1, 0.0], [0.4, 0.7, 0.0]):
+        loc = localize_tdoa(c8.tdoa(np.array(src)), c8)
+        assert loc.extra["direction_model"] == "position"
+        assert loc.n_solutions == 1 and len(loc.candidates) == 1 and loc.feasible
+        az = np.degrees(np.arctan2(src[1], src[0]))
+        assert loc.azimuth_deg == pytest.approx(az, abs=1e-3)
+        assert abs(loc.elevation_deg) < 0.01
+    for el in (3.0, -10.0):
+        src = 1.0 * unit_vector_deg(50.0, el)
+        loc = localize_tdoa(c8.tdoa(src), c8)
+        assert loc.extra["direction_model"] == "position" and loc.n_solutions == 2
+        assert [e for _, e in loc.candidates] == pytest.approx([abs(el), -abs(el)], abs=1e-3)

@@ -1133,13 +1133,24 @@ def _near_model_wins(rms_far_s: float, rms_near_s: float, n_independent: int) ->
     return bool(rms_far_s > rms_near_s * math.exp(NEAR_MODEL_LR_CRITICAL / (2.0 * n_independent)))
 
 
+#: Elevation (rad) above a planar array's plane, seen from its centre, below which a fitted
+#: position's mirror image is the same solution (:func:`_direction_from_position`). The fit of
+#: a source in the plane stops 1e-5 to 5e-5 of its range off it (the height has no gradient
+#: there): an 8-mic 15 cm circle reported in-plane sources as two solutions at +-0.0014 deg
+#: before 2026-11-28, where the plane wave gave one. 1e-3 rad (0.057 deg) changes the TDOAs of
+#: a 30 cm array by ``(D / c0) el^2 / 2`` = 0.4 ns, far below any TDOA error.
+_PLANE_TWIN_RAD = 1e-3
+
+
 def _direction_from_position(loc: Localization, p: NDArray, rms_s: float,
                              tol_s: float, geo: ArrayGeometry) -> None:
     """Make the direction of ``p`` (metres) from the array frame's origin -- the direction a
     source at ``p`` has in that frame, as :func:`hearsee.sim.audio.ground_truth` gives it --
     the primary answer of the localization ``loc`` (the plane wave's answer kept in
     ``extra``). A planar array's ``p`` off its plane adds the direction of its mirror image
-    about the plane as the second candidate."""
+    about the plane as the second candidate, unless ``p``'s elevation above the plane, seen
+    from the array centre, is below :data:`_PLANE_TWIN_RAD`: one solution then, as
+    :func:`far_field_linear` merges twins closer than rounding."""
     v = np.asarray(p, dtype=float)
     n = float(np.linalg.norm(v))
     if not (np.isfinite(n) and n > 0):
@@ -1147,7 +1158,8 @@ def _direction_from_position(loc: Localization, p: NDArray, rms_s: float,
     loc.extra["far_field"] = {"azimuth_deg": loc.azimuth_deg,
                               "elevation_deg": loc.elevation_deg, "residual_s": loc.residual_s}
     points = [v]
-    if geo.kind == "planar" and (h := float((v - geo.centre) @ geo.normal)) > 0:
+    if geo.kind == "planar" and (h := float((v - geo.centre) @ geo.normal)) > \
+            _PLANE_TWIN_RAD * float(np.linalg.norm(v - geo.centre)):
         points.append(v - 2.0 * h * geo.normal)
     cands = [_azel(q / np.linalg.norm(q)) for q in points]
     loc.azimuth_deg, loc.elevation_deg = cands[0]
