@@ -1049,3 +1049,44 @@ def test_in_plane_source_of_a_planar_array_is_one_solution_from_the_position():
         loc = localize_tdoa(c8.tdoa(src), c8)
         assert loc.extra["direction_model"] == "position" and loc.n_solutions == 2
         assert [e for _, e in loc.candidates] == pytest.approx([abs(el), -abs(el)], abs=1e-3)
+
+
+def test_remaining_parameters_are_checked():
+    """Parameters of public solvers that were not checked: far_field_planar(in_plane_tol="1e-3")
+    raised a builtin TypeError and -1 or 0.5 answered a source 10 deg above the plane as in
+    it; near_field_in_plane(range_m="2") and (max_inverse_range="2") raised builtin
+    TypeErrors, True was taken as 1 m and 1e-300 m overflowed; near_field_position(x0=[1e300,
+    0, 0]) raised scipy's ValueError; three_mic_curve read ranges_m=["1.5"] as 1.5 m;
+    position_tdoa_std raised numpy's ValueError for text TDOAs and returned the declared 5 us
+    for NaN ones. Now GeometryErrors; valid values answer as before."""
+    from hearsee.audio.localize import position_tdoa_std
+
+    t3 = THREE.tdoa_far(unit_vector_deg(20.0, 10.0))
+    for bad in ("0.001", -1.0, 0.0, 0.6, np.nan, True):
+        with pytest.raises(GeometryError, match="^in_plane_tol must be a finite number in"):
+            far_field_planar(t3, THREE, in_plane_tol=bad)
+    loc = far_field_planar(t3, THREE, in_plane_tol=1e-3)
+    assert loc.n_solutions == 2 and loc.elevation_deg == pytest.approx(10.0, abs=1e-6)
+    for bad in ("2", True, 1e-300, 1e7, np.nan, 0.0, -2.0):
+        with pytest.raises(GeometryError, match="^range_m must be a number of metres"):
+            near_field_in_plane(t3, THREE, range_m=bad)
+    for bad in ("2", True, -1.0, np.inf, 1e300):
+        with pytest.raises(GeometryError, match=r"^max_inverse_range \(1/m\) must be"):
+            near_field_in_plane(t3, THREE, range_m=None, max_inverse_range=bad)
+    assert near_field_in_plane(t3, THREE, range_m=2).azimuth_deg == \
+        near_field_in_plane(t3, THREE).azimuth_deg
+    tet = MicArray(np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]) * 0.05)
+    with pytest.raises(GeometryError, match="^x0 too far"):
+        near_field_position(tet.tdoa([1.0, 0.0, 0.0]), tet, x0=[1e300, 0.0, 0.0])
+    for bad in (["1.5"], [True, 1.0]):
+        with pytest.raises(GeometryError, match="^ranges_m must be"):
+            three_mic_curve(t3, THREE, ranges_m=bad)
+    for bad, msg in ((["a", 0.0, 0.0], "real numbers"), ([np.nan, 0.0, 0.0], "finite"),
+                     ([0.0, 0.0], "3 microphone pairs")):
+        with pytest.raises(GeometryError, match=msg):
+            position_tdoa_std(bad, THREE.pairs, 3, 5e-6)
+    for kw in ({"tdoa_std_s": "5e-6"}, {"tdoa_std_s": 0.0}, {"factor": np.nan}):
+        with pytest.raises(GeometryError, match=f"^{next(iter(kw))} must be"):
+            position_tdoa_std(t3, THREE.pairs, 3, **{"tdoa_std_s": 5e-6, **kw})
+    assert position_tdoa_std([1e-4, 2e-4, 1e-4 + 3e-6], THREE.pairs, 3, 5e-6) == \
+        pytest.approx(3.0 * 3e-6 / np.sqrt(3))

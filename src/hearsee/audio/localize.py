@@ -44,6 +44,7 @@ from hearsee.audio.arrays import (
     MicArray,
     _linearised_covariance,
     _pair_index,
+    check_pairs,
     closure_rms,
     load_array,
     pair_closure_projector,
@@ -382,7 +383,9 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray | str,
 
     - ``|u_p| < 1``: two mirror solutions about the array plane (the one above, ``w > 0``,
       first); ``n_solutions=2``;
-    - ``|u_p| = 1`` (within ``in_plane_tol``): one solution in the plane;
+    - ``|u_p| = 1`` (within ``in_plane_tol``, a number in (0, 0.5]: elevations below
+      ``asin(sqrt(2 in_plane_tol))``, 2.6 deg by default, count as in the plane; 0.5 puts
+      every direction but the normal there): one solution in the plane;
     - ``|u_p| > 1``: the nearest direction, the in-plane unit vector ``v`` of least TDOA
       residual ``|B v - tdoa|`` (``B`` the in-plane part of the design; the boundary solution
       of the trust-region problem, ``(B^T B + lambda I) v = B^T tdoa`` with ``lambda > 0`` such
@@ -402,6 +405,10 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray | str,
     array = load_array(array)  # (a MicArray, or a preset name / YAML path)
     prs = array.checked_pairs(pairs)
     tau = _tdoas(tdoa_s, prs, tol_s)
+    # (text raised a builtin TypeError; -1 or 0.5 answered a source 10 deg above the plane
+    # as in it)
+    in_plane_tol = finite_number("in_plane_tol", in_plane_tol, 0.0, 0.5, lo_open=True,
+                                 error=GeometryError)
     geo = array_geometry(array)
     if geo.kind != "planar":
         raise GeometryError("far_field_planar needs coplanar (and not collinear) microphones")
@@ -561,6 +568,11 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray | str,
         if start.shape != (3,) or not np.all(np.isfinite(start)):
             raise GeometryError(f"x0 must be a finite [x, y, z] start position in metres, "
                                 f"got {x0!r}")
+        with np.errstate(over="ignore", invalid="ignore"):  # ([1e300, 0, 0]: scipy's ValueError)
+            at = pair_tdoa(start, array.positions, *_pair_index(prs), array.speed_of_sound)
+        if not np.all(np.isfinite(at)):
+            raise GeometryError(f"x0 too far: its distances to the microphones overflow "
+                                f"float64 (metres expected), got {x0!r}")
         x0 = start
     return _fit_position(tau, array, prs, [x0] if x0 is not None else
                          _position_starts(tau, array, prs), loss, tol_s)
@@ -664,6 +676,11 @@ def _inplane_tdoa(theta: NDArray, rho: NDArray, basis: NDArray, d: NDArray, I: N
     return num / ((q[..., I] + q[..., J]) * c)
 
 
+#: Ranges (metres) :func:`near_field_in_plane` takes: from the library's microphone spacing
+#: floor (:data:`hearsee.audio.arrays.MIN_SPACING_M`, 1 mm) to 1000 km (a plane wave to float
+#: precision for any array); beyond them the inverse range over- or underflowed.
+_RANGE_M = (1e-3, 1e6)
+
 #: Assumed range (metres from the array centre) of an in-plane source: a person talking to a
 #: robot (:func:`near_field_in_plane`; the whole-recording search of ``estimate_tdoas(joint=
 #: "auto")`` steers the same wavefront)
@@ -687,18 +704,19 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
     seen from the array centre.
 
     range_m : float or None
-        Assumed source range in metres (``rho = 1 / range_m``; default 2 m, a person talking to
-        a robot). With sources at 1-3 m this leaves ~1/3 of the far-field bias (noiseless RMS
-        0.17 deg instead of 0.5 deg) and adds no noise. ``None`` fits ``rho`` jointly in ``[0,
+        Assumed source range in metres (``rho = 1 / range_m``; default 2 m, a person talking to a
+        robot), within ``[1e-3, 1e6]`` m (:data:`_RANGE_M`; ``max_inverse_range`` is 1/m in ``[0,
+        1e3]``). With sources at 1-3 m this leaves ~1/3 of the far-field bias (noiseless RMS 0.17
+        deg instead of 0.5 deg) and adds no noise. ``None`` fits ``rho`` jointly in ``[0,
         max_inverse_range]`` 1/m (0 = plane wave): unbiased on clean TDOAs, but with three
         microphones the two independent TDOAs then fix both unknowns exactly, the range is
-        ill-conditioned (within a few degrees of a pair's end-fire direction -- +-30, +-90,
-        +-150 deg for the three-mic preset -- distinct in-plane points share their TDOAs:
-        exact fits there may sit up to ~2 deg (0.5 m), ~1 deg (1 m) or ~0.2 deg (2 m) off
-        in azimuth) and TDOA errors reach the azimuth amplified -- on held-out reverberant
-        recordings (``bench/doa.py``, seed 777) the fitted range multiplied the azimuth RMSE
-        by 3-4, the assumed 2 m lowered it (measured before the fix of the clipped range step
-        on 2026-11-24, which halved the azimuth RMS of fits on 5-us-noisy TDOAs; not re-run).
+        ill-conditioned (within a few degrees of a pair's end-fire direction -- +-30, +-90, +-150
+        deg for the three-mic preset -- distinct in-plane points share their TDOAs: exact fits there
+        may sit up to ~2 deg (0.5 m), ~1 deg (1 m) or ~0.2 deg (2 m) off in azimuth) and TDOA errors
+        reach the azimuth amplified -- on held-out reverberant recordings (``bench/doa.py``, seed
+        777) the fitted range multiplied the azimuth RMSE by 3-4, the assumed 2 m lowered it
+        (measured before the fix of the clipped range step on 2026-11-24, which halved the azimuth
+        RMS of fits on 5-us-noisy TDOAs; not re-run).
 
     This is the in-plane (``dim=2``) assumption of pyroomacoustics' DOA methods and of the
     thesis's "half horizontal plane"; Gauss-Newton on range-difference equations follows Foy
@@ -730,10 +748,12 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
     geo = array_geometry(array)
     if geo.kind != "planar":
         raise GeometryError("near_field_in_plane needs coplanar (and not collinear) microphones")
-    if range_m is not None and not (np.isfinite(range_m) and range_m > 0):
-        raise GeometryError(f"range_m must be a positive number of metres or None, got {range_m}")
-    if not max_inverse_range >= 0:
-        raise GeometryError(f"max_inverse_range must be >= 0 (1/m), got {max_inverse_range}")
+    # (text raised builtin TypeErrors, True was 1 m, 1e-300 m overflowed with a warning)
+    if range_m is not None and not (is_real(range_m) and _RANGE_M[0] <= range_m <= _RANGE_M[1]):
+        raise GeometryError(f"range_m must be a number of metres in [{_RANGE_M[0]:g}, "
+                            f"{_RANGE_M[1]:g}] or None, got {range_m!r}")
+    max_inverse_range = finite_number("max_inverse_range (1/m)", max_inverse_range, 0.0,
+                                      1.0 / _RANGE_M[0], error=GeometryError)
     tdoa_std_s = finite_number("tdoa_std_s", tdoa_std_s, 0.0, lo_open=True, error=GeometryError)
     closure_std_factor = finite_number("closure_std_factor", closure_std_factor, 0.0,
                                        error=GeometryError)
@@ -1066,7 +1086,13 @@ def position_tdoa_std(tdoa_s: ArrayLike, pairs: Sequence[tuple[int, int]], n_mic
     and centre 8 -> 0, 8-mic circle 5 -> 0), 95 % ellipsoids holding the truth 57-78 % -> 90-100 %
     per array and RT60 (pooled 68 -> 97 %), reported share in the rooms 47 -> 25 % (340 -> 179
     of 720); anechoic and every direction unchanged."""
-    clo = closure_rms(tdoa_s, pairs, n_mics)
+    prs = check_pairs(pairs, whole_number("n_mics", n_mics, 2, error=GeometryError))
+    tau = as_tdoas(tdoa_s, len(prs))  # (text: numpy's builtin ValueError)
+    if not np.all(np.isfinite(tau)):  # (NaN: max(5e-6, nan) returned the declared value)
+        raise GeometryError("position_tdoa_std needs finite TDOAs (seconds)")
+    tdoa_std_s = finite_number("tdoa_std_s", tdoa_std_s, 0.0, lo_open=True, error=GeometryError)
+    factor = finite_number("factor", factor, 0.0, error=GeometryError)
+    clo = closure_rms(tau, prs, n_mics)
     return tdoa_std_s if clo is None else max(tdoa_std_s, factor * clo)
 
 
@@ -1290,6 +1316,8 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
     arr = load_array(array)
     prs = arr.checked_pairs(pairs)
     tau = as_tdoas(tdoa_s, len(prs))
+    if ranges_m is not None and not real_entries(ranges_m):  # (text was read as numbers)
+        raise GeometryError(f"ranges_m must be finite distances > 0 m, got {ranges_m!r}")
     ranges = np.linspace(0.3, 3.0, 40) if ranges_m is None else np.asarray(ranges_m, float)
     if ranges.ndim != 1 or ranges.size == 0 or not np.all(np.isfinite(ranges) & (ranges > 0)):
         raise GeometryError(f"ranges_m must be finite distances > 0 m, got {ranges_m!r}")
