@@ -1090,3 +1090,25 @@ def test_remaining_parameters_are_checked():
             position_tdoa_std(t3, THREE.pairs, 3, **{"tdoa_std_s": 5e-6, **kw})
     assert position_tdoa_std([1e-4, 2e-4, 1e-4 + 3e-6], THREE.pairs, 3, 5e-6) == \
         pytest.approx(3.0 * 3e-6 / np.sqrt(3))
+
+
+def test_tilted_line_reports_the_horizontal_answers_own_residual():
+    """A line whose axis is tilted out of the horizontal plane: when the cone of a source above
+    it misses that plane the answer is the horizontal direction on the axis azimuth, but the
+    result said residual 0 (the cone's) with feasible=False and 0 solutions, whatever the miss.
+    Now the residual and the flags are the answer's: a 1 deg miss fits within tol_s (one
+    solution), a 30 deg one does not."""
+    axis = unit_vector_deg(0.0, 45.0)
+    line = MicArray(np.outer([0.0, 0.2], axis))
+    for el, ok in ((1.0, True), (30.0, False), (60.0, False)):
+        tau = line.tdoa_far(unit_vector_deg(0.0, el))
+        loc = localize_tdoa(tau, line)
+        answer = line.tdoa_far(unit_vector_deg(loc.azimuth_deg, 0.0))
+        want = float(np.sqrt(np.mean((answer - tau) ** 2)))
+        assert loc.azimuth_deg == pytest.approx(0.0, abs=1e-9) and len(loc.candidates) == 1
+        assert loc.residual_s == pytest.approx(want, rel=1e-9) and want > 0
+        assert loc.feasible is ok and loc.feasible == (want <= DEFAULT_TOL_S)
+        assert loc.n_solutions == (1 if ok else 0) and loc.extra["off_horizontal"]
+    loc = localize_tdoa(line.tdoa_far(unit_vector_deg(30.0, 0.0)), line)  # meets the plane
+    assert loc.feasible and loc.n_solutions == 2 and loc.residual_s < 1e-12
+    assert "off_horizontal" not in loc.extra

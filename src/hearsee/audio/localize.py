@@ -328,6 +328,13 @@ def far_field_linear(tdoa_s: ArrayLike, array: MicArray | str,
     at elevation 0, the thesis's "half horizontal plane"): ``phi_a +- acos(cos(theta) / |a_xy|)``
     with ``phi_a`` the axis azimuth -- for the y-axis pair, ``alpha`` and ``180 - alpha``. The
     front candidate (|az| <= 90) comes first. A vertical axis resolves only the elevation.
+
+    Where the cone misses the horizontal plane (a tilted axis and a source well above or below
+    it) the answer is the horizontal direction nearest it, on the axis azimuth (one candidate),
+    and ``residual_s`` and ``feasible`` are that direction's, as everywhere the primary
+    solution's: within ``tol_s`` it is a solution (``n_solutions=1``), beyond it not;
+    ``extra["off_horizontal"]`` is True. Before 2026-11-28 such TDOAs were always
+    ``feasible=False``, ``n_solutions=0``, with the cone's residual (0 for exact TDOAs).
     """
     array = load_array(array)  # (a MicArray, or a preset name / YAML path)
     prs = array.checked_pairs(pairs)
@@ -356,8 +363,10 @@ def far_field_linear(tdoa_s: ArrayLike, array: MicArray | str,
     # exceed 1 -- "infeasible, 0 solutions" for the true direction in 18-26 % of random
     # horizontal line orientations)
     if abs(ratio) > 1.0 + 1e-9:  # the cone misses the horizontal plane: nearest azimuth on the axis
-        feasible = False
         ratio = float(np.sign(ratio))
+        resid = _rms(A * (axy * ratio) - tau)  # (that horizontal direction's; the cone's was 0)
+        feasible = resid <= tol_s
+        extra["off_horizontal"] = True
     d = np.arccos(np.clip(ratio, -1.0, 1.0))
     azs = [float(np.degrees(phi_a + d)), float(np.degrees(phi_a - d))]
     azs = [float(wrap_deg(v)) for v in azs]
