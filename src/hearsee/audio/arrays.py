@@ -326,7 +326,7 @@ def span_dimension(positions: NDArray, speed_of_sound: float, rel_tol: float = 1
     line (plane) is at most ``c0 * FLAT_TDOA_S`` metres long (:data:`FLAT_TDOA_S`, 10 us: 3.4
     mm at 343 m/s) -- no far-field direction's out-of-line (out-of-plane) part changes a pair's
     TDOA by more -- or when the thinnest spread's singular value is below ``rel_tol`` times
-    the largest (the rule alone until 2026-11-28, with 1e-6). With the ratio alone, positions
+    the largest (the rule alone until 2026-12-02, with 1e-6). With the ratio alone, positions
     written with six decimals (micrometres) sent a 4-mic line along azimuth 30 deg to the
     planar solver and a ``respeaker-6`` tilted by 30 deg to the volume solver, whose extra
     direction was then fixed by micrometres of geometry and swamped by the TDOA noise (2 us:
@@ -335,7 +335,7 @@ def span_dimension(positions: NDArray, speed_of_sound: float, rel_tol: float = 1
     Why 10 us: an extent ``e`` puts at most ``e / c0`` of model error on the lower-dimensional
     solver, while the higher-dimensional one's error along that direction grows as ``sigma c0
     / e`` for TDOA noise ``sigma``. Far-field sources within +-30 deg of the plane (300 per
-    cell, i.i.d. noise; 2026-11-28), RMS error of the best candidate, planar solver vs volume
+    cell, i.i.d. noise; 2026-12-02), RMS error of the best candidate, planar solver vs volume
     solver: ``respeaker-6`` with one microphone raised by e, at 1 / 2 / 5 us of noise, 0.9 vs
     7.4 / 1.5 vs 16.6 / 2.9 vs 25.3 deg at e = 1 mm, 0.9 vs 1.8 / 1.5 vs 4.0 / 2.9 vs 12.7 at
     3.4 mm, 0.9 vs 1.1 / 1.5 vs 2.6 / 3.0 vs 7.9 at 5 mm, 0.9 vs 0.6 / 1.5 vs 1.4 / 3.0 vs 3.9

@@ -171,7 +171,7 @@ class ArrayGeometry:
     its largest component positive (ties: z, then x, then y): "above the plane" (the first
     of two mirror candidates, the side a planar position is reported on) is +z for a
     horizontal array or one tilted less than 45 deg, +x for one in a vertical plane facing
-    forward. Before 2026-11-28 the sign of any z component above 1e-9 decided, so a vertical
+    forward. Before 2026-12-02 the sign of any z component above 1e-9 decided, so a vertical
     array tilted by 0.001 deg (a z component of 2e-5) turned its primary answer of a source
     in front (30 deg) to the mirror behind (150 deg); now sign flips only where two components
     are equal in size (planes at 45 deg), far from level or upright mountings.
@@ -193,7 +193,7 @@ def array_geometry(array: MicArray | NDArray, rel_tol: float = 1e-6) -> ArrayGeo
     A direction counts as flat when no far-field direction's part along it changes a pair's
     TDOA by more than :data:`hearsee.audio.arrays.FLAT_TDOA_S` (10 us, 3.4 mm at 343 m/s), or
     when its singular value is below ``rel_tol`` times the largest
-    (:func:`hearsee.audio.arrays.span_dimension`: until 2026-11-28 the ratio alone decided,
+    (:func:`hearsee.audio.arrays.span_dimension`: until 2026-12-02 the ratio alone decided,
     and micrometre-rounded positions went to the wrong solver). ``rel_tol`` must be a finite
     number in (0, 1]: NaN (and 0) classified every array as "volume", text raised a builtin
     TypeError."""
@@ -333,7 +333,7 @@ def far_field_linear(tdoa_s: ArrayLike, array: MicArray | str,
     it) the answer is the horizontal direction nearest it, on the axis azimuth (one candidate),
     and ``residual_s`` and ``feasible`` are that direction's, as everywhere the primary
     solution's: within ``tol_s`` it is a solution (``n_solutions=1``), beyond it not;
-    ``extra["off_horizontal"]`` is True. Before 2026-11-28 such TDOAs were always
+    ``extra["off_horizontal"]`` is True. Before 2026-12-02 such TDOAs were always
     ``feasible=False``, ``n_solutions=0``, with the cone's residual (0 for exact TDOAs).
     """
     array = load_array(array)  # (a MicArray, or a preset name / YAML path)
@@ -402,7 +402,7 @@ def far_field_planar(tdoa_s: ArrayLike, array: MicArray | str,
       the array plane a few metres away gives that with exact TDOAs (its curved wavefront puts
       ``|u_p|`` up to ~1.02 for the 15 cm triangle at 1-5 m, depending on the azimuth), so
       it is one solution (``n_solutions=1``) when its TDOA residual is within ``tol_s``.
-      Before 2026-11-28 this was ``u_p / |u_p|``, the nearest only where ``B^T B`` is
+      Before 2026-12-02 this was ``u_p / |u_p|``, the nearest only where ``B^T B`` is
       isotropic (an equilateral triangle with all pairs, regular polygons): a 40 x 3 cm
       L-shaped array answered -31.35 deg for a source at -25 deg with 45 us of residual,
       flagged infeasible, where -25.36 deg fits within 7.5 us. The ``three-mic`` preset's
@@ -548,7 +548,7 @@ def near_field_position(tdoa_s: ArrayLike, array: MicArray | str,
     have pairs of fewer than three independent TDOAs (:func:`_independent_tdoas`: three
     microphones, or any array given two pairs): two TDOAs leave a curve of positions
     (:func:`three_mic_curve`, thesis fig. 2.6) for three unknowns. Both are GeometryErrors
-    (before 2026-11-28 the second returned one point of the curve with a residual of ~0,
+    (before 2026-12-02 the second returned one point of the curve with a residual of ~0,
     1.1 m off for the three-mic preset and a source 1.1 m away). Three independent TDOAs
     (four microphones) fit exactly and may fit two positions; the fit returns one.
 
@@ -1172,7 +1172,7 @@ def _near_model_wins(rms_far_s: float, rms_near_s: float, n_independent: int) ->
 #: position's mirror image is the same solution (:func:`_direction_from_position`). The fit of
 #: a source in the plane stops 1e-5 to 5e-5 of its range off it (the height has no gradient
 #: there): an 8-mic 15 cm circle reported in-plane sources as two solutions at +-0.0014 deg
-#: before 2026-11-28, where the plane wave gave one. 1e-3 rad (0.057 deg) changes the TDOAs of
+#: before 2026-12-02, where the plane wave gave one. 1e-3 rad (0.057 deg) changes the TDOAs of
 #: a 30 cm array by ``(D / c0) el^2 / 2`` = 0.4 ns, far below any TDOA error.
 _PLANE_TWIN_RAD = 1e-3
 
