@@ -68,8 +68,9 @@ def _regressor_not_fitted_error() -> type:
     from sklearn.exceptions import NotFittedError
 
     class RegressorNotFittedError(EstimationError, NotFittedError):
-        """``predict`` of a learned mapping (:class:`hearsee.fusion.audiovisual.
-        AudioVisualRegressor`, :class:`hearsee.audio.active.PoseItdMLP`) before ``fit``:
+        """``predict`` of a learned mapping
+        (:class:`hearsee.fusion.audiovisual.AudioVisualRegressor`,
+        :class:`hearsee.audio.active.PoseItdMLP`) before ``fit``:
         hearsee's EstimationError and scikit-learn's ``NotFittedError`` at once
         (scikit-learn's tools and ``check_estimator`` recognise an unfitted estimator by the
         latter). Built on first use, so that importing hearsee's errors does not import
