@@ -238,8 +238,7 @@ class _RoomAudio:
     def chunk(self, k: int, pan_deg: float) -> tuple[int, int]:
         """Render chunk k ([k*dt, (k+1)*dt)) with the head at ``pan_deg``; returns its samples."""
         fs = self.fs
-        a = int(round(k * CONTROL_DT * fs))
-        b = min(int(round((k + 1) * CONTROL_DT * fs)), self.n)
+        a, b = _chunk_start(k, fs), min(_chunk_start(k + 1, fs), self.n)
         mouth = _person_state(self.sc, (a + b) / 2 / fs)["mouth"]
         h = room_impulse_responses(fs, self.body.mics_room(pan_deg), mouth,
                                    self.sc.room_size_m, self.sc.rt60_s)
@@ -268,9 +267,15 @@ def _n_steps(duration_s: float, fs: int) -> int:
     crashed on it (IndexError)."""
     n = int(round(duration_s * fs))
     k = int(np.ceil(duration_s / CONTROL_DT - 1e-9))
-    while k > 0 and int(round((k - 1) * CONTROL_DT * fs)) >= n:
+    while k > 0 and _chunk_start(k - 1, fs) >= n:
         k -= 1  # (the last chunk would start at or after the last sample)
     return k
+
+
+def _chunk_start(k: int, fs: int) -> int:
+    """First sample of control step ``k``'s audio chunk at ``fs`` Hz (:meth:`_RoomAudio.chunk`
+    and :func:`_n_steps` share it)."""
+    return int(round(k * CONTROL_DT * fs))
 
 
 # ------------------------------------------------------------------------------ seeing
