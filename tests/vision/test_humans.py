@@ -771,3 +771,39 @@ def test_point_images_of_ragged_rows_are_refused():
     with pytest.raises(ImageInputError, match=r"^points must be \(H, W, 3\) metres"):
         detect_candidates(np.full((2, 2), 5.0, np.float32), ragged, 500.0, 0.1, 1.0,
                           floor=FloorPlane.level(1.2))
+
+
+def test_edited_params_are_checked_again():
+    """HumanDetectorParams checks its fields when made, but they can be edited afterwards: an
+    edited ``tm = nan`` accepted every candidate (a furniture box 3 m away came out as a
+    person), a dict was a builtin AttributeError. detect_candidates, segment_body,
+    segment_band_m and detect_humans check them again (a ConfigError naming the field)."""
+    H, W = 60, 80
+    d = np.full((H, W), np.nan, np.float32)
+    pts = np.full((H, W, 3), np.nan)
+    floor = FloorPlane.level(1.4)
+    for field, value in (("tm", np.nan), ("max_top_m", np.nan), ("peak_threshold", 2.0),
+                         ("max_candidates", 2.5), ("min_range_m", 20.0)):
+        p = HumanDetectorParams()
+        setattr(p, field, value)
+        with pytest.raises(ConfigError, match=field):
+            detect_candidates(d, pts, F, B, H / 2, camera_height_m=1.4, params=p)
+        with pytest.raises(ConfigError, match=field):
+            segment_body(40, 10.0, d, pts, np.zeros((H, W)), floor, F, B, H / 2, params=p)
+        with pytest.raises(ConfigError, match=field):
+            segment_band_m(3.0, F, B, p)
+    for bad in ({"tm": 0.5}, "default"):
+        with pytest.raises(ConfigError, match="HumanDetectorParams"):
+            detect_candidates(d, pts, F, B, H / 2, camera_height_m=1.4, params=bad)
+        with pytest.raises(ConfigError, match="HumanDetectorParams"):
+            segment_band_m(3.0, F, B, bad)
+    p = HumanDetectorParams()
+    p.tm = np.nan
+    rng = np.random.default_rng(0)
+    img = rng.integers(0, 255, (H, W), dtype=np.uint8)
+    with pytest.raises(ConfigError, match="tm"):
+        detect_humans(img, np.roll(img, 4, axis=1), default_rig(W, H), params=p)
+    # unedited (or None) parameters work as before
+    assert segment_band_m(3.0, F, B, None) == pytest.approx(0.35)
+    assert detect_candidates(d, pts, F, B, H / 2, camera_height_m=1.4,
+                             params=HumanDetectorParams()).candidates == []

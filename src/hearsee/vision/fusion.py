@@ -35,6 +35,7 @@ from hearsee.vision.humans import (
     HumanDetectorParams,
     StereoDetection,
     check_camera_height,
+    check_params,
     detect_candidates,
     robust_top_m,
 )
@@ -266,9 +267,9 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
             "a thermal image was given but the calibration has no thermal camera: add a "
             "'thermal:' block (camera, R, T) to the calibration file or leave out the thermal image"
         )
-    if params is not None and not isinstance(params, HumanDetectorParams):
-        # (a dict was an AttributeError deep in the candidate detector)
-        raise ConfigError(f"params must be a HumanDetectorParams, got {type(params).__name__}")
+    # (a dict was an AttributeError deep in the candidate detector; checked before the stereo
+    # matching, edited fields too)
+    params = check_params(params)
     th = None
     if thermal is not None:  # checked before the stereo matching, not after it
         th = numeric_map("thermal image", thermal, None)  # (text / a number: IndexError)

@@ -74,6 +74,7 @@ __all__ = [
     "StereoDetection",
     "TOP_PERCENTILE",
     "check_camera_height",
+    "check_params",
     "check_principal_row",
     "cut_by_border",
     "detect_candidates",
@@ -238,6 +239,21 @@ class HumanDetectorParams:
                 raise ConfigError(f"HumanDetectorParams: {lo} ({getattr(self, lo)}) must be "
                                   f"below {hi} ({getattr(self, hi)})")
         whole_number("HumanDetectorParams.max_candidates", self.max_candidates)
+
+
+def check_params(params: HumanDetectorParams | None) -> HumanDetectorParams:
+    """``params`` (None: the defaults) checked again, as :class:`HumanDetectorParams` checks
+    them when made: its fields can be edited afterwards, and an edited ``tm = nan`` accepted
+    every candidate (a furniture box as a person), a ``max_top_m = nan`` none. ConfigError
+    for a setting out of range or ``params`` that is not a HumanDetectorParams (a dict was a
+    builtin AttributeError deep in the detector). The check of every function that takes
+    them."""
+    if params is None:
+        return HumanDetectorParams()
+    if not isinstance(params, HumanDetectorParams):
+        raise ConfigError(f"params must be a HumanDetectorParams, got {type(params).__name__}")
+    params.__post_init__()
+    return params
 
 
 # ---------------------------------------------------------------------------------------------
@@ -616,7 +632,15 @@ def segment_band_m(depth_m: float, focal_px: float, baseline_m: float,
     beyond ~5.8 m (f B = 60 px m, 0.21 px, 3 sigma) the noise is larger, and before 2026-11-26
     people 6-8.5 m away were cut down to the pixels that happened to fall in the band (often
     the head: a head-sized false detection plus a missed person).
+
+    ``params`` must be a :class:`HumanDetectorParams` (ConfigError, :func:`check_params`).
     """
+    return _band_m(depth_m, focal_px, baseline_m, check_params(params))
+
+
+def _band_m(depth_m: float, focal_px: float, baseline_m: float,
+            params: HumanDetectorParams) -> float:
+    """:func:`segment_band_m` of checked numbers and parameters (the detector's calls)."""
     sigma_z = depth_m * depth_m * params.disparity_sigma_px / (focal_px * baseline_m)
     return max(params.depth_band_m + 0.15, params.band_sigmas * sigma_z)
 
@@ -645,7 +669,7 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     """
     check_focal_baseline(focal_px, baseline_m)
     check_principal_row(cy)
-    p = params or HumanDetectorParams()
+    p = check_params(params)
     H, W = disparity.shape
     fb = focal_px * baseline_m
     half = int(round(0.6 * disp / baseline_m))
@@ -654,7 +678,7 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
         return None
     Zc = fb / max(disp, 1e-6)
     # rows where a body between the floor and above_m can appear at this depth (level-ish rig)
-    band0 = segment_band_m(Zc, focal_px, baseline_m, p)
+    band0 = _band_m(Zc, focal_px, baseline_m, p)
     zn = max(Zc - band0, 0.3)
     y_top = (floor.offset - p.above_m) / max(-floor.normal[1], 0.5)
     y_bot = floor.offset / max(-floor.normal[1], 0.5)
@@ -684,7 +708,7 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
         Zc = float(fb / np.median(near_pk))
     mask = None
     for _ in range(2):
-        band = segment_band_m(Zc, focal_px, baseline_m, p)
+        band = _band_m(Zc, focal_px, baseline_m, p)
         dlo, dhi = fb / (Zc + band), fb / max(Zc - band, 0.2)
         with np.errstate(invalid="ignore"):
             m = (sub_d >= dlo) & (sub_d <= dhi) & (sub_h >= p.min_height_m) & \
@@ -932,7 +956,7 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     check_focal_baseline(focal_px, baseline_m)
     check_principal_row(cy)
     check_camera_height(camera_height_m)
-    p = params or HumanDetectorParams()
+    p = check_params(params)
     d = numeric_map("disparity", disparity, np.float32)
     points = _point_image(points)
     if d.ndim != 2 or points.shape != (*d.shape, 3):
