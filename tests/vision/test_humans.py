@@ -807,3 +807,17 @@ def test_edited_params_are_checked_again():
     assert segment_band_m(3.0, F, B, None) == pytest.approx(0.35)
     assert detect_candidates(d, pts, F, B, H / 2, camera_height_m=1.4,
                              params=HumanDetectorParams()).candidates == []
+
+
+def test_segment_band_m_refuses_bad_depths_and_calibration():
+    """A zero focal length or baseline was a builtin ZeroDivisionError; a NaN, negative or
+    zero depth gave the near band (0.35 m) without a word."""
+    p = HumanDetectorParams()
+    for f, b in ((0.0, B), (F, 0.0), (np.nan, B), (F, -B)):
+        with pytest.raises(CalibrationError, match="focal_px|baseline_m"):
+            segment_band_m(3.0, f, b, p)
+    for z in (np.nan, -3.0, 0.0, np.inf, "3"):
+        with pytest.raises(GeometryError, match="depth_m"):
+            segment_band_m(z, F, B, p)
+    # a valid depth: the band as before (3 sigma_Z = 3 * 8^2 * 0.21 / (F B) = 1.344 m at 8 m)
+    assert segment_band_m(8.0, F, B, p) == pytest.approx(3 * 64 * 0.21 / (F * B))

@@ -633,8 +633,13 @@ def segment_band_m(depth_m: float, focal_px: float, baseline_m: float,
     people 6-8.5 m away were cut down to the pixels that happened to fall in the band (often
     the head: a head-sized false detection plus a missed person).
 
-    ``params`` must be a :class:`HumanDetectorParams` (ConfigError, :func:`check_params`).
+    ``params`` must be a :class:`HumanDetectorParams` (ConfigError, :func:`check_params`),
+    ``depth_m`` a finite number > 0 (GeometryError: a NaN or negative depth gave the near
+    band without a word), ``focal_px`` and ``baseline_m`` finite and > 0 (CalibrationError: a
+    zero one was a builtin ZeroDivisionError).
     """
+    check_focal_baseline(focal_px, baseline_m)
+    depth_m = finite_number("depth_m", depth_m, 0.0, lo_open=True, error=GeometryError)
     return _band_m(depth_m, focal_px, baseline_m, check_params(params))
 
 
