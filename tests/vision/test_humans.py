@@ -821,3 +821,39 @@ def test_segment_band_m_refuses_bad_depths_and_calibration():
             segment_band_m(z, F, B, p)
     # a valid depth: the band as before (3 sigma_Z = 3 * 8^2 * 0.21 / (F B) = 1.344 m at 8 m)
     assert segment_band_m(8.0, F, B, p) == pytest.approx(3 * 64 * 0.21 / (F * B))
+
+
+def test_segment_body_refuses_bad_candidates_and_maps():
+    """A NaN or infinite candidate disparity, a fractional column, a 1-D disparity, a
+    disparity of text and a floor that is no FloorPlane were builtin errors (ValueError,
+    OverflowError, TypeError, AttributeError); points or heights of another size than the
+    disparity gave None, "no silhouette", without a word. The same call with good inputs
+    finds the body."""
+    H, W, cy = 90, 120, 44.5
+    Z, f, b = 3.0, F, B
+    d = np.full((H, W), np.nan, np.float32)
+    floor = FloorPlane.level(1.4)
+    # a 0.4 m wide, 1.7 m tall upright slab at 3 m (rows of heights 0.1-1.7 m)
+    v = np.arange(H)[:, None]
+    h_row = 1.4 - (v - cy) * Z / f
+    body = (h_row >= 0.1) & (h_row <= 1.7) & (np.abs(np.arange(W)[None, :] - 60) <= 17)
+    d[body] = f * b / Z
+    pts = points_from_disparity(d, np.array([[1, 0, 0, -59.5], [0, 1, 0, -cy], [0, 0, 0, f],
+                                             [0, 0, 1 / b, 0]]))
+    heights = floor.height(pts)
+    good = segment_body(60, f * b / Z, d, pts, heights, floor, f, b, cy)
+    assert good is not None and good.depth_m == pytest.approx(Z)
+    assert good.box[0] == 60 - 17 and good.box[2] == 35
+    args = [60, f * b / Z, d, pts, heights, floor]
+    for k, bad, err in ((0, 60.5, ImageInputError), (0, True, ImageInputError),
+                        (1, np.nan, ImageInputError), (1, np.inf, ImageInputError),
+                        (2, d[0], ImageInputError), (2, d.astype(str), ImageInputError),
+                        (3, pts[:10], ImageInputError), (4, heights[:, :50], ImageInputError),
+                        (5, None, GeometryError), (5, 1.4, GeometryError)):
+        a = list(args)
+        a[k] = bad
+        with pytest.raises(err):
+            segment_body(*a, f, b, cy)
+    # a list is read as the numbers it holds; a column outside the image has no silhouette
+    assert segment_body(60, f * b / Z, d.tolist(), pts, heights, floor, f, b, cy).box == good.box
+    assert segment_body(-50, f * b / Z, d, pts, heights, floor, f, b, cy) is None

@@ -671,10 +671,19 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     (:func:`disparity_band_px`, plus half a pixel of rounding), whichever is wider -- a far
     person's peak is often one whole disparity off (at 7 m the body at d = 9 px also makes a
     stronger peak at d = 8, 0.8 m farther), and the depth band alone missed the body.
+
+    ``column`` is an integer (pixels; one outside the image has no silhouette), ``disp`` a
+    finite number of pixels (ImageInputError), ``disparity`` ``(H, W)`` pixels, ``points``
+    ``(H, W, 3)`` metres and ``heights`` ``(H, W)`` metres of numbers (ImageInputError: a 1-D
+    map, a list or a NaN ``disp`` were builtin errors, and points or heights of another size
+    than the disparity gave None without a word) and ``floor`` a :class:`FloorPlane`
+    (GeometryError).
     """
     check_focal_baseline(focal_px, baseline_m)
     check_principal_row(cy)
     p = check_params(params)
+    disparity, points, heights = _segment_maps(column, disp, disparity, points, heights, floor)
+    column, disp = int(column), float(disp)
     H, W = disparity.shape
     fb = focal_px * baseline_m
     half = int(round(0.6 * disp / baseline_m))
@@ -774,6 +783,25 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     pos = np.array([c[0], y, c[2]])
     return BodySegment(box, crop, pts, hts, Zm, top, float(xhi - xlo), pos,
                        _cut_by_border(box, disparity.shape[1]))
+
+
+def _segment_maps(column: object, disp: object, disparity: ArrayLike, points: ArrayLike,
+                  heights: ArrayLike, floor: object) -> tuple[NDArray, NDArray, NDArray]:
+    """The checks of :func:`segment_body`'s candidate and maps: returns the maps as arrays."""
+    if not isinstance(column, int | np.integer) or isinstance(column, bool):
+        raise ImageInputError(f"column must be an image column (an integer, pixels), got "
+                              f"{column!r:.40}")
+    finite_number("disp (the candidate's disparity, pixels)", disp, error=ImageInputError)
+    if not isinstance(floor, FloorPlane):
+        raise GeometryError(f"floor must be a FloorPlane (estimate_floor, FloorPlane.level), "
+                            f"got {type(floor).__name__}")
+    d = numeric_map("disparity", disparity, None)
+    pts = _point_image(points)
+    h = numeric_map("heights", heights, None)
+    if d.ndim != 2 or pts.shape != (*d.shape, 3) or h.shape != d.shape:
+        raise ImageInputError(f"disparity (H, W), points (H, W, 3) and heights (H, W) expected, "
+                              f"got {d.shape}, {pts.shape} and {h.shape}")
+    return d, pts, h
 
 
 def cut_by_border(box: Sequence[int], width: int) -> bool:
