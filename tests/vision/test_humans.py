@@ -857,3 +857,18 @@ def test_segment_body_refuses_bad_candidates_and_maps():
     # a list is read as the numbers it holds; a column outside the image has no silhouette
     assert segment_body(60, f * b / Z, d.tolist(), pts, heights, floor, f, b, cy).box == good.box
     assert segment_body(-50, f * b / Z, d, pts, heights, floor, f, b, cy) is None
+
+
+def test_empty_maps_give_empty_filters_and_no_peaks():
+    """P(y,d) of no disparities (0 rows) was an IndexError in scale_adaptive_filter, and an
+    empty Psi-hat (no rows or no columns) numpy's "argmax of an empty sequence" in find_peaks:
+    an empty map has an empty response and no peaks."""
+    for shape in ((0, 7), (5, 0), (0, 0)):
+        psi = scale_adaptive_filter(np.zeros(shape), F, B)
+        assert psi.shape == shape
+        assert find_peaks(np.zeros(shape), F, B) == []
+    # a block of counts one person wide (0.4 m = 33 columns at d = 10) still peaks on it
+    P = np.zeros((16, 100))
+    P[10, 34:67] = 40.0
+    col, disp, _ = find_peaks(scale_adaptive_filter(P, F, B), F, B, threshold=1.0)[0]
+    assert abs(col - 50) <= 1 and abs(disp - 10) <= 1

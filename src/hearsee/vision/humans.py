@@ -480,7 +480,8 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
        not given), 3. centre mean over ``person_width_m * d / B`` columns minus the smaller of
        the two surround means (each ``surround_m * d / B`` columns). Returns ``(n_d, W)``.
 
-    ImageInputError when ``P`` is not 2-D, ``above`` not of its shape or ``expected_rows`` not
+    An empty ``P`` (no disparities or no columns) gives an empty map. ImageInputError when
+    ``P`` is not 2-D, ``above`` not of its shape or ``expected_rows`` not
     ``(n_d,)``, or any of them holds NaN or inf; ConfigError for an ``above_weight`` or
     ``depth_band_m`` that is not a finite number >= 0, or a kernel width that is not finite
     > 0.
@@ -529,7 +530,7 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
     right = box_mean(y + half + 1, y + half + 1 + sur)
     both = np.fmin(left, right)  # a surround outside the image is unknown, not empty
     psi = centre - np.nan_to_num(both)
-    psi[0] = 0.0
+    psi[:1] = 0.0  # (psi[0]: an IndexError for a map of no disparities)
     return psi
 
 
@@ -543,7 +544,7 @@ def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: f
     are not searched. ``threshold``, ``person_width_m`` (> 0), ``depth_sep_m`` (>= 0) and
     ``max_peaks`` (an integer >= 0) are ConfigErrors otherwise (a NaN threshold found no peak
     without a word; a NaN width, a fractional count or text raised builtin errors), ``psi``
-    that is not a 2-D map of finite numbers an ImageInputError."""
+    that is not a 2-D map of finite numbers an ImageInputError; an empty ``psi`` has no peaks."""
     check_focal_baseline(focal_px, baseline_m)
     min_disparity = finite_number("min_disparity", min_disparity, 0.0)
     finite_number("threshold", threshold)
@@ -554,6 +555,8 @@ def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: f
     if ps.ndim != 2:
         raise ImageInputError(f"psi must be a (n_d, W) map, got shape {ps.shape}")
     nd, W = ps.shape
+    if ps.size == 0:  # (numpy's 'argmax of an empty sequence')
+        return []
     ps[: int(np.ceil(min_disparity))] = -np.inf
     d = np.arange(nd, dtype=float)
     with np.errstate(divide="ignore"):
