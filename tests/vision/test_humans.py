@@ -872,3 +872,16 @@ def test_empty_maps_give_empty_filters_and_no_peaks():
     P[10, 34:67] = 40.0
     col, disp, _ = find_peaks(scale_adaptive_filter(P, F, B), F, B, threshold=1.0)[0]
     assert abs(col - 50) <= 1 and abs(disp - 10) <= 1
+
+
+def test_detect_candidates_refuses_a_floor_that_is_no_floor_plane():
+    """A floor given as a number, a tuple or a dict was a builtin AttributeError
+    (``floor.height``); a FloorPlane (or None) works as before."""
+    H, W = 40, 60
+    d = np.full((H, W), np.nan, np.float32)
+    pts = np.full((H, W, 3), np.nan)
+    for bad in (1.4, ((0.0, -1.0, 0.0), 1.4), {"normal": (0, -1, 0), "offset": 1.4}):
+        with pytest.raises(GeometryError, match="FloorPlane"):
+            detect_candidates(d, pts, F, B, H / 2, floor=bad)
+    det = detect_candidates(d, pts, F, B, H / 2, floor=FloorPlane.level(1.3))
+    assert det.floor.camera_height_m == 1.3 and det.candidates == []

@@ -982,7 +982,8 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     params : :class:`HumanDetectorParams`.
 
     CalibrationError for a focal length or baseline that is not finite and > 0 or a
-    non-finite ``cy``; GeometryError for a camera height that is not finite and > 0.
+    non-finite ``cy``; GeometryError for a camera height that is not finite and > 0 or a
+    ``floor`` that is no :class:`FloorPlane`.
 
     Returns
     -------
@@ -1002,6 +1003,9 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
         raise ImageInputError(f"the disparity image is empty (shape {d.shape})")
     if floor is None:
         floor = estimate_floor(points, prior_height_m=camera_height_m)
+    elif not isinstance(floor, FloorPlane):  # (a builtin AttributeError on floor.height)
+        raise GeometryError(f"floor must be a FloorPlane (estimate_floor, FloorPlane.level) or "
+                            f"None, got {type(floor).__name__}")
     with np.errstate(invalid="ignore"):
         heights = floor.height(points).astype(np.float32)
         d_min = focal_px * baseline_m / p.max_range_m
