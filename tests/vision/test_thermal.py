@@ -319,3 +319,28 @@ def test_overlay_refuses_images_opencv_cannot_blend():
     grey = vis[..., 0].copy()
     np.testing.assert_array_equal(overlay_thermal(grey[..., None], th, warm),
                                   overlay_thermal(grey, th, warm))
+
+
+def test_thermal_mask_checks_its_flag_and_the_chosen_filters_options():
+    """``radiometric`` as numpy's False went to the degC band (``is False`` is not true of
+    np.False_) and ``"no"`` read as True; an option of the other filter (``k_sigma`` for a
+    radiometric frame, ``background_px`` for 16-bit counts) was a builtin TypeError."""
+    from hearsee.errors import ConfigError
+
+    t = np.full((30, 30), 21.0, np.float32)
+    t[8:22, 10:18] = 45.0  # hot, above the human band: warm only relative to the room
+    relative = thermal_mask(t, radiometric=False)
+    assert relative[15, 14] and not relative[2, 2]
+    assert np.array_equal(thermal_mask(t, radiometric=np.False_), relative)
+    assert not thermal_mask(t).any() and not thermal_mask(t, radiometric=np.True_).any()
+    for bad in ("no", 0, 1.0):
+        with pytest.raises(ConfigError, match="radiometric"):
+            thermal_mask(t, radiometric=bad)
+    with pytest.raises(ConfigError, match="k_sigma.*radiometric"):
+        thermal_mask(t, k_sigma=3.0)
+    counts = np.rint((t + 273.15) * 100).astype(np.uint16)
+    with pytest.raises(ConfigError, match="background_px"):
+        thermal_mask(counts, background_px=5)
+    # the options of the chosen filter still reach it
+    assert thermal_mask(t, radiometric=False, k_sigma=3.0, open_px=0).sum() == 14 * 8
+    assert thermal_mask(t, band_c=(40.0, 50.0), open_px=0, close_px=0).sum() == 14 * 8

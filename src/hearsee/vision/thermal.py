@@ -213,8 +213,13 @@ def thermal_mask(image: NDArray, *, band_c: tuple[float, float] = HUMAN_BAND_C,
     its pixels lie within :data:`FLAT_SPREAD_C`. Radiometric
     frames must hold a scene's temperatures in degC (:data:`SCENE_C`; ImageInputError
     otherwise, as :func:`load_thermal`): a frame in kelvin or raw 14-bit counts rejected every
-    person ("thermal support 0.00") without a word.
+    person ("thermal support 0.00") without a word. ``radiometric`` is True, False or None and
+    the keyword arguments those of the filter the image goes to (ConfigError: ``k_sigma`` for
+    a radiometric frame was a builtin TypeError, ``radiometric="no"`` read as True).
     """
+    if radiometric is not None and not isinstance(radiometric, bool | np.bool_):
+        # ("no" was read as True)
+        raise ConfigError(f"radiometric must be True, False or None, got {radiometric!r:.40}")
     im = numeric_map("thermal image", image, None)
     if im.ndim == 3:
         if im.dtype != np.uint8:
@@ -224,7 +229,9 @@ def thermal_mask(image: NDArray, *, band_c: tuple[float, float] = HUMAN_BAND_C,
         raise ImageInputError(f"thermal image must be a non-empty (h, w) array, got {im.shape}")
     if im.dtype.kind == "f" and not np.all(np.isfinite(im)):  # (both bands: NaN medians)
         raise ImageInputError("thermal image contains NaN or infinite values")
-    if im.dtype == np.uint8 or radiometric is False:
+    relative = im.dtype == np.uint8 or (radiometric is not None and not radiometric)
+    _check_filter_options(kwargs, relative)
+    if relative:
         return relative_warm_mask(im, **kwargs)
     if im.dtype == np.uint16:
         t = counts_to_celsius(im)
@@ -242,6 +249,23 @@ def thermal_mask(image: NDArray, *, band_c: tuple[float, float] = HUMAN_BAND_C,
         # everywhere: every candidate, mannequins and coat stands too, "thermally verified")
         m[:] = False
     return m
+
+
+#: The keyword options of each thermal filter (:func:`thermal_mask` passes them on).
+_RELATIVE_OPTIONS = ("k_sigma", "min_gap", "max_gap", "background_px", "open_px", "close_px")
+_CELSIUS_OPTIONS = ("open_px", "close_px")
+
+
+def _check_filter_options(kwargs: dict, relative: bool) -> None:
+    """ConfigError naming the options of ``kwargs`` that the filter :func:`thermal_mask` chose
+    does not take (they were a builtin TypeError: ``k_sigma`` given for a radiometric frame)."""
+    allowed = _RELATIVE_OPTIONS if relative else _CELSIUS_OPTIONS
+    unknown = sorted(set(kwargs) - set(allowed))
+    if unknown:
+        kind = ("non-radiometric (relative band)" if relative else
+                "radiometric (degC band, band_c)")
+        raise ConfigError(f"thermal filter option(s) {', '.join(unknown)} do not apply to a "
+                          f"{kind} thermal image; it takes {', '.join(allowed)}")
 
 
 def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None) -> NDArray:
