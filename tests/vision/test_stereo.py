@@ -403,3 +403,15 @@ def test_depth_conversions_refuse_what_is_not_a_disparity_and_q_that_cannot_repr
     for Qb in (np.zeros((4, 4)), np.where(np.eye(4) > 0, np.nan, Q)):
         with pytest.raises(ConfigError, match="^Q must be a finite reprojection matrix"):
             points_from_disparity(d, Qb)
+
+
+def test_an_image_that_is_not_8_bit_is_named_with_its_type():
+    """An 8-bit left image and a float32 right one gave "stereo images must be 8-bit (got
+    uint8)": the left image's type, which is fine. The message names the offending image and
+    its type."""
+    rng = np.random.default_rng(3)
+    img = rng.integers(0, 255, (40, 80), dtype=np.uint8)
+    with pytest.raises(ImageInputError, match="right image is float32"):
+        compute_disparity(img, img.astype(np.float32))
+    with pytest.raises(ImageInputError, match="left image is uint16"):
+        compute_disparity(img.astype(np.uint16), img)

@@ -233,11 +233,12 @@ def compute_disparity(
     """
     check_pair(left, right)
     L, R = to_gray(left), to_gray(right)
-    if L.dtype != np.uint8 or R.dtype != np.uint8:
-        raise ImageInputError(
-            f"stereo images must be 8-bit (got {L.dtype}); convert with cv2.normalize or "
-            "cv2.convertScaleAbs"
-        )
+    for name, img in (("left", L), ("right", R)):  # (the message named the left's type)
+        if img.dtype != np.uint8:
+            raise ImageInputError(
+                f"stereo images must be 8-bit (the {name} image is {img.dtype}); convert with "
+                "cv2.normalize or cv2.convertScaleAbs"
+            )
     if not isinstance(mode, str) or mode not in _MODES:  # (a list: a builtin TypeError)
         raise ConfigError(f"mode must be one of {', '.join(_MODES)}, got {mode!r}")
     if lr_check not in ("internal", "full", "none"):
