@@ -415,3 +415,20 @@ def test_an_image_that_is_not_8_bit_is_named_with_its_type():
         compute_disparity(img, img.astype(np.float32))
     with pytest.raises(ImageInputError, match="left image is uint16"):
         compute_disparity(img.astype(np.uint16), img)
+
+
+def test_disparity_flags_must_be_booleans():
+    """pad_left="no" padded the images and fill_holes="no" filled the holes (any non-empty
+    text is true); 0 and 1 were read as False and True. Flags are True or False (numpy's
+    too)."""
+    rng = np.random.default_rng(4)
+    right = rng.integers(0, 255, (40, 100), dtype=np.uint8)
+    left = np.roll(right, 6, axis=1)
+    for name in ("pad_left", "fill_holes"):
+        for bad in ("no", "False", 0, 1, None):
+            with pytest.raises(ConfigError, match=name):
+                compute_disparity(left, right, num_disparities=16, **{name: bad})
+    unpadded = compute_disparity(left, right, num_disparities=16, pad_left=np.False_)
+    assert np.isnan(unpadded[:, :10]).all()  # the leftmost columns unmatched, as pad_left=False
+    padded = compute_disparity(left, right, num_disparities=16, pad_left=np.True_)
+    assert np.nanmedian(padded[:, 20:]) == 6.0

@@ -211,7 +211,7 @@ def compute_disparity(
         check rounds it up to a whole pixel).
     pad_left : pad the images so the leftmost ``num_disparities`` columns get disparities.
     fill_holes : fill invalid pixels from the background (see the module docstring); the
-        result is then dense.
+        result is then dense. Both flags are True or False (ConfigError: "no" read as True).
     scale : match at ``scale`` times the resolution (e.g. 0.5 for 4x speed) and upsample the
         disparity back (values rescaled to full-resolution pixels).
 
@@ -243,6 +243,9 @@ def compute_disparity(
         raise ConfigError(f"mode must be one of {', '.join(_MODES)}, got {mode!r}")
     if lr_check not in ("internal", "full", "none"):
         raise ConfigError(f"lr_check must be internal, full or none, got {lr_check!r}")
+    for name, flag in (("pad_left", pad_left), ("fill_holes", fill_holes)):
+        if not isinstance(flag, bool | np.bool_):  # ("no" was read as True)
+            raise ConfigError(f"{name} must be True or False, got {flag!r:.40}")
     # (checked, not converted, as lr_max_diff below: a numpy scalar stays what it was, and so
     # do the sizes computed from it; a string was a builtin TypeError)
     finite_number("scale", scale, 0.0, 1.0, lo_open=True)
