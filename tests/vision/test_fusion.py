@@ -272,6 +272,11 @@ def test_detect_humans_refuses_bad_thermal_images_params_and_options_before_matc
         detect_humans(scene.left, scene.right, RIG, scene.thermal_c[:-1], camera_height_m=1.4)
     with pytest.raises(ConfigError, match="HumanDetectorParams"):
         detect_humans(scene.left, scene.right, RIG, params={"tm": 0.5}, camera_height_m=1.4)
+    # stereo options that are no mapping of names: a builtin TypeError (a list of pairs was
+    # taken as the mapping it spells)
+    for bad in ([1], [("num_disparities", 16)], {16: "num_disparities"}, "scale"):
+        with pytest.raises(ConfigError, match="stereo_options"):
+            detect_humans(scene.left, scene.right, RIG, stereo_options=bad, camera_height_m=1.4)
     monkeypatch.undo()
     with pytest.raises(ConfigError, match="unknown disparity option.*foo"):
         stereo_frame(scene.left, scene.right, RIG, foo=1)

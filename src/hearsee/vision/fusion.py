@@ -21,6 +21,7 @@ handles the parallax: the same image offset would be wrong at 1 m and at 8 m.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -254,7 +255,8 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
     band_c : radiometric human temperature band (degC).
     camera_height_m : prior for the floor, metres above it (finite, > 0; default
         ``rig.info["camera_height_m"]``).
-    stereo_options : options of :func:`hearsee.vision.stereo.compute_disparity`.
+    stereo_options : options of :func:`hearsee.vision.stereo.compute_disparity`, a mapping
+        of their names to values (ConfigError otherwise, before the stereo matching).
 
     Returns
     -------
@@ -286,6 +288,12 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
     if camera_height_m is None:
         camera_height_m = rig.camera_height_m  # ConfigError when info holds a bad one
     check_camera_height(camera_height_m)
+    if stereo_options is not None and (not isinstance(stereo_options, Mapping) or not all(
+            isinstance(k, str) for k in stereo_options)):
+        # (a list was dict.update's builtin TypeError or, as pairs, taken; a key of another
+        # type the call's "keywords must be strings")
+        raise ConfigError(f"stereo_options must be a mapping of compute_disparity's option "
+                          f"names to values, got {stereo_options!r:.60}")
     opts = dict(DEFAULT_STEREO_OPTIONS)
     opts.update(stereo_options or {})
     frame = stereo_frame(left, right, rig, **opts)
