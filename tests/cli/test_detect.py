@@ -298,3 +298,23 @@ def test_a_pickle_given_for_a_file_is_one_line_and_never_unpickled(folder, capsy
     err = _err(capsys)
     assert name in err and err.count("\n") == 1
     assert not marker.exists()
+
+
+def test_a_truncated_image_file_is_one_line_on_stderr(folder, tmp_path, capfd):
+    """A PNG or TIFF cut short (a copy interrupted) printed OpenCV's own "[ WARN ]" (PNG) or
+    two "[ERROR]" lines (TIFF) on stderr before hearsee's one-line error; now the one line
+    alone, exit 2 -- for the stereo images and the thermal image alike."""
+    d, scene = folder
+    for name, image in (("cut.png", scene.left), ("cut.tif", scene.left)):
+        ok, buf = cv2.imencode(name[-4:], image)
+        assert ok
+        (tmp_path / name).write_bytes(buf.tobytes()[: len(buf) // 3])
+        capfd.readouterr()
+        args = ["detect", "--left", str(tmp_path / name), "--right", str(d / "right.png"),
+                "--calib", str(d / "calib.yaml")]
+        assert main(args) == 2
+        err = capfd.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("hearsee: error:") and name in err[0]
+    assert main(_args(d, thermal=None) + ["--thermal", str(tmp_path / "cut.tif")]) == 2
+    err = capfd.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not a readable image" in err[0]

@@ -71,6 +71,33 @@ def _opencv_log(level: str) -> Iterator[None]:
         cv_log.setLogLevel(before)
 
 
+@contextmanager
+def _codec_stderr_off() -> Iterator[None]:
+    """The process's stderr (file descriptor 2) sent to the null device for the block: the
+    image codecs under OpenCV (libpng's default error handler) write their messages there
+    directly, past OpenCV's log level. Python's own ``sys.stderr`` is flushed first; where
+    descriptor 2 cannot be redirected the block runs as is."""
+    import os
+    import sys
+
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError, AttributeError):
+        yield
+        return
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(null, 2)
+        finally:
+            os.close(null)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 def numeric_map(name: str, value: ArrayLike, dtype: type | None = np.float64, *,
                 copy: bool = False, finite: bool = False) -> NDArray:
     """``value`` (an image-shaped map: disparities, temperatures, counts, a mask, points) as an
@@ -174,7 +201,11 @@ def read_image(path: str | Path, mode: ColorMode = "gray",
         data = np.fromfile(str(p), dtype=np.uint8)
     except OSError as exc:
         raise InputFileError(f"{p}: cannot read file ({exc.strerror})") from None
-    img = cv2.imdecode(data, _IMREAD[mode]) if data.size else None
+    # (OpenCV's log and the codecs' own messages silenced: a truncated PNG printed a
+    # "[ WARN ]" or a "libpng error" line, a truncated TIFF two "[ERROR]" lines, on stderr
+    # before hearsee's one-line error below)
+    with _opencv_log("silent"), _codec_stderr_off():
+        img = cv2.imdecode(data, _IMREAD[mode]) if data.size else None
     if img is None:
         raise ImageInputError(
             f"{p}: not a readable image (corrupt or unsupported format; expected PNG, JPEG, "
