@@ -885,3 +885,18 @@ def test_detect_candidates_refuses_a_floor_that_is_no_floor_plane():
             detect_candidates(d, pts, F, B, H / 2, floor=bad)
     det = detect_candidates(d, pts, F, B, H / 2, floor=FloorPlane.level(1.3))
     assert det.floor.camera_height_m == 1.3 and det.candidates == []
+
+
+def test_u_disparity_docstring_example_runs():
+    """u_disparity's example put a disparity of 5 px in an image 3 px wide, which the function
+    refuses since disparities wider than the image were refused ("exceeds the image width"):
+    the documented call raised ImageInputError. The example now runs as written."""
+    import doctest
+
+    import hearsee.vision.humans as humans
+
+    finder = doctest.DocTestFinder()
+    (test,) = [t for t in finder.find(humans.u_disparity, "u_disparity",
+                                      globs={"np": np, "u_disparity": humans.u_disparity})]
+    result = doctest.DocTestRunner().run(test, out=lambda s: None)
+    assert result.attempted == 2 and result.failed == 0

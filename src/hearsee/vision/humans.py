@@ -392,9 +392,9 @@ def u_disparity(disparity: NDArray, mask: NDArray | None = None, max_disparity: 
     disparity or mask that is no numbers (text, read as numbers; a text mask as all True) is
     an ImageInputError.
 
-    >>> d = np.full((4, 3), np.nan); d[:, 1] = 5.0
+    >>> d = np.full((4, 8), np.nan); d[:, 1] = 5.0
     >>> u_disparity(d)[5].tolist()
-    [0.0, 4.0, 0.0]
+    [0.0, 4.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     """
     d = numeric_map("disparity", disparity, np.float32)
     if d.ndim != 2:
