@@ -266,6 +266,28 @@ def test_dropout_source_delivers_a_late_last_block():
         assert st.audio_s == 10 * BL / FS and st.n_frames == (10 * BL - 1024) // 512 + 1
 
 
+
+@pytest.mark.parametrize("threaded", [False, True])
+def test_dropped_last_blocks_are_counted_and_their_frames_reported_missing(threaded):
+    """Blocks dropped at the end of a stream leave no gap in the sequence numbers: they were
+    counted nowhere (0 dropped blocks) and the frames needing them were left out, not reported
+    missing (29 updates for the 30 frames of the file, n_missing_frames 0)."""
+    n = 10 * BL + 300  # a partial last block
+    y = np.random.default_rng(0).standard_normal((3, n))
+    L, H = 1024, 512
+    starts = np.arange(0, n - L + 1, H)
+    for drop in ([10], [9, 10], [3, 10]):
+        lost = [(b * BL, min((b + 1) * BL, n)) for b in drop]
+        want_missing = [any(a < s0 + L and s0 < b for a, b in lost) for s0 in starts]
+        pipe = StreamPipeline("three-mic")
+        ups = pipe.run(DropoutSource(ArraySource(y, FS, BL), drop=drop), threaded=threaded)
+        np.testing.assert_allclose([u.t for u in ups], (starts + L / 2) / FS)
+        assert [u.missing for u in ups] == want_missing
+        assert all(u.raw_azimuth_deg is None and not u.measured for u in ups if u.missing)
+        st = pipe.stats
+        assert st.n_dropped_blocks == len(drop) and st.n_late_blocks == 0
+        assert st.n_frames == len(starts) and st.n_missing_frames == sum(want_missing)
+
 # ------------------------------------------------------------------------- 3. SRP through gaps
 def test_smoothed_srp_ages_its_evidence_through_dropped_frames():
     """Source at +60 deg for 1 s, 0.5 s of blocks dropped, then at -60 deg: no smoothed

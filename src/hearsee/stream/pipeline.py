@@ -295,6 +295,12 @@ class ArraySource:
         self.n_channels = a.shape[0]
         self.realtime = bool(realtime)
 
+    @property
+    def end_sample(self) -> int:
+        """Samples the stream covers (the recording's length): where it ends, also when a
+        wrapper (:class:`DropoutSource`) loses its last blocks."""
+        return int(self.x.shape[1])
+
     def blocks(self) -> Iterator[Block]:
         t0 = time.perf_counter()
         for seq, start in enumerate(range(0, self.x.shape[1], self.block_len)):
@@ -519,6 +525,11 @@ class DropoutSource:
     no delivered block follows is delivered when the wrapped source ends (in order -- nothing
     overtook it, so it is still used); ``stall_before`` maps a sequence number to seconds of
     silence before that block is delivered.
+
+    ``n_dropped`` counts the blocks the latest :meth:`blocks` run dropped (as a device counts
+    its own: the pipeline's stats then count dropped last blocks too, which leave no gap in
+    the sequence numbers); ``end_sample`` is the wrapped source's (where the stream ends), so
+    that the frames of dropped last blocks are reported missing.
     """
 
     def __init__(self, source: Any, drop: Sequence[int] = (), late: Sequence[int] = (),
@@ -527,13 +538,21 @@ class DropoutSource:
         self.fs, self.n_channels = source.fs, source.n_channels
         self.drop, self.late = set(drop), set(late)
         self.stall_before = dict(stall_before or {})
+        self.n_dropped = 0
+
+    @property
+    def end_sample(self) -> int | None:
+        """The wrapped source's ``end_sample`` (None where it has none, e.g. a device)."""
+        return getattr(self.source, "end_sample", None)
 
     def blocks(self) -> Iterator[Block]:
         held: list[Block] = []
+        self.n_dropped = 0
         for blk in self.source.blocks():
             if blk.seq in self.stall_before:
                 time.sleep(self.stall_before[blk.seq])
             if blk.seq in self.drop:
+                self.n_dropped += 1
                 continue
             if blk.seq in self.late:
                 held.append(blk)
@@ -619,6 +638,21 @@ class Framer:
         t = np.concatenate([np.asarray(missing_t), ok_t])
         missing = np.concatenate([np.ones(len(missing_t), bool), np.zeros(k, bool)])
         return FrameBatch(t, missing, segment, blk.arrival)
+
+    def finish(self, end_sample: int | None) -> FrameBatch | None:
+        """The frames of a stream that ends at sample ``end_sample`` (None: unknown) that no
+        block completed, all missing: those within the stream that need samples after the last
+        block received (the last blocks were dropped: no later block left a gap to show it);
+        None when there are none."""
+        if end_sample is None:
+            return None
+        end = int(end_sample)
+        if self.next_frame + self.frame_len > end:
+            return None
+        k = (end - self.frame_len - self.next_frame) // self.hop + 1
+        t = (self.next_frame + np.arange(k) * self.hop + self.frame_len / 2.0) / self.fs
+        self.next_frame += k * self.hop
+        return FrameBatch(t, np.ones(k, bool), None, time.perf_counter())
 
 
 # ---------------------------------------------------------------------------- per-frame GCC stage
@@ -1702,7 +1736,9 @@ class StreamPipeline:
             nonlocal last_sample
             st.n_blocks += 1
             last_sample = max(last_sample, blk.start + blk.data.shape[1])
-            batch = framer.push(blk)
+            emit(framer.push(blk))
+
+        def emit(batch: FrameBatch | None) -> None:
             if batch is None:
                 return
             if self._reset_requested:
@@ -1717,6 +1753,12 @@ class StreamPipeline:
                 if sink is not None:
                     sink(u)
 
+        def finish() -> None:
+            """The source ended: the frames of its lost last blocks, reported missing
+            (not when its device went silent: the stream's end is not known then)."""
+            if not any(bool(getattr(s, "stalled", False)) for s in _source_chain(source)):
+                emit(framer.finish(getattr(source, "end_sample", None)))
+
         try:
             if not threaded:
                 blocks = source.blocks()
@@ -1726,6 +1768,7 @@ class StreamPipeline:
                 except BaseException:
                     close_blocks(blocks, quiet=True)  # (this error stays the error)
                     raise
+                finish()
             else:
                 q: queue.Queue = queue.Queue(maxsize=self.queue_size)
                 stop = threading.Event()
@@ -1779,6 +1822,8 @@ class StreamPipeline:
                     th.join(timeout=1.0)
                 if errors:
                     raise errors[0]
+                if st.status == "ok":
+                    finish()
         except KeyboardInterrupt:  # Ctrl-C: the stats still describe what was processed
             st.status = "interrupted"
             raise
