@@ -947,3 +947,33 @@ def test_joint_auto_steers_reverberant_recordings_of_larger_planar_arrays(three)
     assert not np.array_equal(auto.summary_tdoa_s, steered.summary_tdoa_s)
     with pytest.raises(ConfigError, match="steer_range_m"):
         estimate_tdoas(x, FS, six, joint="auto", steer_range_m=-1.0)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_source_at_the_physical_maximum_without_margin(method, side):
+    """A plane wave along the pair's axis (TDOA +-6.997 samples, the physical maximum) with
+    ``margin_samples=0`` (bound 6.997): the grid lag 7 nearest the peak was left out of the
+    search, so the peak was searched on its lobe's flank at lag 6: no frame was valid (and at
+    80 deg every frame was 0.9 sample off)."""
+    two = MicArray.from_preset("two-mic")
+    s = white_noise(0.5, FS, rng=3)
+    for az in (90.0, 80.0):
+        u = [np.cos(np.radians(az)), side * np.sin(np.radians(az)), 0.0]
+        x = simulate_free_field(s, FS, two, u, far_field=True, snr_db=30, rng=4)
+        truth = two.tdoa_far(u)[0] * FS
+        r = estimate_tdoas(x, FS, two, method=method, margin_samples=0.0)
+        assert r.n_valid == len(r.t)
+        assert np.max(np.abs(r.tdoa_s[:, 0] * FS - truth)) < 0.05
+        assert abs(r.summary_tdoa_s[0] * FS - truth) < 0.05
+
+
+@pytest.mark.parametrize("delay", [6.6, 6.9, 6.997])
+def test_gcc_peak_near_max_tau(delay):
+    """gcc with ``max_tau_s`` the physical maximum (6.997 samples): a delay of 6.9 samples
+    came out as 6.0, one of 6.997 as 3.96 with confidence 0."""
+    s = white_noise(0.5, FS, rng=5)
+    y = delay_signals(s, np.array([delay, 0.0]) / FS, FS)
+    r = gcc(y[0], y[1], FS, max_tau_s=6.997 / FS)
+    assert abs(r.tdoa_s * FS - delay) < 0.05
+    assert r.confidence > 2.0

@@ -340,27 +340,38 @@ def _take_last(a: NDArray, idx: NDArray) -> NDArray:
     return flat[np.arange(flat.shape[0]), idx.reshape(-1)].reshape(idx.shape)
 
 
-def _lag_window(r: NDArray, max_lag: NDArray, up: int = 1) -> tuple[NDArray, NDArray]:
+def _lag_window(r: NDArray, max_lag: NDArray, up: int = 1,
+                reach: NDArray | None = None) -> tuple[NDArray, NDArray]:
     """The admissible part of circular correlations ``r`` (..., n_pairs, n) sampled ``up``
-    times per sample: the integer grid lags ``-L .. L`` (``L = ceil(max(max_lag) up)``) and
-    ``r`` at them (..., n_pairs, 2L+1), ``-inf`` beyond each pair's ``+-max_lag`` (samples)."""
-    L = int(np.ceil(max_lag.max() * up))
+    times per sample: the grid lags ``-L .. L`` and ``r`` at them (..., n_pairs, 2L+1),
+    ``-inf`` beyond each pair's ``+-max_lag`` (samples) -- except the grid lag nearest each
+    pair's physical maximum ``reach`` (samples; default none), which is admitted even when it
+    is beyond ``max_lag`` (the callers clip the refined lag to ``max_lag``). A source at the
+    physical maximum (a pair's axis pointing at it: 6.997 samples) with no margin (bound
+    6.997) otherwise had its peak searched on the lobe's flank at lag 6, which the refinement
+    does not climb: every frame 0.8-1 sample off, or none valid."""
+    lim = max_lag * up
+    if reach is not None:
+        lim = np.maximum(lim, np.round(np.asarray(reach, dtype=float) * up))
+    L = int(np.floor(lim.max()))
     lags = np.arange(-L, L + 1)
     win = r[..., lags % r.shape[-1]]
-    outside = np.abs(lags)[None, :] > max_lag[:, None] * up  # (n_pairs, 2L+1)
+    outside = np.abs(lags)[None, :] > lim[:, None]  # (n_pairs, 2L+1)
     return lags, np.where(outside, -np.inf, win)
 
 
 def _peaks(r: NDArray, P: NDArray, nfft: int, max_lag: NDArray, refine: str,
            main_lobe: int, bins: NDArray | None = None,
-           need: NDArray | None = None) -> tuple[NDArray, NDArray]:
+           need: NDArray | None = None,
+           reach: NDArray | None = None) -> tuple[NDArray, NDArray]:
     """Bounded peak search + refinement + confidence.
 
     ``r`` (..., n_pairs, nfft) circular correlations, ``P`` their spectra, ``max_lag``
-    (n_pairs,) largest admissible |lag| in samples; ``need`` (...) bool selects the rows that
-    get the interpolation refinement (others: parabolic). Returns (lag in samples, confidence).
+    (n_pairs,) largest admissible |lag| in samples, ``reach`` (n_pairs,) the physical maximum
+    (samples, :func:`_lag_window`); ``need`` (...) bool selects the rows that get the
+    interpolation refinement (others: parabolic). Returns (lag in samples, confidence).
     """
-    lags, win = _lag_window(r, max_lag)
+    lags, win = _lag_window(r, max_lag, reach=reach)
     k = np.argmax(win, axis=-1)
     peak = _take_last(win, k)
     lag_i = lags[k]
@@ -521,8 +532,9 @@ def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
     P = G * gcc_weighting(method, G, Gii, Gjj) * _band_mask(len(G), nfft, fs, band_hz)
     r = sfft.irfft(P, nfft)
     max_lag = (n - 1) if max_tau_s is None else min(max_tau_s * fs, n - 1)
-    lag, conf = _peaks(r[None, None, :], P[None, None, :], nfft, np.array([float(max_lag)]),
-                       refine, main_lobe=2)
+    bound = np.array([float(max_lag)])  # (the bound is the physical maximum here)
+    lag, conf = _peaks(r[None, None, :], P[None, None, :], nfft, bound, refine, main_lobe=2,
+                       reach=bound)
     lag, conf = lag[0], conf[0]
     shift = np.fft.fftshift(r)
     lags = (np.arange(nfft) - nfft // 2) / fs
@@ -964,15 +976,16 @@ def _steered_in_plane(P: NDArray, bins: NDArray, nfft: int, r_up: NDArray, up: i
 
 
 def _fine_peaks(P: NDArray, bins: NDArray, nfft: int, max_lag: NDArray, up: int,
-                first_arrival: float = 0.0) -> NDArray:
+                first_arrival: float = 0.0, reach: NDArray | None = None) -> NDArray:
     """Each pair's maximum of the band-limited correlation of spectra ``P`` (n_pairs, bins)
-    within ``+-max_lag``: searched on an ``up``-times upsampled grid, then refined
-    (:func:`_refine_interp`). Lags in samples (n_pairs,)."""
+    within ``+-max_lag``: searched on an ``up``-times upsampled grid (``reach``: see
+    :func:`_lag_window`), then refined (:func:`_refine_interp`). Lags in samples
+    (n_pairs,)."""
     n_up = nfft * up
     full = np.zeros((P.shape[0], n_up // 2 + 1), dtype=complex)
     full[:, bins] = P
     r = sfft.irfft(full, n_up, axis=-1)
-    lags, win = _lag_window(r, max_lag, up)
+    lags, win = _lag_window(r, max_lag, up, reach)
     k = np.argmax(win, axis=-1)
     if first_arrival > 0:
         k = _first_arrival_peaks(win, lags, k, first_arrival)
@@ -1489,7 +1502,8 @@ def estimate_tdoas(
     a32 = a.astype(np.float32)
     frames = frame_signals(a32, frame_len, hop)  # (n_ch, F, L)
     n_frames = frames.shape[1]
-    max_lag = arr.max_tdoa(prs) * fs + float(margin_samples)
+    reach = arr.max_tdoa(prs) * fs  # the physical maximum (samples)
+    max_lag = reach + float(margin_samples)
     if max_lag.max() >= frame_len // 2:
         raise ConfigError(
             f"frame of {frame_ms} ms is too short for the array's largest delay "
@@ -1584,7 +1598,8 @@ def estimate_tdoas(
         c = np.zeros((s1 - s0, n_pairs))  # (an inactive frame has confidence 0)
         if len(Pa):
             r = corr(Pa)
-            lag[act], c[act] = _peaks(r, Pa, nfft, max_lag, refine, main_lobe, band_bins)
+            lag[act], c[act] = _peaks(r, Pa, nfft, max_lag, refine, main_lobe, band_bins,
+                                      reach=reach)
         ok = act & np.all(c >= min_confidence, axis=1)
         ok_conf = ok.copy()  # the summary averages these; it has its own detection test
         if frame_cfar and ok.any():  # one independent pair: no closure to test, so CFAR
@@ -1651,7 +1666,7 @@ def estimate_tdoas(
         # below and takes only its sample (CFAR) from here
         fine = redundant or summary_upsample <= 1
         lag, c = _peaks(r_sum[None], acc[None], nfft, max_lag, "interp" if fine else "parabolic",
-                        main_lobe, band_bins)
+                        main_lobe, band_bins, reach=reach)
         resid = closure_rms(lag[0], prs, arr.n_mics)
         if resid is not None:
             # redundant pairs (>= 3 microphones). Detection: the pairs' own peaks of
@@ -1682,7 +1697,7 @@ def estimate_tdoas(
                                  >= min_peak_snr))
             if summary_upsample > 1:
                 lag = _fine_peaks(acc, band_bins, nfft, max_lag, int(summary_upsample),
-                                  first_arrival)[None]
+                                  first_arrival, reach)[None]
         if ok:
             summary, summary_conf = lag[0] / fs, c[0]
     t = (np.arange(n_frames) * hop + frame_len / 2.0) / fs
