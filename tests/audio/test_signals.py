@@ -386,3 +386,24 @@ def test_make_signal_resamples_only_the_part_of_a_long_file_it_uses(tmp_path, mo
     np.testing.assert_allclose(y, ref, rtol=1e-12, atol=1e-12)
     # at most the 0.1 s used and a margin of 20 * max(1, rate / fs) + 64 samples went through
     assert all(k <= 0.1 * rate + 20 * max(1, rate / fs) + 66 for k in sizes), sizes
+
+
+@pytest.mark.parametrize("fs", [float("nan"), float("inf"), "16000", -16000.0])
+def test_read_recording_and_load_wav_check_fs(tmp_path, fs):
+    """A sample rate that is no positive number: NaN, inf and text were builtin ValueError,
+    OverflowError and TypeError (``int(round(fs))`` against the file's rate)."""
+    p = _write(tmp_path / "r.wav", 0.1 * np.random.default_rng(1).standard_normal((2, 2000)))
+    for resample in (False, True):
+        with pytest.raises(AudioInputError, match="sample rate"):
+            read_recording(p, 2, fs, resample=resample)
+    with pytest.raises(AudioInputError, match="sample rate"):
+        load_wav(p, fs)
+
+
+@pytest.mark.parametrize("n", ["a", 2.5, 0, True])
+def test_read_recording_checks_n_channels(tmp_path, n):
+    """A channel count that is no whole number >= 1: "a" was a builtin ValueError, 2.5 was
+    taken as 2 (a 2-channel file passed)."""
+    p = _write(tmp_path / "r.wav", 0.1 * np.random.default_rng(1).standard_normal((2, 2000)))
+    with pytest.raises(ConfigError, match="n_channels"):
+        read_recording(p, n)

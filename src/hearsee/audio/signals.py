@@ -27,7 +27,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import as_path, input_file, is_real, output_file, real_entries, same_file
+from hearsee.config import (
+    as_path,
+    input_file,
+    is_real,
+    output_file,
+    real_entries,
+    same_file,
+    whole_number,
+)
 from hearsee.errors import (
     AudioInputError,
     ClippingWarning,
@@ -367,8 +375,11 @@ def load_wav(path: str | Path, fs: float | None = None) -> tuple[NDArray, int]:
     """Load an audio file as a mono signal.
 
     Channels are averaged; with ``fs`` the signal is resampled to ``fs`` Hz (polyphase,
-    :func:`scipy.signal.resample_poly`). Returns ``(x (n,), fs)``.
+    :func:`scipy.signal.resample_poly`). Returns ``(x (n,), fs)``. An ``fs`` that is no
+    positive number is an AudioInputError (:func:`check_fs`).
     """
+    if fs is not None:  # (NaN, inf and text were builtin ValueError / OverflowError / TypeError)
+        fs = check_fs(fs)
     x, fs_in = _read_file(path)
     if x.shape[1] == 0:
         raise AudioInputError(f"{path}: the file contains no samples")
@@ -464,11 +475,12 @@ def read_recording(
     path : str or Path
         Any format libsndfile reads (WAV, FLAC, ...).
     n_channels : int or MicArray, optional
-        Required channel count; pass the :class:`~hearsee.audio.arrays.MicArray` itself to get
-        its name in the error message.
+        Required channel count (a whole number >= 1, else a ConfigError); pass the
+        :class:`~hearsee.audio.arrays.MicArray` itself to get its name in the error message.
     fs : float, optional
-        Required sample rate in Hz. A different file rate is an error unless ``resample=True``,
-        which resamples the recording to ``fs`` (polyphase filter).
+        Required sample rate in Hz (a positive number, else an AudioInputError). A different
+        file rate is an error unless ``resample=True``, which resamples the recording to ``fs``
+        (polyphase filter).
     min_samples : int
         Fewer samples per channel than this is an error (e.g. one analysis frame).
 
@@ -492,6 +504,12 @@ def read_recording(
     TruncatedFileWarning
         A WAV file ends before its header's data size: the samples present are used.
     """
+    # (checked before the file is read: NaN, inf and text were builtin ValueError /
+    # OverflowError / TypeError once compared with the file's rate, "2" a ValueError)
+    if fs is not None:
+        fs = check_fs(fs)
+    want = None if n_channels is None else whole_number(
+        "n_channels", getattr(n_channels, "n_mics", n_channels))
     x, fs_in = _read_file(path)
     n_ch, n = x.shape
     cut = _wav_data_shortfall(Path(path))
@@ -500,8 +518,7 @@ def read_recording(
             f"{path}: the file is cut short: its header declares {cut[0]} bytes of audio, the "
             f"file holds {cut[1]} ({n / fs_in:.3g} s); only those samples are used",
             TruncatedFileWarning, stacklevel=2)
-    if n_channels is not None:
-        want = int(getattr(n_channels, "n_mics", n_channels))
+    if want is not None:
         if n_ch != want:
             what = (f"array {n_channels.name!r} has {want} microphones"
                     if hasattr(n_channels, "n_mics") else f"{want} were expected")
