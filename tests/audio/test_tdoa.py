@@ -977,3 +977,15 @@ def test_gcc_peak_near_max_tau(delay):
     r = gcc(y[0], y[1], FS, max_tau_s=6.997 / FS)
     assert abs(r.tdoa_s * FS - delay) < 0.05
     assert r.confidence > 2.0
+
+
+@pytest.mark.parametrize("band", [(1000.0, 1010.0), (1000.0, 1025.0)])
+def test_band_whose_main_lobe_covers_every_lag_is_refused(three, band):
+    """A band of one or two bins (64 ms frames): the main lobe covered the whole correlation,
+    every confidence was 1e3 and noise alone gave valid frames (61 of 61 for 25 Hz) and a
+    whole-recording estimate with three microphones."""
+    x = np.random.default_rng(0).standard_normal((3, 32000))
+    with pytest.raises(ConfigError, match="band_hz"):
+        estimate_tdoas(x, FS, three, band_hz=band)
+    r = estimate_tdoas(x, FS, three, band_hz=(1000.0, 2000.0))  # a real band: no source
+    assert r.n_valid == 0 and np.all(np.isnan(r.summary_tdoa_s))

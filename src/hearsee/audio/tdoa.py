@@ -1516,6 +1516,14 @@ def estimate_tdoas(
     bins = np.flatnonzero(band)
     bw = (band.nonzero()[0][-1] - band.nonzero()[0][0] + 1) * fs / nfft
     main_lobe = max(2, int(np.ceil(fs / bw)))
+    if 2 * main_lobe + 1 >= nfft:
+        # (nothing outside the main lobe: every confidence was 1e3, "certain", and noise-only
+        # recordings gave valid frames and a summary with three or more microphones)
+        raise ConfigError(
+            f"band_hz {band_hz} is too narrow: {len(bins)} frequency "
+            f"bin{'s' * (len(bins) != 1)} of {nfft}-point frames, whose correlation's main "
+            f"lobe ({main_lobe} samples either side) covers every lag, so no peak can be told "
+            "from a side lobe; widen the band or lengthen the frames")
     win = _window(tuple(window) if isinstance(window, list) else window, frame_len)
     energy = _frame_energy(a32, frame_len, hop, n_frames)
     active, decided = _energy_vad(energy, vad_db)  # frame_activity's decision
