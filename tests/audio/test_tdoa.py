@@ -989,3 +989,30 @@ def test_band_whose_main_lobe_covers_every_lag_is_refused(three, band):
         estimate_tdoas(x, FS, three, band_hz=band)
     r = estimate_tdoas(x, FS, three, band_hz=(1000.0, 2000.0))  # a real band: no source
     assert r.n_valid == 0 and np.all(np.isnan(r.summary_tdoa_s))
+
+
+def test_huge_smoothing_and_upsampling_take_no_huge_memory():
+    """smooth_frames=10**6 copied 10**6 frames of spectra (4 GiB for 0.5 s: a MemoryError or
+    the process killed) and summary_upsample=10**6 asked for an 8 GiB correlation. The
+    smoothing is now counted, not copied (the same moving mean as scipy's uniform_filter1d,
+    edges repeated); the upsampling is bounded."""
+    from scipy.ndimage import uniform_filter1d
+
+    from hearsee.audio.tdoa import _frame_moving_mean
+
+    rng = np.random.default_rng(0)
+    for n_frames, k in [(1, 17), (5, 18), (30, 31), (30, 200), (100, 1001)]:
+        a = rng.standard_normal((n_frames, 3, 7)).astype(np.float32)
+        ref = uniform_filter1d(a.astype(float), k, axis=0, mode="nearest")
+        np.testing.assert_allclose(_frame_moving_mean(a, k), ref, atol=1e-5)
+    two = MicArray.from_preset("two-mic")
+    s = white_noise(0.5, FS, rng=3)
+    x = delay_signals(s, np.array([3.3, 0.0]) / FS, FS)
+    r = estimate_tdoas(x, FS, two, method="ml", smooth_frames=10**6)
+    assert r.summary_tdoa_s[0] * FS == pytest.approx(3.3, abs=0.05)
+    from hearsee.audio.tdoa import MAX_SUMMARY_UPSAMPLE
+
+    with pytest.raises(ConfigError, match="summary_upsample"):
+        estimate_tdoas(x, FS, two, summary_upsample=10**6)
+    r = estimate_tdoas(x, FS, two, summary_upsample=MAX_SUMMARY_UPSAMPLE)
+    assert r.summary_tdoa_s[0] * FS == pytest.approx(3.3, abs=0.05)

@@ -80,6 +80,7 @@ __all__ = [
     "METHODS",
     "MAX_FRAME_MS",
     "MAX_PCM_RANGE",
+    "MAX_SUMMARY_UPSAMPLE",
     "MAX_UNSCALED_PEAK",
     "MIN_FS_HZ",
     "MIN_UNSCALED_PEAK",
@@ -116,6 +117,10 @@ MAX_FRAME_MS = 10_000.0
 MIN_FS_HZ = 4000.0
 #: Fewer confident frames than this: the summary averages all frames with energy instead.
 _MIN_SUMMARY_FRAMES = 3
+#: Largest ``summary_upsample`` of :func:`estimate_tdoas`: the upsampled correlation has
+#: ``summary_upsample`` x the frame's FFT length (10**6 asked for 8 GiB with 64 ms frames);
+#: beyond a few times the Newton refinement that follows gains nothing.
+MAX_SUMMARY_UPSAMPLE = 64
 #: ``coherence_gain`` above which a recording without a noise reference counts as reverberant
 #: (``reverb_method``). White noise 1-3 m from the two- and three-mic presets (2 s, 64 ms
 #: frames, 300-7500 Hz, seed 901, 8 per cell, widest pair): free field 0.87-1.00 at SNR 0-20
@@ -1205,16 +1210,24 @@ def _frame_moving_mean(a: NDArray, k: int) -> NDArray:
     mode="nearest")`` (the same window for even ``k``) as ``k - 1`` sums of shifted slices in
     ``a``'s precision. ndimage copies every (channel, bin) line of a few dozen frames through a
     line buffer in double precision: ~2.5x slower on a recording's spectra; single precision
-    differs from it by ~1 ulp of each sum."""
+    differs from it by ~1 ulp of each sum. A long window (``k`` > 16): running sums in double
+    precision, the repeated edge frames counted rather than copied (memory O(F) whatever
+    ``k``: ``smooth_frames=10**6`` copied 10**6 frames of spectra, 4 GiB for a 0.5 s
+    recording)."""
     F = a.shape[0]
     if k <= 1 or F == 0:
         return a.copy()
     lo, hi = k // 2, (k - 1) // 2
+    if k > 16:
+        c = np.zeros((F + 1,) + a.shape[1:])
+        np.cumsum(a, axis=0, dtype=float, out=c[1:])
+        first = np.arange(F) - lo  # window of frame f: frames first[f] .. first[f] + k - 1
+        inner = c[np.minimum(first + k, F)] - c[np.maximum(first, 0)]
+        shape = (F,) + (1,) * (a.ndim - 1)
+        before = np.maximum(-first, 0).astype(float).reshape(shape)  # copies of frame 0
+        after = np.maximum(first + k - F, 0).astype(float).reshape(shape)  # of frame F - 1
+        return ((inner + before * a[0] + after * a[F - 1]) / k).astype(a.dtype)
     p = a[np.clip(np.arange(-lo, F + hi), 0, F - 1)]  # (F + k - 1, ...), edges repeated
-    if k > 16:  # (a long window: running sums in double precision, O(F) rather than O(k F))
-        c = np.zeros((F + k,) + a.shape[1:])
-        np.cumsum(p, axis=0, dtype=float, out=c[1:])
-        return ((c[k:] - c[:F]) / k).astype(a.dtype)
     s = p[0:F].copy()
     for j in range(1, k):
         s += p[j:j + F]
@@ -1384,7 +1397,8 @@ def estimate_tdoas(
     summary_upsample : int
         Without redundant pairs (two microphones, or pairs that share no triangle), the
         whole-recording peak is searched on the averaged correlation upsampled this many times
-        before the sub-sample refinement (default 4; 1 = on the integer lags). A broadband
+        before the sub-sample refinement (default 4; 1 = on the integer lags; at most
+        :data:`MAX_SUMMARY_UPSAMPLE`). A broadband
         correlation oscillates within ~2 samples; with two close peaks (direct path and an
         early reflection) the integer samples can peak *between* them and the refinement then
         stops in the valley -- upsampling finds the true maximum (three or more microphones
@@ -1485,7 +1499,8 @@ def estimate_tdoas(
     # switched their tests off)
     smooth_frames = whole_number("smooth_frames", smooth_frames)
     chunk_frames = whole_number("chunk_frames", chunk_frames)
-    summary_upsample = whole_number("summary_upsample", summary_upsample)
+    summary_upsample = whole_number("summary_upsample", summary_upsample,
+                                    hi=MAX_SUMMARY_UPSAMPLE)
     vad_db = finite_number("vad_db", vad_db, 0.0)
     reverb_coherence = finite_number("reverb_coherence", reverb_coherence, 0.0)
     prs = arr.checked_pairs(pairs)
