@@ -1016,3 +1016,21 @@ def test_huge_smoothing_and_upsampling_take_no_huge_memory():
         estimate_tdoas(x, FS, two, summary_upsample=10**6)
     r = estimate_tdoas(x, FS, two, summary_upsample=MAX_SUMMARY_UPSAMPLE)
     assert r.summary_tdoa_s[0] * FS == pytest.approx(3.3, abs=0.05)
+
+
+def test_bad_lag_bound_window_and_frame_length_are_config_errors(three, recording):
+    """gcc's max_tau_s as text was numpy's TypeError and as an array its ambiguous-truth
+    ValueError; a window given as an array of weights was lru_cache's TypeError
+    (unhashable); frame_signals cut frames of 10 samples for a frame length of 10.7."""
+    x, _ = recording
+    for bad in ("1e-3", np.array([1e-3, 2e-3])):
+        with pytest.raises(ConfigError, match="max_tau_s"):
+            gcc(x[0], x[1], FS, max_tau_s=bad)
+    for bad in (np.hanning(1024), ("tukey", [0.25])):
+        with pytest.raises(ConfigError, match="window"):
+            estimate_tdoas(x, FS, three, window=bad)
+    with pytest.raises(ConfigError, match="whole numbers of samples"):
+        frame_signals(x, 10.7, 3)
+    assert frame_signals(x, 10.0, 3.0).shape == frame_signals(x, 10, 3).shape
+    r = estimate_tdoas(x, FS, three, window=["tukey", 0.25])  # a list: as the tuple
+    np.testing.assert_array_equal(r.tdoa_s, estimate_tdoas(x, FS, three).tdoa_s)

@@ -267,9 +267,10 @@ def frame_signals(x: ArrayLike, frame_len: int, hop: int) -> NDArray:
         a = a[None, :]
     if a.ndim != 2:
         raise AudioInputError(f"signals must be (n_channels, n_samples), got shape {a.shape}")
-    if not (is_real(frame_len) and is_real(hop)):
-        raise ConfigError(f"frame length and hop must be numbers of samples, got {frame_len!r} "
-                          f"and {hop!r}")
+    # (a fraction was truncated: a frame length of 10.7 cut frames of 10 samples)
+    if not all(is_real(v) and float(v).is_integer() for v in (frame_len, hop)):
+        raise ConfigError(f"frame length and hop must be whole numbers of samples, got "
+                          f"{frame_len!r} and {hop!r}")
     frame_len, hop = int(frame_len), int(hop)
     if frame_len < 2 or hop < 1:
         raise ConfigError(f"frame length must be >= 2 and hop >= 1 samples, got {frame_len}, {hop}")
@@ -524,8 +525,8 @@ def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
         raise AudioInputError("gcc: a signal is silent (constant); there is nothing to correlate")
     _check_refine(refine)
     method = normalize_method(method)
-    if max_tau_s is not None and not (np.isfinite(max_tau_s) and max_tau_s >= 0):
-        raise ConfigError(f"max_tau_s must be a non-negative number of seconds, got {max_tau_s}")
+    if max_tau_s is not None:  # (text was numpy's TypeError, an array its ambiguous truth value)
+        max_tau_s = finite_number("max_tau_s (seconds)", max_tau_s, 0.0)
     n = len(a)
     nfft = sfft.next_fast_len(2 * n, real=True)
     # each signal less its mean, as every framed spectrum (windowed_frames): a DC offset,
@@ -1311,7 +1312,8 @@ def estimate_tdoas(
     vad_db, min_confidence : float
         Thresholds deciding which frames hold a source (module docstring).
     window : str or tuple
-        Analysis window (scipy.signal.get_window spec). The default Tukey window with 25 %
+        Analysis window (scipy.signal.get_window spec; ConfigError for anything else, e.g. an
+        array of weights). The default Tukey window with 25 %
         tapers keeps most of each frame at full weight: with a Hann window the TDOA variance
         is ~1.7x larger (bench/doa.py, white noise vs the Cramer-Rao bound). Each frame's
         mean is removed before windowing (:func:`windowed_frames`): a DC offset is no source.
@@ -1539,7 +1541,14 @@ def estimate_tdoas(
             f"bin{'s' * (len(bins) != 1)} of {nfft}-point frames, whose correlation's main "
             f"lobe ({main_lobe} samples either side) covers every lag, so no peak can be told "
             "from a side lobe; widen the band or lengthen the frames")
-    win = _window(tuple(window) if isinstance(window, list) else window, frame_len)
+    if isinstance(window, list):
+        window = tuple(window)
+    try:
+        hash(window)  # (an array, or a tuple holding a list, was lru_cache's TypeError)
+    except TypeError:
+        raise ConfigError(f"window must be a scipy.signal.get_window name or tuple (e.g. "
+                          f"'hann' or ('tukey', 0.25)), got a {type(window).__name__}") from None
+    win = _window(window, frame_len)
     energy = _frame_energy(a32, frame_len, hop, n_frames)
     active, decided = _energy_vad(energy, vad_db)  # frame_activity's decision
     # (single precision, as the spectra they weigh: a float64 weight made each block complex128)
