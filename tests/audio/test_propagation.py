@@ -322,3 +322,18 @@ def test_add_noise_refuses_an_snr_out_of_its_range():
     assert np.mean(low**2) / np.mean(s**2) == pytest.approx(1e6, rel=0.15)
     high = add_noise(s, 200.0, rng=3) - s
     assert np.mean(high**2) / np.mean(s**2) == pytest.approx(1e-20, rel=0.15)
+
+
+def test_room_refuses_a_signal_that_is_no_real_samples():
+    """simulate_room read its signal with np.asarray(float): a NaN or infinite sample gave an
+    all-NaN recording without a word, text was numpy's ValueError, booleans were 0/1 (the
+    free field, through delay_signals, refused them all)."""
+    fs = 8000
+    arr = MicArray.from_preset("two-mic")
+    x = white_noise(0.05, fs, rng=0)
+    for bad in (np.where(np.arange(x.size) == 7, np.nan, x),
+                np.where(np.arange(x.size) == 7, np.inf, x), "abc", x > 0):
+        with pytest.raises(AudioInputError, match="signal"):
+            simulate_room(bad, fs, arr, [1.0, 0.0, 0.0], ROOM, 0.0, AT)
+    y = simulate_room(x, fs, arr, [1.0, 0.0, 0.0], ROOM, 0.0, AT)
+    assert y.shape == (2, x.size) and np.all(np.isfinite(y))

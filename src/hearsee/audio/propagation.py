@@ -511,7 +511,9 @@ def simulate_room(
     """
     from scipy.signal import fftconvolve
 
-    x = np.asarray(signal, dtype=float)
+    # (as delay_signals for the free field: text was numpy's ValueError, booleans were read as
+    # 0/1, and a NaN or infinite sample gave an all-NaN recording without a word)
+    x = as_samples(signal, "signal")
     if x.ndim != 1 or x.size == 0:
         raise AudioInputError(f"signal must be a non-empty 1-D array, got shape {x.shape}")
     pos = array.positions if mic_positions is None else _mic_positions(mic_positions)
