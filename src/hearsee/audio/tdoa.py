@@ -151,6 +151,15 @@ SUMMARY_TUNED: dict[str, Any] = {"method": "ml", "window": "hann", "min_confiden
 #: ``joint="auto"`` steers the in-plane search (``"steered"``) for planar arrays of at least this
 #: many microphones (see ``joint`` of :func:`estimate_tdoas`)
 AUTO_STEERED_MIN_MICS = 4
+#: :func:`_joint_peaks`' whole-sphere grid: 4000 directions (~3.2 deg apart) for arrays whose
+#: longest pair spans at most this many samples, which then lie within ~0.8 sample of some
+#: direction's TDOAs; a longer pair (a wide array, a high sample rate) gets proportionally
+#: more directions (their number grows with the square of its length), at most
+#: :data:`_MAX_GRID_DIRECTIONS`. With 4000 at any length the grid missed the narrow main lobes of
+#: 192 kHz recordings: the three-mic preset's summary 6.5 samples off (every frame right).
+_GRID_LAG_SAMPLES = 24.0
+_GRID_DIRECTIONS = 4000
+_MAX_GRID_DIRECTIONS = 250_000
 #: Largest RMS violation (samples) of t_ij + t_jk = t_ik accepted for a summary estimate.
 _CLOSURE_TOL_SAMPLES = 2.0
 #: Lags whose noise-only correlation has less than this share of the zero-lag standard
@@ -831,13 +840,14 @@ def _steer_directions(positions: bytes, n_mics: int, n_dirs: int, in_plane: bool
 
 def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
                  pairs: list[tuple[int, int]], c: float, fs: float, max_lag: NDArray,
-                 up: int = 4, n_dirs: int = 4000, coherent: bool = False,
+                 up: int = 4, n_dirs: int | None = None, coherent: bool = False,
                  in_plane: bool = False, steer_range_m: float | None | bool = False,
                  climb: bool = False) -> NDArray:
     """Pick each pair's GCC peak consistently with one far-field direction.
 
     The weighted spectra ``P`` (n_pairs, band bins) are turned into correlations upsampled
-    ``up`` times; their sum is evaluated at the TDOAs of ``n_dirs`` directions (a steered
+    ``up`` times; their sum is evaluated at the TDOAs of ``n_dirs`` directions (default:
+    :func:`_n_grid_directions` of the longest pair; a steered
     response of the averaged GCCs, as SRP-PHAT does per frame) and each pair's peak is then
     refined from the best direction's TDOA (with ``climb``, from the nearest peak
     :func:`_climb` reaches: what volume arrays get, whose localizer fits the curved wavefront
@@ -858,6 +868,9 @@ def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
     I = np.array([p[0] for p in pairs])
     J = np.array([p[1] for p in pairs])
     pos = np.ascontiguousarray(positions, dtype=float)
+    if n_dirs is None:
+        longest = float(np.max(np.linalg.norm(pos[I] - pos[J], axis=1))) / c * fs
+        n_dirs = _n_grid_directions(longest)
     U = _steer_directions(pos.tobytes(), pos.shape[0], int(n_dirs), bool(in_plane))
     tau = -((positions[I] - positions[J]) @ U.T) / c * fs  # (n_pairs, n_dirs) samples
     idx = np.round(tau * up).astype(int) % n_up
@@ -871,6 +884,13 @@ def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
             tau0 = _climb(r, tau0, up)
         lag = _refine_interp(P, tau0, nfft, bins=bins)
     return np.clip(lag, -max_lag, max_lag)
+
+
+def _n_grid_directions(longest_lag: float) -> int:
+    """How many whole-sphere directions :func:`_joint_peaks` steers for an array whose longest
+    pair spans ``longest_lag`` samples (see :data:`_GRID_LAG_SAMPLES`)."""
+    scale = max(float(longest_lag) / _GRID_LAG_SAMPLES, 1.0) ** 2
+    return int(min(np.ceil(_GRID_DIRECTIONS * scale), _MAX_GRID_DIRECTIONS))
 
 
 def _climb(r: NDArray, tau0: NDArray, up: int, max_shift: float = 1.0) -> NDArray:
