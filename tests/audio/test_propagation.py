@@ -337,3 +337,15 @@ def test_room_refuses_a_signal_that_is_no_real_samples():
             simulate_room(bad, fs, arr, [1.0, 0.0, 0.0], ROOM, 0.0, AT)
     y = simulate_room(x, fs, arr, [1.0, 0.0, 0.0], ROOM, 0.0, AT)
     assert y.shape == (2, x.size) and np.all(np.isfinite(y))
+
+
+def test_add_noise_refuses_an_empty_signal_and_a_text_reference_power():
+    """An empty signal was said to contain "NaN or inf samples" (its mean power was NaN);
+    reference_power="1" was read as 1.0 through float()."""
+    with pytest.raises(AudioInputError, match="empty"):
+        add_noise(np.zeros((2, 0)), 10.0, rng=0)
+    x = white_noise(0.05, 8000, rng=0)
+    with pytest.raises(ConfigError, match="reference_power"):
+        add_noise(x, 10.0, rng=0, reference_power="1")
+    y = add_noise(x, 10.0, rng=0, reference_power=4.0)  # noise power 4 / 10
+    assert np.mean((y - x) ** 2) == pytest.approx(0.4, rel=0.1)

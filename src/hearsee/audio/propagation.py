@@ -215,10 +215,12 @@ def add_noise(x: ArrayLike, snr_db: float | None, rng: np.random.Generator | int
     if snr_db is None:
         return y
     rng = np.random.default_rng(rng)
-    p = float(np.mean(y**2)) if reference_power is None else float(reference_power)
-    if reference_power is not None and not (np.isfinite(p) and p > 0):
-        raise ConfigError(f"reference_power must be a positive finite number, got "
-                          f"{reference_power!r}")
+    if reference_power is not None:  # (float() read the text "1" as 1.0)
+        p = finite_number("reference_power", reference_power, 0.0, lo_open=True)
+    elif y.size == 0:  # (its mean power was NaN: "signal contains NaN or inf samples")
+        raise AudioInputError("cannot set an SNR for an empty signal (no samples)")
+    else:
+        p = float(np.mean(y**2))
     if not np.isfinite(p):
         raise AudioInputError("signal contains NaN or inf samples")
     if p <= 0:
