@@ -344,3 +344,16 @@ def test_thermal_mask_checks_its_flag_and_the_chosen_filters_options():
     # the options of the chosen filter still reach it
     assert thermal_mask(t, radiometric=False, k_sigma=3.0, open_px=0).sum() == 14 * 8
     assert thermal_mask(t, band_c=(40.0, 50.0), open_px=0, close_px=0).sum() == 14 * 8
+
+
+def test_counts_below_absolute_zero_are_refused():
+    """Centi-kelvin counts: 0 is absolute zero, 30000 is 26.85 degC; a signed image's negative
+    counts (-5: -273.20 degC) or an offset that puts 0 counts 10 degC lower were returned as
+    temperatures below absolute zero without a word."""
+    ok = counts_to_celsius(np.array([[0, 30000]], np.uint16))
+    np.testing.assert_allclose(ok, [[-273.15, 26.85]], atol=1e-3)
+    with pytest.raises(ImageInputError, match="absolute zero"):
+        counts_to_celsius(np.array([[-5, 29000]], np.int16))
+    with pytest.raises(ImageInputError, match="absolute zero"):
+        counts_to_celsius(np.array([[0, 29000]], np.uint16), offset=-283.15)
+    assert np.isnan(counts_to_celsius(np.array([[np.nan]]))).all()  # NaN stays NaN

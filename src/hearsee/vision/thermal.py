@@ -61,6 +61,10 @@ FLAT_SPREAD_C = 0.1
 _F32_MAX = float(np.finfo(np.float32).max)
 
 
+#: Absolute zero in degrees Celsius: no radiometric reading is colder.
+ABSOLUTE_ZERO_C = -273.15
+
+
 def counts_to_celsius(counts: NDArray, scale: float = 0.01, offset: float = -273.15) -> NDArray:
     """Convert raw radiometric counts to degC: ``T = counts * scale + offset``.
 
@@ -68,14 +72,23 @@ def counts_to_celsius(counts: NDArray, scale: float = 0.01, offset: float = -273
     also what :func:`hearsee.sim.scenes.write_scene` writes to ``thermal_radiometric.png``).
     ``scale`` (degC per count, > 0) and ``offset`` must be finite float32 numbers (ConfigError:
     a NaN scale gave an all-NaN image, a string was parsed); ``counts`` numbers
-    (ImageInputError).
+    (ImageInputError). Counts that convert to below absolute zero (-273.15 degC; negative
+    counts of a signed image, or a wrong scale or offset) are an ImageInputError: they were
+    returned as such temperatures without a word.
     """
     # (numpy's ValueError on text and ragged lists, True read as 1)
     c = numeric_map("counts", counts, np.float32)
     # (checked, not converted: a numpy scalar stays what it was, and so does the result)
     finite_number("scale", scale, 0.0, _F32_MAX, lo_open=True)
     finite_number("offset", offset, -_F32_MAX, _F32_MAX)
-    return c * np.float32(scale) + np.float32(offset)
+    out = c * np.float32(scale) + np.float32(offset)
+    # (float32 rounding of 0 * 0.01 - 273.15 stays within 1e-3 of it)
+    if out.size and np.nanmin(out, initial=np.inf) < ABSOLUTE_ZERO_C - 1e-3:
+        raise ImageInputError(
+            f"counts convert to {float(np.nanmin(out)):.2f} degC, below absolute zero "
+            f"({ABSOLUTE_ZERO_C} degC): negative counts (a signed image?) or a wrong scale "
+            f"({scale}) or offset ({offset})")
+    return out
 
 
 def _kernel_px(name: str, value: object, shape: tuple[int, ...]) -> int:
@@ -309,9 +322,9 @@ def _check_scene_celsius(t: NDArray, what: str) -> float:
     "thermal support 0.00" for every person, without a word. Returns the frame's spread
     (warmest - coldest, degC)."""
     lo, hi = float(np.min(t)), float(np.max(t))
-    if lo < -273.15 or lo > SCENE_C[1] or hi < SCENE_C[0]:
+    if lo < ABSOLUTE_ZERO_C or lo > SCENE_C[1] or hi < SCENE_C[0]:
         hint = (" (is it in kelvin?)" if SCENE_C[1] < lo < SCENE_C[1] + 273.15 else
-                ", and nothing is below absolute zero" if lo < -273.15 else "")
+                ", and nothing is below absolute zero" if lo < ABSOLUTE_ZERO_C else "")
         raise ImageInputError(f"{what}, but this one spans {lo:.4g} to {hi:.4g} degC{hint}; "
                               "convert it to degC")
     return hi - lo
