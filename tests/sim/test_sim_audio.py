@@ -358,3 +358,19 @@ def test_the_simulators_refuse_an_snr_before_any_work(snr, monkeypatch, tmp_path
         with pytest.raises(ConfigError, match="SNR"):
             call()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_save_recording_needs_the_truths_sample_rate(tmp_path):
+    """A truth without "fs" was a builtin KeyError, after the output checks; nothing is
+    written, and with "fs" the WAV is at that rate."""
+    import soundfile as sf
+
+    from hearsee.sim.audio import save_recording
+
+    x = np.ones((2, 160)) * np.linspace(-1.0, 1.0, 160)
+    for truth in ({"source_m": [1.0, 0.0, 0.0]}, [("fs", 16000)], None):
+        with pytest.raises(ConfigError, match="'fs'"):
+            save_recording(tmp_path / "r.wav", x, truth)
+    assert not (tmp_path / "r.wav").exists() and not (tmp_path / "r.json").exists()
+    wav, _ = save_recording(tmp_path / "r.wav", x, {"fs": 8000})
+    assert sf.info(str(wav)).samplerate == 8000

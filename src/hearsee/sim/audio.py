@@ -292,7 +292,13 @@ def save_recording(out: str | Path, x: ArrayLike, truth: Mapping[str, Any],
 
     The common gain applied to all channels is stored as ``truth["gain"]`` (it does not change
     any TDOA). ``protect`` lists input files that must not be overwritten. Returns both paths.
+    ``truth`` must be a mapping with the sample rate ``"fs"`` (Hz) the WAV is written at
+    (ConfigError: without it, a builtin KeyError).
     """
+    if not isinstance(truth, Mapping) or "fs" not in truth:
+        raise ConfigError("truth must be a mapping that gives the sample rate 'fs' (Hz) of the "
+                          f"recording, got {type(truth).__name__} with keys "
+                          f"{list(truth)[:8] if isinstance(truth, Mapping) else None}")
     wav = Path(out)
     if wav.suffix.lower() not in (".wav", ".flac"):
         raise ConfigError(f"{wav}: output must end in .wav (or .flac)")
