@@ -584,7 +584,9 @@ def find_peaks(psi: NDArray, focal_px: float, baseline_m: float, *, threshold: f
 class BodySegment:
     """A candidate's silhouette: ``mask`` (bool, shape of ``box`` = [x, y, w, h] in rectified
     left-image pixels), 3D points ``(N, 3)`` of the silhouette (metres, rectified left frame)
-    with their heights above the floor, ``top_m`` (height of the highest point), ``width_m``
+    with their heights above the floor, ``top_m`` (the silhouette's robust top,
+    :func:`robust_top_m`: metres above the floor, about :data:`CROWN_ABOVE_TOP_M` below the
+    crown -- not its highest point, as this docstring said until 2026-12-02), ``width_m``
     and ``position_m`` (torso centre estimate). ``truncated``: the silhouette touches the top,
     left or right border of the image (a person close to the camera, or not yet centred), so
     its ``top_m`` and ``position_m`` describe the visible part only (the torso centre is
