@@ -1270,6 +1270,36 @@ def _snr_coherence(power: NDArray, noise_psd: NDArray, I: NDArray, J: NDArray,
     return coh
 
 
+def _given_activity(active: ArrayLike, n_frames: int) -> NDArray:
+    """``active`` of :func:`estimate_tdoas` as a (n_frames,) bool array (ConfigError for
+    another shape or non-boolean values)."""
+    a = np.asarray(active)
+    if a.shape != (n_frames,) or a.dtype != bool:
+        raise ConfigError(f"active must be {n_frames} booleans (one per frame), got "
+                          f"{a.dtype} of shape {a.shape}")
+    return a
+
+
+def _given_noise(noise: ArrayLike, shape: tuple[int, int, int], gain: float) -> NDArray:
+    """``frame_noise_psd`` of :func:`estimate_tdoas` (``shape`` = frames, channels, band
+    bins) in single precision, times ``gain**2`` (the samples' level normalisation); rows may
+    be NaN (no reference), other values must be finite and > 0 (ConfigError)."""
+    n = np.asarray(noise, dtype=float)
+    if n.shape != shape:
+        raise ConfigError(f"frame_noise_psd must have shape {shape} (frames, microphones, band "
+                          f"bins), got {n.shape}")
+    none = np.isnan(n).all(axis=(1, 2))
+    if not (np.all(np.isfinite(n[~none])) and np.all(n[~none] > 0)):
+        raise ConfigError("frame_noise_psd must be finite and > 0 (a NaN row: no reference)")
+    return (n * gain**2).astype(np.float32)
+
+
+def _mean_rows(noise: NDArray) -> NDArray | None:
+    """The mean of the frames' noise spectra (F, n_ch, B) that are not NaN; None if all are."""
+    ok = ~np.isnan(noise).all(axis=(1, 2))
+    return noise[ok].mean(axis=0) if ok.any() else None
+
+
 def estimate_tdoas(
     x: ArrayLike,
     fs: float,
@@ -1303,6 +1333,8 @@ def estimate_tdoas(
     band_vad: bool = True,
     chunk_frames: int = 128,
     progress: Callable[[int], None] | None = None,
+    active: ArrayLike | None = None,
+    frame_noise_psd: ArrayLike | None = None,
 ) -> TdoaFrames:
     """Framed GCC TDOAs of all microphone pairs at once.
 
@@ -1494,6 +1526,19 @@ def estimate_tdoas(
     chunk_frames : int
         Frames processed per vectorised block (bounds memory); ``progress(n)`` is called after
         each block with the number of frames done.
+    active : array (n_frames,) of bool, optional
+        The frames' activity decided by the caller: replaces the energy and band activity
+        tests over ``x`` (``vad_db``, ``band_vad``), and the noise spectrum of ``snr_weight``
+        is then taken from ``frame_noise_psd`` only. For a stream, whose batches of frames
+        must not decide anything (:class:`hearsee.stream.pipeline.FrameActivity`). Default
+        None: decided from ``x`` as described above.
+    frame_noise_psd : array (n_frames, n_mics, band bins), optional
+        With ``active``: each frame's noise power spectrum for ``snr_weight``, in units of
+        ``|X|^2`` of the frames of ``x`` as given (Tukey-windowed frames less their means,
+        zero-padded FFT; the band's bins), e.g. averaged over earlier noise-only frames; a row
+        of NaN gives that frame the plain weighting (no noise reference yet). Scaled with
+        ``x`` when the recording's level is normalised. None (with ``active``): no SNR
+        weighting.
 
     Returns
     -------
@@ -1507,6 +1552,8 @@ def estimate_tdoas(
             "(one row per microphone)"
         )
     peak = float(np.max(np.abs(a), initial=0.0))
+    if frame_noise_psd is not None and active is None:
+        raise ConfigError("frame_noise_psd needs active (the frames it was measured with)")
     fs = check_analysis_fs(fs)
     frame_len, hop = frame_geometry(fs, frame_ms, hop_ms)
     method = normalize_method(method)
@@ -1532,8 +1579,10 @@ def estimate_tdoas(
         finite_number("steer_range_m", steer_range_m, 0.0, lo_open=True)
     # (float32 fourth powers of the spectra overflow, tiny powers vanish; every test here is
     # scale-free)
+    gain = 1.0  # (of the samples, for a given frame_noise_psd)
     if peak > MAX_UNSCALED_PEAK or 0 < peak < MIN_UNSCALED_PEAK:
         a = a / peak
+        gain = 1.0 / peak
     # single precision from here on: twice as fast, and its ~1e-7 relative error is far below
     # any sensor noise
     a32 = a.astype(np.float32)
@@ -1570,7 +1619,11 @@ def estimate_tdoas(
                           f"'hann' or ('tukey', 0.25)), got a {type(window).__name__}") from None
     win = _window(window, frame_len)
     energy = _frame_energy(a32, frame_len, hop, n_frames)
-    active, decided = _energy_vad(energy, vad_db)  # frame_activity's decision
+    given = active is not None
+    if not given:
+        active, decided = _energy_vad(energy, vad_db)  # frame_activity's decision
+    else:  # the caller's decision (a stream's, from its own history of frames)
+        active, decided = _given_activity(active, n_frames), True
     # (single precision, as the spectra they weigh: a float64 weight made each block complex128)
     frame_w = _onset_weights(energy, onset_weight).astype(np.float32)
     I = np.array([p[0] for p in prs])
@@ -1589,8 +1642,14 @@ def estimate_tdoas(
                                                   max(int(chunk_frames), 1))
     elif n_frames <= max(int(chunk_frames), 1):  # one transform for the noise and the frames
         X_all, power_all = _spectra_power(frames, win, nfft, k0, k1)
-    noise_psd = (_noise_spectrum(frames, active, win, nfft, k0, k1, power_all) if snr_weight
-                 else None)
+    if frame_noise_psd is None:
+        noise_psd = (_noise_spectrum(frames, active, win, nfft, k0, k1, power_all)
+                     if snr_weight and not given else None)
+    else:  # per frame, NaN rows without a reference: see _snr_coherence's use below
+        noise_psd = (_given_noise(frame_noise_psd, (n_frames, arr.n_mics, k1 - k0), gain)
+                     if snr_weight else None)
+    # (one spectrum for the whole-recording reverberation test: the frames' mean)
+    noise_ref = noise_psd if noise_psd is None or noise_psd.ndim == 2 else _mean_rows(noise_psd)
 
     redundant = pair_closure_projector(tuple(prs), arr.n_mics) is not None  # a closed cycle
     frame_cfar = not redundant and min_frame_peak_snr > 0
@@ -1612,7 +1671,7 @@ def estimate_tdoas(
     # second weighting for reverberant recordings, and the coherence statistics deciding it
     use_rev = reverb_method is not None and whole_recording
     coherence_gain = float("nan")
-    if use_rev and noise_psd is None:  # no noise reference: decide by the frame-length test
+    if use_rev and noise_ref is None:  # no noise reference: decide by the frame-length test
         # on the widest pair (a diffuse field decorrelates it most); all pairs together
         # separated free field from rooms no better (white noise, seed 901, 8 per cell: free
         # field <= 0.998 either way, rooms >= 1.03)
@@ -1620,7 +1679,7 @@ def estimate_tdoas(
         coherence_gain = _coherence_gain(a32[[I[w], J[w]]], frame_len, fs,
                                          (k0 * fs / nfft, (k1 - 1) * fs / nfft))
         use_rev = coherence_gain > REVERB_COHERENCE_GAIN
-    rev_decided = use_rev and noise_psd is None
+    rev_decided = use_rev and noise_ref is None
     acc2 = np.zeros((n_pairs, nb), dtype=complex)
     acc2_active = np.zeros((n_pairs, nb), dtype=complex)
     s_cross = np.zeros((n_pairs, nb), dtype=complex)
@@ -1640,7 +1699,11 @@ def estimate_tdoas(
         if phat_beta != 1.0 and method in ("phat", "ml"):
             W = W * np.abs(G) ** (1.0 - float(phat_beta))
         if noise_psd is not None:
-            coh = _snr_coherence(power, noise_psd, I, J, snr_weight == "ml")
+            if noise_psd.ndim == 2:
+                coh = _snr_coherence(power, noise_psd, I, J, snr_weight == "ml")
+            else:  # each frame's own noise spectrum; a NaN one: the plain weighting
+                coh = np.nan_to_num(_snr_coherence(power, noise_psd[h0:h1], I, J,
+                                                   snr_weight == "ml"), nan=1.0)
             W = W * coh
         sl = slice(s0 - h0, s0 - h0 + (s1 - s0))
         P = G[sl] * W[sl].astype(np.float32, copy=False)
@@ -1678,7 +1741,7 @@ def estimate_tdoas(
                 W2 = gcc_weighting(reverb_method, Ga, *(
                     None if A is None or reverb_method in ("phat", "cc") else A[ia]
                     for A in stats))
-                if noise_psd is not None:  # SNR weights, and the statistics of the test
+                if noise_ref is not None:  # SNR weights, and the statistics of the test
                     s_cross += np.sum(Ga, axis=0)
                     s_auto += np.sum(power[ia], axis=0)
                     P2 = Ga * (W2 * coh[ia]).astype(np.float32, copy=False)
@@ -1697,8 +1760,8 @@ def estimate_tdoas(
     reverberant = False  # (judged only with a reverb_method)
     if use_rev and n_active:
         reverberant = True  # decided above by the frame-length test when there is no noise
-        if noise_psd is not None:
-            coherence_ratio = _coherence_ratio(s_cross, s_auto, n_active, noise_psd, I, J)
+        if noise_ref is not None:
+            coherence_ratio = _coherence_ratio(s_cross, s_auto, n_active, noise_ref, I, J)
             reverberant = coherence_ratio < float(reverb_coherence)
         if reverberant:
             acc, acc_active, summary_method = acc2, acc2_active, reverb_method

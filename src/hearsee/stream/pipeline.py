@@ -17,9 +17,10 @@ Systems 113, 2019): small stages with explicit configuration, connected by a bou
   is discarded. Frames are emitted in batches (all complete frames of a block) so that the
   stages run vectorised over the batch.
 * :class:`FrameGcc` (each frame's own GCC TDOAs: :func:`hearsee.audio.tdoa.estimate_tdoas`
-  without its whole-recording summary) and :class:`SmoothedSrp` (recursively smoothed cross
-  spectra steered over a direction grid, its steering matrix precomputed once, single
-  precision) are the measurement stages.
+  without its whole-recording summary, each frame's activity decided causally by
+  :class:`FrameActivity`, so that no result depends on the block size) and
+  :class:`SmoothedSrp` (recursively smoothed cross spectra steered over a direction grid,
+  its steering matrix precomputed once, single precision) are the measurement stages.
 * :class:`TrackingProcessor` holds the TDOA, ITD-filter
   (:class:`~hearsee.audio.itd_filter.ItdKalman`), localizer
   (:func:`~hearsee.audio.localize.localize_tdoa`) and tracker stages
@@ -656,27 +657,199 @@ class Framer:
 
 
 # ---------------------------------------------------------------------------- per-frame GCC stage
-class FrameGcc:
-    """Per-frame GCC TDOAs of consecutive frames: :func:`hearsee.audio.tdoa.estimate_tdoas`
-    with ``whole_recording=False`` (the same window, lag bounds, energy activity test over the
-    batch, SNR weighting from the batch's quiet frames, peak search and confidence, without the
-    whole-recording summary that a stream does not use -- its direction search cost about two
-    thirds of each call on a batch of eight frames).
+class FrameActivity:
+    """Causal per-frame activity decision and noise spectrum of the stream's GCC stage.
 
-    Units: seconds; ``segment`` (n_ch, frame_len + (m - 1) * hop) samples.
+    :func:`~hearsee.audio.tdoa.estimate_tdoas` decides from the recording it is given: which
+    frames hold a source (energy within ``vad_db`` dB of the 10th percentile of the frame
+    energies, if the 95th percentile shows a range; else the same test on the energy in the
+    analysis band) and, for its SNR weighting, the noise spectrum averaged over the inactive
+    frames. Called on each batch of a stream, those statistics were the batch's -- and a batch
+    is the frames one block completes, so the tracks of one WAV file depended on the block size
+    it was read in (male voice at 10 dB: 49 / 54 / 78 / 81 valid frames of 124 in blocks of
+    1024 / 4096 / 16384 / the whole file; tracked azimuths 12.8 deg apart between 1024 and 4096).
+
+    Here frame k's decision depends only on frames up to k, never on the batch it arrives in:
+
+    * **activity**: the same rule (:func:`hearsee.audio.tdoa._energy_vad`, and its band-energy
+      test when the broadband energy does not decide) applied to the energies of the last
+      ``n_history`` frames including k -- a running-quantile noise floor (quantile-based noise
+      estimation, Stahl, Fischer & Bippus 2000, "Quantile based noise estimation for spectral
+      subtraction and Wiener filtering", ICASSP; the batch rule's percentiles over a sliding
+      window of fixed length instead of over the batch);
+    * **noise spectrum**: the mean band power spectrum ``|X|^2`` (each channel; windowed frames
+      as :func:`estimate_tdoas` takes them) of the inactive, not digitally silent frames among
+      those ``n_history``, when there are at least 3 (the batch rule's minimum); otherwise the
+      last such mean is held (a talker who does not pause for ``n_history`` frames keeps the
+      noise spectrum of the last pause) and before the first one a frame has none (NaN: the
+      plain weighting, as a batch without 3 quiet frames had).
+
+    Start of a stream: the window holds the frames seen so far (frame 0 alone: the energy cannot
+    decide, the frame counts as active), so the first ``n_history`` frames are decided on a
+    shorter history. Missing frames (samples lost to a dropped or late block; the pipeline
+    passes only complete frames) neither enter the history nor age it: the window is the last
+    ``n_history`` frames received, since the noise floor rarely changes across a dropout.
+    Digitally silent frames (a channel all zeros) enter the energy history (their energy is
+    excluded by the rule itself) but never the noise spectrum.
+
+    Levels: the decisions are scale-free; the caller passes the samples at one scale
+    (:class:`FrameGcc` carries them at :func:`level_scale`, rescaling the history by
+    :meth:`rescale` when that changes). Units: energies in squared sample units per sample,
+    spectra in ``|X|^2`` of the band's rfft bins ``k0..k1-1``.
     """
 
+    def __init__(self, n_history: int, frame_len: int, win: NDArray, nfft: int, k0: int,
+                 k1: int, vad_db: float = 3.0, band_test: bool = True,
+                 noise: bool = True) -> None:
+        from collections import deque
+
+        self.n_history = whole_number("n_history", n_history)
+        self.frame_len, self.win, self.nfft, self.k0, self.k1 = frame_len, win, nfft, k0, k1
+        self.vad_db, self.band_test, self.want_noise = float(vad_db), bool(band_test), noise
+        keep = self.n_history - 1  # the past frames a new frame's window needs
+        self._e: deque = deque(maxlen=keep)  # broadband energies (float)
+        self._eb: deque = deque(maxlen=keep)  # band energies (float)
+        self._quiet: deque = deque(maxlen=keep)  # inactive and not digitally silent (bool)
+        self._power: deque = deque(maxlen=keep)  # band power spectra (n_ch, B) float32
+        self.noise: NDArray | None = None  # the held noise spectrum (n_ch, B) float64
+
+    def rescale(self, f: float) -> None:
+        """Samples now come multiplied by a further ``sqrt(f)`` (``f`` a power of two: exact):
+        carry the history's energies and spectra along."""
+        self._e = type(self._e)((e * f for e in self._e), maxlen=self._e.maxlen)
+        self._eb = type(self._eb)((e * f for e in self._eb), maxlen=self._eb.maxlen)
+        self._power = type(self._power)((None if p is None else p * np.float32(f)
+                                         for p in self._power), maxlen=self._power.maxlen)
+        if self.noise is not None:
+            self.noise = self.noise * f
+
+    def __call__(self, frames: NDArray) -> tuple[NDArray, NDArray | None]:
+        """Decide consecutive frames ``frames`` (n_ch, m, frame_len) after those of earlier
+        calls: (active (m,) bool, noise spectra (m, n_ch, B) float32 with NaN rows where there
+        is no reference yet, or None when the noise spectrum is not wanted)."""
+        from hearsee.audio.tdoa import _energy_vad
+
+        n_ch, m = frames.shape[0], frames.shape[1]
+        # each frame about its own mean (a DC offset is no energy; causal, unlike a mean over
+        # the batch), float64 sums of each frame's own contiguous samples
+        f64 = np.ascontiguousarray(np.moveaxis(frames, 1, 0), dtype=float)  # (m, n_ch, L)
+        f64 -= f64.mean(axis=2, keepdims=True)
+        e = np.einsum("mcl,mcl->m", f64, f64) / (self.frame_len * n_ch)
+        silent = ~np.all(np.any(frames != 0, axis=-1), axis=0)
+        need_power = self.band_test or self.want_noise
+        if need_power:
+            X = np.moveaxis(frame_spectra(frames, self.win, self.nfft, self.k0, self.k1), 1, 0)
+            power = np.ascontiguousarray(X.real**2 + X.imag**2)  # (m, n_ch, B) float32
+            eb = power.reshape(m, -1).sum(axis=1, dtype=float)
+        active = np.zeros(m, bool)
+        noise = np.full((m, n_ch, self.k1 - self.k0), np.nan, np.float32) if (
+            self.want_noise) else None
+        for i in range(m):
+            # the window: the last n_history - 1 frames received, and this one
+            ew = np.append(np.fromiter(self._e, float, len(self._e)), e[i])
+            act, decided = _energy_vad(ew, self.vad_db)
+            a = bool(act[-1])
+            if self.band_test and not decided:
+                ebw = np.append(np.fromiter(self._eb, float, len(self._eb)), eb[i])
+                band, b_decided = _energy_vad(ebw, self.vad_db)
+                a = a and (bool(band[-1]) if b_decided else True)
+            active[i] = a
+            quiet = not a and not bool(silent[i])
+            if self.want_noise:
+                pw = [p for p, q in zip(self._power, self._quiet, strict=True) if q]
+                if quiet:
+                    pw.append(power[i])
+                if len(pw) >= 3:  # (estimate_tdoas's minimum of noise-only frames)
+                    psd = np.mean(np.stack(pw), axis=0, dtype=float)
+                    self.noise = np.maximum(psd, 1e-12 * psd.max(initial=0.0) + 1e-30)
+                if self.noise is not None:
+                    noise[i] = self.noise
+            self._e.append(e[i])  # (a deque of maxlen n_history - 1: the oldest drops out)
+            self._eb.append(eb[i] if need_power else 0.0)
+            self._quiet.append(quiet)
+            self._power.append(power[i] if self.want_noise else None)
+        return active, noise
+
+
+class FrameGcc:
+    """Per-frame GCC TDOAs of consecutive frames: :func:`hearsee.audio.tdoa.estimate_tdoas`
+    with ``whole_recording=False`` (the same window, lag bounds, peak search and confidence;
+    SNR weighting only with ``StreamConfig.snr_weight``; without the whole-recording summary
+    that a stream does not use -- its direction search cost about two thirds of each call on
+    a batch of eight frames), given each frame's activity (and noise spectrum) by
+    :class:`FrameActivity` from the frames up to it (``StreamConfig.activity_history_s``)
+    rather than from the batch the frame came in: the TDOAs do not depend on the block size
+    of the source.
+
+    State: the activity history and :func:`level_scale` of the largest |sample| seen (the
+    samples go to both stages at that scale, a power of two, so that a float recording at 1e9
+    does not overflow the single-precision spectra; ordinary levels pass unchanged). Calls
+    must come in stream order. Units: seconds; ``segment`` (n_ch, frame_len + (m - 1) * hop)
+    samples.
+    """
+
+    #: Frames per estimate_tdoas call (bounds memory on a whole file read as one block)
+    CHUNK_FRAMES = 128
+
     def __init__(self, array: MicArray, fs: float, cfg: StreamConfig) -> None:
+        import scipy.fft as sfft
+
+        from hearsee.audio.tdoa import _band_mask, _window
+
         self.array, self.fs, self.cfg = array, float(fs), cfg
         self.pairs = list(array.pairs)
+        self.frame_len, self.hop = frame_geometry(fs, cfg.frame_ms, cfg.hop_ms)
+        # estimate_tdoas's window, transform length and band (its defaults: margin 1 sample,
+        # Tukey 25 %): the noise spectra must be of its frames' spectra
+        max_lag = array.max_tdoa(self.pairs) * self.fs + 1.0
+        nfft = sfft.next_fast_len(self.frame_len + 2 * int(np.ceil(max_lag.max())) + 2,
+                                  real=True)
+        n_bins = nfft // 2 + 1
+        bins = np.flatnonzero(_band_mask(n_bins, nfft, self.fs, cfg.band_hz))
+        k0, k1 = int(bins[0]), int(bins[-1]) + 1
+        n_hist = max(int(round(cfg.activity_history_s * 1e3 / cfg.hop_ms)), 1)
+        self.activity = FrameActivity(n_hist, self.frame_len, _window(("tukey", 0.25),
+                                                                      self.frame_len),
+                                      nfft, k0, k1, band_test=k0 > 1 or k1 < n_bins - 1,
+                                      noise=bool(cfg.snr_weight))
+        self._peak, self._scale = 0.0, 1.0
+
+    def _rescale(self, peak: float) -> None:
+        """Take a batch's largest |sample| into the running maximum; carry the activity
+        history to a new :func:`level_scale` (as :meth:`SmoothedSrp._rescale`)."""
+        if not np.isfinite(peak):
+            raise AudioInputError("recording contains NaN or infinite samples")
+        self._peak = max(self._peak, peak)
+        scale = level_scale(self._peak)
+        if scale != self._scale:
+            self.activity.rescale((scale / self._scale) ** 2)
+            self._scale = scale
 
     def __call__(self, segment: NDArray, n_frames: int) -> tuple[NDArray, NDArray]:
-        """TDOAs (m, n_pairs) seconds (NaN: no estimate) and confidences (m, n_pairs)."""
+        """TDOAs (m, n_pairs) seconds (NaN: no estimate) and confidences (m, n_pairs) of the
+        ``m = n_frames`` frames of ``segment``, the stream's next complete frames."""
         cfg = self.cfg
-        tf = estimate_tdoas(segment, self.fs, self.array, cfg.frame_ms, cfg.hop_ms, cfg.method,
-                            self.pairs, band_hz=cfg.band_hz, refine=cfg.refine,
-                            min_confidence=cfg.min_confidence, whole_recording=False)
-        return tf.tdoa_s[:n_frames], tf.confidence[:n_frames]
+        seg = np.asarray(segment, dtype=np.float32)
+        self._rescale(float(np.max(np.abs(seg), initial=0.0)))
+        if self._scale != 1.0:
+            seg = seg * np.float32(self._scale)
+        frames = frame_signals(seg, self.frame_len, self.hop)[:, :n_frames]
+        if frames.shape[1] != n_frames:
+            raise EstimationError(f"FrameGcc: the segment holds {frames.shape[1]} frames of "
+                                  f"{self.frame_len} samples (hop {self.hop}), not {n_frames}")
+        tdoa = np.full((n_frames, len(self.pairs)), np.nan)
+        conf = np.zeros((n_frames, len(self.pairs)))
+        for s0 in range(0, n_frames, self.CHUNK_FRAMES):
+            s1 = min(s0 + self.CHUNK_FRAMES, n_frames)
+            active, noise = self.activity(frames[:, s0:s1])
+            part = seg[:, s0 * self.hop: (s1 - 1) * self.hop + self.frame_len]
+            tf = estimate_tdoas(part, self.fs, self.array, cfg.frame_ms, cfg.hop_ms,
+                                cfg.method, self.pairs, band_hz=cfg.band_hz,
+                                refine=cfg.refine, min_confidence=cfg.min_confidence,
+                                whole_recording=False, snr_weight=bool(cfg.snr_weight),
+                                active=active, frame_noise_psd=noise)
+            tdoa[s0:s1], conf[s0:s1] = tf.tdoa_s, tf.confidence
+        return tdoa, conf
 
 
 # ---------------------------------------------------------------------------- smoothed SRP stage
@@ -1134,6 +1307,24 @@ class StreamConfig:
         +1.1 / +1.4 at 0.25). Use it where a lower error through a weak talker's pauses matters
         more than ~1-2 frames (32-64 ms) of lag in sharp turns
     gate_sigmas, gate_deg, gated_after_s : see ``gated_min_coherence``
+    activity_history_s : seconds of past frames (rounded to whole hops, this frame included)
+        over which the per-frame GCC stage decides a frame's activity and its noise spectrum
+        (:class:`FrameActivity`: causal, so the tracks do not depend on the block size the
+        input comes in; until 2026-12-02 each batch of frames decided its own). On the dev
+        walks of ``bench/tracking.py`` part A (seed 100, 6 straight room walks per condition,
+        2026-12-02) 0.5, 1 and 2 s gave the same tracked azimuth RMSE within 0.1 deg (male /
+        female voice 10 dB 5.6 / 7.6 deg, 20 dB 3.1 / 2.3, white noise 20 dB 1.1), which is
+        what the benchmark's block of 2048 had measured (5.6 / 7.6, 3.1 / 2.2, 1.1) and below
+        the CLI's block of 4096 (6.3 / 8.8, 3.2 / 3.3, 1.1); 1 s is the middle
+    snr_weight : SNR-weight the per-frame GCC (``snr_weight`` of
+        :func:`~hearsee.audio.tdoa.estimate_tdoas`) with the noise spectrum of the inactive
+        frames of the last ``activity_history_s`` (:class:`FrameActivity`). Default False:
+        on the same dev walks it measured more frames (female voice 10 dB: 45 % instead of
+        18 %) but more of them reflections, and the female voice's tracked RMSE at 10 dB rose
+        from 7.6 to 19.6 deg (1 s; a track on one of six walks ran off at 50-130 deg; male 10
+        dB 5.7 -> 6.1, 20 dB 3.1 -> 3.4, female 20 dB 2.3 -> 2.9). With batches of 2048 samples
+        (the benchmark's block) the old batch decision rarely found the 3 quiet frames it
+        needs, so the stream was tuned and measured almost without it
     srp_band_hz : frequency band of the smoothed steered response, Hz
     srp_coherence_weight : weight the smoothed PHAT spectra by their magnitude-squared
         coherence (:class:`SmoothedSrp`)
@@ -1210,6 +1401,8 @@ class StreamConfig:
     gate_sigmas: float = 3.0
     gate_deg: tuple[float, float] = (6.0, 30.0)
     gated_after_s: float = 0.2
+    activity_history_s: float = 1.0
+    snr_weight: bool = False
 
     def __post_init__(self) -> None:
         _check_config(self)
@@ -1218,7 +1411,7 @@ class StreamConfig:
 #: StreamConfig's numbers that must be finite and > 0 (None allowed for the optional ones)
 _POSITIVE = ("sigma_meas_deg", "sigma_accel_dps2", "sigma_jerk", "sigma_px", "sigma_min_deg",
              "max_fix_residual_samples", "max_evidence_age_frames", "reacquire_s",
-             "planar_elevation_sigma_scale", "mode_dwell_s")
+             "planar_elevation_sigma_scale", "mode_dwell_s", "activity_history_s")
 _POSITIVE_OR_NONE = ("sigma_accel", "sigma_tdoa_s", "accel_tau_s", "max_coast_s",
                      "sigma_frame_deg", "sigma_srp_deg")
 #: ... that must lie in [low, high] (both inclusive; finite)
