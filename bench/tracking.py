@@ -275,6 +275,10 @@ CFG_IMM0 = StreamConfig(frame_ms=64.0, hop_ms=32.0, direction_rate_tau_s=None)
 #: StreamConfig.gated_min_coherence)
 CFG_GATE = StreamConfig(frame_ms=64.0, hop_ms=32.0, gated_min_coherence=0.3, gated_after_s=0.2)
 BAND = (300.0, 3500.0)
+#: part A's block size: the CLI's (``hearsee track`` reads files in blocks of 4096), so that
+#: the benchmark measures what it outputs (2048 until 2026-12-02, when the stream's results
+#: still depended on the block size)
+BLOCK_A = 4096
 #: the real 48 kHz recording of a spoken word, within the shared data folder
 ALEXA = Path("audio", "tdoa_2mic", "alexa-02.wav")
 
@@ -507,7 +511,7 @@ def _part_a_condition(kind: str, snr: float, trials: int, dur: float,
         x = _signal(kind, dur, rng, data=data)
         y = simulate_moving_room(x, FS, arr, traj, ROOM, RT60, ARRAY_AT, snr_db=snr,
                                  rng=rng, block_s=0.1)
-        ups = StreamPipeline(arr, CFG).run(ArraySource(y, FS, 2048))
+        ups = StreamPipeline(arr, CFG).run(ArraySource(y, FS, BLOCK_A))
         t = np.array([u.t for u in ups])
         # truth where the talker was when the frame's sound left them (the array is centred
         # at the origin): r / c = 3-12 ms before the frame time (before 2026-11-24's tenth
@@ -532,7 +536,7 @@ def _part_a_condition(kind: str, snr: float, trials: int, dur: float,
         for k2, k_raw, cfg in (("cv_common", "raw_vs_cv", CFG_CV),
                                ("imm0_common", "raw_vs_imm0", CFG_IMM0),
                                ("gate_common", "raw_vs_gate", CFG_GATE)):
-            other = _azimuths(StreamPipeline(arr, cfg).run(ArraySource(y, FS, 2048)))
+            other = _azimuths(StreamPipeline(arr, cfg).run(ArraySource(y, FS, BLOCK_A)))
             acc[k2].append(np.where(np.isfinite(raw), wrap_deg(other - true), np.nan))
             acc[k_raw].append(np.where(np.isfinite(other), e_raw, np.nan))
         # the lag: on a walk of the same kind that turns back halfway (a straight
@@ -550,7 +554,7 @@ def _part_a_condition(kind: str, snr: float, trials: int, dur: float,
             if key == "lag":
                 cfgs += [("lag_imm0", CFG_IMM0), ("lag_gate", CFG_GATE)]
             for k2, cfg in cfgs:
-                ut = StreamPipeline(arr, cfg).run(ArraySource(yt, FS, 2048))
+                ut = StreamPipeline(arr, cfg).run(ArraySource(yt, FS, BLOCK_A))
                 args = (np.array([u.t for u in ut]), _azimuths(ut), tw,
                         cfg.hop_ms * 1e-3, np.array([u.measured for u in ut]))
                 prof = lag_profile(*args)
