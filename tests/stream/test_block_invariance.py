@@ -12,22 +12,24 @@ from hearsee.stream import pipeline as pl
 FS = 16000
 
 
-def _run(arr, x, block):
-    ups = pl.StreamPipeline(arr).run(pl.ArraySource(x, FS, block))
+def _run(arr, x, block, cfg=None):
+    ups = pl.StreamPipeline(arr, cfg).run(pl.ArraySource(x, FS, block))
     az = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in ups])
     raw = np.array([np.nan if u.raw_azimuth_deg is None else u.raw_azimuth_deg for u in ups])
     return np.array([u.t for u in ups]), az, raw
 
 
-@pytest.mark.parametrize("signal,snr_db", [("male", 10.0), ("noise", 10.0)])
-def test_stream_output_does_not_depend_on_block_size(signal, snr_db):
+@pytest.mark.parametrize("signal,snr_db,method", [("male", 10.0, "phat"), ("noise", 10.0, "phat"),
+                                                  ("male", 10.0, "ml")])
+def test_stream_output_does_not_depend_on_block_size(signal, snr_db, method):
     arr = load_array("three-mic")
     traj = linear_trajectory([0.5, 2.0, 0.3], [0.0, -1.0, 0.0], 1.5)
     x, _ = simulate_moving_recording(arr, traj, signal, fs=FS, snr_db=snr_db, seed=3)
-    t0, az0, raw0 = _run(arr, x, x.shape[1])  # the whole file as one block
+    cfg = pl.StreamConfig(method=method)
+    t0, az0, raw0 = _run(arr, x, x.shape[1], cfg)  # the whole file as one block
     assert np.isfinite(raw0).sum() >= 10 and np.isfinite(az0).sum() >= 10
     for block in (333, 1024, 4096):
-        t, az, raw = _run(arr, x, block)
+        t, az, raw = _run(arr, x, block, cfg)
         np.testing.assert_array_equal(t, t0)
         # the same frames measured, the same directions (float32 rounding of the batch
         # products: ~1e-5 deg)
@@ -37,11 +39,12 @@ def test_stream_output_does_not_depend_on_block_size(signal, snr_db):
         np.testing.assert_allclose(az, az0, atol=1e-3, equal_nan=True)
 
 
-@pytest.mark.parametrize("cfg", [pl.StreamConfig(), pl.StreamConfig(snr_weight=True)])
+@pytest.mark.parametrize("cfg", [pl.StreamConfig(), pl.StreamConfig(snr_weight=True),
+                                 pl.StreamConfig(method="scot")])
 def test_frame_gcc_is_causal_and_batch_free(cfg):
     """FrameGcc on the frames of a recording split into batches anywhere gives the TDOAs of
     one call on all of them, and frame k's result does not change with the frames after it
-    (with the SNR weighting's noise spectrum too)."""
+    (with the SNR weighting's noise spectrum, and SCOT's statistics averaged over frames)."""
     arr = load_array("three-mic")
     rng = np.random.default_rng(5)
     n_frames, L, hop = 40, 1024, 512

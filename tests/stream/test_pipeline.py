@@ -423,15 +423,16 @@ def test_device_drops_are_counted_once(moving):
 def test_frame_gcc_equals_estimate_tdoas_per_frame(cfg):
     """The stream's per-frame GCC stage gives estimate_tdoas's per-frame TDOAs and confidences
     (it only leaves out the whole-recording summary) -- with the activity and noise spectra its
-    FrameActivity decided causally (until 2026-12-02 this compared with estimate_tdoas's own
-    decision over the batch, which made the stream depend on the block size)."""
+    FrameActivity decided causally and SCOT's statistics averaged over earlier frames (until
+    2026-12-02 this compared with estimate_tdoas's own decision over the batch and its centred
+    averages, which made the stream depend on the block size)."""
     from hearsee.audio.tdoa import estimate_tdoas
 
     arr = MicArray.from_preset("three-mic")
     rng = np.random.default_rng(3)
-    gcc = pl.FrameGcc(arr, FS, cfg)
-    twin = pl.FrameGcc(arr, FS, cfg)  # the same history, for the reference's decisions
     for _ in range(3):
+        gcc = pl.FrameGcc(arr, FS, cfg)  # (a new stream: no earlier frames)
+        twin = pl.FrameGcc(arr, FS, cfg)  # the same history, for the reference's decisions
         seg = 0.01 * rng.standard_normal((3, 1024 + 9 * 512))
         s = rng.standard_normal(4000)  # a burst in the middle frames, known integer delays
         for ch, d in enumerate((3, 0, 1)):
@@ -440,7 +441,7 @@ def test_frame_gcc_equals_estimate_tdoas_per_frame(cfg):
         ref = estimate_tdoas(seg, FS, arr, cfg.frame_ms, cfg.hop_ms, cfg.method, arr.pairs,
                              band_hz=cfg.band_hz, refine=cfg.refine,
                              min_confidence=cfg.min_confidence, active=active,
-                             frame_noise_psd=noise)
+                             frame_noise_psd=noise, causal_smoothing=True)
         tdoa, conf = gcc(seg, 10)
         np.testing.assert_array_equal(np.isnan(tdoa), np.isnan(ref.tdoa_s))
         assert np.isfinite(tdoa).any() and np.isnan(tdoa).any()

@@ -1211,21 +1211,21 @@ def _noise_spectrum(frames: NDArray, active: NDArray, win: NDArray, nfft: int, k
     return np.maximum(psd, 1e-12 * psd.max(initial=0.0) + _TINY)
 
 
-def _spectral_densities(auto: NDArray, G: NDArray, I: NDArray, J: NDArray, smooth_frames: int
-                        ) -> tuple[NDArray, NDArray, NDArray]:
+def _spectral_densities(auto: NDArray, G: NDArray, I: NDArray, J: NDArray, smooth_frames: int,
+                        causal: bool = False) -> tuple[NDArray, NDArray, NDArray]:
     """Auto spectra of each pair's microphones and the cross spectra ``G`` (frames, pairs,
     bins), averaged over ``smooth_frames`` frames: what SCOT, ROTH and ML weigh with.
     ``auto`` (frames, n_ch, bins): each channel's power spectrum ``|X|^2``."""
     k = max(int(smooth_frames), 1)
     # one mean per channel (not per pair end), and the cross spectra's real and imaginary
     # parts in one pass through their interleaved float view
-    A = _frame_moving_mean(auto, k)
+    A = _frame_moving_mean(auto, k, causal)
     Gc = np.ascontiguousarray(G)
-    Gav = _frame_moving_mean(Gc.view(Gc.real.dtype), k).view(Gc.dtype)
+    Gav = _frame_moving_mean(Gc.view(Gc.real.dtype), k, causal).view(Gc.dtype)
     return A[:, I, :], A[:, J, :], Gav
 
 
-def _frame_moving_mean(a: NDArray, k: int) -> NDArray:
+def _frame_moving_mean(a: NDArray, k: int, causal: bool = False) -> NDArray:
     """The mean of ``k`` consecutive frames (axis 0) of ``a`` around each frame, the edge
     frames repeated beyond the ends: ``scipy.ndimage.uniform_filter1d(a, k, axis=0,
     mode="nearest")`` (the same window for even ``k``) as ``k - 1`` sums of shifted slices in
@@ -1234,11 +1234,13 @@ def _frame_moving_mean(a: NDArray, k: int) -> NDArray:
     differs from it by ~1 ulp of each sum. A long window (``k`` > 16): running sums in double
     precision, the repeated edge frames counted rather than copied (memory O(F) whatever
     ``k``: ``smooth_frames=10**6`` copied 10**6 frames of spectra, 4 GiB for a 0.5 s
-    recording)."""
+    recording). ``causal``: the ``k`` frames ending at each frame instead (the first frame
+    repeated before the start)."""
     F = a.shape[0]
     if k <= 1 or F == 0:
         return a.copy()
-    lo, hi = k // 2, (k - 1) // 2
+    # (causal: the k frames ending at each frame, the first frame repeated before the start)
+    lo, hi = (k - 1, 0) if causal else (k // 2, (k - 1) // 2)
     if k > 16:
         c = np.zeros((F + 1,) + a.shape[1:])
         np.cumsum(a, axis=0, dtype=float, out=c[1:])
@@ -1335,6 +1337,7 @@ def estimate_tdoas(
     progress: Callable[[int], None] | None = None,
     active: ArrayLike | None = None,
     frame_noise_psd: ArrayLike | None = None,
+    causal_smoothing: bool = False,
 ) -> TdoaFrames:
     """Framed GCC TDOAs of all microphone pairs at once.
 
@@ -1539,6 +1542,12 @@ def estimate_tdoas(
         of NaN gives that frame the plain weighting (no noise reference yet). Scaled with
         ``x`` when the recording's level is normalised. None (with ``active``): no SNR
         weighting.
+    causal_smoothing : bool
+        SCOT, ROTH and ML average their spectral statistics over the ``smooth_frames`` frames
+        *ending* at each frame (the first frame repeated before the start) instead of the
+        frames centred on it: a stream prepends its earlier frames as context (inactive,
+        ``active``) and so gets results that do not depend on where its batches end. Default
+        False.
 
     Returns
     -------
@@ -1631,7 +1640,8 @@ def estimate_tdoas(
     n_pairs = len(prs)
     need_stats = method in ("scot", "roth", "ml") or (
         whole_recording and reverb_method in ("scot", "roth", "ml"))
-    halo = (int(smooth_frames) // 2) if need_stats else 0
+    halo = ((int(smooth_frames) - 1 if causal_smoothing else int(smooth_frames) // 2)
+            if need_stats else 0)
 
     k0, k1 = int(bins[0]), int(bins[-1]) + 1  # the band is one contiguous run of bins
     band_bins = np.arange(k0, k1)
@@ -1693,7 +1703,8 @@ def estimate_tdoas(
             (X_all, power_all) if X_all is not None
             else _spectra_power(frames[:, h0:h1, :], win, nfft, k0, k1)))
         G = X[:, I, :] * np.conj(X[:, J, :])  # (F', P, band bins)
-        stats = (_spectral_densities(power, G, I, J, smooth_frames) if need_stats
+        stats = (_spectral_densities(power, G, I, J, smooth_frames, causal_smoothing)
+                 if need_stats
                  else (None,) * 3)
         W = gcc_weighting(method, G, *stats)
         if phat_beta != 1.0 and method in ("phat", "ml"):

@@ -47,6 +47,7 @@ Units: seconds, degrees, metres; frame times are frame centres from the start of
 from __future__ import annotations
 
 import contextlib
+import inspect
 import math
 import queue
 import threading
@@ -74,6 +75,7 @@ from hearsee.audio.tdoa import (
     frame_signals,
     frame_spectra,
     min_frame_ms,
+    normalize_method,
 )
 from hearsee.audio.tracking import (
     DIRECTION_ANGLE_NOISE_RATIO,
@@ -813,6 +815,18 @@ class FrameGcc:
                                       nfft, k0, k1, band_test=k0 > 1 or k1 < n_bins - 1,
                                       noise=bool(cfg.snr_weight))
         self._peak, self._scale = 0.0, 1.0
+        # SCOT / ROTH / ML average their statistics over estimate_tdoas's smooth_frames:
+        # causally, over this many earlier frames, carried from batch to batch as samples
+        # (frames made of whole hops only: with a hop longer than the frame there is none)
+        stats = normalize_method(cfg.method) in ("scot", "roth", "ml")
+        smooth = int(inspect.signature(estimate_tdoas).parameters["smooth_frames"].default)
+        self.n_context = smooth - 1 if stats and self.hop <= self.frame_len else 0
+        self._ctx = np.zeros((array.n_mics, 0), np.float32)  # from the oldest context frame's
+        # start to the next frame's start, unscaled
+
+    def skip(self) -> None:
+        """Frames were lost: the next ones have no earlier frames to average with."""
+        self._ctx = self._ctx[:, :0]
 
     def _rescale(self, peak: float) -> None:
         """Take a batch's largest |sample| into the running maximum; carry the activity
@@ -827,28 +841,43 @@ class FrameGcc:
 
     def __call__(self, segment: NDArray, n_frames: int) -> tuple[NDArray, NDArray]:
         """TDOAs (m, n_pairs) seconds (NaN: no estimate) and confidences (m, n_pairs) of the
-        ``m = n_frames`` frames of ``segment``, the stream's next complete frames."""
-        cfg = self.cfg
+        ``m = n_frames`` frames of ``segment``, the stream's next complete frames (after
+        :meth:`skip` when frames were lost in between)."""
+        cfg, hop, L = self.cfg, self.hop, self.frame_len
         seg = np.asarray(segment, dtype=np.float32)
         self._rescale(float(np.max(np.abs(seg), initial=0.0)))
+        c0 = self._ctx.shape[1] // hop  # context frames before the segment's first frame
+        full = np.concatenate([self._ctx, seg], axis=1) if c0 else seg
         if self._scale != 1.0:
-            seg = seg * np.float32(self._scale)
-        frames = frame_signals(seg, self.frame_len, self.hop)[:, :n_frames]
+            full = full * np.float32(self._scale)
+        frames = frame_signals(full, L, hop)[:, c0:c0 + n_frames]
         if frames.shape[1] != n_frames:
             raise EstimationError(f"FrameGcc: the segment holds {frames.shape[1]} frames of "
-                                  f"{self.frame_len} samples (hop {self.hop}), not {n_frames}")
+                                  f"{L} samples (hop {hop}), not {n_frames}")
         tdoa = np.full((n_frames, len(self.pairs)), np.nan)
         conf = np.zeros((n_frames, len(self.pairs)))
         for s0 in range(0, n_frames, self.CHUNK_FRAMES):
             s1 = min(s0 + self.CHUNK_FRAMES, n_frames)
             active, noise = self.activity(frames[:, s0:s1])
-            part = seg[:, s0 * self.hop: (s1 - 1) * self.hop + self.frame_len]
+            cc = min(self.n_context, c0 + s0)  # earlier frames, only for the statistics
+            if cc:
+                active = np.concatenate([np.zeros(cc, bool), active])
+                if noise is not None:
+                    noise = np.concatenate([np.full((cc,) + noise.shape[1:], np.nan,
+                                                    noise.dtype), noise])
+            g0 = c0 + s0 - cc
+            part = full[:, g0 * hop: (c0 + s1 - 1) * hop + L]
             tf = estimate_tdoas(part, self.fs, self.array, cfg.frame_ms, cfg.hop_ms,
                                 cfg.method, self.pairs, band_hz=cfg.band_hz,
                                 refine=cfg.refine, min_confidence=cfg.min_confidence,
                                 whole_recording=False, snr_weight=bool(cfg.snr_weight),
-                                active=active, frame_noise_psd=noise)
-            tdoa[s0:s1], conf[s0:s1] = tf.tdoa_s, tf.confidence
+                                active=active, frame_noise_psd=noise,
+                                causal_smoothing=True, chunk_frames=len(active))
+            tdoa[s0:s1], conf[s0:s1] = tf.tdoa_s[cc:], tf.confidence[cc:]
+        if self.n_context:  # the samples of the last n_context frames up to the next start
+            c = min(self.n_context, c0 + n_frames)
+            self._ctx = np.concatenate([self._ctx, seg], axis=1)[
+                :, (c0 + n_frames - c) * hop: (c0 + n_frames) * hop].copy()
         return tdoa, conf
 
 
@@ -1601,6 +1630,8 @@ class TrackingProcessor:
         k = len(batch.t)
         tdoa = np.full((k, len(self.pairs)), np.nan)
         conf = np.zeros(k)
+        if batch.missing.any():  # (missing frames come first in a batch)
+            self.gcc.skip()
         if batch.segment is not None:
             m = int(np.count_nonzero(~batch.missing))
             td, c = self.gcc(batch.segment, m)
