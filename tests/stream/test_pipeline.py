@@ -652,6 +652,9 @@ def test_bad_imm_settings_are_a_config_error():
     ({"frame_ms": float("nan")}, "frame_ms"),
     ({"direction_angle_noise_ratio": -1.0}, "direction_angle_noise_ratio"),
     ({"direction_angle_noise_ratio": float("inf")}, "direction_angle_noise_ratio"),
+    ({"activity_history_s": float("nan")}, "activity_history_s"),
+    ({"snr_weight": "no"}, "snr_weight"),  # read as True: the weighting on (2026-12-02)
+    ({"snr_weight": "ml"}, "snr_weight"),  # the stage passed bool(): the plain weighting
 ])
 def test_stream_config_refuses_out_of_range_settings(bad, name):
     """Found by a bad-input sweep (2026-11-26): each was accepted, most with no effect or a

@@ -1472,6 +1472,9 @@ def _check_config(cfg: StreamConfig) -> None:
             raise bad(name, f"a number in [{lo:g}, {hi:g}]")
     if not (is_real(cfg.spectrum_alpha) and 0.0 <= cfg.spectrum_alpha < 1.0):
         raise bad("spectrum_alpha", "in [0, 1) (0 = no smoothing)")
+    # (the stage passes bool(snr_weight): "no" switched the weighting on, "ml" gave the plain one)
+    if not isinstance(cfg.snr_weight, bool | np.bool_):
+        raise bad("snr_weight", "True or False")
     pfc = cfg.prefer_frame_confidence
     if not ((is_real(pfc) or pfc == math.inf) and pfc > 0):  # (inf = never)
         raise bad("prefer_frame_confidence", "> 0 (inf = never)")
