@@ -160,6 +160,9 @@ AUTO_STEERED_MIN_MICS = 4
 _GRID_LAG_SAMPLES = 24.0
 _GRID_DIRECTIONS = 4000
 _MAX_GRID_DIRECTIONS = 250_000
+#: Frames over which SCOT, ROTH and ML average their spectral statistics (``smooth_frames``
+#: of :func:`estimate_tdoas`; a stream carries this many minus one as context)
+DEFAULT_SMOOTH_FRAMES = 5
 #: Largest RMS violation (samples) of t_ij + t_jk = t_ik accepted for a summary estimate.
 _CLOSURE_TOL_SAMPLES = 2.0
 #: Lags whose noise-only correlation has less than this share of the zero-lag standard
@@ -1211,6 +1214,15 @@ def _noise_spectrum(frames: NDArray, active: NDArray, win: NDArray, nfft: int, k
     return np.maximum(psd, 1e-12 * psd.max(initial=0.0) + _TINY)
 
 
+def gcc_nfft(frame_len: int, max_lag: float) -> int:
+    """Transform length of :func:`estimate_tdoas`' frames of ``frame_len`` samples whose
+    admissible lags reach ``max_lag`` samples: zero padding by twice the largest lag keeps
+    them free of circular wrap (a fast real-FFT length)."""
+    import scipy.fft as sfft
+
+    return int(sfft.next_fast_len(frame_len + 2 * int(np.ceil(max_lag)) + 2, real=True))
+
+
 def _spectral_densities(auto: NDArray, G: NDArray, I: NDArray, J: NDArray, smooth_frames: int,
                         causal: bool = False) -> tuple[NDArray, NDArray, NDArray]:
     """Auto spectra of each pair's microphones and the cross spectra ``G`` (frames, pairs,
@@ -1313,7 +1325,7 @@ def estimate_tdoas(
     *,
     refine: str = "interp",
     band_hz: tuple[float, float] | None = None,
-    smooth_frames: int = 5,
+    smooth_frames: int = DEFAULT_SMOOTH_FRAMES,
     margin_samples: float = 1.0,
     vad_db: float = 3.0,
     min_confidence: float = 1.0,
@@ -1605,7 +1617,7 @@ def estimate_tdoas(
             f"({max_lag.max() / fs * 1e3:.2f} ms); use a longer --frame-ms"
         )
     # zero padding by twice the largest lag keeps the admissible lags free of circular wrap
-    nfft = sfft.next_fast_len(frame_len + 2 * int(np.ceil(max_lag.max())) + 2, real=True)
+    nfft = gcc_nfft(frame_len, float(max_lag.max()))
     n_bins = nfft // 2 + 1
     band = _band_mask(n_bins, nfft, fs, band_hz)
     bins = np.flatnonzero(band)

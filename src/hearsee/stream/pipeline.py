@@ -47,7 +47,6 @@ Units: seconds, degrees, metres; frame times are frame centres from the start of
 from __future__ import annotations
 
 import contextlib
-import inspect
 import math
 import queue
 import threading
@@ -65,6 +64,7 @@ from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.signals import as_samples, check_fs
 from hearsee.audio.tdoa import (
+    DEFAULT_SMOOTH_FRAMES,
     MAX_UNSCALED_PEAK,
     MIN_UNSCALED_PEAK,
     check_analysis_fs,
@@ -74,6 +74,7 @@ from hearsee.audio.tdoa import (
     frame_geometry,
     frame_signals,
     frame_spectra,
+    gcc_nfft,
     min_frame_ms,
     normalize_method,
 )
@@ -794,7 +795,6 @@ class FrameGcc:
     CHUNK_FRAMES = 128
 
     def __init__(self, array: MicArray, fs: float, cfg: StreamConfig) -> None:
-        import scipy.fft as sfft
 
         from hearsee.audio.tdoa import _band_mask, _window
 
@@ -804,8 +804,7 @@ class FrameGcc:
         # estimate_tdoas's window, transform length and band (its defaults: margin 1 sample,
         # Tukey 25 %): the noise spectra must be of its frames' spectra
         max_lag = array.max_tdoa(self.pairs) * self.fs + 1.0
-        nfft = sfft.next_fast_len(self.frame_len + 2 * int(np.ceil(max_lag.max())) + 2,
-                                  real=True)
+        nfft = gcc_nfft(self.frame_len, float(max_lag.max()))
         n_bins = nfft // 2 + 1
         bins = np.flatnonzero(_band_mask(n_bins, nfft, self.fs, cfg.band_hz))
         k0, k1 = int(bins[0]), int(bins[-1]) + 1
@@ -819,8 +818,8 @@ class FrameGcc:
         # causally, over this many earlier frames, carried from batch to batch as samples
         # (frames made of whole hops only: with a hop longer than the frame there is none)
         stats = normalize_method(cfg.method) in ("scot", "roth", "ml")
-        smooth = int(inspect.signature(estimate_tdoas).parameters["smooth_frames"].default)
-        self.n_context = smooth - 1 if stats and self.hop <= self.frame_len else 0
+        self.n_context = (DEFAULT_SMOOTH_FRAMES - 1 if stats and self.hop <= self.frame_len
+                          else 0)
         self._ctx = np.zeros((array.n_mics, 0), np.float32)  # from the oldest context frame's
         # start to the next frame's start, unscaled
 
@@ -937,7 +936,6 @@ class SmoothedSrp:
                  band_hz: tuple[float, float] | None = (300.0, 3500.0), up: int = 4,
                  grid_deg: float = 2.0, coherence_weight: bool = True,
                  in_plane: bool = False) -> None:
-        import scipy.fft as sfft
 
         if not 0.0 <= alpha < 1.0:
             raise ConfigError(f"spectrum smoothing alpha must be in [0, 1), got {alpha}")
@@ -945,8 +943,7 @@ class SmoothedSrp:
         self.frame_len = int(frame_len)
         self.pairs = list(array.pairs)
         max_lag = array.max_tdoa(self.pairs) * fs + 1.0
-        self.nfft = sfft.next_fast_len(self.frame_len + 2 * int(np.ceil(max_lag.max())) + 2,
-                                       real=True)
+        self.nfft = gcc_nfft(self.frame_len, float(max_lag.max()))
         n_bins = self.nfft // 2 + 1
         f = np.arange(n_bins) * fs / self.nfft
         lo, hi = _number_pair(band_hz, "srp_band_hz", "Hz") if band_hz is not None else (
