@@ -2024,3 +2024,41 @@ def test_a_masked_pair_or_a_vertical_line_is_refused_in_the_robot_file(small_rig
         path = make_config(small_rig, _with(audio={"array": array, "channels": [0, 1]}))
         with pytest.raises(ConfigError, match=f"audio.array: .*{words}"):
             load_robot_config(path)
+
+
+@pytest.mark.parametrize("rate_hz", [5, 3])
+def test_cameras_are_read_at_the_robot_files_rate(tmp_path, rate_hz):
+    """cameras.rate_hz frames a second of audio, read at the first update at or after each
+    k / rate_hz s (as the simulated loop's grid). The next read was scheduled one period after
+    the update that read: late by up to one 32 ms update per frame, so 14 reads in 3 s at 5 Hz
+    (4.46 a second, the grid gives 15) and at 3 Hz reads 0.352 s apart, the ninth at 2.848 s
+    instead of 2.688 s -- found 2026-12-02 by counting a fake camera's reads."""
+    from hearsee.robot.hardware import PrintHeadDriver
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import ArraySource
+
+    save_rig(default_rig(160, 120), tmp_path / "rig.yaml")
+    cfg = load_robot_config(make_config(tmp_path, {
+        "audio": {"array": "three-mic", "fs": FS},
+        "cameras": {"left": 0, "right": 1, "calib": "rig.yaml", "rate_hz": rate_hz},
+        "output": {"report": "report"}}))
+
+    class Cams:  # no frame (no detection), but never counted as failed
+        n_failures = n_consecutive_failures = 0
+
+        def __init__(self):
+            self.times: list[float] = []
+
+        def read(self, t=None):
+            self.times.append(t)
+
+    x = np.random.default_rng(0).normal(scale=0.1, size=(3, 3 * FS))
+    cams = Cams()
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, block_len=1600), cameras=cams,
+                    head=PrintHeadDriver(cfg.head, None), jsonl=tmp_path / "u.jsonl")
+    hop = 0.032  # seconds between updates (frame_ms 64)
+    t = np.array(cams.times)
+    slots = np.arange(len(t)) / rate_hz
+    assert res.summary["audio_s"] == 3.0
+    assert len(t) == int(np.ceil((3.0 - hop) * rate_hz))  # every slot up to the last update
+    assert np.all(t >= slots - 1e-9) and np.all(t < np.maximum(slots, hop) + hop)

@@ -1419,7 +1419,12 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         camera_t = None
         if (cameras is not None and not state["cam_ended"] and pending[0] is None
                 and t + 1e-9 >= state["next_cam"]):
-            state["next_cam"] = t + period - 1e-9
+            # the next read on the grid k / rate_hz seconds of audio, as the simulated loop's
+            # (it was t + period: late by up to one update per frame, e.g. 4.46 frames a
+            # second for rate_hz 5 with 32 ms updates); slots missed while a detection ran
+            # are skipped
+            while state["next_cam"] <= t + 1e-9:
+                state["next_cam"] += period
             fr = grab(t)
             if fr is not None and pool is not None:
                 pending[0] = (t, fr, pool.submit(detect, fr, geo), geo)
