@@ -2062,3 +2062,27 @@ def test_cameras_are_read_at_the_robot_files_rate(tmp_path, rate_hz):
     assert res.summary["audio_s"] == 3.0
     assert len(t) == int(np.ceil((3.0 - hop) * rate_hz))  # every slot up to the last update
     assert np.all(t >= slots - 1e-9) and np.all(t < np.maximum(slots, hop) + hop)
+
+
+@pytest.mark.parametrize("cameras, field, first", [
+    ({"right": "left.avi"}, "right", "left"),
+    ({"right": "./left.avi"}, "right", "left"),
+    ({"right": "left-link.avi"}, "right", "left"),  # (a symlink to left.avi)
+    ({"left": 0, "right": "0"}, "right", "left"),
+    ({"thermal": "right.avi"}, "thermal", "right"),
+    ({"left": None, "right": None, "stereo": "sbs.avi", "thermal": "sbs.avi"}, "thermal",
+     "stereo"),
+])
+def test_one_device_given_as_two_cameras_is_refused(small_rig, cameras, field, first):
+    """Each camera of the robot file needs its own device. The same device as left and right
+    was accepted (found 2026-12-02 by probing the robot file's fields): the dry run opened it
+    twice and passed, and the live loop matched a view against itself -- zero disparity,
+    nothing found, no word of why."""
+    (small_rig / "left-link.avi").symlink_to(small_rig / "left.avi")
+    data = _with(cameras=cameras)
+    data["cameras"] = {k: v for k, v in data["cameras"].items() if v is not None}
+    with pytest.raises(ConfigError, match=rf"cameras\.{field}: .* is the device of "
+                                          rf"cameras\.{first}; each camera needs its own"):
+        load_robot_config(make_config(small_rig, data))
+    # distinct devices load
+    assert load_robot_config(make_config(small_rig, _with())).cameras.thermal is not None

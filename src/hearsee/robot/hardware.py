@@ -287,6 +287,15 @@ def _device(v: Any, where: str, base: Path, *, camera: bool) -> DeviceSpec:
     return str(p)
 
 
+def _same_device(a: DeviceSpec, b: DeviceSpec) -> bool:
+    """Whether two camera specs (:func:`_device`'s) name one device: the same index, URL or
+    file (:func:`hearsee.config.same_file`: also through a symlink such as
+    /dev/v4l/by-id/...)."""
+    if isinstance(a, int) or isinstance(b, int) or "://" in a or "://" in b:
+        return a == b
+    return same_file(a, b)
+
+
 def _array(spec: Any, where: str, base: Path) -> tuple[MicArray, str]:
     """``audio.array`` (``where``): the array and its spec -- the absolute path of a YAML file
     (relative to the robot file's folder ``base``) or the name of a preset shipped with
@@ -363,6 +372,15 @@ def _cameras(d: Mapping[str, Any], where: str, base: Path) -> CameraConfig:
         missing = "left" if dev["left"] is None else "right"
         raise ConfigError(f"{where}.{missing}: missing (give left + right, or stereo for one "
                           "side-by-side device)")
+    # (one device given twice was accepted: left = right made a "stereo pair" of one view,
+    # whose zero disparity put everything at infinity and found no one, without a word)
+    given = [k for k in ("stereo", "left", "right", "thermal") if dev[k] is not None]
+    for i, k in enumerate(given):
+        for first in given[:i]:
+            if _same_device(dev[k], dev[first]):
+                raise ConfigError(f"{where}.{k}: {d[k]!r} is the device of cameras.{first}; "
+                                  "each camera needs its own device (one side-by-side stereo "
+                                  "device: cameras.stereo)")
     if "calib" not in d or d["calib"] is None:
         raise ConfigError(f"{where}.calib: missing: the cameras need a rig calibration file "
                           "(create one with `hearsee calibrate`)")
