@@ -533,3 +533,20 @@ def test_default_bands_checks_its_edges():
     e = mask.default_bands(8000.0, 5, 250.0)
     assert len(e) == 6 and e[0] == pytest.approx(250.0) and e[-1] == pytest.approx(8000.0)
     np.testing.assert_allclose(np.diff(np.log(e)), np.log(32.0) / 5)
+
+
+def test_band_without_bins_has_no_measured_iid(asym):
+    # found in the 2026-12-02 audit: a band above the analysed range (0.9 f_max) holds no
+    # frequency bin. With the noise learnt from the pauses of a gated source, both of its empty
+    # band powers were floored alike and its IID reported as a measured 0 dB (the CLI's JSON
+    # printed 0.0 at 4 kHz for the 2-2.8 and 2.8-4 kHz bands); a continuous source gave NaN
+    rng = np.random.default_rng(5)
+    s = rng.standard_normal(2 * FS) * ((np.arange(2 * FS) // 1600) % 3 != 2)
+    x = mask.simulate_masked(s, FS, asym, _src(120, 1.0), snr_db=20, rng=1)
+    assert mask._spectra(x, FS, 32.0)[-1] is not None  # (the pause-noise path)
+    bands = [300, 1000, 1900, 4000]  # the coarse model: f_max 2 kHz, bins up to 1.8 kHz
+    for y in (x, mask.simulate_masked(rng.standard_normal(2 * FS), FS, asym, _src(120, 1.0),
+                                      snr_db=20, rng=1)):
+        est = mask.localize_mask(y, FS, asym, bands_hz=bands)
+        assert np.all(np.isfinite(est.iid_db[:2])) and np.isnan(est.iid_db[2])
+        assert abs(est.azimuth_deg - 120) < 5

@@ -925,6 +925,10 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         var_b = sigma_iid_db**2 + (10 / np.log(10)) ** 2 * (
             (((e0 + noise) / e0) ** 2 + ((e1 + noise) / e1) ** 2) / k_eff
             + (_NOISE_FLOOR_REL * noise) ** 2 * (1 / e0**2 + 1 / e1**2))
+    # a band without a frequency bin in the analysed range (above 0.9 f_max or the Nyquist
+    # frequency) is not measured: NaN, as the coherent split gives it. The pause-noise split
+    # floored both of its empty powers alike and reported 0 dB (2026-12-02)
+    iid_meas = np.where(valid_b, iid_meas, np.nan)
     valid_b &= np.isfinite(iid_meas) & np.isfinite(var_b)
     phi = np.angle(cr)
     best = None
