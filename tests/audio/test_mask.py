@@ -550,3 +550,18 @@ def test_band_without_bins_has_no_measured_iid(asym):
         est = mask.localize_mask(y, FS, asym, bands_hz=bands)
         assert np.all(np.isfinite(est.iid_db[:2])) and np.isnan(est.iid_db[2])
         assert abs(est.azimuth_deg - 120) < 5
+
+
+def test_localize_mask_settings_of_the_wrong_type_are_config_errors(model):
+    # found in the 2026-12-02 audit: distances=None, one number or ("far",) and a phase weight
+    # or sigma given as text raised builtin TypeErrors; True was taken as a 1 m table
+    x = mask.simulate_masked(white_noise(0.5, FS, rng=3), FS, model, _src(120, 1.0), snr_db=20,
+                             rng=1)
+    for kw, msg in (({"distances": None}, "distances"), ({"distances": 1.0}, "distances"),
+                    ({"distances": ("far",)}, "distances"), ({"distances": (True,)}, "distances"),
+                    ({"phase_weight": "400"}, "phase_weight"),
+                    ({"sigma_iid_db": "1"}, "sigma_iid_db")):
+        with pytest.raises(ConfigError, match=msg):
+            mask.localize_mask(x, FS, model, **kw)
+    # valid settings are taken as before
+    assert abs(mask.localize_mask(x, FS, model, distances=(None, 1.0)).azimuth_deg - 120) < 5

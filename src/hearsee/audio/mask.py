@@ -90,7 +90,7 @@ from hearsee.audio import bem
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.signals import as_samples, check_fs
 from hearsee.audio.tdoa import check_frame_ms
-from hearsee.config import finite_number, whole_number
+from hearsee.config import finite_number, is_real, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 from hearsee.geometry import norm_scale, wrap_deg
 
@@ -888,13 +888,17 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         raise AudioInputError("recording is all zeros")
     fs = check_fs(fs)
     check_frame_ms(frame_ms, frame_ms / 2, names=("frame_ms", "half frame"))
-    if not (np.isfinite(phase_weight) and phase_weight > 0
-            and np.isfinite(sigma_iid_db) and sigma_iid_db > 0):
+    if not (is_real(phase_weight) and phase_weight > 0
+            and is_real(sigma_iid_db) and sigma_iid_db > 0):
         # (a NaN weight made every azimuth's cost NaN: the answer was 0 deg)
         raise ConfigError("phase_weight and sigma_iid_db must be finite numbers > 0, got "
                           f"{phase_weight} and {sigma_iid_db}")
-    if len(distances) == 0 or not all(d is None or (np.isfinite(d) and d > 0)
-                                      for d in distances):
+    try:  # (text, None or one number raised a builtin TypeError; True was taken as 1 m)
+        ok = len(distances) > 0 and all(d is None or (is_real(d) and d > 0)
+                                        for d in distances)
+    except TypeError:
+        ok = False
+    if not ok:
         raise ConfigError("distances must be one or more source distances > 0 m (None = far "
                           f"field), got {distances!r}")
     f, p0, p1, cr, n_used, noise_psd = _spectra(x, fs, frame_ms)
