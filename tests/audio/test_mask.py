@@ -565,3 +565,15 @@ def test_localize_mask_settings_of_the_wrong_type_are_config_errors(model):
             mask.localize_mask(x, FS, model, **kw)
     # valid settings are taken as before
     assert abs(mask.localize_mask(x, FS, model, distances=(None, 1.0)).azimuth_deg - 120) < 5
+
+
+def test_too_few_bins_names_the_cause(model):
+    # found in the 2026-12-02 audit: with too few frequency bins in the bands, localize_mask
+    # said "sample rate 16000 Hz too low for the mask model's bands" also when the bands lay
+    # above the model's range (f_max 2 kHz here) or the frame was 1 ms long
+    x = mask.simulate_masked(white_noise(0.5, FS, rng=3), FS, model, _src(120, 1.0), snr_db=20,
+                             rng=1)
+    for kw in ({"bands_hz": [5000, 6000]}, {"frame_ms": 1.0}):
+        with pytest.raises(AudioInputError, match="frequency bins") as exc:
+            mask.localize_mask(x, FS, model, **kw)
+        assert "too low" not in str(exc.value) and "longer frame" in str(exc.value)

@@ -905,7 +905,14 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
     edges = _band_edges(bands_hz, model.f_max)
     use = (f >= max(edges[0], 100.0)) & (f <= min(edges[-1], 0.9 * model.f_max))
     if use.sum() < 4:
-        raise AudioInputError(f"sample rate {fs} Hz too low for the mask model's bands")
+        # (it blamed the sample rate alone, also for bands above the model's range or a short
+        # frame at 16 kHz)
+        raise AudioInputError(
+            f"only {int(use.sum())} frequency bins of the {frame_ms:g} ms frame at {fs:g} Hz "
+            f"lie in the bands {edges[0]:g}-{edges[-1]:g} Hz within the analysed range (100 Hz "
+            f"to 0.9 x the model's f_max of {model.f_max:g} Hz, below the Nyquist frequency "
+            f"{fs / 2:g} Hz); 4 are needed: use a longer frame, a higher sample rate or bands "
+            "within that range")
     f, p0, p1, cr = f[use], p0[use], p1[use], cr[use]
     if noise_psd is not None:
         noise_psd = noise_psd[use]
