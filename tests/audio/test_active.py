@@ -752,3 +752,31 @@ def test_infinite_tdoa_and_a_second_speed_of_sound_are_refused():
     with pytest.raises(ConfigError, match="speed of sound from the array"):
         localize_multipose(true_tdoas(ARR, src, poses), poses, ARR, offset_m=OFF,
                            speed_of_sound=340.0)
+
+
+def test_alignment_settings_are_checked():
+    from hearsee.audio.active import align_head_search
+
+    # found in the 2026-12-02 audit: reversed tilt limits (60, -60) clipped every tilt to
+    # -60 deg and align_head ended "converged" there, ~80 deg from a source 19 deg up; a NaN
+    # tolerance never converged (8 moves), a NaN probe aimed at a NaN tilt, text tilt limits
+    # raised numpy's UFuncTypeError, max_moves=2.5 was taken
+    src = np.array([1.2, 0.8, 0.5])
+
+    def measure(pose):
+        return MicArray(mic_positions_at(ARR, pose, offset_m=OFF)).tdoa(src)
+
+    for kw, msg in (({"tilt_limits_deg": (60.0, -60.0)}, "tilt_limits_deg"),
+                    ({"tilt_limits_deg": (-100.0, 60.0)}, "tilt_limits_deg"),
+                    ({"tilt_limits_deg": "ab"}, "tilt_limits_deg"),
+                    ({"tol_deg": np.nan}, "tol_deg"), ({"probe_deg": np.nan}, "probe_deg"),
+                    ({"max_moves": 2.5}, "max_moves"), ({"max_moves": -1}, "max_moves")):
+        with pytest.raises(GeometryError, match=msg):
+            align_head(measure, ARR, offset_m=OFF, **kw)
+        with pytest.raises(GeometryError, match=msg):
+            align_head_search(measure, ARR, **kw)
+    with pytest.raises(GeometryError, match="max_std_deg"):
+        align_head(measure, ARR, offset_m=OFF, max_std_deg=np.nan)
+    # valid settings: as before
+    res = align_head(measure, ARR, offset_m=OFF, tilt_limits_deg=(-60.0, 60.0), max_moves=8)
+    assert res.converged and res.error_deg(src, offset_m=OFF) < 0.05

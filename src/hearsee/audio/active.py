@@ -1059,6 +1059,22 @@ def _aim_at(point: NDArray, pivot_m: ArrayLike, offset_m: ArrayLike) -> tuple[fl
     return az, el
 
 
+def _alignment_settings(max_moves: Any, tol_deg: Any, probe_deg: Any,
+                        tilt_limits_deg: Any) -> tuple[float, float]:
+    """Check the alignment loops' settings (GeometryError naming the bad one); returns the
+    tilt limits ``(low, high)`` in degrees. Reversed limits (60, -60) clipped every tilt to
+    -60 deg and ended "converged" there; a NaN tolerance never converged, a NaN probe aimed
+    the head at a NaN tilt, text raised numpy's errors (until 2026-12-02)."""
+    whole_number("max_moves", max_moves, 0, error=GeometryError)
+    finite_number("tol_deg", tol_deg, 0.0, lo_open=True, error=GeometryError)
+    finite_number("probe_deg", probe_deg, 0.0, lo_open=True, error=GeometryError)
+    lim = as_float_array(tilt_limits_deg, "tilt_limits_deg", finite=False, error=GeometryError)
+    if lim.shape != (2,) or not (np.all(np.isfinite(lim)) and -90.0 <= lim[0] < lim[1] <= 90.0):
+        raise GeometryError(f"tilt_limits_deg must be (low, high) degrees with -90 <= low < high "
+                            f"<= 90, got {tilt_limits_deg!r}")
+    return float(lim[0]), float(lim[1])
+
+
 def _measure_pose(measure: Any, pose: Any, arr: MicArray) -> NDArray:
     """Call the alignment loops' ``measure(pose)`` and check it returned one TDOA per pair."""
     tau = np.asarray(measure(pose), dtype=float)
@@ -1109,6 +1125,8 @@ def align_head(
     measure : callable HeadPose -> TDOAs (n_pairs,)
         Moves the head to the pose and returns the measured TDOAs (s) of all array pairs.
     """
+    lo_t, hi_t = _alignment_settings(max_moves, tol_deg, probe_deg, tilt_limits_deg)
+    finite_number("max_std_deg", max_std_deg, 0.0, lo_open=True, error=GeometryError)
     arr = load_array(array)
     pair = facing_pair(arr)
     kwargs.setdefault("tdoa_std_s", DEFAULT_TDOA_STD_S)
@@ -1120,7 +1138,6 @@ def align_head(
     moves = 0
     converged = False
     n_probes = 0
-    lo_t, hi_t = tilt_limits_deg
     while True:
         tau = _measure_pose(measure, pose, arr)
         poses.append(pose)
@@ -1227,6 +1244,7 @@ def align_head_search(
     array's height) overshoots and may not converge (``converged=False``). The exact step needs
     ``u_z``, whose sign a planar array cannot tell.
     """
+    lo_t, hi_t = _alignment_settings(max_moves, tol_deg, probe_deg, tilt_limits_deg)
     arr = load_array(array)
     z = arr.positions[:, 2]
     if np.ptp(z) > 1e-6:
@@ -1237,7 +1255,6 @@ def align_head_search(
         raise GeometryError("align_head_search needs two non-collinear microphone baselines in "
                             "the head's horizontal plane (e.g. three-mic); use align_head")
     c = arr.speed_of_sound
-    lo_t, hi_t = tilt_limits_deg
     pose = as_pose(start)
     poses: list[HeadPose] = []
     taus: list[NDArray] = []
