@@ -780,3 +780,23 @@ def test_alignment_settings_are_checked():
     # valid settings: as before
     res = align_head(measure, ARR, offset_m=OFF, tilt_limits_deg=(-60.0, 60.0), max_moves=8)
     assert res.converged and res.error_deg(src, offset_m=OFF) < 0.05
+
+
+def test_solver_settings_are_checked():
+    # found in the 2026-12-02 audit: the solver's gates were used unchecked. A NaN
+    # max_residual_rms_s called exact TDOAs inconsistent, a NaN max_rel_distance_std never
+    # reported the distance, a NaN min_separation_deg refined a single start; text raised
+    # builtin TypeErrors / ValueErrors
+    src = np.array([1.2, 0.8, 0.5])
+    poses = [(0, 0), (40, 25), (-40, -20)]
+    tau = [MicArray(mic_positions_at(ARR, p, offset_m=OFF)).tdoa(src) for p in poses]
+    for name in ("min_separation_deg", "ambiguity_gate", "ambiguity_ratio",
+                 "max_rel_distance_std", "max_residual_rms_s"):
+        for bad in (np.nan, -1.0, "a"):
+            with pytest.raises(GeometryError, match=name):
+                localize_multipose(tau, poses, ARR, offset_m=OFF, **{name: bad})
+    # valid settings: as before, inf meaning no limit
+    for kw in ({}, {"max_rel_distance_std": np.inf, "max_residual_rms_s": np.inf}):
+        est = localize_multipose(tau, poses, ARR, offset_m=OFF, **kw)
+        assert est.unique and est.consistent
+        np.testing.assert_allclose(est.position_m, src, atol=1e-3)

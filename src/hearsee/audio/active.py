@@ -403,6 +403,21 @@ def solve_range_differences(
     if not is_real(tdoa_std_s) or tdoa_std_s <= 0:
         raise GeometryError(f"tdoa_std_s must be > 0 seconds, got {tdoa_std_s!r}")
     sig = float(tdoa_std_s)
+    # (unchecked until 2026-12-02: a NaN min_separation_deg refined one start only, a NaN
+    # max_rel_distance_std never reported a distance, a NaN or negative max_residual_rms_s
+    # called every answer inconsistent, a NaN gate kept every minimum; text raised builtin
+    # TypeErrors and ValueErrors)
+    min_separation_deg = finite_number("min_separation_deg", min_separation_deg, 0.0, 180.0,
+                                       error=GeometryError)
+    ambiguity_gate = finite_number("ambiguity_gate", ambiguity_gate, 0.0, error=GeometryError)
+    ambiguity_ratio = finite_number("ambiguity_ratio", ambiguity_ratio, 0.0,
+                                    error=GeometryError)
+    for name, v in (("max_rel_distance_std", max_rel_distance_std),
+                    ("max_residual_rms_s", max_residual_rms_s)):
+        if v is None and name == "max_residual_rms_s":
+            continue
+        if isinstance(v, bool) or not ((is_real(v) or v == np.inf) and v > 0):
+            raise GeometryError(f"{name} must be a number > 0 (inf: no limit), got {v!r}")
     bounds = as_float_array(distance_bounds_m, "distance_bounds_m", finite=False,
                             error=GeometryError)
     if bounds.shape != (2,) or not (0 < bounds[0] < bounds[1] < np.inf):
