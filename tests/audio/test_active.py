@@ -800,3 +800,19 @@ def test_solver_settings_are_checked():
         est = localize_multipose(tau, poses, ARR, offset_m=OFF, **kw)
         assert est.unique and est.consistent
         np.testing.assert_allclose(est.position_m, src, atol=1e-3)
+
+
+def test_training_set_ranges_of_the_wrong_form_are_geometry_errors():
+    # found in the 2026-12-02 audit: a range given as text or as three numbers raised a
+    # builtin ValueError ("could not convert string to float", "too many values to unpack")
+    # or numpy's TypeError (isfinite of text)
+    from hearsee.audio.active import make_pose_training_set
+
+    poses = [(0, 0), (40, 25)]
+    for kw in ({"distance_range_m": ("a", 2.0)}, {"distance_range_m": (1.0, 2.0, 3.0)},
+               {"azimuth_range_deg": ("a", 2.0)}, {"elevation_range_deg": (0.0,)},
+               {"elevation_range_deg": 10.0}):
+        with pytest.raises(GeometryError, match=next(iter(kw))):
+            make_pose_training_set(ARR, poses, 10, **kw)
+    X, Y = make_pose_training_set(ARR, poses, 10)
+    assert X.shape == (10, 6) and Y.shape == (10, 3)

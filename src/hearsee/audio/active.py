@@ -765,6 +765,12 @@ def make_pose_training_set(
     Returns ``X (n, K * n_pairs)`` seconds and ``Y (n, 3)`` source positions in metres.
     """
     arr = load_array(array)
+    # (text, or three numbers, raised a builtin ValueError / TypeError until 2026-12-02)
+    for name, v in (("distance_range_m", distance_range_m),
+                    ("elevation_range_deg", elevation_range_deg),
+                    ("azimuth_range_deg", azimuth_range_deg)):
+        if as_float_array(v, name, finite=False, error=GeometryError).shape != (2,):
+            raise GeometryError(f"{name} must be two numbers (low, high), got {v!r}")
     lo, hi = (float(v) for v in distance_range_m)
     if not (0 < lo < hi and np.isfinite(hi)):
         raise GeometryError(f"distance_range_m must be 0 < near < far metres, got "
