@@ -268,6 +268,19 @@ def test_solve_adjoint_refuses_non_finite_frequencies_and_speed():
             bem.solve_adjoint(mesh, [300.0], mics, c, on_surface_tol=1e-3)
 
 
+def test_solve_adjoint_refuses_malformed_evaluation_points_and_speed():
+    # found in the 2026-12-02 audit: a NaN evaluation point raised scipy's "'x' must be
+    # finite" ValueError, no point or [x, y] numpy's broadcasting ValueError, a speed of sound
+    # given as text numpy's TypeError
+    mesh = bem.sphere_mesh(A, 4)
+    for pts in ([[0.0, np.nan, 0.0]], np.zeros((0, 3)), [[0.0, 0.1]], "abc"):
+        with pytest.raises(GeometryError, match="evaluation points"):
+            bem.solve_adjoint(mesh, [300.0], pts, C)
+    with pytest.raises(GeometryError, match="speed of sound"):
+        bem.solve_adjoint(mesh, [300.0], [[0.0, 0.1, 0.0]], "343")
+    assert bem.solve_adjoint(mesh, [300.0], [[0.0, 0.1, 0.0]], C).v.shape[:2] == (1, 1)
+
+
 def test_solve_adjoint_refuses_evaluation_points_inside_the_body():
     # found in review: the docstring asks for points on or outside the body, but a point 2 cm
     # from the centre of an 8.75 cm sphere was solved: free-term c ~ 0 and |H| ~ 1.5, while

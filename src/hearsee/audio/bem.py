@@ -412,9 +412,14 @@ def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
     f = np.asarray(freqs, dtype=float).ravel()
     if not np.all(np.isfinite(f) & (f > 0)):  # (NaN and inf passed "<= 0": a NaN solution)
         raise GeometryError("BEM frequencies must be finite numbers > 0 Hz")
-    if not (np.isfinite(speed_of_sound) and speed_of_sound > 0):
+    if not (is_real(speed_of_sound) and speed_of_sound > 0):  # (text: numpy's TypeError)
         raise GeometryError(f"speed of sound must be a finite number > 0 m/s, got {speed_of_sound}")
-    xe = np.atleast_2d(np.asarray(eval_points, dtype=float))
+    # (a NaN point raised scipy's "'x' must be finite" ValueError, none or [x, y] a numpy
+    # broadcasting ValueError, until 2026-12-02)
+    xe = np.atleast_2d(as_points(eval_points, "BEM evaluation points"))
+    if xe.ndim != 2 or len(xe) == 0 or not np.all(np.isfinite(xe)):
+        raise GeometryError(f"BEM evaluation points must be finite [x, y, z] points in metres, "
+                            f"shape (E, 3) with E >= 1, got shape {xe.shape}")
     q, dist, _ = mesh.closest_points(xe)
     inside = (dist > on_surface_tol) & (mesh.winding_number(xe) > 0.5)
     if np.any(inside):  # (no field inside a rigid body: the old answer was garbage)
