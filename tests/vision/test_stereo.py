@@ -19,6 +19,7 @@ from hearsee.vision.stereo import (
     points_from_disparity,
     points_to_left_frame,
     rectify_pair,
+    search_range_px,
     stereo_frame,
 )
 
@@ -85,6 +86,42 @@ def test_shifted_texture_gives_its_shift_with_subpixel_accuracy():
     assert np.mean(np.isfinite(d[10:-10, 12:32])) > 0.8
     plain = compute_disparity(left, tex, num_disparities=32, pad_left=False)
     assert np.all(np.isnan(plain[:, :31]))
+
+
+def _shifted(shift: float) -> tuple[np.ndarray, np.ndarray]:
+    """(left, right) of a texture whose left image is the right shifted by ``shift`` px."""
+    tex = _texture(1)[:120, :240]
+    M = np.float32([[1, 0, shift], [0, 1, 0]])
+    return cv2.warpAffine(tex, M, (240, 120), flags=cv2.INTER_CUBIC,
+                          borderMode=cv2.BORDER_REFLECT), tex
+
+
+def test_search_range_is_what_the_matcher_can_report():
+    """search_range_px names the disparities compute_disparity searches: a shift inside it is
+    measured, one beyond it never gets a disparity above its end (SGBM answers the end or
+    nothing), and a num_disparities that is no multiple of 16 searches to the next one."""
+    assert search_range_px(240, num_disparities=32) == (0.0, 31.0)
+    assert search_range_px(240, num_disparities=40) == (0.0, 47.0)  # rounded up to 48
+    assert search_range_px(240, num_disparities=64, scale=0.5) == (0.0, 62.0)
+    assert search_range_px(240, num_disparities=32, min_disparity=8) == (8.0, 39.0)
+    inside = compute_disparity(*_shifted(40.0), num_disparities=40)[10:-10, 60:-10]
+    assert np.nanmedian(inside) == pytest.approx(40.0, abs=0.15)
+    beyond = compute_disparity(*_shifted(40.0), num_disparities=32)[10:-10, 60:-10]
+    assert np.nanmax(beyond) <= 31.0
+    # its defaults are compute_disparity's, and stereo_frame reports the search it ran
+    import inspect
+
+    sig = inspect.signature(compute_disparity).parameters
+    assert search_range_px(240) == search_range_px(
+        240, sig["num_disparities"].default, sig["min_disparity"].default, sig["scale"].default)
+    rig = StereoRig.ideal(Camera.from_fov(60.0, 240, 120), baseline_m=0.1)
+    f = stereo_frame(*_shifted(20.0), rig, num_disparities=24)
+    assert f.search_px == (0.0, 31.0)
+    assert f.min_depth_m == pytest.approx(f.focal_px * 0.1 / 31.0)
+    for kw in ({"width": 0}, {"width": 2.5}, {"num_disparities": 0}, {"min_disparity": -1},
+               {"scale": 0.0}, {"num_disparities": float("nan")}):
+        with pytest.raises(ConfigError):
+            search_range_px(**{"width": 240, **kw})
 
 
 def test_slanted_plane_through_distorted_rotated_rig_recovers_depth():

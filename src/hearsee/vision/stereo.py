@@ -55,6 +55,7 @@ __all__ = [
     "points_to_left_frame",
     "rectification_maps",
     "rectify_pair",
+    "search_range_px",
     "stereo_frame",
 ]
 
@@ -168,6 +169,56 @@ def _penalties(p1: object, p2: object, b2: int) -> tuple[int, int]:
     return vals[0], vals[1]
 
 
+def _check_search(num_disparities: float, min_disparity: float, scale: float) -> None:
+    """ConfigError unless the search options of :func:`compute_disparity` are numbers in
+    range: ``num_disparities`` >= 1, ``min_disparity`` >= 0 (pixels), ``scale`` in (0, 1]."""
+    # (checked, not converted, as lr_max_diff: a numpy scalar stays what it was, and so do
+    # the sizes computed from it; a string was a builtin TypeError)
+    finite_number("scale", scale, 0.0, 1.0, lo_open=True)
+    for name, v in (("num_disparities", num_disparities), ("min_disparity", min_disparity)):
+        if not is_real(v):  # NaN and inf reached int(np.ceil(.)), strings the comparisons
+            raise ConfigError(f"{name} must be a finite number of pixels, got {v!r}")
+    if num_disparities < 1 or min_disparity < 0:
+        raise ConfigError(
+            f"num_disparities must be >= 1 and min_disparity >= 0, got {num_disparities}, "
+            f"{min_disparity}"
+        )
+
+
+def _matching_search(width: int, num_disparities: float, min_disparity: float,
+                     scale: float) -> tuple[int, float, int, int]:
+    """The matching resolution of :func:`compute_disparity` (``Wm`` columns, ``sx = Wm /
+    width``) and its search at that resolution: ``md`` the smallest disparity, ``nd`` how
+    many (``num_disparities`` rounded up to a multiple of 16), in matching pixels."""
+    Wm = max(8, round(width * scale)) if scale < 1.0 else width
+    sx = Wm / width if scale < 1.0 else 1.0
+    nd = int(np.ceil(num_disparities * sx / 16.0) * 16)
+    md = int(np.floor(min_disparity * sx))
+    return Wm, sx, md, nd
+
+
+def search_range_px(width: int, num_disparities: float = 64, min_disparity: float = 0,
+                    scale: float = 1.0) -> tuple[float, float]:
+    """The smallest and the largest disparity (pixels of the full-resolution image) that
+    :func:`compute_disparity` searches in rectified images ``width`` pixels wide with these
+    options (its defaults here too). ``num_disparities`` is rounded up to a multiple of 16 at
+    the matching resolution, so the search may reach a little beyond what was asked for.
+    A surface nearer than ``f B / largest`` metres is outside the search: SGBM gives it no
+    disparity or a wrong one, at most the largest (:func:`hearsee.vision.humans.
+    detect_candidates` rejects people standing there). ConfigError for options that
+    :func:`compute_disparity` refuses or a width that is not a whole number >= 1.
+
+    >>> search_range_px(640)
+    (0.0, 63.0)
+    >>> search_range_px(640, num_disparities=64, scale=0.5)  # 32 matching pixels, doubled
+    (0.0, 62.0)
+    """
+    width = whole_number("width", width, 1)
+    _check_search(num_disparities, min_disparity, scale)
+    _, sx, md, nd = _matching_search(width, num_disparities, min_disparity, scale)
+    return md / sx, (md + nd - 1) / sx
+
+
 def compute_disparity(
     left: NDArray,
     right: NDArray,
@@ -246,17 +297,7 @@ def compute_disparity(
     for name, flag in (("pad_left", pad_left), ("fill_holes", fill_holes)):
         if not isinstance(flag, bool | np.bool_):  # ("no" was read as True)
             raise ConfigError(f"{name} must be True or False, got {flag!r:.40}")
-    # (checked, not converted, as lr_max_diff below: a numpy scalar stays what it was, and so
-    # do the sizes computed from it; a string was a builtin TypeError)
-    finite_number("scale", scale, 0.0, 1.0, lo_open=True)
-    for name, v in (("num_disparities", num_disparities), ("min_disparity", min_disparity)):
-        if not is_real(v):  # NaN and inf reached int(np.ceil(.)), strings the comparisons
-            raise ConfigError(f"{name} must be a finite number of pixels, got {v!r}")
-    if num_disparities < 1 or min_disparity < 0:
-        raise ConfigError(
-            f"num_disparities must be >= 1 and min_disparity >= 0, got {num_disparities}, "
-            f"{min_disparity}"
-        )
+    _check_search(num_disparities, min_disparity, scale)
     # (a negative tolerance silently became SGBM's 1 px; inf or NaN a builtin error)
     finite_number("lr_max_diff", lr_max_diff, 0.0)
     if (not isinstance(block_size, int | np.integer) or isinstance(block_size, bool)
@@ -275,11 +316,7 @@ def compute_disparity(
     speckle_range = whole_number("speckle_range", speckle_range, 0, _INT_MAX // 16)
     pre_filter_cap = whole_number("pre_filter_cap", pre_filter_cap, 15, 127)
     H, W = L.shape
-    # the matching resolution (Wm columns) and its search range
-    Wm = max(8, round(W * scale)) if scale < 1.0 else W
-    sx = Wm / W if scale < 1.0 else 1.0
-    nd = int(np.ceil(num_disparities * sx / 16.0) * 16)
-    md = int(np.floor(min_disparity * sx))
+    Wm, sx, md, nd = _matching_search(W, num_disparities, min_disparity, scale)
     if md + nd > _MAX_DISPARITY:  # (10**6 ended in cv2.error: out of memory)
         raise ConfigError(
             f"min_disparity + num_disparities must be at most {_MAX_DISPARITY} pixels at the "
@@ -478,13 +515,25 @@ class StereoFrame:
 
     ``disparity`` is float32 pixels (NaN invalid) of the rectified left image; :meth:`depth`
     (metres) and :meth:`points` (``(H, W, 3)`` metres, rectified left frame) derive from it.
+    ``search_px``: the smallest and largest disparity the matcher searched (pixels,
+    :func:`search_range_px`; None when not known): nothing nearer than ``f B / largest``
+    metres has a correct disparity.
     """
 
     left: NDArray
     right: NDArray
     disparity: NDArray
     rectification: Rectification
+    search_px: tuple[float, float] | None = None
     _points: NDArray | None = field(default=None, repr=False)
+
+    @property
+    def min_depth_m(self) -> float | None:
+        """The nearest depth (metres) the disparity search reaches, ``f B / largest
+        disparity``; None when the search is not known."""
+        if self.search_px is None:
+            return None
+        return self.focal_px * self.baseline_m / self.search_px[1]
 
     @property
     def focal_px(self) -> float:
@@ -513,6 +562,9 @@ class StereoFrame:
 #: The keyword options of :func:`compute_disparity` (:func:`stereo_frame` checks its own
 #: against them once per call, not by inspecting the signature each time).
 _DISPARITY_OPTIONS = frozenset(inspect.signature(compute_disparity).parameters) - {"left", "right"}
+#: Its defaults of the options that set the search (:func:`stereo_frame`'s ``search_px``).
+_SEARCH_DEFAULTS = {k: inspect.signature(compute_disparity).parameters[k].default
+                    for k in ("num_disparities", "min_disparity", "scale")}
 
 
 def stereo_frame(left: NDArray, right: NDArray, rig: StereoRig, **disparity_options) -> StereoFrame:
@@ -535,4 +587,6 @@ def stereo_frame(left: NDArray, right: NDArray, rig: StereoRig, **disparity_opti
                           f"{', '.join(sorted(_DISPARITY_OPTIONS))}")
     lr, rr, rect = rectify_pair(left, right, rig)
     d = compute_disparity(lr, rr, **disparity_options)
-    return StereoFrame(lr, rr, d, rect)
+    search = search_range_px(lr.shape[1], **{k: disparity_options.get(k, v)
+                                            for k, v in _SEARCH_DEFAULTS.items()})
+    return StereoFrame(lr, rr, d, rect, search)
