@@ -1042,6 +1042,28 @@ def test_a_refused_update_leaves_the_tracker_as_it_was(cls):
     np.testing.assert_array_equal(k.P, twin.P)
 
 
+def test_a_refused_motion_update_leaves_the_track_as_it_was():
+    """MotionKalman.update predicted the track to a call's time before refusing its fix or
+    covariance (found by an audit, 2026-12-02): the refused call at t = 0.5 s moved the track's
+    time and grew its covariance, and the caller's next frame at 0.2 s was then refused as
+    "time going backwards". Ground truth: a twin that never saw the refused calls."""
+    k, twin = MotionKalman(), MotionKalman()
+    for f in (k, twin):
+        for n in range(5):
+            f.update(n * DT, [1.0 + 0.01 * n, 0.0, 0.0])
+    for pos, R in (([1.0, 2.0], None), ("abc", None), ([1.0, 0.0, 0.0], -np.eye(3)),
+                   ([1.0, 0.0, 0.0], "abc")):
+        with pytest.raises(EstimationError):
+            k.update(0.5, pos, R)
+    with pytest.raises(EstimationError):
+        k.update(0.5, [1.0, 0.0, 0.0], None, candidates=[[1.0, 0.0, 0.0]])
+    assert k.t == twin.t
+    for f in (k, twin):
+        assert f.update(5 * DT, [1.05, 0.0, 0.0])
+    np.testing.assert_array_equal(k.x, twin.x)
+    np.testing.assert_array_equal(k.P, twin.P)
+
+
 def test_sigma_jerk_error_states_its_documented_unit():
     """The message said m/s^3 (a jerk); sigma_jerk is the acceleration's increment per update
     step in m/s^2 (the docstring since 2026-12-01)."""

@@ -1255,7 +1255,9 @@ class MotionKalman(_Kalman):
         """One frame: predict to ``t`` and fuse ``position`` (m) with covariance ``R`` (3x3 m^2)
         when given. ``candidates`` are ambiguous alternative fixes ``(position, R)``; the one
         nearest the prediction (Mahalanobis) is used. Returns True when a fix was fused."""
-        self.predict(t)
+        # every argument checked before the track changes (as DirectionKalman.update: a call
+        # refused for its fix or covariance had predicted the track to its time first, and a
+        # later frame at an earlier time was then "time going backwards"; 2026-12-02)
         cands = [] if position is None else [(position, R)]
         try:  # (a number raised a builtin TypeError)
             extra = [] if candidates is None else list(candidates)
@@ -1285,6 +1287,7 @@ class MotionKalman(_Kalman):
             z = z.reshape(3)
             if np.all(np.isfinite(z)):
                 opts.append((z, self.R if Rc is None else _covariance(Rc, 3)))
+        self.predict(t)
         if not opts:
             return False
         if not self.initialized:
