@@ -673,6 +673,20 @@ def test_tdoa_tracker_pairs_are_checked_when_it_is_made(side_rig):
     assert RayTdoaTracker(side_rig, pairs=[(0.0, 1.0)]).pairs == [(0, 1)]
 
 
+def test_locate_on_ray_pairs_that_are_no_list_are_a_geometry_error(rig):
+    """locate_on_ray(..., pairs=5) raised list()'s builtin TypeError (found by an audit,
+    2026-12-02); ray_residuals and RayTdoaTracker check their pairs with the array's
+    checked_pairs. Valid pairs, in another order, still give the exact fix."""
+    p = np.array([1.4, 0.2, 0.1])
+    uv = rig.project(p)[0]
+    for bad in (5, 2.5, object()):
+        with pytest.raises(GeometryError, match="pair"):
+            locate_on_ray(rig, uv, [0.0], pairs=bad)
+    prs = [(1, 0), (2, 0), (2, 1)]
+    fix = locate_on_ray(rig, uv, rig.array.tdoa(p, prs), pairs=prs)
+    assert np.linalg.norm(fix.position_m - p) < 1e-3
+
+
 def test_settings_and_geometry_of_the_fusion_must_be_numbers(rig):
     """Bad-input sweep of the public fusion API: numpy and float() read text as the numbers it
     spells and True as 1 -- a rig mounting R / t of text, to_optical's and ray_residuals'

@@ -342,7 +342,8 @@ def locate_on_ray(
         plane, so a ray that crosses that plane has two exact solutions) -- a tracker picks
         among them with its prediction.
     """
-    prs = list(rig.array.pairs if pairs is None else pairs)
+    # (a number such as pairs=5 raised list()'s builtin TypeError; as ray_residuals)
+    prs = rig.array.checked_pairs(pairs)
     z = as_tdoas(tdoa_s, len(prs), EstimationError)
     if not np.all(np.isfinite(z)):
         raise EstimationError("TDOAs must be finite to fuse with the camera ray")
