@@ -389,6 +389,23 @@ def test_ray_tracker_bad_parameters():
     assert np.all(np.isnan(RayTracker().position))
 
 
+def test_ray_tracker_candidates_that_are_no_list_of_pairs_are_estimation_errors():
+    """RayTracker.update read its candidates before MotionKalman's checks (found by an audit,
+    2026-12-02): candidates=5 raised list()'s builtin TypeError and [x, y, z] alone (no
+    covariance) a builtin 'too many values to unpack'. MotionKalman itself refused both with
+    an EstimationError. A fix whose covariance is not finite is still skipped (the next
+    candidate is used), and the refused calls leave the track alone."""
+    k = RayTracker()
+    k.update(0.0, [1.0, 0.0, 0.0], np.eye(3) * 1e-4)
+    for bad in (5, [[1.0, 2.0, 3.0]], [(np.zeros(3),)], [(np.zeros(3), None, 1.0)]):
+        with pytest.raises(EstimationError, match="candidates"):
+            k.update(0.1, [1.0, 0.0, 0.0], None, candidates=bad)
+    assert k.t == 0.0
+    assert k.update(0.1, [1.0, 0.0, 0.0], np.full((3, 3), np.nan),
+                    [([1.02, 0.0, 0.0], np.eye(3) * 1e-4)])
+    assert k.position[0] == pytest.approx(1.02, abs=1e-3)  # (its prediction is loose)
+
+
 @pytest.fixture(scope="module")
 def side_rig(rig):
     """The camera 0.2 m beside the three-mic preset (bench/tracking.py part B's first rig)."""

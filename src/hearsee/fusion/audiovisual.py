@@ -501,12 +501,26 @@ class RayTracker(MotionKalman):
         """One frame: predict to ``t`` (seconds) and fuse the fix ``position`` (m, array frame)
         with covariance ``R`` (3x3, m^2; default 5 cm per axis); ``candidates`` are ambiguous
         alternatives (see :meth:`MotionKalman.update`). Returns True when a fix was fused."""
-        cands = ([] if position is None else [(position, R)]) + list(candidates or [])
-        # (a covariance that is no numbers: MotionKalman's EstimationError, not np.isfinite's
-        # builtin TypeError)
-        finite = [(p, Rc) for p, Rc in cands
-                  if Rc is None or not real_entries(Rc) or np.all(np.isfinite(Rc))]
-        return super().update(t, None, None, finite)
+        try:
+            extra = [] if candidates is None else list(candidates)
+        except TypeError:  # (a number: list()'s builtin TypeError; MotionKalman's message)
+            return super().update(t, position, R, candidates)
+
+        def void(c: Any) -> bool:
+            """A (position, R) candidate whose covariance is numbers but not all finite.
+            Anything else is passed on for MotionKalman's checks: a covariance that is no
+            numbers (np.isfinite's builtin TypeError), a candidate that is no pair ([x, y, z]
+            alone: a builtin 'too many values to unpack', 2026-12-02)."""
+            if isinstance(c, str | bytes):
+                return False
+            try:
+                _, Rc = c
+            except (TypeError, ValueError):
+                return False
+            return Rc is not None and real_entries(Rc) and not np.all(np.isfinite(Rc))
+
+        cands = ([] if position is None else [(position, R)]) + extra
+        return super().update(t, None, None, [c for c in cands if not void(c)])
 
     @property
     def acceleration(self) -> NDArray:
