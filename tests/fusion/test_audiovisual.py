@@ -145,6 +145,25 @@ def test_bad_fusion_input(rig):
         AudioVisualRig(rig.array, rig.camera, np.eye(3) * 2, np.zeros(3))
 
 
+def test_tdoa_tracker_refuses_a_fix_that_is_no_ray_fix(side_rig):
+    """update_measurements read fix.alternatives of whatever it was given (found by an audit,
+    2026-12-02): a text fix, a position array or a RayFix whose alternatives are a number or
+    positions raised a builtin AttributeError / TypeError. Now an EstimationError naming the
+    RayFix, the tracker as it was; the real fix still starts the track."""
+    rig = side_rig
+    p = np.array([1.2, 0.2, 0.05])
+    uv, z = rig.project(p)[0], rig.array.tdoa(p)
+    fix = locate_on_ray(rig, uv, z, sigma_tdoa_s=RAY_SIGMA_TDOA_S)
+    trk = RayTdoaTracker(rig)
+    for bad in ("fix", p, RayFix(p, 1.0, 0.0, fix.covariance, fix.direction, 5),
+                RayFix(p, 1.0, 0.0, fix.covariance, fix.direction, [p])):
+        with pytest.raises(EstimationError, match="RayFix"):
+            trk.update_measurements(0.0, uv, z, bad)
+        assert not trk.initialized and trk.t is None
+    assert trk.update_measurements(0.0, uv, z, fix)
+    np.testing.assert_array_equal(trk.position, fix.position_m)
+
+
 def test_tdoa_tracker_refuses_a_fix_covariance_ray_tracker_refuses(side_rig):
     """RayTdoaTracker started (or restarted) on the fix's covariance unchecked: -I was taken
     and position_cov became -4 I (RayTracker refuses the same fix), a 2x2 one raised numpy's

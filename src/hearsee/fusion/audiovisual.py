@@ -632,7 +632,7 @@ class RayTdoaTracker(RayTracker):
             uv = _image_point(uv, finite=False)  # (NaN: not seen in this frame)
         if tdoa_s is not None:
             tdoa_s = as_tdoas(tdoa_s, len(self.pairs), EstimationError)
-        cands = [] if fix is None else [_checked_fix(f) for f in (fix, *fix.alternatives)]
+        cands = [] if fix is None else _fix_candidates(fix)
         if fix is not None and (not self.initialized or self.n_rejects >= self.max_rejects):
             self.predict(t)  # (the time's checks: finite, not before the last frame)
             self._start(*cands[0])
@@ -702,6 +702,23 @@ class RayTdoaTracker(RayTracker):
         self._correct(y, S, H, R)
         self.last_fused_t = self.t
         return True
+
+
+def _fix_candidates(fix: Any) -> list[tuple[NDArray, NDArray]]:
+    """A frame's fix and its alternatives as checked ``(position, covariance)`` pairs
+    (:func:`_checked_fix`), or an EstimationError unless ``fix`` is a :class:`RayFix` whose
+    ``alternatives`` are RayFixes (anything else raised a builtin AttributeError or TypeError,
+    2026-12-02)."""
+    items = None
+    if isinstance(fix, RayFix):
+        try:
+            items = [fix, *fix.alternatives]
+        except TypeError:
+            pass
+    if items is None or not all(isinstance(f, RayFix) for f in items):
+        raise EstimationError(f"a frame's fix must be a RayFix (locate_on_ray) whose "
+                              f"alternatives are RayFixes, or None; got {fix!r:.80}")
+    return [_checked_fix(f) for f in items]
 
 
 def _checked_fix(fix: RayFix) -> tuple[NDArray, NDArray]:
