@@ -11,6 +11,7 @@ from hearsee.fusion.audiovisual import (
     RayFix,
     RayTdoaTracker,
     RayTracker,
+    frame_fix,
     locate_on_ray,
     ray_residuals,
     simulate_av_samples,
@@ -721,6 +722,31 @@ def test_locate_on_ray_pairs_that_are_no_list_are_a_geometry_error(rig):
     prs = [(1, 0), (2, 0), (2, 1)]
     fix = locate_on_ray(rig, uv, rig.array.tdoa(p, prs), pairs=prs)
     assert np.linalg.norm(fix.position_m - p) < 1e-3
+
+
+def test_fusion_functions_refuse_a_rig_that_is_no_audio_visual_rig(rig):
+    """locate_on_ray, frame_fix, track_on_rays, simulate_av_samples and RayTdoaTracker used
+    rig.array of whatever they were given, and ray_residuals array.checked_pairs (found by an
+    audit, 2026-12-02): None or a preset name raised a builtin AttributeError. Now a
+    GeometryError naming the function; the real rig still works."""
+    p = np.array([1.4, 0.2, 0.1])
+    uv, z = rig.project(p)[0], rig.array.tdoa(p)
+    x = np.zeros((3, 4096))
+    for bad in (None, "three-mic", rig.array):
+        calls = {"locate_on_ray": lambda b: locate_on_ray(b, uv, z),
+                 "frame_fix": lambda b: frame_fix(b, lambda t: uv, 0.0, z, rig.array.pairs,
+                                                  range_m=(0.1, 10.0), sigma_tdoa_s=1e-5,
+                                                  sigma_px=1.0, max_residual_s=1e-4),
+                 "track_on_rays": lambda b: track_on_rays(b, x, 16000, lambda t: uv),
+                 "simulate_av_samples": lambda b: simulate_av_samples(b, 3),
+                 "RayTdoaTracker": lambda b: RayTdoaTracker(b)}
+        for name, call in calls.items():
+            with pytest.raises(GeometryError, match=f"{name} needs an AudioVisualRig"):
+                call(bad)
+    for bad in (None, "three-mic", rig):
+        with pytest.raises(GeometryError, match="array must be a MicArray"):
+            ray_residuals(bad, np.zeros(3), [1.0, 0.0, 0.0], 1.0, z)
+    assert np.linalg.norm(locate_on_ray(rig, uv, z).position_m - p) < 1e-3
 
 
 def test_settings_and_geometry_of_the_fusion_must_be_numbers(rig):

@@ -206,6 +206,17 @@ class AudioVisualRig:
         return self.camera_centre, d_opt @ self.R  # R^T d for each row
 
 
+def _check_rig(rig: Any, what: str) -> AudioVisualRig:
+    """``rig`` when it is an :class:`AudioVisualRig`, else a GeometryError naming ``what`` (None
+    or a preset name raised a builtin AttributeError at the first use of ``rig.array``,
+    2026-12-02)."""
+    if not isinstance(rig, AudioVisualRig):
+        raise GeometryError(f"{what} needs an AudioVisualRig (microphones + calibrated camera, "
+                            f"e.g. AudioVisualRig.mounted), got {type(rig).__name__} "
+                            f"{rig!r:.40}")
+    return rig
+
+
 @dataclass
 class RayFix:
     """A 3D fix from one image point and the ITDs.
@@ -243,8 +254,11 @@ def ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: A
     ``array``), seconds; returns ``(n, n_pairs)``. ``sum(F**2, axis=1)`` is the cost J(s)
     plotted in the thesis's figs. 5.14-5.16. Arguments that are no numbers (numpy read text as
     the numbers it spells, True as 1) or of other shapes (numpy's broadcast ValueError) are a
-    GeometryError.
+    GeometryError, and so is an ``array`` that is no MicArray.
     """
+    if not isinstance(array, MicArray):  # (a builtin AttributeError, 2026-12-02)
+        raise GeometryError(f"ray_residuals: array must be a MicArray (hearsee.audio.arrays."
+                            f"load_array), got {type(array).__name__} {array!r:.40}")
     for name, v in (("origin", origin), ("direction", direction), ("s", s),
                     ("tdoa_s", tdoa_s)):
         if not real_entries(v):
@@ -343,7 +357,7 @@ def locate_on_ray(
         among them with its prediction.
     """
     # (a number such as pairs=5 raised list()'s builtin TypeError; as ray_residuals)
-    prs = rig.array.checked_pairs(pairs)
+    prs = _check_rig(rig, "locate_on_ray").array.checked_pairs(pairs)
     z = as_tdoas(tdoa_s, len(prs), EstimationError)
     if not np.all(np.isfinite(z)):
         raise EstimationError("TDOAs must be finite to fuse with the camera ray")
@@ -601,6 +615,7 @@ class RayTdoaTracker(RayTracker):
                  pixel_gate_prob: float = 0.9999, max_rejects: int = 4,
                  init_vel_sigma: float = 1.0,
                  covariance_scale: float = RAY_COVARIANCE_SCALE) -> None:
+        _check_rig(rig, "RayTdoaTracker")
         super().__init__(sigma_accel=sigma_accel, gate_prob=gate_prob, max_rejects=max_rejects,
                          init_vel_sigma=init_vel_sigma)
         # (inf was taken and True was 1; text raised builtin TypeErrors)
@@ -787,7 +802,7 @@ def frame_fix(rig: AudioVisualRig, image_points: Callable[[float], Any], t: floa
     ``max_residual_s``). ``fix.position_m`` is therefore where the source was when it emitted
     the frame's sound.
     """
-    c = rig.array.speed_of_sound
+    c = _check_rig(rig, "frame_fix").array.speed_of_sound
     centre = rig.array.positions.mean(axis=0)
     r = None
     if getattr(tracker, "initialized", False):
@@ -878,6 +893,7 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
     """
     from hearsee.audio.tdoa import estimate_tdoas
 
+    _check_rig(rig, "track_on_rays")
     # (NaN kept every fix -- residual > NaN is False -- and text raised a builtin TypeError)
     finite_number("max_residual_samples", max_residual_samples, 0.0, error=EstimationError)
     # (checked by locate_on_ray only once a frame had an image point and TDOAs: a bad range
@@ -931,6 +947,7 @@ def simulate_av_samples(rig: AudioVisualRig, n: int, range_m: tuple[float, float
     Y : array (n, 3)
         True positions, array frame, metres.
     """
+    _check_rig(rig, "simulate_av_samples")
     n = whole_number("n", n, 1, error=EstimationError)
     # ((1.0,) raised a builtin IndexError)
     near, far = _ray_range(range_m, equal_ok=True)
