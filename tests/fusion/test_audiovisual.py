@@ -749,6 +749,24 @@ def test_fusion_functions_refuse_a_rig_that_is_no_audio_visual_rig(rig):
     assert np.linalg.norm(locate_on_ray(rig, uv, z).position_m - p) < 1e-3
 
 
+def test_image_points_that_are_no_function_are_an_estimation_error(rig):
+    """track_on_rays and frame_fix called image_points as given (found by an audit,
+    2026-12-02): an array of pixels raised a builtin TypeError at the first frame, in
+    track_on_rays after the whole recording's GCC-PHAT. Now an EstimationError first."""
+    p = np.array([1.4, 0.2, 0.1])
+    uv, z = rig.project(p)[0], rig.array.tdoa(p)
+    x = np.random.default_rng(0).standard_normal((3, 4096))
+    for bad in (uv, [uv, uv], None):
+        with pytest.raises(EstimationError, match="image_points must be a function"):
+            track_on_rays(rig, x, 16000, bad)
+        with pytest.raises(EstimationError, match="image_points must be a function"):
+            frame_fix(rig, bad, 0.0, z, rig.array.pairs, range_m=(0.1, 10.0),
+                      sigma_tdoa_s=1e-5, sigma_px=1.0, max_residual_s=1e-4)
+    uv_f, fix = frame_fix(rig, lambda t: uv, 0.0, z, rig.array.pairs, range_m=(0.1, 10.0),
+                          sigma_tdoa_s=1e-5, sigma_px=1.0, max_residual_s=1e-4)
+    assert np.linalg.norm(fix.position_m - p) < 1e-3
+
+
 def test_settings_and_geometry_of_the_fusion_must_be_numbers(rig):
     """Bad-input sweep of the public fusion API: numpy and float() read text as the numbers it
     spells and True as 1 -- a rig mounting R / t of text, to_optical's and ray_residuals'

@@ -769,6 +769,15 @@ def feed_tracker(tracker: Any, t: float, uv: ArrayLike | None, tdoa_s: ArrayLike
                           [(a.position_m, a.covariance) for a in fix.alternatives])
 
 
+def _check_image_points(image_points: Any) -> None:
+    """An EstimationError unless ``image_points`` is callable, ``t -> (u, v) or None`` (an array
+    of points raised a builtin TypeError at the first frame -- in :func:`track_on_rays` after
+    the whole recording's GCC-PHAT; 2026-12-02)."""
+    if not callable(image_points):
+        raise EstimationError(f"image_points must be a function t (s) -> (u, v) pixels or None, "
+                              f"got {type(image_points).__name__} {image_points!r:.40}")
+
+
 def _seen(uv: Any) -> Any:
     """An ``image_points`` answer as :func:`frame_fix` uses it: None (not seen) for None or a
     point with a NaN or infinite coordinate (a NaN point aborted the whole run with
@@ -803,6 +812,7 @@ def frame_fix(rig: AudioVisualRig, image_points: Callable[[float], Any], t: floa
     the frame's sound.
     """
     c = _check_rig(rig, "frame_fix").array.speed_of_sound
+    _check_image_points(image_points)
     centre = rig.array.positions.mean(axis=0)
     r = None
     if getattr(tracker, "initialized", False):
@@ -894,6 +904,7 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
     from hearsee.audio.tdoa import estimate_tdoas
 
     _check_rig(rig, "track_on_rays")
+    _check_image_points(image_points)
     # (NaN kept every fix -- residual > NaN is False -- and text raised a builtin TypeError)
     finite_number("max_residual_samples", max_residual_samples, 0.0, error=EstimationError)
     # (checked by locate_on_ray only once a frame had an image point and TDOAs: a bad range
