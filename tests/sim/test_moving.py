@@ -722,3 +722,20 @@ def test_every_microphone_must_hear_the_moving_or_room_source():
             run()
     long = np.ones(int(0.03 * FS))  # 10.3 m of sound: both hear it
     assert simulate_moving_free_field(long, FS, arr, still).shape == (2, long.size)
+
+
+def test_free_field_microphones_are_checked_as_the_static_simulators_are():
+    """simulate_moving_free_field read its microphones with np.asarray (found by an audit,
+    2026-12-02): a preset name raised numpy's builtin ValueError, True was read as 1 m, and a
+    NaN coordinate was reported as a source "too far (beyond float range)". The static
+    simulate_free_field refuses all three with a GeometryError about the microphones; so
+    does this one now, and N x 3 numbers still give the same recording as the MicArray."""
+    traj = linear_trajectory([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 0.5)
+    x = np.random.default_rng(0).standard_normal(8000)
+    for bad in ("three-mic", [[0.0, 0.0, True], [0.1, 0.0, 0.0]],
+                [[0.0, 0.0, np.nan], [0.1, 0.0, 0.0]]):
+        with pytest.raises(GeometryError, match="microphone positions"):
+            simulate_moving_free_field(x, 16000, bad, traj)
+    arr = MicArray.from_preset("three-mic")
+    as_list = simulate_moving_free_field(x, 16000, arr.positions.tolist(), traj)
+    np.testing.assert_array_equal(as_list, simulate_moving_free_field(x, 16000, arr, traj))

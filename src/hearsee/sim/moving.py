@@ -436,13 +436,13 @@ def retarded_delays(traj: Trajectory, mics: ArrayLike, t: ArrayLike, c: float,
 
 
 def _mics_and_c(mics: MicArray | ArrayLike, speed_of_sound: float | None) -> tuple[NDArray, float]:
-    c = speed_of_sound_of(mics, speed_of_sound)
-    if isinstance(mics, MicArray):
-        return mics.positions, c
-    p = np.asarray(mics, dtype=float)
-    if p.ndim != 2 or p.shape[1] != 3:
-        raise GeometryError(f"microphone positions must be N x 3, got shape {p.shape}")
-    return p, c
+    """Microphone positions (N, 3) in metres and the speed of sound (m/s), checked as the
+    static :func:`hearsee.audio.propagation.simulate_free_field` checks them (a preset name
+    raised numpy's builtin ValueError, True was read as 1 m and a NaN coordinate reported as
+    a source "too far (beyond float range)"; 2026-12-02)."""
+    from hearsee.audio.propagation import _mic_positions
+
+    return _mic_positions(mics), speed_of_sound_of(mics, speed_of_sound)
 
 
 def _check_signal(signal: ArrayLike, fs: float) -> NDArray:
