@@ -739,3 +739,15 @@ def test_free_field_microphones_are_checked_as_the_static_simulators_are():
     arr = MicArray.from_preset("three-mic")
     as_list = simulate_moving_free_field(x, 16000, arr.positions.tolist(), traj)
     np.testing.assert_array_equal(as_list, simulate_moving_free_field(x, 16000, arr, traj))
+
+
+def test_velocity_at_a_nan_time_is_nan_as_the_position():
+    """Trajectory.velocity(NaN) was the last segment's velocity (found by an audit,
+    2026-12-02): searchsorted puts NaN after every knot and NaN is neither before the start nor
+    after the end, so a NaN time read as a time on the last segment -- while at(NaN) is NaN,
+    and acceleration(NaN) was 0 m/s^2. Now NaN rows for NaN times; other times unchanged."""
+    traj = waypoint_trajectory([[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]], 0.5)
+    v = traj.velocity([1.0, np.nan, 3.0, 5.0])
+    np.testing.assert_array_equal(v[[0, 2, 3]], [[0.0, 0.5, 0.0], [-0.5, 0.0, 0.0], [0.0] * 3])
+    assert np.all(np.isnan(v[1])) and np.all(np.isnan(traj.at(np.nan)))
+    assert np.all(np.isnan(traj.velocity(np.nan))) and np.all(np.isnan(traj.acceleration(np.nan)))

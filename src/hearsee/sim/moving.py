@@ -172,7 +172,9 @@ class Trajectory:
         return self.at(tq.ravel() - tau[0]).reshape(tq.shape + (3,))
 
     def velocity(self, times: ArrayLike) -> NDArray:
-        """Velocities ``(..., 3)`` in m/s at ``times`` (piecewise constant; zero outside)."""
+        """Velocities ``(..., 3)`` in m/s at ``times`` (piecewise constant; zero outside; NaN
+        at a NaN time where :meth:`at` is NaN -- it was the last segment's velocity,
+        2026-12-02)."""
         tq = _times(times)
         if self.t.size == 1:
             return np.zeros(tq.shape + (3,))
@@ -181,6 +183,7 @@ class Trajectory:
         v = v_seg[k]
         outside = (tq < self.t[0]) | (tq > self.t[-1])
         v[outside] = 0.0
+        v[np.isnan(tq)] = np.nan
         return v
 
     def acceleration(self, times: ArrayLike) -> NDArray:
