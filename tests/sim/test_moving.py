@@ -16,6 +16,7 @@ from hearsee.sim.moving import (
     retarded_delays,
     save_trajectory,
     simulate_moving_free_field,
+    simulate_moving_recording,
     simulate_moving_room,
     waypoint_trajectory,
 )
@@ -751,3 +752,18 @@ def test_velocity_at_a_nan_time_is_nan_as_the_position():
     np.testing.assert_array_equal(v[[0, 2, 3]], [[0.0, 0.5, 0.0], [-0.5, 0.0, 0.0], [0.0] * 3])
     assert np.all(np.isnan(v[1])) and np.all(np.isnan(traj.at(np.nan)))
     assert np.all(np.isnan(traj.velocity(np.nan))) and np.all(np.isnan(traj.acceleration(np.nan)))
+
+
+def test_a_trajectory_that_ends_before_the_recording_names_its_end():
+    """A trajectory at t = -1 .. -0.5 s without a duration was refused with "a one-point
+    trajectory needs an explicit duration" (found by an audit, 2026-12-02): it has two points,
+    and a one-point trajectory at t = 0.5 s gets a default duration. The message now names the
+    trajectory's end; an explicit duration of 0 says so."""
+    traj = Trajectory([-1.0, -0.5], [[1.0, 0.0, 0.0], [1.0, 0.5, 0.0]])
+    with pytest.raises(ConfigError, match=r"trajectory ends at t = -0.5 s") as exc:
+        simulate_moving_recording("three-mic", traj)
+    assert "one-point" not in str(exc.value)
+    with pytest.raises(ConfigError, match=r"duration must be > 0 s, got 0 s"):
+        simulate_moving_recording("three-mic", traj, duration_s=0.0)
+    x, truth = simulate_moving_recording("three-mic", Trajectory([0.5], [[1.0, 0.2, 0.0]]))
+    assert truth["duration_s"] == 0.5 and x.shape == (3, 8000)

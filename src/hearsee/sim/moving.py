@@ -790,8 +790,12 @@ def simulate_moving_recording(
         raise ConfigError(f"duration must be a number of seconds, got {duration_s!r:.60}")
     dur = float(trajectory.t[-1]) if duration_s is None else float(duration_s)
     if not dur > 0:
+        # (the hint blamed "a one-point trajectory" whatever the trajectory; what gives no
+        # default is one that ends at or before t = 0, the recording's start; 2026-12-02)
         raise ConfigError(
-            "duration must be > 0 s (a one-point trajectory needs an explicit duration)")
+            f"duration must be > 0 s, got {dur:g} s" if duration_s is not None else
+            f"the trajectory ends at t = {dur:g} s, at or before the recording's start (t = 0, "
+            "its first sample), so it gives no default duration: give one, or times from 0 s")
     if seed is not None:  # (-1 or 1.5 raised numpy's ValueError / TypeError)
         seed = whole_number("seed", seed, lo=0)
     fs = check_sim_fs(fs)
