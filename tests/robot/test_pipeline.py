@@ -343,6 +343,35 @@ def test_demo_refuses_export_over_an_input_or_an_existing_file_before_running(
     assert (out / "log.json").read_text(encoding="utf-8") == "[]"
 
 
+@pytest.mark.parametrize("option", ["--mcap", "--rerun"])
+@pytest.mark.parametrize("case", ["out", "above", "plots"])
+def test_demo_refuses_an_export_that_the_report_makes_a_folder(tmp_path, monkeypatch, capsys,
+                                                               option, case):
+    """--mcap / --rerun naming the --out folder (not there yet), a folder above it or its
+    plots/ passed the checks: the run made that folder and the export failed after the whole
+    run ('is a folder', the report written, exit 2; found by the 2026-12-02 robot audit).
+    Now refused before the scenario runs (the extra is faked as installed)."""
+    import hearsee.robot.pipeline as pipeline
+    from hearsee.robot import export
+
+    monkeypatch.setitem(export._EXTRAS, option[2:], ("json", "unused"))
+
+    def no_run(*a, **k):
+        raise AssertionError("the scenario ran although the export is refused")
+
+    monkeypatch.setattr(pipeline, "run_scenario", no_run)
+    monkeypatch.chdir(tmp_path)
+    out, target = {"out": ("rep", "rep"), "above": ("rep/sub", "rep"),
+                   "plots": ("rep", "rep/plots")}[case]
+    if case == "plots":
+        (tmp_path / "rep").mkdir()
+    assert main(["demo", "-o", out, "-q", option, target]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"hearsee: error: {option} {target}: the report (--out {out}) writes into "
+                   "this folder or makes it; choose a file name outside the report\n")
+    assert not (tmp_path / "rep" / "index.html").exists()
+
+
 def test_track_is_dropped_without_visual_fixes_even_when_nobody_speaks(monkeypatch):
     """The speaker talks for 1.2 s; from the fifth camera frame on the camera sees nobody.
     With neither sound nor sight, the 3D track must still be dropped TRACK_TIMEOUT_S after

@@ -130,13 +130,24 @@ def check_export_targets(exports: Sequence[tuple[str, str | Path | None]], repor
     path)`` (None paths skipped) is one of the run's own outputs -- one of the report's files
     (:func:`hearsee.robot.report.report_overwrites`) or the JSON lines file. The exports are
     written last and replaced them (an MCAP over log.json: a broken report), so this holds
-    with ``--force`` too. ``report_name`` names the folder in the message, e.g.
-    ``"--out hearsee-report"``. The one check of ``hearsee demo`` and ``hearsee run``."""
-    from hearsee.robot.report import report_overwrites
+    with ``--force`` too. So is an export path that the report makes a folder: the report
+    folder itself, its ``plots/`` or ``frames/``, or a folder above the report folder (until
+    2026-12-02 ``--mcap`` naming the ``--out`` folder that did not exist yet passed, the run
+    made the folder, and the export failed after the whole run: "is a folder").
+    ``report_name`` names the folder in the message, e.g. ``"--out hearsee-report"``. The
+    one check of ``hearsee demo`` and ``hearsee run``."""
+    from hearsee.robot.report import _REPORT_SUBFOLDERS, report_overwrites
 
+    folder = Path(report).resolve()
     for opt, p in exports:
         if p is None:
             continue
+        q = Path(p).resolve()
+        # (an existing folder: check_exports' "is a folder, expected an output file name")
+        if not q.is_dir() and (q == folder or q in folder.parents or (
+                q.parent == folder and q.name in _REPORT_SUBFOLDERS)):
+            raise ConfigError(f"{opt} {p}: the report ({report_name}) writes into this folder "
+                              "or makes it; choose a file name outside the report")
         if jsonl is not None and same_file(p, jsonl):
             raise ConfigError(f"{opt} {p} is the run's JSON lines file (output.jsonl "
                               f"{jsonl}); choose another path")
