@@ -204,6 +204,30 @@ def test_random_spec_bad_arguments(kw, name):
         random_spec(0, **kw)
 
 
+@pytest.mark.parametrize("kw, name", [({"n_people": 3}, "n_people"),
+                                      ({"n_human_like": (1,)}, "n_human_like"),
+                                      ({"n_furniture": None}, "n_furniture"),
+                                      ({"range_m": 5.0}, "range_m"),
+                                      ({"range_m": (1.0,)}, "range_m"),
+                                      ({"range_m": (1.0, 2.0, 3.0)}, "range_m")])
+def test_random_spec_counts_and_range_that_are_no_pair(kw, name):
+    """A count range or range_m given as one number, or with one or three items, let a
+    builtin TypeError / ValueError / IndexError escape (found by the 2026-12-02 robot audit,
+    p_scenes_bad.py); now a ConfigError naming it. Pairs give the same specs as before."""
+    with pytest.raises(ConfigError, match=f"{name} must be a pair"):
+        random_spec(0, **kw)
+    assert random_spec(5, n_people=[2, 2], range_m=np.array([1.0, 4.0])) == \
+        random_spec(5, n_people=(2, 2), range_m=(1.0, 4.0))
+
+
+def test_generate_scene_refuses_a_rig_that_is_not_one():
+    """generate_scene read rig.left before render_scene's rig check: a rig file's name gave
+    a builtin AttributeError ('str' object has no attribute 'left')."""
+    for bad in ("rig.yaml", 5):
+        with pytest.raises(ConfigError, match="StereoRig"):
+            generate_scene(0, rig=bad)
+
+
 def test_the_scene_rig_has_the_camera_height_it_was_rendered_at(tmp_path):
     """render_scene returned the caller's rig unchanged: rendered at 1.0 m with a rig made for
     1.4 m, scene.rig and write_scene's calib.yaml said 1.4 (truth.json 1.0), and a detector

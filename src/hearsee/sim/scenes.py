@@ -986,6 +986,17 @@ def _free(x: float, z: float, placed: list[tuple[float, float, float]], r: float
     return all(np.hypot(x - px, z - pz) >= r + pr for px, pz, pr in placed)
 
 
+def _pair(name: str, value: Any) -> tuple[Any, Any]:
+    """``value`` as its two items (low, high), else a ConfigError naming ``name``: a count or
+    range given as one number (``n_people=3``, ``range_m=5``) or with one item let a builtin
+    TypeError / ValueError / IndexError escape from random_spec."""
+    try:
+        lo, hi = value
+    except (TypeError, ValueError):
+        raise ConfigError(f"{name} must be a pair (low, high), got {value!r:.60}") from None
+    return lo, hi
+
+
 def random_spec(seed: int, *, n_people: tuple[int, int] = (1, 4),
                 n_human_like: tuple[int, int] = (0, 2), range_m: tuple[float, float] = (1.0, 8.0),
                 n_furniture: tuple[int, int] = (2, 5), hfov_deg: float = 65.0,
@@ -996,11 +1007,13 @@ def random_spec(seed: int, *, n_people: tuple[int, int] = (1, 4),
     (forward distance) inside the camera's horizontal field of view ``hfov_deg``; furniture,
     a radiator and sometimes a warm appliance stand along the walls or in the room.
     """
-    for name, (lo, hi) in (("n_people", n_people), ("n_human_like", n_human_like),
-                           ("n_furniture", n_furniture)):
+    for name, value in (("n_people", n_people), ("n_human_like", n_human_like),
+                        ("n_furniture", n_furniture)):
+        lo, hi = _pair(name, value)
         if whole_number(f"{name}[0]", lo, 0) > whole_number(f"{name}[1]", hi, 0):
             raise ConfigError(f"{name} must be an inclusive range (low, high) with low <= high, "
                               f"got {(lo, hi)}")
+    range_m = _pair("range_m", range_m)
     near = finite_number("range_m[0]", range_m[0], 0.0, lo_open=True)
     if not near <= finite_number("range_m[1]", range_m[1], 0.0, lo_open=True):
         raise ConfigError(f"range_m must be (near, far) metres with 0 < near <= far, got "
@@ -1087,6 +1100,9 @@ def generate_scene(seed: int, rig: StereoRig | None = None, **kwargs: Any) -> Sc
     the left camera's ``hfov_deg`` for a rig with another one (65 deg put a narrower rig's
     "people" outside its image).
     """
+    if rig is not None and not isinstance(rig, StereoRig):  # (rig.left: an AttributeError)
+        raise ConfigError(f"generate_scene: rig must be a StereoRig (see default_rig), got "
+                          f"{rig!r:.60}")
     if rig is not None and "hfov_deg" not in kwargs:
         hfov = rig.left.hfov_deg
         if abs(hfov - np.degrees(2.0 * np.arctan2(320.0, 500.0))) > _DEFAULT_VIEW_TOLERANCE_DEG:
