@@ -497,6 +497,28 @@ def test_demo_refuses_a_report_folder_that_is_a_file_before_running(tmp_path, mo
     assert f.read_text() == "mine\n"
 
 
+@pytest.mark.parametrize("sub", ["plots", "frames"])
+def test_demo_refuses_a_report_folder_whose_plots_or_frames_is_a_file(tmp_path, monkeypatch,
+                                                                      capsys, sub):
+    """A file named plots (or frames) in --out passed every check; after the whole scenario
+    write_report wrote log.json and summary.json and then failed to make the subfolder
+    ('File exists', exit 2; found by the 2026-12-02 robot audit). Now refused first."""
+    import hearsee.robot.pipeline as pipeline
+
+    def no_run(*a, **k):
+        raise AssertionError("the scenario ran although -o is refused")
+
+    monkeypatch.setattr(pipeline, "run_scenario", no_run)
+    out = tmp_path / "rep"
+    out.mkdir()
+    (out / sub).write_text("mine\n")
+    assert main(["demo", "-o", str(out), "-q"]) == 2
+    assert capsys.readouterr().err == (f"hearsee: error: --out {out}: {out / sub} is a file, "
+                                       "not a folder; choose a report folder\n")
+    assert sorted(p.name for p in out.iterdir()) == [sub]
+    assert (out / sub).read_text() == "mine\n"
+
+
 def test_demo_keeps_report_files_it_did_not_write_unless_forced(tmp_path, capsys):
     """--out pointed at a folder of the user's overwrote their index.html (and log.json,
     summary.json) without a word. Now refused unless --force; a folder holding an earlier

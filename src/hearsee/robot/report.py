@@ -35,11 +35,17 @@ _REPORT_SUBFOLDERS = ("plots", "frames")
 
 
 def report_folder_blocker(folder: str | Path) -> Path | None:
-    """The file that keeps :func:`write_report` from making ``folder`` -- the folder itself, or
-    one of its parents, is a file -- or None. Checked before a run (``hearsee demo -o``, a
-    robot file's ``output.report``), not found only once the whole run is done."""
+    """The file that keeps :func:`write_report` from making ``folder`` or writing into it --
+    the folder itself, one of its parents, or its ``plots`` or ``frames`` is a file -- or
+    None. Checked before a run (``hearsee demo -o``, a robot file's ``output.report``), not
+    found only once the whole run is done (a file named ``plots`` in the folder failed the
+    report after the run, with log.json and summary.json already written; until
+    2026-12-02)."""
     blocker = _nearest_existing(folder)
-    return blocker if blocker is not None and not blocker.is_dir() else None
+    if blocker is not None and not blocker.is_dir():
+        return blocker
+    return next((Path(folder) / sub for sub in _REPORT_SUBFOLDERS
+                 if (Path(folder) / sub).exists() and not (Path(folder) / sub).is_dir()), None)
 
 
 def _nearest_existing(folder: str | Path) -> Path | None:
