@@ -269,3 +269,31 @@ def test_rerun_save_error_keeps_the_existing_file(tmp_path, monkeypatch):
     assert path.read_bytes() == b"partial complete"
     assert len(events) == 1 and events[0][1] != str(path)  # (closed before the move)
     assert [p.name for p in tmp_path.iterdir()] == ["run.rrd"]
+
+
+def test_mcap_to_a_fifo_is_written_through_not_replaced(tmp_path):
+    """An export over an existing file is written beside it and moved over it; a FIFO (or a
+    device, e.g. /dev/null) was thereby replaced by a regular file: the pipe's reader got
+    nothing, and `hearsee demo --mcap /dev/null --force` run as root turned /dev/null into a
+    20 MB file (found by the 2026-12-02 robot audit). Such a target is now written to."""
+    import os
+    import stat
+
+    pytest.importorskip("mcap_ros2")
+    if not hasattr(os, "mkfifo"):
+        pytest.skip("no FIFOs on this system")
+    fifo = tmp_path / "run.mcap"
+    os.mkfifo(fifo)
+    fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # (a reader, so the writer can open)
+    try:
+        log = [{"t": 0.2 * k, "head_pan_deg": 10.0 * k, "truth": {"position_m": [1, 2, 1.1]},
+                "track": None} for k in range(3)]
+        write_mcap(fifo, log)
+        data = b""
+        while chunk := os.read(fd, 65536):
+            data += chunk
+    finally:
+        os.close(fd)
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    assert data.startswith(b"\x89MCAP0\r\n") and data.endswith(b"\x89MCAP0\r\n")  # whole
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.mcap"]

@@ -89,6 +89,25 @@ def _overlay_bgr(img: np.ndarray, t: float) -> np.ndarray:
     return np.repeat(img[:, :, None], 3, axis=2) if img.ndim == 2 else img
 
 
+class _Positioned:
+    """A write-only stream that counts its bytes for ``tell()``: the MCAP writer asks for its
+    position, which a FIFO cannot tell (OSError: Illegal seek)."""
+
+    def __init__(self, fh: Any) -> None:
+        self.fh, self.n = fh, 0
+
+    def write(self, data: bytes) -> int:
+        self.fh.write(data)
+        self.n += len(data)
+        return len(data)
+
+    def tell(self) -> int:
+        return self.n
+
+    def flush(self) -> None:
+        self.fh.flush()
+
+
 @contextlib.contextmanager
 def _replacing(path: Path) -> Iterator[Path]:
     """A temporary file name beside ``path`` (its folder: the same file system) for an export
@@ -96,8 +115,15 @@ def _replacing(path: Path) -> Iterator[Path]:
     ``path`` in one step (``os.replace``, keeping the permissions of a file it replaces),
     and on any error it is removed and ``path`` is left as it was. An export that failed part
     way (a frame it could not describe, a full disk, Ctrl-C) truncated the previous file
-    and left a corrupt one. A symlink's target is replaced, as writing through it did."""
+    and left a corrupt one. A symlink's target is replaced, as writing through it did. An
+    existing target that is no regular file -- a FIFO another program reads, a device such
+    as ``/dev/null`` -- is yielded itself and written through: until 2026-12-02 it was
+    replaced by a regular file (``--mcap /dev/null --force`` run as root turned the
+    system's /dev/null into a 20 MB file; a pipe's reader got nothing)."""
     target = Path(os.path.realpath(path))
+    if target.exists() and not target.is_file():
+        yield target
+        return
     tmp = target.with_name(f".{target.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
     try:
         yield tmp
@@ -168,8 +194,9 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
     except ImportError:
         raise ConfigError(_EXTRAS["mcap"][1]) from None
     p = output_file(path)
-    with _replacing(p) as tmp, open(tmp, "xb") as fh:
-        w = Writer(fh)
+    # ("xb": a fresh temporary file; "wb" where the target is written through, a FIFO)
+    with _replacing(p) as tmp, open(tmp, "wb" if tmp.exists() else "xb") as fh:
+        w = Writer(fh if tmp.is_file() else _Positioned(fh))
         s_point = w.register_msgdef("geometry_msgs/msg/PointStamped", _POINT_STAMPED)
         s_image = w.register_msgdef("sensor_msgs/msg/Image", _IMAGE)
         s_float = w.register_msgdef("std_msgs/msg/Float64", _FLOAT64)
