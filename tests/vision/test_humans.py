@@ -272,6 +272,64 @@ def test_silhouettes_cut_by_the_image_border_are_flagged():
     assert sum(g.truncated for g in segs if g.position_m[2] < 2.0) == 1
 
 
+def test_people_nearer_than_the_disparity_search_are_flagged():
+    """A person facing the camera 0.95 m away (640x480, f B = 60 px m): the default search of
+    64 disparities ends at 0.95 m, so the front of the body gets the search's last disparity
+    or none, 47 % of the silhouette's box is unmatched and its torso centre comes out 14 cm
+    off (a robot's track turned around on such a fix). The detection says so
+    (beyond_search); with 96 disparities the same person is seen whole, 2 cm off, and not
+    flagged. 1.05 m away the body reaches the search's end too (27 % of the silhouette) but
+    is whole (11 % unmatched, as people in full view) and 2 cm off: not flagged."""
+    rig = default_rig()
+    for z, nd, flagged in ((0.95, 64, True), (0.95, 96, False), (1.05, 64, False)):
+        sc = render_scene(SceneSpec(entities=[Entity("person", 0.0, z, 0.0, 1.75)],
+                                    depth_m=6.0, seed=3), rig)
+        res = detect_humans(sc.left, sc.right, rig, sc.thermal_c,
+                            stereo_options={"num_disparities": nd})
+        assert res.frame.search_px == (0.0, nd - 1.0)
+        truth = sc.people[0].position_m
+        near = [h for h in res.humans if np.linalg.norm(h.position_m - truth) < 0.3]
+        assert len(near) == 1
+        err = np.linalg.norm(near[0].position_m - truth)
+        assert near[0].beyond_search == flagged
+        assert near[0].to_dict()["beyond_search"] == flagged
+        assert (err > 0.1) if flagged else (err < 0.03)
+
+
+def test_search_end_shares_on_known_maps():
+    """near_search_share and unmatched_share on a hand-made disparity map: a 10x10 box whose
+    mask covers its left half; of the mask's 50 pixels 10 hold the search's end (63 px), 5
+    are NaN (not counted) and the rest 50 px; the right half holds 20 NaN and 5 zero pixels."""
+    from hearsee.vision.humans import BodySegment, near_search_share, unmatched_share
+
+    d = np.full((20, 30), 40.0, np.float32)
+    box = [5, 4, 10, 10]
+    sub = d[4:14, 5:15]
+    sub[:, :5] = 50.0
+    sub[0:2, :5] = 63.0  # 10 pixels at the end of the search
+    sub[2, :5] = np.nan  # 5 unmatched pixels inside the mask
+    sub[5:9, 5:10] = np.nan  # 20 unmatched pixels outside it
+    sub[9, 5:10] = 0.0  # 5 more
+    mask = np.zeros((10, 10), bool)
+    mask[:, :5] = True
+    seg = BodySegment(box, mask, np.zeros((1, 3)), np.zeros(1), 1.0, 1.7, 0.4, np.zeros(3))
+    assert near_search_share(d, seg, 63.0) == pytest.approx(10 / 45)
+    assert near_search_share(d, seg, 63.4) == pytest.approx(10 / 45)  # within half a pixel
+    assert near_search_share(d, seg, 63.6) == 0.0
+    assert unmatched_share(d, box) == pytest.approx(30 / 100)
+
+
+def test_search_end_must_be_a_positive_number_of_pixels(small_scene):
+    """detect_candidates' search_max_px: NaN switched the test off, 0 or a negative value
+    rejected everyone."""
+    rect = small_scene.rig.rectification
+    pts = points_from_disparity(small_scene.disparity, rect.Q)
+    for bad in (float("nan"), 0.0, -5.0, "63"):
+        with pytest.raises(ConfigError, match="search_max_px"):
+            detect_candidates(small_scene.disparity, pts, rect.focal_px, rect.baseline_m,
+                              rect.cy, camera_height_m=1.4, search_max_px=bad)
+
+
 def test_detect_candidates_bad_shapes():
     with pytest.raises(ImageInputError):
         detect_candidates(np.zeros((10, 10)), np.zeros((10, 11, 3)), F, B, 5.0)

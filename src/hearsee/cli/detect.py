@@ -37,11 +37,14 @@ def detect_cmd(
     """Detect humans: stereo candidates (P(y,d), head-shoulder template) confirmed by thermal.
 
     Prints {"humans": [{"box": [x, y, w, h], "position_m": [x, y, z], "score", "thermal_support",
-    "truncated"}], "rejected": [...]}: boxes in rectified left-image pixels (the image --overlay
-    writes; the same as the raw left image only for a distortion-free, already rectified rig),
-    positions in metres in the left camera's own optical frame (x right, y down, z forward);
+    "truncated", "beyond_search"}], "rejected": [...]}: boxes in rectified left-image pixels
+    (the image --overlay writes; the same as the raw left image only for a distortion-free,
+    already rectified rig), positions in metres in the left camera's own optical frame
+    (x right, y down, z forward);
     "truncated": the silhouette is cut by the top, left or right image border, so its position
-    and height describe the visible part only.
+    and height describe the visible part only; "beyond_search": part of the person stands
+    nearer than the disparity search reaches (0.95 m with the default 64 disparities at
+    f B = 60 px m) and the silhouette is broken up, so its position may be tens of cm off.
     """
     from hearsee.vision.camera import load_rig
     from hearsee.vision.fusion import detect_humans, draw_detections
@@ -94,11 +97,15 @@ def detect_cmd(
                 p = h.position_m
                 typer.echo(f"{kind:9s}{x:5d}{y:5d}{w:5d}{hh:5d}  {p[0]:7.2f}{p[1]:7.2f}{p[2]:7.2f}"
                            f"  {h.score:5.2f} {sup:>7s}  {h.reason}"
-                           f"{' (cut by the image border)' if h.truncated else ''}")
+                           f"{' (cut by the image border)' if h.truncated else ''}"
+                           f"{_BEYOND if h.beyond_search else ''}")
         typer.echo(f"{len(res.humans)} human(s), {len(res.rejected)} rejected candidate(s)")
         return
     emit_json(res.to_dict())
 
+
+#: The table's note on a detection flagged beyond_search.
+_BEYOND = " (nearer than the disparity search: position unreliable)"
 
 #: Below this share of stereo-matched pixels ``hearsee detect`` warns. Simulated scenes match
 #: 0.91-0.96 of their pixels, the same scenes with left and right swapped 0.18-0.22 (seeds 0-3).

@@ -53,7 +53,8 @@ __all__ = [
     "thermal_support",
 ]
 
-#: Disparity options used by the detector (64 disparities: people from ~0.95 m at f B = 60 px m).
+#: Disparity options used by the detector (64 disparities: people from ~0.95 m at f B = 60 px m;
+#: nearer ones are flagged Human.beyond_search when their silhouette is broken up).
 DEFAULT_STEREO_OPTIONS: dict[str, Any] = {"num_disparities": 64, "block_size": 3}
 
 
@@ -66,7 +67,9 @@ class Human:
     head-shoulder score; ``thermal_support`` in [0, 1] (None without a thermal image, NaN when
     the thermal camera does not see the candidate); ``reason`` why it was rejected (empty when
     accepted); ``truncated`` when the silhouette is cut by the top, left or right image border,
-    so that its position and height describe the visible part only
+    so that its position and height describe the visible part only; ``beyond_search`` when
+    part of the body stands nearer than the disparity search reaches and the silhouette is
+    broken up, so that its position may be tens of cm off
     (:class:`~hearsee.vision.humans.BodySegment`).
     """
 
@@ -78,6 +81,7 @@ class Human:
     accepted: bool
     reason: str = ""
     truncated: bool = False
+    beyond_search: bool = False
 
     @property
     def distance_m(self) -> float:
@@ -93,6 +97,7 @@ class Human:
             "thermal_support": (None if self.thermal_support is None else
                                 round(float(self.thermal_support), 3)),
             "truncated": bool(self.truncated),
+            "beyond_search": bool(self.beyond_search),
         }
         if not self.accepted:
             d["reason"] = self.reason
@@ -194,7 +199,7 @@ def _to_human(c: HumanCandidate, support: float | None, accepted: bool, reason: 
     seg = c.segment
     assert seg is not None
     return Human(list(seg.box), seg.position_m, c.score, support, seg.top_m, accepted, reason,
-                 seg.truncated)
+                 seg.truncated, seg.beyond_search)
 
 
 def classify_candidates(det: StereoDetection, rig: StereoRig, rect: Rectification,
@@ -299,7 +304,8 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
     frame = stereo_frame(left, right, rig, **opts)
     rect = frame.rectification
     det = detect_candidates(frame.disparity, frame.points(), frame.focal_px, frame.baseline_m,
-                            rect.cy, camera_height_m=camera_height_m, params=params)
+                            rect.cy, camera_height_m=camera_height_m, params=params,
+                            search_max_px=frame.search_px[1])
     warm = None
     if th is not None:
         warm = thermal_mask(th, band_c=band_c)

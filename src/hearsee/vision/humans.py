@@ -65,12 +65,14 @@ from hearsee.vision.io import as_detector_image, bool_mask, numeric_map
 from hearsee.vision.stereo import check_focal_baseline
 
 __all__ = [
+    "BROKEN_BOX_SHARE",
     "BodySegment",
     "FLOOR_BELOW_M",
     "FloorPlane",
     "HumanCandidate",
     "HumanDetectorParams",
     "MAX_DISPARITY_PX",
+    "NEAR_SEARCH_SHARE",
     "StereoDetection",
     "TOP_PERCENTILE",
     "check_camera_height",
@@ -84,11 +86,13 @@ __all__ = [
     "find_peaks",
     "head_shoulder_score",
     "hog_people_detector",
+    "near_search_share",
     "robust_top_m",
     "scale_adaptive_filter",
     "segment_band_m",
     "segment_body",
     "u_disparity",
+    "unmatched_share",
     "upper_contour",
 ]
 
@@ -120,6 +124,26 @@ FLOOR_BELOW_M = 0.12
 #: Percentile of a silhouette's point heights taken as its top (:func:`robust_top_m`): one
 #: stray point in 200 does not move it.
 TOP_PERCENTILE = 99.5
+
+#: A silhouette with at least this share of its valid disparities at the largest disparity the
+#: matcher searched (:func:`near_search_share`) reaches the end of the search: part of the body
+#: stands nearer than the search reaches, and SGBM gives it that disparity or none. People in
+#: full view of the search had shares 0-0.003, those at its end 0.05-0.75 (counted within 1 px
+#: of the end; bench/robot dev scenarios 200-239, 64 disparities at f B = 60 px m: torso
+#: centres 1.04-1.12 m away).
+NEAR_SEARCH_SHARE = 0.05
+#: ... and at least this share of the pixels of its box without a disparity, the silhouette is
+#: broken up: the body's nearer parts are not in it, and its position and height describe a
+#: remainder (:attr:`BodySegment.beyond_search`). On bench/robot dev scenarios 200-239,
+#: silhouettes at the search end with <= 29 % of their box unmatched were 1.1-8 cm off (the
+#: body stood just beyond the search); with >= 43 %, 11-52 cm (the body nearer still: heads
+#: lost, torsos placed low; a robot track turned around on one such fix, seed 16). People in
+#: full view of the search: 7-13 %. Such silhouettes are flagged, not rejected: rejecting
+#: them (or every silhouette at the search end) lowered the robot's mean position p90 by
+#: 43-46 % on held-out scenarios but made single scenarios worse by 10-40 cm (new tracks
+#: left coasting without their next fixes), which its adoption rule did not allow
+#: (2026-12-02).
+BROKEN_BOX_SHARE = 0.4
 
 #: The largest ``max_disparity`` :func:`u_disparity` accepts, pixels: far beyond any matcher
 #: (OpenCV's SGBM stores disparities as 16 x int16, at most 2047 px), small enough that the
@@ -591,7 +615,11 @@ class BodySegment:
     left or right border of the image (a person close to the camera, or not yet centred), so
     its ``top_m`` and ``position_m`` describe the visible part only (the torso centre is
     biased toward it: 0.2-0.3 m in bench/robot's seed 16). Feet cut by the bottom border
-    (usual at close range) leave the torso in view and do not count."""
+    (usual at close range) leave the torso in view and do not count. ``beyond_search``: part
+    of the body stands nearer than the disparity search reaches and the silhouette is broken
+    up (:data:`NEAR_SEARCH_SHARE`, :data:`BROKEN_BOX_SHARE`; set by
+    :func:`detect_candidates` when it knows the search), so its position may be tens of cm
+    off: widen the search (``num_disparities``)."""
 
     box: list[int]
     mask: NDArray
@@ -602,6 +630,7 @@ class BodySegment:
     width_m: float
     position_m: NDArray
     truncated: bool = False
+    beyond_search: bool = False
 
     @cached_property
     def extent_m(self) -> float:
@@ -970,7 +999,8 @@ class StereoDetection:
 def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, baseline_m: float,
                       cy: float, *, floor: FloorPlane | None = None,
                       camera_height_m: float | None = None,
-                      params: HumanDetectorParams | None = None) -> StereoDetection:
+                      params: HumanDetectorParams | None = None,
+                      search_max_px: float | None = None) -> StereoDetection:
     """Stereo-only human detection (7.2): P(y,d) -> Psi-hat -> peaks -> segmentation ->
     head-shoulder verification.
 
@@ -982,6 +1012,13 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     floor : the floor plane; estimated (RANSAC, prior ``camera_height_m``) when None.
     camera_height_m : height of the camera above the floor, metres (finite, > 0).
     params : :class:`HumanDetectorParams`.
+    search_max_px : the largest disparity the matcher searched, pixels
+        (:attr:`hearsee.vision.stereo.StereoFrame.search_px`; None: not known). A silhouette
+        reaching it (:func:`near_search_share` >= :data:`NEAR_SEARCH_SHARE`) and broken up
+        (:func:`unmatched_share` of its box >= :data:`BROKEN_BOX_SHARE`) is flagged
+        :attr:`BodySegment.beyond_search`: its position and height describe a remainder.
+        ``params.min_range_m`` says where people may stand; this says where the matcher
+        can still see them (64 disparities at f B = 60 px m: 0.95 m).
 
     CalibrationError for a focal length or baseline that is not finite and > 0 or a
     non-finite ``cy``; GeometryError for a camera height that is not finite and > 0 or a
@@ -996,6 +1033,8 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     check_principal_row(cy)
     check_camera_height(camera_height_m)
     p = check_params(params)
+    if search_max_px is not None:
+        search_max_px = finite_number("search_max_px", search_max_px, 0.0, lo_open=True)
     d = numeric_map("disparity", disparity, np.float32)
     points = _point_image(points)
     if d.ndim != 2 or points.shape != (*d.shape, 3):
@@ -1045,9 +1084,13 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
         seg = segment_body(col, float(disp), d, points, heights, floor, focal_px, baseline_m,
                            cy, params=p)
         c = HumanCandidate(col, disp, val, seg)
+        near = (near_search_share(d, seg, search_max_px)
+                if seg is not None and search_max_px is not None else 0.0)
         if seg is None:
             c.reason = "empty segmentation"
         else:
+            holes = unmatched_share(d, seg.box) if near >= NEAR_SEARCH_SHARE else 0.0
+            seg.beyond_search = holes >= BROKEN_BOX_SHARE
             if not p.min_top_m <= seg.top_m <= p.max_top_m:
                 c.reason = f"height {seg.top_m:.2f} m outside [{p.min_top_m}, {p.max_top_m}]"
             elif seg.extent_m < p.min_extent_m:
@@ -1068,6 +1111,28 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
     # one silhouette may yield two peaks (e.g. arms): drop accepted duplicates
     _dedupe(cands)
     return StereoDetection(cands, floor, P, psi, heights)
+
+
+def near_search_share(disparity: NDArray, segment: BodySegment, search_max_px: float) -> float:
+    """The share of a silhouette's valid disparities (pixels of ``disparity`` under
+    ``segment``'s mask, finite and > 0) at the end of the matcher's search, within half a
+    pixel of ``search_max_px``, its largest disparity: SGBM answers a surface nearer than the
+    search with that disparity (or none), so this is the part of the silhouette that may
+    stand nearer than the search reaches (:data:`NEAR_SEARCH_SHARE`). 0 for a silhouette
+    without a valid disparity."""
+    x, y, w, h = segment.box
+    v = np.asarray(disparity)[y:y + h, x:x + w][segment.mask]
+    v = v[np.isfinite(v) & (v > 0)]
+    return float(np.mean(v >= search_max_px - 0.5)) if v.size else 0.0
+
+
+def unmatched_share(disparity: NDArray, box: Sequence[int]) -> float:
+    """The share of the pixels of ``box`` [x, y, w, h] (pixels) in ``disparity`` without a
+    disparity (NaN or <= 0): how broken up a silhouette at the end of the search is
+    (:data:`BROKEN_BOX_SHARE`)."""
+    x, y, w, h = box
+    v = np.asarray(disparity)[y:y + h, x:x + w]
+    return float(np.mean(~(np.isfinite(v) & (v > 0)))) if v.size else 1.0
 
 
 def _iou(a: list[int], b: list[int]) -> float:
