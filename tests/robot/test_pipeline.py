@@ -222,8 +222,8 @@ def test_new_tracks_log_an_unknown_velocity(seed16_run):
     "for TRACK_TIMEOUT_S: p90 0.77 m, velocity RMSE 0.63 m/s. A height gate on the track fixed "
     "it (0.09 m) but failed the held-out rule's per-scenario harm check (2026-12-02 note). The "
     "detector now flags that fix beyond_search (vision.humans.BROKEN_BOX_SHARE); the robot "
-    "does not act on the flag: rejecting such fixes gave 0.09 m here and -43 % mean p90 on "
-    "held-out scenarios, but single scenarios 10-15 cm worse (2026-12-02, forty-fifth note)"))
+    "does not act on the flag: rejecting such fixes gave 0.09 m here and -46 % mean p90 on "
+    "120 held-out scenarios, but 3 of them 8-15 cm worse (2026-12-02, forty-fifth note)"))
 def test_track_does_not_run_away_while_the_person_is_too_close_to_see(seed16_run):
     """Random scenario 16 (the simulator's ground truth): the person passes 0.6-0.9 m from the
     robot, where the stereo detector loses them, and the track coasts until TRACK_TIMEOUT_S.
