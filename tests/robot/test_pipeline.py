@@ -325,6 +325,30 @@ def test_rendered_people_face_the_robot_or_along_their_path():
     assert walker.yaw_deg == pytest.approx(90.0)
 
 
+def test_rendered_objects_face_the_robot_turned_by_their_yaw():
+    """An object faces the robot turned by its yaw_deg; a poster (rendered at 0.3 of its
+    entity's yaw) by 0.3 of it. The fraction scaled the turn toward the robot too, so a
+    poster of yaw_deg 0 behind the robot (room -x) faced 126 deg away from it and the robot
+    saw its back (found by the 2026-12-02 robot audit, p_poster.py: 22 of the 73 posters of
+    random scenarios 0-199). The angle is measured on the rendered yaw, which the scene's
+    truth reports (a yaw psi faces (-sin psi, -cos psi) in frame S's (x, z))."""
+    from hearsee.robot.pipeline import _Body, _entities
+    from hearsee.sim.scenes import _rendered_yaw_deg
+
+    objects = [{"kind": k, "position_m": xy, "yaw_deg": yaw}
+               for k in ("poster", "mannequin", "coat")
+               for xy in ([1.5, 2.6], [3.5, 5.0], [5.5, 1.0]) for yaw in (0.0, 30.0)]
+    sc = scenario_from_dict({**SHORT, "objects": objects})
+    body = _Body(sc, sc.robot.array)
+    for o, e in zip(objects, _entities(sc, body, 1.0)[1:], strict=True):
+        psi = np.radians(_rendered_yaw_deg(e))
+        facing = np.array([-np.sin(psi), -np.cos(psi)])
+        to_robot = -np.array([e.x, e.z]) / np.hypot(e.x, e.z)
+        turn = np.degrees(np.arccos(np.clip(facing @ to_robot, -1.0, 1.0)))
+        expected = o["yaw_deg"] * (0.3 if o["kind"] == "poster" else 1.0)
+        assert turn == pytest.approx(expected, abs=1e-6), o
+
+
 def test_demo_checks_the_export_extra_before_running(tmp_path, monkeypatch, capsys):
     """--mcap without its extra fails before the scenario runs: no report is written."""
     from hearsee.robot import export

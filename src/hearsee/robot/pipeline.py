@@ -302,8 +302,13 @@ def frame_noise_seed(seed: int, index: int) -> int:
 
 
 def _entities(sc: Scenario, body: _Body, t: float) -> list[Any]:
-    """People and objects at time t as renderer entities (frame S)."""
-    from hearsee.sim.scenes import Entity
+    """People and objects at time t as renderer entities (frame S). An object faces the robot
+    turned by its ``yaw_deg``; a poster by :data:`hearsee.sim.scenes._POSTER_YAW_FRACTION` of
+    it, the renderer's rule for posters (until 2026-12-02 that fraction scaled the whole yaw,
+    the turn toward the robot included: a poster of yaw_deg 0 behind the room's +x faced up
+    to 126 deg away from the robot, and 22 of the 73 posters of random scenarios 0-199 showed
+    the robot their back)."""
+    from hearsee.sim.scenes import _POSTER_YAW_FRACTION, Entity
 
     P0 = body.pivot_w
 
@@ -321,8 +326,10 @@ def _entities(sc: Scenario, body: _Body, t: float) -> list[Any]:
                            p.height_m))
     for o in sc.objects:
         x, z = to_s(o.position_m)
-        ents.append(Entity(_OBJECT_KIND[o.kind], x, z, facing_robot_yaw(x, z) + o.yaw_deg,
-                           o.height_m))
+        toward = facing_robot_yaw(x, z)
+        if o.kind == "poster":  # (rendered at _POSTER_YAW_FRACTION of the entity's yaw)
+            toward /= _POSTER_YAW_FRACTION
+        ents.append(Entity(_OBJECT_KIND[o.kind], x, z, toward + o.yaw_deg, o.height_m))
     return ents
 
 

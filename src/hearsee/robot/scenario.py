@@ -35,6 +35,8 @@ Schema (defaults in brackets)::
       silent or empty ``speaking`` is refused, as the robot would have nothing to turn to)
     objects:                       [a mannequin]
       - {kind: mannequin|poster|coat, position_m: [x, y], yaw_deg [0], height_m [1.75]}
+      (yaw_deg: the turn away from facing the robot, degrees; a poster, a flat cut-out, is
+      turned by 0.3 of it, as hearsee.sim.scenes renders posters)
 
 Every waypoint and object keeps ``WALL_CLEARANCE_M`` from the walls, every person and object
 is lower than the ceiling, and every path (each segment between waypoints) and object keeps
