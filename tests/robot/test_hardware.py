@@ -211,6 +211,10 @@ def test_side_by_side_stereo_device(small_rig):
     (_with(cameras={"right": None}), "cameras.right", "missing"),
     (_with(cameras={"stereo": 0}), "cameras", "either left + right or one side-by-side"),
     (_with(cameras={"rate_hz": 0}), "cameras.rate_hz", ">= 0.1"),
+    (_with(cameras={"num_disparities": 0}), "cameras.num_disparities", ">= 1"),
+    (_with(cameras={"num_disparities": 2.5}), "cameras.num_disparities", "integer >= 1"),
+    (_with(cameras={"num_disparities": "96"}), "cameras.num_disparities", "integer >= 1"),
+    (_with(cameras={"num_disparities": 4000}), "cameras.num_disparities", "beyond"),
     (_with(cameras={"left": -1}), "cameras.left", ">= 0"),
     (_with(head={"driver": "serial"}), "head.driver", "not supported"),
     (_with(head={"pivot_m": [0, 0]}), "head.pivot_m", "expected shape 3"),
@@ -299,6 +303,19 @@ def test_outputs_never_overwrite_inputs(small_rig):
              small_rig / "out" / "summary.json")
     with pytest.raises(ConfigError, match=r"output\.report: writing .* would overwrite"):
         load_robot_config(make_config(small_rig, _with(cameras={"calib": "out/summary.json"})))
+
+
+def test_the_matchers_search_is_set_by_the_robot_file(small_rig):
+    """cameras.num_disparities reaches the live loop's detector as its stereo option (a live
+    robot could not widen the search that Human.beyond_search points to); without it the
+    detector keeps its defaults. The small rig's images are 160 px wide: 96 disparities fit,
+    170 (rounded up to 176: a search to 175 px) does not."""
+    cfg = load_robot_config(make_config(small_rig, _with(cameras={"num_disparities": 96})))
+    assert cfg.cameras.num_disparities == 96
+    assert cfg.cameras.stereo_options() == {"num_disparities": 96}
+    assert load_robot_config(make_config(small_rig, _with())).cameras.stereo_options() is None
+    with pytest.raises(ConfigError, match="up to 175 px, beyond the 160-pixel-wide images"):
+        load_robot_config(make_config(small_rig, _with(cameras={"num_disparities": 170})))
 
 
 def test_documented_example_file_is_valid(small_rig):

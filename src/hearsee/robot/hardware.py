@@ -30,6 +30,9 @@ Schema (defaults in brackets)::
       calib: rig.yaml                   required: rig YAML from `hearsee calibrate` (with a
                                         thermal block when `thermal` is given)
       rate_hz: 2                        [2]    human detection rate, frames per second
+      num_disparities: 96               [64]   the stereo matcher's search, pixels: people
+                                        nearer than f B / (num_disparities - 1) are flagged
+                                        beyond_search (64 at f B = 60 px m: 0.95 m)
       mount_m: [0.05, 0.06, 0.10]       [[0, 0, 0]]  left camera's optical centre from the
                                         head pivot, head frame (x fwd, y left, z up), metres;
                                         the cameras look along the head's +x axis
@@ -127,7 +130,8 @@ __all__ = [
 DRIVERS = ("none",)
 _TOP = ("audio", "cameras", "head", "output")
 _AUDIO = ("device", "fs", "channels", "array", "block_ms", "frame_ms", "method")
-_CAMERAS = ("left", "right", "stereo", "thermal", "calib", "rate_hz", "mount_m")
+_CAMERAS = ("left", "right", "stereo", "thermal", "calib", "rate_hz", "mount_m",
+            "num_disparities")
 _HEAD = ("pivot_m", "offset_m", "pan_limits_deg", "tilt_limits_deg", "pose_deg", "driver")
 _OUTPUT = ("jsonl", "report")
 DeviceSpec = int | str
@@ -166,8 +170,9 @@ class AudioConfig:
 @dataclass(frozen=True)
 class CameraConfig:
     """Cameras: ``left``/``right`` or one side-by-side ``stereo`` device, optional ``thermal``,
-    the calibrated ``rig`` (from ``calib``), the detection ``rate_hz`` and the left camera's
-    ``mount_m`` (head frame, metres)."""
+    the calibrated ``rig`` (from ``calib``), the detection ``rate_hz``, the left camera's
+    ``mount_m`` (head frame, metres) and the matcher's ``num_disparities`` (None: the
+    detector's default, :data:`hearsee.vision.fusion.DEFAULT_STEREO_OPTIONS`)."""
 
     left: DeviceSpec | None
     right: DeviceSpec | None
@@ -177,6 +182,12 @@ class CameraConfig:
     rig: Any  # hearsee.vision.camera.StereoRig
     rate_hz: float = 2.0
     mount_m: NDArray = field(default_factory=lambda: np.zeros(3))
+    num_disparities: int | None = None
+
+    def stereo_options(self) -> dict[str, Any] | None:
+        """The disparity options the live loop's detector gets (None: its defaults)."""
+        return None if self.num_disparities is None else {
+            "num_disparities": self.num_disparities}
 
     def devices(self) -> dict[str, DeviceSpec]:
         """``{"cameras.left": spec, ...}`` of the devices to open."""
@@ -404,8 +415,21 @@ def _cameras(d: Mapping[str, Any], where: str, base: Path) -> CameraConfig:
 
     mount = check_camera_mount(d.get("mount_m", [0.0, 0.0, 0.0]), f"{where}.mount_m",
                                ConfigError)
+    nd = d.get("num_disparities")
+    if nd is not None:  # checked here, not by the first detection of a live run
+        from hearsee.vision.stereo import search_range_px
+
+        try:
+            nd = whole_number("num_disparities", nd, 1)
+            hi = search_range_px(rig.left.size[0], nd)[1]
+        except HearseeError as exc:
+            raise ConfigError(f"{where}.num_disparities: {exc}") from None
+        if hi >= min(rig.left.size[0], 2048):
+            raise ConfigError(f"{where}.num_disparities: {nd} searches disparities up to "
+                              f"{hi:g} px, beyond the {rig.left.size[0]}-pixel-wide images "
+                              "(or SGBM's 2047)")
     return CameraConfig(dev["left"], dev["right"], dev["stereo"], dev["thermal"], calib, rig,
-                        rate, mount)
+                        rate, mount, nd)
 
 
 def _pair(d: Mapping[str, Any], key: str, default: tuple[float, float], where: str
@@ -1329,7 +1353,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
 
         thermal = fr.thermal if rig.thermal is not None else None
         return detect_humans(fr.left, fr.right, rig, thermal,
-                             camera_height_m=float(g.cam_centre[2]))
+                             camera_height_m=float(g.cam_centre[2]),
+                             stereo_options=cfg.cameras.stereo_options())
 
     def apply(t: float, t_cap: float, fr: CameraFrames, det: Any, bearing: float | None,
               g: _Head) -> list[dict[str, Any]]:
