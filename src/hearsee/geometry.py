@@ -33,6 +33,7 @@ __all__ = [
     "array_to_robot",
     "as_pose",
     "cart_to_sph",
+    "check_angle_limits",
     "check_camera_mount",
     "check_head_offset",
     "check_head_pivot",
@@ -304,6 +305,22 @@ def check_head_pivot(pivot_m: Any, what: str = "pivot_m",
 #: A camera's optical centre is at most this far (metres) from the head pivot (the robot file's
 #: ``cameras.mount_m``, head frame).
 MAX_CAMERA_MOUNT_M = 2.0
+
+
+def check_angle_limits(limits_deg: Any, where: str, bound: float,
+                       error: type[Exception] = GeometryError) -> tuple[float, float]:
+    """``limits_deg`` as ``(min, max)`` degrees with ``-bound <= min < max <= bound`` (two
+    real numbers), else ``error`` naming ``where``: the one rule of a head's pan limits
+    (bound 180) and tilt limits (bound 90; + = gaze up), for the robot file
+    (:func:`hearsee.robot.hardware.tilt_limits_deg`) and the alignment loops of
+    :mod:`hearsee.audio.active` alike."""
+    try:
+        lo, hi = limits_deg
+    except (TypeError, ValueError):
+        raise error(f"{where}: expected [min, max] in degrees, got {limits_deg!r}") from None
+    if not (is_real(lo) and is_real(hi) and -bound <= lo < hi <= bound):
+        raise error(f"{where}: need {-bound:g} <= min < max <= {bound:g}, got [{lo}, {hi}]")
+    return float(lo), float(hi)
 
 
 def check_camera_mount(mount_m: Any, what: str = "mount_m",

@@ -83,6 +83,7 @@ from hearsee.geometry import (
     angle_between,
     as_point,
     as_pose,
+    check_angle_limits,
     check_head_offset,
     check_head_pivot,
     direction_deg,
@@ -1112,11 +1113,7 @@ def _alignment_settings(max_moves: Any, tol_deg: Any, probe_deg: Any,
     whole_number("max_moves", max_moves, 0, error=GeometryError)
     finite_number("tol_deg", tol_deg, 0.0, lo_open=True, error=GeometryError)
     finite_number("probe_deg", probe_deg, 0.0, lo_open=True, error=GeometryError)
-    lim = as_float_array(tilt_limits_deg, "tilt_limits_deg", finite=False, error=GeometryError)
-    if lim.shape != (2,) or not (np.all(np.isfinite(lim)) and -90.0 <= lim[0] < lim[1] <= 90.0):
-        raise GeometryError(f"tilt_limits_deg must be (low, high) degrees with -90 <= low < high "
-                            f"<= 90, got {tilt_limits_deg!r}")
-    return float(lim[0]), float(lim[1])
+    return check_angle_limits(tilt_limits_deg, "tilt_limits_deg", 90.0)  # (the robot's rule)
 
 
 def _measure_pose(measure: Any, pose: Any, arr: MicArray) -> NDArray:

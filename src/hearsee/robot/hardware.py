@@ -84,7 +84,6 @@ from hearsee.config import (
     as_float_array,
     check_keys,
     finite_number,
-    is_real,
     load_yaml,
     number,
     same_file,
@@ -922,25 +921,13 @@ def pan_change_deg(a_deg: float, b_deg: float) -> float:
     return abs(float(wrap_deg(a - b)))
 
 
-def _angle_limits(limits_deg: Any, where: str, bound: float) -> tuple[float, float]:
-    """``limits_deg`` as ``(min, max)`` degrees with ``-bound <= min < max <= bound`` (two
-    real numbers), else ConfigError naming ``where``."""
-    try:
-        lo, hi = limits_deg
-    except (TypeError, ValueError):
-        raise ConfigError(f"{where}: expected [min, max] in degrees, got {limits_deg!r}"
-                          ) from None
-    if not (is_real(lo) and is_real(hi) and -bound <= lo < hi <= bound):
-        raise ConfigError(f"{where}: need {-bound:g} <= min < max <= {bound:g}, got "
-                          f"[{lo}, {hi}]")
-    return float(lo), float(hi)
-
-
 def pan_limits_deg(limits_deg: Any, where: str = "pan_limits_deg") -> tuple[float, float]:
     """``limits_deg`` as the head's ``(min, max)`` pan in degrees (robot frame), checked:
     two finite numbers with ``-180 <= min < max <= 180``; else ConfigError naming ``where``.
     The one rule of the robot file's ``head.pan_limits_deg`` and of :func:`limit_pan_deg`."""
-    return _angle_limits(limits_deg, where, 180.0)
+    from hearsee.geometry import check_angle_limits
+
+    return check_angle_limits(limits_deg, where, 180.0, ConfigError)
 
 
 def limit_pan_deg(pan_deg: float, limits_deg: tuple[float, float]) -> float:
@@ -966,7 +953,9 @@ def tilt_limits_deg(limits_deg: Any, where: str = "tilt_limits_deg") -> tuple[fl
     """``limits_deg`` as the head's ``(min, max)`` tilt in degrees (+ = gaze up), checked: two
     finite numbers with ``-90 <= min < max <= 90``; else ConfigError naming ``where``. The
     one rule of the robot file's ``head.tilt_limits_deg`` and of :func:`limit_tilt_deg`."""
-    return _angle_limits(limits_deg, where, 90.0)
+    from hearsee.geometry import check_angle_limits
+
+    return check_angle_limits(limits_deg, where, 90.0, ConfigError)
 
 
 def limit_tilt_deg(tilt_deg: float, limits_deg: tuple[float, float] = (-90.0, 90.0)) -> float:
