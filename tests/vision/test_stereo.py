@@ -119,7 +119,8 @@ def test_search_range_is_what_the_matcher_can_report():
     assert f.search_px == (0.0, 31.0)
     assert f.min_depth_m == pytest.approx(f.focal_px * 0.1 / 31.0)
     for kw in ({"width": 0}, {"width": 2.5}, {"num_disparities": 0}, {"min_disparity": -1},
-               {"scale": 0.0}, {"num_disparities": float("nan")}):
+               {"scale": 0.0}, {"num_disparities": float("nan")},
+               {"num_disparities": 2049}):  # (beyond SGBM's reach: compute_disparity's rule)
         with pytest.raises(ConfigError):
             search_range_px(**{"width": 240, **kw})
 

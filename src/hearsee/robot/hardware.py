@@ -423,10 +423,9 @@ def _cameras(d: Mapping[str, Any], where: str, base: Path) -> CameraConfig:
             hi = search_range_px(rig.left.size[0], nd)[1]
         except HearseeError as exc:
             raise ConfigError(f"{where}.num_disparities: {exc}") from None
-        if hi >= min(rig.left.size[0], 2048):
+        if hi >= rig.left.size[0]:  # (search_range_px refuses one beyond SGBM's reach)
             raise ConfigError(f"{where}.num_disparities: {nd} searches disparities up to "
-                              f"{hi:g} px, beyond the {rig.left.size[0]}-pixel-wide images "
-                              "(or SGBM's 2047)")
+                              f"{hi:g} px, beyond the {rig.left.size[0]}-pixel-wide images")
     return CameraConfig(dev["left"], dev["right"], dev["stereo"], dev["thermal"], calib, rig,
                         rate, mount, nd)
 

@@ -189,11 +189,17 @@ def _matching_search(width: int, num_disparities: float, min_disparity: float,
                      scale: float) -> tuple[int, float, int, int]:
     """The matching resolution of :func:`compute_disparity` (``Wm`` columns, ``sx = Wm /
     width``) and its search at that resolution: ``md`` the smallest disparity, ``nd`` how
-    many (``num_disparities`` rounded up to a multiple of 16), in matching pixels."""
+    many (``num_disparities`` rounded up to a multiple of 16), in matching pixels. A search
+    beyond SGBM's largest disparity is a ConfigError."""
     Wm = max(8, round(width * scale)) if scale < 1.0 else width
     sx = Wm / width if scale < 1.0 else 1.0
     nd = int(np.ceil(num_disparities * sx / 16.0) * 16)
     md = int(np.floor(min_disparity * sx))
+    if md + nd > _MAX_DISPARITY:  # (10**6 ended in cv2.error: out of memory)
+        raise ConfigError(
+            f"min_disparity + num_disparities must be at most {_MAX_DISPARITY} pixels at the "
+            f"matching resolution (OpenCV's disparities are 16-bit with 4 fractional bits; "
+            f"num_disparities is rounded up to a multiple of 16), got {md} + {nd}")
     return Wm, sx, md, nd
 
 
@@ -205,8 +211,9 @@ def search_range_px(width: int, num_disparities: float = 64, min_disparity: floa
     the matching resolution, so the search may reach a little beyond what was asked for.
     A surface nearer than ``f B / largest`` metres is outside the search: SGBM gives it no
     disparity or a wrong one, at most the largest (:func:`hearsee.vision.humans.
-    detect_candidates` rejects people standing there). ConfigError for options that
-    :func:`compute_disparity` refuses or a width that is not a whole number >= 1.
+    detect_candidates` flags people standing there). ConfigError for options that
+    :func:`compute_disparity` refuses (a search beyond SGBM's largest disparity included) or
+    a width that is not a whole number >= 1.
 
     >>> search_range_px(640)
     (0.0, 63.0)
@@ -317,11 +324,6 @@ def compute_disparity(
     pre_filter_cap = whole_number("pre_filter_cap", pre_filter_cap, 15, 127)
     H, W = L.shape
     Wm, sx, md, nd = _matching_search(W, num_disparities, min_disparity, scale)
-    if md + nd > _MAX_DISPARITY:  # (10**6 ended in cv2.error: out of memory)
-        raise ConfigError(
-            f"min_disparity + num_disparities must be at most {_MAX_DISPARITY} pixels at the "
-            f"matching resolution (OpenCV's disparities are 16-bit with 4 fractional bits; "
-            f"num_disparities is rounded up to a multiple of 16), got {md} + {nd}")
     # SGBM matches the columns right of its largest disparity (all of them when padded), and
     # needs more than half a block of them: fewer raised cv2.error, answered uninitialised
     # memory (3-way: all NaN) or, a search wider than the image, crashed the process
