@@ -795,7 +795,6 @@ class FrameGcc:
     CHUNK_FRAMES = 128
 
     def __init__(self, array: MicArray, fs: float, cfg: StreamConfig) -> None:
-
         from hearsee.audio.tdoa import _band_mask, _window
 
         self.array, self.fs, self.cfg = array, float(fs), cfg
@@ -936,7 +935,6 @@ class SmoothedSrp:
                  band_hz: tuple[float, float] | None = (300.0, 3500.0), up: int = 4,
                  grid_deg: float = 2.0, coherence_weight: bool = True,
                  in_plane: bool = False) -> None:
-
         if not 0.0 <= alpha < 1.0:
             raise ConfigError(f"spectrum smoothing alpha must be in [0, 1), got {alpha}")
         self.array, self.fs, self.alpha, self.up = array, float(fs), float(alpha), int(up)
