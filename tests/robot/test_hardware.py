@@ -233,6 +233,19 @@ def test_bad_config_names_the_field(small_rig, data, field, words):
     assert "\n" not in msg
 
 
+@pytest.mark.parametrize("value, shown", [(None, "got null (no value)"), (3, "got 3 (int)"),
+                                          (["phat"], "got ['phat'] (list)")])
+def test_a_method_that_is_not_a_name_says_what_the_key_takes(small_rig, value, shown):
+    # (``method: null`` was "unknown GCC method 'None'", as if the file named one "None")
+    path = make_config(small_rig, _with(audio={"method": value}))
+    with pytest.raises(ConfigError) as e:
+        load_robot_config(path)
+    msg = str(e.value)
+    assert msg == (f"{path}: audio.method: expected a GCC weighting name, one of phat, scot, "
+                   f"roth, ml, cc (or gcc-<name>; leave the key out for phat), {shown}")
+    assert "None" not in msg
+
+
 @pytest.mark.parametrize("section, value, kind", [
     ("audio", [1, 2], "list"), ("cameras", 5, "int"), ("head", "up", "str"),
     ("output", [], "list")])

@@ -363,9 +363,16 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
                           f"largest delay ({shortest / 4:.2f} ms); use >= "
                           f"{math.ceil(shortest)}")  # (rounded to nearest: a refused value)
     method = d.get("method", "phat")
+    if not isinstance(method, str):  # (a null was "unknown GCC method 'None'", as if the file
+        # had named a method "None"; a number was quoted as a name too)
+        from hearsee.audio.tdoa import METHODS
 
+        got = "null (no value)" if method is None else f"{method!r} ({type(method).__name__})"
+        raise ConfigError(f"{where}.method: expected a GCC weighting name, one of "
+                          f"{', '.join(METHODS)} (or gcc-<name>; leave the key out for phat), "
+                          f"got {got}")
     try:
-        method = normalize_method(str(method))
+        method = normalize_method(method)
     except ConfigError as exc:
         raise ConfigError(f"{where}.method: {exc}") from None
     return AudioConfig(device, int(fs), channels, array, spec, block_ms, frame_ms, method)
