@@ -20,8 +20,8 @@ from hearsee.errors import ConfigError, InputFileError
 
 __all__ = [
     "YamlDumper", "all_real", "as_float_array", "check_keys", "finite_number", "input_file",
-    "is_real", "load_yaml", "number", "object_entries", "output_file", "require", "save_yaml",
-    "time_limit", "to_jsonable", "to_plain", "whole_number",
+    "is_real", "load_yaml", "names_a_file", "number", "object_entries", "output_file",
+    "require", "save_yaml", "time_limit", "to_jsonable", "to_plain", "whole_number",
 ]
 
 
@@ -141,6 +141,14 @@ def output_file(path: str | Path) -> Path:
     if not p.exists() and not os.access(p.parent, os.W_OK | os.X_OK):
         raise InputFileError(f"{p}: folder {p.parent} is not writable")
     return p
+
+
+def names_a_file(spec: str) -> bool:
+    """Whether an array spec (the robot file's ``audio.array``, a scenario's ``robot.array``)
+    names a file rather than a preset: it has a folder or a YAML suffix, in any case (``.yaml``,
+    ``.yml``, ``.YAML``, ...). Preset names have neither. A file name is looked up next to the
+    file that gives it, never in the working directory."""
+    return "/" in spec or "\\" in spec or spec.lower().endswith((".yaml", ".yml"))
 
 
 def load_yaml(path: str | Path) -> dict[str, Any]:

@@ -206,6 +206,36 @@ def test_a_relative_array_file_is_read_next_to_the_scenario(tmp_path, monkeypatc
     assert scenario_from_dict({"robot": {"array": "respeaker-4"}}).robot.array == "respeaker-4"
 
 
+@pytest.mark.parametrize("name", ["mics.YAML", "mics.Yml", "sub/mics.YML"])
+def test_an_upper_case_yaml_suffix_is_a_file_next_to_the_scenario(tmp_path, monkeypatch, name):
+    """robot.array ``mics.YAML`` / ``mics.Yml`` was not taken for a file name as ``mics.yaml``
+    is: missing next to the scenario, a file of that name in the working directory was read
+    instead (another array, without a word), or the name was called an unknown preset."""
+    from hearsee.audio.arrays import MicArray
+    from hearsee.errors import InputFileError
+
+    square = {"name": "square", "microphones": [[0.08, 0.08, 0], [-0.08, 0.08, 0],
+                                                 [-0.08, -0.08, 0], [0.08, -0.08, 0]]}
+    (tmp_path / "sc").mkdir()
+    scenario = tmp_path / "sc" / "demo.yaml"
+    scenario.write_text(yaml.safe_dump({"robot": {"array": name}}))
+    elsewhere = tmp_path / "elsewhere"
+    (elsewhere / "sub").mkdir(parents=True)
+    (elsewhere / name).write_text(yaml.safe_dump(
+        {"name": "elsewhere", "microphones": [[0.1, 0, 0], [-0.05, 0.0866, 0],
+                                              [-0.05, -0.0866, 0]]}))
+    monkeypatch.chdir(elsewhere)
+    near = tmp_path.resolve() / "sc" / name
+    with pytest.raises(InputFileError) as e:  # (as for mics.yaml: not found next to it)
+        load_scenario(scenario)
+    assert str(e.value).startswith(f"{scenario}.robot.array: {near}")
+    near.parent.mkdir(exist_ok=True)
+    near.write_text(yaml.safe_dump(square))
+    sc = load_scenario(scenario)
+    assert sc.robot.array == str(near)
+    assert MicArray.from_yaml(sc.robot.array).name == "square"
+
+
 def test_audio_frames_are_at_most_one_control_step(tmp_path, capsys):
     """The loop localizes each 0.2 s step's audio, the first without history: a frame of up
     to 200 ms fits. 8-512 ms was accepted, and 256 ms then failed at the first step with

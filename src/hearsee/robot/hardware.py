@@ -85,6 +85,7 @@ from hearsee.config import (
     check_keys,
     finite_number,
     load_yaml,
+    names_a_file,
     number,
     same_file,
     time_limit,
@@ -316,8 +317,7 @@ def _array(spec: Any, where: str, base: Path) -> tuple[MicArray, str]:
     if not isinstance(spec, str) or not spec.strip():
         raise ConfigError(f"{where}: expected a preset name or YAML path, got {spec!r}")
     path = _resolve(spec, base)
-    is_file_name = "/" in spec or "\\" in spec or spec.lower().endswith((".yaml", ".yml"))
-    if not path.exists() and is_file_name:
+    if not path.exists() and names_a_file(spec):
         raise ConfigError(f"{where}: array file {spec!r} not found in {base}")
     try:
         if path.exists():  # (a folder: load_array's InputFileError says so)

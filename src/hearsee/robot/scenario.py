@@ -58,7 +58,14 @@ from typing import Any
 import numpy as np
 
 from hearsee.audio.propagation import image_sources
-from hearsee.config import check_keys, finite_number, load_yaml, number, whole_number
+from hearsee.config import (
+    check_keys,
+    finite_number,
+    load_yaml,
+    names_a_file,
+    number,
+    whole_number,
+)
 from hearsee.errors import ConfigError, HearseeError
 
 __all__ = [
@@ -377,7 +384,9 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
     if base_dir is not None and not Path(array).expanduser().is_absolute():
         # (it was read from the working directory, unlike every path of the robot file)
         near = Path(base_dir) / Path(array).expanduser()
-        if array.endswith((".yaml", ".yml")) or near.is_file():
+        # (a name with an upper-case suffix, mics.YAML or mics.Yml, was not: missing next
+        # to the scenario it was read from the working directory, or called an unknown preset)
+        if names_a_file(array) or near.is_file():
             array = str(near)
     from hearsee.audio.arrays import load_array
     from hearsee.audio.localize import array_geometry
