@@ -1,11 +1,13 @@
 """Shared fixtures: the real data beside the repository (skipped cleanly when absent), a
-reference GCC-PHAT written independently of hearsee's, and a camera capture that hangs."""
+reference GCC-PHAT written independently of hearsee's, a camera capture that hangs and a
+full disk (a file size limit)."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -59,6 +61,32 @@ def _reference_gcc_phat(a, b, fs: float, max_lag_s: float, interp: int = 256) ->
 def gcc_phat_ref():
     """The reference GCC-PHAT ``(a, b, fs, max_lag_s, interp=256) -> seconds``."""
     return _reference_gcc_phat
+
+
+@pytest.fixture
+def file_size_limit():
+    """``with file_size_limit(n):`` the process cannot grow a file beyond ``n`` bytes (the
+    write fails with EFBIG, "File too large", as a full disk fails it with ENOSPC): a real
+    failure part way through a write, whoever writes. Skipped where there is no
+    RLIMIT_FSIZE / SIGXFSZ."""
+    resource = pytest.importorskip("resource")
+    import signal
+
+    if not hasattr(resource, "RLIMIT_FSIZE") or not hasattr(signal, "SIGXFSZ"):
+        pytest.skip("no file size limit on this system")
+
+    @contextlib.contextmanager
+    def limit(n: int) -> Iterator[None]:
+        soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+        old = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # (else the signal kills us)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (n, hard))
+        try:
+            yield
+        finally:
+            resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+            signal.signal(signal.SIGXFSZ, old)
+
+    return limit
 
 
 @pytest.fixture

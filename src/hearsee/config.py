@@ -6,10 +6,13 @@ the field, e.g. ``robot.yaml: unknown key 'microphone' (expected one of: array, 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import re
-from collections.abc import Iterable, Mapping
+import secrets
+import stat
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +24,8 @@ from hearsee.errors import ConfigError, InputFileError
 __all__ = [
     "YamlDumper", "all_real", "as_float_array", "check_keys", "finite_number", "input_file",
     "is_real", "load_yaml", "names_a_file", "number", "object_entries", "output_file",
-    "require", "save_yaml", "time_limit", "to_jsonable", "to_plain", "whole_number",
+    "replacing", "require", "save_yaml", "time_limit", "to_jsonable", "to_plain",
+    "whole_number", "write_file", "write_into",
 ]
 
 
@@ -141,6 +145,59 @@ def output_file(path: str | Path) -> Path:
     if not p.exists() and not os.access(p.parent, os.W_OK | os.X_OK):
         raise InputFileError(f"{p}: folder {p.parent} is not writable")
     return p
+
+
+@contextlib.contextmanager
+def replacing(path: str | Path) -> Iterator[Path]:
+    """A temporary file name beside ``path`` (its folder: the same file system) for an output
+    to write instead of ``path``; when the block ends without error the file replaces
+    ``path`` in one step (``os.replace``, keeping the permissions of a file it replaces),
+    and on any error it is removed and ``path`` is left as it was. An output written in place
+    that failed part way (a frame an export could not describe, a full disk, Ctrl-C)
+    truncated the previous file and left a corrupt one. A symlink's target is replaced, as
+    writing through it did. An existing target that is no regular file -- a FIFO another
+    program reads, a device such as ``/dev/null`` -- is yielded itself and written through:
+    until 2026-12-02 the robot's exports replaced it by a regular file (``--mcap /dev/null
+    --force`` run as root turned the system's /dev/null into a 20 MB file; a pipe's reader
+    got nothing). The temporary name ends in ``.tmp`` (a writer that picks its format by the
+    suffix must be told the format). The one rule of the robot's exports, its report folder
+    and ``hearsee eval -o`` (moved here from hearsee.robot.export on 2026-12-02)."""
+    target = Path(os.path.realpath(path))
+    if target.exists() and not target.is_file():
+        yield target
+        return
+    tmp = target.with_name(f".{target.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
+    try:
+        yield tmp
+        if target.exists():
+            os.chmod(tmp, stat.S_IMODE(target.stat().st_mode))
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
+def write_file(path: str | Path, data: str | bytes) -> Path:
+    """Write ``data`` (text as UTF-8, or bytes) to ``path`` through :func:`replacing`: an
+    existing file is replaced only once the new one is complete (a FIFO or device is written
+    through). Returns ``path``; InputFileError naming it when the system refuses the write."""
+    with replacing(path) as tmp:
+        write_into(tmp, data, path)
+    return Path(path)
+
+
+def write_into(dest: Path, data: str | bytes, name: str | Path) -> None:
+    """Write ``data`` (text as UTF-8, or bytes) into ``dest``, the file :func:`replacing`
+    yielded for the output ``name``: a fresh temporary file, or the FIFO/device written
+    through. A write the system refuses (a full disk, a file size limit) is InputFileError
+    naming ``name``, the user's path, not the temporary file (whose OSError named nothing)."""
+    try:
+        # ("xb": a fresh temporary file; "wb" where the target is written through, a FIFO)
+        with open(dest, "wb" if dest.exists() else "xb") as fh:
+            fh.write(data.encode("utf-8") if isinstance(data, str) else data)
+    except OSError as exc:
+        raise InputFileError(f"{name}: cannot write ({exc.strerror or exc})") from None
 
 
 def names_a_file(spec: str) -> bool:

@@ -95,6 +95,47 @@ def test_eval_force_overwrites_the_out_file(capsys, monkeypatch, tmp_path):
     assert json.loads(capsys.readouterr().out) == {"scenarios": 1}
 
 
+def test_eval_out_that_fails_part_way_keeps_the_earlier_file(capsys, monkeypatch, tmp_path,
+                                                            file_size_limit):
+    """`hearsee eval -o results.json --force` wrote the results in place: a full disk (here a
+    file size limit) left half a JSON file where the user's earlier results were. Now the
+    results are written beside the file and moved over it when complete: the earlier file
+    stays, one line names it, no temporary file is left. Over a FIFO they are written through
+    (the pipe stays a pipe, its reader gets the results)."""
+    import json
+    import os
+    import stat
+
+    import hearsee.robot.evaluate as ev
+
+    runs = [{"seed": k, "note": "x" * 100} for k in range(1000)]  # (~130 kB of JSON)
+    monkeypatch.setattr(ev, "evaluate", lambda *a, **k: ev.EvalResult(
+        runs=runs, summary={"scenarios": len(runs)}))
+    out = tmp_path / "results.json"
+    out.write_text("my earlier results\n", encoding="utf-8")
+    with file_size_limit(64_000):
+        code = main(["eval", "-n", "2", "-o", str(out), "--force"])
+    err = capsys.readouterr().err
+    assert code == 2 and err == f"hearsee: error: {out}: cannot write (File too large)\n"
+    assert out.read_text(encoding="utf-8") == "my earlier results\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.json"]
+    assert main(["eval", "-n", "2", "-o", str(out), "--force"]) == 0
+    assert json.loads(out.read_text(encoding="utf-8"))["runs"] == runs
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.json"]
+    if not hasattr(os, "mkfifo"):
+        return
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # (a reader, so the writer can open)
+    try:
+        runs[:] = runs[:3]  # (what a pipe's buffer holds without a reader reading)
+        assert main(["eval", "-n", "2", "-o", str(fifo), "--force"]) == 0
+        data = os.read(fd, 1 << 16)
+    finally:
+        os.close(fd)
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode) and json.loads(data)["runs"] == runs
+
+
 @pytest.mark.parametrize("n", ["0", "1000001", "100000000000"])
 def test_eval_scenario_count_out_of_range_is_one_line(n, capsys, tmp_path, monkeypatch):
     """`hearsee eval -n 100000000000` built a list of every seed first: a MemoryError

@@ -595,6 +595,55 @@ def test_demo_keeps_report_files_it_did_not_write_unless_forced(tmp_path, capsys
     assert report_foreign_file(tmp_path / "new") is None
 
 
+@pytest.mark.parametrize("failure", ["disk full", "interrupted"])
+def test_a_report_that_fails_part_way_keeps_the_earlier_report(tmp_path, monkeypatch,
+                                                               file_size_limit, failure):
+    """write_report wrote each file in place as it came: a full disk truncated the earlier
+    log.json to what fitted, and Ctrl-C while plotting left the new log.json and summary.json
+    beside the earlier plots and page. Now every file is written beside its name and moved
+    over it once the whole report is done: the earlier report stays byte for byte, and no
+    temporary file is left."""
+    import matplotlib.figure
+
+    sc = scenario_from_dict({}).to_dict()
+    folder = tmp_path / "rep"
+    write_report(folder, sc, [{"t": 0.2 * k, "head_pan_deg": 5.0 * k} for k in range(5)],
+                 {"success": False}, images={"first_overlay": np.zeros((8, 8, 3), np.uint8)})
+
+    def files():
+        return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*")
+                if p.is_file()}
+
+    before = files()
+    assert {"index.html", "log.json", "summary.json", "plots/head.png",
+            "frames/first_overlay.png"} <= set(before)
+    log = [{"t": 0.2 * k, "head_pan_deg": 1.0, "note": "x" * 100} for k in range(1000)]
+    new = ({"success": True}, {"first_overlay": np.full((8, 8, 3), 255, np.uint8)})
+    if failure == "disk full":  # (the new log.json, ~130 kB, does not fit)
+        with file_size_limit(64_000), pytest.raises(OSError, match="File too large"):
+            write_report(folder, sc, log, *new)
+    else:
+        calls = []
+        savefig = matplotlib.figure.Figure.savefig
+
+        def interrupted(fig, *a, **k):  # (Ctrl-C while the second plot is saved)
+            calls.append(1)
+            if len(calls) == 2:
+                raise KeyboardInterrupt
+            return savefig(fig, *a, **k)
+
+        monkeypatch.setattr(matplotlib.figure.Figure, "savefig", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            write_report(folder, sc, log, *new)
+    assert files() == before
+    # and once written whole, the new report replaces the earlier one
+    monkeypatch.undo()
+    write_report(folder, sc, log, *new)
+    after = files()
+    assert set(after) == set(before) and json.loads(after["log.json"]) == log
+    assert after["frames/first_overlay.png"] != before["frames/first_overlay.png"]
+
+
 @pytest.mark.parametrize("duration, fs", [(1.00001, 16000), (2.00002, 16000), (6.00003, 16000),
                                           (1.05, 16000), (1.3, 44100), (1.00004, 16000),
                                           (1.2, 8000), (3.0, 16000)])

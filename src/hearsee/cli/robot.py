@@ -107,8 +107,10 @@ def eval_cmd(
     if out is not None:
         import json
 
-        from hearsee.config import to_jsonable
+        from hearsee.config import to_jsonable, write_file
 
-        out.write_text(json.dumps(to_jsonable({"summary": res.summary, "runs": res.runs}),
-                                  indent=1), encoding="utf-8")
+        # (beside it, then moved over it: written in place, a failure part way -- a full disk,
+        # Ctrl-C -- left half a file where the user's earlier results were)
+        write_file(out, json.dumps(to_jsonable({"summary": res.summary, "runs": res.runs}),
+                                   indent=1))
     emit_json(res.summary)

@@ -15,18 +15,15 @@ ROS 2 messages written to MCAP (open in Foxglove or ``ros2 bag``):
 
 from __future__ import annotations
 
-import contextlib
 import importlib.util
-import os
-import secrets
-import stat
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from hearsee.config import output_file, same_file
+from hearsee.config import replacing as _replacing  # (its home was here)
 from hearsee.errors import ConfigError
 
 __all__ = ["check_export", "check_export_targets", "write_mcap", "write_rerun"]
@@ -106,34 +103,6 @@ class _Positioned:
 
     def flush(self) -> None:
         self.fh.flush()
-
-
-@contextlib.contextmanager
-def _replacing(path: Path) -> Iterator[Path]:
-    """A temporary file name beside ``path`` (its folder: the same file system) for an export
-    to write instead of ``path``; when the block ends without error the file replaces
-    ``path`` in one step (``os.replace``, keeping the permissions of a file it replaces),
-    and on any error it is removed and ``path`` is left as it was. An export that failed part
-    way (a frame it could not describe, a full disk, Ctrl-C) truncated the previous file
-    and left a corrupt one. A symlink's target is replaced, as writing through it did. An
-    existing target that is no regular file -- a FIFO another program reads, a device such
-    as ``/dev/null`` -- is yielded itself and written through: until 2026-12-02 it was
-    replaced by a regular file (``--mcap /dev/null --force`` run as root turned the
-    system's /dev/null into a 20 MB file; a pipe's reader got nothing)."""
-    target = Path(os.path.realpath(path))
-    if target.exists() and not target.is_file():
-        yield target
-        return
-    tmp = target.with_name(f".{target.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
-    try:
-        yield tmp
-        if target.exists():
-            os.chmod(tmp, stat.S_IMODE(target.stat().st_mode))
-        os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
 
 
 def check_export(kind: str, path: str | Path) -> str:

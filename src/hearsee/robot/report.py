@@ -14,16 +14,21 @@ Folder layout::
 
 from __future__ import annotations
 
+import contextlib
 import html
+import io
 import json
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from hearsee.errors import InputFileError
+
+#: ``put(rel, data)``: stage the file ``rel`` of the report folder (text or bytes)
+_Put = Callable[[str, "str | bytes"], None]
 
 __all__ = ["REPORT_FILES", "report_folder_blocker", "report_folder_unwritable",
            "report_foreign_file", "report_overwrites", "write_report"]
@@ -144,8 +149,15 @@ def _arr(log: Sequence[Mapping[str, Any]], path: Sequence[str],
     return np.array(out, dtype=float)
 
 
+def _png(fig: Any) -> bytes:
+    """The figure as the PNG bytes ``fig.savefig(path.png, dpi=110)`` writes."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    return buf.getvalue()
+
+
 def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
-           scenario: Mapping[str, Any]) -> list[tuple[str, str]]:
+           scenario: Mapping[str, Any], put: _Put) -> list[tuple[str, str]]:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -184,8 +196,10 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     ax.set_title("Top view: trajectory vs ground truth (grey: head direction)")
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
-    fig.savefig(folder / "plots" / "top_view.png", dpi=110)
-    plt.close(fig)
+    try:
+        put("plots/top_view.png", _png(fig))
+    finally:
+        plt.close(fig)
     figs.append(("plots/top_view.png", "Top view of the room: estimated track vs ground truth."))
 
     fig, ax = plt.subplots(figsize=(7, 3.2))
@@ -195,8 +209,10 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     ax.set_title("Position error over time")
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(folder / "plots" / "error.png", dpi=110)
-    plt.close(fig)
+    try:
+        put("plots/error.png", _png(fig))
+    finally:
+        plt.close(fig)
     figs.append(("plots/error.png", "3D position error of the track over time."))
 
     fig, ax = plt.subplots(figsize=(7, 3.2))
@@ -209,22 +225,26 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(folder / "plots" / "head.png", dpi=110)
-    plt.close(fig)
+    try:
+        put("plots/head.png", _png(fig))
+    finally:
+        plt.close(fig)
     figs.append(("plots/head.png",
                  "Head pan angle, the person's true direction and the audio estimates."))
     return figs
 
 
-def _write_images(folder: Path, images: Mapping[str, np.ndarray]) -> list[str]:
+def _write_images(folder: Path, images: Mapping[str, np.ndarray], put: _Put) -> list[str]:
     import cv2
 
     (folder / "frames").mkdir(parents=True, exist_ok=True)
     names = []
     for name, img in images.items():
         rel = f"frames/{name}.png"
-        if not cv2.imwrite(str(folder / rel), img):
+        ok, png = cv2.imencode(".png", img)  # (the bytes cv2.imwrite(rel) wrote)
+        if not ok:
             raise InputFileError(f"cannot write {folder / rel}")
+        put(rel, png.tobytes())
         names.append(rel)
     return names
 
@@ -241,21 +261,41 @@ def write_report(
 
     ``images`` maps a file stem to a BGR/grey uint8 image (overlays, thermal views);
     ``captions`` maps the same stems to captions.
+
+    Every file is written beside its name and replaces it only once the whole report is
+    written (:func:`hearsee.config.replacing`; ``index.html`` last); on an error or Ctrl-C
+    the files of an earlier report stay as they were and no temporary file is left. Until
+    2026-12-02 each file was written in place as it came: a failure part way (a full disk,
+    an image that could not be encoded, Ctrl-C while plotting) left a half-written file or
+    the new log.json and summary.json beside the earlier report's plots and page. A file
+    that is no regular file (a FIFO) is written through, as the exports do.
     """
-    from hearsee.config import to_jsonable
+    from hearsee.config import replacing, to_jsonable, write_into
 
     out = Path(folder)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputFileError(f"cannot create report folder {out}: {exc.strerror}") from None
-    (out / "log.json").write_text(json.dumps(to_jsonable(list(log)), indent=1), encoding="utf-8")
-    (out / "summary.json").write_text(json.dumps(to_jsonable(dict(summary)), indent=2),
-                                      encoding="utf-8")
-    figs = _plots(out, log, scenario)
-    image_files = _write_images(out, images or {})
-    captions = captions or {}
+    with contextlib.ExitStack() as staged:  # (closed in reverse: the files replace theirs)
 
+        def put(rel: str, data: str | bytes) -> None:
+            write_into(staged.enter_context(replacing(out / rel)), data, out / rel)
+
+        index_tmp = staged.enter_context(replacing(out / "index.html"))  # (replaced last)
+        put("log.json", json.dumps(to_jsonable(list(log)), indent=1))
+        put("summary.json", json.dumps(to_jsonable(dict(summary)), indent=2))
+        figs = _plots(out, log, scenario, put)
+        image_files = _write_images(out, images or {}, put)
+        page = _page(scenario, summary, figs, image_files, captions or {})
+        write_into(index_tmp, page, out / "index.html")
+    return out / "index.html"
+
+
+def _page(scenario: Mapping[str, Any], summary: Mapping[str, Any],
+          figs: Sequence[tuple[str, str]], image_files: Sequence[str],
+          captions: Mapping[str, str]) -> str:
+    """The report's ``index.html``."""
     rows = "".join(
         f"<tr><td>{html.escape(str(k))}</td><td>{_fmt(v)}</td></tr>"
         for k, v in summary.items() if not isinstance(v, Mapping | list)
@@ -290,6 +330,4 @@ and the thermal view.</p>
 <div class="grid">{imgs}</div>
 </body></html>
 """
-    index = out / "index.html"
-    index.write_text(page, encoding="utf-8")
-    return index
+    return page
