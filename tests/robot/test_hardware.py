@@ -836,6 +836,43 @@ def test_jsonl_may_not_be_a_file_the_report_writes(tmp_path):
         assert cfg.output.jsonl == tmp_path / ok
 
 
+@pytest.mark.parametrize("report, jsonl, words", [
+    ("out/run.jsonl/rep", "out/run.jsonl", "needs this path as a folder"),
+    ("out", "out/plots", None),  # (no .jsonl name: the suffix rule refused it already)
+    ("out", "out/index.html/u.jsonl", "would make {out}/index.html a folder"),
+    ("out", "out/plots/head.png/u.jsonl", "would make {out}/plots/head.png a folder"),
+])
+def test_jsonl_and_report_nested_in_each_other_are_refused_at_load(tmp_path, report, jsonl,
+                                                                   words):
+    """output.jsonl above the report folder (out/run.jsonl with the report in
+    out/run.jsonl/rep) passed the load and the dry run; the live run wrote its lines there and
+    its report then failed, "cannot create report folder ...: Not a directory". JSON lines
+    made in a folder named like a report file (out/index.html/u.jsonl) broke the report the
+    same way. Now refused when the file loads; the JSON lines inside the report's plots/ are
+    fine (a run writes both)."""
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource
+
+    out = (tmp_path / "out").resolve()
+    data = {"audio": {}, "output": {"report": report, "jsonl": jsonl}}
+    with pytest.raises(ConfigError) as e:
+        robot_config_from_dict(data, "r.yaml", tmp_path)
+    msg = str(e.value)
+    assert msg.startswith("r.yaml: output.jsonl: ") and "\n" not in msg
+    assert (words.format(out=out) if words else "expected a .jsonl file name") in msg, msg
+    assert not (tmp_path / "out").exists()
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out", "jsonl":
+                                                          "out/plots/u.jsonl"}}, "r.yaml",
+                                 tmp_path)
+    x, _ = simulate_recording("three-mic", [2.0, -1.0, 0.0], duration_s=0.5, fs=FS,
+                              snr_db=25.0, seed=4)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg))
+    index = write_run_report(cfg, res)
+    assert index == cfg.output.report / "index.html" and (out / "plots" / "head.png").is_file()
+    assert len((out / "plots" / "u.jsonl").read_text(encoding="utf-8").splitlines()) == \
+        len(res.log) > 0
+
+
 def test_jsonl_replaces_its_own_lines_but_not_a_file_of_the_user(tmp_path):
     """output.jsonl pointed at the user's notes.json replaced it without a word; a run still
     replaces the lines of an earlier run."""

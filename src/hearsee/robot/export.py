@@ -131,16 +131,13 @@ def check_export_targets(exports: Sequence[tuple[str, str | Path | None]], repor
     made the folder, and the export failed after the whole run: "is a folder").
     ``report_name`` names the folder in the message, e.g. ``"--out hearsee-report"``. The
     one check of ``hearsee demo`` and ``hearsee run``."""
-    from hearsee.robot.report import _REPORT_SUBFOLDERS, report_overwrites
+    from hearsee.robot.report import report_makes_folder, report_overwrites
 
-    folder = Path(report).resolve()
     for opt, p in exports:
         if p is None:
             continue
-        q = Path(p).resolve()
         # (an existing folder: check_exports' "is a folder, expected an output file name")
-        if not q.is_dir() and (q == folder or q in folder.parents or (
-                q.parent == folder and q.name in _REPORT_SUBFOLDERS)):
+        if not Path(p).resolve().is_dir() and report_makes_folder(report, p):
             raise ConfigError(f"{opt} {p}: the report ({report_name}) writes into this folder "
                               "or makes it; choose a file name outside the report")
         if jsonl is not None and same_file(p, jsonl):

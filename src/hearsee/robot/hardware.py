@@ -551,6 +551,7 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
         REPORT_FILES,
         report_folder_blocker,
         report_folder_unwritable,
+        report_makes_folder,
         report_overwrites,
     )
 
@@ -580,6 +581,19 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
                           f"files (output.report {cfg.output.report} writes "
                           f"{', '.join(REPORT_FILES)} and PNGs in plots/ and frames/); "
                           "choose another file name")
+    # (the two outputs nested in each other passed, and the report failed after the live run:
+    # jsonl out/run.jsonl with report out/run.jsonl/rep, "cannot create report folder ...:
+    # Not a directory"; jsonl out/index.html/u.jsonl made the report's page a folder)
+    if report_makes_folder(cfg.output.report, cfg.output.jsonl):
+        raise ConfigError(f"{where}: output.jsonl: {cfg.output.jsonl}: output.report "
+                          f"{cfg.output.report} needs this path as a folder (the report "
+                          "folder, a folder above it, or its plots/ or frames/); the JSON "
+                          "lines are a file: choose another file name")
+    hit = report_overwrites(cfg.output.report, list(cfg.output.jsonl.parents))
+    if hit is not None:
+        raise ConfigError(f"{where}: output.jsonl: {cfg.output.jsonl} would make {hit} a "
+                          f"folder, where output.report {cfg.output.report} writes a file; "
+                          "choose another folder for the JSON lines")
 
 
 def load_robot_config(path: str | Path) -> RobotConfig:

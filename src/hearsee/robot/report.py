@@ -31,7 +31,7 @@ from hearsee.errors import InputFileError
 _Put = Callable[[str, "str | bytes"], None]
 
 __all__ = ["REPORT_FILES", "report_folder_blocker", "report_folder_unwritable",
-           "report_foreign_file", "report_overwrites", "write_report"]
+           "report_foreign_file", "report_makes_folder", "report_overwrites", "write_report"]
 
 #: The files :func:`write_report` writes in its folder itself; it also writes PNGs into the
 #: folder's ``plots/`` and ``frames/`` (named after the plots and the images it is given).
@@ -108,6 +108,18 @@ def report_overwrites(folder: str | Path, paths: Sequence[str | Path | None]) ->
                 and q.suffix.lower() == ".png"):
             return Path(p)
     return None
+
+def report_makes_folder(folder: str | Path, path: str | Path) -> bool:
+    """Whether :func:`write_report` into ``folder`` makes ``path`` a folder (or writes into
+    it): ``folder`` itself, a folder above it, or its ``plots/`` or ``frames/``. An output
+    file of the same run there (an export, a live run's JSON lines) and the report cannot
+    both be written: the one written last failed, after the run. The one rule of
+    :func:`hearsee.robot.export.check_export_targets` and
+    :func:`hearsee.robot.hardware.check_outputs`."""
+    f = Path(folder).resolve()
+    q = Path(path).resolve()
+    return q == f or q in f.parents or (q.parent == f and q.name in _REPORT_SUBFOLDERS)
+
 
 _CSS = """
 body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
