@@ -82,6 +82,47 @@ def test_report_holds_the_run_numbers(short_run, tmp_path):
     assert len(log) == len(res.log) and log[-1]["t"] == pytest.approx(3.0)
 
 
+@pytest.mark.slow
+def test_the_report_keeps_the_first_the_middle_and_the_latest_camera_view(short_run):
+    """The "middle" view was the run's 4th camera frame (t = 1.2 s of frames from 0.6 to
+    3.0 s here) and came after "latest" in the report. It is the median camera frame; the
+    three are the frames the log marks as camera frames, first, middle, latest in order."""
+    _, res = short_run
+    times = [r["t"] for r in res.log if r["camera_frame"]]
+    assert len(times) >= 5 and len(res.frames) == len(times)
+    assert [k for k in res.images if k.endswith("_overlay")] == \
+        ["first_overlay", "middle_overlay", "latest_overlay"]
+    for slot, i in (("first", 0), ("middle", (len(times) - 1) // 2),
+                    ("latest", len(times) - 1)):
+        t, overlay = res.frames[i]
+        assert t == pytest.approx(times[i])
+        assert res.images[f"{slot}_overlay"] is overlay
+        assert res.captions[f"{slot}_overlay"].startswith(f"t = {times[i]:.1f} s: ")
+        assert res.captions[f"{slot}_thermal"].startswith(f"t = {times[i]:.1f} s: ")
+        assert res.images[f"{slot}_thermal"].shape == overlay.shape
+
+
+@pytest.mark.parametrize("n, kept", [(0, {}), (1, {"first": 0}),
+                                     (2, {"first": 0, "latest": 1}),
+                                     (4, {"first": 0, "middle": 1, "latest": 3}),
+                                     (7, {"first": 0, "middle": 3, "latest": 6})])
+def test_views_kept_for_few_camera_frames(n, kept):
+    """With four camera frames the 4th was "middle" and "latest" the 3rd; a frame is now
+    kept once, in the first slot that takes it."""
+    from hearsee.robot.pipeline import _keep_views
+
+    views = [(0.2 * k, np.full((6, 8, 3), k, np.uint8), np.full((3, 4), 30.0 + k), k, 0)
+             for k in range(n)]
+    images, captions = {}, {}
+    _keep_views(images, captions, views)
+    assert list(images) == [f"{slot}_{kind}" for slot in kept for kind in ("overlay",
+                                                                          "thermal")]
+    for slot, i in kept.items():
+        assert images[f"{slot}_overlay"] is views[i][1]
+        assert captions[f"{slot}_overlay"] == (f"t = {0.2 * i:.1f} s: {i} verified person(s), "
+                                               "0 rejected candidate(s)")
+
+
 def test_demo_rejects_a_broken_scenario(tmp_path, capsys):
     bad = tmp_path / "s.yaml"
     bad.write_text("robot:\n  position_m: [3.5, 2.6]\n  heigth: 1.2\n")

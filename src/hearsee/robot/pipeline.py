@@ -495,6 +495,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     images: dict[str, NDArray] = {}
     captions: dict[str, str] = {}
     frames: list[tuple[float, NDArray]] = []
+    views: list[tuple[float, NDArray, NDArray, int, int]] = []  # (for _keep_views)
     first_turned_t: float | None = None
     last_visual_t = -np.inf
     timeout_s = track_timeout_s(1.0 / r.camera_rate_hz)
@@ -584,7 +585,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             if keep_images:
                 overlay = draw_detections(scene.left, det)
                 frames.append((t1, overlay))
-                _keep_view(images, captions, t1, overlay, scene, det, len(frames))
+                views.append((t1, overlay, scene.thermal_c, len(det.humans), len(det.rejected)))
         else:
             track.predict(t1)
 
@@ -610,6 +611,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
         if progress is not None:
             progress(CONTROL_DT)
 
+    _keep_views(images, captions, views)
     summary = _summarize(sc, log, first_turned_t, time.perf_counter() - t_start)
     return RunResult(log, summary, images, captions, frames)
 
@@ -640,24 +642,35 @@ def _nearest_truth(scene: Any, p_cam: NDArray, ids: Sequence[str]
     return (None, None) if best is None else (best.kind, ids[best.index])
 
 
-def _keep_view(images: dict, captions: dict, t: float, overlay: NDArray, scene: Any, det: Any,
-               n: int) -> None:
-    """Keep the first, a middle and the latest camera view (overlay + thermal) for the report."""
+def _keep_views(images: dict, captions: dict,
+                views: Sequence[tuple[float, NDArray, NDArray, int, int]]) -> None:
+    """Keep the first, the middle and the latest camera view of the run (overlay + thermal)
+    for the report, in that order. ``views``: one ``(t, overlay, thermal_c, n_verified,
+    n_rejected)`` per camera frame; the middle is ``views[(n - 1) // 2]`` (the median frame,
+    of an even count the earlier one). A slot is kept only for a frame no earlier slot holds:
+    one frame is "first" only, two are "first" and "latest". (Until 2026-12-02 "middle" was
+    the run's 4th camera frame -- 1.2 s into a run of frames from 0.6 to 3.0 s, the last
+    frame of a run of four, with "latest" then the third -- and it came after "latest".)"""
     import cv2
 
     from hearsee.sim.scenes import thermal_to_8bit
 
-    slot = "first" if n == 1 else "latest"
-    if n == 4:
-        slot = "middle"
-    th = cv2.applyColorMap(thermal_to_8bit(scene.thermal_c), cv2.COLORMAP_INFERNO)
-    th = cv2.resize(th, (overlay.shape[1], overlay.shape[0]), interpolation=cv2.INTER_NEAREST)
-    images[f"{slot}_overlay"] = overlay
-    images[f"{slot}_thermal"] = th
-    n_h, n_r = len(det.humans), len(det.rejected)
-    captions[f"{slot}_overlay"] = (f"t = {t:.1f} s: {n_h} verified person(s), {n_r} rejected "
-                                   "candidate(s)")
-    captions[f"{slot}_thermal"] = f"t = {t:.1f} s: thermal view (radiometric, inferno colours)"
+    n = len(views)
+    kept: set[int] = set()
+    for slot, i in (("first", 0), ("middle", (n - 1) // 2), ("latest", n - 1)):
+        if n == 0 or i in kept:
+            continue
+        kept.add(i)
+        t, overlay, thermal_c, n_h, n_r = views[i]
+        th = cv2.applyColorMap(thermal_to_8bit(thermal_c), cv2.COLORMAP_INFERNO)
+        th = cv2.resize(th, (overlay.shape[1], overlay.shape[0]),
+                        interpolation=cv2.INTER_NEAREST)
+        images[f"{slot}_overlay"] = overlay
+        images[f"{slot}_thermal"] = th
+        captions[f"{slot}_overlay"] = (f"t = {t:.1f} s: {n_h} verified person(s), {n_r} "
+                                       "rejected candidate(s)")
+        captions[f"{slot}_thermal"] = (f"t = {t:.1f} s: thermal view (radiometric, inferno "
+                                       "colours)")
 
 
 def _bearing_error(rec: dict[str, Any] | None) -> float:
