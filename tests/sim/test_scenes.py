@@ -114,6 +114,28 @@ def test_random_spec_counts_and_ranges():
             assert 1.0 <= e.z <= 8.0
 
 
+def test_random_spec_puts_the_radiator_against_a_side_wall_and_appliances_on_cabinets():
+    """What random_spec's comments say (one said "under a side wall or on the back wall";
+    no radiator was ever put on the far wall): one radiator, against the left or right
+    wall, 2 m to depth - 1 m ahead; a warm appliance only on a free-standing cabinet lower
+    than 1 m."""
+    sides = set()
+    for seed in range(40):
+        spec = random_spec(seed)
+        (rad,) = [e for e in spec.entities if e.kind == "radiator"]
+        wall = spec.width_right_m if rad.x > 0 else spec.width_left_m
+        sides.add(np.sign(rad.x))
+        assert abs(rad.x) + rad.params["width_m"] / 2 == pytest.approx(wall - 0.01)
+        assert 2.0 <= rad.z <= spec.depth_m - 1.0 and rad.params["lift_m"] == 0.12
+        boxes = [e for e in spec.entities if e.kind == "box"]
+        for app in (e for e in spec.entities if e.kind == "appliance"):
+            (box,) = [b for b in boxes if (b.x, b.z) == (app.x, app.z)]
+            assert box.height_m < 1.0 and app.params["lift_m"] == box.height_m
+            assert -spec.width_left_m + box.params["width_m"] / 2 + 0.05 < box.x < \
+                spec.width_right_m - box.params["width_m"] / 2 - 0.05  # (not along a wall)
+    assert sides == {-1.0, 1.0}
+
+
 def test_write_scene_files(tmp_path, scene):
     out = write_scene(scene, tmp_path / "s")
     for name in ("left.png", "right.png", "thermal.png", "thermal_radiometric.png",

@@ -1053,7 +1053,9 @@ def random_spec(seed: int, *, n_people: tuple[int, int] = (1, 4),
         h = rng.uniform(1.6, 1.85)
         spec.entities.append(Entity(kind, x, z, yaw() if kind != "poster" else
                                     rng.uniform(-20, 20), h))
-    # a radiator under a side wall or on the back wall, maybe a warm appliance on a low cabinet
+    # one radiator against the left or right side wall (never the far wall): 0.1 m thick with
+    # its back 1 cm off the wall, 0.8-1.4 m long, 0.12-0.72 m above the floor, 2 m to
+    # depth - 1 m ahead (a warm appliance comes with some cabinets, below)
     side = rng.choice([-1.0, 1.0])
     rz = rng.uniform(2.0, depth - 1.0)
     rx = (wr - 0.06) if side > 0 else (-wl + 0.06)
@@ -1079,7 +1081,7 @@ def random_spec(seed: int, *, n_people: tuple[int, int] = (1, 4),
             except GeometryError:
                 continue
             spec.entities.append(Entity("box", x, z, 0, h, {"width_m": w, "depth_m": d}))
-            if h < 1.0 and rng.random() < 0.3:
+            if h < 1.0 and rng.random() < 0.3:  # (a warm appliance on 30 % of the low ones)
                 spec.entities.append(Entity("appliance", x, z, 0, 0.35,
                                             {"width_m": 0.45, "depth_m": 0.3, "lift_m": h}))
     return spec
