@@ -301,6 +301,69 @@ def test_a_wide_stereo_rig_must_clear_the_walls_when_the_head_pans():
                         "people": [{"path_m": [[1.0, 4.5]]}]})
 
 
+def _mics_that_hit_a_wall(sc, pans):
+    """The pans at which the room simulation itself (room_impulse_responses: every
+    microphone MIN_WALL_DISTANCE_M inside the room) refuses the head's microphones."""
+    from hearsee.audio.arrays import load_array
+    from hearsee.audio.propagation import room_impulse_responses
+    from hearsee.errors import GeometryError
+    from hearsee.robot.pipeline import _Body
+
+    body = _Body(sc, load_array(sc.robot.array))
+    src = np.array([3.5, 4.5, 1.5])
+    bad = []
+    for pan in pans:
+        try:
+            room_impulse_responses(16000, body.mics_room(pan), src, sc.room_size_m, 0.0)
+        except GeometryError:
+            bad.append(pan)
+    return bad
+
+
+def test_microphones_must_stay_inside_the_room_when_the_head_pans(tmp_path):
+    """A 1 m square array (microphones 0.707 m from the pan axis) on a robot 0.75 m from a
+    wall was accepted; the run failed once the head turned toward the wall, with the room
+    simulator's GeometryError naming no scenario field (so did a tall array whose top
+    microphone was above the ceiling, at the first step). Refused at load now, naming
+    robot.array; 0.8 m from the wall it fits at every pan (the simulator's own verdict)."""
+    from dataclasses import replace
+
+    square = tmp_path / "square.yaml"
+    square.write_text(yaml.safe_dump({"name": "square", "microphones": [
+        [0.5, 0.5, 0], [-0.5, 0.5, 0], [-0.5, -0.5, 0], [0.5, -0.5, 0]]}))
+    base = {"duration_s": 2.0, "robot": {"array": str(square)},
+            "people": [{"path_m": [[3.0, 4.5]]}], "objects": []}
+    pans = np.arange(-180.0, 180.0, 5.0)
+    ok = scenario_from_dict({**base, "robot": {**base["robot"], "position_m": [0.8, 3.0]}})
+    assert _mics_that_hit_a_wall(ok, pans) == []
+    near = replace(ok, robot=replace(ok.robot, position_m=np.array([0.75, 3.0])))
+    assert _mics_that_hit_a_wall(near, pans)  # (the ground truth: a microphone hits the wall)
+    for xy in ([0.75, 3.0], [3.5, 5.25], [6.5, 3.0]):
+        with pytest.raises(ConfigError, match=r"^scenario\.robot\.array: microphone \d of "
+                                              r"'square' is 0\.707 m from the head's pan axis.*"
+                                              r"scenario\.robot\.position_m"):
+            scenario_from_dict({**base, "robot": {**base["robot"], "position_m": xy}})
+    # a tall array: its top and bottom microphones 0.3 m above / below the array origin,
+    # which is 0.1 m above the pivot (head_height_m), in a 3 m room
+    tall = tmp_path / "tall.yaml"
+    tall.write_text(yaml.safe_dump({"name": "tall", "microphones": [
+        [0.05, 0, 0.3], [-0.05, 0.05, 0], [-0.05, -0.05, 0], [0, 0, -0.3]]}))
+    base["robot"] = {"array": str(tall), "position_m": [3.5, 3.0]}
+    for h, fits in ((2.5, True), (2.6, False), (2.7, False), (0.3, True), (0.2, False)):
+        data = {**base, "robot": {**base["robot"], "head_height_m": h}}
+        if fits:
+            sc = scenario_from_dict(data)
+            assert _mics_that_hit_a_wall(sc, [0.0]) == []
+        else:
+            with pytest.raises(ConfigError, match=r"^scenario\.robot\.array: microphone \d of "
+                                                  r"'tall' is .* m above the floor at scenario"
+                                                  r"\.robot\.head_height_m"):
+                scenario_from_dict(data)
+            sc = scenario_from_dict({**data, "robot": {**data["robot"], "head_height_m": 1.0}})
+            sc = replace(sc, robot=replace(sc.robot, head_height_m=h))
+            assert _mics_that_hit_a_wall(sc, [0.0]) == [0.0]  # (the simulator refuses it)
+
+
 @pytest.mark.parametrize("speaking, why", [
     ([[3.0, 5.0]], "every interval starts at or after 2 s"),
     ([[2.0, 2.5]], "every interval starts at or after 2 s"),

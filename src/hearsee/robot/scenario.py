@@ -42,7 +42,9 @@ Every waypoint and object keeps ``WALL_CLEARANCE_M`` from the walls, every perso
 is lower than the ceiling, and every path (each segment between waypoints) and object keeps
 ``ROBOT_CLEARANCE_M`` from the robot base; the robot keeps its cameras inside the room
 however the head pans (:func:`hearsee.robot.pipeline.sensor_reach_m`: a wide stereo baseline
-needs the robot farther from the walls). The
+needs the robot farther from the walls), and its microphones at least
+``hearsee.audio.propagation.MIN_WALL_DISTANCE_M`` inside it (walls, floor and ceiling; a large
+array needs the robot farther from the walls). The
 default speaker and mannequin (those of :func:`default_scenario`) are checked the same way
 when ``people`` or ``objects`` is left out: with another room or robot position they may not
 fit, and the error says which key to set.
@@ -422,6 +424,7 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
     )
 
     _check_rig_clear_of_walls(robot, size, rw)
+    _check_mics_in_room(robot, arr, size, rw)
     defaults = base.to_dict()
 
     def person(p: Any, k: int, pw: str) -> PersonSpec:
@@ -474,6 +477,42 @@ def _check_rig_clear_of_walls(robot: RobotSpec, size: np.ndarray, rw: str) -> No
             f"{reach:.3f} m from the head's pan axis, but the robot at "
             f"{np.round(xy, 3).tolist()} is {clear:.3f} m from a wall: a camera would pan "
             f"behind it; use a shorter baseline or move {rw}.position_m away from the wall")
+
+
+def _check_mics_in_room(robot: RobotSpec, array: Any, size: np.ndarray, rw: str) -> None:
+    """ConfigError naming ``robot.array`` unless every microphone of ``array`` (a MicArray,
+    its origin :data:`hearsee.robot.pipeline.ARRAY_OFFSET_M` from the pivot) stays at least
+    :data:`hearsee.audio.propagation.MIN_WALL_DISTANCE_M` inside the room (``size`` metres)
+    however the head pans -- the room simulation's rule. The simulated head pans all round
+    at a level tilt: a microphone ``r`` metres from the pan axis comes within ``clear - r`` of
+    the nearest wall, and its height is ``head_height_m`` + its own. Until 2026-12-02 a large
+    array, or a tall one under the ceiling, was accepted and the run failed once the audio
+    was simulated -- at the first step, or only when the head turned toward the wall --
+    with the simulator's GeometryError naming no scenario field."""
+    from hearsee.audio.propagation import MIN_WALL_DISTANCE_M
+    from hearsee.robot.pipeline import ARRAY_OFFSET_M
+
+    p = np.asarray(array.positions, dtype=float) + ARRAY_OFFSET_M  # head frame, from the pivot
+    r = np.hypot(p[:, 0], p[:, 1])
+    k = int(np.argmax(r))
+    xy = robot.position_m
+    clear = float(min(xy.min(), (size[:2] - xy).min()))  # to the nearest wall
+    if clear - r[k] < MIN_WALL_DISTANCE_M:
+        raise ConfigError(
+            f"{rw}.array: microphone {k} of {array.name!r} is {r[k]:.3f} m from the head's pan "
+            f"axis, but the robot at {np.round(xy, 3).tolist()} is {clear:.3f} m from a wall: "
+            f"panning, it would come within {MIN_WALL_DISTANCE_M} m of the wall or go through "
+            f"it (the room simulation keeps every microphone {MIN_WALL_DISTANCE_M} m inside "
+            f"the room); use a smaller array or move {rw}.position_m away from the wall")
+    z = robot.head_height_m + p[:, 2]
+    for k in (int(np.argmin(z)), int(np.argmax(z))):
+        if not MIN_WALL_DISTANCE_M <= z[k] <= size[2] - MIN_WALL_DISTANCE_M:
+            raise ConfigError(
+                f"{rw}.array: microphone {k} of {array.name!r} is {z[k]:.3f} m above the floor "
+                f"at {rw}.head_height_m {robot.head_height_m:g} m (array origin "
+                f"{ARRAY_OFFSET_M[2]:g} m above the pivot), outside the {size[2]:g} m high "
+                f"room or within {MIN_WALL_DISTANCE_M} m of its floor or ceiling; change "
+                f"{rw}.head_height_m or use a flatter array")
 
 
 def _frame_ms(audio: Mapping[str, Any], where: str) -> float:
