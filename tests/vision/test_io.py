@@ -55,6 +55,88 @@ def test_missing_corrupt_and_empty_files(tmp_path):
         read_image(trunc)
 
 
+def _damaged(ext: str) -> bytes:
+    """An encoded image with bytes 40, 47, ... (up to 400) flipped: libpng stops on a bad
+    chunk header, libjpeg on corrupt entropy-coded data."""
+    ok, buf = cv2.imencode(ext, _img(64, 80, 3))
+    data = bytearray(buf.tobytes())
+    for i in range(40, min(len(data), 400), 7):
+        data[i] ^= 0x5A
+    return bytes(data)
+
+
+@pytest.mark.parametrize("name, noise", [("bad.png", "libpng error"),
+                                         ("bad.jpg", "Corrupt JPEG data")])
+@pytest.mark.parametrize("mode", ["gray", "bgr", "unchanged"])
+def test_a_damaged_image_is_one_typed_error_and_nothing_on_stderr(tmp_path, capfd, name,
+                                                                  noise, mode):
+    """The codecs under OpenCV print such a file's trouble on file descriptor 2 themselves,
+    whatever OpenCV's log level (checked here first: the ground truth that there is noise to
+    silence); read_image gives the one ImageInputError and leaves stderr empty."""
+    import cv2.utils.logging as cv_log
+
+    data = _damaged(name[-4:])
+    before = cv_log.getLogLevel()
+    cv_log.setLogLevel(cv_log.LOG_LEVEL_SILENT)
+    try:
+        capfd.readouterr()
+        assert cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED) is None
+        assert noise in capfd.readouterr().err
+    finally:
+        cv_log.setLogLevel(before)
+    (tmp_path / name).write_bytes(data)
+    with pytest.raises(ImageInputError) as e:
+        read_image(tmp_path / name, mode)
+    assert str(e.value) == (f"{tmp_path / name}: not a readable image (corrupt or unsupported "
+                            "format; expected PNG, JPEG, TIFF or PGM)")
+    assert capfd.readouterr().err == ""
+
+
+def test_reads_in_two_threads_leave_stderr_as_it_was(tmp_path, capfd, monkeypatch):
+    """Each read saved file descriptor 2, pointed it at the null device and put the saved one
+    back: a second thread's read that started while the first decoded saved the null device
+    and, ending last, left it as the process's stderr -- everything written to stderr
+    afterwards was lost. The reads now share one redirection; here thread A decodes, B starts
+    and decodes, A ends, then B ends (forced by a stand-in imdecode), and stderr works."""
+    import os
+    import threading
+
+    write_image(tmp_path / "a.png", _img())
+    decode = cv2.imdecode
+    a_in, b_in, a_done = threading.Event(), threading.Event(), threading.Event()
+
+    def interleaved(data, flags):
+        if threading.current_thread().name == "A":
+            a_in.set()
+            b_in.wait(5)
+        else:
+            b_in.set()
+            a_done.wait(5)
+        return decode(data, flags)
+
+    monkeypatch.setattr(cv2, "imdecode", interleaved)
+    images = {}
+
+    def read(name):
+        images[name] = read_image(tmp_path / "a.png")
+        if name == "A":
+            a_done.set()
+
+    ta = threading.Thread(target=read, args=("A",), name="A")
+    tb = threading.Thread(target=read, args=("B",), name="B")
+    ta.start()
+    assert a_in.wait(5)
+    tb.start()
+    ta.join(10)
+    tb.join(10)
+    assert b_in.is_set() and a_done.is_set()  # (the order forced: B began before A ended)
+    for name in ("A", "B"):
+        np.testing.assert_array_equal(images[name], _img())
+    capfd.readouterr()
+    os.write(2, b"stderr still works\n")
+    assert capfd.readouterr().err == "stderr still works\n"
+
+
 def test_wrong_size_and_mismatched_pair(tmp_path):
     write_image(tmp_path / "l.png", _img(48, 64))
     write_image(tmp_path / "r.png", _img(48, 60))

@@ -9,6 +9,7 @@ size or type, or a left/right pair that does not match. Images follow OpenCV con
 from __future__ import annotations
 
 import glob
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -71,31 +72,58 @@ def _opencv_log(level: str) -> Iterator[None]:
         cv_log.setLogLevel(before)
 
 
+#: The state of :func:`_codec_stderr_off`, shared by every thread: its lock, how many blocks
+#: are inside it, and the descriptor of the process's stderr it restores when the last ends.
+_STDERR_OFF: dict = {"lock": threading.Lock(), "depth": 0, "saved": None}
+
+
 @contextmanager
 def _codec_stderr_off() -> Iterator[None]:
     """The process's stderr (file descriptor 2) sent to the null device for the block: the
-    image codecs under OpenCV (libpng's default error handler) write their messages there
-    directly, past OpenCV's log level. Python's own ``sys.stderr`` is flushed first; where
-    descriptor 2 cannot be redirected the block runs as is."""
+    image codecs under OpenCV write their messages there directly, past OpenCV's log level
+    (libpng's "libpng error: ...", libjpeg's "Corrupt JPEG data: ..."; measured with
+    OpenCV 4.14 and its log silent). Python's own ``sys.stderr`` is flushed first; where
+    descriptor 2 cannot be redirected the block runs as is.
+
+    Descriptor 2 belongs to the process, not to a thread, so blocks of several threads share
+    one redirection: the first to enter redirects, the last to leave restores. (Until
+    2026-12-02 each block saved and restored descriptor 2 itself: two reads in two threads,
+    the second starting while the first decoded, saved the null device as "stderr" and put
+    it back last -- the process's stderr stayed silenced for good.) What it cannot avoid:
+    while any thread is inside, whatever else the process writes to descriptor 2 -- another
+    thread's ``sys.stderr`` output, a C library's message -- goes to the null device too."""
     import os
     import sys
 
+    state = _STDERR_OFF
+    with state["lock"]:
+        if state["depth"] == 0:
+            try:
+                sys.stderr.flush()
+                saved = os.dup(2)
+            except (OSError, ValueError, AttributeError):
+                saved = None
+            if saved is not None:
+                try:
+                    null = os.open(os.devnull, os.O_WRONLY)
+                    try:
+                        os.dup2(null, 2)
+                    finally:
+                        os.close(null)
+                except OSError:
+                    os.close(saved)
+                    saved = None
+            state["saved"] = saved
+        state["depth"] += 1
     try:
-        sys.stderr.flush()
-        saved = os.dup(2)
-    except (OSError, ValueError, AttributeError):
-        yield
-        return
-    try:
-        null = os.open(os.devnull, os.O_WRONLY)
-        try:
-            os.dup2(null, 2)
-        finally:
-            os.close(null)
         yield
     finally:
-        os.dup2(saved, 2)
-        os.close(saved)
+        with state["lock"]:
+            state["depth"] -= 1
+            if state["depth"] == 0 and state["saved"] is not None:
+                os.dup2(state["saved"], 2)
+                os.close(state["saved"])
+                state["saved"] = None
 
 
 def numeric_map(name: str, value: ArrayLike, dtype: type | None = np.float64, *,
@@ -193,6 +221,15 @@ def read_image(path: str | Path, mode: ColorMode = "gray",
         channels as stored, e.g. 16-bit PGM/PNG). In every mode the pixels are those stored:
         a JPEG's EXIF orientation tag is not applied.
     expected_size : (width, height) in pixels, checked when given.
+
+    A file OpenCV cannot decode is one ImageInputError and nothing else: OpenCV's log and
+    the codecs' own messages on stderr are silenced while it decodes. The codecs (libpng,
+    libjpeg) write to the process's file descriptor 2 directly -- OpenCV's log level
+    (``cv2.utils.logging``) does not reach them, and decoding bytes with ``cv2.imdecode``
+    (as here) prints them too -- so descriptor 2 is pointed at the null device for the
+    decode (a few milliseconds). Limitation: descriptor 2 is the whole process's, so
+    anything another thread writes to stderr during a decode is lost; concurrent reads are
+    safe (they share the redirection, and stderr is restored when the last one ends).
     """
     if mode not in _IMREAD:
         raise ImageInputError(f"mode must be one of {', '.join(_IMREAD)}, got {mode!r}")
