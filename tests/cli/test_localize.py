@@ -212,6 +212,15 @@ def test_summary_tuned_is_the_benchmarked_summary(tmp_path, capsys):
     assert "--summary-tuned: the masked array 'mask2-asym'" in err
 
 
+def test_in_plane_is_refused_for_a_masked_array(tmp_path, capsys):
+    """--in-plane with a masked pair (ch. 3) was dropped without a word: the mask's pipeline
+    has no in-plane model, and the output was byte for byte that without it. It is now a
+    one-line usage error, before the recording is read (the file here does not exist)."""
+    code, out, err = _run(capsys, tmp_path / "none.wav", "--array", "mask2-asym", "--in-plane")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "--in-plane: the masked array 'mask2-asym'" in err and "leave it out" in err
+
+
 def test_a_corrupt_sample_is_named_when_no_frame_is_valid(rec3, tmp_path, capsys):
     """One float sample of 1e30 in a recording of a source at ~0.5: the analysis scales the
     recording to its loudest sample, every other frame fell below single precision and the

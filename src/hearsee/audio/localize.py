@@ -1396,7 +1396,8 @@ def localize_recording(
         wavefront (:func:`near_field_in_plane`, assumed range 2 m), and the whole-recording
         peak search steers in-plane directions only (``estimate_tdoas(source_in_plane=True)``,
         unless ``tdoa_kwargs`` says otherwise; before 2026-11-27 it searched the whole sphere,
-        unlike bench/doa.py's benchmarked setting). Default False.
+        unlike bench/doa.py's benchmarked setting). Default False. A masked array refuses it
+        (ConfigError), as it refuses the other settings its own pipeline does not take.
     tdoa_std_s : float
         Expected TDOA error (s) of the whole-recording summary, for its near-field position
         (arrays of >= 4 microphones): whether the position is reported and its covariance
@@ -1431,7 +1432,10 @@ def localize_recording(
         from hearsee.audio.mask import localize_recording_mask
 
         # (its pipeline takes none of these: they were dropped without a word)
+        # (in_plane too: its tables are of the horizontal plane already, and it has no
+        # spherical-wavefront model or in-plane search to switch to)
         ignored = sorted(k for k, v in {"pairs": pairs, "q_std_s": q_std_s, "r_std_s": r_std_s,
+                                        "in_plane": in_plane or None,
                                         **tdoa_kwargs}.items() if v is not None)
         if ignored:
             raise ConfigError(f"{', '.join(ignored)}: not available for the masked array "

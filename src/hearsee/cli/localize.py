@@ -116,7 +116,7 @@ def localize_cmd(
     in_plane: Annotated[bool, typer.Option(
         "--in-plane", help="The source is in the plane of a planar (three-mic) array: model "
         "its spherical wavefront (assumed 2 m away) instead of a plane wave, and search the "
-        "whole-recording peak among in-plane directions only.")] = False,
+        "whole-recording peak among in-plane directions only. Not for masked arrays.")] = False,
     summary_tuned: Annotated[bool, typer.Option(
         "--summary-tuned", help="The whole-recording estimate's settings that bench/doa.py "
         "measures against pyroomacoustics (hearsee.audio.tdoa.SUMMARY_TUNED: gcc-ml, gcc-phat "
@@ -158,6 +158,10 @@ def localize_cmd(
     if summary_tuned and arr.mask is not None:
         raise ConfigError(f"--summary-tuned: the masked array {arr.name!r} has a pipeline of its "
                           "own (ch. 3) that takes none of those settings; leave it out")
+    if in_plane and arr.mask is not None:
+        raise ConfigError(f"--in-plane: the masked array {arr.name!r} has a pipeline of its own "
+                          "(ch. 3; tables of the horizontal plane) without an in-plane model; "
+                          "leave it out")
     if tdoa_std_us is not None and not fits_position(arr, in_plane):
         # (it was taken and did nothing: only a fitted position uses it)
         why = ("--in-plane does not fit (it assumes the range)" if fits_position(arr)
