@@ -579,6 +579,30 @@ def test_thesis_search_alignment_far_source():
         align_head_search(lambda p: np.zeros(1), load_array("two-mic"))
 
 
+def test_thesis_search_names_a_non_finite_measurement():
+    """A NaN TDOA from measure() made the least-squares pan NaN, and the error named the pose
+    it was turned into ("HeadPose.pan_deg must be finite, got nan"), not the measurement. It
+    now names the pose measured, the pair and the value."""
+    from hearsee.audio.active import align_head_search
+    from hearsee.errors import AudioInputError
+
+    src = np.array([2.0, 2.0, 1.2])
+    calls = []
+
+    def measure(pose):
+        tau = MicArray(mic_positions_at(ARR, pose)).tdoa(src)
+        calls.append(pose)
+        if len(calls) == 2:
+            tau[2] = np.nan
+        return tau
+
+    with pytest.raises(AudioInputError) as e:
+        align_head_search(measure, ARR)
+    msg = str(e.value)
+    assert f"measure({calls[1]}) returned TDOA nan for pair {ARR.pairs[2]}" in msg
+    assert len(calls) == 2 and calls[1].pan_deg != 0.0  # (the second pose, not the start)
+
+
 def _search_a_random_source(rng, el_lo: float, el_hi: float):
     """A source at a random azimuth, an elevation in [el_lo, el_hi] deg and 1-4 m from the
     pivot (built here from the angles), and the thesis search's alignment to it from exact

@@ -1314,6 +1314,13 @@ def align_head_search(
     converged = False
     while True:
         tau = _measure_pose(measure, pose, arr)
+        bad = [k for k in range(len(tau)) if not np.isfinite(tau[k])]
+        if bad:  # (the least-squares pan became NaN and HeadPose named the pose, not this)
+            i, j = arr.pairs[bad[0]]
+            raise AudioInputError(
+                f"measure({pose}) returned TDOA {tau[bad[0]]} for pair ({i}, {j}): "
+                "align_head_search needs a finite TDOA of every pair at every pose (align_head "
+                "takes NaN as a pair not measured)")
         poses.append(pose)
         taus.append(tau)
         facing.append(float(tau[arr.pairs.index(pair)]) if pair else float("nan"))
