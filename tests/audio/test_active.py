@@ -377,6 +377,33 @@ def test_continuous_sampling_refuses_bad_group_and_block_sizes():
             simulate_turning_capture(sig, fs, ARR, src, lambda t: (0.0, 0.0), block_s=b)
 
 
+def test_turning_capture_checks_fs_and_signal_before_any_work():
+    """fs=0 divided by zero (a RuntimeWarning), called pose_at at an infinite time and failed
+    on the pose ("HeadPose.pan_deg must be finite"); NaN did the same, text raised a builtin
+    TypeError. The sample rate and the signal are now checked first: AudioInputError, no
+    warning, pose_at never called."""
+    import warnings
+
+    from hearsee.errors import AudioInputError
+
+    sig = white_noise(0.3, 16000, np.random.default_rng(0))
+    called = []
+
+    def pose_at(t):
+        called.append(t)
+        return (30.0 * t, 0.0)
+
+    src = np.array([1.0, 0.8, 0.3])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for fs in (0, float("nan"), -16000, "16000"):
+            with pytest.raises(AudioInputError, match="sample rate"):
+                simulate_turning_capture(sig, fs, ARR, src, pose_at)
+        with pytest.raises(AudioInputError, match="signal"):
+            simulate_turning_capture(np.full(100, np.nan), 16000, ARR, src, pose_at)
+    assert called == []
+
+
 # ----------------------------------------------------------------------------- manifests + CLI
 @pytest.fixture(scope="module")
 def pose_manifest(tmp_path_factory):

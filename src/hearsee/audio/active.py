@@ -960,9 +960,12 @@ def simulate_turning_capture(
     once to the assembled capture.
     """
     from hearsee.audio.propagation import add_noise
+    from hearsee.audio.signals import as_samples, check_fs
 
+    # (before any work: fs=0 divided by zero, warned, and failed on the infinite pose)
+    check_fs(fs)
     block_s = finite_number("block_s (seconds)", block_s, 0.0, lo_open=True, error=GeometryError)
-    sig = np.asarray(signal, dtype=float)
+    sig = as_samples(signal, "signal")
     n = len(sig)
     nb = max(int(round(block_s * fs)), 1)
     starts = np.arange(0, n, nb)
