@@ -387,3 +387,23 @@ def test_sphere_series_refuses_impossible_settings():
         args.update(kw)
         with pytest.raises(GeometryError):
             bem.sphere_transfer(**args)
+
+
+def test_sphere_series_refuses_empty_and_non_numeric_settings():
+    # found in the 2026-12-02 audit: no frequency or no angle raised numpy's "zero-size array
+    # to reduction operation" ValueError, a radius, speed of sound, distance or tol given as
+    # text (or None) numpy's TypeError, text frequencies or angles its ValueError, and a radius
+    # of True was taken as 1 m
+    args = {"freqs": [1000.0], "radius": A, "cos_theta": [1.0, -1.0], "distance": 0.5}
+    for kw in ({"freqs": []}, {"cos_theta": []}, {"freqs": "abc"}, {"cos_theta": "a"},
+               {"radius": "0.1"}, {"radius": None}, {"radius": True}, {"speed_of_sound": "x"},
+               {"distance": "2"}):
+        with pytest.raises(GeometryError, match="sphere series"):
+            bem.sphere_transfer(**{**args, **kw})
+    for tol in ("x", None):
+        with pytest.raises(ConfigError, match="tol"):
+            bem.sphere_transfer(**args, tol=tol)
+    # numpy scalars and ints are numbers: the same answer
+    np.testing.assert_array_equal(
+        bem.sphere_transfer(np.array([1000]), np.float64(A), 1, np.float32(0.5), 343),
+        bem.sphere_transfer([1000.0], A, [1.0], float(np.float32(0.5)), 343.0))

@@ -44,7 +44,7 @@ import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from hearsee.config import is_real, whole_number
+from hearsee.config import is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, GeometryError
 from hearsee.geometry import as_points
 
@@ -617,20 +617,27 @@ def sphere_transfer(freqs: ArrayLike, radius: float, cos_theta: ArrayLike,
     Frequencies (Hz), radius (metres) and speed of sound (m/s) must be > 0, the source outside
     the sphere, ``cos_theta`` within [-1, 1], ``tol`` in (0, 1).
     """
+    # (text raised numpy's ValueError or TypeError, an empty frequency or angle list the
+    # ValueError of a maximum over nothing, a bool radius was 1 m, until 2026-12-02)
+    if not (real_entries(freqs) and real_entries(cos_theta)):
+        raise GeometryError("sphere series: frequencies and cos_theta must be numbers")
     f = np.atleast_1d(np.asarray(freqs, dtype=float))
     ct = np.atleast_1d(np.asarray(cos_theta, dtype=float))
+    if f.size == 0 or ct.size == 0:
+        raise GeometryError(f"sphere series: needs at least one frequency and one cos_theta, got "
+                            f"{f.size} and {ct.size}")
     # (a negative radius or frequency gave the complex conjugate, zero or a source inside NaN)
     if not np.all(np.isfinite(f) & (f > 0)):
         raise GeometryError("sphere series: frequencies must be finite numbers > 0 Hz")
-    if not all(np.isfinite(v) and v > 0 for v in (radius, speed_of_sound)):
+    if not all(is_real(v) and v > 0 for v in (radius, speed_of_sound)):
         raise GeometryError("sphere series: radius and speed of sound must be finite numbers > 0, "
-                            f"got {radius} and {speed_of_sound}")
-    if distance is not None and not (np.isfinite(distance) and distance > radius):
-        raise GeometryError(f"sphere series: the source distance ({distance} m) must be larger "
-                            f"than the radius ({radius} m)")
+                            f"got {radius!r} and {speed_of_sound!r}")
+    if distance is not None and not (is_real(distance) and distance > radius):
+        raise GeometryError(f"sphere series: the source distance ({distance!r} m) must be a "
+                            f"number larger than the radius ({radius} m)")
     if not np.all(np.abs(ct) <= 1.0 + 1e-9):  # (NaN included: |P_m| <= 1 bounds the terms)
         raise GeometryError("sphere series: cos_theta must be finite numbers within [-1, 1]")
-    if not (np.isfinite(tol) and 0.0 < tol < 1.0):
+    if not (is_real(tol) and 0.0 < tol < 1.0):
         raise ConfigError(f"sphere series: tol must be a number in (0, 1), got {tol!r}")
     ct = np.clip(ct, -1.0, 1.0)
     x = 2.0 * np.pi * f * radius / speed_of_sound  # mu = ka, (F,)
