@@ -219,6 +219,27 @@ def test_geodesic_sphere_is_closed_and_winding_number():
     assert 1.0 - 1e-9 < d[0] < 1.05 and np.linalg.norm(q[0]) <= 1.0 + 1e-9
 
 
+def test_geodesic_sphere_and_sphere_mesh_refuse_bad_sizes():
+    # found in the 2026-12-02 audit: int(n) took 1.5 as 1 (20 panels instead of an error), "2"
+    # and True as numbers, raised builtin ValueError/TypeError/OverflowError on text, None,
+    # NaN and inf, and 10**6 asked for 2e13 triangles (the process was killed, out of memory);
+    # sphere_mesh turned its faces inward for a negative radius and raised numpy's ValueError
+    # on text
+    for n in (0, -1, 1.5, "2", True, None, float("nan"), float("inf"),
+              bem.MAX_GEODESIC_SUBDIVISION + 1, 10**6):
+        with pytest.raises(GeometryError, match="geodesic sphere subdivision"):
+            bem.geodesic_sphere(n)
+    for r in (-A, 0.0, "a", np.nan):
+        with pytest.raises(GeometryError, match="sphere radius"):
+            bem.sphere_mesh(r, 2)
+    with pytest.raises(GeometryError, match="sphere centre"):
+        bem.sphere_mesh(A, 2, centre=(0.0, 0.0))
+    v, f = bem.geodesic_sphere(np.int64(2))  # numpy integers are integers
+    assert len(f) == 80
+    m = bem.sphere_mesh(A, 2, centre=(0, 0, 1))
+    np.testing.assert_array_equal(m.vertices, v * A + [0.0, 0.0, 1.0])
+
+
 def test_winding_number_is_one_half_on_the_surface():
     # audit p15: a point on a face got 0 or 1 by the rounding of its own face's solid angle
     # (+-2 pi across the face): 5 of 20 centroids and 3 of 20 barycentric points read "inside"

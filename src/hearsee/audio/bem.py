@@ -44,11 +44,12 @@ import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from hearsee.config import is_real, real_entries, whole_number
+from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, GeometryError
-from hearsee.geometry import as_points
+from hearsee.geometry import as_point, as_points
 
 __all__ = [
+    "MAX_GEODESIC_SUBDIVISION",
     "MAX_SERIES_TERMS",
     "TriMesh",
     "check_closed_mesh",
@@ -70,14 +71,21 @@ _PLANE_RTOL = 1e-9
 
 
 # ---------------------------------------------------------------------------------------- meshes
+#: Largest subdivision :func:`geodesic_sphere` makes: 200,000 triangles, far beyond any mesh the
+#: dense BEM can solve (a mask's ``mesh_subdivision`` stops at 40; 1e6 asked for 2e13 triangles
+#: and the process was killed for want of memory).
+MAX_GEODESIC_SUBDIVISION = 100
+
+
 def geodesic_sphere(n: int) -> tuple[NDArray, NDArray]:
     """Unit geodesic sphere: an icosahedron whose faces are split ``n x n`` (``20 n^2`` triangles).
 
+    ``n`` is an integer in ``[1, MAX_GEODESIC_SUBDIVISION]``, else a GeometryError.
     Returns ``(vertices (V, 3), faces (F, 3) int)``, faces counter-clockwise seen from outside.
     """
-    n = int(n)
-    if n < 1:
-        raise GeometryError(f"geodesic sphere subdivision must be >= 1, got {n}")
+    # (int(n) took 1.5 as 1, "2" and True as numbers, and raised builtin errors on NaN or text)
+    n = whole_number("geodesic sphere subdivision", n, 1, MAX_GEODESIC_SUBDIVISION,
+                     error=GeometryError)
     t = (1.0 + 5**0.5) / 2.0
     ico_v = np.array([(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
                       (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)],
@@ -120,8 +128,12 @@ def geodesic_sphere(n: int) -> tuple[NDArray, NDArray]:
 
 def sphere_mesh(radius: float, n: int, centre: ArrayLike = (0.0, 0.0, 0.0)) -> TriMesh:
     """Geodesic triangulation of a sphere of ``radius`` metres (``20 n^2`` panels)."""
+    # (a negative radius turned the faces inward without a word, text raised numpy's errors)
+    radius = finite_number("sphere radius (metres)", radius, 0.0, lo_open=True,
+                           error=GeometryError)
+    c = as_point(centre, "sphere centre")
     v, f = geodesic_sphere(n)
-    return TriMesh(v * float(radius) + np.asarray(centre, dtype=float), f)
+    return TriMesh(v * radius + c, f)
 
 
 def check_closed_mesh(vertices: ArrayLike, faces: ArrayLike, where: str = "mesh") -> None:
