@@ -302,6 +302,31 @@ def test_solve_adjoint_refuses_malformed_evaluation_points_and_speed():
     assert bem.solve_adjoint(mesh, [300.0], [[0.0, 0.1, 0.0]], C).v.shape[:2] == (1, 1)
 
 
+def test_solve_adjoint_refuses_bad_chief_counts_no_frequency_and_a_bad_tolerance():
+    # found in the 2026-12-02 audit: n_chief 0 (and 1-3, below the 4 points chief_points needs)
+    # was "mask body too thin for CHIEF interior points", -1 numpy's "negative dimensions"
+    # ValueError, 2.5 and text a TypeError; no frequency ran the whole setup and returned an
+    # empty solution; text frequencies raised numpy's ValueError; on_surface_tol NaN counted as
+    # 0 and text raised numpy's UFuncTypeError
+    mesh = bem.sphere_mesh(A, 4)
+    mics = [[0.0, -A, 0.0], [0.0, A, 0.0]]
+    for n in (0, 1, 3, -1, 2.5, "16", None):
+        with pytest.raises(GeometryError, match="n_chief"):
+            bem.solve_adjoint(mesh, [500.0], mics, C, n_chief=n, on_surface_tol=1e-3)
+    for freqs in ([], np.zeros(0), "abc", ["500"]):
+        with pytest.raises(GeometryError, match="frequencies"):
+            bem.solve_adjoint(mesh, freqs, mics, C, on_surface_tol=1e-3)
+    for tol in (np.nan, -1e-3, "1e-3", np.inf):
+        with pytest.raises(GeometryError, match="on_surface_tol"):
+            bem.solve_adjoint(mesh, [500.0], mics, C, on_surface_tol=tol)
+    with pytest.raises(GeometryError, match="CHIEF points"):
+        bem.chief_points(mesh, 0)
+    # the smallest count works (a sphere of 320 panels has room for it)
+    sol = bem.solve_adjoint(mesh, [500.0], mics, C, n_chief=bem.MIN_CHIEF_POINTS,
+                            on_surface_tol=1e-3)
+    assert sol.v.shape == (1, 2, mesh.n_panels + bem.MIN_CHIEF_POINTS)
+
+
 def test_solve_adjoint_refuses_evaluation_points_inside_the_body():
     # found in review: the docstring asks for points on or outside the body, but a point 2 cm
     # from the centre of an 8.75 cm sphere was solved: free-term c ~ 0 and |H| ~ 1.5, while

@@ -51,6 +51,7 @@ from hearsee.geometry import as_point, as_points
 __all__ = [
     "MAX_GEODESIC_SUBDIVISION",
     "MAX_SERIES_TERMS",
+    "MIN_CHIEF_POINTS",
     "TriMesh",
     "check_closed_mesh",
     "geodesic_sphere",
@@ -377,8 +378,15 @@ class AdjointSolution:
     speed_of_sound: float | None = None
 
 
+#: Fewest CHIEF interior points :func:`solve_adjoint` takes (``n_chief``): :func:`chief_points`
+#: calls a body in which it finds fewer than ``max(4, n // 2)`` too thin for CHIEF.
+MIN_CHIEF_POINTS = 4
+
+
 def chief_points(mesh: TriMesh, n: int = 16, rng: int = 0) -> NDArray:
-    """``n`` interior points well inside the body (at least two panel sizes from the surface)."""
+    """``n`` interior points well inside the body (at least two panel sizes from the surface);
+    ``n`` an integer >= :data:`MIN_CHIEF_POINTS`, else a GeometryError."""
+    n = whole_number("number of CHIEF points", n, MIN_CHIEF_POINTS, error=GeometryError)
     gen = np.random.default_rng(rng)
     lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
     margin = 2.0 * mesh.size
@@ -412,12 +420,23 @@ def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
         Frequencies in Hz (> 0).
     eval_points : array (E, 3)
         Where the pressure is wanted (the microphones), metres, on or outside the body. Points
-        closer than ``on_surface_tol`` to the surface are projected onto it.
+        closer than ``on_surface_tol`` (metres, >= 0) to the surface are projected onto it.
+    n_chief : int
+        CHIEF interior points against the irregular frequencies (>= :data:`MIN_CHIEF_POINTS`).
     progress : callable, optional
         Called with 1 after each frequency.
     """
     if not isinstance(mesh, TriMesh):
         raise GeometryError(f"BEM mesh must be a TriMesh, got {type(mesh).__name__}")
+    # (until 2026-12-02: n_chief 0-3 said "mask body too thin for CHIEF interior points", -1
+    # and 2.5 raised numpy's ValueError / TypeError, no frequency ran the whole setup and gave
+    # an empty solution, text frequencies raised numpy's ValueError, a NaN on_surface_tol
+    # counted as 0 and a text one raised numpy's UFuncTypeError)
+    whole_number("n_chief", n_chief, MIN_CHIEF_POINTS, error=GeometryError)
+    on_surface_tol = finite_number("on_surface_tol (metres)", on_surface_tol, 0.0,
+                                   error=GeometryError)
+    if not real_entries(freqs) or np.size(freqs) == 0:
+        raise GeometryError(f"BEM frequencies must be one or more numbers (Hz), got {freqs!r}")
     # (an open surface -- a hole, a hemisphere -- gave numbers 10-25 % off without a word, a
     # zero-area face NaN, inverted faces "too thin for CHIEF points")
     check_closed_mesh(mesh.vertices, mesh.faces, "BEM mesh")
