@@ -378,6 +378,9 @@ def test_building_blocks_refuse_bad_arguments():
             adaptive_neighbors(X, ind, dist, shadow=shadow)
     with pytest.raises(ManifoldInputError, match="row indices"):
         adaptive_neighbors(X, ind + 1000, dist)
+    for k in (0, -3, 2.0, True):  # 0 and -3 were silently taken as 1
+        with pytest.raises(ManifoldInputError, match="min_neighbors must be an integer >= 1"):
+            adaptive_neighbors(X, ind, dist, min_neighbors=k)
     # valid calls are unchanged, also with the first rows of X as the centers
     W = reconstruction_weights(X, ind, mask)
     np.testing.assert_allclose(W.sum(axis=1), 1.0)

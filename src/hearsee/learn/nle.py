@@ -208,7 +208,8 @@ def adaptive_neighbors(
         Candidate ``j`` is rejected when an already accepted neighbour ``k`` satisfies
         ``||x_j - x_k|| < shadow * ||x_j - x_i||``. 0 accepts all candidates (plain LLE).
     min_neighbors : int
-        Every row keeps at least this many (the nearest rejected candidates are added back).
+        Every row keeps at least this many (>= 1; the nearest rejected candidates are added
+        back; at most all ``K`` candidates).
     centers : (n, n_features) array, optional
         The points whose neighbourhoods these are; default ``X`` (row ``i`` is point ``i``).
 
@@ -220,7 +221,7 @@ def adaptive_neighbors(
     Raises
     ------
     ManifoldInputError
-        ``shadow`` outside [0, 1] or NaN, ``min_neighbors`` not an integer, non-finite ``X``,
+        ``shadow`` outside [0, 1] or NaN, ``min_neighbors`` not an integer >= 1, non-finite ``X``,
         ``centers`` or ``dist``, or arrays of inconsistent shapes.
     """
     X, ind, centers, (dist,) = _check_neighbourhood_args("adaptive_neighbors", X, ind, centers,
@@ -228,13 +229,15 @@ def adaptive_neighbors(
     if not np.isfinite(dist).all():
         raise ManifoldInputError("adaptive_neighbors: dist must be finite (no NaN or inf)")
     shadow = finite_number("shadow", shadow, 0.0, 1.0, error=ManifoldInputError)
-    if isinstance(min_neighbors, bool) or not isinstance(min_neighbors, Integral):
-        raise ManifoldInputError(f"min_neighbors must be an integer, got {min_neighbors!r}")
+    # (0 and negative counts were silently taken as 1 until 2026-12-02)
+    if (isinstance(min_neighbors, bool) or not isinstance(min_neighbors, Integral)
+            or min_neighbors < 1):
+        raise ManifoldInputError(f"min_neighbors must be an integer >= 1, got {min_neighbors!r}")
     n, K = ind.shape
     mask = np.zeros((n, K), dtype=bool)
     if K == 0:
         return mask
-    min_neighbors = int(min(max(min_neighbors, 1), K))
+    min_neighbors = int(min(min_neighbors, K))
     s2 = shadow**2
     for s, e in _chunks(n, K, X.shape[1]):
         P = X[ind[s:e]] - centers[s:e, None, :]  # (c, K, D) candidate offsets
