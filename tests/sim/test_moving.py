@@ -257,6 +257,27 @@ def test_room_update_times_bound_spacing_and_tdoa_steps():
                              max_tdoa_step_samples=0.0)
 
 
+def test_room_update_times_keep_the_tdoa_bound_for_a_fast_close_source():
+    """A source at 3 m/s passing 0.3 m in front of the three-mic array moves its TDOAs by
+    0.12 sample in 2 ms; the updates were never closer than that 2 ms grid, so consecutive
+    updates were 0.119 sample apart against the promised 0.1. The grid steps above the bound
+    are now split. A bound that updates every sample cannot keep is a GeometryError."""
+    from hearsee.sim.moving import _update_times
+
+    arr = MicArray.from_preset("three-mic")
+    traj = linear_trajectory([0.3, -1.0, 0.0], [0.0, 3.0, 0.0], 0.7)
+    n = int(0.66 * FS)
+    for block_s, delay in ((0.05, None), (0.005, 0.5)):  # whole responses; the early part
+        c = _update_times(traj, arr.positions, 343.0, FS, n, block_s, 0.1, delay)
+        assert c[0] == 0 and c[-1] == n - 1 and np.all(np.diff(c) >= 1)
+        tau = arr.tdoa(traj.at(c / FS)) * FS
+        assert np.abs(np.diff(tau, axis=0)).max() <= 0.1 + 1e-3  # (update times: whole samples)
+    # 30 m/s grazing the array: its TDOAs move ~0.1 sample per sample
+    graze = linear_trajectory([0.05, -3.0, 0.0], [0.0, 30.0, 0.0], 0.2)
+    with pytest.raises(GeometryError, match="too fast near the array at t = 0.1"):
+        _update_times(graze, arr.positions, 343.0, FS, int(0.2 * FS), 0.05, 0.01)
+
+
 def test_trajectory_interpolation_velocity_and_csv_roundtrip(tmp_path):
     traj = waypoint_trajectory([[1, 0, 0], [1, 1, 0], [0, 1, 0]], speed_mps=0.5)
     assert traj.duration == pytest.approx(4.0)
