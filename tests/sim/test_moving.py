@@ -637,6 +637,23 @@ def test_truth_csv_holds_the_corners_and_the_end(tmp_path):
     assert t2[-1] == pytest.approx(0.0731) and np.sum(t2 > 0.07) == 1
 
 
+def test_truth_times_refuses_absurdly_many_times():
+    """step_s=1e-12 asked numpy for 1e12 times (a MemoryError), a 1e300 s duration for 1e302
+    (numpy's "maximum allowed size exceeded" ValueError); a step below the CSV's microsecond
+    made rows that merged anyway. Now GeometryErrors; the largest grid still works."""
+    from hearsee.sim.moving import MAX_TRUTH_TIMES, truth_times
+
+    walk = Trajectory([0.0, 1.0], [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]])
+    with pytest.raises(GeometryError, match="step_s must be a finite number >= 1e-06"):
+        truth_times(walk, 1.0, 1e-12)
+    with pytest.raises(GeometryError, match="more than 10000000; give a larger step_s"):
+        truth_times(walk, 1e300)
+    with pytest.raises(GeometryError, match="more than"):
+        truth_times(walk, 100.0, 1e-5)  # exactly MAX_TRUTH_TIMES
+    t = truth_times(walk, 1.0, 1e-6)  # the finest grid: a million times
+    assert len(t) == 1_000_001 < MAX_TRUTH_TIMES and t[-1] == 1.0
+
+
 def test_a_trajectory_csv_with_a_byte_order_mark_loads(tmp_path):
     """Excel's "CSV UTF-8" starts the file with a byte-order mark: its first header cell read
     "\ufefft" and the file was refused."""

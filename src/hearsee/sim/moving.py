@@ -290,15 +290,26 @@ def save_trajectory(traj: Trajectory, path: str | Path, times: ArrayLike | None 
             w.writerow([f"{ti:.6f}", f"{pi[0]:.6f}", f"{pi[1]:.6f}", f"{pi[2]:.6f}"])
 
 
+#: Most grid times :func:`truth_times` makes (10 million: a 600 s recording every 60 us);
+#: ``step_s=1e-12`` asked for 1e12 and raised a MemoryError.
+MAX_TRUTH_TIMES = 10_000_000
+
+
 def truth_times(traj: Trajectory, duration_s: float, step_s: float = 0.01) -> NDArray:
     """Times (seconds) at which to write a recording's ground-truth trajectory: a ``step_s``
     grid from 0, the trajectory's own knots within the recording (its corners) and the
     recording's end ``duration_s``, rounded to the microsecond the CSV keeps (so that no two
     rows share a time). The 10 ms grid alone stopped up to one step before the end (the truth
-    of the last 10 ms was a held position) and cut the trajectory's corners."""
+    of the last 10 ms was a held position) and cut the trajectory's corners. ``step_s`` is at
+    least that microsecond, and the grid at most :data:`MAX_TRUTH_TIMES` times long (else a
+    GeometryError)."""
     _check_trajectory(traj)
     dur = finite_number("duration_s", duration_s, 0.0, lo_open=True, error=GeometryError)
-    step = finite_number("step_s", step_s, 0.0, lo_open=True, error=GeometryError)
+    # (below the CSV's microsecond the rows merged anyway)
+    step = finite_number("step_s", step_s, 1e-6, error=GeometryError)
+    if dur / step >= MAX_TRUTH_TIMES:
+        raise GeometryError(f"truth_times: {dur:g} s every {step:g} s is {dur / step:.3g} "
+                            f"times, more than {MAX_TRUTH_TIMES}; give a larger step_s")
     grid = np.arange(int(math.floor(dur / step + 1e-9)) + 1) * step
     knots = traj.t[(traj.t > 0.0) & (traj.t < dur)]
     return np.unique(np.round(np.concatenate([grid[grid < dur], knots, [dur]]), 6))
