@@ -152,3 +152,72 @@ def test_array_parameters_take_a_micarray_or_a_preset_and_nothing_else():
     with pytest.raises(ConfigError, match="expected a MicArray"):
         facing_pair(0.0)
     assert facing_pair("three-mic") == facing_pair(three) == (1, 2)
+
+
+def _rng_calls():
+    """(name, call(rng)) of the library's functions that draw random numbers from ``rng``."""
+    from hearsee.audio import active, bem, mask, propagation, signals
+    from hearsee.audio.arrays import MicArray
+    from hearsee.fusion.audiovisual import AudioVisualRig, simulate_av_samples
+    from hearsee.vision.camera import Camera
+
+    arr = MicArray.from_preset("three-mic")
+    sig = signals.white_noise(0.1, 8000, 0)
+    rig = AudioVisualRig.mounted(arr, Camera.from_fov(70.0, 64, 48), (0.0, 0.2, 0.0))
+    return [
+        ("white_noise", lambda r: signals.white_noise(0.01, 8000, r)),
+        ("synthetic_voice", lambda r: signals.synthetic_voice("male", 0.5, 8000, r)),
+        ("make_signal", lambda r: signals.make_signal("noise", 0.01, 8000, r)),
+        ("add_noise", lambda r: propagation.add_noise(np.ones((2, 64)), 10.0, r)),
+        ("add_noise without noise", lambda r: propagation.add_noise(np.ones((2, 64)), None, r)),
+        ("simulate_free_field",
+         lambda r: propagation.simulate_free_field(sig, 8000, arr, [1, 0.5, 0], 10.0, r)),
+        ("simulate_room", lambda r: propagation.simulate_room(
+            sig, 8000, arr, [1, 0.5, 0], [5, 4, 3], 0.0, [2, 2, 1.2], 10.0, r)),
+        ("simulate_masked", lambda r: mask.simulate_masked(sig, 8000, "mask2", [1, 0.5, 0],
+                                                           10.0, r, far_field=True)),
+        ("simulate_pose_captures", lambda r: active.simulate_pose_captures(
+            sig, 8000, arr, [1, 0.5, 0.2], [(0, 0)], snr_db=10.0, rng=r)),
+        ("simulate_turning_capture", lambda r: active.simulate_turning_capture(
+            sig, 8000, arr, [1, 0.5, 0.2], lambda t: (0, 0), snr_db=10.0, rng=r)),
+        ("make_pose_training_set",
+         lambda r: active.make_pose_training_set(arr, [(0, 0)], 4, rng=r)),
+        ("simulate_av_samples", lambda r: simulate_av_samples(rig, 4, rng=r)),
+        ("chief_points", lambda r: bem.chief_points(bem.sphere_mesh(0.1, 4), 4, r)),
+    ]
+
+
+def test_rng_arguments_take_a_generator_a_seed_or_none_and_nothing_else():
+    """numpy's default_rng raised its own TypeError (text, 1.5) or ValueError (-1), took True
+    as the seed 1 and a list as a seed sequence; add_noise without noise (snr_db None), and
+    make_signal, never looked at it. Each is a ConfigError naming rng now, and valid rngs draw
+    exactly what default_rng(rng) draws."""
+    from hearsee.audio.signals import white_noise
+    from hearsee.config import as_rng, check_rng
+
+    for _name, call in _rng_calls():
+        for bad in ("a", 1.5, -1, True, [1, 2], np.random.RandomState(0)):
+            with pytest.raises(ConfigError, match="rng must be a numpy Generator, an integer "
+                                                  "seed >= 0 or None"):
+                call(bad)
+        for good in (None, 3, np.int64(3), np.random.default_rng(3)):
+            call(good)
+    # the stream: as numpy's for a seed, the caller's own for a Generator
+    np.testing.assert_array_equal(white_noise(0.01, 8000, np.uint8(5)),
+                                  np.random.default_rng(5).standard_normal(80))
+    g = np.random.default_rng(9)
+    assert as_rng(g) is g and check_rng(7) == 7 and check_rng(None) is None
+    first = white_noise(0.01, 8000, g)
+    np.testing.assert_array_equal(np.concatenate([first, white_noise(0.01, 8000, g)]),
+                                  np.random.default_rng(9).standard_normal(160))
+
+
+def test_pose_manifest_seed_is_checked_before_any_work(tmp_path):
+    """A negative, fractional or text seed raised numpy's ValueError / TypeError."""
+    from hearsee.audio.active import simulate_pose_manifest
+
+    for seed in (-1, 1.5, "a", True):
+        with pytest.raises(ConfigError, match="seed must be an integer >= 0"):
+            simulate_pose_manifest(tmp_path / "m.yaml", "three-mic", [1.0, 0.5, 0.2], [(0, 0)],
+                                   duration_s=0.1, seed=seed)
+    assert not list(tmp_path.iterdir())

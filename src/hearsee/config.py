@@ -22,10 +22,10 @@ import yaml
 from hearsee.errors import ConfigError, InputFileError
 
 __all__ = [
-    "YamlDumper", "all_real", "as_float_array", "check_keys", "finite_number", "input_file",
-    "is_real", "load_yaml", "names_a_file", "number", "object_entries", "output_file",
-    "replacing", "require", "save_yaml", "time_limit", "to_jsonable", "to_plain",
-    "whole_number", "write_file", "write_into",
+    "YamlDumper", "all_real", "as_float_array", "as_rng", "check_keys", "check_rng",
+    "finite_number", "input_file", "is_real", "load_yaml", "names_a_file", "number",
+    "object_entries", "output_file", "replacing", "require", "save_yaml", "time_limit",
+    "to_jsonable", "to_plain", "whole_number", "write_file", "write_into",
 ]
 
 
@@ -378,6 +378,28 @@ def whole_number(name: str, value: Any, lo: int = 1, hi: int | None = None, *,
         rule = f"in [{lo}, {hi}]" if hi is not None else f">= {lo}"
         raise error(f"{name} must be an integer {rule}, got {value!r}")
     return int(value)
+
+
+def check_rng(rng: Any, name: str = "rng") -> Any:
+    """``rng`` itself when it is what hearsee's random functions take -- a numpy ``Generator``
+    (drawn from: the caller's stream advances), an integer seed >= 0 (Python or numpy, not a
+    bool) or None (fresh entropy) -- else a ConfigError naming ``name``. numpy's
+    ``default_rng`` raised its own TypeError / ValueError on text, 1.5 or -1, and took True
+    as the seed 1 and a list as a seed sequence. For a caller that passes ``rng`` on
+    unchanged (so its seeded output stays what it was) but must check it before any work;
+    :func:`as_rng` makes the Generator."""
+    if rng is None or isinstance(rng, np.random.Generator):
+        return rng
+    if isinstance(rng, int | np.integer) and not isinstance(rng, bool) and rng >= 0:
+        return rng
+    raise ConfigError(f"{name} must be a numpy Generator, an integer seed >= 0 or None, "
+                      f"got {rng!r}")
+
+
+def as_rng(rng: Any, name: str = "rng") -> np.random.Generator:
+    """``np.random.default_rng(rng)`` after :func:`check_rng`: the same stream as before for
+    every valid ``rng`` (a Generator is returned as it is)."""
+    return np.random.default_rng(check_rng(rng, name))
 
 
 def require(data: Mapping[str, Any], key: str, where: str) -> Any:

@@ -70,7 +70,15 @@ from hearsee.audio.arrays import (
 )
 from hearsee.audio.propagation import check_snr_db, speed_of_sound_of
 from hearsee.audio.signals import as_samples
-from hearsee.config import as_float_array, finite_number, is_real, same_file, whole_number
+from hearsee.config import (
+    as_float_array,
+    as_rng,
+    check_rng,
+    finite_number,
+    is_real,
+    same_file,
+    whole_number,
+)
 from hearsee.errors import (
     AudioInputError,
     ConfigError,
@@ -729,7 +737,7 @@ def simulate_pose_captures(
     from hearsee.audio import propagation as prop
 
     arr = load_array(array)
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     src = np.asarray(source_m, dtype=float)
     out = []
     for pose in poses:
@@ -789,7 +797,7 @@ def make_pose_training_set(
         raise GeometryError(f"azimuth_range_deg must be (low, high) with low <= high degrees, "
                             f"got {azimuth_range_deg!r}")
     n = whole_number("n (training samples)", n, 0)
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     az = np.radians(rng.uniform(*azimuth_range_deg, n))
     s_lo, s_hi = np.sin(np.radians(elevation_range_deg))
     el = np.arcsin(rng.uniform(s_lo, s_hi, n))
@@ -964,6 +972,7 @@ def simulate_turning_capture(
 
     # (before any work: fs=0 divided by zero, warned, and failed on the infinite pose)
     check_fs(fs)
+    check_rng(rng)
     block_s = finite_number("block_s (seconds)", block_s, 0.0, lo_open=True, error=GeometryError)
     sig = as_samples(signal, "signal")
     n = len(sig)
@@ -983,7 +992,7 @@ def simulate_turning_capture(
             break
         e = min(s + nb, length)
         out[:, s:e] = caps[uniq[p.as_tuple()]][:, s:e]
-    return add_noise(out, snr_db, np.random.default_rng(rng))
+    return add_noise(out, snr_db, as_rng(rng))
 
 
 def localize_continuous(
@@ -1603,6 +1612,8 @@ def simulate_pose_manifest(
     if not poses:
         raise ConfigError("--poses needs at least one PAN,TILT pose")
     room = normalize_room(room)
+    if seed is not None:  # (-1, 1.5 or text raised numpy's ValueError / TypeError)
+        seed = whole_number("seed", seed, 0)
     rng = np.random.default_rng(seed)
     sig = make_signal(signal, duration_s, fs, rng)
     files, true_tdoas = [], []

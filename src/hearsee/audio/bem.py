@@ -44,7 +44,7 @@ import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from hearsee.config import finite_number, is_real, real_entries, whole_number
+from hearsee.config import as_rng, finite_number, is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, GeometryError
 from hearsee.geometry import as_point, as_points
 
@@ -387,7 +387,7 @@ def chief_points(mesh: TriMesh, n: int = 16, rng: int = 0) -> NDArray:
     """``n`` interior points well inside the body (at least two panel sizes from the surface);
     ``n`` an integer >= :data:`MIN_CHIEF_POINTS`, else a GeometryError."""
     n = whole_number("number of CHIEF points", n, MIN_CHIEF_POINTS, error=GeometryError)
-    gen = np.random.default_rng(rng)
+    gen = as_rng(rng)
     lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
     margin = 2.0 * mesh.size
     out: list[NDArray] = []

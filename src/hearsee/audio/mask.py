@@ -90,7 +90,7 @@ from hearsee.audio import bem
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.signals import as_samples, check_fs
 from hearsee.audio.tdoa import check_frame_ms
-from hearsee.config import finite_number, is_real, whole_number
+from hearsee.config import check_rng, finite_number, is_real, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 from hearsee.geometry import norm_scale, wrap_deg
 
@@ -711,6 +711,7 @@ def simulate_masked(signal: ArrayLike, fs: float, array: MicArray | str | Path |
     if not np.all(np.isfinite(x)):
         raise AudioInputError("signal contains NaN or inf samples")
     fs = check_fs(fs)  # (0 divided by zero; a negative rate gave garbage)
+    check_rng(rng)  # (before the work: add_noise draws from it at the end)
     s = np.asarray(source, dtype=float)
     if s.shape != (3,) or not np.all(np.isfinite(s)):
         raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.signals import as_samples, check_fs
-from hearsee.config import as_float_array, finite_number, is_real, whole_number
+from hearsee.config import as_float_array, check_rng, finite_number, is_real, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 from hearsee.geometry import norm_scale
 
@@ -212,6 +212,7 @@ def add_noise(x: ArrayLike, snr_db: float | None, rng: np.random.Generator | int
     """
     y = np.array(as_samples(x, "signal", finite=False), dtype=float)  # (text: read as numbers)
     snr_db = check_snr_db(snr_db)
+    check_rng(rng)  # (numpy's TypeError / ValueError on text, 1.5, -1; unchecked without noise)
     if snr_db is None:
         return y
     rng = np.random.default_rng(rng)
@@ -273,6 +274,7 @@ def simulate_free_field(
     """
     pos = _mic_positions(mics)
     c = speed_of_sound_of(mics, speed_of_sound)
+    check_rng(rng)  # (before the work: add_noise draws from it at the end)
     s = np.asarray(source, dtype=float)
     if s.shape != (3,) or not np.all(np.isfinite(s)):
         raise GeometryError(f"source must be a finite [x, y, z] point, got {source!r}")
@@ -518,6 +520,7 @@ def simulate_room(
     x = as_samples(signal, "signal")
     if x.ndim != 1 or x.size == 0:
         raise AudioInputError(f"signal must be a non-empty 1-D array, got shape {x.shape}")
+    check_rng(rng)  # (before the work: add_noise draws from it at the end)
     pos = array.positions if mic_positions is None else _mic_positions(mic_positions)
     if len(pos) != array.n_mics:
         raise GeometryError(

@@ -29,6 +29,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.config import (
     as_path,
+    as_rng,
+    check_rng,
     input_file,
     is_real,
     output_file,
@@ -109,7 +111,7 @@ def white_noise(duration_s: float, fs: float,
                 rng: np.random.Generator | int | None = None) -> NDArray:
     """Unit-variance Gaussian white noise of ``duration_s`` seconds at ``fs`` Hz."""
     n = _check_duration(duration_s, fs)
-    return np.random.default_rng(rng).standard_normal(n)
+    return as_rng(rng).standard_normal(n)
 
 
 # ---------------------------------------------------------------------------- synthetic voice
@@ -225,7 +227,7 @@ def synthetic_voice(kind: str = "male", duration_s: float = 2.0, fs: float = 160
     if fs < MIN_VOICE_FS_HZ:  # (at 1 Hz its syllables rounded to 0 samples: an endless loop)
         raise ConfigError(f"a synthetic voice needs a sample rate of at least "
                           f"{MIN_VOICE_FS_HZ:g} Hz (its formants reach 3.3 kHz), got {fs:g} Hz")
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     f0 = VOICE_F0_HZ[kind]
     t = np.arange(n) / fs
     T = max(duration_s, 1e-9)
@@ -403,6 +405,7 @@ def make_signal(spec: str | Path, duration_s: float, fs: float,
     resampled: the part read extends past the duration by the resampler's filter length).
     """
     n = _check_duration(duration_s, fs)
+    check_rng(rng)  # (an audio file draws nothing: a bad rng passed unnoticed)
     s = str(spec)
     if s == "noise":
         return white_noise(duration_s, fs, rng)

@@ -71,7 +71,7 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.localize import as_tdoas
 from hearsee.audio.tracking import MotionKalman, _covariance
-from hearsee.config import finite_number, is_real, real_entries, whole_number
+from hearsee.config import as_rng, finite_number, is_real, real_entries, whole_number
 from hearsee.errors import EstimationError, GeometryError, RegressorNotFittedError
 from hearsee.geometry import as_points
 from hearsee.vision.camera import Camera, camera_pose
@@ -966,7 +966,7 @@ def simulate_av_samples(rig: AudioVisualRig, n: int, range_m: tuple[float, float
     sigma_px = finite_number("sigma_px", sigma_px, 0.0, error=EstimationError)
     cam = rig.camera
     margin_px = _image_margin(margin_px, cam)
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     uv = np.column_stack([rng.uniform(margin_px, cam.width - 1 - margin_px, n),
                           rng.uniform(margin_px, cam.height - 1 - margin_px, n)])
     o, d = rig.rays(uv)
