@@ -841,6 +841,32 @@ def test_track_on_rays_checks_its_search_settings_before_any_frame(rig):
     assert len(res.t) > 0 and np.all(np.isnan(res.raw))
 
 
+def test_trackers_of_the_wrong_kind_are_refused_before_any_frame(rig):
+    """track_on_rays(tracker="a") ran the whole recording's GCC-PHAT and then raised a builtin
+    AttributeError ('str' object has no attribute 'update'), and feed_tracker did at once (None
+    too). Both EstimationErrors now, track_on_rays before its first frame; a tracker without
+    position / velocity is refused there as well. The library's trackers pass."""
+    from hearsee.audio.tracking import MotionKalman
+    from hearsee.fusion.audiovisual import feed_tracker
+
+    class NoState:
+        def update(self, t, position=None, R=None, candidates=None):
+            return False
+
+    x = np.zeros((3, 1600))
+    for bad in ("a", 5, None, [1], NoState()):
+        if bad is not None:
+            with pytest.raises(EstimationError, match="track_on_rays: tracker must be a 3D"):
+                track_on_rays(rig, x, 16000, lambda t: None, tracker=bad)
+        if not isinstance(bad, NoState):
+            with pytest.raises(EstimationError, match="feed_tracker: tracker must be a 3D"):
+                feed_tracker(bad, 0.1, None, None, None)
+    assert feed_tracker(NoState(), 0.1, None, None, None) is False  # (update is all it needs)
+    for good in (RayTracker(), RayTdoaTracker(rig), MotionKalman()):
+        res = track_on_rays(rig, x, 16000, lambda t: None, tracker=good)
+        assert len(res.t) > 0 and np.all(np.isnan(res.raw))
+
+
 @pytest.mark.parametrize("max_iter", [2.5, "500", True, 0])
 def test_regressor_max_iter_must_be_a_whole_number(rig, max_iter):
     """int(max_iter) read 2.5 as 2, "500" as 500 and True as 1."""

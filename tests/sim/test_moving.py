@@ -278,6 +278,43 @@ def test_room_update_times_keep_the_tdoa_bound_for_a_fast_close_source():
         _update_times(graze, arr.positions, 343.0, FS, int(0.2 * FS), 0.05, 0.01)
 
 
+def test_moving_simulators_check_rir_fn_and_rng_before_any_work():
+    """A rir_fn that is no function raised a builtin TypeError at the first block, one that
+    returned text numpy's ValueError, NaN responses made a NaN recording without a word; a
+    bad rng raised numpy's TypeError / ValueError only in add_noise, after the whole
+    simulation. GeometryError / ConfigError now, rir_fn and rng before any block."""
+    arr = MicArray.from_preset("three-mic")
+    at = np.array([2.0, 2.0, 1.2])
+    x = _bandlimited_noise(FS // 4, 3)
+    traj = linear_trajectory([1.0, -0.2, 0.0], [0.0, 0.5, 0.0], 0.3)
+    calls = []
+
+    def counted(src):
+        calls.append(src)
+        return _delay_rir(arr.positions + at)(src)
+
+    def room(**kw):
+        return simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.3, at, **kw)
+
+    for fn in (5, "rir", np.ones((3, 10))):
+        with pytest.raises(GeometryError, match="rir_fn must be a function"):
+            room(rir_fn=fn)
+    for fn, msg in ((lambda s: "abc", "rir_fn must return"), (lambda s: None, "rir_fn must"),
+                    (lambda s: np.ones((2, 10)), r"shape \(2, 10\) for 3 mics"),
+                    (lambda s: np.ones((3, 0)), r"shape \(3, 0\)"),
+                    (lambda s: np.full((3, 10), np.nan), "NaN or infinite")):
+        with pytest.raises(GeometryError, match=msg):
+            room(rir_fn=fn)
+    for bad in ("a", 1.5, -1):
+        with pytest.raises(ConfigError, match="rng must be"):
+            room(rir_fn=counted, snr_db=10.0, rng=bad)
+        with pytest.raises(ConfigError, match="rng must be"):
+            simulate_moving_free_field(x, FS, arr, traj, snr_db=10.0, rng=bad)
+    assert calls == []  # (no block was rendered)
+    y = room(rir_fn=counted, snr_db=10.0, rng=np.random.default_rng(1))
+    assert y.shape == (3, x.size) and np.all(np.isfinite(y)) and calls
+
+
 def test_trajectory_interpolation_velocity_and_csv_roundtrip(tmp_path):
     traj = waypoint_trajectory([[1, 0, 0], [1, 1, 0], [0, 1, 0]], speed_mps=0.5)
     assert traj.duration == pytest.approx(4.0)

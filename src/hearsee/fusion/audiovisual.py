@@ -754,13 +754,30 @@ def _checked_fix(fix: RayFix) -> tuple[NDArray, NDArray]:
     return pos, cov
 
 
+def _check_tracker(tracker: Any, where: str, *, state: bool = False) -> None:
+    """An EstimationError unless ``tracker`` has a callable ``update_measurements`` or
+    ``update`` (and, with ``state``, ``position`` and ``velocity``): text, a number or None
+    raised a builtin AttributeError -- in :func:`track_on_rays` after the whole recording's
+    GCC-PHAT (2026-12-02)."""
+    ok = any(callable(getattr(tracker, m, None)) for m in ("update_measurements", "update"))
+    if ok and state:  # (looked up on the class: a property of an empty track may raise)
+        ok = all(hasattr(type(tracker), a) or a in getattr(tracker, "__dict__", {})
+                 for a in ("position", "velocity"))
+    if not ok:
+        raise EstimationError(
+            f"{where}: tracker must be a 3D tracker with update_measurements(t, uv, tdoa_s, fix) "
+            f"or update(t, position, R, candidates)" + (" and position, velocity" if state else "")
+            + f" (RayTdoaTracker, RayTracker, MotionKalman), got {type(tracker).__name__}")
+
+
 def feed_tracker(tracker: Any, t: float, uv: ArrayLike | None, tdoa_s: ArrayLike | None,
                  fix: RayFix | None) -> bool:
     """One frame into a 3D tracker: one with ``update_measurements`` (:class:`RayTdoaTracker`)
     gets the image point (pixels), the TDOAs (seconds) and the fix; any other
     (:class:`RayTracker`, :class:`hearsee.audio.tracking.MotionKalman`) the fix and its
     alternatives, or a prediction to ``t`` (seconds) without one. Returns the tracker's answer
-    (True when something was fused)."""
+    (True when something was fused). Anything else is an EstimationError."""
+    _check_tracker(tracker, "feed_tracker")
     if hasattr(tracker, "update_measurements"):
         return tracker.update_measurements(t, uv, tdoa_s, fix)
     if fix is None:
@@ -905,6 +922,8 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
 
     _check_rig(rig, "track_on_rays")
     _check_image_points(image_points)
+    if tracker is not None:
+        _check_tracker(tracker, "track_on_rays", state=True)
     # (NaN kept every fix -- residual > NaN is False -- and text raised a builtin TypeError)
     finite_number("max_residual_samples", max_residual_samples, 0.0, error=EstimationError)
     # (checked by locate_on_ray only once a frame had an image point and TDOAs: a bad range

@@ -47,6 +47,7 @@ from hearsee.audio.signals import as_samples, check_fs
 from hearsee.config import (
     MAX_TIME_LIMIT_S,
     as_float_array,
+    check_rng,
     finite_number,
     input_file,
     is_real,
@@ -507,6 +508,7 @@ def simulate_moving_free_field(
         :func:`hearsee.audio.propagation.simulate_free_field` to about -80 dB.
     """
     x = _check_signal(signal, fs)
+    check_rng(rng)  # (before the work: add_noise draws from it at the end)
     pos, c = _mics_and_c(mics, speed_of_sound)
     t = np.arange(x.size) / fs
     tau, r = retarded_delays(trajectory, pos, t, c)
@@ -722,6 +724,10 @@ def simulate_moving_room(
             raise GeometryError(f"{name} must be > 0 or None, got {bound!r}")
     if early_order is not None:
         early_order = whole_number("early_order", early_order, 0, error=GeometryError)
+    check_rng(rng)  # (before the work: add_noise draws from it at the end)
+    if rir_fn is not None and not callable(rir_fn):  # (a builtin TypeError at the first block)
+        raise GeometryError(f"rir_fn must be a function source_room (3,) -> (n_mics, L) impulse "
+                            f"responses, got {type(rir_fn).__name__}")
     from hearsee.sim.audio import _mic_positions
 
     if not isinstance(array, MicArray):
@@ -783,9 +789,17 @@ def _render_blocks(x: NDArray, centres: NDArray, src_room: NDArray,
         seg = x[lo:hi] * _hat_weight(b, lo, hi, centres)
         if not np.any(seg):
             continue
-        h = np.atleast_2d(np.asarray(rir_fn(src_room[b]), dtype=float))
-        if h.shape[0] != n_mics:
-            raise GeometryError(f"rir_fn returned {h.shape[0]} channels for {n_mics} mics")
+        h = rir_fn(src_room[b])
+        # (text raised numpy's ValueError, NaN made a NaN recording without a word)
+        if not real_entries(h):
+            raise GeometryError(f"rir_fn must return (n_mics, L) impulse responses (numbers), "
+                                f"got {type(h).__name__}")
+        h = np.atleast_2d(np.asarray(h, dtype=float))
+        if h.ndim != 2 or h.shape[0] != n_mics or h.shape[1] == 0:
+            raise GeometryError(f"rir_fn returned responses of shape {h.shape} for {n_mics} mics "
+                                f"(expected ({n_mics}, L) with L >= 1)")
+        if not np.all(np.isfinite(h)):
+            raise GeometryError("rir_fn returned NaN or infinite samples")
         y = ss.fftconvolve(seg[None, :], h, axes=-1)
         stop = min(n, lo + y.shape[1])
         out[:, lo:stop] += y[:, : stop - lo]
