@@ -127,6 +127,26 @@ def test_image_point_row_with_only_u_or_v_is_refused(scene, tmp_path, capsys, ro
     assert pts(0.0) == (320.0, 240.0) and pts(0.1) is None and pts(0.2) is None
 
 
+def test_image_points_help_tells_the_margin_the_file_check_uses(scene, tmp_path, capsys):
+    """--help said a point off the camera's image is an error, but points up to
+    IMAGE_POINT_MARGIN of the larger side (64 px of 640x480) past the edge are used. The help
+    now gives that margin; the check is as it was: 50 px off is used, 80 px off refused."""
+    from hearsee.stream.video import IMAGE_POINT_MARGIN
+
+    assert main(["track", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert (f"a point more than {IMAGE_POINT_MARGIN:.0%} of the image's larger side outside "
+            "the camera's image (64 px of 640x480), is an error; a point nearer the edge is "
+            "used") in text
+    near, far = tmp_path / "near.csv", tmp_path / "far.csv"
+    near.write_text("t,u,v\n0.0,-50,240\n0.3,690,240\n")
+    far.write_text("t,u,v\n0.0,-80,240\n")
+    assert main([*scene["base"], "--image-points", str(near)]) == 0
+    capsys.readouterr()
+    assert main([*scene["base"], "--image-points", str(far)]) == 2
+    assert "outside the calibrated 640x480 image by more than 64 px" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(("rows", "where"), [
     ("100,320,240\n101,330,240\n", "the file's visible points are from 100 s to 101 s"),
     ("0.0,,\n0.2,,\n", "the file has no visible point: every u,v is empty"),

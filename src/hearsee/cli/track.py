@@ -14,6 +14,7 @@ from typing import Annotated
 import typer
 
 from hearsee.cli._app import GccMethod, app, emit_json, err_console, parse_floats, to_jsonable
+from hearsee.stream.video import IMAGE_POINT_MARGIN
 
 
 class TrackFormat(StrEnum):
@@ -108,8 +109,10 @@ def track_cmd(
         "--camera-device", help="Live camera index (needs --camera).")] = None,
     image_points: Annotated[Path | None, typer.Option(
         "--image-points", help="CSV t,u,v of the source's image point (needs --camera; "
-        "empty u and v = not visible; only one of them, or a point off the camera's image, is "
-        "an error).")] = None,
+        "empty u and v = not visible). Only one of u and v, or a point more than "
+        f"{IMAGE_POINT_MARGIN:.0%} of the image's larger side outside the camera's image "
+        f"({IMAGE_POINT_MARGIN * 640:g} px of 640x480), is an error; a point nearer the edge "
+        "is used as it is.")] = None,
     detector: Annotated[Detector, typer.Option(
         "--detector", help="Person detector for --video / --camera-device.")] = Detector.hog,
     camera: Annotated[Path | None, typer.Option(

@@ -8,8 +8,8 @@ frame, the pixel ``(u, v)`` where the source appears. Two providers, both callab
   e.g. written by a simulation or an external detector, and interpolates linearly between rows
   that are at most ``max_gap_s`` apart. An infinite pixel, a row with only one of u and v,
   or (given the calibrated camera) a pixel outside its image by more than
-  :data:`IMAGE_POINT_MARGIN` of the image size, is refused with an error naming the file and
-  line, like any other row it cannot use.
+  :data:`IMAGE_POINT_MARGIN` of the image's larger side, is refused with an error naming the
+  file and line, like any other row it cannot use.
 * :class:`VideoImagePoints` reads a video file (which must deliver a first frame: a corrupt or
   empty one is refused) or a camera (OpenCV ``VideoCapture``) and runs a simple detector on
   the frame nearest time t: OpenCV's HOG people detector (Dalal & Triggs 2005; ``detector="hog"``,
