@@ -1052,3 +1052,31 @@ def test_joint_summary_at_a_high_sample_rate_finds_the_peaks(three):
         truth = three.tdoa_far(u)
         np.testing.assert_allclose(np.nanmedian(r.tdoa_s, axis=0) * fs, truth * fs, atol=0.05)
         np.testing.assert_allclose(r.summary_tdoa_s * fs, truth * fs, atol=0.05)
+
+
+def test_confidence_range_is_the_documented_one():
+    """The GCC confidence is a peak ratio whose range was nowhere documented (it exceeds 1 for
+    every usable frame; a reader of the JSON took it for a probability). Documented now -- 0
+    to MAX_CONFIDENCE (1000), not a probability -- and these are its ends: a silent frame 0,
+    exact copies of a signal the cap, noise below 1 in most frames, a source above 1; README
+    states the same range."""
+    from pathlib import Path
+
+    from hearsee.audio.tdoa import MAX_CONFIDENCE
+
+    arr = MicArray.from_preset("three-mic")
+    rng = np.random.default_rng(5)
+    s = rng.standard_normal(FS)
+    copies = np.stack([s, np.roll(s, 3), np.roll(s, -2)])
+    copies[:, : FS // 4] = 0.0  # a silent first quarter
+    tf = estimate_tdoas(copies, FS, arr, snr_weight=False)
+    assert tf.confidence.min() == 0.0 and tf.confidence.max() == MAX_CONFIDENCE == 1000.0
+    assert np.all((tf.summary_confidence > 1.0) & (tf.summary_confidence <= MAX_CONFIDENCE))
+    noise = estimate_tdoas(rng.standard_normal((3, FS)), FS, arr).confidence
+    assert 0.0 < noise.min() and np.median(noise) < 1.0 < MAX_CONFIDENCE
+    source = simulate_free_field(s, FS, arr, [1.0, 1.5, 0.3], snr_db=20, rng=6)
+    assert np.median(estimate_tdoas(source, FS, arr).confidence) > 1.0
+    readme = " ".join((Path(__file__).parents[2] / "README.md").read_text().split())
+    assert ("is the smallest pair's GCC peak-to-second-peak ratio, not a probability: 0 for a "
+            "frame without energy") in readme
+    assert "at most 1000 (`audio.tdoa.MAX_CONFIDENCE`)" in readme

@@ -1423,6 +1423,10 @@ def localize_recording(
         with None where a quantity is not resolvable (no source in the frame, elevation of a
         linear array, ...). The summary localizes the whole-recording TDOA estimate (weighted
         cross spectra averaged over valid frames), not an average of frame angles.
+        ``confidence`` (frames and summary) is the smallest pair's GCC peak-to-second-peak
+        ratio: 0 to :data:`hearsee.audio.tdoa.MAX_CONFIDENCE` (1000), not a probability (a
+        masked array's summary ``confidence`` is the probability of the chosen front/back
+        half instead, 0.5-1: :func:`hearsee.audio.mask.localize_recording_mask`).
     """
     from hearsee.audio.itd_filter import ItdKalman
     from hearsee.audio.tdoa import estimate_tdoas, normalize_method

@@ -1068,7 +1068,9 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
     in that half: :func:`_invert_itd`); the primary is the one in the half chosen for the
     whole recording. Summary:
     :func:`localize_mask` -- one 360-degree azimuth, the runner-up (ITD mirror) as the second
-    candidate, ``front_probability`` and ``confidence`` of the front/back decision,
+    candidate, ``front_probability`` and ``confidence`` of the front/back decision (the
+    probability of the chosen half, 0.5-1; the frames' ``confidence`` is the GCC peak ratio,
+    0 to :data:`hearsee.audio.tdoa.MAX_CONFIDENCE`, as on every array),
     ``distance_m`` of the best-fitting response table. Elevation is null (not resolvable with
     two microphones; the tables are for the horizontal plane), and so are the position keys of
     the contract (``position_m``, ``position_covariance_m2``, ``distance_rel_std``,

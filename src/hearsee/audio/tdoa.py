@@ -35,7 +35,11 @@ Confidence is the peak-to-second-peak ratio: the height of the chosen peak divid
 value of the whole correlation function outside the peak's main lobe (all lags; the lobe is
 ``max(2, ceil(fs / bandwidth))`` samples either side). A coherent source gives a ratio well
 above 1; uncorrelated noise gives a peak in the narrow physical window that is usually lower
-than some spurious peak elsewhere (ratio < 1).
+than some spurious peak elsewhere (ratio < 1). It is a ratio, not a probability: its range is
+0 (a frame without energy, or no positive peak) to :data:`MAX_CONFIDENCE` = 1000 (nothing
+above zero outside the lobe: two exact copies of a signal; larger ratios are capped). A voice
+in free field at 30 dB SNR gave a median of 4.6 per pair and frame (up to 17), in a room of
+RT60 0.3 s at 20 dB 1.3 (up to 3); noise-only frames 0.2-1.2 (three-mic, 64 ms frames).
 
 Frames without a source give no estimate (``valid=False``, TDOA NaN) when either
 - their energy is within ``vad_db`` dB of the recording's noise floor (10th percentile of frame
@@ -78,6 +82,7 @@ from hearsee.geometry import fibonacci_sphere
 
 __all__ = [
     "METHODS",
+    "MAX_CONFIDENCE",
     "MAX_FRAME_MS",
     "MAX_PCM_RANGE",
     "MAX_SUMMARY_UPSAMPLE",
@@ -110,6 +115,9 @@ _ALIASES = {
 }
 _REFINE = ("interp", "parabolic", "none")
 _TINY = 1e-30
+#: Largest GCC confidence (peak-to-second-peak ratio; module docstring): the ratio where nothing
+#: outside the peak's main lobe is above zero, and the cap of larger ratios.
+MAX_CONFIDENCE = 1e3
 #: Longest analysis frame and hop, milliseconds (a frame updating less often than this follows
 #: nothing that moves; the bound also keeps a mistyped length from allocating gigabytes)
 MAX_FRAME_MS = 10_000.0
@@ -420,8 +428,8 @@ def _peaks(r: NDArray, P: NDArray, nfft: int, max_lag: NDArray, refine: str,
     second = R.max(axis=-1).reshape(k.shape)
     R[rows, lobe] = saved
     with np.errstate(divide="ignore", invalid="ignore"):
-        conf = np.where(second > 0, peak / second, np.where(peak > 0, 1e3, 0.0))
-    return lag, np.minimum(conf, 1e3)
+        conf = np.where(second > 0, peak / second, np.where(peak > 0, MAX_CONFIDENCE, 0.0))
+    return lag, np.minimum(conf, MAX_CONFIDENCE)
 
 
 # ---------------------------------------------------------------------------------- one pair
@@ -430,7 +438,8 @@ class GccResult:
     """Whole-signal GCC of one pair.
 
     tdoa_s : float          ``t_i - t_j`` in seconds (refined peak within the lag bound)
-    confidence : float      peak-to-second-peak ratio
+    confidence : float      peak-to-second-peak ratio, 0 to :data:`MAX_CONFIDENCE` (module
+                            docstring; not a probability)
     lags_s : array (m,)     lags of ``r`` in seconds (centred, -nfft/2 .. nfft/2-1 samples)
     r : array (m,)          the weighted cross-correlation function
     """
@@ -576,7 +585,8 @@ class TdoaFrames:
     tdoa_s : array (n_frames, n_pairs)
         ``t_i - t_j`` in seconds per frame and pair; NaN in invalid frames.
     confidence : array (n_frames, n_pairs)
-        Peak-to-second-peak ratio of each GCC (0 in silent frames).
+        Peak-to-second-peak ratio of each GCC: 0 (silent frames) to :data:`MAX_CONFIDENCE`
+        (1000), above 1 where the peak stands out (module docstring; not a probability).
     valid : array (n_frames,) bool
         True where the frame holds a source (energy above the noise floor, every pair's
         confidence >= ``min_confidence`` and, for arrays without redundant pairs (two
@@ -594,7 +604,7 @@ class TdoaFrames:
         for a single independent pair averaged over all frames -- when its confidence is below
         1.5 x ``min_confidence``.
     summary_confidence : array (n_pairs,)
-        Peak-to-second-peak ratio of the averaged correlation.
+        Peak-to-second-peak ratio of the averaged correlation (0 to :data:`MAX_CONFIDENCE`).
     max_tdoa_s : array (n_pairs,)
         The lag bound used per pair (physical maximum plus margin), seconds.
     fs : float

@@ -181,8 +181,10 @@ class Update:
     the default ``spectrum_alpha`` (0.5) any other frame gives it the smoothed steered
     response's candidate (with its age as measurement delay) or nothing, and ``measured``
     says whether it took a measurement. (Until 2026-12-02 this said the tracker receives
-    ``itd_*``.) ``latency_s`` is the wall-clock time from the arrival of the block that
-    completed the frame to the update.
+    ``itd_*``.) ``confidence`` is the frame's GCC peak-to-second-peak ratio (the smallest
+    pair's; 0 when the frame gave no TDOAs): 0 to :data:`hearsee.audio.tdoa.MAX_CONFIDENCE`
+    (1000), above 1 where the peak stands out, not a probability. ``latency_s`` is the
+    wall-clock time from the arrival of the block that completed the frame to the update.
     """
 
     t: float
