@@ -73,3 +73,28 @@ def test_frame_gcc_is_causal_and_batch_free(cfg):
     ok = np.isfinite(ref).all(axis=1)
     want = np.array([-3.0 + 0.0, -3.0 + 1.0, 0.0 + 1.0])  # t_i - t_j, t_k = -d_k
     np.testing.assert_allclose(np.median(ref[ok], axis=0) * FS, want, atol=0.3)
+
+
+def test_frame_gcc_takes_estimate_tdoas_window_and_margin_from_one_place():
+    """FrameGcc repeated estimate_tdoas' defaults as literals (a 1-sample lag margin, a Tukey
+    25 % window) to size its transforms and noise spectra: a change of one default would have
+    left the stream's noise spectra of other frames. Both now come from the module constants
+    that estimate_tdoas' signature uses."""
+    import inspect
+
+    from hearsee.audio.tdoa import (
+        DEFAULT_MARGIN_SAMPLES,
+        DEFAULT_WINDOW,
+        _window,
+        estimate_tdoas,
+        gcc_nfft,
+    )
+
+    params = inspect.signature(estimate_tdoas).parameters
+    assert params["window"].default is DEFAULT_WINDOW == ("tukey", 0.25)
+    assert params["margin_samples"].default is DEFAULT_MARGIN_SAMPLES == 1.0
+    arr = load_array("three-mic")
+    gcc = pl.FrameGcc(arr, FS, pl.StreamConfig())
+    np.testing.assert_array_equal(gcc.activity.win, _window(DEFAULT_WINDOW, gcc.frame_len))
+    lag = arr.max_tdoa(arr.pairs) * FS + DEFAULT_MARGIN_SAMPLES
+    assert gcc.activity.nfft == gcc_nfft(gcc.frame_len, float(lag.max()))

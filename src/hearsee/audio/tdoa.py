@@ -81,6 +81,9 @@ from hearsee.errors import AudioInputError, ConfigError
 from hearsee.geometry import fibonacci_sphere
 
 __all__ = [
+    "DEFAULT_MARGIN_SAMPLES",
+    "DEFAULT_SMOOTH_FRAMES",
+    "DEFAULT_WINDOW",
     "METHODS",
     "MAX_CONFIDENCE",
     "MAX_FRAME_MS",
@@ -171,6 +174,13 @@ _MAX_GRID_DIRECTIONS = 250_000
 #: Frames over which SCOT, ROTH and ML average their spectral statistics (``smooth_frames``
 #: of :func:`estimate_tdoas`; a stream carries this many minus one as context)
 DEFAULT_SMOOTH_FRAMES = 5
+#: Samples added to each pair's physical lag bound (``margin_samples`` of
+#: :func:`estimate_tdoas`; the stream's :class:`~hearsee.stream.pipeline.FrameGcc` sizes its
+#: transforms with it)
+DEFAULT_MARGIN_SAMPLES = 1.0
+#: Analysis window of :func:`estimate_tdoas` (``window``; the stream's noise spectra are of its
+#: frames): Tukey with 25 % tapers
+DEFAULT_WINDOW = ("tukey", 0.25)
 #: Largest RMS violation (samples) of t_ij + t_jk = t_ik accepted for a summary estimate.
 _CLOSURE_TOL_SAMPLES = 2.0
 #: Lags whose noise-only correlation has less than this share of the zero-lag standard
@@ -1336,10 +1346,10 @@ def estimate_tdoas(
     refine: str = "interp",
     band_hz: tuple[float, float] | None = None,
     smooth_frames: int = DEFAULT_SMOOTH_FRAMES,
-    margin_samples: float = 1.0,
+    margin_samples: float = DEFAULT_MARGIN_SAMPLES,
     vad_db: float = 3.0,
     min_confidence: float = 1.0,
-    window: str | tuple = ("tukey", 0.25),
+    window: str | tuple = DEFAULT_WINDOW,
     snr_weight: bool | str = True,
     summary_frames: str = "valid",
     joint: str = "pairs",

@@ -64,7 +64,9 @@ from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.signals import as_samples, check_fs
 from hearsee.audio.tdoa import (
+    DEFAULT_MARGIN_SAMPLES,
     DEFAULT_SMOOTH_FRAMES,
+    DEFAULT_WINDOW,
     MAX_UNSCALED_PEAK,
     MIN_UNSCALED_PEAK,
     check_analysis_fs,
@@ -802,15 +804,15 @@ class FrameGcc:
         self.array, self.fs, self.cfg = array, float(fs), cfg
         self.pairs = list(array.pairs)
         self.frame_len, self.hop = frame_geometry(fs, cfg.frame_ms, cfg.hop_ms)
-        # estimate_tdoas's window, transform length and band (its defaults: margin 1 sample,
-        # Tukey 25 %): the noise spectra must be of its frames' spectra
-        max_lag = array.max_tdoa(self.pairs) * self.fs + 1.0
+        # estimate_tdoas's window, transform length and band (its defaults, which the calls
+        # below leave in place): the noise spectra must be of its frames' spectra
+        max_lag = array.max_tdoa(self.pairs) * self.fs + DEFAULT_MARGIN_SAMPLES
         nfft = gcc_nfft(self.frame_len, float(max_lag.max()))
         n_bins = nfft // 2 + 1
         bins = np.flatnonzero(_band_mask(n_bins, nfft, self.fs, cfg.band_hz))
         k0, k1 = int(bins[0]), int(bins[-1]) + 1
         n_hist = max(int(round(cfg.activity_history_s * 1e3 / cfg.hop_ms)), 1)
-        self.activity = FrameActivity(n_hist, self.frame_len, _window(("tukey", 0.25),
+        self.activity = FrameActivity(n_hist, self.frame_len, _window(DEFAULT_WINDOW,
                                                                       self.frame_len),
                                       nfft, k0, k1, band_test=k0 > 1 or k1 < n_bins - 1,
                                       noise=bool(cfg.snr_weight))
