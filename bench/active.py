@@ -27,7 +27,9 @@ All on the same simulated captures, in one process:
    within 2 deg in at most 8 moves).
 4. **Continuous sampling** (fig. 4.14) and the search curves of figs. 4.15-4.17 in the PNG.
 
-Run ``python bench/active.py`` (~5-8 min on 2 cores) or ``--quick``.
+Run ``python bench/active.py`` (~1.5-2 min on 2 cores with ``--n 12``, the published run;
+~45 s with ``--n 2``: ~40 s of fixed work, the MLP training among it, and ~4 s of CPU per
+source per condition) or ``--quick``.
 """
 
 from __future__ import annotations
