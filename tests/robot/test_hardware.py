@@ -1728,13 +1728,11 @@ def test_video_files_keep_the_time_of_frames_after_a_dropped_one(tmp_path, mjpeg
                      None]
 
 
-def test_speaker_chosen_by_the_bearing_from_the_array_not_the_pivot(tmp_path, monkeypatch):
-    """Before there is a track, the verified person nearest the audio bearing becomes the
-    speaker. The bearing is heard from the array origin (head.offset_m), but the persons'
-    azimuths were taken from the pivot:
-    with the array 0.4 m left of the pivot and the talker 1.2 m straight ahead of it (bearing
-    0 deg), the talker is at 18.4 deg from the pivot and a silent person 0.45 m to their right
-    at -2.4 deg -- the silent one was chosen (from the array: 0 and -20.6 deg)."""
+def _talker_and_silent_run(tmp_path, monkeypatch, talker_beyond_search=False):
+    """A live run over files: the array 0.4 m left of the pivot, the talker 1.2 m straight
+    ahead of it (bearing 0 deg from the array), a silent person 0.45 m to their right (-20.6
+    deg from the array, 18.4 and -2.4 deg from the pivot), both verified by a stand-in
+    detector, the talker's detection flagged ``beyond_search`` if asked."""
     import types as _types
 
     import hearsee.vision.fusion as fusion
@@ -1761,8 +1759,9 @@ def test_speaker_chosen_by_the_bearing_from_the_array_not_the_pivot(tmp_path, mo
         return np.array([-d[1], -d[2], d[0]])
 
     def fake_detect(left, right, rig, thermal=None, **kw):
-        humans = [Human([10, 10, 20, 40], cam(p), 0.9, None, 1.75, True)
-                  for p in (talker, silent)]
+        humans = [Human([10, 10, 20, 40], cam(p), 0.9, None, 1.75, True,
+                        beyond_search=flag)
+                  for p, flag in ((talker, talker_beyond_search), (silent, False))]
         return _types.SimpleNamespace(humans=humans, rejected=[],
                                       frame=_types.SimpleNamespace(left=left))
 
@@ -1771,11 +1770,33 @@ def test_speaker_chosen_by_the_bearing_from_the_array_not_the_pivot(tmp_path, mo
 
     x, _ = simulate_recording("three-mic", talker - pivot - offset, duration_s=1.5, fs=FS,
                               snr_db=25.0, seed=6)
-    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
-                    cameras=_StillCameras(img), keep_frames=0)
+    return run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
+                     cameras=_StillCameras(img), keep_frames=0)
+
+
+def test_speaker_chosen_by_the_bearing_from_the_array_not_the_pivot(tmp_path, monkeypatch):
+    """Before there is a track, the verified person nearest the audio bearing becomes the
+    speaker. The bearing is heard from the array origin (head.offset_m), but the persons'
+    azimuths were taken from the pivot: with the talker at 18.4 deg from the pivot and a
+    silent person at -2.4 deg, the silent one was chosen (from the array: 0 and -20.6 deg)."""
+    res = _talker_and_silent_run(tmp_path, monkeypatch)
     first = next(r for r in res.log if any(d["speaker"] for d in r["detections"]))
     assert first["audio"] is not None
     assert [d["speaker"] for d in first["detections"]] == [True, False]
+
+
+def test_live_loop_does_not_fuse_a_fix_flagged_beyond_search(tmp_path, monkeypatch):
+    """The live loop fuses what the simulated one fuses (pipeline.fuses_fix): the talker's
+    verified detection flagged beyond_search (a silhouette broken up at the end of the
+    disparity search) is logged as verified and flagged but never made the speaker, and the
+    silent person (-20.6 deg from the bearing, outside the 20-deg gate) is not taken in its
+    place: no track. Until 2026-12-02 the flagged fix updated the track."""
+    res = _talker_and_silent_run(tmp_path, monkeypatch, talker_beyond_search=True)
+    dets = [d for r in res.log for d in r["detections"]]
+    assert dets and all(d["accepted"] for d in dets)
+    assert [d["beyond_search"] for d in dets[:2]] == [True, False]
+    assert not any(d["speaker"] for d in dets)
+    assert all(r["track"] is None for r in res.log)
 
 
 def test_a_head_pivot_far_off_the_robot_is_refused(small_rig):

@@ -270,27 +270,37 @@ def test_the_fix_of_a_person_beyond_the_disparity_search_is_flagged(seed16_run):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason=(
-    "known, not fixed (2026-12-02): with independent sensor noise per camera frame, one fix at "
-    "t = 3.6 s of a silhouette without its head -- the body 1.0 m away, its nearer parts beyond "
-    "the default matcher's 64-pixel disparity search (f B / 63 = 0.95 m), the map broken up; "
-    "not flagged truncated -- puts the torso centre 13 cm off in x and 15 cm low (z -3.1 sigma, "
-    "joint d2 11.5 < gate 16.3); fused, it turns the velocity around and the track coasts on it "
-    "for TRACK_TIMEOUT_S: p90 0.77 m, velocity RMSE 0.63 m/s. A height gate on the track fixed "
-    "it (0.09 m) but failed the held-out rule's per-scenario harm check (2026-12-02 note). The "
-    "detector now flags that fix beyond_search (vision.humans.BROKEN_BOX_SHARE); the robot "
-    "does not act on the flag: rejecting such fixes gave 0.09 m here and -46 % mean p90 on "
-    "120 held-out scenarios, but 3 of them 8-15 cm worse (2026-12-02, forty-fifth note)"))
 def test_track_does_not_run_away_while_the_person_is_too_close_to_see(seed16_run):
     """Random scenario 16 (the simulator's ground truth): the person passes 0.6-0.9 m from the
     robot, where the stereo detector loses them, and the track coasts until TRACK_TIMEOUT_S.
     Every audio frame's bearing (of the mouth, ~8 deg off the torso at that range, six
     correlated frames per step) used to update the coasting track too and pushed it away:
     position error p90 0.67 m, velocity RMSE 0.84 m/s. Vision only: 0.11 m and 0.25 m/s
-    (with every camera frame's noise the same; see the xfail reason)."""
+    (with every camera frame's noise the same). With each frame's own noise (2026-12-02) one
+    fix at t = 3.6 s of a silhouette broken up at the end of the disparity search (the body
+    1.0 m away, its nearer parts beyond the 64-disparity search) put the torso 22 cm off and,
+    fused, turned the velocity around: p90 0.77 m, velocity RMSE 0.63 m/s (a strict xfail
+    until the robot stopped fusing fixes flagged beyond_search, pipeline.fuses_fix): now
+    0.094 m and 0.11 m/s."""
     s = seed16_run.summary
     assert s["position_error_p90_m"] < 0.3
     assert s["velocity_rmse_mps"] < 0.5
+
+
+def test_only_verified_fixes_within_the_disparity_search_are_fused():
+    """pipeline.fuses_fix, the one rule of the simulated and the live loop: a verified
+    person updates the track unless flagged beyond_search; a rejected candidate never."""
+    from hearsee.robot.pipeline import fuses_fix
+    from hearsee.vision.fusion import Human
+
+    def human(accepted, beyond):
+        return Human([0, 0, 10, 30], np.array([0.0, 0.0, 2.0]), 0.9, 0.8, 1.7, accepted,
+                     beyond_search=beyond)
+
+    assert fuses_fix(human(True, False))
+    assert not fuses_fix(human(True, True))
+    assert not fuses_fix(human(False, False))
+    assert not fuses_fix(human(False, True))
 
 
 def test_fixes_of_silhouettes_cut_by_the_image_border_count_less():

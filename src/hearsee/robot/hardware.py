@@ -1241,7 +1241,9 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        human detection
        (:func:`hearsee.vision.fusion.detect_humans`).
     4. **Fuse and track**: the verified person nearest the audio bearing (within the pipeline's
-       association gate) updates a constant-acceleration 3D Kalman filter in the robot frame
+       association gate; not one flagged ``beyond_search``:
+       :func:`~hearsee.robot.pipeline.fuses_fix`)
+       updates a constant-acceleration 3D Kalman filter in the robot frame
        (vision only, as the simulated loop: see the pipeline's ``TRACK_TIMEOUT_S``). A track
        without a visual fix for :func:`~hearsee.robot.pipeline.track_timeout_s` of the
        detector's achieved frame interval (``summary["vision_frame_interval_s"]``: 1 s, or
@@ -1290,6 +1292,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         MIN_AUDIO_UPDATES,
         RunResult,
         associate,
+        fuses_fix,
         new_person_track,
         stereo_position_cov,
         track_record,
@@ -1379,7 +1382,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             dets.append({**h.to_dict(), "position_m": _r(p), "azimuth_deg": _r(az, 2),
                          "elevation_deg": _r(el, 2), "accepted": bool(h.accepted),
                          "speaker": False})
-            if h.accepted:  # (compared with the audio bearing: from the array origin)
+            if fuses_fix(h):  # (compared with the audio bearing: from the array origin)
                 verified.append((h, p, g.heard_azimuth_deg(p), len(dets) - 1))
         # the track holds the state of its last fix (the loop reports it predicted to each
         # update's time): the frames' fix is of their capture time, earlier than t by the
