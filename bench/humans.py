@@ -53,6 +53,7 @@ def _save_png(name: str, image: np.ndarray) -> None:
     RESULTS.mkdir(parents=True, exist_ok=True)
     cv2.imwrite(str(RESULTS / name), image, [cv2.IMWRITE_PNG_COMPRESSION, 9])
 
+
 TMS = np.round(np.linspace(0.0, 1.0, 21), 2)
 
 

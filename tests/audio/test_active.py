@@ -360,7 +360,6 @@ def test_continuous_sampling_with_pan_reported_across_180_deg():
     assert ests[1].cost == pytest.approx(ests[0].cost, rel=1e-6, abs=1e-9)
 
 
-
 def test_continuous_sampling_refuses_bad_group_and_block_sizes():
     """group_frames 0 raised range()'s ValueError, 2.5 a TypeError and -1 'at least one head
     pose is needed'; a NaN block_s raised int()'s ValueError and a negative one was taken as
@@ -677,8 +676,6 @@ def test_simulate_poses_cli_writes_manifest(tmp_path, capsys):
     assert "--poses" in capsys.readouterr().err
     assert main(["simulate", str(tmp_path / "x.wav")] + args[2:]) == 2
     assert "manifest" in capsys.readouterr().err
-
-
 
 
 def test_thesis_search_from_the_upper_tilt_limit_tries_downward():

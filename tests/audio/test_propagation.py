@@ -56,7 +56,6 @@ ROOM = [6.0, 5.0, 3.0]
 AT = [3.0, 2.5, 1.4]
 
 
-
 @pytest.mark.parametrize("rt60", [0.0, 0.3])
 def test_room_gcc_tdoa_matches_geometry(rt60, gcc_phat_ref):
     fs = 16000

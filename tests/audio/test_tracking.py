@@ -210,7 +210,6 @@ def test_bad_input():
         track_positions([0, 1], np.zeros((3, 3)))
 
 
-
 def test_track_directions_checks_the_valid_mask_before_using_it():
     """The shape check came after ``valid & isfinite(az)``: a mask of another length raised
     numpy's broadcast ValueError, and a one-element mask was broadcast over every frame."""
@@ -221,7 +220,6 @@ def test_track_directions_checks_the_valid_mask_before_using_it():
         track_directions(t, az, valid=[False])
     tr = track_directions(t, az, valid=[True, False, True, True])
     assert tr.accepted.tolist() == [True, False, True, True]
-
 
 
 def test_motion_fixes_and_covariances_of_the_wrong_shape_are_refused():

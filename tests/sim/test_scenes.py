@@ -88,6 +88,7 @@ def test_textures_let_sgbm_match(scene):
 def test_thermal_temperatures(scene):
     th = scene.thermal_c
     cam = RIG.thermal
+
     def temp_at(p):
         u, v = RIG.project_thermal(np.asarray(p)[None])[0]
         return float(th[int(round(v)), int(round(u))])

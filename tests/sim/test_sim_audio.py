@@ -19,7 +19,6 @@ from hearsee.sim.audio import (
 FS = 16000
 
 
-
 def test_free_field_truth_and_tdoa(gcc_phat_ref):
     arr = MicArray.from_preset("three-mic")
     src = sph_to_cart(np.radians(-130.0), np.radians(20.0), 1.5)

@@ -266,7 +266,6 @@ def test_dropout_source_delivers_a_late_last_block():
         assert st.audio_s == 10 * BL / FS and st.n_frames == (10 * BL - 1024) // 512 + 1
 
 
-
 @pytest.mark.parametrize("threaded", [False, True])
 def test_dropped_last_blocks_are_counted_and_their_frames_reported_missing(threaded):
     """Blocks dropped at the end of a stream leave no gap in the sequence numbers: they were
@@ -287,6 +286,7 @@ def test_dropped_last_blocks_are_counted_and_their_frames_reported_missing(threa
         st = pipe.stats
         assert st.n_dropped_blocks == len(drop) and st.n_late_blocks == 0
         assert st.n_frames == len(starts) and st.n_missing_frames == sum(want_missing)
+
 
 # ------------------------------------------------------------------------- 3. SRP through gaps
 def test_smoothed_srp_ages_its_evidence_through_dropped_frames():

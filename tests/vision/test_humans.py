@@ -51,7 +51,6 @@ def test_u_disparity_counts():
         u_disparity(np.zeros(5))
 
 
-
 def test_u_disparity_refuses_impossible_disparities_and_bad_options():
     """A disparity wider than the image asked for terabytes of counts (MemoryError); a
     negative max_disparity and a mask of another shape failed inside numpy."""

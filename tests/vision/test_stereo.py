@@ -232,7 +232,6 @@ def test_bad_inputs():
         compute_disparity(tex, tex, block_size=4)
 
 
-
 def test_textureless_images_have_no_disparity():
     """Two blank frames (a lens cap, a saturated sensor) match at every disparity equally
     well; SGBM answered a full map of zeros (points at infinity) as if measured."""

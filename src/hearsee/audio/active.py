@@ -462,6 +462,7 @@ def solve_range_differences(
 
     lo = np.array([-np.inf, -np.pi / 2, np.log(rmin)])
     hi = np.array([np.inf, np.pi / 2, np.log(rmax)])
+
     def refine(x0: NDArray) -> tuple[float, float, NDArray, NDArray]:
         if far:
             res = least_squares(lambda t: resid(np.append(t, np.log(FAR_DISTANCE_M))),

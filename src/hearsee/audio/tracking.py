@@ -1187,7 +1187,6 @@ class MotionKalman(_Kalman):
         self._model_cache: dict[float, tuple[NDArray, NDArray]] = {}
         self.reset()
 
-
     def reset(self) -> None:
         """Forget the track."""
         n = self._DIM
@@ -1238,7 +1237,6 @@ class MotionKalman(_Kalman):
 
     def _set_dt(self, dt: float) -> None:
         self.F, self.Q = _cached(self._model_cache, dt, lambda: self._model(dt))
-
 
     def _start(self, z: NDArray, R: NDArray) -> None:
         self.x = np.zeros(9)

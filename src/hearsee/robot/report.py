@@ -109,6 +109,7 @@ def report_overwrites(folder: str | Path, paths: Sequence[str | Path | None]) ->
             return Path(p)
     return None
 
+
 def report_makes_folder(folder: str | Path, path: str | Path) -> bool:
     """Whether :func:`write_report` into ``folder`` makes ``path`` a folder (or writes into
     it): ``folder`` itself, a folder above it, or its ``plots/`` or ``frames/``. An output

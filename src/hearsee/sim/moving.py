@@ -530,6 +530,8 @@ def simulate_moving_free_field(
 #: within it (0.35 samples), so only rooms without that split (rt60 0, a low ``max_order``, a
 #: custom ``rir_fn``) or faster sources and higher rates get more updates.
 MAX_DELAY_STEP_SAMPLES = 0.5
+
+
 def _update_times(trajectory: Trajectory, mics: NDArray, c: float, fs: float, n: int,
                   block_s: float, max_tdoa_step_samples: float | None,
                   max_delay_step_samples: float | None = None) -> NDArray:
