@@ -97,6 +97,11 @@ def test_missing_file_and_unknown_preset(tmp_path):
         load_array(tmp_path)
     with pytest.raises(InputFileError, match="no such array file"):
         load_array(tmp_path / "my-array")
+    # a YAML suffix in any case names a file (config.names_a_file), never a preset: a missing
+    # "mics.YAML" was "unknown array preset 'mics.YAML'"
+    for name in ("mics.YAML", "mics.Yml", "nope.yaml"):
+        with pytest.raises(InputFileError, match="no such array file"):
+            load_array(name)
 
 
 def test_array_mapping_name_and_speed_of_sound():

@@ -33,6 +33,7 @@ from hearsee.config import (
     check_keys,
     is_real,
     load_yaml,
+    names_a_file,
     real_entries,
     require,
     whole_number,
@@ -567,8 +568,11 @@ def load_array(spec: str | Path | MicArray) -> MicArray:
     s = str(spec)
     if Path(s).is_dir():  # (a folder or a missing path read as an unknown preset name)
         raise InputFileError(f"{s}: is a folder; expected an array YAML file or a preset name")
-    if s.endswith((".yaml", ".yml")) or Path(s).is_file():
+    if Path(s).is_file():
         return MicArray.from_yaml(s)
-    if "/" in s or "\\" in s:  # preset names have no folders
+    # (the rule of the robot file and the scenarios, config.names_a_file: a folder or a YAML
+    # suffix in any case -- a missing "mics.YAML" was called an unknown preset until
+    # 2026-12-02; preset names have neither)
+    if names_a_file(s):
         raise InputFileError(f"{s}: no such array file")
     return MicArray.from_preset(s)
