@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hearsee.cli import main
-from hearsee.errors import ConfigError
+from hearsee.errors import ConfigError, EstimationError
 from hearsee.robot.pipeline import (
     TRUNCATED_COV_SCALE,
     new_person_track,
@@ -189,7 +189,6 @@ def test_associate_never_picks_what_is_not_a_number():
     positions and bearings of different lengths are an EstimationError, not an index
     without a position."""
     from hearsee.audio.tracking import MotionKalman
-    from hearsee.errors import EstimationError
     from hearsee.robot.pipeline import associate
 
     kf = MotionKalman()
@@ -515,6 +514,16 @@ def test_camera_rate_is_the_frames_per_second_asked_for():
         assert len(t) - 1 == pytest.approx(rate * span, abs=1.0)
     with pytest.raises(ConfigError, match="camera_rate_hz"):
         scenario_from_dict({**SHORT, "robot": {**SHORT["robot"], "camera_rate_hz": 6}})
+
+
+def test_track_timeout_refuses_a_frame_interval_that_is_not_a_positive_number():
+    """track_timeout_s(NaN) and (-1) gave the plain 1 s (max() of a NaN), text Python's
+    ValueError: each is an EstimationError naming frame_interval_s."""
+    from hearsee.robot.pipeline import track_timeout_s
+
+    for bad in (float("nan"), -1.0, 0.0, float("inf"), "0.5", None):
+        with pytest.raises(EstimationError, match="frame_interval_s"):
+            track_timeout_s(bad)
 
 
 @pytest.mark.slow

@@ -368,8 +368,13 @@ def track_timeout_s(frame_interval_s: float) -> float:
     rate below 1 Hz, a detector slower than a frame a second) a plain 1 s dropped the track
     before every next frame could confirm it, and its velocity never became known; now it
     survives one frame without a fix, as the 5 Hz track survives four. One place for the
-    simulated loop and the live one."""
-    return max(TRACK_TIMEOUT_S, TRACK_TIMEOUT_FRAMES * float(frame_interval_s))
+    simulated loop and the live one. ``frame_interval_s`` is a finite number > 0, else
+    EstimationError (NaN and -1 gave the 1 s silently, text Python's ValueError)."""
+    from hearsee.config import finite_number
+
+    dt = finite_number("frame_interval_s", frame_interval_s, 0.0, lo_open=True,
+                       error=EstimationError)
+    return max(TRACK_TIMEOUT_S, TRACK_TIMEOUT_FRAMES * dt)
 
 
 def new_person_track() -> MotionKalman:
