@@ -202,9 +202,10 @@ def write_into(dest: Path, data: str | bytes, name: str | Path) -> None:
 
 def names_a_file(spec: str) -> bool:
     """Whether an array spec (``--array``, :func:`hearsee.audio.arrays.load_array`, the robot
-    file's ``audio.array``, a scenario's ``robot.array``) names a file rather than a preset: it has a folder or a YAML suffix, in any case (``.yaml``,
-    ``.yml``, ``.YAML``, ...). Preset names have neither. A file name is looked up next to the
-    file that gives it, never in the working directory."""
+    file's ``audio.array``, a scenario's ``robot.array``) names a file rather than a preset:
+    it has a folder or a YAML suffix, in any case (``.yaml``, ``.yml``, ``.YAML``, ...).
+    Preset names have neither. In the robot file and a scenario a file name is looked up next
+    to that file, never in the working directory."""
     return "/" in spec or "\\" in spec or spec.lower().endswith((".yaml", ".yml"))
 
 
