@@ -69,7 +69,7 @@ from hearsee.audio.arrays import (
     position_uncertainty,
 )
 from hearsee.audio.propagation import check_snr_db, speed_of_sound_of
-from hearsee.audio.signals import as_samples
+from hearsee.audio.signals import as_samples, check_fs
 from hearsee.config import (
     as_float_array,
     as_rng,
@@ -969,7 +969,6 @@ def simulate_turning_capture(
     once to the assembled capture.
     """
     from hearsee.audio.propagation import add_noise
-    from hearsee.audio.signals import as_samples, check_fs
 
     # (before any work: fs=0 divided by zero, warned, and failed on the infinite pose)
     check_fs(fs)
