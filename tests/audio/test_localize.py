@@ -1112,3 +1112,22 @@ def test_tilted_line_reports_the_horizontal_answers_own_residual():
     loc = localize_tdoa(line.tdoa_far(unit_vector_deg(30.0, 0.0)), line)  # meets the plane
     assert loc.feasible and loc.n_solutions == 2 and loc.residual_s < 1e-12
     assert "off_horizontal" not in loc.extra
+
+
+def test_three_mic_curve_needs_two_independent_tdoas_of_a_planar_array():
+    """A two-microphone or collinear array's TDOAs fix a surface about its axis, not a curve:
+    three_mic_curve returned "branches" of arbitrary points of that surface (each where the
+    least-squares step from the far-field guess stopped), and for a four-microphone array,
+    whose TDOAs fix a point, a ray of points near it. Now GeometryErrors; two pairs of a larger
+    planar array still trace their curve."""
+    src = np.array([1.0, 0.5, 0.3])
+    line = MicArray([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.2, 0.0, 0.0]])
+    tet = MicArray(np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]) * 0.05)
+    r4 = MicArray.from_preset("respeaker-4")
+    for arr, match in ((TWO, "collinear"), (line, "collinear"), (r4, "3 independent"),
+                       (tet, "3 independent")):
+        with pytest.raises(GeometryError, match=match):
+            three_mic_curve(arr.tdoa(src), arr)
+    prs = [(0, 1), (0, 2)]
+    branches = three_mic_curve(r4.tdoa(src, prs), r4, prs, ranges_m=[np.linalg.norm(src)])
+    assert min(np.min(np.linalg.norm(b - src, axis=1)) for b in branches) < 1e-6

@@ -1319,12 +1319,29 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
 
     Returns a list of branches, each ``(n_points, 3)`` metres (points whose residual exceeds
     10 us are dropped: where the sphere of that range misses the curve).
+
+    The array must be planar and the pairs must hold exactly two independent TDOAs (three
+    microphones, or two pairs of a larger planar array); anything else is a GeometryError: a
+    linear array's TDOAs fix a surface about its axis (:func:`hyperboloid_points`), three or
+    more independent TDOAs fix a point (:func:`near_field_position`). Before 2026-12-02 a
+    two-microphone or collinear array got "branches" of arbitrary points of its hyperboloid
+    (the least-squares step stopped wherever it started on that surface), and a
+    four-microphone array a ray of near misses.
     """
     from scipy.optimize import least_squares
 
     arr = load_array(array)
     prs = arr.checked_pairs(pairs)
     tau = as_tdoas(tdoa_s, len(prs))
+    kind = array_geometry(arr).kind
+    n_ind = _independent_tdoas(arr.n_mics, tuple(prs))
+    if kind != "planar" or n_ind != 2:
+        what = ("collinear microphones: their TDOAs fix a surface about the array axis, see "
+                "hyperboloid_points" if kind == "linear" else
+                f"a {kind} array's pairs with {n_ind} independent TDOA{'s' * (n_ind != 1)}" + (
+                    ": they fix points, see near_field_position" if n_ind > 2 else ""))
+        raise GeometryError(f"three_mic_curve needs the two independent TDOAs of a planar "
+                            f"array (three microphones), got {what}")
     if ranges_m is not None and not real_entries(ranges_m):  # (text was read as numbers)
         raise GeometryError(f"ranges_m must be finite distances > 0 m, got {ranges_m!r}")
     ranges = np.linspace(0.3, 3.0, 40) if ranges_m is None else np.asarray(ranges_m, float)
