@@ -1131,3 +1131,25 @@ def test_three_mic_curve_needs_two_independent_tdoas_of_a_planar_array():
     prs = [(0, 1), (0, 2)]
     branches = three_mic_curve(r4.tdoa(src, prs), r4, prs, ranges_m=[np.linalg.norm(src)])
     assert min(np.min(np.linalg.norm(b - src, axis=1)) for b in branches) < 1e-6
+
+
+@pytest.mark.parametrize("az,el,r", [(0.0, 10.0, 0.3), (0.0, 10.0, 0.6), (-120.0, 10.0, 0.3),
+                                     (60.0, 0.0, 1.0), (40.0, 25.0, 1.5), (150.0, -30.0, 2.0)])
+def test_three_mic_curve_holds_the_source_and_only_points_of_the_curve(az, el, r):
+    """The curve is where both hyperboloids meet: every point of it fits the TDOAs, and the
+    source (or its mirror image about the array plane) is on it. A source near the array has
+    an in-plane far-field answer (its curved wavefront reads as |u_p| > 1); the branch
+    started there never left the plane (the height has no gradient there), so the source 0.3 m
+    away and 10 deg up was missing and in-plane near misses of up to 10 us were returned in
+    its place; an in-plane source 1 m away got near misses (7.6 us) at 0.5 m on both
+    branches."""
+    src = THREE.centre + r * unit_vector_deg(az, el)
+    mirror = src * [1.0, 1.0, -1.0]
+    tau = THREE.tdoa(src)
+    ranges = np.array([0.3, 0.5, 0.6, 1.0, 1.5, 2.0, 3.0])
+    branches = three_mic_curve(tau, THREE, ranges_m=ranges)
+    assert len(branches) == 2
+    for b in branches:
+        assert np.max(np.abs(THREE.tdoa(b) - tau)) < 1e-8
+    near = min(np.min(np.linalg.norm(b - q, axis=1)) for b in branches for q in (src, mirror))
+    assert near < 1e-3 * r

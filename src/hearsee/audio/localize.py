@@ -56,7 +56,7 @@ from hearsee.audio.arrays import (
 )
 from hearsee.config import finite_number, is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, GeometryError
-from hearsee.geometry import wrap_deg
+from hearsee.geometry import unit_vector_deg, wrap_deg
 
 __all__ = [
     "MAX_LOCUS_POINTS",
@@ -1307,6 +1307,13 @@ def cone_points(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float = 343.0,
     return (mi + mj) / 2.0 + local @ R
 
 
+#: Largest RMS misfit (seconds) of a point of :func:`three_mic_curve` to the consistent part of
+#: the TDOAs (10 ns, 3.4 um of path): points of the curve fit it exactly, to the solver's
+#: precision; a point that fits to more is a near miss where the sphere of its range misses the
+#: curve.
+_CURVE_TOL_S = 1e-8
+
+
 def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
                     pairs: Sequence[tuple[int, int]] | None = None,
                     ranges_m: ArrayLike | None = None) -> list[NDArray]:
@@ -1315,10 +1322,21 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
     Two independent TDOAs fix two hyperboloids; their intersection is a curve. It is traced by
     continuation over the range from the array centre: at each range the direction satisfying
     the pair equations is found by least squares, starting from the far-field solution, for each
-    mirror branch (above and below the array plane).
+    mirror branch (above and below the array plane). A far-field solution in the plane (one
+    candidate, e.g. a source near the array whose curved wavefront reads as ``|u_p| > 1``)
+    starts both branches lifted off the plane (:data:`_PLANE_LIFT`), where the height has no
+    gradient.
 
-    Returns a list of branches, each ``(n_points, 3)`` metres (points whose residual exceeds
-    10 us are dropped: where the sphere of that range misses the curve).
+    Returns a list of branches, each ``(n_points, 3)`` metres, in the order of ``ranges_m``.
+    A point is kept where it fits the TDOAs' consistent part (what is left after removing the
+    pairs' closure residual, :func:`hearsee.audio.arrays.pair_closure_projector`) to
+    :data:`_CURVE_TOL_S`; elsewhere the sphere of that range misses the curve, and that range
+    has no point (nor a branch without any). Before 2026-12-02 points were kept up to 10 us of
+    residual and an in-plane far-field solution started one branch in the plane, which the
+    fit never left: exact TDOAs of a source 0.3 m away, 10 deg above the three-mic preset's
+    plane gave one branch of in-plane near misses (1-10 us), none of them within 5 cm of the
+    source or its mirror image; an in-plane source 1 m away got in-plane near misses at 0.5 m
+    (7.6 us) on both branches.
 
     The array must be planar and the pairs must hold exactly two independent TDOAs (three
     microphones, or two pairs of a larger planar array); anything else is a GeometryError: a
@@ -1354,20 +1372,28 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
     I = np.array([p[0] for p in prs])
     J = np.array([p[1] for p in prs])
     centre = pos.mean(axis=0)
+    geo = array_geometry(arr)
+    # the TDOAs' consistent part (what one point's TDOAs can be): the curve is where it fits
+    proj = pair_closure_projector(tuple(prs), arr.n_mics)
+    tau_c = tau if proj is None else tau - proj[0] @ tau
     ff = localize_tdoa(tau, arr, prs, near_field=False)
+    starts = [unit_vector_deg(a, e) for a, e in ff.candidates]
+    if len(starts) == 1:  # in the plane, where the height has no gradient: lift both ways
+        up = starts[0] - float(starts[0] @ geo.normal) * geo.normal
+        starts = [up + s * _PLANE_LIFT * geo.normal for s in (1.0, -1.0)]
     branches = []
-    for az0, el0 in ff.candidates:
-        p = np.radians([az0 or 0.0, el0 or 0.0])
+    for u0 in starts:
+        p = np.radians(_azel(u0))
         pts = []
         for r in ranges[::-1]:  # from far (where the far-field start is good) to near
 
             def res(q: NDArray, r: float = r) -> NDArray:
                 u = np.array([np.cos(q[1]) * np.cos(q[0]), np.cos(q[1]) * np.sin(q[0]),
                               np.sin(q[1])])
-                return (pair_tdoa(centre + r * u, pos, I, J, c) - tau) * 1e5
+                return (pair_tdoa(centre + r * u, pos, I, J, c) - tau_c) * 1e5
 
             sol = least_squares(res, p)
-            if np.sqrt(np.mean(sol.fun**2)) * 1e-5 < 1e-5:
+            if np.sqrt(np.mean(sol.fun**2)) * 1e-5 <= _CURVE_TOL_S:
                 p = sol.x
                 q = sol.x
                 pts.append(centre + r * np.array([np.cos(q[1]) * np.cos(q[0]),
