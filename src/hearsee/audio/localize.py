@@ -1440,7 +1440,8 @@ def localize_recording(
         peak search steers in-plane directions only (``estimate_tdoas(source_in_plane=True)``,
         unless ``tdoa_kwargs`` says otherwise; before 2026-11-27 it searched the whole sphere,
         unlike bench/doa.py's benchmarked setting). Default False. A masked array refuses it
-        (ConfigError), as it refuses the other settings its own pipeline does not take.
+        (ConfigError), as it refuses the other settings its own pipeline does not take;
+        linear and volume arrays ignore it (:func:`localize_tdoa`).
     tdoa_std_s : float
         Expected TDOA error (s) of the whole-recording summary, for its near-field position
         (arrays of >= 4 microphones): whether the position is reported and its covariance
@@ -1502,11 +1503,16 @@ def localize_recording(
                        r_std_s=r_std_s if r_std_s is not None else 1.0 / fs)
         filt, _ = kf.filter(tdoa)
         tdoa = np.where(tf.valid[:, None], filt, np.nan)
+    # the frames' spherical wavefront of in_plane is a planar array's; for other arrays
+    # in_plane is ignored, as localize_tdoa says and the stream does -- near_field=True fitted
+    # a position to every frame of a volume array (18x slower) and, with five or more
+    # microphones, could take the frame's direction from it (before 2026-12-02)
+    frame_near = bool(in_plane) and array_geometry(arr).kind == "planar"
     frames = []
     for n in range(len(tf.t)):
         row = tdoa[n]
         ok = bool(tf.valid[n]) and bool(np.all(np.isfinite(row)))
-        loc = (localize_tdoa(row, arr, tf.pairs, near_field=in_plane, in_plane=in_plane)
+        loc = (localize_tdoa(row, arr, tf.pairs, near_field=frame_near, in_plane=in_plane)
                if ok else None)
         frames.append({
             "t": float(tf.t[n]),
