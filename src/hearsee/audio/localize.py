@@ -1351,7 +1351,8 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
     arr = load_array(array)
     prs = arr.checked_pairs(pairs)
     tau = as_tdoas(tdoa_s, len(prs))
-    kind = array_geometry(arr).kind
+    geo = array_geometry(arr)
+    kind = geo.kind
     n_ind = _independent_tdoas(arr.n_mics, tuple(prs))
     if kind != "planar" or n_ind != 2:
         what = ("collinear microphones: their TDOAs fix a surface about the array axis, see "
@@ -1372,7 +1373,6 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
     I = np.array([p[0] for p in prs])
     J = np.array([p[1] for p in prs])
     centre = pos.mean(axis=0)
-    geo = array_geometry(arr)
     # the TDOAs' consistent part (what one point's TDOAs can be): the curve is where it fits
     proj = pair_closure_projector(tuple(prs), arr.n_mics)
     tau_c = tau if proj is None else tau - proj[0] @ tau
