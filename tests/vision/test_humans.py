@@ -957,3 +957,37 @@ def test_u_disparity_docstring_example_runs():
                                       globs={"np": np, "u_disparity": humans.u_disparity})]
     result = doctest.DocTestRunner().run(test, out=lambda s: None)
     assert result.attempted == 2 and result.failed == 0
+
+
+def test_body_surface_depth_follows_the_silhouette_width():
+    """body_surface_depth_m: 0.07 m behind the visible surface for a silhouette as wide as a
+    person facing the camera, 0.13 m for one as narrow as a person turned sideways, linear in
+    between (monotone), and a typed error for a width that is not a number >= 0."""
+    from hearsee.vision.humans import body_surface_depth_m
+
+    assert body_surface_depth_m(0.60) == pytest.approx(0.07)
+    assert body_surface_depth_m(0.48) == pytest.approx(0.07)
+    assert body_surface_depth_m(0.25) == pytest.approx(0.13)
+    assert body_surface_depth_m(0.10) == pytest.approx(0.13)
+    assert body_surface_depth_m(0.365) == pytest.approx(0.10)
+    w = np.linspace(0.0, 0.7, 50)
+    assert np.all(np.diff([body_surface_depth_m(v) for v in w]) <= 0)
+    for bad in (float("nan"), -0.1, "0.4", None):
+        with pytest.raises(GeometryError, match="width_m"):
+            body_surface_depth_m(bad)
+
+
+@pytest.mark.parametrize("yaw_deg", [0.0, 90.0])
+def test_torso_depth_of_a_person_facing_or_turned_sideways(yaw_deg):
+    """A person 2 m in front of the camera, facing it or turned sideways (the simulator's
+    ground truth: the body axis at z = 2 m): the torso centre's depth within 2.5 cm. With one
+    surface-to-axis depth for both (0.09 m, until 2026-12-02) the sideways person came out
+    4-6 cm too near (the narrow silhouette's visible surface is the near arm and shoulder,
+    0.13 m in front of the axis) and the facing one 2.5 cm too far."""
+    rig = default_rig()
+    spec = SceneSpec(entities=[Entity("person", 0.0, 2.0, yaw_deg, 1.75)], seed=2)
+    scene = render_scene(spec, rig, noise_seed=2)
+    truth = next(o for o in scene.objects if o.kind == "person").position_m
+    det = detect_humans(scene.left, scene.right, rig, scene.thermal_c)
+    assert len(det.humans) == 1
+    assert abs(det.humans[0].position_m[2] - truth[2]) < 0.025

@@ -65,6 +65,10 @@ from hearsee.vision.io import as_detector_image, bool_mask, numeric_map
 from hearsee.vision.stereo import check_focal_baseline
 
 __all__ = [
+    "BODY_SURFACE_DEPTH_FACING_M",
+    "BODY_SURFACE_DEPTH_SIDEWAYS_M",
+    "BODY_WIDTH_FACING_M",
+    "BODY_WIDTH_SIDEWAYS_M",
     "BROKEN_BOX_SHARE",
     "BodySegment",
     "FLOOR_BELOW_M",
@@ -75,6 +79,7 @@ __all__ = [
     "NEAR_SEARCH_SHARE",
     "StereoDetection",
     "TOP_PERCENTILE",
+    "body_surface_depth_m",
     "check_camera_height",
     "check_params",
     "check_principal_row",
@@ -97,10 +102,33 @@ __all__ = [
 ]
 
 #: Depth (metres) of a standing person's body axis behind the median of the visible surface of
-#: the whole silhouette. Measured on hearsee.sim.scenes bodies (adult proportions): about 0.07 m
-#: for a person facing the camera (torso ~0.22 m deep, legs and arms ~0.12 m) and about 0.15 m
-#: for one turned sideways (the near arm and shoulder); 0.09 m balances the two.
-BODY_SURFACE_DEPTH_M = 0.09
+#: the whole silhouette, for a person facing the camera (torso ~0.22 m deep, legs and arms
+#: ~0.12 m) and for one turned sideways (the near arm and shoulder), and the silhouette widths
+#: (metres, 3rd-97th percentile of the points' x) that tell the two apart; measured on
+#: hearsee.sim.scenes bodies (adult proportions: 0.45-0.51 m wide facing, 0.17-0.19 m
+#: sideways, 0.21-0.35 m at 60 deg). See :func:`body_surface_depth_m`.
+BODY_SURFACE_DEPTH_FACING_M = 0.07
+BODY_SURFACE_DEPTH_SIDEWAYS_M = 0.13
+BODY_WIDTH_FACING_M = 0.48
+BODY_WIDTH_SIDEWAYS_M = 0.25
+
+
+def body_surface_depth_m(width_m: float) -> float:
+    """Depth (metres) of a person's body axis behind the median of the silhouette's visible
+    surface, from the silhouette's width ``width_m`` (metres, >= 0):
+    :data:`BODY_SURFACE_DEPTH_FACING_M` for a silhouette at least :data:`BODY_WIDTH_FACING_M`
+    wide (a person facing the camera), :data:`BODY_SURFACE_DEPTH_SIDEWAYS_M` at most
+    :data:`BODY_WIDTH_SIDEWAYS_M` wide (turned sideways), linear in between. Until 2026-12-02
+    it was 0.09 m for everyone, which put a person facing the camera 2 cm too far and one
+    turned sideways 4-6 cm too near: people rendered 1.2-3 m away at yaws 0-90 deg had depth
+    errors of -5.7 to +7.1 cm, now -2.3 to +5.9 (what remains, growing with range, is SGBM's
+    disparity 0.1-0.25 px low on these renders). GeometryError unless ``width_m`` is a finite
+    number >= 0."""
+    w = finite_number("width_m (silhouette width, metres)", width_m, 0.0, error=GeometryError)
+    f = min(max((BODY_WIDTH_FACING_M - w) / (BODY_WIDTH_FACING_M - BODY_WIDTH_SIDEWAYS_M),
+                0.0), 1.0)
+    return BODY_SURFACE_DEPTH_FACING_M + f * (BODY_SURFACE_DEPTH_SIDEWAYS_M
+                                              - BODY_SURFACE_DEPTH_FACING_M)
 #: Height (metres) of the crown above a silhouette's robust top (:func:`robust_top_m`, the
 #: :data:`TOP_PERCENTILE` percentile of its points' heights): the rounded head puts the last
 #: half percent of the points 3.1-4.0 cm below the crown on hearsee.sim.scenes bodies at
@@ -806,11 +834,11 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     Zm = float(np.median(pts[:, 2]))
     Xm = float(np.median(pts[:, 0]))
     # torso centre: at TORSO_HEIGHT_FRACTION of the body height (the crown, CROWN_ABOVE_TOP_M
-    # above the robust top), BODY_SURFACE_DEPTH_M behind the median of the silhouette's
-    # visible surface
+    # above the robust top), body_surface_depth_m (of the silhouette's width) behind the
+    # median of its visible surface
     ray = np.array([Xm, 0.0, Zm])
     ray /= np.linalg.norm(ray)
-    c = np.array([Xm, 0.0, Zm]) + BODY_SURFACE_DEPTH_M * ray
+    c = np.array([Xm, 0.0, Zm]) + body_surface_depth_m(float(xhi - xlo)) * ray
     h_t = TORSO_HEIGHT_FRACTION * (top + CROWN_ABOVE_TOP_M)
     n = floor.normal
     y = (h_t - floor.offset - n[0] * c[0] - n[2] * c[2]) / n[1]
