@@ -109,3 +109,21 @@ def test_files_the_system_refuses_are_one_line_not_a_traceback(monkeypatch, caps
         assert cli.main(argv) == code
         err = capsys.readouterr().err
         assert err.startswith(line) and err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("argv", [["arrays"], ["localize", "rec.wav", "--array", "three-mic"]])
+def test_ctrl_c_is_one_line_and_exit_130(argv, monkeypatch, capsys, tmp_path):
+    """Ctrl-C in a command ended it with exit 130 and nothing on stderr: typer (0.2x) turns a
+    KeyboardInterrupt into a silent Exit(130) before main's handler sees it, so its
+    "hearsee: interrupted" was never printed. Now that line, exit 130, nothing on stdout."""
+    import hearsee.audio.arrays as arrays
+
+    def interrupt(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(arrays, "list_presets", interrupt)
+    monkeypatch.setattr(arrays, "load_array", interrupt)
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 130
+    out, err = capsys.readouterr()
+    assert out == "" and err == "hearsee: interrupted\n"

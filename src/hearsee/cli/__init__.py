@@ -14,7 +14,7 @@ import warnings
 
 import typer
 
-from hearsee.cli._app import app
+from hearsee.cli._app import Interrupted, app
 from hearsee.errors import HearseeError
 
 #: Modules under hearsee.cli that register commands (one line each; keep sorted).
@@ -58,8 +58,9 @@ def main(argv: list[str] | None = None) -> int:
     it returns the exit code instead. Usage errors print ``hearsee <command>: error: <message>
     (see 'hearsee <command> --help')``, hearsee errors and files the system refuses (OSError:
     permissions, a full disk) ``hearsee: error: <message>``, each as one line on stderr, and
-    exit 2 (out of memory: one line, exit 1). Warnings (e.g. clipped audio) print
-    ``hearsee: warning: <message>`` on stderr and the command goes on.
+    exit 2 (out of memory: one line, exit 1). Ctrl-C prints ``hearsee: interrupted`` and
+    exits 130 (a live ``track`` or ``run`` ends its run cleanly instead). Warnings (e.g.
+    clipped audio) print ``hearsee: warning: <message>`` on stderr and the command goes on.
     """
     with warnings.catch_warnings():  # restores the caller's warning display afterwards
         warnings.showwarning = _warning_line
@@ -106,7 +107,7 @@ def _main(argv: list[str] | None) -> int:
         print("hearsee: error: out of memory (is an option, e.g. a count, duration or sample "
               "rate, far larger than intended?)", file=sys.stderr)
         code = 1
-    except (KeyboardInterrupt, typer.Abort):
+    except (KeyboardInterrupt, Interrupted, typer.Abort):
         print("hearsee: interrupted", file=sys.stderr)
         code = 130
     if argv is None:

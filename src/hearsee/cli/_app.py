@@ -20,11 +20,32 @@ from typing import Any
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from typer.core import TyperGroup
 
 from hearsee.config import to_jsonable
 
+
+class Interrupted(Exception):
+    """Ctrl-C inside a command, carried out of typer to :func:`hearsee.cli.main`, which prints
+    ``hearsee: interrupted`` and exits 130."""
+
+
+class _Group(TyperGroup):
+    """hearsee's command group: a KeyboardInterrupt in a command leaves it as
+    :class:`Interrupted`. typer (0.2x) turns a KeyboardInterrupt into a silent ``Exit(130)``:
+    Ctrl-C ended a command without a word, and the CLI's "hearsee: interrupted" was never
+    printed."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            raise Interrupted() from None
+
+
 app = typer.Typer(
     name="hearsee",
+    cls=_Group,
     help="Ears and eyes for a mobile robot with very few sensors.",
     no_args_is_help=True,
     add_completion=False,
