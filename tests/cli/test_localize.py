@@ -290,3 +290,21 @@ def test_eight_mic_circle_table_and_position(tmp_path, capsys):
     assert "TDOAs of 7 of 28 pairs" in out
     assert re.search(r"position \(0\.50, -0\.40, 0\.20\) m \+- \(0\.0\d, 0\.0\d, 0\.0\d\) "
                      r"\(TDOA error 5\.0 us\)", out)
+
+
+@pytest.mark.parametrize("value", ["1e300", "1e7"])
+def test_absurd_tdoa_std_is_one_line_naming_the_flag(value, tmp_path, capsys):
+    """`--tdoa-std-us 1e300` (a slip of units or a typo) was taken and squared into an
+    OverflowError traceback. Now at most 1e6 us (1 s, where no position is ever reported
+    anyway): one line naming the flag and its range, exit 2; 1e6 itself is still taken."""
+    arr = MicArray.from_preset("respeaker-4")
+    x = simulate_free_field(white_noise(0.5, FS, rng=5), FS, arr, np.array([0.6, 0.3, 0.2]),
+                            snr_db=30, rng=6)
+    rec = tmp_path / "r4.wav"
+    sf.write(rec, (x / np.abs(x).max() * 0.5).T, FS, subtype="FLOAT")
+    code, out, err = _run(capsys, rec, "--array", "respeaker-4", "--tdoa-std-us", value)
+    assert code == 2 and out == ""
+    assert err == (f"hearsee: error: --tdoa-std-us must be a finite number in (0, 1e+06], "
+                   f"got {float(value)}\n")
+    code, out, _ = _run(capsys, rec, "--array", "respeaker-4", "--tdoa-std-us", "1e6")
+    assert code == 0 and json.loads(out)["summary"]["position_m"] is None

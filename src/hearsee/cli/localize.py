@@ -18,6 +18,10 @@ from hearsee.errors import ConfigError
 #: Above this much audio x pairs (seconds) processing takes about a second: show a bar.
 _PROGRESS_WORK_S = 60.0
 
+#: The largest --tdoa-std-us, microseconds (1 s: a thousand times any array's largest delay,
+#: where no position is ever reported); 1e300 overflowed squaring it (OverflowError traceback).
+MAX_TDOA_STD_US = 1e6
+
 
 def _fmt(v: Any, digits: int = 1) -> str:
     return "-" if v is None else f"{v:.{digits}f}"
@@ -129,7 +133,8 @@ def localize_cmd(
         "the source position of arrays of 4+ microphones: the position is reported (with its "
         "covariance) only where these errors cannot explain the wavefront's curvature away. A "
         "lower bound: raised to 3x the pairs' disagreement (closure) where that is larger, "
-        "as in reverberant rooms (the JSON summary's position_tdoa_std_s). Default 5.",
+        "as in reverberant rooms (the JSON summary's position_tdoa_std_s). Default 5, at most "
+        "1e6 (1 s).",
         show_default=False)
     ] = None,
 ) -> None:
@@ -141,7 +146,7 @@ def localize_cmd(
 
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
     if tdoa_std_us is not None:
-        finite_number("--tdoa-std-us", tdoa_std_us, 0.0, lo_open=True)
+        finite_number("--tdoa-std-us", tdoa_std_us, 0.0, MAX_TDOA_STD_US, lo_open=True)
     if summary_tuned:
         given = [name for name, v in (("--method", method), ("--reverb-method", reverb_method))
                  if v is not None]
