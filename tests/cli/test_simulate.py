@@ -77,6 +77,10 @@ def test_simulate_room_yaml_array_and_wav_signal(tmp_path):
     (["--source", "100,0,0"], "its sound takes 0.2915 s to arrive, longer than the 0.1 s"),
     (["--source", "1,0,0", "--room", "1e9x4x3", "--rt60", "0.3"],
      "impulse responses up to"),  # (a MemoryError traceback before)
+    # (an OverflowError traceback while the message counted the images, before)
+    (["--source", "1,0,0", "--room", "6x5x3", "--rt60", "1e300"],
+     "RT60 1e+300 s in a 6x5x3 m room needs image sources up to order 1.33e+302 (over 1e+300 "
+     "images, more memory than a simulation should take; the limit is order 200)"),
 ])
 def test_simulate_bad_options(tmp_path, capsys, extra, message):
     code = main(["simulate", str(tmp_path / "o.wav"), "--array", "two-mic", "--duration", "0.1",

@@ -374,11 +374,15 @@ def image_sources(rt60: float, room_dim: ArrayLike, speed_of_sound: float = 343.
     if max_order is not None:
         order = int(max_order)
     if order > MAX_IMAGE_ORDER:
+        # (an RT60 of 1e300 s gave an order of 300 digits, whose image count overflowed a
+        # float: an OverflowError traceback instead of this message)
+        images = (f"~{4 / 3 * float(order) ** 3:.1e}" if order < 1e100 else "over 1e+300")
         raise ConfigError(
             f"RT60 {rt60:g} s in a {'x'.join(f'{v:g}' for v in dim)} m room needs image sources "
-            f"up to order {order} (~{4 * order**3 / 3:.1e} images, more memory than a simulation "
-            f"should take; the limit is order {MAX_IMAGE_ORDER}); use a shorter RT60 or a "
-            "larger room" + (", or a smaller max_order" if max_order is not None else ""))
+            f"up to order {order if order < 1e9 else f'{float(order):.3g}'} ({images} images, "
+            f"more memory than a simulation should take; the limit is order {MAX_IMAGE_ORDER}); "
+            "use a shorter RT60 or a larger room"
+            + (", or a smaller max_order" if max_order is not None else ""))
     return float(e_absorption), int(order)
 
 
