@@ -81,6 +81,11 @@ def test_simulate_room_yaml_array_and_wav_signal(tmp_path):
     (["--source", "1,0,0", "--room", "6x5x3", "--rt60", "1e300"],
      "RT60 1e+300 s in a 6x5x3 m room needs image sources up to order 1.33e+302 (over 1e+300 "
      "images, more memory than a simulation should take; the limit is order 200)"),
+    # (pyroomacoustics' order overflowed: an OverflowError traceback, before)
+    (["--source", "1,0,0", "--room", "1e300x5x3", "--rt60", "0.3"],
+     "RT60 0.3 s in a 1e+300x5x3 m room: the image-source order overflows (infinite); use a "
+     "smaller room or a shorter RT60"),
+    (["--source", "1,0,0", "--room", "6x5x3", "--rt60", "1e308"], "order overflows"),
 ])
 def test_simulate_bad_options(tmp_path, capsys, extra, message):
     code = main(["simulate", str(tmp_path / "o.wav"), "--array", "two-mic", "--duration", "0.1",

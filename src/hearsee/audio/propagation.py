@@ -371,6 +371,12 @@ def image_sources(rt60: float, room_dim: ArrayLike, speed_of_sound: float = 343.
             "(it would need walls absorbing more than all incident sound); "
             "use a longer RT60 or a smaller room"
         ) from None
+    except OverflowError:
+        # (pyroomacoustics' order int(ceil(c RT60 / R - 1)) is infinite where a side of
+        # 1e300 m overflows its square, R = 0, or c RT60 overflows: a traceback before)
+        raise ConfigError(
+            f"RT60 {rt60:g} s in a {'x'.join(f'{v:g}' for v in dim)} m room: the image-source "
+            "order overflows (infinite); use a smaller room or a shorter RT60") from None
     if max_order is not None:
         order = int(max_order)
     if order > MAX_IMAGE_ORDER:
