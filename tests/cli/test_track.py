@@ -273,3 +273,29 @@ def test_track_refuses_a_masked_pair_and_a_vertical_line(tmp_path, capsys):
         assert len(err) == 1 and words in err[0], err
     assert main(["track", str(wav), "--array", "two-mic", "--format", "json"]) == 0
     capsys.readouterr()
+
+
+def test_a_hop_below_half_a_sample_is_one_sample(tmp_path, capsys):
+    """`hearsee track --hop-ms 1e-300` was an OverflowError traceback: the frames' hop is made
+    one sample (as `hearsee localize` does), but the stream sized its activity history from
+    the 1e-300 ms asked for (1e303 frames). Now the history is in the real hop: the run is
+    the one of a one-sample hop (0.0625 ms at 16 kHz), update for update."""
+    from hearsee.audio.propagation import simulate_free_field
+    from hearsee.audio.signals import white_noise
+    from hearsee.geometry import unit_vector_deg
+
+    arr = MicArray.from_preset("three-mic")
+    x = simulate_free_field(white_noise(0.1, FS, rng=2), FS, arr, 2.0 * unit_vector_deg(50, 0),
+                            snr_db=30, rng=3)
+    wav = tmp_path / "r.wav"
+    write_recording(wav, 0.5 * x / np.abs(x).max(), FS)
+    runs = []
+    for hop in ("1e-300", "0.0625"):
+        assert main(["track", str(wav), "--array", "three-mic", "--frame-ms", "4",
+                     "--hop-ms", hop, "--format", "json"]) == 0
+        out, err = capsys.readouterr()
+        runs.append([{k: v for k, v in u.items() if k != "latency_ms"}
+                     for u in json.loads(out)["updates"]])
+    ts = [u["t"] for u in runs[0]]
+    assert len(ts) > 1000 and np.allclose(np.diff(ts), 1 / FS, rtol=0, atol=1.1e-6)  # (t in us)
+    assert runs[0] == runs[1] and any(u["azimuth_deg"] is not None for u in runs[0])

@@ -811,7 +811,11 @@ class FrameGcc:
         n_bins = nfft // 2 + 1
         bins = np.flatnonzero(_band_mask(n_bins, nfft, self.fs, cfg.band_hz))
         k0, k1 = int(bins[0]), int(bins[-1]) + 1
-        n_hist = max(int(round(cfg.activity_history_s * 1e3 / cfg.hop_ms)), 1)
+        # (in the frames' real hop: frame_geometry makes a hop shorter than half a sample one
+        # sample, and --hop-ms 1e-300 asked for 1e303 frames of history, an OverflowError)
+        hop_ms = (cfg.hop_ms if round(cfg.hop_ms * 1e-3 * self.fs) >= 1
+                  else self.hop * 1e3 / self.fs)
+        n_hist = max(int(round(cfg.activity_history_s * 1e3 / hop_ms)), 1)
         self.activity = FrameActivity(n_hist, self.frame_len, _window(DEFAULT_WINDOW,
                                                                       self.frame_len),
                                       nfft, k0, k1, band_test=k0 > 1 or k1 < n_bins - 1,
