@@ -149,3 +149,32 @@ def test_eval_scenario_count_out_of_range_is_one_line(n, capsys, tmp_path, monke
     assert out == "" and err.startswith("hearsee: error: --scenarios must be ") and \
         err.count("\n") == 1, err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("workers", ["1025", "99999999999999999999"])
+def test_eval_absurd_worker_count_is_one_line(workers, capsys, tmp_path, monkeypatch):
+    """`hearsee eval --workers 99999999999999999999` reached multiprocessing as a C int: an
+    OverflowError traceback. Now at most evaluate.MAX_WORKERS (1024): one line naming the
+    flag, exit 2, before any scenario runs or anything is written."""
+    import hearsee.robot.evaluate as ev
+
+    monkeypatch.setattr(ev, "run_one", _no_run)
+    monkeypatch.chdir(tmp_path)
+    assert main(["eval", "-n", "2", "--workers", workers, "-o", "runs.json"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == (f"hearsee: error: --workers must be an integer in [0, 1024], "
+                                 f"got {workers}\n")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_eval_runs_no_more_workers_than_scenarios(capsys, tmp_path, monkeypatch):
+    """--workers 8 for one scenario runs it in this process (one worker is enough): the
+    count is never more than the scenarios."""
+    import hearsee.robot.evaluate as ev
+
+    got = []
+    monkeypatch.setattr(ev, "run_one", lambda seed, duration_s: got.append(seed)
+                        or {"success": True, "seed": seed})
+    monkeypatch.chdir(tmp_path)
+    assert main(["eval", "-n", "1", "--seed", "5", "--workers", "8"]) == 0
+    assert got == [5]

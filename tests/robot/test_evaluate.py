@@ -23,7 +23,8 @@ def test_bad_counts_and_durations():
         evaluate(0)
     with pytest.raises(ConfigError, match="duration"):
         evaluate(1, duration_s=0.5)
-    with pytest.raises(ConfigError, match="--workers must be an integer >= 0"):  # was a ValueError
+    # (was a ValueError; the rule gained an upper bound, MAX_WORKERS)
+    with pytest.raises(ConfigError, match=r"--workers must be an integer in \[0, 1024\]"):
         evaluate(1, workers=-1)
     # (numpy ValueError; the rule gained an upper bound, 2**32 - 1 less the count)
     with pytest.raises(ConfigError, match=r"--seed must be an integer in \[0, "):

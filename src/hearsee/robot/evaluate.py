@@ -85,6 +85,10 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
 #: per-scenario results are held in memory); a larger count is a typo, not a plan.
 MAX_SCENARIOS = 1_000_000
 
+#: Most local worker processes (``workers``): more than any machine's cores; 1e20 reached
+#: multiprocessing as a C int (an OverflowError traceback).
+MAX_WORKERS = 1024
+
 
 def evaluate(
     n_scenarios: int,
@@ -101,7 +105,8 @@ def evaluate(
     Parameters
     ----------
     workers : int, optional
-        Local processes (default: all cores). ``1`` runs in this process.
+        Local processes, 0 to :data:`MAX_WORKERS` (default or 0: all cores; never more than
+        the scenarios). ``1`` runs in this process.
     scheduler : str or distributed.Client, optional
         A Dask scheduler address (``tcp://...``) or a ``Client``; runs there instead.
     progress : callable, optional
@@ -115,7 +120,7 @@ def evaluate(
     # seconds: a scenario's range (a scenario file's duration_s; was 2-120 s here, 1-120 there)
     duration_s = finite_number("--duration", duration_s, MIN_DURATION_S, MAX_DURATION_S)
     if workers is not None:
-        workers = whole_number("--workers", workers, 0)  # (0 = all cores)
+        workers = whole_number("--workers", workers, 0, MAX_WORKERS)  # (0 = all cores)
     # (every seed a scenario file takes, so that any run can be saved and re-run with
     # `hearsee demo --scenario`; there was no upper bound)
     seed0 = whole_number("--seed", seed0, 0, MAX_SEED - n_scenarios + 1)
@@ -126,7 +131,7 @@ def evaluate(
     if scheduler is not None:
         runs = _evaluate_dask(seeds, scheduler, tick, job)
     else:
-        workers = workers or os.cpu_count() or 1
+        workers = min(workers or os.cpu_count() or 1, len(seeds))
         if workers == 1:
             for s in seeds:
                 runs[s] = job(s)
