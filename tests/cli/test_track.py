@@ -299,3 +299,18 @@ def test_a_hop_below_half_a_sample_is_one_sample(tmp_path, capsys):
     ts = [u["t"] for u in runs[0]]
     assert len(ts) > 1000 and np.allclose(np.diff(ts), 1 / FS, rtol=0, atol=1.1e-6)  # (t in us)
     assert runs[0] == runs[1] and any(u["azimuth_deg"] is not None for u in runs[0])
+
+
+def test_a_camera_index_beyond_a_c_int_is_one_line(scene, tmp_path, capsys):
+    """`--camera-device 99999999999999999999` (and a robot file's `cameras.left` as large)
+    reached OpenCV's VideoCapture, whose TypeError was a traceback. Now the camera that
+    cannot be opened: one line naming it, exit 2, before any audio."""
+    from hearsee.robot.hardware import open_capture
+
+    big = "99999999999999999999"
+    assert main([*scene["base"], "--camera-device", big]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == (f"hearsee: error: camera {big}: cannot be opened as a video "
+                                 "(OpenCV VideoCapture)\n")
+    with pytest.raises(ConfigError, match=f"cameras.left: cannot open camera {big}"):
+        open_capture(int(big), "cameras.left")

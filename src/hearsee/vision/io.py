@@ -52,7 +52,11 @@ def video_capture(source: int | str) -> cv2.VideoCapture:
     """``cv2.VideoCapture(source)`` (a camera index, a file, a URL) with OpenCV's own log
     silenced to errors while it opens: a camera that is not there printed two ``[ WARN ]``
     lines of its backends (V4L2, FFMPEG) on stderr before hearsee's one-line message. The
-    caller checks ``isOpened()``."""
+    caller checks ``isOpened()``. An index beyond a C int gives a capture that is not opened
+    (OpenCV's own TypeError, a traceback, for ``--camera-device 99999999999999999999`` or
+    ``cameras.left: 99999999999999999999`` before), so that the caller's "cannot open" names it."""
+    if isinstance(source, int | np.integer) and not -2**31 <= source < 2**31:
+        return cv2.VideoCapture()
     with _opencv_log("error"):
         return cv2.VideoCapture(source)
 
