@@ -262,8 +262,9 @@ def save_yaml(data: Mapping[str, Any], path: str | Path) -> None:
     """Write ``data`` as YAML (numpy arrays and scalars converted to lists and floats) that
     :func:`load_yaml` reads back as written (:class:`YamlDumper`: text such as "2e5" quoted;
     the plain safe dumper wrote it bare and it came back as the number 200000.0)."""
-    Path(path).write_text(yaml.dump(to_plain(dict(data)), Dumper=YamlDumper, sort_keys=False),
-                          encoding="utf-8")
+    # (replaced once complete, :func:`replacing`: written in place, a write that failed part
+    # way truncated the earlier file)
+    write_file(path, yaml.dump(to_plain(dict(data)), Dumper=YamlDumper, sort_keys=False))
 
 
 def check_keys(data: Mapping[str, Any], allowed: Iterable[str], where: str) -> None:

@@ -299,3 +299,52 @@ def test_messages_name_the_files_written_even_with_brackets(tmp_path, capsys):
                  "--duration", "0.2"]) == 0
     err = capsys.readouterr().err
     assert out.is_file() and "take[bold]2.wav" in err and "take[bold]2.json" in err
+
+
+@pytest.mark.parametrize(("mode", "limit", "fails"), [
+    ("static", 100, "rec.wav"), ("static", 400, "rec.json"), ("moving", 400, "rec.json"),
+    ("poses", 400, "rec.yaml")])
+def test_simulate_force_keeps_the_earlier_file_when_a_write_fails(tmp_path, capsys, mode, limit,
+                                                                  fails, file_size_limit):
+    """`simulate --force` wrote its files in place: a write that failed part way (a full disk,
+    here a file size limit; Ctrl-C) left a truncated WAV, JSON or manifest where the user's
+    earlier file was, and a failed JSON or manifest said only "File too large". Now each file
+    replaces the earlier one only when complete (config.replacing): the one that failed is
+    still the earlier file, one line names it, no temporary file is left."""
+    import soundfile as sf
+    import yaml
+
+    out = tmp_path / ("rec.yaml" if mode == "poses" else "rec.wav")
+    args = ["simulate", str(out), "--array", "two-mic", "--duration", "0.004", "--pcm16",
+            "--force"]
+    if mode == "moving":
+        walk = tmp_path / "walk.csv"
+        walk.write_text("t,x,y,z\n0,0.5,-0.2,0.1\n1,0.5,0.2,0.1\n")
+        args += ["--trajectory", str(walk)]
+    else:
+        args += ["--source", "1,0.5,0"]
+    if mode == "poses":
+        args += ["--poses", "0,0;30,0"]
+    names = {"static": ["rec.wav", "rec.json"],
+             "moving": ["rec.wav", "rec.json", "rec.trajectory.csv"],
+             "poses": ["rec.yaml", "rec_pose0.wav", "rec_pose0.json", "rec_pose1.wav",
+                       "rec_pose1.json"]}[mode]
+    for n in names:
+        (tmp_path / n).write_bytes(b"mine")
+    with file_size_limit(limit):
+        code = main(args)
+    err = capsys.readouterr().err
+    assert code == 2 and err == f"hearsee: error: {tmp_path / fails}: cannot write " + (
+        "audio (System error.)\n" if fails.endswith(".wav") else "(File too large)\n"), err
+    assert (tmp_path / fails).read_bytes() == b"mine"
+    for n in names:  # each file is the earlier one or a complete new one, never a part
+        data, p = (tmp_path / n).read_bytes(), tmp_path / n
+        if data != b"mine":
+            if n.endswith(".wav"):
+                assert sf.info(p).frames == 64
+            elif n.endswith(".json"):
+                assert json.loads(data)["fs"] == 16000
+            else:
+                assert isinstance(yaml.safe_load(data), dict)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [*names, *(["walk.csv"] if mode == "moving" else [])])

@@ -35,6 +35,7 @@ from hearsee.config import (
     is_real,
     output_file,
     real_entries,
+    replacing,
     same_file,
     whole_number,
 )
@@ -590,7 +591,10 @@ def write_recording(
     protect : path or paths, optional
         Input files that must not be overwritten; writing to one of them is an error.
 
-    Returns the path written. The format follows the suffix (``.wav``, ``.flac``, ...).
+    Returns the path written. The format follows the suffix (``.wav``, ``.flac``, ...). An
+    existing file is replaced only once the new one is complete
+    (:func:`hearsee.config.replacing`): written in place, a write that failed part way (a full
+    disk, Ctrl-C) left a truncated file where the earlier one was (``simulate --force``).
     """
     import soundfile as sf
 
@@ -616,8 +620,14 @@ def write_recording(
             f"samples exceed full scale (peak {np.max(np.abs(y)):.3g} > 1) for {subtype}; "
             "scale the recording down or write FLOAT"
         )
+    # the format from the user's suffix (the temporary file's is .tmp), as soundfile takes it
+    fmt = os.path.splitext(str(p))[1][1:]
+    if fmt.upper() not in sf.available_formats():
+        raise AudioInputError(f"{p}: cannot write audio (No format specified and unable to get "
+                              f"format from file extension: {str(p)!r})")
     try:
-        sf.write(str(p), y.T, int(round(fs)), subtype=subtype)
+        with replacing(p) as tmp:
+            sf.write(str(tmp), y.T, int(round(fs)), subtype=subtype, format=fmt)
     except (RuntimeError, TypeError, ValueError) as exc:
         raise AudioInputError(f"{p}: cannot write audio ({exc})") from None
     return p

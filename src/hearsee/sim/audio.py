@@ -35,6 +35,7 @@ from hearsee.config import (
     same_file,
     to_jsonable,
     whole_number,
+    write_file,
 )
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 from hearsee.geometry import as_point, cart_to_sph
@@ -322,5 +323,5 @@ def save_recording(out: str | Path, x: ArrayLike, truth: Mapping[str, Any],
     doc = {**truth, "gain": gain, "wav": wav.name}
     text = json.dumps(to_jsonable(doc), indent=2) + "\n"  # before the WAV: both or neither
     write_recording(wav, y * gain, truth["fs"], subtype=subtype, protect=protect)
-    js.write_text(text, encoding="utf-8")
+    write_file(js, text)  # (replaced once complete, as the WAV: config.replacing)
     return wav, js

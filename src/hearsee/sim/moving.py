@@ -30,6 +30,7 @@ Trajectory files are CSV with a header ``t,x,y,z`` (seconds, metres).
 from __future__ import annotations
 
 import csv
+import io
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -54,6 +55,7 @@ from hearsee.config import (
     output_file,
     real_entries,
     whole_number,
+    write_file,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, InputFileError
 from hearsee.geometry import as_point
@@ -284,11 +286,14 @@ def save_trajectory(traj: Trajectory, path: str | Path, times: ArrayLike | None 
     # (a scalar time raised a builtin TypeError, text a ValueError)
     t = traj.t if times is None else np.atleast_1d(_times(times)).ravel()
     p = traj.at(t)
-    with output_file(path).open("w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow(["t", "x", "y", "z"])
-        for ti, pi in zip(t, p, strict=True):
-            w.writerow([f"{ti:.6f}", f"{pi[0]:.6f}", f"{pi[1]:.6f}", f"{pi[2]:.6f}"])
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf)
+    w.writerow(["t", "x", "y", "z"])
+    for ti, pi in zip(t, p, strict=True):
+        w.writerow([f"{ti:.6f}", f"{pi[0]:.6f}", f"{pi[1]:.6f}", f"{pi[2]:.6f}"])
+    # (replaced once complete: written in place, a write that failed part way truncated the
+    # earlier file; config.replacing)
+    write_file(output_file(path), buf.getvalue())
 
 
 #: Most grid times :func:`truth_times` makes (10 million: a 600 s recording every 60 us);
