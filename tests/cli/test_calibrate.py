@@ -220,3 +220,24 @@ def test_calibrate_square_outside_any_board_is_one_line(square, board_dir, tmp_p
     assert err.startswith("hearsee: error: --square must be the side of one square in metres") \
         and err.count("\n") == 1, err
     assert not (tmp_path / "c.yaml").exists()
+
+
+def test_calibrate_force_keeps_the_earlier_rig_when_the_write_fails(board_dir, tmp_path, capsys,
+                                                                   file_size_limit):
+    """`calibrate -o rig.yaml --force` wrote the rig in place: a write that failed part way (a
+    full disk, here a file size limit; Ctrl-C) left a truncated rig.yaml where the user's
+    earlier calibration was, with the message "File too large" naming no file. Now the new
+    file replaces it only when complete: the earlier rig stays, one line names it, no
+    temporary file is left; without the limit the same run writes a loadable rig."""
+    d, truth = board_dir
+    out = tmp_path / "rig.yaml"
+    out.write_text("# my earlier calibration\n", encoding="utf-8")
+    with file_size_limit(600):  # (a rig is ~1.5 kB)
+        code = main(_args(d, out, "--force"))
+    captured = capsys.readouterr()
+    assert code == 2 and captured.out == ""
+    assert captured.err == f"hearsee: error: {out}: cannot write (File too large)\n"
+    assert out.read_text(encoding="utf-8") == "# my earlier calibration\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rig.yaml"]
+    assert main(_args(d, out, "--force")) == 0
+    assert abs(load_rig(out).baseline_m - truth.baseline_m) < 0.005

@@ -74,6 +74,7 @@ from hearsee.config import (
     require,
     to_plain,
     whole_number,
+    write_file,
 )
 from hearsee.errors import CalibrationError, ConfigError, GeometryError
 from hearsee.geometry import as_point, norm_scale
@@ -1243,14 +1244,17 @@ def _dump_calib_yaml(data: dict[str, Any], path: str | Path, title: str) -> None
     """YAML with matrices written one row per line (flow style for the innermost lists).
     InputFileError (:func:`hearsee.config.output_file`) when ``path`` cannot be written: a
     folder, a missing folder, not a path (builtin IsADirectoryError, FileNotFoundError and
-    TypeError before)."""
+    TypeError before). An existing file is replaced only once the new one is complete
+    (:func:`hearsee.config.write_file`): written in place, a write that failed part way (a full
+    disk, Ctrl-C) left a truncated calibration where the earlier one was (``calibrate
+    --force``), and said only "File too large"."""
     p = output_file(path)
     # (YamlDumper: text such as a name "2e5" is quoted, else load_yaml read it as a number)
     text = yaml.dump(to_plain(data), Dumper=YamlDumper, sort_keys=False,
                      default_flow_style=None, width=100)
     header = (f"# {title}\n# optical frame x right, y down, z forward; K in pixels; "
               "T in metres; X_to = R X_from + T\n")
-    p.write_text(header + text, encoding="utf-8")
+    write_file(p, header + text)
 
 
 def rig_from_opencv(intrinsics: str | Path, extrinsics: str | Path,
