@@ -318,3 +318,25 @@ def test_a_truncated_image_file_is_one_line_on_stderr(folder, tmp_path, capfd):
     assert main(_args(d, thermal=None) + ["--thermal", str(tmp_path / "cut.tif")]) == 2
     err = capfd.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "not a readable image" in err[0]
+
+
+def test_overlay_force_keeps_the_earlier_file_when_the_write_fails(folder, capsys, tmp_path,
+                                                                   file_size_limit):
+    """`detect --overlay ov.png --force` wrote the image in place: a write that failed part way
+    (a full disk, here a file size limit; Ctrl-C) left a truncated PNG where the user's
+    earlier file was. Now the new image replaces it only when complete: the earlier file
+    stays, one line names it, no temporary file is left, nothing on stdout; without the limit
+    the same run writes the overlay."""
+    d, _ = folder
+    ov = tmp_path / "ov.png"
+    ov.write_bytes(b"my earlier overlay")
+    with file_size_limit(20_000):  # (the 320x240 overlay is ~150 kB)
+        code = main(_args(d, "--overlay", str(ov), "--force"))
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.startswith(f"hearsee: error: {ov}: cannot write the image (") and \
+        err.count("\n") == 1, err
+    assert ov.read_bytes() == b"my earlier overlay"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ov.png"]
+    assert main(_args(d, "--overlay", str(ov), "--force")) == 0
+    assert cv2.imread(str(ov)).shape == (240, 320, 3)

@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import input_file, output_file, real_entries
+from hearsee.config import input_file, output_file, real_entries, replacing
 from hearsee.errors import ImageInputError, InputFileError
 
 __all__ = [
@@ -450,8 +450,12 @@ def write_image(path: str | Path, image: NDArray) -> Path:
         raise ImageInputError(
             f"{p}: {suffix} cannot hold {image.dtype} pixels (it would be written as "
             f"{back.dtype}); convert the image or use a format that holds them (.tif)")
+    # (replaced once complete, config.replacing: written in place, a write that failed part
+    # way -- a full disk, Ctrl-C -- left a truncated image where the earlier file was,
+    # `detect --overlay --force`)
     try:
-        buf.tofile(str(p))
+        with replacing(p) as tmp, open(tmp, "wb" if tmp.exists() else "xb") as fh:
+            fh.write(buf.tobytes())
     except OSError as exc:  # (no permission: a bare OSError before)
         raise InputFileError(f"{p}: cannot write the image ({exc.strerror or exc})") from None
     return p
