@@ -340,3 +340,20 @@ def test_overlay_force_keeps_the_earlier_file_when_the_write_fails(folder, capsy
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ov.png"]
     assert main(_args(d, "--overlay", str(ov), "--force")) == 0
     assert cv2.imread(str(ov)).shape == (240, 320, 3)
+
+
+@pytest.mark.parametrize(("option", "message"), [
+    ("--thermal", ".: is a folder, expected an image file"),
+    ("--overlay", ".: is a folder, expected an output file name")])
+def test_an_empty_thermal_or_overlay_is_refused(option, message, folder, capsys, tmp_path,
+                                                monkeypatch):
+    """`--thermal ""` (an unset variable in a script, `--thermal "$T"`) was taken as no thermal
+    image: exit 0, people accepted on stereo alone, the mannequin too, without a word; an empty
+    --overlay was dropped the same way. Now each is the path it names, refused in one line as
+    every other empty path is, before the detection."""
+    d, _ = folder
+    monkeypatch.chdir(tmp_path)
+    args = _args(d, thermal=None) + [option, ""]
+    assert main(args) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == f"hearsee: error: {message}\n"

@@ -55,8 +55,10 @@ def detect_cmd(
     if fmt not in ("json", "table"):
         raise typer.BadParameter(f"--format must be json or table, got {fmt!r}")
     left_p, right_p, calib_p = Path(left), Path(right), Path(calib)
-    thermal_p = Path(thermal) if thermal else None
-    overlay_p = Path(overlay) if overlay else None
+    # (an empty --thermal or --overlay, e.g. an unset "$THERMAL", was taken as none: people
+    # were accepted without the thermal check without a word)
+    thermal_p = Path(thermal) if thermal is not None else None
+    overlay_p = Path(overlay) if overlay is not None else None
     if not 0.0 <= tm <= 1.0:
         raise typer.BadParameter(f"--tm must be in [0, 1], got {tm}")
     if not 0.0 <= min_support <= 1.0:
