@@ -241,3 +241,22 @@ def test_calibrate_force_keeps_the_earlier_rig_when_the_write_fails(board_dir, t
     assert sorted(p.name for p in tmp_path.iterdir()) == ["rig.yaml"]
     assert main(_args(d, out, "--force")) == 0
     assert abs(load_rig(out).baseline_m - truth.baseline_m) < 0.005
+
+
+@pytest.mark.parametrize("option", ["--left", "--thermal"])
+def test_calibrate_empty_image_pattern_is_refused(option, board_dir, tmp_path, capsys,
+                                                  monkeypatch):
+    """`--thermal ""` (an unset "$T") was taken as no thermal images: a rig without its thermal
+    camera, exit 0, without a word; an empty --left listed the working folder (here "6 left
+    images but ..." of whatever files were there). Now one line naming what is missing."""
+    d, _ = board_dir
+    monkeypatch.chdir(d)
+    out = tmp_path / "rig.yaml"
+    args = _args(d, out, "--thermal", str(d / "thermal*.png"))
+    args[args.index(option) + 1] = ""
+    assert main(args) == 2
+    captured = capsys.readouterr()
+    what = "left images" if option == "--left" else "thermal images"
+    assert captured.out == "" and captured.err == (f"hearsee: error: no {what} given: the "
+                                                   "pattern is empty\n")
+    assert not out.exists()

@@ -51,7 +51,8 @@ def calibrate_cmd(
     pattern = parse_board(board)
     lf = glob_images(left, "left images")
     rf = glob_images(right, "right images")
-    tf = glob_images(thermal, "thermal images") if thermal else None
+    # (an empty --thermal was taken as none: a rig without its thermal camera, without a word)
+    tf = glob_images(thermal, "thermal images") if thermal is not None else None
     out = Path(output)
     refuse_overwrite([out], [*lf, *rf, *(tf or []), reference], force)
     # read the reference first: a bad file fails before the calibration and the output

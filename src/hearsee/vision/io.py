@@ -464,9 +464,12 @@ def write_image(path: str | Path, image: NDArray) -> Path:
 def glob_images(pattern: str | Path, what: str = "images") -> list[Path]:
     """Sorted files matching a shell pattern (``'DIR/left*.jpg'``) or in a folder.
 
-    Raises InputFileError when nothing matches.
+    Raises InputFileError when nothing matches, and for an empty pattern (it listed the
+    working folder).
     """
     text = str(pattern)
+    if not text.strip():
+        raise InputFileError(f"no {what} given: the pattern is empty")
     p = Path(text).expanduser()
     if p.is_dir():
         files = sorted(f for f in p.iterdir() if f.is_file())
