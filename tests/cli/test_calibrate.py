@@ -260,3 +260,15 @@ def test_calibrate_empty_image_pattern_is_refused(option, board_dir, tmp_path, c
     assert captured.out == "" and captured.err == (f"hearsee: error: no {what} given: the "
                                                    "pattern is empty\n")
     assert not out.exists()
+
+
+def test_calibrate_warnings_are_hearsee_warning_lines(board_dir, tmp_path, capsys):
+    """Every other command prints a warning as `hearsee: warning: <message>` (cli.main); the
+    calibration's own warnings (too few views, rejected views) came as `warning: <message>`,
+    which a log filter for hearsee's warnings missed. Now the same form, on stderr, stdout
+    kept for the result (--json: one JSON document)."""
+    d, _ = board_dir
+    assert main(_args(d, tmp_path / "rig.yaml", "--json")) == 0
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
+    assert doc["warnings"] and err == "".join(f"hearsee: warning: {w}\n" for w in doc["warnings"])

@@ -80,7 +80,8 @@ def calibrate_cmd(
     else:
         _print_report(res, out, comparison)
     for w in res.warnings:
-        err_console.print(f"warning: {w}", style="yellow", markup=False, highlight=False)
+        # (the CLI's one form of a warning, cli.main: "warning: ..." alone was not it)
+        err_console.print(f"hearsee: warning: {w}", style="yellow", markup=False, highlight=False)
 
 
 def _read_reference(reference: Path) -> dict:
