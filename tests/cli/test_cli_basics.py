@@ -127,3 +127,44 @@ def test_ctrl_c_is_one_line_and_exit_130(argv, monkeypatch, capsys, tmp_path):
     assert main(argv) == 130
     out, err = capsys.readouterr()
     assert out == "" and err == "hearsee: interrupted\n"
+
+
+def _option_help(capsys, command: str, option: str) -> str:
+    """The help text of ``option`` in ``hearsee COMMAND --help``, its lines joined."""
+    assert main([command, "--help"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    start = next(i for i, s in enumerate(lines) if s.strip().startswith(option))
+    text = [lines[start].strip()]
+    for s in lines[start + 1:]:
+        if s.strip().startswith("-"):
+            break
+        text.append(s.strip())
+    return " ".join(" ".join(text).split())
+
+
+def test_option_help_states_the_ranges_the_code_enforces(capsys):
+    """Options whose values the code bounds said nothing of the bounds (simulate --fs, --snr,
+    --duration; eval -n, --duration; calibrate --square; detect --camera-height; the frame
+    options), and two said what is not so: --pcm16 "instead of float32" (a .flac is 24-bit
+    PCM without it) and calibrate --reference "with M1/M2 (and D1/D2) to compare against"
+    (D1/D2 are not compared). Each now states the rule, from the constants that enforce it."""
+    from hearsee.audio.propagation import MAX_SNR_DB, MIN_SNR_DB
+    from hearsee.audio.signals import MAX_SIGNAL_S
+    from hearsee.audio.tdoa import MAX_FRAME_MS, MIN_FS_HZ
+    from hearsee.robot.evaluate import MAX_SCENARIOS
+    from hearsee.robot.scenario import MAX_DURATION_S, MIN_DURATION_S
+    from hearsee.sim.audio import MAX_SIM_FS_HZ
+
+    h = lambda c, o: _option_help(capsys, c, o)  # noqa: E731
+    assert f"{MIN_FS_HZ:g}-{MAX_SIM_FS_HZ}" in h("simulate", "--fs")
+    assert f"{MIN_SNR_DB:g} to {MAX_SNR_DB:g}" in h("simulate", "--snr")
+    assert f"at most {MAX_SIGNAL_S:g}" in h("simulate", "--duration")
+    assert ".flac: instead of 24-bit PCM" in h("simulate", "--pcm16")
+    assert f"1-{MAX_SCENARIOS}" in h("eval", "-n, --scenarios")
+    assert f"{MIN_DURATION_S:g}-{MAX_DURATION_S:g}" in h("eval", "--duration")
+    assert "0.001-2" in h("calibrate", "--square")
+    assert "D1" not in h("calibrate", "--reference")
+    assert "0.1-5" in h("detect", "--camera-height")
+    for command in ("localize", "localize3d", "track"):
+        for option in ("--frame-ms", "--hop-ms"):
+            assert f"at most {MAX_FRAME_MS:g}" in h(command, option)

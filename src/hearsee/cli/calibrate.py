@@ -21,14 +21,17 @@ def calibrate_cmd(
     right: str = typer.Option(..., "--right", help="Right images (paired in sorted order)."),
     output: str = typer.Option(..., "-o", "--output", help="Rig YAML file to write."),
     board: str = typer.Option("9x6", "--board", help="Inner corners per row x per column."),
-    square: float = typer.Option(..., "--square", help="Side of one square, metres."),
+    square: float = typer.Option(..., "--square", help="Side of one square, metres, 0.001-2 "
+                                 "(e.g. 0.025 for 25 mm)."),
     thermal: str | None = typer.Option(None, "--thermal", help="Thermal images of the same "
                                        "board (one per pair): adds the thermal camera."),
     model: str = typer.Option("standard", "--model",
                               help="Distortion model: radial, simple, standard or rational."),
     fix_aspect: bool = typer.Option(False, "--fix-aspect", help="Force fx = fy."),
     reference: str | None = typer.Option(None, "--reference", help="OpenCV FileStorage YAML "
-                                          "with M1/M2 (and D1/D2) to compare against."),
+                                          "with camera matrices M1 / M2 (as OpenCV's "
+                                          "stereo_calib writes): the focal lengths and "
+                                          "principal points are compared with them."),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing output file."),
     json_out: bool = typer.Option(False, "--json", help="Print the result as JSON."),
 ) -> None:

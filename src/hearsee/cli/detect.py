@@ -31,8 +31,8 @@ def detect_cmd(
         0.3, "--min-support", help="Thermal support needed to accept a candidate (0..1)."),
     camera_height: float | None = typer.Option(
         None, "--camera-height",
-        help="Height of the left camera above the floor, metres (prior for the floor plane; "
-             "default: info.camera_height_m of the calibration file)."),
+        help="Height of the left camera above the floor, metres, 0.1-5 (prior for the floor "
+             "plane; default: info.camera_height_m of the calibration file)."),
 ) -> None:
     """Detect humans: stereo candidates (P(y,d), head-shoulder template) confirmed by thermal.
 

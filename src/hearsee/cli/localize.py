@@ -102,9 +102,10 @@ def localize_cmd(
     recording: Annotated[Path, typer.Argument(help="Multichannel audio file; channel k is "
                                               "microphone k of the array.")],
     array: Annotated[str, typer.Option("--array", help="Array preset name or YAML file.")],
-    frame_ms: Annotated[float, typer.Option("--frame-ms",
-                                            help="Frame length in milliseconds.")] = 64.0,
-    hop_ms: Annotated[float, typer.Option("--hop-ms", help="Frame hop in milliseconds.")] = 32.0,
+    frame_ms: Annotated[float, typer.Option(
+        "--frame-ms", help="Frame length in milliseconds, at most 10000.")] = 64.0,
+    hop_ms: Annotated[float, typer.Option(
+        "--hop-ms", help="Frame hop in milliseconds, at most 10000.")] = 32.0,
     method: Annotated[GccMethod | None, typer.Option(
         "--method", help="GCC weighting (gcc-ml = Hannan-Thomson); default gcc-phat, or gcc-ml "
         "with --summary-tuned.", show_default=False)] = None,

@@ -16,8 +16,9 @@ def localize3d_cmd(
         help="Pose manifest YAML: array, optional head {pivot_m, offset_m}, and captures "
         "[{file, pan_deg, tilt_deg}] (see hearsee.audio.active.PoseManifest; "
         "`hearsee simulate OUT.yaml --poses ...` writes one).")],
-    frame_ms: float = typer.Option(64.0, "--frame-ms", help="GCC frame length in ms."),
-    hop_ms: float = typer.Option(32.0, "--hop-ms", help="GCC hop in ms."),
+    frame_ms: float = typer.Option(64.0, "--frame-ms", help="GCC frame length in ms, at most "
+                                   "10000."),
+    hop_ms: float = typer.Option(32.0, "--hop-ms", help="GCC hop in ms, at most 10000."),
     method: GccMethod = typer.Option(GccMethod.phat, "--method", help="GCC weighting."),
 ) -> None:
     """Localize a static source in 3D (robot frame) from captures at several head poses.

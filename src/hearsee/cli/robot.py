@@ -85,13 +85,15 @@ def demo_cmd(
 
 @app.command("eval")
 def eval_cmd(
-    scenarios: int = typer.Option(20, "--scenarios", "-n", help="Number of random scenarios."),
+    scenarios: int = typer.Option(20, "--scenarios", "-n", help="Number of random scenarios, "
+                                  "1-1000000."),
     seed0: int = typer.Option(0, "--seed", min=0, help="Seed of the first scenario."),
     workers: int = typer.Option(0, "--workers", help="Local processes (0 = all cores; at most "
                                 "1024)."),
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://...)."),
     out: Path = typer.Option(None, "--out", "-o", help="Write per-scenario results (JSON)."),
-    duration: float = typer.Option(6.0, "--duration", help="Simulated seconds per scenario."),
+    duration: float = typer.Option(6.0, "--duration", help="Simulated seconds per scenario, "
+                                   "1-120."),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing --out file."),
 ) -> None:
     """Run many random scenarios and summarise success rate and error percentiles (JSON).

@@ -98,10 +98,11 @@ def simulate_cmd(
     signal: str = typer.Option("noise", "--signal",
                                help="noise | male | female | PATH to an audio file."),
     duration: float | None = typer.Option(
-        None, "--duration", help="Length in seconds (default: 2 s; with --trajectory, the "
-        "trajectory's last time)."),
-    fs: int = typer.Option(16000, "--fs", help="Sample rate in Hz."),
-    snr: float | None = typer.Option(None, "--snr", help="Sensor-noise SNR in dB (default: none)."),
+        None, "--duration", help="Length in seconds, at most 600 (default: 2 s; with "
+        "--trajectory, the trajectory's last time)."),
+    fs: int = typer.Option(16000, "--fs", help="Sample rate in Hz, 4000-384000."),
+    snr: float | None = typer.Option(None, "--snr", help="Sensor-noise SNR in dB, -60 to 200 "
+                                     "(default: none)."),
     room: str | None = typer.Option(None, "--room",
                                     help="Shoebox room LxWxH in metres (default: free field)."),
     rt60: float | None = typer.Option(None, "--rt60",
@@ -113,7 +114,8 @@ def simulate_cmd(
     far_field: bool = typer.Option(False, "--far-field",
                                    help="Free field only: a plane wave from the source's "
                                    "direction instead of a spherical wave."),
-    pcm16: bool = typer.Option(False, "--pcm16", help="Write 16-bit PCM instead of float32."),
+    pcm16: bool = typer.Option(False, "--pcm16", help="Write 16-bit PCM instead of float32 (a "
+                               ".flac: instead of 24-bit PCM, FLAC holds no floats)."),
     force: bool = typer.Option(False, "--force",
                                help="Overwrite output files that already exist."),
     poses: str | None = typer.Option(

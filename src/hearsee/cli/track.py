@@ -130,8 +130,9 @@ def track_cmd(
         "--camera-tilt", help="Camera tilt (deg, up; -90 to 90; needs --camera; default 0).")
     ] = None,
     frame_ms: Annotated[float, typer.Option(
-        "--frame-ms", help="Frame length in milliseconds.")] = 64.0,
-    hop_ms: Annotated[float, typer.Option("--hop-ms", help="Frame hop in milliseconds.")] = 32.0,
+        "--frame-ms", help="Frame length in milliseconds, at most 10000.")] = 64.0,
+    hop_ms: Annotated[float, typer.Option(
+        "--hop-ms", help="Frame hop in milliseconds, at most 10000.")] = 32.0,
     method: Annotated[GccMethod, typer.Option("--method", help="GCC weighting.")] = GccMethod.phat,
     itd_filter: Annotated[bool, typer.Option(
         "--itd-filter", help="Smooth TDOAs with the ITD Kalman filter first.")] = False,
