@@ -118,16 +118,9 @@ def test_simulate_refuses_bad_outputs(tmp_path, capsys):
 def test_simulate_keeps_existing_outputs_unless_forced(tmp_path, capsys, mode):
     """A second run to the same name is refused (every file it would write is checked first,
     nothing is touched); --force replaces them."""
-    out = tmp_path / ("rec.yaml" if mode == "poses" else "rec.wav")
-    args = ["simulate", str(out), "--array", "two-mic", "--duration", "0.1", "--seed", "1"]
-    if mode == "moving":
-        csv = tmp_path / "walk.csv"
-        csv.write_text("t,x,y,z\n0,1.5,-0.5,0.2\n1,1.5,0.5,0.2\n")
-        args += ["--trajectory", str(csv)]
-    else:
-        args += ["--source", "1,0.5,0"]
-    if mode == "poses":
-        args += ["--poses", "0,0;30,0"]
+    out, extra = _mode_args(tmp_path, mode, "rec")
+    args = ["simulate", str(out), "--array", "two-mic", "--duration", "0.1", "--seed", "1",
+            *extra]
     assert main(args) == 0
     written = sorted(p for p in tmp_path.iterdir() if p.name.startswith("rec"))
     assert len(written) == {"static": 2, "moving": 3, "poses": 5}[mode]
@@ -176,15 +169,16 @@ def test_simulate_refuses_a_one_sample_signal(tmp_path, capsys):
     assert len(err.splitlines()) == 1 and not out.exists()
 
 
-def _mode_args(tmp_path, mode):
-    """(output path, the options of ``simulate`` in ``mode``): static, moving or poses."""
+def _mode_args(tmp_path, mode, stem="o", walk_csv="t,x,y,z\n0,1.5,-0.5,0.2\n1,1.5,0.5,0.2\n"):
+    """(output path ``stem``.wav / .yaml, the options of ``simulate`` in ``mode``): static,
+    moving (``walk_csv`` written to walk.csv) or poses."""
     if mode == "moving":
         csv = tmp_path / "walk.csv"
-        csv.write_text("t,x,y,z\n0,1.5,-0.5,0.2\n1,1.5,0.5,0.2\n")
-        return tmp_path / "o.wav", ["--trajectory", str(csv)]
+        csv.write_text(walk_csv)
+        return tmp_path / f"{stem}.wav", ["--trajectory", str(csv)]
     if mode == "poses":
-        return tmp_path / "o.yaml", ["--source", "1,0.5,0", "--poses", "0,0;30,0"]
-    return tmp_path / "o.wav", ["--source", "1,0.5,0"]
+        return tmp_path / f"{stem}.yaml", ["--source", "1,0.5,0", "--poses", "0,0;30,0"]
+    return tmp_path / f"{stem}.wav", ["--source", "1,0.5,0"]
 
 
 def _outputs(tmp_path):
@@ -314,17 +308,9 @@ def test_simulate_force_keeps_the_earlier_file_when_a_write_fails(tmp_path, caps
     import soundfile as sf
     import yaml
 
-    out = tmp_path / ("rec.yaml" if mode == "poses" else "rec.wav")
+    out, extra = _mode_args(tmp_path, mode, "rec", "t,x,y,z\n0,0.5,-0.2,0.1\n1,0.5,0.2,0.1\n")
     args = ["simulate", str(out), "--array", "two-mic", "--duration", "0.004", "--pcm16",
-            "--force"]
-    if mode == "moving":
-        walk = tmp_path / "walk.csv"
-        walk.write_text("t,x,y,z\n0,0.5,-0.2,0.1\n1,0.5,0.2,0.1\n")
-        args += ["--trajectory", str(walk)]
-    else:
-        args += ["--source", "1,0.5,0"]
-    if mode == "poses":
-        args += ["--poses", "0,0;30,0"]
+            "--force", *extra]
     names = {"static": ["rec.wav", "rec.json"],
              "moving": ["rec.wav", "rec.json", "rec.trajectory.csv"],
              "poses": ["rec.yaml", "rec_pose0.wav", "rec_pose0.json", "rec_pose1.wav",
