@@ -55,7 +55,7 @@ from hearsee.robot.scenario import Scenario
 from hearsee.vision.camera import OPTICAL_FROM_BODY
 from hearsee.vision.humans import TORSO_HEIGHT_FRACTION
 
-__all__ = ["CONTROL_DT", "RunResult", "fuses_fix", "frame_noise_seed", "new_person_track",
+__all__ = ["CONTROL_DT", "RunResult", "frame_noise_seed", "fuses_fix", "new_person_track",
            "run_scenario", "sensor_reach_m", "stereo_position_cov", "track_record",
            "track_timeout_s"]
 
