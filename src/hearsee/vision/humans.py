@@ -122,13 +122,17 @@ def body_surface_depth_m(width_m: float) -> float:
     it was 0.09 m for everyone, which put a person facing the camera 2 cm too far and one
     turned sideways 4-6 cm too near: people rendered 1.2-3 m away at yaws 0-90 deg had depth
     errors of -5.7 to +7.1 cm, now -2.3 to +5.9 (what remains, growing with range, is SGBM's
-    disparity 0.1-0.25 px low on these renders). GeometryError unless ``width_m`` is a finite
-    number >= 0."""
+    disparity 0.1-0.25 px low on these renders); adopted under a rule written before its
+    held-out run (bench/results/HISTORY.md, bench/robot: fresh random scenarios 680-759, the
+    robot's median 3D error 3.27 -> 1.88 cm). Fitted to the simulator's bodies, as the
+    constant was. GeometryError unless ``width_m`` is a finite number >= 0."""
     w = finite_number("width_m (silhouette width, metres)", width_m, 0.0, error=GeometryError)
     f = min(max((BODY_WIDTH_FACING_M - w) / (BODY_WIDTH_FACING_M - BODY_WIDTH_SIDEWAYS_M),
                 0.0), 1.0)
     return BODY_SURFACE_DEPTH_FACING_M + f * (BODY_SURFACE_DEPTH_SIDEWAYS_M
                                               - BODY_SURFACE_DEPTH_FACING_M)
+
+
 #: Height (metres) of the crown above a silhouette's robust top (:func:`robust_top_m`, the
 #: :data:`TOP_PERCENTILE` percentile of its points' heights): the rounded head puts the last
 #: half percent of the points 3.1-4.0 cm below the crown on hearsee.sim.scenes bodies at
