@@ -14,7 +14,7 @@ import secrets
 import stat
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 import yaml
@@ -24,8 +24,8 @@ from hearsee.errors import ConfigError, InputFileError
 __all__ = [
     "YamlDumper", "all_real", "as_float_array", "as_rng", "check_keys", "check_rng",
     "finite_number", "input_file", "is_real", "load_yaml", "names_a_file", "number",
-    "object_entries", "output_file", "replacing", "require", "save_yaml", "time_limit",
-    "to_jsonable", "to_plain", "whole_number", "write_file", "write_into",
+    "object_entries", "open_replaced", "output_file", "replacing", "require", "save_yaml",
+    "time_limit", "to_jsonable", "to_plain", "whole_number", "write_file", "write_into",
 ]
 
 
@@ -187,14 +187,21 @@ def write_file(path: str | Path, data: str | bytes) -> Path:
     return Path(path)
 
 
+def open_replaced(dest: Path) -> BinaryIO:
+    """``dest``, the file :func:`replacing` yielded, opened for writing bytes: ``"xb"`` for
+    the fresh temporary file (nothing else may have made it), ``"wb"`` where the target is
+    written through (a FIFO or a device). The one rule of every output written through
+    :func:`replacing` as a stream (:func:`write_into`, the MCAP export, images)."""
+    return open(dest, "wb" if dest.exists() else "xb")
+
+
 def write_into(dest: Path, data: str | bytes, name: str | Path) -> None:
     """Write ``data`` (text as UTF-8, or bytes) into ``dest``, the file :func:`replacing`
     yielded for the output ``name``: a fresh temporary file, or the FIFO/device written
     through. A write the system refuses (a full disk, a file size limit) is InputFileError
     naming ``name``, the user's path, not the temporary file (whose OSError named nothing)."""
     try:
-        # ("xb": a fresh temporary file; "wb" where the target is written through, a FIFO)
-        with open(dest, "wb" if dest.exists() else "xb") as fh:
+        with open_replaced(dest) as fh:
             fh.write(data.encode("utf-8") if isinstance(data, str) else data)
     except OSError as exc:
         raise InputFileError(f"{name}: cannot write ({exc.strerror or exc})") from None

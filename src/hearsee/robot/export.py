@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from hearsee.config import output_file, same_file
+from hearsee.config import open_replaced, output_file, same_file
 from hearsee.config import replacing as _replacing  # (its home was here)
 from hearsee.errors import ConfigError
 
@@ -160,8 +160,7 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
     except ImportError:
         raise ConfigError(_EXTRAS["mcap"][1]) from None
     p = output_file(path)
-    # ("xb": a fresh temporary file; "wb" where the target is written through, a FIFO)
-    with _replacing(p) as tmp, open(tmp, "wb" if tmp.exists() else "xb") as fh:
+    with _replacing(p) as tmp, open_replaced(tmp) as fh:
         w = Writer(fh if tmp.is_file() else _Positioned(fh))
         s_point = w.register_msgdef("geometry_msgs/msg/PointStamped", _POINT_STAMPED)
         s_image = w.register_msgdef("sensor_msgs/msg/Image", _IMAGE)

@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import input_file, output_file, real_entries, replacing
+from hearsee.config import input_file, open_replaced, output_file, real_entries, replacing
 from hearsee.errors import ImageInputError, InputFileError
 
 __all__ = [
@@ -454,7 +454,7 @@ def write_image(path: str | Path, image: NDArray) -> Path:
     # way -- a full disk, Ctrl-C -- left a truncated image where the earlier file was,
     # `detect --overlay --force`)
     try:
-        with replacing(p) as tmp, open(tmp, "wb" if tmp.exists() else "xb") as fh:
+        with replacing(p) as tmp, open_replaced(tmp) as fh:
             fh.write(buf.tobytes())
     except OSError as exc:  # (no permission: a bare OSError before)
         raise InputFileError(f"{p}: cannot write the image ({exc.strerror or exc})") from None
