@@ -20,7 +20,11 @@ baseline in metres). Disparity is computed with OpenCV's semi-global block match
   pixels and err by -0.13 to +0.20 px with the true fraction, on real Middlebury pairs as on
   the renders -- so one Lucas-Kanade step on the images themselves moves each measured pixel
   toward the minimum of a zero-mean SSD (Lucas & Kanade 1981; on pixel locking Shimizu &
-  Okutomi, "Sub-pixel estimation error cancellation on area-based matching", IJCV 2005);
+  Okutomi, "Sub-pixel estimation error cancellation on area-based matching", IJCV 2005).
+  Opt-in: judged 2026-12-03 under a rule written before its held-out runs, it lowered the
+  rendered people's median disparity error 60 % and the robot's 3D error p90 and velocity
+  error, but not its median 3D error (80 fresh scenarios, 95 % CI of the change -0.11 to
+  +0.06 cm), so the default stays SGBM's own (``bench/results/HISTORY.md``, bench/humans);
 * optional hole filling: each invalid pixel takes the smaller (farther) of the nearest valid
   disparities to its left and right on the same row -- occlusions belong to the background
   (Scharstein & Szeliski 2002, sec. 5.3; Hirschmueller 2008, sec. 3.5) -- then a 5x5 median on
@@ -283,8 +287,9 @@ def compute_disparity(
     subpixel : "sgbm" keeps SGBM's own sub-pixel estimate; "refine" moves every measured
         pixel by one Lucas-Kanade step (:func:`refine_subpixel`, at full resolution, before
         hole filling, which it leaves alone), which removes most of SGBM's pixel locking
-        (~9 ms more at 640x480). With ``scale`` < 1 SGBM errs in coarse pixels, and the
-        one step moves at most :data:`REFINE_MAX_STEP_PX` full-resolution pixels.
+        (~9 ms more at 640x480, a third of SGBM's time; not the default: see the module
+        docstring). With ``scale`` < 1 SGBM errs in coarse pixels, and the one step moves at
+        most :data:`REFINE_MAX_STEP_PX` full-resolution pixels.
 
     Returns
     -------
