@@ -196,7 +196,8 @@ def test_bad_speed_of_sound_and_coincident_microphones_are_refused():
 def test_training_set_refuses_nan_noise_and_bad_ranges():
     """tdoa_std_s=NaN returned all-NaN samples; an inverted or negative distance range raised
     numpy's ValueError or was accepted (bad-input sweep, 2026-11-26)."""
-    for kw in ({"tdoa_std_s": np.nan}, {"tdoa_std_s": -1.0}, {"distance_range_m": (3.0, 0.5)},
+    for kw in ({"tdoa_std_s": np.nan}, {"tdoa_std_s": -1.0}, {"tdoa_std_s": 1e200},
+               {"distance_range_m": (3.0, 0.5)},
                {"distance_range_m": (-1.0, 2.0)}, {"elevation_range_deg": (np.nan, 10.0)},
                {"elevation_range_deg": (-100.0, 0.0)}, {"elevation_range_deg": (40.0, 10.0)},
                {"azimuth_range_deg": (90.0, -90.0)}):
@@ -461,7 +462,11 @@ def test_localize3d_cli_round_trip(pose_manifest, capsys, method):
      "bad.yaml: head.pivot_m: [1e+300, 0.0, 0.0] is more than 10 m from the robot-frame origin"),
     # (an infinite noise passed the manifest check; the solver refused it after measuring
     # every capture, without naming the file: "tdoa_std_s must be > 0 seconds, got inf")
-    (lambda d: d.update(tdoa_std_s=float("inf")), "bad.yaml: tdoa_std_s must be a positive"),
+    (lambda d: d.update(tdoa_std_s=float("inf")),
+     "bad.yaml: tdoa_std_s must be a finite number in (0, 1], got inf"),
+    # (1e200 s was taken and overflowed squaring it in the solver: an OverflowError traceback)
+    (lambda d: d.update(tdoa_std_s=1e200), "bad.yaml: tdoa_std_s must be a finite number in"),
+    (lambda d: d.update(tdoa_std_s=True), "bad.yaml: tdoa_std_s must be a finite number in"),
     # (the captures of a masked pair were solved as the bare pair's: cone azimuths, -30.8 deg
     # for a source at -153 deg)
     (lambda d: d.update(array="mask2-asym"), "bad.yaml: array 'mask2-asym' has a mask"),
@@ -761,7 +766,7 @@ def test_range_difference_solvers_refuse_what_is_no_number():
         (dict(reference_m="origin"), "reference_m"),
         (dict(f_scale="3"), "f_scale must be a finite number"),
         (dict(n_directions=2.5), "n_directions must be an integer"),
-        (dict(tdoa_std_s="1e-5"), "tdoa_std_s must be > 0 seconds"),
+        (dict(tdoa_std_s="1e-5"), "tdoa_std_s must be a finite number in"),
         (dict(distance_bounds_m=("a", 5.0)), "distance_bounds_m: expected numbers"),
         (dict(distance_bounds_m=(0.2, 5.0, 9.0)), "distance_bounds_m must be 0 < min < max"),
     ]

@@ -280,7 +280,7 @@ def test_position_only_where_the_tdoas_determine_the_distance():
     # without near_field nothing is fitted or reported
     none = localize_tdoa(four.tdoa(src), four, near_field=False)
     assert none.distance_rel_std is None and none.to_dict()["position_covariance_m2"] is None
-    for bad in (0.0, -1e-6, float("nan"), "5us"):
+    for bad in (0.0, -1e-6, float("nan"), "5us", 1e200, 1.5):  # (1e200: OverflowError)
         with pytest.raises(GeometryError, match="tdoa_std_s"):
             localize_tdoa(four.tdoa(src), four, tdoa_std_s=bad)
     for bad in (-1.0, float("inf"), None):
@@ -1181,3 +1181,29 @@ def test_localize_recording_in_plane_is_ignored_by_a_volume_array(monkeypatch):
     fits.clear()
     plain = localize_recording(x, fs, tet5)
     assert [f["candidates"] for f in doc["frames"]] == [f["candidates"] for f in plain["frames"]]
+
+
+def test_tdoa_std_is_bounded_in_every_solver():
+    """tdoa_std_s=1e200 s overflowed where it was squared (OverflowError tracebacks from
+    localize_tdoa's position fit and solve_range_differences; only the CLI's --tdoa-std-us was
+    bounded). Every solver now takes (0, MAX_TDOA_STD_S]; at the bound the direction is still
+    found, without overflow, and no position is reported (a 1 s error determines none)."""
+    import warnings
+
+    from hearsee.audio.active import solve_range_differences
+    from hearsee.audio.arrays import MAX_TDOA_STD_S
+
+    vol = MicArray(np.array([[0, 0, 0], [0.2, 0, 0], [0, 0.2, 0], [0, 0, 0.2], [0.1, 0.1, 0.15]]))
+    src = np.array([1.0, 0.8, 0.3])
+    for bad in (1e200, np.nextafter(MAX_TDOA_STD_S, 2.0)):
+        with pytest.raises(GeometryError, match=r"tdoa_std_s must be a finite number in \(0, 1\]"):
+            localize_tdoa(vol.tdoa(src), vol, tdoa_std_s=bad)
+        with pytest.raises(GeometryError, match="tdoa_std_s"):
+            solve_range_differences([vol.positions], [vol.pairs], [vol.tdoa(src)],
+                                    tdoa_std_s=bad)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # (the overflow warned before it raised)
+        loc = localize_tdoa(vol.tdoa(src), vol, tdoa_std_s=MAX_TDOA_STD_S)
+    assert loc.position_m is None
+    # atan2(0.8, 1.0) = 38.66 deg
+    assert loc.azimuth_deg == pytest.approx(np.degrees(np.arctan2(0.8, 1.0)), abs=0.5)

@@ -64,6 +64,7 @@ from scipy.optimize import least_squares
 from hearsee.audio.arrays import (
     DEFAULT_TDOA_STD_S,
     MicArray,
+    check_tdoa_std,
     load_array,
     pair_tdoa,
     position_uncertainty,
@@ -409,9 +410,7 @@ def solve_range_differences(
     n_directions, n_distances, n_starts = (
         whole_number(name, v, error=GeometryError) for name, v in
         (("n_directions", n_directions), ("n_distances", n_distances), ("n_starts", n_starts)))
-    if not is_real(tdoa_std_s) or tdoa_std_s <= 0:
-        raise GeometryError(f"tdoa_std_s must be > 0 seconds, got {tdoa_std_s!r}")
-    sig = float(tdoa_std_s)
+    sig = check_tdoa_std(tdoa_std_s)
     # (unchecked until 2026-12-02: a NaN min_separation_deg refined one start only, a NaN
     # max_rel_distance_std never reported a distance, a NaN or negative max_residual_rms_s
     # called every answer inconsistent, a NaN gate kept every minimum; text raised builtin
@@ -785,8 +784,8 @@ def make_pose_training_set(
     if not (0 < lo < hi and np.isfinite(hi)):
         raise GeometryError(f"distance_range_m must be 0 < near < far metres, got "
                             f"{distance_range_m!r}")
-    if not (is_real(tdoa_std_s) and tdoa_std_s >= 0):  # (NaN made every sample NaN)
-        raise GeometryError(f"tdoa_std_s must be a finite number >= 0 seconds, got {tdoa_std_s}")
+    # (NaN made every sample NaN)
+    tdoa_std_s = check_tdoa_std(tdoa_std_s, "tdoa_std_s (seconds)", zero_ok=True)
     if not all(np.all(np.isfinite(v)) for v in (elevation_range_deg, azimuth_range_deg)):
         raise GeometryError("elevation_range_deg and azimuth_range_deg must be finite degrees")
     e_lo, e_hi = (float(v) for v in elevation_range_deg)
@@ -938,8 +937,7 @@ def train_pose_mlp(array: MicArray | str, poses: Sequence[HeadPose | Sequence[fl
                          tuple(as_point(pivot_m, "pivot_m").tolist()),
                          tuple(as_point(offset_m, "offset_m").tolist()),
                          whole_number("n (training samples)", n, 1, error=GeometryError),
-                         finite_number("tdoa_std_s (seconds)", tdoa_std_s, 0.0,
-                                       error=GeometryError),
+                         check_tdoa_std(tdoa_std_s, "tdoa_std_s (seconds)", zero_ok=True),
                          whole_number("seed", seed, 0, error=GeometryError),
                          tuple(hidden_layer_sizes))
 
@@ -1496,8 +1494,7 @@ def load_pose_manifest(path: Any) -> PoseManifest:
             raise ConfigError(f"{w}: {exc}") from None
         files.append(f)
     std = data.get("tdoa_std_s", DEFAULT_TDOA_STD_S)
-    if isinstance(std, bool) or not isinstance(std, int | float) or not (is_real(std) and std > 0):
-        raise ConfigError(f"{where}: tdoa_std_s must be a positive number of seconds, got {std!r}")
+    std = check_tdoa_std(std, f"{where}: tdoa_std_s", error=ConfigError)  # (seconds)
     truth = data.get("truth")
     return PoseManifest(arr, files, poses, pivot, offset, float(std),
                         truth if isinstance(truth, dict) else None)

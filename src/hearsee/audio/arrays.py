@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.config import (
     as_float_array,
     check_keys,
+    finite_number,
     is_real,
     load_yaml,
     names_a_file,
@@ -40,7 +41,8 @@ from hearsee.config import (
 )
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 
-__all__ = ["FLAT_TDOA_S", "SPEED_OF_SOUND_RANGE_MPS", "MicArray", "check_pairs", "closure_rms",
+__all__ = ["FLAT_TDOA_S", "MAX_TDOA_STD_S", "SPEED_OF_SOUND_RANGE_MPS", "MicArray",
+           "check_pairs", "check_tdoa_std", "closure_rms",
            "list_presets", "load_array", "pair_closure_projector", "pair_matrix", "pair_tdoa",
            "pair_tdoa_jacobian", "position_uncertainty", "residual_scaled_variance",
            "span_dimension"]
@@ -51,6 +53,19 @@ __all__ = ["FLAT_TDOA_S", "SPEED_OF_SOUND_RANGE_MPS", "MicArray", "check_pairs",
 #: in ``bench/nmic.py``'s room (sources 0.5-3 m, 2 s, 10 / 20 dB; 2026-11-27): median per
 #: condition 0.4-1 us anechoic, 4-14 us at RT60 0.3 s, 13-35 us at RT60 0.6 s.
 DEFAULT_TDOA_STD_S = 5e-6
+#: The largest TDOA standard deviation any function takes, seconds: 1 s, a thousand times any
+#: array's largest delay, where no position is ever reported. Larger values overflowed where
+#: they were squared (1e200 s: OverflowError from the position solvers; the CLI's
+#: ``--tdoa-std-us`` was bounded, the library was not).
+MAX_TDOA_STD_S = 1.0
+
+
+def check_tdoa_std(value: Any, name: str = "tdoa_std_s", *, zero_ok: bool = False,
+                   error: type[Exception] = GeometryError) -> float:
+    """``value`` (seconds) as a float when it is a finite number in ``(0, MAX_TDOA_STD_S]``
+    (``[0, ...]`` with ``zero_ok``, for noise levels), else ``error`` naming ``name``."""
+    return finite_number(name, value, 0.0, MAX_TDOA_STD_S, lo_open=not zero_ok, error=error)
+
 
 #: Two microphones closer than this (metres) are treated as coincident.
 MIN_SPACING_M = 1e-3

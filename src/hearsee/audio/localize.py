@@ -45,6 +45,7 @@ from hearsee.audio.arrays import (
     _linearised_covariance,
     _pair_index,
     check_pairs,
+    check_tdoa_std,
     closure_rms,
     load_array,
     pair_closure_projector,
@@ -763,7 +764,7 @@ def near_field_in_plane(tdoa_s: ArrayLike, array: MicArray | str,
                             f"{_RANGE_M[1]:g}] or None, got {range_m!r}")
     max_inverse_range = finite_number("max_inverse_range (1/m)", max_inverse_range, 0.0,
                                       1.0 / _RANGE_M[0], error=GeometryError)
-    tdoa_std_s = finite_number("tdoa_std_s", tdoa_std_s, 0.0, lo_open=True, error=GeometryError)
+    tdoa_std_s = check_tdoa_std(tdoa_std_s)
     closure_std_factor = finite_number("closure_std_factor", closure_std_factor, 0.0,
                                        error=GeometryError)
     # (NaN or 2.5 raised range()'s builtin TypeError; -1 and 0 gave the unfitted start)
@@ -978,7 +979,7 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
     arr = load_array(array)
     prs = arr.checked_pairs(pairs)
     tau = _tdoa_vector(tdoa_s, prs, tol_s)
-    tdoa_std_s = finite_number("tdoa_std_s", tdoa_std_s, 0.0, lo_open=True, error=GeometryError)
+    tdoa_std_s = check_tdoa_std(tdoa_std_s)
     closure_std_factor = finite_number("closure_std_factor", closure_std_factor, 0.0,
                                        error=GeometryError)
     if not np.all(np.isfinite(tau)):
@@ -1099,7 +1100,7 @@ def position_tdoa_std(tdoa_s: ArrayLike, pairs: Sequence[tuple[int, int]], n_mic
     tau = as_tdoas(tdoa_s, len(prs))  # (text: numpy's builtin ValueError)
     if not np.all(np.isfinite(tau)):  # (NaN: max(5e-6, nan) returned the declared value)
         raise GeometryError("position_tdoa_std needs finite TDOAs (seconds)")
-    tdoa_std_s = finite_number("tdoa_std_s", tdoa_std_s, 0.0, lo_open=True, error=GeometryError)
+    tdoa_std_s = check_tdoa_std(tdoa_std_s)
     factor = finite_number("factor", factor, 0.0, error=GeometryError)
     clo = closure_rms(tau, prs, n_mics)
     return tdoa_std_s if clo is None else max(tdoa_std_s, factor * clo)

@@ -18,10 +18,6 @@ from hearsee.errors import ConfigError
 #: Above this much audio x pairs (seconds) processing takes about a second: show a bar.
 _PROGRESS_WORK_S = 60.0
 
-#: The largest --tdoa-std-us, microseconds (1 s: a thousand times any array's largest delay,
-#: where no position is ever reported); 1e300 overflowed squaring it (OverflowError traceback).
-MAX_TDOA_STD_US = 1e6
-
 
 def _fmt(v: Any, digits: int = 1) -> str:
     return "-" if v is None else f"{v:.{digits}f}"
@@ -140,14 +136,15 @@ def localize_cmd(
     ] = None,
 ) -> None:
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
-    from hearsee.audio.arrays import load_array
+    from hearsee.audio.arrays import MAX_TDOA_STD_S, load_array
     from hearsee.audio.localize import fits_position, localize_recording
     from hearsee.audio.signals import read_recording
     from hearsee.audio.tdoa import SUMMARY_TUNED, check_frame_ms, dominant_sample, frame_geometry
 
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
     if tdoa_std_us is not None:
-        finite_number("--tdoa-std-us", tdoa_std_us, 0.0, MAX_TDOA_STD_US, lo_open=True)
+        # (the library's bound, in microseconds: 1e300 overflowed squaring it, a traceback)
+        finite_number("--tdoa-std-us", tdoa_std_us, 0.0, MAX_TDOA_STD_S * 1e6, lo_open=True)
     if summary_tuned:
         given = [name for name, v in (("--method", method), ("--reverb-method", reverb_method))
                  if v is not None]
