@@ -157,6 +157,36 @@ def test_report_overwrites_names_only_what_the_report_writes(tmp_path):
         assert report_overwrites(tmp_path / "r", [tmp_path / p]) is None
 
 
+def test_write_report_refuses_bad_images_before_writing_anything(tmp_path):
+    """An empty image raised cv2's error (a traceback) once the report was half staged; a
+    stem such as ../index wrote outside frames/, where report_overwrites does not look. Both
+    are refused with hearsee's errors before anything is written, and an earlier report in
+    the folder stays as it was."""
+    from hearsee.errors import ConfigError, ImageInputError
+
+    sc = scenario_from_dict({}).to_dict()
+    out = tmp_path / "r"
+    write_report(out, sc, [], {"success": False},
+                 images={"first_overlay": np.full((4, 6), 7, np.uint8)})
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    bad_images = [np.zeros((0, 8, 3), np.uint8), np.zeros((8, 8), np.float32),
+                  np.zeros((8, 8, 2), np.uint8), [[0, 1], [2, 3]]]
+    for img in bad_images:
+        with pytest.raises(ImageInputError, match="report image 'x': expected a non-empty"):
+            write_report(out, sc, [], {"success": True}, images={"x": img})
+    for name in ("../index", "a/b", ".hidden", "", 3):
+        with pytest.raises(ConfigError, match="report image name"):
+            write_report(out, sc, [], {"success": True},
+                         images={name: np.zeros((4, 4), np.uint8)})
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert not (tmp_path / "index.png").exists()
+    # grey, colour and BGRA images of one pixel and up are written
+    write_report(out, sc, [], {"success": True}, images={
+        "g": np.zeros((1, 1), np.uint8), "c.1": np.zeros((3, 2, 3), np.uint8),
+        "a-b": np.zeros((2, 2, 4), np.uint8)})
+    assert {p.name for p in (out / "frames").iterdir()} >= {"g.png", "c.1.png", "a-b.png"}
+
+
 def test_associate_picks_the_nearest_person_inside_the_gate():
     """The one association rule of the simulated and the live loop: before a 3D track, the
     verified person nearest the audio bearing within ASSOCIATION_GATE_DEG (wrapping at 180

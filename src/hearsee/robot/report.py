@@ -19,6 +19,7 @@ import html
 import io
 import json
 import os
+import re
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -37,6 +38,8 @@ __all__ = ["REPORT_FILES", "report_folder_blocker", "report_folder_unwritable",
 #: folder's ``plots/`` and ``frames/`` (named after the plots and the images it is given).
 REPORT_FILES = ("index.html", "log.json", "summary.json")
 _REPORT_SUBFOLDERS = ("plots", "frames")
+#: A report image's file stem (:func:`_check_images`): no separators, no leading dot.
+_STEM = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]*")
 
 
 def report_folder_blocker(folder: str | Path) -> Path | None:
@@ -247,6 +250,27 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     return figs
 
 
+def _check_images(images: Mapping[str, Any]) -> None:
+    """Each of :func:`write_report`'s ``images``: a plain file stem (letters, digits, ``_``,
+    ``-``, ``.``; not starting with ``.``) naming an (H, W), (H, W, 3) or (H, W, 4) uint8
+    image of at least one pixel -- else ConfigError / ImageInputError, before anything is
+    written. An empty image raised cv2's error once the report was half staged; a stem such
+    as ``../index`` wrote outside ``frames/``, past the rules of :func:`report_overwrites`."""
+    from hearsee.errors import ConfigError, ImageInputError
+
+    for name, img in images.items():
+        if not (isinstance(name, str) and _STEM.fullmatch(name)):
+            raise ConfigError(f"report image name {name!r:.60}: expected a plain file stem "
+                              "(letters, digits, _, - and ., not starting with .)")
+        ok = (isinstance(img, np.ndarray) and img.dtype == np.uint8 and img.size > 0
+              and (img.ndim == 2 or (img.ndim == 3 and img.shape[2] in (1, 3, 4))))
+        if not ok:
+            what = (f"{img.dtype} array of shape {img.shape}" if isinstance(img, np.ndarray)
+                    else type(img).__name__)
+            raise ImageInputError(f"report image {name!r}: expected a non-empty (H, W), "
+                                  f"(H, W, 3) or (H, W, 4) uint8 image, got {what}")
+
+
 def _write_images(folder: Path, images: Mapping[str, np.ndarray], put: _Put) -> list[str]:
     import cv2
 
@@ -285,6 +309,7 @@ def write_report(
     """
     from hearsee.config import replacing, to_jsonable, write_into
 
+    _check_images(images or {})
     out = Path(folder)
     try:
         out.mkdir(parents=True, exist_ok=True)
