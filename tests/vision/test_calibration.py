@@ -713,3 +713,18 @@ def test_thermal_view_without_a_left_board_is_not_reported_rejected(monkeypatch)
     assert not res.views[5].found_left and res.views[5].found_thermal
     assert not any(v.rejected_thermal for v in res.views)
     assert np.isnan(res.views[5].err_thermal)
+
+
+def test_render_chessboard_takes_a_seed_as_other_random_functions_do():
+    """rng=3 was numpy's AttributeError ('int' object has no attribute 'normal'); text is
+    a ConfigError. A seed draws the noise a Generator of that seed draws; None is seed 0."""
+    cam = Camera.from_fov(60.0, 64, 48)
+    args = (cam, np.eye(3), np.array([-0.05, -0.03, 0.5]), (4, 3), 0.02)
+    by_seed = C.render_chessboard(*args, noise=5.0, rng=3)
+    by_gen = C.render_chessboard(*args, noise=5.0, rng=np.random.default_rng(3))
+    np.testing.assert_array_equal(by_seed, by_gen)
+    np.testing.assert_array_equal(C.render_chessboard(*args, noise=5.0),
+                                  C.render_chessboard(*args, noise=5.0, rng=0))
+    assert np.any(by_seed != C.render_chessboard(*args, noise=5.0, rng=4))
+    with pytest.raises(ConfigError, match="rng"):
+        C.render_chessboard(*args, noise=5.0, rng="three")

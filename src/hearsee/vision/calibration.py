@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.config import finite_number, is_real, real_entries, whole_number
+from hearsee.config import as_rng, finite_number, is_real, real_entries, whole_number
 from hearsee.errors import CalibrationError
 from hearsee.vision.camera import MIN_BASELINE_M, Camera, StereoRig
 from hearsee.vision.io import to_gray
@@ -729,7 +729,7 @@ def _rigid_fit(A: NDArray, B: NDArray) -> tuple[NDArray, NDArray]:
 def render_chessboard(camera: Camera, R_board: NDArray, t_board: NDArray,
                       pattern: tuple[int, int], square_m: float, *, margin_squares: float = 1.0,
                       invert: bool = False, blur_px: float = 0.0, noise: float = 0.0,
-                      background: float = 0.45, rng: np.random.Generator | None = None,
+                      background: float = 0.45, rng: np.random.Generator | int | None = None,
                       rays: NDArray | None = None) -> NDArray:
     """Render an anti-aliased chessboard seen by ``camera`` (uint8 grey image).
 
@@ -739,7 +739,8 @@ def render_chessboard(camera: Camera, R_board: NDArray, t_board: NDArray,
     exactly (each pixel's ray is intersected with the board plane); each pixel is the average
     over a 4x4 grid of sub-pixel rays. ``invert`` swaps black and white (a heated board in a
     thermal camera); ``blur_px`` is a Gaussian blur sigma; ``noise`` an additive Gaussian
-    noise sigma in grey levels. ``rays`` can pass precomputed sub-pixel rays for speed.
+    noise sigma in grey levels, drawn from ``rng`` (a Generator, an integer seed, or None for
+    the seed 0). ``rays`` can pass precomputed sub-pixel rays for speed.
     """
     nx, ny = pattern
     if rays is None:
@@ -766,8 +767,8 @@ def render_chessboard(camera: Camera, R_board: NDArray, t_board: NDArray,
     img = val.reshape(camera.height, camera.width, -1).mean(axis=2)
     if blur_px > 0:
         img = cv2.GaussianBlur(img, (0, 0), blur_px)
-    if noise > 0:
-        rng = rng if rng is not None else np.random.default_rng(0)
+    if noise > 0:  # (an integer seed was numpy's AttributeError: int has no 'normal')
+        rng = np.random.default_rng(0) if rng is None else as_rng(rng)
         img = img + rng.normal(0.0, noise / 255.0, img.shape)
     return np.clip(np.rint(img * 255.0), 0, 255).astype(np.uint8)
 
