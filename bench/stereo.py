@@ -21,8 +21,8 @@ Methods, all run in this process on the same images:
   P1 = 8*3*25, P2 = 32*3*25, uniqueness 10, speckle 100/2, colour images, other parameters at
   OpenCV's defaults (reproduces the reference numbers in the data README);
 * ``hearsee-raw`` -- ``compute_disparity`` defaults (valid-only quality, density < 1);
-* ``hearsee-raw, subpixel=sgbm`` -- the same with SGBM's own, pixel-locked sub-pixel
-  estimate (no Lucas-Kanade step: the ablation of the default ``subpixel="refine"``);
+* ``hearsee-raw, subpixel=refine`` -- the same with one Lucas-Kanade step on SGBM's
+  pixel-locked sub-pixel estimate (opt-in; see ``compute_disparity``);
 * ``hearsee-fast`` -- + background hole filling (dense; the real-time setting);
 * ``hearsee-accurate`` -- + full left-right consistency check before filling (~2x time).
 
@@ -93,8 +93,8 @@ def methods() -> dict:
     return {
         "opencv-sgbm": opencv_baseline,
         "hearsee-raw": lambda L, R: compute_disparity(L, R, num_disparities=64),
-        "hearsee-raw, subpixel=sgbm": lambda L, R: compute_disparity(
-            L, R, num_disparities=64, subpixel="sgbm"),
+        "hearsee-raw, subpixel=refine": lambda L, R: compute_disparity(
+            L, R, num_disparities=64, subpixel="refine"),
         "hearsee-fast": lambda L, R: compute_disparity(L, R, num_disparities=64,
                                                        fill_holes=True),
         "hearsee-accurate": lambda L, R: compute_disparity(L, R, num_disparities=64,

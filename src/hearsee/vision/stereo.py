@@ -15,18 +15,18 @@ baseline in metres). Disparity is computed with OpenCV's semi-global block match
   columns (which plain SGBM leaves invalid) get disparities too;
 * a left-right consistency check (``disp12MaxDiff``, or a full right-to-left match checked in
   numpy with ``lr_check="full"``);
-* a sub-pixel refinement (``subpixel="refine"``, the default; :func:`refine_subpixel`): SGBM's
+* an optional sub-pixel refinement (``subpixel="refine"``, :func:`refine_subpixel`): SGBM's
   parabola over its Birchfield-Tomasi costs is pixel-locked -- its estimates pile up at whole
   pixels and err by -0.13 to +0.20 px with the true fraction, on real Middlebury pairs as on
   the renders -- so one Lucas-Kanade step on the images themselves moves each measured pixel
   toward the minimum of a zero-mean SSD (Lucas & Kanade 1981; on pixel locking Shimizu &
   Okutomi, "Sub-pixel estimation error cancellation on area-based matching", IJCV 2005).
-  The default since 2026-12-03, judged under two rules written before their held-out runs
-  (``bench/results/HISTORY.md``): it lowered the rendered people's median disparity error
-  60 %, the detector's median 3D error on fresh scenes 1.07 -> 0.68 % of range (beyond 4 m
-  about half) and the robot's 3D error p90 and velocity error; the robot's median 3D error
-  did not move (people mostly 1-3 m away), which is why the first rule, asking it to, failed.
-  ``subpixel="sgbm"`` keeps SGBM's own estimate;
+  Opt-in: judged 2026-12-03 under a rule written before its held-out runs, it lowered the
+  rendered people's median disparity error 60 %, the detector's median 3D error 1.02 ->
+  0.68 % of range (beyond 4 m about half), the robot's 3D error p90 and velocity error, but
+  not the robot's median 3D error (people mostly 1-3 m away; 80 fresh scenarios, 95 % CI of
+  the change -0.11 to +0.06 cm), so the default stays SGBM's own
+  (``bench/results/HISTORY.md``);
 * optional hole filling: each invalid pixel takes the smaller (farther) of the nearest valid
   disparities to its left and right on the same row -- occlusions belong to the background
   (Scharstein & Szeliski 2002, sec. 5.3; Hirschmueller 2008, sec. 3.5) -- then a 5x5 median on
@@ -224,8 +224,7 @@ def search_range_px(width: int, num_disparities: float = 64, min_disparity: floa
     the matching resolution, so the search may reach a little beyond what was asked for.
     A surface nearer than ``f B / largest`` metres is outside the search: SGBM gives it no
     disparity or a wrong one, at most the largest (:func:`hearsee.vision.humans.
-    detect_candidates` flags people standing there), which the default sub-pixel step may
-    move up to :data:`REFINE_MAX_STEP_PX` further. ConfigError for options that
+    detect_candidates` flags people standing there). ConfigError for options that
     :func:`compute_disparity` refuses (a search beyond SGBM's largest disparity included) or
     a width that is not a whole number >= 1.
 
@@ -259,7 +258,7 @@ def compute_disparity(
     pad_left: bool = True,
     fill_holes: bool = False,
     scale: float = 1.0,
-    subpixel: Literal["sgbm", "refine"] = "refine",
+    subpixel: Literal["sgbm", "refine"] = "sgbm",
 ) -> NDArray:
     """Disparity of a rectified pair with tuned semi-global matching.
 
@@ -290,9 +289,9 @@ def compute_disparity(
     subpixel : "sgbm" keeps SGBM's own sub-pixel estimate; "refine" moves every measured
         pixel by one Lucas-Kanade step (:func:`refine_subpixel`, at full resolution, before
         hole filling, which it leaves alone), which removes most of SGBM's pixel locking
-        (~9 ms more at 640x480, a third of SGBM's time; the default since 2026-12-03, see
-        the module docstring). With ``scale`` < 1 SGBM errs in coarse pixels, and the one
-        step moves at most :data:`REFINE_MAX_STEP_PX` full-resolution pixels.
+        (~9 ms more at 640x480, a third of SGBM's time; not the default: see the module
+        docstring). With ``scale`` < 1 SGBM errs in coarse pixels, and the one step moves at
+        most :data:`REFINE_MAX_STEP_PX` full-resolution pixels.
 
     Returns
     -------
