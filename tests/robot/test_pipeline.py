@@ -169,10 +169,12 @@ def test_write_report_refuses_bad_images_before_writing_anything(tmp_path):
     write_report(out, sc, [], {"success": False},
                  images={"first_overlay": np.full((4, 6), 7, np.uint8)})
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
-    bad_images = [np.zeros((0, 8, 3), np.uint8), np.zeros((8, 8), np.float32),
-                  np.zeros((8, 8, 2), np.uint8), [[0, 1], [2, 3]]]
-    for img in bad_images:
-        with pytest.raises(ImageInputError, match="report image 'x': expected a non-empty"):
+    bad_images = [(np.zeros((0, 8, 3), np.uint8), "image is empty"),
+                  (np.zeros((8, 8), np.float32), "expected uint8 pixels, got float32"),
+                  (np.zeros((8, 8, 2), np.uint8), r"expected an \(H, W\) or \(H, W, 1\|3\|4\)"),
+                  ([[0, 1], [2, 3]], "expected a numpy image array, got list")]
+    for img, why in bad_images:
+        with pytest.raises(ImageInputError, match=f"^report image 'x': {why}"):
             write_report(out, sc, [], {"success": True}, images={"x": img})
     for name in ("../index", "a/b", ".hidden", "", 3):
         with pytest.raises(ConfigError, match="report image name"):

@@ -252,23 +252,22 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
 
 def _check_images(images: Mapping[str, Any]) -> None:
     """Each of :func:`write_report`'s ``images``: a plain file stem (letters, digits, ``_``,
-    ``-``, ``.``; not starting with ``.``) naming an (H, W), (H, W, 3) or (H, W, 4) uint8
-    image of at least one pixel -- else ConfigError / ImageInputError, before anything is
-    written. An empty image raised cv2's error once the report was half staged; a stem such
-    as ``../index`` wrote outside ``frames/``, past the rules of :func:`report_overwrites`."""
+    ``-``, ``.``; not starting with ``.``) naming a non-empty uint8 image as
+    :func:`hearsee.vision.io.check_image` takes them ((H, W) or (H, W, 1|3|4)) -- else
+    ConfigError / ImageInputError, before anything is written. An empty image raised cv2's
+    error once the report was half staged; a stem such as ``../index`` wrote outside
+    ``frames/``, past the rules of :func:`report_overwrites`."""
     from hearsee.errors import ConfigError, ImageInputError
+    from hearsee.vision.io import check_image
 
     for name, img in images.items():
         if not (isinstance(name, str) and _STEM.fullmatch(name)):
             raise ConfigError(f"report image name {name!r:.60}: expected a plain file stem "
                               "(letters, digits, _, - and ., not starting with .)")
-        ok = (isinstance(img, np.ndarray) and img.dtype == np.uint8 and img.size > 0
-              and (img.ndim == 2 or (img.ndim == 3 and img.shape[2] in (1, 3, 4))))
-        if not ok:
-            what = (f"{img.dtype} array of shape {img.shape}" if isinstance(img, np.ndarray)
-                    else type(img).__name__)
-            raise ImageInputError(f"report image {name!r}: expected a non-empty (H, W), "
-                                  f"(H, W, 3) or (H, W, 4) uint8 image, got {what}")
+        what = f"report image {name!r}"
+        check_image(img, what)
+        if img.dtype != np.uint8:
+            raise ImageInputError(f"{what}: expected uint8 pixels, got {img.dtype}")
 
 
 def _write_images(folder: Path, images: Mapping[str, np.ndarray], put: _Put) -> list[str]:
