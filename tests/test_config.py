@@ -457,6 +457,46 @@ def test_same_file_sees_hard_links_and_refuse_overwrite_uses_it(tmp_path):
     assert src.read_bytes() == b"image"
 
 
+def test_refuse_overwrite_lets_pipes_and_devices_through(tmp_path):
+    """A FIFO or device is written into, not replaced (config.replacing): it needs no --force.
+    `hearsee eval -o /dev/stdout | jq` was refused as "file exists" until 2026-12-03. A
+    regular file reached through a symlink still needs --force."""
+    import os
+
+    from hearsee.cli._app import refuse_overwrite
+    from hearsee.config import write_file, written_through
+
+    reg = tmp_path / "results.json"
+    reg.write_text("mine")
+    link = tmp_path / "link.json"
+    link.symlink_to(reg)
+    for p in (reg, link):
+        assert not written_through(p)
+        with pytest.raises(InputFileError, match="file exists; pass --force"):
+            refuse_overwrite([p], [], force=False)
+    assert not written_through(tmp_path / "missing.json")
+    if os.path.exists("/dev/null"):
+        assert written_through("/dev/null")
+        refuse_overwrite(["/dev/null"], [], force=False)
+    if hasattr(os, "mkfifo"):
+        fifo = tmp_path / "pipe"
+        os.mkfifo(fifo)
+        assert written_through(fifo)
+        refuse_overwrite([fifo], [], force=False)
+    if os.path.isdir("/proc/self/fd"):  # (what /dev/stdout is in `hearsee eval -o /dev/stdout
+        r, w = os.pipe()                 # | jq`: a link to "pipe:[N]", which realpath cannot
+        try:                             # follow -- "cannot write (No such file ...)" before)
+            name = f"/proc/self/fd/{w}"
+            assert written_through(name)
+            refuse_overwrite([name], [], force=False)
+            write_file(name, "through the pipe")
+            assert os.read(r, 100) == b"through the pipe"
+        finally:
+            os.close(r)
+            os.close(w)
+    assert reg.read_text() == "mine"
+
+
 def test_as_float_array_with_the_callers_error_and_non_finite_values_allowed():
     """finite=False lets NaN and infinities through (only non-numbers are refused) and
     ``error`` is the caller's type."""

@@ -147,6 +147,19 @@ def output_file(path: str | Path) -> Path:
     return p
 
 
+def written_through(path: str | Path) -> bool:
+    """Whether an output at ``path`` is written through rather than replaced: it exists (after
+    following symlinks) and is no regular file -- a FIFO, a pipe such as ``/dev/stdout`` in
+    ``hearsee eval -o /dev/stdout | jq``, a device such as ``/dev/null``. Such a target holds
+    no earlier results to lose, so the CLI's ``--force`` rule does not apply to it
+    (``refuse_overwrite``), and :func:`replacing` writes into it."""
+    try:  # (os.stat follows /dev/stdout -> /proc/self/fd/1 -> "pipe:[N]", which realpath
+        mode = os.stat(path).st_mode  # cannot: it made a nonexistent path of it)
+    except (OSError, ValueError):
+        return False
+    return not stat.S_ISREG(mode) and not stat.S_ISDIR(mode)
+
+
 @contextlib.contextmanager
 def replacing(path: str | Path) -> Iterator[Path]:
     """A temporary file name beside ``path`` (its folder: the same file system) for an output
@@ -162,10 +175,10 @@ def replacing(path: str | Path) -> Iterator[Path]:
     got nothing). The temporary name ends in ``.tmp`` (a writer that picks its format by the
     suffix must be told the format). The one rule of the robot's exports, its report folder
     and ``hearsee eval -o`` (moved here from hearsee.robot.export on 2026-12-02)."""
-    target = Path(os.path.realpath(path))
-    if target.exists() and not target.is_file():
-        yield target
+    if written_through(path):  # (opened by its own name: a pipe's realpath is no path)
+        yield Path(path)
         return
+    target = Path(os.path.realpath(path))
     tmp = target.with_name(f".{target.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
     try:
         yield tmp

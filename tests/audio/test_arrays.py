@@ -95,6 +95,10 @@ def test_missing_file_and_unknown_preset(tmp_path):
     # (both were "unknown array preset" before 2026-11-26)
     with pytest.raises(InputFileError, match="is a folder"):
         load_array(tmp_path)
+    # "" is Path("."), a folder: it was ": is a folder" before 2026-12-03
+    for empty in ("", "  "):
+        with pytest.raises(ConfigError, match="array: empty; expected a preset name .*two-mic"):
+            load_array(empty)
     with pytest.raises(InputFileError, match="no such array file"):
         load_array(tmp_path / "my-array")
     # a YAML suffix in any case names a file (config.names_a_file), never a preset: a missing

@@ -129,11 +129,18 @@ def test_eval_out_that_fails_part_way_keeps_the_earlier_file(capsys, monkeypatch
     fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # (a reader, so the writer can open)
     try:
         runs[:] = runs[:3]  # (what a pipe's buffer holds without a reader reading)
+        first = list(runs)
         assert main(["eval", "-n", "2", "-o", str(fifo), "--force"]) == 0
         data = os.read(fd, 1 << 16)
+        # a pipe holds no earlier results: no --force needed (`-o /dev/stdout | jq` was
+        # refused as "file exists" until 2026-12-03)
+        runs[:] = runs[:2]
+        assert main(["eval", "-n", "2", "-o", str(fifo)]) == 0
+        data2 = os.read(fd, 1 << 16)
     finally:
         os.close(fd)
-    assert stat.S_ISFIFO(os.stat(fifo).st_mode) and json.loads(data)["runs"] == runs
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode) and json.loads(data)["runs"] == first
+    assert json.loads(data2)["runs"] == runs == first[:2]
 
 
 @pytest.mark.parametrize("n", ["0", "1000001", "100000000000"])

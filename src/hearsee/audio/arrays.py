@@ -581,6 +581,9 @@ def load_array(spec: str | Path | MicArray) -> MicArray:
         raise ConfigError(f"array: expected a MicArray, a preset name or a YAML path, got "
                           f"{type(spec).__name__} {spec!r:.60}")
     s = str(spec)
+    if not s.strip():  # ("" is Path("."), which was called "a folder" until 2026-12-03)
+        raise ConfigError(f"array: empty; expected a preset name ({', '.join(list_presets())}) "
+                          f"or an array YAML file")
     if Path(s).is_dir():  # (a folder or a missing path read as an unknown preset name)
         raise InputFileError(f"{s}: is a folder; expected an array YAML file or a preset name")
     if Path(s).is_file():
