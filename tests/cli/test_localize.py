@@ -1,3 +1,5 @@
+import csv
+import io
 import json
 
 import numpy as np
@@ -63,6 +65,16 @@ def test_two_mic_elevation_null_and_twins(tmp_path, capsys):
     assert s["elevation_deg"] is None
     azs = sorted(c["azimuth_deg"] for c in s["candidates"])
     assert azs == pytest.approx([40.0, 140.0], abs=2.0)
+    # the CSV's one null is an empty cell, in the candidates too ("40.00/-" until 2026-12-03)
+    code, out, _ = _run(capsys, p, "--array", "two-mic", "--method", "gcc-scot", "--no-kalman",
+                        "--format", "csv")
+    rows = list(csv.DictReader(io.StringIO(out)))
+    assert code == 0 and rows
+    for r in rows:
+        assert r["elevation_deg"] == ""
+        pairs = [c.split("/") for c in r["candidates"].split(";")]
+        assert [el for _, el in pairs] == ["", ""]
+        assert sorted(float(az) for az, _ in pairs) == pytest.approx([40.0, 140.0], abs=3.0)
 
 
 @pytest.mark.parametrize("fmt", ["csv", "table"])

@@ -23,19 +23,26 @@ def _fmt(v: Any, digits: int = 1) -> str:
     return "-" if v is None else f"{v:.{digits}f}"
 
 
+def _csv_num(v: Any, digits: int) -> str:
+    """A CSV cell: empty where the JSON has null (the one null of the CSV; candidates wrote
+    "-" for an unresolved elevation, e.g. "26.52/-", until 2026-12-03)."""
+    return "" if v is None else f"{v:.{digits}f}"
+
+
 def _write_csv(doc: dict[str, Any]) -> None:
+    """The frames as CSV, one row each; ``candidates`` is ``"az/el;az/el..."`` in degrees, an
+    unresolved value (null in the JSON) empty there as in every column: ``"26.52/;153.48/"``
+    for a two-microphone array."""
     labels = list(doc["summary"]["tdoa_s"])
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["t_s", *[f"tdoa_{k}_s" for k in labels], "azimuth_deg", "elevation_deg",
                 "candidates", "confidence", "valid"])
     for f in doc["frames"]:
-        cands = ";".join(f"{_fmt(c['azimuth_deg'], 2)}/{_fmt(c['elevation_deg'], 2)}"
+        cands = ";".join(f"{_csv_num(c['azimuth_deg'], 2)}/{_csv_num(c['elevation_deg'], 2)}"
                          for c in f["candidates"])
-        w.writerow([f"{f['t']:.4f}",
-                    *["" if f["tdoa_s"][k] is None else f"{f['tdoa_s'][k]:.9f}" for k in labels],
-                    "" if f["azimuth_deg"] is None else f"{f['azimuth_deg']:.2f}",
-                    "" if f["elevation_deg"] is None else f"{f['elevation_deg']:.2f}",
+        w.writerow([f"{f['t']:.4f}", *[_csv_num(f["tdoa_s"][k], 9) for k in labels],
+                    _csv_num(f["azimuth_deg"], 2), _csv_num(f["elevation_deg"], 2),
                     cands, f"{f['confidence']:.3f}", int(f["valid"])])
     sys.stdout.write(buf.getvalue())
 
