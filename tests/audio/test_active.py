@@ -589,6 +589,36 @@ def test_simulate_pose_manifest_checks_its_points(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
+def test_simulate_pose_manifest_interrupted_writes_nothing(tmp_path, monkeypatch):
+    """Captures were written as each pose was rendered: a Ctrl-C during the third pose's
+    render left two captures without a manifest and, with --force, an earlier manifest then
+    named new captures beside old ones. Now everything is rendered first; an interruption
+    leaves the folder (here: an earlier manifest and its captures) as it was."""
+    import hearsee.audio.active as active
+
+    src = [1.0, 0.8, 0.6]
+    man, files = active.simulate_pose_manifest(tmp_path / "m.yaml", "three-mic", src, POSES3,
+                                               duration_s=0.1, seed=1)
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    assert len(files) == 3 and len(before) == 7  # (3 WAVs, 3 truth JSONs, the manifest)
+    import hearsee.sim.audio as sim_audio
+
+    real, calls = sim_audio.render, []
+
+    def render(*a, **k):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(sim_audio, "render", render)  # (imported inside the function)
+    with pytest.raises(KeyboardInterrupt):
+        active.simulate_pose_manifest(man, "three-mic", [2.0, -1.0, 0.3], POSES3,
+                                      duration_s=0.1, seed=2)
+    assert len(calls) == 3
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
 def test_thesis_search_alignment_far_source():
     from hearsee.audio.active import align_head_search
 

@@ -1613,14 +1613,20 @@ def simulate_pose_manifest(
         seed = whole_number("seed", seed, 0)
     rng = np.random.default_rng(seed)
     sig = make_signal(signal, duration_s, fs, rng)
-    files, true_tdoas = [], []
-    for k, pose in enumerate(poses):
+    # Every capture is rendered before any file is written: written as each was rendered, an
+    # interruption (Ctrl-C during a slow room) left some captures without a manifest, and with
+    # --force an earlier manifest then named a mix of new and old captures (until 2026-12-03).
+    rendered = []
+    for pose in poses:
         mics = mic_positions_at(arr, pose, pivot, offset)
         clean = render(sig, fs, arr, src, room, mic_positions=mics)
         x = add_noise(clean, snr_db, rng)
         truth = ground_truth(arr, src, mic_positions=mics)
         truth.update({"fs": int(fs), "pan_deg": pose.pan_deg, "tilt_deg": pose.tilt_deg,
                       "signal": str(signal), "snr_db": snr_db, "room": room, "seed": seed})
+        rendered.append((x, truth))
+    files, true_tdoas = [], []
+    for k, (x, truth) in enumerate(rendered):
         wav, _ = save_recording(man.with_name(f"{man.stem}_pose{k}.wav"), x, truth,
                                 subtype=subtype, protect=list(protect))
         files.append(wav)
