@@ -734,9 +734,11 @@ def test_a_source_without_a_usable_rate_or_channel_count(tmp_path, fs, n_channel
     assert not (tmp_path / "a.jsonl").exists()  # (refused before anything was written)
 
 
-def _texture_case(folder: Path, rig, n_frames: int = 3, duration_s: float = 1.0, **cameras):
+def _texture_case(folder: Path, rig, n_frames: int = 3, duration_s: float = 1.0,
+                  head: dict | None = None, **cameras):
     """The same smooth random texture in both cameras of ``rig`` (no person, no disparity),
-    camera frames at 5 Hz and ``duration_s`` of a simulated voice."""
+    camera frames at 5 Hz and ``duration_s`` of a simulated voice; ``head``: the robot
+    file's head section, if any."""
     from hearsee.sim.audio import simulate_recording
 
     w, h = rig.left.size
@@ -749,10 +751,37 @@ def _texture_case(folder: Path, rig, n_frames: int = 3, duration_s: float = 1.0,
     cfg = load_robot_config(make_config(folder, {
         "audio": {}, "output": {"report": "out"},
         "cameras": {"left": "left.avi", "right": "right.avi", "calib": "rig.yaml",
-                    "rate_hz": 5, **cameras}}))
+                    "rate_hz": 5, **cameras}, **({"head": head} if head else {})}))
     x, _ = simulate_recording("three-mic", [1.0, 1.5, 0.0], duration_s=duration_s, fs=FS,
                               snr_db=25.0, seed=6)
     return cfg, x, img
+
+
+@pytest.mark.parametrize("tilt", [0.0, 20.0, -35.0])
+def test_the_detector_gets_the_cameras_pitch_at_the_heads_tilt(tmp_path, monkeypatch, tilt):
+    """The detector's floor prior is the camera at the head's pose of the capture: its height
+    and, since 2026-12-03, its pitch (the head's tilt; + = up). It was taken as level: a head
+    tilted 15 deg up lost most people, one looking 25 deg down at a person close by could
+    never fit the floor (vision.humans.estimate_floor)."""
+    import types as _types
+
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import ArraySource
+    from hearsee.vision import fusion
+
+    cfg, x, _ = _texture_case(tmp_path, default_rig(160, 120),
+                              head={"pose_deg": [0.0, tilt], "pivot_m": [0.0, 0.0, 1.2]})
+    seen = []
+
+    def fake_detect(left, right, rig, thermal=None, **kw):
+        seen.append((kw["camera_pitch_deg"], kw["camera_height_m"]))
+        return _types.SimpleNamespace(humans=[], rejected=[],
+                                      frame=_types.SimpleNamespace(left=left))
+
+    monkeypatch.setattr(fusion, "detect_humans", fake_detect)
+    monkeypatch.setattr(fusion, "draw_detections", lambda image, det: image.copy())
+    run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg))
+    assert seen and all(p == pytest.approx(tilt, abs=1e-9) for p, _ in seen)
 
 
 @pytest.mark.parametrize("keep", [0, 1, 2])

@@ -502,6 +502,18 @@ def test_camera_height_in_the_rig_info_is_checked_when_loaded(tmp_path):
     path.write_text(text)
     assert load_rig(path).camera_height_m == pytest.approx(1.2)
     assert StereoRig.ideal(cam, 0.1).camera_height_m is None
+    # the camera's pitch (degrees, + = up; since 2026-12-03 the floor's prior too)
+    rig = StereoRig(cam, cam, np.eye(3), [-0.1, 0.0, 0.0], info={"camera_pitch_deg": -20})
+    save_rig(rig, path)
+    text = path.read_text()
+    for bad in (".nan", "81", "-95", "abc", "true", "[10]"):
+        path.write_text(text.replace("camera_pitch_deg: -20", f"camera_pitch_deg: {bad}"))
+        with pytest.raises(ConfigError, match=r"rig.yaml: info: camera_pitch_deg must be a "
+                                              r"finite number of degrees within \+-80"):
+            load_rig(path)
+    path.write_text(text)
+    assert load_rig(path).camera_pitch_deg == -20.0
+    assert StereoRig.ideal(cam, 0.1).camera_pitch_deg is None
 
 
 def test_read_opencv_yaml_refuses_files_that_are_not_filestorage(tmp_path):
@@ -772,6 +784,8 @@ def test_text_that_reads_as_a_number_is_saved_quoted(tmp_path):
     (dict(rms_px="0.3"), "rms_px"), (dict(rms_px=True), "rms_px"), (dict(info=["ab"]), "info"),
     (dict(info={"camera_height_m": np.nan}), "camera_height_m"),
     (dict(info={"camera_height_m": -1.4}), "camera_height_m"),
+    (dict(info={"camera_pitch_deg": np.nan}), "camera_pitch_deg"),
+    (dict(info={"camera_pitch_deg": 90.0}), "camera_pitch_deg"),
 ])
 def test_rig_refuses_rms_and_info_its_files_would_refuse(kw, match, tmp_path):
     """StereoRig did not check rms_px or info: NaN / -1 and a NaN camera height made files

@@ -127,6 +127,87 @@ def test_estimate_floor_recovers_height_and_tilt():
     assert fl.height(np.array([0.0, 0.0, 0.0])) == pytest.approx(1.3, abs=0.01)
 
 
+@pytest.mark.parametrize("down_deg", [-12.0, 30.0, 45.0])
+def test_estimate_floor_with_the_cameras_pitch_as_prior(down_deg):
+    """A camera pitched down 30 or 45 deg (a head looking at a person close by) or up 12 deg:
+    level taken as the prior, a floor tilted more than max_tilt_deg (20) from level could
+    never be found and the level fallback was 30-45 deg wrong. With the pitch as the prior
+    RANSAC finds the floor; its pitch_deg reads the pitch back."""
+    # (looking up, the 160x120 view's +-13.5 deg shows no floor within 10 m: a taller one)
+    pts, up = _plane_points(1.3, down_deg, H=120 if down_deg > 0 else 240)
+    fl = estimate_floor(pts, prior_height_m=1.3, prior_pitch_deg=-down_deg)
+    assert fl.source == "ransac" and fl.camera_height_m == pytest.approx(1.3, abs=0.01)
+    assert np.degrees(np.arccos(np.clip(fl.normal @ up, -1, 1))) < 0.5
+    assert fl.pitch_deg == pytest.approx(-down_deg, abs=0.5)
+    if abs(down_deg) > 20:  # the level prior refuses the true floor: its fallback is level
+        lv = estimate_floor(pts, prior_height_m=1.3)
+        assert lv.source == "prior" and lv.pitch_deg == 0.0
+
+
+def test_floor_of_a_pitched_camera_and_its_fallback():
+    """FloorPlane.from_camera: the floor of a camera h m up pitched p deg (+ = up). A floor
+    point 4 m ahead seen by a camera pitched up 15 deg is at height 0, the camera's own
+    centre at h; with no floor in view the fallback is that floor, not a level one."""
+    h, p = 1.2, 15.0
+    a = np.radians(p)
+    R = np.array([[1, 0, 0], [0, np.cos(a), np.sin(a)], [0, -np.sin(a), np.cos(a)]])  # level->cam
+    floor_pt = R @ np.array([0.3, h, 4.0])  # (a level frame: y down, the floor h below)
+    head = R @ np.array([0.0, h - 1.7, 3.0])  # a crown 1.7 m above the floor
+    fl = FloorPlane.from_camera(h, p)
+    assert fl.height(floor_pt) == pytest.approx(0.0, abs=1e-12)
+    assert fl.height(head) == pytest.approx(1.7, abs=1e-12)
+    assert fl.height(np.zeros(3)) == pytest.approx(h) and fl.pitch_deg == pytest.approx(p)
+    assert FloorPlane.from_camera(h).normal.tolist() == FloorPlane.level(h).normal.tolist() \
+        == [0.0, -1.0, 0.0]
+    empty = np.full((40, 40, 3), np.nan)
+    fb = estimate_floor(empty, prior_height_m=h, prior_pitch_deg=p)
+    assert fb.source == "prior" and fb.pitch_deg == pytest.approx(p)
+    assert fb.height(floor_pt) == pytest.approx(0.0, abs=1e-12)
+    for bad in (np.nan, 81.0, -90.0, "10", True):
+        with pytest.raises(GeometryError, match="pitch"):
+            FloorPlane.from_camera(h, bad)
+        with pytest.raises(GeometryError, match="prior_pitch_deg"):
+            estimate_floor(empty, prior_height_m=h, prior_pitch_deg=bad)
+
+
+@pytest.fixture(scope="module")
+def pitched_up_scene():
+    """A person and a mannequin seen by a camera 1.4 m up pitched up 15 deg: the nearest
+    floor in view is ~6 m out, too little to fit."""
+    import dataclasses
+
+    rig = default_rig(320, 240, thermal_size=(80, 60))
+    spec = SceneSpec(entities=[Entity("person", -0.6, 3.5, 0.0, 1.8),
+                               Entity("mannequin", 0.9, 4.0, 0.0, 1.75)],
+                     width_left_m=3.0, width_right_m=3.0, depth_m=8.0, seed=11)
+    a = np.radians(15.0)
+    R = np.array([[1, 0, 0], [0, np.cos(a), np.sin(a)], [0, -np.sin(a), np.cos(a)]])
+    sc = render_scene(spec, rig, view=(R, np.zeros(3)))
+    return sc, dataclasses.replace(sc.rig, info={**sc.rig.info, "camera_pitch_deg": 15.0})
+
+
+def test_detect_humans_with_a_pitched_camera(pitched_up_scene):
+    """Taken as level (the only choice until 2026-12-03), the camera pitched up 15 deg found
+    nobody: the level fallback floor put the person's top 0.7-0.9 m too low. With the pitch
+    (an argument, or the calibration's info.camera_pitch_deg) the person is found where they
+    stand and the mannequin is still rejected by its thermal image."""
+    sc, rig15 = pitched_up_scene
+    person, mannequin = sc.objects
+    level = detect_humans(sc.left, sc.right, sc.rig, sc.thermal_c)
+    assert level.humans == [] and level.info["floor"]["camera_pitch_deg"] == 0.0
+    for det in (detect_humans(sc.left, sc.right, sc.rig, sc.thermal_c, camera_pitch_deg=15.0),
+                detect_humans(sc.left, sc.right, rig15, sc.thermal_c)):
+        assert det.info["floor"]["camera_pitch_deg"] == pytest.approx(15.0, abs=1.0)
+        assert len(det.humans) == 1
+        assert np.linalg.norm(det.humans[0].position_m - person.position_m) < 0.15
+        assert det.humans[0].height_m == pytest.approx(person.height_m, abs=0.12)
+        near_m = [np.linalg.norm(np.asarray(r.position_m) - mannequin.position_m)
+                  for r in det.rejected if r.reason.startswith("thermal")]
+        assert near_m and min(near_m) < 0.3
+    with pytest.raises(GeometryError, match="camera_pitch_deg"):
+        detect_humans(sc.left, sc.right, sc.rig, sc.thermal_c, camera_pitch_deg=95.0)
+
+
 def _wall_scene(h: float, wall_z: float, f: float = 500.0, B: float = 0.12, W: int = 640,
                 H: int = 480, noise_px: float = 0.25, seed: int = 0) -> np.ndarray:
     """Points (H, W, 3) of a level camera ``h`` m above the floor facing a wall ``wall_z`` m

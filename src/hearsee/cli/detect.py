@@ -33,6 +33,11 @@ def detect_cmd(
         None, "--camera-height",
         help="Height of the left camera above the floor, metres, 0.1-5 (prior for the floor "
              "plane; default: info.camera_height_m of the calibration file)."),
+    camera_pitch: float | None = typer.Option(
+        None, "--camera-pitch",
+        help="Pitch of the left camera above the horizontal, degrees, + = looking up, -80 to "
+             "80 (prior for the floor plane; default: info.camera_pitch_deg of the "
+             "calibration file, else level)."),
 ) -> None:
     """Detect humans: stereo candidates (P(y,d), head-shoulder template) confirmed by thermal.
 
@@ -65,6 +70,9 @@ def detect_cmd(
         raise typer.BadParameter(f"--min-support must be in [0, 1], got {min_support}")
     if camera_height is not None and not 0.1 <= camera_height <= 5.0:
         raise typer.BadParameter(f"--camera-height must be in [0.1, 5] metres, got {camera_height}")
+    if camera_pitch is not None and not -80.0 <= camera_pitch <= 80.0:  # (NaN fails it too)
+        raise typer.BadParameter(f"--camera-pitch must be in [-80, 80] degrees, got "
+                                 f"{camera_pitch}")
     refuse_overwrite([overlay_p], [left_p, right_p, calib_p, thermal_p], force)
     if overlay_p is not None:  # (else write_image refuses it only after the whole detection)
         import cv2
@@ -84,7 +92,7 @@ def detect_cmd(
             )
         th = load_thermal(thermal_p, expected_size=rig.thermal.size)
     res = detect_humans(L, R, rig, th, params=HumanDetectorParams(tm=tm), min_support=min_support,
-                        camera_height_m=camera_height)
+                        camera_height_m=camera_height, camera_pitch_deg=camera_pitch)
     _warn_degenerate(res.frame.disparity, th)
     if overlay_p is not None:
         # the boxes are in rectified left-image pixels: draw them on that image

@@ -1049,6 +1049,16 @@ class _Head:
                                 f"(cameras.mount_m {mount.tolist()} m from head.pivot_m "
                                 f"{self.pivot.tolist()} m)")
         self.R_cam = OPTICAL_FROM_BODY @ self.R.T  # robot -> left optical
+        #: the left camera's pitch above the horizontal (degrees, + = up): the elevation of
+        #: its optical axis R_cam^T e_z in the robot frame, the head's tilt -- the detector's
+        #: floor prior (it took every camera as level until 2026-12-03: a head tilted 15 deg
+        #: up lost most people). Clipped to the prior's +-80 deg (a camera looking further
+        #: up or down sees no floor to speak of).
+        from hearsee.vision.humans import MAX_CAMERA_PITCH_DEG
+
+        self.camera_pitch_deg = round(float(np.clip(  # (rounded: a level head gives 0, not
+            np.degrees(np.arcsin(np.clip(self.R_cam[2, 2], -1.0, 1.0))),  # 1e-15 deg)
+            -MAX_CAMERA_PITCH_DEG, MAX_CAMERA_PITCH_DEG)), 9)
         #: the microphone array's origin, ``head.offset_m`` from the pivot in the head frame:
         #: where the audio bearing is heard from (it was taken as heard from the pivot)
         self.array_origin = array_to_robot(np.zeros(3), pose, self.pivot, cfg.head.offset_m)
@@ -1239,7 +1249,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     3. **See and verify**: every ``1 / cameras.rate_hz`` seconds of audio, one set of camera
        frames (of a video file: its frame at that audio time) goes through stereo + thermal
        human detection
-       (:func:`hearsee.vision.fusion.detect_humans`).
+       (:func:`hearsee.vision.fusion.detect_humans`), with the camera's height and pitch at
+       the head's pose of the capture as the floor's prior.
     4. **Fuse and track**: the verified person nearest the audio bearing (within the pipeline's
        association gate; not one flagged ``beyond_search``:
        :func:`~hearsee.robot.pipeline.fuses_fix`)
@@ -1366,6 +1377,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         thermal = fr.thermal if rig.thermal is not None else None
         return detect_humans(fr.left, fr.right, rig, thermal,
                              camera_height_m=float(g.cam_centre[2]),
+                             camera_pitch_deg=g.camera_pitch_deg,
                              stereo_options=cfg.cameras.stereo_options())
 
     def apply(t: float, t_cap: float, fr: CameraFrames, det: Any, bearing: float | None,

@@ -769,7 +769,9 @@ class StereoRig:
         number >= 0 (else a CalibrationError, as :meth:`from_dict`'s ConfigError).
     info : dict
         Free-form metadata saved with the rig; ``camera_height_m`` (metres above the floor
-        of the left camera), when present, a finite number > 0 (else a CalibrationError).
+        of the left camera), when present, a finite number > 0, and ``camera_pitch_deg``
+        (its pitch above the horizontal, + = looking up) within +-80 degrees (else a
+        CalibrationError).
     """
 
     left: Camera
@@ -816,6 +818,7 @@ class StereoRig:
                                    f"{type(self.info).__name__}")
         try:
             _info_camera_height(self.info, "rig info")
+            _info_camera_pitch(self.info, "rig info")
         except ConfigError as exc:
             raise CalibrationError(str(exc)) from None
         if self.thermal is not None:
@@ -867,6 +870,14 @@ class StereoRig:
         (None when absent). ConfigError when it is not a finite number > 0: a NaN or negative
         height silently removed every person from the detections."""
         return _info_camera_height(self.info, "rig info")
+
+    @property
+    def camera_pitch_deg(self) -> float | None:
+        """Pitch of the (rectified) left camera's optical axis above the horizontal, degrees
+        (+ = looking up, no roll), from ``info: {camera_pitch_deg}`` (None when absent): the
+        floor's prior with ``camera_height_m``. ConfigError when it is not a finite number
+        within +-80 degrees."""
+        return _info_camera_pitch(self.info, "rig info")
 
     @property
     def right_center_m(self) -> NDArray:
@@ -1056,6 +1067,7 @@ class StereoRig:
         if not isinstance(info, dict):
             raise ConfigError(f"{where}: info must be a mapping")
         _info_camera_height(info, f"{where}: info")
+        _info_camera_pitch(info, f"{where}: info")
         try:
             return cls(left=left, right=right, R=R, T=T,
                        rms_px=None if rms is None else float(rms), info=info, **kw)
@@ -1074,6 +1086,21 @@ def _info_camera_height(info: Any, where: str) -> float | None:
             f"{where}: camera_height_m must be a finite number of metres > 0, got {h!r}"
         )
     return float(h)
+
+
+def _info_camera_pitch(info: Any, where: str) -> float | None:
+    """``info["camera_pitch_deg"]`` (degrees, + = looking up) as a float, None when absent;
+    ConfigError naming the field when it is not a finite number within
+    +-:data:`hearsee.vision.humans.MAX_CAMERA_PITCH_DEG`."""
+    from hearsee.vision.humans import MAX_CAMERA_PITCH_DEG
+
+    v = info.get("camera_pitch_deg") if isinstance(info, dict) else None
+    if v is None:
+        return None
+    if not (is_real(v) and abs(v) <= MAX_CAMERA_PITCH_DEG):
+        raise ConfigError(f"{where}: camera_pitch_deg must be a finite number of degrees "
+                          f"within +-{MAX_CAMERA_PITCH_DEG:g} (+ = looking up), got {v!r}")
+    return float(v)
 
 
 def transform_points(R: ArrayLike, t: ArrayLike, points: ArrayLike) -> NDArray:

@@ -36,6 +36,7 @@ from hearsee.vision.humans import (
     HumanDetectorParams,
     StereoDetection,
     check_camera_height,
+    check_camera_pitch,
     check_params,
     detect_candidates,
     robust_top_m,
@@ -245,7 +246,8 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
                   *, params: HumanDetectorParams | None = None, min_support: float = 0.3,
                   band_c: tuple[float, float] = HUMAN_BAND_C,
                   camera_height_m: float | None = None,
-                  stereo_options: dict[str, Any] | None = None) -> DetectionResult:
+                  stereo_options: dict[str, Any] | None = None,
+                  camera_pitch_deg: float | None = None) -> DetectionResult:
     """Detect humans in a stereo pair, confirmed by a thermal image when one is given.
 
     Parameters
@@ -260,6 +262,11 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
     band_c : radiometric human temperature band (degC).
     camera_height_m : prior for the floor, metres above it (finite, > 0; default
         ``rig.info["camera_height_m"]``).
+    camera_pitch_deg : prior for the floor: the left camera's pitch above the horizontal,
+        degrees (+ = looking up, no roll; within +-80, GeometryError otherwise; default
+        ``rig.info["camera_pitch_deg"]``, else level). A head that tilts passes its tilt: taken
+        as level, a camera pitched up 15 deg saw too little floor to fit and lost most people
+        (:func:`hearsee.vision.humans.estimate_floor`).
     stereo_options : options of :func:`hearsee.vision.stereo.compute_disparity`, a mapping
         of their names to values (ConfigError otherwise, before the stereo matching).
 
@@ -293,6 +300,9 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
     if camera_height_m is None:
         camera_height_m = rig.camera_height_m  # ConfigError when info holds a bad one
     check_camera_height(camera_height_m)
+    if camera_pitch_deg is None:
+        camera_pitch_deg = rig.camera_pitch_deg  # ConfigError when info holds a bad one
+    camera_pitch_deg = check_camera_pitch(camera_pitch_deg)
     if stereo_options is not None and (not isinstance(stereo_options, Mapping) or not all(
             isinstance(k, str) for k in stereo_options)):
         # (a list was dict.update's builtin TypeError or, as pairs, taken; a key of another
@@ -305,13 +315,14 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
     rect = frame.rectification
     det = detect_candidates(frame.disparity, frame.points(), frame.focal_px, frame.baseline_m,
                             rect.cy, camera_height_m=camera_height_m, params=params,
-                            search_max_px=frame.search_px[1])
+                            search_max_px=frame.search_px[1], camera_pitch_deg=camera_pitch_deg)
     warm = None
     if th is not None:
         warm = thermal_mask(th, band_c=band_c)
     humans, rejected = classify_candidates(det, rig, rect, warm, min_support=min_support)
     info = {"floor": {"source": det.floor.source,
-                      "camera_height_m": round(det.floor.camera_height_m, 3)},
+                      "camera_height_m": round(det.floor.camera_height_m, 3),
+                      "camera_pitch_deg": round(det.floor.pitch_deg, 2)},
             "thermal": None if thermal is None else
             ("radiometric" if th.dtype != np.uint8 else "relative")}
     return DetectionResult(humans, rejected, frame, det, warm, info)
