@@ -326,13 +326,6 @@ def _run_synthetic(n_scenes: int, seed0: int, hog: bool) -> tuple[list[tuple[str
 PITCHES_DEG = (-25.0, -15.0, -8.0, 0.0, 8.0, 15.0, 25.0)
 
 
-def _pitched_view(pitch_deg: float) -> tuple[np.ndarray, np.ndarray]:
-    """render_scene's view of a camera at the scene's origin pitched ``pitch_deg`` up."""
-    a = np.radians(pitch_deg)
-    R = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(a), np.sin(a)], [0.0, -np.sin(a), np.cos(a)]])
-    return R, np.zeros(3)
-
-
 def run_pitched(n_scenes: int, seed0: int, hog: bool) -> list[tuple[str, str]]:
     """A pitched camera (a head tilted up or down, :data:`PITCHES_DEG`): the random rooms of
     ``random_spec(seed0 + k)`` seen by the default rig pitched about its x axis, detected by
@@ -340,7 +333,7 @@ def run_pitched(n_scenes: int, seed0: int, hog: bool) -> list[tuple[str, str]]:
     before 2026-12-03) and with the camera's true pitch as the prior, and by HOG, all on the
     same images. People cut by the view's top or bottom lose what the detector and HOG need
     (the head, or the floor under the feet): rows at +-25 deg show the view's limits."""
-    from hearsee.sim.scenes import random_spec, render_scene
+    from hearsee.sim.scenes import pitched_view, random_spec, render_scene
 
     cv2.setNumThreads(1)
     rig = default_rig()
@@ -353,7 +346,7 @@ def run_pitched(n_scenes: int, seed0: int, hog: bool) -> list[tuple[str, str]]:
                 st["HOG"] = _new_stats()
             fell_back = {"level prior": 0, "pitch prior": 0}
             for k in range(n_scenes):
-                sc = render_scene(random_spec(seed0 + k), rig, view=_pitched_view(pitch))
+                sc = render_scene(random_spec(seed0 + k), rig, view=pitched_view(pitch))
                 for name, prior in (("level prior", 0.0), ("pitch prior", pitch)):
                     res = detect_humans(sc.left, sc.right, sc.rig, sc.thermal_c,
                                         camera_pitch_deg=prior)

@@ -7,7 +7,14 @@ import numpy as np
 import pytest
 
 from hearsee.cli import main
-from hearsee.sim.scenes import Entity, SceneSpec, default_rig, render_scene, write_scene
+from hearsee.sim.scenes import (
+    Entity,
+    SceneSpec,
+    default_rig,
+    pitched_view,
+    render_scene,
+    write_scene,
+)
 from hearsee.vision.camera import StereoRig, save_rig
 from hearsee.vision.stereo import rectify_pair
 
@@ -197,9 +204,7 @@ def test_camera_pitch_option(capsys, tmp_path):
     rig = default_rig(320, 240, thermal_size=(80, 60))
     spec = SceneSpec(entities=[Entity("person", -0.6, 3.5, 0.0, 1.8)], width_left_m=3.0,
                      width_right_m=3.0, depth_m=8.0, seed=11)
-    a = np.radians(15.0)
-    R = np.array([[1, 0, 0], [0, np.cos(a), np.sin(a)], [0, -np.sin(a), np.cos(a)]])
-    scene = render_scene(spec, rig, view=(R, np.zeros(3)))
+    scene = render_scene(spec, rig, view=pitched_view(15.0))
     d = write_scene(scene, tmp_path / "up15")
     assert main(_args(d)) == 0
     assert json.loads(capsys.readouterr().out)["humans"] == []

@@ -97,3 +97,29 @@ def test_a_view_on_the_room_s_boundary_is_rendered():
     for centre in ([0.0, 0.0, -0.5], [-4.0, 1.3, 0.0], [3.0, -1.3, 9.0]):
         s = render_scene(spec, default_rig(160, 120), view=(np.eye(3), np.array(centre)))
         assert np.all(np.isfinite(s.disparity)) and np.all(s.disparity > 0)
+
+
+def test_pitched_view_looks_up_by_its_angle():
+    """pitched_view(p): the camera pitched p deg up (no roll). A person's torso 3 m ahead at
+    camera height, seen level on the optical axis, lies p deg below the pitched axis, at the
+    same range; the up vector is (0, -cos p, sin p). Bad pitches are a GeometryError."""
+    from hearsee.errors import GeometryError
+    from hearsee.sim.scenes import pitched_view
+
+    R, C = pitched_view(20.0)
+    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
+    assert np.linalg.det(R) == pytest.approx(1.0) and C.tolist() == [0.0, 0.0, 0.0]
+    a = np.radians(20.0)
+    np.testing.assert_allclose(R @ [0.0, -1.0, 0.0], [0.0, -np.cos(a), np.sin(a)], atol=1e-12)
+    rig = default_rig(320, 240, camera_height_m=1.3)
+    spec = SceneSpec(entities=[Entity("person", x=0.0, z=3.0, yaw_deg=0.0, height_m=1.75)],
+                     width_left_m=3, width_right_m=3, depth_m=6, camera_height_m=1.3, seed=1)
+    level = render_scene(spec, rig).objects[0].position_m
+    up = render_scene(spec, rig, view=pitched_view(20.0)).objects[0].position_m
+    np.testing.assert_allclose(up, R @ level, atol=1e-9)
+    assert np.linalg.norm(up) == pytest.approx(np.linalg.norm(level))
+    below = np.degrees(np.arctan2(up[1], up[2])) - np.degrees(np.arctan2(level[1], level[2]))
+    assert below == pytest.approx(20.0, abs=1e-6)  # (y down: the torso is 20 deg lower)
+    for bad in (np.nan, 85.0, "10"):
+        with pytest.raises(GeometryError, match="pitch_deg"):
+            pitched_view(bad)

@@ -11,7 +11,7 @@ from hearsee.errors import (
     GeometryError,
     ImageInputError,
 )
-from hearsee.sim.scenes import Entity, SceneSpec, default_rig, render_scene
+from hearsee.sim.scenes import Entity, SceneSpec, default_rig, pitched_view, render_scene
 from hearsee.vision.fusion import detect_humans
 from hearsee.vision.humans import (
     TOP_PERCENTILE,
@@ -149,8 +149,7 @@ def test_floor_of_a_pitched_camera_and_its_fallback():
     point 4 m ahead seen by a camera pitched up 15 deg is at height 0, the camera's own
     centre at h; with no floor in view the fallback is that floor, not a level one."""
     h, p = 1.2, 15.0
-    a = np.radians(p)
-    R = np.array([[1, 0, 0], [0, np.cos(a), np.sin(a)], [0, -np.sin(a), np.cos(a)]])  # level->cam
+    R, _ = pitched_view(p)  # level -> pitched camera
     floor_pt = R @ np.array([0.3, h, 4.0])  # (a level frame: y down, the floor h below)
     head = R @ np.array([0.0, h - 1.7, 3.0])  # a crown 1.7 m above the floor
     fl = FloorPlane.from_camera(h, p)
@@ -180,9 +179,7 @@ def pitched_up_scene():
     spec = SceneSpec(entities=[Entity("person", -0.6, 3.5, 0.0, 1.8),
                                Entity("mannequin", 0.9, 4.0, 0.0, 1.75)],
                      width_left_m=3.0, width_right_m=3.0, depth_m=8.0, seed=11)
-    a = np.radians(15.0)
-    R = np.array([[1, 0, 0], [0, np.cos(a), np.sin(a)], [0, -np.sin(a), np.cos(a)]])
-    sc = render_scene(spec, rig, view=(R, np.zeros(3)))
+    sc = render_scene(spec, rig, view=pitched_view(15.0))
     return sc, dataclasses.replace(sc.rig, info={**sc.rig.info, "camera_pitch_deg": 15.0})
 
 

@@ -60,6 +60,7 @@ __all__ = [
     "SceneSpec",
     "default_rig",
     "generate_scene",
+    "pitched_view",
     "random_spec",
     "render_scene",
     "thermal_to_8bit",
@@ -853,6 +854,20 @@ def _check_cameras_in_room(spec: SceneSpec, centres: dict[str, NDArray]) -> None
                 f"frame: x right, y down, z forward) is outside the room (x in "
                 f"[{lo[0]:g}, {hi[0]:g}], y in [{lo[1]:g}, {hi[1]:g}], z in [{lo[2]:g}, "
                 f"{hi[2]:g}]); move the view's C or enlarge the room")
+
+
+def pitched_view(pitch_deg: float) -> tuple[NDArray, NDArray]:
+    """:func:`render_scene`'s ``view`` of the left camera at the scene frame's origin pitched
+    ``pitch_deg`` degrees above the horizontal (+ = looking up, no roll): ``R`` rotates the
+    scene frame (optical axes of a level camera: x right, y down, z forward) into the pitched
+    optical frame, whose up vector is then ``(0, -cos p, sin p)``
+    (:meth:`hearsee.vision.humans.FloorPlane.from_camera`). GeometryError unless
+    ``pitch_deg`` is a finite number of degrees within +-80."""
+    from hearsee.vision.humans import check_camera_pitch
+
+    a = np.radians(check_camera_pitch(pitch_deg, "pitch_deg"))
+    R = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(a), np.sin(a)], [0.0, -np.sin(a), np.cos(a)]])
+    return R, np.zeros(3)
 
 
 def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: float = 2.0,
