@@ -497,6 +497,28 @@ def test_refuse_overwrite_lets_pipes_and_devices_through(tmp_path):
     assert reg.read_text() == "mine"
 
 
+def test_output_to_the_file_standard_output_goes_to_is_appended(tmp_path):
+    """`-o /dev/stdout > results.json` (or `>>`): the file is the process's own standard
+    output. It was refused as existing without --force and, forced, replaced by a new file:
+    the shell's file was unlinked, what the command printed after it was lost, and `>>` lost
+    the earlier lines. Now it is written through, appended as the command's printing is."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "results.json"
+    out.write_text("earlier line\n")
+    code = ("import sys; from hearsee.cli._app import refuse_overwrite; "
+            "from hearsee.config import write_file, written_through; "
+            "assert written_through('/dev/stdout'); refuse_overwrite(['/dev/stdout'], [], False); "
+            "write_file('/dev/stdout', 'the runs\\n'); print('the summary', flush=True)")
+    with open(out, "a") as fh:
+        r = subprocess.run([sys.executable, "-c", code], stdout=fh, stderr=subprocess.PIPE,
+                           text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert out.read_text() == "earlier line\nthe runs\nthe summary\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.json"]
+
+
 def test_as_float_array_with_the_callers_error_and_non_finite_values_allowed():
     """finite=False lets NaN and infinities through (only non-numbers are refused) and
     ``error`` is the caller's type."""

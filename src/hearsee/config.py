@@ -148,16 +148,29 @@ def output_file(path: str | Path) -> Path:
 
 
 def written_through(path: str | Path) -> bool:
-    """Whether an output at ``path`` is written through rather than replaced: it exists (after
-    following symlinks) and is no regular file -- a FIFO, a pipe such as ``/dev/stdout`` in
-    ``hearsee eval -o /dev/stdout | jq``, a device such as ``/dev/null``. Such a target holds
-    no earlier results to lose, so the CLI's ``--force`` rule does not apply to it
-    (``refuse_overwrite``), and :func:`replacing` writes into it."""
+    """Whether an output at ``path`` is written through (appended to) rather than replaced:
+    it exists (after following symlinks) and is no regular file -- a FIFO, a pipe such as
+    ``/dev/stdout`` in ``hearsee eval -o /dev/stdout | jq``, a device such as ``/dev/null``
+    -- or it is the file this process's standard output or error goes to (``-o /dev/stdout
+    > results.json``: replaced, the file the shell had opened was unlinked and what the
+    command printed afterwards was lost; ``>>`` had its earlier lines cut). Such a target
+    holds nothing the command would destroy, so the CLI's ``--force`` rule does not apply to
+    it (``refuse_overwrite``), and :func:`replacing` writes into it."""
     try:  # (os.stat follows /dev/stdout -> /proc/self/fd/1 -> "pipe:[N]", which realpath
-        mode = os.stat(path).st_mode  # cannot: it made a nonexistent path of it)
+        st = os.stat(path)  # cannot: it made a nonexistent path of it)
     except (OSError, ValueError):
         return False
-    return not stat.S_ISREG(mode) and not stat.S_ISDIR(mode)
+    if stat.S_ISDIR(st.st_mode):
+        return False
+    if not stat.S_ISREG(st.st_mode):
+        return True
+    for fd in (1, 2):
+        try:
+            if os.path.samestat(st, os.fstat(fd)):
+                return True
+        except OSError:  # (a closed standard stream)
+            continue
+    return False
 
 
 @contextlib.contextmanager
@@ -202,10 +215,11 @@ def write_file(path: str | Path, data: str | bytes) -> Path:
 
 def open_replaced(dest: Path) -> BinaryIO:
     """``dest``, the file :func:`replacing` yielded, opened for writing bytes: ``"xb"`` for
-    the fresh temporary file (nothing else may have made it), ``"wb"`` where the target is
-    written through (a FIFO or a device). The one rule of every output written through
+    the fresh temporary file (nothing else may have made it), ``"ab"`` where the target is
+    written through (a FIFO, a device, the file standard output goes to: appended, as the
+    command's own printing is). The one rule of every output written through
     :func:`replacing` as a stream (:func:`write_into`, the MCAP export, images)."""
-    return open(dest, "wb" if dest.exists() else "xb")
+    return open(dest, "ab" if dest.exists() else "xb")
 
 
 def write_into(dest: Path, data: str | bytes, name: str | Path) -> None:
