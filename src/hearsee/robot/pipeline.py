@@ -107,20 +107,6 @@ TRACK_TIMEOUT_FRAMES = 2.5
 #: 1-4.5 m/s, 1-3 m position errors before the timeout; bench/robot seeds 16, 42, 47).
 PERSON_ACCEL_STEP_MPS2 = (2.0, 2.0, 0.1)
 PERSON_ACCEL_TAU_S = 0.5
-#: Seconds past :func:`track_timeout_s` that a track without visual fixes is held by the
-#: audio bearing alone (0, the default: dropped at the timeout; 3 s is under a held-out rule
-#: written 2026-12-03, bench/results/HISTORY.md, bench/robot): while the direction
-#: filter was updated within :data:`HEARD_FRESH_S` and its bearing is within
-#: :data:`ASSOCIATION_GATE_DEG` of the track's, each step with audio updates the track with
-#: one bearing fix (:func:`bearing_fix`), and a verified person is associated by bearing.
-HEARD_HOLD_S = 0.0
-#: How recent (s) the direction filter's last update must be for a hold.
-HEARD_FRESH_S = 0.6
-#: Standard deviation (degrees) of a held track's bearing fix: the direction filter's 5 deg
-#: and the mouth's offset from the torso the track follows (~2-8 deg at 0.6-2 m).
-HEARD_BEARING_SIGMA_DEG = 6.0
-#: Standard deviation (m) of a bearing fix along the ray and vertically: unobserved.
-HEARD_UNOBSERVED_SIGMA_M = 3.0
 #: Covariance factor for a stereo fix whose silhouette is cut by the image border
 #: (:func:`stereo_position_cov`): 3x the standard deviation.
 TRUNCATED_COV_SCALE = 9.0
@@ -431,31 +417,8 @@ def fuses_fix(human: Any) -> bool:
     return bool(human.accepted) and not bool(human.beyond_search)
 
 
-def bearing_fix(position_m: NDArray, origin_m: NDArray, azimuth_deg: float,
-                sigma_deg: float = HEARD_BEARING_SIGMA_DEG,
-                unobserved_sigma_m: float = HEARD_UNOBSERVED_SIGMA_M
-                ) -> tuple[NDArray, NDArray]:
-    """A bearing as a position fix for a 3D track at ``position_m`` (metres, a frame with z
-    up): the point at the track's horizontal range from ``origin_m`` in the direction
-    ``azimuth_deg`` (degrees, that frame's azimuth) at the track's height, and its covariance
-    (m^2): ``r * sigma_deg`` across the ray, ``unobserved_sigma_m`` along it and vertically --
-    a bearing tells neither the range nor the height."""
-    d = np.asarray(position_m, float) - np.asarray(origin_m, float)
-    r = max(float(np.hypot(d[0], d[1])), 0.3)
-    a = np.radians(azimuth_deg)
-    u = np.array([np.cos(a), np.sin(a), 0.0])
-    v = np.array([-np.sin(a), np.cos(a), 0.0])
-    point = np.asarray(origin_m, float) + r * u
-    point[2] = float(position_m[2])
-    st = r * np.radians(sigma_deg)
-    U = np.column_stack([u, v, [0.0, 0.0, 1.0]])
-    cov = U @ np.diag([unobserved_sigma_m**2, st**2, unobserved_sigma_m**2]) @ U.T
-    return point, cov
-
-
 def associate(positions: Sequence[NDArray], bearings_deg: Sequence[float],
-              track: MotionKalman, audio_bearing_deg: float | None,
-              by_bearing: bool = False) -> int | None:
+              track: MotionKalman, audio_bearing_deg: float | None) -> int | None:
     """Which verified person updates the 3D track.
 
     ``positions`` (metres) and ``bearings_deg`` (azimuths, degrees) are the verified persons'
@@ -470,7 +433,7 @@ def associate(positions: Sequence[NDArray], bearings_deg: Sequence[float],
     if len(positions) != len(bearings_deg):
         raise EstimationError(f"associate: {len(positions)} positions but {len(bearings_deg)} "
                               "bearings (one of each per verified person)")
-    if track.initialized and not by_bearing:
+    if track.initialized:
         pts = [np.asarray(p, dtype=float) for p in positions]
         if any(p.shape != (3,) for p in pts):
             raise EstimationError("associate: each position must be [x, y, z] in metres")
@@ -557,7 +520,6 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     views: list[tuple[float, NDArray, NDArray, int, int]] = []  # (for _keep_views)
     first_turned_t: float | None = None
     last_visual_t = -np.inf
-    last_heard_t = -np.inf  # the direction filter's last update
     timeout_s = track_timeout_s(1.0 / r.camera_rate_hz)
     n_steps = _n_steps(sc.duration_s, sc.fs)
 
@@ -588,19 +550,11 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             az_r = float(wrap_deg(loc.azimuth_deg + frame_pan))
             if direction.update(last_frame_t, (az_r, None)):
                 n_audio_updates += 1
-                last_heard_t = last_frame_t
         audio_rec = None
-        held = False
         # (a tolerance: on the float step grid t1 - last_visual_t read 1.0000000000000002 for
         # some fixes and 0.9999999999999999 for others, so a track went after 1.0 or 1.2 s)
         if track.initialized and t1 - last_visual_t > timeout_s + 1e-9:
-            held = (t1 - last_visual_t <= timeout_s + HEARD_HOLD_S + 1e-9
-                    and direction.initialized and t1 - last_heard_t <= HEARD_FRESH_S
-                    and abs(float(wrap_deg(direction.azimuth_deg
-                                           - body.bearing_deg(track.position))))
-                    < ASSOCIATION_GATE_DEG)
-            if not held:
-                track.reset()  # (a track that no fix updates just coasts)
+            track.reset()  # (vision only: a track that no fix updates just coasts)
         n_meas = n_audio_updates - n_before  # this chunk's frames that updated the filter
         if direction.initialized and n_meas:
             audio_rec = {"azimuth_deg": direction.azimuth_deg, "n_frames": n_meas,
@@ -639,15 +593,13 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
                 if fuses_fix(hmn):
                     verified.append((hmn, p_w))
             k = associate([p for _, p in verified], [body.bearing_deg(p) for _, p in verified],
-                          track, body.bearing_deg(track.position) if held else
-                          direction.azimuth_deg, by_bearing=held)
+                          track, direction.azimuth_deg)
             if k is not None:
                 hmn, p_w = verified[k]
                 Rc = R_cr.T @ stereo_position_cov(np.asarray(hmn.position_m), rig.focal_px,
                                                rig.baseline_m, truncated=hmn.truncated) @ R_cr
                 if track.update(t1, p_w, Rc):
                     last_visual_t = t1
-                    held = False
                 if first_turned_t is None:
                     first_turned_t = t1
             else:
@@ -658,10 +610,6 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
                 views.append((t1, overlay, scene.thermal_c, len(det.humans), len(det.rejected)))
         else:
             track.predict(t1)
-        if held and n_meas:  # one bearing fix per step (its frames are correlated)
-            point, cov = bearing_fix(track.position, body.pivot_w,
-                                     body.heading + direction.azimuth_deg)
-            track.update(t1, point, cov)
 
         # ---- turn the head
         chunk_pan = pan
@@ -680,7 +628,6 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             error = float(np.linalg.norm(track.position - st["torso"]))
         log.append({"t": round(t1, 4), "phase": phase, "head_pan_deg": pan, "audio": audio_rec,
                     "camera_frame": camera_frame, "detections": detections, "track": rec_track,
-                    "track_heard_only": bool(held and track.initialized),
                     "truth": truth,
                     "error_m": error})
         if progress is not None:
