@@ -508,8 +508,9 @@ def test_camera_height_in_the_rig_info_is_checked_when_loaded(tmp_path):
     text = path.read_text()
     for bad in (".nan", "81", "-95", "abc", "true", "[10]"):
         path.write_text(text.replace("camera_pitch_deg: -20", f"camera_pitch_deg: {bad}"))
-        with pytest.raises(ConfigError, match=r"rig.yaml: info: camera_pitch_deg must be a "
-                                              r"finite number of degrees within \+-80"):
+        with pytest.raises(ConfigError, match=r"rig.yaml: info: camera_pitch_deg \(camera "
+                                              r"pitch .*\) must be a finite number of degrees "
+                                              r"within \+-80"):
             load_rig(path)
     path.write_text(text)
     assert load_rig(path).camera_pitch_deg == -20.0

@@ -87,8 +87,9 @@ def refuse_overwrite(outputs: Iterable[str | Path | None], inputs: Iterable[str 
     """Before a command does its work, each output file it will write: one that is also an
     input is refused always, one that exists unless ``force`` (the command's ``--force``), and
     so are a folder and a file whose folder does not exist (which failed only once the work
-    was done). Nothing the user gave is overwritten, and a refusal writes nothing. A FIFO or
-    device (:func:`hearsee.config.written_through`) needs no ``force``: it is written into."""
+    was done). Nothing the user gave is overwritten, and a refusal writes nothing. A FIFO, a
+    device or the file standard output goes to (:func:`hearsee.config.written_through`)
+    needs no ``force``: it is written into, not replaced."""
     from hearsee.config import output_file, same_file, written_through
     from hearsee.errors import InputFileError
 
@@ -98,8 +99,8 @@ def refuse_overwrite(outputs: Iterable[str | Path | None], inputs: Iterable[str 
             raise InputFileError(f"{p}: refusing to overwrite an input file; choose another "
                                  "output path")
         output_file(p)
-        # (a pipe or device, e.g. "-o /dev/stdout | jq", is written through, not replaced:
-        # it was refused as "file exists" until 2026-12-03)
+        # (a pipe, a device or standard output's file, e.g. "-o /dev/stdout | jq", is written
+        # through, not replaced: it was refused as "file exists" until 2026-12-03)
         if p.exists() and not force and not written_through(p):
             raise InputFileError(f"{p}: file exists; pass --force to overwrite it")
 

@@ -1090,17 +1090,15 @@ def _info_camera_height(info: Any, where: str) -> float | None:
 
 def _info_camera_pitch(info: Any, where: str) -> float | None:
     """``info["camera_pitch_deg"]`` (degrees, + = looking up) as a float, None when absent;
-    ConfigError naming the field when it is not a finite number within
-    +-:data:`hearsee.vision.humans.MAX_CAMERA_PITCH_DEG`."""
-    from hearsee.vision.humans import MAX_CAMERA_PITCH_DEG
+    ConfigError naming the field when :func:`hearsee.vision.humans.check_camera_pitch`
+    refuses it (a finite number within +-80 degrees)."""
+    from hearsee.vision.humans import check_camera_pitch
 
     v = info.get("camera_pitch_deg") if isinstance(info, dict) else None
-    if v is None:
-        return None
-    if not (is_real(v) and abs(v) <= MAX_CAMERA_PITCH_DEG):
-        raise ConfigError(f"{where}: camera_pitch_deg must be a finite number of degrees "
-                          f"within +-{MAX_CAMERA_PITCH_DEG:g} (+ = looking up), got {v!r}")
-    return float(v)
+    try:  # (the detector's own rule, as a ConfigError naming the file's field)
+        return check_camera_pitch(v, "camera_pitch_deg")
+    except GeometryError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
 
 
 def transform_points(R: ArrayLike, t: ArrayLike, points: ArrayLike) -> NDArray:

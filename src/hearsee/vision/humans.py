@@ -412,9 +412,10 @@ def estimate_floor(points: NDArray, *, prior_height_m: float | None = None, step
     and "below the camera" below are measured along that camera's up vector
     (:meth:`FloorPlane.from_camera`), and the fallback is that camera's floor. Until
     2026-12-03 the camera was taken as level: pitched up 15 deg it saw too little floor (the
-    nearest visible 6 m out), fell back to a level floor, and every height was off by up to
-    1.5 m (10 of 45 people found in 20 scenes, 35 level); a tilt beyond ``max_tilt_deg``
-    (a head looking down 25 deg at a person 0.7 m away) could never be found.
+    nearest visible 6 m out) and fell back to a level floor, which puts a point d metres ahead
+    about d sin 15 deg too low or high (on 20 dev scenes 10 of 45 people were found, 35 with
+    the camera level); a tilt beyond ``max_tilt_deg`` (a head looking down 25 deg at a person
+    0.7 m away) could never be found.
 
     Only points at least 0.3 m below the camera and nearer than 10 m are used (subsampled every
     ``step`` pixels); planes tilted more than ``max_tilt_deg`` from the prior are refused. Each of
