@@ -595,14 +595,13 @@ def test_simulate_pose_manifest_interrupted_writes_nothing(tmp_path, monkeypatch
     named new captures beside old ones. Now everything is rendered first; an interruption
     leaves the folder (here: an earlier manifest and its captures) as it was."""
     import hearsee.audio.active as active
+    import hearsee.sim.audio as sim_audio
 
     src = [1.0, 0.8, 0.6]
     man, files = active.simulate_pose_manifest(tmp_path / "m.yaml", "three-mic", src, POSES3,
                                                duration_s=0.1, seed=1)
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     assert len(files) == 3 and len(before) == 7  # (3 WAVs, 3 truth JSONs, the manifest)
-    import hearsee.sim.audio as sim_audio
-
     real, calls = sim_audio.render, []
 
     def render(*a, **k):

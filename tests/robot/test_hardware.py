@@ -781,7 +781,9 @@ def test_the_detector_gets_the_cameras_pitch_at_the_heads_tilt(tmp_path, monkeyp
     monkeypatch.setattr(fusion, "detect_humans", fake_detect)
     monkeypatch.setattr(fusion, "draw_detections", lambda image, det: image.copy())
     run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg))
-    assert seen and all(p == pytest.approx(tilt, abs=1e-9) for p, _ in seen)
+    # (the default mount puts the camera at the pivot: 1.2 m up whatever the tilt)
+    assert seen and all(p == pytest.approx(tilt, abs=1e-9) and h == pytest.approx(1.2)
+                        for p, h in seen)
 
 
 @pytest.mark.parametrize("keep", [0, 1, 2])
