@@ -181,12 +181,13 @@ def replacing(path: str | Path) -> Iterator[Path]:
     and on any error it is removed and ``path`` is left as it was. An output written in place
     that failed part way (a frame an export could not describe, a full disk, Ctrl-C)
     truncated the previous file and left a corrupt one. A symlink's target is replaced, as
-    writing through it did. An existing target that is no regular file -- a FIFO another
-    program reads, a device such as ``/dev/null`` -- is yielded itself and written through:
-    until 2026-12-02 the robot's exports replaced it by a regular file (``--mcap /dev/null
-    --force`` run as root turned the system's /dev/null into a 20 MB file; a pipe's reader
-    got nothing). The temporary name ends in ``.tmp`` (a writer that picks its format by the
-    suffix must be told the format). The one rule of the robot's exports, its report folder
+    writing through it did. A target :func:`written_through` names -- a FIFO another
+    program reads, a device such as ``/dev/null``, the file standard output goes to -- is
+    yielded itself and written through (appended, :func:`open_replaced`): until 2026-12-02
+    the robot's exports replaced it by a regular file (``--mcap /dev/null --force`` run as
+    root turned the system's /dev/null into a 20 MB file; a pipe's reader got nothing). The
+    temporary name ends in ``.tmp`` (a writer that picks its format by the suffix must be
+    told the format). The one rule of the robot's exports, its report folder
     and ``hearsee eval -o`` (moved here from hearsee.robot.export on 2026-12-02)."""
     if written_through(path):  # (opened by its own name: a pipe's realpath is no path)
         yield Path(path)

@@ -19,14 +19,11 @@ from hearsee.errors import ConfigError
 _PROGRESS_WORK_S = 60.0
 
 
-def _fmt(v: Any, digits: int = 1) -> str:
-    return "-" if v is None else f"{v:.{digits}f}"
-
-
-def _csv_num(v: Any, digits: int) -> str:
-    """A CSV cell: empty where the JSON has null (the one null of the CSV; candidates wrote
-    "-" for an unresolved elevation, e.g. "26.52/-", until 2026-12-03)."""
-    return "" if v is None else f"{v:.{digits}f}"
+def _fmt(v: Any, digits: int = 1, null: str = "-") -> str:
+    """``v`` with ``digits`` decimals, ``null`` where it is None (the JSON's null): "-" in the
+    table, "" in the CSV (its one null; the CSV's candidates wrote "-" for an unresolved
+    elevation, e.g. "26.52/-", until 2026-12-03)."""
+    return null if v is None else f"{v:.{digits}f}"
 
 
 def _write_csv(doc: dict[str, Any]) -> None:
@@ -39,10 +36,10 @@ def _write_csv(doc: dict[str, Any]) -> None:
     w.writerow(["t_s", *[f"tdoa_{k}_s" for k in labels], "azimuth_deg", "elevation_deg",
                 "candidates", "confidence", "valid"])
     for f in doc["frames"]:
-        cands = ";".join(f"{_csv_num(c['azimuth_deg'], 2)}/{_csv_num(c['elevation_deg'], 2)}"
+        cands = ";".join(f"{_fmt(c['azimuth_deg'], 2, '')}/{_fmt(c['elevation_deg'], 2, '')}"
                          for c in f["candidates"])
-        w.writerow([f"{f['t']:.4f}", *[_csv_num(f["tdoa_s"][k], 9) for k in labels],
-                    _csv_num(f["azimuth_deg"], 2), _csv_num(f["elevation_deg"], 2),
+        w.writerow([f"{f['t']:.4f}", *[_fmt(f["tdoa_s"][k], 9, null="") for k in labels],
+                    _fmt(f["azimuth_deg"], 2, null=""), _fmt(f["elevation_deg"], 2, null=""),
                     cands, f"{f['confidence']:.3f}", int(f["valid"])])
     sys.stdout.write(buf.getvalue())
 

@@ -404,12 +404,12 @@ def _up_vector(pitch_rad: float) -> NDArray:
 
 def estimate_floor(points: NDArray, *, prior_height_m: float | None = None, step: int = 8,
                    iterations: int = 500, inlier_m: float = 0.04, max_tilt_deg: float = 20.0,
-                   seed: int = 0, prior_pitch_deg: float = 0.0) -> FloorPlane:
+                   seed: int = 0, prior_pitch_deg: float | None = 0.0) -> FloorPlane:
     """RANSAC floor plane from 3D points ``(H, W, 3)`` (camera frame, metres, NaN invalid).
 
     ``prior_pitch_deg`` is the camera's pitch above the horizontal (degrees, + = looking up,
-    no roll; :func:`check_camera_pitch`), known from its mounting or the head's tilt: "up"
-    and "below the camera" below are measured along that camera's up vector
+    no roll, None = level; :func:`check_camera_pitch`), known from its mounting or the head's
+    tilt: "up" and "below the camera" below are measured along that camera's up vector
     (:meth:`FloorPlane.from_camera`), and the fallback is that camera's floor. Until
     2026-12-03 the camera was taken as level: pitched up 15 deg it saw too little floor (the
     nearest visible 6 m out) and fell back to a level floor, which puts a point d metres ahead
@@ -1136,7 +1136,7 @@ def detect_candidates(disparity: NDArray, points: NDArray, focal_px: float, base
         raise ImageInputError(f"the disparity image is empty (shape {d.shape})")
     if floor is None:
         floor = estimate_floor(points, prior_height_m=camera_height_m,
-                               prior_pitch_deg=camera_pitch_deg or 0.0)
+                               prior_pitch_deg=camera_pitch_deg)
     elif not isinstance(floor, FloorPlane):  # (a builtin AttributeError on floor.height)
         raise GeometryError(f"floor must be a FloorPlane (estimate_floor, FloorPlane.level) or "
                             f"None, got {type(floor).__name__}")
