@@ -35,6 +35,10 @@ def test_fusion_keeps_the_person_and_rejects_human_like_objects(scene):
     h = res.humans[0]
     assert np.linalg.norm(h.position_m - person.position_m) < 0.05 * person.distance_m
     assert h.thermal_support > 0.6 and h.score >= 0.5
+    # the box reaches the floor under the body (the renderer's box: the toes, a little nearer
+    # than the legs); the silhouette's own stopped 14 px above it, at min_height_m
+    assert abs(h.box[1] + h.box[3] - person.box[1] - person.box[3]) <= 5
+    assert h.box[1] == person.box[1]
     for obj in (mannequin, poster):
         r = _nearest(res.rejected, obj.position_m)
         assert np.linalg.norm(r.position_m - obj.position_m) < 0.3

@@ -1069,3 +1069,38 @@ def test_torso_depth_of_a_person_facing_or_turned_sideways(yaw_deg):
     det = detect_humans(scene.left, scene.right, rig, scene.thermal_c)
     assert len(det.humans) == 1
     assert abs(det.humans[0].position_m[2] - truth[2]) < 0.025
+
+
+@pytest.mark.parametrize("z_m", [3.0, 4.0, 6.0])
+def test_the_body_box_reaches_the_floor_and_hidden_legs_do_not(z_m):
+    """The silhouette stops at min_height_m (0.12 m) above the floor, so its box left the
+    feet out (10-13 px at 2-9 m on bench/humans' scenes). body_box -- the detections' box --
+    goes down to the floor under the body: the cut-out's last row. Legs hidden behind
+    something (no disparity below 0.6 m) leave the floor unknown and the box the silhouette's."""
+    H, W, f, b, cx, cy = 480, 640, 500.0, 0.12, 319.5, 239.5
+    d, pts, body = _cardboard_person((H, W), f, b, cx, cy, z_m=z_m)
+    floor = FloorPlane.level(1.4)
+    heights = floor.height(pts)
+    rows = np.nonzero(body.any(axis=1))[0]  # ground truth: the body's rows, feet included
+    band = np.nonzero((body & (heights >= HumanDetectorParams().min_height_m)).any(axis=1))[0]
+    seg = segment_body(int(cx), f * b / z_m, d, pts, heights, floor, f, b, cy)
+    x, y, w, h = seg.box
+    assert (y, y + h - 1) == (rows[0], band[-1]) and band[-1] < rows[-1] - 5
+    bx, by, bw, bh = seg.body_box
+    assert (bx, by, bw) == (x, y, w) and abs(by + bh - 1 - rows[-1]) <= 1
+    assert seg.floor_row == by + bh - 1
+    hidden = np.where(heights < 0.6, np.nan, d).astype(np.float32)
+    seg = segment_body(int(cx), f * b / z_m, hidden, pts, heights, floor, f, b, cy)
+    assert seg.floor_row is None and seg.body_box == seg.box
+    assert seg.box[1] + seg.box[3] - 1 < rows[-1] - 0.5 * f / z_m  # (legs' 0.6 m left out)
+
+
+def test_the_body_box_stops_at_the_image_bottom():
+    """2.5 m from a rig 1.4 m high the floor under the body is below the image (row 519 of
+    480): the box ends at the last row, as the silhouette does."""
+    H, W, f, b, cx, cy = 480, 640, 500.0, 0.12, 319.5, 239.5
+    d, pts, _ = _cardboard_person((H, W), f, b, cx, cy, z_m=2.5)
+    floor = FloorPlane.level(1.4)
+    seg = segment_body(int(cx), f * b / 2.5, d, pts, floor.height(pts), floor, f, b, cy)
+    assert seg.floor_row == H - 1 and seg.body_box == seg.box
+    assert seg.box[1] + seg.box[3] == H

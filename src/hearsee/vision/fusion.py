@@ -199,7 +199,7 @@ def _check_mask(warm: NDArray) -> NDArray:
 def _to_human(c: HumanCandidate, support: float | None, accepted: bool, reason: str) -> Human:
     seg = c.segment
     assert seg is not None
-    return Human(list(seg.box), seg.position_m, c.score, support, seg.top_m, accepted, reason,
+    return Human(seg.body_box, seg.position_m, c.score, support, seg.top_m, accepted, reason,
                  seg.truncated, seg.beyond_search)
 
 

@@ -71,6 +71,7 @@ __all__ = [
     "BODY_WIDTH_SIDEWAYS_M",
     "BROKEN_BOX_SHARE",
     "BodySegment",
+    "FEET_REACH_M",
     "FLOOR_BELOW_M",
     "FloorPlane",
     "HumanCandidate",
@@ -157,6 +158,11 @@ FLOOR_BELOW_M = 0.12
 #: Percentile of a silhouette's point heights taken as its top (:func:`robust_top_m`): one
 #: stray point in 200 does not move it.
 TOP_PERCENTILE = 99.5
+
+#: How far above the segmentation's height band (``min_height_m``) a silhouette's lowest
+#: points may end for its legs to count as reaching the floor (metres): the body's box is
+#: then drawn down to the floor (:attr:`BodySegment.floor_row`, :attr:`BodySegment.body_box`).
+FEET_REACH_M = 0.1
 
 #: A silhouette with at least this share of its valid disparities at the largest disparity the
 #: matcher searched (:func:`near_search_share`) reaches the end of the search: part of the body
@@ -719,6 +725,20 @@ class BodySegment:
     position_m: NDArray
     truncated: bool = False
     beyond_search: bool = False
+    floor_row: int | None = None
+
+    @property
+    def body_box(self) -> list[int]:
+        """``box`` [x, y, w, h] (pixels) extended down to :attr:`floor_row` -- where the body
+        stands on the floor -- when that row is known and below the silhouette: the
+        silhouette itself stops at ``min_height_m`` (0.12 m) above the floor, so the box
+        left the feet out (bottom 9-13 px high at 2-9 m, IoU with the body's visible pixels
+        0.81-0.93). The detections' boxes (:class:`hearsee.vision.fusion.Human`); the
+        detector's own decisions (holes, duplicates) read ``box``, the silhouette's."""
+        x, y, w, h = self.box
+        if self.floor_row is None or self.floor_row <= y + h - 1:
+            return list(self.box)
+        return [x, y, w, self.floor_row - y + 1]
 
     @cached_property
     def extent_m(self) -> float:
@@ -890,6 +910,7 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
         sel = np.linspace(0, len(pts) - 1, 4000).astype(int)
         pts, hts = pts[sel], hts[sel]
     top = robust_top_m(hts)
+    foot = _floor_row(pts, hts, floor, focal_px, cy, p.min_height_m, disparity.shape[0])
     xlo, xhi = np.percentile(pts[:, 0], [3, 97])
     Zm = float(np.median(pts[:, 2]))
     Xm = float(np.median(pts[:, 0]))
@@ -904,7 +925,27 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     y = (h_t - floor.offset - n[0] * c[0] - n[2] * c[2]) / n[1]
     pos = np.array([c[0], y, c[2]])
     return BodySegment(box, crop, pts, hts, Zm, top, float(xhi - xlo), pos,
-                       _cut_by_border(box, disparity.shape[1]))
+                       _cut_by_border(box, disparity.shape[1]), floor_row=foot)
+
+
+def _floor_row(points: NDArray, heights: NDArray, floor: FloorPlane, focal_px: float,
+               cy: float, min_height_m: float, height_px: int) -> int | None:
+    """Image row (rectified left pixels, at most ``height_px - 1``) of the floor under a
+    silhouette's lowest points (``points`` ``(N, 3)`` metres, their ``heights`` above
+    ``floor``), each moved down along the floor's normal by its height and projected with
+    ``focal_px`` and the principal row ``cy``; None when those points end more than
+    :data:`FEET_REACH_M` above the band's floor ``min_height_m`` (legs hidden behind
+    something: the floor there is not the body's) or project behind the camera."""
+    low_h = float(np.percentile(heights, 100.0 - TOP_PERCENTILE))
+    if low_h > min_height_m + FEET_REACH_M:
+        return None
+    low = heights <= low_h + 0.05
+    feet = points[low] - heights[low, None] * floor.normal
+    feet = feet[feet[:, 2] > 0.05]
+    if len(feet) == 0:
+        return None
+    row = float(np.median(cy + focal_px * feet[:, 1] / feet[:, 2]))
+    return int(min(round(row), height_px - 1))
 
 
 def _segment_maps(column: object, disp: object, disparity: ArrayLike, points: ArrayLike,
