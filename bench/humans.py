@@ -199,7 +199,7 @@ def _run_synthetic(n_scenes: int, seed0: int, hog: bool) -> tuple[list[tuple[str
         # fig. 7.9 material: every segmented candidate with its label
         cands = [c for c in res.stereo.candidates if c.segment is not None
                  and not c.reason.startswith("duplicate")]
-        dets = [{"box": c.segment.box} for c in cands]
+        dets = [{"box": c.segment.body_box} for c in cands]
         mp = _match(dets, sc.people)
         ml = _match(dets, [o for o in sc.human_like])
         humans_all = res.humans + res.rejected
@@ -213,7 +213,7 @@ def _run_synthetic(n_scenes: int, seed0: int, hog: bool) -> tuple[list[tuple[str
                 label = "human_like"
             else:
                 label = "other"
-            tm_rows.append((c.score, ext, label, sup.get(tuple(c.segment.box))))
+            tm_rows.append((c.score, ext, label, sup.get(tuple(c.segment.body_box))))
         if example is None and len(sc.people) >= 2 and sc.human_like:
             example = (sc, res)
         if (k + 1) % 25 == 0:
