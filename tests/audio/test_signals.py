@@ -1,3 +1,4 @@
+import os
 import warnings
 
 import numpy as np
@@ -120,6 +121,18 @@ def test_read_write_round_trip(tmp_path):
     assert sf.info(str(tmp_path / "p.wav")).subtype == "PCM_16"
     y16, _ = read_recording(tmp_path / "p.wav", MicArray.from_preset("three-mic"))
     np.testing.assert_allclose(y16, x, atol=1 / 32768 + 1e-9)
+
+
+def test_a_file_name_that_is_not_utf8_is_read_and_written(tmp_path):
+    """A Linux file name is bytes: soundfile encoded a str name as strict UTF-8, and a
+    recording named b"x\xff.wav" was "not an audio file" (and could not be written)."""
+    p = tmp_path / os.fsdecode(b"x\xff.wav")
+    x = 0.1 * np.random.default_rng(1).standard_normal((2, 800))
+    write_recording(p, x, FS, subtype="PCM_16")
+    assert os.fsencode(p.name) in os.listdir(os.fsencode(tmp_path))
+    y, fs = read_recording(p, n_channels=2, fs=FS)
+    assert fs == FS and y.shape == (2, 800)
+    np.testing.assert_allclose(y, x, atol=1 / 32768 + 1e-9)
 
 
 def test_read_recording_bad_inputs(tmp_path):

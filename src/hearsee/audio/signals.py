@@ -318,7 +318,7 @@ def _full_scale(path: str | Path) -> float:
     import soundfile as sf
 
     try:
-        return _FULL_SCALE.get(sf.info(str(path)).subtype, 1.0)
+        return _FULL_SCALE.get(sf.info(os.fsencode(path)).subtype, 1.0)
     except Exception:  # noqa: BLE001 (the file was read already; only the warning depends on it)
         return 1.0
 
@@ -358,7 +358,9 @@ def _read_file(path: str | Path,
 
     p = input_file(path, "audio file")
     try:
-        with sf.SoundFile(str(p)) as f:  # (what sf.read does, with the rate known first)
+        # (what sf.read does, with the rate known first; the name as the system's bytes:
+        # soundfile encodes a str as strict UTF-8, and a name that is not refused the file)
+        with sf.SoundFile(os.fsencode(p)) as f:
             fs = f.samplerate
             frames = -1 if frames_at is None else frames_at(int(fs))
             data = f.read(frames, dtype="float64", always_2d=True)
@@ -627,7 +629,7 @@ def write_recording(
                               f"format from file extension: {str(p)!r})")
     try:
         with replacing(p) as tmp:
-            sf.write(str(tmp), y.T, int(round(fs)), subtype=subtype, format=fmt)
+            sf.write(os.fsencode(tmp), y.T, int(round(fs)), subtype=subtype, format=fmt)
     except (RuntimeError, TypeError, ValueError) as exc:
         raise AudioInputError(f"{p}: cannot write audio ({exc})") from None
     return p
