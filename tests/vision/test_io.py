@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from hearsee.errors import ImageInputError, InputFileError
+from hearsee.errors import ConfigError, ImageInputError, InputFileError
 from hearsee.vision.io import (
     check_image,
     check_pair,
@@ -15,6 +15,7 @@ from hearsee.vision.io import (
     read_pair,
     read_thermal,
     to_gray,
+    video_capture,
     write_image,
 )
 
@@ -365,3 +366,22 @@ def test_a_tiff_whose_depth_or_channels_opencv_drops_is_refused(tmp_path):
     with pytest.raises(ImageInputError, match="2 channel"):
         read_image(two, "unchanged")
     assert read_image(two, "gray").dtype == np.uint8  # (grey asked for: converted, as before)
+
+
+def test_a_corrupt_video_opens_without_a_word_on_stderr(tmp_path, capfd):
+    """FFmpeg wrote "[mov,mp4,... @ 0x...] moov atom not found" to the process's stderr
+    (descriptor 2, past OpenCV's log level) before hearsee's one-line "cannot be opened"."""
+    p = tmp_path / "v.mp4"
+    p.write_text("hello, not a video\n")
+    cap = video_capture(str(p))
+    assert not cap.isOpened()
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+
+
+@pytest.mark.parametrize("index", [-1, -5, True, np.int64(-1)])
+def test_a_negative_or_bool_camera_index_is_refused(index):
+    """-1 (OpenCV's "any camera") ended the interpreter with a segmentation fault where no
+    backend answered; True was a raw cv2.error."""
+    with pytest.raises(ConfigError, match="camera index must be a whole number >= 0"):
+        video_capture(index)

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.config import input_file, open_replaced, output_file, real_entries, replacing
-from hearsee.errors import ImageInputError, InputFileError
+from hearsee.errors import ConfigError, ImageInputError, InputFileError
 
 __all__ = [
     "as_detector_image",
@@ -54,10 +54,20 @@ def video_capture(source: int | str) -> cv2.VideoCapture:
     lines of its backends (V4L2, FFMPEG) on stderr before hearsee's one-line message. The
     caller checks ``isOpened()``. An index beyond a C int gives a capture that is not opened
     (OpenCV's own TypeError, a traceback, for ``--camera-device 99999999999999999999`` or
-    ``cameras.left: 99999999999999999999`` before), so that the caller's "cannot open" names it."""
-    if isinstance(source, int | np.integer) and not -2**31 <= source < 2**31:
-        return cv2.VideoCapture()
-    with _opencv_log("error"):
+    ``cameras.left: 99999999999999999999`` before), so that the caller's "cannot open" names it.
+    A negative index or a bool is a ConfigError (OpenCV's "any camera" -1 ended the
+    interpreter with a segmentation fault where no camera backend answered; True was a raw
+    cv2.error). A file or URL opens with the process's stderr silenced too
+    (:func:`_codec_stderr_off`): FFmpeg printed "[mov,mp4,... @ 0x...] moov atom not found"
+    there before hearsee's one line on a corrupt or truncated video."""
+    if isinstance(source, bool) or (isinstance(source, int | np.integer) and source < 0):
+        raise ConfigError(f"camera index must be a whole number >= 0, got {source!r}")
+    if isinstance(source, int | np.integer):
+        if source >= 2**31:
+            return cv2.VideoCapture()
+        with _opencv_log("error"):
+            return cv2.VideoCapture(int(source))
+    with _opencv_log("error"), _codec_stderr_off():
         return cv2.VideoCapture(source)
 
 
