@@ -1,6 +1,7 @@
 """Thermal filter: radiometric band, 8-bit relative band, loading, overlay."""
 
 import re
+import warnings
 
 import cv2
 import numpy as np
@@ -105,6 +106,19 @@ def test_load_thermal_refuses_temperatures_in_other_units(tmp_path, name, image,
         cv2.imwrite(str(tmp_path / name), img)
     with pytest.raises(ImageInputError, match=re.escape(needle)):
         load_thermal(tmp_path / name)
+
+
+def test_a_finite_value_beyond_float32_is_named_as_it_is(tmp_path):
+    """One pixel of 1e300 degC: the cast to float32 made it inf, with numpy's overflow
+    warning, and the file was refused for "NaN or infinite values" it does not hold."""
+    t = _room(np.random.default_rng(3)).astype(np.float64)
+    t[0, 0] = 1e300
+    np.save(tmp_path / "hot.npy", t)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ImageInputError,
+                           match=r"spans .* to 1e\+300 degC, and no thermal camera"):
+            load_thermal(tmp_path / "hot.npy")
 
 
 def test_flat_radiometric_frame_has_no_warm_pixels_and_units_are_checked():

@@ -64,6 +64,11 @@ _F32_MAX = float(np.finfo(np.float32).max)
 #: Absolute zero in degrees Celsius: no radiometric reading is colder.
 ABSOLUTE_ZERO_C = -273.15
 
+#: No radiometric pixel is hotter (degC): industrial thermal cameras read up to 2000-3000
+#: degC. A hotter one is no temperature (1e300 in a .npy passed every check until
+#: 2026-12-03, and its cast to float32 reported "NaN or infinite values").
+MAX_PIXEL_C = 3000.0
+
 
 def counts_to_celsius(counts: NDArray, scale: float = 0.01, offset: float = -273.15) -> NDArray:
     """Convert raw radiometric counts to degC: ``T = counts * scale + offset``.
@@ -300,11 +305,13 @@ def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
                 f"{p}: thermal image is {arr.shape[1]}x{arr.shape[0]} pixels but the calibration "
                 f"expects {expected_size[0]}x{expected_size[1]}"
             )
-        arr = arr.astype(np.float32)
+        # (checked before the cast to float32: a finite 1e300 became inf there, with numpy's
+        # overflow warning, and was reported as "NaN or infinite values")
+        arr = arr.astype(np.float64)
         if not np.all(np.isfinite(arr)):
             raise ImageInputError(f"{p}: thermal image contains NaN or infinite values")
         _check_scene_celsius(arr, f"{p}: .npy thermal images are degC")
-        return arr
+        return arr.astype(np.float32)
     from hearsee.vision.io import read_thermal
 
     img = read_thermal(p, expected_size)
@@ -318,13 +325,15 @@ def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
 
 def _check_scene_celsius(t: NDArray, what: str) -> float:
     """ImageInputError unless the temperatures ``t`` (degC) can be a scene's (:data:`SCENE_C`,
-    nothing below absolute zero): a .npy in kelvin (293 "degC" for a 20 degC room) gave
-    "thermal support 0.00" for every person, without a word. Returns the frame's spread
-    (warmest - coldest, degC)."""
+    nothing below absolute zero or above :data:`MAX_PIXEL_C`): a .npy in kelvin (293 "degC"
+    for a 20 degC room) gave "thermal support 0.00" for every person, without a word. Returns
+    the frame's spread (warmest - coldest, degC)."""
     lo, hi = float(np.min(t)), float(np.max(t))
-    if lo < ABSOLUTE_ZERO_C or lo > SCENE_C[1] or hi < SCENE_C[0]:
+    if lo < ABSOLUTE_ZERO_C or lo > SCENE_C[1] or hi < SCENE_C[0] or hi > MAX_PIXEL_C:
         hint = (" (is it in kelvin?)" if SCENE_C[1] < lo < SCENE_C[1] + 273.15 else
-                ", and nothing is below absolute zero" if lo < ABSOLUTE_ZERO_C else "")
+                ", and nothing is below absolute zero" if lo < ABSOLUTE_ZERO_C else
+                f", and no thermal camera reads above {MAX_PIXEL_C:g} degC" if hi > MAX_PIXEL_C
+                else "")
         raise ImageInputError(f"{what}, but this one spans {lo:.4g} to {hi:.4g} degC{hint}; "
                               "convert it to degC")
     return hi - lo
