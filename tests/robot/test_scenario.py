@@ -413,3 +413,10 @@ def test_documented_top_level_defaults_are_the_code_s():
     sc = scenario_from_dict({})
     assert sc.name == doc["name"]
     assert sc.seed == int(doc["seed"]) and sc.duration_s == float(doc["duration_s"])
+
+
+@pytest.mark.parametrize("data", [None, [], "name: x", 3])
+def test_a_scenario_that_is_no_mapping_is_one_config_error(data):
+    """An empty YAML (None) or a list was a builtin TypeError / AttributeError."""
+    with pytest.raises(ConfigError, match=r"^scenario: expected a mapping of sections"):
+        scenario_from_dict(data)

@@ -1003,3 +1003,13 @@ def test_the_3d_track_is_dropped_after_max_coast_s_without_a_measurement(model, 
     assert all(u.velocity_mps is None and u.covariance is None for u in ups if 2.6 < u.t < 4.5)
     assert has[t >= 4.5].all()  # restarted by the next fix
     assert np.linalg.norm(np.array(ups[-1].position_m) - traj.at(1.0)) < 0.05
+
+
+def test_a_tracking_processor_takes_a_preset_name():
+    """TrackingProcessor("three-mic", fs) was a builtin AttributeError; other entry points
+    took preset names. Anything else is a ConfigError."""
+    arr = TrackingProcessor("three-mic", FS).array
+    assert arr.name == "three-mic"
+    np.testing.assert_array_equal(arr.positions, MicArray.from_preset("three-mic").positions)
+    with pytest.raises(ConfigError, match="array: expected a MicArray"):
+        TrackingProcessor(np.zeros((3, 3)), FS)

@@ -728,3 +728,12 @@ def test_render_chessboard_takes_a_seed_as_other_random_functions_do():
     assert np.any(by_seed != C.render_chessboard(*args, noise=5.0, rng=4))
     with pytest.raises(ConfigError, match="rng"):
         C.render_chessboard(*args, noise=5.0, rng="three")
+
+
+@pytest.mark.parametrize("left, right", [("cb/left*.png", "cb/right*.png"),
+                                         ("cb/l*.png", "cb/r*.png"), (None, None)])
+def test_calibrate_rig_refuses_a_glob_pattern_and_none(left, right):
+    """A pattern string was taken as a list of its characters ("12 left images but 13 right
+    images", or, at equal lengths, "c: image file not found"); None a builtin TypeError."""
+    with pytest.raises(CalibrationError, match="left_files must be a list of image paths"):
+        C.calibrate_rig(left, right, PATTERN, SQUARE)

@@ -121,11 +121,18 @@ def white_noise(duration_s: float, fs: float,
 MAX_SIGNAL_S = 600.0
 
 
+#: The highest sample rate an audio file can declare (Hz): libsndfile keeps it in a C int.
+MAX_FILE_FS_HZ = 2**31 - 1
+
+
 def check_fs(fs: float) -> float:
-    """``fs`` (Hz) as a float when it is a finite real number > 0 (:func:`config.is_real`: not
-    a string, a bool or a 1-element array), else an AudioInputError."""
-    if not (is_real(fs) and fs > 0):
-        raise AudioInputError(f"sample rate must be a positive number of Hz, got {fs!r}")
+    """``fs`` (Hz) as a float when it is a finite real number > 0 and at most
+    :data:`MAX_FILE_FS_HZ` (:func:`config.is_real`: not a string, a bool or a 1-element
+    array), else an AudioInputError (``write_recording(..., 1e10)`` was a builtin
+    OverflowError)."""
+    if not (is_real(fs) and 0 < fs <= MAX_FILE_FS_HZ):
+        raise AudioInputError(f"sample rate must be a positive number of Hz (at most "
+                              f"{MAX_FILE_FS_HZ}), got {fs!r}")
     return float(fs)
 
 

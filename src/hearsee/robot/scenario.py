@@ -347,7 +347,11 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
     """Validate a scenario mapping (see module docstring) and build a :class:`Scenario`. A
     relative ``robot.array`` file path is resolved against ``base_dir`` (the scenario file's
     folder when loaded by :func:`load_scenario`; None = the working directory), as the robot
-    file's paths are."""
+    file's paths are. ConfigError unless ``data`` is a mapping (an empty YAML's None and a
+    list were builtin TypeError / AttributeError)."""
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"{where}: expected a mapping of sections (name, seed, duration_s, "
+                          f"audio, room, robot, people, objects), got {type(data).__name__}")
     check_keys(data, ("name", "seed", "duration_s", "audio", "room", "robot", "people", "objects"),
                where)
     base = default_scenario()

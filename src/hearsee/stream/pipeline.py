@@ -1551,7 +1551,8 @@ class TrackingProcessor:
 
     Parameters
     ----------
-    array : MicArray
+    array : MicArray, a preset name or an array YAML path
+        (:func:`hearsee.audio.arrays.load_array`; a preset name was a builtin AttributeError)
     fs : float
         Sample rate, Hz.
     config : StreamConfig
@@ -1565,8 +1566,9 @@ class TrackingProcessor:
         was when it emitted the frame's sound.
     """
 
-    def __init__(self, array: MicArray, fs: float, config: StreamConfig | None = None,
+    def __init__(self, array: MicArray | str, fs: float, config: StreamConfig | None = None,
                  rig: Any = None, image_points: Callable[[float], Any] | None = None) -> None:
+        array = load_array(array)
         self.array, self.fs = array, check_analysis_fs(fs)
         check_trackable(array)
         self.cfg = _stream_config(config)
