@@ -867,3 +867,19 @@ def test_fold_radius_checks_its_input():
             fold_radius([-0.28, 0, 0, 0], r_max)
     assert fold_radius([-0.28, 0, 0, 0]) == pytest.approx(1 / np.sqrt(0.84), abs=1e-3)
     assert fold_radius([]) == np.inf and fold_radius(np.zeros((1, 5))) == np.inf
+
+
+@pytest.mark.parametrize("K, needle", [
+    ([[1e-6, 0, 160], [0, 1e-6, 120], [0, 0, 1]], "field of view near 180 deg"),
+    ([[300, 0, 160], [0, 5.0, 120], [0, 0, 1]], "field of view near 180 deg"),
+    ([[300, 0, 5000], [0, 300, 120], [0, 0, 1]], "principal point"),
+    ([[300, 0, 160], [0, 300, -300], [0, 0, 1]], "principal point"),
+])
+def test_a_camera_matrix_that_cannot_be_this_image_is_refused(K, needle):
+    """A focal length of 1e-6 px (a matrix in metres) or a principal point 15 images to the
+    right were accepted: `hearsee detect` reported "0 human(s)", exit 0. A fisheye's short
+    focal length (0.3 x the width) and a principal point a little off the image stay."""
+    with pytest.raises(CalibrationError, match=needle):
+        Camera(np.array(K, float), None, 320, 240)
+    Camera(np.array([[96.0, 0, 160], [0, 96.0, 120], [0, 0, 1]]), None, 320, 240)
+    Camera(np.array([[300.0, 0, 340], [0, 300.0, -20], [0, 0, 1]]), None, 320, 240)

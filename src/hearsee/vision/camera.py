@@ -112,6 +112,12 @@ _DIST_LENGTHS = (0, 4, 5, 8, 12, 14)
 MIN_BASELINE_M = 1e-3
 
 
+#: The smallest focal length a camera may have, as a share of its image width (and height):
+#: tan of the half field of view at most 1 / (2 * 0.05) = 10, 169 deg across as a pinhole.
+#: Fisheye lenses of 180 deg and more calibrate to ~0.3 of the width; a focal length of
+#: 1e-6 px (a matrix in metres, a typo) was accepted and every detection came out empty.
+MIN_FOCAL_SHARE = 0.05
+
 #: The most a stereo rig's two optical axes may diverge, degrees: convergent rigs toe in by a
 #: few degrees; beyond this the two views barely overlap (R = 180 deg about y, cameras back to
 #: back, rectified and gave depths).
@@ -207,6 +213,16 @@ class Camera:
         if np.all(d == 0):
             d = np.zeros(0)
         w, h = _check_size(self.width, self.height)
+        if K[0, 0] < MIN_FOCAL_SHARE * w or K[1, 1] < MIN_FOCAL_SHARE * h:
+            raise CalibrationError(
+                f"camera K: focal lengths fx = {K[0, 0]:.4g}, fy = {K[1, 1]:.4g} px for a "
+                f"{w}x{h} image, a field of view near 180 deg (at least {MIN_FOCAL_SHARE:g} x "
+                "the image size expected; is K in pixels, and for this image size?)")
+        if not (-w <= K[0, 2] <= 2 * w and -h <= K[1, 2] <= 2 * h):
+            raise CalibrationError(
+                f"camera K: principal point ({K[0, 2]:.4g}, {K[1, 2]:.4g}) px lies more than "
+                f"one image size outside the {w}x{h} image (is the calibration for this image "
+                "size?)")
         K.setflags(write=False)
         d.setflags(write=False)
         object.__setattr__(self, "K", K)
