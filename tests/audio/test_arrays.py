@@ -256,3 +256,15 @@ def test_an_array_spec_that_is_no_name_is_refused():
         with pytest.raises(ConfigError, match="^array: expected a MicArray, a preset name or a"):
             load_array(bad)
     assert load_array("two-mic").n_mics == 2 and load_array(MicArray.from_preset("two-mic"))
+
+
+@pytest.mark.parametrize("name", ["[1, 2]", "{a: 1}", "true"])
+def test_an_array_name_that_is_no_text_is_refused(tmp_path, name):
+    """A list or a mapping was printed as the array's name ("hearsee localize ([1, 2],
+    phat)"); a number is read as its text."""
+    p = tmp_path / "a.yaml"
+    p.write_text(f"name: {name}\nmicrophones: [[0, -0.1, 0], [0, 0.1, 0]]\n")
+    with pytest.raises(ConfigError, match="name must be text"):
+        load_array(p)
+    p.write_text("name: 7\nmicrophones: [[0, -0.1, 0], [0, 0.1, 0]]\n")
+    assert load_array(p).name == "7"
