@@ -246,7 +246,8 @@ def test_a_corrupt_sample_is_named_when_no_frame_is_valid(rec3, tmp_path, capsys
     code, out, err = _run(capsys, p, "--array", "three-mic", "--format", "json")
     assert code == 0 and json.loads(out)["summary"]["n_valid_frames"] == 0
     assert err.strip().splitlines() == [err.strip()]
-    assert err.startswith(f"{p}: no frame holds a detectable source; sample 9000 of channel 2 "
+    assert err.startswith(f"hearsee: warning: {p}: no frame holds a detectable source; "
+                          f"sample 9000 of channel 2 "
                           f"({9000 / FS:.3f} s) is 1e+30, ")
     assert "integer PCM" in err and "uncorrelated" not in err
     noise = np.random.default_rng(7).standard_normal((FS, 3)) * 0.1  # no source at all
@@ -254,7 +255,8 @@ def test_a_corrupt_sample_is_named_when_no_frame_is_valid(rec3, tmp_path, capsys
     sf.write(q, noise, FS, subtype="FLOAT")
     code, out, err = _run(capsys, q, "--array", "three-mic", "--format", "json")
     assert code == 0 and json.loads(out)["summary"]["n_valid_frames"] == 0
-    assert err == f"{q}: no frame holds a detectable source (silence or uncorrelated noise)\n"
+    assert err == (f"hearsee: warning: {q}: no frame holds a detectable source (silence or "
+                   "uncorrelated noise)\n")
 
 
 def test_eight_mic_circle_table_and_position(tmp_path, capsys):
@@ -320,3 +322,14 @@ def test_absurd_tdoa_std_is_one_line_naming_the_flag(value, tmp_path, capsys):
                    f"got {float(value)}\n")
     code, out, _ = _run(capsys, rec, "--array", "respeaker-4", "--tdoa-std-us", "1e6")
     assert code == 0 and json.loads(out)["summary"]["position_m"] is None
+
+
+def test_a_file_name_with_a_line_break_keeps_the_error_on_one_line(tmp_path, capsys):
+    """`hearsee localize $'bad\\nname.wav'` printed its error over two lines; the break is
+    written as \\n, as the one-line rule for errors and warnings asks."""
+    p = tmp_path / "bad\nname.wav"
+    p.write_bytes(b"not audio at all")
+    code, out, err = _run(capsys, p, "--array", "two-mic")
+    assert code == 2 and out == ""
+    assert err == (f"hearsee: error: {tmp_path}/bad\\nname.wav: not an audio file or a format "
+                   "libsndfile cannot read (Format not recognised.); use a WAV or FLAC file\n")

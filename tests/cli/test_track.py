@@ -314,3 +314,15 @@ def test_a_camera_index_beyond_a_c_int_is_one_line(scene, tmp_path, capsys):
                                  "(OpenCV VideoCapture)\n")
     with pytest.raises(ConfigError, match=f"cameras.left: cannot open camera {big}"):
         open_capture(int(big), "cameras.left")
+
+
+def test_a_recording_without_a_source_is_a_warning_line(tmp_path, capsys):
+    """Uncorrelated noise in every channel: no update is measured, and the message is a
+    warning like every other (it lacked the "hearsee: warning:" prefix)."""
+    wav = tmp_path / "noise.wav"
+    write_recording(wav, 0.1 * np.random.default_rng(5).standard_normal((3, FS)), FS)
+    assert main(["track", str(wav), "--array", "three-mic", "--format", "jsonl"]) == 0
+    out, err = capsys.readouterr()
+    assert "hearsee: warning: track: no frame held a localizable source\n" in err
+    lines = out.splitlines()
+    assert len(lines) > 10 and all(json.loads(u)["azimuth_deg"] is None for u in lines)

@@ -374,8 +374,10 @@ def _read_file(path: str | Path,
     except HearseeError:  # frames_at's refusal (an AudioInputError is a ValueError too)
         raise
     except (RuntimeError, sf.LibsndfileError, TypeError, ValueError) as exc:
+        # (libsndfile's own words; its message repeats the file's name, as bytes)
+        why = getattr(exc, "error_string", None) or exc
         raise AudioInputError(
-            f"{p}: not an audio file or a format libsndfile cannot read ({exc}); "
+            f"{p}: not an audio file or a format libsndfile cannot read ({why}); "
             "use a WAV or FLAC file"
         ) from None
     except OSError as exc:

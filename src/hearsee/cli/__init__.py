@@ -44,6 +44,12 @@ _UsageError = _click_base("UsageError")
 _ClickException = _click_base("ClickException")
 
 
+def _one_line(message: object) -> str:
+    """``message`` with its line breaks written as ``\\n`` / ``\\r``: a file name may hold
+    one (``$'bad\\nname.wav'``), and an error or warning is one line on stderr."""
+    return str(message).replace("\r", "\\r").replace("\n", "\\n")
+
+
 def _usage_error_line(exc) -> str:
     """One line for a usage error: the command, the message and where to get help."""
     path = exc.ctx.command_path if exc.ctx is not None else "hearsee"
@@ -72,7 +78,7 @@ def _warning_line(message, category, filename, lineno, file=None, line=None) -> 
     clipped audio) or ``hearsee: warning: <Category>: <message>`` (another library's), instead
     of Python's two lines with the file, line number and source of the call."""
     own = category.__module__.split(".")[0] == "hearsee"
-    print(f"hearsee: warning: {'' if own else category.__name__ + ': '}{message}",
+    print(f"hearsee: warning: {'' if own else category.__name__ + ': '}{_one_line(message)}",
           file=sys.stderr if file is None else file)
 
 
@@ -94,14 +100,14 @@ def _main(argv: list[str] | None) -> int:
         print(f"hearsee: error: {' '.join(exc.format_message().split())}", file=sys.stderr)
         code = exc.exit_code
     except HearseeError as exc:
-        print(f"hearsee: error: {exc}", file=sys.stderr)
+        print(f"hearsee: error: {_one_line(exc)}", file=sys.stderr)
         code = 2
     except OSError as exc:
         # the safety net behind the commands' own checks: a file the system refused (no
         # permission, disk full, ...) is one line, not a traceback (a closed stdout pipe,
         # `hearsee track ... | head`, never gets here: click exits 1 quietly)
         what = f"{exc.filename}: " if exc.filename else ""
-        print(f"hearsee: error: {what}{exc.strerror or exc}", file=sys.stderr)
+        print(f"hearsee: error: {_one_line(what)}{exc.strerror or exc}", file=sys.stderr)
         code = 2
     except MemoryError:
         print("hearsee: error: out of memory (is an option, e.g. a count, duration or sample "

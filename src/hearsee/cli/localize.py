@@ -195,12 +195,13 @@ def localize_cmd(
     if doc["summary"]["n_valid_frames"] == 0:
         spike = dominant_sample(x)
         if spike is None:
-            err_console.print(f"{recording}: no frame holds a detectable source "
+            err_console.print(f"hearsee: warning: {recording}: no frame holds a detectable source "
                               "(silence or uncorrelated noise)", highlight=False)
         else:  # (it was called silence or noise: one corrupt float sample of 1e30 does that)
             ch, i, v, ratio = spike
             err_console.print(
-                f"{recording}: no frame holds a detectable source; sample {i} of channel {ch} "
+                f"hearsee: warning: {recording}: no frame holds a detectable source; sample {i} of "
+                f"channel {ch} "
                 f"({i / fs:.3f} s) is {v:.3g}, {ratio:.2g} times the median |sample|, beyond "
                 "any integer PCM range (a corrupt sample? the analysis scales the recording to "
                 "its loudest sample)", highlight=False)

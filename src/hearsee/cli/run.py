@@ -108,7 +108,8 @@ def run_cmd(
     typer.echo(f"report: {index}")
     status = result.summary["status"]
     if status == "stalled":
-        err_console.print("audio: the input device stopped delivering samples", highlight=False)
+        err_console.print("hearsee: error: audio: the input device stopped delivering samples",
+                          highlight=False)
         raise typer.Exit(1)
 
 

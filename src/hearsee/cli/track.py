@@ -283,7 +283,8 @@ def track_cmd(
             f"{st.n_overflows} input overflows, status {st.status}",
             highlight=False)
     if not any(u.measured for u in updates):
-        err_console.print("track: no frame held a localizable source", highlight=False)
+        err_console.print("hearsee: warning: track: no frame held a localizable source",
+                          highlight=False)
     if image_points is not None and updates and not points.visible_within(
             updates[0].t, updates[-1].t):
         # (rows all outside the recording, e.g. times in ms or of another take: no 3D fix
@@ -300,5 +301,6 @@ def track_cmd(
         _warn_short_video(points, video if video is not None else f"camera {camera_device}",
                           updates[-1].t)
     if st.status == "stalled":  # as 'hearsee run': what was printed is valid, the run is not
-        err_console.print("track: the audio input stopped delivering samples", highlight=False)
+        err_console.print("hearsee: error: track: the audio input stopped delivering samples",
+                          highlight=False)
         raise typer.Exit(1)
