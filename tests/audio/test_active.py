@@ -445,6 +445,9 @@ def test_localize3d_cli_round_trip(pose_manifest, capsys, method):
     (lambda d: d.update(extra=1), "unknown key 'extra'"),
     (lambda d: d["captures"][0].pop("tilt_deg"), "missing required key 'tilt_deg'"),
     (lambda d: d["captures"][1].update(file="nope.wav"), "not found"),
+    # ('' was the manifest's folder, ".: is a folder"; a list was read as its text)
+    (lambda d: d["captures"][1].update(file=""), "captures[1]: file must be a capture file's"),
+    (lambda d: d["captures"][1].update(file=["a.wav"]), "captures[1]: file must be a capture"),
     (lambda d: d["captures"][0].update(pan_deg="left"), "pan_deg must be a finite number"),
     # (a 400-digit integer was an OverflowError traceback)
     (lambda d: d["captures"][0].update(pan_deg=10**400), "pan_deg must be a finite number"),

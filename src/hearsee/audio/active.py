@@ -1475,7 +1475,11 @@ def load_pose_manifest(path: Any) -> PoseManifest:
         if not isinstance(c, dict):
             raise ConfigError(f"{w}: expected a mapping with file, pan_deg, tilt_deg")
         check_keys(c, _CAPTURE_KEYS, w)
-        f = Path(str(require(c, "file", w)))
+        name = require(c, "file", w)
+        if not isinstance(name, str) or not name.strip():
+            # ('' was Path("."), the manifest's folder: ".: is a folder"; a list its text)
+            raise ConfigError(f"{w}: file must be a capture file's name, got {name!r:.60}")
+        f = Path(name)
         f = f if f.is_absolute() else p.parent / f
         try:
             input_file(f, "capture file")
