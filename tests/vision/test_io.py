@@ -385,3 +385,15 @@ def test_a_negative_or_bool_camera_index_is_refused(index):
     backend answered; True was a raw cv2.error."""
     with pytest.raises(ConfigError, match="camera index must be a whole number >= 0"):
         video_capture(index)
+
+
+def test_a_float_tiff_read_as_a_visible_image_is_named(tmp_path):
+    """A float32 TIFF (a thermal frame in degC) given as a visible image was "corrupt or
+    unsupported format"; it is read as stored with mode "unchanged"."""
+    p = tmp_path / "t.tiff"
+    t = np.random.default_rng(2).uniform(20, 35, (24, 32)).astype(np.float32)
+    assert cv2.imwrite(str(p), t)
+    for mode in ("gray", "bgr"):
+        with pytest.raises(ImageInputError, match=r"holds floating-point pixels \(float32; "):
+            read_image(p, mode)
+    np.testing.assert_array_equal(read_image(p, "unchanged"), t)

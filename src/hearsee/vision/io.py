@@ -257,6 +257,15 @@ def read_image(path: str | Path, mode: ColorMode = "gray",
     # before hearsee's one-line error below)
     with _opencv_log("silent"), _codec_stderr_off():
         img = cv2.imdecode(data, _IMREAD[mode]) if data.size else None
+    if img is None and mode != "unchanged" and data.size:
+        # (a float TIFF decodes as it is stored only: gray and colour reads refused it as
+        # "corrupt or unsupported format")
+        with _opencv_log("silent"), _codec_stderr_off():
+            raw = cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+        if raw is not None and raw.dtype.kind == "f":
+            raise ImageInputError(
+                f"{p}: holds floating-point pixels ({raw.dtype}; a thermal or depth image?), "
+                f"which a {mode} image cannot take: give an 8- or 16-bit image")
     if img is None:
         raise ImageInputError(
             f"{p}: not a readable image (corrupt or unsupported format; expected PNG, JPEG, "
