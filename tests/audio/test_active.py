@@ -955,3 +955,12 @@ def test_aim_at_puts_the_point_on_the_array_axis_for_a_large_offset():
         q = robot_to_array(p, (az, el), pivot, offset)
         assert q[0] > 0
         assert np.degrees(np.arctan2(np.hypot(q[1], q[2]), q[0])) < 1e-6, p
+
+
+def test_simulate_pose_manifest_needs_a_path(tmp_path):
+    """None was a builtin TypeError."""
+    from hearsee.audio.active import simulate_pose_manifest
+    from hearsee.errors import InputFileError
+
+    with pytest.raises(InputFileError, match="manifest's path must be a file name"):
+        simulate_pose_manifest(None, "three-mic", [2, 1, 0], [(0, 0), (45, 0)])

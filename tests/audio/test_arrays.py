@@ -268,3 +268,14 @@ def test_an_array_name_that_is_no_text_is_refused(tmp_path, name):
         load_array(p)
     p.write_text("name: 7\nmicrophones: [[0, -0.1, 0], [0, 0.1, 0]]\n")
     assert load_array(p).name == "7"
+
+
+@pytest.mark.parametrize("positions", [None, [], np.zeros((3, 2)), [[0, 0, np.nan], [1, 0, 0]],
+                                       "abc"])
+def test_span_dimension_refuses_what_is_no_set_of_positions(positions):
+    """None was numpy's AxisError, an empty set a LinAlgError."""
+    from hearsee.audio.arrays import span_dimension
+
+    with pytest.raises(GeometryError, match="positions must be"):
+        span_dimension(positions, 343.0)
+    assert span_dimension([[0, 0, 0], [1, 0, 0]], 343.0)[0] == 1

@@ -116,3 +116,11 @@ def test_eval_seeds_are_the_seeds_a_scenario_file_takes(monkeypatch):
     for seed0, n in ((top, 2), (top + 1, 1), (2**40, 3)):
         with pytest.raises(ConfigError, match=r"^--seed must be an integer in \[0, "):
             evaluate(n, seed0=seed0, workers=1)
+
+
+@pytest.mark.parametrize("runs", [None, "runs", {"success": True}, [1, 2]])
+def test_summarize_refuses_what_is_no_list_of_runs(runs):
+    """None was a builtin TypeError."""
+    with pytest.raises(ConfigError, match="runs must be a list of run results"):
+        summarize(runs)
+    assert summarize([{"success": True}])["success_rate"] == 1.0

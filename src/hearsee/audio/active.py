@@ -73,6 +73,7 @@ from hearsee.audio.propagation import check_snr_db, speed_of_sound_of
 from hearsee.audio.signals import as_samples, check_fs
 from hearsee.config import (
     as_float_array,
+    as_path,
     as_rng,
     check_rng,
     finite_number,
@@ -1589,7 +1590,6 @@ def simulate_pose_manifest(
     :func:`~hearsee.geometry.mic_positions_at`) are each one finite ``[x, y, z]`` in metres,
     else GeometryError (:func:`~hearsee.geometry.as_point`).
     """
-    from pathlib import Path
 
     from hearsee.audio.propagation import add_noise
     from hearsee.audio.signals import make_signal
@@ -1597,7 +1597,7 @@ def simulate_pose_manifest(
     from hearsee.errors import ConfigError
     from hearsee.sim.audio import ground_truth, normalize_room, render, save_recording
 
-    man = Path(out)
+    man = as_path(out, "the manifest's path")  # (None was a builtin TypeError)
     if man.suffix.lower() not in (".yaml", ".yml"):
         raise ConfigError(f"{man}: with --poses the output is a manifest; use a .yaml name")
     for q in protect:

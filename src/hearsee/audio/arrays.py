@@ -366,8 +366,14 @@ def span_dimension(positions: NDArray, speed_of_sound: float, rel_tol: float = 1
     1 cm and more (>= 29 us) stay volume.
 
     Geometry of the lower dimension is the solvers' model: a near-flat array's answers carry
-    up to ``FLAT_TDOA_S`` of model error per pair."""
+    up to ``FLAT_TDOA_S`` of model error per pair. GeometryError unless ``positions`` are
+    finite numbers ``(n, 3)``, n >= 1 (None was numpy's AxisError, an empty set a LinAlgError)."""
+    if not real_entries(positions):
+        raise GeometryError(f"positions must be numbers (n, 3) metres, got {positions!r:.60}")
     pos = np.asarray(positions, dtype=float)
+    if pos.ndim != 2 or pos.shape[1] != 3 or len(pos) == 0 or not np.all(np.isfinite(pos)):
+        raise GeometryError(f"positions must be finite (n, 3) metres with n >= 1, got shape "
+                            f"{pos.shape}")
     c = pos.mean(axis=0)
     _, s, vt = np.linalg.svd(pos - c)
     s = np.concatenate([s, np.zeros(3 - len(s))])

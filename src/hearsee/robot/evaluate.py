@@ -59,7 +59,12 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """Success rate and error percentiles over runs (NaN errors are excluded from percentiles);
     ``objects_reported_as_person``: the human-like objects accepted as a person in at least
     one camera frame, summed over the runs (each object of a run counted once);
-    ``object_detections_accepted_as_person``: their accepted detections (object x frame)."""
+    ``object_detections_accepted_as_person``: their accepted detections (object x frame).
+    ConfigError unless ``runs`` is a list of mappings (None was a builtin TypeError)."""
+    if isinstance(runs, str | bytes | dict) or not isinstance(runs, Sequence) or \
+            not all(isinstance(r, dict) for r in runs):
+        raise ConfigError(f"runs must be a list of run results (dicts, as evaluate gives), got "
+                          f"{type(runs).__name__}")
     n = len(runs)
     success = [bool(r.get("success", False)) for r in runs]
     out: dict[str, Any] = {"scenarios": n, "success_rate": float(np.mean(success)) if n else 0.0}
