@@ -2205,3 +2205,12 @@ def test_one_device_given_as_two_cameras_is_refused(small_rig, cameras, field, f
         load_robot_config(make_config(small_rig, data))
     # distinct devices load
     assert load_robot_config(make_config(small_rig, _with())).cameras.thermal is not None
+
+
+def test_a_jsonl_that_is_a_folder_is_refused_at_load(tmp_path):
+    """output.jsonl naming an existing folder passed loading and `run --dry-run`; the run
+    failed when it started, without the robot file's name."""
+    (tmp_path / "adir.jsonl").mkdir()
+    with pytest.raises(ConfigError, match=r"^r\.yaml: output\.jsonl: .*adir\.jsonl is a folder"):
+        robot_config_from_dict({"audio": {}, "output": {"jsonl": "adir.jsonl"}}, "r.yaml",
+                               tmp_path)

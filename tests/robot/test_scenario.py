@@ -420,3 +420,14 @@ def test_a_scenario_that_is_no_mapping_is_one_config_error(data):
     """An empty YAML (None) or a list was a builtin TypeError / AttributeError."""
     with pytest.raises(ConfigError, match=r"^scenario: expected a mapping of sections"):
         scenario_from_dict(data)
+
+
+@pytest.mark.parametrize("speaking", [["06"], [[False, True]], [[0, 1, 2]], "0-2", [["0", 1]],
+                                      [[0, float("nan")]]])
+def test_speaking_must_be_pairs_of_numbers(speaking):
+    """["06"] was unpacked character by character into (0.0, 6.0), [[false, true]] read as
+    (0.0, 1.0)."""
+    with pytest.raises(ConfigError, match=r"^scenario\.people\[0\]\.speaking: expected "
+                                          r"\[\[t0, t1\], \.\.\.\] in seconds"):
+        scenario_from_dict({"duration_s": 2.0, "objects": [],
+                            "people": [{"path_m": [[1, 1]], "speaking": speaking}]})

@@ -542,11 +542,11 @@ def robot_config_from_dict(data: Mapping[str, Any], where: str = "robot.yaml",
 
 def check_outputs(cfg: RobotConfig, where: str) -> None:
     """ConfigError (prefixed ``where``) when ``output.report`` (or the folder it would be made
-    in) is a file or not writable, ``output.jsonl`` names the same path, or the run's outputs
-    would overwrite an input file:
-    ``output.jsonl`` or ``output.report`` is one, the report would write over one
-    (:func:`hearsee.robot.report.report_overwrites`), or the JSON lines are one of the
-    report's own files. Checked when a robot file is loaded and again for ``run --out``."""
+    in) is a file or not writable, ``output.jsonl`` names the same path or a folder, or the
+    run's outputs would overwrite an input file: ``output.jsonl`` or ``output.report`` is
+    one, the report would write over one (:func:`hearsee.robot.report.report_overwrites`), or
+    the JSON lines are one of the report's own files. Checked when a robot file is loaded and
+    again for ``run --out``."""
     from hearsee.robot.report import (
         REPORT_FILES,
         report_folder_blocker,
@@ -574,6 +574,9 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
     if hit is not None:
         raise ConfigError(f"{where}: output.report: writing {cfg.output.report.resolve()} "
                           f"would overwrite the input file {hit}; choose another folder")
+    if cfg.output.jsonl.is_dir():  # (passed the dry run; the run failed when it started)
+        raise ConfigError(f"{where}: output.jsonl: {cfg.output.jsonl} is a folder; the JSON "
+                          "lines are a file: choose a file name")
     if jsonl_foreign_file(cfg.output.jsonl):
         raise _foreign_jsonl_error(cfg.output.jsonl, f"{where}: ")
     if report_overwrites(cfg.output.report, [cfg.output.jsonl]) is not None:

@@ -63,6 +63,7 @@ from hearsee.audio.propagation import image_sources
 from hearsee.config import (
     check_keys,
     finite_number,
+    is_real,
     load_yaml,
     names_a_file,
     number,
@@ -280,10 +281,14 @@ def _parse_person(p: Any, k: int, pw: str, size: np.ndarray, robot_xy: np.ndarra
     if voice not in VOICES:
         raise ConfigError(f"{pw}.voice: expected one of {VOICES}, got {voice!r}")
     speaking = p.get("speaking", [[0.0, duration]])
-    try:
-        spk = tuple((float(a), float(b)) for a, b in speaking)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{pw}.speaking: expected [[t0, t1], ...] in seconds") from None
+    # (only pairs of numbers: ["06"] was unpacked into (0.0, 6.0), [[false, true]] read as
+    # (0.0, 1.0))
+    if not isinstance(speaking, list | tuple) or not all(
+            isinstance(s, list | tuple) and len(s) == 2 and all(is_real(v) for v in s)
+            for s in speaking):
+        raise ConfigError(f"{pw}.speaking: expected [[t0, t1], ...] in seconds, got "
+                          f"{speaking!r:.60}")
+    spk = tuple((float(a), float(b)) for a, b in speaking)
     if any(not (0 <= a < b) for a, b in spk):
         raise ConfigError(f"{pw}.speaking: each interval needs 0 <= t0 < t1")
     if k == 0 and not any(a < duration for a, _ in spk):
