@@ -577,3 +577,18 @@ def test_too_few_bins_names_the_cause(model):
         with pytest.raises(AudioInputError, match="frequency bins") as exc:
             mask.localize_mask(x, FS, model, **kw)
         assert "too low" not in str(exc.value) and "longer frame" in str(exc.value)
+
+
+@pytest.mark.parametrize("kw, needle", [
+    ({"min_separation_deg": 180}, "min_separation_deg"),
+    ({"min_separation_deg": -1}, "min_separation_deg"),
+    ({"min_separation_deg": float("nan")}, "min_separation_deg"),
+    ({"phase_weight": float("nan")}, "phase_weight and sigma_iid_db"),
+    ({"phase_weight": -400.0}, "phase_weight and sigma_iid_db"),
+    ({"sigma_iid_db": 0.0}, "phase_weight and sigma_iid_db"),
+])
+def test_front_back_margin_refuses_settings_that_leave_no_cost(asym, kw, needle):
+    """A 180 deg separation (no azimuth left to compare) or a NaN weight reported every
+    azimuth as infinitely separable; a negative weight gave negative costs."""
+    with pytest.raises(ConfigError, match=needle):
+        mask.front_back_margin(asym, **kw)

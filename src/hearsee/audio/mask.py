@@ -620,6 +620,17 @@ class MaskModel:
         return float((self.array.aperture + 0.5 * np.pi * 0.5 * ext.max()) / self.c)
 
 
+def _check_cost_weights(phase_weight: float, sigma_iid_db: float) -> None:
+    """ConfigError unless the classifier's ``phase_weight`` and ``sigma_iid_db`` (dB) are
+    finite numbers > 0 (:func:`localize_mask`, :func:`front_back_margin`): a NaN weight made
+    every azimuth's cost NaN (the answer was 0 deg, every margin infinite), a negative one
+    a negative cost."""
+    if not (is_real(phase_weight) and phase_weight > 0
+            and is_real(sigma_iid_db) and sigma_iid_db > 0):
+        raise ConfigError("phase_weight and sigma_iid_db must be finite numbers > 0, got "
+                          f"{phase_weight} and {sigma_iid_db}")
+
+
 def front_back_margin(model: MaskModel, distance: float | None = None,
                       min_separation_deg: float = 20.0, sigma_iid_db: float = 1.0,
                       phase_weight: float = 400.0, bands_hz: ArrayLike | None = None,
@@ -642,11 +653,17 @@ def front_back_margin(model: MaskModel, distance: float | None = None,
     a design that separates every azimuth from its front/back mirror has a positive minimum.
 
     Returns ``(azimuth_deg (A,), margin (A,), partner_deg (A,))``: the cost of the nearest
-    confusable azimuth and that azimuth.
+    confusable azimuth and that azimuth. ConfigError unless ``phase_weight`` and
+    ``sigma_iid_db`` are finite numbers > 0 and ``min_separation_deg`` one in [0, 180).
     """
     if not isinstance(model, MaskModel):  # (any other object: a builtin AttributeError)
         raise ConfigError(f"model: expected a MaskModel, e.g. MaskModel('mask2'), got "
                           f"{type(model).__name__}")
+    _check_cost_weights(phase_weight, sigma_iid_db)
+    if not (is_real(min_separation_deg) and 0 <= min_separation_deg < 180):
+        # (180 left no azimuth to compare: every margin came out infinite, "separable")
+        raise ConfigError(f"min_separation_deg must be a finite number of degrees in [0, 180), "
+                          f"got {min_separation_deg!r:.40}")
     az, h = model.table(distance)
     edges = _band_edges(bands_hz, model.f_max)
     use = (model.freqs >= max(edges[0], 100.0)) & (model.freqs <= 0.9 * model.f_max)
@@ -889,11 +906,7 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         raise AudioInputError("recording is all zeros")
     fs = check_fs(fs)
     check_frame_ms(frame_ms, frame_ms / 2, names=("frame_ms", "half frame"))
-    if not (is_real(phase_weight) and phase_weight > 0
-            and is_real(sigma_iid_db) and sigma_iid_db > 0):
-        # (a NaN weight made every azimuth's cost NaN: the answer was 0 deg)
-        raise ConfigError("phase_weight and sigma_iid_db must be finite numbers > 0, got "
-                          f"{phase_weight} and {sigma_iid_db}")
+    _check_cost_weights(phase_weight, sigma_iid_db)
     try:  # (text, None or one number raised a builtin TypeError; True was taken as 1 m)
         ok = len(distances) > 0 and all(d is None or (is_real(d) and d > 0)
                                         for d in distances)
