@@ -74,7 +74,10 @@ def test_ray_residuals_refuses_arguments_of_other_shapes(rig):
                       ({"s": [[1.0, 2.0]]}, r"s must be one range"),
                       ({"tdoa_s": z[:2]}, "got 2 TDOAs for 3 microphone pairs"),
                       ({"tdoa_s": np.r_[z, 0.0]}, "got 4 TDOAs for 3 microphone pairs"),
-                      ({"tdoa_s": z, "pairs": [(0, 1)]}, "got 3 TDOAs for 1 microphone pairs")):
+                      ({"tdoa_s": z, "pairs": [(0, 1)]}, "got 3 TDOAs for 1 microphone pairs"),
+                      # (a zero direction put every range at the origin, without a word)
+                      ({"direction": [0.0, 0.0, 0.0]}, "direction a finite, non-zero vector"),
+                      ({"origin": [0.0, np.inf, 0.0]}, "origin must be finite")):
         args = {"array": arr, "origin": o, "direction": d, "s": [1.0], "tdoa_s": z, **kw}
         with pytest.raises(GeometryError, match=match):
             ray_residuals(**args)

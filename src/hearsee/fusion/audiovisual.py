@@ -254,7 +254,8 @@ def ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: A
     ``array``), seconds; returns ``(n, n_pairs)``. ``sum(F**2, axis=1)`` is the cost J(s)
     plotted in the thesis's figs. 5.14-5.16. Arguments that are no numbers (numpy read text as
     the numbers it spells, True as 1) or of other shapes (numpy's broadcast ValueError) are a
-    GeometryError, and so is an ``array`` that is no MicArray.
+    GeometryError, and so are a zero or non-finite ``direction`` and an ``array`` that is no
+    MicArray.
     """
     if not isinstance(array, MicArray):  # (a builtin AttributeError, 2026-12-02)
         raise GeometryError(f"ray_residuals: array must be a MicArray (hearsee.audio.arrays."
@@ -267,6 +268,10 @@ def ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: A
     if o.shape != (3,) or d.shape != (3,):
         raise GeometryError(f"ray_residuals: origin and direction must be [x, y, z] each, shape "
                             f"(3,), got {o.shape} and {d.shape}")
+    if not (np.all(np.isfinite(o)) and np.all(np.isfinite(d)) and np.linalg.norm(d) > 0):
+        # (a zero direction put every range at the origin and gave residuals without a word)
+        raise GeometryError(f"ray_residuals: origin must be finite and direction a finite, "
+                            f"non-zero vector, got {o.tolist()} and {d.tolist()}")
     if np.ndim(s) > 1:
         raise GeometryError(f"ray_residuals: s must be one range or ranges (n,) in metres, got "
                             f"shape {np.shape(s)}")
