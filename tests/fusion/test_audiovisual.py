@@ -45,7 +45,11 @@ def test_noise_free_ray_and_itds_give_the_exact_position(rig, point):
     uv = rig.project(p)[0]
     fix = locate_on_ray(rig, uv, rig.array.tdoa(p))
     assert np.linalg.norm(fix.position_m - p) < 1e-3
-    assert fix.residual_s < 1e-8
+    assert fix.residual_s < 1e-8 and fix.consistent
+    # TDOAs of the other sign (a pair written j - i) meet the ray nowhere: the least-bad
+    # point came out like any fix until it was flagged
+    bad = locate_on_ray(rig, uv, -rig.array.tdoa(p))
+    assert not bad.consistent and bad.residual_s > 6 * 2e-5
     # the covariance is elongated along the ray (ITDs fix range poorly, the pixel fixes bearing)
     w, V = np.linalg.eigh(fix.covariance)
     assert abs(V[:, -1] @ fix.direction) > 0.99

@@ -81,6 +81,11 @@ from hearsee.vision.camera import Camera, camera_pose
 #: the constant-velocity :class:`RayTracker` uses :data:`RAY_SIGMA_TDOA_S` instead
 FIX_SIGMA_TDOA_S = 2e-5
 
+#: A camera-ray fix whose RMS ITD residual exceeds this many ``sigma_tdoa_s`` (taken as at
+#: least 1 us) is flagged ``consistent=False`` (:class:`RayFix`); as the multi-pose solver's
+#: :data:`hearsee.audio.active.MAX_RESIDUAL_SIGMAS`.
+MAX_RAY_RESIDUAL_SIGMAS = 6.0
+
 #: TDOA noise (s) behind the camera-ray fixes' covariance for :class:`RayTracker`'s defaults,
 #: at any sample rate. Chosen on the seed-100 walks of ``bench/tracking.py`` part B (three-mic
 #: preset + camera 0.2 m aside, RT60 0.3 s, 20 dB; tracked median error): at 16 kHz, synthetic
@@ -116,6 +121,7 @@ __all__ = [
     "AudioVisualRegressor",
     "AudioVisualRig",
     "FIX_SIGMA_TDOA_S",
+    "MAX_RAY_RESIDUAL_SIGMAS",
     "RAY_COVARIANCE_SCALE",
     "RAY_SIGMA_TDOA_S",
     "RayFix",
@@ -235,6 +241,11 @@ class RayFix:
         Unit ray direction (array frame).
     alternatives : list of RayFix
         Other local minima along the ray that explain the ITDs almost as well.
+    consistent : bool
+        ``residual_s`` is at most :data:`MAX_RAY_RESIDUAL_SIGMAS` x the fix's
+        ``sigma_tdoa_s`` (at least 1 us of it): False when the ITDs meet the ray nowhere within
+        the search (TDOAs of the other sign, another source's, a reflection's), and the fix is
+        only the least-bad point, often at the search's end (until 2026-12-03 nothing said so).
     """
 
     position_m: NDArray
@@ -243,6 +254,7 @@ class RayFix:
     covariance: NDArray
     direction: NDArray
     alternatives: list[RayFix] = field(default_factory=list)
+    consistent: bool = True
 
 
 def ray_residuals(array: MicArray, origin: ArrayLike, direction: ArrayLike, s: ArrayLike,
@@ -442,7 +454,9 @@ def _refine_on_ray(rig: AudioVisualRig, o: NDArray, d: NDArray, z: NDArray,
             ds = float(np.clip(ds, -np.sqrt(span2) / sigma_px, np.sqrt(span2) / sigma_px))
             lat.append(s_hat * dd + ds * d)
         cov = cov + sigma_px**2 * sum(np.outer(j, j) for j in lat)
-    return RayFix(o + s_hat * d, s_hat, float(np.sqrt(np.mean(F**2))), cov, d)
+    rms = float(np.sqrt(np.mean(F**2)))
+    return RayFix(o + s_hat * d, s_hat, rms, cov, d,
+                  consistent=rms <= MAX_RAY_RESIDUAL_SIGMAS * max(sigma_tdoa_s, 1e-6))
 
 
 # ----------------------------------------------------------------- tracking along the rays
