@@ -168,6 +168,20 @@ def test_bad_inputs():
     mlp = PoseItdMLP(max_iter=5).fit(X, Y)
     with pytest.raises(EstimationError, match="finite TDOAs"):
         mlp.predict(np.full((1, 9), np.nan))
+    # scikit-learn's own ValueErrors / InvalidParameterError (second helper audit): too few
+    # samples for early stopping's validation set, settings it refuses, and the two it does
+    # not see (a zero TDOA scale: infinite inputs; a 2-vector reference: a broadcast error)
+    with pytest.raises(EstimationError, match="at least 20 samples, got 5"):
+        PoseItdMLP(max_iter=5).fit(X[:5], Y[:5])
+    for kw, needle in (({"tdoa_scale_s": 0.0}, "tdoa_scale_s"), ({"reference_m": (0, 0)},
+                                                                 "reference_m"),
+                       ({"hidden_layer_sizes": (0,)}, "settings: hidden_layer_sizes"),
+                       ({"alpha": -1.0}, "settings: The 'alpha'"),
+                       ({"max_iter": 0}, "settings: The 'max_iter'")):
+        with pytest.raises(ConfigError, match=needle):
+            PoseItdMLP(**{"max_iter": 5, **kw}).fit(X, Y)
+    with pytest.raises(EstimationError, match="got shape"):
+        mlp.predict(np.zeros((0, 9)))
     with pytest.raises(AudioInputError):
         align_head(lambda pose: np.zeros(2), ARR)
 

@@ -78,6 +78,7 @@ from hearsee.config import (
     check_rng,
     finite_number,
     is_real,
+    real_entries,
     same_file,
     whole_number,
 )
@@ -812,6 +813,11 @@ def make_pose_training_set(
     return X, Y
 
 
+#: The fewest training samples :meth:`PoseItdMLP.fit` takes: early stopping holds out a
+#: tenth of them for validation, and scikit-learn refused 5 ("validation set is too small").
+MIN_MLP_SAMPLES = 20
+
+
 class PoseItdMLP:
     """Learned mapping from TDOAs over K head poses to the source position (thesis 4.6,
     figs. 4.10-4.12), with the scikit-learn estimator contract.
@@ -864,7 +870,21 @@ class PoseItdMLP:
         if (X.ndim != 2 or Y.shape != (len(X), 3) or not np.all(np.isfinite(X))
                 or not np.all(np.isfinite(Y))):
             raise EstimationError("PoseItdMLP.fit needs finite X (n, n_features) and Y (n, 3)")
-        v = Y - np.asarray(self.reference_m, dtype=float)
+        # (the settings scikit-learn would refuse with its own ValueErrors, and the two it
+        # does not see: a zero scale made every TDOA infinite, a 2-vector reference a
+        # broadcast error)
+        if not (is_real(self.tdoa_scale_s) and self.tdoa_scale_s > 0):
+            raise ConfigError(f"PoseItdMLP: tdoa_scale_s must be a finite number of seconds "
+                              f"> 0, got {self.tdoa_scale_s!r:.40}")
+        ref = (np.asarray(self.reference_m, dtype=float) if real_entries(self.reference_m)
+               else None)
+        if ref is None or ref.shape != (3,) or not np.all(np.isfinite(ref)):
+            raise ConfigError(f"PoseItdMLP: reference_m must be one finite [x, y, z] in "
+                              f"metres, got {self.reference_m!r:.60}")
+        if len(X) < MIN_MLP_SAMPLES:  # (early stopping's validation set needs some)
+            raise EstimationError(f"PoseItdMLP.fit needs at least {MIN_MLP_SAMPLES} samples, "
+                                  f"got {len(X)}")
+        v = Y - ref
         r = np.linalg.norm(v, axis=1)
         if not np.all(r > 0):  # (direction and log-distance targets: scikit-learn's ValueError)
             raise EstimationError(f"PoseItdMLP.fit: {int(np.sum(~(r > 0)))} training positions "
@@ -878,7 +898,11 @@ class PoseItdMLP:
         # small dense layers: one BLAS thread is much faster than an oversubscribed pool
         with warnings.catch_warnings(), threadpool_limits(1):
             warnings.simplefilter("ignore", ConvergenceWarning)
-            self.mlp_.fit(X / self.tdoa_scale_s, (T - self.target_mean_) / self.target_std_)
+            try:
+                self.mlp_.fit(X / self.tdoa_scale_s, (T - self.target_mean_) / self.target_std_)
+            except (TypeError, ValueError) as exc:  # bad hidden_layer_sizes, alpha, max_iter
+                del self.mlp_
+                raise ConfigError(f"PoseItdMLP settings: {exc}") from None
         self.n_features_in_ = X.shape[1]
         return self
 
@@ -892,7 +916,7 @@ class PoseItdMLP:
 
             raise RegressorNotFittedError("PoseItdMLP is not fitted; call fit() first")
         X = np.atleast_2d(np.asarray(X, dtype=float))
-        if X.ndim != 2 or X.shape[1] != self.n_features_in_:
+        if X.ndim != 2 or X.shape[1] != self.n_features_in_ or len(X) == 0:
             raise EstimationError(
                 f"expected {self.n_features_in_} TDOAs per sample (K poses x pairs), "
                 f"got shape {X.shape}"
