@@ -606,3 +606,28 @@ def test_an_old_model_that_cannot_be_rebuilt_asks_for_a_refit():
     with pytest.raises(ManifoldInputError, match="older hearsee.*re-fit the model") as exc:
         old.transform(X[:3])
     assert "\n" not in str(exc.value)
+
+
+def test_bad_hyperparameters_unfitted_models_and_sparse_input_are_hearsee_errors():
+    """scikit-learn's InvalidParameterError, NotFittedError and a builtin TypeError (sparse X)
+    reached the user alone; each is now also hearsee's ManifoldInputError, keeping
+    scikit-learn's type for its tools."""
+    from scipy import sparse
+    from sklearn.exceptions import NotFittedError
+    from sklearn.utils._param_validation import InvalidParameterError
+
+    from hearsee.learn.nle import ClusteredNLE, ManifoldInputError, NeighborhoodLinearEmbedding
+
+    X = np.random.default_rng(0).normal(size=(60, 3))
+    for est in (NeighborhoodLinearEmbedding(n_neighbors=0), NeighborhoodLinearEmbedding(
+            shadow=float("nan")), ClusteredNLE(min_cluster_size=0)):
+        with pytest.raises(ManifoldInputError, match="parameter of") as info:
+            est.fit(X)
+        assert isinstance(info.value, InvalidParameterError)
+    for call in (NeighborhoodLinearEmbedding().transform, ClusteredNLE().predict):
+        with pytest.raises(ManifoldInputError, match="not fitted yet") as info:
+            call(X)
+        assert isinstance(info.value, NotFittedError)
+    with pytest.raises(ManifoldInputError, match="Sparse data") as info:
+        NeighborhoodLinearEmbedding().fit(sparse.csr_matrix(X))
+    assert isinstance(info.value, TypeError)

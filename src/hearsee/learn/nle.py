@@ -72,9 +72,10 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
 from sklearn.base import BaseEstimator, TransformerMixin
+from sklearn.exceptions import NotFittedError
 from sklearn.neighbors import NearestNeighbors
 from sklearn.utils import check_random_state
-from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils._param_validation import Interval, InvalidParameterError, StrOptions
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from hearsee.config import finite_number, whole_number
@@ -84,6 +85,9 @@ __all__ = [
     "ClusteredNLE",
     "DisconnectedGraphWarning",
     "ManifoldInputError",
+    "ManifoldInputTypeError",
+    "ManifoldNotFittedError",
+    "ManifoldParameterError",
     "NeighborhoodLinearEmbedding",
     "adaptive_neighbors",
     "make_head_pose_images",
@@ -121,6 +125,39 @@ class ManifoldInputError(HearseeError, ValueError):
     Derives from ``ValueError`` like scikit-learn's own input errors."""
 
 
+class ManifoldInputTypeError(ManifoldInputError, TypeError):
+    """X of a kind the learners do not take (a sparse matrix, an array of objects): hearsee's
+    ManifoldInputError and the TypeError scikit-learn raises (that alone before 2026-12-03)."""
+
+
+class ManifoldParameterError(ManifoldInputError, InvalidParameterError):
+    """A hyperparameter of :class:`NeighborhoodLinearEmbedding` / :class:`ClusteredNLE` out of
+    its range (``n_neighbors=0``, a NaN ``shadow``): hearsee's ManifoldInputError and
+    scikit-learn's ``InvalidParameterError`` at once (that alone, before 2026-12-03)."""
+
+
+class ManifoldNotFittedError(ManifoldInputError, NotFittedError):
+    """``transform`` / ``predict`` before ``fit``: hearsee's ManifoldInputError and
+    scikit-learn's ``NotFittedError`` at once (that alone, before 2026-12-03), as the
+    regressors' :class:`hearsee.errors.RegressorNotFittedError`."""
+
+
+def _check_params(est) -> None:
+    """``est._validate_params()`` with its errors as :class:`ManifoldParameterError`."""
+    try:
+        est._validate_params()
+    except InvalidParameterError as exc:
+        raise ManifoldParameterError(str(exc)) from None
+
+
+def _check_fitted(est, attribute: str) -> None:
+    """``check_is_fitted`` with its error as :class:`ManifoldNotFittedError`."""
+    try:
+        check_is_fitted(est, attribute)
+    except NotFittedError as exc:
+        raise ManifoldNotFittedError(str(exc)) from None
+
+
 class DisconnectedGraphWarning(UserWarning):
     """The neighbourhood graph falls apart: it has several connected components (a single
     embedding of all points is then not meaningful; use :class:`ClusteredNLE`), or groups of
@@ -139,6 +176,8 @@ def _validated(est, X, **kw) -> np.ndarray:
         return validate_data(est, X, dtype=np.float64, **kw)
     except ManifoldInputError:
         raise
+    except TypeError as exc:  # (a sparse matrix, an array of objects)
+        raise ManifoldInputTypeError(str(exc)) from None
     except ValueError as exc:
         raise ManifoldInputError(str(exc)) from None
 
@@ -629,7 +668,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
     # -- validation ---------------------------------------------------------------------------
 
     def _validate_fit_input(self, X) -> np.ndarray:
-        self._validate_params()
+        _check_params(self)
         if self.n_neighbors <= self.n_components:
             raise ManifoldInputError(
                 f"n_neighbors={self.n_neighbors} must be > n_components={self.n_components}: a "
@@ -857,7 +896,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         points (the same shadow rule and weights as in fit) and apply the weights to the training
         embedding, ``y = sum_j w_j y_j`` (LLE's out-of-sample map, Saul & Roweis 2003, sec. 6.1).
         """
-        check_is_fitted(self, "embedding_")
+        _check_fitted(self, "embedding_")
         self._restore_fitted_state()
         X = self._centred(_validated(self, X, reset=False))
         ind, W, mask = self._reconstruct(X, self.training_data_, self.nbrs_)
@@ -1120,7 +1159,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
 
     def predict(self, X) -> np.ndarray:
         """Cluster of new points: that of their nearest training point."""
-        check_is_fitted(self, "labels_")
+        _check_fitted(self, "labels_")
         X = self._centred(_validated(self, X, reset=False))
         _, ind = self.nbrs_.kneighbors(X, n_neighbors=1)
         return self.labels_[ind[:, 0]]
@@ -1137,7 +1176,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         places and shadowed the cluster's own points, leaving points near another cluster
         (a sparse sheet beside a dense one) with fewer or other neighbours than fit gives them.
         """
-        check_is_fitted(self, "embedding_")
+        _check_fitted(self, "embedding_")
         self._restore_fitted_state()
         X = self._centred(_validated(self, X, reset=False))
         _, near = self.nbrs_.kneighbors(X, n_neighbors=1)
