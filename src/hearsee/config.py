@@ -302,6 +302,17 @@ def save_yaml(data: Mapping[str, Any], path: str | Path) -> None:
     write_file(path, yaml.dump(to_plain(dict(data)), Dumper=YamlDumper, sort_keys=False))
 
 
+def name_text(value: Any, where: str) -> str:
+    """A file's ``name:`` field as text: a string, or a number written as one (``name: 7``);
+    ConfigError naming ``where`` for a list, a mapping or a bool (printed as the name until
+    2026-12-03: "hearsee localize ([1, 2], phat)"). The one rule of array YAMLs and
+    scenarios."""
+    if isinstance(value, bool) or not isinstance(value, str | int | float):
+        raise ConfigError(f"{where}: name must be text, got {type(value).__name__} "
+                          f"{value!r:.40}")
+    return str(value)
+
+
 def check_keys(data: Mapping[str, Any], allowed: Iterable[str], where: str) -> None:
     """Raise ConfigError naming the first key of ``data`` not in ``allowed``."""
     allowed = list(allowed)

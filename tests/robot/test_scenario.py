@@ -1,3 +1,5 @@
+import re
+
 import numpy as np
 import pytest
 import yaml
@@ -431,3 +433,15 @@ def test_speaking_must_be_pairs_of_numbers(speaking):
                                           r"\[\[t0, t1\], \.\.\.\] in seconds"):
         scenario_from_dict({"duration_s": 2.0, "objects": [],
                             "people": [{"path_m": [[1, 1]], "speaking": speaking}]})
+
+
+@pytest.mark.parametrize("where, data", [
+    ("scenario", {"name": [1, 2]}),
+    ("scenario.people[0]", {"people": [{"name": {"a": 1}, "path_m": [[1, 1]]}]}),
+])
+def test_names_that_are_no_text_are_refused(where, data):
+    """A list or mapping was turned into the text "[1, 2]" (config.name_text, the rule of
+    array YAMLs too); a number stays its text."""
+    with pytest.raises(ConfigError, match="^" + re.escape(where) + ": name must be text"):
+        scenario_from_dict(data)
+    assert scenario_from_dict({"name": 7}).name == "7"

@@ -34,6 +34,7 @@ from hearsee.config import (
     finite_number,
     is_real,
     load_yaml,
+    name_text,
     names_a_file,
     real_entries,
     require,
@@ -174,10 +175,7 @@ class MicArray:
         if mask is not None and not isinstance(mask, Mapping):
             raise ConfigError(f"{where}: mask must be a mapping")
         name = data.get("name")  # (an empty "name:" named the array "None")
-        if name is not None and (isinstance(name, bool) or not isinstance(name, str | int | float)):
-            # (a list or mapping was printed as the array's name: "hearsee localize ([1, 2], ...")
-            raise ConfigError(f"{where}: name must be text, got {type(name).__name__} {name!r:.40}")
-        name = str(name) if name is not None else (
+        name = name_text(name, where) if name is not None else (
             Path(where).stem if where != "array" else "custom")
         try:
             arr = cls(mics, float(c), name, mask)

@@ -65,6 +65,7 @@ from hearsee.config import (
     finite_number,
     is_real,
     load_yaml,
+    name_text,
     names_a_file,
     number,
     whole_number,
@@ -303,7 +304,7 @@ def _parse_person(p: Any, k: int, pw: str, size: np.ndarray, robot_xy: np.ndarra
     if facing not in ("toward-robot", "path"):
         raise ConfigError(f"{pw}.facing: expected 'toward-robot' or 'path'")
     height = _under_ceiling(number(p, "height_m", 1.72, pw, 1.0, 2.2), size, f"{pw}.height_m")
-    return PersonSpec(name=str(p.get("name", f"person{k}")), path_m=path, height_m=height,
+    return PersonSpec(name=name_text(p.get("name", f"person{k}"), pw), path_m=path, height_m=height,
                       voice=voice, speaking=spk, facing=facing)
 
 
@@ -461,7 +462,7 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
     name = data.get("name", "custom")
     seed = number(data, "seed", 0, where, 0, MAX_SEED, integer=True)
     return Scenario(
-        name=str(name), seed=int(seed), duration_s=duration,
+        name=name_text(name, where), seed=int(seed), duration_s=duration,
         fs=int(number(audio, "fs", 16000, f"{where}.audio", 8000, 96000, integer=True)),
         snr_db=number(audio, "snr_db", 20.0, f"{where}.audio", -20.0, 80.0),
         frame_ms=_frame_ms(audio, f"{where}.audio"),
