@@ -219,7 +219,11 @@ def test_thermal_agc_refuses_what_it_cannot_map():
                                       ({"n_people": (3, 1)}, "n_people"),
                                       ({"n_human_like": (-1, 1)}, "n_human_like"),
                                       ({"n_furniture": (2.5, 4)}, "n_furniture"),
-                                      ({"hfov_deg": 180.0}, "hfov_deg")])
+                                      ({"hfov_deg": 180.0}, "hfov_deg"),
+                                      # (these passed here and failed in render_scene)
+                                      ({"camera_height_m": float("nan")}, "camera_height_m"),
+                                      ({"camera_height_m": -1.0}, "camera_height_m"),
+                                      ({"camera_height_m": 5.0}, "camera_height_m")])
 def test_random_spec_bad_arguments(kw, name):
     """range_m (-1, 3) silently put people behind the camera (z < 0, never in view); swapped
     ranges or counts let numpy's ValueError ('low >= high') escape."""

@@ -1021,6 +1021,7 @@ def random_spec(seed: int, *, n_people: tuple[int, int] = (1, 4),
     Counts are inclusive ranges. People and human-like objects stand ``range_m`` metres away
     (forward distance) inside the camera's horizontal field of view ``hfov_deg``; furniture,
     a radiator and sometimes a warm appliance stand along the walls or in the room.
+    ``camera_height_m`` is a finite number of metres in (0, 2.5] (ConfigError).
     """
     for name, value in (("n_people", n_people), ("n_human_like", n_human_like),
                         ("n_furniture", n_furniture)):
@@ -1035,6 +1036,9 @@ def random_spec(seed: int, *, n_people: tuple[int, int] = (1, 4),
                           f"{range_m}")
     if not 0 < finite_number("hfov_deg", hfov_deg) < 180:
         raise ConfigError(f"hfov_deg must be in (0, 180) degrees, got {hfov_deg}")
+    # (NaN, -1 or 5 m passed here and failed later, in render_scene; below the lowest
+    # ceiling drawn, 2.6 m, less a head's room)
+    camera_height_m = finite_number("camera_height_m", camera_height_m, 0.0, 2.5, lo_open=True)
     rng = np.random.default_rng(whole_number("seed", seed, 0))
     depth = max(range_m[1] + rng.uniform(1.0, 2.5), 4.0)
     wl, wr = rng.uniform(2.8, 4.5), rng.uniform(2.8, 4.5)
