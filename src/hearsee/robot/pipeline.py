@@ -159,9 +159,11 @@ class _Body:
         return R_cam_from_room, self.to_room(c_b)
 
     def bearing_deg(self, p_w: NDArray) -> float:
-        """Azimuth (robot frame, degrees) of a room point seen from the pivot."""
+        """Azimuth (robot frame, degrees, in (-180, 180]) of a room point seen from the pivot
+        (arctan2 of a -0.0 gave -180 in some runs, 180 in others: the logs' truth)."""
         d = (np.asarray(p_w) - self.pivot_w) @ self.R_wb
-        return float(np.degrees(np.arctan2(d[1], d[0])))
+        a = float(np.degrees(np.arctan2(d[1], d[0])))
+        return 180.0 if a == -180.0 else a
 
 
 def sensor_reach_m(baseline_m: float) -> float:
