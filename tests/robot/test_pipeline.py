@@ -872,16 +872,18 @@ def test_time_to_verify_counts_from_the_speech_onset():
 
 
 def test_the_truth_bearing_behind_the_robot_is_180_not_minus_180():
-    """A point straight behind the robot whose y comes out -0.0: arctan2 gave -180, and the
-    logs' truth azimuth read -180 in one run, 180 in another; the convention is (-180, 180]."""
+    """A point straight behind the robot, a rounding error to its right: arctan2 gave -180,
+    and the logs' truth azimuth read -180 in one run, 180 in another; the convention is
+    (-180, 180]."""
     from hearsee.audio.arrays import load_array
     from hearsee.robot.pipeline import _Body
     from hearsee.robot.scenario import default_scenario
 
     body = _Body(default_scenario(), load_array("three-mic"))
-    p_b = np.array([-2.0, -0.0, body.pivot_b[2]])  # behind, on the robot's x axis
     body.R_wb = np.eye(3)  # (exact: the scenario's heading rotation carries rounding)
-    body.pivot_w = body.pivot_b.copy()
-    assert np.degrees(np.arctan2(-0.0, -2.0)) == -180.0
+    body.pivot_w = np.zeros(3)
+    # behind the robot, a rounding error to its right: arctan2 rounds to -pi exactly
+    p_b = np.array([-2.0, -1e-18, 0.0])
+    assert np.degrees(np.arctan2(-1e-18, -2.0)) == -180.0
     assert body.bearing_deg(p_b) == 180.0
     assert body.bearing_deg(np.array([2.0, 1.0, 0.0])) == pytest.approx(26.565, abs=1e-3)

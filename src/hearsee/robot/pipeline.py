@@ -160,7 +160,7 @@ class _Body:
 
     def bearing_deg(self, p_w: NDArray) -> float:
         """Azimuth (robot frame, degrees, in (-180, 180]) of a room point seen from the pivot
-        (arctan2 of a -0.0 gave -180 in some runs, 180 in others: the logs' truth)."""
+        (arctan2 rounded to -pi gave -180 in some runs, 180 in others: the logs' truth)."""
         d = (np.asarray(p_w) - self.pivot_w) @ self.R_wb
         a = float(np.degrees(np.arctan2(d[1], d[0])))
         return 180.0 if a == -180.0 else a
