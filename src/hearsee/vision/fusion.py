@@ -63,7 +63,9 @@ DEFAULT_STEREO_OPTIONS: dict[str, Any] = {"num_disparities": 64, "block_size": 3
 class Human:
     """One detection (accepted or rejected).
 
-    ``box`` [x, y, w, h] in rectified left-image pixels (``DetectionResult.frame.left``);
+    ``box`` [x, y, w, h] in rectified left-image pixels (``DetectionResult.frame.left``),
+    down to the floor under the body (:attr:`~hearsee.vision.humans.BodySegment.body_box`;
+    until 2026-12-03 it stopped 0.12 m above the feet);
     ``position_m`` torso centre in the left camera's own optical frame (metres); ``score`` the
     head-shoulder score; ``thermal_support`` in [0, 1] (None without a thermal image, NaN when
     the thermal camera does not see the candidate); ``reason`` why it was rejected (empty when
