@@ -873,9 +873,8 @@ class PoseItdMLP:
         # (the settings scikit-learn would refuse with its own ValueErrors, and the two it
         # does not see: a zero scale made every TDOA infinite, a 2-vector reference a
         # broadcast error)
-        if not (is_real(self.tdoa_scale_s) and self.tdoa_scale_s > 0):
-            raise ConfigError(f"PoseItdMLP: tdoa_scale_s must be a finite number of seconds "
-                              f"> 0, got {self.tdoa_scale_s!r:.40}")
+        finite_number("PoseItdMLP: tdoa_scale_s (seconds)", self.tdoa_scale_s, 0.0,
+                      lo_open=True)
         ref = (np.asarray(self.reference_m, dtype=float) if real_entries(self.reference_m)
                else None)
         if ref is None or ref.shape != (3,) or not np.all(np.isfinite(ref)):

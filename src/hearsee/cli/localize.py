@@ -201,7 +201,6 @@ def localize_cmd(
             ch, i, v, ratio = spike
             err_console.print(
                 f"hearsee: warning: {recording}: no frame holds a detectable source; sample {i} of "
-                f"channel {ch} "
-                f"({i / fs:.3f} s) is {v:.3g}, {ratio:.2g} times the median |sample|, beyond "
-                "any integer PCM range (a corrupt sample? the analysis scales the recording to "
-                "its loudest sample)", highlight=False)
+                f"channel {ch} ({i / fs:.3f} s) is {v:.3g}, {ratio:.2g} times the median "
+                "|sample|, beyond any integer PCM range (a corrupt sample? the analysis "
+                "scales the recording to its loudest sample)", highlight=False)

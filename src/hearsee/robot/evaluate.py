@@ -61,7 +61,7 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     one camera frame, summed over the runs (each object of a run counted once);
     ``object_detections_accepted_as_person``: their accepted detections (object x frame).
     ConfigError unless ``runs`` is a list of mappings (None was a builtin TypeError)."""
-    if isinstance(runs, str | bytes | dict) or not isinstance(runs, Sequence) or \
+    if isinstance(runs, str | bytes) or not isinstance(runs, Sequence) or \
             not all(isinstance(r, dict) for r in runs):
         raise ConfigError(f"runs must be a list of run results (dicts, as evaluate gives), got "
                           f"{type(runs).__name__}")

@@ -870,8 +870,9 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
                         ("thermal_files", thermal_files)):
         # (a glob pattern was taken as a list of its characters: "12 left images but 13
         # right images", or "c: image file not found"; None was a builtin TypeError)
-        if (files is None and what != "thermal_files") or isinstance(files, str | bytes) \
-                or (files is not None and not isinstance(files, Sequence | np.ndarray)):
+        if files is None and what == "thermal_files":  # (optional)
+            continue
+        if isinstance(files, str | bytes) or not isinstance(files, Sequence | np.ndarray):
             raise CalibrationError(
                 f"{what} must be a list of image paths, got {files!r:.60} (for a glob pattern "
                 "use hearsee.vision.io.glob_images)")
