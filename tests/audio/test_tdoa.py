@@ -496,6 +496,47 @@ def test_band_vad_learns_the_noise_of_a_voice_at_0_db(three):
     np.testing.assert_allclose(many.tdoa_s, one.tdoa_s, atol=1e-4 / FS)
 
 
+@pytest.mark.parametrize("band_vad", [True, False])
+def test_long_recordings_transform_each_frame_once(three, monkeypatch, band_vad):
+    """A recording of more frames than ``chunk_frames`` keeps its band spectra (within
+    SPECTRA_CACHE_BYTES): the activity test, the noise spectrum and the frame loop share one
+    transform per frame, where each had transformed them again -- with results identical to
+    the re-transformed ones (SPECTRA_CACHE_BYTES = 0), bit for bit."""
+    import scipy.fft as sfft
+
+    from hearsee.audio import tdoa as tdoa_mod
+    from hearsee.audio.signals import synthetic_voice
+
+    az = np.radians(130.0)
+    src = 2.0 * np.array([np.cos(az), np.sin(az), 0.0])
+    x = simulate_free_field(synthetic_voice("male", 3.0, FS, rng=4), FS, three, src,
+                            snr_db=0, rng=5)
+    kw = {"method": "scot", "band_hz": (300.0, 3500.0), "chunk_frames": 16,
+          "band_vad": band_vad, "reverb_method": "phat"}
+    rows = []
+    rfft = sfft.rfft
+
+    def counted(a, *args, **kwargs):
+        rows.append(int(np.prod(np.shape(a)[:-1])))
+        return rfft(a, *args, **kwargs)
+
+    monkeypatch.setattr(tdoa_mod.sfft, "rfft", counted)
+    cached = estimate_tdoas(x, FS, three, **kw)
+    n_cached = sum(rows)
+    rows.clear()
+    monkeypatch.setattr(tdoa_mod, "SPECTRA_CACHE_BYTES", 0)
+    again = estimate_tdoas(x, FS, three, **kw)
+    n_frames = len(cached.t)
+    assert n_frames > 3 * kw["chunk_frames"]
+    assert n_cached == 3 * n_frames  # three channels, each frame once
+    assert sum(rows) > n_cached  # (the halo of SCOT's statistics alone re-transforms some)
+    for a, b in [(cached.tdoa_s, again.tdoa_s), (cached.confidence, again.confidence),
+                 (cached.summary_tdoa_s, again.summary_tdoa_s)]:
+        assert np.array_equal(a, b, equal_nan=True)
+    assert np.isfinite(cached.summary_tdoa_s).all()
+    np.testing.assert_allclose(cached.summary_tdoa_s, three.tdoa(src), atol=0.3 / FS)
+
+
 def test_band_vad_leaves_a_steady_source_alone(three):
     """White noise from a fixed direction: its band energy is as stationary as its broadband
     energy, so the band test decides nothing either and the estimates are the plain ones."""

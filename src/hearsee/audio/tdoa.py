@@ -132,6 +132,11 @@ _MIN_SUMMARY_FRAMES = 3
 #: ``summary_upsample`` x the frame's FFT length (10**6 asked for 8 GiB with 64 ms frames);
 #: beyond a few times the Newton refinement that follows gains nothing.
 MAX_SUMMARY_UPSAMPLE = 64
+#: Bytes of band spectra (complex64, with their float32 power) of a recording's frames that
+#: :func:`estimate_tdoas` keeps, so that its activity test, noise spectrum and frame loop share
+#: one transform: ~7 minutes of three channels at 16 kHz with a 300-3500 Hz band. Longer
+#: recordings are transformed again per ``chunk_frames`` block (memory stays bounded).
+SPECTRA_CACHE_BYTES = 64 * 2**20
 #: ``coherence_gain`` above which a recording without a noise reference counts as reverberant
 #: (``reverb_method``). White noise 1-3 m from the two- and three-mic presets (2 s, 64 ms
 #: frames, 300-7500 Hz, seed 901, 8 per cell, widest pair): free field 0.87-1.00 at SNR 0-20
@@ -835,15 +840,42 @@ def _band_activity(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int,
     sensor noise outside a voice's band (e.g. 3.5-8 kHz at 16 kHz) can hide the syllables that
     the band's energy still shows, and without inactive frames there is no noise spectrum for
     the SNR weighting. Returns (active, the band spectra (n_ch, F, bins) and their power
-    ``|X|^2`` when all frames fit in one ``chunk`` -- the frame loop then needs no second
-    transform -- else None, None)."""
+    ``|X|^2`` when they fit :data:`SPECTRA_CACHE_BYTES` -- the noise spectrum and the frame
+    loop then need no second transform -- else None, None). Transformed ``chunk`` frames at a
+    time."""
+    keep = _spectra_fit(frames.shape[0], frames.shape[1], k1 - k0)
     e = np.empty(frames.shape[1])
+    parts = []
     for s0 in range(0, frames.shape[1], chunk):
         X, power = _spectra_power(frames[:, s0:s0 + chunk, :], win, nfft, k0, k1)
         e[s0:s0 + chunk] = np.sum(power, axis=(0, 2))
+        if keep:
+            parts.append((X, power))
     band, decided = _energy_vad(e, vad_db)
-    whole = frames.shape[1] <= chunk
-    return (active & band if decided else active), *((X, power) if whole else (None, None))
+    return (active & band if decided else active), *(_joined(parts) if keep else (None, None))
+
+
+def _band_spectra(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int, chunk: int
+                  ) -> tuple[NDArray, NDArray]:
+    """:func:`_spectra_power` of every frame of ``frames`` (n_ch, F, L), transformed ``chunk``
+    frames at a time (the full spectra of a long recording would not fit where its band
+    does)."""
+    return _joined([_spectra_power(frames[:, s0:s0 + chunk, :], win, nfft, k0, k1)
+                    for s0 in range(0, frames.shape[1], chunk)])
+
+
+def _joined(parts: list[tuple[NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
+    """Chunks of (spectra, power), each (n_ch, F_chunk, bins), joined along the frames."""
+    if len(parts) == 1:
+        return parts[0]
+    return (np.concatenate([p[0] for p in parts], axis=1),
+            np.concatenate([p[1] for p in parts], axis=1))
+
+
+def _spectra_fit(n_ch: int, n_frames: int, n_bins: int) -> bool:
+    """Whether the band spectra of ``n_frames`` frames of ``n_ch`` channels (complex64 and
+    their float32 power, 12 bytes per bin) fit :data:`SPECTRA_CACHE_BYTES`."""
+    return n_ch * n_frames * n_bins * 12 <= SPECTRA_CACHE_BYTES
 
 
 @functools.lru_cache(maxsize=32)
@@ -1678,12 +1710,15 @@ def estimate_tdoas(
     k0, k1 = int(bins[0]), int(bins[-1]) + 1  # the band is one contiguous run of bins
     band_bins = np.arange(k0, k1)
     nb = k1 - k0
-    X_all = power_all = None  # the band spectra of every frame when they fit in one chunk
+    # the band spectra of every frame, when they fit SPECTRA_CACHE_BYTES: one transform for
+    # the band activity, the noise spectrum and the frame loop
+    X_all = power_all = None
+    chunk = max(int(chunk_frames), 1)
     if band_vad and (k0 > 1 or k1 < n_bins - 1) and not decided:
         active, X_all, power_all = _band_activity(frames, win, nfft, k0, k1, active, vad_db,
-                                                  max(int(chunk_frames), 1))
-    elif n_frames <= max(int(chunk_frames), 1):  # one transform for the noise and the frames
-        X_all, power_all = _spectra_power(frames, win, nfft, k0, k1)
+                                                  chunk)
+    elif _spectra_fit(arr.n_mics, n_frames, k1 - k0):
+        X_all, power_all = _band_spectra(frames, win, nfft, k0, k1, chunk)
     if frame_noise_psd is None:
         noise_psd = (_noise_spectrum(frames, active, win, nfft, k0, k1, power_all)
                      if snr_weight and not given else None)
@@ -1726,13 +1761,12 @@ def estimate_tdoas(
     acc2_active = np.zeros((n_pairs, nb), dtype=complex)
     s_cross = np.zeros((n_pairs, nb), dtype=complex)
     s_auto = np.zeros((arr.n_mics, nb))
-    chunk = max(int(chunk_frames), 1)
     for s0 in range(0, n_frames, chunk):
         s1 = min(s0 + chunk, n_frames)
         h0, h1 = max(s0 - halo, 0), min(s1 + halo, n_frames)
-        # (one chunk: h0, h1 = 0, n_frames) -> (F', n_ch, band bins)
+        # -> (F', n_ch, band bins)
         X, power = (np.moveaxis(a, 0, 1) for a in (
-            (X_all, power_all) if X_all is not None
+            (X_all[:, h0:h1], power_all[:, h0:h1]) if X_all is not None
             else _spectra_power(frames[:, h0:h1, :], win, nfft, k0, k1)))
         G = X[:, I, :] * np.conj(X[:, J, :])  # (F', P, band bins)
         stats = (_spectral_densities(power, G, I, J, smooth_frames, causal_smoothing)
