@@ -13,9 +13,11 @@ from hearsee.sim.scenes import (
     SceneSpec,
     default_rig,
     generate_scene,
+    pitched_view,
     random_spec,
     render_scene,
     thermal_to_8bit,
+    view_pitch_deg,
     write_scene,
 )
 from hearsee.vision.camera import Camera, StereoRig, load_rig
@@ -44,6 +46,32 @@ def test_shapes_types_and_rig(scene):
     assert scene.thermal_8bit.dtype == np.uint8
     assert scene.rig.is_rectified and scene.rig.thermal is not None
     assert scene.rig.info["camera_height_m"] == pytest.approx(1.4)
+    assert scene.rig.info["camera_pitch_deg"] == 0.0
+
+
+def test_rendered_rig_carries_the_view_pitch(tmp_path):
+    """A scene rendered with a pitched view says so in its rig's info (and so in the
+    calib.yaml that write_scene writes, which `hearsee detect` reads as its floor prior): it
+    had carried only the height, so the detector took a camera looking down 20 deg as level.
+    A rolled view leaves the field out (a pitch cannot describe it), dropping a stale one."""
+    spec = SceneSpec(entities=[Entity("person", 0.0, 3.0, 0.0, 1.75)], width_left_m=3.0,
+                     width_right_m=3.0, depth_m=7.0, seed=5)
+    stale = RIG.__class__(RIG.left, RIG.right, RIG.R, RIG.T, RIG.thermal, RIG.R_thermal,
+                          RIG.T_thermal, RIG.rms_px, {**RIG.info, "camera_pitch_deg": 7.0})
+    down = render_scene(spec, stale, view=pitched_view(-20.0))
+    assert down.rig.info["camera_pitch_deg"] == pytest.approx(-20.0, abs=1e-9)
+    assert load_rig(write_scene(down, tmp_path / "s") / "calib.yaml").camera_pitch_deg \
+        == pytest.approx(-20.0, abs=1e-9)
+    # pitch then yaw about the vertical: still no roll, same pitch
+    R, C = pitched_view(10.0)
+    a = np.radians(25.0)
+    yaw = np.array([[np.cos(a), 0.0, -np.sin(a)], [0.0, 1.0, 0.0], [np.sin(a), 0.0, np.cos(a)]])
+    assert view_pitch_deg(R @ yaw) == pytest.approx(10.0, abs=1e-9)
+    roll = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0, 0, 1.0]])
+    assert view_pitch_deg(roll @ R) is None
+    rolled = render_scene(spec, stale, view=(roll, C))
+    assert "camera_pitch_deg" not in rolled.rig.info
+    assert view_pitch_deg(pitched_view(80.0)[0]) == pytest.approx(80.0)
 
 
 def test_deterministic_from_seed():

@@ -180,20 +180,23 @@ def pitched_up_scene():
                                Entity("mannequin", 0.9, 4.0, 0.0, 1.75)],
                      width_left_m=3.0, width_right_m=3.0, depth_m=8.0, seed=11)
     sc = render_scene(spec, rig, view=pitched_view(15.0))
-    return sc, dataclasses.replace(sc.rig, info={**sc.rig.info, "camera_pitch_deg": 15.0})
+    return sc, dataclasses.replace(sc.rig, info={**sc.rig.info, "camera_pitch_deg": 0.0})
 
 
 def test_detect_humans_with_a_pitched_camera(pitched_up_scene):
     """Taken as level (the only choice until 2026-12-03), the camera pitched up 15 deg found
     nobody: the level fallback floor put the person's top 0.7-0.9 m too low. With the pitch
-    (an argument, or the calibration's info.camera_pitch_deg) the person is found where they
-    stand and the mannequin is still rejected by its thermal image."""
-    sc, rig15 = pitched_up_scene
+    (an argument, or the calibration's info.camera_pitch_deg, which the rendered scene's rig
+    now carries) the person is found where they stand and the mannequin is still rejected by
+    its thermal image."""
+    sc, rig_level = pitched_up_scene
     person, mannequin = sc.objects
-    level = detect_humans(sc.left, sc.right, sc.rig, sc.thermal_c)
+    assert sc.rig.info["camera_pitch_deg"] == pytest.approx(15.0, abs=1e-9)
+    level = detect_humans(sc.left, sc.right, rig_level, sc.thermal_c)
     assert level.humans == [] and level.info["floor"]["camera_pitch_deg"] == 0.0
-    for det in (detect_humans(sc.left, sc.right, sc.rig, sc.thermal_c, camera_pitch_deg=15.0),
-                detect_humans(sc.left, sc.right, rig15, sc.thermal_c)):
+    for det in (detect_humans(sc.left, sc.right, rig_level, sc.thermal_c,
+                              camera_pitch_deg=15.0),
+                detect_humans(sc.left, sc.right, sc.rig, sc.thermal_c)):
         assert det.info["floor"]["camera_pitch_deg"] == pytest.approx(15.0, abs=1.0)
         assert len(det.humans) == 1
         assert np.linalg.norm(det.humans[0].position_m - person.position_m) < 0.15

@@ -44,7 +44,7 @@ from typing import Any
 
 import cv2
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
 from hearsee.config import as_path, finite_number, is_real, whole_number
@@ -64,6 +64,7 @@ __all__ = [
     "random_spec",
     "render_scene",
     "thermal_to_8bit",
+    "view_pitch_deg",
     "write_scene",
 ]
 
@@ -144,12 +145,41 @@ def _pixel_size(name: str, size: Any) -> tuple[int, int]:
     return whole_number(f"{name}[0]", size[0]), whole_number(f"{name}[1]", size[1])
 
 
-def _rig_at_height(rig: StereoRig, camera_height_m: float) -> StereoRig:
+def _rig_at_height(rig: StereoRig, camera_height_m: float,
+                   R_view: NDArray | None = None) -> StereoRig:
     """``rig`` with ``info["camera_height_m"]`` = ``camera_height_m`` (metres above the floor;
-    the rest of its info kept)."""
+    the rest of its info kept) and, given the left camera's orientation ``R_view`` (scene frame,
+    y down, into the optical frame), ``info["camera_pitch_deg"]`` = its optical axis's pitch
+    above the horizontal (degrees, + = looking up; :func:`view_pitch_deg`), dropped when the
+    view rolls the camera or pitches it beyond what that field can hold."""
+    info = {**rig.info, "camera_height_m": float(camera_height_m)}
+    if R_view is not None:
+        pitch = view_pitch_deg(R_view)
+        if pitch is None:
+            info.pop("camera_pitch_deg", None)
+        else:
+            info["camera_pitch_deg"] = pitch
     return StereoRig(rig.left, rig.right, rig.R, rig.T, rig.thermal, rig.R_thermal,
-                     rig.T_thermal, rig.rms_px,
-                     {**rig.info, "camera_height_m": float(camera_height_m)})
+                     rig.T_thermal, rig.rms_px, info)
+
+
+def view_pitch_deg(R: ArrayLike) -> float | None:
+    """The pitch (degrees above the horizontal, + = looking up) of a camera whose rotation
+    ``R`` takes scene-frame vectors (x right, y down, z forward) into its optical frame -- the
+    ``camera_pitch_deg`` of :func:`render_scene`'s rig info. None when the camera is rolled
+    (its x axis leaves the horizontal plane by more than 1e-6, which a pitch alone cannot
+    describe) or pitched beyond :data:`hearsee.vision.humans.MAX_CAMERA_PITCH_DEG`.
+
+    >>> view_pitch_deg(pitched_view(15.0)[0])
+    15.0
+    """
+    from hearsee.vision.humans import MAX_CAMERA_PITCH_DEG
+
+    R = np.asarray(R, dtype=float)
+    if abs(R[0, 1]) > 1e-6:  # the optical x axis in the scene frame is R's first row
+        return None
+    pitch = float(np.degrees(np.arcsin(np.clip(-R[2, 1], -1.0, 1.0))))  # axis: the third row
+    return round(pitch, 9) + 0.0 if abs(pitch) <= MAX_CAMERA_PITCH_DEG else None  # (no -0.0)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -905,7 +935,10 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     The returned scene's ``rig`` is ``rig`` with ``info["camera_height_m"]`` the height of the
     left camera above the floor that rendered it: ``spec.camera_height_m - C_y`` metres (the
     scene frame's y points down), which the scene's ``truth()`` and :func:`write_scene`'s
-    ``calib.yaml`` report too.
+    ``calib.yaml`` report too; and ``info["camera_pitch_deg"]`` the pitch of its view
+    (:func:`view_pitch_deg`; 0 without a ``view``), which the detector takes as its floor
+    prior -- a pitched scene's rig had said nothing of it, so its own detection assumed a
+    level camera.
     """
     _check_room(spec)
     # (NaN made both images black without a word, -1 let numpy's ValueError escape)
@@ -994,7 +1027,7 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
                                    trunc, float(_rendered_yaw_deg(e)), float(e.height_m), n))
     height_m = float(spec.camera_height_m - Cv[1])  # (y down: a camera raised has C_y < 0)
     return Scene(left, right, disparity, labels, thermal_c, thermal_to_8bit(thermal_c),
-                 _rig_at_height(rig, height_m), objects, spec, height_m)
+                 _rig_at_height(rig, height_m, Rv), objects, spec, height_m)
 
 
 def _free(x: float, z: float, placed: list[tuple[float, float, float]], r: float) -> bool:
