@@ -1588,11 +1588,14 @@ def estimate_tdoas(
         0.49; two-mic anechoic ARCTIC 2.46 -> 0.70) and rose in 4 (two-mic RT60 0.6 s female
         voice 21.1 -> 25.7 deg); conditions at or below the best pyroomacoustics method 36 -> 41
         of 72 (the benchmark's own seed 0, run afterwards: 41 -> 45). A steady source's band
-        energy is as stationary as its broadband energy, so it is left as before. Recordings of
-        at most ``chunk_frames`` frames reuse the band spectra (no second transform).
+        energy is as stationary as its broadband energy, so it is left as before. The frame
+        loop reuses the band spectra (no second transform) within
+        :data:`SPECTRA_CACHE_BYTES`.
     chunk_frames : int
-        Frames processed per vectorised block (bounds memory); ``progress(n)`` is called after
-        each block with the number of frames done.
+        Frames processed per vectorised block (bounds the memory of the transforms and
+        correlations; the band spectra of every frame are kept up to
+        :data:`SPECTRA_CACHE_BYTES`); ``progress(n)`` is called after each block with the
+        number of frames done.
     active : array (n_frames,) of bool, optional
         The frames' activity decided by the caller: replaces the energy and band activity
         tests over ``x`` (``vad_db``, ``band_vad``), and the noise spectrum of ``snr_weight``
