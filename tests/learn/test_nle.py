@@ -34,11 +34,11 @@ def _expected_failed_checks(estimator):
     }
 
 
-# n_neighbors=5: scikit-learn's checks fit data sets of 10 samples
+# n_neighbors=5 and min_cluster_size=5: scikit-learn's checks fit data sets of 10 samples
 @parametrize_with_checks(
     [
         NeighborhoodLinearEmbedding(n_neighbors=5, random_state=0),
-        ClusteredNLE(n_neighbors=5, random_state=0),
+        ClusteredNLE(n_neighbors=5, min_cluster_size=5, random_state=0),
     ],
     expected_failed_checks=_expected_failed_checks,
 )
@@ -228,6 +228,20 @@ def test_too_many_neighbours_is_rejected():
     with pytest.raises(ManifoldInputError, match="n_neighbors=30 must be smaller") as exc:
         NeighborhoodLinearEmbedding(n_neighbors=30).fit(X)
     assert isinstance(exc.value, ValueError) and isinstance(exc.value, HearseeError)
+
+
+def test_a_minimum_cluster_size_above_the_sample_count_is_rejected():
+    """min_cluster_size > n_samples can never be met: every point became one cluster, without
+    a word. Now the error n_neighbors >= n_samples gets; n_samples itself is fine."""
+    X, _ = make_swiss_roll(30, random_state=0)
+    with pytest.raises(ManifoldInputError, match=r"^min_cluster_size=31 must not exceed the "
+                                                 r"number of samples \(n_samples = 30\)") as exc:
+        ClusteredNLE(n_neighbors=6, min_cluster_size=31).fit(X)
+    assert isinstance(exc.value, ValueError) and isinstance(exc.value, HearseeError)
+    with pytest.raises(ManifoldInputError, match="min_cluster_size=20 must not exceed"):
+        ClusteredNLE(n_neighbors=6).fit_predict(X[:19])  # (the default, 20)
+    m = ClusteredNLE(n_neighbors=6, min_cluster_size=30, random_state=0).fit(X)
+    assert m.labels_.shape == (30,) and m.n_clusters_ == 1
 
 
 def test_duplicate_points_are_rejected():

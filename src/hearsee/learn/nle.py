@@ -953,7 +953,10 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         As in :class:`NeighborhoodLinearEmbedding` (defaults ``n_neighbors=8``, ``shadow=0.5``).
         ``n_components`` is also the dimension ``d`` of the core-point test.
     min_cluster_size : int, default 20
-        Components of core points with fewer points do not form clusters of their own.
+        Components of core points with fewer points do not form clusters of their own. At
+        most the number of samples fitted: a larger one can never be met, and ``fit`` raises
+        :class:`ManifoldInputError` naming both numbers (as for ``n_neighbors``; until
+        2026-12-03 every point silently became one cluster).
     bridge_ratio : float, default 3.0
         A mutual edge longer than this many times the median accepted-neighbour distance of
         either end is cut.
@@ -1087,6 +1090,17 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         rank = np.empty_like(order)
         rank[order] = np.arange(order.size)
         return rank[inv]
+
+    def _validate_fit_input(self, X) -> np.ndarray:
+        X = super()._validate_fit_input(X)
+        n = X.shape[0]
+        if self.min_cluster_size > n:
+            raise ManifoldInputError(
+                f"min_cluster_size={self.min_cluster_size} must not exceed the number of "
+                f"samples (n_samples = {n}): no cluster can be that large, and every point "
+                "would fall into one cluster; lower min_cluster_size or give more points"
+            )
+        return X
 
     def fit(self, X, y=None):
         """Cluster X by the adaptive neighbourhood graph and embed each cluster."""
