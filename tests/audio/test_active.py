@@ -751,6 +751,27 @@ def test_thesis_search_from_the_upper_tilt_limit_tries_downward():
             assert res.final_pose.tilt_deg == pytest.approx(tilt)
 
 
+def test_train_pose_mlp_needs_min_mlp_samples_before_simulating(monkeypatch):
+    """n = 1 .. 19 passed the argument check and failed in PoseItdMLP.fit, after the training
+    set was simulated, with an EstimationError about fit's samples; now the argument error
+    names n and the minimum before any simulation."""
+    from hearsee.audio import active
+    from hearsee.errors import GeometryError
+
+    def simulate(*args, **kwargs):
+        raise AssertionError("simulated before n was checked")
+
+    monkeypatch.setattr(active, "make_pose_training_set", simulate)
+    for n in (1, active.MIN_MLP_SAMPLES - 1):
+        with pytest.raises(GeometryError, match=rf"^n \(training samples\) must be an integer "
+                                                rf">= {active.MIN_MLP_SAMPLES}, got {n}$"):
+            train_pose_mlp("three-mic", [(0.0, 0.0), (0.0, 30.0)], n=n)
+    monkeypatch.undo()
+    mlp = train_pose_mlp("three-mic", [(0.0, 0.0), (0.0, 30.0)], n=active.MIN_MLP_SAMPLES,
+                         hidden_layer_sizes=(4,))
+    assert mlp.predict(np.zeros((1, 6))).shape == (1, 3)
+
+
 def test_train_pose_mlp_checks_its_settings_before_the_cache_key():
     """The cache key converted them first: float() read True as 1 m (a pivot 1 m off, trained
     without a word), int() 2.5 training samples as 2 and -1 as an empty set."""

@@ -951,7 +951,9 @@ def train_pose_mlp(array: MicArray | str, poses: Sequence[HeadPose | Sequence[fl
                    n: int = 10000, tdoa_std_s: float = DEFAULT_TDOA_STD_S, seed: int = 0,
                    hidden_layer_sizes: tuple[int, ...] = (64, 64)) -> PoseItdMLP:
     """Train (or fetch from the in-memory cache) a :class:`PoseItdMLP` for this array, pose set
-    and head geometry on ``n`` simulated samples (a few seconds; no model file is written)."""
+    and head geometry on ``n`` simulated samples (a few seconds; no model file is written).
+    ``n``: a whole number >= :data:`MIN_MLP_SAMPLES`, else GeometryError before any
+    simulation (fewer failed only in :meth:`PoseItdMLP.fit`, once the set was simulated)."""
     arr = load_array(array)
     key = tuple(map(tuple, arr.positions.tolist()))
     # checked before the cache key's conversions (float() read True as 1 m or 1 s, int() 2.5
@@ -960,7 +962,8 @@ def train_pose_mlp(array: MicArray | str, poses: Sequence[HeadPose | Sequence[fl
                          tuple(as_pose(p).as_tuple() for p in poses),
                          tuple(as_point(pivot_m, "pivot_m").tolist()),
                          tuple(as_point(offset_m, "offset_m").tolist()),
-                         whole_number("n (training samples)", n, 1, error=GeometryError),
+                         whole_number("n (training samples)", n, MIN_MLP_SAMPLES,
+                                      error=GeometryError),
                          check_tdoa_std(tdoa_std_s, "tdoa_std_s (seconds)", zero_ok=True),
                          whole_number("seed", seed, 0, error=GeometryError),
                          tuple(hidden_layer_sizes))
