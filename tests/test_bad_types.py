@@ -5,6 +5,10 @@ before. Well-formed calls next to them keep their results."""
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -221,3 +225,69 @@ def test_pose_manifest_seed_is_checked_before_any_work(tmp_path):
             simulate_pose_manifest(tmp_path / "m.yaml", "three-mic", [1.0, 0.5, 0.2], [(0, 0)],
                                    duration_s=0.1, seed=seed)
     assert not list(tmp_path.iterdir())
+
+
+def _config_calls(tmp: Path) -> list[tuple[str, Any, type, str]]:
+    """(label, call with None for one required argument, error, message start) for the
+    helpers of hearsee.config; the well-formed call of each is in the test below."""
+    from hearsee import config as C
+
+    out = tmp / "out.txt"
+    return [
+        ("check_keys(data)", lambda: C.check_keys(None, ("a",), "w"), ConfigError,
+         "w: expected a mapping, got NoneType"),
+        ("check_keys(allowed)", lambda: C.check_keys({"a": 1}, None, "w"), ConfigError,
+         "w: the allowed keys must be a list of names"),
+        ("number(d)", lambda: C.number(None, "a", 1.0, "w"), ConfigError,
+         "w: expected a mapping, got NoneType"),
+        ("require(data)", lambda: C.require(None, "a", "w"), ConfigError,
+         "w: expected a mapping, got NoneType"),
+        ("save_yaml(data)", lambda: C.save_yaml(None, out), ConfigError,
+         f"{out}: the data to save as YAML: expected a mapping, got NoneType"),
+        ("save_yaml(path)", lambda: C.save_yaml({"a": 1}, None), InputFileError,
+         "the output path must be a file name, got None"),
+        ("write_file(path)", lambda: C.write_file(None, "x"), InputFileError,
+         "the output path must be a file name, got None"),
+        ("write_file(data)", lambda: C.write_file(out, None), ConfigError,
+         f"{out}: the data to write must be text or bytes, got NoneType"),
+        ("write_into(data)", lambda: C.write_into(out, None, "o.txt"), ConfigError,
+         "o.txt: the data to write must be text or bytes, got NoneType"),
+        ("write_into(dest)", lambda: C.write_into(None, "x", "o.txt"), InputFileError,
+         "o.txt: cannot write (the output file must be a file name, got None)"),
+        ("open_replaced(dest)", lambda: C.open_replaced(None), InputFileError,
+         "the output file must be a file name, got None"),
+        ("replacing(path)", lambda: C.replacing(None).__enter__(), InputFileError,
+         "the output path must be a file name, got None"),
+        ("names_a_file(spec)", lambda: C.names_a_file(None), ConfigError,
+         "array: expected a preset name or a YAML path, got NoneType"),
+    ]
+
+
+@pytest.mark.parametrize("label", [c[0] for c in _config_calls(Path("unused"))])
+def test_config_helpers_given_none_raise_their_typed_errors(label, tmp_path):
+    """None for a required argument of hearsee.config's helpers was a builtin TypeError or
+    AttributeError (dict(None), os.stat(None), None.get, "/" in None, None.exists()); now the
+    error each uses for a bad value of that argument (the shared mapping check, as_path),
+    and nothing is written."""
+    [(call, error, message)] = [c[1:] for c in _config_calls(tmp_path) if c[0] == label]
+    with pytest.raises(error, match="^" + re.escape(message)):
+        call()
+    assert not list(tmp_path.iterdir()), label
+
+
+def test_config_helpers_still_take_what_they_took(tmp_path):
+    """The well-formed calls next to the None ones; all_real, a yes/no test, says no to None
+    (no number) where it raised AttributeError, and takes a list as object_entries makes it."""
+    from hearsee import config as C
+
+    C.check_keys({"a": 1}, ("a", "b"), "w")
+    assert C.number({"a": 2}, "a", 1.0, "w") == 2.0 and C.require({"a": 3}, "a", "w") == 3
+    C.save_yaml({"a": 1}, tmp_path / "a.yaml")
+    assert C.load_yaml(tmp_path / "a.yaml") == {"a": 1}
+    C.write_file(tmp_path / "b.txt", b"bytes")
+    assert (tmp_path / "b.txt").read_bytes() == b"bytes"
+    with C.open_replaced(str(tmp_path / "c.txt")) as fh:  # (a str: None.exists() before)
+        fh.write(b"c")
+    assert C.names_a_file(Path("mics.yaml")) and not C.names_a_file("three-mic")
+    assert C.all_real(None) is False and C.all_real([1.0, 2]) and not C.all_real([1.0, "2"])
+    assert C.all_real(np.array([1.0, 2.0], dtype=object))

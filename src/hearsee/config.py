@@ -188,7 +188,10 @@ def replacing(path: str | Path) -> Iterator[Path]:
     root turned the system's /dev/null into a 20 MB file; a pipe's reader got nothing). The
     temporary name ends in ``.tmp`` (a writer that picks its format by the suffix must be
     told the format). The one rule of the robot's exports, its report folder
-    and ``hearsee eval -o`` (moved here from hearsee.robot.export on 2026-12-02)."""
+    and ``hearsee eval -o`` (moved here from hearsee.robot.export on 2026-12-02). A ``path``
+    that is no file name (None, a number) is InputFileError (:func:`as_path`; os.stat's
+    builtin TypeError until 2026-12-03)."""
+    path = as_path(path, "the output path")
     if written_through(path):  # (opened by its own name: a pipe's realpath is no path)
         yield Path(path)
         return
@@ -219,7 +222,9 @@ def open_replaced(dest: Path) -> BinaryIO:
     the fresh temporary file (nothing else may have made it), ``"ab"`` where the target is
     written through (a FIFO, a device, the file standard output goes to: appended, as the
     command's own printing is). The one rule of every output written through
-    :func:`replacing` as a stream (:func:`write_into`, the MCAP export, images)."""
+    :func:`replacing` as a stream (:func:`write_into`, the MCAP export, images). InputFileError
+    for a ``dest`` that is no file name (:func:`as_path`: None was a builtin AttributeError)."""
+    dest = as_path(dest, "the output file")
     return open(dest, "ab" if dest.exists() else "xb")
 
 
@@ -227,7 +232,12 @@ def write_into(dest: Path, data: str | bytes, name: str | Path) -> None:
     """Write ``data`` (text as UTF-8, or bytes) into ``dest``, the file :func:`replacing`
     yielded for the output ``name``: a fresh temporary file, or the FIFO/device written
     through. A write the system refuses (a full disk, a file size limit) is InputFileError
-    naming ``name``, the user's path, not the temporary file (whose OSError named nothing)."""
+    naming ``name``, the user's path, not the temporary file (whose OSError named nothing).
+    ``data`` that is neither text nor bytes (None: a builtin TypeError) is ConfigError naming
+    ``name``, raised before ``dest`` is opened."""
+    if not isinstance(data, str | bytes | bytearray | memoryview):
+        raise ConfigError(f"{name}: the data to write must be text or bytes, got "
+                          f"{type(data).__name__}")
     try:
         with open_replaced(dest) as fh:
             fh.write(data.encode("utf-8") if isinstance(data, str) else data)
@@ -240,7 +250,15 @@ def names_a_file(spec: str) -> bool:
     file's ``audio.array``, a scenario's ``robot.array``) names a file rather than a preset:
     it has a folder or a YAML suffix, in any case (``.yaml``, ``.yml``, ``.YAML``, ...).
     Preset names have neither. In the robot file and a scenario a file name is looked up next
-    to that file, never in the working directory."""
+    to that file, never in the working directory. ``spec``: text or a path-like object, else
+    ConfigError (None was a builtin TypeError), as :func:`hearsee.audio.arrays.load_array`
+    says for an array spec of any other kind."""
+    if not isinstance(spec, str | os.PathLike):
+        raise ConfigError(f"array: expected a preset name or a YAML path, got "
+                          f"{type(spec).__name__}")
+    spec = os.fspath(spec)
+    if isinstance(spec, bytes):
+        spec = os.fsdecode(spec)
     return "/" in spec or "\\" in spec or spec.lower().endswith((".yaml", ".yml"))
 
 
@@ -299,6 +317,7 @@ def save_yaml(data: Mapping[str, Any], path: str | Path) -> None:
     the plain safe dumper wrote it bare and it came back as the number 200000.0)."""
     # (replaced once complete, :func:`replacing`: written in place, a write that failed part
     # way truncated the earlier file)
+    data = _mapping(data, f"{path}: the data to save as YAML")
     write_file(path, yaml.dump(to_plain(dict(data)), Dumper=YamlDumper, sort_keys=False))
 
 
@@ -313,10 +332,23 @@ def name_text(value: Any, where: str) -> str:
     return str(value)
 
 
+def _mapping(data: Any, where: str) -> Mapping[str, Any]:
+    """``data`` when it is a mapping, else ConfigError "``where``: expected a mapping, got
+    <type>": the one check of the mapping :func:`check_keys`, :func:`require`, :func:`number`
+    and :func:`save_yaml` take (None was a builtin TypeError or AttributeError in each)."""
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"{where}: expected a mapping, got {type(data).__name__}")
+    return data
+
+
 def check_keys(data: Mapping[str, Any], allowed: Iterable[str], where: str) -> None:
-    """Raise ConfigError naming the first key of ``data`` not in ``allowed``."""
+    """Raise ConfigError naming the first key of ``data`` not in ``allowed`` (key names), or
+    ``where`` when ``data`` is no mapping or ``allowed`` no collection of names."""
+    if isinstance(allowed, str | bytes) or not isinstance(allowed, Iterable):
+        raise ConfigError(f"{where}: the allowed keys must be a list of names, got "
+                          f"{allowed!r:.60}")
     allowed = list(allowed)
-    for key in data:
+    for key in _mapping(data, where):
         if key not in allowed:
             raise ConfigError(
                 f"{where}: unknown key {key!r} (expected one of: {', '.join(allowed)})"
@@ -355,7 +387,13 @@ def all_real(entries: np.ndarray, *, finite: bool = True) -> bool:
     number (:func:`is_real`): not a bool, a string, a complex number, None, a list (of a ragged
     nesting) or an int beyond float's range. With ``finite=False`` NaN and infinite floats
     count too (for a caller whose next check reports them as not finite). The one
-    entry-by-entry check of :func:`as_float_array` and :func:`hearsee.geometry.as_point`."""
+    entry-by-entry check of :func:`as_float_array` and :func:`hearsee.geometry.as_point`.
+    Anything else is first made an object array by :func:`object_entries` (None, which is no
+    number: False; it was a builtin AttributeError), False where none can be made."""
+    if not isinstance(entries, np.ndarray):
+        entries = object_entries(entries)
+        if entries is None:
+            return False
     return all((not finite and isinstance(v, float | np.floating)) or is_real(v)
                for v in entries.flat)
 
@@ -451,8 +489,9 @@ def as_rng(rng: Any, name: str = "rng") -> np.random.Generator:
 
 
 def require(data: Mapping[str, Any], key: str, where: str) -> Any:
-    """Return ``data[key]`` or raise ConfigError saying the field is missing."""
-    if key not in data:
+    """Return ``data[key]`` or raise ConfigError saying the field is missing (or, naming
+    ``where``, that ``data`` is no mapping)."""
+    if key not in _mapping(data, where):
         raise ConfigError(f"{where}: missing required key {key!r}")
     return data[key]
 
@@ -493,8 +532,8 @@ def number(d: Mapping[str, Any], key: str, default: float, where: str, lo: float
            hi: float | None = None, integer: bool = False) -> float:
     """``d[key]`` (or ``default``) as a finite number within ``[lo, hi]``; ConfigError naming
     ``where.key`` otherwise. With ``integer=True`` the value must be whole and an int is
-    returned."""
-    v = d.get(key, default)
+    returned. ConfigError naming ``where`` when ``d`` is no mapping."""
+    v = _mapping(d, where).get(key, default)
     if not is_real(v):
         raise ConfigError(f"{where}.{key}: expected a number, got {v!r}")
     v = v.item() if isinstance(v, np.generic | np.ndarray) else v  # numpy as Python numbers
