@@ -291,3 +291,55 @@ def test_config_helpers_still_take_what_they_took(tmp_path):
     assert C.names_a_file(Path("mics.yaml")) and not C.names_a_file("three-mic")
     assert C.all_real(None) is False and C.all_real([1.0, 2]) and not C.all_real([1.0, "2"])
     assert C.all_real(np.array([1.0, 2.0], dtype=object))
+
+
+def _kernel_calls() -> dict[str, tuple[Any, dict[str, Any]]]:
+    """Well-formed calls of hearsee.audio.arrays' and hearsee.audio.bem's helpers (function,
+    keyword arguments): three microphones, a source 1 m in front of them."""
+    from hearsee.audio import arrays as A
+    from hearsee.audio import bem as B
+
+    pos = np.array([[0.05, 0.0, 0.0], [-0.025, 0.0433, 0.0], [-0.025, -0.0433, 0.0]])
+    i, j = np.array([0, 0, 1]), np.array([1, 2, 2])
+    p = np.array([1.0, 0.2, 0.0])
+    y = A.pair_tdoa(p, pos, i, j, 343.0)
+    return {
+        "check_pairs": (A.check_pairs, {"pairs": [(0, 1)], "n_mics": 3}),
+        "closure_rms": (A.closure_rms, {"values": [1e-4, 2e-4, 1e-4],
+                                        "pairs": [(0, 1), (0, 2), (1, 2)], "n_mics": 3}),
+        "pair_tdoa": (A.pair_tdoa, {"points": p, "positions": pos, "i": i, "j": j,
+                                    "speed_of_sound": 343.0}),
+        "pair_tdoa_jacobian": (A.pair_tdoa_jacobian, {"point": p, "positions": pos, "i": i,
+                                                      "j": j, "speed_of_sound": 343.0}),
+        "position_uncertainty": (A.position_uncertainty, {
+            "p": p, "M": pos, "a": i, "b": j, "c": 343.0, "y": y, "sig": 2e-6,
+            "ref": np.zeros(3), "max_rel_distance_std": 0.3}),
+        "residual_scaled_variance": (A.residual_scaled_variance, {
+            "residual_s": np.array([1e-6, -2e-6, 1e-6, 3e-6]), "sig": 1e-6, "n_params": 2}),
+        "span_dimension": (A.span_dimension, {"positions": pos, "speed_of_sound": 343.0,
+                                              "rel_tol": 1e-6}),
+        "chief_points": (B.chief_points, {"mesh": B.sphere_mesh(0.1, 4), "n": 4}),
+    }
+
+
+@pytest.mark.parametrize("name, argument", [
+    (name, arg) for name, (_, kw) in _kernel_calls().items() for arg in kw
+    if name != "chief_points" or arg == "mesh"])  # (its n is checked already)
+def test_array_and_bem_helpers_given_none_raise_geometry_error(name, argument):
+    """None for an argument of the microphone-array and BEM helpers was a builtin TypeError,
+    IndexError or AttributeError (pair_tdoa's i and j, and residual_scaled_variance's
+    residuals, a wrong answer without one: an extra axis, sig^2 alone); now the modules'
+    GeometryError naming the argument. The well-formed call answers as before."""
+    func, kw = _kernel_calls()[name]
+    func(**kw)
+    with pytest.raises(GeometryError, match=rf"\b{argument}\b|one value per pair"):
+        func(**{**kw, argument: None})
+
+
+def test_transfer_functions_needs_a_solution():
+    """transfer_functions(None, ...) was a builtin AttributeError ('speed_of_sound')."""
+    from hearsee.audio.bem import transfer_functions
+
+    with pytest.raises(GeometryError, match="^transfer_functions needs the AdjointSolution of "
+                                            "solve_adjoint, got NoneType"):
+        transfer_functions(None, np.array([[1.0, 0.0, 0.0]]))

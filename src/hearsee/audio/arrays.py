@@ -365,7 +365,12 @@ def span_dimension(positions: NDArray, speed_of_sound: float, rel_tol: float = 1
 
     Geometry of the lower dimension is the solvers' model: a near-flat array's answers carry
     up to ``FLAT_TDOA_S`` of model error per pair. GeometryError unless ``positions`` are
-    finite numbers ``(n, 3)``, n >= 1 (None was numpy's AxisError, an empty set a LinAlgError)."""
+    finite numbers ``(n, 3)``, n >= 1 (None was numpy's AxisError, an empty set a LinAlgError),
+    ``speed_of_sound`` a finite number > 0 m/s and ``rel_tol`` one in (0, 1] (None was a builtin
+    TypeError for both)."""
+    c0 = finite_number("speed_of_sound (m/s)", speed_of_sound, 0.0, lo_open=True,
+                       error=GeometryError)
+    finite_number("rel_tol", rel_tol, 0.0, 1.0, lo_open=True, error=GeometryError)
     if not real_entries(positions):
         raise GeometryError(f"positions must be numbers (n, 3) metres, got {positions!r:.60}")
     pos = np.asarray(positions, dtype=float)
@@ -376,7 +381,7 @@ def span_dimension(positions: NDArray, speed_of_sound: float, rel_tol: float = 1
     _, s, vt = np.linalg.svd(pos - c)
     s = np.concatenate([s, np.zeros(3 - len(s))])
     scale = max(s[0], 1e-12)
-    flat_m = FLAT_TDOA_S * float(speed_of_sound)
+    flat_m = FLAT_TDOA_S * c0
     for dim in (1, 2):
         off = (pos - c) @ vt[dim:].T  # offsets from the line (dim 1) or plane (dim 2)
         widest = float(np.max(np.linalg.norm(off[:, None, :] - off[None, :, :], axis=-1)))
@@ -389,8 +394,10 @@ def check_pairs(pairs: Sequence[tuple[int, int]], n_mics: int) -> list[tuple[int
     """``pairs`` as a list of ``(i, j)`` indices of ``n_mics`` microphones, or a GeometryError
     for an empty list, a pair that is not two whole numbers (0.7 used to be truncated to index
     0), an index outside ``[0, n_mics)`` (a negative one used to wrap around to the last
-    microphones) or ``i == j``. The one rule of :meth:`MicArray.checked_pairs` and
+    microphones) or ``i == j``; also for ``n_mics`` that is no whole number >= 2 (None was a
+    builtin TypeError). The one rule of :meth:`MicArray.checked_pairs` and
     :class:`hearsee.audio.itd_filter.ItdKalman`."""
+    n_mics = whole_number("n_mics", n_mics, lo=2, error=GeometryError)
     try:
         items = list(pairs)
     except TypeError:
@@ -477,6 +484,18 @@ def closure_rms(values: ArrayLike, pairs: Sequence[tuple[int, int]], n_mics: int
     return float(np.sqrt(np.sum((P @ v) ** 2) / dof))
 
 
+def _given(func: str, **args: Any) -> None:
+    """GeometryError naming ``func`` and the first of ``args`` (argument name -> value) that
+    is None. The numeric kernels below (:func:`pair_tdoa`, :func:`pair_tdoa_jacobian`,
+    :func:`position_uncertainty`, :func:`residual_scaled_variance`) run inside the solvers'
+    loops and check no more than this (a fraction of a microsecond): None made numpy's or
+    Python's builtin TypeError / IndexError, and as a pair index or residuals a wrong
+    answer without an error (an extra axis; sig^2 alone)."""
+    for name, value in args.items():
+        if value is None:
+            raise GeometryError(f"{func}: {name} must be given, got None")
+
+
 def pair_tdoa(points: ArrayLike, positions: NDArray, i: NDArray, j: NDArray,
               speed_of_sound: float) -> NDArray:
     """Exact (near-field) TDOAs ``t_i - t_j`` in seconds of point(s) ``(..., 3)`` (metres) at
@@ -484,7 +503,10 @@ def pair_tdoa(points: ArrayLike, positions: NDArray, i: NDArray, j: NDArray,
     ``(..., n_pairs)``. The one place of this model: :meth:`MicArray.tdoa`, the near-field
     fits of :mod:`hearsee.audio.localize`, the moving-head solver (:mod:`hearsee.audio.active`,
     whose poses stack several placements of the array) and the 3D tracker
-    (:class:`hearsee.fusion.audiovisual.RayTdoaTracker`) use it."""
+    (:class:`hearsee.fusion.audiovisual.RayTdoaTracker`) use it. GeometryError for an
+    argument that is None."""
+    _given("pair_tdoa", points=points, positions=positions, i=i, j=j,
+           speed_of_sound=speed_of_sound)
     d = np.linalg.norm(np.asarray(points, dtype=float)[..., None, :] - positions, axis=-1)
     return (d[..., i] - d[..., j]) / speed_of_sound
 
@@ -493,7 +515,10 @@ def pair_tdoa_jacobian(point: ArrayLike, positions: NDArray, i: NDArray, j: NDAr
                        speed_of_sound: float) -> NDArray:
     """Derivative of :func:`pair_tdoa` with respect to one point ``(3,)`` (metres): ``(u_i -
     u_j) / c`` per pair, ``u_k`` the unit vector from microphone k to the point; shape
-    ``(n_pairs, 3)``, seconds per metre. A point on a microphone has none (GeometryError)."""
+    ``(n_pairs, 3)``, seconds per metre. A point on a microphone has none (GeometryError), nor
+    has an argument that is None."""
+    _given("pair_tdoa_jacobian", point=point, positions=positions, i=i, j=j,
+           speed_of_sound=speed_of_sound)
     u = np.asarray(point, dtype=float).reshape(3) - positions
     n = np.linalg.norm(u, axis=1, keepdims=True)
     if not np.all(n > 0):
@@ -518,7 +543,10 @@ def position_uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: floa
     (:func:`hearsee.audio.active.solve_range_differences`, ``M`` stacking every pose's
     microphones) and the one-pose near-field position of
     :func:`hearsee.audio.localize.localize_tdoa` use it. A linearisation: where the distance
-    is poorly determined (relative 1-sigma above ~0.3) it is optimistic."""
+    is poorly determined (relative 1-sigma above ~0.3) it is optimistic. GeometryError for an
+    argument that is None."""
+    _given("position_uncertainty", p=p, M=M, a=a, b=b, c=c, y=y, sig=sig, ref=ref,
+           max_rel_distance_std=max_rel_distance_std)
     J = pair_tdoa_jacobian(p, M, a, b, c)
     s2 = residual_scaled_variance(pair_tdoa(p, M, a, b, c) - y, sig, 3)
     JtJ = J.T @ J
@@ -548,7 +576,9 @@ def residual_scaled_variance(residual_s: ArrayLike, sig: float, n_params: int) -
     of the fit's ``m`` TDOA residuals (seconds) where that is larger (MAD: outliers that a
     robust loss down-weighted must not inflate it); ``sig^2`` alone when ``m <= n_params``.
     Used with the 3-D position (``n_params`` 3, :func:`position_uncertainty`) and the in-plane
-    one (2, :func:`hearsee.audio.localize.near_field_in_plane`)."""
+    one (2, :func:`hearsee.audio.localize.near_field_in_plane`). GeometryError for an
+    argument that is None."""
+    _given("residual_scaled_variance", residual_s=residual_s, sig=sig, n_params=n_params)
     r = np.asarray(residual_s, dtype=float).ravel()
     m = r.size
     if m <= n_params:

@@ -38,6 +38,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
@@ -383,9 +384,18 @@ class AdjointSolution:
 MIN_CHIEF_POINTS = 4
 
 
+def _check_mesh(mesh: Any) -> None:
+    """GeometryError unless ``mesh`` is a :class:`TriMesh`: the type check of
+    :func:`solve_adjoint` and :func:`chief_points` (None: a builtin AttributeError there)."""
+    if not isinstance(mesh, TriMesh):
+        raise GeometryError(f"BEM mesh must be a TriMesh, got {type(mesh).__name__}")
+
+
 def chief_points(mesh: TriMesh, n: int = 16, rng: int = 0) -> NDArray:
     """``n`` interior points well inside the body (at least two panel sizes from the surface);
-    ``n`` an integer >= :data:`MIN_CHIEF_POINTS`, else a GeometryError."""
+    ``mesh`` a :class:`TriMesh` and ``n`` an integer >= :data:`MIN_CHIEF_POINTS`, else a
+    GeometryError."""
+    _check_mesh(mesh)
     n = whole_number("number of CHIEF points", n, MIN_CHIEF_POINTS, error=GeometryError)
     gen = as_rng(rng)
     lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
@@ -426,8 +436,7 @@ def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
     progress : callable, optional
         Called with 1 after each frequency.
     """
-    if not isinstance(mesh, TriMesh):
-        raise GeometryError(f"BEM mesh must be a TriMesh, got {type(mesh).__name__}")
+    _check_mesh(mesh)
     # (until 2026-12-02: n_chief 0-3 said "mask body too thin for CHIEF interior points", -1
     # and 2.5 raised numpy's ValueError / TypeError, no frequency ran the whole setup and gave
     # an empty solution, text frequencies raised numpy's ValueError, a NaN on_surface_tol
@@ -562,7 +571,11 @@ def transfer_functions(sol: AdjointSolution, source: ArrayLike, far_field: bool 
     ``source``: positions in metres or, with ``far_field``, directions. GeometryError for a
     source that is not finite, a direction [0, 0, 0], and for a point source inside the body
     (no sound reaches the air from there), on its surface, at an evaluation point or at the
-    origin of the frame (infinite fields, NaN before)."""
+    origin of the frame (infinite fields, NaN before); and for a ``sol`` that is no
+    :class:`AdjointSolution` (None: a builtin AttributeError)."""
+    if not isinstance(sol, AdjointSolution):
+        raise GeometryError(f"transfer_functions needs the AdjointSolution of solve_adjoint, "
+                            f"got {type(sol).__name__}")
     c = sol.speed_of_sound
     if speed_of_sound is not None:
         if not (is_real(speed_of_sound) and speed_of_sound > 0):
