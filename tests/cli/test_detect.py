@@ -198,21 +198,25 @@ def test_images_do_not_match_calibration(folder, capsys, tmp_path):
 
 
 def test_camera_pitch_option(capsys, tmp_path):
-    """--camera-pitch: the camera's pitch (degrees, + = up) as the floor's prior. A camera
-    pitched up 15 deg found nobody when taken as level; with the option the person is found
-    where they stand. Out of [-80, 80] (NaN too): one line, exit 2."""
+    """--camera-pitch: the camera's pitch (degrees, + = up) as the floor's prior, over the
+    calibration's info.camera_pitch_deg. A camera pitched up 15 deg found nobody when taken
+    as level (--camera-pitch 0); with the option, or with the pitch the written scene's
+    calib.yaml now carries, the person is found where they stand. Out of [-80, 80] (NaN too):
+    one line, exit 2."""
     rig = default_rig(320, 240, thermal_size=(80, 60))
     spec = SceneSpec(entities=[Entity("person", -0.6, 3.5, 0.0, 1.8)], width_left_m=3.0,
                      width_right_m=3.0, depth_m=8.0, seed=11)
     scene = render_scene(spec, rig, view=pitched_view(15.0))
     d = write_scene(scene, tmp_path / "up15")
-    assert main(_args(d)) == 0
+    assert main(_args(d, "--camera-pitch", "0")) == 0
     assert json.loads(capsys.readouterr().out)["humans"] == []
-    assert main(_args(d, "--camera-pitch", "15")) == 0
-    out = json.loads(capsys.readouterr().out)
-    assert len(out["humans"]) == 1 and out["floor"]["camera_pitch_deg"] == pytest.approx(15.0)
-    assert np.linalg.norm(np.array(out["humans"][0]["position_m"])
-                          - scene.objects[0].position_m) < 0.15
+    for extra in (["--camera-pitch", "15"], []):
+        assert main(_args(d, *extra)) == 0
+        out = json.loads(capsys.readouterr().out)
+        assert len(out["humans"]) == 1
+        assert out["floor"]["camera_pitch_deg"] == pytest.approx(15.0, abs=1.0)
+        assert np.linalg.norm(np.array(out["humans"][0]["position_m"])
+                              - scene.objects[0].position_m) < 0.15
     for bad in ("95", "-81", "nan"):
         assert main(_args(d, "--camera-pitch", bad)) == 2
         err = capsys.readouterr().err
