@@ -52,8 +52,10 @@ The whole-recording estimate (``summary_tdoa_s``) takes the peak of the weighted
 averaged over the valid frames (more robust than averaging per-frame TDOAs). With three or more
 microphones the pairs' peaks are chosen jointly -- nearest the TDOAs of the direction whose
 summed correlations are largest -- so that a reflection topping one pair's correlation loses to
-the direct path the other pairs agree on; the closure ``t_ij + t_jk = t_ik`` of the pairs' own
-peaks is the test that tells a source from uncorrelated noise.
+the direct path the other pairs agree on (but where the pairs' own peaks close and correlate
+better -- a near source, whose curved wavefront no plane wave fits -- the own peaks are kept:
+:func:`_closed_own_peaks`); the closure ``t_ij + t_jk = t_ik`` of the pairs' own peaks is the
+test that tells a source from uncorrelated noise.
 
 Performance: frames in single precision, all frames and pairs per FFT call, only the band's bins
 weighted; refinement only for active frames.
@@ -188,6 +190,17 @@ DEFAULT_MARGIN_SAMPLES = 1.0
 DEFAULT_WINDOW = ("tukey", 0.25)
 #: Largest RMS violation (samples) of t_ij + t_jk = t_ik accepted for a summary estimate.
 _CLOSURE_TOL_SAMPLES = 2.0
+#: Two refined peaks of one pair's whole-recording correlation closer than this (samples) are
+#: the same lobe (:func:`_closed_own_peaks`): the local maxima of a correlation band-limited
+#: to ``fs / 2`` lie at least ~1.4 samples apart (a sinc's side lobes), refined ones of the
+#: same lobe within ~1e-3 sample of each other.
+_SAME_LOBE_SAMPLES = 0.5
+#: Largest closure residual (samples, per pair: the pair values less their least-squares fit
+#: by arrival times) of the pairs' own whole-recording peaks that :func:`_closed_own_peaks`
+#: takes for one source's. A pair on another lobe than the others leaves a third of its offset
+#: (>= ~1.4 samples) in every residual (three microphones; ``1 - 2 / n`` of it in its own with
+#: all pairs of ``n``): >= ~0.47 sample.
+_OWN_CLOSURE_SAMPLES = 0.25
 #: Lags whose noise-only correlation has less than this share of the zero-lag standard
 #: deviation (the frames' windows overlap little there) are left out of the noise floor.
 _FLOOR_MIN_PROFILE = 0.8
@@ -939,6 +952,42 @@ def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
             tau0 = _climb(r, tau0, up)
         lag = _refine_interp(P, tau0, nfft, bins=bins)
     return np.clip(lag, -max_lag, max_lag)
+
+
+def _closed_own_peaks(own: NDArray, joint: NDArray, pairs: list[tuple[int, int]],
+                      n_mics: int, P: NDArray, bins: NDArray, nfft: int) -> NDArray:
+    """The whole-recording lags (samples, (n_pairs,)) of a whole-sphere joint search: the
+    pairs' own peaks ``own`` where they already close (``t_ij + t_jk = t_ik`` within
+    :data:`_OWN_CLOSURE_SAMPLES` on every pair), the joint choice ``joint``
+    (:func:`_joint_peaks`) put some pair on another lobe (more than :data:`_SAME_LOBE_SAMPLES`
+    away), and ``own`` sum to the higher correlation (of the averaged weighted spectra ``P``
+    (n_pairs, bins) at the rfft bins ``bins`` of ``nfft``-point frames); ``joint`` otherwise.
+
+    The joint search looks for the consistent TDOAs with the largest summed correlation, but
+    among plane waves only, and a near source's curved wavefront can fit none: for a
+    three-microphone array, in-plane TDOAs whose plane-wave fit has an in-plane part longer
+    than 1 (about half of all azimuths). The nearest direction's TDOAs then lie off the peaks
+    by ``~ a^2 / (8 r c0)`` (aperture ``a``, range ``r``: 2-5 samples for a 1 m triangle at 2-4
+    m and 48 kHz, 1.5 for the 15 cm preset at 0.5 m and 96 kHz), and the refinement from there
+    (:func:`_refine_interp`, at most a sample) stopped on a side lobe of the broadband peak:
+    summaries 2-6 samples off while every frame was right. Closing own peaks are consistent
+    TDOAs too; where they also correlate better, they are what the search was after. (A
+    reflection that tops one pair's correlation breaks the closure and still loses to the
+    joint choice; in reverberant rooms own peaks that close by chance but correlate worse
+    than the joint choice are not taken.)"""
+    if np.max(np.abs(joint - own), initial=0.0) <= _SAME_LOBE_SAMPLES:
+        return joint
+    proj = pair_closure_projector(tuple(pairs), n_mics)
+    if proj is None or np.max(np.abs(proj[0] @ own), initial=0.0) > _OWN_CLOSURE_SAMPLES:
+        return joint
+    k = np.asarray(bins)
+    w = 2.0 * np.pi * k / nfft
+    Pc = P * np.where((k == 0) | (2 * k == nfft), 0.5, 1.0)
+
+    def summed(tau: NDArray) -> float:
+        return float(np.sum(np.real(Pc * np.exp(1j * np.outer(tau, w)))))
+
+    return own if summed(own) > summed(joint) else joint
 
 
 def _n_grid_directions(longest_lag: float) -> int:
@@ -1879,10 +1928,16 @@ def estimate_tdoas(
             if (joint == "auto" and reverberant and source_in_plane
                     and arr.n_mics >= AUTO_STEERED_MIN_MICS and kind == "planar"):
                 steer = IN_PLANE_RANGE_M if steer_range_m is None else steer_range_m
+            own = lag[0]
             lag = _joint_peaks(acc, band_bins, nfft, arr.positions, prs, arr.speed_of_sound,
                                fs, max_lag, coherent=joint == "coherent",
                                in_plane=bool(source_in_plane), steer_range_m=steer,
                                climb=kind == "volume")[None]
+            # (not for the in-plane search: an elevated reflection's peaks close too, and
+            # keeping them out is its purpose; a near source there stays a limitation)
+            if steer is False and not source_in_plane:
+                lag = _closed_own_peaks(own, lag[0], prs, arr.n_mics, acc, band_bins,
+                                        nfft)[None]
         else:
             # one independent pair: only the confidence can tell (noise-only recordings reach
             # ~1.25 in 40 trials, a -15 dB white source 0.8-2.4)
