@@ -495,7 +495,10 @@ def read_recording(
     fs : float, optional
         Required sample rate in Hz (a positive number, else an AudioInputError). A different
         file rate is an error unless ``resample=True``, which resamples the recording to ``fs``
-        (polyphase filter).
+        (polyphase filter). Upsampled, it holds no sound above the file's Nyquist frequency,
+        only the filter's mirror images: limit the GCC band below it (``band_hz`` of
+        :func:`hearsee.audio.tdoa.estimate_tdoas`; PHAT over the whole band biased 8 kHz files
+        read at 16 kHz by up to 70 us).
     min_samples : int
         Fewer samples per channel than this is an error (e.g. one analysis frame).
 
