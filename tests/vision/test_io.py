@@ -397,3 +397,30 @@ def test_a_float_tiff_read_as_a_visible_image_is_named(tmp_path):
         with pytest.raises(ImageInputError, match=r"holds floating-point pixels \(float32; "):
             read_image(p, mode)
     np.testing.assert_array_equal(read_image(p, "unchanged"), t)
+
+
+def test_opencv_log_level_without_cv2_utils_logging(monkeypatch):
+    """OpenCV 4.8 (pyproject's lower bound) has no ``cv2.utils.logging``, only
+    ``cv2.getLogLevel`` / ``cv2.setLogLevel``: every image read was a ModuleNotFoundError
+    there. The log is now set through whichever exists, and restored after the block."""
+    import sys
+
+    import cv2
+
+    from hearsee.vision.io import _opencv_log
+
+    level = {"now": 4}
+    calls = []
+
+    def set_level(v):
+        calls.append(v)
+        level["now"] = v
+
+    monkeypatch.setitem(sys.modules, "cv2.utils.logging", None)  # (import: ImportError)
+    monkeypatch.setattr(cv2, "getLogLevel", lambda: level["now"], raising=False)
+    monkeypatch.setattr(cv2, "setLogLevel", set_level, raising=False)
+    with _opencv_log("silent"):
+        assert level["now"] == 0
+    with _opencv_log("error"):
+        assert level["now"] == 2
+    assert calls == [0, 4, 2, 4] and level["now"] == 4

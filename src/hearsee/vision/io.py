@@ -75,15 +75,24 @@ def video_capture(source: int | str) -> cv2.VideoCapture:
 def _opencv_log(level: str) -> Iterator[None]:
     """OpenCV's own log at ``level`` (``"error"``: its warnings off; ``"silent"``: all off)
     for the block, restored after it: messages hearsee reports as its own error, or that
-    would precede it."""
-    import cv2.utils.logging as cv_log
+    would precede it. OpenCV's Python API for it is ``cv2.utils.logging`` in recent releases
+    and ``cv2.getLogLevel`` / ``cv2.setLogLevel`` (the same levels: 0 silent, 2 error) in
+    older ones such as 4.8, which have no ``cv2.utils.logging`` (every image read was a
+    ModuleNotFoundError there)."""
+    try:
+        import cv2.utils.logging as cv_log
 
-    before = cv_log.getLogLevel()
-    cv_log.setLogLevel({"error": cv_log.LOG_LEVEL_ERROR, "silent": cv_log.LOG_LEVEL_SILENT}[level])
+        get, set_ = cv_log.getLogLevel, cv_log.setLogLevel
+    except ImportError:
+        import cv2
+
+        get, set_ = cv2.getLogLevel, cv2.setLogLevel
+    before = get()
+    set_({"error": 2, "silent": 0}[level])  # (OpenCV's LOG_LEVEL_ERROR, LOG_LEVEL_SILENT)
     try:
         yield
     finally:
-        cv_log.setLogLevel(before)
+        set_(before)
 
 
 #: The state of :func:`_codec_stderr_off`, shared by every thread: its lock, how many blocks
