@@ -2116,20 +2116,20 @@ def test_a_missing_camera_is_one_line_without_opencv_warnings(capfd):
     """A camera index with no device behind it: hearsee's one-line error, and nothing of
     OpenCV's own on stderr (its V4L2 and FFMPEG backends printed two "[ WARN ]" lines first,
     against the one-line promise of `hearsee run --dry-run` and `hearsee track --camera`)."""
-    import cv2.utils.logging as cv_log
-
     from hearsee.errors import ImageInputError
     from hearsee.robot.hardware import open_capture
     from hearsee.stream.video import VideoImagePoints
+    from hearsee.vision.io import opencv_log_functions
 
-    level = cv_log.getLogLevel()
+    get_level = opencv_log_functions()[0]
+    level = get_level()
     with pytest.raises(ConfigError, match="cameras.left: cannot open camera 57"):
         open_capture(57, "cameras.left")
     with pytest.raises(ImageInputError, match="camera 57: cannot be opened"):
         VideoImagePoints(57)
     err = capfd.readouterr().err
     assert "WARN" not in err and err == ""
-    assert cv_log.getLogLevel() == level  # (OpenCV's log level restored afterwards)
+    assert get_level() == level  # (OpenCV's log level restored afterwards)
 
 
 def test_a_masked_pair_or_a_vertical_line_is_refused_in_the_robot_file(small_rig):

@@ -74,17 +74,18 @@ def test_a_damaged_image_is_one_typed_error_and_nothing_on_stderr(tmp_path, capf
     """The codecs under OpenCV print such a file's trouble on file descriptor 2 themselves,
     whatever OpenCV's log level (checked here first: the ground truth that there is noise to
     silence); read_image gives the one ImageInputError and leaves stderr empty."""
-    import cv2.utils.logging as cv_log
+    from hearsee.vision.io import opencv_log_functions
 
+    get_level, set_level = opencv_log_functions()
     data = _damaged(name[-4:])
-    before = cv_log.getLogLevel()
-    cv_log.setLogLevel(cv_log.LOG_LEVEL_SILENT)
+    before = get_level()
+    set_level(0)  # (silent)
     try:
         capfd.readouterr()
         assert cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED) is None
         assert noise in capfd.readouterr().err
     finally:
-        cv_log.setLogLevel(before)
+        set_level(before)
     (tmp_path / name).write_bytes(data)
     with pytest.raises(ImageInputError) as e:
         read_image(tmp_path / name, mode)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import glob
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Literal
@@ -75,24 +75,29 @@ def video_capture(source: int | str) -> cv2.VideoCapture:
 def _opencv_log(level: str) -> Iterator[None]:
     """OpenCV's own log at ``level`` (``"error"``: its warnings off; ``"silent"``: all off)
     for the block, restored after it: messages hearsee reports as its own error, or that
-    would precede it. OpenCV's Python API for it is ``cv2.utils.logging`` in recent releases
-    and ``cv2.getLogLevel`` / ``cv2.setLogLevel`` (the same levels: 0 silent, 2 error) in
-    older ones such as 4.8, which have no ``cv2.utils.logging`` (every image read was a
-    ModuleNotFoundError there)."""
-    try:
-        import cv2.utils.logging as cv_log
-
-        get, set_ = cv_log.getLogLevel, cv_log.setLogLevel
-    except ImportError:
-        import cv2
-
-        get, set_ = cv2.getLogLevel, cv2.setLogLevel
+    would precede it."""
+    get, set_ = opencv_log_functions()
     before = get()
     set_({"error": 2, "silent": 0}[level])  # (OpenCV's LOG_LEVEL_ERROR, LOG_LEVEL_SILENT)
     try:
         yield
     finally:
         set_(before)
+
+
+def opencv_log_functions() -> tuple[Callable[[], int], Callable[[int], None]]:
+    """OpenCV's (get, set) of its log level (0 silent, 2 error, 3 warning, ...): the Python
+    API is ``cv2.utils.logging`` in recent releases and ``cv2.getLogLevel`` /
+    ``cv2.setLogLevel`` in older ones such as 4.8 (pyproject's lower bound), which have no
+    ``cv2.utils.logging`` (every image read was a ModuleNotFoundError there)."""
+    try:
+        import cv2.utils.logging as cv_log
+
+        return cv_log.getLogLevel, cv_log.setLogLevel
+    except ImportError:
+        import cv2
+
+        return cv2.getLogLevel, cv2.setLogLevel
 
 
 #: The state of :func:`_codec_stderr_off`, shared by every thread: its lock, how many blocks
