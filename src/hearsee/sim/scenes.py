@@ -145,7 +145,7 @@ def _pixel_size(name: str, size: Any) -> tuple[int, int]:
     return whole_number(f"{name}[0]", size[0]), whole_number(f"{name}[1]", size[1])
 
 
-def _rig_at_height(rig: StereoRig, camera_height_m: float,
+def _rig_as_rendered(rig: StereoRig, camera_height_m: float,
                    R_view: NDArray | None = None) -> StereoRig:
     """``rig`` with ``info["camera_height_m"]`` = ``camera_height_m`` (metres above the floor;
     the rest of its info kept) and, given the left camera's orientation ``R_view`` (scene frame,
@@ -1027,7 +1027,7 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
                                    trunc, float(_rendered_yaw_deg(e)), float(e.height_m), n))
     height_m = float(spec.camera_height_m - Cv[1])  # (y down: a camera raised has C_y < 0)
     return Scene(left, right, disparity, labels, thermal_c, thermal_to_8bit(thermal_c),
-                 _rig_at_height(rig, height_m, Rv), objects, spec, height_m)
+                 _rig_as_rendered(rig, height_m, Rv), objects, spec, height_m)
 
 
 def _free(x: float, z: float, placed: list[tuple[float, float, float]], r: float) -> bool:
