@@ -980,14 +980,18 @@ def _closed_own_peaks(own: NDArray, joint: NDArray, pairs: list[tuple[int, int]]
     proj = pair_closure_projector(tuple(pairs), n_mics)
     if proj is None or np.max(np.abs(proj[0] @ own), initial=0.0) > _OWN_CLOSURE_SAMPLES:
         return joint
+    return own if _summed_corr(P, own, nfft, bins) > _summed_corr(P, joint, nfft, bins) else joint
+
+
+def _summed_corr(P: NDArray, tau: NDArray, nfft: int, bins: NDArray) -> float:
+    """The pairs' band-limited correlations summed at their own lags: ``sum_p R_p(tau_p)``
+    with ``R_p(tau) = sum_k c_k Re(P_pk exp(j w_k tau))`` (``P`` (n_pairs, bins) weighted
+    spectra at the rfft bins ``bins`` of ``nfft``-point frames, ``tau`` (n_pairs,) samples),
+    evaluated exactly between samples."""
     k = np.asarray(bins)
     w = 2.0 * np.pi * k / nfft
-    Pc = P * np.where((k == 0) | (2 * k == nfft), 0.5, 1.0)
-
-    def summed(tau: NDArray) -> float:
-        return float(np.sum(np.real(Pc * np.exp(1j * np.outer(tau, w)))))
-
-    return own if summed(own) > summed(joint) else joint
+    cw = np.where((k == 0) | (2 * k == nfft), 0.5, 1.0)  # irfft's one-sided bin weights
+    return float(np.sum(np.real(P * cw * np.exp(1j * np.outer(tau, w)))))
 
 
 def _n_grid_directions(longest_lag: float) -> int:
@@ -1078,15 +1082,12 @@ def _steered_in_plane(P: NDArray, bins: NDArray, nfft: int, r_up: NDArray, up: i
     step_max = np.radians(float(max_shift_deg))
     rho = np.full(3, 0.0 if range_m is None else 1.0 / float(range_m))
     h = 1e-4
-    k = np.asarray(bins)
-    w = 2.0 * np.pi * k / nfft
-    cw = np.where((k == 0) | (2 * k == nfft), 0.5, 1.0)
 
     def taus(th: float) -> NDArray:
         return _inplane_tdoa(np.array([th - h, th, th + h]), rho, basis, d, I, J, c) * fs
 
     def value(tau: NDArray) -> float:
-        return float(np.sum(np.real(P * cw * np.exp(1j * np.outer(tau, w)))))
+        return _summed_corr(P, tau, nfft, bins)
 
     for _ in range(n_iter):
         tm, t0, tp = taus(th)
