@@ -528,7 +528,8 @@ def test_long_recordings_transform_each_frame_once(three, monkeypatch, band_vad)
     again = estimate_tdoas(x, FS, three, **kw)
     n_frames = len(cached.t)
     assert n_frames > 3 * kw["chunk_frames"]
-    assert n_cached == 3 * n_frames  # three channels, each frame once
+    # three channels, each frame once -- and the empty-band probe's loudest frames
+    assert n_cached == 3 * (n_frames + tdoa_mod._EMPTY_BAND_FRAMES)
     assert sum(rows) > n_cached  # (the halo of SCOT's statistics alone re-transforms some)
     for a, b in [(cached.tdoa_s, again.tdoa_s), (cached.confidence, again.confidence),
                  (cached.summary_tdoa_s, again.summary_tdoa_s)]:
@@ -1149,3 +1150,92 @@ def test_confidence_range_is_the_documented_one():
     assert ("is the smallest pair's GCC peak-to-second-peak ratio, not a probability: 0 for a "
             "frame without energy") in readme
     assert "at most 1000 (`audio.tdoa.MAX_CONFIDENCE`)" in readme
+
+
+# ------------------------------------------------------------- an upsampled recording's empty band
+def _upsampled(az_deg, rng, f_low=8000, up=2):
+    """Three-mic free-field white noise made at ``f_low`` Hz (sensor noise 20 dB included)
+    and upsampled ``up`` times afterwards, as a file read at a higher rate; its true TDOAs."""
+    from scipy.signal import resample_poly
+
+    from hearsee.geometry import unit_vector_deg
+
+    arr = MicArray.from_preset("three-mic")
+    src = 2.0 * unit_vector_deg(az_deg, 0.0)
+    x = simulate_free_field(white_noise(1.5, f_low, rng=rng), f_low, arr, src, snr_db=20,
+                            rng=rng + 1)
+    return resample_poly(x, up, 1, axis=1), arr, arr.tdoa(src)
+
+
+def test_empty_top_band_finds_the_edge_of_a_silent_top():
+    from hearsee.audio.tdoa import empty_top_band
+
+    p = np.r_[np.ones(300), np.full(212, 1e-10)]  # 512 bins, smoothed over 8
+    edge = empty_top_band(p)
+    assert 300 <= edge <= 304  # the smoothing moves the edge up by at most half its width
+    assert empty_top_band(np.r_[np.ones(300), np.full(212, 1e-5)], db=60) is None  # 50 dB
+    assert empty_top_band(np.r_[np.ones(300), np.full(212, 1e-5)], db=40) == edge
+    assert empty_top_band(np.ones(512)) is None
+    assert empty_top_band(np.zeros(512)) is None  # silence: nothing to compare with
+    assert empty_top_band(np.r_[np.ones(10), np.nan]) is None
+    with pytest.raises(ConfigError, match="power must be a spectrum"):
+        empty_top_band(np.ones((2, 5)))
+    with pytest.raises(ConfigError, match="db"):
+        empty_top_band(np.ones(5), db=-3)
+
+
+def test_an_upsampled_recording_is_not_biased_by_its_empty_band():
+    """8 kHz noise read at 16 kHz: above ~4.7 kHz it holds only the resampler's mirror images,
+    80-100 dB down, whose cross spectra point at mirrored delays. PHAT whitened them to full
+    weight and the summary TDOAs came out tens of microseconds off (the azimuth ~12 deg); the
+    empty band is now left out, and the TDOAs are as good as at 8 kHz."""
+    errs, kept, rows = [], [], []
+    for k, az in enumerate((-130.0, 20.0, 100.0)):
+        y, arr, truth = _upsampled(az, 10 * k + 3)
+        tf = estimate_tdoas(y, 2 * 8000, arr)
+        full = estimate_tdoas(y, 2 * 8000, arr, empty_band_db=None)
+        assert 3950.0 < tf.band_hz[1] <= 4000.0 and tf.band_hz[0] == 0.0  # the old Nyquist
+        assert full.band_hz == (0.0, 8000.0)
+        errs.append(np.abs(tf.summary_tdoa_s - truth).max())
+        kept.append(np.abs(full.summary_tdoa_s - truth).max())
+        rows.append(np.abs(tf.tdoa_s[tf.valid] - truth).max())
+    assert max(errs) < 1e-6  # (a sample is 62.5 us; at 8 kHz itself 0.07-0.31 us)
+    assert min(kept) > 40e-6  # what the empty band did
+    assert max(rows) < 5e-6  # every valid frame too
+
+
+def test_a_band_given_is_trimmed_and_one_inside_the_empty_band_refused():
+    y, arr, truth = _upsampled(60.0, 7)
+    tf = estimate_tdoas(y, 16000, arr, band_hz=(200.0, 7000.0))
+    assert tf.band_hz[0] == pytest.approx(200.0, abs=16.0) and 3950.0 < tf.band_hz[1] <= 4000.0
+    assert np.abs(tf.summary_tdoa_s - truth).max() < 1e-6
+    with pytest.raises(ConfigError, match=r"band_hz \(5000.0, 7000.0\): the recording holds "
+                                          r"nothing there .* upsampled"):
+        estimate_tdoas(y, 16000, arr, band_hz=(5000.0, 7000.0))
+    assert estimate_tdoas(y, 16000, arr, band_hz=(5000.0, 7000.0),
+                          empty_band_db=None).band_hz[0] > 4900.0  # asked for: as asked
+
+
+def test_a_recording_made_at_its_rate_keeps_every_bin(recording, three):
+    """Sensor noise fills the whole band: nothing is left out and nothing changes."""
+    x, _ = recording
+    a = estimate_tdoas(x, FS, three)
+    b = estimate_tdoas(x, FS, three, empty_band_db=None)
+    assert a.band_hz == b.band_hz == (0.0, FS / 2)
+    np.testing.assert_array_equal(a.tdoa_s, b.tdoa_s)
+    np.testing.assert_array_equal(a.summary_tdoa_s, b.summary_tdoa_s)
+
+
+def test_empty_band_top_hz_of_native_and_upsampled_recordings(recording):
+    from hearsee.audio.tdoa import empty_band_top_hz
+
+    x, _ = recording
+    assert empty_band_top_hz(x, FS) is None
+    assert empty_band_top_hz(np.zeros((3, FS)), FS) is None  # silence
+    assert empty_band_top_hz(x[:, :100], FS) is None  # shorter than a frame
+    for up, low in ((2, 8000), (3, 16000)):
+        y, _, _ = _upsampled(30.0, 5, f_low=low, up=up)
+        top = empty_band_top_hz(y, low * up)
+        assert 0.5 * low * 0.9 < top < 0.5 * low * 1.1  # about the old Nyquist frequency
+    with pytest.raises(AudioInputError, match="n_channels, n_samples"):
+        empty_band_top_hz(np.zeros(100), FS)

@@ -1457,6 +1457,7 @@ def localize_recording(
         The JSON document of the CLI contract::
 
             {"array": {...}, "sample_rate": fs, "method": ..., "kalman": bool,
+             "band_hz": [low, high] (the band the GCC used, Hz: TdoaFrames.band_hz),
              "frames": [{"t", "tdoa_s": {"0-1": s}, "azimuth_deg", "elevation_deg",
                          "candidates": [{"azimuth_deg", "elevation_deg"}], "confidence",
                          "valid", "feasible"}],
@@ -1552,6 +1553,7 @@ def localize_recording(
         "sample_rate": float(fs),
         "method": method,
         "kalman": bool(kalman),
+        "band_hz": None if tf.band_hz is None else [float(v) for v in tf.band_hz],
         "frames": frames,
         "summary": summary,
     }

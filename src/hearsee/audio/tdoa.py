@@ -548,6 +548,102 @@ def _band_mask(n_bins: int, nfft: int, fs: float, band_hz: tuple[float, float] |
     return m
 
 
+def _main_lobe(bins: NDArray, nfft: int, fs: float, band_hz: Any) -> int:
+    """Half-width (samples) of the GCC's main lobe over the contiguous rfft ``bins`` of an
+    ``nfft``-point transform at ``fs`` Hz; ConfigError when it leaves no lag outside it."""
+    bw = (bins[-1] - bins[0] + 1) * fs / nfft
+    main_lobe = max(2, int(np.ceil(fs / bw)))
+    if 2 * main_lobe + 1 >= nfft:
+        # (nothing outside the main lobe: every confidence was 1e3, "certain", and noise-only
+        # recordings gave valid frames and a summary with three or more microphones)
+        raise ConfigError(
+            f"band_hz {band_hz} is too narrow: {len(bins)} frequency "
+            f"bin{'s' * (len(bins) != 1)} of {nfft}-point frames, whose correlation's main "
+            f"lobe ({main_lobe} samples either side) covers every lag, so no peak can be told "
+            "from a side lobe; widen the band or lengthen the frames")
+    return main_lobe
+
+
+#: How far (dB) below the loudest part of a recording's spectrum its top band must lie, in every
+#: bin, for :func:`estimate_tdoas` to leave it out of the GCC (``empty_band_db``). A recording
+#: upsampled after it was made (an 8 kHz file read at 16 kHz, a sound server's resampling) holds
+#: nothing there but the resampler's mirror images, 80-100 dB down (scipy's polyphase filter) --
+#: which PHAT and ML whiten to full weight, and whose cross spectra point at mirrored delays:
+#: 8 kHz voices and noise upsampled to 16 kHz came out 11-13 deg off in azimuth (three-mic
+#: preset, free field, 20 dB, 2026-12-03), 0.4-0.5 deg with the band left out. A recording
+#: made at its rate keeps a noise floor: synthetic voices without any sensor noise lie 38-46
+#: dB down at 16 kHz, sensor noise at 0-30 dB SNR far less.
+EMPTY_BAND_DB = 60.0
+#: Where :func:`estimate_tdoas` ends the band of an upsampled recording. Everything above the old
+#: Nyquist frequency is the resampler's image, also in its transition band, just below where the
+#: images fall under :data:`EMPTY_BAND_DB` (6-40 dB down there): scipy's polyphase filter (8 to
+#: 16 kHz) is empty from 4.7-5.1 kHz, an FFT resampler from the old Nyquist frequency itself. So
+#: the band ends at the Nyquist frequency ``f_n`` of the highest standard rate
+#: (:data:`STANDARD_RATES_HZ`) at most :data:`EMPTY_BAND_TRANSITION` times below the empty band's
+#: edge whose smoothed spectrum at ``f_n`` lies within :data:`EMPTY_BAND_STEP_DB` of the spectrum
+#: at 0.9 ``f_n`` (the old Nyquist frequency passes half the amplitude, a standard rate's above
+#: it, in the transition band, far less: 22.05 and 24 kHz rates both fit below an upsampled
+#: 22.05 kHz recording's edge); with no such rate, at :data:`EMPTY_BAND_GUARD` of the edge.
+#: White noise and a synthetic voice at 8, 11.025, 12, 16, 22.05, 24 and 32 kHz upsampled to
+#: 16-96 kHz by scipy's polyphase and FFT resamplers (2026-12-03): the old Nyquist frequency
+#: found in 98 of 104 cases (within a bin). Missed: scipy's polyphase 12 -> 16 and 32 -> 44.1 kHz
+#: (white noise) and 44.1 -> 48 kHz keep images above -60 dB; the FFT resampler's 44.1 -> 48 kHz
+#: edge lies above 0.9 of the new Nyquist frequency and is taken for a converter's own (the band
+#: keeps 0.2-0.4 kHz of images there). Pass ``band_hz`` for those. 8 kHz white noise read at 16
+#: kHz (three-mic, 20 dB): summary TDOAs 0.1-0.3 us
+#: off with the band up to 4.0 kHz, 9 us up to 4.3 kHz, 65-86 us with every bin.
+#: An empty band that begins above :data:`EMPTY_BAND_NATIVE` of the Nyquist frequency is a
+#: converter's own anti-alias filter, not an upsampler's (CMU ARCTIC's 16 kHz files are empty from
+#: 7.4-7.8 kHz): there is no image below it, and the band ends at its edge.
+STANDARD_RATES_HZ = (8000, 11025, 12000, 16000, 22050, 24000, 32000, 44100, 48000, 88200,
+                     96000, 176400, 192000)
+EMPTY_BAND_TRANSITION = 1.4
+EMPTY_BAND_STEP_DB = 10.0
+EMPTY_BAND_GUARD = 0.85
+EMPTY_BAND_NATIVE = 0.9
+#: :func:`empty_top_band` smooths the power spectrum over this share of its bins (at least 1)
+_EMPTY_BAND_SMOOTH = 1.0 / 64.0
+
+
+def _smoothed_power(p: NDArray) -> NDArray:
+    """``p`` (n_bins,) averaged over a centred window of ``n_bins * _EMPTY_BAND_SMOOTH`` bins
+    (at least 1; the ends over the bins they have)."""
+    w = max(1, int(round(p.size * _EMPTY_BAND_SMOOTH)))
+    return np.convolve(p, np.ones(w), mode="same") / np.convolve(np.ones(p.size), np.ones(w),
+                                                                 mode="same")
+
+
+def empty_top_band(power: ArrayLike, db: float = EMPTY_BAND_DB) -> int | None:
+    """The first bin of the empty band at the top of a power spectrum, or None.
+
+    ``power`` (n_bins,) is a mean power spectrum (any linear scale, e.g. ``|X|^2`` averaged
+    over frames and channels; its bins evenly spaced, the last the highest frequency). Smoothed
+    by a moving average over ``n_bins / 64`` bins (which moves a sharp edge up by up to half
+    that), every bin from the returned index on lies
+    more than ``db`` dB below the smoothed spectrum's peak, and the bin before it does not --
+    the top of a recording upsampled after it was made (see :data:`EMPTY_BAND_DB`). None when
+    the top bin is not that low, or the spectrum is silent or not finite.
+
+    >>> import numpy as np
+    >>> p = np.r_[np.ones(100), np.full(100, 1e-9)]   # nothing from bin 100 on
+    >>> empty_top_band(p)  # (the 3-bin smoothing blurs the edge by a bin)
+    101
+    >>> empty_top_band(np.r_[np.ones(100), np.full(100, 1e-3)]) is None  # 30 dB down: a floor
+    True
+    """
+    p = np.asarray(power, dtype=float)
+    db = finite_number("db", db, 0.0, lo_open=True)
+    if p.ndim != 1 or p.size < 2:
+        raise ConfigError(f"power must be a spectrum of 2 or more bins, got shape {p.shape}")
+    if not np.all(np.isfinite(p)) or not p.max() > 0:
+        return None
+    sm = _smoothed_power(p)
+    loud = sm >= sm.max() * 10.0 ** (-db / 10.0)
+    if loud[-1]:
+        return None
+    return int(np.flatnonzero(loud)[-1]) + 1
+
+
 def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
         max_tau_s: float | None = None, refine: str = "interp",
         band_hz: tuple[float, float] | None = None) -> GccResult:
@@ -652,6 +748,10 @@ class TdoaFrames:
         :func:`estimate_tdoas`): the coherence with 4x longer frames over that with the
         analysis frames; ~1 (at most 1.0 in our tests) in free field, 1.03-2.1 in RT60 0.3-0.6
         s rooms; NaN when not measured.
+    band_hz : (float, float) or None
+        The frequency band the GCC used, Hz (lowest and highest bin): ``band_hz`` of
+        :func:`estimate_tdoas` or the whole band, less an empty top band
+        (``empty_band_db``). None where not recorded.
     """
 
     t: NDArray
@@ -669,6 +769,7 @@ class TdoaFrames:
     coherence_ratio: float = float("nan")
     summary_method: str = ""
     coherence_gain: float = float("nan")
+    band_hz: tuple[float, float] | None = None
 
     @property
     def pair_labels(self) -> list[str]:
@@ -883,6 +984,74 @@ def _joined(parts: list[tuple[NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
         return parts[0]
     return (np.concatenate([p[0] for p in parts], axis=1),
             np.concatenate([p[1] for p in parts], axis=1))
+
+
+#: :func:`_empty_band_cut` looks at the spectra of this many of a recording's loudest frames (the
+#: same whatever the recording's length or the band asked for: ~1 s of the loudest audio with 64
+#: ms frames; a few tenths of a millisecond per call)
+_EMPTY_BAND_FRAMES = 16
+
+
+def _empty_band_cut(frames: NDArray, win: NDArray, nfft: int, fs: float, energy: NDArray,
+                    db: float) -> int | None:
+    """The rfft bin where the GCC's band must end (exclusive), or None: from the edge found by
+    :func:`empty_top_band` in the mean power over the channels and the
+    :data:`_EMPTY_BAND_FRAMES` loudest ``frames`` (by ``energy``) of the whole band, the old
+    Nyquist frequency of an upsampled recording (:data:`EMPTY_BAND_TRANSITION`)."""
+    n = min(_EMPTY_BAND_FRAMES, frames.shape[1])
+    if n == 0:
+        return None
+    loudest = np.sort(np.argsort(energy, kind="stable")[-n:])
+    power = _spectra_power(frames[:, loudest, :], win, nfft, 0, nfft // 2 + 1)[1]
+    mean = power.mean(axis=(0, 1), dtype=float)
+    edge = empty_top_band(mean, db)
+    if edge is None or edge > EMPTY_BAND_NATIVE * (nfft // 2):
+        return edge
+    edge_hz = edge * fs / nfft
+    sm = _smoothed_power(mean)
+    for f_n in sorted((r / 2.0 for r in STANDARD_RATES_HZ
+                       if edge_hz / EMPTY_BAND_TRANSITION <= r / 2.0 <= edge_hz), reverse=True):
+        k_n = int(np.ceil(f_n * nfft / fs - 1e-9))
+        if sm[min(k_n, sm.size - 1)] >= sm[int(0.9 * k_n)] * 10.0 ** (-EMPTY_BAND_STEP_DB / 10):
+            return k_n
+    return int(np.floor(EMPTY_BAND_GUARD * edge))
+
+
+def empty_band_top_hz(x: ArrayLike, fs: float, frame_ms: float = 64.0,
+                      db: float = EMPTY_BAND_DB) -> float | None:
+    """The highest frequency (Hz) :func:`estimate_tdoas` keeps of a recording whose top band
+    is empty (``empty_band_db``: upsampled from a lower rate), or None when nothing is empty.
+
+    For callers that set a band of their own before the audio is processed in pieces -- a
+    stream, whose batches must share one band: ``hearsee track`` asks it of a file. ``x``
+    (n_ch, n) at ``fs`` Hz, looked at in ``frame_ms`` frames (half overlapping); the band
+    :func:`estimate_tdoas` keeps may differ by a bin (its transform length depends on the
+    array).
+
+    >>> import numpy as np
+    >>> from scipy.signal import resample_poly
+    >>> x8 = np.random.default_rng(0).standard_normal((2, 8000))  # 1 s of noise at 8 kHz
+    >>> empty_band_top_hz(x8, 8000) is None
+    True
+    >>> empty_band_top_hz(resample_poly(x8, 2, 1, axis=1), 16000)  # read at 16 kHz
+    3984.375
+    """
+    fs = check_analysis_fs(fs)
+    db = finite_number("db", db, 0.0, lo_open=True)
+    a = as_samples(x)
+    if a.ndim != 2:
+        raise AudioInputError(f"recording must be (n_channels, n_samples), got {a.shape}")
+    frame_len, hop = frame_geometry(fs, frame_ms, frame_ms / 2.0)
+    peak = float(np.max(np.abs(a), initial=0.0))
+    if not peak > 0 or a.shape[1] < frame_len:
+        return None
+    a32 = (a / peak).astype(np.float32)
+    n_frames = (a32.shape[1] - frame_len) // hop + 1
+    frames = frame_signals(a32, frame_len, hop)
+    energy = _frame_energy(a32, frame_len, hop, n_frames)
+    cut = _empty_band_cut(frames, _window(DEFAULT_WINDOW, frame_len), frame_len, fs,
+                          energy, db)
+    return None if cut is None else (cut - 1) * fs / frame_len
 
 
 def _spectra_fit(n_ch: int, n_frames: int, n_bins: int) -> bool:
@@ -1452,6 +1621,7 @@ def estimate_tdoas(
     active: ArrayLike | None = None,
     frame_noise_psd: ArrayLike | None = None,
     causal_smoothing: bool = False,
+    empty_band_db: float | None = EMPTY_BAND_DB,
 ) -> TdoaFrames:
     """Framed GCC TDOAs of all microphone pairs at once.
 
@@ -1478,9 +1648,11 @@ def estimate_tdoas(
         ``read_recording(resample=True)``, or by a sound server) holds nothing above its old
         Nyquist frequency but the resampler's mirror images of the band below, whose
         cross-spectra point at mirrored delays; PHAT and ML weigh those bins like any other
-        (the SNR weights take the images for signal): pass a band below it. 8 kHz recordings
-        upsampled to 16 kHz (free field, 20 dB, 2026-12-03): summaries 4-70 us off, azimuths
-        6-15 deg RMS (up to 33) without, 0.3-0.5 deg with ``(0, 3800)``, as at 8 kHz.
+        (the SNR weights take the images for signal). Since 2026-12-03 such an empty top band
+        is found and left out by itself (``empty_band_db``); before, 8 kHz recordings
+        upsampled to 16 kHz (free field, 20 dB) gave summaries 4-70 us off and azimuths 6-15
+        deg RMS (up to 33), 0.3-0.5 deg with ``(0, 3800)``, as at 8 kHz. A band given here is
+        trimmed the same way where it reaches into the empty band.
     smooth_frames : int
         Frames averaged for the spectral densities of SCOT, ROTH and ML.
     margin_samples : float
@@ -1672,6 +1844,15 @@ def estimate_tdoas(
         frames centred on it: a stream prepends its earlier frames as context (inactive,
         ``active``) and so gets results that do not depend on where its batches end. Default
         False.
+    empty_band_db : float or None
+        Leave out of the GCC the band at the top of the spectrum that lies more than this many
+        dB below the recording's loudest part in every bin (:func:`empty_top_band` of the
+        frames' mean power; default :data:`EMPTY_BAND_DB`, 60): the empty band of a recording
+        upsampled after it was made, which otherwise biases PHAT and ML (see ``band_hz``).
+        ``TdoaFrames.band_hz`` says the band used. Recordings made at their rate, with any
+        noise floor, keep every bin. None keeps every bin always (a stream does: its batches
+        must not each decide on a band of their own). A band left with nothing but the empty
+        part is a ConfigError.
 
     Returns
     -------
@@ -1731,18 +1912,10 @@ def estimate_tdoas(
     # zero padding by twice the largest lag keeps the admissible lags free of circular wrap
     nfft = gcc_nfft(frame_len, float(max_lag.max()))
     n_bins = nfft // 2 + 1
-    band = _band_mask(n_bins, nfft, fs, band_hz)
-    bins = np.flatnonzero(band)
-    bw = (band.nonzero()[0][-1] - band.nonzero()[0][0] + 1) * fs / nfft
-    main_lobe = max(2, int(np.ceil(fs / bw)))
-    if 2 * main_lobe + 1 >= nfft:
-        # (nothing outside the main lobe: every confidence was 1e3, "certain", and noise-only
-        # recordings gave valid frames and a summary with three or more microphones)
-        raise ConfigError(
-            f"band_hz {band_hz} is too narrow: {len(bins)} frequency "
-            f"bin{'s' * (len(bins) != 1)} of {nfft}-point frames, whose correlation's main "
-            f"lobe ({main_lobe} samples either side) covers every lag, so no peak can be told "
-            "from a side lobe; widen the band or lengthen the frames")
+    bins = np.flatnonzero(_band_mask(n_bins, nfft, fs, band_hz))
+    main_lobe = _main_lobe(bins, nfft, fs, band_hz)
+    if empty_band_db is not None:
+        empty_band_db = finite_number("empty_band_db", empty_band_db, 0.0, lo_open=True)
     if isinstance(window, list):
         window = tuple(window)
     try:
@@ -1779,6 +1952,21 @@ def estimate_tdoas(
                                                   chunk)
     elif _spectra_fit(arr.n_mics, n_frames, k1 - k0):
         X_all, power_all = _band_spectra(frames, win, nfft, k0, k1, chunk)
+    cut = (_empty_band_cut(frames, win, nfft, fs, energy, empty_band_db)
+           if empty_band_db is not None else None)
+    if cut is not None and cut < k1:
+        if cut <= k0:
+            raise ConfigError(
+                f"band_hz {band_hz}: the recording holds nothing there (its spectrum is "
+                f"more than {empty_band_db:g} dB below its loudest part from about "
+                f"{cut * fs / nfft:.0f} Hz up: upsampled from a lower rate?); choose a band "
+                "below that")
+        X_all = None if X_all is None else X_all[..., :cut - k0]
+        power_all = None if power_all is None else power_all[..., :cut - k0]
+        k1 = cut
+        band_bins = np.arange(k0, k1)
+        nb = k1 - k0
+        main_lobe = _main_lobe(band_bins, nfft, fs, band_hz)
     if frame_noise_psd is None:
         noise_psd = (_noise_spectrum(frames, active, win, nfft, k0, k1, power_all)
                      if snr_weight and not given else None)
@@ -1961,4 +2149,5 @@ def estimate_tdoas(
     t = (np.arange(n_frames) * hop + frame_len / 2.0) / fs
     return TdoaFrames(t, tdoa, conf, valid, prs, summary, summary_conf, max_lag / fs, fs,
                       acc / max(n_acc, 1) if n_acc else None, band_bins, nfft,
-                      coherence_ratio, summary_method, coherence_gain)
+                      coherence_ratio, summary_method, coherence_gain,
+                      (k0 * fs / nfft, (k1 - 1) * fs / nfft))

@@ -878,7 +878,9 @@ class FrameGcc:
                                 refine=cfg.refine, min_confidence=cfg.min_confidence,
                                 whole_recording=False, snr_weight=bool(cfg.snr_weight),
                                 active=active, frame_noise_psd=noise,
-                                causal_smoothing=True, chunk_frames=len(active))
+                                causal_smoothing=True, chunk_frames=len(active),
+                                empty_band_db=None)  # (a band per batch: results would
+            # depend on where the batches end; a file's empty band: ``hearsee track`` finds it)
             tdoa[s0:s1], conf[s0:s1] = tf.tdoa_s[cc:], tf.confidence[cc:]
         if self.n_context:  # the samples of the last n_context frames up to the next start
             c = min(self.n_context, c0 + n_frames)
