@@ -326,3 +326,50 @@ def test_a_recording_without_a_source_is_a_warning_line(tmp_path, capsys):
     assert "hearsee: warning: track: no frame held a localizable source\n" in err
     lines = out.splitlines()
     assert len(lines) > 10 and all(json.loads(u)["azimuth_deg"] is None for u in lines)
+
+
+def test_track_leaves_out_an_upsampled_files_empty_band(tmp_path, capsys):
+    """The stream cannot look ahead, so `hearsee track` looks at a file first: an 8 kHz
+    recording read at 16 kHz gets the band below 4 kHz (and a note), as `hearsee localize`."""
+    from scipy.signal import resample_poly
+
+    from hearsee.audio.propagation import simulate_free_field
+    from hearsee.audio.signals import synthetic_voice
+    from hearsee.geometry import unit_vector_deg
+
+    arr = MicArray.from_preset("three-mic")
+    x = simulate_free_field(synthetic_voice("female", 1.5, 8000, rng=3), 8000, arr,
+                            2.0 * unit_vector_deg(70.0, 0.0), snr_db=20, rng=4)
+    y = resample_poly(x, 2, 1, axis=1)
+    wav = tmp_path / "up.wav"
+    write_recording(wav, 0.5 * y / np.abs(y).max(), FS)
+    assert main(["track", str(wav), "--array", "three-mic", "--format", "json"]) == 0
+    out, err = capsys.readouterr()
+    assert err.startswith(f"hearsee: note: {wav}: the top of the spectrum is empty")
+    az = [u["azimuth_deg"] for u in json.loads(out)["updates"][-10:]]
+    assert None not in az and np.allclose(az, 70.0, atol=2.0)
+    assert main(["track", str(wav), "--array", "three-mic", "--band-hz", "5000,7000"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "--band-hz 5000,7000: nothing there" in err
+
+
+def test_stream_bands():
+    from hearsee.cli.track import _srp_band, _stream_band
+
+    x = np.random.default_rng(0).standard_normal((3, FS))  # made at 16 kHz: nothing empty
+    assert _stream_band(None, x, FS, 64.0) is None
+    assert _stream_band((300.0, 3500.0), x, FS, 64.0) == (300.0, 3500.0)
+    assert _stream_band((300.0, 3500.0), None, FS, 64.0) == (300.0, 3500.0)  # live input
+    from scipy.signal import resample_poly
+
+    y = resample_poly(x[:, ::2], 2, 1, axis=1)  # 8 kHz content at 16 kHz
+    lo, hi = _stream_band(None, y, FS, 64.0)
+    assert lo == 0.0 and 3950.0 < hi <= 4000.0
+    assert _stream_band((300.0, 3500.0), y, FS, 64.0) == (300.0, 3500.0)
+    assert _stream_band((300.0, 6000.0), y, FS, 64.0) == (300.0, hi)
+    with pytest.raises(ConfigError, match="nothing there"):
+        _stream_band((5000.0, 7000.0), y, FS, 64.0)
+    assert _srp_band(None, (300.0, 3500.0)) == (300.0, 3500.0)
+    assert _srp_band((0.0, hi), (300.0, 3500.0)) == (300.0, 3500.0)
+    assert _srp_band((1000.0, 2000.0), (300.0, 3500.0)) == (1000.0, 2000.0)
+    assert _srp_band((3600.0, 3900.0), (300.0, 3500.0)) == (3600.0, 3900.0)

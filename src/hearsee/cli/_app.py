@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import math
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from enum import Enum, StrEnum
 from pathlib import Path
@@ -133,6 +133,36 @@ def parse_floats(text: str, n: int | None, what: str) -> list[float]:
     if not all(math.isfinite(v) for v in vals):
         raise typer.BadParameter(f"{what}: numbers must be finite, got {text!r}")
     return vals
+
+
+def parse_band(text: str, what: str = "--band-hz") -> tuple[float, float]:
+    """``"LOW,HIGH"`` in Hz as a band ``(low, high)`` with ``0 <= low < high``;
+    typer.BadParameter otherwise."""
+    lo, hi = parse_floats(text, 2, what)
+    if not 0.0 <= lo < hi:
+        raise typer.BadParameter(f"{what}: expected LOW,HIGH in Hz with 0 <= LOW < HIGH, got "
+                                 f"{text!r}")
+    return lo, hi
+
+
+#: :func:`note_empty_band` speaks when the band used ends below this share of the band asked for
+#: (the whole band up to the Nyquist frequency without --band-hz): the GCC left out an empty top
+#: band below :data:`hearsee.audio.tdoa.EMPTY_BAND_NATIVE` of it -- an upsampled recording, not
+#: a converter's own anti-alias edge
+_EMPTY_BAND_NOTE = 0.9
+
+
+def note_empty_band(where: object, used: Sequence[float] | None,
+                    asked: tuple[float, float] | None, fs: float) -> None:
+    """One line on stderr when the GCC's band ``used`` (Hz) ends well below the band ``asked``
+    for (None: up to ``fs / 2``) because the recording ``where`` holds nothing above it."""
+    if used is None:
+        return
+    top = fs / 2.0 if asked is None else min(asked[1], fs / 2.0)
+    if used[1] < _EMPTY_BAND_NOTE * top:
+        err_console.print(f"hearsee: note: {where}: the top of the spectrum is empty "
+                          f"(upsampled from a lower rate?): the GCC uses {used[0]:.0f}-"
+                          f"{used[1]:.0f} Hz", highlight=False)
 
 
 def print_summary(title: str, summary: dict[str, Any]) -> None:

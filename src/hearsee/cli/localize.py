@@ -11,7 +11,16 @@ from typing import Annotated, Any
 
 import typer
 
-from hearsee.cli._app import GccMethod, OutputFormat, app, emit_json, err_console, progress
+from hearsee.cli._app import (
+    GccMethod,
+    OutputFormat,
+    app,
+    emit_json,
+    err_console,
+    note_empty_band,
+    parse_band,
+    progress,
+)
 from hearsee.config import finite_number
 from hearsee.errors import ConfigError
 
@@ -129,6 +138,11 @@ def localize_cmd(
         "4+ microphones the steered in-plane search when reverberant); with --in-plane the "
         "benchmarked settings but for the benchmark's band limits and its best guess where "
         "hearsee abstains. Sets --method and --reverb-method itself.")] = False,
+    band_hz: Annotated[str | None, typer.Option(
+        "--band-hz", help="LOW,HIGH: only this frequency band in Hz for the GCC, e.g. 300,3500 "
+        "for speech. An empty band at the top of the spectrum (a recording upsampled from a "
+        "lower rate) is left out by itself either way; the JSON's band_hz says the band used.",
+        show_default=False)] = None,
     tdoa_std_us: Annotated[float | None, typer.Option(
         "--tdoa-std-us", help="Expected error of the whole-recording TDOAs in microseconds, for "
         "the source position of arrays of 4+ microphones: the position is reported (with its "
@@ -146,6 +160,7 @@ def localize_cmd(
     from hearsee.audio.tdoa import SUMMARY_TUNED, check_frame_ms, dominant_sample, frame_geometry
 
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
+    band = None if band_hz is None else parse_band(band_hz)
     if tdoa_std_us is not None:
         # (the library's bound, in microseconds: 1e300 overflowed squaring it, a traceback)
         finite_number("--tdoa-std-us", tdoa_std_us, 0.0, MAX_TDOA_STD_S * 1e6, lo_open=True)
@@ -165,6 +180,9 @@ def localize_cmd(
     if summary_tuned and arr.mask is not None:
         raise ConfigError(f"--summary-tuned: the masked array {arr.name!r} has a pipeline of its "
                           "own (ch. 3) that takes none of those settings; leave it out")
+    if band is not None and arr.mask is not None:
+        raise ConfigError(f"--band-hz: the masked array {arr.name!r} has a pipeline of its own "
+                          "(ch. 3) that sets its bands itself; leave it out")
     if in_plane and arr.mask is not None:
         raise ConfigError(f"--in-plane: the masked array {arr.name!r} has a pipeline of its own "
                           "(ch. 3; tables of the horizontal plane) without an in-plane model; "
@@ -184,7 +202,8 @@ def localize_cmd(
         doc = localize_recording(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
                                  kalman=not no_kalman, progress=advance, in_plane=in_plane,
                                  **settings, **({} if tdoa_std_us is None else
-                                                {"tdoa_std_s": tdoa_std_us * 1e-6}))
+                                                {"tdoa_std_s": tdoa_std_us * 1e-6}),
+                                 **({} if band is None else {"band_hz": band}))
     doc["recording"] = str(recording)
     if fmt is OutputFormat.json:
         emit_json(doc)
@@ -192,6 +211,7 @@ def localize_cmd(
         _write_csv(doc)
     else:
         _print_table(doc)
+    note_empty_band(recording, doc.get("band_hz"), band, fs)
     if doc["summary"]["n_valid_frames"] == 0:
         spike = dominant_sample(x)
         if spike is None:

@@ -13,7 +13,16 @@ from typing import Annotated
 
 import typer
 
-from hearsee.cli._app import GccMethod, app, emit_json, err_console, parse_floats, to_jsonable
+from hearsee.cli._app import (
+    GccMethod,
+    app,
+    emit_json,
+    err_console,
+    note_empty_band,
+    parse_band,
+    parse_floats,
+    to_jsonable,
+)
 from hearsee.stream.video import IMAGE_POINT_MARGIN
 
 
@@ -58,6 +67,37 @@ def _camera_pose(camera_at: str | None, pan: float | None, tilt: float | None,
             f"--camera-at: {camera_at} is {off:.3g} m from the array's centre; the camera must "
             f"be within {CAMERA_MAX_OFFSET_M:g} m of its microphones (metres, array frame)")
     return pos, pan, tilt
+
+
+def _stream_band(asked: tuple[float, float] | None, x, fs: float, frame_ms: float
+                 ) -> tuple[float, float] | None:
+    """The stream's GCC band (Hz): ``asked`` (--band-hz; None = the whole band) less the
+    empty top band of a file's samples ``x`` (None for live input, which cannot be looked at
+    ahead) -- :func:`hearsee.audio.tdoa.empty_band_top_hz`, as ``hearsee localize`` leaves it
+    out; ConfigError when nothing of ``asked`` is left."""
+    from hearsee.audio.tdoa import empty_band_top_hz
+    from hearsee.errors import ConfigError
+
+    top = None if x is None else empty_band_top_hz(x, fs, frame_ms)
+    if top is None or (asked is not None and asked[1] <= top):
+        return asked
+    lo = 0.0 if asked is None else asked[0]
+    if top <= lo:
+        what = "the recording" if asked is None else f"--band-hz {asked[0]:g},{asked[1]:g}"
+        raise ConfigError(f"{what}: nothing there (the recording's spectrum is empty above "
+                          f"about {top:.0f} Hz: upsampled from a lower rate?); choose a band "
+                          "below that")
+    return lo, top
+
+
+def _srp_band(gcc_band: tuple[float, float] | None, srp_band: tuple[float, float] | None
+              ) -> tuple[float, float] | None:
+    """The steered response's band (Hz) within the GCC's band ``gcc_band``: ``srp_band``
+    (StreamConfig's 300-3500 Hz) where they overlap, else ``gcc_band`` itself."""
+    if gcc_band is None or srp_band is None:
+        return srp_band if gcc_band is None else gcc_band
+    lo, hi = max(gcc_band[0], srp_band[0]), min(gcc_band[1], srp_band[1])
+    return (lo, hi) if lo < hi else gcc_band
 
 
 def _warn_short_video(points, what: object, t_end: float) -> None:
@@ -155,6 +195,11 @@ def track_cmd(
         "weak talker's error through pauses in bench/tracking.py but lagged sharp turns by "
         "up to ~2 more frames; 0 = off.")
     ] = 0.0,
+    band_hz: Annotated[str | None, typer.Option(
+        "--band-hz", help="LOW,HIGH: only this frequency band in Hz for the GCC (and, within "
+        "it, the steered response's 300-3500 Hz), e.g. 300,3500. A file's empty band at the "
+        "top of the spectrum (upsampled from a lower rate) is left out by itself either way.",
+        show_default=False)] = None,
     fmt: Annotated[TrackFormat, typer.Option(
         "--format", help="jsonl: one JSON line per frame; json: one document.")
     ] = TrackFormat.jsonl,
@@ -205,6 +250,7 @@ def track_cmd(
         raise ConfigError(f"{' / '.join(pose)} need{'s' if len(pose) == 1 else ''} --camera "
                           "CAM.yaml and an image-point source (they place the camera)")
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
+    band = None if band_hz is None else parse_band(band_hz)
     if rate_tau is None:
         rate_tau = DIRECTION_RATE_TAU_S
     if not rate_tau > 0:
@@ -248,6 +294,11 @@ def track_cmd(
                                   duration_s=duration, where="--device")
         else:
             source = WavSource(recording, n_channels=arr.n_mics, block_len=4096)
+        used = _stream_band(band, None if device is not None else source.x, source.fs,
+                            frame_ms)
+        cfg.band_hz, cfg.srp_band_hz = used, _srp_band(used, cfg.srp_band_hz)
+        if used is not None:
+            note_empty_band(recording, used, band, source.fs)
         pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
         try:
             pipe.run(source, sink, threaded=device is not None)
