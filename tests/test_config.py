@@ -12,8 +12,9 @@ from hearsee.config import (
     save_yaml,
     time_limit,
     to_jsonable,
+    whole_number,
 )
-from hearsee.errors import ConfigError, EstimationError, InputFileError
+from hearsee.errors import ConfigError, EstimationError, GeometryError, InputFileError
 
 
 def test_number_takes_numpy_scalars_and_refuses_non_numbers():
@@ -52,6 +53,27 @@ def test_is_real_and_finite_number():
     with pytest.raises(EstimationError, match="b must be"):  # the caller's own exception type
         finite_number("b", float("inf"), error=EstimationError)
 
+
+
+def test_whole_number_bounds_and_none_as_no_bound():
+    """lo=None is no lower bound (as in finite_number), not a builtin TypeError comparing the
+    value with None; the other bounds keep their rule and message."""
+    assert whole_number("n", 3) == 3 and isinstance(whole_number("n", np.int64(3)), int)
+    assert whole_number("n", -7, lo=None) == -7
+    assert whole_number("n", -7, lo=None, hi=5) == -7
+    assert whole_number("n", 0, lo=0, hi=0) == 0
+    cases = [(0, {}, r"n must be an integer >= 1, got 0"),
+             (6, dict(lo=2, hi=5), r"n must be an integer in \[2, 5\], got 6"),
+             (6, dict(lo=None, hi=5), r"n must be an integer <= 5, got 6"),
+             (2.5, dict(lo=None), r"n must be an integer, got 2.5"),
+             ("3", dict(lo=None), r"n must be an integer, got '3'"),
+             (None, dict(lo=None), r"n must be an integer, got None"),
+             (True, dict(lo=None, hi=5), r"n must be an integer <= 5, got True")]
+    for value, kw, msg in cases:
+        with pytest.raises(ConfigError, match=msg):
+            whole_number("n", value, **kw)
+    with pytest.raises(GeometryError, match="n_mics must be an integer"):
+        whole_number("n_mics", "two", lo=None, error=GeometryError)
 
 def test_save_yaml_and_json_take_numpy_values(tmp_path):
     data = {"name": np.str_("rig"), "K": np.eye(2), "n": np.int32(3), "ok": np.bool_(True),

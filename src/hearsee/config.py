@@ -454,15 +454,22 @@ def time_limit(name: str, value: Any, *, error: type[Exception] = ConfigError) -
     return None if value >= MAX_TIME_LIMIT_S else float(value)
 
 
-def whole_number(name: str, value: Any, lo: int = 1, hi: int | None = None, *,
+def whole_number(name: str, value: Any, lo: int | None = 1, hi: int | None = None, *,
                  error: type[Exception] = ConfigError) -> int:
     """``value`` as an int when it is a Python or numpy integer (not a bool) within
-    ``[lo, hi]``, else ``error`` naming ``name`` (counts, strides, steps, lengths in samples
-    or pixels; a float such as 2.5 is refused rather than rounded)."""
+    ``[lo, hi]`` (None = unbounded on that side, as in :func:`finite_number`), else ``error``
+    naming ``name`` (counts, strides, steps, lengths in samples or pixels; a float such as 2.5
+    is refused rather than rounded). ``lo=None`` compared the value with None: a builtin
+    TypeError whatever the value."""
     ok = isinstance(value, int | np.integer) and not isinstance(value, bool)
-    if not ok or value < lo or (hi is not None and value > hi):
-        rule = f"in [{lo}, {hi}]" if hi is not None else f">= {lo}"
-        raise error(f"{name} must be an integer {rule}, got {value!r}")
+    if not ok or (lo is not None and value < lo) or (hi is not None and value > hi):
+        if lo is not None and hi is not None:
+            rule = f" in [{lo}, {hi}]"
+        elif lo is not None:
+            rule = f" >= {lo}"
+        else:
+            rule = f" <= {hi}" if hi is not None else ""
+        raise error(f"{name} must be an integer{rule}, got {value!r}")
     return int(value)
 
 
