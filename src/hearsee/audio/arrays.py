@@ -395,14 +395,17 @@ def check_pairs(pairs: Sequence[tuple[int, int]], n_mics: int) -> list[tuple[int
     for an empty list, a pair that is not two whole numbers (0.7 used to be truncated to index
     0), an index outside ``[0, n_mics)`` (a negative one used to wrap around to the last
     microphones) or ``i == j``; also for ``n_mics`` that is no whole number >= 2 (None was a
-    builtin TypeError). The one rule of :meth:`MicArray.checked_pairs` and
+    builtin TypeError) and for text (``"01"`` was read character by character: "a pair is two
+    microphone indices, got '0'"). The one rule of :meth:`MicArray.checked_pairs` and
     :class:`hearsee.audio.itd_filter.ItdKalman`."""
     n_mics = whole_number("n_mics", n_mics, lo=2, error=GeometryError)
     try:
-        items = list(pairs)
+        items = None if isinstance(pairs, str | bytes) else list(pairs)
     except TypeError:
+        items = None
+    if items is None:
         raise GeometryError(f"pairs must be a list of (i, j) microphone index pairs, got "
-                            f"{pairs!r}") from None
+                            f"{pairs!r}")
     out = []
     for p in items:
         try:  # two whole numbers
@@ -471,8 +474,12 @@ def closure_rms(values: ArrayLike, pairs: Sequence[tuple[int, int]], n_mics: int
     :func:`pair_closure_projector`. Independently measured pair TDOAs (one GCC peak per pair)
     disagree by it; None when the pairs hold no closed cycle (e.g. ``n - 1`` pairs sharing a
     reference microphone). GeometryError for pairs :func:`check_pairs` refuses or values that
-    are not one per pair."""
+    are not numbers, one per pair (text was numpy's builtin ValueError, and a list of numbers
+    written as text, ``["1", "2", "3"]``, was read as numbers)."""
     prs = tuple(check_pairs(pairs, n_mics))
+    if not real_entries(values):
+        raise GeometryError(f"closure_rms: values must be numbers, one per pair, got "
+                            f"{values!r:.60}")
     v = np.asarray(values, dtype=float)
     if v.shape != (len(prs),):
         raise GeometryError(f"closure_rms needs one value per pair ({len(prs)}), got shape "
@@ -486,14 +493,19 @@ def closure_rms(values: ArrayLike, pairs: Sequence[tuple[int, int]], n_mics: int
 
 def _given(func: str, **args: Any) -> None:
     """GeometryError naming ``func`` and the first of ``args`` (argument name -> value) that
-    is None. The numeric kernels below (:func:`pair_tdoa`, :func:`pair_tdoa_jacobian`,
-    :func:`position_uncertainty`, :func:`residual_scaled_variance`) run inside the solvers'
-    loops and check no more than this (a fraction of a microsecond): None made numpy's or
-    Python's builtin TypeError / IndexError, and as a pair index or residuals a wrong
-    answer without an error (an extra axis; sig^2 alone)."""
+    is None or text (a ``str`` or ``bytes``). The numeric kernels below (:func:`pair_tdoa`,
+    :func:`pair_tdoa_jacobian`, :func:`position_uncertainty`,
+    :func:`residual_scaled_variance`) run inside the solvers' loops and check no more than
+    this (a fraction of a microsecond): None made numpy's or Python's builtin TypeError /
+    IndexError, and as a pair index or residuals a wrong answer without an error (an extra
+    axis; sig^2 alone); text made numpy's ValueError / UFuncTypeError / IndexError, and
+    position_uncertainty took a text ``max_rel_distance_std`` without a word. Entries of a
+    list are not looked at (the kernels' callers pass arrays they made)."""
     for name, value in args.items():
         if value is None:
             raise GeometryError(f"{func}: {name} must be given, got None")
+        if isinstance(value, str | bytes):
+            raise GeometryError(f"{func}: {name} must be numeric, got text {value!r:.40}")
 
 
 def pair_tdoa(points: ArrayLike, positions: NDArray, i: NDArray, j: NDArray,
