@@ -453,3 +453,29 @@ def test_sphere_series_refuses_empty_and_non_numeric_settings():
     np.testing.assert_array_equal(
         bem.sphere_transfer(np.array([1000]), np.float64(A), 1, np.float32(0.5), 343),
         bem.sphere_transfer([1000.0], A, [1.0], float(np.float32(0.5)), 343.0))
+
+
+@pytest.mark.parametrize("points, k, match", [
+    (None, [1.0], r"^incident_field: points: expected points"),
+    ("abc", [1.0], r"^incident_field: points: expected points"),
+    ([[0.0, 0.1]], [1.0], r"^incident_field: points: expected points .* got shape \(1, 2\)"),
+    ([[0.0, 0.0, np.nan]], [1.0], r"^incident_field: points must be finite"),
+    (np.zeros((2, 2, 3)) + 0.1, [1.0], r"^incident_field: points must be .* shape \(P, 3\)"),
+    ([[0.0, 0.0, 0.1]], None, r"^incident_field: k must be wavenumbers"),
+    ([[0.0, 0.0, 0.1]], "abc", r"^incident_field: k must be wavenumbers"),
+    ([[0.0, 0.0, 0.1]], ["1.0"], r"^incident_field: k must be wavenumbers"),
+    ([[0.0, 0.0, 0.1]], [np.nan], r"^incident_field: k must be .* non-finite"),
+    ([[0.0, 0.0, 0.1]], [[1.0]], r"^incident_field: k must be .* shape \(F,\)"),
+])
+def test_incident_field_refuses_points_and_wavenumbers_that_are_no_numbers(points, k, match):
+    """points=None (or k=None, or a NaN in either) gave NaN without a word; text was numpy's
+    builtin ValueError, points of 2 coordinates its broadcasting ValueError, a k of shape
+    (1, 1) an output of 4 dimensions. The well-formed call answers as before."""
+    src = [[1.0, 0.0, 0.0]]
+    with pytest.raises(GeometryError, match=match):
+        bem.incident_field(points, k, src)
+    x, kk = np.array([[0.0, 0.0, 0.1]]), 2.0
+    r = np.linalg.norm(np.array(src[0]) - x[0])
+    assert bem.incident_field(x, [kk], src)[0, 0, 0] == 1.0 / r * np.exp(1j * kk * (r - 1.0))
+    assert bem.incident_field(x[0], kk, src).shape == (1, 1, 1)
+

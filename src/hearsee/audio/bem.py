@@ -548,11 +548,24 @@ def incident_field(points: ArrayLike, k: ArrayLike, source: ArrayLike,
     ``points`` (P, 3) metres; ``k`` (F,) wavenumbers rad/m; ``source`` (S, 3) source positions
     (metres) or, with ``far_field``, directions towards the source. Returns (F, S, P) complex.
     GeometryError for a source that is not finite, a direction [0, 0, 0], or a source at the
-    origin or at one of the points (within :data:`_PLANE_RTOL` of the coordinates).
+    origin or at one of the points (within :data:`_PLANE_RTOL` of the coordinates); and for
+    ``points`` or ``k`` that are not finite numbers of those shapes (None gave NaN without a
+    word, text numpy's builtin ValueError, points of 2 coordinates its broadcasting error).
     """
-    x = np.atleast_2d(np.asarray(points, dtype=float))
+    x = np.atleast_2d(as_points(points, "incident_field: points"))
+    if x.ndim != 2 or not np.all(np.isfinite(x)):
+        raise GeometryError("incident_field: points must be finite [x, y, z] in metres, shape "
+                            "(P, 3), got " + (f"shape {x.shape}" if x.ndim != 2
+                                              else "non-finite values"))
     s = _as_sources(source, far_field)
+    if not real_entries(k):
+        raise GeometryError(f"incident_field: k must be wavenumbers (rad/m), finite numbers, "
+                            f"got {k!r:.60}")
     k = np.atleast_1d(np.asarray(k, dtype=float))
+    if k.ndim != 1 or not np.all(np.isfinite(k)):
+        raise GeometryError("incident_field: k must be wavenumbers (rad/m), finite numbers of "
+                            "shape (F,), got " + (f"shape {k.shape}" if k.ndim != 1
+                                                  else "non-finite values"))
     if not far_field:
         _check_sources(x, s)
     return _incident(x, k, s, far_field)
