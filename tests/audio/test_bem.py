@@ -479,3 +479,51 @@ def test_incident_field_refuses_points_and_wavenumbers_that_are_no_numbers(point
     assert bem.incident_field(x, [kk], src)[0, 0, 0] == 1.0 / r * np.exp(1j * kk * (r - 1.0))
     assert bem.incident_field(x[0], kk, src).shape == (1, 1, 1)
 
+
+@pytest.mark.parametrize("vertices, faces, match", [
+    (None, None, r"^TriMesh: vertices must be .* got not numbers"),
+    ("abc", "def", r"^TriMesh: vertices must be .* got not numbers"),
+    ([[0, 0, 0], [1, 0, 0], [0, 1]], [[0, 1, 2]], r"^TriMesh: vertices must be .* not numbers"),
+    (np.eye(3)[:, :2], [[0, 1, 2]], r"^TriMesh: vertices must be .* got shape \(3, 2\)"),
+    ([[0, 0, 0], [1, 0, 0], [0, 1, np.nan]], [[0, 1, 2]], r"^TriMesh: vertices .* non-finite"),
+    (np.eye(3), None, r"^TriMesh: faces must be integer vertex indices.* got not numbers"),
+    (np.eye(3), "012", r"^TriMesh: faces must be integer vertex indices.* got not numbers"),
+    (np.eye(3), [[0.0, 1.0, 2.0]], r"^TriMesh: faces must be .* got dtype float64"),
+    (np.eye(3), np.zeros((0, 3), int), r"^TriMesh: faces must be .* got shape \(0, 3\)"),
+    (np.eye(3), [0, 1, 2], r"^TriMesh: faces must be .* got shape \(3,\)"),
+    (np.eye(3), [[0, 1, 3]], r"^TriMesh: faces must index the 3 vertices \(0 to 2\)"),
+    (np.eye(3), [[0, 1, -1]], r"^TriMesh: faces must index the 3 vertices"),
+])
+def test_trimesh_refuses_vertices_and_faces_that_are_no_mesh(vertices, faces, match):
+    """TriMesh(None, None) was an empty mesh without a word (n_panels then a builtin
+    TypeError), text a mesh of as many panels as characters, a negative index the last
+    vertex; now a GeometryError naming the argument. A triangle is still a TriMesh (closure is
+    check_closed_mesh's test), and float vertices are kept as given."""
+    with pytest.raises(GeometryError, match=match):
+        bem.TriMesh(vertices, faces)
+    v = np.eye(3)
+    tri = bem.TriMesh(v, [[0, 1, 2]])
+    assert tri.vertices is v and tri.n_panels == 1 and tri.areas[0] == pytest.approx(3**0.5 / 2)
+    assert bem.TriMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]).vertices.dtype == float
+
+
+def test_mesh_queries_and_mesh_check_refuse_what_is_no_points():
+    """winding_number / closest_points of None gave NaN (and face 0) without a word, of text
+    numpy's builtin ValueError; check_closed_mesh of text numpy's ValueError too."""
+    mesh = bem.sphere_mesh(A, 2)
+    for method in ("winding_number", "closest_points"):
+        for points, match in ((None, "expected points"), ("abc", "expected points"),
+                              ([[np.nan, 0.0, 0.0]], "must be finite"),
+                              (np.zeros((2, 2, 3)), r"shape \(P, 3\)")):
+            with pytest.raises(GeometryError, match=rf"^{method}: points"):
+                getattr(mesh, method)(points)
+            with pytest.raises(GeometryError, match=match):
+                getattr(mesh, method)(points)
+    np.testing.assert_allclose(mesh.winding_number([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]), [1, 0],
+                               atol=1e-9)
+    assert mesh.closest_points([1.0, 0.0, 0.0])[1][0] == pytest.approx(1.0 - A, abs=A / 10)
+    for v, f, match in (("abc", mesh.faces, "^mesh: vertices must be"),
+                        (mesh.vertices, "def", "^mesh: faces must be")):
+        with pytest.raises(GeometryError, match=match):
+            bem.check_closed_mesh(v, f)
+    bem.check_closed_mesh(mesh.vertices, mesh.faces)

@@ -140,7 +140,14 @@ def sphere_mesh(radius: float, n: int, centre: ArrayLike = (0.0, 0.0, 0.0)) -> T
 
 def check_closed_mesh(vertices: ArrayLike, faces: ArrayLike, where: str = "mesh") -> None:
     """Raise GeometryError unless the triangulation is a closed (watertight), consistently oriented
-    2-manifold enclosing a positive volume with outward-facing triangles."""
+    2-manifold enclosing a positive volume with outward-facing triangles (text for either
+    was numpy's builtin ValueError)."""
+    if not real_entries(vertices):
+        raise GeometryError(f"{where}: vertices must be a finite N x 3 array of numbers (metres), "
+                            f"got {vertices!r:.60}")
+    if not real_entries(faces):
+        raise GeometryError(f"{where}: faces must be a non-empty integer M x 3 array, got "
+                            f"{faces!r:.60}")
     v = np.asarray(vertices, dtype=float)
     f = np.asarray(faces)
     if v.ndim != 2 or v.shape[1] != 3 or len(v) < 4 or not np.all(np.isfinite(v)):
@@ -174,10 +181,38 @@ def check_closed_mesh(vertices: ArrayLike, faces: ArrayLike, where: str = "mesh"
 
 @dataclass(frozen=True, eq=False)
 class TriMesh:
-    """A closed triangulated surface, metres; faces counter-clockwise seen from outside."""
+    """A closed triangulated surface, metres; faces counter-clockwise seen from outside.
+
+    ``vertices`` must be finite numbers ``(V, 3)`` (metres) and ``faces`` integer vertex
+    indices ``(F, 3)``, F >= 1, each in ``[0, V)``, else a GeometryError naming the argument
+    (``TriMesh(None, None)`` was an empty mesh without a word, text a mesh of as many panels
+    as characters, a negative index wrapped around to the last vertices). Whether the surface
+    is closed and outward is :func:`check_closed_mesh`'s test (:func:`solve_adjoint` runs it).
+    """
 
     vertices: NDArray
     faces: NDArray
+
+    def __post_init__(self) -> None:
+        v = self.vertices  # (a float array is kept as it is: results stay what they were)
+        if not (isinstance(v, np.ndarray) and v.dtype.kind == "f"):
+            v = np.asarray(v, dtype=float) if real_entries(v) else None
+        if v is None or v.ndim != 2 or v.shape[1] != 3 or not np.all(np.isfinite(v)):
+            got = "not numbers" if v is None else (
+                f"shape {v.shape}" if v.ndim != 2 or v.shape[1] != 3 else "non-finite values")
+            raise GeometryError(f"TriMesh: vertices must be finite [x, y, z] points in metres, "
+                                f"shape (V, 3), got {got}")
+        f = np.asarray(self.faces) if real_entries(self.faces) else None
+        if f is None or f.dtype.kind not in "iu" or f.ndim != 2 or f.shape[1] != 3 or not len(f):
+            got = "not numbers" if f is None else (
+                f"dtype {f.dtype}" if f.dtype.kind not in "iu" else f"shape {f.shape}")
+            raise GeometryError(f"TriMesh: faces must be integer vertex indices, shape (F, 3) "
+                                f"with F >= 1, got {got}")
+        if f.min() < 0 or f.max() >= len(v):
+            raise GeometryError(f"TriMesh: faces must index the {len(v)} vertices (0 to "
+                                f"{len(v) - 1}), got indices {f.min()} to {f.max()}")
+        object.__setattr__(self, "vertices", v)
+        object.__setattr__(self, "faces", f)
 
     @cached_property
     def corners(self) -> NDArray:
@@ -226,7 +261,7 @@ class TriMesh:
         exactly 1/2 (its own face's solid angle jumps there from -2 pi to 2 pi, and rounding
         picked either end: 0 or 1).
         """
-        w, on_surface = self._winding(points)
+        w, on_surface = self._winding(_query_points(points, "winding_number"))
         return np.where(on_surface, 0.5, w)
 
     def _winding(self, points: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -245,7 +280,7 @@ class TriMesh:
 
     def closest_points(self, points: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
         """Closest surface point to each point: ``(closest (P, 3), distance (P,), face (P,))``."""
-        p = np.atleast_2d(np.asarray(points, dtype=float))
+        p = _query_points(points, "closest_points")
         out_q, out_d, out_f = [], [], []
         c = self.corners
         a, b, cc = c[:, 0], c[:, 1], c[:, 2]
@@ -261,6 +296,18 @@ class TriMesh:
             out_d.append(d[k, fi])
             out_f.append(fi)
         return np.array(out_q), np.array(out_d), np.array(out_f)
+
+
+def _query_points(points: ArrayLike, func: str) -> NDArray:
+    """``points`` as finite ``(P, 3)`` metres (one ``(3,)`` point as ``(1, 3)``), else a
+    GeometryError naming ``func``: the check of :meth:`TriMesh.winding_number` and
+    :meth:`TriMesh.closest_points`, where None gave NaN and face 0 without a word, text
+    numpy's builtin ValueError."""
+    p = np.atleast_2d(as_points(points, f"{func}: points"))
+    if p.ndim != 2 or not np.all(np.isfinite(p)):
+        raise GeometryError(f"{func}: points must be finite [x, y, z] in metres, shape (P, 3), "
+                            f"got " + (f"shape {p.shape}" if p.ndim != 2 else "non-finite values"))
+    return p
 
 
 def _project_to_triangles(x: NDArray, a: NDArray, b: NDArray, c: NDArray, n: NDArray) -> NDArray:
