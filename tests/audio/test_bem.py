@@ -527,3 +527,28 @@ def test_mesh_queries_and_mesh_check_refuse_what_is_no_points():
         with pytest.raises(GeometryError, match=match):
             bem.check_closed_mesh(v, f)
     bem.check_closed_mesh(mesh.vertices, mesh.faces)
+
+
+def test_transfer_functions_and_incident_field_refuse_a_far_field_or_chunk_of_another_kind():
+    """far_field="no" was truthy: plane waves from the source's direction without a word
+    (None a point source); a chunk of None, text, 2.5 or 0 was a builtin TypeError /
+    ValueError of range(). Both flags as bools (numpy's too) and any chunk >= 1 answer alike."""
+    mesh = bem.sphere_mesh(A, 3)
+    sol = bem.solve_adjoint(mesh, [500.0], [[0.0, -A, 0.0], [0.0, A, 0.0]], C,
+                            on_surface_tol=2e-3)
+    src = [[1.0, 0.3, 0.0], [0.0, 2.0, 0.5]]
+    for flag in ("no", "False", None, 0, 1.0):
+        with pytest.raises(ConfigError, match="^transfer_functions: far_field must be True or"):
+            bem.transfer_functions(sol, src, flag)
+        with pytest.raises(ConfigError, match="^incident_field: far_field must be True or"):
+            bem.incident_field([[0.0, 0.0, 0.1]], [1.0], src, flag)
+    for chunk in (None, "8", 2.5, 0, -1, True):
+        with pytest.raises(ConfigError, match="^transfer_functions: chunk must be an integer"):
+            bem.transfer_functions(sol, src, chunk=chunk)
+    for far in (False, True):
+        want = bem.transfer_functions(sol, src, far)
+        np.testing.assert_array_equal(bem.transfer_functions(sol, src, np.bool_(far), chunk=1),
+                                      want)
+        np.testing.assert_array_equal(bem.incident_field([[0.0, 0.0, 0.1]], [1.0], src,
+                                                         np.bool_(far)),
+                                      bem.incident_field([[0.0, 0.0, 0.1]], [1.0], src, far))

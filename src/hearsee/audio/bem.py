@@ -540,6 +540,15 @@ def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
                            float(speed_of_sound))
 
 
+def _far_field_flag(far_field: Any, func: str) -> bool:
+    """``far_field`` itself when it is True or False (a numpy bool too), else a ConfigError
+    naming ``func`` and the argument: text such as "no" was truthy and gave plane waves from
+    the source's direction without a word, None a point source."""
+    if not isinstance(far_field, bool | np.bool_):
+        raise ConfigError(f"{func}: far_field must be True or False, got {far_field!r:.40}")
+    return bool(far_field)
+
+
 def _as_sources(source: ArrayLike, far_field: bool) -> NDArray:
     """``source`` as finite (S, 3) positions (metres) or, with ``far_field``, unit directions."""
     s = np.atleast_2d(as_points(source, "sources"))  # (text, ragged lists: GeometryError)
@@ -598,12 +607,14 @@ def incident_field(points: ArrayLike, k: ArrayLike, source: ArrayLike,
     origin or at one of the points (within :data:`_PLANE_RTOL` of the coordinates); and for
     ``points`` or ``k`` that are not finite numbers of those shapes (None gave NaN without a
     word, text numpy's builtin ValueError, points of 2 coordinates its broadcasting error).
+    ConfigError for a ``far_field`` that is not True or False.
     """
     x = np.atleast_2d(as_points(points, "incident_field: points"))
     if x.ndim != 2 or not np.all(np.isfinite(x)):
         raise GeometryError("incident_field: points must be finite [x, y, z] in metres, shape "
                             "(P, 3), got " + (f"shape {x.shape}" if x.ndim != 2
                                               else "non-finite values"))
+    far_field = _far_field_flag(far_field, "incident_field")
     s = _as_sources(source, far_field)
     if not real_entries(k):
         raise GeometryError(f"incident_field: k must be wavenumbers (rad/m), finite numbers, "
@@ -632,10 +643,15 @@ def transfer_functions(sol: AdjointSolution, source: ArrayLike, far_field: bool 
     source that is not finite, a direction [0, 0, 0], and for a point source inside the body
     (no sound reaches the air from there), on its surface, at an evaluation point or at the
     origin of the frame (infinite fields, NaN before); and for a ``sol`` that is no
-    :class:`AdjointSolution` (None: a builtin AttributeError)."""
+    :class:`AdjointSolution` (None: a builtin AttributeError). ConfigError for a ``far_field``
+    that is not True or False ("no" was truthy: plane waves without a word) and a ``chunk``
+    (sources per block) that is no integer >= 1 (None, text or 0 were builtin errors of
+    ``range``)."""
     if not isinstance(sol, AdjointSolution):
         raise GeometryError(f"transfer_functions needs the AdjointSolution of solve_adjoint, "
                             f"got {type(sol).__name__}")
+    far_field = _far_field_flag(far_field, "transfer_functions")
+    chunk = whole_number("transfer_functions: chunk", chunk, 1)
     c = sol.speed_of_sound
     if speed_of_sound is not None:
         if not (is_real(speed_of_sound) and speed_of_sound > 0):
