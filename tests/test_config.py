@@ -54,7 +54,6 @@ def test_is_real_and_finite_number():
         finite_number("b", float("inf"), error=EstimationError)
 
 
-
 def test_whole_number_bounds_and_none_as_no_bound():
     """lo=None is no lower bound (as in finite_number), not a builtin TypeError comparing the
     value with None; the other bounds keep their rule and message."""
@@ -74,6 +73,7 @@ def test_whole_number_bounds_and_none_as_no_bound():
             whole_number("n", value, **kw)
     with pytest.raises(GeometryError, match="n_mics must be an integer"):
         whole_number("n_mics", "two", lo=None, error=GeometryError)
+
 
 def test_save_yaml_and_json_take_numpy_values(tmp_path):
     data = {"name": np.str_("rig"), "K": np.eye(2), "n": np.int32(3), "ok": np.bool_(True),
