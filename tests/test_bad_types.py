@@ -336,6 +336,35 @@ def test_array_and_bem_helpers_given_none_raise_geometry_error(name, argument):
         func(**{**kw, argument: None})
 
 
+#: the numeric kernels of hearsee.audio.arrays (of :func:`_kernel_calls`), which refuse text too
+_NUMERIC_KERNELS = ("pair_tdoa", "pair_tdoa_jacobian", "position_uncertainty",
+                    "residual_scaled_variance")
+
+
+def _same(a, b):
+    """Results equal bit for bit (tuples, arrays, floats alike)."""
+    if isinstance(a, tuple):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    return np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True)
+
+
+@pytest.mark.parametrize("text", ["abc", "0.3", b"1"])
+@pytest.mark.parametrize("name, argument", [
+    (name, arg) for name, (_, kw) in _kernel_calls().items() for arg in kw
+    if name in _NUMERIC_KERNELS])
+def test_array_kernels_given_text_raise_geometry_error(name, argument, text):
+    """Text for an argument of pair_tdoa, pair_tdoa_jacobian, position_uncertainty or
+    residual_scaled_variance was numpy's builtin ValueError ("could not convert string to
+    float"), UFuncTypeError or IndexError, or Python's TypeError ('<=' between int and str);
+    position_uncertainty took a text max_rel_distance_std without a word. Now a GeometryError
+    naming the function and the argument; the well-formed call answers as before."""
+    func, kw = _kernel_calls()[name]
+    want = func(**kw)
+    with pytest.raises(GeometryError, match=rf"^{name}: {argument} must be numeric, got text"):
+        func(**{**kw, argument: text})
+    assert _same(func(**kw), want)
+
+
 def test_transfer_functions_needs_a_solution():
     """transfer_functions(None, ...) was a builtin AttributeError ('speed_of_sound')."""
     from hearsee.audio.bem import transfer_functions

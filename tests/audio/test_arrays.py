@@ -281,51 +281,6 @@ def test_span_dimension_refuses_what_is_no_set_of_positions(positions):
     assert span_dimension([[0, 0, 0], [1, 0, 0]], 343.0)[0] == 1
 
 
-def _kernel_calls():
-    """Well-formed calls of the numeric kernels (function, keyword arguments): three
-    microphones, a source 1 m in front of them."""
-    from hearsee.audio import arrays as A
-
-    pos = np.array([[0.05, 0.0, 0.0], [-0.025, 0.0433, 0.0], [-0.025, -0.0433, 0.0]])
-    i, j = np.array([0, 0, 1]), np.array([1, 2, 2])
-    p = np.array([1.0, 0.2, 0.0])
-    y = A.pair_tdoa(p, pos, i, j, 343.0)
-    return {
-        "pair_tdoa": (A.pair_tdoa, {"points": p, "positions": pos, "i": i, "j": j,
-                                    "speed_of_sound": 343.0}),
-        "pair_tdoa_jacobian": (A.pair_tdoa_jacobian, {"point": p, "positions": pos, "i": i,
-                                                      "j": j, "speed_of_sound": 343.0}),
-        "position_uncertainty": (A.position_uncertainty, {
-            "p": p, "M": pos, "a": i, "b": j, "c": 343.0, "y": y, "sig": 2e-6,
-            "ref": np.zeros(3), "max_rel_distance_std": 0.3}),
-        "residual_scaled_variance": (A.residual_scaled_variance, {
-            "residual_s": np.array([1e-6, -2e-6, 1e-6, 3e-6]), "sig": 1e-6, "n_params": 2}),
-    }
-
-
-def _same(a, b):
-    """Results equal bit for bit (tuples, arrays, floats alike)."""
-    if isinstance(a, tuple):
-        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
-    return np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True)
-
-
-@pytest.mark.parametrize("text", ["abc", "0.3", b"1"])
-@pytest.mark.parametrize("name, argument", [
-    (name, arg) for name, (_, kw) in _kernel_calls().items() for arg in kw])
-def test_array_kernels_given_text_raise_geometry_error(name, argument, text):
-    """Text for an argument of pair_tdoa, pair_tdoa_jacobian, position_uncertainty or
-    residual_scaled_variance was numpy's builtin ValueError ("could not convert string to
-    float"), UFuncTypeError or IndexError, or Python's TypeError ('<=' between int and str);
-    position_uncertainty took a text max_rel_distance_std without a word. Now a GeometryError
-    naming the function and the argument; the well-formed call answers as before."""
-    func, kw = _kernel_calls()[name]
-    want = func(**kw)
-    with pytest.raises(GeometryError, match=rf"^{name}: {argument} must be numeric, got text"):
-        func(**{**kw, argument: text})
-    assert _same(func(**kw), want)
-
-
 def test_closure_rms_refuses_values_that_are_no_numbers():
     """Text was numpy's builtin ValueError, and numbers written as text were read as numbers
     (["1", "2", "3"] gave a closure of 1.15)."""
