@@ -554,3 +554,14 @@ def test_as_float_array_with_the_callers_error_and_non_finite_values_allowed():
         as_float_array([np.nan], "w", error=GeometryError)
     with pytest.raises(GeometryError, match=r"expected shape 3, got \(2,\)"):
         as_float_array([1, 2], "w", (3,), error=GeometryError)
+
+
+def test_true_or_false():
+    from hearsee.config import true_or_false
+
+    assert true_or_false("f", True) is True and true_or_false("f", np.bool_(False)) is False
+    for bad in ("no", "True", 1, 0, None, 1.0):
+        with pytest.raises(ConfigError, match=r"^f must be True or False, got "):
+            true_or_false("f", bad)
+    with pytest.raises(GeometryError, match="^g must be True or False"):
+        true_or_false("g", "yes", error=GeometryError)

@@ -473,6 +473,15 @@ def whole_number(name: str, value: Any, lo: int | None = 1, hi: int | None = Non
     return int(value)
 
 
+def true_or_false(name: str, value: Any, *, error: type[Exception] = ConfigError) -> bool:
+    """``value`` as a bool when it is True or False (a numpy bool too), else ``error`` naming
+    ``name``: text such as "no" is truthy, and a flag taken by its truth turned it on without a
+    word."""
+    if not isinstance(value, bool | np.bool_):
+        raise error(f"{name} must be True or False, got {value!r:.60}")
+    return bool(value)
+
+
 def check_rng(rng: Any, name: str = "rng") -> Any:
     """``rng`` itself when it is what hearsee's random functions take -- a numpy ``Generator``
     (drawn from: the caller's stream advances), an integer seed >= 0 (Python or numpy, not a

@@ -118,6 +118,10 @@ def test_open_mesh_surface_is_an_error():
     with pytest.raises(GeometryError, match="open"):
         mask.mask_geometry(MicArray.from_dict({**base, "mask": {"shape": "mesh", "vertices": v,
                                                                 "faces": closed[:3]}}))
+    # fractional indices were cut to whole ones without a word (0.7 -> 0): another mesh
+    bad = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1.2, 2, 3]]
+    with pytest.raises(ConfigError, match="whole vertex indices"):
+        MicArray.from_dict({**base, "mask": {"shape": "mesh", "vertices": v, "faces": bad}})
 
 
 @pytest.mark.parametrize("over, exc, msg", [
@@ -447,6 +451,9 @@ def test_transfer_refuses_a_zero_source_vector(model):
             model.transfer_at([500.0], [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]], far_field=far)
     with pytest.raises(GeometryError, match="source"):
         model.transfer(np.ones((2, 2, 3)), far_field=True)
+    # text is no flag: "no" skipped the check that the source is outside the body
+    with pytest.raises(ConfigError, match="^far_field must be True or False, got 'no'"):
+        model.transfer([1.0, 0.0, 0.0], far_field="no")
     # a valid direction still gives finite values, the same for any length of the vector
     np.testing.assert_allclose(model.transfer([3.0, 0.0, 0.0], far_field=True),
                                model.transfer([1.0, 0.0, 0.0], far_field=True))

@@ -348,3 +348,14 @@ def test_add_noise_refuses_an_empty_signal_and_a_text_reference_power():
         add_noise(x, 10.0, rng=0, reference_power="1")
     y = add_noise(x, 10.0, rng=0, reference_power=4.0)  # noise power 4 / 10
     assert np.mean((y - x) ** 2) == pytest.approx(0.4, rel=0.1)
+
+
+def test_far_field_must_be_a_flag():
+    """far_field="no" is truthy: it gave a plane wave without a word."""
+    arr = MicArray.from_preset("two-mic")
+    s = white_noise(0.05, 16000, rng=1)
+    with pytest.raises(ConfigError, match="^far_field must be True or False, got 'no'"):
+        simulate_free_field(s, 16000, arr, [1.0, 0.0, 0.0], far_field="no")
+    a = simulate_free_field(s, 16000, arr, [1.0, 0.0, 0.0], far_field=np.bool_(True))
+    np.testing.assert_array_equal(a, simulate_free_field(s, 16000, arr, [1.0, 0.0, 0.0],
+                                                         far_field=True))

@@ -45,7 +45,14 @@ import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from hearsee.config import as_rng, finite_number, is_real, real_entries, whole_number
+from hearsee.config import (
+    as_rng,
+    finite_number,
+    is_real,
+    real_entries,
+    true_or_false,
+    whole_number,
+)
 from hearsee.errors import ConfigError, GeometryError
 from hearsee.geometry import as_point, as_points
 
@@ -544,9 +551,7 @@ def _far_field_flag(far_field: Any, func: str) -> bool:
     """``far_field`` itself when it is True or False (a numpy bool too), else a ConfigError
     naming ``func`` and the argument: text such as "no" was truthy and gave plane waves from
     the source's direction without a word, None a point source."""
-    if not isinstance(far_field, bool | np.bool_):
-        raise ConfigError(f"{func}: far_field must be True or False, got {far_field!r:.40}")
-    return bool(far_field)
+    return true_or_false(f"{func}: far_field", far_field)
 
 
 def _as_sources(source: ArrayLike, far_field: bool) -> NDArray:

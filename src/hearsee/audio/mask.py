@@ -90,7 +90,7 @@ from hearsee.audio import bem
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.signals import as_samples, check_fs
 from hearsee.audio.tdoa import check_frame_ms
-from hearsee.config import check_rng, finite_number, is_real, whole_number
+from hearsee.config import check_rng, finite_number, is_real, true_or_false, whole_number
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 from hearsee.geometry import norm_scale, wrap_deg
 
@@ -220,10 +220,13 @@ class MaskGeometry:
                                       f"{', '.join(allowed)})")
             try:
                 v = np.asarray(d.get("vertices"), dtype=float)
-                f = np.asarray(d.get("faces"), dtype=np.int64)
+                f = np.asarray(d.get("faces"))
             except (TypeError, ValueError):
+                f = None
+            if f is None or f.dtype.kind not in "iu":  # (0.7 / 1.2 / 2.9 were read as 0 / 1 / 2)
                 raise ConfigError(f"{where}: vertices must be [[x, y, z], ...] metres and faces "
-                                  "[[i, j, k], ...] vertex indices") from None
+                                  "[[i, j, k], ...] whole vertex indices") from None
+            f = f.astype(np.int64)
             bem.check_closed_mesh(v, f, where)
             return cls("mesh", vertices=v, faces=f, **common)
         raise ConfigError(f"{where}: shape must be 'egg' or 'mesh', got {shape!r}")
@@ -491,6 +494,7 @@ class MaskModel:
         directions. Returns (S, 2, F) complex, ``exp(-i w t)`` convention, normalised by the
         free-field pressure at the array origin.
         """
+        far_field = true_or_false("far_field", far_field)  # ("no": the inside check skipped)
         s = np.atleast_2d(np.asarray(source, dtype=float))
         if s.ndim != 2 or s.shape[-1] != 3 or not np.all(np.isfinite(s)):
             raise GeometryError(f"source must be finite [x, y, z] point(s), got shape {s.shape}")
@@ -729,6 +733,7 @@ def simulate_masked(signal: ArrayLike, fs: float, array: MicArray | str | Path |
         raise AudioInputError("signal contains NaN or inf samples")
     fs = check_fs(fs)  # (0 divided by zero; a negative rate gave garbage)
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
+    far_field = true_or_false("far_field", far_field)
     s = np.asarray(source, dtype=float)
     if s.shape != (3,) or not np.all(np.isfinite(s)):
         raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")

@@ -27,7 +27,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.signals import as_samples, check_fs
-from hearsee.config import as_float_array, check_rng, finite_number, is_real, whole_number
+from hearsee.config import (
+    as_float_array,
+    check_rng,
+    finite_number,
+    is_real,
+    true_or_false,
+    whole_number,
+)
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
 from hearsee.geometry import norm_scale
 
@@ -275,6 +282,7 @@ def simulate_free_field(
     pos = _mic_positions(mics)
     c = speed_of_sound_of(mics, speed_of_sound)
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
+    far_field = true_or_false("far_field", far_field)  # ("no" gave a plane wave)
     s = np.asarray(source, dtype=float)
     if s.shape != (3,) or not np.all(np.isfinite(s)):
         raise GeometryError(f"source must be a finite [x, y, z] point, got {source!r}")

@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
-from hearsee.config import as_path, finite_number, is_real, whole_number
+from hearsee.config import as_path, finite_number, is_real, true_or_false, whole_number
 from hearsee.errors import ConfigError, GeometryError, ImageInputError, InputFileError
 from hearsee.vision.camera import Camera, StereoRig, save_rig
 from hearsee.vision.humans import TORSO_HEIGHT_FRACTION
@@ -238,8 +238,8 @@ def _check_params(params: Any) -> None:
         if key in _NUMERIC_PARAMS:
             lo, lo_open = _NUMERIC_PARAMS[key]
             finite_number(f"entity params[{key!r}]", value, lo, lo_open=lo_open)
-        elif key in _FLAG_PARAMS and not isinstance(value, bool | np.bool_):
-            raise ConfigError(f"entity params[{key!r}] must be True or False, got {value!r:.60}")
+        elif key in _FLAG_PARAMS:
+            true_or_false(f"entity params[{key!r}]", value)
 
 
 @dataclass

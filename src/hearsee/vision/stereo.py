@@ -50,7 +50,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import finite_number, is_real, real_entries, whole_number
+from hearsee.config import finite_number, is_real, real_entries, true_or_false, whole_number
 from hearsee.errors import CalibrationError, ConfigError, ImageInputError
 from hearsee.geometry import as_points
 from hearsee.vision.camera import Rectification, StereoRig, check_rig
@@ -325,8 +325,7 @@ def compute_disparity(
     if lr_check not in ("internal", "full", "none"):
         raise ConfigError(f"lr_check must be internal, full or none, got {lr_check!r}")
     for name, flag in (("pad_left", pad_left), ("fill_holes", fill_holes)):
-        if not isinstance(flag, bool | np.bool_):  # ("no" was read as True)
-            raise ConfigError(f"{name} must be True or False, got {flag!r:.40}")
+        true_or_false(name, flag)  # ("no" was read as True)
     _check_search(num_disparities, min_disparity, scale)
     # (a negative tolerance silently became SGBM's 1 px; inf or NaN a builtin error)
     finite_number("lr_max_diff", lr_max_diff, 0.0)
