@@ -307,3 +307,14 @@ def test_pairs_given_as_text_name_the_pairs(pairs):
         with pytest.raises(GeometryError, match=r"^pairs must be a list of \(i, j\) microphone"):
             call()
     assert check_pairs([(0, 1)], 3) == [(0, 1)]
+
+
+def test_micarray_name_and_mask_types():
+    """name=None printed as the array's name everywhere; mask="x" failed later in the mask
+    module with a builtin AttributeError."""
+    pos = [[0.0, -0.1, 0.0], [0.0, 0.1, 0.0]]
+    with pytest.raises(ConfigError, match="^MicArray name must be text, got None"):
+        MicArray(pos, name=None)
+    with pytest.raises(ConfigError, match="^array 'p': mask must be a mapping"):
+        MicArray(pos, name="p", mask="x")
+    assert MicArray(pos, name="p").name == "p" and MicArray(pos, mask=None).mask is None

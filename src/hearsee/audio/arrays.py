@@ -118,6 +118,13 @@ class MicArray:
     mask: Mapping[str, Any] | None = field(default=None)
 
     def __post_init__(self) -> None:
+        # (None printed as the array's name in every message and output; a mask given as text
+        # failed later inside hearsee.audio.mask with a builtin AttributeError)
+        if not isinstance(self.name, str):
+            raise ConfigError(f"MicArray name must be text, got {self.name!r:.40}")
+        if self.mask is not None and not isinstance(self.mask, Mapping):
+            raise ConfigError(f"array {self.name!r}: mask must be a mapping (the YAML's mask: "
+                              f"block) or None, got {self.mask!r:.40}")
         # (numpy read True as 1 m, "0.1" as 0.1 m and dropped an imaginary part)
         pos = np.array(self.positions, dtype=float) if real_entries(self.positions) else None
         if pos is None:
