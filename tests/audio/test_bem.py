@@ -287,6 +287,9 @@ def test_solve_adjoint_refuses_non_finite_frequencies_and_speed():
     for c in (0.0, -C, np.nan, np.inf):
         with pytest.raises(GeometryError, match="speed of sound"):
             bem.solve_adjoint(mesh, [300.0], mics, c, on_surface_tol=1e-3)
+    # progress that cannot be called: a TypeError after the first frequency was solved
+    with pytest.raises(ConfigError, match="^solve_adjoint: progress must be a callable"):
+        bem.solve_adjoint(mesh, [300.0], mics, C, on_surface_tol=1e-3, progress="x")
 
 
 def test_solve_adjoint_refuses_malformed_evaluation_points_and_speed():
@@ -464,7 +467,9 @@ def test_sphere_series_refuses_empty_and_non_numeric_settings():
     ([[0.0, 0.0, 0.1]], None, r"^incident_field: k must be wavenumbers"),
     ([[0.0, 0.0, 0.1]], "abc", r"^incident_field: k must be wavenumbers"),
     ([[0.0, 0.0, 0.1]], ["1.0"], r"^incident_field: k must be wavenumbers"),
-    ([[0.0, 0.0, 0.1]], [np.nan], r"^incident_field: k must be .* non-finite"),
+    ([[0.0, 0.0, 0.1]], [np.nan], r"^incident_field: k must be .* out of range"),
+    ([[0.0, 0.0, 0.1]], [-1.0], r"^incident_field: k must be .* >= 0 .* out of range"),
+    ([[0.0, 0.0, 0.1]], [], r"^incident_field: k must be .* one or more .* shape \(0,\)"),
     ([[0.0, 0.0, 0.1]], [[1.0]], r"^incident_field: k must be .* shape \(F,\)"),
 ])
 def test_incident_field_refuses_points_and_wavenumbers_that_are_no_numbers(points, k, match):

@@ -496,6 +496,9 @@ def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
     # an empty solution, text frequencies raised numpy's ValueError, a NaN on_surface_tol
     # counted as 0 and a text one raised numpy's UFuncTypeError)
     whole_number("n_chief", n_chief, MIN_CHIEF_POINTS, error=GeometryError)
+    if progress is not None and not callable(progress):  # (a TypeError after the first solve)
+        raise ConfigError(f"solve_adjoint: progress must be a callable or None, got "
+                          f"{progress!r:.40}")
     on_surface_tol = finite_number("on_surface_tol (metres)", on_surface_tol, 0.0,
                                    error=GeometryError)
     if not real_entries(freqs) or np.size(freqs) == 0:
@@ -625,10 +628,12 @@ def incident_field(points: ArrayLike, k: ArrayLike, source: ArrayLike,
         raise GeometryError(f"incident_field: k must be wavenumbers (rad/m), finite numbers, "
                             f"got {k!r:.60}")
     k = np.atleast_1d(np.asarray(k, dtype=float))
-    if k.ndim != 1 or not np.all(np.isfinite(k)):
-        raise GeometryError("incident_field: k must be wavenumbers (rad/m), finite numbers of "
-                            "shape (F,), got " + (f"shape {k.shape}" if k.ndim != 1
-                                                  else "non-finite values"))
+    if k.ndim != 1 or k.size == 0 or not np.all(np.isfinite(k) & (k >= 0)):
+        # (an empty k answered an empty field, a negative one the other time convention's)
+        raise GeometryError("incident_field: k must be wavenumbers (rad/m), one or more finite "
+                            "numbers >= 0 of shape (F,), got " + (
+                                f"shape {k.shape}" if k.ndim != 1 or k.size == 0
+                                else "values out of range"))
     if not far_field:
         _check_sources(x, s)
     return _incident(x, k, s, far_field)
