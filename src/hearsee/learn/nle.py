@@ -587,7 +587,11 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         manifold it changes little (500-point swiss roll: 0.8485 vs 0.8498 with "unit").
         An axis that would span more than 10 times the total edge length of the neighbourhood
         graph (its minimum spanning tree) is the mark of a degenerate embedding, where a group
-        of points is barely tied to the rest, and raises :class:`ManifoldInputError`.
+        of points is barely tied to the rest, and raises :class:`ManifoldInputError`. So does a
+        graph with more groups of points that choose their neighbours only among themselves
+        than connected components (see below), whatever the coordinates (until 2026-12-04 only
+        when they spanned that much, which depended on the eigensolver's basis of the null
+        space: scipy 1.11 let one through).
     random_state : int, RandomState or None
         Seeds ARPACK's start vector.
     n_jobs : int or None
@@ -598,7 +602,8 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
     its first axes are constant on each component (contrasts of the components, largest first),
     the rest are the next eigenvectors. Groups of points that choose their neighbours only among
     themselves (more of them than components) leave the LLE cost without a tie between them, and
-    the embedding collapses each group to a point.
+    the embedding collapses each group to a point (``axis_scaling="unit"``, with the warning;
+    ``"edges"`` raises :class:`ManifoldInputError`).
 
     Attributes
     ----------
@@ -769,6 +774,18 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
                 DisconnectedGraphWarning,
                 stacklevel=3,
             )
+        if degenerate and self.axis_scaling == "edges":
+            # (decided from the graph, not from the coordinates: the eigensolver returns an
+            # arbitrary basis of the null space, which scipy 1.11 happened to spread over only
+            # 2.4 times the edge length where 1.17 gave 2.7e6, so the extent test below let it
+            # through)
+            raise ManifoldInputError(
+                f"{where}degenerate embedding: {closed.size} groups of points (sizes "
+                f"{_sizes(closed)}) choose their neighbours only among themselves, more than the "
+                f"{n_comp} connected component(s) of the neighbourhood graph, which leaves their "
+                "placement free (the LLE cost has a null vector per group). Raise n_neighbors or "
+                "lower shadow (axis_scaling='unit' returns LLE's unscaled coordinates)"
+            )
         A = sparse.eye(n, format="csr") - Wm
         M = (A.T @ A).tocsr()
         k = self.n_components + 1
@@ -781,17 +798,12 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
             Y = _scale_axes_to_edges(X, Y, Wm)
             axis, extent, length = _axis_extent(X, Y, Wm, comp, n_comp)
             if extent > _MAX_AXIS_EXTENT * length:
-                cause = (
-                    f"{closed.size} groups of points choose their neighbours only among "
-                    "themselves, which leaves their placement free"
-                    if degenerate
-                    else "some points are tied to the rest by very few or very weak edges"
-                )
                 raise ManifoldInputError(
                     f"{where}degenerate embedding: axis {axis + 1} spans {extent:.3g} in the "
                     f"units of X, more than {_MAX_AXIS_EXTENT:g} times the total edge length of "
-                    f"the neighbourhood graph ({length:.3g}); {cause}. Raise n_neighbors or lower "
-                    "shadow (axis_scaling='unit' returns LLE's unscaled coordinates)"
+                    f"the neighbourhood graph ({length:.3g}); some points are tied to the rest "
+                    "by very few or very weak edges. Raise n_neighbors or lower shadow "
+                    "(axis_scaling='unit' returns LLE's unscaled coordinates)"
                 )
         return Y, Wm, float(np.sum(vals[1:k]))
 
