@@ -50,11 +50,15 @@ _IMREAD = {
 
 def video_capture(source: int | str) -> cv2.VideoCapture:
     """``cv2.VideoCapture(source)`` (a camera index, a file, a URL) with OpenCV's own log
-    silenced to errors while it opens: a camera that is not there printed two ``[ WARN ]``
-    lines of its backends (V4L2, FFMPEG) on stderr before hearsee's one-line message. The
-    caller checks ``isOpened()``. An index beyond a C int gives a capture that is not opened
-    (OpenCV's own TypeError, a traceback, for ``--camera-device 99999999999999999999`` or
-    ``cameras.left: 99999999999999999999`` before), so that the caller's "cannot open" names it.
+    silenced while it opens (errors too for a camera index): a camera that is not there printed
+    two ``[ WARN ]`` lines of its backends (V4L2, FFMPEG) on stderr before hearsee's one-line
+    message, and OpenCV 4.8 and 4.10 also two ``[ERROR:0@...] global
+    obsensor_uvc_stream_channel.cpp ... Camera index out of range`` lines of their Orbbec
+    backend, which probes every index (until 2026-12-04 the log was only lowered to errors).
+    The caller checks ``isOpened()`` and reports a failure itself. An index beyond a C int
+    gives a capture that is not opened (OpenCV's own TypeError, a traceback, for
+    ``--camera-device 99999999999999999999`` or ``cameras.left: 99999999999999999999``
+    before), so that the caller's "cannot open" names it.
     A negative index or a bool is a ConfigError (OpenCV's "any camera" -1 ended the
     interpreter with a segmentation fault where no camera backend answered; True was a raw
     cv2.error). A file or URL opens with the process's stderr silenced too
@@ -65,7 +69,7 @@ def video_capture(source: int | str) -> cv2.VideoCapture:
     if isinstance(source, int | np.integer):
         if source >= 2**31:
             return cv2.VideoCapture()
-        with _opencv_log("error"):
+        with _opencv_log("silent"):
             return cv2.VideoCapture(int(source))
     with _opencv_log("error"), _codec_stderr_off():
         return cv2.VideoCapture(source)
