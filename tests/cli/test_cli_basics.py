@@ -15,9 +15,12 @@ def test_unknown_command_is_usage_error(capsys):
     assert err == "hearsee: error: No such command 'no-such-command'. (see 'hearsee --help')\n"
 
 
+# (the usage errors click reports are worded by typer / click: "No such option: --bogus" with
+# typer 0.2x, "No such option '--bogus'." with 0.18; the contract is hearsee's prefix, one
+# line, exit code 2 and the option named)
 @pytest.mark.parametrize(("argv", "needle"), [
-    (["track"], "Missing option '--array'"),
-    (["localize", "--bogus", "x"], "No such option: --bogus"),
+    (["track"], "--array"),  # (a required option: typer 0.16 with click >= 8.3 ran the command)
+    (["localize", "--bogus", "x"], "--bogus"),
     (["simulate", "o.wav", "--array", "two-mic", "--source", "1,2"], "expected 3 numbers"),
     (["simulate", "o.wav", "--array", "two-mic", "--source", "1,1,0", "--seed", "-1"], "--seed"),
     (["eval", "--seed", "-5"], "--seed"),
