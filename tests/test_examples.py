@@ -99,7 +99,19 @@ def test_make_example_recording_reproduces_the_bundled_example(tmp_path):
     ref_truth = json.loads(bundled.with_suffix(".json").read_text())
     assert truth.pop("wav") == "rec.wav"
     ref_truth.pop("wav")
+    gain, ref_gain = truth.pop("gain"), ref_truth.pop("gain")
     _assert_close(truth, ref_truth)
+    # The bundle was rendered with pyroomacoustics 0.10.1. 0.9.0 and 0.10.0 (pyproject's lower
+    # bound and the next release) give the same 16-bit samples (checked above) and the same
+    # truth, but the simulated signal's peak 6.4e-8 relative apart, and with it the
+    # normalising gain (peak / max |x|): measured 2026-12-04, numpy 1.26.0, scipy 1.15.0.
+    from importlib.metadata import version
+
+    pra = tuple(int(v) for v in version("pyroomacoustics").split(".")[:3])
+    if pra < (0, 10, 1) and gain != pytest.approx(ref_gain, rel=1e-9, abs=1e-15):
+        pytest.xfail(f"pyroomacoustics {version('pyroomacoustics')} < 0.10.1: truth.gain "
+                     f"{gain!r} vs the bundle's {ref_gain!r} (the samples agree)")
+    _assert_close(gain, ref_gain, "truth.gain")
 
 
 def _assert_close(a, b, where="truth"):
