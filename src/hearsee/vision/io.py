@@ -92,7 +92,7 @@ def _opencv_log(level: str) -> Iterator[None]:
 def opencv_log_functions() -> tuple[Callable[[], int], Callable[[int], None]]:
     """OpenCV's (get, set) of its log level (0 silent, 2 error, 3 warning, ...): the Python
     API is ``cv2.utils.logging`` in recent releases and ``cv2.getLogLevel`` /
-    ``cv2.setLogLevel`` in older ones such as 4.8 (pyproject's lower bound), which have no
+    ``cv2.setLogLevel`` in older ones such as 4.8 and 4.11 (pyproject's lower bound), which have no
     ``cv2.utils.logging`` (every image read was a ModuleNotFoundError there)."""
     try:
         import cv2.utils.logging as cv_log
