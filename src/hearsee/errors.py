@@ -57,6 +57,11 @@ class InconsistentMeasurementWarning(UserWarning):
     source explains); the estimate should not be trusted."""
 
 
+class InvertedPolarityWarning(UserWarning):
+    """A microphone's signal seems inverted (a swapped wire, a phase-inverting preamplifier): its
+    pairs correlate negatively, so their TDOAs -- and the direction -- are wrong."""
+
+
 class DegenerateInputWarning(UserWarning):
     """The input is valid but degenerate for the task (stereo images that barely match, a flat
     thermal frame, image points outside the recording): the answer describes the input more

@@ -385,3 +385,18 @@ def test_band_hz_option(rec3, tmp_path, capsys):
                           "--band-hz", "300,3500")
     assert code == 2 and out == "" and err.count("\n") == 1
     assert "--band-hz: the masked array 'mask2-asym'" in err
+
+
+def test_an_inverted_microphone_is_one_warning_line(rec3, tmp_path, capsys):
+    x, fs = sf.read(rec3, always_2d=True)
+    x[:, 1] *= -1.0
+    p = tmp_path / "inv.wav"
+    sf.write(p, x, fs, subtype="FLOAT")
+    code, out, err = _run(capsys, p, "--array", "three-mic")
+    assert code == 0 and json.loads(out)["summary"]["inverted_microphones"] == [1]
+    assert err.startswith("hearsee: warning: microphone 1 seems wired with inverted polarity: "
+                          "pairs 0-1, 1-2 correlate negatively")
+    # (no frame is valid: the warning that says so for silence or noise would mislead here)
+    assert err.count("hearsee: warning:") == 1 and err.count("\n") == 1
+    code, out, _ = _run(capsys, rec3, "--array", "three-mic")
+    assert json.loads(out)["summary"]["inverted_microphones"] == []

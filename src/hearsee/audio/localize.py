@@ -1464,7 +1464,7 @@ def localize_recording(
              "summary": {"tdoa_s", "azimuth_deg", "elevation_deg", "candidates", "n_solutions",
                          "feasible", "confidence", "n_valid_frames", "position_m",
                          "position_covariance_m2", "distance_rel_std",
-                         "position_tdoa_std_s"}}
+                         "position_tdoa_std_s", "inverted_microphones"}}
 
         with None where a quantity is not resolvable (no source in the frame, elevation of a
         linear array, ...). The summary localizes the whole-recording TDOA estimate (weighted
@@ -1547,6 +1547,7 @@ def localize_recording(
                             else None),
         "coherence_gain": (float(tf.coherence_gain) if np.isfinite(tf.coherence_gain)
                            else None),
+        "inverted_microphones": list(tf.inverted_mics),
     }
     return {
         "array": arr.to_dict(),

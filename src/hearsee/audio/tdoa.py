@@ -67,6 +67,7 @@ Units: seconds for TDOAs and frame times, Hz for sample rates; frames are the an
 from __future__ import annotations
 
 import functools
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -79,7 +80,7 @@ from hearsee.audio.arrays import MicArray, closure_rms, load_array, pair_closure
 from hearsee.audio.localize import IN_PLANE_RANGE_M, _inplane_tdoa, array_geometry
 from hearsee.audio.signals import as_samples, check_fs
 from hearsee.config import finite_number, is_real, whole_number
-from hearsee.errors import AudioInputError, ConfigError
+from hearsee.errors import AudioInputError, ConfigError, InvertedPolarityWarning
 from hearsee.geometry import fibonacci_sphere
 
 __all__ = [
@@ -752,6 +753,11 @@ class TdoaFrames:
         The frequency band the GCC used, Hz (lowest and highest bin): ``band_hz`` of
         :func:`estimate_tdoas` or the whole band, less an empty top band
         (``empty_band_db``). None where not recorded.
+    inverted_mics : tuple of int
+        Microphones that seem wired with inverted polarity (their pairs' averaged correlations
+        hold a trough where a source gives a peak; :func:`inverted_microphones`, with an
+        :class:`~hearsee.errors.InvertedPolarityWarning`); empty when none, or without a
+        whole-recording estimate.
     """
 
     t: NDArray
@@ -770,6 +776,7 @@ class TdoaFrames:
     summary_method: str = ""
     coherence_gain: float = float("nan")
     band_hz: tuple[float, float] | None = None
+    inverted_mics: tuple[int, ...] = ()
 
     @property
     def pair_labels(self) -> list[str]:
@@ -1017,6 +1024,29 @@ def _empty_band_cut(frames: NDArray, win: NDArray, nfft: int, fs: float, energy:
     return int(np.floor(EMPTY_BAND_GUARD * edge))
 
 
+def _warn_inverted(r: NDArray, max_lag: NDArray, main_lobe: int,
+                   pairs: Sequence[tuple[int, int]], n_mics: int) -> tuple[int, ...]:
+    """An :class:`~hearsee.errors.InvertedPolarityWarning` when the averaged correlations ``r``
+    (n_pairs, nfft) tell of an inverted microphone (:func:`inverted_microphones`); those
+    microphones (none: ``()``)."""
+    sign, z = pair_polarity(r, max_lag, main_lobe)
+    mics = inverted_microphones(sign, pairs, n_mics, z)
+    if mics is None:
+        return ()
+    neg = [f"{i}-{j}" for (i, j), v in zip(pairs, sign, strict=True) if v < 0]
+    names = ", ".join(map(str, mics))
+    if 2 * len(mics) == n_mics:  # (the other half explains the signs as well)
+        rest = ", ".join(str(m) for m in range(n_mics) if m not in mics)
+        names += f" (or {rest})"
+    who = f"microphone{'s' * (len(mics) > 1)} {names} seem{'s' * (len(mics) == 1)}"
+    warnings.warn(f"{who} wired with inverted polarity: pair{'s' * (len(neg) > 1)} "
+                  f"{', '.join(neg)} correlate{'s' * (len(neg) == 1)} negatively (a trough where "
+                  "a source gives a peak), so their TDOAs and the direction are wrong; invert "
+                  "that channel's samples or fix the wiring", InvertedPolarityWarning,
+                  stacklevel=3)
+    return tuple(mics)
+
+
 def empty_band_top_hz(x: ArrayLike, fs: float, frame_ms: float = 64.0,
                       db: float = EMPTY_BAND_DB) -> float | None:
     """The highest frequency (Hz) :func:`estimate_tdoas` keeps of a recording whose top band
@@ -1052,6 +1082,83 @@ def empty_band_top_hz(x: ArrayLike, fs: float, frame_ms: float = 64.0,
     cut = _empty_band_cut(frames, _window(DEFAULT_WINDOW, frame_len), frame_len, fs,
                           energy, db)
     return None if cut is None else (cut - 1) * fs / frame_len
+
+
+#: :func:`inverted_microphones`: a pair's averaged correlation counts as a peak (or a trough)
+#: where its highest value (or deepest, when deeper than the highest) within its lag bound
+#: stands this many robust standard deviations above the correlation at the lags beyond it;
+#: two microphones, with no other pair to agree, need :data:`POLARITY_PAIR_SIGNIF`
+POLARITY_SIGNIF = 5.0
+POLARITY_PAIR_SIGNIF = 8.0
+#: arrays up to this many microphones are searched for the inverted ones (2^(n-1) sign patterns)
+_POLARITY_MAX_MICS = 12
+
+
+def pair_polarity(r: ArrayLike, max_lag: ArrayLike, main_lobe: int = 2,
+                  signif: float = POLARITY_SIGNIF) -> tuple[NDArray, NDArray]:
+    """The sign of each pair's averaged correlation and its significance.
+
+    ``r`` (n_pairs, nfft): circular correlations (lag 0 first, negative lags at the end);
+    ``max_lag`` (n_pairs,) samples. Per pair, the extremum within ``+-max_lag`` of largest
+    magnitude, over a robust standard deviation (1.4826 median absolute deviation) of ``r`` at
+    the lags beyond ``max_lag + main_lobe``. Returns ``(sign, z)``: ``sign`` +1 for a peak, -1
+    for a trough, 0 where ``z < signif``; ``z`` that ratio. A source's direct path is a peak in
+    every weighting hearsee uses (they are real and positive per bin); a trough is the mark of
+    a microphone whose signal is inverted.
+    """
+    r = np.atleast_2d(np.asarray(r, dtype=float))
+    L = np.ceil(np.atleast_1d(np.asarray(max_lag, dtype=float))).astype(int)
+    n = r.shape[1]
+    sign, z = np.zeros(len(r), dtype=int), np.zeros(len(r))
+    for p in range(len(r)):
+        near = np.r_[r[p, n - L[p]:], r[p, :L[p] + 1]]
+        far = r[p, L[p] + main_lobe + 1: n - L[p] - main_lobe]
+        if far.size < 8:
+            continue
+        sd = 1.4826 * float(np.median(np.abs(far - np.median(far))))
+        hi, lo = float(near.max()), float(-near.min())
+        z[p] = max(hi, lo) / sd if sd > 0 else 0.0
+        if z[p] >= signif:
+            sign[p] = 1 if hi >= lo else -1
+    return sign, z
+
+
+def inverted_microphones(sign: ArrayLike, pairs: Sequence[tuple[int, int]], n_mics: int,
+                         z: ArrayLike | None = None) -> list[int] | None:
+    """The microphones whose inversion explains the pairs' correlation signs (of
+    :func:`pair_polarity`), or None when none is inverted or the signs do not tell.
+
+    Every pair with a sign must agree with ``p_i p_j`` for one polarity ``p`` per microphone;
+    of the patterns that explain them all, the one with the fewest inverted microphones is
+    taken. Each inverted microphone needs two or more troughs among its pairs (three or more
+    microphones) -- or, with two microphones, the one trough ``z >=``
+    :data:`POLARITY_PAIR_SIGNIF`. Where the named microphones are half the array, the other
+    half inverted explains the signs as well (the half without microphone 0 is named: ``[1]``
+    of two microphones). None for arrays of more than 12 microphones (not searched).
+    """
+    s = np.asarray(sign, dtype=int)
+    if not np.any(s < 0) or n_mics > _POLARITY_MAX_MICS:
+        return None
+    if n_mics == 2:
+        zz = np.inf if z is None else float(np.max(np.asarray(z)[s < 0]))
+        return [1] if zz >= POLARITY_PAIR_SIGNIF and np.all(s <= 0) else None
+    I = np.array([a for a, _ in pairs])
+    J = np.array([b for _, b in pairs])
+    has = s != 0
+    best = None
+    for code in range(2 ** (n_mics - 1)):  # (microphone 0's sign fixed: p and -p agree alike)
+        pol = np.ones(n_mics, dtype=int)
+        pol[1:] = [(-1 if code >> k & 1 else 1) for k in range(n_mics - 1)]
+        if np.all(pol[I[has]] * pol[J[has]] == s[has]):
+            # (the minority; on a tie, pol < 0: the half without microphone 0)
+            flipped = np.flatnonzero(pol < 0) if np.sum(pol < 0) <= n_mics / 2 else (
+                np.flatnonzero(pol > 0))
+            if best is None or len(flipped) < len(best):
+                best = flipped
+    if best is None or len(best) == 0:
+        return None
+    troughs = [int(np.sum((s < 0) & ((I == m) | (J == m)))) for m in best]
+    return [int(m) for m in best] if min(troughs) >= 2 else None
 
 
 def _spectra_fit(n_ch: int, n_frames: int, n_bins: int) -> bool:
@@ -2091,6 +2198,7 @@ def estimate_tdoas(
         if reverberant:
             acc, acc_active, summary_method = acc2, acc2_active, reverb_method
     summary, summary_conf = np.full(n_pairs, np.nan), np.zeros(n_pairs)
+    inverted: tuple[int, ...] = ()
     need = min_confidence
     fallback = False
     if summary_frames == "active" and n_active:
@@ -2146,8 +2254,9 @@ def estimate_tdoas(
                                   first_arrival, reach)[None]
         if ok:
             summary, summary_conf = lag[0] / fs, c[0]
+        inverted = _warn_inverted(r_sum, max_lag, main_lobe, prs, arr.n_mics)
     t = (np.arange(n_frames) * hop + frame_len / 2.0) / fs
     return TdoaFrames(t, tdoa, conf, valid, prs, summary, summary_conf, max_lag / fs, fs,
                       acc / max(n_acc, 1) if n_acc else None, band_bins, nfft,
                       coherence_ratio, summary_method, coherence_gain,
-                      (k0 * fs / nfft, (k1 - 1) * fs / nfft))
+                      (k0 * fs / nfft, (k1 - 1) * fs / nfft), inverted)

@@ -212,7 +212,8 @@ def localize_cmd(
     else:
         _print_table(doc)
     note_empty_band(recording, doc.get("band_hz"), band, fs)
-    if doc["summary"]["n_valid_frames"] == 0:
+    if doc["summary"]["n_valid_frames"] == 0 and not doc["summary"].get("inverted_microphones"):
+        # (an inverted microphone has its own warning: no frame was valid because of it)
         spike = dominant_sample(x)
         if spike is None:
             err_console.print(f"hearsee: warning: {recording}: no frame holds a detectable source "
