@@ -373,3 +373,23 @@ def test_stream_bands():
     assert _srp_band((0.0, hi), (300.0, 3500.0)) == (300.0, 3500.0)
     assert _srp_band((1000.0, 2000.0), (300.0, 3500.0)) == (1000.0, 2000.0)
     assert _srp_band((3600.0, 3900.0), (300.0, 3500.0)) == (3600.0, 3900.0)
+
+
+def test_track_warns_of_an_inverted_microphone(tmp_path, capsys):
+    """The stream sees one frame at a time: with microphone 2 wired backwards its directions
+    were wrong without a word. `hearsee track` looks at a file's whole-recording correlations
+    first, as `hearsee localize` does."""
+    from hearsee.audio.propagation import simulate_free_field
+    from hearsee.audio.signals import white_noise
+    from hearsee.geometry import unit_vector_deg
+
+    arr = MicArray.from_preset("three-mic")
+    x = simulate_free_field(white_noise(1.0, FS, rng=5), FS, arr,
+                            2.0 * unit_vector_deg(-60.0, 0.0), snr_db=20, rng=6)
+    for flip, want in ((1.0, 0), (-1.0, 1)):
+        wav = tmp_path / f"r{want}.wav"
+        write_recording(wav, 0.5 * x * np.array([[1.0], [1.0], [flip]]) / np.abs(x).max(), FS)
+        assert main(["track", str(wav), "--array", "three-mic", "--format", "json"]) == 0
+        out, err = capsys.readouterr()
+        assert err.count("microphone 2 seems wired with inverted polarity: pairs 0-2, 1-2") == want
+        assert len(json.loads(out)["updates"]) > 20

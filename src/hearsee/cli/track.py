@@ -90,6 +90,25 @@ def _stream_band(asked: tuple[float, float] | None, x, fs: float, frame_ms: floa
     return lo, top
 
 
+#: :func:`_check_wiring` looks at up to this many seconds of a file
+WIRING_SCAN_S = 30.0
+
+
+def _check_wiring(x, fs: float, arr, cfg) -> None:
+    """The whole-recording TDOA estimate of a file's first :data:`WIRING_SCAN_S` seconds, for
+    its warning of a microphone wired with inverted polarity
+    (:class:`hearsee.errors.InvertedPolarityWarning`): the stream sees one frame at a time and
+    has no whole-recording correlation to tell it (its directions were wrong without a word)."""
+    from hearsee.audio.tdoa import estimate_tdoas
+    from hearsee.errors import HearseeError
+
+    try:
+        estimate_tdoas(x[:, :int(WIRING_SCAN_S * fs)], fs, arr, cfg.frame_ms, cfg.hop_ms,
+                       cfg.method, band_hz=cfg.band_hz)
+    except HearseeError:
+        pass  # (too short for a frame, ...: the stream says what it says about it)
+
+
 def _srp_band(gcc_band: tuple[float, float] | None, srp_band: tuple[float, float] | None
               ) -> tuple[float, float] | None:
     """The steered response's band (Hz) within the GCC's band ``gcc_band``: ``srp_band``
@@ -299,6 +318,8 @@ def track_cmd(
         cfg.band_hz, cfg.srp_band_hz = used, _srp_band(used, cfg.srp_band_hz)
         if used is not None:
             note_empty_band(recording, used, band, source.fs)
+        if device is None:
+            _check_wiring(source.x, source.fs, arr, cfg)
         pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
         try:
             pipe.run(source, sink, threaded=device is not None)
