@@ -356,6 +356,13 @@ def gcc_weighting(method: str, G: NDArray, Gii: NDArray | None = None,
 
 
 # ---------------------------------------------------------------------------------- peaks
+def _bin_phase(k: NDArray, nfft: int) -> tuple[NDArray, NDArray]:
+    """Angular frequencies (rad per sample) of the rfft bins ``k`` of ``nfft``-point frames and
+    irfft's one-sided bin weights (1/2 at DC and Nyquist, 1 elsewhere): the band-limited
+    correlation between samples is ``R(tau) = sum_k cw_k Re(P_k exp(j w_k tau))``."""
+    return 2.0 * np.pi * k / nfft, np.where((k == 0) | (2 * k == nfft), 0.5, 1.0)
+
+
 def _refine_interp(P: NDArray, tau0: NDArray, nfft: int, n_iter: int = 3,
                    bins: NDArray | None = None) -> NDArray:
     """Newton iterations for the maximum of ``R(tau) = sum_k c_k Re(P_k exp(j w_k tau))``.
@@ -366,8 +373,7 @@ def _refine_interp(P: NDArray, tau0: NDArray, nfft: int, n_iter: int = 3,
     in single precision (error ~1e-6 rad, far below the estimation noise).
     """
     k = np.arange(P.shape[-1]) if bins is None else np.asarray(bins)
-    w = 2.0 * np.pi * k / nfft
-    cw = np.where((k == 0) | (2 * k == nfft), 0.5, 1.0)  # irfft's one-sided bin weights
+    w, cw = _bin_phase(k, nfft)
     Pc = P * cw
     wr = (w * Pc.real).astype(np.float32)
     wi = (w * Pc.imag).astype(np.float32)
@@ -1264,9 +1270,7 @@ def _summed_corr(P: NDArray, tau: NDArray, nfft: int, bins: NDArray) -> float:
     with ``R_p(tau) = sum_k c_k Re(P_pk exp(j w_k tau))`` (``P`` (n_pairs, bins) weighted
     spectra at the rfft bins ``bins`` of ``nfft``-point frames, ``tau`` (n_pairs,) samples),
     evaluated exactly between samples."""
-    k = np.asarray(bins)
-    w = 2.0 * np.pi * k / nfft
-    cw = np.where((k == 0) | (2 * k == nfft), 0.5, 1.0)  # irfft's one-sided bin weights
+    w, cw = _bin_phase(np.asarray(bins), nfft)
     return float(np.sum(np.real(P * cw * np.exp(1j * np.outer(tau, w)))))
 
 
@@ -1424,9 +1428,7 @@ def _first_arrival_peaks(win: NDArray, lags: NDArray, k: NDArray, delta: float) 
 def _corr_derivs(P: NDArray, tau: NDArray, nfft: int, bins: NDArray) -> tuple[NDArray, NDArray]:
     """First and second derivatives (per sample) of each pair's band-limited correlation
     ``R_p(tau) = sum_k c_k Re(P_pk exp(j w_k tau))`` at lags ``tau`` (n_pairs,) samples."""
-    k = np.asarray(bins)
-    w = 2.0 * np.pi * k / nfft
-    cw = np.where((k == 0) | (2 * k == nfft), 0.5, 1.0)
+    w, cw = _bin_phase(np.asarray(bins), nfft)
     Q = P * cw * np.exp(1j * np.outer(tau, w))
     d1 = -np.sum(w * Q.imag, axis=-1)
     d2 = -np.sum(w * w * Q.real, axis=-1)
