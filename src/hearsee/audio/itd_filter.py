@@ -116,6 +116,7 @@ class ItdKalman:
         self.kf = kf
         self.gate = float(chi2.ppf(gate_prob, dim_z))
         self.initialized = False
+        self.n_inits = 0  # (first measurement and re-initialisations: where smooth() cuts)
         self.n_rejected = 0
         self._run = 0
         self.last_d2 = float("nan")
@@ -148,6 +149,7 @@ class ItdKalman:
         self.kf.P = np.linalg.pinv(self.kf.H.T @ np.linalg.inv(self.kf.R) @ self.kf.H)
         self.initialized = True
         self._run = 0
+        self.n_inits += 1
 
     def step(self, z: ArrayLike | None) -> bool:
         """One frame: predict, then update with pair TDOAs ``z`` (n_pairs,) seconds.
@@ -203,4 +205,37 @@ class ItdKalman:
             acc[n] = self.step(z)
             if self.initialized:
                 out[n] = self.pair_tdoas()
+        return out, acc
+
+    def smooth(self, Z: ArrayLike) -> tuple[NDArray, NDArray]:
+        """Forward-backward over a whole sequence of frames ``Z`` (n_frames, n_pairs): the
+        filter of :meth:`filter` (its gate and re-initialisations included), then the
+        Rauch-Tung-Striebel smoother (Rauch, Tung & Striebel 1965; filterpy's
+        ``KalmanFilter.rts_smoother``) on each stretch between re-initialisations, so that every
+        frame's estimate uses the frames after it too -- no lag behind a moving source, and
+        less noise, for recordings processed whole (``hearsee localize``).
+
+        Returns (pair TDOAs (n_frames, n_pairs) -- NaN before the first measurement --,
+        accepted (n_frames,) bool, as :meth:`filter`). The filter's state afterwards is the
+        forward pass's (the last frame's estimate is the same either way).
+        """
+        check_real_tdoas(Z)
+        Zm = np.asarray(Z, dtype=float)
+        if Zm.ndim != 2:
+            raise GeometryError(f"expected (n_frames, n_pairs) TDOAs, got shape {Zm.shape}")
+        n, dx = Zm.shape[0], self.kf.dim_x
+        xs, Ps = np.full((n, dx), np.nan), np.full((n, dx, dx), np.nan)
+        start = np.zeros(n, dtype=bool)  # (frames where the state was (re)initialised)
+        acc = np.zeros(n, dtype=bool)
+        for k, z in enumerate(Zm):
+            inits = self.n_inits
+            acc[k] = self.step(z)
+            if self.initialized:
+                xs[k], Ps[k], start[k] = self.kf.x.reshape(-1), self.kf.P, self.n_inits > inits
+        out = np.full(Zm.shape, np.nan)
+        bounds = [*np.flatnonzero(start), n]
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+            if b - a > 1:
+                xs[a:b], Ps[a:b], _, _ = self.kf.rts_smoother(xs[a:b], Ps[a:b])
+            out[a:b] = xs[a:b] @ pair_matrix(self.n_mics, self.pairs, self.ref).T
         return out, acc
