@@ -596,9 +596,9 @@ EMPTY_BAND_DB = 60.0
 #: found in 98 of 104 cases (within a bin). Missed: scipy's polyphase 12 -> 16 and 32 -> 44.1 kHz
 #: (white noise) and 44.1 -> 48 kHz keep images above -60 dB; the FFT resampler's 44.1 -> 48 kHz
 #: edge lies above 0.9 of the new Nyquist frequency and is taken for a converter's own (the band
-#: keeps 0.2-0.4 kHz of images there). Pass ``band_hz`` for those. 8 kHz white noise read at 16
-#: kHz (three-mic, 20 dB): summary TDOAs 0.1-0.3 us
-#: off with the band up to 4.0 kHz, 9 us up to 4.3 kHz, 65-86 us with every bin.
+#: keeps 0.2-0.4 kHz of images there). Pass ``band_hz`` for those. 8 kHz white noise read at
+#: 16 kHz (three-mic, 20 dB): summary TDOAs 0.1-0.3 us off with the band up to 4.0 kHz, 9 us up
+#: to 4.3 kHz, 65-86 us with every bin.
 #: An empty band that begins above :data:`EMPTY_BAND_NATIVE` of the Nyquist frequency is a
 #: converter's own anti-alias filter, not an upsampler's (CMU ARCTIC's 16 kHz files are empty from
 #: 7.4-7.8 kHz): there is no image below it, and the band ends at its edge.
@@ -626,10 +626,10 @@ def empty_top_band(power: ArrayLike, db: float = EMPTY_BAND_DB) -> int | None:
     ``power`` (n_bins,) is a mean power spectrum (any linear scale, e.g. ``|X|^2`` averaged
     over frames and channels; its bins evenly spaced, the last the highest frequency). Smoothed
     by a moving average over ``n_bins / 64`` bins (which moves a sharp edge up by up to half
-    that), every bin from the returned index on lies
-    more than ``db`` dB below the smoothed spectrum's peak, and the bin before it does not --
-    the top of a recording upsampled after it was made (see :data:`EMPTY_BAND_DB`). None when
-    the top bin is not that low, or the spectrum is silent or not finite.
+    that), every bin from the returned index on lies more than ``db`` dB below the smoothed
+    spectrum's peak, and the bin before it does not -- the top of a recording upsampled after
+    it was made (see :data:`EMPTY_BAND_DB`). None when the top bin is not that low, or the
+    spectrum is silent or not finite.
 
     >>> import numpy as np
     >>> p = np.r_[np.ones(100), np.full(100, 1e-9)]   # nothing from bin 100 on
