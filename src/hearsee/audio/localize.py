@@ -952,8 +952,9 @@ def localize_tdoa(tdoa_s: ArrayLike, array: MicArray | str,
         m, 2.08 -> 0.00, 2.14 -> 2.11, 3.37 -> 3.37. No cell of three ranges from 0.5 to 4 m,
         three noise levels and these three arrays is worse than the plane wave; over 1500
         random arrays (5-8 microphones, 5-40 cm, sources 0.3-5 m, 0-30 us) RMS 5.06 -> 4.67 deg,
-        median 1.21 -> 0.61, none worse by more than 10 deg (``bench/nmic.py``'s seed: 4.39 ->
-        4.05, one worse by more than 10 deg). A 5 % test gained more where the
+        median 1.21 -> 0.61, none worse by more than 10 deg (``bench/nmic.py``'s seed: 4.49 ->
+        3.58, none worse by more than 10 deg, re-run 2026-12-03; 4.39 -> 4.05 and one on
+        2026-11-27). A 5 % test gained more where the
         curvature is measured (1.49 -> 0.82 above) but let a far source's noise through 5 % of
         the time (cells up to 2 % worse, two random small arrays 10-15 deg worse).
 
