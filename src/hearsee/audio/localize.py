@@ -1434,7 +1434,14 @@ def localize_recording(
     kalman : bool
         Smooth the valid frames' TDOAs with :class:`hearsee.audio.itd_filter.ItdKalman`
         (reference microphone 0; ``r_std_s`` default one sample, ``q_std_s`` a quarter sample
-        per frame). Frames without a source stay without an estimate either way.
+        per frame), forward and backward (:meth:`~hearsee.audio.itd_filter.ItdKalman.smooth`,
+        since 2026-12-03; the forward filter alone before). Three-mic preset, 3-s recordings,
+        10 dB, free field and RT60 0.3 s, 16 and 48 kHz, static and 45 / 90 deg/s talkers:
+        per-frame TDOA RMSE at most the filter's in every cell of dev and held-out seeds, e.g.
+        16 kHz free field, male voice at 45 deg/s 34.7 -> 15.7 us, white noise 20.1 -> 5.5 us
+        (the raw frames 53 and 1.1 us: for a source that moves, the random walk's defaults
+        still over-smooth white noise's precise frames). Frames without a source stay without
+        an estimate either way.
     progress : callable(n_frames_done), optional
     in_plane : bool
         The source lies in the plane of a planar array: directions model its spherical
@@ -1504,7 +1511,8 @@ def localize_recording(
         kf = ItdKalman(arr.n_mics, tf.pairs, ref=0,
                        q_std_s=q_std_s if q_std_s is not None else 0.25 / fs,
                        r_std_s=r_std_s if r_std_s is not None else 1.0 / fs)
-        filt, _ = kf.filter(tdoa)
+        # (the recording is processed whole: the smoother, which uses the later frames too)
+        filt, _ = kf.smooth(tdoa)
         tdoa = np.where(tf.valid[:, None], filt, np.nan)
     # the frames' spherical wavefront of in_plane is a planar array's; for other arrays
     # in_plane is ignored, as localize_tdoa says and the stream does -- near_field=True fitted
