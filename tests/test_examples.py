@@ -104,7 +104,7 @@ def test_make_example_recording_reproduces_the_bundled_example(tmp_path):
     # The bundle was rendered with pyroomacoustics 0.10.1. 0.9.0 and 0.10.0 (pyproject's lower
     # bound and the next release) give the same 16-bit samples (checked above) and the same
     # truth, but the simulated signal's peak 6.4e-8 relative apart, and with it the
-    # normalising gain (peak / max |x|): measured 2026-12-04, numpy 1.26.0, scipy 1.15.0.
+    # normalising gain (peak / max |x|): measured 2026-12-03, numpy 1.26.0, scipy 1.15.0.
     from importlib.metadata import version
 
     pra = tuple(int(v) for v in version("pyroomacoustics").split(".")[:3])

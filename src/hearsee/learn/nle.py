@@ -589,7 +589,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         graph (its minimum spanning tree) is the mark of a degenerate embedding, where a group
         of points is barely tied to the rest, and raises :class:`ManifoldInputError`. So does a
         graph with more groups of points that choose their neighbours only among themselves
-        than connected components (see below), whatever the coordinates (until 2026-12-04 only
+        than connected components (see below), whatever the coordinates (until 2026-12-03 only
         when they spanned that much, which depended on the eigensolver's basis of the null
         space: scipy 1.11 let one through).
     random_state : int, RandomState or None

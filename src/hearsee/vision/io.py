@@ -54,7 +54,7 @@ def video_capture(source: int | str) -> cv2.VideoCapture:
     two ``[ WARN ]`` lines of its backends (V4L2, FFMPEG) on stderr before hearsee's one-line
     message, and OpenCV 4.8 and 4.10 also two ``[ERROR:0@...] global
     obsensor_uvc_stream_channel.cpp ... Camera index out of range`` lines of their Orbbec
-    backend, which probes every index (until 2026-12-04 the log was only lowered to errors).
+    backend, which probes every index (until 2026-12-03 the log was only lowered to errors).
     The caller checks ``isOpened()`` and reports a failure itself. An index beyond a C int
     gives a capture that is not opened (OpenCV's own TypeError, a traceback, for
     ``--camera-device 99999999999999999999`` or ``cameras.left: 99999999999999999999``
