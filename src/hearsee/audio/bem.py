@@ -307,9 +307,9 @@ class TriMesh:
 
 def _query_points(points: ArrayLike, func: str) -> NDArray:
     """``points`` as finite ``(P, 3)`` metres (one ``(3,)`` point as ``(1, 3)``), else a
-    GeometryError naming ``func``: the check of :meth:`TriMesh.winding_number` and
-    :meth:`TriMesh.closest_points`, where None gave NaN and face 0 without a word, text
-    numpy's builtin ValueError."""
+    GeometryError naming ``func``: the check of :meth:`TriMesh.winding_number`,
+    :meth:`TriMesh.closest_points` and :func:`incident_field`, where None gave NaN (and face 0)
+    without a word, text numpy's builtin ValueError."""
     p = np.atleast_2d(as_points(points, f"{func}: points"))
     if p.ndim != 2 or not np.all(np.isfinite(p)):
         raise GeometryError(f"{func}: points must be finite [x, y, z] in metres, shape (P, 3), "
@@ -550,13 +550,6 @@ def solve_adjoint(mesh: TriMesh, freqs: ArrayLike, eval_points: ArrayLike,
                            float(speed_of_sound))
 
 
-def _far_field_flag(far_field: Any, func: str) -> bool:
-    """``far_field`` itself when it is True or False (a numpy bool too), else a ConfigError
-    naming ``func`` and the argument: text such as "no" was truthy and gave plane waves from
-    the source's direction without a word, None a point source."""
-    return true_or_false(f"{func}: far_field", far_field)
-
-
 def _as_sources(source: ArrayLike, far_field: bool) -> NDArray:
     """``source`` as finite (S, 3) positions (metres) or, with ``far_field``, unit directions."""
     s = np.atleast_2d(as_points(source, "sources"))  # (text, ragged lists: GeometryError)
@@ -617,12 +610,8 @@ def incident_field(points: ArrayLike, k: ArrayLike, source: ArrayLike,
     word, text numpy's builtin ValueError, points of 2 coordinates its broadcasting error).
     ConfigError for a ``far_field`` that is not True or False.
     """
-    x = np.atleast_2d(as_points(points, "incident_field: points"))
-    if x.ndim != 2 or not np.all(np.isfinite(x)):
-        raise GeometryError("incident_field: points must be finite [x, y, z] in metres, shape "
-                            "(P, 3), got " + (f"shape {x.shape}" if x.ndim != 2
-                                              else "non-finite values"))
-    far_field = _far_field_flag(far_field, "incident_field")
+    x = _query_points(points, "incident_field")
+    far_field = true_or_false("incident_field: far_field", far_field)
     s = _as_sources(source, far_field)
     if not real_entries(k):
         raise GeometryError(f"incident_field: k must be wavenumbers (rad/m), finite numbers, "
@@ -660,7 +649,7 @@ def transfer_functions(sol: AdjointSolution, source: ArrayLike, far_field: bool 
     if not isinstance(sol, AdjointSolution):
         raise GeometryError(f"transfer_functions needs the AdjointSolution of solve_adjoint, "
                             f"got {type(sol).__name__}")
-    far_field = _far_field_flag(far_field, "transfer_functions")
+    far_field = true_or_false("transfer_functions: far_field", far_field)
     chunk = whole_number("transfer_functions: chunk", chunk, 1)
     c = sol.speed_of_sound
     if speed_of_sound is not None:
