@@ -644,7 +644,11 @@ def empty_top_band(power: ArrayLike, db: float = EMPTY_BAND_DB) -> int | None:
         raise ConfigError(f"power must be a spectrum of 2 or more bins, got shape {p.shape}")
     if not np.all(np.isfinite(p)) or not p.max() > 0:
         return None
-    sm = _smoothed_power(p)
+    return _top_edge(_smoothed_power(p), db)
+
+
+def _top_edge(sm: NDArray, db: float) -> int | None:
+    """:func:`empty_top_band` of the smoothed spectrum ``sm`` (finite, its peak > 0)."""
     loud = sm >= sm.max() * 10.0 ** (-db / 10.0)
     if loud[-1]:
         return None
@@ -1017,11 +1021,13 @@ def _empty_band_cut(frames: NDArray, win: NDArray, nfft: int, fs: float, energy:
     loudest = np.sort(np.argsort(energy, kind="stable")[-n:])
     power = _spectra_power(frames[:, loudest, :], win, nfft, 0, nfft // 2 + 1)[1]
     mean = power.mean(axis=(0, 1), dtype=float)
-    edge = empty_top_band(mean, db)
+    if not np.all(np.isfinite(mean)) or not mean.max() > 0:  # (empty_top_band's None cases)
+        return None
+    sm = _smoothed_power(mean)
+    edge = _top_edge(sm, db)
     if edge is None or edge > EMPTY_BAND_NATIVE * (nfft // 2):
         return edge
     edge_hz = edge * fs / nfft
-    sm = _smoothed_power(mean)
     for f_n in sorted((r / 2.0 for r in STANDARD_RATES_HZ
                        if edge_hz / EMPTY_BAND_TRANSITION <= r / 2.0 <= edge_hz), reverse=True):
         k_n = int(np.ceil(f_n * nfft / fs - 1e-9))

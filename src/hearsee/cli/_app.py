@@ -145,21 +145,18 @@ def parse_band(text: str, what: str = "--band-hz") -> tuple[float, float]:
     return lo, hi
 
 
-#: :func:`note_empty_band` speaks when the band used ends below this share of the band asked for
-#: (the whole band up to the Nyquist frequency without --band-hz): the GCC left out an empty top
-#: band below :data:`hearsee.audio.tdoa.EMPTY_BAND_NATIVE` of it -- an upsampled recording, not
-#: a converter's own anti-alias edge
-_EMPTY_BAND_NOTE = 0.9
-
-
 def note_empty_band(where: object, used: Sequence[float] | None,
                     asked: tuple[float, float] | None, fs: float) -> None:
     """One line on stderr when the GCC's band ``used`` (Hz) ends well below the band ``asked``
-    for (None: up to ``fs / 2``) because the recording ``where`` holds nothing above it."""
+    for (None: up to ``fs / 2``) because the recording ``where`` holds nothing above it: below
+    :data:`hearsee.audio.tdoa.EMPTY_BAND_NATIVE` of it, where the GCC ends the band of an
+    upsampled recording (not a converter's own anti-alias edge)."""
+    from hearsee.audio.tdoa import EMPTY_BAND_NATIVE
+
     if used is None:
         return
     top = fs / 2.0 if asked is None else min(asked[1], fs / 2.0)
-    if used[1] < _EMPTY_BAND_NOTE * top:
+    if used[1] < EMPTY_BAND_NATIVE * top:
         err_console.print(f"hearsee: note: {where}: the top of the spectrum is empty "
                           f"(upsampled from a lower rate?): the GCC uses {used[0]:.0f}-"
                           f"{used[1]:.0f} Hz", highlight=False)
