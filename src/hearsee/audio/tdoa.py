@@ -1041,6 +1041,9 @@ def _warn_inverted(r: NDArray, max_lag: NDArray, main_lobe: int,
     """An :class:`~hearsee.errors.InvertedPolarityWarning` when the averaged correlations ``r``
     (n_pairs, nfft) tell of an inverted microphone (:func:`inverted_microphones`); those
     microphones (none: ``()``)."""
+    hi, lo = _extrema_within(r, _lag_bounds(max_lag))
+    if all(h >= d for h, d in zip(hi, lo, strict=True)):
+        return ()  # (no trough deeper than its peak: no pair can have sign -1; the usual case)
     sign, z = pair_polarity(r, max_lag, main_lobe)
     mics = inverted_microphones(sign, pairs, n_mics, z)
     if mics is None:
@@ -1119,20 +1122,33 @@ def pair_polarity(r: ArrayLike, max_lag: ArrayLike, main_lobe: int = 2,
     a microphone whose signal is inverted.
     """
     r = np.atleast_2d(np.asarray(r, dtype=float))
-    L = np.ceil(np.atleast_1d(np.asarray(max_lag, dtype=float))).astype(int)
+    L = _lag_bounds(max_lag)
     n = r.shape[1]
+    his, los = _extrema_within(r, L)
     sign, z = np.zeros(len(r), dtype=int), np.zeros(len(r))
     for p in range(len(r)):
-        near = np.r_[r[p, n - L[p]:], r[p, :L[p] + 1]]
         far = r[p, L[p] + main_lobe + 1: n - L[p] - main_lobe]
         if far.size < 8:
             continue
         sd = 1.4826 * float(np.median(np.abs(far - np.median(far))))
-        hi, lo = float(near.max()), float(-near.min())
+        hi, lo = his[p], los[p]
         z[p] = max(hi, lo) / sd if sd > 0 else 0.0
         if z[p] >= signif:
             sign[p] = 1 if hi >= lo else -1
     return sign, z
+
+
+def _lag_bounds(max_lag: ArrayLike) -> NDArray:
+    """Whole-sample lag bounds (n_pairs,) of :func:`pair_polarity`."""
+    return np.ceil(np.atleast_1d(np.asarray(max_lag, dtype=float))).astype(int)
+
+
+def _extrema_within(r: NDArray, L: NDArray) -> tuple[list[float], list[float]]:
+    """Per pair, the highest value and the depth of the deepest trough (``-min``) of the
+    circular correlations ``r`` (n_pairs, nfft) within ``+-L`` samples."""
+    n = r.shape[1]
+    near = [np.r_[r[p, n - L[p]:], r[p, :L[p] + 1]] for p in range(len(r))]
+    return [float(v.max()) for v in near], [float(-v.min()) for v in near]
 
 
 def inverted_microphones(sign: ArrayLike, pairs: Sequence[tuple[int, int]], n_mics: int,
