@@ -528,8 +528,9 @@ def test_long_recordings_transform_each_frame_once(three, monkeypatch, band_vad)
     again = estimate_tdoas(x, FS, three, **kw)
     n_frames = len(cached.t)
     assert n_frames > 3 * kw["chunk_frames"]
-    # three channels, each frame once -- and the empty-band probe's loudest frames
-    assert n_cached == 3 * (n_frames + tdoa_mod._EMPTY_BAND_FRAMES)
+    # three channels, each frame once (the empty-band search's loudest frames come from the
+    # same transforms)
+    assert n_cached == 3 * n_frames
     assert sum(rows) > n_cached  # (the halo of SCOT's statistics alone re-transforms some)
     for a, b in [(cached.tdoa_s, again.tdoa_s), (cached.confidence, again.confidence),
                  (cached.summary_tdoa_s, again.summary_tdoa_s)]:
@@ -1202,6 +1203,25 @@ def test_an_upsampled_recording_is_not_biased_by_its_empty_band():
     assert max(errs) < 1e-6  # (a sample is 62.5 us; at 8 kHz itself 0.07-0.31 us)
     assert min(kept) > 40e-6  # what the empty band did
     assert max(rows) < 5e-6  # every valid frame too
+
+
+@pytest.mark.parametrize("band_vad", [True, False])
+def test_the_empty_band_search_shares_the_band_spectra_transforms(monkeypatch, band_vad):
+    """The loudest frames' whole-band power comes from the transforms of the band spectra
+    (chunked: the loudest frames lie in several chunks); the same cut, band and TDOAs as
+    when they are transformed on their own (SPECTRA_CACHE_BYTES = 0, band_vad=False: no
+    band spectra kept), bit for bit."""
+    from hearsee.audio import tdoa as tdoa_mod
+
+    y, arr, truth = _upsampled(-40.0, 21)
+    kw = {"band_hz": (200.0, 7000.0), "chunk_frames": 8, "band_vad": band_vad}
+    shared = estimate_tdoas(y, 16000, arr, **kw)
+    monkeypatch.setattr(tdoa_mod, "SPECTRA_CACHE_BYTES", 0)
+    alone = estimate_tdoas(y, 16000, arr, **{**kw, "band_vad": False})
+    assert 3950.0 < shared.band_hz[1] <= 4000.0 and shared.band_hz == alone.band_hz
+    np.testing.assert_array_equal(shared.tdoa_s, alone.tdoa_s)
+    np.testing.assert_array_equal(shared.summary_tdoa_s, alone.summary_tdoa_s)
+    assert np.abs(shared.summary_tdoa_s - truth).max() < 1e-6
 
 
 def test_a_band_given_is_trimmed_and_one_inside_the_empty_band_refused():

@@ -898,6 +898,25 @@ def _spectra_power(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int
     return X, X.real**2 + X.imag**2
 
 
+def _chunk_spectra(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int,
+                   rows: NDArray | None) -> tuple[NDArray, NDArray, NDArray | None]:
+    """:func:`_spectra_power` of ``frames`` (n_ch, F, L), and the power over every rfft bin of
+    the frames ``rows`` (indices into F; None or empty: None) from the same transform: the
+    spectra :func:`_empty_band_cut` looks at, at no transform of their own."""
+    full = sfft.rfft(windowed_frames(frames, win, nfft), axis=-1)
+    X = full[..., k0:k1]
+    top = None
+    if rows is not None and rows.size:
+        t = full[:, rows, :]
+        top = t.real**2 + t.imag**2
+    return X, X.real**2 + X.imag**2, top
+
+
+def _rows_in(rows: NDArray | None, s0: int, n: int) -> NDArray | None:
+    """The indices of ``rows`` within frames ``s0..s0+n-1``, counted from ``s0``."""
+    return None if rows is None else rows[(rows >= s0) & (rows < s0 + n)] - s0
+
+
 def frame_activity(x: NDArray, frame_len: int, hop: int, n_frames: int,
                    vad_db: float) -> tuple[NDArray, NDArray]:
     """Energy voice-activity decision per frame.
@@ -963,8 +982,8 @@ def _percentiles(v: NDArray, qs: tuple[float, ...]) -> list[float]:
 
 
 def _band_activity(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int,
-                   active: NDArray, vad_db: float, chunk: int
-                   ) -> tuple[NDArray, NDArray | None, NDArray | None]:
+                   active: NDArray, vad_db: float, chunk: int, rows: NDArray | None = None
+                   ) -> tuple[NDArray, NDArray | None, NDArray | None, NDArray | None]:
     """:func:`frame_activity`'s decision from each frame's energy in the analysis band (bins
     ``k0..k1-1``) instead of the whole spectrum; ``active`` (the broadband decision) where the
     band energy does not decide either. Used when the broadband energy looked stationary: white
@@ -972,27 +991,46 @@ def _band_activity(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int,
     the band's energy still shows, and without inactive frames there is no noise spectrum for
     the SNR weighting. Returns (active, the band spectra (n_ch, F, bins) and their power
     ``|X|^2`` when they fit :data:`SPECTRA_CACHE_BYTES` -- the noise spectrum and the frame
-    loop then need no second transform -- else None, None). Transformed ``chunk`` frames at a
-    time."""
+    loop then need no second transform -- else None, None), and the whole-band power of the
+    frames ``rows`` (sorted indices; :func:`_chunk_spectra`) or None. Transformed ``chunk``
+    frames at a time."""
     keep = _spectra_fit(frames.shape[0], frames.shape[1], k1 - k0)
     e = np.empty(frames.shape[1])
-    parts = []
+    parts, tops = [], []
     for s0 in range(0, frames.shape[1], chunk):
-        X, power = _spectra_power(frames[:, s0:s0 + chunk, :], win, nfft, k0, k1)
+        X, power, top = _chunk_spectra(frames[:, s0:s0 + chunk, :], win, nfft, k0, k1,
+                                       _rows_in(rows, s0, chunk))
         e[s0:s0 + chunk] = np.sum(power, axis=(0, 2))
         if keep:
             parts.append((X, power))
+        if top is not None:
+            tops.append(top)
     band, decided = _energy_vad(e, vad_db)
-    return (active & band if decided else active), *(_joined(parts) if keep else (None, None))
+    return ((active & band if decided else active),
+            *(_joined(parts) if keep else (None, None)), _joined_rows(tops, rows))
 
 
-def _band_spectra(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int, chunk: int
-                  ) -> tuple[NDArray, NDArray]:
+def _band_spectra(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int, chunk: int,
+                  rows: NDArray | None = None) -> tuple[NDArray, NDArray, NDArray | None]:
     """:func:`_spectra_power` of every frame of ``frames`` (n_ch, F, L), transformed ``chunk``
     frames at a time (the full spectra of a long recording would not fit where its band
-    does)."""
-    return _joined([_spectra_power(frames[:, s0:s0 + chunk, :], win, nfft, k0, k1)
-                    for s0 in range(0, frames.shape[1], chunk)])
+    does), and the whole-band power of the frames ``rows`` (:func:`_chunk_spectra`) or
+    None."""
+    parts, tops = [], []
+    for s0 in range(0, frames.shape[1], chunk):
+        X, power, top = _chunk_spectra(frames[:, s0:s0 + chunk, :], win, nfft, k0, k1,
+                                       _rows_in(rows, s0, chunk))
+        parts.append((X, power))
+        if top is not None:
+            tops.append(top)
+    return *_joined(parts), _joined_rows(tops, rows)
+
+
+def _joined_rows(tops: list[NDArray], rows: NDArray | None) -> NDArray | None:
+    """The whole-band power of every frame of ``rows`` from its chunks, or None."""
+    if rows is None or not rows.size:
+        return None
+    return tops[0] if len(tops) == 1 else np.concatenate(tops, axis=1)
 
 
 def _joined(parts: list[tuple[NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
@@ -1009,17 +1047,25 @@ def _joined(parts: list[tuple[NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
 _EMPTY_BAND_FRAMES = 16
 
 
+def _loudest_frames(energy: NDArray) -> NDArray:
+    """The sorted indices of the :data:`_EMPTY_BAND_FRAMES` loudest frames (by ``energy``;
+    all of them when fewer)."""
+    n = min(_EMPTY_BAND_FRAMES, energy.size)
+    return np.sort(np.argsort(energy, kind="stable")[-n:]) if n else np.zeros(0, dtype=int)
+
+
 def _empty_band_cut(frames: NDArray, win: NDArray, nfft: int, fs: float, energy: NDArray,
-                    db: float) -> int | None:
+                    db: float, power: NDArray | None = None) -> int | None:
     """The rfft bin where the GCC's band must end (exclusive), or None: from the edge found by
     :func:`empty_top_band` in the mean power over the channels and the
     :data:`_EMPTY_BAND_FRAMES` loudest ``frames`` (by ``energy``) of the whole band, the old
-    Nyquist frequency of an upsampled recording (:data:`EMPTY_BAND_TRANSITION`)."""
-    n = min(_EMPTY_BAND_FRAMES, frames.shape[1])
-    if n == 0:
-        return None
-    loudest = np.sort(np.argsort(energy, kind="stable")[-n:])
-    power = _spectra_power(frames[:, loudest, :], win, nfft, 0, nfft // 2 + 1)[1]
+    Nyquist frequency of an upsampled recording (:data:`EMPTY_BAND_TRANSITION`). ``power``:
+    those frames' whole-band power (n_ch, n, nfft // 2 + 1) when already transformed."""
+    if power is None:
+        loudest = _loudest_frames(energy)
+        if loudest.size == 0:
+            return None
+        power = _spectra_power(frames[:, loudest, :], win, nfft, 0, nfft // 2 + 1)[1]
     mean = power.mean(axis=(0, 1), dtype=float)
     if not np.all(np.isfinite(mean)) or not mean.max() > 0:  # (empty_top_band's None cases)
         return None
@@ -2076,14 +2122,16 @@ def estimate_tdoas(
     nb = k1 - k0
     # the band spectra of every frame, when they fit SPECTRA_CACHE_BYTES: one transform for
     # the band activity, the noise spectrum and the frame loop
-    X_all = power_all = None
+    X_all = power_all = top = None
     chunk = max(int(chunk_frames), 1)
+    # (the empty-band search's loudest frames, whole band, from the same transforms)
+    loudest = _loudest_frames(energy) if empty_band_db is not None else None
     if band_vad and (k0 > 1 or k1 < n_bins - 1) and not decided:
-        active, X_all, power_all = _band_activity(frames, win, nfft, k0, k1, active, vad_db,
-                                                  chunk)
+        active, X_all, power_all, top = _band_activity(frames, win, nfft, k0, k1, active,
+                                                       vad_db, chunk, loudest)
     elif _spectra_fit(arr.n_mics, n_frames, k1 - k0):
-        X_all, power_all = _band_spectra(frames, win, nfft, k0, k1, chunk)
-    cut = (_empty_band_cut(frames, win, nfft, fs, energy, empty_band_db)
+        X_all, power_all, top = _band_spectra(frames, win, nfft, k0, k1, chunk, loudest)
+    cut = (_empty_band_cut(frames, win, nfft, fs, energy, empty_band_db, top)
            if empty_band_db is not None else None)
     if cut is not None and cut < k1:
         if cut <= k0:
