@@ -296,6 +296,26 @@ def test_closure_rms_refuses_values_that_are_no_numbers():
     assert closure_rms(np.array([1e-4, 2e-4]), [(0, 1), (0, 2)], 3) is None
 
 
+def test_pair_closure_projector_takes_a_list_or_an_array_of_pairs():
+    """A list of pairs (the other functions' type) or an integer array was lru_cache's builtin
+    TypeError, "unhashable type"; a bad pair is a GeometryError."""
+    from hearsee.audio.arrays import pair_closure_projector
+
+    as_tuple = pair_closure_projector(((0, 1), (0, 2), (1, 2)), 3)
+    for pairs in ([(0, 1), (0, 2), (1, 2)], [[0, 1], [0, 2], [1, 2]], np.array([[0, 1], [0, 2],
+                                                                                  [1, 2]])):
+        P, dof = pair_closure_projector(pairs, 3)
+        assert dof == 1 and P is as_tuple[0]  # (the same cached projector)
+    # its residual: consistent values t_i - t_j pass, a closure error does not
+    t = np.array([0.0, 1e-4, 3e-4])
+    consistent = np.array([t[0] - t[1], t[0] - t[2], t[1] - t[2]])
+    np.testing.assert_allclose(P @ consistent, 0.0, atol=1e-18)
+    assert np.linalg.norm(P @ (consistent + [0.0, 0.0, 3e-5])) > 1e-5
+    assert pair_closure_projector([(0, 1), (0, 2)], 3) is None  # no cycle
+    with pytest.raises(GeometryError, match="invalid microphone pair"):
+        pair_closure_projector([(0, 1), (0, 3)], 3)
+
+
 @pytest.mark.parametrize("pairs", ["01", b"01", "0-1"])
 def test_pairs_given_as_text_name_the_pairs(pairs):
     """Text was read character by character ("a pair is two microphone indices, got '0'")."""

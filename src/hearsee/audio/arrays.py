@@ -457,14 +457,21 @@ def pair_matrix(n_mics: int, pairs: Sequence[tuple[int, int]], ref: int = 0) -> 
     return H
 
 
-@lru_cache(maxsize=64)
-def pair_closure_projector(pairs: tuple[tuple[int, int], ...], n_mics: int
+def pair_closure_projector(pairs: Sequence[tuple[int, int]], n_mics: int
                            ) -> tuple[NDArray, int] | None:
     """``(I - H H^+, n_pairs - rank H)`` for the pair matrix ``H`` (:func:`pair_matrix`),
     i.e. the residual of a least-squares fit of consistent ``t_i - t_j`` to pair values, and its
     degrees of freedom; None when the pairs hold no redundancy (no closed cycle ``t_ij + t_jk =
-    t_ik``). Cached per pair set (a tuple of tuples); the projector is read-only. GeometryError
-    for pairs :func:`check_pairs` refuses."""
+    t_ik``). Cached per pair set; the projector is read-only. GeometryError for pairs
+    :func:`check_pairs` refuses (a list of pairs or an array was lru_cache's builtin
+    TypeError, "unhashable type")."""
+    return _closure_projector(tuple(check_pairs(pairs, n_mics)), int(n_mics))
+
+
+@lru_cache(maxsize=64)
+def _closure_projector(pairs: tuple[tuple[int, int], ...], n_mics: int
+                       ) -> tuple[NDArray, int] | None:
+    """:func:`pair_closure_projector` of checked ``pairs`` (a tuple of tuples of ints)."""
     H = pair_matrix(n_mics, pairs)
     rank = int(np.linalg.matrix_rank(H))
     if len(pairs) <= rank:
