@@ -222,3 +222,90 @@ def test_smooth_refuses_what_filter_refuses():
     kf = ItdKalman(3)
     with pytest.raises(GeometryError, match="expected \\(n_frames, n_pairs\\)"):
         kf.smooth(np.zeros(3))
+
+
+# ------------------------------------------------------- the noise model tuned to the recording
+FS_T = 16000.0
+BOX = np.array([4.4e-4, 4.4e-4, 4.4e-4])  # the three-mic preset's lag bound per pair (s)
+
+
+def _walk(n, q_s, r_s, seed, outliers=0.0):
+    """Pair TDOAs (n, 3) of a state (t1 - t0, t2 - t0) walking with steps of std ``q_s``,
+    measured with noise ``r_s``; a share ``outliers`` of frames replaced by uniform peaks
+    within BOX. Returns (measured, true)."""
+    rng = np.random.default_rng(seed)
+    s = np.cumsum(rng.normal(0.0, q_s, (n, 2)), axis=0) + [-1e-4, -2.5e-4]
+    true = s @ pair_matrix(3, [(0, 1), (0, 2), (1, 2)]).T
+    z = true + rng.normal(0.0, r_s, true.shape)
+    bad = rng.random(n) < outliers
+    z[bad] = rng.uniform(-BOX, BOX, (int(bad.sum()), 3))
+    return z, true
+
+
+@pytest.mark.parametrize("q_samples, r_samples", [(1.0, 0.3), (0.03, 3.0), (0.3, 1.0)])
+def test_tune_itd_noise_finds_the_noise_that_made_the_frames(q_samples, r_samples):
+    from hearsee.audio.itd_filter import tune_itd_noise
+
+    z, _ = _walk(400, q_samples / FS_T, r_samples / FS_T, seed=int(10 * q_samples))
+    q, r = tune_itd_noise(z, 3, [(0, 1), (0, 2), (1, 2)], FS_T, BOX)
+    assert q * FS_T == pytest.approx(q_samples) and r * FS_T == pytest.approx(r_samples)
+
+
+def test_tuned_smoother_follows_precise_frames_of_a_moving_source():
+    """Precise frames of a source that moves (white noise: 0.05 samples of error, the state
+    walking a sample per frame): the former fixed model (q a quarter sample, r one sample)
+    lagged it by 25-35 times the frames' own error; the tuned one stays within 3x of them
+    (not below: the grid's smallest r is 0.3 samples, which voices' frames need)."""
+    from hearsee.audio.itd_filter import tune_itd_noise
+
+    z, true = _walk(300, 1.0 / FS_T, 0.05 / FS_T, seed=3)
+    noise = tune_itd_noise(z, 3, [(0, 1), (0, 2), (1, 2)], FS_T, BOX)
+    tuned = ItdKalman(3, q_std_s=noise[0], r_std_s=noise[1]).smooth(z)[0]
+    fixed = ItdKalman(3, q_std_s=0.25 / FS_T, r_std_s=1.0 / FS_T).smooth(z)[0]
+    rms = lambda a: float(np.sqrt(np.mean((a - true) ** 2)))  # noqa: E731
+    assert noise[0] * FS_T == pytest.approx(1.0)
+    assert rms(tuned) < 3 * rms(z) and rms(fixed) > 10 * rms(z)
+
+
+def test_tuned_smoother_still_rejects_a_reflections_peaks():
+    """A still source whose frames hold 10 % anomalous peaks: the outlier term keeps them
+    from deciding the model (a small random walk is chosen) and the smoother's RMSE is far
+    below the frames'."""
+    from hearsee.audio.itd_filter import tune_itd_noise
+
+    z, true = _walk(300, 1e-9, 0.5 / FS_T, seed=4, outliers=0.1)
+    q, r = tune_itd_noise(z, 3, [(0, 1), (0, 2), (1, 2)], FS_T, BOX)
+    assert q * FS_T <= 0.1
+    out = ItdKalman(3, q_std_s=q, r_std_s=r).smooth(z)[0]
+    rms = lambda a: float(np.sqrt(np.mean((a - true) ** 2)))  # noqa: E731
+    assert rms(out) < 0.1 * rms(z) and rms(out) < 0.5 / FS_T
+
+
+def test_tune_itd_noise_with_given_values_and_too_few_frames():
+    from hearsee.audio.itd_filter import tune_itd_noise
+
+    z, _ = _walk(100, 1.0 / FS_T, 0.3 / FS_T, seed=5)
+    pairs = [(0, 1), (0, 2), (1, 2)]
+    assert tune_itd_noise(z, 3, pairs, FS_T, BOX, r_std_s=(2e-5,))[1] == 2e-5
+    assert tune_itd_noise(z, 3, pairs, FS_T, BOX, q_std_s=(7e-6,))[0] == 7e-6
+    assert tune_itd_noise(z[:2], 3, pairs, FS_T, BOX) is None  # one frame scored
+    gaps = np.full_like(z, np.nan)
+    gaps[::25] = z[::25]
+    assert tune_itd_noise(gaps, 3, pairs, FS_T, BOX) is not None  # (predicts across gaps)
+    with pytest.raises(ConfigError, match="fs must be"):
+        tune_itd_noise(z, 3, pairs, "16000", BOX)
+
+
+def test_log_likelihood_refuses_bad_arguments():
+    kf = ItdKalman(3)
+    z = _noisy(10)
+    for bad in (0.0, 1.0, np.nan, "0.1"):
+        with pytest.raises(ConfigError, match="outlier_prob"):
+            kf.log_likelihood(z, BOX, outlier_prob=bad)
+    for box in (BOX[:2], [1e-4, -1e-4, 1e-4], [1e-4, np.nan, 1e-4]):
+        with pytest.raises(GeometryError, match="max_tdoa_s"):
+            ItdKalman(3).log_likelihood(z, box)
+    with pytest.raises(GeometryError, match="n_frames, n_pairs"):
+        kf.log_likelihood(z[0], BOX)
+    total, n = ItdKalman(3, q_std_s=1e-7, r_std_s=2e-5).log_likelihood(z, BOX)
+    assert n == 9 and np.isfinite(total)  # every frame after the first
