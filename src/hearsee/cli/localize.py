@@ -120,6 +120,11 @@ def localize_cmd(
         "with --summary-tuned.", show_default=False)] = None,
     no_kalman: Annotated[bool, typer.Option(
         "--no-kalman", help="Report the raw per-frame TDOAs (no ITD Kalman filter).")] = False,
+    kalman_tuned: Annotated[bool, typer.Option(
+        "--kalman-tuned", help="Choose the ITD Kalman filter's noise (random walk and "
+        "measurement) per recording by its frames' innovation likelihood instead of the fixed "
+        "defaults (much better for moving broadband sources; the JSON's kalman_q_std_s / "
+        "kalman_r_std_s say what was used).")] = False,
     fmt: Annotated[OutputFormat, typer.Option("--format", help="Output format.")] = (
         OutputFormat.json),
     reverb_method: Annotated[GccMethod | None, typer.Option(
@@ -176,7 +181,14 @@ def localize_cmd(
     else:
         settings = {"method": (method or GccMethod.phat).value,
                     "reverb_method": None if reverb_method is None else reverb_method.value}
+    if kalman_tuned and no_kalman:
+        raise ConfigError("--kalman-tuned tunes the ITD Kalman filter that --no-kalman turns "
+                          "off; give one of them")
     arr = load_array(array)
+    if kalman_tuned and arr.mask is not None:
+        raise ConfigError(f"--kalman-tuned: the masked array {arr.name!r} has a pipeline of its "
+                          "own (ch. 3) with a filter on the azimuth, not on the ITDs; leave it "
+                          "out")
     if summary_tuned and arr.mask is not None:
         raise ConfigError(f"--summary-tuned: the masked array {arr.name!r} has a pipeline of its "
                           "own (ch. 3) that takes none of those settings; leave it out")
@@ -200,7 +212,8 @@ def localize_cmd(
     work = x.shape[1] / fs * len(arr.pairs)
     with progress("localizing", n_frames, enabled=work > _PROGRESS_WORK_S) as advance:
         doc = localize_recording(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
-                                 kalman=not no_kalman, progress=advance, in_plane=in_plane,
+                                 kalman=not no_kalman, tune_kalman=kalman_tuned,
+                                 progress=advance, in_plane=in_plane,
                                  **settings, **({} if tdoa_std_us is None else
                                                 {"tdoa_std_s": tdoa_std_us * 1e-6}),
                                  **({} if band is None else {"band_hz": band}))
