@@ -294,6 +294,12 @@ def test_tune_itd_noise_with_given_values_and_too_few_frames():
     assert tune_itd_noise(gaps, 3, pairs, FS_T, BOX) is not None  # (predicts across gaps)
     with pytest.raises(ConfigError, match="fs must be"):
         tune_itd_noise(z, 3, pairs, "16000", BOX)
+    assert tune_itd_noise(z, 3, pairs, FS_T, BOX, q_std_s=7e-6)[0] == 7e-6  # (one number)
+    for bad in ("7e-6", [], [[]]):
+        with pytest.raises(ConfigError, match="q_std_s must be one or more numbers"):
+            tune_itd_noise(z, 3, pairs, FS_T, BOX, q_std_s=bad)
+    with pytest.raises(ConfigError, match="q_std_s, r_std_s and p0_std_s"):  # (ItdKalman's)
+        tune_itd_noise(z, 3, pairs, FS_T, BOX, q_std_s=-1.0)
 
 
 def test_log_likelihood_refuses_bad_arguments():

@@ -35,7 +35,7 @@ from scipy.stats import chi2
 
 from hearsee.audio.arrays import check_pairs, pair_matrix
 from hearsee.audio.localize import as_tdoas, check_real_tdoas
-from hearsee.config import is_real, whole_number
+from hearsee.config import is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, EstimationError, GeometryError
 
 __all__ = ["ItdKalman", "pair_matrix", "tune_itd_noise"]
@@ -304,8 +304,8 @@ def tune_itd_noise(Z: ArrayLike, n_mics: int, pairs: Sequence[tuple[int, int]],
     if not (is_real(fs) and fs > 0):
         raise ConfigError(f"fs must be a sample rate > 0 Hz, got {fs!r}")
     fs = float(fs)
-    qs = [v / fs for v in TUNE_Q_SAMPLES] if q_std_s is None else list(q_std_s)
-    rs = [v / fs for v in TUNE_R_SAMPLES] if r_std_s is None else list(r_std_s)
+    qs = [v / fs for v in TUNE_Q_SAMPLES] if q_std_s is None else _candidates("q_std_s", q_std_s)
+    rs = [v / fs for v in TUNE_R_SAMPLES] if r_std_s is None else _candidates("r_std_s", r_std_s)
     best: tuple[float, float, float] | None = None
     for q in qs:
         for r in rs:
@@ -316,3 +316,12 @@ def tune_itd_noise(Z: ArrayLike, n_mics: int, pairs: Sequence[tuple[int, int]],
             if best is None or ll > best[0]:
                 best = (ll, q, r)
     return None if best is None else (best[1], best[2])
+
+
+def _candidates(name: str, values: ArrayLike) -> list[float]:
+    """One number or a sequence of them (seconds) as a list; a ConfigError for anything else
+    (text, an empty list: a builtin TypeError or no candidate at all)."""
+    v = np.atleast_1d(np.asarray(values, dtype=float)) if real_entries(values) else None
+    if v is None or v.ndim != 1 or v.size == 0:
+        raise ConfigError(f"{name} must be one or more numbers > 0 seconds, got {values!r:.60}")
+    return [float(a) for a in v]
