@@ -180,6 +180,36 @@ def test_read_recording_bad_inputs(tmp_path):
     assert issubclass(AudioInputError, HearseeError) and issubclass(InputFileError, HearseeError)
 
 
+def test_a_constant_or_far_too_quiet_channel_is_named(tmp_path):
+    """A channel holding one constant value (an input with an offset and no microphone) read
+    as "no frame holds a detectable source"; one 100 dB below the others (a disconnected
+    microphone's preamplifier noise) gave no direction and no word."""
+    from hearsee.errors import DegenerateInputWarning
+
+    rng = np.random.default_rng(11)
+    x = 0.1 * rng.standard_normal((3, 8000))
+    flat = x.copy()
+    flat[2] = 0.01
+    with pytest.raises(AudioInputError, match="channel 2 holds one constant value throughout"):
+        read_recording(_write(tmp_path / "flat.wav", flat))
+    flat[0] = -0.2
+    with pytest.raises(AudioInputError, match="channels 0, 2 hold one constant value"):
+        read_recording(_write(tmp_path / "flat2.wav", flat))
+    quiet = x.copy()
+    quiet[1] *= 1e-5  # 100 dB down
+    with pytest.warns(DegenerateInputWarning, match="channel 1 is at least 100 dB below the "
+                                                    "loudest channel: a disconnected"):
+        read_recording(_write(tmp_path / "quiet.wav", quiet))
+    # a gain mismatch of 30 dB and a few corrupt samples are not a dead microphone
+    fine = x.copy()
+    fine[1] *= 10 ** (-30 / 20)
+    fine[2, 100:105] = 1e6
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DegenerateInputWarning)
+        got, _ = read_recording(_write(tmp_path / "fine.wav", fine))
+    np.testing.assert_allclose(got, fine, rtol=1e-6)
+
+
 def test_read_recording_warns_on_clipping(tmp_path):
     x = np.clip(2.0 * np.random.default_rng(2).standard_normal((2, 4000)), -1, 1)
     p = _write(tmp_path / "clip.wav", x, subtype="PCM_16")

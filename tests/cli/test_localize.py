@@ -273,6 +273,28 @@ def test_kalman_tuned_follows_a_moving_white_noise_source(tmp_path, capsys):
     assert code == 2 and out == "" and "--kalman-tuned: the masked array" in err
 
 
+def test_a_dead_microphone_is_named(rec3, tmp_path, capsys):
+    """A channel stuck at one value: a one-line error, exit 2; one 100 dB below the others: a
+    one-line warning naming it (both gave "no frame holds a detectable source" or nothing)."""
+    x, fs = sf.read(rec3, always_2d=True)
+    stuck = x.copy()
+    stuck[:, 2] = 0.003
+    p = tmp_path / "stuck.wav"
+    sf.write(p, stuck, fs, subtype="FLOAT")
+    code, out, err = _run(capsys, p, "--array", "three-mic")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "channel 2 holds one constant value throughout" in err
+    quiet = x.copy()
+    quiet[:, 1] *= 1e-5
+    q = tmp_path / "quiet.wav"
+    sf.write(q, quiet, fs, subtype="FLOAT")
+    code, out, err = _run(capsys, q, "--array", "three-mic")
+    assert code == 0 and json.loads(out)["summary"]
+    lines = [ln for ln in err.splitlines() if "below the loudest channel" in ln]
+    assert len(lines) == 1 and lines[0].startswith(f"hearsee: warning: {q}: channel 1 is at "
+                                                   "least 10")  # (100-101 dB: the pause)
+
+
 def test_a_corrupt_sample_is_named_when_no_frame_is_valid(rec3, tmp_path, capsys):
     """One float sample of 1e30 in a recording of a source at ~0.5: the analysis scales the
     recording to its loudest sample, every other frame fell below single precision and the

@@ -43,6 +43,7 @@ from hearsee.errors import (
     AudioInputError,
     ClippingWarning,
     ConfigError,
+    DegenerateInputWarning,
     HearseeError,
     InputFileError,
     TruncatedFileWarning,
@@ -101,6 +102,12 @@ MIN_VOICE_FS_HZ = 4000.0
 CLIP_LEVEL = 0.999
 #: Fraction of clipped samples above which :func:`read_recording` warns.
 CLIP_FRACTION = 1e-3
+#: :func:`read_recording` warns of a channel whose level (the 90th percentile of its samples'
+#: distance from their median) is this many dB below the loudest channel's: a disconnected or
+#: muted microphone (preamplifier noise only) -- 100 dB below gave no direction and no word
+#: (2026-12-03). Far beyond real gain mismatches (a few dB) and a mask's shadow (tens of dB
+#: only at some frequencies, not over the whole band)
+QUIET_CHANNEL_DB = 40.0
 #: Largest positive sample (read as float) of the file subtypes whose full scale is below
 #: 1.0; :data:`CLIP_LEVEL` applies to it instead of 1.0 (8-bit files stop at 127/128 = 0.992,
 #: so their flat tops went unnoticed, and mu-law / A-law files never reach 0.999 at all).
@@ -512,7 +519,7 @@ def read_recording(
         The file does not exist or cannot be opened.
     AudioInputError
         Not an audio file, wrong channel count or sample rate, NaN/inf samples, a silent
-        (all-zero) channel, or too short.
+        (all-zero) or constant channel, or too short.
 
     Warns
     -----
@@ -521,6 +528,9 @@ def read_recording(
         at their channel's peak, see :data:`CLIP_LEVEL`).
     TruncatedFileWarning
         A WAV file ends before its header's data size: the samples present are used.
+    DegenerateInputWarning
+        A channel is more than :data:`QUIET_CHANNEL_DB` below the loudest one: a
+        disconnected or muted microphone, whose pairs carry only its noise.
     """
     # (checked before the file is read: NaN, inf and text were builtin ValueError /
     # OverflowError / TypeError once compared with the file's rate, "2" a ValueError)
@@ -577,6 +587,31 @@ def read_recording(
         raise AudioInputError(
             f"{path}: channel{'s' if dead.size > 1 else ''} {', '.join(map(str, dead))} "
             "silent (all samples are zero); check the microphone wiring"
+        )
+    # (one constant value: an input with an offset but no microphone. It read as "no frame
+    # holds a detectable source (silence or uncorrelated noise)")
+    flat = np.flatnonzero(np.ptp(x, axis=1) == 0)
+    if flat.size:
+        many = flat.size > 1
+        raise AudioInputError(
+            f"{path}: channel{'s' * many} {', '.join(map(str, flat))} hold{'s' * (not many)} "
+            "one constant value throughout (an offset, no signal); check the microphone wiring"
+        )
+    # (a robust level -- a few corrupt samples of 1e30 made the others "quiet" -- of at most
+    # 2**18 samples per channel, evenly spread: 0.7 s for a minute at 48 kHz otherwise)
+    few = x[:, ::max(1, x.shape[1] >> 18)]
+    level = np.percentile(np.abs(few - np.median(few, axis=1, keepdims=True)), 90.0, axis=1)
+    quiet = np.flatnonzero(level < level.max() * 10.0 ** (-QUIET_CHANNEL_DB / 20.0))
+    if quiet.size:
+        many = quiet.size > 1
+        below = 20.0 * np.log10(level.max() / level[quiet].max())
+        warnings.warn(
+            f"{path}: channel{'s' * many} {', '.join(map(str, quiet))} "
+            f"{'are' if many else 'is'} at least {below:.0f} dB below the loudest channel: a "
+            "disconnected or muted microphone? Its pairs' TDOAs, and the direction, rest on its "
+            "noise alone",
+            DegenerateInputWarning,
+            stacklevel=2,
         )
     if clipped > CLIP_FRACTION:
         warnings.warn(
