@@ -894,8 +894,7 @@ def _spectra_power(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int
                    ) -> tuple[NDArray, NDArray]:
     """:func:`frame_spectra` of ``frames`` and their power ``|X|^2``: the pair that the
     activity test, the noise spectrum, the spectral statistics and the SNR weights share."""
-    X = frame_spectra(frames, win, nfft, k0, k1)
-    return X, X.real**2 + X.imag**2
+    return _chunk_spectra(frames, win, nfft, k0, k1, None)[:2]
 
 
 def _chunk_spectra(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int,
