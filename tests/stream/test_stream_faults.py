@@ -771,3 +771,63 @@ def test_read_frame_names_a_camera_that_delivers_nothing_in_time(hanging_capture
     cap2.go.set()
     frame = read_frame(TimedCapture(cap2, 5.0), 0, "robot.yaml: cameras.left", (80, 60))
     assert frame.shape == (60, 80, 3)
+
+
+# ------------------------------------------------------- a stuck or disconnected microphone, live
+def _fake_recorder(x):
+    """A sounddevice module whose stream delivers the recording ``x`` (n_ch, n) in blocks of
+    ``BL`` samples when entered."""
+    sd = types.ModuleType("sounddevice")
+    sd.PortAudioError = type("PortAudioError", (Exception,), {})
+    dev = {"name": "fake", "max_input_channels": x.shape[0]}
+    sd.query_devices = lambda device=None, kind=None: (
+        [dev] if device is None and kind is None else dev)
+
+    class InputStream:
+        def __init__(self, device, channels, samplerate, blocksize, dtype, callback):
+            self.cb = callback
+
+        def __enter__(self):
+            for s in range(0, x.shape[1] - BL + 1, BL):
+                self.cb(x[:, s:s + BL].T.astype(np.float32), BL, _TimeInfo(0.0), _Flags(False))
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+    sd.InputStream = InputStream
+    return sd
+
+
+@pytest.mark.parametrize("fault, want", [
+    ("stuck", "audio input device 'fake': channel 2 holds one constant value throughout"),
+    ("quiet", "audio input device 'fake': channel 1 is at least 100 dB below the loudest"),
+    ("late quiet", "audio input device 'fake': channel 1 is at least 100 dB below the loudest"),
+    ("none", None),
+])
+def test_live_input_names_a_stuck_or_disconnected_microphone(monkeypatch, fault, want):
+    """Live input had none of a file's checks: a channel stuck at one value or 100 dB down
+    gave no direction and no word. The first 2 s in which any channel varies are checked once
+    (a silent start is looked past); the run goes on."""
+    import warnings
+
+    from hearsee.errors import DegenerateInputWarning
+
+    x = 0.1 * np.random.default_rng(5).standard_normal((3, 6 * FS))
+    if fault == "stuck":
+        x[2] = 0.01
+    elif fault in ("quiet", "late quiet"):
+        x[1] *= 1e-5
+    if fault == "late quiet":
+        x[:, :2 * FS + BL] = 0.0  # the input starts after 2 s of digital silence
+    monkeypatch.setitem(sys.modules, "sounddevice", _fake_recorder(x))
+    src = pl.DeviceSource(0, 3, FS, block_len=BL, timeout_s=0.05, queue_size=128)
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        blocks = list(src.blocks())
+    assert sum(b.data.shape[1] for b in blocks) == 6 * FS // BL * BL  # (none held back)
+    ours = [str(w.message) for w in got if issubclass(w.category, DegenerateInputWarning)]
+    if want is None:
+        assert ours == []
+    else:
+        assert len(ours) == 1 and ours[0].startswith(want)

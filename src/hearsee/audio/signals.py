@@ -590,29 +590,13 @@ def read_recording(
         )
     # (one constant value: an input with an offset but no microphone. It read as "no frame
     # holds a detectable source (silence or uncorrelated noise)")
-    flat = np.flatnonzero(np.ptp(x, axis=1) == 0)
+    flat, quiet, below = channel_faults(x)
     if flat.size:
-        many = flat.size > 1
-        raise AudioInputError(
-            f"{path}: channel{'s' * many} {', '.join(map(str, flat))} hold{'s' * (not many)} "
-            "one constant value throughout (an offset, no signal); check the microphone wiring"
-        )
-    # (a robust level -- a few corrupt samples of 1e30 made the others "quiet" -- of at most
-    # 2**18 samples per channel, evenly spread: 0.7 s for a minute at 48 kHz otherwise)
-    few = x[:, ::max(1, x.shape[1] >> 18)]
-    level = np.percentile(np.abs(few - np.median(few, axis=1, keepdims=True)), 90.0, axis=1)
-    quiet = np.flatnonzero(level < level.max() * 10.0 ** (-QUIET_CHANNEL_DB / 20.0))
+        raise AudioInputError(f"{path}: {stuck_channels_text(flat)}; check the microphone "
+                              "wiring")
     if quiet.size:
-        many = quiet.size > 1
-        below = 20.0 * np.log10(level.max() / level[quiet].max())
-        warnings.warn(
-            f"{path}: channel{'s' * many} {', '.join(map(str, quiet))} "
-            f"{'are' if many else 'is'} at least {below:.0f} dB below the loudest channel: a "
-            "disconnected or muted microphone? Its pairs' TDOAs, and the direction, rest on its "
-            "noise alone",
-            DegenerateInputWarning,
-            stacklevel=2,
-        )
+        warnings.warn(f"{path}: {quiet_channels_text(quiet, below)}", DegenerateInputWarning,
+                      stacklevel=2)
     if clipped > CLIP_FRACTION:
         warnings.warn(
             f"{path}: {clipped * 100:.2f} % of the samples are clipped (flat at full scale, or "
@@ -622,6 +606,44 @@ def read_recording(
             stacklevel=2,
         )
     return x, fs_in
+
+
+def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:
+    """The channels of a recording ``x`` (n_channels, n) that hold no microphone's signal: (those
+    holding one constant value throughout, zeros included; the others more than
+    :data:`QUIET_CHANNEL_DB` below the loudest channel; how far below it the loudest of those
+    is, dB -- nan when there are none). The level is robust -- a few corrupt samples of 1e30
+    made the others "quiet" -- the 90th percentile of the samples' distance from their median,
+    over at most 2**18 evenly spread samples per channel (0.7 s for a minute at 48 kHz
+    otherwise). The one rule of :func:`read_recording` (files) and
+    :class:`hearsee.stream.pipeline.DeviceSource` (live input)."""
+    flat = np.flatnonzero(np.ptp(x, axis=1) == 0)
+    few = x[:, ::max(1, x.shape[1] >> 18)]
+    level = np.percentile(np.abs(few - np.median(few, axis=1, keepdims=True)), 90.0, axis=1)
+    quiet = np.flatnonzero((level < level.max() * 10.0 ** (-QUIET_CHANNEL_DB / 20.0))
+                           & (np.ptp(x, axis=1) > 0))
+    below = (20.0 * np.log10(level.max() / level[quiet].max()) if quiet.size
+             else float("nan"))
+    return flat, quiet, float(below)
+
+
+def _channels(idx: NDArray) -> tuple[str, bool]:
+    return f"channel{'s' * (idx.size > 1)} {', '.join(map(str, idx))}", idx.size > 1
+
+
+def stuck_channels_text(flat: NDArray) -> str:
+    """What :func:`channel_faults`' constant channels ``flat`` are, in words."""
+    names, many = _channels(flat)
+    return (f"{names} hold{'s' * (not many)} one constant value throughout (an offset, no "
+            "signal)")
+
+
+def quiet_channels_text(quiet: NDArray, below: float) -> str:
+    """What :func:`channel_faults`' quiet channels are, in words."""
+    names, many = _channels(quiet)
+    return (f"{names} {'are' if many else 'is'} at least {below:.0f} dB below the loudest "
+            "channel: a disconnected or muted microphone? Its pairs' TDOAs, and the direction, "
+            "rest on its noise alone")
 
 
 def write_recording(

@@ -51,6 +51,7 @@ import math
 import queue
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -62,7 +63,13 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
-from hearsee.audio.signals import as_samples, check_fs
+from hearsee.audio.signals import (
+    as_samples,
+    channel_faults,
+    check_fs,
+    quiet_channels_text,
+    stuck_channels_text,
+)
 from hearsee.audio.tdoa import (
     DEFAULT_MARGIN_SAMPLES,
     DEFAULT_SMOOTH_FRAMES,
@@ -90,7 +97,7 @@ from hearsee.audio.tracking import (
     MotionKalman,
 )
 from hearsee.config import finite_number, is_real, time_limit, whole_number
-from hearsee.errors import AudioInputError, ConfigError, EstimationError
+from hearsee.errors import AudioInputError, ConfigError, DegenerateInputWarning, EstimationError
 from hearsee.geometry import wrap_deg
 from hearsee.stream.device import import_sounddevice, resolve_input_device
 
@@ -334,6 +341,49 @@ class WavSource(ArraySource):
         self.path = Path(path)
 
 
+#: :class:`DeviceSource` looks at the first this many seconds of live input in which a channel
+#: varies for a stuck or disconnected microphone (:class:`_ChannelWatch`)
+CHANNEL_CHECK_S = 2.0
+
+
+class _ChannelWatch:
+    """The first :data:`CHANNEL_CHECK_S` seconds of a live run in which any channel varies,
+    checked once as :func:`hearsee.audio.signals.read_recording` checks a file
+    (:func:`~hearsee.audio.signals.channel_faults`): a DegenerateInputWarning naming a channel
+    stuck at one value or far quieter than the loudest (a file's stuck channel is an error;
+    live input goes on). Windows where every channel is constant (an input that has not
+    started) are looked past."""
+
+    def __init__(self, name: str, n: int) -> None:
+        self.name, self.n = name, max(int(n), 1)
+        self.parts: list[NDArray] = []
+        self.have = 0
+        self.done = False
+
+    def add(self, data: NDArray) -> None:
+        if self.done:
+            return
+        self.parts.append(data)
+        self.have += data.shape[1]
+        if self.have < self.n:
+            return
+        x = np.concatenate(self.parts, axis=1)
+        self.parts, self.have = [], 0
+        if not np.all(np.isfinite(x)):
+            return
+        flat, quiet, below = channel_faults(x)
+        if flat.size == x.shape[0]:
+            return  # (nothing varies yet: look at the next window)
+        self.done = True
+        where = f"audio input device {self.name!r}: "
+        if flat.size:
+            warnings.warn(where + stuck_channels_text(flat) + "; check the microphone wiring",
+                          DegenerateInputWarning, stacklevel=3)
+        if quiet.size:
+            warnings.warn(where + quiet_channels_text(quiet, below), DegenerateInputWarning,
+                          stacklevel=3)
+
+
 class DeviceSource:
     """Live multichannel input through sounddevice (PortAudio).
 
@@ -382,6 +432,10 @@ class DeviceSource:
         The run ended because the device delivered nothing for ``timeout_s``.
     name : str
         The device's name (PortAudio's), for messages.
+
+    A channel stuck at one value or far quieter than the others (a disconnected microphone) in
+    the run's first :data:`CHANNEL_CHECK_S` seconds of signal is a DegenerateInputWarning
+    naming it (:class:`_ChannelWatch`; the run goes on).
 
     A stream the device refuses to open or start (a sample rate or channel count it does not
     support, a device another program holds) is an AudioInputError when the run starts; one
@@ -496,6 +550,7 @@ class DeviceSource:
                     return False
 
                 opened.push(stop_stream)
+                watch = _ChannelWatch(self.name, int(CHANNEL_CHECK_S * self.fs))
                 while True:
                     try:
                         blk = q.get(timeout=self.timeout_s)
@@ -503,6 +558,7 @@ class DeviceSource:
                         if self._run is run:
                             self.stalled = True
                         return
+                    watch.add(blk.data)
                     yield blk
                     if limit is not None and blk.start + blk.data.shape[1] >= limit:
                         return
