@@ -831,3 +831,33 @@ def test_live_input_names_a_stuck_or_disconnected_microphone(monkeypatch, fault,
         assert ours == []
     else:
         assert len(ours) == 1 and ours[0].startswith(want)
+
+
+def test_live_input_checks_only_the_arrays_channels(monkeypatch):
+    """A larger device's unused channel (a playback loopback: digital silence) is no
+    microphone of the array: with ``check_channels`` it is not named (``hearsee run`` passes
+    its robot file's channels); a stuck one among them is, by its device channel number."""
+    import warnings
+
+    from hearsee.errors import DegenerateInputWarning
+
+    x = 0.1 * np.random.default_rng(6).standard_normal((4, 3 * FS))
+    x[0] = 0.0  # unused loopback
+    x[3] = 0.02  # stuck microphone of the array
+
+    def warned(check):
+        monkeypatch.setitem(sys.modules, "sounddevice", _fake_recorder(x))
+        src = pl.DeviceSource(0, 4, FS, block_len=BL, timeout_s=0.05, queue_size=128,
+                              check_channels=check)
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always")
+            list(src.blocks())
+        return [str(w.message) for w in got if issubclass(w.category, DegenerateInputWarning)]
+
+    assert warned([1, 2]) == []
+    (msg,) = warned([1, 2, 3])
+    assert "'fake': channel 3 holds one constant value" in msg
+    (msg,) = warned(None)
+    assert "'fake': channels 0, 3 hold one constant value" in msg
+    with pytest.raises(ConfigError, match="check_channels"):
+        pl.DeviceSource(0, 4, FS, block_len=BL, check_channels=[4])

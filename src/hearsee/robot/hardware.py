@@ -775,7 +775,8 @@ def open_audio_source(cfg: RobotConfig, duration_s: float | None = None) -> Mapp
     dev = verify_audio_device(cfg)
     a = cfg.audio
     src = DeviceSource(dev["index"], a.n_open, a.fs, a.block_len, duration_s=duration_s,
-                       queue_size=max(32, int(np.ceil(4000.0 / a.block_ms))))
+                       queue_size=max(32, int(np.ceil(4000.0 / a.block_ms))),
+                       check_channels=a.channels)
     return MappedSource(src, a.channels, duration_s)
 
 

@@ -354,8 +354,9 @@ class _ChannelWatch:
     live input goes on). Windows where every channel is constant (an input that has not
     started) are looked past."""
 
-    def __init__(self, name: str, n: int) -> None:
+    def __init__(self, name: str, n: int, channels: Sequence[int] | None = None) -> None:
         self.name, self.n = name, max(int(n), 1)
+        self.channels = None if channels is None else np.asarray(channels, dtype=int)
         self.parts: list[NDArray] = []
         self.have = 0
         self.done = False
@@ -369,12 +370,15 @@ class _ChannelWatch:
             return
         x = np.concatenate(self.parts, axis=1)
         self.parts, self.have = [], 0
+        ch = np.arange(x.shape[0]) if self.channels is None else self.channels
+        x = x[ch]
         if not np.all(np.isfinite(x)):
             return
         flat, quiet, below = channel_faults(x)
         if flat.size == x.shape[0]:
             return  # (nothing varies yet: look at the next window)
         self.done = True
+        flat, quiet = ch[flat], ch[quiet]  # (the device's channel numbers)
         where = f"audio input device {self.name!r}: "
         if flat.size:
             warnings.warn(where + stuck_channels_text(flat) + "; check the microphone wiring",
@@ -435,7 +439,8 @@ class DeviceSource:
 
     A channel stuck at one value or far quieter than the others (a disconnected microphone) in
     the run's first :data:`CHANNEL_CHECK_S` seconds of signal is a DegenerateInputWarning
-    naming it (:class:`_ChannelWatch`; the run goes on).
+    naming it (:class:`_ChannelWatch`; the run goes on); ``check_channels`` (device channel
+    indices; None = all) limits the check to the array's channels of a larger device.
 
     A stream the device refuses to open or start (a sample rate or channel count it does not
     support, a device another program holds) is an AudioInputError when the run starts; one
@@ -445,7 +450,8 @@ class DeviceSource:
 
     def __init__(self, device: int | str | None, n_channels: int, fs: float = 16000.0,
                  block_len: int = 1024, duration_s: float | None = None, queue_size: int = 32,
-                 timeout_s: float = 2.0, where: str = "device") -> None:
+                 timeout_s: float = 2.0, where: str = "device",
+                 check_channels: Sequence[int] | None = None) -> None:
         # (unchecked, a rate of 0 divided by zero in the stream, a NaN duration or a block of 0
         # samples raised builtin errors only once the stream ran; inf seconds = no limit)
         fs = check_fs(fs)
@@ -469,6 +475,11 @@ class DeviceSource:
         self.block_len, self.duration_s = int(block_len), duration_s
         self.timeout_s = float(timeout_s)
         self._queue_size = int(queue_size)
+        # (the channels the stuck / quiet check looks at; a device's unused channels -- a
+        # playback loopback, a processed mix -- are no microphone of the array)
+        self._check = (None if check_channels is None else
+                       [whole_number("check_channels", c, 0, self.n_channels - 1)
+                        for c in check_channels])
         self._run: object | None = None
         self._reset_run()
 
@@ -550,7 +561,7 @@ class DeviceSource:
                     return False
 
                 opened.push(stop_stream)
-                watch = _ChannelWatch(self.name, int(CHANNEL_CHECK_S * self.fs))
+                watch = _ChannelWatch(self.name, int(CHANNEL_CHECK_S * self.fs), self._check)
                 while True:
                     try:
                         blk = q.get(timeout=self.timeout_s)
