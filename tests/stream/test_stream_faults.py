@@ -859,5 +859,6 @@ def test_live_input_checks_only_the_arrays_channels(monkeypatch):
     assert "'fake': channel 3 holds one constant value" in msg
     (msg,) = warned(None)
     assert "'fake': channels 0, 3 hold one constant value" in msg
-    with pytest.raises(ConfigError, match="check_channels"):
-        pl.DeviceSource(0, 4, FS, block_len=BL, check_channels=[4])
+    for bad in ([4], [], ["1"]):
+        with pytest.raises(ConfigError, match="check_channels"):
+            pl.DeviceSource(0, 4, FS, block_len=BL, check_channels=bad)

@@ -480,6 +480,9 @@ class DeviceSource:
         self._check = (None if check_channels is None else
                        [whole_number("check_channels", c, 0, self.n_channels - 1)
                         for c in check_channels])
+        if self._check == []:  # (an empty selection failed once the first window was full)
+            raise ConfigError("check_channels must name one or more of the device's channels "
+                              "(None: all of them)")
         self._run: object | None = None
         self._reset_run()
 
