@@ -49,6 +49,16 @@ TUNE_R_SAMPLES = (0.3, 1.0, 3.0)
 OUTLIER_PROB = 0.1
 
 
+def _frames(Z: ArrayLike) -> NDArray:
+    """Frames of pair TDOAs ``Z`` as a float (n_frames, n_pairs) array, or a GeometryError (text
+    was read as seconds and True as 1 s, which :meth:`ItdKalman.step` refuses)."""
+    check_real_tdoas(Z)
+    Zm = np.asarray(Z, dtype=float)
+    if Zm.ndim != 2:
+        raise GeometryError(f"expected (n_frames, n_pairs) TDOAs, got shape {Zm.shape}")
+    return Zm
+
+
 def _size(z: ArrayLike) -> int | None:
     """How many numbers ``z`` holds (None for a ragged nesting)."""
     try:
@@ -206,10 +216,7 @@ class ItdKalman:
         Returns (pair TDOAs (n_frames, n_pairs) from the state after each step -- NaN before the
         first measurement --, accepted (n_frames,) bool).
         """
-        check_real_tdoas(Z)  # (text was read as seconds and True as 1 s, which step() refuses)
-        Zm = np.asarray(Z, dtype=float)
-        if Zm.ndim != 2:
-            raise GeometryError(f"expected (n_frames, n_pairs) TDOAs, got shape {Zm.shape}")
+        Zm = _frames(Z)
         out = np.full(Zm.shape, np.nan)
         acc = np.zeros(Zm.shape[0], dtype=bool)
         for n, z in enumerate(Zm):
@@ -230,10 +237,7 @@ class ItdKalman:
         accepted (n_frames,) bool, as :meth:`filter`). The filter's state afterwards is the
         forward pass's (the last frame's estimate is the same either way).
         """
-        check_real_tdoas(Z)
-        Zm = np.asarray(Z, dtype=float)
-        if Zm.ndim != 2:
-            raise GeometryError(f"expected (n_frames, n_pairs) TDOAs, got shape {Zm.shape}")
+        Zm = _frames(Z)
         n, dx = Zm.shape[0], self.kf.dim_x
         xs, Ps = np.full((n, dx), np.nan), np.full((n, dx, dx), np.nan)
         start = np.zeros(n, dtype=bool)  # (frames where the state was (re)initialised)
@@ -248,7 +252,7 @@ class ItdKalman:
         for a, b in zip(bounds[:-1], bounds[1:], strict=True):
             if b - a > 1:
                 xs[a:b], Ps[a:b], _, _ = self.kf.rts_smoother(xs[a:b], Ps[a:b])
-            out[a:b] = xs[a:b] @ pair_matrix(self.n_mics, self.pairs, self.ref).T
+            out[a:b] = xs[a:b] @ self.kf.H.T  # (H: the measured pairs' matrix)
         return out, acc
 
     def log_likelihood(self, Z: ArrayLike, max_tdoa_s: ArrayLike,
@@ -262,10 +266,7 @@ class ItdKalman:
         likelihood of Schweppe (1965) / Mehra (1970) for tuning Q and R, made robust by the
         outlier term so that a few reflections' peaks do not decide it. Returns (the sum,
         the number of frames scored)."""
-        check_real_tdoas(Z)
-        Zm = np.asarray(Z, dtype=float)
-        if Zm.ndim != 2:
-            raise GeometryError(f"expected (n_frames, n_pairs) TDOAs, got shape {Zm.shape}")
+        Zm = _frames(Z)
         if not (is_real(outlier_prob) and 0 < outlier_prob < 1):
             raise ConfigError(f"outlier_prob must be in (0, 1), got {outlier_prob!r}")
         box = np.asarray(max_tdoa_s, dtype=float).reshape(-1)
