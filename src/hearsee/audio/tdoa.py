@@ -992,37 +992,34 @@ def _band_activity(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int,
     ``|X|^2`` when they fit :data:`SPECTRA_CACHE_BYTES` -- the noise spectrum and the frame
     loop then need no second transform -- else None, None), and the whole-band power of the
     frames ``rows`` (sorted indices; :func:`_chunk_spectra`) or None. Transformed ``chunk``
-    frames at a time."""
+    frames at a time (:func:`_band_spectra`)."""
     keep = _spectra_fit(frames.shape[0], frames.shape[1], k1 - k0)
-    e = np.empty(frames.shape[1])
+    X, power, e, top = _band_spectra(frames, win, nfft, k0, k1, chunk, rows, keep=keep,
+                                     energy=True)
+    band, decided = _energy_vad(e, vad_db)
+    return (active & band if decided else active), X, power, top
+
+
+def _band_spectra(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int, chunk: int,
+                  rows: NDArray | None = None, keep: bool = True, energy: bool = False
+                  ) -> tuple[NDArray | None, NDArray | None, NDArray | None, NDArray | None]:
+    """:func:`_spectra_power` of every frame of ``frames`` (n_ch, F, L), transformed ``chunk``
+    frames at a time (the full spectra of a long recording would not fit where its band
+    does): (the band spectra and their power, both None without ``keep``; with ``energy``
+    each frame's band energy (F,), else None; the whole-band power of the frames ``rows``
+    (:func:`_chunk_spectra`) or None)."""
     parts, tops = [], []
+    e = np.empty(frames.shape[1]) if energy else None
     for s0 in range(0, frames.shape[1], chunk):
         X, power, top = _chunk_spectra(frames[:, s0:s0 + chunk, :], win, nfft, k0, k1,
                                        _rows_in(rows, s0, chunk))
-        e[s0:s0 + chunk] = np.sum(power, axis=(0, 2))
+        if e is not None:
+            e[s0:s0 + chunk] = np.sum(power, axis=(0, 2))
         if keep:
             parts.append((X, power))
         if top is not None:
             tops.append(top)
-    band, decided = _energy_vad(e, vad_db)
-    return ((active & band if decided else active),
-            *(_joined(parts) if keep else (None, None)), _joined_rows(tops, rows))
-
-
-def _band_spectra(frames: NDArray, win: NDArray, nfft: int, k0: int, k1: int, chunk: int,
-                  rows: NDArray | None = None) -> tuple[NDArray, NDArray, NDArray | None]:
-    """:func:`_spectra_power` of every frame of ``frames`` (n_ch, F, L), transformed ``chunk``
-    frames at a time (the full spectra of a long recording would not fit where its band
-    does), and the whole-band power of the frames ``rows`` (:func:`_chunk_spectra`) or
-    None."""
-    parts, tops = [], []
-    for s0 in range(0, frames.shape[1], chunk):
-        X, power, top = _chunk_spectra(frames[:, s0:s0 + chunk, :], win, nfft, k0, k1,
-                                       _rows_in(rows, s0, chunk))
-        parts.append((X, power))
-        if top is not None:
-            tops.append(top)
-    return *_joined(parts), _joined_rows(tops, rows)
+    return *(_joined(parts) if keep else (None, None)), e, _joined_rows(tops, rows)
 
 
 def _joined_rows(tops: list[NDArray], rows: NDArray | None) -> NDArray | None:
@@ -2129,7 +2126,7 @@ def estimate_tdoas(
         active, X_all, power_all, top = _band_activity(frames, win, nfft, k0, k1, active,
                                                        vad_db, chunk, loudest)
     elif _spectra_fit(arr.n_mics, n_frames, k1 - k0):
-        X_all, power_all, top = _band_spectra(frames, win, nfft, k0, k1, chunk, loudest)
+        X_all, power_all, _, top = _band_spectra(frames, win, nfft, k0, k1, chunk, loudest)
     cut = (_empty_band_cut(frames, win, nfft, fs, energy, empty_band_db, top)
            if empty_band_db is not None else None)
     if cut is not None and cut < k1:
