@@ -617,11 +617,12 @@ def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:
     over at most 2**18 evenly spread samples per channel (0.7 s for a minute at 48 kHz
     otherwise). The one rule of :func:`read_recording` (files) and
     :class:`hearsee.stream.pipeline.DeviceSource` (live input)."""
-    flat = np.flatnonzero(np.ptp(x, axis=1) == 0)
+    constant = np.ptp(x, axis=1) == 0
     few = x[:, ::max(1, x.shape[1] >> 18)]
     level = np.percentile(np.abs(few - np.median(few, axis=1, keepdims=True)), 90.0, axis=1)
     quiet = np.flatnonzero((level < level.max() * 10.0 ** (-QUIET_CHANNEL_DB / 20.0))
-                           & (np.ptp(x, axis=1) > 0))
+                           & ~constant)
+    flat = np.flatnonzero(constant)
     below = (20.0 * np.log10(level.max() / level[quiet].max()) if quiet.size
              else float("nan"))
     return flat, quiet, float(below)
