@@ -288,20 +288,28 @@ def test_new_tracks_log_an_unknown_velocity(seed16_run):
 def test_the_fix_of_a_person_beyond_the_disparity_search_is_flagged(seed16_run):
     """Random scenario 16 (the simulator's ground truth): of the detections of the person, the
     one of a silhouette broken up at the end of the disparity search (t = 3.6 s, the body
-    1.1 m away) is flagged beyond_search in the log -- and not fused (pipeline.fuses_fix; with
-    this run's head pan the head-shoulder check rejects it too); the 16 verified fixes are
-    not flagged and within 6 cm. (Until 2026-12-02 it was verified, 22 cm off, and fused; the
-    other fixes were within 8 cm before the torso depth followed the silhouette's width.)"""
+    1.1 m away, its position ~26 cm off) is flagged beyond_search in the log and not fused
+    (pipeline.fuses_fix): the track there stays within 6 cm of the truth. The 16 fixes that
+    are fused are not flagged, within 10 cm and 3 cm at the median. (Until 2026-12-02 the
+    flagged one was verified, 22 cm off, and fused.)
+
+    The run is a closed loop (the head turns to the sound, the images follow the head), so
+    the CPU's vector math moves it: with numpy's and OpenBLAS's AVX-512 kernels the head-shoulder
+    check verifies the broken silhouette (flagged, so still not fused) and the first fix after
+    the person comes back into view (t = 5.4 s) is 8.7 cm off; with AVX2 only, the check
+    rejects it and every fix is within 6 cm (what this test asserted until 2026-12-04, which
+    failed on AVX-512 machines)."""
     log = seed16_run.log
     person = [(r["t"], d) for r in log for d in r["detections"] or []
               if d["truth_kind"] == "person"]
     assert [t for t, d in person if d["beyond_search"]] == [pytest.approx(3.6)]
     truth = {r["t"]: np.asarray(r["truth"]["position_m"]) for r in log}
-    fixes = [(t, d) for t, d in person if d["accepted"]]
+    fixes = [(t, d) for t, d in person if d["accepted"] and not d["beyond_search"]]
     assert len(fixes) == 16
-    for t, d in fixes:
-        assert not d["beyond_search"]
-        assert np.linalg.norm(np.asarray(d["position_m"]) - truth[t]) < 0.06
+    err = [np.linalg.norm(np.asarray(d["position_m"]) - truth[t]) for t, d in fixes]
+    assert max(err) < 0.10 and np.median(err) < 0.03
+    (at_flag,) = [r for r in log if r["t"] == pytest.approx(3.6)]
+    assert np.linalg.norm(np.asarray(at_flag["track"]["position_m"]) - truth[at_flag["t"]]) < 0.06
 
 
 @pytest.mark.slow
