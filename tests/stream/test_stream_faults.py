@@ -862,3 +862,103 @@ def test_live_input_checks_only_the_arrays_channels(monkeypatch):
     for bad in ([4], [], ["1"]):
         with pytest.raises(ConfigError, match="check_channels"):
             pl.DeviceSource(0, 4, FS, block_len=BL, check_channels=bad)
+
+
+# ------------------------------------------------------ a microphone wired backwards, live
+class _Live:
+    """Live-like input (no recording to look at ahead, as a device) of the samples ``x``."""
+
+    def __init__(self, x):
+        self.inner = ArraySource(x, FS, BL)
+        self.n_channels, self.fs = x.shape[0], FS
+
+    def blocks(self):
+        return self.inner.blocks()
+
+
+def _noise_then_source(flip: float, quiet_s: float, source_s: float) -> np.ndarray:
+    """Three-mic input: ``quiet_s`` seconds of sensor noise alone (no source), then white noise
+    from a source 2 m away at azimuth -60 deg for ``source_s`` seconds, 20 dB above it;
+    microphone 2's samples times ``flip``."""
+    from hearsee.audio.propagation import simulate_free_field
+    from hearsee.audio.signals import white_noise
+    from hearsee.geometry import unit_vector_deg
+
+    rng = np.random.default_rng(12)
+    arr = MicArray.from_preset("three-mic")
+    x = simulate_free_field(white_noise(source_s, FS, rng=rng), FS, arr,
+                            2.0 * unit_vector_deg(-60.0, 0.0))
+    x = np.concatenate([np.zeros((3, int(quiet_s * FS))), x], axis=1)
+    x = x + 0.1 * np.std(x[:, int(quiet_s * FS):]) * rng.standard_normal(x.shape)
+    return x * np.array([[1.0], [1.0], [flip]])
+
+
+def _run_live(x, monkeypatch, threaded=False, **kw):
+    """(the stream's updates, the time (s) of the last update before each InvertedPolarityWarning)
+    of ``x`` as live input, with 2-s wiring checks."""
+    import warnings
+
+    from hearsee.errors import InvertedPolarityWarning
+
+    monkeypatch.setattr(pl, "WIRING_CHECK_S", 2.0)
+    seen: list = []  # (each update's time, the warnings raised before it)
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        ups = StreamPipeline("three-mic", StreamConfig(), **kw).run(
+            _Live(x), lambda u: seen.append((u.t, len(got))), threaded)
+    when = []
+    for k, w in enumerate(got):
+        if issubclass(w.category, InvertedPolarityWarning):
+            before = [t for t, n in seen if n <= k]
+            when.append((str(w.message), before[-1] if before else None))
+    return ups, when
+
+
+@pytest.mark.parametrize("threaded", [False, True])
+def test_a_live_stream_warns_of_an_inverted_microphone_once_it_hears_a_source(monkeypatch,
+                                                                             threaded):
+    """A file's whole-recording correlations tell of a microphone wired backwards before
+    `hearsee track` streams it; live input had no such check and its directions were ~30-40
+    deg off without a word. The stream checks its first window (2 s here) with a source heard:
+    the first window here holds sensor noise only (no source: looked past), the second the
+    source with microphone 2 inverted -- one warning, given while the stream runs (after ~4.1
+    s of updates), not at its end; microphone 2 wired right: none."""
+    ups, when = _run_live(_noise_then_source(-1.0, 2.5, 5.5), monkeypatch, threaded)
+    assert len(when) == 1
+    msg, t = when[0]
+    assert msg.startswith("microphone 2 seems wired with inverted polarity: pairs 0-2, 1-2")
+    assert 3.8 <= t <= 4.2 and ups[-1].t > 7.5
+    ups, when = _run_live(_noise_then_source(1.0, 2.5, 5.5), monkeypatch, threaded)
+    assert when == [] and ups[-1].t > 7.5
+
+
+def test_a_short_live_run_is_checked_when_it_ends_and_the_check_can_be_turned_off(monkeypatch):
+    """Input shorter than a check window is checked when it ends (at least
+    WIRING_CHECK_MIN_S = 2 s of it: 1.5 s is too little to tell); ``check_wiring=False``
+    (`hearsee track` on a file, which it checked ahead) checks nothing."""
+    x = _noise_then_source(-1.0, 0.0, 1.9)
+    monkeypatch.setattr(pl, "WIRING_CHECK_MIN_S", 1.0)
+    _, when = _run_live(x, monkeypatch)
+    assert len(when) == 1 and when[0][0].startswith("microphone 2 seems wired with inverted")
+    monkeypatch.setattr(pl, "WIRING_CHECK_MIN_S", 2.0)
+    assert _run_live(x, monkeypatch)[1] == []
+    assert _run_live(_noise_then_source(-1.0, 0.0, 6.0), monkeypatch, check_wiring=False)[1] == []
+    for bad in ("yes", 2, None):
+        with pytest.raises(ConfigError, match="check_wiring"):
+            StreamPipeline("three-mic", check_wiring=bad)
+
+
+def test_track_cli_warns_of_an_inverted_microphone_on_live_input(monkeypatch, capsys):
+    """`hearsee track --device`: one warning line for microphone 2 wired backwards, the run
+    goes on to its end (exit 0)."""
+    from hearsee.cli import main
+
+    monkeypatch.setattr(pl, "WIRING_CHECK_S", 2.0)
+    x = _noise_then_source(-1.0, 0.0, 3.0)
+    monkeypatch.setitem(sys.modules, "sounddevice", _fake_recorder(0.3 * x / np.abs(x).max()))
+    monkeypatch.setattr(pl, "DeviceSource", functools.partial(pl.DeviceSource, timeout_s=0.05,
+                                                              queue_size=128))
+    assert main(["track", "--device", "0", "--array", "three-mic", "--duration", "2.9"]) == 0
+    cap = capsys.readouterr()
+    assert cap.err.count("microphone 2 seems wired with inverted polarity: pairs 0-2, 1-2") == 1
+    assert len(cap.out.splitlines()) > 40
