@@ -934,8 +934,8 @@ def test_a_live_stream_warns_of_an_inverted_microphone_once_it_hears_a_source(mo
 
 def test_a_short_live_run_is_checked_when_it_ends_and_the_check_can_be_turned_off(monkeypatch):
     """Input shorter than a check window is checked when it ends (at least
-    WIRING_CHECK_MIN_S = 2 s of it: 1.5 s is too little to tell); ``check_wiring=False``
-    (`hearsee track` on a file, which it checked ahead) checks nothing."""
+    WIRING_CHECK_MIN_S: 1.9 s is checked with a minimum of 1 s, not with one of 2 s);
+    ``check_wiring=False`` checks nothing."""
     x = _noise_then_source(-1.0, 0.0, 1.9)
     monkeypatch.setattr(pl, "WIRING_CHECK_MIN_S", 1.0)
     _, when = _run_live(x, monkeypatch)
@@ -943,7 +943,25 @@ def test_a_short_live_run_is_checked_when_it_ends_and_the_check_can_be_turned_of
     monkeypatch.setattr(pl, "WIRING_CHECK_MIN_S", 2.0)
     assert _run_live(x, monkeypatch)[1] == []
     assert _run_live(_noise_then_source(-1.0, 0.0, 6.0), monkeypatch, check_wiring=False)[1] == []
-    for bad in ("yes", 2, None):
+
+
+def test_a_recording_is_checked_only_when_asked():
+    """A source holding a recording (``.x``: ArraySource, WavSource, also behind DropoutSource)
+    can be checked ahead, as `hearsee track` does; the stream checks it only with
+    ``check_wiring=True`` (the check's whole-recording estimate would be an eighth of a
+    20-s file's stream)."""
+    import warnings
+
+    from hearsee.errors import InvertedPolarityWarning
+
+    x = _noise_then_source(-1.0, 0.0, 3.0)
+    for src, check, want in ((ArraySource(x, FS, BL), None, 0), (ArraySource(x, FS, BL), True, 1),
+                             (DropoutSource(ArraySource(x, FS, BL), drop=[3]), None, 0)):
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always")
+            StreamPipeline("three-mic", check_wiring=check).run(src)
+        assert sum(issubclass(w.category, InvertedPolarityWarning) for w in got) == want
+    for bad in ("yes", 2, float("nan")):
         with pytest.raises(ConfigError, match="check_wiring"):
             StreamPipeline("three-mic", check_wiring=bad)
 

@@ -322,9 +322,8 @@ def track_cmd(
             note_empty_band(recording, used, band, source.fs)
         if device is None:
             _check_wiring(source.x, source.fs, arr, cfg)
-        # (a file was checked ahead, above; live input is checked once it has heard a source)
-        pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points,
-                              check_wiring=device is not None)
+        # (a file was checked ahead, above; live input once it has heard a source)
+        pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
         try:
             pipe.run(source, sink, threaded=device is not None)
         except KeyboardInterrupt:
