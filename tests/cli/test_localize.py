@@ -233,10 +233,13 @@ def test_in_plane_is_refused_for_a_masked_array(tmp_path, capsys):
     assert "--in-plane: the masked array 'mask2-asym'" in err and "leave it out" in err
 
 
-def test_kalman_tuned_follows_a_moving_white_noise_source(tmp_path, capsys):
+def test_the_itd_filter_follows_a_moving_white_noise_source(tmp_path, capsys):
     """White noise circling the three-mic array at 90 deg/s (free field, 20 dB): its frames
-    err by ~1 us, and the fixed ITD filter lagged them by ~10 us; --kalman-tuned chooses the
-    noise model from the frames (reported in the JSON) and stays near the frames' error."""
+    err by ~1 us, and the fixed ITD filter (the default until 2026-12-04) lagged them by ~10
+    us. The default now scales each frame's measurement noise by its GCC confidence and
+    chooses the random walk from the frames, at most the ITD change per frame of a 90 deg/s
+    turn; --kalman-tuned chooses both noises from a grid. Both stay near the frames' error,
+    and the JSON says what was used."""
     from hearsee.sim.moving import Trajectory, retarded_delays, simulate_moving_free_field
 
     arr = MicArray.from_preset("three-mic")
@@ -247,6 +250,7 @@ def test_kalman_tuned_follows_a_moving_white_noise_source(tmp_path, capsys):
     p = tmp_path / "moving.wav"
     sf.write(p, (0.5 * x / np.abs(x).max()).T, FS, subtype="FLOAT")
     errs = {}
+    cap = 0.15 / arr.speed_of_sound * np.radians(90.0) * 0.032  # (15 cm sides, 32 ms hop)
     for extra in ([], ["--kalman-tuned"], ["--no-kalman"]):
         code, out, _ = _run(capsys, p, "--array", "three-mic", *extra)
         assert code == 0
@@ -261,12 +265,14 @@ def test_kalman_tuned_follows_a_moving_white_noise_source(tmp_path, capsys):
         errs[tuple(extra)] = float(np.sqrt(np.mean((got[ok] - truth[ok]) ** 2)))
         if extra == ["--kalman-tuned"]:
             assert doc["kalman_q_std_s"] * FS == pytest.approx(0.3)  # (the grid's, samples)
+            assert doc["kalman_noise"] == "tuned"
         elif not extra:
-            assert doc["kalman_q_std_s"] * FS == 0.25 and doc["kalman_r_std_s"] * FS == 1.0
+            assert doc["kalman_noise"] == "adaptive" and doc["kalman_r_std_s"] * FS == 1.0
+            assert doc["kalman_q_std_s"] <= cap and doc["kalman_q_std_s"] * FS in (0.03, 0.1, 0.3)
         else:
-            assert doc["kalman_q_std_s"] is None and doc["kalman_r_std_s"] is None
-    raw, fixed, tuned = errs[("--no-kalman",)], errs[()], errs[("--kalman-tuned",)]
-    assert fixed > 4 * raw and tuned < 2 * raw
+            assert doc["kalman_q_std_s"] is None and doc["kalman_noise"] is None
+    raw, adaptive, tuned = errs[("--no-kalman",)], errs[()], errs[("--kalman-tuned",)]
+    assert adaptive < 1.5 * raw and tuned < 2 * raw
     code, out, err = _run(capsys, p, "--array", "three-mic", "--kalman-tuned", "--no-kalman")
     assert code == 2 and out == "" and "--kalman-tuned tunes" in err and err.count("\n") == 1
     code, out, err = _run(capsys, p, "--array", "mask2-asym", "--kalman-tuned")

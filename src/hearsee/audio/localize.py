@@ -1434,27 +1434,42 @@ def localize_recording(
         Passed to :func:`hearsee.audio.tdoa.estimate_tdoas` (with ``tdoa_kwargs``).
     kalman : bool
         Smooth the valid frames' TDOAs with :class:`hearsee.audio.itd_filter.ItdKalman`
-        (reference microphone 0; ``r_std_s`` default one sample, ``q_std_s`` a quarter sample
-        per frame), forward and backward (:meth:`~hearsee.audio.itd_filter.ItdKalman.smooth`,
-        since 2026-12-03; the forward filter alone before). Three-mic preset, 3-s recordings,
-        10 dB, free field and RT60 0.3 s, 16 and 48 kHz, static and 45 / 90 deg/s talkers:
-        per-frame TDOA RMSE at most the filter's in every cell of dev and held-out seeds, e.g.
-        16 kHz free field, male voice at 45 deg/s 34.7 -> 15.7 us, white noise 20.1 -> 5.5 us
-        (the raw frames 53 and 1.1 us: for a source that moves, the random walk's defaults
-        still over-smooth white noise's precise frames). Frames without a source stay without
-        an estimate either way. The JSON's ``kalman_q_std_s`` / ``kalman_r_std_s`` give the
-        values used (null without the filter).
+        (reference microphone 0), forward and backward
+        (:meth:`~hearsee.audio.itd_filter.ItdKalman.smooth`). Its noise, by default
+        (``kalman_noise`` "adaptive" in the JSON, since 2026-12-04): each frame's measurement
+        noise one sample times :func:`~hearsee.audio.itd_filter.confidence_r_scale` of its GCC
+        confidence, and the random walk's chosen per recording by the frames' innovation
+        likelihood (:func:`~hearsee.audio.itd_filter.tune_itd_noise`) among the grid's values
+        up to the ITD change per frame of a source turning at 90 deg/s
+        (:func:`~hearsee.audio.itd_filter.max_itd_step_s`; a quarter sample per frame when too
+        few frames tell them apart). Adopted under a rule written before its held-out run
+        (geometric mean of the per-cell per-frame TDOA RMSE ratio to the former fixed model
+        <= 0.8, no cell above 1.25x, >= 24 of 36 cells better): three-mic preset, 4-s
+        recordings, free field at 16 and 48 kHz and RT60 0.3 s at 16 kHz, static and 45 / 90
+        deg/s talkers 2 m away, male voice and white noise, 10 and 20 dB, two recordings per
+        cell (held-out seeds 70/71): geometric mean **0.35**, 30 of 36 cells better, worst
+        1.17x (free field 16 kHz, male voice at 90 deg/s, 10 dB: 63.5 -> 74.2 us, the raw
+        frames 50); e.g. moving white noise 12.3 -> 1.0 us (16 kHz, 90 deg/s; the raw frames
+        1.0), a static voice 5.9 -> 0.7 us (16 kHz, 20 dB), moving voices at 48 kHz 36.9 ->
+        3.9 us (45 deg/s, 20 dB), RT60 0.3 s voices at 90 deg/s 70.9 -> 52.9 us (20 dB). The
+        former fixed model (q a quarter sample per frame, r one sample, the default from
+        2026-12-03, the forward filter alone before) over-smoothed the precise frames of
+        moving broadband sources (the raw frames 1 us, smoothed 12). Still above the raw
+        frames where a voice turns fast in free field (90 deg/s: 74 / 40 us against 50 / 25
+        at 10 / 20 dB). Given ``q_std_s`` or ``r_std_s`` (the other: a quarter sample per
+        frame / one sample), the filter uses them as they are ("fixed"). Frames without a
+        source stay without an estimate either way. The JSON's ``kalman_q_std_s`` /
+        ``kalman_r_std_s`` / ``kalman_noise`` give what was used (null without the filter).
     tune_kalman : bool
-        Choose ``q_std_s`` and ``r_std_s`` (those not given) per recording by the frames'
-        innovation likelihood (:func:`hearsee.audio.itd_filter.tune_itd_noise`) instead of the
-        fixed defaults. Opt-in (``hearsee localize --kalman-tuned``; 2026-12-03): on held-out
-        recordings (seeds 30/31, three-mic, the conditions above at 10 and 20 dB, 4-s
-        recordings, 36 cells of two) it lowered the per-frame TDOA RMSE in 32 of 36 cells,
-        geometric mean 0.44x the defaults' -- moving white noise 12 -> 1.3 us (16 kHz, 90
-        deg/s) and 39 -> 0.5 us (48 kHz), moving voices at 48 kHz 37 -> 6 us (45 deg/s, 20
-        dB) -- but raised one cell 1.74x (RT60 0.3 s, male voice at 45 deg/s, 20 dB: 25 -> 43
-        us), beyond the 1.25x that the rule written before the run allowed, so the fixed
-        model stays the default. Costs 15 filter passes (~0.2 s per 4 s of audio).
+        Choose ``q_std_s`` and ``r_std_s`` (those not given) per recording from a grid of both
+        by the frames' innovation likelihood (:func:`hearsee.audio.itd_filter.tune_itd_noise`),
+        with one measurement noise for every frame ("tuned"; ``hearsee localize
+        --kalman-tuned``; 2026-12-03). On the 2026-12-03 held-out recordings (seeds 30/31, the
+        conditions above) it lowered the former fixed model's per-frame TDOA RMSE in 32 of 36
+        cells, geometric mean 0.44x, but raised one 1.74x (RT60 0.3 s, male voice at 45 deg/s,
+        20 dB); on this default's held-out recordings it was worse than the default in most
+        voice cells (free field 16 kHz, male at 45 deg/s, 10 dB: 24.9 against 10.9 us). Costs
+        15 filter passes (the default 3-5; ~0.05-0.2 s per 4 s of audio).
     progress : callable(n_frames_done), optional
     in_plane : bool
         The source lies in the plane of a planar array: directions model its spherical
@@ -1479,6 +1494,7 @@ def localize_recording(
 
             {"array": {...}, "sample_rate": fs, "method": ..., "kalman": bool,
              "kalman_q_std_s", "kalman_r_std_s" (the ITD filter's noise, s; null without it),
+             "kalman_noise" ("adaptive", "tuned" or "fixed": how they were chosen; null),
              "band_hz": [low, high] (the band the GCC used, Hz: TdoaFrames.band_hz),
              "frames": [{"t", "tdoa_s": {"0-1": s}, "azimuth_deg", "elevation_deg",
                          "candidates": [{"azimuth_deg", "elevation_deg"}], "confidence",
@@ -1496,8 +1512,13 @@ def localize_recording(
         masked array's summary ``confidence`` is the probability of the chosen front/back
         half instead, 0.5-1: :func:`hearsee.audio.mask.localize_recording_mask`).
     """
-    from hearsee.audio.itd_filter import ItdKalman, tune_itd_noise
-    from hearsee.audio.tdoa import estimate_tdoas, normalize_method
+    from hearsee.audio.itd_filter import (
+        ItdKalman,
+        confidence_r_scale,
+        max_itd_step_s,
+        tune_itd_noise,
+    )
+    from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, normalize_method
 
     arr = load_array(array)
     if arr.mask is not None:  # masked two-microphone array: one 360-degree azimuth (ch. 3)
@@ -1523,17 +1544,30 @@ def localize_recording(
     labels = tf.pair_labels
     tdoa = tf.tdoa_s
     noise: tuple[float, float] | None = None  # the filter's (q_std_s, r_std_s)
+    model = None  # how they were chosen: "adaptive", "tuned" or "fixed"
     if kalman and tf.n_valid:
+        r_scale = None
         if tune_kalman:  # (what is not given: the values that explain the frames best)
             noise = tune_itd_noise(tdoa, arr.n_mics, tf.pairs, fs, arr.max_tdoa(tf.pairs),
                                    q_std_s=None if q_std_s is None else (q_std_s,),
                                    r_std_s=None if r_std_s is None else (r_std_s,))
+            model = "tuned"
+        elif q_std_s is None and r_std_s is None:
+            # the default since 2026-12-04: each frame's measurement noise from its GCC
+            # confidence, the random walk's by the likelihood, at most a 90 deg/s turn's
+            r_scale = confidence_r_scale(tf.confidence)
+            hop = frame_geometry(fs, frame_ms, hop_ms)[1] / fs
+            noise = tune_itd_noise(tdoa, arr.n_mics, tf.pairs, fs, arr.max_tdoa(tf.pairs),
+                                   r_std_s=(1.0 / fs,), r_scale=r_scale,
+                                   q_max_s=max_itd_step_s(arr.max_tdoa(tf.pairs), hop))
+            model = "adaptive"
         if noise is None:  # (the fixed defaults; also when too few frames tell the grid apart)
             noise = (q_std_s if q_std_s is not None else 0.25 / fs,
                      r_std_s if r_std_s is not None else 1.0 / fs)
+            model = "fixed" if r_scale is None else model
         kf = ItdKalman(arr.n_mics, tf.pairs, ref=0, q_std_s=noise[0], r_std_s=noise[1])
         # (the recording is processed whole: the smoother, which uses the later frames too)
-        filt, _ = kf.smooth(tdoa)
+        filt, _ = kf.smooth(tdoa, r_scale=r_scale)
         tdoa = np.where(tf.valid[:, None], filt, np.nan)
     # the frames' spherical wavefront of in_plane is a planar array's; for other arrays
     # in_plane is ignored, as localize_tdoa says and the stream does -- near_field=True fitted
@@ -1586,6 +1620,7 @@ def localize_recording(
         "kalman": bool(kalman),
         "kalman_q_std_s": None if noise is None else float(noise[0]),
         "kalman_r_std_s": None if noise is None else float(noise[1]),
+        "kalman_noise": model,
         "band_hz": None if tf.band_hz is None else [float(v) for v in tf.band_hz],
         "frames": frames,
         "summary": summary,

@@ -121,10 +121,11 @@ def localize_cmd(
     no_kalman: Annotated[bool, typer.Option(
         "--no-kalman", help="Report the raw per-frame TDOAs (no ITD Kalman filter).")] = False,
     kalman_tuned: Annotated[bool, typer.Option(
-        "--kalman-tuned", help="Choose the ITD Kalman filter's noise (random walk and "
-        "measurement) per recording by its frames' innovation likelihood instead of the fixed "
-        "defaults (much better for moving broadband sources; the JSON's kalman_q_std_s / "
-        "kalman_r_std_s say what was used).")] = False,
+        "--kalman-tuned", help="Choose both of the ITD Kalman filter's noises (random walk "
+        "and one measurement noise for every frame) from a grid by the frames' innovation "
+        "likelihood, instead of the default (each frame's measurement noise from its GCC "
+        "confidence, the random walk by the likelihood, at most a 90 deg/s turn's); the JSON's "
+        "kalman_q_std_s / kalman_r_std_s / kalman_noise say what was used.")] = False,
     fmt: Annotated[OutputFormat, typer.Option("--format", help="Output format.")] = (
         OutputFormat.json),
     reverb_method: Annotated[GccMethod | None, typer.Option(
