@@ -346,7 +346,37 @@ class WavSource(ArraySource):
 CHANNEL_CHECK_S = 2.0
 
 
-class _ChannelWatch:
+class _FirstWindows:
+    """A stream's blocks gathered into windows of ``n`` samples (n_ch, n), each handed to
+    :meth:`_check` until it says the check is done: the base of the stream's one-off checks of
+    its input (:class:`_ChannelWatch`, :class:`_WiringWatch`)."""
+
+    def __init__(self, n: int) -> None:
+        self.n = max(int(n), 1)
+        self.parts: list[NDArray] = []
+        self.have = 0
+        self.done = False
+
+    def add(self, data: NDArray) -> None:
+        """Take a block (n_ch, n_samples); check the window once it is full."""
+        if self.done:
+            return
+        self.parts.append(data)
+        self.have += data.shape[1]
+        if self.have >= self.n:
+            self._flush()
+
+    def _flush(self) -> None:
+        x = np.concatenate(self.parts, axis=1)
+        self.parts, self.have = [], 0
+        self.done = self._check(x)
+
+    def _check(self, x: NDArray) -> bool:
+        """Check a window (n_ch, n); True when nothing more is to be checked."""
+        raise NotImplementedError
+
+
+class _ChannelWatch(_FirstWindows):
     """The first :data:`CHANNEL_CHECK_S` seconds of a live run in which any channel varies,
     checked once as :func:`hearsee.audio.signals.read_recording` checks a file
     (:func:`~hearsee.audio.signals.channel_faults`): a DegenerateInputWarning naming a channel
@@ -355,37 +385,27 @@ class _ChannelWatch:
     started) are looked past."""
 
     def __init__(self, name: str, n: int, channels: Sequence[int] | None = None) -> None:
-        self.name, self.n = name, max(int(n), 1)
+        super().__init__(n)
+        self.name = name
         self.channels = None if channels is None else np.asarray(channels, dtype=int)
-        self.parts: list[NDArray] = []
-        self.have = 0
-        self.done = False
 
-    def add(self, data: NDArray) -> None:
-        if self.done:
-            return
-        self.parts.append(data)
-        self.have += data.shape[1]
-        if self.have < self.n:
-            return
-        x = np.concatenate(self.parts, axis=1)
-        self.parts, self.have = [], 0
+    def _check(self, x: NDArray) -> bool:
         ch = np.arange(x.shape[0]) if self.channels is None else self.channels
         x = x[ch]
         if not np.all(np.isfinite(x)):
-            return
+            return False
         flat, quiet, below = channel_faults(x)
         if flat.size == x.shape[0]:
-            return  # (nothing varies yet: look at the next window)
-        self.done = True
+            return False  # (nothing varies yet: look at the next window)
         flat, quiet = ch[flat], ch[quiet]  # (the device's channel numbers)
         where = f"audio input device {self.name!r}: "
         if flat.size:
             warnings.warn(where + stuck_channels_text(flat) + "; check the microphone wiring",
-                          DegenerateInputWarning, stacklevel=3)
+                          DegenerateInputWarning, stacklevel=4)
         if quiet.size:
             warnings.warn(where + quiet_channels_text(quiet, below), DegenerateInputWarning,
-                          stacklevel=3)
+                          stacklevel=4)
+        return True
 
 
 #: a stream checks the first this many seconds of its input in which a source is heard for a
@@ -395,7 +415,7 @@ WIRING_CHECK_S = 10.0
 WIRING_CHECK_MIN_S = 2.0
 
 
-class _WiringWatch:
+class _WiringWatch(_FirstWindows):
     """What ``hearsee localize`` and ``hearsee track`` tell of a file before they use it, told of
     a stream's input once it has heard a source: the whole-recording estimate
     (:func:`hearsee.audio.tdoa.estimate_tdoas`, in the stream's frames, weighting and band) of
@@ -415,39 +435,25 @@ class _WiringWatch:
     16 kHz), run in the stream's own thread between two batches."""
 
     def __init__(self, array: MicArray, fs: float, cfg: StreamConfig) -> None:
+        super().__init__(int(round(WIRING_CHECK_S * float(fs))))
         self.array, self.fs, self.cfg = array, float(fs), cfg
-        self.n = int(round(WIRING_CHECK_S * self.fs))
-        self.parts: list[NDArray] = []
-        self.have = 0
-        self.done = False
-
-    def add(self, data: NDArray) -> None:
-        """Take a block (n_mics, n) of the stream; check once :data:`WIRING_CHECK_S` are in."""
-        if self.done:
-            return
-        self.parts.append(data)
-        self.have += data.shape[1]
-        if self.have >= self.n:
-            self._check()
 
     def finish(self) -> None:
         """The input ended: check what there is, if at least :data:`WIRING_CHECK_MIN_S`."""
         if not self.done and self.have >= WIRING_CHECK_MIN_S * self.fs:
-            self._check()
+            self._flush()
         self.done = True
 
-    def _check(self) -> None:
+    def _check(self, x: NDArray) -> bool:
         from hearsee.errors import HearseeError
 
-        x = np.concatenate(self.parts, axis=1)
-        self.parts, self.have = [], 0
         cfg = self.cfg
         try:  # (warns of an inverted microphone itself)
             tf = estimate_tdoas(x, self.fs, self.array, cfg.frame_ms, cfg.hop_ms, cfg.method,
                                 band_hz=cfg.band_hz)
         except HearseeError:
-            return  # (silence, NaN samples, ...: the stream says what it says of them)
-        self.done = bool(tf.inverted_mics) or bool(np.all(np.isfinite(tf.summary_tdoa_s)))
+            return False  # (silence, NaN samples, ...: the stream says what it says of them)
+        return bool(tf.inverted_mics) or bool(np.all(np.isfinite(tf.summary_tdoa_s)))
 
 
 class DeviceSource:
