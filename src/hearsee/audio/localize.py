@@ -1467,9 +1467,11 @@ def localize_recording(
         --kalman-tuned``; 2026-12-03). On the 2026-12-03 held-out recordings (seeds 30/31, the
         conditions above) it lowered the former fixed model's per-frame TDOA RMSE in 32 of 36
         cells, geometric mean 0.44x, but raised one 1.74x (RT60 0.3 s, male voice at 45 deg/s,
-        20 dB); on this default's held-out recordings it was worse than the default in most
-        voice cells (free field 16 kHz, male at 45 deg/s, 10 dB: 24.9 against 10.9 us). Costs
-        15 filter passes (the default 3-5; ~0.05-0.2 s per 4 s of audio).
+        20 dB); on this default's held-out recordings (``bench/itd_filter.py``) it was worse
+        than the default in 13 of 18 voice cells (free field 16 kHz, male at 45 deg/s, 10 dB:
+        24.9 against 10.9 us), better where a voice turns at 90 deg/s in free field at 16 kHz
+        (10 dB: 20.6 against 74.2 us), worst cell 1.88x the fixed model's. Costs 15 filter
+        passes (the default 3-5; ~0.05-0.2 s per 4 s of audio).
     progress : callable(n_frames_done), optional
     in_plane : bool
         The source lies in the plane of a planar array: directions model its spherical
