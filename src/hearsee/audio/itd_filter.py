@@ -110,14 +110,15 @@ def max_itd_step_s(max_tdoa_s: ArrayLike, hop_s: float,
 
 
 def _scales(r_scale: ArrayLike | None, shape: tuple[int, ...]) -> NDArray | None:
-    """``r_scale`` as a float array of ``shape`` (n_frames, n_pairs), finite and > 0, or None;
-    a ConfigError otherwise."""
+    """``r_scale`` as a float array of ``shape`` ((n_frames, n_pairs), or (n_pairs,) for one
+    frame), finite and > 0, or None; a ConfigError otherwise."""
     if r_scale is None:
         return None
     s = np.asarray(r_scale, dtype=float) if real_entries(r_scale) else None
     if s is None or s.shape != shape or not np.all(np.isfinite(s) & (s > 0)):
-        raise ConfigError(f"r_scale must be {shape} finite numbers > 0 (one per frame and "
-                          f"pair), got {r_scale!r:.80}")
+        what = "one per frame and pair" if len(shape) == 2 else "one per pair"
+        raise ConfigError(f"r_scale must be finite numbers > 0 of shape {shape} ({what}), "
+                          f"got {r_scale!r:.80}")
     return s
 
 
@@ -243,7 +244,7 @@ class ItdKalman:
         this frame's measurement standard deviations are ``r_std_s`` times it (e.g.
         :func:`confidence_r_scale`); None: ``r_std_s``.
         """
-        sc = None if r_scale is None else _scales([r_scale], (1, len(self.pairs)))[0]
+        sc = _scales(r_scale, (len(self.pairs),))
         return self._step(z, sc)
 
     def _step(self, z: ArrayLike | None, sc: NDArray | None) -> bool:
