@@ -948,8 +948,8 @@ def test_a_short_live_run_is_checked_when_it_ends_and_the_check_can_be_turned_of
 def test_a_recording_is_checked_only_when_asked():
     """A source holding a recording (``.x``: ArraySource, WavSource, also behind DropoutSource)
     can be checked ahead, as `hearsee track` does; the stream checks it only with
-    ``check_wiring=True`` (the check's whole-recording estimate would be an eighth of a
-    20-s file's stream)."""
+    ``check_wiring=True`` (the check's whole-recording estimate would add 5-10 % to a 20-s
+    file's stream); anything but a bool or None is refused."""
     import warnings
 
     from hearsee.errors import InvertedPolarityWarning
