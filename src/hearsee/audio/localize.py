@@ -1550,8 +1550,9 @@ def localize_recording(
     model = None  # how they were chosen: "adaptive", "tuned" or "fixed"
     if kalman and tf.n_valid:
         r_scale = None
+        box = arr.max_tdoa(tf.pairs)  # (the pairs' largest TDOAs, s)
         if tune_kalman:  # (what is not given: the values that explain the frames best)
-            noise = tune_itd_noise(tdoa, arr.n_mics, tf.pairs, fs, arr.max_tdoa(tf.pairs),
+            noise = tune_itd_noise(tdoa, arr.n_mics, tf.pairs, fs, box,
                                    q_std_s=None if q_std_s is None else (q_std_s,),
                                    r_std_s=None if r_std_s is None else (r_std_s,))
             model = "tuned"
@@ -1560,9 +1561,8 @@ def localize_recording(
             # confidence, the random walk's by the likelihood, at most a 90 deg/s turn's
             r_scale = confidence_r_scale(tf.confidence)
             hop = frame_geometry(fs, frame_ms, hop_ms)[1] / fs
-            noise = tune_itd_noise(tdoa, arr.n_mics, tf.pairs, fs, arr.max_tdoa(tf.pairs),
-                                   r_std_s=(1.0 / fs,), r_scale=r_scale,
-                                   q_max_s=max_itd_step_s(arr.max_tdoa(tf.pairs), hop))
+            noise = tune_itd_noise(tdoa, arr.n_mics, tf.pairs, fs, box, r_std_s=(1.0 / fs,),
+                                   r_scale=r_scale, q_max_s=max_itd_step_s(box, hop))
             model = "adaptive"
         if noise is None:  # (the fixed defaults; also when too few frames tell the grid apart)
             noise = (q_std_s if q_std_s is not None else 0.25 / fs,

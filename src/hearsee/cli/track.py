@@ -95,20 +95,13 @@ WIRING_SCAN_S = 30.0
 
 
 def _check_wiring(x, fs: float, arr, cfg) -> None:
-    """The whole-recording TDOA estimate of a file's first :data:`WIRING_SCAN_S` seconds, for
-    its warning of a microphone wired with inverted polarity
-    (:class:`hearsee.errors.InvertedPolarityWarning`): the stream sees one frame at a time and
-    has no whole-recording correlation to tell it (its directions were wrong without a word).
-    In ``cfg.band_hz``, which :func:`_stream_band` has already trimmed of an empty top band
-    (so no second search for one)."""
-    from hearsee.audio.tdoa import estimate_tdoas
-    from hearsee.errors import HearseeError
+    """:func:`hearsee.stream.pipeline.wiring_estimate` of a file's first
+    :data:`WIRING_SCAN_S` seconds, for its warning of a microphone wired with inverted
+    polarity, before the file is streamed. In ``cfg.band_hz``, which :func:`_stream_band` has
+    already trimmed of an empty top band (so no second search for one)."""
+    from hearsee.stream.pipeline import wiring_estimate
 
-    try:
-        estimate_tdoas(x[:, :int(WIRING_SCAN_S * fs)], fs, arr, cfg.frame_ms, cfg.hop_ms,
-                       cfg.method, band_hz=cfg.band_hz, empty_band_db=None)
-    except HearseeError:
-        pass  # (too short for a frame, ...: the stream says what it says about it)
+    wiring_estimate(x[:, :int(WIRING_SCAN_S * fs)], fs, arr, cfg, empty_band_db=None)
 
 
 def _srp_band(gcc_band: tuple[float, float] | None, srp_band: tuple[float, float] | None

@@ -74,8 +74,10 @@ from hearsee.audio.tdoa import (
     DEFAULT_MARGIN_SAMPLES,
     DEFAULT_SMOOTH_FRAMES,
     DEFAULT_WINDOW,
+    EMPTY_BAND_DB,
     MAX_UNSCALED_PEAK,
     MIN_UNSCALED_PEAK,
+    TdoaFrames,
     check_analysis_fs,
     check_frame_ms,
     check_recording_length,
@@ -114,6 +116,7 @@ __all__ = [
     "TrackingProcessor",
     "Update",
     "WavSource",
+    "wiring_estimate",
 ]
 
 
@@ -415,6 +418,26 @@ WIRING_CHECK_S = 10.0
 WIRING_CHECK_MIN_S = 2.0
 
 
+def wiring_estimate(x: NDArray, fs: float, array: MicArray, cfg: StreamConfig,
+                    empty_band_db: float | None = EMPTY_BAND_DB) -> TdoaFrames | None:
+    """The whole-recording TDOA estimate of ``x`` (n_mics, n) in the stream's frames, weighting
+    and band (``cfg``), for its warning of a microphone wired with inverted polarity
+    (:class:`~hearsee.errors.InvertedPolarityWarning`, which
+    :func:`~hearsee.audio.tdoa.estimate_tdoas` gives): the stream sees one frame at a time and
+    has no averaged correlation to tell it. None when no estimate can be made (too short for a
+    frame, silent, NaN samples...: the stream says what it says of them). ``empty_band_db``:
+    :func:`~hearsee.audio.tdoa.estimate_tdoas`'s (None where the band was trimmed already).
+    ``hearsee track`` runs it on a file's start before streaming it, :class:`_WiringWatch` on
+    live input."""
+    from hearsee.errors import HearseeError
+
+    try:
+        return estimate_tdoas(x, fs, array, cfg.frame_ms, cfg.hop_ms, cfg.method,
+                              band_hz=cfg.band_hz, empty_band_db=empty_band_db)
+    except HearseeError:
+        return None
+
+
 class _WiringWatch(_FirstWindows):
     """What ``hearsee localize`` and ``hearsee track`` tell of a file before they use it, told of
     a stream's input once it has heard a source: the whole-recording estimate
@@ -445,15 +468,9 @@ class _WiringWatch(_FirstWindows):
         self.done = True
 
     def _check(self, x: NDArray) -> bool:
-        from hearsee.errors import HearseeError
-
-        cfg = self.cfg
-        try:  # (warns of an inverted microphone itself)
-            tf = estimate_tdoas(x, self.fs, self.array, cfg.frame_ms, cfg.hop_ms, cfg.method,
-                                band_hz=cfg.band_hz)
-        except HearseeError:
-            return False  # (silence, NaN samples, ...: the stream says what it says of them)
-        return bool(tf.inverted_mics) or bool(np.all(np.isfinite(tf.summary_tdoa_s)))
+        tf = wiring_estimate(x, self.fs, self.array, self.cfg)
+        return tf is not None and (bool(tf.inverted_mics)
+                                   or bool(np.all(np.isfinite(tf.summary_tdoa_s))))
 
 
 class DeviceSource:
