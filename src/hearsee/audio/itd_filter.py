@@ -39,7 +39,7 @@ from hearsee.config import is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, EstimationError, GeometryError
 
 __all__ = ["ItdKalman", "confidence_r_scale", "max_itd_step_s", "pair_matrix",
-           "tune_itd_noise"]
+           "smooth_recording_itds", "tune_itd_noise"]
 
 #: :func:`tune_itd_noise`'s grids, in samples at the recording's rate: the random walk's
 #: standard deviation per frame (q) and the measurement's (r)
@@ -415,3 +415,51 @@ def _candidates(name: str, values: ArrayLike) -> list[float]:
     if v is None or v.ndim != 1 or v.size == 0:
         raise ConfigError(f"{name} must be one or more numbers > 0 seconds, got {values!r:.60}")
     return [float(a) for a in v]
+
+
+def smooth_recording_itds(Z: ArrayLike, confidence: ArrayLike, n_mics: int,
+                          pairs: Sequence[tuple[int, int]], fs: float, max_tdoa_s: ArrayLike,
+                          hop_s: float, q_std_s: float | None = None,
+                          r_std_s: float | None = None, tune: bool = False
+                          ) -> tuple[NDArray, tuple[float, float], str]:
+    """A whole recording's frame TDOAs ``Z`` (n_frames, n_pairs; NaN rows: no estimate) through
+    :class:`ItdKalman` (reference microphone 0) forward and backward (:meth:`ItdKalman.smooth`):
+    what ``hearsee localize`` reports per frame, for every array (a masked pair's too).
+    ``confidence`` (n_frames, n_pairs): the frames' GCC confidence
+    (:attr:`hearsee.audio.tdoa.TdoaFrames.confidence`); ``max_tdoa_s``: the pairs' largest
+    TDOAs (s; a masked pair's largest tabled ITD); ``hop_s``: the frames' hop (s).
+
+    The noise model, in this order:
+
+    - ``tune``: ``q_std_s`` and ``r_std_s`` (those not given) from :func:`tune_itd_noise`'s
+      grid, one measurement noise for every frame ("tuned");
+    - neither given: "adaptive" -- each frame's measurement noise one sample times
+      :func:`confidence_r_scale` of its confidence, the random walk's by the likelihood among
+      the grid's values up to :func:`max_itd_step_s` (a 90 deg/s turn);
+    - otherwise "fixed": the given values, a quarter sample per frame of random walk and one
+      sample of measurement noise for the one not given (also what "adaptive" and "tuned" fall
+      back to when too few frames tell the grid apart).
+
+    Returns (the smoothed TDOAs (n_frames, n_pairs), NaN where ``Z`` has none; the filter's
+    ``(q_std_s, r_std_s)`` in seconds; the model's name)."""
+    Zm = _frames(Z)
+    noise: tuple[float, float] | None = None
+    r_scale = None
+    model = "fixed"
+    if tune:
+        noise = tune_itd_noise(Zm, n_mics, pairs, fs, max_tdoa_s,
+                               q_std_s=None if q_std_s is None else (q_std_s,),
+                               r_std_s=None if r_std_s is None else (r_std_s,))
+        model = "tuned"
+    elif q_std_s is None and r_std_s is None:
+        r_scale = confidence_r_scale(confidence)
+        noise = tune_itd_noise(Zm, n_mics, pairs, fs, max_tdoa_s, r_std_s=(1.0 / fs,),
+                               r_scale=r_scale, q_max_s=max_itd_step_s(max_tdoa_s, hop_s))
+        model = "adaptive"
+    if noise is None:  # (the fixed defaults; also when too few frames tell the grid apart)
+        noise = (q_std_s if q_std_s is not None else 0.25 / fs,
+                 r_std_s if r_std_s is not None else 1.0 / fs)
+        model = "fixed" if r_scale is None else model
+    kf = ItdKalman(n_mics, pairs, ref=0, q_std_s=noise[0], r_std_s=noise[1])
+    filt, _ = kf.smooth(Zm, r_scale=r_scale)
+    return np.where(np.isnan(Zm).any(axis=1)[:, None], np.nan, filt), noise, model

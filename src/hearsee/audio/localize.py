@@ -1515,12 +1515,7 @@ def localize_recording(
         masked array's summary ``confidence`` is the probability of the chosen front/back
         half instead, 0.5-1: :func:`hearsee.audio.mask.localize_recording_mask`).
     """
-    from hearsee.audio.itd_filter import (
-        ItdKalman,
-        confidence_r_scale,
-        max_itd_step_s,
-        tune_itd_noise,
-    )
+    from hearsee.audio.itd_filter import smooth_recording_itds
     from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, normalize_method
 
     arr = load_array(array)
@@ -1549,29 +1544,10 @@ def localize_recording(
     noise: tuple[float, float] | None = None  # the filter's (q_std_s, r_std_s)
     model = None  # how they were chosen: "adaptive", "tuned" or "fixed"
     if kalman and tf.n_valid:
-        r_scale = None
-        box = arr.max_tdoa(tf.pairs)  # (the pairs' largest TDOAs, s)
-        if tune_kalman:  # (what is not given: the values that explain the frames best)
-            noise = tune_itd_noise(tdoa, arr.n_mics, tf.pairs, fs, box,
-                                   q_std_s=None if q_std_s is None else (q_std_s,),
-                                   r_std_s=None if r_std_s is None else (r_std_s,))
-            model = "tuned"
-        elif q_std_s is None and r_std_s is None:
-            # the default since 2026-12-04: each frame's measurement noise from its GCC
-            # confidence, the random walk's by the likelihood, at most a 90 deg/s turn's
-            r_scale = confidence_r_scale(tf.confidence)
-            hop = frame_geometry(fs, frame_ms, hop_ms)[1] / fs
-            noise = tune_itd_noise(tdoa, arr.n_mics, tf.pairs, fs, box, r_std_s=(1.0 / fs,),
-                                   r_scale=r_scale, q_max_s=max_itd_step_s(box, hop))
-            model = "adaptive"
-        if noise is None:  # (the fixed defaults; also when too few frames tell the grid apart)
-            noise = (q_std_s if q_std_s is not None else 0.25 / fs,
-                     r_std_s if r_std_s is not None else 1.0 / fs)
-            model = "fixed" if r_scale is None else model
-        kf = ItdKalman(arr.n_mics, tf.pairs, ref=0, q_std_s=noise[0], r_std_s=noise[1])
         # (the recording is processed whole: the smoother, which uses the later frames too)
-        filt, _ = kf.smooth(tdoa, r_scale=r_scale)
-        tdoa = np.where(tf.valid[:, None], filt, np.nan)
+        tdoa, noise, model = smooth_recording_itds(
+            tdoa, tf.confidence, arr.n_mics, tf.pairs, fs, arr.max_tdoa(tf.pairs),
+            frame_geometry(fs, frame_ms, hop_ms)[1] / fs, q_std_s, r_std_s, tune_kalman)
     # the frames' spherical wavefront of in_plane is a planar array's; for other arrays
     # in_plane is ignored, as localize_tdoa says and the stream does -- near_field=True fitted
     # a position to every frame of a volume array (18x slower) and, with five or more
