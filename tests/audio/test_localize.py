@@ -716,11 +716,12 @@ def test_locus_plots_refuse_degenerate_input():
 
 
 @pytest.mark.parametrize("kw", [{"band_hz": (300.0, 3500.0)}, {"reverb_method": "phat"},
-                                {"r_std_s": 1e-4}, {"pairs": [(1, 0)]}, {"in_plane": True}])
+                                {"pairs": [(1, 0)]}, {"in_plane": True}])
 def test_localize_recording_refuses_options_a_masked_array_would_ignore(kw):
-    """A masked array goes through the mask's own pipeline, which took none of these: a band,
-    a reverberation weighting, Kalman noises, pairs or in_plane were dropped without a word (the
-    answer silently the default one). None values (the CLI's defaults) still pass."""
+    """A masked array goes through the mask's own pipeline, which takes none of these: a band,
+    a reverberation weighting, pairs or in_plane were dropped without a word (the answer
+    silently the default one). None values (the CLI's defaults) still pass. (The ITD filter's
+    noises are taken since 2026-12-04: tests/audio/test_mask.py.)"""
     from hearsee.errors import ConfigError
 
     mask = MicArray.from_preset("mask2")

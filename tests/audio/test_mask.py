@@ -312,7 +312,10 @@ def test_document_frames_where_the_itd_peaks_inside_a_half(model):
     """The mask's far-field ITD peaks inside the front half (this coarse mask2: 568 us at 77
     deg, 540 us at 90), so one frame's ITD matches two azimuths there. Each frame now takes the
     match nearest the recording's estimate; the nearest ITD alone put the frame median of a
-    source at 65 deg at 76.5 (53 % of the frames > 10 deg off) and at 85 deg at 77."""
+    source at 65 deg at 76.5 (53 % of the frames > 10 deg off) and at 85 deg at 77. The
+    smoothed frames (the default since 2026-12-04) sit where the frames' mean ITD maps, 0.07 /
+    0.18 sample above the table here, which near the flat peak is 3 / 5 deg of azimuth (the
+    forward filter before: within 3 deg; the raw frames spread from 46 to 77 deg)."""
     itd = mask._itd_table(model, None)
     assert 60 < int(np.argmax(itd)) < 90 and itd.max() > itd[90] + 1e-5  # (the premise)
     for az in (65.0, 85.0):
@@ -322,7 +325,7 @@ def test_document_frames_where_the_itd_peaks_inside_a_half(model):
         assert abs(doc["summary"]["azimuth_deg"] - az) < 1.0
         fr = np.array([f["azimuth_deg"] for f in doc["frames"] if f["valid"]])
         assert len(fr) >= 20
-        assert abs(np.median(fr) - az) < 3.0 and np.mean(np.abs(fr - az) > 10) <= 0.2
+        assert abs(np.median(fr) - az) < 6.0 and np.mean(np.abs(fr - az) > 10) <= 0.2
 
 
 def test_no_source_is_not_reported_as_one(model):
@@ -369,6 +372,124 @@ def test_cli_simulate_and_localize_masked(model, tmp_path, capsys):
     assert abs((s["azimuth_deg"] - az + 180) % 360 - 180) < 5
     assert len(s["candidates"]) == 2 and s["elevation_deg"] is None
     assert s["front_probability"] < 0.5
+
+
+def _circling(az0, rate_dps, dur, d=None):
+    """A source circling the array in its plane from ``az0`` at ``rate_dps`` (unit directions,
+    or ``d`` metres away), knots every 10 ms; returns (trajectory, azimuth(t) in deg)."""
+    from hearsee.sim.moving import Trajectory
+
+    t = np.arange(0.0, dur + 0.1, 0.01)
+    az = az0 + rate_dps * t
+    return (Trajectory(t, np.stack([_src(a, d) for a in az])),
+            lambda tq: az0 + rate_dps * np.asarray(tq))
+
+
+def test_moving_masked_simulation(model):
+    """simulate_moving_masked: a still trajectory is simulate_masked (near and far field); a
+    source circling at 60 deg/s gives frame ITDs on the mask's tabled ITD of its azimuth at
+    each frame; bad input is refused with hearsee's errors."""
+    from hearsee.audio.tdoa import estimate_tdoas
+    from hearsee.sim.moving import Trajectory, simulate_moving_masked
+
+    s = white_noise(0.5, FS, rng=3)
+    for ff, p in ((True, _src(40.0)), (False, _src(-120.0, 1.2))):
+        still = simulate_moving_masked(s, FS, model, Trajectory([0.0], [p]), far_field=ff)
+        ref = mask.simulate_masked(s, FS, model, p, far_field=ff)
+        assert np.max(np.abs(still - ref)) < 1e-3 * np.max(np.abs(ref))  # (-60 dB)
+    traj, az = _circling(-100.0, 60.0, 3.0)
+    x = simulate_moving_masked(white_noise(3.0, FS, rng=4), FS, model, traj, snr_db=30, rng=5,
+                               far_field=True)
+    tf = estimate_tdoas(x, FS, model.array, margin_samples=mask._itd_margin_samples(model, FS))
+    tab = mask._itd_table(model, None)  # (1-deg grid from 0 deg)
+    truth = np.interp(az(tf.t - 1e-3) % 360.0, np.arange(361.0), np.append(tab, tab[0]))
+    err = (tf.tdoa_s[:, 0] - truth)[tf.valid]
+    assert tf.n_valid > 0.9 * len(tf.t) and np.sqrt(np.mean(err**2)) < 1.0 / FS
+    # the ITD sweeps the table (-100 -> 80 deg: from one side to the other), unlike a still
+    # source's constant
+    assert np.ptp(truth) > 10.0 / FS and np.ptp(tf.tdoa_s[tf.valid, 0]) > 0.8 * np.ptp(truth)
+    with pytest.raises(ConfigError, match="block_s"):
+        simulate_moving_masked(s, FS, model, traj, block_s=1e-5)
+    with pytest.raises(ConfigError, match="block_s"):
+        simulate_moving_masked(s, FS, model, traj, block_s=float("nan"))
+    with pytest.raises(GeometryError, match="Trajectory"):
+        simulate_moving_masked(s, FS, model, [[1.0, 0.0, 0.0]])
+    with pytest.raises(GeometryError, match="origin"):
+        simulate_moving_masked(s, FS, model, Trajectory([0.0, 0.5], [[0, 0, 0], [1, 0, 0]]))
+    with pytest.raises(GeometryError, match="inside the mask body"):
+        simulate_moving_masked(s, FS, model, Trajectory([0.0, 0.5], [[0.5, 0, 0], [0.01, 0, 0]]))
+
+
+def test_moving_masked_recording_is_smoothed_without_lag(model):
+    """``hearsee localize`` of a masked pair smooths the frames' ITDs as on every array (the
+    adaptive noise, forward and backward) -- the fixed forward filter it ran until 2026-12-04
+    lagged a moving source: 60 deg/s, white noise, 30 dB, near field 1.5 m. The JSON names the
+    noise used; q_std_s / r_std_s / tune_kalman are taken (refused before)."""
+    from hearsee.audio.itd_filter import ItdKalman
+    from hearsee.audio.localize import localize_recording
+    from hearsee.audio.tdoa import estimate_tdoas
+    from hearsee.sim.moving import simulate_moving_recording
+
+    traj, az = _circling(30.0, 60.0, 3.0, d=1.5)
+    x, truth_doc = simulate_moving_recording(model.array, traj, "noise", duration_s=3.0, fs=FS,
+                                             snr_db=30.0, seed=6)
+    assert x.shape == (2, 3 * FS) and truth_doc["moving"]
+    doc = mask.localize_recording_mask(x, FS, model)
+    assert doc["kalman_noise"] == "adaptive" and doc["kalman_r_std_s"] == 1.0 / FS
+    t = np.array([f["t"] for f in doc["frames"]])
+    got = np.array([np.nan if f["tdoa_s"]["0-1"] is None else f["tdoa_s"]["0-1"]
+                    for f in doc["frames"]])
+    tab = mask._itd_table(model, None)
+    truth = np.interp(az(t - 1.5 / 343.0) % 360.0, np.arange(361.0), np.append(tab, tab[0]))
+    ok = np.isfinite(got)
+    smoothed = np.sqrt(np.mean((got[ok] - truth[ok]) ** 2))
+    tf = estimate_tdoas(x, FS, model.array, margin_samples=mask._itd_margin_samples(model, FS))
+    raw = np.sqrt(np.mean((tf.tdoa_s[ok, 0] - truth[ok]) ** 2))
+    old, _ = ItdKalman(2, tf.pairs, q_std_s=0.25 / FS, r_std_s=1.0 / FS).filter(tf.tdoa_s)
+    lagged = np.sqrt(np.mean((old[ok, 0] - truth[ok]) ** 2))
+    assert ok.sum() > 0.9 * len(ok)
+    assert smoothed < 1.2 * raw and lagged > 2 * smoothed
+    # the other noise models, and none (the library entry point passes them through)
+    fixed = localize_recording(x, FS, model.array, q_std_s=0.1 / FS, r_std_s=2.0 / FS)
+    assert fixed["kalman_noise"] == "fixed" and fixed["mask"]
+    assert (fixed["kalman_q_std_s"], fixed["kalman_r_std_s"]) == (0.1 / FS, 2.0 / FS)
+    tuned = localize_recording(x, FS, model.array, tune_kalman=True)
+    assert tuned["kalman_noise"] == "tuned" and tuned["kalman_q_std_s"] > 0
+    off = mask.localize_recording_mask(x, FS, model, kalman=False)
+    assert off["kalman_noise"] is off["kalman_q_std_s"] is off["kalman_r_std_s"] is None
+    assert [f["tdoa_s"]["0-1"] for f in off["frames"]] == [
+        None if not v else float(tf.tdoa_s[n, 0]) for n, v in enumerate(tf.valid)]
+    with pytest.raises(ConfigError, match="q_std_s"):
+        localize_recording(x, FS, model.array, q_std_s=-1.0)
+
+
+def test_cli_simulate_a_moving_source_through_a_mask(model, tmp_path, capsys):
+    """``hearsee simulate --trajectory`` with a masked array (refused until 2026-12-04) writes
+    the recording and its trajectory; ``hearsee localize --kalman-tuned`` takes it (refused
+    too: the masked pair's frames now go through the same ITD filter as every array's)."""
+    import json
+
+    import yaml
+
+    from hearsee.cli import main
+
+    spec = tmp_path / "coarse-mask.yaml"
+    spec.write_text(yaml.safe_dump(model.array.to_dict()), encoding="utf-8")
+    traj = tmp_path / "walk.csv"
+    traj.write_text("t,x,y,z\n0,1.2,-0.6,0\n2,1.2,0.6,0\n", encoding="utf-8")
+    wav = tmp_path / "walk.wav"
+    assert main(["simulate", str(wav), "--array", str(spec), "--trajectory", str(traj),
+                 "--snr", "30", "--duration", "2", "--seed", "3"]) == 0
+    truth = json.loads(wav.with_suffix(".json").read_text())
+    assert truth["moving"] and len(truth["trajectory"]["t"]) == 2
+    capsys.readouterr()
+    for extra, noise in (([], "adaptive"), (["--kalman-tuned"], "tuned")):
+        assert main(["localize", str(wav), "--array", str(spec), *extra]) == 0
+        doc = json.loads(capsys.readouterr().out)
+        assert doc["kalman_noise"] == noise and doc["mask"]
+        az = [f["azimuth_deg"] for f in doc["frames"] if f["valid"]]
+        # the source walks from -27 to +27 deg in front: the frames follow it
+        assert len(az) > 40 and np.median(az[:10]) < -15 and np.median(az[-10:]) > 15
 
 
 def test_cli_masked_array_in_a_room_is_an_error(model, tmp_path, capsys):

@@ -275,8 +275,6 @@ def test_the_itd_filter_follows_a_moving_white_noise_source(tmp_path, capsys):
     assert adaptive < 1.5 * raw and tuned < 2 * raw
     code, out, err = _run(capsys, p, "--array", "three-mic", "--kalman-tuned", "--no-kalman")
     assert code == 2 and out == "" and "--kalman-tuned tunes" in err and err.count("\n") == 1
-    code, out, err = _run(capsys, p, "--array", "mask2-asym", "--kalman-tuned")
-    assert code == 2 and out == "" and "--kalman-tuned: the masked array" in err
 
 
 def test_a_dead_microphone_is_named(rec3, tmp_path, capsys):

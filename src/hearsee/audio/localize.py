@@ -1525,16 +1525,16 @@ def localize_recording(
         # (its pipeline takes none of these: they were dropped without a word)
         # (in_plane too: its tables are of the horizontal plane already, and it has no
         # spherical-wavefront model or in-plane search to switch to)
-        ignored = sorted(k for k, v in {"pairs": pairs, "q_std_s": q_std_s, "r_std_s": r_std_s,
-                                        "in_plane": in_plane or None,
-                                        "tune_kalman": tune_kalman or None,
+        ignored = sorted(k for k, v in {"pairs": pairs, "in_plane": in_plane or None,
                                         **tdoa_kwargs}.items() if v is not None)
         if ignored:
             raise ConfigError(f"{', '.join(ignored)}: not available for the masked array "
                               f"{arr.name!r} (its mask pipeline sets its own); leave them out")
 
         return localize_recording_mask(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
-                                       method=method, kalman=kalman, progress=progress)
+                                       method=method, kalman=kalman, progress=progress,
+                                       q_std_s=q_std_s, r_std_s=r_std_s,
+                                       tune_kalman=tune_kalman)
     method = normalize_method(method)
     tdoa_kwargs.setdefault("source_in_plane", bool(in_plane))
     tf = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method,

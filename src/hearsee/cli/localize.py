@@ -186,10 +186,6 @@ def localize_cmd(
         raise ConfigError("--kalman-tuned tunes the ITD Kalman filter that --no-kalman turns "
                           "off; give one of them")
     arr = load_array(array)
-    if kalman_tuned and arr.mask is not None:
-        raise ConfigError(f"--kalman-tuned: the masked array {arr.name!r} has a pipeline of its "
-                          "own (ch. 3) with a filter on the azimuth, not on the ITDs; leave it "
-                          "out")
     if summary_tuned and arr.mask is not None:
         raise ConfigError(f"--summary-tuned: the masked array {arr.name!r} has a pipeline of its "
                           "own (ch. 3) that takes none of those settings; leave it out")
