@@ -206,16 +206,40 @@ def test_smoother_lowers_noise_and_lag():
 def test_smoother_does_not_smear_across_a_reinitialisation_or_before_the_first_frame():
     """A source that jumps (another talker): the filter re-initialises after max_rejects
     rejections; the smoother treats the stretches on either side apart, so frames before the
-    jump keep the old TDOAs. Frames before the first measurement stay NaN."""
+    jump keep the old TDOAs -- and, since 2026-12-04, the rejected frames that led to the
+    re-initialisation (60, 61; missing frames among them passed over) start the new stretch
+    instead of taking the old one's values. Frames before the first measurement stay NaN."""
     Z = _noisy(120, seed=5, std=1e-6)
     Z[60:] += 2e-4  # pair 0-1 and 0-2 move by 200 us, 1-2 keeps its TDOA
     Z[60:, 2] -= 2e-4
     Z[:5] = np.nan
-    s, acc = ItdKalman(3, q_std_s=1e-7, r_std_s=2e-6, max_rejects=3).smooth(Z)
+    Z[61] = np.nan  # (a pause inside the run)
+    kf = ItdKalman(3, q_std_s=1e-7, r_std_s=2e-6, max_rejects=3)
+    s, acc = kf.smooth(Z)
     assert np.all(np.isnan(s[:5])) and not acc[:5].any()
     np.testing.assert_allclose(s[5:60], np.broadcast_to(TRUE, (55, 3)), atol=1e-6)
-    np.testing.assert_allclose(s[70:], np.broadcast_to(TRUE + [2e-4, 2e-4, 0.0], (50, 3)),
+    np.testing.assert_allclose(s[60:], np.broadcast_to(TRUE + [2e-4, 2e-4, 0.0], (60, 3)),
                                atol=1e-6)
+    assert acc[60] and acc[62:].all() and kf.n_inits == 2  # (first frame, the jump)
+    # the filter alone cannot look back: its rejected frames keep the old TDOAs
+    f, facc = ItdKalman(3, q_std_s=1e-7, r_std_s=2e-6, max_rejects=3).filter(Z)
+    np.testing.assert_allclose(f[60], TRUE, atol=1e-6)
+    assert not facc[60] and not facc[62] and facc[63]
+
+
+def test_smoother_leaves_out_rejected_peaks_that_do_not_fit_the_new_stretch():
+    """The backtracking of a re-initialisation stops at the first rejected measurement that
+    does not fit the new state: a reflection's peak (frame 60, 300 us off both positions)
+    before a source's jump (frame 61 on) keeps the old stretch's value, the jump's first
+    frames start the new one."""
+    Z = _noisy(120, seed=6, std=1e-6)
+    new = TRUE + [2e-4, 2e-4, 0.0]
+    Z[61:] += new - TRUE
+    Z[60] = TRUE + [-3e-4, 0.0, 3e-4]
+    s, acc = ItdKalman(3, q_std_s=1e-7, r_std_s=2e-6, max_rejects=3).smooth(Z)
+    np.testing.assert_allclose(s[:61], np.broadcast_to(TRUE, (61, 3)), atol=1e-6)
+    np.testing.assert_allclose(s[61:], np.broadcast_to(new, (59, 3)), atol=1e-6)
+    assert not acc[60] and acc[61:].all()
 
 
 def test_smooth_refuses_what_filter_refuses():

@@ -1454,12 +1454,16 @@ def localize_recording(
         3.9 us (45 deg/s, 20 dB), RT60 0.3 s voices at 90 deg/s 70.9 -> 52.9 us (20 dB). The
         former fixed model (q a quarter sample per frame, r one sample, the default from
         2026-12-03, the forward filter alone before) over-smoothed the precise frames of
-        moving broadband sources (the raw frames 1 us, smoothed 12). Still above the raw
-        frames where a voice turns fast in free field (90 deg/s: 74 / 40 us against 50 / 25
-        at 10 / 20 dB). Given ``q_std_s`` or ``r_std_s`` (the other: a quarter sample per
-        frame / one sample), the filter uses them as they are ("fixed"). Frames without a
-        source stay without an estimate either way. The JSON's ``kalman_q_std_s`` /
-        ``kalman_r_std_s`` / ``kalman_noise`` give what was used (null without the filter).
+        moving broadband sources (the raw frames 1 us, smoothed 12). Where a voice turns fast
+        in free field (90 deg/s) the default stayed above the raw frames (74 / 40 us against
+        50 / 25 at 10 / 20 dB) until the smoother's re-initialisations looked back
+        (:meth:`~hearsee.audio.itd_filter.ItdKalman.smooth`, 2026-12-04): 46 / 10 us there
+        since, no cell of the benchmark worse (``bench/itd_filter.py``; the fixed model gained
+        more on that voice, 64 -> 26 us at 10 dB, so the re-run's ratio there reads 1.75x).
+        Given ``q_std_s`` or ``r_std_s`` (the other: a quarter sample per frame / one sample),
+        the filter uses them as they are ("fixed"). Frames without a source stay without an
+        estimate either way. The JSON's ``kalman_q_std_s`` / ``kalman_r_std_s`` /
+        ``kalman_noise`` give what was used (null without the filter).
     tune_kalman : bool
         Choose ``q_std_s`` and ``r_std_s`` (those not given) per recording from a grid of both
         by the frames' innovation likelihood (:func:`hearsee.audio.itd_filter.tune_itd_noise`),
