@@ -418,6 +418,10 @@ def test_moving_masked_simulation(model):
         simulate_moving_masked(s, FS, model, Trajectory([0.0, 0.5], [[0, 0, 0], [1, 0, 0]]))
     with pytest.raises(GeometryError, match="inside the mask body"):
         simulate_moving_masked(s, FS, model, Trajectory([0.0, 0.5], [[0.5, 0, 0], [0.01, 0, 0]]))
+    with pytest.raises(GeometryError, match="from the farthest microphone"):  # (not heard)
+        simulate_moving_masked(s, FS, model, Trajectory([0.0, 0.5], [[1, 0, 0], [500, 0, 0]]))
+    with pytest.raises(ConfigError, match="SNR"):  # (before the rendering, not after it)
+        simulate_moving_masked(s, FS, model, traj, snr_db="20")
 
 
 def test_moving_masked_recording_is_smoothed_without_lag(model):

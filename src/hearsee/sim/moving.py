@@ -587,6 +587,7 @@ def simulate_moving_masked(
     x = _check_signal(signal, fs)
     fs = float(fs)
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
+    snr_db = check_snr_db(snr_db)
     _check_trajectory(trajectory)
     far_field = true_or_false("far_field", far_field)
     if not (is_real(block_s) and np.isfinite(block_s) and block_s * fs >= 2):
@@ -604,7 +605,8 @@ def simulate_moving_masked(
         d = np.linalg.norm(pos, axis=1)
         if np.any(d < 1e-9):
             raise GeometryError("the moving source passes through the array's origin")
-        check_heard(float(d.max()), model.c, n, fs, "array origin's")
+        far = np.linalg.norm(pos[:, None] - model.array.positions[None], axis=-1).max()
+        check_heard(float(far), model.c, n, fs, "farthest")
         bulk, gain = d / model.c, 1.0 / d
     # each block's response runs from `pre` samples before its start (the frequency-interpolated
     # transfer functions ring a little before the arrival: wrapped around, that ringing was
