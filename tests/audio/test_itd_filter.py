@@ -381,6 +381,34 @@ def test_frames_scaled_by_their_confidence_outweigh_rival_peaks():
     np.testing.assert_allclose(kf.kf.R, np.eye(3) * (1.0 / FS_T) ** 2)  # (back to r_std_s)
 
 
+def test_a_hand_set_r_is_kept_and_scaled():
+    """``kf.R`` set by hand (filterpy's name, which the module offers) was overwritten by the
+    next step without a word; it is now the base noise that per-frame scales multiply, and a
+    bad one is refused. Checked against a filter built with that noise."""
+    z = _noisy(40, seed=8)
+    a = ItdKalman(3, q_std_s=1e-6, r_std_s=2e-5)
+    b = ItdKalman(3, q_std_s=1e-6, r_std_s=5e-5)
+    a.step(z[0])
+    b.step(z[0])
+    a.kf.R = np.eye(3) * 5e-5**2  # (assigned)
+    b.kf.P = a.kf.P.copy()  # (the same state to start from)
+    for k in range(1, 20):
+        assert a.step(z[k]) == b.step(z[k])
+    np.testing.assert_allclose(a.x, b.x, rtol=1e-12)
+    a.kf.R[:] = np.eye(3) * 1e-5**2  # (edited in place)
+    b = ItdKalman(3, q_std_s=1e-6, r_std_s=1e-5)
+    b.kf.x, b.kf.P, b.initialized = a.kf.x.copy(), a.kf.P.copy(), True
+    for k in range(20, 40):
+        a.step(z[k], r_scale=[2.0, 1.0, 1.0])
+        b.step(z[k], r_scale=[2.0, 1.0, 1.0])
+    np.testing.assert_allclose(a.x, b.x, rtol=1e-12)
+    np.testing.assert_allclose(a.kf.R, np.diag([4.0, 1.0, 1.0]) * 1e-5**2)  # (scaled)
+    for bad in (np.eye(2), -np.eye(3), np.full((3, 3), np.nan), "1e-9"):
+        a.kf.R = bad
+        with pytest.raises(ConfigError, match="kf.R"):
+            a.step(z[0])
+
+
 def test_r_scale_and_q_max_are_checked():
     from hearsee.audio.itd_filter import max_itd_step_s, tune_itd_noise
 

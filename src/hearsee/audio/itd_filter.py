@@ -21,7 +21,8 @@ rejections the filter re-initialises on the measurement (the source moved or the
 Missing frames (None or NaN) are predicted only.
 
 The filter is filterpy's :class:`filterpy.kalman.KalmanFilter`, with the textbook names ``x``,
-``P``, ``F``, ``H``, ``Q``, ``R`` available on :attr:`ItdKalman.kf`.
+``P``, ``F``, ``H``, ``Q``, ``R`` available on :attr:`ItdKalman.kf` (``R`` set by hand is the
+base measurement noise from the next step on, which per-frame scales multiply).
 """
 
 from __future__ import annotations
@@ -193,7 +194,8 @@ class ItdKalman:
         kf.H = H
         kf.Q = np.eye(dim_x) * q_std_s**2
         kf.R = np.eye(dim_z) * r_std_s**2
-        self._R0 = kf.R.copy()
+        self._R0 = kf.R.copy()  # (the base measurement noise that per-frame scales multiply)
+        self._R_set = kf.R.copy()  # (what _step last put in kf.R: a hand edit differs from it)
         kf.P = np.eye(dim_x) * p0_std_s**2
         self.kf = kf
         self.gate = float(chi2.ppf(gate_prob, dim_z))
@@ -234,6 +236,28 @@ class ItdKalman:
         self._run = 0
         self.n_inits += 1
 
+    def _set_r(self, sc: NDArray | None) -> None:
+        """``kf.R`` for a frame whose measurement scales are ``sc`` (n_pairs,) or None."""
+        self.kf.R = self._R0 if sc is None else self._R0 * np.outer(sc, sc)
+        self._R_set = self.kf.R.copy()
+
+    def _adopt_hand_set_r(self) -> None:
+        """A ``kf.R`` set by hand since the last step (filterpy's textbook name, which the
+        module offers) becomes the base measurement noise from now on -- per-frame scales
+        multiply it -- instead of being overwritten by the next step's (until 2026-12-04 it
+        was, without a word). A ConfigError unless it is a finite symmetric positive-definite
+        (n_pairs, n_pairs) matrix (seconds^2)."""
+        R = self.kf.R
+        if np.shape(R) == self._R_set.shape and np.array_equal(R, self._R_set):
+            return
+        m = len(self.pairs)
+        Rm = np.asarray(R, dtype=float) if real_entries(R) else None
+        if (Rm is None or Rm.shape != (m, m) or not np.all(np.isfinite(Rm))
+                or not np.allclose(Rm, Rm.T) or np.linalg.eigvalsh(Rm).min() <= 0):
+            raise ConfigError(f"kf.R must be a finite symmetric positive-definite ({m}, {m}) "
+                              f"matrix (seconds^2), got {R!r:.80}")
+        self._R0 = Rm.copy()
+
     def step(self, z: ArrayLike | None, r_scale: ArrayLike | None = None) -> bool:
         """One frame: predict, then update with pair TDOAs ``z`` (n_pairs,) seconds.
 
@@ -251,7 +275,8 @@ class ItdKalman:
         """:meth:`step` with a checked scale ``sc`` (n_pairs,) or None."""
         if z is not None and _size(z) != len(self.pairs):
             raise GeometryError(f"expected {len(self.pairs)} pair TDOAs, got {_size(z)}")
-        self.kf.R = self._R0 if sc is None else self._R0 * np.outer(sc, sc)
+        self._adopt_hand_set_r()
+        self._set_r(sc)
         # (text raised numpy's ValueError; 1e300 s made the gate distance NaN: accepted)
         zz = None if z is None else as_tdoas(z, len(self.pairs))
         self.last_d2 = float("nan")
@@ -339,7 +364,7 @@ class ItdKalman:
             if j < k:  # (the re-initialisation's run of rejected frames: see below)
                 start[k] = False
                 self.n_inits -= 1
-                self.kf.R = self._R0 if S is None else self._R0 * np.outer(S[j], S[j])
+                self._set_r(None if S is None else S[j])
                 self._init_from(Zm[j])
                 xs[j], Ps[j], start[j], acc[j] = self.kf.x.reshape(-1), self.kf.P, True, True
                 for m in range(j + 1, k + 1):
