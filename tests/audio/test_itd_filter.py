@@ -221,6 +221,7 @@ def test_smoother_does_not_smear_across_a_reinitialisation_or_before_the_first_f
     np.testing.assert_allclose(s[60:], np.broadcast_to(TRUE + [2e-4, 2e-4, 0.0], (60, 3)),
                                atol=1e-6)
     assert acc[60] and acc[62:].all() and kf.n_inits == 2  # (first frame, the jump)
+    assert kf.n_rejected == 0  # (the run's rejections were undone by the look-back)
     # the filter alone cannot look back: its rejected frames keep the old TDOAs
     f, facc = ItdKalman(3, q_std_s=1e-7, r_std_s=2e-6, max_rejects=3).filter(Z)
     np.testing.assert_allclose(f[60], TRUE, atol=1e-6)
@@ -236,10 +237,11 @@ def test_smoother_leaves_out_rejected_peaks_that_do_not_fit_the_new_stretch():
     new = TRUE + [2e-4, 2e-4, 0.0]
     Z[61:] += new - TRUE
     Z[60] = TRUE + [-3e-4, 0.0, 3e-4]
-    s, acc = ItdKalman(3, q_std_s=1e-7, r_std_s=2e-6, max_rejects=3).smooth(Z)
+    kf = ItdKalman(3, q_std_s=1e-7, r_std_s=2e-6, max_rejects=3)
+    s, acc = kf.smooth(Z)
     np.testing.assert_allclose(s[:61], np.broadcast_to(TRUE, (61, 3)), atol=1e-6)
     np.testing.assert_allclose(s[61:], np.broadcast_to(new, (59, 3)), atol=1e-6)
-    assert not acc[60] and acc[61:].all()
+    assert not acc[60] and acc[61:].all() and kf.n_rejected == 1  # (the reflection's)
 
 
 def test_smooth_refuses_what_filter_refuses():

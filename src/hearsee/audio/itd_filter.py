@@ -345,8 +345,8 @@ class ItdKalman:
         Returns (pair TDOAs (n_frames, n_pairs) -- NaN before the first measurement --,
         accepted (n_frames,) bool, as :meth:`filter`, the frames that start a stretch by looking
         back counted as accepted; ``r_scale`` as there). The filter's state afterwards is the
-        forward pass's with that look-back (the last frame's estimate is the same either way);
-        :attr:`n_rejected` counts the forward pass's rejections.
+        forward pass's with that look-back (the last frame's estimate is the same either way),
+        :attr:`n_rejected` its rejections.
         """
         Zm = _frames(Z)
         S = _scales(r_scale, Zm.shape)
@@ -364,6 +364,9 @@ class ItdKalman:
             if j < k:  # (the re-initialisation's run of rejected frames: see below)
                 start[k] = False
                 self.n_inits -= 1
+                # (the run's frames from j on are filtered again: their rejections are undone,
+                # and those of the new pass counted)
+                self.n_rejected -= sum(bool(np.all(np.isfinite(Zm[m]))) for m in range(j, k + 1))
                 self._set_r(None if S is None else S[j])
                 self._init_from(Zm[j])
                 xs[j], Ps[j], start[j], acc[j] = self.kf.x.reshape(-1), self.kf.P, True, True
