@@ -372,6 +372,15 @@ def test_cli_simulate_and_localize_masked(model, tmp_path, capsys):
     assert abs((s["azimuth_deg"] - az + 180) % 360 - 180) < 5
     assert len(s["candidates"]) == 2 and s["elevation_deg"] is None
     assert s["front_probability"] < 0.5
+    # the truth gives the mask's ITD (what is measured: within a quarter sample of the
+    # summary's), not only the bare microphones' free-field TDOA (the path round the body is
+    # longer)
+    truth = json.loads(wav.with_suffix(".json").read_text())
+    itd, bare = truth["mask_itd_s"]["0-1"], truth["tdoa_s"]["0-1"]
+    got = s["tdoa_s"]["0-1"]  # (402 / 378 us truth, 406 measured with this coarse mask)
+    assert abs(itd - got) < 0.25 / FS and abs(bare - got) > 3 * abs(itd - got)
+    assert np.sign(itd) == np.sign(bare) and abs(itd) > abs(bare)
+    np.testing.assert_allclose(itd, model.itd_at(truth["source_m"])[0], rtol=1e-12)
 
 
 def _circling(az0, rate_dps, dur, d=None):
@@ -486,6 +495,8 @@ def test_cli_simulate_a_moving_source_through_a_mask(model, tmp_path, capsys):
                  "--snr", "30", "--duration", "2", "--seed", "3"]) == 0
     truth = json.loads(wav.with_suffix(".json").read_text())
     assert truth["moving"] and len(truth["trajectory"]["t"]) == 2
+    # (the mask's ITD at t = 0, the source at -26.6 deg: negative, longer than the bare pair's)
+    assert truth["mask_itd_s"]["0-1"] < truth["tdoa_s"]["0-1"] < 0
     capsys.readouterr()
     for extra, noise in (([], "adaptive"), (["--kalman-tuned"], "tuned")):
         assert main(["localize", str(wav), "--array", str(spec), *extra]) == 0

@@ -319,6 +319,8 @@ def test_a_far_field_source_1e300_m_away_has_its_direction(array):
     x1, truth1 = simulate_recording(array, [1.0, 1.0, 0.0], duration_s=0.1, far_field=True)
     np.testing.assert_array_equal(x, x1)
     assert truth["tdoa_s"] == truth1["tdoa_s"]
+    assert truth.get("mask_itd_s") == truth1.get("mask_itd_s")  # (the masked array's ITD)
+    assert ("mask_itd_s" in truth) == (array == "mask2")
     assert any(t != 0 for t in truth["tdoa_s"].values())
     assert truth["azimuth_deg"] == pytest.approx(45.0) and truth["elevation_deg"] == 0.0
     assert truth["distance_m"] == math.hypot(1e300, 1e300) != math.inf

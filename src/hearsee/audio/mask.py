@@ -618,6 +618,22 @@ class MaskModel:
                             for b in inband], axis=-1)
         return Responses(az, itd, iid, edges, distance, elevation_deg)
 
+    def itd_at(self, source: ArrayLike, far_field: bool = False) -> NDArray:
+        """The mask's ITD ``t_0 - t_1`` (s) of sources at ``source`` ((3,) or (S, 3), metres,
+        array frame; ``far_field``: directions): the peak of the GCC-PHAT of their transfer
+        functions over the model's frequencies, as :meth:`responses` tabulates it -- what a
+        masked pair measures, which the free-field TDOA of its microphones
+        (:meth:`hearsee.audio.arrays.MicArray.tdoa`) is not (the sound goes round the body).
+        Returns (S,) seconds."""
+        s = np.atleast_2d(np.asarray(source, dtype=float))
+        if true_or_false("far_field", far_field) and s.ndim == 2:
+            # (only the direction counts: (1e300, 1e300, 0) overflowed the norm to inf)
+            big = np.max(np.abs(s), axis=-1, keepdims=True)
+            s = s / np.where((big > 0) & np.isfinite(big), big, 1.0)
+        h = self.transfer(s, far_field)  # (S, 2, F)
+        cross = np.conj(h[:, 0]) * h[:, 1]  # (as in responses)
+        return _phat_itd(cross, self.freqs, np.ones(len(self.freqs)), self.max_itd())
+
     def max_itd(self) -> float:
         """A bound on |ITD| (s): half the path around the body plus the spacing, over c."""
         ext = np.ptp(self.mesh.vertices, axis=0)
