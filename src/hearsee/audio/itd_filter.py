@@ -236,9 +236,14 @@ class ItdKalman:
         self._run = 0
         self.n_inits += 1
 
+    def _r_for(self, sc: NDArray | None) -> NDArray:
+        """The measurement noise (seconds^2) of a frame whose scales are ``sc`` (n_pairs,)
+        or None."""
+        return self._R0 if sc is None else self._R0 * np.outer(sc, sc)
+
     def _set_r(self, sc: NDArray | None) -> None:
         """``kf.R`` for a frame whose measurement scales are ``sc`` (n_pairs,) or None."""
-        self.kf.R = self._R0 if sc is None else self._R0 * np.outer(sc, sc)
+        self.kf.R = self._r_for(sc)
         self._R_set = self.kf.R.copy()
 
     def _adopt_hand_set_r(self) -> None:
@@ -399,8 +404,8 @@ class ItdKalman:
                 break
             if not np.all(np.isfinite(Zm[m])):
                 continue
-            R = self._R0 if S is None else self._R0 * np.outer(S[m], S[m])
             y = Zm[m] - H @ x
+            R = self._r_for(None if S is None else S[m])
             d2 = float(y @ np.linalg.solve(H @ (P + Q * (k - m)) @ H.T + R, y))
             if not d2 <= self.gate:
                 break
