@@ -186,6 +186,10 @@ def ground_truth(array: MicArray, source: ArrayLike,
     near-field values, ``MicArray.tdoa``, or plane-wave values, ``MicArray.tdoa_far``, with
     ``far_field=True``; with ``mic_positions`` for those positions). A source at the origin
     has no direction: azimuth and elevation are None (and ``far_field`` a GeometryError).
+    A masked array (its head fixed) adds ``mask_itd_s`` {"0-1": s}: the ITD its mask gives
+    the source (:meth:`hearsee.audio.mask.MaskModel.itd_at`) -- what ``hearsee localize``
+    measures there, unlike the free-field ``tdoa_s`` of the bare microphones (a source at
+    26.6 deg, 1.1 m away: 195 us free field, 298 us through ``mask2-asym``; added 2026-12-04).
     """
     src = as_point(source, "source")
     geo = array if mic_positions is None else MicArray(
@@ -193,27 +197,19 @@ def ground_truth(array: MicArray, source: ArrayLike,
     az, el, r = cart_to_sph(src)
     at_origin = not r > 0
     tdoa = geo.tdoa_far(src) if far_field else geo.tdoa(src)  # far field at the origin: error
-    return {
+    truth = {
         "source_m": src.tolist(),
         "azimuth_deg": None if at_origin else float(np.degrees(az)),
         "elevation_deg": None if at_origin else float(np.degrees(el)),
         "distance_m": float(r),
         "tdoa_s": {lab: float(t) for lab, t in zip(array.pair_labels, tdoa, strict=True)},
     }
+    if array.mask is not None and mic_positions is None:
+        from hearsee.audio.mask import MaskModel
 
-
-def mask_truth(array: MicArray, source: ArrayLike, far_field: bool = False) -> dict[str, Any]:
-    """For a masked array, ``{"mask_itd_s": {"0-1": s}}``: the ITD its mask gives a source at
-    ``source`` (:meth:`hearsee.audio.mask.MaskModel.itd_at`) -- what ``hearsee localize``
-    measures there, unlike the truth's free-field ``tdoa_s`` of the bare microphones (a source
-    at 26.6 deg, 1.1 m away: 195 us free field, 298 us through ``mask2-asym``; added
-    2026-12-04). Empty for other arrays."""
-    if array.mask is None:
-        return {}
-    from hearsee.audio.mask import MaskModel
-
-    itd = MaskModel(array).itd_at(source, far_field)[0]
-    return {"mask_itd_s": {array.pair_labels[0]: float(itd)}}
+        itd = MaskModel(array).itd_at(src, far_field)[0]
+        truth["mask_itd_s"] = {array.pair_labels[0]: float(itd)}
+    return truth
 
 
 def simulate_recording(
@@ -284,7 +280,6 @@ def simulate_recording(
     clean = render(s, fs, array, src, room, mic_positions=mic_positions, far_field=far_field)
     x = add_noise(clean, snr_db, rng)
     truth = ground_truth(array, src, mic_positions=mic_positions, far_field=far_field)
-    truth.update(mask_truth(array, src, far_field))
     if mic_positions is not None:
         truth["mic_positions"] = np.asarray(mic_positions, dtype=float).tolist()
     if far_field:

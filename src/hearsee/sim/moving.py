@@ -948,7 +948,7 @@ def simulate_moving_recording(
     """
     from hearsee.audio.arrays import load_array
     from hearsee.audio.signals import SIGNAL_KINDS, make_signal
-    from hearsee.sim.audio import check_sim_fs, ground_truth, mask_truth, normalize_room
+    from hearsee.sim.audio import check_sim_fs, ground_truth, normalize_room
 
     arr = load_array(array)
     _check_trajectory(trajectory)
@@ -983,8 +983,7 @@ def simulate_moving_recording(
                                      room_n["array_at"], block_s=block_s,
                                      max_order=room_n.get("max_order"))
     x = add_noise(clean, snr_db, rng)
-    truth = ground_truth(arr, trajectory.at(0.0))
-    truth.update(mask_truth(arr, trajectory.at(0.0)))  # (a masked array's ITD at t = 0)
+    truth = ground_truth(arr, trajectory.at(0.0))  # (a masked array's ITD: at t = 0)
     truth.update({
         "moving": True,
         "trajectory": {"t": trajectory.t.tolist(), "positions_m": trajectory.positions.tolist()},
