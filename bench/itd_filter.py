@@ -59,14 +59,8 @@ from _common import markdown_table, print_table, write_markdown  # noqa: E402
 from hearsee.audio.arrays import MicArray  # noqa: E402
 from hearsee.audio.itd_filter import ItdKalman  # noqa: E402
 from hearsee.audio.localize import localize_recording  # noqa: E402
-from hearsee.audio.mask import (  # noqa: E402
-    MaskModel,
-    _itd_margin_samples,
-    _itd_table,
-    localize_recording_mask,
-)
+from hearsee.audio.mask import MaskModel, _itd_table, localize_recording_mask  # noqa: E402
 from hearsee.audio.signals import synthetic_voice, white_noise  # noqa: E402
-from hearsee.audio.tdoa import estimate_tdoas  # noqa: E402
 from hearsee.sim.moving import (  # noqa: E402
     Trajectory,
     retarded_delays,
@@ -160,7 +154,8 @@ def masked_recording(model: MaskModel, seed: int, speed: float, si: int, snr: fl
 
 
 def masked_errors(model: MaskModel, x: np.ndarray, az_of_t) -> dict:
-    """{model: the valid frames' ITD errors (s)} against the tabled ITD at the true azimuth."""
+    """{model: the valid frames' ITD errors (s)} against the tabled ITD at the true azimuth;
+    "previous" filters the raw document's frames as the masked pipeline did until 2026-12-04."""
     fs = MASK_FS
     tab = _itd_table(model, None)  # (1-deg grid from 0 deg)
     docs = {"raw": {"kalman": False}, "tuned": {"tune_kalman": True}, "adaptive": {}}
@@ -171,13 +166,13 @@ def masked_errors(model: MaskModel, x: np.ndarray, az_of_t) -> dict:
             doc = localize_recording_mask(x, fs, model, **kw)
             out[m] = np.array([np.nan if f["tdoa_s"]["0-1"] is None else f["tdoa_s"]["0-1"]
                                for f in doc["frames"]])
-        tf = estimate_tdoas(x, fs, model.array, method="phat",
-                            margin_samples=_itd_margin_samples(model, fs))
-    prev, _ = ItdKalman(2, tf.pairs, ref=0, q_std_s=0.25 / fs, r_std_s=1.0 / fs).filter(tf.tdoa_s)
-    out["previous"] = np.where(tf.valid, prev[:, 0], np.nan)
-    truth = np.interp(az_of_t(tf.t - MASK_BULK_S) % 360.0, np.arange(361.0),
-                      np.append(tab, tab[0]))
-    return {m: (out[m] - truth)[tf.valid] for m in MASK_MODELS}
+    valid = np.isfinite(out["raw"])
+    prev, _ = ItdKalman(2, [(0, 1)], ref=0, q_std_s=0.25 / fs,
+                        r_std_s=1.0 / fs).filter(out["raw"][:, None])
+    out["previous"] = np.where(valid, prev[:, 0], np.nan)
+    t = np.array([f["t"] for f in doc["frames"]])
+    truth = np.interp(az_of_t(t - MASK_BULK_S) % 360.0, np.arange(361.0), np.append(tab, tab[0]))
+    return {m: (out[m] - truth)[valid] for m in MASK_MODELS}
 
 
 def run_masked(seeds: list[int]) -> dict:
