@@ -505,6 +505,15 @@ def test_cli_simulate_a_moving_source_through_a_mask(model, tmp_path, capsys):
         az = [f["azimuth_deg"] for f in doc["frames"] if f["valid"]]
         # the source walks from -27 to +27 deg in front: the frames follow it
         assert len(az) > 40 and np.median(az[:10]) < -15 and np.median(az[-10:]) > 15
+    # a path into the mask's body: one line, exit 2, nothing written
+    into = tmp_path / "into.csv"
+    into.write_text("t,x,y,z\n0,1.2,0,0\n1,0.01,0,0\n", encoding="utf-8")
+    bad = tmp_path / "into.wav"
+    assert main(["simulate", str(bad), "--array", str(spec), "--trajectory", str(into),
+                 "--duration", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "inside the mask body" in err and err.count("\n") == 1
+    assert not bad.exists() and not bad.with_suffix(".json").exists()
 
 
 def test_cli_masked_array_in_a_room_is_an_error(model, tmp_path, capsys):
