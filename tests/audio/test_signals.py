@@ -210,6 +210,40 @@ def test_a_constant_or_far_too_quiet_channel_is_named(tmp_path):
     np.testing.assert_allclose(got, fine, rtol=1e-6)
 
 
+def test_two_channels_holding_one_signal_are_named(tmp_path):
+    """A mono input copied to two channels (as many sound cards present a mono microphone)
+    gave a two-microphone pair a TDOA of 0 -- a source straight ahead, confidence high --
+    without a word. A copy at any gain or polarity, re-quantised to 16 bits, is named; two
+    microphones 2 cm apart hearing a source 5 deg off their bisecting plane (noise-free) are
+    not."""
+    from hearsee.audio.arrays import MicArray
+    from hearsee.audio.signals import duplicate_channels
+    from hearsee.errors import DegenerateInputWarning
+    from hearsee.sim.audio import simulate_recording
+
+    rng = np.random.default_rng(12)
+    x = 0.1 * rng.standard_normal((4, 8000))
+    x[3] = -0.3 * x[1]
+    with pytest.warns(DegenerateInputWarning, match="channels 1 and 3 hold the same signal"):
+        read_recording(_write(tmp_path / "copy.wav", x, subtype="PCM_16"))
+    assert duplicate_channels(x) == [(1, 3)]
+    y = x.copy()
+    y[2] = y[0]
+    assert duplicate_channels(y) == [(0, 2), (1, 3)]
+    close = MicArray([[0.0, -0.01, 0.0], [0.0, 0.01, 0.0]], name="close")
+    a = np.radians(5.0)
+    z, _ = simulate_recording(close, [2 * np.cos(a), 2 * np.sin(a), 0.0], signal="male",
+                              duration_s=1.0, seed=1)
+    assert duplicate_channels(z) == []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DegenerateInputWarning)
+        read_recording(_write(tmp_path / "close.wav", z))
+    # one channel, constant channels: nothing to pair
+    assert duplicate_channels(x[:1]) == []
+    c = np.vstack([x[:1], np.full((2, 8000), 0.02)])
+    assert duplicate_channels(c) == []
+
+
 def test_read_recording_warns_on_clipping(tmp_path):
     x = np.clip(2.0 * np.random.default_rng(2).standard_normal((2, 4000)), -1, 1)
     p = _write(tmp_path / "clip.wav", x, subtype="PCM_16")
@@ -303,7 +337,7 @@ def test_read_recording_warns_on_a_file_clipped_below_one(subtype, tmp_path):
     ~30 % of the samples) gave no warning."""
     t = np.arange(16000) / 16000
     x = np.clip(1.5 * np.sin(2 * np.pi * 200 * t), -0.9, 1.0)  # only the positive tops clip
-    x = np.stack([x, x])
+    x = np.stack([x, np.roll(x, 3)])  # (a delayed copy: two microphones, not one twice)
     p = _write(tmp_path / "clip8.wav", x, subtype=subtype)
     with pytest.warns(ClippingWarning, match="clipped"):
         read_recording(p)

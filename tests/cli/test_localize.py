@@ -299,6 +299,27 @@ def test_a_dead_microphone_is_named(rec3, tmp_path, capsys):
                                                    "least 10")  # (100-101 dB: the pause)
 
 
+def test_a_mono_input_copied_to_both_channels_is_named(tmp_path, capsys):
+    """A two-microphone recording whose second channel is a copy of the first (a mono input):
+    the summary reads a source straight ahead (TDOA 0) whatever the source; the run now says
+    why in one warning line and still prints its document."""
+    from hearsee.sim.audio import simulate_recording
+
+    x, _ = simulate_recording("two-mic", [1.0, 1.0, 0.0], signal="male", duration_s=1.0,
+                              snr_db=20.0, seed=3)
+    p = tmp_path / "mono.wav"
+    sf.write(p, np.stack([x[0], x[0]], axis=1), FS, subtype="PCM_16")
+    code, out, err = _run(capsys, p, "--array", "two-mic", "--format", "json")
+    assert code == 0 and abs(json.loads(out)["summary"]["tdoa_s"]["0-1"]) < 1e-6
+    lines = [ln for ln in err.splitlines() if "hold the same signal" in ln]
+    assert len(lines) == 1 and lines[0].startswith(f"hearsee: warning: {p}: channels 0 and 1 ")
+    q = tmp_path / "stereo.wav"  # the two microphones themselves: no word
+    sf.write(q, x.T, FS, subtype="PCM_16")
+    code, out, err = _run(capsys, q, "--array", "two-mic", "--format", "json")
+    assert code == 0 and "same signal" not in err
+    assert abs(json.loads(out)["summary"]["tdoa_s"]["0-1"]) > 1e-4
+
+
 def test_a_corrupt_sample_is_named_when_no_frame_is_valid(rec3, tmp_path, capsys):
     """One float sample of 1e30 in a recording of a source at ~0.5: the analysis scales the
     recording to its loudest sample, every other frame fell below single precision and the

@@ -803,6 +803,7 @@ def _fake_recorder(x):
     ("stuck", "audio input device 'fake': channel 2 holds one constant value throughout"),
     ("quiet", "audio input device 'fake': channel 1 is at least 100 dB below the loudest"),
     ("late quiet", "audio input device 'fake': channel 1 is at least 100 dB below the loudest"),
+    ("copy", "audio input device 'fake': channels 0 and 2 hold the same signal"),
     ("none", None),
 ])
 def test_live_input_names_a_stuck_or_disconnected_microphone(monkeypatch, fault, want):
@@ -820,6 +821,8 @@ def test_live_input_names_a_stuck_or_disconnected_microphone(monkeypatch, fault,
         x[1] *= 1e-5
     if fault == "late quiet":
         x[:, :2 * FS + BL] = 0.0  # the input starts after 2 s of digital silence
+    if fault == "copy":  # a mono device presented as several channels
+        x[2] = x[0]
     monkeypatch.setitem(sys.modules, "sounddevice", _fake_recorder(x))
     src = pl.DeviceSource(0, 3, FS, block_len=BL, timeout_s=0.05, queue_size=128)
     with warnings.catch_warnings(record=True) as got:

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -108,6 +108,17 @@ CLIP_FRACTION = 1e-3
 #: (2026-12-03). Far beyond real gain mismatches (a few dB) and a mask's shadow (tens of dB
 #: only at some frequencies, not over the whole band)
 QUIET_CHANNEL_DB = 40.0
+#: :func:`read_recording` warns of two channels whose zero-lag correlation coefficient is
+#: within this of +-1: one signal recorded on both (a mono input copied to every channel, as
+#: many sound cards and USB microphones present it; a channel routed twice). Their TDOA is 0
+#: whatever the source's direction: a two-microphone recording copied from mono read as a
+#: source straight ahead, confidence high, without a word (2026-12-04). Separate microphones
+#: stay far from it -- the real two-microphone 'alexa' recording 0.33, the measured 32-mic
+#: impulse responses with ARCTIC speech >= 0.021 on every pair; a noise-free simulated voice
+#: at two microphones 1 cm apart, 5 deg off their bisecting plane, 3.2e-5. A copy at 30 % gain
+#: re-quantised to 16 bits gave 6.9e-8; a copy re-quantised far below full scale (quantisation
+#: noise within 60 dB of the signal) escapes the test.
+DUPLICATE_CHANNEL_TOL = 1e-6
 #: Largest positive sample (read as float) of the file subtypes whose full scale is below
 #: 1.0; :data:`CLIP_LEVEL` applies to it instead of 1.0 (8-bit files stop at 127/128 = 0.992,
 #: so their flat tops went unnoticed, and mu-law / A-law files never reach 0.999 at all).
@@ -530,7 +541,8 @@ def read_recording(
         A WAV file ends before its header's data size: the samples present are used.
     DegenerateInputWarning
         A channel is more than :data:`QUIET_CHANNEL_DB` below the loudest one: a
-        disconnected or muted microphone, whose pairs carry only its noise.
+        disconnected or muted microphone, whose pairs carry only its noise. Or two channels
+        hold one signal (:func:`duplicate_channels`): their TDOA is 0 whatever the direction.
     """
     # (checked before the file is read: NaN, inf and text were builtin ValueError /
     # OverflowError / TypeError once compared with the file's rate, "2" a ValueError)
@@ -597,6 +609,9 @@ def read_recording(
     if quiet.size:
         warnings.warn(f"{path}: {quiet_channels_text(quiet, below)}", DegenerateInputWarning,
                       stacklevel=2)
+    if dup := duplicate_channels(x):
+        warnings.warn(f"{path}: {duplicate_channels_text(dup)}", DegenerateInputWarning,
+                      stacklevel=2)
     if clipped > CLIP_FRACTION:
         warnings.warn(
             f"{path}: {clipped * 100:.2f} % of the samples are clipped (flat at full scale, or "
@@ -626,6 +641,38 @@ def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:
     below = (20.0 * np.log10(level.max() / level[quiet].max()) if quiet.size
              else float("nan"))
     return flat, quiet, float(below)
+
+
+def duplicate_channels(x: NDArray) -> list[tuple[int, int]]:
+    """Pairs ``(i, j)``, i < j, of channels of ``x`` (n_channels, n) that hold one signal: their
+    zero-lag correlation coefficient is within :data:`DUPLICATE_CHANNEL_TOL` of +1 or -1 (a
+    copy, at any gain or polarity), over the same <= 2**18 evenly spread samples per channel
+    as :func:`channel_faults`. Constant channels are left to that function. A microphone
+    recorded twice (a mono input presented as several channels) gives its pairs a TDOA of 0,
+    i.e. a source on the plane that bisects them, whatever the source's direction.
+
+    (A noise-free simulation of a source exactly as far from two microphones gives two equal
+    channels too: there the pair's TDOA of 0 is the truth.)"""
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 2 or x.shape[0] < 2:
+        return []
+    few = x[:, ::max(1, x.shape[1] >> 18)]
+    few = few - few.mean(axis=1, keepdims=True)
+    norm = np.linalg.norm(few, axis=1)
+    ok = norm > 0
+    u = np.zeros_like(few)
+    u[ok] = few[ok] / norm[ok, None]
+    c = np.abs(u @ u.T)
+    i, j = np.nonzero(np.triu(c >= 1.0 - DUPLICATE_CHANNEL_TOL, 1))
+    return [(int(a), int(b)) for a, b in zip(i, j, strict=True)]
+
+
+def duplicate_channels_text(pairs: Sequence[tuple[int, int]]) -> str:
+    """What :func:`duplicate_channels`' pairs are, in words."""
+    names = ", ".join(f"{i} and {j}" for i, j in pairs)
+    return (f"channels {names} hold the same signal (a copy, up to gain and polarity): one "
+            "microphone recorded on both, e.g. a mono input presented as several channels? "
+            "Such a pair's TDOA is 0 whatever the source's direction")
 
 
 def _channels(idx: NDArray) -> tuple[str, bool]:

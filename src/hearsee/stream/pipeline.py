@@ -67,6 +67,8 @@ from hearsee.audio.signals import (
     as_samples,
     channel_faults,
     check_fs,
+    duplicate_channels,
+    duplicate_channels_text,
     quiet_channels_text,
     stuck_channels_text,
 )
@@ -382,9 +384,11 @@ class _FirstWindows:
 class _ChannelWatch(_FirstWindows):
     """The first :data:`CHANNEL_CHECK_S` seconds of a live run in which any channel varies,
     checked once as :func:`hearsee.audio.signals.read_recording` checks a file
-    (:func:`~hearsee.audio.signals.channel_faults`): a DegenerateInputWarning naming a channel
-    stuck at one value or far quieter than the loudest (a file's stuck channel is an error;
-    live input goes on). Windows where every channel is constant (an input that has not
+    (:func:`~hearsee.audio.signals.channel_faults`,
+    :func:`~hearsee.audio.signals.duplicate_channels`): a DegenerateInputWarning naming a
+    channel stuck at one value or far quieter than the loudest (a file's stuck channel is an
+    error; live input goes on), or two channels holding one signal (a mono device presented
+    as several channels). Windows where every channel is constant (an input that has not
     started) are looked past."""
 
     def __init__(self, name: str, n: int, channels: Sequence[int] | None = None) -> None:
@@ -407,6 +411,9 @@ class _ChannelWatch(_FirstWindows):
                           DegenerateInputWarning, stacklevel=4)
         if quiet.size:
             warnings.warn(where + quiet_channels_text(quiet, below), DegenerateInputWarning,
+                          stacklevel=4)
+        if dup := [(int(ch[i]), int(ch[j])) for i, j in duplicate_channels(x)]:
+            warnings.warn(where + duplicate_channels_text(dup), DegenerateInputWarning,
                           stacklevel=4)
         return True
 
