@@ -62,6 +62,12 @@ class InvertedPolarityWarning(UserWarning):
     pairs correlate negatively, so their TDOAs -- and the direction -- are wrong."""
 
 
+class ChannelSyncWarning(UserWarning):
+    """Two channels seem out of sync (two sound cards, a dropped buffer, a driver's latency):
+    their averaged correlation peaks beyond the lag the microphones' spacing allows, so their
+    TDOAs -- and the direction -- are wrong."""
+
+
 class DegenerateInputWarning(UserWarning):
     """The input is valid but degenerate for the task (stereo images that barely match, a flat
     thermal frame, image points outside the recording): the answer describes the input more

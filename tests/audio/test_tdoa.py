@@ -78,14 +78,20 @@ def test_lag_search_bounded_by_geometry(three):
     # mic 0 hears the source 40 samples late (impossible for a 15 cm array) plus a weak copy
     # 1 sample late (possible): the search stays inside the bound and finds the weak copy, and
     # the confidence (a stronger peak outside the bound) marks the frames as unreliable.
+    # The whole recording's correlations then name microphone 0 as out of sync (2026-12-04).
+    from hearsee.errors import ChannelSyncWarning
+
     s = white_noise(1.0, FS, rng=4)
     y = delay_signals(s, [40 / FS, 0.0, 2 / FS], FS)
     y[0] += 0.3 * delay_signals(s, [1 / FS], FS)[0]
-    tf = estimate_tdoas(y, FS, three, min_confidence=0.0)
+    sync = "microphone 0 seems out of sync with the others: pairs 0-1 at "
+    with pytest.warns(ChannelSyncWarning, match=sync):
+        tf = estimate_tdoas(y, FS, three, min_confidence=0.0)
     assert np.all(np.abs(tf.tdoa_s) <= tf.max_tdoa_s + 1e-12)
     assert np.median(tf.tdoa_s[:, 0]) * FS == pytest.approx(1.0, abs=0.1)
     assert np.all(tf.confidence[:, 0] < 1.0)
-    assert estimate_tdoas(y, FS, three).n_valid == 0
+    with pytest.warns(ChannelSyncWarning, match=sync):
+        assert estimate_tdoas(y, FS, three).n_valid == 0
 
 
 def test_silence_and_noise_give_no_estimate(three):
@@ -1326,3 +1332,52 @@ def test_an_inverted_microphone_is_warned_about(preset, signal):
     with pytest.warns(InvertedPolarityWarning, match=f"^{who} wired with inverted polarity"):
         tf = estimate_tdoas(x, FS, arr)
     assert tf.inverted_mics == (1,)
+
+
+@pytest.mark.parametrize("preset, signal, room", [
+    ("three-mic", "male", None), ("two-mic", "female", None), ("three-mic", "female", 0.6),
+    ("respeaker-6", "noise", 0.6)])
+def test_channels_out_of_sync_are_warned_about(preset, signal, room):
+    """The last channel recorded 2.5 ms late (two sound cards, a dropped buffer): a voice gave
+    "no frame holds a detectable source" or a wrong direction, without a word. The averaged
+    correlations of its pairs peak beyond the lag the spacing allows: a ChannelSyncWarning
+    names the pairs (and, with several, their common microphone) at about the offset; the
+    recording in sync -- in a room with RT60 0.6 s too -- warns nothing."""
+    import warnings
+
+    from hearsee.audio.tdoa import desynchronized_pairs
+    from hearsee.errors import ChannelSyncWarning, InvertedPolarityWarning
+    from hearsee.sim.audio import simulate_recording
+
+    arr = MicArray.from_preset(preset)
+    rm = None if room is None else {"room_dim": [6.0, 5.0, 3.0], "rt60": room,
+                                    "array_at": [2.5, 2.2, 1.2]}
+    x, truth = simulate_recording(arr, [1.2, 1.0, 0.1], signal=signal, duration_s=1.5,
+                                  snr_db=20.0, room=rm, seed=8)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        estimate_tdoas(x, FS, arr)
+    assert not [w for w in caught if issubclass(w.category, ChannelSyncWarning)]
+    last = arr.n_mics - 1
+    x[last] = np.roll(x[last], 40)  # 40 samples late
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tf = estimate_tdoas(x, FS, arr)
+    (msg,) = [str(w.message) for w in caught if issubclass(w.category, ChannelSyncWarning)]
+    # no other diagnosis: a pair out of sync has no polarity to read (a voice's trough within
+    # the bound named a microphone as inverted)
+    assert not [w for w in caught if issubclass(w.category, InvertedPolarityWarning)]
+    # the offset read from the whole recording's correlation: 40 samples late plus the TDOA;
+    # only pairs with the late microphone named (in the room not always all of them)
+    named = []
+    for p, (i, j) in enumerate(tf.pairs):
+        if np.isfinite(tf.sync_offsets_s[p]):
+            assert j == last
+            true = truth["tdoa_s"][f"{i}-{j}"] * FS
+            assert tf.sync_offsets_s[p] * FS == pytest.approx(true - 40.0, abs=1.5)
+            named.append(f"{i}-{j} at {tf.sync_offsets_s[p] * 1e3:+.2f} ms")
+    assert named and (room is not None or len(named) == last)
+    who = (f"microphone {last} seems out of sync with the others: pairs " if len(named) > 1
+           else "pair ")
+    assert msg.startswith(who + ", ".join(named) + " correlate")
+    assert np.isnan(desynchronized_pairs(np.zeros((1, 64)), [3.0])).all()  # (flat: nothing)

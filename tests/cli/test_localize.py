@@ -487,3 +487,24 @@ def test_an_inverted_microphone_is_one_warning_line(rec3, tmp_path, capsys):
     assert err.count("hearsee: warning:") == 1 and err.count("\n") == 1
     code, out, _ = _run(capsys, rec3, "--array", "three-mic")
     assert json.loads(out)["summary"]["inverted_microphones"] == []
+
+
+def test_channels_out_of_sync_are_named_in_one_line(rec3, tmp_path, capsys):
+    """Channel 2 recorded 2.3 ms late: "no frame holds a detectable source (silence or
+    uncorrelated noise)" was all the run said. Now one warning line names the microphone and
+    the JSON summary gives the pairs' offsets; the recording in sync gives none."""
+    x, fs = sf.read(rec3, always_2d=True)
+    code, out, err = _run(capsys, rec3, "--array", "three-mic", "--format", "json")
+    assert code == 0 and json.loads(out)["summary"]["sync_offsets_s"] == {}
+    assert "out of sync" not in err
+    x[:, 2] = np.roll(x[:, 2], 37)
+    p = tmp_path / "late.wav"
+    sf.write(p, x, fs, subtype="FLOAT")
+    code, out, err = _run(capsys, p, "--array", "three-mic", "--format", "json")
+    assert code == 0
+    offs = json.loads(out)["summary"]["sync_offsets_s"]
+    assert set(offs) <= {"0-2", "1-2"} and offs
+    assert all(-37 / fs - 0.5e-3 <= v <= -37 / fs + 0.5e-3 for v in offs.values())
+    lines = [ln for ln in err.splitlines() if "out of sync" in ln]
+    assert len(lines) == 1 and lines[0].startswith("hearsee: warning: ")
+    assert "beyond the +-" in lines[0]

@@ -451,7 +451,9 @@ class _WiringWatch(_FirstWindows):
     (:func:`hearsee.audio.tdoa.estimate_tdoas`, in the stream's frames, weighting and band) of
     its first :data:`WIRING_CHECK_S` seconds warns of a microphone wired with inverted polarity
     (:class:`~hearsee.errors.InvertedPolarityWarning`: the stream sees one frame at a time and
-    has no averaged correlation to tell it; its directions were 30-40 deg off without a word).
+    has no averaged correlation to tell it; its directions were 30-40 deg off without a word),
+    and of channels out of sync (:class:`~hearsee.errors.ChannelSyncWarning`, the same
+    estimate's correlations).
     A window where no source is heard (no whole-recording estimate, no inverted microphone) is
     looked past: the next one is checked.
 
