@@ -1260,14 +1260,15 @@ def desynchronized_pairs(r: ArrayLike, max_lag: ArrayLike, main_lobe: int = 2,
     n = r.shape[1]
     his, los = _extrema_within(r, L)
     out = np.full(len(r), np.nan)
-    for p in range(len(r)):
+    within = np.maximum(np.maximum(his, los), 0.0)
+    for p in np.flatnonzero(r.max(axis=1) >= ratio * within):  # (else no lag beyond can be)
         far, sd = _beyond(r[p], L[p], main_lobe)
         if far.size < 8 or not sd > 0:
             continue
         k = int(np.argmax(far))
         # (against the in-bound extremum of either sign: an inverted microphone's pairs hold
         # a trough there, and a voice's pitch peaks beyond it stood above their low maximum)
-        if far[k] >= signif * sd and far[k] >= ratio * max(his[p], los[p], 0.0):
+        if far[k] >= signif * sd and far[k] >= ratio * within[p]:
             idx = k + L[p] + main_lobe + 1
             out[p] = idx if idx <= n // 2 else idx - n
     return out
