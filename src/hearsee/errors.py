@@ -63,9 +63,9 @@ class InvertedPolarityWarning(UserWarning):
 
 
 class ChannelSyncWarning(UserWarning):
-    """Two channels seem out of sync (two sound cards, a dropped buffer, a driver's latency):
-    their averaged correlation peaks beyond the lag the microphones' spacing allows, so their
-    TDOAs -- and the direction -- are wrong."""
+    """Two channels seem out of sync (two sound cards, a dropped buffer, a driver's latency) or
+    the array description understates their spacing: their averaged correlation peaks beyond
+    the lag the described spacing allows, so their TDOAs -- and the direction -- are wrong."""
 
 
 class DegenerateInputWarning(UserWarning):

@@ -1381,3 +1381,20 @@ def test_channels_out_of_sync_are_warned_about(preset, signal, room):
            else "pair ")
     assert msg.startswith(who + ", ".join(named) + " correlate")
     assert np.isnan(desynchronized_pairs(np.zeros((1, 64)), [3.0])).all()  # (flat: nothing)
+
+
+def test_an_array_file_that_understates_the_spacing_is_warned_about():
+    """A 0.4 m pair analysed as the 0.15 m two-mic preset: a source 60 or 90 deg off broadside
+    has a TDOA (1.0-1.2 ms) beyond the bound the file allows, and the recording gave no
+    summary without a word. The sync warning names it with the offset and the possibility."""
+    from hearsee.errors import ChannelSyncWarning
+    from hearsee.sim.audio import simulate_recording
+
+    wide = MicArray([[0.0, -0.2, 0.0], [0.0, 0.2, 0.0]], name="wide")
+    for az in (60.0, 90.0):
+        a = np.radians(az)
+        x, truth = simulate_recording(wide, [2 * np.cos(a), 2 * np.sin(a), 0.0],
+                                      signal="male", duration_s=1.5, snr_db=20.0, seed=2)
+        with pytest.warns(ChannelSyncWarning, match="farther apart than the array says"):
+            tf = estimate_tdoas(x, FS, "two-mic")
+        assert tf.sync_offsets_s[0] == pytest.approx(truth["tdoa_s"]["0-1"], abs=1.5 / FS)

@@ -1133,8 +1133,9 @@ def _warn_desync(r: NDArray, max_lag: NDArray, main_lobe: int,
            if len(bad) > 1 and len(common) == 1 else "")
     warnings.warn(f"{who}pair{'s' * (bad.size > 1)} {what} correlate{'s' * (bad.size == 1)} "
                   f"best beyond the +-{bound:.2f} ms the microphones' spacing allows: are the "
-                  "channels out of sync (two sound cards, a dropped buffer)? Their TDOAs, and "
-                  "the direction, are wrong", ChannelSyncWarning, stacklevel=3)
+                  "channels out of sync (two sound cards, a dropped buffer), or the microphones "
+                  "farther apart than the array says? Their TDOAs, and the direction, are "
+                  "wrong", ChannelSyncWarning, stacklevel=3)
     return lags / fs
 
 
@@ -1253,7 +1254,9 @@ def desynchronized_pairs(r: ArrayLike, max_lag: ArrayLike, main_lobe: int = 2,
 
     ``r`` (n_pairs, nfft): circular correlations (lag 0 first, negative lags at the end), as
     :func:`pair_polarity` takes them; ``max_lag`` (n_pairs,) samples. A lag offset larger than
-    about half a frame is not seen (the frames no longer overlap).
+    about half a frame is not seen (the frames no longer overlap). An array description that
+    understates a pair's spacing looks the same (a 0.4 m pair read as the 0.15 m ``two-mic``,
+    a source 30 deg or more off broadside: the true TDOA lies beyond the bound).
     """
     r = np.atleast_2d(np.asarray(r, dtype=float))
     L = _lag_bounds(max_lag)
