@@ -896,12 +896,15 @@ def _noise_then_source(flip: float, quiet_s: float, source_s: float) -> np.ndarr
     return x * np.array([[1.0], [1.0], [flip]])
 
 
-def _run_live(x, monkeypatch, threaded=False, **kw):
-    """(the stream's updates, the time (s) of the last update before each InvertedPolarityWarning)
-    of ``x`` as live input, with 2-s wiring checks."""
+def _run_live(x, monkeypatch, threaded=False, category=None, **kw):
+    """(the stream's updates, the time (s) of the last update before each warning of
+    ``category`` -- default InvertedPolarityWarning) of ``x`` as live input, with 2-s wiring
+    checks."""
     import warnings
 
     from hearsee.errors import InvertedPolarityWarning
+
+    category = category or InvertedPolarityWarning
 
     monkeypatch.setattr(pl, "WIRING_CHECK_S", 2.0)
     seen: list = []  # (each update's time, the warnings raised before it)
@@ -911,7 +914,7 @@ def _run_live(x, monkeypatch, threaded=False, **kw):
             _Live(x), lambda u: seen.append((u.t, len(got))), threaded)
     when = []
     for k, w in enumerate(got):
-        if issubclass(w.category, InvertedPolarityWarning):
+        if issubclass(w.category, category):
             before = [t for t, n in seen if n <= k]
             when.append((str(w.message), before[-1] if before else None))
     return ups, when
@@ -933,6 +936,23 @@ def test_a_live_stream_warns_of_an_inverted_microphone_once_it_hears_a_source(mo
     assert 3.8 <= t <= 4.2 and ups[-1].t > 7.5
     ups, when = _run_live(_noise_then_source(1.0, 2.5, 5.5), monkeypatch, threaded)
     assert when == [] and ups[-1].t > 7.5
+
+
+def test_a_live_stream_warns_once_of_a_microphone_out_of_sync(monkeypatch):
+    """Microphone 2 recorded 40 samples (2.5 ms) late on live input: the first 2-s window
+    names it (ChannelSyncWarning) and the check ends there -- no source is localizable, so
+    without that the next windows told it again every 2 s; in sync: no such warning."""
+    from hearsee.errors import ChannelSyncWarning
+
+    x = _noise_then_source(1.0, 0.0, 8.0)
+    ups, when = _run_live(x, monkeypatch, category=ChannelSyncWarning)
+    assert when == [] and ups[-1].t > 7.5
+    x[2] = np.roll(x[2], 40)
+    ups, when = _run_live(x, monkeypatch, category=ChannelSyncWarning)
+    assert len(when) == 1 and ups[-1].t > 7.5
+    msg, t = when[0]
+    assert msg.startswith("microphone 2 seems out of sync with the others: pairs 0-2 at -2.")
+    assert t <= 2.2
 
 
 def test_a_short_live_run_is_checked_when_it_ends_and_the_check_can_be_turned_off(monkeypatch):
