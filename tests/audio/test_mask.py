@@ -744,3 +744,15 @@ def test_front_back_margin_refuses_settings_that_leave_no_cost(asym, kw, needle)
     azimuth as infinitely separable; a negative weight gave negative costs."""
     with pytest.raises(ConfigError, match=needle):
         mask.front_back_margin(asym, **kw)
+
+
+def test_a_model_of_an_array_without_a_mask_says_how_to_get_one():
+    """``MaskModel('two-mic')`` said "this array has no mask: block" (the YAML key read as
+    words); it now names the missing section and a masked preset."""
+    from hearsee.audio.mask import MaskModel
+    from hearsee.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"^two-mic: this array has no mask \(no 'mask:' "
+                                          r"section in its description\): use a masked preset "
+                                          r"such as mask2-asym"):
+        MaskModel("two-mic")

@@ -291,7 +291,8 @@ def mask_geometry(array: MicArray | Mapping[str, Any], positions: ArrayLike | No
     else:
         block = array
     if block is None:
-        raise ConfigError(f"{where}: this array has no mask: block")
+        raise ConfigError(f"{where}: this array has no mask (no 'mask:' section in its "
+                          "description): use a masked preset such as mask2-asym, or add one")
     geom = MaskGeometry.from_dict(block, f"{where}: mask")
     try:
         pos = np.asarray(positions, dtype=float)
