@@ -40,7 +40,7 @@ from hearsee.config import is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, EstimationError, GeometryError
 
 __all__ = ["ItdKalman", "confidence_r_scale", "max_itd_step_s", "pair_matrix",
-           "smooth_recording_itds", "tune_itd_noise"]
+           "itd_filter_entries", "smooth_recording_itds", "tune_itd_noise"]
 
 #: :func:`tune_itd_noise`'s grids, in samples at the recording's rate: the random walk's
 #: standard deviation per frame (q) and the measurement's (r)
@@ -496,6 +496,16 @@ def _candidates(name: str, values: ArrayLike) -> list[float]:
     if v is None or v.ndim != 1 or v.size == 0:
         raise ConfigError(f"{name} must be one or more numbers > 0 seconds, got {values!r:.60}")
     return [float(a) for a in v]
+
+
+def itd_filter_entries(noise: tuple[float, float] | None, model: str | None
+                       ) -> dict[str, float | str | None]:
+    """The ``hearsee localize`` document's ``kalman_q_std_s`` / ``kalman_r_std_s`` (s) /
+    ``kalman_noise`` entries of :func:`smooth_recording_itds`' ``(q, r)`` and model (None,
+    without the filter: nulls) -- one place for every array's document."""
+    return {"kalman_q_std_s": None if noise is None else float(noise[0]),
+            "kalman_r_std_s": None if noise is None else float(noise[1]),
+            "kalman_noise": model}
 
 
 def smooth_recording_itds(Z: ArrayLike, confidence: ArrayLike, n_mics: int,

@@ -1519,7 +1519,7 @@ def localize_recording(
         masked array's summary ``confidence`` is the probability of the chosen front/back
         half instead, 0.5-1: :func:`hearsee.audio.mask.localize_recording_mask`).
     """
-    from hearsee.audio.itd_filter import smooth_recording_itds
+    from hearsee.audio.itd_filter import itd_filter_entries, smooth_recording_itds
     from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, normalize_method
 
     arr = load_array(array)
@@ -1604,9 +1604,7 @@ def localize_recording(
         "sample_rate": float(fs),
         "method": method,
         "kalman": bool(kalman),
-        "kalman_q_std_s": None if noise is None else float(noise[0]),
-        "kalman_r_std_s": None if noise is None else float(noise[1]),
-        "kalman_noise": model,
+        **itd_filter_entries(noise, model),
         "band_hz": None if tf.band_hz is None else [float(v) for v in tf.band_hz],
         "frames": frames,
         "summary": summary,

@@ -1133,7 +1133,7 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
     (:meth:`~hearsee.audio.itd_filter.ItdKalman.smooth`, the same day): 91 / 42 us at 10 / 20
     dB since (raw 78 / 54), 0.36x the previous filter over the 12 cells, worst 0.75x.
     """
-    from hearsee.audio.itd_filter import smooth_recording_itds
+    from hearsee.audio.itd_filter import itd_filter_entries, smooth_recording_itds
     from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, normalize_method
 
     model = array if isinstance(array, MaskModel) else MaskModel(array)
@@ -1202,9 +1202,7 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
         "sample_rate": float(fs),
         "method": method,
         "kalman": bool(kalman),
-        "kalman_q_std_s": None if noise is None else float(noise[0]),
-        "kalman_r_std_s": None if noise is None else float(noise[1]),
-        "kalman_noise": noise_model,
+        **itd_filter_entries(noise, noise_model),
         "mask": True,
         "frames": frames,
         "summary": summary,
