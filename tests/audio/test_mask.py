@@ -462,6 +462,15 @@ def test_moving_masked_recording_is_smoothed_without_lag(model):
     lagged = np.sqrt(np.mean((old[ok, 0] - truth[ok]) ** 2))
     assert ok.sum() > 0.9 * len(ok)
     assert smoothed < 1.2 * raw and lagged > 2 * smoothed
+    # the recording's own truth through time (mask_itd_track, since 2026-12-04; mask_itd_s is
+    # the ITD at t = 0, 9 samples away by the end): within 0.25 sample of this test's, and the
+    # smoothed frames as close to it
+    track = truth_doc["mask_itd_track"]
+    assert track["t"][0] == 0.0 and track["t"][-1] == 3.0 and len(track["t"]) == 301
+    along = np.interp(t, track["t"], track["0-1"])
+    assert np.max(np.abs(along - truth)) < 0.25 / FS
+    assert np.sqrt(np.mean((got[ok] - along[ok]) ** 2)) < 1.2 * smoothed
+    assert np.sqrt(np.mean((got[ok] - truth_doc["mask_itd_s"]["0-1"]) ** 2)) > 10 * smoothed
     # the other noise models, and none (the library entry point passes them through)
     fixed = localize_recording(x, FS, model.array, q_std_s=0.1 / FS, r_std_s=2.0 / FS)
     assert fixed["kalman_noise"] == "fixed" and fixed["mask"]
@@ -497,6 +506,11 @@ def test_cli_simulate_a_moving_source_through_a_mask(model, tmp_path, capsys):
     assert truth["moving"] and len(truth["trajectory"]["t"]) == 2
     # (the mask's ITD at t = 0, the source at -26.6 deg: negative, longer than the bare pair's)
     assert truth["mask_itd_s"]["0-1"] < truth["tdoa_s"]["0-1"] < 0
+    # ... and through the walk, every 10 ms: from that to its mirror at +26.6 deg
+    track = truth["mask_itd_track"]
+    assert len(track["t"]) == len(track["0-1"]) == 201
+    assert track["0-1"][0] == pytest.approx(truth["mask_itd_s"]["0-1"], abs=0.2 / FS)
+    assert track["0-1"][-1] == pytest.approx(-track["0-1"][0], abs=0.5 / FS)
     capsys.readouterr()
     for extra, noise in (([], "adaptive"), (["--kalman-tuned"], "tuned")):
         assert main(["localize", str(wav), "--array", str(spec), *extra]) == 0

@@ -68,6 +68,7 @@ __all__ = [
     "fractional_delay",
     "linear_trajectory",
     "load_trajectory",
+    "mask_itd_track",
     "retarded_delays",
     "save_trajectory",
     "simulate_moving_free_field",
@@ -917,6 +918,25 @@ def _render_blocks(x: NDArray, centres: NDArray, src_room: NDArray,
 
 
 # ---------------------------------------------------------------------------- recordings
+def mask_itd_track(array: Any, trajectory: Trajectory, duration_s: float,
+                   step_s: float = 0.01) -> dict[str, list[float]]:
+    """A masked array's ITD through a moving source's recording: ``{"t": [...], "0-1":
+    [...]}`` (seconds) at :func:`truth_times` (every ``step_s``, the trajectory's corners and
+    the recording's end), each the mask's ITD
+    (:meth:`hearsee.audio.mask.MaskModel.itd_at`: what the masked pair measures) of the
+    position heard at the array's origin at that time (:meth:`Trajectory.heard_at`, r / c
+    earlier) -- the truth of ``hearsee localize``'s per-frame ITDs (frame times are the
+    frames' centres). ``array``: a :class:`~hearsee.audio.arrays.MicArray` with a mask."""
+    from hearsee.audio.arrays import load_array
+    from hearsee.audio.mask import MaskModel
+
+    arr = load_array(array)
+    t = truth_times(trajectory, duration_s, step_s)
+    heard = trajectory.heard_at(t, speed_of_sound=arr.speed_of_sound)
+    itd = MaskModel(arr).itd_at(heard)
+    return {"t": t.tolist(), arr.pair_labels[0]: [float(v) for v in itd]}
+
+
 def simulate_moving_recording(
     array: MicArray | str | Path,
     trajectory: Trajectory,
@@ -944,7 +964,9 @@ def simulate_moving_recording(
         As :func:`hearsee.sim.audio.ground_truth` for the position at t = 0 (``source_m``,
         ``azimuth_deg``, ...), plus ``moving: True``, ``trajectory`` ({"t": [...],
         "positions_m": [[x, y, z], ...]} knots), ``fs``, ``duration_s``, ``array``, ``signal``,
-        ``snr_db``, ``room``, ``seed``.
+        ``snr_db``, ``room``, ``seed``; a masked array adds ``mask_itd_track``
+        (:func:`mask_itd_track`: the mask's ITD through the recording, which ``mask_itd_s``
+        gives at t = 0 only).
     """
     from hearsee.audio.arrays import load_array
     from hearsee.audio.signals import SIGNAL_KINDS, make_signal
@@ -984,6 +1006,8 @@ def simulate_moving_recording(
                                      max_order=room_n.get("max_order"))
     x = add_noise(clean, snr_db, rng)
     truth = ground_truth(arr, trajectory.at(0.0))  # (a masked array's ITD: at t = 0)
+    if arr.mask is not None:
+        truth["mask_itd_track"] = mask_itd_track(arr, trajectory, dur)
     truth.update({
         "moving": True,
         "trajectory": {"t": trajectory.t.tolist(), "positions_m": trajectory.positions.tolist()},
