@@ -1264,7 +1264,9 @@ def desynchronized_pairs(r: ArrayLike, max_lag: ArrayLike, main_lobe: int = 2,
     his, los = _extrema_within(r, L)
     out = np.full(len(r), np.nan)
     within = np.maximum(np.maximum(his, los), 0.0)
-    for p in np.flatnonzero(r.max(axis=1) >= ratio * within):  # (else no lag beyond can be)
+    top = np.array([r[p, L[p] + main_lobe + 1: n - L[p] - main_lobe].max(initial=-np.inf)
+                    for p in range(len(r))])
+    for p in np.flatnonzero(top >= ratio * within):  # (only these can pass: the medians after)
         far, sd = _beyond(r[p], L[p], main_lobe)
         if far.size < 8 or not sd > 0:
             continue
@@ -1282,12 +1284,16 @@ def _lag_bounds(max_lag: ArrayLike) -> NDArray:
     return np.ceil(np.atleast_1d(np.asarray(max_lag, dtype=float))).astype(int)
 
 
-def _extrema_within(r: NDArray, L: NDArray) -> tuple[list[float], list[float]]:
+def _extrema_within(r: NDArray, L: NDArray) -> tuple[NDArray, NDArray]:
     """Per pair, the highest value and the depth of the deepest trough (``-min``) of the
-    circular correlations ``r`` (n_pairs, nfft) within ``+-L`` samples."""
+    circular correlations ``r`` (n_pairs, nfft) within ``+-L`` samples: two (n_pairs,)
+    arrays."""
     n = r.shape[1]
-    near = [np.r_[r[p, n - L[p]:], r[p, :L[p] + 1]] for p in range(len(r))]
-    return [float(v.max()) for v in near], [float(-v.min()) for v in near]
+    L = np.minimum(np.asarray(L, dtype=int), (n - 1) // 2)
+    m = int(L.max(initial=0))
+    w = np.concatenate([r[:, n - m:], r[:, :m + 1]], axis=1)  # lags -m..m
+    near = np.abs(np.arange(-m, m + 1))[None, :] <= L[:, None]
+    return np.where(near, w, -np.inf).max(axis=1), -np.where(near, w, np.inf).min(axis=1)
 
 
 def inverted_microphones(sign: ArrayLike, pairs: Sequence[tuple[int, int]], n_mics: int,
