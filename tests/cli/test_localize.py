@@ -508,3 +508,6 @@ def test_channels_out_of_sync_are_named_in_one_line(rec3, tmp_path, capsys):
     lines = [ln for ln in err.splitlines() if "out of sync" in ln]
     assert len(lines) == 1 and lines[0].startswith("hearsee: warning: ")
     assert "beyond the +-" in lines[0]
+    # no frame was valid because of it: not blamed on "silence or uncorrelated noise" too
+    assert json.loads(out)["summary"]["n_valid_frames"] == 0 and "silence" not in err
+    assert err.count("\n") == 1

@@ -222,8 +222,10 @@ def localize_cmd(
     else:
         _print_table(doc)
     note_empty_band(recording, doc.get("band_hz"), band, fs)
-    if doc["summary"]["n_valid_frames"] == 0 and not doc["summary"].get("inverted_microphones"):
-        # (an inverted microphone has its own warning: no frame was valid because of it)
+    if doc["summary"]["n_valid_frames"] == 0 and not (
+            doc["summary"].get("inverted_microphones") or doc["summary"].get("sync_offsets_s")):
+        # (an inverted microphone and channels out of sync have their own warnings: no frame
+        # was valid because of them -- "silence or uncorrelated noise" misled)
         spike = dominant_sample(x)
         if spike is None:
             err_console.print(f"hearsee: warning: {recording}: no frame holds a detectable source "
