@@ -511,3 +511,15 @@ def test_channels_out_of_sync_are_named_in_one_line(rec3, tmp_path, capsys):
     # no frame was valid because of it: not blamed on "silence or uncorrelated noise" too
     assert json.loads(out)["summary"]["n_valid_frames"] == 0 and "silence" not in err
     assert err.count("\n") == 1
+
+
+def test_track_names_channels_out_of_sync_once(rec3, tmp_path, capsys):
+    """`hearsee track` checks a file before streaming it: channel 2 recorded 2.3 ms late gives
+    one sync warning, and no second "no frame held a localizable source" beside it."""
+    x, fs = sf.read(rec3, always_2d=True)
+    x[:, 2] = np.roll(x[:, 2], 37)
+    p = tmp_path / "late.wav"
+    sf.write(p, x, fs, subtype="FLOAT")
+    assert main(["track", str(p), "--array", "three-mic"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("seems out of sync") == 1 and "localizable" not in err

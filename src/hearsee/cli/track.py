@@ -94,14 +94,19 @@ def _stream_band(asked: tuple[float, float] | None, x, fs: float, frame_ms: floa
 WIRING_SCAN_S = 30.0
 
 
-def _check_wiring(x, fs: float, arr, cfg) -> None:
+def _check_wiring(x, fs: float, arr, cfg) -> bool:
     """:func:`hearsee.stream.pipeline.wiring_estimate` of a file's first
-    :data:`WIRING_SCAN_S` seconds, for its warning of a microphone wired with inverted
-    polarity, before the file is streamed. In ``cfg.band_hz``, which :func:`_stream_band` has
-    already trimmed of an empty top band (so no second search for one)."""
+    :data:`WIRING_SCAN_S` seconds, for its warnings of a microphone wired with inverted
+    polarity or channels out of sync, before the file is streamed. In ``cfg.band_hz``, which
+    :func:`_stream_band` has already trimmed of an empty top band (so no second search for
+    one). True when it told of either."""
+    import numpy as np
+
     from hearsee.stream.pipeline import wiring_estimate
 
-    wiring_estimate(x[:, :int(WIRING_SCAN_S * fs)], fs, arr, cfg, empty_band_db=None)
+    tf = wiring_estimate(x[:, :int(WIRING_SCAN_S * fs)], fs, arr, cfg, empty_band_db=None)
+    return tf is not None and (bool(tf.inverted_mics) or (
+        tf.sync_offsets_s is not None and bool(np.isfinite(tf.sync_offsets_s).any())))
 
 
 def _srp_band(gcc_band: tuple[float, float] | None, srp_band: tuple[float, float] | None
@@ -295,6 +300,7 @@ def track_cmd(
                        gated_min_coherence=gate_coherence if gate_coherence > 0 else None)
 
     updates: list = []  # (kept by the sink: what a Ctrl-C leaves is still reported)
+    told = False  # (a file's wiring check warned: a microphone inverted or out of sync)
 
     def sink(u: object) -> None:
         updates.append(u)
@@ -314,7 +320,7 @@ def track_cmd(
         if used is not None:
             note_empty_band(recording, used, band, source.fs)
         if device is None:
-            _check_wiring(source.x, source.fs, arr, cfg)
+            told = _check_wiring(source.x, source.fs, arr, cfg)
         # (a file was checked ahead, above; live input once it has heard a source)
         pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
         try:
@@ -350,7 +356,8 @@ def track_cmd(
             f"{st.n_dropped_blocks} dropped / {st.n_late_blocks} late blocks, "
             f"{st.n_overflows} input overflows, status {st.status}",
             highlight=False)
-    if not any(u.measured for u in updates):
+    if not any(u.measured for u in updates) and not told:
+        # (after a warning of a microphone inverted or out of sync, which says why)
         err_console.print("hearsee: warning: track: no frame held a localizable source",
                           highlight=False)
     if image_points is not None and updates and not points.visible_within(
