@@ -807,6 +807,14 @@ class TdoaFrames:
     def n_valid(self) -> int:
         return int(np.count_nonzero(self.valid))
 
+    @property
+    def wiring_fault(self) -> bool:
+        """Whether the whole-recording correlations told of a microphone wired with inverted
+        polarity (``inverted_mics``) or of channels out of sync (``sync_offsets_s``), each
+        with its warning: what a caller that checks the wiring ahead needs to know."""
+        return bool(self.inverted_mics) or (self.sync_offsets_s is not None and bool(
+            np.isfinite(self.sync_offsets_s).any()))
+
 
 @functools.lru_cache(maxsize=16)
 def _window(window: str | tuple, frame_len: int) -> NDArray:

@@ -100,13 +100,10 @@ def _check_wiring(x, fs: float, arr, cfg) -> bool:
     polarity or channels out of sync, before the file is streamed. In ``cfg.band_hz``, which
     :func:`_stream_band` has already trimmed of an empty top band (so no second search for
     one). True when it told of either."""
-    import numpy as np
-
     from hearsee.stream.pipeline import wiring_estimate
 
     tf = wiring_estimate(x[:, :int(WIRING_SCAN_S * fs)], fs, arr, cfg, empty_band_db=None)
-    return tf is not None and (bool(tf.inverted_mics) or (
-        tf.sync_offsets_s is not None and bool(np.isfinite(tf.sync_offsets_s).any())))
+    return tf is not None and tf.wiring_fault
 
 
 def _srp_band(gcc_band: tuple[float, float] | None, srp_band: tuple[float, float] | None

@@ -918,7 +918,7 @@ def _render_blocks(x: NDArray, centres: NDArray, src_room: NDArray,
 
 
 # ---------------------------------------------------------------------------- recordings
-def mask_itd_track(array: Any, trajectory: Trajectory, duration_s: float,
+def mask_itd_track(array: MicArray | str | Path, trajectory: Trajectory, duration_s: float,
                    step_s: float = 0.01) -> dict[str, list[float]]:
     """A masked array's ITD through a moving source's recording: ``{"t": [...], "0-1":
     [...]}`` (seconds) at :func:`truth_times` (every ``step_s``, the trajectory's corners and

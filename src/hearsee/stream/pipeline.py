@@ -478,11 +478,9 @@ class _WiringWatch(_FirstWindows):
 
     def _check(self, x: NDArray) -> bool:
         tf = wiring_estimate(x, self.fs, self.array, self.cfg)
-        # (once out of sync is told, the check is done: the next windows' offsets told it again
-        # every 10 s, in other digits)
-        desync = tf is not None and tf.sync_offsets_s is not None and bool(
-            np.isfinite(tf.sync_offsets_s).any())
-        return tf is not None and (bool(tf.inverted_mics) or desync
+        # (once a fault is told, the check is done: channels out of sync were told again every
+        # 10 s, in other digits)
+        return tf is not None and (tf.wiring_fault
                                    or bool(np.all(np.isfinite(tf.summary_tdoa_s))))
 
 
