@@ -10,7 +10,7 @@ from hearsee.audio import mask
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.signals import white_noise
 from hearsee.config import load_yaml
-from hearsee.errors import AudioInputError, ConfigError, GeometryError
+from hearsee.errors import AudioInputError, ChannelSyncWarning, ConfigError, GeometryError
 
 FS = 16000
 
@@ -449,6 +449,13 @@ def test_moving_masked_recording_is_smoothed_without_lag(model):
     assert x.shape == (2, 3 * FS) and truth_doc["moving"]
     doc = mask.localize_recording_mask(x, FS, model)
     assert doc["kalman_noise"] == "adaptive" and doc["kalman_r_std_s"] == 1.0 / FS
+    # the wiring checks' summary entries, as every array's document (absent until 2026-12-04)
+    assert doc["summary"]["inverted_microphones"] == [] == list(doc["summary"]["sync_offsets_s"])
+    late = x.copy()
+    late[1] = np.roll(late[1], 40)  # microphone 1 recorded 2.5 ms late
+    with pytest.warns(ChannelSyncWarning, match="^pair 0-1 at -2"):
+        off = mask.localize_recording_mask(late, FS, model)["summary"]["sync_offsets_s"]
+    assert list(off) == ["0-1"] and off["0-1"] == pytest.approx(-40 / FS, abs=0.8e-3)
     t = np.array([f["t"] for f in doc["frames"]])
     got = np.array([np.nan if f["tdoa_s"]["0-1"] is None else f["tdoa_s"]["0-1"]
                     for f in doc["frames"]])

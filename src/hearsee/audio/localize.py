@@ -1594,10 +1594,7 @@ def localize_recording(
                             else None),
         "coherence_gain": (float(tf.coherence_gain) if np.isfinite(tf.coherence_gain)
                            else None),
-        "inverted_microphones": list(tf.inverted_mics),
-        "sync_offsets_s": ({} if tf.sync_offsets_s is None else {
-            k: float(v) for k, v in zip(labels, tf.sync_offsets_s, strict=True)
-            if np.isfinite(v)}),
+        **tf.wiring_entries(),
     }
     return {
         "array": arr.to_dict(),

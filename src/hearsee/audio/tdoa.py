@@ -815,6 +815,16 @@ class TdoaFrames:
         return bool(self.inverted_mics) or (self.sync_offsets_s is not None and bool(
             np.isfinite(self.sync_offsets_s).any()))
 
+    def wiring_entries(self) -> dict[str, Any]:
+        """The ``hearsee localize`` summary's ``inverted_microphones`` (list) and
+        ``sync_offsets_s`` ({"i-j": s} of the pairs out of sync; {} when none) -- one place
+        for every array's document."""
+        off = self.sync_offsets_s
+        return {"inverted_microphones": [int(m) for m in self.inverted_mics],
+                "sync_offsets_s": {} if off is None else {
+                    k: float(v) for k, v in zip(self.pair_labels, off, strict=True)
+                    if np.isfinite(v)}}
+
 
 @functools.lru_cache(maxsize=16)
 def _window(window: str | tuple, frame_len: int) -> NDArray:
