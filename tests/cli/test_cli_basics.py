@@ -7,6 +7,10 @@ def test_arrays_lists_presets(capsys):
     assert main(["arrays"]) == 0
     out = capsys.readouterr().out
     assert "three-mic" in out and "two-mic" in out
+    # the masked presets say so (the list gave no hint which of them resolve front/back)
+    lines = {ln.split()[0]: ln for ln in out.splitlines()}
+    assert "rigid egg mask" in lines["mask2"] and "turned 25 deg" in lines["mask2-asym"]
+    assert "mask" not in lines["two-mic"] and "mask" not in lines["three-mic"]
 
 
 def test_unknown_command_is_usage_error(capsys):

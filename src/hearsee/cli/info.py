@@ -19,4 +19,10 @@ def arrays_cmd(
         emit_json({a.name: a.to_dict() for a in arrays})
         return
     for a in arrays:
-        typer.echo(f"{a.name:14s} {a.n_mics} mics, aperture {a.aperture * 100:.1f} cm")
+        body = ""
+        if a.mask is not None:  # (which presets resolve front/back: said nowhere in the list)
+            yaw = float(a.mask.get("yaw_deg", 0.0))
+            body = (f", rigid {a.mask.get('shape', 'egg')} mask between them"
+                    + (f" turned {yaw:g} deg (left/right asymmetric)" if yaw else "")
+                    + ": front/back resolved (ch. 3)")
+        typer.echo(f"{a.name:14s} {a.n_mics} mics, aperture {a.aperture * 100:.1f} cm{body}")
