@@ -238,6 +238,19 @@ def test_two_channels_holding_one_signal_are_named(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error", DegenerateInputWarning)
         read_recording(_write(tmp_path / "close.wav", z))
+    # a quiet copy re-quantised to 16 bits: named by its rounding (the coefficient alone
+    # missed copies peaking below about -25 dBFS); the two-mic preset's microphones (15 cm)
+    # hearing a source 3 deg off their bisecting plane at that level are not
+    quiet = np.stack([z[0], 0.7 * z[0]]) / np.abs(z[0]).max() * 10 ** (-45 / 20)
+    with pytest.warns(DegenerateInputWarning, match="channels 0 and 1 hold the same signal"):
+        read_recording(_write(tmp_path / "quiet-copy.wav", quiet, subtype="PCM_16"))
+    a3 = np.radians(3.0)
+    w, _ = simulate_recording("two-mic", [2 * np.cos(a3), 2 * np.sin(a3), 0.0], signal="male",
+                              duration_s=1.0, seed=1)
+    w = w / np.abs(w).max() * 10 ** (-45 / 20)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DegenerateInputWarning)
+        read_recording(_write(tmp_path / "quiet-pair.wav", w, subtype="PCM_16"))
     # one channel, constant channels: nothing to pair
     assert duplicate_channels(x[:1]) == []
     c = np.vstack([x[:1], np.full((2, 8000), 0.02)])

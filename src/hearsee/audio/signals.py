@@ -116,8 +116,9 @@ QUIET_CHANNEL_DB = 40.0
 #: stay far from it -- the real two-microphone 'alexa' recording 0.33, the measured 32-mic
 #: impulse responses with ARCTIC speech >= 0.021 on every pair; a noise-free simulated voice
 #: at two microphones 1 cm apart, 5 deg off their bisecting plane, 3.2e-5. A copy at 30 % gain
-#: re-quantised to 16 bits gave 6.9e-8; a copy re-quantised far below full scale (quantisation
-#: noise within 60 dB of the signal) escapes the test.
+#: re-quantised to 16 bits gave 6.9e-8; one re-quantised far below full scale (its rounding
+#: within 60 dB of the signal) escapes this test, and the rounding test of
+#: :func:`duplicate_channels` (integer PCM files) names it instead.
 DUPLICATE_CHANNEL_TOL = 1e-6
 #: Largest positive sample (read as float) of the file subtypes whose full scale is below
 #: 1.0; :data:`CLIP_LEVEL` applies to it instead of 1.0 (8-bit files stop at 127/128 = 0.992,
@@ -337,15 +338,25 @@ def _resample(x: ArrayLike, fs_in: float, fs_out: float) -> NDArray:
 resample = _resample
 
 
-def _full_scale(path: str | Path) -> float:
-    """The largest positive sample of the audio file's subtype (:data:`_FULL_SCALE`; 1.0
-    for the others)."""
+def _subtype(path: str | Path) -> str | None:
+    """The audio file's subtype ("PCM_16", "FLOAT", ...), None when it cannot be told."""
     import soundfile as sf
 
     try:
-        return _FULL_SCALE.get(sf.info(os.fsencode(path)).subtype, 1.0)
-    except Exception:  # noqa: BLE001 (the file was read already; only the warning depends on it)
-        return 1.0
+        return str(sf.info(os.fsencode(path)).subtype)
+    except Exception:  # noqa: BLE001 (the file was read already; only warnings depend on it)
+        return None
+
+
+def _full_scale(path: str | Path) -> float:
+    """The largest positive sample of the audio file's subtype (:data:`_FULL_SCALE`; 1.0
+    for the others)."""
+    return _FULL_SCALE.get(_subtype(path), 1.0)
+
+
+#: One quantisation step of the integer PCM subtypes, read as floats in [-1, 1)
+_PCM_STEP = {"PCM_S8": 2.0**-7, "PCM_U8": 2.0**-7, "PCM_16": 2.0**-15, "PCM_24": 2.0**-23,
+             "PCM_32": 2.0**-31}
 
 
 def _wav_data_shortfall(path: Path) -> tuple[int, int] | None:
@@ -567,7 +578,7 @@ def read_recording(
                 "(channel k must be microphone k)"
             )
     # clipping is seen on the file's own samples (resampling smooths the flat tops away)
-    clipped = 0.0
+    clipped, resampled = 0.0, False
     if x.size and np.all(np.isfinite(x)):
         mag = np.abs(x)
         peak = mag.max(axis=1, keepdims=True)
@@ -582,6 +593,7 @@ def read_recording(
         x = _resample(x, fs_in, fs)
         fs_in = int(round(fs))
         n = x.shape[1]
+        resampled = True
     if n < max(int(min_samples), 1):
         raise AudioInputError(
             f"{path}: recording is too short ({n} samples, {n / fs_in * 1000:.1f} ms); "
@@ -609,7 +621,10 @@ def read_recording(
     if quiet.size:
         warnings.warn(f"{path}: {quiet_channels_text(quiet, below)}", DegenerateInputWarning,
                       stacklevel=2)
-    if dup := duplicate_channels(x):
+    # (a copy re-quantised to integer PCM differs by its rounding: told by the step, before
+    # any resampling spreads it)
+    step = None if resampled else _PCM_STEP.get(_subtype(path))
+    if dup := duplicate_channels(x, step):
         warnings.warn(f"{path}: {duplicate_channels_text(dup)}", DegenerateInputWarning,
                       stacklevel=2)
     if clipped > CLIP_FRACTION:
@@ -643,13 +658,22 @@ def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:
     return flat, quiet, float(below)
 
 
-def duplicate_channels(x: NDArray) -> list[tuple[int, int]]:
+def duplicate_channels(x: NDArray, step: float | None = None) -> list[tuple[int, int]]:
     """Pairs ``(i, j)``, i < j, of channels of ``x`` (n_channels, n) that hold one signal: their
     zero-lag correlation coefficient is within :data:`DUPLICATE_CHANNEL_TOL` of +1 or -1 (a
     copy, at any gain or polarity), over the same <= 2**18 evenly spread samples per channel
-    as :func:`channel_faults`. Constant channels are left to that function. A microphone
-    recorded twice (a mono input presented as several channels) gives its pairs a TDOA of 0,
-    i.e. a source on the plane that bisects them, whatever the source's direction.
+    as :func:`channel_faults`. With ``step``, the quantisation step of integer samples (a PCM
+    file read as floats: 2**-15 for 16 bits), also those where what one channel's best scaled
+    copy of the other leaves is no more than that rounding (residual RMS <= 0.4 step x
+    sqrt(1 + gain**2); rounding both leaves 0.29, 16-bit copies of a voice gave 0.24-0.29),
+    both channels at least 10 steps RMS: a 16-bit copy of a voice peaking at -30 dBFS left
+    1 - |rho| = 4e-6, beyond the tolerance; now copies are named down to about -55 dBFS.
+    Two noise-free simulated microphones hearing a voice within ~0.5 deg of their bisecting
+    plane at -50 dBFS are named too (0.21 there: at that level their TDOA of < 0.05 sample is
+    0); 1 deg off gave 0.46, 3 deg 1.2 (real microphones' own noise adds more).
+    Constant channels are left to that function. A microphone recorded twice (a mono input
+    presented as several channels) gives its pairs a TDOA of 0, i.e. a source on the plane
+    that bisects them, whatever the source's direction.
 
     (A noise-free simulation of a source exactly as far from two microphones gives two equal
     channels too: there the pair's TDOA of 0 is the truth.)"""
@@ -662,8 +686,16 @@ def duplicate_channels(x: NDArray) -> list[tuple[int, int]]:
     ok = norm > 0
     u = np.zeros_like(few)
     u[ok] = few[ok] / norm[ok, None]
-    c = np.abs(u @ u.T)
-    i, j = np.nonzero(np.triu(c >= 1.0 - DUPLICATE_CHANNEL_TOL, 1))
+    rho = np.clip(np.abs(u @ u.T), 0.0, 1.0)
+    dup = rho >= 1.0 - DUPLICATE_CHANNEL_TOL
+    if step is not None and step > 0:
+        sd = norm / np.sqrt(few.shape[1])  # (n_channels,) RMS about the mean
+        with np.errstate(divide="ignore", invalid="ignore"):
+            gain = sd[None, :] / sd[:, None]  # [i, j]: channel j ~ gain x channel i
+            resid = sd[None, :] * np.sqrt(1.0 - rho**2)  # what fitting j from i leaves
+            loud = (sd[:, None] >= 10 * step) & (sd[None, :] >= 10 * step)
+            dup |= loud & (resid <= 0.4 * step * np.sqrt(1.0 + gain**2))
+    i, j = np.nonzero(np.triu(dup, 1))
     return [(int(a), int(b)) for a, b in zip(i, j, strict=True)]
 
 
