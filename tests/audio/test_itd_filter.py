@@ -250,6 +250,27 @@ def test_smooth_refuses_what_filter_refuses():
         kf.smooth(np.zeros(3))
 
 
+@pytest.mark.parametrize("run", ["filter", "smooth", "log_likelihood"])
+def test_a_bad_frame_is_refused_before_the_filter_changes(run):
+    """The frames are checked once, up front (since 2026-12-04; each step checked its own
+    before): a frame of 1e300 s or of two TDOAs among good ones is refused with step()'s
+    message, and the filter has not moved -- it had taken the frames before the bad one."""
+    good = [[1e-4, 2e-4, 1e-4]] * 4
+    args = (BOX,) if run == "log_likelihood" else ()
+    for bad, msg in (([1e300, 2e-4, 1e-4], "at most 3600 s"), ([1e-4, 2e-4], "expected 3")):
+        kf = ItdKalman(3)
+        frames = good + [bad] + good if len(bad) == 3 else np.array(good)[:, :2]
+        with pytest.raises(GeometryError, match=msg):
+            getattr(kf, run)(frames, *args)
+        assert not kf.initialized and kf.n_inits == 0
+    first, second = getattr(ItdKalman(3), run)(good, *args)  # (the good frames alone)
+    if run == "log_likelihood":
+        assert second == 3 and np.isfinite(first)  # (every frame after the first scored)
+    else:
+        np.testing.assert_allclose(first[-1], good[0], atol=1e-12)
+        assert second.all()
+
+
 # ------------------------------------------------------- the noise model tuned to the recording
 FS_T = 16000.0
 BOX = np.array([4.4e-4, 4.4e-4, 4.4e-4])  # the three-mic preset's lag bound per pair (s)

@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
 from hearsee.audio.arrays import check_pairs, pair_matrix
-from hearsee.audio.localize import as_tdoas, check_real_tdoas
+from hearsee.audio.localize import MAX_TDOA_S, as_tdoas, check_real_tdoas
 from hearsee.config import is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, EstimationError, GeometryError
 
@@ -281,9 +281,29 @@ class ItdKalman:
         if z is not None and _size(z) != len(self.pairs):
             raise GeometryError(f"expected {len(self.pairs)} pair TDOAs, got {_size(z)}")
         self._adopt_hand_set_r()
-        self._set_r(sc)
         # (text raised numpy's ValueError; 1e300 s made the gate distance NaN: accepted)
-        zz = None if z is None else as_tdoas(z, len(self.pairs))
+        return self._step_checked(None if z is None else as_tdoas(z, len(self.pairs)), sc)
+
+    def _checked_frames(self, Z: ArrayLike) -> NDArray:
+        """Frames ``Z`` (n_frames, n_pairs) checked once as :meth:`step` checks each (so the
+        loops of :meth:`filter`, :meth:`smooth` and :meth:`log_likelihood` need not: those
+        checks were ~20 % of a step), and a hand-set ``kf.R`` adopted before them."""
+        Zm = _frames(Z)
+        m = len(self.pairs)
+        if Zm.shape[1] != m:
+            raise GeometryError(f"expected {m} pair TDOAs, got {Zm.shape[1]}")
+        big = np.isfinite(Zm) & (np.abs(Zm) > MAX_TDOA_S)
+        if big.any():
+            row = Zm[int(np.flatnonzero(big.any(axis=1))[0])]
+            raise GeometryError(f"TDOAs must be at most {MAX_TDOA_S:g} s in magnitude, got "
+                                f"{row.tolist()!r:.80}")
+        self._adopt_hand_set_r()
+        return Zm
+
+    def _step_checked(self, zz: NDArray | None, sc: NDArray | None) -> bool:
+        """:meth:`_step` of a measurement ``zz`` (n_pairs,) float seconds (NaN: missing) or None
+        already checked, with a hand-set ``kf.R`` already adopted."""
+        self._set_r(sc)
         self.last_d2 = float("nan")
         self.last_logdet_s = float("nan")
         self.last_accepted = False
@@ -319,12 +339,12 @@ class ItdKalman:
         Returns (pair TDOAs (n_frames, n_pairs) from the state after each step -- NaN before the
         first measurement --, accepted (n_frames,) bool).
         """
-        Zm = _frames(Z)
+        Zm = self._checked_frames(Z)
         S = _scales(r_scale, Zm.shape)
         out = np.full(Zm.shape, np.nan)
         acc = np.zeros(Zm.shape[0], dtype=bool)
         for n, z in enumerate(Zm):
-            acc[n] = self._step(z, None if S is None else S[n])
+            acc[n] = self._step_checked(z, None if S is None else S[n])
             if self.initialized:
                 out[n] = self.pair_tdoas()
         return out, acc
@@ -353,7 +373,7 @@ class ItdKalman:
         forward pass's with that look-back (the last frame's estimate is the same either way),
         :attr:`n_rejected` its rejections.
         """
-        Zm = _frames(Z)
+        Zm = self._checked_frames(Z)
         S = _scales(r_scale, Zm.shape)
         n, dx = Zm.shape[0], self.kf.dim_x
         xs, Ps = np.full((n, dx), np.nan), np.full((n, dx, dx), np.nan)
@@ -362,7 +382,7 @@ class ItdKalman:
         k = 0
         while k < n:
             inits, was = self.n_inits, self.initialized
-            acc[k] = self._step(Zm[k], None if S is None else S[k])
+            acc[k] = self._step_checked(Zm[k], None if S is None else S[k])
             if self.initialized:
                 xs[k], Ps[k], start[k] = self.kf.x.reshape(-1), self.kf.P, self.n_inits > inits
             j = self._run_start(Zm, S, acc, start, k) if was and start[k] else k
@@ -376,7 +396,7 @@ class ItdKalman:
                 self._init_from(Zm[j])
                 xs[j], Ps[j], start[j], acc[j] = self.kf.x.reshape(-1), self.kf.P, True, True
                 for m in range(j + 1, k + 1):
-                    acc[m] = self._step(Zm[m], None if S is None else S[m])
+                    acc[m] = self._step_checked(Zm[m], None if S is None else S[m])
                     xs[m], Ps[m] = self.kf.x.reshape(-1), self.kf.P
             k += 1
         out = np.full(Zm.shape, np.nan)
@@ -424,7 +444,7 @@ class ItdKalman:
         likelihood of Schweppe (1965) / Mehra (1970) for tuning Q and R, made robust by the
         outlier term so that a few reflections' peaks do not decide it. ``r_scale`` as in
         :meth:`filter`. Returns (the sum, the number of frames scored)."""
-        Zm = _frames(Z)
+        Zm = self._checked_frames(Z)
         S = _scales(r_scale, Zm.shape)
         if not (is_real(outlier_prob) and 0 < outlier_prob < 1):
             raise ConfigError(f"outlier_prob must be in (0, 1), got {outlier_prob!r}")
@@ -438,7 +458,7 @@ class ItdKalman:
         total, n = 0.0, 0
         for k, z in enumerate(Zm):
             scored = self.initialized and bool(np.all(np.isfinite(z)))
-            self._step(z, None if S is None else S[k])
+            self._step_checked(z, None if S is None else S[k])
             if scored:
                 total += max(inlier - 0.5 * (self.last_logdet_s + self.last_d2), floor)
                 n += 1
