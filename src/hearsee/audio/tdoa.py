@@ -106,6 +106,7 @@ __all__ = [
     "check_analysis_fs",
     "check_frame_ms",
     "check_recording_length",
+    "desynchronized_pairs",
     "dominant_sample",
     "estimate_tdoas",
     "frame_geometry",
@@ -113,8 +114,10 @@ __all__ = [
     "frame_spectra",
     "gcc",
     "gcc_weighting",
+    "inverted_microphones",
     "min_frame_ms",
     "normalize_method",
+    "pair_polarity",
     "windowed_frames",
 ]
 
