@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
 from hearsee.audio.arrays import check_pairs, pair_matrix
-from hearsee.audio.localize import MAX_TDOA_S, as_tdoas, check_real_tdoas
+from hearsee.audio.localize import as_tdoas, check_real_tdoas, check_tdoa_magnitude
 from hearsee.config import is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, EstimationError, GeometryError
 
@@ -292,11 +292,7 @@ class ItdKalman:
         m = len(self.pairs)
         if Zm.shape[1] != m:
             raise GeometryError(f"expected {m} pair TDOAs, got {Zm.shape[1]}")
-        big = np.isfinite(Zm) & (np.abs(Zm) > MAX_TDOA_S)
-        if big.any():
-            row = Zm[int(np.flatnonzero(big.any(axis=1))[0])]
-            raise GeometryError(f"TDOAs must be at most {MAX_TDOA_S:g} s in magnitude, got "
-                                f"{row.tolist()!r:.80}")
+        check_tdoa_magnitude(Zm)
         self._adopt_hand_set_r()
         return Zm
 

@@ -262,10 +262,19 @@ def as_tdoas(tdoa_s: ArrayLike, n_pairs: int, error: type[Exception] = GeometryE
     tau = np.asarray(tdoa_s, dtype=float).reshape(-1)
     if tau.shape[0] != n_pairs:
         raise error(f"got {tau.shape[0]} TDOAs for {n_pairs} microphone pairs")
-    if np.any(np.abs(tau[np.isfinite(tau)]) > MAX_TDOA_S):
-        raise error(f"TDOAs must be at most {MAX_TDOA_S:g} s in magnitude, got "
-                    f"{tau.tolist()!r:.80}")
+    check_tdoa_magnitude(tau, error)
     return tau
+
+
+def check_tdoa_magnitude(tau: NDArray, error: type[Exception] = GeometryError) -> None:
+    """``error`` naming the (first) TDOA vector of ``tau`` ((n_pairs,) or (n_frames, n_pairs)
+    floats, seconds) with a finite entry beyond :data:`MAX_TDOA_S` in magnitude; NaN and inf
+    pass (the callers decide)."""
+    big = np.isfinite(tau) & (np.abs(tau) > MAX_TDOA_S)
+    if big.any():
+        row = tau if tau.ndim == 1 else tau[int(np.flatnonzero(big.any(axis=1))[0])]
+        raise error(f"TDOAs must be at most {MAX_TDOA_S:g} s in magnitude, got "
+                    f"{row.tolist()!r:.80}")
 
 
 def _tdoa_vector(tdoa_s: ArrayLike, prs: list[tuple[int, int]], tol_s: float) -> NDArray:
