@@ -1224,9 +1224,10 @@ def pair_polarity(r: ArrayLike, max_lag: ArrayLike, main_lobe: int = 2,
     his, los = _extrema_within(r, L)
     sign, z = np.zeros(len(r), dtype=int), np.zeros(len(r))
     for p in range(len(r)):
-        far, sd = _beyond(r[p], L[p], main_lobe)
+        far = _far_lags(r[p], L[p], main_lobe)
         if far.size < 8:
             continue
+        sd = _robust_sd(far)
         hi, lo = his[p], los[p]
         z[p] = max(hi, lo) / sd if sd > 0 else 0.0
         if z[p] >= signif:
@@ -1234,15 +1235,15 @@ def pair_polarity(r: ArrayLike, max_lag: ArrayLike, main_lobe: int = 2,
     return sign, z
 
 
-def _beyond(r: NDArray, L: int, main_lobe: int) -> tuple[NDArray, float]:
+def _far_lags(r: NDArray, L: int, main_lobe: int) -> NDArray:
     """One pair's circular correlation ``r`` (nfft,) at the lags beyond ``+-(L + main_lobe)``
-    (from ``L + main_lobe + 1`` up, then the negative ones) and its robust standard deviation
-    (1.4826 median absolute deviation; 0 with no lag left)."""
-    n = r.size
-    far = r[L + main_lobe + 1: n - L - main_lobe]
-    if not far.size:
-        return far, 0.0
-    return far, 1.4826 * float(np.median(np.abs(far - np.median(far))))
+    (from ``L + main_lobe + 1`` up, then the negative ones)."""
+    return r[L + main_lobe + 1: r.size - L - main_lobe]
+
+
+def _robust_sd(v: NDArray) -> float:
+    """1.4826 median absolute deviation of ``v`` (0 when empty)."""
+    return 1.4826 * float(np.median(np.abs(v - np.median(v)))) if v.size else 0.0
 
 
 #: :func:`desynchronized_pairs`: a pair counts as out of sync when its averaged correlation's
@@ -1285,16 +1286,15 @@ def desynchronized_pairs(r: ArrayLike, max_lag: ArrayLike, main_lobe: int = 2,
     his, los = _extrema_within(r, L)
     out = np.full(len(r), np.nan)
     within = np.maximum(np.maximum(his, los), 0.0)
-    top = np.array([r[p, L[p] + main_lobe + 1: n - L[p] - main_lobe].max(initial=-np.inf)
-                    for p in range(len(r))])
-    for p in np.flatnonzero(top >= ratio * within):  # (only these can pass: the medians after)
-        far, sd = _beyond(r[p], L[p], main_lobe)
-        if far.size < 8 or not sd > 0:
+    for p in range(len(r)):
+        far = _far_lags(r[p], L[p], main_lobe)
+        if far.size < 8:
             continue
         k = int(np.argmax(far))
         # (against the in-bound extremum of either sign: an inverted microphone's pairs hold
-        # a trough there, and a voice's pitch peaks beyond it stood above their low maximum)
-        if far[k] >= signif * sd and far[k] >= ratio * within[p]:
+        # a trough there, and a voice's pitch peaks beyond it stood above their low maximum;
+        # the robust spread -- two medians -- only for a peak that passes this)
+        if far[k] >= ratio * within[p] and (sd := _robust_sd(far)) > 0 and far[k] >= signif * sd:
             idx = k + L[p] + main_lobe + 1
             out[p] = idx if idx <= n // 2 else idx - n
     return out
