@@ -918,7 +918,7 @@ def _render_blocks(x: NDArray, centres: NDArray, src_room: NDArray,
 
 
 # ---------------------------------------------------------------------------- recordings
-def mask_itd_track(array: MicArray | str | Path, trajectory: Trajectory, duration_s: float,
+def mask_itd_track(array: Any, trajectory: Trajectory, duration_s: float,
                    step_s: float = 0.01) -> dict[str, list[float]]:
     """A masked array's ITD through a moving source's recording: ``{"t": [...], "0-1":
     [...]}`` (seconds) at :func:`truth_times` (every ``step_s``, the trajectory's corners and
@@ -926,15 +926,15 @@ def mask_itd_track(array: MicArray | str | Path, trajectory: Trajectory, duratio
     (:meth:`hearsee.audio.mask.MaskModel.itd_at`: what the masked pair measures) of the
     position heard at the array's origin at that time (:meth:`Trajectory.heard_at`, r / c
     earlier) -- the truth of ``hearsee localize``'s per-frame ITDs (frame times are the
-    frames' centres). ``array``: a :class:`~hearsee.audio.arrays.MicArray` with a mask."""
-    from hearsee.audio.arrays import load_array
+    frames' centres). ``array``: a masked array (MicArray, preset name, path) or its
+    :class:`~hearsee.audio.mask.MaskModel`, as :func:`simulate_moving_masked` takes it."""
     from hearsee.audio.mask import MaskModel
 
-    arr = load_array(array)
+    model = array if isinstance(array, MaskModel) else MaskModel(array)
     t = truth_times(trajectory, duration_s, step_s)
-    heard = trajectory.heard_at(t, speed_of_sound=arr.speed_of_sound)
-    itd = MaskModel(arr).itd_at(heard)
-    return {"t": t.tolist(), arr.pair_labels[0]: [float(v) for v in itd]}
+    heard = trajectory.heard_at(t, speed_of_sound=model.array.speed_of_sound)
+    return {"t": t.tolist(),
+            model.array.pair_labels[0]: [float(v) for v in model.itd_at(heard)]}
 
 
 def simulate_moving_recording(
@@ -996,8 +996,12 @@ def simulate_moving_recording(
                           "field (no room)")
     rng = np.random.default_rng(seed)
     s = make_signal(signal, dur, fs, rng)
+    model = None
     if arr.mask is not None:  # the mask's diffraction, block-wise (free field only)
-        clean = simulate_moving_masked(s, fs, arr, trajectory)
+        from hearsee.audio.mask import MaskModel
+
+        model = MaskModel(arr)  # (one model for the rendering and the ITD track)
+        clean = simulate_moving_masked(s, fs, model, trajectory)
     elif room_n is None:
         clean = simulate_moving_free_field(s, fs, arr, trajectory)
     else:
@@ -1006,8 +1010,8 @@ def simulate_moving_recording(
                                      max_order=room_n.get("max_order"))
     x = add_noise(clean, snr_db, rng)
     truth = ground_truth(arr, trajectory.at(0.0))  # (a masked array's ITD: at t = 0)
-    if arr.mask is not None:
-        truth["mask_itd_track"] = mask_itd_track(arr, trajectory, dur)
+    if model is not None:
+        truth["mask_itd_track"] = mask_itd_track(model, trajectory, dur)
     truth.update({
         "moving": True,
         "trajectory": {"t": trajectory.t.tolist(), "positions_m": trajectory.positions.tolist()},
