@@ -68,6 +68,11 @@ class ChannelSyncWarning(UserWarning):
     the lag the described spacing allows, so their TDOAs -- and the direction -- are wrong."""
 
 
+class TonalNoiseWarning(UserWarning):
+    """The recording holds stationary tonal noise on every microphone (mains hum picked up by
+    the wiring, a motor's or fan's whine): its frequencies were left out of the estimate."""
+
+
 class DegenerateInputWarning(UserWarning):
     """The input is valid but degenerate for the task (stereo images that barely match, a flat
     thermal frame, image points outside the recording): the answer describes the input more

@@ -69,13 +69,14 @@ from __future__ import annotations
 import functools
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 
+from hearsee.audio import hum
 from hearsee.audio.arrays import MicArray, closure_rms, load_array, pair_closure_projector
 from hearsee.audio.localize import IN_PLANE_RANGE_M, _inplane_tdoa, array_geometry
 from hearsee.audio.signals import as_samples, check_fs
@@ -85,6 +86,7 @@ from hearsee.errors import (
     ChannelSyncWarning,
     ConfigError,
     InvertedPolarityWarning,
+    TonalNoiseWarning,
 )
 from hearsee.geometry import fibonacci_sphere
 
@@ -781,6 +783,10 @@ class TdoaFrames:
         that says its channels are out of sync (:func:`desynchronized_pairs`, with a
         :class:`~hearsee.errors.ChannelSyncWarning`), NaN where they look in sync; None
         without a whole-recording estimate.
+    tonal_lines_hz : tuple of float
+        The lines of stationary tonal noise (mains hum, a motor's whine) found on every
+        microphone and filtered out of the recording before the estimate (``tonal_noise`` of
+        :func:`estimate_tdoas`), Hz; empty when none.
     """
 
     t: NDArray
@@ -801,6 +807,7 @@ class TdoaFrames:
     band_hz: tuple[float, float] | None = None
     inverted_mics: tuple[int, ...] = ()
     sync_offsets_s: NDArray | None = None
+    tonal_lines_hz: tuple[float, ...] = ()
 
     @property
     def pair_labels(self) -> list[str]:
@@ -819,14 +826,16 @@ class TdoaFrames:
             np.isfinite(self.sync_offsets_s).any()))
 
     def wiring_entries(self) -> dict[str, Any]:
-        """The ``hearsee localize`` summary's ``inverted_microphones`` (list) and
-        ``sync_offsets_s`` ({"i-j": s} of the pairs out of sync; {} when none) -- one place
-        for every array's document."""
+        """The ``hearsee localize`` summary's ``inverted_microphones`` (list),
+        ``sync_offsets_s`` ({"i-j": s} of the pairs out of sync; {} when none) and
+        ``tonal_lines_hz`` (the lines of hum filtered out, Hz; [] when none) -- one place for
+        every array's document."""
         off = self.sync_offsets_s
         return {"inverted_microphones": [int(m) for m in self.inverted_mics],
                 "sync_offsets_s": {} if off is None else {
                     k: float(v) for k, v in zip(self.pair_labels, off, strict=True)
-                    if np.isfinite(v)}}
+                    if np.isfinite(v)},
+                "tonal_lines_hz": [float(f) for f in self.tonal_lines_hz]}
 
 
 @functools.lru_cache(maxsize=16)
@@ -986,13 +995,17 @@ def _energy_vad(energy: NDArray, vad_db: float) -> tuple[NDArray, bool]:
     """The decision of :func:`frame_activity` from frame energies: (active, whether the energy
     decided -- False when the recording looked stationary and only digital silence was
     dropped)."""
-    e_max = float(energy.max(initial=0.0))
-    active = energy > max(1e-20, 1e-10 * e_max)
+    active = _sounding(energy)
     if active.any():
         floor, top = _percentiles(energy[active], (10.0, 95.0))
         if floor > 0 and top > floor * 10 ** ((vad_db + 3.0) / 10.0):
             return active & (energy > floor * 10 ** (vad_db / 10.0)), True
     return active, False
+
+
+def _sounding(energy: NDArray) -> NDArray:
+    """The frames that are not digital silence: energy above 1e-10 of the loudest's."""
+    return energy > max(1e-20, 1e-10 * float(energy.max(initial=0.0)))
 
 
 def _percentiles(v: NDArray, qs: tuple[float, ...]) -> list[float]:
@@ -1067,6 +1080,41 @@ def _joined(parts: list[tuple[NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
         return parts[0]
     return (np.concatenate([p[0] for p in parts], axis=1),
             np.concatenate([p[1] for p in parts], axis=1))
+
+
+def _tonal_lines(power_all: NDArray | None, frames: NDArray, win: NDArray, nfft: int, k0: int,
+                 k1: int, sounding: NDArray, fs: float) -> NDArray | None:
+    """The bins k0..k1-1 (bool) that hold stationary tonal noise (:func:`hum.tonal_bins`) over
+    the frames that are ``sounding``, or None without any. From the band power ``power_all``
+    (n_ch, F, bins) when kept, else from as many frames evenly spread over the recording as fit
+    :data:`SPECTRA_CACHE_BYTES`."""
+    idx = np.flatnonzero(sounding)
+    if idx.size < hum.TONAL_MIN_FRAMES:
+        return None
+    if power_all is not None:
+        p = power_all if idx.size == power_all.shape[1] else power_all[:, idx]
+    else:
+        fit = max(SPECTRA_CACHE_BYTES // (frames.shape[0] * (k1 - k0) * 12),
+                  hum.TONAL_MIN_FRAMES)
+        idx = idx[np.linspace(0, idx.size - 1, min(fit, idx.size)).astype(int)]
+        p = _spectra_power(frames[:, idx, :], win, nfft, k0, k1)[1]
+    line = hum.tonal_bins(p, np.arange(k0, k1) * fs / nfft)
+    return line if line.any() else None
+
+
+def _warn_tonal(lines: NDArray) -> None:
+    """A :class:`~hearsee.errors.TonalNoiseWarning` naming the lines removed (Hz)."""
+    k = np.round(lines / lines[0])
+    on = np.abs(lines - k * lines[0]) <= hum.COMB_TOL_HZ
+    if on.sum() >= 3:  # (a harmonic comb: line_frequencies returns it whole)
+        off = int(np.count_nonzero(~on))
+        what = (f"{lines[0]:.1f} Hz and its harmonics up to {lines[on][-1]:.0f} Hz"
+                + (f" (and {off} other line{'s' * (off > 1)})" if off else ""))
+    else:
+        what = ", ".join(f"{f:.0f}" for f in lines[:6]) + (", ..." * (len(lines) > 6)) + " Hz"
+    warnings.warn(f"stationary tonal noise on every microphone at {what} (mains hum picked up "
+                  "by the wiring, a motor's or a fan's whine?): filtered out before the TDOAs",
+                  TonalNoiseWarning, stacklevel=3)
 
 
 #: :func:`_empty_band_cut` looks at the spectra of this many of a recording's loudest frames (the
@@ -1919,6 +1967,7 @@ def estimate_tdoas(
     frame_noise_psd: ArrayLike | None = None,
     causal_smoothing: bool = False,
     empty_band_db: float | None = EMPTY_BAND_DB,
+    tonal_noise: bool = True,
 ) -> TdoaFrames:
     """Framed GCC TDOAs of all microphone pairs at once.
 
@@ -2150,11 +2199,21 @@ def estimate_tdoas(
         noise floor, keep every bin. None keeps every bin always (a stream does: its batches
         must not each decide on a band of their own). A band left with nothing but the empty
         part is a ConfigError.
+    tonal_noise : bool
+        Find stationary tonal noise on every microphone -- mains hum the wiring picks up, a
+        motor's or a fan's whine (:func:`hearsee.audio.hum.tonal_bins`) -- and, where there
+        is some, filter its lines out of the recording (:func:`hearsee.audio.hum.remove_lines`;
+        a harmonic comb whole) and estimate from what remains, with a
+        :class:`~hearsee.errors.TonalNoiseWarning` and ``TdoaFrames.tonal_lines_hz``. A hum
+        3 dB louder than a voice turned a three-mic summary to a source overhead (identical on
+        every channel, it is a source at TDOA 0). Not with ``active`` (a stream decides its
+        frames itself). False: the recording as it is.
 
     Returns
     -------
     TdoaFrames
     """
+    call = dict(locals())  # (the arguments, for the run on a recording without tonal noise)
     arr = load_array(array)
     a = as_samples(x)
     if a.ndim != 2 or a.shape[0] != arr.n_mics:
@@ -2266,6 +2325,13 @@ def estimate_tdoas(
         band_bins = np.arange(k0, k1)
         nb = k1 - k0
         main_lobe = _main_lobe(band_bins, nfft, fs, band_hz)
+    if tonal_noise and not given:
+        line = _tonal_lines(power_all, frames, win, nfft, k0, k1, _sounding(energy), fs)
+        if line is not None:  # filter the lines out of the recording and start again with it
+            lines = hum.line_frequencies(a, fs, line, np.arange(k0, k1) * fs / nfft)
+            _warn_tonal(lines)
+            call.update(x=hum.remove_lines(a, fs, lines), array=arr, tonal_noise=False)
+            return replace(estimate_tdoas(**call), tonal_lines_hz=tuple(map(float, lines)))
     if frame_noise_psd is None:
         noise_psd = (_noise_spectrum(frames, active, win, nfft, k0, k1, power_all)
                      if snr_weight and not given else None)

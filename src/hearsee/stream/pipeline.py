@@ -440,7 +440,8 @@ def wiring_estimate(x: NDArray, fs: float, array: MicArray, cfg: StreamConfig,
 
     try:
         return estimate_tdoas(x, fs, array, cfg.frame_ms, cfg.hop_ms, cfg.method,
-                              band_hz=cfg.band_hz, empty_band_db=empty_band_db)
+                              band_hz=cfg.band_hz, empty_band_db=empty_band_db,
+                              tonal_noise=False)  # (the stream does not filter hum out)
     except HearseeError:
         return None
 

@@ -1,0 +1,129 @@
+"""Stationary tonal noise (mains hum, a motor's whine): found, removed, and the TDOAs of what
+remains right (hearsee.audio.hum and estimate_tdoas' tonal_noise)."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from hearsee.audio import hum
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.tdoa import estimate_tdoas
+from hearsee.errors import ConfigError, TonalNoiseWarning
+from hearsee.sim.audio import simulate_recording
+
+FS = 16000
+
+
+def _buzz(n: int, f0: float, top_hz: float, rng: np.random.Generator) -> np.ndarray:
+    """A buzz: every harmonic of ``f0`` up to ``top_hz``, amplitude 1 / sqrt(k), random
+    phases (the same waveform goes to every channel: electrical pickup)."""
+    t = np.arange(n) / FS
+    return sum(np.sin(2 * np.pi * k * f0 * t + rng.uniform(0, 2 * np.pi)) / np.sqrt(k)
+               for k in range(1, int(top_hz // f0) + 1))
+
+
+@pytest.fixture(scope="module")
+def voice():
+    """A male voice 2 m away at azimuth 56 deg (three-mic, free field, 20 dB SNR, 4 s) and its
+    truth."""
+    src = 2.0 * np.array([np.cos(np.radians(56.0)), np.sin(np.radians(56.0)), 0.3])
+    return simulate_recording("three-mic", src, signal="male", duration_s=4.0, fs=FS,
+                              snr_db=20, seed=3)
+
+
+def _with_buzz(x: np.ndarray, db: float, f0: float = 60.0) -> np.ndarray:
+    b = _buzz(x.shape[1], f0, 2400.0, np.random.default_rng(7))
+    return x + b * np.sqrt(np.mean(x ** 2) / np.mean(b ** 2) * 10 ** (db / 10))
+
+
+def test_tonal_bins_flag_a_line_on_every_channel_only():
+    """A steady line in bin 10 on both channels is a line; exponential noise bins, a line on
+    one channel only, a line below 40 Hz and too few frames are not."""
+    rng = np.random.default_rng(12)
+    p = rng.exponential(size=(2, 60, 64))
+    hz = np.arange(64) * 20.0  # bin 1 = 20 Hz
+    p[:, :, 10] = 50.0 * (1 + 0.05 * rng.random((2, 60)))  # a line, both channels
+    p[0, :, 20] = 50.0  # one channel only
+    p[:, :, 1] = 50.0  # at 20 Hz
+    line = hum.tonal_bins(p, hz)
+    assert np.flatnonzero(line).tolist() == [10]
+    assert not hum.tonal_bins(p[:, :hum.TONAL_MIN_FRAMES - 1], hz).any()
+    with pytest.raises(ConfigError, match="n_ch, n_frames, n_bins"):
+        hum.tonal_bins(p[0], hz)
+
+
+def test_line_frequencies_complete_a_comb_and_refine_a_single_line():
+    """Runs of line bins become lines at the recording's spectral peaks: three harmonics of
+    50.3 Hz (1, 10, 20 of 21) give every harmonic up to the highest of them (within 0.05 Hz),
+    a lone line at 1234.5 Hz itself."""
+    n = 4 * FS
+    t = np.arange(n) / FS
+    rng = np.random.default_rng(13)
+    x = 0.01 * rng.standard_normal((2, n)) + _buzz(n, 50.3, 1100.0, rng)
+    hz = np.arange(513) * FS / 1024
+    line = np.zeros(513, dtype=bool)
+    for f in (50.3, 503.0, 1005.9):  # harmonics 1, 10, 20 only
+        line[int(np.round(f / hz[1]))] = True
+    got = hum.line_frequencies(x, FS, line, hz)
+    assert len(got) == 20 and np.max(np.abs(got - 50.3 * np.arange(1, 21))) < 0.05
+    y = 0.01 * rng.standard_normal((2, n)) + np.sin(2 * np.pi * 1234.5 * t)
+    one = np.zeros(513, dtype=bool)
+    one[int(np.round(1234.5 / hz[1]))] = True
+    assert hum.line_frequencies(y, FS, one, hz) == pytest.approx([1234.5], abs=0.1)
+    assert hum.line_frequencies(y, FS, np.zeros(513, dtype=bool), hz).size == 0
+
+
+def test_remove_lines_takes_the_hum_out_and_keeps_the_delay():
+    """Noise 3 samples later on channel 1 plus one buzz on both: after the notches the buzz's
+    lines are > 30 dB down and the GCC finds the 3-sample delay to 0.05 sample (zero-phase
+    notches, the same on every channel, move no TDOA)."""
+    rng = np.random.default_rng(14)
+    n = 3 * FS
+    s = rng.standard_normal(n + 3)
+    x = np.stack([s[3:], s[:-3]]) * 0.1
+    b = _buzz(n, 60.0, 2400.0, rng)
+    b *= np.sqrt(np.mean(x ** 2) / np.mean(b ** 2))  # (as loud as the noise)
+    dirty = x + b
+    clean = hum.remove_lines(dirty, FS, 60.0 * np.arange(1, 41))
+    # (the notches are linear: what is left of the buzz is the buzz through them)
+    spec = np.abs(np.fft.rfft(hum.remove_lines(b, FS, 60.0 * np.arange(1, 41)) * np.hanning(n)))
+    spec_b = np.abs(np.fft.rfft(b * np.hanning(n)))
+    k = np.round(60.0 * np.arange(1, 41) * n / FS).astype(int)
+    assert 20 * np.log10(np.max(spec[k] / spec_b[k])) < -30
+    two = MicArray.from_dict({"microphones": [[0, -0.1, 0], [0, 0.1, 0]]})
+    after = estimate_tdoas(clean, FS, two, tonal_noise=False).summary_tdoa_s * FS
+    assert after[0] == pytest.approx(-3.0, abs=0.05)  # (channel 0 hears it first)
+    assert np.array_equal(hum.remove_lines(x, FS, [FS / 2]), x)  # (at Nyquist: nothing)
+
+
+def test_a_buzz_louder_than_the_voice_is_filtered_out(voice):
+    """A 60-Hz buzz 3 dB above the voice made the summary a source overhead (TDOAs near 0);
+    with the hum filtered out the TDOAs are the truth's within 0.3 sample, with one warning
+    naming the comb and its lines in tonal_lines_hz."""
+    x, truth = voice
+    want = np.array(list(truth["tdoa_s"].values())) * FS
+    y = _with_buzz(x, 3.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        off = estimate_tdoas(y, FS, "three-mic", tonal_noise=False)
+    assert np.max(np.abs(off.summary_tdoa_s * FS - want)) > 3.0  # (the failure it fixes)
+    with pytest.warns(TonalNoiseWarning, match=r"60\.0 Hz and its harmonics up to 2400 Hz"):
+        tf = estimate_tdoas(y, FS, "three-mic")
+    assert np.max(np.abs(tf.summary_tdoa_s * FS - want)) < 0.3
+    lines = np.array(tf.tonal_lines_hz)
+    on = lines[np.abs(lines / 60.0 - np.round(lines / 60.0)) < 0.01]
+    assert len(on) == 40 and np.max(np.abs(on - 60.0 * np.arange(1, 41))) < 0.1
+    assert tf.wiring_entries()["tonal_lines_hz"] == list(tf.tonal_lines_hz)
+
+
+def test_a_clean_recording_is_left_as_it_is(voice):
+    """No tonal noise: no warning, no line, and the same TDOAs as with the test switched off."""
+    x, _ = voice
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", TonalNoiseWarning)
+        tf = estimate_tdoas(x, FS, "three-mic")
+    assert tf.tonal_lines_hz == () and tf.wiring_entries()["tonal_lines_hz"] == []
+    ref = estimate_tdoas(x, FS, "three-mic", tonal_noise=False)
+    assert np.array_equal(tf.summary_tdoa_s, ref.summary_tdoa_s)
+    assert np.array_equal(tf.tdoa_s, ref.tdoa_s, equal_nan=True)
