@@ -30,12 +30,14 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.errors import ConfigError
 
 __all__ = [
+    "LineFilter",
     "COMB_SHARE",
     "COMB_TOL_HZ",
     "NOTCH_BANDWIDTH_HZ",
     "TONAL_MIN_FRAMES",
     "TONAL_MIN_HZ",
     "TONAL_STATIONARITY",
+    "check_lines",
     "line_frequencies",
     "remove_lines",
     "tonal_bins",
@@ -158,6 +160,16 @@ def _comb(lines: NDArray) -> NDArray | None:
     return None
 
 
+def _notch_sos(lines_hz: ArrayLike, fs: float, bandwidth_hz: float) -> NDArray | None:
+    """Second-order sections of one notch ``bandwidth_hz`` wide at each line (Hz) below
+    fs / 2 - ``bandwidth_hz``; None without any."""
+    hz = [float(v) for v in np.atleast_1d(np.asarray(lines_hz, dtype=float))
+          if 0 < v < fs / 2 - bandwidth_hz]
+    if not hz:
+        return None
+    return np.vstack([ss.tf2sos(*ss.iirnotch(v, v / bandwidth_hz, fs)) for v in hz])
+
+
 def remove_lines(x: ArrayLike, fs: float, lines_hz: ArrayLike,
                  bandwidth_hz: float = NOTCH_BANDWIDTH_HZ) -> NDArray:
     """``x`` (n_ch, n) with the lines at ``lines_hz`` filtered out of every channel alike: a
@@ -165,8 +177,49 @@ def remove_lines(x: ArrayLike, fs: float, lines_hz: ArrayLike,
     phase: the TDOAs of everything else are untouched). Lines at or above fs / 2 are skipped.
     """
     a = np.asarray(x, dtype=float)
-    hz = [float(v) for v in np.atleast_1d(lines_hz) if 0 < v < fs / 2 - bandwidth_hz]
-    if not hz:
-        return a.copy()
-    sos = np.vstack([ss.tf2sos(*ss.iirnotch(v, v / bandwidth_hz, fs)) for v in hz])
-    return ss.sosfiltfilt(sos, a, axis=-1)
+    sos = _notch_sos(lines_hz, fs, bandwidth_hz)
+    return a.copy() if sos is None else ss.sosfiltfilt(sos, a, axis=-1)
+
+
+def check_lines(lines_hz: ArrayLike) -> tuple[float, ...]:
+    """Line frequencies (Hz) as a tuple of floats, each finite and > 0 (ConfigError else)."""
+    try:
+        hz = np.atleast_1d(np.asarray(lines_hz, dtype=float))
+    except (TypeError, ValueError):
+        hz = None
+    if hz is None or hz.ndim != 1 or not np.all(np.isfinite(hz) & (hz > 0)):
+        raise ConfigError(f"line frequencies must be numbers of Hz > 0, got {lines_hz!r}")
+    return tuple(float(v) for v in hz)
+
+
+class LineFilter:
+    """The notches of :func:`remove_lines` for a stream: causal, block after block, with
+    their state carried over (a block's filtered samples do not depend on how the stream was
+    cut into blocks). The same filter on every channel changes no TDOA -- the cross spectra
+    gain ``|H|^2``, a real factor -- though each channel's phase near a notch is shifted; the
+    first ~0.3 s after the filter starts still hold some hum (the notches' time constant,
+    1 / (pi x ``bandwidth_hz``)).
+
+    Parameters
+    ----------
+    lines_hz : sequence of float
+        The lines to remove, Hz (e.g. ``TdoaFrames.tonal_lines_hz``).
+    fs : float
+        Sample rate, Hz.
+    n_channels : int
+        Channels of every block.
+    """
+
+    def __init__(self, lines_hz: ArrayLike, fs: float, n_channels: int,
+                 bandwidth_hz: float = NOTCH_BANDWIDTH_HZ) -> None:
+        self.lines_hz = check_lines(lines_hz)
+        self.sos = _notch_sos(self.lines_hz, fs, bandwidth_hz)
+        self.zi = (None if self.sos is None
+                   else np.zeros((self.sos.shape[0], int(n_channels), 2)))
+
+    def __call__(self, data: NDArray) -> NDArray:
+        """The block ``data`` (n_channels, n) filtered, in its dtype when that is a float."""
+        if self.sos is None or data.shape[1] == 0:
+            return data
+        y, self.zi = ss.sosfilt(self.sos, data, axis=-1, zi=self.zi)
+        return y.astype(data.dtype, copy=False) if data.dtype.kind == "f" else y

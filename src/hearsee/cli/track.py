@@ -94,16 +94,17 @@ def _stream_band(asked: tuple[float, float] | None, x, fs: float, frame_ms: floa
 WIRING_SCAN_S = 30.0
 
 
-def _check_wiring(x, fs: float, arr, cfg) -> bool:
+def _check_wiring(x, fs: float, arr, cfg) -> tuple[bool, tuple[float, ...]]:
     """:func:`hearsee.stream.pipeline.wiring_estimate` of a file's first
     :data:`WIRING_SCAN_S` seconds, for its warnings of a microphone wired with inverted
-    polarity or channels out of sync, before the file is streamed. In ``cfg.band_hz``, which
-    :func:`_stream_band` has already trimmed of an empty top band (so no second search for
-    one). True when it told of either."""
+    polarity, channels out of sync or mains hum, before the file is streamed. In
+    ``cfg.band_hz``, which :func:`_stream_band` has already trimmed of an empty top band (so
+    no second search for one). (Whether it told of a wiring fault, the lines of hum found:
+    the stream notches them out.)"""
     from hearsee.stream.pipeline import wiring_estimate
 
     tf = wiring_estimate(x[:, :int(WIRING_SCAN_S * fs)], fs, arr, cfg, empty_band_db=None)
-    return tf is not None and tf.wiring_fault
+    return (False, ()) if tf is None else (tf.wiring_fault, tf.tonal_lines_hz)
 
 
 def _srp_band(gcc_band: tuple[float, float] | None, srp_band: tuple[float, float] | None
@@ -316,10 +317,11 @@ def track_cmd(
         cfg.band_hz, cfg.srp_band_hz = used, _srp_band(used, cfg.srp_band_hz)
         if used is not None:
             note_empty_band(recording, used, band, source.fs)
+        lines: tuple[float, ...] = ()
         if device is None:
-            told = _check_wiring(source.x, source.fs, arr, cfg)
+            told, lines = _check_wiring(source.x, source.fs, arr, cfg)
         # (a file was checked ahead, above; live input once it has heard a source)
-        pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points)
+        pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points, tonal_lines_hz=lines)
         try:
             pipe.run(source, sink, threaded=device is not None)
         except KeyboardInterrupt:
@@ -337,7 +339,8 @@ def track_cmd(
                "dropped_blocks": st.n_dropped_blocks, "late_blocks": st.n_late_blocks,
                "input_overflows": st.n_overflows, "status": st.status, "audio_s": st.audio_s,
                "real_time_factor": st.real_time_factor,
-               "cpu_real_time_factor": st.cpu_real_time_factor, **st.latency_summary()}
+               "cpu_real_time_factor": st.cpu_real_time_factor, **st.latency_summary(),
+               "tonal_lines_hz": list(st.tonal_lines_hz)}
     if fmt is TrackFormat.json:
         # (a device by the name PortAudio gives it: "--device 2" or a part of a name is not
         # what was opened)

@@ -53,7 +53,7 @@ import threading
 import time
 import warnings
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -61,6 +61,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.hum import LineFilter, check_lines
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.signals import (
@@ -252,7 +253,9 @@ class StreamStats:
     longer than the pipeline's ``max_stall_s``, or the source gave up itself, as
     :class:`DeviceSource` does after its ``timeout_s``) or ``"interrupted"`` (Ctrl-C: the run
     re-raises the KeyboardInterrupt; the stats describe what was processed until then, as they
-    do after an error).
+    do after an error); ``tonal_lines_hz`` the lines of stationary tonal noise (mains hum)
+    notched out of the input (Hz; the pipeline's ``tonal_lines_hz``, or those the live input's
+    check found), empty when none.
     """
 
     n_blocks: int = 0
@@ -267,6 +270,7 @@ class StreamStats:
     cpu_s: float = 0.0
     latencies_s: list[float] = field(default_factory=list)
     status: str = "ok"
+    tonal_lines_hz: tuple[float, ...] = ()
 
     @property
     def real_time_factor(self) -> float:
@@ -440,8 +444,7 @@ def wiring_estimate(x: NDArray, fs: float, array: MicArray, cfg: StreamConfig,
 
     try:
         return estimate_tdoas(x, fs, array, cfg.frame_ms, cfg.hop_ms, cfg.method,
-                              band_hz=cfg.band_hz, empty_band_db=empty_band_db,
-                              tonal_noise=False)  # (the stream does not filter hum out)
+                              band_hz=cfg.band_hz, empty_band_db=empty_band_db)
     except HearseeError:
         return None
 
@@ -454,7 +457,9 @@ class _WiringWatch(_FirstWindows):
     (:class:`~hearsee.errors.InvertedPolarityWarning`: the stream sees one frame at a time and
     has no averaged correlation to tell it; its directions were 30-40 deg off without a word),
     and of channels out of sync (:class:`~hearsee.errors.ChannelSyncWarning`, the same
-    estimate's correlations).
+    estimate's correlations); stationary tonal noise it finds (mains hum,
+    :class:`~hearsee.errors.TonalNoiseWarning`) is notched out of the stream from then on
+    (``tonal_lines_hz``, :class:`~hearsee.audio.hum.LineFilter`).
     A window where no source is heard (no whole-recording estimate, no inverted microphone) is
     looked past: the next one is checked.
 
@@ -470,6 +475,7 @@ class _WiringWatch(_FirstWindows):
     def __init__(self, array: MicArray, fs: float, cfg: StreamConfig) -> None:
         super().__init__(int(round(WIRING_CHECK_S * float(fs))))
         self.array, self.fs, self.cfg = array, float(fs), cfg
+        self.tonal_lines_hz: tuple[float, ...] = ()  # (hum found: the stream notches it out)
 
     def finish(self) -> None:
         """The input ended: check what there is, if at least :data:`WIRING_CHECK_MIN_S`."""
@@ -479,6 +485,8 @@ class _WiringWatch(_FirstWindows):
 
     def _check(self, x: NDArray) -> bool:
         tf = wiring_estimate(x, self.fs, self.array, self.cfg)
+        if tf is not None and tf.tonal_lines_hz:
+            self.tonal_lines_hz = tf.tonal_lines_hz
         # (once a fault is told, the check is done: channels out of sync were told again every
         # 10 s, in other digits)
         return tf is not None and (tf.wiring_fault
@@ -2070,12 +2078,19 @@ class StreamPipeline:
         recording (``.x``), as :class:`DeviceSource`; a recording can be checked ahead
         (``hearsee track`` does), and the check's one whole-recording estimate (~25 ms for 10 s
         of three-mic audio at 16 kHz) would add 5-10 % to a 20-s file's stream.
+    tonal_lines_hz : sequence of float
+        Lines of stationary tonal noise (Hz; mains hum that the wiring picks up, e.g. a file's
+        ``TdoaFrames.tonal_lines_hz``, as ``hearsee track`` finds them ahead) to notch out of
+        every block before it is framed (:class:`~hearsee.audio.hum.LineFilter`: causal, the
+        same on every channel). Empty (default): none -- unless the live input's check finds
+        some (``check_wiring``). A 60-Hz buzz 3 dB above a voice made the stream's directions
+        follow the buzz.
     """
 
     def __init__(self, array: MicArray | str, config: StreamConfig | None = None, rig: Any = None,
                  image_points: Callable[[float], Any] | None = None, queue_size: int = 8,
                  stall_timeout_s: float = 0.5, max_stall_s: float = 5.0,
-                 check_wiring: bool | None = None) -> None:
+                 check_wiring: bool | None = None, tonal_lines_hz: Sequence[float] = ()) -> None:
         self.array = load_array(array)
         check_trackable(self.array)  # (before any audio)
         self.config = _stream_config(config)
@@ -2092,6 +2107,7 @@ class StreamPipeline:
         self.max_stall_s = float(max_stall_s)
         self.check_wiring = (None if check_wiring is None
                              else true_or_false("check_wiring", check_wiring))
+        self.tonal_lines_hz = check_lines(tonal_lines_hz)
         self.stats = StreamStats()
         self._reset_requested = False
 
@@ -2142,18 +2158,27 @@ class StreamPipeline:
         live = all(getattr(s, "x", None) is None for s in _source_chain(source))
         check = live if self.check_wiring is None else self.check_wiring
         watch = _WiringWatch(self.array, source.fs, self.config) if check else None
+        hum = (LineFilter(self.tonal_lines_hz, source.fs, source.n_channels)
+               if self.tonal_lines_hz else None)
+        st.tonal_lines_hz = self.tonal_lines_hz
         updates: list[Update] = []
         last_sample = 0
         t_start = time.perf_counter()
         c_start = time.process_time()
 
         def handle(blk: Block) -> None:
-            nonlocal last_sample
+            nonlocal last_sample, hum
             st.n_blocks += 1
             last_sample = max(last_sample, blk.start + blk.data.shape[1])
+            raw = blk.data
+            if hum is not None:
+                blk = replace(blk, data=hum(raw))
             emit(framer.push(blk))
             if watch is not None:
-                watch.add(blk.data)
+                watch.add(raw)
+                if hum is None and watch.tonal_lines_hz:  # (hum heard: notched from now on)
+                    hum = LineFilter(watch.tonal_lines_hz, source.fs, source.n_channels)
+                    st.tonal_lines_hz = watch.tonal_lines_hz
 
         def emit(batch: FrameBatch | None) -> None:
             if batch is None:
