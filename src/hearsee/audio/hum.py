@@ -22,25 +22,31 @@ Units: Hz for frequencies and sample rates.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import scipy.fft as sfft
 import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.errors import ConfigError
+from hearsee.errors import ConfigError, TonalNoiseWarning
 
 __all__ = [
     "LineFilter",
     "COMB_SHARE",
     "COMB_TOL_HZ",
+    "MAX_ROUNDS",
     "NOTCH_BANDWIDTH_HZ",
     "TONAL_MIN_FRAMES",
     "TONAL_MIN_HZ",
     "TONAL_STATIONARITY",
     "check_lines",
+    "filter_lines",
+    "find_lines",
     "line_frequencies",
     "remove_lines",
     "tonal_bins",
+    "warn_lines",
 ]
 
 #: A frequency bin holds a line when, on every microphone, its power in no frame falls below
@@ -160,6 +166,41 @@ def _comb(lines: NDArray) -> NDArray | None:
     return None
 
 
+def find_lines(x: ArrayLike, fs: float, frame_ms: float = 64.0) -> NDArray:
+    """The lines (Hz) of stationary tonal noise on every channel of the recording ``x``
+    (n_ch, n): :func:`tonal_bins` of its frames (``frame_ms`` long, every half frame, Tukey
+    window with 25 % tapers as :func:`hearsee.audio.tdoa.estimate_tdoas`'; frames silent on
+    every channel left out), then :func:`line_frequencies`. Empty when there is none. For
+    analyses that do not go through ``estimate_tdoas``, which finds them in its own spectra."""
+    a = np.asarray(x, dtype=float)
+    n = max(int(round(frame_ms * 1e-3 * fs)), 2)
+    if a.ndim != 2 or a.shape[1] < n:
+        return np.zeros(0)
+    f, _, z = ss.stft(a, fs, window=("tukey", 0.25), nperseg=n, noverlap=n - n // 2,
+                      boundary=None, padded=False, detrend="constant", axis=-1)
+    power = np.moveaxis(np.abs(z) ** 2, -1, 1)  # (n_ch, frames, bins)
+    sounding = np.any(power.sum(axis=2) > 0, axis=0)
+    line = tonal_bins(power[:, sounding], f)
+    return line_frequencies(a, fs, line, f) if line.any() else np.zeros(0)
+
+
+def warn_lines(lines: NDArray, stacklevel: int = 3) -> None:
+    """A :class:`~hearsee.errors.TonalNoiseWarning` naming the lines removed (Hz): a harmonic
+    comb by its fundamental and highest harmonic. ``stacklevel`` 3: the caller of the
+    function that calls this one."""
+    k = np.round(lines / lines[0])
+    on = np.abs(lines - k * lines[0]) <= COMB_TOL_HZ
+    if on.sum() >= 3:  # (a harmonic comb: line_frequencies returns it whole)
+        off = int(np.count_nonzero(~on))
+        what = (f"{lines[0]:.1f} Hz and its harmonics up to {lines[on][-1]:.0f} Hz"
+                + (f" (and {off} other line{'s' * (off > 1)})" if off else ""))
+    else:
+        what = ", ".join(f"{f:.0f}" for f in lines[:6]) + (", ..." * (len(lines) > 6)) + " Hz"
+    warnings.warn(f"stationary tonal noise on every microphone at {what} (mains hum picked up "
+                  "by the wiring, a motor's or a fan's whine?): filtered out before the TDOAs",
+                  TonalNoiseWarning, stacklevel=stacklevel)
+
+
 def _notch_sos(lines_hz: ArrayLike, fs: float, bandwidth_hz: float) -> NDArray | None:
     """Second-order sections of one notch ``bandwidth_hz`` wide at each line (Hz) below
     fs / 2 - ``bandwidth_hz``; None without any."""
@@ -190,6 +231,33 @@ def check_lines(lines_hz: ArrayLike) -> tuple[float, ...]:
     if hz is None or hz.ndim != 1 or not np.all(np.isfinite(hz) & (hz > 0)):
         raise ConfigError(f"line frequencies must be numbers of Hz > 0, got {lines_hz!r}")
     return tuple(float(v) for v in hz)
+
+
+#: :func:`filter_lines` looks again for lines this many times at most
+MAX_ROUNDS = 3
+
+
+def filter_lines(x: ArrayLike, fs: float, lines_hz: ArrayLike, frame_ms: float = 64.0
+                 ) -> tuple[NDArray, NDArray]:
+    """``x`` (n_ch, n) without the lines ``lines_hz`` (Hz; :func:`remove_lines`) nor those
+    their removal uncovers: a line beside a stronger one (the top harmonic of a comb next to
+    the one below) can pass the test only once that one is gone. :func:`find_lines` looks
+    again after each removal, up to :data:`MAX_ROUNDS` times; the lines found are joined to
+    the others (a harmonic comb completed again, :func:`line_frequencies`). Returns (the
+    filtered recording, every line removed, Hz, ascending)."""
+    lines = np.sort(np.asarray(lines_hz, dtype=float))
+    y = remove_lines(x, fs, lines)
+    for _ in range(MAX_ROUNDS):
+        more = find_lines(y, fs, frame_ms)
+        more = more[np.min(np.abs(more[:, None] - lines[None]), axis=1, initial=np.inf)
+                    > COMB_TOL_HZ] if lines.size else more
+        if not more.size:
+            break
+        lines = np.sort(np.concatenate((lines, more)))
+        comb = _comb(lines)
+        lines = lines if comb is None else comb
+        y = remove_lines(x, fs, lines)
+    return y, lines
 
 
 class LineFilter:

@@ -86,7 +86,6 @@ from hearsee.errors import (
     ChannelSyncWarning,
     ConfigError,
     InvertedPolarityWarning,
-    TonalNoiseWarning,
 )
 from hearsee.geometry import fibonacci_sphere
 
@@ -1100,21 +1099,6 @@ def _tonal_lines(power_all: NDArray | None, frames: NDArray, win: NDArray, nfft:
         p = _spectra_power(frames[:, idx, :], win, nfft, k0, k1)[1]
     line = hum.tonal_bins(p, np.arange(k0, k1) * fs / nfft)
     return line if line.any() else None
-
-
-def _warn_tonal(lines: NDArray) -> None:
-    """A :class:`~hearsee.errors.TonalNoiseWarning` naming the lines removed (Hz)."""
-    k = np.round(lines / lines[0])
-    on = np.abs(lines - k * lines[0]) <= hum.COMB_TOL_HZ
-    if on.sum() >= 3:  # (a harmonic comb: line_frequencies returns it whole)
-        off = int(np.count_nonzero(~on))
-        what = (f"{lines[0]:.1f} Hz and its harmonics up to {lines[on][-1]:.0f} Hz"
-                + (f" (and {off} other line{'s' * (off > 1)})" if off else ""))
-    else:
-        what = ", ".join(f"{f:.0f}" for f in lines[:6]) + (", ..." * (len(lines) > 6)) + " Hz"
-    warnings.warn(f"stationary tonal noise on every microphone at {what} (mains hum picked up "
-                  "by the wiring, a motor's or a fan's whine?): filtered out before the TDOAs",
-                  TonalNoiseWarning, stacklevel=3)
 
 
 #: :func:`_empty_band_cut` looks at the spectra of this many of a recording's loudest frames (the
@@ -2328,9 +2312,10 @@ def estimate_tdoas(
     if tonal_noise and not given:
         line = _tonal_lines(power_all, frames, win, nfft, k0, k1, _sounding(energy), fs)
         if line is not None:  # filter the lines out of the recording and start again with it
-            lines = hum.line_frequencies(a, fs, line, np.arange(k0, k1) * fs / nfft)
-            _warn_tonal(lines)
-            call.update(x=hum.remove_lines(a, fs, lines), array=arr, tonal_noise=False)
+            y, lines = hum.filter_lines(a, fs, hum.line_frequencies(
+                a, fs, line, np.arange(k0, k1) * fs / nfft), frame_ms)
+            hum.warn_lines(lines)
+            call.update(x=y, array=arr, tonal_noise=False)
             return replace(estimate_tdoas(**call), tonal_lines_hz=tuple(map(float, lines)))
     if frame_noise_psd is None:
         noise_psd = (_noise_spectrum(frames, active, win, nfft, k0, k1, power_all)
