@@ -85,7 +85,8 @@ def tonal_bins(power: ArrayLike, bin_hz: ArrayLike) -> NDArray:
         Each frame's power spectrum ``|X|^2`` per microphone (frames that are not digital
         silence).
     bin_hz : array (n_bins,)
-        The bins' frequencies, Hz; bins below :data:`TONAL_MIN_HZ` are never lines.
+        The bins' frequencies, Hz, ascending; bins below :data:`TONAL_MIN_HZ` are never
+        lines.
 
     Returns
     -------
@@ -98,11 +99,21 @@ def tonal_bins(power: ArrayLike, bin_hz: ArrayLike) -> NDArray:
     if p.ndim != 3 or f.shape != p.shape[2:]:
         raise ConfigError(f"tonal_bins needs power (n_ch, n_frames, n_bins) and bin_hz "
                           f"(n_bins,), got {p.shape} and {f.shape}")
+    line = np.zeros(p.shape[2], dtype=bool)
     if p.shape[1] < TONAL_MIN_FRAMES:
-        return np.zeros(p.shape[2], dtype=bool)
-    mean = p.mean(axis=1)
-    return (np.all(p.min(axis=1) >= TONAL_STATIONARITY * mean, axis=0)
-            & np.all(mean > 0, axis=0) & (f >= TONAL_MIN_HZ))
+        return line
+    cand: NDArray | slice = slice(int(np.searchsorted(f, TONAL_MIN_HZ)), None)  # (sorted)
+    for ch in p:  # (channel by channel, on the bins still in question: the first channel
+        # usually leaves none, and the others cost nothing then)
+        q = ch[:, cand]
+        mean = q.mean(axis=0)
+        keep = (q.min(axis=0) >= TONAL_STATIONARITY * mean) & (mean > 0)
+        cand = (np.flatnonzero(keep) + cand.start if isinstance(cand, slice)
+                else cand[keep])
+        if not cand.size:
+            break
+    line[cand] = True
+    return line
 
 
 def _runs(mask: NDArray) -> list[tuple[int, int]]:
