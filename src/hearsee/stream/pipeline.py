@@ -61,7 +61,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
-from hearsee.audio.hum import LineFilter, check_lines
+from hearsee.audio.hum import LineFilter, check_lines, filter_lines, find_lines, warn_lines
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.signals import (
@@ -430,23 +430,55 @@ WIRING_CHECK_MIN_S = 2.0
 
 
 def wiring_estimate(x: NDArray, fs: float, array: MicArray, cfg: StreamConfig,
-                    empty_band_db: float | None = EMPTY_BAND_DB) -> TdoaFrames | None:
+                    empty_band_db: float | None = EMPTY_BAND_DB, tonal_noise: bool = True
+                    ) -> TdoaFrames | None:
     """The whole-recording TDOA estimate of ``x`` (n_mics, n) in the stream's frames, weighting
     and band (``cfg``), for its warning of a microphone wired with inverted polarity
     (:class:`~hearsee.errors.InvertedPolarityWarning`, which
     :func:`~hearsee.audio.tdoa.estimate_tdoas` gives): the stream sees one frame at a time and
     has no averaged correlation to tell it. None when no estimate can be made (too short for a
     frame, silent, NaN samples...: the stream says what it says of them). ``empty_band_db``:
-    :func:`~hearsee.audio.tdoa.estimate_tdoas`'s (None where the band was trimmed already).
+    :func:`~hearsee.audio.tdoa.estimate_tdoas`'s (None where the band was trimmed already),
+    as ``tonal_noise`` (False where the hum was looked for already).
     ``hearsee track`` runs it on a file's start before streaming it, :class:`_WiringWatch` on
     live input."""
     from hearsee.errors import HearseeError
 
     try:
         return estimate_tdoas(x, fs, array, cfg.frame_ms, cfg.hop_ms, cfg.method,
-                              band_hz=cfg.band_hz, empty_band_db=empty_band_db)
+                              band_hz=cfg.band_hz, empty_band_db=empty_band_db,
+                              tonal_noise=tonal_noise)
     except HearseeError:
         return None
+
+
+#: a live stream looks for mains hum in its first this many seconds (:class:`_HumWatch`)
+HUM_CHECK_S = 3.0
+
+
+class _HumWatch(_FirstWindows):
+    """Stationary tonal noise on every channel of a live stream -- mains hum the wiring picks
+    up, a motor's whine -- in its first :data:`HUM_CHECK_S` seconds, whether or not a source
+    is heard there (:func:`hearsee.audio.hum.find_lines` and
+    :func:`~hearsee.audio.hum.filter_lines`, with a
+    :class:`~hearsee.errors.TonalNoiseWarning`): the stream notches it out from then on
+    (``tonal_lines_hz``). One window: hum that starts later is left to :class:`_WiringWatch`,
+    whose estimate finds it as a file's does. (Before, only that estimate looked, after 10 s
+    with a source heard: a buzz 3 dB above a voice put the directions ~60 deg off until
+    then.)"""
+
+    def __init__(self, fs: float, frame_ms: float) -> None:
+        super().__init__(int(round(HUM_CHECK_S * float(fs))))
+        self.fs, self.frame_ms = float(fs), float(frame_ms)
+        self.tonal_lines_hz: tuple[float, ...] = ()
+
+    def _check(self, x: NDArray) -> bool:
+        lines = find_lines(x, self.fs, self.frame_ms)
+        if lines.size:
+            _, lines = filter_lines(x, self.fs, lines, self.frame_ms)
+            warn_lines(lines)
+            self.tonal_lines_hz = tuple(float(v) for v in lines)
+        return True
 
 
 class _WiringWatch(_FirstWindows):
@@ -476,6 +508,7 @@ class _WiringWatch(_FirstWindows):
         super().__init__(int(round(WIRING_CHECK_S * float(fs))))
         self.array, self.fs, self.cfg = array, float(fs), cfg
         self.tonal_lines_hz: tuple[float, ...] = ()  # (hum found: the stream notches it out)
+        self.tonal_noise = True  # (False once the stream notches hum out)
 
     def finish(self) -> None:
         """The input ended: check what there is, if at least :data:`WIRING_CHECK_MIN_S`."""
@@ -484,7 +517,7 @@ class _WiringWatch(_FirstWindows):
         self.done = True
 
     def _check(self, x: NDArray) -> bool:
-        tf = wiring_estimate(x, self.fs, self.array, self.cfg)
+        tf = wiring_estimate(x, self.fs, self.array, self.cfg, tonal_noise=self.tonal_noise)
         if tf is not None and tf.tonal_lines_hz:
             self.tonal_lines_hz = tf.tonal_lines_hz
         # (once a fault is told, the check is done: channels out of sync were told again every
@@ -2160,25 +2193,37 @@ class StreamPipeline:
         watch = _WiringWatch(self.array, source.fs, self.config) if check else None
         hum = (LineFilter(self.tonal_lines_hz, source.fs, source.n_channels)
                if self.tonal_lines_hz else None)
+        hum_watch = (_HumWatch(source.fs, self.config.frame_ms) if check and hum is None
+                     else None)
         st.tonal_lines_hz = self.tonal_lines_hz
         updates: list[Update] = []
         last_sample = 0
         t_start = time.perf_counter()
         c_start = time.process_time()
 
+        def notch(lines: tuple[float, ...]) -> None:
+            """Hum found by a watch: notched out of every block from now on."""
+            nonlocal hum
+            hum = LineFilter(lines, source.fs, source.n_channels)
+            st.tonal_lines_hz = lines
+            if watch is not None:
+                watch.tonal_noise = False  # (its estimate need not look for hum again)
+
         def handle(blk: Block) -> None:
-            nonlocal last_sample, hum
+            nonlocal last_sample
             st.n_blocks += 1
             last_sample = max(last_sample, blk.start + blk.data.shape[1])
-            raw = blk.data
             if hum is not None:
-                blk = replace(blk, data=hum(raw))
+                blk = replace(blk, data=hum(blk.data))
             emit(framer.push(blk))
+            if hum_watch is not None and not hum_watch.done:
+                hum_watch.add(blk.data)
+                if hum_watch.tonal_lines_hz:
+                    notch(hum_watch.tonal_lines_hz)
             if watch is not None:
-                watch.add(raw)
-                if hum is None and watch.tonal_lines_hz:  # (hum heard: notched from now on)
-                    hum = LineFilter(watch.tonal_lines_hz, source.fs, source.n_channels)
-                    st.tonal_lines_hz = watch.tonal_lines_hz
+                watch.add(blk.data)  # (without the hum once it is notched out)
+                if hum is None and watch.tonal_lines_hz:
+                    notch(watch.tonal_lines_hz)
 
         def emit(batch: FrameBatch | None) -> None:
             if batch is None:
