@@ -124,6 +124,8 @@ def test_a_clean_recording_is_left_as_it_is(voice):
         warnings.simplefilter("error", TonalNoiseWarning)
         tf = estimate_tdoas(x, FS, "three-mic")
     assert tf.tonal_lines_hz == () and tf.wiring_entries()["tonal_lines_hz"] == []
+    with pytest.raises(ConfigError, match="tonal_noise"):
+        estimate_tdoas(x, FS, "three-mic", tonal_noise="no")
     ref = estimate_tdoas(x, FS, "three-mic", tonal_noise=False)
     assert np.array_equal(tf.summary_tdoa_s, ref.summary_tdoa_s)
     assert np.array_equal(tf.tdoa_s, ref.tdoa_s, equal_nan=True)

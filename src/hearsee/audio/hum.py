@@ -32,9 +32,10 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.errors import ConfigError, TonalNoiseWarning
 
 __all__ = [
-    "LineFilter",
     "COMB_SHARE",
     "COMB_TOL_HZ",
+    "LINE_SPECTRUM_S",
+    "LineFilter",
     "MAX_ROUNDS",
     "NOTCH_BANDWIDTH_HZ",
     "TONAL_MIN_FRAMES",
@@ -68,6 +69,9 @@ COMB_TOL_HZ = 1.5
 #: ... when at least this share of them (and three) do; the others are removed as well (a
 #: voice's harmonic beside a hum line can move a line's peak off the comb)
 COMB_SHARE = 2.0 / 3.0
+#: :func:`line_frequencies` reads the lines' frequencies off the spectrum of a recording's first
+#: this many seconds (~0.02 Hz resolution; a whole hour would be a 2**28-point transform)
+LINE_SPECTRUM_S = 30.0
 #: -3 dB width of each notch (Hz): ~40 lines of mains hum take ~80 Hz out of a voice's band
 NOTCH_BANDWIDTH_HZ = 2.0
 
@@ -127,14 +131,15 @@ def line_frequencies(x: ArrayLike, fs: float, line: ArrayLike, bin_hz: ArrayLike
     ``line`` (bool, as :func:`tonal_bins`) at ``bin_hz``.
 
     Each run of line bins is one line, its frequency the peak of the channels' summed
-    spectrum of the whole recording (Hann window, 2x zero padding: ~fs / 2n resolution)
-    within the run, refined by a parabola through the log power. When three or more lines
-    lie within :data:`COMB_TOL_HZ` of the multiples of one fundamental (the lowest line, or
-    it over 2-4, not below :data:`TONAL_MIN_HZ`), they are a harmonic comb -- mains hum --
-    and every multiple of the fundamental fitted to them (least squares through 0) up to the
-    highest line is returned.
+    spectrum of the recording's first :data:`LINE_SPECTRUM_S` seconds (Hann window, 2x zero
+    padding: ~fs / 2n resolution) within the run, refined by a parabola through the log
+    power. When three or more lines, and :data:`COMB_SHARE` of them, lie within
+    :data:`COMB_TOL_HZ` of the multiples of one fundamental (the lowest line, or it over 2-4,
+    not below :data:`TONAL_MIN_HZ`), they are a harmonic comb -- mains hum -- and every
+    multiple of the fundamental fitted to them (least squares through 0) up to the highest
+    line is returned, with the lines off the comb.
     """
-    a = np.asarray(x, dtype=float)
+    a = np.asarray(x, dtype=float)[..., :int(LINE_SPECTRUM_S * fs)]
     f = np.asarray(bin_hz, dtype=float)
     runs = _runs(np.asarray(line, dtype=bool))
     if not runs:

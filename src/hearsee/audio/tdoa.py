@@ -80,7 +80,7 @@ from hearsee.audio import hum
 from hearsee.audio.arrays import MicArray, closure_rms, load_array, pair_closure_projector
 from hearsee.audio.localize import IN_PLANE_RANGE_M, _inplane_tdoa, array_geometry
 from hearsee.audio.signals import as_samples, check_fs
-from hearsee.config import finite_number, is_real, whole_number
+from hearsee.config import finite_number, is_real, true_or_false, whole_number
 from hearsee.errors import (
     AudioInputError,
     ChannelSyncWarning,
@@ -2198,6 +2198,7 @@ def estimate_tdoas(
     TdoaFrames
     """
     call = dict(locals())  # (the arguments, for the run on a recording without tonal noise)
+    tonal_noise = true_or_false("tonal_noise", tonal_noise)
     arr = load_array(array)
     a = as_samples(x)
     if a.ndim != 2 or a.shape[0] != arr.n_mics:
