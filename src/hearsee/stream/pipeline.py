@@ -2195,6 +2195,8 @@ class StreamPipeline:
                if self.tonal_lines_hz else None)
         hum_watch = (_HumWatch(source.fs, self.config.frame_ms) if check and hum is None
                      else None)
+        if watch is not None and hum is not None:
+            watch.tonal_noise = False  # (the hum was given: notched from the start)
         st.tonal_lines_hz = self.tonal_lines_hz
         updates: list[Update] = []
         last_sample = 0
