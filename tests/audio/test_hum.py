@@ -8,19 +8,12 @@ import pytest
 
 from hearsee.audio import hum
 from hearsee.audio.arrays import MicArray
+from hearsee.audio.signals import mains_hum
 from hearsee.audio.tdoa import estimate_tdoas
 from hearsee.errors import ConfigError, TonalNoiseWarning
 from hearsee.sim.audio import simulate_recording
 
 FS = 16000
-
-
-def _buzz(n: int, f0: float, top_hz: float, rng: np.random.Generator) -> np.ndarray:
-    """A buzz: every harmonic of ``f0`` up to ``top_hz``, amplitude 1 / sqrt(k), random
-    phases (the same waveform goes to every channel: electrical pickup)."""
-    t = np.arange(n) / FS
-    return sum(np.sin(2 * np.pi * k * f0 * t + rng.uniform(0, 2 * np.pi)) / np.sqrt(k)
-               for k in range(1, int(top_hz // f0) + 1))
 
 
 @pytest.fixture(scope="module")
@@ -32,9 +25,13 @@ def voice():
                               snr_db=20, seed=3)
 
 
-def _with_buzz(x: np.ndarray, db: float, f0: float = 60.0) -> np.ndarray:
-    b = _buzz(x.shape[1], f0, 2400.0, np.random.default_rng(7))
-    return x + b * np.sqrt(np.mean(x ** 2) / np.mean(b ** 2) * 10 ** (db / 10))
+def _with_hum(db: float, array: str = "three-mic", az: float = 56.0) -> tuple:
+    """The voice of :func:`voice` (or at ``az`` deg, elevation 0, through ``array``) with a
+    60-Hz hum ``db`` dB above it on every channel (``simulate_recording(hum_db=)``)."""
+    el = 0.3 if array == "three-mic" else 0.0
+    src = 2.0 * np.array([np.cos(np.radians(az)), np.sin(np.radians(az)), el])
+    return simulate_recording(array, src, signal="male", duration_s=4.0 if el else 3.0,
+                              fs=FS, snr_db=20, seed=3 if el else 5, hum_db=db, hum_hz=60.0)
 
 
 def test_tonal_bins_flag_a_line_on_every_channel_only():
@@ -60,7 +57,7 @@ def test_line_frequencies_complete_a_comb_and_refine_a_single_line():
     n = 4 * FS
     t = np.arange(n) / FS
     rng = np.random.default_rng(13)
-    x = 0.01 * rng.standard_normal((2, n)) + _buzz(n, 50.3, 1100.0, rng)
+    x = 0.01 * rng.standard_normal((2, n)) + mains_hum(4.0, FS, 50.3, rng, top_hz=1100.0)
     hz = np.arange(513) * FS / 1024
     line = np.zeros(513, dtype=bool)
     for f in (50.3, 503.0, 1005.9):  # harmonics 1, 10, 20 only
@@ -82,8 +79,7 @@ def test_remove_lines_takes_the_hum_out_and_keeps_the_delay():
     n = 3 * FS
     s = rng.standard_normal(n + 3)
     x = np.stack([s[3:], s[:-3]]) * 0.1
-    b = _buzz(n, 60.0, 2400.0, rng)
-    b *= np.sqrt(np.mean(x ** 2) / np.mean(b ** 2))  # (as loud as the noise)
+    b = mains_hum(3.0, FS, 60.0, rng, top_hz=2400.0) * np.sqrt(np.mean(x ** 2))  # (as loud)
     dirty = x + b
     clean = hum.remove_lines(dirty, FS, 60.0 * np.arange(1, 41))
     # (the notches are linear: what is left of the buzz is the buzz through them)
@@ -103,17 +99,17 @@ def test_a_buzz_louder_than_the_voice_is_filtered_out(voice):
     naming the comb and its lines in tonal_lines_hz."""
     x, truth = voice
     want = np.array(list(truth["tdoa_s"].values())) * FS
-    y = _with_buzz(x, 3.0)
+    y, _ = _with_hum(3.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         off = estimate_tdoas(y, FS, "three-mic", tonal_noise=False)
     assert np.max(np.abs(off.summary_tdoa_s * FS - want)) > 3.0  # (the failure it fixes)
-    with pytest.warns(TonalNoiseWarning, match=r"60\.0 Hz and its harmonics up to 2400 Hz"):
+    with pytest.warns(TonalNoiseWarning, match=r"60\.0 Hz and its harmonics up to 2460 Hz"):
         tf = estimate_tdoas(y, FS, "three-mic")
     assert np.max(np.abs(tf.summary_tdoa_s * FS - want)) < 0.3
     lines = np.array(tf.tonal_lines_hz)
     on = lines[np.abs(lines / 60.0 - np.round(lines / 60.0)) < 0.01]
-    assert len(on) == 40 and np.max(np.abs(on - 60.0 * np.arange(1, 41))) < 0.1
+    assert len(on) == 41 and np.max(np.abs(on - 60.0 * np.arange(1, 42))) < 0.1
     assert tf.wiring_entries()["tonal_lines_hz"] == list(tf.tonal_lines_hz)
 
 
@@ -138,10 +134,7 @@ def test_a_masked_pair_localizes_through_a_buzz():
     masked document warns once and lists the lines."""
     from hearsee.audio import mask
 
-    src = 2.0 * np.array([np.cos(np.radians(130.0)), np.sin(np.radians(130.0)), 0.0])
-    x, _ = simulate_recording("mask2-asym", src, signal="male", duration_s=3.0, fs=FS,
-                              snr_db=20, seed=5)
-    y = _with_buzz(x, 3.0)
+    y, _ = _with_hum(3.0, "mask2-asym", 130.0)
     with pytest.warns(TonalNoiseWarning) as got:
         est = mask.localize_mask(y, FS, "mask2-asym")
     assert len(got) == 1 and abs(est.azimuth_deg - 130.0) < 3.0
@@ -155,3 +148,16 @@ def test_a_masked_pair_localizes_through_a_buzz():
     assert abs(doc["summary"]["tonal_lines_hz"][0] - 60.0) < 0.1
     with pytest.raises(ConfigError, match="line frequencies"):
         mask.localize_mask(y, FS, "mask2-asym", tonal_lines_hz=[-60.0])
+
+
+def test_mains_hum_is_a_unit_rms_comb_below_the_top_and_nyquist():
+    """50 Hz at 16 kHz: harmonics 50..2500 Hz, unit RMS; at 4 kHz sampling only those below
+    2 kHz; a fundamental that is not a frequency or has no harmonic below the top: ConfigError."""
+    for fs, top in ((FS, 2500), (4000, 1950)):
+        h = mains_hum(1.0, fs, 50.0, 3)
+        assert np.sqrt(np.mean(h ** 2)) == pytest.approx(1.0)
+        spec = np.abs(np.fft.rfft(h))
+        assert set(np.flatnonzero(spec > 1e-3 * spec.max())) == set(range(50, top + 1, 50))
+    for bad in (0.0, -50.0, float("nan"), 3000.0):
+        with pytest.raises(ConfigError):
+            mains_hum(1.0, FS, bad)

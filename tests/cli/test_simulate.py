@@ -334,3 +334,36 @@ def test_simulate_force_keeps_the_earlier_file_when_a_write_fails(tmp_path, caps
                 assert isinstance(yaml.safe_load(data), dict)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
         [*names, *(["walk.csv"] if mode == "moving" else [])])
+
+
+def test_simulate_hum_is_the_same_on_every_channel_and_in_the_truth(tmp_path, capsys):
+    """--hum 0 --hum-hz 60: the recording less the one without hum (same seed) is one 60-Hz
+    harmonic waveform on every channel, as loud as the signal; the truth records it;
+    --hum with --trajectory or an out-of-range level is one error line, exit 2."""
+    src = "1.0,1.0,0.2"
+    out = tmp_path / "h.wav"
+    args = ["simulate", str(out), "--array", "two-mic", "--source", src, "--signal", "male",
+            "--duration", "1", "--seed", "4"]
+    assert main([*args, "--hum", "0", "--hum-hz", "60"]) == 0
+    truth = json.loads(out.with_suffix(".json").read_text())
+    assert truth["hum_db"] == 0.0 and truth["hum_hz"] == 60.0
+    x, _ = simulate_recording("two-mic", [1.0, 1.0, 0.2], signal="male", duration_s=1.0,
+                              seed=4)
+    y, _ = simulate_recording("two-mic", [1.0, 1.0, 0.2], signal="male", duration_s=1.0,
+                              seed=4, hum_db=0.0, hum_hz=60.0)
+    h = y - x
+    np.testing.assert_allclose(h[0], h[1], atol=1e-12)
+    assert np.mean(h ** 2) == pytest.approx(np.mean(x ** 2), rel=1e-9)
+    spec = np.abs(np.fft.rfft(h[0]))  # (1 s: 1-Hz bins)
+    assert set(np.flatnonzero(spec > 1e-3 * spec.max())) == set(range(60, 2501, 60))
+    capsys.readouterr()
+    traj = tmp_path / "t.csv"
+    traj.write_text("t,x,y,z\n0,1,1,0\n1,1,-1,0\n")
+    for extra, msg in (([f"--trajectory={traj}"], "--hum applies to a static --source only"),
+                       (["--source", src, "--hum", "70"], "hum_db must be")):
+        bad = ["simulate", str(tmp_path / "b.wav"), "--array", "two-mic", *extra]
+        if extra[0].startswith("--trajectory"):
+            bad += ["--hum", "0"]
+        assert main(bad) == 2
+        err = capsys.readouterr().err
+        assert msg in err and err.count("\n") == 1

@@ -19,23 +19,19 @@ from hearsee.sim.audio import simulate_recording
 from hearsee.stream.pipeline import ArraySource, StreamPipeline
 
 FS = 16000
-HUM = 60.0 * np.arange(1, 41)  # the buzz's harmonics, Hz
+HUM = 60.0 * np.arange(1, 42)  # the hum's harmonics, Hz
 
 
 @pytest.fixture(scope="module")
 def voice_and_buzz():
     """A male voice 2 m away at azimuth 56 deg (three-mic, free field, 20 dB SNR, 6 s), the
-    same with a 60-Hz buzz (40 harmonics, one waveform on every channel) 3 dB louder, and the
+    same with a 60-Hz hum (41 harmonics, one waveform on every channel) 3 dB louder, and the
     true azimuth."""
     src = 2.0 * np.array([np.cos(np.radians(56.0)), np.sin(np.radians(56.0)), 0.3])
-    x, truth = simulate_recording("three-mic", src, signal="male", duration_s=6.0, fs=FS,
-                                  snr_db=20, seed=3)
-    t = np.arange(x.shape[1]) / FS
-    rng = np.random.default_rng(7)
-    b = sum(np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi)) / np.sqrt(f / 60.0)
-            for f in HUM)
-    b *= np.sqrt(np.mean(x ** 2) / np.mean(b ** 2) * 10 ** 0.3)
-    return x, x + b, truth["azimuth_deg"]
+    kw = {"signal": "male", "duration_s": 6.0, "fs": FS, "snr_db": 20, "seed": 3}
+    x, truth = simulate_recording("three-mic", src, **kw)
+    y, _ = simulate_recording("three-mic", src, hum_db=3.0, hum_hz=60.0, **kw)
+    return x, y, truth["azimuth_deg"]
 
 
 def _median_error(updates, az: float, after_s: float = 0.0) -> float:

@@ -31,6 +31,7 @@ from hearsee.config import (
     as_path,
     as_rng,
     check_rng,
+    finite_number,
     input_file,
     is_real,
     output_file,
@@ -50,6 +51,7 @@ from hearsee.errors import (
 )
 
 __all__ = [
+    "HUM_TOP_HZ",
     "MIN_SAMPLES",
     "MIN_SIGNAL_FILE_FS_HZ",
     "SIGNAL_KINDS",
@@ -59,6 +61,7 @@ __all__ = [
     "check_fs",
     "duplicate_channels",
     "load_wav",
+    "mains_hum",
     "make_signal",
     "read_recording",
     "resample",
@@ -134,6 +137,32 @@ def white_noise(duration_s: float, fs: float,
     """Unit-variance Gaussian white noise of ``duration_s`` seconds at ``fs`` Hz."""
     n = _check_duration(duration_s, fs)
     return as_rng(rng).standard_normal(n)
+
+
+#: :func:`mains_hum`'s highest harmonic, Hz (the buzz of a ground loop or of a cheap power supply
+#: reaches a few kHz)
+HUM_TOP_HZ = 2500.0
+
+
+def mains_hum(duration_s: float, fs: float, f0_hz: float = 50.0,
+              rng: np.random.Generator | int | None = None,
+              top_hz: float = HUM_TOP_HZ) -> NDArray:
+    """Mains hum as electrical pickup gives it: every harmonic of ``f0_hz`` (50 or 60 Hz) up
+    to ``top_hz`` (and below fs / 2), harmonic k at amplitude 1 / sqrt(k) with a random phase;
+    unit RMS, ``duration_s`` seconds at ``fs`` Hz. The same waveform on every channel is what
+    a ground loop puts there (:mod:`hearsee.audio.hum` takes it out)."""
+    n = _check_duration(duration_s, fs)
+    f0_hz = finite_number("f0_hz", f0_hz, 0.0, lo_open=True)
+    top = min(finite_number("top_hz", top_hz, 0.0, lo_open=True), float(fs) / 2 * 0.999)
+    k = np.arange(1, int(top // f0_hz) + 1)
+    if not k.size:
+        raise ConfigError(f"no harmonic of {f0_hz:g} Hz lies below {top:g} Hz")
+    phase = as_rng(rng).uniform(0.0, 2 * np.pi, k.size)
+    t = np.arange(n) / float(fs)
+    x = np.zeros(n)
+    for kk, ph in zip(k, phase, strict=True):
+        x += np.sin(2 * np.pi * kk * f0_hz * t + ph) / np.sqrt(kk)
+    return x / np.sqrt(np.mean(x**2))
 
 
 # ---------------------------------------------------------------------------- synthetic voice

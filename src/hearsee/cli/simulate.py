@@ -127,6 +127,12 @@ def simulate_cmd(
         None, "--head-offset",
         help="With --poses: array origin relative to the head pivot (head frame), X,Y,Z m "
         "(default 0,0,0)."),
+    hum: float | None = typer.Option(
+        None, "--hum", help="Static --source: mains hum picked up by the wiring (the same "
+        "waveform on every channel, harmonics up to 2.5 kHz) at this level in dB relative to "
+        "the signal, -60 to 60 (default: none)."),
+    hum_hz: float = typer.Option(50.0, "--hum-hz", help="The hum's fundamental in Hz (50 or "
+                                 "60 where the mains are)."),
 ) -> None:
     """Simulate a recording of a static source and write OUT.wav + OUT.json (ground truth)."""
     from hearsee.audio.propagation import check_snr_db
@@ -140,6 +146,9 @@ def simulate_cmd(
     if head_offset is not None and poses is None:  # (it was ignored, even when malformed)
         raise ConfigError("--head-offset needs --poses (it places the array on the turning "
                           "head of a pose capture)")
+    if hum is not None and (trajectory is not None or poses is not None):
+        raise ConfigError("--hum applies to a static --source only (not with --trajectory or "
+                          "--poses)")
     _check_output(out, poses is not None)
     snr = check_snr_db(snr)  # (before the simulation: add_noise checks it only at its end)
     protect = [p for p in (signal, array) if Path(p).is_file()]  # inputs no output may replace
@@ -175,7 +184,7 @@ def simulate_cmd(
     with progress("simulating", total=1) as advance:
         x, truth = simulate_recording(array, src, signal=signal, duration_s=duration, fs=fs,
                                       snr_db=snr, room=room_spec, seed=seed,
-                                      far_field=far_field)
+                                      far_field=far_field, hum_db=hum, hum_hz=hum_hz)
         advance()
     wav, js = save_recording(out, x, truth, subtype="PCM_16" if pcm16 else "FLOAT",
                              protect=protect)

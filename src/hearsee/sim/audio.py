@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.propagation import add_noise, check_snr_db, simulate_free_field, simulate_room
-from hearsee.audio.signals import SIGNAL_KINDS, make_signal, write_recording
+from hearsee.audio.signals import SIGNAL_KINDS, mains_hum, make_signal, write_recording
 from hearsee.config import (
     finite_number,
     is_real,
@@ -223,6 +223,8 @@ def simulate_recording(
     seed: int | None = 0,
     mic_positions: ArrayLike | None = None,
     far_field: bool = False,
+    hum_db: float | None = None,
+    hum_hz: float = 50.0,
 ) -> tuple[NDArray, dict[str, Any]]:
     """Simulate what ``array`` records from a static source, with its ground truth.
 
@@ -250,6 +252,13 @@ def simulate_recording(
     far_field : bool
         Free field only: a plane wave from the source's direction (equal amplitudes, truth
         TDOAs from ``MicArray.tdoa_far``).
+    hum_db : float, optional
+        Mains hum picked up by the wiring (:func:`~hearsee.audio.signals.mains_hum`: every
+        harmonic of ``hum_hz`` up to 2.5 kHz, the same waveform on every channel) at this
+        level in dB relative to the mean received signal power, -60 to 60; None (default):
+        none.
+    hum_hz : float
+        The hum's fundamental, Hz (50 or 60 where the mains are).
 
     Returns
     -------
@@ -258,7 +267,8 @@ def simulate_recording(
     truth : dict
         JSON-able: ``source_m``, ``azimuth_deg``, ``elevation_deg``, ``distance_m``,
         ``tdoa_s`` {"i-j": s}, ``fs``, ``duration_s``, ``array`` (``MicArray.to_dict``),
-        ``signal``, ``snr_db``, ``room`` (filled in, or None), ``seed``.
+        ``signal``, ``snr_db``, ``room`` (filled in, or None), ``seed``; with hum ``hum_db``
+        and ``hum_hz``.
 
     Examples
     --------
@@ -270,6 +280,8 @@ def simulate_recording(
     src = as_point(source, "source")
     fs = check_sim_fs(fs)
     snr_db = check_snr_db(snr_db)  # (before the simulation: add_noise checks it at its end)
+    if hum_db is not None:
+        hum_db = finite_number("hum_db", hum_db, -60.0, 60.0)
     room = normalize_room(room)
     if seed is not None:  # (-1 or 1.5 raised numpy's ValueError / TypeError)
         seed = whole_number("seed", seed, lo=0)
@@ -279,11 +291,16 @@ def simulate_recording(
     s = make_signal(signal, duration_s, fs, rng)
     clean = render(s, fs, array, src, room, mic_positions=mic_positions, far_field=far_field)
     x = add_noise(clean, snr_db, rng)
+    if hum_db is not None:
+        hum = mains_hum(duration_s, fs, hum_hz, rng)[: x.shape[1]]
+        x = x + hum * np.sqrt(np.mean(clean**2) * 10 ** (hum_db / 10.0))
     truth = ground_truth(array, src, mic_positions=mic_positions, far_field=far_field)
     if mic_positions is not None:
         truth["mic_positions"] = np.asarray(mic_positions, dtype=float).tolist()
     if far_field:
         truth["far_field"] = True
+    if hum_db is not None:
+        truth.update({"hum_db": float(hum_db), "hum_hz": float(hum_hz)})
     truth.update({
         "fs": fs,
         "duration_s": float(duration_s),

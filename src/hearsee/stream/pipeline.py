@@ -2204,10 +2204,13 @@ class StreamPipeline:
         c_start = time.process_time()
 
         def notch(lines: tuple[float, ...]) -> None:
-            """Hum found by a watch: notched out of every block from now on."""
+            """Hum found by a watch: notched out of every block from now on, and the track
+            built on the hum's directions forgotten (it sat near the pole, where the hum puts
+            a source, and took ~2 s of right measurements, most outside its gate, to leave)."""
             nonlocal hum
             hum = LineFilter(lines, source.fs, source.n_channels)
             st.tonal_lines_hz = lines
+            self._reset_requested = True
             if watch is not None:
                 watch.tonal_noise = False  # (its estimate need not look for hum again)
 
