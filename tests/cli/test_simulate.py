@@ -367,3 +367,15 @@ def test_simulate_hum_is_the_same_on_every_channel_and_in_the_truth(tmp_path, ca
         assert main(bad) == 2
         err = capsys.readouterr().err
         assert msg in err and err.count("\n") == 1
+
+
+def test_simulate_hum_hz_without_a_harmonic_is_refused_before_any_work(tmp_path, capsys):
+    """--hum-hz 0 or one whose harmonics all lie above 2.5 kHz: one error line, exit 2, no
+    file written."""
+    for hz, msg in (("0", "hum_hz must be a finite number > 0"),
+                    ("9000", "no harmonic of 9000 Hz lies below 2500 Hz")):
+        out = tmp_path / "h.wav"
+        assert main(["simulate", str(out), "--array", "two-mic", "--source", "1,1,0",
+                     "--hum", "0", "--hum-hz", hz]) == 2
+        err = capsys.readouterr().err
+        assert msg in err and err.count("\n") == 1 and not out.exists()

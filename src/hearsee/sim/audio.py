@@ -280,8 +280,10 @@ def simulate_recording(
     src = as_point(source, "source")
     fs = check_sim_fs(fs)
     snr_db = check_snr_db(snr_db)  # (before the simulation: add_noise checks it at its end)
-    if hum_db is not None:
+    if hum_db is not None:  # (before the simulation, as the SNR)
         hum_db = finite_number("hum_db", hum_db, -60.0, 60.0)
+        hum_hz = finite_number("hum_hz", hum_hz, 0.0, lo_open=True)
+        mains_hum(1.0 / fs, fs, hum_hz)  # (a fundamental without a harmonic below fs / 2)
     room = normalize_room(room)
     if seed is not None:  # (-1 or 1.5 raised numpy's ValueError / TypeError)
         seed = whole_number("seed", seed, lo=0)
