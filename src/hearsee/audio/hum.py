@@ -34,10 +34,13 @@ from hearsee.errors import ConfigError, TonalNoiseWarning
 __all__ = [
     "COMB_SHARE",
     "COMB_TOL_HZ",
+    "HARMONIC_PROMINENCE",
+    "HARMONIC_TOP_HZ",
     "LINE_SPECTRUM_S",
     "LineFilter",
     "MAX_ROUNDS",
     "NOTCH_BANDWIDTH_HZ",
+    "SETTLE_S",
     "TONAL_MIN_FRAMES",
     "TONAL_MIN_HZ",
     "TONAL_STATIONARITY",
@@ -66,12 +69,23 @@ TONAL_MIN_HZ = 40.0
 #: (:func:`line_frequencies`): every harmonic up to the highest line found is removed, also
 #: those a voice's harmonics hid from the test
 COMB_TOL_HZ = 1.5
+#: A multiple of a found hum's fundamental is removed too where the recording's spectrum (as
+#: :func:`line_frequencies` reads it) peaks this many times above its median within half a
+#: fundamental around it: a steady line is a few bins wide there, a voice's harmonics glide and
+#: smear, noise stays near its median (10x found a false line in white noise, ~1 in 150
+#: harmonics; the hum's hidden harmonics stood far higher)
+HARMONIC_PROMINENCE = 100.0
+#: ... up to this frequency (Hz)
+HARMONIC_TOP_HZ = 8000.0
 #: ... when at least this share of them (and three) do; the others are removed as well (a
 #: voice's harmonic beside a hum line can move a line's peak off the comb)
 COMB_SHARE = 2.0 / 3.0
 #: :func:`line_frequencies` reads the lines' frequencies off the spectrum of a recording's first
 #: this many seconds (~0.02 Hz resolution; a whole hour would be a 2**28-point transform)
 LINE_SPECTRUM_S = 30.0
+#: :func:`remove_lines` extends a recording by this many seconds at each end for its notches to
+#: settle in (the 2-Hz notches' hum residue is ~40 dB down after 0.7 s)
+SETTLE_S = 1.0
 #: -3 dB width of each notch (Hz): ~40 lines of mains hum take ~80 Hz out of a voice's band
 NOTCH_BANDWIDTH_HZ = 2.0
 
@@ -137,7 +151,10 @@ def line_frequencies(x: ArrayLike, fs: float, line: ArrayLike, bin_hz: ArrayLike
     :data:`COMB_TOL_HZ` of the multiples of one fundamental (the lowest line, or it over 2-4,
     not below :data:`TONAL_MIN_HZ`), they are a harmonic comb -- mains hum -- and every
     multiple of the fundamental fitted to them (least squares through 0) up to the highest
-    line is returned, with the lines off the comb.
+    line is returned, with the lines off the comb. Then every multiple of the fundamental
+    (the comb's, else the lowest line's or, when the lines are its multiples, it over 2-4)
+    where that spectrum peaks :data:`HARMONIC_PROMINENCE` times above its surroundings is
+    added: a hum's harmonics under a voice's, which the test of :func:`tonal_bins` misses.
     """
     a = np.asarray(x, dtype=float)[..., :int(LINE_SPECTRUM_S * fs)]
     f = np.asarray(bin_hz, dtype=float)
@@ -153,13 +170,60 @@ def line_frequencies(x: ArrayLike, fs: float, line: ArrayLike, bin_hz: ArrayLike
     for lo, hi in runs:
         k0 = max(int(np.floor((f[lo] - step / 2) / df)), 1)
         k1 = min(int(np.ceil((f[hi - 1] + step / 2) / df)), len(spec) - 2)
-        k = k0 + int(np.argmax(spec[k0:k1 + 1]))
-        la, lb, lc = np.log(spec[k - 1:k + 2] + 1e-300)
-        den = la - 2 * lb + lc
-        lines.append((k + (0.5 * (la - lc) / den if den < 0 else 0.0)) * df)
+        lines.append(_peak_hz(spec, k0 + int(np.argmax(spec[k0:k1 + 1])), df))
     lines_a = np.array(lines)
     comb = _comb(lines_a)
-    return lines_a if comb is None else comb
+    lines_a = lines_a if comb is None else comb
+    more = _prominent_harmonics(spec, df, _fundamental(lines_a), fs)
+    if more.size:  # (a hum's harmonics that a voice hid from the test, or beyond the highest)
+        far = np.min(np.abs(more[:, None] - lines_a[None]), axis=1) > COMB_TOL_HZ
+        lines_a = np.sort(np.concatenate((lines_a, more[far])))
+    return lines_a
+
+
+def _peak_hz(spec: NDArray, k: int, df: float) -> float:
+    """The frequency (Hz) of the peak of ``spec`` (bins ``df`` Hz apart) at bin ``k``: a
+    parabola through the log power of it and its neighbours."""
+    if not 0 < k < len(spec) - 1:
+        return k * df
+    la, lb, lc = np.log(spec[k - 1:k + 2] + 1e-300)
+    den = la - 2 * lb + lc
+    return (k + (0.5 * (la - lc) / den if den < 0 else 0.0)) * df
+
+
+def _fundamental(lines: NDArray) -> float:
+    """The fundamental (Hz) of ``lines`` (ascending): the lowest line, or the lowest over 2-4
+    (not below :data:`TONAL_MIN_HZ`) when all of them are its multiples within
+    :data:`COMB_TOL_HZ` (100 and 150 Hz: 50 Hz)."""
+    f0 = float(lines[0])
+    for m in range(2, 5):
+        if lines[0] / m < TONAL_MIN_HZ:
+            break
+        g = lines[0] / m
+        if len(lines) > 1 and np.all(np.abs(lines - np.round(lines / g) * g) <= COMB_TOL_HZ) \
+                and not np.all(np.abs(lines - np.round(lines / f0) * f0) <= COMB_TOL_HZ):
+            f0 = g
+    return f0
+
+
+def _prominent_harmonics(spec: NDArray, df: float, f0: float, fs: float) -> NDArray:
+    """The multiples of ``f0`` (Hz) below fs / 2 and :data:`HARMONIC_TOP_HZ` where the power
+    spectrum ``spec`` (bins ``df`` Hz apart) peaks :data:`HARMONIC_PROMINENCE` times above its
+    median within +-f0 / 2 (the line's own +-1 Hz left out): each the peak's frequency."""
+    top = min(fs / 2 - f0 / 2, HARMONIC_TOP_HZ)
+    out = []
+    for k in range(1, int(top // f0) + 1):
+        c = k * f0
+        lo, hi = int((c - f0 / 2) / df), min(int((c + f0 / 2) / df) + 1, len(spec))
+        seg = spec[lo:hi]
+        f = (lo + np.arange(seg.size)) * df
+        near = np.abs(f - c) <= max(1.0, 3 * df)
+        if not near.any() or near.all():
+            continue
+        i = int(np.flatnonzero(near)[np.argmax(seg[near])])
+        if seg[i] >= HARMONIC_PROMINENCE * np.median(seg[np.abs(f - c) > 1.0]):
+            out.append(_peak_hz(spec, lo + i, df))
+    return np.array(out)
 
 
 def _comb(lines: NDArray) -> NDArray | None:
@@ -232,10 +296,48 @@ def remove_lines(x: ArrayLike, fs: float, lines_hz: ArrayLike,
     """``x`` (n_ch, n) with the lines at ``lines_hz`` filtered out of every channel alike: a
     second-order notch ``bandwidth_hz`` wide (-3 dB) at each, forward and backward (zero
     phase: the TDOAs of everything else are untouched). Lines at or above fs / 2 are skipped.
+
+    A notch takes ~1 / (pi ``bandwidth_hz``) s (0.16 s at 2 Hz) to settle, ~0.7 s to take a
+    line 40 dB down, so the recording's first and last second kept much of the hum (-9 dB in
+    the first 0.1 s). When most lines are harmonics of one fundamental the hum repeats every
+    period, and the recording is extended at both ends by copies of its first and last
+    periods (a whole number of periods within 0.05 sample) before it is filtered: the notches
+    settle in the extension, which is cut off again (the hum's residue in the first 0.1 s of
+    a 50-Hz comb: -9 -> about -35 dB).
     """
     a = np.asarray(x, dtype=float)
     sos = _notch_sos(lines_hz, fs, bandwidth_hz)
-    return a.copy() if sos is None else ss.sosfiltfilt(sos, a, axis=-1)
+    if sos is None:
+        return a.copy()
+    period = _hum_period(np.sort(np.atleast_1d(np.asarray(lines_hz, dtype=float))), fs)
+    pad = int(round(SETTLE_S * fs))
+    if period is None or period > a.shape[-1]:
+        return ss.sosfiltfilt(sos, a, axis=-1)
+    n = a.shape[-1]
+    s = np.arange(1, pad + 1)
+    before = (-s) % period  # (copies of the first period, backwards)
+    after = n - period + (np.arange(pad) % period)  # (of the last period, forwards)
+    ext = np.concatenate((a[..., before[::-1]], a, a[..., after]), axis=-1)
+    return ss.sosfiltfilt(sos, ext, axis=-1, padlen=0)[..., pad:pad + n]
+
+
+def _hum_period(lines: NDArray, fs: float) -> int | None:
+    """A whole number of samples (<= :data:`SETTLE_S`) that is a whole number of periods of the
+    fundamental of ``lines`` (Hz) within 0.05 sample, when :data:`COMB_SHARE` of them are its
+    harmonics within :data:`COMB_TOL_HZ`; else None."""
+    if not lines.size:
+        return None
+    f0 = _fundamental(lines)
+    on = np.abs(lines - np.round(lines / f0) * f0) <= COMB_TOL_HZ
+    if on.sum() < COMB_SHARE * len(lines):
+        return None
+    k = np.round(lines[on] / f0)
+    f0 = float(np.sum(k * lines[on]) / np.sum(k * k))
+    p = fs / f0
+    for m in range(1, int(SETTLE_S * f0) + 1):
+        if abs(m * p - round(m * p)) <= 0.05:
+            return int(round(m * p))
+    return None
 
 
 def check_lines(lines_hz: ArrayLike) -> tuple[float, ...]:
