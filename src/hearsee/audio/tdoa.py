@@ -2186,8 +2186,8 @@ def estimate_tdoas(
     tonal_noise : bool
         Find stationary tonal noise on every microphone -- mains hum the wiring picks up, a
         motor's or a fan's whine (:func:`hearsee.audio.hum.tonal_bins`) -- and, where there
-        is some, filter its lines out of the recording (:func:`hearsee.audio.hum.remove_lines`;
-        a harmonic comb whole) and estimate from what remains, with a
+        is some, filter its lines out of the recording (:func:`hearsee.audio.hum.filter_lines`:
+        a hum's every harmonic, zero-phase notches) and estimate from what remains, with a
         :class:`~hearsee.errors.TonalNoiseWarning` and ``TdoaFrames.tonal_lines_hz``. A hum
         3 dB louder than a voice turned a three-mic summary to a source overhead (identical on
         every channel, it is a source at TDOA 0). Not with ``active`` (a stream decides its
