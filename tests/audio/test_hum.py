@@ -176,3 +176,22 @@ def test_remove_lines_takes_the_hum_out_at_the_recordings_ends_too():
     tone = np.sin(2 * np.pi * 1234.5 * t)[None]
     r = hum.remove_lines(tone, FS, [1234.5])
     assert np.mean(r[0, FS:2 * FS] ** 2) < 1e-6  # (the middle second: settled)
+
+
+def test_a_recording_too_long_for_the_spectra_cache_is_checked_on_frames_spread_over_it(
+        voice, monkeypatch):
+    """Without the band spectra kept (SPECTRA_CACHE_BYTES too small, as for a recording of
+    minutes), the hum is looked for on frames spread over the recording (here the fewest, 40
+    of 124): the same comb found (a line more or less at its top), the TDOAs within 0.05
+    sample of those with the cache."""
+    from hearsee.audio import tdoa
+
+    y, _ = _with_hum(3.0)
+    with pytest.warns(TonalNoiseWarning):
+        kept = estimate_tdoas(y, FS, "three-mic")
+    monkeypatch.setattr(tdoa, "SPECTRA_CACHE_BYTES", 1000)
+    with pytest.warns(TonalNoiseWarning):
+        spread = estimate_tdoas(y, FS, "three-mic")
+    a, b = np.array(spread.tonal_lines_hz), np.array(kept.tonal_lines_hz)
+    assert abs(len(a) - len(b)) <= 1 and abs(a[0] - 60.0) < 0.01 and abs(b[0] - 60.0) < 0.01
+    np.testing.assert_allclose(spread.summary_tdoa_s * FS, kept.summary_tdoa_s * FS, atol=0.05)

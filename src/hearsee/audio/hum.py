@@ -118,18 +118,19 @@ def tonal_bins(power: ArrayLike, bin_hz: ArrayLike) -> NDArray:
         raise ConfigError(f"tonal_bins needs power (n_ch, n_frames, n_bins) and bin_hz "
                           f"(n_bins,), got {p.shape} and {f.shape}")
     line = np.zeros(p.shape[2], dtype=bool)
-    if p.shape[1] < TONAL_MIN_FRAMES:
+    n_frames = p.shape[1]
+    if n_frames < TONAL_MIN_FRAMES:
         return line
-    cand: NDArray | slice = slice(int(np.searchsorted(f, TONAL_MIN_HZ)), None)  # (sorted)
+    start = int(f.searchsorted(TONAL_MIN_HZ))  # (ascending)
+    cand = None
     for ch in p:  # (channel by channel, on the bins still in question: the first channel
         # usually leaves none, and the others cost nothing then)
-        q = ch[:, cand]
-        mean = q.mean(axis=0)
-        keep = (q.min(axis=0) >= TONAL_STATIONARITY * mean) & (mean > 0)
-        cand = (np.flatnonzero(keep) + cand.start if isinstance(cand, slice)
-                else cand[keep])
-        if not cand.size:
-            break
+        q = ch[:, start:] if cand is None else ch[:, cand]
+        # smallest >= fraction x mean, as min x F > fraction x sum (a bin all zero: no line)
+        keep = q.min(axis=0) * n_frames > TONAL_STATIONARITY * q.sum(axis=0)
+        if not keep.any():
+            return line
+        cand = keep.nonzero()[0] + start if cand is None else cand[keep]
     line[cand] = True
     return line
 

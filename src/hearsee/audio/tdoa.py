@@ -1087,12 +1087,14 @@ def _tonal_lines(power_all: NDArray | None, frames: NDArray, win: NDArray, nfft:
     the frames that are ``sounding``, or None without any. From the band power ``power_all``
     (n_ch, F, bins) when kept, else from as many frames evenly spread over the recording as fit
     :data:`SPECTRA_CACHE_BYTES`."""
-    idx = np.flatnonzero(sounding)
-    if idx.size < hum.TONAL_MIN_FRAMES:
+    n_sounding = int(np.count_nonzero(sounding))
+    if n_sounding < hum.TONAL_MIN_FRAMES:
         return None
+    idx = None if n_sounding == len(sounding) else np.flatnonzero(sounding)
     if power_all is not None:
-        p = power_all if idx.size == power_all.shape[1] else power_all[:, idx]
+        p = power_all if idx is None else power_all[:, idx]
     else:
+        idx = np.arange(len(sounding)) if idx is None else idx
         fit = max(SPECTRA_CACHE_BYTES // (frames.shape[0] * (k1 - k0) * 12),
                   hum.TONAL_MIN_FRAMES)
         idx = idx[np.linspace(0, idx.size - 1, min(fit, idx.size)).astype(int)]
