@@ -175,11 +175,27 @@ def line_frequencies(x: ArrayLike, fs: float, line: ArrayLike, bin_hz: ArrayLike
     lines_a = np.array(lines)
     comb = _comb(lines_a)
     lines_a = lines_a if comb is None else comb
-    more = _prominent_harmonics(spec, df, _fundamental(lines_a), fs)
-    if more.size:  # (a hum's harmonics that a voice hid from the test, or beyond the highest)
-        far = np.min(np.abs(more[:, None] - lines_a[None]), axis=1) > COMB_TOL_HZ
-        lines_a = np.sort(np.concatenate((lines_a, more[far])))
-    return lines_a
+    # (a hum's harmonics that a voice hid from the test, or beyond the highest)
+    more = _apart(_prominent_harmonics(spec, df, _fundamental(lines_a), fs), lines_a)
+    return np.sort(np.concatenate((lines_a, more))) if more.size else lines_a
+
+
+def _on_comb(lines: NDArray, f0: float) -> NDArray:
+    """Which ``lines`` (Hz) lie within :data:`COMB_TOL_HZ` of a multiple of ``f0``."""
+    return np.abs(lines - np.round(lines / f0) * f0) <= COMB_TOL_HZ
+
+
+def _fit_fundamental(lines: NDArray, f0: float) -> float:
+    """The fundamental (Hz) near ``f0`` that fits ``lines``, each a multiple of it, best
+    (least squares through 0)."""
+    k = np.round(lines / f0)
+    return float(np.sum(k * lines) / np.sum(k * k))
+
+
+def _apart(cand: NDArray, known: NDArray) -> NDArray:
+    """The lines of ``cand`` (Hz) farther than :data:`COMB_TOL_HZ` from every one of ``known``."""
+    return cand[np.min(np.abs(cand[:, None] - known[None]), axis=1, initial=np.inf)
+                > COMB_TOL_HZ]
 
 
 def _peak_hz(spec: NDArray, k: int, df: float) -> float:
@@ -201,8 +217,7 @@ def _fundamental(lines: NDArray) -> float:
         if lines[0] / m < TONAL_MIN_HZ:
             break
         g = lines[0] / m
-        if len(lines) > 1 and np.all(np.abs(lines - np.round(lines / g) * g) <= COMB_TOL_HZ) \
-                and not np.all(np.abs(lines - np.round(lines / f0) * f0) <= COMB_TOL_HZ):
+        if len(lines) > 1 and _on_comb(lines, g).all() and not _on_comb(lines, f0).all():
             f0 = g
     return f0
 
@@ -236,14 +251,11 @@ def _comb(lines: NDArray) -> NDArray | None:
         f0 = lines[0] / m
         if f0 < TONAL_MIN_HZ:
             break
-        k = np.round(lines / f0)
-        on = np.abs(lines - k * f0) <= COMB_TOL_HZ
+        on = _on_comb(lines, f0)
         if on.sum() >= 3 and on.sum() >= COMB_SHARE * len(lines):
-            f0 = float(np.sum(k[on] * lines[on]) / np.sum(k[on] ** 2))
+            f0 = _fit_fundamental(lines[on], f0)
             comb = f0 * np.arange(1, int(np.round(lines[-1] / f0)) + 1)
-            off = lines[~on]
-            off = off[np.min(np.abs(off[:, None] - comb[None]), axis=1) > COMB_TOL_HZ]
-            return np.sort(np.concatenate((comb, off)))
+            return np.sort(np.concatenate((comb, _apart(lines[~on], comb))))
     return None
 
 
@@ -269,8 +281,7 @@ def warn_lines(lines: NDArray, stacklevel: int = 3) -> None:
     """A :class:`~hearsee.errors.TonalNoiseWarning` naming the lines removed (Hz): a harmonic
     comb by its fundamental and highest harmonic. ``stacklevel`` 3: the caller of the
     function that calls this one."""
-    k = np.round(lines / lines[0])
-    on = np.abs(lines - k * lines[0]) <= COMB_TOL_HZ
+    on = _on_comb(lines, lines[0])
     if on.sum() >= 3:  # (a harmonic comb: line_frequencies returns it whole)
         off = int(np.count_nonzero(~on))
         what = (f"{lines[0]:.1f} Hz and its harmonics up to {lines[on][-1]:.0f} Hz"
@@ -329,11 +340,10 @@ def _hum_period(lines: NDArray, fs: float) -> int | None:
     if not lines.size:
         return None
     f0 = _fundamental(lines)
-    on = np.abs(lines - np.round(lines / f0) * f0) <= COMB_TOL_HZ
+    on = _on_comb(lines, f0)
     if on.sum() < COMB_SHARE * len(lines):
         return None
-    k = np.round(lines[on] / f0)
-    f0 = float(np.sum(k * lines[on]) / np.sum(k * k))
+    f0 = _fit_fundamental(lines[on], f0)
     p = fs / f0
     for m in range(1, int(SETTLE_S * f0) + 1):
         if abs(m * p - round(m * p)) <= 0.05:
@@ -367,9 +377,7 @@ def filter_lines(x: ArrayLike, fs: float, lines_hz: ArrayLike, frame_ms: float =
     lines = np.sort(np.asarray(lines_hz, dtype=float))
     y = remove_lines(x, fs, lines)
     for _ in range(MAX_ROUNDS):
-        more = find_lines(y, fs, frame_ms)
-        more = more[np.min(np.abs(more[:, None] - lines[None]), axis=1, initial=np.inf)
-                    > COMB_TOL_HZ] if lines.size else more
+        more = _apart(find_lines(y, fs, frame_ms), lines)
         if not more.size:
             break
         lines = np.sort(np.concatenate((lines, more)))
