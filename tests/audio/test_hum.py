@@ -8,7 +8,7 @@ import pytest
 
 from hearsee.audio import hum
 from hearsee.audio.arrays import MicArray
-from hearsee.audio.signals import mains_hum
+from hearsee.audio.signals import hum_harmonics, mains_hum
 from hearsee.audio.tdoa import estimate_tdoas
 from hearsee.errors import ConfigError, TonalNoiseWarning
 from hearsee.sim.audio import simulate_recording
@@ -161,6 +161,11 @@ def test_mains_hum_is_a_unit_rms_comb_below_the_top_and_nyquist():
     for bad in (0.0, -50.0, float("nan"), 3000.0):
         with pytest.raises(ConfigError):
             mains_hum(1.0, FS, bad)
+        with pytest.raises(ConfigError):
+            hum_harmonics(bad, FS)
+    # the harmonics it makes, without making any (simulate_recording's check of hum_hz)
+    assert hum_harmonics(60.0, FS).tolist() == list(range(1, 42))  # 60 .. 2460 Hz
+    assert hum_harmonics(50.0, 4000).tolist() == list(range(1, 40))  # below 2 kHz only
 
 
 def test_remove_lines_takes_the_hum_out_at_the_recordings_ends_too():

@@ -60,6 +60,7 @@ __all__ = [
     "channel_faults",
     "check_fs",
     "duplicate_channels",
+    "hum_harmonics",
     "load_wav",
     "mains_hum",
     "make_signal",
@@ -144,6 +145,18 @@ def white_noise(duration_s: float, fs: float,
 HUM_TOP_HZ = 2500.0
 
 
+def hum_harmonics(f0_hz: float, fs: float, top_hz: float = HUM_TOP_HZ) -> NDArray:
+    """The harmonic numbers 1, 2, ... of a hum of fundamental ``f0_hz`` (Hz) that
+    :func:`mains_hum` makes at ``fs`` Hz: those up to ``top_hz`` and below fs / 2. A
+    ConfigError when ``f0_hz`` or ``top_hz`` is not a number > 0 or no harmonic fits."""
+    f0_hz = finite_number("f0_hz", f0_hz, 0.0, lo_open=True)
+    top = min(finite_number("top_hz", top_hz, 0.0, lo_open=True), float(fs) / 2 * 0.999)
+    k = np.arange(1, int(top // f0_hz) + 1)
+    if not k.size:
+        raise ConfigError(f"no harmonic of {f0_hz:g} Hz lies below {top:g} Hz")
+    return k
+
+
 def mains_hum(duration_s: float, fs: float, f0_hz: float = 50.0,
               rng: np.random.Generator | int | None = None,
               top_hz: float = HUM_TOP_HZ) -> NDArray:
@@ -152,11 +165,8 @@ def mains_hum(duration_s: float, fs: float, f0_hz: float = 50.0,
     unit RMS, ``duration_s`` seconds at ``fs`` Hz. The same waveform on every channel is what
     a ground loop puts there (:mod:`hearsee.audio.hum` takes it out)."""
     n = _check_duration(duration_s, fs)
-    f0_hz = finite_number("f0_hz", f0_hz, 0.0, lo_open=True)
-    top = min(finite_number("top_hz", top_hz, 0.0, lo_open=True), float(fs) / 2 * 0.999)
-    k = np.arange(1, int(top // f0_hz) + 1)
-    if not k.size:
-        raise ConfigError(f"no harmonic of {f0_hz:g} Hz lies below {top:g} Hz")
+    k = hum_harmonics(f0_hz, fs, top_hz)
+    f0_hz = float(f0_hz)
     phase = as_rng(rng).uniform(0.0, 2 * np.pi, k.size)
     t = np.arange(n) / float(fs)
     x = np.zeros(n)

@@ -1082,9 +1082,10 @@ def _joined(parts: list[tuple[NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
 
 
 def _tonal_lines(power_all: NDArray | None, frames: NDArray, win: NDArray, nfft: int, k0: int,
-                 k1: int, sounding: NDArray, fs: float) -> NDArray | None:
-    """The bins k0..k1-1 (bool) that hold stationary tonal noise (:func:`hum.tonal_bins`) over
-    the frames that are ``sounding``, or None without any. From the band power ``power_all``
+                 k1: int, sounding: NDArray, bin_hz: NDArray) -> NDArray | None:
+    """The bins k0..k1-1 (bool; at frequencies ``bin_hz``, Hz) that hold stationary tonal noise
+    (:func:`hum.tonal_bins`) over the frames that are ``sounding``, or None without any. From
+    the band power ``power_all``
     (n_ch, F, bins) when kept, else from as many frames evenly spread over the recording as fit
     :data:`SPECTRA_CACHE_BYTES`."""
     n_sounding = int(np.count_nonzero(sounding))
@@ -1099,7 +1100,7 @@ def _tonal_lines(power_all: NDArray | None, frames: NDArray, win: NDArray, nfft:
                   hum.TONAL_MIN_FRAMES)
         idx = idx[np.linspace(0, idx.size - 1, min(fit, idx.size)).astype(int)]
         p = _spectra_power(frames[:, idx, :], win, nfft, k0, k1)[1]
-    line = hum.tonal_bins(p, np.arange(k0, k1) * fs / nfft)
+    line = hum.tonal_bins(p, bin_hz)
     return line if line.any() else None
 
 
@@ -2313,10 +2314,11 @@ def estimate_tdoas(
         nb = k1 - k0
         main_lobe = _main_lobe(band_bins, nfft, fs, band_hz)
     if tonal_noise and not given:
-        line = _tonal_lines(power_all, frames, win, nfft, k0, k1, _sounding(energy), fs)
+        bin_hz = band_bins * fs / nfft
+        line = _tonal_lines(power_all, frames, win, nfft, k0, k1, _sounding(energy), bin_hz)
         if line is not None:  # filter the lines out of the recording and start again with it
-            y, lines = hum.filter_lines(a, fs, hum.line_frequencies(
-                a, fs, line, np.arange(k0, k1) * fs / nfft), frame_ms)
+            y, lines = hum.filter_lines(a, fs, hum.line_frequencies(a, fs, line, bin_hz),
+                                        frame_ms)
             hum.warn_lines(lines)
             call.update(x=y, array=arr, tonal_noise=False)
             return replace(estimate_tdoas(**call), tonal_lines_hz=tuple(map(float, lines)))

@@ -27,7 +27,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.propagation import add_noise, check_snr_db, simulate_free_field, simulate_room
-from hearsee.audio.signals import SIGNAL_KINDS, mains_hum, make_signal, write_recording
+from hearsee.audio.signals import (
+    SIGNAL_KINDS,
+    hum_harmonics,
+    mains_hum,
+    make_signal,
+    write_recording,
+)
 from hearsee.config import (
     finite_number,
     is_real,
@@ -283,7 +289,7 @@ def simulate_recording(
     if hum_db is not None:  # (before the simulation, as the SNR)
         hum_db = finite_number("hum_db", hum_db, -60.0, 60.0)
         hum_hz = finite_number("hum_hz", hum_hz, 0.0, lo_open=True)
-        mains_hum(1.0 / fs, fs, hum_hz)  # (a fundamental without a harmonic below fs / 2)
+        hum_harmonics(hum_hz, fs)  # (a fundamental without a harmonic below fs / 2)
     room = normalize_room(room)
     if seed is not None:  # (-1 or 1.5 raised numpy's ValueError / TypeError)
         seed = whole_number("seed", seed, lo=0)
