@@ -88,7 +88,8 @@ def test_calibrate_writes_rig_and_prints_errors(board_dir, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("case", ["no_match", "no_board", "count_mismatch", "unreadable",
-                                  "overwrite_input", "bad_board", "huge_board", "bad_square",
+                                  "overwrite_input", "bad_board", "huge_board", "thin_board",
+                                  "bad_square",
                                   "sizes_differ", "reference_without_m1",
                                   "reference_zero_m1", "reference_nan_m2"])
 def test_calibrate_bad_input_exits_2_with_one_line(case, board_dir, tmp_path, capsys):
@@ -124,6 +125,10 @@ def test_calibrate_bad_input_exits_2_with_one_line(case, board_dir, tmp_path, ca
         args = _args(d, out)
         args[6] = "99999999999x6"
         expect = "at most 1000 inner corners"
+    elif case == "thin_board":  # (OpenCV's detectors raised cv2.error: a traceback)
+        args = _args(d, out)
+        args[6] = "2x5"
+        expect = "at least 3x3 inner corners"
     elif case == "bad_square":
         args = _args(d, out)
         args[8] = "-1"

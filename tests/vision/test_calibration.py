@@ -79,36 +79,37 @@ def test_board_helpers():
     assert C.parse_board("9x6") == (9, 6)
     with pytest.raises(CalibrationError, match="9x6"):
         C.parse_board("nine by six")
-    with pytest.raises(CalibrationError, match="at least 2x2"):
-        C.parse_board("1x6")
+    for small in ("1x6", "2x5", "5x2"):  # (2 passed, and OpenCV's detectors raised cv2.error)
+        with pytest.raises(CalibrationError, match="at least 3x3"):
+            C.parse_board(small)
     assert C.parse_board("1000x6") == (1000, 6)
     for huge in ("99999999999x6", "6x1001"):  # (a builtin MemoryError in board_points before)
         with pytest.raises(CalibrationError, match="at most 1000 inner corners"):
             C.parse_board(huge)
-    p = C.board_points((3, 2), 0.1)
+    p = C.board_points((3, 3), 0.1)
     np.testing.assert_allclose(p[:4], [[0, 0, 0], [0.1, 0, 0], [0.2, 0, 0], [0, 0.1, 0]])
     with pytest.raises(CalibrationError, match="square"):
-        C.board_points((3, 2), 0.0)
+        C.board_points((3, 3), 0.0)
     for bad in (np.inf, np.nan):  # inf gave inf / NaN corners before 2026-11-26
         with pytest.raises(CalibrationError, match="square"):
-            C.board_points((3, 2), bad)
+            C.board_points((3, 3), bad)
     # the building blocks check the pattern too: (0, 0) and "9x6" were cv2.error, (-2, 3)
     # and (2.5, 3) numpy's errors; match_labeling's NaN a LinAlgError, a wrong count a
     # reshape ValueError
     img = np.full((60, 80), 128, np.uint8)
-    for pat, words in (((0, 0), "at least 2x2"), ((-2, 3), "at least 2x2"),
+    for pat, words in (((0, 0), "at least 3x3"), ((-2, 3), "at least 3x3"),
                        ((2.5, 3), "whole numbers"), ("9x6", "whole numbers"),
                        ((3,), "whole numbers"), ((5, 1001), "at most 1000")):
         for func, args in ((C.board_points, (pat, 0.1)), (C.find_corners, (img, pat)),
-                           (C.match_labeling, (np.zeros((6, 2)), np.zeros((6, 2)), pat))):
+                           (C.match_labeling, (np.zeros((9, 2)), np.zeros((9, 2)), pat))):
             with pytest.raises(CalibrationError, match=words):
                 func(*args)
     assert C.check_pattern(np.array([9, 6])) == (9, 6)
-    ref = C.board_points((3, 2), 10.0)[:, :2] + 50.0
-    np.testing.assert_array_equal(C.match_labeling(ref, ref, (3, 2)), ref)
-    for bad in (np.where(np.arange(12).reshape(6, 2) == 3, np.nan, ref), ref[:5]):
+    ref = C.board_points((3, 3), 10.0)[:, :2] + 50.0
+    np.testing.assert_array_equal(C.match_labeling(ref, ref, (3, 3)), ref)
+    for bad in (np.where(np.arange(18).reshape(9, 2) == 3, np.nan, ref), ref[:8]):
         with pytest.raises(CalibrationError, match="match_labeling"):
-            C.match_labeling(ref, bad, (3, 2))
+            C.match_labeling(ref, bad, (3, 3))
 
 
 def test_corners_are_subpixel_accurate(synthetic):
@@ -487,6 +488,9 @@ def test_find_corners_upscale_must_be_a_positive_integer(synthetic):
             C.find_corners(img, PATTERN, upscale=bad)
     c = C.find_corners(img, PATTERN, upscale=np.int64(1))
     assert c is not None and np.all(np.isfinite(c))
+    # a factor beyond MAX_UPSCALED_PX on a side: one line, not OpenCV's out-of-memory error
+    with pytest.raises(ConfigError, match=r"upscale 1000000 makes the"):
+        C.find_corners(img, PATTERN, upscale=10**6)
 
 
 def test_thermal_extrinsics_refuse_views_that_do_not_match():

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from hearsee.config import as_rng, finite_number, is_real, real_entries, whole_number
-from hearsee.errors import CalibrationError
+from hearsee.errors import CalibrationError, ConfigError
 from hearsee.vision.camera import MIN_BASELINE_M, Camera, StereoRig
 from hearsee.vision.io import to_gray
 
@@ -73,6 +73,8 @@ MAX_RMS_PX = 3.0
 #: above 3 % had fx 7-9 % off (median).
 MAX_FOCAL_REL_STD = 0.03
 
+#: The fewest inner corners per side of a board (OpenCV's chessboard detectors need more than 2)
+MIN_BOARD_CORNERS = 3
 #: :func:`parse_board` refuses more inner corners than this per side: no printed board has
 #: them, and ``99999999999x6`` asked :func:`board_points` for 6.5 TiB (a builtin MemoryError).
 MAX_BOARD_CORNERS = 1000
@@ -102,11 +104,12 @@ def parse_board(text: str) -> tuple[int, int]:
 
 
 def check_pattern(pattern: Any, text: Any = None) -> tuple[int, int]:
-    """``pattern`` (inner corners per row, per column) as two ints from 2 to
-    :data:`MAX_BOARD_CORNERS`, else a CalibrationError quoting ``text`` (default the pattern).
-    The board check of :func:`parse_board`, :func:`board_points`, :func:`find_corners` and
-    :func:`match_labeling` (a pattern of (0, 0) or "9x6" reached OpenCV: cv2.error; (-2, 3)
-    and (2.5, 3) numpy's ValueError / TypeError)."""
+    """``pattern`` (inner corners per row, per column) as two ints from
+    :data:`MIN_BOARD_CORNERS` to :data:`MAX_BOARD_CORNERS`, else a CalibrationError quoting
+    ``text`` (default the pattern). The board check of :func:`parse_board`,
+    :func:`board_points`, :func:`find_corners` and :func:`match_labeling` (a pattern of (0, 0)
+    or "9x6" reached OpenCV: cv2.error; (-2, 3) and (2.5, 3) numpy's ValueError / TypeError;
+    2x5 passed and OpenCV's detectors raised cv2.error: they need 3 corners a side)."""
     shown = pattern if text is None else text
     try:
         a, b = pattern
@@ -115,8 +118,9 @@ def check_pattern(pattern: Any, text: Any = None) -> tuple[int, int]:
     if not all(isinstance(v, int | np.integer) and not isinstance(v, bool) for v in (a, b)):
         raise CalibrationError(f"board must be two whole numbers of inner corners (per row, per "
                                f"column), e.g. (9, 6), got {shown!r}")
-    if a < 2 or b < 2:
-        raise CalibrationError(f"board needs at least 2x2 inner corners, got {shown!r}")
+    if a < MIN_BOARD_CORNERS or b < MIN_BOARD_CORNERS:
+        raise CalibrationError(f"board needs at least {MIN_BOARD_CORNERS}x{MIN_BOARD_CORNERS} "
+                               f"inner corners, got {shown!r}")
     if max(a, b) > MAX_BOARD_CORNERS:
         raise CalibrationError(f"board has at most {MAX_BOARD_CORNERS} inner corners per side, "
                                f"got {shown!r}")
@@ -179,6 +183,11 @@ def match_labeling(reference: NDArray, corners: NDArray, pattern: tuple[int, int
     return best
 
 
+#: :func:`find_corners` enlarges an image to at most this many pixels on a side (a 4K frame
+#: is 3840 wide; the thermal cameras it enlarges are a few hundred)
+MAX_UPSCALED_PX = 8192
+
+
 def find_corners(image: NDArray, pattern: tuple[int, int], *, try_inverted: bool = False,
                  upscale: int | None = None) -> NDArray | None:
     """Inner chessboard corners ``(N, 2)`` float32 in pixels, or None when the board is not
@@ -190,7 +199,9 @@ def find_corners(image: NDArray, pattern: tuple[int, int], *, try_inverted: bool
     makes the sub-pixel estimate several times more accurate on blurry low-resolution boards.
     ``try_inverted`` also tries the inverted image (thermal images of a heated board). Corners
     are relabelled so that corner 0 is the outer corner nearest the top-left of the image.
-    ``upscale`` must be an integer >= 1 (ConfigError): 0 gave infinite corners.
+    ``upscale`` must be an integer >= 1 (ConfigError): 0 gave infinite corners; one that makes
+    the image larger than :data:`MAX_UPSCALED_PX` on a side, a ConfigError too (10**6 was
+    OpenCV's out-of-memory error).
     """
     pattern = check_pattern(pattern)
     if upscale is not None:
@@ -199,6 +210,9 @@ def find_corners(image: NDArray, pattern: tuple[int, int], *, try_inverted: bool
     if g.dtype != np.uint8:
         g = cv2.normalize(g, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
     up = int(upscale) if upscale is not None else max(1, int(np.ceil(640 / g.shape[1])))
+    if up * max(g.shape) > MAX_UPSCALED_PX and up > 1:
+        raise ConfigError(f"upscale {up} makes the {g.shape[1]}x{g.shape[0]} image larger than "
+                          f"{MAX_UPSCALED_PX} px on a side; choose a smaller factor")
     if up > 1:
         g = cv2.resize(g, None, fx=up, fy=up, interpolation=cv2.INTER_CUBIC)
     candidates = [g, 255 - g] if try_inverted else [g]
