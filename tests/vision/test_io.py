@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from hearsee.errors import ConfigError, ImageInputError, InputFileError
+from hearsee.errors import CalibrationError, ConfigError, ImageInputError, InputFileError
 from hearsee.vision.io import (
     check_image,
     check_pair,
@@ -149,6 +149,9 @@ def test_wrong_size_and_mismatched_pair(tmp_path):
     write_image(tmp_path / "r2.png", _img(48, 64, seed=1))
     L, R = read_pair(tmp_path / "l.png", tmp_path / "r2.png", expected_size=(64, 48))
     assert L.shape == R.shape == (48, 64)
+    for bad in ((1,), 64, (64, -48), (64.5, 48), "64x48"):  # ((1,) was an IndexError)
+        with pytest.raises(CalibrationError, match="expected_size"):
+            read_pair(tmp_path / "l.png", tmp_path / "r2.png", expected_size=bad)
     with pytest.raises(ImageInputError, match="channels"):
         check_pair(_img(), _img(c=3))
     # the same view twice: zero disparity, no candidate at all -- refused (read as a pair before)

@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from hearsee.errors import ConfigError, ImageInputError, InputFileError
+from hearsee.errors import CalibrationError, ConfigError, ImageInputError, InputFileError
 from hearsee.vision.thermal import (
     counts_to_celsius,
     load_thermal,
@@ -82,6 +82,13 @@ def test_load_thermal(tmp_path):
     np.save(tmp_path / "nan.npy", np.full((4, 4), np.nan))
     with pytest.raises(ImageInputError):
         load_thermal(tmp_path / "nan.npy")
+    with open(tmp_path / "z.npy", "wb") as f:  # an .npz archive named .npy (AttributeError)
+        np.savez(f, a=t)
+    with pytest.raises(ImageInputError, match="npz archive"):
+        load_thermal(tmp_path / "z.npy")
+    for bad in (5, (80,), (80.5, 60), (0, 60)):  # (5 was a TypeError)
+        with pytest.raises(CalibrationError, match="expected_size"):
+            load_thermal(tmp_path / "t.npy", expected_size=bad)
     ck = np.rint((t + 273.15) * 100).astype(np.uint16)
     cv2.imwrite(str(tmp_path / "t16.png"), ck)
     got = load_thermal(tmp_path / "t16.png")

@@ -87,6 +87,7 @@ __all__ = [
     "StereoRig",
     "camera_pose",
     "check_rig",
+    "check_size",
     "fold_radius",
     "head_camera_pose",
     "load_camera",
@@ -212,7 +213,7 @@ class Camera:
             )
         if np.all(d == 0):
             d = np.zeros(0)
-        w, h = _check_size(self.width, self.height)
+        w, h = check_size(self.width, self.height)
         if K[0, 0] < MIN_FOCAL_SHARE * w or K[1, 1] < MIN_FOCAL_SHARE * h:
             raise CalibrationError(
                 f"camera K: focal lengths fx = {K[0, 0]:.4g}, fy = {K[1, 1]:.4g} px for a "
@@ -242,7 +243,7 @@ class Camera:
         # (True was read as 1 deg; text and a text size raised builtin TypeErrors)
         if not (is_real(hfov_deg) and 0.0 < hfov_deg < 180.0):
             raise CalibrationError(f"hfov_deg must be in (0, 180), got {hfov_deg!r}")
-        _check_size(width, height)
+        check_size(width, height)
         fx = (width / 2.0) / np.tan(np.radians(hfov_deg) / 2.0)
         if vfov_deg is None:
             fy = fx
@@ -298,7 +299,7 @@ class Camera:
 
     def with_size(self, width: int, height: int) -> Camera:
         """The same camera resampled to ``width x height`` pixels (K scaled; dist unchanged)."""
-        _check_size(width, height)  # (text: a builtin TypeError)
+        check_size(width, height)  # (text: a builtin TypeError)
         sx, sy = width / self.width, height / self.height
         S = np.diag([sx, sy, 1.0])
         K = S @ self.K
@@ -591,7 +592,7 @@ class Camera:
             raise ConfigError(f"{where}: {exc}") from None
 
 
-def _check_size(width: Any, height: Any, what: str = "camera size") -> tuple[int, int]:
+def check_size(width: Any, height: Any, what: str = "camera size") -> tuple[int, int]:
     """``(width, height)`` in pixels as ints when both are whole numbers > 0 (640.0 too; not a
     bool or text), else a CalibrationError naming ``what``: the one image-size rule of
     :class:`Camera`, :meth:`Camera.from_fov`, :meth:`Camera.with_size` and
@@ -1307,7 +1308,7 @@ def rig_from_opencv(intrinsics: str | Path, extrinsics: str | Path,
     if isinstance(image_size, str) or not hasattr(image_size, "__len__") or len(image_size) != 2:
         raise CalibrationError(f"image_size: width and height must be positive integers, got "
                                f"{image_size!r:.80}")
-    size = _check_size(*image_size, what="image_size")
+    size = check_size(*image_size, what="image_size")
     # (int() read "640" as 640 and truncated 640.7; a text scale was numpy's builtin TypeError)
     scale_to_m = finite_number("scale_to_m", scale_to_m, 0.0, lo_open=True)
     a = read_opencv_yaml(intrinsics)

@@ -13,20 +13,21 @@ import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.config import input_file, open_replaced, output_file, real_entries, replacing
-from hearsee.errors import ConfigError, ImageInputError, InputFileError
+from hearsee.errors import CalibrationError, ConfigError, ImageInputError, InputFileError
 
 __all__ = [
     "as_detector_image",
     "check_image",
     "check_pair",
     "glob_images",
+    "image_size",
     "read_image",
     "read_pair",
     "read_thermal",
@@ -196,12 +197,29 @@ def _size_text(size: tuple[int, int]) -> str:
     return f"{size[0]}x{size[1]}"
 
 
+def image_size(size: Any, what: str = "expected_size") -> tuple[int, int]:
+    """``size`` as ``(width, height)`` in pixels, two ints, by the camera's image-size rule
+    (:func:`hearsee.vision.camera.check_size`: whole numbers > 0), else a CalibrationError
+    naming ``what`` (a 1-tuple raised IndexError, a bare number TypeError)."""
+    from hearsee.vision.camera import check_size
+
+    try:
+        w, h = size
+    except (TypeError, ValueError):
+        raise CalibrationError(f"{what} must be (width, height) in pixels, got {size!r:.60}"
+                               ) from None
+    return check_size(w, h, what)
+
+
 def check_image(image: NDArray, name: str = "image",
                 expected_size: tuple[int, int] | None = None) -> NDArray:
     """Validate an image array: 2-D or 3-D with 1, 3 or 4 channels, non-empty, numeric, finite.
 
-    ``expected_size`` is ``(width, height)`` in pixels (OpenCV order). Returns the array.
+    ``expected_size`` is ``(width, height)`` in pixels (OpenCV order; :func:`image_size`).
+    Returns the array.
     """
+    if expected_size is not None:
+        expected_size = image_size(expected_size)
     if not isinstance(image, np.ndarray):
         raise ImageInputError(f"{name}: expected a numpy image array, got {type(image).__name__}")
     if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] not in (1, 3, 4)):

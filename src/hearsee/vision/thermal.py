@@ -290,13 +290,20 @@ def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
     """Read a thermal image: ``.npy`` (float degC, (h, w)), or any image file through
     :func:`hearsee.vision.io.read_thermal` (8-bit non-radiometric, 16-bit centi-kelvin counts,
     float TIFF degC). ``expected_size`` is (width, height)."""
+    from hearsee.vision.io import image_size, read_thermal
+
     p = as_path(path, "the thermal file's path")
+    if expected_size is not None:  # (a bare number was a TypeError)
+        expected_size = image_size(expected_size)
     if p.suffix.lower() == ".npy":
         input_file(p, "thermal file")
         try:
             arr = np.load(p, allow_pickle=False)
         except (ValueError, OSError) as exc:
             raise ImageInputError(f"{p}: not a readable .npy array ({exc})") from None
+        if not isinstance(arr, np.ndarray):  # (np.load reads an .npz archive whatever its name)
+            arr.close()
+            raise ImageInputError(f"{p}: an .npz archive of arrays, not one .npy array of degC")
         if arr.ndim != 2 or arr.dtype.kind not in "fiu" or arr.size == 0:
             raise ImageInputError(f"{p}: expected a 2-D numeric array of degC, got {arr.shape} "
                                   f"{arr.dtype}")
@@ -312,8 +319,6 @@ def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
             raise ImageInputError(f"{p}: thermal image contains NaN or infinite values")
         _check_scene_celsius(arr, f"{p}: .npy thermal images are degC")
         return arr.astype(np.float32)
-    from hearsee.vision.io import read_thermal
-
     img = read_thermal(p, expected_size)
     if img.dtype == np.uint16:
         _check_scene_celsius(counts_to_celsius(img), f"{p}: 16-bit thermal images are "
