@@ -277,3 +277,29 @@ def test_calibrate_warnings_are_hearsee_warning_lines(board_dir, tmp_path, capsy
     out, err = capsys.readouterr()
     doc = json.loads(out)
     assert doc["warnings"] and err == "".join(f"hearsee: warning: {w}\n" for w in doc["warnings"])
+
+
+@pytest.mark.slow
+def test_calibrate_reads_deep_images_at_their_depth(board_dir, tmp_path, capsys):
+    """12-bit visible boards in 16-bit PNGs and 16-bit radiometric thermal boards (centi-kelvin,
+    the board 10 K apart from its squares): read as grey, OpenCV kept each file's top 8 bits --
+    the visible boards nearly black (0.25 px RMS instead of 0.06 in the audit), the thermal board
+    3 grey levels, found in no image. Now the rig is the one the 8-bit files give."""
+    d, truth = board_dir
+    for i in range(6):
+        for side in ("left", "right"):
+            img = cv2.imread(str(d / f"{side}{i:02d}.png"), cv2.IMREAD_UNCHANGED)
+            cv2.imwrite(str(tmp_path / f"{side}{i:02d}.png"), img.astype(np.uint16) << 4)
+        t8 = cv2.imread(str(d / f"thermal{i:02d}.png"), cv2.IMREAD_UNCHANGED).astype(float)
+        counts = np.rint((20.0 + 10.0 * t8 / 255.0 + 273.15) * 100.0).astype(np.uint16)
+        cv2.imwrite(str(tmp_path / f"thermal{i:02d}.png"), counts)
+    deep, flat = tmp_path / "deep.yaml", tmp_path / "flat.yaml"
+    assert main(_args(tmp_path, deep, "--thermal", str(tmp_path / "thermal*.png"))) == 0
+    assert main(_args(d, flat, "--thermal", str(d / "thermal*.png"))) == 0
+    capsys.readouterr()
+    a, b = load_rig(deep), load_rig(flat)
+    # (12 bits >> 4: the 8-bit pixels; OpenCV's solver agrees with itself to ~1e-10 px)
+    np.testing.assert_allclose(a.left.K, b.left.K, rtol=1e-8)
+    np.testing.assert_allclose(a.T, b.T, atol=1e-9)
+    assert a.thermal is not None
+    np.testing.assert_allclose(a.thermal_center_m, truth.thermal_center_m, atol=0.006)

@@ -526,7 +526,7 @@ def _fake_image_files(monkeypatch, corners: dict, sizes: dict) -> None:
     ``sizes[camera]``), instead of reading and searching real images."""
     found = {}
 
-    def read_image(path, mode="bgr"):
+    def read_image(path, mode="bgr", expected_size=None):  # (read_thermal's call too)
         name = str(path)
         w, h = sizes[name.rstrip("0123456789")]
         img = np.zeros((h, w), np.uint8)

@@ -14,6 +14,7 @@ from hearsee.vision.io import (
     read_image,
     read_pair,
     read_thermal,
+    to_8_bits,
     to_gray,
     video_capture,
     write_image,
@@ -428,3 +429,36 @@ def test_opencv_log_level_without_cv2_utils_logging(monkeypatch):
     with _opencv_log("error"):
         assert level["now"] == 2
     assert calls == [0, 4, 2, 4] and level["now"] == 4
+
+
+def test_sixteen_bit_images_keep_their_significant_bits(tmp_path):
+    """A 12-bit camera's frames in 16-bit PNGs, read as grey or colour: OpenCV kept the top 8 of
+    16 bits (0-15 of 0-255); now shifted by the bits in use -- the 8-bit pixels exactly. A pair
+    whose views differ in brightness gets one shift (the same gain); 8-bit values in a 16-bit
+    file are kept; a float TIFF is named, not read."""
+    g = _img(48, 64)
+    c = _img(48, 64, c=3, seed=1)
+    cv2.imwrite(str(tmp_path / "g12.png"), g.astype(np.uint16) << 4)
+    cv2.imwrite(str(tmp_path / "c12.png"), c.astype(np.uint16) << 4)
+    np.testing.assert_array_equal(read_image(tmp_path / "g12.png", "gray"), g)
+    np.testing.assert_array_equal(read_image(tmp_path / "c12.png", "bgr"), c)
+    # (grey from 16-bit colour, then shifted: the 8-bit conversion's value or one below)
+    diff = cv2.cvtColor(c, cv2.COLOR_BGR2GRAY).astype(int) - read_image(tmp_path / "c12.png",
+                                                                         "gray")
+    assert set(np.unique(diff)) <= {0, 1}
+    assert read_image(tmp_path / "g12.png", "unchanged").dtype == np.uint16
+    cv2.imwrite(str(tmp_path / "g8in16.png"), g.astype(np.uint16))
+    np.testing.assert_array_equal(read_image(tmp_path / "g8in16.png", "gray"), g)
+    # a darker right view (its brightest pixel below 2048): the left view's shift, not its own
+    dark = (g // 2).astype(np.uint16) << 4
+    cv2.imwrite(str(tmp_path / "dark12.png"), dark)
+    L, R = read_pair(tmp_path / "g12.png", tmp_path / "dark12.png")
+    np.testing.assert_array_equal(L, g)
+    np.testing.assert_array_equal(R, g // 2)
+    a, b = to_8_bits(g.astype(np.uint16) << 4, dark)
+    assert np.array_equal(a, g) and np.array_equal(b, g // 2)
+    assert to_8_bits(g)[0] is g  # (8-bit images as they are)
+    t = np.random.default_rng(2).uniform(20, 35, (24, 32)).astype(np.float32)
+    assert cv2.imwrite(str(tmp_path / "t.tiff"), t)
+    with pytest.raises(ImageInputError, match="floating-point pixels"):
+        read_pair(tmp_path / "t.tiff", tmp_path / "t.tiff")

@@ -878,7 +878,7 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
     ImageInputError / InputFileError (unreadable or differently sized images).
     """
     from hearsee.errors import ImageInputError
-    from hearsee.vision.io import read_image
+    from hearsee.vision.io import read_image, read_thermal
 
     for what, files in (("left_files", left_files), ("right_files", right_files),
                         ("thermal_files", thermal_files)):
@@ -911,7 +911,10 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
     sizes: dict[str, tuple[int, int]] = {}
 
     def load(path, key: str) -> NDArray:
-        img = read_image(path, "gray")
+        # (a thermal image at its depth: find_corners stretches its range to 8 bits -- read
+        # as grey, 16-bit radiometric counts kept their top 8 bits: a board 10 K warmer than
+        # its squares was 3 grey levels and found in no image)
+        img = read_thermal(path) if key == "thermal" else read_image(path, "gray")
         size = (img.shape[1], img.shape[0])
         ref = sizes.setdefault(key, size)
         if size != ref:

@@ -31,6 +31,7 @@ __all__ = [
     "read_image",
     "read_pair",
     "read_thermal",
+    "to_8_bits",
     "to_gray",
     "video_capture",
     "write_image",
@@ -269,7 +270,10 @@ def read_image(path: str | Path, mode: ColorMode = "gray",
     path : file name (any format OpenCV decodes: PNG, JPEG, TIFF, PGM, ...).
     mode : "gray" (uint8 (H, W)), "bgr" (uint8 (H, W, 3)) or "unchanged" (bit depth and
         channels as stored, e.g. 16-bit PGM/PNG). In every mode the pixels are those stored:
-        a JPEG's EXIF orientation tag is not applied.
+        a JPEG's EXIF orientation tag is not applied. A 16-bit file read as "gray" or "bgr"
+        keeps its 8 most significant bits in use (:func:`to_8_bits`: a 12-bit camera's
+        0-4095 shifted right by 4); OpenCV's own conversion kept the top 8 of 16 bits, which
+        left a 10- or 12-bit image nearly black.
     expected_size : (width, height) in pixels, checked when given.
 
     A file OpenCV cannot decode is one ImageInputError and nothing else: OpenCV's log and
@@ -281,6 +285,25 @@ def read_image(path: str | Path, mode: ColorMode = "gray",
     anything another thread writes to stderr during a decode is lost; concurrent reads are
     safe (they share the redirection, and stderr is restored when the last one ends).
     """
+    img, p = _decode(path, mode)
+    return check_image(img if mode == "unchanged" else to_8_bits(img)[0], str(p), expected_size)
+
+
+def to_8_bits(*images: NDArray) -> tuple[NDArray, ...]:
+    """``images`` as uint8, the 16-bit ones shifted right by as many bits as their largest
+    value needs beyond 8 -- one shift for all of them, so the two views of a stereo pair keep
+    the same gain (a 12-bit pair: >> 4 on both, whatever each one's brightest pixel). 8-bit
+    images come back as they are; 8-bit values in a 16-bit file are not shifted."""
+    deep = [im for im in images if im.dtype == np.uint16]
+    top = max((int(im.max(initial=0)) for im in deep), default=0)
+    shift = max(top.bit_length() - 8, 0)
+    return tuple((im >> shift).astype(np.uint8) if im.dtype == np.uint16 else im
+                 for im in images)
+
+
+def _decode(path: str | Path, mode: ColorMode) -> tuple[NDArray, Path]:
+    """(the image file ``path`` decoded in ``mode`` (:func:`read_image`), its checked path):
+    "gray" and "bgr" keep a 16-bit file's depth (OpenCV's ANYDEPTH: uint8 or uint16)."""
     if mode not in _IMREAD:
         raise ImageInputError(f"mode must be one of {', '.join(_IMREAD)}, got {mode!r}")
     p = input_file(path, "image file")
@@ -291,25 +314,28 @@ def read_image(path: str | Path, mode: ColorMode = "gray",
     # (OpenCV's log and the codecs' own messages silenced: a truncated PNG printed a
     # "[ WARN ]" or a "libpng error" line, a truncated TIFF two "[ERROR]" lines, on stderr
     # before hearsee's one-line error below)
+    flags = _IMREAD[mode] if mode == "unchanged" else _IMREAD[mode] | cv2.IMREAD_ANYDEPTH
     with _opencv_log("silent"), _codec_stderr_off():
-        img = cv2.imdecode(data, _IMREAD[mode]) if data.size else None
+        img = cv2.imdecode(data, flags) if data.size else None
     if img is None and mode != "unchanged" and data.size:
-        # (a float TIFF decodes as it is stored only: gray and colour reads refused it as
-        # "corrupt or unsupported format")
+        # (a float TIFF decodes in colour only as it is stored: named below, not "corrupt")
         with _opencv_log("silent"), _codec_stderr_off():
             raw = cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
-        if raw is not None and raw.dtype.kind == "f":
-            raise ImageInputError(
-                f"{p}: holds floating-point pixels ({raw.dtype}; a thermal or depth image?), "
-                f"which a {mode} image cannot take: give an 8- or 16-bit image")
+        img = raw if raw is not None and raw.dtype not in (np.uint8, np.uint16) else None
     if img is None:
         raise ImageInputError(
             f"{p}: not a readable image (corrupt or unsupported format; expected PNG, JPEG, "
             "TIFF or PGM)"
         )
+    if mode != "unchanged" and img.dtype not in (np.uint8, np.uint16):
+        # (a float TIFF: "corrupt or unsupported format" before ANYDEPTH, now its own words)
+        kind = "floating-point" if img.dtype.kind == "f" else f"{img.dtype.itemsize * 8}-bit"
+        raise ImageInputError(
+            f"{p}: holds {kind} pixels ({img.dtype}; a thermal or depth image?), which a "
+            f"{mode} image cannot take: give an 8- or 16-bit image")
     if mode == "unchanged":
         _check_tiff_kept(p, data, img)
-    return check_image(img, str(p), expected_size)
+    return img, p
 
 
 def _check_tiff_kept(p: Path, data: NDArray, img: NDArray) -> None:
@@ -363,8 +389,11 @@ def read_pair(left: str | Path, right: str | Path, mode: ColorMode = "gray",
     """Read a stereo pair and check that both images have the same size (and
     ``expected_size`` = (width, height) when given), and that they are two views: the same
     file twice (or a copy) gave zero disparity everywhere, "no human" without a word."""
-    L = read_image(left, mode)
-    R = read_image(right, mode)
+    (L, lp), (R, rp) = (_decode(p, mode) for p in (left, right))
+    if mode != "unchanged":  # (one shift for both views: the same gain)
+        L, R = to_8_bits(L, R)
+    check_image(L, str(lp))
+    check_image(R, str(rp))
     names = (str(left), str(right))
     check_pair(L, R, names)  # (sizes that differ first, then the calibration's size)
     check_pair(L, R, names, expected_size)
