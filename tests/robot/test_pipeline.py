@@ -132,6 +132,19 @@ def test_demo_rejects_a_broken_scenario(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("command", [["demo"], ["run", "--config", "robot.yaml"]])
+def test_an_empty_report_folder_is_refused(command, tmp_path, monkeypatch, capsys):
+    """``--out ""`` (an unset shell variable) became ``.``: demo wrote its report into the
+    current folder. Refused before anything runs, as one usage line."""
+    monkeypatch.chdir(tmp_path)
+    for empty in ("", "  "):
+        assert main([*command, "--out", empty, "-q"]) == 2
+        err = capsys.readouterr().err
+        assert "--out" in err and "must name a report folder" in err
+        assert len(err.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_demo_will_not_write_over_its_input(tmp_path, capsys):
     # a scenario (YAML is a superset of JSON) saved as the report's own summary.json
     sc = tmp_path / "summary.json"

@@ -121,6 +121,17 @@ def check_exports(rerun: Path | None, mcap: Path | None,
             for kind, p in (("rerun", rerun), ("mcap", mcap)) if p is not None]
 
 
+def folder_path(value: str | Path) -> Path:
+    """A report folder option's value as a Path (typer's ``parser``): an empty one is refused.
+    As a plain Path option, ``--out ""`` became ``.`` and the report went into the current
+    folder (an unset shell variable, not a choice); ``--out .`` still means it."""
+    if isinstance(value, Path):  # (the default, or a value typer has converted already)
+        return value
+    if not str(value).strip():
+        raise typer.BadParameter(f"must name a report folder, got {value!r}")
+    return Path(value)
+
+
 def parse_floats(text: str, n: int | None, what: str) -> list[float]:
     """Parse ``"1,2,3"`` into floats; raise typer.BadParameter with a clear message."""
     try:

@@ -10,6 +10,7 @@ from hearsee.cli._app import (
     app,
     check_exports,
     emit_json,
+    folder_path,
     print_summary,
     progress,
     refuse_overwrite,
@@ -19,7 +20,8 @@ from hearsee.cli._app import (
 @app.command("demo")
 def demo_cmd(
     scenario: Path = typer.Option(None, "--scenario", help="Scenario YAML (default: built-in)."),
-    out: Path = typer.Option(Path("hearsee-report"), "--out", "-o", help="Report folder."),
+    out: Path = typer.Option(Path("hearsee-report"), "--out", "-o", help="Report folder.",
+                             parser=folder_path, metavar="<path>"),
     rerun: Path = typer.Option(None, "--rerun", help="Also write a Rerun recording (.rrd)."),
     mcap: Path = typer.Option(None, "--mcap", help="Also write ROS 2 messages to an MCAP file."),
     force: bool = typer.Option(False, "--force",

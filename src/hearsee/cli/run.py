@@ -14,7 +14,14 @@ from typing import Annotated
 
 import typer
 
-from hearsee.cli._app import app, check_exports, err_console, print_summary, progress
+from hearsee.cli._app import (
+    app,
+    check_exports,
+    err_console,
+    folder_path,
+    print_summary,
+    progress,
+)
 
 
 @app.command("run")
@@ -29,7 +36,7 @@ def run_cmd(
         "no limit -- until Ctrl-C or the input stops).")] = None,
     out: Annotated[Path | None, typer.Option(
         "--out", "-o", help="Report folder (overrides output.report; the JSON lines go to "
-        "OUT/updates.jsonl).")] = None,
+        "OUT/updates.jsonl).", parser=folder_path, metavar="<path>")] = None,
     rerun: Annotated[Path | None, typer.Option(
         "--rerun", help="Also write a Rerun recording (.rrd; pip install 'hearsee[rerun]').")
     ] = None,
