@@ -303,3 +303,21 @@ def test_calibrate_reads_deep_images_at_their_depth(board_dir, tmp_path, capsys)
     np.testing.assert_allclose(a.T, b.T, atol=1e-9)
     assert a.thermal is not None
     np.testing.assert_allclose(a.thermal_center_m, truth.thermal_center_m, atol=0.006)
+
+
+def test_the_reference_is_checked_against_the_images_size(tmp_path):
+    """The reference file holds no image size: its matrices were checked as 640x480 cameras, so
+    a 4K camera's (principal point 1920, 1080) was refused as "outside the image". Checked
+    against the calibrated images' size: the 4K matrix is a 3840x2160 camera, and a 320x240
+    camera's principal point 1000 px out is still refused."""
+    from hearsee.cli.calibrate import _read_reference
+    from hearsee.errors import ConfigError
+
+    ref = tmp_path / "intrinsics.yml"
+    fs = cv2.FileStorage(str(ref), cv2.FILE_STORAGE_WRITE)
+    k4 = np.array([[2800.0, 0, 1920.0], [0, 2800.0, 1080.0], [0, 0, 1]])
+    fs.write("M1", k4)
+    fs.release()
+    np.testing.assert_array_equal(_read_reference(ref, (3840, 2160))["M1"], k4)
+    with pytest.raises(ConfigError, match="outside the 320x240 image"):
+        _read_reference(ref, (320, 240))

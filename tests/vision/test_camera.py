@@ -472,6 +472,22 @@ def test_read_opencv_yaml_skips_what_it_does_not_read(tmp_path):
     assert data["grid_points"].dtype == float
 
 
+@pytest.mark.parametrize("rows, dt, n", [(3, "d", 5), (-3, "d", 9), (3, "q", 9)])
+def test_read_opencv_yaml_names_a_broken_matrix(tmp_path, rows, dt, n):
+    """A matrix node OpenCV cannot read (5 values for 3x3, rows -3, dt q) was skipped, and
+    calibrate --reference said there was no M1 at all; now a ConfigError names the node."""
+    p = tmp_path / "intrinsics.yml"
+    values = ", ".join(f"{v:g}." for v in K.reshape(-1)[:n])
+    p.write_text(f"%YAML:1.0\n---\nM1: !!opencv-matrix\n   rows: {rows}\n   cols: 3\n"
+                 f"   dt: {dt}\n   data: [ {values} ]\n")
+    with pytest.raises(ConfigError, match=r"M1: a malformed !!opencv-matrix"):
+        read_opencv_yaml(p)
+    p.write_text(p.read_text().replace(f"rows: {rows}", "rows: 3").replace(f"dt: {dt}", "dt: d")
+                 .replace(f"[ {values} ]", "[ " + ", ".join(f"{v:g}." for v in K.reshape(-1))
+                          + " ]"))
+    np.testing.assert_array_equal(read_opencv_yaml(p)["M1"], K)
+
+
 def test_a_baseline_below_one_millimetre_is_refused(tmp_path):
     """The same images for both cameras calibrate to |T| ~ 5e-15 m, which was accepted as a
     rig; real stereo pairs are >= 10 mm apart."""

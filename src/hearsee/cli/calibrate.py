@@ -43,7 +43,7 @@ def calibrate_cmd(
     from hearsee.errors import CalibrationError, ConfigError
     from hearsee.vision.calibration import calibrate_rig, parse_board
     from hearsee.vision.camera import save_rig
-    from hearsee.vision.io import glob_images
+    from hearsee.vision.io import glob_images, read_image
 
     # (1e300 or 1e-300 reached OpenCV: a RuntimeWarning and an "Assertion failed" message)
     if not 1e-3 <= square <= 2.0:
@@ -59,7 +59,8 @@ def calibrate_cmd(
     out = Path(output)
     refuse_overwrite([out], [*lf, *rf, *(tf or []), reference], force)
     # read the reference first: a bad file fails before the calibration and the output
-    ref_cams = _read_reference(Path(reference)) if reference is not None else None
+    ref_cams = (_read_reference(Path(reference), read_image(lf[0]).shape[::-1])
+                if reference is not None else None)
 
     total = len(lf) + len(rf) + (len(tf) if tf else 0)
     with progress("detecting chessboards", total) as advance:
@@ -87,9 +88,11 @@ def calibrate_cmd(
         err_console.print(f"hearsee: warning: {w}", style="yellow", markup=False, highlight=False)
 
 
-def _read_reference(reference: Path) -> dict:
+def _read_reference(reference: Path, size: tuple[int, int]) -> dict:
     """The camera matrices ``{"M1": K, "M2": K}`` (3x3, pixels) of an OpenCV
-    stereo_calib-style FileStorage file (at least one of them)."""
+    stereo_calib-style FileStorage file (at least one of them), each checked as a camera of the
+    images' ``size`` (width, height; the file holds none: checked against 640x480, a 4K
+    camera's principal point was "outside the image")."""
     from hearsee.errors import CalibrationError, ConfigError
     from hearsee.vision.camera import Camera, read_opencv_yaml
 
@@ -101,7 +104,7 @@ def _read_reference(reference: Path) -> dict:
         if getattr(ref[key], "shape", None) != (3, 3):
             raise ConfigError(f"{reference}: {key} is not a 3x3 matrix")
         try:  # (an all-zero or NaN matrix gave divide warnings and an inf/null comparison)
-            Camera(ref[key])
+            Camera(ref[key], width=size[0], height=size[1])
         except CalibrationError as exc:
             raise ConfigError(f"{reference}: {key}: {exc}") from None
         out[key] = ref[key]

@@ -1341,7 +1341,9 @@ def rig_from_opencv(intrinsics: str | Path, extrinsics: str | Path,
 def read_opencv_yaml(path: str | Path) -> dict[str, Any]:
     """Read the top-level nodes of an OpenCV ``FileStorage`` file: matrices (``!!opencv-matrix``)
     and sequences of numbers -> float numpy arrays, numbers -> float, strings -> str. Other
-    nodes (plain maps, sequences of strings or of structures) are skipped."""
+    nodes (plain maps, sequences of strings or of structures) are skipped; a matrix node that
+    OpenCV cannot read (rows x cols not its number of values, an unknown dt) is a
+    ConfigError naming it."""
     p = input_file(path)
     try:
         fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_READ)
@@ -1358,7 +1360,10 @@ def read_opencv_yaml(path: str | Path) -> dict[str, Any]:
     try:
         root = fs.root()
         for key in root.keys():
-            value = _fs_value(fs.getNode(key))
+            try:
+                value = _fs_value(fs.getNode(key))
+            except ValueError as exc:
+                raise ConfigError(f"{p}: {key}: {exc}") from None
             if value is not None:
                 out[key] = value
     except cv2.error as exc:
@@ -1402,6 +1407,11 @@ def _fs_value(node: cv2.FileNode) -> float | str | NDArray | None:
         try:  # only !!opencv-matrix / !!opencv-nd-matrix maps are matrices
             m = node.mat()
         except cv2.error:
-            return None
+            m = None
+        if m is None and {"rows", "cols", "data"} <= set(node.keys()):
+            # (a matrix whose rows x cols do not match its data, or whose dt is not a type,
+            # was skipped: "no M1 camera matrix" for an M1 that is there, broken)
+            raise ValueError("a malformed !!opencv-matrix (rows, cols, dt and the number of "
+                             "data values must agree)")
         return None if m is None else np.asarray(m, dtype=float)
     return None
