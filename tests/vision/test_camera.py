@@ -505,6 +505,24 @@ def test_a_baseline_below_one_millimetre_is_refused(tmp_path):
         load_rig(path)
 
 
+def test_a_baseline_in_millimetres_is_refused(tmp_path):
+    """A rig file written in millimetres (T: [-120, 0, 0]) gave depths 1000x too large and
+    "0 humans" without a word; baselines and thermal offsets above 5 m are refused."""
+    cam = Camera.from_fov(60.0, 640, 480)
+    assert StereoRig.ideal(cam, 5.0).baseline_m == pytest.approx(5.0)
+    path = tmp_path / "rig.yaml"
+    save_rig(StereoRig.ideal(cam, 0.12, thermal=cam, thermal_offset_m=(0.05, 0.0, 0.0)), path)
+    text = path.read_text()
+    assert "\nT: [-0.12, 0.0, 0.0]" in text and "\n  T: [-0.05, 0.0, 0.0]" in text
+    path.write_text(text.replace("\nT: [-0.12, 0.0, 0.0]", "\nT: [-120.0, 0.0, 0.0]"))
+    with pytest.raises(ConfigError, match=r"rig T: the baseline is 120 m, above 5 m \(is the "
+                                          r"translation in millimetres"):
+        load_rig(path)
+    path.write_text(text.replace("\n  T: [-0.05, 0.0, 0.0]", "\n  T: [-50.0, 0.0, 0.0]"))
+    with pytest.raises(ConfigError, match=r"thermal camera is 50 m from the left camera"):
+        load_rig(path)
+
+
 def test_camera_height_in_the_rig_info_is_checked_when_loaded(tmp_path):
     cam = Camera.from_fov(60.0, 640, 480)
     path = tmp_path / "rig.yaml"
@@ -755,7 +773,7 @@ def test_camera_and_rig_keep_copies_of_the_callers_arrays():
         rig.T[0] = -0.5  # the rig's own arrays are read-only
 
 
-@pytest.mark.parametrize("T", [[0.0, 1e6, 0.0], [-0.12, 0.12 * 1.5, 0.0], [-0.12, 0.0, 5.0]])
+@pytest.mark.parametrize("T", [[0.0, 1.0, 0.0], [-0.12, 0.12 * 1.5, 0.0], [-0.12, 0.0, 4.0]])
 def test_a_rig_whose_cameras_are_not_side_by_side_says_so(T):
     """A vertical or forward baseline was refused as "the right camera is to the LEFT (T_x >
     0)" although T_x <= 0, or with "focal_px must be ... got -67.85": neither the cause."""

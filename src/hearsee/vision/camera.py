@@ -80,6 +80,7 @@ from hearsee.errors import CalibrationError, ConfigError, GeometryError
 from hearsee.geometry import as_point, norm_scale
 
 __all__ = [
+    "MAX_BASELINE_M",
     "MIN_BASELINE_M",
     "OPTICAL_FROM_BODY",
     "Camera",
@@ -111,6 +112,10 @@ _DIST_LENGTHS = (0, 4, 5, 8, 12, 14)
 #: (phone dual cameras; depth cameras 18-120 mm; the robot scenarios allow 20 mm and up), so
 #: 1 mm is a safe floor that still reads as "the two images come from one place".
 MIN_BASELINE_M = 1e-3
+#: A stereo baseline or a thermal camera's offset from the left camera (metres) above this is
+#: refused: no robot's head is that wide, and a file written in millimetres (T: [-120, 0, 0])
+#: gave depths 1000x too large -- "0 humans", without a word. Robot scenarios allow up to 1 m.
+MAX_BASELINE_M = 5.0
 
 
 #: The smallest focal length a camera may have, as a share of its image width (and height):
@@ -777,7 +782,7 @@ class StereoRig:
     left, right : Camera
     R, T : (3, 3), (3,)
         Right-from-left: ``X_right = R @ X_left + T`` (metres); ``|T|`` must be at least
-        :data:`MIN_BASELINE_M` (1 mm).
+        :data:`MIN_BASELINE_M` (1 mm) and at most :data:`MAX_BASELINE_M` (5 m; as ``|T_thermal|``).
     thermal : Camera, optional
     R_thermal, T_thermal : (3, 3), (3,), optional
         Thermal-from-left: ``X_thermal = R_thermal @ X_left + T_thermal`` (metres).
@@ -819,6 +824,10 @@ class StereoRig:
                 f"{MIN_BASELINE_M * 1000:g} mm: both cameras at one point (left and right images "
                 "are the same or taken from the same place?)"
             )
+        if np.linalg.norm(T) > MAX_BASELINE_M:
+            raise CalibrationError(
+                f"rig T: the baseline is {np.linalg.norm(T):.4g} m, above {MAX_BASELINE_M:g} m "
+                "(is the translation in millimetres? hearsee's rig files are in metres)")
         object.__setattr__(self, "R", R)
         object.__setattr__(self, "T", T)
         # (the rules of from_dict: a NaN or negative rms_px and a NaN camera height were saved
@@ -847,8 +856,13 @@ class StereoRig:
                 )
             object.__setattr__(self, "R_thermal",
                                _check_rotation(self.R_thermal, "rig R_thermal (thermal-from-left)"))
-            object.__setattr__(self, "T_thermal",
-                               _check_translation(self.T_thermal, "rig T_thermal"))
+            Tt = _check_translation(self.T_thermal, "rig T_thermal")
+            if np.linalg.norm(Tt) > MAX_BASELINE_M:
+                raise CalibrationError(
+                    f"rig T_thermal: the thermal camera is {np.linalg.norm(Tt):.4g} m from the "
+                    f"left camera, above {MAX_BASELINE_M:g} m (is the translation in "
+                    "millimetres? hearsee's rig files are in metres)")
+            object.__setattr__(self, "T_thermal", Tt)
 
     # -- construction ---------------------------------------------------------------------
     @classmethod
