@@ -425,6 +425,17 @@ def test_input_file_names_the_kind():
         input_file("nowhere.csv", "trajectory file", " (hint)")
 
 
+def test_a_name_too_long_for_the_system_is_an_input_file_error():
+    """Path.is_dir / exists raise ENAMETOOLONG rather than answer: load_array('x' * 5000) was
+    a bare OSError (the CLI's net caught it; the library's callers got no typed error)."""
+    from hearsee.audio.arrays import load_array
+    from hearsee.config import input_file, output_file
+
+    for check in (input_file, output_file, load_array):
+        with pytest.raises(InputFileError, match=r"^x{57}\.\.\.: the system refuses this path"):
+            check("x" * 5000)
+
+
 def test_output_file_refuses_folders_and_missing_or_file_parents(tmp_path):
     """config.output_file, the one output-path check of refuse_overwrite, save_wav and the
     robot's exports (each had its own copy)."""

@@ -24,8 +24,9 @@ from hearsee.errors import ConfigError, InputFileError
 __all__ = [
     "YamlDumper", "all_real", "as_float_array", "as_rng", "check_keys", "check_rng",
     "finite_number", "input_file", "is_real", "load_yaml", "names_a_file", "number",
-    "object_entries", "open_replaced", "output_file", "replacing", "require", "save_yaml",
-    "time_limit", "to_jsonable", "to_plain", "whole_number", "write_file", "write_into",
+    "object_entries", "open_replaced", "output_file", "refused_name", "replacing", "require",
+    "save_yaml", "time_limit", "to_jsonable", "to_plain", "whole_number", "write_file",
+    "write_into",
 ]
 
 
@@ -103,12 +104,29 @@ def input_file(path: str | Path, kind: str = "file", hint: str = "") -> Path:
     A file that exists but is not a regular one (a FIFO, ``/dev/stdin``) is left to the
     reader, whose own typed error reports what it cannot read."""
     p = as_path(path, f"the {kind}'s path")
-    if p.is_dir():
-        article = "an" if kind[:1].lower() in "aeiou" else "a"
-        raise InputFileError(f"{p}: is a folder, expected {article} {kind}")
-    if not p.exists():
-        raise InputFileError(f"{p}: {kind} not found{hint}")
+    with refused_name(p):
+        if p.is_dir():
+            article = "an" if kind[:1].lower() in "aeiou" else "a"
+            raise InputFileError(f"{p}: is a folder, expected {article} {kind}")
+        if not p.exists():
+            raise InputFileError(f"{p}: {kind} not found{hint}")
     return p
+
+
+@contextlib.contextmanager
+def refused_name(path: str | Path) -> Iterator[None]:
+    """An OSError of looking at ``path`` (a name too long for the system: Path.is_dir and
+    exists raise ENAMETOOLONG rather than answer False) as an InputFileError, its name cut
+    to 60 characters: a bare OSError from the library before."""
+    try:
+        yield
+    except InputFileError:  # (one of the checks' own: an OSError too)
+        raise
+    except OSError as exc:
+        name = str(path)
+        shown = name if len(name) <= 60 else name[:57] + "..."
+        raise InputFileError(f"{shown}: the system refuses this path "
+                             f"({exc.strerror or exc})") from None
 
 
 def same_file(a: str | Path, b: str | Path) -> bool:
@@ -134,16 +152,17 @@ def output_file(path: str | Path) -> Path:
     that ends by writing it (the CLI's ``refuse_overwrite``, ``save_wav``, the robot's
     exports, ``write_image`` and the simulator's ground-truth file)."""
     p = as_path(path, "the output path")
-    if p.is_dir():
-        raise InputFileError(f"{p}: is a folder, expected an output file name")
-    if not p.parent.is_dir():
-        raise InputFileError(f"{p}: folder {p.parent} does not exist"
-                             if not p.parent.exists() else f"{p}: {p.parent} is not a folder")
-    # (a PermissionError came only once the work was done, e.g. after a whole evaluation)
-    if p.exists() and not os.access(p, os.W_OK):
-        raise InputFileError(f"{p}: the file is not writable")
-    if not p.exists() and not os.access(p.parent, os.W_OK | os.X_OK):
-        raise InputFileError(f"{p}: folder {p.parent} is not writable")
+    with refused_name(p):
+        if p.is_dir():
+            raise InputFileError(f"{p}: is a folder, expected an output file name")
+        if not p.parent.is_dir():
+            raise InputFileError(f"{p}: folder {p.parent} does not exist"
+                                 if not p.parent.exists() else f"{p}: {p.parent} is not a folder")
+        # (a PermissionError came only once the work was done, e.g. after a whole evaluation)
+        if p.exists() and not os.access(p, os.W_OK):
+            raise InputFileError(f"{p}: the file is not writable")
+        if not p.exists() and not os.access(p.parent, os.W_OK | os.X_OK):
+            raise InputFileError(f"{p}: folder {p.parent} is not writable")
     return p
 
 

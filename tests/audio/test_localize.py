@@ -1208,3 +1208,15 @@ def test_tdoa_std_is_bounded_in_every_solver():
     assert loc.position_m is None
     # atan2(0.8, 1.0) = 38.66 deg
     assert loc.azimuth_deg == pytest.approx(np.degrees(np.arctan2(0.8, 1.0)), abs=0.5)
+
+
+@pytest.mark.parametrize("array", ["two-mic", "three-mic", "mask2", "respeaker-4"])
+def test_localize_recording_checks_the_tdoa_error_on_every_array(array):
+    """``tdoa_std_s`` only sets a fitted position's error, which arrays of three microphones
+    or fewer never get: -1 or "x" passed there without a word (the CLI refused them)."""
+    arr = MicArray.from_preset(array)
+    x = white_noise(0.3, 16000, 7)
+    x = np.stack([np.roll(x, k) for k in range(arr.n_mics)])
+    for bad in (-1.0, "x", float("nan")):
+        with pytest.raises(GeometryError, match="tdoa_std_s must be a finite number"):
+            localize_recording(x, 16000, arr, tdoa_std_s=bad)

@@ -329,6 +329,14 @@ def test_load_wav_and_make_signal_bad_files(tmp_path):
     sf.write(tmp_path / "nan.wav", nan.T, FS, subtype="FLOAT")
     with pytest.raises(AudioInputError, match="nan.wav: the file contains NaN"):
         make_signal(tmp_path / "nan.wav", 0.5, FS)
+    # a stereo file whose channels cancel in the mono mixdown: its rounding residue was scaled
+    # to full level and simulated as the source; a stereo file of two voices is a source
+    v = np.random.default_rng(7).standard_normal(8000) * 0.1
+    sf.write(tmp_path / "cancel.wav", np.c_[v, -v], FS, subtype="PCM_16")
+    with pytest.raises(AudioInputError, match="cancel when mixed to mono"):
+        make_signal(tmp_path / "cancel.wav", 0.5, FS)
+    sf.write(tmp_path / "two.wav", np.c_[v, np.roll(v, 100)], FS, subtype="PCM_16")
+    assert np.mean(make_signal(tmp_path / "two.wav", 0.5, FS) ** 2) == pytest.approx(1.0)
     empty = tmp_path / "empty.wav"
     sf.write(empty, np.zeros((0, 1)), FS)
     with pytest.raises(AudioInputError, match="no samples"):
@@ -364,11 +372,13 @@ def test_write_recording_refuses_a_bad_sample_rate_before_writing(tmp_path):
     """fs=inf raised a builtin OverflowError from int(round(fs)); a NaN or a string went to
     libsndfile. Nothing is written."""
     x = 0.1 * np.ones((2, 100))
-    for fs in (float("inf"), float("nan"), "16000", -16000.0, 1e10):  # (1e10: OverflowError)
+    # (16000.7: a header of 16001 Hz, written without a word)
+    for fs in (float("inf"), float("nan"), "16000", -16000.0, 1e10, 16000.7):
         out = tmp_path / "out.wav"
         with pytest.raises(AudioInputError, match="sample rate"):
             write_recording(out, x, fs)
         assert not out.exists()
+    assert sf.info(write_recording(tmp_path / "whole.wav", x, 16000.0)).samplerate == 16000
 
 
 def test_a_wav_cut_short_is_read_with_a_warning(tmp_path, capsys):

@@ -37,6 +37,7 @@ from hearsee.config import (
     name_text,
     names_a_file,
     real_entries,
+    refused_name,
     require,
     whole_number,
 )
@@ -647,9 +648,12 @@ def load_array(spec: str | Path | MicArray) -> MicArray:
     if not s.strip():  # ("" is Path("."), which was called "a folder" until 2026-12-03)
         raise ConfigError(f"array: empty; expected a preset name ({', '.join(list_presets())}) "
                           f"or an array YAML file")
-    if Path(s).is_dir():  # (a folder or a missing path read as an unknown preset name)
-        raise InputFileError(f"{s}: is a folder; expected an array YAML file or a preset name")
-    if Path(s).is_file():
+    with refused_name(s):  # (a name too long for the system: its OSError)
+        if Path(s).is_dir():  # (a folder or a missing path read as an unknown preset name)
+            raise InputFileError(f"{s}: is a folder; expected an array YAML file or a preset "
+                                 "name")
+        is_file = Path(s).is_file()
+    if is_file:
         return MicArray.from_yaml(s)
     # (the rule of the robot file and the scenarios, config.names_a_file: a folder or a YAML
     # suffix in any case -- a missing "mics.YAML" was called an unknown preset until

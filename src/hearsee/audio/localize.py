@@ -1533,6 +1533,9 @@ def localize_recording(
     from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, normalize_method
 
     arr = load_array(array)
+    # (checked whatever the array: only a fitted position reads it, and -1 or "x" passed
+    # without a word on arrays of three microphones or fewer)
+    tdoa_std_s = check_tdoa_std(tdoa_std_s)
     if arr.mask is not None:  # masked two-microphone array: one 360-degree azimuth (ch. 3)
         from hearsee.audio.mask import localize_recording_mask
 

@@ -71,6 +71,10 @@ __all__ = [
     "write_recording",
 ]
 
+#: :func:`make_signal` refuses a file whose mono mixdown is this far below its channels' power
+#: (-60 dB): channels that cancel, not a source
+MONO_CANCEL = 1e-6
+
 #: Built-in source signal names accepted by :func:`make_signal` (anything else is a file path).
 SIGNAL_KINDS = ("noise", "male", "female")
 
@@ -524,7 +528,16 @@ def make_signal(spec: str | Path, duration_s: float, fs: float,
     if x.shape[1] == 0:
         raise AudioInputError(f"{p}: the file contains no samples")
     whole = x.shape[1] < asked[0]  # (else the file may go on past the part read)
+    each = float(np.mean(x**2)) if np.all(np.isfinite(x)) else 0.0  # (NaN: refused below)
     x = x.mean(axis=0)
+    mixed = float(np.mean(x**2)) if x.size else 0.0
+    if each > 0 and mixed < MONO_CANCEL * each:
+        # (a stereo file whose channels are each other inverted left rounding residue that
+        # was scaled to full level and simulated as the source, without a word)
+        db = 10 * np.log10(max(mixed, 1e-300) / each)
+        raise AudioInputError(
+            f"{p}: its channels cancel when mixed to mono ({db:.0f} dB below them: one channel "
+            "the other inverted?); give a file of one of its channels")
     if fs_in != fs_out:
         x = _resample(x, fs_in, fs)
     if len(x) < MIN_SAMPLES:
@@ -783,7 +796,8 @@ def write_recording(
     protect : path or paths, optional
         Input files that must not be overwritten; writing to one of them is an error.
 
-    Returns the path written. The format follows the suffix (``.wav``, ``.flac``, ...). An
+    ``fs`` is a whole number of Hz (an audio file's header holds no fraction). Returns the path
+    written. The format follows the suffix (``.wav``, ``.flac``, ...). An
     existing file is replaced only once the new one is complete
     (:func:`hearsee.config.replacing`): written in place, a write that failed part way (a full
     disk, Ctrl-C) left a truncated file where the earlier one was (``simulate --force``).
@@ -792,6 +806,9 @@ def write_recording(
 
     p = as_path(path, "the output path")
     fs = check_fs(fs)  # (inf: a builtin OverflowError from int(round(fs)) before)
+    if fs != round(fs):  # (an audio file's header holds whole Hz: 16000.7 was written as 16001)
+        raise AudioInputError(f"an audio file's sample rate is a whole number of Hz, got {fs!r}; "
+                              "resample the recording to one")
     if protect is not None:
         items = [protect] if isinstance(protect, str | Path) else list(protect)
         for q in items:
