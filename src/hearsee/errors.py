@@ -68,6 +68,12 @@ class ChannelSyncWarning(UserWarning):
     the lag the described spacing allows, so their TDOAs -- and the direction -- are wrong."""
 
 
+class DeadMicrophoneWarning(UserWarning):
+    """A microphone's channel correlates with no other while the others hear a source (a
+    microphone unplugged, broken or covered, its input left to the preamplifier's noise): every
+    pair it belongs to has no TDOA, and the direction is missing or wrong."""
+
+
 class TonalNoiseWarning(UserWarning):
     """The recording holds stationary tonal noise on every microphone (mains hum picked up by
     the wiring, a motor's or fan's whine): its frequencies were left out of the estimate."""

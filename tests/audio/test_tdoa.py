@@ -1334,6 +1334,45 @@ def test_an_inverted_microphone_is_warned_about(preset, signal):
     assert tf.inverted_mics == (1,)
 
 
+@pytest.mark.parametrize("preset, signal, room, dead, level", [
+    ("three-mic", "male", None, 1, 1.0), ("three-mic", "female", 0.3, 2, 0.1),
+    ("respeaker-4", "noise", 0.6, 0, 0.01), ("respeaker-6", "male", 0.3, 4, 1.0)])
+def test_a_dead_microphone_is_warned_about(preset, signal, room, dead, level):
+    """A microphone whose channel holds only noise (unplugged, broken; at the channel's level
+    or below it) gave no direction, or a wrong one in `track`, without a word. Its pairs peak
+    nowhere while the others hear the source: a DeadMicrophoneWarning names it; the recording
+    as recorded warns nothing, nor does a two-microphone array (no pair to compare with)."""
+    import warnings
+
+    from hearsee.errors import DeadMicrophoneWarning
+    from hearsee.sim.audio import simulate_recording
+
+    arr = MicArray.from_preset(preset)
+    rm = None if room is None else {"room_dim": [6.0, 5.0, 3.0], "rt60": room,
+                                    "array_at": [2.5, 2.2, 1.2]}
+    x, _ = simulate_recording(arr, [1.2, 1.0, 0.1], signal=signal, duration_s=2.0,
+                              snr_db=20.0, room=rm, seed=9)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tf = estimate_tdoas(x, FS, arr)
+    assert not [w for w in caught if issubclass(w.category, DeadMicrophoneWarning)]
+    assert tf.dead_mics == () and tf.wiring_entries()["dead_microphones"] == []
+    x[dead] = np.random.default_rng(10).standard_normal(x.shape[1]) * np.std(x[dead]) * level
+    with pytest.warns(DeadMicrophoneWarning, match=f"^microphone {dead} hears nothing of what "
+                                                   "the others hear"):
+        tf = estimate_tdoas(x, FS, arr)
+    assert tf.dead_mics == (dead,) and tf.wiring_fault
+    assert tf.wiring_entries()["dead_microphones"] == [dead]
+    two = MicArray.from_preset("two-mic")
+    y, _ = simulate_recording(two, [1.2, 1.0, 0.1], signal=signal, duration_s=2.0,
+                              snr_db=20.0, seed=9)
+    y[1] = np.random.default_rng(10).standard_normal(y.shape[1]) * np.std(y[1])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert estimate_tdoas(y, FS, two).dead_mics == ()
+    assert not [w for w in caught if issubclass(w.category, DeadMicrophoneWarning)]
+
+
 @pytest.mark.parametrize("preset, signal, room", [
     ("three-mic", "male", None), ("two-mic", "female", None), ("three-mic", "female", 0.6),
     ("respeaker-6", "noise", 0.6)])
@@ -1398,3 +1437,33 @@ def test_an_array_file_that_understates_the_spacing_is_warned_about():
         with pytest.warns(ChannelSyncWarning, match="farther apart than the array says"):
             tf = estimate_tdoas(x, FS, "two-mic")
         assert tf.sync_offsets_s[0] == pytest.approx(truth["tdoa_s"]["0-1"], abs=1.5 / FS)
+
+
+def test_a_spatially_aliased_band_is_warned_about():
+    """--band-hz 5000,5200 gave the three-mic preset a confident direction 31 deg off without a
+    word: a narrow band far above the spacing's c / 2d correlates in repeats 1 / fc apart at
+    nearly the peak's height, and several fit within the pair's delays. The level is the flat
+    band's envelope sinc(B / fc) at the first repeat; bands whose repeat lies beyond the
+    delays, or that are wide, warn nothing."""
+    import warnings
+
+    from hearsee.audio.tdoa import ALIAS_LEVEL, band_alias_level
+    from hearsee.errors import DegenerateInputWarning
+
+    tmax = 0.15 / 343.0  # the three-mic preset's side
+    assert band_alias_level(5000.0, 5200.0, tmax) == pytest.approx(np.sinc(200 / 5100))
+    assert band_alias_level(300.0, 3500.0, tmax) < 0.2
+    assert band_alias_level(600.0, 700.0, tmax) == 0.0  # (1 / 650 Hz > 2 x 0.44 ms)
+    assert band_alias_level(2000.0, 2500.0, tmax) > ALIAS_LEVEL > band_alias_level(
+        1000.0, 2000.0, tmax)
+    arr = MicArray.from_preset("three-mic")
+    x = simulate_free_field(white_noise(1.0, FS, rng=3), FS, arr, [1.0, 1.0, 0.0], snr_db=20,
+                            rng=4)
+    with pytest.warns(DegenerateInputWarning, match=r"^band 50\d\d-5200 Hz is narrow .*"
+                                                    r"spatial aliasing"):
+        estimate_tdoas(x, FS, arr, band_hz=(5000.0, 5200.0))
+    for band in ((300.0, 3500.0), None):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            estimate_tdoas(x, FS, arr, band_hz=band)
+        assert not [w for w in caught if issubclass(w.category, DegenerateInputWarning)]

@@ -1518,8 +1518,8 @@ def localize_recording(
              "summary": {"tdoa_s", "azimuth_deg", "elevation_deg", "candidates", "n_solutions",
                          "feasible", "confidence", "n_valid_frames", "position_m",
                          "position_covariance_m2", "distance_rel_std",
-                         "position_tdoa_std_s", "inverted_microphones", "sync_offsets_s",
-                         "tonal_lines_hz"}}
+                         "position_tdoa_std_s", "inverted_microphones", "dead_microphones",
+                         "sync_offsets_s", "tonal_lines_hz"}}
 
         with None where a quantity is not resolvable (no source in the frame, elevation of a
         linear array, ...). The summary localizes the whole-recording TDOA estimate (weighted

@@ -608,6 +608,8 @@ def read_recording(
         A channel is more than :data:`QUIET_CHANNEL_DB` below the loudest one: a
         disconnected or muted microphone, whose pairs carry only its noise. Or two channels
         hold one signal (:func:`duplicate_channels`): their TDOA is 0 whatever the direction.
+        Or one sample is beyond any integer PCM range of the others
+        (:func:`hearsee.audio.tdoa.dominant_sample`: a corrupt float sample), told instead.
     """
     # (checked before the file is read: NaN, inf and text were builtin ValueError /
     # OverflowError / TypeError once compared with the file's rate, "2" a ValueError)
@@ -678,7 +680,18 @@ def read_recording(
     # (a copy re-quantised to integer PCM differs by its rounding: told by the step, before
     # any resampling spreads it)
     step = None if resampled else _PCM_STEP.get(_subtype(path))
-    if dup := duplicate_channels(x, step):
+    from hearsee.audio.tdoa import dominant_sample
+
+    if spike := dominant_sample(x):
+        # (told once, first: the same corrupt sample on every channel also made them read as
+        # copies of one another, the only warning there was)
+        ch, i, v, ratio = spike
+        warnings.warn(
+            f"{path}: sample {i} of channel {ch} ({i / fs_in:.3f} s) is {v:.3g}, {ratio:.2g} "
+            "times the median |sample|, beyond any integer PCM range (a corrupt sample?); the "
+            "analysis scales the recording to its loudest sample, so the rest of it is nearly "
+            "lost and its estimates may be wrong", DegenerateInputWarning, stacklevel=2)
+    elif dup := duplicate_channels(x, step):
         warnings.warn(f"{path}: {duplicate_channels_text(dup)}", DegenerateInputWarning,
                       stacklevel=2)
     if clipped > CLIP_FRACTION:

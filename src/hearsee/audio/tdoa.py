@@ -85,11 +85,14 @@ from hearsee.errors import (
     AudioInputError,
     ChannelSyncWarning,
     ConfigError,
+    DeadMicrophoneWarning,
+    DegenerateInputWarning,
     InvertedPolarityWarning,
 )
 from hearsee.geometry import fibonacci_sphere
 
 __all__ = [
+    "ALIAS_LEVEL",
     "DEFAULT_MARGIN_SAMPLES",
     "DEFAULT_SMOOTH_FRAMES",
     "DEFAULT_WINDOW",
@@ -108,6 +111,8 @@ __all__ = [
     "check_frame_ms",
     "check_recording_length",
     "desynchronized_pairs",
+    "band_alias_level",
+    "dead_microphones",
     "dominant_sample",
     "estimate_tdoas",
     "frame_geometry",
@@ -564,6 +569,41 @@ def _band_mask(n_bins: int, nfft: int, fs: float, band_hz: tuple[float, float] |
     return m
 
 
+#: :func:`estimate_tdoas` warns of a band whose correlation repeats within the array's delays at
+#: this share of its peak or more (:func:`band_alias_level`): 5000-5200 Hz (0.997) gave the
+#: three-mic preset a confident direction 31 deg off, 7000-8000 Hz (0.97) 21 deg off; a speech
+#: band of 300-3500 Hz repeats at 0.16
+ALIAS_LEVEL = 0.9
+
+
+def band_alias_level(lo_hz: float, hi_hz: float, max_tdoa_s: float) -> float:
+    """How high a GCC over the band ``lo_hz``..``hi_hz`` (Hz) repeats its peak within the delays
+    ``+-max_tdoa_s`` (seconds) a pair can have: the correlation of a flat band is its carrier
+    at the centre frequency ``fc`` under an envelope ``sinc(B tau)`` of the bandwidth ``B``, so
+    the first repeat, ``1 / fc`` from the peak, stands at ``|sinc(B / fc)|`` of it -- when
+    ``1 / fc`` fits within the ``2 max_tdoa_s`` the bounded peak search spans (else 0: no
+    repeat to take). A narrow band high above the spacing's ``c / 2d`` is spatially aliased:
+    its direction can jump to a repeat (0 to 1; ~1: the peaks cannot be told apart)."""
+    fc, bw = 0.5 * (lo_hz + hi_hz), hi_hz - lo_hz
+    if fc <= 0 or 1.0 / fc > 2.0 * max_tdoa_s:
+        return 0.0
+    return float(abs(np.sinc(bw / fc)))
+
+
+def _warn_aliasing(lo_hz: float, hi_hz: float, max_tdoa_s: float) -> None:
+    """A :class:`~hearsee.errors.DegenerateInputWarning` when the band ``lo_hz``..``hi_hz``
+    (Hz) is spatially aliased for delays up to ``max_tdoa_s`` (:func:`band_alias_level` at
+    least :data:`ALIAS_LEVEL`)."""
+    level = band_alias_level(lo_hz, hi_hz, max_tdoa_s)
+    if level >= ALIAS_LEVEL:
+        warnings.warn(
+            f"band {lo_hz:.0f}-{hi_hz:.0f} Hz is narrow for its frequencies: its correlation "
+            f"repeats every {2e3 / (lo_hz + hi_hz):.3g} ms at {100 * level:.0f} % of its peak "
+            f"within the +-{max_tdoa_s * 1e3:.2f} ms the microphones' spacing allows, so the "
+            "direction can jump to a repeat (spatial aliasing); widen the band or move it "
+            "lower (e.g. 300-3500 Hz for speech)", DegenerateInputWarning, stacklevel=3)
+
+
 def _main_lobe(bins: NDArray, nfft: int, fs: float, band_hz: Any) -> int:
     """Half-width (samples) of the GCC's main lobe over the contiguous rfft ``bins`` of an
     ``nfft``-point transform at ``fs`` Hz; ConfigError when it leaves no lag outside it."""
@@ -786,6 +826,10 @@ class TdoaFrames:
         The lines of stationary tonal noise (mains hum, a motor's whine) found on every
         microphone and filtered out of the recording before the estimate (``tonal_noise`` of
         :func:`estimate_tdoas`), Hz; empty when none.
+    dead_mics : tuple of int
+        Microphones whose channels correlate with no other while the others hear a source
+        (:func:`dead_microphones`, with a :class:`~hearsee.errors.DeadMicrophoneWarning`);
+        empty when none, or without a whole-recording estimate.
     """
 
     t: NDArray
@@ -807,6 +851,7 @@ class TdoaFrames:
     inverted_mics: tuple[int, ...] = ()
     sync_offsets_s: NDArray | None = None
     tonal_lines_hz: tuple[float, ...] = ()
+    dead_mics: tuple[int, ...] = ()
 
     @property
     def pair_labels(self) -> list[str]:
@@ -819,18 +864,20 @@ class TdoaFrames:
     @property
     def wiring_fault(self) -> bool:
         """Whether the whole-recording correlations told of a microphone wired with inverted
-        polarity (``inverted_mics``) or of channels out of sync (``sync_offsets_s``), each
-        with its warning: what a caller that checks the wiring ahead needs to know."""
-        return bool(self.inverted_mics) or (self.sync_offsets_s is not None and bool(
-            np.isfinite(self.sync_offsets_s).any()))
+        polarity (``inverted_mics``), of channels out of sync (``sync_offsets_s``) or of a
+        dead microphone (``dead_mics``), each with its warning: what a caller that checks the
+        wiring ahead needs to know."""
+        return bool(self.inverted_mics) or bool(self.dead_mics) or (
+            self.sync_offsets_s is not None and bool(np.isfinite(self.sync_offsets_s).any()))
 
     def wiring_entries(self) -> dict[str, Any]:
         """The ``hearsee localize`` summary's ``inverted_microphones`` (list),
-        ``sync_offsets_s`` ({"i-j": s} of the pairs out of sync; {} when none) and
-        ``tonal_lines_hz`` (the lines of hum filtered out, Hz; [] when none) -- one place for
-        every array's document."""
+        ``dead_microphones`` (list), ``sync_offsets_s`` ({"i-j": s} of the pairs out of sync;
+        {} when none) and ``tonal_lines_hz`` (the lines of hum filtered out, Hz; [] when none)
+        -- one place for every array's document."""
         off = self.sync_offsets_s
         return {"inverted_microphones": [int(m) for m in self.inverted_mics],
+                "dead_microphones": [int(m) for m in self.dead_mics],
                 "sync_offsets_s": {} if off is None else {
                     k: float(v) for k, v in zip(self.pair_labels, off, strict=True)
                     if np.isfinite(v)},
@@ -1169,6 +1216,68 @@ def _warn_inverted(r: NDArray, max_lag: NDArray, main_lobe: int,
                   "that channel's samples or fix the wiring", InvertedPolarityWarning,
                   stacklevel=3)
     return tuple(mics)
+
+
+#: :func:`dead_microphones`: a microphone whose pairs' averaged correlations all peak below this
+#: many robust noise deviations (:func:`_peak_snr`) while another pair's peaks at least
+#: :data:`DEAD_OTHERS_PEAK_SNR` above its floor hears nothing of the others' source. Chosen on
+#: dev recordings (seed 2: three-mic, respeaker-4/6; voices and noise; free field, RT60 0.3/0.6
+#: s; 0/10/20 dB; 162 each): the best pair of every microphone of a clean recording peaked at
+#: least 6.4 (where another reached 8), a channel replaced by noise at most 3.4.
+DEAD_PEAK_SNR = 3.5
+#: :func:`dead_microphones`: the clear source another pair must hear (see :data:`DEAD_PEAK_SNR`)
+DEAD_OTHERS_PEAK_SNR = 8.0
+#: :func:`dead_microphones` looks further only at a microphone whose pairs all have a
+#: confidence (peak over second peak) below this: a channel of noise had at most 1.23 on the
+#: dev recordings, so clean recordings rarely pay for the noise floors
+DEAD_MAX_CONFIDENCE = 1.3
+
+
+@functools.lru_cache(maxsize=16)
+def _window_noise_profile(window: str | tuple, frame_len: int, nfft: int) -> NDArray:
+    """:func:`_lag_noise_profile` of the analysis window (read-only: shared between calls)."""
+    p = _lag_noise_profile(_window(window, frame_len), nfft)
+    p.flags.writeable = False
+    return p
+
+
+def dead_microphones(r: NDArray, lag: NDArray, confidence: NDArray, max_lag: NDArray,
+                     main_lobe: int, pairs: Sequence[tuple[int, int]], n_mics: int,
+                     profile: Callable[[], NDArray]) -> tuple[int, ...]:
+    """The microphones whose channels correlate with no other while the others hear a
+    source: every pair of such a microphone peaks below :data:`DEAD_PEAK_SNR` noise
+    deviations of its averaged correlation ``r`` (n_pairs, nfft; peaks at ``lag``, samples,
+    with ``confidence`` (n_pairs,)), and some pair without it at least
+    :data:`DEAD_OTHERS_PEAK_SNR` (:func:`_peak_snr` with the window's lag ``profile()``).
+    Needs three microphones (a pair without the one in question); a microphone none of whose
+    pairs is among ``pairs`` is not judged. Reconstruction beyond the thesis."""
+    conf = np.asarray(confidence, dtype=float)
+    members = [[p for p, pr in enumerate(pairs) if k in pr] for k in range(n_mics)]
+    suspects = [k for k, w in enumerate(members)
+                if w and len(w) < len(pairs) and np.max(conf[w]) < DEAD_MAX_CONFIDENCE]
+    if not suspects:
+        return ()
+    try:
+        snr = _peak_snr(r, np.asarray(lag), max_lag, main_lobe, profile())
+    except ConfigError:  # (a band too narrow to measure a floor: nothing to say)
+        return ()
+    return tuple(k for k in suspects
+                 if np.max(snr[members[k]]) < DEAD_PEAK_SNR
+                 and np.max(np.delete(snr, members[k])) >= DEAD_OTHERS_PEAK_SNR)
+
+
+def _warn_dead(*args) -> tuple[int, ...]:
+    """A :class:`~hearsee.errors.DeadMicrophoneWarning` naming the microphones
+    :func:`dead_microphones` finds (its arguments); those microphones."""
+    dead = dead_microphones(*args)
+    if dead:
+        names = ", ".join(map(str, dead))
+        one = len(dead) == 1
+        warnings.warn(f"microphone{'' if one else 's'} {names} hear{'s' if one else ''} nothing "
+                      "of what the others hear (its channel correlates with no other: "
+                      "unplugged, broken or covered?), so its pairs have no TDOA and the "
+                      "direction is missing or wrong", DeadMicrophoneWarning, stacklevel=3)
+    return dead
 
 
 def _warn_desync(r: NDArray, max_lag: NDArray, main_lobe: int,
@@ -2258,6 +2367,8 @@ def estimate_tdoas(
     n_bins = nfft // 2 + 1
     bins = np.flatnonzero(_band_mask(n_bins, nfft, fs, band_hz))
     main_lobe = _main_lobe(bins, nfft, fs, band_hz)
+    if band_hz is not None:  # (the whole band is wide: nothing to say)
+        _warn_aliasing(bins[0] * fs / nfft, bins[-1] * fs / nfft, float(reach.max()) / fs)
     if empty_band_db is not None:
         empty_band_db = finite_number("empty_band_db", empty_band_db, 0.0, lo_open=True)
     if isinstance(window, list):
@@ -2447,6 +2558,7 @@ def estimate_tdoas(
             acc, acc_active, summary_method = acc2, acc2_active, reverb_method
     summary, summary_conf = np.full(n_pairs, np.nan), np.zeros(n_pairs)
     inverted: tuple[int, ...] = ()
+    dead: tuple[int, ...] = ()
     offsets: NDArray | None = None
     need = min_confidence
     fallback = False
@@ -2464,6 +2576,7 @@ def estimate_tdoas(
         fine = redundant or summary_upsample <= 1
         lag, c = _peaks(r_sum[None], acc[None], nfft, max_lag, "interp" if fine else "parabolic",
                         main_lobe, band_bins, reach=reach)
+        own_peaks, own_conf = lag[0], c[0]  # (each pair's own: the dead-microphone test's)
         resid = closure_rms(lag[0], prs, arr.n_mics)
         if resid is not None:
             # redundant pairs (>= 3 microphones). Detection: the pairs' own peaks of
@@ -2507,8 +2620,13 @@ def estimate_tdoas(
         if not np.isfinite(offsets).any():  # (a pair out of sync has no polarity to read: a
             # voice's trough within its bound named a microphone as inverted)
             inverted = _warn_inverted(r_sum, max_lag, main_lobe, prs, arr.n_mics)
+            if not inverted:  # (an inverted microphone's pairs peak nowhere either)
+                dead = _warn_dead(r_sum, own_peaks, own_conf, max_lag, main_lobe, prs,
+                                  arr.n_mics, lambda: _window_noise_profile(window, frame_len,
+                                                                            nfft))
     t = (np.arange(n_frames) * hop + frame_len / 2.0) / fs
     return TdoaFrames(t, tdoa, conf, valid, prs, summary, summary_conf, max_lag / fs, fs,
                       acc / max(n_acc, 1) if n_acc else None, band_bins, nfft,
                       coherence_ratio, summary_method, coherence_gain,
-                      (k0 * fs / nfft, (k1 - 1) * fs / nfft), inverted, offsets)
+                      (k0 * fs / nfft, (k1 - 1) * fs / nfft), inverted, offsets,
+                      dead_mics=dead)

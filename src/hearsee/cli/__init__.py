@@ -8,6 +8,7 @@ traceback, never click's three-line usage block.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import sys
 import warnings
@@ -69,17 +70,25 @@ def main(argv: list[str] | None = None) -> int:
     clipped audio) print ``hearsee: warning: <message>`` on stderr and the command goes on.
     """
     with warnings.catch_warnings():  # restores the caller's warning display afterwards
-        warnings.showwarning = _warning_line
+        shown: set[str] = set()
+        warnings.showwarning = functools.partial(_warning_line, shown=shown)
         return _main(argv)
 
 
-def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+def _warning_line(message, category, filename, lineno, file=None, line=None, *,
+                  shown: set[str] | None = None) -> None:
     """A warning as one line on stderr, ``hearsee: warning: <message>`` (hearsee's own, e.g.
     clipped audio) or ``hearsee: warning: <Category>: <message>`` (another library's), instead
-    of Python's two lines with the file, line number and source of the call."""
+    of Python's two lines with the file, line number and source of the call. A line already
+    in ``shown`` is not printed again (one run's checks of the same input -- ``track``'s look
+    ahead and its stream -- told it twice from two places of the code)."""
     own = category.__module__.split(".")[0] == "hearsee"
-    print(f"hearsee: warning: {'' if own else category.__name__ + ': '}{_one_line(message)}",
-          file=sys.stderr if file is None else file)
+    text = f"hearsee: warning: {'' if own else category.__name__ + ': '}{_one_line(message)}"
+    if shown is not None:
+        if text in shown:
+            return
+        shown.add(text)
+    print(text, file=sys.stderr if file is None else file)
 
 
 def _main(argv: list[str] | None) -> int:

@@ -222,18 +222,18 @@ def localize_cmd(
     else:
         _print_table(doc)
     note_empty_band(recording, doc.get("band_hz"), band, fs)
-    if doc["summary"]["n_valid_frames"] == 0 and not (
-            doc["summary"].get("inverted_microphones") or doc["summary"].get("sync_offsets_s")):
-        # (an inverted microphone and channels out of sync have their own warnings: no frame
-        # was valid because of them -- "silence or uncorrelated noise" misled)
-        spike = dominant_sample(x)
-        if spike is None:
-            err_console.print(f"hearsee: warning: {recording}: no frame holds a detectable source "
-                              "(silence or uncorrelated noise)", highlight=False)
-        else:  # (it was called silence or noise: one corrupt float sample of 1e30 does that)
-            ch, i, v, ratio = spike
-            err_console.print(
-                f"hearsee: warning: {recording}: no frame holds a detectable source; sample {i} of "
-                f"channel {ch} ({i / fs:.3f} s) is {v:.3g}, {ratio:.2g} times the median "
-                "|sample|, beyond any integer PCM range (a corrupt sample? the analysis "
-                "scales the recording to its loudest sample)", highlight=False)
+    summ = doc["summary"]
+    # (an inverted or dead microphone, channels out of sync and a corrupt sample have their own
+    # warnings: nothing was found because of them -- "silence or uncorrelated noise" misled)
+    told = dominant_sample(x) is not None or any(summ.get(k) for k in (
+        "inverted_microphones", "dead_microphones", "sync_offsets_s"))
+    if not told and summ["n_valid_frames"] == 0:
+        err_console.print(f"hearsee: warning: {recording}: no frame holds a detectable source "
+                          "(silence or uncorrelated noise)", highlight=False)
+    elif not told and summ.get("azimuth_deg") is None:
+        # (a summary of nulls beside a few valid frames was printed without a word)
+        n = summ["n_valid_frames"]
+        err_console.print(f"hearsee: warning: {recording}: no direction for the whole recording "
+                          f"(its averaged correlations name no source; {n} frame"
+                          f"{'' if n == 1 else 's'} on {len(doc['frames'])} had one)",
+                          highlight=False)
