@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from hearsee.audio.itd_filter import ItdKalman, pair_matrix
+from hearsee.audio.itd_filter import ItdKalman, confidence_r_scale, pair_matrix
 from hearsee.errors import ConfigError, GeometryError
 
 TRUE = np.array([1e-4, 2.5e-4, 1.5e-4])  # pairs 0-1, 0-2, 1-2 (consistent: t01 + t12 = t02)
@@ -72,11 +72,18 @@ def test_bad_parameters():
         ItdKalman(1)
     with pytest.raises(ConfigError):
         ItdKalman(3, q_std_s=0.0)
-    # NaN and inf passed the "<= 0" test: NaN TDOAs, or an SVD that did not converge
+    # NaN and inf passed the "<= 0" test: NaN TDOAs, or an SVD that did not converge; 1e-200
+    # squared to a singular R (numpy's LinAlgError at the first step), 1e200 overflowed
     for kw in ({"q_std_s": np.nan}, {"q_std_s": np.inf}, {"r_std_s": np.nan},
-               {"r_std_s": np.inf}, {"p0_std_s": np.nan}):
-        with pytest.raises(ConfigError, match="finite numbers > 0"):
+               {"r_std_s": np.inf}, {"p0_std_s": np.nan}, {"r_std_s": 1e-200},
+               {"q_std_s": 1e200}):
+        with pytest.raises(ConfigError, match="must be numbers from 1e-09 to 1 seconds"):
             ItdKalman(3, **kw)
+    with pytest.raises(ConfigError, match="r_scale must be numbers from 1e-06 to 1e"):
+        ItdKalman(3).step([0.0, 0.0, 0.0], r_scale=[1e-200] * 3)
+    for bad in ("abc", None):  # (numpy's ValueError; None read as the largest scale)
+        with pytest.raises(ConfigError, match="confidence must be numbers"):
+            confidence_r_scale(bad)
     with pytest.raises(ConfigError):
         ItdKalman(3, gate_prob=1.5)
     with pytest.raises(GeometryError, match="do not determine"):

@@ -496,11 +496,18 @@ def test_nan_times_and_noises_are_refused_and_leave_the_track_intact(cls):
         kf.update(k * DT, (10.0 + 8.6 * k, 0.0))
         ref.update(k * DT, (10.0 + 8.6 * k, 0.0))
     nan, inf = float("nan"), float("inf")
-    for bad in ({"t": nan}, {"t": inf}, {"sigma_meas_deg": nan}, {"sigma_meas_deg": inf},
-                {"sigma_meas_deg": 0.0}, {"sigma_meas_deg": (2.0, -1.0)}, {"delay_s": nan},
-                {"delay_s": inf}):
+    # (and, from an audit: a delay of 1e200 s or a noise of 1e-170 deg -- whose square is 0 --
+    # turned the state NaN while update answered True; a negative delay passed)
+    for bad, words in (({"t": nan}, "finite number"), ({"t": inf}, "finite number"),
+                       ({"sigma_meas_deg": nan}, "finite number"),
+                       ({"sigma_meas_deg": inf}, "finite number"),
+                       ({"sigma_meas_deg": 0.0}, "finite number"),
+                       ({"sigma_meas_deg": 1e-170}, r"in \[1e-06, 1e\+06\]"),
+                       ({"sigma_meas_deg": (2.0, -1.0)}, "finite number"),
+                       ({"delay_s": nan}, "from 0 to 60"), ({"delay_s": inf}, "from 0 to 60"),
+                       ({"delay_s": 1e200}, "from 0 to 60"), ({"delay_s": -5.0}, "from 0 to 60")):
         args = {"t": 4 * DT, **bad}
-        with pytest.raises(EstimationError, match="finite number"):
+        with pytest.raises(EstimationError, match=words):
             kf.update(args.pop("t"), (44.4, 0.0), **args)
     for k in range(4, 8):
         kf.update(k * DT, (10.0 + 8.6 * k, 0.0))
@@ -512,17 +519,21 @@ def test_nan_times_and_noises_are_refused_and_leave_the_track_intact(cls):
                                 {"sigma_accel_dps2": float("inf")},
                                 {"elevation_accel_ratio": float("inf")},
                                 {"init_rate_sigma_dps": float("nan")},
-                                {"init_rate_sigma_dps": 0.0}])
+                                {"init_rate_sigma_dps": 0.0},
+                                {"sigma_meas_deg": 1e200}, {"sigma_accel_dps2": 1e300},
+                                {"init_rate_sigma_dps": 1e-170}])
 def test_infinite_or_nan_settings_are_refused(kw):
     """``> 0`` let inf through (and init_rate_sigma_dps was not checked): each gave NaN
-    directions."""
-    with pytest.raises(EstimationError, match="finite number > 0"):
+    directions; 1e200 overflowed (OverflowError) and 1e-170 underflowed to a zero variance."""
+    words = r"must be a finite number in \[1e-06, 1e\+06\]"
+    with pytest.raises(EstimationError, match=words):
         DirectionKalman(**kw)
     if "sigma_accel_dps2" not in kw:
-        with pytest.raises(EstimationError, match="finite number > 0"):
+        with pytest.raises(EstimationError, match=words):
             DirectionIMM(**kw)
-    with pytest.raises(EstimationError, match="finite number > 0"):
-        DirectionIMM(sigma_accel_dps2=(50.0, float("inf")))
+    for q in (float("inf"), 1e300):
+        with pytest.raises(EstimationError, match="must be a number from 1e-06 to 1e"):
+            DirectionIMM(sigma_accel_dps2=(50.0, q))
 
 
 @pytest.mark.parametrize("make", [lambda: DirectionKalman(2.0, 150.0, elevation_accel_ratio=1.0),

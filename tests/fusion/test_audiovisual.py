@@ -680,6 +680,16 @@ def test_an_image_point_of_nan_is_not_seen_like_none(rig, tracker):
     assert got is uv and np.linalg.norm(fix.position_m - p) < 1e-3
     with pytest.raises(EstimationError, match="image point"):
         frame_fix(rig, lambda t: (np.nan, 240.0, 1.0), 0.2, z, rig.array.pairs, **kw)
+    # (an audit: max_residual_s NaN kept every fix -- the TDOAs negated, 5.7e-4 s of residual,
+    # came back -- and text, like a text t or tdoa_s, was a builtin TypeError)
+    assert frame_fix(rig, lambda t: uv, 0.2, -z, rig.array.pairs, **kw)[1] is None
+    for bad, words in (({"max_residual_s": np.nan}, "max_residual_s"),
+                       ({"max_residual_s": "0.1"}, "max_residual_s"), ({"t": "0.5"}, "t must"),
+                       ({"tdoa_s": "abc"}, "tdoa_s must be numbers")):
+        args = {"t": 0.2, "tdoa_s": -z, **kw, **bad}
+        with pytest.raises(EstimationError, match=words):
+            frame_fix(rig, lambda t: uv, args.pop("t"), args.pop("tdoa_s"), rig.array.pairs,
+                      **args)
 
 
 def test_track_on_rays_at_48_khz_uses_the_wide_band(rig):

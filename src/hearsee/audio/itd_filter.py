@@ -74,6 +74,9 @@ def confidence_r_scale(confidence: ArrayLike) -> NDArray:
     deviation falling with the square root of the peak's margin over its rival) is our
     construction; per-measurement noise from the estimator's own quality is the adaptive
     measurement noise of the tracking literature (Bar-Shalom, Li & Kirubarajan 2001, ch. 11)."""
+    if not real_entries(confidence):  # (text was numpy's ValueError, None the largest scale)
+        raise ConfigError(f"confidence must be numbers (GCC peak-to-second-peak ratios), got "
+                          f"{confidence!r:.60}")
     c = np.asarray(confidence, dtype=float)
     lo, hi = CONFIDENCE_R_RANGE
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -110,16 +113,26 @@ def max_itd_step_s(max_tdoa_s: ArrayLike, hop_s: float,
     return float(np.max(m) * np.radians(rate_dps) * hop_s)
 
 
+#: :class:`ItdKalman`'s standard deviations (``q_std_s``, ``r_std_s``, ``p0_std_s``) lie within
+#: these bounds (seconds): a nanosecond is a thousandth of a sample at 1 MHz, and their squares
+#: stay normal floats
+ITD_STD_RANGE_S = (1e-9, 1.0)
+#: A frame's measurement-noise scale (``r_scale``) lies within these bounds
+R_SCALE_RANGE = (1e-6, 1e6)
+
+
 def _scales(r_scale: ArrayLike | None, shape: tuple[int, ...]) -> NDArray | None:
     """``r_scale`` as a float array of ``shape`` ((n_frames, n_pairs), or (n_pairs,) for one
     frame), finite and > 0, or None; a ConfigError otherwise."""
     if r_scale is None:
         return None
     s = np.asarray(r_scale, dtype=float) if real_entries(r_scale) else None
-    if s is None or s.shape != shape or not np.all(np.isfinite(s) & (s > 0)):
+    lo, hi = R_SCALE_RANGE
+    if s is None or s.shape != shape or not np.all((s >= lo) & (s <= hi)):
+        # (1e-200 made R singular: numpy's LinAlgError)
         what = "one per frame and pair" if len(shape) == 2 else "one per pair"
-        raise ConfigError(f"r_scale must be finite numbers > 0 of shape {shape} ({what}), "
-                          f"got {r_scale!r:.80}")
+        raise ConfigError(f"r_scale must be numbers from {lo:g} to {hi:g} of shape {shape} "
+                          f"({what}), got {r_scale!r:.80}")
     return s
 
 
@@ -172,10 +185,12 @@ class ItdKalman:
         ref = whole_number("ref", ref, lo=0, hi=n_mics - 1, error=GeometryError)
         # (pairs: check_pairs; (0.7, 1.9) was truncated to (0, 1))
         pairs = None if pairs is None else check_pairs(pairs, n_mics)
-        if not all(is_real(v) and v > 0 for v in (q_std_s, r_std_s, p0_std_s)):
-            # (NaN passed "<= 0": NaN TDOAs, or an SVD that did not converge)
-            raise ConfigError("q_std_s, r_std_s and p0_std_s must be finite numbers > 0 seconds, "
-                              f"got {q_std_s}, {r_std_s}, {p0_std_s}")
+        lo, hi = ITD_STD_RANGE_S
+        if not all(is_real(v) and lo <= v <= hi for v in (q_std_s, r_std_s, p0_std_s)):
+            # (NaN passed "<= 0": NaN TDOAs, or an SVD that did not converge; 1e-200 squared to
+            # a singular R -- numpy's LinAlgError -- and 1e200 overflowed)
+            raise ConfigError(f"q_std_s, r_std_s and p0_std_s must be numbers from {lo:g} to "
+                              f"{hi:g} seconds, got {q_std_s}, {r_std_s}, {p0_std_s}")
         if not (is_real(gate_prob) and 0 < gate_prob < 1):
             raise ConfigError(f"gate_prob must be in (0, 1), got {gate_prob}")
         self.n_mics = int(n_mics)

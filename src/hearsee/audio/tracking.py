@@ -59,6 +59,8 @@ __all__ = [
     "IMM_MODES_DPS2",
     "LOST_AZIMUTH_SD_DEG",
     "MAX_AZIMUTH_DEG",
+    "MAX_DELAY_S",
+    "NOISE_RANGE",
     "VELOCITY_KNOWN_FRACTION",
     "DirectionIMM",
     "DirectionKalman",
@@ -129,7 +131,7 @@ def _sigma_pair(sigma_meas_deg: Any) -> tuple[float, float]:
     if len(pair) != 2:
         raise EstimationError(f"sigma_meas_deg must be one number or (azimuth, elevation) in "
                               f"degrees, got {sigma_meas_deg!r}")
-    return _positive("sigma_meas_deg", pair[0]), _positive("sigma_meas_deg", pair[1])
+    return _noise("sigma_meas_deg", pair[0]), _noise("sigma_meas_deg", pair[1])
 
 
 def _gate_prob(value: Any) -> float:
@@ -154,14 +156,26 @@ def _time_constant(name: str, value: Any, *, none: bool = True) -> float:
     return float(value)
 
 
+#: The oldest a measurement may be (``delay_s``, seconds): a direction heard a minute ago says
+#: nothing of where the talker is now (1e200 overflowed the innovation covariance: the state
+#: became NaN and the update still answered True)
+MAX_DELAY_S = 60.0
+#: Noise levels of the trackers (standard deviations and their ratios, in their units: deg,
+#: deg/s, deg/s^2, m, m/s, m/s^2) lie within these bounds: their squares stay normal floats (1e-170
+#: underflowed to a zero variance and a singular innovation covariance, 1e200 overflowed)
+NOISE_RANGE = (1e-6, 1e6)
+
+
 def _delay(value: Any) -> float:
     """A measurement's ``delay_s`` (seconds) as a float, or an EstimationError unless it is a
-    finite real number (text and None raised math.isfinite's builtin TypeError, True was read
-    as a 1 s delay, NaN made a gate distance NaN)."""
-    if type(value) is float and math.isfinite(value):  # the common case (0.0), without numpy
+    real number from 0 to :data:`MAX_DELAY_S` (text and None raised math.isfinite's builtin
+    TypeError, True was read as a 1 s delay, NaN made a gate distance NaN, a negative delay --
+    a measurement from the future -- passed)."""
+    if type(value) is float and 0.0 <= value <= MAX_DELAY_S:  # the common case (0.0)
         return value
-    if not is_real(value):
-        raise EstimationError(f"delay_s must be a finite number of seconds, got {value!r:.80}")
+    if not (is_real(value) and 0.0 <= value <= MAX_DELAY_S):
+        raise EstimationError(f"delay_s must be a number of seconds from 0 to {MAX_DELAY_S:g} "
+                              f"(how old the measurement is), got {value!r:.80}")
     return float(value)
 
 
@@ -184,6 +198,12 @@ def _angle(v: Any) -> bool:
 def _positive(name: str, value: float) -> float:
     """``value`` as a float when finite and > 0, else an EstimationError naming it."""
     return finite_number(name, value, 0.0, lo_open=True, error=EstimationError)
+
+
+def _noise(name: str, value: float) -> float:
+    """A noise level ``value`` as a float within :data:`NOISE_RANGE`, else an EstimationError
+    naming it."""
+    return finite_number(name, value, *NOISE_RANGE, error=EstimationError)
 
 
 def _wrap1(a: float) -> float:
@@ -459,7 +479,7 @@ class DirectionKalman(_Kalman):
         for name, v in (("sigma_meas_deg", sigma_meas_deg), ("sigma_accel_dps2", sigma_accel_dps2),
                         ("elevation_accel_ratio", elevation_accel_ratio),
                         ("init_rate_sigma_dps", init_rate_sigma_dps)):
-            _positive(name, v)
+            _noise(name, v)
         # an infinite time constant is the constant-velocity model (its F would be inf * 0)
         tau = _time_constant("rate_tau_s", rate_tau_s)
         self.rate_tau_s = None if math.isinf(tau) else tau
@@ -789,9 +809,9 @@ class DirectionIMM:
         qs = np.array([float(q) for q in items])
         if qs.size < 2:
             raise EstimationError("an IMM needs at least two modes (sigma_accel_dps2)")
-        if not np.all(np.isfinite(qs) & (qs > 0)):
-            raise EstimationError(f"every mode's sigma_accel_dps2 must be a finite number > 0, "
-                                  f"got {qs.tolist()}")
+        if not np.all(np.isfinite(qs) & (qs >= NOISE_RANGE[0]) & (qs <= NOISE_RANGE[1])):
+            raise EstimationError(f"every mode's sigma_accel_dps2 must be a number from "
+                                  f"{NOISE_RANGE[0]:g} to {NOISE_RANGE[1]:g}, got {qs.tolist()}")
         # (inf: the modes never switch)
         dwell = _time_constant("mode_dwell_s", mode_dwell_s, none=False)
         # the mixture, as a filter object: association, gate and read-out reuse its methods;
@@ -1161,7 +1181,7 @@ class MotionKalman(_Kalman):
                  accel_tau_s: float | None = None) -> None:
         for name, v in (("sigma_meas_m", sigma_meas_m),
                         ("init_vel_sigma", init_vel_sigma), ("init_acc_sigma", init_acc_sigma)):
-            _positive(name, v)
+            _noise(name, v)
         # (True was read as 1 m/s^2)
         jerk = np.asarray(sigma_jerk, dtype=float) if real_entries(sigma_jerk) else None
         if jerk is None or jerk.shape not in ((), (3,)):
@@ -1169,7 +1189,7 @@ class MotionKalman(_Kalman):
                                   "acceleration's increment per update step, m/s^2, got "
                                   f"{sigma_jerk!r}")
         for v in jerk.reshape(-1):
-            _positive("sigma_jerk", v)
+            _noise("sigma_jerk", v)
         if accel_tau_s is not None:
             _positive("accel_tau_s", accel_tau_s)
         self.accel_tau_s = accel_tau_s

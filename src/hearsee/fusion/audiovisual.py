@@ -849,6 +849,11 @@ def frame_fix(rig: AudioVisualRig, image_points: Callable[[float], Any], t: floa
     """
     c = _check_rig(rig, "frame_fix").array.speed_of_sound
     _check_image_points(image_points)
+    # (NaN kept every fix, the inconsistent ones too; text was a builtin TypeError)
+    max_residual_s = finite_number("max_residual_s", max_residual_s, 0.0, error=EstimationError)
+    t = finite_number("t", t, error=EstimationError)
+    if tdoa_s is not None and not real_entries(tdoa_s):  # (text: a builtin TypeError)
+        raise EstimationError(f"tdoa_s must be numbers (seconds) or None, got {tdoa_s!r:.60}")
     centre = rig.array.positions.mean(axis=0)
     r = None
     if getattr(tracker, "initialized", False):

@@ -62,7 +62,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.hum import LineFilter, check_lines, filter_lines, find_lines, warn_lines
-from hearsee.audio.itd_filter import ItdKalman
+from hearsee.audio.itd_filter import ITD_STD_RANGE_S, ItdKalman
 from hearsee.audio.localize import array_geometry, localize_tdoa
 from hearsee.audio.signals import (
     as_samples,
@@ -97,11 +97,19 @@ from hearsee.audio.tracking import (
     DIRECTION_RATE_TAU_S,
     ELEVATION_ACCEL_RATIO,
     IMM_MODES_DPS2,
+    NOISE_RANGE,
     DirectionIMM,
     DirectionKalman,
     MotionKalman,
 )
-from hearsee.config import finite_number, is_real, time_limit, true_or_false, whole_number
+from hearsee.config import (
+    finite_number,
+    is_real,
+    real_entries,
+    time_limit,
+    true_or_false,
+    whole_number,
+)
 from hearsee.errors import AudioInputError, ConfigError, DegenerateInputWarning, EstimationError
 from hearsee.geometry import wrap_deg
 from hearsee.stream.device import import_sounddevice, resolve_input_device
@@ -1685,13 +1693,25 @@ def _check_config(cfg: StreamConfig) -> None:
             raise bad(name, f"a number in [{lo:g}, {hi:g}]")
     if not (is_real(cfg.spectrum_alpha) and 0.0 <= cfg.spectrum_alpha < 1.0):
         raise bad("spectrum_alpha", "in [0, 1) (0 = no smoothing)")
-    # (the stage passes bool(snr_weight): "no" switched the weighting on, "ml" gave the plain one)
-    if not isinstance(cfg.snr_weight, bool | np.bool_):
-        raise bad("snr_weight", "True or False")
+    # (the stage passes bool(snr_weight): "no" switched the weighting on, "ml" gave the plain one;
+    # in_plane="no" likewise switched the in-plane model on, and so the other switches)
+    for name in ("snr_weight", "itd_filter", "in_plane", "srp_coherence_weight",
+                 "prefer_frame"):
+        if not isinstance(getattr(cfg, name), bool | np.bool_):
+            raise bad(name, "True or False")
+    # (noises whose squares leave the normal floats: 1e300 overflowed in the trackers, 1e-170
+    # squared to a zero variance)
+    for name in _POSITIVE + _POSITIVE_OR_NONE:
+        v = getattr(cfg, name)
+        if name.startswith("sigma_") and v is not None:
+            lo, hi = ITD_STD_RANGE_S if name == "sigma_tdoa_s" else NOISE_RANGE
+            if not lo <= v <= hi:
+                raise bad(name, f"a number in [{lo:g}, {hi:g}]")
     pfc = cfg.prefer_frame_confidence
     if not ((is_real(pfc) or pfc == math.inf) and pfc > 0):  # (inf = never)
         raise bad("prefer_frame_confidence", "> 0 (inf = never)")
-    r = np.asarray(cfg.range_m, dtype=float).reshape(-1)
+    r = (np.asarray(cfg.range_m, dtype=float).reshape(-1) if real_entries(cfg.range_m)
+         else np.zeros(0))  # (text: numpy's ValueError)
     if not (r.size == 2 and np.all(np.isfinite(r)) and 0 < r[0] < r[1]):
         raise bad("range_m", "(near, far) metres with 0 < near < far")
     _check_gating(cfg)
@@ -1731,7 +1751,9 @@ def _check_gating(cfg: StreamConfig) -> None:
         raise ConfigError("gated_min_coherence needs the smoothed steered response "
                           f"(spectrum_alpha > 0), got spectrum_alpha={cfg.spectrum_alpha}")
     lo, hi = _number_pair(cfg.gate_deg, "gate_deg", "degrees")
-    if not (cfg.gate_sigmas > 0 and 0.0 < lo <= hi <= 180.0 and cfg.gated_after_s >= 0):
+    # (text or None: builtin TypeErrors from the comparisons; True read as 1 sigma)
+    if not (is_real(cfg.gate_sigmas) and cfg.gate_sigmas > 0 and 0.0 < lo <= hi <= 180.0
+            and is_real(cfg.gated_after_s) and cfg.gated_after_s >= 0):
         raise ConfigError(
             "gate_sigmas must be > 0, gate_deg (low, high) with 0 < low <= high <= 180 deg and "
             f"gated_after_s >= 0 s; got {cfg.gate_sigmas}, {cfg.gate_deg}, {cfg.gated_after_s}")
