@@ -623,6 +623,17 @@ def test_transfer_refuses_a_zero_source_vector(model):
     # a valid direction still gives finite values, the same for any length of the vector
     np.testing.assert_allclose(model.transfer([3.0, 0.0, 0.0], far_field=True),
                                model.transfer([1.0, 0.0, 0.0], far_field=True))
+    # (an audit: a NaN or infinite frequency gave NaN responses, text numpy's ValueError --
+    # as text sources did in transfer, itd_at, impulse_responses and simulate_masked)
+    for bad in ([np.nan, 100.0], [np.inf], [-5.0], "abc", [[100.0, 200.0]]):
+        with pytest.raises(ConfigError, match="freqs_hz must be one row"):
+            model.transfer_at(bad, [1.0, 0.0, 0.0])
+    assert np.all(np.isfinite(model.transfer_at([0.0, 100.0], [1.0, 0.0, 0.0])))
+    for call in (lambda: model.transfer("abc"), lambda: model.itd_at("abc"),
+                 lambda: model.impulse_responses("abc", 16000),
+                 lambda: mask.simulate_masked(np.ones(1600), 16000, model, "abc")):
+        with pytest.raises(GeometryError, match="source must be"):
+            call()
 
 
 def test_impulse_responses_bad_rate_and_length(model):

@@ -72,6 +72,17 @@ def test_points_from_disparity_match_opencv_reproject():
     np.testing.assert_allclose(pts[1:], ref[1:], rtol=1e-5)
     assert np.all(np.isnan(pts[0, 0]))
     np.testing.assert_allclose(pts[..., 2][1:], (rig.focal_px * 0.12 / d)[1:], rtol=1e-6)
+    # (an audit: a swapped rig's Q, T_x > 0, or a negative focal length put every point behind
+    # the camera, Z < 0, without a word)
+    for r, c, v in ((3, 2, -rig.Q[3, 2]), (2, 3, -rig.Q[2, 3])):
+        Q = rig.Q.copy()
+        Q[r, c] = v
+        with pytest.raises(ConfigError, match=r"Q\[2, 3\] = f > 0 and Q\[3, 2\] = -1/T_x > 0"):
+            points_from_disparity(d, Q)
+    Q = rig.Q.copy()
+    Q[3, 3] = -1.0  # (W = d / B - 1 <= 0 for d <= B px: at or behind the camera there)
+    pts = points_from_disparity(np.array([[0.06, 0.12, 0.24]]), Q)
+    assert np.all(np.isnan(pts[0, :2])) and pts[0, 2, 2] > 0
 
 
 def test_shifted_texture_gives_its_shift_with_subpixel_accuracy():

@@ -588,18 +588,23 @@ def disparity_from_depth(depth_m: ArrayLike, focal_px: float, baseline_m: float)
 def points_from_disparity(disparity: ArrayLike, Q: ArrayLike) -> NDArray:
     """3D points ``(H, W, 3)`` in metres in the rectified left optical frame,
     ``[X Y Z W]^T = Q [u v d 1]^T`` (``Q`` from :class:`hearsee.vision.camera.Rectification`);
-    NaN where the disparity is invalid or non-positive. ConfigError for a ``Q`` that is not a
-    finite 4x4 matrix with a focal length ``Q[2, 3]`` and an inverse baseline ``Q[3, 2]``
-    (a NaN or all-zero Q gave an all-NaN cloud without a word)."""
+    NaN where the disparity is invalid or non-positive (or puts the point at or behind the
+    camera). ConfigError for a ``Q`` that is not a finite 4x4 matrix with a focal length
+    ``Q[2, 3] > 0`` and an inverse baseline ``Q[3, 2] > 0`` (a NaN or all-zero Q gave an
+    all-NaN cloud without a word, a swapped rig's points behind the camera)."""
     d = numeric_map("disparity", disparity)
     if not real_entries(Q):
         raise ConfigError(f"Q must be a 4x4 matrix of numbers, got {Q!r:.80}")
     Q = np.asarray(Q, dtype=np.float64)
     if d.ndim != 2 or Q.shape != (4, 4):
         raise ConfigError(f"expected (H, W) disparity and 4x4 Q, got {d.shape} and {Q.shape}")
-    if not np.all(np.isfinite(Q)) or Q[2, 3] == 0 or Q[3, 2] == 0:
-        raise ConfigError("Q must be a finite reprojection matrix with Q[2, 3] = f and "
-                          "Q[3, 2] = -1/T_x nonzero (see cv2.stereoRectify)")
+    if not np.all(np.isfinite(Q)) or not (Q[2, 3] > 0 and Q[3, 2] > 0):
+        # (a Q of a rig with the cameras swapped -- T_x > 0 -- or a negative focal length put
+        # every point behind the camera, Z < 0, without a word)
+        raise ConfigError("Q must be a finite reprojection matrix with Q[2, 3] = f > 0 and "
+                          "Q[3, 2] = -1/T_x > 0 (the right camera to the right of the left "
+                          f"one; see cv2.stereoRectify), got Q[2, 3] = {Q[2, 3]:.4g}, "
+                          f"Q[3, 2] = {Q[3, 2]:.4g}")
     H, W = d.shape
     u = np.arange(W, dtype=np.float64)[None, :]
     v = np.arange(H, dtype=np.float64)[:, None]
@@ -609,7 +614,7 @@ def points_from_disparity(disparity: ArrayLike, Q: ArrayLike) -> NDArray:
     Wh = Q[3, 0] * u + Q[3, 1] * v + Q[3, 2] * d + Q[3, 3]
     with np.errstate(divide="ignore", invalid="ignore"):
         pts = np.stack(np.broadcast_arrays(X / Wh, Y / Wh, Z / Wh), axis=-1)
-    bad = ~(d > 0)
+    bad = ~(d > 0) | ~(Wh > 0)  # (W <= 0: a point at or behind the camera)
     pts[bad] = np.nan
     return pts
 
