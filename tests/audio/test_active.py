@@ -999,3 +999,43 @@ def test_simulate_pose_manifest_needs_a_path(tmp_path):
 
     with pytest.raises(InputFileError, match="manifest's path must be a file name"):
         simulate_pose_manifest(None, "three-mic", [2, 1, 0], [(0, 0), (45, 0)])
+
+
+def test_poses_tdoas_and_offsets_of_the_wrong_kind_are_geometry_errors():
+    """From an API audit: None or a number for the poses or the TDOAs raised builtin
+    TypeErrors, an empty pose list numpy's "need at least one array", an array offset of
+    1e160 m scipy's "residuals are not finite" (1e100: a result of cost inf)."""
+    from hearsee.audio.active import pose_mic_positions
+
+    arr = MicArray.from_preset("three-mic")
+    poses = [(0.0, 0.0), (40.0, 20.0)]
+    tau = [arr.tdoa([1.0, 0.5, 0.3])] * 2
+    for bad in (None, 3.0, "0,0"):
+        with pytest.raises(GeometryError, match="poses must be a sequence"):
+            pose_mic_positions(arr, bad)
+        with pytest.raises(GeometryError, match="poses must be a sequence"):
+            localize_multipose(tau, bad, arr)
+        with pytest.raises(GeometryError, match="tdoa_s must be one TDOA vector"):
+            localize_multipose(bad, poses, arr)
+    for empty in ([], ()):
+        with pytest.raises(GeometryError, match="at least one head pose"):
+            make_pose_training_set(arr, empty, 5)
+    for far in ((1e160, 0.0, 0.0), (1e100, 0.0, 0.0)):
+        with pytest.raises(GeometryError, match="offset_m"):
+            localize_multipose(tau, poses, arr, offset_m=far)
+    assert len(pose_mic_positions(arr, np.array(poses))) == 2
+
+
+def test_pose_mlp_scores_and_predicts_only_numbers():
+    """``score`` with an all-NaN Y answered NaN (fit refuses it); text TDOAs were numpy's
+    ValueError in predict."""
+    arr = MicArray.from_preset("three-mic")
+    poses = [(0.0, 0.0), (60.0, 20.0)]
+    X, Y = make_pose_training_set(arr, poses, 60, rng=3)
+    mlp = PoseItdMLP(hidden_layer_sizes=(8,), max_iter=50, random_state=0,
+                     tdoa_scale_s=arr.aperture / arr.speed_of_sound).fit(X, Y)
+    assert np.isfinite(mlp.score(X, Y))
+    with pytest.raises(EstimationError, match=r"PoseItdMLP.score needs finite"):
+        mlp.score(X, np.full_like(Y, np.nan))
+    with pytest.raises(EstimationError, match=r"PoseItdMLP.predict needs TDOAs"):
+        mlp.predict("abc")

@@ -645,3 +645,13 @@ def test_bad_hyperparameters_unfitted_models_and_sparse_input_are_hearsee_errors
     with pytest.raises(ManifoldInputError, match="Sparse data") as info:
         NeighborhoodLinearEmbedding().fit(sparse.csr_matrix(X))
     assert isinstance(info.value, TypeError)
+
+
+@pytest.mark.parametrize("cls", [NeighborhoodLinearEmbedding, ClusteredNLE])
+def test_n_jobs_zero_is_refused_with_the_parameters(cls):
+    """n_jobs=0 passed the parameter check and joblib refused it at fit ("n_jobs == 0 in
+    Parallel has no meaning", a bare ValueError); -1 and 1 still fit."""
+    X = np.random.default_rng(0).standard_normal((60, 3))
+    with pytest.raises(HearseeError, match="'n_jobs' parameter"):
+        cls(n_jobs=0).fit(X)
+    assert cls(n_jobs=-1, n_neighbors=8).fit(X).embedding_.shape == (60, 2)

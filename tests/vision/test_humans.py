@@ -1107,3 +1107,17 @@ def test_the_body_box_stops_at_the_image_bottom():
     seg = segment_body(int(cx), f * b / 2.5, d, pts, floor.height(pts), floor, f, b, cy)
     assert seg.floor_row == H - 1 and seg.body_box == seg.box
     assert seg.box[1] + seg.box[3] == H
+
+
+def test_floor_priors_and_filter_maps_of_the_wrong_kind_are_typed_errors():
+    """From an API audit: FloorPlane.level(None) and from_camera(1.0, None) raised float()'s
+    TypeError (the checks let None through for "no prior"); a ragged expected_rows or above map
+    of scale_adaptive_filter numpy's ValueError (its shape was read before converting it)."""
+    for call in (lambda: FloorPlane.level(None), lambda: FloorPlane.from_camera(1.0, None)):
+        with pytest.raises(GeometryError, match="a floor needs a camera height"):
+            call()
+    assert FloorPlane.from_camera(1.2, 10.0).pitch_deg == pytest.approx(10.0)
+    P = np.ones((4, 6))
+    for kw in ({"expected_rows": [[1], [1, 2]]}, {"above": [[1], [1, 2]]}):
+        with pytest.raises(ImageInputError):
+            scale_adaptive_filter(P, 100.0, 0.1, **kw)

@@ -378,3 +378,11 @@ def test_counts_below_absolute_zero_are_refused():
     with pytest.raises(ImageInputError, match="absolute zero"):
         counts_to_celsius(np.array([[0, 29000]], np.uint16), offset=-283.15)
     assert np.isnan(counts_to_celsius(np.array([[np.nan]]))).all()  # NaN stays NaN
+
+
+@pytest.mark.parametrize("shape", [(0, 10), (10, 0)])
+def test_an_empty_thermal_image_is_an_image_input_error(shape):
+    """OpenCV's "!src.empty()" assertion in erode before (an API audit); the other two masks
+    refused it already."""
+    with pytest.raises(ImageInputError, match="not empty"):
+        warm_mask_celsius(np.zeros(shape, np.float32))

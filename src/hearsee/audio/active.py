@@ -235,7 +235,22 @@ def pose_mic_positions(array: MicArray | str, poses: Sequence[HeadPose | Sequenc
     (:func:`~hearsee.geometry.check_head_pivot`)."""
     arr = load_array(array)
     pivot = check_head_pivot(pivot_m)
-    return [mic_positions_at(arr, as_pose(p), pivot, offset_m) for p in poses]
+    # (an offset of 1e160 m overflowed the solver's residuals: scipy's ValueError)
+    offset = check_head_offset(offset_m)
+    return [mic_positions_at(arr, p, pivot, offset) for p in pose_list(poses)]
+
+
+def pose_list(poses: Any) -> list[HeadPose]:
+    """``poses`` (a sequence of :class:`~hearsee.geometry.HeadPose` or (pan, tilt) degrees) as a
+    list of HeadPose, at least one; a GeometryError otherwise (None or a number raised a
+    builtin TypeError, an empty list numpy's "need at least one array")."""
+    if isinstance(poses, str | bytes) or not isinstance(poses, Sequence | np.ndarray):
+        raise GeometryError(f"poses must be a sequence of head poses (pan, tilt) in degrees, "
+                            f"got {poses!r:.60}")
+    out = [as_pose(p) for p in poses]
+    if not out:
+        raise GeometryError("at least one head pose is needed")
+    return out
 
 
 def facing_pair(array: MicArray | str) -> tuple[int, int] | None:
@@ -608,9 +623,9 @@ def localize_multipose(
     """
     arr = load_array(array)
     prs = list(arr.pairs if pairs is None else pairs)
-    poses = [as_pose(p) for p in poses]
-    if not poses:
-        raise GeometryError("at least one head pose is needed")
+    poses = pose_list(poses)
+    if isinstance(tdoa_s, str | bytes) or not isinstance(tdoa_s, Sequence | np.ndarray):
+        raise GeometryError(f"tdoa_s must be one TDOA vector (s) per pose, got {tdoa_s!r:.60}")
     t = [np.atleast_1d(as_float_array(v, f"pose {k}: TDOAs", finite=False, error=GeometryError))
          for k, v in enumerate(tdoa_s)]
     if len(t) != len(poses):
@@ -865,11 +880,7 @@ class PoseItdMLP:
         from sklearn.neural_network import MLPRegressor
         from threadpoolctl import threadpool_limits
 
-        X = np.asarray(X, dtype=float)
-        Y = np.asarray(Y, dtype=float)
-        if (X.ndim != 2 or Y.shape != (len(X), 3) or not np.all(np.isfinite(X))
-                or not np.all(np.isfinite(Y))):
-            raise EstimationError("PoseItdMLP.fit needs finite X (n, n_features) and Y (n, 3)")
+        X, Y = _mlp_samples(X, Y, "fit")
         # (the settings scikit-learn would refuse with its own ValueErrors, and the two it
         # does not see: a zero scale made every TDOA infinite, a 2-vector reference a
         # broadcast error)
@@ -914,6 +925,8 @@ class PoseItdMLP:
             from hearsee.errors import RegressorNotFittedError
 
             raise RegressorNotFittedError("PoseItdMLP is not fitted; call fit() first")
+        if not real_entries(X):  # (text: numpy's ValueError)
+            raise EstimationError(f"PoseItdMLP.predict needs TDOAs (s), got {X!r:.60}")
         X = np.atleast_2d(np.asarray(X, dtype=float))
         if X.ndim != 2 or X.shape[1] != self.n_features_in_ or len(X) == 0:
             raise EstimationError(
@@ -932,8 +945,22 @@ class PoseItdMLP:
         return np.asarray(self.reference_m, dtype=float) + u * np.exp(T[:, 3:4])
 
     def score(self, X: ArrayLike, Y: ArrayLike) -> float:
-        """Negative median 3D error in metres (higher is better)."""
-        return -float(np.median(np.linalg.norm(self.predict(X) - np.asarray(Y), axis=1)))
+        """Negative median 3D error in metres (higher is better); X and Y as for :meth:`fit`
+        (a NaN Y scored NaN, fit refused it)."""
+        X, Y = _mlp_samples(X, Y, "score")
+        return -float(np.median(np.linalg.norm(self.predict(X) - Y, axis=1)))
+
+
+def _mlp_samples(X: ArrayLike, Y: ArrayLike, what: str) -> tuple[NDArray, NDArray]:
+    """``(X, Y)`` of :class:`PoseItdMLP` as float arrays, TDOAs ``X (n, n_features)`` and
+    positions ``Y (n, 3)``, all finite; an EstimationError naming ``what`` otherwise."""
+    ok = real_entries(X) and real_entries(Y)
+    X = np.asarray(X, dtype=float) if ok else np.zeros(0)
+    Y = np.asarray(Y, dtype=float) if ok else np.zeros(0)
+    if (X.ndim != 2 or Y.shape != (len(X), 3) or not np.all(np.isfinite(X))
+            or not np.all(np.isfinite(Y))):
+        raise EstimationError(f"PoseItdMLP.{what} needs finite X (n, n_features) and Y (n, 3)")
+    return X, Y
 
 
 @functools.lru_cache(maxsize=16)

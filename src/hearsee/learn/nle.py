@@ -644,7 +644,9 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         "tol": [Interval(Real, 0, None, closed="left")],
         "axis_scaling": [StrOptions({"edges", "unit"})],
         "random_state": ["random_state"],
-        "n_jobs": [Integral, None],
+        # (0 passed and joblib refused it at fit: "n_jobs == 0 in Parallel has no meaning")
+        "n_jobs": [Interval(Integral, None, -1, closed="right"),
+                   Interval(Integral, 1, None, closed="left"), None],
     }
 
     def __init__(

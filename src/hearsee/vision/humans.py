@@ -380,6 +380,10 @@ class FloorPlane:
         optical axis is pitched ``pitch_deg`` degrees above the horizontal (+ = looking up,
         :func:`check_camera_pitch`), without roll: the up vector in the optical frame (x
         right, y down, z forward) is ``(0, -cos p, sin p)``."""
+        # (the checks let None through, for "no prior": here it was float()'s TypeError)
+        if camera_height_m is None or pitch_deg is None:
+            raise GeometryError(f"a floor needs a camera height (m) and pitch (deg), got "
+                                f"{camera_height_m!r} and {pitch_deg!r}")
         check_camera_height(camera_height_m)
         p = np.radians(check_camera_pitch(pitch_deg, "pitch_deg"))
         return cls(_up_vector(p), float(camera_height_m), "prior")
@@ -613,23 +617,25 @@ def scale_adaptive_filter(P: NDArray, focal_px: float, baseline_m: float, *,
     depth_band_m = finite_number("depth_band_m", depth_band_m, 0.0)
     person_width_m = finite_number("person_width_m", person_width_m, 0.0, lo_open=True)
     surround_m = finite_number("surround_m", surround_m, 0.0, lo_open=True)
-    if above is not None and np.shape(above) != P.shape:
-        raise ImageInputError(f"above must have P's shape {P.shape}, got {np.shape(above)}")
-    if expected_rows is not None and np.shape(expected_rows) != (nd,):
+    # (converted first: a ragged nesting made np.shape raise numpy's ValueError)
+    A = None if above is None else numeric_map("above", above, finite=True)
+    e = None if expected_rows is None else numeric_map("expected_rows", expected_rows,
+                                                       finite=True)
+    if A is not None and A.shape != P.shape:
+        raise ImageInputError(f"above must have P's shape {P.shape}, got {A.shape}")
+    if e is not None and e.shape != (nd,):
         raise ImageInputError(f"expected_rows must have one value per disparity ({nd},), got "
-                              f"shape {np.shape(expected_rows)}")
+                              f"shape {e.shape}")
     d = np.arange(nd, dtype=float)
     band = _band_px(d, depth_band_m, focal_px, baseline_m)
     cs = np.vstack([np.zeros((1, W)), np.cumsum(P, axis=0)])
     lo = np.clip(np.arange(nd) - band, 0, nd)
     hi = np.clip(np.arange(nd) + band + 1, 0, nd)
     Pb = cs[hi] - cs[lo]
-    if above is not None:
-        A = numeric_map("above", above, finite=True)
+    if A is not None:
         ca = np.vstack([np.zeros((1, W)), np.cumsum(A, axis=0)])
         Pb = np.clip(Pb - above_weight * (ca[hi] - ca[lo]), 0.0, None)
-    if expected_rows is not None:
-        e = numeric_map("expected_rows", expected_rows, finite=True)
+    if e is not None:
         Pb = np.where(e[:, None] > 3, Pb / np.maximum(e[:, None], 1.0), 0.0)
     half = np.maximum(1, np.rint(0.5 * person_width_m * d / baseline_m)).astype(int)[:, None]
     sur = np.maximum(1, np.rint(surround_m * d / baseline_m)).astype(int)[:, None]

@@ -134,8 +134,9 @@ def warm_mask_celsius(thermal_c: NDArray, band_c: tuple[float, float] = HUMAN_BA
     (True, False, 39)
     """
     t = numeric_map("thermal image", thermal_c, np.float32)
-    if t.ndim != 2:
-        raise ImageInputError(f"thermal image must be single-channel (h, w), got {t.shape}")
+    if t.ndim != 2 or t.size == 0:  # (an empty one was OpenCV's assertion in erode)
+        raise ImageInputError(f"thermal image must be single-channel (h, w) and not empty, got "
+                              f"{t.shape}")
     open_px = _kernel_px("open_px", open_px, t.shape)
     close_px = _kernel_px("close_px", close_px, t.shape)
     try:
