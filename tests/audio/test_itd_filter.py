@@ -470,3 +470,21 @@ def test_r_scale_and_q_max_are_checked():
             max_itd_step_s(bad, 0.032)
     with pytest.raises(ConfigError, match="hop_s and rate_dps"):
         max_itd_step_s([1e-4], 0.0)
+
+
+def test_helpers_refuse_text_and_malformed_noise():
+    """From an API audit: text bounds were numpy's ValueError, a text rate with a given
+    q_std_s a builtin TypeError, a 1-tuple noise an IndexError."""
+    from hearsee.audio.itd_filter import itd_filter_entries, max_itd_step_s, smooth_recording_itds
+
+    pairs = [(0, 1), (0, 2), (1, 2)]
+    with pytest.raises(GeometryError, match="max_tdoa_s must be finite"):
+        max_itd_step_s("abc", 0.016)
+    with pytest.raises(GeometryError, match="max_tdoa_s must be 3 finite"):
+        ItdKalman(3).log_likelihood(_noisy(5), "abc")
+    with pytest.raises(ConfigError, match="fs must be a sample rate"):
+        smooth_recording_itds(_noisy(5), np.ones((5, 3)), 3, pairs, "x", [4e-4] * 3, 0.032,
+                              q_std_s=1e-5)
+    with pytest.raises(ConfigError, match=r"noise must be \(q_std_s, r_std_s\)"):
+        itd_filter_entries((1e-5,), "fixed")
+    assert itd_filter_entries((1e-5, 2e-5), "fixed")["kalman_r_std_s"] == 2e-5

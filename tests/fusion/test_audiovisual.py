@@ -317,6 +317,19 @@ def test_learned_mapping_without_calibration(rig):
         AudioVisualRegressor().predict(Xt)
     with pytest.raises(EstimationError, match="features"):
         model.predict(Xt[:, :3])
+    # (an API audit: a TDOA of 1e306 s overflowed to inf after the finiteness check, and a
+    # y of another shape in score was scikit-learn's ValueError)
+    big = Xt[:1].copy()
+    big[0, 0] = 1e306
+    with pytest.raises(EstimationError, match="features out of range"):
+        model.predict(big)
+    with pytest.raises(EstimationError, match=r"targets must be \(n_samples, 3\)"):
+        model.score(Xt, Yt[:, :2])
+    # a fix that is not a RayFix: an AttributeError in feed_tracker
+    from hearsee.fusion.audiovisual import feed_tracker
+
+    with pytest.raises(EstimationError, match="fix must be a RayFix or None"):
+        feed_tracker(RayTracker(), 0.0, None, None, "fix")
 
 
 @pytest.mark.parametrize("kw, name", [({"range_m": (-1.0, -0.5)}, "range_m"),

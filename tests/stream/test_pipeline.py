@@ -1023,3 +1023,24 @@ def test_a_tracking_processor_takes_a_preset_name():
     np.testing.assert_array_equal(arr.positions, MicArray.from_preset("three-mic").positions)
     with pytest.raises(ConfigError, match="array: expected a MicArray"):
         TrackingProcessor(np.zeros((3, 3)), FS)
+
+
+def test_sources_sinks_and_wiring_inputs_of_the_wrong_kind_are_config_errors(moving):
+    """From an API audit: a list as the source and a number as the sink raised builtin
+    AttributeError / TypeError in the run, a None or dict config of wiring_estimate an
+    AttributeError, a negative stall time.sleep's ValueError in the middle of a run."""
+    from hearsee.stream.pipeline import wiring_estimate
+
+    arr, _, y = moving
+    pipe = StreamPipeline(arr)
+    with pytest.raises(ConfigError, match="source must be a block source"):
+        pipe.run([1, 2, 3])
+    with pytest.raises(ConfigError, match="sink must be a function"):
+        pipe.run(ArraySource(y, FS), sink=5)
+    with pytest.raises(ConfigError, match="config must be a StreamConfig"):
+        wiring_estimate(y, FS, arr, {"frame_ms": 64})
+    tf = wiring_estimate(y, FS, arr, None)  # (None: the default settings, as the stream's)
+    assert tf is not None and np.all(np.isfinite(tf.summary_tdoa_s))
+    for bad in (-5.0, float("nan")):
+        with pytest.raises(ConfigError, match=r"stall_before\[1\]"):
+            DropoutSource(ArraySource(y, FS), stall_before={1: bad})

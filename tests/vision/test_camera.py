@@ -571,7 +571,7 @@ def test_camera_pose_and_transform_points_refuse_bad_input():
     """camera_pose with a NaN angle returned NaN R, t; transform_points read a flat (6,) array
     as two points and silently dropped the second."""
     for args in (((0, 0, 1), np.nan), ((0, 0, 1), 0.0, np.inf), ((0, 0, 1), 0, 0, "x"),
-                 ((0.0, 1.0),), ((0, 0, np.nan),)):
+                 ((0.0, 1.0),), ((0, 0, np.nan),), ((0, 0, 1), 1e300)):  # (1e300: as HeadPose)
         with pytest.raises(GeometryError, match="camera_pose"):
             camera_pose(*args)
     R, t = camera_pose((0.0, 0.0, 1.2), 30.0)
@@ -896,7 +896,7 @@ def test_fold_radius_checks_its_input():
     for bad in (["a", 0, 0, 0], [np.nan, 0, 0, 0], [-0.28, 0, 0], [[-0.28, 0], [0, 0]], None):
         with pytest.raises(CalibrationError, match="fold_radius: dist"):
             fold_radius(bad)
-    for r_max in (np.nan, 0.0, "5"):
+    for r_max in (np.nan, 0.0, "5", 1e300, 1e6):  # (1e300: numpy's "maximum size", 1e6: 8 GB)
         with pytest.raises(CalibrationError, match="r_max"):
             fold_radius([-0.28, 0, 0, 0], r_max)
     assert fold_radius([-0.28, 0, 0, 0]) == pytest.approx(1 / np.sqrt(0.84), abs=1e-3)

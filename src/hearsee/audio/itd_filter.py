@@ -104,8 +104,8 @@ def max_itd_step_s(max_tdoa_s: ArrayLike, hop_s: float,
     explained a reverberant voice's bursts of reflection peaks as motion (RT60 0.3 s, male
     voice at 90 deg/s, 20 dB: q of one sample per frame picked, 80 us per-frame RMSE where a
     third of a sample gave 57)."""
-    m = np.asarray(max_tdoa_s, dtype=float)
-    if not (real_entries(max_tdoa_s) and m.size and np.all(np.isfinite(m) & (m > 0))):
+    m = np.asarray(max_tdoa_s, dtype=float) if real_entries(max_tdoa_s) else np.zeros(0)
+    if not (m.size and np.all(np.isfinite(m) & (m > 0))):  # (text: numpy's ValueError)
         raise GeometryError(f"max_tdoa_s must be finite numbers > 0 seconds, got "
                             f"{max_tdoa_s!r:.80}")
     if not all(is_real(v) and v > 0 for v in (hop_s, rate_dps)):
@@ -459,7 +459,8 @@ class ItdKalman:
         S = _scales(r_scale, Zm.shape)
         if not (is_real(outlier_prob) and 0 < outlier_prob < 1):
             raise ConfigError(f"outlier_prob must be in (0, 1), got {outlier_prob!r}")
-        box = np.asarray(max_tdoa_s, dtype=float).reshape(-1)
+        box = (np.asarray(max_tdoa_s, dtype=float).reshape(-1) if real_entries(max_tdoa_s)
+               else np.zeros(0))  # (text: numpy's ValueError)
         if box.shape != (len(self.pairs),) or not np.all(np.isfinite(box) & (box > 0)):
             raise GeometryError(f"max_tdoa_s must be {len(self.pairs)} finite numbers > 0 "
                                 f"seconds (one per pair), got {max_tdoa_s!r:.80}")
@@ -534,6 +535,9 @@ def itd_filter_entries(noise: tuple[float, float] | None, model: str | None
     """The ``hearsee localize`` document's ``kalman_q_std_s`` / ``kalman_r_std_s`` (s) /
     ``kalman_noise`` entries of :func:`smooth_recording_itds`' ``(q, r)`` and model (None,
     without the filter: nulls) -- one place for every array's document."""
+    if noise is not None and (isinstance(noise, str) or len(noise) != 2):  # (IndexError)
+        raise ConfigError(f"noise must be (q_std_s, r_std_s) in seconds or None, got "
+                          f"{noise!r:.60}")
     return {"kalman_q_std_s": None if noise is None else float(noise[0]),
             "kalman_r_std_s": None if noise is None else float(noise[1]),
             "kalman_noise": model}
@@ -564,6 +568,8 @@ def smooth_recording_itds(Z: ArrayLike, confidence: ArrayLike, n_mics: int,
 
     Returns (the smoothed TDOAs (n_frames, n_pairs), NaN where ``Z`` has none; the filter's
     ``(q_std_s, r_std_s)`` in seconds; the model's name)."""
+    if not (is_real(fs) and fs > 0):  # (text with a given q_std_s: a builtin TypeError)
+        raise ConfigError(f"fs must be a sample rate > 0 Hz, got {fs!r}")
     Zm = _frames(Z)
     noise: tuple[float, float] | None = None
     r_scale = None

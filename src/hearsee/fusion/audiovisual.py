@@ -797,6 +797,8 @@ def feed_tracker(tracker: Any, t: float, uv: ArrayLike | None, tdoa_s: ArrayLike
     alternatives, or a prediction to ``t`` (seconds) without one. Returns the tracker's answer
     (True when something was fused). Anything else is an EstimationError."""
     _check_tracker(tracker, "feed_tracker")
+    if fix is not None and not isinstance(fix, RayFix):  # (a builtin AttributeError)
+        raise EstimationError(f"fix must be a RayFix or None, got {type(fix).__name__}")
     if hasattr(tracker, "update_measurements"):
         return tracker.update_measurements(t, uv, tdoa_s, fix)
     if fix is None:
@@ -1044,6 +1046,10 @@ def _layer_sizes(sizes: Any) -> tuple[Any, ...]:
                               f"them, got {sizes!r:.80}") from None
 
 
+#: :class:`AudioVisualRegressor` takes image points within this many pixels of the image origin
+MAX_PIXEL = 1e6
+
+
 class AudioVisualRegressor(RegressorMixin, BaseEstimator):
     """(ITDs, image point) -> 3D position by a multi-layer perceptron (thesis 5.3.3).
 
@@ -1085,9 +1091,25 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
                 f"features must be (n_samples, n_pairs + 2) [tdoas..., u, v], got {A.shape}")
         if not np.all(np.isfinite(A)):
             raise EstimationError("features contain NaN or inf")
+        # (1e306 s overflowed the milliseconds below after this check: scikit-learn's ValueError)
+        if np.any(np.abs(A[:, :-2]) > 1.0) or np.any(np.abs(A[:, -2:]) > MAX_PIXEL):
+            raise EstimationError(f"features out of range: TDOAs are seconds (|t| <= 1) and image "
+                                  f"points pixels (|u|, |v| <= {MAX_PIXEL:g})")
         A = A.copy()
         A[:, :-2] *= 1e3  # seconds -> milliseconds
         return A
+
+    @staticmethod
+    def _targets(y: ArrayLike, n: int) -> NDArray:
+        """Positions ``y`` (n, 3) in metres as floats, all finite, else an EstimationError."""
+        if not real_entries(y):  # (text read as metres, True as 1 m)
+            raise EstimationError("targets must be numbers (n_samples, 3) positions in metres")
+        Y = np.asarray(y, dtype=float)
+        if Y.shape != (n, 3):
+            raise EstimationError(f"targets must be (n_samples, 3) positions, got {Y.shape}")
+        if not np.all(np.isfinite(Y)):  # (scikit-learn's ValueError)
+            raise EstimationError("targets contain NaN or inf")
+        return Y
 
     def fit(self, X: ArrayLike, y: ArrayLike) -> AudioVisualRegressor:
         from sklearn.exceptions import ConvergenceWarning
@@ -1096,13 +1118,7 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
         from sklearn.preprocessing import StandardScaler
 
         A = self._features(X)
-        if not real_entries(y):  # (text read as metres, True as 1 m)
-            raise EstimationError("targets must be numbers (n_samples, 3) positions in metres")
-        Y = np.asarray(y, dtype=float)
-        if Y.shape != (A.shape[0], 3):
-            raise EstimationError(f"targets must be (n_samples, 3) positions, got {Y.shape}")
-        if not np.all(np.isfinite(Y)):  # (scikit-learn's ValueError)
-            raise EstimationError("targets contain NaN or inf")
+        Y = self._targets(y, A.shape[0])
         if A.shape[0] < 2:
             raise EstimationError(f"fit needs at least 2 samples, got {A.shape[0]}")
         self.model_ = make_pipeline(
@@ -1136,4 +1152,11 @@ class AudioVisualRegressor(RegressorMixin, BaseEstimator):
         if A.shape[0] == 0:  # (scikit-learn's ValueError for no sample)
             return np.zeros((0, 3))
         return self.model_.predict(A)
+
+    def score(self, X: ArrayLike, y: ArrayLike, sample_weight: ArrayLike | None = None
+              ) -> float:
+        """R^2 of :meth:`predict` against positions ``y`` (n, 3) in metres (scikit-learn's
+        ``RegressorMixin.score``; a ``y`` of another shape was its ValueError)."""
+        Y = self._targets(y, self._features(X).shape[0])
+        return super().score(X, Y, sample_weight=sample_weight)
 

@@ -449,9 +449,12 @@ def wiring_estimate(x: NDArray, fs: float, array: MicArray, cfg: StreamConfig,
     :func:`~hearsee.audio.tdoa.estimate_tdoas`'s (None where the band was trimmed already),
     as ``tonal_noise`` (False where the hum was looked for already).
     ``hearsee track`` runs it on a file's start before streaming it, :class:`_WiringWatch` on
-    live input."""
+    live input. The array and the settings are checked first (a ConfigError / GeometryError
+    of their own: a None or dict ``cfg`` was a builtin AttributeError, a wrong array None)."""
     from hearsee.errors import HearseeError
 
+    cfg = _stream_config(cfg)
+    array = load_array(array)
     try:
         return estimate_tdoas(x, fs, array, cfg.frame_ms, cfg.hop_ms, cfg.method,
                               band_hz=cfg.band_hz, empty_band_db=empty_band_db,
@@ -761,7 +764,9 @@ class DropoutSource:
         self.source = source
         self.fs, self.n_channels = source.fs, source.n_channels
         self.drop, self.late = set(drop), set(late)
-        self.stall_before = dict(stall_before or {})
+        # (a negative or NaN stall was time.sleep's ValueError during the run)
+        self.stall_before = {k: finite_number(f"stall_before[{k}] (seconds)", v, 0.0)
+                             for k, v in dict(stall_before or {}).items()}
         self.n_dropped = 0
 
     @property
@@ -2173,7 +2178,15 @@ class StreamPipeline:
         batch being delivered were measured before the call and keep the old state."""
         self._reset_requested = True
 
-    def _check_source(self, source: Any) -> None:
+    def _check_source(self, source: Any, sink: Any = None) -> None:
+        # (a list of samples or a number: builtin AttributeErrors / TypeErrors at the first
+        # block or update)
+        if not all(hasattr(source, a) for a in ("n_channels", "fs", "blocks")):
+            raise ConfigError(f"source must be a block source (FileSource, ArraySource, "
+                              f"DeviceSource, ...), got {type(source).__name__}")
+        if sink is not None and not callable(sink):
+            raise ConfigError(f"sink must be a function of an Update or None, got "
+                              f"{type(sink).__name__}")
         if source.n_channels != self.array.n_mics:
             raise AudioInputError(
                 f"the input has {source.n_channels} channels; array {self.array.name!r} has "
@@ -2205,7 +2218,7 @@ class StreamPipeline:
 
     def _run(self, source: Any, sink: Callable[[Update], None] | None,
              threaded: bool) -> list[Update]:
-        self._check_source(source)
+        self._check_source(source, sink)
         self._reset_requested = False
         framer = Framer(source.n_channels, source.fs, self.config.frame_ms, self.config.hop_ms)
         proc = TrackingProcessor(self.array, source.fs, self.config, self.rig, self.image_points)

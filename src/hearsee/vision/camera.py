@@ -77,7 +77,7 @@ from hearsee.config import (
     write_file,
 )
 from hearsee.errors import CalibrationError, ConfigError, GeometryError
-from hearsee.geometry import as_point, norm_scale
+from hearsee.geometry import MAX_ANGLE_DEG, as_point, norm_scale
 
 __all__ = [
     "MAX_BASELINE_M",
@@ -640,6 +640,10 @@ def _as_rows(value: ArrayLike, width: int, what: str, numbers: str, shape: str) 
     return p
 
 
+#: :func:`fold_radius` searches normalised radii up to at most this (tan of 89.94 deg)
+MAX_FOLD_RADIUS = 1000.0
+
+
 def fold_radius(dist: ArrayLike, r_max: float = 5.0) -> float:
     """The normalised image radius (``sqrt(x^2 + y^2) / z``) up to which OpenCV's radial
     distortion ``r (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 + k6 r^6)`` keeps
@@ -657,7 +661,9 @@ def fold_radius(dist: ArrayLike, r_max: float = 5.0) -> float:
             or not np.all(np.isfinite(d))):
         raise CalibrationError(f"fold_radius: dist must be 0, 4, 5, 8, 12 or 14 finite "
                                f"coefficients, got {d.size} of shape {d.shape}")
-    r_max = finite_number("fold_radius: r_max", r_max, 0.0, lo_open=True,
+    # (the search grid is r_max / 1e-3 points: 1e300 was numpy's "maximum allowed size
+    # exceeded", 1e6 eight gigabytes; 1000 is 89.94 deg off the axis)
+    r_max = finite_number("fold_radius: r_max", r_max, 0.0, MAX_FOLD_RADIUS, lo_open=True,
                           error=CalibrationError)
     c = np.zeros(8)
     d = d.ravel()[:8]
@@ -1189,10 +1195,12 @@ def camera_pose(position_m: ArrayLike = (0.0, 0.0, 0.0), pan_deg: float = 0.0,
     >>> np.round(R @ np.array([3.0, 0.5, 1.2]) + t, 6) + 0.0  # 3 m ahead, 0.5 m left, eye height
     array([-0.5,  0. ,  3. ])
     """
-    if _finite((pan_deg, tilt_deg, roll_deg), 3) is None:
+    angles = _finite((pan_deg, tilt_deg, roll_deg), 3)
+    # (1e300 deg was taken, as a HeadPose refuses it: MAX_ANGLE_DEG)
+    if angles is None or np.any(np.abs(angles) > MAX_ANGLE_DEG):
         raise GeometryError(
-            f"camera_pose: pan, tilt and roll must be finite degrees, got "
-            f"{(pan_deg, tilt_deg, roll_deg)}"
+            f"camera_pose: pan, tilt and roll must be finite degrees within "
+            f"+-{MAX_ANGLE_DEG:g}, got {(pan_deg, tilt_deg, roll_deg)}"
         )
     c = _finite(position_m, 3)
     if c is None:
