@@ -1339,6 +1339,29 @@ def test_an_inverted_microphone_is_warned_about(preset, signal):
     assert tf.inverted_mics == (1,)
 
 
+def _wiring_recording(preset, signal, room, duration_s, seed):
+    """(array, recording, truth): ``signal`` from [1.2, 1.0, 0.1] m at 20 dB, in free field or
+    a 6 x 5 x 3 m room of RT60 ``room`` s -- the wiring checks' test recordings."""
+    from hearsee.sim.audio import simulate_recording
+
+    arr = MicArray.from_preset(preset)
+    rm = None if room is None else {"room_dim": [6.0, 5.0, 3.0], "rt60": room,
+                                    "array_at": [2.5, 2.2, 1.2]}
+    x, truth = simulate_recording(arr, [1.2, 1.0, 0.1], signal=signal, duration_s=duration_s,
+                                  snr_db=20.0, room=rm, seed=seed)
+    return arr, x, truth
+
+
+def _warned(category, fn, *args):
+    """(``fn(*args)``, the warnings of ``category`` it gave)."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = fn(*args)
+    return out, [w for w in caught if issubclass(w.category, category)]
+
+
 @pytest.mark.parametrize("preset, signal, room, dead, level", [
     ("three-mic", "male", None, 1, 1.0), ("three-mic", "female", 0.3, 2, 0.1),
     ("respeaker-4", "noise", 0.6, 0, 0.01), ("respeaker-6", "male", 0.3, 4, 1.0)])
@@ -1347,20 +1370,12 @@ def test_a_dead_microphone_is_warned_about(preset, signal, room, dead, level):
     or below it) gave no direction, or a wrong one in `track`, without a word. Its pairs peak
     nowhere while the others hear the source: a DeadMicrophoneWarning names it; the recording
     as recorded warns nothing, nor does a two-microphone array (no pair to compare with)."""
-    import warnings
-
     from hearsee.errors import DeadMicrophoneWarning
     from hearsee.sim.audio import simulate_recording
 
-    arr = MicArray.from_preset(preset)
-    rm = None if room is None else {"room_dim": [6.0, 5.0, 3.0], "rt60": room,
-                                    "array_at": [2.5, 2.2, 1.2]}
-    x, _ = simulate_recording(arr, [1.2, 1.0, 0.1], signal=signal, duration_s=2.0,
-                              snr_db=20.0, room=rm, seed=9)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        tf = estimate_tdoas(x, FS, arr)
-    assert not [w for w in caught if issubclass(w.category, DeadMicrophoneWarning)]
+    arr, x, _ = _wiring_recording(preset, signal, room, 2.0, 9)
+    tf, caught = _warned(DeadMicrophoneWarning, estimate_tdoas, x, FS, arr)
+    assert not caught
     assert tf.dead_mics == () and tf.wiring_entries()["dead_microphones"] == []
     x[dead] = np.random.default_rng(10).standard_normal(x.shape[1]) * np.std(x[dead]) * level
     with pytest.warns(DeadMicrophoneWarning, match=f"^microphone {dead} hears nothing of what "
@@ -1372,10 +1387,8 @@ def test_a_dead_microphone_is_warned_about(preset, signal, room, dead, level):
     y, _ = simulate_recording(two, [1.2, 1.0, 0.1], signal=signal, duration_s=2.0,
                               snr_db=20.0, seed=9)
     y[1] = np.random.default_rng(10).standard_normal(y.shape[1]) * np.std(y[1])
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        assert estimate_tdoas(y, FS, two).dead_mics == ()
-    assert not [w for w in caught if issubclass(w.category, DeadMicrophoneWarning)]
+    tf, caught = _warned(DeadMicrophoneWarning, estimate_tdoas, y, FS, two)
+    assert tf.dead_mics == () and not caught
 
 
 @pytest.mark.parametrize("preset, signal, room", [
@@ -1391,17 +1404,9 @@ def test_channels_out_of_sync_are_warned_about(preset, signal, room):
 
     from hearsee.audio.tdoa import desynchronized_pairs
     from hearsee.errors import ChannelSyncWarning, InvertedPolarityWarning
-    from hearsee.sim.audio import simulate_recording
 
-    arr = MicArray.from_preset(preset)
-    rm = None if room is None else {"room_dim": [6.0, 5.0, 3.0], "rt60": room,
-                                    "array_at": [2.5, 2.2, 1.2]}
-    x, truth = simulate_recording(arr, [1.2, 1.0, 0.1], signal=signal, duration_s=1.5,
-                                  snr_db=20.0, room=rm, seed=8)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        estimate_tdoas(x, FS, arr)
-    assert not [w for w in caught if issubclass(w.category, ChannelSyncWarning)]
+    arr, x, truth = _wiring_recording(preset, signal, room, 1.5, 8)
+    assert not _warned(ChannelSyncWarning, estimate_tdoas, x, FS, arr)[1]
     last = arr.n_mics - 1
     x[last] = np.roll(x[last], 40)  # 40 samples late
     with warnings.catch_warnings(record=True) as caught:
