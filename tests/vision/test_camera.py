@@ -917,3 +917,19 @@ def test_a_camera_matrix_that_cannot_be_this_image_is_refused(K, needle):
         Camera(np.array(K, float), None, 320, 240)
     Camera(np.array([[96.0, 0, 160], [0, 96.0, 120], [0, 0, 1]]), None, 320, 240)
     Camera(np.array([[300.0, 0, 340], [0, 300.0, -20], [0, 0, 1]]), None, 320, 240)
+
+
+def test_a_point_nearly_sideways_projects_to_nan_without_runtime_warnings():
+    """From an API audit: [1, 1, 1e-300] (in front, 90 deg off the axis) overflowed the
+    distortion polynomial with RuntimeWarnings; it is NaN alone now, and near points as
+    before."""
+    import warnings
+
+    cam = Camera(K, np.array([-0.12, 0.05, 0.001, -0.0005, 0.0]), 640, 480)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        uv = cam.project(np.array([[1.0, 1.0, 1e-300], [0.1, 0.2, 1.0]]))
+    assert np.all(np.isnan(uv[0])) and np.all(np.isfinite(uv[1]))
+    ref = cv2.projectPoints(np.array([[0.1, 0.2, 1.0]]), np.zeros(3), np.zeros(3), K,
+                            cam.dist)[0].reshape(2)
+    np.testing.assert_allclose(uv[1], ref, atol=1e-6)

@@ -318,7 +318,9 @@ class Camera:
         """Project 3D points ``(N, 3)`` in this camera's optical frame (metres) to pixels.
 
         Returns ``(N, 2)`` float ``(u, v)`` including lens distortion; points with ``z <= 0``
-        (behind the camera) give NaN. Pixels may lie outside the image: see :meth:`in_image`.
+        (behind the camera) give NaN, as do points so nearly sideways that the distortion
+        polynomial overflows (``|x / z|`` beyond ~1e50: RuntimeWarnings and NaN before, now NaN
+        alone). Pixels may lie outside the image: see :meth:`in_image`.
         """
         P = _as_points(points, "project")
         z = P[:, 2]
@@ -332,7 +334,9 @@ class Camera:
             if np.any(front):
                 xd[front], yd[front] = _distort_tilted(P[front], self.dist)
         else:
-            xd, yd = _distort(x, y, self.dist)
+            with np.errstate(over="ignore", invalid="ignore"):
+                xd, yd = _distort(x, y, self.dist)
+            xd, yd = (np.where(np.isfinite(xd) & np.isfinite(yd), v, np.nan) for v in (xd, yd))
         return self._pixels(xd, yd)
 
     @property
