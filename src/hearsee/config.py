@@ -23,7 +23,7 @@ from hearsee.errors import ConfigError, InputFileError
 
 __all__ = [
     "YamlDumper", "all_real", "as_float_array", "as_rng", "check_keys", "check_rng",
-    "finite_number", "input_file", "is_real", "load_yaml", "names_a_file", "number",
+    "expand_path", "finite_number", "input_file", "is_real", "load_yaml", "names_a_file", "number",
     "object_entries", "open_replaced", "output_file", "refused_name", "replacing", "require",
     "save_yaml", "time_limit", "to_jsonable", "to_plain", "whole_number", "write_file",
     "write_into",
@@ -110,6 +110,28 @@ def input_file(path: str | Path, kind: str = "file", hint: str = "") -> Path:
             raise InputFileError(f"{p}: is a folder, expected {article} {kind}")
         if not p.exists():
             raise InputFileError(f"{p}: {kind} not found{hint}")
+    return p
+
+
+def expand_path(path: str | Path, what: str, error: type[Exception] = ConfigError) -> Path:
+    """``path`` with a leading ``~`` / ``~user`` expanded, as a Path the system can look at,
+    else ``error`` naming ``what``: a NUL character (os.stat's "embedded null byte"
+    ValueError), a ``~user`` without a home folder (pathlib's RuntimeError) and a name the
+    system refuses (too long: an OSError) were tracebacks of the robot file's and the
+    scenario's paths."""
+    text = str(path)
+    shown = text if len(text) <= 60 else text[:57] + "..."
+    if "\0" in text:
+        raise error(f"{what}: {shown!r} holds a NUL character: not a file name")
+    try:
+        p = Path(text).expanduser()
+    except RuntimeError:
+        raise error(f"{what}: {shown!r}: no such user's home folder") from None
+    try:
+        p.exists()
+    except OSError as exc:
+        raise error(f"{what}: {shown}: the system refuses this path "
+                    f"({exc.strerror or exc})") from None
     return p
 
 

@@ -2214,3 +2214,23 @@ def test_a_jsonl_that_is_a_folder_is_refused_at_load(tmp_path):
     with pytest.raises(ConfigError, match=r"^r\.yaml: output\.jsonl: .*adir\.jsonl is a folder"):
         robot_config_from_dict({"audio": {}, "output": {"jsonl": "adir.jsonl"}}, "r.yaml",
                                tmp_path)
+
+
+@pytest.mark.parametrize("section, key", [("output", "report"), ("output", "jsonl"),
+                                          ("audio", "array"), ("cameras", "left")])
+def test_paths_the_system_cannot_look_at_are_config_errors(section, key, tmp_path):
+    """From an audit: "~nosuchuser/..." raised pathlib's RuntimeError ("Could not determine home
+    directory"), a NUL os.stat's ValueError and a 300-character name an OSError -- tracebacks
+    of `hearsee run --dry-run`. Each is a ConfigError naming the field."""
+    from hearsee.errors import ConfigError
+
+    for value, words in (("~nosuchuser/x.jsonl", "no such user's home folder"),
+                         ("a\0b.jsonl", "holds a NUL character"),
+                         ("a" * 300 + ".jsonl", "the system refuses this path")):
+        d = {"audio": {}}
+        if section == "cameras":
+            d["cameras"] = {"left": value, "right": "r.avi", "calib": "rig.yaml"}
+        else:
+            d.setdefault(section, {})[key] = value
+        with pytest.raises(ConfigError, match=rf"{section}\.{key}: .*{words}"):
+            robot_config_from_dict(d, "robot.yaml", tmp_path)

@@ -522,3 +522,19 @@ def test_random_scenarios_keep_objects_clear_of_the_walk():
             assert _min_distance(sc.people[0].path_m, o.position_m) >= 0.6, (seed, o)
         for a, b in itertools.combinations(sc.objects, 2):
             assert np.linalg.norm(a.position_m - b.position_m) >= 0.6
+
+
+def test_coordinates_are_numbers_not_flags_or_text():
+    """From an audit: YAML's yes/on/true in a coordinate list was read as 1.0 m and "7" as
+    7 m (the single-number fields refuse both); a ~user array without a home folder was
+    pathlib's RuntimeError."""
+    from hearsee.errors import ConfigError
+    from hearsee.robot.scenario import scenario_from_dict
+
+    for d, where in (({"room": {"size_m": ["7", "6", "3"]}}, "room.size_m"),
+                     ({"people": [{"path_m": [[True, 4], [2, 4]]}]}, r"people\[0\].path_m"),
+                     ({"robot": {"position_m": [3.5, "2.6"]}}, "robot.position_m")):
+        with pytest.raises(ConfigError, match=rf"{where}: expected numbers"):
+            scenario_from_dict(d)
+    with pytest.raises(ConfigError, match="robot.array: .*no such user's home folder"):
+        scenario_from_dict({"robot": {"array": "~nosuchuser/a.yaml"}}, base_dir=".")

@@ -193,6 +193,13 @@ def test_an_absurd_trajectory_step_is_reported_at_its_true_speed():
     wide = Trajectory([0.0, 1.0], [[-1e308, 0.0, 0.0], [1e308, 0.0, 0.0]])
     with pytest.raises(GeometryError, match=r"moves at 2e\+308 m/s"):
         retarded_delays(wide, mics, [0.0], 343.0)
+    # a source standing 1e200 m away: its distance squared to inf (a RuntimeWarning, then
+    # "beyond float range" from the simulator); now its true distance, without a warning
+    far = Trajectory([0.0], [[1e200, 0.0, 0.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tau, r = retarded_delays(far, mics, [0.0], 343.0)
+    assert r[0, 0] == pytest.approx(1e200) and tau[0, 0] == pytest.approx(1e200 / 343.0)
 
 
 def test_room_moving_source_delay_tracks_trajectory():
@@ -328,6 +335,15 @@ def test_trajectory_interpolation_velocity_and_csv_roundtrip(tmp_path):
     with pytest.raises(GeometryError, match="expected a Trajectory"):
         save_trajectory(traj.positions, tmp_path / "other.csv")  # (was AttributeError)
     assert not (tmp_path / "other.csv").exists()
+    # (an audit: knots 1e-7 s apart were written as one time, "0.000000", and NaN or unsorted
+    # times as rows load_trajectory refused; times are written in full precision now)
+    close = Trajectory([0.0, 1e-7, 1.0], [[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]])
+    save_trajectory(close, p)
+    np.testing.assert_array_equal(load_trajectory(p).t, close.t)
+    for bad in ([np.nan], [0.0, np.inf], [0.5, 0.2]):
+        with pytest.raises(GeometryError, match="times must be finite and strictly increasing"):
+            save_trajectory(close, tmp_path / "bad.csv", bad)
+    assert not (tmp_path / "bad.csv").exists()
 
 
 def test_bad_trajectories(tmp_path):

@@ -83,6 +83,7 @@ from hearsee.audio.arrays import MicArray, load_array
 from hearsee.config import (
     as_float_array,
     check_keys,
+    expand_path,
     finite_number,
     load_yaml,
     names_a_file,
@@ -269,9 +270,11 @@ def _mapping(d: Mapping[str, Any], key: str, where: str, required: bool = False
     return v
 
 
-def _resolve(p: str | Path, base: Path) -> Path:
-    q = Path(p).expanduser()
-    return q if q.is_absolute() else base / q
+def _resolve(p: str | Path, base: Path, where: str) -> Path:
+    """``p`` (the robot file's path ``where``) expanded (:func:`~hearsee.config.expand_path`)
+    and, when relative, taken from the robot file's folder ``base``."""
+    q = expand_path(p, where)
+    return q if q.is_absolute() else expand_path(base / q, where)
 
 
 def _device(v: Any, where: str, base: Path, *, camera: bool) -> DeviceSpec:
@@ -292,7 +295,7 @@ def _device(v: Any, where: str, base: Path, *, camera: bool) -> DeviceSpec:
         return s
     if "://" in s:
         return s
-    p = _resolve(s, base)
+    p = _resolve(s, base, where)
     if not p.exists():
         raise ConfigError(f"{where}: no such camera device or video file {s!r}")
     return str(p)
@@ -316,7 +319,7 @@ def _array(spec: Any, where: str, base: Path) -> tuple[MicArray, str]:
     preset, or like the file, was loaded instead."""
     if not isinstance(spec, str) or not spec.strip():
         raise ConfigError(f"{where}: expected a preset name or YAML path, got {spec!r}")
-    path = _resolve(spec, base)
+    path = _resolve(spec, base, where)
     if not path.exists() and names_a_file(spec):
         raise ConfigError(f"{where}: array file {spec!r} not found in {base}")
     try:
@@ -403,7 +406,7 @@ def _cameras(d: Mapping[str, Any], where: str, base: Path) -> CameraConfig:
                           "(create one with `hearsee calibrate`)")
     if not isinstance(d["calib"], str):
         raise ConfigError(f"{where}.calib: expected a file path, got {d['calib']!r}")
-    calib = _resolve(d["calib"], base)
+    calib = _resolve(d["calib"], base, f"{where}.calib")
     if not calib.exists():  # (a folder: load_rig's InputFileError says so, below)
         raise ConfigError(f"{where}.calib: calibration file {d['calib']!r} not found "
                           "(create one with `hearsee calibrate`)")
@@ -513,8 +516,9 @@ def _output(d: Mapping[str, Any], where: str, base: Path) -> OutputConfig:
     for k in _OUTPUT:
         if k in d and (not isinstance(d[k], str) or not d[k].strip()):
             raise ConfigError(f"{where}.{k}: expected a path, got {d[k]!r}")
-    report = _resolve(d.get("report", "hearsee-run"), base)
-    jsonl = _resolve(d["jsonl"], base) if "jsonl" in d else report / "updates.jsonl"
+    report = _resolve(d.get("report", "hearsee-run"), base, f"{where}.report")
+    jsonl = (_resolve(d["jsonl"], base, f"{where}.jsonl") if "jsonl" in d
+             else report / "updates.jsonl")
     if jsonl.suffix.lower() not in (".jsonl", ".ndjson", ".json"):
         raise ConfigError(f"{where}.jsonl: expected a .jsonl file name, got {d['jsonl']!r}")
     return OutputConfig(jsonl, report)

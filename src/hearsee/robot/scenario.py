@@ -64,12 +64,14 @@ import numpy as np
 from hearsee.audio.propagation import image_sources
 from hearsee.config import (
     check_keys,
+    expand_path,
     finite_number,
     is_real,
     load_yaml,
     name_text,
     names_a_file,
     number,
+    real_entries,
     whole_number,
 )
 from hearsee.errors import ConfigError, HearseeError
@@ -219,6 +221,9 @@ class Scenario:
 
 # ---------------------------------------------------------------------- parsing helpers
 def _vec(v: Any, n: int | None, where: str) -> np.ndarray:
+    # (YAML's yes/on/true was read as 1.0 m and "7" as 7 m, as the single-number fields refuse)
+    if not real_entries(v):
+        raise ConfigError(f"{where}: expected numbers, got {v!r}")
     try:
         a = np.asarray(v, dtype=float)
     except (TypeError, ValueError):
@@ -475,9 +480,11 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
     array = rob.get("array", base.robot.array)
     if not isinstance(array, str):
         raise ConfigError(f"{rw}.array: expected a preset name or file path, got {array!r}")
-    if base_dir is not None and not Path(array).expanduser().is_absolute():
+    # (a "~user/..." without a home folder, a NUL: pathlib's RuntimeError, os's ValueError)
+    given = expand_path(array, f"{rw}.array")
+    if base_dir is not None and not given.is_absolute():
         # (it was read from the working directory, unlike every path of the robot file)
-        near = Path(base_dir) / Path(array).expanduser()
+        near = expand_path(Path(base_dir) / given, f"{rw}.array")
         # (a name with an upper-case suffix, mics.YAML or mics.Yml, was not: missing next
         # to the scenario it was read from the working directory, or called an unknown preset)
         if names_a_file(array) or near.is_file():

@@ -60,7 +60,7 @@ from hearsee.config import (
     write_file,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, InputFileError
-from hearsee.geometry import as_point
+from hearsee.geometry import as_point, norm_scale
 
 __all__ = [
     "MAX_SPEED_FRACTION",
@@ -285,16 +285,23 @@ def _trajectory_row(path: Path, line: int, row: list[str]) -> list[float]:
 
 
 def save_trajectory(traj: Trajectory, path: str | Path, times: ArrayLike | None = None) -> None:
-    """Write ``traj`` (sampled at ``times`` if given, else its own knots) as CSV ``t,x,y,z``."""
+    """Write ``traj`` (sampled at ``times`` if given, else its own knots) as CSV ``t,x,y,z``:
+    times in full precision (the shortest text that reads back as the same float), positions
+    to the micrometre; what :func:`load_trajectory` reads back. The times must be finite and
+    strictly increasing (GeometryError): knots 1e-7 s apart were written as one time, and NaN
+    times as "nan" rows, files load_trajectory refused."""
     _check_trajectory(traj, "traj")
     # (a scalar time raised a builtin TypeError, text a ValueError)
     t = traj.t if times is None else np.atleast_1d(_times(times)).ravel()
+    if not (np.all(np.isfinite(t)) and np.all(np.diff(t) > 0)):
+        raise GeometryError("save_trajectory: times must be finite and strictly increasing "
+                            "seconds")
     p = traj.at(t)
     buf = io.StringIO(newline="")
     w = csv.writer(buf)
     w.writerow(["t", "x", "y", "z"])
     for ti, pi in zip(t, p, strict=True):
-        w.writerow([f"{ti:.6f}", f"{pi[0]:.6f}", f"{pi[1]:.6f}", f"{pi[2]:.6f}"])
+        w.writerow([repr(float(ti)), f"{pi[0]:.6f}", f"{pi[1]:.6f}", f"{pi[2]:.6f}"])
     # (replaced once complete: written in place, a write that failed part way truncated the
     # earlier file; config.replacing)
     write_file(output_file(path), buf.getvalue())
@@ -452,11 +459,21 @@ def retarded_delays(traj: Trajectory, mics: ArrayLike, t: ArrayLike, c: float,
                 f"{traj.t[k + 1]:g} s; moving sources must be slower than "
                 f"{MAX_SPEED_FRACTION:g} times the speed of sound ({MAX_SPEED_FRACTION * c:.1f} "
                 "m/s)")
-    tau = np.linalg.norm(traj.at(tq)[None, :, :] - m[:, None, :], axis=-1) / c
+    tau = _distance(traj.at(tq)[None, :, :] - m[:, None, :]) / c
     for _ in range(n_iter):
-        r = np.linalg.norm(traj.at(tq[None, :] - tau) - m[:, None, :], axis=-1)
+        r = _distance(traj.at(tq[None, :] - tau) - m[:, None, :])
         tau = r / c
     return tau, r
+
+
+def _distance(d: NDArray) -> NDArray:
+    """Lengths of the vectors ``d`` (..., 3), metres, without overflow: a source 1e200 m away
+    squared to inf with numpy's RuntimeWarning, and was then said to be "beyond float range"
+    (:func:`hearsee.geometry.norm_scale`; ordinary lengths bit for bit as np.linalg.norm's)."""
+    if not np.abs(d).max(initial=0.0) > 1e150:  # (the usual case, at one pass's cost)
+        return np.linalg.norm(d, axis=-1)
+    k = norm_scale(d)
+    return k[..., 0] * np.linalg.norm(d / k, axis=-1)
 
 
 def _mics_and_c(mics: MicArray | ArrayLike, speed_of_sound: float | None) -> tuple[NDArray, float]:
