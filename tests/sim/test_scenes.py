@@ -520,3 +520,14 @@ def test_noise_seed_changes_the_sensor_noise_only():
     for bad in (-1, 1.5, "3", True):
         with pytest.raises(ConfigError, match="noise_seed"):
             render_scene(spec, rig, noise_seed=bad)
+
+
+def test_a_malformed_view_is_a_geometry_error():
+    """From an audit: view=("a", "b") was numpy's ValueError, (R,) an IndexError, 5 a
+    TypeError."""
+    rig = default_rig(160, 120, thermal_size=(40, 30))
+    spec = SceneSpec([Entity("person", x=0.0, z=3.0)])
+    for bad in (("a", "b"), (np.eye(3),), 5, "view"):
+        with pytest.raises(GeometryError, match=r"view must be \(R, C\)"):
+            render_scene(spec, rig, view=bad)
+    assert render_scene(spec, rig, view=(np.eye(3), np.zeros(3))).left.shape[:2] == (120, 160)

@@ -36,7 +36,7 @@ a test bed for the geometry of ch. 7, not a photo-realistic simulator.
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -47,7 +47,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
-from hearsee.config import as_path, finite_number, is_real, true_or_false, whole_number
+from hearsee.config import (
+    as_path,
+    finite_number,
+    is_real,
+    real_entries,
+    true_or_false,
+    whole_number,
+)
 from hearsee.errors import ConfigError, GeometryError, ImageInputError, InputFileError
 from hearsee.vision.camera import Camera, StereoRig, save_rig
 from hearsee.vision.humans import TORSO_HEIGHT_FRACTION
@@ -951,6 +958,11 @@ def render_scene(spec: SceneSpec, rig: StereoRig | None = None, *, noise_std: fl
     if view is None:
         Rv, Cv = np.eye(3), np.zeros(3)
     else:
+        # (text was numpy's ValueError, a 1-tuple an IndexError, a number a TypeError)
+        if (isinstance(view, str) or not isinstance(view, Sequence) or len(view) != 2
+                or not all(real_entries(v) for v in view)):
+            raise GeometryError("render_scene: view must be (R, C): a 3x3 rotation and the "
+                                f"camera's centre in metres, got {view!r:.60}")
         Rv = np.asarray(view[0], dtype=float)
         Rv = Rv.reshape(3, 3) if Rv.size == 9 else Rv
         Cv = np.asarray(view[1], dtype=float).reshape(-1)
