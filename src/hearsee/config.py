@@ -113,6 +113,12 @@ def input_file(path: str | Path, kind: str = "file", hint: str = "") -> Path:
     return p
 
 
+def _shown(name: str) -> str:
+    """A path's text for a message, cut to 60 characters (a name the system refuses may be
+    thousands long)."""
+    return name if len(name) <= 60 else name[:57] + "..."
+
+
 def expand_path(path: str | Path, what: str, error: type[Exception] = ConfigError) -> Path:
     """``path`` with a leading ``~`` / ``~user`` expanded, as a Path the system can look at,
     else ``error`` naming ``what``: a NUL character (os.stat's "embedded null byte"
@@ -120,7 +126,7 @@ def expand_path(path: str | Path, what: str, error: type[Exception] = ConfigErro
     system refuses (too long: an OSError) were tracebacks of the robot file's and the
     scenario's paths."""
     text = str(path)
-    shown = text if len(text) <= 60 else text[:57] + "..."
+    shown = _shown(text)
     if "\0" in text:
         raise error(f"{what}: {shown!r} holds a NUL character: not a file name")
     try:
@@ -145,9 +151,7 @@ def refused_name(path: str | Path) -> Iterator[None]:
     except InputFileError:  # (one of the checks' own: an OSError too)
         raise
     except OSError as exc:
-        name = str(path)
-        shown = name if len(name) <= 60 else name[:57] + "..."
-        raise InputFileError(f"{shown}: the system refuses this path "
+        raise InputFileError(f"{_shown(str(path))}: the system refuses this path "
                              f"({exc.strerror or exc})") from None
 
 
