@@ -1235,7 +1235,9 @@ DEAD_MAX_CONFIDENCE = 1.3
 
 @functools.lru_cache(maxsize=16)
 def _window_noise_profile(window: str | tuple, frame_len: int, nfft: int) -> NDArray:
-    """:func:`_lag_noise_profile` of the analysis window (read-only: shared between calls)."""
+    """:func:`_lag_noise_profile` of the analysis window ``window`` of ``frame_len`` samples
+    (read-only: shared between calls; every estimate of a recording of one pair computed it
+    afresh, and the dead-microphone test reads it too)."""
     p = _lag_noise_profile(_window(window, frame_len), nfft)
     p.flags.writeable = False
     return p
@@ -2444,7 +2446,7 @@ def estimate_tdoas(
 
     redundant = pair_closure_projector(tuple(prs), arr.n_mics) is not None  # a closed cycle
     frame_cfar = not redundant and min_frame_peak_snr > 0
-    noise_profile = _lag_noise_profile(win, nfft) if not redundant else None
+    noise_profile = _window_noise_profile(window, frame_len, nfft) if not redundant else None
 
     def corr(Pb: NDArray) -> NDArray:
         full = np.empty(Pb.shape[:-1] + (n_bins,), dtype=Pb.dtype)
@@ -2622,8 +2624,8 @@ def estimate_tdoas(
             inverted = _warn_inverted(r_sum, max_lag, main_lobe, prs, arr.n_mics)
             if not inverted:  # (an inverted microphone's pairs peak nowhere either)
                 dead = _warn_dead(r_sum, own_peaks, own_conf, max_lag, main_lobe, prs,
-                                  arr.n_mics, lambda: _window_noise_profile(window, frame_len,
-                                                                            nfft))
+                                  arr.n_mics,
+                                  lambda: _window_noise_profile(window, frame_len, nfft))
     t = (np.arange(n_frames) * hop + frame_len / 2.0) / fs
     return TdoaFrames(t, tdoa, conf, valid, prs, summary, summary_conf, max_lag / fs, fs,
                       acc / max(n_acc, 1) if n_acc else None, band_bins, nfft,
