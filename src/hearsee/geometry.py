@@ -45,6 +45,7 @@ __all__ = [
     "robot_to_array",
     "sph_to_cart",
     "unit_vector_deg",
+    "vector_length",
     "wrap_deg",
     "wrap_rad",
 ]
@@ -104,6 +105,14 @@ def norm_scale(v: ArrayLike) -> NDArray:
     big = np.max(np.abs(p), axis=-1, keepdims=True)
     scale = np.isfinite(big) & ((big > _SQUARE_SAFE) | ((big > 0) & (big < 1.0 / _SQUARE_SAFE)))
     return np.where(scale, big, 1.0)
+
+
+def vector_length(v: ArrayLike) -> NDArray:
+    """Euclidean lengths ``(...)`` of vectors ``(..., 3)`` without overflow or underflow
+    (:func:`norm_scale`): 1.41e300 for (1e300, 1e300, 0), not inf; ordinary vectors' lengths
+    bit for bit as ``np.linalg.norm``'s."""
+    k = norm_scale(v)
+    return k[..., 0] * np.linalg.norm(np.asarray(v, dtype=float) / k, axis=-1)
 
 
 def cart_to_sph(xyz: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:

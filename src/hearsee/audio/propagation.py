@@ -36,7 +36,7 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
-from hearsee.geometry import norm_scale
+from hearsee.geometry import norm_scale, vector_length
 
 __all__ = [
     "MAX_IMAGE_ORDER",
@@ -297,8 +297,7 @@ def simulate_free_field(
         gains = np.ones(len(pos))
     else:
         d = pos - s
-        k = norm_scale(d)  # (a source 1e300 m away: that distance, refused just below)
-        r = k[:, 0] * np.linalg.norm(d / k, axis=1)
+        r = vector_length(d)  # (a source 1e300 m away: that distance, refused just below)
         if np.any(r < 1e-3):
             raise GeometryError("the source coincides with a microphone")
         # every microphone must hear it: the farthest one's direct sound arriving after the

@@ -60,7 +60,7 @@ from hearsee.config import (
     write_file,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, InputFileError
-from hearsee.geometry import as_point, norm_scale
+from hearsee.geometry import as_point, vector_length
 
 __all__ = [
     "MAX_SPEED_FRACTION",
@@ -469,11 +469,11 @@ def retarded_delays(traj: Trajectory, mics: ArrayLike, t: ArrayLike, c: float,
 def _distance(d: NDArray) -> NDArray:
     """Lengths of the vectors ``d`` (..., 3), metres, without overflow: a source 1e200 m away
     squared to inf with numpy's RuntimeWarning, and was then said to be "beyond float range"
-    (:func:`hearsee.geometry.norm_scale`; ordinary lengths bit for bit as np.linalg.norm's)."""
+    (:func:`hearsee.geometry.vector_length`; ordinary lengths bit for bit as
+    np.linalg.norm's)."""
     if not np.abs(d).max(initial=0.0) > 1e150:  # (the usual case, at one pass's cost)
         return np.linalg.norm(d, axis=-1)
-    k = norm_scale(d)
-    return k[..., 0] * np.linalg.norm(d / k, axis=-1)
+    return vector_length(d)
 
 
 def _mics_and_c(mics: MicArray | ArrayLike, speed_of_sound: float | None) -> tuple[NDArray, float]:
