@@ -99,7 +99,7 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
-from hearsee.geometry import norm_scale, wrap_deg
+from hearsee.geometry import as_points, norm_scale, wrap_deg
 
 __all__ = [
     "CODE_VERSION",
@@ -503,7 +503,7 @@ class MaskModel:
         free-field pressure at the array origin.
         """
         far_field = true_or_false("far_field", far_field)  # ("no": the inside check skipped)
-        s = _source_points(source)
+        s = np.atleast_2d(as_points(source, "source"))
         if s.ndim != 2 or s.shape[-1] != 3 or not np.all(np.isfinite(s)):
             raise GeometryError(f"source must be finite [x, y, z] point(s), got shape {s.shape}")
         if np.any(np.linalg.norm(s, axis=1) < 1e-9):
@@ -526,7 +526,7 @@ class MaskModel:
         the model grid, ``H(0)`` = the free-field value; above ``f_max`` a raised-cosine taper over
         the top 10 % of the band brings ``H`` to zero (``taper=False``: hold the last value).
         """
-        s = _source_points(source)
+        s = np.atleast_2d(as_points(source, "source"))
         # (NaN or inf gave NaN responses without a word; text was numpy's ValueError)
         fq = np.asarray(freqs_hz, dtype=float) if real_entries(freqs_hz) else None
         if fq is None or fq.ndim != 1 or not np.all(np.isfinite(fq) & (fq >= 0)):
@@ -637,7 +637,7 @@ class MaskModel:
         masked pair measures, which the free-field TDOA of its microphones
         (:meth:`hearsee.audio.arrays.MicArray.tdoa`) is not (the sound goes round the body).
         Returns (S,) seconds."""
-        s = _source_points(source)
+        s = np.atleast_2d(as_points(source, "source"))
         if true_or_false("far_field", far_field) and s.ndim == 2:
             # (only the direction counts: (1e300, 1e300, 0) overflowed the norm to inf)
             big = np.max(np.abs(s), axis=-1, keepdims=True)
@@ -650,14 +650,6 @@ class MaskModel:
         """A bound on |ITD| (s): half the path around the body plus the spacing, over c."""
         ext = np.ptp(self.mesh.vertices, axis=0)
         return float((self.array.aperture + 0.5 * np.pi * 0.5 * ext.max()) / self.c)
-
-
-def _source_points(source: ArrayLike) -> NDArray:
-    """``source`` as a 2-D float array (one point per row, checked further by the caller), or
-    a GeometryError for anything but numbers (text was numpy's ValueError)."""
-    if not real_entries(source):
-        raise GeometryError(f"source must be [x, y, z] point(s) in metres, got {source!r:.60}")
-    return np.atleast_2d(np.asarray(source, dtype=float))
 
 
 def _check_cost_weights(phase_weight: float, sigma_iid_db: float) -> None:
@@ -770,8 +762,7 @@ def simulate_masked(signal: ArrayLike, fs: float, array: MicArray | str | Path |
     fs = check_fs(fs)  # (0 divided by zero; a negative rate gave garbage)
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
     far_field = true_or_false("far_field", far_field)
-    pts = _source_points(source)  # (text: numpy's ValueError)
-    s = pts[0] if np.ndim(source) == 1 else pts
+    s = as_points(source, "source")  # (text: numpy's ValueError)
     if s.shape != (3,) or not np.all(np.isfinite(s)):
         raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")
     k = norm_scale(s)  # (a source 1e300 m away: its norm overflowed, with RuntimeWarnings)
