@@ -133,26 +133,25 @@ def expand_path(path: str | Path, what: str, error: type[Exception] = ConfigErro
         p = Path(text).expanduser()
     except RuntimeError:
         raise error(f"{what}: {shown!r}: no such user's home folder") from None
-    try:
+    with refused_name(text, what, error):
         p.exists()
-    except OSError as exc:
-        raise error(f"{what}: {shown}: the system refuses this path "
-                    f"({exc.strerror or exc})") from None
     return p
 
 
 @contextlib.contextmanager
-def refused_name(path: str | Path) -> Iterator[None]:
+def refused_name(path: str | Path, what: str | None = None,
+                 error: type[Exception] = InputFileError) -> Iterator[None]:
     """An OSError of looking at ``path`` (a name too long for the system: Path.is_dir and
-    exists raise ENAMETOOLONG rather than answer False) as an InputFileError, its name cut
-    to 60 characters: a bare OSError from the library before."""
+    exists raise ENAMETOOLONG rather than answer False) as ``error``, prefixed by ``what``
+    when given, its name cut to 60 characters: a bare OSError from the library before."""
     try:
         yield
     except InputFileError:  # (one of the checks' own: an OSError too)
         raise
     except OSError as exc:
-        raise InputFileError(f"{_shown(str(path))}: the system refuses this path "
-                             f"({exc.strerror or exc})") from None
+        where = "" if what is None else f"{what}: "
+        raise error(f"{where}{_shown(str(path))}: the system refuses this path "
+                    f"({exc.strerror or exc})") from None
 
 
 def same_file(a: str | Path, b: str | Path) -> bool:

@@ -1692,6 +1692,12 @@ def _check_config(cfg: StreamConfig) -> None:
         if not (is_real(v) and v > 0):
             raise bad(name, "a finite number > 0" + (" or None" if name in _POSITIVE_OR_NONE
                                                       else ""))
+        # (noises whose squares leave the normal floats: 1e300 overflowed in the trackers,
+        # 1e-170 squared to a zero variance)
+        if name.startswith("sigma_"):
+            lo, hi = ITD_STD_RANGE_S if name == "sigma_tdoa_s" else NOISE_RANGE
+            if not lo <= v <= hi:
+                raise bad(name, f"a number in [{lo:g}, {hi:g}]")
     for name, (lo, hi) in _WITHIN.items():
         v = getattr(cfg, name)
         if not (is_real(v) and lo <= v <= hi):
@@ -1704,14 +1710,6 @@ def _check_config(cfg: StreamConfig) -> None:
                  "prefer_frame"):
         if not isinstance(getattr(cfg, name), bool | np.bool_):
             raise bad(name, "True or False")
-    # (noises whose squares leave the normal floats: 1e300 overflowed in the trackers, 1e-170
-    # squared to a zero variance)
-    for name in _POSITIVE + _POSITIVE_OR_NONE:
-        v = getattr(cfg, name)
-        if name.startswith("sigma_") and v is not None:
-            lo, hi = ITD_STD_RANGE_S if name == "sigma_tdoa_s" else NOISE_RANGE
-            if not lo <= v <= hi:
-                raise bad(name, f"a number in [{lo:g}, {hi:g}]")
     pfc = cfg.prefer_frame_confidence
     if not ((is_real(pfc) or pfc == math.inf) and pfc > 0):  # (inf = never)
         raise bad("prefer_frame_confidence", "> 0 (inf = never)")
