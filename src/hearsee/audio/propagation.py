@@ -408,6 +408,7 @@ def room_impulse_responses(
     max_order: int | None = None,
     speed_of_sound: float = 343.0,
     align: bool = True,
+    directivities: list | None = None,
 ) -> NDArray:
     """Room impulse responses of a shoebox room from pyroomacoustics' image-source model.
 
@@ -432,6 +433,11 @@ def room_impulse_responses(
         Remove the fractional-delay filter latency so that sample 0 is the emission time (the
         direct path to microphone k peaks at ``r_k / c * fs``). The filters' pre-ringing
         before time 0 is then cut off (affects only sources closer than ~40 samples * c).
+    directivities : list, optional
+        One pyroomacoustics directivity per microphone (e.g. a
+        ``pyroomacoustics.directivities.MeasuredDirectivity`` of impulse responses, applied
+        to each image source by its direction of arrival; the masked arrays' reflections,
+        :func:`hearsee.audio.mask.simulate_masked_room`); None = omnidirectional.
 
     Returns
     -------
@@ -472,7 +478,13 @@ def room_impulse_responses(
     room = pra.ShoeBox(dim, fs=int(round(fs)), materials=materials, max_order=int(order))
     room.set_sound_speed(float(speed_of_sound))
     room.add_source(src)
-    room.add_microphone_array(mics.T.copy())
+    if directivities is None:
+        room.add_microphone_array(mics.T.copy())
+    else:
+        if len(directivities) != len(mics):
+            raise ConfigError(f"{len(directivities)} directivities for {len(mics)} microphones")
+        room.add_microphone_array(pra.MicrophoneArray(mics.T.copy(), room.fs,
+                                                      directivity=list(directivities)))
     room.compute_rir()
     rirs = [np.asarray(room.rir[m][0], dtype=float) for m in range(len(mics))]
     out = np.zeros((len(rirs), max(len(h) for h in rirs)))

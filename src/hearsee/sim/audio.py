@@ -165,12 +165,17 @@ def render(signal: ArrayLike, fs: float, array: MicArray, source: ArrayLike,
     if mic_positions is not None:
         mic_positions = _mic_positions(array, mic_positions)
     if array.mask is not None:  # masked two-microphone array: the mask's diffraction (BEM)
-        from hearsee.audio.mask import simulate_masked
+        from hearsee.audio.mask import simulate_masked, simulate_masked_room
 
-        if room is not None or mic_positions is not None:
-            raise ConfigError(f"array {array.name!r} has a mask: masked arrays are simulated in "
-                              "free field with the head fixed (no room, no turned microphones)")
-        return simulate_masked(signal, fs, array, src, far_field=far_field)
+        if mic_positions is not None:
+            raise ConfigError(f"array {array.name!r} has a mask: masked arrays are simulated "
+                              "with the head fixed (no turned microphones)")
+        if room is None:
+            return simulate_masked(signal, fs, array, src, far_field=far_field)
+        if far_field:
+            raise ConfigError("far_field applies to free field only; omit the room or far_field")
+        return simulate_masked_room(signal, fs, array, src, room["room_dim"], room["rt60"],
+                                    room["array_at"], max_order=room.get("max_order"))
     if room is None:
         mics = array.positions if mic_positions is None else mic_positions
         return simulate_free_field(signal, fs, mics, src, speed_of_sound=array.speed_of_sound,
