@@ -79,6 +79,13 @@ class TonalNoiseWarning(UserWarning):
     the wiring, a motor's or fan's whine): its frequencies were left out of the estimate."""
 
 
+class MaskFitWarning(UserWarning):
+    """A masked pair's level and phase differences fit its free-field model poorly (a
+    reverberant room, strong noise, a source that moved during the recording, or a recording
+    not made through this mask): the 360-degree azimuth and its front/back decision are
+    unreliable."""
+
+
 class DegenerateInputWarning(UserWarning):
     """The input is valid but degenerate for the task (stereo images that barely match, a flat
     thermal frame, image points outside the recording): the answer describes the input more

@@ -10,7 +10,13 @@ from hearsee.audio import mask
 from hearsee.audio.arrays import MicArray
 from hearsee.audio.signals import white_noise
 from hearsee.config import load_yaml
-from hearsee.errors import AudioInputError, ChannelSyncWarning, ConfigError, GeometryError
+from hearsee.errors import (
+    AudioInputError,
+    ChannelSyncWarning,
+    ConfigError,
+    GeometryError,
+    MaskFitWarning,
+)
 
 FS = 16000
 
@@ -433,6 +439,7 @@ def test_moving_masked_simulation(model):
         simulate_moving_masked(s, FS, model, traj, snr_db="20")
 
 
+@pytest.mark.filterwarnings("ignore::hearsee.errors.MaskFitWarning")
 def test_moving_masked_recording_is_smoothed_without_lag(model):
     """``hearsee localize`` of a masked pair smooths the frames' ITDs as on every array (the
     adaptive noise, forward and backward) -- the fixed forward filter it ran until 2026-12-04
@@ -447,7 +454,9 @@ def test_moving_masked_recording_is_smoothed_without_lag(model):
     x, truth_doc = simulate_moving_recording(model.array, traj, "noise", duration_s=3.0, fs=FS,
                                              snr_db=30.0, seed=6)
     assert x.shape == (2, 3 * FS) and truth_doc["moving"]
-    doc = mask.localize_recording_mask(x, FS, model)
+    # (the whole-recording summary of a source sweeping 180 deg fits no one direction)
+    with pytest.warns(MaskFitWarning, match="a moving source"):
+        doc = mask.localize_recording_mask(x, FS, model)
     assert doc["kalman_noise"] == "adaptive" and doc["kalman_r_std_s"] == 1.0 / FS
     # the wiring checks' summary entries, as every array's document (absent until 2026-12-04)
     assert doc["summary"]["inverted_microphones"] == [] == list(doc["summary"]["sync_offsets_s"])
@@ -560,7 +569,11 @@ def test_cli_simulates_a_masked_array_in_a_room(asym, tmp_path, capsys):
     assert truth["room"]["rt60"] == 0.3 and "0-1" in truth["mask_itd_s"]
     capsys.readouterr()
     assert main(["localize", str(wav), "--array", str(spec), "--format", "json"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    cap = capsys.readouterr()
+    out = json.loads(cap.out)
+    # the room's reflections: the cues fit the free-field model poorly, and the user is told
+    assert out["summary"]["cues_fit"] is False
+    assert cap.err.count("fit its free-field model poorly") == 1
     az = out["summary"]["azimuth_deg"]  # (truth 128.7 deg: behind, left)
     # the right half, and near: 14.6 deg off (reflections pull the ITD and the level cues)
     assert abs((az - truth["azimuth_deg"] + 180) % 360 - 180) < 20.0 and abs(az) > 90
@@ -901,3 +914,34 @@ def test_sphere_impulse_responses_are_the_models_impulse_responses(asym):
         ref = asym.impulse_responses(u[k], FS, irs.shape[-1], far_field=True)
         assert lead == irs.shape[-1] // 4
         np.testing.assert_allclose(irs[:, k], ref, atol=1e-5 * np.abs(ref).max())
+
+
+def test_cues_fit_a_free_field_masked_recording_and_not_a_bare_one(asym):
+    """A bare pair's recording read as masked (the same microphone positions, no mask) was
+    localized without a word; its level differences do not fit the mask's model. A masked
+    recording in free field fits; one in a reverberant room does not (the rule and its held-out
+    run: mask.FIT_PHASE_MIN)."""
+    import warnings
+
+    from hearsee.audio.propagation import simulate_free_field
+
+    sig = white_noise(1.0, FS, rng=6)
+    src = _src(60, 1.5)
+    masked = mask.simulate_masked(sig, FS, asym, src, snr_db=20, rng=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MaskFitWarning)
+        doc = mask.localize_recording_mask(masked, FS, asym)
+    assert doc["summary"]["cues_fit"] is True
+    assert doc["summary"]["phase_match"] >= mask.FIT_PHASE_MIN
+    assert doc["summary"]["iid_misfit"] <= mask.FIT_IID_MAX
+    bare_pair = MicArray(asym.array.positions, asym.c, "bare")
+    bare = simulate_free_field(sig, FS, bare_pair, src, snr_db=20, rng=1)
+    with pytest.warns(MaskFitWarning, match="fit its free-field model poorly"):
+        doc = mask.localize_recording_mask(bare, FS, asym)
+    assert doc["summary"]["cues_fit"] is False
+    est = mask.localize_mask(bare, FS, asym)
+    assert not est.cues_fit and est.iid_misfit > mask.FIT_IID_MAX
+    room = mask.simulate_masked_room(sig, FS, asym, src, ROOM, 0.6, ARRAY_AT, snr_db=20, rng=1)
+    with pytest.warns(MaskFitWarning):
+        doc = mask.localize_recording_mask(room, FS, asym)
+    assert doc["summary"]["phase_match"] < mask.FIT_PHASE_MIN
