@@ -476,8 +476,17 @@ class MaskModel:
     def _compute(self) -> bem.AdjointSolution:
         kw = dict(mesh=self.mesh, freqs=self.freqs, eval_points=self.array.positions,
                   speed_of_sound=self.c, on_surface_tol=self.geometry.tolerance)
+        return self._with_bar(
+            f"{self.array.name}: {self.mesh.n_panels} panels, {len(self.freqs)} frequencies "
+            "(first use; cached after)", len(self.freqs),
+            lambda advance: bem.solve_adjoint(**kw, progress=advance))
+
+    def _with_bar(self, description: str, total: int, work: Any) -> Any:
+        """``work(advance)`` under a transient rich progress bar on stderr (when
+        :attr:`progress` and stderr is a terminal, and no other bar is showing), ``advance(n)``
+        moving it by ``n`` of ``total`` steps; without a bar ``advance`` is None."""
         if not (self.progress and sys.stderr.isatty()):
-            return bem.solve_adjoint(**kw)
+            return work(None)
         from rich.console import Console
         from rich.errors import LiveError
         from rich.progress import (
@@ -495,12 +504,10 @@ class MaskModel:
         try:
             bar.start()
         except LiveError:  # another progress display is active (e.g. a CLI bar): no nested bar
-            return bem.solve_adjoint(**kw)
+            return work(None)
         try:
-            task = bar.add_task(f"{self.array.name}: {self.mesh.n_panels} panels, "
-                                f"{len(self.freqs)} frequencies (first use; cached after)",
-                                total=len(self.freqs))
-            return bem.solve_adjoint(**kw, progress=lambda n: bar.advance(task, n))
+            task = bar.add_task(description, total=total)
+            return work(lambda n: bar.advance(task, n))
         finally:
             bar.stop()
 
@@ -600,7 +607,18 @@ class MaskModel:
             except (OSError, KeyError, ValueError):
                 h = None
         if h is None or h.shape != (n, 2, len(self.freqs)):
-            h = bem.transfer_functions(self.solution, u, True, self.c).astype(np.complex64)
+            sol, step = self.solution, 256
+
+            def directions(advance: Any) -> NDArray:
+                out = []
+                for k in range(0, n, step):
+                    out.append(bem.transfer_functions(sol, u[k:k + step], True, self.c))
+                    if advance is not None:
+                        advance(len(out[-1]))
+                return np.concatenate(out).astype(np.complex64)
+
+            h = self._with_bar(f"{self.array.name}: responses from {n} directions (first use "
+                               "in a room; cached after)", n, directions)
             if self.cache:
                 self._save(path, h=h)
         self._tables[("sphere", n)] = (u, h)
@@ -851,6 +869,12 @@ def _masked_inputs(signal: ArrayLike, fs: float, array: MicArray | str | Path | 
         raise AudioInputError("signal contains NaN or inf samples")
     fs = check_fs(fs)  # (0 divided by zero; a negative rate gave garbage)
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
+    return (model, x, fs, *_source_point(source))
+
+
+def _source_point(source: ArrayLike) -> tuple[NDArray, float]:
+    """A masked simulator's source ``(point (3,), its distance from the origin in metres)``;
+    GeometryError unless a finite non-zero [x, y, z]."""
     s = as_points(source, "source")  # (text: numpy's ValueError)
     if s.shape != (3,) or not np.all(np.isfinite(s)):
         raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")
@@ -858,7 +882,7 @@ def _masked_inputs(signal: ArrayLike, fs: float, array: MicArray | str | Path | 
     d0 = float(k[0] * np.linalg.norm(s / k))
     if d0 < 1e-9:
         raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")
-    return model, x, fs, s, d0
+    return s, d0
 
 
 #: Budget of :func:`simulate_masked_room`'s directional rendering: image sources times the
@@ -967,9 +991,7 @@ def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | Mask
 
     model = array if isinstance(array, MaskModel) else MaskModel(array)
     fs = check_fs(fs)
-    s = as_points(source, "source")
-    if s.shape != (3,) or not np.all(np.isfinite(s)):
-        raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")
+    s, _ = _source_point(source)
     if model.geometry_inside(s[None])[0]:
         raise GeometryError("the source lies inside the mask body")
     dim = _room_dim(room_dim)
