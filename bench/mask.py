@@ -23,7 +23,8 @@ an estimate counts as a front/back error with a 180-deg azimuth error -- for the
 source (``MaskLocalization.detected``; before, the masks always answered). Reported per
 signal (white noise, synthetic male and female voices), field and SNR: the masks' detected
 share, front/back correct rate, 360-degree azimuth RMSE, median absolute error, mean
-front/back confidence of the detected recordings, and for mask2 the
+front/back confidence of the detected recordings, the share of them whose cues fit the model
+(``MaskLocalization.cues_fit``; ``hearsee localize`` warns for the others), and for mask2 the
 RMSE of the sources more than 3 deg off the median plane (diagnostic: at 0 / 180 deg a
 left/right symmetric mask has ITD = IID = 0 for the source and its mirror alike). The design
 measure :func:`hearsee.audio.mask.front_back_margin` (the classifier's noiseless cost of the
@@ -137,6 +138,11 @@ def _stats(est: list, true: np.ndarray) -> tuple[float, float, float]:
             float(np.median(err)))
 
 
+def _share(flags: list) -> float:
+    """Percentage of True in ``flags`` (NaN for none)."""
+    return 100.0 * float(np.mean(flags)) if flags else float("nan")
+
+
 def run(trials: int, snrs: list[float], duration: float, seed: int, mismatch: bool
         ) -> tuple[list[dict], dict[str, MaskModel]]:
     models = {k: MaskModel(p) for k, p in DESIGNS}
@@ -171,6 +177,8 @@ def run(trials: int, snrs: list[float], duration: float, seed: int, mismatch: bo
                         res.setdefault(f"{k}_conf", []).append(est.confidence if est.detected
                                                                else np.nan)
                         res.setdefault(f"{k}_det", []).append(est.detected)
+                        if est.detected:
+                            res.setdefault(f"{k}_fit", []).append(est.cues_fit)
                         if k in perts:
                             xm = simulate_masked(sig, FS, perts[k], src, snr, nseed,
                                                  far_field=far)
@@ -188,6 +196,7 @@ def run(trials: int, snrs: list[float], duration: float, seed: int, mismatch: bo
                     c = np.array(res[f"{k}_conf"], float)
                     row[f"{k}_conf"] = float(np.nanmean(c)) if np.isfinite(c).any() else np.nan
                     row[f"{k}_det"] = 100.0 * float(np.mean(res[f"{k}_det"]))
+                    row[f"{k}_fit"] = _share(res.get(f"{k}_fit", []))
                 for name in [*models, *(f"{k}_mis" for k in perts), "bare"]:
                     row[f"{name}_fb"], row[f"{name}_rmse"], row[f"{name}_med"] = _stats(
                         res[name], true)
@@ -246,6 +255,8 @@ def run_rooms(trials: int, duration: float, seed: int, rt60s: list[float],
                         cell.setdefault(k, []).append(est.azimuth_deg if est.detected
                                                       else np.nan)
                         cell.setdefault(f"{k}_det", []).append(est.detected)
+                        if est.detected:
+                            cell.setdefault(f"{k}_fit", []).append(est.cues_fit)
                     doc = localize_recording(add_noise(clean["bare"], snr, nseed), FS, bare,
                                              kalman=False)
                     a = doc["summary"]["azimuth_deg"]
@@ -255,6 +266,7 @@ def run_rooms(trials: int, duration: float, seed: int, rt60s: list[float],
             row = {"rt60": rt, "signal": kind, "snr": snr, "n": len(true)}
             for k in models:
                 row[f"{k}_det"] = 100.0 * float(np.mean(cell[f"{k}_det"]))
+                row[f"{k}_fit"] = _share(cell.get(f"{k}_fit", []))
             for name in [*models, "bare"]:
                 row[f"{name}_fb"], row[f"{name}_rmse"], row[f"{name}_med"] = _stats(
                     cell[name], true)
@@ -346,7 +358,7 @@ def main(argv: list[str] | None = None) -> None:
     headers = ["signal", "field", "SNR dB", "n"]
     for k, preset in DESIGNS:
         headers += [f"{preset} detected %", f"{preset} F/B %", f"{preset} RMSE",
-                    f"{preset} median", f"{preset} conf"]
+                    f"{preset} median", f"{preset} conf", f"{preset} cues fit %"]
         if k == "mask2":
             headers += ["mask2 RMSE off median plane"]
         if mis:
@@ -358,7 +370,7 @@ def main(argv: list[str] | None = None) -> None:
         line = [r["signal"], r["field"], r["snr"], r["n"]]
         for k, _ in DESIGNS:
             line += [r[f"{k}_det"], r[f"{k}_fb"], r[f"{k}_rmse"], r[f"{k}_med"],
-                     r[f"{k}_conf"]]
+                     r[f"{k}_conf"], r[f"{k}_fit"]]
             if k == "mask2":
                 line += [r["mask2_rmse_off"]]
             if mis:
@@ -381,10 +393,11 @@ def main(argv: list[str] | None = None) -> None:
     rhead = ["RT60 s", "signal", "SNR dB", "n"]
     for _, preset in DESIGNS:
         rhead += [f"{preset} detected %", f"{preset} F/B %", f"{preset} RMSE",
-                  f"{preset} median"]
+                  f"{preset} median", f"{preset} cues fit %"]
     rhead += ["bare F/B %", "bare RMSE", "bare median"]
     rtable = [[r["rt60"], r["signal"], r["snr"], r["n"],
-               *[r[f"{k}_{c}"] for k, _ in DESIGNS for c in ("det", "fb", "rmse", "med")],
+               *[r[f"{k}_{c}"] for k, _ in DESIGNS
+                 for c in ("det", "fb", "rmse", "med", "fit")],
                r["bare_fb"], r["bare_rmse"], r["bare_med"]] for r in room_rows]
     if rtable:
         print_table(f"in a {'x'.join(f'{v:g}' for v in ROOM)} m room", rhead, rtable)
