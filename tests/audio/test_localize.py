@@ -1220,3 +1220,49 @@ def test_localize_recording_checks_the_tdoa_error_on_every_array(array):
     for bad in (-1.0, "x", float("nan")):
         with pytest.raises(GeometryError, match="tdoa_std_s must be a finite number"):
             localize_recording(x, 16000, arr, tdoa_std_s=bad)
+
+
+@pytest.mark.parametrize("preset, dead", [("respeaker-6", 1), ("respeaker-4", 3),
+                                          ("three-mic", 1)])
+def test_a_dead_microphone_is_left_out_and_the_others_localize(preset, dead):
+    """One microphone unplugged (its channel only noise) made every pair, frame and the summary
+    null -- six microphones with one dead heard nothing. The others now localize as an array of
+    their own: the summary's direction is the truth's (two microphones: the truth's cone), the
+    dead microphone's pairs stay null, the rest are numbered as the array's, and one warning
+    says so."""
+    import warnings
+
+    from hearsee.audio.localize import localize_recording
+    from hearsee.errors import DeadMicrophoneWarning
+    from hearsee.sim.audio import simulate_recording
+
+    arr = MicArray.from_preset(preset)
+    src = np.array([1.5, 1.0, 0.3])
+    x, truth = simulate_recording(arr, src, "male", 3.0, 16000, 20.0, seed=4,
+                                  room={"room_dim": [6, 5, 3], "rt60": 0.3})
+    clean = localize_recording(x, 16000, arr)["summary"]
+    x[dead] = np.random.default_rng(0).standard_normal(x.shape[1]) * np.std(x[dead])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        doc = localize_recording(x, 16000, arr)
+    told = [str(w.message) for w in caught if issubclass(w.category, DeadMicrophoneWarning)]
+    keep = [m for m in range(arr.n_mics) if m != dead]
+    assert len(told) == 1 and told[0].startswith(f"microphone {dead} hears nothing")
+    assert f"the direction comes from microphones {', '.join(map(str, keep))} alone" in told[0]
+    s = doc["summary"]
+    assert s["dead_microphones"] == [dead] and s["microphones_used"] == keep
+    assert clean["microphones_used"] == list(range(arr.n_mics))
+    assert doc["array"]["name"] == arr.name and list(s["tdoa_s"]) == arr.pair_labels
+    for label, v in s["tdoa_s"].items():
+        i, j = map(int, label.split("-"))
+        if dead in (i, j):
+            assert v is None
+        else:  # the direct path's TDOA, within a sample and a half
+            assert abs(v - truth["tdoa_s"][label]) < 1.5 / 16000
+    assert all(f["tdoa_s"][label] is None for f in doc["frames"] for label in s["tdoa_s"]
+               if str(dead) in label.split("-"))
+    assert sum(f["azimuth_deg"] is not None for f in doc["frames"]) > 0.5 * len(doc["frames"])
+    if len(keep) > 2:
+        assert abs(wrap_deg(s["azimuth_deg"] - truth["azimuth_deg"])) < 6.0
+    else:  # the pair's cone: its two in-plane candidates mirror about the pair's axis
+        assert s["elevation_deg"] is None and len(s["candidates"]) == 2

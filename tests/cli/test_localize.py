@@ -505,9 +505,13 @@ def test_a_dead_microphone_is_one_warning_line(tmp_path, capsys):
     p = tmp_path / "dead.wav"
     sf.write(p, x.T / np.abs(x).max() * 0.5, FS, subtype="FLOAT")
     code, out, err = _run(capsys, p, "--array", "three-mic", "--format", "json")
-    assert code == 0 and json.loads(out)["summary"]["dead_microphones"] == [1]
+    summ = json.loads(out)["summary"]
+    assert code == 0 and summ["dead_microphones"] == [1]
     assert err.startswith("hearsee: warning: microphone 1 hears nothing of what the others "
                           "hear") and err.count("\n") == 1
+    # (since 2026-12-05 the other two localize: a cone about their axis, both candidates)
+    assert "comes from microphones 0, 2 alone" in err and summ["microphones_used"] == [0, 2]
+    assert summ["azimuth_deg"] is not None and len(summ["candidates"]) == 2
     assert main(["track", str(p), "--array", "three-mic"]) == 0
     err = capsys.readouterr().err
     assert err.count("microphone 1 hears nothing") == 1 and err.count("\n") == 1

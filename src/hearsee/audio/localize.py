@@ -31,6 +31,7 @@ Angles: azimuth from +x toward +y, elevation from the xy-plane toward +z, degree
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -56,7 +57,7 @@ from hearsee.audio.arrays import (
     span_dimension,
 )
 from hearsee.config import finite_number, is_real, real_entries, whole_number
-from hearsee.errors import ConfigError, GeometryError
+from hearsee.errors import ConfigError, DeadMicrophoneWarning, GeometryError
 from hearsee.geometry import unit_vector_deg, wrap_deg
 
 __all__ = [
@@ -1415,6 +1416,51 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
 
 
 # ---------------------------------------------------------------------------------- recordings
+def _without_dead(x: ArrayLike, fs: float, arr: MicArray, tf: Any,
+                  kw: dict[str, Any]) -> dict[str, Any]:
+    """:func:`localize_recording`'s document from the microphones that hear the source when
+    ``tf`` (its TDOAs) found dead ones (:func:`hearsee.audio.tdoa.dead_microphones`): the
+    recording's other channels localized as an array of their own, its pairs and microphone
+    numbers put back in ``arr``'s (the dead microphone's pairs null), ``microphones_used`` in
+    the summary, and a :class:`~hearsee.errors.DeadMicrophoneWarning` saying so. Until
+    2026-12-05 every pair, frame and the summary were null: a six-microphone array with one
+    microphone unplugged heard nothing. The other warnings are those of the whole recording
+    (the caller's), not told again."""
+    from hearsee.audio.signals import as_samples
+    from hearsee.audio.tdoa import dead_microphones_text
+
+    dead = sorted(int(m) for m in tf.dead_mics)
+    keep = [m for m in range(arr.n_mics) if m not in dead]
+    sub = MicArray(arr.positions[keep], arr.speed_of_sound,
+                   f"{arr.name} without microphone {', '.join(map(str, dead))}")
+    warnings.warn(dead_microphones_text(dead, (
+        f"the direction comes from microphones {', '.join(map(str, keep))} alone"
+        + (" (two: a cone about their axis, its mirror image and elevation unresolved)"
+           if len(keep) == 2 else ""))), DeadMicrophoneWarning, stacklevel=3)
+    with warnings.catch_warnings():
+        # (the whole recording's warnings were told, in the array's own numbering: the other
+        # microphones' run would tell them again, numbered as its own array's)
+        warnings.simplefilter("ignore")
+        doc = localize_recording(as_samples(x)[keep], fs, sub, **kw)
+    label = {f"{a}-{b}": f"{keep[a]}-{keep[b]}" for a in range(len(keep))
+             for b in range(a + 1, len(keep))}
+
+    def tdoas(d: dict[str, Any]) -> dict[str, Any]:
+        got = {label[k]: v for k, v in d.items()}
+        return {k: got.get(k) for k in tf.pair_labels}
+
+    for f in doc["frames"]:
+        f["tdoa_s"] = tdoas(f["tdoa_s"])
+    summ = doc["summary"]
+    summ["tdoa_s"] = tdoas(summ["tdoa_s"])
+    summ["inverted_microphones"] = [keep[m] for m in summ["inverted_microphones"]]
+    summ["dead_microphones"] = sorted(dead + [keep[m] for m in summ["dead_microphones"]])
+    summ["sync_offsets_s"] = {label[k]: v for k, v in summ["sync_offsets_s"].items()}
+    summ["microphones_used"] = [keep[m] for m in summ["microphones_used"]]
+    doc["array"] = arr.to_dict()
+    return doc
+
+
 def localize_recording(
     x: ArrayLike,
     fs: float,
@@ -1519,10 +1565,13 @@ def localize_recording(
                          "feasible", "confidence", "n_valid_frames", "position_m",
                          "position_covariance_m2", "distance_rel_std",
                          "position_tdoa_std_s", "inverted_microphones", "dead_microphones",
-                         "sync_offsets_s", "tonal_lines_hz"}}
+                         "sync_offsets_s", "tonal_lines_hz", "microphones_used"}}
 
         with None where a quantity is not resolvable (no source in the frame, elevation of a
-        linear array, ...). The summary localizes the whole-recording TDOA estimate (weighted
+        linear array, ...). ``microphones_used``: the microphones the directions come from --
+        all of them, or, with three or more, all but the dead ones (``dead_microphones``; the
+        others localize as an array of their own and the dead one's pairs are null: see
+        :func:`_without_dead`). The summary localizes the whole-recording TDOA estimate (weighted
         cross spectra averaged over valid frames), not an average of frame angles.
         ``confidence`` (frames and summary) is the smallest pair's GCC peak-to-second-peak
         ratio: 0 to :data:`hearsee.audio.tdoa.MAX_CONFIDENCE` (1000), not a probability (a
@@ -1554,8 +1603,21 @@ def localize_recording(
                                        tune_kalman=tune_kalman)
     method = normalize_method(method)
     tdoa_kwargs.setdefault("source_in_plane", bool(in_plane))
-    tf = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method,
-                        pairs=pairs, progress=progress, **tdoa_kwargs)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tf = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method,
+                            pairs=pairs, progress=progress, **tdoa_kwargs)
+    # (re-told as they came, but for a dead microphone when the others localize: the warning
+    # said "the direction is missing or wrong", and a second line said otherwise)
+    without = bool(tf.dead_mics) and pairs is None and arr.n_mics - len(tf.dead_mics) >= 2
+    for w in caught:
+        if not (without and issubclass(w.category, DeadMicrophoneWarning)):
+            warnings.warn(w.message, w.category, stacklevel=2)
+    if without:
+        return _without_dead(x, fs, arr, tf, dict(
+            frame_ms=frame_ms, hop_ms=hop_ms, method=method, kalman=kalman, q_std_s=q_std_s,
+            r_std_s=r_std_s, tune_kalman=tune_kalman, in_plane=in_plane,
+            tdoa_std_s=tdoa_std_s, **tdoa_kwargs))
     labels = tf.pair_labels
     tdoa = tf.tdoa_s
     noise: tuple[float, float] | None = None  # the filter's (q_std_s, r_std_s)
@@ -1608,6 +1670,7 @@ def localize_recording(
         "coherence_gain": (float(tf.coherence_gain) if np.isfinite(tf.coherence_gain)
                            else None),
         **tf.wiring_entries(),
+        "microphones_used": list(range(arr.n_mics)),
     }
     return {
         "array": arr.to_dict(),

@@ -113,6 +113,7 @@ __all__ = [
     "check_recording_length",
     "dead_microphones",
     "desynchronized_pairs",
+    "dead_microphones_text",
     "dominant_sample",
     "estimate_tdoas",
     "frame_geometry",
@@ -1273,13 +1274,19 @@ def _warn_dead(*args) -> tuple[int, ...]:
     :func:`dead_microphones` finds (its arguments); those microphones."""
     dead = dead_microphones(*args)
     if dead:
-        names = ", ".join(map(str, dead))
-        one = len(dead) == 1
-        warnings.warn(f"microphone{'' if one else 's'} {names} hear{'s' if one else ''} nothing "
-                      "of what the others hear (its channel correlates with no other: "
-                      "unplugged, broken or covered?), so its pairs have no TDOA and the "
-                      "direction is missing or wrong", DeadMicrophoneWarning, stacklevel=3)
+        warnings.warn(dead_microphones_text(dead), DeadMicrophoneWarning, stacklevel=3)
     return dead
+
+
+def dead_microphones_text(dead: Sequence[int],
+                          outcome: str = "the direction is missing or wrong") -> str:
+    """The :class:`~hearsee.errors.DeadMicrophoneWarning` line for the microphones ``dead``;
+    ``outcome`` says what became of the direction."""
+    names = ", ".join(map(str, dead))
+    one = len(dead) == 1
+    return (f"microphone{'' if one else 's'} {names} hear{'s' if one else ''} nothing of what "
+            "the others hear (its channel correlates with no other: unplugged, broken or "
+            f"covered?), so its pairs have no TDOA and {outcome}")
 
 
 def _warn_desync(r: NDArray, max_lag: NDArray, main_lobe: int,
