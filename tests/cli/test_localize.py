@@ -12,7 +12,7 @@ from hearsee.audio.propagation import simulate_free_field
 from hearsee.audio.signals import white_noise
 from hearsee.audio.tdoa import estimate_tdoas
 from hearsee.cli import main
-from hearsee.geometry import unit_vector_deg
+from hearsee.geometry import unit_vector_deg, wrap_deg
 
 FS = 16000
 
@@ -512,9 +512,26 @@ def test_a_dead_microphone_is_one_warning_line(tmp_path, capsys):
     # (since 2026-12-05 the other two localize: a cone about their axis, both candidates)
     assert "comes from microphones 0, 2 alone" in err and summ["microphones_used"] == [0, 2]
     assert summ["azimuth_deg"] is not None and len(summ["candidates"]) == 2
-    assert main(["track", str(p), "--array", "three-mic"]) == 0
-    err = capsys.readouterr().err
+    assert main(["track", str(p), "--array", "three-mic", "--format", "json"]) == 0
+    out, err = capsys.readouterr()
     assert err.count("microphone 1 hears nothing") == 1 and err.count("\n") == 1
+    # (the stream leaves it out too: its directions had been built with the dead channel)
+    assert "comes from microphones 0, 2 alone" in err
+    doc = json.loads(out)
+    assert doc["stats"]["microphones_used"] == [0, 2] and doc["array"]["name"] == "three-mic"
+    assert any(u["measured"] for u in doc["updates"])
+    # an array of four: the other three localize; the stream's directions near the truth
+    x, truth = simulate_recording("respeaker-4", [1.2, 1.4, 0.2], signal="male",
+                                  duration_s=3.0, snr_db=20.0, seed=7)
+    x[3] = np.random.default_rng(2).standard_normal(x.shape[1]) * np.std(x[3])
+    p4 = tmp_path / "dead4.wav"
+    sf.write(p4, x.T / np.abs(x).max() * 0.5, FS, subtype="FLOAT")
+    assert main(["track", str(p4), "--array", "respeaker-4", "--format", "json"]) == 0
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
+    assert doc["stats"]["microphones_used"] == [0, 1, 2] and "0, 1, 2 alone" in err
+    az = np.array([u["azimuth_deg"] for u in doc["updates"] if u["measured"]])
+    assert len(az) > 20 and np.median(np.abs(wrap_deg(az - truth["azimuth_deg"]))) < 5.0
 
 
 def test_a_warning_told_twice_in_one_run_is_one_line(tmp_path, capsys):

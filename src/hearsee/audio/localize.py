@@ -57,7 +57,7 @@ from hearsee.audio.arrays import (
     span_dimension,
 )
 from hearsee.config import finite_number, is_real, real_entries, whole_number
-from hearsee.errors import ConfigError, DeadMicrophoneWarning, GeometryError
+from hearsee.errors import ConfigError, DeadMicrophoneWarning, GeometryError, retell_warnings
 from hearsee.geometry import unit_vector_deg, wrap_deg
 
 __all__ = [
@@ -1416,6 +1416,24 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
 
 
 # ---------------------------------------------------------------------------------- recordings
+def without_microphones(arr: MicArray, dead: Sequence[int], stacklevel: int = 4
+                        ) -> tuple[list[int], MicArray]:
+    """``(keep, sub)``: the microphones of ``arr`` other than ``dead`` and the array they make
+    (numbered 0.. in ``keep``'s order, the same frame), with the
+    :class:`~hearsee.errors.DeadMicrophoneWarning` that the direction comes from them alone
+    (:func:`localize_recording`, ``hearsee track``)."""
+    from hearsee.audio.tdoa import dead_microphones_text
+
+    keep = [m for m in range(arr.n_mics) if m not in dead]
+    sub = MicArray(arr.positions[keep], arr.speed_of_sound,
+                   f"{arr.name} without microphone {', '.join(map(str, dead))}")
+    warnings.warn(dead_microphones_text(dead, (
+        f"the direction comes from microphones {', '.join(map(str, keep))} alone"
+        + (" (two: a cone about their axis, its mirror image and elevation unresolved)"
+           if len(keep) == 2 else ""))), DeadMicrophoneWarning, stacklevel=stacklevel)
+    return keep, sub
+
+
 def _without_dead(x: ArrayLike, fs: float, arr: MicArray, tf: Any,
                   kw: dict[str, Any]) -> dict[str, Any]:
     """:func:`localize_recording`'s document from the microphones that hear the source when
@@ -1427,16 +1445,9 @@ def _without_dead(x: ArrayLike, fs: float, arr: MicArray, tf: Any,
     microphone unplugged heard nothing. The other warnings are those of the whole recording
     (the caller's), not told again."""
     from hearsee.audio.signals import as_samples
-    from hearsee.audio.tdoa import dead_microphones_text
 
     dead = sorted(int(m) for m in tf.dead_mics)
-    keep = [m for m in range(arr.n_mics) if m not in dead]
-    sub = MicArray(arr.positions[keep], arr.speed_of_sound,
-                   f"{arr.name} without microphone {', '.join(map(str, dead))}")
-    warnings.warn(dead_microphones_text(dead, (
-        f"the direction comes from microphones {', '.join(map(str, keep))} alone"
-        + (" (two: a cone about their axis, its mirror image and elevation unresolved)"
-           if len(keep) == 2 else ""))), DeadMicrophoneWarning, stacklevel=3)
+    keep, sub = without_microphones(arr, dead)
     with warnings.catch_warnings():
         # (the whole recording's warnings were told, in the array's own numbering: the other
         # microphones' run would tell them again, numbered as its own array's)
@@ -1610,9 +1621,7 @@ def localize_recording(
     # (re-told as they came, but for a dead microphone when the others localize: the warning
     # said "the direction is missing or wrong", and a second line said otherwise)
     without = bool(tf.dead_mics) and pairs is None and arr.n_mics - len(tf.dead_mics) >= 2
-    for w in caught:
-        if not (without and issubclass(w.category, DeadMicrophoneWarning)):
-            warnings.warn(w.message, w.category, stacklevel=2)
+    retell_warnings(caught, DeadMicrophoneWarning if without else ())
     if without:
         return _without_dead(x, fs, arr, tf, dict(
             frame_ms=frame_ms, hop_ms=hop_ms, method=method, kalman=kalman, q_std_s=q_std_s,

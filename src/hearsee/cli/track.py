@@ -94,17 +94,27 @@ def _stream_band(asked: tuple[float, float] | None, x, fs: float, frame_ms: floa
 WIRING_SCAN_S = 30.0
 
 
-def _check_wiring(x, fs: float, arr, cfg) -> tuple[bool, tuple[float, ...]]:
+def _check_wiring(x, fs: float, arr, cfg) -> tuple[bool, tuple[float, ...], tuple[int, ...]]:
     """:func:`hearsee.stream.pipeline.wiring_estimate` of a file's first
     :data:`WIRING_SCAN_S` seconds, for its warnings of a microphone wired with inverted
-    polarity, channels out of sync or mains hum, before the file is streamed. In
-    ``cfg.band_hz``, which :func:`_stream_band` has already trimmed of an empty top band (so
-    no second search for one). (Whether it told of a wiring fault, the lines of hum found:
-    the stream notches them out.)"""
+    polarity, channels out of sync, a dead microphone or mains hum, before the file is
+    streamed. In ``cfg.band_hz``, which :func:`_stream_band` has already trimmed of an empty
+    top band (so no second search for one). (Whether it told of a wiring fault, the lines of
+    hum found: the stream notches them out; the dead microphones the stream leaves out when
+    two or more others remain -- their warning is :func:`hearsee.audio.localize.
+    without_microphones`'s, which says so.)"""
+    from hearsee.errors import DeadMicrophoneWarning, retell_warnings
     from hearsee.stream.pipeline import wiring_estimate
 
-    tf = wiring_estimate(x[:, :int(WIRING_SCAN_S * fs)], fs, arr, cfg, empty_band_db=None)
-    return (False, ()) if tf is None else (tf.wiring_fault, tf.tonal_lines_hz)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tf = wiring_estimate(x[:, :int(WIRING_SCAN_S * fs)], fs, arr, cfg, empty_band_db=None)
+    dead = () if tf is None else tuple(int(m) for m in tf.dead_mics)
+    leave_out = bool(dead) and arr.n_mics - len(dead) >= 2
+    retell_warnings(caught, DeadMicrophoneWarning if leave_out else ())
+    if tf is None:
+        return False, (), ()
+    return tf.wiring_fault, tf.tonal_lines_hz, dead if leave_out else ()
 
 
 def _srp_band(gcc_band: tuple[float, float] | None, srp_band: tuple[float, float] | None
@@ -318,10 +328,20 @@ def track_cmd(
         if used is not None:
             note_empty_band(recording, used, band, source.fs)
         lines: tuple[float, ...] = ()
+        heard_by = arr  # (the array the stream localizes with: without a dead microphone)
+        used_mics = list(range(arr.n_mics))
         if device is None:
-            told, lines = _check_wiring(source.x, source.fs, arr, cfg)
+            told, lines, dead = _check_wiring(source.x, source.fs, arr, cfg)
+            if dead:  # (the directions were built with the dead channel, 20-30 deg off)
+                from hearsee.audio.localize import without_microphones
+                from hearsee.stream.pipeline import ArraySource
+
+                used_mics, heard_by = without_microphones(arr, dead, stacklevel=2)
+                source = ArraySource(source.x[used_mics], source.fs,
+                                     block_len=source.block_len)
         # (a file was checked ahead, above; live input once it has heard a source)
-        pipe = StreamPipeline(arr, cfg, rig=rig, image_points=points, tonal_lines_hz=lines)
+        pipe = StreamPipeline(heard_by, cfg, rig=rig, image_points=points,
+                              tonal_lines_hz=lines)
         try:
             pipe.run(source, sink, threaded=device is not None)
         except KeyboardInterrupt:
@@ -340,7 +360,7 @@ def track_cmd(
                "input_overflows": st.n_overflows, "status": st.status, "audio_s": st.audio_s,
                "real_time_factor": st.real_time_factor,
                "cpu_real_time_factor": st.cpu_real_time_factor, **st.latency_summary(),
-               "tonal_lines_hz": list(st.tonal_lines_hz)}
+               "tonal_lines_hz": list(st.tonal_lines_hz), "microphones_used": used_mics}
     if fmt is TrackFormat.json:
         # (a device by the name PortAudio gives it: "--device 2" or a part of a name is not
         # what was opened)
