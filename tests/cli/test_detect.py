@@ -391,3 +391,22 @@ def test_an_empty_thermal_or_overlay_is_refused(option, message, folder, capsys,
     assert main(args) == 2
     out, err = capsys.readouterr()
     assert out == "" and err == f"hearsee: error: {message}\n"
+
+
+def test_a_binary_image_is_warned_about(folder, tmp_path, capsys):
+    """A 1-bit PNG as --left (a scan, a thresholded export) gave a false human beside the
+    real one without a word: stereo matching and the template need grey levels. One warning
+    line names it; the rendered pair itself warns nothing."""
+    d, _ = folder
+    code = main(_args(d))
+    assert code == 0 and "two grey levels" not in capsys.readouterr().err
+    left = cv2.imread(str(d / "left.png"), cv2.IMREAD_GRAYSCALE)
+    binary = tmp_path / "left_1bit.png"
+    assert cv2.imwrite(str(binary), np.where(left > 100, 255, 0).astype(np.uint8),
+                       [cv2.IMWRITE_PNG_BILEVEL, 1])
+    args = _args(d)
+    args[args.index("--left") + 1] = str(binary)
+    code = main(args)
+    err = capsys.readouterr().err
+    assert code == 0 and err.count("holds only two grey levels") == 1
+    assert err.startswith(f"hearsee: warning: {binary} holds only two grey levels")

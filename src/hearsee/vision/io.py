@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import glob
 import threading
+import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -20,7 +21,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.config import input_file, open_replaced, output_file, real_entries, replacing
-from hearsee.errors import CalibrationError, ConfigError, ImageInputError, InputFileError
+from hearsee.errors import (
+    CalibrationError,
+    ConfigError,
+    DegenerateInputWarning,
+    ImageInputError,
+    InputFileError,
+)
 
 __all__ = [
     "as_detector_image",
@@ -400,7 +407,19 @@ def read_pair(left: str | Path, right: str | Path, mode: ColorMode = "gray",
     if np.array_equal(L, R):  # (two cameras' images always differ, by their noise at least)
         raise ImageInputError(f"{left} and {right} are the same image; a stereo pair needs the "
                               "left and the right camera's views")
+    for im, name in ((L, left), (R, right)):
+        if _two_levels(im):  # (a 1-bit PNG gave a false human without a word)
+            warnings.warn(f"{name} holds only two grey levels (a binary image, e.g. a 1-bit "
+                          "PNG): stereo matching and the head-shoulder template need the "
+                          "camera's grey levels, so the detections may be false",
+                          DegenerateInputWarning, stacklevel=2)
     return L, R
+
+
+def _two_levels(image: NDArray) -> bool:
+    """Whether ``image`` holds at most two distinct values (over all its channels)."""
+    lo, hi = image.min(), image.max()  # (non-empty: check_image)
+    return not np.any((image != lo) & (image != hi))
 
 
 #: Pixel types OpenCV converts from colour to grey (cv2.cvtColor).
