@@ -680,6 +680,18 @@ def test_thesis_search_names_a_non_finite_measurement():
     assert len(calls) == 2 and calls[1].pan_deg != 0.0  # (the second pose, not the start)
 
 
+@pytest.mark.parametrize("got", ["abc", ["1e-4", "2e-4", "x"], None, {"0-1": 1e-4}])
+def test_alignment_refuses_a_measurement_that_is_no_numbers(got):
+    """measure() returning text or a mapping was a builtin ValueError / TypeError inside both
+    alignment loops; numeric strings were read as TDOAs. One AudioInputError names it."""
+    from hearsee.audio.active import align_head, align_head_search
+    from hearsee.errors import AudioInputError
+
+    for loop in (align_head, align_head_search):
+        with pytest.raises(AudioInputError, match=r"measure\(\) must return one TDOA"):
+            loop(lambda pose: got, ARR)
+
+
 def _search_a_random_source(rng, el_lo: float, el_hi: float):
     """A source at a random azimuth, an elevation in [el_lo, el_hi] deg and 1-4 m from the
     pivot (built here from the angles), and the thesis search's alignment to it from exact

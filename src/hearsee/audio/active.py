@@ -1181,8 +1181,13 @@ def _alignment_settings(max_moves: Any, tol_deg: Any, probe_deg: Any,
 
 
 def _measure_pose(measure: Any, pose: Any, arr: MicArray) -> NDArray:
-    """Call the alignment loops' ``measure(pose)`` and check it returned one TDOA per pair."""
-    tau = np.asarray(measure(pose), dtype=float)
+    """Call the alignment loops' ``measure(pose)`` and check it returned one TDOA per pair
+    (seconds, numbers: text or a mapping was a builtin ValueError / TypeError)."""
+    got = measure(pose)
+    if not real_entries(got):
+        raise AudioInputError(f"measure() must return one TDOA (s) per pair as numbers, got "
+                              f"{got!r:.60}")
+    tau = np.asarray(got, dtype=float)
     if tau.shape != (len(arr.pairs),):
         raise AudioInputError(f"measure() returned {tau.shape} TDOAs, expected "
                               f"{len(arr.pairs)} (one per pair)")
