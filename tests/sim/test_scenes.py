@@ -531,3 +531,24 @@ def test_a_malformed_view_is_a_geometry_error():
         with pytest.raises(GeometryError, match=r"view must be \(R, C\)"):
             render_scene(spec, rig, view=bad)
     assert render_scene(spec, rig, view=(np.eye(3), np.zeros(3))).left.shape[:2] == (120, 160)
+
+
+def test_entities_outside_the_room_or_through_its_ceiling_are_refused():
+    """A person 10 m tall stood through the ceiling and one 20 m to the side was drawn where
+    the wall is (reported invisible, odd ground truth): both are GeometryErrors naming the
+    entity; one standing at the corner of the room itself is fine."""
+    import re
+
+    from hearsee.sim.scenes import Entity, SceneSpec, render_scene
+
+    for e, told in ((Entity("person", 0.0, 3.0, height_m=10.0),
+                     "entity 1 (person) reaches 10 m, above the 2.8 m ceiling"),
+                    (Entity("person", 20.0, 3.0), "entity 1 (person) stands at x = 20, z = 3 m"),
+                    (Entity("box", 0.0, 3.0, height_m=1.0, params={"lift_m": 2.0}),
+                     "entity 1 (box) reaches 3 m"),
+                    (Entity("person", 0.0, -3.0), "entity 1 (person) stands at x = 0, z = -3 m")):
+        spec = SceneSpec(entities=[Entity("person", -1.0, 3.0), e], seed=1)
+        with pytest.raises(GeometryError, match=re.escape(f"scene {told}")):
+            render_scene(spec)
+    scene = render_scene(SceneSpec(entities=[Entity("box", 4.0, 10.0, height_m=1.0)], seed=1))
+    assert len(scene.objects) == 1

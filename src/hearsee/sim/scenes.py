@@ -859,7 +859,8 @@ def _check_room(spec: SceneSpec) -> None:
     """ConfigError unless ``spec`` is a SceneSpec whose room has finite positive extents
     around the camera (which must be inside it: between the floor and the ceiling) and a
     finite temperature, whose entities are a list of valid Entity and whose seed is a whole number
-    >= 0 (numpy's generator raised a builtin ValueError for -1 and TypeError for 1.5)."""
+    >= 0 (numpy's generator raised a builtin ValueError for -1 and TypeError for 1.5);
+    GeometryError for an entity standing outside the room or reaching above its ceiling."""
     if not isinstance(spec, SceneSpec):
         raise ConfigError(f"render_scene needs a SceneSpec, got {spec!r:.60}")
     if not isinstance(spec.entities, list) or \
@@ -876,6 +877,19 @@ def _check_room(spec: SceneSpec) -> None:
     if not (is_real(spec.camera_height_m) and 0 < spec.camera_height_m < spec.ceiling_m):
         raise ConfigError(f"scene camera_height_m must be between the floor and the ceiling "
                           f"(0, {spec.ceiling_m:g}) m, got {spec.camera_height_m!r}")
+    for k, e in enumerate(spec.entities):
+        # (a person 10 m tall stood through the ceiling, one 20 m beside the room was rendered
+        # in the wall's place -- reported invisible, with ground truth of neither)
+        top = e.height_m + float(e.params.get("lift_m", 0.0))
+        if not (-spec.width_left_m <= e.x <= spec.width_right_m
+                and -spec.back_m <= e.z <= spec.depth_m):
+            raise GeometryError(
+                f"scene entity {k} ({e.kind}) stands at x = {e.x:g}, z = {e.z:g} m, outside "
+                f"the room (x in [{-spec.width_left_m:g}, {spec.width_right_m:g}], z in "
+                f"[{-spec.back_m:g}, {spec.depth_m:g}] m)")
+        if top > spec.ceiling_m:
+            raise GeometryError(f"scene entity {k} ({e.kind}) reaches {top:g} m, above the "
+                                f"{spec.ceiling_m:g} m ceiling")
 
 
 def _check_cameras_in_room(spec: SceneSpec, centres: dict[str, NDArray]) -> None:
