@@ -360,7 +360,9 @@ def track_cmd(
                "input_overflows": st.n_overflows, "status": st.status, "audio_s": st.audio_s,
                "real_time_factor": st.real_time_factor,
                "cpu_real_time_factor": st.cpu_real_time_factor, **st.latency_summary(),
-               "tonal_lines_hz": list(st.tonal_lines_hz), "microphones_used": used_mics}
+               "tonal_lines_hz": list(st.tonal_lines_hz),
+               # (live input: those the stream's own check left out, see StreamStats)
+               "microphones_used": [m for m in used_mics if m not in st.dead_microphones]}
     if fmt is TrackFormat.json:
         # (a device by the name PortAudio gives it: "--device 2" or a part of a name is not
         # what was opened)

@@ -263,7 +263,9 @@ class StreamStats:
     re-raises the KeyboardInterrupt; the stats describe what was processed until then, as they
     do after an error); ``tonal_lines_hz`` the lines of stationary tonal noise (mains hum)
     notched out of the input (Hz; the pipeline's ``tonal_lines_hz``, or those the live input's
-    check found), empty when none.
+    check found), empty when none; ``dead_microphones`` those the live input's check found
+    dead and the stream left out from then on (the other microphones localize as an array of
+    their own; empty when none).
     """
 
     n_blocks: int = 0
@@ -279,6 +281,7 @@ class StreamStats:
     latencies_s: list[float] = field(default_factory=list)
     status: str = "ok"
     tonal_lines_hz: tuple[float, ...] = ()
+    dead_microphones: tuple[int, ...] = ()
 
     @property
     def real_time_factor(self) -> float:
@@ -520,6 +523,9 @@ class _WiringWatch(_FirstWindows):
         self.array, self.fs, self.cfg = array, float(fs), cfg
         self.tonal_lines_hz: tuple[float, ...] = ()  # (hum found: the stream notches it out)
         self.tonal_noise = True  # (False once the stream notches hum out)
+        # (dead microphones found while two or more others remain: the stream leaves them out,
+        # and their warning is hearsee.audio.localize.without_microphones')
+        self.dead_mics: tuple[int, ...] = ()
 
     def finish(self) -> None:
         """The input ended: check what there is, if at least :data:`WIRING_CHECK_MIN_S`."""
@@ -528,7 +534,16 @@ class _WiringWatch(_FirstWindows):
         self.done = True
 
     def _check(self, x: NDArray) -> bool:
-        tf = wiring_estimate(x, self.fs, self.array, self.cfg, tonal_noise=self.tonal_noise)
+        from hearsee.errors import DeadMicrophoneWarning, retell_warnings
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            tf = wiring_estimate(x, self.fs, self.array, self.cfg,
+                                 tonal_noise=self.tonal_noise)
+        dead = () if tf is None else tuple(int(m) for m in tf.dead_mics)
+        if dead and self.array.n_mics - len(dead) >= 2:
+            self.dead_mics = dead
+        retell_warnings(caught, DeadMicrophoneWarning if self.dead_mics else ())
         if tf is not None and tf.tonal_lines_hz:
             self.tonal_lines_hz = tf.tonal_lines_hz
         # (once a fault is told, the check is done: channels out of sync were told again every
@@ -2241,16 +2256,34 @@ class StreamPipeline:
             built on the hum's directions forgotten (it sat near the pole, where the hum puts
             a source, and took ~2 s of right measurements, most outside its gate, to leave)."""
             nonlocal hum
-            hum = LineFilter(lines, source.fs, source.n_channels)
+            hum = LineFilter(lines, source.fs, source.n_channels if keep is None else len(keep))
             st.tonal_lines_hz = lines
             self._reset_requested = True
             if watch is not None:
                 watch.tonal_noise = False  # (its estimate need not look for hum again)
 
+        keep: list[int] | None = None  # (the microphones used, once a dead one is left out)
+
+        def leave_out(dead: tuple[int, ...]) -> None:
+            """Dead microphones found by the watch: the others localize from the next block
+            on, as an array of their own (the framer keeps its place and their samples; a new
+            processor: the track starts afresh), the hum filter on their channels."""
+            from hearsee.audio.localize import without_microphones
+
+            nonlocal keep, proc, hum
+            keep, sub = without_microphones(self.array, dead, stacklevel=2)
+            framer.buf, framer.n_channels = framer.buf[keep], len(keep)
+            proc = TrackingProcessor(sub, source.fs, self.config, self.rig, self.image_points)
+            if hum is not None:
+                hum = LineFilter(st.tonal_lines_hz, source.fs, len(keep))
+            st.dead_microphones = dead
+
         def handle(blk: Block) -> None:
             nonlocal last_sample
             st.n_blocks += 1
             last_sample = max(last_sample, blk.start + blk.data.shape[1])
+            if keep is not None:
+                blk = replace(blk, data=blk.data[keep])
             if hum is not None:
                 blk = replace(blk, data=hum(blk.data))
             emit(framer.push(blk))
@@ -2258,10 +2291,12 @@ class StreamPipeline:
                 hum_watch.add(blk.data)
                 if hum_watch.tonal_lines_hz:
                     notch(hum_watch.tonal_lines_hz)
-            if watch is not None:
+            if watch is not None and not watch.done:  # (done once it told a fault)
                 watch.add(blk.data)  # (without the hum once it is notched out)
                 if hum is None and watch.tonal_lines_hz:
                     notch(watch.tonal_lines_hz)
+                if watch.dead_mics and keep is None:
+                    leave_out(watch.dead_mics)
 
         def emit(batch: FrameBatch | None) -> None:
             if batch is None:
