@@ -114,17 +114,3 @@ def __getattr__(name: str) -> Any:
     if name == "RegressorNotFittedError":
         return _regressor_not_fitted_error()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def retell_warnings(caught: list, skip: type | tuple[type, ...] = (), stacklevel: int = 3
-                    ) -> None:
-    """Warn again, in their order, the warnings ``caught`` (``warnings.catch_warnings(record=
-    True)``'s list) but those of the categories ``skip``: a caller that learns what became of
-    an estimate after its warnings were raised tells one of them itself (a dead microphone
-    left out: :func:`hearsee.audio.localize.localize_recording`, ``hearsee track``)."""
-    import warnings
-
-    for w in caught:
-        if not (skip and issubclass(w.category, skip)):
-            warnings.warn(w.message, w.category, stacklevel=stacklevel)
-

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
@@ -57,7 +57,7 @@ from hearsee.audio.arrays import (
     span_dimension,
 )
 from hearsee.config import finite_number, is_real, real_entries, whole_number
-from hearsee.errors import ConfigError, DeadMicrophoneWarning, GeometryError, retell_warnings
+from hearsee.errors import ConfigError, DeadMicrophoneWarning, GeometryError
 from hearsee.geometry import unit_vector_deg, wrap_deg
 
 __all__ = [
@@ -1416,6 +1416,28 @@ def three_mic_curve(tdoa_s: ArrayLike, array: MicArray | str,
 
 
 # ---------------------------------------------------------------------------------- recordings
+def hold_dead_warning(arr: MicArray, estimate: Callable[[], Any], leave_out: bool = True,
+                      stacklevel: int = 2) -> tuple[Any, tuple[int, ...]]:
+    """``(estimate(), dead)``: a whole-recording estimate (``estimate()`` gives a
+    :class:`~hearsee.audio.tdoa.TdoaFrames` or None) run with its warnings held and told
+    again after it, in their order -- all but a dead microphone's when ``leave_out`` and two
+    or more other microphones remain: ``dead`` then names the dead ones, the caller leaves
+    them out and :func:`without_microphones` tells the warning with where the direction comes
+    from instead of "missing or wrong" (else ``dead`` is ()). ``stacklevel`` as the caller's
+    own ``warnings.warn``. One place for ``hearsee localize``, ``hearsee track``'s look-ahead
+    and the live stream's wiring watch."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tf = estimate()
+    dead = () if tf is None else tuple(int(m) for m in tf.dead_mics)
+    if not (leave_out and dead and arr.n_mics - len(dead) >= 2):
+        dead = ()
+    for w in caught:
+        if not (dead and issubclass(w.category, DeadMicrophoneWarning)):
+            warnings.warn(w.message, w.category, stacklevel=stacklevel + 1)
+    return tf, dead
+
+
 def without_microphones(arr: MicArray, dead: Sequence[int], stacklevel: int = 4
                         ) -> tuple[list[int], MicArray]:
     """``(keep, sub)``: the microphones of ``arr`` other than ``dead`` and the array they make
@@ -1614,15 +1636,10 @@ def localize_recording(
                                        tune_kalman=tune_kalman)
     method = normalize_method(method)
     tdoa_kwargs.setdefault("source_in_plane", bool(in_plane))
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        tf = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method,
-                            pairs=pairs, progress=progress, **tdoa_kwargs)
-    # (re-told as they came, but for a dead microphone when the others localize: the warning
-    # said "the direction is missing or wrong", and a second line said otherwise)
-    without = bool(tf.dead_mics) and pairs is None and arr.n_mics - len(tf.dead_mics) >= 2
-    retell_warnings(caught, DeadMicrophoneWarning if without else ())
-    if without:
+    tf, dead = hold_dead_warning(arr, lambda: estimate_tdoas(
+        x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method, pairs=pairs,
+        progress=progress, **tdoa_kwargs), leave_out=pairs is None)
+    if dead:
         return _without_dead(x, fs, arr, tf, dict(
             frame_ms=frame_ms, hop_ms=hop_ms, method=method, kalman=kalman, q_std_s=q_std_s,
             r_std_s=r_std_s, tune_kalman=tune_kalman, in_plane=in_plane,

@@ -103,18 +103,12 @@ def _check_wiring(x, fs: float, arr, cfg) -> tuple[bool, tuple[float, ...], tupl
     hum found: the stream notches them out; the dead microphones the stream leaves out when
     two or more others remain -- their warning is :func:`hearsee.audio.localize.
     without_microphones`'s, which says so.)"""
-    from hearsee.errors import DeadMicrophoneWarning, retell_warnings
+    from hearsee.audio.localize import hold_dead_warning
     from hearsee.stream.pipeline import wiring_estimate
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        tf = wiring_estimate(x[:, :int(WIRING_SCAN_S * fs)], fs, arr, cfg, empty_band_db=None)
-    dead = () if tf is None else tuple(int(m) for m in tf.dead_mics)
-    leave_out = bool(dead) and arr.n_mics - len(dead) >= 2
-    retell_warnings(caught, DeadMicrophoneWarning if leave_out else ())
-    if tf is None:
-        return False, (), ()
-    return tf.wiring_fault, tf.tonal_lines_hz, dead if leave_out else ()
+    tf, dead = hold_dead_warning(arr, lambda: wiring_estimate(
+        x[:, :int(WIRING_SCAN_S * fs)], fs, arr, cfg, empty_band_db=None))
+    return (False, (), ()) if tf is None else (tf.wiring_fault, tf.tonal_lines_hz, dead)
 
 
 def _srp_band(gcc_band: tuple[float, float] | None, srp_band: tuple[float, float] | None

@@ -534,16 +534,10 @@ class _WiringWatch(_FirstWindows):
         self.done = True
 
     def _check(self, x: NDArray) -> bool:
-        from hearsee.errors import DeadMicrophoneWarning, retell_warnings
+        from hearsee.audio.localize import hold_dead_warning
 
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            tf = wiring_estimate(x, self.fs, self.array, self.cfg,
-                                 tonal_noise=self.tonal_noise)
-        dead = () if tf is None else tuple(int(m) for m in tf.dead_mics)
-        if dead and self.array.n_mics - len(dead) >= 2:
-            self.dead_mics = dead
-        retell_warnings(caught, DeadMicrophoneWarning if self.dead_mics else ())
+        tf, self.dead_mics = hold_dead_warning(self.array, lambda: wiring_estimate(
+            x, self.fs, self.array, self.cfg, tonal_noise=self.tonal_noise))
         if tf is not None and tf.tonal_lines_hz:
             self.tonal_lines_hz = tf.tonal_lines_hz
         # (once a fault is told, the check is done: channels out of sync were told again every
