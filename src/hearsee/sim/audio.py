@@ -164,6 +164,8 @@ def render(signal: ArrayLike, fs: float, array: MicArray, source: ArrayLike,
     src = as_point(source, "source")
     if mic_positions is not None:
         mic_positions = _mic_positions(array, mic_positions)
+    if far_field and room is not None:
+        raise ConfigError("far_field applies to free field only; omit the room or far_field")
     if array.mask is not None:  # masked two-microphone array: the mask's diffraction (BEM)
         from hearsee.audio.mask import simulate_masked, simulate_masked_room
 
@@ -172,16 +174,12 @@ def render(signal: ArrayLike, fs: float, array: MicArray, source: ArrayLike,
                               "with the head fixed (no turned microphones)")
         if room is None:
             return simulate_masked(signal, fs, array, src, far_field=far_field)
-        if far_field:
-            raise ConfigError("far_field applies to free field only; omit the room or far_field")
         return simulate_masked_room(signal, fs, array, src, room["room_dim"], room["rt60"],
                                     room["array_at"], max_order=room.get("max_order"))
     if room is None:
         mics = array.positions if mic_positions is None else mic_positions
         return simulate_free_field(signal, fs, mics, src, speed_of_sound=array.speed_of_sound,
                                    far_field=far_field)
-    if far_field:
-        raise ConfigError("far_field applies to free field only; omit the room or far_field")
     return simulate_room(signal, fs, array, src, room["room_dim"], room["rt60"],
                          room["array_at"], mic_positions=mic_positions,
                          max_order=room.get("max_order"))
