@@ -375,3 +375,15 @@ def test_save_recording_needs_the_truths_sample_rate(tmp_path):
     assert not (tmp_path / "r.wav").exists() and not (tmp_path / "r.json").exists()
     wav, _ = save_recording(tmp_path / "r.wav", x, {"fs": 8000})
     assert sf.info(str(wav)).samplerate == 8000
+
+
+@pytest.mark.parametrize("array", ["three-mic", "mask2"])
+def test_far_field_in_a_room_is_refused(array):
+    """A plane wave has no place in a room's image sources: ConfigError for bare and masked
+    arrays alike (the masked branch had its own copy of the check)."""
+    from hearsee.sim.audio import render
+
+    room = {"room_dim": [6.0, 5.0, 3.0], "rt60": 0.3}
+    with pytest.raises(ConfigError, match="far_field applies to free field only"):
+        render(np.ones(1600), 16000, MicArray.from_preset(array), [1.0, 1.0, 0.0], room,
+               far_field=True)
