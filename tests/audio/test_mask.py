@@ -945,3 +945,22 @@ def test_cues_fit_a_free_field_masked_recording_and_not_a_bare_one(asym):
     with pytest.warns(MaskFitWarning):
         doc = mask.localize_recording_mask(room, FS, asym)
     assert doc["summary"]["phase_match"] < mask.FIT_PHASE_MIN
+
+
+def test_sphere_table_cache_is_used_only_for_its_own_directions(asym):
+    """The cached room responses are stored with their directions: a file whose directions
+    are not this sampling's (another pyroomacoustics, another file) is recomputed, not paired
+    with the wrong directions; a matching one is read as it is."""
+    u, h = asym.sphere_table()
+    path = asym._path(f"-sphere-{mask.SPHERE_DIRECTIONS}")
+    assert path.is_file()
+    fresh = mask.MaskModel(asym.array, progress=False)  # (no tables in memory)
+    np.testing.assert_array_equal(fresh.sphere_table()[1], h)
+    np.savez(path, h=np.zeros_like(h), u=np.roll(u, 1, axis=0))
+    again = mask.MaskModel(asym.array, progress=False)
+    np.testing.assert_allclose(again.sphere_table()[1], h, rtol=1e-5, atol=1e-6)
+    np.savez(path, h=np.zeros_like(h), u=u)  # (its own directions: taken as stored)
+    try:
+        assert not np.any(mask.MaskModel(asym.array, progress=False).sphere_table()[1])
+    finally:
+        np.savez(path, h=h, u=u)  # (the module's other models read this cache)

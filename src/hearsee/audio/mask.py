@@ -603,7 +603,11 @@ class MaskModel:
         h = None
         if self.cache and path.is_file():
             try:
-                h = np.load(path)["h"]
+                z = np.load(path)
+                # (the directions are stored with the responses: another pyroomacoustics
+                # whose sampling moved them would have paired these responses with other
+                # directions without a word)
+                h = z["h"] if np.allclose(z["u"], u, rtol=0.0, atol=1e-9) else None
             except (OSError, KeyError, ValueError):
                 h = None
         if h is None or h.shape != (n, 2, len(self.freqs)):
@@ -620,7 +624,7 @@ class MaskModel:
             h = self._with_bar(f"{self.array.name}: responses from {n} directions (first use "
                                "in a room; cached after)", n, directions)
             if self.cache:
-                self._save(path, h=h)
+                self._save(path, h=h, u=u)
         self._tables[("sphere", n)] = (u, h)
         return u, h
 
