@@ -100,7 +100,7 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, MaskFitWarning
-from hearsee.geometry import as_points, norm_scale, wrap_deg
+from hearsee.geometry import as_points, norm_scale, vector_length, wrap_deg
 
 __all__ = [
     "CODE_VERSION",
@@ -882,8 +882,7 @@ def _source_point(source: ArrayLike) -> tuple[NDArray, float]:
     s = as_points(source, "source")  # (text: numpy's ValueError)
     if s.shape != (3,) or not np.all(np.isfinite(s)):
         raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")
-    k = norm_scale(s)  # (a source 1e300 m away: its norm overflowed, with RuntimeWarnings)
-    d0 = float(k[0] * np.linalg.norm(s / k))
+    d0 = float(vector_length(s))  # (a source 1e300 m away: its norm overflowed)
     if d0 < 1e-9:
         raise GeometryError(f"source must be a finite non-zero [x, y, z], got {source!r}")
     return s, d0
