@@ -828,6 +828,13 @@ class Framer:
         self._expected_seq = 0
         self._gaps: set[int] = set()  # sequence numbers counted in n_dropped (the latest ones)
 
+    def keep_channels(self, keep: Sequence[int]) -> None:
+        """From now on frame only the channels ``keep`` (their indices in the blocks so far):
+        the samples held keep their place in time, the next blocks must carry those channels
+        alone (a live stream leaving a dead microphone out)."""
+        self.buf = self.buf[list(keep)]
+        self.n_channels = len(self.buf)
+
     def push(self, blk: Block) -> FrameBatch | None:
         """Add a block; return the frames it completes (or None)."""
         data = block_samples(blk.data, self.n_channels)
@@ -2266,7 +2273,7 @@ class StreamPipeline:
 
             nonlocal keep, proc, hum
             keep, sub = without_microphones(self.array, dead, stacklevel=2)
-            framer.buf, framer.n_channels = framer.buf[keep], len(keep)
+            framer.keep_channels(keep)
             proc = TrackingProcessor(sub, source.fs, self.config, self.rig, self.image_points)
             if hum is not None:
                 hum = LineFilter(st.tonal_lines_hz, source.fs, len(keep))
