@@ -640,12 +640,9 @@ class MaskModel:
         fs = check_fs(fs)
         u, h = self.sphere_table(n)
         length = int(2 ** np.ceil(np.log2(max(8e-3 * fs, 16))))
-        lead, nf = length // 4, 4 * length
-        f = np.fft.rfftfreq(nf, 1.0 / fs)
-        hf = self._interpolate(h.astype(complex), u, True, f)  # (n, 2, F')
-        shift = np.exp(-2j * np.pi * f * lead / fs)
-        irs = np.fft.irfft(np.conj(hf) * shift, nf, axis=-1)[..., :length]
-        return u, np.ascontiguousarray(irs.transpose(1, 0, 2)), lead
+        f = np.fft.rfftfreq(4 * length, 1.0 / fs)
+        irs = _shifted_impulses(self._interpolate(h.astype(complex), u, True, f), f, fs, length)
+        return u, np.ascontiguousarray(irs.transpose(1, 0, 2)), length // 4
 
     def impulse_responses(self, source: ArrayLike, fs: float, n: int = 256,
                           far_field: bool = False) -> NDArray:
@@ -656,11 +653,8 @@ class MaskModel:
         """
         fs = check_fs(fs)
         n = whole_number("n", n, lo=1)
-        nf = 4 * n
-        f = np.fft.rfftfreq(nf, 1.0 / fs)
-        h = self.transfer_at(f, source, far_field)[0]  # (2, F) physics convention
-        shift = np.exp(-2j * np.pi * f * (n // 4) / fs)
-        return np.fft.irfft(np.conj(h) * shift, nf, axis=-1)[:, :n]
+        f = np.fft.rfftfreq(4 * n, 1.0 / fs)
+        return _shifted_impulses(self.transfer_at(f, source, far_field)[0], f, fs, n)
 
     # -- response tables
     def table(self, distance: float | None = None, elevation_deg: float = 0.0,
@@ -737,6 +731,14 @@ class MaskModel:
         """A bound on |ITD| (s): half the path around the body plus the spacing, over c."""
         ext = np.ptp(self.mesh.vertices, axis=0)
         return float((self.array.aperture + 0.5 * np.pi * 0.5 * ext.max()) / self.c)
+
+
+def _shifted_impulses(h: NDArray, f: NDArray, fs: float, n: int) -> NDArray:
+    """Impulse responses ``(..., n)`` of transfer functions ``h (..., F)`` (physics
+    convention) given at ``f = rfftfreq(4 n, 1 / fs)``, delayed by ``n // 4`` samples
+    (:meth:`MaskModel.impulse_responses`, :meth:`MaskModel.sphere_impulse_responses`)."""
+    shift = np.exp(-2j * np.pi * f * (n // 4) / fs)
+    return np.fft.irfft(np.conj(h) * shift, 4 * n, axis=-1)[..., :n]
 
 
 def _check_cost_weights(phase_weight: float, sigma_iid_db: float) -> None:
