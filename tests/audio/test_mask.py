@@ -964,3 +964,23 @@ def test_sphere_table_cache_is_used_only_for_its_own_directions(asym):
         assert not np.any(mask.MaskModel(asym.array, progress=False).sphere_table()[1])
     finally:
         np.savez(path, h=h, u=u)  # (the module's other models read this cache)
+
+
+def test_cli_refuses_a_masked_room_the_mask_does_not_fit(asym, tmp_path, capsys):
+    """A masked array standing through a wall, or a source inside the mask: one error line,
+    exit 2, no file written."""
+    import yaml
+
+    from hearsee.cli import main
+
+    spec = tmp_path / "coarse-mask.yaml"
+    spec.write_text(yaml.safe_dump(asym.array.to_dict()), encoding="utf-8")
+    wav = tmp_path / "r.wav"
+    for extra, told in ((["--source", "1,0,0", "--array-at", "0.05,2,1.2"],
+                         "the mask's vertex"),
+                        (["--source", "0,0,0.001"], "the source lies inside the mask body")):
+        code = main(["simulate", str(wav), "--array", str(spec), "--room", "5x4x3", "--rt60",
+                     "0.3", *extra])
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1 and told in err
+        assert err.startswith("hearsee: error: ") and not wav.exists()

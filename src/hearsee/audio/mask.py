@@ -1003,7 +1003,7 @@ def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | Mask
     at = as_points(array_at, "array_at")
     if at.shape != (3,) or not np.all(np.isfinite(at)):
         raise GeometryError(f"array_at must be a finite [x, y, z] point, got {array_at!r}")
-    _check_inside(model.mesh.vertices + at, dim, "the mask")
+    _check_inside(model.mesh.vertices + at, dim, "the mask's vertex")
     e_absorption, order = image_sources(rt60, dim, model.c, max_order)
     if e_absorption is None or order == 0:
         return None
