@@ -78,7 +78,7 @@ import os
 import sys
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -112,10 +112,12 @@ __all__ = [
     "MaskLocalization",
     "MaskModel",
     "Responses",
+    "analysis_bins",
     "cache_dir",
     "front_back_margin",
     "localize_mask",
     "localize_recording_mask",
+    "localize_spectra",
     "mask_geometry",
     "diffuse_field_response",
     "masked_room_impulse_responses",
@@ -390,13 +392,21 @@ def _direction(az_deg: ArrayLike, el_deg: ArrayLike) -> NDArray:
 
 
 def _phat_itd(cross: NDArray, freqs: NDArray, weights: NDArray, max_s: float,
-              step_s: float = 2e-6) -> NDArray:
+              step_s: float = 2e-6, cache: dict | None = None) -> NDArray:
     """Peak of the weighted GCC-PHAT of cross-spectra ``(..., F)`` (numpy sign convention:
-    ``cross = X_0 conj(X_1)``) over |tau| <= max_s; parabolic refinement. Returns t_0 - t_1 (s)."""
+    ``cross = X_0 conj(X_1)``) over |tau| <= max_s; parabolic refinement. Returns t_0 - t_1 (s).
+    ``cache``: a dict that keeps the steering matrix of these ``freqs`` (Hz) and bound for the
+    next call (a stream's frames: its ~130 000 complex exponentials were most of the cost)."""
     taus = np.arange(-max_s, max_s + step_s / 2, step_s)
     with np.errstate(invalid="ignore", divide="ignore"):
         ph = np.where(np.abs(cross) > 0, cross / np.abs(cross), 0.0) * weights
-    steer = np.exp(2j * np.pi * freqs[:, None] * taus[None])  # (F, T)
+    key = ("phat_steer", len(freqs), float(freqs[0]), float(freqs[-1]), float(max_s),
+           float(step_s))
+    steer = None if cache is None else cache.get(key)
+    if steer is None:
+        steer = np.exp(2j * np.pi * freqs[:, None] * taus[None])  # (F, T)
+        if cache is not None:
+            cache[key] = steer
     r = np.real(ph @ steer)
     k = np.clip(np.argmax(r, axis=-1), 1, len(taus) - 2)
     y0 = np.take_along_axis(r, (k - 1)[..., None], -1)[..., 0]
@@ -1259,7 +1269,7 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         x = hum.remove_lines(x, fs, lines)
     f, p0, p1, cr, n_used, noise_psd = _spectra(x, fs, frame_ms)
     edges = _band_edges(bands_hz, model.f_max)
-    use = (f >= max(edges[0], 100.0)) & (f <= min(edges[-1], 0.9 * model.f_max))
+    use = analysis_bins(f, edges, model)
     if use.sum() < 4:
         # (it blamed the sample rate alone, also for bands above the model's range or a short
         # frame at 16 kHz)
@@ -1269,15 +1279,40 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
             f"to 0.9 x the model's f_max of {model.f_max:g} Hz, below the Nyquist frequency "
             f"{fs / 2:g} Hz); 4 are needed: use a longer frame, a higher sample rate or bands "
             "within that range")
-    f, p0, p1, cr = f[use], p0[use], p1[use], cr[use]
-    if noise_psd is not None:
-        noise_psd = noise_psd[use]
+    est = localize_spectra(model, f[use], p0[use], p1[use], cr[use], n_used,
+                           None if noise_psd is None else noise_psd[use], edges, distances,
+                           sigma_iid_db, phase_weight)
+    if est is None:
+        raise AudioInputError("no coherent source found in the recording")
+    return replace(est, detected=_source_detected(x, fs, model, frame_ms))
+
+
+def analysis_bins(freqs_hz: NDArray, edges: NDArray, model: MaskModel) -> NDArray:
+    """Which frequencies (Hz) :func:`localize_spectra` analyses: within the IID bands
+    ``edges`` (Hz), at least 100 Hz and at most 0.9 x the model's ``f_max`` (bool mask)."""
+    return (freqs_hz >= max(edges[0], 100.0)) & (freqs_hz <= min(edges[-1], 0.9 * model.f_max))
+
+
+def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr: NDArray,
+                     n_used: float, noise_psd: NDArray | None, edges: NDArray,
+                     distances: tuple[float | None, ...] = TABLE_DISTANCES,
+                     sigma_iid_db: float = 1.0, phase_weight: float = 400.0
+                     ) -> MaskLocalization | None:
+    """:func:`localize_mask`'s decision from frame-averaged spectra: the auto-spectra ``p0``,
+    ``p1`` and cross-spectrum ``cr = X0 conj(X1)`` of the two microphones at frequencies ``f``
+    (Hz; :func:`analysis_bins` of the frame's), averaged over ``n_used`` frames (their
+    effective number for a weighted average), ``noise_psd`` the sensor noise's power per bin
+    (pause frames; None: a continuous source, the coherent split), IID band ``edges`` (Hz);
+    ``distances``, ``sigma_iid_db``, ``phase_weight`` as :func:`localize_mask` (checked there).
+    Returns its :class:`MaskLocalization` (``detected`` True: the caller's test decides), or
+    None when no bin holds a coherent source. The one place of the cost, shared by the
+    whole-recording :func:`localize_mask` and the stream's :class:`RunningMaskLocalizer`."""
     s0, s1 = _coherent_power(p0, p1, cr, n_used)
     coh = np.abs(cr) ** 2 / np.maximum(p0 * p1, 1e-300)
     w = coh / max(coh.sum(), 1e-300)
     if not np.isfinite(w).all() or w.sum() <= 0:
-        raise AudioInputError("no coherent source found in the recording")
-    itd = float(_phat_itd(cr, f, w, model.max_itd()))
+        return None
+    itd = float(_phat_itd(cr, f, w, model.max_itd(), cache=model._tables))
     band_idx = np.digitize(f, edges) - 1  # (F,)
     nb = len(edges) - 1
     onehot = (band_idx[None] == np.arange(nb)[:, None]).astype(float)  # (B, F)
@@ -1301,14 +1336,14 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
     best = None
     for dist in distances:
         az, _ = model.table(dist)
-        h = _table_at(model, dist, f)  # (A, 2, F) physics convention
-        hc = np.conj(h)  # numpy convention
-        phi_t = np.angle(hc[:, 0] * np.conj(hc[:, 1]))
-        rho = np.cos(phi[None] - phi_t) @ w  # (A,)
-        g0, g1 = np.abs(h[:, 0]) ** 2, np.abs(h[:, 1]) ** 2
-        src = (s0 + s1)[None] / np.maximum(g0 + g1, 1e-12)
+        cos_t, sin_t, r0, r1 = _table_terms(model, dist, f)
+        # rho = sum_f w cos(phi - phi_table), as two matrix-vector products
+        rho = cos_t @ (w * np.cos(phi)) + sin_t @ (w * np.sin(phi))  # (A,)
+        # the table's band powers for the recording's own spectrum: the source spectrum
+        # (s0 + s1) / (g0 + g1) through each microphone's table power g_m
+        src = (s0 + s1)[:, None] * onehot.T  # (F, B)
         with np.errstate(divide="ignore", invalid="ignore"):
-            iid_t = 10 * np.log10((src * g0) @ onehot.T / ((src * g1) @ onehot.T))
+            iid_t = 10 * np.log10((r0 @ src) / (r1 @ src))
         # (only the valid bands: a constant recording's invalid ones divided 0 by 0)
         chi = np.nansum((iid_meas[valid_b][None] - iid_t[:, valid_b]) ** 2
                         / (2 * var_b[valid_b]), axis=1)
@@ -1328,8 +1363,7 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
     other = np.where(front != front[k], np.abs(itd_tab - itd), np.inf)
     az_other = float(az[int(np.argmin(other))])
     return MaskLocalization(az_best, az_other, p_front, max(p_front, 1 - p_front), itd,
-                            iid_meas, edges, dist, cost,
-                            detected=_source_detected(x, fs, model, frame_ms),
+                            iid_meas, edges, dist, cost, detected=True,
                             phase_match=fit[0], iid_misfit=fit[1])
 
 
@@ -1383,6 +1417,24 @@ def _table_at(model: MaskModel, dist: float | None, f: NDArray) -> NDArray:
     out = out * np.exp(2j * np.pi * f * tau[..., None])
     model._tables[key] = out
     return out
+
+
+def _table_terms(model: MaskModel, dist: float | None, f: NDArray
+                 ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """The response table's parts of :func:`localize_spectra`'s cost at frequencies ``f``
+    (Hz), each (A, F) and cached: cos and sin of the interaural phase (numpy convention,
+    ``angle(H0* H1)``) and each microphone's share ``g_m / (g0 + g1)`` of the power
+    ``g_m = |H_m|^2``. Computed per call until 2026-12-05 (33 ms for three tables of a 64-ms
+    frame, ~0.5 ms since)."""
+    key = ("terms", dist, len(f), float(f[0]), float(f[-1]))
+    if key not in model._tables:
+        h = _table_at(model, dist, f)  # (A, 2, F) physics convention
+        hc = np.conj(h)  # numpy convention
+        phi_t = np.angle(hc[:, 0] * np.conj(hc[:, 1]))
+        g0, g1 = np.abs(h[:, 0]) ** 2, np.abs(h[:, 1]) ** 2
+        g = np.maximum(g0 + g1, 1e-12)
+        model._tables[key] = (np.cos(phi_t), np.sin(phi_t), g0 / g, g1 / g)
+    return model._tables[key]
 
 
 def _refine(az: NDArray, cost: NDArray, k: int) -> float:
