@@ -48,6 +48,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +63,7 @@ from hearsee.audio.mask import (  # noqa: E402
     MaskModel,
     front_back_margin,
     localize_mask,
+    localize_recording_mask,
     masked_room_impulse_responses,
     simulate_masked,
 )
@@ -72,6 +74,8 @@ from hearsee.audio.propagation import (  # noqa: E402
 )
 from hearsee.audio.signals import synthetic_voice, white_noise  # noqa: E402
 from hearsee.config import load_yaml  # noqa: E402
+from hearsee.errors import MaskFitWarning  # noqa: E402
+from hearsee.sim.moving import Trajectory, simulate_moving_masked  # noqa: E402
 
 FS = 16000
 SIGNALS = ("noise", "male", "female")
@@ -277,6 +281,90 @@ def run_rooms(trials: int, duration: float, seed: int, rt60s: list[float],
     return rows
 
 
+#: the stream part: talkers per signal and SNR, recording length (s), SNRs (dB)
+STREAM_WALKS = 8
+STREAM_DURATION_S = 4.0
+STREAM_SNRS = (10.0, 20.0)
+#: frames scored from this time on (s): the stream's front/back decision needs its averages
+STREAM_SCORED_FROM_S = 1.0
+
+
+def circle_walk(rng: np.random.Generator, k: int, duration: float
+                ) -> tuple[Trajectory, bool]:
+    """Talker ``k`` of the stream part, in the horizontal plane 1-2 m from the array: every
+    fourth one still, the others walking round it at 0.5-1.5 m/s (20-90 deg/s, either way,
+    crossing from front to back or back to front on the way); knots every 50 ms. Returns the
+    trajectory and whether it moves."""
+    a0, r = rng.uniform(-180.0, 180.0), rng.uniform(1.0, 2.0)
+    moving = k % 4 != 0
+    rate = np.degrees(rng.uniform(0.5, 1.5) / r) * rng.choice([-1.0, 1.0]) if moving else 0.0
+    t = np.arange(0.0, duration + 1e-9, 0.05)
+    az = np.radians(a0 + rate * t)
+    pos = r * np.stack([np.cos(az), np.sin(az), np.zeros_like(az)], axis=1)
+    return Trajectory(t, pos), moving
+
+
+def run_stream(walks: int, duration: float, seed: int, model: MaskModel) -> list[dict]:
+    """Masked talkers, still and walking round the array (:func:`circle_walk`), rendered
+    block-wise through the mask (free field, :func:`simulate_moving_masked`) and followed three
+    ways on the same frames (64 ms every 32 ms, scored from :data:`STREAM_SCORED_FROM_S`
+    against the direction heard at each frame time): hearsee's stream (``hearsee track``:
+    per-frame ITD candidates, the front/back decision of :class:`SmoothedMask` on the
+    recursively averaged spectra, the direction tracker); the frames of ``hearsee localize``
+    (the same ITDs, every frame put in the half decided for the whole recording -- what a
+    masked pair had before the stream took it); and pyroomacoustics' SRP-PHAT on each frame
+    (the bare pair's steering over 360 deg: no front/back)."""
+    from tracking import srp_per_frame
+
+    from hearsee.stream.pipeline import ArraySource, StreamPipeline
+
+    rng = np.random.default_rng([seed, 2000])
+    paths = [circle_walk(rng, k, duration) for k in range(walks)]
+    rows = []
+    for kind in SIGNALS:
+        for snr in STREAM_SNRS:
+            est: dict[str, list] = {"stream": [], "frames": [], "srp": [], "true": [],
+                                    "moving": []}
+            cpu = {"stream": 0.0, "srp": 0.0}
+            for traj, moving in paths:
+                sig = make_signal(kind, duration, rng)
+                x = simulate_moving_masked(sig, FS, model, traj, snr_db=snr,
+                                           rng=int(rng.integers(2**31)))
+                c0 = time.process_time()
+                ups = StreamPipeline(model.array).run(ArraySource(x, FS))
+                cpu["stream"] += time.process_time() - c0
+                t = np.array([u.t for u in ups])
+                heard = traj.heard_at(t, speed_of_sound=model.c)
+                with warnings.catch_warnings():  # (a moving source fits no one direction)
+                    warnings.simplefilter("ignore", MaskFitWarning)
+                    doc = localize_recording_mask(x, FS, model)
+                by_t = {round(f["t"], 6): f["azimuth_deg"] for f in doc["frames"]}
+                srp, c_srp = srp_per_frame(x, model.array, t)
+                cpu["srp"] += c_srp
+                got = {"stream": [u.azimuth_deg for u in ups],
+                       "frames": [by_t.get(round(v, 6)) for v in t], "srp": list(srp),
+                       "true": list(np.degrees(np.arctan2(heard[:, 1], heard[:, 0]))),
+                       "moving": [moving] * len(t)}
+                keep = t >= STREAM_SCORED_FROM_S
+                for key, vals in got.items():
+                    est[key] += [np.nan if v is None else v
+                                 for v, k in zip(vals, keep, strict=True) if k]
+            true = np.array(est["true"], float)
+            mov = np.array(est["moving"], bool)
+            row = {"signal": kind, "snr": snr, "n": walks, "frames": len(true)}
+            for name in ("stream", "frames", "srp"):
+                e = np.array(est[name], float)
+                row[f"{name}_fb"], row[f"{name}_rmse"], row[f"{name}_med"] = _stats(e, true)
+                row[f"{name}_fb_moving"] = _stats(e[mov], true[mov])[0]
+            row["stream_cpu"] = 1e3 * cpu["stream"] / (walks * duration)
+            row["srp_cpu"] = 1e3 * cpu["srp"] / (walks * duration)
+            rows.append(row)
+            print(f"stream {kind:6s} {snr:4.0f} dB  " + "  ".join(
+                f"{k} fb {row[f'{k}_fb']:5.1f}% rmse {row[f'{k}_rmse']:5.1f}"
+                for k in ("stream", "frames", "srp")), flush=True)
+    return rows
+
+
 def plot(rows: list[dict], path: Path) -> None:
     import matplotlib
 
@@ -344,17 +432,21 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--rt60s", default="0.3,0.6",
                     help="room reverberation times (s) of the rooms part; '' skips it")
     ap.add_argument("--room-trials", type=int, default=16, help="sources per room")
+    ap.add_argument("--stream-walks", type=int, default=STREAM_WALKS,
+                    help="talkers per signal and SNR of the stream part; 0 skips it")
     a = ap.parse_args(argv)
     snrs = [float(s) for s in a.snrs.split(",")]
     trials = a.trials
     rt60s = [float(v) for v in a.rt60s.split(",") if v.strip()]
-    room_trials = a.room_trials
+    room_trials, walks = a.room_trials, a.stream_walks
     if a.quick:
-        trials, snrs, room_trials = 6, [10.0, 20.0], 4
+        trials, snrs, room_trials, walks = 6, [10.0, 20.0], 4, min(walks, 2)
     t0 = time.time()
     mis = not a.no_mismatch
     rows, models = run(trials, snrs, a.duration, a.seed, mis)
     room_rows = run_rooms(room_trials, a.duration, a.seed, rt60s, models) if rt60s else []
+    stream_rows = (run_stream(walks, STREAM_DURATION_S, a.seed, models[DESIGNS[0][0]])
+                   if walks > 0 else [])
     headers = ["signal", "field", "SNR dB", "n"]
     for k, preset in DESIGNS:
         headers += [f"{preset} detected %", f"{preset} F/B %", f"{preset} RMSE",
@@ -401,6 +493,16 @@ def main(argv: list[str] | None = None) -> None:
                r["bare_fb"], r["bare_rmse"], r["bare_med"]] for r in room_rows]
     if rtable:
         print_table(f"in a {'x'.join(f'{v:g}' for v in ROOM)} m room", rhead, rtable)
+    shead = ["signal", "SNR dB", "talkers", "frames",
+             *[f"{name} {c}" for name in ("stream", "localize frames", "SRP-PHAT")
+               for c in ("F/B %", "F/B % walking", "RMSE", "median")],
+             "stream CPU ms/s", "SRP-PHAT CPU ms/s"]
+    stable = [[r["signal"], r["snr"], r["n"], r["frames"],
+               *[r[f"{k}_{c}"] for k in ("stream", "frames", "srp")
+                 for c in ("fb", "fb_moving", "rmse", "med")],
+               r["stream_cpu"], r["srp_cpu"]] for r in stream_rows]
+    if stable:
+        print_table(f"{DESIGNS[0][1]} in the stream: talkers walking round it", shead, stable)
     RESULTS.mkdir(parents=True, exist_ok=True)
     png = RESULTS / "mask.png"
     plot(rows, png)
@@ -417,6 +519,16 @@ def main(argv: list[str] | None = None) -> None:
             "directions the cues cannot tell apart.\n\n" + markdown_table(mhead, mrows))),
         ("Results", markdown_table(headers, table)),
         *([("Rooms", room_md)] if room_md else []),
+        *([("Stream: talkers walking round the mask", (
+            f"{DESIGNS[0][1]}, free field; {walks} talkers per signal and SNR, "
+            f"{STREAM_DURATION_S:g} s each, 1-2 m away in the horizontal plane, one in four "
+            "still, the others walking round the array at 0.5-1.5 m/s (crossing between "
+            "front and back); every 64-ms frame (32-ms hop) from "
+            f"{STREAM_SCORED_FROM_S:g} s on scored against the direction heard then (see "
+            "`run_stream`): hearsee's stream (`hearsee track`), the frames of `hearsee "
+            "localize` (one half for the whole recording) and pyroomacoustics' SRP-PHAT "
+            "per frame (no front/back). 'F/B % walking' counts the walking talkers' frames "
+            "only.\n\n" + markdown_table(shead, stable)))] if stable else []),
         ("Plot", f"![mask]({png.name})"),
     ], intro=(__doc__.split("\n\n")[0] + f"\n\nRun: `python bench/mask.py` (trials={trials}, "
               f"SNRs {','.join(f'{s:g}' for s in snrs)} dB, duration={a.duration} s, "

@@ -415,7 +415,7 @@ def test_moving_masked_simulation(model):
     traj, az = _circling(-100.0, 60.0, 3.0)
     x = simulate_moving_masked(white_noise(3.0, FS, rng=4), FS, model, traj, snr_db=30, rng=5,
                                far_field=True)
-    tf = estimate_tdoas(x, FS, model.array, margin_samples=mask._itd_margin_samples(model, FS))
+    tf = estimate_tdoas(x, FS, model.array, margin_samples=mask.itd_margin_samples(model, FS))
     tab = mask._itd_table(model, None)  # (1-deg grid from 0 deg)
     truth = np.interp(az(tf.t - 1e-3) % 360.0, np.arange(361.0), np.append(tab, tab[0]))
     err = (tf.tdoa_s[:, 0] - truth)[tf.valid]
@@ -472,7 +472,7 @@ def test_moving_masked_recording_is_smoothed_without_lag(model):
     truth = np.interp(az(t - 1.5 / 343.0) % 360.0, np.arange(361.0), np.append(tab, tab[0]))
     ok = np.isfinite(got)
     smoothed = np.sqrt(np.mean((got[ok] - truth[ok]) ** 2))
-    tf = estimate_tdoas(x, FS, model.array, margin_samples=mask._itd_margin_samples(model, FS))
+    tf = estimate_tdoas(x, FS, model.array, margin_samples=mask.itd_margin_samples(model, FS))
     raw = np.sqrt(np.mean((tf.tdoa_s[ok, 0] - truth[ok]) ** 2))
     old, _ = ItdKalman(2, tf.pairs, q_std_s=0.25 / FS, r_std_s=1.0 / FS).filter(tf.tdoa_s)
     lagged = np.sqrt(np.mean((old[ok, 0] - truth[ok]) ** 2))
@@ -984,3 +984,117 @@ def test_cli_refuses_a_masked_room_the_mask_does_not_fit(asym, tmp_path, capsys)
         err = capsys.readouterr().err
         assert code == 2 and err.count("\n") == 1 and told in err
         assert err.startswith("hearsee: error: ") and not wav.exists()
+
+
+# ------------------------------------------------------------------------------- the stream
+def _stream(array, x, block=2048, **cfg):
+    from hearsee.stream.pipeline import ArraySource, StreamConfig, StreamPipeline
+
+    ups = StreamPipeline(array, StreamConfig(**cfg)).run(ArraySource(x, FS, block))
+    t = np.array([u.t for u in ups])
+    az = np.array([np.nan if u.azimuth_deg is None else u.azimuth_deg for u in ups])
+    return ups, t, az
+
+
+def test_stream_tracks_a_masked_pair_over_360_degrees(asym):
+    """The stream took a masked pair for the bare pair until 2026-12-05 (a source at -153 deg
+    came out at -29 deg) and was refused for it: now its front/back decision runs in the
+    stream (SmoothedMask). A still source behind (150 deg; the bare pair's reading would be
+    its mirror, 30 deg) is tracked there, and a source circling from front to back round the
+    left side is followed into the back half."""
+    from hearsee.geometry import wrap_deg
+    from hearsee.sim.moving import simulate_moving_masked
+
+    x = mask.simulate_masked(white_noise(2.0, FS, rng=7), FS, asym, _src(150.0, 1.5),
+                             snr_db=20, rng=8)
+    ups, t, az = _stream(asym.array, x)
+    late = t >= 1.0
+    assert np.all(np.isfinite(az[late]))
+    assert np.max(np.abs(wrap_deg(az[late] - 150.0))) < 5.0
+    assert all(u.front_probability < 0.01 for u, k in zip(ups, late, strict=True) if k)
+    assert ups[-1].to_json()["front_probability"] == ups[-1].front_probability
+    assert ups[-1].elevation_deg is None
+    # circling at 60 deg/s from 10 deg (front, left) to 178 deg (behind), 1.5 m away; away
+    # from the side (60-125 deg), where this coarse mask's ITD levels off and a frame's ITD
+    # says little about the azimuth
+    traj, truth = _circling(10.0, 60.0, 2.8, d=1.5)
+    x = simulate_moving_masked(white_noise(2.8, FS, rng=9), FS, asym, traj, snr_db=20, rng=10)
+    ups, t, az = _stream(asym.array, x)
+    heard = truth(t - 1.5 / 343.0)
+    err = np.abs(wrap_deg(az - heard))
+    front, back = (heard > 25.0) & (heard < 60.0), (heard > 125.0) & (heard < 165.0)
+    assert front.sum() >= 15 and back.sum() >= 15
+    assert np.nanmedian(err[front]) < 5.0 and np.nanmedian(err[back]) < 5.0
+    # (behind, not at the mirror 15-55 deg: the half followed the source round)
+    assert np.all(err[back] < 30.0)  # (the mirror is 70-150 deg off there)
+
+
+def test_masked_stream_does_not_depend_on_block_size(asym):
+    """The front/back decisions are made every MASK_DECISION_S counted in frames from the
+    stream's start, so a file read in blocks of 333 or 4096 samples is tracked as one read
+    whole (as the bare arrays' stream, tests/stream/test_block_invariance.py)."""
+    x = mask.simulate_masked(white_noise(1.5, FS, rng=11), FS, asym, _src(-120.0, 1.2),
+                             snr_db=15, rng=12)
+    ups0, t0, az0 = _stream(asym.array, x, block=x.shape[1])
+    p0 = np.array([np.nan if u.front_probability is None else u.front_probability
+                   for u in ups0])
+    assert np.isfinite(az0).sum() >= 20 and np.isfinite(p0).sum() >= 20
+    for block in (333, 4096):
+        ups, t, az = _stream(asym.array, x, block=block)
+        p = np.array([np.nan if u.front_probability is None else u.front_probability
+                      for u in ups])
+        np.testing.assert_array_equal(t, t0)
+        np.testing.assert_allclose(az, az0, atol=1e-3, equal_nan=True)
+        np.testing.assert_allclose(p, p0, atol=1e-6, equal_nan=True)
+
+
+def test_masked_stream_refuses_a_camera_and_a_frame_without_bins(asym):
+    """A masked pair gives a direction, not the bare microphones' ITD equations that the
+    camera fusion solves: refused with a camera rig. A frame too short to hold four frequency
+    bins in the mask's bands cannot decide front or back: a ConfigError, not an empty track."""
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import StreamConfig, TrackingProcessor
+
+    with pytest.raises(ConfigError, match="has a mask: .* without a camera"):
+        TrackingProcessor(asym.array, FS, rig=default_rig(160, 120))
+    with pytest.raises(ConfigError, match="4 are needed: use a longer frame"):
+        TrackingProcessor(asym.array, FS, StreamConfig(frame_ms=2.0, hop_ms=1.0))
+    with pytest.raises(ConfigError, match="mask_tau_s"):
+        StreamConfig(mask_tau_s=0.0)
+    with pytest.raises(ConfigError, match="mask_decide_confidence"):
+        StreamConfig(mask_decide_confidence=0.3)
+
+
+def test_cli_tracks_a_masked_pair_and_refuses_it_with_a_camera(asym, tmp_path, capsys):
+    """`hearsee track --array MASK.yaml` was refused until 2026-12-05; it now prints the 360-
+    degree track (and each update's front_probability) of a source behind the pair. With
+    --camera it is one line and exit 2 before any audio is read (the fusion solves the bare
+    microphones' ITD equations)."""
+    import json
+
+    import yaml
+
+    from hearsee.cli import main
+
+    spec = tmp_path / "coarse-mask.yaml"
+    spec.write_text(yaml.safe_dump(asym.array.to_dict()), encoding="utf-8")
+    wav = tmp_path / "rec.wav"
+    src = f"{np.cos(np.radians(-140.0)):.6f},{np.sin(np.radians(-140.0)):.6f},0"
+    assert main(["simulate", str(wav), "--array", str(spec), "--source", src, "--snr", "20",
+                 "--duration", "2.0", "--seed", "5"]) == 0
+    capsys.readouterr()
+    assert main(["track", str(wav), "--array", str(spec), "--format", "jsonl"]) == 0
+    lines = [json.loads(v) for v in capsys.readouterr().out.splitlines()]
+    late = [d for d in lines if d["t"] >= 1.0]
+    assert len(late) >= 25
+    err = np.abs([(d["azimuth_deg"] + 140.0 + 180.0) % 360.0 - 180.0 for d in late])
+    assert np.median(err) < 3.0 and err.max() < 10.0  # (the mirror, -40 deg, is 100 deg off)
+    assert all(d["front_probability"] < 0.01 for d in late)
+    cam = tmp_path / "cam.yaml"
+    cam.write_text("not read\n", encoding="utf-8")
+    pts = tmp_path / "points.csv"
+    pts.write_text("t,u,v\n0,80,60\n", encoding="utf-8")
+    assert main(["track", str(wav), "--array", str(spec), "--camera", str(cam),
+                 "--image-points", str(pts)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "has a mask" in err[0] and "without a camera" in err[0], err

@@ -115,6 +115,8 @@ __all__ = [
     "analysis_bins",
     "cache_dir",
     "front_back_margin",
+    "itd_candidates",
+    "itd_margin_samples",
     "localize_mask",
     "localize_recording_mask",
     "localize_spectra",
@@ -1335,15 +1337,14 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
     phi = np.angle(cr)
     best = None
     for dist in distances:
-        az, _ = model.table(dist)
-        cos_t, sin_t, r0, r1 = _table_terms(model, dist, f)
-        # rho = sum_f w cos(phi - phi_table), as two matrix-vector products
-        rho = cos_t @ (w * np.cos(phi)) + sin_t @ (w * np.sin(phi))  # (A,)
+        az, trig, shares = _table_terms(model, dist, f)
+        # rho = sum_f w cos(phi - phi_table) = [cos phi_t, sin phi_t] @ [w cos phi, w sin phi]
+        rho = trig @ np.concatenate([w * np.cos(phi), w * np.sin(phi)])  # (A,)
         # the table's band powers for the recording's own spectrum: the source spectrum
         # (s0 + s1) / (g0 + g1) through each microphone's table power g_m
-        src = (s0 + s1)[:, None] * onehot.T  # (F, B)
+        e_t = shares @ ((s0 + s1)[:, None] * onehot.T)  # (2 A, B): microphone 0's, then 1's
         with np.errstate(divide="ignore", invalid="ignore"):
-            iid_t = 10 * np.log10((r0 @ src) / (r1 @ src))
+            iid_t = 10 * np.log10(e_t[:len(az)] / e_t[len(az):])
         # (only the valid bands: a constant recording's invalid ones divided 0 by 0)
         chi = np.nansum((iid_meas[valid_b][None] - iid_t[:, valid_b]) ** 2
                         / (2 * var_b[valid_b]), axis=1)
@@ -1367,7 +1368,7 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
                             phase_match=fit[0], iid_misfit=fit[1])
 
 
-def _itd_margin_samples(model: MaskModel, fs: float) -> float:
+def itd_margin_samples(model: MaskModel, fs: float) -> float:
     """How far (samples) the mask's largest ITD exceeds the bare pair's, as the GCC lag bound's
     ``margin_samples`` (at least 1)."""
     return max(1.0, (model.max_itd() - float(model.array.max_tdoa()[0])) * fs)
@@ -1384,7 +1385,7 @@ def _source_detected(x: NDArray, fs: float, model: MaskModel, frame_ms: float) -
 
     frame = 64.0 if x.shape[1] >= frame_geometry(fs, 64.0, 32.0)[0] else frame_ms
     tf = estimate_tdoas(x, fs, model.array, frame_ms=frame, hop_ms=frame / 2,
-                        margin_samples=_itd_margin_samples(model, fs),
+                        margin_samples=itd_margin_samples(model, fs),
                         tonal_noise=False)  # (localize_mask has filtered the hum out)
     return bool(np.all(np.isfinite(tf.summary_tdoa_s)))
 
@@ -1420,20 +1421,23 @@ def _table_at(model: MaskModel, dist: float | None, f: NDArray) -> NDArray:
 
 
 def _table_terms(model: MaskModel, dist: float | None, f: NDArray
-                 ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+                 ) -> tuple[NDArray, NDArray, NDArray]:
     """The response table's parts of :func:`localize_spectra`'s cost at frequencies ``f``
-    (Hz), each (A, F) and cached: cos and sin of the interaural phase (numpy convention,
-    ``angle(H0* H1)``) and each microphone's share ``g_m / (g0 + g1)`` of the power
-    ``g_m = |H_m|^2``. Computed per call until 2026-12-05 (33 ms for three tables of a 64-ms
-    frame, ~0.5 ms since)."""
+    (Hz), cached: its azimuths (A,) deg; ``[cos phi_t, sin phi_t]`` (A, 2F) of its interaural
+    phase (numpy convention, ``angle(H0* H1)``); each microphone's share ``g_m / (g0 + g1)``
+    of the power ``g_m = |H_m|^2``, microphone 0's rows above microphone 1's (2A, F).
+    Computed per call until 2026-12-05 (33 ms for three tables of a 64-ms frame, ~1 ms
+    since)."""
     key = ("terms", dist, len(f), float(f[0]), float(f[-1]))
     if key not in model._tables:
+        az, _ = model.table(dist)
         h = _table_at(model, dist, f)  # (A, 2, F) physics convention
         hc = np.conj(h)  # numpy convention
         phi_t = np.angle(hc[:, 0] * np.conj(hc[:, 1]))
         g0, g1 = np.abs(h[:, 0]) ** 2, np.abs(h[:, 1]) ** 2
         g = np.maximum(g0 + g1, 1e-12)
-        model._tables[key] = (np.cos(phi_t), np.sin(phi_t), g0 / g, g1 / g)
+        model._tables[key] = (az, np.concatenate([np.cos(phi_t), np.sin(phi_t)], axis=1),
+                              np.concatenate([g0 / g, g1 / g], axis=0))
     return model._tables[key]
 
 
@@ -1462,6 +1466,21 @@ def _invert_itd(itd_tab: NDArray, az_tab: NDArray, half: NDArray, itd_s: float,
     cand = np.flatnonzero(local & (err <= err[best] + tol_s))
     gap = np.abs(wrap_deg(az_tab[cand] - prior_deg))
     return float(az_tab[cand[int(np.argmin(gap))]])
+
+
+def itd_candidates(model: MaskModel, itd_s: float, fs: float, prior_front_deg: float,
+                   prior_back_deg: float) -> tuple[float, float]:
+    """The two azimuths (deg, in (-180, 180], on the far-field ITD table's 1-degree grid) that
+    a masked pair's ITD ``itd_s`` (s, t_0 - t_1) gives, one in front (|az| < 90) and one
+    behind: where the ITD matches twice within a half, the match nearest that half's prior
+    (deg; :func:`_invert_itd`, within half a sample at ``fs`` Hz). The one place that turns a
+    masked pair's ITD into directions (``hearsee localize``'s frames, the stream)."""
+    az_tab = wrap_deg(np.arange(0.0, 360.0, 1.0))  # (the ITD table's grid, in (-180, 180])
+    itd_tab = _itd_table(model, None)
+    front = np.abs(az_tab) < 90
+    tol = 0.5 / float(fs)
+    return (_invert_itd(itd_tab, az_tab, front, itd_s, prior_front_deg, tol),
+            _invert_itd(itd_tab, az_tab, ~front, itd_s, prior_back_deg, tol))
 
 
 # ------------------------------------------------------------------------------- CLI document
@@ -1517,10 +1536,9 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
     x = as_samples(x)
     method = normalize_method(method)
     tf = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method,
-                        margin_samples=_itd_margin_samples(model, fs), progress=progress)
+                        margin_samples=itd_margin_samples(model, fs), progress=progress)
     est = localize_mask(x, fs, model, tonal_lines_hz=tf.tonal_lines_hz)  # (hum: found once)
     tdoa = tf.tdoa_s[:, 0]
-    az_tab = wrap_deg(np.arange(0.0, 360.0, 1.0))  # (the ITD table's grid, in (-180, 180])
     itd_tab = _itd_table(model, None)
     noise: tuple[float, float] | None = None  # the filter's (q_std_s, r_std_s)
     noise_model = None
@@ -1529,20 +1547,17 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
             tf.tdoa_s, tf.confidence, 2, tf.pairs, fs, float(np.max(np.abs(itd_tab))),
             frame_geometry(fs, frame_ms, hop_ms)[1] / fs, q_std_s, r_std_s, tune_kalman)
         tdoa = filt[:, 0]
-    front_tab = np.abs(az_tab) < 90
     want_front = est.front_probability >= 0.5
     # each half's candidate: the ITD's match nearest the summary's azimuth in that half (the
-    # runner-up's in the other), within half a sample (see _invert_itd)
+    # runner-up's in the other; see itd_candidates)
     prior_f, prior_b = ((est.azimuth_deg, est.runner_up_deg) if want_front
                         else (est.runner_up_deg, est.azimuth_deg))
-    tol = 0.5 / float(fs)
     frames = []
     for n in range(len(tf.t)):
         ok = bool(tf.valid[n]) and bool(np.isfinite(tdoa[n]))
         cands = []
         if ok:
-            a_f = _invert_itd(itd_tab, az_tab, front_tab, tdoa[n], prior_f, tol)
-            a_b = _invert_itd(itd_tab, az_tab, ~front_tab, tdoa[n], prior_b, tol)
+            a_f, a_b = itd_candidates(model, tdoa[n], fs, prior_f, prior_b)
             cands = [a_f, a_b] if want_front else [a_b, a_f]
         frames.append({
             "t": float(tf.t[n]),

@@ -279,7 +279,8 @@ def track_cmd(
     if not 0.0 <= gate_coherence <= 1.0:
         raise ConfigError(f"--gate-coherence must be in [0, 1] (0 = off), got {gate_coherence}")
     arr = load_array(array)
-    check_trackable(arr)  # (a masked pair or a vertical line: refused before any audio)
+    # (a vertical line, or a masked pair with a camera: refused before any audio)
+    check_trackable(arr, camera=camera is not None)
     rig = points = None
     if camera is not None:
         from hearsee.fusion.audiovisual import AudioVisualRig

@@ -339,7 +339,7 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
     array, spec = _array(d.get("array", "three-mic"), f"{where}.array", base)
     from hearsee.stream.pipeline import check_trackable
 
-    try:  # (the live loop's stream cannot use a masked pair or a vertical line: say so now)
+    try:  # (the live loop's stream cannot use a vertical line: say so now)
         check_trackable(array)
     except ConfigError as exc:
         raise ConfigError(f"{where}.array: {exc}") from None

@@ -498,10 +498,10 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
         raise type(exc)(f"{rw}.array: {exc}") from None
     if arr.mask is not None or array_geometry(arr).kind == "linear":
         raise ConfigError(
-            f"{rw}.array: {arr.name!r} cannot give the robot a 360-degree direction (a "
-            "masked pair decides front/back on whole recordings, not in the stream the robot "
-            "tracks with; a linear array has a front/back mirror); use a planar array of 3 "
-            "or more microphones, e.g. three-mic, respeaker-4 or respeaker-6"
+            f"{rw}.array: {arr.name!r} cannot give the simulated robot a 360-degree "
+            "direction (walking talkers in a room are not rendered through a mask; a linear "
+            "array has a front/back mirror); use a planar array of 3 or more microphones, e.g. "
+            "three-mic, respeaker-4 or respeaker-6"
         )
     robot = RobotSpec(
         position_m=robot_xy,

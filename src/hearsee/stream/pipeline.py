@@ -20,7 +20,10 @@ Systems 113, 2019): small stages with explicit configuration, connected by a bou
   without its whole-recording summary, each frame's activity decided causally by
   :class:`FrameActivity`, so that no result depends on the block size) and
   :class:`SmoothedSrp` (recursively smoothed cross spectra steered over a direction grid,
-  its steering matrix precomputed once, single precision) are the measurement stages.
+  its steering matrix precomputed once, single precision) are the measurement stages; a
+  masked pair (thesis ch. 3) has :class:`SmoothedMask` instead of the steered response: the
+  mask's front/back decision (:func:`hearsee.audio.mask.localize_spectra`) on recursively
+  averaged spectra puts each frame's ITD in its half (since 2026-12-05; refused before).
 * :class:`TrackingProcessor` holds the TDOA, ITD-filter
   (:class:`~hearsee.audio.itd_filter.ItdKalman`), localizer
   (:func:`~hearsee.audio.localize.localize_tdoa`) and tracker stages
@@ -227,6 +230,7 @@ class Update:
     raw_position_m: list[float] | None = None
     itd_azimuth_deg: float | None = None
     itd_elevation_deg: float | None = None
+    front_probability: float | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The JSON object of the CLI contract (plus ``rate_dps``, ``measured``, ``missing``,
@@ -244,6 +248,9 @@ class Update:
             "measured": self.measured,
             "missing": self.missing,
             "latency_ms": None if not np.isfinite(self.latency_s) else self.latency_s * 1e3,
+            # (a masked pair's: the stream's front/back decision; absent for other arrays)
+            **({} if self.front_probability is None
+               else {"front_probability": self.front_probability}),
         }
 
 
@@ -458,10 +465,15 @@ def wiring_estimate(x: NDArray, fs: float, array: MicArray, cfg: StreamConfig,
 
     cfg = _stream_config(cfg)
     array = load_array(array)
+    margin = DEFAULT_MARGIN_SAMPLES
+    if array.mask is not None:  # (a masked pair's ITDs reach past its bare delays)
+        from hearsee.audio.mask import MaskModel, itd_margin_samples
+
+        margin = itd_margin_samples(MaskModel(array), fs)
     try:
         return estimate_tdoas(x, fs, array, cfg.frame_ms, cfg.hop_ms, cfg.method,
-                              band_hz=cfg.band_hz, empty_band_db=empty_band_db,
-                              tonal_noise=tonal_noise)
+                              band_hz=cfg.band_hz, margin_samples=margin,
+                              empty_band_db=empty_band_db, tonal_noise=tonal_noise)
     except HearseeError:
         return None
 
@@ -1035,15 +1047,17 @@ class FrameGcc:
     #: Frames per estimate_tdoas call (bounds memory on a whole file read as one block)
     CHUNK_FRAMES = 128
 
-    def __init__(self, array: MicArray, fs: float, cfg: StreamConfig) -> None:
+    def __init__(self, array: MicArray, fs: float, cfg: StreamConfig,
+                 margin_samples: float = DEFAULT_MARGIN_SAMPLES) -> None:
         from hearsee.audio.tdoa import _band_mask, _window
 
         self.array, self.fs, self.cfg = array, float(fs), cfg
+        self.margin_samples = float(margin_samples)  # (a masked pair's ITDs reach further)
         self.pairs = list(array.pairs)
         self.frame_len, self.hop = frame_geometry(fs, cfg.frame_ms, cfg.hop_ms)
         # estimate_tdoas's window, transform length and band (its defaults, which the calls
         # below leave in place): the noise spectra must be of its frames' spectra
-        max_lag = array.max_tdoa(self.pairs) * self.fs + DEFAULT_MARGIN_SAMPLES
+        max_lag = array.max_tdoa(self.pairs) * self.fs + self.margin_samples
         nfft = gcc_nfft(self.frame_len, float(max_lag.max()))
         n_bins = nfft // 2 + 1
         bins = np.flatnonzero(_band_mask(n_bins, nfft, self.fs, cfg.band_hz))
@@ -1113,7 +1127,8 @@ class FrameGcc:
             tf = estimate_tdoas(part, self.fs, self.array, cfg.frame_ms, cfg.hop_ms,
                                 cfg.method, self.pairs, band_hz=cfg.band_hz,
                                 refine=cfg.refine, min_confidence=cfg.min_confidence,
-                                whole_recording=False, snr_weight=bool(cfg.snr_weight),
+                                margin_samples=self.margin_samples, whole_recording=False,
+                                snr_weight=bool(cfg.snr_weight),
                                 active=active, frame_noise_psd=noise,
                                 causal_smoothing=True, chunk_frames=len(active),
                                 empty_band_db=None)  # (a band per batch: results would
@@ -1410,6 +1425,138 @@ class SmoothedSrp:
                 "profile": prof}
 
 
+#: The fewest frames (their effective number, ``(sum w)^2 / sum w^2``) whose averaged spectra
+#: :class:`SmoothedMask` decides on: :func:`hearsee.audio.mask.localize_mask` needs no fewer
+#: from a recording either (4 frames of 64 ms: a quarter second of sound).
+MASK_MIN_FRAMES = 4.0
+#: :class:`SmoothedMask` decides every this many seconds (rounded to whole hops; the frames in
+#: between hold the last decision): its averages change little from one hop to the next, and
+#: each decision costs about as much as a frame's whole GCC stage.
+MASK_DECISION_S = 0.125
+#: A masked pair's track within this many degrees of the side axis (+-90 deg) is in neither
+#: half for :meth:`TrackingProcessor._wrong_half`: there the two halves' candidates meet.
+MASK_SIDE_DEG = 10.0
+
+
+class SmoothedMask:
+    """A masked pair's front/back decision and 360-degree azimuth through a stream (thesis
+    ch. 3's mask in ch. 5's stream).
+
+    :func:`hearsee.audio.mask.localize_mask` decides on a whole recording's frame-averaged
+    auto- and cross-spectra. Here the same averages run recursively over the stream's frames,
+    ``S <- lam S + X X*`` with ``lam = exp(-hop / tau_s)`` (the evidence of about the last
+    ``tau_s`` seconds: recursive averaging of the spectra as :class:`SmoothedSrp` and ODAS's
+    SSL module), over the frames that :class:`FrameActivity` finds active (the quiet ones only
+    decay the averages), with its noise spectrum of the pauses (a continuous source has none:
+    the coherent split, as localize_mask without pauses). Every :data:`MASK_DECISION_S`
+    (counted in frames from the stream's start, so that the decisions do not depend on the
+    blocks the samples came in) the estimate is :func:`hearsee.audio.mask.localize_spectra`
+    -- the one cost of the whole-recording decision -- on the averages so far, from
+    :data:`MASK_MIN_FRAMES` effective frames on; the frames in between hold it.
+    Reconstruction (no streaming form in the thesis); the estimate lags a moving source by
+    about ``tau_s`` / 2 and a change of half (a talker walking round behind the head) by up
+    to ``tau_s``.
+
+    Frames: Hann windows of ``frame_len`` samples at the stream's hop, their rfft bins within
+    :func:`hearsee.audio.mask.analysis_bins`. Levels: the samples are scaled by
+    :func:`level_scale` of the largest |sample| seen (the state carried along when it changes,
+    as :class:`SmoothedSrp`); the decision is scale-free. Units: seconds, Hz, degrees.
+    """
+
+    def __init__(self, model: Any, fs: float, frame_len: int, hop: int, tau_s: float,
+                 history_frames: int) -> None:
+        from hearsee.audio.mask import analysis_bins, default_bands
+
+        self.model, self.fs, self.frame_len = model, float(fs), int(frame_len)
+        self.nfft = self.frame_len
+        self.edges = default_bands(model.f_max)
+        f = np.fft.rfftfreq(self.nfft, 1.0 / self.fs)
+        bins = np.flatnonzero(analysis_bins(f, self.edges, model))
+        if bins.size < 4:
+            raise ConfigError(
+                f"a {self.frame_len}-sample frame at {fs:g} Hz holds {bins.size} frequency "
+                f"bins within the masked pair's bands ({self.edges[0]:g}-{self.edges[-1]:g} Hz, "
+                "below 0.9 x its model's f_max); 4 are needed: use a longer frame")
+        self.k0, self.k1 = int(bins[0]), int(bins[-1]) + 1
+        self.freqs = f[self.k0:self.k1]
+        self.win = np.hanning(self.frame_len).astype(np.float32)
+        self.lam = math.exp(-hop / self.fs / float(tau_s))
+        self.every = max(1, int(round(MASK_DECISION_S * self.fs / hop)))
+        self.activity = FrameActivity(history_frames, self.frame_len, self.win, self.nfft,
+                                      self.k0, self.k1)
+        self.reset()
+
+    def reset(self) -> None:
+        self._S = np.zeros((3, self.k1 - self.k0), complex)  # |X0|^2, |X1|^2, X0 X1*
+        self._w = self._w2 = 0.0  # sum of the weights and of their squares
+        self._peak, self._scale = 0.0, 1.0
+        self._n = 0  # frames since the start (missing ones too)
+        self._last: Any = None  # the decision the frames hold
+
+    def skip(self, n_frames: int) -> None:
+        """Age the averages through ``n_frames`` missing frames (they decay, nothing is added;
+        they count towards the next decision's time)."""
+        n = max(int(n_frames), 0)
+        self._decay(n)
+        self._n += n
+
+    def _decay(self, n: int) -> None:
+        self._S *= self.lam**n
+        self._w *= self.lam**n
+        self._w2 *= self.lam ** (2 * n)
+
+    def _rescale(self, peak: float) -> None:
+        if not np.isfinite(peak):
+            raise AudioInputError("recording contains NaN or infinite samples")
+        self._peak = max(self._peak, peak)
+        scale = level_scale(self._peak)
+        if scale != self._scale:
+            f = (scale / self._scale) ** 2  # a power of two: exact
+            self._S *= f
+            self.activity.rescale(f)
+            self._scale = scale
+
+    def process(self, segment: NDArray, n_frames: int, hop: int) -> list[Any]:
+        """Average and decide ``n_frames`` consecutive frames of ``segment`` (2, n): one
+        :class:`~hearsee.audio.mask.MaskLocalization` per frame, None where the averages hold
+        too few frames or no coherent source."""
+        from hearsee.audio.mask import localize_spectra
+
+        seg = np.asarray(segment, dtype=np.float32)  # (single precision, as the other stages)
+        self._rescale(float(np.max(np.abs(seg), initial=0.0)))
+        if self._scale != 1.0:
+            seg = seg * np.float32(self._scale)
+        fr = frame_signals(seg, self.frame_len, hop)[:, :n_frames]
+        if fr.shape[1] != n_frames:
+            raise EstimationError(f"SmoothedMask.process: the segment holds {fr.shape[1]} "
+                                  f"frames of {self.frame_len} samples (hop {hop}), not "
+                                  f"{n_frames}")
+        active, noise = self.activity(fr)
+        X = frame_spectra(fr, self.win, self.nfft, self.k0, self.k1)  # (2, k, B)
+        out: list[Any] = []
+        for i in range(n_frames):
+            self._decay(1)
+            if active[i]:
+                x0, x1 = X[0, i], X[1, i]
+                self._S[0] += x0.real**2 + x0.imag**2
+                self._S[1] += x1.real**2 + x1.imag**2
+                self._S[2] += x0 * np.conj(x1)
+                self._w += 1.0
+                self._w2 += 1.0
+            if self._n % self.every == 0:
+                self._last = None
+                if self._w > 0 and self._w**2 / self._w2 >= MASK_MIN_FRAMES - 1e-9:
+                    S = self._S / self._w
+                    nz = None if noise is None or not np.all(np.isfinite(noise[i])) else (
+                        noise[i].mean(axis=0).astype(float))
+                    self._last = localize_spectra(self.model, self.freqs, S[0].real,
+                                                  S[1].real, S[2], self._w**2 / self._w2, nz,
+                                                  self.edges)
+            self._n += 1
+            out.append(self._last)
+        return out
+
+
 # ---------------------------------------------------------------------------- processing
 @dataclass
 class StreamConfig:
@@ -1627,6 +1774,18 @@ class StreamConfig:
         the interferer in 11 % of the frames, 8 frames in 3 %, 0.5 s in none; on
         bench/tracking.py part A's single-speaker walks (seeds 0/100/200, 8 each) the three
         gave the same numbers (the 16-walk seed-0 run: white noise's ratio within 0.02)
+    mask_tau_s : masked pairs: time constant (s) of the averaged spectra that decide front or
+        back (:class:`SmoothedMask`); longer is steadier, shorter follows a talker walking round
+        the head sooner. 0.15 s chosen among 0.1-2 s on dev talkers (seed 170: mask2-asym, free
+        field, 8 per signal and SNR, one in four still, the others walking round the array
+        at 20-90 deg/s): front/back of the frames from 1 s on, noise / male / female at 10 and
+        20 dB, 100 / 100, 95 / 93, 88 / 95 % (1 s: 96 / 96, 88 / 83, 79 / 76 %; the frames
+        of ``hearsee localize``, one half for the whole recording: 57 / 57, 40 / 65, 73 / 63)
+    mask_decide_confidence : masked pairs: a frame's ITD gives the tracker only the half that
+        the front/back decision chose when that decision's confidence (the probability of the
+        chosen half, 0.5-1) reaches this; below it, both halves' candidates, the chosen one
+        first. A track in the other half is then restarted after ``reacquire_s`` of rejected
+        measurements (1 = always both: the tracker's continuity alone keeps the half)
     """
 
     frame_ms: float = 64.0
@@ -1674,6 +1833,8 @@ class StreamConfig:
     gated_after_s: float = 0.2
     activity_history_s: float = 1.0
     snr_weight: bool = False
+    mask_tau_s: float = 0.15
+    mask_decide_confidence: float = 0.9
 
     def __post_init__(self) -> None:
         _check_config(self)
@@ -1682,13 +1843,15 @@ class StreamConfig:
 #: StreamConfig's numbers that must be finite and > 0 (None allowed for the optional ones)
 _POSITIVE = ("sigma_meas_deg", "sigma_accel_dps2", "sigma_jerk", "sigma_px", "sigma_min_deg",
              "max_fix_residual_samples", "max_evidence_age_frames", "reacquire_s",
-             "planar_elevation_sigma_scale", "mode_dwell_s", "activity_history_s")
+             "planar_elevation_sigma_scale", "mode_dwell_s", "activity_history_s",
+             "mask_tau_s")
 _POSITIVE_OR_NONE = ("sigma_accel", "sigma_tdoa_s", "accel_tau_s", "max_coast_s",
                      "sigma_frame_deg", "sigma_srp_deg")
 #: ... that must lie in [low, high] (both inclusive; finite)
 _WITHIN = {"min_confidence": (0.0, np.inf), "direction_angle_noise_ratio": (0.0, np.inf),
            "min_coherence": (0.0, 1.0),
-           "alt_ratio": (0.0, 1.0), "max_alt_ratio": (0.0, 1.0)}
+           "alt_ratio": (0.0, 1.0), "max_alt_ratio": (0.0, 1.0),
+           "mask_decide_confidence": (0.5, 1.0)}
 
 
 def _check_config(cfg: StreamConfig) -> None:
@@ -1778,17 +1941,19 @@ def _check_gating(cfg: StreamConfig) -> None:
             f"gated_after_s >= 0 s; got {cfg.gate_sigmas}, {cfg.gate_deg}, {cfg.gated_after_s}")
 
 
-def check_trackable(array: MicArray) -> None:
-    """ConfigError unless the stream can track a direction with ``array``: a masked pair's
-    front/back decision (:func:`hearsee.audio.mask.localize_mask`) is not part of the stream,
-    which took it for the bare pair (a source at -153 deg came out at -29 deg: use ``hearsee
-    localize``); a vertical line of microphones hears the elevation only, and the stream's
-    direction trackers follow an azimuth (every frame was dropped: "no localizable source")."""
-    if array.mask is not None:
+def check_trackable(array: MicArray, camera: bool = False) -> None:
+    """ConfigError unless the stream can track a direction with ``array`` (and, with
+    ``camera``, fuse it with a camera): a vertical line of microphones hears the elevation
+    only, and the stream's direction trackers follow an azimuth (every frame was dropped: "no
+    localizable source"). Masked pairs are tracked (:class:`SmoothedMask`) since 2026-12-05 --
+    until then they were refused here (the stream had taken them for the bare pair: a source
+    at -153 deg came out at -29 deg) -- but not with a camera: the fusion solves the bare
+    microphones' ITD equations, which the mask changes."""
+    if array.mask is not None and camera:
         raise ConfigError(
-            f"array {array.name!r} has a mask: its front/back decision is made on whole "
-            "recordings (hearsee localize), not in the stream; track with the bare pair's "
-            "preset to get the front/back twins")
+            f"array {array.name!r} has a mask: a masked pair gives a direction, not the ITD "
+            "equations of its bare microphones that the camera fusion solves; track it "
+            "without a camera")
     geo = array_geometry(array)
     if geo.kind == "linear" and float(np.hypot(geo.axis[0], geo.axis[1])) < 1e-6:
         raise ConfigError(
@@ -1821,7 +1986,7 @@ class TrackingProcessor:
                  rig: Any = None, image_points: Callable[[float], Any] | None = None) -> None:
         array = load_array(array)
         self.array, self.fs = array, check_analysis_fs(fs)
-        check_trackable(array)
+        check_trackable(array, camera=rig is not None)
         self.cfg = _stream_config(config)
         self.rig, self.image_points = rig, image_points
         self.frame_len, self.hop = frame_geometry(fs, self.cfg.frame_ms, self.cfg.hop_ms)
@@ -1837,9 +2002,20 @@ class TrackingProcessor:
         self._last_measured_t = -np.inf
         self.motion, self.sigma_tdoa_s = self._motion_tracker(self.cfg)
         self._motion_measured_t = -np.inf
-        self.gcc = FrameGcc(array, fs, self.cfg)
+        model, margin = None, DEFAULT_MARGIN_SAMPLES
+        if array.mask is not None:  # (the mask's ITDs exceed the bare pair's delays)
+            from hearsee.audio.mask import MaskModel, itd_margin_samples
+
+            model = MaskModel(array)
+            margin = itd_margin_samples(model, self.fs)
+        self.gcc = FrameGcc(array, fs, self.cfg, margin_samples=margin)
+        # a masked pair's front/back decision (its frames' activity history as the GCC's)
+        self.mask = None if model is None else SmoothedMask(
+            model, fs, self.frame_len, self.hop, self.cfg.mask_tau_s,
+            self.gcc.activity.n_history)
         self.srp = None
-        if self.cfg.spectrum_alpha > 0:
+        # (a masked pair: no steered response -- its steering is the bare pair's)
+        if self.cfg.spectrum_alpha > 0 and self.mask is None:
             self.srp = SmoothedSrp(array, fs, self.frame_len, self.cfg.spectrum_alpha,
                                    self.cfg.srp_band_hz,
                                    coherence_weight=self.cfg.srp_coherence_weight,
@@ -1861,6 +2037,8 @@ class TrackingProcessor:
         self.itd = self._itd_filter()
         if self.srp is not None:
             self.srp.reset()
+        if self.mask is not None:
+            self.mask.reset()
         self._last_measured_t = -np.inf
         self._motion_measured_t = -np.inf
 
@@ -1905,6 +2083,7 @@ class TrackingProcessor:
                                batch.arrival)
         tdoa, conf = self.tdoas(batch)
         sm = self.smoothed(batch)
+        mk = self.mask_decisions(batch)
         out = []
         for n, t in enumerate(batch.t):
             z = raw_z = tdoa[n]
@@ -1921,17 +2100,13 @@ class TrackingProcessor:
             raw_az = raw_el = itd_az = itd_el = None
             cands: list[tuple[float, float | None]] = []
             if have:  # raw_*: the frame's own TDOAs, not the filter's, taken or not
-                loc_raw = localize_tdoa(raw_z, self.array, self.pairs,
-                                        near_field=self._in_plane, in_plane=self._in_plane)
-                raw_az, raw_el = loc_raw.azimuth_deg, loc_raw.elevation_deg
+                raw_az, raw_el, raw_cands = self._locate(raw_z, mk[n])
             if use:
                 # the tracker's measurement: the (ITD-filtered) TDOAs' direction
-                loc = (loc_raw if z is raw_z else
-                       localize_tdoa(z, self.array, self.pairs, near_field=self._in_plane,
-                                     in_plane=self._in_plane))
-                cands = [(a, e) for a, e in loc.candidates if a is not None]
-                if z is not raw_z:
-                    itd_az, itd_el = loc.azimuth_deg, loc.elevation_deg
+                if z is raw_z:
+                    cands = raw_cands
+                else:
+                    itd_az, itd_el, cands = self._locate(z, mk[n])
             delay = 0.0
             own = bool(cands) and (self.cfg.prefer_frame
                                    or conf[n] >= self.cfg.prefer_frame_confidence)
@@ -1947,6 +2122,8 @@ class TrackingProcessor:
                 sigma = self._srp_sigma(c_sm) if cands else None
             if sigma is not None and self._level_plane:
                 sigma = (sigma, sigma * self.cfg.planar_elevation_sigma_scale)
+            if cands and self._wrong_half(mk[n]):
+                self.direction.reset()  # (restarted at the decided half's candidate below)
             measured = self.direction.update(float(t), cands[0] if cands else None, cands[1:],
                                              sigma_meas_deg=sigma, delay_s=delay)
             if measured:
@@ -1958,7 +2135,9 @@ class TrackingProcessor:
                          float(conf[n]) if have else 0.0, measured=measured,
                          missing=bool(batch.missing[n]), raw_azimuth_deg=raw_az,
                          raw_elevation_deg=raw_el, itd_azimuth_deg=itd_az,
-                         itd_elevation_deg=itd_el)
+                         itd_elevation_deg=itd_el,
+                         front_probability=None if mk[n] is None
+                         else mk[n].front_probability)
             if self.direction.initialized:
                 upd.azimuth_deg = self.direction.azimuth_deg
                 el = self.direction.elevation_deg
@@ -1969,6 +2148,67 @@ class TrackingProcessor:
                 self._fuse(upd, z if use else None)
             out.append(upd)
         return out
+
+    def mask_decisions(self, batch: FrameBatch) -> list[Any]:
+        """A masked pair's :class:`SmoothedMask` decision for each of the batch's frames (None
+        for missing frames, before enough evidence, and on every frame of a bare array)."""
+        k = len(batch.t)
+        out: list[Any] = [None] * k
+        if self.mask is None:
+            return out
+        n_missing = int(np.count_nonzero(batch.missing))  # (missing frames come first)
+        self.mask.skip(n_missing)
+        if batch.segment is not None:
+            out[n_missing:] = self.mask.process(batch.segment, k - n_missing, self.hop)
+        return out
+
+    def _locate(self, z: NDArray, decision: Any
+                ) -> tuple[float | None, float | None, list[tuple[float, float | None]]]:
+        """A frame's direction from its TDOAs ``z`` (s): ``(azimuth_deg, elevation_deg,
+        candidates)`` for the tracker (the first the primary). Bare arrays:
+        :func:`~hearsee.audio.localize.localize_tdoa`. A masked pair: the ITD's azimuth in
+        each half (:func:`hearsee.audio.mask.itd_candidates`; where it matches twice in a
+        half, the match nearest the decision's azimuth or runner-up there, else the track's),
+        the half of the :class:`SmoothedMask` ``decision`` first -- alone when its confidence
+        reaches ``mask_decide_confidence`` -- and no elevation (two microphones)."""
+        if self.mask is None:
+            loc = localize_tdoa(z, self.array, self.pairs, near_field=self._in_plane,
+                                in_plane=self._in_plane)
+            return (loc.azimuth_deg, loc.elevation_deg,
+                    [(a, e) for a, e in loc.candidates if a is not None])
+        from hearsee.audio.mask import itd_candidates
+
+        p_front = 0.5 if decision is None else decision.front_probability
+        if decision is not None:
+            best, other = wrap_deg(decision.azimuth_deg), wrap_deg(decision.runner_up_deg)
+            prior_f, prior_b = (best, other) if p_front >= 0.5 else (other, best)
+        elif self.direction.initialized:  # the track's azimuth and its mirror
+            a = float(self.direction.azimuth_deg)
+            prior_f, prior_b = (a, wrap_deg(180.0 - a)) if abs(a) < 90 else (
+                wrap_deg(180.0 - a), a)
+        else:
+            prior_f, prior_b = 0.0, 180.0
+        a_f, a_b = itd_candidates(self.mask.model, float(z[0]), self.fs, prior_f, prior_b)
+        first, second = (a_f, a_b) if p_front >= 0.5 else (a_b, a_f)
+        cands: list[tuple[float, float | None]] = [(first, None)]
+        if max(p_front, 1.0 - p_front) < self.cfg.mask_decide_confidence:
+            cands.append((second, None))
+        return first, None, cands
+
+    def _wrong_half(self, decision: Any) -> bool:
+        """Whether a masked pair's track lies in the half that a confident front/back
+        ``decision`` (:class:`SmoothedMask`, confidence >= ``mask_decide_confidence``) rules
+        out, more than :data:`MASK_SIDE_DEG` from the side axis (nearer it the halves meet and
+        the track's own continuity decides): the track is then restarted at once, not after
+        ``reacquire_s`` of rejected measurements (a stream started before the first decision
+        took the front candidate: 0.5 s at the mirror)."""
+        if decision is None or not self.direction.initialized:
+            return False
+        p = decision.front_probability
+        if max(p, 1.0 - p) < self.cfg.mask_decide_confidence:
+            return False
+        az = abs(float(self.direction.azimuth_deg))
+        return (az > 90.0 + MASK_SIDE_DEG) if p >= 0.5 else (az < 90.0 - MASK_SIDE_DEG)
 
     def _frame_sigma(self, confidence: float) -> float:
         """Measurement noise (deg) of a frame's own GCC direction: ``sigma_frame_deg /
@@ -2166,7 +2406,7 @@ class StreamPipeline:
                  stall_timeout_s: float = 0.5, max_stall_s: float = 5.0,
                  check_wiring: bool | None = None, tonal_lines_hz: Sequence[float] = ()) -> None:
         self.array = load_array(array)
-        check_trackable(self.array)  # (before any audio)
+        check_trackable(self.array, camera=rig is not None)  # (before any audio)
         self.config = _stream_config(config)
         self.rig, self.image_points = rig, image_points
         # (unchecked, a negative stall_timeout_s was a ValueError of queue.get in the threaded
