@@ -136,6 +136,24 @@ def test_two_mic_summary_detects_sources_not_noise():
         estimate_tdoas(x, FS, two, min_peak_snr=-1)
 
 
+def test_without_detection_test_is_the_run_without_it():
+    """An estimate refused only by the peak-SNR detection test is kept
+    (``undetected_summary``): ``without_detection_test()`` gives what ``min_peak_snr=0``
+    gives, field by field, for recordings the test refused and for those it did not."""
+    two = MicArray.from_preset("two-mic")
+    refused = 0
+    for s in range(20):
+        x = np.random.default_rng(s).standard_normal((2, FS))
+        tf = estimate_tdoas(x, FS, two)
+        refused += tf.undetected_summary is not None
+        relaxed = estimate_tdoas(x, FS, two, min_peak_snr=0)
+        for name in ("summary_tdoa_s", "summary_confidence", "tdoa_s", "confidence", "valid"):
+            np.testing.assert_array_equal(getattr(tf.without_detection_test(), name),
+                                          getattr(relaxed, name))
+        assert relaxed.undetected_summary is None
+    assert refused  # (the confidence alone lets some of this noise through)
+
+
 @pytest.mark.parametrize("n", [1, 2, 7, 8, 403, 404])
 def test_median_last_is_numpys_median(n):
     """The CFAR floor's partial-sort median equals np.median on odd and even lengths,

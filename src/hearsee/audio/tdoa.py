@@ -831,6 +831,12 @@ class TdoaFrames:
         Microphones whose channels correlate with no other while the others hear a source
         (:func:`dead_microphones`, with a :class:`~hearsee.errors.DeadMicrophoneWarning`);
         empty when none, or without a whole-recording estimate.
+    undetected_summary : (array (n_pairs,), array (n_pairs,)) or None
+        The whole-recording estimate (``summary_tdoa_s``, ``summary_confidence``) that only
+        the detection test refused (``min_peak_snr`` of :func:`estimate_tdoas`: a single
+        independent pair whose averaged correlation peak does not stand out of its floor), so
+        that a caller who wants a best guess rather than an abstention needs no second run
+        (:meth:`without_detection_test`); None when that test refused nothing.
     """
 
     t: NDArray
@@ -853,6 +859,7 @@ class TdoaFrames:
     sync_offsets_s: NDArray | None = None
     tonal_lines_hz: tuple[float, ...] = ()
     dead_mics: tuple[int, ...] = ()
+    undetected_summary: tuple[NDArray, NDArray] | None = None
 
     @property
     def pair_labels(self) -> list[str]:
@@ -870,6 +877,18 @@ class TdoaFrames:
         wiring ahead needs to know."""
         return bool(self.inverted_mics) or bool(self.dead_mics) or (
             self.sync_offsets_s is not None and bool(np.isfinite(self.sync_offsets_s).any()))
+
+    def without_detection_test(self) -> TdoaFrames:
+        """These estimates as :func:`estimate_tdoas` gives them with ``min_peak_snr=0``: the
+        summary that only the detection test refused (``undetected_summary``) put in place.
+        That test looks at the averaged correlation once it is computed and changes nothing
+        else, so this is the relaxed run's result at no second estimate; ``self`` when the
+        test refused nothing (``min_peak_snr=0`` then changes nothing)."""
+        if self.undetected_summary is None:
+            return self
+        tdoa_s, confidence = self.undetected_summary
+        return replace(self, summary_tdoa_s=tdoa_s, summary_confidence=confidence,
+                       undetected_summary=None)
 
     def wiring_entries(self) -> dict[str, Any]:
         """The ``hearsee localize`` summary's ``inverted_microphones`` (list),
@@ -2243,7 +2262,8 @@ def estimate_tdoas(
         (2 s) and of 1200 (0.5, 1 and 4 s; at 5.0: 2 of the 1-s ones). Detected, 2 s, 40
         each: a white source at -10 dB 40 (before 40), at -15 dB 9 (before 23, some of them
         2 samples off), a male voice at 0 / -5 dB 40 / 34 (before 40 / 40), a female voice
-        40 / 6 (before 40 / 37): the price of the test is the weakest voices.
+        40 / 6 (before 40 / 37): the price of the test is the weakest voices. An estimate
+        that only this test refused is kept in ``undetected_summary`` of the result.
     min_frame_peak_snr : float
         The same test for each frame's own estimate without redundant pairs (0 = off). Of
         100 two-microphone noise-only recordings (2 s) the confidence alone let 2.1 % of the
@@ -2571,6 +2591,8 @@ def estimate_tdoas(
     offsets: NDArray | None = None
     need = min_confidence
     fallback = False
+    detection_refused = False  # only the peak-SNR test (min_peak_snr) refused the summary
+    undetected: tuple[NDArray, NDArray] | None = None
     if summary_frames == "active" and n_active:
         acc, n_acc = acc_active, n_active
     elif n_acc < _MIN_SUMMARY_FRAMES and n_active > n_acc:
@@ -2620,11 +2642,14 @@ def estimate_tdoas(
             if ok and min_peak_snr > 0:
                 ok = bool(np.all(_peak_snr(r_sum, lag[0], max_lag, main_lobe, noise_profile)
                                  >= min_peak_snr))
+                detection_refused = not ok
             if summary_upsample > 1:
                 lag = _fine_peaks(acc, band_bins, nfft, max_lag, int(summary_upsample),
                                   first_arrival, reach)[None]
         if ok:
             summary, summary_conf = lag[0] / fs, c[0]
+        elif detection_refused:  # (kept for TdoaFrames.without_detection_test)
+            undetected = (lag[0] / fs, c[0])
         offsets = _warn_desync(r_sum, max_lag, main_lobe, prs, fs)
         if not np.isfinite(offsets).any():  # (a pair out of sync has no polarity to read: a
             # voice's trough within its bound named a microphone as inverted)
@@ -2638,4 +2663,4 @@ def estimate_tdoas(
                       acc / max(n_acc, 1) if n_acc else None, band_bins, nfft,
                       coherence_ratio, summary_method, coherence_gain,
                       (k0 * fs / nfft, (k1 - 1) * fs / nfft), inverted, offsets,
-                      dead_mics=dead)
+                      dead_mics=dead, undetected_summary=undetected)
