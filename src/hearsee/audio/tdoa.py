@@ -932,6 +932,15 @@ MAX_UNSCALED_PEAK = 1e3
 MIN_UNSCALED_PEAK = 1e-6
 
 
+def _peak_level(a: NDArray) -> float:
+    """The largest |sample| of ``a`` (0 without samples): NaN when a sample is NaN, inf when
+    one is infinite -- the recording's finiteness test in the same passes. From its largest
+    and smallest sample: no |a| temporary the size of the recording."""
+    if a.size == 0:
+        return 0.0
+    return float(np.maximum(a.max(), -a.min()))  # (np.maximum: NaN propagates)
+
+
 #: No integer PCM recording spans more than this ratio of its loudest |sample| to its median
 #: |sample| when that is not zero: 32-bit PCM's full scale is 2**31 steps, and a median of
 #: integers that is not zero is at least half a step (:func:`dominant_sample`).
@@ -2341,13 +2350,15 @@ def estimate_tdoas(
     call = dict(locals())  # (the arguments, for the run on a recording without tonal noise)
     tonal_noise = true_or_false("tonal_noise", tonal_noise)
     arr = load_array(array)
-    a = as_samples(x)
+    a = as_samples(x, finite=False)  # (finiteness: from the peak, below)
+    peak = _peak_level(a)
+    if not np.isfinite(peak):  # (as_samples' check and message)
+        raise AudioInputError("recording contains NaN or infinite samples")
     if a.ndim != 2 or a.shape[0] != arr.n_mics:
         raise AudioInputError(
             f"recording has shape {a.shape}; array {arr.name!r} needs ({arr.n_mics}, n_samples) "
             "(one row per microphone)"
         )
-    peak = float(np.max(np.abs(a), initial=0.0))
     if frame_noise_psd is not None and active is None:
         raise ConfigError("frame_noise_psd needs active (the frames it was measured with)")
     fs = check_analysis_fs(fs)
