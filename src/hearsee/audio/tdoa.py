@@ -2011,12 +2011,27 @@ def _frame_moving_mean(a: NDArray, k: int, causal: bool = False) -> NDArray:
         before = np.maximum(-first, 0).astype(float).reshape(shape)  # copies of frame 0
         after = np.maximum(first + k - F, 0).astype(float).reshape(shape)  # of frame F - 1
         return ((inner + before * a[0] + after * a[F - 1]) / k).astype(a.dtype)
-    p = a[np.clip(np.arange(-lo, F + hi), 0, F - 1)]  # (F + k - 1, ...), edges repeated
-    s = p[0:F].copy()
-    for j in range(1, k):
-        s += p[j:j + F]
+    s = np.empty_like(a)
+    for j in range(k):  # frame f adds frame f + j - lo, clipped to the ends
+        _add_shifted(s, a, j - lo, first=j == 0)
     s *= s.dtype.type(1.0 / k)
     return s
+
+
+def _add_shifted(s: NDArray, a: NDArray, d: int, first: bool) -> None:
+    """``s[f] += a[clip(f + d, 0, F - 1)]`` for every frame ``f`` (axis 0; ``first``: ``=``
+    instead of ``+=``): the middle frames from a slice of ``a``, those beyond an end from its
+    edge frame by broadcasting -- no copy of ``a`` with its edges repeated (each sum adds the
+    same terms in the same order: the same bits)."""
+    F = a.shape[0]
+    m0, m1 = min(max(-d, 0), F), max(min(F - d, F), 0)  # frames whose f + d is inside
+    parts = ((slice(0, m0), a[0]), (slice(m0, m1), a[m0 + d:m1 + d]), (slice(m1, F), a[F - 1]))
+    for rows, src in parts:
+        if rows.stop > rows.start:
+            if first:
+                s[rows] = src
+            else:
+                s[rows] += src
 
 
 def _snr_coherence(power: NDArray, noise_psd: NDArray, I: NDArray, J: NDArray,
