@@ -992,7 +992,8 @@ def windowed_frames(frames: NDArray, win: NDArray, nfft: int | None = None) -> N
         raise ConfigError(f"nfft must be a whole number of samples >= the frame length {L}, "
                           f"got {nfft!r}")
     dtype = np.result_type(np.result_type(frames.dtype, mean.dtype), win.dtype)
-    out = np.zeros(frames.shape[:-1] + (int(nfft),), dtype)
+    out = np.empty(frames.shape[:-1] + (int(nfft),), dtype)
+    out[..., L:] = 0  # (only the padding: the body is written below)
     body = out[..., :L]
     np.subtract(frames, mean, out=body)
     body *= win
