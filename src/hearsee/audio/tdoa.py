@@ -355,7 +355,9 @@ def gcc_weighting(method: str, G: NDArray, Gii: NDArray | None = None,
         return np.ones(G.shape)
     if method == "phat":
         mag = np.abs(G)
-        return 1.0 / np.maximum(mag, _TINY + 1e-12 * mag.max(initial=0.0))
+        # 1 / max(|G|, floor), in place (the same bits, no temporaries)
+        np.maximum(mag, _TINY + 1e-12 * mag.max(initial=0.0), out=mag)
+        return np.divide(1.0, mag, out=mag)
     if Gii is None or Gjj is None:
         raise ConfigError(f"GCC-{method.upper()} needs the auto spectra G_ii and G_jj")
     floor = _TINY + 1e-12 * max(float(Gii.max(initial=0.0)), float(Gjj.max(initial=0.0)))
@@ -366,8 +368,19 @@ def gcc_weighting(method: str, G: NDArray, Gii: NDArray | None = None,
     # ml / Hannan-Thomson
     Gc = G if Gij_avg is None else Gij_avg
     mag = np.abs(Gc)
-    coh = np.clip(mag**2 / np.maximum(Gii * Gjj, floor * floor), 0.0, 0.99)
-    return coh / ((1.0 - coh) * np.maximum(mag, floor))
+    den = Gii * Gjj
+    np.maximum(den, floor * floor, out=den)
+    if den.dtype != mag.dtype or den.shape != mag.shape:  # (numpy's promotions as written)
+        coh = np.clip(mag**2 / den, 0.0, 0.99)
+        return coh / ((1.0 - coh) * np.maximum(mag, floor))
+    # the same in place (one dtype and shape: the same bits, a third of the allocations)
+    coh = mag * mag
+    coh /= den
+    np.clip(coh, 0.0, 0.99, out=coh)
+    np.subtract(1.0, coh, out=den)
+    den *= np.maximum(mag, floor, out=mag)
+    coh /= den
+    return coh
 
 
 # ---------------------------------------------------------------------------------- peaks
