@@ -2053,12 +2053,16 @@ def _snr_coherence(power: NDArray, noise_psd: NDArray, I: NDArray, J: NDArray,
     """Per-bin coherence estimate ``xi_i xi_j / ((1 + xi_i)(1 + xi_j))`` of each pair from the
     channels' a-priori SNRs over ``noise_psd`` (see ``snr_weight``); in the Hannan-Thomson form
     ``g / (1 - g)`` when asked. ``power`` (F', n_ch, B): the channels' ``|X|^2``."""
-    xi = np.maximum(power / noise_psd - 1.0, 0.0)  # (F', n_ch, B)
-    xi = np.minimum(xi, 1e15)  # (a product of two must not overflow float32; coh ~ 1 anyway)
-    coh = xi[:, I] * xi[:, J] / ((1.0 + xi[:, I]) * (1.0 + xi[:, J]))
+    xi = power / noise_psd  # (F', n_ch, B)
+    xi -= 1.0
+    # (a product of two must not overflow float32; coh ~ 1 anyway)
+    np.clip(xi, 0.0, 1e15, out=xi)
+    xi1 = xi + 1.0  # (per channel, not per pair end; the same bits)
+    coh = xi[:, I] * xi[:, J]
+    coh /= xi1[:, I] * xi1[:, J]
     if hannan_thomson:  # gamma^2 / (1 - gamma^2)
-        coh = np.minimum(coh, 0.99)
-        coh = coh / (1.0 - coh)
+        np.minimum(coh, 0.99, out=coh)
+        coh /= 1.0 - coh
     return coh
 
 
