@@ -1967,7 +1967,7 @@ def _noise_spectrum(frames: NDArray, active: NDArray, win: NDArray, nfft: int, k
     channel is digitally silent (all zeros: a recorder's lead-in, zero padding) are no noise
     sample: a noise floor of zero would make every SNR infinite. ``power_all``: the band power
     spectra ``|X|^2`` (n_ch, F, bins) of every frame when already computed (not repeated)."""
-    silent = ~np.all(np.any(frames != 0, axis=-1), axis=0)  # (F,)
+    silent = ~np.all(frames.any(axis=-1), axis=0)  # (F,); (no `frames != 0` temporary)
     quiet = np.flatnonzero(~active & ~silent)
     if quiet.size < _MIN_SUMMARY_FRAMES:
         return None
