@@ -2591,11 +2591,12 @@ def estimate_tdoas(
             n_active += int(act.sum())
             okk = ok_conf[act]
             n_acc += int(okk.sum())
+            onset = frame_w[s0:s1][act][:, None, None] if onset_weight else None
             if not rev_decided:  # (else the summary is reverb_method's: skip this one)
                 # (with SNR weights, they already say how much each frame and bin counts)
                 Pn = Pa if noise_psd is not None else _unit_frames(Pa)
-                if onset_weight:
-                    Pn = Pn * frame_w[s0:s1][act][:, None, None]
+                if onset is not None:  # (in place: Pa is needed no more)
+                    Pn *= onset
                 acc_active += np.sum(Pn, axis=0)
                 if okk.any():
                     acc += np.sum(Pn[okk], axis=0)
@@ -2611,8 +2612,8 @@ def estimate_tdoas(
                     P2 = Ga * (W2 * coh[ia]).astype(np.float32, copy=False)
                 else:  # every frame counts equally, as in the first weighting's sum
                     P2 = _unit_frames(Ga * W2.astype(np.float32, copy=False))
-                if onset_weight:
-                    P2 = P2 * frame_w[s0:s1][act][:, None, None]
+                if onset is not None:
+                    P2 *= onset
                 acc2_active += np.sum(P2, axis=0)
                 if okk.any():
                     acc2 += np.sum(P2[okk], axis=0)
