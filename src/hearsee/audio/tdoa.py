@@ -1571,6 +1571,25 @@ def _steer_directions(positions: bytes, n_mics: int, n_dirs: int, in_plane: bool
     return U
 
 
+@functools.lru_cache(maxsize=32)
+def _steer_lags(positions: bytes, n_mics: int, pairs: tuple[tuple[int, int], ...], n_dirs: int,
+                in_plane: bool, c: float, fs: float, up: int, n_up: int
+                ) -> tuple[NDArray, NDArray]:
+    """The TDOAs (samples, (n_pairs, n_dirs)) of the pairs for :func:`_steer_directions`'
+    directions (same arguments) at sound speed ``c`` and rate ``fs``, and their indices into a
+    circular correlation of ``n_up`` samples upsampled ``up`` times (the nearest sample): once
+    per geometry and transform rather than per recording (read-only arrays)."""
+    pos = np.frombuffer(positions, dtype=float).reshape(n_mics, 3)
+    U = _steer_directions(positions, n_mics, n_dirs, in_plane)
+    I = np.array([p[0] for p in pairs])
+    J = np.array([p[1] for p in pairs])
+    tau = -((pos[I] - pos[J]) @ U.T) / c * fs
+    idx = np.round(tau * up).astype(int) % n_up
+    for a in (tau, idx):
+        a.flags.writeable = False
+    return tau, idx
+
+
 def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
                  pairs: list[tuple[int, int]], c: float, fs: float, max_lag: NDArray,
                  up: int = 4, n_dirs: int | None = None, coherent: bool = False,
@@ -1605,8 +1624,8 @@ def _joint_peaks(P: NDArray, bins: NDArray, nfft: int, positions: NDArray,
         longest = float(np.max(np.linalg.norm(pos[I] - pos[J], axis=1))) / c * fs
         n_dirs = _n_grid_directions(longest)
     U = _steer_directions(pos.tobytes(), pos.shape[0], int(n_dirs), bool(in_plane))
-    tau = -((positions[I] - positions[J]) @ U.T) / c * fs  # (n_pairs, n_dirs) samples
-    idx = np.round(tau * up).astype(int) % n_up
+    tau, idx = _steer_lags(pos.tobytes(), pos.shape[0], tuple(pairs), int(n_dirs),
+                           bool(in_plane), float(c), float(fs), int(up), n_up)
     score = np.take_along_axis(r, idx, axis=1).sum(axis=0)
     tau0 = tau[:, int(np.argmax(score))]
     if coherent:
