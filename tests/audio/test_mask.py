@@ -1085,6 +1085,8 @@ def test_cli_tracks_a_masked_pair_and_refuses_it_with_a_camera(asym, tmp_path, c
     capsys.readouterr()
     assert main(["track", str(wav), "--array", str(spec), "--format", "jsonl"]) == 0
     lines = [json.loads(v) for v in capsys.readouterr().out.splitlines()]
+    # (every line has the key; null before the first decision, which needs 4 frames)
+    assert all("front_probability" in d for d in lines) and lines[0]["front_probability"] is None
     late = [d for d in lines if d["t"] >= 1.0]
     assert len(late) >= 25
     err = np.abs([(d["azimuth_deg"] + 140.0 + 180.0) % 360.0 - 180.0 for d in late])

@@ -211,6 +211,10 @@ class Update:
     pair's; 0 when the frame gave no TDOAs): 0 to :data:`hearsee.audio.tdoa.MAX_CONFIDENCE`
     (1000), above 1 where the peak stands out, not a probability. ``latency_s`` is the
     wall-clock time from the arrival of the block that completed the frame to the update.
+    ``masked``: the array is a masked pair; then ``front_probability`` is its stream's
+    front/back decision (:class:`SmoothedMask`; the score of
+    :attr:`hearsee.audio.mask.MaskLocalization.front_probability`, None before the first),
+    and the JSON line carries it (other arrays' lines do not have the key).
     """
 
     t: float
@@ -231,6 +235,7 @@ class Update:
     itd_azimuth_deg: float | None = None
     itd_elevation_deg: float | None = None
     front_probability: float | None = None
+    masked: bool = False
 
     def to_json(self) -> dict[str, Any]:
         """The JSON object of the CLI contract (plus ``rate_dps``, ``measured``, ``missing``,
@@ -248,9 +253,9 @@ class Update:
             "measured": self.measured,
             "missing": self.missing,
             "latency_ms": None if not np.isfinite(self.latency_s) else self.latency_s * 1e3,
-            # (a masked pair's: the stream's front/back decision; absent for other arrays)
-            **({} if self.front_probability is None
-               else {"front_probability": self.front_probability}),
+            # (a masked pair's: the stream's front/back decision, null before its first one;
+            # absent for other arrays)
+            **({"front_probability": self.front_probability} if self.masked else {}),
         }
 
 
@@ -1426,8 +1431,9 @@ class SmoothedSrp:
 
 
 #: The fewest frames (their effective number, ``(sum w)^2 / sum w^2``) whose averaged spectra
-#: :class:`SmoothedMask` decides on: :func:`hearsee.audio.mask.localize_mask` needs no fewer
-#: from a recording either (4 frames of 64 ms: a quarter second of sound).
+#: :class:`SmoothedMask` decides on: a guard for the stream's first active frames, not tuned
+#: (with the default ``mask_tau_s`` of 0.15 s and a 32-ms hop a talker who keeps sounding
+#: fills the averages to ~9.4 effective frames).
 MASK_MIN_FRAMES = 4.0
 #: :class:`SmoothedMask` decides every this many seconds (rounded to whole hops; the frames in
 #: between hold the last decision): its averages change little from one hop to the next, and
@@ -2137,7 +2143,7 @@ class TrackingProcessor:
                          raw_elevation_deg=raw_el, itd_azimuth_deg=itd_az,
                          itd_elevation_deg=itd_el,
                          front_probability=None if mk[n] is None
-                         else mk[n].front_probability)
+                         else mk[n].front_probability, masked=self.mask is not None)
             if self.direction.initialized:
                 upd.azimuth_deg = self.direction.azimuth_deg
                 el = self.direction.elevation_deg
