@@ -1308,7 +1308,8 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
     ``distances``, ``sigma_iid_db``, ``phase_weight`` as :func:`localize_mask` (checked there).
     Returns its :class:`MaskLocalization` (``detected`` True: the caller's test decides), or
     None when no bin holds a coherent source. The one place of the cost, shared by the
-    whole-recording :func:`localize_mask` and the stream's :class:`RunningMaskLocalizer`."""
+    whole-recording :func:`localize_mask` and the stream's
+    :class:`hearsee.stream.pipeline.SmoothedMask`."""
     s0, s1 = _coherent_power(p0, p1, cr, n_used)
     coh = np.abs(cr) ** 2 / np.maximum(p0 * p1, 1e-300)
     w = coh / max(coh.sum(), 1e-300)
