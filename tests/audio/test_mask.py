@@ -1100,3 +1100,49 @@ def test_cli_tracks_a_masked_pair_and_refuses_it_with_a_camera(asym, tmp_path, c
                  "--image-points", str(pts)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "has a mask" in err[0] and "without a camera" in err[0], err
+
+
+@pytest.mark.slow  # (the robot's whole live loop: ~5 s)
+def test_robot_live_loop_hears_a_talker_behind_a_masked_head(asym, tmp_path):
+    """The robot's live loop refused a masked pair until 2026-12-05 (its stream took it for
+    the bare pair); it now hears a talker behind the head where they are, 150 deg, not at the
+    bare pair's first candidate, the mirror 30 deg (head not moved: driver none)."""
+    import io
+
+    import yaml
+
+    from hearsee.audio.signals import synthetic_voice
+    from hearsee.robot.hardware import (
+        CameraFrames,
+        PrintHeadDriver,
+        load_robot_config,
+        run_robot,
+    )
+    from hearsee.sim.scenes import default_rig
+    from hearsee.stream.pipeline import ArraySource
+    from hearsee.vision.camera import save_rig
+
+    (tmp_path / "mask.yaml").write_text(yaml.safe_dump(asym.array.to_dict()), encoding="utf-8")
+    save_rig(default_rig(160, 120), tmp_path / "rig.yaml")
+    (tmp_path / "robot.yaml").write_text(yaml.safe_dump({
+        "audio": {"array": "mask.yaml", "fs": FS, "block_ms": 100},
+        "cameras": {"left": 0, "right": 1, "calib": "rig.yaml"},
+        "head": {"pivot_m": [0.0, 0.0, 1.2]}, "output": {"report": "report"}}),
+        encoding="utf-8")
+    cfg = load_robot_config(tmp_path / "robot.yaml")
+
+    class Grey:  # cameras that see an empty grey room
+        n_failures = n_consecutive_failures = 0
+
+        def read(self, t=None):
+            img = np.full((120, 160, 3), 90, np.uint8)
+            return CameraFrames(img, img, None)
+
+    x = mask.simulate_masked(synthetic_voice("male", 3.0, FS, 3), FS, asym, _src(150.0, 1.5),
+                             snr_db=20, rng=4)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, block_len=1600), cameras=Grey(),
+                    head=PrintHeadDriver(cfg.head, io.StringIO()))
+    s = res.summary
+    assert s["status"] == "ok" and s["updates"] >= 80
+    assert abs(s["azimuth_deg_median"] - 150.0) < 5.0
+    assert abs(s["azimuth_deg_final"] - 150.0) < 5.0
