@@ -1146,3 +1146,22 @@ def test_robot_live_loop_hears_a_talker_behind_a_masked_head(asym, tmp_path):
     assert s["status"] == "ok" and s["updates"] >= 80
     assert abs(s["azimuth_deg_median"] - 150.0) < 5.0
     assert abs(s["azimuth_deg_final"] - 150.0) < 5.0
+
+
+def test_masked_stream_reset_keeps_the_level_scale_of_its_activity_history(asym):
+    """reset_array_state (the head turned) forgets the averaged spectra and the decision; it
+    had also set the level scale back to 1 while the activity history stayed at the scale of
+    a float recording at 1e9, so the next batch scaled that history a second time (its
+    energies 2**60 too small: in effect no history). Now the scale, and the history with it,
+    stay as they are."""
+    from hearsee.stream.pipeline import SmoothedMask
+
+    x = 1e9 * mask.simulate_masked(white_noise(1.0, FS, rng=13), FS, asym, _src(60.0, 1.5),
+                                   snr_db=20, rng=14)
+    stage = SmoothedMask(asym, FS, 1024, 512, 0.15, 31)
+    first = stage.process(x[:, :8192], 15, 512)
+    assert stage._scale != 1.0 and first[-1] is not None
+    stage.reset()
+    assert stage._scale != 1.0 and stage._last is None and stage._w == 0.0
+    again = stage.process(x[:, 8192 - 512:], 15, 512)
+    assert again[-1] is not None and abs(again[-1].azimuth_deg - 60.0) < 5.0

@@ -1490,13 +1490,16 @@ class SmoothedMask:
         self.every = max(1, int(round(MASK_DECISION_S * self.fs / hop)))
         self.activity = FrameActivity(history_frames, self.frame_len, self.win, self.nfft,
                                       self.k0, self.k1)
+        self._peak, self._scale = 0.0, 1.0  # largest |sample| seen; its level_scale
+        self._n = 0  # frames since the stream's start (missing ones too)
         self.reset()
 
     def reset(self) -> None:
+        """Forget the averaged spectra and the decision (the head turned: they describe the
+        old pose); the activity history and the level scale it is kept at stay (the noise
+        floor does not turn with the head), and so does the decisions' schedule."""
         self._S = np.zeros((3, self.k1 - self.k0), complex)  # |X0|^2, |X1|^2, X0 X1*
         self._w = self._w2 = 0.0  # sum of the weights and of their squares
-        self._peak, self._scale = 0.0, 1.0
-        self._n = 0  # frames since the start (missing ones too)
         self._last: Any = None  # the decision the frames hold
 
     def skip(self, n_frames: int) -> None:
