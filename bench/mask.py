@@ -534,8 +534,10 @@ def main(argv: list[str] | None = None) -> None:
             f"{STREAM_SCORED_FROM_S:g} s on scored against the direction heard then (see "
             "`run_stream`): hearsee's stream (`hearsee track`), the frames of `hearsee "
             "localize` (one half for the whole recording) and pyroomacoustics' SRP-PHAT "
-            "per frame (no front/back). 'F/B % walking' counts the walking talkers' frames "
-            "only.\n\n" + markdown_table(shead, stable)))] if stable else []),
+            "per frame (no front/back). A frame without an azimuth counts as a front/back "
+            "error of 180 deg (`hearsee localize` gives none where a frame has no valid ITD). "
+            "'F/B % walking' counts the walking talkers' frames only.\n\n"
+            + markdown_table(shead, stable)))] if stable else []),
         ("Plot", f"![mask]({png.name})"),
     ], intro=(__doc__.split("\n\n")[0] + f"\n\nRun: `python bench/mask.py` (trials={trials}, "
               f"SNRs {','.join(f'{s:g}' for s in snrs)} dB, duration={a.duration} s, "
