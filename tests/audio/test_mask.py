@@ -1160,8 +1160,8 @@ def test_masked_stream_reset_keeps_the_level_scale_of_its_activity_history(asym)
                                    snr_db=20, rng=14)
     stage = SmoothedMask(asym, FS, 1024, 512, 0.15, 31)
     first = stage.process(x[:, :8192], 15, 512)
-    assert stage._scale != 1.0 and first[-1] is not None
+    assert stage._level.scale != 1.0 and first[-1] is not None
     stage.reset()
-    assert stage._scale != 1.0 and stage._last is None and stage._w == 0.0
+    assert stage._level.scale != 1.0 and stage._last is None and stage._w == 0.0
     again = stage.process(x[:, 8192 - 512:], 15, 512)
     assert again[-1] is not None and abs(again[-1].azimuth_deg - 60.0) < 5.0

@@ -1076,7 +1076,7 @@ class FrameGcc:
                                                                       self.frame_len),
                                       nfft, k0, k1, band_test=k0 > 1 or k1 < n_bins - 1,
                                       noise=bool(cfg.snr_weight))
-        self._peak, self._scale = 0.0, 1.0
+        self._level = LevelScale()
         # SCOT / ROTH / ML average their statistics over estimate_tdoas's smooth_frames:
         # causally, over this many earlier frames, carried from batch to batch as samples
         # (frames made of whole hops only: with a hop longer than the frame there is none)
@@ -1090,28 +1090,17 @@ class FrameGcc:
         """Frames were lost: the next ones have no earlier frames to average with."""
         self._ctx = self._ctx[:, :0]
 
-    def _rescale(self, peak: float) -> None:
-        """Take a batch's largest |sample| into the running maximum; carry the activity
-        history to a new :func:`level_scale` (as :meth:`SmoothedSrp._rescale`)."""
-        if not np.isfinite(peak):
-            raise AudioInputError("recording contains NaN or infinite samples")
-        self._peak = max(self._peak, peak)
-        scale = level_scale(self._peak)
-        if scale != self._scale:
-            self.activity.rescale((scale / self._scale) ** 2)
-            self._scale = scale
-
     def __call__(self, segment: NDArray, n_frames: int) -> tuple[NDArray, NDArray]:
         """TDOAs (m, n_pairs) seconds (NaN: no estimate) and confidences (m, n_pairs) of the
         ``m = n_frames`` frames of ``segment``, the stream's next complete frames (after
         :meth:`skip` when frames were lost in between)."""
         cfg, hop, L = self.cfg, self.hop, self.frame_len
         seg = np.asarray(segment, dtype=np.float32)
-        self._rescale(float(np.max(np.abs(seg), initial=0.0)))
+        factor = self._level.take(seg)  # (the activity history goes to a new level_scale)
+        if factor != 1.0:
+            self.activity.rescale(factor)
         c0 = self._ctx.shape[1] // hop  # context frames before the segment's first frame
-        full = np.concatenate([self._ctx, seg], axis=1) if c0 else seg
-        if self._scale != 1.0:
-            full = full * np.float32(self._scale)
+        full = self._level.scaled(np.concatenate([self._ctx, seg], axis=1) if c0 else seg)
         frames = frame_signals(full, L, hop)[:, c0:c0 + n_frames]
         if frames.shape[1] != n_frames:
             raise EstimationError(f"FrameGcc: the segment holds {frames.shape[1]} frames of "
@@ -1157,6 +1146,36 @@ def level_scale(peak: float) -> float:
     if peak == 0.0 or MIN_UNSCALED_PEAK <= peak <= MAX_UNSCALED_PEAK:
         return 1.0
     return math.ldexp(1.0, int(np.clip(-round(math.log2(peak)), -120, 120)))
+
+
+class LevelScale:
+    """A stream stage's running :func:`level_scale`: the largest |sample| seen (``peak``) and
+    the power of two the stage multiplies its samples by (``scale``). The one bookkeeping of
+    :class:`FrameGcc`, :class:`SmoothedSrp` and :class:`SmoothedMask`, which each had their
+    own copy."""
+
+    def __init__(self) -> None:
+        self.peak, self.scale = 0.0, 1.0
+
+    def take(self, samples: NDArray) -> float:
+        """Take a batch's ``samples`` into the running maximum (an AudioInputError for NaN or
+        infinite samples); return the factor -- a power of two, 1 when the scale stays -- that
+        carries a state of squared samples from the old scale to the new one. Once a sample is
+        non-zero the scale only falls as the maximum grows (a state is never enlarged, so it
+        cannot overflow); the one rise, from digital silence (scale 1) to a tiny first level,
+        finds a state of zeros."""
+        peak = float(np.max(np.abs(samples), initial=0.0))
+        if not np.isfinite(peak):
+            raise AudioInputError("recording contains NaN or infinite samples")
+        self.peak = max(self.peak, peak)
+        scale = level_scale(self.peak)
+        factor = (scale / self.scale) ** 2
+        self.scale = scale
+        return factor
+
+    def scaled(self, x: NDArray) -> NDArray:
+        """``x`` (single precision) at the current scale (``x`` itself at scale 1)."""
+        return x if self.scale == 1.0 else x * np.float32(self.scale)
 
 
 class SmoothedSrp:
@@ -1272,33 +1291,25 @@ class SmoothedSrp:
         self.S: NDArray | None = None
         self.A: NDArray | None = None
         self._w, self._age = 0.0, 0.0
-        self._peak, self._scale = 0.0, 1.0  # largest |sample| seen; its level_scale
+        self._level = LevelScale()
 
     def reset(self) -> None:
         self.S = None
         self.A = None
         self._w, self._age = 0.0, 0.0
-        self._peak, self._scale = 0.0, 1.0
+        self._level = LevelScale()
 
-    def _rescale(self, peak: float) -> None:
-        """Take a batch's largest |sample| ``peak`` into the running maximum and, when its
-        :func:`level_scale` changes, carry the state (spectra and energies: squares of the
-        samples) to the new scale. Once a sample is non-zero the scale only falls as the maximum
-        grows (the state is never enlarged, so it cannot overflow); the one rise, from digital
-        silence (scale 1) to a tiny first level, finds the state all zeros."""
-        if not np.isfinite(peak):
-            raise AudioInputError("recording contains NaN or infinite samples")
-        self._peak = max(self._peak, peak)
-        scale = level_scale(self._peak)
-        if scale == self._scale:
+    def _rescale(self, seg: NDArray) -> None:
+        """Take a batch's samples into :class:`LevelScale` and, when the scale changes, carry
+        the state (spectra and energies: squares of the samples) to the new one."""
+        f = self._level.take(seg)
+        if f == 1.0:
             return
-        f = (scale / self._scale) ** 2  # a power of two
         if self.S is not None:
             self.S = self.S * np.float32(f)
         if self.A is not None:
             self.A = self.A * np.float32(f)
         self._w *= f
-        self._scale = scale
 
     def skip(self, n_frames: int) -> None:
         """Age the state through ``n_frames`` missing frames: what ``n_frames`` frames of zero
@@ -1348,9 +1359,8 @@ class SmoothedSrp:
         when none) with their ``alt_coherence`` (k, 2).
         """
         seg = np.asarray(segment, dtype=np.float32)
-        self._rescale(float(np.max(np.abs(seg), initial=0.0)))
-        if self._scale != 1.0:
-            seg = seg * np.float32(self._scale)
+        self._rescale(seg)
+        seg = self._level.scaled(seg)
         fr = frame_signals(seg, self.frame_len, hop)[:, :n_frames]
         if fr.shape[1] != n_frames:  # (fewer rows came back without a word)
             raise EstimationError(f"SmoothedSrp.process: the segment holds {fr.shape[1]} frames "
@@ -1465,8 +1475,9 @@ class SmoothedMask:
 
     Frames: Hann windows of ``frame_len`` samples at the stream's hop, their rfft bins within
     :func:`hearsee.audio.mask.analysis_bins`. Levels: the samples are scaled by
-    :func:`level_scale` of the largest |sample| seen (the state carried along when it changes,
-    as :class:`SmoothedSrp`); the decision is scale-free. Units: seconds, Hz, degrees.
+    :func:`level_scale` of the largest |sample| seen (:class:`LevelScale`; the state carried
+    along when it changes, as :class:`SmoothedSrp`'s); the decision is scale-free. Units:
+    seconds, Hz, degrees.
     """
 
     def __init__(self, model: Any, fs: float, frame_len: int, hop: int, tau_s: float,
@@ -1490,7 +1501,7 @@ class SmoothedMask:
         self.every = max(1, int(round(MASK_DECISION_S * self.fs / hop)))
         self.activity = FrameActivity(history_frames, self.frame_len, self.win, self.nfft,
                                       self.k0, self.k1)
-        self._peak, self._scale = 0.0, 1.0  # largest |sample| seen; its level_scale
+        self._level = LevelScale()
         self._n = 0  # frames since the stream's start (missing ones too)
         self.reset()
 
@@ -1514,17 +1525,6 @@ class SmoothedMask:
         self._w *= self.lam**n
         self._w2 *= self.lam ** (2 * n)
 
-    def _rescale(self, peak: float) -> None:
-        if not np.isfinite(peak):
-            raise AudioInputError("recording contains NaN or infinite samples")
-        self._peak = max(self._peak, peak)
-        scale = level_scale(self._peak)
-        if scale != self._scale:
-            f = (scale / self._scale) ** 2  # a power of two: exact
-            self._S *= f
-            self.activity.rescale(f)
-            self._scale = scale
-
     def process(self, segment: NDArray, n_frames: int, hop: int) -> list[Any]:
         """Average and decide ``n_frames`` consecutive frames of ``segment`` (2, n): one
         :class:`~hearsee.audio.mask.MaskLocalization` per frame, None where the averages hold
@@ -1532,9 +1532,11 @@ class SmoothedMask:
         from hearsee.audio.mask import localize_spectra
 
         seg = np.asarray(segment, dtype=np.float32)  # (single precision, as the other stages)
-        self._rescale(float(np.max(np.abs(seg), initial=0.0)))
-        if self._scale != 1.0:
-            seg = seg * np.float32(self._scale)
+        factor = self._level.take(seg)  # (the state goes to a new level_scale: exactly)
+        if factor != 1.0:
+            self._S *= factor
+            self.activity.rescale(factor)
+        seg = self._level.scaled(seg)
         fr = frame_signals(seg, self.frame_len, hop)[:, :n_frames]
         if fr.shape[1] != n_frames:
             raise EstimationError(f"SmoothedMask.process: the segment holds {fr.shape[1]} "
@@ -1793,8 +1795,10 @@ class StreamConfig:
     mask_decide_confidence : masked pairs: a frame's ITD gives the tracker only the half that
         the front/back decision chose when that decision's confidence (the probability of the
         chosen half, 0.5-1) reaches this; below it, both halves' candidates, the chosen one
-        first. A track in the other half is then restarted after ``reacquire_s`` of rejected
-        measurements (1 = always both: the tracker's continuity alone keeps the half)
+        first. A track in the ruled-out half, more than ``MASK_SIDE_DEG`` from the side axis,
+        is then restarted at once at the chosen half's candidate (1 = always both: the
+        tracker's continuity alone keeps the half -- but for decisions whose confidence
+        rounds to 1, which a clear recording's often does)
     """
 
     frame_ms: float = 64.0
@@ -2200,7 +2204,7 @@ class TrackingProcessor:
         a_f, a_b = itd_candidates(self.mask.model, float(z[0]), self.fs, prior_f, prior_b)
         first, second = (a_f, a_b) if p_front >= 0.5 else (a_b, a_f)
         cands: list[tuple[float, float | None]] = [(first, None)]
-        if max(p_front, 1.0 - p_front) < self.cfg.mask_decide_confidence:
+        if not self._decided(decision):
             cands.append((second, None))
         return first, None, cands
 
@@ -2211,13 +2215,17 @@ class TrackingProcessor:
         the track's own continuity decides): the track is then restarted at once, not after
         ``reacquire_s`` of rejected measurements (a stream started before the first decision
         took the front candidate: 0.5 s at the mirror)."""
-        if decision is None or not self.direction.initialized:
-            return False
-        p = decision.front_probability
-        if max(p, 1.0 - p) < self.cfg.mask_decide_confidence:
+        if not (self._decided(decision) and self.direction.initialized):
             return False
         az = abs(float(self.direction.azimuth_deg))
-        return (az > 90.0 + MASK_SIDE_DEG) if p >= 0.5 else (az < 90.0 - MASK_SIDE_DEG)
+        return ((az > 90.0 + MASK_SIDE_DEG) if decision.front_probability >= 0.5
+                else (az < 90.0 - MASK_SIDE_DEG))
+
+    def _decided(self, decision: Any) -> bool:
+        """Whether a :class:`SmoothedMask` decision (or None) is confident enough to rule out
+        the other half: its confidence (the chosen half's probability) reaches
+        ``mask_decide_confidence``."""
+        return decision is not None and decision.confidence >= self.cfg.mask_decide_confidence
 
     def _frame_sigma(self, confidence: float) -> float:
         """Measurement noise (deg) of a frame's own GCC direction: ``sigma_frame_deg /
