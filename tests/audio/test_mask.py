@@ -17,6 +17,7 @@ from hearsee.errors import (
     GeometryError,
     MaskFitWarning,
 )
+from hearsee.geometry import wrap_deg
 
 FS = 16000
 
@@ -934,6 +935,7 @@ def test_cues_fit_a_free_field_masked_recording_and_not_a_bare_one(asym):
     assert doc["summary"]["cues_fit"] is True
     assert doc["summary"]["phase_match"] >= mask.FIT_PHASE_MIN
     assert doc["summary"]["iid_misfit"] <= mask.FIT_IID_MAX
+    assert doc["summary"]["front_back_by"] == "cost"
     bare_pair = MicArray(asym.array.positions, asym.c, "bare")
     bare = simulate_free_field(sig, FS, bare_pair, src, snr_db=20, rng=1)
     with pytest.warns(MaskFitWarning, match="fit its free-field model poorly"):
@@ -945,6 +947,35 @@ def test_cues_fit_a_free_field_masked_recording_and_not_a_bare_one(asym):
     with pytest.warns(MaskFitWarning):
         doc = mask.localize_recording_mask(room, FS, asym)
     assert doc["summary"]["phase_match"] < mask.FIT_PHASE_MIN
+
+
+def test_cues_that_do_not_fit_leave_front_back_to_the_iids_at_the_itd(asym):
+    """Where the interaural phase is spoilt (a room: here the front/back twin's phase plus a
+    random 0.7-rad wobble per frequency) but the levels are the true direction's, the whole
+    cost followed the phase into the wrong half; the cues do not fit, and the half is decided
+    by the band IIDs at the measured ITD's two azimuths (mask.ROOM_DECISION)."""
+    f = np.fft.rfftfreq(512, 1.0 / FS)
+    edges = mask._band_edges(None, asym.f_max)
+    f = f[mask.analysis_bins(f, edges, asym)]
+    wobble = np.random.default_rng(0).normal(0.0, 0.7, len(f))
+    whole_cost_wrong = 0
+    for az in (160.0, -130.0, 30.0, 140.0):
+        itd = float(np.ravel(asym.itd_at(_src(az), far_field=True))[0])
+        front, back = mask.itd_candidates(asym, itd, FS, 40.0, 140.0)
+        twin = back if abs(az) < 90 else front
+        h = asym.transfer_at(f, _src(az), far_field=True).reshape(2, -1)
+        h_twin = asym.transfer_at(f, _src(twin), far_field=True).reshape(2, -1)
+        p0, p1 = np.abs(h[0]) ** 2, np.abs(h[1]) ** 2
+        cross = np.sqrt(p0 * p1) * np.exp(1j * (np.angle(np.conj(h_twin[0]) * h_twin[1])
+                                                 + wobble))
+        est = mask.localize_spectra(asym, f, p0, p1, cross, 50, None, edges, fs=FS)
+        assert not est.cues_fit and est.phase_match < mask.FIT_PHASE_MIN
+        assert est.front_back_by == mask.ROOM_DECISION
+        assert abs(wrap_deg(est.azimuth_deg - az)) <= 5.0
+        assert (abs(wrap_deg(est.runner_up_deg)) < 90) != (abs(az) < 90)
+        assert (est.front_probability > 0.5) == (abs(az) < 90) and est.confidence > 0.99
+        whole_cost_wrong += (abs(wrap_deg(float(np.argmin(est.score)))) < 90) != (abs(az) < 90)
+    assert whole_cost_wrong >= 2  # (160 and -130 deg: the phase had the twin's half)
 
 
 def test_sphere_table_cache_is_used_only_for_its_own_directions(asym):
