@@ -980,6 +980,12 @@ def test_cues_that_do_not_fit_leave_front_back_to_the_iids_at_the_itd(asym):
         assert (abs(wrap_deg(est.runner_up_deg)) < 90) != (abs(az) < 90)
         assert (est.front_probability > 0.5) == (abs(az) < 90) and est.confidence > 0.99
         whole_cost_wrong += (abs(wrap_deg(float(np.argmin(est.score)))) < 90) != (abs(az) < 90)
+        # (the stream's decisions keep the whole cost's halves: room_decision=False)
+        whole = mask.localize_spectra(asym, f, p0, p1, cross, 50, None, edges, fs=FS,
+                                      room_decision=False)
+        assert whole.front_back_by == "cost"
+        assert (abs(wrap_deg(whole.azimuth_deg)) < 90) == (
+            abs(wrap_deg(float(np.argmin(whole.score)))) < 90)
     assert whole_cost_wrong >= 2  # (160 and -130 deg: the phase had the twin's half)
 
 

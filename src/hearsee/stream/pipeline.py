@@ -1562,7 +1562,8 @@ class SmoothedMask:
                         noise[i].mean(axis=0).astype(float))
                     self._last = localize_spectra(self.model, self.freqs, S[0].real,
                                                   S[1].real, S[2], self._w**2 / self._w2, nz,
-                                                  self.edges, fs=self.fs)
+                                                  self.edges, fs=self.fs,
+                                                  room_decision=False)
             self._n += 1
             out.append(self._last)
         return out
