@@ -1009,6 +1009,8 @@ def test_onset_band_iids_hear_the_first_wavefront():
     assert abs(np.median(onset) - truth) < 1.5
     assert np.all(np.isnan(mask.onset_band_iids(np.zeros((2, n)), FS, edges)))
     assert np.all(np.isnan(mask.onset_band_iids(x[:, :200], FS, edges)))
+    with pytest.raises(AudioInputError, match="two-channel"):
+        mask.onset_band_iids(x[0], FS, edges)
 
 
 def test_onsets_weigh_in_the_room_decision(asym):

@@ -1490,6 +1490,10 @@ def onset_band_iids(x: NDArray, fs: float, edges: NDArray) -> NDArray:
     few frequency bins fluctuates enough for stationary noise to cross the threshold now and
     then (a 2-bin band's power exceeds 4x its mean in ~2 % of frames): such "onsets" give the
     steady field's level difference, as the long average does."""
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 2 or x.shape[0] != 2:
+        raise AudioInputError(f"onsets need a two-channel recording (2, n), got {x.shape}")
+    fs = check_fs(fs)
     n = int(2 ** np.round(np.log2(ONSET_FRAME_S * fs)))
     hop = max(n // 4, 1)
     nb = len(edges) - 1
