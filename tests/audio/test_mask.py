@@ -783,6 +783,18 @@ def test_localize_mask_settings_of_the_wrong_type_are_config_errors(model):
                     ({"sigma_iid_db": "1"}, "sigma_iid_db")):
         with pytest.raises(ConfigError, match=msg):
             mask.localize_mask(x, FS, model, **kw)
+    # the decision from spectra (public, the stream's) checks them too: a NaN phase weight made
+    # every azimuth's cost NaN, a text distance a builtin TypeError
+    f = np.fft.rfftfreq(512, 1.0 / FS)
+    edges = mask._band_edges(None, model.f_max)
+    f = f[mask.analysis_bins(f, edges, model)]
+    h = model.transfer_at(f, _src(120, 1.0)).reshape(2, -1)
+    spectra = (np.abs(h[0]) ** 2, np.abs(h[1]) ** 2, np.conj(h[0]) * h[1], 50, None, edges)
+    for kw, msg in (({"phase_weight": float("nan")}, "phase_weight"),
+                    ({"distances": ("1",)}, "distances"), ({"distances": ()}, "distances")):
+        with pytest.raises(ConfigError, match=msg):
+            mask.localize_spectra(model, f, *spectra, fs=FS, **kw)
+    assert abs(mask.localize_spectra(model, f, *spectra, fs=FS).azimuth_deg - 120) < 5
     # valid settings are taken as before
     assert abs(mask.localize_mask(x, FS, model, distances=(None, 1.0)).azimuth_deg - 120) < 5
 

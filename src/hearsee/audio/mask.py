@@ -770,6 +770,22 @@ def _check_cost_weights(phase_weight: float, sigma_iid_db: float) -> None:
                           f"{phase_weight} and {sigma_iid_db}")
 
 
+def _check_decision_settings(distances: Any, sigma_iid_db: float, phase_weight: float) -> None:
+    """ConfigError unless :func:`localize_spectra`'s settings are usable: the cost weights as
+    :func:`_check_cost_weights`, ``distances`` one or more source distances > 0 m or None (far
+    field). Checked by :func:`localize_mask` before its spectra and by
+    :func:`localize_spectra` itself (public: a caller's NaN weight or text distance)."""
+    _check_cost_weights(phase_weight, sigma_iid_db)
+    try:  # (text, None or one number raised a builtin TypeError; True was taken as 1 m)
+        ok = len(distances) > 0 and all(d is None or (is_real(d) and d > 0)
+                                        for d in distances)
+    except TypeError:
+        ok = False
+    if not ok:
+        raise ConfigError("distances must be one or more source distances > 0 m (None = far "
+                          f"field), got {distances!r}")
+
+
 def front_back_margin(model: MaskModel, distance: float | None = None,
                       min_separation_deg: float = 20.0, sigma_iid_db: float = 1.0,
                       phase_weight: float = 400.0, bands_hz: ArrayLike | None = None,
@@ -1303,15 +1319,7 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         raise AudioInputError("recording is all zeros")
     fs = check_fs(fs)
     check_frame_ms(frame_ms, frame_ms / 2, names=("frame_ms", "half frame"))
-    _check_cost_weights(phase_weight, sigma_iid_db)
-    try:  # (text, None or one number raised a builtin TypeError; True was taken as 1 m)
-        ok = len(distances) > 0 and all(d is None or (is_real(d) and d > 0)
-                                        for d in distances)
-    except TypeError:
-        ok = False
-    if not ok:
-        raise ConfigError("distances must be one or more source distances > 0 m (None = far "
-                          f"field), got {distances!r}")
+    _check_decision_settings(distances, sigma_iid_db, phase_weight)
     lines = (hum.find_lines(x, fs) if tonal_lines_hz is None
              else np.array(hum.check_lines(tonal_lines_hz)) if np.size(tonal_lines_hz)
              else np.zeros(0))
@@ -1363,7 +1371,8 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
     (Hz; :func:`analysis_bins` of the frame's), averaged over ``n_used`` frames (their
     effective number for a weighted average), ``noise_psd`` the sensor noise's power per bin
     (pause frames; None: a continuous source, the coherent split), IID band ``edges`` (Hz);
-    ``distances``, ``sigma_iid_db``, ``phase_weight`` as :func:`localize_mask` (checked there);
+    ``distances``, ``sigma_iid_db``, ``phase_weight`` as :func:`localize_mask` (a ConfigError
+    for unusable ones, as there);
     ``fs`` the sample rate (Hz; the ITD's match tolerance, half a sample, see
     :func:`itd_candidates`). Where the cues do not fit the free-field model
     (:attr:`MaskLocalization.cues_fit` False) the front/back decision is :data:`ROOM_DECISION`'s,
@@ -1373,6 +1382,7 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
     None when no bin holds a coherent source. The one place of the cost, shared by the
     whole-recording :func:`localize_mask` and the stream's
     :class:`hearsee.stream.pipeline.SmoothedMask`."""
+    _check_decision_settings(distances, sigma_iid_db, phase_weight)
     s0, s1 = _coherent_power(p0, p1, cr, n_used)
     coh = np.abs(cr) ** 2 / np.maximum(p0 * p1, 1e-300)
     w = coh / max(coh.sum(), 1e-300)
