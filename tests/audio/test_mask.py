@@ -966,25 +966,38 @@ def test_cues_fit_a_free_field_masked_recording_and_not_a_bare_one(asym):
     assert doc["summary"]["phase_match"] < mask.FIT_PHASE_MIN
 
 
+def _spoilt_phase_spectra(model, az, levels_of_twin):
+    """Frame-averaged spectra (localize_spectra's f, p0, p1, cross, edges) of a far-field
+    source at ``az`` (deg) whose interaural phase is its front/back twin's (the other half's
+    azimuth of the same ITD) plus a fixed random 0.7-rad wobble per frequency, as a room
+    spoils it; the levels are the twin's too when ``levels_of_twin``, else the source's. Also
+    the source's own band IIDs (dB)."""
+    f = np.fft.rfftfreq(512, 1.0 / FS)
+    edges = mask._band_edges(None, model.f_max)
+    f = f[mask.analysis_bins(f, edges, model)]
+    itd = float(np.ravel(model.itd_at(_src(az), far_field=True))[0])
+    front, back = mask.itd_candidates(model, itd, FS, 40.0, 140.0)
+    twin = back if abs(az) < 90 else front
+    h = model.transfer_at(f, _src(az), far_field=True).reshape(2, -1)
+    h_twin = model.transfer_at(f, _src(twin), far_field=True).reshape(2, -1)
+    p0, p1 = np.abs(h_twin if levels_of_twin else h) ** 2
+    wobble = np.random.default_rng(0).normal(0.0, 0.7, len(f))
+    cross = np.sqrt(p0 * p1) * np.exp(1j * (np.angle(np.conj(h_twin[0]) * h_twin[1]) + wobble))
+    band = np.digitize(f, edges) - 1
+    g = np.abs(h) ** 2
+    iid = np.array([10 * np.log10(g[0, band == b].sum() / g[1, band == b].sum())
+                    for b in range(len(edges) - 1)])
+    return (f, p0, p1, cross, edges), iid
+
+
 def test_cues_that_do_not_fit_leave_front_back_to_the_iids_at_the_itd(asym):
     """Where the interaural phase is spoilt (a room: here the front/back twin's phase plus a
     random 0.7-rad wobble per frequency) but the levels are the true direction's, the whole
     cost followed the phase into the wrong half; the cues do not fit, and the half is decided
     by the band IIDs at the measured ITD's two azimuths (mask.ROOM_DECISION)."""
-    f = np.fft.rfftfreq(512, 1.0 / FS)
-    edges = mask._band_edges(None, asym.f_max)
-    f = f[mask.analysis_bins(f, edges, asym)]
-    wobble = np.random.default_rng(0).normal(0.0, 0.7, len(f))
     whole_cost_wrong = 0
     for az in (160.0, -130.0, 30.0, 140.0):
-        itd = float(np.ravel(asym.itd_at(_src(az), far_field=True))[0])
-        front, back = mask.itd_candidates(asym, itd, FS, 40.0, 140.0)
-        twin = back if abs(az) < 90 else front
-        h = asym.transfer_at(f, _src(az), far_field=True).reshape(2, -1)
-        h_twin = asym.transfer_at(f, _src(twin), far_field=True).reshape(2, -1)
-        p0, p1 = np.abs(h[0]) ** 2, np.abs(h[1]) ** 2
-        cross = np.sqrt(p0 * p1) * np.exp(1j * (np.angle(np.conj(h_twin[0]) * h_twin[1])
-                                                 + wobble))
+        (f, p0, p1, cross, edges), _ = _spoilt_phase_spectra(asym, az, levels_of_twin=False)
         est = mask.localize_spectra(asym, f, p0, p1, cross, 50, None, edges, fs=FS)
         assert not est.cues_fit and est.phase_match < mask.FIT_PHASE_MIN
         assert est.front_back_by == mask.ROOM_DECISION
@@ -1029,23 +1042,9 @@ def test_onsets_weigh_in_the_room_decision(asym):
     """Where the cues do not fit and the long average's levels are the front/back twin's (the
     phase too, spoilt), onset level differences of the true direction move every decision
     towards the true half and turn most of them (4 of these 6)."""
-    f = np.fft.rfftfreq(512, 1.0 / FS)
-    edges = mask._band_edges(None, asym.f_max)
-    f = f[mask.analysis_bins(f, edges, asym)]
-    band = np.digitize(f, edges) - 1
-    wobble = np.random.default_rng(0).normal(0.0, 0.7, len(f))
     turned = 0
     for az in (160.0, -130.0, 30.0, 140.0, 120.0, -60.0):
-        itd = float(np.ravel(asym.itd_at(_src(az), far_field=True))[0])
-        front, back = mask.itd_candidates(asym, itd, FS, 40.0, 140.0)
-        twin = back if abs(az) < 90 else front
-        g = np.abs(asym.transfer_at(f, _src(az), far_field=True).reshape(2, -1)) ** 2
-        h_twin = asym.transfer_at(f, _src(twin), far_field=True).reshape(2, -1)
-        p0, p1 = np.abs(h_twin[0]) ** 2, np.abs(h_twin[1]) ** 2
-        cross = np.sqrt(p0 * p1) * np.exp(1j * (np.angle(np.conj(h_twin[0]) * h_twin[1])
-                                                 + wobble))
-        onset = np.array([10 * np.log10(g[0, band == b].sum() / g[1, band == b].sum())
-                          for b in range(len(edges) - 1)])
+        (f, p0, p1, cross, edges), onset = _spoilt_phase_spectra(asym, az, levels_of_twin=True)
         without = mask.localize_spectra(asym, f, p0, p1, cross, 50, None, edges, fs=FS)
         with_onsets = mask.localize_spectra(asym, f, p0, p1, cross, 50, None, edges, fs=FS,
                                             onset_iid_db=onset)
