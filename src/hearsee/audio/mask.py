@@ -1230,9 +1230,9 @@ FIT_IID_MAX = 1.0
 #: from other rooms (worse at RT60 0.3 s), a direct-plus-diffuse template
 #: (:func:`diffuse_field_response`) with the diffuse share fitted per recording (no better),
 #: onset IIDs of 32-ms frames (no better: the direct sound lasts ~4 ms; 8-ms frames did), onset
-#: IIDs alone (better for voices, worse for white noise). In bench/mask.py the flagged
-#: free-field recordings' azimuths lose the cost's refinement (mask2-asym, voices at 20 dB:
-#: RMSE 1.06 -> 3.0 deg from one of 30 recordings).
+#: IIDs alone (better for voices, worse for white noise). A flagged recording's azimuth is the
+#: ITD's, without the cost's refinement: in bench/mask.py's free field (one flagged mask2-asym
+#: voice at 20 dB) the RMSE went 1.06 -> 3.0 deg with v1, 0.96 with v2.
 ROOM_DECISION = "itd-iid"
 #: What :class:`~hearsee.errors.MaskFitWarning` adds from the held-out run of the fit rule (its
 #: seed-151 recordings localized again with :data:`ROOM_DECISION`: 41 % before it, 36 % with
