@@ -90,7 +90,7 @@ from numpy.typing import ArrayLike, NDArray
 from hearsee.audio import bem, hum
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.signals import as_samples, check_fs
-from hearsee.audio.tdoa import check_frame_ms
+from hearsee.audio.tdoa import check_frame_ms, frame_signals
 from hearsee.config import (
     check_rng,
     finite_number,
@@ -1125,10 +1125,16 @@ class MaskLocalization:
 
     @property
     def cues_fit(self) -> bool:
-        """Whether the recording's cues fit the mask's free-field model at the answer: phase
-        match ``>=`` :data:`FIT_PHASE_MIN` and IID misfit ``<=`` :data:`FIT_IID_MAX` (False
-        for NaN)."""
-        return bool(self.phase_match >= FIT_PHASE_MIN and self.iid_misfit <= FIT_IID_MAX)
+        """Whether the recording's cues fit the mask's free-field model at the answer
+        (:func:`_cues_fit`)."""
+        return _cues_fit(self.phase_match, self.iid_misfit)
+
+
+def _cues_fit(phase_match: float, iid_misfit: float) -> bool:
+    """The fit test: phase match ``>=`` :data:`FIT_PHASE_MIN` and IID misfit ``<=``
+    :data:`FIT_IID_MAX` (False for NaN) -- :attr:`MaskLocalization.cues_fit`, and where
+    :func:`localize_spectra` turns to :data:`ROOM_DECISION`."""
+    return bool(phase_match >= FIT_PHASE_MIN and iid_misfit <= FIT_IID_MAX)
 
 
 def _spectra(x: NDArray, fs: float, frame_ms: float
@@ -1389,9 +1395,7 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
     if not np.isfinite(w).all() or w.sum() <= 0:
         return None
     itd = float(_phat_itd(cr, f, w, model.max_itd(), cache=model._tables))
-    band_idx = np.digitize(f, edges) - 1  # (F,)
-    nb = len(edges) - 1
-    onehot = (band_idx[None] == np.arange(nb)[:, None]).astype(float)  # (B, F)
+    onehot = _band_onehot(f, edges)  # (B, F)
     valid_b = onehot.sum(axis=1) > 0
     e0, e1, noise = _band_powers(p0, p1, s0, s1, onehot, noise_psd)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -1414,14 +1418,8 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
         az, trig, shares = _table_terms(model, dist, f)
         # rho = sum_f w cos(phi - phi_table) = [cos phi_t, sin phi_t] @ [w cos phi, w sin phi]
         rho = trig @ np.concatenate([w * np.cos(phi), w * np.sin(phi)])  # (A,)
-        # the table's band powers for the recording's own spectrum: the source spectrum
-        # (s0 + s1) / (g0 + g1) through each microphone's table power g_m
-        e_t = shares @ ((s0 + s1)[:, None] * onehot.T)  # (2 A, B): microphone 0's, then 1's
-        with np.errstate(divide="ignore", invalid="ignore"):
-            iid_t = 10 * np.log10(e_t[:len(az)] / e_t[len(az):])
-        # (only the valid bands: a constant recording's invalid ones divided 0 by 0)
-        chi = np.nansum((iid_meas[valid_b][None] - iid_t[:, valid_b]) ** 2
-                        / (2 * var_b[valid_b]), axis=1)
+        iid_t = _table_iids(shares, s0 + s1, onehot)  # (A, B)
+        chi = _iid_chi(iid_meas, iid_t, var_b, valid_b)
         cost = phase_weight * (1.0 - rho) + chi
         if best is None or cost.min() < best[0].min():
             kb = int(np.argmin(cost))
@@ -1431,19 +1429,21 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
     front = (az < 90) | (az > 270)
     jf, jb = cost[front].min(), cost[~front].min()
     p_front = float(1.0 / (1.0 + np.exp(np.clip(jf - jb, -700, 700))))
-    if room_decision and not (fit[0] >= FIT_PHASE_MIN and fit[1] <= FIT_IID_MAX):  # (cues_fit)
+    if room_decision and not _cues_fit(*fit):
         # the cues do not fit the free-field model (a room): the half by the band IIDs at the
         # measured ITD's two azimuths (see ROOM_DECISION)
         priors = [float(az[int(np.argmin(np.where(front == h, cost, np.inf)))])
                   for h in (True, False)]
         cands = itd_candidates(model, itd, fs, *priors)
-        iid_c = _table_iids_at(model, f, cands, s0 + s1, onehot)  # (2, B)
-        chi_c = np.nansum((iid_meas[valid_b][None] - iid_c[:, valid_b]) ** 2
-                          / (2 * var_b[valid_b]), axis=1)
+        _, _, shares = _table_terms(model, None, f)
+        rows = np.round(np.asarray(cands)).astype(int) % (len(shares) // 2)
+        iid_c = _table_iids(shares[np.concatenate([rows, rows + len(shares) // 2])], s0 + s1,
+                            onehot)  # (2, B)
+        chi_c = _iid_chi(iid_meas, iid_c, var_b, valid_b)
         if onset_iid_db is not None:  # (the onsets' level differences: onset_band_iids)
             on = np.isfinite(onset_iid_db) & np.isfinite(iid_c).all(axis=0)
-            chi_c = chi_c + np.sum((onset_iid_db[on][None] - iid_c[:, on]) ** 2, axis=1) \
-                / (2 * ONSET_IID_VAR_DB2)
+            chi_c = chi_c + _iid_chi(onset_iid_db, iid_c, np.full(len(on), ONSET_IID_VAR_DB2),
+                                     on)
         p_front = float(1.0 / (1.0 + np.exp(np.clip(chi_c[0] - chi_c[1], -700, 700))))
         # the azimuth is the ITD's in that half (the cost's best there sat on the side axis
         # where the whole cost preferred the other half: held out, 0.3 points fewer right)
@@ -1464,16 +1464,29 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
                             phase_match=fit[0], iid_misfit=fit[1])
 
 
-def _table_iids_at(model: MaskModel, f: NDArray, az_deg: tuple[float, float],
-                   spectrum: NDArray, onehot: NDArray) -> NDArray:
-    """The far-field table's band IIDs (dB) at azimuths ``az_deg`` (deg, on its 1-degree grid)
-    for a source of power ``spectrum`` at ``f`` (Hz), as :func:`localize_spectra`'s cost
-    predicts them: (len(az_deg), B)."""
-    az, _, shares = _table_terms(model, None, f)
-    rows = np.round(np.asarray(az_deg, dtype=float)).astype(int) % len(az)
-    e_t = shares[np.concatenate([rows, rows + len(az)])] @ (spectrum[:, None] * onehot.T)
+def _band_onehot(freqs_hz: NDArray, edges: NDArray) -> NDArray:
+    """Which band of ``edges`` (Hz) each frequency (Hz) is in: (B, F), 1.0 or 0.0 (none
+    outside the edges)."""
+    band = np.digitize(freqs_hz, edges) - 1
+    return (band[None] == np.arange(len(edges) - 1)[:, None]).astype(float)
+
+
+def _table_iids(shares: NDArray, spectrum: NDArray, onehot: NDArray) -> NDArray:
+    """Band IIDs (dB, (A, B)) that response-table rows predict for a source of power
+    ``spectrum`` (F,): ``shares`` (2A, F) each row's microphone share of the power
+    (:func:`_table_terms`; microphone 0's rows above microphone 1's) -- the source spectrum
+    through each microphone's table power, summed over the bands ``onehot`` (B, F)."""
+    e_t = shares @ (spectrum[:, None] * onehot.T)  # (2A, B)
+    a = len(shares) // 2
     with np.errstate(divide="ignore", invalid="ignore"):
-        return 10 * np.log10(e_t[:len(rows)] / e_t[len(rows):])
+        return 10 * np.log10(e_t[:a] / e_t[a:])
+
+
+def _iid_chi(iid_db: NDArray, iid_t: NDArray, var_db2: NDArray, use: NDArray) -> NDArray:
+    """``sum_b (IID_b - IID_t[:, b])^2 / (2 var_b)`` over the bands ``use`` (bool, (B,)) for
+    each row of ``iid_t`` (A, B), NaN terms left out: :func:`localize_spectra`'s IID cost.
+    (Only the usable bands: a constant recording's others divided 0 by 0.)"""
+    return np.nansum((iid_db[use][None] - iid_t[:, use]) ** 2 / (2 * var_db2[use]), axis=1)
 
 
 #: :func:`onset_band_iids`' frame (s), the onset threshold (a band's power over this many
@@ -1510,9 +1523,8 @@ def onset_band_iids(x: NDArray, fs: float, edges: NDArray) -> NDArray:
     out = np.full(nb, np.nan)
     if x.shape[1] < n + hop * ONSET_HISTORY_FRAMES:
         return out
-    frames = np.lib.stride_tricks.sliding_window_view(x, n, axis=1)[:, ::hop]  # (2, T, n)
-    band = np.digitize(np.fft.rfftfreq(n, 1.0 / fs), edges) - 1
-    onehot = (band[None] == np.arange(nb)[:, None]).astype(float)  # (B, F)
+    frames = frame_signals(x, n, hop)  # (2, T, n)
+    onehot = _band_onehot(np.fft.rfftfreq(n, 1.0 / fs), edges)  # (B, F)
     win = np.hanning(n)
     step = 4096  # (frames at a time: a long recording's spectra would take ~20x its size)
     bp = np.concatenate([np.abs(np.fft.rfft(frames[:, k:k + step] * win, axis=-1)) ** 2
