@@ -84,6 +84,7 @@ from hearsee.audio.tdoa import (
     MAX_UNSCALED_PEAK,
     MIN_UNSCALED_PEAK,
     TdoaFrames,
+    _peak_level,
     check_analysis_fs,
     check_frame_ms,
     check_recording_length,
@@ -1164,7 +1165,7 @@ class LevelScale:
         non-zero the scale only falls as the maximum grows (a state is never enlarged, so it
         cannot overflow); the one rise, from digital silence (scale 1) to a tiny first level,
         finds a state of zeros."""
-        peak = float(np.max(np.abs(samples), initial=0.0))
+        peak = _peak_level(samples)  # (estimate_tdoas' own: NaN / inf come through)
         if not np.isfinite(peak):
             raise AudioInputError("recording contains NaN or infinite samples")
         self.peak = max(self.peak, peak)
