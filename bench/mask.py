@@ -231,19 +231,26 @@ ROOM = np.array([6.0, 5.0, 3.2])
 ARRAY_AT = np.array([3.1, 2.4, 1.2])
 ROOM_SNRS = (10.0, 20.0)
 ROOM_DISTANCES_M = (1.0, 2.4)
+#: the rooms' stream columns: recording length (s) of the stream's talkers (scored from
+#: :data:`STREAM_SCORED_FROM_S` on, as the stream part)
+ROOM_STREAM_S = 3.0
 
 
 def run_rooms(trials: int, duration: float, seed: int, rt60s: list[float],
               models: dict[str, MaskModel]) -> list[dict]:
     """The masks and the bare pair in :data:`ROOM`: per RT60, ``trials`` sources (uniform
     azimuth, :data:`ROOM_DISTANCES_M` away, in the array's horizontal plane), each rendered
-    once per design and heard with every signal at every SNR of :data:`ROOM_SNRS`."""
+    once per design and heard with every signal at every SNR of :data:`ROOM_SNRS`; and each
+    masked one, in a recording of :data:`ROOM_STREAM_S` of its own (own random numbers, so
+    the other columns are those of a run without it), followed by hearsee's stream
+    (:func:`_stream_azimuths`)."""
     from scipy.signal import fftconvolve
 
     bare = MicArray.from_preset("two-mic")
     rows = []
     for rt in rt60s:
         rng = np.random.default_rng([seed, 1000, int(round(1000 * rt))])
+        srng = np.random.default_rng([seed, 3000, int(round(1000 * rt))])
         res: dict[tuple, dict[str, list]] = {}
         for _ in range(trials):
             az = rng.uniform(0.0, 360.0)
@@ -272,20 +279,42 @@ def run_rooms(trials: int, duration: float, seed: int, rt60s: list[float],
                                              kalman=False)
                     a = doc["summary"]["azimuth_deg"]
                     cell.setdefault("bare", []).append(np.nan if a is None else a % 360.0)
+                sig = make_signal(kind, ROOM_STREAM_S, srng)
+                for k, model in models.items():
+                    clean_s = fftconvolve(sig[None], hs[k], axes=-1)[:, :len(sig)]
+                    for snr in ROOM_SNRS:
+                        e = _stream_azimuths(add_noise(clean_s, snr,
+                                                       int(srng.integers(2**31))), model)
+                        cell = res[(kind, snr)]
+                        cell.setdefault(f"{k}_stream", []).extend(e)
+                        cell.setdefault(f"{k}_stream_true", []).extend([az] * len(e))
         for (kind, snr), cell in res.items():
             true = np.array(cell["true"])
             row = {"rt60": rt, "signal": kind, "snr": snr, "n": len(true)}
             for k in models:
                 row[f"{k}_det"] = 100.0 * float(np.mean(cell[f"{k}_det"]))
                 row[f"{k}_fit"] = _share(cell.get(f"{k}_fit", []))
+                row[f"{k}_sfb"], _, row[f"{k}_smed"] = _stats(
+                    cell[f"{k}_stream"], np.array(cell[f"{k}_stream_true"]))
             for name in [*models, "bare"]:
                 row[f"{name}_fb"], row[f"{name}_rmse"], row[f"{name}_med"] = _stats(
                     cell[name], true)
             rows.append(row)
             print(f"room rt60={rt:g} {kind:6s} {snr:4.0f} dB  " + "  ".join(
-                f"{k} fb {row[f'{k}_fb']:5.1f}% med {row[f'{k}_med']:6.2f}"
-                for k in models) + f"  bare fb {row['bare_fb']:5.1f}%", flush=True)
+                f"{k} fb {row[f'{k}_fb']:5.1f}% med {row[f'{k}_med']:6.2f} stream fb "
+                f"{row[f'{k}_sfb']:5.1f}%" for k in models)
+                + f"  bare fb {row['bare_fb']:5.1f}%", flush=True)
     return rows
+
+
+def _stream_azimuths(x: np.ndarray, model: MaskModel) -> list[float]:
+    """hearsee's stream (``hearsee track``) on a masked recording ``x``: the azimuths (deg;
+    NaN where a frame has none) of its frames from :data:`STREAM_SCORED_FROM_S` on."""
+    from hearsee.stream.pipeline import ArraySource, StreamPipeline
+
+    ups = StreamPipeline(model.array).run(ArraySource(x, FS))
+    return [np.nan if u.azimuth_deg is None else u.azimuth_deg for u in ups
+            if u.t >= STREAM_SCORED_FROM_S]
 
 
 #: the stream part: talkers per signal and SNR, recording length (s), SNRs (dB)
@@ -492,11 +521,12 @@ def main(argv: list[str] | None = None) -> None:
     rhead = ["RT60 s", "signal", "SNR dB", "n"]
     for _, preset in DESIGNS:
         rhead += [f"{preset} detected %", f"{preset} F/B %", f"{preset} RMSE",
-                  f"{preset} median", f"{preset} cues fit %"]
+                  f"{preset} median", f"{preset} cues fit %", f"{preset} stream F/B %",
+                  f"{preset} stream median"]
     rhead += ["bare F/B %", "bare RMSE", "bare median"]
     rtable = [[r["rt60"], r["signal"], r["snr"], r["n"],
                *[r[f"{k}_{c}"] for k, _ in DESIGNS
-                 for c in ("det", "fb", "rmse", "med", "fit")],
+                 for c in ("det", "fb", "rmse", "med", "fit", "sfb", "smed")],
                r["bare_fb"], r["bare_rmse"], r["bare_med"]] for r in room_rows]
     if rtable:
         print_table(f"in a {'x'.join(f'{v:g}' for v in ROOM)} m room", rhead, rtable)
@@ -517,7 +547,12 @@ def main(argv: list[str] | None = None) -> None:
                f"{' x '.join(f'{v:g}' for v in ROOM)} m room (image sources through the mask, "
                "see the script's docstring), sources 1-2.4 m away in the horizontal plane, "
                f"{room_trials} per RT60; the bare pair in the same room. Scored as the free "
-               "field's table.\n\n" + markdown_table(rhead, rtable)) if rtable else None
+               "field's table. 'stream': each source again in a recording of "
+               f"{ROOM_STREAM_S:g} s of its own, followed by hearsee's stream (`hearsee "
+               "track`), its frames from "
+               f"{STREAM_SCORED_FROM_S:g} s on scored (a frame without an azimuth counts as a "
+               "front/back error of 180 deg).\n\n" + markdown_table(rhead, rtable)
+               ) if rtable else None
     md = write_markdown("mask", [
         ("Targets", markdown_table(["target", "measured"], summary)),
         ("Design: front/back separability", (

@@ -1057,6 +1057,25 @@ def test_onsets_weigh_in_the_room_decision(asym):
     assert turned >= 4
 
 
+
+def test_geometry_inside_skips_only_points_beyond_the_mesh(asym):
+    """geometry_inside leaves out the winding numbers of points beyond the sphere round the
+    mesh's vertices: for 3000 random points around the mask, a third of them within that
+    sphere, it gives what the winding numbers give; a point at a table's distance is outside,
+    one point alone is taken, and a malformed point is a GeometryError."""
+    pts = np.random.default_rng(2).normal(size=(3000, 3)) * 0.08
+    centre, radius = asym._bounding_sphere
+    near = np.linalg.norm(pts - centre, axis=1) <= radius
+    assert 0.2 < near.mean() < 0.8
+    inside = asym.geometry_inside(pts)
+    np.testing.assert_array_equal(inside, asym.mesh.winding_number(pts) > 0.5)
+    assert inside.any() and not inside[~near].any()
+    assert asym.geometry_inside([0.5, 0.0, 0.0]).tolist() == [False]
+    assert asym.geometry_inside(pts[inside][0]).tolist() == [True]
+    with pytest.raises(GeometryError, match="geometry_inside"):
+        asym.geometry_inside([0.1, np.nan, 0.0])
+
+
 def test_sphere_table_cache_is_used_only_for_its_own_directions(asym):
     """The cached room responses are stored with their directions: a file whose directions
     are not this sampling's (another pyroomacoustics, another file) is recomputed, not paired
