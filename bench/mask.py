@@ -36,7 +36,10 @@ Rooms (added 2026-12-05): the same masks standing in a 6 x 5 x 3.2 m room of RT6
 sources, each heard through the mask from its direction; the direct path exact), sources in the
 horizontal plane 1-2.4 m away, 10 and 20 dB, every signal; the bare pair in the same room
 (pyroomacoustics, omnidirectional) beside them. No target was set for rooms; the numbers show
-what reflections do to the level and phase cues the tables were made for (free field).
+what reflections do to the level and phase cues the tables were made for (free field). Each
+source is also heard for :data:`ROOM_STREAM_S` through hearsee's stream (``hearsee track``,
+its frames from 1 s on: the "stream" columns, added 2026-12-05), which keeps
+the whole cost's front/back halves where ``localize_mask`` decides by the onsets.
 
 Stream (added 2026-12-05): talkers still or walking round ``mask2-asym`` (free field,
 :func:`run_stream`), followed by hearsee's stream (``hearsee track``: its front/back decision
