@@ -1249,7 +1249,12 @@ FIT_IID_MAX = 1.0
 #: written before the run, asked v1 (it has no onsets) to be within 1 point of the whole cost
 #: on seed 178's rooms (still sources, 3 s, 20 dB, frames from 1 s on); it was below, 59.4
 #: against 62.6 % of the frames (white noise 59-89 against 59-85 %, the voices 35-68 against
-#: 40-73 %).
+#: 40-73 %). A streaming form with onsets (8-ms frames within the stream's, a floor of the last
+#: 2 s, onset powers summed over ~0.4 s; git branch ``stream-onsets``) gained 8 points of frames
+#: on dev rooms (seeds 174 / 175, 3-s recordings at 10 and 20 dB) but +2.7 on fresh ones (seed
+#: 180: 52.4 -> 55.1 %, against the +4 its rule asked), and cost walking voices in free field 4.5
+#: points (seed 183: 88.7 -> 84.2 %; the stream's averages of a moving talker fail the fit test
+#: there too): not adopted.
 #: Tried on dev and not adopted: the IIDs compressed towards 0 dB by factors learnt per band
 #: from other rooms (worse at RT60 0.3 s), a direct-plus-diffuse template
 #: (:func:`diffuse_field_response`) with the diffuse share fitted per recording (no better),
