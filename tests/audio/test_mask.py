@@ -1277,6 +1277,34 @@ def test_robot_live_loop_hears_a_talker_behind_a_masked_head(asym, tmp_path):
     assert abs(s["azimuth_deg_final"] - 150.0) < 5.0
 
 
+
+def test_masked_stream_measures_by_its_decisions_where_frames_do_not(asym, monkeypatch):
+    """Frames without a GCC measurement of their own (here none: min_confidence 1e9) take
+    the SmoothedMask decision's azimuth as their measurement while the talker
+    sounds -- the masked pair's counterpart of the bare arrays' smoothed steered response. A
+    still source behind (150 deg) is tracked by them alone; without them there is no track.
+    When the source stops and the floor falls 20 dB, the activity test calls the quiet frames
+    active again after its ~1-s history (no range left in it) while the averages still hold
+    the source: the evidence's age (> max_evidence_age_frames) keeps those stale decisions
+    out."""
+    import hearsee.stream.pipeline as pl
+
+    x = mask.simulate_masked(white_noise(2.0, FS, rng=7), FS, asym, _src(150.0, 1.5),
+                             snr_db=20, rng=8)
+    quiet = np.random.default_rng(9).normal(0.0, np.std(x) * 0.01, (2, int(2.2 * FS)))
+    x = np.concatenate([x, quiet], axis=1)
+    ups, t, az = _stream(asym.array, x, min_confidence=1e9)
+    sounding = (t >= 0.8) & (t < 1.9)
+    assert np.all(np.isfinite(az[sounding]))
+    assert np.max(np.abs(wrap_deg(az[sounding] - 150.0))) < 5.0
+    assert all(u.measured for u, k in zip(ups, sounding, strict=True) if k)
+    stale = (t > 2.3) & (t < 4.0)
+    assert not any(u.measured for u, k in zip(ups, stale, strict=True) if k)
+    monkeypatch.setattr(pl, "MASK_SMOOTHED_MEASUREMENT", False)
+    _, _, az = _stream(asym.array, x, min_confidence=1e9)
+    assert np.all(np.isnan(az))
+
+
 def test_masked_stream_reset_keeps_the_level_scale_of_its_activity_history(asym):
     """reset_array_state (the head turned) forgets the averaged spectra and the decision; it
     had also set the level scale back to 1 while the activity history stayed at the scale of

@@ -1453,6 +1453,22 @@ MASK_DECISION_S = 0.125
 #: A masked pair's track within this many degrees of the side axis (+-90 deg) is in neither
 #: half for :meth:`TrackingProcessor._wrong_half`: there the two halves' candidates meet.
 MASK_SIDE_DEG = 10.0
+#: A masked pair's frames without a GCC measurement of their own take the
+#: :class:`SmoothedMask` decision's azimuth as their measurement
+#: (:meth:`TrackingProcessor._mask_candidates`; False: such frames give none, as before
+#: 2026-12-05's sixty-second session). In a reverberant room few frames pass the GCC's
+#: ``min_confidence`` (3-s voices at RT60 0.6 s: 0-11 % of the frames had a direction), so the
+#: track coasted and was dropped. Adopted under a rule written before its held-out runs
+#: (bench/results/HISTORY.md; still sources in random shoebox rooms, 3 s, noise / male / female at
+#: 10 and 20 dB, frames from 1 s on with a frame without an azimuth counted wrong): front/back
+#: right on fresh rooms 44.0 -> 54.0 % of the frames (mask2-asym; voices 35.5 -> 49.5; every
+#: RT60 class of 0.3 / 0.45 / 0.6 s better) and 50.0 -> 62.0 % (mask2); talkers walking round
+#: the mask in free field: mean front/back 88.6 -> 89.1 % (male at 10 dB 83.9 -> 79.3, female
+#: at 10 dB 77.0 -> 84.2), mean median error 7.4 -> 6.3 deg. Dev: rooms 44.9 -> 56.8 and
+#: 44.0 -> 55.9 %; replacing also the frames whose own GCC was not confident
+#: (``prefer_frame_confidence``, as the bare arrays' smoothed response does) was the same in
+#: rooms and 0.5 points worse in free field.
+MASK_SMOOTHED_MEASUREMENT = True
 
 
 class SmoothedMask:
@@ -1504,6 +1520,9 @@ class SmoothedMask:
                                       self.k0, self.k1)
         self._level = LevelScale()
         self._n = 0  # frames since the stream's start (missing ones too)
+        self._since = 0  # frames since the held decision was made
+        self.active = np.zeros(0, bool)  # the last batch's active frames
+        self.age_frames = np.zeros(0)  # ... and the age of each one's decision's evidence
         self.reset()
 
     def reset(self) -> None:
@@ -1513,6 +1532,9 @@ class SmoothedMask:
         self._S = np.zeros((3, self.k1 - self.k0), complex)  # |X0|^2, |X1|^2, X0 X1*
         self._w = self._w2 = 0.0  # sum of the weights and of their squares
         self._last: Any = None  # the decision the frames hold
+        # the averages' energy and its weighted mean age (frames), and that age when the held
+        # decision was made (SmoothedSrp's age_frames)
+        self._energy = self._age = self._decided_age = 0.0
 
     def skip(self, n_frames: int) -> None:
         """Age the averages through ``n_frames`` missing frames (they decay, nothing is added;
@@ -1525,6 +1547,8 @@ class SmoothedMask:
         self._S *= self.lam**n
         self._w *= self.lam**n
         self._w2 *= self.lam ** (2 * n)
+        self._energy *= self.lam**n
+        self._age += n
 
     def process(self, segment: NDArray, n_frames: int, hop: int) -> list[Any]:
         """Average and decide ``n_frames`` consecutive frames of ``segment`` (2, n): one
@@ -1536,6 +1560,7 @@ class SmoothedMask:
         factor = self._level.take(seg)  # (the state goes to a new level_scale: exactly)
         if factor != 1.0:
             self._S *= factor
+            self._energy *= factor
             self.activity.rescale(factor)
         seg = self._level.scaled(seg)
         fr = frame_signals(seg, self.frame_len, hop)[:, :n_frames]
@@ -1546,17 +1571,27 @@ class SmoothedMask:
         active, noise = self.activity(fr)
         X = frame_spectra(fr, self.win, self.nfft, self.k0, self.k1)  # (2, k, B)
         out: list[Any] = []
+        self.active = np.asarray(active, bool)[:n_frames]
+        self.age_frames = np.zeros(n_frames)
         for i in range(n_frames):
             self._decay(1)
             if active[i]:
                 x0, x1 = X[0, i], X[1, i]
-                self._S[0] += x0.real**2 + x0.imag**2
-                self._S[1] += x1.real**2 + x1.imag**2
+                p0, p1 = x0.real**2 + x0.imag**2, x1.real**2 + x1.imag**2
+                self._S[0] += p0
+                self._S[1] += p1
                 self._S[2] += x0 * np.conj(x1)
                 self._w += 1.0
                 self._w2 += 1.0
+                # (the energy-weighted age: this frame's evidence is 0 frames old)
+                e = float(p0.sum() + p1.sum())
+                total = self._energy + e
+                self._age = self._energy * self._age / total if total > 0 else 0.0
+                self._energy = total
             if self._n % self.every == 0:
                 self._last = None
+                self._since = 0
+                self._decided_age = self._age
                 if self._w > 0 and self._w**2 / self._w2 >= MASK_MIN_FRAMES - 1e-9:
                     S = self._S / self._w
                     nz = None if noise is None or not np.all(np.isfinite(noise[i])) else (
@@ -1565,6 +1600,8 @@ class SmoothedMask:
                                                   S[1].real, S[2], self._w**2 / self._w2, nz,
                                                   self.edges, fs=self.fs,
                                                   room_decision=False)
+            self.age_frames[i] = self._decided_age + self._since
+            self._since += 1
             self._n += 1
             out.append(self._last)
         return out
@@ -1765,7 +1802,11 @@ class StreamConfig:
         best one's power is ambiguous and not used (1 = no such test)
     max_evidence_age_frames : a smoothed measurement whose evidence is older than this (energy-
         weighted mean age, frames: in a pause the average still holds the last loud frames) is
-        not used; younger ones enter the tracker with their age as measurement delay
+        not used; younger ones enter the tracker with their age as measurement delay. The same
+        for a masked pair's smoothed front/back decisions, which give frames without a GCC
+        measurement their azimuth (:data:`MASK_SMOOTHED_MEASUREMENT`; there
+        ``min_coherence`` applies to the decision's phase match and ``sigma_srp_deg`` to its
+        measurement noise)
     prefer_frame : frames whose own GCC gives a confident measurement use it (no delay); only
         the others use the smoothed steered response
     prefer_frame_confidence : the same for frames whose own GCC confidence (smallest pair
@@ -2135,6 +2176,8 @@ class TrackingProcessor:
                     cands, c_sm = self._gated_candidate(sm["profile"][n], float(t) - age_s)
                 delay = age_s if cands else 0.0
                 sigma = self._srp_sigma(c_sm) if cands else None
+            elif self.mask is not None and not cands and MASK_SMOOTHED_MEASUREMENT:
+                cands, sigma, delay = self._mask_candidates(mk[n], n)
             if sigma is not None and self._level_plane:
                 sigma = (sigma, sigma * self.cfg.planar_elevation_sigma_scale)
             if cands and self._wrong_half(mk[n]):
@@ -2169,12 +2212,16 @@ class TrackingProcessor:
         for missing frames, before enough evidence, and on every frame of a bare array)."""
         k = len(batch.t)
         out: list[Any] = [None] * k
+        self._mask_active = np.zeros(k, bool)
+        self._mask_age = np.zeros(k)
         if self.mask is None:
             return out
         n_missing = int(np.count_nonzero(batch.missing))  # (missing frames come first)
         self.mask.skip(n_missing)
         if batch.segment is not None:
             out[n_missing:] = self.mask.process(batch.segment, k - n_missing, self.hop)
+            self._mask_active[n_missing:] = self.mask.active
+            self._mask_age[n_missing:] = self.mask.age_frames
         return out
 
     def _locate(self, z: NDArray, decision: Any
@@ -2236,6 +2283,27 @@ class TrackingProcessor:
         if c.sigma_frame_deg is None or not confidence > 0:
             return c.sigma_meas_deg
         return max(c.sigma_min_deg, c.sigma_frame_deg / confidence)
+
+    def _mask_candidates(self, decision: Any, n: int
+                         ) -> tuple[list[tuple[float, float | None]], float | None, float]:
+        """A masked pair's measurement where frame ``n`` has none of its own (no GCC peak
+        passed ``min_confidence``): the :class:`SmoothedMask` ``decision``'s azimuth, from the
+        spectra averaged over the last ~``mask_tau_s`` -- the masked pair's counterpart of the
+        smoothed steered response (:meth:`_smoothed_candidates`) -- while the frame is active,
+        the evidence's energy-weighted age is at most ``max_evidence_age_frames`` and the
+        averages' phase match ``rho`` reaches ``min_coherence``; its mirror in the other half
+        as an alternative unless the decision is confident (``mask_decide_confidence``).
+        Returns ``(candidates, sigma_deg, delay_s)``: ``sigma`` as :meth:`_srp_sigma` of
+        ``rho``, the delay that age."""
+        age = float(self._mask_age[n])
+        if decision is None or not self._mask_active[n] or not (
+                decision.phase_match >= self.cfg.min_coherence
+                and age <= self.cfg.max_evidence_age_frames):
+            return [], None, 0.0
+        cands: list[tuple[float, float | None]] = [(wrap_deg(decision.azimuth_deg), None)]
+        if not self._decided(decision):
+            cands.append((wrap_deg(decision.runner_up_deg), None))
+        return cands, self._srp_sigma(decision.phase_match), age * self.hop / self.fs
 
     def _srp_sigma(self, coherence: float) -> float:
         """Measurement noise (deg) of a smoothed steered-response direction: ``sigma_srp_deg
