@@ -1305,6 +1305,27 @@ def test_masked_stream_measures_by_its_decisions_where_frames_do_not(asym, monke
     assert np.all(np.isnan(az))
 
 
+
+def test_masked_stream_decision_age_counts_missing_frames(asym):
+    """The age of a held decision's evidence (SmoothedMask.age_frames, the tracker's gate and
+    delay for its decision measurements) counts the frames since the decision, missing ones
+    (skip: a dropped block) too; a new decision starts from its averages' own age."""
+    from hearsee.stream.pipeline import SmoothedMask
+
+    x = mask.simulate_masked(white_noise(1.5, FS, rng=13), FS, asym, _src(60.0, 1.5),
+                             snr_db=20, rng=14)
+    stage = SmoothedMask(asym, FS, 1024, 512, 0.15, 31)
+    assert stage.every == 4
+    stage.process(x[:, :14 * 512 + 1024], 15, 512)  # (decisions at frames 0, 4, 8, 12)
+    decided = stage._decided_age
+    assert 0.0 < decided < 5.0  # (a steady source: ~lam / (1 - lam) frames, lam = e^-0.213)
+    np.testing.assert_allclose(stage.age_frames[12:], decided + np.arange(3))
+    stage.skip(6)  # (frames 15-20 lost; 21 is not a decision frame, 24 is)
+    stage.process(x[:, 21 * 512:24 * 512 + 1024], 4, 512)
+    np.testing.assert_allclose(stage.age_frames[:3], decided + 9 + np.arange(3))
+    assert stage.age_frames[3] == stage._decided_age != decided
+
+
 def test_masked_stream_reset_keeps_the_level_scale_of_its_activity_history(asym):
     """reset_array_state (the head turned) forgets the averaged spectra and the decision; it
     had also set the level scale back to 1 while the activity history stayed at the scale of

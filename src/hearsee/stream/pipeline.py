@@ -1490,6 +1490,11 @@ class SmoothedMask:
     about ``tau_s`` / 2 and a change of half (a talker walking round behind the head) by up
     to ``tau_s``.
 
+    After each :meth:`process`, ``active`` (bool) and ``age_frames`` hold each of its frames'
+    activity and the energy-weighted mean age (frames, :class:`SmoothedSrp`'s) of the evidence
+    its held decision was made on, missing frames counted: the tracker's gates and delay for
+    the decisions it takes as measurements (:data:`MASK_SMOOTHED_MEASUREMENT`).
+
     Frames: Hann windows of ``frame_len`` samples at the stream's hop, their rfft bins within
     :func:`hearsee.audio.mask.analysis_bins`. Levels: the samples are scaled by
     :func:`level_scale` of the largest |sample| seen (:class:`LevelScale`; the state carried
@@ -1541,6 +1546,7 @@ class SmoothedMask:
         they count towards the next decision's time)."""
         n = max(int(n_frames), 0)
         self._decay(n)
+        self._since += n
         self._n += n
 
     def _decay(self, n: int) -> None:
