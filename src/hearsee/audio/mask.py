@@ -552,9 +552,9 @@ class MaskModel:
     def geometry_inside(self, points: ArrayLike) -> NDArray:
         """True for points (P, 3) or one point (3,), metres in the array frame, inside the mask
         body (winding number > 1/2). Points beyond the sphere round the mesh's vertices are
-        outside without their winding numbers: the mesh subtends less than a hemisphere's solid
-        angle there, so theirs is below 1/2 (the response tables' sources, 0.5-1 m away: ~0.3 s
-        a model, each time one was made, for two sums of solid angles over every panel)."""
+        outside the body and are answered without their winding numbers (the closed mesh's is
+        0 there; the response tables' sources, 0.5-1 m away, had cost ~0.3 s each time a model
+        was made, for two sums of solid angles over every panel)."""
         p = bem._query_points(points, "geometry_inside")
         centre, radius = self._bounding_sphere
         near = np.linalg.norm(p - centre, axis=1) <= radius
