@@ -1057,7 +1057,6 @@ def test_onsets_weigh_in_the_room_decision(asym):
     assert turned >= 4
 
 
-
 def test_geometry_inside_skips_only_points_beyond_the_mesh(asym):
     """geometry_inside leaves out the winding numbers of points beyond the sphere round the
     mesh's vertices: for 3000 random points around the mask, a third of them within that
@@ -1277,7 +1276,6 @@ def test_robot_live_loop_hears_a_talker_behind_a_masked_head(asym, tmp_path):
     assert abs(s["azimuth_deg_final"] - 150.0) < 5.0
 
 
-
 def test_masked_stream_measures_by_its_decisions_where_frames_do_not(asym, monkeypatch):
     """Frames without a GCC measurement of their own (here none: min_confidence 1e9) take
     the SmoothedMask decision's azimuth as their measurement while the talker
@@ -1303,7 +1301,6 @@ def test_masked_stream_measures_by_its_decisions_where_frames_do_not(asym, monke
     monkeypatch.setattr(pl, "MASK_SMOOTHED_MEASUREMENT", False)
     _, _, az = _stream(asym.array, x, min_confidence=1e9)
     assert np.all(np.isnan(az))
-
 
 
 def test_masked_stream_decision_age_counts_missing_frames(asym):
