@@ -1191,6 +1191,9 @@ def test_masked_stream_refuses_a_camera_and_a_frame_without_bins(asym):
         StreamConfig(mask_tau_s=0.0)
     with pytest.raises(ConfigError, match="mask_decide_confidence"):
         StreamConfig(mask_decide_confidence=0.3)
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(ConfigError, match="mask_min_phase_match"):
+            StreamConfig(mask_min_phase_match=bad)
 
 
 def test_cli_tracks_a_masked_pair_and_refuses_it_with_a_camera(asym, tmp_path, capsys):
@@ -1280,7 +1283,8 @@ def test_masked_stream_measures_by_its_decisions_where_frames_do_not(asym, monke
     """Frames without a GCC measurement of their own (here none: min_confidence 1e9) take
     the SmoothedMask decision's azimuth as their measurement while the talker
     sounds -- the masked pair's counterpart of the bare arrays' smoothed steered response. A
-    still source behind (150 deg) is tracked by them alone; without them there is no track.
+    still source behind (150 deg) is tracked by them alone; without them (or with a phase-
+    match gate of 1, mask_min_phase_match) there is no track.
     When the source stops and the floor falls 20 dB, the activity test calls the quiet frames
     active again after its ~1-s history (no range left in it) while the averages still hold
     the source: the evidence's age (> max_evidence_age_frames) keeps those stale decisions
@@ -1298,6 +1302,9 @@ def test_masked_stream_measures_by_its_decisions_where_frames_do_not(asym, monke
     assert all(u.measured for u, k in zip(ups, sounding, strict=True) if k)
     stale = (t > 2.3) & (t < 4.0)
     assert not any(u.measured for u, k in zip(ups, stale, strict=True) if k)
+    # (a phase match of 1 is never reached: mask_min_phase_match gates them)
+    _, _, az = _stream(asym.array, x, min_confidence=1e9, mask_min_phase_match=1.0)
+    assert np.all(np.isnan(az))
     monkeypatch.setattr(pl, "MASK_SMOOTHED_MEASUREMENT", False)
     _, _, az = _stream(asym.array, x, min_confidence=1e9)
     assert np.all(np.isnan(az))

@@ -1811,8 +1811,7 @@ class StreamConfig:
         not used; younger ones enter the tracker with their age as measurement delay. The same
         for a masked pair's smoothed front/back decisions, which give frames without a GCC
         measurement their azimuth (:data:`MASK_SMOOTHED_MEASUREMENT`; there
-        ``min_coherence`` applies to the decision's phase match and ``sigma_srp_deg`` to its
-        measurement noise)
+        ``mask_min_phase_match`` gates them and ``sigma_srp_deg`` gives their measurement noise)
     prefer_frame : frames whose own GCC gives a confident measurement use it (no delay); only
         the others use the smoothed steered response
     prefer_frame_confidence : the same for frames whose own GCC confidence (smallest pair
@@ -1848,6 +1847,17 @@ class StreamConfig:
         is then restarted at once at the chosen half's candidate (1 = always both: the
         tracker's continuity alone keeps the half -- but for decisions whose confidence
         rounds to 1, which a clear recording's often does)
+    mask_min_phase_match : masked pairs: the least phase match (``rho``, the coherence-weighted
+        mean cosine of the averaged cross-spectrum's phase against the mask's table at the
+        decided azimuth) with which a front/back decision gives its azimuth to a frame without
+        a GCC measurement (:data:`MASK_SMOOTHED_MEASUREMENT`; 0.4, ``min_coherence``'s
+        default, which gated them when they were adopted). Lower admits more of a
+        reverberant room's decisions -- voices at RT60 0.6 s and 10 dB have a median of 0.31 --
+        and more of noise's: 0.3 was tried under a rule written first (bench/results/HISTORY.md):
+        fresh rooms' frames in the right half 58.3 -> 64.1 % (mask2-asym, every RT60 class
+        better), free-field walking talkers unchanged, but 60 of 5622 frames of pure sensor
+        noise (3 x 60 s) measured, against none at 0.4 -- a spurious measurement every ~3 s
+        of silence; not adopted. A stream that is never long silent may set it lower
     """
 
     frame_ms: float = 64.0
@@ -1897,6 +1907,7 @@ class StreamConfig:
     snr_weight: bool = False
     mask_tau_s: float = 0.15
     mask_decide_confidence: float = 0.9
+    mask_min_phase_match: float = 0.4
 
     def __post_init__(self) -> None:
         _check_config(self)
@@ -1913,7 +1924,7 @@ _POSITIVE_OR_NONE = ("sigma_accel", "sigma_tdoa_s", "accel_tau_s", "max_coast_s"
 _WITHIN = {"min_confidence": (0.0, np.inf), "direction_angle_noise_ratio": (0.0, np.inf),
            "min_coherence": (0.0, 1.0),
            "alt_ratio": (0.0, 1.0), "max_alt_ratio": (0.0, 1.0),
-           "mask_decide_confidence": (0.5, 1.0)}
+           "mask_decide_confidence": (0.5, 1.0), "mask_min_phase_match": (0.0, 1.0)}
 
 
 def _check_config(cfg: StreamConfig) -> None:
@@ -2297,13 +2308,13 @@ class TrackingProcessor:
         spectra averaged over the last ~``mask_tau_s`` -- the masked pair's counterpart of the
         smoothed steered response (:meth:`_smoothed_candidates`) -- while the frame is active,
         the evidence's energy-weighted age is at most ``max_evidence_age_frames`` and the
-        averages' phase match ``rho`` reaches ``min_coherence``; its mirror in the other half
+        averages' phase match ``rho`` reaches ``mask_min_phase_match``; its mirror in the other half
         as an alternative unless the decision is confident (``mask_decide_confidence``).
         Returns ``(candidates, sigma_deg, delay_s)``: ``sigma`` as :meth:`_srp_sigma` of
         ``rho``, the delay that age."""
         age = float(self._mask_age[n])
         if decision is None or not self._mask_active[n] or not (
-                decision.phase_match >= self.cfg.min_coherence
+                decision.phase_match >= self.cfg.mask_min_phase_match
                 and age <= self.cfg.max_evidence_age_frames):
             return [], None, 0.0
         cands: list[tuple[float, float | None]] = [(wrap_deg(decision.azimuth_deg), None)]
