@@ -1041,13 +1041,23 @@ def test_onset_band_iids_hear_the_first_wavefront():
 def test_onsets_weigh_in_the_room_decision(asym):
     """Where the cues do not fit and the long average's levels are the front/back twin's (the
     phase too, spoilt), onset level differences of the true direction move every decision
-    towards the true half and turn most of them (4 of these 6)."""
+    towards the true half and turn most of them (4 of these 6). Given as a function (as
+    localize_mask does), the onsets are computed there and only there: the same decisions;
+    the whole cost's decision (room_decision False) never calls it."""
     turned = 0
     for az in (160.0, -130.0, 30.0, 140.0, 120.0, -60.0):
         (f, p0, p1, cross, edges), onset = _spoilt_phase_spectra(asym, az, levels_of_twin=True)
         without = mask.localize_spectra(asym, f, p0, p1, cross, 50, None, edges, fs=FS)
         with_onsets = mask.localize_spectra(asym, f, p0, p1, cross, 50, None, edges, fs=FS,
                                             onset_iid_db=onset)
+        calls = []
+        lazy = mask.localize_spectra(asym, f, p0, p1, cross, 50, None, edges, fs=FS,
+                                     onset_iid_db=lambda o=onset, c=calls: c.append(1) or o)
+        assert calls == [1] and lazy.front_probability == with_onsets.front_probability
+        mask.localize_spectra(asym, f, p0, p1, cross, 50, None, edges, fs=FS,
+                              onset_iid_db=lambda o=onset, c=calls: c.append(1) or o,
+                              room_decision=False)
+        assert calls == [1]
         ahead = abs(az) < 90
         assert without.front_back_by == with_onsets.front_back_by == mask.ROOM_DECISION
         assert (without.front_probability > 0.5) != ahead  # (the twin's levels)

@@ -77,7 +77,7 @@ import json
 import os
 import sys
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
@@ -1369,15 +1369,10 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
             f"to 0.9 x the model's f_max of {model.f_max:g} Hz, below the Nyquist frequency "
             f"{fs / 2:g} Hz); 4 are needed: use a longer frame, a higher sample rate or bands "
             "within that range")
-
-    def decide(onsets: NDArray | None) -> MaskLocalization | None:
-        return localize_spectra(model, f[use], p0[use], p1[use], cr[use], n_used,
-                                None if noise_psd is None else noise_psd[use], edges, distances,
-                                sigma_iid_db, phase_weight, fs=fs, onset_iid_db=onsets)
-
-    est = decide(None)
-    if est is not None and est.front_back_by == ROOM_DECISION:  # (the onsets only where used)
-        est = decide(onset_band_iids(x, fs, edges))
+    est = localize_spectra(model, f[use], p0[use], p1[use], cr[use], n_used,
+                           None if noise_psd is None else noise_psd[use], edges, distances,
+                           sigma_iid_db, phase_weight, fs=fs,
+                           onset_iid_db=lambda: onset_band_iids(x, fs, edges))
     if est is None:
         raise AudioInputError("no coherent source found in the recording")
     return replace(est, detected=_source_detected(x, fs, model, frame_ms))
@@ -1393,7 +1388,8 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
                      n_used: float, noise_psd: NDArray | None, edges: NDArray,
                      distances: tuple[float | None, ...] = TABLE_DISTANCES,
                      sigma_iid_db: float = 1.0, phase_weight: float = 400.0, *, fs: float,
-                     onset_iid_db: NDArray | None = None, room_decision: bool = True
+                     onset_iid_db: NDArray | Callable[[], NDArray] | None = None,
+                     room_decision: bool = True
                      ) -> MaskLocalization | None:
     """:func:`localize_mask`'s decision from frame-averaged spectra: the auto-spectra ``p0``,
     ``p1`` and cross-spectrum ``cr = X0 conj(X1)`` of the two microphones at frequencies ``f``
@@ -1405,7 +1401,8 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
     ``fs`` the sample rate (Hz; the ITD's match tolerance, half a sample, see
     :func:`itd_candidates`). Where the cues do not fit the free-field model
     (:attr:`MaskLocalization.cues_fit` False) the front/back decision is :data:`ROOM_DECISION`'s,
-    with the onsets' band IIDs ``onset_iid_db`` (dB, :func:`onset_band_iids`; None: without),
+    with the onsets' band IIDs ``onset_iid_db`` (dB, :func:`onset_band_iids`, or a function
+    of no arguments that gives them, called only there; None: without),
     unless ``room_decision`` is False (the whole cost's halves always, as the stream decides).
     Returns its :class:`MaskLocalization` (``detected`` True: the caller's test decides), or
     None when no bin holds a coherent source. The one place of the cost, shared by the
@@ -1464,9 +1461,9 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
                             onehot)  # (2, B)
         chi_c = _iid_chi(iid_meas, iid_c, var_b, valid_b)
         if onset_iid_db is not None:  # (the onsets' level differences: onset_band_iids)
-            on = np.isfinite(onset_iid_db) & np.isfinite(iid_c).all(axis=0)
-            chi_c = chi_c + _iid_chi(onset_iid_db, iid_c, np.full(len(on), ONSET_IID_VAR_DB2),
-                                     on)
+            onsets = onset_iid_db() if callable(onset_iid_db) else onset_iid_db
+            on = np.isfinite(onsets) & np.isfinite(iid_c).all(axis=0)
+            chi_c = chi_c + _iid_chi(onsets, iid_c, np.full(len(on), ONSET_IID_VAR_DB2), on)
         p_front = float(1.0 / (1.0 + np.exp(np.clip(chi_c[0] - chi_c[1], -700, 700))))
         # the azimuth is the ITD's in that half (the cost's best there sat on the side axis
         # where the whole cost preferred the other half: held out, 0.3 points fewer right)
