@@ -934,6 +934,22 @@ def test_sphere_impulse_responses_are_the_models_impulse_responses(asym):
         np.testing.assert_allclose(irs[:, k], ref, atol=1e-5 * np.abs(ref).max())
 
 
+def test_sphere_directivities_hold_the_sphere_responses_and_are_made_once(asym):
+    """The reflections' filters are the sphere's impulse responses (pyroomacoustics reads the
+    response of an image's direction of arrival off them), built once per sample rate."""
+    u, irs, lead = asym.sphere_impulse_responses(FS)
+    dirs, lead_d = asym.sphere_directivities(FS)
+    assert lead_d == lead and len(dirs) == 2
+    for m, d in enumerate(dirs):
+        assert d.filter_len_ir == irs.shape[-1]
+        k = 1234
+        h = d.get_response(azimuth=np.arctan2(u[k, 1], u[k, 0]),
+                           colatitude=np.arccos(np.clip(u[k, 2], -1.0, 1.0)), degrees=False)
+        np.testing.assert_allclose(np.asarray(h).ravel(), irs[m, k], atol=1e-12)
+    again, _ = asym.sphere_directivities(FS)
+    assert all(a is b for a, b in zip(again, dirs, strict=True))
+
+
 def test_cues_fit_a_free_field_masked_recording_and_not_a_bare_one(asym):
     """A bare pair's recording read as masked (the same microphone positions, no mask) was
     localized without a word; its level differences do not fit the mask's model. A masked

@@ -680,6 +680,28 @@ class MaskModel:
         irs = _shifted_impulses(self._interpolate(h.astype(complex), u, True, f), f, fs, length)
         return u, np.ascontiguousarray(irs.transpose(1, 0, 2)), length // 4
 
+    def sphere_directivities(self, fs: float) -> tuple[list, int]:
+        """pyroomacoustics directivities of the two microphones (one
+        ``pyroomacoustics.directivities.MeasuredDirectivity`` each, of
+        :meth:`sphere_impulse_responses` at ``fs`` Hz) and their ``lead`` (samples): the
+        reflections' filters of :func:`masked_room_impulse_responses`. Made once per sample
+        rate and kept: building them computes the octave-band energies of all 2 x 4096
+        responses (~3 s), while a room's image sources through them take ~0.1-1.5 s; they
+        are not changed by a simulation (their orientation is set here only)."""
+        fs = check_fs(fs)
+        key = ("directivities", SPHERE_DIRECTIONS, fs)
+        if key not in self._tables:
+            import pyroomacoustics as pra
+            from pyroomacoustics.directivities import MeasuredDirectivity, Rotation3D
+
+            u, irs, lead = self.sphere_impulse_responses(fs)
+            grid = pra.doa.GridSphere(cartesian_points=u.T)
+            dirs = [MeasuredDirectivity(Rotation3D([0.0, 0.0, 0.0], "zyx"), grid, irs[m],
+                                        int(fs)) for m in range(2)]
+            self._tables[key] = (dirs, lead)
+        dirs, lead = self._tables[key]
+        return list(dirs), lead
+
     def impulse_responses(self, source: ArrayLike, fs: float, n: int = 256,
                           far_field: bool = False) -> NDArray:
         """Impulse responses (2, n) of the two microphones (thesis figs. 3.6-3.7).
@@ -1036,7 +1058,6 @@ def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | Mask
     of 4096 directions; ``tests/audio/test_mask.py``).
     """
     import pyroomacoustics as pra
-    from pyroomacoustics.directivities import MeasuredDirectivity, Rotation3D
 
     from hearsee.audio.propagation import (
         _check_inside,
@@ -1059,14 +1080,11 @@ def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | Mask
     e_absorption, order = image_sources(rt60, dim, model.c, max_order)
     if e_absorption is None or order == 0:
         return None
-    u, irs, lead = model.sphere_impulse_responses(fs)
-    taps = irs.shape[-1] + int(pra.constants.get("frac_delay_length"))
+    dirs, lead = model.sphere_directivities(fs)
+    taps = dirs[0].filter_len_ir + int(pra.constants.get("frac_delay_length"))
     k_dir = order
     while k_dir > 0 and _images_up_to(k_dir) * taps > MAX_DIRECTIONAL_TAPS:
         k_dir -= 1
-    grid = pra.doa.GridSphere(cartesian_points=u.T)
-    dirs = [MeasuredDirectivity(Rotation3D([0.0, 0.0, 0.0], "zyx"), grid, irs[m], int(fs))
-            for m in range(2)]
     centre = np.stack([at, at])  # both responses are relative to the array origin
 
     def rirs(order_: int, mics: NDArray, directivities: list | None, latency: int) -> NDArray:
