@@ -924,6 +924,105 @@ def test_masked_room_refuses_impossible_placements(asym):
         mask.simulate_masked_room(sig, FS, asym, _src(0, 1.0), ROOM, 0.3, [1.0, np.nan, 1.0])
 
 
+def test_moving_masked_room_reflections_follow_the_source(asym):
+    """simulate_moving_masked_room. Ground truth built here: a talker stands at p0, walks to p1
+    and stands there. The recording is the moving direct path (simulate_moving_masked) plus
+    reflections that, while the talker stands, are the static room's reflections of where
+    they stand (masked_room_reflections convolved with the signal) -- before the walk up to
+    the last update spacing (50 ms), after it once that spacing and the reflections' tail
+    (orders <= 3 of a 4 x 3.5 x 2.7 m room: < 40 ms) are past. The early images (orders 1-2,
+    every 5 ms) and the rest add up to the whole room's."""
+    from scipy.signal import fftconvolve
+
+    from hearsee.sim.moving import (
+        Trajectory,
+        simulate_moving_masked,
+        simulate_moving_masked_room,
+    )
+
+    sig = white_noise(0.8, FS, rng=11)
+    p0, p1 = _src(60, 1.0), _src(150, 1.2)
+    traj = Trajectory([0.0, 0.25, 0.45, 0.8], [p0, p0, p1, p1])
+    kw = dict(max_order=3, early_order=2)
+    y = simulate_moving_masked_room(sig, FS, asym, traj, ROOM, 0.3, ARRAY_AT, **kw)
+    refl = y - simulate_moving_masked(sig, FS, asym, traj)
+
+    def static(p):
+        h = mask.masked_room_reflections(FS, asym, p, ROOM, 0.3, ARRAY_AT, max_order=3)
+        return fftconvolve(sig[None], h, axes=-1)[:, :sig.size]
+
+    before, after = slice(0, int(0.19 * FS)), slice(int(0.55 * FS), sig.size)
+    ref0, ref1 = static(p0), static(p1)
+    scale = np.abs(ref1).max()
+    np.testing.assert_allclose(refl[:, before], ref0[:, before], atol=1e-9 * scale)
+    np.testing.assert_allclose(refl[:, after], ref1[:, after], atol=1e-9 * scale)
+    # (where the talker stands matters: p0's reflections are not p1's)
+    assert np.linalg.norm(ref0[:, after] - ref1[:, after]) > 0.3 * np.linalg.norm(ref1[:, after])
+    # several signals along one path: the same recordings as one at a time
+    two = simulate_moving_masked_room(np.stack([sig, sig[::-1]]), FS, asym, traj, ROOM, 0.3,
+                                      ARRAY_AT, **kw)
+    assert two.shape == (2, 2, sig.size)
+    np.testing.assert_array_equal(two[0], y)
+    # anechoic: the free-field renderer's recording
+    np.testing.assert_array_equal(
+        simulate_moving_masked_room(sig, FS, asym, traj, ROOM, 0.0, ARRAY_AT),
+        simulate_moving_masked(sig, FS, asym, traj))
+
+
+@pytest.mark.slow  # (two renderings and a new model's directivities: ~9 s)
+def test_cli_simulates_a_masked_walk_in_a_room(asym, tmp_path):
+    """`hearsee simulate --trajectory` with a masked array and a room was refused until
+    2026-12-05; it now writes simulate_moving_masked_room's recording of the seed's signal
+    (the same samples) and the truth with the room and the mask's ITD track."""
+    import json
+
+    import soundfile as sf
+    import yaml
+
+    from hearsee.audio.signals import make_signal
+    from hearsee.cli import main
+    from hearsee.sim.moving import load_trajectory, simulate_moving_masked_room
+
+    spec = tmp_path / "coarse-mask.yaml"
+    spec.write_text(yaml.safe_dump(asym.array.to_dict()), encoding="utf-8")
+    csv = tmp_path / "walk.csv"
+    csv.write_text("t,x,y,z\n0,0.5,0.9,0\n0.3,-0.6,0.9,0\n", encoding="utf-8")
+    wav = tmp_path / "walk.wav"
+    room = ["--room", "4x3.5x2.7", "--rt60", "0.1", "--array-at", "1.6,1.5,1.2"]
+    assert main(["simulate", str(wav), "--array", str(spec), "--trajectory", str(csv),
+                 "--seed", "4", *room]) == 0
+    x, fs = sf.read(wav, dtype="float64")
+    truth = json.loads(wav.with_suffix(".json").read_text())
+    assert fs == FS and x.shape == (int(0.3 * FS), 2)
+    assert truth["room"]["rt60"] == 0.1 and truth["moving"] is True
+    assert len(truth["mask_itd_track"]["t"]) > 10
+    s = make_signal("noise", 0.3, FS, np.random.default_rng(4))
+    ref = simulate_moving_masked_room(s, FS, asym, load_trajectory(csv), [4.0, 3.5, 2.7], 0.1,
+                                      [1.6, 1.5, 1.2])
+    np.testing.assert_allclose(x.T / truth["gain"], ref, atol=1e-6 * np.abs(ref).max())
+
+
+def test_moving_masked_room_refuses_bad_input(asym):
+    from hearsee.sim.moving import Trajectory, simulate_moving_masked_room
+
+    sig = white_noise(0.2, FS, rng=3)
+    walk = Trajectory([0.0, 0.2], [_src(0, 1.0), _src(90, 1.0)])
+    with pytest.raises(GeometryError, match="block_s"):
+        simulate_moving_masked_room(sig, FS, asym, walk, ROOM, 0.3, ARRAY_AT, block_s=0.0)
+    with pytest.raises(AudioInputError, match="signal"):
+        simulate_moving_masked_room(sig[None, None], FS, asym, walk, ROOM, 0.3, ARRAY_AT)
+    with pytest.raises(GeometryError, match="source"):  # walks out through a wall
+        simulate_moving_masked_room(sig, FS, asym, Trajectory([0.0, 0.2], [_src(0, 1.0),
+                                                                          _src(0, 3.0)]),
+                                    ROOM, 0.3, ARRAY_AT, max_order=1)
+    with pytest.raises(GeometryError, match="inside the mask"):
+        simulate_moving_masked_room(sig, FS, asym, Trajectory([0.0, 0.2], [_src(0, 1.0),
+                                                                          _src(0, 0.01)]),
+                                    ROOM, 0.3, ARRAY_AT, max_order=1)
+    with pytest.raises(ConfigError, match="SNR"):
+        simulate_moving_masked_room(sig, FS, asym, walk, ROOM, 0.3, ARRAY_AT, snr_db="20")
+
+
 def test_sphere_impulse_responses_are_the_models_impulse_responses(asym):
     u, irs, lead = asym.sphere_impulse_responses(FS)
     assert u.shape == (mask.SPHERE_DIRECTIONS, 3) and irs.shape[:2] == (2, len(u))

@@ -1057,6 +1057,51 @@ def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | Mask
     far-field responses of the six hand-mirrored images to 4.9 % in 100-1800 Hz (the nearest
     of 4096 directions; ``tests/audio/test_mask.py``).
     """
+    model = array if isinstance(array, MaskModel) else MaskModel(array)
+    s, _ = _source_point(source)
+    parts = _reflection_parts(fs, model, s, room_dim, rt60, array_at, max_order)
+    if not parts:
+        return None
+    n = max(p.shape[1] for p in parts)
+    impulse = np.zeros(n)
+    impulse[0] = 1.0
+    h = simulate_masked(impulse, fs, model, s)  # the exact direct path (checks the source)
+    for p in parts:
+        h[:, :p.shape[1]] += p
+    return h
+
+
+def masked_room_reflections(fs: float, array: MicArray | str | Path | MaskModel,
+                            source: ArrayLike, room_dim: ArrayLike, rt60: float,
+                            array_at: ArrayLike, max_order: int | None = None,
+                            orders: tuple[int, int | None] = (1, None)) -> NDArray | None:
+    """The reflections of :func:`masked_room_impulse_responses` alone, (2, L) -- the image
+    sources of ``orders[0]`` to ``orders[1]`` reflections (None: the room's last order; the
+    direct path is order 0), rendered as there (through the mask's far-field responses up to
+    the directional budget, diffusely beyond) -- or None when there are none (an anechoic
+    room, or no order of the room in the range). Sample 0 is the emission time. Images of
+    orders ``a..b`` and ``b+1..c`` add up to those of ``a..c``, which lets
+    :func:`hearsee.sim.moving.simulate_moving_masked_room` update the early reflections more
+    often than the rest."""
+    model = array if isinstance(array, MaskModel) else MaskModel(array)
+    s, _ = _source_point(source)
+    parts = _reflection_parts(fs, model, s, room_dim, rt60, array_at, max_order, orders)
+    if not parts:
+        return None
+    out = np.zeros((2, max(p.shape[1] for p in parts)))
+    for p in parts:
+        out[:, :p.shape[1]] += p
+    return out
+
+
+def _reflection_parts(fs: float, model: MaskModel, s: NDArray, room_dim: ArrayLike,
+                      rt60: float, array_at: ArrayLike, max_order: int | None,
+                      orders: tuple[int, int | None] = (1, None)) -> list[NDArray]:
+    """The reflections of orders ``orders`` as a list of (2, L) parts to be added: the
+    directional images (through :meth:`MaskModel.sphere_directivities`) and, past the
+    directional budget, the late images at the bare microphones filtered by the
+    diffuse-field response. Empty when there are none. Checks the source (outside the
+    body), the room and the mask's place in it."""
     import pyroomacoustics as pra
 
     from hearsee.audio.propagation import (
@@ -1067,9 +1112,7 @@ def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | Mask
         room_impulse_responses,
     )
 
-    model = array if isinstance(array, MaskModel) else MaskModel(array)
     fs = check_fs(fs)
-    s, _ = _source_point(source)
     if model.geometry_inside(s[None])[0]:
         raise GeometryError("the source lies inside the mask body")
     dim = _room_dim(room_dim)
@@ -1077,9 +1120,14 @@ def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | Mask
     if at.shape != (3,) or not np.all(np.isfinite(at)):
         raise GeometryError(f"array_at must be a finite [x, y, z] point, got {array_at!r}")
     _check_inside(model.mesh.vertices + at, dim, "the mask's vertex")
+    lo = whole_number("orders[0]", orders[0], lo=1, error=GeometryError)
     e_absorption, order = image_sources(rt60, dim, model.c, max_order)
     if e_absorption is None or order == 0:
-        return None
+        return []
+    hi = order if orders[1] is None else min(
+        whole_number("orders[1]", orders[1], lo=0, error=GeometryError), order)
+    if lo > hi:
+        return []
     dirs, lead = model.sphere_directivities(fs)
     taps = dirs[0].filter_len_ir + int(pra.constants.get("frac_delay_length"))
     k_dir = order
@@ -1099,21 +1147,18 @@ def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | Mask
         return out
 
     lat = _fractional_delay_latency()
-    parts = [minus(rirs(k_dir, centre, dirs, lat + lead), rirs(0, centre, dirs, lat + lead))]
-    if k_dir < order:
+    parts = []
+    if lo <= k_dir:
+        parts.append(minus(rirs(min(hi, k_dir), centre, dirs, lat + lead),
+                           rirs(lo - 1, centre, dirs, lat + lead)))
+    if hi > k_dir:
         mics = model.array.positions + at
-        late = minus(rirs(order, mics, None, lat), rirs(k_dir, mics, None, lat))
+        late = minus(rirs(hi, mics, None, lat), rirs(max(k_dir, lo - 1), mics, None, lat))
         nf = sfft.next_fast_len(late.shape[1], real=True)
         eq = diffuse_field_response(model, np.fft.rfftfreq(nf, 1.0 / fs))
         parts.append(sfft.irfft(sfft.rfft(late, nf, axis=-1) * eq, nf, axis=-1)
                      [:, :late.shape[1]])
-    n = max(p.shape[1] for p in parts)
-    impulse = np.zeros(n)
-    impulse[0] = 1.0
-    h = simulate_masked(impulse, fs, model, s)  # the exact direct path (checks the source)
-    for p in parts:
-        h[:, :p.shape[1]] += p
-    return h
+    return parts
 
 
 # ------------------------------------------------------------------------------- localization
