@@ -48,9 +48,15 @@ and by pyroomacoustics' SRP-PHAT per frame (no front/back), on the same frames. 
 a rule written before its held-out run (bench/results/HISTORY.md); this part's own seed is not
 held out (part of it was seen while the script was tried).
 
-Run ``python bench/mask.py`` (6-12 min on 2 cores once the mask models are cached; the first
-run solves the BEM for the four masks, 1-6 min each) or ``--quick``; ``--rt60s ""`` skips the
-rooms, ``--stream-walks 0`` the stream.
+Stream in the room (added 2026-12-05): the same kind of talkers, still or walking round
+``mask2-asym`` in the rooms part's room (RT60 :data:`STREAM_ROOM_RT60S`,
+:func:`run_stream_room`; rendered by :func:`hearsee.sim.moving.simulate_moving_masked_room`,
+~75 s of CPU per talker for its three signals), followed the same three ways. No target.
+
+Run ``python bench/mask.py`` (~20 min on 2 cores once the mask models are cached, half of it
+rendering the talkers in the room; the first run solves the BEM for the four masks, 1-6 min
+each) or ``--quick``; ``--rt60s ""`` skips the rooms, ``--stream-walks 0`` the stream,
+``--stream-rt60s ""`` its talkers in the room.
 """
 
 from __future__ import annotations
@@ -85,7 +91,11 @@ from hearsee.audio.propagation import (  # noqa: E402
 from hearsee.audio.signals import synthetic_voice, white_noise  # noqa: E402
 from hearsee.config import load_yaml  # noqa: E402
 from hearsee.errors import MaskFitWarning  # noqa: E402
-from hearsee.sim.moving import Trajectory, simulate_moving_masked  # noqa: E402
+from hearsee.sim.moving import (  # noqa: E402
+    Trajectory,
+    simulate_moving_masked,
+    simulate_moving_masked_room,
+)
 
 FS = 16000
 SIGNALS = ("noise", "male", "female")
@@ -353,55 +363,98 @@ def run_stream(walks: int, duration: float, seed: int, model: MaskModel) -> list
     (the same ITDs, every frame put in the half decided for the whole recording -- what a
     masked pair had before the stream took it); and pyroomacoustics' SRP-PHAT on each frame
     (the bare pair's steering over 360 deg: no front/back)."""
-    from tracking import srp_per_frame
-
-    from hearsee.stream.pipeline import ArraySource, StreamPipeline
-
     rng = np.random.default_rng([seed, 2000])
     paths = [circle_walk(rng, k, duration) for k in range(walks)]
     rows = []
     for kind in SIGNALS:
         for snr in STREAM_SNRS:
-            est: dict[str, list] = {"stream": [], "frames": [], "srp": [], "true": [],
-                                    "moving": []}
+            est: dict[str, list] = {}
             cpu = {"stream": 0.0, "srp": 0.0}
             for traj, moving in paths:
                 sig = make_signal(kind, duration, rng)
                 x = simulate_moving_masked(sig, FS, model, traj, snr_db=snr,
                                            rng=int(rng.integers(2**31)))
-                c0 = time.process_time()
-                ups = StreamPipeline(model.array).run(ArraySource(x, FS))
-                cpu["stream"] += time.process_time() - c0
-                t = np.array([u.t for u in ups])
-                heard = traj.heard_at(t, speed_of_sound=model.c)
-                with warnings.catch_warnings():  # (a moving source fits no one direction)
-                    warnings.simplefilter("ignore", MaskFitWarning)
-                    doc = localize_recording_mask(x, FS, model)
-                by_t = {round(f["t"], 6): f["azimuth_deg"] for f in doc["frames"]}
-                srp, c_srp = srp_per_frame(x, model.array, t)
-                cpu["srp"] += c_srp
-                got = {"stream": [u.azimuth_deg for u in ups],
-                       "frames": [by_t.get(round(v, 6)) for v in t], "srp": list(srp),
-                       "true": list(np.degrees(np.arctan2(heard[:, 1], heard[:, 0]))),
-                       "moving": [moving] * len(t)}
-                keep = t >= STREAM_SCORED_FROM_S
-                for key, vals in got.items():
-                    est[key] += [np.nan if v is None else v
-                                 for v, k in zip(vals, keep, strict=True) if k]
-            true = np.array(est["true"], float)
-            mov = np.array(est["moving"], bool)
-            row = {"signal": kind, "snr": snr, "n": walks, "frames": len(true)}
-            for name in ("stream", "frames", "srp"):
-                e = np.array(est[name], float)
-                row[f"{name}_fb"], row[f"{name}_rmse"], row[f"{name}_med"] = _stats(e, true)
-                row[f"{name}_fb_moving"] = _stats(e[mov], true[mov])[0]
-            row["stream_cpu"] = 1e3 * cpu["stream"] / (walks * duration)
-            row["srp_cpu"] = 1e3 * cpu["srp"] / (walks * duration)
-            rows.append(row)
-            print(f"stream {kind:6s} {snr:4.0f} dB  " + "  ".join(
-                f"{k} fb {row[f'{k}_fb']:5.1f}% rmse {row[f'{k}_rmse']:5.1f}"
-                for k in ("stream", "frames", "srp")), flush=True)
+                _follow(x, traj, moving, model, est, cpu)
+            rows.append(_stream_row(kind, snr, walks, est, cpu, duration))
     return rows
+
+
+#: the stream in the room: reverberation times (s) of its walking talkers
+STREAM_ROOM_RT60S = (0.3,)
+
+
+def run_stream_room(walks: int, duration: float, seed: int, model: MaskModel,
+                    rt60: float) -> list[dict]:
+    """:func:`run_stream`'s talkers (their own random numbers) in the rooms part's room
+    (:data:`ROOM`, the mask at :data:`ARRAY_AT`) of RT60 ``rt60`` s: each path rendered once
+    for all three signals (:func:`hearsee.sim.moving.simulate_moving_masked_room`: the moving
+    direct path through the mask, the image sources' responses updated as the talker walks),
+    the sensor noise of each SNR added to that, and followed the same three ways."""
+    rng = np.random.default_rng([seed, 4000, int(round(rt60 * 1000))])
+    paths = [circle_walk(rng, k, duration) for k in range(walks)]
+    est: dict = {(kind, snr): {} for kind in SIGNALS for snr in STREAM_SNRS}
+    cpu = {key: {"stream": 0.0, "srp": 0.0} for key in est}
+    for traj, moving in paths:
+        sigs = np.stack([make_signal(kind, duration, rng) for kind in SIGNALS])
+        clean = simulate_moving_masked_room(sigs, FS, model, traj, ROOM, rt60, ARRAY_AT)
+        for j, kind in enumerate(SIGNALS):
+            for snr in STREAM_SNRS:
+                x = add_noise(clean[j], snr, int(rng.integers(2**31)))
+                _follow(x, traj, moving, model, est[kind, snr], cpu[kind, snr])
+    rows = []
+    for (kind, snr), e in est.items():
+        rows.append({"rt60": rt60, **_stream_row(kind, snr, walks, e, cpu[kind, snr],
+                                                 duration)})
+    return rows
+
+
+def _follow(x: np.ndarray, traj: Trajectory, moving: bool, model: MaskModel, est: dict,
+            cpu: dict) -> None:
+    """Follow the masked recording ``x`` of the talker on ``traj`` three ways (hearsee's
+    stream, ``hearsee localize``'s frames, SRP-PHAT per frame) and append each frame's
+    azimuth from :data:`STREAM_SCORED_FROM_S` on (NaN: none), the direction heard then and
+    whether the talker moves to ``est``; the stream's and SRP-PHAT's CPU seconds to ``cpu``."""
+    from tracking import srp_per_frame
+
+    from hearsee.stream.pipeline import ArraySource, StreamPipeline
+
+    c0 = time.process_time()
+    ups = StreamPipeline(model.array).run(ArraySource(x, FS))
+    cpu["stream"] += time.process_time() - c0
+    t = np.array([u.t for u in ups])
+    heard = traj.heard_at(t, speed_of_sound=model.c)
+    with warnings.catch_warnings():  # (a moving source fits no one direction)
+        warnings.simplefilter("ignore", MaskFitWarning)
+        doc = localize_recording_mask(x, FS, model)
+    by_t = {round(f["t"], 6): f["azimuth_deg"] for f in doc["frames"]}
+    srp, c_srp = srp_per_frame(x, model.array, t)
+    cpu["srp"] += c_srp
+    got = {"stream": [u.azimuth_deg for u in ups],
+           "frames": [by_t.get(round(v, 6)) for v in t], "srp": list(srp),
+           "true": list(np.degrees(np.arctan2(heard[:, 1], heard[:, 0]))),
+           "moving": [moving] * len(t)}
+    keep = t >= STREAM_SCORED_FROM_S
+    for key, vals in got.items():
+        est.setdefault(key, []).extend(np.nan if v is None else v
+                                       for v, k in zip(vals, keep, strict=True) if k)
+
+
+def _stream_row(kind: str, snr: float, walks: int, est: dict, cpu: dict,
+                duration: float) -> dict:
+    """One row of a stream table from :func:`_follow`'s frames (printed as it is made)."""
+    true = np.array(est["true"], float)
+    mov = np.array(est["moving"], bool)
+    row = {"signal": kind, "snr": snr, "n": walks, "frames": len(true)}
+    for name in ("stream", "frames", "srp"):
+        e = np.array(est[name], float)
+        row[f"{name}_fb"], row[f"{name}_rmse"], row[f"{name}_med"] = _stats(e, true)
+        row[f"{name}_fb_moving"] = _stats(e[mov], true[mov])[0]
+    row["stream_cpu"] = 1e3 * cpu["stream"] / (walks * duration)
+    row["srp_cpu"] = 1e3 * cpu["srp"] / (walks * duration)
+    print(f"stream {kind:6s} {snr:4.0f} dB  " + "  ".join(
+        f"{k} fb {row[f'{k}_fb']:5.1f}% rmse {row[f'{k}_rmse']:5.1f}"
+        for k in ("stream", "frames", "srp")), flush=True)
+    return row
 
 
 def plot(rows: list[dict], path: Path) -> None:
@@ -473,6 +526,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--room-trials", type=int, default=16, help="sources per room")
     ap.add_argument("--stream-walks", type=int, default=STREAM_WALKS,
                     help="talkers per signal and SNR of the stream part; 0 skips it")
+    ap.add_argument("--stream-rt60s", default=",".join(f"{v:g}" for v in STREAM_ROOM_RT60S),
+                    help="reverberation times (s) of the stream's talkers in the room; '' "
+                    "skips them")
     a = ap.parse_args(argv)
     snrs = [float(s) for s in a.snrs.split(",")]
     trials = a.trials
@@ -486,6 +542,10 @@ def main(argv: list[str] | None = None) -> None:
     room_rows = run_rooms(room_trials, a.duration, a.seed, rt60s, models) if rt60s else []
     stream_rows = (run_stream(walks, STREAM_DURATION_S, a.seed, models[DESIGNS[0][0]])
                    if walks > 0 else [])
+    stream_rt60s = [float(v) for v in a.stream_rt60s.split(",") if v.strip()]
+    sroom_rows = [r for rt in stream_rt60s if walks > 0
+                  for r in run_stream_room(walks, STREAM_DURATION_S, a.seed,
+                                           models[DESIGNS[0][0]], rt)]
     headers = ["signal", "field", "SNR dB", "n"]
     for k, preset in DESIGNS:
         headers += [f"{preset} detected %", f"{preset} F/B %", f"{preset} RMSE",
@@ -543,6 +603,14 @@ def main(argv: list[str] | None = None) -> None:
                r["stream_cpu"], r["srp_cpu"]] for r in stream_rows]
     if stable:
         print_table(f"{DESIGNS[0][1]} in the stream: talkers walking round it", shead, stable)
+    srhead = ["RT60 s", *shead]
+    srtable = [[r["rt60"], r["signal"], r["snr"], r["n"], r["frames"],
+                *[r[f"{k}_{c}"] for k in ("stream", "frames", "srp")
+                  for c in ("fb", "fb_moving", "rmse", "med")],
+                r["stream_cpu"], r["srp_cpu"]] for r in sroom_rows]
+    if srtable:
+        print_table(f"{DESIGNS[0][1]} in the stream, in the room: talkers walking round it",
+                    srhead, srtable)
     RESULTS.mkdir(parents=True, exist_ok=True)
     png = RESULTS / "mask.png"
     plot(rows, png)
@@ -576,6 +644,15 @@ def main(argv: list[str] | None = None) -> None:
             "error of 180 deg (`hearsee localize` gives none where a frame has no valid ITD). "
             "'F/B % walking' counts the walking talkers' frames only.\n\n"
             + markdown_table(shead, stable)))] if stable else []),
+        *([("Stream in the room: talkers walking round the mask", (
+            f"The stream part's talkers (their own random paths and signals, {walks} per "
+            f"signal and SNR) in the rooms part's {' x '.join(f'{v:g}' for v in ROOM)} m room, "
+            f"the mask at {ARRAY_AT.tolist()}: each path rendered once for the three signals "
+            "by `sim.moving.simulate_moving_masked_room` (the moving direct path through the "
+            "mask; the image sources' responses through the mask, orders 1-3 updated every "
+            "5 ms, the rest every 50 ms), the sensor noise of each SNR added to that; scored "
+            "as the free-field stream table (no target; added 2026-12-05).\n\n"
+            + markdown_table(srhead, srtable)))] if srtable else []),
         ("Plot", f"![mask]({png.name})"),
     ], intro=(__doc__.split("\n\n")[0] + f"\n\nRun: `python bench/mask.py` (trials={trials}, "
               f"SNRs {','.join(f'{s:g}' for s in snrs)} dB, duration={a.duration} s, "
