@@ -330,6 +330,28 @@ def test_camera_fix_tdoa_noise_defaults():
     assert TrackingProcessor(arr, 48000, StreamConfig(motion_model="ca")).sigma_tdoa_s == 2e-5
 
 
+def test_evidence_age_is_the_energy_weighted_mean_age():
+    """EvidenceAge (SmoothedSrp's and SmoothedMask's measurement delay) against the definition
+    computed here: after energies e_0..e_N entered an average decaying by lam per frame,
+    sum_n lam^(N-n) e_n (N - n) / sum_n lam^(N-n) e_n -- gaps (missing frames) decay and age
+    the average without adding."""
+    rng = np.random.default_rng(3)
+    lam = 0.8
+    e = rng.exponential(1.0, 40) * (rng.random(40) > 0.3)  # (quiet frames add nothing)
+    ev = pl.EvidenceAge()
+    for k in range(40):
+        if k:
+            ev.decay(lam)
+        ev.add(float(e[k]))
+        w = lam ** (k - np.arange(k + 1)) * e[:k + 1]
+        ref = np.sum(w * (k - np.arange(k + 1))) / w.sum() if w.sum() > 0 else 0.0
+        assert ev.age == pytest.approx(ref, rel=1e-12, abs=1e-12)
+        assert ev.energy == pytest.approx(w.sum(), rel=1e-12)
+    age, energy = ev.age, ev.energy
+    ev.decay(lam**5, 5)  # five missing frames
+    assert ev.age == pytest.approx(age + 5) and ev.energy == pytest.approx(energy * lam**5)
+
+
 def test_smoothed_srp_finds_a_static_source_and_not_noise():
     arr = MicArray.from_preset("three-mic")
     rng = np.random.default_rng(5)

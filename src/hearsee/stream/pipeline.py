@@ -1179,6 +1179,33 @@ class LevelScale:
         return x if self.scale == 1.0 else x * np.float32(self.scale)
 
 
+class EvidenceAge:
+    """The energy-weighted mean age (frames) of recursively averaged evidence: how long ago,
+    on average, the energy in an average ``S <- lam S + e_n`` arrived (a loud syllable keeps
+    dominating the average through the quiet frames after it). The one bookkeeping of
+    :class:`SmoothedSrp` (its ``age_frames``, the measurement delay of its directions) and
+    :class:`SmoothedMask` (the age of the evidence its decisions were made on), which each
+    had their own form of the recursion.
+
+    ``energy`` is the averaged energy (the units of what is added: squared samples at the
+    stage's :class:`LevelScale`), ``age`` its mean age in frames."""
+
+    def __init__(self) -> None:
+        self.energy, self.age = 0.0, 0.0
+
+    def decay(self, factor: float, n: int = 1) -> None:
+        """``n`` frames pass and the average is multiplied by ``factor`` (its decay over them):
+        the energy shrinks, its age grows by ``n``."""
+        self.energy *= factor
+        self.age += n
+
+    def add(self, e: float) -> None:
+        """Energy ``e`` (>= 0) enters the average now, 0 frames old."""
+        total = self.energy + e
+        self.age = self.energy * self.age / total if total > 0 else 0.0
+        self.energy = total
+
+
 class SmoothedSrp:
     """Recursively smoothed cross-power spectra -> PHAT -> steered response over directions.
 
@@ -1291,13 +1318,13 @@ class SmoothedSrp:
         self.coherence_weight = bool(coherence_weight)
         self.S: NDArray | None = None
         self.A: NDArray | None = None
-        self._w, self._age = 0.0, 0.0
+        self._evidence = EvidenceAge()
         self._level = LevelScale()
 
     def reset(self) -> None:
         self.S = None
         self.A = None
-        self._w, self._age = 0.0, 0.0
+        self._evidence = EvidenceAge()
         self._level = LevelScale()
 
     def _rescale(self, seg: NDArray) -> None:
@@ -1310,7 +1337,7 @@ class SmoothedSrp:
             self.S = self.S * np.float32(f)
         if self.A is not None:
             self.A = self.A * np.float32(f)
-        self._w *= f
+        self._evidence.energy *= f
 
     def skip(self, n_frames: int) -> None:
         """Age the state through ``n_frames`` missing frames: what ``n_frames`` frames of zero
@@ -1323,8 +1350,7 @@ class SmoothedSrp:
         self.S = self.S * np.float32(f)
         if self.A is not None:
             self.A = self.A * np.float32(f)
-        self._w *= f
-        self._age += n
+        self._evidence.decay(f, n)
 
     def _smooth(self, G: NDArray, prev: NDArray) -> NDArray:
         """``S_n = alpha S_{n-1} + (1 - alpha) G_n`` for the k frames of ``G`` (k, ...) from
@@ -1376,13 +1402,10 @@ class SmoothedSrp:
         # (a loud syllable keeps dominating the average through the quiet frames after it)
         e = np.abs(G).sum(axis=(1, 2)).astype(float)
         age = np.zeros(len(e))
-        w_prev, d_prev = self._w, self._age
         for n, en in enumerate(e):
-            w = a * w_prev + (1.0 - a) * en
-            d = a * w_prev * (d_prev + 1.0) / w if w > 0 else 0.0
-            age[n] = d
-            w_prev, d_prev = w, d
-        self._w, self._age = w_prev, d_prev
+            self._evidence.decay(a)
+            self._evidence.add((1.0 - a) * en)
+            age[n] = self._evidence.age
         mag = np.abs(S)
         floor = 1e-20 + 1e-12 * mag.max(initial=0.0)
         P = S / np.maximum(mag, floor)
@@ -1537,9 +1560,10 @@ class SmoothedMask:
         self._S = np.zeros((3, self.k1 - self.k0), complex)  # |X0|^2, |X1|^2, X0 X1*
         self._w = self._w2 = 0.0  # sum of the weights and of their squares
         self._last: Any = None  # the decision the frames hold
-        # the averages' energy and its weighted mean age (frames), and that age when the held
-        # decision was made (SmoothedSrp's age_frames)
-        self._energy = self._age = self._decided_age = 0.0
+        # the averages' energy and its mean age (frames), and that age when the held decision
+        # was made
+        self._evidence = EvidenceAge()
+        self._decided_age = 0.0
 
     def skip(self, n_frames: int) -> None:
         """Age the averages through ``n_frames`` missing frames (they decay, nothing is added;
@@ -1553,8 +1577,7 @@ class SmoothedMask:
         self._S *= self.lam**n
         self._w *= self.lam**n
         self._w2 *= self.lam ** (2 * n)
-        self._energy *= self.lam**n
-        self._age += n
+        self._evidence.decay(self.lam**n, n)
 
     def process(self, segment: NDArray, n_frames: int, hop: int) -> list[Any]:
         """Average and decide ``n_frames`` consecutive frames of ``segment`` (2, n): one
@@ -1566,7 +1589,7 @@ class SmoothedMask:
         factor = self._level.take(seg)  # (the state goes to a new level_scale: exactly)
         if factor != 1.0:
             self._S *= factor
-            self._energy *= factor
+            self._evidence.energy *= factor
             self.activity.rescale(factor)
         seg = self._level.scaled(seg)
         fr = frame_signals(seg, self.frame_len, hop)[:, :n_frames]
@@ -1589,15 +1612,11 @@ class SmoothedMask:
                 self._S[2] += x0 * np.conj(x1)
                 self._w += 1.0
                 self._w2 += 1.0
-                # (the energy-weighted age: this frame's evidence is 0 frames old)
-                e = float(p0.sum() + p1.sum())
-                total = self._energy + e
-                self._age = self._energy * self._age / total if total > 0 else 0.0
-                self._energy = total
+                self._evidence.add(float(p0.sum() + p1.sum()))
             if self._n % self.every == 0:
                 self._last = None
                 self._since = 0
-                self._decided_age = self._age
+                self._decided_age = self._evidence.age
                 if self._w > 0 and self._w**2 / self._w2 >= MASK_MIN_FRAMES - 1e-9:
                     S = self._S / self._w
                     nz = None if noise is None or not np.all(np.isfinite(noise[i])) else (
