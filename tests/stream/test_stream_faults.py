@@ -337,9 +337,10 @@ def test_smoothed_srp_skip_equals_silent_frames():
     ref = s_ref.process(seg2, 4, hop)
     s = pl.SmoothedSrp(arr, FS, frame_len, alpha=0.8)
     s.process(seg1, 8, hop)
-    w, age = s._w, s._age
+    w, age = s._evidence.energy, s._evidence.age
     s.skip(n_gap)
-    assert s._w == pytest.approx(w * 0.8**n_gap) and s._age == pytest.approx(age + n_gap)
+    assert s._evidence.energy == pytest.approx(w * 0.8**n_gap)
+    assert s._evidence.age == pytest.approx(age + n_gap)
     got = s.process(seg2, 4, hop)
     np.testing.assert_allclose(got["age_frames"], ref["age_frames"], rtol=1e-6)
     s_no = pl.SmoothedSrp(arr, FS, frame_len, alpha=0.8)  # the same frames without the gap
