@@ -1435,6 +1435,33 @@ def test_masked_stream_measures_by_its_decisions_where_frames_do_not(asym, monke
     assert np.all(np.isnan(az))
 
 
+def test_masked_stream_decides_by_the_room_decision(asym, monkeypatch):
+    """The stream's front/back decisions are localize_spectra's with its room decision
+    (MASK_ROOM_DECISION; tests of localize_spectra check what that decision does where the
+    cues do not fit), without onsets (the stream has none); False gives the whole cost's
+    halves. Each decision of a still source behind the pair is in its half either way (free
+    field: the cues fit, the room decision does not come in)."""
+    import hearsee.stream.pipeline as pl
+
+    seen = []
+    real = mask.localize_spectra
+
+    def spy(*args, **kwargs):
+        seen.append((kwargs.get("room_decision"), kwargs.get("onset_iid_db")))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(mask, "localize_spectra", spy)
+    x = mask.simulate_masked(white_noise(1.5, FS, rng=12), FS, asym, _src(140.0, 1.5),
+                             snr_db=20, rng=13)
+    for flag in (True, False):
+        seen.clear()
+        monkeypatch.setattr(pl, "MASK_ROOM_DECISION", flag)
+        ups, t, az = _stream(asym.array, x)
+        assert len(seen) >= 8 and set(seen) == {(flag, None)}
+        err = np.abs(wrap_deg(az[t >= 0.8] - 140.0))
+        assert np.median(err) < 5.0 and err.max() < 15.0  # (the mirror, 40 deg, is 100 off)
+
+
 def test_masked_stream_decision_age_counts_missing_frames(asym):
     """The age of a held decision's evidence (SmoothedMask.age_frames, the tracker's gate and
     delay for its decision measurements) counts the frames since the decision, missing ones

@@ -1308,12 +1308,16 @@ FIT_IID_MAX = 1.0
 #: RT60 class worse, mask2 +4.5, free field equal). v1's gain did not carry over to seed 178
 #: (-2.7 against the whole cost); v2 is above the whole cost on every set (mask2-asym +5.9 to
 #: +12.8 points, mask2 +2.1 and +3.2), but at RT60 0.3 s on seed 178 it is 6 points below it.
-#: The stream (:class:`hearsee.stream.pipeline.SmoothedMask`) keeps the whole cost: its rule,
-#: written before the run, asked v1 (it has no onsets) to be within 1 point of the whole cost
-#: on seed 178's rooms (still sources, 3 s, 20 dB, frames from 1 s on); it was below, 59.4
-#: against 62.6 % of the frames (white noise 59-89 against 59-85 %, the voices 35-68 against
-#: 40-73 %). A streaming form with onsets (8-ms frames within the stream's, a floor of the last
-#: 2 s, onset powers summed over ~0.4 s; git branch ``stream-onsets``) gained 8 points of frames
+#: The stream (:class:`hearsee.stream.pipeline.SmoothedMask`) kept the whole cost until
+#: 2026-12-05's sixty-third session: its rule, written before the run, asked v1 (it has no
+#: onsets) to be within 1 point of the whole cost on seed 178's rooms (still sources, 3 s,
+#: 20 dB, frames from 1 s on); it was below, 59.4 against 62.6 % of the frames (white noise
+#: 59-89 against 59-85 %, the voices 35-68 against 40-73 %). Since its decisions became
+#: measurements, v1 is the stream's (:data:`hearsee.stream.pipeline.MASK_ROOM_DECISION`: held
+#: out, talkers walking in a room 68.9 -> 84.1 % of the frames, still sources in fresh rooms
+#: 60.6 -> 65.0, free field 89.5 -> 92.7). A streaming form with onsets (8-ms frames within
+#: the stream's, a floor of the last 2 s, onset powers summed over ~0.4 s; git branch
+#: ``stream-onsets``) gained 8 points of frames
 #: on dev rooms (seeds 174 / 175, 3-s recordings at 10 and 20 dB) but +2.7 on fresh ones (seed
 #: 180: 52.4 -> 55.1 %, against the +4 its rule asked), and cost walking voices in free field 4.5
 #: points (seed 183: 88.7 -> 84.2 %; the stream's averages of a moving talker fail the fit test
@@ -1466,7 +1470,8 @@ def localize_spectra(model: MaskModel, f: NDArray, p0: NDArray, p1: NDArray, cr:
     (:attr:`MaskLocalization.cues_fit` False) the front/back decision is :data:`ROOM_DECISION`'s,
     with the onsets' band IIDs ``onset_iid_db`` (dB, :func:`onset_band_iids`, or a function
     of no arguments that gives them, called only there; None: without),
-    unless ``room_decision`` is False (the whole cost's halves always, as the stream decides).
+    unless ``room_decision`` is False (the whole cost's halves always, as the stream decided
+    until 2026-12-05).
     Returns its :class:`MaskLocalization` (``detected`` True: the caller's test decides), or
     None when no bin holds a coherent source. The one place of the cost, shared by the
     whole-recording :func:`localize_mask` and the stream's

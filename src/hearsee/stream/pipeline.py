@@ -1492,6 +1492,25 @@ MASK_SIDE_DEG = 10.0
 #: (``prefer_frame_confidence``, as the bare arrays' smoothed response does) was the same in
 #: rooms and 0.5 points worse in free field.
 MASK_SMOOTHED_MEASUREMENT = True
+#: :class:`SmoothedMask` decides front/back as :func:`hearsee.audio.mask.localize_spectra` does
+#: with ``room_decision=True``: where the averaged spectra's cues do not fit the mask's
+#: free-field model, by the band level differences at the ITD's two azimuths
+#: (:data:`hearsee.audio.mask.ROOM_DECISION`, its first form: the stream has no onsets) instead
+#: of the whole cost, whose interaural phase reverberation spoils first (False: the whole cost,
+#: as before 2026-12-05's sixty-third session). Tried and rejected in the sixty-first session
+#: (still sources, 59.4 against 62.6 % of the frames) before the decision's azimuth became a
+#: measurement (:data:`MASK_SMOOTHED_MEASUREMENT`); adopted under a rule written before its
+#: held-out runs (bench/results/HISTORY.md), all five criteria met -- front/back right of the
+#: frames from 1 s on, default -> this: talkers walking round mask2-asym in ``bench/mask.py``'s
+#: 6 x 5 x 3.2 m room of RT60 0.3 s (8 per cell, 4 s; rendered by
+#: :func:`hearsee.sim.moving.simulate_moving_masked_room`) mean of six cells 68.9 -> 84.1 %
+#: (white noise 73.9 / 77.4 -> 96.9 / 96.0 at 10 / 20 dB, voices +6 to +24, every cell better);
+#: still sources in random rooms (RT60 0.3-0.6 s, 3 s, 10 and 20 dB) 60.6 -> 65.0 %
+#: (mask2-asym, no RT60 class worse; 0.6 s 42.5 -> 50.9) and 58.5 -> 60.0 % (mask2); talkers
+#: walking round the mask in free field 89.5 -> 92.7 % (white noise 0.5 points worse, voices
+#: 2-7 better); pure sensor noise (3 x 60 s) no measured frame, as before. Dev: room walkers
+#: 54.9 -> 75.9 %, still sources 56.8 -> 61.4, free field 94.0 -> 96.9.
+MASK_ROOM_DECISION = True
 
 
 class SmoothedMask:
@@ -1507,8 +1526,10 @@ class SmoothedMask:
     the coherent split, as localize_mask without pauses). Every :data:`MASK_DECISION_S`
     (counted in frames from the stream's start, so that the decisions do not depend on the
     blocks the samples came in) the estimate is :func:`hearsee.audio.mask.localize_spectra`
-    -- the one cost of the whole-recording decision -- on the averages so far, from
-    :data:`MASK_MIN_FRAMES` effective frames on; the frames in between hold it.
+    -- the one cost of the whole-recording decision, and where the averages' cues do not fit
+    the free-field model its room decision without onsets (:data:`MASK_ROOM_DECISION`) -- on
+    the averages so far, from :data:`MASK_MIN_FRAMES` effective frames on; the frames in
+    between hold it.
     Reconstruction (no streaming form in the thesis); the estimate lags a moving source by
     about ``tau_s`` / 2 and a change of half (a talker walking round behind the head) by up
     to ``tau_s``.
@@ -1624,7 +1645,7 @@ class SmoothedMask:
                     self._last = localize_spectra(self.model, self.freqs, S[0].real,
                                                   S[1].real, S[2], self._w**2 / self._w2, nz,
                                                   self.edges, fs=self.fs,
-                                                  room_decision=False)
+                                                  room_decision=MASK_ROOM_DECISION)
             self.age_frames[i] = self._decided_age + self._since
             self._since += 1
             self._n += 1
