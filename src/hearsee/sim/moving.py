@@ -842,17 +842,11 @@ def simulate_moving_room(
     array (n_mics, n)
     """
     x = _check_signal(signal, fs)
-    for name, spacing in (("block_s", block_s), ("early_block_s", early_block_s)):
-        # (block_s had only a "> 0" test: a string raised a builtin TypeError, inf an
-        # OverflowError in the update grid)
-        if not (is_real(spacing) and spacing > 0):
-            raise GeometryError(f"{name} must be > 0 seconds, got {spacing!r}")
+    early_order = _check_updates(block_s, early_block_s, early_order)
     for name, bound in (("max_tdoa_step_samples", max_tdoa_step_samples),
                         ("max_delay_step_samples", max_delay_step_samples)):
         if bound is not None and not (is_real(bound) and bound > 0):
             raise GeometryError(f"{name} must be > 0 or None, got {bound!r}")
-    if early_order is not None:
-        early_order = whole_number("early_order", early_order, 0, error=GeometryError)
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
     if rir_fn is not None and not callable(rir_fn):  # (a builtin TypeError at the first block)
         raise GeometryError(f"rir_fn must be a function source_room (3,) -> (n_mics, L) impulse "
@@ -904,6 +898,19 @@ def simulate_moving_room(
             # positions at block centres, evaluated at the (approximate) emission time
             _render_blocks(x, centres, trajectory.at(centres / fs) + at, fn, out)
     return add_noise(out, snr_db, rng)
+
+
+def _check_updates(block_s: Any, early_block_s: Any, early_order: Any) -> int | None:
+    """The room renderers' update settings checked (a GeometryError otherwise): both
+    spacings finite seconds > 0, ``early_order`` None or a whole number >= 0 (returned as an
+    int). (``block_s`` had only a "> 0" test: a string raised a builtin TypeError, inf an
+    OverflowError in the update grid.)"""
+    for name, spacing in (("block_s", block_s), ("early_block_s", early_block_s)):
+        if not (is_real(spacing) and spacing > 0):
+            raise GeometryError(f"{name} must be > 0 seconds, got {spacing!r}")
+    if early_order is None:
+        return None
+    return whole_number("early_order", early_order, 0, error=GeometryError)
 
 
 def _render_blocks(x: NDArray, centres: NDArray, src_room: NDArray,
@@ -1015,11 +1022,7 @@ def simulate_moving_masked_room(
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
     snr_db = check_snr_db(snr_db)
     _check_trajectory(trajectory)
-    for name, spacing in (("block_s", block_s), ("early_block_s", early_block_s)):
-        if not (is_real(spacing) and spacing > 0):
-            raise GeometryError(f"{name} must be > 0 seconds, got {spacing!r}")
-    if early_order is not None:
-        early_order = whole_number("early_order", early_order, 0, error=GeometryError)
+    early_order = _check_updates(block_s, early_block_s, early_order)
     model = array if isinstance(array, MaskModel) else MaskModel(array)
     at = as_point(array_at, "array_at")
     dim = _room_dim(room_dim)
