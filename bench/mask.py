@@ -38,8 +38,9 @@ horizontal plane 1-2.4 m away, 10 and 20 dB, every signal; the bare pair in the 
 (pyroomacoustics, omnidirectional) beside them. No target was set for rooms; the numbers show
 what reflections do to the level and phase cues the tables were made for (free field). Each
 source is also heard for :data:`ROOM_STREAM_S` through hearsee's stream (``hearsee track``,
-its frames from 1 s on: the "stream" columns, added 2026-12-05), which keeps
-the whole cost's front/back halves where ``localize_mask`` decides by the onsets.
+its frames from 1 s on: the "stream" columns, added 2026-12-05), which decides by the band
+level differences at the ITD's two azimuths without onsets where ``localize_mask`` adds the
+onsets (until 2026-12-05's sixty-third session: the whole cost's halves).
 
 Stream (added 2026-12-05): talkers still or walking round ``mask2-asym`` (free field,
 :func:`run_stream`), followed by hearsee's stream (``hearsee track``: its front/back decision
