@@ -963,6 +963,13 @@ def test_moving_masked_room_reflections_follow_the_source(asym):
                                       ARRAY_AT, **kw)
     assert two.shape == (2, 2, sig.size)
     np.testing.assert_array_equal(two[0], y)
+    # ... each with its own sensor noise, the first as one recording's with that seed
+    one_n = simulate_moving_masked_room(sig, FS, asym, traj, ROOM, 0.3, ARRAY_AT, snr_db=20,
+                                        rng=5, max_order=1)
+    two_n = simulate_moving_masked_room(np.stack([sig, sig]), FS, asym, traj, ROOM, 0.3,
+                                        ARRAY_AT, snr_db=20, rng=5, max_order=1)
+    np.testing.assert_array_equal(two_n[0], one_n)
+    assert np.linalg.norm(two_n[1] - two_n[0]) > 0.05 * np.linalg.norm(two_n[0])
     # anechoic: the free-field renderer's recording
     np.testing.assert_array_equal(
         simulate_moving_masked_room(sig, FS, asym, traj, ROOM, 0.0, ARRAY_AT),

@@ -1020,6 +1020,9 @@ def simulate_moving_masked_room(
                               f"{x.shape}")
     fs = float(check_fs(fs))
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
+    # (one generator for every waveform: a seed handed to add_noise per waveform gave each
+    # the same noise)
+    rng = np.random.default_rng(rng)
     snr_db = check_snr_db(snr_db)
     _check_trajectory(trajectory)
     early_order = _check_updates(block_s, early_block_s, early_order)
