@@ -1028,6 +1028,12 @@ def test_moving_masked_room_refuses_bad_input(asym):
                                     ROOM, 0.3, ARRAY_AT, max_order=1)
     with pytest.raises(ConfigError, match="SNR"):
         simulate_moving_masked_room(sig, FS, asym, walk, ROOM, 0.3, ARRAY_AT, snr_db="20")
+    for bad in (3, (0, 2), (1, 2.5), (1, 2, 3)):  # (orders: (first >= 1, last or None))
+        with pytest.raises(GeometryError, match="orders"):
+            mask.masked_room_reflections(FS, asym, _src(0, 1.0), ROOM, 0.3, ARRAY_AT,
+                                         orders=bad)
+    assert mask.masked_room_reflections(FS, asym, _src(0, 1.0), ROOM, 0.3, ARRAY_AT,
+                                        orders=(3, 2)) is None  # (no order in the range)
 
 
 def test_sphere_impulse_responses_are_the_models_impulse_responses(asym):

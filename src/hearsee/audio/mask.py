@@ -1120,6 +1120,9 @@ def _reflection_parts(fs: float, model: MaskModel, s: NDArray, room_dim: ArrayLi
     if at.shape != (3,) or not np.all(np.isfinite(at)):
         raise GeometryError(f"array_at must be a finite [x, y, z] point, got {array_at!r}")
     _check_inside(model.mesh.vertices + at, dim, "the mask's vertex")
+    if not (isinstance(orders, (tuple, list)) and len(orders) == 2):
+        raise GeometryError(f"orders must be (first, last) reflection orders (last None: the "
+                            f"room's), got {orders!r:.60}")
     lo = whole_number("orders[0]", orders[0], lo=1, error=GeometryError)
     e_absorption, order = image_sources(rt60, dim, model.c, max_order)
     if e_absorption is None or order == 0:
