@@ -1009,6 +1009,27 @@ def test_cli_simulates_a_masked_walk_in_a_room(asym, tmp_path):
     np.testing.assert_allclose(x.T / truth["gain"], ref, atol=1e-6 * np.abs(ref).max())
 
 
+def test_cli_refuses_a_masked_walk_through_a_wall(asym, tmp_path, capsys):
+    """A talker walking out of the room: one line and exit 2 from `hearsee simulate`, no file
+    written, and before any rendering (the room was checked with the first reflections, after
+    the whole direct path)."""
+    import yaml
+
+    from hearsee.cli import main
+
+    spec = tmp_path / "coarse-mask.yaml"
+    spec.write_text(yaml.safe_dump(asym.array.to_dict()), encoding="utf-8")
+    csv = tmp_path / "walk.csv"
+    csv.write_text("t,x,y,z\n0,0.5,0.9,0\n0.3,3.0,0.9,0\n", encoding="utf-8")
+    wav = tmp_path / "walk.wav"
+    capsys.readouterr()
+    assert main(["simulate", str(wav), "--array", str(spec), "--trajectory", str(csv),
+                 "--room", "4x3.5x2.7", "--rt60", "0.3", "--array-at", "1.6,1.5,1.2"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "the source (t = " in err[0] and "outside the room" in err[0], err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["coarse-mask.yaml", "walk.csv"]
+
+
 def test_moving_masked_room_refuses_bad_input(asym):
     from hearsee.sim.moving import Trajectory, simulate_moving_masked_room
 

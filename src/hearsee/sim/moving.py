@@ -1011,7 +1011,7 @@ def simulate_moving_masked_room(
     array (2, n), or (k, 2, n) for k waveforms
     """
     from hearsee.audio.mask import MaskModel, masked_room_reflections
-    from hearsee.audio.propagation import _room_dim, image_sources
+    from hearsee.audio.propagation import _check_inside, _room_dim, image_sources
 
     x = as_samples(signal, "signal")
     many = x.ndim == 2
@@ -1030,26 +1030,33 @@ def simulate_moving_masked_room(
     at = as_point(array_at, "array_at")
     dim = _room_dim(room_dim)
     order = image_sources(rt60, dim, model.c, max_order)[1]
-    out = np.stack([simulate_moving_masked(s, fs, model, trajectory, block_s=direct_block_s)
-                    for s in np.atleast_2d(x)])
 
     def reflections(lo: int, hi: int | None) -> Callable[[NDArray], NDArray]:
         def fn(src_room: NDArray) -> NDArray:
-            h = masked_room_reflections(fs, model, src_room - at, dim, rt60, at, max_order,
-                                        (lo, hi))
-            return np.zeros((2, 1)) if h is None else h
+            return masked_room_reflections(fs, model, src_room - at, dim, rt60, at, max_order,
+                                           (lo, hi))  # (never None: each range holds orders)
         return fn
 
+    updates = []  # (responses, update times in samples)
     if order > 0:
         if early_order is not None and 0 < early_order < order:
             parts = [(reflections(1, early_order), early_block_s),
                      (reflections(early_order + 1, None), block_s)]
         else:
             parts = [(reflections(1, None), block_s)]
-        mics = model.array.positions
-        for fn, spacing in parts:
-            centres = _update_times(trajectory, mics, model.c, fs, x.shape[-1], spacing, None)
-            _render_blocks(np.atleast_2d(x), centres, trajectory.at(centres / fs) + at, fn, out)
+        updates = [(fn, _update_times(trajectory, model.array.positions, model.c, fs,
+                                      x.shape[-1], spacing, None)) for fn, spacing in parts]
+        # the room's checks before any rendering (they came with the first reflections, after
+        # the whole direct path): the mask inside the room, the talker wherever it is heard
+        _check_inside(model.mesh.vertices + at, dim, "the mask's vertex")
+        t = np.concatenate([centres for _, centres in updates]) / fs
+        pos = trajectory.at(t) + at
+        k = int(np.argmin(np.minimum(pos, dim - pos).min(axis=1)))  # (the nearest a wall)
+        _check_inside(pos[k:k + 1], dim, f"the source (t = {t[k]:.3g} s)")
+    out = np.stack([simulate_moving_masked(s, fs, model, trajectory, block_s=direct_block_s)
+                    for s in np.atleast_2d(x)])
+    for fn, centres in updates:
+        _render_blocks(np.atleast_2d(x), centres, trajectory.at(centres / fs) + at, fn, out)
     out = np.stack([add_noise(y, snr_db, rng) for y in out])
     return out if many else out[0]
 
