@@ -976,6 +976,45 @@ def test_moving_masked_room_reflections_follow_the_source(asym):
         simulate_moving_masked(sig, FS, asym, traj))
 
 
+def test_moving_masked_room_reports_its_three_stages(asym, monkeypatch):
+    """simulate_moving_masked_room(progress=...): the direct path's 16-ms blocks (of every
+    waveform), the early and the later reflections' updates -- all three announced before any
+    work, each counted to its total; the totals are the blocks of the signal (counted here)
+    and the reflection updates the renderer computes (counted through masked_room_reflections);
+    the recordings are those without reports."""
+    from hearsee.sim.moving import Trajectory, simulate_moving_masked_room
+
+    sig = white_noise(0.3, FS, rng=12)
+    traj = Trajectory([0.0, 0.3], [_src(60, 1.0), _src(120, 1.1)])
+    kw = dict(max_order=3, early_order=2)
+    plain = simulate_moving_masked_room(np.stack([sig, sig[::-1]]), FS, asym, traj, ROOM, 0.3,
+                                        ARRAY_AT, **kw)
+    calls = []
+    real = mask.masked_room_reflections
+
+    def counted(*a):
+        calls.append(a[-1])  # (the orders rendered)
+        return real(*a)
+
+    monkeypatch.setattr(mask, "masked_room_reflections", counted)
+    reports = []
+    y = simulate_moving_masked_room(np.stack([sig, sig[::-1]]), FS, asym, traj, ROOM, 0.3,
+                                    ARRAY_AT, progress=lambda *r: reports.append(r), **kw)
+    np.testing.assert_array_equal(y, plain)
+    stages = ["direct path through the mask (16-ms blocks)", "early reflections (orders 1-2)",
+              "later reflections (order 3)"]
+    assert [r[0] for r in reports[:3]] == stages and all(r[1] == 0 for r in reports[:3])
+    hop = FS * 16 // 1000 // 2  # blocks of 16 ms at half that hop, over the whole signal
+    blocks = 2 * ((sig.size - 1 + hop) // hop + 1)  # (two waveforms)
+    totals = {stage: [r[2] for r in reports if r[0] == stage] for stage in stages}
+    done = {stage: [r[1] for r in reports if r[0] == stage] for stage in stages}
+    assert set(totals[stages[0]]) == {blocks} and done[stages[0]][-1] == blocks
+    assert done[stages[0]] == sorted(done[stages[0]])
+    for stage, orders in zip(stages[1:], [(1, 2), (3, None)], strict=True):
+        n = calls.count(orders)
+        assert n >= 5 and set(totals[stage]) == {n} and done[stage] == list(range(n + 1))
+
+
 @pytest.mark.slow  # (two renderings and a new model's directivities: ~9 s)
 def test_cli_simulates_a_masked_walk_in_a_room(asym, tmp_path):
     """`hearsee simulate --trajectory` with a masked array and a room was refused until

@@ -856,3 +856,116 @@ def test_a_trajectory_that_ends_before_the_recording_names_its_end():
         simulate_moving_recording("three-mic", traj, duration_s=0.0)
     x, truth = simulate_moving_recording("three-mic", Trajectory([0.5], [[1.0, 0.2, 0.0]]))
     assert truth["duration_s"] == 0.5 and x.shape == (3, 8000)
+
+
+def _stages(reports):
+    """{stage: [(done, total), ...]} of progress(stage, done, total) reports, and the stages
+    announced (done = 0) before the first step of any was reported done."""
+    first_step = next((i for i, (_, done, _t) in enumerate(reports) if done), len(reports))
+    announced = [stage for stage, done, _ in reports[:first_step] if done == 0]
+    by_stage = {}
+    for stage, done, total in reports:
+        by_stage.setdefault(stage, []).append((done, total))
+    return by_stage, announced
+
+
+def test_room_renderer_reports_each_stage_of_its_work():
+    """simulate_moving_room(progress=...): every stage announced before any work, then one
+    report per impulse-response update, counting up to the stage's total; the totals are the
+    updates the renderer computes (counted here through a rir_fn); the recording is the same
+    with or without the reports. A progress that cannot be called is refused before any
+    work (a TypeError came after the first update's)."""
+    arr = MicArray.from_preset("three-mic")
+    at = np.array([2.0, 2.0, 1.2])
+    x = _bandlimited_noise(FS // 4, 5)
+    traj = linear_trajectory([1.0, -0.2, 0.0], [0.0, 0.5, 0.0], 0.25)
+    calls = []
+
+    def counted(src):
+        calls.append(src)
+        return _delay_rir(arr.positions + at)(src)
+
+    reports = []
+    y = simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.3, at, rir_fn=counted,
+                             progress=lambda *r: reports.append(r))
+    by_stage, announced = _stages(reports)
+    assert announced == ["room responses"] and list(by_stage) == ["room responses"]
+    steps = by_stage["room responses"]
+    assert steps[-1] == (len(calls), len(calls)) and len(calls) >= 6
+    assert [d for d, _ in steps] == list(range(len(calls) + 1))  # one report per update
+    calls.clear()
+    np.testing.assert_array_equal(
+        simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.3, at, rir_fn=counted), y)
+    for bad in ("x", 3):
+        calls.clear()
+        with pytest.raises(ConfigError, match="progress must be a callable"):
+            simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.3, at, rir_fn=counted,
+                                 progress=bad)
+        assert calls == []
+    # the default responses, split: the later reflections' and the early part's updates,
+    # each stage named with its image-source orders
+    reports.clear()
+    z = simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.2, at, max_order=6,
+                             early_order=2, progress=lambda *r: reports.append(r))
+    by_stage, announced = _stages(reports)
+    assert announced == ["later reflections (orders 3-6)",
+                         "direct path and early reflections (orders 0-2)"]
+    early, late = by_stage[announced[1]], by_stage[announced[0]]
+    # early updates every 5 ms at most, later ones every 50 ms at most, over 0.25 s
+    assert early[-1][0] == early[-1][1] >= 50 and 5 <= late[-1][1] < early[-1][1]
+    np.testing.assert_array_equal(
+        z, simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.2, at, max_order=6,
+                                early_order=2))
+
+
+def test_free_field_and_recording_report_progress():
+    """simulate_moving_free_field reports its interpolator's chunks (4096 output samples per
+    microphone), and simulate_moving_recording hands its progress to the renderer; the
+    recordings are those without reports."""
+    arr = MicArray.from_preset("three-mic")
+    x = _bandlimited_noise(10000, 6)
+    traj = linear_trajectory([1.0, -0.2, 0.0], [0.0, 0.5, 0.0], 0.7)
+    reports = []
+    y = simulate_moving_free_field(x, FS, arr, traj, progress=lambda *r: reports.append(r))
+    by_stage, announced = _stages(reports)
+    assert announced == ["direct path (fractional delays)"]
+    total = 3 * int(np.ceil(10000 / 4096))  # 3 microphones x 3 chunks
+    assert by_stage[announced[0]] == [(k, total) for k in range(total + 1)]
+    np.testing.assert_array_equal(y, simulate_moving_free_field(x, FS, arr, traj))
+    reports.clear()
+    room = dict(room_dim=[5, 4, 3], rt60=0.2, array_at=[2.0, 2.0, 1.2], max_order=4)
+    r, _ = simulate_moving_recording("three-mic", traj, duration_s=0.3, room=room,
+                                     progress=lambda *a: reports.append(a))
+    assert _stages(reports)[1] == ["later reflections (order 4)",
+                                   "direct path and early reflections (orders 0-3)"]
+    np.testing.assert_array_equal(
+        r, simulate_moving_recording("three-mic", traj, duration_s=0.3, room=room)[0])
+    with pytest.raises(ConfigError, match="progress must be a callable"):
+        simulate_moving_recording("three-mic", traj, duration_s=0.3, progress="bar")
+
+
+def test_cli_stage_progress_shows_a_bar_per_stage(monkeypatch):
+    """The CLI's stage_progress: on a terminal, a bar per stage named "description: stage",
+    each at its count; elsewhere (pipes, files) nothing is drawn."""
+    import io
+
+    from rich.console import Console
+
+    from hearsee.cli import _app
+
+    out = io.StringIO()
+    monkeypatch.setattr(_app, "err_console", Console(file=out, force_terminal=True, width=120))
+    monkeypatch.setattr(_app.sys.stderr, "isatty", lambda: True, raising=False)
+    with _app.stage_progress("simulating") as report:
+        report("early reflections (orders 1-3)", 0, 40)
+        report("later reflections (orders 4-9)", 0, 8)
+        report("early reflections (orders 1-3)", 40, 40)
+        report("later reflections (orders 4-9)", 3, 8)
+    text = out.getvalue()
+    assert "simulating: early reflections (orders 1-3)" in text and "40/40" in text
+    assert "simulating: later reflections (orders 4-9)" in text and "3/8" in text
+    monkeypatch.setattr(_app.sys.stderr, "isatty", lambda: False, raising=False)
+    out.truncate(0)
+    with _app.stage_progress("simulating") as report:
+        report("early reflections (orders 1-3)", 5, 40)
+    assert out.getvalue() == ""

@@ -189,13 +189,9 @@ def print_summary(title: str, summary: dict[str, Any]) -> None:
     err_console.print(t)
 
 
-@contextmanager
-def progress(description: str, total: float | None, *, enabled: bool = True) -> Iterator[Any]:
-    """A rich progress bar on stderr; yields a callable ``advance(n=1)``."""
-    if not enabled or not sys.stderr.isatty():
-        yield lambda n=1: None
-        return
-    with Progress(
+def _bars() -> Progress:
+    """The CLI's rich progress display on stderr (cleared when done)."""
+    return Progress(
         TextColumn("[progress.description]{task.description}"),
         BarColumn(),
         TextColumn("{task.completed:.0f}/{task.total:.0f}"),
@@ -203,9 +199,37 @@ def progress(description: str, total: float | None, *, enabled: bool = True) -> 
         TimeRemainingColumn(),
         console=err_console,
         transient=True,
-    ) as bar:
+    )
+
+
+@contextmanager
+def progress(description: str, total: float | None, *, enabled: bool = True) -> Iterator[Any]:
+    """A rich progress bar on stderr; yields a callable ``advance(n=1)``."""
+    if not enabled or not sys.stderr.isatty():
+        yield lambda n=1: None
+        return
+    with _bars() as bar:
         task = bar.add_task(description, total=total)
         yield lambda n=1: bar.advance(task, n)
+
+
+@contextmanager
+def stage_progress(description: str, *, enabled: bool = True) -> Iterator[Any]:
+    """Rich progress bars on stderr, one per stage of a job; yields a callable
+    ``report(stage, done, total)`` (the library's :data:`hearsee.sim.moving.Progress`) that
+    adds a bar "description: stage" the first time it hears of a stage and moves it after."""
+    if not enabled or not sys.stderr.isatty():
+        yield lambda stage, done, total: None
+        return
+    with _bars() as bar:
+        tasks: dict[str, Any] = {}
+
+        def report(stage: str, done: int, total: int) -> None:
+            if stage not in tasks:
+                tasks[stage] = bar.add_task(f"{description}: {stage}", total=total)
+            bar.update(tasks[stage], completed=done, total=total)
+
+        yield report
 
 
 def _version_callback(value: bool) -> None:

@@ -7,7 +7,14 @@ from typing import Annotated
 
 import typer
 
-from hearsee.cli._app import app, err_console, parse_floats, progress, refuse_overwrite
+from hearsee.cli._app import (
+    app,
+    err_console,
+    parse_floats,
+    progress,
+    refuse_overwrite,
+    stage_progress,
+)
 from hearsee.errors import ConfigError, InputFileError
 
 #: Length of a static source's recording without ``--duration``, seconds.
@@ -69,10 +76,10 @@ def _simulate_moving(out: Path, array: str, trajectory: Path, signal: str,
     truth_csv = Path(out).with_suffix(".trajectory.csv")
     protect = [*protect, *([trajectory] if Path(trajectory).is_file() else [])]
     refuse_overwrite([Path(out), Path(out).with_suffix(".json"), truth_csv], protect, force)
-    with progress("simulating", total=1) as advance:
+    with stage_progress("simulating") as report:
         x, truth = simulate_moving_recording(array, traj, signal=signal, duration_s=duration,
-                                             fs=fs, snr_db=snr, room=room_spec, seed=seed)
-        advance()
+                                             fs=fs, snr_db=snr, room=room_spec, seed=seed,
+                                             progress=report)
     truth["trajectory_csv"] = truth_csv.name
     wav, js = save_recording(out, x, truth, subtype="PCM_16" if pcm16 else "FLOAT",
                              protect=protect)

@@ -335,7 +335,8 @@ def truth_times(traj: Trajectory, duration_s: float, step_s: float = 0.01) -> ND
 # ---------------------------------------------------------------------------- free field
 def fractional_delay(signal: ArrayLike, delays_samples: ArrayLike, n_out: int | None = None,
                      half_width: int = SINC_HALF_WIDTH, beta: float = SINC_KAISER_BETA,
-                     chunk: int = 4096) -> NDArray:
+                     chunk: int = 4096,
+                     tick: Callable[[int, int], None] | None = None) -> NDArray:
     """Time-varying fractional delay: ``y[n] = x(n - D[n])`` by windowed-sinc interpolation.
 
     Parameters
@@ -351,6 +352,8 @@ def fractional_delay(signal: ArrayLike, delays_samples: ArrayLike, n_out: int | 
         Kaiser window parameter (finite, >= 0).
     chunk : int
         Output samples interpolated at once (>= 1; memory ~ ``chunk * 2 half_width``).
+    tick : callable, optional
+        ``tick(done, total)`` after each chunk: chunks finished, over all channels.
 
     Returns
     -------
@@ -380,6 +383,8 @@ def fractional_delay(signal: ArrayLike, delays_samples: ArrayLike, n_out: int | 
     L = whole_number("half_width", half_width, 1, MAX_SINC_HALF_WIDTH)
     beta = finite_number("beta", beta, 0.0)
     chunk = whole_number("chunk", chunk)
+    if tick is not None and not callable(tick):
+        raise ConfigError(f"tick must be a callable tick(done, total) or None, got {tick!r:.40}")
     # a delay beyond n_out + L puts every tap before the signal's start: the output is 0
     # there, as it is for the clipped delay (a 1e12-sample delay asked for 7 TiB of padding)
     d = np.minimum(d, n_out + L + 1.0)
@@ -389,8 +394,11 @@ def fractional_delay(signal: ArrayLike, delays_samples: ArrayLike, n_out: int | 
     i0_beta = np.i0(beta)
     y = np.zeros((d.shape[0], n_out))
     last = len(xp) - 1
+    per_ch = -(-n_out // chunk)
     for ch in range(d.shape[0]):
-        for s in range(0, n_out, chunk):
+        for j, s in enumerate(range(0, n_out, chunk)):
+            if tick is not None:
+                tick(ch * per_ch + j, d.shape[0] * per_ch)
             e = min(s + chunk, n_out)
             pos = np.arange(s, e) - d[ch, s:e] + pad_front  # position in xp
             i0 = np.floor(pos).astype(np.int64)
@@ -401,6 +409,8 @@ def fractional_delay(signal: ArrayLike, delays_samples: ArrayLike, n_out: int | 
             idx = i0[:, None] + k[None, :]
             valid = (idx >= 0) & (idx <= last)
             y[ch, s:e] = np.sum(np.where(valid, xp[np.clip(idx, 0, last)], 0.0) * h, axis=1)
+    if tick is not None:
+        tick(d.shape[0] * per_ch, d.shape[0] * per_ch)
     return y[0] if squeeze else y
 
 
@@ -510,6 +520,7 @@ def simulate_moving_free_field(
     snr_db: float | None = None,
     rng: np.random.Generator | int | None = None,
     speed_of_sound: float | None = None,
+    progress: Progress | None = None,
 ) -> NDArray:
     """Record ``signal`` emitted by a source moving along ``trajectory`` in free field.
 
@@ -525,6 +536,10 @@ def simulate_moving_free_field(
         Source path (seconds, metres).
     snr_db : float, optional
         Per-channel SNR of added white sensor noise.
+    progress : callable, optional
+        ``progress(stage, done, total)`` (:data:`Progress`): one stage, the interpolator's
+        chunks of 4096 output samples per microphone (~0.2 s of CPU per second of recording
+        and microphone at 16 kHz).
 
     Returns
     -------
@@ -535,6 +550,7 @@ def simulate_moving_free_field(
     """
     x = _check_signal(signal, fs)
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
+    progress = _check_progress(progress)
     pos, c = _mics_and_c(mics, speed_of_sound)
     t = np.arange(x.size) / fs
     tau, r = retarded_delays(trajectory, pos, t, c)
@@ -543,7 +559,8 @@ def simulate_moving_free_field(
     # (t - tau grows with t below the speed of sound: heard at all means heard at the end)
     # (every microphone must hear it: only the nearest one was checked)
     check_heard(float(r[:, -1].max()), c, x.size, fs, "farthest")
-    y = fractional_delay(x, tau * fs) / r
+    y = fractional_delay(x, tau * fs, tick=None if progress is None else (
+        lambda done, total: progress("direct path (fractional delays)", done, total))) / r
     return add_noise(y, snr_db, rng)
 
 
@@ -561,6 +578,7 @@ def simulate_moving_masked(
     rng: np.random.Generator | int | None = None,
     far_field: bool = False,
     block_s: float = MASKED_BLOCK_S,
+    progress: Progress | None = None,
 ) -> NDArray:
     """Record ``signal`` emitted by a source moving along ``trajectory`` through a masked
     two-microphone array (ch. 3's mask, ch. 5's moving sources).
@@ -595,6 +613,9 @@ def simulate_moving_masked(
         Per-channel SNR of added white sensor noise.
     block_s : float
         Block length, s (at least two samples).
+    progress : callable, optional
+        ``progress(stage, done, total)`` as the blocks are rendered (:data:`Progress`; one
+        stage, :func:`_masked_stage`).
 
     Returns
     -------
@@ -608,14 +629,11 @@ def simulate_moving_masked(
     snr_db = check_snr_db(snr_db)
     _check_trajectory(trajectory)
     far_field = true_or_false("far_field", far_field)
-    if not (is_real(block_s) and np.isfinite(block_s) and block_s * fs >= 2):
-        raise ConfigError(f"block_s must be a number of seconds of at least two samples, got "
-                          f"{block_s!r:.40}")
+    progress = _check_progress(progress)
+    hop, K = _masked_blocks(x.size, fs, block_s)
     model = array if isinstance(array, MaskModel) else MaskModel(array)
-    hop = max(int(round(block_s * fs / 2)), 1)
     L = 2 * hop
     n = x.size
-    K = (n - 1 + hop) // hop + 1  # blocks k cover [k hop - hop, k hop + hop) of the signal
     pos = trajectory.at(np.arange(K) * hop / fs)  # (K, 3) emission positions
     if far_field:
         bulk, gain = np.full(K, 1e-3), np.ones(K)
@@ -636,6 +654,8 @@ def simulate_moving_masked(
     w = 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(L) / L)  # periodic Hann: sums to one
     xp = np.concatenate([np.zeros(hop), x, np.zeros(L)])
     y = np.zeros((2, pre + K * hop + nf))  # (sample j of the signal at pre + hop + j)
+    stage = _masked_stage(block_s)
+    _announce(progress, [(stage, K)])
     for k0 in range(0, K, 256):  # (a few hundred blocks of transfer functions at a time)
         ks = np.arange(k0, min(k0 + 256, K))
         h = model.transfer_at(f, pos[ks], far_field)  # (B, 2, F); GeometryError inside the body
@@ -645,7 +665,25 @@ def simulate_moving_masked(
         yb = sfft.irfft(spec[:, None, :] * np.conj(h), nf, axis=-1)  # (B, 2, nf)
         for b, k in enumerate(ks):
             y[:, k * hop:k * hop + nf] += yb[b]
+        if progress is not None:
+            progress(stage, int(ks[-1]) + 1, K)
     return add_noise(y[:, pre + hop:pre + hop + n], snr_db, rng)
+
+
+def _masked_blocks(n: int, fs: float, block_s: Any) -> tuple[int, int]:
+    """:func:`simulate_moving_masked`'s hop (samples) and block count for ``n`` samples:
+    Hann blocks of ``block_s`` seconds (at least two samples, else a ConfigError) at half
+    that hop; block k covers samples [k hop - hop, k hop + hop) of the signal."""
+    if not (is_real(block_s) and np.isfinite(block_s) and block_s * fs >= 2):
+        raise ConfigError(f"block_s must be a number of seconds of at least two samples, got "
+                          f"{block_s!r:.40}")
+    hop = max(int(round(block_s * fs / 2)), 1)
+    return hop, (n - 1 + hop) // hop + 1
+
+
+def _masked_stage(block_s: float) -> str:
+    """The progress stage of :func:`simulate_moving_masked` (its blocks of ``block_s`` s)."""
+    return f"direct path through the mask ({block_s * 1e3:.3g}-ms blocks)"
 
 
 # ---------------------------------------------------------------------------- rooms
@@ -657,6 +695,31 @@ def simulate_moving_masked(
 #: within it (0.35 samples), so only rooms without that split (rt60 0, a low ``max_order``, a
 #: custom ``rir_fn``) or faster sources and higher rates get more updates.
 MAX_DELAY_STEP_SAMPLES = 0.5
+
+
+#: A renderer's progress report: ``progress(stage, done, total)`` -- ``stage`` names a part of
+#: the work (e.g. ``"later reflections (orders 4-17)"``), ``done`` of its ``total`` steps
+#: (blocks or impulse-response updates) are finished. Every stage is announced with
+#: ``done = 0`` before any work, so a display can show them all from the start; the stages'
+#: steps cost very different amounts (a masked walk of 4 s in a room of RT60 0.3 s: ~500
+#: direct-path blocks, 2.9 s; ~800 updates of orders 1-3, 6.8 s; ~80 of the rest, 77 s),
+#: which is why they are reported apart rather than as one count.
+Progress = Callable[[str, int, int], None]
+
+
+def _check_progress(progress: Any) -> Progress | None:
+    """``progress`` None or a callable (a ConfigError otherwise: a TypeError came only after
+    the first update's work)."""
+    if progress is not None and not callable(progress):
+        raise ConfigError(f"progress must be a callable progress(stage, done, total) or None, "
+                          f"got {progress!r:.40}")
+    return progress
+
+
+def _orders_stage(label: str, first: int, last: int) -> str:
+    """A progress stage's name: ``label`` and the image-source orders it renders (0 = the
+    direct path), e.g. ``"later reflections (orders 4-17)"``."""
+    return f"{label} (orders {first}-{last})" if last > first else f"{label} (order {first})"
 
 
 def _update_times(trajectory: Trajectory, mics: NDArray, c: float, fs: float, n: int,
@@ -759,6 +822,7 @@ def simulate_moving_room(
     max_order: int | None = None,
     early_order: int | None = EARLY_ORDER,
     early_block_s: float = EARLY_BLOCK_S,
+    progress: Progress | None = None,
 ) -> NDArray:
     """Record a moving source in a shoebox room: block-wise image-source RIRs, crossfaded.
 
@@ -836,12 +900,16 @@ def simulate_moving_room(
         (or a custom ``rir_fn``, or an order not above it) renders whole responses only.
     early_block_s : float
         Largest spacing in seconds of the early reflections' updates (default 5 ms).
+    progress : callable, optional
+        ``progress(stage, done, total)`` after each impulse-response update (:data:`Progress`;
+        the stages: the early and the later responses when split, else the room's responses).
 
     Returns
     -------
     array (n_mics, n)
     """
     x = _check_signal(signal, fs)
+    progress = _check_progress(progress)
     early_order = _check_updates(block_s, early_block_s, early_order)
     for name, bound in (("max_tdoa_step_samples", max_tdoa_step_samples),
                         ("max_delay_step_samples", max_delay_step_samples)):
@@ -864,6 +932,7 @@ def simulate_moving_room(
     if np.any(dim <= 0):
         raise GeometryError(f"room_dim must be positive lengths in metres, got {dim.tolist()}")
     early_fn = None
+    stages = ["room responses", None]  # (the whole / later part's, the early part's)
     if rir_fn is None:
         from hearsee.audio.propagation import image_sources, room_impulse_responses
 
@@ -872,7 +941,11 @@ def simulate_moving_room(
                                           speed_of_sound=array.speed_of_sound)
 
         order = image_sources(rt60, dim, array.speed_of_sound, max_order)[1]
+        stages[0] = _orders_stage("room responses", 0, order)
         if early_order is not None and order > early_order:
+            stages = [_orders_stage("later reflections", early_order + 1, order),
+                      _orders_stage("direct path and early reflections", 0, early_order)]
+
             def early_fn(src_room: NDArray) -> NDArray:
                 return rir_at(src_room, early_order)
 
@@ -890,13 +963,15 @@ def simulate_moving_room(
     check_heard(float(r_end.max()), array.speed_of_sound, n, fs, "farthest")
     out = np.zeros((len(mics), n))
     direct = early_fn if early_fn is not None else rir_fn  # (the part holding the direct path)
-    for fn, spacing in ((rir_fn, block_s), (early_fn, early_block_s)):
-        if fn is not None:
-            centres = _update_times(trajectory, mics, array.speed_of_sound, fs, n, spacing,
-                                    max_tdoa_step_samples,
-                                    max_delay_step_samples if fn is direct else None)
-            # positions at block centres, evaluated at the (approximate) emission time
-            _render_blocks(x, centres, trajectory.at(centres / fs) + at, fn, out)
+    parts = [(fn, _update_times(trajectory, mics, array.speed_of_sound, fs, n, spacing,
+                                max_tdoa_step_samples,
+                                max_delay_step_samples if fn is direct else None), stage)
+             for fn, spacing, stage in ((rir_fn, block_s, stages[0]),
+                                        (early_fn, early_block_s, stages[1]))
+             if fn is not None]
+    _announce(progress, [(stage, len(centres)) for _, centres, stage in parts])
+    # positions at the update times, evaluated at the (approximate) emission time
+    _render_stages(x, parts, trajectory, at, fs, out, progress)
     return add_noise(out, snr_db, rng)
 
 
@@ -914,13 +989,17 @@ def _check_updates(block_s: Any, early_block_s: Any, early_order: Any) -> int | 
 
 
 def _render_blocks(x: NDArray, centres: NDArray, src_room: NDArray,
-                   rir_fn: Callable[[NDArray], NDArray], out: NDArray) -> None:
+                   rir_fn: Callable[[NDArray], NDArray], out: NDArray,
+                   tick: Callable[[int, int], None] | None = None) -> None:
     """Add to ``out`` (n_mics, n) the signal ``x`` (n,) through ``rir_fn``'s responses for
     the source at ``src_room`` (room frame, metres) at the update times ``centres`` (sample
     indices), crossfaded by triangular weights in emission time. Several signals along the
-    same path: ``x`` (k, n) and ``out`` (k, n_mics, n), each response computed once."""
+    same path: ``x`` (k, n) and ``out`` (k, n_mics, n), each response computed once.
+    ``tick(done, total)`` is called after each update with the number finished."""
     n_mics, n = out.shape[-2:]
     for b in range(len(centres)):
+        if tick is not None and b:
+            tick(b, len(centres))
         lo = int(np.floor(centres[b - 1])) if b > 0 else 0
         hi = int(np.ceil(centres[b + 1])) + 1 if b + 1 < len(centres) else n
         seg = x[..., lo:hi] * _hat_weight(b, lo, hi, centres)
@@ -940,6 +1019,27 @@ def _render_blocks(x: NDArray, centres: NDArray, src_room: NDArray,
         y = ss.fftconvolve(seg[..., None, :], h if seg.ndim == 1 else h[None], axes=-1)
         stop = min(n, lo + y.shape[-1])
         out[..., lo:stop] += y[..., : stop - lo]
+    if tick is not None:
+        tick(len(centres), len(centres))
+
+
+def _announce(progress: Progress | None, stages: list[tuple[str, int]]) -> None:
+    """Report every stage (name, total steps) with nothing done yet, before any work."""
+    if progress is not None:
+        for stage, total in stages:
+            progress(stage, 0, total)
+
+
+def _render_stages(x: NDArray, parts: list[tuple[Callable[[NDArray], NDArray], NDArray, str]],
+                   trajectory: Trajectory, at: NDArray, fs: float, out: NDArray,
+                   progress: Progress | None) -> None:
+    """:func:`_render_blocks` for each (responses, update times, stage name) of ``parts``,
+    the source at ``trajectory`` (array frame) + ``at`` (the array origin in the room),
+    reporting each update to ``progress``."""
+    for fn, centres, stage in parts:
+        tick = None if progress is None else (
+            lambda done, total, stage=stage: progress(stage, done, total))
+        _render_blocks(x, centres, trajectory.at(centres / fs) + at, fn, out, tick)
 
 
 def simulate_moving_masked_room(
@@ -957,6 +1057,7 @@ def simulate_moving_masked_room(
     early_order: int | None = EARLY_ORDER,
     early_block_s: float = EARLY_BLOCK_S,
     direct_block_s: float = MASKED_BLOCK_S,
+    progress: Progress | None = None,
 ) -> NDArray:
     """Record a source moving along ``trajectory`` through a masked two-microphone array
     standing in a shoebox room (head fixed, the array axes parallel to the room's): ch. 3's
@@ -1005,6 +1106,9 @@ def simulate_moving_masked_room(
         all reflections every ``block_s``).
     direct_block_s : float
         The direct path's block length, seconds (:func:`simulate_moving_masked`).
+    progress : callable, optional
+        ``progress(stage, done, total)`` as the work goes (:data:`Progress`): the direct
+        path's blocks (of every waveform), then the early and the later reflections' updates.
 
     Returns
     -------
@@ -1026,6 +1130,8 @@ def simulate_moving_masked_room(
     snr_db = check_snr_db(snr_db)
     _check_trajectory(trajectory)
     early_order = _check_updates(block_s, early_block_s, early_order)
+    progress = _check_progress(progress)
+    n_direct = _masked_blocks(x.shape[-1], fs, direct_block_s)[1]
     model = array if isinstance(array, MaskModel) else MaskModel(array)
     at = as_point(array_at, "array_at")
     dim = _room_dim(room_dim)
@@ -1037,26 +1143,34 @@ def simulate_moving_masked_room(
                                            (lo, hi))  # (never None: each range holds orders)
         return fn
 
-    updates = []  # (responses, update times in samples)
+    updates = []  # (responses, update times in samples, progress stage)
     if order > 0:
         if early_order is not None and 0 < early_order < order:
-            parts = [(reflections(1, early_order), early_block_s),
-                     (reflections(early_order + 1, None), block_s)]
+            parts = [(reflections(1, early_order), early_block_s,
+                      _orders_stage("early reflections", 1, early_order)),
+                     (reflections(early_order + 1, None), block_s,
+                      _orders_stage("later reflections", early_order + 1, order))]
         else:
-            parts = [(reflections(1, None), block_s)]
+            parts = [(reflections(1, None), block_s, _orders_stage("reflections", 1, order))]
         updates = [(fn, _update_times(trajectory, model.array.positions, model.c, fs,
-                                      x.shape[-1], spacing, None)) for fn, spacing in parts]
+                                      x.shape[-1], spacing, None), stage)
+                   for fn, spacing, stage in parts]
         # the room's checks before any rendering (they came with the first reflections, after
         # the whole direct path): the mask inside the room, the talker wherever it is heard
         _check_inside(model.mesh.vertices + at, dim, "the mask's vertex")
-        t = np.concatenate([centres for _, centres in updates]) / fs
+        t = np.concatenate([centres for _, centres, _ in updates]) / fs
         pos = trajectory.at(t) + at
         k = int(np.argmin(np.minimum(pos, dim - pos).min(axis=1)))  # (the nearest a wall)
         _check_inside(pos[k:k + 1], dim, f"the source (t = {t[k]:.3g} s)")
-    out = np.stack([simulate_moving_masked(s, fs, model, trajectory, block_s=direct_block_s)
-                    for s in np.atleast_2d(x)])
-    for fn, centres in updates:
-        _render_blocks(np.atleast_2d(x), centres, trajectory.at(centres / fs) + at, fn, out)
+    xs = np.atleast_2d(x)
+    _announce(progress, [(_masked_stage(direct_block_s), len(xs) * n_direct)]
+              + [(stage, len(centres)) for _, centres, stage in updates])
+    out = np.stack([simulate_moving_masked(
+        s, fs, model, trajectory, block_s=direct_block_s,
+        progress=None if progress is None else (  # (waveform i's blocks after the others')
+            lambda stage, done, total, i=i: progress(stage, i * total + done, len(xs) * total)))
+        for i, s in enumerate(xs)])
+    _render_stages(xs, updates, trajectory, at, fs, out, progress)
     out = np.stack([add_noise(y, snr_db, rng) for y in out])
     return out if many else out[0]
 
@@ -1091,6 +1205,7 @@ def simulate_moving_recording(
     room: dict | None = None,
     seed: int | None = 0,
     block_s: float = 0.05,
+    progress: Progress | None = None,
 ) -> tuple[NDArray, dict]:
     """Simulate a recording of a source moving along ``trajectory`` (array frame), with truth.
 
@@ -1099,7 +1214,8 @@ def simulate_moving_recording(
     :func:`simulate_moving_free_field`, rooms by :func:`simulate_moving_room`, a masked array
     by :func:`simulate_moving_masked` (refused until 2026-12-04) and in a room by
     :func:`simulate_moving_masked_room` (refused until 2026-12-05).
-    ``duration_s`` defaults to the trajectory's end time.
+    ``duration_s`` defaults to the trajectory's end time. ``progress(stage, done, total)``
+    (:data:`Progress`) follows the renderer's stages.
 
     Returns
     -------
@@ -1132,6 +1248,7 @@ def simulate_moving_recording(
             "its first sample), so it gives no default duration: give one, or times from 0 s")
     if seed is not None:  # (-1 or 1.5 raised numpy's ValueError / TypeError)
         seed = whole_number("seed", seed, lo=0)
+    progress = _check_progress(progress)
     fs = check_sim_fs(fs)
     snr_db = check_snr_db(snr_db)  # (before the simulation: add_noise checks it at its end)
     room_n = normalize_room(room)
@@ -1143,18 +1260,19 @@ def simulate_moving_recording(
 
         model = MaskModel(arr)  # (one model for the rendering and the ITD track)
         if room_n is None:
-            clean = simulate_moving_masked(s, fs, model, trajectory)
+            clean = simulate_moving_masked(s, fs, model, trajectory, progress=progress)
         else:
             clean = simulate_moving_masked_room(s, fs, model, trajectory, room_n["room_dim"],
                                                 room_n["rt60"], room_n["array_at"],
                                                 block_s=block_s,
-                                                max_order=room_n.get("max_order"))
+                                                max_order=room_n.get("max_order"),
+                                                progress=progress)
     elif room_n is None:
-        clean = simulate_moving_free_field(s, fs, arr, trajectory)
+        clean = simulate_moving_free_field(s, fs, arr, trajectory, progress=progress)
     else:
         clean = simulate_moving_room(s, fs, arr, trajectory, room_n["room_dim"], room_n["rt60"],
                                      room_n["array_at"], block_s=block_s,
-                                     max_order=room_n.get("max_order"))
+                                     max_order=room_n.get("max_order"), progress=progress)
     x = add_noise(clean, snr_db, rng)
     truth = ground_truth(arr, trajectory.at(0.0))  # (a masked array's ITD: at t = 0)
     if model is not None:
