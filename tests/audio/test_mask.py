@@ -924,6 +924,45 @@ def test_masked_room_refuses_impossible_placements(asym):
         mask.simulate_masked_room(sig, FS, asym, _src(0, 1.0), ROOM, 0.3, [1.0, np.nan, 1.0])
 
 
+@pytest.mark.parametrize("directional_orders", [3, 1])
+def test_masked_room_responses_of_a_turned_head(asym, monkeypatch, directional_orders):
+    """heading_deg turns the masked head in the room. Ground truth built here: a head turned
+    to 90 deg in a 4 x 3.5 m room is the same scene as an unturned head in the 3.5 x 4 m room
+    obtained by turning everything by -90 deg (the array at (y, L - x)): the same source in
+    the array frame gets the same responses, to rounding -- the directional images (the
+    nearest of the table's directions turns with it) and the late, diffuse ones (forced here
+    from order 2 on by a small directional budget). Not turning the directivities (the bug
+    this guards) gives another scene (95-130 % of the reflections' norm apart)."""
+    src = _src(140, 1.1)
+    if directional_orders == 1:  # (images of order 1 directional, orders 2-3 diffuse)
+        import pyroomacoustics as pra
+
+        taps = (asym.sphere_directivities(FS)[0][0].filter_len_ir
+                + int(pra.constants.get("frac_delay_length")))
+        monkeypatch.setattr(mask, "MAX_DIRECTIONAL_TAPS", 7 * taps)
+    turned = mask.masked_room_impulse_responses(FS, asym, src, ROOM, 0.3, ARRAY_AT, 3,
+                                                heading_deg=90.0)
+    swapped_room = ROOM[[1, 0, 2]]
+    same = mask.masked_room_impulse_responses(
+        FS, asym, src, swapped_room, 0.3, [ARRAY_AT[1], ROOM[0] - ARRAY_AT[0], ARRAY_AT[2]], 3)
+    direct = mask.simulate_masked(np.r_[1.0, np.zeros(turned.shape[1] - 1)], FS, asym, src)
+    r_turned, r_same = turned - direct, same[:, :turned.shape[1]] - direct
+    assert np.linalg.norm(r_turned) > 0.1 * np.linalg.norm(direct)  # (reflections there)
+    err = np.linalg.norm(r_turned - r_same) / np.linalg.norm(r_same)
+    assert err < 1e-4, err
+    # not turned: the reflections of another scene (the head facing the room's +x)
+    unturned = mask.masked_room_impulse_responses(FS, asym, src, ROOM, 0.3, ARRAY_AT, 3)
+    assert np.linalg.norm(unturned[:, :turned.shape[1]] - turned) > 0.3 * np.linalg.norm(r_same)
+    # a turn of 360 deg is none
+    np.testing.assert_allclose(
+        mask.masked_room_impulse_responses(FS, asym, src, ROOM, 0.3, ARRAY_AT, 3,
+                                           heading_deg=360.0), unturned, atol=1e-12)
+    for bad in (np.nan, "90", 1e12):
+        with pytest.raises(GeometryError, match="heading_deg"):
+            mask.masked_room_reflections(FS, asym, src, ROOM, 0.3, ARRAY_AT, 3,
+                                         heading_deg=bad)
+
+
 def test_moving_masked_room_reflections_follow_the_source(asym):
     """simulate_moving_masked_room. Ground truth built here: a talker stands at p0, walks to p1
     and stands there. The recording is the moving direct path (simulate_moving_masked) plus

@@ -72,6 +72,7 @@ Method in Acoustics"; Knapp, C. & Carter, G. (1976) (GCC-PHAT); F. Guan (2006) t
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 import os
@@ -100,7 +101,14 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, MaskFitWarning
-from hearsee.geometry import as_points, norm_scale, vector_length, wrap_deg
+from hearsee.geometry import (
+    MAX_ANGLE_DEG,
+    as_points,
+    head_rotation,
+    norm_scale,
+    vector_length,
+    wrap_deg,
+)
 
 __all__ = [
     "CODE_VERSION",
@@ -1020,12 +1028,18 @@ def simulate_masked_room(signal: ArrayLike, fs: float,
 
 def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | MaskModel,
                                   source: ArrayLike, room_dim: ArrayLike, rt60: float,
-                                  array_at: ArrayLike, max_order: int | None = None
-                                  ) -> NDArray | None:
-    """Impulse responses (2, L) of a masked array standing in a shoebox room (head fixed, the
-    array axes parallel to the room's): sample 0 is the emission time, amplitude ``1 / r`` as
+                                  array_at: ArrayLike, max_order: int | None = None,
+                                  heading_deg: float = 0.0) -> NDArray | None:
+    """Impulse responses (2, L) of a masked array standing in a shoebox room (head fixed):
+    sample 0 is the emission time, amplitude ``1 / r`` as
     :func:`hearsee.audio.propagation.room_impulse_responses`. None for an anechoic room
     (``rt60`` 0: :func:`simulate_masked` renders the free field exactly).
+
+    ``source`` is in the array frame (metres), whose origin stands at ``array_at`` (room
+    coordinates) and whose +x axis points to room azimuth ``heading_deg`` (degrees about the
+    room's +z, + = from +x toward +y; default 0: the array axes parallel to the room's): a
+    robot's masked head turned in the room (:func:`_reflection_parts` turns the microphones,
+    the mask and its directivities with it).
 
     Reconstruction: the thesis measured its mask in a room but simulated none; this follows
     the way head-related transfer functions are put into image-source simulations (e.g.
@@ -1059,7 +1073,8 @@ def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | Mask
     """
     model = array if isinstance(array, MaskModel) else MaskModel(array)
     s, _ = _source_point(source)
-    parts = _reflection_parts(fs, model, s, room_dim, rt60, array_at, max_order)
+    parts = _reflection_parts(fs, model, s, room_dim, rt60, array_at, max_order,
+                              heading_deg=heading_deg)
     if not parts:
         return None
     n = max(p.shape[1] for p in parts)
@@ -1074,7 +1089,8 @@ def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | Mask
 def masked_room_reflections(fs: float, array: MicArray | str | Path | MaskModel,
                             source: ArrayLike, room_dim: ArrayLike, rt60: float,
                             array_at: ArrayLike, max_order: int | None = None,
-                            orders: tuple[int, int | None] = (1, None)) -> NDArray | None:
+                            orders: tuple[int, int | None] = (1, None),
+                            heading_deg: float = 0.0) -> NDArray | None:
     """The reflections of :func:`masked_room_impulse_responses` alone, (2, L) -- the image
     sources of ``orders[0]`` to ``orders[1]`` reflections (None: the room's last order; the
     direct path is order 0), rendered as there (through the mask's far-field responses up to
@@ -1082,10 +1098,12 @@ def masked_room_reflections(fs: float, array: MicArray | str | Path | MaskModel,
     room, or no order of the room in the range). Sample 0 is the emission time. Images of
     orders ``a..b`` and ``b+1..c`` add up to those of ``a..c``, which lets
     :func:`hearsee.sim.moving.simulate_moving_masked_room` update the early reflections more
-    often than the rest."""
+    often than the rest. ``source`` in the array frame, turned to ``heading_deg`` in the room
+    as :func:`masked_room_impulse_responses`'s."""
     model = array if isinstance(array, MaskModel) else MaskModel(array)
     s, _ = _source_point(source)
-    parts = _reflection_parts(fs, model, s, room_dim, rt60, array_at, max_order, orders)
+    parts = _reflection_parts(fs, model, s, room_dim, rt60, array_at, max_order, orders,
+                              heading_deg)
     if not parts:
         return None
     out = np.zeros((2, max(p.shape[1] for p in parts)))
@@ -1096,12 +1114,16 @@ def masked_room_reflections(fs: float, array: MicArray | str | Path | MaskModel,
 
 def _reflection_parts(fs: float, model: MaskModel, s: NDArray, room_dim: ArrayLike,
                       rt60: float, array_at: ArrayLike, max_order: int | None,
-                      orders: tuple[int, int | None] = (1, None)) -> list[NDArray]:
+                      orders: tuple[int, int | None] = (1, None),
+                      heading_deg: float = 0.0) -> list[NDArray]:
     """The reflections of orders ``orders`` as a list of (2, L) parts to be added: the
     directional images (through :meth:`MaskModel.sphere_directivities`) and, past the
     directional budget, the late images at the bare microphones filtered by the
     diffuse-field response. Empty when there are none. Checks the source (outside the
-    body), the room and the mask's place in it."""
+    body), the room and the mask's place in it. The array frame (``s``, the microphones,
+    the mask) is turned by ``heading_deg`` about the room's +z: the source's and the
+    microphones' room positions and the directivities' orientation (pyroomacoustics'
+    ``Rotation3D``, "zyx" Euler angles: the heading first) turn with it."""
     import pyroomacoustics as pra
 
     from hearsee.audio.propagation import (
@@ -1119,7 +1141,10 @@ def _reflection_parts(fs: float, model: MaskModel, s: NDArray, room_dim: ArrayLi
     at = as_points(array_at, "array_at")
     if at.shape != (3,) or not np.all(np.isfinite(at)):
         raise GeometryError(f"array_at must be a finite [x, y, z] point, got {array_at!r}")
-    _check_inside(model.mesh.vertices + at, dim, "the mask's vertex")
+    heading = finite_number("heading_deg", heading_deg, -MAX_ANGLE_DEG, MAX_ANGLE_DEG,
+                            error=GeometryError)
+    turn = head_rotation(heading, 0.0).as_matrix()  # array frame -> room axes (a pan)
+    _check_inside(model.mesh.vertices @ turn.T + at, dim, "the mask's vertex")
     if not (isinstance(orders, (tuple, list)) and len(orders) == 2):
         raise GeometryError(f"orders must be (first, last) reflection orders (last None: the "
                             f"room's), got {orders!r:.60}")
@@ -1132,6 +1157,12 @@ def _reflection_parts(fs: float, model: MaskModel, s: NDArray, room_dim: ArrayLi
     if lo > hi:
         return []
     dirs, lead = model.sphere_directivities(fs)
+    if heading != 0.0:  # (copies: the model's are shared, and turning one takes ~1 ms)
+        from pyroomacoustics.directivities import Rotation3D
+
+        dirs = [copy.copy(d) for d in dirs]
+        for d in dirs:
+            d.set_orientation(Rotation3D([heading, 0.0, 0.0], "zyx", degrees=True))
     taps = dirs[0].filter_len_ir + int(pra.constants.get("frac_delay_length"))
     k_dir = order
     while k_dir > 0 and _images_up_to(k_dir) * taps > MAX_DIRECTIONAL_TAPS:
@@ -1139,7 +1170,7 @@ def _reflection_parts(fs: float, model: MaskModel, s: NDArray, room_dim: ArrayLi
     centre = np.stack([at, at])  # both responses are relative to the array origin
 
     def rirs(order_: int, mics: NDArray, directivities: list | None, latency: int) -> NDArray:
-        h = room_impulse_responses(fs, mics, s + at, dim, rt60, max_order=order_,
+        h = room_impulse_responses(fs, mics, turn @ s + at, dim, rt60, max_order=order_,
                                    speed_of_sound=model.c, align=False,
                                    directivities=directivities)
         return h[:, latency:]
@@ -1155,7 +1186,7 @@ def _reflection_parts(fs: float, model: MaskModel, s: NDArray, room_dim: ArrayLi
         parts.append(minus(rirs(min(hi, k_dir), centre, dirs, lat + lead),
                            rirs(lo - 1, centre, dirs, lat + lead)))
     if hi > k_dir:
-        mics = model.array.positions + at
+        mics = model.array.positions @ turn.T + at
         late = minus(rirs(hi, mics, None, lat), rirs(max(k_dir, lo - 1), mics, None, lat))
         nf = sfft.next_fast_len(late.shape[1], real=True)
         eq = diffuse_field_response(model, np.fft.rfftfreq(nf, 1.0 / fs))
