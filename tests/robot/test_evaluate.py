@@ -124,3 +124,26 @@ def test_summarize_refuses_what_is_no_list_of_runs(runs):
     with pytest.raises(ConfigError, match="runs must be a list of run results"):
         summarize(runs)
     assert summarize([{"success": True}])["success_rate"] == 1.0
+
+
+def test_eval_takes_another_array_for_the_same_scenes(monkeypatch):
+    """``array`` (``hearsee eval --array``): the same random scenes with another robot array,
+    checked once before any scenario runs (a bad one named --array); every run gets it."""
+    from hearsee.robot import evaluate as ev
+    from hearsee.robot.scenario import random_scenario
+
+    a, b = random_scenario(4), random_scenario(4, array="mask2-asym")
+    assert b.robot.array == "mask2-asym" and a.robot.array != b.robot.array
+    da, db = a.to_dict(), b.to_dict()
+    da["robot"].pop("array"), db["robot"].pop("array")
+    assert da == db  # (the scene is the seed's)
+    for bad, msg in (("nope", "unknown array preset"), ("two-mic", "cannot give"),
+                     (3, "expected a preset name")):
+        with pytest.raises(ConfigError, match=f"^--array.*{msg}"):
+            evaluate(2, workers=1, array=bad)
+    seen = []
+    monkeypatch.setattr(ev, "run_one", lambda seed, duration_s, array: seen.append(
+        (seed, array)) or {"seed": seed, "success": True, "position_error_median_m": 0.1,
+                           "false_person_objects": 0})
+    evaluate(2, seed0=7, workers=1, array="mask2")
+    assert seen == [(7, "mask2"), (8, "mask2")]

@@ -97,6 +97,9 @@ def eval_cmd(
     duration: float = typer.Option(6.0, "--duration", help="Simulated seconds per scenario, "
                                    "1-120."),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing --out file."),
+    array: str = typer.Option(None, "--array", help="The robot's microphone array in every "
+                              "scenario: a preset or YAML file (default three-mic), e.g. "
+                              "mask2-asym for the thesis's masked pair."),
 ) -> None:
     """Run many random scenarios and summarise success rate and error percentiles (JSON).
 
@@ -108,7 +111,7 @@ def eval_cmd(
     refuse_overwrite([out], [], force)  # before the scenarios run, not after
     with progress("scenarios", total=scenarios) as advance:
         res = evaluate(scenarios, seed0=seed0, workers=workers or None, scheduler=scheduler,
-                       progress=advance, duration_s=duration)
+                       progress=advance, duration_s=duration, array=array)
     if out is not None:
         import json
 

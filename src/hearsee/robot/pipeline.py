@@ -151,6 +151,13 @@ class _Body:
         p_b = array_to_robot(self.array.positions, (pan_deg, 0.0), self.pivot_b, ARRAY_OFFSET_M)
         return self.to_room(p_b)
 
+    def array_pose(self, pan_deg: float) -> tuple[NDArray, float]:
+        """The array frame at head pan ``pan_deg``: its origin in the room (metres) and its
+        heading (degrees: its +x axis points to that room azimuth; the head pans level)."""
+        origin = self.to_room(array_to_robot(np.zeros(3), (pan_deg, 0.0), self.pivot_b,
+                                             ARRAY_OFFSET_M))
+        return origin, self.heading + pan_deg
+
     def camera_room(self, pan_deg: float) -> tuple[NDArray, NDArray]:
         """Left camera: (R_cam_from_room, centre in room), optical frame conventions."""
         c_b = array_to_robot(np.zeros(3), (pan_deg, 0.0), self.pivot_b, self.cam_offset)
@@ -215,7 +222,11 @@ def _person_state(sc: Scenario, t: float) -> dict[str, NDArray]:
 # ------------------------------------------------------------------------------ hearing
 class _RoomAudio:
     """Causal closed-loop room audio: one impulse-response set per control step for the head's
-    current pose and the mouth's current position, crossfaded over :data:`CROSSFADE_S`."""
+    current pose and the mouth's current position, crossfaded over :data:`CROSSFADE_S`. A
+    masked pair (thesis ch. 3) is heard through its mask turned with the head
+    (:func:`hearsee.audio.mask.masked_room_impulse_responses` with the head's heading: the
+    mask's diffraction for the direct path, its far-field responses for the reflections;
+    ~0.1-1.5 s per step instead of ~0.05 s)."""
 
     def __init__(self, sc: Scenario, body: _Body, rng: np.random.Generator) -> None:
         self.sc = sc
@@ -237,14 +248,34 @@ class _RoomAudio:
         self.out = np.zeros((body.array.n_mics, n + int(sc.fs)))
         self.n = n
         self.prev_h: NDArray | None = None
+        self.model = None
+        if body.array.mask is not None:
+            from hearsee.audio.mask import MaskModel
+
+            self.model = MaskModel(body.array)
+
+    def responses(self, mouth: NDArray, pan_deg: float) -> NDArray:
+        """Impulse responses (n_mics, L) from the mouth (room frame, metres) to the microphones
+        with the head at ``pan_deg``; sample 0 is the emission time."""
+        if self.model is None:
+            return room_impulse_responses(self.fs, self.body.mics_room(pan_deg), mouth,
+                                          self.sc.room_size_m, self.sc.rt60_s)
+        from hearsee.audio.mask import masked_room_impulse_responses, simulate_masked
+
+        origin, heading = self.body.array_pose(pan_deg)
+        s = (mouth - origin) @ head_rotation(heading, 0.0).as_matrix()  # array frame
+        h = masked_room_impulse_responses(self.fs, self.model, s, self.sc.room_size_m,
+                                          self.sc.rt60_s, origin, heading_deg=heading)
+        if h is None:  # (an anechoic room: the direct path alone)
+            n = int(np.ceil((np.linalg.norm(s) / self.model.c + 0.02) * self.fs))
+            h = simulate_masked(np.r_[1.0, np.zeros(n - 1)], self.fs, self.model, s)
+        return h
 
     def chunk(self, k: int, pan_deg: float) -> tuple[int, int]:
         """Render chunk k ([k*dt, (k+1)*dt)) with the head at ``pan_deg``; returns its samples."""
         fs = self.fs
         a, b = _chunk_start(k, fs), min(_chunk_start(k + 1, fs), self.n)
-        mouth = _person_state(self.sc, (a + b) / 2 / fs)["mouth"]
-        h = room_impulse_responses(fs, self.body.mics_room(pan_deg), mouth,
-                                   self.sc.room_size_m, self.sc.rt60_s)
+        h = self.responses(_person_state(self.sc, (a + b) / 2 / fs)["mouth"], pan_deg)
         seg = self.source[a:b]
         w = np.ones(b - a)
         if self.prev_h is not None:
@@ -468,6 +499,101 @@ def _frame_pan(t_centre_s: float, frame_len: int, fs: float, a: int, old_pan: fl
     return None
 
 
+class _BareEars:
+    """The loop's hearing with a bare array: each chunk's frames (with one frame of history)
+    through framed GCC-PHAT TDOAs, the ITD Kalman filter (restarted when the head turns: the
+    array-frame ITDs jump) and the closed-form plane-wave direction, rotated by the frame's
+    head pan into the robot frame."""
+
+    def __init__(self, sc: Scenario, array: MicArray) -> None:
+        self.sc, self.array = sc, array
+        self.frame_len = int(round(sc.frame_ms / 1000 * sc.fs))
+        self.itd, self.itd_pan = self._itd_filter(), 0.0  # (the head starts at pan 0)
+        self.last_frame_t = -1.0
+
+    def _itd_filter(self) -> ItdKalman:
+        return ItdKalman(self.array.n_mics, q_std_s=2e-5, r_std_s=3e-5)
+
+    def hear(self, out: NDArray, a: int, b: int, old_pan: float, pan: float
+             ) -> tuple[list[tuple[float, float]], float]:
+        """The bearings (frame-centre time s, robot-frame azimuth deg) of the frames that
+        samples ``a:b`` of ``out`` complete -- rendered at head pan ``pan``, the chunk before
+        at ``old_pan`` -- and the chunk's mean GCC confidence (0 without a valid frame)."""
+        sc, array = self.sc, self.array
+        lo = max(0, a - self.frame_len)
+        tf = estimate_tdoas(out[:, lo:b], sc.fs, array, frame_ms=sc.frame_ms,
+                            hop_ms=sc.frame_ms / 2)
+        t_frames = lo / sc.fs + tf.t
+        bearings = []
+        for i in np.flatnonzero(tf.valid & (t_frames > self.last_frame_t)):
+            self.last_frame_t = float(t_frames[i])
+            frame_pan = _frame_pan(t_frames[i], self.frame_len, sc.fs, a, old_pan, pan)
+            if frame_pan is None:
+                continue  # heard partly at the old pan, partly at the new one
+            if frame_pan != self.itd_pan:  # the array-frame ITDs jump when the head turns
+                self.itd, self.itd_pan = self._itd_filter(), frame_pan
+            if not self.itd.step(tf.tdoa_s[i]):
+                continue
+            # each frame's plane-wave direction, as the live robot's stream localizes (a
+            # near-field position fit per frame cost ~12 ms with respeaker-4/6)
+            loc = localize_tdoa(self.itd.pair_tdoas(tf.pairs), array, tf.pairs,
+                                near_field=False)
+            if loc.azimuth_deg is not None:
+                bearings.append((self.last_frame_t,
+                                 float(wrap_deg(loc.azimuth_deg + frame_pan))))
+        conf = float(np.mean(tf.confidence[tf.valid])) if tf.valid.any() else 0.0
+        return bearings, conf
+
+
+class _MaskedEars:
+    """The loop's hearing with a masked pair (thesis ch. 3): the stream's stages, as the live
+    robot hears (:class:`hearsee.stream.pipeline.Framer` and
+    :class:`~hearsee.stream.pipeline.TrackingProcessor`: the GCC, the ITD filter, the
+    :class:`~hearsee.stream.pipeline.SmoothedMask` front/back decision and the direction
+    tracker, in the array frame). Frames heard partly before a head turn feed it and are
+    then forgotten (``reset_array_state``: the live robot's rule while the head moves); the
+    bearings are the tracked azimuths of the frames that measured, once the mask has decided
+    a half, rotated by the head pan. The bare pair's closed form cannot tell front from
+    back: it is not used here."""
+
+    def __init__(self, sc: Scenario, array: MicArray) -> None:
+        from hearsee.stream.pipeline import Framer, StreamConfig, TrackingProcessor
+
+        self.sc = sc
+        cfg = StreamConfig(frame_ms=sc.frame_ms, hop_ms=sc.frame_ms / 2)
+        self.framer = Framer(array.n_mics, sc.fs, cfg.frame_ms, cfg.hop_ms)
+        self.proc = TrackingProcessor(array, sc.fs, cfg)
+        self.seq = 0
+
+    def hear(self, out: NDArray, a: int, b: int, old_pan: float, pan: float
+             ) -> tuple[list[tuple[float, float]], float]:
+        """As :meth:`_BareEars.hear`; the confidence is the mean GCC confidence of the frames
+        that held a GCC estimate."""
+        from hearsee.stream.pipeline import Block, FrameBatch
+
+        batch = self.framer.push(Block(self.seq, a, out[:, a:b], 0.0))
+        self.seq += 1
+        if batch is None:
+            return [], 0.0
+        fl, hop = self.framer.frame_len, self.framer.hop
+        pans = [_frame_pan(float(t), fl, self.sc.fs, a, old_pan, pan) for t in batch.t]
+        mixed = sum(p is None for p in pans)  # (they come first: the turn is at the start)
+        updates = []
+        for lo, hi in ((0, mixed), (mixed, len(pans))):
+            if hi > lo:
+                updates += self.proc.process(FrameBatch(
+                    batch.t[lo:hi], batch.missing[lo:hi],
+                    batch.segment[:, lo * hop:(hi - 1) * hop + fl], batch.arrival))
+            if lo == 0 and mixed:
+                self.proc.reset_array_state()
+        bearings = [(u.t, float(wrap_deg(u.azimuth_deg + p)))
+                    for u, p in zip(updates, pans, strict=True)
+                    if p is not None and u.measured and u.azimuth_deg is not None
+                    and u.front_probability is not None]
+        conf = [u.confidence for u in updates if u.confidence > 0]
+        return bearings, float(np.mean(conf)) if conf else 0.0
+
+
 # ------------------------------------------------------------------------------ the loop
 def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
                  keep_images: bool = True) -> RunResult:
@@ -502,17 +628,12 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
                  + [f"objects[{k}]" for k in range(len(sc.objects))])
     half_fov = float(np.degrees(np.arctan2(r.width / 2.0, r.focal_px)))
 
-    def new_itd_filter() -> ItdKalman:
-        return ItdKalman(array.n_mics, q_std_s=2e-5, r_std_s=3e-5)
-
-    itd, itd_pan = new_itd_filter(), 0.0  # (the head starts at pan 0)
+    ears = _BareEars(sc, array) if array.mask is None else _MaskedEars(sc, array)
     direction = DirectionKalman(sigma_meas_deg=5.0, sigma_accel_dps2=60.0)
     track = new_person_track()
-    frame_len = int(round(sc.frame_ms / 1000 * sc.fs))
     pan = 0.0
     phase = "listening"
     n_audio_updates = 0
-    last_frame_t = -1.0
     next_camera_t = 0.0
     n_camera_frames = 0
     log: list[dict[str, Any]] = []
@@ -529,39 +650,20 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     for k in range(n_steps):
         t1 = min((k + 1) * CONTROL_DT, sc.duration_s)
         a, b = audio.chunk(k, pan)
-        # ---- localize: frames of this chunk (with one frame of history)
-        lo = max(0, a - frame_len)
-        tf = estimate_tdoas(audio.out[:, lo:b], sc.fs, array, frame_ms=sc.frame_ms,
-                            hop_ms=sc.frame_ms / 2)
-        n_before = n_audio_updates
-        t_frames = lo / sc.fs + tf.t
-        for i in np.flatnonzero(tf.valid & (t_frames > last_frame_t)):
-            last_frame_t = float(t_frames[i])
-            frame_pan = _frame_pan(t_frames[i], frame_len, sc.fs, a, chunk_pan, pan)
-            if frame_pan is None:
-                continue  # heard partly at the old pan, partly at the new one
-            if frame_pan != itd_pan:  # the array-frame ITDs jump when the head turns
-                itd, itd_pan = new_itd_filter(), frame_pan
-            if not itd.step(tf.tdoa_s[i]):
-                continue
-            # each frame's plane-wave direction, as the live robot's stream localizes (a
-            # near-field position fit per frame cost ~12 ms with respeaker-4/6)
-            loc = localize_tdoa(itd.pair_tdoas(tf.pairs), array, tf.pairs, near_field=False)
-            if loc.azimuth_deg is None:
-                continue
-            az_r = float(wrap_deg(loc.azimuth_deg + frame_pan))
-            if direction.update(last_frame_t, (az_r, None)):
-                n_audio_updates += 1
+        # ---- localize: the chunk's frames (robot-frame bearings) into the direction filter
+        bearings, confidence = ears.hear(audio.out, a, b, chunk_pan, pan)
+        n_meas = 0  # this chunk's frames that updated the filter
+        for t_frame, az_r in bearings:
+            n_meas += bool(direction.update(t_frame, (az_r, None)))
+        n_audio_updates += n_meas
         audio_rec = None
         # (a tolerance: on the float step grid t1 - last_visual_t read 1.0000000000000002 for
         # some fixes and 0.9999999999999999 for others, so a track went after 1.0 or 1.2 s)
         if track.initialized and t1 - last_visual_t > timeout_s + 1e-9:
             track.reset()  # (vision only: a track that no fix updates just coasts)
-        n_meas = n_audio_updates - n_before  # this chunk's frames that updated the filter
         if direction.initialized and n_meas:
             audio_rec = {"azimuth_deg": direction.azimuth_deg, "n_frames": n_meas,
-                         "confidence": float(np.mean(tf.confidence[tf.valid]))
-                         if tf.valid.any() else 0.0}
+                         "confidence": confidence}
 
         # ---- truth at the end of the step
         st = _person_state(sc, t1)
