@@ -982,3 +982,57 @@ def test_a_masked_head_hears_a_talker_behind_and_turns_to_them(coarse_mask_yaml)
     assert res.summary["azimuth_error_initial_deg"] < 15.0
     assert abs(wrap_deg(res.log[-1]["head_pan_deg"] - truth)) < 10.0
     assert res.log[-1]["phase"] != "listening"
+
+
+def test_masked_ears_keep_hearing_while_the_head_follows_and_forget_after_a_turn(
+        coarse_mask_yaml, monkeypatch):
+    """The masked head's stream state (array frame) survives small turns -- a head following
+    a walker, a few degrees per 0.2 s step -- and is forgotten after a large one (more than
+    MASK_TURN_RESET_DEG). Forgotten at every turn, the stream never gathered the evidence of
+    a front/back decision while the head followed a person: no bearing for seconds. Ground
+    truth built here: a talker standing at robot-frame 60 deg, anechoic room, the chunks
+    rendered at the pans given."""
+    from hearsee.robot import pipeline
+    from hearsee.robot.pipeline import (
+        CONTROL_DT,
+        MASK_TURN_RESET_DEG,
+        _Body,
+        _MaskedEars,
+        _RoomAudio,
+    )
+
+    sc = scenario_from_dict({"seed": 2, "duration_s": 4.0, "room": {"rt60_s": 0.0},
+                             "audio": {"snr_db": 25.0},
+                             "robot": {"position_m": [3.5, 2.6], "array": str(coarse_mask_yaml)},
+                             "people": [{"path_m": [[4.5, 4.33]], "voice": "male"}],
+                             "objects": []})
+    truth = np.degrees(np.arctan2(4.33 - 2.6, 4.5 - 3.5))  # 60 deg
+    array = pipeline.load_array(str(coarse_mask_yaml))
+
+    def run(pans):
+        audio = _RoomAudio(sc, _Body(sc, array), np.random.default_rng(0))
+        ears, heard, old = _MaskedEars(sc, array), [], pans[0]
+        for k, pan in enumerate(pans):
+            a, b = audio.chunk(k, pan)
+            heard.append(ears.hear(audio.out, a, b, old, pan)[0])
+            old = pan
+        return heard
+
+    following = [3.0 * k for k in range(int(sc.duration_s / CONTROL_DT))]  # 15 deg/s
+    assert 3.0 < MASK_TURN_RESET_DEG
+    small = run(following)
+    # from the first second on, every step's frames give bearings (the last step's end with
+    # the recording), near the truth
+    assert all(small[5:-1]), [len(h) for h in small]
+    errors = [abs(wrap_deg(az - truth)) for h in small[5:] for _, az in h]
+    assert np.median(errors) < 8.0, np.median(errors)
+    # forgotten at every turn (the first rule), the same head hears nothing after its start
+    monkeypatch.setattr(pipeline, "MASK_TURN_RESET_DEG", 0.0)
+    assert sum(len(h) for h in run(following)[2:]) == 0
+    monkeypatch.undo()
+    # a 30-deg turn every 0.4 s: the frames heard across each turn give no bearing, and the
+    # state starts afresh (the steps right after a turn hear less than the steady ones)
+    big = run([30.0 * (k // 2) for k in range(int(sc.duration_s / CONTROL_DT))])
+    after = [len(h) for k, h in enumerate(big) if k % 2 == 0 and k >= 4]
+    steady = [len(h) for k, h in enumerate(small) if k % 2 == 0 and k >= 4]
+    assert sum(after) < sum(steady)

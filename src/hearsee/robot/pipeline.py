@@ -545,13 +545,23 @@ class _BareEars:
         return bearings, conf
 
 
+#: A masked head's stream state (array frame: its averaged spectra, front/back decision and
+#: direction track) is forgotten when the head turns by more than this (degrees) between two
+#: chunks; smaller turns (a head following a walker) only age it. Forgetting it at
+#: every turn left the stream deaf while the head followed a person: each 0.2 s chunk
+#: restarted it, and it never gathered the evidence of a decision (random scenario 16: no
+#: bearing for 3.4 s, the person lost).
+MASK_TURN_RESET_DEG = 10.0
+
+
 class _MaskedEars:
     """The loop's hearing with a masked pair (thesis ch. 3): the stream's stages, as the live
     robot hears (:class:`hearsee.stream.pipeline.Framer` and
     :class:`~hearsee.stream.pipeline.TrackingProcessor`: the GCC, the ITD filter, the
     :class:`~hearsee.stream.pipeline.SmoothedMask` front/back decision and the direction
-    tracker, in the array frame). Frames heard partly before a head turn feed it and are
-    then forgotten (``reset_array_state``: the live robot's rule while the head moves); the
+    tracker, in the array frame). Frames heard partly before a head turn of more than
+    :data:`MASK_TURN_RESET_DEG` feed it and are then forgotten (``reset_array_state``: the
+    live robot's rule while the head moves); the
     bearings are the tracked azimuths of the frames that measured, once the mask has decided
     a half, rotated by the head pan. The bare pair's closed form cannot tell front from
     back: it is not used here."""
@@ -577,6 +587,9 @@ class _MaskedEars:
             return [], 0.0
         fl, hop = self.framer.frame_len, self.framer.hop
         pans = [_frame_pan(float(t), fl, self.sc.fs, a, old_pan, pan) for t in batch.t]
+        if abs(float(wrap_deg(pan - old_pan))) <= MASK_TURN_RESET_DEG:
+            # a small turn: the state is kept (the frames across it heard halfway)
+            pans = [(old_pan + pan) / 2.0 if p is None else p for p in pans]
         mixed = sum(p is None for p in pans)  # (they come first: the turn is at the start)
         updates = []
         for lo, hi in ((0, mixed), (mixed, len(pans))):
