@@ -4,9 +4,12 @@ Prints and writes ``bench/results/robot.md`` and ``robot.png``: the demo's summa
 error after the head has turned, mannequin rejection, runtime) and, over ``--scenarios`` random
 scenarios (seeds 0..N-1, all cores), the success rate and error percentiles -- the numbers of
 ``hearsee eval``. With ``--dask`` the same seeds also run through a Dask LocalCluster and the
-script checks that both give identical per-scenario results.
+script checks that both give identical per-scenario results. ``--masked-scenarios`` random
+scenarios (seeds from ``--masked-seed0``) run again with the thesis's masked pair on the head
+(``--masked-array``, default mask2-asym: ch. 3's two microphones and mask, heard through the
+mask turned with the head) beside the default three-mic head on the same scenes.
 
-    python bench/robot.py --scenarios 200            # about 25 min on 2 idle cores
+    python bench/robot.py --scenarios 200            # about 33 min on 2 idle cores
     python bench/robot.py --scenarios 20 --dask
 """
 
@@ -28,6 +31,11 @@ def main() -> None:
     ap.add_argument("--scenarios", type=int, default=200)
     ap.add_argument("--workers", type=int, default=0, help="0 = all cores")
     ap.add_argument("--dask", action="store_true", help="also run through a Dask LocalCluster")
+    ap.add_argument("--masked-scenarios", type=int, default=20,
+                    help="random scenarios run again with --masked-array (0: none)")
+    # (seeds 0-19 were the masked head's development scenes, 2026-12-05)
+    ap.add_argument("--masked-seed0", type=int, default=20)
+    ap.add_argument("--masked-array", default="mask2-asym")
     args = ap.parse_args()
 
     import matplotlib
@@ -80,6 +88,9 @@ def main() -> None:
         print(f"Dask LocalCluster gives identical per-scenario results: {same}")
         sections.append(("Dask LocalCluster", f"identical per-scenario results: **{same}**"))
 
+    if args.masked_scenarios > 0:
+        sections.append(masked_head(args, res.runs))
+
     fails = [r for r in res.runs if not r["success"]]
     if fails:
         sections.append(("Failed scenarios", markdown_table(
@@ -110,6 +121,45 @@ def main() -> None:
     fig.tight_layout()
     fig.savefig(RESULTS / "robot.png", dpi=110)
     print(f"wrote {RESULTS / 'robot.md'}")
+
+
+def masked_head(args: argparse.Namespace, runs: list[dict]) -> tuple[str, str]:
+    """The masked pair on the robot beside the default head, on the same random scenes: a
+    table (printed) and its markdown section."""
+    from hearsee.robot.evaluate import evaluate, summarize
+    from hearsee.robot.scenario import default_scenario
+
+    seeds = range(args.masked_seed0, args.masked_seed0 + args.masked_scenarios)
+    t0 = time.perf_counter()
+    masked = evaluate(len(seeds), seed0=seeds[0], workers=args.workers or None,
+                      array=args.masked_array)
+    masked_wall = time.perf_counter() - t0
+    have = {r["seed"]: r for r in runs}
+    if all(s in have for s in seeds):
+        bare = [have[s] for s in seeds]
+    else:
+        bare = evaluate(len(seeds), seed0=seeds[0], workers=args.workers or None).runs
+    heads = [(default_scenario().robot.array, summarize(bare)), (args.masked_array,
+                                                                  masked.summary)]
+    rows = [["success rate", *[f"{h['success_rate']:.2f}" for _, h in heads]]]
+    for key in ("azimuth_error_initial_deg", "azimuth_error_at_turn_deg",
+                "position_error_median_m", "time_to_verify_s"):
+        for q in ("p50", "p90"):
+            rows.append([f"{key} {q}", *[h[key].get(q, np.nan) for _, h in heads]])
+    wrong = [sum(r["azimuth_error_at_turn_deg"] > 90 for r in rr) for rr in (bare, masked.runs)]
+    rows.append(["bearing at the turn > 90 deg off (the wrong half)", *wrong])
+    headers = ["metric", *[f"head: {name}" for name, _ in heads]]
+    title = (f"The masked pair on the robot: {len(seeds)} random scenarios "
+             f"(seeds {seeds[0]}..{seeds[-1]})")
+    print_table(title, headers, rows)
+    text = (
+        f"Each scene twice: the default head (three microphones) and `{args.masked_array}` "
+        "(thesis ch. 3: two microphones and the mask, heard through the mask turned with the "
+        "head -- `audio.mask.masked_room_impulse_responses(heading_deg=)` -- and localized by "
+        "the stream's masked stages, `robot.pipeline._MaskedEars`). Seeds 0-19 were the "
+        "masked head's development scenes; these are others. "
+        f"Masked runs: {masked_wall:.0f} s wall.\n\n" + markdown_table(headers, rows))
+    return title, text
 
 
 if __name__ == "__main__":
