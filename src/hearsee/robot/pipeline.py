@@ -12,7 +12,9 @@ where it has turned its head):
    Kalman filter (:class:`hearsee.audio.itd_filter.ItdKalman`), the array's closed-form direction
    (:func:`hearsee.audio.localize.localize_tdoa`; three microphones give the full 360 degrees of
    azimuth) rotated by the head pose into the robot frame, and a direction Kalman filter
-   (:class:`hearsee.audio.tracking.DirectionKalman`).
+   (:class:`hearsee.audio.tracking.DirectionKalman`). A masked pair (thesis ch. 3, e.g.
+   ``mask2-asym``) is heard through its mask turned with the head and localized by the
+   stream's masked stages, its front/back decision included (:class:`_MaskedEars`).
 3. **Turn.** The head pans toward the audio bearing (or the track, once there is one) at no
    more than ``pan_speed_dps``.
 4. **See and verify.** Once the head has turned, every camera frame (``camera_rate_hz``) is
