@@ -19,7 +19,8 @@ Schema (defaults in brackets)::
       position_m: [x, y]           [room centre]    base position on the floor
       heading_deg: float           [0]              robot x axis, from room +x toward +y
       head_height_m: float         [1.25]           pan/tilt pivot height above the floor
-      array: str                   [three-mic]      preset name or YAML path
+      array: str                   [three-mic]      preset name or YAML path: 3+ microphones
+                                                    in a plane, or a masked pair (mask2-asym)
       pan_speed_dps: float         [120]            maximum pan rate
       camera_rate_hz: float        [5]              stereo + thermal frames per second (at
                                                     most 5: one per 0.2 s control step)
