@@ -285,6 +285,18 @@ def test_room_update_times_keep_the_tdoa_bound_for_a_fast_close_source():
         _update_times(graze, arr.positions, 343.0, FS, int(0.2 * FS), 0.05, 0.01)
 
 
+def _counting_rir(arr, at):
+    """A rir_fn (the delays-only responses of _delay_rir) that records each source position
+    it is called with in the returned list."""
+    calls = []
+
+    def counted(src):
+        calls.append(src)
+        return _delay_rir(arr.positions + at)(src)
+
+    return calls, counted
+
+
 def test_moving_simulators_check_rir_fn_and_rng_before_any_work():
     """A rir_fn that is no function raised a builtin TypeError at the first block, one that
     returned text numpy's ValueError, NaN responses made a NaN recording without a word; a
@@ -294,11 +306,7 @@ def test_moving_simulators_check_rir_fn_and_rng_before_any_work():
     at = np.array([2.0, 2.0, 1.2])
     x = _bandlimited_noise(FS // 4, 3)
     traj = linear_trajectory([1.0, -0.2, 0.0], [0.0, 0.5, 0.0], 0.3)
-    calls = []
-
-    def counted(src):
-        calls.append(src)
-        return _delay_rir(arr.positions + at)(src)
+    calls, counted = _counting_rir(arr, at)
 
     def room(**kw):
         return simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.3, at, **kw)
@@ -879,11 +887,7 @@ def test_room_renderer_reports_each_stage_of_its_work():
     at = np.array([2.0, 2.0, 1.2])
     x = _bandlimited_noise(FS // 4, 5)
     traj = linear_trajectory([1.0, -0.2, 0.0], [0.0, 0.5, 0.0], 0.25)
-    calls = []
-
-    def counted(src):
-        calls.append(src)
-        return _delay_rir(arr.positions + at)(src)
+    calls, counted = _counting_rir(arr, at)
 
     reports = []
     y = simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.3, at, rir_fn=counted,
