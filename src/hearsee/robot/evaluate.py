@@ -140,8 +140,6 @@ def evaluate(
     if array is not None:  # (a bad one: one error before the workers start, not one each)
         from hearsee.robot.scenario import random_scenario
 
-        if not isinstance(array, str):
-            raise ConfigError(f"--array: expected a preset name or YAML path, got {array!r:.40}")
         try:
             random_scenario(seeds[0], duration_s, array)
         except HearseeError as exc:

@@ -593,17 +593,18 @@ class _MaskedEars:
             # a small turn: the state is kept (the frames across it heard halfway)
             pans = [(old_pan + pan) / 2.0 if p is None else p for p in pans]
         mixed = sum(p is None for p in pans)  # (they come first: the turn is at the start)
-        updates = []
-        for lo, hi in ((0, mixed), (mixed, len(pans))):
-            if hi > lo:
-                updates += self.proc.process(FrameBatch(
-                    batch.t[lo:hi], batch.missing[lo:hi],
-                    batch.segment[:, lo * hop:(hi - 1) * hop + fl], batch.arrival))
-            if lo == 0 and mixed:
-                self.proc.reset_array_state()
+
+        def frames(lo: int, hi: int) -> FrameBatch:
+            return FrameBatch(batch.t[lo:hi], batch.missing[lo:hi],
+                              batch.segment[:, lo * hop:(hi - 1) * hop + fl], batch.arrival)
+
+        if mixed:  # heard across a large turn: they feed the stream, then its state goes
+            self.proc.process(frames(0, mixed))
+            self.proc.reset_array_state()
+        updates = self.proc.process(frames(mixed, len(pans))) if mixed < len(pans) else []
         bearings = [(u.t, float(wrap_deg(u.azimuth_deg + p)))
-                    for u, p in zip(updates, pans, strict=True)
-                    if p is not None and u.measured and u.azimuth_deg is not None
+                    for u, p in zip(updates, pans[mixed:], strict=True)
+                    if u.measured and u.azimuth_deg is not None
                     and u.front_probability is not None]
         conf = [u.confidence for u in updates if u.confidence > 0]
         return bearings, float(np.mean(conf)) if conf else 0.0
