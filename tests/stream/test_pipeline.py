@@ -134,6 +134,22 @@ def test_file_stream_tracks_a_moving_source(moving):
     np.testing.assert_allclose([u.azimuth_deg for u in ups2], [u.azimuth_deg for u in ups])
 
 
+def test_the_sink_reads_the_audio_clock_in_the_stats(moving):
+    """During a run ``stats.audio_s`` is the end of the newest block (the live robot reads the
+    head's pose against it): at each update, the end of the block whose samples completed its
+    frame (frame centre + half a frame <= it < that + one block); it was set only when the
+    run ended."""
+    arr, _, y = moving
+    pipe = StreamPipeline(arr, StreamConfig(frame_ms=64, hop_ms=32))
+    seen = []
+    pipe.run(ArraySource(y, FS, 1600), lambda u: seen.append((u.t, pipe.stats.audio_s)))
+    t, now = np.array(seen).T
+    ends = np.arange(1, y.shape[1] // 1600 + 2) * 1600 / FS
+    want = ends[np.searchsorted(ends, t + 0.032 - 1e-9)]
+    np.testing.assert_allclose(now, np.minimum(want, y.shape[1] / FS))
+    assert pipe.stats.audio_s == y.shape[1] / FS
+
+
 def test_device_dropout_late_block_and_stall_do_not_crash_or_hang(moving):
     arr, traj, y = moving
     src = DropoutSource(ArraySource(y, FS, 1024), drop=[6, 7, 8], late=[15],

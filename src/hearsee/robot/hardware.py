@@ -71,6 +71,7 @@ from __future__ import annotations
 import json
 import math
 import sys
+from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -937,6 +938,17 @@ class Cameras:
 #: one it was built for by more than this (degrees): encoder jitter is no head turn.
 POSE_TOLERANCE_DEG = 0.5
 
+#: The fastest head motion (degrees per second of audio) the live loop's stream hears through:
+#: a head that moves no faster -- following a walker -- keeps the stream's array-frame state
+#: (its trackers follow the talker's apparent motion, as a talker's own) and its audio; a
+#: faster move is a turn, and the stream restarts once the head has settled. Judged over one
+#: frame plus one audio block, the audio a move can reach. Until 2026-12-05 every move above
+#: :data:`POSE_TOLERANCE_DEG` restarted it: a head following a person crossing 2 m away at
+#: 1 m/s heard nothing for as long as it followed. The simulated loop's masked ears keep
+#: their state below the same rate (:data:`hearsee.robot.pipeline.MASK_TURN_RESET_DEG` per
+#: 0.2-s step).
+FOLLOW_RATE_DPS = 50.0
+
 
 def pan_change_deg(a_deg: float, b_deg: float) -> float:
     """``|a - b|`` of two pans (degrees) the short way round, in [0, 180]: 179.9 and -179.9
@@ -1116,6 +1128,25 @@ def _pose(head: Any) -> tuple[float, float]:
         raise GeometryError(f"head driver pose_deg: {exc}") from None
 
 
+def _pose_change_deg(a: tuple[float, float], b: tuple[float, float]) -> float:
+    """The larger of the pan change (the short way round) and the tilt change between two
+    (pan, tilt) poses, degrees."""
+    return max(pan_change_deg(a[0], b[0]), abs(a[1] - b[1]))
+
+
+def _pose_at(t: float, poses: Sequence[tuple[float, tuple[float, float]]]) -> tuple[float, float]:
+    """The head's (pan, tilt) at ``t`` seconds of audio, linearly interpolated between the
+    reads ``poses`` ((seconds, (pan, tilt)), times increasing; pans the short way round from
+    the newest), held at the first or last read outside them."""
+    from hearsee.geometry import wrap_deg
+
+    ts = [tp for tp, _ in poses]
+    pan0 = poses[-1][1][0]
+    pans = [pan0 + float(wrap_deg(p[0] - pan0)) for _, p in poses]
+    pan = float(wrap_deg(np.interp(t, ts, pans)))
+    return pan, float(np.interp(t, ts, [p[1] for _, p in poses]))
+
+
 def _unheard(u: Any) -> Any:
     """A stream update with its audio withheld (the head was turning): no direction, not
     measured."""
@@ -1248,12 +1279,15 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        and logged and the head stays put. The loop reads the driver's actual pose at every
        update (see :class:`PrintHeadDriver` for the protocol a real driver implements): when
        it moves (the short way round, :func:`pan_change_deg`) by more than
-       :data:`POSE_TOLERANCE_DEG`, the sensor geometry follows it, the stream forgets its
-       array-frame state (direction tracker, ITD filter, smoothed spectra: their directions were
-       relative to the old pose) and the audio is withheld until one frame and one audio block
-       after the head stops (``summary["head_moves"]`` counts the moves; meanwhile, without a
-       3D track, the desired pose stays the last one commanded). The robot-frame 3D track is
-       kept.
+       :data:`POSE_TOLERANCE_DEG`, the sensor geometry follows it. A head moving no faster
+       than :data:`FOLLOW_RATE_DPS` (following a walker) keeps the stream as it is, each
+       update's direction turned with the head's pose at its frame's time
+       (``summary["head_follows"]`` counts these pose changes); after a faster move (a turn)
+       the stream forgets its array-frame state (direction tracker, ITD filter, smoothed
+       spectra: their directions were relative to the old pose) and the audio is withheld
+       until one frame and one audio block after the head stops (``summary["head_moves"]``
+       counts the pose changes of turns; meanwhile, without a 3D track, the desired pose stays
+       the last one commanded). The robot-frame 3D track is kept.
     3. **See and verify**: every ``1 / cameras.rate_hz`` seconds of audio, one set of camera
        frames (of a video file: its frame at that audio time) goes through stereo + thermal
        human detection
@@ -1361,12 +1395,15 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     state = {"n_audio": 0, "next_cam": 0.0, "phase": "listening", "cam_frames": 0,
              "cam_ended": False, "first_verified": None, "hop": scfg.hop_ms / 1000.0,
              "last_visual": -np.inf, "track_drops": 0, "heard_from": -np.inf, "head_moves": 0,
-             "desired": None, "last_capture": None, "frame_interval": period}
+             "head_follows": 0, "desired": None, "last_capture": None, "frame_interval": period}
     # live: detection runs in a worker thread so that the audio keeps flowing; its result is
     # applied at the first update after it is ready (file sources: in line, deterministic)
     use_pool = (live if async_vision is None else async_vision) and cameras is not None
     pool = ThreadPoolExecutor(1, thread_name_prefix="hearsee-vision") if use_pool else None
     pending: list[Any] = [None]
+    # the driver's poses read within the last frame plus block: (seconds of audio, (pan, tilt))
+    poses: deque[tuple[float, tuple[float, float]]] = deque()
+    audio_geo: list[_Head | None] = [None]  # (the last geometry built for a frame's pose)
     t_start = time.perf_counter()
 
     def grab(t: float) -> CameraFrames | None:
@@ -1448,27 +1485,49 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             captions[f"{slot}_thermal"] = f"t = {t_cap:.1f} s: thermal camera (8-bit, inferno)"
         return dets
 
-    def follow_head(t: float) -> bool:
-        """Whether the audio of the update at ``t`` can be trusted: False while the driver's
-        pose moves (the geometry follows it) and for one frame plus one block after it stops
-        (frames that began during the turn; a block the device had captured before the pose
-        was read). Meanwhile the stream keeps forgetting its array-frame state (directions
-        relative to an old pose), so its trackers start afresh on the settled head's audio."""
+    def follow_head(t: float) -> _Head | None:
+        """The head geometry of the audio of the update at ``t`` (a frame's centre, seconds of
+        audio), or None when that audio cannot be trusted. The loop's geometry follows the
+        driver's pose, read now -- at the end of the newest audio block. A head moving no
+        faster than :data:`FOLLOW_RATE_DPS` over the last frame plus block keeps the stream as
+        it is, and the update's direction is turned into the robot frame with the pose at its
+        frame's time (interpolated between the reads: a head following at 28 deg/s read at the
+        block's end put ~0.7 deg more into the median error). A faster move (a turn) withholds
+        the audio while it lasts and for one frame plus one block after it (frames that began
+        during the turn; a block the device had captured before the pose was read), and
+        meanwhile the stream keeps forgetting its array-frame state (directions relative to
+        an old pose), so its trackers start afresh on the settled head's audio."""
         nonlocal geo
         pose = _pose(head)
-        if max(pan_change_deg(pose[0], geo.pose[0]), abs(pose[1] - geo.pose[1])) \
-                > POSE_TOLERANCE_DEG:
+        now = max(float(pipeline.stats.audio_s), t)
+        window = (scfg.frame_ms + a.block_ms) / 1000.0
+        while poses and poses[-1][0] >= now:  # (reads within one block: the latest)
+            poses.pop()
+        poses.append((now, pose))
+        while len(poses) > 2 and poses[1][0] < now - window:  # (one older, to interpolate)
+            poses.popleft()
+        if _pose_change_deg(pose, geo.pose) > POSE_TOLERANCE_DEG:
             geo = _Head(cfg, pose)
-            state["heard_from"] = t + (scfg.frame_ms + a.block_ms) / 1000.0
-            state["head_moves"] += 1
+            moved = max(_pose_change_deg(pose, p) for tp, p in poses if tp >= now - window)
+            if moved > FOLLOW_RATE_DPS * window:
+                state["heard_from"] = t + window
+                state["head_moves"] += 1
+            else:
+                state["head_follows"] += 1
         if t < state["heard_from"]:
             pipeline.reset_array_state()
-            return False
-        return True
+            return None
+        then = _pose_at(t, poses)
+        if _pose_change_deg(then, geo.pose) <= POSE_TOLERANCE_DEG:
+            return geo
+        if audio_geo[0] is None or _pose_change_deg(then, audio_geo[0].pose) > 1e-9:
+            audio_geo[0] = _Head(cfg, then)
+        return audio_geo[0]
 
     def sink(u: Any) -> None:
         t = float(u.t)
-        heard = follow_head(t)
+        ageo = follow_head(t)
+        heard = ageo is not None
         if not heard:
             u = _unheard(u)
         if (track.initialized
@@ -1480,10 +1539,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         audio = None
         bearing = None
         if u.azimuth_deg is not None:
-            az, el = geo.direction_to_robot(u.azimuth_deg, u.elevation_deg)
+            az, el = ageo.direction_to_robot(u.azimuth_deg, u.elevation_deg)
             raw = None
             if u.raw_azimuth_deg is not None:  # (the frame's own bearing, logged)
-                raw = geo.direction_to_robot(u.raw_azimuth_deg, u.raw_elevation_deg)[0]
+                raw = ageo.direction_to_robot(u.raw_azimuth_deg, u.raw_elevation_deg)[0]
             bearing = az
             audio = {"azimuth_deg": _r(az, 2), "elevation_deg": _r(el, 2),
                      "raw_azimuth_deg": _r(raw, 2), "confidence": _r(u.confidence, 3),
@@ -1627,6 +1686,7 @@ def _live_summary(log: list[dict[str, Any]], stats: Any, status: str, state: dic
                                        else float("nan")),
         "head_commands_printed": int(getattr(head, "n_printed", 0)),
         "head_moves": int(state["head_moves"]),
+        "head_follows": int(state["head_follows"]),
         "dropped_blocks": int(stats.n_dropped_blocks),
         "input_overflows": int(stats.n_overflows),  # (as `hearsee track`'s stats)
         "missing_frames": int(stats.n_missing_frames),

@@ -270,8 +270,10 @@ class StreamStats:
     ``n_frames`` updates, ``n_missing_frames`` of them frames that lost samples to a dropped or
     late block; ``n_stalls`` waits of ``stall_timeout_s`` without a block; ``n_overflows`` input
     overflows the device reported (PortAudio discarded samples; the blocks' worth of samples lost
-    count as dropped blocks); ``status`` ``"ok"``, ``"stalled"`` (the source went silent: for
-    longer than the pipeline's ``max_stall_s``, or the source gave up itself, as
+    count as dropped blocks); ``audio_s`` seconds of audio received (the end of the newest
+    block, also during the run: a sink reads the audio clock's present there); ``status``
+    ``"ok"``, ``"stalled"`` (the source went silent: for longer than the pipeline's
+    ``max_stall_s``, or the source gave up itself, as
     :class:`DeviceSource` does after its ``timeout_s``) or ``"interrupted"`` (Ctrl-C: the run
     re-raises the KeyboardInterrupt; the stats describe what was processed until then, as they
     do after an error); ``tonal_lines_hz`` the lines of stationary tonal noise (mains hum)
@@ -2667,6 +2669,7 @@ class StreamPipeline:
             nonlocal last_sample
             st.n_blocks += 1
             last_sample = max(last_sample, blk.start + blk.data.shape[1])
+            st.audio_s = last_sample / source.fs  # (the audio clock's now, for the sink)
             if keep is not None:
                 blk = replace(blk, data=blk.data[keep])
             if hum is not None:
