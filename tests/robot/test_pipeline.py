@@ -963,6 +963,68 @@ def test_masked_head_audio_turns_the_mask_with_the_head(coarse_mask_yaml):
         > 0.05 * np.abs(h).max()
 
 
+def test_masked_head_late_reflections_are_updated_every_second_or_after_a_turn(
+        coarse_mask_yaml):
+    """In a room the masked head's responses are the mask's whole room responses
+    (:func:`masked_room_impulse_responses`, computed here in one piece) at each update of its
+    late reflections (beyond EARLY_ORDER reflections: ~3/4 of a masked run's CPU when
+    updated at every 0.2-s step); in between, the direct path and early reflections are the
+    step's own and the late ones those of the last update -- which comes again after
+    MASK_LATE_UPDATE_S seconds or a head turn of MASK_TURN_RESET_DEG."""
+    from hearsee.audio.arrays import load_array
+    from hearsee.audio.mask import masked_room_impulse_responses, masked_room_reflections
+    from hearsee.geometry import head_rotation
+    from hearsee.robot.pipeline import (
+        MASK_LATE_UPDATE_S,
+        MASK_TURN_RESET_DEG,
+        _Body,
+        _RoomAudio,
+    )
+    from hearsee.sim.moving import EARLY_ORDER
+
+    sc = scenario_from_dict({"seed": 1, "duration_s": 3.0,
+                             "room": {"size_m": [4.0, 3.5, 2.6], "rt60_s": 0.2},
+                             "robot": {"position_m": [2.5, 1.6], "heading_deg": 30.0,
+                                       "array": str(coarse_mask_yaml)},
+                             "people": [{"path_m": [[1.2, 2.6]]}], "objects": []})
+    audio = _RoomAudio(sc, _Body(sc, load_array(str(coarse_mask_yaml))),
+                       np.random.default_rng(0))
+    mouth = np.array([1.2, 2.6, 1.55])
+
+    def whole(pan, orders=None):
+        origin, heading = audio.body.array_pose(pan)
+        s = (mouth - origin) @ head_rotation(heading, 0.0).as_matrix()
+        if orders is None:
+            return masked_room_impulse_responses(sc.fs, audio.model, s, sc.room_size_m,
+                                                 sc.rt60_s, origin, heading_deg=heading)
+        return masked_room_reflections(sc.fs, audio.model, s, sc.room_size_m, sc.rt60_s,
+                                       origin, orders=orders, heading_deg=heading)
+
+    def plus(*parts):  # (responses of different lengths, added)
+        out = np.zeros((2, max(p.shape[1] for p in parts)))
+        for p in parts:
+            out[:, :p.shape[1]] += p
+        return out
+
+    def close(h, want):
+        h, want = plus(h, 0 * want), plus(want, 0 * h)
+        np.testing.assert_allclose(h, want, atol=1e-4 * np.abs(want).max())
+
+    late = (EARLY_ORDER + 1, None)
+    small = MASK_TURN_RESET_DEG / 2
+    close(audio.responses(mouth, 0.0, 0.0), whole(0.0))  # (first: all updated)
+    # 0.2 s later, the head turned by half the threshold: the late part of pan 0
+    close(audio.responses(mouth, small, 0.2),
+          plus(whole(small), -whole(small, late), whole(0.0, late)))
+    close(audio.responses(mouth, MASK_TURN_RESET_DEG, 0.4), whole(MASK_TURN_RESET_DEG))
+    close(audio.responses(mouth, MASK_TURN_RESET_DEG, 0.4 + MASK_LATE_UPDATE_S - 0.2),
+          whole(MASK_TURN_RESET_DEG))  # (the same pose: nothing changed)
+    assert audio.late[0] == 0.4
+    audio.responses(mouth, MASK_TURN_RESET_DEG, 0.4 + MASK_LATE_UPDATE_S)
+    assert audio.late[0] == pytest.approx(0.4 + MASK_LATE_UPDATE_S)
+    assert np.abs(whole(0.0, late)).max() > 0.05 * np.abs(whole(0.0)).max()  # (it matters)
+
+
 @pytest.mark.slow  # (~20 s: masked room responses every 0.2 s)
 def test_a_masked_head_hears_a_talker_behind_and_turns_to_them(coarse_mask_yaml):
     """The thesis's two microphones with the mask on the robot: a talker stands behind it,

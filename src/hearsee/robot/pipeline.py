@@ -222,13 +222,22 @@ def _person_state(sc: Scenario, t: float) -> dict[str, NDArray]:
 
 
 # ------------------------------------------------------------------------------ hearing
+#: A masked head's late reflections -- the image sources of more than
+#: :data:`hearsee.sim.moving.EARLY_ORDER` reflections, ~0.2-1 s of CPU per update against ~0.01
+#: s for the direct path and the early ones -- are updated every this many seconds, or at the
+#: next step after the head has turned by :data:`MASK_TURN_RESET_DEG` since; the early ones
+#: every step. Updated every 0.2-s step (until 2026-12-05), they took ~3/4 of a masked run's
+#: CPU.
+MASK_LATE_UPDATE_S = 1.0
+
+
 class _RoomAudio:
     """Causal closed-loop room audio: one impulse-response set per control step for the head's
     current pose and the mouth's current position, crossfaded over :data:`CROSSFADE_S`. A
     masked pair (thesis ch. 3) is heard through its mask turned with the head
     (:func:`hearsee.audio.mask.masked_room_impulse_responses` with the head's heading: the
-    mask's diffraction for the direct path, its far-field responses for the reflections;
-    ~0.1-1.5 s per step instead of ~0.05 s)."""
+    mask's diffraction for the direct path, its far-field responses for the reflections; the
+    late reflections updated less often, :data:`MASK_LATE_UPDATE_S`)."""
 
     def __init__(self, sc: Scenario, body: _Body, rng: np.random.Generator) -> None:
         self.sc = sc
@@ -251,33 +260,55 @@ class _RoomAudio:
         self.n = n
         self.prev_h: NDArray | None = None
         self.model = None
+        self.late: tuple[float, float, NDArray | None] | None = None  # (t, heading, responses)
         if body.array.mask is not None:
             from hearsee.audio.mask import MaskModel
+            from hearsee.audio.propagation import image_sources
 
             self.model = MaskModel(body.array)
+            self.order = image_sources(sc.rt60_s, sc.room_size_m, self.model.c)[1]
 
-    def responses(self, mouth: NDArray, pan_deg: float) -> NDArray:
+    def responses(self, mouth: NDArray, pan_deg: float, t: float | None = None) -> NDArray:
         """Impulse responses (n_mics, L) from the mouth (room frame, metres) to the microphones
-        with the head at ``pan_deg``; sample 0 is the emission time."""
+        with the head at ``pan_deg``; sample 0 is the emission time. A masked head's late
+        reflections are those of its last update at or before ``t`` (seconds;
+        :data:`MASK_LATE_UPDATE_S`; None: updated now)."""
         if self.model is None:
             return room_impulse_responses(self.fs, self.body.mics_room(pan_deg), mouth,
                                           self.sc.room_size_m, self.sc.rt60_s)
-        from hearsee.audio.mask import masked_room_impulse_responses, simulate_masked
+        from hearsee.audio.mask import (
+            masked_room_impulse_responses,
+            masked_room_reflections,
+            simulate_masked,
+        )
+        from hearsee.sim.moving import EARLY_ORDER
 
         origin, heading = self.body.array_pose(pan_deg)
         s = (mouth - origin) @ head_rotation(heading, 0.0).as_matrix()  # array frame
-        h = masked_room_impulse_responses(self.fs, self.model, s, self.sc.room_size_m,
-                                          self.sc.rt60_s, origin, heading_deg=heading)
-        if h is None:  # (an anechoic room: the direct path alone)
+        room, rt60 = self.sc.room_size_m, self.sc.rt60_s
+        if self.order == 0:  # (an anechoic room: the direct path alone)
             n = int(np.ceil((np.linalg.norm(s) / self.model.c + 0.02) * self.fs))
-            h = simulate_masked(np.r_[1.0, np.zeros(n - 1)], self.fs, self.model, s)
-        return h
+            return simulate_masked(np.r_[1.0, np.zeros(n - 1)], self.fs, self.model, s)
+        h = masked_room_impulse_responses(self.fs, self.model, s, room, rt60, origin,
+                                          min(EARLY_ORDER, self.order), heading_deg=heading)
+        if (t is None or self.late is None or t >= self.late[0] + MASK_LATE_UPDATE_S - 1e-9
+                or abs(float(wrap_deg(heading - self.late[1]))) >= MASK_TURN_RESET_DEG):
+            late = masked_room_reflections(self.fs, self.model, s, room, rt60, origin,
+                                           orders=(EARLY_ORDER + 1, None), heading_deg=heading)
+            self.late = (-np.inf if t is None else t, heading, late)
+        late = self.late[2]
+        if late is None:  # (no order beyond the early ones)
+            return h
+        out = np.zeros((h.shape[0], max(h.shape[1], late.shape[1])))
+        out[:, :h.shape[1]] += h
+        out[:, :late.shape[1]] += late
+        return out
 
     def chunk(self, k: int, pan_deg: float) -> tuple[int, int]:
         """Render chunk k ([k*dt, (k+1)*dt)) with the head at ``pan_deg``; returns its samples."""
         fs = self.fs
         a, b = _chunk_start(k, fs), min(_chunk_start(k + 1, fs), self.n)
-        h = self.responses(_person_state(self.sc, (a + b) / 2 / fs)["mouth"], pan_deg)
+        h = self.responses(_person_state(self.sc, (a + b) / 2 / fs)["mouth"], pan_deg, a / fs)
         seg = self.source[a:b]
         w = np.ones(b - a)
         if self.prev_h is not None:
