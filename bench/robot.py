@@ -155,7 +155,9 @@ def masked_head(args: argparse.Namespace, runs: list[dict]) -> tuple[str, str]:
     text = (
         f"Each scene twice: the default head (three microphones) and `{args.masked_array}` "
         "(thesis ch. 3: two microphones and the mask, heard through the mask turned with the "
-        "head -- `audio.mask.masked_room_impulse_responses(heading_deg=)` -- and localized by "
+        "head -- `audio.mask.masked_room_impulse_responses(heading_deg=)`, its late reflections "
+        "updated once a second (`robot.pipeline.MASK_LATE_UPDATE_S`, since 2026-12-05; every "
+        "0.2-s step before) -- and localized by "
         "the stream's masked stages, `robot.pipeline._MaskedEars`). Seeds 0-19 were the "
         "masked head's development scenes; these are others. "
         f"Masked runs: {masked_wall:.0f} s wall.\n\n" + markdown_table(headers, rows))
