@@ -1670,6 +1670,31 @@ def test_pose_jitter_across_180_is_no_head_move(tmp_path):
     assert s["audio_updates"] > 20 and abs(wrap_deg(s["azimuth_deg_final"] - 170.0)) < 2.0
 
 
+def test_a_masked_pair_turns_the_head_once_it_has_decided_a_half(tmp_path):
+    """mask2-asym with a talker behind it (150 deg, 2 m, free field): until the stream's
+    first front/back decision (~0.16 s) its tracker followed the front mirror (~20 deg), and
+    the loop sent the head there from 0.1 s on (the simulated loop's masked ears waited for
+    the decision). Now no bearing is logged or acted on before it, and every command goes
+    to the talker's half, the first within 5 deg of them."""
+    from hearsee.audio.mask import MaskModel, simulate_masked
+    from hearsee.audio.signals import synthetic_voice
+    from hearsee.stream.pipeline import ArraySource
+
+    a = np.radians(150.0)
+    x = simulate_masked(synthetic_voice("male", 2.0, FS, rng=207), FS, MaskModel("mask2-asym"),
+                        [2.0 * np.cos(a), 2.0 * np.sin(a), 0.0])
+    x = x + 0.01 * x.std() * np.random.default_rng(207).standard_normal(x.shape)
+    cfg = robot_config_from_dict({"audio": {"array": "mask2-asym", "channels": [0, 1]},
+                                  "head": {"pan_limits_deg": [-180, 180]},
+                                  "output": {"report": "out"}}, "r.yaml", tmp_path)
+    head = _FixedHead(0.0)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=head)
+    assert len(head.sent) > 40 and abs(head.sent[0] - 150.0) < 5.0
+    assert all(abs(wrap_deg(p - 150.0)) < 90.0 for p in head.sent)
+    heard = [r["audio"]["azimuth_deg"] for r in res.log if r["audio"] is not None]
+    assert heard and all(abs(wrap_deg(az - 150.0)) < 90.0 for az in heard)
+
+
 class _SlewingHead:
     """A pan-only head that ignores the commands and pans from ``pan0`` at ``rate`` deg/s
     between ``t0`` and ``t1`` seconds of audio (then holds): its pose is read at ``t_now``,

@@ -1538,7 +1538,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             state["track_drops"] += 1
         audio = None
         bearing = None
-        if u.azimuth_deg is not None:
+        if u.bearing_decided:  # (a masked pair's: once it has decided a half)
             az, el = ageo.direction_to_robot(u.azimuth_deg, u.elevation_deg)
             raw = None
             if u.raw_azimuth_deg is not None:  # (the frame's own bearing, logged)
@@ -1569,15 +1569,18 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             pending[0] = None
             dets, camera_t = apply(t, t_cap, fr, fut.result(), bearing, g), t_cap
         state["last_t"], state["last_bearing"] = t, bearing
-        emit(t, audio, bearing, dets, camera_t, heard)
+        # (a masked pair not yet decided on a half: as unheard, the head keeps its course)
+        emit(t, audio, bearing, dets, camera_t, heard and (u.azimuth_deg is None
+                                                           or u.bearing_decided))
         if progress is not None:
             progress(state["hop"])
 
     def emit(t: float, audio: dict | None, bearing: float | None, dets: list[dict[str, Any]],
              camera_t: float | None, heard: bool = True) -> None:
         """Phase, head command and track of this update; one log record / JSON line. While the
-        audio is withheld (the head turns or settles) and there is no track, the desired pose
-        stays the last one commanded: the head's pose of the moment would stop the turn."""
+        audio is withheld (the head turns or settles; ``heard`` False, also while a masked
+        pair has not decided a half) and there is no track, the desired pose stays the last
+        one commanded: the head's pose of the moment would stop the turn."""
         if state["phase"] == "listening" and state["n_audio"] >= MIN_AUDIO_UPDATES:
             state["phase"] = "turning"
         now = track.predicted_to(t)  # (the track's state is its last fix's)

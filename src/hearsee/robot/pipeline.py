@@ -635,8 +635,7 @@ class _MaskedEars:
         updates = self.proc.process(frames(mixed, len(pans))) if mixed < len(pans) else []
         bearings = [(u.t, float(wrap_deg(u.azimuth_deg + p)))
                     for u, p in zip(updates, pans[mixed:], strict=True)
-                    if u.measured and u.azimuth_deg is not None
-                    and u.front_probability is not None]
+                    if u.measured and u.bearing_decided]
         conf = [u.confidence for u in updates if u.confidence > 0]
         return bearings, float(np.mean(conf)) if conf else 0.0
 

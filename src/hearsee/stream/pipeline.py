@@ -238,6 +238,15 @@ class Update:
     front_probability: float | None = None
     masked: bool = False
 
+    @property
+    def bearing_decided(self) -> bool:
+        """Whether ``azimuth_deg`` is a direction to act on: given, and for a masked pair
+        once its stream has decided a half (``front_probability`` not None) -- before that
+        the tracker follows either mirror candidate (a talker at 150 deg was tracked at 20 deg
+        for the first 0.13 s, and the live robot turned toward it)."""
+        return self.azimuth_deg is not None and (not self.masked
+                                                 or self.front_probability is not None)
+
     def to_json(self) -> dict[str, Any]:
         """The JSON object of the CLI contract (plus ``rate_dps``, ``measured``, ``missing``,
         ``latency_ms``)."""
