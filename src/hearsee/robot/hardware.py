@@ -1274,7 +1274,9 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        framer -> GCC TDOAs -> ITD Kalman filter -> localizer -> direction Kalman filter); the
        array-frame direction is rotated by the head pose into the robot frame.
     2. **Turn**: after a few audio updates the desired head pan/tilt (toward the 3D track once
-       there is one, else the audio bearing; within ``head.pan_limits_deg``, see
+       there is one, else the robot-frame bearing of the newest update that measured the
+       talker -- kept through silences, where the stream's track coasts in the turning
+       array's frame and is then lost; within ``head.pan_limits_deg``, see
        :func:`limit_pan_deg`) goes to the head driver -- with ``driver: none`` it is printed
        and logged and the head stays put. The loop reads the driver's actual pose at every
        update (see :class:`PrintHeadDriver` for the protocol a real driver implements): when
@@ -1395,7 +1397,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     state = {"n_audio": 0, "next_cam": 0.0, "phase": "listening", "cam_frames": 0,
              "cam_ended": False, "first_verified": None, "hop": scfg.hop_ms / 1000.0,
              "last_visual": -np.inf, "track_drops": 0, "heard_from": -np.inf, "head_moves": 0,
-             "head_follows": 0, "desired": None, "last_capture": None, "frame_interval": period}
+             "head_follows": 0, "desired": None, "heard_bearing": None, "last_capture": None,
+             "frame_interval": period}
     # live: detection runs in a worker thread so that the audio keeps flowing; its result is
     # applied at the first update after it is ready (file sources: in line, deterministic)
     use_pool = (live if async_vision is None else async_vision) and cameras is not None
@@ -1549,6 +1552,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                      "measured": bool(u.measured)}
             if u.measured:
                 state["n_audio"] += 1
+                state["heard_bearing"] = az
         dets: list[dict[str, Any]] = []
         camera_t = None
         if (cameras is not None and not state["cam_ended"] and pending[0] is None
@@ -1593,8 +1597,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             pan, tilt = geo.pose
             if now.initialized:
                 pan, tilt = geo.bearing_deg(now.position)
-            elif bearing is not None:
-                pan = bearing
+            elif state["heard_bearing"] is not None:
+                pan = state["heard_bearing"]
             elif not heard and state["desired"] is not None:
                 pan, tilt = state["desired"]
             # any driver gets a pan and a tilt within the head's limits (not only
