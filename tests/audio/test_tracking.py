@@ -1079,3 +1079,27 @@ def test_sigma_jerk_error_states_its_documented_unit():
     for bad in ("a", True, (1.0, 2.0)):
         with pytest.raises(EstimationError, match=r"increment per update step, m/s\^2"):
             MotionKalman(sigma_jerk=bad)
+
+
+@pytest.mark.parametrize("make", [lambda: DirectionKalman(), lambda: DirectionIMM()])
+def test_rotate_azimuth_turns_the_track_with_the_frame(make):
+    """The frame turned by -d (a head panned): the track's azimuth moves by +d, wrapped, every
+    IMM mode with it; rates, elevation and covariance stay; before a track, nothing; NaN is
+    refused (it would have wrapped to NaN silently)."""
+    f = make()
+    f.rotate_azimuth(30.0)
+    assert not f.initialized
+    for k in range(6):
+        f.update(0.032 * k, (170.0 + 2.0 * k, 5.0))
+    az, el, rate, P = f.azimuth_deg, f.elevation_deg, f.rate_dps.copy(), f.P.copy()
+    modes = f.X.copy() if hasattr(f, "X") else None
+    f.rotate_azimuth(25.0)
+    assert f.azimuth_deg == pytest.approx(float(wrap_deg(az + 25.0)))
+    assert -170.0 < f.azimuth_deg < -150.0  # (across the seam)
+    assert f.elevation_deg == el and np.array_equal(f.rate_dps, rate)
+    np.testing.assert_array_equal(f.P, P)
+    if modes is not None:
+        np.testing.assert_allclose(wrap_deg(f.X[:, 0] - modes[:, 0] - 25.0), 0.0, atol=1e-9)
+        np.testing.assert_array_equal(f.X[:, 1:], modes[:, 1:])
+    with pytest.raises(EstimationError, match="delta_deg"):
+        f.rotate_azimuth(float("nan"))

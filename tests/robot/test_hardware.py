@@ -1471,7 +1471,9 @@ def test_an_impossible_pose_during_the_run_is_a_geometry_error(tmp_path, bad, wo
                   jsonl=tmp_path / "a.jsonl")
     assert str(e.value).startswith(words), e.value
     assert head.n_reads == 6  # stopped at the first bad read
-    assert len((tmp_path / "a.jsonl").read_text().splitlines()) == 4  # (updates before it)
+    # (the updates before it; the pose is also read before each batch of frames, for the
+    # stream's array_pan: 4 updates before 2026-12-05)
+    assert len((tmp_path / "a.jsonl").read_text().splitlines()) == 2
 
 
 def _lowest_camera_by_brute_force(pivot_z, mount):
@@ -1751,19 +1753,20 @@ def test_a_head_following_slowly_keeps_hearing(tmp_path):
     """A head panning at 20 deg/s (as when following a person crossing 2 m away at 0.7 m/s)
     with a still talker behind: the loop took every pose change above 0.5 deg for a turn,
     restarted the stream and withheld the audio, so it heard nothing for the whole pan (2 s).
-    Now the stream keeps its state and each update is turned into the robot frame with the
-    head's pose at its frame's time: the talker stays at 180 deg, also across the +-180
-    seam. A turn at 200 deg/s is still a turn: withheld until the head has settled."""
+    Now the stream hears, told the head's pan at each frame, and each update is turned into
+    the robot frame with the head's pose at its frame's time: the talker stays at 180 deg,
+    also across the +-180 seam. A turn at 200 deg/s is still a turn: withheld until the head
+    has settled."""
     res = _slewing_head_run(tmp_path, 20.0)
     s, log = res.summary, res.log
     assert s["head_moves"] == 0 and s["head_follows"] >= 15  # (2 deg per 0.1-s block)
     during = [r for r in log if 0.8 <= r["t"] <= 2.8]
     assert len(during) > 55 and all(r["audio"] is not None for r in during)
     err = wrap_deg(np.array([r["audio"]["azimuth_deg"] for r in during]) - 180.0)
-    # (the tracker lags the talker's apparent motion by ~0.05 s: +1.0 deg on average; with the
-    # pose read at the block's end instead of at each frame's time, +2.6 deg, median 2.7,
-    # largest 5.4)
-    assert abs(err.mean()) < 1.6 and np.median(np.abs(err)) < 2.0 and np.abs(err).max() < 5.0
+    # (+0.7 deg on average, median 1.0, 90 % within 2.3, the largest 3.9; with the pose read
+    # at the block's end instead of at each frame's time +2.3, median 2.4)
+    assert abs(err.mean()) < 1.5 and np.median(np.abs(err)) < 1.5
+    assert np.percentile(np.abs(err), 90) < 3.0 and np.abs(err).max() < 5.0
     assert len({r["head_pan_deg"] > 0 for r in during}) == 2  # (the pan crossed the seam)
 
     res = _slewing_head_run(tmp_path, 200.0)
@@ -1801,7 +1804,7 @@ def test_the_head_finishes_its_turn_after_the_talker_falls_silent(tmp_path):
     at 30 deg/s, turns toward them: the loop sent the head its own pose once the stream's
     track of the voice was gone (~1.6 s into the silence), and the head stopped at 69 deg.
     It now holds the bearing of the last update that heard them (robot frame; the stream's
-    coasting direction, in the turning array's frame, drifted to 118 deg meanwhile).
+    coasting direction, in the turning array's frame, had drifted to 118 deg by then).
     Closed loop: each 0.1-s block is rendered (free field) with the talker where the head's
     pose of that block puts them in the array frame."""
     from hearsee.audio.signals import synthetic_voice
@@ -1830,8 +1833,9 @@ def test_the_head_finishes_its_turn_after_the_talker_falls_silent(tmp_path):
                 yield Block(seq, start, x[:, start - lo:start - lo + 1600] + 1e-4 * noise, 0.0)
 
     res = run_robot(cfg, audio_source=Source(), head=head)
-    assert abs(res.summary["azimuth_deg_final"] - 100.0) < 3.0
-    assert abs(head.pan - 100.0) < 3.0  # (it stopped at 69 deg)
+    final = res.summary["azimuth_deg_final"]  # (the last measured bearing: 100.7 deg)
+    assert abs(final - 100.0) < 3.0
+    assert abs(head.pan - final) < 0.5  # (it stopped at 69 deg)
 
 
 def _talker(azimuth_deg: float, duration_s: float):

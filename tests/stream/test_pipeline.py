@@ -150,6 +150,42 @@ def test_the_sink_reads_the_audio_clock_in_the_stats(moving):
     assert pipe.stats.audio_s == y.shape[1] / FS
 
 
+def test_a_turning_array_told_its_pans_keeps_a_still_talker_still():
+    """An array panning at 40 deg/s from 0.5 to 2.5 s past a still voice (30 deg in the world;
+    rendered as the turning array hears it): told the pans (``array_pan``), the tracker's
+    azimuth plus the pan stays on the talker, also after the turn stops; untold, it took the
+    turning for the talker's motion and overshot by up to ~7 deg when the turn stopped.
+    Bad pans are refused."""
+    from hearsee.audio.signals import synthetic_voice
+    from hearsee.errors import GeometryError
+    from hearsee.sim.moving import Trajectory
+
+    arr = MicArray.from_preset("three-mic")
+
+    def pan(t):
+        return 40.0 * np.clip(np.asarray(t, float) - 0.5, 0.0, 2.0)
+
+    tt = np.arange(0.0, 3.01, 0.01)
+    a = np.radians(30.0 - pan(tt))
+    path = Trajectory(tt, np.stack([2 * np.cos(a), 2 * np.sin(a), np.zeros_like(a)], 1))
+    y = simulate_moving_free_field(synthetic_voice("male", 3.0, FS, rng=7), FS, arr, path,
+                                   snr_db=20, rng=8)
+
+    def errors(array_pan, lo, hi):
+        ups = StreamPipeline(arr, StreamConfig(frame_ms=64, hop_ms=32)).run(
+            ArraySource(y, FS, 1600), array_pan=array_pan)
+        return np.abs(wrap_deg([u.azimuth_deg + pan(u.t) - 30.0 for u in ups
+                                if u.azimuth_deg is not None and lo < u.t < hi]))
+
+    told = errors(pan, 0.5, 3.0)
+    assert told.size > 60 and np.percentile(told, 90) < 2.0 and told.max() < 2.5
+    assert errors(None, 2.5, 3.0).max() > 4.0  # (untold: the overshoot)
+    with pytest.raises(GeometryError, match="array_pan_deg"):
+        StreamPipeline(arr).run(ArraySource(y, FS, 1600), array_pan=lambda ts: [0.0])
+    with pytest.raises(ConfigError, match="array_pan"):
+        StreamPipeline(arr).run(ArraySource(y, FS, 1600), array_pan=30.0)
+
+
 def test_device_dropout_late_block_and_stall_do_not_crash_or_hang(moving):
     arr, traj, y = moving
     src = DropoutSource(ArraySource(y, FS, 1024), drop=[6, 7, 8], late=[15],

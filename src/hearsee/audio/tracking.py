@@ -670,6 +670,16 @@ class DirectionKalman(_Kalman):
         _bound_elevation(self.x)
         self.has_elevation = self.has_elevation or el is not None
 
+    def rotate_azimuth(self, delta_deg: float) -> None:
+        """Add ``delta_deg`` (degrees) to the tracked azimuth, wrapped; the rates and the
+        covariance stay: the frame the azimuth is measured in has turned by ``-delta_deg``
+        about its z axis (an array on a head that panned by ``-delta_deg``), so the track stays
+        on the talker without taking the turn for the talker's motion. Nothing before the
+        track has started."""
+        d = finite_number("delta_deg", delta_deg, error=EstimationError)
+        if self.initialized:
+            self.x[0] = _wrap1(float(self.x[0]) + d)
+
     # -- read-out ------------------------------------------------------------------------
     @property
     def azimuth_deg(self) -> float:
@@ -838,6 +848,12 @@ class DirectionIMM:
         self.X = np.repeat(self._mix.x[None], m, axis=0)  # (modes, 4) states
         self.Ps = np.repeat(self._mix.P[None], m, axis=0)  # (modes, 4, 4) covariances
         self.mu = np.full(m, 1.0 / m)
+
+    def rotate_azimuth(self, delta_deg: float) -> None:
+        """As :meth:`DirectionKalman.rotate_azimuth`, for the mixture and every mode."""
+        self._mix.rotate_azimuth(delta_deg)
+        if self._mix.initialized:
+            self.X[:, 0] = [_wrap1(float(a) + float(delta_deg)) for a in self.X[:, 0]]
 
     # -- the mixture, read like a DirectionKalman -----------------------------------------
     @property

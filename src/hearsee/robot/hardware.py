@@ -939,14 +939,18 @@ class Cameras:
 POSE_TOLERANCE_DEG = 0.5
 
 #: The fastest head motion (degrees per second of audio) the live loop's stream hears through:
-#: a head that moves no faster -- following a walker -- keeps the stream's array-frame state
-#: (its trackers follow the talker's apparent motion, as a talker's own) and its audio; a
-#: faster move is a turn, and the stream restarts once the head has settled. Judged over one
-#: frame plus one audio block, the audio a move can reach. Until 2026-12-05 every move above
-#: :data:`POSE_TOLERANCE_DEG` restarted it: a head following a person crossing 2 m away at
-#: 1 m/s heard nothing for as long as it followed. The simulated loop's masked ears keep
-#: their state below the same rate (:data:`hearsee.robot.pipeline.MASK_TURN_RESET_DEG` per
-#: 0.2-s step).
+#: a head that moves no faster -- following a walker -- is heard, the stream told the head's pan
+#: at every frame (``StreamPipeline.run(array_pan=)``: its direction tracker turns back with
+#: the head instead of taking the head's turning for the talker's motion); a faster move is a
+#: turn, after which the stream restarts once the head has settled. Judged over one frame plus
+#: one audio block, the audio a move can reach. Until 2026-12-05 every move above
+#: :data:`POSE_TOLERANCE_DEG` was a turn: a head following a person heard nothing while it
+#: moved. Measured by ``bench/live_head.py`` (a closed loop: a 60 deg/s servo head following
+#: walkers; bench/results/live_head.md): against that rule the share of updates with a
+#: bearing rose ~4x and the head pointed closer to the talker; heard without telling the
+#: stream the pans, the tracker lagged and overshot and the head swung about the talker
+#: (worse pointing than before). The simulated loop's masked ears keep their state below the
+#: same rate (:data:`hearsee.robot.pipeline.MASK_TURN_RESET_DEG` per 0.2-s step).
 FOLLOW_RATE_DPS = 50.0
 
 
@@ -1282,9 +1286,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        update (see :class:`PrintHeadDriver` for the protocol a real driver implements): when
        it moves (the short way round, :func:`pan_change_deg`) by more than
        :data:`POSE_TOLERANCE_DEG`, the sensor geometry follows it. A head moving no faster
-       than :data:`FOLLOW_RATE_DPS` (following a walker) keeps the stream as it is, each
-       update's direction turned with the head's pose at its frame's time
-       (``summary["head_follows"]`` counts these pose changes); after a faster move (a turn)
+       than :data:`FOLLOW_RATE_DPS` (following a walker) is heard: the stream is told the
+       head's pan at each frame (its direction tracker turns back with the head), and each
+       update's direction is turned into the robot frame with the head's pose at its frame's
+       time (``summary["head_follows"]`` counts these pose changes); after a faster move (a turn)
        the stream forgets its array-frame state (direction tracker, ITD filter, smoothed
        spectra: their directions were relative to the old pose) and the audio is withheld
        until one frame and one audio block after the head stops (``summary["head_moves"]``
@@ -1488,29 +1493,44 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             captions[f"{slot}_thermal"] = f"t = {t_cap:.1f} s: thermal camera (8-bit, inferno)"
         return dets
 
-    def follow_head(t: float) -> _Head | None:
-        """The head geometry of the audio of the update at ``t`` (a frame's centre, seconds of
-        audio), or None when that audio cannot be trusted. The loop's geometry follows the
-        driver's pose, read now -- at the end of the newest audio block. A head moving no
-        faster than :data:`FOLLOW_RATE_DPS` over the last frame plus block keeps the stream as
-        it is, and the update's direction is turned into the robot frame with the pose at its
-        frame's time (interpolated between the reads: a head following at 28 deg/s read at the
-        block's end put ~0.7 deg more into the median error). A faster move (a turn) withholds
-        the audio while it lasts and for one frame plus one block after it (frames that began
-        during the turn; a block the device had captured before the pose was read), and
-        meanwhile the stream keeps forgetting its array-frame state (directions relative to
-        an old pose), so its trackers start afresh on the settled head's audio."""
-        nonlocal geo
+    window = (scfg.frame_ms + a.block_ms) / 1000.0  # (seconds a head move can reach)
+
+    def read_pose(t: float) -> tuple[float, float]:
+        """The driver's pose now -- at the end of the newest audio block, or ``t`` if later --
+        also kept in ``poses``, the reads of the last ``window`` (and one before)."""
         pose = _pose(head)
         now = max(float(pipeline.stats.audio_s), t)
-        window = (scfg.frame_ms + a.block_ms) / 1000.0
         while poses and poses[-1][0] >= now:  # (reads within one block: the latest)
             poses.pop()
         poses.append((now, pose))
-        while len(poses) > 2 and poses[1][0] < now - window:  # (one older, to interpolate)
+        while len(poses) > 2 and poses[1][0] < now - window:
             poses.popleft()
+        return pose
+
+    def frame_pans(ts: NDArray) -> list[float]:
+        """The head's pan at the frames' times ``ts`` (seconds of audio; the stream's
+        ``array_pan``, read before it processes them): its direction tracker follows the
+        head's turns instead of taking them for the talker's motion."""
+        read_pose(float(np.max(ts)) if len(ts) else 0.0)
+        return [_pose_at(float(t), poses)[0] for t in ts]
+
+    def follow_head(t: float) -> _Head | None:
+        """The head geometry of the audio of the update at ``t`` (a frame's centre, seconds of
+        audio), or None when that audio cannot be trusted. The loop's geometry follows the
+        driver's pose, read now (:func:`read_pose`). A head moving no faster than
+        :data:`FOLLOW_RATE_DPS` over the last frame plus block is heard, the update's
+        direction turned into the robot frame with the pose at its frame's time (interpolated
+        between the reads: a head following at 28 deg/s read at the block's end put ~0.7 deg
+        more into the median error). A faster move (a turn) withholds the audio while it lasts
+        and for one frame plus one block after it (frames that began during the turn; a block
+        the device had captured before the pose was read), and meanwhile the stream keeps
+        forgetting its array-frame state, so its trackers start afresh on the settled head's
+        audio."""
+        nonlocal geo
+        pose = read_pose(t)
         if _pose_change_deg(pose, geo.pose) > POSE_TOLERANCE_DEG:
             geo = _Head(cfg, pose)
+            now = poses[-1][0]
             moved = max(_pose_change_deg(pose, p) for tp, p in poses if tp >= now - window)
             if moved > FOLLOW_RATE_DPS * window:
                 state["heard_from"] = t + window
@@ -1622,7 +1642,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     status = "ok"
     ended = False  # (else the run failed: the JSON lines stay as they are)
     try:
-        pipeline.run(source, sink, threaded=live if threaded is None else threaded)
+        pipeline.run(source, sink, threaded=live if threaded is None else threaded,
+                     array_pan=frame_pans)
         status = pipeline.stats.status
         if pending[0] is not None and "last_t" in state:
             # the audio ended while a detection was running: log its result as a last update

@@ -107,6 +107,7 @@ from hearsee.audio.tracking import (
     MotionKalman,
 )
 from hearsee.config import (
+    as_float_array,
     finite_number,
     is_real,
     real_entries,
@@ -114,7 +115,13 @@ from hearsee.config import (
     true_or_false,
     whole_number,
 )
-from hearsee.errors import AudioInputError, ConfigError, DegenerateInputWarning, EstimationError
+from hearsee.errors import (
+    AudioInputError,
+    ConfigError,
+    DegenerateInputWarning,
+    EstimationError,
+    GeometryError,
+)
 from hearsee.geometry import wrap_deg
 from hearsee.stream.device import import_sounddevice, resolve_input_device
 
@@ -2124,6 +2131,7 @@ class TrackingProcessor:
         self.itd = self._itd_filter()
         self.direction = self._direction_tracker(self.cfg, self.hop / self.fs)
         self._last_measured_t = -np.inf
+        self._pan: tuple[float, float] | None = None  # (t, the array's pan), see process
         self.motion, self.sigma_tdoa_s = self._motion_tracker(self.cfg)
         self._motion_measured_t = -np.inf
         model, margin = None, DEFAULT_MARGIN_SAMPLES
@@ -2200,8 +2208,26 @@ class TrackingProcessor:
             conf[k - m:] = np.min(c, axis=1)
         return tdoa, conf
 
-    def process(self, batch: FrameBatch) -> list[Update]:
-        """Run all stages on one batch of frames; one :class:`Update` per frame."""
+    def process(self, batch: FrameBatch, array_pan_deg: ArrayLike | None = None
+                ) -> list[Update]:
+        """Run all stages on one batch of frames; one :class:`Update` per frame.
+
+        ``array_pan_deg``: the array's pan (degrees, + = turned left about its z axis, any
+        fixed reference) at each frame's time, for an array on a turning head: the direction
+        tracker's azimuth is turned back by the array's turn between frames
+        (:meth:`~hearsee.audio.tracking.DirectionKalman.rotate_azimuth`: ego-motion
+        compensation, so that a still talker stays still and the tracker's rate is the
+        talker's own), and a smoothed measurement, whose evidence is ``delay`` seconds old, by
+        the turn over its age (the pan's rate since the previous frame times that age). Exact
+        for a level array panning about its z axis; a tilted head's pan is only approximately
+        an azimuth shift. The ITD filter and the smoothed spectra are not turned: at a
+        following head's rates (tens of deg/s) they move on within a few frames. The 3D motion
+        tracker restarts at each turn. None: the array does not turn (or its turns are handled
+        with :meth:`reset_array_state`)."""
+        pans = None
+        if array_pan_deg is not None:
+            pans = as_float_array(array_pan_deg, "array_pan_deg", (len(batch.t),),
+                                  error=GeometryError)
         if batch.segment is not None:  # single precision once for both measurement stages
             batch = FrameBatch(batch.t, batch.missing, np.asarray(batch.segment, np.float32),
                                batch.arrival)
@@ -2246,6 +2272,8 @@ class TrackingProcessor:
                 sigma = self._srp_sigma(c_sm) if cands else None
             elif self.mask is not None and not cands and MASK_SMOOTHED_MEASUREMENT:
                 cands, sigma, delay = self._mask_candidates(mk[n], n)
+            if pans is not None:
+                cands = self._follow_pan(float(t), float(pans[n]), cands, delay)
             if sigma is not None and self._level_plane:
                 sigma = (sigma, sigma * self.cfg.planar_elevation_sigma_scale)
             if cands and self._wrong_half(mk[n]):
@@ -2351,6 +2379,27 @@ class TrackingProcessor:
         if c.sigma_frame_deg is None or not confidence > 0:
             return c.sigma_meas_deg
         return max(c.sigma_min_deg, c.sigma_frame_deg / confidence)
+
+    def _follow_pan(self, t: float, pan: float, cands: list[tuple[float, float | None]],
+                    delay: float) -> list[tuple[float, float | None]]:
+        """The array turned to ``pan`` (degrees) at frame time ``t``: the direction tracker
+        turned back by the turn since the previous frame, and ``cands`` -- measured on
+        evidence ``delay`` seconds old -- by the turn over that age (see :meth:`process`).
+        The 3D motion tracker (a camera rig's) restarts instead: a head turns its array about
+        the pivot, a point the stream does not know."""
+        rate = 0.0
+        if self._pan is not None:
+            turn = float(wrap_deg(pan - self._pan[1]))
+            if turn:
+                self.direction.rotate_azimuth(-turn)
+                self.motion.reset()
+            dt = t - self._pan[0]
+            rate = turn / dt if dt > 0 else 0.0
+        self._pan = (t, pan)
+        if not (rate and delay > 0):
+            return cands
+        back = rate * delay  # (how far the array turned since the evidence)
+        return [(float(wrap_deg(az - back)), el) for az, el in cands]
 
     def _mask_candidates(self, decision: Any, n: int
                          ) -> tuple[list[tuple[float, float | None]], float | None, float]:
@@ -2613,8 +2662,14 @@ class StreamPipeline:
             )
 
     def run(self, source: Any, sink: Callable[[Update], None] | None = None,
-            threaded: bool = False) -> list[Update]:
+            threaded: bool = False,
+            array_pan: Callable[[NDArray], ArrayLike] | None = None) -> list[Update]:
         """Process the whole source; call ``sink(update)`` per frame and return all updates.
+
+        ``array_pan``: for an array on a turning head, called before each batch of frames with
+        their times (seconds of audio) and returning the array's pan at each (degrees, + =
+        left; :meth:`TrackingProcessor.process`'s ``array_pan_deg``: the direction tracker
+        follows the turns instead of taking them for the talker's motion).
 
         BLAS runs single-threaded meanwhile: the stages' matrices are small (a few frames), and
         a multithreaded BLAS on a busy machine made each product 10-100x slower (thread
@@ -2622,11 +2677,15 @@ class StreamPipeline:
         """
         from threadpoolctl import threadpool_limits
 
+        if array_pan is not None and not callable(array_pan):
+            raise ConfigError(f"array_pan must be a function of the frames' times or None, got "
+                              f"{type(array_pan).__name__}")
         with threadpool_limits(1, user_api="blas"):
-            return self._run(source, sink, threaded)
+            return self._run(source, sink, threaded, array_pan)
 
     def _run(self, source: Any, sink: Callable[[Update], None] | None,
-             threaded: bool) -> list[Update]:
+             threaded: bool, array_pan: Callable[[NDArray], ArrayLike] | None = None
+             ) -> list[Update]:
         self._check_source(source, sink)
         self._reset_requested = False
         framer = Framer(source.n_channels, source.fs, self.config.frame_ms, self.config.hop_ms)
@@ -2701,7 +2760,8 @@ class StreamPipeline:
             if self._reset_requested:
                 proc.reset_array_state()
                 self._reset_requested = False
-            for u in proc.process(batch):
+            pans = None if array_pan is None else array_pan(np.asarray(batch.t, float))
+            for u in proc.process(batch, pans):
                 u.latency_s = time.perf_counter() - batch.arrival
                 st.latencies_s.append(u.latency_s)
                 st.n_frames += 1
