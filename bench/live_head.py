@@ -1,14 +1,15 @@
 """Benchmark of the live robot loop's hearing while its head moves (`hearsee run`'s loop).
 
 Each run puts :func:`hearsee.robot.hardware.run_robot` in a closed loop with a simulated pan
-servo (``--servo-dps``, default 60 deg/s) that turns toward the loop's commands, and a talker
-walking a straight line (0.5-1.5 m/s, starting 1.5-3 m away within 60 deg of the robot's
-front, synthetic male or female voice with its pauses, free field, sensor noise ``--snr`` dB
-at 2 m). Every 0.1-s audio block is rendered while the loop runs, from the talker's path in the
-array's frame given the head's poses over that block (the servo's pose is read at the block's
-end: a device's present); no cameras, so the head follows the audio alone, as before a first
-visual fix. The array: the default three-mic head and the thesis's masked pair (mask2-asym,
-rendered through the mask by :func:`hearsee.sim.moving.simulate_moving_masked`).
+servo (:class:`hearsee.sim.servo.ServoHead`, ``--servo-dps``, default 60 deg/s) that turns
+toward the loop's commands, and a talker walking a straight line (0.5-1.5 m/s, starting
+1.5-3 m away within 60 deg of the robot's front, synthetic male or female voice with its
+pauses, free field, sensor noise ``--snr`` dB at 2 m). Every 0.1-s audio block is rendered
+while the loop runs, from the talker's path in the array's frame given the head's poses over
+that block (the servo's pose is read at the block's end: a device's present); no cameras, so
+the head follows the audio alone, as before a first visual fix. The array: the default
+three-mic head and the thesis's masked pair (mask2-asym, rendered through the mask by
+:func:`hearsee.sim.moving.simulate_moving_masked`).
 
 Side by side on the same walks: the loop's rule (a head moving no faster than
 ``hardware.FOLLOW_RATE_DPS``, 50 deg/s, is heard, and the stream is told the head's pan at each
@@ -45,38 +46,6 @@ MOUTH_Z_M = 1.55
 RULES = ("default", "keep", "before")
 
 
-class ServoHead:
-    """A pan-only head turning toward the last commanded pan at ``rate`` deg/s of audio time;
-    :meth:`advance` moves it to a later time (the audio source calls it per block)."""
-
-    def __init__(self, rate: float) -> None:
-        self.rate, self.pan, self.target, self.t = rate, 0.0, None, 0.0
-        self.history = [(0.0, 0.0)]  # (t, pan) at each block end
-        self.n_printed = 0
-
-    @property
-    def pose_deg(self) -> tuple[float, float]:
-        return (self.pan, 0.0)
-
-    def advance(self, t: float) -> None:
-        from hearsee.geometry import wrap_deg
-
-        if self.target is not None:
-            step = float(wrap_deg(self.target - self.pan))
-            limit = self.rate * (t - self.t)
-            self.pan = float(wrap_deg(self.pan + np.clip(step, -limit, limit)))
-        self.t = t
-        self.history.append((t, self.pan))
-
-    def pan_at(self, t: float) -> float:
-        ts, pans = np.array(self.history).T
-        return float(np.interp(t, ts, np.unwrap(pans, period=360.0)))
-
-    def command(self, t: float, pan_deg: float, tilt_deg: float) -> dict:
-        self.target = pan_deg
-        return {"pan_deg": pan_deg, "tilt_deg": tilt_deg}
-
-
 def walk(rng: np.random.Generator, duration_s: float) -> tuple[object, str]:
     """A straight walk (robot frame, metres) and its voice kind."""
     from hearsee.sim.moving import Trajectory
@@ -94,7 +63,7 @@ def walk(rng: np.random.Generator, duration_s: float) -> tuple[object, str]:
 class ClosedLoopSource:
     """The walker's voice as the head hears it, rendered block by block while the loop runs."""
 
-    def __init__(self, cfg, head: ServoHead, path, voice: np.ndarray, noise_sigma: float,
+    def __init__(self, cfg, head, path, voice: np.ndarray, noise_sigma: float,
                  rng: np.random.Generator, model=None) -> None:
         self.cfg, self.head, self.path, self.voice = cfg, head, path, voice
         self.noise_sigma, self.rng, self.model = noise_sigma, rng, model
@@ -134,6 +103,7 @@ def run_one(array: str, seed: int, args: argparse.Namespace, rule: str) -> dict:
     import hearsee.robot.hardware as hw
     from hearsee.audio.signals import synthetic_voice
     from hearsee.geometry import wrap_deg
+    from hearsee.sim.servo import ServoHead
     from hearsee.stream.pipeline import StreamPipeline
 
     rng = np.random.default_rng([args.seed, seed])
@@ -151,7 +121,7 @@ def run_one(array: str, seed: int, args: argparse.Namespace, rule: str) -> dict:
             from hearsee.audio.mask import MaskModel
 
             model = MaskModel(cfg.audio.array)
-        head = ServoHead(args.servo_dps)
+        head = ServoHead(args.servo_dps)  # (hearsee.sim.servo)
         source = ClosedLoopSource(cfg, head, path, voice, sigma, rng, model)
         saved = hw.FOLLOW_RATE_DPS, StreamPipeline.run
         if rule == "before":

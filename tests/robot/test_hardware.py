@@ -1777,28 +1777,6 @@ def test_a_head_following_slowly_keeps_hearing(tmp_path):
     assert len(after) > 50 and np.median(err) < 1.0
 
 
-class _ServoHead:
-    """A pan-only head that turns toward the last commanded pan at ``rate`` deg/s of audio
-    time (``advance(t)``: the audio source moves it at each block)."""
-
-    def __init__(self, rate: float) -> None:
-        self.rate, self.pan, self.target, self.t, self.n_printed = rate, 0.0, None, 0.0, 0
-
-    @property
-    def pose_deg(self) -> tuple[float, float]:
-        return (self.pan, 0.0)
-
-    def advance(self, t: float) -> None:
-        if self.target is not None:
-            step = float(wrap_deg(self.target - self.pan))
-            self.pan += float(np.clip(step, -self.rate * (t - self.t), self.rate * (t - self.t)))
-        self.t = t
-
-    def command(self, t: float, pan_deg: float, tilt_deg: float) -> dict:
-        self.target = pan_deg
-        return {"pan_deg": pan_deg, "tilt_deg": tilt_deg}
-
-
 def test_the_head_finishes_its_turn_after_the_talker_falls_silent(tmp_path):
     """A talker at 100 deg says a few words (0.8 s) and falls silent while the head, a servo
     at 30 deg/s, turns toward them: the loop sent the head its own pose once the stream's
@@ -1810,6 +1788,7 @@ def test_the_head_finishes_its_turn_after_the_talker_falls_silent(tmp_path):
     from hearsee.audio.signals import synthetic_voice
     from hearsee.geometry import robot_to_array
     from hearsee.sim.moving import Trajectory, simulate_moving_free_field
+    from hearsee.sim.servo import ServoHead
     from hearsee.stream.pipeline import Block
 
     cfg = robot_config_from_dict({"audio": {}, "head": {"pan_limits_deg": [-180, 180]},
@@ -1817,7 +1796,7 @@ def test_the_head_finishes_its_turn_after_the_talker_falls_silent(tmp_path):
     talker = np.array([2.0 * np.cos(np.radians(100.0)), 2.0 * np.sin(np.radians(100.0)), 1.2])
     voice = synthetic_voice("male", 4.0, FS, rng=214)
     voice[int(0.8 * FS):] = 0.0
-    head = _ServoHead(30.0)
+    head = ServoHead(30.0)
 
     class Source:
         fs, n_channels = float(FS), 3
