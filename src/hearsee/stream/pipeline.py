@@ -55,6 +55,7 @@ import queue
 import threading
 import time
 import warnings
+from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -1529,6 +1530,10 @@ MASK_SMOOTHED_MEASUREMENT = True
 #: 2-7 better); pure sensor noise (3 x 60 s) no measured frame, as before. Dev: room walkers
 #: 54.9 -> 75.9 %, still sources 56.8 -> 61.4, free field 94.0 -> 96.9.
 MASK_ROOM_DECISION = True
+#: Frames whose array pans :class:`TrackingProcessor` keeps (``process``'s ``array_pan_deg``)
+#: to turn a smoothed measurement by the turn since its evidence: 64 frames, 2 s at the
+#: default 32-ms hop, well past the evidence's largest accepted age.
+PAN_HISTORY_FRAMES = 64
 
 
 class SmoothedMask:
@@ -2131,7 +2136,9 @@ class TrackingProcessor:
         self.itd = self._itd_filter()
         self.direction = self._direction_tracker(self.cfg, self.hop / self.fs)
         self._last_measured_t = -np.inf
-        self._pan: tuple[float, float] | None = None  # (t, the array's pan), see process
+        # (t, the array's pan) of the last frames told one (process's array_pan_deg), pans
+        # unwrapped along them
+        self._pans: deque[tuple[float, float]] = deque(maxlen=PAN_HISTORY_FRAMES)
         self.motion, self.sigma_tdoa_s = self._motion_tracker(self.cfg)
         self._motion_measured_t = -np.inf
         model, margin = None, DEFAULT_MARGIN_SAMPLES
@@ -2218,7 +2225,7 @@ class TrackingProcessor:
         (:meth:`~hearsee.audio.tracking.DirectionKalman.rotate_azimuth`: ego-motion
         compensation, so that a still talker stays still and the tracker's rate is the
         talker's own), and a smoothed measurement, whose evidence is ``delay`` seconds old, by
-        the turn over its age (the pan's rate since the previous frame times that age). Exact
+        the turn since the time of its evidence (the last frames' pans, interpolated). Exact
         for a level array panning about its z axis; a tilted head's pan is only approximately
         an azimuth shift. The ITD filter and the smoothed spectra are not turned: at a
         following head's rates (tens of deg/s) they move on within a few frames. The 3D motion
@@ -2384,21 +2391,24 @@ class TrackingProcessor:
                     delay: float) -> list[tuple[float, float | None]]:
         """The array turned to ``pan`` (degrees) at frame time ``t``: the direction tracker
         turned back by the turn since the previous frame, and ``cands`` -- measured on
-        evidence ``delay`` seconds old -- by the turn over that age (see :meth:`process`).
-        The 3D motion tracker (a camera rig's) restarts instead: a head turns its array about
-        the pivot, a point the stream does not know."""
-        rate = 0.0
-        if self._pan is not None:
-            turn = float(wrap_deg(pan - self._pan[1]))
+        evidence ``delay`` seconds old -- by the turn since then (the pan at ``t - delay``
+        interpolated between the last :data:`PAN_HISTORY_FRAMES` frames' pans; see
+        :meth:`process`). The 3D motion tracker (a camera rig's) restarts instead: a head
+        turns its array about the pivot, a point the stream does not know."""
+        if self._pans:
+            t0, pan0 = self._pans[-1]
+            turn = float(wrap_deg(pan - pan0))
+            pan = pan0 + turn  # (unwrapped along the history)
             if turn:
                 self.direction.rotate_azimuth(-turn)
                 self.motion.reset()
-            dt = t - self._pan[0]
-            rate = turn / dt if dt > 0 else 0.0
-        self._pan = (t, pan)
-        if not (rate and delay > 0):
+        self._pans.append((t, pan))
+        if not (cands and delay > 0 and len(self._pans) > 1):
             return cands
-        back = rate * delay  # (how far the array turned since the evidence)
+        ts, pans = zip(*self._pans, strict=True)
+        back = pan - float(np.interp(t - delay, ts, pans))  # (the turn since the evidence)
+        if not back:
+            return cands
         return [(float(wrap_deg(az - back)), el) for az, el in cands]
 
     def _mask_candidates(self, decision: Any, n: int
