@@ -1402,7 +1402,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     state = {"n_audio": 0, "next_cam": 0.0, "phase": "listening", "cam_frames": 0,
              "cam_ended": False, "first_verified": None, "hop": scfg.hop_ms / 1000.0,
              "last_visual": -np.inf, "track_drops": 0, "heard_from": -np.inf, "head_moves": 0,
-             "head_follows": 0, "desired": None, "heard_bearing": None, "last_capture": None,
+             "head_follows": 0, "heard_bearing": None, "last_capture": None,
              "frame_interval": period}
     # live: detection runs in a worker thread so that the audio keeps flowing; its result is
     # applied at the first update after it is ready (file sources: in line, deterministic)
@@ -1550,8 +1550,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     def sink(u: Any) -> None:
         t = float(u.t)
         ageo = follow_head(t)
-        heard = ageo is not None
-        if not heard:
+        if ageo is None:
             u = _unheard(u)
         if (track.initialized
                 and t - state["last_visual"] > track_timeout_s(state["frame_interval"])):
@@ -1593,18 +1592,17 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             pending[0] = None
             dets, camera_t = apply(t, t_cap, fr, fut.result(), bearing, g), t_cap
         state["last_t"], state["last_bearing"] = t, bearing
-        # (a masked pair not yet decided on a half: as unheard, the head keeps its course)
-        emit(t, audio, bearing, dets, camera_t, heard and (u.azimuth_deg is None
-                                                           or u.bearing_decided))
+        emit(t, audio, dets, camera_t)
         if progress is not None:
             progress(state["hop"])
 
-    def emit(t: float, audio: dict | None, bearing: float | None, dets: list[dict[str, Any]],
-             camera_t: float | None, heard: bool = True) -> None:
-        """Phase, head command and track of this update; one log record / JSON line. While the
-        audio is withheld (the head turns or settles; ``heard`` False, also while a masked
-        pair has not decided a half) and there is no track, the desired pose stays the last
-        one commanded: the head's pose of the moment would stop the turn."""
+    def emit(t: float, audio: dict | None, dets: list[dict[str, Any]],
+             camera_t: float | None) -> None:
+        """Phase, head command and track of this update; one log record / JSON line. Without
+        a track the head is sent to the newest measured bearing, also while the audio is
+        withheld (the head turns or settles), silent, or a masked pair's half undecided: the
+        head's pose of the moment would stop the turn (it stopped a turn at the first silence
+        once the stream's coasting track was gone)."""
         if state["phase"] == "listening" and state["n_audio"] >= MIN_AUDIO_UPDATES:
             state["phase"] = "turning"
         now = track.predicted_to(t)  # (the track's state is its last fix's)
@@ -1617,16 +1615,13 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             pan, tilt = geo.pose
             if now.initialized:
                 pan, tilt = geo.bearing_deg(now.position)
-            elif state["heard_bearing"] is not None:
+            elif state["heard_bearing"] is not None:  # (set before the phase leaves listening)
                 pan = state["heard_bearing"]
-            elif not heard and state["desired"] is not None:
-                pan, tilt = state["desired"]
             # any driver gets a pan and a tilt within the head's limits (not only
             # PrintHeadDriver); a NaN never reaches it (GeometryError)
             pan = limit_pan_deg(pan, cfg.head.pan_limits_deg)
             tilt = limit_tilt_deg(tilt, cfg.head.tilt_limits_deg)
             command = head.command(t, pan, tilt)
-            state["desired"] = (pan, tilt)
         rec_track = track_record(now)  # (rounded for the JSON line: mm, covariance 1e-6)
         if rec_track is not None:
             rec_track = {k: _r(v, 6 if k == "covariance" else 4) for k, v in rec_track.items()}
@@ -1650,8 +1645,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             t_cap, fr, fut, g = pending[0]
             pending[0] = None
             t = state["last_t"]
-            emit(t, None, state["last_bearing"],
-                 apply(t, t_cap, fr, fut.result(), state["last_bearing"], g), t_cap)
+            emit(t, None, apply(t, t_cap, fr, fut.result(), state["last_bearing"], g), t_cap)
         ended = True
     except KeyboardInterrupt:
         status = "interrupted"
