@@ -2396,7 +2396,7 @@ class TrackingProcessor:
         :meth:`process`). The 3D motion tracker (a camera rig's) restarts instead: a head
         turns its array about the pivot, a point the stream does not know."""
         if self._pans:
-            t0, pan0 = self._pans[-1]
+            pan0 = self._pans[-1][1]
             turn = float(wrap_deg(pan - pan0))
             pan = pan0 + turn  # (unwrapped along the history)
             if turn:
