@@ -10,6 +10,7 @@ from hearsee.audio.propagation import (
     room_impulse_responses,
     simulate_free_field,
     simulate_room,
+    sum_responses,
 )
 from hearsee.audio.signals import synthetic_voice, white_noise
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
@@ -359,3 +360,12 @@ def test_far_field_must_be_a_flag():
     a = simulate_free_field(s, 16000, arr, [1.0, 0.0, 0.0], far_field=np.bool_(True))
     np.testing.assert_array_equal(a, simulate_free_field(s, 16000, arr, [1.0, 0.0, 0.0],
                                                          far_field=True))
+
+
+def test_sum_responses_adds_parts_of_different_lengths_from_the_same_instant():
+    a = np.array([[1.0, 2.0, 3.0], [0.0, 1.0, 0.0]])
+    b = np.array([[10.0], [20.0]])
+    c = np.zeros((2, 5))
+    c[:, 4] = [7.0, 8.0]
+    np.testing.assert_array_equal(sum_responses([a, b, c]),
+                                  [[11.0, 2.0, 3.0, 0.0, 7.0], [20.0, 1.0, 0.0, 0.0, 8.0]])

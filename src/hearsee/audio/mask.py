@@ -1106,10 +1106,9 @@ def masked_room_reflections(fs: float, array: MicArray | str | Path | MaskModel,
                               heading_deg)
     if not parts:
         return None
-    out = np.zeros((2, max(p.shape[1] for p in parts)))
-    for p in parts:
-        out[:, :p.shape[1]] += p
-    return out
+    from hearsee.audio.propagation import sum_responses
+
+    return sum_responses(parts)
 
 
 def _reflection_parts(fs: float, model: MaskModel, s: NDArray, room_dim: ArrayLike,

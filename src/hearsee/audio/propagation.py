@@ -51,6 +51,7 @@ __all__ = [
     "image_sources",
     "room_impulse_responses",
     "simulate_free_field",
+    "sum_responses",
     "simulate_room",
     "speed_of_sound_of",
 ]
@@ -397,6 +398,16 @@ def image_sources(rt60: float, room_dim: ArrayLike, speed_of_sound: float = 343.
             "use a shorter RT60 or a larger room"
             + (", or a smaller max_order" if max_order is not None else ""))
     return float(e_absorption), int(order)
+
+
+def sum_responses(parts: list[NDArray]) -> NDArray:
+    """Impulse responses of different lengths -- (n_mics, L_k) each, sample 0 the same
+    instant -- added into one (n_mics, max L_k) array (the shorter ones end in zeros): the
+    parts of a response rendered apart (a masked room's early and late reflections)."""
+    out = np.zeros((parts[0].shape[0], max(p.shape[1] for p in parts)))
+    for p in parts:
+        out[:, :p.shape[1]] += p
+    return out
 
 
 def room_impulse_responses(

@@ -47,7 +47,7 @@ from numpy.typing import NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import localize_tdoa
-from hearsee.audio.propagation import room_impulse_responses
+from hearsee.audio.propagation import room_impulse_responses, sum_responses
 from hearsee.audio.signals import synthetic_voice
 from hearsee.audio.tdoa import estimate_tdoas
 from hearsee.audio.tracking import DirectionKalman, MotionKalman
@@ -297,12 +297,7 @@ class _RoomAudio:
                                            orders=(EARLY_ORDER + 1, None), heading_deg=heading)
             self.late = (-np.inf if t is None else t, heading, late)
         late = self.late[2]
-        if late is None:  # (no order beyond the early ones)
-            return h
-        out = np.zeros((h.shape[0], max(h.shape[1], late.shape[1])))
-        out[:, :h.shape[1]] += h
-        out[:, :late.shape[1]] += late
-        return out
+        return h if late is None else sum_responses([h, late])  # (None: no late orders)
 
     def chunk(self, k: int, pan_deg: float) -> tuple[int, int]:
         """Render chunk k ([k*dt, (k+1)*dt)) with the head at ``pan_deg``; returns its samples."""
@@ -594,7 +589,7 @@ class _MaskedEars:
     :class:`~hearsee.stream.pipeline.SmoothedMask` front/back decision and the direction
     tracker, in the array frame). Frames heard partly before a head turn of more than
     :data:`MASK_TURN_RESET_DEG` feed it and are then forgotten (``reset_array_state``: the
-    live robot's rule while the head moves); the
+    live robot's rule after a turn); the
     bearings are the tracked azimuths of the frames that measured, once the mask has decided
     a half, rotated by the head pan. The bare pair's closed form cannot tell front from
     back: it is not used here."""
