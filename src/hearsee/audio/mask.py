@@ -1080,10 +1080,10 @@ def masked_room_impulse_responses(fs: float, array: MicArray | str | Path | Mask
     n = max(p.shape[1] for p in parts)
     impulse = np.zeros(n)
     impulse[0] = 1.0
-    h = simulate_masked(impulse, fs, model, s)  # the exact direct path (checks the source)
-    for p in parts:
-        h[:, :p.shape[1]] += p
-    return h
+    from hearsee.audio.propagation import sum_responses
+
+    # the exact direct path (checks the source), as long as the longest part
+    return sum_responses([simulate_masked(impulse, fs, model, s), *parts])
 
 
 def masked_room_reflections(fs: float, array: MicArray | str | Path | MaskModel,
