@@ -514,6 +514,31 @@ def test_mapped_source_picks_channels_and_stops_at_duration():
         MappedSource(ArraySource(x, 1000.0), [0, 7])
 
 
+def test_mapped_source_passes_on_the_sources_capture_clock():
+    """A file has no 'now' (None); a source's ``audio_time_now`` is passed on, None (no block
+    yet) as None, and anything but a finite number is an AudioInputError naming it."""
+    from hearsee.stream.pipeline import ArraySource
+
+    x = np.zeros((2, 100))
+    assert MappedSource(ArraySource(x, 1000.0), [0, 1]).audio_time_now() is None
+
+    class Clocked(ArraySource):
+        now = None
+
+        def audio_time_now(self):
+            return self.now
+
+    src = Clocked(x, 1000.0)
+    mapped = MappedSource(src, [1])
+    assert mapped.audio_time_now() is None
+    src.now = 2.25
+    assert mapped.audio_time_now() == 2.25
+    for bad in (float("nan"), "soon"):
+        src.now = bad
+        with pytest.raises(AudioInputError, match="audio_time_now"):
+            mapped.audio_time_now()
+
+
 def _person_case(folder: Path, n_frames: int = 8):
     """A room with a person (left of centre, 2.5 m) and a mannequin (right, 3 m) seen by the
     head's cameras, and the person's voice recorded by a three-mic array at the pivot."""
@@ -1718,10 +1743,13 @@ class _SlewingHead:
         return {"pan_deg": pan_deg, "tilt_deg": tilt_deg}
 
 
-def _slewing_head_run(tmp_path, rate: float):
+def _slewing_head_run(tmp_path, rate: float, latency_s: float = 0.0, clock: bool = False):
     """A talker behind the robot (robot azimuth 180 deg, 2 m, at the pivot's height) and a
     head panning from 160 deg at ``rate`` deg/s from 0.8 s of audio to 40 deg further (across
-    the +-180 seam), rendered as the turning array hears the still talker (free field)."""
+    the +-180 seam), rendered as the turning array hears the still talker (free field).
+    ``latency_s``: the head's pose is read ``latency_s`` seconds of audio after the end of the
+    newest block (a device's input latency and queued blocks); ``clock``: the source tells
+    that second (``audio_time_now``, as a live device does)."""
     from hearsee.audio.signals import synthetic_voice
     from hearsee.geometry import robot_to_array
     from hearsee.sim.moving import Trajectory, simulate_moving_free_field
@@ -1743,10 +1771,14 @@ def _slewing_head_run(tmp_path, rate: float):
 
         def blocks(self):
             for b in ArraySource(x, FS, 1600).blocks():
-                head.t_now = (b.start + b.data.shape[1]) / FS
+                head.t_now = (b.start + b.data.shape[1]) / FS + latency_s
                 yield b
 
-    return run_robot(cfg, audio_source=Source(), head=head)
+    class ClockedSource(Source):
+        def audio_time_now(self):
+            return head.t_now
+
+    return run_robot(cfg, audio_source=ClockedSource() if clock else Source(), head=head)
 
 
 def test_a_head_following_slowly_keeps_hearing(tmp_path):
@@ -1775,6 +1807,27 @@ def test_a_head_following_slowly_keeps_hearing(tmp_path):
     after = [r for r in res.log if r["t"] > 1.5]
     err = np.abs(wrap_deg(np.array([r["audio"]["azimuth_deg"] for r in after]) - 180.0))
     assert len(after) > 50 and np.median(err) < 1.0
+
+
+def test_head_poses_are_timed_by_the_sources_capture_clock(tmp_path):
+    """The head's encoders are read now, while the newest block the stream has taken ended
+    a device's input latency (plus any blocks queued behind the stream) ago: timed at that
+    block's end, a head panning at 20 deg/s read 0.15 s late put each update's pose 3 deg
+    ahead, and the still talker behind it 3 deg further round too. A source that tells the second
+    of audio it captures now (``audio_time_now``, as DeviceSource does) times the reads by
+    it."""
+    def errors(res):
+        during = [r for r in res.log if 1.0 <= r["t"] <= 2.8]
+        assert len(during) > 50 and all(r["audio"] is not None for r in during)
+        return wrap_deg(np.array([r["audio"]["azimuth_deg"] for r in during]) - 180.0)
+
+    late = errors(_slewing_head_run(tmp_path, 20.0, latency_s=0.15))
+    timed = errors(_slewing_head_run(tmp_path, 20.0, latency_s=0.15, clock=True))
+    # (no latency: +0.7 deg on average; the late reads add 20 x 0.15 deg: +3.8; timed +0.9,
+    # median |error| 1.0, the largest 3.9)
+    assert late.mean() > 2.5
+    assert abs(timed.mean()) < 1.5 and np.median(np.abs(timed)) < 1.5
+    assert np.abs(timed).max() < 5.0
 
 
 def test_the_head_finishes_its_turn_after_the_talker_falls_silent(tmp_path):

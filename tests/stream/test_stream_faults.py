@@ -104,6 +104,35 @@ def _device(monkeypatch, sd, **kw):
     return pl.DeviceSource(0, 3, FS, **kw)
 
 
+def test_device_source_tells_the_second_of_audio_captured_now(monkeypatch):
+    """``audio_time_now``: the end of the newest block plus the time since its capture --
+    PortAudio's currentTime less the buffer's end where the host API gives both, else the
+    stream's reported latency -- plus the time since its callback (a robot times its head's
+    pose reads by it)."""
+    src = _device(monkeypatch, _fake_portaudio([0]))
+    now = [100.0]
+    monkeypatch.setattr(pl.time, "perf_counter", lambda: now[0])
+    assert src.audio_time_now() is None  # (no block yet)
+    ti = _TimeInfo(5.0)
+    ti.currentTime = 5.0 + BL / FS + 0.03  # (the callback 30 ms after the buffer's end)
+    src._callback(np.zeros((BL, 3), np.float32), BL, ti, _Flags(False))
+    assert src.audio_time_now() == pytest.approx(BL / FS + 0.03)
+    now[0] += 0.25
+    assert src.audio_time_now() == pytest.approx(BL / FS + 0.28)
+    # a host API without times: the stream's reported input latency (here 50 ms)
+    src._latency_s = pl._input_latency(types.SimpleNamespace(latency=0.05))
+    src._callback(np.zeros((BL, 3), np.float32), BL, _TimeInfo(0.0), _Flags(False))
+    assert src.audio_time_now() == pytest.approx(2 * BL / FS + 0.05)
+    # times a host API fills inconsistently (the callback before the buffer's end, or a second
+    # after it) and latencies that are no number >= 0 are not believed
+    for current in (5.0, 5.0 + BL / FS + 2.0, float("nan")):
+        ti.currentTime = current
+        assert pl._capture_delay(ti, 5.0, BL, FS) is None
+    for bad in (float("nan"), -0.01, (0.01, 0.02), None):
+        assert pl._input_latency(types.SimpleNamespace(latency=bad)) == 0.0
+    assert pl._input_latency(object()) == 0.0
+
+
 # ------------------------------------------------------------------------- 1. reuse
 def test_device_source_run_twice_starts_again_at_sample_zero(monkeypatch):
     """A second run of the same DeviceSource covers its own stream from sample 0: the blocks

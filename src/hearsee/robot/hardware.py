@@ -745,6 +745,17 @@ class MappedSource:
     def n_dropped(self) -> int:
         return int(getattr(self.source, "n_dropped", 0))
 
+    def audio_time_now(self) -> float | None:
+        """The source's ``audio_time_now()`` (seconds of audio being captured now, e.g.
+        :meth:`hearsee.stream.pipeline.DeviceSource.audio_time_now`), or None where it has
+        none (a file: its audio has no 'now') or gives None (no block yet); anything else than
+        a finite number is an AudioInputError."""
+        clock = getattr(self.source, "audio_time_now", None)
+        now = None if clock is None else clock()
+        if now is None:
+            return None
+        return finite_number("audio source audio_time_now()", now, error=AudioInputError)
+
     def blocks(self) -> Any:
         """The source's blocks, mapped; the source's own iterator is closed when they end (a
         device's error while stopping is raised, unless another error ends the run)."""
@@ -952,6 +963,11 @@ POSE_TOLERANCE_DEG = 0.5
 #: (worse pointing than before). The simulated loop's masked ears keep their state below the
 #: same rate (:data:`hearsee.robot.pipeline.MASK_TURN_RESET_DEG` per 0.2-s step).
 FOLLOW_RATE_DPS = 50.0
+
+#: Seconds of audio over which the live loop keeps its reads of the head's pose, to place each
+#: frame's audio at the pose of its time (``_pose_at``): a live source's blocks can wait in
+#: the stream's queue (behind a slow update) for longer than one frame plus one block.
+POSE_HISTORY_S = 2.0
 
 
 def pan_change_deg(a_deg: float, b_deg: float) -> float:
@@ -1317,7 +1333,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     duration_s : stop after this much audio (None: until the source ends or Ctrl-C).
     audio_source : a stream source (``fs``, ``n_channels``, ``blocks()``) with ``cfg.audio``'s
         input channels; default: the live device (:func:`open_audio_source`). Tests pass an
-        :class:`hearsee.stream.pipeline.ArraySource` of a simulated recording.
+        :class:`hearsee.stream.pipeline.ArraySource` of a simulated recording. A source with
+        ``audio_time_now()`` (the second of audio captured now, as
+        :meth:`hearsee.stream.pipeline.DeviceSource.audio_time_now`) times the head's pose
+        reads by it.
     cameras : default: :class:`Cameras` of ``cfg.cameras`` (None in the file: audio only);
         any object with its ``read(t)`` (``t``: seconds of audio), ``n_failures`` and
         ``n_consecutive_failures``.
@@ -1403,7 +1422,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
              "cam_ended": False, "first_verified": None, "hop": scfg.hop_ms / 1000.0,
              "last_visual": -np.inf, "track_drops": 0, "heard_from": -np.inf, "head_moves": 0,
              "head_follows": 0, "heard_bearing": None, "last_capture": None,
-             "frame_interval": period}
+             "frame_interval": period, "captured": -math.inf}
     # live: detection runs in a worker thread so that the audio keeps flowing; its result is
     # applied at the first update after it is ready (file sources: in line, deterministic)
     use_pool = (live if async_vision is None else async_vision) and cameras is not None
@@ -1496,14 +1515,20 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     window = (scfg.frame_ms + a.block_ms) / 1000.0  # (seconds a head move can reach)
 
     def read_pose(t: float) -> tuple[float, float]:
-        """The driver's pose now -- at the end of the newest audio block, or ``t`` if later --
-        also kept in ``poses``, the reads of the last ``window`` (and one before)."""
+        """The driver's pose now, also kept in ``poses`` (the reads of the last
+        :data:`POSE_HISTORY_S`, and one before), timed on the audio's clock: the second of
+        audio the microphones capture now where the source tells it (a live device:
+        ``audio_time_now()``, its input latency and the blocks queued behind the stream
+        included; unheeded, a head following at 28 deg/s put its pan 0.5-1 deg off per 20-40
+        ms), else the end of the newest block the stream has taken, or ``t`` if later."""
         pose = _pose(head)
-        now = max(float(pipeline.stats.audio_s), t)
+        captured = source.audio_time_now()
+        state["captured"] = -math.inf if captured is None else captured
+        now = max(float(pipeline.stats.audio_s), t, state["captured"])
         while poses and poses[-1][0] >= now:  # (reads within one block: the latest)
             poses.pop()
         poses.append((now, pose))
-        while len(poses) > 2 and poses[1][0] < now - window:
+        while len(poses) > 2 and poses[1][0] < now - max(window, POSE_HISTORY_S):
             poses.popleft()
         return pose
 
@@ -1533,7 +1558,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             now = poses[-1][0]
             moved = max(_pose_change_deg(pose, p) for tp, p in poses if tp >= now - window)
             if moved > FOLLOW_RATE_DPS * window:
-                state["heard_from"] = t + window
+                # (and the audio captured until the read, where a live source's clock tells)
+                state["heard_from"] = max(t, state["captured"]) + window
                 state["head_moves"] += 1
             else:
                 state["head_follows"] += 1

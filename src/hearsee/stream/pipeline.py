@@ -632,6 +632,11 @@ class DeviceSource:
     name : str
         The device's name (PortAudio's), for messages.
 
+    :meth:`audio_time_now` tells which second of this run's audio the microphones are
+    capturing at the moment it is called (the device's input latency and the blocks still
+    queued behind the consumer included): what a robot reading its head's encoders times the
+    reading by.
+
     A channel stuck at one value or far quieter than the others (a disconnected microphone) in
     the run's first :data:`CHANNEL_CHECK_S` seconds of signal is a DegenerateInputWarning
     naming it (:class:`_ChannelWatch`; the run goes on); ``check_channels`` (device channel
@@ -693,7 +698,23 @@ class DeviceSource:
         self.n_dropped = 0
         self.n_overflows = 0
         self.stalled = False
+        # (the newest block's end: its sample index and the time.perf_counter() of its capture)
+        self._clock: tuple[int, float] | None = None
+        self._latency_s = 0.0  # (the stream's input latency, s, once it is open)
         return run
+
+    def audio_time_now(self) -> float | None:
+        """Seconds of this run's audio (sample index / ``fs``) being captured now: the end of
+        the newest block the device delivered, plus the time since it was captured -- the
+        device's input latency (PortAudio's ``time_info``: the callback's ``currentTime`` less
+        the buffer's end, ``inputBufferAdcTime`` + its length; where the host API gives no
+        times, the stream's reported ``latency``) and the time since its callback. None before
+        the run's first block."""
+        clock = self._clock
+        if clock is None:
+            return None
+        end, t_end = clock
+        return end / self.fs + max(time.perf_counter() - t_end, 0.0)
 
     def _callback(self, indata: NDArray, frames: int, time_info: Any, status: Any) -> None:
         adc = _adc_time(time_info)
@@ -713,7 +734,10 @@ class DeviceSource:
         self._next += frames
         seq = self._seq
         self._seq += 1
-        blk = Block(seq, start, np.array(indata, dtype=float).T, time.perf_counter())
+        arrival = time.perf_counter()
+        delay = _capture_delay(time_info, adc, frames, self.fs)
+        self._clock = (self._next, arrival - (self._latency_s if delay is None else delay))
+        blk = Block(seq, start, np.array(indata, dtype=float).T, arrival)
         try:
             self._q.put_nowait(blk)
         except queue.Full:
@@ -736,6 +760,8 @@ class DeviceSource:
                         device=self._index, channels=self.n_channels, samplerate=self.fs,
                         blocksize=self.block_len, dtype="float32", callback=callback)
                     stream.__enter__()
+                    if self._run is run:
+                        self._latency_s = _input_latency(stream)
                 except (ValueError, sd.PortAudioError) as exc:
                     # (a rate or channel count the device refuses, a device another program
                     # holds: PortAudioError escaped as a traceback)
@@ -788,6 +814,31 @@ def _adc_time(time_info: Any) -> float | None:
     except (TypeError, ValueError):
         return None
     return t if np.isfinite(t) and t > 0.0 else None
+
+
+def _capture_delay(time_info: Any, adc: float | None, frames: int, fs: float) -> float | None:
+    """Seconds from the capture of a block's end to its callback: ``time_info.currentTime``
+    less (``inputBufferAdcTime`` + ``frames`` / ``fs``), both on PortAudio's stream clock; None
+    where the host API does not give both, or the difference is negative or a second or more
+    (clocks a host API fills inconsistently)."""
+    if adc is None:
+        return None
+    try:
+        now = float(getattr(time_info, "currentTime", 0.0))
+    except (TypeError, ValueError):
+        return None
+    delay = now - (adc + frames / fs)
+    return delay if np.isfinite(now) and now > 0.0 and 0.0 <= delay < 1.0 else None
+
+
+def _input_latency(stream: Any) -> float:
+    """The input stream's reported latency, seconds (sounddevice's ``InputStream.latency``);
+    0 where it reports none or no finite number >= 0."""
+    try:
+        latency = float(getattr(stream, "latency", 0.0))
+    except (TypeError, ValueError):
+        return 0.0
+    return latency if np.isfinite(latency) and 0.0 <= latency < 1.0 else 0.0
 
 
 class DropoutSource:
