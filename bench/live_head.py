@@ -17,7 +17,12 @@ frame, ``StreamPipeline.run(array_pan=)``, so that its direction tracker turns b
 head instead of taking the head's turning for the talker's motion), the same without telling
 the stream (its ablation) and the rule before 2026-12-05 (every pose change above 0.5 deg
 restarted the whole stream and withheld its audio until one frame and one block after the head
-stopped: ``FOLLOW_RATE_DPS = 0``). Per run, from 1 s on:
+stopped: ``FOLLOW_RATE_DPS = 0``). Two more rows run the loop's rule with a device whose blocks
+reach the loop ``--latency-ms`` (default 50) after their capture, so that the head's pose read
+while a block is processed is that much newer than the block's end: the source telling the
+second of audio it captures (``audio_time_now``, as the live DeviceSource does since
+2026-12-05's evening), and not telling it (the pose timed at the newest block's end, as
+before). Per run, from 1 s on:
 the share of updates with a measured bearing, the bearing error of those (robot frame, against
 the talker as heard at the array), and the head's pointing error |pan - talker azimuth| at
 every update (its p50 / p90 and the share of updates within 10 deg).
@@ -42,8 +47,9 @@ FS = 16000
 BLOCK = 1600  # samples: the robot file's default block_ms 100
 CONTEXT = 1024  # samples rendered before each block (the sound already on its way)
 MOUTH_Z_M = 1.55
-#: the loop's rule, its ablation (the stream not told the head's pans), the rule before
-RULES = ("default", "keep", "before")
+#: the loop's rule, its ablation (the stream not told the head's pans), the rule before; the
+#: loop's rule with a device latency, the source telling its capture clock or not
+RULES = ("default", "keep", "before", "latency-clock", "latency")
 
 
 def walk(rng: np.random.Generator, duration_s: float) -> tuple[object, str]:
@@ -64,10 +70,11 @@ class ClosedLoopSource:
     """The walker's voice as the head hears it, rendered block by block while the loop runs."""
 
     def __init__(self, cfg, head, path, voice: np.ndarray, noise_sigma: float,
-                 rng: np.random.Generator, model=None) -> None:
+                 rng: np.random.Generator, model=None, latency_s: float = 0.0) -> None:
         self.cfg, self.head, self.path, self.voice = cfg, head, path, voice
         self.noise_sigma, self.rng, self.model = noise_sigma, rng, model
         self.fs, self.n_channels = float(FS), cfg.audio.array.n_mics
+        self.latency_s = latency_s  # (a block reaches the loop this long after its end)
 
     def heard(self, lo: int, hi: int) -> np.ndarray:
         from hearsee.geometry import robot_to_array
@@ -91,11 +98,19 @@ class ClosedLoopSource:
         from hearsee.stream.pipeline import Block
 
         for seq, start in enumerate(range(0, self.voice.size - BLOCK + 1, BLOCK)):
-            self.head.advance((start + BLOCK) / FS)  # (the head moved during the block)
+            # (the head moved during the block, and on until the block reaches the loop)
+            self.head.advance((start + BLOCK) / FS + self.latency_s)
             lo = max(start - CONTEXT, 0)
             x = self.heard(lo, start + BLOCK)[:, start - lo:start - lo + BLOCK]
             x = x + self.noise_sigma * self.rng.standard_normal(x.shape)
             yield Block(seq, start, x, time.perf_counter())
+
+
+class ClockedSource(ClosedLoopSource):
+    """... telling the second of audio captured now (the head's clock), as DeviceSource."""
+
+    def audio_time_now(self) -> float:
+        return self.head.t
 
 
 def run_one(array: str, seed: int, args: argparse.Namespace, rule: str) -> dict:
@@ -122,7 +137,9 @@ def run_one(array: str, seed: int, args: argparse.Namespace, rule: str) -> dict:
 
             model = MaskModel(cfg.audio.array)
         head = ServoHead(args.servo_dps)  # (hearsee.sim.servo)
-        source = ClosedLoopSource(cfg, head, path, voice, sigma, rng, model)
+        latency = args.latency_ms / 1000.0 if rule.startswith("latency") else 0.0
+        kind_of_source = ClockedSource if rule == "latency-clock" else ClosedLoopSource
+        source = kind_of_source(cfg, head, path, voice, sigma, rng, model, latency)
         saved = hw.FOLLOW_RATE_DPS, StreamPipeline.run
         if rule == "before":
             hw.FOLLOW_RATE_DPS = 0.0
@@ -158,6 +175,7 @@ def main() -> None:
     ap.add_argument("--servo-dps", type=float, default=60.0)
     ap.add_argument("--snr", type=float, default=20.0)
     ap.add_argument("--arrays", default="three-mic,mask2-asym")
+    ap.add_argument("--latency-ms", type=float, default=50.0)
     args = ap.parse_args()
 
     import matplotlib
@@ -171,7 +189,11 @@ def main() -> None:
     variants = [(f"heard while <= {hw.FOLLOW_RATE_DPS:g} deg/s, tracker told the pans (default)",
                  "default"),
                 ("heard, tracker not told the pans (ablation)", "keep"),
-                ("every move restarts, audio withheld (before 2026-12-05)", "before")]
+                ("every move restarts, audio withheld (before 2026-12-05)", "before"),
+                (f"default, device latency {args.latency_ms:g} ms, poses timed by the "
+                 "device's capture clock", "latency-clock"),
+                (f"default, device latency {args.latency_ms:g} ms, poses timed at the newest "
+                 "block's end (before 2026-12-05's evening)", "latency")]
     headers = ["array", "rule", "updates with a bearing", "bearing error p50 / p90 deg",
                "pointing error p50 / p90 deg", "pointing within 10 deg", "turns / follows"]
     rows, curves = [], {}
