@@ -229,6 +229,32 @@ def test_associate_picks_the_nearest_person_inside_the_gate():
     assert associate(far, bearings, kf, 90.0) is None
 
 
+def test_a_masked_pairs_coarser_bearing_gets_a_wider_association_gate():
+    """A masked pair's bearings are several times coarser than three microphones': a verified
+    person 30 deg from its bearing is taken (not with the default gate), one 45 deg off is
+    not; the gate follows the array (association_gate_deg) and is checked."""
+    from hearsee.audio.arrays import MicArray
+    from hearsee.audio.tracking import MotionKalman
+    from hearsee.robot.pipeline import (
+        ASSOCIATION_GATE_DEG,
+        MASKED_ASSOCIATION_GATE_DEG,
+        associate,
+        association_gate_deg,
+    )
+
+    assert association_gate_deg(MicArray.from_preset("three-mic")) == ASSOCIATION_GATE_DEG
+    masked = association_gate_deg(MicArray.from_preset("mask2-asym"))
+    assert masked == MASKED_ASSOCIATION_GATE_DEG > ASSOCIATION_GATE_DEG
+    kf = MotionKalman()
+    person = [np.array([2.0, 0.0, 1.2])]  # (robot frame: at 0 deg)
+    assert associate(person, [0.0], kf, 30.0) is None
+    assert associate(person, [0.0], kf, 30.0, masked) == 0
+    assert associate(person, [0.0], kf, -45.0, masked) is None
+    for bad in (0.0, -5.0, float("nan"), 181.0, "40"):
+        with pytest.raises(EstimationError, match="gate_deg"):
+            associate(person, [0.0], kf, 30.0, bad)
+
+
 def test_associate_never_picks_what_is_not_a_number():
     """A NaN audio bearing (a direction filter's before it starts) is no bearing, a person
     with a NaN bearing or position is never the nearest (numpy's argmin took the NaN), and

@@ -1371,6 +1371,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         MIN_AUDIO_UPDATES,
         RunResult,
         associate,
+        association_gate_deg,
         fuses_fix,
         new_person_track,
         stereo_position_cov,
@@ -1480,7 +1481,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         state["last_capture"] = t_cap
         if track.initialized:
             track.predict(t_cap)
-        best = associate([v[1] for v in verified], [v[2] for v in verified], track, bearing)
+        best = associate([v[1] for v in verified], [v[2] for v in verified], track, bearing,
+                         association_gate_deg(a.array))
         if best is not None:
             h, p, _, k = verified[best]
             Rc = g.R_cam.T @ stereo_position_cov(np.asarray(h.position_m), rig.focal_px,
