@@ -200,3 +200,47 @@ def test_a_recording_too_long_for_the_spectra_cache_is_checked_on_frames_spread_
     a, b = np.array(spread.tonal_lines_hz), np.array(kept.tonal_lines_hz)
     assert abs(len(a) - len(b)) <= 1 and abs(a[0] - 60.0) < 0.01 and abs(b[0] - 60.0) < 0.01
     np.testing.assert_allclose(spread.summary_tdoa_s * FS, kept.summary_tdoa_s * FS, atol=0.05)
+
+
+def test_the_public_hum_helpers_refuse_bad_input():
+    """One NaN sample made remove_lines / filter_lines return a whole channel of NaN and
+    find_lines find nothing, silently; a bandwidth of 0 or a rate of 0 divided by zero, text
+    lines were read as Hz and a recording shorter than scipy's padding raised its ValueError.
+    Now: typed errors naming the input, and a short recording is filtered."""
+    from hearsee.audio.hum import LineFilter, filter_lines, find_lines, remove_lines
+    from hearsee.errors import AudioInputError, ConfigError
+
+    t = np.arange(8000) / 16000.0
+    x = np.vstack([np.sin(2 * np.pi * 50.0 * t)] * 2)
+    bad = x.copy()
+    bad[0, 100] = np.nan
+    for call in (lambda: remove_lines(bad, 16000, [50.0]), lambda: find_lines(bad, 16000),
+                 lambda: filter_lines(bad, 16000, [50.0])):
+        with pytest.raises(AudioInputError, match="finite|NaN"):
+            call()
+    for fs in (0, float("nan"), "16000"):
+        with pytest.raises(AudioInputError, match="sample rate"):
+            find_lines(x, fs)
+        with pytest.raises(AudioInputError, match="sample rate"):
+            LineFilter([50.0], fs, 2)
+    with pytest.raises(AudioInputError, match="n_channels, n_samples"):
+        find_lines(x[0], 16000)
+    with pytest.raises(AudioInputError, match="at least one sample"):
+        remove_lines(np.zeros((2, 0)), 16000, [50.0])
+    with pytest.raises(ConfigError, match="bandwidth_hz"):
+        remove_lines(x, 16000, [50.0], bandwidth_hz=0)
+    with pytest.raises(ConfigError, match="bandwidth_hz"):
+        LineFilter([50.0], 16000, 2, bandwidth_hz=float("nan"))
+    with pytest.raises(ConfigError, match="n_channels"):
+        LineFilter([50.0], 16000, -1)
+    with pytest.raises(ConfigError, match="frame_ms"):
+        find_lines(x, 16000, frame_ms=0)
+    for lines in ("50", [-50.0], [float("nan")], [[50.0]], [True]):
+        with pytest.raises(ConfigError, match="line frequencies"):
+            remove_lines(x, 16000, lines)
+    # a recording shorter than the zero-phase filter's padding: filtered, not refused
+    short = remove_lines(x[:, :5], 16000, [50.0, 1234.0])
+    assert short.shape == (2, 5) and np.all(np.isfinite(short))
+    # a valid call is unchanged: the 50-Hz tone taken out (away from the ends)
+    y = remove_lines(x, 16000, [50.0])
+    assert np.sqrt(np.mean(y[:, 2000:6000] ** 2)) < 0.05 * np.sqrt(np.mean(x ** 2))

@@ -29,7 +29,9 @@ import scipy.fft as sfft
 import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.errors import ConfigError, TonalNoiseWarning
+from hearsee.audio.signals import as_samples, check_fs
+from hearsee.config import finite_number, real_entries, whole_number
+from hearsee.errors import AudioInputError, ConfigError, TonalNoiseWarning
 
 __all__ = [
     "COMB_SHARE",
@@ -259,13 +261,35 @@ def _comb(lines: NDArray) -> NDArray | None:
     return None
 
 
+def _recording(x: ArrayLike, fs: float, *, two_d: bool = False) -> tuple[NDArray, float]:
+    """The checked recording (samples on the last axis; (n_ch, n) with ``two_d``) and sample
+    rate (Hz) of the public functions here: finite real samples, at least one, and a rate
+    :func:`hearsee.audio.signals.check_fs` takes; AudioInputError else (one NaN sample made a
+    whole channel NaN, silently)."""
+    a = as_samples(x)
+    if (two_d and a.ndim != 2) or a.ndim == 0 or a.shape[-1] == 0:
+        shape = "(n_channels, n_samples)" if two_d else "samples along its last axis"
+        raise AudioInputError(f"recording must be {shape} with at least one sample, got "
+                              f"shape {a.shape}")
+    return a, check_fs(fs)
+
+
+def _bandwidth(bandwidth_hz: float) -> float:
+    """A notch's -3 dB bandwidth, Hz: a finite number > 0 (ConfigError else)."""
+    return finite_number("bandwidth_hz", bandwidth_hz, 0.0, lo_open=True)
+
+
 def find_lines(x: ArrayLike, fs: float, frame_ms: float = 64.0) -> NDArray:
     """The lines (Hz) of stationary tonal noise on every channel of the recording ``x``
     (n_ch, n): :func:`tonal_bins` of its frames (``frame_ms`` long, every half frame, Tukey
     window with 25 % tapers as :func:`hearsee.audio.tdoa.estimate_tdoas`'; frames silent on
-    every channel left out), then :func:`line_frequencies`. Empty when there is none. For
-    analyses that do not go through ``estimate_tdoas``, which finds them in its own spectra."""
-    a = np.asarray(x, dtype=float)
+    every channel left out), then :func:`line_frequencies`. Empty when there is none (also for
+    a recording shorter than one frame). For analyses that do not go through
+    ``estimate_tdoas``, which finds them in its own spectra. A recording that is no finite
+    (n_ch, n) array of samples, or a bad rate, is an AudioInputError; ``frame_ms`` must be a
+    finite number > 0 (ConfigError)."""
+    a, fs = _recording(x, fs, two_d=True)
+    frame_ms = finite_number("frame_ms", frame_ms, 0.0, lo_open=True)
     n = max(int(round(frame_ms * 1e-3 * fs)), 2)
     if a.ndim != 2 or a.shape[1] < n:
         return np.zeros(0)
@@ -316,15 +340,21 @@ def remove_lines(x: ArrayLike, fs: float, lines_hz: ArrayLike,
     periods (a whole number of periods within 0.05 sample) before it is filtered: the notches
     settle in the extension, which is cut off again (the hum's residue in the first 0.1 s of
     a 50-Hz comb: -9 -> about -35 dB).
+
+    The recording must hold finite samples, at least one (AudioInputError), ``lines_hz``
+    numbers > 0 (:func:`check_lines`) and ``bandwidth_hz`` a number > 0 (ConfigError).
     """
-    a = np.asarray(x, dtype=float)
-    sos = _notch_sos(lines_hz, fs, bandwidth_hz)
+    a, fs = _recording(x, fs)
+    lines = np.array(check_lines(lines_hz), dtype=float)
+    sos = _notch_sos(lines, fs, _bandwidth(bandwidth_hz))
     if sos is None:
         return a.copy()
-    period = _hum_period(np.sort(np.atleast_1d(np.asarray(lines_hz, dtype=float))), fs)
+    period = _hum_period(np.sort(lines), fs)
     pad = int(round(SETTLE_S * fs))
     if period is None or period > a.shape[-1]:
-        return ss.sosfiltfilt(sos, a, axis=-1)
+        # (scipy's default padding, 3 (2 sections + 1) samples, refused a shorter recording)
+        return ss.sosfiltfilt(sos, a, axis=-1,
+                              padlen=min(3 * (2 * sos.shape[0] + 1), a.shape[-1] - 1))
     n = a.shape[-1]
     s = np.arange(1, pad + 1)
     before = (-s) % period  # (copies of the first period, backwards)
@@ -352,11 +382,9 @@ def _hum_period(lines: NDArray, fs: float) -> int | None:
 
 
 def check_lines(lines_hz: ArrayLike) -> tuple[float, ...]:
-    """Line frequencies (Hz) as a tuple of floats, each finite and > 0 (ConfigError else)."""
-    try:
-        hz = np.atleast_1d(np.asarray(lines_hz, dtype=float))
-    except (TypeError, ValueError):
-        hz = None
+    """Line frequencies (Hz) as a tuple of floats, each a finite number > 0, none or more
+    (ConfigError else: text such as "50" was read as 50 Hz)."""
+    hz = np.atleast_1d(np.asarray(lines_hz, dtype=float)) if real_entries(lines_hz) else None
     if hz is None or hz.ndim != 1 or not np.all(np.isfinite(hz) & (hz > 0)):
         raise ConfigError(f"line frequencies must be numbers of Hz > 0, got {lines_hz!r}")
     return tuple(float(v) for v in hz)
@@ -373,8 +401,10 @@ def filter_lines(x: ArrayLike, fs: float, lines_hz: ArrayLike, frame_ms: float =
     the one below) can pass the test only once that one is gone. :func:`find_lines` looks
     again after each removal, up to :data:`MAX_ROUNDS` times; the lines found are joined to
     the others (a harmonic comb completed again, :func:`line_frequencies`). Returns (the
-    filtered recording, every line removed, Hz, ascending)."""
-    lines = np.sort(np.asarray(lines_hz, dtype=float))
+    filtered recording, every line removed, Hz, ascending). Inputs checked as
+    :func:`find_lines` and :func:`remove_lines` check them."""
+    x, fs = _recording(x, fs, two_d=True)
+    lines = np.sort(np.array(check_lines(lines_hz), dtype=float))
     y = remove_lines(x, fs, lines)
     for _ in range(MAX_ROUNDS):
         more = _apart(find_lines(y, fs, frame_ms), lines)
@@ -403,14 +433,20 @@ class LineFilter:
         Sample rate, Hz.
     n_channels : int
         Channels of every block.
+    bandwidth_hz : float
+        Each notch's -3 dB bandwidth, Hz.
+
+    Bad settings (lines that are no numbers > 0, a bandwidth or channel count that is no
+    number > 0) are a ConfigError, a bad rate an AudioInputError.
     """
 
     def __init__(self, lines_hz: ArrayLike, fs: float, n_channels: int,
                  bandwidth_hz: float = NOTCH_BANDWIDTH_HZ) -> None:
         self.lines_hz = check_lines(lines_hz)
-        self.sos = _notch_sos(self.lines_hz, fs, bandwidth_hz)
+        self.sos = _notch_sos(self.lines_hz, check_fs(fs), _bandwidth(bandwidth_hz))
+        n_channels = whole_number("n_channels", n_channels)
         self.zi = (None if self.sos is None
-                   else np.zeros((self.sos.shape[0], int(n_channels), 2)))
+                   else np.zeros((self.sos.shape[0], n_channels, 2)))
 
     def __call__(self, data: NDArray) -> NDArray:
         """The block ``data`` (n_channels, n) filtered, in its dtype when that is a float."""
