@@ -733,6 +733,19 @@ def test_localize_recording_refuses_options_a_masked_array_would_ignore(kw):
     assert doc["frames"]
 
 
+def test_localize_recording_names_a_misspelt_setting():
+    """A setting estimate_tdoas does not take (a typo) was its builtin TypeError; now a
+    ConfigError naming it and listing the settings. A right one still works."""
+    from hearsee.errors import ConfigError
+
+    three = MicArray.from_preset("three-mic")
+    x = white_noise(0.3, 16000, 7)
+    x = np.stack([x, np.roll(x, 1), np.roll(x, 2)])
+    with pytest.raises(ConfigError, match="'min_confidense'.*min_confidence"):
+        localize_recording(x, 16000, three, min_confidense=2.0)
+    assert localize_recording(x, 16000, three, min_confidence=2.0)["frames"]
+
+
 def test_volume_solvers_refuse_a_bad_start_or_loss():
     """A NaN, short or non-numeric start position raised scipy's or numpy's ValueError
     ("Initial guess is outside of provided bounds", a broadcast error), an unknown loss

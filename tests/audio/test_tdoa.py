@@ -761,12 +761,15 @@ def test_int32_scale_samples_do_not_overflow_the_spectral_products(recording, th
                                       ({"chunk_frames": np.nan}, "chunk_frames"),
                                       ({"summary_upsample": np.nan}, "summary_upsample"),
                                       ({"vad_db": np.nan}, "vad_db"),
+                                      ({"vad_db": 4000.0}, "vad_db"),  # (an OverflowError)
+                                      ({"progress": True}, "progress"),  # (after the work)
                                       ({"reverb_coherence": np.nan, "reverb_method": "phat"},
                                        "reverb_coherence")])
 def test_estimate_tdoas_refuses_bad_counts_and_thresholds(three, recording, kw, name):
     """A negative smooth_frames (ML, SCOT, ROTH) sliced the frames' statistics from the wrong
     end (IndexError), a NaN one or a NaN chunk_frames raised int()'s ValueError, and a NaN
-    vad_db, reverb_coherence or summary_upsample silently switched their test off."""
+    vad_db, reverb_coherence or summary_upsample silently switched their test off; a huge
+    vad_db overflowed, and a progress that is no function failed once every frame was done."""
     x, _ = recording
     with pytest.raises(ConfigError, match=name):
         estimate_tdoas(x, FS, three, method="ml", **kw)

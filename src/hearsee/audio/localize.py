@@ -30,6 +30,7 @@ Angles: azimuth from +x toward +y, elevation from the xy-plane toward +z, degree
 
 from __future__ import annotations
 
+import inspect
 import math
 import warnings
 from collections.abc import Callable, Sequence
@@ -1634,6 +1635,13 @@ def localize_recording(
                                        method=method, kalman=kalman, progress=progress,
                                        q_std_s=q_std_s, r_std_s=r_std_s,
                                        tune_kalman=tune_kalman)
+    # (a misspelt setting was estimate_tdoas' builtin TypeError)
+    own = {"x", "fs", "array", "frame_ms", "hop_ms", "method", "pairs", "progress"}
+    known = [n for n in inspect.signature(estimate_tdoas).parameters if n not in own]
+    unknown = sorted(k for k in tdoa_kwargs if k not in known)
+    if unknown:
+        raise ConfigError(f"unknown estimate_tdoas setting {unknown[0]!r} (expected one of: "
+                          f"{', '.join(known)})")
     method = normalize_method(method)
     tdoa_kwargs.setdefault("source_in_plane", bool(in_plane))
     tf, dead = hold_dead_warning(arr, lambda: estimate_tdoas(

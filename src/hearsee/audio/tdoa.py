@@ -150,6 +150,9 @@ _MIN_SUMMARY_FRAMES = 3
 #: ``summary_upsample`` x the frame's FFT length (10**6 asked for 8 GiB with 64 ms frames);
 #: beyond a few times the Newton refinement that follows gains nothing.
 MAX_SUMMARY_UPSAMPLE = 64
+#: Largest ``vad_db`` of :func:`estimate_tdoas`, dB: a frame's energy that far above the
+#: recording's noise floor is beyond any microphone's dynamic range (~120 dB for 24 bits).
+MAX_VAD_DB = 200.0
 #: Bytes of band spectra (complex64, with their float32 power) of a recording's frames that
 #: :func:`estimate_tdoas` keeps, so that its activity test, noise spectrum and frame loop share
 #: one transform: ~7 minutes of three channels at 16 kHz with a 300-3500 Hz band. Longer
@@ -2433,7 +2436,11 @@ def estimate_tdoas(
     chunk_frames = whole_number("chunk_frames", chunk_frames)
     summary_upsample = whole_number("summary_upsample", summary_upsample,
                                     hi=MAX_SUMMARY_UPSAMPLE)
-    vad_db = finite_number("vad_db", vad_db, 0.0)
+    # (above ~3000 dB its power ratio overflowed: a builtin OverflowError)
+    vad_db = finite_number("vad_db", vad_db, 0.0, MAX_VAD_DB)
+    if progress is not None and not callable(progress):  # (called only after the work)
+        raise ConfigError(f"progress must be a function of the frames done, or None; got "
+                          f"{progress!r:.60}")
     reverb_coherence = finite_number("reverb_coherence", reverb_coherence, 0.0)
     prs = arr.checked_pairs(pairs)
     if joint == "steered":
