@@ -259,6 +259,19 @@ def test_a_section_that_is_not_a_mapping_names_the_file_then_the_section(small_r
     assert str(e.value) == f"{path}: {section}: expected a mapping, got {kind}"
 
 
+def test_a_path_that_is_no_file_name_is_an_input_file_error():
+    """load_robot_config(None) and robot_config_from_dict(base_dir=3) were Path()'s builtin
+    TypeError; base_dir None means the current folder (as scenario_from_dict)."""
+    from hearsee.errors import InputFileError
+
+    with pytest.raises(InputFileError, match="robot file's path"):
+        load_robot_config(None)
+    with pytest.raises(InputFileError, match="base_dir"):
+        robot_config_from_dict({"audio": {}}, base_dir=3)
+    cfg = robot_config_from_dict({"audio": {}}, base_dir=None)
+    assert cfg.output.report == Path("hearsee-run")
+
+
 def test_impossible_geometry_and_bad_calibration(small_rig):
     (small_rig / "coincident.yaml").write_text(
         "microphones:\n- [0.0, 0.0, 0.0]\n- [0.0, 0.0, 0.0]\n", encoding="utf-8")

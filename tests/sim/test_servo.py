@@ -28,6 +28,11 @@ def test_servo_turns_toward_the_command_at_its_rate_the_short_way():
     (lambda: ServoHead(30.0, float("inf")), GeometryError, "pan_deg"),
     (lambda: ServoHead(30.0).command(0.0, float("nan"), 0.0), GeometryError, "pan_deg"),
     (lambda: ServoHead(30.0).advance(float("nan")), ConfigError, "t must be"),
+    # (a NaN time read as a NaN pan, text as a time; a None tilt was float()'s TypeError)
+    (lambda: ServoHead(30.0).pan_at(float("nan")), ConfigError, "t must be"),
+    (lambda: ServoHead(30.0).pan_at("0.1"), ConfigError, "t must be"),
+    (lambda: ServoHead(30.0).command(0.0, 10.0, None), GeometryError, "tilt_deg"),
+    (lambda: ServoHead(30.0).command(0.0, 10.0, float("nan")), GeometryError, "tilt_deg"),
 ])
 def test_servo_refuses_bad_numbers(call, error, words):
     with pytest.raises(error, match=words):

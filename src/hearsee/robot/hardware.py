@@ -83,6 +83,7 @@ from numpy.typing import NDArray
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.config import (
     as_float_array,
+    as_path,
     check_keys,
     expand_path,
     finite_number,
@@ -526,12 +527,14 @@ def _output(d: Mapping[str, Any], where: str, base: Path) -> OutputConfig:
 
 
 def robot_config_from_dict(data: Mapping[str, Any], where: str = "robot.yaml",
-                           base_dir: str | Path = ".") -> RobotConfig:
+                           base_dir: str | Path | None = ".") -> RobotConfig:
     """Validate a robot mapping (see the module docstring). ``where`` prefixes every error;
-    relative paths are resolved against ``base_dir``."""
+    relative paths are resolved against ``base_dir`` (None: the current folder, as
+    :func:`hearsee.robot.scenario.scenario_from_dict`; anything but a path is an
+    InputFileError)."""
     if not isinstance(data, Mapping):
         raise ConfigError(f"{where}: expected a mapping at top level")
-    base = Path(base_dir)
+    base = Path(".") if base_dir is None else as_path(base_dir, "base_dir")
     check_keys(data, _TOP, where)
     audio = _audio(_mapping(data, "audio", where, required=True), f"{where}: audio", base)
     cams = _mapping(data, "cameras", where)
@@ -605,8 +608,9 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
 
 
 def load_robot_config(path: str | Path) -> RobotConfig:
-    """Load and validate a robot file; errors name the file and the field."""
-    p = Path(path)
+    """Load and validate a robot file; errors name the file and the field (a ``path`` that is
+    no file name, e.g. None, an InputFileError)."""
+    p = as_path(path, "the robot file's path")
     data = load_yaml(p)
     cfg = robot_config_from_dict(data, where=str(p), base_dir=p.resolve().parent)
     return RobotConfig(p, cfg.audio, cfg.cameras, cfg.head, cfg.output)

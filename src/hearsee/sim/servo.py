@@ -55,13 +55,17 @@ class ServoHead:
     def pan_at(self, t: float) -> float:
         """The pan (degrees, unwrapped along the history) at ``t`` seconds: linear between the
         :meth:`advance` times -- the servo turns at a constant rate between them unless it
-        reached its target -- and held outside them."""
+        reached its target -- and held outside them. ``t`` must be a finite number
+        (ConfigError, as for :meth:`advance`: NaN read as a NaN pan)."""
+        t = finite_number("t", t, error=ConfigError)
         ts, pans = np.array(self.history).T
         return float(np.interp(t, ts, np.unwrap(pans, period=360.0)))
 
     def command(self, t: float, pan_deg: float, tilt_deg: float) -> dict[str, float]:
         """The loop's desired pose (degrees); the pan becomes the target (the tilt is
-        ignored: a pan-only head)."""
-        self.target = float(wrap_deg(finite_number("pan_deg", pan_deg, error=GeometryError)))
+        ignored: a pan-only head, but it must be a finite number too: GeometryError)."""
+        pan = finite_number("pan_deg", pan_deg, error=GeometryError)
+        tilt = finite_number("tilt_deg", tilt_deg, error=GeometryError)
+        self.target = float(wrap_deg(pan))
         self.n_printed += 1
-        return {"pan_deg": float(pan_deg), "tilt_deg": float(tilt_deg)}
+        return {"pan_deg": pan, "tilt_deg": tilt}
