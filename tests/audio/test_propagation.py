@@ -369,3 +369,20 @@ def test_sum_responses_adds_parts_of_different_lengths_from_the_same_instant():
     c[:, 4] = [7.0, 8.0]
     np.testing.assert_array_equal(sum_responses([a, b, c]),
                                   [[11.0, 2.0, 3.0, 0.0, 7.0], [20.0, 1.0, 0.0, 0.0, 8.0]])
+
+
+def test_text_sources_and_delays_and_empty_response_sums_are_refused():
+    """A source or delays given as text were numpy's ValueError; sum_responses of nothing its
+    IndexError, of parts with different microphone counts a broadcast ValueError."""
+    from hearsee.audio.propagation import delay_signals, simulate_free_field, sum_responses
+
+    sig = white_noise(0.1, 16000, 1)
+    with pytest.raises(GeometryError, match="source"):
+        simulate_free_field(sig, 16000, MicArray.from_preset("three-mic"), "x")
+    with pytest.raises(GeometryError, match="delays"):
+        delay_signals(sig, "x", 16000)
+    for parts in ([], [np.zeros((2, 3)), np.zeros((3, 3))], [np.zeros(3)]):
+        with pytest.raises(GeometryError, match="sum_responses"):
+            sum_responses(parts)
+    total = sum_responses([np.ones((2, 3)), np.ones((2, 5))])
+    np.testing.assert_array_equal(total, [[2, 2, 2, 1, 1]] * 2)

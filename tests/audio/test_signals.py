@@ -507,3 +507,21 @@ def test_read_recording_checks_n_channels(tmp_path, n):
     p = _write(tmp_path / "r.wav", 0.1 * np.random.default_rng(1).standard_normal((2, 2000)))
     with pytest.raises(ConfigError, match="n_channels"):
         read_recording(p, n)
+
+
+def test_channel_faults_and_write_recording_refuse_what_is_no_recording(tmp_path):
+    """channel_faults of an empty or 1-D array was numpy's ValueError / AxisError (NaN gave
+    garbage levels); write_recording of text numpy's ValueError. A silent channel beside a
+    sounding one is still found."""
+    from hearsee.audio.signals import channel_faults, write_recording
+
+    for x in (np.zeros((4, 0)), np.zeros(100), [["a"]]):
+        with pytest.raises(AudioInputError):
+            channel_faults(x)
+    with pytest.raises(AudioInputError, match="NaN"):
+        channel_faults(np.array([[0.0, np.nan, 1.0]] * 2))
+    with pytest.raises(AudioInputError, match="real numbers"):
+        write_recording(tmp_path / "x.wav", "x", 16000)
+    flat, quiet, _ = channel_faults(np.vstack([np.zeros(100),
+                                               np.random.default_rng(1).standard_normal(100)]))
+    assert flat.tolist() == [0] and quiet.size == 0

@@ -32,6 +32,7 @@ from hearsee.config import (
     check_rng,
     finite_number,
     is_real,
+    real_entries,
     true_or_false,
     whole_number,
 )
@@ -160,8 +161,9 @@ def delay_signals(signal: ArrayLike, delays_s: ArrayLike, fs: float, gains: Arra
     if x.ndim != 1:
         raise AudioInputError(f"signal must be one-dimensional, got shape {x.shape}")
     fs = check_fs(fs)
-    d = np.atleast_1d(np.asarray(delays_s, dtype=float))
-    if d.size == 0 or np.any(d < 0) or not np.all(np.isfinite(d)):
+    # (text was numpy's ValueError, "0.5" read as 0.5 s)
+    d = np.atleast_1d(np.asarray(delays_s, dtype=float)) if real_entries(delays_s) else None
+    if d is None or d.size == 0 or np.any(d < 0) or not np.all(np.isfinite(d)):
         raise GeometryError("delays must be one or more finite, non-negative numbers of seconds")
     if d.max() * fs > MAX_RIR_SAMPLES:  # (1e12 samples: a MemoryError traceback)
         raise ConfigError(
@@ -284,9 +286,10 @@ def simulate_free_field(
     c = speed_of_sound_of(mics, speed_of_sound)
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
     far_field = true_or_false("far_field", far_field)  # ("no" gave a plane wave)
-    s = np.asarray(source, dtype=float)
+    # (text was numpy's ValueError)
+    s = np.asarray(source, dtype=float) if real_entries(source) else np.zeros(0)
     if s.shape != (3,) or not np.all(np.isfinite(s)):
-        raise GeometryError(f"source must be a finite [x, y, z] point, got {source!r}")
+        raise GeometryError(f"source must be a finite [x, y, z] point, got {source!r:.60}")
     if far_field:
         s = s / norm_scale(s)  # (the direction of a source 1e300 m away, without overflow)
         if not np.linalg.norm(s) > 0:
@@ -403,7 +406,13 @@ def image_sources(rt60: float, room_dim: ArrayLike, speed_of_sound: float = 343.
 def sum_responses(parts: list[NDArray]) -> NDArray:
     """Impulse responses of different lengths -- (n_mics, L_k) each, sample 0 the same
     instant -- added into one (n_mics, max L_k) array (the shorter ones end in zeros): the
-    parts of a response rendered apart (a masked room's early and late reflections)."""
+    parts of a response rendered apart (a masked room's early and late reflections). None, or
+    parts that are no 2-D arrays of as many microphones, are a GeometryError."""
+    if not parts or any(not isinstance(p, np.ndarray) or p.ndim != 2 for p in parts) \
+            or len({p.shape[0] for p in parts}) != 1:
+        raise GeometryError("sum_responses: expected one or more (n_mics, n_samples) arrays of "
+                            "the same n_mics, got shapes "
+                            f"{[getattr(p, 'shape', type(p).__name__) for p in parts or []]}")
     out = np.zeros((parts[0].shape[0], max(p.shape[1] for p in parts)))
     for p in parts:
         out[:, :p.shape[1]] += p

@@ -713,7 +713,16 @@ def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:
     made the others "quiet" -- the 90th percentile of the samples' distance from their median,
     over at most 2**18 evenly spread samples per channel (0.7 s for a minute at 48 kHz
     otherwise). The one rule of :func:`read_recording` (files) and
-    :class:`hearsee.stream.pipeline.DeviceSource` (live input)."""
+    :class:`hearsee.stream.pipeline.DeviceSource` (live input). ``x`` must be a 2-D array of
+    finite real samples with one or more of each (AudioInputError else: an empty one was
+    numpy's ValueError, a 1-D one its AxisError)."""
+    if not (isinstance(x, np.ndarray) and x.dtype.kind in "iuf"):
+        x = as_samples(x)
+    if x.ndim != 2 or 0 in x.shape:
+        raise AudioInputError(f"recording must be (n_channels, n_samples) with one or more of "
+                              f"each, got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise AudioInputError("recording contains NaN or infinite samples")
     constant = np.ptp(x, axis=1) == 0
     few = x[:, ::max(1, x.shape[1] >> 18)]
     level = np.percentile(np.abs(few - np.median(few, axis=1, keepdims=True)), 90.0, axis=1)
@@ -830,7 +839,7 @@ def write_recording(
                     f"{p}: refusing to overwrite the input file {q}; choose another output path"
                 )
     output_file(p)
-    y = np.asarray(x, dtype=float)
+    y = as_samples(x, finite=False)  # (text was numpy's ValueError; NaN is named below)
     if y.ndim == 1:
         y = y[None, :]
     if y.ndim != 2 or y.shape[1] == 0:
