@@ -338,3 +338,15 @@ def test_micarray_name_and_mask_types():
     with pytest.raises(ConfigError, match="^array 'p': mask must be a mapping"):
         MicArray(pos, name="p", mask="x")
     assert MicArray(pos, name="p").name == "p" and MicArray(pos, mask=None).mask is None
+
+
+def test_residual_scaled_variance_needs_a_positive_tdoa_std():
+    """sig 0 divided the residuals by zero (a NaN variance with a RuntimeWarning), NaN passed
+    through; a valid sig keeps the robust rule."""
+    from hearsee.audio.arrays import residual_scaled_variance
+
+    r = np.array([1e-5, -2e-5, 3e-5, 0.0, 1e-5])
+    for bad in (0.0, -1e-5, float("nan")):
+        with pytest.raises(GeometryError, match="sig"):
+            residual_scaled_variance(r, bad, 3)
+    assert residual_scaled_variance(r, 1e-3, 3) == pytest.approx(1e-6)  # (sig^2 dominates)

@@ -1064,3 +1064,9 @@ def test_a_live_streams_dead_microphone_is_left_out(monkeypatch):
     before = np.array([abs((u.azimuth_deg - truth["azimuth_deg"] + 180) % 360 - 180)
                        for u in ups if u.measured and u.t < 4.0])
     assert np.median(before) > 2 * np.median(err)  # (the dead channel's noise in every pair)
+
+
+def test_dropout_source_wraps_only_a_stream_source():
+    """DropoutSource(None) was an AttributeError."""
+    with pytest.raises(ConfigError, match="DropoutSource"):
+        DropoutSource(None)

@@ -462,3 +462,14 @@ def test_sixteen_bit_images_keep_their_significant_bits(tmp_path):
     assert cv2.imwrite(str(tmp_path / "t.tiff"), t)
     with pytest.raises(ImageInputError, match="floating-point pixels"):
         read_pair(tmp_path / "t.tiff", tmp_path / "t.tiff")
+
+
+def test_to_8_bits_refuses_what_is_no_image():
+    """None was an AttributeError."""
+    from hearsee.errors import ImageInputError
+    from hearsee.vision.io import to_8_bits
+
+    with pytest.raises(ImageInputError, match="to_8_bits"):
+        to_8_bits(np.zeros((2, 2), np.uint8), None)
+    out = to_8_bits(np.full((2, 2), 4095, np.uint16), np.zeros((2, 2), np.uint16))
+    assert out[0].dtype == np.uint8 and out[0].max() == 255

@@ -604,8 +604,11 @@ def residual_scaled_variance(residual_s: ArrayLike, sig: float, n_params: int) -
     robust loss down-weighted must not inflate it); ``sig^2`` alone when ``m <= n_params``.
     Used with the 3-D position (``n_params`` 3, :func:`position_uncertainty`) and the in-plane
     one (2, :func:`hearsee.audio.localize.near_field_in_plane`). GeometryError for an
-    argument that is None."""
+    argument that is None, and for a ``sig`` that is not > 0."""
     _given("residual_scaled_variance", residual_s=residual_s, sig=sig, n_params=n_params)
+    if not sig > 0:  # (0 divided the residuals by zero: a NaN variance; NaN passed through)
+        raise GeometryError(f"residual_scaled_variance: sig must be a TDOA standard deviation "
+                            f"> 0 s, got {sig!r}")
     r = np.asarray(residual_s, dtype=float).ravel()
     m = r.size
     if m <= n_params:

@@ -858,6 +858,9 @@ class DropoutSource:
 
     def __init__(self, source: Any, drop: Sequence[int] = (), late: Sequence[int] = (),
                  stall_before: dict[int, float] | None = None) -> None:
+        if not all(hasattr(source, a) for a in ("fs", "n_channels", "blocks")):
+            raise ConfigError(f"DropoutSource wraps a stream source (fs, n_channels, "
+                              f"blocks()), got {type(source).__name__}")
         self.source = source
         self.fs, self.n_channels = source.fs, source.n_channels
         self.drop, self.late = set(drop), set(late)

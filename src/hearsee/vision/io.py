@@ -300,7 +300,11 @@ def to_8_bits(*images: NDArray) -> tuple[NDArray, ...]:
     """``images`` as uint8, the 16-bit ones shifted right by as many bits as their largest
     value needs beyond 8 -- one shift for all of them, so the two views of a stereo pair keep
     the same gain (a 12-bit pair: >> 4 on both, whatever each one's brightest pixel). 8-bit
-    images come back as they are; 8-bit values in a 16-bit file are not shifted."""
+    images come back as they are; 8-bit values in a 16-bit file are not shifted. Anything
+    but numpy arrays is an ImageInputError (None was an AttributeError)."""
+    for im in images:
+        if not isinstance(im, np.ndarray):
+            raise ImageInputError(f"to_8_bits: expected image arrays, got {type(im).__name__}")
     deep = [im for im in images if im.dtype == np.uint16]
     top = max((int(im.max(initial=0)) for im in deep), default=0)
     shift = max(top.bit_length() - 8, 0)
