@@ -525,3 +525,18 @@ def test_channel_faults_and_write_recording_refuse_what_is_no_recording(tmp_path
     flat, quiet, _ = channel_faults(np.vstack([np.zeros(100),
                                                np.random.default_rng(1).standard_normal(100)]))
     assert flat.tolist() == [0] and quiet.size == 0
+
+
+def test_generators_and_the_resampler_refuse_absurd_sample_counts():
+    """A rate of 1e12 Hz asked the generators for terabytes, resampling to 1e9 Hz likewise (a
+    MemoryError); now a typed error before any allocation. Ordinary rates still work."""
+    from hearsee.audio.signals import mains_hum, resample, synthetic_voice
+
+    for make in (lambda: white_noise(0.5, 1e12, rng=0), lambda: mains_hum(0.5, 1e12),
+                 lambda: synthetic_voice("male", 0.5, 1e12, rng=0)):
+        with pytest.raises(ConfigError, match="more than the generators make"):
+            make()
+    with pytest.raises(AudioInputError, match="samples per channel"):
+        resample(np.zeros(16000), 16000, 1e9)
+    assert resample(np.zeros((2, 16000)), 16000, 48000).shape == (2, 48000)
+    assert resample(np.zeros(48000), 48000, 16000).shape == (16000,)

@@ -183,6 +183,9 @@ def mains_hum(duration_s: float, fs: float, f0_hz: float = 50.0,
 #: Longest signal the generators make, seconds (longer scenes: simulate them in pieces; the
 #: bound keeps a mistyped duration from asking for terabytes)
 MAX_SIGNAL_S = 600.0
+#: Most samples per channel the generators and the resampler make: :data:`MAX_SIGNAL_S` at
+#: 192 kHz (a sample rate of 1e12 Hz asked for terabytes: a MemoryError)
+MAX_SIGNAL_SAMPLES = int(MAX_SIGNAL_S * 192_000)
 
 
 #: The highest sample rate an audio file can declare (Hz): libsndfile keeps it in a C int.
@@ -235,6 +238,10 @@ def _check_duration(duration_s: float, fs: float) -> int:
     n = int(round(duration_s * fs))
     if n < 1:
         raise ConfigError(f"duration {duration_s} s at {fs} Hz is shorter than one sample")
+    if n > MAX_SIGNAL_SAMPLES:
+        raise ConfigError(f"{duration_s:g} s at {fs:g} Hz is {n:.3g} samples, more than the "
+                          f"generators make ({MAX_SIGNAL_SAMPLES}: {MAX_SIGNAL_S:g} s at 192 "
+                          "kHz); use a lower sample rate or a shorter signal")
     return n
 
 
@@ -376,6 +383,13 @@ def _resample(x: ArrayLike, fs_in: float, fs_out: float) -> NDArray:
             f"cannot resample {fs_in} Hz to {fs_out} Hz: the ratio needs a polyphase filter "
             "of more than 1000 phases; resample to a common rate (e.g. 16000 or 48000 Hz) first"
         )
+    # (upsampling to 1e9 Hz was a MemoryError; a long file taken down to a lower rate never
+    # grows, so it is not limited)
+    n_out = x.shape[-1] * ratio.numerator // ratio.denominator if x.ndim else 0
+    if n_out > max(MAX_SIGNAL_SAMPLES, x.shape[-1]):
+        raise AudioInputError(f"resampling {x.shape[-1]} samples from {fs_in:g} to {fs_out:g} "
+                              f"Hz makes {n_out:.3g} samples per channel, more than "
+                              f"{MAX_SIGNAL_SAMPLES} ({MAX_SIGNAL_S:g} s at 192 kHz)")
     return resample_poly(x, ratio.numerator, ratio.denominator, axis=-1)
 
 
