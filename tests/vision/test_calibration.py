@@ -741,3 +741,114 @@ def test_calibrate_rig_refuses_a_glob_pattern_and_none(left, right):
     images", or, at equal lengths, "c: image file not found"); None a builtin TypeError."""
     with pytest.raises(CalibrationError, match="left_files must be a list of image paths"):
         C.calibrate_rig(left, right, PATTERN, SQUARE)
+
+
+def test_calibrate_camera_names_points_that_are_not_views():
+    """image_points None was a builtin TypeError (len(None)), object_points None a TypeError
+    and text numpy's ValueError (float('a')): CalibrationErrors naming the argument now (for
+    calibrate_stereo's object_points too). Every accepted form still calibrates, alike."""
+    cam, views = _projected_views(30.0)
+    obj = C.board_points(PATTERN, SQUARE)
+    for bad in (None, 5, "abc", np.float64(3.0)):
+        with pytest.raises(CalibrationError, match=r"^image_points must be a list of views"):
+            C.calibrate_camera(bad, obj, cam.size)
+    with pytest.raises(CalibrationError, match=r"^image points must be \(N, 2\) pixel"):
+        C.calibrate_camera([v.reshape(-1)[:-1] for v in views], obj, cam.size)
+    for bad, words in ((None, "got None"), ("abc", "got 'abc'"), (["abc"] * 8, "got 'abc'"),
+                       (5, "got 5"), (obj[:-1, :2], r"got an array of shape \(53, 2\)"),
+                       (np.where(obj == 0, np.nan, obj), "finite numbers")):
+        with pytest.raises(CalibrationError, match=rf"^object_points .*{words}"):
+            C.calibrate_camera(views, bad, cam.size)
+    with pytest.raises(CalibrationError, match=r"^object_points must be the board's 3D"):
+        C.calibrate_stereo(views, views, None, cam, cam)
+    # calibrate_stereo's views likewise (len(None) was a builtin TypeError)
+    with pytest.raises(CalibrationError, match=r"^left_points must be a list of views"):
+        C.calibrate_stereo(None, views, obj, cam, cam)
+    with pytest.raises(CalibrationError, match=r"^right_points must be a list of views"):
+        C.calibrate_stereo(views, 5, obj, cam, cam)
+    with pytest.raises(CalibrationError, match=r"^image points must be \(N, 2\) pixel"):
+        C.calibrate_stereo(views, [v.reshape(-1)[:-1] for v in views], obj, cam, cam)
+    ref = C.calibrate_camera(views, obj, cam.size)  # (OpenCV's threads: equal to ~1e-8)
+    for same in ([obj] * 8, tuple(obj for _ in views), (obj for _ in views), np.stack([obj] * 8)):
+        np.testing.assert_allclose(C.calibrate_camera(views, same, cam.size).camera.K,
+                                   ref.camera.K, rtol=1e-6)
+    np.testing.assert_allclose(C.calibrate_camera(np.stack(views), obj, cam.size).camera.K,
+                               ref.camera.K, rtol=1e-6)
+
+
+def test_max_focal_rel_std_must_be_a_positive_number_or_inf():
+    """NaN, 0 and negative limits were never checked: any calibration, a perfect one too, was
+    refused as "focal length poorly determined (+-0.0 %)". A number > 0 or inf (no limit, as
+    calibrate_rig passes) now; anything else a CalibrationError before the calibration runs."""
+    cam, views = _projected_views(30.0)
+    obj = C.board_points(PATTERN, SQUARE)
+    for bad in (np.nan, 0, 0.0, -0.03, -np.inf, "0.03", None, True, [0.03]):
+        with pytest.raises(CalibrationError, match=r"^max_focal_rel_std must be a number > 0 "
+                                                   r"\(0.03 = \+-3 %\), or inf for no limit"):
+            C.calibrate_camera(views, obj, cam.size, max_focal_rel_std=bad)
+    ref = C.calibrate_camera(views, obj, cam.size)
+    for ok in (np.inf, float("inf"), np.float32(0.5), 1):
+        res = C.calibrate_camera(views, obj, cam.size, max_focal_rel_std=ok)
+        np.testing.assert_allclose(res.camera.K, ref.camera.K, rtol=1e-6)
+        assert res.focal_rel_std == pytest.approx(ref.focal_rel_std, rel=1e-4)
+    _, flat = _projected_views(0.0)  # degenerate views: refused by a limit, taken by inf
+    with pytest.raises(CalibrationError, match="poorly determined"):
+        C.calibrate_camera(flat, obj, cam.size, max_focal_rel_std=0.5)
+    assert C.calibrate_camera(flat, obj, cam.size, max_focal_rel_std=np.inf).focal_rel_std > 0.5
+
+
+def test_render_chessboard_checks_its_arguments():
+    """render_chessboard checked nothing: a square of 0 or NaN drew garbage and a negative one
+    a mirrored board, noise=NaN meant no noise, background=NaN an undefined cast, a t_board of
+    2 numbers and the pattern "9x6" were numpy's / Python's ValueError, and blur_px=1e6
+    allocated 20 GB. The board is a CalibrationError (as board_points), the drawing settings
+    a ConfigError (as rng), each naming the argument and its rule."""
+    cam = Camera.from_fov(60.0, 64, 48)  # blur_px up to 64 / 8 = 8 px
+    args = dict(camera=cam, R_board=np.eye(3), t_board=np.array([-0.05, -0.03, 0.5]),
+                pattern=(4, 3), square_m=0.02)
+    for key, bad, error, words in (
+        ("pattern", "9x6", CalibrationError, "board must be two whole numbers"),
+        ("pattern", (2, 2), CalibrationError, "board needs at least 3x3"),
+        ("square_m", 0.0, CalibrationError, r"square_m must be a finite number > 0, got 0.0"),
+        ("square_m", np.nan, CalibrationError, "square_m must be a finite number > 0"),
+        ("square_m", -0.02, CalibrationError, "square_m must be a finite number > 0"),
+        ("square_m", "0.02", CalibrationError, "square_m must be a finite number > 0"),
+        ("R_board", np.eye(2), CalibrationError, r"R_board: expected shape 3x3"),
+        ("R_board", np.full((3, 3), np.nan), CalibrationError, "R_board: values must be finite"),
+        ("R_board", 2 * np.eye(3), CalibrationError, "R_board: not a rotation matrix"),
+        ("R_board", None, CalibrationError, "R_board: expected numbers"),
+        ("t_board", [0.0, 0.5], CalibrationError, r"t_board: expected 3 numbers .*shape \(2,\)"),
+        ("t_board", [0.0, 0.0, np.nan], CalibrationError, "t_board: values must be finite"),
+        ("t_board", "abc", CalibrationError, "t_board: expected numbers"),
+        ("camera", None, CalibrationError, "render_chessboard needs a Camera"),
+        ("margin_squares", -1.0, ConfigError, "margin_squares must be a finite number >= 0"),
+        ("margin_squares", np.nan, ConfigError, "margin_squares must be a finite number >= 0"),
+        ("blur_px", 1e6, ConfigError, r"blur_px must be a finite number in \[0, 8\]"),
+        ("blur_px", 8.01, ConfigError, r"blur_px must be a finite number in \[0, 8\]"),
+        ("blur_px", np.nan, ConfigError, "blur_px must be a finite number"),
+        ("blur_px", -0.5, ConfigError, "blur_px must be a finite number"),
+        ("noise", np.nan, ConfigError, "noise must be a finite number >= 0"),
+        ("noise", np.inf, ConfigError, "noise must be a finite number >= 0"),
+        ("noise", -1.0, ConfigError, "noise must be a finite number >= 0"),
+        ("background", np.nan, ConfigError, r"background must be a finite number in \[0, 1\]"),
+        ("background", 1.5, ConfigError, r"background must be a finite number in \[0, 1\]"),
+        ("background", -0.1, ConfigError, r"background must be a finite number in \[0, 1\]"),
+        ("invert", "no", ConfigError, "invert must be True or False"),  # ("no" inverted it)
+    ):
+        with pytest.raises(error, match=f"^{words}"):
+            C.render_chessboard(**{**args, key: bad})
+    # valid calls: the accepted forms of one board draw the same image; the limits are taken
+    ref = C.render_chessboard(**args, blur_px=0.7, noise=2.0, rng=3)
+    assert ref.dtype == np.uint8 and ref.shape == (48, 64) and ref.min() < 100 < 200 < ref.max()
+    same = C.render_chessboard(cam, np.eye(3).tolist(), [[-0.05], [-0.03], [0.5]],
+                               np.array([4, 3]), np.float32(0.02), blur_px=np.float64(0.7),
+                               noise=2, rng=np.random.default_rng(3))
+    np.testing.assert_array_equal(same, ref)
+    assert np.all(C.render_chessboard(**args, blur_px=8.0) > 0)  # (the most blur: all grey)
+    # background 0 and 1 (black, white) are taken: only the pixels around the board change
+    plain, black, white = (C.render_chessboard(**args, background=bg) for bg in (0.45, 0, 1))
+    board = black == white
+    assert 0 < board.sum() < board.size
+    np.testing.assert_array_equal(plain[board], black[board])
+    assert np.all(black[~board] < plain[~board]) and np.all(plain[~board] < white[~board])
+    assert black[0, 0] == 0 and plain[0, 0] == 115 and white[0, 0] == 255

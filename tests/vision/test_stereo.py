@@ -18,6 +18,7 @@ from hearsee.vision.stereo import (
     lr_consistency,
     points_from_disparity,
     points_to_left_frame,
+    rectification_maps,
     rectify_pair,
     refine_subpixel,
     search_range_px,
@@ -545,3 +546,25 @@ def test_disparity_flags_must_be_booleans():
     assert np.isnan(unpadded[:, :10]).all()  # the leftmost columns unmatched, as pad_left=False
     padded = compute_disparity(left, right, num_disparities=16, pad_left=np.True_)
     assert np.nanmedian(padded[:, 20:]) == 6.0
+
+
+def test_rectification_maps_check_alpha_before_the_cache_key():
+    """alpha=None or "x" was a builtin TypeError / ValueError of float(alpha), which built the
+    cache key before StereoRig.rectify's range check; a ConfigError naming alpha and its range
+    now, from rectify_pair too. Valid alphas give the maps they gave."""
+    cam = Camera(np.array([[400.0, 0, 160], [0, 400, 120], [0, 0, 1]]), width=320, height=240)
+    rig = StereoRig(cam, cam, np.eye(3), np.array([-0.1, 0, 0]))
+    img = np.zeros((240, 320), np.uint8)
+    for bad in (None, "x", "0.5", np.nan, np.inf, -0.1, 1.5, True, [0.5]):
+        with pytest.raises(ConfigError, match=r"^alpha must be a finite number in \[0, 1\]"):
+            rectification_maps(rig, alpha=bad)
+        with pytest.raises(ConfigError, match=r"^alpha must be a finite number in \[0, 1\]"):
+            rectify_pair(img, img, rig, alpha=bad)
+    for alpha in (0.0, 0, np.float32(0.5), 1):
+        rect, maps = rectification_maps(rig, alpha=alpha)
+        want = rig.rectify(alpha=float(alpha))
+        np.testing.assert_array_equal(rect.P1, want.P1)
+        m1 = cv2.initUndistortRectifyMap(cam.K, cam.dist, want.R1, want.P1, want.size,
+                                         cv2.CV_16SC2)
+        np.testing.assert_array_equal(maps[0], m1[0])
+        np.testing.assert_array_equal(maps[1], m1[1])

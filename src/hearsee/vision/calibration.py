@@ -19,7 +19,7 @@ All lengths (square size, translations) are metres; pixel errors are RMS pixels.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -28,7 +28,15 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from hearsee.config import as_rng, finite_number, is_real, real_entries, whole_number
+from hearsee.config import (
+    as_float_array,
+    as_rng,
+    finite_number,
+    is_real,
+    real_entries,
+    true_or_false,
+    whole_number,
+)
 from hearsee.errors import CalibrationError, ConfigError
 from hearsee.vision.camera import MIN_BASELINE_M, Camera, StereoRig
 from hearsee.vision.io import to_gray
@@ -78,6 +86,12 @@ MIN_BOARD_CORNERS = 3
 #: :func:`parse_board` refuses more inner corners than this per side: no printed board has
 #: them, and ``99999999999x6`` asked :func:`board_points` for 6.5 TiB (a builtin MemoryError).
 MAX_BOARD_CORNERS = 1000
+
+#: :func:`render_chessboard` refuses a blur sigma beyond this share of the image's larger side
+#: (a blur that wide greys the whole board already): OpenCV's Gaussian kernel grows with the
+#: sigma, and 1e6 px made it allocate 20 GB; max(width, height) took 5 minutes and 1.7 GB for
+#: a 1280x960 image, an eighth of it 6 s and 45 MB (measured).
+MAX_BLUR_SHARE = 0.125
 
 #: Distortion models: number of coefficients and calibrateCamera flags.
 _MODELS = {
@@ -275,11 +289,17 @@ def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | S
         0.5 px) are dropped and the calibration rerun once; 0 disables.
     max_focal_rel_std : CalibrationError when the focal length's relative standard deviation
         exceeds this (:data:`MAX_FOCAL_REL_STD`): the views do not determine it (Zhang's
-        degenerate case: boards parallel to each other, e.g. all facing the camera).
+        degenerate case: boards parallel to each other, e.g. all facing the camera). A number
+        > 0 (0.03 = +-3 %), or inf for no limit.
+
+    Inputs that are none of these are a CalibrationError naming the argument (``image_points``
+    or ``object_points`` of None or text were a builtin TypeError / ValueError; a
+    ``max_focal_rel_std`` of NaN, 0 or below refused every calibration as "poorly
+    determined").
     """
     if model not in _MODELS:
         raise CalibrationError(f"model must be one of {', '.join(_MODELS)}, got {model!r}")
-    n = len(image_points)
+    n = _view_count(image_points, "image_points")
     if n < 3:
         raise CalibrationError(
             f"need the board in at least 3 images to calibrate, found it in {n}; add views of "
@@ -287,9 +307,11 @@ def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | S
         )
     # (a NaN factor rejected no view without a word; complex corners lost their imaginary part)
     finite_number("reject_factor", reject_factor, 0.0, error=CalibrationError)
+    _check_max_focal_rel_std(max_focal_rel_std)
     if not all(real_entries(p) and np.all(np.isfinite(np.asarray(p, float)))
                for p in image_points):
         raise CalibrationError("image points must be finite real pixel coordinates")
+    _check_view_shapes(image_points)
     objs = _per_view(object_points, n)
     imgs = [np.asarray(p, np.float32).reshape(-1, 1, 2) for p in image_points]
     _check_corners_in_image(imgs, image_size)
@@ -356,6 +378,39 @@ def _check_corners_in_image(imgs: list[NDArray], image_size: tuple[int, int]) ->
                 if outside(h, w) == 0 else "")
         raise CalibrationError(f"{bad} of {len(p)} corners lie outside the {w:g}x{h:g} image "
                                f"(image_size = (width, height)){hint}")
+
+
+def _view_count(points: Any, name: str) -> int:
+    """How many views ``points`` (a sequence of each view's corners) holds; CalibrationError
+    naming ``name`` for None, a number, text or a 0-d array (len() raised a builtin
+    TypeError)."""
+    try:
+        n = None if isinstance(points, str | bytes) else len(points)
+    except TypeError:
+        n = None
+    if n is None:
+        raise CalibrationError(f"{name} must be a list of views, each the board's corners "
+                               f"(N, 2) in pixels, got {points!r:.60}")
+    return n
+
+
+def _check_view_shapes(views: Sequence[Any]) -> None:
+    """CalibrationError unless every view holds pixel pairs (an even count of numbers: numpy's
+    reshape to (N, 1, 2) raised its ValueError)."""
+    if any(np.size(p) % 2 for p in views):
+        raise CalibrationError("image points must be (N, 2) pixel coordinates per view, got "
+                               f"{[np.shape(p) for p in views if np.size(p) % 2][0]}")
+
+
+def _check_max_focal_rel_std(value: Any) -> None:
+    """CalibrationError unless ``value`` is a real number > 0 or +inf (no limit; what
+    :func:`calibrate_rig` passes): NaN refused every calibration, 0 or below even a perfect
+    one ("focal length poorly determined (+-0.0 %)")."""
+    if isinstance(value, float | np.floating) and value == np.inf:
+        return
+    if not (is_real(value) and value > 0):
+        raise CalibrationError(f"max_focal_rel_std must be a number > 0 (0.03 = +-3 %), or inf "
+                               f"for no limit, got {value!r:.60}")
 
 
 def _check_focal(calib: CameraCalibration, max_rel_std: float) -> None:
@@ -432,10 +487,29 @@ def _focal_rel_std(objs: list[NDArray], imgs: list[NDArray], K: NDArray, dist: N
 
 
 def _per_view(object_points: NDArray | Sequence[NDArray], n: int) -> list[NDArray]:
+    """The board's corners ``(N, 1, 3)`` float32 for each of ``n`` views: ``object_points`` is
+    one ``(N, 3)`` array for every view or one per view; CalibrationError naming it unless
+    they are finite real numbers, 3 per corner (None was a builtin TypeError, text numpy's
+    ValueError, a count of numbers not a multiple of 3 its reshape ValueError)."""
+    rule = "object_points must be the board's 3D corners (N, 3) in metres (or one such per view)"
+    if isinstance(object_points, np.ndarray) and object_points.ndim == 2:
+        sets = [object_points]
+    elif (object_points.ndim > 0 if isinstance(object_points, np.ndarray)
+          else isinstance(object_points, Iterable) and not isinstance(object_points, str | bytes)):
+        sets = list(object_points)
+    else:
+        raise CalibrationError(f"{rule}, got {object_points!r:.60}")
+    for o in sets:
+        if not real_entries(o):
+            raise CalibrationError(f"{rule}, got {o!r:.60}")
+        if np.size(o) == 0 or np.size(o) % 3:
+            raise CalibrationError(f"{rule}, got an array of shape {np.shape(o)}")
+        if not np.all(np.isfinite(np.asarray(o, float))):
+            raise CalibrationError("object_points must be finite numbers (metres)")
     if isinstance(object_points, np.ndarray) and object_points.ndim == 2:
         o = np.asarray(object_points, np.float32).reshape(-1, 1, 3)
         return [o] * n
-    objs = [np.asarray(o, np.float32).reshape(-1, 1, 3) for o in object_points]
+    objs = [np.asarray(o, np.float32).reshape(-1, 1, 3) for o in sets]
     if len(objs) != n:
         raise CalibrationError(f"{len(objs)} object point sets for {n} views")
     return objs
@@ -482,9 +556,14 @@ def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDAr
     """
     if model is not None and model not in _MODELS:
         raise CalibrationError(f"model must be one of {', '.join(_MODELS)}, got {model!r}")
-    n = len(left_points)
-    if n != len(right_points):
+    n = _view_count(left_points, "left_points")
+    if n != _view_count(right_points, "right_points"):
         raise CalibrationError(f"{n} left views but {len(right_points)} right views")
+    for views in (left_points, right_points):  # (as calibrate_camera's image_points)
+        if not all(real_entries(p) and np.all(np.isfinite(np.asarray(p, float)))
+                   for p in views):
+            raise CalibrationError("image points must be finite real pixel coordinates")
+        _check_view_shapes(views)
     if n < 1:
         raise CalibrationError("need at least one view with the board in both cameras")
     if left.size != right.size:
@@ -752,15 +831,41 @@ def render_chessboard(camera: Camera, R_board: NDArray, t_board: NDArray,
     map board coordinates to the camera's optical frame (metres). Lens distortion is rendered
     exactly (each pixel's ray is intersected with the board plane); each pixel is the average
     over a 4x4 grid of sub-pixel rays. ``invert`` swaps black and white (a heated board in a
-    thermal camera); ``blur_px`` is a Gaussian blur sigma; ``noise`` an additive Gaussian
-    noise sigma in grey levels, drawn from ``rng`` (a Generator, an integer seed, or None for
-    the seed 0). ``rays`` can pass precomputed sub-pixel rays for speed.
+    thermal camera); ``blur_px`` is a Gaussian blur sigma in pixels, from 0 (none) to
+    :data:`MAX_BLUR_SHARE` of the image's larger side; ``noise`` an additive Gaussian noise
+    sigma in grey levels (0-255 scale), >= 0, drawn from ``rng`` (a Generator, an integer seed,
+    or None for the seed 0); ``background`` the grey level around the board as a fraction of
+    white, in [0, 1] (the board's squares are 0.08 and 0.92). ``rays`` can pass precomputed
+    sub-pixel rays for speed.
+
+    The board -- ``pattern`` (:func:`check_pattern`), ``square_m`` (finite > 0), ``R_board``
+    (a finite 3x3 rotation) and ``t_board`` (3 finite numbers: shape (3,), (3, 1) or (1, 3))
+    -- and ``camera`` (a :class:`Camera`) are a CalibrationError otherwise, as in
+    :func:`board_points`; the drawing settings ``margin_squares`` (finite >= 0, in squares),
+    ``blur_px``, ``noise``, ``background``, ``invert`` (True or False) and (when ``noise`` >
+    0) ``rng`` a ConfigError.
+    Unchecked, a square of 0 or NaN drew garbage, a negative one a mirrored board, a NaN noise
+    no noise, and a blur of 1e6 px allocated 20 GB.
     """
-    nx, ny = pattern
+    if not isinstance(camera, Camera):  # (None was a builtin AttributeError)
+        raise CalibrationError(f"render_chessboard needs a Camera, got {type(camera).__name__}")
+    nx, ny = check_pattern(pattern)
+    finite_number("square_m", square_m, 0.0, lo_open=True, error=CalibrationError)
+    R_board = as_float_array(R_board, "R_board", (3, 3), error=CalibrationError)
+    if not np.allclose(R_board @ R_board.T, np.eye(3), atol=1e-5) or np.linalg.det(R_board) < 0:
+        raise CalibrationError("R_board: not a rotation matrix (R R^T != I or det(R) < 0)")
+    t_board = as_float_array(t_board, "t_board", error=CalibrationError)
+    if t_board.shape not in ((3,), (3, 1), (1, 3)):
+        raise CalibrationError(f"t_board: expected 3 numbers (metres) of shape (3,), (3, 1) or "
+                               f"(1, 3), got shape {t_board.shape}")
+    t_board = t_board.reshape(3)
+    finite_number("margin_squares", margin_squares, 0.0)
+    finite_number("blur_px", blur_px, 0.0, MAX_BLUR_SHARE * max(camera.width, camera.height))
+    finite_number("noise", noise, 0.0)
+    finite_number("background", background, 0.0, 1.0)
+    invert = true_or_false("invert", invert)  # ("no" inverted the board)
     if rays is None:
         rays = _subpixel_rays(camera)
-    R_board = np.asarray(R_board, float)
-    t_board = np.asarray(t_board, float).reshape(3)
     # ray p = s * r meets the board plane n . (p - t) = 0 with n = R e_z
     n = R_board[:, 2]
     denom = rays @ n

@@ -88,9 +88,14 @@ _MAPS_CACHE: dict[tuple[int, float, tuple[int, int]], tuple] = {}
 # ---------------------------------------------------------------------------------------------
 def rectification_maps(rig: StereoRig, alpha: float = 0.0) -> tuple[Rectification, tuple]:
     """The rectification of ``rig`` and its remap tables ``(map1x, map1y, map2x, map2y)``
-    (``cv2.initUndistortRectifyMap``, fixed-point maps), cached per rig."""
+    (``cv2.initUndistortRectifyMap``, fixed-point maps), cached per rig.
+
+    ``alpha`` in [0, 1] (:meth:`StereoRig.rectify`: 0 keeps only valid pixels, 1 keeps all
+    source pixels); anything else is a ConfigError, checked before the cache key is built
+    (None or text were a builtin TypeError / ValueError of ``float(alpha)``)."""
     check_rig(rig, "stereo rectification")
-    key = (id(rig), float(alpha), rig.left.size)
+    alpha = finite_number("alpha", alpha, 0.0, 1.0)
+    key = (id(rig), alpha, rig.left.size)
     hit = _MAPS_CACHE.get(key)
     if hit is not None and hit[0] is rig:
         return hit[1], hit[2]
@@ -111,7 +116,8 @@ def rectify_pair(left: NDArray, right: NDArray, rig: StereoRig, alpha: float = 0
     """Rectify a stereo pair with ``rig``: returns (left_rect, right_rect, rectification).
 
     Images must have the rig's size (``ImageInputError`` otherwise). For an already rectified
-    rig (:attr:`StereoRig.is_rectified`) the images are returned unchanged.
+    rig (:attr:`StereoRig.is_rectified`) the images are returned unchanged. ``alpha`` in
+    [0, 1] as in :func:`rectification_maps` (ConfigError otherwise).
     """
     check_pair(left, right, expected_size=check_rig(rig, "rectify_pair").left.size)
     rect, maps = rectification_maps(rig, alpha)
