@@ -1525,8 +1525,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         :data:`POSE_HISTORY_S`, and one before), timed on the audio's clock: the second of
         audio the microphones capture now where the source tells it (a live device:
         ``audio_time_now()``, its input latency and the blocks queued behind the stream
-        included; unheeded, a head following at 28 deg/s put its pan 0.5-1 deg off per 20-40
-        ms), else the end of the newest block the stream has taken, or ``t`` if later."""
+        included; unheeded, 20-40 ms of latency put a head following at 28 deg/s 0.5-1 deg
+        off), else the end of the newest block the stream has taken, or ``t`` if later."""
         pose = _pose(head)
         captured = source.audio_time_now()
         state["captured"] = -math.inf if captured is None else captured

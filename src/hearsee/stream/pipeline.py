@@ -833,7 +833,7 @@ def _capture_delay(time_info: Any, adc: float | None, frames: int, fs: float) ->
 
 def _input_latency(stream: Any) -> float:
     """The input stream's reported latency, seconds (sounddevice's ``InputStream.latency``);
-    0 where it reports none or no finite number >= 0."""
+    0 where it reports none, or no number from 0 to 1 s."""
     try:
         latency = float(getattr(stream, "latency", 0.0))
     except (TypeError, ValueError):
