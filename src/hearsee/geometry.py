@@ -158,10 +158,15 @@ def wrap_deg(angle: ArrayLike) -> NDArray:
     return np.where(w == -180.0, 180.0, w)
 
 
+#: The most points :func:`fibonacci_sphere` spreads (a 0.06-degree lattice; 240 MB).
+MAX_SPHERE_POINTS = 10_000_000
+
+
 def fibonacci_sphere(n: int) -> NDArray:
     """``n`` nearly uniformly spread unit vectors ``(n, 3)`` (Fibonacci lattice); ``n`` an
-    integer >= 1 (GeometryError otherwise: 2.5 is not rounded)."""
-    n = whole_number("n", n, error=GeometryError)
+    integer from 1 to :data:`MAX_SPHERE_POINTS` (GeometryError otherwise: 2.5 is not
+    rounded, 10**9 points was a MemoryError)."""
+    n = whole_number("n", n, hi=MAX_SPHERE_POINTS, error=GeometryError)
     i = np.arange(n) + 0.5
     z = 1.0 - 2.0 * i / n
     phi = np.pi * (1.0 + 5**0.5) * i

@@ -350,3 +350,25 @@ def test_residual_scaled_variance_needs_a_positive_tdoa_std():
         with pytest.raises(GeometryError, match="sig"):
             residual_scaled_variance(r, bad, 3)
     assert residual_scaled_variance(r, 1e-3, 3) == pytest.approx(1e-6)  # (sig^2 dominates)
+
+
+def test_microphone_counts_have_a_ceiling():
+    """10**9 or 10**20 microphones hung the pair helpers and the ITD filter building their
+    pairs; an array of more than MAX_MICS positions would have asked for a distance table of
+    their square; 10**9 sphere points was a MemoryError. Now typed errors at once."""
+    from hearsee.audio.arrays import MAX_MICS, closure_rms, pair_matrix
+    from hearsee.audio.itd_filter import ItdKalman
+    from hearsee.geometry import fibonacci_sphere
+
+    with pytest.raises(GeometryError, match="n_mics"):
+        pair_matrix(10**20, [(0, 1)])
+    with pytest.raises(GeometryError, match="n_mics"):
+        closure_rms([0.0], [(0, 1)], 10**20)
+    with pytest.raises(GeometryError, match="n_mics"):
+        ItdKalman(10**9)
+    with pytest.raises(GeometryError, match=f"at most {MAX_MICS} microphones"):
+        MicArray(np.random.default_rng(0).uniform(-1, 1, (MAX_MICS + 1, 3)))
+    with pytest.raises(GeometryError, match="n must be"):
+        fibonacci_sphere(10**9)
+    assert pair_matrix(4, [(0, 1), (2, 3)]).shape == (2, 3)
+    assert fibonacci_sphere(100).shape == (100, 3)

@@ -293,6 +293,7 @@ def test_bad_search_parameters_are_an_estimation_error(rig):
     p = np.array([1.5, 0.3, 0.1])
     uv, z = rig.project(p)[0], rig.array.tdoa(p)
     for kw, name in (({"n_grid": 1}, "n_grid"), ({"n_grid": 0}, "n_grid"),
+                     ({"n_grid": 10**8}, "n_grid"),  # (a MemoryError)
                      ({"max_candidates": 0}, "max_candidates"),
                      ({"range_m": (0.1, np.inf)}, "range_m"),
                      ({"sigma_tdoa_s": np.nan}, "sigma_tdoa_s"),

@@ -43,11 +43,16 @@ from hearsee.config import (
 )
 from hearsee.errors import ConfigError, GeometryError, InputFileError
 
-__all__ = ["FLAT_TDOA_S", "MAX_TDOA_STD_S", "SPEED_OF_SOUND_RANGE_MPS", "MicArray",
+__all__ = ["FLAT_TDOA_S", "MAX_MICS", "MAX_TDOA_STD_S", "SPEED_OF_SOUND_RANGE_MPS", "MicArray",
            "check_pairs", "check_tdoa_std", "closure_rms",
            "list_presets", "load_array", "pair_closure_projector", "pair_matrix", "pair_tdoa",
            "pair_tdoa_jacobian", "position_uncertainty", "residual_scaled_variance",
            "span_dimension"]
+
+#: The most microphones an array (and the pair helpers' ``n_mics``) may have: a pair table or
+#: ITD filter of 10**9 microphones hung building its pairs, and the array's distance table
+#: grows with the square (4096 microphones: ~0.4 GB).
+MAX_MICS = 4096
 
 #: Default TDOA standard deviation (s): whole-capture GCC-PHAT summaries of 1-2 s of speech at
 #: 16 kHz measured 1-2 us rms at SNR 20 dB in RT60 0.3 s rooms, ~6 us at SNR 10 dB (anechoic)
@@ -139,6 +144,9 @@ class MicArray:
             raise GeometryError(
                 f"array {self.name!r}: needs at least 2 microphones, got {pos.shape[0]}"
             )
+        if pos.shape[0] > MAX_MICS:
+            raise GeometryError(f"array {self.name!r}: at most {MAX_MICS} microphones, got "
+                                f"{pos.shape[0]}")
         if not np.all(np.isfinite(pos)):
             raise GeometryError(f"array {self.name!r}: microphone positions must be finite")
         with np.errstate(over="ignore"):
@@ -406,7 +414,7 @@ def check_pairs(pairs: Sequence[tuple[int, int]], n_mics: int) -> list[tuple[int
     builtin TypeError) and for text (``"01"`` was read character by character: "a pair is two
     microphone indices, got '0'"). The one rule of :meth:`MicArray.checked_pairs` and
     :class:`hearsee.audio.itd_filter.ItdKalman`."""
-    n_mics = whole_number("n_mics", n_mics, lo=2, error=GeometryError)
+    n_mics = whole_number("n_mics", n_mics, lo=2, hi=MAX_MICS, error=GeometryError)
     try:
         items = None if isinstance(pairs, str | bytes) else list(pairs)
     except TypeError:
@@ -444,7 +452,7 @@ def pair_matrix(n_mics: int, pairs: Sequence[tuple[int, int]], ref: int = 0) -> 
     :func:`check_pairs` refuses (n_mics 0 was numpy's builtin ValueError, a reference of 9 for
     3 microphones a matrix as if there were none). The ITD Kalman filter's measurement matrix
     (:mod:`hearsee.audio.itd_filter`) and the closure of :func:`pair_closure_projector`."""
-    n_mics = whole_number("n_mics", n_mics, lo=2, error=GeometryError)
+    n_mics = whole_number("n_mics", n_mics, lo=2, hi=MAX_MICS, error=GeometryError)
     ref = whole_number("ref", ref, lo=0, hi=n_mics - 1, error=GeometryError)
     pairs = check_pairs(pairs, n_mics)
     others = [k for k in range(n_mics) if k != ref]

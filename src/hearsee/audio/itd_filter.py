@@ -34,7 +34,7 @@ from filterpy.kalman import KalmanFilter
 from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
-from hearsee.audio.arrays import check_pairs, pair_matrix
+from hearsee.audio.arrays import MAX_MICS, check_pairs, pair_matrix
 from hearsee.audio.localize import as_tdoas, check_real_tdoas, check_tdoa_magnitude
 from hearsee.config import is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, EstimationError, GeometryError
@@ -181,7 +181,7 @@ class ItdKalman:
                  q_std_s: float = 2e-5, r_std_s: float = 3e-5, gate_prob: float = 0.99,
                  max_rejects: int = 5, p0_std_s: float = 1e-3) -> None:
         # (not numbers: TypeErrors from numpy or range(); ref=1.5 was truncated to 1)
-        n_mics = whole_number("n_mics", n_mics, lo=2, error=GeometryError)
+        n_mics = whole_number("n_mics", n_mics, lo=2, hi=MAX_MICS, error=GeometryError)
         ref = whole_number("ref", ref, lo=0, hi=n_mics - 1, error=GeometryError)
         # (pairs: check_pairs; (0.7, 1.9) was truncated to (0, 1))
         pairs = None if pairs is None else check_pairs(pairs, n_mics)

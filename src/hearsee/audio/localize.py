@@ -43,6 +43,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import (
     DEFAULT_TDOA_STD_S,
+    MAX_MICS,
     MicArray,
     _linearised_covariance,
     _pair_index,
@@ -1108,7 +1109,7 @@ def position_tdoa_std(tdoa_s: ArrayLike, pairs: Sequence[tuple[int, int]], n_mic
     and centre 8 -> 0, 8-mic circle 5 -> 0), 95 % ellipsoids holding the truth 57-78 % -> 90-100 %
     per array and RT60 (pooled 68 -> 97 %), reported share in the rooms 47 -> 25 % (340 -> 179
     of 720); anechoic and every direction unchanged."""
-    prs = check_pairs(pairs, whole_number("n_mics", n_mics, 2, error=GeometryError))
+    prs = check_pairs(pairs, whole_number("n_mics", n_mics, 2, MAX_MICS, error=GeometryError))
     tau = as_tdoas(tdoa_s, len(prs))  # (text: numpy's builtin ValueError)
     if not np.all(np.isfinite(tau)):  # (NaN: max(5e-6, nan) returned the declared value)
         raise GeometryError("position_tdoa_std needs finite TDOAs (seconds)")

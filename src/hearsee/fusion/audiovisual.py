@@ -333,6 +333,11 @@ def _image_point(uv: ArrayLike, finite: bool) -> NDArray:
     return p
 
 
+#: The most ranges :func:`locate_on_ray` scans along the camera ray (its grid is refined
+#: around the best anyway: 256 by default).
+MAX_RAY_GRID = 100_000
+
+
 def locate_on_ray(
     rig: AudioVisualRig,
     uv: ArrayLike,
@@ -358,7 +363,7 @@ def locate_on_ray(
     range_m : (near, far)
         Search interval along the ray, metres from the camera centre.
     n_grid : int
-        Log-spaced grid points of the global search.
+        Log-spaced grid points of the global search, 2 to :data:`MAX_RAY_GRID`.
     sigma_tdoa_s, sigma_px : float
         Measurement noise used for the returned covariance (seconds, pixels).
     max_candidates : int
@@ -389,7 +394,8 @@ def locate_on_ray(
             "or milliseconds)")
     p = _image_point(uv, finite=True)
     near, far = _ray_range(range_m)
-    n_grid = whole_number("n_grid", n_grid, 2, error=EstimationError)
+    # (10**8 points was a MemoryError: a residual per point and pair)
+    n_grid = whole_number("n_grid", n_grid, 2, MAX_RAY_GRID, error=EstimationError)
     max_candidates = whole_number("max_candidates", max_candidates, 1, error=EstimationError)
     sigma_tdoa_s = finite_number("sigma_tdoa_s", sigma_tdoa_s, 0.0, error=EstimationError)
     sigma_px = finite_number("sigma_px", sigma_px, 0.0, error=EstimationError)
