@@ -1313,8 +1313,9 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        the stream forgets its array-frame state (direction tracker, ITD filter, smoothed
        spectra: their directions were relative to the old pose) and the audio is withheld
        until one frame and one audio block after the head stops (``summary["head_moves"]``
-       counts the pose changes of turns; meanwhile, without a 3D track, the desired pose stays
-       the last one commanded). The robot-frame 3D track is kept.
+       counts the pose changes of turns; meanwhile, without a 3D track, the head is still sent
+       to the newest measured bearing, which withheld updates do not change). The robot-frame
+       3D track is kept.
     3. **See and verify**: every ``1 / cameras.rate_hz`` seconds of audio, one set of camera
        frames (of a video file: its frame at that audio time) goes through stereo + thermal
        human detection
@@ -1433,7 +1434,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     use_pool = (live if async_vision is None else async_vision) and cameras is not None
     pool = ThreadPoolExecutor(1, thread_name_prefix="hearsee-vision") if use_pool else None
     pending: list[Any] = [None]
-    # the driver's poses read within the last frame plus block: (seconds of audio, (pan, tilt))
+    # the driver's poses read within the last POSE_HISTORY_S: (seconds of audio, (pan, tilt))
     poses: deque[tuple[float, tuple[float, float]]] = deque()
     audio_geo: list[_Head | None] = [None]  # (the last geometry built for a frame's pose)
     t_start = time.perf_counter()
