@@ -127,6 +127,11 @@ def _sigma_pair(sigma_meas_deg: Any) -> tuple[float, float]:
     """A frame's measurement noise ``sigma_meas_deg`` (degrees): one number for both angles or
     (azimuth, elevation), each finite and > 0; EstimationError otherwise (three numbers were
     numpy's broadcast ValueError, text float()'s)."""
+    lo, hi = NOISE_RANGE
+    if (type(sigma_meas_deg) is tuple and len(sigma_meas_deg) == 2  # the stream's, every frame
+            and type(sigma_meas_deg[0]) is float and type(sigma_meas_deg[1]) is float
+            and lo <= sigma_meas_deg[0] <= hi and lo <= sigma_meas_deg[1] <= hi):
+        return sigma_meas_deg
     pair = (sigma_meas_deg,) * 2 if np.ndim(sigma_meas_deg) == 0 else tuple(sigma_meas_deg)
     if len(pair) != 2:
         raise EstimationError(f"sigma_meas_deg must be one number or (azimuth, elevation) in "
@@ -241,9 +246,14 @@ def _bound_elevation(X: NDArray) -> None:
     """Clamp the elevation of direction states ``X`` (..., 4) to +-90 deg in place, stopping
     an elevation rate that points beyond the bound (a prediction must not carry a track over
     the pole: coasting at the last rate once reported elevations of several hundred deg)."""
+    if X.ndim == 1:  # (states within the bounds are the common case: tested as floats)
+        if -90.0 <= X[1] <= 90.0:
+            return
+    elif X.ndim == 2 and len(X) <= 8 and all(-90.0 <= v <= 90.0 for v in X[:, 1].tolist()):
+        return
     el = X[..., 1]
     over = np.abs(el) > 90.0
-    if np.any(over):
+    if over.any():  # (the method: np.any's wrapper cost more than the test, every frame)
         X[..., 3] = np.where(over & (X[..., 3] * el > 0), 0.0, X[..., 3])
         X[..., 1] = np.clip(el, -90.0, 90.0)
 
@@ -935,7 +945,7 @@ class DirectionIMM:
 
     def _combine(self, w: NDArray) -> None:
         """The output: the modes' mixture with probabilities ``w``."""
-        x, P = self._mixtures(self.X, self.Ps, w[:, None], float(self.X[int(np.argmax(w)), 0]))
+        x, P = self._mixtures(self.X, self.Ps, w[:, None], float(self.X[int(w.argmax()), 0]))
         self._mix.x, self._mix.P = x[0], P[0]
 
     def _predicted_mixture(self, F: NDArray, Qs: NDArray, c: NDArray
@@ -990,7 +1000,7 @@ class DirectionIMM:
         T = self._tpm(dt)
         c = T.T @ self.mu  # predicted mode probabilities
         W = T * self.mu[:, None] / np.maximum(c[None, :], 1e-300)
-        X, Ps = self._mixtures(self.X, self.Ps, W, float(self.X[int(np.argmax(self.mu)), 0]))
+        X, Ps = self._mixtures(self.X, self.Ps, W, float(self.X[int(self.mu.argmax()), 0]))
         if dt > 0:  # every mode predicts with its own process noise
             F, Qs = self._model(dt)
             X = X @ F.T
