@@ -1,6 +1,7 @@
 """Thesis ch. 5 regenerated: tracking a moving speaker, camera + microphone fusion, motion.
 
-Figures and tables (thesis numbering; reconstruction, see ``design/reconstruction.md``):
+Figures and tables (thesis numbering; reconstruction from the literature cited in
+``hearsee.audio.tracking`` and ``hearsee.fusion.audiovisual``):
 
 * fig. 5.1   far-field direction error as d0/r shrinks (d0 = microphone spacing, r = range)
 * table 5.1  + figs. 5.3-5.6  cases I-III: white noise / male / female voice as the moving

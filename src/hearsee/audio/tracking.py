@@ -1,6 +1,8 @@
 """Direction and 3D-motion trackers (thesis ch. 5): Kalman filters with gating and missing frames.
 
-Reconstruction (the thesis's ch. 5 text is lost; see ``design/reconstruction.md``):
+Reconstruction (the thesis's ch. 5 text is lost; the project's design
+notes, ``../shared/design/reconstruction.md``, lie outside this repository; the literature
+followed is cited below):
 
 * :class:`DirectionKalman` (thesis 5.2, fig. 5.6) tracks the azimuth and elevation of a distant
   moving source with a constant-velocity model (Bar-Shalom, Li & Kirubarajan, *Estimation with

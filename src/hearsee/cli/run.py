@@ -32,7 +32,7 @@ def run_cmd(
                                           help="Check the robot file and open every device "
                                           "once; exit 0 only if all checks pass.")] = False,
     duration: Annotated[float | None, typer.Option(
-        "--duration", "-d", help="Stop after this many seconds of audio, > 0 (default, or inf: "
+        "--duration", "-d", help="Stop after this many seconds of audio, > 0; default (or inf): "
         "no limit -- until Ctrl-C or the input stops).")] = None,
     out: Annotated[Path | None, typer.Option(
         "--out", "-o", help="Report folder (overrides output.report; the JSON lines go to "

@@ -113,7 +113,8 @@ def simulate_cmd(
     room: str | None = typer.Option(None, "--room",
                                     help="Shoebox room LxWxH in metres (default: free field)."),
     rt60: float | None = typer.Option(None, "--rt60",
-                                      help="Room reverberation time in seconds (0 = anechoic)."),
+                                      help="Room reverberation time in seconds (0 = anechoic); "
+                                      "required with --room."),
     array_at: str | None = typer.Option(None, "--array-at",
                                         help="Array origin X,Y,Z in room coordinates "
                                         "(default: the room centre)."),
@@ -141,7 +142,8 @@ def simulate_cmd(
     hum_hz: float = typer.Option(50.0, "--hum-hz", help="The hum's fundamental in Hz (50 or "
                                  "60 where the mains are)."),
 ) -> None:
-    """Simulate a recording of a static source and write OUT.wav + OUT.json (ground truth)."""
+    """Simulate a recording of a static source (or a moving one: --trajectory; or one capture per
+    head pose: --poses) and write OUT.wav + OUT.json (ground truth)."""
     from hearsee.audio.propagation import check_snr_db
     from hearsee.sim.audio import save_recording, simulate_recording
 

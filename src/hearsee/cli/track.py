@@ -158,7 +158,7 @@ def track_cmd(
     device: Annotated[str | None, typer.Option(
         "--device", help="Live input: PortAudio device index or name.")] = None,
     duration: Annotated[float | None, typer.Option(
-        "--duration", help="Live input: stop after this many seconds, > 0 (default, or inf: "
+        "--duration", help="Live input: stop after this many seconds, > 0; default (or inf): "
         "no limit -- until Ctrl-C or the input stops).")] = None,
     fs: Annotated[int | None, typer.Option(
         "--fs", help="Live input: sample rate in Hz (default 16000; with a camera, 48000 "
@@ -182,7 +182,8 @@ def track_cmd(
         "--camera-at", help="Camera optical centre X,Y,Z in the array frame, metres (needs "
         "--camera; default 0,0,0; at most 5 m from the array's centre). Measure "
         "it (and the pan) carefully: the range comes from the camera-array parallax, 10 cm "
-        "off sideways moved the 3D fixes 0.25-0.8 m in bench/mounting.py, and the audio "
+        "off sideways moved the 3D fixes 0.5-0.8 m with the camera 0.2 m aside (0.2-0.3 m "
+        "0.5 m aside) in bench/mounting.py, and the audio "
         "cannot tell.")] = None,
     camera_pan: Annotated[float | None, typer.Option(
         "--camera-pan", help="Camera pan (deg, toward +y; -180 to 180; needs --camera; "

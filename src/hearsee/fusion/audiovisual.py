@@ -1,6 +1,8 @@
 """Microphones + one camera: the 3D position of a nearby sound source (thesis 5.3, 5.4).
 
-Reconstruction (the thesis's ch. 5 text is lost; see ``design/reconstruction.md``).
+Reconstruction (the thesis's ch. 5 text is lost; the project's design
+notes, ``../shared/design/reconstruction.md``, lie outside this repository; the literature
+followed is cited below).
 
 **With camera calibration (5.4, figs. 5.12-5.17).** The image point ``(u, v)`` of the source fixes
 a ray from the camera centre ``o`` along ``d`` (lens distortion removed with the calibrated

@@ -3,7 +3,8 @@
 Reconstruction
 --------------
 The thesis text of chapter 6 is not available; only its title, section titles and figure list
-are (see ``shared/design/reconstruction.md``). What follows is a reconstruction from the
+are (the project's design notes, ``../shared/design/reconstruction.md``, outside this
+repository). What follows is a reconstruction from the
 literature, not a transcription:
 
 * The embedding follows Locally Linear Embedding (LLE): Roweis & Saul, "Nonlinear dimensionality
