@@ -687,6 +687,40 @@ def test_duration_and_ctrl_c_stop_cleanly(tmp_path):
 
 
 @pytest.mark.slow
+def test_live_loop_lets_go_of_a_silent_person_when_the_voice_is_elsewhere(tmp_path):
+    """The cameras see one person (robot-frame azimuth ~18 deg), who is silent: a voice 8 deg
+    beside them for 1.5 s gets them associated (inside the 20-deg gate), then the voice comes
+    from -45 deg. The track is let go once the measured bearing has stayed more than the gate
+    away from it for SPEAKER_CHECK_S, and the person is not associated again within
+    SPEAKER_EXCLUDE_S (before the check the track followed them to the end)."""
+    from hearsee.robot.pipeline import SPEAKER_CHECK_S, SPEAKER_EXCLUDE_S
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg, _, _, torso, _ = _person_case(tmp_path, n_frames=8)
+    person_az = float(np.degrees(np.arctan2(torso[1], torso[0])))
+    parts = []
+    for az, dur, seed in ((person_az + 8.0, 1.5, 5), (-45.0, 2.5, 6)):
+        a = np.radians(az)
+        src = [2.5 * np.cos(a), 2.5 * np.sin(a), 0.2]
+        parts.append(simulate_recording("three-mic", src, signal="male", duration_s=dur,
+                                        fs=FS, snr_db=20.0, seed=seed)[0])
+    x = np.concatenate(parts, axis=1)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, block_len=1600), head=_quiet_head(cfg))
+    s = res.summary
+    assert s["status"] == "ok" and s["speaker_drops"] == 1
+    taken = [r["t"] for r in res.log for d in r["detections"] if d["speaker"]]
+    assert taken and min(taken) < 1.5  # the person was taken while the voice was beside them
+    tracked = [r["t"] for r in res.log if r["track"] is not None]
+    dropped = max(tracked)
+    # let go SPEAKER_CHECK_S after the bearing left (the stream's tracker needs a few frames)
+    assert 1.5 + SPEAKER_CHECK_S <= dropped <= 1.5 + SPEAKER_CHECK_S + 0.6
+    assert dropped + SPEAKER_EXCLUDE_S > 4.0  # (excluded to the end of the run)
+    assert not [t for t in taken if t > dropped] and res.log[-1]["track"] is None
+    assert abs(float(wrap_deg(s["azimuth_deg_final"] + 45.0))) < 5.0
+
+
+@pytest.mark.slow
 def test_track_dropped_after_cameras_end(tmp_path):
     """Videos of 2 frames (camera at 2 Hz) and 3 s of audio: the person is verified and tracked,
     then the cameras end; after the track timeout without a visual fix the 3D track is dropped

@@ -255,6 +255,114 @@ def test_a_masked_pairs_coarser_bearing_gets_a_wider_association_gate():
             associate(person, [0.0], kf, 30.0, bad)
 
 
+def test_speaker_check_lets_go_of_a_person_the_voice_is_not_coming_from():
+    """The 3D track is kept while the audio bearing agrees with its bearing within the gate;
+    when every audio step of SPEAKER_CHECK_S seconds (at least SPEAKER_CHECK_MIN_UPDATES of
+    them) disagrees, the check says drop it -- steps without audio hold the count, one
+    agreeing step or a step without a track restarts it -- and the dropped person (within
+    SPEAKER_EXCLUDE_M of the excluded position) is refused for SPEAKER_EXCLUDE_S seconds."""
+    from hearsee.robot.pipeline import (
+        SPEAKER_CHECK_MIN_UPDATES,
+        SPEAKER_CHECK_S,
+        SPEAKER_EXCLUDE_M,
+        SPEAKER_EXCLUDE_S,
+        SpeakerCheck,
+    )
+
+    dt = 0.2
+    steps = int(round(SPEAKER_CHECK_S / dt))  # steps after the first disagreeing one
+    assert steps + 1 >= SPEAKER_CHECK_MIN_UPDATES
+    chk = SpeakerCheck(20.0)
+    # agreeing (19 deg off, across the +-180 seam) for 3 s: never
+    assert not any(chk.observe(k * dt, -170.0, 171.0) for k in range(15))
+    # 25 deg off from t = 3.0 on: the drop comes at 3.0 + SPEAKER_CHECK_S, not before
+    said = [chk.observe(3.0 + k * dt, 60.0, 35.0) for k in range(steps + 1)]
+    assert said == [False] * steps + [True]
+    # the count restarted after the drop; no audio in between holds it, one agreeing step
+    # restarts it, and so does a step without a track
+    t0 = 5.0
+    assert not chk.observe(t0, 60.0, 0.0)
+    assert not any(chk.observe(t0 + k * dt, None, 0.0) for k in range(1, 4))
+    assert not chk.observe(t0 + 4 * dt, 60.0, 0.0)
+    assert chk.observe(t0 + steps * dt, 60.0, 0.0)  # (3 audio steps over 1 s)
+    for track_deg in (55.0, None):  # a step agreeing (60 vs 55 deg); one without a track
+        chk = SpeakerCheck(20.0)
+        assert not any(chk.observe(k * dt, 60.0, 0.0) for k in range(steps))
+        assert not chk.observe(steps * dt, 60.0, track_deg)
+        # the count starts again: the drop comes SPEAKER_CHECK_S after the next step
+        said = [chk.observe((steps + 1 + k) * dt, 60.0, 0.0) for k in range(steps + 1)]
+        assert said == [False] * steps + [True]
+    # too few audio steps: two disagreeing steps SPEAKER_CHECK_S apart are not enough
+    fresh = SpeakerCheck(20.0)
+    assert SPEAKER_CHECK_MIN_UPDATES > 2
+    assert not fresh.observe(0.0, 90.0, 0.0)
+    assert not fresh.observe(SPEAKER_CHECK_S + 0.5, 90.0, 0.0)
+    assert fresh.observe(SPEAKER_CHECK_S + 0.7, 90.0, 0.0)
+    # the dropped person is refused for SPEAKER_EXCLUDE_S, the others are not
+    p = np.array([2.0, 1.0, 1.2])
+    fresh.exclude(10.0, p)
+    near = p + [SPEAKER_EXCLUDE_M - 0.05, 0.0, 0.0]
+    away = p + [SPEAKER_EXCLUDE_M + 0.05, 0.0, 0.0]
+    assert fresh.allowed(10.0 + SPEAKER_EXCLUDE_S - 0.1, [p, near, away]) == [False, False, True]
+    assert fresh.allowed(10.0 + SPEAKER_EXCLUDE_S + 0.1, [p, near]) == [True, True]
+    for bad in (0.0, -1.0, float("nan"), 200.0, "20"):
+        with pytest.raises(EstimationError, match="gate_deg"):
+            SpeakerCheck(bad)
+
+
+def test_speaker_check_switches_to_the_person_in_view_nearer_the_voice():
+    """Two verified persons in view, the track on the one at 0 deg: when the voice's bearing
+    is nearer the other (at 20 deg, 0.7 m away) by more than SPEAKER_SWITCH_MARGIN x the gate
+    in every camera frame for SPEAKER_SWITCH_S, speaker_checked drops the track and leaves its
+    person out, so association by the audio bearing takes the other; nearer by less than the
+    margin, or only now and then, the track stays."""
+    from hearsee.robot.pipeline import (
+        SPEAKER_SWITCH_MARGIN,
+        SPEAKER_SWITCH_S,
+        SpeakerCheck,
+        associate,
+        speaker_checked,
+    )
+
+    gate, dt = 20.0, 0.2
+    margin = SPEAKER_SWITCH_MARGIN * gate
+    a, b = np.array([2.0, 0.0, 1.2]), np.array([2.0 * np.cos(np.radians(20.0)),
+                                                 2.0 * np.sin(np.radians(20.0)), 1.2])
+
+    def bearing(p):
+        return float(np.degrees(np.arctan2(p[1], p[0])))
+
+    def run(audio_deg: float, frames: int, every: int = 1):
+        chk, kf = SpeakerCheck(gate), new_person_track()
+        kf.update(0.0, a)
+        kept = []
+        for k in range(frames):
+            t = (k + 1) * dt
+            kf.predict(t)
+            audio = audio_deg if k % every == 0 else 3.0  # (3 deg: the tracked one's)
+            people = speaker_checked(chk, t, ["a", "b"], [a, b], [bearing(a), bearing(b)], kf,
+                                     audio, bearing)
+            kept.append(people)
+            if not kf.initialized:
+                return t, people, associate([b], [bearing(b)], kf, audio, gate)
+            kf.update(t, a)
+        return None, kept[-1], None
+
+    # the voice at 19 deg: 19 from the tracked person, 1 from the other (> margin nearer)
+    assert 19.0 - 1.0 > margin
+    t, people, k = run(19.0, 10)
+    assert t == pytest.approx(dt + SPEAKER_SWITCH_S)  # (frames from t = 0.2 s)
+    assert people == ["b"] and k == 0  # the tracked person left out; the other taken
+    # nearer by less than the margin: kept
+    mid = (20.0 + margin) / 2.0 - 0.5  # d_track - d_other = 2 mid - 20 < margin
+    assert 0 < 2 * mid - 20.0 < margin
+    assert run(mid, 10)[0] is None
+    # nearer in every other frame only: kept (each agreeing frame restarts the count)
+    assert run(19.0, 10, every=2)[0] is None
+    # without an audio bearing nothing changes
+    assert run(float("nan"), 10)[0] is None
+
+
 def test_associate_never_picks_what_is_not_a_number():
     """A NaN audio bearing (a direction filter's before it starts) is no bearing, a person
     with a NaN bearing or position is never the nearest (numpy's argmin took the NaN), and

@@ -1330,7 +1330,11 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        detector's achieved frame interval (``summary["vision_frame_interval_s"]``: 1 s, or
        2.5 intervals when its results come more than 0.4 s apart -- a slow detector, a low
        ``rate_hz``) since the last fix arrived is dropped (counted in
-       ``summary["track_drops"]``) and the head follows the audio bearing again.
+       ``summary["track_drops"]``) and the head follows the audio bearing again; so is a
+       track whose bearing the measured audio bearing has left by more than the association
+       gate for :data:`~hearsee.robot.pipeline.SPEAKER_CHECK_S` (a silent person taken for
+       the speaker: :class:`~hearsee.robot.pipeline.SpeakerCheck`, ``summary["speaker_drops"]``),
+       whose person is then not associated again for a few seconds.
 
     Parameters
     ----------
@@ -1375,10 +1379,12 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     from hearsee.robot.pipeline import (
         MIN_AUDIO_UPDATES,
         RunResult,
+        SpeakerCheck,
         associate,
         association_gate_deg,
         fuses_fix,
         new_person_track,
+        speaker_checked,
         stereo_position_cov,
         track_record,
         track_timeout_s,
@@ -1409,6 +1415,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                         itd_filter=True)
     pipeline = StreamPipeline(a.array, scfg, queue_size=16, max_stall_s=5.0)
     track = new_person_track()
+    speaker = SpeakerCheck(association_gate_deg(a.array))
     # the cameras last, just before the try that closes them (an error above left them open)
     own_cameras = cameras is None and cfg.cameras is not None
     if own_cameras:
@@ -1426,7 +1433,8 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     frames: list[tuple[float, NDArray]] = []
     state = {"n_audio": 0, "next_cam": 0.0, "phase": "listening", "cam_frames": 0,
              "cam_ended": False, "first_verified": None, "hop": scfg.hop_ms / 1000.0,
-             "last_visual": -np.inf, "track_drops": 0, "heard_from": -np.inf, "head_moves": 0,
+             "last_visual": -np.inf, "track_drops": 0, "speaker_drops": 0,
+             "heard_from": -np.inf, "head_moves": 0,
              "head_follows": 0, "heard_bearing": None, "last_capture": None,
              "frame_interval": period, "captured": -math.inf}
     # live: detection runs in a worker thread so that the audio keeps flowing; its result is
@@ -1486,6 +1494,10 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         state["last_capture"] = t_cap
         if track.initialized:
             track.predict(t_cap)
+        # (the tracked person still the voice's? not one the audio check let go of lately)
+        verified = speaker_checked(speaker, t_cap, verified, [v[1] for v in verified],
+                                    [v[2] for v in verified], track, bearing,
+                                    g.heard_azimuth_deg)
         best = associate([v[1] for v in verified], [v[2] for v in verified], track, bearing,
                          association_gate_deg(a.array))
         if best is not None:
@@ -1605,6 +1617,14 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             if u.measured:
                 state["n_audio"] += 1
                 state["heard_bearing"] = az
+        # the track must stay on the person heard (as the simulated loop: a silent person
+        # taken by mistake is let go; :class:`~hearsee.robot.pipeline.SpeakerCheck`)
+        now = track.predicted_to(t) if track.initialized else None
+        if speaker.observe(t, bearing if u.measured else None,
+                           None if now is None else geo.heard_azimuth_deg(now.position)):
+            speaker.exclude(t, now.position)
+            track.reset()
+            state["speaker_drops"] += 1
         dets: list[dict[str, Any]] = []
         camera_t = None
         if (cameras is not None and not state["cam_ended"] and pending[0] is None
@@ -1733,6 +1753,7 @@ def _live_summary(log: list[dict[str, Any]], stats: Any, status: str, state: dic
                              is not None else float("nan")),
         "tracked_updates": int(tracked),
         "track_drops": int(state["track_drops"]),
+        "speaker_drops": int(state["speaker_drops"]),
         # (seconds between the frames the detector got through, as the track's timeout uses
         # it: the rate's period, or the detector's latency when it is slower; NaN: no frame)
         "vision_frame_interval_s": (float(state["frame_interval"])

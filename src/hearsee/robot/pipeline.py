@@ -35,6 +35,7 @@ centre (what the stereo detector measures); the voice comes from the mouth.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -42,7 +43,7 @@ from typing import Any
 
 import numpy as np
 import scipy.signal as ss
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.itd_filter import ItdKalman
@@ -58,9 +59,9 @@ from hearsee.robot.scenario import Scenario
 from hearsee.vision.camera import OPTICAL_FROM_BODY
 from hearsee.vision.humans import TORSO_HEIGHT_FRACTION
 
-__all__ = ["CONTROL_DT", "RunResult", "frame_noise_seed", "fuses_fix", "new_person_track",
-           "run_scenario", "sensor_reach_m", "stereo_position_cov", "track_record",
-           "track_timeout_s"]
+__all__ = ["CONTROL_DT", "RunResult", "SpeakerCheck", "frame_noise_seed", "fuses_fix",
+           "new_person_track", "run_scenario", "sensor_reach_m", "speaker_checked",
+           "stereo_position_cov", "track_record", "track_timeout_s"]
 
 #: Control period and audio chunk length, seconds.
 CONTROL_DT = 0.2
@@ -492,6 +493,138 @@ def fuses_fix(human: Any) -> bool:
     return bool(human.accepted) and not bool(human.beyond_search)
 
 
+#: The 3D track must stay on the person heard (:class:`SpeakerCheck`): it is dropped when the
+#: audio bearing has disagreed with the track's bearing by more than the association gate for
+#: this long (seconds, every step with audio in it, at least :data:`SPEAKER_CHECK_MIN_UPDATES`
+#: of them), and the person it followed is not associated again for
+#: :data:`SPEAKER_EXCLUDE_S` seconds.
+SPEAKER_CHECK_S = 1.0
+SPEAKER_CHECK_MIN_UPDATES = 3
+SPEAKER_EXCLUDE_S = 3.0
+#: ... within this distance (metres) of where it was let go: less than two people stand apart
+#: (:data:`hearsee.robot.scenario.MIN_BODY_SEPARATION_M`), more than a standing person's fixes
+#: scatter.
+SPEAKER_EXCLUDE_M = 0.4
+#: ... and let go sooner, after this long (seconds; camera frames with an audio bearing, at least
+#: :data:`SPEAKER_CHECK_MIN_UPDATES` of them), when another verified person in view is nearer
+#: the audio bearing than the tracked one by more than :data:`SPEAKER_SWITCH_MARGIN` times the
+#: association gate: seeing both is stronger evidence than the bearing alone.
+SPEAKER_SWITCH_S = 0.6
+SPEAKER_SWITCH_MARGIN = 0.25
+
+
+def _persisting(t: float, holds: bool, since: float | None, n: int, hold_s: float
+                ) -> tuple[float | None, int, bool]:
+    """A condition's run of consecutive observations: ``(since, n, fired)`` after one at ``t``
+    (seconds) -- restarted when it does not hold, fired (and restarted) once it has held
+    for ``hold_s`` seconds over at least :data:`SPEAKER_CHECK_MIN_UPDATES` observations."""
+    if not holds:
+        return None, 0, False
+    since = t if since is None else since
+    n += 1
+    if n >= SPEAKER_CHECK_MIN_UPDATES and t - since >= hold_s - 1e-9:
+        return None, 0, True
+    return since, n, False
+
+
+class SpeakerCheck:
+    """Whether the 3D track still follows the person heard.
+
+    Not in the thesis. The track starts on the verified person nearest the audio bearing
+    (:func:`associate`); from then on only its own position associates fixes, so a silent
+    person taken by mistake -- the head turned to a wrong bearing (a masked pair's wrong half)
+    and found someone there -- was followed to the end of the run while the voice came from
+    elsewhere. Each step that has an audio bearing, :meth:`observe` compares it with the
+    track's bearing (both degrees, in the frame of the audio bearing); when every such step of
+    the last :data:`SPEAKER_CHECK_S` seconds disagreed by more than ``gate_deg`` (the array's
+    :func:`association_gate_deg`), it answers True: drop the track and :meth:`exclude` its
+    position (metres, the track's frame), whose person :meth:`allowed` then refuses for
+    :data:`SPEAKER_EXCLUDE_S` seconds (within :data:`SPEAKER_EXCLUDE_M`). Each camera frame with
+    an audio bearing and other verified persons besides the tracked one, :meth:`compare`
+    asks whether one of them is nearer the audio bearing by more than
+    :data:`SPEAKER_SWITCH_MARGIN` x ``gate_deg``; when every such frame of the last
+    :data:`SPEAKER_SWITCH_S` seconds says so, it answers True (a person walking past a silent
+    one had the coasting track taken over by the silent one, whose position it reached). One
+    place for the simulated loop and the live one (:mod:`hearsee.robot.hardware`)."""
+
+    def __init__(self, gate_deg: float) -> None:
+        self.gate_deg = finite_number("SpeakerCheck gate_deg", gate_deg, 0.0, 180.0,
+                                      lo_open=True, error=EstimationError)
+        self._since: float | None = None  # (time of the first disagreeing step in a row)
+        self._n = 0  # (disagreeing steps in a row)
+        self._rel_since: float | None = None  # (the same for compare's frames)
+        self._rel_n = 0
+        self._excluded: list[tuple[float, NDArray]] = []  # (until, position)
+
+    def observe(self, t: float, audio_deg: float | None, track_deg: float | None) -> bool:
+        """One control step at ``t`` (seconds): the audio bearing (None or NaN: no audio this
+        step -- the count holds) and the track's bearing (None: no track -- the count
+        restarts). True when the track should be dropped (the count restarts)."""
+        if track_deg is None or not math.isfinite(track_deg):
+            self._since = self._rel_since = None
+            self._n = self._rel_n = 0
+            return False
+        if audio_deg is None or not math.isfinite(audio_deg):
+            return False
+        agree = abs(float(wrap_deg(audio_deg - track_deg))) <= self.gate_deg
+        self._since, self._n, drop = _persisting(t, not agree, self._since, self._n,
+                                                 SPEAKER_CHECK_S)
+        if drop:
+            self._rel_since, self._rel_n = None, 0
+        return drop
+
+    def compare(self, t: float, audio_deg: float | None, track_deg: float,
+                others_deg: Sequence[float]) -> bool:
+        """One camera frame at ``t`` (seconds): the audio bearing (None or NaN: none -- the
+        count holds), the bearing of the tracked person (the one the track associates, or
+        the track's own) and of the other verified persons in view (degrees). True when the
+        track should be dropped for another person nearer the voice (the count restarts)."""
+        if (audio_deg is None or not math.isfinite(audio_deg) or not math.isfinite(track_deg)
+                or not len(others_deg)):
+            return False
+        d_track = abs(float(wrap_deg(audio_deg - track_deg)))
+        d_other = float(np.min(np.abs(wrap_deg(np.asarray(others_deg, float) - audio_deg))))
+        nearer = d_other + SPEAKER_SWITCH_MARGIN * self.gate_deg < d_track  # (NaN: no)
+        self._rel_since, self._rel_n, drop = _persisting(t, nearer, self._rel_since,
+                                                         self._rel_n, SPEAKER_SWITCH_S)
+        if drop:
+            self._since, self._n = None, 0
+        return drop
+
+    def exclude(self, t: float, position: ArrayLike) -> None:
+        """The person at ``position`` (metres) is not the speaker: refused until
+        ``t + SPEAKER_EXCLUDE_S``."""
+        self._excluded.append((t + SPEAKER_EXCLUDE_S, np.asarray(position, dtype=float).copy()))
+
+    def allowed(self, t: float, positions: Sequence[ArrayLike]) -> list[bool]:
+        """For each verified person's position (metres), whether it may be associated at
+        ``t``: not within :data:`SPEAKER_EXCLUDE_M` of a position excluded until after ``t``."""
+        self._excluded = [(u, p) for u, p in self._excluded if u > t]
+        return [all(float(np.linalg.norm(np.asarray(q, dtype=float) - p)) >= SPEAKER_EXCLUDE_M
+                    for _, p in self._excluded) for q in positions]
+
+
+def speaker_checked(speaker: SpeakerCheck, t: float, verified: list, positions: list[NDArray],
+                     bearings: list[float], track: MotionKalman, audio_deg: float | None,
+                     bearing_of: Callable[[NDArray], float]) -> list:
+    """A camera frame's verified persons (``verified``, with their ``positions`` in the
+    track's frame, metres, and ``bearings`` in the audio bearing's, degrees) as the loops
+    may associate them at ``t`` (seconds): without those :class:`SpeakerCheck` let go of lately
+    -- and when another person in view is the voice's for :data:`SPEAKER_SWITCH_S`
+    (:meth:`SpeakerCheck.compare`, ``audio_deg``: this frame's audio bearing or None), the
+    track is dropped first and its person left out. ``bearing_of``: the bearing (degrees) of
+    a position in the track's frame. One place for the simulated and the live loop."""
+    if track.initialized and len(verified):
+        k = associate(positions, bearings, track, None)
+        others = [b for i, b in enumerate(bearings) if i != k]
+        mine = bearings[k] if k is not None else bearing_of(track.position)
+        if speaker.compare(t, audio_deg, mine, others):
+            speaker.exclude(t, track.position if k is None else positions[k])
+            track.reset()
+    ok = speaker.allowed(t, positions)
+    return [v for v, keep in zip(verified, ok, strict=True) if keep]
+
+
 def association_gate_deg(array: MicArray) -> float:
     """The gate (degrees) within which :func:`associate` takes a verified person for the one
     heard, before there is a 3D track: :data:`MASKED_ASSOCIATION_GATE_DEG` for a masked pair
@@ -698,6 +831,7 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     ears = _BareEars(sc, array) if array.mask is None else _MaskedEars(sc, array)
     direction = DirectionKalman(sigma_meas_deg=5.0, sigma_accel_dps2=60.0)
     track = new_person_track()
+    speaker = SpeakerCheck(association_gate_deg(array))
     pan = 0.0
     phase = "listening"
     n_audio_updates = 0
@@ -731,6 +865,11 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
         if direction.initialized and n_meas:
             audio_rec = {"azimuth_deg": direction.azimuth_deg, "n_frames": n_meas,
                          "confidence": confidence}
+        # the track must stay on the person heard (a silent one taken by mistake is let go)
+        if speaker.observe(t1, direction.azimuth_deg if audio_rec else None,
+                           body.bearing_deg(track.position) if track.initialized else None):
+            speaker.exclude(t1, track.position)
+            track.reset()
 
         # ---- truth at the end of the step
         st = _person_state(sc, t1)
@@ -763,6 +902,10 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
                                    "truth_kind": kind, "truth_id": truth_id})
                 if fuses_fix(hmn):
                     verified.append((hmn, p_w))
+            verified = speaker_checked(speaker, t1, verified, [p for _, p in verified],
+                                        [body.bearing_deg(p) for _, p in verified], track,
+                                        direction.azimuth_deg if audio_rec else None,
+                                        body.bearing_deg)
             k = associate([p for _, p in verified], [body.bearing_deg(p) for _, p in verified],
                           track, direction.azimuth_deg, association_gate_deg(array))
             if k is not None:
