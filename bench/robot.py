@@ -11,7 +11,8 @@ mask turned with the head) beside the default three-mic head on the same scenes.
 ``--bystander-scenarios`` random scenarios (seeds from ``--bystander-seed0``) gain a silent second
 person standing 15-40 deg from where the speaker starts (:func:`with_bystander`), run with both
 heads with and without :class:`hearsee.robot.pipeline.SpeakerCheck` (the track let go of a
-person the voice is not coming from).
+person the voice is not coming from): ``bench/results/robot_bystander.md``
+(``--bystander-only``: that section alone, about 15 min).
 
     python bench/robot.py --scenarios 200            # about 33 min on 2 idle cores
     python bench/robot.py --scenarios 20 --dask
@@ -44,6 +45,8 @@ def main() -> None:
                     help="random scenarios with a silent bystander (0: none)")
     # (1020-1039: SpeakerCheck's development scenes, 2026-12-05)
     ap.add_argument("--bystander-seed0", type=int, default=1040)
+    ap.add_argument("--bystander-only", action="store_true",
+                    help="run only the bystander section (bench/results/robot_bystander.md)")
     args = ap.parse_args()
 
     import matplotlib
@@ -55,6 +58,10 @@ def main() -> None:
     from hearsee.robot.pipeline import run_scenario
     from hearsee.robot.scenario import default_scenario
 
+    if args.bystander_scenarios > 0:  # (its own results file: robot_bystander.md)
+        bystander(args)
+    if args.bystander_only:
+        return
     t0 = time.perf_counter()
     demo = run_scenario(default_scenario(), keep_images=False).summary
     demo_wall = time.perf_counter() - t0
@@ -98,9 +105,6 @@ def main() -> None:
 
     if args.masked_scenarios > 0:
         sections.append(masked_head(args, res.runs))
-
-    if args.bystander_scenarios > 0:
-        sections.append(bystander(args))
 
     fails = [r for r in res.runs if not r["success"]]
     if fails:
@@ -233,9 +237,11 @@ def _bystander_run(job: tuple[int, str, bool]) -> dict:
             "range_m": r, "steps_speaker": on[0], "steps_bystander": on[1]}
 
 
-def bystander(args: argparse.Namespace) -> tuple[str, str]:
+def bystander(args: argparse.Namespace) -> None:
     """Both heads on scenes with a silent bystander (:func:`with_bystander`), with and without
-    the speaker check, in one process pool."""
+    the speaker check, in one process pool; printed and written to
+    ``bench/results/robot_bystander.md``."""
+    import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     from hearsee.robot.scenario import default_scenario
@@ -245,7 +251,9 @@ def bystander(args: argparse.Namespace) -> tuple[str, str]:
     jobs = [(s, a, c) for a in arrays for c in (False, True) for s in seeds]
     t0 = time.perf_counter()
     workers = args.workers or None
-    with ProcessPoolExecutor(workers) as pool:
+    # spawn, not fork (as hearsee.robot.evaluate): forked after the BLAS / progress-bar
+    # threads of the runs before, the workers hung on a lock
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
         out = list(pool.map(_bystander_run, jobs))
     wall = time.perf_counter() - t0
     rows = []
@@ -270,7 +278,7 @@ def bystander(args: argparse.Namespace) -> tuple[str, str]:
     per = [[r["seed"], r["array"], "with" if r["check"] else "without", r["offset_deg"],
             r["range_m"], r["success"], r["steps_speaker"], r["steps_bystander"]]
            for r in sorted(out, key=lambda r: (r["array"], r["seed"], r["check"]))]
-    return title, (
+    write_markdown("robot_bystander", [(title, (
         "Each random scene gains a second person, silent, standing 1.5-3.5 m from the robot "
         "15-40 deg to either side of where the speaker starts (`with_bystander`; the scenes "
         "otherwise the seed's). The robot must follow the speaker: a track taken on the "
@@ -284,7 +292,9 @@ def bystander(args: argparse.Namespace) -> tuple[str, str]:
         f"scenes. Wall {wall:.0f} s.\n\n" + markdown_table(headers, rows)
         + "\n\nPer scene:\n\n" + markdown_table(
             ["seed", "head", "check", "bystander offset deg", "bystander range m", "success",
-             "tracked steps on the speaker", "on the bystander"], per))
+             "tracked steps on the speaker", "on the bystander"], per)))],
+                   intro="Produced by `python bench/robot.py --bystander-only` (also part of "
+                   "every full run).")
 
 
 if __name__ == "__main__":

@@ -785,7 +785,8 @@ class DirectionIMM:
     seam. Data association (nearest candidate) and the chi-square gate use the mixture's
     prediction, as :class:`DirectionKalman` does with its own; the measurement delay ``delay_s``
     is modelled the same way. The modes are held as stacked arrays (``X`` (modes, 4), ``Ps``
-    (modes, 4, 4)) and stepped together, ~0.19 ms per frame; ``mu`` are the mode probabilities.
+    (modes, 4, 4)) and stepped together, ~0.1 ms of CPU per frame; ``mu`` are the mode
+    probabilities.
 
     Parameters
     ----------
