@@ -1333,8 +1333,11 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        ``summary["track_drops"]``) and the head follows the audio bearing again; so is a
        track whose bearing the measured audio bearing has left by more than the association
        gate for :data:`~hearsee.robot.pipeline.SPEAKER_CHECK_S` (a silent person taken for
-       the speaker: :class:`~hearsee.robot.pipeline.SpeakerCheck`, ``summary["speaker_drops"]``),
-       whose person is then not associated again for a few seconds.
+       the speaker: :class:`~hearsee.robot.pipeline.SpeakerCheck`, ``summary["speaker_drops"]``)
+       or, in the camera frames, whose person another verified person in view has been nearer
+       the voice than for :data:`~hearsee.robot.pipeline.SPEAKER_SWITCH_S`
+       (:func:`~hearsee.robot.pipeline.speaker_checked`, not counted there); the person let go
+       is not associated again for a few seconds.
 
     Parameters
     ----------
