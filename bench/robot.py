@@ -14,7 +14,7 @@ heads with and without :class:`hearsee.robot.pipeline.SpeakerCheck` (the track l
 person the voice is not coming from): ``bench/results/robot_bystander.md``
 (``--bystander-only``: that section alone, about 15 min).
 
-    python bench/robot.py --scenarios 200            # about 33 min on 2 idle cores
+    python bench/robot.py --scenarios 200            # about 50 min on 2 idle cores (bystanders ~17)
     python bench/robot.py --scenarios 20 --dask
 """
 
