@@ -730,13 +730,10 @@ def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:
     :class:`hearsee.stream.pipeline.DeviceSource` (live input). ``x`` must be a 2-D array of
     finite real samples with one or more of each (AudioInputError else: an empty one was
     numpy's ValueError, a 1-D one its AxisError)."""
-    if not (isinstance(x, np.ndarray) and x.dtype.kind in "iuf"):
-        x = as_samples(x)
+    x = as_samples(x)  # (real, finite samples)
     if x.ndim != 2 or 0 in x.shape:
         raise AudioInputError(f"recording must be (n_channels, n_samples) with one or more of "
                               f"each, got shape {x.shape}")
-    if not np.all(np.isfinite(x)):
-        raise AudioInputError("recording contains NaN or infinite samples")
     constant = np.ptp(x, axis=1) == 0
     few = x[:, ::max(1, x.shape[1] >> 18)]
     level = np.percentile(np.abs(few - np.median(few, axis=1, keepdims=True)), 90.0, axis=1)

@@ -38,7 +38,7 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import CalibrationError, ConfigError
-from hearsee.vision.camera import MIN_BASELINE_M, Camera, StereoRig
+from hearsee.vision.camera import MIN_BASELINE_M, Camera, StereoRig, _check_rotation
 from hearsee.vision.io import to_gray
 
 __all__ = [
@@ -308,9 +308,6 @@ def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | S
     # (a NaN factor rejected no view without a word; complex corners lost their imaginary part)
     finite_number("reject_factor", reject_factor, 0.0, error=CalibrationError)
     _check_max_focal_rel_std(max_focal_rel_std)
-    if not all(real_entries(p) and np.all(np.isfinite(np.asarray(p, float)))
-               for p in image_points):
-        raise CalibrationError("image points must be finite real pixel coordinates")
     _check_view_shapes(image_points)
     objs = _per_view(object_points, n)
     imgs = [np.asarray(p, np.float32).reshape(-1, 1, 2) for p in image_points]
@@ -395,8 +392,10 @@ def _view_count(points: Any, name: str) -> int:
 
 
 def _check_view_shapes(views: Sequence[Any]) -> None:
-    """CalibrationError unless every view holds pixel pairs (an even count of numbers: numpy's
-    reshape to (N, 1, 2) raised its ValueError)."""
+    """CalibrationError unless every view holds finite real pixel coordinates, in pairs (an
+    even count of numbers: numpy's reshape to (N, 1, 2) raised its ValueError)."""
+    if not all(real_entries(p) and np.all(np.isfinite(np.asarray(p, float))) for p in views):
+        raise CalibrationError("image points must be finite real pixel coordinates")
     if any(np.size(p) % 2 for p in views):
         raise CalibrationError("image points must be (N, 2) pixel coordinates per view, got "
                                f"{[np.shape(p) for p in views if np.size(p) % 2][0]}")
@@ -560,9 +559,6 @@ def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDAr
     if n != _view_count(right_points, "right_points"):
         raise CalibrationError(f"{n} left views but {len(right_points)} right views")
     for views in (left_points, right_points):  # (as calibrate_camera's image_points)
-        if not all(real_entries(p) and np.all(np.isfinite(np.asarray(p, float)))
-                   for p in views):
-            raise CalibrationError("image points must be finite real pixel coordinates")
         _check_view_shapes(views)
     if n < 1:
         raise CalibrationError("need at least one view with the board in both cameras")
@@ -852,8 +848,7 @@ def render_chessboard(camera: Camera, R_board: NDArray, t_board: NDArray,
     nx, ny = check_pattern(pattern)
     finite_number("square_m", square_m, 0.0, lo_open=True, error=CalibrationError)
     R_board = as_float_array(R_board, "R_board", (3, 3), error=CalibrationError)
-    if not np.allclose(R_board @ R_board.T, np.eye(3), atol=1e-5) or np.linalg.det(R_board) < 0:
-        raise CalibrationError("R_board: not a rotation matrix (R R^T != I or det(R) < 0)")
+    R_board = _check_rotation(R_board, "R_board")  # (the rig's rule: R R^T = I, det > 0)
     t_board = as_float_array(t_board, "t_board", error=CalibrationError)
     if t_board.shape not in ((3,), (3, 1), (1, 3)):
         raise CalibrationError(f"t_board: expected 3 numbers (metres) of shape (3,), (3, 1) or "
