@@ -7,6 +7,7 @@ the field, e.g. ``robot.yaml: unknown key 'microphone' (expected one of: array, 
 from __future__ import annotations
 
 import contextlib
+import inspect
 import math
 import os
 import re
@@ -23,6 +24,7 @@ from hearsee.errors import ConfigError, InputFileError
 
 __all__ = [
     "YamlDumper", "all_real", "as_float_array", "as_rng", "check_keys", "check_rng",
+    "check_settings",
     "expand_path", "finite_number", "input_file", "is_real", "load_yaml", "names_a_file", "number",
     "object_entries", "open_replaced", "output_file", "refused_name", "replacing", "require",
     "save_yaml", "time_limit", "to_jsonable", "to_plain", "whole_number", "write_file",
@@ -383,6 +385,20 @@ def _mapping(data: Any, where: str) -> Mapping[str, Any]:
     if not isinstance(data, Mapping):
         raise ConfigError(f"{where}: expected a mapping, got {type(data).__name__}")
     return data
+
+
+def check_settings(target: Any, params: Iterable[str], skip: Iterable[str] = (),
+                   error: type[Exception] = ConfigError) -> None:
+    """An ``error`` naming the first of ``params`` (setting names, in their order) that the
+    function or class ``target`` takes no keyword of (``skip``: its keywords the caller sets
+    itself), with the ones it takes; a misspelt setting passed on as ``**kwargs`` was the
+    builtin TypeError of the call."""
+    skip = set(skip)
+    known = [n for n in inspect.signature(target).parameters if n != "self" and n not in skip]
+    for key in params:
+        if key not in known:
+            raise error(f"unknown {target.__name__} setting {key!r} (expected one of: "
+                        f"{', '.join(known)})")
 
 
 def check_keys(data: Mapping[str, Any], allowed: Iterable[str], where: str) -> None:

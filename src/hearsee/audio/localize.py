@@ -30,7 +30,6 @@ Angles: azimuth from +x toward +y, elevation from the xy-plane toward +z, degree
 
 from __future__ import annotations
 
-import inspect
 import math
 import warnings
 from collections.abc import Callable, Sequence
@@ -58,7 +57,7 @@ from hearsee.audio.arrays import (
     residual_scaled_variance,
     span_dimension,
 )
-from hearsee.config import finite_number, is_real, real_entries, whole_number
+from hearsee.config import check_settings, finite_number, is_real, real_entries, whole_number
 from hearsee.errors import ConfigError, DeadMicrophoneWarning, GeometryError
 from hearsee.geometry import unit_vector_deg, wrap_deg
 
@@ -1637,12 +1636,8 @@ def localize_recording(
                                        q_std_s=q_std_s, r_std_s=r_std_s,
                                        tune_kalman=tune_kalman)
     # (a misspelt setting was estimate_tdoas' builtin TypeError)
-    own = {"x", "fs", "array", "frame_ms", "hop_ms", "method", "pairs", "progress"}
-    known = [n for n in inspect.signature(estimate_tdoas).parameters if n not in own]
-    unknown = sorted(k for k in tdoa_kwargs if k not in known)
-    if unknown:
-        raise ConfigError(f"unknown estimate_tdoas setting {unknown[0]!r} (expected one of: "
-                          f"{', '.join(known)})")
+    check_settings(estimate_tdoas, sorted(tdoa_kwargs),
+                   skip=("x", "fs", "array", "frame_ms", "hop_ms", "method", "pairs", "progress"))
     method = normalize_method(method)
     tdoa_kwargs.setdefault("source_in_plane", bool(in_plane))
     tf, dead = hold_dead_warning(arr, lambda: estimate_tdoas(

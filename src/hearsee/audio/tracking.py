@@ -32,7 +32,6 @@ Units: degrees and deg/s for directions, metres, m/s and m/s^2 for motion, secon
 from __future__ import annotations
 
 import copy
-import inspect
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -46,6 +45,7 @@ from scipy.stats import chi2
 
 from hearsee.config import (
     MAX_TIME_LIMIT_S,
+    check_settings,
     finite_number,
     is_real,
     object_entries,
@@ -184,16 +184,6 @@ def _delay(value: Any) -> float:
         raise EstimationError(f"delay_s must be a number of seconds from 0 to {MAX_DELAY_S:g} "
                               f"(how old the measurement is), got {value!r:.80}")
     return float(value)
-
-
-def _unknown_settings(cls: type, params: dict[str, Any]) -> None:
-    """An EstimationError naming the first of ``params`` that ``cls`` takes no setting of (a
-    builtin TypeError from the constructor before)."""
-    known = [n for n in inspect.signature(cls).parameters if n != "self"]
-    for key in params:
-        if key not in known:
-            raise EstimationError(f"unknown {cls.__name__} setting {key!r} (expected one of: "
-                                  f"{', '.join(known)})")
 
 
 def _angle(v: Any) -> bool:
@@ -1099,7 +1089,7 @@ def track_directions(t: ArrayLike, azimuth_deg: ArrayLike, elevation_deg: ArrayL
     if not (tt.shape == az.shape == el.shape == ok.shape) or tt.ndim != 1:
         raise EstimationError("t, azimuth_deg, elevation_deg and valid must be equal 1-D arrays")
     ok = ok & np.isfinite(az)
-    _unknown_settings(DirectionKalman, params)
+    check_settings(DirectionKalman, params, error=EstimationError)
     kf = DirectionKalman(**params)
     n = tt.size
     out_az, out_el = np.full(n, np.nan), np.full(n, np.nan)
@@ -1397,7 +1387,7 @@ def track_positions(t: ArrayLike, positions: ArrayLike, R: ArrayLike | None = No
             raise EstimationError(f"R must be one 3x3 covariance or one per frame (n, 3, 3) "
                                   f"in m^2, got shape {Ra.shape} for {tt.size} frames")
         Rs = np.broadcast_to(Ra, (tt.size, 3, 3))
-    _unknown_settings(MotionKalman, params)
+    check_settings(MotionKalman, params, error=EstimationError)
     kf = MotionKalman(**params)
     n = tt.size
     pos, vel, acc = (np.full((n, 3), np.nan) for _ in range(3))
