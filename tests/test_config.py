@@ -576,3 +576,20 @@ def test_true_or_false():
             true_or_false("f", bad)
     with pytest.raises(GeometryError, match="^g must be True or False"):
         true_or_false("g", "yes", error=GeometryError)
+
+
+def test_check_settings_names_the_first_unknown_keyword():
+    """A misspelt setting passed on as **kwargs is named with the keywords the target takes
+    (those the caller sets itself left out); known ones pass. The trackers use it."""
+    from hearsee.audio.tracking import track_directions
+    from hearsee.config import check_settings
+
+    def target(x, fs, gain=1.0, delay_s=0.0):
+        return x
+
+    check_settings(target, ["gain", "delay_s"], skip=("x", "fs"))
+    with pytest.raises(ConfigError, match=r"unknown target setting 'gian' \(expected one of: "
+                                          r"gain, delay_s\)"):
+        check_settings(target, ["delay_s", "gian", "zzz"], skip=("x", "fs"))
+    with pytest.raises(EstimationError, match="unknown DirectionKalman setting 'sigma_acel_dps2'"):
+        track_directions([0.0, 0.1], [10.0, 11.0], sigma_acel_dps2=30.0)
