@@ -552,15 +552,18 @@ def test_mapped_source_passes_on_the_sources_capture_clock():
             mapped.audio_time_now()
 
 
-def _person_case(folder: Path, n_frames: int = 8):
-    """A room with a person (left of centre, 2.5 m) and a mannequin (right, 3 m) seen by the
-    head's cameras, and the person's voice recorded by a three-mic array at the pivot."""
+def _person_case(folder: Path, n_frames: int = 8,
+                 second: tuple[str, float, float] = ("mannequin", 0.9, 3.0)):
+    """A room with a person (left of centre, 2.5 m) and a ``second`` entity (kind, x right,
+    z forward, metres; default a mannequin right, 3 m) seen by the head's cameras, and the
+    person's voice recorded by a three-mic array at the pivot."""
     from hearsee.sim.audio import simulate_recording
     from hearsee.sim.scenes import Entity, SceneSpec, render_scene
 
     cam_h = 1.4
+    kind, x2, z2 = second
     spec = SceneSpec(entities=[Entity("person", -0.8, 2.5, 0.0, 1.75),
-                               Entity("mannequin", 0.9, 3.0, 0.0, 1.75)],
+                               Entity(kind, x2, z2, 0.0, 1.75)],
                      depth_m=6.0, camera_height_m=cam_h, seed=1)
     scene = render_scene(spec)
     # videos at the cameras' rate (files play at their own frame rate): one frame per 0.5 s
@@ -718,6 +721,47 @@ def test_live_loop_lets_go_of_a_silent_person_when_the_voice_is_elsewhere(tmp_pa
     assert dropped + SPEAKER_EXCLUDE_S > 4.0  # (excluded to the end of the run)
     assert not [t for t in taken if t > dropped] and res.log[-1]["track"] is None
     assert abs(float(wrap_deg(s["azimuth_deg_final"] + 45.0))) < 5.0
+
+
+@pytest.mark.slow
+def test_live_loop_switches_to_the_person_nearer_the_voice_and_counts_the_drop(tmp_path):
+    """Two people in view, ~18 deg apart (left 2.5 m, ahead 2.8 m): a voice 3 deg beside the
+    left one for 1.5 s gets them associated, then the voice comes from the one ahead -- still
+    inside the 20-deg gate of the track, so only the camera frames' comparison
+    (speaker_checked) can tell: the track is let go for the person nearer the voice within
+    about SPEAKER_SWITCH_S and three frames, counted in speaker_drops, and follows them."""
+    from hearsee.robot.pipeline import SPEAKER_SWITCH_S
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg, _, _, torso, scene = _person_case(tmp_path, n_frames=9,
+                                           second=("person", 0.0, 2.8))
+    left_az = float(np.degrees(np.arctan2(torso[1], torso[0])))
+    p = scene.people[1].position_m
+    ahead = np.array([p[2], -p[0], 1.4 - p[1]])
+    assert abs(float(np.degrees(np.arctan2(ahead[1], ahead[0])))) < 1.0
+    parts = []
+    for az, dist, dur, seed in ((left_az + 3.0, 2.5, 1.5, 5), (0.0, 2.8, 2.5, 6)):
+        a = np.radians(az)
+        src = [dist * np.cos(a), dist * np.sin(a), 0.2]
+        parts.append(simulate_recording("three-mic", src, signal="male", duration_s=dur,
+                                        fs=FS, snr_db=20.0, seed=seed)[0])
+    x = np.concatenate(parts, axis=1)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, block_len=1600), head=_quiet_head(cfg))
+    s = res.summary
+    assert s["status"] == "ok" and s["speaker_drops"] == 1
+    on = {}  # camera time -> the associated person (0 left, 1 ahead)
+    for r in res.log:
+        for d in r["detections"]:
+            if d["speaker"]:
+                pos = np.array(d["position_m"])
+                on[r["camera_t"]] = int(np.linalg.norm(pos - ahead) < np.linalg.norm(pos - torso))
+    first = [t for t, k in on.items() if k == 1]
+    assert [k for t, k in sorted(on.items()) if t < 1.5] and all(
+        k == 0 for t, k in on.items() if t < 1.5)  # the left one was taken first
+    assert first and 1.5 + SPEAKER_SWITCH_S <= min(first) <= 1.5 + SPEAKER_SWITCH_S + 1.6
+    assert all(k == 1 for t, k in on.items() if t >= min(first))
+    assert np.linalg.norm(np.array(s["track_position_m_final"]) - ahead) < 0.3
 
 
 @pytest.mark.slow

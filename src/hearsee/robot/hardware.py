@@ -1336,7 +1336,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        the speaker: :class:`~hearsee.robot.pipeline.SpeakerCheck`, ``summary["speaker_drops"]``)
        or, in the camera frames, whose person another verified person in view has been nearer
        the voice than for :data:`~hearsee.robot.pipeline.SPEAKER_SWITCH_S`
-       (:func:`~hearsee.robot.pipeline.speaker_checked`, not counted there); the person let go
+       (:func:`~hearsee.robot.pipeline.speaker_checked`, counted there too); the person let go
        is not associated again for a few seconds.
 
     Parameters
@@ -1498,9 +1498,11 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         if track.initialized:
             track.predict(t_cap)
         # (the tracked person still the voice's? not one the audio check let go of lately)
+        had_track = track.initialized
         verified = speaker_checked(speaker, t_cap, verified, [v[1] for v in verified],
                                     [v[2] for v in verified], track, bearing,
                                     g.heard_azimuth_deg)
+        state["speaker_drops"] += int(had_track and not track.initialized)
         best = associate([v[1] for v in verified], [v[2] for v in verified], track, bearing,
                          association_gate_deg(a.array))
         if best is not None:
