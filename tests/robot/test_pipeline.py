@@ -310,6 +310,28 @@ def test_speaker_check_lets_go_of_a_person_the_voice_is_not_coming_from():
             SpeakerCheck(bad)
 
 
+def test_speaker_check_threshold_is_the_gate_but_at_most_speaker_check_max_deg():
+    """A masked pair's wide association gate (40 deg) admits a person its first bearing is far
+    off; the check lets go of a track the voice stays more than SPEAKER_CHECK_MAX_DEG from
+    for SPEAKER_CHECK_S (a narrower gate is used as it is)."""
+    from hearsee.robot.pipeline import (
+        MASKED_ASSOCIATION_GATE_DEG,
+        SPEAKER_CHECK_MAX_DEG,
+        SPEAKER_CHECK_S,
+        SpeakerCheck,
+    )
+
+    dt = 0.2
+    steps = int(round(SPEAKER_CHECK_S / dt))
+    assert SPEAKER_CHECK_MAX_DEG < MASKED_ASSOCIATION_GATE_DEG
+    for gate, off, drops in ((MASKED_ASSOCIATION_GATE_DEG, SPEAKER_CHECK_MAX_DEG + 5.0, True),
+                             (MASKED_ASSOCIATION_GATE_DEG, SPEAKER_CHECK_MAX_DEG - 1.0, False),
+                             (10.0, 12.0, True), (10.0, 9.0, False)):
+        chk = SpeakerCheck(gate)
+        said = [chk.observe(k * dt, -175.0 + off, -175.0) for k in range(steps + 1)]
+        assert said == [False] * steps + [drops], (gate, off)
+
+
 def test_speaker_check_switches_to_the_person_in_view_nearer_the_voice():
     """Two verified persons in view, the track on the one at 0 deg: when the voice's bearing
     is nearer the other (at 20 deg, 0.7 m away) by more than SPEAKER_SWITCH_MARGIN x the gate

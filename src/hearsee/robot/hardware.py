@@ -1332,10 +1332,11 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        ``rate_hz``) since the last fix arrived is dropped (counted in
        ``summary["track_drops"]``) and the head follows the audio bearing again; so is a
        track whose bearing the measured audio bearing has left by more than the association
-       gate for :data:`~hearsee.robot.pipeline.SPEAKER_CHECK_S` (a silent person taken for
+       gate (at most :data:`~hearsee.robot.pipeline.SPEAKER_CHECK_MAX_DEG`) for
+       :data:`~hearsee.robot.pipeline.SPEAKER_CHECK_S` (a silent person taken for
        the speaker: :class:`~hearsee.robot.pipeline.SpeakerCheck`, ``summary["speaker_drops"]``)
-       or, in the camera frames, whose person another verified person in view has been nearer
-       the voice than for :data:`~hearsee.robot.pipeline.SPEAKER_SWITCH_S`
+       or, in the camera frames, one whose person has been farther from the voice than another
+       verified person in view for :data:`~hearsee.robot.pipeline.SPEAKER_SWITCH_S`
        (:func:`~hearsee.robot.pipeline.speaker_checked`, counted there too); the person let go
        is not associated again for a few seconds.
 
