@@ -689,6 +689,22 @@ def test_duration_and_ctrl_c_stop_cleanly(tmp_path):
     assert len(lines) == len(res.log) > 0 and json.loads(lines[-1])["t"] < 0.8
 
 
+def _run_voice_legs(cfg, legs):
+    """run_robot on a male voice that speaks from one place after another: ``legs`` of
+    (robot-frame azimuth deg, range m, duration s, seed), 0.2 m above the array."""
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource
+
+    parts = []
+    for az, dist, dur, seed in legs:
+        a = np.radians(az)
+        src = [dist * np.cos(a), dist * np.sin(a), 0.2]
+        parts.append(simulate_recording("three-mic", src, signal="male", duration_s=dur,
+                                        fs=FS, snr_db=20.0, seed=seed)[0])
+    x = np.concatenate(parts, axis=1)
+    return run_robot(cfg, audio_source=ArraySource(x, FS, block_len=1600), head=_quiet_head(cfg))
+
+
 @pytest.mark.slow
 def test_live_loop_lets_go_of_a_silent_person_when_the_voice_is_elsewhere(tmp_path):
     """The cameras see one person (robot-frame azimuth ~18 deg), who is silent: a voice 8 deg
@@ -697,19 +713,10 @@ def test_live_loop_lets_go_of_a_silent_person_when_the_voice_is_elsewhere(tmp_pa
     away from it for SPEAKER_CHECK_S, and the person is not associated again within
     SPEAKER_EXCLUDE_S (before the check the track followed them to the end)."""
     from hearsee.robot.pipeline import SPEAKER_CHECK_S, SPEAKER_EXCLUDE_S
-    from hearsee.sim.audio import simulate_recording
-    from hearsee.stream.pipeline import ArraySource
 
     cfg, _, _, torso, _ = _person_case(tmp_path, n_frames=8)
     person_az = float(np.degrees(np.arctan2(torso[1], torso[0])))
-    parts = []
-    for az, dur, seed in ((person_az + 8.0, 1.5, 5), (-45.0, 2.5, 6)):
-        a = np.radians(az)
-        src = [2.5 * np.cos(a), 2.5 * np.sin(a), 0.2]
-        parts.append(simulate_recording("three-mic", src, signal="male", duration_s=dur,
-                                        fs=FS, snr_db=20.0, seed=seed)[0])
-    x = np.concatenate(parts, axis=1)
-    res = run_robot(cfg, audio_source=ArraySource(x, FS, block_len=1600), head=_quiet_head(cfg))
+    res = _run_voice_legs(cfg, [(person_az + 8.0, 2.5, 1.5, 5), (-45.0, 2.5, 2.5, 6)])
     s = res.summary
     assert s["status"] == "ok" and s["speaker_drops"] == 1
     taken = [r["t"] for r in res.log for d in r["detections"] if d["speaker"]]
@@ -731,8 +738,6 @@ def test_live_loop_switches_to_the_person_nearer_the_voice_and_counts_the_drop(t
     (speaker_checked) can tell: the track is let go for the person nearer the voice within
     about SPEAKER_SWITCH_S and three frames, counted in speaker_drops, and follows them."""
     from hearsee.robot.pipeline import SPEAKER_SWITCH_S
-    from hearsee.sim.audio import simulate_recording
-    from hearsee.stream.pipeline import ArraySource
 
     cfg, _, _, torso, scene = _person_case(tmp_path, n_frames=9,
                                            second=("person", 0.0, 2.8))
@@ -740,14 +745,7 @@ def test_live_loop_switches_to_the_person_nearer_the_voice_and_counts_the_drop(t
     p = scene.people[1].position_m
     ahead = np.array([p[2], -p[0], 1.4 - p[1]])
     assert abs(float(np.degrees(np.arctan2(ahead[1], ahead[0])))) < 1.0
-    parts = []
-    for az, dist, dur, seed in ((left_az + 3.0, 2.5, 1.5, 5), (0.0, 2.8, 2.5, 6)):
-        a = np.radians(az)
-        src = [dist * np.cos(a), dist * np.sin(a), 0.2]
-        parts.append(simulate_recording("three-mic", src, signal="male", duration_s=dur,
-                                        fs=FS, snr_db=20.0, seed=seed)[0])
-    x = np.concatenate(parts, axis=1)
-    res = run_robot(cfg, audio_source=ArraySource(x, FS, block_len=1600), head=_quiet_head(cfg))
+    res = _run_voice_legs(cfg, [(left_az + 3.0, 2.5, 1.5, 5), (0.0, 2.8, 2.5, 6)])
     s = res.summary
     assert s["status"] == "ok" and s["speaker_drops"] == 1
     on = {}  # camera time -> the associated person (0 left, 1 ahead)
