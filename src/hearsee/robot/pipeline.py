@@ -509,17 +509,17 @@ def fuses_fix(human: Any) -> bool:
 SPEAKER_CHECK_S = 1.0
 SPEAKER_CHECK_MIN_UPDATES = 3
 #: ... but never by more than this (degrees): the masked pair's wide gate
-#: (:data:`MASKED_ASSOCIATION_GATE_DEG`, 40) is for its coarse first bearing, heard before the
-#: head turned; once the head faces the track the pair hears near broadside, where its
-#: bearings are several times finer, and a silent person 15-40 deg from the voice stayed
-#: inside 40 deg. The three-mic gate, 20 deg, is unchanged. Chosen (2026-12-06,
-#: sixty-eighth session) on the development scenarios 1020-1039 with a bystander: mask2-asym
-#: successes 15 -> 17/20 (1024 and 1037 let go after 1 s instead of following the bystander
-#: to the end), the same scenes alone identical to the digit; the check's median over the
+#: (:data:`MASKED_ASSOCIATION_GATE_DEG`, 40) is for its coarse first bearing, heard before the head
+#: turned (often near the pair's axis, where a time difference tells the angle worst); once the
+#: head faces the track the pair hears near broadside, where it tells it best, and a silent person
+#: 15-40 deg from the voice stayed inside 40 deg. The three-mic gate, 20 deg, is unchanged. Chosen
+#: (2026-12-06, sixty-eighth session) on the development scenarios 1020-1039 with a bystander:
+#: mask2-asym successes 15 -> 17/20 (1024 and 1037 let go after 1 s instead of following the
+#: bystander to the end), the same scenes alone identical to the digit; the check's median over the
 #: last second (instead of every step) at the same threshold dropped right tracks: 20 -> 14/20
-#: alone. Held out on seeds 1060-1079 (bench/results/HISTORY.md): no success gained or lost
-#: with or without a bystander (18/20 each), one right track let go for 1 s (1074: the masked
-#: bearings 28 deg off the speaker for a second) -- a small net gain over all 40 scenes.
+#: alone. Held out on seeds 1060-1079 (bench/results/HISTORY.md): no success gained or lost with or
+#: without a bystander (18/20 each), one right track let go for 1 s (1074: the masked bearings 28
+#: deg off the speaker for a second) -- a small net gain over all 40 scenes.
 SPEAKER_CHECK_MAX_DEG = 20.0
 SPEAKER_EXCLUDE_S = 3.0
 #: ... within this distance (metres) of where it was let go: less than two people stand apart
