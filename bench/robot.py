@@ -43,7 +43,8 @@ def main() -> None:
     ap.add_argument("--masked-array", default="mask2-asym")
     ap.add_argument("--bystander-scenarios", type=int, default=20,
                     help="random scenarios with a silent bystander (0: none)")
-    # (1020-1039: SpeakerCheck's development scenes, 2026-12-05)
+    # (1020-1039: SpeakerCheck's development scenes, 2026-12-05 and -06; 1060-1079: the
+    # held-out scenes of its 20-deg cap, SPEAKER_CHECK_MAX_DEG -- see HISTORY)
     ap.add_argument("--bystander-seed0", type=int, default=1040)
     ap.add_argument("--bystander-only", action="store_true",
                     help="run only the bystander section (bench/results/robot_bystander.md)")
