@@ -29,7 +29,10 @@ def test_paths_must_be_file_names(path, tmp_path):
     from hearsee.vision.thermal import load_thermal
 
     for call in (lambda: input_file(path), lambda: output_file(path),
-                 lambda: read_recording(path), lambda: load_thermal(path),
+                 # (read_recording takes a list of files, one per microphone: a list in it
+                 # is no file name)
+                 lambda: read_recording(path if path != ["a.wav"] else [path]),
+                 lambda: load_thermal(path),
                  lambda: load_trajectory(path),
                  lambda: write_recording(path, np.zeros((2, 160)), 16000),
                  lambda: save_trajectory(linear_trajectory([1, 0, 0], [0, 1, 0], 1.0), path)):

@@ -19,6 +19,7 @@ from hearsee.errors import (
     AudioInputError,
     ClippingWarning,
     ConfigError,
+    DegenerateInputWarning,
     HearseeError,
     InputFileError,
     TruncatedFileWarning,
@@ -540,3 +541,93 @@ def test_generators_and_the_resampler_refuse_absurd_sample_counts():
         resample(np.zeros(16000), 16000, 1e9)
     assert resample(np.zeros((2, 16000)), 16000, 48000).shape == (2, 48000)
     assert resample(np.zeros(48000), 48000, 16000).shape == (16000,)
+
+
+# ------------------------------------------------------------ one file per microphone
+def _per_mic_files(tmp_path, x, fs=FS, subtype="FLOAT", split=(1, 1, 1)):
+    """``x`` (n_ch, n) written as files of ``split`` channels each; their paths."""
+    paths, k = [], 0
+    for i, n in enumerate(split):
+        p = tmp_path / f"mic{i}.wav"
+        sf.write(p, x[k:k + n].T, fs, subtype=subtype)
+        paths.append(p)
+        k += n
+    return paths
+
+
+def test_one_file_per_microphone_is_the_multichannel_recording(tmp_path):
+    rng = np.random.default_rng(241)
+    s = rng.standard_normal(FS + 7) * 0.1
+    x = np.stack([s[7:], s[3:-4], s[:-7]])  # known delays of 0, 4 and 7 samples
+    whole = tmp_path / "whole.wav"
+    sf.write(whole, x.T, FS, subtype="FLOAT")
+    ref, fs = read_recording(whole, 3)
+    for split in ((1, 1, 1), (1, 2), (2, 1)):
+        (tmp_path / "s").mkdir(exist_ok=True)
+        paths = _per_mic_files(tmp_path / "s", x, split=split)
+        got, fs2 = read_recording(paths, 3)
+        assert fs2 == fs == FS
+        np.testing.assert_array_equal(got, ref)  # the files' channels in the order given
+        got, _ = read_recording([str(p) for p in paths[::-1]], 3)  # names as text, reversed
+        assert not np.array_equal(got, ref)
+    # one file in a list is that file
+    np.testing.assert_array_equal(read_recording([whole], 3)[0], ref)
+
+
+def test_one_file_per_microphone_refusals(tmp_path):
+    rng = np.random.default_rng(242)
+    x = rng.standard_normal((2, FS)) * 0.1
+    a, b = _per_mic_files(tmp_path, x, split=(1, 1))
+    sf.write(tmp_path / "short.wav", x[1, :-5], FS, subtype="FLOAT")
+    with pytest.raises(AudioInputError, match=r"different numbers of samples \(.*mic0.wav "
+                       rf"{FS}, .*short.wav {FS - 5}\)"):
+        read_recording([a, tmp_path / "short.wav"])
+    sf.write(tmp_path / "b8k.wav", x[1, ::2], FS // 2, subtype="FLOAT")
+    with pytest.raises(AudioInputError, match="different rates .*b8k.wav 8000 Hz"):
+        read_recording([a, tmp_path / "b8k.wav"])
+    with pytest.raises(AudioInputError, match="2 channels but array 'three-mic' has 3 "
+                       "microphones .*file by file"):
+        read_recording([a, b], MicArray.from_preset("three-mic"))
+    sf.write(tmp_path / "zero.wav", np.zeros(FS), FS, subtype="FLOAT")
+    with pytest.raises(AudioInputError, match=r"zero.wav: recording is silent"):
+        read_recording([a, tmp_path / "zero.wav"])
+    with pytest.raises(InputFileError, match="nothere.wav: audio file not found"):
+        read_recording([a, tmp_path / "nothere.wav"])
+    with pytest.raises(InputFileError, match="one audio file or more"):
+        read_recording([])
+    # resampled to one rate when asked: both at 16 kHz, as long as each other
+    sf.write(tmp_path / "a8k.wav", x[0, ::2], FS // 2, subtype="FLOAT")
+    got, fs = read_recording([tmp_path / "a8k.wav", tmp_path / "b8k.wav"], 2, fs=FS,
+                             resample=True)
+    assert fs == FS and got.shape == (2, FS)
+
+
+def test_one_file_per_microphone_compares_the_files_channels(tmp_path):
+    rng = np.random.default_rng(243)
+    x = rng.standard_normal((2, FS)) * 0.1
+    a, b = _per_mic_files(tmp_path, x, split=(1, 1))
+    with pytest.warns(DegenerateInputWarning, match=r"mic0.wav \+ .*mic0.wav: channels 0 and 1 "
+                      "hold the same signal"):
+        read_recording([a, a])
+    sf.write(tmp_path / "faint.wav", x[1] * 1e-4, FS, subtype="FLOAT")
+    with pytest.warns(DegenerateInputWarning, match=r"mic0.wav \+ .*faint.wav: channel 1 is "
+                      "at least"):
+        read_recording([a, tmp_path / "faint.wav"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_recording([a, b])  # two microphones of their own: no word
+
+
+@pytest.mark.shared
+def test_the_real_two_file_recording_reads_as_one(shared_data):
+    """The real 'alexa' pair (one 48 kHz PCM_16 file per microphone, tdoa_2mic) reads as a
+    two-channel recording, sample for sample, without any warning (no copy, no quiet channel,
+    no clipping: two working microphones)."""
+    files = [shared_data / "audio" / "tdoa_2mic" / f"alexa-0{k}.wav" for k in (1, 2)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        x, fs = read_recording(files, 2)
+    assert fs == 48000
+    for k, f in enumerate(files):
+        y, _ = sf.read(f)
+        np.testing.assert_array_equal(x[k], y)

@@ -635,3 +635,46 @@ def test_mains_hum_is_named_in_one_line_and_filtered_out(tmp_path, capsys):
         off = estimate_tdoas(y, FS, "three-mic", tonal_noise=False).summary_tdoa_s
     want = np.array(list(truth["tdoa_s"].values()))
     assert np.max(np.abs(off - want)) * FS > 3.0  # (the failure the filter fixes)
+
+
+def test_one_file_per_microphone(tmp_path, capsys):
+    """Recorders that write a file per input: `hearsee localize` and `hearsee track` take the
+    files in the array's order and answer as for the multichannel file; files of different
+    lengths are one line, exit 2."""
+    arr = MicArray.from_preset("two-mic")
+    x = simulate_free_field(white_noise(0.5, FS, rng=5), FS, arr, 2.0 * unit_vector_deg(-35, 0),
+                            snr_db=25, rng=6)
+    x = 0.3 * x / np.abs(x).max()
+    whole = tmp_path / "two.wav"
+    sf.write(whole, x.T, FS, subtype="FLOAT")
+    mics = [tmp_path / f"mic{k}.wav" for k in range(2)]
+    for k, p in enumerate(mics):
+        sf.write(p, x[k], FS, subtype="FLOAT")
+    code, out, _ = _run(capsys, *mics, "--array", "two-mic")
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["recording"] == [str(p) for p in mics]
+    # the truth: t_0 - t_1 of a plane wave from -35 deg (arrival t_k = -p_k . u / c; the
+    # source is 2 m away, the 15 cm pair's far-field error well below the tolerance)
+    u = unit_vector_deg(-35, 0)
+    tau = -float((arr.positions[0] - arr.positions[1]) @ u) / arr.speed_of_sound
+    assert doc["summary"]["tdoa_s"]["0-1"] == pytest.approx(tau, abs=3e-6)
+    code, ref, _ = _run(capsys, whole, "--array", "two-mic")
+    assert code == 0 and json.loads(ref)["summary"] == doc["summary"]
+
+    def updates():  # (the stream's JSON lines but their measured latency)
+        lines = [json.loads(s) for s in capsys.readouterr().out.splitlines()]
+        return [{k: v for k, v in u.items() if k != "latency_ms"} for u in lines]
+
+    assert main(["track", str(whole), "--array", "two-mic"]) == 0
+    ref = updates()
+    assert main(["track", *map(str, mics), "--array", "two-mic"]) == 0
+    assert updates() == ref and any(u["measured"] for u in ref)
+    # swapped files: the mirror image's TDOA
+    code, out, _ = _run(capsys, *mics[::-1], "--array", "two-mic")
+    assert json.loads(out)["summary"]["tdoa_s"]["0-1"] == pytest.approx(-tau, abs=3e-6)
+    sf.write(mics[1], x[1, :-3], FS, subtype="FLOAT")
+    for cmd in ("localize", "track"):
+        assert main([cmd, *map(str, mics), "--array", "two-mic"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "different numbers of samples" in err

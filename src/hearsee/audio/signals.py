@@ -573,7 +573,7 @@ def make_signal(spec: str | Path, duration_s: float, fs: float,
 
 
 def read_recording(
-    path: str | Path,
+    path: str | Path | list[str | Path] | tuple[str | Path, ...],
     n_channels: int | Any | None = None,
     fs: float | None = None,
     *,
@@ -584,8 +584,13 @@ def read_recording(
 
     Parameters
     ----------
-    path : str or Path
-        Any format libsndfile reads (WAV, FLAC, ...).
+    path : str or Path, or a list or tuple of them
+        Any format libsndfile reads (WAV, FLAC, ...). Several files are one recording made of
+        one file per microphone (or per group of microphones), as recorders that write a file
+        per input channel: their channels in the order given, file by file (two mono files
+        make microphones 0 and 1). They must share the sample rate (or be resampled to ``fs``)
+        and hold the same number of samples: files of different lengths are not known to
+        start together, and an offset between them is a time difference of its own.
     n_channels : int or MicArray, optional
         Required channel count (a whole number >= 1, else a ConfigError); pass the
         :class:`~hearsee.audio.arrays.MicArray` itself to get its name in the error message.
@@ -606,10 +611,12 @@ def read_recording(
     Raises
     ------
     InputFileError
-        The file does not exist or cannot be opened.
+        The file does not exist or cannot be opened; ``path`` is no file name, an empty
+        sequence or one holding something that is no file name.
     AudioInputError
         Not an audio file, wrong channel count or sample rate, NaN/inf samples, a silent
-        (all-zero) or constant channel, or too short.
+        (all-zero) or constant channel, or too short; several files of different sample
+        rates or lengths.
 
     Warns
     -----
@@ -631,22 +638,102 @@ def read_recording(
         fs = check_fs(fs)
     want = None if n_channels is None else whole_number(
         "n_channels", getattr(n_channels, "n_mics", n_channels))
-    x, fs_in = _read_file(path)
-    n_ch, n = x.shape
+    paths = recording_paths(path)
+    label = recording_label(paths)
+    raw = [_read_file(p) for p in paths]
+    n_ch = sum(x.shape[0] for x, _ in raw)
+    if want is not None and n_ch != want:
+        what = (f"array {n_channels.name!r} has {want} microphones"
+                if hasattr(n_channels, "n_mics") else f"{want} were expected")
+        held = "recording has" if len(paths) == 1 else "the files hold"
+        raise AudioInputError(
+            f"{label}: {held} {n_ch} channel{'s' if n_ch != 1 else ''} but {what} "
+            f"(channel k must be microphone k{'' if len(paths) == 1 else ', file by file'})"
+        )
+    parts = [_checked(p, x, rate, fs, resample, min_samples)
+             for p, (x, rate) in zip(paths, raw, strict=True)]
+    rates = {rate for _, rate, _, _ in parts}
+    if len(rates) > 1:
+        each = ", ".join(f"{p} {rate} Hz" for p, (_, rate, _, _) in zip(paths, parts,
+                                                                          strict=True))
+        raise AudioInputError(f"{label}: the files are sampled at different rates ({each}); "
+                              "one recording needs one rate: resample them to one, or ask "
+                              "for resampling")
+    lengths = {x.shape[1] for x, _, _, _ in parts}
+    if len(lengths) > 1:
+        each = ", ".join(f"{p} {x.shape[1]}" for p, (x, _, _, _) in zip(paths, parts,
+                                                                          strict=True))
+        raise AudioInputError(
+            f"{label}: the files hold different numbers of samples ({each}): files of one "
+            "recording start and end together, and an offset between them would read as a "
+            "time difference; trim them to a common start and length")
+    x = parts[0][0] if len(parts) == 1 else np.concatenate([q[0] for q in parts], axis=0)
+    fs_in = parts[0][1]
+    _, quiet, below = channel_faults(x)  # (stuck channels were refused file by file)
+    if quiet.size:
+        warnings.warn(f"{label}: {quiet_channels_text(quiet, below)}", DegenerateInputWarning,
+                      stacklevel=2)
+    # (a copy re-quantised to integer PCM differs by its rounding: told by the step, before
+    # any resampling spreads it)
+    steps = {step for _, _, step, _ in parts}
+    step = steps.pop() if len(steps) == 1 else None
+    from hearsee.audio.tdoa import dominant_sample
+
+    if spike := dominant_sample(x):
+        # (told once, first: the same corrupt sample on every channel also made them read as
+        # copies of one another, the only warning there was)
+        ch, i, v, ratio = spike
+        warnings.warn(
+            f"{label}: sample {i} of channel {ch} ({i / fs_in:.3f} s) is {v:.3g}, {ratio:.2g} "
+            "times the median |sample|, beyond any integer PCM range (a corrupt sample?); the "
+            "analysis scales the recording to its loudest sample, so the rest of it is nearly "
+            "lost and its estimates may be wrong", DegenerateInputWarning, stacklevel=2)
+    elif dup := duplicate_channels(x, step):
+        warnings.warn(f"{label}: {duplicate_channels_text(dup)}", DegenerateInputWarning,
+                      stacklevel=2)
+    for p, (_, _, _, clipped) in zip(paths, parts, strict=True):
+        if clipped > CLIP_FRACTION:
+            warnings.warn(
+                f"{p}: {clipped * 100:.2f} % of the samples are clipped (flat at full scale, "
+                "or at the channel's peak in a float file beyond it); "
+                "estimates may be biased -- lower the input gain",
+                ClippingWarning,
+                stacklevel=2,
+            )
+    return x, fs_in
+
+
+def recording_paths(path: str | Path | list[str | Path] | tuple[str | Path, ...]
+                    ) -> list[Path]:
+    """The files of a recording given as one file name or a list or tuple of them (one file per
+    microphone or group of microphones, :func:`read_recording`); an InputFileError for an
+    empty sequence or anything that is no file name (:func:`hearsee.config.as_path`)."""
+    if isinstance(path, list | tuple):
+        if not path:
+            raise InputFileError("a recording needs one audio file or more, got none")
+        return [as_path(p, "an audio file's path") for p in path]
+    return [as_path(path, "the audio file's path")]
+
+
+def recording_label(path: str | Path | list[str | Path] | tuple[str | Path, ...]) -> str:
+    """How messages name a recording of one file or several (``a.wav + b.wav``)."""
+    return " + ".join(str(p) for p in recording_paths(path))
+
+
+def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resample: bool,
+             min_samples: int) -> tuple[NDArray, int, float | None, float]:
+    """One file of :func:`read_recording` (its samples ``x`` (n_ch, n) read at ``fs_in`` Hz)
+    checked on its own. Returns the samples (resampled to ``fs`` when asked), their rate (Hz),
+    the quantisation step of the file's integer samples (None: float or resampled) and the
+    share of them clipped. The checks that compare channels with one another, and the
+    clipping warning, are the caller's."""
+    n = x.shape[1]
     cut = _wav_data_shortfall(Path(path))
     if cut is not None:
         warnings.warn(
             f"{path}: the file is cut short: its header declares {cut[0]} bytes of audio, the "
             f"file holds {cut[1]} ({n / fs_in:.3g} s); only those samples are used",
-            TruncatedFileWarning, stacklevel=2)
-    if want is not None:
-        if n_ch != want:
-            what = (f"array {n_channels.name!r} has {want} microphones"
-                    if hasattr(n_channels, "n_mics") else f"{want} were expected")
-            raise AudioInputError(
-                f"{path}: recording has {n_ch} channel{'s' if n_ch != 1 else ''} but {what} "
-                "(channel k must be microphone k)"
-            )
+            TruncatedFileWarning, stacklevel=3)
     # clipping is seen on the file's own samples (resampling smooths the flat tops away)
     clipped, resampled = 0.0, False
     if x.size and np.all(np.isfinite(x)):
@@ -684,39 +771,11 @@ def read_recording(
         )
     # (one constant value: an input with an offset but no microphone. It read as "no frame
     # holds a detectable source (silence or uncorrelated noise)")
-    flat, quiet, below = channel_faults(x)
+    flat = np.flatnonzero(np.ptp(x, axis=1) == 0)
     if flat.size:
         raise AudioInputError(f"{path}: {stuck_channels_text(flat)}; check the microphone "
                               "wiring")
-    if quiet.size:
-        warnings.warn(f"{path}: {quiet_channels_text(quiet, below)}", DegenerateInputWarning,
-                      stacklevel=2)
-    # (a copy re-quantised to integer PCM differs by its rounding: told by the step, before
-    # any resampling spreads it)
-    step = None if resampled else _PCM_STEP.get(_subtype(path))
-    from hearsee.audio.tdoa import dominant_sample
-
-    if spike := dominant_sample(x):
-        # (told once, first: the same corrupt sample on every channel also made them read as
-        # copies of one another, the only warning there was)
-        ch, i, v, ratio = spike
-        warnings.warn(
-            f"{path}: sample {i} of channel {ch} ({i / fs_in:.3f} s) is {v:.3g}, {ratio:.2g} "
-            "times the median |sample|, beyond any integer PCM range (a corrupt sample?); the "
-            "analysis scales the recording to its loudest sample, so the rest of it is nearly "
-            "lost and its estimates may be wrong", DegenerateInputWarning, stacklevel=2)
-    elif dup := duplicate_channels(x, step):
-        warnings.warn(f"{path}: {duplicate_channels_text(dup)}", DegenerateInputWarning,
-                      stacklevel=2)
-    if clipped > CLIP_FRACTION:
-        warnings.warn(
-            f"{path}: {clipped * 100:.2f} % of the samples are clipped (flat at full scale, or "
-            "at the channel's peak in a float file beyond it); "
-            "estimates may be biased -- lower the input gain",
-            ClippingWarning,
-            stacklevel=2,
-        )
-    return x, fs_in
+    return x, fs_in, None if resampled else _PCM_STEP.get(_subtype(path)), clipped
 
 
 def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:

@@ -108,8 +108,10 @@ def _print_table(doc: dict[str, Any]) -> None:
 
 @app.command("localize")
 def localize_cmd(
-    recording: Annotated[Path, typer.Argument(help="Multichannel audio file; channel k is "
-                                              "microphone k of the array.")],
+    recording: Annotated[list[Path], typer.Argument(
+        help="Multichannel audio file (channel k is microphone k of the array), or one file "
+        "per microphone in the array's order (their channels file by file; one rate and "
+        "length).")],
     array: Annotated[str, typer.Option("--array", help="Array preset name or YAML file.")],
     frame_ms: Annotated[float, typer.Option(
         "--frame-ms", help="Frame length in milliseconds, at most 10000.")] = 64.0,
@@ -162,7 +164,7 @@ def localize_cmd(
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
     from hearsee.audio.arrays import MAX_TDOA_STD_S, load_array
     from hearsee.audio.localize import fits_position, localize_recording
-    from hearsee.audio.signals import read_recording
+    from hearsee.audio.signals import read_recording, recording_label
     from hearsee.audio.tdoa import SUMMARY_TUNED, check_frame_ms, dominant_sample, frame_geometry
 
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
@@ -204,6 +206,7 @@ def localize_cmd(
         raise ConfigError(f"--tdoa-std-us sets the TDOA error behind the source position, which "
                           f"{why}; leave it out")
     x, fs = read_recording(recording, arr)
+    name = recording_label(recording)  # (the file, or the files joined by " + ")
     frame_len, hop = frame_geometry(fs, frame_ms, hop_ms)
     n_frames = max((x.shape[1] - frame_len) // hop + 1, 0)
     work = x.shape[1] / fs * len(arr.pairs)
@@ -214,26 +217,26 @@ def localize_cmd(
                                  **settings, **({} if tdoa_std_us is None else
                                                 {"tdoa_std_s": tdoa_std_us * 1e-6}),
                                  **({} if band is None else {"band_hz": band}))
-    doc["recording"] = str(recording)
+    doc["recording"] = str(recording[0]) if len(recording) == 1 else [str(p) for p in recording]
     if fmt is OutputFormat.json:
         emit_json(doc)
     elif fmt is OutputFormat.csv:
         _write_csv(doc)
     else:
         _print_table(doc)
-    note_empty_band(recording, doc.get("band_hz"), band, fs)
+    note_empty_band(name, doc.get("band_hz"), band, fs)
     summ = doc["summary"]
     # (an inverted or dead microphone, channels out of sync and a corrupt sample have their own
     # warnings: nothing was found because of them -- "silence or uncorrelated noise" misled)
     told = dominant_sample(x) is not None or any(summ.get(k) for k in (
         "inverted_microphones", "dead_microphones", "sync_offsets_s"))
     if not told and summ["n_valid_frames"] == 0:
-        err_console.print(f"hearsee: warning: {recording}: no frame holds a detectable source "
+        err_console.print(f"hearsee: warning: {name}: no frame holds a detectable source "
                           "(silence or uncorrelated noise)", highlight=False)
     elif not told and summ.get("azimuth_deg") is None:
         # (a summary of nulls beside a few valid frames was printed without a word)
         n = summ["n_valid_frames"]
-        err_console.print(f"hearsee: warning: {recording}: no direction for the whole recording "
+        err_console.print(f"hearsee: warning: {name}: no direction for the whole recording "
                           f"(its averaged correlations name no source; {n} frame"
                           f"{'' if n == 1 else 's'} on {len(doc['frames'])} had one)",
                           highlight=False)

@@ -152,8 +152,10 @@ def _device_spec(text: str) -> int | str:
 
 @app.command("track")
 def track_cmd(
-    recording: Annotated[Path | None, typer.Argument(
-        help="Multichannel audio file (channel k = microphone k). Omit with --device.")] = None,
+    recording: Annotated[list[Path] | None, typer.Argument(
+        help="Multichannel audio file (channel k = microphone k), or one file per microphone "
+        "in the array's order (their channels file by file; one rate and length). Omit with "
+        "--device.")] = None,
     array: Annotated[str, typer.Option("--array", help="Array preset name or YAML file.")] = ...,
     device: Annotated[str | None, typer.Option(
         "--device", help="Live input: PortAudio device index or name.")] = None,
@@ -236,6 +238,7 @@ def track_cmd(
     reported, as by `hearsee run`.
     """
     from hearsee.audio.arrays import load_array
+    from hearsee.audio.signals import recording_label
     from hearsee.audio.tdoa import check_frame_ms
     from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, IMM_MODES_DPS2
     from hearsee.config import time_limit
@@ -248,6 +251,7 @@ def track_cmd(
         check_trackable,
     )
 
+    recording = recording or None  # (no file given: an empty list)
     if recording is None and device is None:
         raise ConfigError("give a recording file or --device (live input)")
     if recording is not None and device is not None:
@@ -317,12 +321,12 @@ def track_cmd(
             source = DeviceSource(_device_spec(device), arr.n_mics, 16000 if fs is None else fs,
                                   duration_s=duration, where="--device")
         else:
-            source = WavSource(recording, n_channels=arr.n_mics, block_len=4096)
+            source = WavSource(recording, n_channels=arr, block_len=4096)
         used = _stream_band(band, None if device is not None else source.x, source.fs,
                             frame_ms)
         cfg.band_hz, cfg.srp_band_hz = used, _srp_band(used, cfg.srp_band_hz)
         if used is not None:
-            note_empty_band(recording, used, band, source.fs)
+            note_empty_band(recording_label(recording), used, band, source.fs)
         lines: tuple[float, ...] = ()
         heard_by = arr  # (the array the stream localizes with: without a dead microphone)
         used_mics = list(range(arr.n_mics))
@@ -362,8 +366,11 @@ def track_cmd(
     if fmt is TrackFormat.json:
         # (a device by the name PortAudio gives it: "--device 2" or a part of a name is not
         # what was opened)
-        emit_json({"array": arr.to_dict(),
-                   "source": str(recording) if device is None else source.name,
+        if device is not None:
+            heard: str | list[str] = source.name
+        else:  # (the file, or the list of them)
+            heard = str(recording[0]) if len(recording) == 1 else [str(p) for p in recording]
+        emit_json({"array": arr.to_dict(), "source": heard,
                    "updates": [u.to_json() for u in updates], "stats": summary})
     if stats or st.status != "ok":
         err_console.print(

@@ -381,16 +381,20 @@ class ArraySource:
 
 
 class WavSource(ArraySource):
-    """Blocks of a multichannel WAV file (validated by
-    :func:`hearsee.audio.signals.read_recording`)."""
+    """Blocks of a multichannel audio file, or of one file per microphone (their channels
+    file by file), validated by :func:`hearsee.audio.signals.read_recording`. ``paths``: the
+    files; ``path``: the first one."""
 
-    def __init__(self, path: str | Path, n_channels: int | None = None, block_len: int = 2048,
-                 realtime: bool = False, fs: float | None = None) -> None:
-        from hearsee.audio.signals import read_recording
+    def __init__(self, path: str | Path | list[str | Path] | tuple[str | Path, ...],
+                 n_channels: int | Any | None = None,
+                 block_len: int = 2048, realtime: bool = False, fs: float | None = None
+                 ) -> None:
+        from hearsee.audio.signals import read_recording, recording_paths
 
         x, rate = read_recording(path, n_channels=n_channels, fs=fs)
         super().__init__(x, rate, block_len, realtime)
-        self.path = Path(path)
+        self.paths = recording_paths(path)
+        self.path = self.paths[0]
 
 
 #: :class:`DeviceSource` looks at the first this many seconds of live input in which a channel
