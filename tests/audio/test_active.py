@@ -455,13 +455,57 @@ def test_localize3d_cli_round_trip(pose_manifest, capsys, method):
         assert k in doc
 
 
+def test_a_capture_given_as_one_file_per_microphone(pose_manifest, tmp_path, capsys):
+    """A manifest's capture may list one file per microphone (a recorder that writes a file
+    per input): the same position as the multichannel files; a list whose files differ in
+    length is one line, exit 2."""
+    import json
+
+    import soundfile as sf
+    import yaml
+
+    from hearsee.audio.active import load_pose_manifest
+    from hearsee.cli import main
+
+    man, files, src = pose_manifest
+    d = yaml.safe_load(man.read_text())
+    x, fs = sf.read(files[1], always_2d=True)
+    mics = [tmp_path / f"p1_mic{k}.wav" for k in range(x.shape[1])]
+    for k, p in enumerate(mics):
+        sf.write(p, x[:, k], fs, subtype=sf.info(files[1]).subtype)
+    d["array"] = "three-mic"
+    for c, f in zip(d["captures"], files, strict=True):
+        c["file"] = str(f)
+    d["captures"][1]["file"] = [p.name for p in mics]  # (relative to the manifest's folder)
+    split = tmp_path / "split.yaml"
+    split.write_text(yaml.safe_dump(d))
+    assert load_pose_manifest(split).files[1] == mics
+    assert main(["localize3d", str(man)]) == 0
+    ref = json.loads(capsys.readouterr().out)
+    assert main(["localize3d", str(split)]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["position_m"] == ref["position_m"]
+    np.testing.assert_allclose(got["position_m"], src, atol=0.1)
+    sf.write(mics[2], x[:-4, 2], fs)
+    assert main(["localize3d", str(split)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "different numbers of samples" in err
+    d["captures"][1]["file"] = [mics[0].name, 3]
+    split.write_text(yaml.safe_dump(d))
+    assert main(["localize3d", str(split)]) == 2
+    assert "file must be a capture file's name or a list of them" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("edit, needle", [
     (lambda d: d.update(extra=1), "unknown key 'extra'"),
     (lambda d: d["captures"][0].pop("tilt_deg"), "missing required key 'tilt_deg'"),
     (lambda d: d["captures"][1].update(file="nope.wav"), "not found"),
     # ('' was the manifest's folder, ".: is a folder"; a list was read as its text)
     (lambda d: d["captures"][1].update(file=""), "captures[1]: file must be a capture file's"),
-    (lambda d: d["captures"][1].update(file=["a.wav"]), "captures[1]: file must be a capture"),
+    # (a list of files is one per microphone: an empty one, or one holding a list, is none)
+    (lambda d: d["captures"][1].update(file=[]), "captures[1]: file must be a capture"),
+    (lambda d: d["captures"][1].update(file=[["a.wav"]]), "captures[1]: file must be a capture"),
+    (lambda d: d["captures"][1].update(file=["a.wav"]), "a.wav: capture file not found"),
     (lambda d: d["captures"][0].update(pan_deg="left"), "pan_deg must be a finite number"),
     # (a 400-digit integer was an OverflowError traceback)
     (lambda d: d["captures"][0].update(pan_deg=10**400), "pan_deg must be a finite number"),

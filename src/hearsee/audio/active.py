@@ -1472,7 +1472,12 @@ class PoseManifest:
         captures:
           - {file: pose0.wav, pan_deg: 0, tilt_deg: 0}
           - {file: pose1.wav, pan_deg: 45, tilt_deg: 25}
+          - {file: [p2_mic0.wav, p2_mic1.wav, p2_mic2.wav], pan_deg: 0, tilt_deg: 30}
         truth: {...}                # optional ground truth (ignored by localize3d)
+
+    A capture's ``file`` is one multichannel file or a list of files, one per microphone
+    (their channels file by file, :func:`hearsee.audio.signals.read_recording`); ``files``
+    holds a Path or a list of Paths per capture.
     """
 
     array: MicArray
@@ -1535,15 +1540,20 @@ def load_pose_manifest(path: Any) -> PoseManifest:
             raise ConfigError(f"{w}: expected a mapping with file, pan_deg, tilt_deg")
         check_keys(c, _CAPTURE_KEYS, w)
         name = require(c, "file", w)
-        if not isinstance(name, str) or not name.strip():
-            # ('' was Path("."), the manifest's folder: ".: is a folder"; a list its text)
-            raise ConfigError(f"{w}: file must be a capture file's name, got {name!r:.60}")
-        f = Path(name)
-        f = f if f.is_absolute() else p.parent / f
-        try:
-            input_file(f, "capture file")
-        except InputFileError as exc:
-            raise InputFileError(f"{w}: {exc}") from None
+        names = name if isinstance(name, list) and name else [name]
+        found = []
+        for one in names:
+            if not isinstance(one, str) or not one.strip():
+                # ('' was Path("."), the manifest's folder: ".: is a folder"; a list its text)
+                raise ConfigError(f"{w}: file must be a capture file's name or a list of "
+                                  f"them (one per microphone), got {name!r:.60}")
+            f = Path(one)
+            f = f if f.is_absolute() else p.parent / f
+            try:
+                input_file(f, "capture file")
+            except InputFileError as exc:
+                raise InputFileError(f"{w}: {exc}") from None
+            found.append(f)
         pose_vals = []
         for key in ("pan_deg", "tilt_deg"):
             v = require(c, key, w)
@@ -1555,7 +1565,7 @@ def load_pose_manifest(path: Any) -> PoseManifest:
             poses.append(HeadPose(*pose_vals))
         except GeometryError as exc:
             raise ConfigError(f"{w}: {exc}") from None
-        files.append(f)
+        files.append(found[0] if isinstance(name, str) else found)
     std = data.get("tdoa_std_s", DEFAULT_TDOA_STD_S)
     std = check_tdoa_std(std, f"{where}: tdoa_std_s", error=ConfigError)  # (seconds)
     truth = data.get("truth")
@@ -1572,17 +1582,17 @@ def localize_manifest(path: Any, *, frame_ms: float = 64.0, hop_ms: float = 32.0
     (:func:`localize_multipose`). Warns (:class:`~hearsee.errors.InconsistentMeasurementWarning`)
     when the result is not ``consistent``.
     """
-    from hearsee.audio.signals import read_recording
+    from hearsee.audio.signals import read_recording, recording_label
 
     man = load_pose_manifest(path)
     taus = []
     for f in man.files:
-        x, fs = read_recording(f, n_channels=man.array.n_mics)
+        x, fs = read_recording(f, n_channels=man.array)
         try:
             taus.append(capture_tdoas(x, fs, man.array, frame_ms=frame_ms, hop_ms=hop_ms,
                                       method=method))
         except EstimationError as exc:
-            raise EstimationError(f"{f}: {exc}") from None
+            raise EstimationError(f"{recording_label(f)}: {exc}") from None
     est = localize_multipose(taus, man.poses, man.array, pivot_m=man.pivot_m,
                              offset_m=man.offset_m, tdoa_std_s=man.tdoa_std_s)
     if not est.consistent:

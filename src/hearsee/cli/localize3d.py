@@ -14,7 +14,8 @@ from hearsee.cli._app import GccMethod, app, emit_json, progress
 def localize3d_cmd(
     manifest: Annotated[Path, typer.Argument(
         help="Pose manifest YAML: array, optional head {pivot_m, offset_m}, and captures "
-        "[{file, pan_deg, tilt_deg}] (see hearsee.audio.active.PoseManifest; "
+        "[{file (or a list of files, one per microphone), pan_deg, tilt_deg}] (see "
+        "hearsee.audio.active.PoseManifest; "
         "`hearsee simulate OUT.yaml --poses ...` writes one).")],
     frame_ms: float = typer.Option(64.0, "--frame-ms", help="GCC frame length in ms, at most "
                                    "10000."),
