@@ -631,3 +631,60 @@ def test_the_real_two_file_recording_reads_as_one(shared_data):
     for k, f in enumerate(files):
         y, _ = sf.read(f)
         np.testing.assert_array_equal(x[k], y)
+
+
+# ------------------------------------------------------------ a device's other channels
+def test_channels_pick_the_microphones_of_a_larger_recording(tmp_path):
+    """A 6-channel ReSpeaker-style file (0: a beam, 1-4: the microphones, 5: a silent playback
+    channel): ``channels=[1, 2, 3, 4]`` gives the four microphones, in that order, and the
+    silent channel is no error; without it the count is refused, naming ``channels``."""
+    rng = np.random.default_rng(244)
+    mics = rng.standard_normal((4, FS)) * 0.1
+    six = np.vstack([mics.mean(axis=0), mics, np.zeros((1, FS))])
+    p = tmp_path / "six.wav"
+    sf.write(p, six.T, FS, subtype="FLOAT")
+    arr = MicArray.from_preset("respeaker-4")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        x, fs = read_recording(p, arr, channels=[1, 2, 3, 4])
+    np.testing.assert_array_equal(x, mics.astype(np.float32))
+    x, _ = read_recording(p, arr, channels=(4, 3, 2, 1))
+    np.testing.assert_array_equal(x, mics[::-1].astype(np.float32))
+    with pytest.raises(AudioInputError, match="6 channels but array 'respeaker-4' has 4 "
+                       "microphones.*left out with channels"):
+        read_recording(p, arr)
+    for bad, msg in (([1, 2, 3], "3 channels for an array of 4 microphones"),
+                     ([1, 2, 2, 3], "must be distinct and >= 0"),
+                     ([1, 2, 3, -1], "must be distinct and >= 0"),
+                     ([1, 2, 3, 4.0], "expected a list of channel indices"),
+                     ("1234", "expected a list of channel indices")):
+        with pytest.raises(ConfigError, match=msg):
+            read_recording(p, arr, channels=bad)
+    with pytest.raises(AudioInputError, match=r"channel 6 asked for, but the recording has 6 "
+                       r"channels \(0-5\)"):
+        read_recording(p, arr, channels=[1, 2, 3, 6])
+    # the checks name the input channels: the silent one picked, a copy picked twice
+    with pytest.raises(AudioInputError, match="six.wav: channel 5 silent"):
+        read_recording(p, arr, channels=[1, 2, 3, 5])
+    six[3] = six[2]
+    sf.write(p, six.T, FS, subtype="FLOAT")
+    with pytest.warns(DegenerateInputWarning, match="channels 2 and 3 hold the same signal"):
+        read_recording(p, arr, channels=[1, 2, 3, 4])
+
+
+def test_channels_over_several_files(tmp_path):
+    """Two stereo files are input channels 0-3, file by file: ``channels=[3, 0]`` is the second
+    file's right channel, then the first file's left one; a file none of whose channels is
+    asked for is not checked (its silence is no error)."""
+    rng = np.random.default_rng(245)
+    x = rng.standard_normal((4, FS)) * 0.1
+    a, b = tmp_path / "a.wav", tmp_path / "b.wav"
+    sf.write(a, x[:2].T, FS, subtype="FLOAT")
+    sf.write(b, x[2:].T, FS, subtype="FLOAT")
+    got, _ = read_recording([a, b], 2, channels=[3, 0])
+    np.testing.assert_array_equal(got, x[[3, 0]].astype(np.float32))
+    sf.write(b, np.zeros((FS, 2)), FS, subtype="FLOAT")
+    got, _ = read_recording([a, b], 2, channels=[1, 0])
+    np.testing.assert_array_equal(got, x[[1, 0]].astype(np.float32))
+    with pytest.raises(AudioInputError, match="b.wav: recording is silent"):
+        read_recording([a, b], 2, channels=[1, 2])

@@ -544,3 +544,21 @@ def test_ctrl_c_ends_live_track_cleanly(fake_sd, capsys, fmt):
     assert len(ups) == (17 * 1024 - 1024) // 512 + 1
     # the frames touching the samples lost before the third block, [2048, 3072)
     assert [u["t"] for u in ups if u["missing"]] == [(s + 512) / FS for s in (1536, 2048, 2560)]
+
+
+def test_track_device_channels_pick_the_microphones(fake_sd, capsys):
+    """`track --device 2 --channels 1,2,3`: the 6-channel device opened for its channels 0-3,
+    the stream fed channels 1-3 (as the robot file's audio.channels); a channel beyond the
+    device, or too few channels for the array, is one line."""
+    sd = fake_sd(deliver_channels=4)
+    assert main(["track", "--device", "2", "--array", "three-mic", "--channels", "1,2,3",
+                 "--duration", "0.2", "--format", "json"]) == 0, capsys.readouterr().err
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["source"] == "USB 6ch Array" and doc["stats"]["status"] == "ok"
+    assert doc["stats"]["microphones_used"] == [0, 1, 2] and doc["stats"]["frames"] > 0
+    assert sd.opened == [2]
+    _one_line(capsys, main(["track", "--device", "2", "--array", "three-mic", "--channels",
+                            "1,2,7"]),
+              "device 'USB 6ch Array' has 6 input channels; the array needs 8 (channels 1, 2, 7)")
+    _one_line(capsys, main(["track", "--device", "2", "--array", "three-mic", "--channels",
+                            "1,2"]), "--channels: 2 channels for an array of 3 microphones")

@@ -637,6 +637,12 @@ def test_mains_hum_is_named_in_one_line_and_filtered_out(tmp_path, capsys):
     assert np.max(np.abs(off - want)) * FS > 3.0  # (the failure the filter fixes)
 
 
+def _track_updates(capsys) -> list[dict]:
+    """`hearsee track`'s JSON lines just printed, but their measured latency."""
+    lines = [json.loads(s) for s in capsys.readouterr().out.splitlines()]
+    return [{k: v for k, v in u.items() if k != "latency_ms"} for u in lines]
+
+
 def test_one_file_per_microphone(tmp_path, capsys):
     """Recorders that write a file per input: `hearsee localize` and `hearsee track` take the
     files in the array's order and answer as for the multichannel file; files of different
@@ -661,15 +667,10 @@ def test_one_file_per_microphone(tmp_path, capsys):
     assert doc["summary"]["tdoa_s"]["0-1"] == pytest.approx(tau, abs=3e-6)
     code, ref, _ = _run(capsys, whole, "--array", "two-mic")
     assert code == 0 and json.loads(ref)["summary"] == doc["summary"]
-
-    def updates():  # (the stream's JSON lines but their measured latency)
-        lines = [json.loads(s) for s in capsys.readouterr().out.splitlines()]
-        return [{k: v for k, v in u.items() if k != "latency_ms"} for u in lines]
-
     assert main(["track", str(whole), "--array", "two-mic"]) == 0
-    ref = updates()
+    ref = _track_updates(capsys)
     assert main(["track", *map(str, mics), "--array", "two-mic"]) == 0
-    assert updates() == ref and any(u["measured"] for u in ref)
+    assert _track_updates(capsys) == ref and any(u["measured"] for u in ref)
     # swapped files: the mirror image's TDOA
     code, out, _ = _run(capsys, *mics[::-1], "--array", "two-mic")
     assert json.loads(out)["summary"]["tdoa_s"]["0-1"] == pytest.approx(-tau, abs=3e-6)
@@ -678,3 +679,36 @@ def test_one_file_per_microphone(tmp_path, capsys):
         assert main([cmd, *map(str, mics), "--array", "two-mic"]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "different numbers of samples" in err
+
+
+def test_channels_pick_a_devices_microphones(tmp_path, capsys):
+    """A ReSpeaker 4-mic array records 6 channels (0: its processed beam, 1-4: the microphones,
+    5: the playback): `--channels 1,2,3,4` localizes the microphones as their own 4-channel
+    file does (`hearsee localize` and `hearsee track`); without it, or with text that is no
+    channel list, one line and exit 2."""
+    arr = MicArray.from_preset("respeaker-4")
+    x = simulate_free_field(white_noise(0.5, FS, rng=7), FS, arr, 2.0 * unit_vector_deg(70, 0),
+                            snr_db=25, rng=8)
+    x = 0.3 * x / np.abs(x).max()
+    four, six = tmp_path / "four.wav", tmp_path / "six.wav"
+    sf.write(four, x.T, FS, subtype="FLOAT")
+    sf.write(six, np.vstack([x.mean(axis=0), x, np.zeros((1, x.shape[1]))]).T, FS,
+             subtype="FLOAT")
+    code, ref, _ = _run(capsys, four, "--array", "respeaker-4")
+    assert code == 0
+    ref = json.loads(ref)["summary"]
+    assert ref["azimuth_deg"] == pytest.approx(70.0, abs=2.0)
+    code, out, _ = _run(capsys, six, "--array", "respeaker-4", "--channels", "1,2,3,4")
+    assert code == 0 and json.loads(out)["summary"] == ref
+    for cmd in ("localize", "track"):
+        for extra, want in (([], "6 channels but array 'respeaker-4' has 4 microphones"),
+                            (["--channels", "1,2,x,4"], "--channels: expected comma-separated"),
+                            (["--channels", "1,2,3"], "--channels: 3 channels for an array of"),
+                            (["--channels", "1,2,3,5"], "six.wav: channel 5 silent")):
+            assert main([cmd, str(six), "--array", "respeaker-4", *extra]) == 2
+            err = capsys.readouterr().err
+            assert err.count("\n") == 1 and want in err, err
+    assert main(["track", str(four), "--array", "respeaker-4"]) == 0
+    ref = _track_updates(capsys)
+    assert main(["track", str(six), "--array", "respeaker-4", "--channels", "1,2,3,4"]) == 0
+    assert _track_updates(capsys) == ref and any(u["measured"] for u in ref)

@@ -64,6 +64,7 @@ __all__ = [
     "load_wav",
     "mains_hum",
     "make_signal",
+    "microphone_channels",
     "read_recording",
     "resample",
     "synthetic_voice",
@@ -579,8 +580,10 @@ def read_recording(
     *,
     resample: bool = False,
     min_samples: int = MIN_SAMPLES,
+    channels: Sequence[int] | None = None,
 ) -> tuple[NDArray, int]:
-    """Read and validate a multichannel recording (channel k = microphone k).
+    """Read and validate a multichannel recording (channel k = microphone k, or
+    ``channels[k]``).
 
     Parameters
     ----------
@@ -603,6 +606,13 @@ def read_recording(
         read at 16 kHz by up to 70 us).
     min_samples : int
         Fewer samples per channel than this is an error (e.g. one analysis frame).
+    channels : sequence of int, optional
+        The input channel (0-based; over several files, their channels file by file) of each
+        microphone: a device's recording that holds other channels too, e.g. a 6-channel
+        ReSpeaker 4-mic array file (channel 0 its processed beam, 1-4 the microphones, 5 the
+        playback: ``channels=[1, 2, 3, 4]``). One per microphone (``n_channels`` of them),
+        distinct; the others are neither returned nor checked (a silent playback channel is
+        no error). Messages name channels by these input numbers.
 
     Returns
     -------
@@ -641,41 +651,55 @@ def read_recording(
     paths = recording_paths(path)
     label = recording_label(paths)
     raw = [_read_file(p) for p in paths]
-    n_ch = sum(x.shape[0] for x, _ in raw)
-    if want is not None and n_ch != want:
+    counts = [x.shape[0] for x, _ in raw]
+    total = sum(counts)
+    if channels is not None:
+        chosen = np.asarray(microphone_channels(channels, want, "channels"), dtype=int)
+        if chosen.max() >= total:
+            raise AudioInputError(
+                f"{label}: channel {chosen.max()} asked for, but the recording has {total} "
+                f"channel{'s' if total != 1 else ''} (0-{total - 1})")
+    elif want is not None and total != want:
         what = (f"array {n_channels.name!r} has {want} microphones"
                 if hasattr(n_channels, "n_mics") else f"{want} were expected")
         held = "recording has" if len(paths) == 1 else "the files hold"
         raise AudioInputError(
-            f"{label}: {held} {n_ch} channel{'s' if n_ch != 1 else ''} but {what} "
-            f"(channel k must be microphone k{'' if len(paths) == 1 else ', file by file'})"
-        )
-    parts = [_checked(p, x, rate, fs, resample, min_samples)
-             for p, (x, rate) in zip(paths, raw, strict=True)]
-    rates = {rate for _, rate, _, _ in parts}
+            f"{label}: {held} {total} channel{'s' if total != 1 else ''} but {what} "
+            f"(channel k must be microphone k{'' if len(paths) == 1 else ', file by file'}; "
+            "a device's other channels can be left out with channels)")
+    else:
+        chosen = np.arange(total)
+    # each file checked on its own (the channels asked for of it); the input channel numbers
+    # (over the files, file by file) of its rows
+    files, first = [], 0
+    for p, (x, rate) in zip(paths, raw, strict=True):
+        mine = np.unique(chosen[(chosen >= first) & (chosen < first + x.shape[0])])
+        if mine.size:  # (a file none of whose channels is asked for is not read further)
+            files.append((p, *_checked(p, x[mine - first], rate, fs, resample, min_samples,
+                                       mine - first), mine))
+        first += x.shape[0]
+    rates = {rate for _, _, rate, _, _, _ in files}
     if len(rates) > 1:
-        each = ", ".join(f"{p} {rate} Hz" for p, (_, rate, _, _) in zip(paths, parts,
-                                                                          strict=True))
+        each = ", ".join(f"{p} {rate} Hz" for p, _, rate, _, _, _ in files)
         raise AudioInputError(f"{label}: the files are sampled at different rates ({each}); "
                               "one recording needs one rate: resample them to one, or ask "
                               "for resampling")
-    lengths = {x.shape[1] for x, _, _, _ in parts}
-    if len(lengths) > 1:
-        each = ", ".join(f"{p} {x.shape[1]}" for p, (x, _, _, _) in zip(paths, parts,
-                                                                          strict=True))
+    if len({y.shape[1] for _, y, _, _, _, _ in files}) > 1:
+        each = ", ".join(f"{p} {y.shape[1]}" for p, y, _, _, _, _ in files)
         raise AudioInputError(
             f"{label}: the files hold different numbers of samples ({each}): files of one "
             "recording start and end together, and an offset between them would read as a "
             "time difference; trim them to a common start and length")
-    x = parts[0][0] if len(parts) == 1 else np.concatenate([q[0] for q in parts], axis=0)
-    fs_in = parts[0][1]
+    rows = {int(c): y[k] for _, y, _, _, _, mine in files for k, c in enumerate(mine)}
+    x = np.stack([rows[int(c)] for c in chosen])
+    fs_in = files[0][2]
     _, quiet, below = channel_faults(x)  # (stuck channels were refused file by file)
     if quiet.size:
-        warnings.warn(f"{label}: {quiet_channels_text(quiet, below)}", DegenerateInputWarning,
-                      stacklevel=2)
+        warnings.warn(f"{label}: {quiet_channels_text(chosen[quiet], below)}",
+                      DegenerateInputWarning, stacklevel=2)
     # (a copy re-quantised to integer PCM differs by its rounding: told by the step, before
     # any resampling spreads it)
-    steps = {step for _, _, step, _ in parts}
+    steps = {step for _, _, _, step, _, _ in files}
     step = steps.pop() if len(steps) == 1 else None
     from hearsee.audio.tdoa import dominant_sample
 
@@ -684,14 +708,16 @@ def read_recording(
         # copies of one another, the only warning there was)
         ch, i, v, ratio = spike
         warnings.warn(
-            f"{label}: sample {i} of channel {ch} ({i / fs_in:.3f} s) is {v:.3g}, {ratio:.2g} "
-            "times the median |sample|, beyond any integer PCM range (a corrupt sample?); the "
-            "analysis scales the recording to its loudest sample, so the rest of it is nearly "
-            "lost and its estimates may be wrong", DegenerateInputWarning, stacklevel=2)
+            f"{label}: sample {i} of channel {chosen[ch]} ({i / fs_in:.3f} s) is {v:.3g}, "
+            f"{ratio:.2g} times the median |sample|, beyond any integer PCM range (a corrupt "
+            "sample?); the analysis scales the recording to its loudest sample, so the rest of "
+            "it is nearly lost and its estimates may be wrong", DegenerateInputWarning,
+            stacklevel=2)
     elif dup := duplicate_channels(x, step):
+        dup = [(int(chosen[i]), int(chosen[j])) for i, j in dup]
         warnings.warn(f"{label}: {duplicate_channels_text(dup)}", DegenerateInputWarning,
                       stacklevel=2)
-    for p, (_, _, _, clipped) in zip(paths, parts, strict=True):
+    for p, _, _, _, clipped, _ in files:
         if clipped > CLIP_FRACTION:
             warnings.warn(
                 f"{p}: {clipped * 100:.2f} % of the samples are clipped (flat at full scale, "
@@ -715,18 +741,37 @@ def recording_paths(path: str | Path | list[str | Path] | tuple[str | Path, ...]
     return [as_path(path, "the audio file's path")]
 
 
+def microphone_channels(channels: Any, n_mics: int | None, where: str) -> tuple[int, ...]:
+    """``channels``, the input channel (0-based) of each microphone, checked: a list or tuple
+    of distinct integers >= 0, ``n_mics`` of them (None: any number >= 1); a ConfigError
+    naming ``where`` else. The one check of :func:`read_recording`'s ``channels``, the CLI's
+    ``--channels`` and the robot file's ``audio.channels``."""
+    from numbers import Integral
+
+    if (not isinstance(channels, list | tuple) or not channels
+            or not all(isinstance(c, Integral) and not isinstance(c, bool) for c in channels)):
+        raise ConfigError(f"{where}: expected a list of channel indices, got {channels!r:.60}")
+    ch = tuple(int(c) for c in channels)
+    if n_mics is not None and len(ch) != n_mics:
+        raise ConfigError(f"{where}: {len(ch)} channels for an array of {n_mics} microphones "
+                          "(one input channel per microphone)")
+    if any(c < 0 for c in ch) or len(set(ch)) != len(ch):
+        raise ConfigError(f"{where}: channels must be distinct and >= 0, got {list(ch)}")
+    return ch
+
+
 def recording_label(path: str | Path | list[str | Path] | tuple[str | Path, ...]) -> str:
     """How messages name a recording of one file or several (``a.wav + b.wav``)."""
     return " + ".join(str(p) for p in recording_paths(path))
 
 
 def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resample: bool,
-             min_samples: int) -> tuple[NDArray, int, float | None, float]:
-    """One file of :func:`read_recording` (its samples ``x`` (n_ch, n) read at ``fs_in`` Hz)
-    checked on its own. Returns the samples (resampled to ``fs`` when asked), their rate (Hz),
-    the quantisation step of the file's integer samples (None: float or resampled) and the
-    share of them clipped. The checks that compare channels with one another, and the
-    clipping warning, are the caller's."""
+             min_samples: int, names: NDArray) -> tuple[NDArray, int, float | None, float]:
+    """One file of :func:`read_recording` (its samples ``x`` (n_ch, n) read at ``fs_in`` Hz,
+    the file's channels ``names``) checked on its own. Returns the samples (resampled to
+    ``fs`` when asked), their rate (Hz), the quantisation step of the file's integer samples
+    (None: float or resampled) and the share of them clipped. The checks that compare
+    channels with one another, and the clipping warning, are the caller's."""
     n = x.shape[1]
     cut = _wav_data_shortfall(Path(path))
     if cut is not None:
@@ -763,7 +808,7 @@ def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resampl
     peak = np.max(np.abs(x), axis=1)
     if np.all(peak == 0):
         raise AudioInputError(f"{path}: recording is silent (all samples are zero)")
-    dead = np.flatnonzero(peak == 0)
+    dead = names[peak == 0]
     if dead.size:
         raise AudioInputError(
             f"{path}: channel{'s' if dead.size > 1 else ''} {', '.join(map(str, dead))} "
@@ -771,7 +816,7 @@ def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resampl
         )
     # (one constant value: an input with an offset but no microphone. It read as "no frame
     # holds a detectable source (silence or uncorrelated noise)")
-    flat = np.flatnonzero(np.ptp(x, axis=1) == 0)
+    flat = names[np.ptp(x, axis=1) == 0]
     if flat.size:
         raise AudioInputError(f"{path}: {stuck_channels_text(flat)}; check the microphone "
                               "wiring")

@@ -156,6 +156,28 @@ def parse_band(text: str, what: str = "--band-hz") -> tuple[float, float]:
     return lo, hi
 
 
+def parse_channels(text: str | None, n_mics: int, what: str = "--channels"
+                   ) -> tuple[int, ...] | None:
+    """``"1,2,3,4"``: the input channel (0-based) of each of ``n_mics`` microphones
+    (:func:`hearsee.audio.signals.microphone_channels`); None for None. typer.BadParameter
+    for text that is no list of integers, ConfigError for a wrong count or repeats."""
+    from hearsee.audio.signals import microphone_channels
+
+    if text is None:
+        return None
+    vals = parse_floats(text, None, what)
+    if not vals or not all(v.is_integer() for v in vals):
+        raise typer.BadParameter(f"{what}: expected comma-separated channel indices such as "
+                                 f"1,2,3,4, got {text!r}")
+    return microphone_channels([int(v) for v in vals], n_mics, what)
+
+
+#: ``--channels``' help, the same for every command that reads microphones
+CHANNELS_HELP = ("The input channel (0-based, comma-separated) of each microphone, e.g. "
+                 "1,2,3,4 for a 6-channel ReSpeaker 4-mic array recording; the other channels "
+                 "are left out. Default: channel k is microphone k.")
+
+
 def note_empty_band(where: object, used: Sequence[float] | None,
                     asked: tuple[float, float] | None, fs: float) -> None:
     """One line on stderr when the GCC's band ``used`` (Hz) ends well below the band ``asked``

@@ -12,6 +12,7 @@ from typing import Annotated, Any
 import typer
 
 from hearsee.cli._app import (
+    CHANNELS_HELP,
     GccMethod,
     OutputFormat,
     app,
@@ -19,6 +20,7 @@ from hearsee.cli._app import (
     err_console,
     note_empty_band,
     parse_band,
+    parse_channels,
     progress,
 )
 from hearsee.config import finite_number
@@ -113,6 +115,8 @@ def localize_cmd(
         "per microphone in the array's order (their channels file by file; one rate and "
         "length).")],
     array: Annotated[str, typer.Option("--array", help="Array preset name or YAML file.")],
+    channels: Annotated[str | None, typer.Option(
+        "--channels", help=CHANNELS_HELP, show_default=False)] = None,
     frame_ms: Annotated[float, typer.Option(
         "--frame-ms", help="Frame length in milliseconds, at most 10000.")] = 64.0,
     hop_ms: Annotated[float, typer.Option(
@@ -205,7 +209,7 @@ def localize_cmd(
                "line, without a mask)")
         raise ConfigError(f"--tdoa-std-us sets the TDOA error behind the source position, which "
                           f"{why}; leave it out")
-    x, fs = read_recording(recording, arr)
+    x, fs = read_recording(recording, arr, channels=parse_channels(channels, arr.n_mics))
     name = recording_label(recording)  # (the file, or the files joined by " + ")
     frame_len, hop = frame_geometry(fs, frame_ms, hop_ms)
     n_frames = max((x.shape[1] - frame_len) // hop + 1, 0)

@@ -14,12 +14,14 @@ from typing import Annotated
 import typer
 
 from hearsee.cli._app import (
+    CHANNELS_HELP,
     GccMethod,
     app,
     emit_json,
     err_console,
     note_empty_band,
     parse_band,
+    parse_channels,
     parse_floats,
     to_jsonable,
 )
@@ -157,6 +159,9 @@ def track_cmd(
         "in the array's order (their channels file by file; one rate and length). Omit with "
         "--device.")] = None,
     array: Annotated[str, typer.Option("--array", help="Array preset name or YAML file.")] = ...,
+    channels: Annotated[str | None, typer.Option(
+        "--channels", help=CHANNELS_HELP + " Of a file or of the --device.",
+        show_default=False)] = None,
     device: Annotated[str | None, typer.Option(
         "--device", help="Live input: PortAudio device index or name.")] = None,
     duration: Annotated[float | None, typer.Option(
@@ -284,6 +289,7 @@ def track_cmd(
     if not 0.0 <= gate_coherence <= 1.0:
         raise ConfigError(f"--gate-coherence must be in [0, 1] (0 = off), got {gate_coherence}")
     arr = load_array(array)
+    chosen = parse_channels(channels, arr.n_mics)
     # (a vertical line, or a masked pair with a camera: refused before any audio)
     check_trackable(arr, camera=camera is not None)
     rig = points = None
@@ -318,10 +324,16 @@ def track_cmd(
 
     try:
         if device is not None:
-            source = DeviceSource(_device_spec(device), arr.n_mics, 16000 if fs is None else fs,
-                                  duration_s=duration, where="--device")
+            source = opened = DeviceSource(
+                _device_spec(device), arr.n_mics if chosen is None else max(chosen) + 1,
+                16000 if fs is None else fs, duration_s=duration, where="--device",
+                check_channels=chosen)
+            if chosen is not None:  # (the microphones' channels of a larger device)
+                from hearsee.robot.hardware import MappedSource
+
+                source = MappedSource(opened, chosen)
         else:
-            source = WavSource(recording, n_channels=arr, block_len=4096)
+            source = WavSource(recording, n_channels=arr, block_len=4096, channels=chosen)
         used = _stream_band(band, None if device is not None else source.x, source.fs,
                             frame_ms)
         cfg.band_hz, cfg.srp_band_hz = used, _srp_band(used, cfg.srp_band_hz)
@@ -367,7 +379,7 @@ def track_cmd(
         # (a device by the name PortAudio gives it: "--device 2" or a part of a name is not
         # what was opened)
         if device is not None:
-            heard: str | list[str] = source.name
+            heard: str | list[str] = opened.name
         else:  # (the file, or the list of them)
             heard = str(recording[0]) if len(recording) == 1 else [str(p) for p in recording]
         emit_json({"array": arr.to_dict(), "source": heard,

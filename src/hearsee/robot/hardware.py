@@ -81,6 +81,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.signals import microphone_channels
 from hearsee.config import (
     as_float_array,
     as_path,
@@ -346,18 +347,8 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
     except ConfigError as exc:
         raise ConfigError(f"{where}.array: {exc}") from None
     ch = d.get("channels")
-    if ch is None:
-        channels = tuple(range(array.n_mics))
-    else:
-        if not isinstance(ch, list) or not all(isinstance(c, int) and not isinstance(c, bool)
-                                               for c in ch):
-            raise ConfigError(f"{where}.channels: expected a list of channel indices, got {ch!r}")
-        if len(ch) != array.n_mics:
-            raise ConfigError(f"{where}.channels: {len(ch)} channels for an array of "
-                              f"{array.n_mics} microphones (one input channel per microphone)")
-        if any(c < 0 for c in ch) or len(set(ch)) != len(ch):
-            raise ConfigError(f"{where}.channels: channels must be distinct and >= 0, got {ch}")
-        channels = tuple(ch)
+    channels = (tuple(range(array.n_mics)) if ch is None
+                else microphone_channels(ch, array.n_mics, f"{where}.channels"))
     block_ms = number(d, "block_ms", 100.0, where, 10.0, 2000.0)
     frame_ms = number(d, "frame_ms", 64.0, where, 8.0, 1000.0)
     from hearsee.audio.tdoa import min_frame_ms, normalize_method

@@ -382,16 +382,17 @@ class ArraySource:
 
 class WavSource(ArraySource):
     """Blocks of a multichannel audio file, or of one file per microphone (their channels
-    file by file), validated by :func:`hearsee.audio.signals.read_recording`. ``paths``: the
-    files; ``path``: the first one."""
+    file by file), validated by :func:`hearsee.audio.signals.read_recording` (``channels``:
+    the input channel of each microphone, as there). ``paths``: the files; ``path``: the
+    first one."""
 
     def __init__(self, path: str | Path | list[str | Path] | tuple[str | Path, ...],
                  n_channels: int | Any | None = None,
-                 block_len: int = 2048, realtime: bool = False, fs: float | None = None
-                 ) -> None:
+                 block_len: int = 2048, realtime: bool = False, fs: float | None = None,
+                 channels: Sequence[int] | None = None) -> None:
         from hearsee.audio.signals import read_recording, recording_paths
 
-        x, rate = read_recording(path, n_channels=n_channels, fs=fs)
+        x, rate = read_recording(path, n_channels=n_channels, fs=fs, channels=channels)
         super().__init__(x, rate, block_len, realtime)
         self.paths = recording_paths(path)
         self.path = self.paths[0]
@@ -668,9 +669,11 @@ class DeviceSource:
         # refused an ambiguous one and preferred an exact name: one rule now)
         info = resolve_input_device(sd, device, where, AudioInputError)
         if int(info["max_input_channels"]) < n_channels:
+            which = ("" if check_channels is None else
+                     f" (channels {', '.join(str(c) for c in check_channels)})")
             raise AudioInputError(
                 f"device {info['name']!r} has {info['max_input_channels']} input channels; the "
-                f"array needs {n_channels}"
+                f"array needs {n_channels}{which}"
             )
         self._sd = sd
         self.name = str(info.get("name", device))  #: the device's name (PortAudio's)
