@@ -650,6 +650,8 @@ def test_channels_pick_the_microphones_of_a_larger_recording(tmp_path):
     np.testing.assert_array_equal(x, mics.astype(np.float32))
     x, _ = read_recording(p, arr, channels=(4, 3, 2, 1))
     np.testing.assert_array_equal(x, mics[::-1].astype(np.float32))
+    x, _ = read_recording(p, arr, channels=np.arange(1, 5))
+    np.testing.assert_array_equal(x, mics.astype(np.float32))
     with pytest.raises(AudioInputError, match="6 channels but array 'respeaker-4' has 4 "
                        "microphones.*left out with channels"):
         read_recording(p, arr)

@@ -656,8 +656,9 @@ def read_recording(
     if channels is not None:
         chosen = np.asarray(microphone_channels(channels, want, "channels"), dtype=int)
         if chosen.max() >= total:
+            held = "the recording has" if len(paths) == 1 else "the files hold"
             raise AudioInputError(
-                f"{label}: channel {chosen.max()} asked for, but the recording has {total} "
+                f"{label}: channel {chosen.max()} asked for, but {held} {total} "
                 f"channel{'s' if total != 1 else ''} (0-{total - 1})")
     elif want is not None and total != want:
         what = (f"array {n_channels.name!r} has {want} microphones"
@@ -675,8 +676,9 @@ def read_recording(
     for p, (x, rate) in zip(paths, raw, strict=True):
         mine = np.unique(chosen[(chosen >= first) & (chosen < first + x.shape[0])])
         if mine.size:  # (a file none of whose channels is asked for is not read further)
-            files.append((p, *_checked(p, x[mine - first], rate, fs, resample, min_samples,
-                                       mine - first), mine))
+            sub = x if mine.size == x.shape[0] else x[mine - first]  # (all: no copy)
+            files.append((p, *_checked(p, sub, rate, fs, resample, min_samples, mine - first),
+                          mine))
         first += x.shape[0]
     rates = {rate for _, _, rate, _, _, _ in files}
     if len(rates) > 1:
@@ -690,8 +692,11 @@ def read_recording(
             f"{label}: the files hold different numbers of samples ({each}): files of one "
             "recording start and end together, and an offset between them would read as a "
             "time difference; trim them to a common start and length")
-    rows = {int(c): y[k] for _, y, _, _, _, mine in files for k, c in enumerate(mine)}
-    x = np.stack([rows[int(c)] for c in chosen])
+    if np.array_equal(chosen, np.arange(total)):  # (every channel in order: no copy of one)
+        x = files[0][1] if len(files) == 1 else np.concatenate([f[1] for f in files], axis=0)
+    else:
+        rows = {int(c): y[k] for _, y, _, _, _, mine in files for k, c in enumerate(mine)}
+        x = np.stack([rows[int(c)] for c in chosen])
     fs_in = files[0][2]
     _, quiet, below = channel_faults(x)  # (stuck channels were refused file by file)
     if quiet.size:
@@ -742,12 +747,14 @@ def recording_paths(path: str | Path | list[str | Path] | tuple[str | Path, ...]
 
 
 def microphone_channels(channels: Any, n_mics: int | None, where: str) -> tuple[int, ...]:
-    """``channels``, the input channel (0-based) of each microphone, checked: a list or tuple
-    of distinct integers >= 0, ``n_mics`` of them (None: any number >= 1); a ConfigError
+    """``channels``, the input channel (0-based) of each microphone, checked: a list, tuple or
+    1-D array of distinct integers >= 0, ``n_mics`` of them (None: any number >= 1); a ConfigError
     naming ``where`` else. The one check of :func:`read_recording`'s ``channels``, the CLI's
     ``--channels`` and the robot file's ``audio.channels``."""
     from numbers import Integral
 
+    if isinstance(channels, np.ndarray) and channels.ndim == 1:
+        channels = channels.tolist()
     if (not isinstance(channels, list | tuple) or not channels
             or not all(isinstance(c, Integral) and not isinstance(c, bool) for c in channels)):
         raise ConfigError(f"{where}: expected a list of channel indices, got {channels!r:.60}")
