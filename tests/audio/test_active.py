@@ -458,7 +458,7 @@ def test_localize3d_cli_round_trip(pose_manifest, capsys, method):
 def test_a_capture_given_as_one_file_per_microphone(pose_manifest, tmp_path, capsys):
     """A manifest's capture may list one file per microphone (a recorder that writes a file
     per input): the same position as the multichannel files; a list whose files differ in
-    length is one line, exit 2."""
+    length is one line, exit 2. Its ``channels`` pick the microphones of larger files."""
     import json
 
     import soundfile as sf
@@ -494,6 +494,26 @@ def test_a_capture_given_as_one_file_per_microphone(pose_manifest, tmp_path, cap
     split.write_text(yaml.safe_dump(d))
     assert main(["localize3d", str(split)]) == 2
     assert "file must be a capture file's name or a list of them" in capsys.readouterr().err
+    # a device's other channels: each capture as 5 channels (a mix first, a silent one last),
+    # the manifest's channels pick the microphones
+    for c, f in zip(d["captures"], files, strict=True):
+        y, fs = sf.read(f, always_2d=True)
+        five = np.column_stack([y.mean(axis=1), y, np.zeros(len(y))])
+        c["file"] = f"five_{f.name}"
+        sf.write(tmp_path / c["file"], five, fs, subtype=sf.info(f).subtype)
+    d["channels"] = [1, 2, 3]
+    split.write_text(yaml.safe_dump(d))
+    assert load_pose_manifest(split).channels == (1, 2, 3)
+    assert main(["localize3d", str(split)]) == 0
+    assert json.loads(capsys.readouterr().out)["position_m"] == ref["position_m"]
+    for bad, want in (([1, 2], "split.yaml: channels: 2 channels for an array of 3"),
+                      ([1, 2, 4], "channel 4 silent"), ([1, 2, 5], "channel 5 asked for"),
+                      (None, "5 channels but array")):
+        d["channels"] = bad
+        split.write_text(yaml.safe_dump(d))
+        assert main(["localize3d", str(split)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and want in err, err
 
 
 @pytest.mark.parametrize("edit, needle", [

@@ -70,7 +70,7 @@ from hearsee.audio.arrays import (
     position_uncertainty,
 )
 from hearsee.audio.propagation import check_snr_db, speed_of_sound_of
-from hearsee.audio.signals import as_samples, check_fs
+from hearsee.audio.signals import as_samples, check_fs, microphone_channels
 from hearsee.config import (
     as_float_array,
     as_path,
@@ -1453,7 +1453,7 @@ def align_head_search(
 
 # ------------------------------------------------------------------------ pose manifests
 #: Keys of a pose manifest (``hearsee localize3d``, written by ``hearsee simulate --poses``).
-MANIFEST_KEYS = ("array", "head", "captures", "tdoa_std_s", "truth")
+MANIFEST_KEYS = ("array", "channels", "head", "captures", "tdoa_std_s", "truth")
 _HEAD_KEYS = ("pivot_m", "offset_m")
 _CAPTURE_KEYS = ("file", "pan_deg", "tilt_deg")
 
@@ -1465,6 +1465,7 @@ class PoseManifest:
     YAML schema (paths relative to the manifest's folder)::
 
         array: three-mic            # preset name, array YAML path, or an inline array mapping
+        channels: [1, 2, 3]         # optional: each microphone's input channel of the files
         head:                       # optional
           pivot_m: [0, 0, 0]        # pan-tilt pivot, robot frame, metres
           offset_m: [0.1, 0, 0.05]  # array origin relative to the pivot, head frame, metres
@@ -1477,7 +1478,9 @@ class PoseManifest:
 
     A capture's ``file`` is one multichannel file or a list of files, one per microphone
     (their channels file by file, :func:`hearsee.audio.signals.read_recording`); ``files``
-    holds a Path or a list of Paths per capture.
+    holds a Path or a list of Paths per capture. ``channels`` (0-based, one per microphone)
+    picks the microphones of a device that records other channels too (default: channel k is
+    microphone k), the same for every capture.
     """
 
     array: MicArray
@@ -1487,6 +1490,7 @@ class PoseManifest:
     offset_m: NDArray
     tdoa_std_s: float = DEFAULT_TDOA_STD_S
     truth: dict[str, Any] | None = None
+    channels: tuple[int, ...] | None = None
 
 
 def load_pose_manifest(path: Any) -> PoseManifest:
@@ -1569,8 +1573,11 @@ def load_pose_manifest(path: Any) -> PoseManifest:
     std = data.get("tdoa_std_s", DEFAULT_TDOA_STD_S)
     std = check_tdoa_std(std, f"{where}: tdoa_std_s", error=ConfigError)  # (seconds)
     truth = data.get("truth")
+    ch = data.get("channels")
+    if ch is not None:
+        ch = microphone_channels(ch, arr.n_mics, f"{where}: channels")
     return PoseManifest(arr, files, poses, pivot, offset, float(std),
-                        truth if isinstance(truth, dict) else None)
+                        truth if isinstance(truth, dict) else None, ch)
 
 
 def localize_manifest(path: Any, *, frame_ms: float = 64.0, hop_ms: float = 32.0,
@@ -1587,7 +1594,7 @@ def localize_manifest(path: Any, *, frame_ms: float = 64.0, hop_ms: float = 32.0
     man = load_pose_manifest(path)
     taus = []
     for f in man.files:
-        x, fs = read_recording(f, n_channels=man.array)
+        x, fs = read_recording(f, n_channels=man.array, channels=man.channels)
         try:
             taus.append(capture_tdoas(x, fs, man.array, frame_ms=frame_ms, hop_ms=hop_ms,
                                       method=method))

@@ -13,7 +13,8 @@ from hearsee.cli._app import GccMethod, app, emit_json, progress
 @app.command("localize3d")
 def localize3d_cmd(
     manifest: Annotated[Path, typer.Argument(
-        help="Pose manifest YAML: array, optional head {pivot_m, offset_m}, and captures "
+        help="Pose manifest YAML: array, optional channels and head {pivot_m, offset_m}, "
+        "and captures "
         "[{file (or a list of files, one per microphone), pan_deg, tilt_deg}] (see "
         "hearsee.audio.active.PoseManifest; "
         "`hearsee simulate OUT.yaml --poses ...` writes one).")],
