@@ -712,3 +712,21 @@ def test_channels_pick_a_devices_microphones(tmp_path, capsys):
     ref = _track_updates(capsys)
     assert main(["track", str(six), "--array", "respeaker-4", "--channels", "1,2,3,4"]) == 0
     assert _track_updates(capsys) == ref and any(u["measured"] for u in ref)
+
+
+def test_an_array_file_in_centimetres_is_asked_about_its_unit(tmp_path, capsys):
+    """A 15 cm pair written in centimetres (15 m wide) asked for frames of 175 ms and more
+    without a word of the unit; the message now asks whether the positions are in metres. A
+    frame too short for a real (0.6 m) array gets no such question."""
+    x = 0.1 * np.random.default_rng(246).standard_normal((2, FS))
+    rec = tmp_path / "pair.wav"
+    sf.write(rec, x.T, FS, subtype="FLOAT")
+    for name, y, hint in (("cm", 7.5, True), ("wide", 0.3, False)):
+        arr = tmp_path / f"{name}.yaml"
+        arr.write_text(f"microphones:\n  - [0, {-y}, 0]\n  - [0, {y}, 0]\n")
+        for cmd in ("localize", "track"):
+            assert main([cmd, str(rec), "--array", str(arr), "--frame-ms", "2"]) == 2
+            err = capsys.readouterr().err
+            assert err.count("\n") == 1 and "too short for the array's largest delay" in err
+            assert ("are its microphone positions in metres?" in err) is hint, err
+            assert ("spans 15 m" in err) is hint

@@ -76,6 +76,10 @@ def check_tdoa_std(value: Any, name: str = "tdoa_std_s", *, zero_ok: bool = Fals
 
 #: Two microphones closer than this (metres) are treated as coincident.
 MIN_SPACING_M = 1e-3
+#: An array wider than this (metres) whose delays outgrow a frame is asked whether its
+#: positions are in metres (:meth:`MicArray.units_hint`): a robot's head spans centimetres, an
+#: array file written in centimetres metres.
+UNIT_HINT_APERTURE_M = 2.0
 
 #: Largest TDOA (seconds) that the microphones' offsets from their best-fitting line (plane)
 #: may add to any pair for the array to count as linear (planar): 10 us, 3.4 mm at 343 m/s, a
@@ -277,6 +281,15 @@ class MicArray:
     def aperture(self) -> float:
         """Largest microphone spacing in metres."""
         return float(self.pair_distance().max())
+
+    def units_hint(self) -> str:
+        """`` (the array spans 15 m: are its microphone positions in metres?)`` for an array
+        wider than :data:`UNIT_HINT_APERTURE_M`, else ``""``: what the messages that find its
+        delays too long for a frame add (a 15 cm pair written in centimetres asked for frames
+        of 175 ms and more, without a word of the unit)."""
+        if self.aperture <= UNIT_HINT_APERTURE_M:
+            return ""
+        return f" (the array spans {self.aperture:.3g} m: are its microphone positions in metres?)"
 
     @property
     def is_planar(self) -> bool:

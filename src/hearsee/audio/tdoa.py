@@ -2463,7 +2463,7 @@ def estimate_tdoas(
     if max_lag.max() >= frame_len // 2:
         raise ConfigError(
             f"frame of {frame_ms} ms is too short for the array's largest delay "
-            f"({max_lag.max() / fs * 1e3:.2f} ms); use a longer --frame-ms"
+            f"({max_lag.max() / fs * 1e3:.2f} ms); use a longer --frame-ms{arr.units_hint()}"
         )
     # zero padding by twice the largest lag keeps the admissible lags free of circular wrap
     nfft = gcc_nfft(frame_len, float(max_lag.max()))

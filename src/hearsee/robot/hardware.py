@@ -357,7 +357,8 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
     if frame_ms < shortest:
         raise ConfigError(f"{where}.frame_ms: {frame_ms} ms is too short for the array's "
                           f"largest delay ({shortest / 4:.2f} ms); use >= "
-                          f"{math.ceil(shortest)}")  # (rounded to nearest: a refused value)
+                          # (rounded to nearest: a refused value)
+                          f"{math.ceil(shortest)}{array.units_hint()}")
     method = d.get("method", "phat")
     if not isinstance(method, str):  # (a null was "unknown GCC method 'None'", as if the file
         # had named a method "None"; a number was quoted as a name too)

@@ -2730,7 +2730,7 @@ class StreamPipeline:
             raise ConfigError(
                 f"frame of {self.config.frame_ms:g} ms is too short for the array's largest "
                 f"delay ({shortest / 4:.2f} ms); use a frame of at least {shortest:.2f} ms"
-            )
+                f"{self.array.units_hint()}")
 
     def run(self, source: Any, sink: Callable[[Update], None] | None = None,
             threaded: bool = False,
