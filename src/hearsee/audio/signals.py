@@ -772,6 +772,13 @@ def recording_label(path: str | Path | list[str | Path] | tuple[str | Path, ...]
     return " + ".join(str(p) for p in recording_paths(path))
 
 
+def recording_entry(path: str | Path | list[str | Path] | tuple[str | Path, ...]
+                    ) -> str | list[str]:
+    """How JSON documents name a recording: its file, or the list of its files."""
+    paths = recording_paths(path)
+    return str(paths[0]) if len(paths) == 1 else [str(p) for p in paths]
+
+
 def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resample: bool,
              min_samples: int, names: NDArray) -> tuple[NDArray, int, float | None, float]:
     """One file of :func:`read_recording` (its samples ``x`` (n_ch, n) read at ``fs_in`` Hz,

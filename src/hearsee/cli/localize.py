@@ -168,7 +168,7 @@ def localize_cmd(
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
     from hearsee.audio.arrays import MAX_TDOA_STD_S, load_array
     from hearsee.audio.localize import fits_position, localize_recording
-    from hearsee.audio.signals import read_recording, recording_label
+    from hearsee.audio.signals import read_recording, recording_entry, recording_label
     from hearsee.audio.tdoa import SUMMARY_TUNED, check_frame_ms, dominant_sample, frame_geometry
 
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
@@ -221,7 +221,7 @@ def localize_cmd(
                                  **settings, **({} if tdoa_std_us is None else
                                                 {"tdoa_std_s": tdoa_std_us * 1e-6}),
                                  **({} if band is None else {"band_hz": band}))
-    doc["recording"] = str(recording[0]) if len(recording) == 1 else [str(p) for p in recording]
+    doc["recording"] = recording_entry(recording)
     if fmt is OutputFormat.json:
         emit_json(doc)
     elif fmt is OutputFormat.csv:

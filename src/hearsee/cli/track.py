@@ -243,7 +243,7 @@ def track_cmd(
     reported, as by `hearsee run`.
     """
     from hearsee.audio.arrays import load_array
-    from hearsee.audio.signals import recording_label
+    from hearsee.audio.signals import recording_entry, recording_label
     from hearsee.audio.tdoa import check_frame_ms
     from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, IMM_MODES_DPS2
     from hearsee.config import time_limit
@@ -378,10 +378,7 @@ def track_cmd(
     if fmt is TrackFormat.json:
         # (a device by the name PortAudio gives it: "--device 2" or a part of a name is not
         # what was opened)
-        if device is not None:
-            heard: str | list[str] = opened.name
-        else:  # (the file, or the list of them)
-            heard = str(recording[0]) if len(recording) == 1 else [str(p) for p in recording]
+        heard = opened.name if device is not None else recording_entry(recording)
         emit_json({"array": arr.to_dict(), "source": heard,
                    "updates": [u.to_json() for u in updates], "stats": summary})
     if stats or st.status != "ok":
