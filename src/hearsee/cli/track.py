@@ -250,6 +250,7 @@ def track_cmd(
     from hearsee.errors import ConfigError
     from hearsee.stream.pipeline import (
         DeviceSource,
+        MappedSource,
         StreamConfig,
         StreamPipeline,
         WavSource,
@@ -329,9 +330,7 @@ def track_cmd(
                 16000 if fs is None else fs, duration_s=duration, where="--device",
                 check_channels=chosen)
             if chosen is not None:  # (the microphones' channels of a larger device)
-                from hearsee.robot.hardware import MappedSource
-
-                source = MappedSource(opened, chosen)
+                source = MappedSource(opened, chosen, where="--channels")
         else:
             source = WavSource(recording, n_channels=arr, block_len=4096, channels=chosen)
         used = _stream_band(band, None if device is not None else source.x, source.fs,

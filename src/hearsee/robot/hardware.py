@@ -92,7 +92,6 @@ from hearsee.config import (
     names_a_file,
     number,
     same_file,
-    time_limit,
     whole_number,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError, HearseeError
@@ -100,6 +99,7 @@ from hearsee.stream.device import (  # (import_sounddevice, resolve_input_device
     import_sounddevice,
     resolve_input_device,
 )
+from hearsee.stream.pipeline import MappedSource  # (re-exported: its home was here)
 from hearsee.stream.video import (  # (read_frame re-exported: its home was here)
     FIRST_FRAME_TIMEOUT_S,
     FileFrameClock,
@@ -713,72 +713,6 @@ def first_failure(checks: Sequence[Check]) -> Check | None:
 # ---------------------------------------------------------------------------------------------
 # Live sources
 # ---------------------------------------------------------------------------------------------
-class MappedSource:
-    """A stream source (:mod:`hearsee.stream.pipeline`) seen through the robot file: picks the
-    input channel of each microphone (``channels``), ends after ``duration_s`` seconds of audio
-    (> 0; None or inf = when the source ends) or as soon as ``stop`` (a ``threading.Event``) is
-    set. The source's ``fs`` (Hz, finite, > 0) and ``n_channels`` (an integer >= 1) are
-    checked: AudioInputError otherwise."""
-
-    def __init__(self, source: Any, channels: Sequence[int], duration_s: float | None = None,
-                 stop: Any = None) -> None:
-        self.source = source
-        # (a NaN rate was a builtin ValueError once the stream started, None a TypeError)
-        self.fs = finite_number("audio source fs", source.fs, 0.0, lo_open=True,
-                                error=AudioInputError)  # Hz
-        self.n_in = n_in = whole_number("audio source n_channels", source.n_channels, 1,
-                                        error=AudioInputError)
-        self.channels = list(channels)
-        if max(self.channels) >= n_in:
-            raise AudioInputError(f"audio.channels: channel {max(self.channels)} requested but "
-                                  f"the input has {n_in} channels")
-        self.n_channels = len(self.channels)
-        duration_s = time_limit("duration_s", duration_s)  # (inf: no limit, as DeviceSource)
-        self.limit = None if duration_s is None else int(round(duration_s * self.fs))
-        self.stop = stop
-
-    @property
-    def n_dropped(self) -> int:
-        return int(getattr(self.source, "n_dropped", 0))
-
-    def audio_time_now(self) -> float | None:
-        """The source's ``audio_time_now()`` (seconds of audio being captured now, e.g.
-        :meth:`hearsee.stream.pipeline.DeviceSource.audio_time_now`), or None where it has
-        none (a file: its audio has no 'now') or gives None (no block yet); anything else than
-        a finite number is an AudioInputError."""
-        clock = getattr(self.source, "audio_time_now", None)
-        now = None if clock is None else clock()
-        if now is None:
-            return None
-        return finite_number("audio source audio_time_now()", now, error=AudioInputError)
-
-    def blocks(self) -> Any:
-        """The source's blocks, mapped; the source's own iterator is closed when they end (a
-        device's error while stopping is raised, unless another error ends the run)."""
-        from hearsee.stream.pipeline import Block, block_samples, close_blocks
-
-        blocks = self.source.blocks()
-        try:
-            for blk in blocks:
-                if self.stop is not None and self.stop.is_set():
-                    break
-                # (a block of fewer channels than the source declared was an IndexError)
-                data = block_samples(blk.data, self.n_in)[self.channels]
-                if self.limit is not None:
-                    if blk.start >= self.limit:
-                        break
-                    data = data[:, : self.limit - blk.start]
-                yield Block(blk.seq, blk.start, data, blk.arrival)
-                if self.limit is not None and blk.start + data.shape[1] >= self.limit:
-                    break
-        except BaseException as exc:  # (GeneratorExit: our consumer ended the run normally)
-            close_blocks(blocks, quiet=not isinstance(exc, GeneratorExit))
-            raise
-        # (the device's stream used to stop only when its generator was garbage collected:
-        # a PortAudioError there was printed as "Exception ignored in", the run went on)
-        close_blocks(blocks)
-
-
 def open_audio_source(cfg: RobotConfig, duration_s: float | None = None) -> MappedSource:
     """The live microphones of ``cfg`` (checked with :func:`verify_audio_device`) as a stream
     source: :class:`hearsee.stream.pipeline.DeviceSource` behind :class:`MappedSource`."""
@@ -789,7 +723,7 @@ def open_audio_source(cfg: RobotConfig, duration_s: float | None = None) -> Mapp
     src = DeviceSource(dev["index"], a.n_open, a.fs, a.block_len, duration_s=duration_s,
                        queue_size=max(32, int(np.ceil(4000.0 / a.block_ms))),
                        check_channels=a.channels)
-    return MappedSource(src, a.channels, duration_s)
+    return MappedSource(src, a.channels, duration_s, where="audio.channels")
 
 
 @dataclass
@@ -1396,7 +1330,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     if live:
         source = open_audio_source(cfg, duration_s)
     else:
-        source = MappedSource(audio_source, a.channels, duration_s, stop)
+        source = MappedSource(audio_source, a.channels, duration_s, stop, "audio.channels")
     if live and stop is not None:
         source.stop = stop
     if abs(source.fs - a.fs) > 1e-6:

@@ -398,6 +398,73 @@ class WavSource(ArraySource):
         self.path = self.paths[0]
 
 
+class MappedSource:
+    """A stream source seen through a channel map: picks the input channel of each microphone
+    (``channels``), ends after ``duration_s`` seconds of audio (> 0; None or inf = when the
+    source ends) or as soon as ``stop`` (a ``threading.Event``) is set. The source's ``fs``
+    (Hz, finite, > 0) and ``n_channels`` (an integer >= 1) are checked: AudioInputError
+    otherwise; ``where`` is what messages call the channel map (the robot file's
+    ``audio.channels``, ``hearsee track``'s ``--channels``). The live robot's source
+    (:func:`hearsee.robot.hardware.open_audio_source`) and ``hearsee track --device
+    --channels``."""
+
+    def __init__(self, source: Any, channels: Sequence[int], duration_s: float | None = None,
+                 stop: Any = None, where: str = "channels") -> None:
+        self.source = source
+        # (a NaN rate was a builtin ValueError once the stream started, None a TypeError)
+        self.fs = finite_number("audio source fs", source.fs, 0.0, lo_open=True,
+                                error=AudioInputError)  # Hz
+        self.n_in = n_in = whole_number("audio source n_channels", source.n_channels, 1,
+                                        error=AudioInputError)
+        self.channels = list(channels)
+        if max(self.channels) >= n_in:
+            raise AudioInputError(f"{where}: channel {max(self.channels)} requested but the "
+                                  f"input has {n_in} channels")
+        self.n_channels = len(self.channels)
+        duration_s = time_limit("duration_s", duration_s)  # (inf: no limit, as DeviceSource)
+        self.limit = None if duration_s is None else int(round(duration_s * self.fs))
+        self.stop = stop
+
+    @property
+    def n_dropped(self) -> int:
+        return int(getattr(self.source, "n_dropped", 0))
+
+    def audio_time_now(self) -> float | None:
+        """The source's ``audio_time_now()`` (seconds of audio being captured now, e.g.
+        :meth:`hearsee.stream.pipeline.DeviceSource.audio_time_now`), or None where it has
+        none (a file: its audio has no 'now') or gives None (no block yet); anything else than
+        a finite number is an AudioInputError."""
+        clock = getattr(self.source, "audio_time_now", None)
+        now = None if clock is None else clock()
+        if now is None:
+            return None
+        return finite_number("audio source audio_time_now()", now, error=AudioInputError)
+
+    def blocks(self) -> Any:
+        """The source's blocks, mapped; the source's own iterator is closed when they end (a
+        device's error while stopping is raised, unless another error ends the run)."""
+        blocks = self.source.blocks()
+        try:
+            for blk in blocks:
+                if self.stop is not None and self.stop.is_set():
+                    break
+                # (a block of fewer channels than the source declared was an IndexError)
+                data = block_samples(blk.data, self.n_in)[self.channels]
+                if self.limit is not None:
+                    if blk.start >= self.limit:
+                        break
+                    data = data[:, : self.limit - blk.start]
+                yield Block(blk.seq, blk.start, data, blk.arrival)
+                if self.limit is not None and blk.start + data.shape[1] >= self.limit:
+                    break
+        except BaseException as exc:  # (GeneratorExit: our consumer ended the run normally)
+            close_blocks(blocks, quiet=not isinstance(exc, GeneratorExit))
+            raise
+        # (the device's stream used to stop only when its generator was garbage collected:
+        # a PortAudioError there was printed as "Exception ignored in", the run went on)
+        close_blocks(blocks)
+
+
 #: :class:`DeviceSource` looks at the first this many seconds of live input in which a channel
 #: varies for a stuck or disconnected microphone (:class:`_ChannelWatch`)
 CHANNEL_CHECK_S = 2.0
@@ -2658,7 +2725,7 @@ class StreamPipeline:
         :class:`DeviceSource` does after ``timeout_s``) gives the same status; its input
         overflows (``n_overflows``) go to :attr:`StreamStats.n_overflows`. Both are also read
         from a source that a wrapper exposes as ``.source`` (:class:`DropoutSource`,
-        ``robot.hardware.MappedSource``).
+        :class:`MappedSource`).
     check_wiring : bool or None
         Check the input's first :data:`WIRING_CHECK_S` seconds in which a source is heard for a
         microphone wired with inverted polarity, with a warning (:class:`_WiringWatch`): what
