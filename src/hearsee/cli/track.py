@@ -336,8 +336,9 @@ def track_cmd(
         used = _stream_band(band, None if device is not None else source.x, source.fs,
                             frame_ms)
         cfg.band_hz, cfg.srp_band_hz = used, _srp_band(used, cfg.srp_band_hz)
-        if used is not None:
-            note_empty_band(recording_label(recording), used, band, source.fs)
+        if used is not None:  # (a device's band is the one asked for: it says nothing)
+            note_empty_band(opened.name if device is not None else recording_label(recording),
+                            used, band, source.fs)
         lines: tuple[float, ...] = ()
         heard_by = arr  # (the array the stream localizes with: without a dead microphone)
         used_mics = list(range(arr.n_mics))
