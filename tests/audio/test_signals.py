@@ -653,12 +653,13 @@ def test_channels_pick_the_microphones_of_a_larger_recording(tmp_path):
     x, _ = read_recording(p, arr, channels=np.arange(1, 5))
     np.testing.assert_array_equal(x, mics.astype(np.float32))
     with pytest.raises(AudioInputError, match="6 channels but array 'respeaker-4' has 4 "
-                       "microphones.*left out with channels"):
+                       "microphones.*choose the microphones' with --channels"):
         read_recording(p, arr)
     for bad, msg in (([1, 2, 3], "3 channels for an array of 4 microphones"),
                      ([1, 2, 2, 3], "must be distinct and >= 0"),
                      ([1, 2, 3, -1], "must be distinct and >= 0"),
                      ([1, 2, 3, 4.0], "expected a list of channel indices"),
+                     ([1, 2, 3, 2**63], "is beyond any input"),
                      ("1234", "expected a list of channel indices")):
         with pytest.raises(ConfigError, match=msg):
             read_recording(p, arr, channels=bad)
@@ -685,8 +686,34 @@ def test_channels_over_several_files(tmp_path):
     sf.write(b, x[2:].T, FS, subtype="FLOAT")
     got, _ = read_recording([a, b], 2, channels=[3, 0])
     np.testing.assert_array_equal(got, x[[3, 0]].astype(np.float32))
+    # the checks name input channels, over the files: b.wav's right channel is channel 3
+    sf.write(b, np.column_stack([x[2], np.zeros(FS)]), FS, subtype="FLOAT")
+    with pytest.raises(AudioInputError, match=r"b.wav: channel 3 silent"):
+        read_recording([a, b])
     sf.write(b, np.zeros((FS, 2)), FS, subtype="FLOAT")
     got, _ = read_recording([a, b], 2, channels=[1, 0])
     np.testing.assert_array_equal(got, x[[1, 0]].astype(np.float32))
-    with pytest.raises(AudioInputError, match="b.wav: recording is silent"):
+    with pytest.raises(AudioInputError, match=r"b.wav: recording is silent"):
+        read_recording([a, b])
+    with pytest.raises(AudioInputError, match=r"b.wav: channel 2 silent"):  # (only it taken)
         read_recording([a, b], 2, channels=[1, 2])
+
+
+def test_clipping_over_several_files_is_one_warning(tmp_path):
+    """Clipping is measured over every sample taken, as of one file holding them all: three
+    clipped mono files give one warning (they gave one each), with the share their
+    multichannel file gives."""
+    rng = np.random.default_rng(249)
+    x = 0.1 * rng.standard_normal((3, FS))  # (10 sigma from full scale: no sample clips)
+    x[:, :40] = 1.0  # 0.25 % of each channel at full scale
+    files = []
+    for k in range(3):
+        files.append(tmp_path / f"m{k}.wav")
+        sf.write(files[-1], x[k], FS, subtype="PCM_16")
+    sf.write(tmp_path / "all.wav", x.T, FS, subtype="PCM_16")
+    for rec in (files, tmp_path / "all.wav"):
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always")
+            read_recording(rec, 3)
+        clip = [w for w in got if issubclass(w.category, ClippingWarning)]
+        assert len(clip) == 1 and "0.25 % of the samples are clipped" in str(clip[0].message)

@@ -559,6 +559,12 @@ def test_track_device_channels_pick_the_microphones(fake_sd, capsys):
     assert sd.opened == [2]
     _one_line(capsys, main(["track", "--device", "2", "--array", "three-mic", "--channels",
                             "1,2,7"]),
-              "device 'USB 6ch Array' has 6 input channels; the array needs 8 (channels 1, 2, 7)")
+              "device 'USB 6ch Array' has 6 input channels; channel 7 asked for")
     _one_line(capsys, main(["track", "--device", "2", "--array", "three-mic", "--channels",
                             "1,2"]), "--channels: 2 channels for an array of 3 microphones")
+    # a band with a device (the recording's name was asked for and there is none: exit 2)
+    assert main(["track", "--device", "2", "--array", "three-mic", "--channels", "1,2,3",
+                 "--band-hz", "300,3000", "--duration", "0.2"]) == 0, capsys.readouterr().err
+    fake_sd()  # (a device delivering the channels opened)
+    assert main(["track", "--device", "2", "--array", "three-mic", "--band-hz", "300,3000",
+                 "--duration", "0.2"]) == 0, capsys.readouterr().err

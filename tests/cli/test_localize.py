@@ -704,7 +704,10 @@ def test_channels_pick_a_devices_microphones(tmp_path, capsys):
         for extra, want in (([], "6 channels but array 'respeaker-4' has 4 microphones"),
                             (["--channels", "1,2,x,4"], "--channels: expected comma-separated"),
                             (["--channels", "1,2,3"], "--channels: 3 channels for an array of"),
-                            (["--channels", "1,2,3,5"], "six.wav: channel 5 silent")):
+                            (["--channels", "1,2,3,5"], "six.wav: channel 5 silent"),
+                            # (numpy's OverflowError, a traceback)
+                            (["--channels", "1,2,3,1e19"], "channel 10000000000000000000 is "
+                                                           "beyond any input")):
             assert main([cmd, str(six), "--array", "respeaker-4", *extra]) == 2
             err = capsys.readouterr().err
             assert err.count("\n") == 1 and want in err, err

@@ -525,6 +525,10 @@ def test_mapped_source_picks_channels_and_stops_at_duration():
     assert list(MappedSource(ArraySource(x, 1000.0), [0, 1], stop=stop).blocks()) == []
     with pytest.raises(AudioInputError, match="channel 7"):
         MappedSource(ArraySource(x, 1000.0), [0, 7])
+    # (-1 took the last channel without a word, [] was a builtin ValueError)
+    for bad in ([-1, 0], [], [1, 1]):
+        with pytest.raises(ConfigError, match="channels"):
+            MappedSource(ArraySource(x, 1000.0), bad)
 
 
 def test_mapped_source_passes_on_the_sources_capture_clock():

@@ -574,13 +574,13 @@ def make_signal(spec: str | Path, duration_s: float, fs: float,
 
 
 def read_recording(
-    path: str | Path | list[str | Path] | tuple[str | Path, ...],
+    path: str | Path | Sequence[str | Path],
     n_channels: int | Any | None = None,
     fs: float | None = None,
     *,
     resample: bool = False,
     min_samples: int = MIN_SAMPLES,
-    channels: Sequence[int] | None = None,
+    channels: Sequence[int] | NDArray | None = None,
 ) -> tuple[NDArray, int]:
     """Read and validate a multichannel recording (channel k = microphone k, or
     ``channels[k]``).
@@ -650,7 +650,7 @@ def read_recording(
         "n_channels", getattr(n_channels, "n_mics", n_channels))
     paths = recording_paths(path)
     label = recording_label(paths)
-    raw = [_read_file(p) for p in paths]
+    raw = [_read_whole(p) for p in paths]
     counts = [x.shape[0] for x, _ in raw]
     total = sum(counts)
     if channels is not None:
@@ -667,7 +667,8 @@ def read_recording(
         raise AudioInputError(
             f"{label}: {held} {total} channel{'s' if total != 1 else ''} but {what} "
             f"(channel k must be microphone k{'' if len(paths) == 1 else ', file by file'}; "
-            "a device's other channels can be left out with channels)")
+            "a device that records other channels too: choose the microphones' with "
+            "--channels)")
     else:
         chosen = np.arange(total)
     # each file checked on its own (the channels asked for of it); the input channel numbers
@@ -677,10 +678,10 @@ def read_recording(
         mine = np.unique(chosen[(chosen >= first) & (chosen < first + x.shape[0])])
         if mine.size:  # (a file none of whose channels is asked for is not read further)
             sub = x if mine.size == x.shape[0] else x[mine - first]  # (all: no copy)
-            files.append((p, *_checked(p, sub, rate, fs, resample, min_samples, mine - first),
-                          mine))
+            files.append((p, *_checked(p, sub, rate, fs, resample, min_samples, mine,
+                                       mine.size == x.shape[0]), mine))
         first += x.shape[0]
-    rates = {rate for _, _, rate, _, _, _ in files}
+    rates = {rate for _, _, rate, _, _, _ in files}  # (Hz)
     if len(rates) > 1:
         each = ", ".join(f"{p} {rate} Hz" for p, _, rate, _, _, _ in files)
         raise AudioInputError(f"{label}: the files are sampled at different rates ({each}); "
@@ -722,20 +723,21 @@ def read_recording(
         dup = [(int(chosen[i]), int(chosen[j])) for i, j in dup]
         warnings.warn(f"{label}: {duplicate_channels_text(dup)}", DegenerateInputWarning,
                       stacklevel=2)
-    for p, _, _, _, clipped, _ in files:
-        if clipped > CLIP_FRACTION:
-            warnings.warn(
-                f"{p}: {clipped * 100:.2f} % of the samples are clipped (flat at full scale, "
-                "or at the channel's peak in a float file beyond it); "
-                "estimates may be biased -- lower the input gain",
-                ClippingWarning,
-                stacklevel=2,
-            )
+    # (over every sample taken, as of one file holding them all)
+    clipped = (sum(c[0] for _, _, _, _, c, _ in files)
+               / max(sum(c[1] for _, _, _, _, c, _ in files), 1))
+    if clipped > CLIP_FRACTION:
+        warnings.warn(
+            f"{label}: {clipped * 100:.2f} % of the samples are clipped (flat at full scale, or "
+            "at the channel's peak in a float file beyond it); "
+            "estimates may be biased -- lower the input gain",
+            ClippingWarning,
+            stacklevel=2,
+        )
     return x, fs_in
 
 
-def recording_paths(path: str | Path | list[str | Path] | tuple[str | Path, ...]
-                    ) -> list[Path]:
+def recording_paths(path: str | Path | Sequence[str | Path]) -> list[Path]:
     """The files of a recording given as one file name or a list or tuple of them (one file per
     microphone or group of microphones, :func:`read_recording`); an InputFileError for an
     empty sequence or anything that is no file name (:func:`hearsee.config.as_path`)."""
@@ -744,6 +746,10 @@ def recording_paths(path: str | Path | list[str | Path] | tuple[str | Path, ...]
             raise InputFileError("a recording needs one audio file or more, got none")
         return [as_path(p, "an audio file's path") for p in path]
     return [as_path(path, "the audio file's path")]
+
+
+#: The most input channels a recording or device is taken to have (:func:`microphone_channels`)
+MAX_INPUT_CHANNELS = 4096
 
 
 def microphone_channels(channels: Any, n_mics: int | None, where: str) -> tuple[int, ...]:
@@ -764,42 +770,53 @@ def microphone_channels(channels: Any, n_mics: int | None, where: str) -> tuple[
                           "(one input channel per microphone)")
     if any(c < 0 for c in ch) or len(set(ch)) != len(ch):
         raise ConfigError(f"{where}: channels must be distinct and >= 0, got {list(ch)}")
+    if max(ch) >= MAX_INPUT_CHANNELS:  # (1e19 overflowed numpy's integers: a traceback)
+        raise ConfigError(f"{where}: channel {max(ch)} is beyond any input (at most "
+                          f"{MAX_INPUT_CHANNELS} channels, 0-{MAX_INPUT_CHANNELS - 1})")
     return ch
 
 
-def recording_label(path: str | Path | list[str | Path] | tuple[str | Path, ...]) -> str:
+def recording_label(path: str | Path | Sequence[str | Path]) -> str:
     """How messages name a recording of one file or several (``a.wav + b.wav``)."""
     return " + ".join(str(p) for p in recording_paths(path))
 
 
-def recording_entry(path: str | Path | list[str | Path] | tuple[str | Path, ...]
-                    ) -> str | list[str]:
+def recording_entry(path: str | Path | Sequence[str | Path]) -> str | list[str]:
     """How JSON documents name a recording: its file, or the list of its files."""
     paths = recording_paths(path)
     return str(paths[0]) if len(paths) == 1 else [str(p) for p in paths]
 
 
-def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resample: bool,
-             min_samples: int, names: NDArray) -> tuple[NDArray, int, float | None, float]:
-    """One file of :func:`read_recording` (its samples ``x`` (n_ch, n) read at ``fs_in`` Hz,
-    the file's channels ``names``) checked on its own. Returns the samples (resampled to
-    ``fs`` when asked), their rate (Hz), the quantisation step of the file's integer samples
-    (None: float or resampled) and the share of them clipped. The checks that compare
-    channels with one another, and the clipping warning, are the caller's."""
-    n = x.shape[1]
+def _read_whole(path: str | Path) -> tuple[NDArray, int]:
+    """One file of :func:`read_recording` read (:func:`_read_file`), with a
+    TruncatedFileWarning when it ends before its header's data size."""
+    x, fs_in = _read_file(path)
     cut = _wav_data_shortfall(Path(path))
     if cut is not None:
         warnings.warn(
             f"{path}: the file is cut short: its header declares {cut[0]} bytes of audio, the "
-            f"file holds {cut[1]} ({n / fs_in:.3g} s); only those samples are used",
+            f"file holds {cut[1]} ({x.shape[1] / fs_in:.3g} s); only those samples are used",
             TruncatedFileWarning, stacklevel=3)
+    return x, fs_in
+
+
+def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resample: bool,
+             min_samples: int, names: NDArray, whole: bool
+             ) -> tuple[NDArray, int, float | None, tuple[int, int]]:
+    """One file of :func:`read_recording` (``x`` (n_ch, n): its channels ``names``, input
+    channel numbers over the files, read at ``fs_in`` Hz; ``whole``: every channel of the file)
+    checked on its own. Returns the samples (resampled to ``fs`` when asked), their rate (Hz),
+    the quantisation step of the file's integer samples (None: float or resampled) and
+    (clipped samples, samples) as read. The checks that compare channels with one another, and
+    the clipping warning, are the caller's."""
+    n, read = x.shape[1], x.size
     # clipping is seen on the file's own samples (resampling smooths the flat tops away)
-    clipped, resampled = 0.0, False
+    clipped, resampled = 0, False
     if x.size and np.all(np.isfinite(x)):
         mag = np.abs(x)
         peak = mag.max(axis=1, keepdims=True)
         level = CLIP_LEVEL * np.where(peak > 1.0, peak, _full_scale(path))
-        clipped = float(np.mean(mag >= level))
+        clipped = int(np.count_nonzero(mag >= level))
     if fs is not None and int(round(fs)) != fs_in:
         if not resample:
             raise AudioInputError(
@@ -820,7 +837,7 @@ def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resampl
         bad = int(np.size(x) - np.count_nonzero(finite))
         raise AudioInputError(f"{path}: recording contains {bad} NaN or infinite samples")
     peak = np.max(np.abs(x), axis=1)
-    if np.all(peak == 0):
+    if whole and np.all(peak == 0):
         raise AudioInputError(f"{path}: recording is silent (all samples are zero)")
     dead = names[peak == 0]
     if dead.size:
@@ -834,7 +851,7 @@ def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resampl
     if flat.size:
         raise AudioInputError(f"{path}: {stuck_channels_text(flat)}; check the microphone "
                               "wiring")
-    return x, fs_in, None if resampled else _PCM_STEP.get(_subtype(path)), clipped
+    return x, fs_in, None if resampled else _PCM_STEP.get(_subtype(path)), (clipped, read)
 
 
 def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:

@@ -74,6 +74,7 @@ from hearsee.audio.signals import (
     check_fs,
     duplicate_channels,
     duplicate_channels_text,
+    microphone_channels,
     quiet_channels_text,
     stuck_channels_text,
 )
@@ -386,10 +387,10 @@ class WavSource(ArraySource):
     the input channel of each microphone, as there). ``paths``: the files; ``path``: the
     first one."""
 
-    def __init__(self, path: str | Path | list[str | Path] | tuple[str | Path, ...],
+    def __init__(self, path: str | Path | Sequence[str | Path],
                  n_channels: int | Any | None = None,
                  block_len: int = 2048, realtime: bool = False, fs: float | None = None,
-                 channels: Sequence[int] | None = None) -> None:
+                 channels: Sequence[int] | NDArray | None = None) -> None:
         from hearsee.audio.signals import read_recording, recording_paths
 
         x, rate = read_recording(path, n_channels=n_channels, fs=fs, channels=channels)
@@ -416,7 +417,8 @@ class MappedSource:
                                 error=AudioInputError)  # Hz
         self.n_in = n_in = whole_number("audio source n_channels", source.n_channels, 1,
                                         error=AudioInputError)
-        self.channels = list(channels)
+        # (-1 took the last channel without a word, [] was a builtin ValueError)
+        self.channels = list(microphone_channels(channels, None, where))
         if max(self.channels) >= n_in:
             raise AudioInputError(f"{where}: channel {max(self.channels)} requested but the "
                                   f"input has {n_in} channels")
@@ -736,12 +738,10 @@ class DeviceSource:
         # refused an ambiguous one and preferred an exact name: one rule now)
         info = resolve_input_device(sd, device, where, AudioInputError)
         if int(info["max_input_channels"]) < n_channels:
-            which = ("" if check_channels is None else
-                     f" (channels {', '.join(str(c) for c in check_channels)})")
-            raise AudioInputError(
-                f"device {info['name']!r} has {info['max_input_channels']} input channels; the "
-                f"array needs {n_channels}{which}"
-            )
+            have = int(info["max_input_channels"])
+            need = (f"the array needs {n_channels}" if check_channels is None
+                    else f"channel {max(check_channels)} asked for")
+            raise AudioInputError(f"device {info['name']!r} has {have} input channels; {need}")
         self._sd = sd
         self.name = str(info.get("name", device))  #: the device's name (PortAudio's)
         self.device, self.n_channels, self.fs = device, int(n_channels), float(fs)
