@@ -650,7 +650,9 @@ def read_recording(
         "n_channels", getattr(n_channels, "n_mics", n_channels))
     paths = recording_paths(path)
     label = recording_label(paths)
-    raw = [_read_whole(p) for p in paths]
+    raw = []
+    for p in paths:  # (not a comprehension: its own frame moved the warnings' stacklevel)
+        raw.append(_read_whole(p))
     counts = [x.shape[0] for x, _ in raw]
     total = sum(counts)
     if channels is not None:
