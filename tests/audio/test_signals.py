@@ -403,8 +403,10 @@ def test_a_wav_cut_short_is_read_with_a_warning(tmp_path, capsys):
         stream = tmp_path / "stream.wav"
         stream.write_bytes(data[: i + 4] + b"\xff\xff\xff\xff" + data[i + 8:])
         assert read_recording(stream, 2)[0].shape == (2, 8000)
-    with pytest.warns(TruncatedFileWarning, match="cut short: its header declares 64000 bytes"):
+    with pytest.warns(TruncatedFileWarning, match="cut short: its header declares 64000 bytes"
+                      ) as told:
         y, fs = read_recording(cut, 2)
+    assert told[0].filename == __file__  # (it points at the caller of read_recording)
     assert fs == FS and 3000 <= y.shape[1] < 8000
     np.testing.assert_allclose(y, x[:, : y.shape[1]], atol=1e-7)
     assert main(["localize", str(cut), "--array", "two-mic"]) == 0
