@@ -22,7 +22,7 @@ import warnings
 from collections.abc import Callable, Iterable, Sequence
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -675,39 +675,39 @@ def read_recording(
         chosen = np.arange(total)
     # each file checked on its own (the channels asked for of it); the input channel numbers
     # (over the files, file by file) of its rows
-    files, first = [], 0
+    files: list[_FilePart] = []
+    first = 0
     for p, (x, rate) in zip(paths, raw, strict=True):
         mine = np.unique(chosen[(chosen >= first) & (chosen < first + x.shape[0])])
         if mine.size:  # (a file none of whose channels is asked for is not read further)
             sub = x if mine.size == x.shape[0] else x[mine - first]  # (all: no copy)
-            files.append((p, *_checked(p, sub, rate, fs, resample, min_samples, mine,
-                                       mine.size == x.shape[0]), mine))
+            files.append(_checked(p, sub, rate, fs, resample, min_samples, mine,
+                                  mine.size == x.shape[0]))
         first += x.shape[0]
-    rates = {rate for _, _, rate, _, _, _ in files}  # (Hz)
-    if len(rates) > 1:
-        each = ", ".join(f"{p} {rate} Hz" for p, _, rate, _, _, _ in files)
+    if len({f.fs for f in files}) > 1:
+        each = ", ".join(f"{f.path} {f.fs} Hz" for f in files)
         raise AudioInputError(f"{label}: the files are sampled at different rates ({each}); "
                               "one recording needs one rate: resample them to one, or ask "
                               "for resampling")
-    if len({y.shape[1] for _, y, _, _, _, _ in files}) > 1:
-        each = ", ".join(f"{p} {y.shape[1]}" for p, y, _, _, _, _ in files)
+    if len({f.x.shape[1] for f in files}) > 1:
+        each = ", ".join(f"{f.path} {f.x.shape[1]}" for f in files)
         raise AudioInputError(
             f"{label}: the files hold different numbers of samples ({each}): files of one "
             "recording start and end together, and an offset between them would read as a "
             "time difference; trim them to a common start and length")
     if np.array_equal(chosen, np.arange(total)):  # (every channel in order: no copy of one)
-        x = files[0][1] if len(files) == 1 else np.concatenate([f[1] for f in files], axis=0)
+        x = files[0].x if len(files) == 1 else np.concatenate([f.x for f in files], axis=0)
     else:
-        rows = {int(c): y[k] for _, y, _, _, _, mine in files for k, c in enumerate(mine)}
+        rows = {int(c): f.x[k] for f in files for k, c in enumerate(f.channels)}
         x = np.stack([rows[int(c)] for c in chosen])
-    fs_in = files[0][2]
+    fs_in = files[0].fs
     _, quiet, below = channel_faults(x)  # (stuck channels were refused file by file)
     if quiet.size:
         warnings.warn(f"{label}: {quiet_channels_text(chosen[quiet], below)}",
                       DegenerateInputWarning, stacklevel=2)
     # (a copy re-quantised to integer PCM differs by its rounding: told by the step, before
     # any resampling spreads it)
-    steps = {step for _, _, _, step, _, _ in files}
+    steps = {f.step for f in files}
     step = steps.pop() if len(steps) == 1 else None
     from hearsee.audio.tdoa import dominant_sample
 
@@ -726,8 +726,7 @@ def read_recording(
         warnings.warn(f"{label}: {duplicate_channels_text(dup)}", DegenerateInputWarning,
                       stacklevel=2)
     # (over every sample taken, as of one file holding them all)
-    clipped = (sum(c[0] for _, _, _, _, c, _ in files)
-               / max(sum(c[1] for _, _, _, _, c, _ in files), 1))
+    clipped = sum(f.clipped for f in files) / max(sum(f.read for f in files), 1)
     if clipped > CLIP_FRACTION:
         warnings.warn(
             f"{label}: {clipped * 100:.2f} % of the samples are clipped (flat at full scale, or "
@@ -802,15 +801,24 @@ def _read_whole(path: str | Path) -> tuple[NDArray, int]:
     return x, fs_in
 
 
+class _FilePart(NamedTuple):
+    """One file's part of a recording (:func:`read_recording`, :func:`_checked`)."""
+
+    path: str | Path
+    x: NDArray  #: its channels taken (n, samples), resampled when asked
+    fs: int  #: their rate, Hz
+    step: float | None  #: the file's integer quantisation step (None: float or resampled)
+    clipped: int  #: samples clipped, as read
+    read: int  #: samples read (of the channels taken)
+    channels: NDArray  #: the input channel numbers (over the files) of ``x``'s rows
+
+
 def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resample: bool,
-             min_samples: int, names: NDArray, whole: bool
-             ) -> tuple[NDArray, int, float | None, tuple[int, int]]:
+             min_samples: int, names: NDArray, whole: bool) -> _FilePart:
     """One file of :func:`read_recording` (``x`` (n_ch, n): its channels ``names``, input
     channel numbers over the files, read at ``fs_in`` Hz; ``whole``: every channel of the file)
-    checked on its own. Returns the samples (resampled to ``fs`` when asked), their rate (Hz),
-    the quantisation step of the file's integer samples (None: float or resampled) and
-    (clipped samples, samples) as read. The checks that compare channels with one another, and
-    the clipping warning, are the caller's."""
+    checked on its own. The checks that compare channels with one another, and the clipping
+    warning, are the caller's."""
     n, read = x.shape[1], x.size
     # clipping is seen on the file's own samples (resampling smooths the flat tops away)
     clipped, resampled = 0, False
@@ -853,7 +861,8 @@ def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resampl
     if flat.size:
         raise AudioInputError(f"{path}: {stuck_channels_text(flat)}; check the microphone "
                               "wiring")
-    return x, fs_in, None if resampled else _PCM_STEP.get(_subtype(path)), (clipped, read)
+    return _FilePart(path, x, fs_in, None if resampled else _PCM_STEP.get(_subtype(path)),
+                     clipped, read, names)
 
 
 def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:
