@@ -250,11 +250,11 @@ def track_cmd(
     from hearsee.errors import ConfigError
     from hearsee.stream.pipeline import (
         DeviceSource,
-        MappedSource,
         StreamConfig,
         StreamPipeline,
         WavSource,
         check_trackable,
+        mapped_device,
     )
 
     recording = recording or None  # (no file given: an empty list)
@@ -325,12 +325,14 @@ def track_cmd(
 
     try:
         if device is not None:
-            source = opened = DeviceSource(
-                _device_spec(device), arr.n_mics if chosen is None else max(chosen) + 1,
-                16000 if fs is None else fs, duration_s=duration, where="--device",
-                check_channels=chosen)
-            if chosen is not None:  # (the microphones' channels of a larger device)
-                source = MappedSource(opened, chosen, where="--channels")
+            rate = 16000 if fs is None else fs
+            if chosen is None:
+                source = opened = DeviceSource(_device_spec(device), arr.n_mics, rate,
+                                               duration_s=duration, where="--device")
+            else:  # (the microphones' channels of a larger device)
+                source = mapped_device(_device_spec(device), chosen, rate, duration_s=duration,
+                                       where="--device", channels_where="--channels")
+                opened = source.source
         else:
             source = WavSource(recording, n_channels=arr, block_len=4096, channels=chosen)
         used = _stream_band(band, None if device is not None else source.x, source.fs,

@@ -715,15 +715,15 @@ def first_failure(checks: Sequence[Check]) -> Check | None:
 # ---------------------------------------------------------------------------------------------
 def open_audio_source(cfg: RobotConfig, duration_s: float | None = None) -> MappedSource:
     """The live microphones of ``cfg`` (checked with :func:`verify_audio_device`) as a stream
-    source: :class:`hearsee.stream.pipeline.DeviceSource` behind :class:`MappedSource`."""
-    from hearsee.stream.pipeline import DeviceSource
+    source: :class:`hearsee.stream.pipeline.DeviceSource` behind :class:`MappedSource`
+    (:func:`hearsee.stream.pipeline.mapped_device`)."""
+    from hearsee.stream.pipeline import mapped_device
 
     dev = verify_audio_device(cfg)
     a = cfg.audio
-    src = DeviceSource(dev["index"], a.n_open, a.fs, a.block_len, duration_s=duration_s,
-                       queue_size=max(32, int(np.ceil(4000.0 / a.block_ms))),
-                       check_channels=a.channels)
-    return MappedSource(src, a.channels, duration_s, where="audio.channels")
+    return mapped_device(dev["index"], a.channels, a.fs, duration_s=duration_s,
+                         channels_where="audio.channels", block_len=a.block_len,
+                         queue_size=max(32, int(np.ceil(4000.0 / a.block_ms))))
 
 
 @dataclass

@@ -880,6 +880,22 @@ class DeviceSource:
                     break
 
 
+def mapped_device(device: int | str | None, channels: Sequence[int], fs: float, *,
+                  duration_s: float | None = None, where: str = "device",
+                  channels_where: str = "channels", **kwargs: Any) -> MappedSource:
+    """Live microphones on some of a device's input channels (``channels``, 0-based, one per
+    microphone; ``channels_where``: what messages call them): the device opened for its
+    channels up to the highest of them, its stuck-channel watch on those only
+    (:class:`DeviceSource`'s ``check_channels``; ``kwargs`` go to it too), behind a
+    :class:`MappedSource` that picks them. The one way of the live robot
+    (:func:`hearsee.robot.hardware.open_audio_source`) and ``hearsee track --device
+    --channels``; ``.source`` is the device."""
+    channels = microphone_channels(channels, None, channels_where)
+    dev = DeviceSource(device, max(channels) + 1, fs, duration_s=duration_s, where=where,
+                       check_channels=channels, **kwargs)
+    return MappedSource(dev, channels, duration_s, where=channels_where)
+
+
 def _adc_time(time_info: Any) -> float | None:
     """``time_info.inputBufferAdcTime`` (PortAudio stream time of the block's first sample, s),
     or None where the host API does not provide it (missing, 0 or not finite)."""
