@@ -150,6 +150,23 @@ BANDS = {"noise": (300.0, 7500.0), "speech": (300.0, 3500.0)}
 #:   Hann + 32 ms hop 2.54/2.48; all active frames 2.43/2.35). Over all twelve white-noise room
 #:   cells the two methods are within 3 % on seed 901 (3.34 vs 3.42 deg pooled); the cells
 #:   are ties that either side wins by chance.
+#:   Why it did not reproduce (2026-12-06, seventieth session, scratch, dev seeds 250-253):
+#:   the framing. ``pra.transform.stft.analysis`` pads the recording with L - hop (512) zeros
+#:   in front, so its 63 frames of a 2-s recording (hearsee: 61) are centred from t = 0 and
+#:   its first frame holds the source's onset at full window weight -- every recording here
+#:   starts with its source at sample 0, when only the direct sound and the first reflections
+#:   have arrived. A plain SRP-PHAT written out in numpy (PHAT per channel, summed over frames,
+#:   steered to the peers' 2-m in-plane points) gives hearsee's steered azimuths on
+#:   unpadded frames (e.g. 6.77 / 1.52 / 8.74 deg off on three RT60 0.6 s white-noise
+#:   recordings) and the peer's exactly on pyroomacoustics' frames (5.67 / 1.42 / 7.64).
+#:   hearsee given 512 leading zeros (seed 250, 16 recordings per cell) narrowed the white-noise
+#:   gap (three-mic RT60 0.6 s 20 dB 0.963 -> 0.872 deg, SRP-PHAT 0.871) but lost elsewhere
+#:   (female voice RT60 0.6 s 10 dB 2.40 -> 4.19, ARCTIC RT60 0.3 s 0 dB 1.24 -> 1.44), and on
+#:   white noise whose first second is cut away (no onset in the recording; seeds 252/253, 30
+#:   per cell) hearsee is at or below SRP-PHAT in 3 of 6 three-mic and 4 of 6 two-mic room cells
+#:   (with the onset: 2 and 3), three-mic RT60 0.6 s 10 / 20 dB 1.86 / 1.87 vs 1.98 / 2.00 deg.
+#:   Not adopted (centred frames change every per-frame output); the benchmark's loss pattern is
+#:   in part an onset at the recording's first sample.
 #: - A coherence-test weighting of the reverberant summary (keep the time-frequency bins whose
 #:   5-frame magnitude-squared coherence passes a threshold: Mohan et al. 2008, "Localization
 #:   of multiple acoustic sources with small arrays using a coherence test", JASA 123(4)):
