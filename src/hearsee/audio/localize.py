@@ -1487,6 +1487,8 @@ def _without_dead(x: ArrayLike, fs: float, arr: MicArray, tf: Any,
         f["tdoa_s"] = tdoas(f["tdoa_s"])
     summ = doc["summary"]
     summ["tdoa_s"] = tdoas(summ["tdoa_s"])
+    for src in doc.get("sources", []):
+        src["tdoa_s"] = tdoas(src["tdoa_s"])
     summ["inverted_microphones"] = [keep[m] for m in summ["inverted_microphones"]]
     summ["dead_microphones"] = sorted(dead + [keep[m] for m in summ["dead_microphones"]])
     summ["sync_offsets_s"] = {label[k]: v for k, v in summ["sync_offsets_s"].items()}
@@ -1510,6 +1512,7 @@ def localize_recording(
     progress: Any = None,
     in_plane: bool = False,
     tdoa_std_s: float = DEFAULT_TDOA_STD_S,
+    max_sources: int = 1,
     **tdoa_kwargs: Any,
 ) -> dict[str, Any]:
     """The per-frame pipeline behind ``hearsee localize``: GCC TDOAs -> ITD Kalman -> solver.
@@ -1579,6 +1582,13 @@ def localize_recording(
         Expected TDOA error (s) of the whole-recording summary, for its near-field position
         (arrays of >= 4 microphones): whether the position is reported and its covariance
         (:func:`localize_tdoa`).
+    max_sources : int
+        With 2 or more (up to :data:`hearsee.audio.sources.MAX_SOURCES`), up to that many
+        sources talking in turn or at once: the frames' directions clustered
+        (:func:`hearsee.audio.sources.localize_sources`), the document's ``sources`` and each
+        frame's ``source`` (its index there, None for none). Needs ``kalman=False``: the ITD
+        filter follows one source and takes another's frames for outliers. The ``summary``
+        stays the whole recording's one estimate. Not for masked arrays.
     tdoa_kwargs :
         Further :func:`hearsee.audio.tdoa.estimate_tdoas` settings, e.g.
         ``**hearsee.audio.tdoa.SUMMARY_TUNED`` (the benchmarked whole-recording estimate).
@@ -1599,7 +1609,10 @@ def localize_recording(
                          "feasible", "confidence", "n_valid_frames", "position_m",
                          "position_covariance_m2", "distance_rel_std",
                          "position_tdoa_std_s", "inverted_microphones", "dead_microphones",
-                         "sync_offsets_s", "tonal_lines_hz", "microphones_used"}}
+                         "sync_offsets_s", "tonal_lines_hz", "microphones_used"},
+             "sources": [{"azimuth_deg", "elevation_deg", "candidates", "tdoa_s", "share",
+                          "n_frames", "spread_deg"}] (with max_sources >= 2; the frames then
+                                                      hold "source")}
 
         with None where a quantity is not resolvable (no source in the frame, elevation of a
         linear array, ...). ``microphones_used``: the microphones the directions come from --
@@ -1613,12 +1626,17 @@ def localize_recording(
         half instead, 0.5-1: :func:`hearsee.audio.mask.localize_recording_mask`).
     """
     from hearsee.audio.itd_filter import itd_filter_entries, smooth_recording_itds
+    from hearsee.audio.sources import MAX_SOURCES, localize_sources
     from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, normalize_method
 
     arr = load_array(array)
     # (checked whatever the array: only a fitted position reads it, and -1 or "x" passed
     # without a word on arrays of three microphones or fewer)
     tdoa_std_s = check_tdoa_std(tdoa_std_s)
+    max_sources = whole_number("max_sources", max_sources, 1, MAX_SOURCES)
+    if max_sources > 1 and kalman:
+        raise ConfigError("max_sources > 1 needs kalman=False: the ITD Kalman filter follows "
+                          "one source and takes another's frames for outliers")
     if arr.mask is not None:  # masked two-microphone array: one 360-degree azimuth (ch. 3)
         from hearsee.audio.mask import localize_recording_mask
 
@@ -1626,6 +1644,7 @@ def localize_recording(
         # (in_plane too: its tables are of the horizontal plane already, and it has no
         # spherical-wavefront model or in-plane search to switch to)
         ignored = sorted(k for k, v in {"pairs": pairs, "in_plane": in_plane or None,
+                                        "max_sources": max_sources if max_sources > 1 else None,
                                         **tdoa_kwargs}.items() if v is not None)
         if ignored:
             raise ConfigError(f"{', '.join(ignored)}: not available for the masked array "
@@ -1647,7 +1666,7 @@ def localize_recording(
         return _without_dead(x, fs, arr, tf, dict(
             frame_ms=frame_ms, hop_ms=hop_ms, method=method, kalman=kalman, q_std_s=q_std_s,
             r_std_s=r_std_s, tune_kalman=tune_kalman, in_plane=in_plane,
-            tdoa_std_s=tdoa_std_s, **tdoa_kwargs))
+            tdoa_std_s=tdoa_std_s, max_sources=max_sources, **tdoa_kwargs))
     labels = tf.pair_labels
     tdoa = tf.tdoa_s
     noise: tuple[float, float] | None = None  # the filter's (q_std_s, r_std_s)
@@ -1662,6 +1681,8 @@ def localize_recording(
     # a position to every frame of a volume array (18x slower) and, with five or more
     # microphones, could take the frame's direction from it (before 2026-12-02)
     frame_near = bool(in_plane) and array_geometry(arr).kind == "planar"
+    sources, which = (localize_sources(tf.tdoa_s, tf.valid, arr, tf.pairs, max_sources,
+                                       in_plane=in_plane) if max_sources > 1 else (None, None))
     frames = []
     for n in range(len(tf.t)):
         row = tdoa[n]
@@ -1677,6 +1698,7 @@ def localize_recording(
             "confidence": float(np.min(tf.confidence[n])),
             "valid": ok,
             "feasible": loc.feasible if loc else None,
+            **({} if which is None else {"source": int(which[n]) if which[n] >= 0 else None}),
         })
     summ = tf.summary_tdoa_s
     have = bool(np.all(np.isfinite(summ)))
@@ -1711,4 +1733,5 @@ def localize_recording(
         "band_hz": None if tf.band_hz is None else [float(v) for v in tf.band_hz],
         "frames": frames,
         "summary": summary,
+        **({} if sources is None else {"sources": sources}),
     }

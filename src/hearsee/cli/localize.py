@@ -23,7 +23,7 @@ from hearsee.cli._app import (
     parse_channels,
     progress,
 )
-from hearsee.config import finite_number
+from hearsee.config import finite_number, whole_number
 from hearsee.errors import ConfigError
 
 #: Above this much audio x pairs (seconds) processing takes about a second: show a bar.
@@ -44,14 +44,16 @@ def _write_csv(doc: dict[str, Any]) -> None:
     labels = list(doc["summary"]["tdoa_s"])
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
+    several = "sources" in doc  # (--sources: each frame's source, its index in them)
     w.writerow(["t_s", *[f"tdoa_{k}_s" for k in labels], "azimuth_deg", "elevation_deg",
-                "candidates", "confidence", "valid"])
+                "candidates", "confidence", "valid", *(["source"] if several else [])])
     for f in doc["frames"]:
         cands = ";".join(f"{_fmt(c['azimuth_deg'], 2, '')}/{_fmt(c['elevation_deg'], 2, '')}"
                          for c in f["candidates"])
         w.writerow([f"{f['t']:.4f}", *[_fmt(f["tdoa_s"][k], 9, null="") for k in labels],
                     _fmt(f["azimuth_deg"], 2, null=""), _fmt(f["elevation_deg"], 2, null=""),
-                    cands, f"{f['confidence']:.3f}", int(f["valid"])])
+                    cands, f"{f['confidence']:.3f}", int(f["valid"]),
+                    *([_fmt(f["source"], 0, null="")] if several else [])])
     sys.stdout.write(buf.getvalue())
 
 
@@ -106,6 +108,16 @@ def _print_table(doc: dict[str, Any]) -> None:
     con.print(f"summary: azimuth {_fmt(s['azimuth_deg'])} deg, elevation "
               f"{_fmt(s['elevation_deg'])} deg, candidates {cands}{where}, "
               f"{s['n_valid_frames']} valid frames", highlight=False, soft_wrap=True)
+    for k, src in enumerate(doc.get("sources", [])):
+        cands = ", ".join(f"({_fmt(c['azimuth_deg'])}, {_fmt(c['elevation_deg'])})"
+                          for c in src["candidates"])
+        con.print(f"source {k}: azimuth {_fmt(src['azimuth_deg'])} deg, elevation "
+                  f"{_fmt(src['elevation_deg'])} deg, candidates {cands}, {src['n_frames']} "
+                  f"frames ({src['share']:.0%}), spread {src['spread_deg']:.1f} deg",
+                  highlight=False, soft_wrap=True)
+    if "sources" in doc and not doc["sources"]:
+        con.print("sources: none (the frames' directions do not pile up anywhere)",
+                  highlight=False)
 
 
 @app.command("localize")
@@ -164,11 +176,17 @@ def localize_cmd(
         "1e6 (1 s).",
         show_default=False)
     ] = None,
+    sources: Annotated[int, typer.Option(
+        "--sources", help="Look for up to this many sources talking in turn or at once (1-8): "
+        "the frames' directions clustered; the JSON's sources (direction, share of the frames) "
+        "and each frame's source. Above 1 the frames are not smoothed (the ITD Kalman filter "
+        "follows one source). Not for masked arrays.")] = 1,
 ) -> None:
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
     from hearsee.audio.arrays import MAX_TDOA_STD_S, load_array
     from hearsee.audio.localize import fits_position, localize_recording
     from hearsee.audio.signals import read_recording, recording_entry, recording_label
+    from hearsee.audio.sources import MAX_SOURCES
     from hearsee.audio.tdoa import SUMMARY_TUNED, check_frame_ms, dominant_sample, frame_geometry
 
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
@@ -191,6 +209,10 @@ def localize_cmd(
     if kalman_tuned and no_kalman:
         raise ConfigError("--kalman-tuned tunes the ITD Kalman filter that --no-kalman turns "
                           "off; give one of them")
+    whole_number("--sources", sources, 1, MAX_SOURCES)
+    if kalman_tuned and sources > 1:
+        raise ConfigError("--kalman-tuned tunes the ITD Kalman filter, which follows one source: "
+                          "with --sources above 1 the frames are not smoothed; give one of them")
     arr = load_array(array)
     if summary_tuned and arr.mask is not None:
         raise ConfigError(f"--summary-tuned: the masked array {arr.name!r} has a pipeline of its "
@@ -198,6 +220,9 @@ def localize_cmd(
     if band is not None and arr.mask is not None:
         raise ConfigError(f"--band-hz: the masked array {arr.name!r} has a pipeline of its own "
                           "(ch. 3) that sets its bands itself; leave it out")
+    if sources > 1 and arr.mask is not None:
+        raise ConfigError(f"--sources: the masked array {arr.name!r} has a pipeline of its own "
+                          "(ch. 3) that names one source; leave it out")
     if in_plane and arr.mask is not None:
         raise ConfigError(f"--in-plane: the masked array {arr.name!r} has a pipeline of its own "
                           "(ch. 3; tables of the horizontal plane) without an in-plane model; "
@@ -216,8 +241,9 @@ def localize_cmd(
     work = x.shape[1] / fs * len(arr.pairs)
     with progress("localizing", n_frames, enabled=work > _PROGRESS_WORK_S) as advance:
         doc = localize_recording(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
-                                 kalman=not no_kalman, tune_kalman=kalman_tuned,
-                                 progress=advance, in_plane=in_plane,
+                                 kalman=not no_kalman and sources == 1,
+                                 tune_kalman=kalman_tuned, progress=advance, in_plane=in_plane,
+                                 max_sources=sources,
                                  **settings, **({} if tdoa_std_us is None else
                                                 {"tdoa_std_s": tdoa_std_us * 1e-6}),
                                  **({} if band is None else {"band_hz": band}))
@@ -237,7 +263,9 @@ def localize_cmd(
     if not told and summ["n_valid_frames"] == 0:
         err_console.print(f"hearsee: warning: {name}: no frame holds a detectable source "
                           "(silence or uncorrelated noise)", highlight=False)
-    elif not told and summ.get("azimuth_deg") is None:
+    elif not told and summ.get("azimuth_deg") is None and not doc.get("sources"):
+        # (with --sources the sources found say where the frames point: two talkers' averaged
+        # correlations name neither)
         # (a summary of nulls beside a few valid frames was printed without a word)
         n = summ["n_valid_frames"]
         err_console.print(f"hearsee: warning: {name}: no direction for the whole recording "

@@ -1,0 +1,239 @@
+"""Several sources at once (hearsee.audio.sources, localize_recording(max_sources=),
+``hearsee localize --sources``): clusters of constructed angles, and talkers simulated at
+known directions."""
+
+import csv
+import io
+import json
+
+import numpy as np
+import pytest
+import soundfile as sf
+
+from hearsee.audio.arrays import MicArray
+from hearsee.audio.localize import localize_recording
+from hearsee.audio.propagation import simulate_free_field
+from hearsee.audio.signals import synthetic_voice
+from hearsee.audio.sources import MAX_SOURCES, direction_clusters, localize_sources
+from hearsee.audio.tdoa import estimate_tdoas
+from hearsee.cli import main
+from hearsee.errors import ConfigError
+from hearsee.geometry import unit_vector_deg
+
+FS = 16000
+
+
+def _ang(a, b):
+    return abs((a - b + 180.0) % 360.0 - 180.0)
+
+
+def _fold(a):
+    """A two-microphone (y-axis) array's angle from broadside of azimuth ``a`` (degrees)."""
+    return float(np.degrees(np.arcsin(np.sin(np.radians(a)))))
+
+
+# ------------------------------------------------------------------------ constructed angles
+def test_two_piles_among_scattered_frames():
+    rng = np.random.default_rng(250)
+    a = np.concatenate([30.0 + rng.normal(0, 2.0, 40), -100.0 + rng.normal(0, 2.0, 30),
+                        rng.uniform(-180, 180, 10)])
+    got = direction_clusters(a, max_sources=2)
+    assert len(got) == 2
+    assert _ang(got[0].angle_deg, 30.0) < 1.0 and _ang(got[1].angle_deg, -100.0) < 1.0
+    # each pile's frames, and the scattered frames that happen to fall within its radius
+    near = [np.sum(np.abs((a - c + 180) % 360 - 180) < 10.0) for c in (30.0, -100.0)]
+    assert [c.n_frames for c in got] == near
+    assert got[0].share == pytest.approx(near[0] / len(a))
+    assert 1.0 < got[0].spread_deg < 4.0
+    assert set(got[0].frames) >= set(range(40)) and set(got[1].frames) >= set(range(40, 70))
+
+
+def test_a_pile_across_the_wrap_is_one_source():
+    rng = np.random.default_rng(251)
+    a = (180.0 + rng.normal(0, 2.0, 50) + 180.0) % 360.0 - 180.0  # around +-180
+    got = direction_clusters(a, max_sources=3)
+    assert len(got) == 1 and _ang(got[0].angle_deg, 180.0) < 1.0 and got[0].n_frames == 50
+
+
+def test_small_piles_and_weights():
+    rng = np.random.default_rng(252)
+    a = np.concatenate([10.0 + rng.normal(0, 1.0, 60), 120.0 + rng.normal(0, 1.0, 6)])
+    assert len(direction_clusters(a, max_sources=2)) == 1  # 6 of 66 frames: below 0.15
+    assert len(direction_clusters(a, max_sources=2, min_share=0.05)) == 2
+    # weights: the small pile's frames counting 20 times as much make it the first source
+    w = np.r_[np.ones(60), np.full(6, 20.0)]
+    got = direction_clusters(a, w, max_sources=2)
+    assert _ang(got[0].angle_deg, 120.0) < 1.0 and got[0].share == pytest.approx(120 / 180)
+    # sources closer than min_separation_deg are one
+    b = np.concatenate([0.0 + rng.normal(0, 1.0, 40), 12.0 + rng.normal(0, 1.0, 40)])
+    assert len(direction_clusters(b, max_sources=2, min_separation_deg=30.0)) == 1
+    assert len(direction_clusters(b, max_sources=2, min_separation_deg=10.0,
+                                  bandwidth_deg=2.0)) == 2
+    assert direction_clusters([], max_sources=2) == []
+    assert direction_clusters([1.0, 2.0], [0.0, 0.0]) == []
+
+
+@pytest.mark.parametrize("kw", [
+    {"angle_deg": [1.0, np.nan]}, {"angle_deg": [[1.0]]}, {"weight": [1.0, -1.0]},
+    {"weight": [1.0]}, {"max_sources": 0}, {"max_sources": MAX_SOURCES + 1},
+    {"max_sources": 2.5}, {"bandwidth_deg": 0.0}, {"min_separation_deg": 1.0},
+    {"min_share": 1.0}, {"min_share": np.nan},
+])
+def test_bad_settings_are_config_errors(kw):
+    args = {"angle_deg": [1.0, 2.0], **kw}
+    with pytest.raises(ConfigError):
+        direction_clusters(**args)
+
+
+# ------------------------------------------------------------------------ simulated talkers
+def _talkers(arr, azimuths, seed, duration=3.0):
+    """Free-field recording of a male and a female voice (in turn, each with its pauses)
+    from ``azimuths`` (deg) 1.5 m away, 25 dB."""
+    x = 0.0
+    for k, az in enumerate(azimuths):
+        s = synthetic_voice(("male", "female")[k % 2], duration, FS, seed + k)
+        x = x + simulate_free_field(s, FS, arr, 1.5 * unit_vector_deg(az, 0.0), snr_db=25,
+                                    rng=seed + 10 + k)
+    return x
+
+
+@pytest.fixture(scope="module")
+def two3():
+    return _talkers(MicArray.from_preset("three-mic"), (40.0, -110.0), 253)
+
+
+def test_two_talkers_three_microphones(two3):
+    arr = MicArray.from_preset("three-mic")
+    tf = estimate_tdoas(two3, FS, arr, band_hz=(300, 3500))
+    src, which = localize_sources(tf.tdoa_s, tf.valid, arr, tf.pairs, 2)
+    assert len(src) == 2
+    assert sorted(round(s["azimuth_deg"] / 10) for s in src) == [-11, 4]
+    for s in src:
+        truth = min((40.0, -110.0), key=lambda t: _ang(t, s["azimuth_deg"]))
+        assert _ang(s["azimuth_deg"], truth) < 2.0
+        assert s["share"] > 0.2 and s["n_frames"] == int(np.sum(which == src.index(s)))
+    assert set(np.unique(which)) <= {-1, 0, 1} and np.all(which[~tf.valid] == -1)
+    # one talker: one source
+    one = _talkers(arr, (75.0,), 254)
+    tf1 = estimate_tdoas(one, FS, arr, band_hz=(300, 3500))
+    src1, _ = localize_sources(tf1.tdoa_s, tf1.valid, arr, tf1.pairs, 3)
+    assert len(src1) == 1 and _ang(src1[0]["azimuth_deg"], 75.0) < 2.0
+
+
+def test_two_talkers_two_microphones():
+    arr = MicArray.from_preset("two-mic")
+    x = _talkers(arr, (25.0, -50.0), 255)
+    doc = localize_recording(x, FS, arr, kalman=False, max_sources=2, band_hz=(300, 3500))
+    src = doc["sources"]
+    assert len(src) == 2
+    for s, truth in zip(sorted(src, key=lambda s: _fold(s["azimuth_deg"])), (-50.0, 25.0),
+                        strict=True):
+        assert abs(_fold(s["azimuth_deg"]) - truth) < 3.0
+        # the cone's twins: the truth and its mirror about the pair's axis
+        assert any(_ang(c["azimuth_deg"], truth) < 3.0 for c in s["candidates"])
+        assert s["elevation_deg"] is None
+    # a talker and its mirror about the pair's axis are one direction to a pair
+    mirrored = _talkers(arr, (30.0, 150.0), 256)
+    doc = localize_recording(mirrored, FS, arr, kalman=False, max_sources=2,
+                             band_hz=(300, 3500))
+    assert len(doc["sources"]) == 1 and abs(_fold(doc["sources"][0]["azimuth_deg"]) - 30) < 3
+
+
+def test_localize_recording_document(two3):
+    arr = MicArray.from_preset("three-mic")
+    doc = localize_recording(two3, FS, arr, kalman=False, max_sources=2)
+    assert {"sources"} <= set(doc) and len(doc["sources"]) == 2
+    counts = [sum(f["source"] == k for f in doc["frames"]) for k in range(2)]
+    assert counts == [s["n_frames"] for s in doc["sources"]]
+    assert all(f["source"] is None for f in doc["frames"] if not f["valid"])
+    assert set(doc["sources"][0]) == {"azimuth_deg", "elevation_deg", "candidates", "tdoa_s",
+                                      "share", "n_frames", "spread_deg"}
+    assert "sources" not in localize_recording(two3, FS, arr, kalman=False)
+    assert "source" not in localize_recording(two3, FS, arr)["frames"][0]
+    with pytest.raises(ConfigError, match="kalman=False"):
+        localize_recording(two3, FS, arr, max_sources=2)
+    with pytest.raises(ConfigError, match="max_sources"):
+        localize_recording(two3[:2], FS, "mask2-asym", kalman=False, max_sources=2)
+    with pytest.raises(ConfigError):
+        localize_recording(two3, FS, arr, kalman=False, max_sources=0)
+
+
+# ------------------------------------------------------------------------------------ CLI
+@pytest.fixture(scope="module")
+def two3_wav(two3, tmp_path_factory):
+    path = tmp_path_factory.mktemp("src") / "two.wav"
+    sf.write(path, (two3 / np.abs(two3).max() * 0.5).T, FS, subtype="FLOAT")
+    return path
+
+
+def _run(capsys, *args):
+    code = main(["localize", *map(str, args)])
+    cap = capsys.readouterr()
+    return code, cap.out, cap.err
+
+
+def test_cli_sources(two3_wav, capsys):
+    code, out, err = _run(capsys, two3_wav, "--array", "three-mic", "--sources", "2")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["kalman"] is False and len(doc["sources"]) == 2
+    assert sorted(round(s["azimuth_deg"] / 10) for s in doc["sources"]) == [-11, 4]
+    # (two talkers' averaged correlations name no one source: no warning when sources did)
+    assert "no direction for the whole recording" not in err
+    code, out, _ = _run(capsys, two3_wav, "--array", "three-mic", "--sources", "2",
+                        "--format", "csv")
+    rows = list(csv.DictReader(io.StringIO(out)))
+    assert code == 0 and "source" in rows[0]
+    assert {r["source"] for r in rows} <= {"", "0", "1"} and {"0", "1"} <= {r["source"]
+                                                                             for r in rows}
+    code, out, _ = _run(capsys, two3_wav, "--array", "three-mic", "--sources", "2",
+                        "--format", "table")
+    assert code == 0 and "source 0: azimuth" in out and "source 1: azimuth" in out
+
+
+@pytest.mark.parametrize("args, words", [
+    (("--array", "three-mic", "--sources", "2", "--kalman-tuned"), "--kalman-tuned"),
+    (("--array", "three-mic", "--sources", "0"), "--sources"),
+    (("--array", "three-mic", "--sources", "9"), "--sources"),
+])
+def test_cli_sources_refusals(two3_wav, capsys, args, words):
+    code, out, err = _run(capsys, two3_wav, *args)
+    assert code == 2 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and words in lines[0] and "Traceback" not in err
+
+
+def test_cli_sources_masked_array_refused(tmp_path, capsys):
+    path = tmp_path / "m.wav"
+    sf.write(path, np.random.default_rng(257).standard_normal((8000, 2)) * 0.1, FS)
+    code, _, err = _run(capsys, path, "--array", "mask2-asym", "--sources", "2")
+    assert code == 2 and "masked array" in err and len(err.strip().splitlines()) == 1
+
+
+def test_sources_without_a_dead_microphone():
+    """A microphone that hears only its own noise (unplugged): the other two localize the
+    talkers, and the sources' TDOAs are named in the array's own pairs (its pairs null).
+    Talkers at 90 and 0 deg: 30 and -60 deg from the broadside of microphones 0-1 (40 and
+    -110 deg, the other tests' talkers, are -20 and -10 deg from it: one source to that pair)."""
+    arr = MicArray.from_preset("three-mic")
+    x = _talkers(arr, (90.0, 0.0), 259)
+    x[2] = np.random.default_rng(258).standard_normal(x.shape[1]) * np.std(x[2])
+    with pytest.warns(Warning):
+        doc = localize_recording(x, FS, "three-mic", kalman=False, max_sources=2)
+    assert doc["summary"]["dead_microphones"] == [2]
+    src = doc["sources"]
+    assert len(src) == 2
+    for s in src:
+        assert s["tdoa_s"]["0-2"] is None and s["tdoa_s"]["1-2"] is None
+        assert s["tdoa_s"]["0-1"] is not None
+    # mics 0 and 1 of the triangle: a pair whose broadside angles are the truth's
+    axis = arr.positions[1] - arr.positions[0]
+    axis /= np.linalg.norm(axis)
+
+    def broadside(az):
+        u = unit_vector_deg(az, 0.0)
+        return float(np.degrees(np.arcsin(np.clip(u @ axis, -1, 1))))
+
+    got = sorted(broadside(s["azimuth_deg"]) for s in src)
+    want = sorted(broadside(a) for a in (90.0, 0.0))
+    assert np.allclose(got, want, atol=3.0)
