@@ -1585,7 +1585,9 @@ def localize_recording(
     max_sources : int
         With 2 or more (up to :data:`hearsee.audio.sources.MAX_SOURCES`), up to that many
         sources talking in turn or at once: the frames' directions clustered
-        (:func:`hearsee.audio.sources.localize_sources`), the document's ``sources`` and each
+        (:func:`hearsee.audio.sources.localize_sources`; a linear array's each from its
+        frames' averaged spectra, :func:`~hearsee.audio.sources.sources_from_spectra`), the
+        document's ``sources`` and each
         frame's ``source`` (its index there, None for none). Needs ``kalman=False``: the ITD
         filter follows one source and takes another's frames for outliers. The ``summary``
         stays the whole recording's one estimate. Not for masked arrays.
@@ -1626,7 +1628,7 @@ def localize_recording(
         half instead, 0.5-1: :func:`hearsee.audio.mask.localize_recording_mask`).
     """
     from hearsee.audio.itd_filter import itd_filter_entries, smooth_recording_itds
-    from hearsee.audio.sources import MAX_SOURCES, localize_sources
+    from hearsee.audio.sources import MAX_SOURCES, localize_sources, sources_from_spectra
     from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, normalize_method
 
     arr = load_array(array)
@@ -1683,6 +1685,10 @@ def localize_recording(
     frame_near = bool(in_plane) and array_geometry(arr).kind == "planar"
     sources, which = (localize_sources(tf.tdoa_s, tf.valid, arr, tf.pairs, max_sources,
                                        in_plane=in_plane) if max_sources > 1 else (None, None))
+    if sources and array_geometry(arr).kind == "linear":  # (see sources_from_spectra)
+        sources = sources_from_spectra(sources, which, lambda act: estimate_tdoas(
+            x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method, pairs=pairs,
+            active=act, **tdoa_kwargs), arr, tf.pairs, in_plane)
     frames = []
     for n in range(len(tf.t)):
         row = tdoa[n]
