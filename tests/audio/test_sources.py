@@ -73,6 +73,15 @@ def test_small_piles_and_weights():
     assert direction_clusters([1.0, 2.0], [0.0, 0.0]) == []
 
 
+def test_a_broad_pile_is_one_source():
+    """Frames spread evenly over 30 deg: the second maximum, 20 deg from the first, shifts
+    toward it (every point of the pile's middle is a mean of its neighbours) and is dropped
+    rather than splitting the pile in two."""
+    a = np.linspace(0.0, 30.0, 301)
+    got = direction_clusters(a, max_sources=2)
+    assert len(got) == 1 and got[0].share > 0.6 and 5.0 < got[0].angle_deg < 25.0
+
+
 @pytest.mark.parametrize("kw", [
     {"angle_deg": [1.0, np.nan]}, {"angle_deg": [[1.0]]}, {"weight": [1.0, -1.0]},
     {"weight": [1.0]}, {"max_sources": 0}, {"max_sources": MAX_SOURCES + 1},

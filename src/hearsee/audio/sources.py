@@ -1,10 +1,9 @@
 """Several talkers at once: the directions of a recording's frames, clustered.
 
 hearsee's whole-recording summary (:func:`hearsee.audio.localize.localize_recording`) names
-one source. Two people talking in turn, or over each other, or a talker beside a radio, are
-two sources; with two or three microphones, subspace methods cannot separate them (MUSIC
-needs more microphones than sources) and a steered response over the whole recording lets the
-louder source's sidelobes hide the other. Speech is sparse in time and frequency (Rickard &
+one source. Two people talking in turn or over each other are two sources; subspace methods
+need more microphones than sources (a pair cannot take two, a triangle barely), and a steered
+response over the whole recording lets the louder source's sidelobes hide the other. Speech is sparse in time and frequency (Rickard &
 Yilmaz 2002, "On the approximate W-disjoint orthogonality of speech", ICASSP): most short
 frames are dominated by one talker, so each frame's GCC peak points at one of them, and the
 frames' directions pile up at the sources. This module finds those piles -- a kernel density
@@ -18,8 +17,9 @@ extension.
 
 Azimuths are degrees in the array frame (from +x toward +y). A two-microphone array's frames
 carry the front/back twin of their cone (:func:`~hearsee.audio.localize.localize_tdoa`):
-their angle from broadside, the same for both twins, is clustered instead, and two talkers
-mirrored about the pair's axis are one source to it.
+the sine of their angle from broadside, the same for both twins and proportional to the
+TDOA, is clustered instead, and two talkers mirrored about the pair's axis are one source to
+it.
 """
 
 from __future__ import annotations
@@ -97,13 +97,15 @@ def direction_clusters(angle_deg: ArrayLike, weight: ArrayLike | None = None,
                        min_share: float = DEFAULT_MIN_SHARE) -> list[DirectionCluster]:
     """The sources among frame directions: up to ``max_sources`` piles, the largest share first.
 
-    The frames' angles (degrees on a circle: azimuths, or a linear array's angles from
-    broadside; ``weight`` >= 0 per frame, default 1) are binned on a
-    0.5-deg circle and smoothed by a Gaussian of ``bandwidth_deg``; its highest maximum is a
-    source, the density within ``min_separation_deg`` of it is set aside, and so on. Each
-    frame then joins the nearest source within half of ``min_separation_deg`` (farther frames
-    -- reflections, noise -- join none); a source's angle is its frames' weighted circular
-    mean, moved to the mean of the frames within that radius of it until it settles. Sources
+    The frames' angles (degrees on a circle: azimuths -- :func:`localize_sources` gives a
+    linear array's sines of the angle from broadside times 90; ``weight`` >= 0 per frame,
+    default 1) are binned on a 0.5-deg circle and smoothed by a Gaussian of
+    ``bandwidth_deg``; its highest maximum is a source, the density within
+    ``min_separation_deg`` of it is set aside, and so on. Each maximum moves to the weighted
+    circular mean of the frames within half of ``min_separation_deg`` of it until it settles
+    (one of two that come closer than ``min_separation_deg`` is dropped); each frame then
+    joins the nearest within that radius (farther frames -- reflections, noise -- join
+    none), and a source's angle is its frames' weighted circular mean. Sources
     holding less than ``min_share`` of the total weight are dropped (all of them, when the
     frames scatter: an empty list).
 
@@ -152,6 +154,11 @@ def direction_clusters(angle_deg: ArrayLike, weight: ArrayLike | None = None,
         peaks = moved
         if done:
             break
+    kept: list[float] = []  # (two maxima the shifts brought within min_separation: one)
+    for p in peaks:
+        if all(abs(_wrap(p - q)) >= sep for q in kept):
+            kept.append(p)
+    peaks = kept
     if peaks:
         dist = np.abs(_wrap(az[:, None] - np.array(peaks)[None, :]))  # (frames, peaks)
         nearest = np.argmin(dist, axis=1)
