@@ -3,17 +3,17 @@
 hearsee's whole-recording summary (:func:`hearsee.audio.localize.localize_recording`) names
 one source. Two people talking in turn or over each other are two sources; subspace methods
 need more microphones than sources (a pair cannot take two, a triangle barely), and a steered
-response over the whole recording lets the louder source's sidelobes hide the other. Speech is sparse in time and frequency (Rickard &
-Yilmaz 2002, "On the approximate W-disjoint orthogonality of speech", ICASSP): most short
-frames are dominated by one talker, so each frame's GCC peak points at one of them, and the
-frames' directions pile up at the sources. This module finds those piles -- a kernel density
-of the frames' azimuths, its highest maxima taken greedily at least ``min_separation_deg``
-apart (mean shift, Comaniciu & Meer 2002, "Mean shift: a robust approach toward feature
-space analysis", IEEE TPAMI 24(5), for each maximum's position), as the time-frequency
-clustering of Araki et al. 2007 ("Underdetermined blind sparse source separation for
-arbitrarily arranged multiple sensors", Signal Processing 87(8)) does per bin, here per frame.
-Not in the thesis (its chapter 5 tracks one speaker with an interfering source); an
-extension.
+response over the whole recording lets the louder source's sidelobes hide the other. Speech
+is sparse in time and frequency (Rickard & Yilmaz 2002, "On the approximate W-disjoint
+orthogonality of speech", ICASSP): most short frames are dominated by one talker, so each
+frame's GCC peak points at one of them, and the frames' directions pile up at the sources.
+This module finds those piles -- a kernel density of the frames' azimuths, its highest maxima
+taken greedily at least ``min_separation_deg`` apart (mean shift, Comaniciu & Meer 2002,
+"Mean shift: a robust approach toward feature space analysis", IEEE TPAMI 24(5), for each
+maximum's position), as the time-frequency clustering of Araki et al. 2007 ("Underdetermined
+blind sparse source separation for arbitrarily arranged multiple sensors", Signal Processing
+87(8)) does per bin, here per frame. Not in the thesis (its chapter 5 tracks one speaker
+with an interfering source); an extension.
 
 Azimuths are degrees in the array frame (from +x toward +y). A two-microphone array's frames
 carry the front/back twin of their cone (:func:`~hearsee.audio.localize.localize_tdoa`):
@@ -224,9 +224,10 @@ def localize_sources(tdoa_s: ArrayLike, valid: ArrayLike, array: Any,
                           f"{w_all.shape}")
     arr = load_array(array)
     geo = array_geometry(arr)
+    near = bool(in_plane) and geo.kind == "planar"  # (as localize_recording's frames)
     rows, angle, key = [], [], []  # (the frames' angles, and what is clustered)
     for n in np.flatnonzero(ok & np.all(np.isfinite(tau), axis=1)):
-        loc = localize_tdoa(tau[n], arr, pairs, near_field=False, in_plane=in_plane)
+        loc = localize_tdoa(tau[n], arr, pairs, near_field=near, in_plane=in_plane)
         if loc.azimuth_deg is not None and np.isfinite(loc.azimuth_deg):
             a, k = ((loc.azimuth_deg,) * 2 if geo.kind != "linear"
                     else _from_broadside(loc.azimuth_deg, geo.axis))
