@@ -82,11 +82,29 @@ def test_a_broad_pile_is_one_source():
     assert len(got) == 1 and got[0].share > 0.6 and 5.0 < got[0].angle_deg < 25.0
 
 
+def test_a_pile_beside_a_broad_one_is_found_with_two_asked_for():
+    """A broad pile (sd 12 deg) throws up two maxima that the mean shift merges; the next
+    maximum, a real second pile holding 17 % of the frames, must take the freed place."""
+    rng = np.random.default_rng(95)
+    a = np.r_[rng.normal(0, 12, 200), rng.normal(100, 3, 40)]
+    got = direction_clusters(a, max_sources=2)
+    assert len(got) == 2 and _ang(got[1].angle_deg, 100.0) < 2.0
+    assert got[1].n_frames == 40 and got[1].share == pytest.approx(40 / 240)
+
+
+def test_one_frame_has_no_spread():
+    got = direction_clusters([42.0], max_sources=2, min_share=0.0)
+    assert len(got) == 1 and got[0].angle_deg == pytest.approx(42.0)
+    assert got[0].spread_deg == 0.0 and not np.signbit(got[0].spread_deg)
+
+
 @pytest.mark.parametrize("kw", [
     {"angle_deg": [1.0, np.nan]}, {"angle_deg": [[1.0]]}, {"weight": [1.0, -1.0]},
     {"weight": [1.0]}, {"max_sources": 0}, {"max_sources": MAX_SOURCES + 1},
     {"max_sources": 2.5}, {"bandwidth_deg": 0.0}, {"min_separation_deg": 1.0},
-    {"min_share": 1.0}, {"min_share": np.nan},
+    {"min_share": 1.0}, {"min_share": np.nan}, {"angle_deg": ["a", "b"]},
+    {"angle_deg": ["10", "10"]}, {"angle_deg": [1j, 2.0]}, {"angle_deg": [True, 2.0]},
+    {"weight": ["1", "1"]}, {"angle_deg": [[1.0, 2.0], [3.0]]},
 ])
 def test_bad_settings_are_config_errors(kw):
     args = {"angle_deg": [1.0, 2.0], **kw}
@@ -246,3 +264,39 @@ def test_sources_without_a_dead_microphone():
     got = sorted(broadside(s["azimuth_deg"]) for s in src)
     want = sorted(broadside(a) for a in (90.0, 0.0))
     assert np.allclose(got, want, atol=3.0)
+
+
+def test_localize_sources_refuses_bad_input():
+    arr = MicArray.from_preset("three-mic")
+    pairs = arr.pairs
+    ok = np.ones(2, bool)
+    for tau in ([["a", "b", "c"], ["a", "b", "c"]], [[0.0, 0.0, 0.0], [0.0, 0.0]],
+                np.zeros((2, 2))):
+        with pytest.raises(ConfigError):
+            localize_sources(tau, ok, arr, pairs, 2)
+    with pytest.raises(ConfigError, match="unknown direction_clusters setting 'foo'"):
+        localize_sources(np.zeros((2, 3)), ok, arr, pairs, 2, foo=1)
+
+
+@pytest.mark.parametrize("tilt_deg, cone_deg", [(90.0, (50.0, 110.0)), (60.0, (10.0, 50.0))])
+def test_a_vertical_or_tilted_pair_clusters_its_cones(tmp_path, tilt_deg, cone_deg):
+    """A pair whose axis is vertical (no azimuth at all) or tilted 60 deg up (cones of 10 and
+    50 deg about it miss the horizontal plane, and both land on the axis azimuth): its frames
+    are clustered by their cones, so two talkers on two cones are two sources, each reported
+    with its cone's TDOA (exact TDOAs with 2-us noise)."""
+    a = np.array([0.0, np.cos(np.radians(tilt_deg)), np.sin(np.radians(tilt_deg))])
+    path = tmp_path / "pair.yaml"
+    mics = [[float(v) for v in m] for m in (-0.1 * a, 0.1 * a)]
+    path.write_text(f"name: slanted\nmicrophones: {mics}\n")
+    arr = MicArray.from_yaml(path)
+    rng = np.random.default_rng(259)
+    cones = np.r_[np.full(50, cone_deg[0]), np.full(50, cone_deg[1])]
+    # tdoa_0-1 = -(M_0 - M_1) . u / c = 0.2 cos(cone) / c, u on the cone about a
+    tau = (0.2 * np.cos(np.radians(cones)) / arr.speed_of_sound
+           + rng.normal(0, 2e-6, 100))[:, None]
+    src, which = localize_sources(tau, np.ones(100, bool), arr, arr.pairs, 2)
+    assert len(src) == 2 and sorted(s["n_frames"] for s in src) == [50, 50]
+    got = sorted(float(np.degrees(np.arccos(s["tdoa_s"]["0-1"] * arr.speed_of_sound / 0.2)))
+                 for s in src)
+    assert np.allclose(got, cone_deg, atol=1.5)
+    assert set(which[:50]) != set(which[50:])

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import finite_number, whole_number
+from hearsee.config import check_settings, finite_number, real_entries, whole_number
 from hearsee.errors import ConfigError
 
 #: the most sources :func:`direction_clusters` looks for (``hearsee localize --sources``)
@@ -82,11 +82,24 @@ def _wrap(a: NDArray | float) -> NDArray | float:
     return 180.0 - (180.0 - np.asarray(a)) % 360.0
 
 
+def _numbers(name: str, value: Any) -> NDArray:
+    """``value`` as a float array when every entry is a real number (ConfigError naming
+    ``name`` for text, complex numbers, bools or ragged lists: numpy read "10" as 10.0)."""
+    if not real_entries(value):
+        raise ConfigError(f"{name} must hold real numbers, got {value!r:.60}")
+    try:
+        return np.asarray(value, dtype=float)
+    except ValueError:  # (a ragged list)
+        raise ConfigError(f"{name} must be a regular array of numbers, got {value!r:.60}"
+                          ) from None
+
+
 def _circular_mean(az: NDArray, w: NDArray) -> tuple[float, float]:
     """Weighted circular mean and standard deviation (degrees) of azimuths ``az``."""
     z = np.sum(w * np.exp(1j * np.radians(az))) / np.sum(w)
     r = min(float(abs(z)), 1.0)
-    std = float(np.degrees(np.sqrt(-2.0 * np.log(r)))) if r > 0 else 180.0
+    # (max: log(1.0) is -0.0 for one frame, and the JSON said "spread_deg": -0.0)
+    std = float(np.degrees(np.sqrt(max(0.0, -2.0 * np.log(r))))) if r > 0 else 180.0
     return float(_wrap(np.degrees(np.angle(z)))), std
 
 
@@ -103,9 +116,10 @@ def direction_clusters(angle_deg: ArrayLike, weight: ArrayLike | None = None,
     ``bandwidth_deg``; its highest maximum is a source, the density within
     ``min_separation_deg`` of it is set aside, and so on. Each maximum moves to the weighted
     circular mean of the frames within half of ``min_separation_deg`` of it until it settles
-    (one of two that come closer than ``min_separation_deg`` is dropped); each frame then
-    joins the nearest within that radius (farther frames -- reflections, noise -- join
-    none), and a source's angle is its frames' weighted circular mean. Sources
+    (at most 20 steps; of two that come closer than ``min_separation_deg`` the lower is
+    dropped); the ``max_sources`` highest remaining are the sources, each frame joins the
+    nearest within that radius (farther frames -- reflections, noise -- join none), and a
+    source's angle is its frames' weighted circular mean. Sources
     holding less than ``min_share`` of the total weight are dropped (all of them, when the
     frames scatter: an empty list).
 
@@ -119,10 +133,10 @@ def direction_clusters(angle_deg: ArrayLike, weight: ArrayLike | None = None,
     min_share = finite_number("min_share", min_share, 0.0, 1.0)
     if min_share >= 1.0:
         raise ConfigError(f"min_share must be below 1 (a share of the frames), got {min_share}")
-    az = np.asarray(angle_deg, dtype=float)
+    az = _numbers("angle_deg", angle_deg)
     if az.ndim != 1 or not np.all(np.isfinite(az)):
         raise ConfigError("angle_deg must be a 1-D array of finite degrees, one per frame")
-    w = np.ones_like(az) if weight is None else np.asarray(weight, dtype=float)
+    w = np.ones_like(az) if weight is None else _numbers("weight", weight)
     if w.shape != az.shape or not np.all(np.isfinite(w)) or np.any(w < 0):
         raise ConfigError("weight must hold one finite number >= 0 per angle")
     total = float(w.sum())
@@ -137,7 +151,10 @@ def direction_clusters(angle_deg: ArrayLike, weight: ArrayLike | None = None,
     density = np.fft.irfft(np.fft.rfft(hist) * np.fft.rfft(kernel), n_grid)
     peaks: list[float] = []
     left = density.copy()
-    for _ in range(max_sources):
+    # (every maximum, not only max_sources of them: one that the shifts merge into another is
+    # replaced by the next -- a second talker beside a broad pile was missed with two asked
+    # for and found with three)
+    for _ in range(MAX_SOURCES):
         g = int(np.argmax(left))
         if left[g] <= 1e-9 * total:
             break
@@ -158,7 +175,7 @@ def direction_clusters(angle_deg: ArrayLike, weight: ArrayLike | None = None,
     for p in peaks:
         if all(abs(_wrap(p - q)) >= sep for q in kept):
             kept.append(p)
-    peaks = kept
+    peaks = kept[:max_sources]  # (the highest maxima first)
     if peaks:
         dist = np.abs(_wrap(az[:, None] - np.array(peaks)[None, :]))  # (frames, peaks)
         nearest = np.argmin(dist, axis=1)
@@ -173,19 +190,18 @@ def direction_clusters(angle_deg: ArrayLike, weight: ArrayLike | None = None,
     return sorted(clusters, key=lambda c: -c.share)
 
 
-def _from_broadside(azimuth_deg: float, axis: NDArray) -> tuple[float, float]:
-    """A linear array's (unit ``axis``) view of the horizontal direction at ``azimuth_deg``,
-    the same for both twins of its cone: its angle from broadside (degrees, -90 to 90) and
-    that angle's sine times 90 -- proportional to the TDOA, whose errors are alike at every
-    angle (an angle's grow toward the axis, where a frame's TDOA beyond the pair's reach
-    reads as the axis itself and piled up 10-20 deg from a talker near it). Clustered in
-    angles instead (dev seed 261, two-mic preset, 30 recordings per cell as
-    bench/sources.py makes them): one talker named alone 100 / 70 / 30 % (free field, RT60
-    0.3 / 0.6 s) against 100 / 83 / 30 % in sines, both of two talkers 90 / 57 / 17 % against
-    97 / 57 / 20 %."""
-    a = np.radians(azimuth_deg)
-    cos_axis = float(np.clip(np.cos(a) * axis[0] + np.sin(a) * axis[1], -1.0, 1.0))
-    return float(np.degrees(np.arcsin(cos_axis))), 90.0 * cos_axis
+def _from_broadside(cos_theta: float) -> tuple[float, float]:
+    """A linear array's view of a frame whose cone about its axis has ``cos_theta`` (the
+    cosine of its half angle, :func:`~hearsee.audio.localize.far_field_linear`), the same for
+    every direction on that cone: its angle from broadside (degrees, -90 to 90) and that
+    angle's sine times 90 -- proportional to the TDOA, whose errors are alike at every angle
+    (an angle's grow toward the axis, where a frame's TDOA beyond the pair's reach reads as
+    the axis itself and piled up 10-20 deg from a talker near it). Clustered in angles
+    instead (dev seed 261, two-mic preset, 30 recordings per cell as bench/sources.py makes
+    them): one talker named alone 100 / 70 / 30 % (free field, RT60 0.3 / 0.6 s) against
+    100 / 83 / 30 % in sines, both of two talkers 90 / 57 / 17 % against 97 / 57 / 20 %."""
+    c = float(np.clip(cos_theta, -1.0, 1.0))
+    return float(np.degrees(np.arcsin(c))), 90.0 * c
 
 
 def localize_sources(tdoa_s: ArrayLike, valid: ArrayLike, array: Any,
@@ -199,13 +215,15 @@ def localize_sources(tdoa_s: ArrayLike, valid: ArrayLike, array: Any,
     follows one source and takes the other's frames for outliers), ``valid`` (n_frames,)
     which hold a source. Each valid frame is localized
     (:func:`~hearsee.audio.localize.localize_tdoa`, ``in_plane`` as there), its azimuth (a
-    linear array's: the sine of its angle from broadside, times 90) clustered by
+    linear array's: the sine of its cone's angle from broadside, times 90, whatever the
+    axis) clustered by
     :func:`direction_clusters`
     (``weight`` per frame and ``cluster_kwargs`` passed on), and each cluster localized again
     from its frames' median TDOA per pair: the source's azimuth, elevation and candidates as
     the array can tell them.
 
-    Returns the sources, the largest share of frames first, as dicts ``{"azimuth_deg",
+    Returns the sources, the largest share of frames first (``share``: of the weight of the
+    frames that got a direction), as dicts ``{"azimuth_deg",
     "elevation_deg", "candidates": [{"azimuth_deg", "elevation_deg"}], "tdoa_s": {"i-j": s},
     "share", "n_frames", "spread_deg"}`` (the JSON's ``sources``), and each frame's source
     (n_frames,) -- its index in that list, -1 for none.
@@ -213,12 +231,14 @@ def localize_sources(tdoa_s: ArrayLike, valid: ArrayLike, array: Any,
     from hearsee.audio.arrays import load_array
     from hearsee.audio.localize import array_geometry, localize_tdoa
 
-    tau = np.asarray(tdoa_s, dtype=float)
+    check_settings(direction_clusters, cluster_kwargs,
+                   skip=("angle_deg", "weight", "max_sources"))
+    tau = _numbers("tdoa_s", tdoa_s)
     ok = np.asarray(valid, dtype=bool)
     if tau.ndim != 2 or ok.shape != (tau.shape[0],) or tau.shape[1] != len(pairs):
         raise ConfigError(f"localize_sources needs tdoa_s (n_frames, {len(pairs)}) and valid "
                           f"(n_frames,), got {tau.shape} and {ok.shape}")
-    w_all = np.ones(len(tau)) if weight is None else np.asarray(weight, dtype=float)
+    w_all = np.ones(len(tau)) if weight is None else _numbers("weight", weight)
     if w_all.shape != ok.shape:
         raise ConfigError(f"weight must hold one number per frame ({len(ok)}), got shape "
                           f"{w_all.shape}")
@@ -228,12 +248,16 @@ def localize_sources(tdoa_s: ArrayLike, valid: ArrayLike, array: Any,
     rows, angle, key = [], [], []  # (the frames' angles, and what is clustered)
     for n in np.flatnonzero(ok & np.all(np.isfinite(tau), axis=1)):
         loc = localize_tdoa(tau[n], arr, pairs, near_field=near, in_plane=in_plane)
-        if loc.azimuth_deg is not None and np.isfinite(loc.azimuth_deg):
-            a, k = ((loc.azimuth_deg,) * 2 if geo.kind != "linear"
-                    else _from_broadside(loc.azimuth_deg, geo.axis))
-            rows.append(n)
-            angle.append(a)
-            key.append(k)
+        if geo.kind == "linear":  # (any axis: a vertical one has no azimuth, a tilted one
+            # puts every cone that misses the horizontal plane on its own azimuth)
+            a, k = _from_broadside(loc.extra["cos_theta"])
+        elif loc.azimuth_deg is not None and np.isfinite(loc.azimuth_deg):
+            a = k = loc.azimuth_deg
+        else:
+            continue
+        rows.append(n)
+        angle.append(a)
+        key.append(k)
     rows_a = np.array(rows, dtype=int)
     clusters = direction_clusters(np.array(key, dtype=float), w_all[rows_a], max_sources,
                                   **cluster_kwargs)

@@ -178,9 +178,9 @@ def localize_cmd(
     ] = None,
     sources: Annotated[int, typer.Option(
         "--sources", help="Look for up to this many sources talking in turn or at once (1-8): "
-        "the frames' directions clustered; the JSON's sources (direction, share of the frames) "
-        "and each frame's source. Above 1 the frames are not smoothed (the ITD Kalman filter "
-        "follows one source). Not for masked arrays.")] = 1,
+        "the frames' directions clustered; the JSON's sources (direction, share of the located "
+        "frames) and each frame's source. Above 1 the frames are not smoothed (the ITD Kalman "
+        "filter follows one source). Not for masked arrays.")] = 1,
 ) -> None:
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
     from hearsee.audio.arrays import MAX_TDOA_STD_S, load_array
