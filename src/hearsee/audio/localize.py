@@ -1585,12 +1585,12 @@ def localize_recording(
     max_sources : int
         With 2 or more (up to :data:`hearsee.audio.sources.MAX_SOURCES`), up to that many
         sources talking in turn or at once: the frames' directions clustered
-        (:func:`hearsee.audio.sources.localize_sources`; a linear array's each from its
-        frames' averaged spectra, :func:`~hearsee.audio.sources.sources_from_spectra`), the
-        document's ``sources`` and each
-        frame's ``source`` (its index there, None for none). Needs ``kalman=False``: the ITD
-        filter follows one source and takes another's frames for outliers. The ``summary``
-        stays the whole recording's one estimate. Not for masked arrays.
+        (:func:`hearsee.audio.sources.localize_sources`; a linear array's sources each from
+        its frames' averaged spectra, :func:`~hearsee.audio.sources.sources_from_spectra`),
+        the document's ``sources`` and each frame's ``source`` (its index there, None for
+        none). Needs ``kalman=False``: the ITD filter follows one source and takes another's
+        frames for outliers. The ``summary`` stays the whole recording's one estimate. Not
+        for masked arrays.
     tdoa_kwargs :
         Further :func:`hearsee.audio.tdoa.estimate_tdoas` settings, e.g.
         ``**hearsee.audio.tdoa.SUMMARY_TUNED`` (the benchmarked whole-recording estimate).
