@@ -297,18 +297,30 @@ def pra_azimuth(x: np.ndarray, fs: float, arr: MicArray, algo: str,
     (``dim=2``), steered to points ``near_m`` metres from the array centre (a spherical
     wavefront, as hearsee's in-plane model) for arrays of 3+ microphones, far field for two
     (hearsee's cone) or with ``near_m=None``."""
+    return pra_azimuths(x, fs, arr, algo, band, 1, nfft, grid_deg, near_m)[0]
+
+
+def pra_azimuths(x: np.ndarray, fs: float, arr: MicArray, algo: str,
+                 band: tuple[float, float], num_src: int, nfft: int = PRA_NFFT,
+                 grid_deg: float = PRA_GRID_DEG, near_m: float | None = PEER_NEAR_M,
+                 front_half: bool = False) -> list[float]:
+    """The ``num_src`` azimuths (deg) of :func:`pra_azimuth`'s peer call (the method told
+    that many sources are present); with ``front_half`` the grid spans -90..90 deg only (a
+    y-axis pair's steered response is the same at an azimuth and its mirror, and two of its
+    maxima were one source's twins: bench/sources.py)."""
     import pyroomacoustics as pra
 
     X = pra.transform.stft.analysis(x.T, nfft, nfft // 2, win=pra.hann(nfft))
     X = X.transpose([2, 1, 0])
-    az = np.radians(np.arange(0.0, 360.0, grid_deg))
+    az = np.radians(np.arange(-90.0, 90.0 + grid_deg / 2, grid_deg) if front_half
+                    else np.arange(0.0, 360.0, grid_deg))
     L = arr.positions[:, :2].T
-    doa = pra.doa.algorithms[algo](L, fs, nfft, c=arr.speed_of_sound, num_src=1, azimuth=az,
-                                   dim=2)
+    doa = pra.doa.algorithms[algo](L, fs, nfft, c=arr.speed_of_sound, num_src=num_src,
+                                   azimuth=az, dim=2)
     if near_m is not None and arr.n_mics >= 3:
         doa.mode_vec = _near_mode_vector(L, fs, nfft, arr, az, near_m)
     doa.locate_sources(X, freq_range=list(band))
-    return float(np.degrees(doa.azimuth_recon[0]))
+    return [float(v) for v in np.degrees(doa.azimuth_recon)]
 
 
 def _near_mode_vector(L: np.ndarray, fs: float, nfft: int, arr: MicArray, az: np.ndarray,

@@ -50,7 +50,7 @@ from _common import (  # noqa: E402
     shared_data_dir,
     write_markdown,
 )
-from doa import ARRAY_AT, PEER_NEAR_M, ROOM, _near_mode_vector  # noqa: E402
+from doa import ARRAY_AT, ROOM, pra_azimuths  # noqa: E402
 
 from hearsee.audio.arrays import MicArray  # noqa: E402
 from hearsee.audio.localize import localize_recording  # noqa: E402
@@ -93,25 +93,6 @@ def matched_errors(est: list[float], truth: list[float], two: bool) -> list[floa
         if best is None or max(e) < max(best):
             best = e
     return best
-
-
-def pra_azimuths(x: np.ndarray, arr: MicArray, algo: str, k: int) -> list[float]:
-    import pyroomacoustics as pra
-
-    nfft = 1024
-    X = pra.transform.stft.analysis(x.T, nfft, nfft // 2, win=pra.hann(nfft))
-    X = X.transpose([2, 1, 0])
-    # (a pair's steered response is the same at an azimuth and its mirror about the pair's
-    # axis, and two of its maxima were a twin: the two-mic preset's front half only)
-    az = np.radians(np.arange(0.0, 360.0, GRID_DEG) if arr.n_mics >= 3
-                    else np.arange(-90.0, 90.0 + GRID_DEG / 2, GRID_DEG))
-    L = arr.positions[:, :2].T
-    doa = pra.doa.algorithms[algo](L, FS, nfft, c=arr.speed_of_sound, num_src=k, azimuth=az,
-                                   dim=2)
-    if arr.n_mics >= 3:
-        doa.mode_vec = _near_mode_vector(L, FS, nfft, arr, az, PEER_NEAR_M)
-    doa.locate_sources(X, freq_range=list(BAND))
-    return [float(v) for v in np.degrees(doa.azimuth_recon)]
 
 
 def _speaker(p: Path) -> str:
@@ -186,7 +167,8 @@ def run(trials: int, seed: int, speech: list[Path]) -> tuple[dict, dict, dict]:
                 cpu["audio_s"] += x.shape[1] / FS
                 for m in PEERS:
                     t0 = time.process_time()
-                    est[m] = pra_azimuths(x, arr, m, 2)
+                    est[m] = pra_azimuths(x, FS, arr, m, BAND, 2, grid_deg=GRID_DEG,
+                                          front_half=two)
                     if m == "SRP":
                         cpu["SRP"] += time.process_time() - t0
             for m, e in est.items():
