@@ -274,6 +274,8 @@ def test_localize_sources_refuses_bad_input():
                 np.zeros((2, 2))):
         with pytest.raises(ConfigError):
             localize_sources(tau, ok, arr, pairs, 2)
+    with pytest.raises(ConfigError, match="valid"):
+        localize_sources(np.zeros((2, 3)), ["yes", "no"], arr, pairs, 2)
     with pytest.raises(ConfigError, match="unknown direction_clusters setting 'foo'"):
         localize_sources(np.zeros((2, 3)), ok, arr, pairs, 2, foo=1)
 

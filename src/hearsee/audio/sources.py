@@ -38,8 +38,8 @@ from hearsee.errors import ConfigError
 #: the most sources :func:`direction_clusters` looks for (``hearsee localize --sources``)
 MAX_SOURCES = 8
 #: width (standard deviation, degrees) of the Gaussian kernel of the frames' azimuth density:
-#: about a frame's spread around a talker 1-3 m away in a room of RT60 0.3 s (three-mic
-#: preset, 64-ms frames)
+#: of the order of the frames' spread around a talker (``spread_deg`` 2.5 and 4.2 deg for two
+#: talkers 1.5 m from the three-mic preset in a 6 x 5 x 3 m room of RT60 0.3 s, 64-ms frames)
 DEFAULT_BANDWIDTH_DEG = 4.0
 #: two sources closer than this (degrees) are one
 DEFAULT_MIN_SEPARATION_DEG = 20.0
@@ -48,7 +48,11 @@ DEFAULT_MIN_SEPARATION_DEG = 20.0
 #: recordings per cell of one or two talkers 1-2.5 m away, synthetic voices, 3 s, 20 dB,
 #: three-mic and two-mic presets, free field and RT60 0.3 / 0.6 s rooms): 0.1 / 0.15 / 0.2 found
 #: the one talker of a three-mic RT60 0.6 s recording alone in 75 / 83 / 83 % and both of two
-#: in 83 / 83 / 67 %; weighting the frames by their GCC confidence changed nothing that held
+#: in 83 / 83 / 67 %; weighting the frames by their GCC confidence changed nothing that held.
+#: Re-checked once merged maxima were dropped (dev seeds 264 / 265, 20 / 30 per cell): 0.12
+#: found both of two talkers in up to one recording more per cell and named a lone talker
+#: alone in up to three fewer (seed 265: three-mic RT60 0.6 s 97 -> 87 %, two-mic RT60 0.3 s
+#: 83 -> 73 %)
 DEFAULT_MIN_SHARE = 0.15
 #: the density's grid step (degrees)
 _GRID_DEG = 0.5
@@ -234,7 +238,9 @@ def localize_sources(tdoa_s: ArrayLike, valid: ArrayLike, array: Any,
     check_settings(direction_clusters, cluster_kwargs,
                    skip=("angle_deg", "weight", "max_sources"))
     tau = _numbers("tdoa_s", tdoa_s)
-    ok = np.asarray(valid, dtype=bool)
+    ok = np.asarray(valid)
+    if ok.dtype != bool:  # (text or numbers read as bools: "no" was a valid frame)
+        raise ConfigError(f"valid must hold one bool per frame, got {valid!r:.60}")
     if tau.ndim != 2 or ok.shape != (tau.shape[0],) or tau.shape[1] != len(pairs):
         raise ConfigError(f"localize_sources needs tdoa_s (n_frames, {len(pairs)}) and valid "
                           f"(n_frames,), got {tau.shape} and {ok.shape}")
