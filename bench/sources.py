@@ -23,7 +23,7 @@ time per second of audio, hearsee's whole ``localize_recording`` against SRP-PHA
 search.
 
 The default seed (260) was not used to build or tune ``hearsee.audio.sources``: its choices
-were made on dev seeds 254-257 and 261-263 (``DEFAULT_MIN_SHARE``, ``_from_broadside``,
+were made on dev seeds 254-257 and 261-265 (``DEFAULT_MIN_SHARE``, ``_from_broadside``,
 ``sources_from_spectra``); it was re-run after each change to the module that day.
 
 Usage: python bench/sources.py [--trials 12] [--seed 260] [--data ../shared/data]
