@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import check_settings, finite_number, real_entries, whole_number
+from hearsee.config import as_float_array, check_settings, finite_number, whole_number
 from hearsee.errors import ConfigError
 
 #: the most sources :func:`direction_clusters` looks for (``hearsee localize --sources``)
@@ -86,18 +86,6 @@ def _wrap(a: NDArray | float) -> NDArray | float:
     return 180.0 - (180.0 - np.asarray(a)) % 360.0
 
 
-def _numbers(name: str, value: Any) -> NDArray:
-    """``value`` as a float array when every entry is a real number (ConfigError naming
-    ``name`` for text, complex numbers, bools or ragged lists: numpy read "10" as 10.0)."""
-    if not real_entries(value):
-        raise ConfigError(f"{name} must hold real numbers, got {value!r:.60}")
-    try:
-        return np.asarray(value, dtype=float)
-    except ValueError:  # (a ragged list)
-        raise ConfigError(f"{name} must be a regular array of numbers, got {value!r:.60}"
-                          ) from None
-
-
 def _circular_mean(az: NDArray, w: NDArray) -> tuple[float, float]:
     """Weighted circular mean and standard deviation (degrees) of azimuths ``az``."""
     z = np.sum(w * np.exp(1j * np.radians(az))) / np.sum(w)
@@ -137,10 +125,10 @@ def direction_clusters(angle_deg: ArrayLike, weight: ArrayLike | None = None,
     min_share = finite_number("min_share", min_share, 0.0, 1.0)
     if min_share >= 1.0:
         raise ConfigError(f"min_share must be below 1 (a share of the frames), got {min_share}")
-    az = _numbers("angle_deg", angle_deg)
+    az = as_float_array(angle_deg, "angle_deg", finite=False)
     if az.ndim != 1 or not np.all(np.isfinite(az)):
         raise ConfigError("angle_deg must be a 1-D array of finite degrees, one per frame")
-    w = np.ones_like(az) if weight is None else _numbers("weight", weight)
+    w = np.ones_like(az) if weight is None else as_float_array(weight, "weight", finite=False)
     if w.shape != az.shape or not np.all(np.isfinite(w)) or np.any(w < 0):
         raise ConfigError("weight must hold one finite number >= 0 per angle")
     total = float(w.sum())
@@ -237,14 +225,15 @@ def localize_sources(tdoa_s: ArrayLike, valid: ArrayLike, array: Any,
 
     check_settings(direction_clusters, cluster_kwargs,
                    skip=("angle_deg", "weight", "max_sources"))
-    tau = _numbers("tdoa_s", tdoa_s)
+    tau = as_float_array(tdoa_s, "tdoa_s", finite=False)
     ok = np.asarray(valid)
     if ok.dtype != bool:  # (text or numbers read as bools: "no" was a valid frame)
         raise ConfigError(f"valid must hold one bool per frame, got {valid!r:.60}")
     if tau.ndim != 2 or ok.shape != (tau.shape[0],) or tau.shape[1] != len(pairs):
         raise ConfigError(f"localize_sources needs tdoa_s (n_frames, {len(pairs)}) and valid "
                           f"(n_frames,), got {tau.shape} and {ok.shape}")
-    w_all = np.ones(len(tau)) if weight is None else _numbers("weight", weight)
+    w_all = np.ones(len(tau)) if weight is None else as_float_array(weight, "weight",
+                                                                         finite=False)
     if w_all.shape != ok.shape:
         raise ConfigError(f"weight must hold one number per frame ({len(ok)}), got shape "
                           f"{w_all.shape}")
