@@ -140,6 +140,16 @@ def test_two_talkers_three_microphones(two3):
         assert _ang(s["azimuth_deg"], truth) < 2.0
         assert s["share"] > 0.2 and s["n_frames"] == int(np.sum(which == src.index(s)))
     assert set(np.unique(which)) <= {-1, 0, 1} and np.all(which[~tf.valid] == -1)
+    # the frames' localizations given (as localize_recording has them): the same sources;
+    # frames given none are left out
+    from hearsee.audio.localize import localize_tdoa
+
+    locs = [localize_tdoa(t, arr, tf.pairs, near_field=False) if v else None
+            for t, v in zip(tf.tdoa_s, tf.valid, strict=True)]
+    assert localize_sources(tf.tdoa_s, tf.valid, arr, tf.pairs, 2, locs=locs)[0] == src
+    none, none_which = localize_sources(tf.tdoa_s, tf.valid, arr, tf.pairs, 2,
+                                        locs=[None] * len(locs))
+    assert none == [] and np.all(none_which == -1)
     # one talker: one source
     one = _talkers(arr, (75.0,), 254)
     tf1 = estimate_tdoas(one, FS, arr, band_hz=(300, 3500))
@@ -274,6 +284,8 @@ def test_localize_sources_refuses_bad_input():
                 np.zeros((2, 2))):
         with pytest.raises(ConfigError):
             localize_sources(tau, ok, arr, pairs, 2)
+    with pytest.raises(ConfigError, match="locs"):
+        localize_sources(np.zeros((2, 3)), ok, arr, pairs, 2, locs=[None])
     with pytest.raises(ConfigError, match="valid"):
         localize_sources(np.zeros((2, 3)), ["yes", "no"], arr, pairs, 2)
     with pytest.raises(ConfigError, match="unknown direction_clusters setting 'foo'"):

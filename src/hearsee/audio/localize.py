@@ -1683,18 +1683,24 @@ def localize_recording(
     # a position to every frame of a volume array (18x slower) and, with five or more
     # microphones, could take the frame's direction from it (before 2026-12-02)
     frame_near = bool(in_plane) and array_geometry(arr).kind == "planar"
+    locs = []
+    for n in range(len(tf.t)):
+        row = tdoa[n]
+        ok = bool(tf.valid[n]) and bool(np.all(np.isfinite(row)))
+        locs.append(localize_tdoa(row, arr, tf.pairs, near_field=frame_near, in_plane=in_plane)
+                    if ok else None)
+    # (max_sources > 1 runs without the filter: the frames localized above are the raw ones)
     sources, which = (localize_sources(tf.tdoa_s, tf.valid, arr, tf.pairs, max_sources,
-                                       in_plane=in_plane) if max_sources > 1 else (None, None))
+                                       in_plane=in_plane, locs=locs)
+                      if max_sources > 1 else (None, None))
     if sources and array_geometry(arr).kind == "linear":  # (see sources_from_spectra)
         sources = sources_from_spectra(sources, which, lambda act: estimate_tdoas(
             x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method, pairs=pairs,
             active=act, **tdoa_kwargs), arr, tf.pairs, in_plane)
     frames = []
-    for n in range(len(tf.t)):
+    for n, loc in enumerate(locs):
         row = tdoa[n]
-        ok = bool(tf.valid[n]) and bool(np.all(np.isfinite(row)))
-        loc = (localize_tdoa(row, arr, tf.pairs, near_field=frame_near, in_plane=in_plane)
-               if ok else None)
+        ok = loc is not None
         frames.append({
             "t": float(tf.t[n]),
             "tdoa_s": {k: (float(v) if ok else None) for k, v in zip(labels, row, strict=True)},

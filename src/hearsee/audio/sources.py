@@ -199,6 +199,7 @@ def _from_broadside(cos_theta: float) -> tuple[float, float]:
 def localize_sources(tdoa_s: ArrayLike, valid: ArrayLike, array: Any,
                      pairs: Sequence[tuple[int, int]], max_sources: int = 2, *,
                      in_plane: bool = False, weight: ArrayLike | None = None,
+                     locs: Sequence[Any] | None = None,
                      **cluster_kwargs: Any) -> tuple[list[dict[str, Any]], NDArray]:
     """Up to ``max_sources`` sources of a recording from its frames' TDOAs.
 
@@ -210,7 +211,10 @@ def localize_sources(tdoa_s: ArrayLike, valid: ArrayLike, array: Any,
     linear array's: the sine of its cone's angle from broadside, times 90, whatever the
     axis) clustered by
     :func:`direction_clusters`
-    (``weight`` per frame and ``cluster_kwargs`` passed on), and each cluster localized again
+    (``weight`` per frame and ``cluster_kwargs`` passed on; ``locs``, one per frame with None
+    for frames without, are the frames' localizations when the caller has them already, as
+    :func:`~hearsee.audio.localize.localize_recording` does: not computed again), and each
+    cluster localized again
     from its frames' median TDOA per pair: the source's azimuth, elevation and candidates as
     the array can tell them.
 
@@ -237,12 +241,18 @@ def localize_sources(tdoa_s: ArrayLike, valid: ArrayLike, array: Any,
     if w_all.shape != ok.shape:
         raise ConfigError(f"weight must hold one number per frame ({len(ok)}), got shape "
                           f"{w_all.shape}")
+    if locs is not None and len(locs) != len(tau):
+        raise ConfigError(f"locs must hold one localization (or None) per frame ({len(tau)}), "
+                          f"got {len(locs)}")
     arr = load_array(array)
     geo = array_geometry(arr)
     near = bool(in_plane) and geo.kind == "planar"  # (as localize_recording's frames)
     rows, angle, key = [], [], []  # (the frames' angles, and what is clustered)
     for n in np.flatnonzero(ok & np.all(np.isfinite(tau), axis=1)):
-        loc = localize_tdoa(tau[n], arr, pairs, near_field=near, in_plane=in_plane)
+        loc = (localize_tdoa(tau[n], arr, pairs, near_field=near, in_plane=in_plane)
+               if locs is None else locs[n])
+        if loc is None:
+            continue
         if geo.kind == "linear":  # (any axis: a vertical one has no azimuth, a tilted one
             # puts every cone that misses the horizontal plane on its own azimuth)
             a, k = _from_broadside(loc.extra["cos_theta"])
