@@ -14,7 +14,12 @@ from hearsee.audio.arrays import MicArray
 from hearsee.audio.localize import localize_recording
 from hearsee.audio.propagation import simulate_free_field
 from hearsee.audio.signals import synthetic_voice
-from hearsee.audio.sources import MAX_SOURCES, direction_clusters, localize_sources
+from hearsee.audio.sources import (
+    MAX_SOURCES,
+    direction_clusters,
+    localize_sources,
+    track_sources,
+)
 from hearsee.audio.tdoa import estimate_tdoas
 from hearsee.cli import main
 from hearsee.errors import ConfigError
@@ -314,3 +319,184 @@ def test_a_vertical_or_tilted_pair_clusters_its_cones(tmp_path, tilt_deg, cone_d
                  for s in src)
     assert np.allclose(got, cone_deg, atol=1.5)
     assert set(which[:50]) != set(which[50:])
+
+
+# ----------------------------------------------------------------------- moving talkers
+def _two_talker_angles(seed, n=190, hop=0.032, outliers=0.05):
+    """Frames of a walker (-60 -> +30 deg at 15 deg/s) and a still talker (80 deg) by turns,
+    a third of the frames without a direction, ``outliers`` of them anywhere; 3-deg noise.
+    Returns ``t, angles, who`` (0 walker, 1 still, 2 none or an outlier)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * hop
+    who = rng.integers(0, 3, n)
+    a = np.where(who == 0, -60.0 + 15.0 * t, 80.0) + rng.normal(0, 3.0, n)
+    a[who == 2] = np.nan
+    out = rng.random(n) < outliers
+    a[out] = rng.uniform(-180, 180, out.sum())
+    who[out] = 2
+    return t, a, who
+
+
+def test_a_walker_and_a_still_talker_are_two_tracks():
+    t, a, who = _two_talker_angles(268)
+    tracks, which = track_sources(t, a, max_sources=2)
+    assert len(tracks) == 2
+    walker = next(k for k, tr in enumerate(tracks) if abs(tr.angle_deg[-1] - 80.0) > 20)
+    still = 1 - walker
+    # nearly every frame of each talker joins its track (the first ones start it)
+    assert np.mean(which[who == 0] == walker) > 0.9 and np.mean(which[who == 1] == still) > 0.9
+    assert set(which[np.isnan(a)]) == {-1}
+    for k, truth in ((walker, lambda tt: -60.0 + 15.0 * tt), (still, lambda tt: 80.0)):
+        tr = tracks[k]
+        settled = tr.t > tr.t[0] + 0.5  # (after its first half second)
+        err = np.abs((tr.angle_deg[settled] - truth(tr.t[settled]) + 180) % 360 - 180)
+        assert np.median(err) < 2.0 and err.max() < 8.0
+        assert np.array_equal(tr.frames, np.flatnonzero(which == k))
+        assert tr.t[0] == t[tr.frames[0]] and tr.t[-1] == t[tr.frames[-1]]
+    assert sum(tr.share for tr in tracks) == pytest.approx(
+        np.sum(which >= 0) / np.sum(np.isfinite(a)))
+
+
+def test_a_walker_across_the_wrap_is_one_track():
+    rng = np.random.default_rng(269)
+    t = np.arange(150) * 0.032
+    truth = 160.0 + 12.0 * t  # 160 -> 217.6 = -142.4 deg
+    a = (truth + rng.normal(0, 2.0, 150) + 180.0) % 360.0 - 180.0
+    a[rng.random(150) < 0.4] = np.nan
+    tracks, which = track_sources(t, a, max_sources=2)
+    assert len(tracks) == 1 and np.all(which[np.isfinite(a)][3:] == 0)
+    assert _ang(tracks[0].angle_deg[-1], truth[-1]) < 4.0
+
+
+def test_at_most_max_sources_at_once_and_small_tracks_dropped():
+    t, a, who = _two_talker_angles(270)
+    one, which = track_sources(t, a, max_sources=1)
+    # one at a time: the talker with the larger share, every frame of the other none
+    assert len(one) == 1
+    assert np.all(which[who == 1] == -1) or np.all(which[who == 0] == -1)
+    # a burst of 5 frames at 150 deg holds under 5 % of the frames: not a source
+    b = a.copy()
+    b[100:105] = 150.0
+    tracks, which = track_sources(t, b, max_sources=3)
+    assert len(tracks) == 2 and np.all(which[100:105] == -1)
+    kept, _ = track_sources(t, b, max_sources=3, min_share=0.0)
+    assert len(kept) == 3 and any(_ang(tr.angle_deg[-1], 150.0) < 3 for tr in kept)
+    # scattered frames pile up nowhere (chance would put as many in a gate: max_chance): of
+    # 20 such recordings, every frame or half of them located, at most one gives a track
+    rng = np.random.default_rng(271)
+    none, which = track_sources(t, rng.uniform(-180, 180, len(t)), max_sources=2)
+    assert none == [] and np.all(which == -1)
+    found = []
+    for _ in range(20):
+        r = rng.uniform(-180, 180, len(t))
+        r[rng.random(len(t)) < 0.5] = np.nan
+        found.append(len(track_sources(t, r, max_sources=2)[0]))
+    assert sum(found) <= 1, found
+    # the same frames with the chance test off: tracks of chance frames
+    loose = [len(track_sources(t, np.where(rng.random(len(t)) < 0.5, np.nan,
+                                           rng.uniform(-180, 180, len(t))),
+                               max_sources=2, max_chance=1.0)[0]) for _ in range(20)]
+    assert sum(loose) >= 5, loose
+    empty, which = track_sources(t, np.full(len(t), np.nan))
+    assert empty == [] and np.all(which == -1)
+
+
+@pytest.mark.parametrize("args, kw, words", [
+    (([0.0, 0.1, 0.05], [1.0, 2.0, 3.0]), {}, "non-decreasing"),
+    (([0.0, np.nan], [1.0, 2.0]), {}, "non-decreasing"),
+    (([0.0, 0.1], [1.0, np.inf]), {}, "angle_deg"),
+    (([0.0, 0.1], [1.0, 2.0, 3.0]), {}, "angle_deg"),
+    (([0.0, 0.1], ["a", "b"]), {}, "angle_deg"),
+    (([[0.0, 0.1]], [1.0, 2.0]), {}, "t must be a 1-D"),
+    (([0.0, 0.1], [1.0, 2.0], [1.0, -1.0]), {}, "weight"),
+    (([0.0, 0.1], [1.0, 2.0]), {"max_sources": 9}, "max_sources"),
+    (([0.0, 0.1], [1.0, 2.0]), {"confirm_hits": 0}, "confirm_hits"),
+    (([0.0, 0.1], [1.0, 2.0]), {"max_jump_deg": 0.0}, "max_jump_deg"),
+    (([0.0, 0.1], [1.0, 2.0]), {"max_coast_s": np.nan}, "max_coast_s"),
+    (([0.0, 0.1], [1.0, 2.0]), {"min_share": 1.0}, "min_share"),
+    (([0.0, 0.1], [1.0, 2.0]), {"max_chance": 0.0}, "max_chance"),
+    (([0.0, 0.1], [1.0, 2.0]), {"span_deg": 400.0}, "span_deg"),
+])
+def test_track_sources_refuses_bad_input(args, kw, words):
+    with pytest.raises(ConfigError, match=words):
+        track_sources(*args, **kw)
+
+
+def _walk_and_stand(arr, seed, duration=4.0):
+    """Free field: a male voice walking from -60 deg (2 m away) at 0.6 m/s across the front,
+    a female voice standing at 110 deg 1.5 m away, 25 dB. Returns the recording and the
+    walker's trajectory."""
+    from hearsee.sim.moving import linear_trajectory, simulate_moving_recording
+
+    start = 2.0 * unit_vector_deg(-60.0, 0.0)
+    traj = linear_trajectory(start, [0.0, 0.6, 0.0], duration)
+    xw, _ = simulate_moving_recording(arr, traj, "male", duration, FS, seed=seed)
+    s = synthetic_voice("female", duration, FS, seed + 1)
+    xs = simulate_free_field(s, FS, arr, 1.5 * unit_vector_deg(110.0, 0.0), rng=seed + 2)
+    n = min(xw.shape[1], xs.shape[1])
+    from hearsee.audio.propagation import add_noise
+
+    return add_noise(xw[:, :n] + xs[:, :n], 25.0, seed + 3), traj
+
+
+@pytest.mark.parametrize("preset", ["three-mic", "two-mic"])
+def test_localize_recording_follows_a_walking_talker(preset):
+    arr = MicArray.from_preset(preset)
+    two = arr.n_mics == 2
+    x, traj = _walk_and_stand(arr, 272)
+    doc = localize_recording(x, FS, arr, kalman=False, max_sources=2, moving=True,
+                             band_hz=(300, 3500))
+    src = doc["sources"]
+    assert 2 <= len(src) <= 3
+    assert set(src[0]) == {"azimuth_deg", "elevation_deg", "candidates", "tdoa_s", "share",
+                           "n_frames", "t_start_s", "t_end_s", "path"}
+    counts = [sum(f["source"] == k for f in doc["frames"]) for k in range(len(src))]
+    assert counts == [s["n_frames"] for s in src]
+
+    def err(est, truth):
+        return abs(_fold(est) - _fold(truth)) if two else _ang(est, truth)
+
+    # every half second from 1 s: each talker within 8 deg of a track alive then
+    hits = []
+    for tau in np.arange(1.0, 3.6, 0.5):
+        walker = float(np.degrees(np.arctan2(*traj.heard_at(tau)[1::-1])))
+        est = [s["path"]["azimuth_deg"][int(np.argmin(np.abs(np.array(s["path"]["t_s"]) - tau)))]
+               for s in src if s["t_start_s"] <= tau <= s["t_end_s"]]
+        hits.append([any(err(e, truth) < 8.0 for e in est) for truth in (walker, 110.0)])
+    assert np.mean(hits) >= 0.8, hits
+    # where it was last heard: the walker's track ends near its last position
+    last = max(src, key=lambda s: s["t_end_s"] if err(s["azimuth_deg"], 110.0) > 20 else -1)
+    end = float(np.degrees(np.arctan2(*traj.heard_at(last["t_end_s"])[1::-1])))
+    assert err(last["azimuth_deg"], end) < 8.0
+
+
+def test_moving_needs_several_sources(two3):
+    arr = MicArray.from_preset("three-mic")
+    with pytest.raises(ConfigError, match="max_sources >= 2"):
+        localize_recording(two3, FS, arr, kalman=False, moving=True)
+    with pytest.raises(ConfigError, match="moving must be True or False"):
+        localize_recording(two3, FS, arr, kalman=False, max_sources=2, moving="yes")
+    with pytest.raises(ConfigError, match="unknown track_sources setting 'bandwidth_deg'"):
+        from hearsee.audio.sources import localize_moving_sources
+
+        tf = estimate_tdoas(two3, FS, arr)
+        localize_moving_sources(tf.t, tf.tdoa_s, tf.valid, arr, tf.pairs, 2, bandwidth_deg=4)
+
+
+def test_cli_moving(two3_wav, capsys):
+    code, out, err = _run(capsys, two3_wav, "--array", "three-mic", "--sources", "2",
+                          "--moving")
+    assert code == 0, err
+    doc = json.loads(out)
+    # two still talkers, tracked: two sources at their directions, each path on it
+    assert sorted(round(s["azimuth_deg"] / 10) for s in doc["sources"]) == [-11, 4]
+    for s in doc["sources"]:
+        path = np.array([a for a in s["path"]["azimuth_deg"]])
+        assert np.all([_ang(p, s["azimuth_deg"]) < 6.0 for p in path])
+        assert len(s["path"]["t_s"]) == len(path) and s["t_start_s"] == s["path"]["t_s"][0]
+    code, out, _ = _run(capsys, two3_wav, "--array", "three-mic", "--sources", "2",
+                        "--moving", "--format", "table")
+    assert code == 0 and "source 0: azimuth" in out and "heard 0." in out
+    code, out, err = _run(capsys, two3_wav, "--array", "three-mic", "--moving")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert "--sources" in err and "Traceback" not in err

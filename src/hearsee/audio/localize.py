@@ -57,7 +57,14 @@ from hearsee.audio.arrays import (
     residual_scaled_variance,
     span_dimension,
 )
-from hearsee.config import check_settings, finite_number, is_real, real_entries, whole_number
+from hearsee.config import (
+    check_settings,
+    finite_number,
+    is_real,
+    real_entries,
+    true_or_false,
+    whole_number,
+)
 from hearsee.errors import ConfigError, DeadMicrophoneWarning, GeometryError
 from hearsee.geometry import unit_vector_deg, wrap_deg
 
@@ -1513,6 +1520,7 @@ def localize_recording(
     in_plane: bool = False,
     tdoa_std_s: float = DEFAULT_TDOA_STD_S,
     max_sources: int = 1,
+    moving: bool = False,
     **tdoa_kwargs: Any,
 ) -> dict[str, Any]:
     """The per-frame pipeline behind ``hearsee localize``: GCC TDOAs -> ITD Kalman -> solver.
@@ -1591,6 +1599,13 @@ def localize_recording(
         none). Needs ``kalman=False``: the ITD filter follows one source and takes another's
         frames for outliers. The ``summary`` stays the whole recording's one estimate. Not
         for masked arrays.
+    moving : bool
+        With ``max_sources`` >= 2: the sources may walk -- the frames' directions are tracked
+        through time instead of clustered (:func:`hearsee.audio.sources.track_sources`), at
+        most ``max_sources`` at once, and each source adds ``t_start_s``, ``t_end_s`` and its
+        ``path`` (``{"t_s": [...], "azimuth_deg": [...]}``, every frame of its life); its
+        direction is where it was last heard
+        (:func:`~hearsee.audio.sources.localize_moving_sources`).
     tdoa_kwargs :
         Further :func:`hearsee.audio.tdoa.estimate_tdoas` settings, e.g.
         ``**hearsee.audio.tdoa.SUMMARY_TUNED`` (the benchmarked whole-recording estimate).
@@ -1614,7 +1629,9 @@ def localize_recording(
                          "sync_offsets_s", "tonal_lines_hz", "microphones_used"},
              "sources": [{"azimuth_deg", "elevation_deg", "candidates", "tdoa_s", "share",
                           "n_frames", "spread_deg"}] (with max_sources >= 2; the frames then
-                                                      hold "source")}
+                                                      hold "source"; with moving, "t_start_s",
+                                                      "t_end_s" and "path" instead of
+                                                      "spread_deg")}
 
         with None where a quantity is not resolvable (no source in the frame, elevation of a
         linear array, ...). ``microphones_used``: the microphones the directions come from --
@@ -1628,7 +1645,12 @@ def localize_recording(
         half instead, 0.5-1: :func:`hearsee.audio.mask.localize_recording_mask`).
     """
     from hearsee.audio.itd_filter import itd_filter_entries, smooth_recording_itds
-    from hearsee.audio.sources import MAX_SOURCES, localize_sources, sources_from_spectra
+    from hearsee.audio.sources import (
+        MAX_SOURCES,
+        localize_moving_sources,
+        localize_sources,
+        sources_from_spectra,
+    )
     from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, normalize_method
 
     arr = load_array(array)
@@ -1639,6 +1661,10 @@ def localize_recording(
     if max_sources > 1 and kalman:
         raise ConfigError("max_sources > 1 needs kalman=False: the ITD Kalman filter follows "
                           "one source and takes another's frames for outliers")
+    moving = true_or_false("moving", moving)
+    if moving and max_sources < 2:
+        raise ConfigError("moving=True tracks several sources: give max_sources >= 2 (one "
+                          "moving source is the Kalman-smoothed frames', or hearsee track)")
     if arr.mask is not None:  # masked two-microphone array: one 360-degree azimuth (ch. 3)
         from hearsee.audio.mask import localize_recording_mask
 
@@ -1668,7 +1694,7 @@ def localize_recording(
         return _without_dead(x, fs, arr, tf, dict(
             frame_ms=frame_ms, hop_ms=hop_ms, method=method, kalman=kalman, q_std_s=q_std_s,
             r_std_s=r_std_s, tune_kalman=tune_kalman, in_plane=in_plane,
-            tdoa_std_s=tdoa_std_s, max_sources=max_sources, **tdoa_kwargs))
+            tdoa_std_s=tdoa_std_s, max_sources=max_sources, moving=moving, **tdoa_kwargs))
     labels = tf.pair_labels
     tdoa = tf.tdoa_s
     noise: tuple[float, float] | None = None  # the filter's (q_std_s, r_std_s)
@@ -1690,10 +1716,14 @@ def localize_recording(
         locs.append(localize_tdoa(row, arr, tf.pairs, near_field=frame_near, in_plane=in_plane)
                     if ok else None)
     # (max_sources > 1 runs without the filter: the frames localized above are the raw ones)
-    sources, which = (localize_sources(tf.tdoa_s, tf.valid, arr, tf.pairs, max_sources,
-                                       in_plane=in_plane, locs=locs)
-                      if max_sources > 1 else (None, None))
-    if sources and array_geometry(arr).kind == "linear":  # (see sources_from_spectra)
+    sources, which = None, None
+    if max_sources > 1 and moving:
+        sources, which = localize_moving_sources(tf.t, tf.tdoa_s, tf.valid, arr, tf.pairs,
+                                                 max_sources, in_plane=in_plane, locs=locs)
+    elif max_sources > 1:
+        sources, which = localize_sources(tf.tdoa_s, tf.valid, arr, tf.pairs, max_sources,
+                                          in_plane=in_plane, locs=locs)
+    if sources and not moving and array_geometry(arr).kind == "linear":  # (sources_from_spectra)
         sources = sources_from_spectra(sources, which, lambda act: estimate_tdoas(
             x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method, pairs=pairs,
             active=act, **tdoa_kwargs), arr, tf.pairs, in_plane)

@@ -57,6 +57,11 @@ def _write_csv(doc: dict[str, Any]) -> None:
     sys.stdout.write(buf.getvalue())
 
 
+def _first(values: list[Any]) -> Any:
+    """The first of ``values`` that is not None (a moving source's path), else None."""
+    return next((v for v in values if v is not None), None)
+
+
 #: The table shows every pair's TDOA up to this many pairs (four microphones), else only the
 #: pairs with microphone 0 (the ITD filter's states): the 28 pairs of eight microphones were
 #: squeezed to unreadable one-character columns in 160 characters. JSON and CSV keep them all.
@@ -111,10 +116,13 @@ def _print_table(doc: dict[str, Any]) -> None:
     for k, src in enumerate(doc.get("sources", [])):
         cands = ", ".join(f"({_fmt(c['azimuth_deg'])}, {_fmt(c['elevation_deg'])})"
                           for c in src["candidates"])
+        how = (f"spread {src['spread_deg']:.1f} deg" if "spread_deg" in src else
+               f"heard {src['t_start_s']:.2f}-{src['t_end_s']:.2f} s, azimuth "
+               f"{_fmt(_first(src['path']['azimuth_deg']))} -> "
+               f"{_fmt(_first(src['path']['azimuth_deg'][::-1]))} deg")
         con.print(f"source {k}: azimuth {_fmt(src['azimuth_deg'])} deg, elevation "
                   f"{_fmt(src['elevation_deg'])} deg, candidates {cands}, {src['n_frames']} "
-                  f"frames ({src['share']:.0%}), spread {src['spread_deg']:.1f} deg",
-                  highlight=False, soft_wrap=True)
+                  f"frames ({src['share']:.0%}), {how}", highlight=False, soft_wrap=True)
     if "sources" in doc and not doc["sources"]:
         con.print("sources: none (the frames' directions do not pile up anywhere)",
                   highlight=False)
@@ -181,6 +189,11 @@ def localize_cmd(
         "the frames' directions clustered; the JSON's sources (direction, share of the located "
         "frames) and each frame's source. Above 1 the frames are not smoothed (the ITD Kalman "
         "filter follows one source). Not for masked arrays.")] = 1,
+    moving: Annotated[bool, typer.Option(
+        "--moving", help="With --sources: the sources may walk -- the frames' directions are "
+        "tracked through time instead of clustered; each source adds its first and last frame "
+        "(t_start_s, t_end_s) and its path (azimuth at every frame of its life), its direction "
+        "is where it was last heard.")] = False,
 ) -> None:
     """Estimate TDOAs and the source direction per frame and for the whole recording."""
     from hearsee.audio.arrays import MAX_TDOA_STD_S, load_array
@@ -213,6 +226,9 @@ def localize_cmd(
     if kalman_tuned and sources > 1:
         raise ConfigError("--kalman-tuned tunes the ITD Kalman filter, which follows one source: "
                           "with --sources above 1 the frames are not smoothed; give one of them")
+    if moving and sources < 2:
+        raise ConfigError("--moving tracks several sources: give --sources 2 or more with it "
+                          "(one moving source: hearsee track)")
     arr = load_array(array)
     if summary_tuned and arr.mask is not None:
         raise ConfigError(f"--summary-tuned: the masked array {arr.name!r} has a pipeline of its "
@@ -243,7 +259,7 @@ def localize_cmd(
         doc = localize_recording(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms,
                                  kalman=not no_kalman and sources == 1,
                                  tune_kalman=kalman_tuned, progress=advance, in_plane=in_plane,
-                                 max_sources=sources,
+                                 max_sources=sources, moving=moving,
                                  **settings, **({} if tdoa_std_us is None else
                                                 {"tdoa_std_s": tdoa_std_us * 1e-6}),
                                  **({} if band is None else {"band_hz": band}))
