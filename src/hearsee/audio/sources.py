@@ -335,33 +335,42 @@ def sources_from_spectra(sources: list[dict[str, Any]], which: NDArray,
 
 
 # -- moving talkers ------------------------------------------------------------------------
-#: :func:`track_sources`' defaults. One frame's direction noise, degrees (the frames' spread
-#: about a still talker, as :data:`DEFAULT_BANDWIDTH_DEG`).
+#: :func:`track_sources`' defaults, chosen on dev recordings (seeds 270-273 of
+#: bench/moving_sources.py, scratch, 2026-12-06: 20 recordings x 10 moments per array, room and
+#: signal cell; the mean over the 8 cells of "both talkers within 10 deg", 67.8 % with 4 deg,
+#: 20 deg/s^2, 15 deg, 4 frames, 3 s, 0.5 s and 0.05 before the chance test, each changed
+#: alone). A frame's direction noise, degrees: 3 / 6 / 8 deg gave 63.9 / 68.9 / 68.0 %.
 TRACK_SIGMA_MEAS_DEG = 6.0
 #: the tracks' angular acceleration noise, deg/s^2: a talker walking at 1.5 m/s 1 m away turns
 #: at up to 86 deg/s, but over seconds, and a track must coast through the other talker's
-#: turns without drifting onto them
+#: turns without drifting onto them (10 / 40 / 80 deg/s^2: 64.6 / 66.2 / 62.9 %)
 TRACK_ACCEL_DPS2 = 20.0
 #: a frame joins no track whose predicted angle is farther than this (degrees), however
 #: uncertain the track: a track that coasted through a pause widens its gate, and took the
-#: frames between two talkers (or the other talker's)
+#: frames between two talkers (or the other talker's); with the chance test 10 / 20 / 25 deg
+#: gave 58.4 / 60.6 / 48.5 % against 65.4 %
 TRACK_MAX_JUMP_DEG = 15.0
 #: a new track's angular rate spread, deg/s (a talker walking at 1 m/s 2 m away: <= 29 deg/s)
 TRACK_INIT_RATE_DPS = 30.0
-#: a new track is a source once this many frames joined it
+#: a new track is a source once this many frames joined it (3 / 6: 67.9 / 65.8 %)
 TRACK_CONFIRM_HITS = 4
-#: a track that is not yet a source ends after this long (s) without a frame
+#: a track that is not yet a source ends after this long (s) without a frame (0.3 / 1 s:
+#: 66.8 / 67.3 %)
 TRACK_TENTATIVE_S = 0.5
-#: a source's track ends after this long (s) without a frame (a talker's pause)
+#: a source's track ends after this long (s) without a frame, a talker's pause (1.5 / 5 s:
+#: 66.3 / 67.8 %)
 TRACK_MAX_COAST_S = 3.0
-#: a track holding less than this share of the located frames' weight is not reported (a
-#: reflection's, or a fragment of a talker's)
+#: a track holding less than this share of the located frames' weight is not reported, a
+#: reflection's or a fragment of a talker's (0.02 / 0.1: 68.1 / 66.8 %)
 TRACK_MIN_SHARE = 0.05
 #: a track is not reported when frames scattered at random over the angles would put as many
 #: frames in its gate (``max_jump_deg`` either side) during its life (first to last frame)
-#: with at least this probability (binomial; each new frame could start a track, so the bar
-#: is low): half the frames of 6 s scattered at random gathered into a track in 64 of 100
-#: trials under a bar of 20 % of its life's frames, in none under this one
+#: with at least this probability (binomial; each frame that joins no track starts one, so
+#: the bar is low). Scattered frames (190 frames of 32 ms, every one or half of them located,
+#: 100 trials each) gathered into a reported track in 64 % of the trials under a bar of 20 %
+#: of the frames of its life, in 0-3 % under this one (10 % with 1e-3); on the dev recordings
+#: it cost the two-mic preset (mean over all cells 68.9 -> 65.4 %; 67.0 % with 1e-3), whose
+#: angles span 180 deg, where a gate is twice the chance
 TRACK_MAX_CHANCE = 1e-4
 
 
