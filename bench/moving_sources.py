@@ -26,7 +26,7 @@ sets them up (1024-sample Hann STFT at 50 % overlap, 300-3500 Hz, the array plan
 grid, a pair's front half).
 
 The default seed (280) was not used to choose :func:`hearsee.audio.sources.track_sources`'
-settings; those were chosen on dev seeds 270-279 (see its constants).
+settings; those were chosen on dev seeds 270-273 (see its constants).
 
 Usage: python bench/moving_sources.py [--trials 10] [--seed 280] [--data ../shared/data]
 """
