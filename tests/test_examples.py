@@ -37,6 +37,7 @@ RUNS = {
     "ch6_faces": ([], ["ch6_head_pose.png", "ch6_lfw.png"]),
     "ch6_motion": ([], ["ch6_motion.png"]),
     "ch7_humans": ([], ["ch7_humans.png"]),
+    "two_talkers": ([], ["two_talkers.png"]),
 }
 
 
