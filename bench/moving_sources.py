@@ -10,7 +10,7 @@ pair: in angle from its broadside, what it can tell); a synthetic male and femal
 speakers; free field (``simulate_moving_free_field``: time-varying fractional delays) or
 bench/doa.py's 8 x 7 x 3 m room at RT60 0.3 s (``simulate_moving_room``: block-wise image
 sources, crossfaded; the standing talker by ``simulate_recording``); white sensor noise 20 dB
-below the mixture.
+below the mixture. Also the walker alone, to count false second tracks.
 
 Scored every 0.5 s from t = 1 s to 5.5 s: the directions each method gives for that moment,
 matched to where the two talkers were heard from then (``Trajectory.heard_at``; the
@@ -109,8 +109,9 @@ def scene(two: bool, rng: np.random.Generator) -> tuple:
 
 
 def recording(arr: MicArray, kind: str, rt60: float, rng: np.random.Generator,
-              speech: list[Path]) -> tuple[np.ndarray, object, np.ndarray]:
-    """The two talkers' recording, the walker's trajectory and the still talker's position."""
+              speech: list[Path], alone: bool = False) -> tuple[np.ndarray, object, np.ndarray]:
+    """The two talkers' recording (``alone``: the walker's only), the walker's trajectory and
+    the still talker's position."""
     two = arr.n_mics == 2
     traj, still = scene(two, rng)
     room = None if rt60 == 0 else {"room_dim": list(ROOM), "rt60": rt60,
@@ -118,12 +119,14 @@ def recording(arr: MicArray, kind: str, rt60: float, rng: np.random.Generator,
     walker_sig, still_sig = talker_specs(kind, 2, rng, speech)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        xw, _ = simulate_moving_recording(arr, traj, signal=walker_sig, duration_s=DURATION_S,
-                                          fs=FS, room=room, seed=int(rng.integers(2**31)))
-        xs, _ = simulate_recording(arr, still, signal=still_sig, duration_s=DURATION_S, fs=FS,
-                                   room=room, seed=int(rng.integers(2**31)))
-    n = min(xw.shape[1], xs.shape[1])
-    return add_noise(xw[:, :n] + xs[:, :n], SNR_DB, rng), traj, still
+        x, _ = simulate_moving_recording(arr, traj, signal=walker_sig, duration_s=DURATION_S,
+                                         fs=FS, room=room, seed=int(rng.integers(2**31)))
+        if not alone:
+            xs, _ = simulate_recording(arr, still, signal=still_sig, duration_s=DURATION_S,
+                                       fs=FS, room=room, seed=int(rng.integers(2**31)))
+            n = min(x.shape[1], xs.shape[1])
+            x = x[:, :n] + xs[:, :n]
+    return add_noise(x, SNR_DB, rng), traj, still
 
 
 def track_estimates(doc: dict, tau: float) -> list[float]:
@@ -136,6 +139,46 @@ def track_estimates(doc: dict, tau: float) -> list[float]:
             if a is not None:
                 out.append(a)
     return out
+
+
+def _localized(x: np.ndarray, arr: MicArray) -> dict:
+    """hearsee's tracks of a recording: ``localize_recording``'s document."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return localize_recording(x, FS, arr, kalman=False, max_sources=2, moving=True,
+                                  band_hz=BAND)
+
+
+def run_alone(trials: int, seed: int, speech: list[Path]) -> dict:
+    """The walker alone (its own random numbers): per (array, RT60, signal) and moment, how
+    many tracks were alive and the nearest one's error (deg; 180 without one)."""
+    rng = np.random.default_rng([seed, 1])
+    kinds = ["voices"] + (["arctic"] if speech else [])
+    out: dict = {}
+    for array, rt60, kind in itertools.product(ARRAYS, RT60S, kinds):
+        arr = MicArray.from_preset(array)
+        two = arr.n_mics == 2
+        for _ in range(trials):
+            x, traj, _ = recording(arr, kind, rt60, rng, speech, alone=True)
+            doc = _localized(x, arr)
+            for tau in TIMES_S:
+                est = track_estimates(doc, tau)
+                truth = float(_azimuth(traj.heard_at(tau)))
+                e = min((angle_error(a, truth, two) for a in est), default=180.0)
+                out.setdefault((array, rt60, kind), []).append((len(est), e))
+    return out
+
+
+def alone_table(alone: dict) -> tuple[list, list]:
+    headers = ["array", "RT60 s", "signal", "recordings x moments",
+               f"one track, within {HIT_DEG:g} deg %", "two tracks %", "no track %"]
+    rows = []
+    for key, v in alone.items():
+        n = np.array([a for a, _ in v])
+        e = np.array([b for _, b in v])
+        rows.append([*key, len(v), f"{100 * np.mean((n == 1) & (e < HIT_DEG)):.0f}",
+                     f"{100 * np.mean(n >= 2):.0f}", f"{100 * np.mean(n == 0):.0f}"])
+    return headers, rows
 
 
 def run(trials: int, seed: int, speech: list[Path]) -> tuple[dict, dict]:
@@ -152,10 +195,7 @@ def run(trials: int, seed: int, speech: list[Path]) -> tuple[dict, dict]:
         key = (array, rt60, kind)
         for _ in range(trials):
             x, traj, still = recording(arr, kind, rt60, rng, speech)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                doc = localize_recording(x, FS, arr, kalman=False, max_sources=2, moving=True,
-                                         band_hz=BAND)
+            doc = _localized(x, arr)
             n_tracks.setdefault(key, []).append(len(doc["sources"]))
             for tau in TIMES_S:
                 truth = [float(_azimuth(traj.heard_at(tau))), float(_azimuth(still))]
@@ -239,10 +279,14 @@ def main(argv: list[str] | None = None) -> int:
     t_wall = time.time()
     with threadpool_limits(1):  # (as bench/sources.py)
         err, n_tracks = run(args.trials, args.seed, speech)
+        alone = run_alone(args.trials, args.seed, speech)
     headers, rows = tables(err, n_tracks)
     print_table("Two talkers, one walking: both found (%) / median matched error (deg)",
                 headers, rows)
     print(wins(err, n_tracks))
+    a_headers, a_rows = alone_table(alone)
+    print_table("One talker walking alone: hearsee's tracks (told at most two)", a_headers,
+                a_rows)
     if args.no_write:
         return 0
     RESULTS.mkdir(parents=True, exist_ok=True)
@@ -254,6 +298,10 @@ def main(argv: list[str] | None = None) -> int:
          f"{wins(err, n_tracks)}. Each cell: `--trials` {args.trials} recordings x "
          f"{len(TIMES_S)} moments; seed {args.seed}; {data}. Plot: {png.name}. Wall time "
          f"{time.time() - t_wall:.0f} s."),
+        ("One talker walking alone", markdown_table(a_headers, a_rows) + "\n\n"
+         "The same scenes without the still talker (their own random numbers): at each moment, "
+         "whether hearsee's tracks alive then are one, within 10 deg of the walker, or two "
+         "(a false second source), or none."),
     ], intro=__doc__.split("\n\n")[0])
     print(f"wrote {out} and {png}")
     return 0
