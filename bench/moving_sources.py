@@ -18,12 +18,13 @@ assignment whose larger error is smallest, a missing estimate 180 deg off, 90 fo
 whose angles are from broadside, modulo front/back): "both within 10 deg" and the matched
 errors' median. hearsee (tracks): one ``localize_recording(kalman=False, max_sources=2,
 moving=True)`` of the whole recording; at each moment the tracks alive then (first to last
-frame) give their angle at the nearest frame -- causal, from that frame and the ones before.
-hearsee (blocks): ``localize_recording(max_sources=2)`` (the still talkers' clustering) of the
-one-second block centred on the moment. Peers: the same blocks, told there are two talkers
-(``num_src=2``; a block sees 0.5 s ahead, which the tracks do not), set up as bench/sources.py
-sets them up (1024-sample Hann STFT at 50 % overlap, 300-3500 Hz, the array plane, a 0.5-deg
-grid, a pair's front half).
+frame) give their angle at the nearest frame -- an angle from that frame and the ones before,
+but which tracks are reported, and where each ends, is decided on the whole recording (an
+offline answer, as the blocks' 0.5 s ahead is). hearsee (blocks):
+``localize_recording(max_sources=2)`` (the still talkers' clustering) of the one-second block
+centred on the moment. Peers: the same blocks, told there are two talkers (``num_src=2``),
+set up as bench/sources.py sets them up (1024-sample Hann STFT at 50 % overlap, 300-3500 Hz,
+the array plane, a 0.5-deg grid, a pair's front half).
 
 The default seed (280) was not used to choose :func:`hearsee.audio.sources.track_sources`'
 settings; those were chosen on dev seeds 270-273 (see its constants).

@@ -17,6 +17,7 @@ from hearsee.audio.signals import synthetic_voice
 from hearsee.audio.sources import (
     MAX_SOURCES,
     direction_clusters,
+    localize_moving_sources,
     localize_sources,
     track_sources,
 )
@@ -416,6 +417,10 @@ def test_at_most_max_sources_at_once_and_small_tracks_dropped():
     (([0.0, 0.1], [1.0, 2.0]), {"min_share": 1.0}, "min_share"),
     (([0.0, 0.1], [1.0, 2.0]), {"max_chance": 0.0}, "max_chance"),
     (([0.0, 0.1], [1.0, 2.0]), {"span_deg": 400.0}, "span_deg"),
+    # (the Kalman filter's own ranges: its EstimationError came at the first located frame)
+    (([0.0, 0.1], [1.0, 2.0]), {"sigma_accel_dps2": 1e300}, "sigma_accel_dps2"),
+    (([0.0, 0.1], [np.nan, np.nan]), {"sigma_accel_dps2": 1e300}, "sigma_accel_dps2"),
+    (([0.0, 0.1], [1e300, 2.0]), {}, "angle_deg"),
 ])
 def test_track_sources_refuses_bad_input(args, kw, words):
     with pytest.raises(ConfigError, match=words):
@@ -477,8 +482,6 @@ def test_moving_needs_several_sources(two3):
     with pytest.raises(ConfigError, match="moving must be True or False"):
         localize_recording(two3, FS, arr, kalman=False, max_sources=2, moving="yes")
     with pytest.raises(ConfigError, match="unknown track_sources setting 'bandwidth_deg'"):
-        from hearsee.audio.sources import localize_moving_sources
-
         tf = estimate_tdoas(two3, FS, arr)
         localize_moving_sources(tf.t, tf.tdoa_s, tf.valid, arr, tf.pairs, 2, bandwidth_deg=4)
 
@@ -500,3 +503,44 @@ def test_cli_moving(two3_wav, capsys):
     code, out, err = _run(capsys, two3_wav, "--array", "three-mic", "--moving")
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
     assert "--sources" in err and "Traceback" not in err
+
+
+def test_overlapping_tracks_under_the_cap_and_a_wide_jump_gate():
+    """Two talkers whose lives overlap (30 deg for 0-3 s, -60 deg for 2-5 s, the first with
+    more frames): one at a time keeps the larger whole, two keep both; a jump gate of 180 deg
+    (none) leaves the chi-square gate, and the chance test counts that one (it had counted
+    +-180 deg, and every source was dropped)."""
+    rng = np.random.default_rng(273)
+    t = np.arange(160) * 0.032
+    a = np.full(len(t), np.nan)
+    first = (t < 3.0) & (rng.random(len(t)) < 0.6)
+    second = (t >= 2.0) & ~first & (rng.random(len(t)) < 0.5)
+    a[first] = 30.0 + rng.normal(0, 2.0, first.sum())
+    a[second] = -60.0 + rng.normal(0, 2.0, second.sum())
+    assert first.sum() > second.sum()
+    one, which = track_sources(t, a, max_sources=1)
+    assert len(one) == 1 and _ang(one[0].angle_deg[-1], 30.0) < 4.0
+    assert np.all(which[second] == -1)
+    two, _ = track_sources(t, a, max_sources=2)
+    assert sorted(round(tr.angle_deg[-1] / 10) for tr in two) == [-6, 3]
+    wide, _ = track_sources(t, a, max_sources=2, max_jump_deg=180.0)
+    assert sorted(round(tr.angle_deg[-1] / 10) for tr in wide) == [-6, 3]
+
+
+def test_an_x_axis_pair_keeps_its_path_on_one_side(tmp_path):
+    """A pair along x: the twins of a cone are +-a (both in front or both behind), and the
+    path took either by rounding, frame to frame; it keeps to one now (exact TDOAs of a still
+    talker at 40 deg with 2-us noise)."""
+    path = tmp_path / "xpair.yaml"
+    path.write_text("name: xpair\nmicrophones: [[0.075, 0, 0], [-0.075, 0, 0]]\n")
+    arr = MicArray.from_yaml(path)
+    rng = np.random.default_rng(273)
+    n = 120
+    # tdoa_0-1 = -(M_0 - M_1) . u / c
+    tau = (-0.15 * np.cos(np.radians(40.0)) / arr.speed_of_sound
+           + rng.normal(0, 2e-6, n))[:, None]
+    src, _ = localize_moving_sources(np.arange(n) * 0.032, tau, np.ones(n, bool), arr,
+                                     arr.pairs, 2)
+    assert len(src) == 1
+    az = np.array(src[0]["path"]["azimuth_deg"])
+    assert np.all(np.sign(az) == np.sign(az[0])) and np.all(np.abs(np.abs(az) - 40.0) < 3.0)

@@ -433,8 +433,9 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
     Afterwards, sources holding less than ``min_share`` of the located frames' weight, or so
     few of the frames located during their life that chance would explain them
     (``max_chance``), are dropped, and at most ``max_sources`` are kept at any one time, the
-    largest share first. Causal: a track's angle at a frame uses that frame and those before
-    it. Not in the thesis (its chapter 5 tracks one speaker); an extension.
+    largest share first. A track's angle at a frame uses that frame and those before it
+    (causal); which tracks are reported, and where each ends, is decided on the whole
+    recording. Not in the thesis (its chapter 5 tracks one speaker); an extension.
 
     Parameters
     ----------
@@ -459,8 +460,9 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
         Share (0-1) of the located frames' weight a source needs to be reported.
     max_chance : float
         A source is reported only when frames scattered at random over ``span_deg`` would put
-        as many frames within ``max_jump_deg`` of it during its life (its first to its last
-        frame, of the frames located then) with a probability below this (binomial tail).
+        as many frames in its gate (``max_jump_deg`` either side, or the chi-square gate where
+        that is narrower: their mean width) during its life (its first to its last frame, of
+        the frames located then) with a probability below this (binomial tail).
     span_deg : float
         The range the angles can take (degrees): 360 for azimuths, 180 for a linear array's
         (-90 to 90).
@@ -472,16 +474,20 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
     which : array (n,) of int
         Each frame's track (its index in ``tracks``), -1 for none.
 
-    Raises ConfigError for inputs of the wrong shape, non-finite or decreasing times, negative
-    weights or settings outside their ranges.
+    Raises ConfigError for inputs of the wrong shape, non-finite or decreasing times, angles
+    beyond +-1e9 deg, negative weights or settings outside their ranges (the noises within
+    1e-6 to 1e6, as the Kalman filter takes them).
     """
     from scipy.stats import binom, chi2
 
-    from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, DirectionKalman
+    from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, NOISE_RANGE, DirectionKalman
+    from hearsee.geometry import MAX_ANGLE_DEG
 
     max_sources = whole_number("max_sources", max_sources, 1, MAX_SOURCES)
-    s_meas = finite_number("sigma_meas_deg", sigma_meas_deg, 0.0, 90.0, lo_open=True)
-    s_acc = finite_number("sigma_accel_dps2", sigma_accel_dps2, 0.0, None, lo_open=True)
+    # (the ranges DirectionKalman takes: beyond them its EstimationError came at the first
+    # located frame, and never without one)
+    s_meas = finite_number("sigma_meas_deg", sigma_meas_deg, NOISE_RANGE[0], 90.0)
+    s_acc = finite_number("sigma_accel_dps2", sigma_accel_dps2, *NOISE_RANGE)
     jump = finite_number("max_jump_deg", max_jump_deg, 0.0, 180.0, lo_open=True)
     confirm = whole_number("confirm_hits", confirm_hits, 1, None)
     tent = finite_number("tentative_s", tentative_s, 0.0, None, lo_open=True)
@@ -495,8 +501,9 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
     az = _series_1d("angle_deg", angle_deg, len(tt))
     if not np.all(np.isfinite(tt)) or np.any(np.diff(tt) < 0):
         raise ConfigError("t must hold finite, non-decreasing frame times (s)")
-    if np.any(np.isinf(az)):
-        raise ConfigError("angle_deg must hold finite degrees or NaN (no direction)")
+    if np.any(np.isinf(az)) or np.any(np.abs(az[np.isfinite(az)]) > MAX_ANGLE_DEG):
+        raise ConfigError(f"angle_deg must hold finite degrees (within +-{MAX_ANGLE_DEG:g}) or "
+                          "NaN (no direction)")
     w = np.ones(len(tt)) if weight is None else _series_1d("weight", weight, len(tt))
     if not np.all(np.isfinite(w)) or np.any(w < 0):
         raise ConfigError("weight must hold one finite number >= 0 per frame")
@@ -517,13 +524,14 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
                 S = float(P[0, 0]) + R
                 y = float(_wrap(az[i] - x[0]))
                 d2 = y * y / S
+                tr["gate_deg"].append(min(jump, float(np.sqrt(gate * S))))  # (its half width)
                 if d2 <= gate and abs(y) <= jump and d2 + np.log(S) < best_cost:
                     best, best_cost = tr, d2 + np.log(S)
             if best is None:
                 best = {"kf": DirectionKalman(s_meas, s_acc, gate_prob=0.997,
                                               init_rate_sigma_dps=TRACK_INIT_RATE_DPS,
                                               rate_tau_s=DIRECTION_RATE_TAU_S),
-                        "hits": [], "path_i": [], "path_a": []}
+                        "hits": [], "path_i": [], "path_a": [], "gate_deg": []}
                 live.append(best)
             best["kf"].update(ti, (float(az[i]), None))
             best["hits"].append(i)
@@ -534,20 +542,24 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
             tr["path_a"].append(_wrap(a))
     located = float(w[np.isfinite(az)].sum())
     n_located = np.concatenate([[0], np.cumsum(np.isfinite(az))])
-    p_gate = min(1.0, 2.0 * jump / span)  # (a random frame's chance of a track's gate)
     cands = []
     for tr in ended + live:
         hits = np.array(tr["hits"], dtype=int)
         share = float(w[hits].sum()) / located if located > 0 else 0.0
+        if len(hits) < confirm or share < min_share or not share > 0:
+            continue
         during = int(n_located[hits[-1] + 1] - n_located[hits[0]])
-        if (len(hits) >= confirm and share >= min_share and share > 0
-                and binom.sf(len(hits) - 1, during, p_gate) < chance):
+        # a random frame's chance of falling in the track's gate: the gate's mean width over
+        # the located frames of its life (max_jump_deg, unless the chi-square gate is tighter)
+        half = float(np.mean(tr["gate_deg"][:during - 1])) if during > 1 else jump
+        if binom.sf(len(hits) - 1, during, min(1.0, 2.0 * half / span)) < chance:
             cands.append((share, hits, tr))
     kept: list[tuple[float, NDArray, dict[str, Any]]] = []
     for share, hits, tr in sorted(cands, key=lambda c: -c[0]):
-        lo, hi = tt[hits[0]], tt[hits[-1]]
-        # at most max_sources at once: this one's life with the kept ones'
-        spans = [(tt[h[0]], tt[h[-1]]) for _, h, _ in kept]
+        # at most max_sources at once: this one's life with the kept ones' (in frames: two
+        # frames at one time, which a caller's times may hold, are not one moment)
+        lo, hi = hits[0], hits[-1]
+        spans = [(h[0], h[-1]) for _, h, _ in kept]
         edges = sorted({lo, hi, *(v for s in spans for v in s if lo <= v <= hi)})
         if all(sum(a <= e <= b for a, b in spans) < max_sources for e in edges):
             kept.append((share, hits, tr))
@@ -584,9 +596,10 @@ def localize_moving_sources(t: ArrayLike, tdoa_s: ArrayLike, valid: ArrayLike, a
     "candidates", "tdoa_s"`` (from the median TDOAs of its last :data:`TRACK_LAST_FRAMES`
     frames: where it was last heard) ``, "share", "n_frames", "t_start_s", "t_end_s"`` (its
     first and last frame) ``, "path": {"t_s": [...], "azimuth_deg": [...]}}`` (the track at
-    every frame of its life; a linear array's front candidate, ``|azimuth| <= 90`` for the
-    y-axis pair, its mirror as likely), and each frame's source (n_frames,): its index, -1
-    for none.
+    every frame of its life; a linear array's front candidate, ``|azimuth| < 90``, its mirror
+    as likely -- an x-axis pair, whose twins are both in front or both behind, keeps to one
+    side --, a vertical pair's None: it tells no azimuth), and each frame's source
+    (n_frames,): its index, -1 for none.
     """
     from hearsee.audio.arrays import load_array
     from hearsee.audio.localize import _design, array_geometry, localize_tdoa
@@ -603,14 +616,28 @@ def localize_moving_sources(t: ArrayLike, tdoa_s: ArrayLike, valid: ArrayLike, a
     linear = array_geometry(arr).kind == "linear"
     tracks, which = track_sources(tt, angles, w_all, max_sources,
                                   **{"span_deg": 180.0 if linear else 360.0, **track_kwargs})
-    if linear:  # (the tracked sine back to the cone's TDOAs, then azimuths)
-        A = _design(arr, list(pairs)) @ array_geometry(arr).axis
+    A = _design(arr, list(pairs)) @ array_geometry(arr).axis if linear else None
 
-        def azimuth(k: float) -> float | None:
-            return localize_tdoa(A * np.clip(k / 90.0, -1.0, 1.0), arr, pairs).azimuth_deg
-    else:
-        def azimuth(k: float) -> float | None:
-            return float(k)
+    def path(angles: NDArray) -> list[float | None]:
+        """A track's azimuths (deg); a linear array's from its tracked sines: the cone's twin
+        in front (|azimuth| < 90) where there is one, else the one nearest the path's last
+        azimuth -- an x-axis pair's twins are +-a, and the tie between them was broken by
+        rounding, which flipped the path's sign from frame to frame."""
+        if A is None:
+            return [float(a) for a in angles]
+        out: list[float | None] = []
+        prev = None
+        for k in angles:
+            loc = localize_tdoa(A * np.clip(k / 90.0, -1.0, 1.0), arr, pairs)
+            azs = [c[0] for c in loc.candidates if c[0] is not None]
+            front = [a for a in azs if abs(a) < 90.0 - 1e-6]
+            if len(front) == 1 or (azs and prev is None):
+                prev = front[0] if len(front) == 1 else azs[0]
+            elif azs:
+                prev = min(azs, key=lambda a: abs(float(_wrap(a - prev))))
+            out.append(prev if azs else None)  # (a vertical pair: no azimuth)
+        return out
+
     sources = []
     for tr in tracks:
         last = tr.frames[-TRACK_LAST_FRAMES:]
@@ -620,7 +647,6 @@ def localize_moving_sources(t: ArrayLike, tdoa_s: ArrayLike, valid: ArrayLike, a
             "n_frames": len(tr.frames),
             "t_start_s": float(tr.t[0]),
             "t_end_s": float(tr.t[-1]),
-            "path": {"t_s": [float(v) for v in tr.t],
-                     "azimuth_deg": [azimuth(float(a)) for a in tr.angle_deg]},
+            "path": {"t_s": [float(v) for v in tr.t], "azimuth_deg": path(tr.angle_deg)},
         })
     return sources, which
