@@ -544,3 +544,22 @@ def test_an_x_axis_pair_keeps_its_path_on_one_side(tmp_path):
     assert len(src) == 1
     az = np.array(src[0]["path"]["azimuth_deg"])
     assert np.all(np.sign(az) == np.sign(az[0])) and np.all(np.abs(np.abs(az) - 40.0) < 3.0)
+
+
+def test_a_track_that_coasted_does_not_take_a_precise_neighbours_frame():
+    """A talker at 0 deg heard all along and one at 20 deg silent since 1 s: at 3.4 s a frame
+    at 8 deg is the first's (10 deg of innovation against its ~6-deg spread) though the
+    second's prediction, grown through 2.4 s of silence, explains it by fewer of its own
+    standard deviations -- the ln S of the association cost (without it the frame went to the
+    coasted track)."""
+    t = np.arange(125) * 0.032
+    a = np.full(len(t), np.nan)
+    a[::2] = 0.0
+    early = (t < 1.0) & (np.arange(len(t)) % 2 == 1)
+    a[early] = 20.0
+    k = int(np.argmin(np.abs(t - 3.4)))
+    a[k] = 8.0
+    tracks, which = track_sources(t, a, max_sources=2, min_share=0.0)
+    assert len(tracks) == 2
+    first = int(which[0])
+    assert _ang(tracks[first].angle_deg[0], 0.0) < 1.0 and which[k] == first
