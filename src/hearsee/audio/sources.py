@@ -618,16 +618,16 @@ def localize_moving_sources(t: ArrayLike, tdoa_s: ArrayLike, valid: ArrayLike, a
                                   **{"span_deg": 180.0 if linear else 360.0, **track_kwargs})
     A = _design(arr, list(pairs)) @ array_geometry(arr).axis if linear else None
 
-    def path(angles: NDArray) -> list[float | None]:
+    def path(tracked: NDArray) -> list[float | None]:
         """A track's azimuths (deg); a linear array's from its tracked sines: the cone's twin
         in front (|azimuth| < 90) where there is one, else the one nearest the path's last
         azimuth -- an x-axis pair's twins are +-a, and the tie between them was broken by
         rounding, which flipped the path's sign from frame to frame."""
         if A is None:
-            return [float(a) for a in angles]
+            return [float(a) for a in tracked]
         out: list[float | None] = []
         prev = None
-        for k in angles:
+        for k in tracked:
             loc = localize_tdoa(A * np.clip(k / 90.0, -1.0, 1.0), arr, pairs)
             azs = [c[0] for c in loc.candidates if c[0] is not None]
             front = [a for a in azs if abs(a) < 90.0 - 1e-6]
