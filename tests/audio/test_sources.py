@@ -408,7 +408,7 @@ def test_at_most_max_sources_at_once_and_small_tracks_dropped():
     (([0.0, 0.1], [1.0, np.inf]), {}, "angle_deg"),
     (([0.0, 0.1], [1.0, 2.0, 3.0]), {}, "angle_deg"),
     (([0.0, 0.1], ["a", "b"]), {}, "angle_deg"),
-    (([[0.0, 0.1]], [1.0, 2.0]), {}, "t must be a 1-D"),
+    (([[0.0, 0.1]], [1.0, 2.0]), {}, "t: expected shape N,"),
     (([0.0, 0.1], [1.0, 2.0], [1.0, -1.0]), {}, "weight"),
     (([0.0, 0.1], [1.0, 2.0]), {"max_sources": 9}, "max_sources"),
     (([0.0, 0.1], [1.0, 2.0]), {"confirm_hits": 0}, "confirm_hits"),

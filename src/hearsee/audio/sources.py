@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.config import as_float_array, check_settings, finite_number, whole_number
 from hearsee.errors import ConfigError
+from hearsee.geometry import wrap_deg
 
 #: the most sources :func:`direction_clusters` looks for (``hearsee localize --sources``)
 MAX_SOURCES = 8
@@ -81,18 +82,13 @@ class DirectionCluster:
     frames: NDArray
 
 
-def _wrap(a: NDArray | float) -> NDArray | float:
-    """Degrees wrapped to ``(-180, 180]``."""
-    return 180.0 - (180.0 - np.asarray(a)) % 360.0
-
-
 def _circular_mean(az: NDArray, w: NDArray) -> tuple[float, float]:
     """Weighted circular mean and standard deviation (degrees) of azimuths ``az``."""
     z = np.sum(w * np.exp(1j * np.radians(az))) / np.sum(w)
     r = min(float(abs(z)), 1.0)
     # (max: log(1.0) is -0.0 for one frame, and the JSON said "spread_deg": -0.0)
     std = float(np.degrees(np.sqrt(max(0.0, -2.0 * np.log(r))))) if r > 0 else 180.0
-    return float(_wrap(np.degrees(np.angle(z)))), std
+    return float(wrap_deg(np.degrees(np.angle(z)))), std
 
 
 def direction_clusters(angle_deg: ArrayLike, weight: ArrayLike | None = None,
@@ -138,7 +134,7 @@ def direction_clusters(angle_deg: ArrayLike, weight: ArrayLike | None = None,
     grid = np.arange(n_grid) * _GRID_DEG
     hist = np.bincount(np.round(az % 360.0 / _GRID_DEG).astype(int) % n_grid, weights=w,
                        minlength=n_grid)
-    d = _wrap(grid)  # (the kernel's offsets on the circle)
+    d = wrap_deg(grid)  # (the kernel's offsets on the circle)
     kernel = np.exp(-0.5 * (d / bw) ** 2)
     density = np.fft.irfft(np.fft.rfft(hist) * np.fft.rfft(kernel), n_grid)
     peaks: list[float] = []
@@ -151,25 +147,25 @@ def direction_clusters(angle_deg: ArrayLike, weight: ArrayLike | None = None,
         if left[g] <= 1e-9 * total:
             break
         peaks.append(float(grid[g]))
-        left[np.abs(_wrap(grid - grid[g])) < sep] = 0.0
+        left[np.abs(wrap_deg(grid - grid[g])) < sep] = 0.0
     radius = sep / 2.0
     clusters = []
     for _ in range(20):  # mean shift of every peak within its radius, until they settle
         moved = []
         for p in peaks:
-            near = np.abs(_wrap(az - p)) < radius
+            near = np.abs(wrap_deg(az - p)) < radius
             moved.append(_circular_mean(az[near], w[near])[0] if np.any(w[near] > 0) else p)
-        done = all(abs(_wrap(a - b)) < 1e-6 for a, b in zip(moved, peaks, strict=True))
+        done = all(abs(wrap_deg(a - b)) < 1e-6 for a, b in zip(moved, peaks, strict=True))
         peaks = moved
         if done:
             break
     kept: list[float] = []  # (two maxima the shifts brought within min_separation: one)
     for p in peaks:
-        if all(abs(_wrap(p - q)) >= sep for q in kept):
+        if all(abs(wrap_deg(p - q)) >= sep for q in kept):
             kept.append(p)
     peaks = kept[:max_sources]  # (the highest maxima first)
     if peaks:
-        dist = np.abs(_wrap(az[:, None] - np.array(peaks)[None, :]))  # (frames, peaks)
+        dist = np.abs(wrap_deg(az[:, None] - np.array(peaks)[None, :]))  # (frames, peaks)
         nearest = np.argmin(dist, axis=1)
         joined = dist[np.arange(len(az)), nearest] < radius
         for k in range(len(peaks)):
@@ -395,16 +391,6 @@ class SourceTrack:
     share: float
 
 
-def _series_1d(name: str, value: ArrayLike, n: int | None = None) -> NDArray:
-    """``value`` as a 1-D float array (of ``n`` entries when given), else a ConfigError."""
-    a = as_float_array(value, name, finite=False)
-    if a.ndim != 1 or (n is not None and len(a) != n):
-        raise ConfigError(f"{name} must be a 1-D array"
-                          + ("" if n is None else f" of {n} entries (one per frame)")
-                          + f", got shape {a.shape}")
-    return a
-
-
 def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None = None,
                   max_sources: int = 2, *,
                   sigma_meas_deg: float = TRACK_SIGMA_MEAS_DEG,
@@ -497,14 +483,15 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
         raise ConfigError(f"min_share must be below 1 (a share of the frames), got {min_share}")
     chance = finite_number("max_chance", max_chance, 0.0, 1.0, lo_open=True)
     span = finite_number("span_deg", span_deg, 0.0, 360.0, lo_open=True)
-    tt = _series_1d("t", t)
-    az = _series_1d("angle_deg", angle_deg, len(tt))
+    tt = as_float_array(t, "t", (None,), finite=False)
+    az = as_float_array(angle_deg, "angle_deg", tt.shape, finite=False)
     if not np.all(np.isfinite(tt)) or np.any(np.diff(tt) < 0):
         raise ConfigError("t must hold finite, non-decreasing frame times (s)")
     if np.any(np.isinf(az)) or np.any(np.abs(az[np.isfinite(az)]) > MAX_ANGLE_DEG):
         raise ConfigError(f"angle_deg must hold finite degrees (within +-{MAX_ANGLE_DEG:g}) or "
                           "NaN (no direction)")
-    w = np.ones(len(tt)) if weight is None else _series_1d("weight", weight, len(tt))
+    w = np.ones(len(tt)) if weight is None else as_float_array(weight, "weight", tt.shape,
+                                                                finite=False)
     if not np.all(np.isfinite(w)) or np.any(w < 0):
         raise ConfigError("weight must hold one finite number >= 0 per frame")
     gate = float(chi2.ppf(0.997, 1))
@@ -522,7 +509,7 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
             for tr in live:
                 x, P = tr["kf"].predicted(ti)
                 S = float(P[0, 0]) + R
-                y = float(_wrap(az[i] - x[0]))
+                y = float(wrap_deg(az[i] - x[0]))
                 d2 = y * y / S
                 tr["gate_deg"].append(min(jump, float(np.sqrt(gate * S))))  # (its half width)
                 if d2 <= gate and abs(y) <= jump and d2 + np.log(S) < best_cost:
@@ -539,7 +526,7 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
         for tr in live:  # (each live track's angle at this frame)
             a = tr["kf"].azimuth_deg if tr is best else float(tr["kf"].predicted(ti)[0][0])
             tr["path_i"].append(i)
-            tr["path_a"].append(_wrap(a))
+            tr["path_a"].append(wrap_deg(a))
     located = float(w[np.isfinite(az)].sum())
     n_located = np.concatenate([[0], np.cumsum(np.isfinite(az))])
     cands = []
@@ -608,7 +595,7 @@ def localize_moving_sources(t: ArrayLike, tdoa_s: ArrayLike, valid: ArrayLike, a
                    skip=("t", "angle_deg", "weight", "max_sources"))
     tau, ok, w_all = _frame_inputs("localize_moving_sources", tdoa_s, valid, pairs, weight,
                                    locs)
-    tt = _series_1d("t", t, len(tau))
+    tt = as_float_array(t, "t", (len(tau),), finite=False)
     arr = load_array(array)
     rows, _, key = _frame_angles(tau, ok, arr, pairs, in_plane, locs)
     angles = np.full(len(tau), np.nan)
@@ -634,7 +621,7 @@ def localize_moving_sources(t: ArrayLike, tdoa_s: ArrayLike, valid: ArrayLike, a
             if len(front) == 1 or (azs and prev is None):
                 prev = front[0] if len(front) == 1 else azs[0]
             elif azs:
-                prev = min(azs, key=lambda a: abs(float(_wrap(a - prev))))
+                prev = min(azs, key=lambda a: abs(float(wrap_deg(a - prev))))
             out.append(prev if azs else None)  # (a vertical pair: no azimuth)
         return out
 
