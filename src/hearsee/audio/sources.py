@@ -505,9 +505,11 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
                 live.remove(tr)
                 ended.append(tr)
         best, best_cost = None, np.inf
+        # (each live track's predicted state at this frame, once: the gate and the path)
+        pred = {id(tr): tr["kf"].predicted(ti) for tr in live}
         if np.isfinite(az[i]):
             for tr in live:
-                x, P = tr["kf"].predicted(ti)
+                x, P = pred[id(tr)]
                 S = float(P[0, 0]) + R
                 y = float(wrap_deg(az[i] - x[0]))
                 d2 = y * y / S
@@ -524,7 +526,7 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
             best["hits"].append(i)
             best["last_t"] = ti
         for tr in live:  # (each live track's angle at this frame)
-            a = tr["kf"].azimuth_deg if tr is best else float(tr["kf"].predicted(ti)[0][0])
+            a = tr["kf"].azimuth_deg if tr is best else float(pred[id(tr)][0][0])
             tr["path_i"].append(i)
             tr["path_a"].append(wrap_deg(a))
     located = float(w[np.isfinite(az)].sum())
@@ -600,10 +602,11 @@ def localize_moving_sources(t: ArrayLike, tdoa_s: ArrayLike, valid: ArrayLike, a
     rows, _, key = _frame_angles(tau, ok, arr, pairs, in_plane, locs)
     angles = np.full(len(tau), np.nan)
     angles[rows] = key
-    linear = array_geometry(arr).kind == "linear"
+    geo = array_geometry(arr)
+    linear = geo.kind == "linear"
     tracks, which = track_sources(tt, angles, w_all, max_sources,
                                   **{"span_deg": 180.0 if linear else 360.0, **track_kwargs})
-    A = _design(arr, list(pairs)) @ array_geometry(arr).axis if linear else None
+    A = _design(arr, list(pairs)) @ geo.axis if linear else None
 
     def path(tracked: NDArray) -> list[float | None]:
         """A track's azimuths (deg); a linear array's from its tracked sines: the cone's twin
