@@ -54,7 +54,7 @@ from _common import (  # noqa: E402
     write_markdown,
 )
 from doa import ARRAY_AT, ROOM, pra_azimuths  # noqa: E402
-from sources import angle_error, matched_errors, talker_specs  # noqa: E402
+from sources import angle_error, matched_errors, room_spec, talker_specs  # noqa: E402
 
 from hearsee.audio.arrays import MicArray  # noqa: E402
 from hearsee.audio.localize import localize_recording  # noqa: E402
@@ -115,8 +115,7 @@ def recording(arr: MicArray, kind: str, rt60: float, rng: np.random.Generator,
     the still talker's position."""
     two = arr.n_mics == 2
     traj, still = scene(two, rng)
-    room = None if rt60 == 0 else {"room_dim": list(ROOM), "rt60": rt60,
-                                   "array_at": list(ARRAY_AT)}
+    room = room_spec(rt60)
     walker_sig, still_sig = talker_specs(kind, 2, rng, speech)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

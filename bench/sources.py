@@ -113,12 +113,17 @@ def talker_specs(kind: str, n: int, rng: np.random.Generator, speech: list[Path]
     return [rng.choice([q for q in speech if _speaker(q) == w]) for w in who]
 
 
+def room_spec(rt60: float) -> dict | None:
+    """``simulate_recording``'s room: bench/doa.py's, at ``rt60`` seconds (0: free field)."""
+    return None if rt60 == 0 else {"room_dim": list(ROOM), "rt60": rt60,
+                                   "array_at": list(ARRAY_AT)}
+
+
 def recording(arr: MicArray, azimuths: list[float], kind: str, rt60: float,
               rng: np.random.Generator, speech: list[Path]) -> np.ndarray:
     """The talkers at ``azimuths`` (deg, in the array plane, 1-2.5 m away), summed, with
     sensor noise :data:`SNR_DB` below the mixture."""
-    room = None if rt60 == 0 else {"room_dim": list(ROOM), "rt60": rt60,
-                                   "array_at": list(ARRAY_AT)}
+    room = room_spec(rt60)
     x = 0.0
     for az, spec in zip(azimuths, talker_specs(kind, len(azimuths), rng, speech), strict=True):
         d = rng.uniform(1.0, 2.5)
