@@ -32,9 +32,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.config import as_float_array, check_settings, finite_number, whole_number
+from hearsee.config import (
+    as_float_array,
+    check_settings,
+    finite_number,
+    true_or_false,
+    whole_number,
+)
 from hearsee.errors import ConfigError
-from hearsee.geometry import wrap_deg
+from hearsee.geometry import MAX_ANGLE_DEG, wrap_deg
 
 #: the most sources :func:`direction_clusters` looks for (``hearsee localize --sources``)
 MAX_SOURCES = 8
@@ -370,6 +376,199 @@ TRACK_MIN_SHARE = 0.05
 TRACK_MAX_CHANCE = 1e-4
 
 
+class _Track:
+    """One track of :class:`SourceTracker`: its filter and what the reporting rules count."""
+
+    __slots__ = ("id", "kf", "hits", "weight", "last_t", "angle_deg", "located_before",
+                 "weight_before", "located_through", "gate_sum", "gate_n", "gate_at_hit",
+                 "passed", "path_i", "path_a")
+
+    def __init__(self, track_id: int, kf: Any, located_before: int,
+                 weight_before: float) -> None:
+        self.id, self.kf = track_id, kf
+        self.hits: list[int] = []
+        self.weight = 0.0
+        self.last_t = self.angle_deg = float("nan")
+        # the located frames (and their weight) before its first frame, and through its last
+        self.located_before, self.weight_before = located_before, weight_before
+        self.located_through = located_before
+        # its gate's half widths (deg) at the located frames since its first; their sum and
+        # count at its last frame
+        self.gate_sum, self.gate_n = 0.0, 0
+        self.gate_at_hit = (0.0, 0)
+        self.passed = False  # (the chance test, once passed, holds)
+        self.path_i: list[int] = []
+        self.path_a: list[float] = []
+
+    def mean_gate_deg(self, jump: float) -> float:
+        """The gate's mean half width (deg) over the located frames of its life (its first to
+        its last frame; ``jump`` when it has one frame)."""
+        s, n = self.gate_at_hit
+        return s / n if n else jump
+
+
+class SourceTracker:
+    """The online core of :func:`track_sources`: one frame at a time, as a stream gets them.
+
+    :meth:`step` takes a frame's time and angle (or NaN) and joins it to a track as
+    :func:`track_sources` describes; :meth:`reported` names the talkers to act on now -- the
+    live tracks that are sources (``confirm_hits`` frames), whose frames chance does not
+    explain (``max_chance``, judged at each of their frames until it passes; then it holds)
+    and that hold at least ``min_share`` of the weight of the frames located since their first
+    frame, at most ``max_sources`` of them, the most weight first. Unlike
+    :func:`track_sources`' answer, decided on the whole recording, this one is causal: a
+    talker is reported from the frame that makes it a source, and a talker's track goes on,
+    predicted, through a pause of up to ``max_coast_s`` (``last_t`` says when it was last
+    heard). The settings are :func:`track_sources`'; ``history`` keeps the tracks that ended
+    and every track's angle at every frame (what :func:`track_sources` needs; a stream leaves
+    it off, so that memory stays bounded).
+    """
+
+    def __init__(self, max_sources: int = 2, *,
+                 sigma_meas_deg: float = TRACK_SIGMA_MEAS_DEG,
+                 sigma_accel_dps2: float = TRACK_ACCEL_DPS2,
+                 max_jump_deg: float = TRACK_MAX_JUMP_DEG,
+                 confirm_hits: int = TRACK_CONFIRM_HITS,
+                 tentative_s: float = TRACK_TENTATIVE_S,
+                 max_coast_s: float = TRACK_MAX_COAST_S,
+                 min_share: float = TRACK_MIN_SHARE,
+                 max_chance: float = TRACK_MAX_CHANCE,
+                 span_deg: float = 360.0, history: bool = False) -> None:
+        from scipy.stats import chi2
+
+        from hearsee.audio.tracking import NOISE_RANGE
+
+        self.max_sources = whole_number("max_sources", max_sources, 1, MAX_SOURCES)
+        # (the ranges DirectionKalman takes: beyond them its EstimationError came at the first
+        # located frame, and never without one)
+        self.sigma_meas_deg = finite_number("sigma_meas_deg", sigma_meas_deg, NOISE_RANGE[0],
+                                            90.0)
+        self.sigma_accel_dps2 = finite_number("sigma_accel_dps2", sigma_accel_dps2,
+                                              *NOISE_RANGE)
+        self.max_jump_deg = finite_number("max_jump_deg", max_jump_deg, 0.0, 180.0,
+                                          lo_open=True)
+        self.confirm_hits = whole_number("confirm_hits", confirm_hits, 1, None)
+        self.tentative_s = finite_number("tentative_s", tentative_s, 0.0, None, lo_open=True)
+        self.max_coast_s = finite_number("max_coast_s", max_coast_s, 0.0, None, lo_open=True)
+        self.min_share = finite_number("min_share", min_share, 0.0, 1.0)
+        if self.min_share >= 1.0:
+            raise ConfigError(f"min_share must be below 1 (a share of the frames), got "
+                              f"{min_share}")
+        self.max_chance = finite_number("max_chance", max_chance, 0.0, 1.0, lo_open=True)
+        self.span_deg = finite_number("span_deg", span_deg, 0.0, 360.0, lo_open=True)
+        self.history = true_or_false("history", history)
+        self._gate = float(chi2.ppf(0.997, 1))
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every track (as after the array has turned by an unknown angle)."""
+        self.live: list[_Track] = []
+        self.ended: list[_Track] = []
+        self.n_frames = 0  # frames stepped
+        self.located = 0  # frames with an angle
+        self.located_weight = 0.0
+        self._next_id = 0
+        self._t = -np.inf
+
+    def rotate(self, delta_deg: float) -> None:
+        """Add ``delta_deg`` (degrees) to every live track's angle (azimuths: the array turned
+        by ``-delta_deg`` about its z axis; see
+        :meth:`~hearsee.audio.tracking.DirectionKalman.rotate_azimuth`)."""
+        for tr in self.live:
+            tr.kf.rotate_azimuth(delta_deg)
+            tr.angle_deg = float(wrap_deg(tr.angle_deg + delta_deg))
+
+    def step(self, t: float, angle_deg: float, weight: float = 1.0) -> int:
+        """Take the frame at time ``t`` (s, not before the last) with angle ``angle_deg``
+        (degrees, NaN = none) and ``weight`` (>= 0); returns the id of the track it joined, -1
+        for none. ConfigError for a time that goes back or is not finite, an infinite angle
+        (or beyond +-1e9 deg) or a negative or non-finite weight."""
+        from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, DirectionKalman
+
+        ti, a, w = float(t), float(angle_deg), float(weight)
+        if not (np.isfinite(ti) and ti >= self._t):
+            raise ConfigError("t must hold finite, non-decreasing frame times (s)")
+        if np.isinf(a) or abs(a) > MAX_ANGLE_DEG:
+            raise ConfigError(f"angle_deg must hold finite degrees (within "
+                              f"+-{MAX_ANGLE_DEG:g}) or NaN (no direction)")
+        if not (np.isfinite(w) and w >= 0):
+            raise ConfigError("weight must hold one finite number >= 0 per frame")
+        self._t = ti
+        i = self.n_frames
+        self.n_frames += 1
+        for tr in list(self.live):  # (tracks that went quiet too long end)
+            if ti - tr.last_t > (self.max_coast_s if len(tr.hits) >= self.confirm_hits
+                                 else self.tentative_s):
+                self.live.remove(tr)
+                if self.history:
+                    self.ended.append(tr)
+        # (each live track's predicted state at this frame, once: the gate and the path)
+        pred = {tr.id: tr.kf.predicted(ti) for tr in self.live}
+        best: _Track | None = None
+        if np.isfinite(a):
+            best_cost, R = np.inf, self.sigma_meas_deg**2
+            for tr in self.live:
+                x, P = pred[tr.id]
+                S = float(P[0, 0]) + R
+                y = float(wrap_deg(a - x[0]))
+                d2 = y * y / S
+                # (its gate's half width)
+                tr.gate_sum += min(self.max_jump_deg, float(np.sqrt(self._gate * S)))
+                tr.gate_n += 1
+                if d2 <= self._gate and abs(y) <= self.max_jump_deg and (
+                        d2 + np.log(S) < best_cost):
+                    best, best_cost = tr, d2 + np.log(S)
+            if best is None:
+                best = _Track(self._next_id, DirectionKalman(
+                    self.sigma_meas_deg, self.sigma_accel_dps2, gate_prob=0.997,
+                    init_rate_sigma_dps=TRACK_INIT_RATE_DPS, rate_tau_s=DIRECTION_RATE_TAU_S),
+                    self.located, self.located_weight)
+                self._next_id += 1
+                self.live.append(best)
+            self.located += 1
+            self.located_weight += w
+            best.kf.update(ti, (a, None))
+            best.hits.append(i)
+            best.weight += w
+            best.last_t = ti
+            best.located_through = self.located
+            best.gate_at_hit = (best.gate_sum, best.gate_n)
+            if not best.passed and len(best.hits) >= self.confirm_hits:
+                best.passed = self._beats_chance(best)
+        for tr in self.live:  # (each live track's angle at this frame)
+            tr.angle_deg = float(wrap_deg(
+                tr.kf.azimuth_deg if tr is best else float(pred[tr.id][0][0])))
+            if self.history:
+                tr.path_i.append(i)
+                tr.path_a.append(tr.angle_deg)
+        return -1 if best is None else best.id
+
+    def _beats_chance(self, tr: _Track) -> bool:
+        """Whether frames scattered at random over ``span_deg`` would put as many frames as
+        ``tr`` holds in its gate during its life with a probability below ``max_chance``
+        (binomial tail)."""
+        from scipy.special import bdtrc
+
+        during = tr.located_through - tr.located_before
+        half = tr.mean_gate_deg(self.max_jump_deg) if during > 1 else self.max_jump_deg
+        p = min(1.0, 2.0 * half / self.span_deg)
+        return bool(bdtrc(len(tr.hits) - 1, during, p) < self.max_chance)
+
+    def share(self, tr: _Track) -> float:
+        """``tr``'s share (0-1) of the weight of the frames located since its first frame."""
+        since = self.located_weight - tr.weight_before
+        return tr.weight / since if since > 0 else 0.0
+
+    def reported(self) -> list[_Track]:
+        """The talkers to act on at the last frame: live sources whose frames beat chance and
+        hold ``min_share`` of the weight since their first, at most ``max_sources``, the most
+        weight first. Each has ``id``, ``angle_deg`` (its angle at the last frame, degrees),
+        ``last_t`` (when a frame last joined it, s) and ``hits`` (its frames' indices)."""
+        ok = [tr for tr in self.live if len(tr.hits) >= self.confirm_hits and tr.passed
+              and tr.weight > 0 and self.share(tr) >= self.min_share]
+        return sorted(ok, key=lambda tr: (-tr.weight, tr.id))[:self.max_sources]
+
+
 @dataclass(frozen=True)
 class SourceTrack:
     """One talker followed through a recording by :func:`track_sources`.
@@ -464,25 +663,11 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
     beyond +-1e9 deg, negative weights or settings outside their ranges (the noises within
     1e-6 to 1e6, as the Kalman filter takes them).
     """
-    from scipy.stats import binom, chi2
-
-    from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, NOISE_RANGE, DirectionKalman
-    from hearsee.geometry import MAX_ANGLE_DEG
-
-    max_sources = whole_number("max_sources", max_sources, 1, MAX_SOURCES)
-    # (the ranges DirectionKalman takes: beyond them its EstimationError came at the first
-    # located frame, and never without one)
-    s_meas = finite_number("sigma_meas_deg", sigma_meas_deg, NOISE_RANGE[0], 90.0)
-    s_acc = finite_number("sigma_accel_dps2", sigma_accel_dps2, *NOISE_RANGE)
-    jump = finite_number("max_jump_deg", max_jump_deg, 0.0, 180.0, lo_open=True)
-    confirm = whole_number("confirm_hits", confirm_hits, 1, None)
-    tent = finite_number("tentative_s", tentative_s, 0.0, None, lo_open=True)
-    coast = finite_number("max_coast_s", max_coast_s, 0.0, None, lo_open=True)
-    min_share = finite_number("min_share", min_share, 0.0, 1.0)
-    if min_share >= 1.0:
-        raise ConfigError(f"min_share must be below 1 (a share of the frames), got {min_share}")
-    chance = finite_number("max_chance", max_chance, 0.0, 1.0, lo_open=True)
-    span = finite_number("span_deg", span_deg, 0.0, 360.0, lo_open=True)
+    tracker = SourceTracker(max_sources, sigma_meas_deg=sigma_meas_deg,
+                            sigma_accel_dps2=sigma_accel_dps2, max_jump_deg=max_jump_deg,
+                            confirm_hits=confirm_hits, tentative_s=tentative_s,
+                            max_coast_s=max_coast_s, min_share=min_share,
+                            max_chance=max_chance, span_deg=span_deg, history=True)
     tt = as_float_array(t, "t", (None,), finite=False)
     az = as_float_array(angle_deg, "angle_deg", tt.shape, finite=False)
     if not np.all(np.isfinite(tt)) or np.any(np.diff(tt) < 0):
@@ -494,56 +679,20 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
                                                                 finite=False)
     if not np.all(np.isfinite(w)) or np.any(w < 0):
         raise ConfigError("weight must hold one finite number >= 0 per frame")
-    gate = float(chi2.ppf(0.997, 1))
-    R = s_meas**2
-    live: list[dict[str, Any]] = []
-    ended: list[dict[str, Any]] = []
     for i in range(len(tt)):
-        ti = float(tt[i])
-        for tr in list(live):  # (tracks that went quiet too long end)
-            if ti - tr["last_t"] > (coast if len(tr["hits"]) >= confirm else tent):
-                live.remove(tr)
-                ended.append(tr)
-        best, best_cost = None, np.inf
-        # (each live track's predicted state at this frame, once: the gate and the path)
-        pred = {id(tr): tr["kf"].predicted(ti) for tr in live}
-        if np.isfinite(az[i]):
-            for tr in live:
-                x, P = pred[id(tr)]
-                S = float(P[0, 0]) + R
-                y = float(wrap_deg(az[i] - x[0]))
-                d2 = y * y / S
-                tr["gate_deg"].append(min(jump, float(np.sqrt(gate * S))))  # (its half width)
-                if d2 <= gate and abs(y) <= jump and d2 + np.log(S) < best_cost:
-                    best, best_cost = tr, d2 + np.log(S)
-            if best is None:
-                best = {"kf": DirectionKalman(s_meas, s_acc, gate_prob=0.997,
-                                              init_rate_sigma_dps=TRACK_INIT_RATE_DPS,
-                                              rate_tau_s=DIRECTION_RATE_TAU_S),
-                        "hits": [], "path_i": [], "path_a": [], "gate_deg": []}
-                live.append(best)
-            best["kf"].update(ti, (float(az[i]), None))
-            best["hits"].append(i)
-            best["last_t"] = ti
-        for tr in live:  # (each live track's angle at this frame)
-            a = tr["kf"].azimuth_deg if tr is best else float(pred[id(tr)][0][0])
-            tr["path_i"].append(i)
-            tr["path_a"].append(wrap_deg(a))
+        tracker.step(tt[i], az[i], w[i])
     located = float(w[np.isfinite(az)].sum())
-    n_located = np.concatenate([[0], np.cumsum(np.isfinite(az))])
     cands = []
-    for tr in ended + live:
-        hits = np.array(tr["hits"], dtype=int)
+    for tr in tracker.ended + tracker.live:
+        hits = np.array(tr.hits, dtype=int)
         share = float(w[hits].sum()) / located if located > 0 else 0.0
-        if len(hits) < confirm or share < min_share or not share > 0:
+        if len(hits) < tracker.confirm_hits or share < tracker.min_share or not share > 0:
             continue
-        during = int(n_located[hits[-1] + 1] - n_located[hits[0]])
-        # a random frame's chance of falling in the track's gate: the gate's mean width over
-        # the located frames of its life (max_jump_deg, unless the chi-square gate is tighter)
-        half = float(np.mean(tr["gate_deg"][:during - 1])) if during > 1 else jump
-        if binom.sf(len(hits) - 1, during, min(1.0, 2.0 * half / span)) < chance:
+        # (the chance test over its whole life: a random frame's chance of falling in its
+        # gate, max_jump_deg unless the chi-square gate is tighter, its mean over the life)
+        if tracker._beats_chance(tr):
             cands.append((share, hits, tr))
-    kept: list[tuple[float, NDArray, dict[str, Any]]] = []
+    kept: list[tuple[float, NDArray, _Track]] = []
     for share, hits, tr in sorted(cands, key=lambda c: -c[0]):
         # at most max_sources at once: this one's life with the kept ones' (in frames: two
         # frames at one time, which a caller's times may hold, are not one moment)
@@ -557,9 +706,9 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
     tracks = []
     for k, (share, hits, tr) in enumerate(kept):
         which[hits] = k
-        pi = np.array(tr["path_i"], dtype=int)
+        pi = np.array(tr.path_i, dtype=int)
         on = (pi >= hits[0]) & (pi <= hits[-1])
-        tracks.append(SourceTrack(tt[pi[on]], np.array(tr["path_a"], dtype=float)[on],
+        tracks.append(SourceTrack(tt[pi[on]], np.array(tr.path_a, dtype=float)[on],
                                   hits, share))
     return tracks, which
 
