@@ -16,6 +16,7 @@ from hearsee.audio.propagation import simulate_free_field
 from hearsee.audio.signals import synthetic_voice
 from hearsee.audio.sources import (
     MAX_SOURCES,
+    SourceTracker,
     direction_clusters,
     localize_moving_sources,
     localize_sources,
@@ -563,3 +564,198 @@ def test_a_track_that_coasted_does_not_take_a_precise_neighbours_frame():
     assert len(tracks) == 2
     first = int(which[0])
     assert _ang(tracks[first].angle_deg[0], 0.0) < 1.0 and which[k] == first
+
+
+# ------------------------------------------------------------- online (SourceTracker)
+def _online(t, a, **kw):
+    """Each frame's reported talkers ``[(id, angle_deg), ...]`` from a SourceTracker."""
+    trk = SourceTracker(**kw)
+    out = []
+    for ti, ai in zip(t, a, strict=True):
+        trk.step(ti, ai)
+        out.append([(tr.id, tr.angle_deg) for tr in trk.reported()])
+    return out
+
+
+def test_source_tracker_follows_a_walker_and_a_still_talker_online():
+    t, a, who = _two_talker_angles(268)
+    rep = _online(t, a, max_sources=2)
+    assert all(len(r) <= 2 for r in rep)
+    # from 1 s on, each talker has a reported track within 6 deg, the same one throughout
+    ids = {0: set(), 1: set()}
+    for ti, r in zip(t, rep, strict=True):
+        if ti < 1.0:
+            continue
+        for k, truth in ((0, -60.0 + 15.0 * ti), (1, 80.0)):
+            near = [i for i, ang in r if _ang(ang, truth) < 6.0]
+            assert len(near) == 1, (ti, r)
+            ids[k].add(near[0])
+    assert len(ids[0]) == len(ids[1]) == 1 and ids[0] != ids[1]
+    # nothing is reported before a track has its confirming frames
+    first = next(i for i, r in enumerate(rep) if r)
+    assert np.count_nonzero(np.isfinite(a[:first + 1])) >= 4
+
+
+def test_source_tracker_is_causal_and_matches_track_sources_frames():
+    """The online tracks are track_sources' own: every frame joins the same track (its angle
+    at that frame the same), whatever comes after it."""
+    t, a, _ = _two_talker_angles(269)
+    tracks, which = track_sources(t, a, max_sources=2)
+    trk = SourceTracker(max_sources=2)
+    joined = np.array([trk.step(ti, ai) for ti, ai in zip(t, a, strict=True)])
+    # the offline tracks are some of the online ones: the same frames, the same partition
+    for k, tr in enumerate(tracks):
+        ids = set(joined[which == k])
+        assert len(ids) == 1 and set(np.flatnonzero(joined == ids.pop())) == set(tr.frames)
+    short = SourceTracker(max_sources=2)
+    for ti, ai in zip(t[:100], a[:100], strict=True):
+        short.step(ti, ai)
+    full = SourceTracker(max_sources=2)
+    rep = []
+    for i, (ti, ai) in enumerate(zip(t, a, strict=True)):
+        full.step(ti, ai)
+        if i == 99:
+            rep = [(tr.id, tr.angle_deg) for tr in full.reported()]
+    assert rep == [(tr.id, tr.angle_deg) for tr in short.reported()] and rep
+
+
+def test_source_tracker_reports_the_recently_heard_part_of_a_broken_track():
+    """A talker at 30 deg for 2 s whose frames then come from -40 deg (its track broke: a
+    turn faster than the track predicts) while another talks at 120 deg throughout, at most
+    two reported: the live -40 deg track and the 120 deg one, not the 30 deg track coasting on
+    its old frames (by their whole weight it outranked the -40 deg one for 3 s)."""
+    rng = np.random.default_rng(270)
+    t = np.arange(110) * 0.032
+    a = np.where(np.arange(110) % 2 == 0, np.where(t < 2.0, 30.0, -40.0), 120.0)
+    a = a + rng.normal(0, 1.0, len(t))
+    rep = _online(t, a, max_sources=2)
+    end = sorted(round(ang) for _, ang in rep[-1])
+    assert len(end) == 2 and abs(end[0] + 40) < 4 and abs(end[1] - 120) < 4, rep[-1]
+    # with ranking by the whole weight (a decay over 1000 s) the stale track is still reported
+    stale = _online(t, a, max_sources=2, rank_tau_s=1000.0)
+    assert any(abs(ang - 30) < 4 for _, ang in stale[-1]), stale[-1]
+
+
+def test_source_tracker_reports_little_from_scattered_frames():
+    """Frames at random angles (no talker): a reported talker at under 5 % of the frames in
+    20 tries; with the chance test off (max_chance=1) at most of them."""
+    rng = np.random.default_rng(271)
+    on, off = [], []
+    for _ in range(20):
+        t = np.arange(190) * 0.032
+        a = rng.uniform(-180, 180, len(t))
+        on.append(np.mean([bool(r) for r in _online(t, a, max_sources=2)]))
+        off.append(np.mean([bool(r) for r in _online(t, a, max_sources=2, max_chance=1.0,
+                                                      min_share=0.0)]))
+    assert np.mean(on) < 0.05 and np.mean(off) > 0.3, (np.mean(on), np.mean(off))
+
+
+def test_source_tracker_rotate_and_reset():
+    trk = SourceTracker(max_sources=2)
+    for i in range(10):
+        trk.step(0.032 * i, 40.0)
+    assert [round(tr.angle_deg) for tr in trk.reported()] == [40]
+    trk.rotate(-50.0)  # the array turned 50 deg left: the talker is now at -10 deg
+    assert [round(tr.angle_deg) for tr in trk.reported()] == [-10]
+    assert trk.step(0.32, -10.0) == trk.reported()[0].id
+    trk.reset()
+    assert trk.reported() == [] and trk.live == []
+    trk.step(0.0, 5.0)  # (time starts again after a reset)
+
+
+@pytest.mark.parametrize("kw, words", [
+    ({"max_sources": 0}, "max_sources"),
+    ({"rank_tau_s": 0.0}, "rank_tau_s"),
+    ({"rank_tau_s": np.inf}, "rank_tau_s"),
+    ({"history": "yes"}, "history must be True or False"),
+    ({"span_deg": 400.0}, "span_deg"),
+])
+def test_source_tracker_refuses_bad_settings(kw, words):
+    with pytest.raises(ConfigError, match=words):
+        SourceTracker(**kw)
+
+
+@pytest.mark.parametrize("frames, words", [
+    ([(1.0, 10.0), (0.5, 10.0)], "non-decreasing"),
+    ([(np.nan, 10.0)], "non-decreasing"),
+    ([(0.0, np.inf)], "angle_deg"),
+    ([(0.0, 2e9)], "angle_deg"),
+])
+def test_source_tracker_refuses_bad_frames(frames, words):
+    trk = SourceTracker()
+    with pytest.raises(ConfigError, match=words):
+        for ti, ai in frames:
+            trk.step(ti, ai)
+    with pytest.raises(ConfigError, match="weight"):
+        SourceTracker().step(0.0, 10.0, -1.0)
+
+
+# --------------------------------------------------------------- several talkers, streamed
+def _streamed(x, arr, **kw):
+    from hearsee.stream.pipeline import ArraySource, StreamConfig, StreamPipeline
+
+    ups = []
+    StreamPipeline(arr, StreamConfig(**kw)).run(ArraySource(x, FS), ups.append)
+    return ups
+
+
+@pytest.mark.parametrize("preset", ["three-mic", "two-mic"])
+def test_stream_follows_a_walker_and_a_still_talker(preset):
+    """``StreamConfig(max_sources=2)``: each update's sources, causal -- from 2.5 s on, each
+    talker within 8 deg of a reported source (a pair modulo front/back) at >= 80 % of the
+    frames, the still talker's under one id throughout."""
+    arr = MicArray.from_preset(preset)
+    two = arr.n_mics == 2
+    x, traj = _walk_and_stand(arr, 272)
+    ups = _streamed(x, arr, max_sources=2)
+
+    def err(est, truth):
+        return abs(_fold(est) - _fold(truth)) if two else _ang(est, truth)
+
+    hits, still_ids = [], set()
+    for u in ups:
+        assert u.sources is not None and len(u.sources) <= 2
+        assert all(set(s) == {"id", "azimuth_deg", "rate_dps", "last_heard_s", "n_frames"}
+                   for s in u.to_json()["sources"])
+        assert all((s["rate_dps"] is None) == two for s in u.sources)
+        if u.t < 2.5:
+            continue
+        walker = float(np.degrees(np.arctan2(*traj.heard_at(u.t)[1::-1])))
+        hits.append([any(err(s["azimuth_deg"], truth) < 8.0 for s in u.sources)
+                     for truth in (walker, 110.0)])
+        still_ids |= {s["id"] for s in u.sources if err(s["azimuth_deg"], 110.0) < 8.0}
+        assert all(s["last_heard_s"] <= u.t for s in u.sources)
+    assert np.mean(hits, axis=0).min() >= 0.8, np.mean(hits, axis=0)
+    assert len(still_ids) == 1
+
+
+def test_stream_sources_settings(two3):
+    from hearsee.stream.pipeline import StreamConfig, TrackingProcessor
+
+    arr = MicArray.from_preset("three-mic")
+    ups = _streamed(two3[:, :FS], arr)  # (without max_sources: no "sources")
+    assert all(u.sources is None and "sources" not in u.to_json() for u in ups)
+    for bad in (1, 9, 2.0, True, "2"):
+        with pytest.raises(ConfigError, match="max_sources"):
+            StreamConfig(max_sources=bad)
+    with pytest.raises(ConfigError, match="masked pair"):
+        TrackingProcessor(MicArray.from_preset("mask2-asym"), FS, StreamConfig(max_sources=2))
+
+
+def test_track_cli_sources(two3_wav, capsys):
+    code = main(["track", str(two3_wav), "--array", "three-mic", "--sources", "2"])
+    cap = capsys.readouterr()
+    assert code == 0, cap.err
+    rows = [json.loads(s) for s in cap.out.strip().splitlines()]
+    last = rows[-1]["sources"]
+    # two still talkers at 40 and -110 deg, both reported at the end
+    assert sorted(round(s["azimuth_deg"] / 10) for s in last) == [-11, 4]
+    assert all("sources" in r for r in rows)
+    for bad in (["--sources", "9"], ["--sources", "0"]):
+        code = main(["track", str(two3_wav), "--array", "three-mic", *bad])
+        cap = capsys.readouterr()
+        assert code == 2 and cap.out == "" and len(cap.err.strip().splitlines()) == 1
+        assert "--sources" in cap.err and "Traceback" not in cap.err
+    code = main(["track", str(two3_wav), "--array", "mask2-asym", "--sources", "2"])
+    cap = capsys.readouterr()
+    assert code == 2 and "masked" in cap.err and "Traceback" not in cap.err

@@ -24,6 +24,7 @@ it.
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -285,19 +286,50 @@ def _frame_angles(tau: NDArray, ok: NDArray, arr: Any, pairs: Sequence[tuple[int
     for n in np.flatnonzero(ok & np.all(np.isfinite(tau), axis=1)):
         loc = (localize_tdoa(tau[n], arr, pairs, near_field=near, in_plane=in_plane)
                if locs is None else locs[n])
-        if loc is None:
+        ak = frame_angle(loc, geo.kind == "linear")
+        if ak is None:
             continue
-        if geo.kind == "linear":  # (any axis: a vertical one has no azimuth, a tilted one
-            # puts every cone that misses the horizontal plane on its own azimuth)
-            a, k = _from_broadside(loc.extra["cos_theta"])
-        elif loc.azimuth_deg is not None and np.isfinite(loc.azimuth_deg):
-            a = k = loc.azimuth_deg
-        else:
-            continue
+        a, k = ak
         rows.append(n)
         angle.append(a)
         key.append(k)
     return np.array(rows, dtype=int), np.array(angle, dtype=float), np.array(key, dtype=float)
+
+
+def frame_angle(loc: Any, linear: bool) -> tuple[float, float] | None:
+    """A frame's localization ``loc`` (:class:`~hearsee.audio.localize.Localization`, or
+    None) as ``(angle, key)`` in degrees -- its azimuth twice, or a ``linear`` array's angle
+    from broadside and what is clustered or tracked of it (:func:`_from_broadside`) -- or
+    None when it gives no direction."""
+    if loc is None:
+        return None
+    if linear:  # (any axis: a vertical one has no azimuth, a tilted one puts every cone
+        # that misses the horizontal plane on its own azimuth)
+        return _from_broadside(loc.extra["cos_theta"])
+    if loc.azimuth_deg is not None and np.isfinite(loc.azimuth_deg):
+        return loc.azimuth_deg, loc.azimuth_deg
+    return None
+
+
+def linear_azimuth(key: float, design: NDArray, arr: Any, pairs: Sequence[tuple[int, int]],
+                   prev: float | None) -> float | None:
+    """A linear array's azimuth (degrees) for a tracked ``key`` (its angle's sine from
+    broadside times 90): the cone's twin in front (|azimuth| < 90) where there is one, else
+    the one nearest ``prev`` (the track's last azimuth; the first twin without one) -- an
+    x-axis pair's twins are +-a, and the tie between them was broken by rounding, which
+    flipped a path's sign from frame to frame; None where the cone has no azimuth (a
+    vertical pair). ``design`` is the pairs' TDOAs (s) per unit of the cosine along the
+    array's axis (``localize._design(arr, pairs) @ axis``)."""
+    from hearsee.audio.localize import localize_tdoa
+
+    loc = localize_tdoa(design * np.clip(key / 90.0, -1.0, 1.0), arr, pairs)
+    azs = [c[0] for c in loc.candidates if c[0] is not None]
+    front = [a for a in azs if abs(a) < 90.0 - 1e-6]
+    if not azs:
+        return None
+    if len(front) == 1 or prev is None:
+        return front[0] if len(front) == 1 else azs[0]
+    return min(azs, key=lambda a: abs(float(wrap_deg(a - prev))))
 
 
 def _direction(tau: NDArray, arr: Any, pairs: Sequence[tuple[int, int]], in_plane: bool
@@ -376,12 +408,21 @@ TRACK_MIN_SHARE = 0.05
 TRACK_MAX_CHANCE = 1e-4
 
 
+#: :class:`SourceTracker`'s chance bar for reporting a talker (see :data:`TRACK_MAX_CHANCE`)
+REPORT_MAX_CHANCE = 1e-4
+#: :class:`SourceTracker` reports the talkers with the most weight of frames, each frame's
+#: decayed with this time constant (s): a talker heard lately before one heard long ago -- a
+#: track that fragmented leaves a coasting stale part, which by its whole weight outranked the
+#: live part for up to ``max_coast_s``
+REPORT_RANK_TAU_S = 1.0
+
+
 class _Track:
     """One track of :class:`SourceTracker`: its filter and what the reporting rules count."""
 
     __slots__ = ("id", "kf", "hits", "weight", "last_t", "angle_deg", "located_before",
                  "weight_before", "located_through", "gate_sum", "gate_n", "gate_at_hit",
-                 "passed", "path_i", "path_a")
+                 "passed", "path_i", "path_a", "recent_w", "recent_t")
 
     def __init__(self, track_id: int, kf: Any, located_before: int,
                  weight_before: float) -> None:
@@ -397,6 +438,7 @@ class _Track:
         self.gate_sum, self.gate_n = 0.0, 0
         self.gate_at_hit = (0.0, 0)
         self.passed = False  # (the chance test, once passed, holds)
+        self.recent_w, self.recent_t = 0.0, 0.0
         self.path_i: list[int] = []
         self.path_a: list[float] = []
 
@@ -432,8 +474,9 @@ class SourceTracker:
                  tentative_s: float = TRACK_TENTATIVE_S,
                  max_coast_s: float = TRACK_MAX_COAST_S,
                  min_share: float = TRACK_MIN_SHARE,
-                 max_chance: float = TRACK_MAX_CHANCE,
-                 span_deg: float = 360.0, history: bool = False) -> None:
+                 max_chance: float = REPORT_MAX_CHANCE,
+                 span_deg: float = 360.0, rank_tau_s: float = REPORT_RANK_TAU_S,
+                 history: bool = False) -> None:
         from scipy.stats import chi2
 
         from hearsee.audio.tracking import NOISE_RANGE
@@ -456,6 +499,7 @@ class SourceTracker:
                               f"{min_share}")
         self.max_chance = finite_number("max_chance", max_chance, 0.0, 1.0, lo_open=True)
         self.span_deg = finite_number("span_deg", span_deg, 0.0, 360.0, lo_open=True)
+        self.rank_tau_s = finite_number("rank_tau_s", rank_tau_s, 0.0, None, lo_open=True)
         self.history = true_or_false("history", history)
         self._gate = float(chi2.ppf(0.997, 1))
         self.reset()
@@ -530,6 +574,8 @@ class SourceTracker:
             best.kf.update(ti, (a, None))
             best.hits.append(i)
             best.weight += w
+            best.recent_w = self.recent_weight(best, ti) + w
+            best.recent_t = ti
             best.last_t = ti
             best.located_through = self.located
             best.gate_at_hit = (best.gate_sum, best.gate_n)
@@ -566,7 +612,13 @@ class SourceTracker:
         ``last_t`` (when a frame last joined it, s) and ``hits`` (its frames' indices)."""
         ok = [tr for tr in self.live if len(tr.hits) >= self.confirm_hits and tr.passed
               and tr.weight > 0 and self.share(tr) >= self.min_share]
-        return sorted(ok, key=lambda tr: (-tr.weight, tr.id))[:self.max_sources]
+        return sorted(ok, key=lambda tr: (-self.recent_weight(tr, self._t), tr.id)
+                      )[:self.max_sources]
+
+    def recent_weight(self, tr: _Track, t: float) -> float:
+        """``tr``'s frames' weight, each decayed by ``exp(-age / rank_tau_s)`` at time ``t``
+        (s): what :meth:`reported` ranks by."""
+        return tr.recent_w * math.exp(-(t - tr.recent_t) / self.rank_tau_s)
 
 
 @dataclass(frozen=True)
@@ -740,7 +792,7 @@ def localize_moving_sources(t: ArrayLike, tdoa_s: ArrayLike, valid: ArrayLike, a
     (n_frames,): its index, -1 for none.
     """
     from hearsee.audio.arrays import load_array
-    from hearsee.audio.localize import _design, array_geometry, localize_tdoa
+    from hearsee.audio.localize import _design, array_geometry
 
     check_settings(track_sources, track_kwargs,
                    skip=("t", "angle_deg", "weight", "max_sources"))
@@ -758,23 +810,16 @@ def localize_moving_sources(t: ArrayLike, tdoa_s: ArrayLike, valid: ArrayLike, a
     A = _design(arr, list(pairs)) @ geo.axis if linear else None
 
     def path(tracked: NDArray) -> list[float | None]:
-        """A track's azimuths (deg); a linear array's from its tracked sines: the cone's twin
-        in front (|azimuth| < 90) where there is one, else the one nearest the path's last
-        azimuth -- an x-axis pair's twins are +-a, and the tie between them was broken by
-        rounding, which flipped the path's sign from frame to frame."""
+        """A track's azimuths (deg); a linear array's from its tracked sines
+        (:func:`linear_azimuth`, each frame's twin chosen by the path's last azimuth)."""
         if A is None:
             return [float(a) for a in tracked]
         out: list[float | None] = []
         prev = None
         for k in tracked:
-            loc = localize_tdoa(A * np.clip(k / 90.0, -1.0, 1.0), arr, pairs)
-            azs = [c[0] for c in loc.candidates if c[0] is not None]
-            front = [a for a in azs if abs(a) < 90.0 - 1e-6]
-            if len(front) == 1 or (azs and prev is None):
-                prev = front[0] if len(front) == 1 else azs[0]
-            elif azs:
-                prev = min(azs, key=lambda a: abs(float(wrap_deg(a - prev))))
-            out.append(prev if azs else None)  # (a vertical pair: no azimuth)
+            az = linear_azimuth(float(k), A, arr, pairs, prev)
+            prev = prev if az is None else az
+            out.append(az)  # (a vertical pair: None, no azimuth)
         return out
 
     sources = []

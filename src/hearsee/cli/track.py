@@ -229,6 +229,12 @@ def track_cmd(
         "it, the steered response's 300-3500 Hz), e.g. 300,3500. A file's empty band at the "
         "top of the spectrum (upsampled from a lower rate) is left out by itself either way.",
         show_default=False)] = None,
+    sources: Annotated[int, typer.Option(
+        "--sources", help="Several talkers at once, who may walk (2-8): each update's "
+        "\"sources\" names up to this many, each with a track id, azimuth (a pair's front "
+        "twin) and when it was last heard; the frames' own directions followed by "
+        "audio.sources.SourceTracker, causally. 1: one talker (no \"sources\"). Not for a "
+        "masked pair.")] = 1,
     fmt: Annotated[TrackFormat, typer.Option(
         "--format", help="jsonl: one JSON line per frame; json: one document.")
     ] = TrackFormat.jsonl,
@@ -244,9 +250,10 @@ def track_cmd(
     """
     from hearsee.audio.arrays import load_array
     from hearsee.audio.signals import recording_entry, recording_label
+    from hearsee.audio.sources import MAX_SOURCES
     from hearsee.audio.tdoa import check_frame_ms
     from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, IMM_MODES_DPS2
-    from hearsee.config import time_limit
+    from hearsee.config import time_limit, whole_number
     from hearsee.errors import ConfigError
     from hearsee.stream.pipeline import (
         DeviceSource,
@@ -282,6 +289,7 @@ def track_cmd(
         raise ConfigError(f"{' / '.join(pose)} need{'s' if len(pose) == 1 else ''} --camera "
                           "CAM.yaml and an image-point source (they place the camera)")
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
+    whole_number("--sources", sources, 1, MAX_SOURCES)
     band = None if band_hz is None else parse_band(band_hz)
     if rate_tau is None:
         rate_tau = DIRECTION_RATE_TAU_S
@@ -293,6 +301,9 @@ def track_cmd(
     chosen = parse_channels(channels, arr.n_mics)
     # (a vertical line, or a masked pair with a camera: refused before any audio)
     check_trackable(arr, camera=camera is not None)
+    if sources > 1 and arr.mask is not None:
+        raise ConfigError(f"--sources: the masked array {arr.name!r} tracks one talker (its "
+                          "front/back decision is one talker's)")
     rig = points = None
     if camera is not None:
         from hearsee.fusion.audiovisual import AudioVisualRig
@@ -312,7 +323,8 @@ def track_cmd(
                        itd_filter=itd_filter, in_plane=in_plane,
                        direction_modes_dps2=IMM_MODES_DPS2 if tracker is Tracker.imm else None,
                        direction_rate_tau_s=rate_tau,
-                       gated_min_coherence=gate_coherence if gate_coherence > 0 else None)
+                       gated_min_coherence=gate_coherence if gate_coherence > 0 else None,
+                       max_sources=sources if sources > 1 else None)
 
     updates: list = []  # (kept by the sink: what a Ctrl-C leaves is still reported)
     told = False  # (a file's wiring check warned: a microphone inverted or out of sync)

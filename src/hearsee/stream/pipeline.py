@@ -224,7 +224,15 @@ class Update:
     ``masked``: the array is a masked pair; then ``front_probability`` is its stream's
     front/back decision (:class:`SmoothedMask`; the score of
     :attr:`hearsee.audio.mask.MaskLocalization.front_probability`, None before the first),
-    and the JSON line carries it (other arrays' lines do not have the key).
+    and the JSON line carries it (other arrays' lines do not have the key). ``sources``
+    (with ``StreamConfig.max_sources``, else None and not in the JSON line): the talkers
+    reported at this frame by :class:`hearsee.audio.sources.SourceTracker` on the frames' own
+    directions, the most recently heard first, each ``{"id"`` (the track's number, the same
+    for as long as it is followed) ``, "azimuth_deg"`` (a pair's front twin: its mirror is
+    as likely) ``, "rate_dps"`` (None for a pair, whose track is in its angle's sine)
+    ``, "last_heard_s"`` (the time of its last frame; it is predicted through a pause)
+    ``, "n_frames"}``. The single-talker fields above are the one direction tracker's, as
+    without it.
     """
 
     t: float
@@ -246,6 +254,7 @@ class Update:
     itd_elevation_deg: float | None = None
     front_probability: float | None = None
     masked: bool = False
+    sources: list[dict[str, Any]] | None = None
 
     @property
     def bearing_decided(self) -> bool:
@@ -275,6 +284,8 @@ class Update:
             # (a masked pair's: the stream's front/back decision, null before its first one;
             # absent for other arrays)
             **({"front_probability": self.front_probability} if self.masked else {}),
+            # (with StreamConfig.max_sources: the talkers reported at this frame)
+            **({"sources": self.sources} if self.sources is not None else {}),
         }
 
 
@@ -2065,6 +2076,11 @@ class StreamConfig:
         better), free-field walking talkers unchanged, but 60 of 5622 frames of pure sensor
         noise (3 x 60 s) measured, against none at 0.4 -- a spurious measurement every ~3 s
         of silence; not adopted. A stream that is never long silent may set it lower
+    max_sources : several talkers at once, some of whom may walk: the frames' own directions
+        (the ``raw_*`` of :class:`Update`) are also followed by
+        :class:`hearsee.audio.sources.SourceTracker`, and each update's ``sources`` names up
+        to this many talkers (2 to :data:`hearsee.audio.sources.MAX_SOURCES`); None (the
+        default) = one talker, no ``sources``. Not for a masked pair
     """
 
     frame_ms: float = 64.0
@@ -2115,6 +2131,7 @@ class StreamConfig:
     mask_tau_s: float = 0.15
     mask_decide_confidence: float = 0.9
     mask_min_phase_match: float = 0.4
+    max_sources: int | None = None
 
     def __post_init__(self) -> None:
         _check_config(self)
@@ -2169,6 +2186,13 @@ def _check_config(cfg: StreamConfig) -> None:
                  "prefer_frame"):
         if not isinstance(getattr(cfg, name), bool | np.bool_):
             raise bad(name, "True or False")
+    if cfg.max_sources is not None:
+        from hearsee.audio.sources import MAX_SOURCES
+
+        ms = cfg.max_sources
+        if not (isinstance(ms, int | np.integer) and not isinstance(ms, bool)
+                and 2 <= ms <= MAX_SOURCES):
+            raise bad("max_sources", f"None or a whole number 2 to {MAX_SOURCES}")
     pfc = cfg.prefer_frame_confidence
     if not ((is_real(pfc) or pfc == math.inf) and pfc > 0):  # (inf = never)
         raise bad("prefer_frame_confidence", "> 0 (inf = never)")
@@ -2296,6 +2320,9 @@ class TrackingProcessor:
         self.mask = None if model is None else SmoothedMask(
             model, fs, self.frame_len, self.hop, self.cfg.mask_tau_s,
             self.gcc.activity.n_history)
+        self.talkers, self._talker_design = None, None
+        if self.cfg.max_sources is not None:
+            self._talkers_init(geom)
         self.srp = None
         # (a masked pair: no steered response -- its steering is the bare pair's)
         if self.cfg.spectrum_alpha > 0 and self.mask is None:
@@ -2303,6 +2330,46 @@ class TrackingProcessor:
                                    self.cfg.srp_band_hz,
                                    coherence_weight=self.cfg.srp_coherence_weight,
                                    in_plane=self._in_plane)
+
+    def _talkers_init(self, geom: Any) -> None:
+        """The several talkers' tracker (``cfg.max_sources``): angles are azimuths, or a
+        linear array's sines from broadside times 90 (180 deg of span)."""
+        from hearsee.audio.localize import _design
+        from hearsee.audio.sources import SourceTracker
+
+        if self.array.mask is not None:
+            raise ConfigError("StreamConfig.max_sources: a masked pair's frames tell no "
+                              "several talkers' directions (one talker only)")
+        linear = geom.kind == "linear"
+        self.talkers = SourceTracker(self.cfg.max_sources, span_deg=180.0 if linear else 360.0)
+        if linear:
+            self._talker_design = _design(self.array, self.pairs) @ geom.axis
+        self._talker_az: dict[int, float] = {}  # (a pair's last azimuth per track: its twin)
+
+    def _talkers_step(self, t: float, loc: Any) -> list[dict[str, Any]]:
+        """Frame ``t`` (s) with its own localization ``loc`` (None: no direction) into the
+        talkers' tracker; the talkers it reports now (:attr:`Update.sources`)."""
+        from hearsee.audio.sources import frame_angle, linear_azimuth
+
+        linear = self._talker_design is not None
+        ak = frame_angle(loc, linear)
+        self.talkers.step(t, np.nan if ak is None else ak[1])
+        out = []
+        for tr in self.talkers.reported():
+            if linear:
+                az = linear_azimuth(tr.angle_deg, self._talker_design, self.array, self.pairs,
+                                    self._talker_az.get(tr.id))
+                if az is not None:
+                    self._talker_az[tr.id] = az
+                rate = None
+            else:
+                az, rate = tr.angle_deg, float(tr.kf.rate_dps[0])
+            out.append({"id": tr.id, "azimuth_deg": az, "rate_dps": rate,
+                        "last_heard_s": tr.last_t, "n_frames": len(tr.hits)})
+        live = {tr.id for tr in self.talkers.live}
+        for k in [k for k in self._talker_az if k not in live]:
+            del self._talker_az[k]
+        return out
 
     def _itd_filter(self) -> ItdKalman | None:
         """A new ITD Kalman filter (thesis 2.2.2) when ``cfg.itd_filter``, else None."""
@@ -2324,6 +2391,9 @@ class TrackingProcessor:
             self.mask.reset()
         self._last_measured_t = -np.inf
         self._motion_measured_t = -np.inf
+        if self.talkers is not None:
+            self.talkers.reset()
+            self._talker_az.clear()
 
     def smoothed(self, batch: FrameBatch) -> dict[str, NDArray] | None:
         """The :class:`SmoothedSrp` measurements of the batch's frames (NaN rows for missing
@@ -2398,16 +2468,16 @@ class TrackingProcessor:
                 use = self.itd.step(z if have else None)
                 if use:
                     z = self.itd.pair_tdoas()
-            raw_az = raw_el = itd_az = itd_el = None
+            raw_az = raw_el = itd_az = itd_el = raw_loc = None
             cands: list[tuple[float, float | None]] = []
             if have:  # raw_*: the frame's own TDOAs, not the filter's, taken or not
-                raw_az, raw_el, raw_cands = self._locate(raw_z, mk[n])
+                raw_az, raw_el, raw_cands, raw_loc = self._locate(raw_z, mk[n])
             if use:
                 # the tracker's measurement: the (ITD-filtered) TDOAs' direction
                 if z is raw_z:
                     cands = raw_cands
                 else:
-                    itd_az, itd_el, cands = self._locate(z, mk[n])
+                    itd_az, itd_el, cands, _ = self._locate(z, mk[n])
             delay = 0.0
             own = bool(cands) and (self.cfg.prefer_frame
                                    or conf[n] >= self.cfg.prefer_frame_confidence)
@@ -2451,6 +2521,8 @@ class TrackingProcessor:
                 upd.covariance = self.direction.P[:2, :2].tolist()
             if self.rig is not None and self.image_points is not None:
                 self._fuse(upd, z if use else None)
+            if self.talkers is not None:
+                upd.sources = self._talkers_step(float(t), raw_loc)
             out.append(upd)
         return out
 
@@ -2472,9 +2544,10 @@ class TrackingProcessor:
         return out
 
     def _locate(self, z: NDArray, decision: Any
-                ) -> tuple[float | None, float | None, list[tuple[float, float | None]]]:
+                ) -> tuple[float | None, float | None, list[tuple[float, float | None]], Any]:
         """A frame's direction from its TDOAs ``z`` (s): ``(azimuth_deg, elevation_deg,
-        candidates)`` for the tracker (the first the primary). Bare arrays:
+        candidates, localization)`` for the tracker (the first the primary; the
+        localization, a bare array's, None for a masked pair's). Bare arrays:
         :func:`~hearsee.audio.localize.localize_tdoa`. A masked pair: the ITD's azimuth in
         each half (:func:`hearsee.audio.mask.itd_candidates`; where it matches twice in a
         half, the match nearest the decision's azimuth or runner-up there, else the track's),
@@ -2484,7 +2557,7 @@ class TrackingProcessor:
             loc = localize_tdoa(z, self.array, self.pairs, near_field=self._in_plane,
                                 in_plane=self._in_plane)
             return (loc.azimuth_deg, loc.elevation_deg,
-                    [(a, e) for a, e in loc.candidates if a is not None])
+                    [(a, e) for a, e in loc.candidates if a is not None], loc)
         from hearsee.audio.mask import itd_candidates
 
         p_front = 0.5 if decision is None else decision.front_probability
@@ -2502,7 +2575,7 @@ class TrackingProcessor:
         cands: list[tuple[float, float | None]] = [(first, None)]
         if not self._decided(decision):
             cands.append((second, None))
-        return first, None, cands
+        return first, None, cands, None
 
     def _wrong_half(self, decision: Any) -> bool:
         """Whether a masked pair's track lies in the half that a confident front/back
@@ -2546,6 +2619,12 @@ class TrackingProcessor:
             if turn:
                 self.direction.rotate_azimuth(-turn)
                 self.motion.reset()
+                if self.talkers is not None:  # (a pair's tracks are in sines: forgotten)
+                    if self._talker_design is None:
+                        self.talkers.rotate(-turn)
+                    else:
+                        self.talkers.reset()
+                        self._talker_az.clear()
         self._pans.append((t, pan))
         if not (cands and delay > 0 and len(self._pans) > 1):
             return cands
