@@ -513,21 +513,24 @@ class SourceTracker:
         self.located_weight = 0.0
         self._next_id = 0
         self._t = -np.inf
+        self._models: dict[float, Any] = {}  # (the filters' transition and noise per step)
 
     def rotate(self, delta_deg: float) -> None:
         """Add ``delta_deg`` (degrees) to every live track's angle (azimuths: the array turned
         by ``-delta_deg`` about its z axis; see
         :meth:`~hearsee.audio.tracking.DirectionKalman.rotate_azimuth`)."""
+        from hearsee.audio.tracking import _wrap1
+
         for tr in self.live:
             tr.kf.rotate_azimuth(delta_deg)
-            tr.angle_deg = float(wrap_deg(tr.angle_deg + delta_deg))
+            tr.angle_deg = _wrap1(tr.angle_deg + float(delta_deg))
 
     def step(self, t: float, angle_deg: float, weight: float = 1.0) -> int:
         """Take the frame at time ``t`` (s, not before the last) with angle ``angle_deg``
         (degrees, NaN = none) and ``weight`` (>= 0); returns the id of the track it joined, -1
         for none. ConfigError for a time that goes back or is not finite, an infinite angle
         (or beyond +-1e9 deg) or a negative or non-finite weight."""
-        from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, DirectionKalman
+        from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, DirectionKalman, _wrap1
 
         ti, a, w = float(t), float(angle_deg), float(weight)
         if not (np.isfinite(ti) and ti >= self._t):
@@ -554,7 +557,7 @@ class SourceTracker:
             for tr in self.live:
                 x, P = pred[tr.id]
                 S = float(P[0, 0]) + R
-                y = float(wrap_deg(a - x[0]))
+                y = _wrap1(a - float(x[0]))
                 d2 = y * y / S
                 # (its gate's half width)
                 tr.gate_sum += min(self.max_jump_deg, float(np.sqrt(self._gate * S)))
@@ -567,6 +570,8 @@ class SourceTracker:
                     self.sigma_meas_deg, self.sigma_accel_dps2, gate_prob=0.997,
                     init_rate_sigma_dps=TRACK_INIT_RATE_DPS, rate_tau_s=DIRECTION_RATE_TAU_S),
                     self.located, self.located_weight)
+                # (one model per step for all the tracks: they share their filters' settings)
+                best.kf._model_cache = self._models
                 self._next_id += 1
                 self.live.append(best)
             self.located += 1
@@ -582,8 +587,8 @@ class SourceTracker:
             if not best.passed and len(best.hits) >= self.confirm_hits:
                 best.passed = self._beats_chance(best)
         for tr in self.live:  # (each live track's angle at this frame)
-            tr.angle_deg = float(wrap_deg(
-                tr.kf.azimuth_deg if tr is best else float(pred[tr.id][0][0])))
+            tr.angle_deg = _wrap1(tr.kf.azimuth_deg if tr is best
+                                  else float(pred[tr.id][0][0]))
             if self.history:
                 tr.path_i.append(i)
                 tr.path_a.append(tr.angle_deg)

@@ -361,8 +361,11 @@ class _Kalman:
 # ---------------------------------------------------------------------------- directions
 #: Entries each per-step cache of a tracker (transition and noise matrices, IMM switching) keeps
 #: before it starts again: the stream's sample-clock steps take a few values, but a wall clock's
-#: jitter gives nearly every frame its own step (the caches grew by one entry per frame).
-_CACHE_SIZE = 64
+#: jitter gives nearly every frame its own step (the caches grew by one entry per frame). 256
+#: (64 before 2026-12-06) holds every step of a track that coasts 3 s through 32-ms frames
+#: (:class:`hearsee.audio.sources.SourceTracker`'s predictions, ~100 steps: with 64 the cache
+#: emptied and refilled through every pause)
+_CACHE_SIZE = 256
 
 
 def _cached(cache: dict, dt: float, make: Callable[[], Any]) -> Any:
