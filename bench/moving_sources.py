@@ -1,6 +1,7 @@
 """Benchmark: two talkers, one of them walking -- hearsee's tracks (``hearsee localize
---sources 2 --moving``) against pyroomacoustics' SRP-PHAT, MUSIC and NormMUSIC on sliding
-one-second blocks, side by side on the same recordings.
+--sources 2 --moving``) and its stream (``hearsee track --sources 2``) against
+pyroomacoustics' SRP-PHAT, MUSIC and NormMUSIC on sliding one-second blocks, side by side on
+the same recordings.
 
 Recordings: the three-mic and two-mic presets; 6 s; one talker walks a straight line at 0.5-1.5
 m/s (starting 1-2.5 m away in a random direction, staying 0.7-3.5 m from the array and 0.5 m
@@ -20,14 +21,18 @@ errors' median. hearsee (tracks): one ``localize_recording(kalman=False, max_sou
 moving=True)`` of the whole recording; at each moment the tracks alive then (first to last
 frame) give their angle at the nearest frame -- an angle from that frame and the ones before,
 but which tracks are reported, and where each ends, is decided on the whole recording (an
-offline answer, as the blocks' 0.5 s ahead is). hearsee (blocks):
+offline answer, as the blocks' 0.5 s ahead is). hearsee (stream): ``hearsee track --sources
+2`` (``StreamConfig(max_sources=2)``, its defaults) over the recording as a file; at each
+moment the talkers its last update at or before it reported -- causal, what a robot listening
+live knew then (:class:`hearsee.audio.sources.SourceTracker`). hearsee (blocks):
 ``localize_recording(max_sources=2)`` (the still talkers' clustering) of the one-second block
 centred on the moment. Peers: the same blocks, told there are two talkers (``num_src=2``),
 set up as bench/sources.py sets them up (1024-sample Hann STFT at 50 % overlap, 300-3500 Hz,
 the array plane, a 0.5-deg grid, a pair's front half).
 
 The default seed (280) was not used to choose :func:`hearsee.audio.sources.track_sources`'
-settings; those were chosen on dev seeds 270-273 (see its constants).
+settings (chosen on dev seeds 270-273, see its constants) nor the stream's reporting rules
+(:class:`~hearsee.audio.sources.SourceTracker`'s, on dev seeds 281-282).
 
 Usage: python bench/moving_sources.py [--trials 10] [--seed 280] [--data ../shared/data]
 """
@@ -61,12 +66,13 @@ from hearsee.audio.localize import localize_recording  # noqa: E402
 from hearsee.audio.propagation import add_noise  # noqa: E402
 from hearsee.sim.audio import simulate_recording  # noqa: E402
 from hearsee.sim.moving import linear_trajectory, simulate_moving_recording  # noqa: E402
+from hearsee.stream.pipeline import ArraySource, StreamConfig, StreamPipeline  # noqa: E402
 
 FS = 16000
 ARRAYS = ("three-mic", "two-mic")
 RT60S = (0.0, 0.3)
 PEERS = ("SRP", "MUSIC", "NormMUSIC")
-METHODS = ("hearsee (tracks)", "hearsee (blocks)", *PEERS)
+METHODS = ("hearsee (tracks)", "hearsee (stream)", "hearsee (blocks)", *PEERS)
 BAND = (300.0, 3500.0)
 DURATION_S = 6.0
 SNR_DB = 20.0
@@ -141,6 +147,29 @@ def track_estimates(doc: dict, tau: float) -> list[float]:
     return out
 
 
+def streamed(x: np.ndarray, arr: MicArray) -> tuple[np.ndarray, list]:
+    """hearsee's stream with several talkers as ``hearsee track --sources 2`` runs it
+    (``StreamConfig(max_sources=2)``, its defaults: the GCC over the whole band -- on the dev
+    recordings the 300-3500 Hz band of the other methods put a false second talker beside a
+    lone walker twice as often): the updates' times (s) and each one's reported azimuths
+    (deg)."""
+    ups: list = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        StreamPipeline(arr, StreamConfig(max_sources=2)).run(ArraySource(x, FS), ups.append)
+    return (np.array([u.t for u in ups]),
+            [[s["azimuth_deg"] for s in u.sources if s["azimuth_deg"] is not None]
+             for u in ups])
+
+
+def stream_estimates(streamed_out: tuple[np.ndarray, list], tau: float) -> list[float]:
+    """The azimuths (deg) the stream reported at its last update at or before ``tau`` (s):
+    what a robot listening live knew then."""
+    t, az = streamed_out
+    k = int(np.searchsorted(t, tau + 1e-9)) - 1
+    return az[k] if k >= 0 else []
+
+
 def _localized(x: np.ndarray, arr: MicArray) -> dict:
     """hearsee's tracks of a recording: ``localize_recording``'s document."""
     with warnings.catch_warnings():
@@ -150,8 +179,9 @@ def _localized(x: np.ndarray, arr: MicArray) -> dict:
 
 
 def run_alone(trials: int, seed: int, speech: list[Path]) -> dict:
-    """The walker alone (its own random numbers): per (array, RT60, signal) and moment, how
-    many tracks were alive and the nearest one's error (deg; 180 without one)."""
+    """The walker alone (its own random numbers): per (array, RT60, signal, "tracks" or
+    "stream") and moment, how many tracks were alive (the offline tracks) or reported (the
+    stream) and the nearest one's error (deg; 180 without one)."""
     rng = np.random.default_rng([seed, 1])
     kinds = ["voices"] + (["arctic"] if speech else [])
     out: dict = {}
@@ -161,16 +191,18 @@ def run_alone(trials: int, seed: int, speech: list[Path]) -> dict:
         for _ in range(trials):
             x, traj, _ = recording(arr, kind, rt60, rng, speech, alone=True)
             doc = _localized(x, arr)
+            live = streamed(x, arr)
             for tau in TIMES_S:
-                est = track_estimates(doc, tau)
                 truth = float(_azimuth(traj.heard_at(tau)))
-                e = min((angle_error(a, truth, two) for a in est), default=180.0)
-                out.setdefault((array, rt60, kind), []).append((len(est), e))
+                for m, est in (("tracks", track_estimates(doc, tau)),
+                               ("stream", stream_estimates(live, tau))):
+                    e = min((angle_error(a, truth, two) for a in est), default=180.0)
+                    out.setdefault((array, rt60, kind, m), []).append((len(est), e))
     return out
 
 
 def alone_table(alone: dict) -> tuple[list, list]:
-    headers = ["array", "RT60 s", "signal", "recordings x moments",
+    headers = ["array", "RT60 s", "signal", "hearsee", "recordings x moments",
                f"one track, within {HIT_DEG:g} deg %", "two tracks %", "no track %"]
     rows = []
     for key, v in alone.items():
@@ -196,6 +228,7 @@ def run(trials: int, seed: int, speech: list[Path]) -> tuple[dict, dict]:
         for _ in range(trials):
             x, traj, still = recording(arr, kind, rt60, rng, speech)
             doc = _localized(x, arr)
+            live = streamed(x, arr)
             n_tracks.setdefault(key, []).append(len(doc["sources"]))
             for tau in TIMES_S:
                 truth = [float(_azimuth(traj.heard_at(tau))), float(_azimuth(still))]
@@ -206,6 +239,7 @@ def run(trials: int, seed: int, speech: list[Path]) -> tuple[dict, dict]:
                     bdoc = localize_recording(blk, FS, arr, kalman=False, max_sources=2,
                                               band_hz=BAND)
                 est = {"hearsee (tracks)": track_estimates(doc, tau),
+                       "hearsee (stream)": stream_estimates(live, tau),
                        "hearsee (blocks)": [s["azimuth_deg"] for s in bdoc["sources"]]}
                 for m in PEERS:
                     est[m] = pra_azimuths(blk, FS, arr, m, BAND, 2, grid_deg=GRID_DEG,
@@ -223,12 +257,15 @@ def both_found(err: dict, key: tuple, m: str) -> float:
 
 
 def wins(err: dict, n_tracks: dict) -> str:
-    """The cells where hearsee's tracks found both talkers at least as often as the best
-    pyroomacoustics method, in a line."""
-    won = [k for k in n_tracks
-           if both_found(err, k, METHODS[0]) >= max(both_found(err, k, m) for m in PEERS)]
+    """The cells where hearsee's tracks (and its stream) found both talkers at least as often
+    as the best pyroomacoustics method, in a line."""
+    def won(method: str) -> int:
+        return sum(both_found(err, k, method) >= max(both_found(err, k, m) for m in PEERS)
+                   for k in n_tracks)
+
     return (f"hearsee (tracks) found both talkers at least as often as the best pyroomacoustics "
-            f"method in {len(won)} of {len(n_tracks)} cells")
+            f"method in {won(METHODS[0])} of {len(n_tracks)} cells, hearsee (stream) in "
+            f"{won(METHODS[1])}")
 
 
 def tables(err: dict, n_tracks: dict) -> tuple[list, list]:
@@ -285,7 +322,8 @@ def main(argv: list[str] | None = None) -> int:
                 headers, rows)
     print(wins(err, n_tracks))
     a_headers, a_rows = alone_table(alone)
-    print_table("One talker walking alone: hearsee's tracks (told at most two)", a_headers,
+    print_table("One talker walking alone: hearsee's tracks and stream (told at most two)",
+                a_headers,
                 a_rows)
     if args.no_write:
         return 0
@@ -300,7 +338,8 @@ def main(argv: list[str] | None = None) -> int:
          f"{time.time() - t_wall:.0f} s."),
         ("One talker walking alone", markdown_table(a_headers, a_rows) + "\n\n"
          "The same scenes without the still talker (their own random numbers): at each moment, "
-         "whether hearsee's tracks alive then are one, within 10 deg of the walker, or two "
+         "whether hearsee's tracks alive then (or the talkers its stream reported by then) are "
+         "one, within 10 deg of the walker, or two "
          "(a false second source), or none."),
     ], intro=__doc__.split("\n\n")[0])
     print(f"wrote {out} and {png}")

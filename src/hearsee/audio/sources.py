@@ -408,13 +408,28 @@ TRACK_MIN_SHARE = 0.05
 TRACK_MAX_CHANCE = 1e-4
 
 
-#: :class:`SourceTracker`'s chance bar for reporting a talker (see :data:`TRACK_MAX_CHANCE`)
-REPORT_MAX_CHANCE = 1e-4
-#: :class:`SourceTracker` reports the talkers with the most weight of frames, each frame's
-#: decayed with this time constant (s): a talker heard lately before one heard long ago -- a
-#: track that fragmented leaves a coasting stale part, which by its whole weight outranked the
-#: live part for up to ``max_coast_s``
+#: :class:`SourceTracker`'s reporting rules, chosen on the stream's frames of dev recordings
+#: (seeds 281-282 of bench/moving_sources.py's kind, scratch, 2026-12-06: 10 recordings x 10
+#: moments per array, room and signal cell, two talkers and the walker alone; ``hearsee track
+#: --sources 2``'s frames). With :func:`track_sources`' rules as they are (ranked by whole
+#: weight, the chance test over all the frames of a track's life) the online answer had both
+#: talkers within 10 deg at 44 % of the moments (8-cell mean) and a false second talker beside
+#: the lone walker at 11 %; each change below, added in turn: 50 / 11, 68 / 14, 65 / 9 %.
+#: First, the talkers are ranked by the weight of their frames, each frame's decayed with this
+#: time constant (s): a talker heard lately before one heard long ago -- a track that
+#: fragmented leaves a coasting stale part, which by its whole weight outranked the live part
+#: for up to ``max_coast_s`` (0.5 / 2 s, with all three changes: 60 / 5 and 64 / 12 %).
+#: Second, online, the chance test counts only the frames of its life that no other source
+#: explains (that did not join a track which had beaten chance): a talker who starts while
+#: another talks was held back until its own frames outnumbered chance among the other's
+#: (a constructed second talker: reported after its 14th frame, now its 4th) -- the bar
+#: stays :data:`TRACK_MAX_CHANCE` (1e-3: 70 / 10 %, but frames scattered at random were then
+#: reported at 12 % of the frames, against 5 %)
 REPORT_RANK_TAU_S = 1.0
+#: Third, a second (third, ...) talker is named only while its decayed weight is at least this
+#: share of the first's: a reflection's track gathers a trickle of frames beside a talker's
+#: stream of them (0.25: 58 / 7 %)
+REPORT_MIN_RATIO = 0.15
 
 
 class _Track:
@@ -422,7 +437,8 @@ class _Track:
 
     __slots__ = ("id", "kf", "hits", "weight", "last_t", "angle_deg", "located_before",
                  "weight_before", "located_through", "gate_sum", "gate_n", "gate_at_hit",
-                 "passed", "path_i", "path_a", "recent_w", "recent_t")
+                 "passed", "path_i", "path_a", "recent_w", "recent_t", "explained_before",
+                 "explained_through", "own_explained")
 
     def __init__(self, track_id: int, kf: Any, located_before: int,
                  weight_before: float) -> None:
@@ -433,6 +449,9 @@ class _Track:
         # the located frames (and their weight) before its first frame, and through its last
         self.located_before, self.weight_before = located_before, weight_before
         self.located_through = located_before
+        # the located frames that joined a track already a source (before its first frame,
+        # through its last) and how many of those were its own
+        self.explained_before = self.explained_through = self.own_explained = 0
         # its gate's half widths (deg) at the located frames since its first; their sum and
         # count at its last frame
         self.gate_sum, self.gate_n = 0.0, 0
@@ -453,17 +472,24 @@ class SourceTracker:
     """The online core of :func:`track_sources`: one frame at a time, as a stream gets them.
 
     :meth:`step` takes a frame's time and angle (or NaN) and joins it to a track as
-    :func:`track_sources` describes; :meth:`reported` names the talkers to act on now -- the
-    live tracks that are sources (``confirm_hits`` frames), whose frames chance does not
-    explain (``max_chance``, judged at each of their frames until it passes; then it holds)
-    and that hold at least ``min_share`` of the weight of the frames located since their first
-    frame, at most ``max_sources`` of them, the most weight first. Unlike
+    :func:`track_sources` describes (the same tracks, frame for frame); :meth:`reported`
+    names the talkers to act on now -- the live tracks that are sources (``confirm_hits``
+    frames), whose frames chance does not explain (``max_chance``, judged at each of their
+    frames until it passes, then it holds; the frames of its life counted are those that no
+    other source, one that had beaten chance, took) and that hold at least ``min_share`` of
+    the weight of the frames located since their first frame; of those the ``max_sources``
+    with the most weight of recent frames (each frame's decayed by ``exp(-age /
+    rank_tau_s)``), a second or later one only while that weight is at least ``min_ratio``
+    times the first's. Unlike
     :func:`track_sources`' answer, decided on the whole recording, this one is causal: a
     talker is reported from the frame that makes it a source, and a talker's track goes on,
     predicted, through a pause of up to ``max_coast_s`` (``last_t`` says when it was last
-    heard). The settings are :func:`track_sources`'; ``history`` keeps the tracks that ended
-    and every track's angle at every frame (what :func:`track_sources` needs; a stream leaves
-    it off, so that memory stays bounded).
+    heard). The settings are :func:`track_sources`', and the reporting rules
+    (:data:`REPORT_RANK_TAU_S`, :data:`REPORT_MIN_RATIO`; chosen on the stream's frames of dev
+    recordings). ``history`` keeps the tracks that ended and every track's angle at
+    every frame (what :func:`track_sources` needs; a stream leaves it off, so that memory stays
+    bounded). Used by the stream (``StreamConfig.max_sources``, ``hearsee track --sources
+    N``). Not in the thesis; an extension.
     """
 
     def __init__(self, max_sources: int = 2, *,
@@ -474,9 +500,9 @@ class SourceTracker:
                  tentative_s: float = TRACK_TENTATIVE_S,
                  max_coast_s: float = TRACK_MAX_COAST_S,
                  min_share: float = TRACK_MIN_SHARE,
-                 max_chance: float = REPORT_MAX_CHANCE,
+                 max_chance: float = TRACK_MAX_CHANCE,
                  span_deg: float = 360.0, rank_tau_s: float = REPORT_RANK_TAU_S,
-                 history: bool = False) -> None:
+                 min_ratio: float = REPORT_MIN_RATIO, history: bool = False) -> None:
         from scipy.stats import chi2
 
         from hearsee.audio.tracking import NOISE_RANGE
@@ -500,6 +526,7 @@ class SourceTracker:
         self.max_chance = finite_number("max_chance", max_chance, 0.0, 1.0, lo_open=True)
         self.span_deg = finite_number("span_deg", span_deg, 0.0, 360.0, lo_open=True)
         self.rank_tau_s = finite_number("rank_tau_s", rank_tau_s, 0.0, None, lo_open=True)
+        self.min_ratio = finite_number("min_ratio", min_ratio, 0.0, 1.0)
         self.history = true_or_false("history", history)
         self._gate = float(chi2.ppf(0.997, 1))
         self.reset()
@@ -510,6 +537,7 @@ class SourceTracker:
         self.ended: list[_Track] = []
         self.n_frames = 0  # frames stepped
         self.located = 0  # frames with an angle
+        self.explained = 0  # ... that joined a track already a source then
         self.located_weight = 0.0
         self._next_id = 0
         self._t = -np.inf
@@ -570,11 +598,15 @@ class SourceTracker:
                     self.sigma_meas_deg, self.sigma_accel_dps2, gate_prob=0.997,
                     init_rate_sigma_dps=TRACK_INIT_RATE_DPS, rate_tau_s=DIRECTION_RATE_TAU_S),
                     self.located, self.located_weight)
+                best.explained_before = self.explained
                 # (one model per step for all the tracks: they share their filters' settings)
                 best.kf._model_cache = self._models
                 self._next_id += 1
                 self.live.append(best)
             self.located += 1
+            if best.passed:  # (a frame of a source that beat chance: explained)
+                self.explained += 1
+                best.own_explained += 1
             self.located_weight += w
             best.kf.update(ti, (a, None))
             best.hits.append(i)
@@ -583,9 +615,10 @@ class SourceTracker:
             best.recent_t = ti
             best.last_t = ti
             best.located_through = self.located
+            best.explained_through = self.explained
             best.gate_at_hit = (best.gate_sum, best.gate_n)
             if not best.passed and len(best.hits) >= self.confirm_hits:
-                best.passed = self._beats_chance(best)
+                best.passed = self._beats_chance(best, free=True)
         for tr in self.live:  # (each live track's angle at this frame)
             tr.angle_deg = _wrap1(tr.kf.azimuth_deg if tr is best
                                   else float(pred[tr.id][0][0]))
@@ -594,13 +627,16 @@ class SourceTracker:
                 tr.path_a.append(tr.angle_deg)
         return -1 if best is None else best.id
 
-    def _beats_chance(self, tr: _Track) -> bool:
+    def _beats_chance(self, tr: _Track, free: bool = False) -> bool:
         """Whether frames scattered at random over ``span_deg`` would put as many frames as
         ``tr`` holds in its gate during its life with a probability below ``max_chance``
-        (binomial tail)."""
+        (binomial tail); with ``free`` (online) the frames of its life that other sources,
+        ones that had beaten chance then, took are not counted."""
         from scipy.special import bdtrc
 
         during = tr.located_through - tr.located_before
+        if free:
+            during -= (tr.explained_through - tr.explained_before) - tr.own_explained
         half = tr.mean_gate_deg(self.max_jump_deg) if during > 1 else self.max_jump_deg
         p = min(1.0, 2.0 * half / self.span_deg)
         return bool(bdtrc(len(tr.hits) - 1, during, p) < self.max_chance)
@@ -613,12 +649,15 @@ class SourceTracker:
     def reported(self) -> list[_Track]:
         """The talkers to act on at the last frame: live sources whose frames beat chance and
         hold ``min_share`` of the weight since their first, at most ``max_sources``, the most
-        weight first. Each has ``id``, ``angle_deg`` (its angle at the last frame, degrees),
-        ``last_t`` (when a frame last joined it, s) and ``hits`` (its frames' indices)."""
+        weight of recent frames first, the second and later ones with at least ``min_ratio``
+        of the first's (see the class). Each has ``id``, ``angle_deg`` (its angle at the last
+        frame, degrees), ``last_t`` (when a frame last joined it, s) and ``hits`` (its frames'
+        indices)."""
         ok = [tr for tr in self.live if len(tr.hits) >= self.confirm_hits and tr.passed
               and tr.weight > 0 and self.share(tr) >= self.min_share]
-        return sorted(ok, key=lambda tr: (-self.recent_weight(tr, self._t), tr.id)
-                      )[:self.max_sources]
+        ranked = sorted(((self.recent_weight(tr, self._t), tr) for tr in ok),
+                        key=lambda wt: (-wt[0], wt[1].id))[:self.max_sources]
+        return [tr for w, tr in ranked if w >= self.min_ratio * ranked[0][0]]
 
     def recent_weight(self, tr: _Track, t: float) -> float:
         """``tr``'s frames' weight, each decayed by ``exp(-age / rank_tau_s)`` at time ``t``
