@@ -1124,3 +1124,26 @@ def test_sources_sinks_and_wiring_inputs_of_the_wrong_kind_are_config_errors(mov
     for bad in (-5.0, float("nan")):
         with pytest.raises(ConfigError, match=r"stall_before\[1\]"):
             DropoutSource(ArraySource(y, FS), stall_before={1: bad})
+
+
+def test_a_turning_array_keeps_its_several_talkers_tracks_on_them():
+    """StreamConfig(max_sources=2) on an array panning 80 deg at 40 deg/s past a still voice
+    at 30 deg (as test_a_turning_array_told_its_pans_keeps_a_still_talker_still): told the
+    pans, each reported talker's azimuth plus the pan stays on the talker -- the talkers'
+    tracks are turned back with the array (``SourceTracker.rotate``), under one id."""
+    from hearsee.audio.signals import synthetic_voice
+    from hearsee.sim.moving import Trajectory
+
+    arr = MicArray.from_preset("three-mic")
+    tt = np.arange(0.0, 3.001, 0.001)
+    a = np.radians(30.0 - _steady_pan(tt))
+    path = Trajectory(tt, np.stack([2 * np.cos(a), 2 * np.sin(a), np.zeros_like(a)], 1))
+    y = simulate_moving_free_field(synthetic_voice("male", 3.0, FS, rng=7), FS, arr, path,
+                                   snr_db=20, rng=8)
+    ups = StreamPipeline(arr, StreamConfig(max_sources=2)).run(ArraySource(y, FS, 1600),
+                                                               array_pan=_steady_pan)
+    late = [u for u in ups if 1.0 < u.t < 3.0]
+    err = [abs(float(wrap_deg(s["azimuth_deg"] + _steady_pan(u.t) - 30.0)))
+           for u in late for s in u.sources]
+    assert len(err) >= 0.9 * len(late) and np.percentile(err, 90) < 3.0, np.percentile(err, 90)
+    assert len({s["id"] for u in late for s in u.sources}) == 1
