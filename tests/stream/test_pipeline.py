@@ -159,6 +159,21 @@ def _stepping_pan(t):  # (8-deg steps of 20 ms every 0.2 s)
     return 8.0 * np.clip((t[..., None] - 0.5 - 0.2 * np.arange(10)) / 0.02, 0, 1).sum(-1)
 
 
+def _panned_voice(pan):
+    """The three-mic preset and its recording (3 s, 20 dB) of a still male voice 2 m away at
+    30 deg in the world while the array pans by ``pan(t)`` degrees: rendered as the turning
+    array hears it."""
+    from hearsee.audio.signals import synthetic_voice
+    from hearsee.sim.moving import Trajectory
+
+    arr = MicArray.from_preset("three-mic")
+    tt = np.arange(0.0, 3.001, 0.001)
+    a = np.radians(30.0 - pan(tt))
+    path = Trajectory(tt, np.stack([2 * np.cos(a), 2 * np.sin(a), np.zeros_like(a)], 1))
+    return arr, simulate_moving_free_field(synthetic_voice("male", 3.0, FS, rng=7), FS, arr,
+                                           path, snr_db=20, rng=8)
+
+
 @pytest.mark.parametrize("pan", [_steady_pan, _stepping_pan])
 def test_a_turning_array_told_its_pans_keeps_a_still_talker_still(pan):
     """An array panning by 80 deg from 0.5 to 2.5 s (at 40 deg/s, or in 8-deg steps) past a
@@ -166,16 +181,9 @@ def test_a_turning_array_told_its_pans_keeps_a_still_talker_still(pan):
     (``array_pan``), the tracker's azimuth plus the pan stays on the talker, also after the
     turn stops; untold, it took the turning for the talker's motion and overshot by up to
     ~6-7 deg. Bad pans are refused."""
-    from hearsee.audio.signals import synthetic_voice
     from hearsee.errors import GeometryError
-    from hearsee.sim.moving import Trajectory
 
-    arr = MicArray.from_preset("three-mic")
-    tt = np.arange(0.0, 3.001, 0.001)
-    a = np.radians(30.0 - pan(tt))
-    path = Trajectory(tt, np.stack([2 * np.cos(a), 2 * np.sin(a), np.zeros_like(a)], 1))
-    y = simulate_moving_free_field(synthetic_voice("male", 3.0, FS, rng=7), FS, arr, path,
-                                   snr_db=20, rng=8)
+    arr, y = _panned_voice(pan)
 
     def errors(array_pan, lo, hi):
         ups = StreamPipeline(arr, StreamConfig(frame_ms=64, hop_ms=32)).run(
@@ -1131,15 +1139,7 @@ def test_a_turning_array_keeps_its_several_talkers_tracks_on_them():
     at 30 deg (as test_a_turning_array_told_its_pans_keeps_a_still_talker_still): told the
     pans, each reported talker's azimuth plus the pan stays on the talker -- the talkers'
     tracks are turned back with the array (``SourceTracker.rotate``), under one id."""
-    from hearsee.audio.signals import synthetic_voice
-    from hearsee.sim.moving import Trajectory
-
-    arr = MicArray.from_preset("three-mic")
-    tt = np.arange(0.0, 3.001, 0.001)
-    a = np.radians(30.0 - _steady_pan(tt))
-    path = Trajectory(tt, np.stack([2 * np.cos(a), 2 * np.sin(a), np.zeros_like(a)], 1))
-    y = simulate_moving_free_field(synthetic_voice("male", 3.0, FS, rng=7), FS, arr, path,
-                                   snr_db=20, rng=8)
+    arr, y = _panned_voice(_steady_pan)
     ups = StreamPipeline(arr, StreamConfig(max_sources=2)).run(ArraySource(y, FS, 1600),
                                                                array_pan=_steady_pan)
     late = [u for u in ups if 1.0 < u.t < 3.0]

@@ -766,16 +766,9 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
                             max_chance=max_chance, span_deg=span_deg, history=True)
     tt = as_float_array(t, "t", (None,), finite=False)
     az = as_float_array(angle_deg, "angle_deg", tt.shape, finite=False)
-    if not np.all(np.isfinite(tt)) or np.any(np.diff(tt) < 0):
-        raise ConfigError("t must hold finite, non-decreasing frame times (s)")
-    if np.any(np.isinf(az)) or np.any(np.abs(az[np.isfinite(az)]) > MAX_ANGLE_DEG):
-        raise ConfigError(f"angle_deg must hold finite degrees (within +-{MAX_ANGLE_DEG:g}) or "
-                          "NaN (no direction)")
     w = np.ones(len(tt)) if weight is None else as_float_array(weight, "weight", tt.shape,
                                                                 finite=False)
-    if not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise ConfigError("weight must hold one finite number >= 0 per frame")
-    for i in range(len(tt)):
+    for i in range(len(tt)):  # (each frame's time, angle and weight checked there)
         tracker.step(tt[i], az[i], w[i])
     located = float(w[np.isfinite(az)].sum())
     cands = []
