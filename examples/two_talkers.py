@@ -8,8 +8,11 @@ A male voice walks past the array at 0.8 m/s (from 2 m away at -70 deg), a femal
 ``sim.audio.simulate_recording``). ``localize_recording(max_sources=2, moving=True)`` -- what
 ``hearsee localize REC --array A --sources 2 --moving`` runs -- gives each talker a track; the
 figure shows every frame's azimuth coloured by the track it joined (grey: none), each track's
-path and the two talkers' true azimuths. A pair's azimuths are its front candidates (angles
-from its broadside; a talker behind it reads as its mirror). Writes ``two_talkers.png``.
+path and the two talkers' true azimuths; and, as small crosses, the talkers that the stream
+reported at each update (``hearsee track REC --array A --sources 2``,
+``StreamConfig(max_sources=2)``: causal, what a robot listening live knows then). A pair's
+azimuths are its front candidates (angles from its broadside; a talker behind it reads as its
+mirror). Writes ``two_talkers.png``.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from hearsee.audio.propagation import add_noise  # noqa: E402
 from hearsee.geometry import unit_vector_deg  # noqa: E402
 from hearsee.sim.audio import simulate_recording  # noqa: E402
 from hearsee.sim.moving import linear_trajectory, simulate_moving_recording  # noqa: E402
+from hearsee.stream.pipeline import ArraySource, StreamConfig, StreamPipeline  # noqa: E402
 
 FS = 16000
 DURATION_S = 6.0
@@ -78,6 +82,16 @@ def main(argv: list[str] | None = None) -> int:
         ax.plot(src["path"]["t_s"], shown(path), color=colours[k % len(colours)], lw=2)
         print(f"track {k}: {src['t_start_s']:.2f}-{src['t_end_s']:.2f} s, {src['n_frames']} "
               f"frames, last heard at {src['azimuth_deg']:.1f} deg")
+    ups: list = []
+    StreamPipeline(args.array, StreamConfig(max_sources=2)).run(ArraySource(x, FS), ups.append)
+    live = [(u.t, s["azimuth_deg"]) for u in ups for s in u.sources
+            if s["azimuth_deg"] is not None]
+    if live:
+        lt, la = np.array(live).T
+        ax.scatter(lt, shown(la), s=6, marker="x", color="k", lw=0.6,
+                   label="stream's talkers (causal)")
+    print(f"stream: {len(live)} talker reports over {len(ups)} updates, ids "
+          f"{sorted({s['id'] for u in ups for s in u.sources})}")
     ax.plot(t_true, shown(walker), "k--", lw=1, label="walker (truth)")
     ax.plot(t_true, shown(np.full_like(t_true, STILL_AZ_DEG)), "k:", lw=1,
             label="still talker (truth)")
