@@ -23,8 +23,8 @@ frame) give their angle at the nearest frame -- an angle from that frame and the
 but which tracks are reported, and where each ends, is decided on the whole recording (an
 offline answer, as the blocks' 0.5 s ahead is). hearsee (stream): ``hearsee track --sources
 2`` (``StreamConfig(max_sources=2)``, its defaults) over the recording as a file; at each
-moment the talkers its last update at or before it reported -- causal, what a robot listening
-live knew then (:class:`hearsee.audio.sources.SourceTracker`). hearsee (blocks):
+moment the talkers reported by its last update whose frame had ended then -- causal, what a
+robot listening live knew then (:class:`hearsee.audio.sources.SourceTracker`). hearsee (blocks):
 ``localize_recording(max_sources=2)`` (the still talkers' clustering) of the one-second block
 centred on the moment. Peers: the same blocks, told there are two talkers (``num_src=2``),
 set up as bench/sources.py sets them up (1024-sample Hann STFT at 50 % overlap, 300-3500 Hz,
@@ -162,11 +162,16 @@ def streamed(x: np.ndarray, arr: MicArray) -> tuple[np.ndarray, list]:
              for u in ups])
 
 
+#: the stream's frame length (s, StreamConfig's default): an update at frame-centre time t has
+#: heard the audio up to t plus half of it
+STREAM_FRAME_S = StreamConfig().frame_ms / 1e3
+
+
 def stream_estimates(streamed_out: tuple[np.ndarray, list], tau: float) -> list[float]:
-    """The azimuths (deg) the stream reported at its last update at or before ``tau`` (s):
-    what a robot listening live knew then."""
+    """The azimuths (deg) the stream reported at its last update whose frame had ended by
+    ``tau`` (s): what a robot listening live knew then."""
     t, az = streamed_out
-    k = int(np.searchsorted(t, tau + 1e-9)) - 1
+    k = int(np.searchsorted(t + STREAM_FRAME_S / 2, tau + 1e-9)) - 1
     return az[k] if k >= 0 else []
 
 

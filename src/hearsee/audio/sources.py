@@ -37,6 +37,7 @@ from hearsee.config import (
     as_float_array,
     check_settings,
     finite_number,
+    is_real,
     true_or_false,
     whole_number,
 )
@@ -435,23 +436,25 @@ REPORT_MIN_RATIO = 0.15
 class _Track:
     """One track of :class:`SourceTracker`: its filter and what the reporting rules count."""
 
-    __slots__ = ("id", "kf", "hits", "weight", "last_t", "angle_deg", "located_before",
+    __slots__ = ("id", "kf", "n_hits", "hits", "weight", "last_t", "angle_deg", "located_before",
                  "weight_before", "located_through", "gate_sum", "gate_n", "gate_at_hit",
                  "passed", "path_i", "path_a", "recent_w", "recent_t", "explained_before",
-                 "explained_through", "own_explained")
+                 "explained_through")
 
     def __init__(self, track_id: int, kf: Any, located_before: int,
                  weight_before: float) -> None:
         self.id, self.kf = track_id, kf
-        self.hits: list[int] = []
+        self.n_hits = 0  # frames that joined it
+        self.hits: list[int] = []  # (their indices: kept with the tracker's history only)
         self.weight = 0.0
         self.last_t = self.angle_deg = float("nan")
         # the located frames (and their weight) before its first frame, and through its last
         self.located_before, self.weight_before = located_before, weight_before
         self.located_through = located_before
-        # the located frames that joined a track already a source (before its first frame,
-        # through its last) and how many of those were its own
-        self.explained_before = self.explained_through = self.own_explained = 0
+        # the located frames that joined a source that had beaten chance, before its first
+        # frame and through its last (none of them its own while the chance test is judged:
+        # that stops once it has passed)
+        self.explained_before = self.explained_through = 0
         # its gate's half widths (deg) at the located frames since its first; their sum and
         # count at its last frame
         self.gate_sum, self.gate_n = 0.0, 0
@@ -532,14 +535,16 @@ class SourceTracker:
         self.reset()
 
     def reset(self) -> None:
-        """Forget every track (as after the array has turned by an unknown angle)."""
+        """Forget every track (as after the array has turned by an unknown angle); the ids of
+        tracks started afterwards continue the count, and time may start again."""
         self.live: list[_Track] = []
         self.ended: list[_Track] = []
         self.n_frames = 0  # frames stepped
         self.located = 0  # frames with an angle
         self.explained = 0  # ... that joined a track already a source then
         self.located_weight = 0.0
-        self._next_id = 0
+        # (ids are not given again: a client keying on them would merge two talkers)
+        self._next_id = getattr(self, "_next_id", 0)
         self._t = -np.inf
         self._models: dict[float, Any] = {}  # (the filters' transition and noise per step)
 
@@ -560,19 +565,21 @@ class SourceTracker:
         (or beyond +-1e9 deg) or a negative or non-finite weight."""
         from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, DirectionKalman, _wrap1
 
-        ti, a, w = float(t), float(angle_deg), float(weight)
-        if not (np.isfinite(ti) and ti >= self._t):
+        # (numbers only: text, None or a list had been float()'s ValueError or TypeError)
+        if not (is_real(t) and float(t) >= self._t):
             raise ConfigError("t must hold finite, non-decreasing frame times (s)")
-        if np.isinf(a) or abs(a) > MAX_ANGLE_DEG:
+        nan = isinstance(angle_deg, float | np.floating) and math.isnan(angle_deg)
+        if not (nan or (is_real(angle_deg) and abs(float(angle_deg)) <= MAX_ANGLE_DEG)):
             raise ConfigError(f"angle_deg must hold finite degrees (within "
                               f"+-{MAX_ANGLE_DEG:g}) or NaN (no direction)")
-        if not (np.isfinite(w) and w >= 0):
+        if not (is_real(weight) and float(weight) >= 0):
             raise ConfigError("weight must hold one finite number >= 0 per frame")
+        ti, a, w = float(t), float(angle_deg), float(weight)
         self._t = ti
         i = self.n_frames
         self.n_frames += 1
         for tr in list(self.live):  # (tracks that went quiet too long end)
-            if ti - tr.last_t > (self.max_coast_s if len(tr.hits) >= self.confirm_hits
+            if ti - tr.last_t > (self.max_coast_s if tr.n_hits >= self.confirm_hits
                                  else self.tentative_s):
                 self.live.remove(tr)
                 if self.history:
@@ -606,10 +613,11 @@ class SourceTracker:
             self.located += 1
             if best.passed:  # (a frame of a source that beat chance: explained)
                 self.explained += 1
-                best.own_explained += 1
             self.located_weight += w
             best.kf.update(ti, (a, None))
-            best.hits.append(i)
+            best.n_hits += 1
+            if self.history:
+                best.hits.append(i)
             best.weight += w
             best.recent_w = self.recent_weight(best, ti) + w
             best.recent_t = ti
@@ -617,7 +625,7 @@ class SourceTracker:
             best.located_through = self.located
             best.explained_through = self.explained
             best.gate_at_hit = (best.gate_sum, best.gate_n)
-            if not best.passed and len(best.hits) >= self.confirm_hits:
+            if not best.passed and best.n_hits >= self.confirm_hits:
                 best.passed = self._beats_chance(best, free=True)
         for tr in self.live:  # (each live track's angle at this frame)
             tr.angle_deg = _wrap1(tr.kf.azimuth_deg if tr is best
@@ -636,10 +644,10 @@ class SourceTracker:
 
         during = tr.located_through - tr.located_before
         if free:
-            during -= (tr.explained_through - tr.explained_before) - tr.own_explained
+            during -= tr.explained_through - tr.explained_before
         half = tr.mean_gate_deg(self.max_jump_deg) if during > 1 else self.max_jump_deg
         p = min(1.0, 2.0 * half / self.span_deg)
-        return bool(bdtrc(len(tr.hits) - 1, during, p) < self.max_chance)
+        return bool(bdtrc(tr.n_hits - 1, during, p) < self.max_chance)
 
     def share(self, tr: _Track) -> float:
         """``tr``'s share (0-1) of the weight of the frames located since its first frame."""
@@ -651,9 +659,9 @@ class SourceTracker:
         hold ``min_share`` of the weight since their first, at most ``max_sources``, the most
         weight of recent frames first, the second and later ones with at least ``min_ratio``
         of the first's (see the class). Each has ``id``, ``angle_deg`` (its angle at the last
-        frame, degrees), ``last_t`` (when a frame last joined it, s) and ``hits`` (its frames'
-        indices)."""
-        ok = [tr for tr in self.live if len(tr.hits) >= self.confirm_hits and tr.passed
+        frame, degrees), ``last_t`` (when a frame last joined it, s) and ``n_hits`` (how many
+        frames joined it)."""
+        ok = [tr for tr in self.live if tr.n_hits >= self.confirm_hits and tr.passed
               and tr.weight > 0 and self.share(tr) >= self.min_share]
         ranked = sorted(((self.recent_weight(tr, self._t), tr) for tr in ok),
                         key=lambda wt: (-wt[0], wt[1].id))[:self.max_sources]

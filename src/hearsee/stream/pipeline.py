@@ -2080,7 +2080,10 @@ class StreamConfig:
         (the ``raw_*`` of :class:`Update`) are also followed by
         :class:`hearsee.audio.sources.SourceTracker`, and each update's ``sources`` names up
         to this many talkers (2 to :data:`hearsee.audio.sources.MAX_SOURCES`); None (the
-        default) = one talker, no ``sources``. Not for a masked pair
+        default) = one talker, no ``sources``. Told the array's pans
+        (:meth:`TrackingProcessor.process`' ``array_pan_deg``), the talkers' tracks are turned
+        back with the array; a linear array's, tracked in its angles' sines, follow the turn as
+        motion. Not for a masked pair
     """
 
     frame_ms: float = 64.0
@@ -2365,7 +2368,7 @@ class TrackingProcessor:
             else:
                 az, rate = tr.angle_deg, float(tr.kf.rate_dps[0])
             out.append({"id": tr.id, "azimuth_deg": az, "rate_dps": rate,
-                        "last_heard_s": tr.last_t, "n_frames": len(tr.hits)})
+                        "last_heard_s": tr.last_t, "n_frames": tr.n_hits})
         live = {tr.id for tr in self.talkers.live}
         for k in [k for k in self._talker_az if k not in live]:
             del self._talker_az[k]
@@ -2380,7 +2383,8 @@ class TrackingProcessor:
 
     def reset_array_state(self) -> None:
         """Forget everything held in the array's frame -- the direction and 3D trackers, the
-        ITD filter, the smoothed spectra -- as after the array has turned (a pan-tilt head):
+        ITD filter, the smoothed spectra, the several talkers' tracks (``max_sources``; their
+        ids go on counting) -- as after the array has turned (a pan-tilt head):
         their estimates describe where the source was relative to the old pose."""
         self.direction.reset()
         self.motion.reset()
@@ -2619,12 +2623,11 @@ class TrackingProcessor:
             if turn:
                 self.direction.rotate_azimuth(-turn)
                 self.motion.reset()
-                if self.talkers is not None:  # (a pair's tracks are in sines: forgotten)
-                    if self._talker_design is None:
-                        self.talkers.rotate(-turn)
-                    else:
-                        self.talkers.reset()
-                        self._talker_az.clear()
+                # (a pair's tracks are in its angles' sines, which a turn does not shift alike
+                # for a talker and its front/back mirror: they follow the turn as motion --
+                # forgetting them at each turn left a panning pair no talker at all)
+                if self.talkers is not None and self._talker_design is None:
+                    self.talkers.rotate(-turn)
         self._pans.append((t, pan))
         if not (cands and delay > 0 and len(self._pans) > 1):
             return cands
