@@ -483,16 +483,16 @@ class SourceTracker:
     the weight of the frames located since their first frame; of those the ``max_sources``
     with the most weight of recent frames (each frame's decayed by ``exp(-age /
     rank_tau_s)``), a second or later one only while that weight is at least ``min_ratio``
-    times the first's. Unlike
-    :func:`track_sources`' answer, decided on the whole recording, this one is causal: a
-    talker is reported from the frame that makes it a source, and a talker's track goes on,
-    predicted, through a pause of up to ``max_coast_s`` (``last_t`` says when it was last
-    heard). The settings are :func:`track_sources`', and the reporting rules
-    (:data:`REPORT_RANK_TAU_S`, :data:`REPORT_MIN_RATIO`; chosen on the stream's frames of dev
-    recordings). ``history`` keeps the tracks that ended and every track's angle at
-    every frame (what :func:`track_sources` needs; a stream leaves it off, so that memory stays
-    bounded). Used by the stream (``StreamConfig.max_sources``, ``hearsee track --sources
-    N``). Not in the thesis; an extension.
+    times the first's. Unlike :func:`track_sources`' answer, decided on the whole recording,
+    this one is causal: a talker is reported from the frame that makes it a source, and a
+    talker's track goes on, predicted, through a pause of up to ``max_coast_s`` (``last_t``
+    says when it was last heard). The settings are :func:`track_sources`', and the reporting
+    rules (:data:`REPORT_RANK_TAU_S`, :data:`REPORT_MIN_RATIO`; chosen on the stream's frames
+    of dev recordings). ``history`` keeps the tracks that ended, each track's frames and its
+    angle at every frame (what :func:`track_sources` needs; a stream leaves it off, so that
+    memory stays bounded: a live track counts its frames). Ids are never given twice by one
+    tracker, :meth:`reset` included. Used by the stream (``StreamConfig.max_sources``,
+    ``hearsee track --sources N``). Not in the thesis; an extension.
     """
 
     def __init__(self, max_sources: int = 2, *,
@@ -541,7 +541,7 @@ class SourceTracker:
         self.ended: list[_Track] = []
         self.n_frames = 0  # frames stepped
         self.located = 0  # frames with an angle
-        self.explained = 0  # ... that joined a track already a source then
+        self.explained = 0  # ... that joined a source which had beaten chance by then
         self.located_weight = 0.0
         # (ids are not given again: a client keying on them would merge two talkers)
         self._next_id = getattr(self, "_next_id", 0)

@@ -227,9 +227,10 @@ class Update:
     and the JSON line carries it (other arrays' lines do not have the key). ``sources``
     (with ``StreamConfig.max_sources``, else None and not in the JSON line): the talkers
     reported at this frame by :class:`hearsee.audio.sources.SourceTracker` on the frames' own
-    directions, the most weight of recent frames first, each ``{"id"`` (the track's number, the same
-    for as long as it is followed) ``, "azimuth_deg"`` (a pair's front twin: its mirror is
-    as likely) ``, "rate_dps"`` (None for a pair, whose track is in its angle's sine)
+    directions, the most weight of recent frames first, each ``{"id"`` (the track's number:
+    the same for as long as it is followed, never another talker's in one stream -- but a
+    new :class:`TrackingProcessor` counts from 0) ``, "azimuth_deg"`` (a pair's front twin: its
+    mirror is as likely) ``, "rate_dps"`` (None for a pair, whose track is in its angle's sine)
     ``, "last_heard_s"`` (the time of its last frame; it is predicted through a pause)
     ``, "n_frames"}``. The single-talker fields above are the one direction tracker's, as
     without it.
