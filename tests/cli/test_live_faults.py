@@ -568,3 +568,21 @@ def test_track_device_channels_pick_the_microphones(fake_sd, capsys):
     fake_sd()  # (a device delivering the channels opened)
     assert main(["track", "--device", "2", "--array", "three-mic", "--band-hz", "300,3000",
                  "--duration", "0.2"]) == 0, capsys.readouterr().err
+
+
+def test_live_track_with_several_talkers(fake_sd, capsys):
+    """`track --device 2 --channels 1,2,3 --sources 2`: live input runs with the several
+    talkers' tracker; every update carries its "sources" (the fake's noise: a list, maybe
+    empty); a masked pair is refused before the device is opened."""
+    sd = fake_sd(deliver_channels=4)
+    assert main(["track", "--device", "2", "--array", "three-mic", "--channels", "1,2,3",
+                 "--sources", "2", "--duration", "0.2", "--format", "json"]) == 0, \
+        capsys.readouterr().err
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["stats"]["status"] == "ok" and doc["updates"]
+    assert all(isinstance(u["sources"], list) and len(u["sources"]) <= 2
+               for u in doc["updates"])
+    n_opened = len(sd.opened)
+    _one_line(capsys, main(["track", "--device", "0", "--array", "mask2-asym", "--sources",
+                            "2", "--duration", "0.2"]), "--sources: the masked array")
+    assert len(sd.opened) == n_opened
