@@ -312,6 +312,14 @@ def frame_angle(loc: Any, linear: bool) -> tuple[float, float] | None:
     return None
 
 
+def linear_design(arr: Any, pairs: Sequence[tuple[int, int]]) -> NDArray:
+    """A linear array's pair TDOAs (s) per unit of the cosine of a source's angle from the
+    array's axis (the cone that :func:`linear_azimuth` turns a tracked key back into)."""
+    from hearsee.audio.localize import _design, array_geometry
+
+    return _design(arr, list(pairs)) @ array_geometry(arr).axis
+
+
 def linear_azimuth(key: float, design: NDArray, arr: Any, pairs: Sequence[tuple[int, int]],
                    prev: float | None) -> float | None:
     """A linear array's azimuth (degrees) for a tracked ``key`` (its angle's sine from
@@ -319,8 +327,7 @@ def linear_azimuth(key: float, design: NDArray, arr: Any, pairs: Sequence[tuple[
     the one nearest ``prev`` (the track's last azimuth; the first twin without one) -- an
     x-axis pair's twins are +-a, and the tie between them was broken by rounding, which
     flipped a path's sign from frame to frame; None where the cone has no azimuth (a
-    vertical pair). ``design`` is the pairs' TDOAs (s) per unit of the cosine along the
-    array's axis (``localize._design(arr, pairs) @ axis``)."""
+    vertical pair). ``design`` is :func:`linear_design`'s."""
     from hearsee.audio.localize import localize_tdoa
 
     loc = localize_tdoa(design * np.clip(key / 90.0, -1.0, 1.0), arr, pairs)
@@ -532,6 +539,9 @@ class SourceTracker:
         self.min_ratio = finite_number("min_ratio", min_ratio, 0.0, 1.0)
         self.history = true_or_false("history", history)
         self._gate = float(chi2.ppf(0.997, 1))
+        # (ids are never given again, reset() included: a client keying on them would merge
+        # two talkers)
+        self._next_id = 0
         self.reset()
 
     def reset(self) -> None:
@@ -543,8 +553,6 @@ class SourceTracker:
         self.located = 0  # frames with an angle
         self.explained = 0  # ... that joined a source which had beaten chance by then
         self.located_weight = 0.0
-        # (ids are not given again: a client keying on them would merge two talkers)
-        self._next_id = getattr(self, "_next_id", 0)
         self._t = -np.inf
         self._models: dict[float, Any] = {}  # (the filters' transition and noise per step)
 
@@ -645,7 +653,7 @@ class SourceTracker:
         during = tr.located_through - tr.located_before
         if free:
             during -= tr.explained_through - tr.explained_before
-        half = tr.mean_gate_deg(self.max_jump_deg) if during > 1 else self.max_jump_deg
+        half = tr.mean_gate_deg(self.max_jump_deg)  # (max_jump_deg at its first frame)
         p = min(1.0, 2.0 * half / self.span_deg)
         return bool(bdtrc(tr.n_hits - 1, during, p) < self.max_chance)
 
@@ -837,7 +845,7 @@ def localize_moving_sources(t: ArrayLike, tdoa_s: ArrayLike, valid: ArrayLike, a
     (n_frames,): its index, -1 for none.
     """
     from hearsee.audio.arrays import load_array
-    from hearsee.audio.localize import _design, array_geometry
+    from hearsee.audio.localize import array_geometry
 
     check_settings(track_sources, track_kwargs,
                    skip=("t", "angle_deg", "weight", "max_sources"))
@@ -852,7 +860,7 @@ def localize_moving_sources(t: ArrayLike, tdoa_s: ArrayLike, valid: ArrayLike, a
     linear = geo.kind == "linear"
     tracks, which = track_sources(tt, angles, w_all, max_sources,
                                   **{"span_deg": 180.0 if linear else 360.0, **track_kwargs})
-    A = _design(arr, list(pairs)) @ geo.axis if linear else None
+    A = linear_design(arr, pairs) if linear else None
 
     def path(tracked: NDArray) -> list[float | None]:
         """A track's azimuths (deg); a linear array's from its tracked sines

@@ -2338,8 +2338,7 @@ class TrackingProcessor:
     def _talkers_init(self, geom: Any) -> None:
         """The several talkers' tracker (``cfg.max_sources``): angles are azimuths, or a
         linear array's sines from broadside times 90 (180 deg of span)."""
-        from hearsee.audio.localize import _design
-        from hearsee.audio.sources import SourceTracker
+        from hearsee.audio.sources import SourceTracker, linear_design
 
         if self.array.mask is not None:
             raise ConfigError("StreamConfig.max_sources: a masked pair's frames tell no "
@@ -2347,7 +2346,7 @@ class TrackingProcessor:
         linear = geom.kind == "linear"
         self.talkers = SourceTracker(self.cfg.max_sources, span_deg=180.0 if linear else 360.0)
         if linear:
-            self._talker_design = _design(self.array, self.pairs) @ geom.axis
+            self._talker_design = linear_design(self.array, self.pairs)
         self._talker_az: dict[int, float] = {}  # (a pair's last azimuth per track: its twin)
 
     def _talkers_step(self, t: float, loc: Any) -> list[dict[str, Any]]:
