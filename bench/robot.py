@@ -209,25 +209,33 @@ def with_bystander(seed: int, array: str):
     raise ConfigError(f"bystander scenario {seed}: no place for the bystander")
 
 
-def _bystander_run(job: tuple[int, str, bool]) -> dict:
-    """One bystander scene (seed, array, with the speaker check?): its summary, the offset
-    and range of the bystander, and the tracked steps nearer the speaker / the bystander."""
+def run_checked(sc, check: bool):
+    """``run_scenario(sc)`` single-threaded (as ``hearsee eval``), without images; with
+    ``check`` False, :class:`hearsee.robot.pipeline.SpeakerCheck` never fires (the loop
+    before it: the track is never let go for the voice)."""
     import cv2
     from threadpoolctl import threadpool_limits
 
     import hearsee.robot.pipeline as pl
 
-    seed, array, check = job
     cv2.setNumThreads(1)
-    sc, offset, r = with_bystander(seed, array)
     held = pl.SPEAKER_CHECK_S, pl.SPEAKER_SWITCH_S
     if not check:  # (the check never fires: the loop before it)
         pl.SPEAKER_CHECK_S = pl.SPEAKER_SWITCH_S = float("inf")
     try:
         with threadpool_limits(1):
-            res = pl.run_scenario(sc, keep_images=False)
+            return pl.run_scenario(sc, keep_images=False)
     finally:  # (a pool's worker runs the next job with the module as it found it)
         pl.SPEAKER_CHECK_S, pl.SPEAKER_SWITCH_S = held
+
+
+def _bystander_run(job: tuple[int, str, bool]) -> dict:
+    """One bystander scene (seed, array, with the speaker check?): its summary, the offset
+    and range of the bystander, and the tracked steps nearer the speaker / the bystander."""
+
+    seed, array, check = job
+    sc, offset, r = with_bystander(seed, array)
+    res = run_checked(sc, check)
     on = [0, 0]
     for rec in res.log:
         if rec["track"] is not None:

@@ -386,10 +386,10 @@ def test_microphones_must_stay_inside_the_room_when_the_head_pans(tmp_path):
     ([], "an empty list"),
 ])
 def test_the_heard_person_must_speak_during_the_run(speaking, why):
-    """The robot hears only the first person: a 2 s run in which they speak from 3 s on (or
-    never) was accepted, ran silent and summarized to nulls (exit 0). Refused now, naming
-    the field; others' speaking is not used and stays free; an interval that starts inside
-    the run and ends after it is fine."""
+    """The first person must speak: a 2 s run in which they speak from 3 s on (or never) was
+    accepted, ran silent and summarized to nulls (exit 0), when only they were heard. Refused
+    now, naming the field; the others may be silent or speak after the run; an interval that
+    starts inside the run and ends after it is fine."""
     base = {"duration_s": 2.0, "objects": []}
     with pytest.raises(ConfigError, match=r"^scenario\.people\[0\]\.speaking: the first person "
                                           r".*never speak.*" + why):

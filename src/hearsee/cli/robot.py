@@ -100,6 +100,8 @@ def eval_cmd(
     array: str = typer.Option(None, "--array", help="The robot's microphone array in every "
                               "scenario: a preset or YAML file (default three-mic), e.g. "
                               "mask2-asym for the thesis's masked pair."),
+    talkers: int = typer.Option(1, "--talkers", help="1: one speaker; 2: the same scenes with "
+                                "a second talker, the two taking turns (try --duration 10)."),
 ) -> None:
     """Run many random scenarios and summarise success rate and error percentiles (JSON).
 
@@ -111,7 +113,7 @@ def eval_cmd(
     refuse_overwrite([out], [], force)  # before the scenarios run, not after
     with progress("scenarios", total=scenarios) as advance:
         res = evaluate(scenarios, seed0=seed0, workers=workers or None, scheduler=scheduler,
-                       progress=advance, duration_s=duration, array=array)
+                       progress=advance, duration_s=duration, array=array, talkers=talkers)
     if out is not None:
         import json
 

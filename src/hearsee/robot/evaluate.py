@@ -23,20 +23,28 @@ from hearsee.config import finite_number, whole_number
 from hearsee.errors import ConfigError, HearseeError
 from hearsee.robot.scenario import MAX_DURATION_S, MAX_SEED, MIN_DURATION_S
 
-__all__ = ["MAX_SCENARIOS", "EvalResult", "evaluate", "run_one", "summarize"]
+__all__ = ["MAX_SCENARIOS", "TALKERS", "EvalResult", "evaluate", "run_one", "summarize"]
 
 
-def run_one(seed: int, duration_s: float = 6.0, array: str | None = None) -> dict[str, Any]:
+#: ``talkers`` of :func:`evaluate`: one speaker, or two people taking turns.
+TALKERS = (1, 2)
+
+
+def run_one(seed: int, duration_s: float = 6.0, array: str | None = None,
+            talkers: int = 1) -> dict[str, Any]:
     """Run random scenario ``seed`` (with the robot's ``array``, default the default
-    scenario's: :func:`hearsee.robot.scenario.random_scenario`) and return its metrics
+    scenario's: :func:`hearsee.robot.scenario.random_scenario`; with ``talkers`` 2, the
+    same scene with a second talker taking turns,
+    :func:`hearsee.robot.scenario.random_conversation`) and return its metrics
     (single-threaded, deterministic).
 
     ``runtime_s`` (wall-clock) is dropped so that results compare exactly across runs."""
     from threadpoolctl import threadpool_limits
 
     from hearsee.robot.pipeline import run_scenario
-    from hearsee.robot.scenario import random_scenario
+    from hearsee.robot.scenario import random_conversation, random_scenario
 
+    make = random_conversation if talkers == 2 else random_scenario
     try:
         import cv2
 
@@ -44,7 +52,7 @@ def run_one(seed: int, duration_s: float = 6.0, array: str | None = None) -> dic
     except ImportError:  # pragma: no cover - cv2 is a hard dependency
         pass
     with threadpool_limits(1):
-        result = run_scenario(random_scenario(seed, duration_s, array), keep_images=False)
+        result = run_scenario(make(seed, duration_s, array), keep_images=False)
     out = {k: v for k, v in result.summary.items() if k != "runtime_s"}
     out["seed"] = int(seed)
     return out
@@ -62,7 +70,10 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """Success rate and error percentiles over runs (NaN errors are excluded from percentiles);
     ``objects_reported_as_person``: the human-like objects accepted as a person in at least
     one camera frame, summed over the runs (each object of a run counted once);
-    ``object_detections_accepted_as_person``: their accepted detections (object x frame).
+    ``object_detections_accepted_as_person``: their accepted detections (object x frame);
+    ``talker_changes`` / ``talker_changes_followed``: summed over the runs, and
+    ``time_to_follow_s`` the percentiles of the runs' ``time_to_follow_median_s`` (runs with
+    two people taking turns: ``evaluate(talkers=2)``).
     ConfigError unless ``runs`` is a list of mappings (None was a builtin TypeError)."""
     if isinstance(runs, str | bytes) or not isinstance(runs, Sequence) or \
             not all(isinstance(r, dict) for r in runs):
@@ -71,11 +82,14 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     n = len(runs)
     success = [bool(r.get("success", False)) for r in runs]
     out: dict[str, Any] = {"scenarios": n, "success_rate": float(np.mean(success)) if n else 0.0}
-    for key in ("position_error_median_m", "azimuth_error_initial_deg",
-                "azimuth_error_at_turn_deg", "velocity_rmse_mps", "time_to_verify_s"):
-        vals = np.array([r.get(key, np.nan) for r in runs], dtype=float)
+    for key, name in (("position_error_median_m", None), ("azimuth_error_initial_deg", None),
+                      ("azimuth_error_at_turn_deg", None), ("velocity_rmse_mps", None),
+                      ("time_to_verify_s", None),
+                      ("time_to_follow_median_s", "time_to_follow_s")):
+        # (None, a run without a followed change of talker, is NaN here)
+        vals = np.array([np.nan if r.get(key) is None else r[key] for r in runs], dtype=float)
         vals = vals[np.isfinite(vals)]
-        out[key] = (
+        out[name or key] = (
             {f"p{q}": float(np.percentile(vals, q)) for q in (50, 75, 90, 95)}
             | {"n": int(len(vals))}
             if len(vals) else {"n": 0}
@@ -86,6 +100,8 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
         sum(int(r.get("false_person_objects", 0)) for r in runs))
     out["object_detections_accepted_as_person"] = int(
         sum(int(r.get("object_detections_accepted_as_person", 0)) for r in runs))
+    for key in ("talker_changes", "talker_changes_followed"):
+        out[key] = int(sum(int(r.get(key, 0)) for r in runs))
     return out
 
 
@@ -106,6 +122,7 @@ def evaluate(
     progress: Callable[[int], None] | None = None,
     duration_s: float = 6.0,
     array: str | None = None,
+    talkers: int = 1,
 ) -> EvalResult:
     """Run ``n_scenarios`` random scenarios (1 to :data:`MAX_SCENARIOS`) with seeds
     ``seed0 .. seed0 + n - 1``, each at most :data:`hearsee.robot.scenario.MAX_SEED`
@@ -126,6 +143,10 @@ def evaluate(
     array : str, optional
         The robot's array in every scenario (a preset name or YAML path; checked before any
         scenario runs), e.g. ``"mask2-asym"``; default the default scenario's (three-mic).
+    talkers : int
+        1: one speaker (:func:`hearsee.robot.scenario.random_scenario`); 2: the same scenes
+        with a second talker, the two taking turns
+        (:func:`hearsee.robot.scenario.random_conversation`; try ``duration_s`` 10 or more).
     """
     # (a string or None raised a builtin TypeError from the comparisons; 1e11 a MemoryError)
     n_scenarios = whole_number("--scenarios", n_scenarios, 1, MAX_SCENARIOS)
@@ -137,6 +158,8 @@ def evaluate(
     # `hearsee demo --scenario`; there was no upper bound)
     seed0 = whole_number("--seed", seed0, 0, MAX_SEED - n_scenarios + 1)
     seeds = list(range(seed0, seed0 + n_scenarios))
+    if talkers not in TALKERS or isinstance(talkers, bool):
+        raise ConfigError(f"--talkers: expected 1 or 2, got {talkers!r}")
     if array is not None:  # (a bad one: one error before the workers start, not one each)
         from hearsee.robot.scenario import random_scenario
 
@@ -146,7 +169,8 @@ def evaluate(
             raise type(exc)(f"--array {array!r}: {exc}") from None
         array = str(Path(array).resolve()) if Path(array).is_file() else array
     job = partial(run_one, duration_s=float(duration_s),
-                  **({} if array is None else {"array": array}))
+                  **({} if array is None else {"array": array}),
+                  **({} if talkers == 1 else {"talkers": int(talkers)}))
     tick = progress or (lambda n=1: None)
     runs: dict[int, dict[str, Any]] = {}
     if scheduler is not None:

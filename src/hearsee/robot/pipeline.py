@@ -61,7 +61,7 @@ from hearsee.vision.humans import TORSO_HEIGHT_FRACTION
 
 __all__ = ["CONTROL_DT", "RunResult", "SpeakerCheck", "frame_noise_seed", "fuses_fix",
            "new_person_track", "run_scenario", "sensor_reach_m", "speaker_checked",
-           "stereo_position_cov", "track_record", "track_timeout_s"]
+           "stereo_position_cov", "talker_changes", "track_record", "track_timeout_s"]
 
 #: Control period and audio chunk length, seconds.
 CONTROL_DT = 0.2
@@ -228,12 +228,12 @@ def _facing_xy(sc: Scenario, k: int, t: float) -> NDArray:
     return v / speed if speed >= 0.05 else toward
 
 
-def _person_state(sc: Scenario, t: float) -> dict[str, NDArray]:
-    """Torso centre, mouth and velocity of the (first) person at time t (room frame)."""
-    p = sc.people[0]
-    xy = sc.person_position(0, t)
-    v_xy = _person_velocity(sc, 0, t)
-    face = _facing_xy(sc, 0, t)
+def _person_state(sc: Scenario, t: float, k: int = 0) -> dict[str, NDArray]:
+    """Torso centre, mouth and velocity of person ``k`` at time t (room frame)."""
+    p = sc.people[k]
+    xy = sc.person_position(k, t)
+    v_xy = _person_velocity(sc, k, t)
+    face = _facing_xy(sc, k, t)
     torso = np.array([xy[0], xy[1], TORSO_HEIGHT_FRACTION * p.height_m])
     mouth = np.array([*(xy + MOUTH_FORWARD_M * face), p.height_m - MOUTH_BELOW_TOP_M])
     return {"torso": torso, "mouth": mouth, "velocity": np.array([v_xy[0], v_xy[1], 0.0])}
@@ -249,10 +249,34 @@ def _person_state(sc: Scenario, t: float) -> dict[str, NDArray]:
 MASK_LATE_UPDATE_S = 1.0
 
 
+class _Voice:
+    """One talker's part of :class:`_RoomAudio`: their dry speech (zero outside their
+    ``speaking`` intervals), the impulse responses of the last chunk (crossfaded from) and a
+    masked head's late reflections (:data:`MASK_LATE_UPDATE_S`), which follow this talker's
+    mouth."""
+
+    def __init__(self, k: int, source: NDArray) -> None:
+        self.k = k
+        self.source = source
+        self.prev_h: NDArray | None = None
+        self.late: tuple[float, float, NDArray | None] | None = None  # (t, heading, responses)
+
+
+def _speaking_mask(speaking: Sequence[tuple[float, float]], t: NDArray) -> NDArray:
+    """Whether each time of ``t`` (seconds) falls in one of the ``speaking`` intervals."""
+    on = np.zeros(t.shape, bool)
+    for a, b in speaking:
+        on |= (t >= a) & (t < b)
+    return on
+
+
 class _RoomAudio:
-    """Causal closed-loop room audio: one impulse-response set per control step for the head's
-    current pose and the mouth's current position, crossfaded over :data:`CROSSFADE_S`. A
-    masked pair (thesis ch. 3) is heard through its mask turned with the head
+    """Causal closed-loop room audio: one impulse-response set per control step and talker for
+    the head's current pose and the talker's mouth, crossfaded over :data:`CROSSFADE_S`. Each
+    person who speaks during the run is heard in their own voice while they speak (people
+    take turns: :meth:`hearsee.robot.scenario.Scenario.talker_at`); the sensor noise is set
+    by the first person's speech power at their starting distance. A masked pair (thesis ch.
+    3) is heard through its mask turned with the head
     (:func:`hearsee.audio.mask.masked_room_impulse_responses` with the head's heading: the
     mask's diffraction for the direct path, its far-field responses for the reflections; the
     late reflections updated less often, :data:`MASK_LATE_UPDATE_S`)."""
@@ -262,23 +286,24 @@ class _RoomAudio:
         self.body = body
         self.fs = sc.fs
         n = int(round(sc.duration_s * sc.fs))
-        p = sc.people[0]
-        voice = synthetic_voice(p.voice, sc.duration_s, sc.fs, rng=rng)[:n]
         t = np.arange(n) / sc.fs
-        speaking = np.zeros(n, bool)
-        for a, b in p.speaking:
-            speaking |= (t >= a) & (t < b)
-        self.source = voice * speaking
-        # sensor noise fixed from the direct-path speech power at the starting distance
-        r0 = np.linalg.norm(_person_state(sc, 0.0)["mouth"] - body.pivot_w)
-        p_ref = float(np.mean(voice[speaking] ** 2)) / r0**2 if speaking.any() else 1.0 / r0**2
-        self.noise_sigma = np.sqrt(p_ref / 10 ** (sc.snr_db / 10.0))
+        self.voices: list[_Voice] = []
+        # (the first person's voice is drawn first, as when only they were heard: a
+        # one-talker scenario renders the same audio sample for sample)
+        for k in sc.talkers():
+            p = sc.people[k]
+            dry = synthetic_voice(p.voice, sc.duration_s, sc.fs, rng=rng)[:n]
+            speaking = _speaking_mask(p.speaking, t)
+            if k == 0:  # sensor noise fixed from the direct-path speech power at the start
+                r0 = np.linalg.norm(_person_state(sc, 0.0)["mouth"] - body.pivot_w)
+                p_ref = float(np.mean(dry[speaking] ** 2)) / r0**2 if speaking.any() \
+                    else 1.0 / r0**2
+                self.noise_sigma = np.sqrt(p_ref / 10 ** (sc.snr_db / 10.0))
+            self.voices.append(_Voice(k, dry * speaking))
         self.rng = rng
         self.out = np.zeros((body.array.n_mics, n + int(sc.fs)))
         self.n = n
-        self.prev_h: NDArray | None = None
         self.model = None
-        self.late: tuple[float, float, NDArray | None] | None = None  # (t, heading, responses)
         if body.array.mask is not None:
             from hearsee.audio.mask import MaskModel
             from hearsee.audio.propagation import image_sources
@@ -286,11 +311,18 @@ class _RoomAudio:
             self.model = MaskModel(body.array)
             self.order = image_sources(sc.rt60_s, sc.room_size_m, self.model.c)[1]
 
-    def responses(self, mouth: NDArray, pan_deg: float, t: float | None = None) -> NDArray:
+    @property
+    def late(self) -> tuple[float, float, NDArray | None] | None:
+        """The first talker's late-reflection cache (what :meth:`responses` updates when no
+        voice is named)."""
+        return self.voices[0].late
+
+    def responses(self, mouth: NDArray, pan_deg: float, t: float | None = None,
+                  voice: _Voice | None = None) -> NDArray:
         """Impulse responses (n_mics, L) from the mouth (room frame, metres) to the microphones
         with the head at ``pan_deg``; sample 0 is the emission time. A masked head's late
-        reflections are those of its last update at or before ``t`` (seconds;
-        :data:`MASK_LATE_UPDATE_S`; None: updated now)."""
+        reflections are those of ``voice``'s (None: the first talker's) last update at or
+        before ``t`` (seconds; :data:`MASK_LATE_UPDATE_S`; None: updated now)."""
         if self.model is None:
             return room_impulse_responses(self.fs, self.body.mics_room(pan_deg), mouth,
                                           self.sc.room_size_m, self.sc.rt60_s)
@@ -301,6 +333,7 @@ class _RoomAudio:
         )
         from hearsee.sim.moving import EARLY_ORDER
 
+        voice = self.voices[0] if voice is None else voice
         origin, heading = self.body.array_pose(pan_deg)
         s = (mouth - origin) @ head_rotation(heading, 0.0).as_matrix()  # array frame
         room, rt60 = self.sc.room_size_m, self.sc.rt60_s
@@ -309,27 +342,34 @@ class _RoomAudio:
             return simulate_masked(np.r_[1.0, np.zeros(n - 1)], self.fs, self.model, s)
         h = masked_room_impulse_responses(self.fs, self.model, s, room, rt60, origin,
                                           min(EARLY_ORDER, self.order), heading_deg=heading)
-        if (t is None or self.late is None or t >= self.late[0] + MASK_LATE_UPDATE_S - 1e-9
-                or abs(float(wrap_deg(heading - self.late[1]))) >= MASK_TURN_RESET_DEG):
+        if (t is None or voice.late is None or t >= voice.late[0] + MASK_LATE_UPDATE_S - 1e-9
+                or abs(float(wrap_deg(heading - voice.late[1]))) >= MASK_TURN_RESET_DEG):
             late = masked_room_reflections(self.fs, self.model, s, room, rt60, origin,
                                            orders=(EARLY_ORDER + 1, None), heading_deg=heading)
-            self.late = (-np.inf if t is None else t, heading, late)
-        late = self.late[2]
+            voice.late = (-np.inf if t is None else t, heading, late)
+        late = voice.late[2]
         return h if late is None else sum_responses([h, late])  # (None: no late orders)
 
     def chunk(self, k: int, pan_deg: float) -> tuple[int, int]:
-        """Render chunk k ([k*dt, (k+1)*dt)) with the head at ``pan_deg``; returns its samples."""
+        """Render chunk k ([k*dt, (k+1)*dt)) with the head at ``pan_deg``; returns its samples.
+        A talker silent over the whole chunk is skipped (no responses computed; their next
+        spoken chunk starts without a crossfade, from silence)."""
         fs = self.fs
         a, b = _chunk_start(k, fs), min(_chunk_start(k + 1, fs), self.n)
-        h = self.responses(_person_state(self.sc, (a + b) / 2 / fs)["mouth"], pan_deg, a / fs)
-        seg = self.source[a:b]
-        w = np.ones(b - a)
-        if self.prev_h is not None:
-            nx = min(int(round(CROSSFADE_S * fs)), b - a)
-            w[:nx] = np.linspace(0.0, 1.0, nx, endpoint=False)
-            self._add(a, ss.fftconvolve(seg[None, :] * (1 - w), self.prev_h, axes=-1))
-        self._add(a, ss.fftconvolve(seg[None, :] * w, h, axes=-1))
-        self.prev_h = h
+        for v in self.voices:
+            seg = v.source[a:b]
+            if v.k != 0 and not seg.any():
+                v.prev_h = None
+                continue
+            mouth = _person_state(self.sc, (a + b) / 2 / fs, v.k)["mouth"]
+            h = self.responses(mouth, pan_deg, a / fs, v)
+            w = np.ones(b - a)
+            if v.prev_h is not None:
+                nx = min(int(round(CROSSFADE_S * fs)), b - a)
+                w[:nx] = np.linspace(0.0, 1.0, nx, endpoint=False)
+                self._add(a, ss.fftconvolve(seg[None, :] * (1 - w), v.prev_h, axes=-1))
+            self._add(a, ss.fftconvolve(seg[None, :] * w, h, axes=-1))
+            v.prev_h = h
         self.out[:, a:b] += self.noise_sigma * self.rng.standard_normal((self.out.shape[0], b - a))
         return a, b
 
@@ -521,6 +561,11 @@ SPEAKER_CHECK_MIN_UPDATES = 3
 #: without a bystander (18/20 each), one right track let go for 1 s (1074: the masked bearings 28
 #: deg off the speaker for a second) -- a small net gain over all 40 scenes.
 SPEAKER_CHECK_MAX_DEG = 20.0
+#: ... and sooner, after this long (seconds; at least :data:`SPEAKER_CHECK_MIN_UPDATES` steps),
+#: when every step's audio bearing was more than :data:`SPEAKER_CHECK_FAR_DEG` degrees from
+#: the track: someone else, well away, has started to speak.
+SPEAKER_CHECK_FAR_S = float("inf")
+SPEAKER_CHECK_FAR_DEG = 60.0
 SPEAKER_EXCLUDE_S = 3.0
 #: ... within this distance (metres) of where it was let go: less than two people stand apart
 #: (:data:`hearsee.robot.scenario.MIN_BODY_SEPARATION_M`), more than a standing person's fixes
@@ -575,6 +620,8 @@ class SpeakerCheck:
         self.check_deg = min(self.gate_deg, SPEAKER_CHECK_MAX_DEG)  # (observe's threshold)
         self._since: float | None = None  # (time of the first disagreeing step in a row)
         self._n = 0  # (disagreeing steps in a row)
+        self._far_since: float | None = None  # (the same for steps SPEAKER_CHECK_FAR_DEG off)
+        self._far_n = 0
         self._rel_since: float | None = None  # (the same for compare's frames)
         self._rel_n = 0
         self._excluded: list[tuple[float, NDArray]] = []  # (until, position)
@@ -584,17 +631,21 @@ class SpeakerCheck:
         step -- the count holds) and the track's bearing (None: no track -- the count
         restarts). True when the track should be dropped (the count restarts)."""
         if track_deg is None or not math.isfinite(track_deg):
-            self._since = self._rel_since = None
-            self._n = self._rel_n = 0
+            self._since = self._rel_since = self._far_since = None
+            self._n = self._rel_n = self._far_n = 0
             return False
         if audio_deg is None or not math.isfinite(audio_deg):
             return False
-        agree = abs(float(wrap_deg(audio_deg - track_deg))) <= self.check_deg
-        self._since, self._n, drop = _persisting(t, not agree, self._since, self._n,
+        off = abs(float(wrap_deg(audio_deg - track_deg)))
+        self._since, self._n, drop = _persisting(t, off > self.check_deg, self._since, self._n,
                                                  SPEAKER_CHECK_S)
-        if drop:
-            self._rel_since, self._rel_n = None, 0
-        return drop
+        self._far_since, self._far_n, far = _persisting(
+            t, off > max(SPEAKER_CHECK_FAR_DEG, self.check_deg), self._far_since, self._far_n,
+            SPEAKER_CHECK_FAR_S)
+        if drop or far:
+            self._since = self._rel_since = self._far_since = None
+            self._n = self._rel_n = self._far_n = 0
+        return drop or far
 
     def compare(self, t: float, audio_deg: float | None, track_deg: float,
                 others_deg: Sequence[float]) -> bool:
@@ -895,9 +946,10 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
             track.reset()
 
         # ---- truth at the end of the step
-        st = _person_state(sc, t1)
+        talker = sc.talker_at(t1)
+        st = _person_state(sc, t1, talker)
         truth = {"position_m": st["torso"], "velocity_mps": st["velocity"],
-                 "azimuth_robot_deg": body.bearing_deg(st["torso"])}
+                 "azimuth_robot_deg": body.bearing_deg(st["torso"]), "talker": talker}
 
         # ---- see and verify
         detections = []
@@ -1041,10 +1093,49 @@ def _bearing_error(rec: dict[str, Any] | None) -> float:
 
 
 def _speech_onset_s(sc: Scenario) -> float:
-    """When the heard (first) person first speaks in the run, seconds from its start: the
-    earliest start of their speaking intervals (the scenario guarantees one inside the run)."""
-    starts = [a for a, _ in sc.people[0].speaking if a < sc.duration_s]
+    """When someone first speaks in the run, seconds from its start: the earliest start of
+    anyone's speaking intervals (the scenario guarantees one inside the run)."""
+    starts = [a for p in sc.people for a, _ in p.speaking if a < sc.duration_s]
     return float(min(starts)) if starts else 0.0
+
+
+#: A change of talker counts as followed (``_summarize``'s ``talker_changes_followed``) at
+#: the first step whose 3D track is within this distance (metres) of the new talker's torso:
+#: the final-error bound of a run's ``success``.
+TALKER_FOLLOW_M = 0.5
+
+
+def talker_changes(sc: Scenario) -> list[tuple[float, int]]:
+    """When the talker changes during the run: ``(t, k)`` for each speaking interval of
+    person ``k`` starting at ``t`` seconds (inside the run) right after another person's turn
+    (:meth:`hearsee.robot.scenario.Scenario.talker_at`). The first talker's first words are
+    not a change (``time_to_verify_s`` times them); a talker's own next interval after a
+    pause is none either."""
+    starts = sorted((a, k) for k, p in enumerate(sc.people) for a, _ in p.speaking
+                    if a < sc.duration_s)
+    return [(float(a), k) for (_, k0), (a, k) in zip(starts, starts[1:], strict=False)
+            if k != k0]
+
+
+def _followed(sc: Scenario, log: list[dict[str, Any]]) -> list[float]:
+    """For each :func:`talker_changes` entry, seconds from the new talker's first words to the
+    end of the first control step whose track was within :data:`TALKER_FOLLOW_M` of them,
+    before the next change (or the run's end); NaN when it never was."""
+    changes = talker_changes(sc)
+    out = []
+    for i, (t_on, k) in enumerate(changes):
+        t_end = changes[i + 1][0] if i + 1 < len(changes) else np.inf
+        hit = next((r["t"] for r in log if t_on <= r["t"] + 1e-9 and r["t"] < t_end - 1e-9
+                    and r["track"] is not None and _person_distance(sc, r, k) < TALKER_FOLLOW_M),
+                   None)
+        out.append(float("nan") if hit is None else float(hit - t_on))
+    return out
+
+
+def _person_distance(sc: Scenario, rec: dict[str, Any], k: int) -> float:
+    """Distance (metres) of a log record's track from person ``k``'s torso at its time."""
+    torso = _person_state(sc, float(rec["t"]), k)["torso"]
+    return float(np.linalg.norm(np.asarray(rec["track"]["position_m"], float) - torso))
 
 
 def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | None,
@@ -1072,7 +1163,16 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
     ``false_person_objects``: distinct objects accepted as a person in at least one frame.
     ``object_detections_rejected`` / ``object_detections_accepted_as_person``: the same
     detections counted per camera frame (object x frame). Until 2026-12-02 the two object
-    keys held these per-frame counts (a single mannequin: "22 objects rejected")."""
+    keys held these per-frame counts (a single mannequin: "22 objects rejected").
+
+    With people who take turns, the truth of each step is the current talker's
+    (:meth:`~hearsee.robot.scenario.Scenario.talker_at`), so the errors above count the
+    steps the track spends on the previous talker after a change. ``talker_changes``: the
+    changes of talker during the run (:func:`talker_changes`); ``talker_changes_followed``:
+    those after which the track came within :data:`TALKER_FOLLOW_M` of the new talker before
+    the next change; ``time_to_follow_median_s``: the median of their times (from the new
+    talker's first words to the end of that step; None without one -- a one-talker run's
+    NaN would make every run's summary unequal to itself)."""
     errs = np.array([r["error_m"] for r in log if r["error_m"] is not None], dtype=float)
     vel = np.array([np.linalg.norm(np.asarray(r["track"]["velocity_mps"]) -
                                    np.asarray(r["truth"]["velocity_mps"]))
@@ -1102,6 +1202,7 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
     final_err = (float(end["error_m"]) if end is not None and end["error_m"] is not None
                  else float("nan"))
     med = float(np.median(errs)) if len(errs) else float("nan")
+    follow = np.array(_followed(sc, log), dtype=float)
     return {
         "scenario": sc.name,
         "success": bool(len(errs) > 0 and med < 0.3 and final_err < 0.5),
@@ -1121,5 +1222,9 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
         "false_person_objects": len(fooled),
         "object_detections_rejected": sum(1 for d in obj_dets if not d["accepted"]),
         "object_detections_accepted_as_person": sum(1 for d in obj_dets if d["accepted"]),
+        "talker_changes": len(follow),
+        "talker_changes_followed": int(np.isfinite(follow).sum()),
+        "time_to_follow_median_s": (float(np.median(follow[np.isfinite(follow)]))
+                                    if np.isfinite(follow).any() else None),
         "runtime_s": float(runtime_s),
     }

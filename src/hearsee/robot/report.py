@@ -186,6 +186,11 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     err = _arr(log, ["error_m"])
     pan = _arr(log, ["head_pan_deg"])
     target = _arr(log, ["truth", "azimuth_robot_deg"])
+    # (with people taking turns the truth jumps from one talker to the next: no line across)
+    talker = np.nan_to_num(_arr(log, ["truth", "talker"]), nan=-1.0)
+    cut = np.flatnonzero(np.diff(talker) != 0) + 1
+    t_cut = np.insert(t, cut, np.nan)
+    truth, target = np.insert(truth, cut, np.nan, axis=0), np.insert(target, cut, np.nan)
     audio_az = _arr(log, ["audio", "azimuth_deg"])
     figs = []
 
@@ -194,7 +199,13 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     ax.add_patch(plt.Rectangle((0, 0), room[0], room[1], fill=False, lw=2, color="k"))
     robot = scenario["robot"]["position_m"]
     ax.plot(*robot, "ks", ms=10, label="robot")
-    ax.plot(truth[:, 0], truth[:, 1], "g-", lw=3, alpha=0.6, label="person (truth)")
+    # (markers: a talker standing still is a point, which a line alone does not draw)
+    ax.plot(truth[:, 0], truth[:, 1], "g-", marker="o", ms=4, lw=3, alpha=0.6,
+            label="speaker (truth)")
+    for p in scenario.get("people", []):
+        if p.get("speaking"):  # (the people heard, by name: several take turns)
+            ax.annotate(p.get("name", ""), p["path_m"][0], textcoords="offset points",
+                        xytext=(5, -12), color="g")
     ax.plot(track[:, 0], track[:, 1], "b.-", ms=4, label="track (estimate)")
     for o in scenario.get("objects", []):
         ax.plot(*o["position_m"], "rx", ms=10, mew=2)
@@ -233,7 +244,7 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
 
     fig, ax = plt.subplots(figsize=(7, 3.2))
     ax.plot(t, pan, "k-", label="head pan")
-    ax.plot(t, target, "g--", label="person direction (truth)")
+    ax.plot(t_cut, target, "g--", label="speaker direction (truth)")
     ax.plot(t, audio_az, "m.", ms=4, label="audio azimuth estimate")
     ax.set_xlabel("time (s)")
     ax.set_ylabel("azimuth in robot frame (deg)")
@@ -246,7 +257,7 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     finally:
         plt.close(fig)
     figs.append(("plots/head.png",
-                 "Head pan angle, the person's true direction and the audio estimates."))
+                 "Head pan angle, the speaker's true direction and the audio estimates."))
     return figs
 
 

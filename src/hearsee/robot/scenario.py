@@ -28,12 +28,17 @@ Schema (defaults in brackets)::
       thermal: {width [160], height [120], hfov_deg [72]}   (mounted 7 cm above the left camera)
     people:                        [one walking speaker]
       - {name, path_m: [[x, y], ...] (waypoints, walked at constant speed over the run),
-         height_m [1.72], voice: male|female [female], speaking: [[t0, t1], ...] [whole run],
+         height_m [1.72], voice: male|female [female],
+         speaking: [[t0, t1], ...] [the first person: the whole run; the others: never],
          facing: toward-robot|path [toward-robot]}
-      (only the FIRST person speaks in the simulated audio, and the ground truth follows
-      them; the others are seen, not heard: their voice and speaking are read but not used.
-      The first person must speak during the run: an interval with t0 < duration_s; a
-      silent or empty ``speaking`` is refused, as the robot would have nothing to turn to)
+      (every person is heard while they speak, in their own voice; people take turns: no
+      two people's intervals may overlap inside the run, as the simulated robot attends to
+      one talker at a time. The ground truth follows the current talker -- the person
+      speaking, or between turns the last one who spoke; before the first word, the first
+      to speak (:meth:`Scenario.talker_at`). The first person must speak during the run: an
+      interval with t0 < duration_s; a silent or empty ``speaking`` is refused, as the
+      robot would have nothing to turn to. Until 2026-12-06 only the first person was
+      heard and the others' voice and speaking were read but not used)
     objects:                       [a mannequin]
       - {kind: mannequin|poster|coat, position_m: [x, y], yaw_deg [0], height_m [1.75]}
       (yaw_deg: the turn away from facing the robot, degrees; a poster, a flat cut-out, is
@@ -89,6 +94,7 @@ __all__ = [
     "Scenario",
     "default_scenario",
     "load_scenario",
+    "random_conversation",
     "random_scenario",
     "scenario_from_dict",
 ]
@@ -182,6 +188,24 @@ class Scenario:
     def person_position(self, k: int, t: float | np.ndarray) -> np.ndarray:
         """Floor position (room frame, metres) of person k at time(s) t: (..., 2)."""
         return _walk_position(self.people[k].path_m, self.duration_s, t)
+
+    def talker_at(self, t: float) -> int:
+        """Index of the current talker at time ``t`` (seconds): the person speaking then, or
+        between turns the last one who spoke (the latest interval start at or before ``t``);
+        before anyone speaks, the first to speak. People take turns (no two intervals of
+        different people overlap inside the run), so the answer is unique. The robot's
+        ground truth follows this person."""
+        starts = [(a, k) for k, p in enumerate(self.people) for a, _ in p.speaking
+                  if a < self.duration_s]
+        if not starts:  # (refused by the parser: the first person speaks during the run)
+            return 0
+        begun = [(a, k) for a, k in starts if a <= t]
+        return max(begun)[1] if begun else min(starts)[1]
+
+    def talkers(self) -> list[int]:
+        """Indices of the people who speak during the run (the first person always)."""
+        return [k for k, p in enumerate(self.people)
+                if any(a < self.duration_s for a, _ in p.speaking)]
 
     def person_speed_mps(self, k: int) -> float:
         path = self.people[k].path_m
@@ -305,6 +329,23 @@ def _closest_approach(a: np.ndarray, b: np.ndarray, duration: float) -> tuple[fl
     return float(dist[k]), float(t[k] + u[k] * (t[k + 1] - t[k]))
 
 
+def _check_turns(people: tuple[PersonSpec, ...], duration: float, where: str) -> None:
+    """ConfigError naming two people whose speaking intervals overlap inside the run
+    (``duration`` seconds): the simulated robot attends to one talker at a time
+    (:meth:`Scenario.talker_at`), so a scenario's people take turns. Touching intervals
+    ([1, 2] and [2, 3]) are turns."""
+    for k in range(len(people)):
+        for j in range(k + 1, len(people)):
+            for a, b in people[k].speaking:
+                for c, d in people[j].speaking:
+                    lo, hi = max(a, c), min(b, d, duration)
+                    if lo < hi:
+                        raise ConfigError(
+                            f"{where}.people[{j}].speaking: [{c:g}, {d:g}] overlaps "
+                            f"people[{k}]'s [{a:g}, {b:g}] ({lo:g}-{hi:g} s); the simulated "
+                            "robot follows one talker at a time, so people take turns")
+
+
 def _check_bodies_apart(people: tuple[PersonSpec, ...], objects: tuple[ObjectSpec, ...],
                         duration: float, where: str, defaults: tuple[bool, bool]) -> None:
     """ConfigError naming two bodies whose centres come closer than
@@ -369,7 +410,7 @@ def _parse_person(p: Any, k: int, pw: str, size: np.ndarray, robot_xy: np.ndarra
     voice = p.get("voice", "female")
     if voice not in VOICES:
         raise ConfigError(f"{pw}.voice: expected one of {VOICES}, got {voice!r}")
-    speaking = p.get("speaking", [[0.0, duration]])
+    speaking = p.get("speaking", [[0.0, duration]] if k == 0 else [])
     # (only pairs of numbers: ["06"] was unpacked into (0.0, 6.0), [[false, true]] read as
     # (0.0, 1.0))
     if not isinstance(speaking, list | tuple) or not all(
@@ -381,10 +422,10 @@ def _parse_person(p: Any, k: int, pw: str, size: np.ndarray, robot_xy: np.ndarra
     if any(not (0 <= a < b) for a, b in spk):
         raise ConfigError(f"{pw}.speaking: each interval needs 0 <= t0 < t1")
     if k == 0 and not any(a < duration for a, _ in spk):
-        # (the robot hears the first person only: a run in which they never speak heard
-        # nothing, saw nothing and summarized to nulls, exit 0)
+        # (a run in which the first person never spoke heard nothing, saw nothing and
+        # summarized to nulls, exit 0, when they were the only one heard)
         raise ConfigError(
-            f"{pw}.speaking: the first person is the one the robot hears, and they never "
+            f"{pw}.speaking: the first person must speak, and they never "
             f"speak during the run ({duration:g} s): "
             + ("an empty list" if not spk else f"every interval starts at or after {duration:g} s")
             + f"; give an interval [t0, t1] with t0 < {duration:g}")
@@ -552,6 +593,7 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
         objects = tuple(obj(o, k, f"{where}.objects[{k}]") for k, o in enumerate(objects_raw))
     _check_bodies_apart(people, objects, duration, where,
                         (people_raw is None, objects_raw is None))
+    _check_turns(people, duration, where)
 
     name = data.get("name", "custom")
     seed = number(data, "seed", 0, where, 0, MAX_SEED, integer=True)
@@ -755,3 +797,52 @@ def random_scenario(seed: int, duration_s: float = 6.0, array: str | None = None
     d = sc.to_dict()
     d["robot"]["array"] = array  # (validated with the rest, as in a scenario file)
     return scenario_from_dict(d, where=f"random scenario {seed}")
+
+
+def random_conversation(seed: int, duration_s: float = 10.0, array: str | None = None,
+                        ) -> Scenario:
+    """:func:`random_scenario` ``seed`` with a second talker: the two take turns of 1.5-3.5 s
+    with 0.2-1 s pauses between them, the walking speaker first (from 0 s); the second
+    stands 1.5-3.5 m from the robot, 40-150 deg to either side of where the first starts (so
+    the head must turn to them), in a voice of either kind, at least 0.5 m from the walls
+    and 0.9 m from the walk and the objects (as :func:`random_scenario` places its speaker
+    and objects). Drawn by a generator of its own (``[seed, 4242]``), so the room, the walk
+    and the objects are the seed's; a place that fails these or the scenario's checks is
+    drawn again. Arguments as :func:`random_scenario`'s (``duration_s`` from
+    :data:`MIN_DURATION_S`); ConfigError when no place fits. Not in the thesis: a test of
+    the robot attending to whoever speaks (``talker_changes_followed`` of
+    :func:`hearsee.robot.pipeline.run_scenario`'s summary)."""
+    sc = random_scenario(seed, duration_s, array)
+    rng = np.random.default_rng([int(seed), 4242])
+    duration = sc.duration_s
+    turns: list[list[tuple[float, float]]] = [[], []]
+    t, who = 0.0, 0
+    while t < duration - 0.2:  # (a last turn of at least 0.2 s)
+        end = t + float(rng.uniform(1.5, 3.5))
+        turns[who].append((round(t, 3), round(min(end, duration), 3)))
+        t, who = end + float(rng.uniform(0.2, 1.0)), 1 - who
+    robot = sc.robot.position_m
+    start = sc.people[0].path_m[0]
+    bearing = np.arctan2(start[1] - robot[1], start[0] - robot[0])
+    voice = str(rng.choice(VOICES))
+    height = float(rng.uniform(1.55, 1.90))
+    d = sc.to_dict()
+    d["name"] = f"conversation-{seed}"
+    d["people"][0]["speaking"] = [list(s) for s in turns[0]]
+    margin = WALL_CLEARANCE_M + 0.2  # (random_scenario's margin for where people start)
+    for _ in range(500):
+        a = bearing + np.radians(float(rng.choice([-1.0, 1.0]) * rng.uniform(40.0, 150.0)))
+        xy = robot + float(rng.uniform(1.5, 3.5)) * np.array([np.cos(a), np.sin(a)])
+        if (np.any(xy < margin) or np.any(xy > sc.room_size_m[:2] - margin)
+                or _path_distance(sc.people[0].path_m, xy) < 0.9
+                or any(np.linalg.norm(o.position_m - xy) < 0.9 for o in sc.objects)):
+            continue  # (a person against a wall merged with it in the stereo: 2.4 m tall)
+        d["people"] = [d["people"][0], {"name": "second talker", "path_m": [xy.tolist()],
+                                        "height_m": height, "voice": voice,
+                                        "speaking": [list(s) for s in turns[1]]}]
+        try:
+            return scenario_from_dict(d, where=f"random conversation {seed}")
+        except ConfigError:
+            continue
+    raise ConfigError(f"random conversation {seed}: no place for the second talker")
+
