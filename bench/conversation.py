@@ -7,12 +7,14 @@ second talker standing 40-150 deg to the side of where the first starts; they ta
 and track them (:func:`hearsee.robot.pipeline.run_scenario`; its summary's
 ``talker_changes_followed``: the 3D track within 0.5 m of the new talker before the next
 change). Both heads (three microphones; the thesis's masked pair, ch. 3), with and without
-:class:`hearsee.robot.pipeline.SpeakerCheck` -- 'without' is the loop that keeps the first
-person it verified (no peer library turns a robot's head; this is the baseline). Prints a
+:class:`hearsee.robot.pipeline.SpeakerCheck` (the track let go when the voice stays more than
+the gate away for 1 s, more than 45 deg away for 0.4 s) -- 'without' is the loop that keeps
+the person it verified until vision loses them (no peer library turns a robot's head; this is
+the baseline). Prints a
 table and writes ``bench/results/robot_conversation.md`` and ``.png``.
 
-Seeds 2000-2019 are development scenes (the loop was looked at on them); the default seeds
-(2100 on) were not used to choose anything.
+Seeds 2000-2019 are development scenes (``SPEAKER_CHECK_FAR_S`` / ``_DEG`` were chosen on
+2000-2011); the default seeds (2100 on) were not used to choose anything.
 
     python bench/conversation.py                        # 12 scenes, about 30 min on 2 cores
     python bench/conversation.py --scenes 4 --seed0 2000
@@ -110,9 +112,14 @@ def main() -> None:
         "The time to follow runs from the new talker's first words to the end of the 0.2-s "
         "control step whose 3D track is first within 0.5 m of them (the head has turned and "
         "the camera verified them); a change not followed before the next one counts as "
-        "missed. A tracked step is counted on the person nearer the track. 'without': the "
-        "speaker check disabled, so the track stays on the first person verified -- the "
-        f"loop before 2026-12-05. Wall {wall:.0f} s.\n\n" + markdown_table(headers, rows)
+        "missed (a turn that ends the run may be too short to follow). A tracked step is "
+        "counted on the person nearer the track. 'with': `SpeakerCheck` lets the track go "
+        "when the voice stays more than the association gate (at most 20 deg) away for 1 s, "
+        "more than 45 deg away for 0.4 s (`SPEAKER_CHECK_FAR_S`, chosen on development "
+        "scenes 2000-2011); 'without': the check disabled, so the track stays on the person "
+        "verified until vision loses them -- the loop before 2026-12-05 (a change back to "
+        "the tracked person then counts as followed at once). "
+        f"Wall {wall:.0f} s.\n\n" + markdown_table(headers, rows)
         + "\n\nPer scene (time to follow of each change, s; '-': missed):\n\n"
         + markdown_table(["seed", "head", "check", "changes", "time to follow (s)",
                           "tracked steps on the talker", "on the other", "success"], per)))],

@@ -226,3 +226,15 @@ def test_run_one_runs_the_conversation():
     assert run_one(6, duration_s=3.0, talkers=2)["talker_changes"] == 1
     r1 = run_one(6, duration_s=3.0)
     assert r1["talker_changes"] == 0 and r1["time_to_follow_median_s"] is None
+
+
+def test_the_conversation_example_is_a_valid_scenario():
+    """examples/conversation.yaml (the README's tour): Ana, then Ben, then Ana again."""
+    from pathlib import Path
+
+    from hearsee.robot.scenario import load_scenario
+
+    sc = load_scenario(Path(__file__).resolve().parents[2] / "examples" / "conversation.yaml")
+    assert [p.name for p in sc.people] == ["Ana", "Ben"]
+    assert talker_changes(sc) == [(3.0, 1), (6.2, 0)]
+    assert [sc.talker_at(t) for t in (1.0, 2.8, 4.0, 6.0, 8.0)] == [0, 0, 1, 1, 0]

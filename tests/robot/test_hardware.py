@@ -710,28 +710,38 @@ def _run_voice_legs(cfg, legs):
 
 
 @pytest.mark.slow
-def test_live_loop_lets_go_of_a_silent_person_when_the_voice_is_elsewhere(tmp_path):
+@pytest.mark.parametrize("away_deg", [-35.0, -70.0])
+def test_live_loop_lets_go_of_a_silent_person_when_the_voice_is_elsewhere(tmp_path, away_deg):
     """The cameras see one person (robot-frame azimuth ~18 deg), who is silent: a voice 8 deg
     beside them for 1.5 s gets them associated (inside the 20-deg gate), then the voice comes
-    from -45 deg. The track is let go once the measured bearing has stayed more than the gate
-    away from it for SPEAKER_CHECK_S, and the person is not associated again within
+    from ``away_deg`` from them. The track is let go once the measured bearing has stayed more
+    than the gate away from it for SPEAKER_CHECK_S -- or, more than SPEAKER_CHECK_FAR_DEG
+    away, for SPEAKER_CHECK_FAR_S -- and the person is not associated again within
     SPEAKER_EXCLUDE_S (before the check the track followed them to the end)."""
-    from hearsee.robot.pipeline import SPEAKER_CHECK_S, SPEAKER_EXCLUDE_S
+    from hearsee.robot.pipeline import (
+        SPEAKER_CHECK_FAR_DEG,
+        SPEAKER_CHECK_FAR_S,
+        SPEAKER_CHECK_S,
+        SPEAKER_EXCLUDE_S,
+    )
 
     cfg, _, _, torso, _ = _person_case(tmp_path, n_frames=8)
     person_az = float(np.degrees(np.arctan2(torso[1], torso[0])))
-    res = _run_voice_legs(cfg, [(person_az + 8.0, 2.5, 1.5, 5), (-45.0, 2.5, 2.5, 6)])
+    voice = person_az + away_deg
+    wait = SPEAKER_CHECK_FAR_S if abs(away_deg) > SPEAKER_CHECK_FAR_DEG + 10 else SPEAKER_CHECK_S
+    res = _run_voice_legs(cfg, [(person_az + 8.0, 2.5, 1.5, 5), (voice, 2.5, 2.5, 6)])
     s = res.summary
     assert s["status"] == "ok" and s["speaker_drops"] == 1
     taken = [r["t"] for r in res.log for d in r["detections"] if d["speaker"]]
     assert taken and min(taken) < 1.5  # the person was taken while the voice was beside them
     tracked = [r["t"] for r in res.log if r["track"] is not None]
     dropped = max(tracked)
-    # let go SPEAKER_CHECK_S after the bearing left (the stream's tracker needs a few frames)
-    assert 1.5 + SPEAKER_CHECK_S <= dropped <= 1.5 + SPEAKER_CHECK_S + 0.6
+    # let go that long after the bearing left (the stream's tracker needs a few frames)
+    assert 1.5 + wait <= dropped <= 1.5 + wait + 0.6
+    assert wait == SPEAKER_CHECK_S or dropped < 1.5 + SPEAKER_CHECK_S  # (the far rule's)
     assert dropped + SPEAKER_EXCLUDE_S > 4.0  # (excluded to the end of the run)
     assert not [t for t in taken if t > dropped] and res.log[-1]["track"] is None
-    assert abs(float(wrap_deg(s["azimuth_deg_final"] + 45.0))) < 5.0
+    assert abs(float(wrap_deg(s["azimuth_deg_final"] - voice))) < 5.0
 
 
 @pytest.mark.slow

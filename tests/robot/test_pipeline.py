@@ -260,7 +260,9 @@ def test_speaker_check_lets_go_of_a_person_the_voice_is_not_coming_from():
     when every audio step of SPEAKER_CHECK_S seconds (at least SPEAKER_CHECK_MIN_UPDATES of
     them) disagrees, the check says drop it -- steps without audio hold the count, one
     agreeing step or a step without a track restarts it -- and the dropped person (within
-    SPEAKER_EXCLUDE_M of the excluded position) is refused for SPEAKER_EXCLUDE_S seconds."""
+    SPEAKER_EXCLUDE_M of the excluded position) is refused for SPEAKER_EXCLUDE_S seconds.
+    (Disagreements of 25-40 deg: beyond SPEAKER_CHECK_FAR_DEG the drop comes sooner, next
+    test.)"""
     from hearsee.robot.pipeline import (
         SPEAKER_CHECK_MIN_UPDATES,
         SPEAKER_CHECK_S,
@@ -281,23 +283,23 @@ def test_speaker_check_lets_go_of_a_person_the_voice_is_not_coming_from():
     # the count restarted after the drop; no audio in between holds it, one agreeing step
     # restarts it, and so does a step without a track
     t0 = 5.0
-    assert not chk.observe(t0, 60.0, 0.0)
+    assert not chk.observe(t0, 40.0, 0.0)
     assert not any(chk.observe(t0 + k * dt, None, 0.0) for k in range(1, 4))
-    assert not chk.observe(t0 + 4 * dt, 60.0, 0.0)
-    assert chk.observe(t0 + steps * dt, 60.0, 0.0)  # (3 audio steps over 1 s)
-    for track_deg in (55.0, None):  # a step agreeing (60 vs 55 deg); one without a track
+    assert not chk.observe(t0 + 4 * dt, 40.0, 0.0)
+    assert chk.observe(t0 + steps * dt, 40.0, 0.0)  # (3 audio steps over 1 s)
+    for track_deg in (35.0, None):  # a step agreeing (40 vs 35 deg); one without a track
         chk = SpeakerCheck(20.0)
-        assert not any(chk.observe(k * dt, 60.0, 0.0) for k in range(steps))
-        assert not chk.observe(steps * dt, 60.0, track_deg)
+        assert not any(chk.observe(k * dt, 40.0, 0.0) for k in range(steps))
+        assert not chk.observe(steps * dt, 40.0, track_deg)
         # the count starts again: the drop comes SPEAKER_CHECK_S after the next step
-        said = [chk.observe((steps + 1 + k) * dt, 60.0, 0.0) for k in range(steps + 1)]
+        said = [chk.observe((steps + 1 + k) * dt, 40.0, 0.0) for k in range(steps + 1)]
         assert said == [False] * steps + [True]
     # too few audio steps: two disagreeing steps SPEAKER_CHECK_S apart are not enough
     fresh = SpeakerCheck(20.0)
     assert SPEAKER_CHECK_MIN_UPDATES > 2
-    assert not fresh.observe(0.0, 90.0, 0.0)
-    assert not fresh.observe(SPEAKER_CHECK_S + 0.5, 90.0, 0.0)
-    assert fresh.observe(SPEAKER_CHECK_S + 0.7, 90.0, 0.0)
+    assert not fresh.observe(0.0, 40.0, 0.0)
+    assert not fresh.observe(SPEAKER_CHECK_S + 0.5, 40.0, 0.0)
+    assert fresh.observe(SPEAKER_CHECK_S + 0.7, 40.0, 0.0)
     # the dropped person is refused for SPEAKER_EXCLUDE_S, the others are not
     p = np.array([2.0, 1.0, 1.2])
     fresh.exclude(10.0, p)
@@ -308,6 +310,57 @@ def test_speaker_check_lets_go_of_a_person_the_voice_is_not_coming_from():
     for bad in (0.0, -1.0, float("nan"), 200.0, "20"):
         with pytest.raises(EstimationError, match="gate_deg"):
             SpeakerCheck(bad)
+
+
+def test_speaker_check_lets_go_sooner_when_the_voice_is_far_away():
+    """Someone else takes the turn to speak, well away: when every audio step of
+    SPEAKER_CHECK_FAR_S (at least SPEAKER_CHECK_MIN_UPDATES of them) is more than
+    SPEAKER_CHECK_FAR_DEG from the track, the check says drop it then, not after
+    SPEAKER_CHECK_S; a step nearer than that restarts the far count (the 1-s rule's goes on),
+    and after a drop both counts start again."""
+    from hearsee.robot.pipeline import (
+        SPEAKER_CHECK_FAR_DEG,
+        SPEAKER_CHECK_FAR_S,
+        SPEAKER_CHECK_MIN_UPDATES,
+        SPEAKER_CHECK_S,
+        SpeakerCheck,
+    )
+
+    dt = 0.2
+    far = max(int(round(SPEAKER_CHECK_FAR_S / dt)), SPEAKER_CHECK_MIN_UPDATES - 1)
+    slow = int(round(SPEAKER_CHECK_S / dt))
+    assert far < slow
+    off = SPEAKER_CHECK_FAR_DEG + 5.0
+    for track in (-170.0, 0.0, 100.0):  # (across the +-180 seam too)
+        chk = SpeakerCheck(20.0)
+        said = [chk.observe(k * dt, track + off, track) for k in range(far + 1)]
+        assert said == [False] * far + [True], track
+        # counted again from the drop: the same wait before the next one
+        said = [chk.observe((far + 1 + k) * dt, track - off, track) for k in range(far + 1)]
+        assert said == [False] * far + [True], track
+    # just inside SPEAKER_CHECK_FAR_DEG: only the 1-s rule
+    chk = SpeakerCheck(20.0)
+    said = [chk.observe(k * dt, SPEAKER_CHECK_FAR_DEG - 1.0, 0.0) for k in range(slow + 1)]
+    assert said == [False] * slow + [True]
+    # nearer steps in between restart the far count, not the 1-s rule's: that one drops
+    # first here (the far count, restarted, would at far + 2 + far)
+    chk = SpeakerCheck(20.0)
+    bearings = [off] * far + [30.0] * 2 + [off] * slow
+    said = [chk.observe(k * dt, b, 0.0) for k, b in enumerate(bearings)]
+    assert slow < far + 2 + far and said.index(True) == slow
+    # a masked pair's check has no far rule (its bearings flip to the wrong half for a
+    # moment): a far voice waits for the 1-s rule; the three-mic head's has it
+    from hearsee.audio.arrays import load_array
+    from hearsee.robot.pipeline import speaker_check
+
+    masked, three = speaker_check(load_array("mask2-asym")), speaker_check(load_array("three-mic"))
+    assert masked.far_deg is None and three.far_deg == SPEAKER_CHECK_FAR_DEG
+    said = [masked.observe(k * dt, 120.0, 0.0) for k in range(slow + 1)]
+    assert said == [False] * slow + [True]
+    for bad in (0.0, -5.0, float("nan"), 181.0, "45"):
+        with pytest.raises(EstimationError, match="far_deg"):
+            SpeakerCheck(20.0, far_deg=bad)
+    assert SpeakerCheck(20.0, far_deg=10.0).far_deg == 20.0  # (never below the gate's check)
 
 
 def test_speaker_check_threshold_is_the_gate_but_at_most_speaker_check_max_deg():

@@ -1309,11 +1309,11 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     from hearsee.robot.pipeline import (
         MIN_AUDIO_UPDATES,
         RunResult,
-        SpeakerCheck,
         associate,
         association_gate_deg,
         fuses_fix,
         new_person_track,
+        speaker_check,
         speaker_checked,
         stereo_position_cov,
         track_record,
@@ -1345,7 +1345,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
                         itd_filter=True)
     pipeline = StreamPipeline(a.array, scfg, queue_size=16, max_stall_s=5.0)
     track = new_person_track()
-    speaker = SpeakerCheck(association_gate_deg(a.array))
+    speaker = speaker_check(a.array)
     # the cameras last, just before the try that closes them (an error above left them open)
     own_cameras = cameras is None and cfg.cameras is not None
     if own_cameras:
