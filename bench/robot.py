@@ -219,14 +219,14 @@ def run_checked(sc, check: bool):
     import hearsee.robot.pipeline as pl
 
     cv2.setNumThreads(1)
-    held = pl.SPEAKER_CHECK_S, pl.SPEAKER_SWITCH_S
-    if not check:  # (the check never fires: the loop before it)
-        pl.SPEAKER_CHECK_S = pl.SPEAKER_SWITCH_S = float("inf")
+    held = pl.SPEAKER_CHECK_S, pl.SPEAKER_SWITCH_S, pl.SPEAKER_CHECK_FAR_S
+    if not check:  # (none of its rules ever fires: the loop before it)
+        pl.SPEAKER_CHECK_S = pl.SPEAKER_SWITCH_S = pl.SPEAKER_CHECK_FAR_S = float("inf")
     try:
         with threadpool_limits(1):
             return pl.run_scenario(sc, keep_images=False)
     finally:  # (a pool's worker runs the next job with the module as it found it)
-        pl.SPEAKER_CHECK_S, pl.SPEAKER_SWITCH_S = held
+        pl.SPEAKER_CHECK_S, pl.SPEAKER_SWITCH_S, pl.SPEAKER_CHECK_FAR_S = held
 
 
 def _bystander_run(job: tuple[int, str, bool]) -> dict:
