@@ -238,3 +238,32 @@ def test_the_conversation_example_is_a_valid_scenario():
     assert [p.name for p in sc.people] == ["Ana", "Ben"]
     assert talker_changes(sc) == [(3.0, 1), (6.2, 0)]
     assert [sc.talker_at(t) for t in (1.0, 2.8, 4.0, 6.0, 8.0)] == [0, 0, 1, 1, 0]
+
+
+def test_demo_prints_the_talker_rows_only_when_people_took_turns(tmp_path, monkeypatch, capsys):
+    """``hearsee demo``'s summary table: the three talker rows for a conversation, none for
+    one talker (the summary.json keeps them all). The run itself is stubbed: its summary is
+    the one thing the table shows."""
+    import json
+
+    import hearsee.robot.pipeline as pl
+    from hearsee.cli import main
+
+    sc_file = tmp_path / "turns.yaml"
+    for turns in (0, 2):
+        def fake(sc, progress=None, keep_images=True, turns=turns):
+            return pl.RunResult([], {"scenario": sc.name, "success": True,
+                                     "talker_changes": turns, "talker_changes_followed": turns,
+                                     "time_to_follow_median_s": 1.5 if turns else None},
+                                {}, {}, [])
+        monkeypatch.setattr(pl, "run_scenario", fake)
+        sc_file.write_text(json.dumps({**QUICK, "duration_s": 2.0,
+                                       "people": [{"path_m": [A_XY]}]}))
+        out = tmp_path / f"out{turns}"
+        assert main(["demo", "--scenario", str(sc_file), "-o", str(out)]) == 0
+        table = capsys.readouterr().err  # (the summary table goes to stderr)
+        assert "hearsee demo summary" in table and "success" in table
+        assert ("talker_changes_followed" in table) == bool(turns)
+        assert ("time_to_follow_median_s" in table) == bool(turns)
+        saved = json.loads((out / "summary.json").read_text())
+        assert saved["talker_changes"] == turns and "time_to_follow_median_s" in saved
