@@ -94,9 +94,11 @@ def test_each_talker_is_heard_from_where_they_stand():
     assert power[1] < power[0] / 100 and power[1] < power[2] / 100
 
 
-def test_a_one_talker_scenario_renders_as_before():
+def test_a_silent_second_person_changes_nothing_heard():
     """A second person who never speaks draws nothing from the generator and adds nothing:
-    the audio is the first talker's alone, sample for sample."""
+    the audio is the first talker's alone, sample for sample. (That a one-talker run is what
+    it was before people could take turns was checked once against the code before,
+    f97ae3b: the default demo's and a masked random scene's whole logs identical.)"""
     from hearsee.robot.pipeline import _Body, _RoomAudio
 
     out = []
@@ -164,6 +166,12 @@ def test_a_change_never_followed_is_counted_missed():
     s = _summarize(sc, log, 0.2, 0.0)
     assert (s["talker_changes"], s["talker_changes_followed"]) == (2, 1)
     assert s["time_to_follow_median_s"] == pytest.approx(0.4)  # (back to A: 2.4 - 2.0)
+    # a track that stays on A through B's turn has not "followed" the change back to A
+    # (it was on them at the change; it had counted, in 0 s -- review finding)
+    still = [rec(round(0.2 * i, 1), 0) for i in range(1, 16)]
+    s = _summarize(sc, still, 0.2, 0.0)
+    assert (s["talker_changes"], s["talker_changes_followed"]) == (2, 0)
+    assert s["time_to_follow_median_s"] is None
 
 
 def test_random_conversation_takes_turns_beside_the_seeds_scene():
@@ -198,6 +206,7 @@ def test_eval_takes_two_talkers(monkeypatch, capsys):
     import hearsee.robot.evaluate as ev
     from hearsee.cli import main
 
+    run_one = ev.run_one
     seen = []
     monkeypatch.setattr(ev, "run_one", lambda seed, duration_s, talkers: seen.append(
         (seed, talkers)) or {"seed": seed, "success": True, "talker_changes": 3,
@@ -212,6 +221,8 @@ def test_eval_takes_two_talkers(monkeypatch, capsys):
     for bad in (0, 3, "2", True, None):
         with pytest.raises(ConfigError, match=r"^--talkers: expected 1 or 2"):
             ev.evaluate(1, workers=1, talkers=bad)
+        with pytest.raises(ConfigError, match=r"^--talkers: expected 1 or 2"):
+            run_one(1, 1.0, talkers=bad)  # (the real one: it ran one talker for 3)
     assert main(["eval", "-n", "1", "--talkers", "3"]) == 2
     err = capsys.readouterr().err
     assert "--talkers: expected 1 or 2, got 3" in err and "Traceback" not in err

@@ -44,6 +44,8 @@ def run_one(seed: int, duration_s: float = 6.0, array: str | None = None,
     from hearsee.robot.pipeline import run_scenario
     from hearsee.robot.scenario import random_conversation, random_scenario
 
+    if talkers not in TALKERS or isinstance(talkers, bool):
+        raise ConfigError(f"--talkers: expected 1 or 2, got {talkers!r}")
     make = random_conversation if talkers == 2 else random_scenario
     try:
         import cv2

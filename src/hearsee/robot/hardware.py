@@ -1259,8 +1259,12 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
        ``summary["track_drops"]``) and the head follows the audio bearing again; so is a
        track whose bearing the measured audio bearing has left by more than the association
        gate (at most :data:`~hearsee.robot.pipeline.SPEAKER_CHECK_MAX_DEG`) for
-       :data:`~hearsee.robot.pipeline.SPEAKER_CHECK_S` (a silent person taken for
-       the speaker: :class:`~hearsee.robot.pipeline.SpeakerCheck`, ``summary["speaker_drops"]``)
+       :data:`~hearsee.robot.pipeline.SPEAKER_CHECK_S` -- by more than
+       :data:`~hearsee.robot.pipeline.SPEAKER_CHECK_FAR_DEG` for
+       :data:`~hearsee.robot.pipeline.SPEAKER_CHECK_FAR_S`, unless the array is a masked pair
+       (someone else took the turn to speak; :func:`~hearsee.robot.pipeline.speaker_check`)
+       -- (a silent person taken for the speaker:
+       :class:`~hearsee.robot.pipeline.SpeakerCheck`, ``summary["speaker_drops"]``)
        or, in the camera frames, one whose person has been farther from the voice than another
        verified person in view for :data:`~hearsee.robot.pipeline.SPEAKER_SWITCH_S`
        (:func:`~hearsee.robot.pipeline.speaker_checked`, counted there too); the person let go

@@ -352,8 +352,9 @@ class _RoomAudio:
 
     def chunk(self, k: int, pan_deg: float) -> tuple[int, int]:
         """Render chunk k ([k*dt, (k+1)*dt)) with the head at ``pan_deg``; returns its samples.
-        A talker silent over the whole chunk is skipped (no responses computed; their next
-        spoken chunk starts without a crossfade, from silence)."""
+        A talker other than the first silent over the whole chunk is skipped (no responses
+        computed; their next spoken chunk starts without a crossfade, from silence); the
+        first is rendered every chunk, as when they were the only one heard."""
         fs = self.fs
         a, b = _chunk_start(k, fs), min(_chunk_start(k + 1, fs), self.n)
         for v in self.voices:
@@ -679,7 +680,8 @@ class SpeakerCheck:
         self._rel_since, self._rel_n, drop = _persisting(t, nearer, self._rel_since,
                                                          self._rel_n, SPEAKER_SWITCH_S)
         if drop:
-            self._since, self._n = None, 0
+            self._since = self._far_since = None
+            self._n = self._far_n = 0
         return drop
 
     def exclude(self, t: float, position: ArrayLike) -> None:
@@ -907,7 +909,9 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     ``track`` {position_m, velocity_mps (None until the track's fixes determine
     it, :attr:`~hearsee.audio.tracking.MotionKalman.velocity_known`), acceleration_mps2
     (likewise), covariance} or None,
-    ``truth`` {position_m, velocity_mps, azimuth_robot_deg}, ``error_m``.
+    ``truth`` {position_m, velocity_mps, azimuth_robot_deg, talker (the index of the current
+    talker, :meth:`~hearsee.robot.scenario.Scenario.talker_at`, whom the truth follows)},
+    ``error_m``.
     """
     from hearsee.sim.scenes import default_rig, render_scene
     from hearsee.vision.fusion import detect_humans, draw_detections
@@ -1146,12 +1150,20 @@ def talker_changes(sc: Scenario) -> list[tuple[float, int]]:
 def _followed(sc: Scenario, log: list[dict[str, Any]]) -> list[float]:
     """For each :func:`talker_changes` entry, seconds from the new talker's first words to the
     end of the first control step whose track was within :data:`TALKER_FOLLOW_M` of them,
-    before the next change (or the run's end); NaN when it never was."""
+    before the next change (or the run's end); NaN when it never was -- or when the track
+    was already on them at the change (the last step ending at or before it): a robot that
+    kept the first talker through the other's turn had "followed" the change back to them
+    in 0 s (review finding)."""
     changes = talker_changes(sc)
     out = []
     for i, (t_on, k) in enumerate(changes):
         t_end = changes[i + 1][0] if i + 1 < len(changes) else np.inf
-        hit = next((r["t"] for r in log if t_on <= r["t"] + 1e-9 and r["t"] < t_end - 1e-9
+        before = [r for r in log if r["t"] <= t_on + 1e-9]
+        if before and before[-1]["track"] is not None and \
+                _person_distance(sc, before[-1], k) < TALKER_FOLLOW_M:
+            out.append(float("nan"))  # (no turn made: the track had stayed on them)
+            continue
+        hit = next((r["t"] for r in log if t_on < r["t"] - 1e-9 and r["t"] < t_end - 1e-9
                     and r["track"] is not None and _person_distance(sc, r, k) < TALKER_FOLLOW_M),
                    None)
         out.append(float("nan") if hit is None else float(hit - t_on))
@@ -1196,7 +1208,8 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
     steps the track spends on the previous talker after a change. ``talker_changes``: the
     changes of talker during the run (:func:`talker_changes`); ``talker_changes_followed``:
     those after which the track came within :data:`TALKER_FOLLOW_M` of the new talker before
-    the next change; ``time_to_follow_median_s``: the median of their times (from the new
+    the next change, not having been on them at the change (:func:`_followed`);
+    ``time_to_follow_median_s``: the median of their times (from the new
     talker's first words to the end of that step; None without one -- a one-talker run's
     NaN would make every run's summary unequal to itself)."""
     errs = np.array([r["error_m"] for r in log if r["error_m"] is not None], dtype=float)
