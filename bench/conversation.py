@@ -33,7 +33,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import RESULTS, markdown_table, print_table, write_markdown  # noqa: E402
-from robot import run_checked  # noqa: E402
+from robot import run_checked, tracked_person  # noqa: E402
 
 DURATION_S = 10.0
 
@@ -49,10 +49,9 @@ def _run(job: tuple[int, str, bool]) -> dict:
     res = run_checked(sc, check)
     on = [0, 0]  # (tracked steps nearer the current talker, nearer the other person)
     for rec in res.log:
-        if rec["track"] is not None:
-            p = np.asarray(rec["track"]["position_m"], float)[:2]
-            d = [np.linalg.norm(sc.person_position(k, rec["t"]) - p) for k in (0, 1)]
-            on[int(int(np.argmin(d)) != rec["truth"]["talker"])] += 1
+        k = tracked_person(sc, rec)
+        if k is not None:
+            on[int(k != rec["truth"]["talker"])] += 1
     return {**res.summary, "seed": seed, "array": array, "check": check,
             "follow_s": _followed(sc, res.log), "steps_talker": on[0], "steps_other": on[1]}
 

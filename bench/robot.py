@@ -209,6 +209,16 @@ def with_bystander(seed: int, array: str):
     raise ConfigError(f"bystander scenario {seed}: no place for the bystander")
 
 
+def tracked_person(sc, rec: dict) -> int | None:
+    """Which of a two-person scene's people (0 or 1) a log record's track is nearer (on the
+    floor; a tie: 0), None without a track."""
+    if rec["track"] is None:
+        return None
+    p = np.asarray(rec["track"]["position_m"], float)[:2]
+    d = [np.linalg.norm(sc.person_position(k, rec["t"])[:2] - p) for k in (0, 1)]
+    return int(d[1] < d[0])
+
+
 def run_checked(sc, check: bool):
     """``run_scenario(sc)`` single-threaded (as ``hearsee eval``), without images; with
     ``check`` False, :class:`hearsee.robot.pipeline.SpeakerCheck` never fires (the loop
@@ -238,10 +248,9 @@ def _bystander_run(job: tuple[int, str, bool]) -> dict:
     res = run_checked(sc, check)
     on = [0, 0]
     for rec in res.log:
-        if rec["track"] is not None:
-            p = np.asarray(rec["track"]["position_m"], float)[:2]
-            d = [np.linalg.norm(sc.person_position(k, rec["t"])[:2] - p) for k in (0, 1)]
-            on[int(d[1] < d[0])] += 1
+        k = tracked_person(sc, rec)
+        if k is not None:
+            on[k] += 1
     return {**res.summary, "seed": seed, "array": array, "check": check, "offset_deg": offset,
             "range_m": r, "steps_speaker": on[0], "steps_bystander": on[1]}
 

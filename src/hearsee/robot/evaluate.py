@@ -30,6 +30,12 @@ __all__ = ["MAX_SCENARIOS", "TALKERS", "EvalResult", "evaluate", "run_one", "sum
 TALKERS = (1, 2)
 
 
+def _check_talkers(talkers: Any) -> None:
+    """ConfigError unless ``talkers`` is one of :data:`TALKERS` (a bool is not a count)."""
+    if talkers not in TALKERS or isinstance(talkers, bool):
+        raise ConfigError(f"--talkers: expected 1 or 2, got {talkers!r}")
+
+
 def run_one(seed: int, duration_s: float = 6.0, array: str | None = None,
             talkers: int = 1) -> dict[str, Any]:
     """Run random scenario ``seed`` (with the robot's ``array``, default the default
@@ -44,8 +50,7 @@ def run_one(seed: int, duration_s: float = 6.0, array: str | None = None,
     from hearsee.robot.pipeline import run_scenario
     from hearsee.robot.scenario import random_conversation, random_scenario
 
-    if talkers not in TALKERS or isinstance(talkers, bool):
-        raise ConfigError(f"--talkers: expected 1 or 2, got {talkers!r}")
+    _check_talkers(talkers)
     make = random_conversation if talkers == 2 else random_scenario
     try:
         import cv2
@@ -160,8 +165,7 @@ def evaluate(
     # `hearsee demo --scenario`; there was no upper bound)
     seed0 = whole_number("--seed", seed0, 0, MAX_SEED - n_scenarios + 1)
     seeds = list(range(seed0, seed0 + n_scenarios))
-    if talkers not in TALKERS or isinstance(talkers, bool):
-        raise ConfigError(f"--talkers: expected 1 or 2, got {talkers!r}")
+    _check_talkers(talkers)
     if array is not None:  # (a bad one: one error before the workers start, not one each)
         from hearsee.robot.scenario import random_scenario
 

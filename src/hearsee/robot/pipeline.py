@@ -1125,8 +1125,8 @@ def _bearing_error(rec: dict[str, Any] | None) -> float:
 def _speech_onset_s(sc: Scenario) -> float:
     """When someone first speaks in the run, seconds from its start: the earliest start of
     anyone's speaking intervals (the scenario guarantees one inside the run)."""
-    starts = [a for p in sc.people for a, _ in p.speaking if a < sc.duration_s]
-    return float(min(starts)) if starts else 0.0
+    starts = sc.speech_starts()
+    return float(starts[0][0]) if starts else 0.0
 
 
 #: A change of talker counts as followed (``_summarize``'s ``talker_changes_followed``) at
@@ -1141,8 +1141,7 @@ def talker_changes(sc: Scenario) -> list[tuple[float, int]]:
     (:meth:`hearsee.robot.scenario.Scenario.talker_at`). The first talker's first words are
     not a change (``time_to_verify_s`` times them); a talker's own next interval after a
     pause is none either."""
-    starts = sorted((a, k) for k, p in enumerate(sc.people) for a, _ in p.speaking
-                    if a < sc.duration_s)
+    starts = sc.speech_starts()
     return [(float(a), k) for (_, k0), (a, k) in zip(starts, starts[1:], strict=False)
             if k != k0]
 

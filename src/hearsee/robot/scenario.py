@@ -195,17 +195,21 @@ class Scenario:
         before anyone speaks, the first to speak. People take turns (no two intervals of
         different people overlap inside the run), so the answer is unique. The robot's
         ground truth follows this person."""
-        starts = [(a, k) for k, p in enumerate(self.people) for a, _ in p.speaking
-                  if a < self.duration_s]
+        starts = self.speech_starts()
         if not starts:  # (refused by the parser: the first person speaks during the run)
             return 0
         begun = [(a, k) for a, k in starts if a <= t]
         return max(begun)[1] if begun else min(starts)[1]
 
+    def speech_starts(self) -> list[tuple[float, int]]:
+        """``(t0, k)`` of every speaking interval that starts inside the run (seconds, person
+        index), in time order: one place for the turns' bookkeeping."""
+        return sorted((a, k) for k, p in enumerate(self.people) for a, _ in p.speaking
+                      if a < self.duration_s)
+
     def talkers(self) -> list[int]:
         """Indices of the people who speak during the run (the first person always)."""
-        return [k for k, p in enumerate(self.people)
-                if any(a < self.duration_s for a, _ in p.speaking)]
+        return sorted({k for _, k in self.speech_starts()})
 
     def person_speed_mps(self, k: int) -> float:
         path = self.people[k].path_m
