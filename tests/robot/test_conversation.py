@@ -278,3 +278,32 @@ def test_demo_prints_the_talker_rows_only_when_people_took_turns(tmp_path, monke
         assert ("time_to_follow_median_s" in table) == bool(turns)
         saved = json.loads((out / "summary.json").read_text())
         assert saved["talker_changes"] == turns and "time_to_follow_median_s" in saved
+
+
+def test_room_audio_of_a_scenario_built_around_the_parser():
+    """A Scenario made with dataclasses.replace may have a silent first person (the parser
+    refuses it): the second talker is then heard, their speech power setting the sensor noise
+    -- the same audio as the scenario with them first; nobody speaking is a ConfigError."""
+    import dataclasses
+
+    from hearsee.robot.pipeline import _Body, _RoomAudio
+
+    sc = _turns([[0.0, 0.1]], [[0.2, 0.8]], duration_s=1.0)
+    a, b = sc.people
+    quiet = dataclasses.replace(sc, people=(dataclasses.replace(a, speaking=()), b))
+    first = dataclasses.replace(sc, people=(b, dataclasses.replace(a, speaking=())))
+    out = []
+    for s in (quiet, first):
+        audio = _RoomAudio(s, _Body(s, load_array(s.robot.array)), np.random.default_rng(0))
+        for k in range(5):
+            audio.chunk(k, 0.0)
+        out.append(audio.out)
+    np.testing.assert_array_equal(out[0], out[1])
+    fs = sc.fs
+    noise, speech = out[0][:, : int(0.15 * fs)], out[0][:, int(0.3 * fs): int(0.7 * fs)]
+    assert np.std(speech) > 2 * np.std(noise) > 0  # (B heard over the noise they set)
+    nobody = dataclasses.replace(sc, people=tuple(dataclasses.replace(p, speaking=())
+                                                  for p in sc.people))
+    with pytest.raises(ConfigError, match="nobody speaks"):
+        _RoomAudio(nobody, _Body(nobody, load_array(nobody.robot.array)),
+                   np.random.default_rng(0))

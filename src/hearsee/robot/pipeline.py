@@ -53,7 +53,7 @@ from hearsee.audio.signals import synthetic_voice
 from hearsee.audio.tdoa import estimate_tdoas
 from hearsee.audio.tracking import DirectionKalman, MotionKalman
 from hearsee.config import finite_number
-from hearsee.errors import EstimationError, GeometryError
+from hearsee.errors import ConfigError, EstimationError, GeometryError
 from hearsee.geometry import array_to_robot, head_rotation, wrap_deg
 from hearsee.robot.scenario import Scenario
 from hearsee.vision.camera import OPTICAL_FROM_BODY
@@ -275,7 +275,10 @@ class _RoomAudio:
     the head's current pose and the talker's mouth, crossfaded over :data:`CROSSFADE_S`. Each
     person who speaks during the run is heard in their own voice while they speak (people
     take turns: :meth:`hearsee.robot.scenario.Scenario.talker_at`); the sensor noise is set
-    by the first person's speech power at their starting distance. A masked pair (thesis ch.
+    by the first talker's speech power at their starting distance (the first person's: the
+    parser makes them speak; a :class:`~hearsee.robot.scenario.Scenario` built around it may
+    not, and then the lowest-indexed talker sets it; nobody speaking is a
+    :class:`~hearsee.errors.ConfigError`). A masked pair (thesis ch.
     3) is heard through its mask turned with the head
     (:func:`hearsee.audio.mask.masked_room_impulse_responses` with the head's heading: the
     mask's diffraction for the direct path, its far-field responses for the reflections; the
@@ -288,14 +291,19 @@ class _RoomAudio:
         n = int(round(sc.duration_s * sc.fs))
         t = np.arange(n) / sc.fs
         self.voices: list[_Voice] = []
+        talkers = sc.talkers()
+        if not talkers:  # (the parser refuses it; a Scenario built around it got an
+            # AttributeError for the noise level)
+            raise ConfigError("nobody speaks during the run: give someone a speaking "
+                              "interval that starts before its end")
         # (the first person's voice is drawn first, as when only they were heard: a
         # one-talker scenario renders the same audio sample for sample)
-        for k in sc.talkers():
+        for k in talkers:
             p = sc.people[k]
             dry = synthetic_voice(p.voice, sc.duration_s, sc.fs, rng=rng)[:n]
             speaking = _speaking_mask(p.speaking, t)
-            if k == 0:  # sensor noise fixed from the direct-path speech power at the start
-                r0 = np.linalg.norm(_person_state(sc, 0.0)["mouth"] - body.pivot_w)
+            if k == talkers[0]:  # sensor noise from the direct-path speech power at the start
+                r0 = np.linalg.norm(_person_state(sc, 0.0, k)["mouth"] - body.pivot_w)
                 p_ref = float(np.mean(dry[speaking] ** 2)) / r0**2 if speaking.any() \
                     else 1.0 / r0**2
                 self.noise_sigma = np.sqrt(p_ref / 10 ** (sc.snr_db / 10.0))
@@ -352,14 +360,15 @@ class _RoomAudio:
 
     def chunk(self, k: int, pan_deg: float) -> tuple[int, int]:
         """Render chunk k ([k*dt, (k+1)*dt)) with the head at ``pan_deg``; returns its samples.
-        A talker other than the first silent over the whole chunk is skipped (no responses
-        computed; their next spoken chunk starts without a crossfade, from silence); the
-        first is rendered every chunk, as when they were the only one heard."""
+        A talker other than the first (the lowest index among those who speak: the parser's
+        first person) silent over the whole chunk is skipped (no responses computed; their
+        next spoken chunk starts without a crossfade, from silence); the first is rendered
+        every chunk, as when they were the only one heard."""
         fs = self.fs
         a, b = _chunk_start(k, fs), min(_chunk_start(k + 1, fs), self.n)
         for v in self.voices:
             seg = v.source[a:b]
-            if v.k != 0 and not seg.any():
+            if v is not self.voices[0] and not seg.any():
                 v.prev_h = None
                 continue
             mouth = _person_state(self.sc, (a + b) / 2 / fs, v.k)["mouth"]
