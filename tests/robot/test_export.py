@@ -60,10 +60,10 @@ def test_rerun_recording(tmp_path):
     assert path.stat().st_size > 1000
 
 
-def test_rerun_overlay_colours_with_a_stand_in_rerun(tmp_path, monkeypatch):
-    """The images write_rerun logs are RGB (H, W, 3) whatever the frame's layout: a BGRA frame
-    was reversed whole (ARGB: alpha read as red), grey stayed 2-D. A stand-in ``rerun`` module
-    records what is logged (the real one is an optional extra, often absent here)."""
+def _stand_in_rerun(monkeypatch, entity):
+    """A stand-in ``rerun`` module (the real one is an optional extra, often absent here)
+    that records what is logged to ``entity``: images as arrays, the other archetypes as
+    (args, kwargs)."""
     import sys
     import types
 
@@ -74,7 +74,7 @@ def test_rerun_overlay_colours_with_a_stand_in_rerun(tmp_path, monkeypatch):
             pass
 
         def log(self, name, obj, static=False):
-            if name == "camera/overlay":
+            if name == entity:
                 logged.append(obj)
 
         def set_time(self, *_, **__):
@@ -90,8 +90,42 @@ def test_rerun_overlay_colours_with_a_stand_in_rerun(tmp_path, monkeypatch):
     fake.RecordingStream = _Rec
     fake.Image = lambda a: np.asarray(a)
     for name in ("Boxes3D", "Points3D", "LineStrips3D", "Scalars"):
-        setattr(fake, name, lambda *a, **k: None)
+        setattr(fake, name, lambda *a, **k: (a, k))
     monkeypatch.setitem(sys.modules, "rerun", fake)
+    return logged
+
+
+def test_rerun_lines_break_at_a_change_of_talker_and_a_new_track(tmp_path, monkeypatch):
+    """The truth line breaks where the talker changes (it was drawn across the room from one
+    talker to the other) and the track's where a new track begins after none; the truth point
+    is labelled with the current talker's name."""
+    sc = default_scenario().to_dict()
+    sc["people"] = [{**sc["people"][0], "name": "Ana"}, {**sc["people"][0], "name": "Ben"}]
+    a, b = np.array([1.0, 4.0, 1.1]), np.array([5.0, 1.0, 1.1])
+    log = []
+    for k in range(6):  # Ana for three steps, then Ben; the track lost at step 3
+        who = int(k >= 3)
+        p = (a if who == 0 else b) + [0.1 * k, 0.0, 0.0]
+        log.append({"t": 0.2 * (k + 1), "truth": {"position_m": p, "talker": who},
+                    "track": None if k == 3 else {"position_m": p + 0.01}})
+    paths = _stand_in_rerun(monkeypatch, "truth_path")
+    write_rerun(tmp_path / "run.rrd", sc, log)
+    strips = paths[-1][0][0]
+    assert [len(s) for s in strips] == [3, 3]
+    assert strips[1][0] == pytest.approx(list(b + [0.3, 0.0, 0.0]))
+    tracks = _stand_in_rerun(monkeypatch, "track_path")
+    write_rerun(tmp_path / "run.rrd", sc, log)
+    assert [len(s) for s in tracks[-1][0][0]] == [3, 2]
+    points = _stand_in_rerun(monkeypatch, "truth")
+    write_rerun(tmp_path / "run.rrd", sc, log)
+    assert [pt[1]["labels"] for pt in points] == [["Ana"]] * 3 + [["Ben"]] * 3
+
+
+def test_rerun_overlay_colours_with_a_stand_in_rerun(tmp_path, monkeypatch):
+    """The images write_rerun logs are RGB (H, W, 3) whatever the frame's layout: a BGRA frame
+    was reversed whole (ARGB: alpha read as red), grey stayed 2-D. A stand-in ``rerun`` module
+    records what is logged (the real one is an optional extra, often absent here)."""
+    logged = _stand_in_rerun(monkeypatch, "camera/overlay")
     bgra = np.zeros((4, 5, 4), np.uint8)
     bgra[..., 0], bgra[..., 2], bgra[..., 3] = 200, 10, 255  # blue, a little red, opaque
     bgr = bgra[..., :3].copy()

@@ -8,7 +8,9 @@ clear :class:`hearsee.errors.ConfigError`. Positions are in the ROOM frame of a 
 ROS 2 messages written to MCAP (open in Foxglove or ``ros2 bag``):
 
 - ``/hearsee/speaker`` geometry_msgs/msg/PointStamped: the tracked speaker position;
-- ``/hearsee/truth`` geometry_msgs/msg/PointStamped: the ground truth (simulation only);
+- ``/hearsee/truth`` geometry_msgs/msg/PointStamped: the ground truth (simulation only): the
+  current talker's position, so it jumps where people take turns (the log's
+  ``truth.talker`` names them);
 - ``/hearsee/head_pan`` std_msgs/msg/Float64: the head pan angle in degrees;
 - ``/hearsee/overlay`` sensor_msgs/msg/Image (bgr8): the left camera with detections.
 """
@@ -193,7 +195,11 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
 def write_rerun(path: str | Path, scenario: Mapping[str, Any], log: Sequence[Mapping[str, Any]],
                 frames: Sequence[tuple[float, np.ndarray]] = ()) -> Path:
     """Write a Rerun recording (``.rrd``): room, robot, truth and track in 3D, and the images.
-    As :func:`write_mcap`, the file replaces an existing ``path`` only when complete."""
+    The truth follows the current talker (the log's ``truth.talker``, labelled with their
+    name): its line breaks where the talker changes, and the track's where a track was let go
+    and a new one began (until 2026-12-06 each was one line, drawn across the room at a
+    change). As :func:`write_mcap`, the file replaces an existing ``path`` only when
+    complete."""
     try:
         import rerun as rr
     except ImportError:
@@ -208,20 +214,34 @@ def write_rerun(path: str | Path, scenario: Mapping[str, Any], log: Sequence[Map
         pts = rr.Points3D([list(o["position_m"]) + [1.0]], radii=0.15, labels=[o["kind"]],
                           colors=[[220, 40, 40]])
         rec.log(f"objects/{k}", pts, static=True)
-    truth_path: list[list[float]] = []
-    track_path: list[list[float]] = []
+    names = [p.get("name") for p in scenario.get("people", [])]
+    truth_strips: list[list[list[float]]] = []
+    track_strips: list[list[list[float]]] = []
+    talker, tracked = None, False
     for r in log:
         rec.set_time("t", duration=float(r["t"]))
-        tr = (r.get("truth") or {}).get("position_m")
+        truth = r.get("truth") or {}
+        tr = truth.get("position_m")
         es = (r.get("track") or {}).get("position_m")
         if tr is not None:
-            truth_path.append(list(map(float, tr)))
-            rec.log("truth", rr.Points3D([truth_path[-1]], radii=0.06, colors=[[40, 180, 40]]))
-            rec.log("truth_path", rr.LineStrips3D([truth_path], colors=[[40, 180, 40]]))
+            k = truth.get("talker")
+            if not truth_strips or k != talker:  # (a new talker: a new line, not a jump)
+                truth_strips.append([])
+            talker = k
+            truth_strips[-1].append(list(map(float, tr)))
+            label = names[k] if isinstance(k, int) and 0 <= k < len(names) else None
+            rec.log("truth", rr.Points3D([truth_strips[-1][-1]], radii=0.06,
+                                         colors=[[40, 180, 40]],
+                                         labels=None if label is None else [label]))
+            rec.log("truth_path", rr.LineStrips3D(truth_strips, colors=[[40, 180, 40]]))
         if es is not None:
-            track_path.append(list(map(float, es)))
-            rec.log("track", rr.Points3D([track_path[-1]], radii=0.06, colors=[[40, 80, 220]]))
-            rec.log("track_path", rr.LineStrips3D([track_path], colors=[[40, 80, 220]]))
+            if not tracked:  # (a new track after none: a new line)
+                track_strips.append([])
+            track_strips[-1].append(list(map(float, es)))
+            rec.log("track", rr.Points3D([track_strips[-1][-1]], radii=0.06,
+                                         colors=[[40, 80, 220]]))
+            rec.log("track_path", rr.LineStrips3D(track_strips, colors=[[40, 80, 220]]))
+        tracked = es is not None
         if r.get("head_pan_deg") is not None:
             rec.log("head_pan_deg", rr.Scalars(float(r["head_pan_deg"])))
     for t, img in frames:
