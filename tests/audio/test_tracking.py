@@ -80,6 +80,39 @@ def test_restart_after_consecutive_rejections():
     assert kf.azimuth_deg == pytest.approx(-120.0)
 
 
+def test_after_a_pause_fewer_rejections_restart_the_track():
+    """People taking turns: after more than ``pause_s`` without a measurement,
+    ``pause_max_rejects`` rejections restart the track (a new talker elsewhere), not
+    ``max_rejects``; without a pause -- or with the rule off -- the full count; a lone outlier
+    after a pause followed by the old direction does not move the track, and the next jump
+    needs the full count again."""
+    def run(pause_s, gap_s, after):
+        kf = DirectionKalman(sigma_meas_deg=2.0, max_rejects=4, pause_s=pause_s)
+        for k in range(20):
+            kf.update(k * DT, (10.0, 0.0))
+        t0 = 19 * DT + gap_s
+        return kf, [kf.update(t0 + k * DT, (a, 0.0)) for k, a in enumerate(after)]
+
+    kf, res = run(0.15, 0.5, [-120.0] * 4)
+    assert res[:2] == [False, True] and kf.azimuth_deg == pytest.approx(-120.0, abs=1.0)
+    for pause_s, gap_s in ((None, 0.5), (0.15, 0.1)):  # rule off / a gap shorter than a pause
+        kf, res = run(pause_s, gap_s, [-120.0] * 4)
+        assert res == [False, False, False, True]
+    kf, res = run(0.15, 0.5, [-120.0, 10.0, -120.0, -120.0, -120.0, -120.0])
+    assert res == [False, True, False, False, False, True]
+    kf = DirectionKalman(pause_s=0.15)
+    kf.update(0.0, (10.0, 0.0))
+    for k in range(1, 20):  # frames without a measurement count toward the pause
+        kf.update(k * DT, None)
+    assert kf.last_measured_t == 0.0
+    for bad in (0, -1.0, np.nan, "1"):
+        with pytest.raises(EstimationError, match="pause_s"):
+            DirectionKalman(pause_s=bad)
+    for bad in (0, 1.5):
+        with pytest.raises(EstimationError, match="pause_max_rejects"):
+            DirectionKalman(pause_max_rejects=bad)
+
+
 def test_candidates_resolve_front_back_twin():
     kf = DirectionKalman(sigma_meas_deg=3.0)
     for k in range(60):

@@ -474,13 +474,24 @@ class DirectionKalman(_Kalman):
         Time constant, seconds, with which the angular rates relax toward zero between
         measurements (integrated Ornstein-Uhlenbeck, see :func:`_cv_model`); None = constant
         velocity, the thesis's model. The stream uses :data:`DIRECTION_RATE_TAU_S`.
+    pause_s : float or None
+        A pause: more than this many seconds without a measurement (frames without one, or
+        no call at all). After one, ``pause_max_rejects`` consecutive rejections restart the
+        track instead of ``max_rejects`` -- whoever speaks after a pause may be someone else,
+        elsewhere (people taking turns), and waiting out the full count kept the old
+        direction for ~0.1-0.2 s more. None (the default): no such rule. The robot loop uses
+        :data:`hearsee.robot.pipeline.DIRECTION_PAUSE_S`.
+    pause_max_rejects : int
+        The rejections that restart a track after a pause (>= 1; 1: the first measurement
+        after a pause either passes the gate or starts the track anew).
     """
 
     def __init__(self, sigma_meas_deg: float = 5.0, sigma_accel_dps2: float = 150.0,
                  gate_prob: float = 0.997, max_rejects: int = 4,
                  init_rate_sigma_dps: float = 60.0,
                  elevation_accel_ratio: float = ELEVATION_ACCEL_RATIO,
-                 rate_tau_s: float | None = None) -> None:
+                 rate_tau_s: float | None = None, pause_s: float | None = None,
+                 pause_max_rejects: int = 2) -> None:
         for name, v in (("sigma_meas_deg", sigma_meas_deg), ("sigma_accel_dps2", sigma_accel_dps2),
                         ("elevation_accel_ratio", elevation_accel_ratio),
                         ("init_rate_sigma_dps", init_rate_sigma_dps)):
@@ -492,6 +503,9 @@ class DirectionKalman(_Kalman):
         self.sigma_accel_dps2 = float(sigma_accel_dps2)
         self.gate_prob = _gate_prob(gate_prob)
         self.max_rejects = whole_number("max_rejects", max_rejects, error=EstimationError)
+        self.pause_s = None if pause_s is None else _positive("pause_s", pause_s)
+        self.pause_max_rejects = whole_number("pause_max_rejects", pause_max_rejects,
+                                              error=EstimationError)
         self.init_rate_sigma_dps = float(init_rate_sigma_dps)
         self.elevation_accel_ratio = float(elevation_accel_ratio)
         self.H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
@@ -510,6 +524,8 @@ class DirectionKalman(_Kalman):
         self.initialized = False
         self.n_rejects = 0
         self.has_elevation = False
+        self.last_measured_t: float | None = None  # (the latest frame with a measurement)
+        self._after_pause = False  # (the rejections since a pause restart sooner)
 
     # -- model ---------------------------------------------------------------------------
     def _set_dt(self, dt: float) -> None:
@@ -533,6 +549,7 @@ class DirectionKalman(_Kalman):
         self.initialized = True
         self.has_elevation = el is not None
         self.n_rejects = 0
+        self._after_pause = False
 
     def _initial_cov(self, az_var: float, el_var: float) -> NDArray:
         """A new track's covariance: the given angle variances (deg^2), rates with
@@ -604,19 +621,25 @@ class DirectionKalman(_Kalman):
         self.predict(t)
         if not cands:
             return False
+        if self.pause_s is not None and self.last_measured_t is not None \
+                and self.t - self.last_measured_t > self.pause_s:
+            self._after_pause = True
+        self.last_measured_t = self.t
         if not self.initialized or self.lost:
             self._start(*cands[0], Rf)
             return True
         dist2, az, el, z, H, R, y, S = self._nearest(cands, Rf, delay_s)
         if dist2 > self._gate[len(z)]:
             self.n_rejects += 1
-            if self.n_rejects >= self.max_rejects:
+            if self.n_rejects >= (self.pause_max_rejects if self._after_pause
+                                  else self.max_rejects):
                 self._start(az, el, Rf)
                 return True
             return False
         self._correct(y, S, H, R)
         self._settle(el)
         self.n_rejects = 0
+        self._after_pause = False
         return True
 
     @property

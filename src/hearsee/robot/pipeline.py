@@ -98,6 +98,19 @@ TRACK_GATE_M = 0.8
 DISPARITY_SIGMA_PX = 0.35
 #: Direction-filter updates needed before the head starts turning.
 MIN_AUDIO_UPDATES = 3
+#: The loop's direction filter treats more than this many seconds without a bearing as a
+#: pause after which two rejected bearings restart it, not four
+#: (:class:`~hearsee.audio.tracking.DirectionKalman` ``pause_s``): whoever speaks next may be
+#: someone else. Development conversations 2000-2011 (three-mic, with :class:`SpeakerCheck`;
+#: 2026-12-06, seventy-fourth session): the new talker's bearing in the log 0.28 -> 0.20 s
+#: after their first words (median), the time to follow 1.44 -> 1.26 s, the track on the
+#: current talker in 78.1 -> 82.0 % of its steps, 26 of 29 changes followed either way; the
+#: single-talker scenes 0-19 unchanged (every summary). One rejection instead of two: 0.14 s,
+#: 1.24 s, 82.9 %, but three single-talker summaries moved (time to verify 1.4 -> 1.6 s in
+#: one); the ITD filter's gate restarting sooner after a pause as well, or its random walk
+#: carried through frames without a source, changed nothing beyond this. Held out: seeds
+#: 2200-2211 (bench/results/HISTORY.md).
+DIRECTION_PAUSE_S = 0.15
 #: Seconds without a verified visual fix after which the 3D track is dropped (a coasting track
 #: drifts); the head then follows the audio bearing until vision re-acquires the person.
 #: Until 2026-11-27 every audio frame's bearing also updated the 3D track (an extended-Kalman
@@ -942,7 +955,8 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
     half_fov = float(np.degrees(np.arctan2(r.width / 2.0, r.focal_px)))
 
     ears = _BareEars(sc, array) if array.mask is None else _MaskedEars(sc, array)
-    direction = DirectionKalman(sigma_meas_deg=5.0, sigma_accel_dps2=60.0)
+    direction = DirectionKalman(sigma_meas_deg=5.0, sigma_accel_dps2=60.0,
+                                pause_s=DIRECTION_PAUSE_S)
     track = new_person_track()
     speaker = speaker_check(array)
     pan = 0.0
