@@ -13,8 +13,10 @@ the person it verified until vision loses them (no peer library turns a robot's 
 the baseline). Prints a
 table and writes ``bench/results/robot_conversation.md`` and ``.png``.
 
-Seeds 2000-2019 are development scenes (``SPEAKER_CHECK_FAR_S`` / ``_DEG`` were chosen on
-2000-2011); the default seeds (2100 on) were not used to choose anything.
+Seeds 2000-2019 are development scenes (``SPEAKER_CHECK_FAR_S`` / ``_DEG`` and
+``robot.pipeline.DIRECTION_PAUSE_S`` were chosen on 2000-2011); the default seeds (2100 on)
+and 2200-2211 (``--seed0 2200``, the pause rule's held-out run, the committed results) were
+not used to choose anything before their runs.
 
     python bench/conversation.py                        # 12 scenes, about 30 min on 2 cores
     python bench/conversation.py --scenes 4 --seed0 2000
