@@ -307,3 +307,25 @@ def test_room_audio_of_a_scenario_built_around_the_parser():
     with pytest.raises(ConfigError, match="nobody speaks"):
         _RoomAudio(nobody, _Body(nobody, load_array(nobody.robot.array)),
                    np.random.default_rng(0))
+
+
+def test_the_direction_filter_restarts_sooner_after_a_pause_for_a_bare_array():
+    """The loop's direction filter: after a pause of more than DIRECTION_PAUSE_S a bearing
+    90 deg away restarts it at the second rejection (a new talker); without a pause it takes
+    the full count; the masked pair's filter has no pause rule (its bearings may flip)."""
+    from hearsee.robot.pipeline import DIRECTION_PAUSE_S, direction_filter
+
+    def restarted_after(array, gap_s):
+        f = direction_filter(load_array(array))
+        for k in range(15):
+            f.update(0.032 * k, (20.0, None))
+        t = 0.032 * 14 + gap_s
+        for n in range(1, 6):
+            f.update(t + 0.032 * (n - 1), (110.0, None))
+            if abs(f.azimuth_deg - 110.0) < 10.0:
+                return n
+        return None
+
+    assert restarted_after("three-mic", DIRECTION_PAUSE_S + 0.2) == 2
+    assert restarted_after("three-mic", 0.032) == 4
+    assert restarted_after("mask2-asym", DIRECTION_PAUSE_S + 0.2) == 4
