@@ -479,8 +479,9 @@ class DirectionKalman(_Kalman):
         no call at all). After one, ``pause_max_rejects`` consecutive rejections restart the
         track instead of ``max_rejects`` -- whoever speaks after a pause may be someone else,
         elsewhere (people taking turns), and waiting out the full count kept the old
-        direction for ~0.1-0.2 s more. None (the default): no such rule. The robot loop uses
-        :data:`hearsee.robot.pipeline.DIRECTION_PAUSE_S`.
+        direction for ~0.1-0.2 s more. None (the default): no such rule. The simulated robot
+        loop uses :data:`hearsee.robot.pipeline.DIRECTION_PAUSE_S` with a bare array
+        (:func:`hearsee.robot.pipeline.direction_filter`).
     pause_max_rejects : int
         The rejections that restart a track after a pause (>= 1; 1: the first measurement
         after a pause either passes the gate or starts the track anew).
