@@ -60,22 +60,21 @@ def test_rerun_recording(tmp_path):
     assert path.stat().st_size > 1000
 
 
-def _stand_in_rerun(monkeypatch, entity):
+def _stand_in_rerun(monkeypatch):
     """A stand-in ``rerun`` module (the real one is an optional extra, often absent here)
-    that records what is logged to ``entity``: images as arrays, the other archetypes as
+    that records what is logged, by entity: images as arrays, the other archetypes as
     (args, kwargs)."""
     import sys
     import types
 
-    logged = []
+    logged = {}
 
     class _Rec:
         def __init__(self, *_):
             pass
 
         def log(self, name, obj, static=False):
-            if name == entity:
-                logged.append(obj)
+            logged.setdefault(name, []).append(obj)
 
         def set_time(self, *_, **__):
             pass
@@ -108,24 +107,20 @@ def test_rerun_lines_break_at_a_change_of_talker_and_a_new_track(tmp_path, monke
         p = (a if who == 0 else b) + [0.1 * k, 0.0, 0.0]
         log.append({"t": 0.2 * (k + 1), "truth": {"position_m": p, "talker": who},
                     "track": None if k == 3 else {"position_m": p + 0.01}})
-    paths = _stand_in_rerun(monkeypatch, "truth_path")
+    logged = _stand_in_rerun(monkeypatch)
     write_rerun(tmp_path / "run.rrd", sc, log)
-    strips = paths[-1][0][0]
+    strips = logged["truth_path"][-1][0][0]
     assert [len(s) for s in strips] == [3, 3]
     assert strips[1][0] == pytest.approx(list(b + [0.3, 0.0, 0.0]))
-    tracks = _stand_in_rerun(monkeypatch, "track_path")
-    write_rerun(tmp_path / "run.rrd", sc, log)
-    assert [len(s) for s in tracks[-1][0][0]] == [3, 2]
-    points = _stand_in_rerun(monkeypatch, "truth")
-    write_rerun(tmp_path / "run.rrd", sc, log)
-    assert [pt[1]["labels"] for pt in points] == [["Ana"]] * 3 + [["Ben"]] * 3
+    assert [len(s) for s in logged["track_path"][-1][0][0]] == [3, 2]
+    assert [pt[1]["labels"] for pt in logged["truth"]] == [["Ana"]] * 3 + [["Ben"]] * 3
 
 
 def test_rerun_overlay_colours_with_a_stand_in_rerun(tmp_path, monkeypatch):
     """The images write_rerun logs are RGB (H, W, 3) whatever the frame's layout: a BGRA frame
     was reversed whole (ARGB: alpha read as red), grey stayed 2-D. A stand-in ``rerun`` module
     records what is logged (the real one is an optional extra, often absent here)."""
-    logged = _stand_in_rerun(monkeypatch, "camera/overlay")
+    logged = _stand_in_rerun(monkeypatch)
     bgra = np.zeros((4, 5, 4), np.uint8)
     bgra[..., 0], bgra[..., 2], bgra[..., 3] = 200, 10, 255  # blue, a little red, opaque
     bgr = bgra[..., :3].copy()
@@ -133,10 +128,11 @@ def test_rerun_overlay_colours_with_a_stand_in_rerun(tmp_path, monkeypatch):
     log, _ = _log()
     write_rerun(tmp_path / "run.rrd", default_scenario().to_dict(), log,
                 [(0.2, bgra), (0.4, bgr), (0.6, grey)])
-    assert [im.shape for im in logged] == [(4, 5, 3)] * 3
-    for im in logged[:2]:
+    overlays = logged["camera/overlay"]
+    assert [im.shape for im in overlays] == [(4, 5, 3)] * 3
+    for im in overlays[:2]:
         assert (im[0, 0] == [10, 0, 200]).all()  # RGB: red 10, green 0, blue 200
-    assert (logged[2] == 77).all()
+    assert (overlays[2] == 77).all()
     # a frame of another layout is refused, naming its time (neither export can describe it)
     for bad in (np.zeros((4, 5, 2), np.uint8), np.zeros(20, np.uint8)):
         with pytest.raises(ImageInputError, match=r"overlay frame at t = 0\.6 s"):

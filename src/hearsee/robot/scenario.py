@@ -198,8 +198,8 @@ class Scenario:
         starts = self.speech_starts()
         if not starts:  # (refused by the parser: the first person speaks during the run)
             return 0
-        begun = [(a, k) for a, k in starts if a <= t]
-        return max(begun)[1] if begun else min(starts)[1]
+        begun = [k for a, k in starts if a <= t]  # (in time order)
+        return begun[-1] if begun else starts[0][1]
 
     def speech_starts(self) -> list[tuple[float, int]]:
         """``(t0, k)`` of every speaking interval that starts inside the run (seconds, person
@@ -208,7 +208,8 @@ class Scenario:
                       if a < self.duration_s)
 
     def talkers(self) -> list[int]:
-        """Indices of the people who speak during the run (the first person always)."""
+        """Indices of the people who speak during the run, ascending (the parser makes the
+        first person one of them; a Scenario built around it may not)."""
         return sorted({k for _, k in self.speech_starts()})
 
     def person_speed_mps(self, k: int) -> float:
