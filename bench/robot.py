@@ -70,7 +70,8 @@ def main() -> None:
             "azimuth_error_initial_deg", "azimuth_error_at_turn_deg", "time_to_verify_s",
             "person_detections_verified",
             "human_like_objects_rejected", "false_person_objects",
-            "object_detections_rejected", "object_detections_accepted_as_person"]
+            "object_detections_rejected", "object_detections_accepted_as_person",
+            "phantom_detections_accepted"]
     demo_rows = [[k, demo[k]] for k in keys] + [["wall time (s)", demo_wall]]
     print_table("default demo scenario", ["metric", "value"], demo_rows)
 
@@ -87,6 +88,8 @@ def main() -> None:
     rows.append(["objects reported as person", s["objects_reported_as_person"], "", "", "", ""])
     rows.append(["object detections accepted as person (object x frame)",
                  s["object_detections_accepted_as_person"], "", "", "", ""])
+    rows.append(["detections of nothing accepted as person (phantoms, per frame)",
+                 s["phantom_detections_accepted"], "", "", "", ""])
     headers = ["metric", "n / value", "p50", "p75", "p90", "p95"]
     print_table(f"{args.scenarios} random scenarios ({eval_wall:.0f} s wall)", headers, rows)
 

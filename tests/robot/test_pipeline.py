@@ -1061,7 +1061,9 @@ def test_object_metrics_count_objects_and_detections_apart():
         if k < 5:
             dets.append(det("poster", "objects[1]", k < 2))
         if k == 3:
-            dets.append(det(None, None, False))  # near nothing: not scored
+            dets.append(det(None, None, False))  # near nothing, rejected: not scored
+        if k in (4, 9, 10):
+            dets.append(det(None, None, True))  # near nothing, accepted: a phantom
         log.append({"t": 0.2 * (k + 1), "phase": "tracking", "head_pan_deg": 0.0,
                     "audio": None, "camera_frame": True, "detections": dets, "track": None,
                     "truth": {}, "error_m": None})
@@ -1071,10 +1073,12 @@ def test_object_metrics_count_objects_and_detections_apart():
     assert s["object_detections_rejected"] == 22 + 3
     assert s["object_detections_accepted_as_person"] == 2
     assert s["person_detections_verified"] == 22
+    assert s["phantom_detections_accepted"] == 3
     # hearsee eval sums the objects over runs (each run's objects once) and the detections
     ev = summarize([s, s])
     assert ev["objects_reported_as_person"] == 2
     assert ev["object_detections_accepted_as_person"] == 4
+    assert ev["phantom_detections_accepted"] == 6
 
 
 def test_time_to_verify_counts_from_the_speech_onset():

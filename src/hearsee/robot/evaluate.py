@@ -78,6 +78,7 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     ``objects_reported_as_person``: the human-like objects accepted as a person in at least
     one camera frame, summed over the runs (each object of a run counted once);
     ``object_detections_accepted_as_person``: their accepted detections (object x frame);
+    ``phantom_detections_accepted``: accepted detections of nothing (summed over the runs);
     ``talker_changes`` / ``talker_changes_followed``: summed over the runs, and
     ``time_to_follow_s`` the percentiles of the runs' ``time_to_follow_median_s`` (runs with
     two people taking turns: ``evaluate(talkers=2)``).
@@ -107,7 +108,7 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
         sum(int(r.get("false_person_objects", 0)) for r in runs))
     out["object_detections_accepted_as_person"] = int(
         sum(int(r.get("object_detections_accepted_as_person", 0)) for r in runs))
-    for key in ("talker_changes", "talker_changes_followed"):
+    for key in ("phantom_detections_accepted", "talker_changes", "talker_changes_followed"):
         out[key] = int(sum(int(r.get(key, 0)) for r in runs))
     return out
 

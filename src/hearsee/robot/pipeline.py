@@ -1235,6 +1235,8 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
     ``object_detections_rejected`` / ``object_detections_accepted_as_person``: the same
     detections counted per camera frame (object x frame). Until 2026-12-02 the two object
     keys held these per-frame counts (a single mannequin: "22 objects rejected").
+    ``phantom_detections_accepted``: accepted detections with no entity of the scenario within
+    0.6 m (a patch of wall or floor verified as a person), per camera frame (since 2026-12-06).
 
     With people who take turns, the truth of each step is the current talker's
     (:meth:`~hearsee.robot.scenario.Scenario.talker_at`), so the errors above count the
@@ -1294,6 +1296,8 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
         "false_person_objects": len(fooled),
         "object_detections_rejected": sum(1 for d in obj_dets if not d["accepted"]),
         "object_detections_accepted_as_person": sum(1 for d in obj_dets if d["accepted"]),
+        "phantom_detections_accepted": sum(1 for d in dets
+                                           if d["accepted"] and d["truth_kind"] is None),
         "talker_changes": len(follow),
         "talker_changes_followed": int(np.isfinite(follow).sum()),
         "time_to_follow_median_s": (float(np.median(follow[np.isfinite(follow)]))
