@@ -27,7 +27,12 @@ the share of updates with a measured bearing, the bearing error of those (robot 
 the talker as heard at the array), and the head's pointing error |pan - talker azimuth| at
 every update (its p50 / p90 and the share of updates within 10 deg).
 
-    python bench/live_head.py                # about 3 min on 2 cores
+A second part (since 2026-12-06, ``--turn-scenes``): two still people taking turns
+(:func:`turns_scene`), heard by the loop's default rule; per change of talker the time from the
+new talker's first words to the loop's bearing and to the head's pan within 15 deg of them
+(:func:`run_turns`).
+
+    python bench/live_head.py                # about 8-10 min on one core
 """
 
 from __future__ import annotations
@@ -194,10 +199,11 @@ def turns_scene(rng: np.random.Generator, duration_s: float) -> tuple[list, list
     """Two still talkers (robot frame, metres; the first within 60 deg of the front, the second
     40-120 deg from them, both 1.5-3 m away), their voices (one male, one female) and their
     turns ``(talker, start s, end s)``, alternating from the first talker."""
+    from hearsee.geometry import wrap_deg
     from hearsee.sim.moving import Trajectory
 
     az0 = rng.uniform(-60.0, 60.0)
-    az1 = float(wrap_deg_scalar(az0 + rng.choice([-1.0, 1.0]) * rng.uniform(40.0, 120.0)))
+    az1 = float(wrap_deg(az0 + rng.choice([-1.0, 1.0]) * rng.uniform(40.0, 120.0)))
     paths = []
     for az in (az0, az1):
         r = rng.uniform(1.5, 3.0)
@@ -210,10 +216,6 @@ def turns_scene(rng: np.random.Generator, duration_s: float) -> tuple[list, list
         turns.append((k, t, end))
         t, k = end + rng.uniform(*GAP_S), 1 - k
     return paths, kinds, turns
-
-
-def wrap_deg_scalar(a: float) -> float:
-    return (a + 180.0) % 360.0 - 180.0
 
 
 def run_turns(array: str, seed: int, args: argparse.Namespace) -> dict:
@@ -392,7 +394,6 @@ def main() -> None:
     sections = [(title, text)]
     if args.turn_scenes > 0:
         sections.append(turns_table(args))
-    wall = time.perf_counter() - t0
     write_markdown("live_head", sections, intro=__doc__.split("\n\n")[0])
     print(f"wrote {RESULTS / 'live_head.md'}")
 
