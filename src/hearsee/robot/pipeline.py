@@ -1236,7 +1236,8 @@ def _summarize(sc: Scenario, log: list[dict[str, Any]], first_turned_t: float | 
     detections counted per camera frame (object x frame). Until 2026-12-02 the two object
     keys held these per-frame counts (a single mannequin: "22 objects rejected").
     ``phantom_detections_accepted``: accepted detections with no entity of the scenario within
-    0.6 m (a patch of wall or floor verified as a person), per camera frame (since 2026-12-06).
+    0.6 m, per camera frame (since 2026-12-06): a patch of wall or floor verified as a person --
+    or a person's fix more than 0.6 m off (the one of the development scenes was a wall patch).
 
     With people who take turns, the truth of each step is the current talker's
     (:meth:`~hearsee.robot.scenario.Scenario.talker_at`), so the errors above count the
