@@ -756,7 +756,10 @@ def direction_filter(array: MicArray) -> DirectionKalman:
     """The simulated loop's direction filter (robot-frame azimuth, degrees): with the pause rule
     (:data:`DIRECTION_PAUSE_S`) unless the array is a masked pair, whose bearings, decided
     afresh after a pause, may flip to the wrong half for a moment (as :func:`speaker_check`'s
-    far rule)."""
+    far rule). The live loop's tracker (the stream's IMM, which takes a new talker at their
+    first measurement after a pause: bench/live_head.py) was tried here on 2026-12-06 and
+    followed fewer changes of talker on the development conversations 2000-2011 (three-mic 24
+    instead of 26 of 29, masked 18 instead of 20; bench/results/HISTORY.md)."""
     return DirectionKalman(sigma_meas_deg=5.0, sigma_accel_dps2=60.0,
                            pause_s=None if array.mask is not None else DIRECTION_PAUSE_S)
 
