@@ -163,6 +163,13 @@ def closed_loop(array: str, talkers: list, sigma: float, rng: np.random.Generato
     return res, head, cfg
 
 
+def heard_azimuth_deg(path, t: float, pivot: np.ndarray) -> float:
+    """The robot-frame azimuth (deg) from the head's ``pivot`` (metres) of where ``path``'s
+    talker is heard at time ``t`` (s): its position at the emission time."""
+    p = path.heard_at(t, pivot) - pivot
+    return float(np.degrees(np.arctan2(p[1], p[0])))
+
+
 def run_one(array: str, seed: int, args: argparse.Namespace, rule: str) -> dict:
     """One closed-loop run under ``rule`` (one of :data:`RULES`); its metrics."""
     from hearsee.audio.signals import synthetic_voice
@@ -176,8 +183,7 @@ def run_one(array: str, seed: int, args: argparse.Namespace, rule: str) -> dict:
     pivot = np.asarray(cfg.head.pivot_m, float)
 
     def truth(t: float) -> float:
-        p = path.heard_at(t, pivot) - pivot
-        return float(np.degrees(np.arctan2(p[1], p[0])))
+        return heard_azimuth_deg(path, t, pivot)
 
     log = [r for r in res.log if r["t"] >= 1.0]
     heard = [r for r in log if r["audio"] is not None and r["audio"]["measured"]]
@@ -255,8 +261,7 @@ def run_turns(array: str, seed: int, args: argparse.Namespace) -> dict:
     pivot = np.asarray(cfg.head.pivot_m, float)
 
     def az_of(k: int, t: float) -> float:
-        p = paths[k].heard_at(t, pivot) - pivot
-        return float(np.degrees(np.arctan2(p[1], p[0])))
+        return heard_azimuth_deg(paths[k], t, pivot)
 
     def on(angle: float, k: int, t: float) -> bool:
         return abs(float(wrap_deg(angle - az_of(k, t)))) < FOLLOW_DEG

@@ -106,9 +106,8 @@ def summarize(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     # once; until 2026-12-02 it counted object x frame detections), and those detections
     out["objects_reported_as_person"] = int(
         sum(int(r.get("false_person_objects", 0)) for r in runs))
-    out["object_detections_accepted_as_person"] = int(
-        sum(int(r.get("object_detections_accepted_as_person", 0)) for r in runs))
-    for key in ("phantom_detections_accepted", "talker_changes", "talker_changes_followed"):
+    for key in ("object_detections_accepted_as_person", "phantom_detections_accepted",
+                "talker_changes", "talker_changes_followed"):
         out[key] = int(sum(int(r.get(key, 0)) for r in runs))
     return out
 
