@@ -34,7 +34,7 @@ def test_results_file_ends_with_the_environment_it_was_produced_in(tmp_path, mon
 def test_environment_without_git_says_so(monkeypatch):
     common = _common()
     monkeypatch.setattr(common, "_git", lambda *args: None)
-    assert common.environment().startswith("hearsee at unknown (no git checkout);")
+    assert common.environment().startswith("hearsee at unknown (no git checkout)")
 
 
 def test_environment_names_a_package_imported_from_elsewhere(tmp_path, monkeypatch):
