@@ -674,6 +674,53 @@ def test_source_tracker_min_ratio():
     assert [round(ang / 10) for _, ang in one] == [2]
 
 
+def test_source_tracker_names_a_walker_passing_near_once():
+    """A talker walking at 1.5 m/s past the array 0.6 m away turns at up to 143 deg/s, faster
+    than the tracks follow: its frames break away and start a new track. The old track,
+    coasting, is not named beside the new one (two talkers at most 3 % of the frames, the
+    walker alone and within 10 deg at > 80 %); without the take-over rule (successor_deg=0)
+    it was, at > 20 % of the frames."""
+    rng = np.random.default_rng(276)
+    t = np.arange(190) * 0.032
+    truth = np.degrees(np.arctan2(0.6, -3.0 + 1.5 * t))
+    a = truth + rng.normal(0, 2.0, len(t))
+    a[rng.random(len(t)) < 0.3] = np.nan  # (the pauses between words)
+    for kw in ({}, {"successor_deg": 0.0}):
+        rep = _online(t, a, max_sources=2, **kw)
+        two = np.mean([len(r) >= 2 for r in rep])
+        alone = np.mean([len(r) == 1 and _ang(r[0][1], tr) < 10 for r, tr in
+                         zip(rep, truth, strict=True)])
+        # (the track did break: more than one id named over the walk)
+        assert len({i for r in rep for i, _ in r}) >= 2
+        if kw:
+            assert two > 0.2 and alone < 0.7, (two, alone)
+        else:
+            assert two <= 0.03 and alone > 0.8, (two, alone)
+
+
+@pytest.mark.parametrize("apart_deg, named_in_pause", [(60.0, True), (25.0, False)])
+def test_source_tracker_take_over_needs_a_start_near_the_quiet_talker(apart_deg,
+                                                                      named_in_pause):
+    """A talker at 10 deg speaks on every frame for 2 s, then pauses for 1 s while another
+    speaks at 10 + ``apart_deg`` deg, then speaks again. 60 deg away the second is another
+    talker: the first is named through its pause. 25 deg away (within successor_deg) the
+    second began where the first was predicted: it took over, and the first is not named
+    once quiet for successor_quiet_s -- until it speaks again."""
+    rng = np.random.default_rng(277)
+    t = np.arange(125) * 0.032
+    first = (t < 2.0) | (t >= 3.0)
+    a = np.where(first, 10.0, 10.0 + apart_deg) + rng.normal(0, 1.0, len(t))
+    rep = _online(t, a, max_sources=2)
+    pause = (t >= 2.0 + 0.3) & (t < 3.0)
+    named = [any(_ang(ang, 10.0) < 5 for _, ang in r) for r in rep]
+    assert all(n == named_in_pause for n, p in zip(named, pause, strict=True) if p)
+    # (both named while both tracks were live and the second was heard, at 60 deg; the
+    # first again once it speaks: its frames join its track)
+    assert all(named[k] for k in np.flatnonzero(t >= 3.1))
+    assert all(any(_ang(ang, 10.0 + apart_deg) < 5 for _, ang in r)
+               for r, p in zip(rep, pause, strict=True) if p)
+
+
 def test_source_tracker_rotate_and_reset():
     trk = SourceTracker(max_sources=2)
     for i in range(10):
@@ -696,6 +743,10 @@ def test_source_tracker_rotate_and_reset():
     ({"rank_tau_s": np.inf}, "rank_tau_s"),
     ({"history": "yes"}, "history must be True or False"),
     ({"min_ratio": 1.5}, "min_ratio"),
+    ({"successor_deg": -1.0}, "successor_deg"),
+    ({"successor_deg": 200.0}, "successor_deg"),
+    ({"successor_quiet_s": -0.1}, "successor_quiet_s"),
+    ({"successor_quiet_s": np.nan}, "successor_quiet_s"),
     ({"span_deg": 400.0}, "span_deg"),
 ])
 def test_source_tracker_refuses_bad_settings(kw, words):

@@ -438,6 +438,28 @@ REPORT_RANK_TAU_S = 1.0
 #: share of the first's: a reflection's track gathers a trickle of frames beside a talker's
 #: stream of them (0.25: 58 / 7 %)
 REPORT_MIN_RATIO = 0.15
+#: Fourth (added 2026-12-07), a talker whose track broke is named once, not twice: a source is
+#: not named while a younger source has taken over from it -- one that began at most this
+#: far (degrees) from its predicted angle, was heard after its last frame, and it has been
+#: quiet for :data:`REPORT_SUCCESSOR_QUIET_S`. A walker passing near the array turns faster
+#: than the tracks' 20 deg/s^2 follow (:data:`TRACK_ACCEL_DPS2`); the frames fall out of the
+#: old track's gate and start a new one beside it, and the old one, coasting on its stale
+#: rate, had been named as a second talker for up to ~2 s (track-segment association: a
+#: track that ends where another begins is one target's; Yeom, Kirubarajan & Bar-Shalom
+#: 2004, "Track segment association, fine-step IMM and initialization with Doppler for
+#: improved track performance", IEEE Trans. AES 40(1)). Dev (seeds 281-282 of
+#: bench/moving_sources.py's scenes, scratch, 10 recordings per cell, the stream's frames):
+#: a false second talker beside the lone walker at 7.7 -> 1.7 % of the moments (8-cell
+#: mean), the walker alone and within 10 deg 88.6 -> 94.4 %, both talkers within 10 deg
+#: 64.4 -> 65.2 %; 45 deg cost the two talkers (63.8-65.0 %), a quiet time of 0 / 0.5 s gave
+#: 1.0 / 2.3 % false and 64.9 / 65.3 % both; a take-over counted only within 1 s of the old
+#: track's last frame, 2.4 % false. Held out (seeds 291-292, the rule written before their
+#: run): false second talker 10.3 -> 3.8 %, the walker alone within 10 deg 85.2 -> 91.5 %,
+#: both talkers 65.1 -> 66.3 %, no cell worse. 0 disables it.
+REPORT_SUCCESSOR_DEG = 30.0
+#: see :data:`REPORT_SUCCESSOR_DEG`: how long (s) a source must have been quiet before a
+#: younger one that took over from it hides it
+REPORT_SUCCESSOR_QUIET_S = 0.25
 
 
 class _Track:
@@ -446,7 +468,7 @@ class _Track:
     __slots__ = ("id", "kf", "n_hits", "hits", "weight", "last_t", "angle_deg", "located_before",
                  "weight_before", "located_through", "gate_sum", "gate_n", "gate_at_hit",
                  "passed", "path_i", "path_a", "recent_w", "recent_t", "explained_before",
-                 "explained_through")
+                 "explained_through", "born_angle", "born_near")
 
     def __init__(self, track_id: int, kf: Any, located_before: int,
                  weight_before: float) -> None:
@@ -468,6 +490,10 @@ class _Track:
         self.gate_at_hit = (0.0, 0)
         self.passed = False  # (the chance test, once passed, holds)
         self.recent_w, self.recent_t = 0.0, 0.0
+        # its first frame's angle (deg) and the other live tracks' predicted angles then
+        # (id -> deg): whom it may have taken over from (REPORT_SUCCESSOR_DEG)
+        self.born_angle = float("nan")
+        self.born_near: dict[int, float] = {}
         self.path_i: list[int] = []
         self.path_a: list[float] = []
 
@@ -490,14 +516,19 @@ class SourceTracker:
     the weight of the frames located since their first frame; of those the ``max_sources``
     with the most weight of recent frames (each frame's decayed by ``exp(-age /
     rank_tau_s)``), a second or later one only while that weight is at least ``min_ratio``
-    times the first's. Unlike :func:`track_sources`' answer, decided on the whole recording,
-    this one is causal: a talker is reported from the frame that makes it a source, and a
-    talker's track goes on, predicted, through a pause of up to ``max_coast_s`` (``last_t``
-    says when it was last heard). The settings are :func:`track_sources`', and the reporting
-    rules (:data:`REPORT_RANK_TAU_S`, :data:`REPORT_MIN_RATIO`; chosen on the stream's frames
-    of dev recordings). ``history`` keeps the tracks that ended, each track's frames and its
-    angle at every frame (what :func:`track_sources` needs; a stream leaves it off, so that
-    memory stays bounded: a live track counts its frames). Ids are never given twice by one
+    times the first's; and a source is not named while a younger one has taken over from it
+    (one talker whose track broke: it began within ``successor_deg`` of the source's
+    predicted angle and was heard after the source's last frame, and the source has been
+    quiet for ``successor_quiet_s``; see :data:`REPORT_SUCCESSOR_DEG`). Unlike
+    :func:`track_sources`' answer, decided on the whole recording, this one is causal: a
+    talker is reported from the frame that makes it a source, and a talker's track goes on,
+    predicted, through a pause of up to ``max_coast_s`` (``last_t`` says when it was last
+    heard). The settings are :func:`track_sources`', and the reporting rules
+    (:data:`REPORT_RANK_TAU_S`, :data:`REPORT_MIN_RATIO`, :data:`REPORT_SUCCESSOR_DEG`,
+    :data:`REPORT_SUCCESSOR_QUIET_S`; chosen on the stream's frames of dev recordings).
+    ``history`` keeps the tracks that ended, each track's frames and its angle at every frame
+    (what :func:`track_sources` needs; a stream leaves it off, so that memory stays bounded:
+    a live track counts its frames). Ids are never given twice by one
     tracker, :meth:`reset` included. Used by the stream (``StreamConfig.max_sources``,
     ``hearsee track --sources N``). Not in the thesis; an extension.
     """
@@ -512,7 +543,10 @@ class SourceTracker:
                  min_share: float = TRACK_MIN_SHARE,
                  max_chance: float = TRACK_MAX_CHANCE,
                  span_deg: float = 360.0, rank_tau_s: float = REPORT_RANK_TAU_S,
-                 min_ratio: float = REPORT_MIN_RATIO, history: bool = False) -> None:
+                 min_ratio: float = REPORT_MIN_RATIO,
+                 successor_deg: float = REPORT_SUCCESSOR_DEG,
+                 successor_quiet_s: float = REPORT_SUCCESSOR_QUIET_S,
+                 history: bool = False) -> None:
         from scipy.stats import chi2
 
         from hearsee.audio.tracking import NOISE_RANGE
@@ -537,6 +571,9 @@ class SourceTracker:
         self.span_deg = finite_number("span_deg", span_deg, 0.0, 360.0, lo_open=True)
         self.rank_tau_s = finite_number("rank_tau_s", rank_tau_s, 0.0, None, lo_open=True)
         self.min_ratio = finite_number("min_ratio", min_ratio, 0.0, 1.0)
+        self.successor_deg = finite_number("successor_deg", successor_deg, 0.0, 180.0)
+        self.successor_quiet_s = finite_number("successor_quiet_s", successor_quiet_s, 0.0,
+                                               None)
         self.history = true_or_false("history", history)
         self._gate = float(chi2.ppf(0.997, 1))
         # (ids are never given again, reset() included: a client keying on them would merge
@@ -614,6 +651,8 @@ class SourceTracker:
                     init_rate_sigma_dps=TRACK_INIT_RATE_DPS, rate_tau_s=DIRECTION_RATE_TAU_S),
                     self.located, self.located_weight)
                 best.explained_before = self.explained
+                best.born_angle = a
+                best.born_near = {tr.id: _wrap1(float(pred[tr.id][0][0])) for tr in self.live}
                 # (one model per step for all the tracks: they share their filters' settings)
                 best.kf._model_cache = self._models
                 self._next_id += 1
@@ -666,14 +705,27 @@ class SourceTracker:
         """The talkers to act on at the last frame: live sources whose frames beat chance and
         hold ``min_share`` of the weight since their first, at most ``max_sources``, the most
         weight of recent frames first, the second and later ones with at least ``min_ratio``
-        of the first's (see the class). Each has ``id``, ``angle_deg`` (its angle at the last
-        frame, degrees), ``last_t`` (when a frame last joined it, s) and ``n_hits`` (how many
-        frames joined it)."""
+        of the first's, none while a younger source has taken over from it (see the class).
+        Each has ``id``, ``angle_deg`` (its angle at the last frame, degrees), ``last_t`` (when
+        a frame last joined it, s) and ``n_hits`` (how many frames joined it)."""
         ok = [tr for tr in self.live if tr.n_hits >= self.confirm_hits and tr.passed
               and tr.weight > 0 and self.share(tr) >= self.min_share]
+        ok = [tr for tr in ok if not any(self._took_over(new, tr) for new in ok)]
         ranked = sorted(((self.recent_weight(tr, self._t), tr) for tr in ok),
                         key=lambda wt: (-wt[0], wt[1].id))[:self.max_sources]
         return [tr for w, tr in ranked if w >= self.min_ratio * ranked[0][0]]
+
+    def _took_over(self, new: _Track, old: _Track) -> bool:
+        """Whether ``new`` has taken over from ``old`` (one talker whose track broke; see
+        :data:`REPORT_SUCCESSOR_DEG`): it began within ``successor_deg`` of ``old``'s predicted
+        angle, was heard after ``old``'s last frame, and ``old`` has been quiet for
+        ``successor_quiet_s``."""
+        from hearsee.audio.tracking import _wrap1
+
+        start = new.born_near.get(old.id)
+        return (self.successor_deg > 0 and start is not None and new.last_t > old.last_t
+                and self._t - old.last_t >= self.successor_quiet_s
+                and abs(_wrap1(new.born_angle - start)) <= self.successor_deg)
 
     def recent_weight(self, tr: _Track, t: float) -> float:
         """``tr``'s frames' weight, each decayed by ``exp(-age / rank_tau_s)`` at time ``t``
