@@ -714,8 +714,8 @@ def test_source_tracker_take_over_needs_a_start_near_the_quiet_talker(apart_deg,
     pause = (t >= 2.0 + 0.3) & (t < 3.0)
     named = [any(_ang(ang, 10.0) < 5 for _, ang in r) for r in rep]
     assert all(n == named_in_pause for n, p in zip(named, pause, strict=True) if p)
-    # (both named while both tracks were live and the second was heard, at 60 deg; the
-    # first again once it speaks: its frames join its track)
+    # (the first named again once it speaks -- its frames join its coasting track -- and
+    # the second named through the pause either way)
     assert all(named[k] for k in np.flatnonzero(t >= 3.1))
     assert all(any(_ang(ang, 10.0 + apart_deg) < 5 for _, ang in r)
                for r, p in zip(rep, pause, strict=True) if p)
