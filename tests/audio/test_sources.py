@@ -403,6 +403,61 @@ def test_at_most_max_sources_at_once_and_small_tracks_dropped():
     assert empty == [] and np.all(which == -1)
 
 
+def _split_talker_angles(seed, beside_deg, n=190, hop=0.032):
+    """Frames of one talker walking from -40 deg at 10 deg/s, each at random either from its
+    direction or from ``beside_deg`` beside it (its frames split by a reflection), 2-deg
+    noise, a third of the frames without a direction. Returns ``t, angles, truth``."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * hop
+    truth = -40.0 + 10.0 * t
+    a = truth + np.where(rng.random(n) < 0.5, beside_deg, 0.0) + rng.normal(0, 2.0, n)
+    a[rng.random(n) < 0.33] = np.nan
+    return t, a, truth
+
+
+@pytest.mark.parametrize("seed", [300, 302])
+def test_a_talker_split_between_two_side_by_side_tracks_is_one_source(seed):
+    t, a, truth = _split_talker_angles(seed, 17.0)
+    located = np.isfinite(a)
+    # two tracks 17 deg apart for the whole recording, each with about half the frames
+    apart, which = track_sources(t, a, merge_deg=0.0)
+    assert len(apart) == 2 and all(0.35 < tr.share < 0.65 for tr in apart)
+    # closer than TRACK_MERGE_DEG (20): one talker, every located frame its
+    tracks, which = track_sources(t, a)
+    assert len(tracks) == 1 and tracks[0].share == pytest.approx(1.0)
+    assert np.array_equal(which >= 0, located) and set(which[located]) == {0}
+    assert np.array_equal(tracks[0].frames, np.flatnonzero(located))
+    # its path: the heavier track's, from the first frame to the last, on the talker's side
+    heavier = max(apart, key=lambda tr: tr.share)
+    assert tracks[0].t[0] == t[located][0] and tracks[0].t[-1] == t[located][-1]
+    on = np.isin(tracks[0].t, heavier.t)
+    assert np.array_equal(tracks[0].angle_deg[on], heavier.angle_deg)
+    err = tracks[0].angle_deg - (-40.0 + 10.0 * tracks[0].t)
+    assert np.all((err > -8.0) & (err < 17.0 + 8.0))
+    # 25 deg apart they stay two (two talkers walking side by side), unless the bar is wider
+    t, a, _ = _split_talker_angles(seed, 25.0)
+    assert len(track_sources(t, a)[0]) == 2
+    assert len(track_sources(t, a, merge_deg=30.0)[0]) == 1
+
+
+def test_two_talkers_whose_paths_cross_are_not_merged():
+    # a walker crossing in front of a still talker (0 deg), within 20 deg of it for a quarter
+    # of the time: two sources, as without the merge (the merge looks at the median distance)
+    rng = np.random.default_rng(310)
+    t = np.arange(190) * 0.032
+    who = rng.integers(0, 3, 190)
+    a = np.where(who == 0, -75.0 + 25.0 * t, 0.0) + rng.normal(0, 3.0, 190)
+    a[who == 2] = np.nan
+    tracks, which = track_sources(t, a)
+    _, unmerged = track_sources(t, a, merge_deg=0.0)
+    assert len(tracks) == 2 and np.array_equal(which, unmerged)
+    for tau in (1.0, 5.0):  # (away from the crossing: one track on each talker)
+        assert all(tr.t[0] <= tau <= tr.t[-1] for tr in tracks)
+        at = [float(np.interp(tau, tr.t, tr.angle_deg)) for tr in tracks]
+        assert min(_ang(at[0], -75.0 + 25.0 * tau), _ang(at[1], -75.0 + 25.0 * tau)) < 8.0
+        assert min(_ang(at[0], 0.0), _ang(at[1], 0.0)) < 8.0
+
+
 @pytest.mark.parametrize("args, kw, words", [
     (([0.0, 0.1, 0.05], [1.0, 2.0, 3.0]), {}, "non-decreasing"),
     (([0.0, np.nan], [1.0, 2.0]), {}, "non-decreasing"),
@@ -418,6 +473,9 @@ def test_at_most_max_sources_at_once_and_small_tracks_dropped():
     (([0.0, 0.1], [1.0, 2.0]), {"min_share": 1.0}, "min_share"),
     (([0.0, 0.1], [1.0, 2.0]), {"max_chance": 0.0}, "max_chance"),
     (([0.0, 0.1], [1.0, 2.0]), {"span_deg": 400.0}, "span_deg"),
+    (([0.0, 0.1], [1.0, 2.0]), {"merge_deg": -1.0}, "merge_deg"),
+    (([0.0, 0.1], [1.0, 2.0]), {"merge_deg": 181.0}, "merge_deg"),
+    (([0.0, 0.1], [1.0, 2.0]), {"merge_deg": np.nan}, "merge_deg"),
     # (the Kalman filter's own ranges: its EstimationError came at the first located frame)
     (([0.0, 0.1], [1.0, 2.0]), {"sigma_accel_dps2": 1e300}, "sigma_accel_dps2"),
     (([0.0, 0.1], [np.nan, np.nan]), {"sigma_accel_dps2": 1e300}, "sigma_accel_dps2"),
