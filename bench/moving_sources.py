@@ -33,7 +33,9 @@ the array plane, a 0.5-deg grid, a pair's front half).
 The default seed (280) was not used to choose :func:`hearsee.audio.sources.track_sources`'
 settings (chosen on dev seeds 270-273, see its constants) nor the stream's reporting rules
 (:class:`~hearsee.audio.sources.SourceTracker`'s, on dev seeds 281-282; its take-over rule,
-:data:`~hearsee.audio.sources.REPORT_SUCCESSOR_DEG`, held out on seeds 291-292).
+:data:`~hearsee.audio.sources.REPORT_SUCCESSOR_DEG`, held out on seeds 291-292) nor the merge
+of tracks running side by side (:data:`~hearsee.audio.sources.TRACK_MERGE_DEG`, offline and in
+the stream: dev seeds 281-282, held out on 293-294).
 
 Usage: python bench/moving_sources.py [--trials 10] [--seed 280] [--data ../shared/data]
 """

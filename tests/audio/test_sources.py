@@ -779,6 +779,22 @@ def test_source_tracker_take_over_needs_a_start_near_the_quiet_talker(apart_deg,
                for r, p in zip(rep, pause, strict=True) if p)
 
 
+def test_source_tracker_names_a_talker_split_between_two_tracks_once():
+    # one talker's frames split 17 deg apart (see the offline test): two tracks side by side,
+    # both named at most frames without the rule, one with it -- the heavier, on the talker
+    t, a, truth = _split_talker_angles(300, 17.0)
+    apart = _online(t, a, merge_deg=0.0)
+    assert np.mean([len(r) == 2 for r in apart]) > 0.5
+    rep = _online(t, a)
+    assert np.mean([len(r) == 2 for r in rep]) <= 0.02
+    assert np.mean([len(r) == 1 for r in rep]) > 0.9
+    err = np.array([ang - tr for r, tr in zip(rep, truth, strict=True) for _, ang in r])
+    assert np.all((err > -8.0) & (err < 17.0 + 8.0))
+    # 25 deg apart: two talkers walking side by side, both named
+    t, a, _ = _split_talker_angles(300, 25.0)
+    assert np.mean([len(r) == 2 for r in _online(t, a)]) > 0.5
+
+
 def test_source_tracker_rotate_and_reset():
     trk = SourceTracker(max_sources=2)
     for i in range(10):
@@ -805,6 +821,8 @@ def test_source_tracker_rotate_and_reset():
     ({"successor_deg": 200.0}, "successor_deg"),
     ({"successor_quiet_s": -0.1}, "successor_quiet_s"),
     ({"successor_quiet_s": np.nan}, "successor_quiet_s"),
+    ({"merge_deg": -1.0}, "merge_deg"),
+    ({"merge_deg": np.inf}, "merge_deg"),
     ({"span_deg": 400.0}, "span_deg"),
 ])
 def test_source_tracker_refuses_bad_settings(kw, words):
