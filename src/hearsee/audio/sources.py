@@ -414,8 +414,8 @@ TRACK_MIN_SHARE = 0.05
 #: it cost the two-mic preset (mean over all cells 68.9 -> 65.4 %; 67.0 % with 1e-3), whose
 #: angles span 180 deg, where a gate is twice the chance
 TRACK_MAX_CHANCE = 1e-4
-#: two sources whose paths are closer than this (degrees) at half or more of the frames both lived
-#: through (the median distance) are one talker, and are reported as one (added 2026-12-07;
+#: two sources whose paths are closer than this (degrees) at half or more of the frames both
+#: lived through (the median distance) are one talker, reported as one (added 2026-12-07;
 #: ``merge_deg=0`` disables it): in a room one talker's frames, pulled apart by its
 #: reflections, had split between two tracks that ran side by side for seconds, both holding
 #: a large share, and the walker alone was reported as two talkers (two tracks of one target:
@@ -736,10 +736,10 @@ class SourceTracker:
         source has taken over from it (see the class).
         Each has ``id``, ``angle_deg`` (its angle at the last frame, degrees), ``last_t`` (when
         a frame last joined it, s) and ``n_hits`` (how many frames joined it)."""
-        ok = [tr for tr in self.live if tr.n_hits >= self.confirm_hits and tr.passed
-              and tr.weight > 0 and self.share(tr) >= self.min_share]
         from hearsee.audio.tracking import _wrap1
 
+        ok = [tr for tr in self.live if tr.n_hits >= self.confirm_hits and tr.passed
+              and tr.weight > 0 and self.share(tr) >= self.min_share]
         ok = [tr for tr in ok if not any(self._took_over(new, tr) for new in ok)]
         ranked = sorted(((self.recent_weight(tr, self._t), tr) for tr in ok),
                         key=lambda wt: (-wt[0], wt[1].id))
@@ -854,9 +854,9 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
         The range the angles can take (degrees): 360 for azimuths, 180 for a linear array's
         (-90 to 90).
     merge_deg : float
-        Two sources whose paths are closer than this (degrees) at half or more of the frames both
-        lived through are merged into one, the heavier's path kept where it lived (0 to 180;
-        0: never).
+        Two sources whose paths are closer than this (degrees) at half or more of the frames
+        both lived through are merged into one, the heavier's path kept where it lived (0 to
+        180; 0: never).
 
     Returns
     -------
