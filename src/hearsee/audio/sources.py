@@ -430,12 +430,12 @@ TRACK_MAX_CHANCE = 1e-4
 #: lived through instead of the median, 20 / 25 deg: 8.4 / 5.9 % false; the median at 25 / 30
 #: deg: 1.8 / 0.8 % false, both talkers 64.6 / 64.8 %, but two talkers standing closer than that
 #: would be one (the scenes keep theirs 30 deg apart). Held out (seeds 293-294, the rule fixed
-#: before their run): false second track 10.8 -> 2.4 %, the walker alone within 10 deg 85.2 ->
-#: 90.7 %, both talkers 64.8 -> 65.2 %, no cell worse. Online (:class:`SourceTracker`, which
+#: before they were scored): false second track 10.8 -> 2.4 %, the walker alone within 10 deg
+#: 85.2 -> 90.7 %, both talkers 64.8 -> 65.2 %, no cell worse. Online (:class:`SourceTracker`, which
 #: cannot wait for the paths) the same bar at each frame: a source is not named while its
 #: angle is closer than this to one named before it, the heavier by recent weight. The
 #: stream's frames of the same scenes: dev, false second talker 1.7 -> 0.5 %, the walker alone
-#: 94.4 -> 95.4 %, both talkers 65.2 -> 65.3 %; held out (293-294, fixed before their run):
+#: 94.4 -> 95.4 %, both talkers 65.2 -> 65.3 %; held out (293-294, fixed before scored):
 #: 3.2 -> 0.9 %, 92.2 -> 94.0 %, both talkers 64.1 % unchanged in every cell.
 TRACK_MERGE_DEG = 20.0
 
