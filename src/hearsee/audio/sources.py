@@ -938,8 +938,9 @@ def _merged(cands: list[_Candidate], merge_deg: float, w: NDArray,
                 k.hits = np.union1d(k.hits, c.hits)
                 k.share = float(w[k.hits].sum()) / located
                 extra = ~np.isin(c.path_i, k.path_i)
-                order = np.argsort(np.concatenate([k.path_i, c.path_i[extra]]), kind="stable")
-                k.path_i = np.concatenate([k.path_i, c.path_i[extra]])[order]
+                path_i = np.concatenate([k.path_i, c.path_i[extra]])
+                order = np.argsort(path_i, kind="stable")
+                k.path_i = path_i[order]
                 k.path_a = np.concatenate([k.path_a, c.path_a[extra]])[order]
                 break
         else:
