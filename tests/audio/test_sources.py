@@ -458,6 +458,31 @@ def test_two_talkers_whose_paths_cross_are_not_merged():
         assert min(_ang(at[0], 0.0), _ang(at[1], 0.0)) < 8.0
 
 
+def test_a_slow_walker_crossing_a_still_talker_is_not_merged_with_it():
+    # a walker at 10 deg/s crossing a still talker (0 deg) mid-recording: within 20 deg of it
+    # for two thirds of the time, so the median distance alone merges them; their difference
+    # spreads over tens of degrees (TRACK_MERGE_SPREAD_DEG): two sources, as without the merge
+    rng = np.random.default_rng(312)
+    t = np.arange(190) * 0.032
+    walker = -30.0 + 10.0 * t
+    who = rng.integers(0, 3, 190)
+    a = np.where(who == 0, walker, 0.0) + rng.normal(0, 2.0, 190)
+    a[who == 2] = np.nan
+    tracks, which = track_sources(t, a)
+    _, unmerged = track_sources(t, a, merge_deg=0.0)
+    assert len(tracks) == 2 and np.array_equal(which, unmerged)
+    for tau in (0.6, 1.2):  # (before the crossing: one track on each talker)
+        at = [float(np.interp(tau, tr.t, tr.angle_deg)) for tr in tracks
+              if tr.t[0] <= tau <= tr.t[-1]]
+        assert len(at) == 2
+        w = -30.0 + 10.0 * tau
+        assert min(_ang(at[0], w), _ang(at[1], w)) < 8.0
+        assert min(_ang(at[0], 0.0), _ang(at[1], 0.0)) < 8.0
+    # with no bar on the spread, the median alone merges the walker into the still talker
+    merged, _ = track_sources(t, a, merge_spread_deg=360.0)
+    assert len(merged) == 1 and merged[0].share == pytest.approx(1.0)
+
+
 @pytest.mark.parametrize("args, kw, words", [
     (([0.0, 0.1, 0.05], [1.0, 2.0, 3.0]), {}, "non-decreasing"),
     (([0.0, np.nan], [1.0, 2.0]), {}, "non-decreasing"),
@@ -476,6 +501,8 @@ def test_two_talkers_whose_paths_cross_are_not_merged():
     (([0.0, 0.1], [1.0, 2.0]), {"merge_deg": -1.0}, "merge_deg"),
     (([0.0, 0.1], [1.0, 2.0]), {"merge_deg": 181.0}, "merge_deg"),
     (([0.0, 0.1], [1.0, 2.0]), {"merge_deg": np.nan}, "merge_deg"),
+    (([0.0, 0.1], [1.0, 2.0]), {"merge_spread_deg": -1.0}, "merge_spread_deg"),
+    (([0.0, 0.1], [1.0, 2.0]), {"merge_spread_deg": np.inf}, "merge_spread_deg"),
     # (the Kalman filter's own ranges: its EstimationError came at the first located frame)
     (([0.0, 0.1], [1.0, 2.0]), {"sigma_accel_dps2": 1e300}, "sigma_accel_dps2"),
     (([0.0, 0.1], [np.nan, np.nan]), {"sigma_accel_dps2": 1e300}, "sigma_accel_dps2"),
