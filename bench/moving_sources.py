@@ -11,7 +11,9 @@ pair: in angle from its broadside, what it can tell); a synthetic male and femal
 speakers; free field (``simulate_moving_free_field``: time-varying fractional delays) or
 bench/doa.py's 8 x 7 x 3 m room at RT60 0.3 s (``simulate_moving_room``: block-wise image
 sources, crossfaded; the standing talker by ``simulate_recording``); white sensor noise 20 dB
-below the mixture. Also the walker alone, to count false second tracks.
+below the mixture. Also the walker alone, to count false second tracks, and scenes where the
+walker crosses the still talker's direction halfway (``crossing_scene``), scored while the two
+are at least 30 deg apart.
 
 Scored every 0.5 s from t = 1 s to 5.5 s: the directions each method gives for that moment,
 matched to where the two talkers were heard from then (``Trajectory.heard_at``; the
@@ -35,7 +37,10 @@ settings (chosen on dev seeds 270-273, see its constants) nor the stream's repor
 (:class:`~hearsee.audio.sources.SourceTracker`'s, on dev seeds 281-282; its take-over rule,
 :data:`~hearsee.audio.sources.REPORT_SUCCESSOR_DEG`, held out on seeds 291-292) nor the merge
 of tracks running side by side (:data:`~hearsee.audio.sources.TRACK_MERGE_DEG`, offline and in
-the stream: dev seeds 281-282, held out on 293-294).
+the stream: dev seeds 281-282, held out on 293-294) nor the bar on their paths' spread
+(:data:`~hearsee.audio.sources.TRACK_MERGE_SPREAD_DEG`: dev 281-282 and crossing scenes of a
+scratch seed 400, held out on 295-296 and 401-402; this bench's crossing scenes draw from
+``[seed, 2]``).
 
 Usage: python bench/moving_sources.py [--trials 10] [--seed 280] [--data ../shared/data]
 """
@@ -118,12 +123,40 @@ def scene(two: bool, rng: np.random.Generator) -> tuple:
             return linear_trajectory(start, v, DURATION_S), still
 
 
+def crossing_scene(two: bool, rng: np.random.Generator) -> tuple:
+    """A walker who crosses a still talker's direction halfway through the recording: the
+    still talker 1-2.5 m away, the walker passing 0.5-1.5 m nearer or farther at 0.5-1.5 m/s
+    across the line of sight; drawn until both stay within bounds and are at least
+    :data:`MIN_APART_DEG` apart at the first and the last moment scored."""
+    lo = -np.asarray(ARRAY_AT[:2]) + WALL_M
+    hi = np.asarray(ROOM[:2]) - np.asarray(ARRAY_AT[:2]) - WALL_M
+    t = np.linspace(0.0, DURATION_S, 61)
+    while True:
+        az, ds, dw = rng.uniform(-180.0, 180.0), *rng.uniform(1.0, 2.5, 2)
+        if not 0.5 <= abs(dw - ds) <= 1.5:
+            continue
+        u = np.array([np.cos(np.radians(az)), np.sin(np.radians(az)), 0.0])
+        v = rng.choice([-1.0, 1.0]) * rng.uniform(0.5, 1.5) * np.array([-u[1], u[0], 0.0])
+        start = dw * u - v * DURATION_S / 2
+        path = start[None, :] + t[:, None] * v[None, :]
+        still = ds * u
+        r = np.linalg.norm(path[:, :2], axis=1)
+        if (r.min() < NEAR_M or r.max() > FAR_M or np.any(path[:, :2] < lo)
+                or np.any(path[:, :2] > hi)):
+            continue
+        ends = _azimuth(start + np.array([TIMES_S[0], TIMES_S[-1]])[:, None] * v)
+        if all(angle_error(a, az, two) >= MIN_APART_DEG for a in ends):
+            return linear_trajectory(start, v, DURATION_S), still
+
+
 def recording(arr: MicArray, kind: str, rt60: float, rng: np.random.Generator,
-              speech: list[Path], alone: bool = False) -> tuple[np.ndarray, object, np.ndarray]:
-    """The two talkers' recording (``alone``: the walker's only), the walker's trajectory and
+              speech: list[Path], alone: bool = False,
+              crossing: bool = False) -> tuple[np.ndarray, object, np.ndarray]:
+    """The two talkers' recording (``alone``: the walker's only; ``crossing``: the walker
+    crosses the still talker's direction, :func:`crossing_scene`), the walker's trajectory and
     the still talker's position."""
     two = arr.n_mics == 2
-    traj, still = scene(two, rng)
+    traj, still = (crossing_scene if crossing else scene)(two, rng)
     room = room_spec(rt60)
     walker_sig, still_sig = talker_specs(kind, 2, rng, speech)
     with warnings.catch_warnings():
@@ -221,10 +254,13 @@ def alone_table(alone: dict) -> tuple[list, list]:
     return headers, rows
 
 
-def run(trials: int, seed: int, speech: list[Path]) -> tuple[dict, dict]:
+def run(trials: int, seed: int, speech: list[Path],
+        crossing: bool = False) -> tuple[dict, dict]:
     """Matched errors per (array, RT60, signal, method) -- one row per recording and moment --
-    and hearsee's number of tracks per recording."""
-    rng = np.random.default_rng(seed)
+    and hearsee's number of tracks per recording. ``crossing``: the walker crosses the still
+    talker's direction (:func:`crossing_scene`; its own random numbers), scored only at the
+    moments the two are at least :data:`MIN_APART_DEG` apart."""
+    rng = np.random.default_rng([seed, 2] if crossing else seed)
     kinds = ["voices"] + (["arctic"] if speech else [])
     err: dict = {}
     n_tracks: dict = {}
@@ -234,12 +270,14 @@ def run(trials: int, seed: int, speech: list[Path]) -> tuple[dict, dict]:
         two = arr.n_mics == 2
         key = (array, rt60, kind)
         for _ in range(trials):
-            x, traj, still = recording(arr, kind, rt60, rng, speech)
+            x, traj, still = recording(arr, kind, rt60, rng, speech, crossing=crossing)
             doc = _localized(x, arr)
             live = streamed(x, arr)
             n_tracks.setdefault(key, []).append(len(doc["sources"]))
             for tau in TIMES_S:
                 truth = [float(_azimuth(traj.heard_at(tau))), float(_azimuth(still))]
+                if angle_error(truth[0], truth[1], two) < MIN_APART_DEG:
+                    continue  # (a crossing: closer than the array tells them apart)
                 c = int(round(tau * FS))
                 blk = x[:, c - half: c + half]
                 with warnings.catch_warnings():
@@ -254,7 +292,8 @@ def run(trials: int, seed: int, speech: list[Path]) -> tuple[dict, dict]:
                                           front_half=two)
                 for m, e in est.items():
                     err.setdefault((*key, m), []).append(matched_errors(e, truth, two))
-        print(f"  {array} RT60 {rt60} {kind}: done", flush=True)
+        print(f"  {array} RT60 {rt60} {kind}{' (crossing)' if crossing else ''}: done",
+              flush=True)
     return err, n_tracks
 
 
@@ -325,10 +364,15 @@ def main(argv: list[str] | None = None) -> int:
     with threadpool_limits(1):  # (as bench/sources.py)
         err, n_tracks = run(args.trials, args.seed, speech)
         alone = run_alone(args.trials, args.seed, speech)
+        x_err, x_tracks = run(args.trials, args.seed, speech, crossing=True)
     headers, rows = tables(err, n_tracks)
     print_table("Two talkers, one walking: both found (%) / median matched error (deg)",
                 headers, rows)
     print(wins(err, n_tracks))
+    x_headers, x_rows = tables(x_err, x_tracks)
+    print_table("Two talkers, the walker crossing the other's direction: both found (%) / "
+                "median matched error (deg), moments 30+ deg apart", x_headers, x_rows)
+    print(wins(x_err, x_tracks))
     a_headers, a_rows = alone_table(alone)
     print_table("One talker walking alone: hearsee's tracks and stream (told at most two)",
                 a_headers,
@@ -344,6 +388,14 @@ def main(argv: list[str] | None = None) -> int:
          f"{wins(err, n_tracks)}. Each cell: `--trials` {args.trials} recordings x "
          f"{len(TIMES_S)} moments; seed {args.seed}; {data}. Plot: {png.name}. Wall time "
          f"{time.time() - t_wall:.0f} s."),
+        ("Two talkers, the walker crossing the other's direction",
+         markdown_table(x_headers, x_rows) + "\n\n"
+         f"{wins(x_err, x_tracks)}. The walker crosses the still talker's line of sight at "
+         f"t = {DURATION_S / 2:g} s, 0.5-1.5 m nearer or farther than it "
+         "(`crossing_scene`); scored at the moments the two are at least "
+         f"{MIN_APART_DEG:g} deg apart, as the other scenes keep them ('recordings x "
+         "moments' counts those). Each cell: `--trials` "
+         f"{args.trials} recordings, their own random numbers."),
         ("One talker walking alone", markdown_table(a_headers, a_rows) + "\n\n"
          "The same scenes without the still talker (their own random numbers): at each moment, "
          "whether hearsee's tracks alive then (or the talkers its stream reported by then) are "
