@@ -126,7 +126,8 @@ def scene(two: bool, rng: np.random.Generator) -> tuple:
 def crossing_scene(two: bool, rng: np.random.Generator) -> tuple:
     """A walker who crosses a still talker's direction halfway through the recording: the
     still talker 1-2.5 m away, the walker passing 0.5-1.5 m nearer or farther at 0.5-1.5 m/s
-    across the line of sight; drawn until both stay within bounds and are at least
+    across the line of sight; drawn until the walker stays within bounds (the still talker,
+    at most 2.5 m from the array in the room's middle, always is) and the two are at least
     :data:`MIN_APART_DEG` apart at the first and the last moment scored."""
     lo = -np.asarray(ARRAY_AT[:2]) + WALL_M
     hi = np.asarray(ROOM[:2]) - np.asarray(ARRAY_AT[:2]) - WALL_M
@@ -277,7 +278,7 @@ def run(trials: int, seed: int, speech: list[Path],
             for tau in TIMES_S:
                 truth = [float(_azimuth(traj.heard_at(tau))), float(_azimuth(still))]
                 if angle_error(truth[0], truth[1], two) < MIN_APART_DEG:
-                    continue  # (a crossing: closer than the array tells them apart)
+                    continue  # (at the crossing: closer than the other scenes keep them)
                 c = int(round(tau * FS))
                 blk = x[:, c - half: c + half]
                 with warnings.catch_warnings():
