@@ -971,7 +971,8 @@ def _merged(cands: list[_Candidate], merge_deg: float, spread_deg: float, w: NDA
                     np.subtract(*np.percentile(d, [90, 10])) < spread_deg):
                 k.hits = np.union1d(k.hits, c.hits)
                 k.share = float(w[k.hits].sum()) / located
-                extra = ~np.isin(c.path_i, k.path_i)
+                extra = np.ones(len(c.path_i), dtype=bool)  # (its frames beyond k's life)
+                extra[ic] = False
                 path_i = np.concatenate([k.path_i, c.path_i[extra]])
                 order = np.argsort(path_i, kind="stable")
                 k.path_i = path_i[order]
