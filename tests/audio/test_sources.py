@@ -415,6 +415,18 @@ def _split_talker_angles(seed, beside_deg, n=190, hop=0.032):
     return t, a, truth
 
 
+def _crossing_angles(seed, start_deg, rate_dps, noise_deg, n=190, hop=0.032):
+    """Frames of a walker at ``start_deg + rate_dps * t`` and a talker standing at 0 deg: each
+    frame at random the walker's, the still talker's or without a direction (a third each),
+    with ``noise_deg`` of noise. Returns ``t, angles``."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * hop
+    who = rng.integers(0, 3, n)
+    a = np.where(who == 0, start_deg + rate_dps * t, 0.0) + rng.normal(0, noise_deg, n)
+    a[who == 2] = np.nan
+    return t, a
+
+
 @pytest.mark.parametrize("seed", [300, 302])
 def test_a_talker_split_between_two_side_by_side_tracks_is_one_source(seed):
     t, a, truth = _split_talker_angles(seed, 17.0)
@@ -443,11 +455,7 @@ def test_a_talker_split_between_two_side_by_side_tracks_is_one_source(seed):
 def test_two_talkers_whose_paths_cross_are_not_merged():
     # a walker crossing in front of a still talker (0 deg), within 20 deg of it for a quarter
     # of the time: two sources, as without the merge (the merge looks at the median distance)
-    rng = np.random.default_rng(310)
-    t = np.arange(190) * 0.032
-    who = rng.integers(0, 3, 190)
-    a = np.where(who == 0, -75.0 + 25.0 * t, 0.0) + rng.normal(0, 3.0, 190)
-    a[who == 2] = np.nan
+    t, a = _crossing_angles(310, -75.0, 25.0, 3.0)
     tracks, which = track_sources(t, a)
     _, unmerged = track_sources(t, a, merge_deg=0.0)
     assert len(tracks) == 2 and np.array_equal(which, unmerged)
@@ -462,12 +470,7 @@ def test_a_slow_walker_crossing_a_still_talker_is_not_merged_with_it():
     # a walker at 10 deg/s crossing a still talker (0 deg) mid-recording: within 20 deg of it
     # for two thirds of the time, so the median distance alone merges them; their difference
     # spreads over tens of degrees (TRACK_MERGE_SPREAD_DEG): two sources, as without the merge
-    rng = np.random.default_rng(312)
-    t = np.arange(190) * 0.032
-    walker = -30.0 + 10.0 * t
-    who = rng.integers(0, 3, 190)
-    a = np.where(who == 0, walker, 0.0) + rng.normal(0, 2.0, 190)
-    a[who == 2] = np.nan
+    t, a = _crossing_angles(312, -30.0, 10.0, 2.0)
     tracks, which = track_sources(t, a)
     _, unmerged = track_sources(t, a, merge_deg=0.0)
     assert len(tracks) == 2 and np.array_equal(which, unmerged)
