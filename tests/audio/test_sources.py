@@ -506,6 +506,8 @@ def test_a_slow_walker_crossing_a_still_talker_is_not_merged_with_it():
     (([0.0, 0.1], [1.0, 2.0]), {"merge_deg": np.nan}, "merge_deg"),
     (([0.0, 0.1], [1.0, 2.0]), {"merge_spread_deg": -1.0}, "merge_spread_deg"),
     (([0.0, 0.1], [1.0, 2.0]), {"merge_spread_deg": np.inf}, "merge_spread_deg"),
+    (([0.0, 0.1], [1.0, 2.0]), {"merge_spread_deg": 361.0}, "merge_spread_deg"),
+    (([0.0, 0.1], [1.0, 2.0]), {"merge_spread_deg": np.nan}, "merge_spread_deg"),
     # (the Kalman filter's own ranges: its EstimationError came at the first located frame)
     (([0.0, 0.1], [1.0, 2.0]), {"sigma_accel_dps2": 1e300}, "sigma_accel_dps2"),
     (([0.0, 0.1], [np.nan, np.nan]), {"sigma_accel_dps2": 1e300}, "sigma_accel_dps2"),
