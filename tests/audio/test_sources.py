@@ -17,9 +17,11 @@ from hearsee.audio.signals import synthetic_voice
 from hearsee.audio.sources import (
     MAX_SOURCES,
     SourceTracker,
+    azimuth_keys,
     direction_clusters,
     localize_moving_sources,
     localize_sources,
+    second_direction,
     track_sources,
 )
 from hearsee.audio.tdoa import estimate_tdoas
@@ -927,6 +929,66 @@ def test_stream_follows_a_walker_and_a_still_talker(preset):
     assert len(still_ids) == 1
 
 
+def _bumps(peaks):
+    """A steered-response profile over azimuths -180 ... 178 deg (2-deg grid) with a bump of
+    height h at each (azimuth, h) of ``peaks`` (3-deg wide)."""
+    az = np.arange(-180.0, 180.0, 2.0)
+    prof = sum(h * np.exp(-0.5 * (_ang(az, a) / 3.0) ** 2) for a, h in peaks)
+    return az, prof
+
+
+def test_second_direction_is_the_strongest_other_maximum_far_enough():
+    az, prof = _bumps([(40.0, 1.0), (52.0, 0.95), (-100.0, 0.9), (170.0, 0.5)])
+    # 52 deg is within 20 deg of the frame's own 40: the next strongest, -100
+    assert second_direction(prof, az, 40.0) == pytest.approx(-100.0)
+    # own direction at -100: 40 is the strongest maximum far enough
+    assert second_direction(prof, az, -100.0) == pytest.approx(40.0)
+    # own direction off every maximum (a GCC peak the response does not share): its top
+    assert second_direction(prof, az, 100.0) == pytest.approx(40.0)
+    # the share asked: -100 holds 0.9 of the top, 170 only 0.5
+    assert second_direction(prof, az, 40.0, ratio=0.95) is None
+    assert second_direction(prof, az, 40.0, ratio=0.4) == pytest.approx(-100.0)
+    # how far from the frame's own: -100 lies 140 deg from 40, 170 only 130
+    assert second_direction(prof, az, 40.0, ratio=0.4, min_apart_deg=135.0) == (
+        pytest.approx(-100.0))
+    assert second_direction(prof, az, 40.0, ratio=0.4, min_apart_deg=145.0) is None
+    # wrap-around: a maximum at -178 is 8 deg from an own direction at 174
+    az2, prof2 = _bumps([(-178.0, 1.0), (90.0, 0.85)])
+    assert second_direction(prof2, az2, 174.0) == pytest.approx(90.0)
+    # nothing to take: an empty, all-zero, negative or NaN response
+    for bad in (np.zeros(180), -np.ones(180), np.full(180, np.nan), np.zeros(0)):
+        assert second_direction(bad, az[:bad.size], 40.0) is None
+
+
+def test_azimuth_keys_are_what_the_tracker_tracks():
+    az = np.array([-150.0, 0.0, 30.0, 90.0, 150.0])
+    assert np.array_equal(azimuth_keys(az), az)  # (azimuths: themselves, exactly)
+    # a pair along y: 90 sin(azimuth), front/back twins alike (the tracker's linear keys)
+    got = azimuth_keys(az, [0.0, 1.0, 0.0])
+    assert np.allclose(got, [-45.0, 0.0, 45.0, 90.0, 45.0])
+    assert np.allclose(got, [90.0 * np.sin(np.radians(_fold(a))) for a in az])
+
+
+def test_stream_names_a_talker_the_frames_own_directions_miss():
+    """Two white-noise talkers at once, the one at -100 deg 2 dB quieter: each frame's GCC
+    peaks name the louder one, so the frames' own directions alone never name the quieter
+    (talker_peak_ratio=None); the second maximum of each frame's steered response does."""
+    arr = MicArray.from_preset("three-mic")
+    rng = np.random.default_rng(315)
+    x = 0.0
+    for k, (az, gain) in enumerate(((40.0, 1.0), (-100.0, 10 ** (-2.0 / 20)))):
+        s = rng.standard_normal(3 * FS) * gain
+        x = x + simulate_free_field(s, FS, arr, 1.5 * unit_vector_deg(az, 0.0), snr_db=30,
+                                    rng=320 + k)
+    for ratio, want in ((0.8, (40.0, -100.0)), (None, (40.0,))):
+        ups = [u for u in _streamed(x, arr, max_sources=2, talker_peak_ratio=ratio)
+               if u.t >= 1.0]
+        for truth in (40.0, -100.0):
+            named = np.mean([any(_ang(s["azimuth_deg"], truth) < 5.0 for s in u.sources)
+                             for u in ups])
+            assert (named >= 0.9) if truth in want else (named == 0.0), (ratio, truth, named)
+
+
 def test_stream_sources_settings(two3):
     from hearsee.stream.pipeline import StreamConfig, TrackingProcessor
 
@@ -936,6 +998,11 @@ def test_stream_sources_settings(two3):
     for bad in (1, 9, 2.0, True, "2"):
         with pytest.raises(ConfigError, match="max_sources"):
             StreamConfig(max_sources=bad)
+    for bad in (0.0, -0.5, 1.5, float("nan"), float("inf"), "0.8", True):
+        with pytest.raises(ConfigError, match="talker_peak_ratio"):
+            StreamConfig(talker_peak_ratio=bad)
+    assert StreamConfig(talker_peak_ratio=None).talker_peak_ratio is None
+    assert StreamConfig(talker_peak_ratio=1).talker_peak_ratio == 1
     with pytest.raises(ConfigError, match="masked pair"):
         TrackingProcessor(MicArray.from_preset("mask2-asym"), FS, StreamConfig(max_sources=2))
 

@@ -461,6 +461,64 @@ TRACK_MERGE_DEG = 20.0
 #: crossing 30.7 -> 35.0 % on dev but 34.3 -> 35.7 % held out (seed 401; +2 asked).
 TRACK_MERGE_SPREAD_DEG = 20.0
 
+#: A stream frame that has its own direction also gives :class:`SourceTracker` its smoothed
+#: steered response's strongest other maximum when that maximum is at least this share of the
+#: response's peak (:func:`second_direction`; ``StreamConfig.talker_peak_ratio``; added
+#: 2026-12-07). A frame's GCC peaks name the louder talker, so the other is heard in fewer
+#: frames: in the two-talker scenes of bench/moving_sources.py (seed 281) the less-heard
+#: talker had a median 27 % of the located frames within 10 deg of them, under 20 % in a
+#: quarter of the recordings. Two talkers are two maxima of a steered response (SRP-PHAT;
+#: DiBiase, Silverman & Brandstein 2001; ODAS likewise scans several potential sources per
+#: frame, Grondin & Michaud 2019). Chosen on the stream's frames of dev recordings (scratch:
+#: bench/moving_sources.py's scenes of seed 281 and its crossing scenes of seed 400, 10
+#: recordings per cell, captured and replayed; 8-cell means; the maximum at least
+#: :data:`TRACK_MERGE_DEG` from the frame's own direction, which :meth:`SourceTracker.reported`
+#: would not name beside it anyway): both talkers within 10 deg 63.0 % without, 69.6 / 70.4 /
+#: 70.8 / 71.2 % with a share of 0.7 / 0.75 / 0.8 / 0.9; a false second talker beside the
+#: walker alone 0.4 % without, 1.6 / 1.4 / 1.0 / 0.8 % with (0.5: 15.0 %); the walker alone
+#: and within 10 deg 95.1 -> 93.9 % at 0.8; crossing talkers both within 10 deg 58.9 -> 65.1 %
+#: (0.9: 61.6 %). Held out (seeds 297 and crossing 403, the rule written before their replay):
+#: both talkers 67.5 -> 71.6 %, a false second talker 2.6 -> 3.5 %, the walker alone 91.2 ->
+#: 90.4 %, crossing talkers both 56.1 -> 58.6 % and the still one found 79.1 -> 81.0 %, no
+#: cell worse by more than 4 points.
+TALKER_PEAK_RATIO = 0.8
+
+
+def second_direction(profile: ArrayLike, keys: ArrayLike, own_key: float,
+                     ratio: float = TALKER_PEAK_RATIO,
+                     min_apart_deg: float = TRACK_MERGE_DEG) -> float | None:
+    """A frame's second direction from its steered response: of the local maxima of
+    ``profile`` (the response over a circle of azimuths, evenly spaced, as
+    :class:`~hearsee.stream.pipeline.SmoothedSrp` gives it) whose value is at least ``ratio``
+    times the profile's largest and whose ``keys`` (what :class:`SourceTracker` tracks at
+    those azimuths, degrees: the azimuths, or a linear array's sines from broadside times 90,
+    :func:`azimuth_keys`) lie ``min_apart_deg`` or more from the frame's own ``own_key``, the
+    strongest one's key; None when there is none (or the profile is all zero or not finite).
+    See :data:`TALKER_PEAK_RATIO`."""
+    from hearsee.audio.tracking import _wrap1
+
+    prof = np.asarray(profile, dtype=float)
+    top = float(prof.max(initial=0.0)) if prof.size else 0.0
+    if not (np.isfinite(top) and top > 0):
+        return None
+    peak = (prof >= np.roll(prof, 1)) & (prof > np.roll(prof, -1)) & (prof >= ratio * top)
+    for i in np.flatnonzero(peak)[np.argsort(-prof[peak], kind="stable")]:
+        k = float(np.asarray(keys)[i])
+        if abs(_wrap1(k - own_key)) >= min_apart_deg:
+            return k
+    return None
+
+
+def azimuth_keys(azimuth_deg: ArrayLike, axis: ArrayLike | None = None) -> NDArray:
+    """What :class:`SourceTracker` tracks for sources in the horizontal plane at
+    ``azimuth_deg`` (degrees, array frame): the azimuths themselves, or for a linear array of
+    unit ``axis`` the sines of their angles from broadside times 90 (:func:`_from_broadside`)."""
+    if axis is None:
+        return np.array(azimuth_deg, dtype=float)
+    az = np.radians(np.asarray(azimuth_deg, dtype=float))
+    u = np.stack([np.cos(az), np.sin(az), np.zeros_like(az)], axis=-1)
+    return 90.0 * np.clip(u @ np.asarray(axis, dtype=float), -1.0, 1.0)
+
 
 #: :class:`SourceTracker`'s reporting rules, chosen on the stream's frames of dev recordings
 #: (seeds 281-282 of bench/moving_sources.py's kind, scratch, 2026-12-06: 10 recordings x 10

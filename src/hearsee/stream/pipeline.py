@@ -78,6 +78,7 @@ from hearsee.audio.signals import (
     quiet_channels_text,
     stuck_channels_text,
 )
+from hearsee.audio.sources import TALKER_PEAK_RATIO
 from hearsee.audio.tdoa import (
     DEFAULT_MARGIN_SAMPLES,
     DEFAULT_SMOOTH_FRAMES,
@@ -227,9 +228,10 @@ class Update:
     and the JSON line carries it (other arrays' lines do not have the key). ``sources``
     (with ``StreamConfig.max_sources``, else None and not in the JSON line): the talkers
     reported at this frame by :class:`hearsee.audio.sources.SourceTracker` on the frames' own
-    directions, the most weight of recent frames first, each ``{"id"`` (the track's number:
-    the same for as long as it is followed, never another talker's in one stream -- but a
-    new :class:`TrackingProcessor` counts from 0) ``, "azimuth_deg"`` (a pair's front twin: its
+    directions (and their steered responses' second maxima, ``talker_peak_ratio``), the
+    most weight of recent frames first, each ``{"id"`` (the track's number: the same for as
+    long as it is followed, never another talker's in one stream -- but a new
+    :class:`TrackingProcessor` counts from 0) ``, "azimuth_deg"`` (a pair's front twin: its
     mirror is as likely) ``, "rate_dps"`` (None for a pair, whose track is in its angle's sine)
     ``, "last_heard_s"`` (the time of its last frame; it is predicted through a pause)
     ``, "n_frames"}``. The single-talker fields above are the one direction tracker's, as
@@ -2078,13 +2080,23 @@ class StreamConfig:
         noise (3 x 60 s) measured, against none at 0.4 -- a spurious measurement every ~3 s
         of silence; not adopted. A stream that is never long silent may set it lower
     max_sources : several talkers at once, some of whom may walk: the frames' own directions
-        (the ``raw_*`` of :class:`Update`) are also followed by
-        :class:`hearsee.audio.sources.SourceTracker`, and each update's ``sources`` names up
-        to this many talkers (2 to :data:`hearsee.audio.sources.MAX_SOURCES`); None (the
-        default) = one talker, no ``sources``. Told the array's pans
+        (the ``raw_*`` of :class:`Update`; with ``talker_peak_ratio``, also a second one
+        per frame) are also followed by :class:`hearsee.audio.sources.SourceTracker`, and
+        each update's ``sources`` names up to this many talkers (2 to
+        :data:`hearsee.audio.sources.MAX_SOURCES`); None (the default) = one talker, no
+        ``sources``. Told the array's pans
         (:meth:`TrackingProcessor.process`' ``array_pan_deg``), the talkers' tracks are turned
         back with the array; a linear array's, tracked in its angles' sines, follow the turn as
         motion. Not for a masked pair
+    talker_peak_ratio : with ``max_sources``, a frame that has its own direction also gives
+        the talkers' tracker the strongest other maximum of its smoothed steered response
+        that reaches this share (0-1] of the response's peak and lies
+        :data:`~hearsee.audio.sources.TRACK_MERGE_DEG` or more from the frame's own
+        direction (:func:`hearsee.audio.sources.second_direction`; a frame's GCC peaks name
+        the louder talker, the response shows both): the default,
+        :data:`~hearsee.audio.sources.TALKER_PEAK_RATIO`, was chosen on dev recordings and
+        held out; None = the frames' own directions only (as before 2026-12-07), as with
+        ``spectrum_alpha=0``, which computes no steered response
     """
 
     frame_ms: float = 64.0
@@ -2136,6 +2148,7 @@ class StreamConfig:
     mask_decide_confidence: float = 0.9
     mask_min_phase_match: float = 0.4
     max_sources: int | None = None
+    talker_peak_ratio: float | None = TALKER_PEAK_RATIO
 
     def __post_init__(self) -> None:
         _check_config(self)
@@ -2197,6 +2210,9 @@ def _check_config(cfg: StreamConfig) -> None:
         if not (isinstance(ms, int | np.integer) and not isinstance(ms, bool)
                 and 2 <= ms <= MAX_SOURCES):
             raise bad("max_sources", f"None or a whole number 2 to {MAX_SOURCES}")
+    tpr = cfg.talker_peak_ratio
+    if tpr is not None and not (is_real(tpr) and 0.0 < tpr <= 1.0):
+        raise bad("talker_peak_ratio", "None or in (0, 1]")
     pfc = cfg.prefer_frame_confidence
     if not ((is_real(pfc) or pfc == math.inf) and pfc > 0):  # (inf = never)
         raise bad("prefer_frame_confidence", "> 0 (inf = never)")
@@ -2334,6 +2350,15 @@ class TrackingProcessor:
                                    self.cfg.srp_band_hz,
                                    coherence_weight=self.cfg.srp_coherence_weight,
                                    in_plane=self._in_plane)
+        # (what the talkers' tracker tracks at the response's azimuths: a frame's second
+        # direction, cfg.talker_peak_ratio)
+        self._talker_keys = None
+        if self.talkers is not None and self.srp is not None and (
+                self.cfg.talker_peak_ratio is not None):
+            from hearsee.audio.sources import azimuth_keys
+
+            self._talker_keys = azimuth_keys(self.srp.az_axis, None if geom.kind != "linear"
+                                             else geom.axis)
 
     def _talkers_init(self, geom: Any) -> None:
         """The several talkers' tracker (``cfg.max_sources``): angles are azimuths, or a
@@ -2349,14 +2374,22 @@ class TrackingProcessor:
             self._talker_design = linear_design(self.array, self.pairs)
         self._talker_az: dict[int, float] = {}  # (a pair's last azimuth per track: its twin)
 
-    def _talkers_step(self, t: float, loc: Any) -> list[dict[str, Any]]:
+    def _talkers_step(self, t: float, loc: Any, profile: NDArray | None = None
+                      ) -> list[dict[str, Any]]:
         """Frame ``t`` (s) with its own localization ``loc`` (None: no direction) into the
-        talkers' tracker; the talkers it reports now (:attr:`Update.sources`)."""
-        from hearsee.audio.sources import frame_angle, linear_azimuth
+        talkers' tracker, and where the frame has a direction its steered response
+        ``profile`` (:class:`SmoothedSrp`'s, over its azimuths; None: none)'s second direction
+        (``cfg.talker_peak_ratio``); the talkers it reports now (:attr:`Update.sources`)."""
+        from hearsee.audio.sources import frame_angle, linear_azimuth, second_direction
 
         linear = self._talker_design is not None
         ak = frame_angle(loc, linear)
         self.talkers.step(t, np.nan if ak is None else ak[1])
+        if ak is not None and profile is not None and self._talker_keys is not None:
+            k2 = second_direction(profile, self._talker_keys, ak[1],
+                                  self.cfg.talker_peak_ratio)
+            if k2 is not None:
+                self.talkers.step(t, k2)
         out = []
         for tr in self.talkers.reported():
             if linear:
@@ -2526,7 +2559,8 @@ class TrackingProcessor:
             if self.rig is not None and self.image_points is not None:
                 self._fuse(upd, z if use else None)
             if self.talkers is not None:
-                upd.sources = self._talkers_step(float(t), raw_loc)
+                upd.sources = self._talkers_step(
+                    float(t), raw_loc, None if sm is None else sm["profile"][n])
             out.append(upd)
         return out
 
