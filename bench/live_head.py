@@ -280,8 +280,10 @@ def run_turns(array: str, seed: int, args: argparse.Namespace) -> dict:
                        None)
         sep = abs(float(wrap_deg(head.pan_at(t0) - az_of(k, t0))))
         changes.append({"bearing": bearing, "head": pointed, "sep": sep})
-    speaking = [(r, next(k for k, a, b in onsets if a <= r["t"] < b)) for r in res.log
-                if r["t"] >= 1.0 and any(a <= r["t"] < b for _, a, b in onsets)]
+    # (each update from 1 s on with the talker speaking then, if any: one pass over the turns)
+    talking = [(r, next((k for k, a, b in onsets if a <= r["t"] < b), None))
+               for r in res.log if r["t"] >= 1.0]
+    speaking = [(r, k) for r, k in talking if k is not None]
     on_talker = np.mean([on(head.pan_at(r["t"]), k, r["t"]) for r, k in speaking])
     return {"changes": changes, "on_talker": float(on_talker)}
 
