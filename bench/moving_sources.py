@@ -40,7 +40,9 @@ of tracks running side by side (:data:`~hearsee.audio.sources.TRACK_MERGE_DEG`, 
 the stream: dev seeds 281-282, held out on 293-294) nor the bar on their paths' spread
 (:data:`~hearsee.audio.sources.TRACK_MERGE_SPREAD_DEG`: dev 281-282 and crossing scenes of a
 scratch seed 400, held out on 295-296 and 401-402; this bench's crossing scenes draw from
-``[seed, 2]``).
+``[seed, 2]``) nor the stream's second direction per frame
+(:data:`~hearsee.audio.sources.TALKER_PEAK_RATIO`: dev 281 and crossing ``[400, 2]``, held out
+on 297 and crossing ``[403, 2]``).
 
 Usage: python bench/moving_sources.py [--trials 10] [--seed 280] [--data ../shared/data]
 """
