@@ -969,6 +969,34 @@ def test_azimuth_keys_are_what_the_tracker_tracks():
     assert np.allclose(got, [90.0 * np.sin(np.radians(_fold(a))) for a in az])
 
 
+@pytest.mark.parametrize("preset", ["three-mic", "two-mic"])
+def test_the_steered_response_keys_agree_with_the_frames_own(preset, monkeypatch):
+    """One white-noise source at -60 deg: the stream's steered response peaks, in what the
+    talkers' tracker tracks (a pair's sines from broadside), where each frame's own direction
+    is -- a sign or axis slip would put every second direction at the mirror."""
+    from hearsee.audio.sources import frame_angle
+    from hearsee.stream.pipeline import TrackingProcessor
+
+    arr = MicArray.from_preset(preset)
+    x = simulate_free_field(np.random.default_rng(316).standard_normal(FS), FS, arr,
+                            1.5 * unit_vector_deg(-60.0, 0.0), snr_db=30, rng=317)
+    seen = []
+    step = TrackingProcessor._talkers_step
+
+    def spy(self, t, loc, profile=None):
+        ak = frame_angle(loc, self._talker_design is not None)
+        if ak is not None and profile is not None:
+            seen.append((ak[1], self._talker_keys[int(np.argmax(profile))]))
+        return step(self, t, loc, profile)
+
+    monkeypatch.setattr(TrackingProcessor, "_talkers_step", spy)
+    _streamed(x, arr, max_sources=2)
+    own, top = np.array(seen).T
+    truth = -60.0 if preset == "three-mic" else 90.0 * np.sin(np.radians(-60.0))
+    assert len(seen) >= 20 and np.all(np.abs(own - truth) < 2.0), own
+    assert np.all(np.abs(top - own) < 2.0), top - own
+
+
 def test_stream_names_a_talker_the_frames_own_directions_miss():
     """Two white-noise talkers at once, the one at -100 deg 2 dB quieter: each frame's GCC
     peaks name the louder one, so the frames' own directions alone never name the quieter
