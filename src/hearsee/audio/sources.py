@@ -497,15 +497,14 @@ def second_direction(profile: ArrayLike, keys: ArrayLike, own_key: float,
     See :data:`TALKER_PEAK_RATIO`."""
     from hearsee.audio.tracking import _wrap1
 
-    prof = np.asarray(profile, dtype=float)
+    prof, key = np.asarray(profile, dtype=float), np.asarray(keys, dtype=float)
     top = float(prof.max(initial=0.0)) if prof.size else 0.0
     if not (np.isfinite(top) and top > 0):
         return None
     peak = (prof >= np.roll(prof, 1)) & (prof > np.roll(prof, -1)) & (prof >= ratio * top)
     for i in np.flatnonzero(peak)[np.argsort(-prof[peak], kind="stable")]:
-        k = float(np.asarray(keys)[i])
-        if abs(_wrap1(k - own_key)) >= min_apart_deg:
-            return k
+        if abs(_wrap1(float(key[i]) - own_key)) >= min_apart_deg:
+            return float(key[i])
     return None
 
 
