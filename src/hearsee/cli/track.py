@@ -232,9 +232,9 @@ def track_cmd(
     sources: Annotated[int, typer.Option(
         "--sources", help="Several talkers at once, who may walk (2-8): each update's "
         "\"sources\" names up to this many, each with a track id, azimuth (a pair's front "
-        "twin) and when it was last heard; the frames' own directions followed by "
-        "audio.sources.SourceTracker, causally. 1: one talker (no \"sources\"). Not for a "
-        "masked pair.")] = 1,
+        "twin) and when it was last heard; the frames' own directions (and their steered "
+        "responses' second maxima) followed by audio.sources.SourceTracker, causally. 1: one "
+        "talker (no \"sources\"). Not for a masked pair.")] = 1,
     fmt: Annotated[TrackFormat, typer.Option(
         "--format", help="jsonl: one JSON line per frame; json: one document.")
     ] = TrackFormat.jsonl,
