@@ -42,7 +42,7 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import ConfigError
-from hearsee.geometry import MAX_ANGLE_DEG, wrap_deg
+from hearsee.geometry import MAX_ANGLE_DEG, unit_vector_deg, wrap_deg
 
 #: the most sources :func:`direction_clusters` looks for (``hearsee localize --sources``)
 MAX_SOURCES = 8
@@ -514,8 +514,7 @@ def azimuth_keys(azimuth_deg: ArrayLike, axis: ArrayLike | None = None) -> NDArr
     unit ``axis`` the sines of their angles from broadside times 90 (:func:`_from_broadside`)."""
     if axis is None:
         return np.array(azimuth_deg, dtype=float)
-    az = np.radians(np.asarray(azimuth_deg, dtype=float))
-    u = np.stack([np.cos(az), np.sin(az), np.zeros_like(az)], axis=-1)
+    u = unit_vector_deg(azimuth_deg)
     return 90.0 * np.clip(u @ np.asarray(axis, dtype=float), -1.0, 1.0)
 
 
