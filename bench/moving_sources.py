@@ -100,23 +100,32 @@ def _azimuth(p: np.ndarray) -> np.ndarray:
     return np.degrees(np.arctan2(p[..., 1], p[..., 0]))
 
 
+def _walk(start: np.ndarray, v: np.ndarray) -> np.ndarray | None:
+    """A straight walk's path (61 points over :data:`DURATION_S`, array frame, metres) from
+    ``start`` at velocity ``v`` (m/s), or None when it comes nearer than :data:`NEAR_M` to the
+    array, farther than :data:`FAR_M` or within :data:`WALL_M` of a wall."""
+    lo = -np.asarray(ARRAY_AT[:2]) + WALL_M
+    hi = np.asarray(ROOM[:2]) - np.asarray(ARRAY_AT[:2]) - WALL_M
+    path = start[None, :] + np.linspace(0.0, DURATION_S, 61)[:, None] * v[None, :]
+    r = np.linalg.norm(path[:, :2], axis=1)
+    if (r.min() < NEAR_M or r.max() > FAR_M or np.any(path[:, :2] < lo)
+            or np.any(path[:, :2] > hi)):
+        return None
+    return path
+
+
 def scene(two: bool, rng: np.random.Generator) -> tuple:
     """A walker's :class:`~hearsee.sim.moving.Trajectory` and a still talker's position
     (array frame, metres), drawn until both stay within bounds and apart (see the module's
     docstring)."""
-    t = np.linspace(0.0, DURATION_S, 61)
-    lo = -np.asarray(ARRAY_AT[:2]) + WALL_M
-    hi = np.asarray(ROOM[:2]) - np.asarray(ARRAY_AT[:2]) - WALL_M
     while True:
         az0, head = rng.uniform(-180.0, 180.0, 2)
         start = rng.uniform(1.0, 2.5) * np.array([np.cos(np.radians(az0)),
                                                   np.sin(np.radians(az0)), 0.0])
         v = rng.uniform(0.5, 1.5) * np.array([np.cos(np.radians(head)),
                                               np.sin(np.radians(head)), 0.0])
-        path = start[None, :] + t[:, None] * v[None, :]
-        r = np.linalg.norm(path[:, :2], axis=1)
-        if (r.min() < NEAR_M or r.max() > FAR_M or np.any(path[:, :2] < lo)
-                or np.any(path[:, :2] > hi)):
+        path = _walk(start, v)
+        if path is None:
             continue
         azs = rng.uniform(-180.0, 180.0)
         still = rng.uniform(1.0, 2.5) * np.array([np.cos(np.radians(azs)),
@@ -131,9 +140,6 @@ def crossing_scene(two: bool, rng: np.random.Generator) -> tuple:
     across the line of sight; drawn until the walker stays within bounds (the still talker,
     at most 2.5 m from the array in the room's middle, always is) and the two are at least
     :data:`MIN_APART_DEG` apart at the first and the last moment scored."""
-    lo = -np.asarray(ARRAY_AT[:2]) + WALL_M
-    hi = np.asarray(ROOM[:2]) - np.asarray(ARRAY_AT[:2]) - WALL_M
-    t = np.linspace(0.0, DURATION_S, 61)
     while True:
         az, ds, dw = rng.uniform(-180.0, 180.0), *rng.uniform(1.0, 2.5, 2)
         if not 0.5 <= abs(dw - ds) <= 1.5:
@@ -141,11 +147,8 @@ def crossing_scene(two: bool, rng: np.random.Generator) -> tuple:
         u = np.array([np.cos(np.radians(az)), np.sin(np.radians(az)), 0.0])
         v = rng.choice([-1.0, 1.0]) * rng.uniform(0.5, 1.5) * np.array([-u[1], u[0], 0.0])
         start = dw * u - v * DURATION_S / 2
-        path = start[None, :] + t[:, None] * v[None, :]
         still = ds * u
-        r = np.linalg.norm(path[:, :2], axis=1)
-        if (r.min() < NEAR_M or r.max() > FAR_M or np.any(path[:, :2] < lo)
-                or np.any(path[:, :2] > hi)):
+        if _walk(start, v) is None:
             continue
         ends = _azimuth(start + np.array([TIMES_S[0], TIMES_S[-1]])[:, None] * v)
         if all(angle_error(a, az, two) >= MIN_APART_DEG for a in ends):
