@@ -177,30 +177,36 @@ def recording(arr: MicArray, kind: str, rt60: float, rng: np.random.Generator,
     return add_noise(x, SNR_DB, rng), traj, still
 
 
-def track_estimates(doc: dict, tau: float) -> list[float]:
-    """The azimuths (deg) of the tracks alive at ``tau`` (s), each at its nearest frame."""
+def track_labels(doc: dict, tau: float) -> list[tuple[int, float]]:
+    """The tracks alive at ``tau`` (s): each one's index in ``doc["sources"]`` (its identity)
+    and azimuth (deg) at its nearest frame."""
     out = []
-    for src in doc["sources"]:
+    for i, src in enumerate(doc["sources"]):
         if src["t_start_s"] <= tau <= src["t_end_s"]:
             ts = np.array(src["path"]["t_s"])
             a = src["path"]["azimuth_deg"][int(np.argmin(np.abs(ts - tau)))]
             if a is not None:
-                out.append(a)
+                out.append((i, a))
     return out
+
+
+def track_estimates(doc: dict, tau: float) -> list[float]:
+    """The azimuths (deg) of the tracks alive at ``tau`` (s), each at its nearest frame."""
+    return [a for _, a in track_labels(doc, tau)]
 
 
 def streamed(x: np.ndarray, arr: MicArray) -> tuple[np.ndarray, list]:
     """hearsee's stream with several talkers as ``hearsee track --sources 2`` runs it
     (``StreamConfig(max_sources=2)``, its defaults: the GCC over the whole band -- on the dev
     recordings the 300-3500 Hz band of the other methods put a false second talker beside a
-    lone walker twice as often): the updates' times (s) and each one's reported azimuths
-    (deg)."""
+    lone walker twice as often): the updates' times (s) and each one's reported talkers, (id,
+    azimuth in deg)."""
     ups: list = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         StreamPipeline(arr, StreamConfig(max_sources=2)).run(ArraySource(x, FS), ups.append)
     return (np.array([u.t for u in ups]),
-            [[s["azimuth_deg"] for s in u.sources if s["azimuth_deg"] is not None]
+            [[(s["id"], s["azimuth_deg"]) for s in u.sources if s["azimuth_deg"] is not None]
              for u in ups])
 
 
@@ -209,12 +215,35 @@ def streamed(x: np.ndarray, arr: MicArray) -> tuple[np.ndarray, list]:
 STREAM_FRAME_S = StreamConfig().frame_ms / 1e3
 
 
-def stream_estimates(streamed_out: tuple[np.ndarray, list], tau: float) -> list[float]:
-    """The azimuths (deg) the stream reported at its last update whose frame had ended by
-    ``tau`` (s): what a robot listening live knew then."""
-    t, az = streamed_out
+def stream_labels(streamed_out: tuple[np.ndarray, list], tau: float
+                  ) -> list[tuple[int, float]]:
+    """The talkers (id, azimuth in deg) the stream reported at its last update whose frame had
+    ended by ``tau`` (s): what a robot listening live knew then."""
+    t, talkers = streamed_out
     k = int(np.searchsorted(t + STREAM_FRAME_S / 2, tau + 1e-9)) - 1
-    return az[k] if k >= 0 else []
+    return talkers[k] if k >= 0 else []
+
+
+def stream_estimates(streamed_out: tuple[np.ndarray, list], tau: float) -> list[float]:
+    """The azimuths (deg) of :func:`stream_labels`."""
+    return [a for _, a in stream_labels(streamed_out, tau)]
+
+
+def nearest_label(labelled: list[tuple[int, float]], truth: float, two: bool) -> int | None:
+    """The identity of the estimate nearest ``truth`` (deg) if it is within :data:`HIT_DEG`,
+    else None."""
+    e, i = min(((angle_error(a, truth, two), i) for i, a in labelled), default=(180.0, None))
+    return i if e < HIT_DEG else None
+
+
+def kept_identity(found: dict[float, int | None], at_s: float) -> list[bool]:
+    """For every pair of scored moments, one before ``at_s`` (s) and one after, at both of
+    which a talker was found (``found``: moment -> the identity it was found under, or None),
+    whether it was found under the same identity: a tracker that follows the talker through
+    the crossing keeps it."""
+    before = [i for tau, i in found.items() if tau < at_s and i is not None]
+    after = [i for tau, i in found.items() if tau > at_s and i is not None]
+    return [a == b for a in before for b in after]
 
 
 def _localized(x: np.ndarray, arr: MicArray) -> dict:
@@ -261,15 +290,18 @@ def alone_table(alone: dict) -> tuple[list, list]:
 
 
 def run(trials: int, seed: int, speech: list[Path],
-        crossing: bool = False) -> tuple[dict, dict]:
-    """Matched errors per (array, RT60, signal, method) -- one row per recording and moment --
-    and hearsee's number of tracks per recording. ``crossing``: the walker crosses the still
-    talker's direction (:func:`crossing_scene`; its own random numbers), scored only at the
-    moments the two are at least :data:`MIN_APART_DEG` apart."""
+        crossing: bool = False) -> tuple[dict, dict, dict]:
+    """Matched errors per (array, RT60, signal, method) -- one row per recording and moment --,
+    hearsee's number of tracks per recording, and whether hearsee's tracks and stream kept
+    each talker's identity (:func:`kept_identity`, per (array, RT60, signal, method, "walker"
+    or "still"); the peers name no identities). ``crossing``: the walker crosses the still
+    talker's direction (:func:`crossing_scene`; its own random numbers) at ``DURATION_S / 2``,
+    scored only at the moments the two are at least :data:`MIN_APART_DEG` apart."""
     rng = np.random.default_rng([seed, 2] if crossing else seed)
     kinds = ["voices"] + (["arctic"] if speech else [])
     err: dict = {}
     n_tracks: dict = {}
+    kept: dict = {}
     half = int(BLOCK_S * FS / 2)
     for array, rt60, kind in itertools.product(ARRAYS, RT60S, kinds):
         arr = MicArray.from_preset(array)
@@ -280,10 +312,15 @@ def run(trials: int, seed: int, speech: list[Path],
             doc = _localized(x, arr)
             live = streamed(x, arr)
             n_tracks.setdefault(key, []).append(len(doc["sources"]))
+            found: dict = {}  # (method, who) -> {moment: identity or None}
             for tau in TIMES_S:
                 truth = [float(_azimuth(traj.heard_at(tau))), float(_azimuth(still))]
                 if angle_error(truth[0], truth[1], two) < MIN_APART_DEG:
                     continue  # (at the crossing: closer than the other scenes keep them)
+                for m, lab in ((METHODS[0], track_labels(doc, tau)),
+                               (METHODS[1], stream_labels(live, tau))):
+                    for who, az in zip(("walker", "still"), truth, strict=True):
+                        found.setdefault((m, who), {})[tau] = nearest_label(lab, az, two)
                 c = int(round(tau * FS))
                 blk = x[:, c - half: c + half]
                 with warnings.catch_warnings():
@@ -298,9 +335,11 @@ def run(trials: int, seed: int, speech: list[Path],
                                           front_half=two)
                 for m, e in est.items():
                     err.setdefault((*key, m), []).append(matched_errors(e, truth, two))
+            for (m, who), f in found.items():
+                kept.setdefault((*key, m, who), []).extend(kept_identity(f, DURATION_S / 2))
         print(f"  {array} RT60 {rt60} {kind}{' (crossing)' if crossing else ''}: done",
               flush=True)
-    return err, n_tracks
+    return err, n_tracks, kept
 
 
 def both_found(err: dict, key: tuple, m: str) -> float:
@@ -321,17 +360,42 @@ def wins(err: dict, n_tracks: dict) -> str:
             f"{won(METHODS[1])}")
 
 
-def tables(err: dict, n_tracks: dict) -> tuple[list, list]:
+def tables(err: dict, n_tracks: dict, kept: dict | None = None) -> tuple[list, list]:
+    """The table of both talkers found; with ``kept`` (crossing scenes) also the share (%) of
+    the pairs of moments, one before the crossing and one after, at which hearsee's tracks
+    and stream named the walker (and the still talker) under the same identity."""
     headers = ["array", "RT60 s", "signals", "recordings x moments",
                *(f"{m}: both within {HIT_DEG:g} deg % / median deg" for m in METHODS),
                "hearsee tracks per recording (mean)"]
+    if kept is not None:
+        headers += [f"{m}: walker / still talker keep their id % (pairs)"
+                    for m in METHODS[:2]]
     rows = []
     for key in n_tracks:
         cells = []
         for m in METHODS:
             cells.append(f"{both_found(err, key, m):.0f} / {np.median(err[(*key, m)]):.2f}")
-        rows.append([*key, len(err[(*key, METHODS[0])]), *cells, np.mean(n_tracks[key])])
+        row = [*key, len(err[(*key, METHODS[0])]), *cells, np.mean(n_tracks[key])]
+        if kept is not None:
+            for m in METHODS[:2]:
+                w, st = (kept.get((*key, m, who), []) for who in ("walker", "still"))
+                row.append(" / ".join(f"{100 * np.mean(v):.0f}" if v else "-" for v in (w, st))
+                           + f" ({len(w)} / {len(st)})")
+        rows.append(row)
     return headers, rows
+
+
+def kept_line(kept: dict) -> str:
+    """hearsee's tracks' and stream's identities kept across the crossing, pooled over the
+    cells, in a line."""
+    parts = []
+    for m in METHODS[:2]:
+        pooled = {who: [b for k, v in kept.items() if k[-2:] == (m, who) for b in v]
+                  for who in ("walker", "still")}
+        parts.append(f"{m} kept the walker's identity across the crossing in "
+                     f"{100 * np.mean(pooled['walker']):.0f} % of the pairs of moments and the "
+                     f"still talker's in {100 * np.mean(pooled['still']):.0f} %")
+    return "; ".join(parts)
 
 
 def plot(err: dict, n_tracks: dict, path: Path) -> None:
@@ -368,17 +432,18 @@ def main(argv: list[str] | None = None) -> int:
     speech = arctic_files(shared_data_dir(args.data))
     t_wall = time.time()
     with threadpool_limits(1):  # (as bench/sources.py)
-        err, n_tracks = run(args.trials, args.seed, speech)
+        err, n_tracks, _ = run(args.trials, args.seed, speech)
         alone = run_alone(args.trials, args.seed, speech)
-        x_err, x_tracks = run(args.trials, args.seed, speech, crossing=True)
+        x_err, x_tracks, x_kept = run(args.trials, args.seed, speech, crossing=True)
     headers, rows = tables(err, n_tracks)
     print_table("Two talkers, one walking: both found (%) / median matched error (deg)",
                 headers, rows)
     print(wins(err, n_tracks))
-    x_headers, x_rows = tables(x_err, x_tracks)
+    x_headers, x_rows = tables(x_err, x_tracks, x_kept)
     print_table("Two talkers, the walker crossing the other's direction: both found (%) / "
                 "median matched error (deg), moments 30+ deg apart", x_headers, x_rows)
     print(wins(x_err, x_tracks))
+    print(kept_line(x_kept))
     a_headers, a_rows = alone_table(alone)
     print_table("One talker walking alone: hearsee's tracks and stream (told at most two)",
                 a_headers,
@@ -401,7 +466,15 @@ def main(argv: list[str] | None = None) -> int:
          "(`crossing_scene`); scored at the moments the two are at least "
          f"{MIN_APART_DEG:g} deg apart, as the other scenes keep them ('recordings x "
          "moments' counts those). Each cell: `--trials` "
-         f"{args.trials} recordings, their own random numbers."),
+         f"{args.trials} recordings, their own random numbers.\n\n"
+         "Identity (the last two columns): at each scored moment the track (offline: the "
+         "source in `localize_recording`'s document; stream: the reported `id`) nearest each "
+         f"talker within {HIT_DEG:g} deg; over every pair of moments, one before the crossing "
+         "and one after, at which a talker was found both times, the share where it was "
+         "found under the same identity (pairs counted in brackets). A tracker that swaps the "
+         "two talkers at the crossing, or loses the walker and starts a new track, scores "
+         "low. The peers' blocks name no identities. "
+         f"{kept_line(x_kept)}."),
         ("One talker walking alone", markdown_table(a_headers, a_rows) + "\n\n"
          "The same scenes without the still talker (their own random numbers): at each moment, "
          "whether hearsee's tracks alive then (or the talkers its stream reported by then) are "
