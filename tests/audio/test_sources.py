@@ -845,6 +845,65 @@ def test_source_tracker_rotate_and_reset():
     assert trk.step(0.0, 5.0) > first
 
 
+def test_source_tracker_filters():
+    """The offline tracks' one filter (its rate relaxing over TRACK_RATE_TAU_S, the stream's
+    single-talker value) or, with ``modes_dps2``, an IMM of those modes."""
+    from hearsee.audio.sources import TRACK_RATE_TAU_S
+    from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, DirectionIMM, DirectionKalman
+
+    assert TRACK_RATE_TAU_S == DIRECTION_RATE_TAU_S
+    one, imm = SourceTracker(), SourceTracker(modes_dps2=(5, 40.0), rate_tau_s=None,
+                                              mode_dwell_s=2.0)
+    for trk in (one, imm):
+        for i in range(6):
+            trk.step(0.032 * i, 30.0 + 0.5 * i)
+    (a,), (b,) = one.live, imm.live
+    assert type(a.kf) is DirectionKalman and a.kf.rate_tau_s == TRACK_RATE_TAU_S
+    assert type(b.kf) is DirectionIMM and b.kf.sigma_accel_dps2.tolist() == [5.0, 40.0]
+    assert b.kf.mode_dwell_s == 2.0 and b.kf._mix.rate_tau_s is None
+    assert b.angle_deg == pytest.approx(32.5, abs=1.5)  # (on the frames, 30-32.5 deg)
+
+
+def _crossing_ids(trk, seed):
+    """Frames of a still talker at 0 deg and a walker turning at 25 deg/s from -75 deg through
+    it (at 3 s) to 75 deg, each frame the walker's (35 %: the still talker's, 30 %: none;
+    2-deg noise): the ids ``trk`` reported each talker under, before and after the crossing,
+    at the frames the two are 30 deg or more apart."""
+    rng = np.random.default_rng(seed)
+    ids = {(who, after): set() for who in "ws" for after in (False, True)}
+    for ti in np.arange(0.0, 6.0, 0.032):
+        walker = -75.0 + 25.0 * ti
+        r = rng.random()
+        trk.step(ti, np.nan if r < 0.3 else (0.0 if r < 0.65 else walker) + rng.normal(0, 2.0))
+        for who, truth in (("w", walker), ("s", 0.0)):
+            e, i = min(((_ang(s.angle_deg, truth), s.id) for s in trk.reported()),
+                       default=(180.0, None))
+            if abs(walker) >= 30.0 and e < 10.0:
+                ids[(who, ti > 3.0)].add(i)
+    return ids
+
+
+def test_imm_talker_tracks_keep_their_ids_where_they_cross():
+    """The opt-in IMM tracks (TALKER_MODES_DPS2, constant rates; ``StreamConfig.
+    talker_modes_dps2``) keep the walker and the still talker under one id each across the
+    crossing; the default one slow filter lags the walker, and the still talker's track takes
+    the walker's frames past the crossing in some of the same runs."""
+    from hearsee.audio.sources import TALKER_MAX_JUMP_DEG, TALKER_MODE_DWELL_S, TALKER_MODES_DPS2
+
+    kept = []
+    for seed in range(322, 330):
+        for stream in (True, False):
+            kw = (dict(max_jump_deg=TALKER_MAX_JUMP_DEG, rate_tau_s=None,
+                       modes_dps2=TALKER_MODES_DPS2, mode_dwell_s=TALKER_MODE_DWELL_S)
+                  if stream else {})
+            ids = _crossing_ids(SourceTracker(2, **kw), seed)
+            assert all(len(v) >= 1 for v in ids.values()), ids  # (each found both times)
+            kept.append((stream, all(len(ids[(w, False)] | ids[(w, True)]) == 1
+                                     for w in "ws")))
+    assert all(k for stream, k in kept if stream), kept
+    assert not all(k for stream, k in kept if not stream), kept
+
+
 @pytest.mark.parametrize("kw, words", [
     ({"max_sources": 0}, "max_sources"),
     ({"rank_tau_s": 0.0}, "rank_tau_s"),
@@ -858,6 +917,17 @@ def test_source_tracker_rotate_and_reset():
     ({"merge_deg": -1.0}, "merge_deg"),
     ({"merge_deg": np.inf}, "merge_deg"),
     ({"span_deg": 400.0}, "span_deg"),
+    ({"rate_tau_s": 0.0}, "rate_tau_s"),
+    ({"rate_tau_s": np.nan}, "rate_tau_s"),
+    ({"rate_tau_s": "2"}, "rate_tau_s"),
+    ({"modes_dps2": (5.0,)}, "modes_dps2"),
+    ({"modes_dps2": 40.0}, "modes_dps2"),
+    ({"modes_dps2": "5,40"}, "modes_dps2"),
+    ({"modes_dps2": (5.0, np.nan)}, "modes_dps2"),
+    ({"modes_dps2": (0.0, 40.0)}, "modes_dps2"),
+    ({"modes_dps2": (5.0, True)}, "modes_dps2"),
+    ({"modes_dps2": [[5.0, 40.0]]}, "modes_dps2"),
+    ({"mode_dwell_s": 0.0}, "mode_dwell_s"),
 ])
 def test_source_tracker_refuses_bad_settings(kw, words):
     with pytest.raises(ConfigError, match=words):
@@ -1031,6 +1101,19 @@ def test_stream_sources_settings(two3):
             StreamConfig(talker_peak_ratio=bad)
     assert StreamConfig(talker_peak_ratio=None).talker_peak_ratio is None
     assert StreamConfig(talker_peak_ratio=1).talker_peak_ratio == 1
+    for bad in ((40.0,), 40.0, "5,40", (5.0, np.nan), (0.0, 40.0), (5.0, "40"), True):
+        with pytest.raises(ConfigError, match="talker_modes_dps2"):
+            StreamConfig(talker_modes_dps2=bad)
+    # the default (None): the offline tracks' one filter and gate; modes: IMM tracks
+    assert StreamConfig().talker_modes_dps2 is None
+    from hearsee.audio.sources import TALKER_MAX_JUMP_DEG, TRACK_MAX_JUMP_DEG
+    from hearsee.audio.tracking import DirectionIMM, DirectionKalman
+
+    for modes, kind, jump in (((5.0, 40.0), DirectionIMM, TALKER_MAX_JUMP_DEG),
+                              (None, DirectionKalman, TRACK_MAX_JUMP_DEG)):
+        proc = TrackingProcessor(arr, FS, StreamConfig(max_sources=2, talker_modes_dps2=modes))
+        proc.talkers.step(0.0, 10.0)
+        assert type(proc.talkers.live[0].kf) is kind and proc.talkers.max_jump_deg == jump
     with pytest.raises(ConfigError, match="masked pair"):
         TrackingProcessor(MicArray.from_preset("mask2-asym"), FS, StreamConfig(max_sources=2))
 

@@ -34,10 +34,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from hearsee.config import (
+    all_real,
     as_float_array,
     check_settings,
     finite_number,
     is_real,
+    object_entries,
     true_or_false,
     whole_number,
 )
@@ -394,6 +396,10 @@ TRACK_ACCEL_DPS2 = 20.0
 TRACK_MAX_JUMP_DEG = 15.0
 #: a new track's angular rate spread, deg/s (a talker walking at 1 m/s 2 m away: <= 29 deg/s)
 TRACK_INIT_RATE_DPS = 30.0
+#: the tracks' angular rates relax toward zero with this time constant (s; ``rate_tau_s``,
+#: None = constant rate): :data:`hearsee.audio.tracking.DIRECTION_RATE_TAU_S`'s value, which
+#: the offline tracks took from it before the setting existed (a test holds the two equal)
+TRACK_RATE_TAU_S = 2.0
 #: a new track is a source once this many frames joined it (3 / 6: 67.9 / 65.8 %)
 TRACK_CONFIRM_HITS = 4
 #: a track that is not yet a source ends after this long (s) without a frame (0.3 / 1 s:
@@ -482,6 +488,49 @@ TRACK_MERGE_SPREAD_DEG = 20.0
 #: 90.4 %, crossing talkers both 56.1 -> 58.6 % and the still one found 79.1 -> 81.0 %, no
 #: cell worse by more than 4 points.
 TALKER_PEAK_RATIO = 0.8
+
+#: Opt-in tracks for the stream's talkers (``StreamConfig.talker_modes_dps2``; added
+#: 2026-12-07): each an interacting-multiple-model filter
+#: (:class:`~hearsee.audio.tracking.DirectionIMM`; Blom & Bar-Shalom 1988) of two
+#: constant-velocity modes with these angular acceleration noises (deg/s^2) -- a talker who
+#: stands (or walks steadily) and one who walks on or turns --, the rates not relaxing
+#: (``rate_tau_s`` None), modes held :data:`TALKER_MODE_DWELL_S` on average, and a frame joining
+#: a track within :data:`TALKER_MAX_JUMP_DEG` of its prediction. Why: the default tracks' one
+#: filter (:data:`TRACK_ACCEL_DPS2`, rates relaxing over :data:`TRACK_RATE_TAU_S`) lags a
+#: walker, so where the walker crosses a still talker's direction the still talker's track,
+#: nearer than the walker's own, takes the walker's frames: bench/moving_sources.py's crossing
+#: scenes name the walker under one identity before and after the crossing in few of the
+#: pairs of moments (its identity columns). Dev (the stream's frames of that bench's crossing
+#: scenes ``[400, 2]`` and scenes of seed 281, 10 recordings per cell, captured and replayed;
+#: 8-cell means): the walker's identity kept 13.1 -> 59.0 %, the still talker's 64.1 -> 73.8 %,
+#: both talkers within 10 deg 65.1 -> 64.7 % (crossing) and 70.8 -> 72.8 % (two talkers), the
+#: walker alone and within 10 deg 93.9 -> 95.8 %, a false second talker 1.0 % both. Held out
+#: (crossing ``[405, 2]``, the rule written before its replay): walker 5.8 -> 36.6 %, still
+#: talker 49.1 -> 71.1 %, both talkers 64.4 -> 63.1 %, but one cell (three-mic, RT60 0.3 s,
+#: ARCTIC) 73 -> 59 %, beyond the rule's 10-point bar: not the default. (One filter of 40
+#: deg/s^2 with constant rates and the same gate, tried first: dev identities 66.0 / 68.7 %;
+#: held out on ``[404, 2]`` walker 7.7 -> 41.4 % but still talker 63.6 -> 50.8 %, its track,
+#: given a rate by the walker's frames, drifting off; the IMM's quiet mode keeps it: 65.4 %
+#: there.) The offline tracks (:func:`track_sources`) keep their filter too: the faster
+#: filters cost them 4-6 points of both talkers found on dev.
+TALKER_MODES_DPS2 = (5.0, 40.0)
+#: see :data:`TALKER_MODES_DPS2`: the mean time (s) a talker's track stays in one mode
+TALKER_MODE_DWELL_S = 1.0
+#: see :data:`TALKER_MODES_DPS2`: the gate (degrees) with the two modes; with 15 (the default
+#: tracks' :data:`TRACK_MAX_JUMP_DEG`) dev gave both talkers 68.9 %, identities 68.9 / 77.1 %
+TALKER_MAX_JUMP_DEG = 12.0
+
+
+def _modes(modes: Any, noise_range: tuple[float, float]) -> tuple[float, ...]:
+    """``modes`` as an IMM's angular acceleration noises (deg/s^2): two or more finite numbers
+    within ``noise_range``; ConfigError otherwise."""
+    items = None if isinstance(modes, str) else object_entries(modes)
+    if items is None or items.ndim != 1 or items.size < 2 or not all_real(items) or not all(
+            noise_range[0] <= float(q) <= noise_range[1] for q in items):
+        raise ConfigError(f"modes_dps2 must hold two or more angular acceleration noises "
+                          f"(deg/s^2, {noise_range[0]:g} to {noise_range[1]:g}), e.g. (5, 40); "
+                          f"got {modes!r:.80}")
+    return tuple(float(q) for q in items)
 
 
 def second_direction(profile: ArrayLike, keys: ArrayLike, own_key: float,
@@ -633,8 +682,14 @@ class SourceTracker:
     ``history`` keeps the tracks that ended, each track's frames and its angle at every frame
     (what :func:`track_sources` needs; a stream leaves it off, so that memory stays bounded:
     a live track counts its frames). Ids are never given twice by one
-    tracker, :meth:`reset` included. Used by the stream (``StreamConfig.max_sources``,
-    ``hearsee track --sources N``). Not in the thesis; an extension.
+    tracker, :meth:`reset` included. Each track's filter is a constant-velocity
+    :class:`~hearsee.audio.tracking.DirectionKalman` (``sigma_accel_dps2``, its rates relaxing
+    toward zero over ``rate_tau_s`` seconds, None = constant rates), or with ``modes_dps2`` (two
+    or more angular acceleration noises, deg/s^2) an IMM of such modes
+    (:class:`~hearsee.audio.tracking.DirectionIMM`, ``mode_dwell_s``; ``sigma_accel_dps2`` is
+    then not used; the stream's opt-in, :data:`TALKER_MODES_DPS2`). Used by the stream
+    (``StreamConfig.max_sources``, ``hearsee track --sources N``). Not in the thesis; an
+    extension.
     """
 
     def __init__(self, max_sources: int = 2, *,
@@ -650,7 +705,10 @@ class SourceTracker:
                  min_ratio: float = REPORT_MIN_RATIO,
                  successor_deg: float = REPORT_SUCCESSOR_DEG,
                  successor_quiet_s: float = REPORT_SUCCESSOR_QUIET_S,
-                 merge_deg: float = TRACK_MERGE_DEG, history: bool = False) -> None:
+                 merge_deg: float = TRACK_MERGE_DEG, history: bool = False,
+                 rate_tau_s: float | None = TRACK_RATE_TAU_S,
+                 modes_dps2: Sequence[float] | None = None,
+                 mode_dwell_s: float = TALKER_MODE_DWELL_S) -> None:
         from scipy.stats import chi2
 
         from hearsee.audio.tracking import NOISE_RANGE
@@ -680,6 +738,11 @@ class SourceTracker:
                                                None)
         self.merge_deg = finite_number("merge_deg", merge_deg, 0.0, 180.0)
         self.history = true_or_false("history", history)
+        self.rate_tau_s = None if rate_tau_s is None else finite_number(
+            "rate_tau_s", rate_tau_s, 0.0, None, lo_open=True)
+        self.modes_dps2 = None if modes_dps2 is None else _modes(modes_dps2, NOISE_RANGE)
+        self.mode_dwell_s = finite_number("mode_dwell_s", mode_dwell_s, 0.0, None,
+                                          lo_open=True)
         self._gate = float(chi2.ppf(0.997, 1))
         # (ids are never given again, reset() included: a client keying on them would merge
         # two talkers)
@@ -697,6 +760,7 @@ class SourceTracker:
         self.located_weight = 0.0
         self._t = -np.inf
         self._models: dict[float, Any] = {}  # (the filters' transition and noise per step)
+        self._tpms: dict[float, Any] = {}  # (an IMM's mode switching per step)
 
     def rotate(self, delta_deg: float) -> None:
         """Add ``delta_deg`` (degrees) to every live track's angle (azimuths: the array turned
@@ -713,7 +777,7 @@ class SourceTracker:
         (degrees, NaN = none) and ``weight`` (>= 0); returns the id of the track it joined, -1
         for none. ConfigError for a time that goes back or is not finite, an infinite angle
         (or beyond +-1e9 deg) or a negative or non-finite weight."""
-        from hearsee.audio.tracking import DIRECTION_RATE_TAU_S, DirectionKalman, _wrap1
+        from hearsee.audio.tracking import _wrap1
 
         # (numbers only: text, None or a list had been float()'s ValueError or TypeError)
         if not (is_real(t) and float(t) >= self._t):
@@ -751,15 +815,11 @@ class SourceTracker:
                         d2 + np.log(S) < best_cost):
                     best, best_cost = tr, d2 + np.log(S)
             if best is None:
-                best = _Track(self._next_id, DirectionKalman(
-                    self.sigma_meas_deg, self.sigma_accel_dps2, gate_prob=0.997,
-                    init_rate_sigma_dps=TRACK_INIT_RATE_DPS, rate_tau_s=DIRECTION_RATE_TAU_S),
-                    self.located, self.located_weight)
+                best = _Track(self._next_id, self._new_filter(), self.located,
+                              self.located_weight)
                 best.explained_before = self.explained
                 best.born_angle = a
                 best.born_near = {tr.id: _wrap1(float(pred[tr.id][0][0])) for tr in self.live}
-                # (one model per step for all the tracks: they share their filters' settings)
-                best.kf._model_cache = self._models
                 self._next_id += 1
                 self.live.append(best)
             self.located += 1
@@ -786,6 +846,24 @@ class SourceTracker:
                 tr.path_i.append(i)
                 tr.path_a.append(tr.angle_deg)
         return -1 if best is None else best.id
+
+    def _new_filter(self) -> Any:
+        """A new track's filter: one constant-velocity Kalman filter, or with ``modes_dps2``
+        an IMM of such modes; its transition and noise per step shared with the other
+        tracks' (they share their filters' settings)."""
+        from hearsee.audio.tracking import DirectionIMM, DirectionKalman
+
+        if self.modes_dps2 is None:
+            kf = DirectionKalman(self.sigma_meas_deg, self.sigma_accel_dps2, gate_prob=0.997,
+                                 init_rate_sigma_dps=TRACK_INIT_RATE_DPS,
+                                 rate_tau_s=self.rate_tau_s)
+        else:
+            kf = DirectionIMM(self.sigma_meas_deg, self.modes_dps2, self.mode_dwell_s,
+                              gate_prob=0.997, init_rate_sigma_dps=TRACK_INIT_RATE_DPS,
+                              rate_tau_s=self.rate_tau_s)
+            kf._tpm_cache = self._tpms
+        kf._model_cache = self._models
+        return kf
 
     def _beats_chance(self, tr: _Track, free: bool = False) -> bool:
         """Whether frames scattered at random over ``span_deg`` would put as many frames as
@@ -885,8 +963,8 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
 
     :func:`direction_clusters` assumes the talkers stand still; a talker who walks smears
     a pile over tens of degrees. Here every talker has a constant-velocity Kalman filter on
-    its angle (:class:`~hearsee.audio.tracking.DirectionKalman`, the relaxing rate of
-    :data:`~hearsee.audio.tracking.DIRECTION_RATE_TAU_S`). Speech is sparse (see the module's
+    its angle (:class:`~hearsee.audio.tracking.DirectionKalman`, the rate relaxing over
+    :data:`TRACK_RATE_TAU_S`). Speech is sparse (see the module's
     docstring), so each frame's one direction is one talker's: it joins the track whose
     prediction explains it best -- the least ``d^2 + ln S`` (innovation ``y``, its variance
     ``S``, ``d^2 = y^2 / S``) among those whose chi-square gate (99.7 %) it passes and whose
