@@ -26,7 +26,12 @@ but which tracks are reported, and where each ends, is decided on the whole reco
 offline answer, as the blocks' 0.5 s ahead is). hearsee (stream): ``hearsee track --sources
 2`` (``StreamConfig(max_sources=2)``, its defaults) over the recording as a file; at each
 moment the talkers reported by its last update whose frame had ended then -- causal, what a
-robot listening live knew then (:class:`hearsee.audio.sources.SourceTracker`). hearsee (blocks):
+robot listening live knew then (:class:`hearsee.audio.sources.SourceTracker`). hearsee
+(stream, IMM tracks): the same with the opt-in tracks of
+``StreamConfig(talker_modes_dps2=TALKER_MODES_DPS2)`` (each talker's track an IMM of a quiet and
+a walking mode: a walker's track keeps up with the walker). The crossing scenes also score
+identity: whether the tracks (offline: a source of the document; stream: the reported ``id``)
+name each talker under the same identity before and after the crossing. hearsee (blocks):
 ``localize_recording(max_sources=2)`` (the still talkers' clustering) of the one-second block
 centred on the moment. Peers: the same blocks, told there are two talkers (``num_src=2``),
 set up as bench/sources.py sets them up (1024-sample Hann STFT at 50 % overlap, 300-3500 Hz,
@@ -42,7 +47,9 @@ the stream: dev seeds 281-282, held out on 293-294) nor the bar on their paths' 
 scratch seed 400, held out on 295-296 and 401-402; this bench's crossing scenes draw from
 ``[seed, 2]``) nor the stream's second direction per frame
 (:data:`~hearsee.audio.sources.TALKER_PEAK_RATIO`: dev 281 and crossing ``[400, 2]``, held out
-on 297 and crossing ``[403, 2]``).
+on 297 and crossing ``[403, 2]``) nor the opt-in IMM tracks
+(:data:`~hearsee.audio.sources.TALKER_MODES_DPS2`: dev 281 and crossing ``[400, 2]``, held out
+on crossing ``[405, 2]``).
 
 Usage: python bench/moving_sources.py [--trials 10] [--seed 280] [--data ../shared/data]
 """
@@ -74,6 +81,7 @@ from sources import angle_error, matched_errors, room_spec, talker_specs  # noqa
 from hearsee.audio.arrays import MicArray  # noqa: E402
 from hearsee.audio.localize import localize_recording  # noqa: E402
 from hearsee.audio.propagation import add_noise  # noqa: E402
+from hearsee.audio.sources import TALKER_MODES_DPS2  # noqa: E402
 from hearsee.sim.audio import simulate_recording  # noqa: E402
 from hearsee.sim.moving import linear_trajectory, simulate_moving_recording  # noqa: E402
 from hearsee.stream.pipeline import ArraySource, StreamConfig, StreamPipeline  # noqa: E402
@@ -82,7 +90,12 @@ FS = 16000
 ARRAYS = ("three-mic", "two-mic")
 RT60S = (0.0, 0.3)
 PEERS = ("SRP", "MUSIC", "NormMUSIC")
-METHODS = ("hearsee (tracks)", "hearsee (stream)", "hearsee (blocks)", *PEERS)
+#: hearsee's: the offline tracks, the stream (default), the stream with the opt-in IMM tracks
+#: (``StreamConfig.talker_modes_dps2``), the blocks
+METHODS = ("hearsee (tracks)", "hearsee (stream)", "hearsee (stream, IMM tracks)",
+           "hearsee (blocks)", *PEERS)
+#: the methods that name identities (tracks)
+TRACKED = METHODS[:3]
 BAND = (300.0, 3500.0)
 DURATION_S = 6.0
 SNR_DB = 20.0
@@ -195,16 +208,17 @@ def track_estimates(doc: dict, tau: float) -> list[float]:
     return [a for _, a in track_labels(doc, tau)]
 
 
-def streamed(x: np.ndarray, arr: MicArray) -> tuple[np.ndarray, list]:
+def streamed(x: np.ndarray, arr: MicArray, **cfg) -> tuple[np.ndarray, list]:
     """hearsee's stream with several talkers as ``hearsee track --sources 2`` runs it
     (``StreamConfig(max_sources=2)``, its defaults: the GCC over the whole band -- on the dev
     recordings the 300-3500 Hz band of the other methods put a false second talker beside a
-    lone walker twice as often): the updates' times (s) and each one's reported talkers, (id,
-    azimuth in deg)."""
+    lone walker twice as often; ``cfg``: other StreamConfig settings): the updates' times (s)
+    and each one's reported talkers, (id, azimuth in deg)."""
     ups: list = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        StreamPipeline(arr, StreamConfig(max_sources=2)).run(ArraySource(x, FS), ups.append)
+        StreamPipeline(arr, StreamConfig(max_sources=2, **cfg)).run(ArraySource(x, FS),
+                                                                     ups.append)
     return (np.array([u.t for u in ups]),
             [[(s["id"], s["azimuth_deg"]) for s in u.sources if s["azimuth_deg"] is not None]
              for u in ups])
@@ -255,8 +269,8 @@ def _localized(x: np.ndarray, arr: MicArray) -> dict:
 
 
 def run_alone(trials: int, seed: int, speech: list[Path]) -> dict:
-    """The walker alone (its own random numbers): per (array, RT60, signal, "tracks" or
-    "stream") and moment, how many tracks were alive (the offline tracks) or reported (the
+    """The walker alone (its own random numbers): per (array, RT60, signal, "tracks", "stream"
+    or "stream IMM") and moment, how many tracks were alive (the offline tracks) or reported (the
     stream) and the nearest one's error (deg; 180 without one)."""
     rng = np.random.default_rng([seed, 1])
     kinds = ["voices"] + (["arctic"] if speech else [])
@@ -268,10 +282,12 @@ def run_alone(trials: int, seed: int, speech: list[Path]) -> dict:
             x, traj, _ = recording(arr, kind, rt60, rng, speech, alone=True)
             doc = _localized(x, arr)
             live = streamed(x, arr)
+            live_imm = streamed(x, arr, talker_modes_dps2=TALKER_MODES_DPS2)
             for tau in TIMES_S:
                 truth = float(_azimuth(traj.heard_at(tau)))
                 for m, est in (("tracks", track_estimates(doc, tau)),
-                               ("stream", stream_estimates(live, tau))):
+                               ("stream", stream_estimates(live, tau)),
+                               ("stream IMM", stream_estimates(live_imm, tau))):
                     e = min((angle_error(a, truth, two) for a in est), default=180.0)
                     out.setdefault((array, rt60, kind, m), []).append((len(est), e))
     return out
@@ -292,7 +308,7 @@ def alone_table(alone: dict) -> tuple[list, list]:
 def run(trials: int, seed: int, speech: list[Path],
         crossing: bool = False) -> tuple[dict, dict, dict]:
     """Matched errors per (array, RT60, signal, method) -- one row per recording and moment --,
-    hearsee's number of tracks per recording, and whether hearsee's tracks and stream kept
+    hearsee's number of tracks per recording, and whether hearsee's tracks and streams kept
     each talker's identity (:func:`kept_identity`, per (array, RT60, signal, method, "walker"
     or "still"); the peers name no identities). ``crossing``: the walker crosses the still
     talker's direction (:func:`crossing_scene`; its own random numbers) at ``DURATION_S / 2``,
@@ -311,14 +327,16 @@ def run(trials: int, seed: int, speech: list[Path],
             x, traj, still = recording(arr, kind, rt60, rng, speech, crossing=crossing)
             doc = _localized(x, arr)
             live = streamed(x, arr)
+            live_imm = streamed(x, arr, talker_modes_dps2=TALKER_MODES_DPS2)
             n_tracks.setdefault(key, []).append(len(doc["sources"]))
             found: dict = {}  # (method, who) -> {moment: identity or None}
             for tau in TIMES_S:
                 truth = [float(_azimuth(traj.heard_at(tau))), float(_azimuth(still))]
                 if angle_error(truth[0], truth[1], two) < MIN_APART_DEG:
                     continue  # (at the crossing: closer than the other scenes keep them)
-                for m, lab in ((METHODS[0], track_labels(doc, tau)),
-                               (METHODS[1], stream_labels(live, tau))):
+                labels = dict(zip(TRACKED, (track_labels(doc, tau), stream_labels(live, tau),
+                                            stream_labels(live_imm, tau)), strict=True))
+                for m, lab in labels.items():
                     for who, az in zip(("walker", "still"), truth, strict=True):
                         found.setdefault((m, who), {})[tau] = nearest_label(lab, az, two)
                 c = int(round(tau * FS))
@@ -327,9 +345,8 @@ def run(trials: int, seed: int, speech: list[Path],
                     warnings.simplefilter("ignore")
                     bdoc = localize_recording(blk, FS, arr, kalman=False, max_sources=2,
                                               band_hz=BAND)
-                est = {"hearsee (tracks)": track_estimates(doc, tau),
-                       "hearsee (stream)": stream_estimates(live, tau),
-                       "hearsee (blocks)": [s["azimuth_deg"] for s in bdoc["sources"]]}
+                est = {m: [a for _, a in lab] for m, lab in labels.items()}
+                est["hearsee (blocks)"] = [s["azimuth_deg"] for s in bdoc["sources"]]
                 for m in PEERS:
                     est[m] = pra_azimuths(blk, FS, arr, m, BAND, 2, grid_deg=GRID_DEG,
                                           front_half=two)
@@ -357,7 +374,7 @@ def wins(err: dict, n_tracks: dict) -> str:
 
     return (f"hearsee (tracks) found both talkers at least as often as the best pyroomacoustics "
             f"method in {won(METHODS[0])} of {len(n_tracks)} cells, hearsee (stream) in "
-            f"{won(METHODS[1])}")
+            f"{won(METHODS[1])}, hearsee (stream, IMM tracks) in {won(METHODS[2])}")
 
 
 def tables(err: dict, n_tracks: dict, kept: dict | None = None) -> tuple[list, list]:
@@ -369,7 +386,7 @@ def tables(err: dict, n_tracks: dict, kept: dict | None = None) -> tuple[list, l
                "hearsee tracks per recording (mean)"]
     if kept is not None:
         headers += [f"{m}: walker / still talker keep their id % (pairs)"
-                    for m in METHODS[:2]]
+                    for m in TRACKED]
     rows = []
     for key in n_tracks:
         cells = []
@@ -377,7 +394,7 @@ def tables(err: dict, n_tracks: dict, kept: dict | None = None) -> tuple[list, l
             cells.append(f"{both_found(err, key, m):.0f} / {np.median(err[(*key, m)]):.2f}")
         row = [*key, len(err[(*key, METHODS[0])]), *cells, np.mean(n_tracks[key])]
         if kept is not None:
-            for m in METHODS[:2]:
+            for m in TRACKED:
                 w, st = (kept.get((*key, m, who), []) for who in ("walker", "still"))
                 row.append(" / ".join(f"{100 * np.mean(v):.0f}" if v else "-" for v in (w, st))
                            + f" ({len(w)} / {len(st)})")
@@ -389,7 +406,7 @@ def kept_line(kept: dict) -> str:
     """hearsee's tracks' and stream's identities kept across the crossing, pooled over the
     cells, in a line."""
     parts = []
-    for m in METHODS[:2]:
+    for m in TRACKED:
         pooled = {who: [b for k, v in kept.items() if k[-2:] == (m, who) for b in v]
                   for who in ("walker", "still")}
         parts.append(f"{m} kept the walker's identity across the crossing in "
