@@ -484,7 +484,7 @@ def main(argv: list[str] | None = None) -> int:
          f"{MIN_APART_DEG:g} deg apart, as the other scenes keep them ('recordings x "
          "moments' counts those). Each cell: `--trials` "
          f"{args.trials} recordings, their own random numbers.\n\n"
-         "Identity (the last two columns): at each scored moment the track (offline: the "
+         "Identity (the last columns): at each scored moment the track (offline: the "
          "source in `localize_recording`'s document; stream: the reported `id`) nearest each "
          f"talker within {HIT_DEG:g} deg; over every pair of moments, one before the crossing "
          "and one after, at which a talker was found both times, the share where it was "
