@@ -884,10 +884,10 @@ def _crossing_ids(trk, seed):
 
 
 def test_imm_talker_tracks_keep_their_ids_where_they_cross():
-    """The opt-in IMM tracks (TALKER_MODES_DPS2, constant rates; ``StreamConfig.
+    """The stream's IMM tracks (TALKER_MODES_DPS2, constant rates; ``StreamConfig.
     talker_modes_dps2``) keep the walker and the still talker under one id each across the
-    crossing; the default one slow filter lags the walker, and the still talker's track takes
-    the walker's frames past the crossing in some of the same runs."""
+    crossing; the offline tracks' one slow filter lags the walker, and the still talker's track
+    takes the walker's frames past the crossing in some of the same runs."""
     from hearsee.audio.sources import TALKER_MAX_JUMP_DEG, TALKER_MODE_DWELL_S, TALKER_MODES_DPS2
 
     kept = []
@@ -1104,8 +1104,10 @@ def test_stream_sources_settings(two3):
     for bad in ((40.0,), 40.0, "5,40", (5.0, np.nan), (0.0, 40.0), (5.0, "40"), True):
         with pytest.raises(ConfigError, match="talker_modes_dps2"):
             StreamConfig(talker_modes_dps2=bad)
-    # the default (None): the offline tracks' one filter and gate; modes: IMM tracks
-    assert StreamConfig().talker_modes_dps2 is None
+    # the default: IMM tracks (TALKER_MODES_DPS2); None: the offline tracks' filter and gate
+    from hearsee.audio.sources import TALKER_MODES_DPS2
+
+    assert StreamConfig().talker_modes_dps2 == TALKER_MODES_DPS2
     from hearsee.audio.sources import TALKER_MAX_JUMP_DEG, TRACK_MAX_JUMP_DEG
     from hearsee.audio.tracking import DirectionIMM, DirectionKalman
 
