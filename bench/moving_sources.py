@@ -27,9 +27,10 @@ offline answer, as the blocks' 0.5 s ahead is). hearsee (stream): ``hearsee trac
 2`` (``StreamConfig(max_sources=2)``, its defaults) over the recording as a file; at each
 moment the talkers reported by its last update whose frame had ended then -- causal, what a
 robot listening live knew then (:class:`hearsee.audio.sources.SourceTracker`). hearsee
-(stream, IMM tracks): the same with the opt-in tracks of
-``StreamConfig(talker_modes_dps2=TALKER_MODES_DPS2)`` (each talker's track an IMM of a quiet and
-a walking mode: a walker's track keeps up with the walker). The crossing scenes also score
+(stream, one filter): the same with the offline tracks' one filter and gate
+(``StreamConfig(talker_modes_dps2=None)``, the stream's before 2026-12-07; the default's tracks
+are IMMs of a quiet and a walking mode, :data:`~hearsee.audio.sources.TALKER_MODES_DPS2`, which
+keep up with a walker). The crossing scenes also score
 identity: whether the tracks (offline: a source of the document; stream: the reported ``id``)
 name each talker under the same identity before and after the crossing. hearsee (blocks):
 ``localize_recording(max_sources=2)`` (the still talkers' clustering) of the one-second block
@@ -47,9 +48,9 @@ the stream: dev seeds 281-282, held out on 293-294) nor the bar on their paths' 
 scratch seed 400, held out on 295-296 and 401-402; this bench's crossing scenes draw from
 ``[seed, 2]``) nor the stream's second direction per frame
 (:data:`~hearsee.audio.sources.TALKER_PEAK_RATIO`: dev 281 and crossing ``[400, 2]``, held out
-on 297 and crossing ``[403, 2]``) nor the opt-in IMM tracks
+on 297 and crossing ``[403, 2]``) nor the stream's IMM tracks
 (:data:`~hearsee.audio.sources.TALKER_MODES_DPS2`: dev 281 and crossing ``[400, 2]``, held out
-on crossing ``[405, 2]``).
+on crossing ``[405, 2]`` and on ``[407, 2]``, ``[408, 2]`` and seed 300).
 
 Usage: python bench/moving_sources.py [--trials 10] [--seed 280] [--data ../shared/data]
 """
@@ -81,7 +82,6 @@ from sources import angle_error, matched_errors, room_spec, talker_specs  # noqa
 from hearsee.audio.arrays import MicArray  # noqa: E402
 from hearsee.audio.localize import localize_recording  # noqa: E402
 from hearsee.audio.propagation import add_noise  # noqa: E402
-from hearsee.audio.sources import TALKER_MODES_DPS2  # noqa: E402
 from hearsee.sim.audio import simulate_recording  # noqa: E402
 from hearsee.sim.moving import linear_trajectory, simulate_moving_recording  # noqa: E402
 from hearsee.stream.pipeline import ArraySource, StreamConfig, StreamPipeline  # noqa: E402
@@ -90,9 +90,9 @@ FS = 16000
 ARRAYS = ("three-mic", "two-mic")
 RT60S = (0.0, 0.3)
 PEERS = ("SRP", "MUSIC", "NormMUSIC")
-#: hearsee's: the offline tracks, the stream (default), the stream with the opt-in IMM tracks
-#: (``StreamConfig.talker_modes_dps2``), the blocks
-METHODS = ("hearsee (tracks)", "hearsee (stream)", "hearsee (stream, IMM tracks)",
+#: hearsee's: the offline tracks, the stream (default), the stream with the offline tracks'
+#: one filter (``StreamConfig(talker_modes_dps2=None)``), the blocks
+METHODS = ("hearsee (tracks)", "hearsee (stream)", "hearsee (stream, one filter)",
            "hearsee (blocks)", *PEERS)
 #: the methods that name identities (tracks)
 TRACKED = METHODS[:3]
@@ -270,8 +270,8 @@ def _localized(x: np.ndarray, arr: MicArray) -> dict:
 
 def run_alone(trials: int, seed: int, speech: list[Path]) -> dict:
     """The walker alone (its own random numbers): per (array, RT60, signal, "tracks", "stream"
-    or "stream IMM") and moment, how many tracks were alive (the offline tracks) or reported (the
-    stream) and the nearest one's error (deg; 180 without one)."""
+    or "stream one filter") and moment, how many tracks were alive (the offline tracks) or
+    reported (the stream) and the nearest one's error (deg; 180 without one)."""
     rng = np.random.default_rng([seed, 1])
     kinds = ["voices"] + (["arctic"] if speech else [])
     out: dict = {}
@@ -282,12 +282,12 @@ def run_alone(trials: int, seed: int, speech: list[Path]) -> dict:
             x, traj, _ = recording(arr, kind, rt60, rng, speech, alone=True)
             doc = _localized(x, arr)
             live = streamed(x, arr)
-            live_imm = streamed(x, arr, talker_modes_dps2=TALKER_MODES_DPS2)
+            live_one = streamed(x, arr, talker_modes_dps2=None)
             for tau in TIMES_S:
                 truth = float(_azimuth(traj.heard_at(tau)))
                 for m, est in (("tracks", track_estimates(doc, tau)),
                                ("stream", stream_estimates(live, tau)),
-                               ("stream IMM", stream_estimates(live_imm, tau))):
+                               ("stream one filter", stream_estimates(live_one, tau))):
                     e = min((angle_error(a, truth, two) for a in est), default=180.0)
                     out.setdefault((array, rt60, kind, m), []).append((len(est), e))
     return out
@@ -327,7 +327,7 @@ def run(trials: int, seed: int, speech: list[Path],
             x, traj, still = recording(arr, kind, rt60, rng, speech, crossing=crossing)
             doc = _localized(x, arr)
             live = streamed(x, arr)
-            live_imm = streamed(x, arr, talker_modes_dps2=TALKER_MODES_DPS2)
+            live_one = streamed(x, arr, talker_modes_dps2=None)
             n_tracks.setdefault(key, []).append(len(doc["sources"]))
             found: dict = {}  # (method, who) -> {moment: identity or None}
             for tau in TIMES_S:
@@ -335,7 +335,7 @@ def run(trials: int, seed: int, speech: list[Path],
                 if angle_error(truth[0], truth[1], two) < MIN_APART_DEG:
                     continue  # (at the crossing: closer than the other scenes keep them)
                 labels = dict(zip(TRACKED, (track_labels(doc, tau), stream_labels(live, tau),
-                                            stream_labels(live_imm, tau)), strict=True))
+                                            stream_labels(live_one, tau)), strict=True))
                 for m, lab in labels.items():
                     for who, az in zip(("walker", "still"), truth, strict=True):
                         found.setdefault((m, who), {})[tau] = nearest_label(lab, az, two)
@@ -374,7 +374,7 @@ def wins(err: dict, n_tracks: dict) -> str:
 
     return (f"hearsee (tracks) found both talkers at least as often as the best pyroomacoustics "
             f"method in {won(METHODS[0])} of {len(n_tracks)} cells, hearsee (stream) in "
-            f"{won(METHODS[1])}, hearsee (stream, IMM tracks) in {won(METHODS[2])}")
+            f"{won(METHODS[1])}, hearsee (stream, one filter) in {won(METHODS[2])}")
 
 
 def tables(err: dict, n_tracks: dict, kept: dict | None = None) -> tuple[list, list]:
