@@ -233,8 +233,10 @@ def track_cmd(
         "--sources", help="Several talkers at once, who may walk (2-8): each update's "
         "\"sources\" names up to this many, each with a track id, azimuth (a pair's front "
         "twin) and when it was last heard; the frames' own directions (and their steered "
-        "responses' second maxima) followed by audio.sources.SourceTracker, causally. 1: one "
-        "talker (no \"sources\"). Not for a masked pair.")] = 1,
+        "responses' second maxima) followed by audio.sources.SourceTracker, causally, each "
+        "talker's track an IMM of a quiet and a walking mode (a walker keeps its id where it "
+        "crosses another talker far more often). 1: one talker (no \"sources\"). Not for a "
+        "masked pair.")] = 1,
     fmt: Annotated[TrackFormat, typer.Option(
         "--format", help="jsonl: one JSON line per frame; json: one document.")
     ] = TrackFormat.jsonl,
