@@ -866,8 +866,8 @@ def test_source_tracker_filters():
 
 def _crossing_ids(trk, seed):
     """Frames of a still talker at 0 deg and a walker turning at 25 deg/s from -75 deg through
-    it (at 3 s) to 75 deg, each frame the walker's (35 %: the still talker's, 30 %: none;
-    2-deg noise): the ids ``trk`` reported each talker under, before and after the crossing,
+    it (at 3 s) to 75 deg, each frame the walker's (35 %), the still talker's (35 %) or none
+    (30 %; 2-deg noise): the ids ``trk`` reported each talker under, before and after the crossing,
     at the frames the two are 30 deg or more apart."""
     rng = np.random.default_rng(seed)
     ids = {(who, after): set() for who in "ws" for after in (False, True)}
@@ -1105,11 +1105,10 @@ def test_stream_sources_settings(two3):
         with pytest.raises(ConfigError, match="talker_modes_dps2"):
             StreamConfig(talker_modes_dps2=bad)
     # the default: IMM tracks (TALKER_MODES_DPS2); None: the offline tracks' filter and gate
-    from hearsee.audio.sources import TALKER_MODES_DPS2
+    from hearsee.audio.sources import TALKER_MAX_JUMP_DEG, TALKER_MODES_DPS2, TRACK_MAX_JUMP_DEG
+    from hearsee.audio.tracking import DirectionIMM, DirectionKalman
 
     assert StreamConfig().talker_modes_dps2 == TALKER_MODES_DPS2
-    from hearsee.audio.sources import TALKER_MAX_JUMP_DEG, TRACK_MAX_JUMP_DEG
-    from hearsee.audio.tracking import DirectionIMM, DirectionKalman
 
     for modes, kind, jump in (((5.0, 40.0), DirectionIMM, TALKER_MAX_JUMP_DEG),
                               (None, DirectionKalman, TRACK_MAX_JUMP_DEG)):
