@@ -888,14 +888,12 @@ def test_imm_talker_tracks_keep_their_ids_where_they_cross():
     talker_modes_dps2``) keep the walker and the still talker under one id each across the
     crossing; the offline tracks' one slow filter lags the walker, and the still talker's track
     takes the walker's frames past the crossing in some of the same runs."""
-    from hearsee.audio.sources import TALKER_MAX_JUMP_DEG, TALKER_MODE_DWELL_S, TALKER_MODES_DPS2
+    from hearsee.audio.sources import talker_tracker_settings
 
     kept = []
     for seed in range(322, 330):
         for stream in (True, False):
-            kw = (dict(max_jump_deg=TALKER_MAX_JUMP_DEG, rate_tau_s=None,
-                       modes_dps2=TALKER_MODES_DPS2, mode_dwell_s=TALKER_MODE_DWELL_S)
-                  if stream else {})
+            kw = talker_tracker_settings() if stream else talker_tracker_settings(None)
             ids = _crossing_ids(SourceTracker(2, **kw), seed)
             assert all(len(v) >= 1 for v in ids.values()), ids  # (each found both times)
             kept.append((stream, all(len(ids[(w, False)] | ids[(w, True)]) == 1

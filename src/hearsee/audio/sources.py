@@ -527,6 +527,18 @@ TALKER_MODE_DWELL_S = 1.0
 TALKER_MAX_JUMP_DEG = 12.0
 
 
+def talker_tracker_settings(modes_dps2: Sequence[float] | None = TALKER_MODES_DPS2
+                            ) -> dict[str, Any]:
+    """:class:`SourceTracker`'s settings for the stream's talkers
+    (``StreamConfig.talker_modes_dps2``): with ``modes_dps2`` (deg/s^2) IMM tracks of those
+    modes, constant rates, :data:`TALKER_MODE_DWELL_S` and the gate
+    :data:`TALKER_MAX_JUMP_DEG`; None: none (the offline tracks' defaults)."""
+    if modes_dps2 is None:
+        return {}
+    return {"max_jump_deg": TALKER_MAX_JUMP_DEG, "rate_tau_s": None, "modes_dps2": modes_dps2,
+            "mode_dwell_s": TALKER_MODE_DWELL_S}
+
+
 def _modes(modes: Any, noise_range: tuple[float, float]) -> tuple[float, ...]:
     """``modes`` as an IMM's angular acceleration noises (deg/s^2): two or more finite numbers
     within ``noise_range``; ConfigError otherwise."""

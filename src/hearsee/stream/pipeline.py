@@ -2382,23 +2382,14 @@ class TrackingProcessor:
     def _talkers_init(self, geom: Any) -> None:
         """The several talkers' tracker (``cfg.max_sources``): angles are azimuths, or a
         linear array's sines from broadside times 90 (180 deg of span)."""
-        from hearsee.audio.sources import (
-            TALKER_MAX_JUMP_DEG,
-            TALKER_MODE_DWELL_S,
-            SourceTracker,
-            linear_design,
-        )
+        from hearsee.audio.sources import SourceTracker, linear_design, talker_tracker_settings
 
         if self.array.mask is not None:
             raise ConfigError("StreamConfig.max_sources: a masked pair's frames tell no "
                               "several talkers' directions (one talker only)")
         linear = geom.kind == "linear"
-        span = 180.0 if linear else 360.0
-        modes = self.cfg.talker_modes_dps2
-        self.talkers = (SourceTracker(self.cfg.max_sources, span_deg=span) if modes is None
-                        else SourceTracker(self.cfg.max_sources, span_deg=span,
-                                           max_jump_deg=TALKER_MAX_JUMP_DEG, rate_tau_s=None,
-                                           modes_dps2=modes, mode_dwell_s=TALKER_MODE_DWELL_S))
+        self.talkers = SourceTracker(self.cfg.max_sources, span_deg=180.0 if linear else 360.0,
+                                     **talker_tracker_settings(self.cfg.talker_modes_dps2))
         if linear:
             self._talker_design = linear_design(self.array, self.pairs)
         self._talker_az: dict[int, float] = {}  # (a pair's last azimuth per track: its twin)
