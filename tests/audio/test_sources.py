@@ -845,6 +845,18 @@ def test_source_tracker_rotate_and_reset():
     assert trk.step(0.0, 5.0) > first
 
 
+def test_a_source_tracker_that_replaces_another_goes_on_with_its_ids():
+    old = SourceTracker()
+    assert old.next_id == 0
+    ids = {old.step(0.0, 40.0), old.step(0.1, -60.0), old.step(0.2, 150.0)}
+    assert ids == {0, 1, 2} and old.next_id == 3
+    new = SourceTracker(first_id=old.next_id)
+    assert new.step(0.0, 40.0) == 3 and new.next_id == 4
+    for bad in (-1, 1.5, "3", True, None):
+        with pytest.raises(ConfigError, match="first_id"):
+            SourceTracker(first_id=bad)
+
+
 def test_source_tracker_filters():
     """The offline tracks' one filter (its rate relaxing over TRACK_RATE_TAU_S, the stream's
     single-talker value) or, with ``modes_dps2``, an IMM of those modes."""

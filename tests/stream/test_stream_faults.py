@@ -1066,6 +1066,39 @@ def test_a_live_streams_dead_microphone_is_left_out(monkeypatch):
     assert np.median(before) > 2 * np.median(err)  # (the dead channel's noise in every pair)
 
 
+def test_talker_ids_go_on_counting_where_a_dead_microphone_is_left_out(monkeypatch):
+    """With several talkers (``max_sources``) the processor that takes over when a dead
+    microphone is left out goes on with the old one's talker ids: a client keying on them would
+    otherwise take the new tracks (counted from 0 again) for the old ones. (A watch that finds
+    microphone 3 dead at its check stands in for an unplugged one whose frames still gave
+    directions.)"""
+    import warnings
+
+    from hearsee.sim.audio import simulate_recording
+
+    class Unplugged(pl._WiringWatch):
+        def _check(self, x):
+            self.dead_mics = (3,)
+            return True
+
+    monkeypatch.setattr(pl, "WIRING_CHECK_S", 3.0)
+    monkeypatch.setattr(pl, "_WiringWatch", Unplugged)
+    x, _ = simulate_recording("respeaker-4", [1.2, 1.4, 0.2], "male", 7.0, FS, 20.0, seed=333)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        pipe = StreamPipeline("respeaker-4", StreamConfig(max_sources=2), check_wiring=True)
+        ups = pipe.run(ArraySource(x, FS, BL))
+    assert pipe.stats.dead_microphones == (3,)
+    before = {s["id"] for u in ups if u.t < 2.5 for s in u.sources}
+    after = {s["id"] for u in ups if u.t > 5.0 for s in u.sources}
+    assert before and after and min(after) > max(before)
+    proc = pl.TrackingProcessor("three-mic", FS, StreamConfig(max_sources=2), first_talker_id=7)
+    assert proc.next_talker_id == 7
+    assert pl.TrackingProcessor("three-mic", FS).next_talker_id == 0
+    with pytest.raises(ConfigError, match="first_talker_id"):
+        pl.TrackingProcessor("three-mic", FS, first_talker_id=-1)
+
+
 def test_dropout_source_wraps_only_a_stream_source():
     """DropoutSource(None) was an AttributeError."""
     with pytest.raises(ConfigError, match="DropoutSource"):

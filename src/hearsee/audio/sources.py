@@ -700,7 +700,8 @@ class SourceTracker:
     ``history`` keeps the tracks that ended, each track's frames and its angle at every frame
     (what :func:`track_sources` needs; a stream leaves it off, so that memory stays bounded:
     a live track counts its frames). Ids are never given twice by one
-    tracker, :meth:`reset` included. Each track's filter is a constant-velocity
+    tracker, :meth:`reset` included; they count from ``first_id`` (a tracker replacing
+    another one starts at its :attr:`next_id`). Each track's filter is a constant-velocity
     :class:`~hearsee.audio.tracking.DirectionKalman` (``sigma_accel_dps2``, its rates relaxing
     toward zero over ``rate_tau_s`` seconds, None = constant rates), or with ``modes_dps2`` (two
     or more angular acceleration noises, deg/s^2) an IMM of such modes
@@ -726,7 +727,7 @@ class SourceTracker:
                  merge_deg: float = TRACK_MERGE_DEG, history: bool = False,
                  rate_tau_s: float | None = TRACK_RATE_TAU_S,
                  modes_dps2: Sequence[float] | None = None,
-                 mode_dwell_s: float = TALKER_MODE_DWELL_S) -> None:
+                 mode_dwell_s: float = TALKER_MODE_DWELL_S, first_id: int = 0) -> None:
         from scipy.stats import chi2
 
         from hearsee.audio.tracking import NOISE_RANGE
@@ -763,9 +764,16 @@ class SourceTracker:
                                           lo_open=True)
         self._gate = float(chi2.ppf(0.997, 1))
         # (ids are never given again, reset() included: a client keying on them would merge
-        # two talkers)
-        self._next_id = 0
+        # two talkers; a tracker that replaces another one goes on from its next_id)
+        self._next_id = whole_number("first_id", first_id, 0, None)
         self.reset()
+
+    @property
+    def next_id(self) -> int:
+        """The id the next new track gets (``first_id`` for a tracker that has started none):
+        a tracker that takes over from this one starts there (``first_id=``), so that no id
+        names two talkers."""
+        return self._next_id
 
     def reset(self) -> None:
         """Forget every track (as after the array has turned by an unknown angle); the ids of

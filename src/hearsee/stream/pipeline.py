@@ -230,8 +230,9 @@ class Update:
     reported at this frame by :class:`hearsee.audio.sources.SourceTracker` on the frames' own
     directions (and their steered responses' second maxima, ``talker_peak_ratio``), the
     most weight of recent frames first, each ``{"id"`` (the track's number: the same for as
-    long as it is followed, never another talker's in one stream -- but a new
-    :class:`TrackingProcessor` counts from 0) ``, "azimuth_deg"`` (a pair's front twin: its
+    long as it is followed, never another talker's in one stream, also where the stream
+    leaves a dead microphone out and goes on with a new :class:`TrackingProcessor`)
+    ``, "azimuth_deg"`` (a pair's front twin: its
     mirror is as likely) ``, "rate_dps"`` (None for a pair, whose track is in its angle's sine)
     ``, "last_heard_s"`` (the time of its last frame; it is predicted through a pause)
     ``, "n_frames"}``. The single-talker fields above are the one direction tracker's, as
@@ -2323,10 +2324,16 @@ class TrackingProcessor:
         called at each update's ``t`` minus the source's propagation delay
         (:func:`hearsee.fusion.audiovisual.frame_fix`), so ``position_m`` is where the source
         was when it emitted the frame's sound.
+    first_talker_id : int
+        With ``StreamConfig.max_sources``: the id of the first talker's track (the talkers'
+        :class:`~hearsee.audio.sources.SourceTracker`'s ``first_id``): a processor that
+        replaces another one in a running stream (a dead microphone left out) goes on from
+        the old one's :attr:`next_talker_id`, so that no id names two talkers.
     """
 
     def __init__(self, array: MicArray | str, fs: float, config: StreamConfig | None = None,
-                 rig: Any = None, image_points: Callable[[float], Any] | None = None) -> None:
+                 rig: Any = None, image_points: Callable[[float], Any] | None = None, *,
+                 first_talker_id: int = 0) -> None:
         array = load_array(array)
         self.array, self.fs = array, check_analysis_fs(fs)
         check_trackable(array, camera=rig is not None)
@@ -2360,8 +2367,9 @@ class TrackingProcessor:
             model, fs, self.frame_len, self.hop, self.cfg.mask_tau_s,
             self.gcc.activity.n_history)
         self.talkers, self._talker_design = None, None
+        first_talker_id = whole_number("first_talker_id", first_talker_id, 0, None)
         if self.cfg.max_sources is not None:
-            self._talkers_init(geom)
+            self._talkers_init(geom, first_talker_id)
         self.srp = None
         # (a masked pair: no steered response -- its steering is the bare pair's)
         if self.cfg.spectrum_alpha > 0 and self.mask is None:
@@ -2379,9 +2387,16 @@ class TrackingProcessor:
             self._talker_keys = azimuth_keys(self.srp.az_axis, None if geom.kind != "linear"
                                              else geom.axis)
 
-    def _talkers_init(self, geom: Any) -> None:
-        """The several talkers' tracker (``cfg.max_sources``): angles are azimuths, or a
-        linear array's sines from broadside times 90 (180 deg of span)."""
+    @property
+    def next_talker_id(self) -> int:
+        """The id the talkers' tracker gives its next new track (0 without
+        ``StreamConfig.max_sources``): a processor replacing this one starts there."""
+        return 0 if self.talkers is None else self.talkers.next_id
+
+    def _talkers_init(self, geom: Any, first_id: int) -> None:
+        """The several talkers' tracker (``cfg.max_sources``), its ids from ``first_id``:
+        angles are azimuths, or a linear array's sines from broadside times 90 (180 deg of
+        span)."""
         from hearsee.audio.sources import SourceTracker, linear_design, talker_tracker_settings
 
         if self.array.mask is not None:
@@ -2389,6 +2404,7 @@ class TrackingProcessor:
                               "several talkers' directions (one talker only)")
         linear = geom.kind == "linear"
         self.talkers = SourceTracker(self.cfg.max_sources, span_deg=180.0 if linear else 360.0,
+                                     first_id=first_id,
                                      **talker_tracker_settings(self.cfg.talker_modes_dps2))
         if linear:
             self._talker_design = linear_design(self.array, self.pairs)
@@ -3012,13 +3028,15 @@ class StreamPipeline:
         def leave_out(dead: tuple[int, ...]) -> None:
             """Dead microphones found by the watch: the others localize from the next block
             on, as an array of their own (the framer keeps its place and their samples; a new
-            processor: the track starts afresh), the hum filter on their channels."""
+            processor: the track starts afresh, the talkers' ids go on counting), the hum
+            filter on their channels."""
             from hearsee.audio.localize import without_microphones
 
             nonlocal keep, proc, hum
             keep, sub = without_microphones(self.array, dead, stacklevel=2)
             framer.keep_channels(keep)
-            proc = TrackingProcessor(sub, source.fs, self.config, self.rig, self.image_points)
+            proc = TrackingProcessor(sub, source.fs, self.config, self.rig, self.image_points,
+                                     first_talker_id=proc.next_talker_id)
             if hum is not None:
                 hum = LineFilter(st.tonal_lines_hz, source.fs, len(keep))
             st.dead_microphones = dead
