@@ -584,5 +584,5 @@ def test_live_track_with_several_talkers(fake_sd, capsys):
                for u in doc["updates"])
     n_opened = len(sd.opened)
     _one_line(capsys, main(["track", "--device", "0", "--array", "mask2-asym", "--sources",
-                            "2", "--duration", "0.2"]), "--sources: the masked array")
+                            "2", "--duration", "0.2"]), "--sources: the masked pair")
     assert len(sd.opened) == n_opened

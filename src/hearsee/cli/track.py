@@ -301,11 +301,10 @@ def track_cmd(
         raise ConfigError(f"--gate-coherence must be in [0, 1] (0 = off), got {gate_coherence}")
     arr = load_array(array)
     chosen = parse_channels(channels, arr.n_mics)
-    # (a vertical line, or a masked pair with a camera: refused before any audio)
-    check_trackable(arr, camera=camera is not None)
-    if sources > 1 and arr.mask is not None:
-        raise ConfigError(f"--sources: the masked array {arr.name!r} tracks one talker (its "
-                          "front/back decision is one talker's)")
+    # (a vertical line, a masked pair with a camera or several talkers: refused before any
+    # audio)
+    check_trackable(arr, camera=camera is not None, max_sources=sources if sources > 1 else None,
+                    setting="--sources")
     rig = points = None
     if camera is not None:
         from hearsee.fusion.audiovisual import AudioVisualRig

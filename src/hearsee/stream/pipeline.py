@@ -2285,14 +2285,21 @@ def _check_gating(cfg: StreamConfig) -> None:
             f"gated_after_s >= 0 s; got {cfg.gate_sigmas}, {cfg.gate_deg}, {cfg.gated_after_s}")
 
 
-def check_trackable(array: MicArray, camera: bool = False) -> None:
+def check_trackable(array: MicArray, camera: bool = False, max_sources: int | None = None,
+                    setting: str = "StreamConfig.max_sources") -> None:
     """ConfigError unless the stream can track a direction with ``array`` (and, with
-    ``camera``, fuse it with a camera): a vertical line of microphones hears the elevation
-    only, and the stream's direction trackers follow an azimuth (every frame was dropped: "no
-    localizable source"). Masked pairs are tracked (:class:`SmoothedMask`) since 2026-12-05 --
-    until then they were refused here (the stream had taken them for the bare pair: a source
-    at -153 deg came out at -29 deg) -- but not with a camera: the fusion solves the bare
-    microphones' ITD equations, which the mask changes."""
+    ``camera``, fuse it with a camera; with ``max_sources``, follow several talkers -- the
+    error names ``setting``, e.g. the CLI's ``--sources``): a vertical line of microphones
+    hears the elevation only, and the stream's direction trackers follow an azimuth (every
+    frame was dropped: "no localizable source"). Masked pairs are tracked
+    (:class:`SmoothedMask`) since 2026-12-05 -- until then they were refused here (the stream
+    had taken them for the bare pair: a source at -153 deg came out at -29 deg) -- but not
+    with a camera: the fusion solves the bare microphones' ITD equations, which the mask
+    changes; nor with several talkers: a masked pair's front/back decision is one talker's,
+    and its frames tell no several talkers' directions."""
+    if array.mask is not None and max_sources is not None:
+        raise ConfigError(f"{setting}: the masked pair {array.name!r} tracks one talker (its "
+                          "front/back decision is one talker's)")
     if array.mask is not None and camera:
         raise ConfigError(
             f"array {array.name!r} has a mask: a masked pair gives a direction, not the ITD "
@@ -2336,8 +2343,8 @@ class TrackingProcessor:
                  first_talker_id: int = 0) -> None:
         array = load_array(array)
         self.array, self.fs = array, check_analysis_fs(fs)
-        check_trackable(array, camera=rig is not None)
         self.cfg = _stream_config(config)
+        check_trackable(array, camera=rig is not None, max_sources=self.cfg.max_sources)
         self.rig, self.image_points = rig, image_points
         self.frame_len, self.hop = frame_geometry(fs, self.cfg.frame_ms, self.cfg.hop_ms)
         self.pairs = list(array.pairs)
@@ -2399,9 +2406,6 @@ class TrackingProcessor:
         span)."""
         from hearsee.audio.sources import SourceTracker, linear_design, talker_tracker_settings
 
-        if self.array.mask is not None:
-            raise ConfigError("StreamConfig.max_sources: a masked pair's frames tell no "
-                              "several talkers' directions (one talker only)")
         linear = geom.kind == "linear"
         self.talkers = SourceTracker(self.cfg.max_sources, span_deg=180.0 if linear else 360.0,
                                      first_id=first_id,
