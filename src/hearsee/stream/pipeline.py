@@ -2345,6 +2345,7 @@ class TrackingProcessor:
         self.array, self.fs = array, check_analysis_fs(fs)
         self.cfg = _stream_config(config)
         check_trackable(array, camera=rig is not None, max_sources=self.cfg.max_sources)
+        first_talker_id = whole_number("first_talker_id", first_talker_id, 0, None)
         self.rig, self.image_points = rig, image_points
         self.frame_len, self.hop = frame_geometry(fs, self.cfg.frame_ms, self.cfg.hop_ms)
         self.pairs = list(array.pairs)
@@ -2374,7 +2375,6 @@ class TrackingProcessor:
             model, fs, self.frame_len, self.hop, self.cfg.mask_tau_s,
             self.gcc.activity.n_history)
         self.talkers, self._talker_design = None, None
-        first_talker_id = whole_number("first_talker_id", first_talker_id, 0, None)
         if self.cfg.max_sources is not None:
             self._talkers_init(geom, first_talker_id)
         self.srp = None
