@@ -50,7 +50,9 @@ scratch seed 400, held out on 295-296 and 401-402; this bench's crossing scenes 
 (:data:`~hearsee.audio.sources.TALKER_PEAK_RATIO`: dev 281 and crossing ``[400, 2]``, held out
 on 297 and crossing ``[403, 2]``) nor the stream's IMM tracks
 (:data:`~hearsee.audio.sources.TALKER_MODES_DPS2`: dev 281 and crossing ``[400, 2]``, held out
-on crossing ``[405, 2]`` and on ``[407, 2]``, ``[408, 2]`` and seed 300).
+on crossing ``[405, 2]`` and on ``[407, 2]``, ``[408, 2]`` and seed 300) nor the offline tracks'
+linking of a broken track's pieces (:data:`~hearsee.audio.sources.TRACK_LINK_GAP_S`: dev 281
+and crossing ``[400, 2]``, held out on 301 and crossing ``[409, 2]``).
 
 Usage: python bench/moving_sources.py [--trials 10] [--seed 280] [--data ../shared/data]
 """

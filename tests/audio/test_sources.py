@@ -372,6 +372,31 @@ def test_a_walker_across_the_wrap_is_one_track():
     assert _ang(tracks[0].angle_deg[-1], truth[-1]) < 4.0
 
 
+def test_a_talker_whose_track_broke_is_one_source():
+    """A walker at 25 deg/s, silent for 2.5 s: the track coasts on a relaxing rate and falls
+    ~27 deg behind, so the walker's next frames start a new track; the two pieces, whose
+    straight-line extrapolations meet, are linked into one source (TRACK_LINK_GAP_S). A talker
+    who stops and another who starts 1 s later 90 deg away stay two."""
+    linked = 0
+    for seed in range(334, 342):
+        rng = np.random.default_rng(seed)
+        t = np.arange(0.0, 7.0, 0.032)
+        a = -80.0 + 25.0 * t + rng.normal(0, 2.0, t.size)
+        a[(rng.random(t.size) < 0.35) | ((t > 2.0) & (t < 4.5))] = np.nan
+        apart, which_apart = track_sources(t, a, link_gap_s=0.0)
+        assert len(apart) == 2  # (the broken track, each piece its own source)
+        tracks, which = track_sources(t, a)
+        if len(tracks) == 1:
+            linked += 1
+            assert np.array_equal(which == 0, which_apart >= 0)  # (both pieces' frames)
+            assert tracks[0].share == pytest.approx(1.0)
+            assert _ang(tracks[0].angle_deg[-1], -80.0 + 25.0 * t[tracks[0].frames[-1]]) < 6.0
+        b = np.where(t < 3.0, 0.0, np.where(t > 4.0, 90.0, np.nan)) + rng.normal(0, 2.0, t.size)
+        b[rng.random(t.size) < 0.35] = np.nan
+        assert len(track_sources(t, b)[0]) == 2
+    assert linked >= 6  # (a line fitted to 0.6 s of noisy frames misses now and then)
+
+
 def test_at_most_max_sources_at_once_and_small_tracks_dropped():
     t, a, who = _two_talker_angles(270)
     one, which = track_sources(t, a, max_sources=1)
@@ -510,6 +535,10 @@ def test_a_slow_walker_crossing_a_still_talker_is_not_merged_with_it():
     (([0.0, 0.1], [1.0, 2.0]), {"merge_spread_deg": np.inf}, "merge_spread_deg"),
     (([0.0, 0.1], [1.0, 2.0]), {"merge_spread_deg": 361.0}, "merge_spread_deg"),
     (([0.0, 0.1], [1.0, 2.0]), {"merge_spread_deg": np.nan}, "merge_spread_deg"),
+    (([0.0, 0.1], [1.0, 2.0]), {"link_gap_s": -1.0}, "link_gap_s"),
+    (([0.0, 0.1], [1.0, 2.0]), {"link_gap_s": np.inf}, "link_gap_s"),
+    (([0.0, 0.1], [1.0, 2.0]), {"link_deg": 181.0}, "link_deg"),
+    (([0.0, 0.1], [1.0, 2.0]), {"link_deg": np.nan}, "link_deg"),
     # (the Kalman filter's own ranges: its EstimationError came at the first located frame)
     (([0.0, 0.1], [1.0, 2.0]), {"sigma_accel_dps2": 1e300}, "sigma_accel_dps2"),
     (([0.0, 0.1], [np.nan, np.nan]), {"sigma_accel_dps2": 1e300}, "sigma_accel_dps2"),
