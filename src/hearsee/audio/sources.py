@@ -1185,7 +1185,9 @@ def _linked(pieces: list[_Track], t: NDArray, a: NDArray, gap_s: float, link_deg
         ends = [(t[tr.hits], a[tr.hits]) for tr in pieces]
         for i, (ti, ai) in enumerate(ends):
             for j, (tj, aj) in enumerate(ends):
-                if i != j and -TRACK_LINK_OVERLAP_S <= tj[0] - ti[-1] <= gap_s:
+                # (j begins after i began: a chain's starts increase, so no chain closes
+                # on itself)
+                if tj[0] > ti[0] and -TRACK_LINK_OVERLAP_S <= tj[0] - ti[-1] <= gap_s:
                     e = (miss(_extrapolated(ti, ai, tj[0], True, wrap), aj[0]),
                          miss(_extrapolated(tj, aj, ti[-1], False, wrap), ai[-1]))
                     if max(e) <= link_deg:
