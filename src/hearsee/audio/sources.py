@@ -1157,18 +1157,21 @@ def _life(tr: _Track) -> tuple[NDArray, NDArray]:
     return pi[on], np.array(tr.path_a, dtype=float)[on]
 
 
-def _extrapolated(t: NDArray, a: NDArray, at: float, end: bool, wrap: bool) -> float:
+def _end_line(t: NDArray, a: NDArray, end: bool, wrap: bool) -> tuple[float, float, float]:
     """The straight line fitted to the angles ``a`` (degrees; unwrapped with ``wrap``) of the
     frames at times ``t`` (s) within :data:`TRACK_LINK_FIT_S` of the last (``end``) or first
-    one, at time ``at``; the end frame's angle when those frames span under 0.1 s."""
+    one: a time (s), the line's angle then (degrees) and its slope (deg/s); the end frame's
+    time and angle and no slope when those frames span under 0.1 s."""
     near = t >= t[-1] - TRACK_LINK_FIT_S if end else t <= t[0] + TRACK_LINK_FIT_S
     ts, aa = t[near], a[near]
     if wrap:
-        aa = np.degrees(np.unwrap(np.radians(aa)))
+        aa = np.unwrap(aa, period=360.0)
     if np.ptp(ts) < 0.1:
-        return float(aa[-1] if end else aa[0])
-    slope, icpt = np.polyfit(ts - ts.mean(), aa, 1)
-    return float(icpt + slope * (at - ts.mean()))
+        k = -1 if end else 0
+        return float(ts[k]), float(aa[k]), 0.0
+    tm = float(ts.mean())
+    slope, icpt = np.polyfit(ts - tm, aa, 1)
+    return tm, float(icpt), float(slope)
 
 
 def _linked(pieces: list[_Track], t: NDArray, a: NDArray, gap_s: float, link_deg: float,
@@ -1177,19 +1180,22 @@ def _linked(pieces: list[_Track], t: NDArray, a: NDArray, gap_s: float, link_deg
     (:data:`TRACK_LINK_GAP_S`): lists of their indices, each piece in one chain (alone when
     ``gap_s`` or ``link_deg`` is 0). ``t``, ``a``: every frame's time (s) and angle
     (degrees; azimuths when ``wrap``)."""
-    def miss(x: float, y: float) -> float:
-        return abs(float(wrap_deg(x - y))) if wrap else abs(x - y)
+    def miss(line: tuple[float, float, float], at: float, angle: float) -> float:
+        d = line[1] + line[2] * (at - line[0]) - angle  # (the line at ``at`` vs ``angle``)
+        return abs(float(wrap_deg(d))) if wrap else abs(d)
 
     links = []
     if gap_s > 0 and link_deg > 0:
         ends = [(t[tr.hits], a[tr.hits]) for tr in pieces]
+        # (each piece's lines through its first and its last frames, fitted once)
+        lines = [(_end_line(ti, ai, False, wrap), _end_line(ti, ai, True, wrap))
+                 for ti, ai in ends]
         for i, (ti, ai) in enumerate(ends):
             for j, (tj, aj) in enumerate(ends):
                 # (j begins after i began: a chain's starts increase, so no chain closes
                 # on itself)
                 if tj[0] > ti[0] and -TRACK_LINK_OVERLAP_S <= tj[0] - ti[-1] <= gap_s:
-                    e = (miss(_extrapolated(ti, ai, tj[0], True, wrap), aj[0]),
-                         miss(_extrapolated(tj, aj, ti[-1], False, wrap), ai[-1]))
+                    e = (miss(lines[i][1], tj[0], aj[0]), miss(lines[j][0], ti[-1], ai[-1]))
                     if max(e) <= link_deg:
                         links.append((sum(e), i, j))
     after: dict[int, int] = {}
