@@ -1190,8 +1190,15 @@ def _linked(pieces: list[_Track], t: NDArray, a: NDArray, gap_s: float, link_deg
         # (each piece's lines through its first and its last frames, fitted once)
         lines = [(_end_line(ti, ai, False, wrap), _end_line(ti, ai, True, wrap))
                  for ti, ai in ends]
+        # (the pieces are sorted by their first frames: those that begin near i's end are
+        # found by bisection, a window a little wider than the test below, which decides)
+        starts = np.array([ti[0] for ti, _ in ends])
         for i, (ti, ai) in enumerate(ends):
-            for j, (tj, aj) in enumerate(ends):
+            eps = 1e-9 * (1.0 + abs(ti[-1]))
+            lo = np.searchsorted(starts, max(ti[0], ti[-1] - TRACK_LINK_OVERLAP_S) - eps)
+            hi = np.searchsorted(starts, ti[-1] + gap_s + eps, side="right")
+            for j in range(int(lo), int(hi)):
+                tj, aj = ends[j]
                 # (j begins after i began: a chain's starts increase, so no chain closes
                 # on itself)
                 if tj[0] > ti[0] and -TRACK_LINK_OVERLAP_S <= tj[0] - ti[-1] <= gap_s:
