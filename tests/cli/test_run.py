@@ -365,6 +365,20 @@ def test_report_folder_that_is_a_file_fails_before_listening(robot_dir, monkeypa
     assert notes.read_text(encoding="utf-8") == "keep"
 
 
+def test_report_folder_holding_a_folder_named_index_html_fails_before_listening(
+        robot_dir, monkeypatch, capsys):
+    """A folder named index.html in output.report passed the dry run; a live run listened
+    to the end, then the report died with IsADirectoryError (2026-12-07 robot review)."""
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES))
+    (robot_dir / "report" / "index.html").mkdir(parents=True)
+    cfg = _config(robot_dir, cameras=False, output={"report": "report"})
+    assert main(["run", "--config", str(cfg), "--dry-run"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "output.report" in err[0] and (
+        "index.html is a folder where the report writes a file" in err[0]), err
+    assert list((robot_dir / "report").iterdir()) == [robot_dir / "report" / "index.html"]
+
+
 def test_report_folder_that_cannot_be_written_or_is_the_jsonl_fails_before_listening(
         robot_dir, monkeypatch, capsys):
     """An output.report folder without write permission was refused only when the report was

@@ -1,6 +1,7 @@
 """The robot loop end to end on a short scenario whose ground truth the test sets up."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -888,6 +889,34 @@ def test_demo_refuses_a_report_folder_whose_plots_or_frames_is_a_file(tmp_path, 
                                        "not a folder; choose a report folder\n")
     assert sorted(p.name for p in out.iterdir()) == [sub]
     assert (out / sub).read_text() == "mine\n"
+
+
+@pytest.mark.parametrize("name", ["index.html", "log.json", "summary.json",
+                                  "plots/top_view.png", "frames/left.png"])
+def test_demo_refuses_a_report_folder_with_a_folder_where_a_report_file_goes(
+        tmp_path, monkeypatch, capsys, name):
+    """A folder named index.html (or log.json, summary.json, a PNG in plots/ or frames/) in
+    --out passed every check; after the whole scenario write_report failed with
+    IsADirectoryError naming its temporary file (found by the 2026-12-07 robot review; the
+    three report files with --force). Now refused first, with or without --force."""
+    import hearsee.robot.pipeline as pipeline
+
+    def no_run(*a, **k):
+        raise AssertionError("the scenario ran although -o is refused")
+
+    monkeypatch.setattr(pipeline, "run_scenario", no_run)
+    out = tmp_path / "rep"
+    (out / name).mkdir(parents=True)
+    (out / name / "mine.txt").write_text("mine\n")
+    for force in ([], ["--force"]):
+        assert main(["demo", "-o", str(out), "-q", *force]) == 2
+        assert capsys.readouterr().err == (
+            f"hearsee: error: --out {out}: {out / name} is a folder where the report writes "
+            "a file; choose a report folder\n")
+    assert (out / name / "mine.txt").read_text() == "mine\n"
+    assert [p.relative_to(out).as_posix() for p in sorted(out.rglob("*"))] == sorted(
+        {*(q.as_posix() for q in Path(name).parents if q != Path(".")), name,
+         f"{name}/mine.txt"})
 
 
 def test_demo_keeps_report_files_it_did_not_write_unless_forced(tmp_path, capsys):

@@ -39,6 +39,7 @@ def demo_cmd(
     from hearsee.robot.export import check_export_targets
     from hearsee.robot.pipeline import run_scenario
     from hearsee.robot.report import (
+        report_blocker_reason,
         report_folder_blocker,
         report_folder_unwritable,
         report_foreign_file,
@@ -52,7 +53,7 @@ def demo_cmd(
     inputs = [scenario, *([Path(sc.robot.array)] if Path(sc.robot.array).is_file() else [])]
     blocker = report_folder_blocker(out)  # (found only after the whole scenario before)
     if blocker is not None:
-        raise ConfigError(f"--out {out}: {blocker} is a file, not a folder; choose a report "
+        raise ConfigError(f"--out {out}: {report_blocker_reason(blocker)}; choose a report "
                           "folder")
     locked = report_folder_unwritable(out)
     if locked is not None:  # (a PermissionError traceback after the whole scenario)

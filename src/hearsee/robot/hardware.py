@@ -549,6 +549,7 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
     again for ``run --out``."""
     from hearsee.robot.report import (
         REPORT_FILES,
+        report_blocker_reason,
         report_folder_blocker,
         report_folder_unwritable,
         report_makes_folder,
@@ -557,7 +558,7 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
 
     blocker = report_folder_blocker(cfg.output.report)
     if blocker is not None:  # (found only when the report was written, after the live run)
-        raise ConfigError(f"{where}: output.report: {blocker} is a file, not a folder; "
+        raise ConfigError(f"{where}: output.report: {report_blocker_reason(blocker)}; "
                           "choose a report folder")
     locked = report_folder_unwritable(cfg.output.report)
     if locked is not None:  # (likewise: a PermissionError after the live run)

@@ -31,8 +31,9 @@ from hearsee.errors import InputFileError
 #: ``put(rel, data)``: stage the file ``rel`` of the report folder (text or bytes)
 _Put = Callable[[str, "str | bytes"], None]
 
-__all__ = ["REPORT_FILES", "report_folder_blocker", "report_folder_unwritable",
-           "report_foreign_file", "report_makes_folder", "report_overwrites", "write_report"]
+__all__ = ["REPORT_FILES", "report_blocker_reason", "report_folder_blocker",
+           "report_folder_unwritable", "report_foreign_file", "report_makes_folder",
+           "report_overwrites", "write_report"]
 
 #: The files :func:`write_report` writes in its folder itself; it also writes PNGs into the
 #: folder's ``plots/`` and ``frames/`` (named after the plots and the images it is given).
@@ -43,17 +44,34 @@ _STEM = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]*")
 
 
 def report_folder_blocker(folder: str | Path) -> Path | None:
-    """The file that keeps :func:`write_report` from making ``folder`` or writing into it --
-    the folder itself, one of its parents, or its ``plots`` or ``frames`` is a file -- or
-    None. Checked before a run (``hearsee demo -o``, a robot file's ``output.report``), not
-    found only once the whole run is done (a file named ``plots`` in the folder failed the
-    report after the run, with log.json and summary.json already written; until
-    2026-12-02)."""
+    """The path that keeps :func:`write_report` from making ``folder`` or writing into it --
+    the folder itself, one of its parents, or its ``plots`` or ``frames`` is a file; or one of
+    :data:`REPORT_FILES` there, or a ``*.png`` in its ``plots/`` or ``frames/``, is a folder --
+    or None (:func:`report_blocker_reason` says which). Checked before a run (``hearsee demo
+    -o``, a robot file's ``output.report``), not found only once the whole run is done (a file
+    named ``plots`` in the folder failed the report after the run, with log.json and
+    summary.json already written; until 2026-12-02; a folder named ``index.html`` failed it
+    with IsADirectoryError naming a temporary file, until 2026-12-07)."""
     blocker = _nearest_existing(folder)
     if blocker is not None and not blocker.is_dir():
         return blocker
-    return next((Path(folder) / sub for sub in _REPORT_SUBFOLDERS
-                 if (Path(folder) / sub).exists() and not (Path(folder) / sub).is_dir()), None)
+    f = Path(folder)
+    hit = next((f / sub for sub in _REPORT_SUBFOLDERS
+                if (f / sub).exists() and not (f / sub).is_dir()), None)
+    if hit is None:
+        hit = next((f / name for name in REPORT_FILES if (f / name).is_dir()), None)
+    if hit is None:
+        hit = next((q for sub in _REPORT_SUBFOLDERS if (f / sub).is_dir()
+                    for q in sorted((f / sub).iterdir())
+                    if q.suffix.lower() == ".png" and q.is_dir()), None)
+    return hit
+
+
+def report_blocker_reason(blocker: Path) -> str:
+    """What is wrong with :func:`report_folder_blocker`'s answer, for an error message."""
+    if blocker.is_dir():
+        return f"{blocker} is a folder where the report writes a file"
+    return f"{blocker} is a file, not a folder"
 
 
 def _nearest_existing(folder: str | Path) -> Path | None:
