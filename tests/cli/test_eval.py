@@ -95,6 +95,24 @@ def test_eval_force_overwrites_the_out_file(capsys, monkeypatch, tmp_path):
     assert json.loads(capsys.readouterr().out) == {"scenarios": 1}
 
 
+def test_eval_refuses_to_write_its_results_over_the_array_file(capsys, monkeypatch, tmp_path):
+    """`hearsee eval --array mics.yaml -o mics.yaml --force` replaced the user's array file,
+    which every scenario reads, with the results (2026-12-07 robot review): an input is now
+    refused whatever --force says, as `hearsee demo` refuses its own inputs."""
+    import hearsee.robot.evaluate as ev
+
+    monkeypatch.setattr(ev, "evaluate", _no_run)
+    mics = tmp_path / "mics.yaml"
+    text = "microphones: [[0.075, 0, 0], [-0.075, 0, 0]]\n"
+    mics.write_text(text, encoding="utf-8")
+    for force in ([], ["--force"]):
+        assert main(["eval", "-n", "1", "--duration", "2", "--array", str(mics), "-o",
+                     str(mics), *force]) == 2
+        assert capsys.readouterr().err == (f"hearsee: error: {mics}: refusing to overwrite an "
+                                           "input file; choose another output path\n")
+    assert mics.read_text(encoding="utf-8") == text
+
+
 def test_eval_out_that_fails_part_way_keeps_the_earlier_file(capsys, monkeypatch, tmp_path,
                                                             file_size_limit):
     """`hearsee eval -o results.json --force` wrote the results in place: a full disk (here a

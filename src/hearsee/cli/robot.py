@@ -115,7 +115,9 @@ def eval_cmd(
     """
     from hearsee.robot.evaluate import evaluate
 
-    refuse_overwrite([out], [], force)  # before the scenarios run, not after
+    # (before the scenarios run, not after; the array file every scenario reads is an input:
+    # `-o` naming it replaced it with the results, given --force, until 2026-12-07)
+    refuse_overwrite([out], [Path(array)] if array and Path(array).is_file() else [], force)
     with progress("scenarios", total=scenarios) as advance:
         res = evaluate(scenarios, seed0=seed0, workers=workers or None, scheduler=scheduler,
                        progress=advance, duration_s=duration, array=array, talkers=talkers)
