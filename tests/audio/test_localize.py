@@ -140,7 +140,8 @@ def _tetra_and_centre(side: float = 0.15) -> MicArray:
 def test_volume_array_direction_from_the_wavefront_curvature():
     """Five or more microphones: a near source's direction comes from the fitted position
     when the point source explains the TDOAs significantly better than a plane wave;
-    a plane wave keeps the plane wave's answer; four microphones always do."""
+    a plane wave keeps the plane wave's answer; four microphones take a reported position's
+    direction unless it is within NEAR_DIRECTION_MIN_RANGE_M of the array centre."""
     from hearsee.audio.localize import far_field_volume
     from hearsee.geometry import angle_between
 
@@ -158,16 +159,30 @@ def test_volume_array_direction_from_the_wavefront_curvature():
     far = localize_tdoa(arr.tdoa_far(unit_vector_deg(-60.0, -25.0)), arr)
     assert far.extra["direction_model"] == "plane_wave" and "far_field" not in far.extra
     assert (far.azimuth_deg, far.elevation_deg) == pytest.approx((-60.0, -25.0), abs=1e-6)
-    # four microphones: three TDOAs fit a position exactly, so the plane wave stays
+    # four microphones: three TDOAs fit a position exactly, so its direction is taken only
+    # where the position is reported (until 2026-12-07 the plane wave always stayed)
     tet = MicArray(arr.positions[:4])
     four = localize_tdoa(tet.tdoa(src), tet)
-    assert four.extra["direction_model"] == "plane_wave"
-    assert four.azimuth_deg == pytest.approx(far_field_volume(tet.tdoa(src), tet).azimuth_deg)
+    assert four.position_m is not None and four.extra["direction_model"] == "position"
+    assert (four.azimuth_deg, four.elevation_deg) == pytest.approx((130.0, 20.0), abs=1e-4)
+    assert four.extra["far_field"]["azimuth_deg"] == pytest.approx(
+        far_field_volume(tet.tdoa(src), tet).azimuth_deg)
+    assert abs(four.extra["far_field"]["elevation_deg"] - 20.0) > 1.0  # (what it corrects)
+    # ... and farther than NEAR_DIRECTION_MIN_RANGE_M from the centre: a position 0.2 m away
+    # (outside the 9 cm array) keeps the plane wave (reflections pull fits toward the array);
+    # a plane wave reports no position
+    from hearsee.audio.localize import NEAR_DIRECTION_MIN_RANGE_M
+
+    assert NEAR_DIRECTION_MIN_RANGE_M > 0.2
+    close = localize_tdoa(tet.tdoa(0.2 * unit_vector_deg(130.0, 20.0)), tet)
+    assert close.position_m is not None and close.extra["direction_model"] == "plane_wave"
+    far4 = localize_tdoa(tet.tdoa_far(unit_vector_deg(-60.0, -25.0)), tet)
+    assert far4.position_m is None and far4.extra["direction_model"] == "plane_wave"
     # five microphones, but pairs among four of them (microphone 3 left out): three independent
-    # TDOAs, which a position fits exactly too, so the plane wave stays
+    # TDOAs, the four microphones' rule (these four pairs report no position: the plane wave)
     sub = [(0, 4), (1, 4), (2, 4), (0, 1)]
     few = localize_tdoa(arr.tdoa(src, sub), arr, sub)
-    assert few.extra["direction_model"] == "plane_wave"
+    assert few.position_m is None and few.extra["direction_model"] == "plane_wave"
     # a position inside the array's extent is not taken for a talker's (noise pulls far
     # sources' fits there): a point 3 cm from the centre of the 15 cm array keeps the plane wave
     inside = localize_tdoa(arr.tdoa(0.03 * unit_vector_deg(40.0, 10.0)), arr)
@@ -215,8 +230,8 @@ def test_planar_array_position_up_to_its_mirror(el):
 def test_planar_array_direction_from_the_wavefront_curvature():
     """Planar arrays of five or more microphones take a near source's direction from its
     position as volume arrays do (the 1 % likelihood-ratio test), with the mirror image's
-    direction as the second candidate; a plane wave, four microphones and ``in_plane`` keep
-    their answers."""
+    direction as the second candidate (four microphones: a reported position's); a plane
+    wave and ``in_plane`` keep their answers."""
     arr = _circle(6, 0.15)
     src = 0.7 * unit_vector_deg(-120.0, 12.0)
     plane = far_field_planar(arr.tdoa(src), arr)
@@ -241,11 +256,14 @@ def test_planar_array_direction_from_the_wavefront_curvature():
     noisy = localize_tdoa(tau, arr)
     assert noisy.extra["direction_model"] == "plane_wave"
     assert noisy.candidates == far_field_planar(tau, arr).candidates
-    # four microphones: a position, but three TDOAs fit it exactly, so the plane wave stays
+    # four microphones: the reported position's direction and its mirror image's (the plane
+    # wave until 2026-12-07)
     four = _circle(4, 0.15)
     loc4 = localize_tdoa(four.tdoa(src), four)
-    assert loc4.extra["direction_model"] == "plane_wave" and loc4.position_m is not None
-    assert loc4.candidates == far_field_planar(four.tdoa(src), four).candidates
+    assert loc4.extra["direction_model"] == "position" and loc4.position_m is not None
+    np.testing.assert_allclose(loc4.candidates, [(-120.0, 12.0), (-120.0, -12.0)], atol=1e-5)
+    assert loc4.extra["far_field"]["elevation_deg"] == pytest.approx(
+        far_field_planar(four.tdoa(src), four).elevation_deg)
     # in_plane (a source at the array's height) and near_field=False: unchanged
     assert localize_tdoa(arr.tdoa(src), arr, near_field=False).position_m is None
     assert "direction_model" not in localize_tdoa(arr.tdoa(0.7 * unit_vector_deg(50.0)), arr,
