@@ -570,6 +570,30 @@ def test_localize_recording_document():
     assert f["azimuth_deg"] == pytest.approx(60.0, abs=3.0)
 
 
+def test_localize_recording_four_microphones_summary_from_the_position():
+    """Four microphones 0.5 m wide (a small robot's corners), a talker 1.5 m away: the plane
+    wave's azimuth is 1.7 deg off (the frames'); the summary takes the reported near-field
+    position's direction (since 2026-12-07) and says so (``direction_from_position``)."""
+    from hearsee.sim.audio import simulate_recording
+
+    arr = MicArray(np.array([[0.2, 0, 0], [-0.1, 0.25, 0], [-0.1, -0.25, 0], [0, 0, 0.2]]))
+    src = 1.5 * unit_vector_deg(18.0, 10.0)
+    x, truth = simulate_recording(arr, src, signal="noise", duration_s=1.0, fs=16000,
+                                  snr_db=30, seed=342)
+    assert (truth["azimuth_deg"], truth["elevation_deg"]) == pytest.approx((18.0, 10.0))
+    doc = localize_recording(x, 16000, arr)
+    s = doc["summary"]
+    assert s["direction_from_position"] is True and s["position_m"] is not None
+    np.testing.assert_allclose(s["position_m"], src, atol=0.05)
+    assert (s["azimuth_deg"], s["elevation_deg"]) == pytest.approx((18.0, 10.0), abs=0.2)
+    frames = [f for f in doc["frames"] if f["valid"]]
+    assert len(frames) > 20
+    assert abs(np.median([f["azimuth_deg"] for f in frames]) - 18.0) > 1.0  # (plane waves)
+    # a three-mic array never localizes from a position
+    x3 = simulate_free_field(white_noise(0.6, 16000, 7), 16000, THREE, src, snr_db=20, rng=8)
+    assert localize_recording(x3, 16000, THREE)["summary"]["direction_from_position"] is False
+
+
 def test_localize_recording_in_plane_also_steers_the_summary_search_in_plane():
     """``in_plane`` reaches the whole-recording peak search (estimate_tdoas(source_in_plane)),
     as in bench/doa.py's benchmarked setting, unless the caller sets it. A female voice in the

@@ -310,6 +310,7 @@ def test_localize_recording_document(model):
                 "position_covariance_m2", "distance_rel_std", "position_tdoa_std_s")
     assert set(contract) <= set(bare) and set(contract) <= set(s)
     assert all(s[k] is None for k in contract[8:])
+    assert s["direction_from_position"] is False and bare["direction_from_position"] is False
     json_doc = __import__("json").dumps(doc)  # JSON-able
     assert '"summary"' in json_doc
 

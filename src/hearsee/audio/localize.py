@@ -1650,7 +1650,8 @@ def localize_recording(
              "summary": {"tdoa_s", "azimuth_deg", "elevation_deg", "candidates", "n_solutions",
                          "feasible", "confidence", "n_valid_frames", "position_m",
                          "position_covariance_m2", "distance_rel_std",
-                         "position_tdoa_std_s", "inverted_microphones", "dead_microphones",
+                         "position_tdoa_std_s", "direction_from_position",
+                         "inverted_microphones", "dead_microphones",
                          "sync_offsets_s", "tonal_lines_hz", "microphones_used"},
              "sources": [{"azimuth_deg", "elevation_deg", "candidates", "tdoa_s", "share",
                           "n_frames", "spread_deg"}] (with max_sources >= 2; the frames then
@@ -1663,7 +1664,13 @@ def localize_recording(
         all of them, or, with three or more, all but the dead ones (``dead_microphones``; the
         others localize as an array of their own and the dead one's pairs are null: see
         :func:`_without_dead`). The summary localizes the whole-recording TDOA estimate (weighted
-        cross spectra averaged over valid frames), not an average of frame angles.
+        cross spectra averaged over valid frames), not an average of frame angles. The frames'
+        directions are plane waves' (a far-field direction, the same from any point of the
+        frame); the summary's of a planar or volume array of four or more microphones may be
+        its near-field position's, seen from the array frame's origin
+        (``direction_from_position`` true; :func:`localize_tdoa`), which differs from the plane
+        wave's for a talker near the array -- by its curvature error, and by parallax where the
+        microphones sit away from the origin (the frame's z = 0 on a robot's floor, say).
         ``confidence`` (frames and summary) is the smallest pair's GCC peak-to-second-peak
         ratio: 0 to :data:`hearsee.audio.tdoa.MAX_CONFIDENCE` (1000), not a probability (a
         masked array's summary ``confidence`` is the probability of the chosen front/back
@@ -1783,6 +1790,8 @@ def localize_recording(
         **{k: sloc.to_dict()[k] if sloc else None
            for k in ("position_m", "position_covariance_m2", "distance_rel_std",
                      "position_tdoa_std_s")},
+        "direction_from_position": (sloc.extra.get("direction_model") == "position"
+                                    if sloc else None),
         "method": tf.summary_method,
         "coherence_ratio": (float(tf.coherence_ratio) if np.isfinite(tf.coherence_ratio)
                             else None),

@@ -1893,6 +1893,7 @@ def localize_recording_mask(x: ArrayLike, fs: float, array: MicArray | str | Pat
         "n_valid_frames": tf.n_valid,
         **dict.fromkeys(("position_m", "position_covariance_m2", "distance_rel_std",
                          "position_tdoa_std_s")),
+        "direction_from_position": False,
         **tf.wiring_entries(),  # (the same checks as every array's; absent until 2026-12-04)
         "microphones_used": [0, 1],
     }
