@@ -1166,7 +1166,7 @@ NEAR_DIRECTION_MIN_MICS = 5
 #: :func:`_add_position`) outside the array and farther than this from its centre (metres):
 #: nearer fits are taken for reflections pulling the fit toward the array. Not in the thesis;
 #: chosen 2026-12-07 (scratch; the rule written before the held-out run) on random
-#: four-microphone arrays at the TDOA level (planar and volume, 15-50 cm, sources 0.5-4 m,
+#: four-microphone arrays at the TDOA level (planar and volume, 5-50 cm, sources 0.5-4 m,
 #: 0-20 us) and recordings in ``bench/nmic.py``'s room (a 15 cm and a 40 cm regular
 #: tetrahedron, a 0.5 m array with one microphone 0.2 m up, a 30 cm square; white noise, male
 #: and female voices, 10/20 dB, anechoic and RT60 0.3/0.6 s, sources 0.5-3 m). Without the
