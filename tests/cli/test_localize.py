@@ -393,7 +393,8 @@ def test_eight_mic_circle_table_and_position(tmp_path, capsys):
     assert heads == [f"0-{k}" for k in range(1, 8)]
     assert "TDOAs of 7 of 28 pairs" in out
     assert re.search(r"position \(0\.50, -0\.40, 0\.20\) m \+- \(0\.0\d, 0\.0\d, 0\.0\d\) "
-                     r"\(TDOA error 5\.0 us\)", out)
+                     r"\(TDOA error 5\.0 us\); direction from the position,", out)
+    assert s["direction_from_position"] is True
 
 
 @pytest.mark.parametrize("value", ["1e300", "1e7"])

@@ -110,6 +110,8 @@ def _print_table(doc: dict[str, Any]) -> None:
         where += f" +- ({', '.join(_fmt(math.sqrt(max(cov[k][k], 0.0)), 2) for k in range(3))})"
         if s.get("position_tdoa_std_s") is not None:
             where += f" (TDOA error {s['position_tdoa_std_s'] * 1e6:.1f} us)"
+    if s.get("direction_from_position"):  # (the frames' are plane waves': they may differ)
+        where += "; direction from the position"
     con.print(f"summary: azimuth {_fmt(s['azimuth_deg'])} deg, elevation "
               f"{_fmt(s['elevation_deg'])} deg, candidates {cands}{where}, "
               f"{s['n_valid_frames']} valid frames", highlight=False, soft_wrap=True)
