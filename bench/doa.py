@@ -300,6 +300,20 @@ def pra_azimuth(x: np.ndarray, fs: float, arr: MicArray, algo: str,
     return pra_azimuths(x, fs, arr, algo, band, 1, nfft, grid_deg, near_m)[0]
 
 
+#: pyroomacoustics' subspace methods: their noise subspace is what is left of the spatial
+#: covariance after ``num_src`` signal dimensions
+PRA_SUBSPACE = ("MUSIC", "NormMUSIC")
+
+
+def peer_applies(algo: str, n_mics: int, num_src: int) -> bool:
+    """Whether pyroomacoustics' ``algo`` can be told ``num_src`` sources on ``n_mics``
+    microphones: MUSIC and NormMUSIC need more microphones than sources (two microphones and
+    two talkers leave an empty noise subspace, and the pseudo-spectrum is one over rounding
+    error: bench/sources.py and bench/moving_sources.py scored it as a peer until
+    2026-12-07); SRP-PHAT has no such limit."""
+    return algo not in PRA_SUBSPACE or n_mics > num_src
+
+
 def pra_azimuths(x: np.ndarray, fs: float, arr: MicArray, algo: str,
                  band: tuple[float, float], num_src: int, nfft: int = PRA_NFFT,
                  grid_deg: float = PRA_GRID_DEG, near_m: float | None = PEER_NEAR_M,
@@ -307,8 +321,12 @@ def pra_azimuths(x: np.ndarray, fs: float, arr: MicArray, algo: str,
     """The ``num_src`` azimuths (deg) of :func:`pra_azimuth`'s peer call (the method told
     that many sources are present); with ``front_half`` the grid spans -90..90 deg only (a
     y-axis pair's steered response is the same at an azimuth and its mirror, and two of its
-    maxima were one source's twins: bench/sources.py)."""
+    maxima were one source's twins: bench/sources.py). ValueError where the method does not
+    apply (:func:`peer_applies`)."""
     import pyroomacoustics as pra
+
+    if not peer_applies(algo, arr.n_mics, num_src):
+        raise ValueError(f"{algo} needs more than {num_src} microphones for {num_src} sources")
 
     X = pra.transform.stft.analysis(x.T, nfft, nfft // 2, win=pra.hann(nfft))
     X = X.transpose([2, 1, 0])

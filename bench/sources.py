@@ -15,7 +15,10 @@ at most two, and decides how many (``hearsee.audio.sources``). Peers: pyroomacou
 DOA methods told that there are two (``num_src=2``), given what bench/doa.py gives them (1024-
 sample Hann STFT at 50 % overlap, the same band, the array plane (``dim=2``), in-plane points
 2 m away for the triangle and far-field steering for the pair, whose grid is its front half:
-a pair's response is the same at an azimuth and at its mirror) on a 0.5-deg grid. Scored:
+a pair's response is the same at an azimuth and at its mirror) on a 0.5-deg grid; MUSIC and
+NormMUSIC only where there are more microphones than talkers (``peer_applies``: the pair's
+noise subspace is empty -- "n/a"; until 2026-12-07 their meaningless answers were scored,
+0-7 % both found). Scored:
 both talkers found within 10 deg (the estimates matched to the talkers so that the larger
 error is smallest; two-mic angles from broadside, modulo front/back) and the matched errors'
 median; a talker without an estimate counts as 180 deg off (90 for the pair). CPU: process
@@ -51,7 +54,7 @@ from _common import (  # noqa: E402
     shared_data_dir,
     write_markdown,
 )
-from doa import ARRAY_AT, ROOM, pra_azimuths  # noqa: E402
+from doa import ARRAY_AT, ROOM, peer_applies, pra_azimuths  # noqa: E402
 
 from hearsee.audio.arrays import MicArray  # noqa: E402
 from hearsee.audio.localize import localize_recording  # noqa: E402
@@ -171,7 +174,7 @@ def run(trials: int, seed: int, speech: list[Path]) -> tuple[dict, dict, dict]:
             if n_talk == 2:
                 cpu["hearsee"] += t1 - t0
                 cpu["audio_s"] += x.shape[1] / FS
-                for m in PEERS:
+                for m in (m for m in PEERS if peer_applies(m, arr.n_mics, 2)):
                     t0 = time.process_time()
                     est[m] = pra_azimuths(x, FS, arr, m, BAND, 2, grid_deg=GRID_DEG,
                                           front_half=two)
@@ -195,6 +198,9 @@ def tables(err: dict, found: dict, trials: int) -> tuple[list, list, list, list]
             ARRAYS.index(k[0]), k[1], k[2] != "voices")):
         cells = []
         for m in METHODS:
+            if (array, rt60, kind, 2, m) not in err:  # (peer_applies: MUSIC on two mics)
+                cells.append("n/a")
+                continue
             e = np.array(err[(array, rt60, kind, 2, m)])
             cells.append(f"{100 * np.mean(e.max(axis=1) < HIT_DEG):.0f} / "
                          f"{np.median(e):.2f}")
@@ -217,6 +223,8 @@ def plot(err: dict, path: Path) -> None:
     fig, axes = plt.subplots(1, len(ARRAYS), figsize=(5 * len(ARRAYS), 3.4), sharey=True)
     for ax, array in zip(axes, ARRAYS, strict=True):
         for m, mk in zip(METHODS, "os^v", strict=True):
+            if (array, RT60S[0], kinds[0], 2, m) not in err:  # (n/a: peer_applies)
+                continue
             for kind, ls in zip(kinds, ("-", "--"), strict=False):
                 hit = [100 * np.mean(np.array(err[(array, rt, kind, 2, m)]).max(axis=1)
                                      < HIT_DEG) for rt in RT60S]
