@@ -57,8 +57,9 @@ which is why its per-frame / tracked ratio stays below 2 (1.2-1.4x in the 2026-1
 where a lag-free 9-frame smoother of the per-frame errors would reach only 1.2-1.7x) while the
 voices' sparse, outlier-ridden per-frame errors are cut 2-7x. With the IMM's former 1000
 deg/s^2 turning mode the median of the per-walk lags reached 2.7 frames for the male voice at
-10 dB (standard error 1.8; 1.5 in free field); with 2000 deg/s^2 it is 1.6 and every
-condition's pooled lag is within about +-1 frame. The "one CV filter" columns run the same
+10 dB (standard error 1.8; 1.5 in free field); with 2000 deg/s^2 it was 1.6 and every
+condition's pooled lag within about +-1 frame in that day's run (later runs: the table's
+pooled lags, within 2 frames). The "one CV filter" columns run the same
 recordings through the stream with one constant-velocity
 :class:`~hearsee.audio.tracking.DirectionKalman` instead
 (``StreamConfig(direction_modes_dps2=None, direction_rate_tau_s=None)``, angular acceleration
@@ -184,8 +185,8 @@ The last two columns (since 2026-11-24's fifth session) say how hard each rig ma
 range, whatever the room: the error along the camera ray that 1 deg of error in the array's
 azimuth causes, and the range spread that 1 us of TDOA noise on every pair causes (medians over
 the walks' positions; :func:`range_sensitivity`). With the camera 0.2 m beside the 15 cm array
-one degree is ~17 cm, so the tracked 5.9-6.5 cm correspond to ~0.35 deg of remaining azimuth
-bias (~3 us), and the 5 cm target would need ~0.3 deg; the 0.5 m baseline has ~7 cm per
+one degree is ~16 cm, so the 5 cm target leaves ~0.3 deg of azimuth bias (~2 us) to the
+tracked fixes (the 2026-11-24 runs' 5.9-6.5 cm were ~0.35 deg); the 0.5 m baseline has ~7 cm per
 degree; the camera ahead of the 0.5 m triangle gets its range from the wavefront's curvature
 (~1 cm per us) rather than from the azimuth.
 The last row set (since 2026-11-25's twelfth session; before, only in the session notes) takes
