@@ -546,7 +546,11 @@ def simulate_moving_free_field(
     array (n_mics, n)
         Microphone signals: retarded-time fractional delays (Doppler included) and ``1/r``
         gains. For a static trajectory this equals
-        :func:`hearsee.audio.propagation.simulate_free_field` to about -80 dB.
+        :func:`hearsee.audio.propagation.simulate_free_field` to about -70 dB for a signal
+        band-limited below ~0.9 x Nyquist (the interpolator's range, :func:`fractional_delay`);
+        white noise up to Nyquist differs by -20 to -50 dB overall, all of it in the top ~5 %
+        of the band, where the 32-tap interpolator's gain falls with the delay's fraction (0.84
+        at 0.48 fs for half a sample; measured 2026-12-07). The TDOAs are not affected.
     """
     x = _check_signal(signal, fs)
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
