@@ -20,7 +20,7 @@ import io
 import json
 import os
 import re
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -61,10 +61,15 @@ def report_folder_blocker(folder: str | Path) -> Path | None:
     if hit is None:
         hit = next((f / name for name in REPORT_FILES if (f / name).is_dir()), None)
     if hit is None:
-        hit = next((q for sub in _REPORT_SUBFOLDERS if (f / sub).is_dir()
-                    for q in sorted((f / sub).iterdir())
-                    if q.suffix.lower() == ".png" and q.is_dir()), None)
+        hit = next((q for q in _report_pngs(f) if q.is_dir()), None)
     return hit
+
+
+def _report_pngs(folder: Path) -> Iterator[Path]:
+    """The entries named ``*.png`` in ``folder``'s ``plots/`` and ``frames/`` (where a report
+    writes its PNGs), in order."""
+    return (q for sub in _REPORT_SUBFOLDERS if (folder / sub).is_dir()
+            for q in sorted((folder / sub).iterdir()) if q.suffix.lower() == ".png")
 
 
 def report_blocker_reason(blocker: Path) -> str:
@@ -109,8 +114,7 @@ def report_foreign_file(folder: str | Path) -> Path | None:
         return None if ours else index
     hit = next((f / name for name in REPORT_FILES[1:] if (f / name).exists()), None)
     if hit is None:
-        hit = next((q for sub in _REPORT_SUBFOLDERS if (f / sub).is_dir()
-                    for q in sorted((f / sub).iterdir()) if q.suffix.lower() == ".png"), None)
+        hit = next(_report_pngs(f), None)
     return hit
 
 
