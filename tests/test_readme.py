@@ -85,3 +85,57 @@ def test_readme_command_line_tour(tmp_path, monkeypatch, capsys):
     # the tracked talker at the end of the walk: (2, 1.5, 0.3) m heard from the array
     last = json.loads(next(o for w, o in ran if w[1] == "track").strip().splitlines()[-1])
     assert _azimuth_error(last["azimuth_deg"], np.degrees(np.arctan2(1.5, 2.0))) < 10.0
+
+
+RESULTS = README.parent / "bench" / "results"
+
+
+def _table(name: str, header_start: str) -> list[dict[str, str]]:
+    """Rows of the first table of ``bench/results/<name>`` whose header line starts so."""
+    def cells(line: str) -> list[str]:
+        return [c.strip() for c in re.split(r"(?<!\\)\|", line.strip().strip("|"))]
+
+    lines = (RESULTS / name).read_text(encoding="utf-8").splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith(header_start))
+    header, rows = cells(lines[i]), []
+    for line in lines[i + 2:]:
+        if not line.startswith("|"):
+            break
+        rows.append(dict(zip(header, cells(line), strict=True)))
+    return rows
+
+
+def _signed(x: float, fmt: str = ".1f") -> str:
+    return format(x, fmt).replace("-", "−")
+
+
+def test_readme_quotes_the_committed_benchmark_results():
+    """Numbers the README's benchmark rows quote, recomputed from bench/results/*.md."""
+    text = " ".join(README.read_text(encoding="utf-8").split())
+    # four_mics part 1: cells where hearsee's answer is worse than the plane wave
+    cells = _table("four_mics.md", "| array | size m |")
+    worse = [r for r in cells
+             if float(r["hearsee RMSE deg"]) > float(r["plane wave RMSE deg"])]
+    words = {1: "one", 2: "two", 3: "three", 4: "four", 5: "five"}
+    assert f"TDOA level: {words.get(len(worse), len(worse))} of {len(cells)} cells worse" in text
+    # tracking part A: the pooled lag on turning walks
+    lags = [float(r["pooled lag frames, turning walks"])
+            for r in _table("tracking.md", "| signal | SNR dB | per-frame RMSE")]
+    assert (f"pooled lag on turning walks {_signed(min(lags))} to {_signed(max(lags))} frames"
+            in text)
+    # nle scaling: n = 20,000, hearsee's NLE against standard LLE
+    times = {r["method"]: float(r["time [s]"])
+             for r in _table("nle.md", "| n | method | time [s]") if r["n"] == "20000"}
+    assert (f"n = 20,000 in {times['NLE (hearsee)']:.1f} s vs {times['LLE standard']:.1f} s"
+            in text)
+    # doa: CPU per second of audio against the recording's length
+    rows = _table("doa.md", "| array | signal | 2 s:")
+    ranges = []
+    for col in ("2 s", "8 s", "32 s"):
+        key = next(k for k in rows[0] if k.startswith(col + ":"))
+        x = [float(re.search(r"\(([0-9.]+)x\)", r[key]).group(1)) for r in rows]
+        ranges.append(f"{min(x):.1f}–{max(x):.1f}x")
+    added = [float(r["per added s: speed-up"]) for r in rows]
+    assert (f"hearsee is {ranges[0]} cheaper at 2 s, {ranges[1]} at 8 s and {ranges[2]} at "
+            f"32 s, and each further second costs it {min(added):.2g}–{max(added):.2g}x less"
+            in text)
