@@ -148,11 +148,24 @@ def table_2_1(out: Path, fs: float) -> tuple[Path, Path]:
     return md, png
 
 
+def _sample_rate(text: str) -> float:
+    """--fs: a finite rate > 0 (0 raised ZeroDivisionError, NaN a numpy ValueError, and a
+    negative rate wrote a table whose -7 samples were +437.5 us)."""
+    try:
+        fs = float(text)
+    except ValueError:
+        fs = float("nan")
+    if not (np.isfinite(fs) and fs > 0):
+        raise argparse.ArgumentTypeError(f"expected a sample rate > 0 (Hz), got {text!r}")
+    return fs
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=str(Path(__file__).parent / "out"),
                     help="output folder (default: examples/out)")
-    ap.add_argument("--fs", type=float, default=16000.0, help="sample rate for table 2.1 (Hz)")
+    ap.add_argument("--fs", type=_sample_rate, default=16000.0,
+                    help="sample rate for table 2.1 (Hz)")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -273,11 +273,22 @@ def tables(m: MaskModel, out: Path, trials: int) -> str:
     return text
 
 
+def _trials(text: str) -> int:
+    """--trials: a whole number >= 1 (0 or fewer wrote tables of nan means and 0/0)."""
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return n
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description="Regenerate thesis ch. 3 figures and tables.")
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "out"),
                     help="output folder (default: examples/out)")
-    ap.add_argument("--trials", type=int, default=5, help="recordings per table cell")
+    ap.add_argument("--trials", type=_trials, default=5, help="recordings per table cell (>= 1)")
     ap.add_argument("--array", default="mask2", help="masked array preset or YAML path")
     a = ap.parse_args()
     out = Path(a.out)

@@ -5,9 +5,9 @@
 Each frame (grey, downsampled to 36 x 48) is one point; NLE embeds the sequence in 2-D and the
 path through the embedding, coloured by time, shows the motion's structure. Frames come from the
 real pedestrian clip ``../shared/data/vision/pedestrian_video/vtest.avi`` when it is present
-(``--video`` to name another file), else from a generated sequence: a walker-like figure crossing
-the image with a periodic leg swing, whose embedding should trace a drifting loop.
-Writes ``ch6_motion.png``.
+(``--video`` to name another file; one that OpenCV reads 12 or fewer distinct frames from is
+skipped), and always from a generated sequence: a walker-like figure crossing the image with a
+periodic leg swing, whose embedding should trace a drifting loop. Writes ``ch6_motion.png``.
 """
 
 from __future__ import annotations
@@ -81,8 +81,13 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     video = Path(a.video)
     sets = []
-    if video.is_file():
-        sets.append((f"video {video.name} (first 400 frames)", video_frames(video)))
+    frames = video_frames(video) if video.is_file() else None
+    n_distinct = 0 if frames is None or not len(frames) else len(np.unique(frames, axis=0))
+    if n_distinct > 12:  # (NLE's 12 candidate neighbours)
+        sets.append((f"video {video.name} (first {len(frames)} frames)", frames))
+    elif frames is not None:  # (an unreadable file was NLE's ManifoldInputError traceback)
+        print(f"{video}: {n_distinct} distinct frames read, too few for NLE: using the "
+              "generated sequence only")
     else:
         print(f"{video} not found: using the generated sequence only")
     sets.append(("generated walker (300 frames)", walker_frames()))

@@ -68,6 +68,9 @@ def main() -> None:
     args = ap.parse_args()
     if args.figure is None:
         args.figure = str(Path(args.out) / "ch7_humans.png")
+    elif not cv2.haveImageWriter(args.figure):  # (cv2.imwrite raised, after every scene)
+        ap.error(f"--figure {args.figure}: OpenCV cannot write "
+                 f"{Path(args.figure).suffix or 'a file without a suffix'}; use .png or .jpg")
     cv2.setNumThreads(1)
     rig = default_rig()
     normal = render_scene(room(), rig)

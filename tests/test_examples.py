@@ -128,3 +128,37 @@ def _assert_close(a, b, where="truth"):
         assert a == pytest.approx(b, rel=1e-9, abs=1e-15), where
     else:
         assert a == b, where
+
+
+@pytest.mark.parametrize("name, args, message", [
+    ("ch2_geometry", ["--fs", "0"], "argument --fs: expected a sample rate > 0 (Hz), got '0'"),
+    ("ch2_geometry", ["--fs", "-16000"], "expected a sample rate > 0 (Hz), got '-16000'"),
+    ("ch2_geometry", ["--fs", "nan"], "expected a sample rate > 0 (Hz), got 'nan'"),
+    ("ch3_mask", ["--trials", "0"], "argument --trials: expected a whole number >= 1, got '0'"),
+    ("ch7_humans", ["--figure", "humans.pdf"], "--figure humans.pdf: OpenCV cannot write .pdf"),
+    ("ch7_humans", ["--figure", "humans"], "OpenCV cannot write a file without a suffix"),
+])
+def test_example_refuses_bad_arguments(name, args, message, tmp_path):
+    """Refused before any work, in one usage line (exit 2): --fs 0 was a ZeroDivisionError,
+    NaN a numpy ValueError and a negative rate a table whose -7 samples were +437.5 us;
+    --trials 0 tables of nan means; ch7's --figure without an image suffix a cv2.error
+    traceback after every scene had been rendered and detected."""
+    r = subprocess.run([sys.executable, str(EXAMPLES[0].parent / f"{name}.py"), *args,
+                        "--out", str(tmp_path / "out")], cwd=tmp_path, capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 2, r.stderr[-2000:]
+    assert message in r.stderr and "Traceback" not in r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ch6_motion_unreadable_video_falls_back(tmp_path):
+    """A --video that OpenCV reads no frames from is the generated sequence only, as a missing
+    one (was NLE's ManifoldInputError traceback on the empty array)."""
+    bad = tmp_path / "clip.avi"
+    bad.write_text("not a video\n")
+    r = subprocess.run([sys.executable, str(EXAMPLES[0].parent / "ch6_motion.py"), "--video",
+                        str(bad), "--out", str(tmp_path / "out")], cwd=tmp_path,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "0 distinct frames read, too few for NLE: using the generated sequence only" in r.stdout
+    _check_output(tmp_path / "out" / "ch6_motion.png")
