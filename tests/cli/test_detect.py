@@ -97,6 +97,27 @@ def test_swapped_images_and_a_flat_thermal_image_are_warned_about(folder, capsys
     assert "thermal image is flat" in err and err.count("\n") == 1, err
 
 
+@pytest.mark.parametrize("kind", ["npy", "png16"])
+def test_a_thermal_image_flat_to_the_filter_is_warned_about(folder, capsys, tmp_path, kind):
+    """A radiometric frame whose pixels all lie within FLAT_SPREAD_C (one pixel 0.05 degC off a
+    lens cap's 21 degC) is flat to the thermal filter, which empties its warm mask: every
+    person was rejected ("thermal support 0.00") and only a frame flat to the digit was
+    warned about. Now both are."""
+    d, _ = folder
+    t = np.full((60, 80), 21.0)
+    t[0, 0] = 21.05
+    if kind == "npy":
+        path = tmp_path / "flat.npy"
+        np.save(path, t.astype(np.float32))
+    else:
+        path = tmp_path / "flat.png"
+        cv2.imwrite(str(path), np.rint((t + 273.15) * 100).astype(np.uint16))
+    assert main(_args(d, thermal=None) + ["--thermal", str(path)]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["humans"] == []
+    assert "thermal image is flat" in err and err.count("\n") == 1, err
+
+
 def test_stereo_only_table_and_overlay(folder, capsys, tmp_path):
     d, _ = folder
     ov = tmp_path / "ov.png"

@@ -137,6 +137,20 @@ def _warn_degenerate(disparity, thermal) -> None:
         warnings.warn(f"only {100 * matched:.0f} % of the pixels found a stereo match: are "
                       "--left and --right swapped, or the calibration another rig's?",
                       DegenerateInputWarning, stacklevel=2)
-    if thermal is not None and np.ptp(thermal) == 0:
+    if thermal is None:
+        return
+    if np.ptp(thermal) == 0:
         warnings.warn(f"the thermal image is flat (every pixel {thermal.flat[0]}): nobody can be "
                       "thermally verified", DegenerateInputWarning, stacklevel=2)
+    elif thermal.dtype != np.uint8:
+        # (a radiometric frame within FLAT_SPREAD_C is flat to the thermal filter too -- its
+        # warm mask is emptied -- but only a frame flat to the digit was warned about: one
+        # pixel 0.05 degC off and "0 human(s)" came without a word)
+        from hearsee.vision.thermal import FLAT_SPREAD_C, counts_to_celsius
+
+        t = counts_to_celsius(thermal) if thermal.dtype == np.uint16 else thermal
+        spread = float(np.ptp(t))
+        if spread < FLAT_SPREAD_C:
+            warnings.warn(f"the thermal image is flat (its pixels span {spread:.3g} degC from "
+                          f"{float(np.min(t)):.2f} degC, less than {FLAT_SPREAD_C:g}): nobody can "
+                          "be thermally verified", DegenerateInputWarning, stacklevel=2)
