@@ -852,3 +852,34 @@ def test_render_chessboard_checks_its_arguments():
     np.testing.assert_array_equal(plain[board], black[board])
     assert np.all(black[~board] < plain[~board]) and np.all(plain[~board] < white[~board])
     assert black[0, 0] == 0 and plain[0, 0] == 115 and white[0, 0] == 255
+
+
+def test_calibration_flags_must_be_true_or_false():
+    """fix_aspect="no" (a config file's text) was truthy: fx = fy forced without a word -- a
+    camera of fx 300, fy 330 px came back as fx = fy = 429 px. So were try_inverted and
+    calibrate_stereo's refine. Now a CalibrationError naming the flag; True and False as
+    before."""
+    cam = Camera(K=np.array([[300.0, 0, 160.0], [0, 330.0, 120.0], [0, 0, 1]]),
+                 width=320, height=240)
+    obj = C.board_points(PATTERN, SQUARE)
+    rng = np.random.default_rng(0)
+    views = []
+    for _ in range(8):
+        Rb = cv2.Rodrigues(rng.uniform(-0.4, 0.4, 3))[0]
+        views.append(cam.project(obj @ Rb.T + np.array([-0.1, -0.06, 0.5])
+                                 + rng.uniform(-0.03, 0.03, 3)))
+    free = C.calibrate_camera(views, obj, cam.size, fix_aspect=False).camera
+    assert free.fx == pytest.approx(300.0, rel=1e-4) and free.fy == pytest.approx(330.0, rel=1e-4)
+    for bad in ("no", "false", 1, None):
+        with pytest.raises(CalibrationError, match="^fix_aspect must be True or False"):
+            C.calibrate_camera(views, obj, cam.size, fix_aspect=bad)
+        with pytest.raises(CalibrationError, match="^fix_aspect must be True or False"):
+            C.calibrate_stereo(views, views, obj, cam, cam, fix_aspect=bad)
+        with pytest.raises(CalibrationError, match="^refine must be True or False"):
+            C.calibrate_stereo(views, views, obj, cam, cam, refine=bad)
+        with pytest.raises(CalibrationError, match="^fix_aspect must be True or False"):
+            C.calibrate_rig(["l.png"], ["r.png"], PATTERN, SQUARE, fix_aspect=bad)
+        with pytest.raises(CalibrationError, match="^try_inverted must be True or False"):
+            C.find_corners(np.zeros((60, 80), np.uint8), PATTERN, try_inverted=bad)
+    assert C.find_corners(np.zeros((60, 80), np.uint8), PATTERN, try_inverted=np.bool_(True)) \
+        is None

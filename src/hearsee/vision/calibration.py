@@ -218,6 +218,8 @@ def find_corners(image: NDArray, pattern: tuple[int, int], *, try_inverted: bool
     OpenCV's out-of-memory error).
     """
     pattern = check_pattern(pattern)
+    # ("no" was truthy: the inverted image tried too, without a word)
+    try_inverted = true_or_false("try_inverted", try_inverted, error=CalibrationError)
     if upscale is not None:
         upscale = whole_number("upscale", upscale)
     g = to_gray(image)
@@ -284,7 +286,7 @@ def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | S
     image_size : (width, height) pixels.
     model : "radial" (k1 only: low-resolution cameras such as thermal ones), "simple"
         (k1, k2, p1, p2), "standard" (+ k3) or "rational" (+ k4..k6).
-    fix_aspect : force fx = fy.
+    fix_aspect : force fx = fy (True or False).
     reject_factor : views whose RMS error exceeds ``reject_factor`` times the median (and
         0.5 px) are dropped and the calibration rerun once; 0 disables.
     max_focal_rel_std : CalibrationError when the focal length's relative standard deviation
@@ -299,6 +301,8 @@ def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | S
     """
     if model not in _MODELS:
         raise CalibrationError(f"model must be one of {', '.join(_MODELS)}, got {model!r}")
+    # (text such as "no" was truthy: fx = fy forced without a word)
+    fix_aspect = true_or_false("fix_aspect", fix_aspect, error=CalibrationError)
     n = _view_count(image_points, "image_points")
     if n < 3:
         raise CalibrationError(
@@ -555,6 +559,9 @@ def calibrate_stereo(left_points: Sequence[NDArray], right_points: Sequence[NDAr
     """
     if model is not None and model not in _MODELS:
         raise CalibrationError(f"model must be one of {', '.join(_MODELS)}, got {model!r}")
+    # (text such as "no" was truthy: each camera's aspect ratio held, or the refinement run)
+    fix_aspect = true_or_false("fix_aspect", fix_aspect, error=CalibrationError)
+    refine = true_or_false("refine", refine, error=CalibrationError)
     n = _view_count(left_points, "left_points")
     if n != _view_count(right_points, "right_points"):
         raise CalibrationError(f"{n} left views but {len(right_points)} right views")
@@ -980,6 +987,8 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
     from hearsee.errors import ImageInputError
     from hearsee.vision.io import read_image, read_thermal
 
+    # (checked before the images are read: "no" was truthy and forced fx = fy)
+    fix_aspect = true_or_false("fix_aspect", fix_aspect, error=CalibrationError)
     for what, files in (("left_files", left_files), ("right_files", right_files),
                         ("thermal_files", thermal_files)):
         # (a glob pattern was taken as a list of its characters: "12 left images but 13
