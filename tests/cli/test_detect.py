@@ -312,6 +312,33 @@ def test_overlay_suffix_is_checked_before_the_detection(folder, capsys, tmp_path
         assert not (tmp_path / name).exists()
 
 
+def test_overlay_in_a_disabled_codec_is_one_line(folder, capfd, tmp_path, monkeypatch):
+    """--overlay out.exr: OpenCV's wheels build the OpenEXR codec but disable it, and
+    cv2.haveImageWriter raised cv2.error -- OpenCV's "[ WARN ]" line and a traceback, exit 1.
+    Now the one-line refusal of any suffix OpenCV cannot write, before the detection (the
+    descriptor-level capture: OpenCV's log writes there)."""
+    from hearsee.vision import fusion
+
+    try:
+        cv2.haveImageWriter("probe.exr")
+    except cv2.error:
+        pass
+    else:
+        pytest.skip("this OpenCV build writes OpenEXR")
+    d, _ = folder
+
+    def not_now(*_, **__):
+        raise AssertionError("the detection ran before the overlay path was checked")
+
+    monkeypatch.setattr(fusion, "detect_humans", not_now)
+    capfd.readouterr()
+    assert main(_args(d, "--overlay", str(tmp_path / "out.exr"), thermal=None)) == 2
+    out, err = capfd.readouterr()
+    assert out == "" and err.startswith("hearsee: error: ") and "OpenCV cannot write .exr" in err
+    assert err.count("\n") == 1, err
+    assert not (tmp_path / "out.exr").exists()
+
+
 def test_existing_overlay_is_kept_unless_forced(folder, capsys, tmp_path):
     d, _ = folder
     ov = tmp_path / "mine.png"

@@ -77,7 +77,16 @@ def detect_cmd(
     if overlay_p is not None:  # (else write_image refuses it only after the whole detection)
         import cv2
 
-        if not cv2.haveImageWriter(str(overlay_p)):
+        from hearsee.vision.io import _opencv_log
+
+        # (a codec built in but disabled, e.g. OpenEXR, raised cv2.error: a traceback after
+        # OpenCV's own "[ WARN ]" line)
+        with _opencv_log("silent"):
+            try:
+                writable = cv2.haveImageWriter(str(overlay_p))
+            except cv2.error:
+                writable = False
+        if not writable:
             kind = overlay_p.suffix or "a file without a suffix"
             raise ImageInputError(f"{overlay_p}: OpenCV cannot write {kind}; use an image "
                                   "suffix such as .png or .jpg")
