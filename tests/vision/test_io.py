@@ -473,3 +473,23 @@ def test_to_8_bits_refuses_what_is_no_image():
         to_8_bits(np.zeros((2, 2), np.uint8), None)
     out = to_8_bits(np.full((2, 2), 4095, np.uint16), np.zeros((2, 2), np.uint16))
     assert out[0].dtype == np.uint8 and out[0].max() == 255
+
+
+@pytest.mark.parametrize("mode", ["gray", "bgr", "unchanged"])
+def test_an_openexr_file_is_one_typed_error_and_nothing_on_stderr(tmp_path, capfd, mode):
+    """OpenEXR (a float format thermal and depth images come in): OpenCV's wheels build the
+    codec but disable it, and cv2.imdecode raised cv2.error -- a traceback from read_image,
+    read_thermal, load_thermal, `hearsee detect --thermal t.exr` and `hearsee calibrate`.
+    Now an ImageInputError naming the file and the reason, stderr kept quiet. (A file with
+    OpenEXR's magic number is enough to choose the codec; with the codec enabled it is
+    "not a readable image".)"""
+    from hearsee.vision.thermal import load_thermal
+
+    path = tmp_path / "t.exr"
+    path.write_bytes(bytes([0x76, 0x2F, 0x31, 0x01, 2, 0, 0, 0]) + bytes(100))
+    capfd.readouterr()
+    for read in (lambda p: read_image(p, mode), read_thermal, load_thermal):
+        with pytest.raises(ImageInputError, match=r"t\.exr: (OpenCV cannot decode this image "
+                                                  r"\(.*OpenEXR|not a readable image)"):
+            read(path)
+    assert capfd.readouterr().err == ""

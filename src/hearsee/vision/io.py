@@ -326,12 +326,10 @@ def _decode(path: str | Path, mode: ColorMode) -> tuple[NDArray, Path]:
     # "[ WARN ]" or a "libpng error" line, a truncated TIFF two "[ERROR]" lines, on stderr
     # before hearsee's one-line error below)
     flags = _IMREAD[mode] if mode == "unchanged" else _IMREAD[mode] | cv2.IMREAD_ANYDEPTH
-    with _opencv_log("silent"), _codec_stderr_off():
-        img = cv2.imdecode(data, flags) if data.size else None
+    img = _imdecode(data, flags, p) if data.size else None
     if img is None and mode != "unchanged" and data.size:
         # (a float TIFF decodes in colour only as it is stored: named below, not "corrupt")
-        with _opencv_log("silent"), _codec_stderr_off():
-            raw = cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+        raw = _imdecode(data, cv2.IMREAD_UNCHANGED, p)
         img = raw if raw is not None and raw.dtype not in (np.uint8, np.uint16) else None
     if img is None:
         raise ImageInputError(
@@ -347,6 +345,20 @@ def _decode(path: str | Path, mode: ColorMode) -> tuple[NDArray, Path]:
     if mode == "unchanged":
         _check_tiff_kept(p, data, img)
     return img, p
+
+
+def _imdecode(data: NDArray, flags: int, p: Path) -> NDArray | None:
+    """``cv2.imdecode`` of the bytes ``data`` of the file ``p`` with OpenCV's log and the
+    codecs' stderr off (:func:`read_image`); None when OpenCV cannot decode them, an
+    ImageInputError naming ``p`` when it refuses to (an OpenEXR file: the codec is built into
+    OpenCV's wheels but disabled, and imdecode raised cv2.error -- a traceback)."""
+    with _opencv_log("silent"), _codec_stderr_off():
+        try:
+            return cv2.imdecode(data, flags)
+        except cv2.error as exc:
+            why = str(exc.err).split(" Refer for details")[0].strip()
+            raise ImageInputError(f"{p}: OpenCV cannot decode this image ({why}); convert it "
+                                  "to PNG, TIFF or, for a thermal image in degC, .npy") from None
 
 
 def _check_tiff_kept(p: Path, data: NDArray, img: NDArray) -> None:
