@@ -493,3 +493,24 @@ def test_an_openexr_file_is_one_typed_error_and_nothing_on_stderr(tmp_path, capf
                                                   r"\(.*OpenEXR|not a readable image)"):
             read(path)
     assert capfd.readouterr().err == ""
+
+
+def test_an_image_beyond_opencv_s_pixel_limit_is_one_typed_error(tmp_path):
+    """A PNG whose header claims 60000 x 60000 pixels (beyond OpenCV's CV_IO_MAX_IMAGE_PIXELS):
+    cv2.imdecode raised cv2.error's "(-215:Assertion failed)", a traceback. Now an
+    ImageInputError naming the file and the limit."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return (struct.pack(">I", len(body)) + kind + body
+                + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF))
+
+    ihdr = struct.pack(">IIBBBBB", 60000, 60000, 8, 0, 0, 0, 0)
+    path = tmp_path / "huge.png"
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr)
+                     + chunk(b"IDAT", zlib.compress(bytes(60001))) + chunk(b"IEND", b""))
+    with pytest.raises(ImageInputError, match=r"huge\.png: OpenCV cannot decode this image "
+                                              r"\(its header claims more pixels than OpenCV's "
+                                              r"limit, CV_IO_MAX_IMAGE_PIXELS\)$"):
+        read_image(path)

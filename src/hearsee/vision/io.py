@@ -350,15 +350,24 @@ def _decode(path: str | Path, mode: ColorMode) -> tuple[NDArray, Path]:
 def _imdecode(data: NDArray, flags: int, p: Path) -> NDArray | None:
     """``cv2.imdecode`` of the bytes ``data`` of the file ``p`` with OpenCV's log and the
     codecs' stderr off (:func:`read_image`); None when OpenCV cannot decode them, an
-    ImageInputError naming ``p`` when it refuses to (an OpenEXR file: the codec is built into
-    OpenCV's wheels but disabled, and imdecode raised cv2.error -- a traceback)."""
+    ImageInputError naming ``p`` when it refuses to, where imdecode raised cv2.error -- a
+    traceback: an OpenEXR file (the codec is built into OpenCV's wheels but disabled) or a
+    header claiming more pixels than OpenCV's limit (``CV_IO_MAX_IMAGE_PIXELS``, 2**30 by
+    default)."""
     with _opencv_log("silent"), _codec_stderr_off():
         try:
             return cv2.imdecode(data, flags)
         except cv2.error as exc:
             why = str(exc.err).split(" Refer for details")[0].strip()
-            raise ImageInputError(f"{p}: OpenCV cannot decode this image ({why}); convert it "
-                                  "to PNG, TIFF or, for a thermal image in degC, .npy") from None
+            if "OpenEXR" in why:
+                hint = ("; convert it to TIFF or, for a thermal image in degC, .npy")
+            elif "CV_IO_MAX_IMAGE_PIXELS" in why:
+                why, hint = ("its header claims more pixels than OpenCV's limit, "
+                             "CV_IO_MAX_IMAGE_PIXELS"), ""
+            else:
+                hint = ""
+            raise ImageInputError(f"{p}: OpenCV cannot decode this image ({why}){hint}") \
+                from None
 
 
 def _check_tiff_kept(p: Path, data: NDArray, img: NDArray) -> None:
