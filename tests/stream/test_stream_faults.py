@@ -1066,6 +1066,35 @@ def test_a_live_streams_dead_microphone_is_left_out(monkeypatch):
     assert np.median(before) > 2 * np.median(err)  # (the dead channel's noise in every pair)
 
 
+def test_a_live_streams_dead_first_microphone_is_left_out_of_the_camera_fixes_too(monkeypatch):
+    """With a camera: the processor that takes over when a dead microphone is left out reads
+    its TDOAs through a rig of the remaining microphones. Its pairs are numbered in them, so
+    microphone 0 dead made the whole array's rig read pair 1-2's TDOA as 0-1's: 3 frames of
+    62 had a position after the switch, 1.8 m off (0.15 m now)."""
+    import warnings
+
+    from hearsee.fusion.audiovisual import AudioVisualRig
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.vision.camera import Camera
+
+    monkeypatch.setattr(pl, "WIRING_CHECK_S", 4.0)
+    src = np.array([1.2, 1.4, 0.2])
+    x, _ = simulate_recording("respeaker-4", src, "male", 8.0, FS, 20.0, seed=7)
+    x[0] = np.random.default_rng(2).standard_normal(x.shape[1]) * np.std(x[0])
+    arr = MicArray.from_preset("respeaker-4")
+    rig = AudioVisualRig.mounted(arr, Camera.from_fov(70.0, 640, 480), (0.0, -0.2, 0.1), 45.0)
+    uv = tuple(rig.project(src[None])[0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        pipe = StreamPipeline(arr, rig=rig, image_points=lambda t: uv, check_wiring=True)
+        ups = pipe.run(ArraySource(x, FS, BL))
+    assert pipe.stats.dead_microphones == (0,)
+    late = [u for u in ups if u.t > 6.0]
+    pos = np.array([u.position_m for u in late if u.position_m is not None])
+    assert len(pos) == len(late) > 50
+    assert np.median(np.linalg.norm(pos - src, axis=1)) < 0.3
+
+
 def test_talker_ids_go_on_counting_where_a_dead_microphone_is_left_out(monkeypatch):
     """With several talkers (``max_sources``) the processor that takes over when a dead
     microphone is left out goes on with the old one's talker ids: a client keying on them would

@@ -118,6 +118,34 @@ def test_track_with_calibrated_camera_gives_3d_position_and_velocity(scene, caps
     assert doc["stats"]["frames"] == len(ups)
 
 
+def test_track_file_with_a_dead_first_microphone_and_a_camera(tmp_path, capsys):
+    """A file whose microphone 0 is dead is streamed from the others, whose pairs are
+    numbered among themselves: the camera's rig must be theirs too. The whole array's read
+    pair 1-2's TDOA as 0-1's: every 3D position 1.0 m off (0.06 m now)."""
+    from hearsee.sim.audio import simulate_recording
+
+    src = np.array([1.2, 1.4, 0.2])
+    x, _ = simulate_recording("respeaker-4", src, "male", 5.0, FS, 20.0, seed=7)
+    x[0] = np.random.default_rng(2).standard_normal(x.shape[1]) * np.std(x[0])
+    wav = tmp_path / "dead0.wav"
+    write_recording(wav, x, FS)
+    cam = Camera.from_fov(70.0, 640, 480)
+    save_camera(cam, tmp_path / "cam.yaml")
+    rig = AudioVisualRig.mounted(MicArray.from_preset("respeaker-4"), cam, (0.0, -0.2, 0.1), 45.0)
+    t = np.arange(0, 5.0, 1 / 30)
+    save_image_points(tmp_path / "pts.csv", t, rig.project(np.tile(src, (len(t), 1))))
+    assert main(["track", str(wav), "--array", "respeaker-4", "--camera",
+                 str(tmp_path / "cam.yaml"), "--image-points", str(tmp_path / "pts.csv"),
+                 "--camera-at", "0,-0.2,0.1", "--camera-pan", "45", "--format", "json"]) == 0
+    cap = capsys.readouterr()
+    assert "microphone 0 hears nothing" in cap.err
+    doc = json.loads(cap.out)
+    assert doc["stats"]["microphones_used"] == [1, 2, 3]
+    pos = np.array([u["position_m"] for u in doc["updates"] if u["t"] > 2.5], dtype=float)
+    assert len(pos) > 50 and np.all(np.isfinite(pos))
+    assert np.median(np.linalg.norm(pos - src, axis=1)) < 0.2
+
+
 @pytest.mark.parametrize("args, msg", [
     (["--camera", "CAM"], "image-point source"),
     (["--image-points", "PTS"], "need --camera"),

@@ -366,6 +366,11 @@ def track_cmd(
                 used_mics, heard_by = without_microphones(arr, dead, stacklevel=2)
                 source = ArraySource(source.x[used_mics], source.fs,
                                      block_len=source.block_len)
+                if rig is not None:  # (the camera's fixes read the TDOAs with these
+                    # microphones: the full array's took microphone 0-1's for 1-2's, 1 m off)
+                    from dataclasses import replace
+
+                    rig = replace(rig, array=heard_by)
         # (a file was checked ahead, above; live input once it has heard a source)
         pipe = StreamPipeline(heard_by, cfg, rig=rig, image_points=points,
                               tonal_lines_hz=lines)

@@ -3039,7 +3039,11 @@ class StreamPipeline:
             nonlocal keep, proc, hum
             keep, sub = without_microphones(self.array, dead, stacklevel=2)
             framer.keep_channels(keep)
-            proc = TrackingProcessor(sub, source.fs, self.config, self.rig, self.image_points,
+            # (the camera's rig with the same microphones: its fixes read the TDOAs of the
+            # new processor's pairs, numbered in ``keep`` -- the whole array's put microphone
+            # 0 dead gave no 3D fix or one 1-2 m off)
+            rig = None if self.rig is None else replace(self.rig, array=sub)
+            proc = TrackingProcessor(sub, source.fs, self.config, rig, self.image_points,
                                      first_talker_id=proc.next_talker_id)
             if hum is not None:
                 hum = LineFilter(st.tonal_lines_hz, source.fs, len(keep))
