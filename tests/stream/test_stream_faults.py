@@ -498,6 +498,55 @@ def test_a_live_camera_that_reports_no_frame_size_opens(monkeypatch, fake_camera
         vp.close()
 
 
+def test_a_live_cameras_frames_of_another_size_than_the_calibration_are_refused(
+        monkeypatch, fake_camera, tmp_path, capsys):
+    """A live camera's frames are checked against the calibrated size as they come (its
+    driver need not report one): 800x600 frames read through a 640x480 calibration put the
+    3D fixes 1.75 m off, exit 0 and no word. Now ``points(t)`` raises the ImageInputError
+    and ``hearsee track --camera-device`` exits 2 with it, as a video file of another size
+    and ``hearsee run``'s cameras are refused."""
+    import hearsee.stream.video as video
+    from hearsee.audio.signals import write_recording
+    from hearsee.cli import main
+    from hearsee.errors import ImageInputError
+    from hearsee.vision.camera import Camera, save_camera
+
+    fake_camera(10_000, before_read=lambda: time.sleep(0.002), size=float("nan"))  # 80x60
+    monkeypatch.setattr(video, "detect_source_point", lambda img, det: (40.0, 30.0))
+    vp = video.VideoImagePoints(0, detector="hog", expected_size=(160, 120))
+    try:
+        vp(0.0)  # starts the thread
+        with pytest.raises(ImageInputError, match="camera 0: delivers 80x60 frames but the "
+                           "calibration expects 160x120"):
+            for _ in range(500):
+                time.sleep(0.01)
+                vp(0.01)
+    finally:
+        vp.close()
+    arr = MicArray.from_preset("three-mic")
+    y = simulate_moving_free_field(
+        0.05 * np.random.default_rng(0).standard_normal(FS), FS, arr,
+        linear_trajectory([1.2, -0.5, 0.1], [0, 0.8, 0], 1.0), snr_db=25, rng=1)
+    write_recording(tmp_path / "rec.wav", y, FS)
+    save_camera(Camera.from_fov(70.0, 160, 120), tmp_path / "cam.yaml")
+    args = ["track", str(tmp_path / "rec.wav"), "--array", "three-mic", "--camera",
+            str(tmp_path / "cam.yaml"), "--camera-device", "0"]
+    monkeypatch.setattr(pl, "StreamPipeline", _SlowStart)
+    assert main(args) == 2
+    assert "camera 0: delivers 80x60 frames but the calibration expects 160x120" in (
+        capsys.readouterr().err)
+
+
+class _SlowStart(pl.StreamPipeline):
+    """A stream whose first image point is asked for only once the camera has delivered
+    (a file's audio is streamed faster than a camera delivers its first frame)."""
+
+    def run(self, source, sink=None, threaded=False, array_pan=None):
+        self.image_points(0.0)
+        time.sleep(0.2)
+        return super().run(source, sink, threaded, array_pan)
+
+
 @pytest.mark.parametrize("reported", [float("nan"), -1.0, 0.0, float("inf")])
 def test_a_live_camera_without_a_usable_frame_rate_counts_30_fps(monkeypatch, fake_camera,
                                                                   reported):
@@ -575,7 +624,7 @@ def test_track_cli_closes_its_video_source(monkeypatch, tmp_path, capsys):
             if self._c is not None:
                 return self._c.read()
             time.sleep(0.002)
-            return True, np.full((60, 80, 3), 90, np.uint8)
+            return True, np.full((120, 160, 3), 90, np.uint8)  # (the calibration's size)
 
         def release(self):
             released.append(1)

@@ -383,8 +383,11 @@ class VideoImagePoints:
         frame k is then at k / fps seconds (its own timestamps are not used).
     expected_size : (width, height), optional
         The calibrated camera's image size in pixels: a video file of another size is refused
-        (its image points would be read through the wrong intrinsics). Not checked for a live
-        camera, whose driver may report its size only once it streams.
+        (its image points would be read through the wrong intrinsics). A live camera's driver
+        may report its size only once it streams: its frames are checked as they come, and
+        ``points(t)`` raises the ImageInputError once one of another size has come (its
+        points were used: 800x600 frames with a 640x480 calibration put the 3D fixes 1.75 m
+        off, without a word).
     where : str
         Prefix of the error when a video file opens but delivers no frame (a corrupt or
         truncated file; :func:`read_frame`, the check of ``hearsee run --dry-run`` too), e.g.
@@ -451,6 +454,9 @@ class VideoImagePoints:
         self.last_point: tuple[float, float] | None = None
         self._thread = None
         self.ended = False
+        self._what = what
+        self._expected = None if expected_size is None else tuple(int(n) for n in expected_size)
+        self._error: ImageInputError | None = None  # live: a frame of another size came
         self._clock = time.perf_counter  # live camera: wall clock (s) of the frames' ages
         self._frame_wall = -np.inf  # live: wall-clock time of the latest detection
         self._cycle = 0.0  # live: wall-clock seconds between the last two detections
@@ -495,6 +501,15 @@ class VideoImagePoints:
                 with self._lock:
                     self.ended = True
                 return
+            size = (frame.shape[1], frame.shape[0])
+            if self._expected is not None and size != self._expected:
+                with self._lock:
+                    self._error = ImageInputError(
+                        f"{self._what}: delivers {size[0]}x{size[1]} frames but the "
+                        f"calibration expects {self._expected[0]}x{self._expected[1]} (use "
+                        "the calibrated camera, at its resolution)")
+                    self.ended = True
+                return
             pt = detect_source_point(frame, self.detector)
             now = self._clock()
             with self._lock:
@@ -517,6 +532,8 @@ class VideoImagePoints:
                                                 name="hearsee-camera")
                 self._thread.start()
             with self._lock:
+                if self._error is not None:
+                    raise self._error
                 period = max(1.0 / self.fps, self._cycle)
                 if self.ended or self._clock() - self._frame_wall > 2.0 * period:
                     return None  # the camera has stopped: no current image of the source
