@@ -440,8 +440,8 @@ def test_input_overflow_is_counted_and_the_run_goes_on(robot, fake_sd, capsys):
     assert "1 dropped / 0 late blocks, 1 input overflows, status ok" in " ".join(out.err.split())
     recs = [json.loads(s) for s in out.out.splitlines()]
     # blocks of 1024: the frames touching the lost samples [3072, 4096) start at 2560 ... 3584
-    # (16 blocks: the device's last block is not cut at --duration)
-    assert sum(r["missing"] for r in recs) == 3 and len(recs) == (16 * 1024 - 1024) // 512 + 1
+    # (the device's last block is cut at --duration: 1 s, as `run`'s)
+    assert sum(r["missing"] for r in recs) == 3 and len(recs) == (16000 - 1024) // 512 + 1
 
 
 def test_run_reports_input_overflows_as_track_does(robot, fake_sd, capsys):

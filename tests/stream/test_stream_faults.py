@@ -281,6 +281,30 @@ def test_track_cli_stats_report_input_overflows(monkeypatch, capsys):
     assert json.loads(cap.out)["stats"]["input_overflows"] == 1
 
 
+def test_device_duration_ends_at_its_sample(monkeypatch, capsys):
+    """``duration_s`` ends the run's samples there, as MappedSource's does: the last block was
+    yielded whole, up to a block past it -- ``hearsee track --device 0 --duration 1`` streamed
+    1.024 s (31 frames) and the same with ``--channels 0,1,2`` 1.00 s (30 frames). After an
+    overflow's gap past the limit no block is yielded."""
+    import json
+
+    from hearsee.cli import main
+
+    src = _device(monkeypatch, _fake_portaudio([20]), duration_s=1.0)
+    blocks = list(src.blocks())
+    assert sum(b.data.shape[1] for b in blocks) == FS and blocks[-1].data.shape[1] == FS % BL
+    src = _device(monkeypatch, _fake_portaudio([20], lose={5: 4 * BL}), duration_s=7 * BL / FS)
+    assert [b.start for b in src.blocks()] == [0, BL, 2 * BL, 3 * BL, 4 * BL]
+    frames = {}
+    monkeypatch.setitem(sys.modules, "sounddevice", _fake_portaudio([20, 20]))
+    for extra in ([], ["--channels", "0,1,2"]):
+        assert main(["track", "--device", "0", "--array", "three-mic", "--duration", "1",
+                     "--format", "json", *extra]) == 0
+        frames[bool(extra)] = json.loads(capsys.readouterr().out)["stats"]
+        assert frames[bool(extra)]["audio_s"] == 1.0
+    assert frames[False]["frames"] == frames[True]["frames"] == (FS - 1024) // 512 + 1
+
+
 # ------------------------------------------------------------------------- 7a. late last block
 def test_dropout_source_delivers_a_late_last_block():
     y = np.random.default_rng(0).standard_normal((3, 10 * BL))
@@ -515,12 +539,11 @@ def test_a_live_cameras_frames_of_another_size_than_the_calibration_are_refused(
     monkeypatch.setattr(video, "detect_source_point", lambda img, det: (40.0, 30.0))
     vp = video.VideoImagePoints(0, detector="hog", expected_size=(160, 120))
     try:
-        vp(0.0)  # starts the thread
         with pytest.raises(ImageInputError, match="camera 0: delivers 80x60 frames but the "
                            "calibration expects 160x120"):
             for _ in range(500):
+                vp(0.01)  # (the first call starts the camera's thread)
                 time.sleep(0.01)
-                vp(0.01)
     finally:
         vp.close()
     arr = MicArray.from_preset("three-mic")

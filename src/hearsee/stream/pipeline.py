@@ -841,7 +841,10 @@ class DeviceSource:
                 self._callback(indata, frames, time_info, status)
 
         sd = self._sd
-        limit = None if self.duration_s is None else int(self.duration_s * self.fs)
+        # (as MappedSource: the run's samples end at the limit -- the last block was yielded
+        # whole, up to a block past it: `hearsee track --device --duration 1` streamed 1.024 s
+        # and one frame more than with --channels)
+        limit = None if self.duration_s is None else int(round(self.duration_s * self.fs))
         try:
             with contextlib.ExitStack() as opened:
                 try:  # PortAudio opens the device here and starts it on entering
@@ -882,6 +885,10 @@ class DeviceSource:
                         if self._run is run:
                             self.stalled = True
                         return
+                    if limit is not None:
+                        if blk.start >= limit:  # (after an overflow's gap)
+                            return
+                        blk = replace(blk, data=blk.data[:, :limit - blk.start])
                     watch.add(blk.data)
                     yield blk
                     if limit is not None and blk.start + blk.data.shape[1] >= limit:
