@@ -522,47 +522,69 @@ def test_a_live_camera_that_reports_no_frame_size_opens(monkeypatch, fake_camera
         vp.close()
 
 
-def test_a_live_cameras_frames_of_another_size_than_the_calibration_are_refused(
-        monkeypatch, fake_camera, tmp_path, capsys):
+@pytest.mark.parametrize("frame, want", [
+    (np.zeros((60, 80, 3), np.uint8), "delivers 80x60 frames but the calibration expects "
+                                      "160x120"),
+    (np.zeros((120, 160), np.uint16), "the person detector needs an 8-bit grey, BGR or BGRA "
+                                      "image, got shape (120, 160) uint16"),
+])
+def test_a_live_cameras_frames_the_calibration_or_detector_cannot_take_are_refused(
+        monkeypatch, tmp_path, capsys, frame, want):
     """A live camera's frames are checked against the calibrated size as they come (its
     driver need not report one): 800x600 frames read through a 640x480 calibration put the
-    3D fixes 1.75 m off, exit 0 and no word. Now ``points(t)`` raises the ImageInputError
-    and ``hearsee track --camera-device`` exits 2 with it, as a video file of another size
-    and ``hearsee run``'s cameras are refused."""
-    import hearsee.stream.video as video
-    from hearsee.audio.signals import write_recording
+    3D fixes 1.75 m off, exit 0 and no word; a 16-bit camera's frame was the detector's
+    ImageInputError as a traceback of the camera's thread, and the run went on
+    direction-only. Now ``points(t)`` raises the ImageInputError and ``hearsee track --device
+    --camera-device`` exits 2 with it, as a video file of another size and ``hearsee run``'s
+    cameras are refused."""
+    import re
+
+    import cv2
+
     from hearsee.cli import main
     from hearsee.errors import ImageInputError
+    from hearsee.stream.video import VideoImagePoints
     from hearsee.vision.camera import Camera, save_camera
 
-    fake_camera(10_000, before_read=lambda: time.sleep(0.002), size=float("nan"))  # 80x60
-    monkeypatch.setattr(video, "detect_source_point", lambda img, det: (40.0, 30.0))
-    vp = video.VideoImagePoints(0, detector="hog", expected_size=(160, 120))
+    class Cap:
+        def __init__(self, index):
+            pass
+
+        def isOpened(self):
+            return True
+
+        def get(self, prop):
+            return 30.0 if prop == cv2.CAP_PROP_FPS else float("nan")
+
+        def read(self):
+            time.sleep(0.002)
+            return True, frame
+
+        def release(self):
+            pass
+
+    monkeypatch.setattr(cv2, "VideoCapture", Cap)
+    vp = VideoImagePoints(0, detector="hog", expected_size=(160, 120))
     try:
-        with pytest.raises(ImageInputError, match="camera 0: delivers 80x60 frames but the "
-                           "calibration expects 160x120"):
+        with pytest.raises(ImageInputError, match=re.escape(f"camera 0: {want}")):
             for _ in range(500):
                 vp(0.01)  # (the first call starts the camera's thread)
                 time.sleep(0.01)
     finally:
         vp.close()
-    arr = MicArray.from_preset("three-mic")
-    y = simulate_moving_free_field(
-        0.05 * np.random.default_rng(0).standard_normal(FS), FS, arr,
-        linear_trajectory([1.2, -0.5, 0.1], [0, 0.8, 0], 1.0), snr_db=25, rng=1)
-    write_recording(tmp_path / "rec.wav", y, FS)
     save_camera(Camera.from_fov(70.0, 160, 120), tmp_path / "cam.yaml")
-    args = ["track", str(tmp_path / "rec.wav"), "--array", "three-mic", "--camera",
-            str(tmp_path / "cam.yaml"), "--camera-device", "0"]
+    x = 0.1 * np.random.default_rng(0).standard_normal((3, FS))
+    monkeypatch.setitem(sys.modules, "sounddevice", _fake_recorder(x))
     monkeypatch.setattr(pl, "StreamPipeline", _SlowStart)
-    assert main(args) == 2
-    assert "camera 0: delivers 80x60 frames but the calibration expects 160x120" in (
-        capsys.readouterr().err)
+    assert main(["track", "--device", "0", "--duration", "0.9", "--array", "three-mic",
+                 "--camera", str(tmp_path / "cam.yaml"), "--camera-device", "0"]) == 2
+    err = capsys.readouterr().err
+    assert f"camera 0: {want}" in err and "Traceback" not in err
 
 
 class _SlowStart(pl.StreamPipeline):
     """A stream whose first image point is asked for only once the camera has delivered
-    (a file's audio is streamed faster than a camera delivers its first frame)."""
+    (the fake device's audio is all there at once, before a camera's first frame)."""
 
     def run(self, source, sink=None, threaded=False, array_pan=None):
         self.image_points(0.0)
@@ -657,9 +679,10 @@ def test_track_cli_closes_its_video_source(monkeypatch, tmp_path, capsys):
     monkeypatch.setattr(cv2, "VideoCapture", CountingCap)
     monkeypatch.setattr(video, "detect_source_point", lambda img, det: None)
     cam = ["--camera", str(tmp_path / "cam.yaml")]
-    for extra in (["--video", str(vid)], ["--camera-device", "0"]):
-        assert main(["track", str(tmp_path / "rec.wav"), "--array", "three-mic", *cam,
-                     *extra]) == 0
+    monkeypatch.setitem(sys.modules, "sounddevice", _fake_recorder(y))
+    for audio, extra in (([str(tmp_path / "rec.wav")], ["--video", str(vid)]),
+                         (["--device", "0", "--duration", "0.4"], ["--camera-device", "0"])):
+        assert main(["track", *audio, "--array", "three-mic", *cam, *extra]) == 0
         assert len(released) == len(opened)
         assert not [t for t in threading.enumerate() if t.name == "hearsee-camera"]
     # the microphone cannot be opened after the camera was: the camera is still closed

@@ -385,9 +385,9 @@ class VideoImagePoints:
         The calibrated camera's image size in pixels: a video file of another size is refused
         (its image points would be read through the wrong intrinsics). A live camera's driver
         may report its size only once it streams: its frames are checked as they come, and
-        ``points(t)`` raises the ImageInputError once one of another size has come (its
-        points were used: 800x600 frames with a 640x480 calibration put the 3D fixes 1.75 m
-        off, without a word).
+        ``points(t)`` raises the ImageInputError once one of another size (or one the
+        detector cannot take, e.g. 16-bit) has come (its points were used: 800x600 frames
+        with a 640x480 calibration put the 3D fixes 1.75 m off, without a word).
     where : str
         Prefix of the error when a video file opens but delivers no frame (a corrupt or
         truncated file; :func:`read_frame`, the check of ``hearsee run --dry-run`` too), e.g.
@@ -497,20 +497,24 @@ class VideoImagePoints:
         t0 = self._clock()
         while not self._stop.is_set():
             ok, frame = self.cap.read()
-            if not ok:
+            if not ok or frame is None:
                 with self._lock:
                     self.ended = True
                 return
-            size = (frame.shape[1], frame.shape[0])
-            if self._expected is not None and size != self._expected:
+            try:
+                size = (frame.shape[1], frame.shape[0])
+                if self._expected is not None and size != self._expected:
+                    raise ImageInputError(
+                        f"delivers {size[0]}x{size[1]} frames but the calibration expects "
+                        f"{self._expected[0]}x{self._expected[1]} (use the calibrated camera, "
+                        "at its resolution)")
+                pt = detect_source_point(frame, self.detector)
+            except ImageInputError as exc:  # (a 16-bit camera's frame: the detector's error
+                # was a traceback of this thread, and the run went on direction-only)
                 with self._lock:
-                    self._error = ImageInputError(
-                        f"{self._what}: delivers {size[0]}x{size[1]} frames but the "
-                        f"calibration expects {self._expected[0]}x{self._expected[1]} (use "
-                        "the calibrated camera, at its resolution)")
+                    self._error = ImageInputError(f"{self._what}: {exc}")
                     self.ended = True
                 return
-            pt = detect_source_point(frame, self.detector)
             now = self._clock()
             with self._lock:
                 if self.frame_index >= 0:
