@@ -306,7 +306,8 @@ def test_a_camera_index_beyond_a_c_int_is_one_line(scene, tmp_path, capsys):
     from hearsee.robot.hardware import open_capture
 
     big = "99999999999999999999"
-    assert main([*scene["base"], "--camera-device", big]) == 2
+    assert main(["track", "--device", "0", "--array", str(scene["array"]), "--camera",
+                 str(scene["cam"]), "--camera-device", big]) == 2
     out, err = capsys.readouterr()
     assert out == "" and err == (f"hearsee: error: camera {big}: cannot be opened as a video "
                                  "(OpenCV VideoCapture)\n")

@@ -168,6 +168,10 @@ def test_track_file_with_a_dead_first_microphone_and_a_camera(tmp_path, capsys):
      "--camera-at: expected 3 numbers"),
     (["--camera", "CAM", "--image-points", "PTS", "--camera-at", "0,nan,0"],
      "--camera-at: numbers must be finite"),
+    # (a recording streams faster than real time: its frames were paired with what the
+    # camera sees now -- no 3D fix, exit 0 and no word)
+    (["--camera", "CAM", "--camera-device", "0"],
+     "--camera-device is a live camera, for live input (--device)"),
 ])
 def test_track_bad_options(scene, capsys, args, msg):
     args = [a.replace("CAM", str(scene["cam"])).replace("PTS", str(scene["pts"])) for a in args]

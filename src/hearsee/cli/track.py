@@ -174,7 +174,7 @@ def track_cmd(
     video: Annotated[Path | None, typer.Option(
         "--video", help="Video of the scene (needs --camera).")] = None,
     camera_device: Annotated[int | None, typer.Option(
-        "--camera-device", help="Live camera index (needs --camera).")] = None,
+        "--camera-device", help="Live camera index (needs --camera and --device).")] = None,
     image_points: Annotated[Path | None, typer.Option(
         "--image-points", help="CSV t,u,v of the source's image point (needs --camera; "
         "empty u and v = not visible). Only one of u and v, or a point more than "
@@ -285,6 +285,12 @@ def track_cmd(
     if camera is not None and not visual:
         raise ConfigError("--camera needs an image-point source: --video, --camera-device or "
                           "--image-points")
+    if camera_device is not None and device is None:
+        # (a recording streams many times faster than real time: its frames were paired with
+        # what the camera sees now -- a walk filmed live in step with it gave no 3D fix, exit 0
+        # and no word)
+        raise ConfigError("--camera-device is a live camera, for live input (--device); give a "
+                          "recording's own video with --video")
     pose = [n for n, o in (("--camera-at", camera_at), ("--camera-pan", camera_pan),
                            ("--camera-tilt", camera_tilt)) if o is not None]
     if pose and camera is None:  # (they were ignored without a word)
