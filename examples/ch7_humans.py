@@ -26,8 +26,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from hearsee.errors import ImageInputError
 from hearsee.sim.scenes import Entity, SceneSpec, default_rig, render_scene, write_scene
 from hearsee.vision.fusion import detect_humans, draw_detections
+from hearsee.vision.io import check_image_writable
 
 
 def room(person: dict | None = None, mannequin_c: float | None = None) -> SceneSpec:
@@ -68,9 +70,11 @@ def main() -> None:
     args = ap.parse_args()
     if args.figure is None:
         args.figure = str(Path(args.out) / "ch7_humans.png")
-    elif not cv2.haveImageWriter(args.figure):  # (cv2.imwrite raised, after every scene)
-        ap.error(f"--figure {args.figure}: OpenCV cannot write "
-                 f"{Path(args.figure).suffix or 'a file without a suffix'}; use .png or .jpg")
+    else:  # (cv2.imwrite raised, after every scene)
+        try:
+            check_image_writable(args.figure)
+        except ImageInputError as exc:
+            ap.error(f"--figure {exc}")
     cv2.setNumThreads(1)
     rig = default_rig()
     normal = render_scene(room(), rig)

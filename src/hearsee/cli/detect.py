@@ -75,21 +75,9 @@ def detect_cmd(
                                  f"{camera_pitch}")
     refuse_overwrite([overlay_p], [left_p, right_p, calib_p, thermal_p], force)
     if overlay_p is not None:  # (else write_image refuses it only after the whole detection)
-        import cv2
+        from hearsee.vision.io import check_image_writable
 
-        from hearsee.vision.io import _opencv_log
-
-        # (a codec built in but disabled, e.g. OpenEXR, raised cv2.error: a traceback after
-        # OpenCV's own "[ WARN ]" line)
-        with _opencv_log("silent"):
-            try:
-                writable = cv2.haveImageWriter(str(overlay_p))
-            except cv2.error:
-                writable = False
-        if not writable:
-            kind = overlay_p.suffix or "a file without a suffix"
-            raise ImageInputError(f"{overlay_p}: OpenCV cannot write {kind}; use an image "
-                                  "suffix such as .png or .jpg")
+        check_image_writable(overlay_p)
     rig = load_rig(calib_p)
     L, R = read_pair(left_p, right_p, "bgr", expected_size=rig.left.size)
     th = None

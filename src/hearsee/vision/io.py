@@ -551,6 +551,24 @@ def _refuse_false_colour(chans: NDArray, path: str | Path) -> None:
             "radiometric 16-bit counts or as float degC")
 
 
+def check_image_writable(path: str | Path) -> Path:
+    """``path`` as a Path when OpenCV has an encoder for its suffix, else an ImageInputError
+    naming it: checked before the work whose image it will hold (:func:`write_image` refuses
+    it only then). A codec OpenCV builds but disables (OpenEXR in its wheels) made
+    ``cv2.haveImageWriter`` raise cv2.error after its own "[ WARN ]" line: a traceback."""
+    p = Path(path)
+    with _opencv_log("silent"):
+        try:
+            writable = cv2.haveImageWriter(str(p))
+        except cv2.error:
+            writable = False
+    if not writable:
+        kind = p.suffix or "a file without a suffix"
+        raise ImageInputError(f"{p}: OpenCV cannot write {kind}; use an image suffix such as "
+                              ".png or .jpg")
+    return p
+
+
 def write_image(path: str | Path, image: NDArray) -> Path:
     """Write an image (format from the suffix); raise ImageInputError when OpenCV cannot.
 
