@@ -365,6 +365,36 @@ def test_report_folder_that_is_a_file_fails_before_listening(robot_dir, monkeypa
     assert notes.read_text(encoding="utf-8") == "keep"
 
 
+def test_out_replaces_the_robot_files_outputs_which_are_not_checked(robot_dir, monkeypatch,
+                                                                     capsys):
+    """--out overrides output.report and output.jsonl: the robot file's own, which the run
+    does not write, refused it ("output.report: .../hearsee-run is a file", "output.jsonl:
+    notes.json exists and is not a hearsee run's JSON lines") -- a robot file whose default
+    report folder is blocked could not be run with any --out (2026-12-07 robot review)."""
+    monkeypatch.setitem(sys.modules, "sounddevice", FakeSoundDevice(DEVICES))
+    (robot_dir / "hearsee-run").write_text("not a folder", encoding="utf-8")
+    (robot_dir / "notes.json").write_text("my notes\n", encoding="utf-8")
+    for output in (None, {"report": "r", "jsonl": "notes.json"}):
+        cfg = _config(robot_dir, cameras=False, **({} if output is None else {"output": output}))
+        if output is None:  # (_config's report folder: removed, the default 'hearsee-run')
+            data = yaml.safe_load(cfg.read_text(encoding="utf-8"))
+            del data["output"]
+            cfg.write_text(yaml.safe_dump(data), encoding="utf-8")
+        assert main(["run", "--config", str(cfg), "--dry-run"]) == 2  # (without --out: refused)
+        assert "output." in capsys.readouterr().err
+        code = main(["run", "--config", str(cfg), "--out", str(robot_dir / "elsewhere"),
+                     "--dry-run"])
+        out = capsys.readouterr()
+        assert code == 0, out.err
+        assert "all 2 checks passed" in out.out
+    # --out's own outputs are still checked
+    assert main(["run", "--config", str(cfg), "--out", str(robot_dir / "hearsee-run"),
+                 "--dry-run"]) == 2
+    assert "--out" in capsys.readouterr().err
+    assert (robot_dir / "notes.json").read_text(encoding="utf-8") == "my notes\n"
+    assert not (robot_dir / "elsewhere").exists()
+
+
 def test_report_folder_holding_a_folder_named_index_html_fails_before_listening(
         robot_dir, monkeypatch, capsys):
     """A folder named index.html in output.report passed the dry run; a live run listened

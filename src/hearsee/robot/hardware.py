@@ -519,11 +519,14 @@ def _output(d: Mapping[str, Any], where: str, base: Path) -> OutputConfig:
 
 
 def robot_config_from_dict(data: Mapping[str, Any], where: str = "robot.yaml",
-                           base_dir: str | Path | None = ".") -> RobotConfig:
+                           base_dir: str | Path | None = ".", *,
+                           check_output: bool = True) -> RobotConfig:
     """Validate a robot mapping (see the module docstring). ``where`` prefixes every error;
     relative paths are resolved against ``base_dir`` (None: the current folder, as
     :func:`hearsee.robot.scenario.scenario_from_dict`; anything but a path is an
-    InputFileError)."""
+    InputFileError). ``check_output=False``: the ``output`` section's keys and types are
+    checked, but not its paths on disk (:func:`check_outputs`) -- for a caller that replaces
+    the outputs (:meth:`RobotConfig.with_output`, ``hearsee run --out``) and checks those."""
     if not isinstance(data, Mapping):
         raise ConfigError(f"{where}: expected a mapping at top level")
     base = Path(".") if base_dir is None else as_path(base_dir, "base_dir")
@@ -536,7 +539,8 @@ def robot_config_from_dict(data: Mapping[str, Any], where: str = "robot.yaml",
         _check_camera_above_floor(cameras, head, f"{where}: cameras.mount_m")
     output = _output(_mapping(data, "output", where) or {}, f"{where}: output", base)
     cfg = RobotConfig(Path(where), audio, cameras, head, output)
-    check_outputs(cfg, where)
+    if check_output:
+        check_outputs(cfg, where)
     return cfg
 
 
@@ -600,12 +604,16 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
                           "choose another folder for the JSON lines")
 
 
-def load_robot_config(path: str | Path) -> RobotConfig:
+def load_robot_config(path: str | Path, *, check_output: bool = True) -> RobotConfig:
     """Load and validate a robot file; errors name the file and the field (a ``path`` that is
-    no file name, e.g. None, an InputFileError)."""
+    no file name, e.g. None, an InputFileError). ``check_output``: as
+    :func:`robot_config_from_dict`'s (False where the outputs are replaced: ``hearsee run
+    --out``; the file's own output.report or output.jsonl, which that run does not write,
+    refused it until 2026-12-07)."""
     p = as_path(path, "the robot file's path")
     data = load_yaml(p)
-    cfg = robot_config_from_dict(data, where=str(p), base_dir=p.resolve().parent)
+    cfg = robot_config_from_dict(data, where=str(p), base_dir=p.resolve().parent,
+                                 check_output=check_output)
     return RobotConfig(p, cfg.audio, cfg.cameras, cfg.head, cfg.output)
 
 
