@@ -825,6 +825,58 @@ def test_cameras_that_end_or_change_size(small_rig, capsys):
         cams.read()
 
 
+def test_cameras_that_stop_for_a_moment_are_read_again(small_rig, monkeypatch, capsys):
+    """Camera devices that deliver no frame for three reads in a row (a 1.6 s hiccup at 2 Hz),
+    then deliver again: the loop never read them again (vision lost for the rest of the run),
+    though CAMERA_READ_TIMEOUT_S said reads resume. Now they are tried every CAMERA_RETRY_S
+    seconds of audio and read at rate_hz again once they deliver (2026-12-07 robot review)."""
+    from hearsee.robot import hardware
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource
+
+    img = np.random.default_rng(1).integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    now = [0.0]  # (the audio time of the read: the devices' own clock in this test)
+
+    class Hiccup:
+        def isOpened(self):
+            return True
+
+        def set(self, *a):
+            return True
+
+        def get(self, prop):
+            return 0.0
+
+        def read(self):
+            return (False, None) if 1.0 <= now[0] < 2.6 else (True, img.copy())
+
+        def release(self):
+            pass
+
+    monkeypatch.setattr(hardware, "open_capture", lambda spec, where: Hiccup())
+    real_read = hardware.Cameras.read
+
+    def read(self, t=None):
+        now[0] = t
+        return real_read(self, t)
+
+    monkeypatch.setattr(hardware.Cameras, "read", read)
+    cfg = load_robot_config(make_config(small_rig, _with(
+        audio={"device": None, "array": "three-mic", "channels": None},
+        cameras={"left": 0, "right": 1, "thermal": None, "rate_hz": 2})))
+    x, _ = simulate_recording("three-mic", [1.0, 1.5, 0.0], duration_s=5.0, fs=FS, snr_db=25.0,
+                              seed=6)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
+                    async_vision=False)
+    err = capsys.readouterr().err
+    assert "no more frames; continuing with audio only" in err and "frames again" in err
+    cam_t = [r["camera_t"] for r in res.log if r["camera_t"] is not None]
+    # slots 0, 0.5 s; 1, 1.5, 2 s fail; retried at 3 s (a retry after the 2 s slot), then 2 Hz
+    assert res.summary["camera_read_failures"] == 3
+    assert [round(2 * t) / 2 for t in cam_t] == [0.0, 0.5, 3.0, 3.5, 4.0, 4.5]
+    assert res.summary["camera_frames"] == 6
+
+
 def _quiet_head(cfg):
     from hearsee.robot.hardware import PrintHeadDriver
 

@@ -63,7 +63,8 @@ device exists with enough channels and accepts the sample rate (``sd.check_input
 each camera opens and delivers a frame of the calibrated size (within
 :data:`~hearsee.stream.video.FIRST_FRAME_TIMEOUT_S`), the calibration loads. In the live loop a
 camera device or stream that stops delivering does not stall the audio: its reads give up after
-:data:`CAMERA_READ_TIMEOUT_S`, and after three failed reads the loop goes on with audio only.
+:data:`CAMERA_READ_TIMEOUT_S`, and after three failed reads the loop goes on with audio only,
+trying the cameras again every :data:`CAMERA_RETRY_S` seconds of audio until they deliver.
 """
 
 from __future__ import annotations
@@ -748,8 +749,15 @@ class CameraFrames:
 #: How long the live loop waits for one frame of a camera device or stream (seconds) before
 #: it counts the read as failed (:class:`~hearsee.stream.video.TimedCapture`): a device that
 #: blocks in its read stalled the loop, and with it the audio, forever. Three failed reads in a
-#: row and the loop goes on with audio only; reads resume when the device delivers again.
+#: row and the loop goes on with audio only; reads resume when the device delivers again
+#: (tried every :data:`CAMERA_RETRY_S`).
 CAMERA_READ_TIMEOUT_S = 1.0
+
+#: Seconds of audio between the live loop's reads of cameras that stopped delivering (three
+#: failed reads in a row): on the first read that delivers, reads go on at ``rate_hz``. Until
+#: 2026-12-07 the loop never read them again: a camera's hiccup of three reads (1.5 s at
+#: 2 Hz) left the rest of the run without vision.
+CAMERA_RETRY_S = 1.0
 
 
 class Cameras:
@@ -1395,8 +1403,16 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
         if fr is None:
             if cameras.n_consecutive_failures >= 3 and not state["cam_ended"]:
                 state["cam_ended"] = True
-                print("cameras: no more frames; continuing with audio only", file=sys.stderr)
+                print("cameras: no more frames; continuing with audio only (trying again "
+                      f"every {CAMERA_RETRY_S:g} s)", file=sys.stderr)
+            if state["cam_ended"]:  # the next try: the grid's slot a retry after this one's
+                slot = state["next_cam"] - period
+                while state["next_cam"] < slot + CAMERA_RETRY_S - 1e-9:
+                    state["next_cam"] += period
             return None
+        if state["cam_ended"]:
+            state["cam_ended"] = False
+            print(f"cameras: frames again at t = {t:.2f} s", file=sys.stderr)
         state["cam_frames"] += 1
         return fr
 
@@ -1572,7 +1588,7 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
             state["speaker_drops"] += 1
         dets: list[dict[str, Any]] = []
         camera_t = None
-        if (cameras is not None and not state["cam_ended"] and pending[0] is None
+        if (cameras is not None and pending[0] is None
                 and t + 1e-9 >= state["next_cam"]):
             # the next read on the grid k / rate_hz seconds of audio, as the simulated loop's
             # (it was t + period: late by up to one update per frame, e.g. 4.46 frames a
