@@ -877,6 +877,49 @@ def test_cameras_that_stop_for_a_moment_are_read_again(small_rig, monkeypatch, c
     assert res.summary["camera_frames"] == 6
 
 
+def test_a_camera_device_named_by_path_keeps_only_its_newest_frame(small_rig, monkeypatch):
+    """cameras.left: /dev/video0 is the device of cameras.left: 0 (the schema's own example),
+    but only an index got CAP_PROP_BUFFERSIZE 1: a device named by its path kept OpenCV's
+    buffers of old frames. Both now; a video file and a URL are left alone (2026-12-07 robot
+    review; FIFOs stand in for the device nodes)."""
+    import os
+
+    import cv2
+
+    from hearsee.robot import hardware
+
+    calls = {}
+
+    class Capture:
+        def __init__(self, spec):
+            self.spec, calls[spec] = spec, []
+
+        def isOpened(self):
+            return True
+
+        def set(self, prop, value):
+            calls[self.spec].append((prop, value))
+            return True
+
+        def get(self, prop):
+            return 0.0
+
+        def release(self):
+            pass
+
+    monkeypatch.setattr(hardware, "open_capture", lambda spec, where: Capture(spec))
+    for name in ("video0", "video1", "video2"):
+        os.mkfifo(small_rig / name)
+    for cams, live in (({"left": 0, "right": 1, "thermal": 2}, (0, 1, 2)),
+                       ({"left": "video0", "right": "video1", "thermal": "video2"},
+                        tuple(str(small_rig / f"video{k}") for k in range(3))),
+                       ({"left": "left.avi", "right": "rtsp://cam/right", "thermal": 2}, (2,))):
+        calls.clear()
+        cfg = load_robot_config(make_config(small_rig, _with(cameras=cams)))
+        hardware.Cameras(cfg.cameras).close()
+        assert {k for k, v in calls.items() if (cv2.CAP_PROP_BUFFERSIZE, 1) in v} == set(live)
+
+
 def _quiet_head(cfg):
     from hearsee.robot.hardware import PrintHeadDriver
 

@@ -799,7 +799,9 @@ class Cameras:
                 if not is_file:  # a device or stream, whose read may block: see TimedCapture
                     cap = TimedCapture(cap, CAMERA_READ_TIMEOUT_S)
                 self.caps[name] = cap
-                if isinstance(spec, int):  # live device: keep only the newest frame
+                # a live device, by index or by path (/dev/video0; until 2026-12-07 only an
+                # index): keep only the newest frame
+                if isinstance(spec, int) or (not is_file and "://" not in spec):
                     cap.set(cv2.CAP_PROP_BUFFERSIZE, 1)
                 fps = cap.get(cv2.CAP_PROP_FPS)
                 if is_file and np.isfinite(fps) and fps > 0:
