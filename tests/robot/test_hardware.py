@@ -2635,3 +2635,32 @@ def test_paths_the_system_cannot_look_at_are_config_errors(section, key, tmp_pat
             d.setdefault(section, {})[key] = value
         with pytest.raises(ConfigError, match=rf"{section}\.{key}: .*{words}"):
             robot_config_from_dict(d, "robot.yaml", tmp_path)
+
+
+@pytest.mark.parametrize("tilt", [30.0, -20.0])
+def test_a_flat_arrays_elevation_side_is_the_one_nearer_the_horizontal(tmp_path, tilt):
+    """A three-mic (flat) array on a head tilted ``tilt`` deg, a talker 3 m away at azimuth
+    60 deg and at the pivot's height: the array cannot tell on which side of its plane the
+    talker is and the stream reports the upper side. The loop took it: tilted 30 deg up (the
+    talker below the array's plane) the logged azimuth was 74.8 deg; the side nearer the
+    robot's horizontal is the talker's. Tilted down, the upper side was already right."""
+    from hearsee.geometry import robot_to_array
+    from hearsee.robot.hardware import PrintHeadDriver
+    from hearsee.sim.audio import simulate_recording
+    from hearsee.stream.pipeline import ArraySource
+
+    cfg = robot_config_from_dict({"audio": {"array": "three-mic"},
+                                  "head": {"pose_deg": [0.0, tilt]},
+                                  "output": {"report": "out"}}, "r.yaml", str(tmp_path))
+    az = np.radians(60.0)
+    talker = cfg.head.pivot_m + 3.0 * np.array([np.cos(az), np.sin(az), 0.0])
+    p_arr = robot_to_array(talker, (0.0, tilt), cfg.head.pivot_m, cfg.head.offset_m)
+    x, _ = simulate_recording("three-mic", p_arr.tolist(), signal="male", duration_s=1.5,
+                              fs=FS, snr_db=30.0, seed=343)
+    res = run_robot(cfg, audio_source=ArraySource(x, FS, 1600),
+                    head=PrintHeadDriver(cfg.head, None))
+    heard = [r["audio"] for r in res.log if r["audio"] and r["audio"]["measured"]]
+    assert len(heard) > 20
+    assert abs(res.summary["azimuth_deg_median"] - 60.0) < 1.5
+    # each frame's robot-frame elevation: the talker's (0), not its mirror's (2 x tilt)
+    assert np.median([abs(a["elevation_deg"]) for a in heard]) < 5.0

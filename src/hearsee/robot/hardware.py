@@ -1051,12 +1051,33 @@ class _Head:
         #: the microphone array's origin, ``head.offset_m`` from the pivot in the head frame:
         #: where the audio bearing is heard from (it was taken as heard from the pivot)
         self.array_origin = array_to_robot(np.zeros(3), pose, self.pivot, cfg.head.offset_m)
+        #: a flat array's plane normal (head frame) where the plane lies within 45 deg of the
+        #: head's horizontal, else None: its elevation's sign is unknown (see
+        #: :meth:`direction_to_robot`)
+        from hearsee.audio.localize import array_geometry
+
+        geo = array_geometry(cfg.audio.array)
+        self.mirror_normal = (geo.normal if geo.kind == "planar"
+                              and abs(float(geo.normal[2])) >= np.sqrt(0.5) else None)
 
     def direction_to_robot(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
+        """The head-frame direction ``(az_deg, el_deg)`` (degrees; el None: unknown, taken as
+        0) as the robot frame's (azimuth, elevation), degrees. A flat array cannot tell on
+        which side of its plane a talker is (the stream reports the upper side): with the head
+        tilted, the two sides are two robot azimuths, and of them the one nearer the robot's
+        horizontal is taken -- right for every talker nearer the horizontal than its mirror in
+        the array's plane, e.g. every talker below the array's plane when the head tilts up.
+        It took the upper side: with the head tilted 30 deg up, a talker at the pivot's height
+        at azimuth 60 deg was logged at 74.8 deg (a review helper's rig, 2026-12-07)."""
         from hearsee.geometry import direction_deg, unit_vector_deg
 
-        u = self.R @ unit_vector_deg(az_deg, 0.0 if el_deg is None else el_deg)
-        az, el = direction_deg(u)
+        u = unit_vector_deg(az_deg, 0.0 if el_deg is None else el_deg)
+        if el_deg is not None and self.mirror_normal is not None:
+            n = self.mirror_normal
+            m = u - 2.0 * float(u @ n) * n
+            if abs(float((self.R @ m)[2])) < abs(float((self.R @ u)[2])) - 1e-9:
+                u = m
+        az, el = direction_deg(self.R @ u)
         return float(az), (None if el_deg is None else float(el))
 
     def camera_to_robot(self, p_cam: NDArray) -> NDArray:
