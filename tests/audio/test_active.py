@@ -782,6 +782,28 @@ def test_thesis_search_alignment_nearby_sources():
     assert max(errs) < 1.0 and np.median(errs) < 0.3
 
 
+@pytest.mark.parametrize("az", [30.0, 90.0, 150.0])
+@pytest.mark.parametrize("r", [2.0, 20.0])
+def test_thesis_search_alignment_level_source(az, r):
+    """A source level with the head (a talker at its height), left or behind: the search
+    settled the pan at tilt 0, tried +-12 deg and came back to tilt 0 -- the source exactly --
+    then fitted its parabola through the two samples at tilt 0 and 2.5e-11 deg (numpy's
+    RankWarning), went to 6 deg and halved its way back, ending 1.5 deg off with
+    converged=True (tol_deg 1). Exact TDOAs, the source built from its angles."""
+    import warnings
+
+    from hearsee.audio.active import align_head_search
+
+    src = r * np.array([np.cos(np.radians(az)), np.sin(np.radians(az)), 0.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # (the RankWarning)
+        res = align_head_search(lambda pose: MicArray(mic_positions_at(ARR, pose)).tdoa(src),
+                                ARR)
+    assert res.converged
+    assert res.error_deg(src) < 0.1
+    assert abs(res.final_pose.tilt_deg) < 0.1
+
+
 def test_simulate_poses_cli_writes_manifest(tmp_path, capsys):
     import json
 

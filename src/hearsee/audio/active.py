@@ -1412,6 +1412,16 @@ def align_head_search(
         else:
             kb = int(np.argmax(gv))
             lower, upper = b[b < b[kb]], b[b > b[kb]]
+            # a sample at (nearly) the best one's tilt -- the head back at a tilt it measured
+            # before its pan settled -- is no neighbour while another lies beyond it: the
+            # parabola through two equal tilts was ill-conditioned (a source level with the
+            # head: back at tilt 0, the vertex went to 6 deg, and the search ended 1.5 deg
+            # off, "converged"). Only such repeats: a noisy sample a few tenths of a degree
+            # away is a neighbour still (dropped for one far away, the fit was worse)
+            gap = 1e-3 * tol_deg
+            far_l, far_u = lower[lower <= b[kb] - gap], upper[upper >= b[kb] + gap]
+            lower = far_l if len(far_l) else lower
+            upper = far_u if len(far_u) else upper
             if len(lower) and len(upper):
                 # bracketed maximum: parabola through the best sample and its neighbours
                 bl, bu = lower.max(), upper.min()
