@@ -804,6 +804,30 @@ def test_thesis_search_alignment_level_source(az, r):
     assert abs(res.final_pose.tilt_deg) < 0.1
 
 
+@pytest.mark.parametrize("r", [25.0, 40.0, 100.0])
+def test_multipose_distance_at_the_far_search_bound_is_not_reported(r):
+    """A source beyond the solver's distance range (20 m): the refined distance stopped at
+    the bound, and with a head offset of 0.6 m its relative 1-sigma was 0.23-0.36, so the
+    answer was "20.0 m, unique" for sources 25-100 m away. A distance held at the bound is
+    only a lower bound: no distance, the far-field direction. Exact TDOAs, the source built
+    from its angles; one inside the range keeps its distance."""
+    poses = [(0, 0), (90, 30), (-90, -30), (180, 0)]
+    off = (0.6, 0.0, 0.3)
+    u = np.array([np.cos(np.radians(10)) * np.cos(np.radians(30)),
+                  np.cos(np.radians(10)) * np.sin(np.radians(30)), np.sin(np.radians(10))])
+
+    def solve(dist):
+        tau = [MicArray(mic_positions_at(ARR, p, offset_m=off)).tdoa(dist * u) for p in poses]
+        return localize_multipose(tau, poses, ARR, offset_m=off)
+
+    est = solve(r)
+    assert est.distance_m is None and est.position_m is None and not est.unique
+    assert est.distance_rel_std == np.inf
+    assert np.degrees(angle_between(est.direction, u)) < 0.5
+    near = solve(10.0)
+    assert near.unique and near.distance_m == pytest.approx(10.0, rel=1e-3)
+
+
 def test_simulate_poses_cli_writes_manifest(tmp_path, capsys):
     import json
 

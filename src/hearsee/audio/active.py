@@ -409,7 +409,8 @@ def solve_range_differences(
         (sum of squared normalised residuals) is within ``max(ambiguity_gate,
         ambiguity_ratio * chi2_best)`` of the best.
     max_rel_distance_std : float
-        Above this relative 1-sigma distance uncertainty the distance is reported as unknown.
+        Above this relative 1-sigma distance uncertainty the distance is reported as unknown;
+        so is a distance held at the far end of ``distance_bounds_m`` (only a lower bound).
     max_residual_rms_s : float, optional
         Above this root-mean-square TDOA residual (s) of the best candidate the answer is
         flagged ``consistent=False``; default :data:`MAX_RESIDUAL_SIGMAS` x ``tdoa_std_s``.
@@ -517,12 +518,16 @@ def solve_range_differences(
     kept: list[tuple[float, float, NDArray, bool]] = []
     cos_min = np.cos(np.radians(min_separation_deg))
     info = {}
-    for cost, chi2, p, _th in sols:
+    for cost, chi2, p, th in sols:
         if chi2 - best_chi2 > gate:
             continue
         cov, rel, ang, cond = position_uncertainty(p, M, a, b, c, y, sig, ref,
                                                    max_rel_distance_std)
-        known = resolve_distance and rel <= max_rel_distance_std
+        # a distance held at the search's far bound is the bound, not a measurement: the data
+        # say only "at least this far" (sources 25-100 m away, a head offset of 0.3-0.6 m,
+        # were reported 20.0 m away, unique, with a relative 1-sigma of 0.2-0.46)
+        at_far_bound = bool(th[2] >= np.log(rmax) - 1e-6)
+        known = resolve_distance and rel <= max_rel_distance_std and not at_far_bound
         u = (p - ref) / np.linalg.norm(p - ref)
         r = np.linalg.norm(p - ref)
         dup = False
@@ -536,7 +541,7 @@ def solve_range_differences(
         if dup:
             continue
         kept.append((cost, chi2, p, known))
-        info[len(kept) - 1] = (cov, rel, ang, cond)
+        info[len(kept) - 1] = (cov, np.inf if at_far_bound else rel, ang, cond)
 
     cands = []
     for (cost, _chi2, p, known) in kept:
