@@ -649,6 +649,27 @@ def test_localize3d_single_pose_reports_ambiguity(tmp_path, capsys):
     assert els[1] == pytest.approx(el_true, abs=4.0)
 
 
+def test_simulate_pose_manifest_truth_of_a_source_at_the_pivot(tmp_path):
+    """A source at the head pivot has no direction from it: the manifest's truth wrote
+    azimuth and elevation 0.0 (each capture's own truth, ground_truth, says None for a source
+    at its origin). Now None there too; a source 1 m above the pivot keeps 90 deg."""
+    import yaml
+
+    from hearsee.audio.active import simulate_pose_manifest
+
+    pivot, off = [0.2, 0.0, 1.2], (0.1, 0.0, 0.0)
+    man, _ = simulate_pose_manifest(tmp_path / "at.yaml", "three-mic", pivot, [(0, 0), (40, 20)],
+                                    duration_s=0.3, pivot_m=pivot, offset_m=off)
+    truth = yaml.safe_load(man.read_text())["truth"]
+    assert truth["azimuth_deg"] is None and truth["elevation_deg"] is None
+    assert truth["distance_m"] == 0.0
+    man, _ = simulate_pose_manifest(tmp_path / "up.yaml", "three-mic", [0.2, 0.0, 2.2],
+                                    [(0, 0)], duration_s=0.3, pivot_m=pivot, offset_m=off)
+    truth = yaml.safe_load(man.read_text())["truth"]
+    assert truth["elevation_deg"] == pytest.approx(90.0)
+    assert truth["distance_m"] == pytest.approx(1.0)
+
+
 def test_simulate_pose_manifest_checks_its_points(tmp_path):
     """source_m, pivot_m and offset_m went through np.asarray(float): True was read as 1 m and
     "0.1" as 0.1 m (a manifest written with the wrong geometry), a huge int was a builtin

@@ -102,6 +102,7 @@ from hearsee.geometry import (
     mic_positions_at,
     sph_to_cart,
     unit_vector_deg,
+    vector_length,
     wrap_deg,
 )
 
@@ -1726,6 +1727,10 @@ def simulate_pose_manifest(
         files.append(wav)
         true_tdoas.append(dict(truth["tdoa_s"]))
     az, el = direction_deg(src - pivot)
+    dist = float(vector_length(src - pivot))
+    # a source at the pivot has no direction: None, as each capture's truth has for a source
+    # at the robot-frame origin (ground_truth); it was written as azimuth and elevation 0.0
+    az, el = (None, None) if not dist > 0 else (float(az), float(el))
     doc = {
         "array": arr.to_dict(),
         "head": {"pivot_m": pivot.tolist(), "offset_m": offset.tolist()},
@@ -1733,9 +1738,9 @@ def simulate_pose_manifest(
                      for f, p in zip(files, poses, strict=True)],
         "truth": {
             "source_m": src.tolist(),
-            "azimuth_deg": float(az),
-            "elevation_deg": float(el),
-            "distance_m": float(np.linalg.norm(src - pivot)),
+            "azimuth_deg": az,
+            "elevation_deg": el,
+            "distance_m": dist,
             "tdoa_s": true_tdoas,
             "signal": str(signal), "snr_db": snr_db, "room": room, "fs": int(fs),
             "duration_s": float(duration_s), "seed": seed,
