@@ -196,6 +196,21 @@ def test_glob_images(tmp_path):
         glob_images(str(tmp_path / "nothing*.jpg"))
 
 
+def test_glob_images_pairs_numbered_views_whatever_their_padding(tmp_path):
+    """left1 ... left12 and right01 ... right12: sorted as text the pairs were (left1,
+    right01), (left10, right02), ... and the stereo calibration blamed the cameras. In
+    natural order each view pairs with its own number, in a folder or through a pattern."""
+    (tmp_path / "L").mkdir()
+    for k in range(1, 13):
+        (tmp_path / "L" / f"left{k}.png").write_bytes(b"")
+        (tmp_path / f"right{k:02d}.png").write_bytes(b"")
+    lf = glob_images(tmp_path / "L")
+    rf = glob_images(str(tmp_path / "right*.png"))
+    num = [int(f.stem[4:]) for f in lf]
+    assert num == list(range(1, 13))
+    assert [int(f.stem[5:]) for f in rf] == num
+
+
 def test_to_gray_names_colour_pixel_types_opencv_cannot_convert():
     """check_image accepts e.g. float64 or int32 colour images, but cv2.cvtColor raised a bare
     cv2.error on them (reached through compute_disparity and find_corners)."""

@@ -18,7 +18,8 @@ def _fmt(v: float | None) -> str:
 def calibrate_cmd(
     left: str = typer.Option(..., "--left", help="Left images: a quoted glob ('DIR/left*.jpg') "
                              "or a folder."),
-    right: str = typer.Option(..., "--right", help="Right images (paired in sorted order)."),
+    right: str = typer.Option(..., "--right", help="Right images (paired in natural order: "
+                              "left2 before left10)."),
     output: str = typer.Option(..., "-o", "--output", help="Rig YAML file to write."),
     board: str = typer.Option("9x6", "--board", help="Inner corners per row x per column."),
     square: float = typer.Option(..., "--square", help="Side of one square, metres, 0.001-2 "

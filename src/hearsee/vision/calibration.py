@@ -1002,13 +1002,13 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
     n = len(left_files)
     if n != len(right_files):
         raise CalibrationError(
-            f"{n} left images but {len(right_files)} right images; they are paired in sorted "
-            "order, so both patterns must match the same number of files"
+            f"{n} left images but {len(right_files)} right images; they are paired in order "
+            "(the CLI's patterns: natural order), so both must name the same number of files"
         )
     if thermal_files is not None and len(thermal_files) != n:
         raise CalibrationError(
             f"{len(thermal_files)} thermal images for {n} stereo pairs; give one thermal image "
-            "per pair (same sorted order)"
+            "per pair (in the same order)"
         )
     if n == 0:
         raise CalibrationError("no images given")

@@ -9,6 +9,7 @@ size or type, or a left/right pair that does not match. Images follow OpenCV con
 from __future__ import annotations
 
 import glob
+import re
 import threading
 import warnings
 from collections.abc import Callable, Iterator
@@ -607,8 +608,18 @@ def write_image(path: str | Path, image: NDArray) -> Path:
     return p
 
 
+def _natural_key(path: Path) -> tuple:
+    """Sort key of a path with its digit runs compared as numbers (``left2`` before
+    ``left10``, ``left01`` beside ``left1``), the text itself breaking ties."""
+    parts = re.split(r"(\d+)", str(path))
+    return tuple((0, int(c), "") if c.isdigit() else (1, 0, c) for c in parts), str(path)
+
+
 def glob_images(pattern: str | Path, what: str = "images") -> list[Path]:
-    """Sorted files matching a shell pattern (``'DIR/left*.jpg'``) or in a folder.
+    """Files matching a shell pattern (``'DIR/left*.jpg'``) or in a folder, in natural order
+    (numbers in the names compared as numbers: ``left1 ... left10`` pairs with ``right01 ...
+    right10``; sorted as text, one side's padding paired left1 with right01 and left10 with
+    right02, and the calibration blamed the cameras: "optical axes are 75 deg apart").
 
     Raises InputFileError when nothing matches, and for an empty pattern (it listed the
     working folder).
@@ -618,9 +629,10 @@ def glob_images(pattern: str | Path, what: str = "images") -> list[Path]:
         raise InputFileError(f"no {what} given: the pattern is empty")
     p = Path(text).expanduser()
     if p.is_dir():
-        files = sorted(f for f in p.iterdir() if f.is_file())
+        files = sorted((f for f in p.iterdir() if f.is_file()), key=_natural_key)
     else:
-        files = sorted(Path(f) for f in glob.glob(str(p)) if Path(f).is_file())
+        files = sorted((Path(f) for f in glob.glob(str(p)) if Path(f).is_file()),
+                       key=_natural_key)
     if not files:
         raise InputFileError(f"no {what} matched {text!r} (check the path and quote the pattern)")
     return files
