@@ -72,7 +72,7 @@ def main() -> None:
         args.figure = str(Path(args.out) / "ch7_humans.png")
     else:  # (cv2.imwrite raised, after every scene)
         try:
-            check_image_writable(args.figure)
+            check_image_writable(args.figure, like=np.zeros((2, 2, 3), np.uint8))
         except ImageInputError as exc:
             ap.error(f"--figure {exc}")
     cv2.setNumThreads(1)

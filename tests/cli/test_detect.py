@@ -310,6 +310,16 @@ def test_overlay_suffix_is_checked_before_the_detection(folder, capsys, tmp_path
         err = _err(capsys)
         assert "OpenCV cannot write" in err and "Traceback" not in err
         assert not (tmp_path / name).exists()
+    # formats OpenCV writes, but not an 8-bit colour overlay (they were refused only after
+    # the detection: grey-only PGM / PBM, float-only Radiance HDR / PFM)
+    for name, words in (("out.pgm", "cannot encode the image as .pgm"),
+                        ("out.pbm", "cannot encode the image as .pbm"),
+                        ("out.hdr", ".hdr cannot hold uint8 pixels"),
+                        ("out.pfm", ".pfm cannot hold uint8 pixels")):
+        assert main(_args(d, "--overlay", str(tmp_path / name), thermal=None)) == 2
+        err = _err(capsys)
+        assert words in err and "Traceback" not in err
+        assert not (tmp_path / name).exists()
 
 
 def test_overlay_in_a_disabled_codec_is_one_line(folder, capfd, tmp_path, monkeypatch):

@@ -75,9 +75,13 @@ def detect_cmd(
                                  f"{camera_pitch}")
     refuse_overwrite([overlay_p], [left_p, right_p, calib_p, thermal_p], force)
     if overlay_p is not None:  # (else write_image refuses it only after the whole detection)
+        import numpy as np
+
         from hearsee.vision.io import check_image_writable
 
-        check_image_writable(overlay_p)
+        # (an 8-bit colour image, as draw_detections gives: .pgm or .hdr were refused only
+        # after the detection)
+        check_image_writable(overlay_p, like=np.zeros((2, 2, 3), np.uint8))
     rig = load_rig(calib_p)
     L, R = read_pair(left_p, right_p, "bgr", expected_size=rig.left.size)
     th = None

@@ -552,11 +552,14 @@ def _refuse_false_colour(chans: NDArray, path: str | Path) -> None:
             "radiometric 16-bit counts or as float degC")
 
 
-def check_image_writable(path: str | Path) -> Path:
-    """``path`` as a Path when OpenCV has an encoder for its suffix, else an ImageInputError
-    naming it: checked before the work whose image it will hold (:func:`write_image` refuses
-    it only then). A codec OpenCV builds but disables (OpenEXR in its wheels) made
-    ``cv2.haveImageWriter`` raise cv2.error after its own "[ WARN ]" line: a traceback."""
+def check_image_writable(path: str | Path, like: NDArray | None = None) -> Path:
+    """``path`` as a Path when OpenCV has an encoder for its suffix -- and, given ``like`` (a
+    small image of the pixel type and channels to be written), one that holds such an image
+    as :func:`write_image` requires -- else an ImageInputError naming it: checked before the
+    work whose image it will hold (:func:`write_image` refuses it only then: an 8-bit colour
+    overlay as .pgm, .pbm, .hdr or .pfm). A codec OpenCV builds but disables (OpenEXR in its
+    wheels) made ``cv2.haveImageWriter`` raise cv2.error after its own "[ WARN ]" line: a
+    traceback."""
     p = Path(path)
     with _opencv_log("silent"):
         try:
@@ -567,7 +570,29 @@ def check_image_writable(path: str | Path) -> Path:
         kind = p.suffix or "a file without a suffix"
         raise ImageInputError(f"{p}: OpenCV cannot write {kind}; use an image suffix such as "
                               ".png or .jpg")
+    if like is not None:
+        _encoded(p, like)
     return p
+
+
+def _encoded(p: Path, image: NDArray) -> NDArray:
+    """``image`` encoded in the format of ``p``'s suffix (.png without one): the bytes, or an
+    ImageInputError when OpenCV cannot encode it or the file would not read back with the
+    image's pixel type (see :func:`write_image`)."""
+    suffix = p.suffix or ".png"
+    with _opencv_log("silent"):  # (its "fallbacked to CV_8U" warning; the error below says it)
+        try:
+            ok, buf = cv2.imencode(suffix, image)
+        except cv2.error:  # e.g. no encoder for the suffix: OpenCV raises rather than returns
+            ok = False
+        back = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED) if ok else None
+    if not ok:
+        raise ImageInputError(f"{p}: cannot encode the image as {suffix}")
+    if back is not None and back.dtype != image.dtype:
+        raise ImageInputError(
+            f"{p}: {suffix} cannot hold {image.dtype} pixels (it would be written as "
+            f"{back.dtype}); convert the image or use a format that holds them (.tif)")
+    return buf
 
 
 def write_image(path: str | Path, image: NDArray) -> Path:
@@ -584,19 +609,7 @@ def write_image(path: str | Path, image: NDArray) -> Path:
     # "cannot write the image (Is a directory)" after it -- and a file where the folder should
     # be is "D is not a folder", no longer "folder D does not exist")
     p = output_file(path)
-    suffix = p.suffix or ".png"
-    with _opencv_log("silent"):  # (its "fallbacked to CV_8U" warning; the error below says it)
-        try:
-            ok, buf = cv2.imencode(suffix, image)
-        except cv2.error:  # e.g. no encoder for the suffix: OpenCV raises rather than returns
-            ok = False
-        back = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED) if ok else None
-    if not ok:
-        raise ImageInputError(f"{p}: cannot encode the image as {suffix}")
-    if back is not None and back.dtype != image.dtype:
-        raise ImageInputError(
-            f"{p}: {suffix} cannot hold {image.dtype} pixels (it would be written as "
-            f"{back.dtype}); convert the image or use a format that holds them (.tif)")
+    buf = _encoded(p, image)
     # (replaced once complete, config.replacing: written in place, a write that failed part
     # way -- a full disk, Ctrl-C -- left a truncated image where the earlier file was,
     # `detect --overlay --force`)
