@@ -630,6 +630,35 @@ def test_one_microphone_from_captures():
     np.testing.assert_allclose(est.position_m, src, atol=0.05)
 
 
+def test_each_pose_captures_truth_is_in_its_arrays_frame(pose_manifest):
+    """Each capture's .json truth is what localizing that capture alone measures: the
+    direction in the array's frame at its pose (as `hearsee simulate`'s of one recording),
+    with the robot frame's position beside it. It was the robot frame's, unlabelled (a
+    capture localized at -6 deg against its truth's 33.7)."""
+    import json
+
+    import soundfile as sf
+
+    from hearsee.audio.active import load_pose_manifest
+    from hearsee.audio.localize import localize_recording
+    from hearsee.geometry import robot_to_array
+
+    man, files, src = pose_manifest
+    m = load_pose_manifest(man)
+    for k, (f, pose) in enumerate(zip(files, m.poses, strict=True)):
+        truth = json.loads(f.with_suffix(".json").read_text())
+        np.testing.assert_allclose(truth["source_robot_m"], src)
+        p = robot_to_array(src, pose, m.pivot_m, m.offset_m)
+        np.testing.assert_allclose(truth["source_m"], p, atol=1e-12)
+        assert truth["distance_m"] == pytest.approx(float(np.linalg.norm(p)))
+        assert truth["tdoa_s"] == pytest.approx(m.truth["tdoa_s"][k], abs=1e-12)
+        x, fs = sf.read(f, always_2d=True)
+        loc = localize_recording(x.T, fs, "three-mic")
+        az = loc["summary"]["azimuth_deg"]
+        assert abs(float(np.degrees(np.angle(np.exp(1j * np.radians(
+            az - truth["azimuth_deg"])))))) < 3.0
+
+
 def test_localize3d_single_pose_reports_ambiguity(tmp_path, capsys):
     import json
 

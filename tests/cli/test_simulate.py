@@ -297,7 +297,7 @@ def test_messages_name_the_files_written_even_with_brackets(tmp_path, capsys):
 
 @pytest.mark.parametrize(("mode", "limit", "fails"), [
     ("static", 100, "rec.wav"), ("static", 400, "rec.json"), ("moving", 400, "rec.json"),
-    ("poses", 400, "rec.yaml")])
+    ("poses", 520, "rec.yaml")])
 def test_simulate_force_keeps_the_earlier_file_when_a_write_fails(tmp_path, capsys, mode, limit,
                                                                   fails, file_size_limit):
     """`simulate --force` wrote its files in place: a write that failed part way (a full disk,

@@ -100,6 +100,7 @@ from hearsee.geometry import (
     direction_deg,
     fibonacci_sphere,
     mic_positions_at,
+    robot_to_array,
     sph_to_cart,
     unit_vector_deg,
     vector_length,
@@ -1672,7 +1673,9 @@ def simulate_pose_manifest(
     """Simulate one capture per head pose of a static source and write a pose manifest.
 
     ``out`` is the manifest path (``.yaml``); captures go next to it as ``<stem>_pose<k>.wav``
-    (+ ``.json`` truth each). ``source_m`` is in the ROBOT frame; ``room`` as in
+    (+ ``.json`` truth each, in the array's frame at that pose as ``hearsee simulate``'s of one
+    recording, with ``source_robot_m`` the robot frame's position). ``source_m`` is in the
+    ROBOT frame; ``room`` as in
     :func:`hearsee.sim.audio.normalize_room`, with ``array_at`` = the robot-frame origin in room
     coordinates. The same source signal is used for every pose; sensor noise is independent.
     The manifest's ``truth`` holds the source position, its azimuth/elevation/distance from the
@@ -1716,7 +1719,12 @@ def simulate_pose_manifest(
         mics = mic_positions_at(arr, pose, pivot, offset)
         clean = render(sig, fs, arr, src, room, mic_positions=mics)
         x = add_noise(clean, snr_db, rng)
-        truth = ground_truth(arr, src, mic_positions=mics)
+        # each capture's truth in the array's frame at its pose, as a single recording's
+        # (what `hearsee localize` of that capture measures; the TDOAs are the same in any
+        # frame): it was the robot frame's, unlabelled -- a capture localized at -6 deg
+        # against its truth's 33.7 (a review helper, 2026-12-07)
+        truth = ground_truth(arr, robot_to_array(src, pose, pivot, offset))
+        truth["source_robot_m"] = src.tolist()
         truth.update({"fs": int(fs), "pan_deg": pose.pan_deg, "tilt_deg": pose.tilt_deg,
                       "signal": str(signal), "snr_db": snr_db, "room": room, "seed": seed})
         rendered.append((x, truth))
