@@ -1676,7 +1676,9 @@ def localize_recording(
         masked array's summary ``confidence`` is the probability of the chosen front/back
         half instead, 0.5-1: :func:`hearsee.audio.mask.localize_recording_mask`).
     """
+    from hearsee.audio.hum import remove_lines
     from hearsee.audio.itd_filter import itd_filter_entries, smooth_recording_itds
+    from hearsee.audio.signals import as_samples
     from hearsee.audio.sources import (
         MAX_SOURCES,
         localize_moving_sources,
@@ -1756,8 +1758,12 @@ def localize_recording(
         sources, which = localize_sources(tf.tdoa_s, tf.valid, arr, tf.pairs, max_sources,
                                           in_plane=in_plane, locs=locs)
     if sources and not moving and array_geometry(arr).kind == "linear":  # (sources_from_spectra)
+        # (estimate_tdoas looks for hum only without ``active``: the recording it filtered,
+        # else every two-mic source read as the hum's TDOA 0, ~0 deg for a talker at 59 deg)
+        xs = (x if not tf.tonal_lines_hz else
+              remove_lines(as_samples(x), fs, tf.tonal_lines_hz))
         sources = sources_from_spectra(sources, which, lambda act: estimate_tdoas(
-            x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method, pairs=pairs,
+            xs, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method, pairs=pairs,
             active=act, **tdoa_kwargs), arr, tf.pairs, in_plane)
     frames = []
     for n, loc in enumerate(locs):
