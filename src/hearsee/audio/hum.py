@@ -151,11 +151,12 @@ def line_frequencies(x: ArrayLike, fs: float, line: ArrayLike, bin_hz: ArrayLike
     spectrum of the recording's first :data:`LINE_SPECTRUM_S` seconds (Hann window, 2x zero
     padding: ~fs / 2n resolution) within the run, refined by a parabola through the log
     power. When three or more lines, and :data:`COMB_SHARE` of them, lie within
-    :data:`COMB_TOL_HZ` of the multiples of one fundamental (the lowest line, or it over 2-4,
-    not below :data:`TONAL_MIN_HZ`), they are a harmonic comb -- mains hum -- and every
-    multiple of the fundamental fitted to them (least squares through 0) up to the highest
-    line is returned, with the lines off the comb. Then every multiple of the fundamental
-    (the comb's, else the lowest line's or, when the lines are its multiples, it over 2-4)
+    :data:`COMB_TOL_HZ` of the multiples of one fundamental (the lowest line, or it over a
+    whole number, not below :data:`TONAL_MIN_HZ`), they are a harmonic comb -- mains hum --
+    and every multiple of the fundamental fitted to them (least squares through 0) up to the
+    highest line is returned, with the lines off the comb. Then every multiple of the fundamental
+    (the comb's, else the lowest line's or, when the lines are its multiples, it over a
+    whole number)
     where that spectrum peaks :data:`HARMONIC_PROMINENCE` times above its surroundings is
     added: a hum's harmonics under a voice's, which the test of :func:`tonal_bins` misses.
     """
@@ -211,11 +212,13 @@ def _peak_hz(spec: NDArray, k: int, df: float) -> float:
 
 
 def _fundamental(lines: NDArray) -> float:
-    """The fundamental (Hz) of ``lines`` (ascending): the lowest line, or the lowest over 2-4
-    (not below :data:`TONAL_MIN_HZ`) when all of them are its multiples within
-    :data:`COMB_TOL_HZ` (100 and 150 Hz: 50 Hz)."""
+    """The fundamental (Hz) of ``lines`` (ascending): the lowest line, or the lowest over a
+    whole number (the largest such fundamental, not below :data:`TONAL_MIN_HZ`) when all of
+    them are its multiples within :data:`COMB_TOL_HZ` (100 and 150 Hz: 50 Hz; 1920 and 2160
+    Hz: 240 Hz -- a hum whose lower harmonics a voice hid from :func:`tonal_bins`: up to 2-4
+    until 2026-12-07, and such lines were taken for a fundamental of their own)."""
     f0 = float(lines[0])
-    for m in range(2, 5):
+    for m in range(2, int(lines[0] // TONAL_MIN_HZ) + 1):
         if lines[0] / m < TONAL_MIN_HZ:
             break
         g = lines[0] / m
@@ -246,10 +249,14 @@ def _prominent_harmonics(spec: NDArray, df: float, f0: float, fs: float) -> NDAr
 
 def _comb(lines: NDArray) -> NDArray | None:
     """Every multiple of the fundamental of ``lines`` (Hz) up to the highest, with the lines
-    off the comb, or None when they are not a harmonic comb (:func:`line_frequencies`)."""
+    off the comb, or None when they are not a harmonic comb (:func:`line_frequencies`). The
+    fundamental is the lowest line over a whole number, the largest that fits: a hum whose
+    harmonics below 1.9 kHz a voice hid from :func:`tonal_bins` (32-ms frames, 60 Hz at 3 dB)
+    found 1920, 2160, 2220, ..., 2460 Hz, no comb among the lowest over 1-4 (until
+    2026-12-07), and the rest of the hum left a three-mic summary 173 deg off."""
     if len(lines) < 3:
         return None
-    for m in range(1, 5):
+    for m in range(1, int(lines[0] // TONAL_MIN_HZ) + 1):
         f0 = lines[0] / m
         if f0 < TONAL_MIN_HZ:
             break
