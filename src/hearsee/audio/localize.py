@@ -1681,8 +1681,10 @@ def localize_recording(
     from hearsee.audio.signals import as_samples
     from hearsee.audio.sources import (
         MAX_SOURCES,
+        frame_angle,
         localize_moving_sources,
         localize_sources,
+        merge_repeated_sources,
         sources_from_spectra,
     )
     from hearsee.audio.tdoa import estimate_tdoas, frame_geometry, normalize_method
@@ -1765,6 +1767,11 @@ def localize_recording(
         sources = sources_from_spectra(sources, which, lambda act: estimate_tdoas(
             xs, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms, method=method, pairs=pairs,
             active=act, **tdoa_kwargs), arr, tf.pairs, in_plane)
+        # (two piles of frames whose spectra name one talker: one source, not two a degree
+        # apart)
+        sources, which = merge_repeated_sources(
+            sources, which, [np.nan if loc is None else frame_angle(loc, True)[0]
+                             for loc in locs], arr, tf.pairs)
     frames = []
     for n, loc in enumerate(locs):
         row = tdoa[n]

@@ -378,6 +378,57 @@ def sources_from_spectra(sources: list[dict[str, Any]], which: NDArray,
     return out
 
 
+
+def merge_repeated_sources(sources: list[dict[str, Any]], which: NDArray,
+                           frame_angle_deg: ArrayLike, array: Any, pairs: Sequence[tuple[int, int]],
+                           min_separation_deg: float = DEFAULT_MIN_SEPARATION_DEG
+                           ) -> tuple[list[dict[str, Any]], NDArray]:
+    """:func:`sources_from_spectra`' sources with those that came out as one direction merged:
+    two piles of a linear array's frames (at least ``min_separation_deg`` apart, as
+    :func:`direction_clusters` finds them) whose averaged spectra both name one talker -- one
+    pile his direct path's, the other his reflections' -- were two sources within a degree of
+    each other (two-mic preset, one talker in a room of RT60 0.6 s: 36.1 and 34.9 deg with 58
+    and 21 % of the frames). A source whose key (its angle's sine from broadside times 90, as
+    clustered) lies within ``min_separation_deg`` of a larger one's joins it: its frames and
+    share are added to it, its ``spread_deg`` is its frames' (``frame_angle_deg``, the angle
+    from broadside of each frame, NaN for none), its direction stays the larger one's. Returns
+    the sources and each frame's source (``which`` renumbered, -1 for none)."""
+    from hearsee.audio.localize import localize_tdoa
+
+    w = np.asarray(which)
+    ang = np.asarray(frame_angle_deg, dtype=float)
+    keys = []
+    for src in sources:
+        tau = np.array([src["tdoa_s"][f"{i}-{j}"] for i, j in pairs], dtype=float)
+        loc = localize_tdoa(tau, array, pairs) if np.all(np.isfinite(tau)) else None
+        ak = frame_angle(loc, True) if loc is not None and "cos_theta" in loc.extra else None
+        keys.append(None if ak is None else ak[1])
+    kept: list[int] = []
+    into = {}
+    for k, key in enumerate(keys):  # (the largest share first)
+        home = next((j for j in kept if key is not None and keys[j] is not None
+                     and abs(key - keys[j]) < min_separation_deg), None)
+        if home is None:
+            kept.append(k)
+            into[k] = k
+        else:
+            into[k] = home
+    if len(kept) == len(sources):
+        return sources, w
+    out, new_which = [], np.full(len(w), -1)
+    for n, j in enumerate(kept):
+        members = [k for k, h in into.items() if h == j]
+        frames = np.flatnonzero(np.isin(w, members))
+        new_which[frames] = n
+        merged = {**sources[j], "share": float(sum(sources[k]["share"] for k in members)),
+                  "n_frames": int(sum(sources[k]["n_frames"] for k in members))}
+        a = ang[frames]
+        a = a[np.isfinite(a)]
+        if len(members) > 1 and a.size:
+            merged["spread_deg"] = _circular_mean(a, np.ones_like(a))[1]
+        out.append(merged)
+    return out, new_which
+
 # -- moving talkers ------------------------------------------------------------------------
 #: :func:`track_sources`' defaults, chosen on dev recordings (seeds 270-273 of
 #: bench/moving_sources.py, scratch, 2026-12-06: 20 recordings x 10 moments per array, room and
