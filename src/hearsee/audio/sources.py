@@ -378,7 +378,6 @@ def sources_from_spectra(sources: list[dict[str, Any]], which: NDArray,
     return out
 
 
-
 def merge_repeated_sources(sources: list[dict[str, Any]], which: NDArray,
                            frame_angle_deg: ArrayLike, array: Any, pairs: Sequence[tuple[int, int]],
                            min_separation_deg: float = DEFAULT_MIN_SEPARATION_DEG
@@ -428,6 +427,7 @@ def merge_repeated_sources(sources: list[dict[str, Any]], which: NDArray,
             merged["spread_deg"] = _circular_mean(a, np.ones_like(a))[1]
         out.append(merged)
     return out, new_which
+
 
 # -- moving talkers ------------------------------------------------------------------------
 #: :func:`track_sources`' defaults, chosen on dev recordings (seeds 270-273 of
