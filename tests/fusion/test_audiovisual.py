@@ -1044,3 +1044,32 @@ def test_fix_covariance_holds_the_pixel_noise_along_the_ray(sigma_tdoa_s, sigma_
                 e = f.position_m - p
                 nees.append(e @ np.linalg.solve(f.covariance, e))
             assert 2.3 < np.mean(nees) < 3.9, (mount, p, np.mean(nees))
+
+
+def test_pixels_at_the_reach_of_a_radial_lens_model():
+    """A k1-only calibration of a wide lens (``hearsee calibrate --model radial``) folds back
+    before the image corners: no ray reaches them. The fix of a source seen just inside that
+    reach raised the camera's GeometryError (its covariance probed the pixel +- 0.5 px, one
+    probe beyond the reach), and a detection in the corner aborted the whole stream in
+    frame_fix; now the first is a fix with a finite covariance, the second 'not seen'."""
+    arr = MicArray.from_preset("three-mic")
+    cam = Camera(np.array([[520.0, 0, 319.5], [0, 520.0, 239.5], [0, 0, 1]]),
+                 [-0.28, 0.0, 0.0, 0.0, 0.0], 640, 480)
+    rig = AudioVisualRig.mounted(arr, cam, (0.0, 0.2, 0.0))
+    assert not np.isfinite(cam.pixel_rays([[3.0, 3.0]], unreachable="nan")).any()
+    diag = np.arange(0.0, 100.0, 0.01)[:, None] * np.array([[1.0, 0.75]])
+    reach = np.isfinite(cam.pixel_rays(diag, unreachable="nan")).all(axis=1)
+    uv = diag[np.argmax(reach)]  # the first pixel along the diagonal that has a ray
+    assert not reach[np.argmax(reach) - 50]  # (0.5 px up-left of it has none)
+    o, d = rig.rays(uv[None])
+    src = o + 1.5 * d[0]
+    z = arr.tdoa(src)
+    fix = locate_on_ray(rig, uv, z)
+    assert np.linalg.norm(fix.position_m - src) < 1e-4
+    assert np.all(np.isfinite(fix.covariance))
+    assert np.all(np.linalg.eigvalsh(fix.covariance) > 0)
+    kw = dict(range_m=(0.2, 6.0), sigma_tdoa_s=8e-6, sigma_px=1.0, max_residual_s=1e-4)
+    assert frame_fix(rig, lambda t: (3.0, 3.0), 0.2, z, arr.pairs, **kw) == (None, None)
+    assert frame_fix(rig, lambda t: (3.0, 3.0), 0.2, None, arr.pairs, **kw) == (None, None)
+    got, fix = frame_fix(rig, lambda t: tuple(uv), 0.2, z, arr.pairs, **kw)
+    assert np.linalg.norm(fix.position_m - src) < 1e-4

@@ -515,3 +515,20 @@ def test_save_image_points_writes_only_what_csv_image_points_reads(tmp_path):
         with pytest.raises(ConfigError):
             save_image_points(q, tb, uvb)
         assert not q.exists()
+
+
+def test_image_points_csv_refuses_a_pixel_the_lens_model_cannot_reach(tmp_path):
+    """A corner pixel of a radial (k1-only) calibration that folds back before the corners was
+    read, and the run then aborted at its frame with the camera's GeometryError, naming no file
+    or line; now the file is refused up front with the line. Reachable pixels are read."""
+    cam = Camera(np.array([[520.0, 0, 319.5], [0, 520.0, 239.5], [0, 0, 1]]),
+                 [-0.28, 0.0, 0.0, 0.0, 0.0], 640, 480)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,u,v\n0.0,320,240\n0.1,,\n0.2,2,2\n")
+    with pytest.raises(ConfigError, match=r"bad.csv: line 4: image point \(2, 2\) px is beyond "
+                                          "the reach"):
+        CsvImagePoints(bad, camera=cam)
+    assert CsvImagePoints(bad)(0.2) == (2.0, 2.0)  # (without the camera: no lens to ask)
+    ok = tmp_path / "ok.csv"
+    ok.write_text("t,u,v\n0.0,320,240\n0.1,,\n0.2,40,30\n")
+    assert CsvImagePoints(ok, camera=cam)(0.2) == (40.0, 30.0)

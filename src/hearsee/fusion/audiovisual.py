@@ -452,12 +452,21 @@ def _refine_on_ray(rig: AudioVisualRig, o: NDArray, d: NDArray, z: NDArray,
     if sigma_px > 0:
         hp = 0.5  # pixels: the rays of uv +- hp along each image axis
         offsets = np.array([[hp, 0.0], [-hp, 0.0], [0.0, hp], [0.0, -hp]])
-        d4 = rig.rays(np.asarray(uv, dtype=float)[None, :] + offsets)[1]
+        # (a probe the lens model cannot reach -- next to the corner a radial calibration
+        # folds back before -- is a NaN ray: that side's difference is taken from uv's own
+        # ray d instead; it raised the camera's GeometryError for a pixel that sees the source)
+        d4 = rig.camera.pixel_rays(np.asarray(uv, dtype=float)[None, :] + offsets,
+                                   unreachable="nan") @ rig.R
         lat = []
         for a in (0, 2):
-            dd = (d4[a] - d4[a + 1]) / (2 * hp)  # ray direction per pixel
-            dFdu = (_ray_residuals(rig.array, o, d4[a], [s_hat], z, prs)[0]
-                    - _ray_residuals(rig.array, o, d4[a + 1], [s_hat], z, prs)[0]) / (2 * hp)
+            ends = [(d4[a], hp), (d4[a + 1], -hp)]
+            (dp, up), (dm, um) = ((e, w) if np.all(np.isfinite(e)) else (d, 0.0)
+                                  for e, w in ends)
+            if up == um:  # (neither side reaches: no pixel noise along this axis)
+                continue
+            dd = (dp - dm) / (up - um)  # ray direction per pixel
+            dFdu = (_ray_residuals(rig.array, o, dp, [s_hat], z, prs)[0]
+                    - _ray_residuals(rig.array, o, dm, [s_hat], z, prs)[0]) / (up - um)
             ds = -float(dF @ dFdu) / g
             ds = float(np.clip(ds, -np.sqrt(span2) / sigma_px, np.sqrt(span2) / sigma_px))
             lat.append(s_hat * dd + ds * d)
@@ -834,6 +843,14 @@ def _seen(uv: Any) -> Any:
     return uv
 
 
+def _no_ray(uv: Any, camera: Camera) -> bool:
+    """Whether the ``camera``'s lens model gives the pixel ``uv`` (2,) no ray
+    (:meth:`hearsee.vision.camera.Camera.pixel_rays`: near the corners of a radial calibration
+    whose distortion folds back before them)."""
+    p = np.asarray(uv, dtype=float).reshape(1, 2)
+    return not np.all(np.isfinite(camera.pixel_rays(p, unreachable="nan")))
+
+
 def frame_fix(rig: AudioVisualRig, image_points: Callable[[float], Any], t: float,
               tdoa_s: ArrayLike | None, pairs: Sequence[tuple[int, int]], tracker: Any = None,
               *, range_m: tuple[float, float], sigma_tdoa_s: float, sigma_px: float,
@@ -850,7 +867,9 @@ def frame_fix(rig: AudioVisualRig, image_points: Callable[[float], Any], t: floa
 
     ``image_points`` answers None, or a point with a NaN or infinite coordinate (as
     :meth:`RayTdoaTracker.update_measurements` reads NaN), when the camera does not see the
-    source; anything else must be two pixel coordinates (EstimationError).
+    source; anything else must be two pixel coordinates (EstimationError). A pixel the
+    camera's lens model gives no ray for (see :meth:`hearsee.vision.camera.Camera.pixel_rays`)
+    counts as not seen.
 
     Returns ``(uv, fix)``: the image point (None when the camera has none) and the fix (None
     without TDOAs or image point, or when the fix's RMS ITD residual exceeds
@@ -873,17 +892,27 @@ def frame_fix(rig: AudioVisualRig, image_points: Callable[[float], Any], t: floa
     uv = _seen(image_points(t if r is None else t - r / c))
     ok = tdoa_s is not None and np.all(np.isfinite(tdoa_s))
     if uv is None or not ok:
-        return uv, None
+        return (None if uv is not None and _no_ray(uv, rig.camera) else uv), None
 
-    def fix_at(point: Any) -> RayFix:
-        return locate_on_ray(rig, point, tdoa_s, pairs, range_m=range_m,
-                             sigma_tdoa_s=sigma_tdoa_s, sigma_px=sigma_px)
+    def fix_at(point: Any) -> RayFix | None:
+        try:
+            return locate_on_ray(rig, point, tdoa_s, pairs, range_m=range_m,
+                                 sigma_tdoa_s=sigma_tdoa_s, sigma_px=sigma_px)
+        except GeometryError:
+            # a pixel the lens model gives no ray for (a detection in the corner of a radial
+            # calibration that folds back before it) is not seen: it aborted the whole run
+            if _no_ray(point, rig.camera):
+                return None
+            raise
 
     fix = fix_at(uv)
+    if fix is None:
+        return None, None
     if r is None:  # no track yet: the image at the first fix's emission time
         uv2 = _seen(image_points(t - float(np.linalg.norm(fix.position_m - centre)) / c))
-        if uv2 is not None:
-            uv, fix = uv2, fix_at(uv2)
+        fix2 = None if uv2 is None else fix_at(uv2)
+        if fix2 is not None:
+            uv, fix = uv2, fix2
     if fix.residual_s > max_residual_s:
         fix = None
     return uv, fix

@@ -8,8 +8,8 @@ frame, the pixel ``(u, v)`` where the source appears. Two providers, both callab
   e.g. written by a simulation or an external detector, and interpolates linearly between rows
   that are at most ``max_gap_s`` apart. An infinite pixel, a row with only one of u and v,
   or (given the calibrated camera) a pixel outside its image by more than
-  :data:`IMAGE_POINT_MARGIN` of the image's larger side, is refused with an error naming the
-  file and line, like any other row it cannot use.
+  :data:`IMAGE_POINT_MARGIN` of the image's larger side or one its lens model gives no ray
+  for, is refused with an error naming the file and line, like any other row it cannot use.
 * :class:`VideoImagePoints` reads a video file (which must deliver a first frame: a corrupt or
   empty one is refused) or a camera (OpenCV ``VideoCapture``) and runs a simple detector on
   the frame nearest time t: OpenCV's HOG people detector (Dalal & Triggs 2005; ``detector="hog"``,
@@ -188,7 +188,9 @@ class CsvImagePoints:
     ``camera`` (a :class:`hearsee.vision.camera.Camera`; ``hearsee track`` passes the
     calibrated one) bounds the pixels: a point outside its image by more than
     :data:`IMAGE_POINT_MARGIN` of the larger side is a ConfigError naming the file and line
-    (it was used as a ray through no pixel of the camera). An infinite pixel (``inf``,
+    (it was used as a ray through no pixel of the camera), and so is a pixel the lens model
+    gives no ray for (:meth:`hearsee.vision.camera.Camera.pixel_rays`: near the corners of an
+    image whose radial distortion folds back before them). An infinite pixel (``inf``,
     ``1e400``) is one always; empty cells (or NaN) mean "not visible".
     :meth:`visible_within` tells whether any visible row can be used in a time span (``hearsee
     track`` warns when none lies within the recording).
@@ -206,7 +208,7 @@ class CsvImagePoints:
             raise ConfigError(f"{p}: not a text CSV file") from None
         if not rows or [c.strip().lower() for c in rows[0][1]] != ["t", "u", "v"]:
             raise ConfigError(f"{p}: header must be 't,u,v' (seconds, pixels)")
-        data = []
+        data, lines = [], []
         for k, r in rows[1:]:
             if len(r) != 3:
                 raise ConfigError(f"{p}: line {k}: expected 3 values t,u,v")
@@ -218,9 +220,12 @@ class CsvImagePoints:
                 raise ConfigError(f"{p}: line {k}: non-numeric value in {','.join(r)!r}") from None
             _check_pixel(p, k, u, v, camera)
             data.append((t, u, v))
+            lines.append(k)
         if not data:
             raise ConfigError(f"{p}: no image points after the header")
         a = np.array(data)
+        if camera is not None:
+            _check_reach(p, lines, a[:, 1:], camera)
         if np.any(np.diff(a[:, 0]) <= 0) or not np.all(np.isfinite(a[:, 0])):
             raise ConfigError(f"{p}: times must be finite and strictly increasing")
         self.t, self.uv = a[:, 0], a[:, 1:]
@@ -284,6 +289,26 @@ def _check_pixel(path: Path, line: int, u: float, v: float, camera: Any) -> None
             f"{path}: line {line}: image point ({u:g}, {v:g}) px is outside the calibrated "
             f"{camera.width}x{camera.height} image by more than {margin:g} px (check the "
             "columns, and that the points are of this camera)")
+
+
+def _check_reach(path: Path, lines: list[int], uv: NDArray, camera: Any) -> None:
+    """ConfigError naming ``path`` and the line of the first visible pixel of ``uv`` (n, 2)
+    (rows of file ``lines``) that the ``camera``'s lens model gives no ray for
+    (:meth:`hearsee.vision.camera.Camera.pixel_rays`: near the corners of an image whose
+    radial distortion folds back before them). Such a row was read, and the run then aborted
+    at its frame with the camera's GeometryError, which named no file or line."""
+    seen = np.flatnonzero(np.all(np.isfinite(uv), axis=1))
+    if not len(seen):
+        return
+    rays = camera.pixel_rays(uv[seen], unreachable="nan")
+    lost = seen[~np.all(np.isfinite(rays), axis=1)]
+    if len(lost):
+        u, v = uv[lost[0]]
+        raise ConfigError(
+            f"{path}: line {lines[lost[0]]}: image point ({u:g}, {v:g}) px is beyond the "
+            "reach of the calibrated camera's lens model: no direction it maps to pixels "
+            "projects there (its distortion folds back before it; check the points and the "
+            "calibration)")
 
 
 def save_image_points(path: str | Path, t: NDArray, uv: NDArray) -> None:
