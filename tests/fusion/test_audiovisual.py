@@ -1073,3 +1073,19 @@ def test_pixels_at_the_reach_of_a_radial_lens_model():
     assert frame_fix(rig, lambda t: (3.0, 3.0), 0.2, None, arr.pairs, **kw) == (None, None)
     got, fix = frame_fix(rig, lambda t: tuple(uv), 0.2, z, arr.pairs, **kw)
     assert np.linalg.norm(fix.position_m - src) < 1e-4
+
+
+def test_simulate_av_samples_with_a_radial_lens_model():
+    """A radial (k1-only) calibration that folds back before the image corners: a pixel drawn
+    at margin 0 near them raised the camera's GeometryError (a pixel the caller never gave);
+    now such pixels are drawn again, and every sample is in the lens field and exact."""
+    arr = MicArray.from_preset("three-mic")
+    cam = Camera(np.array([[520.0, 0, 319.5], [0, 520.0, 239.5], [0, 0, 1]]),
+                 [-0.28, 0.0, 0.0, 0.0, 0.0], 640, 480)
+    rig = AudioVisualRig.mounted(arr, cam, (0.0, 0.2, 0.0))
+    X, Y = simulate_av_samples(rig, 500, margin_px=0.0, rng=0)
+    assert X.shape == (500, 5) and Y.shape == (500, 3)
+    assert cam.in_lens_field(rig.to_optical(Y)).all()
+    np.testing.assert_allclose(X[:, :3], arr.tdoa(Y), atol=1e-12)
+    np.testing.assert_allclose(X[:, 3:], rig.project(Y), atol=1e-9)
+    assert cam.in_image(X[:, 3:], margin=-1e-6).all()

@@ -1027,7 +1027,8 @@ def simulate_av_samples(rig: AudioVisualRig, n: int, range_m: tuple[float, float
     """Training/test examples for the uncalibrated mapping (thesis 5.3).
 
     Draws ``n`` source positions uniformly in the camera's view (pixel uniform in the image,
-    range uniform in ``range_m`` metres from the camera centre), computes their exact TDOAs
+    among the pixels its lens model gives a ray for, range uniform in ``range_m`` metres from
+    the camera centre), computes their exact TDOAs
     (all pairs) and pixels, and adds Gaussian noise (``sigma_tdoa_s`` seconds,
     ``sigma_px`` pixels). ``range_m`` is (near, far) in metres, 0 < near <= far; ``margin_px``
     the pixels kept clear of the image border (negative: beyond it), at most
@@ -1049,14 +1050,33 @@ def simulate_av_samples(rig: AudioVisualRig, n: int, range_m: tuple[float, float
     cam = rig.camera
     margin_px = _image_margin(margin_px, cam)
     rng = as_rng(rng)
-    uv = np.column_stack([rng.uniform(margin_px, cam.width - 1 - margin_px, n),
-                          rng.uniform(margin_px, cam.height - 1 - margin_px, n)])
-    o, d = rig.rays(uv)
+    # pixels the lens model gives no ray for are drawn again (near the corners of a radial
+    # calibration that folds back before them: the camera's GeometryError, at margin 0 for
+    # k1 -0.28 at f 520 px, 640x480, whatever n)
+    rays = np.zeros((0, 3))
+    for _ in range(MAX_PIXEL_DRAWS):
+        uv = np.column_stack([rng.uniform(margin_px, cam.width - 1 - margin_px, n),
+                              rng.uniform(margin_px, cam.height - 1 - margin_px, n)])
+        r = cam.pixel_rays(uv, unreachable="nan")
+        rays = np.vstack([rays, r[np.all(np.isfinite(r), axis=1)]])
+        if len(rays) >= n:
+            break
+    else:
+        raise EstimationError(f"simulate_av_samples: the camera's lens model gives a ray for "
+                              f"too few of the pixels drawn with margin_px = {margin_px:g} "
+                              f"({MAX_PIXEL_DRAWS} draws did not give {n}; its distortion "
+                              "folds back before them)")
+    o, d = rig.camera_centre, rays[:n] @ rig.R
     s = rng.uniform(near, far, n)
     Y = o[None, :] + s[:, None] * d
     tdoa = rig.array.tdoa(Y) + sigma_tdoa_s * rng.standard_normal((n, len(rig.array.pairs)))
     uv_n = rig.project(Y) + sigma_px * rng.standard_normal((n, 2))
     return np.column_stack([tdoa, uv_n]), Y
+
+
+#: :func:`simulate_av_samples` draws its pixels at most this many times over (the pixels its
+#: camera's lens model gives no ray for are drawn again)
+MAX_PIXEL_DRAWS = 20
 
 
 def _image_margin(margin_px: Any, camera: Camera) -> float:
