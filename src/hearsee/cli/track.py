@@ -38,6 +38,11 @@ class Tracker(StrEnum):
     imm = "imm"
 
 
+class MotionModel(StrEnum):
+    cv = "cv"
+    ca = "ca"
+
+
 class Detector(StrEnum):
     hog = "hog"
     face = "face"
@@ -208,6 +213,12 @@ def track_cmd(
     in_plane: Annotated[bool, typer.Option(
         "--in-plane", help="The speaker is at the height of a planar (three-mic) array: "
         "elevation 0, spherical wavefront of a source assumed 2 m away.")] = False,
+    motion_model: Annotated[MotionModel, typer.Option(
+        "--motion-model", help="3D tracker with a calibrated camera: cv (constant velocity on "
+        "the image point and each pair's TDOA; the default, the more accurate position; "
+        "acceleration_mps2 null) or ca (constant acceleration on the camera-ray fixes, thesis "
+        "5.4.3: also acceleration_mps2).")
+    ] = MotionModel.cv,
     tracker: Annotated[Tracker, typer.Option(
         "--tracker", help="Direction tracker: imm (interacting multiple models: a quiet and a "
         "turning mode; the default) or cv (one Kalman filter instead of the modes).")
@@ -243,8 +254,8 @@ def track_cmd(
     stats: Annotated[bool, typer.Option(
         "--stats", help="Print real-time factor and latency on stderr.")] = False,
 ) -> None:
-    """Track the direction (and, with a calibrated camera, the 3D position, velocity and
-    acceleration) of a moving speaker; one update per audio frame.
+    """Track the direction (and, with a calibrated camera, the 3D position, velocity and,
+    with --motion-model ca, acceleration) of a moving speaker; one update per audio frame.
 
     Live input (--device) runs for --duration seconds, until the input stops, or until Ctrl-C,
     which ends it cleanly: the updates so far and the stats (status "interrupted") are
@@ -331,7 +342,8 @@ def track_cmd(
                        direction_modes_dps2=IMM_MODES_DPS2 if tracker is Tracker.imm else None,
                        direction_rate_tau_s=rate_tau,
                        gated_min_coherence=gate_coherence if gate_coherence > 0 else None,
-                       max_sources=sources if sources > 1 else None)
+                       max_sources=sources if sources > 1 else None,
+                       motion_model=motion_model.value)
 
     updates: list = []  # (kept by the sink: what a Ctrl-C leaves is still reported)
     told = False  # (a file's wiring check warned: a microphone inverted or out of sync)
