@@ -606,6 +606,36 @@ def test_frame_pan_attributes_frames_to_the_pan_they_were_heard_at():
         assert _frame_pan(centre(start), L, fs, a, 30.0, 30.0) == 30.0  # no turn: all frames
 
 
+def test_the_loops_hearing_makes_no_microphone_health_warnings():
+    """The simulated loop localizes each 0.2 s chunk frame by frame; it asked estimate_tdoas
+    for the chunk's whole-recording estimate too, unused, whose health checks named a
+    simulated microphone "unplugged, broken or covered?" (on `hearsee demo`'s stderr) when a
+    chunk held the end of a word and a pause: here chunk 9, 1.8-2.0 s."""
+    import warnings
+
+    from hearsee.audio.arrays import load_array
+    from hearsee.robot.pipeline import _BareEars, _Body, _n_steps, _RoomAudio
+
+    sc = scenario_from_dict({
+        "name": "ahead", "seed": 3, "duration_s": 3.0,
+        "robot": {"position_m": [3.5, 3.0], "heading_deg": 90},
+        "people": [{"name": "P", "path_m": [[3.5, 5.0]], "height_m": 1.7}], "objects": []})
+    array = load_array(sc.robot.array)
+    body = _Body(sc, array)
+    audio = _RoomAudio(sc, body, np.random.default_rng(sc.seed))
+    ears = _BareEars(sc, array)
+    n_bearings = 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # (any warning fails the test)
+        for k in range(_n_steps(sc.duration_s, sc.fs)):
+            a, b = audio.chunk(k, 0.0)
+            bearings, _ = ears.hear(audio.out, a, b, 0.0, 0.0)
+            n_bearings += len(bearings)
+            # straight ahead (robot heading 90 deg, the person at room +y)
+            assert all(abs(float(wrap_deg(az))) < 3.0 for _, az in bearings)
+    assert n_bearings > 20
+
+
 def test_truth_velocity_and_facing_along_the_path():
     """Ground truth of a person walking a straight line at constant speed: the velocity is the
     same at the scenario's last instant (the central difference was clipped at the end but

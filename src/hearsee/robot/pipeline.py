@@ -847,8 +847,11 @@ class _BareEars:
         at ``old_pan`` -- and the chunk's mean GCC confidence (0 without a valid frame)."""
         sc, array = self.sc, self.array
         lo = max(0, a - self.frame_len)
+        # (per-frame results only: the whole-recording estimate of each 0.2 s chunk went
+        # unused, and its health checks named a simulated microphone "unplugged, broken or
+        # covered?" when a chunk held the end of a word and a pause)
         tf = estimate_tdoas(out[:, lo:b], sc.fs, array, frame_ms=sc.frame_ms,
-                            hop_ms=sc.frame_ms / 2)
+                            hop_ms=sc.frame_ms / 2, whole_recording=False)
         t_frames = lo / sc.fs + tf.t
         bearings = []
         for i in np.flatnonzero(tf.valid & (t_frames > self.last_frame_t)):
