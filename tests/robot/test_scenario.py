@@ -67,6 +67,28 @@ def test_a_masked_pair_is_a_robot_array_and_the_bare_pair_is_not():
         scenario_from_dict({"robot": {"array": "two-mic"}})
 
 
+@pytest.mark.parametrize("mics, ok", [
+    ([[0, 0, 0], [0, 0.1, 0], [0, 0, 0.1]], False),  # upright, facing forward: ahead = behind
+    ([[0, 0, 0], [0.1, 0, 0], [0, 0, 0.1]], False),  # upright, facing the side: left = right
+    ([[0, 0, 0], [0, 0.1, 0], [0.02, 0, 0.1]], True),  # tilted back: spread out from above
+    ([[0.08, 0, 0], [-0.04, 0.07, 0], [-0.04, -0.07, 0], [0, 0, 0.08]], True),  # a volume
+])
+def test_an_array_standing_upright_is_no_robot_array(tmp_path, mics, ok):
+    """The simulated head pans in the level plane: microphones that lie on a line seen from
+    above cannot tell a bearing from its mirror across the upright plane through them -- not
+    only a linear array's. An upright planar array (a face plate) was taken, and the robot
+    heard a speaker straight behind it straight ahead (-1.1 deg against 180)."""
+    f = tmp_path / "mics.yaml"
+    f.write_text(yaml.safe_dump({"name": "plate", "microphones": mics}))
+    data = {"robot": {"array": str(f)}}
+    if ok:
+        assert scenario_from_dict(data).robot.array == str(f)
+    else:
+        with pytest.raises(ConfigError, match=r"robot\.array: 'plate' cannot give the "
+                                              r"simulated robot a 360-degree direction"):
+            scenario_from_dict(data)
+
+
 def test_random_scenarios_are_valid_and_deterministic():
     for seed in range(30):
         sc = random_scenario(seed)

@@ -20,7 +20,8 @@ Schema (defaults in brackets)::
       heading_deg: float           [0]              robot x axis, from room +x toward +y
       head_height_m: float         [1.25]           pan/tilt pivot height above the floor
       array: str                   [three-mic]      preset name or YAML path: 3+ microphones
-                                                    in a plane, or a masked pair (mask2-asym)
+                                                    not on a line seen from above (x, y), or a
+                                                    masked pair (mask2-asym)
       pan_speed_dps: float         [120]            maximum pan rate
       camera_rate_hz: float        [5]              stereo + thermal frames per second (at
                                                     most 5: one per 0.2 s control step)
@@ -552,6 +553,17 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
             "more microphones, e.g. three-mic, respeaker-4 or respeaker-6, or a masked pair, "
             "e.g. mask2-asym"
         )
+    if arr.mask is None and _level_footprint_is_a_line(arr):
+        # (a planar array standing upright -- a face plate, ears and forehead -- passed the
+        # linear check, and a speaker straight behind the robot was heard straight ahead)
+        raise ConfigError(
+            f"{rw}.array: {arr.name!r} cannot give the simulated robot a 360-degree "
+            "direction: its microphones, seen from above (x forward, y left, z up), lie on a "
+            "line, so a source and its mirror across the upright plane through them give the "
+            "same time differences (e.g. straight ahead and straight behind); use an array "
+            "spread out horizontally, e.g. three-mic, respeaker-4 or respeaker-6, or a masked "
+            "pair, e.g. mask2-asym"
+        )
     robot = RobotSpec(
         position_m=robot_xy,
         heading_deg=number(rob, "heading_deg", 0.0, rw, -360, 360),
@@ -609,6 +621,20 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
         frame_ms=_frame_ms(audio, f"{where}.audio"),
         room_size_m=size, rt60_s=rt60, robot=robot, people=people, objects=objects,
     )
+
+
+def _level_footprint_is_a_line(array: Any) -> bool:
+    """Whether the microphones of ``array`` (a MicArray; head frame, z up), projected on the
+    level plane the head pans in, lie on a line (or a point) as time differences see them
+    (:func:`hearsee.audio.arrays.span_dimension`): then every azimuth has a mirror across the
+    upright plane through them -- a linear array's, or an upright planar one's."""
+    from hearsee.audio.arrays import span_dimension
+
+    level = np.asarray(array.positions, dtype=float).copy()
+    level[:, 2] = 0.0
+    if np.ptp(level, axis=0).max() == 0.0:  # (a vertical line: one point from above)
+        return True
+    return span_dimension(level, array.speed_of_sound)[0] < 2
 
 
 def _check_rig_clear_of_walls(robot: RobotSpec, size: np.ndarray, rw: str) -> None:
