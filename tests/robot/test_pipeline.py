@@ -172,6 +172,32 @@ def test_report_overwrites_names_only_what_the_report_writes(tmp_path):
         assert report_overwrites(tmp_path / "r", [tmp_path / p]) is None
 
 
+def test_talker_names_are_drawn_as_written_not_as_tex(tmp_path, monkeypatch):
+    """The top view labels the people heard with their names. A name holding two "$" was
+    read as matplotlib TeX: drawn garbled ("Ana $5 and $6" as math), or, not valid TeX
+    ("x$^$"), the report failed after the whole run with a ParseSyntaxException traceback
+    (exit 1) and left an empty plots/ folder."""
+    import matplotlib.axes
+
+    drawn = []
+    annotate = matplotlib.axes.Axes.annotate
+
+    def spy(self, text, *args, **kwargs):
+        t = annotate(self, text, *args, **kwargs)
+        drawn.append((t.get_text(), t.get_parse_math()))
+        return t
+
+    monkeypatch.setattr(matplotlib.axes.Axes, "annotate", spy)
+    names = ["x$^$", "Ana $5 and $6"]
+    sc = scenario_from_dict({"robot": {"position_m": [3.5, 3.0]}, "objects": [], "people": [
+        {"name": names[0], "path_m": [[3.5, 5.0]], "speaking": [[0.0, 4.0]]},
+        {"name": names[1], "path_m": [[1.5, 3.0]], "speaking": [[7.0, 8.0]]}],
+        "duration_s": 8.0}).to_dict()
+    index = write_report(tmp_path / "r", sc, [], {"success": False})
+    assert index.is_file() and (tmp_path / "r" / "plots" / "top_view.png").is_file()
+    assert [(t, math) for t, math in drawn if t in names] == [(n, False) for n in names]
+
+
 def test_write_report_refuses_bad_images_before_writing_anything(tmp_path):
     """An empty image raised cv2's error (a traceback) once the report was half staged; a
     stem such as ../index wrote outside frames/, where report_overwrites does not look. Both

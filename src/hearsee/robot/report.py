@@ -226,8 +226,10 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
             label="speaker (truth)")
     for p in scenario.get("people", []):
         if p.get("speaking"):  # (the people heard, by name: several take turns)
-            ax.annotate(p.get("name", ""), p["path_m"][0], textcoords="offset points",
-                        xytext=(5, -12), color="g")
+            # (as written: a name with two "$" was read as TeX -- drawn garbled, or, when no
+            # valid TeX, failing the report after the whole run with a traceback)
+            ax.annotate(str(p.get("name", "")), p["path_m"][0], textcoords="offset points",
+                        xytext=(5, -12), color="g", parse_math=False)
     ax.plot(track[:, 0], track[:, 1], "b.-", ms=4, label="track (estimate)")
     for o in scenario.get("objects", []):
         ax.plot(*o["position_m"], "rx", ms=10, mew=2)
