@@ -874,6 +874,29 @@ def test_source_tracker_rotate_and_reset():
     assert trk.step(0.0, 5.0) > first
 
 
+@pytest.mark.parametrize("modes", [None, (5.0, 40.0)])
+def test_a_linear_arrays_source_tracker_holds_its_tracks_within_endfire(modes):
+    """span_deg=180 (a linear array's sines from broadside times 90): a talker at 20 deg
+    and a second one that moved at 60 deg/s to ~66 deg and fell silent while the first went
+    on. The silent one's coasting track stops at 90 (it ran on to ~137 and more: 0.6 s
+    after its last frame, 21 deg from the first talker, the stream named it at endfire,
+    where nobody was); with the IMM's constant rates (the stream's) and without."""
+    kw = {} if modes is None else {"modes_dps2": modes, "rate_tau_s": None}
+    trk = SourceTracker(max_sources=2, span_deg=180.0, **kw)
+    dt, angles = 0.032, []
+    for i in range(int(3.0 / dt)):
+        t = dt * i
+        trk.step(t, 75.0)
+        if t < 1.1:
+            trk.step(t, 60.0 * t)
+        angles.append([tr.angle_deg for tr in trk.live])
+    assert all(-90.0 <= a <= 90.0 for row in angles for a in row)
+    assert max(a for row in angles for a in row) == 90.0
+    assert [round(tr.angle_deg) for tr in trk.reported()] == [75]
+    with pytest.raises(ConfigError, match="span_deg 360"):
+        trk.rotate(10.0)
+
+
 def test_a_source_tracker_that_replaces_another_goes_on_with_its_ids():
     old = SourceTracker()
     assert old.next_id == 0

@@ -587,6 +587,34 @@ def test_coasting_never_carries_the_elevation_over_the_pole(make):
 
 
 @pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
+def test_a_bounded_angle_coasts_to_its_bound_and_stops(cls):
+    """angle_bound_deg=90 (a linear array's sines from broadside times 90): a track moving
+    at 60 deg/s up to 66 deg, then silent for 1.5 s, stops at +90 with its rate stopped
+    (unbounded it coasts on to ~156, and past +180 it would wrap to the other endfire); a
+    later frame at 70 deg is fused from there; a turn of the array is refused."""
+    free, trk = cls(2.0), cls(2.0, angle_bound_deg=90.0)
+    t = np.arange(0.0, 1.1, DT)
+    for f in (free, trk):
+        for tk in t:
+            assert f.update(tk, (60.0 * tk, None))
+    assert trk.rate_dps[0] > 40.0
+    for tk in np.arange(t[-1] + DT, t[-1] + 1.5, DT):
+        trk.update(tk, None)
+        free.update(tk, None)
+        x, _ = trk.predicted(tk + 0.5)
+        assert -90.0 <= trk.azimuth_deg <= 90.0 and -90.0 <= x[0] <= 90.0
+    assert free.azimuth_deg > 140.0
+    assert trk.azimuth_deg == 90.0 and trk.rate_dps[0] == 0.0
+    assert trk.update(t[-1] + 1.5 + DT, (70.0, None))
+    assert 70.0 < trk.azimuth_deg < 90.0
+    with pytest.raises(EstimationError, match="no azimuth"):
+        trk.rotate_azimuth(10.0)
+    for bad in (0.0, -5.0, 181.0, float("nan")):
+        with pytest.raises(EstimationError, match="angle_bound_deg"):
+            cls(2.0, angle_bound_deg=bad)
+
+
+@pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
 @pytest.mark.parametrize("tau", [None, float("inf"), 0.8, 1e9])
 def test_rate_relaxes_with_rate_tau_through_a_gap(cls, tau):
     """Track a speaker turning at 20 deg/s (elevation rising 2 deg/s), then 1.2 s without a

@@ -791,7 +791,9 @@ class SourceTracker:
     toward zero over ``rate_tau_s`` seconds, None = constant rates), or with ``modes_dps2`` (two
     or more angular acceleration noises, deg/s^2) an IMM of such modes
     (:class:`~hearsee.audio.tracking.DirectionIMM`, ``mode_dwell_s``; ``sigma_accel_dps2`` is
-    then not used; the stream's, :data:`TALKER_MODES_DPS2`). Used by the stream
+    then not used; the stream's, :data:`TALKER_MODES_DPS2`); below a ``span_deg`` of 360
+    (a linear array's angles) the tracks' angles stay within +-``span_deg / 2``. Used by the
+    stream
     (``StreamConfig.max_sources``, ``hearsee track --sources N``). Not in the thesis; an
     extension.
     """
@@ -876,12 +878,17 @@ class SourceTracker:
     def rotate(self, delta_deg: float) -> None:
         """Add ``delta_deg`` (degrees) to every live track's angle (azimuths: the array turned
         by ``-delta_deg`` about its z axis; see
-        :meth:`~hearsee.audio.tracking.DirectionKalman.rotate_azimuth`)."""
+        :meth:`~hearsee.audio.tracking.DirectionKalman.rotate_azimuth`). ConfigError for a
+        tracker of angles that are no azimuths (``span_deg`` below 360: a linear array's)."""
         from hearsee.audio.tracking import _wrap1
 
+        if self.span_deg != 360.0:
+            raise ConfigError("only azimuths (span_deg 360) turn with the array: a linear "
+                              "array's angles follow a turn as motion")
+        d = finite_number("delta_deg", delta_deg)
         for tr in self.live:
-            tr.kf.rotate_azimuth(delta_deg)
-            tr.angle_deg = _wrap1(tr.angle_deg + float(delta_deg))
+            tr.kf.rotate_azimuth(d)
+            tr.angle_deg = _wrap1(tr.angle_deg + d)
 
     def step(self, t: float, angle_deg: float, weight: float = 1.0) -> int:
         """Take the frame at time ``t`` (s, not before the last) with angle ``angle_deg``
@@ -961,17 +968,20 @@ class SourceTracker:
     def _new_filter(self) -> Any:
         """A new track's filter: one constant-velocity Kalman filter, or with ``modes_dps2``
         an IMM of such modes; its transition and noise per step shared with the other
-        tracks' (they share their filters' settings)."""
+        tracks' (they share their filters' settings). With a ``span_deg`` below 360 (a
+        linear array's angles, -90 to 90) the angle is held within +-``span_deg / 2``
+        (``angle_bound_deg``: a track coasting at its last rate does not pass endfire)."""
         from hearsee.audio.tracking import DirectionIMM, DirectionKalman
 
+        bound = None if self.span_deg == 360.0 else self.span_deg / 2.0
         if self.modes_dps2 is None:
             kf = DirectionKalman(self.sigma_meas_deg, self.sigma_accel_dps2, gate_prob=0.997,
                                  init_rate_sigma_dps=TRACK_INIT_RATE_DPS,
-                                 rate_tau_s=self.rate_tau_s)
+                                 rate_tau_s=self.rate_tau_s, angle_bound_deg=bound)
         else:
             kf = DirectionIMM(self.sigma_meas_deg, self.modes_dps2, self.mode_dwell_s,
                               gate_prob=0.997, init_rate_sigma_dps=TRACK_INIT_RATE_DPS,
-                              rate_tau_s=self.rate_tau_s)
+                              rate_tau_s=self.rate_tau_s, angle_bound_deg=bound)
             kf._tpm_cache = self._tpms
         kf._model_cache = self._models
         return kf
@@ -1126,7 +1136,7 @@ def track_sources(t: ArrayLike, angle_deg: ArrayLike, weight: ArrayLike | None =
         the frames located then) with a probability below this (binomial tail).
     span_deg : float
         The range the angles can take (degrees): 360 for azimuths, 180 for a linear array's
-        (-90 to 90).
+        (-90 to 90; below 360, the tracks' angles are held within +-``span_deg / 2``).
     merge_deg : float
         Two sources whose paths are closer than this (degrees) at half or more of the frames
         both lived through are merged into one, the heavier's path kept where it lived (0 to

@@ -250,11 +250,33 @@ def _bound_elevation(X: NDArray) -> None:
         X[..., 1] = np.clip(el, -90.0, 90.0)
 
 
-def _propagate(x: NDArray, P: NDArray, F: NDArray, Q: NDArray) -> tuple[NDArray, NDArray]:
+def _bound_angle(X: NDArray, bound_deg: float | None) -> None:
+    """Clamp the first angle of direction states ``X`` (..., 4) to +-``bound_deg`` degrees in
+    place, stopping a rate that points beyond the bound, as :func:`_bound_elevation` does for
+    the elevation; None: no bound (an azimuth wraps instead). A linear array's tracked angle
+    (its angle's sine from broadside times 90, :func:`hearsee.audio.sources.frame_angle`)
+    cannot pass endfire: coasting at the last rate once carried a talker's track to 137 and
+    the stream reported it at endfire, 0.6 s after it was last heard, where nobody was."""
+    if bound_deg is None:
+        return
+    if X.ndim == 1:
+        if -bound_deg <= X[0] <= bound_deg:
+            return
+    a = X[..., 0]
+    over = np.abs(a) > bound_deg
+    if over.any():
+        X[..., 2] = np.where(over & (X[..., 2] * a > 0), 0.0, X[..., 2])
+        X[..., 0] = np.clip(a, -bound_deg, bound_deg)
+
+
+def _propagate(x: NDArray, P: NDArray, F: NDArray, Q: NDArray, bound_deg: float | None = None
+               ) -> tuple[NDArray, NDArray]:
     """A direction state ``x`` (4,) and covariance ``P`` (4, 4) predicted by the transition F
-    with process noise Q: new arrays, the azimuth wrapped and the elevation bounded."""
+    with process noise Q: new arrays, the azimuth wrapped (or held within +-``bound_deg``,
+    :func:`_bound_angle`) and the elevation bounded."""
     x = F @ x
     x[0] = _wrap1(float(x[0]))
+    _bound_angle(x, bound_deg)
     _bound_elevation(x)
     return x, F @ P @ F.T + Q
 
@@ -485,6 +507,10 @@ class DirectionKalman(_Kalman):
     pause_max_rejects : int
         The rejections that restart a track after a pause (>= 1; 1: the first measurement
         after a pause either passes the gate or starts the track anew).
+    angle_bound_deg : float or None
+        None (the default): the azimuth wraps at +-180 deg. A number (0-180 deg): the first
+        angle is held within +-that many degrees instead, its rate stopped at the bound (a
+        linear array's tracked sines from broadside times 90: 90; see :func:`_bound_angle`).
     """
 
     def __init__(self, sigma_meas_deg: float = 5.0, sigma_accel_dps2: float = 150.0,
@@ -492,7 +518,7 @@ class DirectionKalman(_Kalman):
                  init_rate_sigma_dps: float = 60.0,
                  elevation_accel_ratio: float = ELEVATION_ACCEL_RATIO,
                  rate_tau_s: float | None = None, pause_s: float | None = None,
-                 pause_max_rejects: int = 2) -> None:
+                 pause_max_rejects: int = 2, angle_bound_deg: float | None = None) -> None:
         for name, v in (("sigma_meas_deg", sigma_meas_deg), ("sigma_accel_dps2", sigma_accel_dps2),
                         ("elevation_accel_ratio", elevation_accel_ratio),
                         ("init_rate_sigma_dps", init_rate_sigma_dps)):
@@ -509,6 +535,8 @@ class DirectionKalman(_Kalman):
                                               error=EstimationError)
         self.init_rate_sigma_dps = float(init_rate_sigma_dps)
         self.elevation_accel_ratio = float(elevation_accel_ratio)
+        self.angle_bound_deg = None if angle_bound_deg is None else finite_number(
+            "angle_bound_deg", angle_bound_deg, 0.0, 180.0, lo_open=True, error=EstimationError)
         self.H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
         self.R = np.eye(2) * self.sigma_meas_deg**2
         self._gate = {1: float(chi2.ppf(self.gate_prob, 1)), 2: float(chi2.ppf(self.gate_prob, 2))}
@@ -533,7 +561,7 @@ class DirectionKalman(_Kalman):
         self.F, self.Q = self._cv(dt)
 
     def _predict(self) -> None:
-        self.x, self.P = _propagate(self.x, self.P, self.F, self.Q)
+        self.x, self.P = _propagate(self.x, self.P, self.F, self.Q, self.angle_bound_deg)
 
     def _start(self, az: float, el: float | None, R: NDArray | None = None) -> None:
         """A new track at the measurement ``(az, el)`` (deg) whose noise covariance is ``R``
@@ -545,6 +573,7 @@ class DirectionKalman(_Kalman):
         instead of 2 over a track's first three frames.)"""
         R = self.R if R is None else R
         self.x = np.array([_wrap1(float(az)), 0.0 if el is None else float(el), 0.0, 0.0])
+        _bound_angle(self.x, self.angle_bound_deg)
         el_var = 90.0**2 if el is None else float(R[1, 1])
         self.P = self._initial_cov(float(R[0, 0]), el_var)
         self.initialized = True
@@ -686,7 +715,7 @@ class DirectionKalman(_Kalman):
         dt = _time_step(self.t, _finite_time(t), past=True)
         if not dt > 0:
             return self.x.copy(), self.P.copy()
-        return _propagate(self.x, self.P, *self._cv(dt))
+        return _propagate(self.x, self.P, *self._cv(dt), self.angle_bound_deg)
 
     def _cv(self, dt: float) -> tuple[NDArray, NDArray]:
         """The (cached) transition and process noise over ``dt`` seconds."""
@@ -694,8 +723,10 @@ class DirectionKalman(_Kalman):
             dt, self.sigma_accel_dps2**2, self.elevation_accel_ratio, self.rate_tau_s))
 
     def _settle(self, el: float | None) -> None:
-        """After a correction: azimuth wrapped, elevation clipped to +-90 deg."""
+        """After a correction: azimuth wrapped (or bounded, ``angle_bound_deg``), elevation
+        clipped to +-90 deg."""
         self.x[0] = _wrap1(float(self.x[0]))
+        _bound_angle(self.x, self.angle_bound_deg)
         _bound_elevation(self.x)
         self.has_elevation = self.has_elevation or el is not None
 
@@ -706,6 +737,9 @@ class DirectionKalman(_Kalman):
         on the talker without taking the turn for the talker's motion. Nothing before the
         track has started."""
         d = finite_number("delta_deg", delta_deg, error=EstimationError)
+        if self.angle_bound_deg is not None:
+            raise EstimationError("a bounded angle (angle_bound_deg) is no azimuth: a turn of "
+                                  "the array does not shift it alike for every source")
         if self.initialized:
             self.x[0] = _wrap1(float(self.x[0]) + d)
 
@@ -825,6 +859,9 @@ class DirectionIMM:
         (degrees; held while none arrives), so that a measurement moves the azimuth more
         without moving the angular rate more. 0 (default) = none. See
         :data:`DIRECTION_ANGLE_NOISE_RATIO` (the stream's value).
+    angle_bound_deg : float or None
+        As for :class:`DirectionKalman`: every mode's first angle held within +-that many
+        degrees instead of wrapping (None, the default: an azimuth).
     """
 
     def __init__(self, sigma_meas_deg: float = 10.0,
@@ -832,7 +869,8 @@ class DirectionIMM:
                  gate_prob: float = 0.997, max_rejects: int = 4,
                  init_rate_sigma_dps: float = 60.0,
                  elevation_accel_ratio: float = ELEVATION_ACCEL_RATIO,
-                 rate_tau_s: float | None = None, angle_noise_ratio: float = 0.0) -> None:
+                 rate_tau_s: float | None = None, angle_noise_ratio: float = 0.0,
+                 angle_bound_deg: float | None = None) -> None:
         if not (is_real(angle_noise_ratio) and math.isfinite(angle_noise_ratio)
                 and angle_noise_ratio >= 0):
             raise EstimationError("angle_noise_ratio must be a finite number >= 0 (1/s), got "
@@ -857,7 +895,8 @@ class DirectionIMM:
         # the mixture, as a filter object: association, gate and read-out reuse its methods;
         # the modes themselves are stacked arrays, so that one numpy call steps all of them
         self._mix = DirectionKalman(sigma_meas_deg, float(qs[0]), gate_prob, max_rejects,
-                                    init_rate_sigma_dps, elevation_accel_ratio, rate_tau_s)
+                                    init_rate_sigma_dps, elevation_accel_ratio, rate_tau_s,
+                                    angle_bound_deg=angle_bound_deg)
         self.sigma_accel_dps2 = qs
         self.mode_dwell_s = dwell
         self.max_rejects = whole_number("max_rejects", max_rejects, error=EstimationError)
@@ -974,7 +1013,7 @@ class DirectionIMM:
         predicted mode probabilities c: mixing only regroups the same components, so it is
         the last output predicted with the expected process noise ``sum_j c_j Q_j``."""
         return _propagate(self._mix.x, self._mix.P, F,
-                          (c @ Qs.reshape(c.size, -1)).reshape(4, 4))
+                          (c @ Qs.reshape(c.size, -1)).reshape(4, 4), self._mix.angle_bound_deg)
 
     def predicted(self, t: float) -> tuple[NDArray, NDArray]:
         """The output state and covariance predicted to time ``t`` (seconds) as the next
@@ -1026,6 +1065,7 @@ class DirectionIMM:
             X = X @ F.T
             Ps = F @ Ps @ F.T + Qs
             X[:, 0] = _wrap_many(X[:, 0])
+            _bound_angle(X, self._mix.angle_bound_deg)
             _bound_elevation(X)
             self._mix.x, self._mix.P = self._predicted_mixture(F, Qs, c)
         self.X, self.Ps, self.mu = X, Ps, c
@@ -1053,6 +1093,7 @@ class DirectionIMM:
         I_KH = _eye(4) - K @ H
         Ps = I_KH @ Ps @ I_KH.transpose(0, 2, 1) + K @ R @ K.transpose(0, 2, 1)
         X[:, 0] = _wrap_many(X[:, 0])
+        _bound_angle(X, self._mix.angle_bound_deg)
         _bound_elevation(X)
         self.X, self.Ps = X, Ps
         self._mix.has_elevation = self._mix.has_elevation or el is not None
