@@ -1164,3 +1164,22 @@ def test_rotate_azimuth_turns_the_track_with_the_frame(make):
         np.testing.assert_array_equal(f.X[:, 1:], modes[:, 1:])
     with pytest.raises(EstimationError, match="delta_deg"):
         f.rotate_azimuth(float("nan"))
+
+
+@pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
+def test_elevation_is_reported_once_measured_and_kept_through_azimuth_only_frames(cls):
+    """A track reports an elevation from the first frame that measured one, and keeps it
+    through frames that measured the azimuth alone (NaN only while none ever was). No test held
+    it: a track that lost its elevation at an azimuth-only frame, or never took one after an
+    azimuth-only start, passed this file."""
+    later = cls()
+    later.update(0.0, (30.0, None))  # started from the azimuth alone: no elevation yet
+    assert np.isnan(later.elevation_deg)
+    for k in range(1, 20):  # then measured at 20 deg elevation
+        later.update(k * DT, (30.0, 20.0))
+    assert later.elevation_deg == pytest.approx(20.0, abs=0.5)
+    kept = cls()
+    for k in range(10):
+        kept.update(k * DT, (30.0, 20.0))
+    kept.update(10 * DT, (30.0, None))  # one frame without an elevation
+    assert kept.elevation_deg == pytest.approx(20.0, abs=0.5)
