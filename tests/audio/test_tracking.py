@@ -808,6 +808,10 @@ def test_track_directions_refuses_arrays_that_are_not_numbers():
         (dict(azimuth_deg=az, elevation_deg=["1", "2", "3"]), "elevation_deg"),
         (dict(t=["0", "0.1", "0.2"], azimuth_deg=az), "t"),
         (dict(azimuth_deg=az, valid=["x", "", "y"]), "valid"),
+        # (a mask of other numbers -- 2, 1.0 -- is no 0/1 mask: _flags' `and` made `or`, which
+        # took both as True, passed this test)
+        (dict(azimuth_deg=az, valid=[2, 1, 0]), "valid"),
+        (dict(azimuth_deg=az, valid=[1.0, 0.0, 1.0]), "valid"),
     ):
         with pytest.raises(EstimationError, match=f"^{name} must hold"):
             track_directions(**{"t": t, **kwargs})
