@@ -375,6 +375,12 @@ def test_resolve_input_device(fake_sd):
         resolve_input_device(fake_sd, 7)
     with pytest.raises(ConfigError, match="matches several input devices"):
         resolve_input_device(fake_sd, "hw:")
+    # names are looked up among the input devices only: 'hd' is also in 'HDMI output' (no
+    # inputs), 'hdmi' only there (a look-up among every device -- `> 0` made `>= 0` -- refused
+    # 'hd' as several devices and named 'hdmi' a device without inputs; no test held it)
+    assert resolve_input_device(fake_sd, "hd")["index"] == 0
+    with pytest.raises(ConfigError, match="no input device named 'hdmi'"):
+        resolve_input_device(fake_sd, "hdmi")
     fake_sd.default.device = "respeaker"  # a name set as the default for input and output
     assert resolve_input_device(fake_sd, None)["index"] == 2
     fake_sd.default.device = _Pair(-1, -1)
