@@ -152,7 +152,7 @@ def line_frequencies(x: ArrayLike, fs: float, line: ArrayLike, bin_hz: ArrayLike
     padding: ~fs / 2n resolution) within the run, refined by a parabola through the log
     power. When three or more lines, and :data:`COMB_SHARE` of them, lie within
     :data:`COMB_TOL_HZ` of the multiples of one fundamental (the lowest line, or it over a
-    whole number, not below :data:`TONAL_MIN_HZ`), they are a harmonic comb -- mains hum --
+    whole number, :func:`_divided`), they are a harmonic comb -- mains hum --
     and every multiple of the fundamental fitted to them (least squares through 0) up to the
     highest line is returned, with the lines off the comb. Then every multiple of the fundamental
     (the comb's, else the lowest line's or, when the lines are its multiples, it over a
@@ -211,17 +211,35 @@ def _peak_hz(spec: NDArray, k: int, df: float) -> float:
     return (k + (0.5 * (la - lc) / den if den < 0 else 0.0)) * df
 
 
+#: The mains' fundamentals (Hz): a comb's fundamental may be its lowest line over any whole
+#: number only near these (within :data:`COMB_TOL_HZ`), else over 1-4 (:func:`_divided`)
+MAINS_HZ = (50.0, 60.0)
+
+
+def _divided(lowest: float, first: int = 1) -> list[float]:
+    """The candidate fundamentals (Hz) of lines whose lowest is ``lowest``: it over 1-4 from
+    ``first``, and it over any larger whole number that lands within :data:`COMB_TOL_HZ` of
+    the mains (:data:`MAINS_HZ`) -- a hum whose harmonics below 1.9 kHz a voice hid from
+    :func:`tonal_bins` (32-ms frames, 60 Hz at 3 dB) showed 1920, 2160, 2220, ..., 2460 Hz,
+    no comb over 1-4, and the rest of the hum left a three-mic summary 173 deg off (until
+    2026-12-07); any whole number took 3-7 % of random sets of three or four lines in 200-3000
+    Hz for a comb (0.0-0.2 % over 1-4), and notched every multiple of a 40-Hz fundamental --
+    none below :data:`TONAL_MIN_HZ`."""
+    out = []
+    for m in range(first, int(lowest // TONAL_MIN_HZ) + 1):
+        g = lowest / m
+        if m <= 4 or min(abs(g - f) for f in MAINS_HZ) <= COMB_TOL_HZ:
+            out.append(g)
+    return out
+
+
 def _fundamental(lines: NDArray) -> float:
     """The fundamental (Hz) of ``lines`` (ascending): the lowest line, or the lowest over a
-    whole number (the largest such fundamental, not below :data:`TONAL_MIN_HZ`) when all of
-    them are its multiples within :data:`COMB_TOL_HZ` (100 and 150 Hz: 50 Hz; 1920 and 2160
-    Hz: 240 Hz -- a hum whose lower harmonics a voice hid from :func:`tonal_bins`: up to 2-4
-    until 2026-12-07, and such lines were taken for a fundamental of their own)."""
+    whole number (:func:`_divided`: the largest such fundamental, not below
+    :data:`TONAL_MIN_HZ`) when all of them are its multiples within :data:`COMB_TOL_HZ` (100
+    and 150 Hz: 50 Hz; 1920 and 2160 Hz: 60 Hz)."""
     f0 = float(lines[0])
-    for m in range(2, int(lines[0] // TONAL_MIN_HZ) + 1):
-        if lines[0] / m < TONAL_MIN_HZ:
-            break
-        g = lines[0] / m
+    for g in _divided(float(lines[0]), 2):
         if len(lines) > 1 and _on_comb(lines, g).all() and not _on_comb(lines, f0).all():
             f0 = g
     return f0
@@ -250,16 +268,11 @@ def _prominent_harmonics(spec: NDArray, df: float, f0: float, fs: float) -> NDAr
 def _comb(lines: NDArray) -> NDArray | None:
     """Every multiple of the fundamental of ``lines`` (Hz) up to the highest, with the lines
     off the comb, or None when they are not a harmonic comb (:func:`line_frequencies`). The
-    fundamental is the lowest line over a whole number, the largest that fits: a hum whose
-    harmonics below 1.9 kHz a voice hid from :func:`tonal_bins` (32-ms frames, 60 Hz at 3 dB)
-    found 1920, 2160, 2220, ..., 2460 Hz, no comb among the lowest over 1-4 (until
-    2026-12-07), and the rest of the hum left a three-mic summary 173 deg off."""
+    fundamental is the lowest line over a whole number (:func:`_divided`), the largest that
+    fits."""
     if len(lines) < 3:
         return None
-    for m in range(1, int(lines[0] // TONAL_MIN_HZ) + 1):
-        f0 = lines[0] / m
-        if f0 < TONAL_MIN_HZ:
-            break
+    for f0 in _divided(float(lines[0])):
         on = _on_comb(lines, f0)
         if on.sum() >= 3 and on.sum() >= COMB_SHARE * len(lines):
             f0 = _fit_fundamental(lines[on], f0)
