@@ -837,6 +837,8 @@ class SourceTracker:
                               f"{min_share}")
         self.max_chance = finite_number("max_chance", max_chance, 0.0, 1.0, lo_open=True)
         self.span_deg = finite_number("span_deg", span_deg, 0.0, 360.0, lo_open=True)
+        # (below 360, a linear array's angles: its tracks' filters hold them within +-half)
+        self._bound_deg = None if self.span_deg == 360.0 else self.span_deg / 2.0
         self.rank_tau_s = finite_number("rank_tau_s", rank_tau_s, 0.0, None, lo_open=True)
         self.min_ratio = finite_number("min_ratio", min_ratio, 0.0, 1.0)
         self.successor_deg = finite_number("successor_deg", successor_deg, 0.0, 180.0)
@@ -882,7 +884,7 @@ class SourceTracker:
         tracker of angles that are no azimuths (``span_deg`` below 360: a linear array's)."""
         from hearsee.audio.tracking import _wrap1
 
-        if self.span_deg != 360.0:
+        if self._bound_deg is not None:
             raise ConfigError("only azimuths (span_deg 360) turn with the array: a linear "
                               "array's angles follow a turn as motion")
         d = finite_number("delta_deg", delta_deg)
@@ -973,7 +975,7 @@ class SourceTracker:
         (``angle_bound_deg``: a track coasting at its last rate does not pass endfire)."""
         from hearsee.audio.tracking import DirectionIMM, DirectionKalman
 
-        bound = None if self.span_deg == 360.0 else self.span_deg / 2.0
+        bound = self._bound_deg
         if self.modes_dps2 is None:
             kf = DirectionKalman(self.sigma_meas_deg, self.sigma_accel_dps2, gate_prob=0.997,
                                  init_rate_sigma_dps=TRACK_INIT_RATE_DPS,

@@ -234,20 +234,28 @@ def _wrap_many(a: NDArray) -> NDArray:
     return 180.0 - (180.0 - a) % 360.0
 
 
+def _clamp_angle(X: NDArray, k: int, bound_deg: float) -> None:
+    """Clamp angle ``k`` (0: the first, 1: the elevation) of direction states ``X`` (..., 4)
+    to +-``bound_deg`` degrees in place, stopping its rate (entry ``k + 2``) where it points
+    beyond the bound."""
+    if X.ndim == 1:  # (states within the bounds are the common case: tested as floats)
+        if -bound_deg <= X[k] <= bound_deg:
+            return
+    elif X.ndim == 2 and len(X) <= 8 and all(-bound_deg <= v <= bound_deg
+                                             for v in X[:, k].tolist()):
+        return
+    a = X[..., k]
+    over = np.abs(a) > bound_deg
+    if over.any():  # (the method: np.any's wrapper cost more than the test, every frame)
+        X[..., k + 2] = np.where(over & (X[..., k + 2] * a > 0), 0.0, X[..., k + 2])
+        X[..., k] = np.clip(a, -bound_deg, bound_deg)
+
+
 def _bound_elevation(X: NDArray) -> None:
     """Clamp the elevation of direction states ``X`` (..., 4) to +-90 deg in place, stopping
     an elevation rate that points beyond the bound (a prediction must not carry a track over
     the pole: coasting at the last rate once reported elevations of several hundred deg)."""
-    if X.ndim == 1:  # (states within the bounds are the common case: tested as floats)
-        if -90.0 <= X[1] <= 90.0:
-            return
-    elif X.ndim == 2 and len(X) <= 8 and all(-90.0 <= v <= 90.0 for v in X[:, 1].tolist()):
-        return
-    el = X[..., 1]
-    over = np.abs(el) > 90.0
-    if over.any():  # (the method: np.any's wrapper cost more than the test, every frame)
-        X[..., 3] = np.where(over & (X[..., 3] * el > 0), 0.0, X[..., 3])
-        X[..., 1] = np.clip(el, -90.0, 90.0)
+    _clamp_angle(X, 1, 90.0)
 
 
 def _bound_angle(X: NDArray, bound_deg: float | None) -> None:
@@ -257,16 +265,8 @@ def _bound_angle(X: NDArray, bound_deg: float | None) -> None:
     (its angle's sine from broadside times 90, :func:`hearsee.audio.sources.frame_angle`)
     cannot pass endfire: coasting at the last rate once carried a talker's track to 137 and
     the stream reported it at endfire, 0.6 s after it was last heard, where nobody was."""
-    if bound_deg is None:
-        return
-    if X.ndim == 1:
-        if -bound_deg <= X[0] <= bound_deg:
-            return
-    a = X[..., 0]
-    over = np.abs(a) > bound_deg
-    if over.any():
-        X[..., 2] = np.where(over & (X[..., 2] * a > 0), 0.0, X[..., 2])
-        X[..., 0] = np.clip(a, -bound_deg, bound_deg)
+    if bound_deg is not None:
+        _clamp_angle(X, 0, bound_deg)
 
 
 def _propagate(x: NDArray, P: NDArray, F: NDArray, Q: NDArray, bound_deg: float | None = None
