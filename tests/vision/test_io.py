@@ -529,3 +529,13 @@ def test_an_image_beyond_opencv_s_pixel_limit_is_one_typed_error(tmp_path):
                                               r"\(its header claims more pixels than OpenCV's "
                                               r"limit, CV_IO_MAX_IMAGE_PIXELS\)$"):
         read_image(path)
+
+
+def test_glob_images_takes_names_with_digits_no_decimal(tmp_path):
+    """'²' is a digit to str.isdigit but no decimal digit to the natural order's split: a
+    name such as take1²0 made int('²') raise a builtin ValueError (a traceback). Such a part
+    is text; the numbers still sort as numbers."""
+    for name in ("take1²0.png", "take10.png", "take2.png"):
+        (tmp_path / name).write_bytes(b"")
+    assert [f.name for f in glob_images(tmp_path)] == ["take1²0.png", "take2.png",
+                                                       "take10.png"]

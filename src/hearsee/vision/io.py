@@ -624,8 +624,10 @@ def write_image(path: str | Path, image: NDArray) -> Path:
 def _natural_key(path: Path) -> tuple:
     """Sort key of a path with its digit runs compared as numbers (``left2`` before
     ``left10``, ``left01`` beside ``left1``), the text itself breaking ties."""
-    parts = re.split(r"(\d+)", str(path))
-    return tuple((0, int(c), "") if c.isdigit() else (1, 0, c) for c in parts), str(path)
+    parts = re.split(r"(\d+)", str(path))  # (the odd parts are the digit runs: "²" is no
+    # decimal digit to the split, though str.isdigit takes it -- int("²") raised ValueError)
+    return tuple((0, int(c), "") if i % 2 else (1, 0, c)
+                 for i, c in enumerate(parts)), str(path)
 
 
 def glob_images(pattern: str | Path, what: str = "images") -> list[Path]:
