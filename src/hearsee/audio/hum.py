@@ -43,6 +43,7 @@ __all__ = [
     "MAX_ROUNDS",
     "NOTCH_BANDWIDTH_HZ",
     "SETTLE_S",
+    "TONAL_FRAME_MS",
     "TONAL_MIN_FRAMES",
     "TONAL_MIN_HZ",
     "TONAL_STATIONARITY",
@@ -67,6 +68,12 @@ TONAL_STATIONARITY = 0.5
 TONAL_MIN_FRAMES = 40
 #: ... and only above this frequency (Hz): the mains' fundamental is 50 or 60 Hz
 TONAL_MIN_HZ = 40.0
+#: ... on frames at least this long (ms; the length :data:`TONAL_STATIONARITY` was measured
+#: with), whatever frame the analysis itself uses: at 16 ms a bin is ~63 Hz wide, a 60-Hz
+#: line shares it with a voice's lowest harmonics and swings with them, and a hum 3 dB above a
+#: male voice was found on none of three arrays (two-mic, three-mic, respeaker-4; the summary
+#: TDOAs 2.6-6.4 samples off), where 32- and 64-ms frames found it
+TONAL_FRAME_MS = 64.0
 #: Lines within this many Hz of the multiples of one fundamental are a harmonic comb
 #: (:func:`line_frequencies`): every harmonic up to the highest line found is removed, also
 #: those a voice's harmonics hid from the test
@@ -301,24 +308,29 @@ def _bandwidth(bandwidth_hz: float) -> float:
 
 def find_lines(x: ArrayLike, fs: float, frame_ms: float = 64.0) -> NDArray:
     """The lines (Hz) of stationary tonal noise on every channel of the recording ``x``
-    (n_ch, n): :func:`tonal_bins` of its frames (``frame_ms`` long, every half frame, Tukey
-    window with 25 % tapers as :func:`hearsee.audio.tdoa.estimate_tdoas`'; frames silent on
-    every channel left out), then :func:`line_frequencies`. Empty when there is none (also for
-    a recording shorter than one frame). For analyses that do not go through
+    (n_ch, n): :func:`tonal_bins` of its frames (``frame_ms`` long but at least
+    :data:`TONAL_FRAME_MS` -- ``frame_ms`` itself where those would be fewer than
+    :data:`TONAL_MIN_FRAMES` --, every half frame, Tukey window with 25 % tapers as
+    :func:`hearsee.audio.tdoa.estimate_tdoas`'; frames silent on every channel left out), then
+    :func:`line_frequencies`. Empty when there is none (also for a recording with fewer than
+    :data:`TONAL_MIN_FRAMES` such frames). For analyses that do not go through
     ``estimate_tdoas``, which finds them in its own spectra. A recording that is no finite
     (n_ch, n) array of samples, or a bad rate, is an AudioInputError; ``frame_ms`` must be a
     finite number > 0 (ConfigError)."""
     a, fs = _recording(x, fs, two_d=True)
     frame_ms = finite_number("frame_ms", frame_ms, 0.0, lo_open=True)
-    n = max(int(round(frame_ms * 1e-3 * fs)), 2)
-    if a.ndim != 2 or a.shape[1] < n:
-        return np.zeros(0)
-    f, _, z = ss.stft(a, fs, window=("tukey", 0.25), nperseg=n, noverlap=n - n // 2,
-                      boundary=None, padded=False, detrend="constant", axis=-1)
-    power = np.moveaxis(np.abs(z) ** 2, -1, 1)  # (n_ch, frames, bins)
-    sounding = np.any(power.sum(axis=2) > 0, axis=0)
-    line = tonal_bins(power[:, sounding], f)
-    return line_frequencies(a, fs, line, f) if line.any() else np.zeros(0)
+    for ms in dict.fromkeys((max(frame_ms, TONAL_FRAME_MS), frame_ms)):
+        n = max(int(round(ms * 1e-3 * fs)), 2)
+        if a.shape[1] < n:
+            continue
+        f, _, z = ss.stft(a, fs, window=("tukey", 0.25), nperseg=n, noverlap=n - n // 2,
+                          boundary=None, padded=False, detrend="constant", axis=-1)
+        power = np.moveaxis(np.abs(z) ** 2, -1, 1)  # (n_ch, frames, bins)
+        sounding = np.any(power.sum(axis=2) > 0, axis=0)
+        if np.count_nonzero(sounding) >= TONAL_MIN_FRAMES:
+            line = tonal_bins(power[:, sounding], f)
+            return line_frequencies(a, fs, line, f) if line.any() else np.zeros(0)
+    return np.zeros(0)
 
 
 def warn_lines(lines: NDArray, stacklevel: int = 3) -> None:

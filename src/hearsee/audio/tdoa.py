@@ -1201,6 +1201,30 @@ def _tonal_lines(power_all: NDArray | None, frames: NDArray, win: NDArray, nfft:
     return line if line.any() else None
 
 
+def _band_tonal_lines(a32: NDArray, fs: float, frame_len: int, window: str | tuple,
+                      nfft: int, k0: int, k1: int, power_all: NDArray | None, frames: NDArray,
+                      win: NDArray, energy: NDArray) -> tuple[NDArray | None, NDArray]:
+    """(:func:`_tonal_lines` of the band of bins k0..k1-1 of the analysis' ``nfft``-point
+    spectra, their frequencies in Hz). On frames :data:`hum.TONAL_FRAME_MS` long (half-frame
+    hop, the analysis' window) where the analysis' ``frame_len`` is shorter and the recording
+    ``a32`` (n_ch, n) holds :data:`hum.TONAL_MIN_FRAMES` of them that are not silent, the
+    bins of the same band at that resolution; else the analysis' own frames, power
+    ``power_all`` and frame ``energy``."""
+    n = int(round(hum.TONAL_FRAME_MS * 1e-3 * fs))
+    if frame_len < n <= a32.shape[1]:
+        hop = n // 2
+        count = (a32.shape[1] - n) // hop + 1
+        sounding = _sounding(_frame_energy(a32, n, hop, count))
+        if np.count_nonzero(sounding) >= hum.TONAL_MIN_FRAMES:
+            lo = int(np.ceil(k0 * n / nfft))  # (the band's edges, Hz, in n-point bins)
+            hi = int(np.floor((k1 - 1) * n / nfft)) + 1
+            bin_hz = np.arange(lo, hi) * fs / n
+            return (_tonal_lines(None, frame_signals(a32, n, hop), _window(window, n), n, lo,
+                                 hi, sounding, bin_hz), bin_hz)
+    bin_hz = np.arange(k0, k1) * fs / nfft
+    return _tonal_lines(power_all, frames, win, nfft, k0, k1, _sounding(energy), bin_hz), bin_hz
+
+
 #: :func:`_empty_band_cut` looks at the spectra of this many of a recording's loudest frames (the
 #: same whatever the recording's length or the band asked for: ~1 s of the loudest audio with 64
 #: ms frames; a few tenths of a millisecond per call)
@@ -2394,7 +2418,8 @@ def estimate_tdoas(
         part is a ConfigError.
     tonal_noise : bool
         Find stationary tonal noise on every microphone -- mains hum the wiring picks up, a
-        motor's or a fan's whine (:func:`hearsee.audio.hum.tonal_bins`) -- and, where there
+        motor's or a fan's whine (:func:`hearsee.audio.hum.tonal_bins`, on frames at least
+        :data:`hearsee.audio.hum.TONAL_FRAME_MS` long whatever ``frame_ms``) -- and, where there
         is some, filter its lines out of the recording (:func:`hearsee.audio.hum.filter_lines`:
         a hum's every harmonic, zero-phase notches) and estimate from what remains, with a
         :class:`~hearsee.errors.TonalNoiseWarning` and ``TdoaFrames.tonal_lines_hz``. A hum
@@ -2528,8 +2553,8 @@ def estimate_tdoas(
         nb = k1 - k0
         main_lobe = _main_lobe(band_bins, nfft, fs, band_hz)
     if tonal_noise and not given:
-        bin_hz = band_bins * fs / nfft
-        line = _tonal_lines(power_all, frames, win, nfft, k0, k1, _sounding(energy), bin_hz)
+        line, bin_hz = _band_tonal_lines(a32, fs, frame_len, window, nfft, k0, k1, power_all,
+                                         frames, win, energy)
         if line is not None:  # filter the lines out of the recording and start again with it
             y, lines = hum.filter_lines(a, fs, hum.line_frequencies(a, fs, line, bin_hz),
                                         frame_ms)
