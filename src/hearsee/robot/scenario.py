@@ -29,7 +29,8 @@ Schema (defaults in brackets)::
       thermal: {width [160], height [120], hfov_deg [72]}   (mounted 7 cm above the left camera)
     people:                        [one walking speaker]
       - {name, path_m: [[x, y], ...] (waypoints, walked at constant speed over the run),
-         height_m [1.72], voice: male|female [female],
+         height_m [1.72] (1.2-2.2: the detector's standing adult), voice: male|female
+         [female],
          speaking: [[t0, t1], ...] [the first person: the whole run; the others: never],
          facing: toward-robot|path [toward-robot]}
       (every person is heard while they speak, in their own voice; people take turns: no
@@ -439,6 +440,15 @@ def _parse_person(p: Any, k: int, pw: str, size: np.ndarray, robot_xy: np.ndarra
     if facing not in ("toward-robot", "path"):
         raise ConfigError(f"{pw}.facing: expected 'toward-robot' or 'path'")
     height = _under_ceiling(number(p, "height_m", 1.72, pw, 1.0, 2.2), size, f"{pw}.height_m")
+    from hearsee.vision.humans import HumanDetectorParams
+
+    shortest = HumanDetectorParams.min_top_m
+    if height < shortest:  # (accepted, a 1.0-1.19 m person was heard, never seen: the run
+        # failed, each time, with nothing said)
+        raise ConfigError(
+            f"{pw}.height_m: {height:g} m is below the {shortest:g} m the people detector "
+            "takes for a standing adult's top (HumanDetectorParams.min_top_m): the robot "
+            f"would hear them but never see them; give {shortest:g}-2.2 m")
     return PersonSpec(name=name_text(p.get("name", f"person{k}"), pw), path_m=path, height_m=height,
                       voice=voice, speaking=spk, facing=facing)
 
