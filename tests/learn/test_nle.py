@@ -253,6 +253,21 @@ def test_duplicate_points_are_rejected():
         ClusteredNLE().fit(X)
 
 
+def test_identical_points_in_many_dimensions_are_duplicates_and_map_to_themselves():
+    """With more than 15 features scikit-learn's brute-force search takes
+    ``|x|^2 + |y|^2 - 2 x.y``: identical points came out up to ~1e-5 apart, so fit let some
+    duplicates through (30 of 40 found here) and transform moved training points off their
+    embedding (91 of 400)."""
+    X, _ = make_swiss_roll(400, random_state=0)
+    Q = np.linalg.qr(np.random.default_rng(0).normal(size=(40, 3)))[0]  # (40, 3) orthonormal
+    X40 = X @ Q.T
+    for cls in (NeighborhoodLinearEmbedding, ClusteredNLE):
+        m = cls(random_state=0).fit(X40)
+        np.testing.assert_array_equal(m.transform(X40), m.embedding_)
+        with pytest.raises(ManifoldInputError, match="X contains 40 points that duplicate"):
+            cls().fit(np.vstack([X40, X40[:20]]))
+
+
 def test_bad_parameters_are_rejected():
     X, _ = make_swiss_roll(100, random_state=0)
     with pytest.raises(ValueError, match="shadow"):

@@ -538,6 +538,19 @@ def _sizes(sizes: np.ndarray, show: int = 5) -> str:
     return s + (", ..." if sizes.size > show else "")
 
 
+def _coincident(centers: np.ndarray, X: np.ndarray, dist: np.ndarray,
+                ind: np.ndarray) -> np.ndarray:
+    """Rows whose nearest candidate ``X[ind[:, 0]]`` is the same point as the center. Not from
+    ``dist`` alone: scikit-learn's brute-force search (more than 15 features) takes
+    ``|x|^2 + |y|^2 - 2 x.y``, which leaves identical points up to ~1e-5 apart (until
+    2026-12-07 an exact duplicate in 1024-pixel images passed fit one time in eight, and
+    transform moved 125 of 300 training images off their embedding)."""
+    same = dist[:, 0] <= 0.0 if ind.shape[1] else np.zeros(ind.shape[0], dtype=bool)
+    for s, e in _chunks(ind.shape[0] if ind.shape[1] else 0, 1, X.shape[1]):
+        same[s:e] |= (X[ind[s:e, 0]] == centers[s:e]).all(axis=1)
+    return same
+
+
 def _weight_matrix(ind: np.ndarray, W: np.ndarray, mask: np.ndarray, n: int) -> sparse.csr_matrix:
     rows = np.repeat(np.arange(ind.shape[0]), ind.shape[1])
     f = mask.ravel()
@@ -720,8 +733,8 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         return X
 
     @staticmethod
-    def _check_duplicates(dist: np.ndarray, ind: np.ndarray) -> None:
-        zero = dist[:, 0] <= 0.0
+    def _check_duplicates(X: np.ndarray, dist: np.ndarray, ind: np.ndarray) -> None:
+        zero = _coincident(X, X, dist, ind)
         if zero.any():
             i = int(np.flatnonzero(zero)[0])
             raise ManifoldInputError(
@@ -742,7 +755,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         keep[keep.sum(axis=1) > n_neighbors, -1] = False
         dist = dist[keep].reshape(X.shape[0], n_neighbors)
         ind = ind[keep].reshape(X.shape[0], n_neighbors)
-        self._check_duplicates(dist, ind)
+        self._check_duplicates(X, dist, ind)
         mask = adaptive_neighbors(X, ind, dist, self.shadow,
                                   min_neighbors=self.n_components + 1)
         return nbrs, dist, ind, mask
@@ -899,7 +912,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         mask = adaptive_neighbors(train, ind, dist, self.shadow,
                                   min_neighbors=self.n_components + 1, centers=X)
         W = reconstruction_weights(train, ind, mask, self.reg, centers=X)
-        exact = dist[:, 0] <= 0.0  # query coincides with a training point: use its embedding
+        exact = _coincident(X, train, dist, ind)  # a training point: use its embedding
         W[exact] = 0.0
         W[exact, 0] = 1.0
         mask[exact] = False
