@@ -537,6 +537,28 @@ def test_failed_refit_leaves_the_fitted_model_consistent(cls, bad_k):
         np.testing.assert_array_equal(m.predict(X_good), ref_labels)
 
 
+@pytest.mark.parametrize("cls", [NeighborhoodLinearEmbedding, ClusteredNLE])
+def test_failed_refit_on_another_feature_count_keeps_the_model_usable(cls):
+    """Validation had already set ``n_features_in_`` to the new count when the refit raised:
+    the old model then refused its own 3 features and took 5 on to a NumPy broadcasting
+    ValueError (not a hearsee error)."""
+    X, _ = make_swiss_roll(600, random_state=1)
+    m = cls(n_neighbors=10, random_state=0).fit(X)
+    ref = m.transform(X[:20])
+    B = np.random.default_rng(0).normal(size=(100, 5))
+    B[3] = B[4]
+    with pytest.raises(ManifoldInputError, match="duplicate"):
+        m.fit(B)
+    assert m.n_features_in_ == 3
+    np.testing.assert_array_equal(m.transform(X[:20]), ref)
+    with pytest.raises(ManifoldInputError, match="X has 5 features"):
+        m.transform(B[:3])
+    unfitted = cls()
+    with pytest.raises(ManifoldInputError, match="duplicate"):
+        unfitted.fit(B)
+    assert not hasattr(unfitted, "n_features_in_")
+
+
 def test_cnle_transform_reconstructs_from_the_cluster_alone():
     """A sparse sheet (12 x 12, spacing 1, z = 1.5) above a dense one (40 x 40, spacing 0.3,
     z = 0): CNLE separates them exactly. New points of the sparse sheet, 0.5 off it towards the

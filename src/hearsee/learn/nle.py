@@ -66,6 +66,7 @@ COLAMD ordering) as the inverse operator. Small problems (``n <= 200``) use a de
 
 from __future__ import annotations
 
+import functools
 import warnings
 from numbers import Integral, Real
 
@@ -157,6 +158,29 @@ def _check_fitted(est, attribute: str) -> None:
         check_is_fitted(est, attribute)
     except NotFittedError as exc:
         raise ManifoldNotFittedError(str(exc)) from None
+
+
+def _input_attributes_kept_on_error(fit):
+    """Decorate ``fit``: when it raises, put back the ``n_features_in_`` / ``feature_names_in_``
+    of the previous fit (or none), which validation had already replaced. The other fitted
+    attributes are set together at the end of a fit that succeeds; until 2026-12-07 a failed
+    refit on data with another number of features left the old model expecting the new count:
+    transform refused the features it was fitted on, and the new count went on to a NumPy
+    broadcasting ValueError."""
+
+    @functools.wraps(fit)
+    def wrapper(self, *args, **kwargs):
+        saved = {a: self.__dict__[a] for a in ("n_features_in_", "feature_names_in_")
+                 if a in self.__dict__}
+        try:
+            return fit(self, *args, **kwargs)
+        except BaseException:
+            for a in ("n_features_in_", "feature_names_in_"):
+                self.__dict__.pop(a, None)
+            self.__dict__.update(saved)
+            raise
+
+    return wrapper
 
 
 class DisconnectedGraphWarning(UserWarning):
@@ -876,6 +900,7 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         self.embedding_, self.adjacency_, self.reconstruction_error_ = Y, Wm, err
         self.n_neighbors_ = mask.sum(axis=1)
 
+    @_input_attributes_kept_on_error
     def fit(self, X, y=None):
         """Compute the embedding of X (n_samples, n_features). ``y`` is ignored."""
         X = self._validate_fit_input(X)
@@ -1130,6 +1155,7 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
             )
         return X
 
+    @_input_attributes_kept_on_error
     def fit(self, X, y=None):
         """Cluster X by the adaptive neighbourhood graph and embed each cluster."""
         X = self._validate_fit_input(X)
