@@ -925,6 +925,29 @@ def test_masked_room_refuses_impossible_placements(asym):
         mask.simulate_masked_room(sig, FS, asym, _src(0, 1.0), ROOM, 0.3, [1.0, np.nan, 1.0])
 
 
+def test_an_anechoic_masked_room_refuses_a_source_outside_it(asym):
+    """RT60 0 (no reflections) checked the mask's place but never the source's: a talker
+    3 m ahead of an array 1.6 m from the 4 m wall was recorded as if the room were not there,
+    still (static) and walking (where the mask outside the room also passed) -- an unmasked
+    array's anechoic room refuses both. Placed inside, it is still the free field."""
+    from hearsee.sim.moving import Trajectory, simulate_moving_masked_room
+
+    sig = white_noise(0.1, FS, rng=3)
+    with pytest.raises(GeometryError, match="source .* outside the room"):
+        mask.simulate_masked_room(sig, FS, asym, _src(0, 3.0), ROOM, 0.0, ARRAY_AT)
+    with pytest.raises(GeometryError, match="source .* outside the room"):
+        mask.masked_room_impulse_responses(FS, asym, _src(0, 3.0), ROOM, 0.0, ARRAY_AT)
+    walk = Trajectory([0.0, 0.1], [_src(0, 1.0), _src(0, 3.0)])
+    with pytest.raises(GeometryError, match=r"the source \(t = .* outside the room"):
+        simulate_moving_masked_room(sig, FS, asym, walk, ROOM, 0.0, ARRAY_AT)
+    still = Trajectory([0.0], [_src(0, 1.0)])
+    with pytest.raises(GeometryError, match="the mask's vertex"):
+        simulate_moving_masked_room(sig, FS, asym, still, ROOM, 0.0, [0.01, 1.5, 1.2])
+    np.testing.assert_array_equal(
+        mask.simulate_masked_room(sig, FS, asym, _src(30, 1.0), ROOM, 0.0, ARRAY_AT),
+        mask.simulate_masked(sig, FS, asym, _src(30, 1.0)))
+
+
 @pytest.mark.parametrize("directional_orders", [3, 1])
 def test_masked_room_responses_of_a_turned_head(asym, monkeypatch, directional_orders):
     """heading_deg turns the masked head in the room. Ground truth built here: a head turned

@@ -1144,6 +1144,9 @@ def _reflection_parts(fs: float, model: MaskModel, s: NDArray, room_dim: ArrayLi
                             error=GeometryError)
     turn = head_rotation(heading, 0.0).as_matrix()  # array frame -> room axes (a pan)
     _check_inside(model.mesh.vertices @ turn.T + at, dim, "the mask's vertex")
+    # (before the anechoic room's early return: rt60 0 simulated a source outside the room,
+    # which an unmasked array's room refuses)
+    _check_inside((turn @ s + at)[None, :], dim, "source")
     if not (isinstance(orders, (tuple, list)) and len(orders) == 2):
         raise GeometryError(f"orders must be (first, last) reflection orders (last None: the "
                             f"room's), got {orders!r:.60}")

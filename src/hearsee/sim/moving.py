@@ -1135,7 +1135,7 @@ def simulate_moving_masked_room(
     _check_trajectory(trajectory)
     early_order = _check_updates(block_s, early_block_s, early_order)
     progress = _check_progress(progress)
-    n_direct = _masked_blocks(x.shape[-1], fs, direct_block_s)[1]
+    hop, n_direct = _masked_blocks(x.shape[-1], fs, direct_block_s)
     model = array if isinstance(array, MaskModel) else MaskModel(array)
     at = as_point(array_at, "array_at")
     dim = _room_dim(room_dim)
@@ -1159,13 +1159,16 @@ def simulate_moving_masked_room(
         updates = [(fn, _update_times(trajectory, model.array.positions, model.c, fs,
                                       x.shape[-1], spacing, None), stage)
                    for fn, spacing, stage in parts]
-        # the room's checks before any rendering (they came with the first reflections, after
-        # the whole direct path): the mask inside the room, the talker wherever it is heard
-        _check_inside(model.mesh.vertices + at, dim, "the mask's vertex")
-        t = np.concatenate([centres for _, centres, _ in updates]) / fs
-        pos = trajectory.at(t) + at
-        k = int(np.argmin(np.minimum(pos, dim - pos).min(axis=1)))  # (the nearest a wall)
-        _check_inside(pos[k:k + 1], dim, f"the source (t = {t[k]:.3g} s)")
+    # the room's checks before any rendering (they came with the first reflections, after
+    # the whole direct path): the mask inside the room, the talker wherever it is heard (at
+    # the reflections' updates; an anechoic room has none, and took a walk through its walls
+    # and a mask outside it without a word: there at the direct path's blocks)
+    _check_inside(model.mesh.vertices + at, dim, "the mask's vertex")
+    t = (np.concatenate([centres for _, centres, _ in updates]) / fs if updates
+         else np.arange(n_direct) * hop / fs)
+    pos = trajectory.at(t) + at
+    k = int(np.argmin(np.minimum(pos, dim - pos).min(axis=1)))  # (the nearest a wall)
+    _check_inside(pos[k:k + 1], dim, f"the source (t = {t[k]:.3g} s)")
     xs = np.atleast_2d(x)
     _announce(progress, [(_masked_stage(direct_block_s), len(xs) * n_direct)]
               + [(stage, len(centres)) for _, centres, stage in updates])
