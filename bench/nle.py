@@ -387,7 +387,7 @@ def main(argv=None) -> int:
     md = write_markdown(
         "nle",
         [
-            (f"Quality at n = {n_q} (faces: 400 rendered heads, 200 LFW faces)",
+            (f"Quality at n = {n_q} (faces: 400 rendered heads, 100 LFW faces)",
              markdown_table(qh, qrows, 4)),
             ("Two rolls: LLE with every fixed K vs CNLE", markdown_table(wh, wrows, 4)),
             ("Scaling on the swiss roll (subprocess per run)", markdown_table(sh, srows, 4)),
