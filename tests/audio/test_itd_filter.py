@@ -251,6 +251,24 @@ def test_smoother_leaves_out_rejected_peaks_that_do_not_fit_the_new_stretch():
     assert not acc[60] and acc[61:].all() and kf.n_rejected == 1  # (the reflection's)
 
 
+def test_smoother_of_a_filter_that_has_a_state_smooths_every_frame():
+    """Found in review (2026-12-07): ``smooth`` on a filter with a state already (after a step,
+    ``filter`` or an earlier ``smooth`` -- a recording in chunks) cut its stretches only at
+    re-initialisations, so the frames before the first of them were never written: every frame
+    NaN, though all were measured and accepted."""
+    Z = _noisy(40, seed=8)
+    for warm in ("step", "filter", "smooth"):
+        kf = ItdKalman(3, q_std_s=1e-6, r_std_s=2e-5)
+        if warm == "step":
+            kf.step(Z[0])
+        else:
+            getattr(kf, warm)(Z[:20])
+        s, acc = kf.smooth(Z[20:])
+        assert acc.all() and np.all(np.isfinite(s)), warm
+        np.testing.assert_allclose(s, np.broadcast_to(TRUE, s.shape), atol=2e-5)
+        np.testing.assert_allclose(s[-1], kf.pair_tdoas())  # (the last frame: the filter's)
+
+
 def test_smooth_refuses_what_filter_refuses():
     kf = ItdKalman(3)
     with pytest.raises(GeometryError, match="expected \\(n_frames, n_pairs\\)"):

@@ -382,13 +382,20 @@ class ItdKalman:
         accepted (n_frames,) bool, as :meth:`filter`, the frames that start a stretch by looking
         back counted as accepted; ``r_scale`` as there). The filter's state afterwards is the
         forward pass's with that look-back (the last frame's estimate is the same either way),
-        :attr:`n_rejected` its rejections.
+        :attr:`n_rejected` its rejections. A filter that has a state already (an earlier
+        step, :meth:`filter` or :meth:`smooth`: a recording in chunks) goes on from it, its
+        first stretch smoothed from the first frame (until 2026-12-07 that stretch was left
+        out: every frame before a re-initialisation NaN).
         """
         Zm = self._checked_frames(Z)
         S = _scales(r_scale, Zm.shape)
         n, dx = Zm.shape[0], self.kf.dim_x
         xs, Ps = np.full((n, dx), np.nan), np.full((n, dx, dx), np.nan)
         start = np.zeros(n, dtype=bool)  # (frames where the state was (re)initialised)
+        # (a filter that has a state already -- an earlier step, filter or smooth -- starts a
+        # stretch at the first frame: its frames before any re-initialisation were left out of
+        # the smoothing, all NaN, though every one was measured and taken)
+        had_state = self.initialized
         acc = np.zeros(n, dtype=bool)
         k = 0
         while k < n:
@@ -411,7 +418,10 @@ class ItdKalman:
                     xs[m], Ps[m] = self.kf.x.reshape(-1), self.kf.P
             k += 1
         out = np.full(Zm.shape, np.nan)
-        bounds = [*np.flatnonzero(start), n]
+        cuts = start.copy()
+        if n and had_state:
+            cuts[0] = True
+        bounds = [*np.flatnonzero(cuts), n]
         for a, b in zip(bounds[:-1], bounds[1:], strict=True):
             if b - a > 1:
                 xs[a:b], Ps[a:b], _, _ = self.kf.rts_smoother(xs[a:b], Ps[a:b])
