@@ -52,8 +52,9 @@ OUTLIER_PROB = 0.1
 #: :func:`max_itd_step_s`: the fastest turn about the array (deg/s) whose ITD change per frame
 #: ``hearsee localize`` lets its tuned random walk allow (a person walking 1.5 m/s past at 1 m)
 TUNE_MAX_RATE_DPS = 90.0
-#: :func:`confidence_r_scale`: the GCC confidence (peak-to-second-peak ratio) c at which a
-#: frame's measurement noise is the filter's ``r_std_s``, and the range of the scale
+#: :func:`confidence_r_scale`: the GCC confidence's margin ``c - 1`` (``c`` the
+#: peak-to-second-peak ratio) at which a frame's measurement noise is the filter's ``r_std_s``
+#: (``c`` = 1.3), and the range of the scale
 CONFIDENCE_R_REF = 0.3
 CONFIDENCE_R_RANGE = (0.1, 10.0)
 
