@@ -922,14 +922,18 @@ def segment_body(column: int, disp: float, disparity: NDArray, points: NDArray,
     Xm = float(np.median(pts[:, 0]))
     # torso centre: at TORSO_HEIGHT_FRACTION of the body height (the crown, CROWN_ABOVE_TOP_M
     # above the robust top), body_surface_depth_m (of the silhouette's width) behind the
-    # median of its visible surface
-    ray = np.array([Xm, 0.0, Zm])
-    ray /= np.linalg.norm(ray)
-    c = np.array([Xm, 0.0, Zm]) + body_surface_depth_m(float(xhi - xlo)) * ray
-    h_t = TORSO_HEIGHT_FRACTION * (top + CROWN_ABOVE_TOP_M)
+    # median of its visible surface, horizontally (in the floor's plane), and moved to that
+    # height along the floor's normal. (Until 2026-12-07 the camera's own x-z plane and its y
+    # axis: with the camera pitched, the move from the surface's median height to the torso's
+    # -- 0.15-0.2 m -- went along the tilted y axis too, and the torso came out that times
+    # sin(pitch) too near or too far: 4-5 cm at -15 deg on exact disparities.)
     n = floor.normal
-    y = (h_t - floor.offset - n[0] * c[0] - n[2] * c[2]) / n[1]
-    pos = np.array([c[0], y, c[2]])
+    m = np.array([Xm, float(np.median(pts[:, 1])), Zm])
+    ray = m - (m @ n) * n  # the median's direction from the camera, horizontal
+    ray /= np.linalg.norm(ray)
+    c = m + body_surface_depth_m(float(xhi - xlo)) * ray
+    h_t = TORSO_HEIGHT_FRACTION * (top + CROWN_ABOVE_TOP_M)
+    pos = c + (h_t - (c @ n + floor.offset)) * n
     return BodySegment(box, crop, pts, hts, Zm, top, float(xhi - xlo), pos,
                        _cut_by_border(box, disparity.shape[1]), floor_row=foot)
 
