@@ -218,6 +218,16 @@ def test_images_do_not_match_calibration(folder, capsys, tmp_path):
     assert "calibration expects 320x240" in _err(capsys)
 
 
+def test_help_puts_the_positions_in_the_raw_left_cameras_frame(capsys):
+    """The positions are in the left camera's own optical frame (the command's help above,
+    classify_candidates): --camera-pitch's help called the rectified left camera's frame "the
+    frame the positions are in" (1.7 deg of turn: 8.7 cm at 3 m)."""
+    main(["detect", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "the frame the positions are in;" not in text
+    assert "raw left camera's, whose frame the positions are in" in text
+
+
 def test_camera_pitch_option(capsys, tmp_path):
     """--camera-pitch: the camera's pitch (degrees, + = up) as the floor's prior, over the
     calibration's info.camera_pitch_deg. A camera pitched up 15 deg found nobody when taken

@@ -35,10 +35,11 @@ def detect_cmd(
              "plane; default: info.camera_height_m of the calibration file)."),
     camera_pitch: float | None = typer.Option(
         None, "--camera-pitch",
-        help="Pitch of the rectified left camera (the frame the positions are in; the raw "
-             "one's within the rectification's turn, ~1 deg) above the horizontal, degrees, + "
-             "= looking up, -80 to 80 (prior for the floor plane; default: "
-             "info.camera_pitch_deg of the calibration file, else level)."),
+        help="Pitch of the rectified left camera (the frame the floor is fitted in; the raw "
+             "left camera's, whose frame the positions are in, is within the rectification's "
+             "turn, ~1 deg) above the horizontal, degrees, + = looking up, -80 to 80 (prior "
+             "for the floor plane; default: info.camera_pitch_deg of the calibration file, "
+             "else level)."),
 ) -> None:
     """Detect humans: stereo candidates (P(y,d), head-shoulder template) confirmed by thermal.
 
