@@ -246,6 +246,20 @@ def test_lr_consistency_and_hole_filling():
     np.testing.assert_array_equal(fill_disparity_holes(np.full((2, 3), np.nan)).shape, (2, 3))
 
 
+@pytest.mark.parametrize("median", [3, 5])
+def test_hole_filling_median_does_not_read_unmatched_rows_as_zero(median):
+    """Rows without any valid pixel stay NaN and are no disparity of 0 in the median of the
+    filled pixels: a 2-px hole in a one-row band (two rows for the 5x5 median) between such
+    rows came out 0 -- a point at infinity -- between neighbours of 20 px."""
+    d = np.full((9, 12), np.nan, np.float32)
+    band = slice(4, 5) if median == 3 else slice(3, 5)
+    d[band] = 20.0
+    d[band, 5:7] = np.nan
+    out = fill_disparity_holes(d, median=median)
+    np.testing.assert_array_equal(out[band], 20.0)
+    assert np.isnan(out[:3]).all() and np.isnan(out[5:]).all()
+
+
 def test_fill_makes_dense_and_full_lr_check_runs():
     tex = _texture(4)[:96, :160]
     left = np.roll(tex, 6, axis=1)

@@ -545,8 +545,17 @@ def fill_disparity_holes(disparity: NDArray, median: int = 5) -> NDArray:
     filled[~np.isfinite(filled)] = np.nan
     out = np.where(valid, d, filled).astype(np.float32)
     if median:
+        # the rows still NaN (no valid pixel at all) take their nearest filled row's values in
+        # the median's window, as the image's own border rows do in medianBlur: read as 0
+        # they outvoted a thin band's rows (a hole in a row between two such rows came out 0,
+        # a point at infinity, between neighbours of 20 px)
         good = np.isfinite(out)
-        sm = cv2.medianBlur(np.where(good, out, 0).astype(np.float32), median)
+        rows_ok = good.any(axis=1)  # (a row is filled whole or not at all)
+        r = np.arange(H)
+        above = np.maximum.accumulate(np.where(rows_ok, r, -1))
+        below = np.minimum.accumulate(np.where(rows_ok, r, H)[::-1])[::-1]
+        near = np.where((above >= 0) & ((below >= H) | (r - above <= below - r)), above, below)
+        sm = cv2.medianBlur(np.ascontiguousarray(out[near], dtype=np.float32), median)
         out = np.where(valid | ~good, out, sm).astype(np.float32)
     return out
 
