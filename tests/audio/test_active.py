@@ -591,6 +591,42 @@ def test_localize3d_warns_when_the_poses_contradict_the_captures(pose_manifest, 
     assert len(err) == 1 and err[0].startswith("hearsee: warning:") and "pose" in err[0]
 
 
+def test_a_manifest_array_is_never_read_from_the_working_directory(pose_manifest, tmp_path,
+                                                                   monkeypatch):
+    """A manifest's array named by a preset or a file name that is no file next to the
+    manifest was read from the working directory (load_array): a file there named like the
+    preset gave another array without a word (a triangle twice the size: the position
+    (0.09, 0.07, 0.16) m for a source at (1.2, 0.8, 0.4) m), and "mics.yaml" missing beside
+    the manifest was read from there ("paths relative to the manifest's folder")."""
+    import yaml
+
+    from hearsee.audio.active import load_pose_manifest
+    from hearsee.audio.arrays import MicArray
+    from hearsee.errors import InputFileError
+
+    man, _files, _src = pose_manifest
+    doc = yaml.safe_load(man.read_text())
+    for c in doc["captures"]:
+        c["file"] = str(man.parent / c["file"])
+    doc["array"] = "three-mic"
+    f = tmp_path / "m" / "preset.yaml"
+    f.parent.mkdir()
+    f.write_text(yaml.safe_dump(doc))
+    work = tmp_path / "work"
+    work.mkdir()
+    big = {"microphones": (2 * MicArray.from_preset("three-mic").positions).tolist()}
+    (work / "three-mic").write_text(yaml.safe_dump(big))
+    (work / "mics.yaml").write_text(yaml.safe_dump(big))
+    monkeypatch.chdir(work)
+    arr = load_pose_manifest(f).array
+    assert arr.name == "three-mic"
+    np.testing.assert_allclose(arr.positions, MicArray.from_preset("three-mic").positions)
+    doc["array"] = "mics.yaml"
+    f.write_text(yaml.safe_dump(doc))
+    with pytest.raises(InputFileError, match=r"array: .*m/mics\.yaml: no such array file"):
+        load_pose_manifest(f)
+
+
 def test_localize3d_missing_manifest(tmp_path, capsys):
     from hearsee.cli import main
 

@@ -253,6 +253,52 @@ def test_a_relative_array_file_is_read_next_to_the_scenario(tmp_path, monkeypatc
     assert scenario_from_dict({"robot": {"array": "respeaker-4"}}).robot.array == "respeaker-4"
 
 
+def test_a_preset_name_is_never_read_from_the_working_directory(tmp_path, monkeypatch):
+    """robot.array naming a preset (or left out: three-mic) that is no file next to the
+    scenario was looked up in the working directory (load_array): a file there named like
+    the preset was read instead -- by the scenario and again by run_scenario, so `hearsee
+    demo` in a folder holding a file "three-mic" simulated a four-microphone robot without a
+    word -- and a folder of that name refused the scenario; "~/mics.yaml" was not expanded
+    (the robot file's array: both as documented, "never in the working directory")."""
+    from hearsee.robot import pipeline
+
+    square = {"name": "square", "microphones": [[0.08, 0.08, 0], [-0.08, 0.08, 0],
+                                                 [-0.08, -0.08, 0], [0.08, -0.08, 0]]}
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    (work / "three-mic").write_text(yaml.safe_dump(square))
+    (tmp_path / "sc").mkdir()
+    f = tmp_path / "sc" / "s.yaml"
+    f.write_text("duration_s: 1.0\n")
+    sc = load_scenario(f)
+    assert sc.robot.array == "three-mic"
+
+    class Stop(Exception):
+        pass
+
+    used = []
+
+    def body(self, scenario, array, *args, **kwargs):
+        used.append(array.n_mics)
+        raise Stop
+
+    monkeypatch.setattr(pipeline._Body, "__init__", body)
+    for s in (sc, default_scenario()):
+        with pytest.raises(Stop):
+            pipeline.run_scenario(s)
+    assert used == [3, 3]
+    (work / "three-mic").unlink()
+    (work / "three-mic").mkdir()
+    assert load_scenario(f).robot.array == "three-mic"
+    home = tmp_path / "home"
+    home.mkdir()
+    monkeypatch.setenv("HOME", str(home))
+    (home / "mics.yaml").write_text(yaml.safe_dump(square))
+    f.write_text("robot: {array: ~/mics.yaml}\n")
+    assert load_scenario(f).robot.array == str((home / "mics.yaml").absolute())
+
+
 @pytest.mark.parametrize("name", ["mics.YAML", "mics.Yml", "sub/mics.YML"])
 def test_an_upper_case_yaml_suffix_is_a_file_next_to_the_scenario(tmp_path, monkeypatch, name):
     """robot.array ``mics.YAML`` / ``mics.Yml`` was not taken for a file name as ``mics.yaml``

@@ -66,6 +66,7 @@ from hearsee.audio.arrays import (
     MicArray,
     check_tdoa_std,
     load_array,
+    load_array_beside,
     pair_tdoa,
     position_uncertainty,
 )
@@ -1531,9 +1532,10 @@ def load_pose_manifest(path: Any) -> PoseManifest:
     spec = require(data, "array", where)
     if isinstance(spec, dict):
         arr = MicArray.from_dict(spec, where=f"{where}: array")
-    elif isinstance(spec, str):
-        cand = p.parent / spec
-        arr = load_array(str(cand) if cand.is_file() else spec)
+    elif isinstance(spec, str):  # (next to the manifest, else a preset: a name that was no
+        # file there was read from the working directory -- a file named like the preset, or
+        # like the array file, gave another array without a word)
+        arr = load_array_beside(spec, p.parent, f"{where}: array")[0]
     else:
         raise ConfigError(f"{where}: array must be a preset name, a YAML path or a mapping")
     if arr.mask is not None:  # (its captures were solved as the bare pair's: cone twins)

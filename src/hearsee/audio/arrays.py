@@ -41,11 +41,12 @@ from hearsee.config import (
     require,
     whole_number,
 )
-from hearsee.errors import ConfigError, GeometryError, InputFileError
+from hearsee.errors import ConfigError, GeometryError, HearseeError, InputFileError
 
 __all__ = ["FLAT_TDOA_S", "MAX_MICS", "MAX_TDOA_STD_S", "SPEED_OF_SOUND_RANGE_MPS", "MicArray",
            "check_pairs", "check_tdoa_std", "closure_rms",
-           "list_presets", "load_array", "pair_closure_projector", "pair_matrix", "pair_tdoa",
+           "list_presets", "load_array", "load_array_beside", "pair_closure_projector",
+           "pair_matrix", "pair_tdoa",
            "pair_tdoa_jacobian", "position_uncertainty", "residual_scaled_variance",
            "span_dimension"]
 
@@ -685,3 +686,33 @@ def load_array(spec: str | Path | MicArray) -> MicArray:
     if names_a_file(s):
         raise InputFileError(f"{s}: no such array file")
     return MicArray.from_preset(s)
+
+
+def load_array_beside(spec: Any, base_dir: str | Path | None, where: str = "array"
+                      ) -> tuple[MicArray, str]:
+    """The array a file's field ``where`` names (a scenario's ``robot.array``, a pose
+    manifest's ``array``) and its spec: a YAML path, ``~`` expanded and taken from the file's
+    folder ``base_dir`` when relative (None: the working directory), or a preset's name -- a
+    name with neither a folder nor a YAML suffix (:func:`hearsee.config.names_a_file`) that
+    is nothing in that folder. Returned spec: the file's absolute path, or the preset's name.
+    The rule of the robot file's ``audio.array``: until 2026-12-07 a name that was no file
+    beside a scenario or manifest was looked up in the working directory (:func:`load_array`):
+    a file there named like the preset, or like the array file, was read instead (another
+    array, without a word), and a folder named like the preset refused a scenario that did
+    not name an array at all. ConfigError / InputFileError naming ``where``."""
+    if not isinstance(spec, str) or not spec.strip():
+        raise ConfigError(f"{where}: expected a preset name or a YAML path, got {spec!r:.60}")
+    from hearsee.config import expand_path
+
+    path = expand_path(spec, where)
+    if base_dir is not None and not path.is_absolute():
+        path = expand_path(Path(base_dir) / path, where)
+    try:
+        if path.exists():  # (a folder: load_array's InputFileError says so)
+            path = path.absolute()
+            return load_array(path), str(path)
+        if names_a_file(spec):
+            raise InputFileError(f"{path}: no such array file")
+        return MicArray.from_preset(spec), spec
+    except HearseeError as exc:
+        raise type(exc)(f"{where}: {exc}") from None

@@ -45,7 +45,7 @@ import numpy as np
 import scipy.signal as ss
 from numpy.typing import ArrayLike, NDArray
 
-from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.arrays import MicArray, list_presets, load_array
 from hearsee.audio.itd_filter import ItdKalman
 from hearsee.audio.localize import localize_tdoa
 from hearsee.audio.propagation import room_impulse_responses, sum_responses
@@ -958,7 +958,11 @@ def run_scenario(sc: Scenario, progress: Callable[[float], None] | None = None,
 
     t_start = time.perf_counter()
     rng = np.random.default_rng(sc.seed)
-    array = load_array(sc.robot.array)
+    # (a preset's name is the preset, a file's spec its absolute path (scenario_from_dict):
+    # load_array looked in the working directory first, where a file or folder named like the
+    # preset was read instead, or refused the run)
+    spec = sc.robot.array
+    array = MicArray.from_preset(spec) if spec in list_presets() else load_array(spec)
     body = _Body(sc, array)
     audio = _RoomAudio(sc, body, rng)
     r = sc.robot

@@ -75,17 +75,15 @@ import numpy as np
 from hearsee.audio.propagation import image_sources
 from hearsee.config import (
     check_keys,
-    expand_path,
     finite_number,
     is_real,
     load_yaml,
     name_text,
-    names_a_file,
     number,
     real_entries,
     whole_number,
 )
-from hearsee.errors import ConfigError, HearseeError
+from hearsee.errors import ConfigError
 
 __all__ = [
     "MAX_DURATION_S",
@@ -541,22 +539,14 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
     array = rob.get("array", base.robot.array)
     if not isinstance(array, str):
         raise ConfigError(f"{rw}.array: expected a preset name or file path, got {array!r}")
-    # (a "~user/..." without a home folder, a NUL: pathlib's RuntimeError, os's ValueError)
-    given = expand_path(array, f"{rw}.array")
-    if base_dir is not None and not given.is_absolute():
-        # (it was read from the working directory, unlike every path of the robot file)
-        near = expand_path(Path(base_dir) / given, f"{rw}.array")
-        # (a name with an upper-case suffix, mics.YAML or mics.Yml, was not: missing next
-        # to the scenario it was read from the working directory, or called an unknown preset)
-        if names_a_file(array) or near.is_file():
-            array = str(near)
-    from hearsee.audio.arrays import load_array
+    from hearsee.audio.arrays import load_array_beside
     from hearsee.audio.localize import array_geometry
 
-    try:
-        arr = load_array(array)
-    except HearseeError as exc:  # (a missing file's InputFileError named no field)
-        raise type(exc)(f"{rw}.array: {exc}") from None
+    # a file next to the scenario (base_dir; the robot file's rule), else a preset: a name that
+    # was no file there was looked up in the working directory, where a file or folder named
+    # like the preset (or the file) was read instead or refused (a "~/..." was not expanded);
+    # the spec kept is the file's absolute path or the preset's name (run_scenario reads it)
+    arr, array = load_array_beside(array, base_dir, f"{rw}.array")
     # (masked pairs: refused until 2026-12-05, when the room audio learned to turn the mask
     # with the head; the mask resolves the pair's front/back mirror)
     if arr.mask is None and array_geometry(arr).kind == "linear":
