@@ -3,8 +3,11 @@ simulation and 360-degree localization on a coarse, fast model."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
+import yaml
 
 from hearsee.audio import mask
 from hearsee.audio.arrays import MicArray
@@ -591,6 +594,25 @@ def test_bad_mask_geometry_is_an_error_at_load():
     d["microphones"] = [[0.0, -0.05, 0.0], [0.0, 0.05, 0.0]]
     with pytest.raises(GeometryError, match="inside the mask body"):
         MicArray.from_dict(d, where="bad")
+
+
+def test_a_bad_mask_block_names_the_array_file(tmp_path):
+    """An array file's bad mask block was reported under the array's name alone ("left-ear:
+    mask: missing required key 'front'"): the file was not named, as every other error of an
+    array file (and hearsee.config's promise) names it."""
+    from hearsee.audio.arrays import load_array
+
+    f = tmp_path / "ears.yaml"
+    f.write_text("name: left-ear\nmicrophones: [[0, -0.075, 0], [0, 0.075, 0]]\n"
+                 "mask: {shape: egg}\n")
+    with pytest.raises(ConfigError, match=rf"^{re.escape(str(f))}: left-ear: mask: missing "
+                       "required key 'front'"):
+        load_array(f)
+    d = _mask2_dict(mesh_subdivision=3)
+    d["microphones"] = [[0.0, -0.05, 0.0], [0.0, 0.05, 0.0]]
+    f.write_text(yaml.safe_dump(d))
+    with pytest.raises(GeometryError, match=rf"^{re.escape(str(f))}: .*inside the mask body"):
+        load_array(f)
 
 
 def test_band_iid_with_noise_learnt_from_pauses():

@@ -205,7 +205,12 @@ class MicArray:
         if mask is not None:  # bad mask geometry is a clear error at load (hearsee.audio.mask)
             from hearsee.audio.mask import mask_geometry
 
-            mask_geometry(arr)
+            try:
+                mask_geometry(arr)
+            except HearseeError as exc:  # (named the array's name only, not its file)
+                if where == name:
+                    raise
+                raise type(exc)(f"{where}: {exc}") from None
         return arr
 
     @classmethod
