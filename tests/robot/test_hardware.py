@@ -2292,8 +2292,10 @@ def test_audio_array_is_looked_up_in_the_robot_files_folder_never_the_current_on
     for spec in ("mics.YAML", "sub/m.yaml", "other.yml"):
         with pytest.raises(ConfigError) as e:
             load(spec)
-        assert str(e.value) == (f"{robot / 'robot.yaml'}: audio.array: array file {spec!r} not "
-                                f"found in {robot}")
+        # (the rule of every file's array since 2026-12-07, arrays.load_array_beside: the
+        # path looked for, in the robot file's folder)
+        assert str(e.value) == (f"{robot / 'robot.yaml'}: audio.array: "
+                                f"{(robot / spec).absolute()}: no such array file")
     # files in the robot file's folder, whatever the case of their suffix (or none)
     four = "microphones: [[0.1, 0, 0], [-0.1, 0, 0], [0, 0.1, 0], [0, -0.1, 0]]\n"
     for name in ("Mics.YML", "sub/m.yaml", "three-mic"):

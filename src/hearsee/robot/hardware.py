@@ -81,7 +81,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hearsee.audio.arrays import MicArray, load_array
+from hearsee.audio.arrays import MicArray, load_array_beside
 from hearsee.audio.signals import microphone_channels
 from hearsee.config import (
     as_float_array,
@@ -90,7 +90,6 @@ from hearsee.config import (
     expand_path,
     finite_number,
     load_yaml,
-    names_a_file,
     number,
     same_file,
     whole_number,
@@ -317,22 +316,14 @@ def _same_device(a: DeviceSpec, b: DeviceSpec) -> bool:
 def _array(spec: Any, where: str, base: Path) -> tuple[MicArray, str]:
     """``audio.array`` (``where``): the array and its spec -- the absolute path of a YAML file
     (relative to the robot file's folder ``base``) or the name of a preset shipped with
-    hearsee. A name is a preset only when no such file is in ``base`` and it has neither a
-    folder nor a YAML suffix (any case): else "array file ... not found". A name not found in
-    ``base`` was looked up in the current folder (load_array): a file there named like the
-    preset, or like the file, was loaded instead."""
-    if not isinstance(spec, str) or not spec.strip():
-        raise ConfigError(f"{where}: expected a preset name or YAML path, got {spec!r}")
-    path = _resolve(spec, base, where)
-    if not path.exists() and names_a_file(spec):
-        raise ConfigError(f"{where}: array file {spec!r} not found in {base}")
+    hearsee (:func:`hearsee.audio.arrays.load_array_beside`, the rule of every file's array:
+    a name is a preset only when no such file is in ``base`` and it has neither a folder nor
+    a YAML suffix, any case; never looked up in the working directory). Any error is a
+    ConfigError naming the field."""
     try:
-        if path.exists():  # (a folder: load_array's InputFileError says so)
-            path = path.absolute()
-            return load_array(path), str(path)
-        return MicArray.from_preset(spec), spec
+        return load_array_beside(spec, base, where)
     except HearseeError as exc:
-        raise ConfigError(f"{where}: {exc}") from None
+        raise ConfigError(str(exc)) from None
 
 
 def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
