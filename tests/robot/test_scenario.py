@@ -65,6 +65,25 @@ def test_bad_scenarios_name_the_field(data, field):
         scenario_from_dict(data)
 
 
+def test_a_frame_too_short_for_the_array_is_refused(tmp_path):
+    """audio.frame_ms below four times the array's largest delay (min_frame_ms) is refused as
+    the robot file refuses it: a 1.04 m triangle's shortest frame is 12.1 ms, and with 8-ms
+    frames the demo's talker was heard 144 deg off, with nothing said; 13 ms is taken."""
+    r = 0.6  # (the triangle's circumradius, m: sides 1.04 m)
+    mics = [[float(r * np.cos(a)), float(r * np.sin(a)), 0.0]
+            for a in np.radians([0.0, 120.0, 240.0])]
+    (tmp_path / "big.yaml").write_text(yaml.safe_dump({"name": "big", "microphones": mics}))
+    for ms, ok in ((8.0, False), (12.0, False), (13.0, True)):
+        f = tmp_path / f"sc{ms:g}.yaml"
+        f.write_text(yaml.safe_dump({"audio": {"frame_ms": ms}, "robot": {"array": "big.yaml"}}))
+        if ok:
+            assert load_scenario(f).frame_ms == ms
+            continue
+        with pytest.raises(ConfigError, match=rf"audio\.frame_ms: {ms} ms is too short for the "
+                                              r"array's largest delay \(3\.03 ms\); use >= 13"):
+            load_scenario(f)
+
+
 def test_a_masked_pair_is_a_robot_array_and_the_bare_pair_is_not():
     """A masked pair resolves its front/back mirror (thesis ch. 3): the robot takes it (it
     was refused until 2026-12-05, when the room audio learned to turn the mask with the

@@ -67,6 +67,7 @@ Units: seconds for TDOAs and frame times, Hz for sample rates; frames are the an
 from __future__ import annotations
 
 import functools
+import math
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -109,6 +110,7 @@ __all__ = [
     "TdoaFrames",
     "band_alias_level",
     "check_analysis_fs",
+    "check_frame_for_array",
     "check_frame_ms",
     "check_recording_length",
     "dead_microphones",
@@ -246,6 +248,18 @@ def min_frame_ms(array: MicArray | str) -> float:
     (:func:`estimate_tdoas` itself only needs the delays inside half a frame.) ``array``: a
     MicArray, a preset name or a YAML path."""
     return 4e3 * float(np.max(load_array(array).max_tdoa()))
+
+
+def check_frame_for_array(frame_ms: float, array: MicArray, what: str = "frame_ms") -> None:
+    """ConfigError naming ``what`` (a file's field) when a frame of ``frame_ms`` milliseconds
+    is shorter than :func:`min_frame_ms` of ``array``: the rule of the robot file's and the
+    scenario's ``audio.frame_ms``."""
+    shortest = min_frame_ms(array)
+    if frame_ms < shortest:
+        raise ConfigError(f"{what}: {frame_ms} ms is too short for the array's largest "
+                          f"delay ({shortest / 4:.2f} ms); use >= "
+                          # (rounded up: the nearest would be a refused value)
+                          f"{math.ceil(shortest)}{array.units_hint()}")
 
 
 def check_frame_ms(frame_ms: float, hop_ms: float, *,

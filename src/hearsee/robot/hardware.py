@@ -343,14 +343,9 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
                 else microphone_channels(ch, array.n_mics, f"{where}.channels"))
     block_ms = number(d, "block_ms", 100.0, where, 10.0, 2000.0)
     frame_ms = number(d, "frame_ms", 64.0, where, 8.0, 1000.0)
-    from hearsee.audio.tdoa import min_frame_ms, normalize_method
+    from hearsee.audio.tdoa import check_frame_for_array, normalize_method
 
-    shortest = min_frame_ms(array)
-    if frame_ms < shortest:
-        raise ConfigError(f"{where}.frame_ms: {frame_ms} ms is too short for the array's "
-                          f"largest delay ({shortest / 4:.2f} ms); use >= "
-                          # (rounded to nearest: a refused value)
-                          f"{math.ceil(shortest)}{array.units_hint()}")
+    check_frame_for_array(frame_ms, array, f"{where}.frame_ms")
     method = d.get("method", "phat")
     if not isinstance(method, str):  # (a null was "unknown GCC method 'None'", as if the file
         # had named a method "None"; a number was quoted as a name too)

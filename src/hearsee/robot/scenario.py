@@ -588,6 +588,12 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
 
     _check_rig_clear_of_walls(robot, size, rw)
     _check_mics_in_room(robot, arr, size, rw)
+    from hearsee.audio.tdoa import check_frame_for_array
+
+    # (as the robot file's: a 1 m array's 8 ms frames, its shortest 12.1, left the demo's
+    # talker heard 144 deg off, with nothing said)
+    frame_ms = _frame_ms(audio, f"{where}.audio")
+    check_frame_for_array(frame_ms, arr, f"{where}.audio.frame_ms")
     defaults = base.to_dict()
 
     def person(p: Any, k: int, pw: str) -> PersonSpec:
@@ -622,7 +628,7 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
         name=name_text(name, where), seed=int(seed), duration_s=duration,
         fs=int(number(audio, "fs", 16000, f"{where}.audio", 8000, 96000, integer=True)),
         snr_db=number(audio, "snr_db", 20.0, f"{where}.audio", -20.0, 80.0),
-        frame_ms=_frame_ms(audio, f"{where}.audio"),
+        frame_ms=frame_ms,
         room_size_m=size, rt60_s=rt60, robot=robot, people=people, objects=objects,
     )
 
