@@ -19,7 +19,7 @@ from hearsee.audio.localize import (
 )
 from hearsee.audio.propagation import simulate_free_field
 from hearsee.audio.signals import white_noise
-from hearsee.errors import GeometryError
+from hearsee.errors import ConfigError, GeometryError
 from hearsee.geometry import unit_vector_deg, wrap_deg
 
 TWO = MicArray.from_preset("two-mic")
@@ -1321,3 +1321,23 @@ def test_a_dead_microphone_is_left_out_and_the_others_localize(preset, dead):
         assert abs(wrap_deg(s["azimuth_deg"] - truth["azimuth_deg"])) < 6.0
     else:  # the pair's cone: its two in-plane candidates mirror about the pair's axis
         assert s["elevation_deg"] is None and len(s["candidates"]) == 2
+
+
+def test_pairs_that_leave_a_microphone_out_are_refused_before_the_estimation_with_kalman():
+    """pairs (0, 1), (1, 2) of a four-microphone array leave microphone 3's delay unknown: the
+    ITD Kalman filter (state: every microphone's delay) refused them with a GeometryError only
+    after the whole estimation; now a ConfigError before it, naming kalman=False -- with which
+    they localize -- and pairs that connect every microphone are taken."""
+    from hearsee.sim.audio import simulate_recording
+
+    src = np.array([1.0, 1.0, 0.2])
+    x, truth = simulate_recording("respeaker-4", src, "noise", 1.0, snr_db=20, seed=344)
+    calls = []
+    with pytest.raises(ConfigError, match=r"do not connect all 4 microphones.*kalman=False"):
+        localize_recording(x, 16000, "respeaker-4", pairs=[(0, 1), (1, 2)],
+                           progress=calls.append)
+    assert calls == []  # (nothing estimated)
+    out = localize_recording(x, 16000, "respeaker-4", pairs=[(0, 1), (1, 2)], kalman=False)
+    want = truth["tdoa_s"]["0-1"]
+    assert abs(out["summary"]["tdoa_s"]["0-1"] - want) < 2e-6
+    localize_recording(x, 16000, "respeaker-4", pairs=[(0, 1), (1, 2), (2, 3)])

@@ -1718,6 +1718,14 @@ def localize_recording(
                                        method=method, kalman=kalman, progress=progress,
                                        q_std_s=q_std_s, r_std_s=r_std_s,
                                        tune_kalman=tune_kalman)
+    if kalman and pairs is not None:  # (the filter refused them only after the estimation)
+        from hearsee.audio.arrays import pair_matrix
+
+        prs = arr.checked_pairs(pairs)
+        if np.linalg.matrix_rank(pair_matrix(arr.n_mics, prs)) < arr.n_mics - 1:
+            raise ConfigError(f"pairs {[tuple(p) for p in prs]}: they do not connect all "
+                              f"{arr.n_mics} microphones, and the ITD Kalman filter's state is "
+                              "every microphone's delay; give pairs that do, or kalman=False")
     # (a misspelt setting was estimate_tdoas' builtin TypeError)
     check_settings(estimate_tdoas, sorted(tdoa_kwargs),
                    skip=("x", "fs", "array", "frame_ms", "hop_ms", "method", "pairs", "progress"))
