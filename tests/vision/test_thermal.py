@@ -115,6 +115,27 @@ def test_load_thermal_refuses_temperatures_in_other_units(tmp_path, name, image,
         load_thermal(tmp_path / name)
 
 
+def test_a_kelvin_frame_with_a_dead_pixel_or_a_zero_border_is_refused(tmp_path):
+    """A frame in kelvin with one dead pixel of 0, or the border of 0 an undistorted or
+    registered frame has, had its coldest pixel at 0 "degC" and passed as degC: the person
+    (304 "degC") was no warm pixel, "thermal support 0.00", exit 0. The median decides now;
+    the degC room with the same dead pixel or border is read as before."""
+    t = _room(np.random.default_rng(3))
+    for zero in ((0, 0), (slice(None), slice(0, 4))):
+        k = t + np.float32(273.15)
+        k[zero] = 0.0
+        with pytest.raises(ImageInputError, match=re.escape("median 294.2 (is it in kelvin?)")):
+            thermal_mask(k)
+        np.save(tmp_path / "k.npy", k)
+        with pytest.raises(ImageInputError, match=re.escape("(is it in kelvin?)")):
+            load_thermal(tmp_path / "k.npy")
+        c = t.copy()
+        c[zero] = 0.0  # (0 degC: ice, a cold window)
+        assert thermal_mask(c)[30, 35]
+        np.save(tmp_path / "c.npy", c)
+        assert np.array_equal(load_thermal(tmp_path / "c.npy"), c)
+
+
 def test_a_finite_value_beyond_float32_is_named_as_it_is(tmp_path):
     """One pixel of 1e300 degC: the cast to float32 made it inf, with numpy's overflow
     warning, and the file was refused for "NaN or infinite values" it does not hold."""

@@ -45,9 +45,11 @@ __all__ = [
 #: Default human skin/clothing band in degC.
 HUMAN_BAND_C = (26.0, 40.0)
 
-#: A radiometric frame of a robot's surroundings has its coldest pixel below the upper bound
-#: (degC) and its warmest above the lower one; a frame entirely outside is in other units:
-#: kelvin read as degC (a 20 degC room is 293), or raw counts of another scale.
+#: A radiometric frame of a robot's surroundings has its median pixel below the upper bound
+#: (degC) and its warmest above the lower one; a frame outside is in other units: kelvin read
+#: as degC (a 20 degC room is 293), or raw counts of another scale. (The median, not the
+#: coldest pixel: one dead pixel or a border of 0 -- undistorted or registered frames have
+#: one -- let a kelvin frame through as degC, and every person had "thermal support 0.00".)
 SCENE_C = (-60.0, 100.0)
 
 #: A radiometric frame whose warmest and coldest pixels are less than this apart (degC) is
@@ -335,13 +337,15 @@ def _check_scene_celsius(t: NDArray, what: str) -> float:
     for a 20 degC room) gave "thermal support 0.00" for every person, without a word. Returns
     the frame's spread (warmest - coldest, degC)."""
     lo, hi = float(np.min(t)), float(np.max(t))
-    if lo < ABSOLUTE_ZERO_C or lo > SCENE_C[1] or hi < SCENE_C[0] or hi > MAX_PIXEL_C:
-        hint = (" (is it in kelvin?)" if SCENE_C[1] < lo < SCENE_C[1] + 273.15 else
+    med = float(np.median(t)) if lo <= SCENE_C[1] else lo  # (the median only when it matters)
+    if lo < ABSOLUTE_ZERO_C or med > SCENE_C[1] or hi < SCENE_C[0] or hi > MAX_PIXEL_C:
+        hint = (" (is it in kelvin?)" if SCENE_C[1] < med < SCENE_C[1] + 273.15 else
                 ", and nothing is below absolute zero" if lo < ABSOLUTE_ZERO_C else
                 f", and no thermal camera reads above {MAX_PIXEL_C:g} degC" if hi > MAX_PIXEL_C
                 else "")
-        raise ImageInputError(f"{what}, but this one spans {lo:.4g} to {hi:.4g} degC{hint}; "
-                              "convert it to degC")
+        middle = f", median {med:.4g}" if lo <= SCENE_C[1] < med else ""  # (when it decided)
+        raise ImageInputError(f"{what}, but this one spans {lo:.4g} to {hi:.4g} degC{middle}"
+                              f"{hint}; convert it to degC")
     return hi - lo
 
 
