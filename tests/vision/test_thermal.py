@@ -189,6 +189,23 @@ def test_local_background_for_outdoor_agc_images():
     assert not relative_warm_mask(img)[75, 60]  # global band: the pavement is brighter
 
 
+def test_local_background_is_a_true_opening_for_every_kernel_size():
+    """The top-hat's opening was cv2.morphologyEx's, which with an even disk is shifted by a
+    pixel (as _clean's was): a warm wall's left column and top row, 90 grey levels above the
+    floor and far wider than the disk, were "warm". A 1-px disk took the whole image as the
+    background: an empty mask, the person lost. Odd disks give the opening they gave."""
+    for wall in (np.s_[:, 100:], np.s_[70:, :]):  # a warm wall, a warm floor
+        im = np.full((120, 160), 60, np.uint8)
+        im[wall] = 150  # far wider than the disk
+        im[20:60, 30:42] = 220  # a person, 12 px wide
+        for bg in (30, 31):
+            m = relative_warm_mask(im, background_px=bg, open_px=0, close_px=0)
+            assert m[40, 35] and m.sum() == 40 * 12, bg  # the person, and nothing else
+        none = relative_warm_mask(im, open_px=0, close_px=0)
+        assert np.array_equal(relative_warm_mask(im, background_px=1, open_px=0, close_px=0),
+                              none) and none[40, 35]
+
+
 def test_flat_8bit_frame_has_no_warm_pixels():
     """A shutter-closed or frozen 8-bit frame has MAD = 0 and no percentile range: the threshold
     ``median + 1e-6``, compared in float32, rounded back to the median and EVERY pixel was warm

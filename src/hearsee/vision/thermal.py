@@ -177,7 +177,7 @@ def relative_warm_mask(image: NDArray, *, k_sigma: float = 6.0, min_gap: float =
     background is warm while the background is not.
 
     ``k_sigma``, ``min_gap`` and ``max_gap`` are finite numbers >= 0 with ``min_gap <=
-    max_gap``, the kernel sizes integers from 0 (none) to the image's larger side
+    max_gap``, the kernel sizes integers from 0 or 1 (none) to the image's larger side
     (ConfigError: a NaN gap or k_sigma gave an empty or a wrong mask without a word); an image
     with NaN or inf pixels is an ImageInputError (as in :func:`thermal_mask`).
     """
@@ -198,9 +198,12 @@ def relative_warm_mask(image: NDArray, *, k_sigma: float = 6.0, min_gap: float =
     close_px = _kernel_px("close_px", close_px, im.shape)
     # float64: in float32, med + a tiny gap rounds back to med and a flat frame was all warm
     x = im.astype(np.float64)
-    if background_px:
-        ker = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (background_px, background_px))
-        x = x - cv2.morphologyEx(x, cv2.MORPH_OPEN, ker)
+    if background_px is not None and background_px > 1:
+        # a true opening (as _clean's): cv2.morphologyEx's shifted the background of an even
+        # kernel by a pixel, and a warm wall's edge row or column was "warm"; a 1-px disk is
+        # no background (it took the whole image, and the mask was empty)
+        k, a, kr, ar = _kernels(background_px)
+        x = x - cv2.dilate(cv2.erode(x, k, anchor=a), kr, anchor=ar)
     med = float(np.median(x))
     mad = float(np.median(np.abs(x - med))) * 1.4826
     r = float(np.percentile(x, 99.5)) - med
