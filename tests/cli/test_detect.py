@@ -63,6 +63,24 @@ def test_other_thermal_formats(folder, capsys, thermal):
     assert len(json.loads(capsys.readouterr().out)["humans"]) == 1
 
 
+def test_an_8bit_npy_is_a_non_radiometric_frame(folder, capsys, tmp_path):
+    """The scene's 8-bit AGC frame saved as .npy was read as degC: its grey levels 26-40 were
+    the "human band", and the person (bright) was rejected while the mannequin (dark) was
+    accepted, exit 0. Now it is read as the same frame as a PNG (and as detect_humans reads
+    the array): the person accepted, the mannequin rejected."""
+    d, scene = folder
+    t8 = cv2.imread(str(d / "thermal.png"), cv2.IMREAD_UNCHANGED)
+    assert t8.dtype == np.uint8
+    np.save(tmp_path / "t8.npy", t8)
+    found = []
+    for path in (d / "thermal.png", tmp_path / "t8.npy"):
+        assert main(_args(d, thermal=None) + ["--thermal", str(path)]) == 0
+        out = json.loads(capsys.readouterr().out)
+        found.append([h["position_m"] for h in out["humans"]])
+    assert found[0] == found[1] and len(found[0]) == 1
+    assert np.linalg.norm(np.array(found[1][0]) - scene.objects[0].position_m) < 0.15
+
+
 def test_the_same_image_as_left_and_right_is_refused(folder, capsys):
     """--right naming the left image (a slip of tab completion) printed "0 human(s)" and exited
     0: the pair has zero disparity everywhere. Now one line, exit 2."""

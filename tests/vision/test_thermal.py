@@ -72,6 +72,10 @@ def test_load_thermal(tmp_path):
     t = _room(np.random.default_rng(3))
     np.save(tmp_path / "t.npy", t)
     assert np.array_equal(load_thermal(tmp_path / "t.npy", expected_size=(80, 60)), t)
+    t8 = np.clip(t * 4, 0, 255).astype(np.uint8)  # an 8-bit frame: non-radiometric, kept
+    np.save(tmp_path / "t8.npy", t8)
+    got = load_thermal(tmp_path / "t8.npy", expected_size=(80, 60))
+    assert got.dtype == np.uint8 and np.array_equal(got, t8)
     with pytest.raises(ImageInputError, match="80x60"):
         load_thermal(tmp_path / "t.npy", expected_size=(160, 120))
     with pytest.raises(InputFileError):

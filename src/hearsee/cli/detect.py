@@ -19,7 +19,7 @@ def detect_cmd(
     thermal: str | None = typer.Option(
         None, "--thermal",
         help="Thermal image of the rig's thermal camera: 8-bit (non-radiometric, relative band), "
-             "16-bit PNG (centi-kelvin) or .npy (degC)."),
+             "16-bit PNG (centi-kelvin) or .npy (degC; an 8-bit one non-radiometric)."),
     fmt: str = typer.Option("json", "--format", help="json or table."),
     overlay: str | None = typer.Option(
         None, "--overlay",

@@ -293,9 +293,14 @@ def _check_filter_options(kwargs: dict, relative: bool) -> None:
 
 
 def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None) -> NDArray:
-    """Read a thermal image: ``.npy`` (float degC, (h, w)), or any image file through
+    """Read a thermal image: ``.npy`` (float degC, (h, w); an 8-bit one is a non-radiometric
+    frame, returned as uint8 as an 8-bit image file is), or any image file through
     :func:`hearsee.vision.io.read_thermal` (8-bit non-radiometric, 16-bit centi-kelvin counts,
-    float TIFF degC). ``expected_size`` is (width, height)."""
+    float TIFF degC). ``expected_size`` is (width, height).
+
+    (An 8-bit .npy was read as degC: the AGC grey levels 26-40 were the "human band", so
+    ``hearsee detect`` accepted a dark mannequin and rejected the bright person that the same
+    array passed to :func:`~hearsee.vision.fusion.detect_humans` got right.)"""
     from hearsee.vision.io import image_size, read_thermal
 
     p = as_path(path, "the thermal file's path")
@@ -318,6 +323,8 @@ def load_thermal(path: str | Path, expected_size: tuple[int, int] | None = None)
                 f"{p}: thermal image is {arr.shape[1]}x{arr.shape[0]} pixels but the calibration "
                 f"expects {expected_size[0]}x{expected_size[1]}"
             )
+        if arr.dtype == np.uint8:  # non-radiometric, as thermal_mask reads it
+            return np.ascontiguousarray(arr)
         # (checked before the cast to float32: a finite 1e300 became inf there, with numpy's
         # overflow warning, and was reported as "NaN or infinite values")
         arr = arr.astype(np.float64)
