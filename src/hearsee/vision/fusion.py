@@ -258,7 +258,11 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
         rig needs it).
     rig : the calibrated rig; must have a thermal camera when ``thermal`` is given.
     thermal : thermal image of the rig's thermal camera: float degC, uint16 centi-kelvin or
-        uint8 non-radiometric (see :func:`hearsee.vision.thermal.thermal_mask`).
+        uint8 non-radiometric (see :func:`hearsee.vision.thermal.thermal_mask`). An 8-bit
+        frame's "warm" is relative to the frame: with nobody warm in view its contrast
+        stretch spreads a room-temperature scene over 0-255 and an object's warmest pixels can
+        pass (a review helper's 30 rooms with one mannequin, poster or coat stand each and
+        nobody else, seeds 100-129: 2 accepted with the 8-bit frame, 0 with degC).
     params : stereo detector parameters (Tm = ``params.tm``).
     min_support : thermal support needed to accept a candidate.
     band_c : radiometric human temperature band (degC).
