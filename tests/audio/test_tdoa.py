@@ -595,6 +595,42 @@ def test_digitally_silent_lead_in_is_not_the_noise_floor(three, snr_weight):
     np.testing.assert_allclose(tf.summary_tdoa_s, three.tdoa(src), atol=0.05 / fs)
 
 
+def test_a_zero_lead_in_does_not_become_the_noise_floor(three):
+    """Speech in bursts, noise throughout, with and without 1 s of exact zeros before it (a
+    whole number of hops: the same frames follow). About its mean a zero frame had the
+    mean's square as energy, no digital silence to the VAD: the lead-in became the noise
+    floor, every frame between the bursts (3 of 44 active without it) was active, the SNR
+    weighting lost its noise reference and fewer frames came out right."""
+    from hearsee.audio.signals import synthetic_voice
+    from hearsee.audio.tdoa import _energy_vad
+
+    n, hop, frame_len = 3 * 16384, 512, 1024
+    src = np.array([1.2, 0.8, 0.3])
+    on = np.zeros(n)
+    for a in (4096, 20480, 36864):
+        on[a:a + 8192] = 1.0
+    clean = simulate_free_field(synthetic_voice("male", n / FS, FS, rng=4) * on, FS, three,
+                                src, snr_db=None)
+    y = clean + 0.3 * clean.std() * np.random.default_rng(0).standard_normal(clean.shape)
+    x = np.concatenate([np.zeros((3, 16384)), y], axis=1)
+    lead = 16384 // hop
+    n_frames = (x.shape[1] - frame_len) // hop + 1
+    energy = _frame_energy(x.astype(np.float32), frame_len, hop, n_frames)
+    assert np.all(energy[:lead - 1] == 0.0)  # (frame lead - 1 holds the noise's first half)
+    starts = np.arange(n_frames - lead) * hop
+    quiet = np.array([not on[s:s + frame_len].any() for s in starts])
+    alone = _energy_vad(_frame_energy(y.astype(np.float32), frame_len, hop, len(starts)),
+                        3.0)[0]
+    assert alone[quiet].sum() <= 3  # (a burst's tail leaks into its neighbours)
+    np.testing.assert_array_equal(_energy_vad(energy, 3.0)[0][lead:], alone)
+    a = estimate_tdoas(y, FS, three)
+    b = estimate_tdoas(x, FS, three)
+    np.testing.assert_array_equal(b.valid[lead:], a.valid)
+    # (frame lead - 1, half zeros, joins the noise spectrum: a few hundredths of a sample)
+    np.testing.assert_allclose(b.tdoa_s[lead:], a.tdoa_s, atol=0.05 / FS)
+    np.testing.assert_allclose(b.summary_tdoa_s, three.tdoa(src), atol=0.1 / FS)
+
+
 def test_band_too_narrow_for_the_noise_floor_is_a_config_error():
     """A 20 Hz band: the correlation's main lobe (~800 samples) covers every lag of a 64 ms
     frame, so the two-microphone detection test has no floor to measure (it was numpy's

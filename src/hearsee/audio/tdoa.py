@@ -1086,7 +1086,12 @@ def _frame_energy(x: NDArray, frame_len: int, hop: int, n_frames: int) -> NDArra
     """Mean-square energy of each frame of ``x`` (n_ch, n), over all channels, each channel
     taken about its mean over ``x``: a DC offset (real ADCs have one, often different per
     channel) otherwise raised every frame's energy by the same amount, so the noise floor
-    rose toward the voice and the energy VAD dropped its quieter frames."""
+    rose toward the voice and the energy VAD dropped its quieter frames. A frame of digital
+    silence (every sample of every channel exactly 0: a recorder's lead-in, zero padding) has
+    energy 0: about the mean it had the mean's square, ~80 dB below a voice and so no silence
+    to :func:`_sounding`, and a lead-in became the noise floor -- every pause of the voice
+    after it was active and the SNR weighting lost its noise reference."""
+    heard = np.any(x, axis=0)  # (per sample: any channel not exactly 0)
     x = x - x.sum(axis=1, keepdims=True) / x.shape[1]  # (float32 stays float32)
     e = np.einsum("ij,ij->j", x, x)  # per sample, summed over the channels
     if frame_len % hop == 0:  # frames made of whole hops: sum the hops, then the frames
@@ -1098,6 +1103,11 @@ def _frame_energy(x: NDArray, frame_len: int, hop: int, n_frames: int) -> NDArra
         np.cumsum(e, dtype=float, out=cs[1:])
         start = np.arange(n_frames) * hop
         s = cs[start + frame_len] - cs[start]
+    if not heard.all():  # digital silence: no energy (see above)
+        ch = np.zeros(heard.size + 1, dtype=np.int64)
+        np.cumsum(heard, out=ch[1:])
+        start = np.arange(n_frames) * hop
+        s = np.where(ch[start + frame_len] == ch[start], 0.0, s)
     return np.maximum(s / (frame_len * x.shape[0]), 0.0)
 
 
