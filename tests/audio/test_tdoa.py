@@ -631,6 +631,27 @@ def test_a_zero_lead_in_does_not_become_the_noise_floor(three):
     np.testing.assert_allclose(b.summary_tdoa_s, three.tdoa(src), atol=0.1 / FS)
 
 
+@pytest.mark.parametrize("method", ["scot", "ml"])
+def test_a_block_of_digital_silence_gets_finite_weights(method):
+    """SCOT's and ML's floor of G_ii G_jj was 1e-60, zero in single precision: a block of
+    frames (``chunk_frames``) of exact zeros -- a recorder's lead-in -- got 1 / 0 and 0 / 0
+    weights, numpy's RuntimeWarnings on the CLI. Known delay: +3 samples."""
+    import warnings
+
+    from hearsee.audio.tdoa import gcc_weighting
+
+    z = np.zeros((4, 1, 9), np.float32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert np.all(np.isfinite(gcc_weighting(method, z.astype(np.complex64), z, z, z)))
+        two = MicArray(np.array([[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]]))
+        n = delay_signals(white_noise(1.0, FS, rng=1), [3 / FS, 0.0], FS)
+        x = np.concatenate([np.zeros((2, FS)), n], axis=1)
+        tf = estimate_tdoas(x, FS, two, method=method, chunk_frames=8)
+    assert tf.n_valid > 25
+    assert tf.summary_tdoa_s[0] * FS == pytest.approx(3.0, abs=0.05)
+
+
 def test_band_too_narrow_for_the_noise_floor_is_a_config_error():
     """A 20 Hz band: the correlation's main lobe (~800 samples) covers every lag of a 64 ms
     frame, so the two-microphone detection test has no floor to measure (it was numpy's

@@ -382,15 +382,21 @@ def gcc_weighting(method: str, G: NDArray, Gii: NDArray | None = None,
     if Gii is None or Gjj is None:
         raise ConfigError(f"GCC-{method.upper()} needs the auto spectra G_ii and G_jj")
     floor = _TINY + 1e-12 * max(float(Gii.max(initial=0.0)), float(Gjj.max(initial=0.0)))
+    # (the floor of products of two spectra; at least the spectra's smallest normal number:
+    # _TINY squared is 0 in single precision, and a block of frames of digital silence -- a
+    # recorder's lead-in -- got 1 / 0 and 0 / 0 weights, numpy's RuntimeWarnings)
+    floor2 = floor * floor
+    if isinstance(Gii, np.ndarray) and Gii.dtype.kind == "f":
+        floor2 = max(floor2, float(np.finfo(Gii.dtype).tiny))
     if method == "scot":
-        return 1.0 / np.sqrt(np.maximum(Gii * Gjj, floor * floor))
+        return 1.0 / np.sqrt(np.maximum(Gii * Gjj, floor2))
     if method == "roth":
         return 1.0 / np.maximum(Gjj, floor)
     # ml / Hannan-Thomson
     Gc = G if Gij_avg is None else Gij_avg
     mag = np.abs(Gc)
     den = Gii * Gjj
-    np.maximum(den, floor * floor, out=den)
+    np.maximum(den, floor2, out=den)
     if den.dtype != mag.dtype or den.shape != mag.shape:  # (numpy's promotions as written)
         coh = np.clip(mag**2 / den, 0.0, 0.99)
         return coh / ((1.0 - coh) * np.maximum(mag, floor))
