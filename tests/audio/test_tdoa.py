@@ -670,6 +670,26 @@ def test_band_too_narrow_for_the_noise_floor_is_a_config_error():
     assert tf.summary_tdoa_s[0] * fs == pytest.approx(3.0, abs=0.1)
 
 
+def test_whole_signal_gcc_confidence_looks_outside_the_bands_main_lobe():
+    """gcc's confidence is the module's peak-to-second-peak ratio: outside the main lobe of
+    max(2, ceil(fs / bandwidth)) samples either side. It used 2 samples whatever band_hz, so a
+    300-1000 Hz band's own lobe (23 samples) was the "second peak": an exact delayed copy had
+    a confidence of 1.4. Known delay: 3 samples; the ratio computed here from gcc's r."""
+    s = white_noise(0.5, FS, rng=3)
+    y = delay_signals(s, [3 / FS, 0.0], FS)
+    for band, lobe in (((300.0, 1000.0), 23), ((1000.0, 1500.0), 32), (None, 2)):
+        res = gcc(y[0], y[1], FS, max_tau_s=10 / FS, band_hz=band)
+        assert res.tdoa_s * FS == pytest.approx(3.0, abs=0.01)
+        r = np.fft.ifftshift(res.r)
+        outside = np.ones(r.size, bool)
+        outside[np.arange(3 - lobe, 3 + lobe + 1) % r.size] = False
+        want = min(r[3] / r[outside].max(), 1e3)
+        assert res.confidence == pytest.approx(want, rel=1e-6)
+        assert res.confidence > 4
+    with pytest.raises(ConfigError, match="too narrow"):  # (estimate_tdoas' rule)
+        gcc(y[0, :400], y[1, :400], FS, band_hz=(1000.0, 1010.0))
+
+
 def test_gcc_refuses_a_negative_lag_bound():
     s = white_noise(0.25, 8000, rng=3)
     with pytest.raises(ConfigError, match="max_tau_s"):

@@ -781,12 +781,17 @@ def gcc(x_i: ArrayLike, x_j: ArrayLike, fs: float, method: str = "phat",
     Xb = sfft.rfft(b - b.mean(), nfft)
     G = Xa * np.conj(Xb)
     Gii, Gjj = np.abs(Xa) ** 2, np.abs(Xb) ** 2
-    P = G * gcc_weighting(method, G, Gii, Gjj) * _band_mask(len(G), nfft, fs, band_hz)
+    mask = _band_mask(len(G), nfft, fs, band_hz)
+    P = G * gcc_weighting(method, G, Gii, Gjj) * mask
     r = sfft.irfft(P, nfft)
     max_lag = (n - 1) if max_tau_s is None else min(max_tau_s * fs, n - 1)
     bound = np.array([float(max_lag)])  # (the bound is the physical maximum here)
-    lag, conf = _peaks(r[None, None, :], P[None, None, :], nfft, bound, refine, main_lobe=2,
-                       reach=bound)
+    # the confidence looks outside the band's main lobe, as estimate_tdoas' (module docstring):
+    # with 2 samples whatever the band, a 300-1000 Hz band's own lobe was the "second peak"
+    # (an exact copy's confidence 1.4)
+    main_lobe = 2 if band_hz is None else _main_lobe(np.flatnonzero(mask), nfft, fs, band_hz)
+    lag, conf = _peaks(r[None, None, :], P[None, None, :], nfft, bound, refine,
+                       main_lobe=main_lobe, reach=bound)
     lag, conf = lag[0], conf[0]
     shift = np.fft.fftshift(r)
     lags = (np.arange(nfft) - nfft // 2) / fs
