@@ -168,6 +168,15 @@ def _share(flags: list) -> float:
     return 100.0 * float(np.mean(flags)) if flags else float("nan")
 
 
+def cell_rng(seed: int, kind: str, fld: str, snr: float) -> np.random.Generator:
+    """The random stream of one free-field cell (signal ``kind``, field ``fld``, ``snr`` dB).
+    The SNR enters as its integer part modulo 2**32: a negative SNR (``--snrs=-5,0``) raised
+    numpy's ValueError ("expected non-negative integer") before any trial; the streams of
+    SNRs >= 0 are those of earlier runs."""
+    return np.random.default_rng([seed, SIGNALS.index(kind), FIELDS.index(fld),
+                                  int(snr) % 2**32])
+
+
 def run(trials: int, snrs: list[float], duration: float, seed: int, mismatch: bool
         ) -> tuple[list[dict], dict[str, MaskModel]]:
     models = {k: MaskModel(p) for k, p in DESIGNS}
@@ -179,8 +188,7 @@ def run(trials: int, snrs: list[float], duration: float, seed: int, mismatch: bo
     for kind in SIGNALS:
         for fld in FIELDS:
             for snr in snrs:
-                rng = np.random.default_rng([seed, SIGNALS.index(kind), FIELDS.index(fld),
-                                             int(snr)])
+                rng = cell_rng(seed, kind, fld, snr)
                 res: dict[str, list] = {"true": [], "bare": []}
                 cpu = {k: 0.0 for k in models}
                 for _ in range(trials):
