@@ -350,7 +350,7 @@ STREAM_SCORED_FROM_S = 1.0
 def circle_walk(rng: np.random.Generator, k: int, duration: float
                 ) -> tuple[Trajectory, bool]:
     """Talker ``k`` of the stream part, in the horizontal plane 1-2 m from the array: every
-    fourth one still, the others walking round it at 0.5-1.5 m/s (20-90 deg/s, either way,
+    fourth one still, the others walking round it at 0.5-1.5 m/s (14-86 deg/s, either way,
     crossing from front to back or back to front on the way); knots every 50 ms. Returns the
     trajectory and whether it moves."""
     a0, r = rng.uniform(-180.0, 180.0), rng.uniform(1.0, 2.0)

@@ -2066,7 +2066,7 @@ class StreamConfig:
         back (:class:`SmoothedMask`); longer is steadier, shorter follows a talker walking round
         the head sooner. 0.15 s chosen among 0.1-2 s on dev talkers (seed 170: mask2-asym, free
         field, 8 per signal and SNR, one in four still, the others walking round the array
-        at 20-90 deg/s): front/back of the frames from 1 s on, noise / male / female at 10 and
+        at 14-86 deg/s): front/back of the frames from 1 s on, noise / male / female at 10 and
         20 dB, 100 / 100, 95 / 93, 88 / 95 % (1 s: 96 / 96, 88 / 83, 79 / 76 %; the frames
         of ``hearsee localize``, one half for the whole recording: 57 / 57, 40 / 65, 73 / 63)
     mask_decide_confidence : masked pairs: a frame's ITD gives the tracker only the half that
