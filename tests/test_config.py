@@ -552,6 +552,30 @@ def test_output_to_the_file_standard_output_goes_to_is_appended(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results.json"]
 
 
+def test_output_to_the_file_standard_output_truncates_is_not_overwritten_by_later_output(
+        tmp_path):
+    """`hearsee eval -o /dev/stdout > results.json` (the shell's ``>``: no append mode): the
+    results go where standard output stands, and what the command prints afterwards follows
+    them. Opened anew in append mode, the results were written at the end while standard
+    output's offset stayed at 0: the summary printed afterwards overwrote the start of the
+    results (and of an MCAP export, its header), until 2026-12-07."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "results.json"
+    code = ("from hearsee.cli._app import refuse_overwrite; "
+            "from hearsee.config import write_file; print('before'); "
+            "refuse_overwrite(['/dev/stdout'], [], False); "
+            "write_file('/dev/stdout', 'the runs, a long results document\\n'); "
+            "print('the summary', flush=True)")
+    with open(out, "w") as fh:
+        r = subprocess.run([sys.executable, "-c", code], stdout=fh, stderr=subprocess.PIPE,
+                           text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert out.read_text() == "before\nthe runs, a long results document\nthe summary\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.json"]
+
+
 def test_as_float_array_with_the_callers_error_and_non_finite_values_allowed():
     """finite=False lets NaN and infinities through (only non-numbers are refused) and
     ``error`` is the caller's type."""

@@ -208,15 +208,21 @@ def written_through(path: str | Path) -> bool:
         return False
     if stat.S_ISDIR(st.st_mode):
         return False
-    if not stat.S_ISREG(st.st_mode):
-        return True
+    return not stat.S_ISREG(st.st_mode) or _standard_stream_fd(st) is not None
+
+
+def _standard_stream_fd(st: os.stat_result) -> int | None:
+    """1 or 2 when the file of ``st`` is the one this process's standard output or error
+    goes to (a regular file the shell opened: ``> results.json``), else None."""
+    if not stat.S_ISREG(st.st_mode):  # (a pipe or device has no offset to share)
+        return None
     for fd in (1, 2):
         try:
             if os.path.samestat(st, os.fstat(fd)):
-                return True
+                return fd
         except OSError:  # (a closed standard stream)
             continue
-    return False
+    return None
 
 
 @contextlib.contextmanager
@@ -271,6 +277,21 @@ def open_replaced(dest: Path) -> BinaryIO:
     :func:`replacing` as a stream (:func:`write_into`, the MCAP export, images). InputFileError
     for a ``dest`` that is no file name (:func:`as_path`: None was a builtin AttributeError)."""
     dest = as_path(dest, "the output file")
+    try:
+        fd = _standard_stream_fd(os.stat(dest))
+    except (OSError, ValueError):
+        fd = None
+    if fd is not None:
+        # (through the standard stream's own file description, sharing its offset: opened
+        # anew, "ab" wrote at the end while the stream's offset stayed where it was, and what
+        # the command printed afterwards -- `hearsee eval -o /dev/stdout > results.json`: the
+        # summary -- overwrote the start of the file, the MCAP export's header likewise;
+        # until 2026-12-07)
+        import sys
+
+        with contextlib.suppress(Exception):  # (what Python buffered goes first)
+            (sys.stdout if fd == 1 else sys.stderr).flush()
+        return os.fdopen(os.dup(fd), "ab")
     return open(dest, "ab" if dest.exists() else "xb")
 
 
