@@ -1,5 +1,7 @@
 """Rerun and MCAP exports of a robot log the test constructs."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -158,6 +160,40 @@ def test_check_export_before_a_run(tmp_path, monkeypatch):
     with pytest.raises(ConfigError, match="export kind must be one of"):  # (a KeyError)
         check_export("foo", tmp_path / "run.foo")
     assert list(tmp_path.iterdir()) == []  # a check writes nothing
+
+
+def test_a_rerun_sdk_older_than_the_api_used_is_refused_before_the_run(tmp_path, monkeypatch):
+    """write_rerun uses rerun 0.23's API (set_time(duration=), rr.Scalars); the extra asked for
+    rerun-sdk>=0.20, and with 0.22.1 `hearsee demo --rerun` ran the whole scenario, wrote the
+    report and ended in an AttributeError traceback. Now the check before the run, and the
+    export itself, say which version is needed."""
+    versions = {"rerun-sdk": "0.22.1"}
+
+    def fake_version(name):
+        if name not in versions:
+            raise export.PackageNotFoundError(name)
+        return versions[name]
+
+    monkeypatch.setattr(export, "_dist_version", fake_version)
+    monkeypatch.setitem(export._EXTRAS, "rerun", ("json", "--rerun needs Y"))  # (present)
+    with pytest.raises(ConfigError, match=r"rerun-sdk 0\.23 or later, found 0\.22\.1"):
+        check_export("rerun", tmp_path / "run.rrd")
+    _stand_in_rerun(monkeypatch)
+    log, _ = _log()
+    with pytest.raises(ConfigError, match=r"rerun-sdk 0\.23 or later, found 0\.22\.1"):
+        write_rerun(tmp_path / "run.rrd", default_scenario().to_dict(), log)
+    assert list(tmp_path.iterdir()) == []
+    for ok in ("0.23.0", "0.41.0", "1.0.0"):  # (the version the API appeared in, and later)
+        versions["rerun-sdk"] = ok
+        assert "json installed" in check_export("rerun", tmp_path / "run.rrd")
+    del versions["rerun-sdk"]  # (no metadata: not refused)
+    assert "json installed" in check_export("rerun", tmp_path / "run.rrd")
+    from importlib.metadata import version as real_version
+
+    monkeypatch.setattr(export, "_dist_version", real_version)
+    assert export.RERUN_MIN_VERSION == (0, 23)
+    pyproject = (Path(__file__).parents[2] / "pyproject.toml").read_text()
+    assert '"rerun-sdk>=0.23"' in pyproject  # (the extra asks for what the code uses)
 
 
 def test_overlay_frames_that_are_not_8_bit_are_refused():

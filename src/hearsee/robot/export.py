@@ -18,7 +18,10 @@ ROS 2 messages written to MCAP (open in Foxglove or ``ros2 bag``):
 from __future__ import annotations
 
 import importlib.util
+import re
 from collections.abc import Mapping, Sequence
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as _dist_version
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +36,31 @@ __all__ = ["check_export", "check_export_targets", "write_mcap", "write_rerun"]
 #: each export's module and the error when its extra is not installed
 _EXTRAS = {"rerun": ("rerun", "--rerun needs the Rerun extra: pip install 'hearsee[rerun]'"),
            "mcap": ("mcap_ros2", "--mcap needs the ROS extra: pip install 'hearsee[ros]'")}
+
+#: The oldest rerun-sdk whose API :func:`write_rerun` uses (``RecordingStream(app_id)``,
+#: ``set_time(duration=)``, ``rr.Scalars``: 0.23). The extra asked for ``>=0.20`` until
+#: 2026-12-07: with 0.20-0.22 a run ended in an AttributeError traceback once it was done.
+RERUN_MIN_VERSION = (0, 23)
+
+
+def _old_rerun() -> str | None:
+    """The installed rerun-sdk's version when it is older than :data:`RERUN_MIN_VERSION`,
+    else None (also when its version is unknown)."""
+    try:
+        v = _dist_version("rerun-sdk")
+    except PackageNotFoundError:
+        return None
+    m = re.match(r"(\d+)\.(\d+)", str(v))
+    return str(v) if m and tuple(map(int, m.groups())) < RERUN_MIN_VERSION else None
+
+
+def _check_rerun_version() -> None:
+    """ConfigError when the installed rerun-sdk is too old for :func:`write_rerun`."""
+    old = _old_rerun()
+    if old is not None:
+        need = ".".join(map(str, RERUN_MIN_VERSION))
+        raise ConfigError(f"--rerun needs rerun-sdk {need} or later, found {old}: "
+                          "pip install --upgrade 'hearsee[rerun]'")
 
 _POINT_STAMPED = """std_msgs/Header header
 geometry_msgs/Point point
@@ -109,7 +137,8 @@ class _Positioned:
 
 def check_export(kind: str, path: str | Path) -> str:
     """Before a run that ends by writing export ``kind`` (``"rerun"`` or ``"mcap"``) to
-    ``path``: its extra is installed (else :class:`ConfigError`) and its folder exists (else
+    ``path``: its extra is installed (else :class:`ConfigError`; so is a rerun-sdk older than
+    :data:`RERUN_MIN_VERSION`) and its folder exists (else
     :class:`InputFileError`), so a long live run does not fail only at its end. Returns a
     one-line description for ``hearsee run --dry-run``."""
     if kind not in _EXTRAS:  # (a KeyError)
@@ -117,6 +146,8 @@ def check_export(kind: str, path: str | Path) -> str:
     module, missing = _EXTRAS[kind]
     if importlib.util.find_spec(module) is None:
         raise ConfigError(missing)
+    if kind == "rerun":
+        _check_rerun_version()
     return f"{output_file(path)}: {module} installed, folder exists"
 
 
@@ -204,6 +235,7 @@ def write_rerun(path: str | Path, scenario: Mapping[str, Any], log: Sequence[Map
         import rerun as rr
     except ImportError:
         raise ConfigError(_EXTRAS["rerun"][1]) from None
+    _check_rerun_version()
     p = output_file(path)
     rec = rr.RecordingStream("hearsee")
     room = np.asarray(scenario["room"]["size_m"], dtype=float)
