@@ -452,6 +452,23 @@ def test_output_file_refuses_folders_and_missing_or_file_parents(tmp_path):
         output_file(tmp_path / "f" / "x.wav")
 
 
+def test_output_file_follows_a_dangling_link_to_its_missing_folder(tmp_path):
+    """An output path that is a link to a file not there yet is written at the link's target
+    (replacing): a target in a missing folder passed the up-front check and failed only once
+    the work was done (`hearsee eval -o` after the whole evaluation: "cannot write")."""
+    from hearsee.config import output_file, write_file
+
+    link = tmp_path / "results.json"
+    link.symlink_to(tmp_path / "gone" / "results.json")
+    with pytest.raises(InputFileError, match=r"results\.json: links to .*gone.*does not exist"):
+        output_file(link)
+    ok = tmp_path / "ok.json"  # a dangling link into an existing folder: made there
+    ok.symlink_to(tmp_path / "target.json")
+    assert output_file(ok) == ok
+    write_file(ok, "x")
+    assert (tmp_path / "target.json").read_text() == "x" and ok.is_symlink()
+
+
 def test_output_file_refuses_what_the_system_would_not_let_it_write(tmp_path, monkeypatch):
     """A read-only output file or folder raised PermissionError only once the work was done
     (a whole evaluation, a calibration). The tests run as root, where permissions do not stop

@@ -190,6 +190,17 @@ def output_file(path: str | Path) -> Path:
             raise InputFileError(f"{p}: the file is not writable")
         if not p.exists() and not os.access(p.parent, os.W_OK | os.X_OK):
             raise InputFileError(f"{p}: folder {p.parent} is not writable")
+        if p.is_symlink() and not p.exists():
+            # (a dangling link: the output is made at its target, :func:`replacing`; a target
+            # in a missing folder passed here and failed once the work was done -- `hearsee
+            # eval -o` after the whole evaluation, until 2026-12-07)
+            real = Path(os.path.realpath(p))
+            if not real.parent.is_dir():
+                raise InputFileError(f"{p}: links to {real}, whose folder {real.parent} "
+                                     "does not exist")
+            if not os.access(real.parent, os.W_OK | os.X_OK):
+                raise InputFileError(f"{p}: links to {real}, whose folder {real.parent} "
+                                     "is not writable")
     return p
 
 
