@@ -925,6 +925,39 @@ def test_demo_refuses_a_report_folder_that_is_a_file_before_running(tmp_path, mo
     assert f.read_text() == "mine\n"
 
 
+def test_a_report_folder_that_is_a_dangling_link_is_made_at_its_target(tmp_path, monkeypatch,
+                                                                       capsys):
+    """-o naming a link to a folder not made yet (e.g. on a disk prepared later) passed every
+    check, and after the whole scenario write_report failed: 'cannot create report folder
+    ...: File exists' (mkdir of the link itself). Now the folder is made where the link
+    leads, as an output file's is; a link whose target lies inside a file is refused before
+    the run."""
+    import hearsee.robot.pipeline as pipeline
+    from hearsee.robot.report import report_folder_blocker
+
+    link = tmp_path / "rep"
+    link.symlink_to(tmp_path / "disk" / "rep")
+    assert report_folder_blocker(link) is None
+    sc = scenario_from_dict({}).to_dict()
+    index = write_report(link, sc, [], {"success": False})
+    assert index.is_file() and (tmp_path / "disk" / "rep" / "log.json").is_file()
+    assert link.is_symlink()
+    f = tmp_path / "notes.txt"
+    f.write_text("mine\n")
+    bad = tmp_path / "bad"
+    bad.symlink_to(f / "rep")
+    assert report_folder_blocker(bad) == f
+
+    def no_run(*a, **k):
+        raise AssertionError("the scenario ran although -o is refused")
+
+    monkeypatch.setattr(pipeline, "run_scenario", no_run)
+    assert main(["demo", "-o", str(bad), "-q"]) == 2
+    assert capsys.readouterr().err == (f"hearsee: error: --out {bad}: {f} is a file, not a "
+                                       "folder; choose a report folder\n")
+    assert f.read_text() == "mine\n"
+
+
 @pytest.mark.parametrize("sub", ["plots", "frames"])
 def test_demo_refuses_a_report_folder_whose_plots_or_frames_is_a_file(tmp_path, monkeypatch,
                                                                       capsys, sub):

@@ -80,9 +80,16 @@ def report_blocker_reason(blocker: Path) -> str:
 
 
 def _nearest_existing(folder: str | Path) -> Path | None:
-    """``folder`` itself or its nearest parent that exists (None if none does)."""
+    """``folder`` itself or its nearest parent that exists (None if none does); past a
+    dangling link, its target's (:func:`write_report` makes the folder there)."""
     p = Path(folder)
-    return next((q for q in (p, *p.parents) if q.exists()), None)
+    for q in (p, *p.parents):
+        if q.exists():
+            return q
+        if q.is_symlink():
+            real = Path(os.path.realpath(q))
+            return None if real == q else _nearest_existing(real)
+    return None
 
 
 def report_folder_unwritable(folder: str | Path) -> Path | None:
@@ -346,7 +353,9 @@ def write_report(
     _check_images(images or {})
     out = Path(folder)
     try:
-        out.mkdir(parents=True, exist_ok=True)
+        # (at a link's target: a dangling link, e.g. to a folder on a disk not yet made,
+        # passed the checks and failed here once the whole run was done, "File exists")
+        Path(os.path.realpath(out)).mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputFileError(f"cannot create report folder {out}: {exc.strerror}") from None
     with contextlib.ExitStack() as staged:  # (closed in reverse: the files replace theirs)
