@@ -547,49 +547,33 @@ def test_refuse_overwrite_lets_pipes_and_devices_through(tmp_path):
     assert reg.read_text() == "mine"
 
 
-def test_output_to_the_file_standard_output_goes_to_is_appended(tmp_path):
-    """`-o /dev/stdout > results.json` (or `>>`): the file is the process's own standard
-    output. It was refused as existing without --force and, forced, replaced by a new file:
-    the shell's file was unlinked, what the command printed after it was lost, and `>>` lost
-    the earlier lines. Now it is written through, appended as the command's printing is."""
+@pytest.mark.parametrize("mode, earlier", [("a", "earlier line\n"), ("w", "")])
+def test_output_to_the_file_standard_output_goes_to_is_written_where_it_stands(
+        tmp_path, mode, earlier):
+    """`-o /dev/stdout >> results.json` or `> results.json`: the file is the process's own
+    standard output. It was refused as existing without --force and, forced, replaced by a new
+    file: the shell's file was unlinked, what the command printed after it was lost, and `>>`
+    lost the earlier lines. Now it is written through standard output's own file description:
+    the results go where standard output stands, and what the command prints afterwards
+    follows them. (With `>`, opened anew in append mode, the results went to the end while
+    standard output's offset stayed at 0: the summary printed afterwards overwrote the start
+    of the results -- and of an MCAP export, its header -- until 2026-12-07.)"""
     import subprocess
     import sys
 
     out = tmp_path / "results.json"
-    out.write_text("earlier line\n")
-    code = ("import sys; from hearsee.cli._app import refuse_overwrite; "
-            "from hearsee.config import write_file, written_through; "
-            "assert written_through('/dev/stdout'); refuse_overwrite(['/dev/stdout'], [], False); "
-            "write_file('/dev/stdout', 'the runs\\n'); print('the summary', flush=True)")
-    with open(out, "a") as fh:
-        r = subprocess.run([sys.executable, "-c", code], stdout=fh, stderr=subprocess.PIPE,
-                           text=True, timeout=60)
-    assert r.returncode == 0, r.stderr
-    assert out.read_text() == "earlier line\nthe runs\nthe summary\n"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.json"]
-
-
-def test_output_to_the_file_standard_output_truncates_is_not_overwritten_by_later_output(
-        tmp_path):
-    """`hearsee eval -o /dev/stdout > results.json` (the shell's ``>``: no append mode): the
-    results go where standard output stands, and what the command prints afterwards follows
-    them. Opened anew in append mode, the results were written at the end while standard
-    output's offset stayed at 0: the summary printed afterwards overwrote the start of the
-    results (and of an MCAP export, its header), until 2026-12-07."""
-    import subprocess
-    import sys
-
-    out = tmp_path / "results.json"
+    out.write_text(earlier)
     code = ("from hearsee.cli._app import refuse_overwrite; "
-            "from hearsee.config import write_file; print('before'); "
-            "refuse_overwrite(['/dev/stdout'], [], False); "
+            "from hearsee.config import write_file, written_through; print('before'); "
+            "assert written_through('/dev/stdout'); refuse_overwrite(['/dev/stdout'], [], False); "
             "write_file('/dev/stdout', 'the runs, a long results document\\n'); "
             "print('the summary', flush=True)")
-    with open(out, "w") as fh:
+    with open(out, mode) as fh:
         r = subprocess.run([sys.executable, "-c", code], stdout=fh, stderr=subprocess.PIPE,
                            text=True, timeout=60)
     assert r.returncode == 0, r.stderr
-    assert out.read_text() == "before\nthe runs, a long results document\nthe summary\n"
+    assert out.read_text() == (earlier + "before\nthe runs, a long results document\n"
+                               "the summary\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results.json"]
 
 
