@@ -211,6 +211,27 @@ def test_a_constant_or_far_too_quiet_channel_is_named(tmp_path):
     np.testing.assert_allclose(got, fine, rtol=1e-6)
 
 
+def test_a_disconnected_input_flipping_a_bit_now_and_then_is_named_without_inf(tmp_path):
+    """A disconnected 16-bit input: zeros but for a 1-LSB flip in one sample of 20 (not
+    constant, so not stuck). Its level (90th percentile of |x - median|) is 0: the warning
+    read "at least inf dB below the loudest channel", after numpy's RuntimeWarning (divide by
+    zero), which the CLI printed as a warning of its own."""
+    from hearsee.errors import DegenerateInputWarning
+
+    rng = np.random.default_rng(0)
+    x = np.zeros((2, 2 * FS))
+    x[0] = 0.1 * rng.standard_normal(2 * FS)
+    flip = rng.random(2 * FS) < 0.05
+    x[1, flip] = rng.choice([-1.0, 1.0], flip.sum()) / 32768
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        read_recording(_write(tmp_path / "dead.wav", x, subtype="PCM_16"), 2)
+    said = [str(w.message) for w in got]
+    assert [w.category for w in got] == [DegenerateInputWarning], said
+    assert "channel 1 is nearly silent beside the loudest channel" in said[0]
+    assert "inf" not in said[0]
+
+
 def test_two_channels_holding_one_signal_are_named(tmp_path):
     """A mono input copied to two channels (as many sound cards present a mono microphone)
     gave a two-microphone pair a TDOA of 0 -- a source straight ahead, confidence high --

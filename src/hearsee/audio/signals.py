@@ -869,10 +869,10 @@ def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:
     """The channels of a recording ``x`` (n_channels, n) that hold no microphone's signal: (those
     holding one constant value throughout, zeros included; the others more than
     :data:`QUIET_CHANNEL_DB` below the loudest channel; how far below it the loudest of those
-    is, dB -- nan when there are none). The level is robust -- a few corrupt samples of 1e30
-    made the others "quiet" -- the 90th percentile of the samples' distance from their median,
-    over at most 2**18 evenly spread samples per channel (0.7 s for a minute at 48 kHz
-    otherwise). The one rule of :func:`read_recording` (files) and
+    is, dB -- nan when there are none, inf when their level is 0). The level is robust -- a
+    few corrupt samples of 1e30 made the others "quiet" -- the 90th percentile of the samples'
+    distance from their median, over at most 2**18 evenly spread samples per channel (0.7 s
+    for a minute at 48 kHz otherwise). The one rule of :func:`read_recording` (files) and
     :class:`hearsee.stream.pipeline.DeviceSource` (live input). ``x`` must be a 2-D array of
     finite real samples with one or more of each (AudioInputError else: an empty one was
     numpy's ValueError, a 1-D one its AxisError)."""
@@ -886,8 +886,11 @@ def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:
     quiet = np.flatnonzero((level < level.max() * 10.0 ** (-QUIET_CHANNEL_DB / 20.0))
                            & ~constant)
     flat = np.flatnonzero(constant)
-    below = (20.0 * np.log10(level.max() / level[quiet].max()) if quiet.size
-             else float("nan"))
+    # (inf where the quiet ones' level is 0: nine samples in ten at one value, a disconnected
+    # input flipping a bit now and then -- a numpy RuntimeWarning and "inf dB" until 2026-12-07)
+    with np.errstate(divide="ignore"):
+        below = (20.0 * np.log10(level.max() / level[quiet].max()) if quiet.size
+                 else float("nan"))
     return flat, quiet, float(below)
 
 
@@ -954,9 +957,10 @@ def stuck_channels_text(flat: NDArray) -> str:
 def quiet_channels_text(quiet: NDArray, below: float) -> str:
     """What :func:`channel_faults`' quiet channels are, in words."""
     names, many = _channels(quiet)
-    return (f"{names} {'are' if many else 'is'} at least {below:.0f} dB below the loudest "
-            "channel: a disconnected or muted microphone? Its pairs' TDOAs, and the direction, "
-            "rest on its noise alone")
+    how = (f"at least {below:.0f} dB below the loudest channel" if np.isfinite(below) else
+           "nearly silent beside the loudest channel (nine samples in ten at one value)")
+    return (f"{names} {'are' if many else 'is'} {how}: a disconnected or muted microphone? "
+            "Its pairs' TDOAs, and the direction, rest on its noise alone")
 
 
 def write_recording(
