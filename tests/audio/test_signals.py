@@ -312,6 +312,22 @@ def test_loud_float_recordings_are_not_called_clipped(tmp_path):
         read_recording(flat)
 
 
+def test_a_loud_float_chirp_is_not_called_clipped(tmp_path):
+    """A float file's smooth wave beyond full scale has no flat top, but near its crests its
+    samples pass 0.999 of its peak: an unclipped chirp (200 Hz - 6 kHz) at amplitude 2 read
+    "2.77 % of the samples are clipped". The same chirp clipped at 1.5 still warns."""
+    from scipy.signal import chirp
+
+    t = np.arange(2 * FS) / FS
+    s = 2.0 * chirp(t, 200, 2, 6000)
+    x = np.stack([np.concatenate([np.zeros(3), s[:-3]]), s])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_recording(_write(tmp_path / "chirp.wav", x))
+    with pytest.warns(ClippingWarning, match="clipped"):
+        read_recording(_write(tmp_path / "clipped.wav", np.clip(x, -1.5, 1.5)))
+
+
 def test_synthetic_voice_too_short_is_a_config_error():
     for seed in range(4):  # the first syllable starts 20-80 ms in
         with pytest.raises(ConfigError, match="too short"):
