@@ -328,6 +328,32 @@ def test_a_loud_float_chirp_is_not_called_clipped(tmp_path):
         read_recording(_write(tmp_path / "clipped.wav", np.clip(x, -1.5, 1.5)))
 
 
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")
+def test_a_wav_file_through_a_pipe_is_read(tmp_path):
+    """A WAV file given through a pipe (a named FIFO, or the shell's <(sox ...)): soundfile
+    reads a stream that cannot seek only by a count of frames, so it was refused as "not an
+    audio file or a format libsndfile cannot read (frames must be specified for non-seekable
+    files)". Read in blocks it gives the file's samples."""
+    import threading
+
+    x = 0.1 * np.random.default_rng(8).standard_normal((2, 3000))
+    data = _write(tmp_path / "x.wav", x, subtype="PCM_16").read_bytes()
+    fifo = tmp_path / "pipe.wav"
+    os.mkfifo(fifo)
+
+    def feed():
+        with open(fifo, "wb") as f:
+            f.write(data)
+
+    writer = threading.Thread(target=feed, daemon=True)
+    writer.start()
+    got, fs = read_recording(fifo, 2)
+    writer.join(5)
+    want, _ = read_recording(tmp_path / "x.wav", 2)
+    assert fs == FS
+    np.testing.assert_array_equal(got, want)
+
+
 def test_synthetic_voice_too_short_is_a_config_error():
     for seed in range(4):  # the first syllable starts 20-80 ms in
         with pytest.raises(ConfigError, match="too short"):

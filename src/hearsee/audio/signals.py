@@ -403,6 +403,8 @@ def _subtype(path: str | Path) -> str | None:
     """The audio file's subtype ("PCM_16", "FLOAT", ...), None when it cannot be told."""
     import soundfile as sf
 
+    if not Path(path).is_file():  # (a pipe, read already: opened again, a FIFO waits forever)
+        return None
     try:
         return str(sf.info(os.fsencode(path)).subtype)
     except Exception:  # noqa: BLE001 (the file was read already; only warnings depend on it)
@@ -424,7 +426,9 @@ def _wav_data_shortfall(path: Path) -> tuple[int, int] | None:
     """``(declared, present)`` bytes of a RIFF/WAVE file's data chunk when the file ends before
     the size its header declares, else None (other formats, intact files, and the unknown size
     0xFFFFFFFF of a recorder that streamed to a pipe). libsndfile reads such a file without a
-    word, as the samples present."""
+    word, as the samples present. None for what is no regular file (a pipe, read already)."""
+    if not path.is_file():
+        return None
     try:
         with open(path, "rb") as f:
             head = f.read(12)
@@ -444,6 +448,20 @@ def _wav_data_shortfall(path: Path) -> tuple[int, int] | None:
         return None
 
 
+def _read_stream(f: Any, frames: int) -> NDArray:
+    """``frames`` frames (-1: all) of the open, non-seekable soundfile ``f``, read in blocks
+    until it ends: (n, n_channels) float64."""
+    parts, left = [], frames
+    while left != 0:
+        block = f.read(1 << 16 if left < 0 else min(left, 1 << 16), dtype="float64",
+                       always_2d=True)
+        if not len(block):
+            break
+        parts.append(block)
+        left = left - len(block) if left > 0 else left
+    return np.concatenate(parts) if parts else np.zeros((0, f.channels))
+
+
 def _read_file(path: str | Path,
                frames_at: Callable[[int], int] | None = None) -> tuple[NDArray, int]:
     """Read any libsndfile format -> ``(x (n_ch, n) float64, fs)`` with typed errors.
@@ -460,7 +478,11 @@ def _read_file(path: str | Path,
         with sf.SoundFile(os.fsencode(p)) as f:
             fs = f.samplerate
             frames = -1 if frames_at is None else frames_at(int(fs))
-            data = f.read(frames, dtype="float64", always_2d=True)
+            if f.seekable():
+                data = f.read(frames, dtype="float64", always_2d=True)
+            else:  # (a pipe, e.g. <(sox ...): soundfile reads it only by a count of frames --
+                # "frames must be specified", read as "not an audio file" until 2026-12-07)
+                data = _read_stream(f, frames)
     except HearseeError:  # frames_at's refusal (an AudioInputError is a ValueError too)
         raise
     except (RuntimeError, sf.LibsndfileError, TypeError, ValueError) as exc:
