@@ -478,6 +478,25 @@ def test_a_wav_cut_short_is_read_with_a_warning(tmp_path, capsys):
         err.count("\n") == 1, err
 
 
+def test_an_rf64_wav_cut_short_is_read_with_a_warning(tmp_path):
+    """An RF64 file (the WAV of more than 4 GiB, suffix .wav; libsndfile writes one with
+    format="RF64") declares its data size in the ds64 chunk, its data chunk's own size
+    0xFFFFFFFF: cut short, it was read as the samples present without a word. Intact, no
+    warning."""
+    x = 0.1 * np.random.default_rng(6).standard_normal((2, 8000))
+    full = tmp_path / "full.wav"
+    sf.write(full, x.T, FS, format="RF64", subtype="PCM_16")
+    assert full.read_bytes()[:4] == b"RF64"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert read_recording(full, 2)[0].shape == (2, 8000)
+    cut = tmp_path / "cut.wav"
+    cut.write_bytes(full.read_bytes()[:16000])
+    with pytest.warns(TruncatedFileWarning, match="cut short: its header declares 32000 bytes"):
+        y, _ = read_recording(cut, 2)
+    assert 3000 < y.shape[1] < 4000
+
+
 def test_a_signal_file_too_short_to_loop_is_refused(tmp_path):
     """make_signal loops a short file to the duration: a 1-sample file became a constant (DC)
     signal, simulated and localized as if it were sound. Fewer than MIN_SAMPLES (64, a

@@ -423,25 +423,34 @@ _PCM_STEP = {"PCM_S8": 2.0**-7, "PCM_U8": 2.0**-7, "PCM_16": 2.0**-15, "PCM_24":
 
 
 def _wav_data_shortfall(path: Path) -> tuple[int, int] | None:
-    """``(declared, present)`` bytes of a RIFF/WAVE file's data chunk when the file ends before
-    the size its header declares, else None (other formats, intact files, and the unknown size
-    0xFFFFFFFF of a recorder that streamed to a pipe). libsndfile reads such a file without a
-    word, as the samples present. None for what is no regular file (a pipe, read already)."""
+    """``(declared, present)`` bytes of a RIFF/WAVE or RF64 file's data chunk when the file
+    ends before the size its header declares, else None (other formats, intact files, and the
+    unknown size 0xFFFFFFFF of a recorder that streamed to a pipe). libsndfile reads such a
+    file without a word, as the samples present. An RF64 file (the WAV of more than 4 GiB that
+    recorders and libsndfile write, suffix .wav) declares the size in its ds64 chunk: until
+    2026-12-07 it was not looked at, so a cut one was read without a word. None for what is
+    no regular file (a pipe, read already)."""
     if not path.is_file():
         return None
     try:
         with open(path, "rb") as f:
             head = f.read(12)
-            if len(head) < 12 or head[:4] != b"RIFF" or head[8:12] != b"WAVE":
+            if len(head) < 12 or head[:4] not in (b"RIFF", b"RF64") or head[8:12] != b"WAVE":
                 return None
             size = os.fstat(f.fileno()).st_size
+            ds64 = None  # (RF64: the data chunk's 64-bit size)
             while True:
                 chunk = f.read(8)
                 if len(chunk) < 8:
                     return None
                 n = int.from_bytes(chunk[4:], "little")
+                if chunk[:4] == b"ds64" and head[:4] == b"RF64" and n >= 16:
+                    ds64 = int.from_bytes(f.read(16)[8:], "little")
+                    n -= 16
                 if chunk[:4] == b"data":
                     present = size - f.tell()
+                    if n == 0xFFFFFFFF and ds64 is not None:
+                        n = ds64
                     return (n, present) if n != 0xFFFFFFFF and n > present else None
                 f.seek(n + (n & 1), os.SEEK_CUR)
     except OSError:
