@@ -378,6 +378,44 @@ def test_write_recording_refusals(tmp_path):
     assert sf.info(str(src)).channels == 2  # untouched
 
 
+def test_a_file_without_read_permission_is_an_input_file_error():
+    """read_recording's InputFileError for a file that "cannot be opened": libsndfile names no
+    reason for a file the system refuses (no read permission), so it was an AudioInputError,
+    "not an audio file or a format libsndfile cannot read (System error.); use a WAV or FLAC
+    file". Run as root every file is readable: a child process drops to user nobody."""
+    import tempfile
+
+    import soundfile  # noqa: F401 (imported before the child drops its rights)
+
+    with tempfile.TemporaryDirectory() as d:  # (under /tmp: other users may reach it)
+        os.chmod(d, 0o755)
+        p = _write(os.path.join(d, "locked.wav"), 0.1 * np.ones((2, 800)))
+        os.chmod(p, 0)
+        if os.geteuid() != 0:
+            with pytest.raises(InputFileError, match=r"locked.wav: cannot be read \(Perm"):
+                read_recording(p, 2)
+            return
+        r, w = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the child, as user nobody
+            try:
+                os.setgid(65534)
+                os.setuid(65534)
+                try:
+                    read_recording(p, 2)
+                    said = b"read"
+                except Exception as exc:  # noqa: BLE001
+                    said = f"{type(exc).__name__}: {exc}".encode()
+                os.write(w, said)
+            finally:
+                os._exit(0)
+        os.close(w)
+        said = os.read(r, 4096).decode()
+        os.close(r)
+        os.waitpid(pid, 0)
+    assert said == f"InputFileError: {p}: cannot be read (Permission denied)", said
+
+
 def test_load_wav_and_make_signal_bad_files(tmp_path):
     junk = tmp_path / "junk.wav"
     junk.write_bytes(b"RIFF\x00\x00garbage" * 10)

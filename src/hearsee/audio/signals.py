@@ -497,6 +497,12 @@ def _read_file(path: str | Path,
     except (RuntimeError, sf.LibsndfileError, TypeError, ValueError) as exc:
         # (libsndfile's own words; its message repeats the file's name, as bytes)
         why = getattr(exc, "error_string", None) or exc
+        if p.is_file():  # (a file the system will not open -- no permission -- was "not an
+            # audio file ... (System error.)" until 2026-12-07: libsndfile says no more)
+            try:
+                open(p, "rb").close()
+            except OSError as err:
+                raise InputFileError(f"{p}: cannot be read ({err.strerror or err})") from None
         raise AudioInputError(
             f"{p}: not an audio file or a format libsndfile cannot read ({why}); "
             "use a WAV or FLAC file"
