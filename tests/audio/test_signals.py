@@ -375,6 +375,10 @@ def test_write_recording_refusals(tmp_path):
         write_recording(tmp_path / "loud.wav", 20 * x, FS, subtype="PCM_16")
     with pytest.raises(AudioInputError, match="NaN"):
         write_recording(tmp_path / "nan.wav", x * np.nan, FS)
+    for subtype in (None, 16):  # (a builtin AttributeError: 'NoneType' has no 'upper')
+        with pytest.raises(AudioInputError, match="subtype must be a soundfile subtype name"):
+            write_recording(tmp_path / "sub.wav", x, FS, subtype=subtype)
+    assert not (tmp_path / "sub.wav").exists()
     assert sf.info(str(src)).channels == 2  # untouched
 
 

@@ -1040,6 +1040,9 @@ def write_recording(
     if fs != round(fs):  # (an audio file's header holds whole Hz: 16000.7 was written as 16001)
         raise AudioInputError(f"an audio file's sample rate is a whole number of Hz, got {fs!r}; "
                               "resample the recording to one")
+    if not isinstance(subtype, str):  # (None or 16: a builtin AttributeError from .upper())
+        raise AudioInputError(f"subtype must be a soundfile subtype name such as 'FLOAT' or "
+                              f"'PCM_16', got {subtype!r}")
     if protect is not None:
         items = [protect] if isinstance(protect, str | Path) else list(protect)
         for q in items:
