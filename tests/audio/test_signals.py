@@ -362,6 +362,18 @@ def test_synthetic_voice_too_short_is_a_config_error():
             make_signal("female", 0.015, 16000, np.random.default_rng(seed))
 
 
+def test_read_recording_checks_min_samples_and_resample(tmp_path):
+    """min_samples "x", None or NaN were builtin ValueError / TypeError (int()); resample="no"
+    was taken by its truth and resampled."""
+    p = _write(tmp_path / "r.wav", 0.1 * np.random.default_rng(3).standard_normal((2, 800)))
+    for bad in ("x", None, float("nan"), -1, 2.5):
+        with pytest.raises(ConfigError, match="min_samples must be an integer >= 0"):
+            read_recording(p, 2, min_samples=bad)
+    with pytest.raises(ConfigError, match="resample must be True or False"):
+        read_recording(p, 2, fs=8000, resample="no")
+    assert read_recording(p, 2, min_samples=np.int64(800))[0].shape == (2, 800)
+
+
 def test_write_recording_refusals(tmp_path):
     x = 0.1 * np.ones((2, 100))
     src = _write(tmp_path / "in.wav", x)
@@ -375,6 +387,8 @@ def test_write_recording_refusals(tmp_path):
         write_recording(tmp_path / "loud.wav", 20 * x, FS, subtype="PCM_16")
     with pytest.raises(AudioInputError, match="NaN"):
         write_recording(tmp_path / "nan.wav", x * np.nan, FS)
+    with pytest.raises(InputFileError, match="a protected input's path must be a file name"):
+        write_recording(tmp_path / "sub.wav", x, FS, protect=3)  # (a builtin TypeError)
     for subtype in (None, 16):  # (a builtin AttributeError: 'NoneType' has no 'upper')
         with pytest.raises(AudioInputError, match="subtype must be a soundfile subtype name"):
             write_recording(tmp_path / "sub.wav", x, FS, subtype=subtype)

@@ -38,6 +38,7 @@ from hearsee.config import (
     real_entries,
     replacing,
     same_file,
+    true_or_false,
     whole_number,
 )
 from hearsee.errors import (
@@ -684,6 +685,10 @@ def read_recording(
     # OverflowError / TypeError once compared with the file's rate, "2" a ValueError)
     if fs is not None:
         fs = check_fs(fs)
+    # (min_samples "x", None or NaN were builtin ValueError / TypeError from int(); a
+    # resample of "no" resampled)
+    min_samples = whole_number("min_samples", min_samples, 0)
+    resample = true_or_false("resample", resample)
     want = None if n_channels is None else whole_number(
         "n_channels", getattr(n_channels, "n_mics", n_channels))
     paths = recording_paths(path)
@@ -1044,9 +1049,10 @@ def write_recording(
         raise AudioInputError(f"subtype must be a soundfile subtype name such as 'FLOAT' or "
                               f"'PCM_16', got {subtype!r}")
     if protect is not None:
-        items = [protect] if isinstance(protect, str | Path) else list(protect)
+        items = ([protect] if isinstance(protect, str | Path | os.PathLike)
+                 else list(protect) if isinstance(protect, Iterable) else [protect])
         for q in items:
-            if q is not None and same_file(p, q):
+            if q is not None and same_file(p, as_path(q, "a protected input's path")):
                 raise ConfigError(
                     f"{p}: refusing to overwrite the input file {q}; choose another output path"
                 )
