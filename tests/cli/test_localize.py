@@ -93,6 +93,19 @@ def test_other_formats(rec3, capsys, fmt):
         assert "t [s]" in out and "tdoa 0-1 [us]" in out and "azimuth [deg]" in out
 
 
+def test_csv_times_are_those_of_the_json(rec3, capsys):
+    """The CSV's t_s was written to 0.1 ms: with a hop of one sample (0.0625 ms at 16 kHz)
+    frames at 32.0625 and 32.125 ms were both 0.0321."""
+    args = ("--array", "three-mic", "--hop-ms", "0.0625", "--no-kalman")
+    code, out, _ = _run(capsys, rec3, *args, "--format", "csv")
+    assert code == 0
+    got = [float(r["t_s"]) for r in csv.DictReader(io.StringIO(out))]
+    code, out, _ = _run(capsys, rec3, *args, "--format", "json")
+    want = [f["t"] for f in json.loads(out)["frames"]]
+    assert len(got) == len(want) and len(set(got)) == len(got)
+    np.testing.assert_allclose(got, want, rtol=0, atol=6e-7)  # (to the microsecond)
+
+
 def _bad(tmp_path, name, data, fs=FS, subtype="FLOAT"):
     p = tmp_path / name
     sf.write(p, data, fs, subtype=subtype)

@@ -40,7 +40,9 @@ def _fmt(v: Any, digits: int = 1, null: str = "-") -> str:
 def _write_csv(doc: dict[str, Any]) -> None:
     """The frames as CSV, one row each; ``candidates`` is ``"az/el;az/el..."`` in degrees, an
     unresolved value (null in the JSON) empty there as in every column: ``"26.52/;153.48/"``
-    for a two-microphone array."""
+    for a two-microphone array. ``t_s`` to the microsecond (a sample at 192 kHz is 5.2 us):
+    to 0.1 ms it gave two frames one time at hops below 0.1 ms (0.0321 for 32.0625 and
+    32.125 ms, a one-sample hop at 16 kHz) until 2026-12-07."""
     labels = list(doc["summary"]["tdoa_s"])
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
@@ -50,7 +52,7 @@ def _write_csv(doc: dict[str, Any]) -> None:
     for f in doc["frames"]:
         cands = ";".join(f"{_fmt(c['azimuth_deg'], 2, '')}/{_fmt(c['elevation_deg'], 2, '')}"
                          for c in f["candidates"])
-        w.writerow([f"{f['t']:.4f}", *[_fmt(f["tdoa_s"][k], 9, null="") for k in labels],
+        w.writerow([f"{f['t']:.6f}", *[_fmt(f["tdoa_s"][k], 9, null="") for k in labels],
                     _fmt(f["azimuth_deg"], 2, null=""), _fmt(f["elevation_deg"], 2, null=""),
                     cands, f"{f['confidence']:.3f}", int(f["valid"]),
                     *([_fmt(f["source"], 0, null="")] if several else [])])
