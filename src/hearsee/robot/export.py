@@ -62,6 +62,7 @@ def _check_rerun_version() -> None:
         raise ConfigError(f"--rerun needs rerun-sdk {need} or later, found {old}: "
                           "pip install --upgrade 'hearsee[rerun]'")
 
+
 _POINT_STAMPED = """std_msgs/Header header
 geometry_msgs/Point point
 ================================================================================
