@@ -273,6 +273,12 @@ def test_two_channels_holding_one_signal_are_named(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error", DegenerateInputWarning)
         read_recording(_write(tmp_path / "quiet-pair.wav", w, subtype="PCM_16"))
+    # float samples of any size: a copy at 1e200 is named, and nothing overflows (squared in
+    # the norm, they were numpy's RuntimeWarning, which the CLI printed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        assert duplicate_channels(1e200 * x) == [(1, 3)]
+        assert duplicate_channels(1e200 * y) == [(0, 2), (1, 3)]
     # one channel, constant channels: nothing to pair
     assert duplicate_channels(x[:1]) == []
     c = np.vstack([x[:1], np.full((2, 8000), 0.02)])

@@ -971,7 +971,10 @@ def duplicate_channels(x: NDArray, step: float | None = None) -> list[tuple[int,
         return []
     few = x[:, ::max(1, x.shape[1] >> 18)]
     few = few - few.mean(axis=1, keepdims=True)
-    norm = np.linalg.norm(few, axis=1)
+    # (the norm of samples scaled to a peak of 1: squared, samples of 1e200 overflowed --
+    # numpy's RuntimeWarning, printed by the CLI)
+    scale = float(np.abs(few).max(initial=0.0)) or 1.0
+    norm = np.linalg.norm(few / scale, axis=1) * scale
     ok = norm > 0
     u = np.zeros_like(few)
     u[ok] = few[ok] / norm[ok, None]
