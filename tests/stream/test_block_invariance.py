@@ -98,3 +98,19 @@ def test_frame_gcc_takes_estimate_tdoas_window_and_margin_from_one_place():
     np.testing.assert_array_equal(gcc.activity.win, _window(DEFAULT_WINDOW, gcc.frame_len))
     lag = arr.max_tdoa(arr.pairs) * FS + DEFAULT_MARGIN_SAMPLES
     assert gcc.activity.nfft == gcc_nfft(gcc.frame_len, float(lag.max()))
+
+
+def test_stream_output_does_not_depend_on_the_recordings_scale():
+    """Float recordings beyond single precision's range: at 1e200 the stages' float32 made
+    every sample infinite ("recording contains NaN or infinite samples", `hearsee track` of a
+    float64 WAV), at 1e-300 zero (no source). ArraySource scales such a recording by a power
+    of two: the directions are those of the recording at its own scale."""
+    arr = load_array("three-mic")
+    traj = linear_trajectory([0.5, 2.0, 0.3], [0.0, -1.0, 0.0], 1.0)
+    x, _ = simulate_moving_recording(arr, traj, "noise", fs=FS, snr_db=20.0, seed=345)
+    t0, az0, _ = _run(arr, x, 2048)
+    assert np.isfinite(az0).sum() >= 10
+    for gain in (1e200, 1e-300):
+        t, az, _ = _run(arr, gain * x, 2048)
+        assert np.array_equal(t, t0) and np.array_equal(np.isfinite(az), np.isfinite(az0))
+        np.testing.assert_allclose(az[np.isfinite(az)], az0[np.isfinite(az0)], atol=1e-3)

@@ -359,6 +359,12 @@ class Source(Protocol):
     def blocks(self) -> Iterator[Block]: ...
 
 
+#: The sample magnitudes :class:`ArraySource` streams as they are; beyond, it scales the
+#: recording by a power of two (the stages work in single precision: 3.4e38 at most, 1.2e-38
+#: the smallest normal number)
+_SINGLE_SAFE = (1e-30, 1e30)
+
+
 class ArraySource:
     """Blocks of an in-memory recording ``x`` (n_ch, n) at ``fs`` Hz.
 
@@ -373,6 +379,12 @@ class ArraySource:
         # (NaN raised numpy's ValueError; 2.5 was truncated to 2 -- DeviceSource's rule: a
         # float, 2.0 included, is refused rather than rounded)
         block_len = whole_number("block_len", block_len)
+        # samples beyond single precision's comfortable range (float files: 1e200, 1e-300) are
+        # scaled by a power of two -- exact, and every stage is scale-free: the stages' single
+        # precision made 1e200 infinite ("NaN or infinite samples") and 1e-300 zero
+        peak = float(np.max(np.abs(a), initial=0.0))
+        if peak > 0.0 and not _SINGLE_SAFE[0] <= peak <= _SINGLE_SAFE[1]:
+            a = a * math.ldexp(1.0, -math.frexp(peak)[1])
         # (a rate of 0 divided by zero in the stream; a negative one read as "frame too short")
         self.x, self.fs, self.block_len = a, check_fs(fs), block_len
         self.n_channels = a.shape[0]
