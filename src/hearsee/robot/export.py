@@ -43,23 +43,17 @@ _EXTRAS = {"rerun": ("rerun", "--rerun needs the Rerun extra: pip install 'hears
 RERUN_MIN_VERSION = (0, 23)
 
 
-def _old_rerun() -> str | None:
-    """The installed rerun-sdk's version when it is older than :data:`RERUN_MIN_VERSION`,
-    else None (also when its version is unknown)."""
-    try:
-        v = _dist_version("rerun-sdk")
-    except PackageNotFoundError:
-        return None
-    m = re.match(r"(\d+)\.(\d+)", str(v))
-    return str(v) if m and tuple(map(int, m.groups())) < RERUN_MIN_VERSION else None
-
-
 def _check_rerun_version() -> None:
-    """ConfigError when the installed rerun-sdk is too old for :func:`write_rerun`."""
-    old = _old_rerun()
-    if old is not None:
+    """ConfigError when the installed rerun-sdk is older than :data:`RERUN_MIN_VERSION`, the
+    API :func:`write_rerun` uses (nothing when its version is unknown)."""
+    try:
+        v = str(_dist_version("rerun-sdk"))
+    except PackageNotFoundError:
+        return
+    m = re.match(r"(\d+)\.(\d+)", v)
+    if m and tuple(map(int, m.groups())) < RERUN_MIN_VERSION:
         need = ".".join(map(str, RERUN_MIN_VERSION))
-        raise ConfigError(f"--rerun needs rerun-sdk {need} or later, found {old}: "
+        raise ConfigError(f"--rerun needs rerun-sdk {need} or later, found {v}: "
                           "pip install --upgrade 'hearsee[rerun]'")
 
 
