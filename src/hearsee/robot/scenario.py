@@ -642,14 +642,15 @@ def _check_talkers_in_stereo_reach(people: tuple[PersonSpec, ...], robot: RobotS
     scene, whose talker stays within 2.5 m, with nothing said (0.3 m: verified at 1.2 s)."""
     from hearsee.vision.stereo import search_range_px
 
-    nearest = robot.focal_px * robot.baseline_m / search_range_px(robot.width)[1]
+    largest = search_range_px(robot.width)[1]  # (pixels)
+    nearest = robot.focal_px * robot.baseline_m / largest
     for k, p in enumerate(people):
         if not any(a < duration for a, _ in p.speaking):
             continue
         # (a straight walk's distance from a point is convex: largest at a waypoint)
         far = float(np.linalg.norm(p.path_m - robot.position_m, axis=1).max())
         if far < nearest:
-            most = far * search_range_px(robot.width)[1] / robot.focal_px
+            most = far * largest / robot.focal_px
             raise ConfigError(
                 f"{rw}.stereo.baseline_m: a {robot.baseline_m:g} m baseline at "
                 f"{robot.focal_px:g} px sees nothing nearer than {nearest:.2f} m (the stereo "
