@@ -222,6 +222,16 @@ def written_through(path: str | Path) -> bool:
     return not stat.S_ISREG(st.st_mode) or _standard_stream_fd(st) is not None
 
 
+def goes_to_stdout(path: str | Path) -> bool:
+    """Whether writing ``path`` writes what this process's standard output goes to:
+    ``/dev/stdout``, or the pipe, device or file the shell connected it to (``--mcap
+    /dev/stdout > run.mcap``)."""
+    try:
+        return os.path.samestat(os.stat(path), os.fstat(1))
+    except (OSError, ValueError):  # (no such file, or a closed standard output)
+        return False
+
+
 def _standard_stream_fd(st: os.stat_result) -> int | None:
     """1 or 2 when the file of ``st`` is the one this process's standard output or error
     goes to (a regular file the shell opened: ``> results.json``), else None."""

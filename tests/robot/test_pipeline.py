@@ -724,6 +724,25 @@ def test_rendered_objects_face_the_robot_turned_by_their_yaw():
                 assert turn == pytest.approx(expected, abs=1e-6), o
 
 
+def test_demo_mcap_to_standard_output_stays_an_mcap(tmp_path, monkeypatch, capfdbinary):
+    """`hearsee demo --mcap /dev/stdout > run.mcap`: the closing "report: ..." line was
+    appended after the MCAP's footer (its readers seek the footer at the end: unreadable);
+    with an export on standard output it goes to standard error. The run itself is stubbed."""
+    import hearsee.robot.pipeline as pl
+
+    pytest.importorskip("mcap")
+    frames = [(0.0, np.zeros((4, 6, 3), np.uint8))]
+    monkeypatch.setattr(pl, "run_scenario", lambda sc, progress=None, keep_images=True:
+                        pl.RunResult([], {"scenario": sc.name, "success": True}, {}, {}, frames))
+    out = tmp_path / "report"
+    assert main(["demo", "-o", str(out), "-q", "--mcap", "/dev/stdout"]) == 0
+    got = capfdbinary.readouterr()
+    assert got.out.startswith(b"\x89MCAP0\r\n") and got.out.endswith(b"\x89MCAP0\r\n")
+    assert got.err.decode().strip() == f"report: {out / 'index.html'}"
+    assert main(["demo", "-o", str(out), "-q"]) == 0  # (no export there: on standard output)
+    assert capfdbinary.readouterr().out.decode().strip() == f"report: {out / 'index.html'}"
+
+
 def test_demo_checks_the_export_extra_before_running(tmp_path, monkeypatch, capsys):
     """--mcap without its extra fails before the scenario runs: no report is written."""
     from hearsee.robot import export

@@ -82,6 +82,18 @@ def emit_json(obj: Any, *, indent: int | None = 2) -> None:
     sys.stdout.write(json.dumps(to_jsonable(obj), indent=indent) + "\n")
 
 
+def echo_done(lines: Iterable[str], written: Iterable[str | Path | None]) -> None:
+    """The lines a command prints when it is done (``report: ...``), on standard output --
+    or on standard error when one of the files it ``written`` is standard output's own
+    (``--mcap /dev/stdout > run.mcap``: the line appended after the MCAP's footer made it
+    unreadable, until 2026-12-07)."""
+    from hearsee.config import goes_to_stdout
+
+    to_err = any(goes_to_stdout(p) for p in written if p is not None)
+    for line in lines:
+        typer.echo(line, err=to_err)
+
+
 def refuse_overwrite(outputs: Iterable[str | Path | None], inputs: Iterable[str | Path | None],
                      force: bool) -> None:
     """Before a command does its work, each output file it will write: one that is also an

@@ -9,6 +9,7 @@ import typer
 from hearsee.cli._app import (
     app,
     check_exports,
+    echo_done,
     emit_json,
     folder_path,
     print_summary,
@@ -87,7 +88,7 @@ def demo_cmd(
             k: v for k, v in result.summary.items()
             if turns or k not in ("talker_changes", "talker_changes_followed",
                                   "time_to_follow_median_s")})
-    typer.echo(f"report: {index}")
+    echo_done([f"report: {index}"], [rerun, mcap])
 
 
 @app.command("eval")

@@ -17,6 +17,7 @@ import typer
 from hearsee.cli._app import (
     app,
     check_exports,
+    echo_done,
     err_console,
     folder_path,
     print_summary,
@@ -112,8 +113,8 @@ def run_cmd(
         write_mcap(mcap, result.log, result.frames, frame_id="robot")
     if not quiet:
         print_summary("hearsee run summary", result.summary)
-    typer.echo(f"updates: {cfg.output.jsonl}")
-    typer.echo(f"report: {index}")
+    echo_done([f"updates: {cfg.output.jsonl}", f"report: {index}"],
+              [rerun, mcap, cfg.output.jsonl])
     status = result.summary["status"]
     if status == "stalled":
         err_console.print("hearsee: error: audio: the input device stopped delivering samples",
