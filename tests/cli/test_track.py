@@ -212,6 +212,23 @@ def test_camera_pose_options_need_a_camera(scene, capsys, args, names):
                                  "image-point source (they place the camera)\n")
 
 
+def test_motion_model_ca_needs_a_camera(scene, capsys):
+    """--motion-model ca (the 3D tracker's constant-acceleration model) without --camera was
+    ignored: exit 0 and acceleration_mps2 null on every line, where the help and the README
+    promise it; now one error line before the audio is read. The default cv without a camera
+    stays a direction-only run."""
+    wav_args = ["track", str(scene["wav"]), "--array", str(scene["array"])]
+    assert main([*wav_args, "--motion-model", "ca"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == ("hearsee: error: --motion-model ca chooses the 3D tracker of a "
+                                 "calibrated camera's fixes: it needs --camera CAM.yaml and an "
+                                 "image-point source (without them there is no 3D track and no "
+                                 "acceleration_mps2)\n")
+    assert main([*wav_args, "--motion-model", "cv"]) == 0
+    assert all(json.loads(s)["position_m"] is None
+               for s in capsys.readouterr().out.strip().splitlines())
+
+
 @pytest.mark.parametrize(("args", "msg"), [
     (["--camera-pan", "1e300"], "--camera-pan must be in [-180, 180] degrees, got 1e+300"),
     (["--camera-pan", "-180.5"], "--camera-pan must be in [-180, 180] degrees, got -180.5"),

@@ -214,7 +214,8 @@ def track_cmd(
         "--in-plane", help="The speaker is at the height of a planar (three-mic) array: "
         "elevation 0, spherical wavefront of a source assumed 2 m away.")] = False,
     motion_model: Annotated[MotionModel, typer.Option(
-        "--motion-model", help="3D tracker with a calibrated camera: cv (constant velocity on "
+        "--motion-model", help="3D tracker with a calibrated camera (needs --camera): cv "
+        "(constant velocity on "
         "the image point and each pair's TDOA; the default: tracked median 4.3 cm on "
         "bench/tracking's room walks; acceleration_mps2 null) or ca (constant acceleration on "
         "the camera-ray fixes, thesis 5.4.3: also acceleration_mps2; 15 cm there).")
@@ -307,6 +308,11 @@ def track_cmd(
     if pose and camera is None:  # (they were ignored without a word)
         raise ConfigError(f"{' / '.join(pose)} need{'s' if len(pose) == 1 else ''} --camera "
                           "CAM.yaml and an image-point source (they place the camera)")
+    if motion_model is MotionModel.ca and camera is None:
+        # (it was ignored without a word: no 3D track, acceleration_mps2 null on every line)
+        raise ConfigError("--motion-model ca chooses the 3D tracker of a calibrated camera's "
+                          "fixes: it needs --camera CAM.yaml and an image-point source (without "
+                          "them there is no 3D track and no acceleration_mps2)")
     check_frame_ms(frame_ms, hop_ms, names=("--frame-ms", "--hop-ms"))
     whole_number("--sources", sources, 1, MAX_SOURCES)
     band = None if band_hz is None else parse_band(band_hz)
