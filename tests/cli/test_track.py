@@ -212,6 +212,21 @@ def test_camera_pose_options_need_a_camera(scene, capsys, args, names):
                                  "image-point source (they place the camera)\n")
 
 
+@pytest.mark.parametrize("args", [[], ["--camera", "CAM", "--image-points", "PTS"]])
+@pytest.mark.parametrize("name", ["face", "hog"])
+def test_detector_needs_a_video_or_a_live_camera(scene, capsys, args, name):
+    """--detector without --video / --camera-device (no camera at all, or --image-points,
+    which are the image point itself) was ignored, exit 0; now one error line before the
+    audio is read."""
+    args = [{"CAM": str(scene["cam"]), "PTS": str(scene["pts"])}.get(a, a) for a in args]
+    assert main(["track", str(scene["wav"]), "--array", str(scene["array"]), *args,
+                 "--detector", name]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == ("hearsee: error: --detector finds the speaker in the images of "
+                                 "--video or --camera-device; give one of them, or leave it "
+                                 "out\n")
+
+
 def test_motion_model_ca_needs_a_camera(scene, capsys):
     """--motion-model ca (the 3D tracker's constant-acceleration model) without --camera was
     ignored: exit 0 and acceleration_mps2 null on every line, where the help and the README

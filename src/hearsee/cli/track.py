@@ -186,8 +186,9 @@ def track_cmd(
         f"{IMAGE_POINT_MARGIN:.0%} of the image's larger side outside the camera's image "
         f"({IMAGE_POINT_MARGIN * 640:g} px of 640x480), is an error; a point nearer the edge "
         "is used as it is.")] = None,
-    detector: Annotated[Detector, typer.Option(
-        "--detector", help="Person detector for --video / --camera-device.")] = Detector.hog,
+    detector: Annotated[Detector | None, typer.Option(
+        "--detector", help="Person detector for --video / --camera-device (default hog).",
+        show_default=False)] = None,
     camera: Annotated[Path | None, typer.Option(
         "--camera", help="Camera calibration YAML.")] = None,
     camera_at: Annotated[str | None, typer.Option(
@@ -308,6 +309,10 @@ def track_cmd(
     if pose and camera is None:  # (they were ignored without a word)
         raise ConfigError(f"{' / '.join(pose)} need{'s' if len(pose) == 1 else ''} --camera "
                           "CAM.yaml and an image-point source (they place the camera)")
+    if detector is not None and video is None and camera_device is None:
+        # (it was ignored without a word: --image-points are the image point itself)
+        raise ConfigError("--detector finds the speaker in the images of --video or "
+                          "--camera-device; give one of them, or leave it out")
     if motion_model is MotionModel.ca and camera is None:
         # (it was ignored without a word: no 3D track, acceleration_mps2 null on every line)
         raise ConfigError("--motion-model ca chooses the 3D tracker of a calibrated camera's "
@@ -341,8 +346,8 @@ def track_cmd(
             points = CsvImagePoints(image_points, camera=cam)
         else:  # (a video file that delivers no frame: refused here, before the audio)
             points = VideoImagePoints(camera_device if video is None else video,
-                                      detector=detector.value, expected_size=cam.size,
-                                      where="--video")
+                                      detector=(detector or Detector.hog).value,
+                                      expected_size=cam.size, where="--video")
     cfg = StreamConfig(frame_ms=frame_ms, hop_ms=hop_ms, method=method.value.replace("gcc-", ""),
                        itd_filter=itd_filter, in_plane=in_plane,
                        direction_modes_dps2=IMM_MODES_DPS2 if tracker is Tracker.imm else None,
