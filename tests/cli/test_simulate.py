@@ -379,3 +379,19 @@ def test_simulate_hum_hz_without_a_harmonic_is_refused_before_any_work(tmp_path,
                      "--hum", "0", "--hum-hz", hz]) == 2
         err = capsys.readouterr().err
         assert msg in err and err.count("\n") == 1 and not out.exists()
+
+
+def test_simulate_hum_hz_needs_hum(tmp_path, capsys):
+    """--hum-hz without --hum was ignored: exit 0 and a recording without any hum (its truth
+    without hum_db / hum_hz), where the README's `--hum DB --hum-hz 50|60` pair was meant;
+    now one error line, exit 2, no file written. With --hum, --hum-hz defaults to 50 Hz."""
+    out = tmp_path / "h.wav"
+    base = ["simulate", str(out), "--array", "two-mic", "--source", "1,1,0", "--duration", "1"]
+    assert main([*base, "--hum-hz", "60"]) == 2
+    out_, err = capsys.readouterr()
+    assert err == ("hearsee: error: --hum-hz sets the fundamental of the mains hum that --hum "
+                   "DB adds; give --hum with it\n")
+    assert list(tmp_path.iterdir()) == []
+    assert main([*base, "--hum", "0"]) == 0
+    truth = json.loads(out.with_suffix(".json").read_text())
+    assert truth["hum_db"] == 0.0 and truth["hum_hz"] == 50.0

@@ -139,8 +139,9 @@ def simulate_cmd(
         None, "--hum", help="Static --source: mains hum picked up by the wiring (the same "
         "waveform on every channel, harmonics up to 2.5 kHz) at this level in dB relative to "
         "the signal, -60 to 60 (default: none)."),
-    hum_hz: float = typer.Option(50.0, "--hum-hz", help="The hum's fundamental in Hz (50 or "
-                                 "60 where the mains are)."),
+    hum_hz: float | None = typer.Option(None, "--hum-hz", help="With --hum: the hum's "
+                                        "fundamental in Hz (50 or 60 where the mains are; "
+                                        "default 50)."),
 ) -> None:
     """Simulate a recording of a static source (or a moving one: --trajectory; or one capture per
     head pose: --poses) and write OUT.wav + OUT.json (ground truth)."""
@@ -158,6 +159,9 @@ def simulate_cmd(
     if hum is not None and (trajectory is not None or poses is not None):
         raise ConfigError("--hum applies to a static --source only (not with --trajectory or "
                           "--poses)")
+    if hum_hz is not None and hum is None:  # (it was ignored: a recording without hum)
+        raise ConfigError("--hum-hz sets the fundamental of the mains hum that --hum DB adds; "
+                          "give --hum with it")
     _check_output(out, poses is not None)
     snr = check_snr_db(snr)  # (before the simulation: add_noise checks it only at its end)
     protect = [p for p in (signal, array) if Path(p).is_file()]  # inputs no output may replace
@@ -193,7 +197,8 @@ def simulate_cmd(
     with progress("simulating", total=1) as advance:
         x, truth = simulate_recording(array, src, signal=signal, duration_s=duration, fs=fs,
                                       snr_db=snr, room=room_spec, seed=seed,
-                                      far_field=far_field, hum_db=hum, hum_hz=hum_hz)
+                                      far_field=far_field, hum_db=hum,
+                                      hum_hz=50.0 if hum_hz is None else hum_hz)
         advance()
     wav, js = save_recording(out, x, truth, subtype="PCM_16" if pcm16 else "FLOAT",
                              protect=protect)
