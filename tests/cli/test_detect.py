@@ -299,6 +299,21 @@ def test_missing_and_broken_calibration(folder, capsys, tmp_path):
     assert "K" in _err(capsys)
 
 
+def test_min_support_needs_a_thermal_image(folder, capsys):
+    """--min-support without --thermal was ignored: exit 0 and the mannequin accepted as a
+    person by stereo alone, whatever support was asked for; now one error line. With
+    --thermal it still decides: support 1.0 is more than anyone's, so nobody is accepted."""
+    d, _ = folder
+    assert main(_args(d, "--min-support", "0.9", thermal=None)) == 2
+    assert _err(capsys) == ("hearsee: error: --min-support is the thermal support a candidate "
+                            "needs: give --thermal with it (without a thermal image the "
+                            "stereo detector alone decides)\n")
+    assert main(_args(d)) == 0
+    assert len(json.loads(capsys.readouterr().out)["humans"]) == 1  # the person, not the dummy
+    assert main(_args(d, "--min-support", "1")) == 0
+    assert json.loads(capsys.readouterr().out)["humans"] == []
+
+
 def test_thermal_without_thermal_camera(folder, capsys, tmp_path):
     d, scene = folder
     rig = scene.rig

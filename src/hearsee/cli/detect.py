@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from hearsee.cli._app import app, emit_json, refuse_overwrite
-from hearsee.errors import ImageInputError
+from hearsee.errors import ConfigError, ImageInputError
 
 
 @app.command("detect")
@@ -27,8 +27,9 @@ def detect_cmd(
              "to this file."),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing --overlay file."),
     tm: float = typer.Option(0.5, "--tm", help="Head-shoulder score threshold Tm (0..1)."),
-    min_support: float = typer.Option(
-        0.3, "--min-support", help="Thermal support needed to accept a candidate (0..1)."),
+    min_support: float | None = typer.Option(
+        None, "--min-support", help="With --thermal: thermal support needed to accept a "
+        "candidate (0..1; default 0.3)."),
     camera_height: float | None = typer.Option(
         None, "--camera-height",
         help="Height of the left camera above the floor, metres, 0.1-5 (prior for the floor "
@@ -68,8 +69,12 @@ def detect_cmd(
     overlay_p = Path(overlay) if overlay is not None else None
     if not 0.0 <= tm <= 1.0:
         raise typer.BadParameter(f"--tm must be in [0, 1], got {tm}")
-    if not 0.0 <= min_support <= 1.0:
+    if min_support is not None and not 0.0 <= min_support <= 1.0:
         raise typer.BadParameter(f"--min-support must be in [0, 1], got {min_support}")
+    if min_support is not None and thermal is None:  # (it was ignored: stereo alone decided)
+        raise ConfigError("--min-support is the thermal support a candidate needs: give "
+                          "--thermal with it (without a thermal image the stereo detector "
+                          "alone decides)")
     if camera_height is not None and not 0.1 <= camera_height <= 5.0:
         raise typer.BadParameter(f"--camera-height must be in [0.1, 5] metres, got {camera_height}")
     if camera_pitch is not None and not -80.0 <= camera_pitch <= 80.0:  # (NaN fails it too)
@@ -94,7 +99,8 @@ def detect_cmd(
                 "'thermal:' block (camera, R, T) to the calibration or leave out --thermal"
             )
         th = load_thermal(thermal_p, expected_size=rig.thermal.size)
-    res = detect_humans(L, R, rig, th, params=HumanDetectorParams(tm=tm), min_support=min_support,
+    res = detect_humans(L, R, rig, th, params=HumanDetectorParams(tm=tm),
+                        **({} if min_support is None else {"min_support": min_support}),
                         camera_height_m=camera_height, camera_pitch_deg=camera_pitch)
     _warn_degenerate(res.frame.disparity, th)
     if overlay_p is not None:
