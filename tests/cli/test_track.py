@@ -227,6 +227,28 @@ def test_detector_needs_a_video_or_a_live_camera(scene, capsys, args, name):
                                  "out\n")
 
 
+@pytest.mark.parametrize(("args", "msg"), [
+    (["--in-plane"], "--in-plane: the masked pair 'mask2-asym' is tracked by its own stages "
+                     "(ch. 3; tables of the horizontal plane) without an in-plane model; leave "
+                     "it out"),
+    (["--gate-coherence", "0.3"], "--gate-coherence: the masked pair 'mask2-asym' is tracked by "
+                                  "its own stages (ch. 3), without the steered response that "
+                                  "gated detection searches; leave it out"),
+])
+def test_options_a_masked_pair_does_not_use_are_refused(tmp_path, capsys, args, msg):
+    """--in-plane and --gate-coherence with mask2-asym were ignored: the same lines, to the
+    digit, as without them (the masked stages have no in-plane model and no steered
+    response), exit 0; `hearsee localize` refuses --in-plane there. Now one error line before
+    the recording is read (so before the mask's model is solved); --gate-coherence 0 (off,
+    the default) stays accepted."""
+    code = main(["track", str(tmp_path / "none.wav"), "--array", "mask2-asym", *args])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and err == f"hearsee: error: {msg}\n"
+    main(["track", str(tmp_path / "none.wav"), "--array", "mask2-asym", "--gate-coherence",
+          "0"])
+    assert "gate-coherence" not in capsys.readouterr().err
+
+
 def test_motion_model_ca_needs_a_camera(scene, capsys):
     """--motion-model ca (the 3D tracker's constant-acceleration model) without --camera was
     ignored: exit 0 and acceleration_mps2 null on every line, where the help and the README

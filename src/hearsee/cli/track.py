@@ -213,7 +213,8 @@ def track_cmd(
         "--itd-filter", help="Smooth TDOAs with the ITD Kalman filter first.")] = False,
     in_plane: Annotated[bool, typer.Option(
         "--in-plane", help="The speaker is at the height of a planar (three-mic) array: "
-        "elevation 0, spherical wavefront of a source assumed 2 m away.")] = False,
+        "elevation 0, spherical wavefront of a source assumed 2 m away. Not for a masked pair.")
+    ] = False,
     motion_model: Annotated[MotionModel, typer.Option(
         "--motion-model", help="3D tracker with a calibrated camera (needs --camera): cv "
         "(constant velocity on "
@@ -235,7 +236,7 @@ def track_cmd(
         "inside the running track's gate once it has coasted 0.2 s (tracker-aided detection, "
         "StreamConfig.gated_min_coherence; the grid's own threshold is 0.4). 0.3 lowered a "
         "weak talker's error through pauses in bench/tracking.py but lagged sharp turns by "
-        "up to ~2 more frames; 0 = off.")
+        "up to ~2 more frames; 0 = off. Not for a masked pair.")
     ] = 0.0,
     band_hz: Annotated[str | None, typer.Option(
         "--band-hz", help="LOW,HIGH: only this frequency band in Hz for the GCC (and, within "
@@ -328,6 +329,16 @@ def track_cmd(
     if not 0.0 <= gate_coherence <= 1.0:
         raise ConfigError(f"--gate-coherence must be in [0, 1] (0 = off), got {gate_coherence}")
     arr = load_array(array)
+    # (a masked pair's stream has neither: both were ignored without a word, as they are
+    # refused by `hearsee localize`)
+    if in_plane and arr.mask is not None:
+        raise ConfigError(f"--in-plane: the masked pair {arr.name!r} is tracked by its own "
+                          "stages (ch. 3; tables of the horizontal plane) without an in-plane "
+                          "model; leave it out")
+    if gate_coherence > 0 and arr.mask is not None:
+        raise ConfigError(f"--gate-coherence: the masked pair {arr.name!r} is tracked by its own "
+                          "stages (ch. 3), without the steered response that gated detection "
+                          "searches; leave it out")
     chosen = parse_channels(channels, arr.n_mics)
     # (a vertical line, a masked pair with a camera or several talkers: refused before any
     # audio)
