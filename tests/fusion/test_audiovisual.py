@@ -614,6 +614,27 @@ def test_tdoa_tracker_gates_a_far_fix_and_restarts_after_repeated_ones(side_rig)
     assert not RayTdoaTracker(rig).update_measurements(0.0, (320.0, 240.0), None, None)
 
 
+@pytest.mark.parametrize("gap_s", [10.0, 100.0])
+def test_tdoa_tracker_starts_anew_at_an_exact_fix_after_a_long_gap(side_rig, gap_s):
+    # a walker tracked for 1 s (exact pixels and TDOAs) stops while nothing is seen; the
+    # frame after the gap predicts the track far off with a covariance that holds no
+    # position, and the EKF linearised there kept it metres from the exact fix (this rig:
+    # 4.9 m after 10 s, 50 m after 100 s, the exact fix rejected; a pinhole camera: fused, 3.5
+    # and 668 m off), where RayTracker fused the same fix to a fraction of a millimetre
+    rig = side_rig
+    p0, v = np.array([1.5, -0.4, 0.1]), np.array([0.0, 0.5, 0.0])
+    trk, fixed = RayTdoaTracker(rig), RayTracker()
+    for t in [*np.arange(0.0, 1.0, 0.016), 1.0 + gap_s]:
+        p = p0 + v * min(t, 1.0)
+        uv, z = rig.project(p)[0], rig.array.tdoa(p)
+        fix = locate_on_ray(rig, uv, z, range_m=(0.2, 4.0), sigma_tdoa_s=RAY_SIGMA_TDOA_S)
+        fused = trk.update_measurements(t, uv, z, fix)
+        fixed.update(t, fix.position_m, fix.covariance)
+    assert np.linalg.norm(fixed.position - p) < 1e-3
+    assert np.linalg.norm(trk.position - p) < 1e-3 and fused
+    assert not trk.velocity_known  # (started anew: the velocity is its prior again)
+
+
 def test_tdoa_tracker_ignores_a_detection_on_someone_else_then_follows_them(side_rig):
     rig = side_rig
     trk, frames = _settled(rig, 9, 50)
