@@ -893,6 +893,22 @@ def test_track_on_rays_checks_its_search_settings_before_any_frame(rig):
     assert len(res.t) > 0 and np.all(np.isnan(res.raw))
 
 
+def test_track_on_rays_refuses_zero_noise_before_any_frame(rig):
+    """sigma_tdoa_s = 0 or sigma_px = 0 makes every fix's covariance singular, which the
+    trackers refuse (RayTracker, MotionKalman: 'a measurement covariance must be ... positive
+    definite' at the first fix, after the whole recording's GCC-PHAT; RayTdoaTracker: its own
+    'must be > 0', also after it); a recording without a fix took them silently. Refused
+    before any frame, as the stream's StreamConfig does."""
+    from hearsee.audio.tracking import MotionKalman
+
+    x = np.zeros((3, 1600))
+    for kw in ({"sigma_px": 0.0}, {"sigma_tdoa_s": 0.0}):
+        for trk in (RayTracker(), MotionKalman(), None):
+            with pytest.raises(EstimationError, match=f"{next(iter(kw))} must be a finite "
+                                                      "number > 0"):
+                track_on_rays(rig, x, 16000, lambda t: None, tracker=trk, **kw)
+
+
 def test_trackers_of_the_wrong_kind_are_refused_before_any_frame(rig):
     """track_on_rays(tracker="a") ran the whole recording's GCC-PHAT and then raised a builtin
     AttributeError ('str' object has no attribute 'update'), and feed_tracker did at once (None

@@ -992,8 +992,8 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
         Search interval along the camera ray, metres.
     sigma_tdoa_s, sigma_px : float
         Measurement noise behind each fix's covariance and the default tracker's measurements
-        (seconds, pixels); ``sigma_tdoa_s`` None = :data:`RAY_SIGMA_TDOA_S` (8 us, chosen with
-        :class:`RayTracker`'s defaults).
+        (seconds, pixels; > 0, EstimationError before any frame); ``sigma_tdoa_s`` None =
+        :data:`RAY_SIGMA_TDOA_S` (8 us, chosen with :class:`RayTracker`'s defaults).
     min_confidence : float
         Frames whose GCC confidence is below this in any pair give no fix.
     max_residual_samples : float
@@ -1016,9 +1016,12 @@ def track_on_rays(rig: AudioVisualRig, x: ArrayLike, fs: float, image_points: Ca
     # (checked by locate_on_ray only once a frame had an image point and TDOAs: a bad range
     # or sigma ran the whole GCC-PHAT first, and a recording without a fix never raised)
     _ray_range(range_m)
+    # (> 0, as the stream's: 0 gave every fix a singular covariance, which a fix-based tracker
+    # refused -- the run aborted at the first fix, after the GCC-PHAT -- and a recording
+    # without a fix took silently; the default tracker refused it only after the GCC-PHAT)
     if sigma_tdoa_s is not None:
-        finite_number("sigma_tdoa_s", sigma_tdoa_s, 0.0, error=EstimationError)
-    finite_number("sigma_px", sigma_px, 0.0, error=EstimationError)
+        finite_number("sigma_tdoa_s", sigma_tdoa_s, 0.0, lo_open=True, error=EstimationError)
+    finite_number("sigma_px", sigma_px, 0.0, lo_open=True, error=EstimationError)
     prs = list(rig.array.pairs)
     tf = estimate_tdoas(x, fs, rig.array, frame_ms, hop_ms, "phat", prs, refine="interp",
                         min_confidence=min_confidence)
