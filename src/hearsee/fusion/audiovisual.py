@@ -646,8 +646,9 @@ class RayTdoaTracker(RayTracker):
         Standard deviation of the image point per axis, pixels.
     gate_prob, pair_gate_prob, pixel_gate_prob : float
         Chi-square gate probabilities of the fix (3 dof), of each TDOA (1 dof) and of the image
-        point (2 dof; a detection on someone else). A frame whose image point or fix fails its
-        gate fuses nothing and counts toward ``max_rejects``.
+        point (2 dof; a detection on someone else). A frame whose image point fails its gate
+        fuses nothing; one whose fix fails its gate fuses its image point (which passed its
+        own) but none of its TDOAs; either counts toward ``max_rejects``.
     max_rejects, init_vel_sigma :
         As :class:`RayTracker`.
     covariance_scale : float
