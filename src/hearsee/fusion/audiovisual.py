@@ -514,7 +514,9 @@ class RayTracker(MotionKalman):
     ----------
     sigma_accel : float
         Standard deviation of the white acceleration, m/s^2 (0.2 chosen on the seed-100 walks
-        of ``bench/tracking.py`` part B, with fixes made with ``sigma_tdoa_s=8e-6``).
+        of ``bench/tracking.py`` part B, with fixes made with ``sigma_tdoa_s=8e-6``), held
+        constant over each prediction step (filterpy's ``Q_discrete_white_noise``): over a gap
+        the covariance grows less when it is predicted in many short steps than in one.
     gate_prob : float
         Chi-square gate probability (3 degrees of freedom).
     max_rejects : int
@@ -639,7 +641,7 @@ class RayTdoaTracker(RayTracker):
     pairs : list of (i, j), optional
         Microphone pairs of the TDOAs, default all pairs of the array.
     sigma_accel : float
-        White acceleration, m/s^2.
+        White acceleration, m/s^2, per prediction step (as :class:`RayTracker`).
     sigma_tdoa_s : float
         Standard deviation of one pair's TDOA, seconds.
     sigma_px : float
