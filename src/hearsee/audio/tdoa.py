@@ -175,6 +175,13 @@ _FALLBACK_CONFIDENCE = 1.5
 #: further from zero lag (on the same side) counts as the direct path of the highest one's
 #: family of reflections
 FIRST_ARRIVAL = 0.1
+#: ... a peak that counts must stand out of the highest one's lobe: its correlation dips by
+#: at least this share of the highest's height between them (:func:`_col_depth`). At 48 kHz a
+#: voice's main lobe is many samples wide and carries ripples 2 samples from its top, within
+#: 4-6 % of its height and dipping by 0.3-2 % (two microphones, free field, 14 of 32 voice
+#: summaries moved 2 samples off, 2026-12-07); reflections' peaks dip by 12-93 % (16 kHz,
+#: bench/doa's rooms) and 20-50 % (48 kHz, RT60 0.6 s).
+FIRST_ARRIVAL_PROMINENCE = 0.05
 #: :func:`estimate_tdoas` settings of the whole-recording estimate that ``bench/doa.py`` measures
 #: against pyroomacoustics and acoular (bench/results/doa.md): ML (Hannan-Thomson) weighting,
 #: switched to PHAT when the recording measures as reverberant, Hann frames (64 ms every 32,
@@ -1894,8 +1901,22 @@ def _first_arrival_peaks(win: NDArray, lags: NDArray, k: NDArray, delta: float) 
     side = np.sign(lags[k])[:, None]
     cand = (peak & (win >= top - delta * np.abs(top)) & (side != 0)
             & (lags[None, :] * side >= np.abs(lags[k])[:, None]))
+    need = FIRST_ARRIVAL_PROMINENCE * np.abs(top[:, 0])
+    for p, i in zip(*np.nonzero(cand), strict=True):  # (a few per recording)
+        if i != k[p] and _col_depth(win[p], int(i), int(k[p])) < need[p]:
+            cand[p, i] = False
     far = np.argmax(np.where(cand, np.abs(lags)[None, :], -1), axis=1)
     return np.where(cand.any(axis=1), far, k)
+
+
+def _col_depth(r: NDArray, i: int, k: int) -> float:
+    """How far correlation ``r`` dips below its peak at index ``i`` on the way toward index
+    ``k`` (the highest, ``r[k] >= r[i]``) before it is as high as ``r[i]`` again: the peak's
+    prominence on that side (its col). A ripple on the highest lobe's flank dips by a hair."""
+    step = 1 if k > i else -1
+    path = r[np.arange(i + step, k + step, step)]
+    higher = np.flatnonzero(path >= r[i])
+    return float(r[i] - path[: higher[0] + 1].min())
 
 
 def _corr_derivs(P: NDArray, tau: NDArray, nfft: int, bins: NDArray) -> tuple[NDArray, NDArray]:
@@ -2378,6 +2399,10 @@ def estimate_tdoas(
         The reasoning holds for a level pair (axis horizontal, as two ears are at any pan and
         tilt of hearsee's head); for a pair standing upright the floor's and ceiling's images
         arrive at LONGER lags and this rule can pick one of them: pass 0 there.
+        A peak counts only where it stands out of the highest one's lobe (the correlation dips
+        by :data:`FIRST_ARRIVAL_PROMINENCE` of the height between them; since 2026-12-07: at
+        48 kHz a voice's wide main lobe carries ripples 2 samples from its top, which moved a
+        third of free-field two-microphone voice summaries 2-4 samples off).
     source_in_plane : bool
         With a planar array of 3+ microphones, the joint whole-recording peak search
         (``joint``) steers only directions in the array plane instead of the whole sphere --
