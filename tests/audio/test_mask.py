@@ -167,6 +167,26 @@ def test_cache_roundtrip_and_key(model, cache_root):
     assert other.key != model.key
 
 
+@pytest.mark.parametrize("damage", ["empty", "truncated"])
+def test_unreadable_cache_files_are_recomputed(tmp_path, monkeypatch, damage):
+    """An empty or truncated cache file is recomputed and overwritten, as a garbled one is: an
+    empty one raised numpy's EOFError ('hearsee localize' said "interrupted" and exited 130),
+    a truncated one zipfile's BadZipFile (a traceback)."""
+    monkeypatch.setenv("HEARSEE_CACHE_DIR", str(tmp_path))
+    arr = _coarse(mesh_subdivision=3, df=500.0, f_max=1000.0)
+    first = mask.MaskModel(arr, progress=False)
+    truth = (first.solution.v, first.table(None)[1], first.sphere_table(16)[1])
+    files = sorted((tmp_path / "mask").glob("*.npz"))
+    assert len(files) == 3
+    for f in files:
+        f.write_bytes(b"" if damage == "empty" else f.read_bytes()[:100])
+    again = mask.MaskModel(arr, progress=False)
+    np.testing.assert_array_equal(again.solution.v, truth[0])
+    np.testing.assert_array_equal(again.table(None)[1], truth[1])
+    np.testing.assert_array_equal(again.sphere_table(16)[1], truth[2])
+    assert all(f.stat().st_size > 1000 for f in files)  # overwritten with whole files
+
+
 def test_left_right_mirror_symmetry(model):
     # the egg is symmetric in y: a source at -az is heard with the microphones swapped
     h = model.transfer(np.stack([_src(40), _src(-40)]), far_field=True)

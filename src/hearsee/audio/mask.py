@@ -78,6 +78,7 @@ import json
 import os
 import sys
 import warnings
+import zipfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -151,6 +152,10 @@ TABLE_DISTANCES: tuple[float | None, ...] = (None, 1.0, 0.5)
 _EGG_KEYS = ("shape", "centre", "front", "back", "half_width", "half_height")
 _EGG_OPTIONAL = ("yaw_deg",)
 _COMMON_KEYS = ("f_max", "df", "elements_per_wavelength", "mesh_subdivision", "tolerance")
+#: What reading a cache file that is not a whole ``.npz`` raises: it is recomputed and
+#: overwritten. (An empty file raised numpy's EOFError -- ``hearsee localize`` said
+#: "interrupted", click's reading of an EOFError -- a truncated one zipfile's BadZipFile.)
+_UNREADABLE = (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile)
 
 
 def cache_dir() -> Path:
@@ -491,7 +496,7 @@ class MaskModel:
                 return bem.AdjointSolution(z["freqs"], z["v"], z["c"], z["eval_points"],
                                            z["row_points"], mesh=self.mesh,
                                            speed_of_sound=self.c)
-            except (OSError, KeyError, ValueError):
+            except _UNREADABLE:
                 pass  # unreadable cache file: recompute and overwrite
         sol = self._compute()
         if self.cache:
@@ -652,7 +657,7 @@ class MaskModel:
                 # whose sampling moved them would have paired these responses with other
                 # directions without a word)
                 h = z["h"] if np.allclose(z["u"], u, rtol=0.0, atol=1e-9) else None
-            except (OSError, KeyError, ValueError):
+            except _UNREADABLE:
                 h = None
         if h is None or h.shape != (n, 2, len(self.freqs)):
             sol, step = self.solution, 256
@@ -752,7 +757,7 @@ class MaskModel:
         if self.cache and path.is_file():
             try:
                 h = np.load(path)["h"]
-            except (OSError, KeyError, ValueError):
+            except _UNREADABLE:
                 h = None
         if h is None:
             h = bem.transfer_functions(self.solution, src, distance is None, self.c)
