@@ -306,6 +306,22 @@ def test_localize_bad_input(model):
             mask.simulate_masked(white_noise(0.1, FS, rng=3), fs, model, _src(120, 1.0))
 
 
+def test_localize_is_scale_free(asym):
+    """A recording's scale does not change its answer (power-of-two scaling is exact): at 1e-100
+    and 1e80 it was "no coherent source found" (the averaged spectra's products under- and
+    overflowed), at 1e-80 a front/back probability of 0.06 for a source at 130 deg, with
+    RuntimeWarnings; every estimate of hearsee is scale-free (a bare pair's at any of them)."""
+    x = mask.simulate_masked(white_noise(0.5, FS, rng=7), FS, asym, _src(130), snr_db=30,
+                             rng=2, far_field=True)
+    ref = mask.localize_mask(x, FS, asym)
+    assert abs(ref.azimuth_deg - 130.0) < 2.0 and ref.front_probability < 0.01
+    for scale in (2.0**-332, 2.0**-266, 2.0**266, 2.0**332):  # ~1e-100, 1e-80, 1e80, 1e100
+        est = mask.localize_mask(x * scale, FS, asym)  # (x times a power of two: exactly)
+        assert est.azimuth_deg == ref.azimuth_deg
+        assert est.front_probability == ref.front_probability
+        np.testing.assert_array_equal(est.iid_db, ref.iid_db)
+
+
 def test_localize_recording_document(model):
     """A source behind on the right (200 deg = -160 deg): the summary and every frame give it in
     (-180, 180] as on every other array (the document gave 200 until 2026-12-01), the frames

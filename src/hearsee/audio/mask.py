@@ -1454,6 +1454,10 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
         raise AudioInputError(f"a masked array recording needs 2 channels (2, n), got {x.shape}")
     if not np.any(x):
         raise AudioInputError("recording is all zeros")
+    # scale-free, as every estimate: the peak brought to [0.5, 1) by a power of two (exact). The
+    # products of the averaged spectra under- or overflowed: a recording at 1e-100 or 1e80 was
+    # "no coherent source found", at 1e-80 another front/back probability with RuntimeWarnings
+    x = np.ldexp(x, -int(np.frexp(np.max(np.abs(x)))[1]))
     fs = check_fs(fs)
     check_frame_ms(frame_ms, frame_ms / 2, names=("frame_ms", "half frame"))
     _check_decision_settings(distances, sigma_iid_db, phase_weight)
