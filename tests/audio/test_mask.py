@@ -322,6 +322,24 @@ def test_localize_is_scale_free(asym):
         np.testing.assert_array_equal(est.iid_db, ref.iid_db)
 
 
+def test_one_frame_recording_reports_no_band_iids(asym):
+    """A recording of one 32-ms frame (600 samples) has no coherent part to split off (one
+    frame's |C|^2 is P0 P1 whatever it holds): its band IIDs are not measured (NaN, null in
+    'hearsee localize' JSON). They were -140 to -170 dB or infinite where the mask's are -1 to
+    -6 dB; the azimuth, from the interaural phase, stays right."""
+    x = mask.simulate_masked(white_noise(0.5, FS, rng=7), FS, asym, _src(130), snr_db=30,
+                             rng=2, far_field=True)
+    bands = [200.0, 600.0, 1100.0, 1600.0, 1800.0]  # (each holds a frequency of the model)
+    table = asym.responses(bands_hz=bands).iid_db[130]
+    assert np.all((table < 0) & (table > -8))  # (the truth the one frame's IIDs missed)
+    est = mask.localize_mask(x[:, :600], FS, asym, bands_hz=bands)
+    assert np.all(np.isnan(est.iid_db))
+    assert abs(est.azimuth_deg - 130.0) < 2.0 and est.front_probability < 0.5
+    # three frames: measured, near the table's
+    est3 = mask.localize_mask(x[:, :1024], FS, asym, bands_hz=bands)
+    assert np.all(np.abs(est3.iid_db - table) < 2.0)
+
+
 def test_localize_recording_document(model):
     """A source behind on the right (200 deg = -160 deg): the summary and every frame give it in
     (-180, 180] as on every other array (the document gave 200 until 2026-12-01), the frames

@@ -1300,7 +1300,12 @@ def _coherent_power(p0: NDArray, p1: NDArray, cr: NDArray, n_frames: int
                     ) -> tuple[NDArray, NDArray]:
     """Powers of the coherent (source) part at each microphone, removing equal uncorrelated noise:
     S0 S1 = |C|^2 and S0 - S1 = P0 - P1, with |C|^2 debiased by the estimation floor
-    P0 P1 / K of an average over K frames."""
+    P0 P1 / K of an average over K frames. NaN (not measured) for K <= 1: one frame's
+    ``|C|^2`` is ``P0 P1`` whatever it holds, and the debiasing left no coherent power (the
+    band IIDs of a one-frame recording came out at -150 dB or infinite, where they were -1
+    to -5 dB)."""
+    if not n_frames > 1:
+        return np.full(np.shape(p0), np.nan), np.full(np.shape(p1), np.nan)
     d = p0 - p1
     c2 = np.maximum(np.abs(cr) ** 2 - p0 * p1 / max(n_frames, 1), 0.0)
     s1 = 0.5 * (-d + np.sqrt(d**2 + 4 * c2))
