@@ -1247,3 +1247,21 @@ def test_pose_mlp_scores_and_predicts_only_numbers():
         mlp.score(X, np.full_like(Y, np.nan))
     with pytest.raises(EstimationError, match=r"PoseItdMLP.predict needs TDOAs"):
         mlp.predict("abc")
+
+
+@pytest.mark.parametrize("poses", [[(0, 0)], [(0, 0), (0, 0)], [(0, 0), (0, 30), (0, -30)],
+                                   [(20, 0), (20, 0), (20, 0)]])
+def test_a_cone_of_directions_has_no_finite_direction_std(poses):
+    """One microphone pair, at one pose or turned only about its own axis (two-mic's tilt is
+    about the pair's y axis), fixes only a cone of directions: its direction 1-sigma is
+    infinite. The 2x2 matrix of the far-field direction was inverted in floating point: 0.0
+    deg for tilts 0, +-30 (a cone called exact; ``hearsee localize3d`` printed it) and 1.3e8
+    deg for the single pose."""
+    two = load_array("two-mic")
+    src = np.array([1.0, 0.6, 0.4])
+    est = localize_multipose(true_tdoas(two, src, poses, offset=(0, 0, 0)), poses, two)
+    assert not est.unique and len(est.candidates) > 2
+    assert est.direction_std_deg == np.inf
+    # a determined direction keeps its finite 1-sigma (pan turns the pair: two mirror cones)
+    one = localize_multipose(true_tdoas(ARR, src, [(0, 0)], offset=(0, 0, 0)), [(0, 0)], ARR)
+    assert one.direction_std_deg == pytest.approx(1.7134, abs=1e-3)

@@ -588,7 +588,8 @@ def position_uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: floa
     (seconds) of the pairs ``(a[k], b[k])`` of microphones ``M`` (n, 3) (metres), speed of
     sound ``c`` (m/s): position covariance (m^2), relative 1-sigma distance from ``ref``,
     angular 1-sigma seen from ``ref`` (degrees; conditional on the distance when its relative
-    1-sigma exceeds ``max_rel_distance_std``) and the Jacobian's condition number.
+    1-sigma exceeds ``max_rel_distance_std``; inf where the TDOAs leave a cone of directions,
+    e.g. one pair) and the Jacobian's condition number.
 
     ``C = s^2 (J^T J)^-1`` with J = :func:`pair_tdoa_jacobian` at ``p`` (per-pair TDOA errors
     taken as independent) and ``s^2`` the larger of ``sig^2`` (the declared TDOA standard
@@ -617,7 +618,13 @@ def position_uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: floa
     else:
         E = np.linalg.svd(P)[0][:, :2]  # basis orthogonal to u
         Jt = J @ E
+        wt = np.linalg.eigvalsh(Jt.T @ Jt)
         try:
+            # a rank-deficient J^T J (one pair, or poses turned only about its axis: a cone of
+            # directions) has no inverse; inverted in floating point it gave 0 deg (a cone
+            # called exact) or 1e8 deg, by rounding
+            if not wt[0] > 1e-10 * wt[-1]:
+                raise np.linalg.LinAlgError
             ang = np.sqrt(max(np.trace(s2 * np.linalg.inv(Jt.T @ Jt)), 0.0)) / r
         except np.linalg.LinAlgError:
             ang = np.inf
