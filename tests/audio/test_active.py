@@ -20,7 +20,13 @@ from hearsee.audio.active import (
 from hearsee.audio.arrays import MicArray, load_array
 from hearsee.audio.signals import white_noise
 from hearsee.errors import AudioInputError, ConfigError, EstimationError, GeometryError
-from hearsee.geometry import HeadPose, angle_between, direction_deg, mic_positions_at
+from hearsee.geometry import (
+    HeadPose,
+    angle_between,
+    direction_deg,
+    mic_positions_at,
+    unit_vector_deg,
+)
 
 ARR = load_array("three-mic")
 OFF = (0.1, 0.0, 0.05)
@@ -1265,3 +1271,26 @@ def test_a_cone_of_directions_has_no_finite_direction_std(poses):
     # a determined direction keeps its finite 1-sigma (pan turns the pair: two mirror cones)
     one = localize_multipose(true_tdoas(ARR, src, [(0, 0)], offset=(0, 0, 0)), [(0, 0)], ARR)
     assert one.direction_std_deg == pytest.approx(1.7134, abs=1e-3)
+
+
+def test_one_microphone_moved_along_a_line_claims_no_covariance():
+    """One microphone moved along a line hears a circle of sources about it (every point of
+    the circle has the same range differences): J^T J is singular in all but rounding, which
+    np.linalg.inv took -- a covariance with an eigenvalue of -1.2e12 m^2, a direction 1-sigma
+    of 0.0 deg and one point of the circle as the position. Unknown instead (the far-field cone
+    of directions, each on it)."""
+    src = np.array([1.2, -0.7, 0.5])
+    P = np.array([[0, 0, 0], [0.1, 0, 0], [0.25, 0, 0], [0.4, 0, 0], [0.6, 0, 0]], float)
+    est = localize_one_mic(np.linalg.norm(src - P, axis=1) / 343.0, P)
+    assert est.covariance is None and est.position_m is None and not est.unique
+    assert est.direction_std_deg == np.inf and est.distance_rel_std == np.inf
+    # every candidate direction lies on the cone of the source's angle to the line
+    cone = np.degrees(np.arccos((src - P.mean(axis=0))[0] / np.linalg.norm(src - P.mean(0))))
+    for c in est.candidates:
+        u = unit_vector_deg(c["azimuth_deg"], c["elevation_deg"])
+        assert np.degrees(np.arccos(u[0])) == pytest.approx(cone, abs=1.0)
+    # a virtual array spanning 3D still gives the point and a positive covariance
+    P3 = np.array([[0, 0, 0], [0.3, 0, 0], [0, 0.3, 0], [0, 0, 0.3], [0.2, 0.2, 0.2]], float)
+    est = localize_one_mic(np.linalg.norm(src - P3, axis=1) / 343.0, P3)
+    np.testing.assert_allclose(est.position_m, src, atol=1e-3)
+    assert np.all(np.linalg.eigvalsh(est.covariance) > 0)

@@ -658,9 +658,16 @@ def _linearised_covariance(JtJ: NDArray, s2: float, v: NDArray,
     the relative 1-sigma of the length of ``v`` (the position from its reference point,
     metres) under it; with ``basis`` (k, 3) orthonormal rows, ``J`` was taken along them
     (``J B^T``: the position held in their span) and ``C = B^T s2 (J^T J)^-1 B`` (zero across
-    it). A singular ``J^T J`` gives an infinite C and rel. The step shared by
+    it). A singular ``J^T J`` (to rounding: smallest eigenvalue at most 1e-12 of the largest)
+    gives an infinite C and rel. The step shared by
     :func:`position_uncertainty` and the in-plane fit of
     :func:`hearsee.audio.localize.near_field_in_plane`."""
+    w = np.linalg.eigvalsh(JtJ)
+    if not w[0] > 1e-12 * w[-1]:
+        # (singular in all but rounding -- one microphone moved along a line, a circle of
+        # sources -- np.linalg.inv did not raise: a covariance with an eigenvalue of -1e12 m^2,
+        # a direction 1-sigma of 0 deg and a distance called known)
+        return np.full((3, 3), np.inf), float("inf")
     try:
         cov = s2 * np.linalg.inv(JtJ)
     except np.linalg.LinAlgError:
