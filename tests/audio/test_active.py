@@ -1294,3 +1294,31 @@ def test_one_microphone_moved_along_a_line_claims_no_covariance():
     est = localize_one_mic(np.linalg.norm(src - P3, axis=1) / 343.0, P3)
     np.testing.assert_allclose(est.position_m, src, atol=1e-3)
     assert np.all(np.linalg.eigvalsh(est.covariance) > 0)
+
+
+def test_simulated_poses_sources_and_pose_functions_of_the_wrong_kind_are_geometry_errors():
+    """simulate_pose_captures read its source with np.asarray (True as 1 m, "0.5" as 0.5 m,
+    text numpy's ValueError) and iterated its poses (None a builtin TypeError, [] no capture);
+    a pose where the turning head's function of time belongs was called: "'tuple' object is not
+    callable"; train_pose_mlp's poses None, a TypeError."""
+    sig = white_noise(0.2, 8000, 0)
+    with pytest.raises(GeometryError, match="source_m"):
+        simulate_pose_captures(sig, 8000, ARR, [True, 0.0, 0.0], [(0, 0)])
+    with pytest.raises(GeometryError, match="source_m"):
+        simulate_pose_captures(sig, 8000, ARR, "abc", [(0, 0)])
+    with pytest.raises(GeometryError, match="poses must be a sequence"):
+        simulate_pose_captures(sig, 8000, ARR, [1.0, 0.5, 0.2], None)
+    with pytest.raises(GeometryError, match="at least one head pose"):
+        simulate_pose_captures(sig, 8000, ARR, [1.0, 0.5, 0.2], [])
+    with pytest.raises(GeometryError, match="pose_at must be a function"):
+        simulate_turning_capture(sig, 8000, ARR, [1.0, 0.5, 0.2], (0, 0))
+    with pytest.raises(GeometryError, match="pose_at must be a function"):
+        localize_continuous(np.zeros((3, 8000)), 8000, ARR, (0, 0))
+    with pytest.raises(GeometryError, match="poses must be a sequence"):
+        train_pose_mlp(ARR, None, n=20)
+    # the right kinds still simulate the exact delays: the source in the robot frame
+    src = np.array([1.0, 0.5, 0.2])
+    x = simulate_pose_captures(white_noise(0.5, 16000, 1), 16000, ARR, src, [(30, 10)])[0]
+    tau = capture_tdoas(x, 16000, ARR)
+    np.testing.assert_allclose(tau, true_tdoas(ARR, src, [(30, 10)], offset=(0, 0, 0))[0],
+                               atol=2e-5)

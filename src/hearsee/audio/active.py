@@ -763,10 +763,12 @@ def simulate_pose_captures(
 
     arr = load_array(array)
     rng = as_rng(rng)
-    src = np.asarray(source_m, dtype=float)
+    # (np.asarray read True as 1 m and "0.5" as 0.5 m, text was numpy's ValueError; poses None
+    # a builtin TypeError, [] an empty list of captures)
+    src = as_point(source_m, "source_m")
     out = []
-    for pose in poses:
-        mics = mic_positions_at(arr, as_pose(pose), pivot_m, offset_m)
+    for pose in pose_list(poses):
+        mics = mic_positions_at(arr, pose, pivot_m, offset_m)
         if room_dim is None:
             y = prop.simulate_free_field(signal, fs, mics, src, snr_db=snr_db, rng=rng,
                                          speed_of_sound=arr.speed_of_sound)
@@ -994,7 +996,7 @@ def train_pose_mlp(array: MicArray | str, poses: Sequence[HeadPose | Sequence[fl
     # checked before the cache key's conversions (float() read True as 1 m or 1 s, int() 2.5
     # training samples as 2)
     return _train_cached(key, arr.speed_of_sound,
-                         tuple(as_pose(p).as_tuple() for p in poses),
+                         tuple(p.as_tuple() for p in pose_list(poses)),
                          tuple(as_point(pivot_m, "pivot_m").tolist()),
                          tuple(as_point(offset_m, "offset_m").tolist()),
                          whole_number("n (training samples)", n, MIN_MLP_SAMPLES,
@@ -1005,6 +1007,14 @@ def train_pose_mlp(array: MicArray | str, poses: Sequence[HeadPose | Sequence[fl
 
 
 # ------------------------------------------------------------------------ continuous sampling
+def _check_pose_at(pose_at: Any) -> None:
+    """GeometryError unless ``pose_at`` is a callable ``t -> pose`` (a pose itself was called
+    and raised a builtin TypeError: "'tuple' object is not callable")."""
+    if not callable(pose_at):
+        raise GeometryError(f"pose_at must be a function of time t (s) returning the head pose "
+                            f"(pan_deg, tilt_deg), got {pose_at!r:.60}")
+
+
 def simulate_turning_capture(
     signal: ArrayLike,
     fs: float,
@@ -1033,6 +1043,7 @@ def simulate_turning_capture(
     # (before any work: fs=0 divided by zero, warned, and failed on the infinite pose)
     check_fs(fs)
     check_rng(rng)
+    _check_pose_at(pose_at)
     block_s = finite_number("block_s (seconds)", block_s, 0.0, lo_open=True, error=GeometryError)
     sig = as_samples(signal, "signal")
     n = len(sig)
@@ -1085,6 +1096,7 @@ def localize_continuous(
     from hearsee.audio.tdoa import estimate_tdoas
 
     group_frames = whole_number("group_frames", group_frames, 1, error=GeometryError)
+    _check_pose_at(pose_at)
     arr = load_array(array)
     fr = estimate_tdoas(x, fs, arr, frame_ms=frame_ms, hop_ms=hop_ms)
     idx = np.flatnonzero(fr.valid)
