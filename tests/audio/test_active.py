@@ -1322,3 +1322,36 @@ def test_simulated_poses_sources_and_pose_functions_of_the_wrong_kind_are_geomet
     tau = capture_tdoas(x, 16000, ARR)
     np.testing.assert_allclose(tau, true_tdoas(ARR, src, [(30, 10)], offset=(0, 0, 0))[0],
                                atol=2e-5)
+
+
+def test_localize3d_names_the_manifests_channels_for_a_capture_of_other_channels(
+        pose_manifest, tmp_path, capsys):
+    """A capture with more channels than the array's microphones was refused with the remedy
+    "choose the microphones' with --channels": an option of `hearsee localize` that localize3d
+    has not (typer's "No such option"); the manifest's channels key is the remedy there, and
+    with it the same captures localize."""
+    import json
+
+    import soundfile as sf
+    import yaml
+
+    from hearsee.cli import main
+
+    man, files, src = pose_manifest
+    doc = yaml.safe_load(man.read_text())
+    for k, c in enumerate(doc["captures"]):  # a device's 4 channels: its playback first
+        x, fs = sf.read(files[k], dtype="float32")
+        wide = np.column_stack([0.01 * x[:, 0], x])
+        c["file"] = str(tmp_path / f"wide{k}.wav")
+        sf.write(c["file"], wide, fs, subtype="FLOAT")
+    bad = tmp_path / "wide.yaml"
+    bad.write_text(yaml.safe_dump(doc))
+    assert main(["localize3d", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "has 4 channels" in err[0]
+    assert "--channels" not in err[0] and "the manifest's channels: list" in err[0]
+    doc["channels"] = [1, 2, 3]
+    bad.write_text(yaml.safe_dump(doc))
+    assert main(["localize3d", str(bad)]) == 0
+    got = json.loads(capsys.readouterr().out)
+    np.testing.assert_allclose(got["position_m"], src, atol=0.05)

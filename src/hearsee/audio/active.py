@@ -1625,7 +1625,13 @@ def localize_manifest(path: Any, *, frame_ms: float = 64.0, hop_ms: float = 32.0
     man = load_pose_manifest(path)
     taus = []
     for f in man.files:
-        x, fs = read_recording(f, n_channels=man.array, channels=man.channels)
+        try:
+            x, fs = read_recording(f, n_channels=man.array, channels=man.channels)
+        except AudioInputError as exc:
+            # (the remedy named `hearsee localize`'s --channels, an option localize3d has not:
+            # a manifest picks its microphones with its channels key)
+            raise AudioInputError(str(exc).replace(
+                "with --channels)", "with the manifest's channels: list)")) from None
         try:
             taus.append(capture_tdoas(x, fs, man.array, frame_ms=frame_ms, hop_ms=hop_ms,
                                       method=method))
