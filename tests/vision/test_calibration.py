@@ -883,3 +883,24 @@ def test_calibration_flags_must_be_true_or_false():
             C.find_corners(np.zeros((60, 80), np.uint8), PATTERN, try_inverted=bad)
     assert C.find_corners(np.zeros((60, 80), np.uint8), PATTERN, try_inverted=np.bool_(True)) \
         is None
+
+
+def test_an_image_too_thin_for_a_board_is_not_found(tmp_path):
+    """A strip under 15 px high (640x8: at least 640 wide, so not enlarged) reached OpenCV's
+    classic detector, whose adaptive threshold raised cv2.error (-215 blockSize > 1): `hearsee
+    calibrate` on such files ended in a traceback. No board is found in it: None, and the
+    rig calibration's "not found in any image"."""
+    rng = np.random.default_rng(0)
+    for h, w in ((8, 640), (14, 700), (1, 640), (3, 1000)):
+        strip = rng.integers(0, 256, (h, w)).astype(np.uint8)
+        assert C.find_corners(strip, PATTERN) is None
+        assert C.find_corners(strip, PATTERN, upscale=1, try_inverted=True) is None
+    files = {}
+    for side in ("left", "right"):
+        files[side] = []
+        for i in range(3):
+            p = tmp_path / f"{side}{i}.png"
+            cv2.imwrite(str(p), rng.integers(0, 256, (8, 640)).astype(np.uint8))
+            files[side].append(p)
+    with pytest.raises(CalibrationError, match="not found in any image"):
+        C.calibrate_rig(files["left"], files["right"], PATTERN, SQUARE)

@@ -200,6 +200,9 @@ def match_labeling(reference: NDArray, corners: NDArray, pattern: tuple[int, int
 #: :func:`find_corners` enlarges an image to at most this many pixels on a side (a 4K frame
 #: is 3840 wide; the thermal cameras it enlarges are a few hundred)
 MAX_UPSCALED_PX = 8192
+#: OpenCV's classic chessboard detector (the fallback of :func:`find_corners`) raises on an
+#: image smaller than this on a side; such an image holds no board it could find
+MIN_CLASSIC_SIDE_PX = 15
 
 
 def find_corners(image: NDArray, pattern: tuple[int, int], *, try_inverted: bool = False,
@@ -234,7 +237,9 @@ def find_corners(image: NDArray, pattern: tuple[int, int], *, try_inverted: bool
     candidates = [g, 255 - g] if try_inverted else [g]
     for img in candidates:
         ok, c = cv2.findChessboardCornersSB(img, pattern, cv2.CALIB_CB_ACCURACY)
-        if not ok:
+        # (the classic detector's adaptive threshold needs a block of round(0.1 * the smaller
+        # side) | 1 > 1 pixels: an image under 15 px on a side, e.g. 640x8, was cv2.error)
+        if not ok and min(img.shape[:2]) >= MIN_CLASSIC_SIDE_PX:
             flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
             ok, c = cv2.findChessboardCorners(img, pattern, flags)
             if ok:
