@@ -66,7 +66,8 @@ __all__ = [
 #: is a sub-grid of the real board (3x3 on a 9x6 board) is still "found" in every image, at a
 #: different place in each, and gave 5.7-9.4 px intrinsics and 15-74 px stereo errors with a
 #: focal length off by a factor of 3-6 -- written as the rig, with exit status 0, until
-#: 2026-11-25's sixteenth session.
+#: 2026-11-25's sixteenth session. :func:`calibrate_thermal_extrinsics` refuses a median
+#: per-view error above it.
 MAX_RMS_PX = 3.0
 
 #: :func:`calibrate_camera` refuses a calibration whose focal length has a relative standard
@@ -708,7 +709,9 @@ def calibrate_thermal_extrinsics(rig: StereoRig, thermal: Camera,
 
     Returns
     -------
-    ThermalExtrinsics with ``X_thermal = R X_left + T``.
+    ThermalExtrinsics with ``X_thermal = R X_left + T``. CalibrationError when the median of
+    the per-view errors under it exceeds :data:`MAX_RMS_PX`: most views contradict it (mirrored
+    thermal images, another board).
     """
     # (a negative or NaN rotation limit silently kept every view)
     finite_number("max_rotation_deg", max_rotation_deg, 0.0, lo_open=True,
@@ -799,6 +802,15 @@ def calibrate_thermal_extrinsics(rig: StereoRig, thermal: Camera,
         raise CalibrationError("the thermal extrinsics did not converge (reprojection error "
                                f"{rms}): check that the thermal corners are of the same board "
                                "and labelled like the left ones (match_labeling)")
+    med = float(np.median(per_view_arr))
+    if not med <= MAX_RMS_PX:
+        # (mirrored thermal images: 7 of 8 views "rejected", 29-52 px off, the one kept fit
+        # at 0.12 px -- a thermal camera 9.7 cm from its place, saved with exit status 0)
+        raise CalibrationError(
+            f"thermal extrinsics: the views disagree on where the thermal camera is (median "
+            f"error {med:.1f} px under the fitted transform, at most {MAX_RMS_PX:g} px expected; "
+            f"{len(used)} of {len(views)} views kept): are the thermal images mirrored, or of "
+            "another board than the left ones?")
     return ThermalExtrinsics(R, T, rms, per_view_arr, used)
 
 
