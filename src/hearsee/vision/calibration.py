@@ -206,6 +206,17 @@ MAX_UPSCALED_PX = 8192
 MIN_CLASSIC_SIDE_PX = 15
 
 
+def _outlier_views(idx: Sequence[int], errs: NDArray, factor: float) -> list[int]:
+    """The views ``idx`` whose reprojection error ``errs`` (px) exceeds ``factor`` times the
+    median and 0.5 px -- among 6 or more, and only where at least 3 stay; none otherwise (or
+    with ``factor`` 0). One rule for the intrinsics and the stereo pairs."""
+    if not factor or len(idx) < 6:
+        return []
+    thr = max(factor * float(np.median(errs)), 0.5)
+    out = [i for i, e in zip(idx, errs, strict=True) if e > thr]
+    return out if len(idx) - len(out) >= 3 else []
+
+
 def find_corners(image: NDArray, pattern: tuple[int, int], *, try_inverted: bool = False,
                  upscale: int | None = None) -> NDArray | None:
     """Inner chessboard corners ``(N, 2)`` float32 in pixels, or None when the board is not
@@ -338,15 +349,10 @@ def calibrate_camera(image_points: Sequence[NDArray], object_points: NDArray | S
             raise CalibrationError(f"OpenCV calibration failed: {exc.msg.strip()}") from None
 
     out = run(idx)
-    rejected: list[int] = []
-    if reject_factor and n >= 6:
-        errs = np.asarray(out[7]).reshape(-1)
-        thr = max(reject_factor * float(np.median(errs)), 0.5)
-        keep = [i for i, e in zip(idx, errs, strict=True) if e <= thr]
-        if len(keep) < n and len(keep) >= 3:
-            rejected = [i for i in idx if i not in keep]
-            idx = keep
-            out = run(idx)
+    rejected = _outlier_views(idx, np.asarray(out[7]).reshape(-1), reject_factor)
+    if rejected:
+        idx = [i for i in idx if i not in rejected]
+        out = run(idx)
     rms, K, dist, rvecs, tvecs, _, _, per_view = out
     rel_std = _focal_rel_std([objs[i] for i in idx], [imgs[i] for i in idx], K, dist, rvecs,
                              tvecs, model, fix_aspect)
@@ -1114,10 +1120,8 @@ def calibrate_rig(left_files: Sequence, right_files: Sequence, pattern: tuple[in
                           cr.camera, refine=len(both) >= 3, model=model, fix_aspect=fix_aspect)
     # outlier pairs, as the intrinsics' (reject_factor 3): a pair of two moments (a dropped
     # frame) fits each camera but not the rig; kept, one among 8 moved T by 7 mm at 1.9 px RMS
-    errs = np.max(st.per_view_px, axis=1)
-    out = [i for i, e in zip(both, errs, strict=True)
-           if e > max(3.0 * float(np.median(errs)), 0.5)] if len(both) >= 6 else []
-    if out and len(both) - len(out) >= 3:
+    out = _outlier_views(both, np.max(st.per_view_px, axis=1), 3.0)
+    if out:
         for i in out:
             views[i].rejected = True
         rejected.update(out)
