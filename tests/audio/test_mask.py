@@ -148,6 +148,26 @@ def test_bad_mask_blocks(over, exc, msg):
         mask.mask_geometry(MicArray.from_dict(_mask2_dict(**over)))
 
 
+@pytest.mark.parametrize("over, msg", [
+    ({"df": 1e-6}, "4,000,000,000 frequencies to solve, at most 1024"),
+    ({"df": 3.0}, "1,333 frequencies"),
+    ({"f_max": 1e9, "df": 1e7}, "more than 6000 panels"),
+    ({"f_max": 10500.0}, "more than 6000 panels"),
+    ({"mesh_subdivision": 40}, "the mesh has 32000 panels, at most 6000"),
+])
+def test_a_mask_model_too_large_to_solve_is_refused(over, msg):
+    """A model of more frequencies or panels than a dense BEM solve can hold: `df: 1e-6` had
+    the process killed for want of memory without a word, `f_max: 1e9` ran on, the egg's
+    finest subdivision (32,000 panels, ~170 GB) taken silently when none met the panel size
+    (found by a review helper). Refused naming the setting; the preset's egg up to 10 kHz at
+    its 5.5 panels per wavelength builds, as 1024 frequencies do."""
+    with pytest.raises(ConfigError, match=msg):
+        mask.mask_geometry(MicArray.from_dict(_mask2_dict(**over))).mesh()
+    assert mask.mask_geometry(MicArray.from_dict(_mask2_dict(f_max=10000.0))).mesh().n_panels \
+        == 5780
+    assert mask.mask_geometry(MicArray.from_dict(_mask2_dict(df=4000.0 / 1024))).mesh()
+
+
 def test_masked_array_needs_two_microphones():
     d = _mask2_dict(mesh_subdivision=3)
     d["microphones"].append([0.2, 0.0, 0.0])

@@ -116,6 +116,8 @@ __all__ = [
     "FIT_IID_MAX",
     "FIT_PHASE_MIN",
     "MAX_DIRECTIONAL_TAPS",
+    "MAX_MESH_PANELS",
+    "MAX_MODEL_FREQS",
     "ONSET_FRAME_S",
     "ONSET_HISTORY_FRAMES",
     "ONSET_IID_VAR_DB2",
@@ -152,6 +154,15 @@ TABLE_DISTANCES: tuple[float | None, ...] = (None, 1.0, 0.5)
 _EGG_KEYS = ("shape", "centre", "front", "back", "half_width", "half_height")
 _EGG_OPTIONAL = ("yaw_deg",)
 _COMMON_KEYS = ("f_max", "df", "elements_per_wavelength", "mesh_subdivision", "tolerance")
+#: Most frequencies ``df, 2 df, ..., f_max`` a mask model solves (one dense BEM solve each, ~3 s
+#: on the default 1280-panel mesh; the presets have 64). ``df: 1e-6`` asked for 4e9 and the
+#: process was killed for want of memory, without a message (found by a review helper).
+MAX_MODEL_FREQS = 1024
+#: Most panels of a mask's BEM mesh: its solve holds ~170 bytes per panel squared (1.4 GB
+#: measured at 2880 panels), 6.1 GB here; ``f_max`` up to 10 kHz on the presets' egg at their
+#: 5.5 panels per wavelength (5780 panels). Beyond, ``f_max: 1e9`` ran on (the egg's finest
+#: subdivision, 32,000 panels, ~170 GB, was taken without a word when none met the panel size).
+MAX_MESH_PANELS = 6000
 #: What reading a cache file that is not a whole ``.npz`` raises: it is recomputed and
 #: overwritten. (An empty file raised numpy's EOFError -- ``hearsee localize`` said
 #: "interrupted", click's reading of an EOFError -- a truncated one zipfile's BadZipFile.)
@@ -225,6 +236,10 @@ class MaskGeometry:
         )
         if common["df"] >= common["f_max"]:
             raise ConfigError(f"{where}: df ({common['df']} Hz) must be below f_max")
+        if common["f_max"] / common["df"] > MAX_MODEL_FREQS + 1e-9:
+            raise ConfigError(f"{where}: df {common['df']:g} Hz up to f_max {common['f_max']:g} "
+                              f"Hz is {int(common['f_max'] / common['df']):,} frequencies to "
+                              f"solve, at most {MAX_MODEL_FREQS}; raise df or lower f_max")
         ms = d.get("mesh_subdivision")
         if ms is not None:
             if isinstance(ms, bool) or not isinstance(ms, int) or not 1 <= ms <= 40:
@@ -291,16 +306,32 @@ class MaskGeometry:
         return bem.TriMesh(v + np.asarray(self.centre), faces)
 
     def mesh(self, speed_of_sound: float = 343.0) -> bem.TriMesh:
-        """The BEM surface mesh (closed, checked)."""
+        """The BEM surface mesh (closed, checked); ConfigError beyond :data:`MAX_MESH_PANELS`
+        panels."""
         if self.shape == "mesh":
-            return bem.TriMesh(np.asarray(self.vertices, float), np.asarray(self.faces))
+            return self._small_enough(bem.TriMesh(np.asarray(self.vertices, float),
+                                                  np.asarray(self.faces)))
         if self.mesh_subdivision is not None:
-            return self._egg_mesh(self.mesh_subdivision)
+            return self._small_enough(self._egg_mesh(self.mesh_subdivision))
         target = speed_of_sound / self.f_max / self.elements_per_wavelength
         for n in range(2, 41):
+            if 20 * n * n > MAX_MESH_PANELS:  # (a geodesic egg of subdivision n)
+                break
             m = self._egg_mesh(n)
             if m.size <= target:
                 return m
+        raise ConfigError(
+            f"mask: panels of {target * 1000:.3g} mm ({self.elements_per_wavelength:g} per "
+            f"wavelength at f_max {self.f_max:g} Hz) need a mesh of more than "
+            f"{MAX_MESH_PANELS} panels, more than a dense BEM solve can hold; lower f_max or "
+            "elements_per_wavelength")
+
+    @staticmethod
+    def _small_enough(m: bem.TriMesh) -> bem.TriMesh:
+        if m.n_panels > MAX_MESH_PANELS:
+            raise ConfigError(f"mask: the mesh has {m.n_panels} panels, at most "
+                              f"{MAX_MESH_PANELS} (a dense BEM solve holds ~170 bytes per "
+                              "panel squared); lower mesh_subdivision or give a coarser mesh")
         return m
 
     def inside_egg(self, points: ArrayLike) -> NDArray:
