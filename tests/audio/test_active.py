@@ -76,6 +76,22 @@ def test_contradicting_poses_are_flagged_inconsistent(pan_error_deg):
     assert d["residual_rms_s"] == pytest.approx(est.residual_rms_s)
 
 
+def test_a_source_nearer_than_the_search_is_not_called_consistent():
+    """Exact TDOAs of a source 0.15 m from the pivot, inside the solver's 0.2 m near bound: the
+    fit held at the bound (0.200 m, 6.6 deg off) was called unique and consistent. At 0.21 m
+    the answer is exact and consistent."""
+    poses = [(0, 0), (40, 25), (-40, -20)]
+    for r, ok in ((0.21, True), (0.15, False)):
+        src = r * unit_vector_deg(45.0, 10.0)
+        out = localize_multipose(true_tdoas(ARR, src, poses, offset=(0, 0, 0)), poses, ARR)
+        assert out.consistent is ok
+        assert out.residual_rms_s < 3e-5  # (within the residual test: the bound decides)
+        if ok:
+            np.testing.assert_allclose(out.position_m, src, atol=1e-6)
+        else:
+            assert out.distance_m == pytest.approx(0.2)
+
+
 def test_single_pose_reports_mirror_and_no_distance():
     src = np.array([1.0, 0.5, 0.7])
     est = localize_multipose(true_tdoas(ARR, src, [(0, 0)]), [(0, 0)], ARR, offset_m=OFF)
