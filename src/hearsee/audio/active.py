@@ -1257,6 +1257,10 @@ def align_head(
     the gaze ends within 0.05 deg of the source. ``tol_deg`` bounds the last
     suggested move, not the gaze error, which follows the TDOA noise.
 
+    A pair whose axis stays horizontal at every pan and tilt (``two-mic`` on this head) cannot
+    tell up from down at any pose: its mirror never resolves, and the search ends after
+    ``max_moves`` with ``converged=False`` (15 sources checked, 2026-12-07: 12-104 deg off).
+
     Parameters
     ----------
     measure : callable HeadPose -> TDOAs (n_pairs,)
