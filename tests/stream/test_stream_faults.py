@@ -374,6 +374,26 @@ def test_smoothed_srp_ages_its_evidence_through_dropped_frames():
     assert after[0][0]  # the new direction is measured at once
 
 
+def test_tracker_aided_detection_coasts_through_dropped_blocks():
+    """With ``gated_min_coherence`` (``hearsee track --gate-coherence``) a block dropped once the
+    track has coasted ``gated_after_s`` gave its missing frames the gated search, on evidence of
+    NaN age: the prediction to a NaN time was an EstimationError that ended the run. Now the
+    missing frames coast on the talker's direction (40 deg: 1 s of noise, then silence)."""
+    arr = MicArray.from_preset("three-mic")
+    rng = np.random.default_rng(0)
+    sig = rng.standard_normal(2 * FS)
+    sig[FS:] = 0.0
+    x = simulate_moving_free_field(sig, FS, arr, linear_trajectory(
+        [2.0 * np.cos(np.radians(40.0)), 2.0 * np.sin(np.radians(40.0)), 0.0], [0, 0, 0], 2.0),
+        snr_db=30, rng=1)
+    src = DropoutSource(ArraySource(x, FS, BL), drop=[25])  # 1.6-1.664 s: coasting since ~1.2 s
+    ups = StreamPipeline(arr, StreamConfig(gated_min_coherence=0.3)).run(src)
+    missing = [u for u in ups if u.missing]
+    assert len(ups) == 61 and len(missing) == 3
+    for u in missing:
+        assert not u.measured and abs(wrap_deg(u.azimuth_deg - 40.0)) < 2.0
+
+
 def test_smoothed_srp_skip_equals_silent_frames():
     """skip(n) does to the state what n frames of zeros do (the model: a missing frame adds no
     evidence): the same outputs afterwards; the evidence weight decays by alpha**n and its

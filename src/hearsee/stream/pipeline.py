@@ -2582,7 +2582,10 @@ class TrackingProcessor:
                 cands = self._smoothed_candidates(sm, n)
                 c_sm = float(sm["coherence"][n])
                 age_s = float(sm["age_frames"][n]) * self.hop / self.fs
+                # (not on a missing frame: no evidence, its age NaN -- the prediction to a NaN
+                # time was an EstimationError that ended the run at a dropped block)
                 if not cands and self.cfg.gated_min_coherence is not None and (
+                        not batch.missing[n]) and (
                         float(t) - self._last_measured_t >= self.cfg.gated_after_s):
                     cands, c_sm = self._gated_candidate(sm["profile"][n], float(t) - age_s)
                 delay = age_s if cands else 0.0
