@@ -1165,3 +1165,30 @@ def test_a_panning_pair_keeps_reporting_its_talker():
     near = [any(abs(fold(s["azimuth_deg"]) - fold(30.0 - _steady_pan(u.t))) < 10.0
                 for s in u.sources) for u in turn]
     assert np.mean(near) >= 0.7, np.mean(near)
+
+
+def test_smoothed_evidence_older_than_a_tracker_takes_is_no_measurement():
+    """With the longest frames (10 s hops) the smoothed steered response's evidence passed
+    ``MAX_DELAY_S`` (60 s) within ``max_evidence_age_frames`` (8 frames): 10 s of noise from
+    40 deg, then 80 s of sensor noise alone, and the 7th quiet frame's 70 s old measurement was
+    the direction tracker's EstimationError, which ended the run. Now it gives no measurement
+    (the track coasts, then is dropped); the earlier frames still measure 40 deg."""
+    from hearsee.audio.propagation import simulate_free_field
+    from hearsee.audio.tracking import MAX_DELAY_S
+
+    fs = 8000
+    arr = MicArray.from_preset("three-mic")
+    rng = np.random.default_rng(0)
+    sig = rng.standard_normal(90 * fs)
+    sig[10 * fs:] = 0.0
+    src = [2.0 * np.cos(np.radians(40.0)), 2.0 * np.sin(np.radians(40.0)), 0.0]
+    x = simulate_free_field(sig, fs, arr, src)
+    x += 1e-5 * rng.standard_normal(x.shape)
+    cfg = StreamConfig(frame_ms=10000.0, hop_ms=10000.0)
+    ups = StreamPipeline(arr, cfg).run(ArraySource(x, fs, 8000))
+    assert [u.t for u in ups] == pytest.approx(np.arange(5.0, 90.0, 10.0))
+    measured = [u for u in ups if u.measured]
+    assert len(measured) >= 5 and MAX_DELAY_S == 60.0
+    for u in measured:
+        assert abs(wrap_deg(u.azimuth_deg - 40.0)) < 1.0
+    assert not ups[-1].measured and not ups[-2].measured  # (70 and 80 s old)

@@ -104,6 +104,7 @@ from hearsee.audio.tracking import (
     DIRECTION_RATE_TAU_S,
     ELEVATION_ACCEL_RATIO,
     IMM_MODES_DPS2,
+    MAX_DELAY_S,
     NOISE_RANGE,
     DirectionIMM,
     DirectionKalman,
@@ -2592,6 +2593,10 @@ class TrackingProcessor:
                 sigma = self._srp_sigma(c_sm) if cands else None
             elif self.mask is not None and not cands and MASK_SMOOTHED_MEASUREMENT:
                 cands, sigma, delay = self._mask_candidates(mk[n], n)
+            if delay > MAX_DELAY_S:  # (evidence older than a tracker takes: no measurement --
+                # with long hops its age in frames passed, and the tracker's EstimationError
+                # for the delay ended the run)
+                cands, sigma, delay = [], None, 0.0
             if pans is not None:
                 cands = self._follow_pan(float(t), float(pans[n]), cands, delay)
             if sigma is not None and self._level_plane:
