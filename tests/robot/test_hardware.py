@@ -278,11 +278,12 @@ def test_impossible_geometry_and_bad_calibration(small_rig):
     with pytest.raises(ConfigError, match=r"audio\.array: .*coincide"):
         load_robot_config(make_config(small_rig, _with(audio={"array": "coincident.yaml",
                                                               "channels": [0, 1]})))
-    (small_rig / "wide.yaml").write_text(
-        "microphones:\n- [0.0, -0.6, 0.0]\n- [0.0, 0.6, 0.0]\n", encoding="utf-8")
+    (small_rig / "wide.yaml").write_text(  # (a level triangle: a bare pair is refused)
+        "microphones:\n- [0.0, -0.6, 0.0]\n- [0.0, 0.6, 0.0]\n- [0.3, 0.0, 0.0]\n",
+        encoding="utf-8")
     with pytest.raises(ConfigError, match=r"audio\.frame_ms: 8.0 ms is too short"):
         load_robot_config(make_config(small_rig, _with(audio={"array": "wide.yaml",
-                                                              "channels": [0, 1],
+                                                              "channels": [0, 1, 2],
                                                               "frame_ms": 8})))
     (small_rig / "bad_rig.yaml").write_text("left: {width: 10}\n", encoding="utf-8")
     with pytest.raises(ConfigError, match=r"cameras\.calib: "):
@@ -304,7 +305,8 @@ def test_frame_ms_advice_is_a_value_that_is_accepted(tmp_path, half_m):
     import math
 
     (tmp_path / "wide.yaml").write_text(
-        f"microphones: [[{half_m}, 0, 0], [{-half_m}, 0, 0]]\nspeed_of_sound: 343.0\n",
+        f"microphones: [[{half_m}, 0, 0], [{-half_m}, 0, 0], [0, 0.1, 0]]\n"  # (level: a
+        "speed_of_sound: 343.0\n",  # bare pair is refused; the largest delay still 2 half_m)
         encoding="utf-8")
     want = math.ceil(4e3 * 2 * half_m / 343.0)  # ms
 
@@ -2552,6 +2554,30 @@ def test_a_vertical_line_is_refused_in_the_robot_file_a_masked_pair_is_not(small
     cfg = load_robot_config(make_config(small_rig, _with(audio={"array": "mask2",
                                                                 "channels": [0, 1]})))
     assert cfg.audio.array.mask is not None and cfg.audio.channels == (0, 1)
+
+
+@pytest.mark.parametrize("array, channels", [
+    ("two-mic", [0, 1]),
+    ("upright.yaml", [0, 1, 2]),  # ears and forehead: a plane standing upright
+])
+def test_an_array_that_cannot_tell_front_from_back_is_refused(small_rig, array, channels):
+    """A bare pair (or an upright plane of microphones) hears a talker at 150 deg and its
+    mirror at 30 deg alike; the stream reports the front one. The robot file accepted them,
+    and the live loop logged a talker at 150 deg at 30 deg (robot frame) and sent the head
+    there, without a word. Refused when the file is loaded, as the scenario file refuses them;
+    a masked pair and a level planar array load."""
+    import yaml
+
+    (small_rig / "upright.yaml").write_text(yaml.safe_dump(
+        {"microphones": [[0, -0.075, 0], [0, 0.075, 0], [0, 0, 0.12]]}))
+    path = make_config(small_rig, _with(audio={"array": array, "channels": channels}))
+    with pytest.raises(ConfigError, match=r"audio\.array: .*cannot tell a talker in front "
+                                          r"from one behind"):
+        load_robot_config(path)
+    for ok, ch in (("mask2-asym", [0, 1]), ("three-mic", [0, 1, 2])):
+        cfg = load_robot_config(make_config(small_rig, _with(audio={"array": ok,
+                                                                    "channels": ch})))
+        assert cfg.audio.channels == tuple(ch)
 
 
 @pytest.mark.parametrize("rate_hz", [5, 3])

@@ -13,7 +13,9 @@ Schema (defaults in brackets)::
       device: "ReSpeaker" | 2           [default input]  input device: name substring or index
       fs: 16000                         [16000]  sample rate, Hz
       channels: [1, 2, 3, 4]            [0 .. n_mics-1]  input channel (0-based) of microphone k
-      array: respeaker-4 | mics.yaml    [three-mic]  array preset or YAML file (array frame)
+      array: respeaker-4 | mics.yaml    [three-mic]  array preset or YAML file (array frame):
+                                        spread out horizontally, or a masked pair (a bare
+                                        pair such as two-mic has a front/back mirror)
       block_ms: 100                     [100]  audio block read from the device, ms
       frame_ms: 64                      [64]   TDOA analysis frame, ms (hop = frame / 2; one
                                         update, one JSON line, per hop)
@@ -338,6 +340,19 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
         check_trackable(array)
     except ConfigError as exc:
         raise ConfigError(f"{where}.array: {exc}") from None
+    from hearsee.robot.scenario import _level_footprint_is_a_line
+
+    if array.mask is None and _level_footprint_is_a_line(array):
+        # (accepted: a bare pair, or an upright face plate, heard a talker at 150 deg at
+        # 30 deg -- the stream reports the front one of the mirror pair -- and the head was
+        # sent there, without a word; the scenario file refuses such arrays alike)
+        raise ConfigError(
+            f"{where}.array: {array.name!r} cannot tell a talker in front from one behind: "
+            "its microphones, seen from above (head frame: x forward, y left, z up), lie on "
+            "a line, so a direction and its mirror across the upright plane through them "
+            "give the same time differences (150 deg is heard at 30 deg); use an array spread "
+            "out horizontally, e.g. three-mic, respeaker-4 or respeaker-6, or a masked pair, "
+            "e.g. mask2-asym")
     ch = d.get("channels")
     channels = (tuple(range(array.n_mics)) if ch is None
                 else microphone_channels(ch, array.n_mics, f"{where}.channels"))
