@@ -1046,6 +1046,23 @@ def test_keep_frames_must_be_a_count(tmp_path, keep):
     assert not (tmp_path / "a.jsonl").exists()
 
 
+def test_cameras_for_a_robot_file_without_cameras_are_a_config_error(tmp_path):
+    """run_robot given cameras while the robot file has no cameras section (no calibrated
+    rig): the loop ran, and its first frame died in the detector with a builtin
+    AttributeError ('NoneType' object has no attribute 'thermal'). Now a ConfigError naming
+    the file, before any audio is read or line written."""
+    from hearsee.stream.pipeline import ArraySource
+
+    x, _ = _talker(40.0, 1.0)
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "out"}}, "r.yaml", tmp_path)
+    img = np.zeros((120, 160, 3), np.uint8)
+    with pytest.raises(ConfigError, match=r"^r\.yaml: cameras: run_robot was given cameras, "
+                                          "but the robot file has no cameras section"):
+        run_robot(cfg, audio_source=ArraySource(x, FS, 1600), head=_quiet_head(cfg),
+                  cameras=_StillCameras(img), jsonl=tmp_path / "a.jsonl")
+    assert not (tmp_path / "a.jsonl").exists()
+
+
 def test_overlay_is_drawn_on_the_rectified_left_image(tmp_path):
     """Detection boxes are in rectified left-image pixels, so the overlay must be the rectified
     left image, not the raw one: with lens distortion the two differ almost everywhere."""

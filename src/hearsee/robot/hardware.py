@@ -1371,6 +1371,11 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     pan_limits_deg(cfg.head.pan_limits_deg, f"{cfg.path}: head.pan_limits_deg")
     # (-1 kept none, 2.5 three, "3" was a builtin TypeError at the first camera frame)
     keep_frames = whole_number("keep_frames", keep_frames, 0)
+    if cameras is not None and cfg.cameras is None:  # (a builtin AttributeError at the first
+        # frame: the detector had no calibrated rig)
+        raise ConfigError(f"{cfg.path}: cameras: run_robot was given cameras, but the robot "
+                          "file has no cameras section (the rig calibration, rate_hz and "
+                          "mount_m the frames need); add one or leave the cameras out")
     live = audio_source is None
     if live:
         source = open_audio_source(cfg, duration_s)
