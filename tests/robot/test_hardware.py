@@ -1675,6 +1675,14 @@ def test_no_nan_and_no_bad_limit_reaches_the_driver(tmp_path, monkeypatch):
         run_robot(bad, audio_source=ArraySource(x, FS, 1600), head=head,
                   jsonl=tmp_path / "a.jsonl")
     assert head.sent == []
+    # so are bad tilt limits (they stopped the run at its first command, two lines written,
+    # with "tilt_limits_deg: need ..." naming neither the file nor the field)
+    bad = dataclasses.replace(cfg, head=dataclasses.replace(cfg.head,
+                                                            tilt_limits_deg=(np.nan, 60.0)))
+    with pytest.raises(ConfigError, match=r"^r\.yaml: head\.tilt_limits_deg: need -90"):
+        run_robot(bad, audio_source=ArraySource(x, FS, 1600), head=head,
+                  jsonl=tmp_path / "t.jsonl")
+    assert head.sent == [] and not (tmp_path / "t.jsonl").exists()
     monkeypatch.setattr(hw._Head, "direction_to_robot",
                         lambda self, az, el: (float("nan"), None if el is None else 0.0))
     with pytest.raises(GeometryError, match="desired pan_deg"):

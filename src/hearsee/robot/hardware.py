@@ -1369,6 +1369,9 @@ def run_robot(cfg: RobotConfig, *, duration_s: float | None = None, audio_source
     a = cfg.audio
     # (a HeadConfig built in code skipped the robot file's check; before any device opens)
     pan_limits_deg(cfg.head.pan_limits_deg, f"{cfg.path}: head.pan_limits_deg")
+    # (and its tilt limits: bad ones stopped the run at its first head command, after the
+    # device had opened and lines were written, naming neither the file nor the field)
+    tilt_limits_deg(cfg.head.tilt_limits_deg, f"{cfg.path}: head.tilt_limits_deg")
     # (-1 kept none, 2.5 three, "3" was a builtin TypeError at the first camera frame)
     keep_frames = whole_number("keep_frames", keep_frames, 0)
     if cameras is not None and cfg.cameras is None:  # (a builtin AttributeError at the first
