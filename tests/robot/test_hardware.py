@@ -2667,6 +2667,22 @@ def test_one_device_given_as_two_cameras_is_refused(small_rig, cameras, field, f
     assert load_robot_config(make_config(small_rig, _with())).cameras.thermal is not None
 
 
+def test_a_jsonl_under_a_file_is_refused_at_load_not_when_the_run_starts(tmp_path):
+    """output.jsonl notes.txt/u.jsonl, notes.txt a file: the robot file loaded (and the dry
+    run passed), and the live run failed as it started ("cannot write ...: Not a
+    directory"). Now refused when the file is loaded, naming the field and the file in the
+    way."""
+    (tmp_path / "notes.txt").write_text("mine\n", encoding="utf-8")
+    path = make_config(tmp_path, {"audio": {}, "output": {"report": "rep",
+                                                          "jsonl": "notes.txt/run/u.jsonl"}})
+    with pytest.raises(ConfigError, match=r"robot\.yaml: output\.jsonl: .*notes\.txt is a "
+                                          "file, not a folder"):
+        load_robot_config(path)
+    cfg = load_robot_config(path, check_output=False)  # (--out replaces it: not checked)
+    assert cfg.output.jsonl == tmp_path / "notes.txt" / "run" / "u.jsonl"
+    assert (tmp_path / "notes.txt").read_text(encoding="utf-8") == "mine\n"
+
+
 def test_a_jsonl_that_is_a_folder_is_refused_at_load(tmp_path):
     """output.jsonl naming an existing folder passed loading and `run --dry-run`; the run
     failed when it started, without the robot file's name."""

@@ -584,6 +584,13 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
     if cfg.output.jsonl.is_dir():  # (passed the dry run; the run failed when it started)
         raise ConfigError(f"{where}: output.jsonl: {cfg.output.jsonl} is a folder; the JSON "
                           "lines are a file: choose a file name")
+    from hearsee.robot.report import _nearest_existing
+
+    above = _nearest_existing(cfg.output.jsonl.parent)
+    if above is not None and not above.is_dir():  # (likewise: "cannot write ...: Not a
+        # directory" when the run started, after a dry run whose checks all passed)
+        raise ConfigError(f"{where}: output.jsonl: {cfg.output.jsonl}: {above} is a file, not "
+                          "a folder; choose another folder for the JSON lines")
     if jsonl_foreign_file(cfg.output.jsonl):
         raise _foreign_jsonl_error(cfg.output.jsonl, f"{where}: ")
     if report_overwrites(cfg.output.report, [cfg.output.jsonl]) is not None:
