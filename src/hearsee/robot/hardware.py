@@ -340,19 +340,12 @@ def _audio(d: Mapping[str, Any], where: str, base: Path) -> AudioConfig:
         check_trackable(array)
     except ConfigError as exc:
         raise ConfigError(f"{where}.array: {exc}") from None
-    from hearsee.robot.scenario import _level_footprint_is_a_line
+    from hearsee.robot.scenario import check_hears_front_and_back
 
-    if array.mask is None and _level_footprint_is_a_line(array):
-        # (accepted: a bare pair, or an upright face plate, heard a talker at 150 deg at
-        # 30 deg -- the stream reports the front one of the mirror pair -- and the head was
-        # sent there, without a word; the scenario file refuses such arrays alike)
-        raise ConfigError(
-            f"{where}.array: {array.name!r} cannot tell a talker in front from one behind: "
-            "its microphones, seen from above (head frame: x forward, y left, z up), lie on "
-            "a line, so a direction and its mirror across the upright plane through them "
-            "give the same time differences (150 deg is heard at 30 deg); use an array spread "
-            "out horizontally, e.g. three-mic, respeaker-4 or respeaker-6, or a masked pair, "
-            "e.g. mask2-asym")
+    # (accepted: a bare pair, or an upright face plate, heard a talker at 150 deg at 30 deg --
+    # the stream reports the front one of the mirror pair -- and the head was sent there,
+    # without a word; the scenario file's rule)
+    check_hears_front_and_back(array, f"{where}.array", "the robot")
     ch = d.get("channels")
     channels = (tuple(range(array.n_mics)) if ch is None
                 else microphone_channels(ch, array.n_mics, f"{where}.channels"))

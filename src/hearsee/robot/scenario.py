@@ -540,7 +540,6 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
     if not isinstance(array, str):
         raise ConfigError(f"{rw}.array: expected a preset name or file path, got {array!r}")
     from hearsee.audio.arrays import load_array_beside
-    from hearsee.audio.localize import array_geometry
 
     # a file next to the scenario (base_dir; the robot file's rule), else a preset: a name that
     # was no file there was looked up in the working directory, where a file or folder named
@@ -548,25 +547,10 @@ def scenario_from_dict(data: Mapping[str, Any], where: str = "scenario",
     # the spec kept is the file's absolute path or the preset's name (run_scenario reads it)
     arr, array = load_array_beside(array, base_dir, f"{rw}.array")
     # (masked pairs: refused until 2026-12-05, when the room audio learned to turn the mask
-    # with the head; the mask resolves the pair's front/back mirror)
-    if arr.mask is None and array_geometry(arr).kind == "linear":
-        raise ConfigError(
-            f"{rw}.array: {arr.name!r} cannot give the simulated robot a 360-degree "
-            "direction (a linear array has a front/back mirror); use a planar array of 3 or "
-            "more microphones, e.g. three-mic, respeaker-4 or respeaker-6, or a masked pair, "
-            "e.g. mask2-asym"
-        )
-    if arr.mask is None and _level_footprint_is_a_line(arr):
-        # (a planar array standing upright -- a face plate, ears and forehead -- passed the
-        # linear check, and a speaker straight behind the robot was heard straight ahead)
-        raise ConfigError(
-            f"{rw}.array: {arr.name!r} cannot give the simulated robot a 360-degree "
-            "direction: its microphones, seen from above (x forward, y left, z up), lie on a "
-            "line, so a source and its mirror across the upright plane through them give the "
-            "same time differences (e.g. straight ahead and straight behind); use an array "
-            "spread out horizontally, e.g. three-mic, respeaker-4 or respeaker-6, or a masked "
-            "pair, e.g. mask2-asym"
-        )
+    # with the head; the mask resolves the pair's front/back mirror. A planar array standing
+    # upright -- a face plate, ears and forehead -- passed a linear-only check, and a speaker
+    # straight behind the robot was heard straight ahead)
+    check_hears_front_and_back(arr, f"{rw}.array", "the simulated robot")
     robot = RobotSpec(
         position_m=robot_xy,
         heading_deg=number(rob, "heading_deg", 0.0, rw, -360, 360),
@@ -657,6 +641,21 @@ def _check_talkers_in_stereo_reach(people: tuple[PersonSpec, ...], robot: RobotS
                 f"search's largest disparity), and {where}.people[{k}], who speaks, stays "
                 f"within {far:.2f} m of the robot: it would hear them and never see them; "
                 f"give at most {np.floor(most * 100) / 100:g} m")
+
+
+def check_hears_front_and_back(array: Any, where: str, who: str) -> None:
+    """ConfigError naming ``where`` unless ``array`` (a MicArray on a head that pans in the
+    level plane) can tell a talker in front from one behind: a masked pair, or microphones
+    that do not lie on a line seen from above (:func:`_level_footprint_is_a_line`). One rule
+    for the scenario's and the robot file's arrays; ``who`` is named in the message."""
+    if array.mask is None and _level_footprint_is_a_line(array):
+        raise ConfigError(
+            f"{where}: {array.name!r} cannot give {who} a 360-degree direction, it cannot tell "
+            "a talker in front from one behind: its microphones, seen from above (x forward, "
+            "y left, z up), lie on a line, so a source and its mirror across the upright plane "
+            "through them give the same time differences (a talker at 150 deg is heard at 30 "
+            "deg); use an array spread out horizontally, e.g. three-mic, respeaker-4 or "
+            "respeaker-6, or a masked pair, e.g. mask2-asym")
 
 
 def _level_footprint_is_a_line(array: Any) -> bool:
