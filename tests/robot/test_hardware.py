@@ -641,6 +641,12 @@ def test_live_loop_hears_sees_and_tracks_the_person(person_case):
     index = write_run_report(cfg, res)
     assert index.is_file() and (index.parent / "frames" / "first_overlay.png").is_file()
     assert json.loads((index.parent / "summary.json").read_text())["person_reported"] is True
+    # a live run knows no truth: its plots neither draw nor name it (they were titled "vs
+    # ground truth", the error plot empty)
+    page = index.read_text()
+    assert "vs ground truth" not in page and "true direction" not in page
+    assert (index.parent / "plots" / "head.png").is_file()
+    assert not (index.parent / "plots" / "error.png").exists()
 
 
 @pytest.mark.slow
@@ -1277,8 +1283,12 @@ def test_a_run_without_updates_still_writes_its_report(tmp_path):
     assert res.log == []
     index = write_run_report(cfg, res)
     assert index.is_file() and json.loads((index.parent / "log.json").read_text()) == []
-    assert all((index.parent / "plots" / f).is_file()
-               for f in ("top_view.png", "error.png", "head.png"))
+    assert all((index.parent / "plots" / f).is_file() for f in ("top_view.png", "head.png"))
+    # (a live run has no truth: no error plot, no caption naming the truth -- found by a
+    # review helper, 2026-12-07)
+    page = index.read_text()
+    assert not (index.parent / "plots" / "error.png").exists()
+    assert "vs ground truth" not in page and "true direction" not in page
 
 
 class _SteppingHead:

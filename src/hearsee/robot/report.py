@@ -221,6 +221,9 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     t_cut = np.insert(t, cut, np.nan)
     truth, target = np.insert(truth, cut, np.nan, axis=0), np.insert(target, cut, np.nan)
     audio_az = _arr(log, ["audio", "azimuth_deg"])
+    # (a live run knows no truth: its plots were titled against the ground truth, the error
+    # plot empty -- found by a review helper)
+    known = bool(np.isfinite(truth).any())
     figs = []
 
     fig, ax = plt.subplots(figsize=(6.5, 5.5))
@@ -229,8 +232,9 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     robot = scenario["robot"]["position_m"]
     ax.plot(*robot, "ks", ms=10, label="robot")
     # (markers: a talker standing still is a point, which a line alone does not draw)
-    ax.plot(truth[:, 0], truth[:, 1], "g-", marker="o", ms=4, lw=3, alpha=0.6,
-            label="speaker (truth)")
+    if known:
+        ax.plot(truth[:, 0], truth[:, 1], "g-", marker="o", ms=4, lw=3, alpha=0.6,
+                label="speaker (truth)")
     for p in scenario.get("people", []):
         if p.get("speaking"):  # (the people heard, by name: several take turns)
             # (as written: a name with two "$" was read as TeX -- drawn garbled, or, when no
@@ -251,31 +255,35 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     ax.set_aspect("equal")
     ax.set_xlabel("room x (m)")
     ax.set_ylabel("room y (m)")
-    ax.set_title("Top view: trajectory vs ground truth (grey: head direction)")
+    ax.set_title("Top view: trajectory vs ground truth (grey: head direction)" if known else
+                 "Top view: trajectory (grey: head direction)")
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
     try:
         put("plots/top_view.png", _png(fig))
     finally:
         plt.close(fig)
-    figs.append(("plots/top_view.png", "Top view of the room: estimated track vs ground truth."))
+    figs.append(("plots/top_view.png", "Top view of the room: estimated track vs ground truth."
+                 if known else "Top view: the estimated track (a live run has no ground truth)."))
 
-    fig, ax = plt.subplots(figsize=(7, 3.2))
-    ax.plot(t, err * 100, "b.-")
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("3D position error (cm)")
-    ax.set_title("Position error over time")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    try:
-        put("plots/error.png", _png(fig))
-    finally:
-        plt.close(fig)
-    figs.append(("plots/error.png", "3D position error of the track over time."))
+    if known:
+        fig, ax = plt.subplots(figsize=(7, 3.2))
+        ax.plot(t, err * 100, "b.-")
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("3D position error (cm)")
+        ax.set_title("Position error over time")
+        ax.grid(alpha=0.3)
+        fig.tight_layout()
+        try:
+            put("plots/error.png", _png(fig))
+        finally:
+            plt.close(fig)
+        figs.append(("plots/error.png", "3D position error of the track over time."))
 
     fig, ax = plt.subplots(figsize=(7, 3.2))
     ax.plot(t, pan, "k-", label="head pan")
-    ax.plot(t_cut, target, "g--", label="speaker direction (truth)")
+    if known:
+        ax.plot(t_cut, target, "g--", label="speaker direction (truth)")
     ax.plot(t, audio_az, "m.", ms=4, label="audio azimuth estimate")
     ax.set_xlabel("time (s)")
     ax.set_ylabel("azimuth in robot frame (deg)")
@@ -288,7 +296,8 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     finally:
         plt.close(fig)
     figs.append(("plots/head.png",
-                 "Head pan angle, the speaker's true direction and the audio estimates."))
+                 "Head pan angle, the speaker's true direction and the audio estimates." if known
+                 else "Head pan angle and the audio estimates."))
     return figs
 
 
