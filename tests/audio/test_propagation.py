@@ -386,3 +386,41 @@ def test_text_sources_and_delays_and_empty_response_sums_are_refused():
             sum_responses(parts)
     total = sum_responses([np.ones((2, 3)), np.ones((2, 5))])
     np.testing.assert_array_equal(total, [[2, 2, 2, 1, 1]] * 2)
+
+
+def test_room_points_and_settings_that_are_no_numbers_are_typed_errors():
+    """The room simulators read their points with numpy's float conversion: text or a ragged
+    list was a builtin ValueError, True 1 m, an empty microphone list pyroomacoustics'
+    ValueError, a preset name for the array an AttributeError, a text speed of sound in
+    image_sources a TypeError (0 m/s "an RT60 too short"); the free field's text signal was
+    a source "too far" (np.size("abc") is 1). Now each is a hearsee error, and good
+    arguments give the recording they gave."""
+    from hearsee.audio.propagation import image_sources
+
+    fs, arr = 16000, MicArray.from_preset("two-mic")
+    x = white_noise(0.1, fs, rng=5)
+    room = ([5.0, 4.0, 3.0], 0.0)
+    for bad in ("2,2,1", [True, 2, 1], [[2, 2], [1]]):
+        with pytest.raises(GeometryError, match="array_at"):
+            simulate_room(x, fs, arr, [1.0, 0.0, 0.0], *room, bad)
+        with pytest.raises(GeometryError, match="source"):
+            simulate_room(x, fs, arr, bad, *room, [2.0, 2.0, 1.0])
+    with pytest.raises(GeometryError, match="MicArray"):
+        simulate_room(x, fs, "two-mic", [1.0, 0.0, 0.0], *room, [2.0, 2.0, 1.0])
+    for mics in ("abc", [[2, 2, 1], [1, 1]], np.zeros((0, 3))):
+        with pytest.raises(GeometryError, match="microphone positions"):
+            room_impulse_responses(fs, mics, [1.0, 1.0, 1.0], *room)
+    with pytest.raises(GeometryError, match="source"):
+        room_impulse_responses(fs, [[2.0, 2.0, 1.0]], "1,1,1", *room)
+    with pytest.raises(ConfigError, match="directivity"):
+        room_impulse_responses(fs, [[2.0, 2.0, 1.0]], [1.0, 1.0, 1.0], *room, directivities=3)
+    for c in ("343", 0.0, float("nan")):
+        with pytest.raises(GeometryError, match="speed_of_sound"):
+            image_sources(0.3, [5.0, 4.0, 3.0], c)
+    with pytest.raises(AudioInputError, match="signal"):
+        simulate_free_field("abc", fs, arr, [1.0, 0.0, 0.0])
+    # good arguments: the direct path of the room as before (peak at r / c, amplitude ~1 / r)
+    y = simulate_room(x, fs, arr, (1.0, 0.0, 0.0), *room, np.array([2.0, 2.0, 1.0]))
+    np.testing.assert_allclose(y, simulate_free_field(x, fs, arr, [1.0, 0.0, 0.0]),
+                               atol=0.1 * np.abs(y).max())
+    assert image_sources(0.3, [5.0, 4.0, 3.0], 343) == image_sources(0.3, [5.0, 4.0, 3.0])

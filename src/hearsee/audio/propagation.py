@@ -37,7 +37,7 @@ from hearsee.config import (
     whole_number,
 )
 from hearsee.errors import AudioInputError, ConfigError, GeometryError
-from hearsee.geometry import norm_scale, vector_length
+from hearsee.geometry import as_point, norm_scale, vector_length
 
 __all__ = [
     "MAX_IMAGE_ORDER",
@@ -306,7 +306,11 @@ def simulate_free_field(
             raise GeometryError("the source coincides with a microphone")
         # every microphone must hear it: the farthest one's direct sound arriving after the
         # signal's end left that channel without it (the nearest one was checked)
-        check_heard(float(r.max()), c, np.size(signal), check_fs(fs), "farthest")
+        # (the signal checked first: np.size of the text "abc" is 1, a source "too far")
+        x = as_samples(signal, "signal")
+        if x.ndim != 1:
+            raise AudioInputError(f"signal must be one-dimensional, got shape {x.shape}")
+        check_heard(float(r.max()), c, x.size, check_fs(fs), "farthest")
         t = r / c
         gains = 1.0 / r
     y = delay_signals(signal, t, fs, gains)
@@ -358,10 +362,15 @@ def image_sources(rt60: float, room_dim: ArrayLike, speed_of_sound: float = 343.
     ConfigError
         A negative or non-finite RT60, one the room cannot have (too short for its size), a
         bad ``max_order``, or an order above :data:`MAX_IMAGE_ORDER` (too much memory).
+    GeometryError
+        Room dimensions that are no three positive lengths, a speed of sound that is no
+        finite number > 0 (m/s).
     """
     import pyroomacoustics as pra
 
     dim = _room_dim(room_dim)
+    # (text was a builtin TypeError inside pyroomacoustics, 0 or NaN "RT60 too short")
+    speed_of_sound = speed_of_sound_of(None, speed_of_sound)
     if not is_real(rt60) or rt60 < 0:
         raise ConfigError(f"RT60 must be a non-negative number of seconds, got {rt60!r}")
     rt60 = float(rt60)
@@ -474,9 +483,11 @@ def room_impulse_responses(
     import pyroomacoustics as pra
 
     dim = _room_dim(room_dim)
-    mics = np.atleast_2d(np.asarray(mic_positions_room, dtype=float))
-    src = np.asarray(source_room, dtype=float)
-    if mics.ndim != 2 or mics.shape[1] != 3 or not np.all(np.isfinite(mics)):
+    # (text, a ragged list or no microphone was numpy's or pyroomacoustics' ValueError)
+    mics = np.atleast_2d(as_float_array(mic_positions_room, "microphone positions",
+                                        finite=False, error=GeometryError))
+    src = as_float_array(source_room, "source", finite=False, error=GeometryError)
+    if mics.ndim != 2 or mics.shape[1] != 3 or len(mics) < 1 or not np.all(np.isfinite(mics)):
         raise GeometryError(f"microphone positions must be finite N x 3, got shape {mics.shape}")
     if src.shape != (3,) or not np.all(np.isfinite(src)):
         raise GeometryError(f"source must be a finite [x, y, z] point, got {source_room!r}")
@@ -501,8 +512,10 @@ def room_impulse_responses(
     if directivities is None:
         room.add_microphone_array(mics.T.copy())
     else:
-        if len(directivities) != len(mics):
-            raise ConfigError(f"{len(directivities)} directivities for {len(mics)} microphones")
+        if not isinstance(directivities, list | tuple) or len(directivities) != len(mics):
+            got = (len(directivities) if isinstance(directivities, list | tuple)
+                   else type(directivities).__name__)
+            raise ConfigError(f"expected one directivity per microphone ({len(mics)}), got {got}")
         room.add_microphone_array(pra.MicrophoneArray(mics.T.copy(), room.fs,
                                                       directivity=list(directivities)))
     room.compute_rir()
@@ -570,18 +583,17 @@ def simulate_room(
     if x.ndim != 1 or x.size == 0:
         raise AudioInputError(f"signal must be a non-empty 1-D array, got shape {x.shape}")
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
+    if not isinstance(array, MicArray):  # (a preset name was a builtin AttributeError)
+        raise GeometryError(f"array: expected a MicArray, got {type(array).__name__}")
     pos = array.positions if mic_positions is None else _mic_positions(mic_positions)
     if len(pos) != array.n_mics:
         raise GeometryError(
             f"mic_positions has {len(pos)} rows but array {array.name!r} has {array.n_mics} "
             "microphones"
         )
-    at = np.asarray(array_at, dtype=float)
-    if at.shape != (3,) or not np.all(np.isfinite(at)):
-        raise GeometryError(f"array_at must be a finite [x, y, z] point, got {array_at!r}")
-    src = np.asarray(source, dtype=float)
-    if src.shape != (3,) or not np.all(np.isfinite(src)):
-        raise GeometryError(f"source must be a finite [x, y, z] point, got {source!r}")
+    # (text or a ragged list was numpy's ValueError, True read as 1 m)
+    at = as_point(array_at, "array_at")
+    src = as_point(source, "source")
     # (every microphone must hear it: only the nearest one was checked)
     check_heard(float(np.linalg.norm(pos - src, axis=1).max()), array.speed_of_sound, x.size,
                 check_fs(fs), "farthest")
