@@ -330,6 +330,35 @@ def test_moving_simulators_check_rir_fn_and_rng_before_any_work():
     assert y.shape == (3, x.size) and np.all(np.isfinite(y)) and calls
 
 
+def test_moving_simulators_check_the_snr_before_any_work():
+    """simulate_moving_free_field and simulate_moving_room left a bad SNR to add_noise, after
+    the whole rendering (a 2-s walk in a room of RT60 0.3 s: 10.6 s of impulse responses,
+    then "SNR must be within -60 to 200 dB"); the masked renderers checked it first. Now
+    before any block or chunk: no response computed, no progress reported."""
+    arr = MicArray.from_preset("three-mic")
+    at = np.array([2.0, 2.0, 1.2])
+    x = _bandlimited_noise(FS // 4, 3)
+    traj = linear_trajectory([1.0, -0.2, 0.0], [0.0, 0.5, 0.0], 0.3)
+    calls, counted = _counting_rir(arr, at)
+    reports = []
+
+    def progress(stage, done, total):
+        reports.append((stage, done, total))
+
+    for bad in (500.0, -100.0, "10", [10.0]):
+        with pytest.raises(ConfigError, match="SNR must be"):
+            simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.3, at, rir_fn=counted,
+                                 snr_db=bad, progress=progress)
+        with pytest.raises(ConfigError, match="SNR must be"):
+            simulate_moving_free_field(x, FS, arr, traj, snr_db=bad, progress=progress)
+    assert calls == [] and reports == []
+    # a good SNR: the noise it asks for (relative to the mean received power)
+    clean = simulate_moving_free_field(x, FS, arr, traj)
+    noisy = simulate_moving_free_field(x, FS, arr, traj, snr_db=20.0, rng=1)
+    assert 10 * np.log10(np.mean(clean**2) / np.mean((noisy - clean) ** 2)) == pytest.approx(
+        20.0, abs=0.2)
+
+
 def test_trajectory_interpolation_velocity_and_csv_roundtrip(tmp_path):
     traj = waypoint_trajectory([[1, 0, 0], [1, 1, 0], [0, 1, 0]], speed_mps=0.5)
     assert traj.duration == pytest.approx(4.0)

@@ -554,6 +554,7 @@ def simulate_moving_free_field(
     """
     x = _check_signal(signal, fs)
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
+    snr_db = check_snr_db(snr_db)  # (add_noise refused a bad one only after the work)
     progress = _check_progress(progress)
     pos, c = _mics_and_c(mics, speed_of_sound)
     t = np.arange(x.size) / fs
@@ -920,6 +921,8 @@ def simulate_moving_room(
         if bound is not None and not (is_real(bound) and bound > 0):
             raise GeometryError(f"{name} must be > 0 or None, got {bound!r}")
     check_rng(rng)  # (before the work: add_noise draws from it at the end)
+    # (add_noise refused a bad SNR only after the work: 10 s of responses for a 2-s walk)
+    snr_db = check_snr_db(snr_db)
     if rir_fn is not None and not callable(rir_fn):  # (a builtin TypeError at the first block)
         raise GeometryError(f"rir_fn must be a function source_room (3,) -> (n_mics, L) impulse "
                             f"responses, got {type(rir_fn).__name__}")
