@@ -363,7 +363,9 @@ def remove_lines(x: ArrayLike, fs: float, lines_hz: ArrayLike,
                  bandwidth_hz: float = NOTCH_BANDWIDTH_HZ) -> NDArray:
     """``x`` (n_ch, n) with the lines at ``lines_hz`` filtered out of every channel alike: a
     second-order notch ``bandwidth_hz`` wide (-3 dB) at each, forward and backward (zero
-    phase: the TDOAs of everything else are untouched). Lines at or above fs / 2 are skipped.
+    phase: the TDOAs of everything else are untouched). Lines within ``bandwidth_hz`` of
+    fs / 2 or above it are skipped (a notch there has a pole on the unit circle to rounding:
+    at 16 kHz a 7999-Hz line stays; found by a review helper).
 
     A notch takes ~1 / (pi ``bandwidth_hz``) s (0.16 s at 2 Hz) to settle, ~0.7 s to take a
     line 40 dB down, so the recording's first and last second kept much of the hum (-9 dB in
