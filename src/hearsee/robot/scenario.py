@@ -754,7 +754,7 @@ def load_scenario(path: str | Path) -> Scenario:
 def default_scenario() -> Scenario:
     """The built-in demo: a 7 x 6 x 3 m room (RT60 0.3 s, SNR 20 dB); the robot faces +x from
     near the room centre; a woman speaks from behind-left of the robot (azimuth about 121 -> 141
-    deg, 2.6 m) while walking at 0.15 m/s; a mannequin stands 1.8 m away at azimuth 100 deg, in the
+    deg, 2.7 m) while walking at 0.15 m/s; a mannequin stands 1.8 m away at azimuth 100 deg, in the
     camera's view once the head has turned to her."""
     room = np.array([7.0, 6.0, 3.0])
     robot_xy = np.array([3.5, 2.6])
