@@ -156,7 +156,7 @@ def line_frequencies(x: ArrayLike, fs: float, line: ArrayLike, bin_hz: ArrayLike
 
     Each run of line bins is one line, its frequency the peak of the channels' summed
     spectrum of the recording's first :data:`LINE_SPECTRUM_S` seconds (Hann window, 2x zero
-    padding: ~fs / 2n resolution) within the run, refined by a parabola through the log
+    padding: ~fs / 2n resolution) within a bin of the run, refined by a parabola through the log
     power. When three or more lines, and :data:`COMB_SHARE` of them, lie within
     :data:`COMB_TOL_HZ` of the multiples of one fundamental (the lowest line, or it over a
     whole number, :func:`_divided`), they are a harmonic comb -- mains hum --
@@ -179,10 +179,14 @@ def line_frequencies(x: ArrayLike, fs: float, line: ArrayLike, bin_hz: ArrayLike
     step = f[1] - f[0] if len(f) > 1 else fs
     lines = []
     for lo, hi in runs:
-        k0 = max(int(np.floor((f[lo] - step / 2) / df)), 1)
-        k1 = min(int(np.ceil((f[hi - 1] + step / 2) / df)), len(spec) - 2)
+        # within a bin of the run's ends: a line between two bins may pass the test on the
+        # farther one only (the nearer one's power swings with a neighbouring line's leakage),
+        # up to a bin from it; half a bin took a noise peak beside the line for it (the 600-Hz
+        # harmonic of a 60-Hz hum, found at bin 609.4 Hz only, was a line at 611.9 Hz)
+        k0 = max(int(np.floor((f[lo] - step) / df)), 1)
+        k1 = min(int(np.ceil((f[hi - 1] + step) / df)), len(spec) - 2)
         lines.append(_peak_hz(spec, k0 + int(np.argmax(spec[k0:k1 + 1])), df))
-    lines_a = np.array(lines)
+    lines_a = np.unique(lines)  # (two runs a bin apart find the same line)
     comb = _comb(lines_a)
     lines_a = lines_a if comb is None else comb
     # (a hum's harmonics that a voice hid from the test, or beyond the highest)
