@@ -906,7 +906,6 @@ def test_an_image_too_thin_for_a_board_is_not_found(tmp_path):
         C.calibrate_rig(files["left"], files["right"], PATTERN, SQUARE)
 
 
-
 def test_thermal_views_that_disagree_on_the_transform_are_refused():
     """Corners (+0.05 px noise) of 8 known boards with the thermal images mirrored left-right
     (a thermal camera set to flip its picture), relabelled by match_labeling to look like the
@@ -932,7 +931,6 @@ def test_thermal_views_that_disagree_on_the_transform_are_refused():
         mirrored.append(C.match_labeling(lp[i], m, PATTERN))
     with pytest.raises(CalibrationError, match="views disagree .* mirrored"):
         C.calibrate_thermal_extrinsics(truth, th, lp, mirrored, obj, right_points=rp)
-
 
 
 def test_a_stereo_pair_of_two_moments_is_rejected_or_named(monkeypatch):
