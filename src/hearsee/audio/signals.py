@@ -419,12 +419,6 @@ def _subtype(path: str | Path) -> str | None:
         return None
 
 
-def _full_scale(path: str | Path) -> float:
-    """The largest positive sample of the audio file's subtype (:data:`_FULL_SCALE`; 1.0
-    for the others)."""
-    return _FULL_SCALE.get(_subtype(path), 1.0)
-
-
 #: One quantisation step of the integer PCM subtypes, read as floats in [-1, 1)
 _PCM_STEP = {"PCM_S8": 2.0**-7, "PCM_U8": 2.0**-7, "PCM_16": 2.0**-15, "PCM_24": 2.0**-23,
              "PCM_32": 2.0**-31}
@@ -775,8 +769,7 @@ def read_recording(
         dup = [(int(chosen[i]), int(chosen[j])) for i, j in dup]
         warnings.warn(f"{label}: {duplicate_channels_text(dup)}", DegenerateInputWarning,
                       stacklevel=2)
-    lossy = [(f.path, sub) for f in files
-             if (sub := _subtype(f.path)) is not None and sub in LOSSY_SUBTYPES]
+    lossy = [(f.path, f.subtype) for f in files if f.subtype in LOSSY_SUBTYPES]
     if lossy:
         what = (f"lossy-compressed ({lossy[0][1]})" if len(paths) == 1 else
                 ", ".join(f"{q} ({sub})" for q, sub in lossy)
@@ -871,6 +864,7 @@ class _FilePart(NamedTuple):
     clipped: int  #: samples clipped, as read
     read: int  #: samples read (of the channels taken)
     channels: NDArray  #: the input channel numbers (over the files) of ``x``'s rows
+    subtype: str | None  #: the file's subtype (:func:`_subtype`), None when it cannot be told
 
 
 def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resample: bool,
@@ -880,13 +874,15 @@ def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resampl
     checked on its own. The checks that compare channels with one another, and the clipping
     warning, are the caller's."""
     n, read = x.shape[1], x.size
+    sub = _subtype(path)  # (its header read once: full scale, quantisation step, lossy codec)
     # clipping is seen on the file's own samples (resampling smooths the flat tops away)
     clipped, resampled = 0, False
     if x.size and np.all(np.isfinite(x)):
         mag = np.abs(x)
         peak = mag.max(axis=1, keepdims=True)
         beyond = peak > 1.0
-        at = mag >= CLIP_LEVEL * np.where(beyond, peak, _full_scale(path))
+        # (the largest positive sample of the file's subtype; 1.0 for the others)
+        at = mag >= CLIP_LEVEL * np.where(beyond, peak, _FULL_SCALE.get(sub, 1.0))
         if beyond.any():
             # (there only a flat top: a sample equal to a neighbour. Near its peak a smooth
             # unclipped wave passes the level too -- a float file's chirp at amplitude 2 read
@@ -931,8 +927,8 @@ def _checked(path: str | Path, x: NDArray, fs_in: int, fs: float | None, resampl
     if flat.size:
         raise AudioInputError(f"{path}: {stuck_channels_text(flat)}; check the microphone "
                               "wiring")
-    return _FilePart(path, x, fs_in, None if resampled else _PCM_STEP.get(_subtype(path)),
-                     clipped, read, names)
+    return _FilePart(path, x, fs_in, None if resampled else _PCM_STEP.get(sub), clipped, read,
+                     names, sub)
 
 
 def channel_faults(x: NDArray) -> tuple[NDArray, NDArray, float]:
