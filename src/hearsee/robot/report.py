@@ -226,6 +226,14 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     known = bool(np.isfinite(truth).any())
     figs = []
 
+    def save(fig: Any, rel: str, caption: str) -> None:
+        fig.tight_layout()
+        try:
+            put(rel, _png(fig))
+        finally:
+            plt.close(fig)
+        figs.append((rel, caption))
+
     fig, ax = plt.subplots(figsize=(6.5, 5.5))
     room = scenario["room"]["size_m"]
     ax.add_patch(plt.Rectangle((0, 0), room[0], room[1], fill=False, lw=2, color="k"))
@@ -258,13 +266,8 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     ax.set_title("Top view: trajectory vs ground truth (grey: head direction)" if known else
                  "Top view: trajectory (grey: head direction)")
     ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
-    try:
-        put("plots/top_view.png", _png(fig))
-    finally:
-        plt.close(fig)
-    figs.append(("plots/top_view.png", "Top view of the room: estimated track vs ground truth."
-                 if known else "Top view: the estimated track (a live run has no ground truth)."))
+    save(fig, "plots/top_view.png", "Top view of the room: estimated track vs ground truth."
+         if known else "Top view: the estimated track (a live run has no ground truth).")
 
     if known:
         fig, ax = plt.subplots(figsize=(7, 3.2))
@@ -273,12 +276,7 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
         ax.set_ylabel("3D position error (cm)")
         ax.set_title("Position error over time")
         ax.grid(alpha=0.3)
-        fig.tight_layout()
-        try:
-            put("plots/error.png", _png(fig))
-        finally:
-            plt.close(fig)
-        figs.append(("plots/error.png", "3D position error of the track over time."))
+        save(fig, "plots/error.png", "3D position error of the track over time.")
 
     fig, ax = plt.subplots(figsize=(7, 3.2))
     ax.plot(t, pan, "k-", label="head pan")
@@ -290,14 +288,9 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
     ax.set_title("Head angle over time")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    try:
-        put("plots/head.png", _png(fig))
-    finally:
-        plt.close(fig)
-    figs.append(("plots/head.png",
-                 "Head pan angle, the speaker's true direction and the audio estimates." if known
-                 else "Head pan angle and the audio estimates."))
+    save(fig, "plots/head.png",
+         "Head pan angle, the speaker's true direction and the audio estimates." if known
+         else "Head pan angle and the audio estimates.")
     return figs
 
 
