@@ -91,7 +91,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from hearsee.audio import bem, hum
 from hearsee.audio.arrays import MicArray, load_array
-from hearsee.audio.signals import as_samples, check_fs
+from hearsee.audio.signals import as_samples, check_fs, unit_peak_scale
 from hearsee.audio.tdoa import check_frame_ms, frame_signals
 from hearsee.config import (
     check_rng,
@@ -1493,7 +1493,7 @@ def localize_mask(x: ArrayLike, fs: float, array: MicArray | str | Path | MaskMo
     # scale-free, as every estimate: the peak brought to [0.5, 1) by a power of two (exact). The
     # products of the averaged spectra under- or overflowed: a recording at 1e-100 or 1e80 was
     # "no coherent source found", at 1e-80 another front/back probability with RuntimeWarnings
-    x = np.ldexp(x, -int(np.frexp(np.max(np.abs(x)))[1]))
+    x = x * unit_peak_scale(float(np.max(np.abs(x))))
     fs = check_fs(fs)
     check_frame_ms(frame_ms, frame_ms / 2, names=("frame_ms", "half frame"))
     _check_decision_settings(distances, sigma_iid_db, phase_weight)

@@ -17,6 +17,7 @@ Multichannel arrays are ``(n_channels, n_samples)``.
 
 from __future__ import annotations
 
+import math
 import os
 import warnings
 from collections.abc import Callable, Iterable, Sequence
@@ -69,6 +70,7 @@ __all__ = [
     "read_recording",
     "resample",
     "synthetic_voice",
+    "unit_peak_scale",
     "white_noise",
     "write_recording",
 ]
@@ -204,6 +206,15 @@ def check_fs(fs: float) -> float:
         raise AudioInputError(f"sample rate must be a positive number of Hz (at most "
                               f"{MAX_FILE_FS_HZ}), got {fs!r}")
     return float(fs)
+
+
+def unit_peak_scale(peak: float) -> float:
+    """The power of two that brings a recording's largest |sample| ``peak`` (> 0) into
+    [0.5, 1): multiplying by it is exact, so a scale-free estimate is the same bit for bit at
+    any level (1 for a peak that is not finite). Used by
+    :func:`hearsee.audio.mask.localize_mask` and
+    :class:`hearsee.stream.pipeline.ArraySource`."""
+    return math.ldexp(1.0, -math.frexp(peak)[1])
 
 
 def as_samples(x: ArrayLike, what: str = "recording", *, finite: bool = True) -> NDArray:

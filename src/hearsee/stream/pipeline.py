@@ -77,6 +77,7 @@ from hearsee.audio.signals import (
     microphone_channels,
     quiet_channels_text,
     stuck_channels_text,
+    unit_peak_scale,
 )
 from hearsee.audio.sources import TALKER_MODES_DPS2, TALKER_PEAK_RATIO
 from hearsee.audio.tdoa import (
@@ -385,7 +386,7 @@ class ArraySource:
         # precision made 1e200 infinite ("NaN or infinite samples") and 1e-300 zero
         peak = float(np.max(np.abs(a), initial=0.0))
         if peak > 0.0 and not _SINGLE_SAFE[0] <= peak <= _SINGLE_SAFE[1]:
-            a = a * math.ldexp(1.0, -math.frexp(peak)[1])
+            a = a * unit_peak_scale(peak)
         # (a rate of 0 divided by zero in the stream; a negative one read as "frame too short")
         self.x, self.fs, self.block_len = a, check_fs(fs), block_len
         self.n_channels = a.shape[0]
