@@ -577,11 +577,11 @@ def check_outputs(cfg: RobotConfig, where: str) -> None:
     if cfg.output.jsonl.is_dir():  # (passed the dry run; the run failed when it started)
         raise ConfigError(f"{where}: output.jsonl: {cfg.output.jsonl} is a folder; the JSON "
                           "lines are a file: choose a file name")
-    from hearsee.robot.report import _nearest_existing
+    from hearsee.robot.report import file_in_the_way
 
-    above = _nearest_existing(cfg.output.jsonl.parent)
-    if above is not None and not above.is_dir():  # (likewise: "cannot write ...: Not a
-        # directory" when the run started, after a dry run whose checks all passed)
+    above = file_in_the_way(cfg.output.jsonl.parent)
+    if above is not None:  # (likewise: "cannot write ...: Not a directory" when the run
+        # started, after a dry run whose checks all passed)
         raise ConfigError(f"{where}: output.jsonl: {cfg.output.jsonl}: {above} is a file, not "
                           "a folder; choose another folder for the JSON lines")
     if jsonl_foreign_file(cfg.output.jsonl):

@@ -31,7 +31,7 @@ from hearsee.errors import InputFileError
 #: ``put(rel, data)``: stage the file ``rel`` of the report folder (text or bytes)
 _Put = Callable[[str, "str | bytes"], None]
 
-__all__ = ["REPORT_FILES", "report_blocker_reason", "report_folder_blocker",
+__all__ = ["REPORT_FILES", "file_in_the_way", "report_blocker_reason", "report_folder_blocker",
            "report_folder_unwritable", "report_foreign_file", "report_makes_folder",
            "report_overwrites", "write_report"]
 
@@ -52,8 +52,8 @@ def report_folder_blocker(folder: str | Path) -> Path | None:
     named ``plots`` in the folder failed the report after the run, with log.json and
     summary.json already written; until 2026-12-02; a folder named ``index.html`` failed it
     with IsADirectoryError naming a temporary file, until 2026-12-07)."""
-    blocker = _nearest_existing(folder)
-    if blocker is not None and not blocker.is_dir():
+    blocker = file_in_the_way(folder)
+    if blocker is not None:
         return blocker
     f = Path(folder)
     hit = next((f / sub for sub in _REPORT_SUBFOLDERS
@@ -77,6 +77,15 @@ def report_blocker_reason(blocker: Path) -> str:
     if blocker.is_dir():
         return f"{blocker} is a folder where the report writes a file"
     return f"{blocker} is a file, not a folder"
+
+
+def file_in_the_way(folder: str | Path) -> Path | None:
+    """The file that keeps ``folder`` from being made: the folder itself or the nearest of its
+    parents that exists, when that is no folder (past a dangling link, at its target); else
+    None. The report folder's rule (:func:`report_folder_blocker`) and the robot file's JSON
+    lines' folder."""
+    above = _nearest_existing(folder)
+    return above if above is not None and not above.is_dir() else None
 
 
 def _nearest_existing(folder: str | Path) -> Path | None:
