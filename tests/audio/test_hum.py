@@ -316,3 +316,20 @@ def test_a_line_found_on_its_farther_bin_only_is_found_at_its_frequency():
     rng = np.random.default_rng(0)
     x = np.sin(2 * np.pi * 7998.5 * t)[None] + 0.1 * rng.standard_normal((2, t.size))
     np.testing.assert_allclose(hum.find_lines(x, FS), [7998.5], atol=0.01)
+
+
+@pytest.mark.parametrize("f0", [20.0, 30.0, 45.0])
+def test_a_strong_lines_leakage_is_no_line(f0):
+    # a line 40 dB above white noise: its leakage through the frames' Tukey window holds
+    # steady in bins far from it; their peaks are noise, no lines (20 Hz gave 32.9, 109.5,
+    # 162.3 Hz; 45 Hz at 20 dB gave 45 and 124.2 Hz)
+    fs = 16000
+    t = np.arange(5 * fs) / fs
+    rng = np.random.default_rng(349)
+    line = np.sin(2 * np.pi * f0 * t)
+    for amp in (1.0, 0.1):
+        x = amp * np.stack([line, line]) + 0.01 * rng.standard_normal((2, t.size))
+        found = hum.find_lines(x, fs)
+        # below TONAL_MIN_HZ no line is looked for; above, the line itself and nothing else
+        want = [f0] if f0 >= hum.TONAL_MIN_HZ else []
+        assert found == pytest.approx(want, abs=0.05), (amp, found)

@@ -82,7 +82,12 @@ COMB_TOL_HZ = 1.5
 #: :func:`line_frequencies` reads it) peaks this many times above its median within half a
 #: fundamental around it: a steady line is a few bins wide there, a voice's harmonics glide and
 #: smear, noise stays near its median (10x found a false line in white noise, ~1 in 150
-#: harmonics; the hum's hidden harmonics stood far higher)
+#: harmonics; the hum's hidden harmonics stood far higher). A run of :func:`tonal_bins`' line
+#: bins is a line only where that spectrum peaks this many times above its median over the
+#: run (and a bin each side) too: a strong line's leakage through the frames' Tukey window
+#: holds steady in bins far from it, and their peak was noise (a 20-Hz line 40 dB above white
+#: noise gave 'lines' at 32.9, 109.5 and 162.3 Hz, peaking 7-10x above their median; the
+#: 1953 runs of bench/hum.py's recordings, with voices, peaked 659x or more)
 HARMONIC_PROMINENCE = 100.0
 #: ... up to this frequency (Hz)
 HARMONIC_TOP_HZ = 8000.0
@@ -157,9 +162,11 @@ def line_frequencies(x: ArrayLike, fs: float, line: ArrayLike, bin_hz: ArrayLike
     Each run of line bins is one line, its frequency the peak of the channels' summed
     spectrum of the recording's first :data:`LINE_SPECTRUM_S` seconds (Hann window, 2x zero
     padding: ~fs / 2n resolution) within a bin of the run, refined by a parabola through the log
-    power. When three or more lines, and :data:`COMB_SHARE` of them, lie within
-    :data:`COMB_TOL_HZ` of the multiples of one fundamental (the lowest line, or it over a
-    whole number, :func:`_divided`), they are a harmonic comb -- mains hum --
+    power; a run where that peak stands less than :data:`HARMONIC_PROMINENCE` times above the
+    spectrum's median there is no line (a stronger line's leakage). When three or more lines,
+    and :data:`COMB_SHARE` of them, lie within :data:`COMB_TOL_HZ` of the multiples of one
+    fundamental (the lowest line, or it over a whole number, :func:`_divided`), they are a
+    harmonic comb -- mains hum --
     and every multiple of the fundamental fitted to them (least squares through 0) up to the
     highest line is returned, with the lines off the comb. Then every multiple of the fundamental
     (the comb's, else the lowest line's or, when the lines are its multiples, it over a
@@ -185,7 +192,11 @@ def line_frequencies(x: ArrayLike, fs: float, line: ArrayLike, bin_hz: ArrayLike
         # harmonic of a 60-Hz hum, found at bin 609.4 Hz only, was a line at 611.9 Hz)
         k0 = max(int(np.floor((f[lo] - step) / df)), 1)
         k1 = min(int(np.ceil((f[hi - 1] + step) / df)), len(spec) - 2)
-        lines.append(_peak_hz(spec, k0 + int(np.argmax(spec[k0:k1 + 1])), df))
+        k = k0 + int(np.argmax(spec[k0:k1 + 1]))
+        if spec[k] >= HARMONIC_PROMINENCE * np.median(spec[k0:k1 + 1]):
+            lines.append(_peak_hz(spec, k, df))
+    if not lines:
+        return np.zeros(0)
     lines_a = np.unique(lines)  # (two runs a bin apart find the same line)
     comb = _comb(lines_a)
     lines_a = lines_a if comb is None else comb
