@@ -349,17 +349,18 @@ def test_write_image_keeps_a_pixel_type_the_format_holds(tmp_path, name, image):
     np.testing.assert_array_equal(read_image(tmp_path / name, "unchanged"), image)
 
 
-def _tiff(img: np.ndarray) -> bytes:
+def _tiff(img: np.ndarray, orientation: int | None = None) -> bytes:
     """An uncompressed little-endian TIFF of ``img`` ((H, W) or (H, W, 2) unsigned integers,
     interleaved samples, minimum-is-black, one strip; a second sample is an unspecified
-    extra sample)."""
+    extra sample), with an Orientation tag (274) when ``orientation`` is given."""
     import struct
 
     h, w = img.shape[:2]
     spp, bits = (1 if img.ndim == 2 else img.shape[2]), img.dtype.itemsize * 8
     data = np.ascontiguousarray(img).astype(img.dtype.newbyteorder("<")).tobytes()
+    turn = [] if orientation is None else [(274, 3, 1, orientation)]
     entries = [(256, 4, 1, w), (257, 4, 1, h), (258, 3, spp, bits), (259, 3, 1, 1),
-               (262, 3, 1, 1), (273, 4, 1, 8), (277, 3, 1, spp), (278, 4, 1, h),
+               (262, 3, 1, 1), (273, 4, 1, 8), *turn, (277, 3, 1, spp), (278, 4, 1, h),
                (279, 4, 1, len(data)), (284, 3, 1, 1)] + ([(338, 3, 1, 0)] if spp == 2 else [])
     ifd = struct.pack("<H", len(entries))
     for tag, kind, count, value in entries:
@@ -368,6 +369,28 @@ def _tiff(img: np.ndarray) -> bytes:
                                                                         else 0)
         ifd += struct.pack("<HHI", tag, kind, count) + packed
     return b"II*\x00" + struct.pack("<I", 8 + len(data)) + data + ifd + struct.pack("<I", 0)
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16])
+@pytest.mark.parametrize("orientation", [2, 3, 4, 5, 6, 7, 8])
+def test_every_read_mode_gives_a_tiff_s_pixels_as_stored(tmp_path, orientation, dtype):
+    """OpenCV's TIFF decoder turns or mirrors a TIFF by its Orientation tag whatever the read
+    flags: a 64x48 TIFF tagged 6 came back 48x64 (turned 90 deg) in every mode, one tagged 3
+    upside down, where a JPEG with the same EXIF tag gives its pixels as stored. Ground truth:
+    the array written, distinct in every pixel (a 12-bit ramp for uint16)."""
+    stored = (np.arange(48 * 64).reshape(48, 64) % (256 if dtype == np.uint8 else 4096)
+              ).astype(dtype)
+    path = tmp_path / "turned.tif"
+    path.write_bytes(_tiff(stored, orientation))
+    np.testing.assert_array_equal(read_image(path, "unchanged"), stored)
+    np.testing.assert_array_equal(read_thermal(path), stored)
+    grey = stored if dtype == np.uint8 else (stored >> 4).astype(np.uint8)  # (to_8_bits)
+    np.testing.assert_array_equal(read_image(path, "gray"), grey)
+    np.testing.assert_array_equal(read_image(path, "bgr"), np.dstack([grey] * 3))
+    plain = tmp_path / "plain.tif"  # (no tag, or tag 1: as before)
+    for tag in (None, 1):
+        plain.write_bytes(_tiff(stored, tag))
+        np.testing.assert_array_equal(read_image(plain, "unchanged"), stored)
 
 
 def test_a_tiff_whose_depth_or_channels_opencv_drops_is_refused(tmp_path):

@@ -278,7 +278,8 @@ def read_image(path: str | Path, mode: ColorMode = "gray",
     path : file name (any format OpenCV decodes: PNG, JPEG, TIFF, PGM, ...).
     mode : "gray" (uint8 (H, W)), "bgr" (uint8 (H, W, 3)) or "unchanged" (bit depth and
         channels as stored, e.g. 16-bit PGM/PNG). In every mode the pixels are those stored:
-        a JPEG's EXIF orientation tag is not applied. A 16-bit file read as "gray" or "bgr"
+        a JPEG's EXIF orientation tag is not applied, nor a TIFF's Orientation tag (which
+        OpenCV applies: undone, :func:`_tiff_as_stored`). A 16-bit file read as "gray" or "bgr"
         keeps its 8 most significant bits in use (:func:`to_8_bits`: a 12-bit camera's
         0-4095 shifted right by 4); OpenCV's own conversion kept the top 8 of 16 bits, which
         left a 10- or 12-bit image nearly black.
@@ -345,7 +346,7 @@ def _decode(path: str | Path, mode: ColorMode) -> tuple[NDArray, Path]:
             f"{mode} image cannot take: give an 8- or 16-bit image")
     if mode == "unchanged":
         _check_tiff_kept(p, data, img)
-    return img, p
+    return _tiff_as_stored(data, img), p
 
 
 def _imdecode(data: NDArray, flags: int, p: Path) -> NDArray | None:
@@ -387,10 +388,42 @@ def _check_tiff_kept(p: Path, data: NDArray, img: NDArray) -> None:
             "with 1, 3 or 4 channels (e.g. one 16-bit plane per file)")
 
 
+#: How to undo the Orientation (TIFF tag 274) of a TIFF that OpenCV's TIFF decoder applied
+#: to its pixels, by orientation: flips and turns of the (rows, columns) axes.
+_UNDO_TIFF_ORIENTATION: dict[int, Callable[[NDArray], NDArray]] = {
+    2: lambda a: a[:, ::-1],  # (mirrored left-right)
+    3: lambda a: a[::-1, ::-1],  # (turned 180 deg)
+    4: lambda a: a[::-1],  # (mirrored top-bottom)
+    5: lambda a: a.swapaxes(0, 1),  # (transposed)
+    6: lambda a: np.rot90(a, 1),  # (turned 90 deg clockwise)
+    7: lambda a: a.swapaxes(0, 1)[::-1, ::-1],  # (transposed across the other diagonal)
+    8: lambda a: np.rot90(a, -1),  # (turned 90 deg counter-clockwise)
+}
+
+
+def _tiff_as_stored(data: NDArray, img: NDArray) -> NDArray:
+    """``img``, OpenCV's decoding of the file ``data``, with its pixels as stored: OpenCV's
+    TIFF decoder turns or mirrors the image by the file's Orientation tag whatever the read
+    flags (IMREAD_IGNORE_ORIENTATION and IMREAD_UNCHANGED too; measured with OpenCV 4.14),
+    so a TIFF tagged e.g. 3 (180 deg) came back turned where a JPEG with the same EXIF tag
+    did not (:data:`_IMREAD`). Other files come back as they are."""
+    tags = _tiff_tags(data, {274: 1})  # Orientation
+    undo = None if tags is None else _UNDO_TIFF_ORIENTATION.get(tags[274])
+    return img if undo is None else np.ascontiguousarray(undo(img))
+
+
 def _tiff_layout(data: NDArray) -> tuple[int, int] | None:
     """(samples per pixel, bits per sample) of the first image of the TIFF file ``data``
     (uint8 bytes), from its first IFD (TIFF 6.0 defaults: 1 and 1); None when ``data`` is
     not a classic TIFF or the directory cannot be read."""
+    found = _tiff_tags(data, {277: 1, 258: 1})  # SamplesPerPixel, BitsPerSample
+    return None if found is None else (found[277], found[258])
+
+
+def _tiff_tags(data: NDArray, defaults: dict[int, int]) -> dict[int, int] | None:
+    """The first values of the SHORT or LONG tags ``defaults`` names (tag: its value when the
+    file has none) in the first IFD of the TIFF file ``data`` (uint8 bytes); None when
+    ``data`` is not a classic TIFF or the directory cannot be read."""
     import struct
 
     order = {b"II*\x00": "<", b"MM\x00*": ">"}.get(data[:4].tobytes())
@@ -399,7 +432,7 @@ def _tiff_layout(data: NDArray) -> tuple[int, int] | None:
     try:
         (ifd,) = struct.unpack(order + "I", data[4:8].tobytes())
         (n,) = struct.unpack(order + "H", data[ifd:ifd + 2].tobytes())
-        found = {277: 1, 258: 1}  # SamplesPerPixel, BitsPerSample
+        found = dict(defaults)
         for k in range(n):
             entry = data[ifd + 2 + 12 * k:ifd + 14 + 12 * k].tobytes()
             tag, kind, count = struct.unpack(order + "HHI", entry[:8])
@@ -414,7 +447,7 @@ def _tiff_layout(data: NDArray) -> tuple[int, int] | None:
             (found[tag],) = struct.unpack(order + ("H" if size == 2 else "I"), raw)
     except struct.error:  # (a directory cut short: OpenCV decoded what it could)
         return None
-    return found[277], found[258]
+    return found
 
 
 def read_pair(left: str | Path, right: str | Path, mode: ColorMode = "gray",
