@@ -211,6 +211,24 @@ def test_glob_images_pairs_numbered_views_whatever_their_padding(tmp_path):
     assert [int(f.stem[5:]) for f in rf] == num
 
 
+def test_a_folder_s_hidden_files_are_no_images(tmp_path):
+    """A folder copied from a Mac holds a .DS_Store: glob_images of the folder listed it
+    (first, in natural order) where 'DIR/*' does not, and `hearsee calibrate --left DIR`
+    failed on "DIR/.DS_Store: not a readable image" (or "4 left images but 3 right images"
+    when only one folder had it). The folder now lists what 'DIR/*' lists: the 3 images."""
+    for k in (1, 2, 3):
+        write_image(tmp_path / f"left{k}.png", _img(seed=k))
+    (tmp_path / ".DS_Store").write_bytes(b"\x00\x00\x00\x01Bud1")
+    (tmp_path / ".left1.png.swp").write_bytes(b"")
+    names = ["left1.png", "left2.png", "left3.png"]
+    assert [f.name for f in glob_images(tmp_path)] == names
+    assert [f.name for f in glob_images(str(tmp_path / "*"))] == names
+    (tmp_path / "only").mkdir()  # (hidden files only: nothing, as for an empty folder)
+    (tmp_path / "only" / ".DS_Store").write_bytes(b"")
+    with pytest.raises(InputFileError, match="no images matched"):
+        glob_images(tmp_path / "only")
+
+
 def test_to_gray_names_colour_pixel_types_opencv_cannot_convert():
     """check_image accepts e.g. float64 or int32 colour images, but cv2.cvtColor raised a bare
     cv2.error on them (reached through compute_disparity and find_corners)."""

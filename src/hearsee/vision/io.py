@@ -669,6 +669,11 @@ def glob_images(pattern: str | Path, what: str = "images") -> list[Path]:
     right10``; sorted as text, one side's padding paired left1 with right01 and left10 with
     right02, and the calibration blamed the cameras: "optical axes are 75 deg apart").
 
+    A folder's hidden files (names starting with a dot: macOS's ``.DS_Store``, an editor's
+    ``.left1.png.swp``) are left out, as the pattern ``'DIR/*'`` leaves them out: they were
+    taken as images -- "DIR/.DS_Store: not a readable image", or "4 left images but 3 right
+    images" where only one folder held one.
+
     Raises InputFileError when nothing matches, and for an empty pattern (it listed the
     working folder).
     """
@@ -677,7 +682,8 @@ def glob_images(pattern: str | Path, what: str = "images") -> list[Path]:
         raise InputFileError(f"no {what} given: the pattern is empty")
     p = Path(text).expanduser()
     if p.is_dir():
-        files = sorted((f for f in p.iterdir() if f.is_file()), key=_natural_key)
+        files = sorted((f for f in p.iterdir() if f.is_file() and not f.name.startswith(".")),
+                       key=_natural_key)
     else:
         files = sorted((Path(f) for f in glob.glob(str(p)) if Path(f).is_file()),
                        key=_natural_key)
