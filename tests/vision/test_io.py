@@ -354,6 +354,30 @@ def test_write_image_refuses_a_pixel_type_the_format_cannot_hold(tmp_path, name,
     assert list(tmp_path.iterdir()) == []
 
 
+_GREY = np.arange(16 * 20, dtype=np.uint8).reshape(16, 20)
+
+
+@pytest.mark.parametrize("name, image", [
+    ("grey.sr", _GREY),  # (Sun raster: read back all 0)
+    ("grey.ras", _GREY),
+    ("bgra.sr", np.dstack([_GREY, _GREY, _GREY, _GREY])),  # (its alpha dropped)
+    ("neg.hdr", np.array([[-5.0, 1.0, 20.5, 36.6]], np.float32)),  # (negatives 0; rounded)
+])
+def test_write_image_refuses_a_format_that_would_change_the_values(tmp_path, name, image):
+    """The pixel type of the file read back was checked, not its values: a grey uint8 image
+    written as .sr read back as uint8 -- all 0 --, a float32 map of degC as .hdr read back
+    float32 with -5 as 0 and 36.6 as 36.5, a BGRA image as .sr without its alpha. Nothing
+    is written now; what reads back as written still is, a grey image also where the format
+    stores three equal channels (.webp, .hdr)."""
+    with pytest.raises(ImageInputError, match="does not keep this image's pixel values"):
+        write_image(tmp_path / name, image)
+    assert list(tmp_path.iterdir()) == []
+    for ok_name, ok in (("grey.webp", _GREY), ("bgr.sr", np.dstack([_GREY, _GREY // 2, _GREY])),
+                        ("ones.hdr", np.array([[0.5, 1.0, 2.0, 4.0]], np.float32))):
+        back = read_image(write_image(tmp_path / ok_name, ok), "unchanged")
+        np.testing.assert_array_equal(back if back.ndim == ok.ndim else back[:, :, 0], ok)
+
+
 @pytest.mark.parametrize("name, image", [
     ("u16.png", np.arange(12, dtype=np.uint16).reshape(3, 4) * 5000),
     ("u16.pgm", np.arange(12, dtype=np.uint16).reshape(3, 4) * 5000),

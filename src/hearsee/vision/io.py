@@ -625,7 +625,33 @@ def _encoded(p: Path, image: NDArray) -> NDArray:
         raise ImageInputError(
             f"{p}: {suffix} cannot hold {image.dtype} pixels (it would be written as "
             f"{back.dtype}); convert the image or use a format that holds them (.tif)")
+    if back is not None and suffix.lower() not in _LOSSY_SUFFIXES and not _kept(image, back):
+        raise ImageInputError(
+            f"{p}: {suffix} does not keep this image's pixel values (a {_layout(image)} image "
+            f"would read back as {_layout(back)} with other values); use .png or .tif")
     return buf
+
+
+#: Suffixes of the formats whose encoders approximate the pixels by design (OpenCV's
+#: defaults: JPEG quality 95, JPEG 2000's wavelet rate, AVIF 95; GIF's 256-colour palette);
+#: every other format must give back what was written.
+_LOSSY_SUFFIXES = (".jpg", ".jpeg", ".jpe", ".jp2", ".avif", ".gif")
+
+
+def _kept(image: NDArray, back: NDArray) -> bool:
+    """Whether ``back`` (the decoding of ``image``'s encoding) holds ``image``'s pixels: the
+    same values, a grey image's also in each channel of a colour decoding (WebP, Radiance HDR
+    store grey as three equal channels)."""
+    img = image[:, :, 0] if image.ndim == 3 and image.shape[2] == 1 else image
+    if back.shape == img.shape:
+        return bool(np.array_equal(back, img))
+    return img.ndim == 2 and back.ndim == 3 and \
+        all(np.array_equal(back[:, :, k], img) for k in range(back.shape[2]))
+
+
+def _layout(image: NDArray) -> str:
+    """``"H x W x C dtype"`` of an image, for messages."""
+    return " x ".join(str(n) for n in image.shape) + f" {image.dtype}"
 
 
 def write_image(path: str | Path, image: NDArray) -> Path:
@@ -635,7 +661,10 @@ def write_image(path: str | Path, image: NDArray) -> Path:
     hold to 8 bits without a word (float32 0..1 written as all 0, uint16 to a JPEG clipped at
     255, negative int16 to 0), so a pixel type the written file would not read back as is an
     ImageInputError naming both (PNG and PGM hold uint8 and uint16, JPEG uint8, TIFF also
-    int8-int32, float32 and float64).
+    int8-int32, float32 and float64). So is an image a format other than a lossy one (JPEG,
+    JPEG 2000, AVIF, GIF) would not give back as written: Sun raster wrote a grey image that
+    read back all 0, Radiance HDR clipped negative float32 values to 0 and rounded the rest
+    to 8-bit mantissas, and an alpha channel that a format drops was dropped.
     """
     check_image(image, str(path))
     # (config.output_file: a folder at the path is refused before the encoding -- it was
