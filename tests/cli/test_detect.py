@@ -146,6 +146,18 @@ def test_stereo_only_table_and_overlay(folder, capsys, tmp_path):
     assert img is not None and img.shape == (240, 320, 3)
 
 
+def test_an_overlay_in_jpeg_2000_is_written(folder, capsys, tmp_path):
+    """--overlay out.jp2 was refused before the detection, "cannot encode the image as .jp2":
+    the check encoded a 2x2 probe, which OpenCV's JPEG 2000 encoder cannot (it needs 32 px),
+    though it encodes the 320x240 overlay. Written now, the size of the left image."""
+    d, _ = folder
+    ov = tmp_path / "ov.jp2"
+    assert main(_args(d, "--overlay", str(ov), thermal=None)) == 0
+    capsys.readouterr()
+    img = cv2.imread(str(ov))
+    assert img is not None and img.shape == (240, 320, 3)
+
+
 def test_a_person_cut_by_the_image_border_is_flagged(tmp_path, capsys):
     """A person 1.3 m away at the right edge of the view (the renderer's box reaches the
     border): JSON "truncated": true, and the table says so; a person in full view is not."""

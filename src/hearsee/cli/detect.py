@@ -87,8 +87,9 @@ def detect_cmd(
         from hearsee.vision.io import check_image_writable
 
         # (an 8-bit colour image, as draw_detections gives: .pgm or .hdr were refused only
-        # after the detection)
-        check_image_writable(overlay_p, like=np.zeros((2, 2, 3), np.uint8))
+        # after the detection; 64 px square: OpenCV's JPEG 2000 encoder cannot encode an
+        # image smaller than 32 px, and a 2x2 probe refused --overlay out.jp2)
+        check_image_writable(overlay_p, like=np.zeros((64, 64, 3), np.uint8))
     rig = load_rig(calib_p)
     L, R = read_pair(left_p, right_p, "bgr", expected_size=rig.left.size)
     th = None
