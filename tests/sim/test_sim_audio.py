@@ -387,3 +387,24 @@ def test_far_field_in_a_room_is_refused(array):
     with pytest.raises(ConfigError, match="far_field applies to free field only"):
         render(np.ones(1600), 16000, MicArray.from_preset(array), [1.0, 1.0, 0.0], room,
                far_field=True)
+
+
+def test_far_field_that_is_no_bool_is_refused_by_the_truth_and_render():
+    """ground_truth took far_field by its truth: "no" gave a near source (0.3, 0.5, 0) m the
+    plane-wave TDOA of two-mic (375.00 us) for its exact one (374.17 us), without a word; in a
+    room render said "far_field applies to free field only" for "no". Both are ConfigErrors
+    naming far_field; False and True keep their values."""
+    from hearsee.sim.audio import render
+
+    arr = MicArray.from_preset("two-mic")
+    src = np.array([0.3, 0.5, 0.0])
+    near = ground_truth(arr, src, far_field=False)["tdoa_s"]["0-1"]
+    assert near == pytest.approx(float(arr.tdoa(src)[0]))
+    assert ground_truth(arr, src, far_field=np.True_)["tdoa_s"]["0-1"] == pytest.approx(
+        float(arr.tdoa_far(src)[0]))
+    for bad in ("no", 0, None):
+        with pytest.raises(ConfigError, match="far_field must be True or False"):
+            ground_truth(arr, src, far_field=bad)
+    with pytest.raises(ConfigError, match="far_field must be True or False"):
+        render(np.ones(1600), FS, arr, src, {"room_dim": [6.0, 5.0, 3.0], "rt60": 0.0},
+               far_field="no")

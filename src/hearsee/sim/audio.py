@@ -40,6 +40,7 @@ from hearsee.config import (
     output_file,
     same_file,
     to_jsonable,
+    true_or_false,
     whole_number,
     write_file,
 )
@@ -162,6 +163,7 @@ def render(signal: ArrayLike, fs: float, array: MicArray, source: ArrayLike,
     """
     room = normalize_room(room)
     src = as_point(source, "source")
+    far_field = true_or_false("far_field", far_field)  # ("no" with a room: "free field only")
     if mic_positions is not None:
         mic_positions = _mic_positions(array, mic_positions)
     if far_field and room is not None:
@@ -201,6 +203,8 @@ def ground_truth(array: MicArray, source: ArrayLike,
     26.6 deg, 1.1 m away: 195 us free field, 298 us through ``mask2-asym``; added 2026-12-04).
     """
     src = as_point(source, "source")
+    # ("no" is truthy: the plane-wave TDOAs of a near source were its truth)
+    far_field = true_or_false("far_field", far_field)
     geo = array if mic_positions is None else MicArray(
         _mic_positions(array, mic_positions), array.speed_of_sound, array.name)
     az, el, r = cart_to_sph(src)
