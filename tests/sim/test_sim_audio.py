@@ -408,3 +408,18 @@ def test_far_field_that_is_no_bool_is_refused_by_the_truth_and_render():
     with pytest.raises(ConfigError, match="far_field must be True or False"):
         render(np.ones(1600), FS, arr, src, {"room_dim": [6.0, 5.0, 3.0], "rt60": 0.0},
                far_field="no")
+
+
+@pytest.mark.parametrize("array", ["two-mic", None, {"microphones": [[0, 0.075, 0]]}])
+def test_render_and_ground_truth_refuse_an_array_that_is_no_micarray(array):
+    """render and ground_truth read array.mask / array.tdoa: a preset name was a builtin
+    AttributeError (simulate_recording loads names; these take a MicArray). GeometryError
+    naming the array, as simulate_room's; a MicArray gives the same truth as before."""
+    from hearsee.sim.audio import render
+
+    with pytest.raises(GeometryError, match="expected a MicArray"):
+        render(np.ones(1600), FS, array, [1.0, 1.0, 0.0])
+    with pytest.raises(GeometryError, match="expected a MicArray"):
+        ground_truth(array, [1.0, 1.0, 0.0])
+    arr = MicArray.from_preset("two-mic")
+    assert ground_truth(arr, [1.0, 1.0, 0.0])["azimuth_deg"] == pytest.approx(45.0)

@@ -95,6 +95,15 @@ def check_sim_fs(fs: float | None) -> int:
     return int(fs)
 
 
+def _check_array(array: MicArray) -> None:
+    """GeometryError unless ``array`` is a MicArray (a preset name or path reached
+    ``array.mask`` / ``array.tdoa``: a builtin AttributeError; :func:`simulate_recording` is
+    the entry point that loads them)."""
+    if not isinstance(array, MicArray):
+        raise GeometryError(f"array: expected a MicArray (hearsee.audio.arrays.load_array), "
+                            f"got {type(array).__name__}")
+
+
 def _mic_positions(array: MicArray, mic_positions: ArrayLike) -> NDArray:
     """``mic_positions`` as a finite float array of ``array.positions``' shape (one row per
     microphone), else a GeometryError."""
@@ -161,6 +170,7 @@ def render(signal: ArrayLike, fs: float, array: MicArray, source: ArrayLike,
     plane wave from the source's direction with ``far_field=True``). Sample 0 is the emission
     time, so direct-path TDOAs equal ``MicArray.tdoa(source)`` (``tdoa_far`` in far field).
     """
+    _check_array(array)
     room = normalize_room(room)
     src = as_point(source, "source")
     far_field = true_or_false("far_field", far_field)  # ("no" with a room: "free field only")
@@ -202,6 +212,7 @@ def ground_truth(array: MicArray, source: ArrayLike,
     measures there, unlike the free-field ``tdoa_s`` of the bare microphones (a source at
     26.6 deg, 1.1 m away: 195 us free field, 298 us through ``mask2-asym``; added 2026-12-04).
     """
+    _check_array(array)
     src = as_point(source, "source")
     # ("no" is truthy: the plane-wave TDOAs of a near source were its truth)
     far_field = true_or_false("far_field", far_field)
