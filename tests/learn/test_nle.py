@@ -692,3 +692,30 @@ def test_n_jobs_zero_is_refused_with_the_parameters(cls):
     with pytest.raises(HearseeError, match="'n_jobs' parameter"):
         cls(n_jobs=0).fit(X)
     assert cls(n_jobs=-1, n_neighbors=8).fit(X).embedding_.shape == (60, 2)
+
+
+def test_cnle_keeps_graph_components_without_core_points_apart():
+    # two 5 x 5 patches 100 apart in 10-D, 0.3 of noise in the 8 other dimensions: no point
+    # passes the core test (off-plane energy > 0.3), yet the neighbourhood graph has two
+    # components. Before: one cluster (ARI 0), both patches embedded together, a constant
+    # contrast axis; and a clean patch beside the noisy one took the noisy patch in
+    rng = np.random.default_rng(0)
+
+    def patch(shift, noise):
+        P = np.zeros((300, 10))
+        P[:, :2] = rng.uniform(0, 5, (300, 2))
+        P[:, 2:] = rng.normal(0, noise, (300, 8)) if noise else 0.0
+        P[:, 0] += shift
+        return P
+
+    truth = np.r_[np.zeros(300, int), np.ones(300, int)]
+    for first_noise in (0.3, 0.0):
+        X = np.r_[patch(0.0, first_noise), patch(100.0, 0.3)]
+        m = ClusteredNLE(random_state=0).fit(X)
+        assert m.n_clusters_ == 2
+        assert adjusted_rand_score(truth, m.labels_) == 1.0
+        for c in range(2):  # each patch unfolded on its own (it spans 5 x 5)
+            assert np.ptp(m.embedding_[m.labels_ == c], axis=0).min() > 3.0
+    # a connected cloud without core points is still one cluster
+    one = ClusteredNLE(random_state=0).fit(patch(0.0, 0.3))
+    assert one.n_clusters_ == 1

@@ -49,7 +49,10 @@ literature, not a transcription:
 
   Components of core points with at least ``min_cluster_size`` points are the clusters; every
   other point (noise, boundary points, small pieces) takes the majority label of its adaptive
-  neighbours, spreading outwards from the clusters, or failing that the label of its nearest
+  neighbours, spreading outwards from the clusters. A connected component of the neighbourhood
+  graph that no cluster reaches (none of its points is a core point: noisy or
+  higher-dimensional data, a curve with ``d = 2``) is a cluster of its own when it has at least
+  ``min_cluster_size`` points; the points still unlabelled take the label of their nearest
   labelled point. Each cluster is then embedded by NLE on its own. The guards are in the spirit
   of mutual-kNN graphs and density-based clustering (DBSCAN's core points, Ester et al. 1996);
   their combination and thresholds are this reconstruction's choice.
@@ -1114,12 +1117,11 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         sizes = np.bincount(comp)
         min_size = max(self.min_cluster_size, self.n_components + 2)
         big = (sizes[comp] >= min_size) & core
-        if not big.any():
-            return np.zeros(n, dtype=int)
         comp = np.where(big, comp, -1)
         # the others (noise, small pieces) take the majority label of their accepted neighbours,
-        # spreading outwards from the large components; what is still unreached takes the label
-        # of its nearest labelled point
+        # spreading outwards from the large components; a component of the neighbourhood graph
+        # that no cluster reaches is a cluster of its own when large enough; what is still
+        # unreached takes the label of its nearest labelled point
         rows = np.repeat(np.arange(n), ind.shape[1])
         f = mask.ravel()
         S = sparse.csr_matrix((np.ones(int(f.sum())), (rows[f], ind.ravel()[f])), shape=(n, n))
@@ -1140,6 +1142,18 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
             idx = np.flatnonzero(todo)[has]
             comp[idx] = np.argmax(votes[has], axis=1)
         todo = comp < 0
+        if todo.any():
+            # (a component without core points -- noisy or higher-dimensional data, a curve with
+            # n_components=2 -- took the nearest cluster's label until 2026-12-08, and without
+            # any core point all points formed one cluster: two blobs 100 apart in 10-D, ARI 0)
+            _, part = csgraph.connected_components(S, directed=False)
+            reached = np.zeros(int(part.max()) + 1, dtype=bool)
+            reached[part[~todo]] = True
+            new = todo & ~reached[part] & (np.bincount(part)[part] >= min_size)
+            comp[new] = n_lab + part[new]
+            todo = comp < 0
+        if todo.all():
+            return np.zeros(n, dtype=int)
         if todo.any():
             nn = NearestNeighbors(n_neighbors=1, n_jobs=self.n_jobs).fit(X[~todo])
             _, near = nn.kneighbors(X[todo])
