@@ -719,3 +719,30 @@ def test_cnle_keeps_graph_components_without_core_points_apart():
     # a connected cloud without core points is still one cluster
     one = ClusteredNLE(random_state=0).fit(patch(0.0, 0.3))
     assert one.n_clusters_ == 1
+
+
+def test_cnle_small_piece_far_away_does_not_flatten_its_cluster():
+    # two 5 x 5 patches 50 apart and a 1 x 1 piece of 15 points 50 from the first, below
+    # min_cluster_size: it takes the first patch's label. Before, that cluster was embedded with
+    # a disconnected graph: the first axis constant on the patch (only telling the piece apart), the
+    # patch squeezed onto one axis (Procrustes error 0.75 of its size); now 0.08
+    from scipy.linalg import orthogonal_procrustes
+
+    rng = np.random.default_rng(0)
+    T0, T1 = rng.uniform(0, 5, (200, 2)), rng.uniform(0, 5, (200, 2))
+    T2 = rng.uniform(0, 1, (15, 2))
+    X = np.r_[np.c_[T0, np.zeros(200)], np.c_[T1 + [50, 0], np.zeros(200)],
+              np.c_[T2 + [0, 50], np.zeros(15)]]
+    m = ClusteredNLE(random_state=0).fit(X)
+    assert m.n_clusters_ == 2
+    assert (m.labels_[400:] == m.labels_[0]).all() and (m.labels_[:200] == m.labels_[0]).all()
+    Y = m.embedding_[:200] - m.embedding_[:200].mean(axis=0)
+    T = T0 - T0.mean(axis=0)
+    R, _ = orthogonal_procrustes(Y, T)
+    assert np.sqrt(((Y @ R - T) ** 2).sum() / (T**2).sum()) < 0.2
+    assert np.ptp(m.embedding_[400:], axis=0).max() < 1.0  # the piece stays together
+    np.testing.assert_allclose(m.embedding_[m.labels_ == m.labels_[0]].mean(axis=0), 0.0,
+                               atol=1e-9)
+    np.testing.assert_allclose(m.transform(X), m.embedding_, atol=1e-12)
+    np.testing.assert_allclose(np.asarray(m.adjacency_.sum(axis=1)).ravel(), 1.0)
+    assert m.n_neighbors_.min() >= 3

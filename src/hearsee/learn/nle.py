@@ -53,9 +53,10 @@ literature, not a transcription:
   graph that no cluster reaches (none of its points is a core point: noisy or
   higher-dimensional data, a curve with ``d = 2``) is a cluster of its own when it has at least
   ``min_cluster_size`` points; the points still unlabelled take the label of their nearest
-  labelled point. Each cluster is then embedded by NLE on its own. The guards are in the spirit
-  of mutual-kNN graphs and density-based clustering (DBSCAN's core points, Ester et al. 1996);
-  their combination and thresholds are this reconstruction's choice.
+  labelled point. Each cluster is then embedded by NLE on its own (when its graph falls apart,
+  its largest piece, the others placed by the out-of-sample map of ``transform``). The guards
+  are in the spirit of mutual-kNN graphs and density-based clustering (DBSCAN's core points,
+  Ester et al. 1996); their combination and thresholds are this reconstruction's choice.
 
 The thesis author's own paper on the method (Ge, Guan, Pan & Loh, "Neighborhood linear embedding
 for intrinsic structure discovery", Machine Vision and Applications, 2010) was not available to
@@ -1206,10 +1207,10 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
             dc, ic = dc[:, 1:], ic[:, 1:]
             mc = adaptive_neighbors(Xc, ic, dc, self.shadow, min_neighbors=self.n_components + 1)
             Wc = reconstruction_weights(Xc, ic, mc, self.reg)
-            Yc, Wmc, e = self._embed(Xc, ic, Wc, mc, m, rs, warn=False, where=f"cluster {c}: ")
+            Yc, Wmc, e, kept = self._embed_cluster(Xc, ic, Wc, mc, rs, where=f"cluster {c}: ")
             Y[idx] = Yc
             err += e
-            counts[idx] = mc.sum(axis=1)
+            counts[idx] = kept
             Wmc = Wmc.tocoo()
             blocks.append((idx[Wmc.row], idx[Wmc.col], Wmc.data))
         r = np.concatenate([b[0] for b in blocks if isinstance(b, tuple)] or [np.zeros(0, int)])
@@ -1223,6 +1224,39 @@ class ClusteredNLE(NeighborhoodLinearEmbedding):
         self.reconstruction_error_ = err
         self.offset_ = offset
         return self
+
+    def _embed_cluster(self, Xc, ic, Wc, mc, rs, where):
+        """NLE of one cluster from its neighbourhoods; returns ``(Y, W sparse, error, accepted
+        neighbour counts)``. When the cluster's neighbourhood graph falls apart (a small piece
+        far away took the cluster's label, see :meth:`_cluster`), the largest piece is embedded
+        alone and the others are placed by the out-of-sample map of :meth:`transform`: embedded
+        together, the first axis only told the pieces apart and the cluster itself kept one
+        axis (until 2026-12-08)."""
+        m = Xc.shape[0]
+        n_pc, pc = csgraph.connected_components(_pattern(_weight_matrix(ic, Wc, mc, m)),
+                                                directed=True, connection="weak")
+        sizes = np.bincount(pc)
+        if n_pc == 1 or sizes.max() <= self.n_components + 1:
+            return (*self._embed(Xc, ic, Wc, mc, m, rs, warn=False, where=where), mc.sum(axis=1))
+        main = pc == np.argmax(sizes)
+        keep, rest = np.flatnonzero(main), np.flatnonzero(~main)
+        pos = np.zeros(m, dtype=int)
+        pos[keep] = np.arange(keep.size)  # (the main piece's accepted neighbours are its own)
+        Ym, Wm, err = self._embed(Xc[keep], pos[ic[keep]], Wc[keep], mc[keep], keep.size, rs,
+                                  warn=False, where=where)
+        nn = NearestNeighbors(n_jobs=self.n_jobs).fit(Xc[keep])
+        ir, Wr, mr = self._reconstruct(Xc[rest], Xc[keep], nn)
+        Y = np.zeros((m, self.n_components))
+        Y[keep] = Ym
+        Y[rest] = np.einsum("nk,nkd->nd", Wr * mr, Ym[ir])
+        Y -= Y.mean(axis=0)  # (each cluster zero-mean, as documented)
+        Wm, Wr = Wm.tocoo(), _weight_matrix(ir, Wr, mr, keep.size).tocoo()
+        W = sparse.csr_matrix((np.r_[Wm.data, Wr.data], (np.r_[keep[Wm.row], rest[Wr.row]],
+                                                         keep[np.r_[Wm.col, Wr.col]])),
+                              shape=(m, m))
+        kept = np.zeros(m, dtype=int)
+        kept[keep], kept[rest] = mc[keep].sum(axis=1), mr.sum(axis=1)
+        return Y, W, err, kept
 
     def _cluster_search(self, Xc: np.ndarray) -> NearestNeighbors | None:
         """The candidate search of one cluster's training points ``Xc`` as fit builds it (its
