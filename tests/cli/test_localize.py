@@ -93,6 +93,18 @@ def test_other_formats(rec3, capsys, fmt):
         assert "t [s]" in out and "tdoa 0-1 [us]" in out and "azimuth [deg]" in out
 
 
+@pytest.mark.parametrize("name", ["respeaker[v2]", "x[/b]"])
+def test_table_title_keeps_an_array_name_in_brackets(rec3, tmp_path, capsys, name):
+    # the array's own name in the title: rich read "[v2]" as a style tag (titled "respeaker")
+    # and "[/b]" as a closing tag with nothing open (MarkupError, a traceback)
+    yml = tmp_path / "rig.yaml"
+    pos = MicArray.from_preset("three-mic").positions.tolist()
+    yml.write_text(f'name: "{name}"\nmicrophones: {pos}\n')
+    code, out, _ = _run(capsys, rec3, "--array", yml, "--format", "table")
+    assert code == 0
+    assert f"hearsee localize ({name}, phat)" in out
+
+
 def test_csv_times_are_those_of_the_json(rec3, capsys):
     """The CSV's t_s was written to 0.1 ms: with a hop of one sample (0.0625 ms at 16 kHz)
     frames at 32.0625 and 32.125 ms were both 0.0321."""

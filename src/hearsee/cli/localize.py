@@ -85,7 +85,9 @@ def _print_table(doc: dict[str, Any]) -> None:
 
     every = list(doc["summary"]["tdoa_s"])
     labels = _table_pairs(every)
-    t = Table(title=f"hearsee localize ({doc['array']['name']}, {doc['method']})",
+    # (the array's name escaped too: a YAML name "respeaker[v2]" was titled "respeaker", and
+    # "x[/b]" was rich's MarkupError, a traceback)
+    t = Table(title=f"hearsee localize ({escape(doc['array']['name'])}, {doc['method']})",
               caption=None if labels == every else
               f"TDOAs of {len(labels)} of {len(every)} pairs; --format json or csv has all")
     # (escaped: rich read "[s]", "[us]" and "[deg]" as style tags and dropped the units)
