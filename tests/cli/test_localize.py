@@ -574,6 +574,24 @@ def test_a_warning_told_twice_in_one_run_is_one_line(tmp_path, capsys):
     assert err.count("spatial aliasing") == 1 and err.startswith("hearsee: warning: band ")
 
 
+def test_a_vertical_pairs_elevation_is_a_direction(tmp_path, capsys):
+    """A vertical pair tells the elevation alone (its azimuth is always null): a source 25 deg
+    up, whose elevation the summary got right, was warned about as "no direction for the whole
+    recording"."""
+    yml = tmp_path / "vertical.yaml"
+    yml.write_text("name: vertical\nmicrophones:\n- [0, 0, -0.075]\n- [0, 0, 0.075]\n")
+    arr = MicArray.from_yaml(yml)
+    x = simulate_free_field(white_noise(1.0, FS, rng=5), FS, arr,
+                            20.0 * unit_vector_deg(30.0, 25.0), snr_db=30, rng=6)
+    p = tmp_path / "vertical.wav"
+    sf.write(p, (x / np.abs(x).max() * 0.5).T, FS, subtype="FLOAT")
+    code, out, err = _run(capsys, p, "--array", yml, "--format", "json")
+    assert code == 0
+    s = json.loads(out)["summary"]
+    assert s["azimuth_deg"] is None and s["elevation_deg"] == pytest.approx(25.0, abs=1.0)
+    assert "no direction" not in err
+
+
 def test_a_summary_without_a_direction_is_said(rec3, monkeypatch, capsys):
     """A summary of nulls beside a few valid frames was printed without a word (only no valid
     frame at all was told)."""

@@ -285,7 +285,10 @@ def localize_cmd(
     if not told and summ["n_valid_frames"] == 0:
         err_console.print(f"hearsee: warning: {name}: no frame holds a detectable source "
                           "(silence or uncorrelated noise)", highlight=False)
-    elif not told and summ.get("azimuth_deg") is None and not doc.get("sources"):
+    elif (not told and summ.get("azimuth_deg") is None and summ.get("elevation_deg") is None
+          and not doc.get("sources")):
+        # (a vertical pair's direction is its elevation alone: its azimuth is always null, and
+        # a talker 25 deg up, found within 0.01 deg, was "no direction for the whole recording")
         # (with --sources the sources found say where the frames point: two talkers' averaged
         # correlations name neither)
         # (a summary of nulls beside a few valid frames was printed without a word)
