@@ -185,6 +185,11 @@ def test_mains_hum_is_a_unit_rms_comb_below_the_top_and_nyquist():
     # the harmonics it makes, without making any (simulate_recording's check of hum_hz)
     assert hum_harmonics(60.0, FS).tolist() == list(range(1, 42))  # 60 .. 2460 Hz
     assert hum_harmonics(50.0, 4000).tolist() == list(range(1, 40))  # below 2 kHz only
+    # a sample rate that is no number > 0: no harmonic is below its Nyquist frequency (NaN,
+    # inf and "16000" gave all 50 up to 2.5 kHz, None a builtin TypeError)
+    for bad_fs in (float("nan"), float("inf"), "16000", None, 0.0, -16000.0):
+        with pytest.raises(ConfigError, match="fs"):
+            hum_harmonics(50.0, bad_fs)
 
 
 def test_remove_lines_takes_the_hum_out_at_the_recordings_ends_too():

@@ -157,9 +157,12 @@ HUM_TOP_HZ = 2500.0
 def hum_harmonics(f0_hz: float, fs: float, top_hz: float = HUM_TOP_HZ) -> NDArray:
     """The harmonic numbers 1, 2, ... of a hum of fundamental ``f0_hz`` (Hz) that
     :func:`mains_hum` makes at ``fs`` Hz: those up to ``top_hz`` and below fs / 2. A
-    ConfigError when ``f0_hz`` or ``top_hz`` is not a number > 0 or no harmonic fits."""
+    ConfigError when ``f0_hz``, ``top_hz`` or ``fs`` is not a number > 0 or no harmonic fits
+    (an ``fs`` of NaN, inf or text "16000" gave every harmonic up to ``top_hz``, None a
+    builtin TypeError)."""
     f0_hz = finite_number("f0_hz", f0_hz, 0.0, lo_open=True)
-    top = min(finite_number("top_hz", top_hz, 0.0, lo_open=True), float(fs) / 2 * 0.999)
+    fs = finite_number("fs (Hz)", fs, 0.0, lo_open=True)
+    top = min(finite_number("top_hz", top_hz, 0.0, lo_open=True), fs / 2 * 0.999)
     k = np.arange(1, int(top // f0_hz) + 1)
     if not k.size:
         raise ConfigError(f"no harmonic of {f0_hz:g} Hz lies below {top:g} Hz")
