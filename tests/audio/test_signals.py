@@ -66,6 +66,9 @@ def test_voice_is_deterministic_and_has_formant_energy():
 def test_voice_bad_args():
     with pytest.raises(ConfigError):
         synthetic_voice("child", 1.0, FS)
+    for kind in (["male"], {"kind": "male"}):  # (builtin TypeError "unhashable type")
+        with pytest.raises(ConfigError, match="unknown voice kind"):
+            synthetic_voice(kind, 1.0, FS)
     with pytest.raises(ConfigError):
         synthetic_voice("male", -1.0, FS)
     # (a numeric string raised numpy's TypeError before 2026-11-26)

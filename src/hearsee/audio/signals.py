@@ -317,7 +317,8 @@ def synthetic_voice(kind: str = "male", duration_s: float = 2.0, fs: float = 160
     """
     from scipy.signal import fftconvolve, lfilter
 
-    if kind not in VOICE_F0_HZ:
+    # (a list or a dict was a builtin TypeError, "unhashable type")
+    if not isinstance(kind, str) or kind not in VOICE_F0_HZ:
         raise ConfigError(f"unknown voice kind {kind!r} (expected 'male' or 'female')")
     n = _check_duration(duration_s, fs)
     if fs < MIN_VOICE_FS_HZ:  # (at 1 Hz its syllables rounded to 0 samples: an endless loop)
