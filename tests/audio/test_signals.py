@@ -690,6 +690,9 @@ def test_generators_and_the_resampler_refuse_absurd_sample_counts():
         resample(np.zeros(16000), 16000, 1e9)
     assert resample(np.zeros((2, 16000)), 16000, 48000).shape == (2, 48000)
     assert resample(np.zeros(48000), 48000, 16000).shape == (16000,)
+    for one in (np.float64(0.5), 0.5):  # (no samples axis: scipy's builtin IndexError)
+        with pytest.raises(AudioInputError, match="single number"):
+            resample(one, 16000, 8000)
 
 
 # ------------------------------------------------------------ one file per microphone

@@ -391,6 +391,9 @@ def _resample(x: ArrayLike, fs_in: float, fs_out: float) -> NDArray:
     from scipy.signal import resample_poly
 
     x = as_samples(x, "signal", finite=False)  # (text was read as numbers; NaN: the caller's)
+    if x.ndim == 0:  # (a single number: scipy's builtin IndexError)
+        raise AudioInputError(f"signal must hold samples along its last axis, got the single "
+                              f"number {float(x)!r}")
     for rate in (fs_in, fs_out):  # (0 divided by zero, NaN and inf raised numpy errors)
         check_fs(rate)
     if fs_in == fs_out:
@@ -403,7 +406,7 @@ def _resample(x: ArrayLike, fs_in: float, fs_out: float) -> NDArray:
         )
     # (upsampling to 1e9 Hz was a MemoryError; a long file taken down to a lower rate never
     # grows, so it is not limited)
-    n_out = x.shape[-1] * ratio.numerator // ratio.denominator if x.ndim else 0
+    n_out = x.shape[-1] * ratio.numerator // ratio.denominator
     if n_out > max(MAX_SIGNAL_SAMPLES, x.shape[-1]):
         raise AudioInputError(f"resampling {x.shape[-1]} samples from {fs_in:g} to {fs_out:g} "
                               f"Hz makes {n_out:.3g} samples per channel, more than "
