@@ -213,6 +213,27 @@ def test_report_marks_views_the_thermal_calibration_rejected(capsys, tmp_path, m
     assert "(rejected)" in rows["l1.png"]
 
 
+def test_report_prints_file_names_as_written(capsys, tmp_path, monkeypatch):
+    """File names are text, not rich markup: 'l[1].png' was shown as 'l.png' in the table and
+    the rig written to 'rig[v2].yaml' as 'wrote .../rig.yaml'."""
+    from types import SimpleNamespace
+
+    from hearsee.cli.calibrate import _print_report
+    from hearsee.vision.calibration import ViewReport
+    from hearsee.vision.camera import Camera, StereoRig
+
+    rig = StereoRig.ideal(Camera.from_fov(60.0, 640, 480), 0.08)
+    monkeypatch.setenv("COLUMNS", "200")
+    views = [ViewReport("l[1].png", "r[b]1.png", found_left=True, found_right=True,
+                        err_left=0.1, err_right=0.1)]
+    res = SimpleNamespace(rig=rig, views=views, rms_left_px=0.1, rms_right_px=0.1,
+                          rms_stereo_px=0.1)
+    out = tmp_path / "rig[v2].yaml"
+    _print_report(res, out, None)
+    text = capsys.readouterr().out
+    assert "l[1].png" in text and "r[b]1.png" in text and f"wrote {out}" in text
+
+
 @pytest.mark.parametrize("square", ["1e300", "1e-300", "nan", "2.5"])
 def test_calibrate_square_outside_any_board_is_one_line(square, board_dir, tmp_path, capsys):
     """--square 1e300 or 1e-300 reached OpenCV: a numpy RuntimeWarning and an OpenCV

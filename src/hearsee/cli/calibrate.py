@@ -135,7 +135,9 @@ def _print_report(res, out: Path, comparison: dict | None) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    con = Console(soft_wrap=True)
+    # (no markup: file names are text -- 'l[1].png' was shown as 'l.png', and 'rig[v2].yaml'
+    # as 'wrote rig.yaml')
+    con = Console(soft_wrap=True, markup=False)
     has_t = res.rig.thermal is not None
     t = Table(title="Per-image RMS reprojection error (pixels)")
     for h in ("left image", "right image", "left", "right", "stereo L", "stereo R"):
