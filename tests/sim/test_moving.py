@@ -297,16 +297,23 @@ def _counting_rir(arr, at):
     return calls, counted
 
 
+def _counted_walk(noise_seed, duration_s):
+    """The three-mic array 2 m into a room, band-limited noise (FS / 4 samples of seed
+    ``noise_seed``), a walk past it lasting ``duration_s`` s and a counting rir_fn:
+    ``(arr, at, x, traj, calls, counted)``."""
+    arr = MicArray.from_preset("three-mic")
+    at = np.array([2.0, 2.0, 1.2])
+    x = _bandlimited_noise(FS // 4, noise_seed)
+    traj = linear_trajectory([1.0, -0.2, 0.0], [0.0, 0.5, 0.0], duration_s)
+    return (arr, at, x, traj, *_counting_rir(arr, at))
+
+
 def test_moving_simulators_check_rir_fn_and_rng_before_any_work():
     """A rir_fn that is no function raised a builtin TypeError at the first block, one that
     returned text numpy's ValueError, NaN responses made a NaN recording without a word; a
     bad rng raised numpy's TypeError / ValueError only in add_noise, after the whole
     simulation. GeometryError / ConfigError now, rir_fn and rng before any block."""
-    arr = MicArray.from_preset("three-mic")
-    at = np.array([2.0, 2.0, 1.2])
-    x = _bandlimited_noise(FS // 4, 3)
-    traj = linear_trajectory([1.0, -0.2, 0.0], [0.0, 0.5, 0.0], 0.3)
-    calls, counted = _counting_rir(arr, at)
+    arr, at, x, traj, calls, counted = _counted_walk(3, 0.3)
 
     def room(**kw):
         return simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.3, at, **kw)
@@ -335,11 +342,7 @@ def test_moving_simulators_check_the_snr_before_any_work():
     the whole rendering (a 2-s walk in a room of RT60 0.3 s: 10.6 s of impulse responses,
     then "SNR must be within -60 to 200 dB"); the masked renderers checked it first. Now
     before any block or chunk: no response computed, no progress reported."""
-    arr = MicArray.from_preset("three-mic")
-    at = np.array([2.0, 2.0, 1.2])
-    x = _bandlimited_noise(FS // 4, 3)
-    traj = linear_trajectory([1.0, -0.2, 0.0], [0.0, 0.5, 0.0], 0.3)
-    calls, counted = _counting_rir(arr, at)
+    arr, at, x, traj, calls, counted = _counted_walk(3, 0.3)
     reports = []
 
     def progress(stage, done, total):
@@ -912,11 +915,7 @@ def test_room_renderer_reports_each_stage_of_its_work():
     updates the renderer computes (counted here through a rir_fn); the recording is the same
     with or without the reports. A progress that cannot be called is refused before any
     work (a TypeError came after the first update's)."""
-    arr = MicArray.from_preset("three-mic")
-    at = np.array([2.0, 2.0, 1.2])
-    x = _bandlimited_noise(FS // 4, 5)
-    traj = linear_trajectory([1.0, -0.2, 0.0], [0.0, 0.5, 0.0], 0.25)
-    calls, counted = _counting_rir(arr, at)
+    arr, at, x, traj, calls, counted = _counted_walk(5, 0.25)
 
     reports = []
     y = simulate_moving_room(x, FS, arr, traj, [5, 4, 3], 0.3, at, rir_fn=counted,
