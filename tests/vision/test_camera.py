@@ -903,6 +903,29 @@ def test_fold_radius_checks_its_input():
     assert fold_radius([]) == np.inf and fold_radius(np.zeros((1, 5))) == np.inf
 
 
+def test_fold_beyond_79_deg_is_found_and_folded_points_are_outside_the_lens_field():
+    """A mild barrel lens, k1 = -0.01, folds at r = 1 / sqrt(0.03) = 5.774 (80.2 deg off the
+    axis): the fold was searched only up to r = 5, so it had none, and a point 84.3 deg off
+    the axis (r = 10, distorted radius 0) was "in the lens field" and landed on the principal
+    point, in the image; points at r = 7-9 landed in the image too."""
+    from hearsee.vision.camera import fold_radius
+
+    assert fold_radius([-0.01, 0, 0, 0]) == pytest.approx(1 / np.sqrt(0.03), abs=1e-3)
+    assert fold_radius([-0.001, 0, 0, 0]) == pytest.approx(1 / np.sqrt(0.003), rel=1e-3)
+    cam = Camera(np.array([[100.0, 0, 319.5], [0, 100, 239.5], [0, 0, 1]]),
+                 np.array([-0.01, 0, 0, 0]), 640, 480)
+    r = np.array([1.0, 4.0, 5.5, 7.0, 8.0, 9.0, 10.0])
+    pts = np.c_[0.8 * r, 0.6 * r, np.ones(len(r))]
+    uv = cam.project(pts)
+    assert cam.in_image(uv).all()  # (all land in the image: the folded ones too)
+    np.testing.assert_allclose(uv[-1], [319.5, 239.5], atol=1e-9)
+    np.testing.assert_array_equal(cam.in_lens_field(pts), r < 5.774)
+    # the pixel's own ray is the unfolded direction, inside the lens field
+    rays = cam.pixel_rays(uv)
+    assert cam.in_lens_field(rays).all()
+    np.testing.assert_allclose(rays[:3] / rays[:3, 2:], pts[:3], atol=1e-6)
+
+
 @pytest.mark.parametrize("K, needle", [
     ([[1e-6, 0, 160], [0, 1e-6, 120], [0, 0, 1]], "field of view near 180 deg"),
     ([[300, 0, 160], [0, 5.0, 120], [0, 0, 1]], "field of view near 180 deg"),

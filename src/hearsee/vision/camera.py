@@ -648,12 +648,15 @@ def _as_rows(value: ArrayLike, width: int, what: str, numbers: str, shape: str) 
 MAX_FOLD_RADIUS = 1000.0
 
 
-def fold_radius(dist: ArrayLike, r_max: float = 5.0) -> float:
+def fold_radius(dist: ArrayLike, r_max: float = MAX_FOLD_RADIUS) -> float:
     """The normalised image radius (``sqrt(x^2 + y^2) / z``) up to which OpenCV's radial
     distortion ``r (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 + k6 r^6)`` keeps
     increasing: beyond it the model folds back and two directions share a pixel. ``inf`` when it
-    increases up to ``r_max`` (5: 79 deg off the axis). Tangential and thin-prism terms are
-    left out (they are small). Computed on a 0.001 grid, cached per coefficient set.
+    increases up to ``r_max`` (default :data:`MAX_FOLD_RADIUS`, 89.94 deg off the axis; until
+    2026-12-08 it was 5, 79 deg, and a mild lens, k1 = -0.01, that folds at 5.77 had no fold:
+    a point 84.3 deg off its axis was "in the lens field" and landed on the principal point).
+    Tangential and thin-prism terms are left out (they are small). Computed on a 0.001 grid up
+    to 5 and on steps of 0.02 % beyond, cached per coefficient set.
 
     ``dist`` must hold 0, 4, 5, 8, 12 or 14 finite numbers (OpenCV order, a row or a column)
     and ``r_max`` be a finite number > 0, else a CalibrationError (text was a builtin
@@ -680,7 +683,10 @@ def _fold_radius(c: tuple[float, ...], r_max: float) -> float:
     k1, k2, _, _, k3, k4, k5, k6 = c
     if not any((k1, k2, k3, k4, k5, k6)):
         return float("inf")
-    r = np.arange(0.0, r_max + 5e-4, 1e-3)
+    r = np.arange(0.0, min(r_max, 5.0) + 5e-4, 1e-3)
+    if r_max > 5.0:  # (a 0.001 grid to 1000 was a million points: 0.2-0.5 s per lens)
+        n = int(np.ceil(np.log(r_max / 5.0) / np.log1p(2e-4))) + 1
+        r = np.concatenate([r[r < 5.0], np.geomspace(5.0, r_max, n)])
     r2 = r * r
     with np.errstate(all="ignore"):
         rd = r * (1 + k1 * r2 + k2 * r2**2 + k3 * r2**3) / (1 + k4 * r2 + k5 * r2**2 + k6 * r2**3)
