@@ -604,6 +604,25 @@ def test_load_camera_which_on_a_single_camera_file(tmp_path):
     assert load_camera(rig).width == 320 and load_camera(rig, "right").width == 320
 
 
+def test_saving_a_value_yaml_cannot_hold_is_a_calibration_error(tmp_path):
+    """A Path in a rig's free-form info (or as a camera's name) was PyYAML's builtin
+    RepresenterError from save_rig / save_camera; now a CalibrationError naming the value, and
+    an earlier file at the path is left as it was. Plain info still round-trips."""
+    from pathlib import Path
+
+    cam = Camera.from_fov(60.0, 320, 240)
+    path = tmp_path / "rig.yaml"
+    path.write_text("earlier\n")
+    rig = StereoRig(cam, cam, np.eye(3), [-0.1, 0.0, 0.0], info={"images": Path("left")})
+    with pytest.raises(CalibrationError, match="PosixPath|WindowsPath"):
+        save_rig(rig, path)
+    with pytest.raises(CalibrationError, match="cannot hold"):
+        save_camera(Camera(cam.K, width=320, height=240, name=Path("left")), path)
+    assert path.read_text() == "earlier\n"
+    save_rig(StereoRig(cam, cam, np.eye(3), [-0.1, 0.0, 0.0], info={"images": "left"}), path)
+    assert load_rig(path).info == {"images": "left"}
+
+
 def test_rms_in_a_rig_file_must_be_a_number(tmp_path):
     # a non-numeric rms_px escaped as a bare ValueError / TypeError (a traceback from
     # `hearsee detect --calib`); a NaN or negative one was loaded as the rig's RMS error

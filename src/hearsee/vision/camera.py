@@ -1285,8 +1285,8 @@ def load_camera(path: str | Path, which: str | None = None) -> Camera:
 def save_camera(camera: Camera, path: str | Path, *, rms_px: float | None = None) -> None:
     """Write ``camera`` as a camera YAML file (see the module docstring); ``rms_px`` in
     pixels. InputFileError for a path that cannot be written (checked before writing),
-    CalibrationError for a camera that is not a Camera or an rms_px that is not a finite
-    number >= 0."""
+    CalibrationError for a camera that is not a Camera, an rms_px that is not a finite
+    number >= 0 or a name YAML cannot represent (nothing is written)."""
     if not isinstance(camera, Camera):
         raise CalibrationError(f"save_camera needs a Camera, got {type(camera).__name__}")
     d = {"kind": "camera", **camera.to_dict()}
@@ -1309,7 +1309,8 @@ def load_rig(path: str | Path) -> StereoRig:
 def save_rig(rig: StereoRig, path: str | Path) -> None:
     """Write ``rig`` as a stereo rig YAML file (see the module docstring). InputFileError
     for a path that cannot be written (checked before writing), CalibrationError for a rig
-    that is not a StereoRig."""
+    that is not a StereoRig or whose ``info`` holds a value YAML cannot represent (a Path:
+    PyYAML's builtin RepresenterError before; nothing is written)."""
     check_rig(rig, "save_rig")
     _dump_calib_yaml(rig.to_dict(), path, "hearsee stereo rig (see hearsee.vision.camera)")
 
@@ -1318,14 +1319,24 @@ def _dump_calib_yaml(data: dict[str, Any], path: str | Path, title: str) -> None
     """YAML with matrices written one row per line (flow style for the innermost lists).
     InputFileError (:func:`hearsee.config.output_file`) when ``path`` cannot be written: a
     folder, a missing folder, not a path (builtin IsADirectoryError, FileNotFoundError and
-    TypeError before). An existing file is replaced only once the new one is complete
-    (:func:`hearsee.config.write_file`): written in place, a write that failed part way (a full
-    disk, Ctrl-C) left a truncated calibration where the earlier one was (``calibrate
-    --force``), and said only "File too large"."""
+    TypeError before); CalibrationError, before anything is written, when ``data`` holds a
+    value YAML cannot represent (a Path in a rig's info). An existing file is replaced only
+    once the new one is complete (:func:`hearsee.config.write_file`): written in place, a write
+    that failed part way (a full disk, Ctrl-C) left a truncated calibration where the earlier
+    one was (``calibrate --force``), and said only "File too large"."""
     p = output_file(path)
     # (YamlDumper: text such as a name "2e5" is quoted, else load_yaml read it as a number)
-    text = yaml.dump(to_plain(data), Dumper=YamlDumper, sort_keys=False,
-                     default_flow_style=None, width=100)
+    try:
+        text = yaml.dump(to_plain(data), Dumper=YamlDumper, sort_keys=False,
+                         default_flow_style=None, width=100)
+    except yaml.YAMLError as exc:
+        # (a Path or another object in a rig's info, or as a camera's name, was PyYAML's
+        # builtin RepresenterError; nothing is written)
+        bad = exc.args[1] if len(exc.args) > 1 else exc
+        raise CalibrationError(
+            f"{p}: the calibration holds a value a YAML file cannot hold "
+            f"({type(bad).__name__} {bad!r:.60}); give rig info values and camera names as "
+            "text, numbers, lists or mappings") from None
     header = (f"# {title}\n# optical frame x right, y down, z forward; K in pixels; "
               "T in metres; X_to = R X_from + T\n")
     write_file(p, header + text)
