@@ -604,6 +604,26 @@ def test_load_camera_which_on_a_single_camera_file(tmp_path):
     assert load_camera(rig).width == 320 and load_camera(rig, "right").width == 320
 
 
+def test_an_empty_camera_name_in_a_file_is_no_name(tmp_path):
+    """An empty ``name:`` (YAML's null) named the camera "None": save_camera wrote
+    ``name: None`` back, and asking the file for the left camera said it held "camera
+    'None'"; a list was named "['a']"."""
+    path = tmp_path / "cam.yaml"
+    body = "width: 640\nheight: 480\nK: [[500, 0, 320], [0, 500, 240], [0, 0, 1]]\n"
+    path.write_text("name:\n" + body)
+    assert load_camera(path).name == ""
+    with pytest.raises(ConfigError, match="an unnamed camera"):
+        load_camera(path, "left")
+    out = tmp_path / "out.yaml"
+    save_camera(load_camera(path), out)
+    assert "name" not in out.read_text()
+    path.write_text("name: [a]\n" + body)
+    with pytest.raises(ConfigError, match="name must be text"):
+        load_camera(path)
+    path.write_text("name: thermal\n" + body)
+    assert load_camera(path, "thermal").name == "thermal"
+
+
 def test_saving_a_value_yaml_cannot_hold_is_a_calibration_error(tmp_path):
     """A Path in a rig's free-form info (or as a camera's name) was PyYAML's builtin
     RepresenterError from save_rig / save_camera; now a CalibrationError naming the value, and

@@ -595,8 +595,13 @@ class Camera:
             raise ConfigError(
                 f"{where}: dist must have 0, 4, 5, 8, 12 or 14 coefficients, got {dist.size}"
             )
+        name = data.get("name")
+        if isinstance(name, list | dict):  # (["a"] was named "['a']")
+            raise ConfigError(f"{where}: name must be text, got {name!r:.40}")
         try:
-            return cls(K=K, dist=dist, width=width, height=height, name=str(data.get("name", "")))
+            # (an empty "name:" is YAML's null: the camera was named "None")
+            return cls(K=K, dist=dist, width=width, height=height,
+                       name="" if name is None else str(name))
         except CalibrationError as exc:
             raise ConfigError(f"{where}: {exc}") from None
 
