@@ -363,3 +363,29 @@ def test_mcap_to_a_fifo_is_written_through_not_replaced(tmp_path):
     assert stat.S_ISFIFO(os.stat(fifo).st_mode)
     assert data.startswith(b"\x89MCAP0\r\n") and data.endswith(b"\x89MCAP0\r\n")  # whole
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.mcap"]
+
+
+@pytest.mark.parametrize("t", [-0.5, float("nan"), 1e11, None])
+def test_mcap_time_out_of_a_stamps_range_is_a_config_error(tmp_path, t):
+    """A negative time or one past a ROS 2 stamp's int32 seconds was struct.error "argument
+    out of range" from the MCAP writer, NaN a builtin ValueError and a record without ``t`` a
+    KeyError; now a ConfigError naming the record, and an existing file is kept."""
+    pytest.importorskip("mcap_ros2")
+    from mcap.reader import make_reader
+
+    old = tmp_path / "run.mcap"
+    old.write_bytes(b"earlier")
+    log = [{"t": 0.2, "head_pan_deg": 1.0}, {"head_pan_deg": 2.0, **({} if t is None else
+                                                                      {"t": t})}]
+    with pytest.raises(ConfigError, match=r"log record 1: t .* must be a finite number in \[0"):
+        write_mcap(old, log)
+    with pytest.raises(ConfigError, match=r"overlay frame 0: t .* must be a finite number"):
+        write_mcap(old, log[:1], [(t, np.zeros((4, 6, 3), np.uint8))])
+    with pytest.raises(ConfigError, match=r"log record 0: track.position_m must be 3 numbers"):
+        write_mcap(old, [{"t": 0.2, "track": {"position_m": [1.0, 2.0]}}])
+    assert old.read_bytes() == b"earlier" and [p.name for p in tmp_path.iterdir()] == ["run.mcap"]
+    # the range's ends are written: 0 s and the last whole second of an int32 stamp
+    log = [{"t": 0.0, "head_pan_deg": 1.0}, {"t": export.MAX_STAMP_S, "head_pan_deg": 2.0}]
+    with open(write_mcap(tmp_path / "ends.mcap", log), "rb") as f:
+        times = [m.log_time for _, _, m in make_reader(f).iter_messages()]
+    assert times == [0, (2**31 - 1) * 1_000_000_000]

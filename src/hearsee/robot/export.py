@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from hearsee.config import open_replaced, output_file, same_file
+from hearsee.config import finite_number, open_replaced, output_file, same_file
 from hearsee.config import replacing as _replacing  # (its home was here)
 from hearsee.errors import ConfigError
 
@@ -90,6 +90,19 @@ int32 sec
 uint32 nanosec"""
 
 _FLOAT64 = "float64 data"
+
+
+#: The latest time an MCAP export takes, seconds from the start of the run: a ROS 2 stamp's
+#: seconds are an int32 (and an MCAP log time uint64 nanoseconds, so no time is negative).
+MAX_STAMP_S = float(2**31 - 1)
+
+
+def _time_s(t: Any, what: str) -> float:
+    """``t`` (seconds) when it is a finite number in [0, :data:`MAX_STAMP_S`], else a
+    ConfigError naming ``what``: a negative or huge time was struct.error "argument out of
+    range" from the MCAP writer, NaN a builtin ValueError, a record without ``t`` a
+    KeyError."""
+    return finite_number(what, t, 0.0, MAX_STAMP_S)
 
 
 def _stamp(t: float) -> dict[str, int]:
@@ -182,7 +195,8 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
     ``frame_id`` names the frame of the positions: ``"room"`` for a simulated run, ``"robot"``
     for a live one (its log is in the robot frame; it was labelled ``room`` until
     2026-12-01). The file is written beside ``path`` and replaces it only when complete: an
-    error leaves an existing file as it was."""
+    error leaves an existing file as it was. Each record's ``t`` and each frame's time must be
+    seconds in [0, :data:`MAX_STAMP_S`] and each position 3 numbers, else ConfigError."""
     try:
         from mcap_ros2.writer import Writer
     except ImportError:
@@ -194,11 +208,14 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
         s_image = w.register_msgdef("sensor_msgs/msg/Image", _IMAGE)
         s_float = w.register_msgdef("std_msgs/msg/Float64", _FLOAT64)
         for seq, rec in enumerate(log):
-            t = float(rec["t"])
+            t = _time_s(rec.get("t"), f"log record {seq}: t (seconds from the run's start)")
             ns = int(round(t * 1e9))
             for topic, key in (("/hearsee/speaker", "track"), ("/hearsee/truth", "truth")):
                 pos = (rec.get(key) or {}).get("position_m")
                 if pos is not None:
+                    if np.shape(pos) != (3,):  # (a 2-D point was an IndexError)
+                        raise ConfigError(f"log record {seq}: {key}.position_m must be 3 "
+                                          f"numbers (x, y, z in metres), got {pos!r:.60}")
                     w.write_message(topic, s_point, {
                         "header": {"stamp": _stamp(t), "frame_id": frame_id},
                         "point": {"x": float(pos[0]), "y": float(pos[1]), "z": float(pos[2])},
@@ -207,6 +224,7 @@ def write_mcap(path: str | Path, log: Sequence[Mapping[str, Any]],
                 w.write_message("/hearsee/head_pan", s_float, {"data": float(rec["head_pan_deg"])},
                                 log_time=ns, publish_time=ns, sequence=seq)
         for seq, (t, img) in enumerate(frames):
+            t = _time_s(t, f"overlay frame {seq}: t (seconds from the run's start)")
             img = _overlay_bgr(img, t)
             ns = int(round(t * 1e9))
             w.write_message("/hearsee/overlay", s_image, {
