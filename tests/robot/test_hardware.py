@@ -2749,3 +2749,34 @@ def test_a_flat_arrays_elevation_side_is_the_one_nearer_the_horizontal(tmp_path,
     assert abs(res.summary["azimuth_deg_median"] - 60.0) < 1.5
     # each frame's robot-frame elevation: the talker's (0), not its mirror's (2 x tilt)
     assert np.median([abs(a["elevation_deg"]) for a in heard]) < 5.0
+
+
+def test_a_live_reports_top_view_is_labelled_in_the_robot_frame(tmp_path, monkeypatch):
+    """A live run's positions are robot-frame (x forward, y left; write_run_report draws the
+    robot at the origin), but its top view's axes read "room x (m)" / "room y (m)". A
+    simulated run's stay in the room frame."""
+    from hearsee.robot import report
+    from hearsee.robot.pipeline import RunResult
+    from hearsee.robot.scenario import default_scenario
+
+    labels = {}
+    png = report._png
+
+    def keep_labels(fig):
+        ax = fig.axes[0]
+        labels.setdefault(ax.get_title(), (ax.get_xlabel(), ax.get_ylabel()))
+        return png(fig)
+
+    monkeypatch.setattr(report, "_png", keep_labels)
+    cfg = robot_config_from_dict({"audio": {}, "output": {"report": "live"}}, "r.yaml", tmp_path)
+    log = [{"t": 0.1, "phase": "tracking", "head_pan_deg": 30.0, "audio": None,
+            "detections": [], "track": {"position_m": [2.0, 1.0, 1.1]}, "truth": None,
+            "error_m": None}]
+    write_run_report(cfg, RunResult(log, {"success": True}, {}, {}, []))
+    assert labels.pop("Top view: trajectory (grey: head direction)") == (
+        "robot frame x, forward (m)", "robot frame y, left (m)")
+    sim = [{**log[0], "truth": {"position_m": [2.0, 1.0, 1.1], "azimuth_robot_deg": 30.0,
+                                "talker": 0}, "error_m": 0.0}]
+    report.write_report(tmp_path / "sim", default_scenario().to_dict(), sim, {})
+    assert labels["Top view: trajectory vs ground truth (grey: head direction)"] == (
+        "room x (m)", "room y (m)")

@@ -1785,9 +1785,11 @@ def write_run_report(cfg: RobotConfig, result: RunResult, folder: str | Path | N
 
 def report_scenario(cfg: RobotConfig) -> dict[str, Any]:
     """The scenario mapping the report and the Rerun export expect, for a live run: the robot
-    at the origin of its own frame, no room outline (unknown), no objects."""
+    at the origin of its own frame, no room outline (unknown), no objects; ``frame``
+    ``"robot"``: the report's top view is labelled in the robot frame, not the room's."""
     return {
         "name": f"live run ({cfg.path.name})",
+        "frame": "robot",
         "seed": None,
         "room": {"size_m": [0.0, 0.0, 0.0]},
         "robot": {"position_m": [0.0, 0.0], "heading_deg": 0.0,

@@ -270,8 +270,13 @@ def _plots(folder: Path, log: Sequence[Mapping[str, Any]],
             ax.plot([robot[0], robot[0] + 0.5 * np.cos(a)], [robot[1], robot[1] + 0.5 * np.sin(a)],
                     color="0.6", lw=1)
     ax.set_aspect("equal")
-    ax.set_xlabel("room x (m)")
-    ax.set_ylabel("room y (m)")
+    # (a live run's positions are in the robot's own frame: its axes were labelled "room")
+    if scenario.get("frame") == "robot":
+        ax.set_xlabel("robot frame x, forward (m)")
+        ax.set_ylabel("robot frame y, left (m)")
+    else:
+        ax.set_xlabel("room x (m)")
+        ax.set_ylabel("room y (m)")
     ax.set_title("Top view: trajectory vs ground truth (grey: head direction)" if known else
                  "Top view: trajectory (grey: head direction)")
     ax.legend(loc="best", fontsize=8)
@@ -348,6 +353,9 @@ def write_report(
 ) -> Path:
     """Write the report folder; returns the path of ``index.html``.
 
+    ``scenario``'s ``frame`` names the frame of the log's positions: ``"room"`` (default, a
+    simulated run) or ``"robot"`` (a live run, :func:`hearsee.robot.hardware.report_scenario`;
+    the top view's axes are labelled so).
     ``images`` maps a file stem to a BGR/grey uint8 image (overlays, thermal views);
     ``captions`` maps the same stems to captions.
 
