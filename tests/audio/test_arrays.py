@@ -372,3 +372,22 @@ def test_microphone_counts_have_a_ceiling():
         fibonacci_sphere(10**9)
     assert pair_matrix(4, [(0, 1), (2, 3)]).shape == (2, 3)
     assert fibonacci_sphere(100).shape == (100, 3)
+
+
+def test_a_pair_is_an_ordered_sequence_of_two_indices_not_bools_or_a_set():
+    """(True, False) was read as the pair (1, 0) without a word, a set {0, 2} raised a builtin
+    TypeError ('set' object is not subscriptable; and a set has no order, so no TDOA sign),
+    a mapping a builtin KeyError."""
+    from hearsee.audio.arrays import check_pairs
+
+    arr = MicArray.from_preset("three-mic")
+    src = [1.0, 0.5, 0.0]
+    for pairs in ([(True, False)], [(np.True_, np.False_)], np.array([[True, False]]),
+                  [{0, 2}], [{0: 1, 2: 3}], [(0, True)]):
+        with pytest.raises(GeometryError, match="a pair is two microphone indices"):
+            arr.tdoa(src, pairs)
+        with pytest.raises(GeometryError, match="a pair is two microphone indices"):
+            check_pairs(pairs, 3)
+    d = np.linalg.norm(np.asarray(src) - arr.positions, axis=1)  # hand-made truth: t_1 - t_0
+    for ok in ([(1, 0)], [[1, 0]], np.array([[1, 0]]), [range(1, -1, -1)]):
+        np.testing.assert_allclose(arr.tdoa(src, ok), [(d[1] - d[0]) / 343.0], rtol=1e-12)

@@ -427,11 +427,12 @@ def span_dimension(positions: NDArray, speed_of_sound: float, rel_tol: float = 1
 
 def check_pairs(pairs: Sequence[tuple[int, int]], n_mics: int) -> list[tuple[int, int]]:
     """``pairs`` as a list of ``(i, j)`` indices of ``n_mics`` microphones, or a GeometryError
-    for an empty list, a pair that is not two whole numbers (0.7 used to be truncated to index
-    0), an index outside ``[0, n_mics)`` (a negative one used to wrap around to the last
-    microphones) or ``i == j``; also for ``n_mics`` that is no whole number >= 2 (None was a
-    builtin TypeError) and for text (``"01"`` was read character by character: "a pair is two
-    microphone indices, got '0'"). The one rule of :meth:`MicArray.checked_pairs` and
+    for an empty list, a pair that is not an ordered sequence of two whole numbers (0.7 used
+    to be truncated to index 0; a bool or a set is none), an index outside ``[0, n_mics)`` (a
+    negative one used to wrap around to the last microphones) or ``i == j``; also for
+    ``n_mics`` that is no whole number >= 2 (None was a builtin TypeError) and for text
+    (``"01"`` was read character by character: "a pair is two microphone indices, got '0'").
+    The one rule of :meth:`MicArray.checked_pairs` and
     :class:`hearsee.audio.itd_filter.ItdKalman`."""
     n_mics = whole_number("n_mics", n_mics, lo=2, hi=MAX_MICS, error=GeometryError)
     try:
@@ -443,8 +444,12 @@ def check_pairs(pairs: Sequence[tuple[int, int]], n_mics: int) -> list[tuple[int
                             f"{pairs!r}")
     out = []
     for p in items:
+        # (an ordered pair: a set or a mapping was a builtin TypeError / KeyError -- and a set
+        # has no order, its sign was the hash's; a bool is no index: (True, False) was (1, 0))
         try:  # two whole numbers
-            ok = len(p) == 2 and all(int(v) == v for v in p)
+            ok = (isinstance(p, Sequence | np.ndarray) and not isinstance(p, str | bytes)
+                  and len(p) == 2
+                  and all(not isinstance(v, bool | np.bool_) and int(v) == v for v in p))
         except (TypeError, ValueError, OverflowError):
             ok = False
         if not ok:
