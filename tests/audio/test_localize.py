@@ -1341,3 +1341,21 @@ def test_pairs_that_leave_a_microphone_out_are_refused_before_the_estimation_wit
     want = truth["tdoa_s"]["0-1"]
     assert abs(out["summary"]["tdoa_s"]["0-1"] - want) < 2e-6
     localize_recording(x, 16000, "respeaker-4", pairs=[(0, 1), (1, 2), (2, 3)])
+
+
+def test_hyperboloid_points_reach_extent_m_from_the_pair_centre():
+    """The docstring says points out to extent_m from the pair's centre, as cone_points; the
+    sheet was cut at a radius of extent_m about the axis instead: 3.37 m for extent 3 m at
+    c tdoa = 0.46 of the spacing, 16.5 m near end-fire (0.98), its far rim off any plot."""
+    mi, mj = np.array([0.0, -0.075, 0.0]), np.array([0.0, 0.075, 0.0])
+    centre = (mi + mj) / 2
+    for frac in (-0.98, -0.5, 0.0, 0.46, 0.8, 0.98):
+        tau = frac * 0.15 / 343.0
+        h = hyperboloid_points(tau, mi, mj, c=343.0, extent_m=3.0, n_radial=30, n_around=24)
+        r = np.linalg.norm(h - centre, axis=-1)
+        assert r.max() == pytest.approx(3.0, rel=1e-9)  # the rim is at extent_m
+        assert r[-1] == pytest.approx(np.full(24, 3.0), rel=1e-9)
+        d = np.linalg.norm(h - mi, axis=-1) - np.linalg.norm(h - mj, axis=-1)
+        np.testing.assert_allclose(d, 343.0 * tau, atol=1e-12)  # and still on the sheet
+    with pytest.raises(GeometryError, match="does not reach the sheet"):
+        hyperboloid_points(0.9 * 0.15 / 343.0, mi, mj, c=343.0, extent_m=0.05)

@@ -1303,7 +1303,8 @@ def hyperboloid_points(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float =
 
     Returns a grid ``(n_radial, n_around, 3)`` of points (metres) out to ``extent_m`` from the
     pair's centre, ready for ``plot_surface``. A zero TDOA gives the bisecting plane's disc;
-    ``|c tdoa| >= |M_i - M_j|`` raises GeometryError (no locus).
+    ``|c tdoa| >= |M_i - M_j|`` raises GeometryError (no locus), and so does an ``extent_m``
+    that does not reach past the sheet's vertex (``|c tdoa| / 2`` from the centre).
     """
     mi, mj, delta = _locus_input(tdoa_s, m_i, m_j, c, extent_m, n_radial, n_around)
     f = np.linalg.norm(mi - mj) / 2.0
@@ -1320,7 +1321,13 @@ def hyperboloid_points(tdoa_s: float, m_i: ArrayLike, m_j: ArrayLike, c: float =
         rho = np.linspace(0.0, extent_m, n_radial)
         z = np.zeros_like(rho)
     else:
-        vmax = np.arcsinh(extent_m / b)
+        # out to extent_m from the centre, |P - centre|^2 = a^2 + f^2 sinh(v)^2 (arcsinh(extent
+        # / b) bounded the radius about the axis instead: near end-fire, where b is small, a
+        # sheet asked for 3 m reached 16 m along the axis)
+        if not extent_m > a:
+            raise GeometryError(f"extent_m = {extent_m:g} m does not reach the sheet, whose "
+                                f"vertex is {a:.4f} m from the pair's centre")
+        vmax = np.arcsinh(np.sqrt(extent_m**2 - a * a) / f)
         v = np.linspace(0.0, vmax, n_radial)
         z, rho = a * np.cosh(v), b * np.sinh(v)
     local = np.stack(np.broadcast_arrays(rho[:, None] * np.cos(phi)[None, :],
