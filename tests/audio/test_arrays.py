@@ -391,3 +391,33 @@ def test_a_pair_is_an_ordered_sequence_of_two_indices_not_bools_or_a_set():
     d = np.linalg.norm(np.asarray(src) - arr.positions, axis=1)  # hand-made truth: t_1 - t_0
     for ok in ([(1, 0)], [[1, 0]], np.array([[1, 0]]), [range(1, -1, -1)]):
         np.testing.assert_allclose(arr.tdoa(src, ok), [(d[1] - d[0]) / 343.0], rtol=1e-12)
+
+
+def test_position_uncertainty_of_a_position_at_its_reference_point():
+    """A source at the array centre (a 10 cm tetrahedron has no microphone there) with exact
+    TDOAs raised numpy's LinAlgError "SVD did not converge" after a RuntimeWarning (0 / 0);
+    seen from the point itself there is no distance or direction: both 1-sigmas are inf, and
+    the covariance is the one of any other point, s^2 (J^T J)^-1."""
+    import warnings
+
+    from hearsee.audio.arrays import pair_tdoa, pair_tdoa_jacobian, position_uncertainty
+
+    arr = MicArray(0.05 * np.array([[1, 1, 1], [-1, -1, 1], [-1, 1, -1], [1, -1, -1]]))
+    M, c = arr.positions, arr.speed_of_sound
+    a, b = np.array(arr.pairs).T
+    ref = np.zeros(3)
+    p = np.zeros(3)  # the source at the reference point
+    y = pair_tdoa(p, M, a, b, c)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        cov, rel, ang, cond = position_uncertainty(p, M, a, b, c, y, 2e-6, ref, 0.3)
+    assert rel == np.inf and ang == np.inf
+    J = pair_tdoa_jacobian(p, M, a, b, c)
+    np.testing.assert_allclose(cov, 4e-12 * np.linalg.inv(J.T @ J), rtol=1e-9)
+    # a point elsewhere is as before: finite, its own covariance
+    q = np.array([0.3, 0.2, 0.1])
+    cov_q, rel_q, ang_q, _ = position_uncertainty(q, M, a, b, c, pair_tdoa(q, M, a, b, c), 2e-6,
+                                                  ref, 0.3)
+    Jq = pair_tdoa_jacobian(q, M, a, b, c)
+    np.testing.assert_allclose(cov_q, 4e-12 * np.linalg.inv(Jq.T @ Jq), rtol=1e-9)
+    assert np.isfinite(rel_q) and np.isfinite(ang_q)

@@ -603,8 +603,9 @@ def position_uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: floa
     (:func:`hearsee.audio.active.solve_range_differences`, ``M`` stacking every pose's
     microphones) and the one-pose near-field position of
     :func:`hearsee.audio.localize.localize_tdoa` use it. A linearisation: where the distance
-    is poorly determined (relative 1-sigma above ~0.3) it is optimistic. GeometryError for an
-    argument that is None."""
+    is poorly determined (relative 1-sigma above ~0.3) it is optimistic. A position at ``ref``
+    itself has no distance or direction seen from it: both 1-sigmas are inf. GeometryError for
+    an argument that is None."""
     _given("position_uncertainty", p=p, M=M, a=a, b=b, c=c, y=y, sig=sig, ref=ref,
            max_rel_distance_std=max_rel_distance_std)
     J = pair_tdoa_jacobian(p, M, a, b, c)
@@ -614,6 +615,9 @@ def position_uncertainty(p: NDArray, M: NDArray, a: NDArray, b: NDArray, c: floa
     cond = float(np.sqrt(w[-1] / max(w[0], 1e-300)))
     v = p - ref
     r = float(np.linalg.norm(v))
+    if not r > 0:  # (p at ref: u = 0 / 0, a RuntimeWarning, then numpy's LinAlgError "SVD
+        # did not converge" from the NaN projector below)
+        return _linearised_covariance(JtJ, s2, v)[0], float("inf"), float("inf"), cond
     u = v / r
     cov, rel = _linearised_covariance(JtJ, s2, v)
     # angular std: perpendicular spread, conditional on the distance when it is unknown
@@ -664,7 +668,7 @@ def _linearised_covariance(JtJ: NDArray, s2: float, v: NDArray,
     metres) under it; with ``basis`` (k, 3) orthonormal rows, ``J`` was taken along them
     (``J B^T``: the position held in their span) and ``C = B^T s2 (J^T J)^-1 B`` (zero across
     it). A singular ``J^T J`` (to rounding: smallest eigenvalue at most 1e-12 of the largest)
-    gives an infinite C and rel. The step shared by
+    gives an infinite C and rel, and ``v = 0`` an infinite rel. The step shared by
     :func:`position_uncertainty` and the in-plane fit of
     :func:`hearsee.audio.localize.near_field_in_plane`."""
     w = np.linalg.eigvalsh(JtJ)
@@ -680,6 +684,8 @@ def _linearised_covariance(JtJ: NDArray, s2: float, v: NDArray,
     if basis is not None:
         cov = basis.T @ cov @ basis
     r = float(np.linalg.norm(v))
+    if not r > 0:  # v = 0: no length to be relative to
+        return cov, float("inf")
     u = v / r
     var_r = float(u @ cov @ u)
     return cov, (float(np.sqrt(var_r)) / r if np.isfinite(var_r) and var_r >= 0
