@@ -421,3 +421,16 @@ def test_position_uncertainty_of_a_position_at_its_reference_point():
     Jq = pair_tdoa_jacobian(q, M, a, b, c)
     np.testing.assert_allclose(cov_q, 4e-12 * np.linalg.inv(Jq.T @ Jq), rtol=1e-9)
     assert np.isfinite(rel_q) and np.isfinite(ang_q)
+
+
+@pytest.mark.parametrize(("blank", "value"), [('""', ""), ("' '", " "), ('"\\t"', "\t")])
+def test_a_blank_array_name_is_no_name(tmp_path, blank, value):
+    """'name: ""' named the array "" (hearsee localize's table was titled "hearsee localize
+    (, phat)"), where an empty 'name:' takes the file's stem."""
+    p = tmp_path / "rig.yaml"
+    p.write_text(f"name: {blank}\nmicrophones: [[0, -0.1, 0], [0, 0.1, 0]]\n")
+    assert load_array(p).name == "rig"
+    mics = [[0, -0.1, 0], [0, 0.1, 0]]
+    assert MicArray.from_dict({"name": value, "microphones": mics}).name == "custom"
+    p.write_text("name:\nmicrophones: [[0, -0.1, 0], [0, 0.1, 0]]\n")
+    assert load_array(p).name == "rig"

@@ -196,6 +196,8 @@ class MicArray:
         if mask is not None and not isinstance(mask, Mapping):
             raise ConfigError(f"{where}: mask must be a mapping")
         name = data.get("name")  # (an empty "name:" named the array "None")
+        if isinstance(name, str) and not name.strip():  # ('name: ""' titled its reports
+            name = None  # "hearsee localize (, phat)"): as no name, the file's stem
         name = name_text(name, where) if name is not None else (
             Path(where).stem if where != "array" else "custom")
         try:
