@@ -118,6 +118,27 @@ def test_rerun_lines_break_at_a_change_of_talker_and_a_new_track(tmp_path, monke
     assert [pt[1]["labels"] for pt in logged["truth"]] == [["Ana"]] * 3 + [["Ben"]] * 3
 
 
+def test_rerun_paths_are_logged_a_bounded_number_of_times(tmp_path, monkeypatch):
+    """Each path was logged whole at every record: the recording grew with the square of the
+    run's length. A 2000-record run logs each path at most RERUN_PATH_UPDATES (+1) times, the
+    last one complete; the points at every record."""
+    from hearsee.robot import export
+
+    n = 2000
+    log = [{"t": 0.032 * k, "truth": {"position_m": [2.0, 0.001 * k, 1.1], "talker": 0},
+            "track": {"position_m": [2.0, 0.001 * k + 0.01, 1.1]}} for k in range(n)]
+    logged = _stand_in_rerun(monkeypatch)
+    write_rerun(tmp_path / "run.rrd", default_scenario().to_dict(), log)
+    for name in ("truth", "track"):
+        assert len(logged[name]) == n
+        paths = logged[f"{name}_path"]
+        assert len(paths) <= export.RERUN_PATH_UPDATES + 1
+        last = paths[-1][0][0]
+        assert [len(s) for s in last] == [n]
+        assert last[0][-1][1] == pytest.approx(0.001 * (n - 1) + (0.01 if name == "track" else 0))
+        assert sum(len(p[0][0][0]) for p in paths) <= (export.RERUN_PATH_UPDATES + 1) * n
+
+
 def test_rerun_overlay_colours_with_a_stand_in_rerun(tmp_path, monkeypatch):
     """The images write_rerun logs are RGB (H, W, 3) whatever the frame's layout: a BGRA frame
     was reversed whole (ARGB: alpha read as red), grey stayed 2-D. A stand-in ``rerun`` module
