@@ -615,6 +615,36 @@ def test_a_bounded_angle_coasts_to_its_bound_and_stops(cls):
 
 
 @pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
+def test_a_bounded_angle_predicted_over_one_long_step_stays_at_its_bound(cls):
+    """angle_bound_deg=90: a track at 77 deg moving at 40 deg/s, predicted 3 s ahead in one
+    step (a prediction to a later frame, or the next update after a silent gap, which the
+    stepped coasting above never takes), reaches 197 deg before its bound: it was wrapped
+    first, to -163, and clamped to the far endfire, -90, its rate +40 kept -- the filter
+    then rejected the talker at 88 deg (the side it went to). Now it stops at +90, rate 0,
+    and the measurement at 88 is fused; a measurement at the far endfire from a track at
+    the near one is an innovation of -180 deg (it was wrapped to +180)."""
+    kw = ({"sigma_accel_dps2": 5.0} if cls is DirectionKalman
+          else {"sigma_accel_dps2": (5.0, 20.0)})
+    trk = cls(1.0, angle_bound_deg=90.0, **kw)
+    t = np.arange(30) * DT
+    for tk in t:
+        assert trk.update(tk, (40.0 + 40.0 * tk, None))
+    assert trk.azimuth_deg == pytest.approx(77.1, abs=0.2)
+    assert trk.rate_dps[0] == pytest.approx(40.0, abs=0.5)
+    x, _ = trk.predicted(t[-1] + 3.0)
+    assert x[0] == 90.0 and x[2] == 0.0
+    assert trk.update(t[-1] + 3.0, (88.0, None))
+    assert trk.azimuth_deg == pytest.approx(88.0, abs=0.5)
+    assert abs(trk.rate_dps[0]) < 5.0
+    edge = cls(5.0, angle_bound_deg=90.0, init_rate_sigma_dps=60.0)
+    edge.update(0.0, (90.0, None))
+    for tk in (0.5, 1.0, 1.5):
+        edge.update(tk, (-90.0, None))
+        assert edge.azimuth_deg in (90.0, -90.0) or edge.rate_dps[0] < 0.0
+    assert edge.azimuth_deg < -80.0 and edge.rate_dps[0] <= 0.0
+
+
+@pytest.mark.parametrize("cls", [DirectionKalman, DirectionIMM])
 @pytest.mark.parametrize("tau", [None, float("inf"), 0.8, 1e9])
 def test_rate_relaxes_with_rate_tau_through_a_gap(cls, tau):
     """Track a speaker turning at 20 deg/s (elevation rising 2 deg/s), then 1.2 s without a

@@ -74,8 +74,12 @@ __all__ = [
 ]
 
 
-_WRAP_AZ = np.array([True])  # which measurement components are angles on a circle
-_WRAP_AZ_EL = np.array([True, False])
+_WRAP_AZ = np.array([1])  # which measurement components are angles on a circle
+_WRAP_AZ_EL = np.array([1, 0])
+# (2: a bounded angle, ``angle_bound_deg``, which is no angle on a circle: its innovation is
+# wrapped only where that leaves its value, within (-180, 180); from +90 to -90 it was +180)
+_BOUNDED_AZ = np.array([2])
+_BOUNDED_AZ_EL = np.array([2, 0])
 
 
 def _covariance(R: ArrayLike, n: int) -> NDArray:
@@ -275,8 +279,10 @@ def _propagate(x: NDArray, P: NDArray, F: NDArray, Q: NDArray, bound_deg: float 
     with process noise Q: new arrays, the azimuth wrapped (or held within +-``bound_deg``,
     :func:`_bound_angle`) and the elevation bounded."""
     x = F @ x
-    x[0] = _wrap1(float(x[0]))
+    # (bounded before the wrap: one step of a bounded angle past 180 deg was wrapped, and
+    # clamped to the far bound with its rate kept)
     _bound_angle(x, bound_deg)
+    x[0] = _wrap1(float(x[0]))
     _bound_elevation(x)
     return x, F @ P @ F.T + Q
 
@@ -368,7 +374,9 @@ class _Kalman:
         if wrap is not None:
             for i in range(y.size):  # tiny vectors: per element is faster than wrap_deg
                 if wrap[i]:
-                    y[i] = _wrap1(float(y[i]))
+                    w = _wrap1(float(y[i]))
+                    if wrap[i] == 1 or abs(w - y[i]) < 180.0:
+                        y[i] = w
         S = H @ self.P @ H.T + R
         d2 = float(y @ _inv_small(S) @ y)
         return y, S, d2
@@ -572,8 +580,9 @@ class DirectionKalman(_Kalman):
         planar-array frames declare (s, 4 s) and got (10, 10) deg, a mean NEES(az, el) of ~30
         instead of 2 over a track's first three frames.)"""
         R = self.R if R is None else R
-        self.x = np.array([_wrap1(float(az)), 0.0 if el is None else float(el), 0.0, 0.0])
-        _bound_angle(self.x, self.angle_bound_deg)
+        self.x = np.array([float(az), 0.0 if el is None else float(el), 0.0, 0.0])
+        _bound_angle(self.x, self.angle_bound_deg)  # (before the wrap: as _propagate)
+        self.x[0] = _wrap1(float(self.x[0]))
         el_var = 90.0**2 if el is None else float(R[1, 1])
         self.P = self._initial_cov(float(R[0, 0]), el_var)
         self.initialized = True
@@ -595,9 +604,10 @@ class DirectionKalman(_Kalman):
             # the measurement shows the direction delay_s ago: z = d(t - delay) ~ d - delay * rate
             H = H.copy()
             H[0, 2] = H[1, 3] = -float(delay_s)
+        bounded = self.angle_bound_deg is not None
         if el is None or not math.isfinite(el):
-            return np.array([az]), H[:1], R[:1, :1], _WRAP_AZ
-        return np.array([az, el]), H, R, _WRAP_AZ_EL
+            return np.array([az]), H[:1], R[:1, :1], _BOUNDED_AZ if bounded else _WRAP_AZ
+        return np.array([az, el]), H, R, _BOUNDED_AZ_EL if bounded else _WRAP_AZ_EL
 
     def gate_distance(self, az: float, el: float | None = None, R: NDArray | None = None,
                       delay_s: float = 0.0) -> float:
@@ -725,8 +735,8 @@ class DirectionKalman(_Kalman):
     def _settle(self, el: float | None) -> None:
         """After a correction: azimuth wrapped (or bounded, ``angle_bound_deg``), elevation
         clipped to +-90 deg."""
+        _bound_angle(self.x, self.angle_bound_deg)  # (before the wrap: as _propagate)
         self.x[0] = _wrap1(float(self.x[0]))
-        _bound_angle(self.x, self.angle_bound_deg)
         _bound_elevation(self.x)
         self.has_elevation = self.has_elevation or el is not None
 
@@ -1064,8 +1074,8 @@ class DirectionIMM:
             F, Qs = self._model(dt)
             X = X @ F.T
             Ps = F @ Ps @ F.T + Qs
+            _bound_angle(X, self._mix.angle_bound_deg)  # (before the wrap: as _propagate)
             X[:, 0] = _wrap_many(X[:, 0])
-            _bound_angle(X, self._mix.angle_bound_deg)
             _bound_elevation(X)
             self._mix.x, self._mix.P = self._predicted_mixture(F, Qs, c)
         self.X, self.Ps, self.mu = X, Ps, c
@@ -1084,7 +1094,9 @@ class DirectionIMM:
             return False
         # every mode corrects with the same measurement (Joseph form, as _Kalman._correct)
         Y = z[None, :] - X @ H.T  # (modes, m) innovations, azimuth wrapped
-        Y[:, 0] = _wrap_many(Y[:, 0])
+        w = _wrap_many(Y[:, 0])
+        bounded = self._mix.angle_bound_deg is not None  # (as _BOUNDED_AZ)
+        Y[:, 0] = np.where(np.abs(w - Y[:, 0]) < 180.0, w, Y[:, 0]) if bounded else w
         S = H @ Ps @ H.T + R
         S_inv, det = _inv_det_batch(S)
         d2 = ((Y[:, None, :] @ S_inv) @ Y[:, :, None])[:, 0, 0]
@@ -1092,8 +1104,8 @@ class DirectionIMM:
         X = X + (K @ Y[:, :, None])[:, :, 0]
         I_KH = _eye(4) - K @ H
         Ps = I_KH @ Ps @ I_KH.transpose(0, 2, 1) + K @ R @ K.transpose(0, 2, 1)
+        _bound_angle(X, self._mix.angle_bound_deg)  # (before the wrap: as _propagate)
         X[:, 0] = _wrap_many(X[:, 0])
-        _bound_angle(X, self._mix.angle_bound_deg)
         _bound_elevation(X)
         self.X, self.Ps = X, Ps
         self._mix.has_elevation = self._mix.has_elevation or el is not None
