@@ -245,9 +245,20 @@ class ItdKalman:
         return pair_matrix(self.n_mics, prs, self.ref) @ self.x
 
     def _init_from(self, z: NDArray) -> None:
-        x, *_ = np.linalg.lstsq(self.kf.H, z, rcond=None)
+        """The state from one measurement ``z`` by least squares over the pairs, weighted by
+        the frame's measurement noise ``kf.R`` -- the estimate whose covariance is the
+        ``P = (H^T R^-1 H)^-1`` it gets. (Until 2026-12-08 the fit was unweighted whatever
+        the frame's per-pair noise: with ``r_scale`` (0.1, 10, 10) a well-measured pair's
+        TDOA took the others' errors, 4.7 samples where P said 0.1 -- the next frames were
+        rejected and the filter re-initialised over and over.)"""
+        H, R = self.kf.H, self.kf.R
+        if np.array_equal(R, R[0, 0] * np.eye(len(R))):  # (one noise for all: unweighted)
+            x, *_ = np.linalg.lstsq(H, z, rcond=None)
+        else:  # (whitened by R's Cholesky factor)
+            L = np.linalg.cholesky(R)
+            x, *_ = np.linalg.lstsq(np.linalg.solve(L, H), np.linalg.solve(L, z), rcond=None)
         self.kf.x = x.reshape(-1, 1)
-        self.kf.P = np.linalg.pinv(self.kf.H.T @ np.linalg.inv(self.kf.R) @ self.kf.H)
+        self.kf.P = np.linalg.pinv(H.T @ np.linalg.inv(R) @ H)
         self.initialized = True
         self._run = 0
         self.n_inits += 1
