@@ -562,6 +562,28 @@ def test_disparity_flags_must_be_booleans():
     assert np.nanmedian(padded[:, 20:]) == 6.0
 
 
+def test_rectify_pair_checks_its_interpolation_for_every_rig():
+    """rectify_pair passed its interpolation to cv2.remap unchecked: 99, -1, 2.5 or "linear"
+    raised cv2.error, INTER_AREA (which remap does not support) gave INTER_LINEAR's images,
+    and an already rectified rig took any value. A ConfigError for both rigs now; remap's
+    own methods give what they gave (nearest: the maps' pixels exactly)."""
+    cam = Camera(np.array([[400.0, 0, 160], [0, 400, 120], [0, 0, 1]]), width=320, height=240)
+    turned = StereoRig(cam, cam, cv2.Rodrigues(np.array([0.0, 0.02, 0.01]))[0],
+                       np.array([-0.1, 0, 0]))
+    rectified = StereoRig(cam, cam, np.eye(3), np.array([-0.1, 0, 0]))
+    assert not turned.is_rectified and rectified.is_rectified
+    img = np.random.default_rng(0).integers(0, 255, (240, 320), dtype=np.uint8)
+    for rig in (turned, rectified):
+        for bad in (99, -1, 2.5, "linear", None, True, cv2.INTER_AREA):
+            with pytest.raises(ConfigError, match="^interpolation must be one of cv2.remap"):
+                rectify_pair(img, img, rig, interpolation=bad)
+    _, maps = rectification_maps(turned)
+    for method in (cv2.INTER_NEAREST, cv2.INTER_LINEAR, np.int64(cv2.INTER_CUBIC),
+                   cv2.INTER_LANCZOS4):
+        lr, _, _ = rectify_pair(img, img, turned, interpolation=method)
+        np.testing.assert_array_equal(lr, cv2.remap(img, maps[0], maps[1], int(method)))
+
+
 def test_rectification_maps_check_alpha_before_the_cache_key():
     """alpha=None or "x" was a builtin TypeError / ValueError of float(alpha), which built the
     cache key before StereoRig.rectify's range check; a ConfigError naming alpha and its range

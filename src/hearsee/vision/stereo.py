@@ -111,14 +111,27 @@ def rectification_maps(rig: StereoRig, alpha: float = 0.0) -> tuple[Rectificatio
     return rect, maps
 
 
+#: The interpolation methods ``cv2.remap`` supports (:func:`rectify_pair`).
+_REMAP_METHODS = (cv2.INTER_NEAREST, cv2.INTER_LINEAR, cv2.INTER_CUBIC, cv2.INTER_LANCZOS4)
+
+
 def rectify_pair(left: NDArray, right: NDArray, rig: StereoRig, alpha: float = 0.0,
                  interpolation: int = cv2.INTER_LINEAR) -> tuple[NDArray, NDArray, Rectification]:
     """Rectify a stereo pair with ``rig``: returns (left_rect, right_rect, rectification).
 
     Images must have the rig's size (``ImageInputError`` otherwise). For an already rectified
     rig (:attr:`StereoRig.is_rectified`) the images are returned unchanged. ``alpha`` in
-    [0, 1] as in :func:`rectification_maps` (ConfigError otherwise).
+    [0, 1] as in :func:`rectification_maps` (ConfigError otherwise). ``interpolation`` is one
+    of ``cv2.remap``'s methods: ``cv2.INTER_NEAREST``, ``INTER_LINEAR``, ``INTER_CUBIC`` or
+    ``INTER_LANCZOS4`` (ConfigError otherwise, for any rig: 99 or "linear" raised cv2.error,
+    INTER_AREA -- which remap does not support -- gave INTER_LINEAR's images without a word,
+    and a rectified rig took anything).
     """
+    if (not isinstance(interpolation, int | np.integer) or isinstance(interpolation, bool)
+            or interpolation not in _REMAP_METHODS):
+        raise ConfigError(f"interpolation must be one of cv2.remap's methods cv2.INTER_NEAREST, "
+                          f"INTER_LINEAR, INTER_CUBIC or INTER_LANCZOS4 "
+                          f"({', '.join(map(str, _REMAP_METHODS))}), got {interpolation!r:.40}")
     check_pair(left, right, expected_size=check_rig(rig, "rectify_pair").left.size)
     rect, maps = rectification_maps(rig, alpha)
     if rect.baseline_m <= 0:
