@@ -2788,7 +2788,11 @@ class TrackingProcessor:
                 # an exact twin (front/back of a linear array: the same steered power) goes
                 # first when it is the frontal one, as localize_tdoa orders its candidates
                 if c >= coh * (1.0 - 1e-4) and abs(az) < abs(cands[0][0]):
-                    cands.insert(0, (float(az), None))
+                    # (refined as the best one is: the grid's azimuth, up to half a grid step
+                    # off, was the pair's measurement -- a talker at -3 deg tracked at -2.0)
+                    i = int(np.argmin(np.abs(wrap_deg(self.srp.az_axis - az))))
+                    cands.insert(0, (float(self.srp.peak_azimuth(sm["profile"][n][None],
+                                                                  np.array([i]))[0]), None))
                 else:
                     cands.append((float(az), None))
         return cands
