@@ -325,9 +325,9 @@ def test_a_line_found_on_its_farther_bin_only_is_found_at_its_frequency():
 
 @pytest.mark.parametrize("f0", [20.0, 30.0, 45.0])
 def test_a_strong_lines_leakage_is_no_line(f0):
-    # a line 40 dB above white noise: its leakage through the frames' Tukey window holds
-    # steady in bins far from it; their peaks are noise, no lines (20 Hz gave 32.9, 109.5,
-    # 162.3 Hz; 45 Hz at 20 dB gave 45 and 124.2 Hz)
+    # a line 37 dB (amplitude 1) or 17 dB (0.1) above white noise: its leakage through the
+    # frames' Tukey window holds steady in bins far from it; their peaks are noise, no lines
+    # (20 Hz gave 32.9, 109.5, 162.3 Hz; 45 Hz at 17 dB gave 45 and 124.2 Hz)
     fs = 16000
     t = np.arange(5 * fs) / fs
     rng = np.random.default_rng(349)

@@ -85,7 +85,7 @@ COMB_TOL_HZ = 1.5
 #: harmonics; the hum's hidden harmonics stood far higher). A run of :func:`tonal_bins`' line
 #: bins is a line only where that spectrum peaks this many times above its median over the
 #: run (and a bin each side) too: a strong line's leakage through the frames' Tukey window
-#: holds steady in bins far from it, and their peak was noise (a 20-Hz line 40 dB above white
+#: holds steady in bins far from it, and their peak was noise (a 20-Hz line 37 dB above white
 #: noise gave 'lines' at 32.9, 109.5 and 162.3 Hz, peaking 7-10x above their median; the
 #: 1953 runs of bench/hum.py's recordings, with voices, peaked 659x or more)
 HARMONIC_PROMINENCE = 100.0
