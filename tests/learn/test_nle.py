@@ -746,3 +746,21 @@ def test_cnle_small_piece_far_away_does_not_flatten_its_cluster():
     np.testing.assert_allclose(m.transform(X), m.embedding_, atol=1e-12)
     np.testing.assert_allclose(np.asarray(m.adjacency_.sum(axis=1)).ravel(), 1.0)
     assert m.n_neighbors_.min() >= 3
+
+
+def test_output_features_are_named_as_sklearn_names_its_embeddings():
+    """get_feature_names_out (scikit-learn's set_output needs it: pandas output was an
+    AttributeError): the class's name in lower case and the axis, as LocallyLinearEmbedding's
+    'locallylinearembedding0', ...; one name per embedding dimension."""
+    from sklearn.manifold import LocallyLinearEmbedding
+
+    X, _ = make_swiss_roll(300, random_state=349)
+    lle = LocallyLinearEmbedding(n_neighbors=10, n_components=3).fit(X)
+    assert list(lle.get_feature_names_out()) == [f"locallylinearembedding{i}" for i in range(3)]
+    for est, prefix in ((NeighborhoodLinearEmbedding(3, n_neighbors=10, random_state=0),
+                         "neighborhoodlinearembedding"),
+                        (ClusteredNLE(2, random_state=0), "clusterednle")):
+        est.fit(X)
+        names = list(est.get_feature_names_out())
+        assert names == [f"{prefix}{i}" for i in range(est.embedding_.shape[1])]
+        assert len(names) == est.n_components

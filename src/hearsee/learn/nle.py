@@ -77,7 +77,7 @@ from numbers import Integral, Real
 import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
-from sklearn.base import BaseEstimator, TransformerMixin
+from sklearn.base import BaseEstimator, ClassNamePrefixFeaturesOutMixin, TransformerMixin
 from sklearn.exceptions import NotFittedError
 from sklearn.neighbors import NearestNeighbors
 from sklearn.utils import check_random_state
@@ -588,7 +588,7 @@ def _weight_matrix(ind: np.ndarray, W: np.ndarray, mask: np.ndarray, n: int) -> 
 # --------------------------------------------------------------------------- estimator
 
 
-class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
+class NeighborhoodLinearEmbedding(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEstimator):
     """Neighborhood Linear Embedding: LLE with adaptively chosen neighbourhoods (thesis ch. 6).
 
     Reconstruction; see the module docstring for the rule and the literature followed. Each point
@@ -947,6 +947,14 @@ class NeighborhoodLinearEmbedding(TransformerMixin, BaseEstimator):
         mask[exact] = False
         mask[exact, 0] = True
         return ind, W, mask
+
+    @property
+    def _n_features_out(self) -> int:
+        """The embedding's dimensions, for ``get_feature_names_out``: the class's name in
+        lower case and the axis (``neighborhoodlinearembedding0``, ...), as scikit-learn's
+        ``LocallyLinearEmbedding`` names its own (without it, ``set_output(transform="pandas")``
+        was an AttributeError)."""
+        return self.embedding_.shape[1]
 
     def transform(self, X) -> np.ndarray:
         """Embed new points: reconstruct each from its adaptive neighbourhood among the training
