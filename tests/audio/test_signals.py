@@ -405,6 +405,16 @@ def test_write_recording_refusals(tmp_path):
     assert sf.info(str(src)).channels == 2  # untouched
 
 
+def test_write_recording_refuses_samples_by_channels(tmp_path):
+    """(n, 2) data, the layout transposed, was soundfile's misleading "Format not recognised"."""
+    for ext in ("wav", "flac"):
+        with pytest.raises(AudioInputError, match=r"\(n_channels, n_samples\).*\(16000, 2\)"):
+            write_recording(tmp_path / f"t.{ext}", 0.1 * np.ones((16000, 2)), FS)
+        assert not (tmp_path / f"t.{ext}").exists()
+    x = 0.1 * np.ones((1024, 4))  # as many channels as a WAV file holds: written as before
+    assert sf.info(str(write_recording(tmp_path / "wide.wav", x, FS))).channels == 1024
+
+
 def test_a_file_without_read_permission_is_an_input_file_error():
     """read_recording's InputFileError for a file that "cannot be opened": libsndfile names no
     reason for a file the system refuses (no read permission), so it was an AudioInputError,

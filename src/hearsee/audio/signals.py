@@ -1096,6 +1096,11 @@ def write_recording(
         y = y[None, :]
     if y.ndim != 2 or y.shape[1] == 0:
         raise AudioInputError(f"recording must be (n_channels, n_samples), got shape {y.shape}")
+    if y.shape[0] > 1024:  # (libsndfile's limit; (n, 2) was its misleading "Format not recognised")
+        raise AudioInputError(
+            f"recording must be (n_channels, n_samples), got shape {y.shape}: {y.shape[0]} "
+            "channels is more than an audio file holds (1024); pass x.T if its rows are samples"
+        )
     if not np.all(np.isfinite(y)):
         raise AudioInputError("refusing to write NaN or infinite samples")
     if subtype.upper().startswith("PCM") and np.max(np.abs(y)) > 1.0:
