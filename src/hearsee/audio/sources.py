@@ -272,6 +272,13 @@ def _frame_inputs(who: str, tdoa_s: ArrayLike, valid: ArrayLike,
     if locs is not None and len(locs) != len(tau):
         raise ConfigError(f"locs must hold one localization (or None) per frame ({len(tau)}), "
                           f"got {len(locs)}")
+    if locs is not None:  # ([1, 1]: a builtin AttributeError, 'int' has no 'azimuth_deg')
+        from hearsee.audio.localize import Localization
+
+        bad = [x for x in locs if x is not None and not isinstance(x, Localization)]
+        if bad:
+            raise ConfigError(f"locs must hold one Localization (or None) per frame, got "
+                              f"{bad[0]!r:.60}")
     return tau, ok, w_all
 
 
