@@ -434,3 +434,15 @@ def test_a_blank_array_name_is_no_name(tmp_path, blank, value):
     assert MicArray.from_dict({"name": value, "microphones": mics}).name == "custom"
     p.write_text("name:\nmicrophones: [[0, -0.1, 0], [0, 0.1, 0]]\n")
     assert load_array(p).name == "rig"
+
+
+def test_a_preset_name_is_never_a_path(tmp_path):
+    """from_preset("/abs/file") or "../arrays/two-mic" read a file outside the presets' folder
+    (the suffix added); a preset is a bundled one's plain name, and load_array takes paths."""
+    (tmp_path / "mine.yaml").write_text("microphones: [[0, 0.1, 0], [0, -0.1, 0]]\n")
+    for name in (str(tmp_path / "mine"), "../arrays/two-mic", "./two-mic"):
+        with pytest.raises(ConfigError, match=r"unknown array preset .*presets: .*two-mic"):
+            MicArray.from_preset(name)
+    assert load_array(tmp_path / "mine.yaml").n_mics == 2
+    assert load_array(str(tmp_path / "mine.yaml")).n_mics == 2
+    assert MicArray.from_preset("two-mic").n_mics == load_array("two-mic").n_mics == 2

@@ -222,9 +222,11 @@ class MicArray:
 
     @classmethod
     def from_preset(cls, name: str) -> MicArray:
-        """Load a preset shipped with hearsee by name (see :func:`list_presets`)."""
+        """Load a preset shipped with hearsee by name (see :func:`list_presets`): a plain name,
+        never a path ("/abs/file" or "../arrays/two-mic" read a file outside the presets'
+        folder; :func:`load_array` takes paths)."""
         path = _preset_dir() / f"{name}.yaml"
-        if not path.is_file():
+        if str(name) not in list_presets() or not path.is_file():
             raise ConfigError(
                 f"unknown array preset {name!r} (presets: {', '.join(list_presets())})"
             )
