@@ -175,6 +175,19 @@ def test_masked_array_needs_two_microphones():
         mask.mask_geometry(MicArray.from_dict(d))
 
 
+def test_an_incomplete_mask_on_three_microphones_says_a_mask_needs_two(tmp_path):
+    """A 3-microphone array file with a mask block said only "mask: missing required key
+    'front'", as if completing the block would do."""
+    from hearsee.audio.arrays import load_array
+
+    f = tmp_path / "three.yaml"
+    f.write_text("microphones: [[0, -0.075, 0], [0, 0.075, 0], [0.05, 0, 0]]\n"
+                 "mask: {shape: egg}\n")
+    with pytest.raises(ConfigError, match=r"a masked array needs exactly 2 microphones, got 3 "
+                       r"\(three: mask: missing required key 'front'\)"):
+        load_array(f)
+
+
 # ------------------------------------------------------------------ model, cache, responses
 @pytest.mark.slow  # solves the coarse BEM for the module (about 10 s on a busy machine)
 def test_cache_roundtrip_and_key(model, cache_root):

@@ -364,13 +364,19 @@ def mask_geometry(array: MicArray | Mapping[str, Any], positions: ArrayLike | No
     if block is None:
         raise ConfigError(f"{where}: this array has no mask (no 'mask:' section in its "
                           "description): use a masked preset such as mask2-asym, or add one")
-    geom = MaskGeometry.from_dict(block, f"{where}: mask")
     try:
         pos = np.asarray(positions, dtype=float)
     except (TypeError, ValueError):
         pos = np.full(0, np.nan)
+    got = len(pos) if pos.ndim == 2 else f"positions of shape {pos.shape}"
+    try:
+        geom = MaskGeometry.from_dict(block, f"{where}: mask")
+    except (ConfigError, GeometryError) as exc:  # (3 microphones and an incomplete block said
+        if pos.shape == (2, 3):  # only "mask: missing required key 'front'")
+            raise
+        raise type(exc)(f"{where}: a masked array needs exactly 2 microphones, got {got} "
+                        f"({exc})") from None
     if pos.shape != (2, 3):
-        got = len(pos) if pos.ndim == 2 else f"positions of shape {pos.shape}"
         raise GeometryError(f"{where}: a masked array needs exactly 2 microphones, got {got}")
     if not np.all(np.isfinite(pos)):
         raise GeometryError(f"{where}: microphone positions must be finite numbers (metres)")
