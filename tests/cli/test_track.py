@@ -81,8 +81,9 @@ def test_track_refuses_a_video_that_delivers_no_frame(scene, tmp_path, capsys):
     assert main([*scene["base"], "--video", str(cut)]) == 2
     out, err = capsys.readouterr()
     assert out == ""
-    assert err == f"hearsee: error: --video: camera '{cut}' opened but delivered no frame\n"
-    with pytest.raises(ConfigError, match="video file: camera .* opened but delivered no frame"):
+    assert err == f"hearsee: error: --video: video file '{cut}' opened but delivered no frame\n"
+    with pytest.raises(ConfigError,
+                       match="video file: video file .* opened but delivered no frame"):
         VideoImagePoints(cut, detector="face")
     # the whole file: accepted, and its first frame (read by the check) is frame 0
     vp = VideoImagePoints(full, detector="face")

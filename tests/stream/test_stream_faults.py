@@ -918,6 +918,36 @@ def test_read_frame_names_a_camera_that_delivers_nothing_in_time(hanging_capture
     assert frame.shape == (60, 80, 3)
 
 
+def test_read_frame_names_a_video_file_as_a_video_file_not_a_camera(tmp_path):
+    """A video FILE that opened and delivered nothing (or frames of another size) was called
+    "camera 'clip.mp4'"; a file is "video file" now, a device index, device node or URL still
+    "camera"."""
+    from hearsee.stream.video import read_frame
+
+    class Empty:
+        def read(self):
+            return False, None
+
+    class Small:
+        def read(self):
+            return True, np.zeros((60, 80, 3), np.uint8)
+
+    clip = tmp_path / "clip.mp4"
+    clip.write_bytes(b"")
+    for spec in (str(clip), clip):
+        with pytest.raises(ConfigError, match=r"^--video: video file '.*clip\.mp4' opened but "
+                                              r"delivered no frame$"):
+            read_frame(Empty(), spec, "--video")
+        with pytest.raises(ConfigError, match=r"^--video: video file '.*clip\.mp4' delivers "
+                                              r"80x60 frames but the calibration expects"):
+            read_frame(Small(), spec, "--video", (160, 120))
+    for spec, shown in ((0, "0"), ("rtsp://cam/1", "'rtsp://cam/1'"),
+                        (str(tmp_path / "gone.mp4"), repr(str(tmp_path / "gone.mp4")))):
+        with pytest.raises(ConfigError) as err:
+            read_frame(Empty(), spec, "--video")
+        assert str(err.value) == f"--video: camera {shown} opened but delivered no frame"
+
+
 # ------------------------------------------------------- a stuck or disconnected microphone, live
 def _fake_recorder(x):
     """A sounddevice module whose stream delivers the recording ``x`` (n_ch, n) in blocks of

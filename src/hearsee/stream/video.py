@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import time
 from pathlib import Path
 from typing import Any
@@ -127,15 +128,20 @@ def read_frame(cap: Any, spec: Any, where: str, size: tuple[int, int] | None = N
     """One frame from an open OpenCV capture ``cap`` (of the camera or file ``spec``; a
     :class:`TimedCapture` for a device that may block); ConfigError prefixed ``where`` when
     none comes (in time) or it has the wrong size (``size`` = (width, height), pixels). The one
-    "delivers frames" check of ``hearsee run --dry-run`` and ``hearsee track --video``."""
+    "delivers frames" check of ``hearsee run --dry-run`` and ``hearsee track --video``. The
+    message says "video file" when ``spec`` is the path of a file (it said "camera" for those
+    too), else "camera"."""
+    # (a device such as /dev/video0 or a URL is no regular file)
+    is_file = isinstance(spec, str | Path) and os.path.isfile(spec)
+    what = f"video file {str(spec)!r}" if is_file else f"camera {spec!r}"
     ok, frame = cap.read()
     if isinstance(cap, TimedCapture) and cap.stuck:
-        raise ConfigError(f"{where}: camera {spec!r} opened but delivered no frame within "
+        raise ConfigError(f"{where}: {what} opened but delivered no frame within "
                           f"{cap.timeout_s:g} s")
     if not ok or frame is None:
-        raise ConfigError(f"{where}: camera {spec!r} opened but delivered no frame")
+        raise ConfigError(f"{where}: {what} opened but delivered no frame")
     if size is not None and (frame.shape[1], frame.shape[0]) != tuple(size):
-        raise ConfigError(f"{where}: camera {spec!r} delivers {frame.shape[1]}x{frame.shape[0]} "
+        raise ConfigError(f"{where}: {what} delivers {frame.shape[1]}x{frame.shape[0]} "
                           f"frames but the calibration expects {size[0]}x{size[1]}")
     return frame
 
