@@ -289,6 +289,29 @@ def test_detect_humans_refuses_bad_thermal_images_params_and_options_before_matc
                       params=HumanDetectorParams(), camera_height_m=1.4)
 
 
+def test_detect_humans_refuses_a_colour_float_thermal_image_before_matching(scene, monkeypatch):
+    """An (H, W, 3) float thermal image of the right height and width passed the early check
+    (height and width only) and was refused by the thermal filter only after the stereo
+    matching had run; now before it (the matcher records its calls)."""
+    import hearsee.vision.fusion as fusion
+
+    calls = []
+    real = fusion.stereo_frame
+
+    def recording(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(fusion, "stereo_frame", recording)
+    colour = np.repeat(scene.thermal_c[:, :, None], 3, axis=2).astype(float)
+    with pytest.raises(ImageInputError, match="multi-channel thermal image must be 8-bit"):
+        detect_humans(scene.left, scene.right, RIG, colour, camera_height_m=1.4)
+    with pytest.raises(ConfigError, match="band_c"):  # a bad band too
+        detect_humans(scene.left, scene.right, RIG, scene.thermal_c, camera_height_m=1.4,
+                      band_c=(37.0, 30.0))
+    assert calls == []
+
+
 def test_a_nan_thermal_threshold_is_refused(scene):
     """min_support=NaN rejected every candidate (support >= NaN is False) without a word."""
     from hearsee.errors import ConfigError

@@ -317,14 +317,14 @@ def detect_humans(left: NDArray, right: NDArray, rig: StereoRig, thermal: NDArra
                           f"names to values, got {stereo_options!r:.60}")
     opts = dict(DEFAULT_STEREO_OPTIONS)
     opts.update(stereo_options or {})
+    # the thermal filter before the stereo matching: its checks (an (H, W, 3) float image, a
+    # float one in kelvin, a bad band_c) refused the image only after the matching had run
+    warm = None if th is None else thermal_mask(th, band_c=band_c)
     frame = stereo_frame(left, right, rig, **opts)
     rect = frame.rectification
     det = detect_candidates(frame.disparity, frame.points(), frame.focal_px, frame.baseline_m,
                             rect.cy, camera_height_m=camera_height_m, params=params,
                             search_max_px=frame.search_px[1], camera_pitch_deg=camera_pitch_deg)
-    warm = None
-    if th is not None:
-        warm = thermal_mask(th, band_c=band_c)
     humans, rejected = classify_candidates(det, rig, rect, warm, min_support=min_support)
     info = {"floor": {"source": det.floor.source,
                       "camera_height_m": round(det.floor.camera_height_m, 3),
