@@ -99,6 +99,11 @@ def test_thermal_support_projection_and_weights():
                {"max_points": 2.5}, {"min_points": -1}, {"min_points": np.nan}):
         with pytest.raises(ConfigError):
             thermal_support(mixed, h, RIG, warm, **kw)
+    # max_points below min_points kept too few points ever to reach min_points: NaN for every
+    # candidate without a word; equal is fine
+    with pytest.raises(ConfigError, match=r"max_points \(10\) must be >= min_points \(20\)"):
+        thermal_support(left_pts, h, RIG, warm, max_points=10, min_points=20)
+    assert thermal_support(left_pts, h, RIG, warm, max_points=10, min_points=10) == 1.0
 
 
 def test_bad_inputs(scene):

@@ -133,7 +133,8 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
     ``heights`` ``(N,)`` their heights above the floor (the top ``head_band_m`` metres get weight
     ``head_weight`` > 0); ``warm`` the thermal filter's mask (thermal image size; bool, or 0/1
     numbers -- a 0/255 image is refused, it gave "fractions" up to 255). Points projecting
-    outside the thermal image are ignored; NaN when fewer than ``min_points`` remain.
+    outside the thermal image are ignored; NaN when fewer than ``min_points`` remain
+    (``max_points`` >= ``min_points``, ConfigError otherwise).
 
     The head band is counted down from the robust top of the points the thermal camera sees
     (:func:`~hearsee.vision.humans.robust_top_m`, as
@@ -150,6 +151,8 @@ def thermal_support(points_left: NDArray, heights: NDArray, rig: StereoRig, warm
     finite_number("head_band_m", head_band_m, 0.0)
     max_points = whole_number("max_points", max_points)
     min_points = whole_number("min_points", min_points, 0)
+    if max_points < min_points:  # (kept fewer points than it needed: NaN whatever the points)
+        raise ConfigError(f"max_points ({max_points}) must be >= min_points ({min_points})")
     if warm.ndim != 2:  # ((15, 20, 1) was "20x15 pixels but ... is 20x15")
         raise ImageInputError(f"thermal mask must be (H, W) = {cam.shape}, got shape "
                               f"{warm.shape}")
