@@ -45,6 +45,25 @@ def deny_reading(monkeypatch):
     return deny
 
 
+@pytest.fixture
+def count_calls(monkeypatch):
+    """``calls = count_calls(module, "name")`` wraps ``module.name`` so that every call is
+    recorded (an entry appended to ``calls``) and then made as before."""
+
+    def count(owner, name: str) -> list:
+        calls: list = []
+        real = getattr(owner, name)
+
+        def counted(*args, **kwargs):
+            calls.append(1)
+            return real(*args, **kwargs)
+
+        monkeypatch.setattr(owner, name, counted)
+        return calls
+
+    return count
+
+
 def _reference_gcc_phat(a, b, fs: float, max_lag_s: float, interp: int = 256) -> float:
     """Textbook whole-signal GCC-PHAT, ``t_a - t_b`` in seconds, interpolated by zero padding
     the spectrum ``interp`` times: the ground-truth check of delays the tests simulate."""

@@ -1211,7 +1211,7 @@ def test_three_mic_curve_holds_the_source_and_only_points_of_the_curve(az, el, r
     assert near < 1e-3 * r
 
 
-def test_localize_recording_in_plane_is_ignored_by_a_volume_array(monkeypatch):
+def test_localize_recording_in_plane_is_ignored_by_a_volume_array(count_calls):
     """in_plane models a planar array's in-plane source; localize_tdoa ignores it for other
     arrays. localize_recording also passed it as the frames' near_field, so a volume array's
     every frame got a near-field position fit (18x slower for 55 frames of a 5-mic array) and,
@@ -1224,14 +1224,7 @@ def test_localize_recording_in_plane_is_ignored_by_a_volume_array(monkeypatch):
     fs = 16000
     src = 0.8 * unit_vector_deg(50.0, 10.0)
     x = simulate_free_field(white_noise(1.0, fs, rng=3), fs, tet5, src, snr_db=20.0, rng=4)
-    fits = []
-    add = L._add_position
-
-    def counted(*args, **kwargs):
-        fits.append(1)
-        return add(*args, **kwargs)
-
-    monkeypatch.setattr(L, "_add_position", counted)
+    fits = count_calls(L, "_add_position")
     doc = localize_recording(x, fs, tet5, in_plane=True)
     assert len(fits) == 1 and doc["summary"]["azimuth_deg"] == pytest.approx(50.0, abs=2.0)
     fits.clear()

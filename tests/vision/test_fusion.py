@@ -294,20 +294,13 @@ def test_detect_humans_refuses_bad_thermal_images_params_and_options_before_matc
                       params=HumanDetectorParams(), camera_height_m=1.4)
 
 
-def test_detect_humans_refuses_a_colour_float_thermal_image_before_matching(scene, monkeypatch):
+def test_detect_humans_refuses_a_colour_float_thermal_image_before_matching(scene, count_calls):
     """An (H, W, 3) float thermal image of the right height and width passed the early check
     (height and width only) and was refused by the thermal filter only after the stereo
     matching had run; now before it (the matcher records its calls)."""
     import hearsee.vision.fusion as fusion
 
-    calls = []
-    real = fusion.stereo_frame
-
-    def recording(*args, **kwargs):
-        calls.append(1)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(fusion, "stereo_frame", recording)
+    calls = count_calls(fusion, "stereo_frame")
     colour = np.repeat(scene.thermal_c[:, :, None], 3, axis=2).astype(float)
     with pytest.raises(ImageInputError, match="multi-channel thermal image must be 8-bit"):
         detect_humans(scene.left, scene.right, RIG, colour, camera_height_m=1.4)
