@@ -295,6 +295,9 @@ def test_localize_sources_refuses_bad_input():
             localize_sources(tau, ok, arr, pairs, 2)
     with pytest.raises(ConfigError, match="locs"):
         localize_sources(np.zeros((2, 3)), ok, arr, pairs, 2, locs=[None])
+    for locs in (5, "ab"):  # (5: len()'s builtin TypeError)
+        with pytest.raises(ConfigError, match="locs must be a list"):
+            localize_sources(np.zeros((2, 3)), ok, arr, pairs, 2, locs=locs)
     for locs in ([1, 1], ["x", None]):  # (a builtin AttributeError: no 'azimuth_deg')
         with pytest.raises(ConfigError, match="locs must hold one Localization"):
             localize_sources(np.zeros((2, 3)), ok, arr, pairs, 2, locs=locs)

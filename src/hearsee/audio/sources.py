@@ -269,12 +269,17 @@ def _frame_inputs(who: str, tdoa_s: ArrayLike, valid: ArrayLike,
     if w_all.shape != ok.shape:
         raise ConfigError(f"weight must hold one number per frame ({len(ok)}), got shape "
                           f"{w_all.shape}")
-    if locs is not None and len(locs) != len(tau):
-        raise ConfigError(f"locs must hold one localization (or None) per frame ({len(tau)}), "
-                          f"got {len(locs)}")
-    if locs is not None:  # ([1, 1]: a builtin AttributeError, 'int' has no 'azimuth_deg')
+    if locs is not None:
         from hearsee.audio.localize import Localization
 
+        # (a number, 5, was len()'s builtin TypeError; [1, 1] a builtin AttributeError, 'int'
+        # has no 'azimuth_deg')
+        if not isinstance(locs, Sequence) or isinstance(locs, str):
+            raise ConfigError(f"locs must be a list of one Localization (or None) per frame, "
+                              f"got {locs!r:.60}")
+        if len(locs) != len(tau):
+            raise ConfigError(f"locs must hold one localization (or None) per frame "
+                              f"({len(tau)}), got {len(locs)}")
         bad = [x for x in locs if x is not None and not isinstance(x, Localization)]
         if bad:
             raise ConfigError(f"locs must hold one Localization (or None) per frame, got "
