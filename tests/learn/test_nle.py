@@ -670,8 +670,11 @@ def test_bad_hyperparameters_unfitted_models_and_sparse_input_are_hearsee_errors
     from hearsee.learn.nle import ClusteredNLE, ManifoldInputError, NeighborhoodLinearEmbedding
 
     X = np.random.default_rng(0).normal(size=(60, 3))
+    # (a bool as a whole number: n_neighbors=True passed scikit-learn's check as 1)
     for est in (NeighborhoodLinearEmbedding(n_neighbors=0), NeighborhoodLinearEmbedding(
-            shadow=float("nan")), ClusteredNLE(min_cluster_size=0)):
+            shadow=float("nan")), ClusteredNLE(min_cluster_size=0),
+            NeighborhoodLinearEmbedding(n_neighbors=True), ClusteredNLE(min_cluster_size=True),
+            NeighborhoodLinearEmbedding(n_components=np.True_)):
         with pytest.raises(ManifoldInputError, match="parameter of") as info:
             est.fit(X)
         assert isinstance(info.value, InvalidParameterError)

@@ -149,11 +149,20 @@ class ManifoldNotFittedError(ManifoldInputError, NotFittedError):
 
 
 def _check_params(est) -> None:
-    """``est._validate_params()`` with its errors as :class:`ManifoldParameterError`."""
+    """``est._validate_params()`` with its errors as :class:`ManifoldParameterError`; a bool
+    where a whole number is asked is refused too (scikit-learn's ``Interval(Integral, ...)``
+    takes True as 1: ``n_neighbors=True`` passed, then failed as "n_neighbors=True must be >
+    n_components")."""
     try:
         est._validate_params()
     except InvalidParameterError as exc:
         raise ManifoldParameterError(str(exc)) from None
+    for name, rules in est._parameter_constraints.items():
+        value = getattr(est, name, None)
+        if isinstance(value, bool | np.bool_) and any(
+                isinstance(r, Interval) and r.type is Integral for r in rules):
+            raise ManifoldParameterError(f"the {name!r} parameter of {type(est).__name__} must "
+                                         f"be a whole number, got {value!r}")
 
 
 def _check_fitted(est, attribute: str) -> None:
